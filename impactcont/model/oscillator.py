@@ -1,0 +1,286 @@
+"""The impact oscillator of eq. (1)-(4), validated at construction."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Sequence
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from impactcont.errors import ParameterError
+from impactcont.model.modal import ModalBasis
+
+__all__ = ["ImpactOscillator", "chain_stiffness"]
+
+_SYMMETRY_RTOL = 1e-12
+
+
+def _matrix(name: str, value: Any) -> np.ndarray:
+    """Return ``value`` as a finite, square, symmetric, positive definite float matrix."""
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name} must be a real square matrix (array_like); got {value!r}") from exc
+    if a.ndim == 0:
+        a = a.reshape(1, 1)
+    if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] == 0:
+        raise ParameterError(f"{name} must be a non-empty square matrix; got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ParameterError(f"{name} must be finite; got {a.tolist()}")
+    scale = np.max(np.abs(a))
+    if np.max(np.abs(a - a.T)) > _SYMMETRY_RTOL * scale:
+        raise ParameterError(
+            f"{name} must be symmetric (|{name} - {name}.T| <= {_SYMMETRY_RTOL:g}*max|{name}|); "
+            f"got {a.tolist()}"
+        )
+    a = 0.5 * (a + a.T)
+    try:
+        np.linalg.cholesky(a)
+    except np.linalg.LinAlgError:
+        eig = np.linalg.eigvalsh(a)
+        raise ParameterError(
+            f"{name} must be positive definite; got eigenvalues {eig.tolist()} of {a.tolist()}"
+        ) from None
+    return a
+
+
+def _vector(name: str, value: Any, n: int) -> np.ndarray:
+    try:
+        v = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name} must be a real vector of length {n}; got {value!r}") from exc
+    v = np.atleast_1d(v)
+    if v.shape != (n,):
+        raise ParameterError(f"{name} must have shape ({n},) to match M and K; got shape {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ParameterError(f"{name} must be finite; got {v.tolist()}")
+    return v
+
+
+def _real(name: str, value: Any, *, allowed: str, low: float | None = None,
+          low_open: bool = False, high: float | None = None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number ({allowed}); got {value!r}")
+    x = float(value)
+    bad = not math.isfinite(x)
+    if low is not None:
+        bad = bad or (x <= low if low_open else x < low)
+    if high is not None:
+        bad = bad or x > high
+    if bad:
+        raise ParameterError(f"{name} must be {allowed}; got {value!r}")
+    return x
+
+
+def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
+    """Stiffness matrix of the chain of eq. (2).
+
+    Mass 1 hangs on mass 2 by spring ``k1``, mass j on mass j+1 by ``k_j`` and
+    the last mass on the ground by ``k_n``.
+
+    Parameters
+    ----------
+    springs : sequence of float, length n
+        Spring constants ``k_1 ... k_n``, all > 0.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        ``K[0,0] = k1``, ``K[j,j] = k_j + k_{j+1}``, ``K[j,j+1] = -k_{j+1}``.
+    """
+    k = np.atleast_1d(np.array(springs, dtype=float))
+    if k.ndim != 1 or k.size == 0:
+        raise ParameterError(f"springs must be a non-empty 1-D sequence; got {springs!r}")
+    if not np.all(np.isfinite(k)) or np.any(k <= 0):
+        raise ParameterError(f"springs must be finite and > 0; got {k.tolist()}")
+    n = k.size
+    K = np.zeros((n, n))
+    K[0, 0] = k[0]
+    for j in range(1, n):
+        K[j, j] = k[j - 1] + k[j]
+        K[j - 1, j] = K[j, j - 1] = -k[j - 1]
+    return K
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ImpactOscillator:
+    """A chain of masses, springs and dampers whose mass 1 strikes a rigid stop.
+
+    Between impacts ``M x'' + C x' + K x = F cos(omega t + delta)`` (eq. 1);
+    mass 1 hits the stop when ``x1 = b`` moving towards it (eq. 3) and its
+    velocity is multiplied by ``-R`` (eq. 4).
+
+    Parameters
+    ----------
+    M, K : array_like, shape (n, n)
+        Symmetric positive definite mass and stiffness matrices.
+    F : array_like, shape (n,)
+        Forcing amplitude vector.
+    R : float
+        Coefficient of restitution, ``0 <= R <= 1``.
+    b : float
+        Gap: position of the stop for mass 1 (any real number).
+    omega : float
+        Forcing frequency, ``> 0``.
+    eta : float, optional
+        Paper's damping, ``C = 2 eta K`` (modal damping ``xi_i = eta omega_i``).
+    alpha, beta : float, optional
+        Rayleigh damping ``C = alpha M + beta K``. Give either ``eta`` or
+        ``alpha``/``beta``; with none the system is undamped.
+
+    Notes
+    -----
+    The oscillator is immutable; use :meth:`replace` to change parameters.
+    Its modal basis is computed once, on first use.
+    """
+
+    M: np.ndarray
+    K: np.ndarray
+    F: np.ndarray
+    R: float
+    b: float
+    omega: float
+    eta: float | None = None
+    alpha: float | None = None
+    beta: float | None = None
+
+    def __post_init__(self) -> None:
+        M = _matrix("M", self.M)
+        K = _matrix("K", self.K)
+        if M.shape != K.shape:
+            raise ParameterError(f"M and K must have the same shape; got {M.shape} and {K.shape}")
+        n = M.shape[0]
+        F = _vector("F", self.F, n)
+        R = _real("R", self.R, allowed="in [0, 1]", low=0.0, high=1.0)
+        b = _real("b", self.b, allowed="a finite real number")
+        omega = _real("omega", self.omega, allowed="finite and > 0", low=0.0, low_open=True)
+        if self.eta is not None and (self.alpha is not None or self.beta is not None):
+            raise ParameterError(
+                f"give either eta (C = 2 eta K) or alpha/beta (C = alpha M + beta K), not both; "
+                f"got eta={self.eta!r}, alpha={self.alpha!r}, beta={self.beta!r}"
+            )
+        eta = alpha = beta = None
+        if self.eta is not None:
+            eta = _real("eta", self.eta, allowed="finite and >= 0", low=0.0)
+        if self.alpha is not None or self.beta is not None:
+            alpha = _real("alpha", 0.0 if self.alpha is None else self.alpha,
+                          allowed="finite and >= 0", low=0.0)
+            beta = _real("beta", 0.0 if self.beta is None else self.beta,
+                         allowed="finite and >= 0", low=0.0)
+        for name, value in [("M", M), ("K", K), ("F", F)]:
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+        for name, value in [("R", R), ("b", b), ("omega", omega), ("eta", eta),
+                            ("alpha", alpha), ("beta", beta)]:
+            object.__setattr__(self, name, value)
+
+    # -- construction -------------------------------------------------------------------------
+    @classmethod
+    def chain(cls, *, masses: Sequence[float], springs: Sequence[float], **params: Any
+              ) -> ImpactOscillator:
+        """Build the chain of eq. (2) from masses and springs.
+
+        Parameters
+        ----------
+        masses : sequence of float, length n
+            ``m_1 ... m_n``, all > 0.
+        springs : sequence of float, length n
+            ``k_1 ... k_n``; see :func:`chain_stiffness`.
+        **params
+            ``F, R, b, omega`` and the damping (``eta`` or ``alpha``/``beta``).
+        """
+        m = np.atleast_1d(np.array(masses, dtype=float))
+        if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)) or np.any(m <= 0):
+            raise ParameterError(f"masses must be a non-empty sequence of finite values > 0; "
+                                 f"got {masses!r}")
+        K = chain_stiffness(springs)
+        if K.shape[0] != m.size:
+            raise ParameterError(f"springs must have the same length as masses ({m.size}); "
+                                 f"got {len(np.atleast_1d(springs))}")
+        return cls(M=np.diag(m), K=K, **params)
+
+    def replace(self, **changes: Any) -> ImpactOscillator:
+        """Return a copy with some parameters changed (validated again).
+
+        Examples
+        --------
+        >>> osc2 = osc.replace(omega=1.5, b=0.2)  # doctest: +SKIP
+        """
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            allowed = ", ".join(f.name for f in dataclasses.fields(self))
+            raise ParameterError(f"unknown parameter(s) {sorted(unknown)}; allowed: {allowed}")
+        if "eta" in changes and changes["eta"] is not None:
+            changes.setdefault("alpha", None)
+            changes.setdefault("beta", None)
+        if ("alpha" in changes or "beta" in changes) and changes.get("eta") is None:
+            changes["eta"] = None
+        return dataclasses.replace(self, **changes)
+
+    # -- derived quantities -------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of degrees of freedom."""
+        return self.M.shape[0]
+
+    @property
+    def rayleigh(self) -> tuple[float, float]:
+        """Damping as Rayleigh coefficients ``(alpha, beta)``, ``C = alpha M + beta K``."""
+        if self.eta is not None:
+            return 0.0, 2.0 * self.eta
+        return (self.alpha or 0.0, self.beta or 0.0)
+
+    @property
+    def C(self) -> np.ndarray:
+        """Damping matrix ``C = alpha M + beta K`` (``2 eta K`` for the paper's damping)."""
+        alpha, beta = self.rayleigh
+        return alpha * self.M + beta * self.K
+
+    @property
+    def D(self) -> np.ndarray:
+        """Impact matrix of eq. (4): ``diag(1, ..., 1, -R, 1, ..., 1)``, shape (2n, 2n)."""
+        d = np.ones(2 * self.n)
+        d[self.n] = -self.R
+        return np.diag(d)
+
+    @cached_property
+    def modes(self) -> ModalBasis:
+        """Mass-normalised modal basis of eq. (5)-(6), computed once."""
+        alpha, beta = self.rayleigh
+        return ModalBasis.from_matrices(self.M, self.K, alpha, beta, self.F)
+
+    # -- serialisation ------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python description (JSON-able) of the oscillator."""
+        out: dict[str, Any] = {"M": self.M.tolist(), "K": self.K.tolist(), "F": self.F.tolist(),
+                               "R": self.R, "b": self.b, "omega": self.omega}
+        if self.eta is not None:
+            out["eta"] = self.eta
+        if self.alpha is not None:
+            out["alpha"] = self.alpha
+            out["beta"] = self.beta
+        return out
+
+    def to_json(self) -> str:
+        """JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ImpactOscillator:
+        """Inverse of :meth:`to_dict`."""
+        return cls(**data)
+
+    @classmethod
+    def from_json(cls, text: str) -> ImpactOscillator:
+        """Inverse of :meth:`to_json`."""
+        return cls.from_dict(json.loads(text))
+
+    def __repr__(self) -> str:
+        damping = (f"eta={self.eta!r}" if self.eta is not None
+                   else f"alpha={self.alpha!r}, beta={self.beta!r}")
+        return (f"ImpactOscillator(n={self.n}, R={self.R!r}, b={self.b!r}, "
+                f"omega={self.omega!r}, {damping}, F={self.F.tolist()})")
