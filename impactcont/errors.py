@@ -6,7 +6,7 @@ and what is allowed.
 
 from __future__ import annotations
 
-__all__ = ["ImpactcontError", "ParameterError", "NoPeriodicMotionError", "ResonanceError"]
+__all__ = ["ImpactcontError", "NoPeriodicMotionError", "ParameterError", "ResonanceError"]
 
 
 class ImpactcontError(Exception):

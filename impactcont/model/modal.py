@@ -28,7 +28,7 @@ import scipy.linalg
 
 from impactcont.errors import ParameterError, ResonanceError
 
-__all__ = ["ModalBasis", "free_transfer", "forced_coefficients"]
+__all__ = ["ModalBasis", "forced_coefficients", "free_transfer"]
 
 _SERIES_TERMS = 14  # |z| <= 1: 1/(2*14)! < 1e-29
 

@@ -1,0 +1,1 @@
+"""The exact flow, closed-form periodic motions, G and robust stability (eq. 9-29)."""

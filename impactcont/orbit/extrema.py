@@ -13,6 +13,7 @@ component faster than the grid was built for.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 
@@ -21,7 +22,7 @@ from scipy.optimize import brentq
 
 from impactcont.orbit.flow import Flow, Mass1Motion
 
-__all__ = ["sample_times", "critical_points", "interior_maxima", "first_upward_crossing"]
+__all__ = ["critical_points", "first_upward_crossing", "interior_maxima", "sample_times"]
 
 log = logging.getLogger(__name__)
 
@@ -58,7 +59,7 @@ def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
     osc_rate, decay_rate = _time_scales(flow)
     h = 2.0 * math.pi / (_CELLS_PER_PERIOD * osc_rate)
     length = t1 - t0
-    count = max(int(math.ceil(length / h)), 8)
+    count = max(math.ceil(length / h), 8)
     if count > _MAX_SAMPLES:
         log.warning("x1 search grid capped at %d cells for an interval of %.3g (fastest "
                     "frequency %.3g); short excursions may be missed", _MAX_SAMPLES, length,
@@ -69,7 +70,7 @@ def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
     tau = 1.0 / (_CELLS_PER_PERIOD * decay_rate) if decay_rate > 0 else cell
     if tau < cell:
         # fast over-damped transients right after the start: geometric refinement
-        k = int(math.ceil(math.log2(cell / tau)))
+        k = math.ceil(math.log2(cell / tau))
         extra = t0 + cell * np.exp2(-np.arange(1, k + 1))
         grid = np.union1d(grid, extra)
     return grid
@@ -109,7 +110,7 @@ def critical_points(motion: Mass1Motion, grid: np.ndarray) -> np.ndarray:
         if (acc[i] < 0) != (acc[i + 1] < 0):
             tc = _root(accel, ta, tb)
             bounds.insert(1, (tc, vel(tc)))
-        for (lo, vlo), (hi, vhi) in zip(bounds[:-1], bounds[1:], strict=True):
+        for (lo, vlo), (hi, vhi) in itertools.pairwise(bounds):
             if (vlo < 0) != (vhi < 0):
                 roots.append(_root(vel, lo, hi))
     inner = [r for r in roots if grid[0] < r < grid[-1]]

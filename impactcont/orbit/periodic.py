@@ -14,8 +14,13 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
 
-__all__ = ["PeriodicOrbit", "periodic_orbits", "impact_map_jacobian", "orbit_at_phase",
-           "IllConditionedWarning"]
+__all__ = [
+    "IllConditionedWarning",
+    "PeriodicOrbit",
+    "impact_map_jacobian",
+    "orbit_at_phase",
+    "periodic_orbits",
+]
 
 log = logging.getLogger(__name__)
 

@@ -1,0 +1,51 @@
+"""impactcont: bifurcation analysis of multi-degree-of-freedom vibro-impact oscillators.
+
+The closed-form periodic N-1 motions of Cao & Shu (eq. 12-16), their stability
+(eq. 25) and robust stability (eq. 26-29), with an exact event-driven
+simulator as the independent witness.
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+from impactcont.errors import (
+    ImpactcontError,
+    NoPeriodicMotionError,
+    ParameterError,
+    ResonanceError,
+)
+from impactcont.model.modal import ModalBasis
+from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.periodic import (
+    IllConditionedWarning,
+    PeriodicOrbit,
+    amplitude_squared,
+    periodic_orbits,
+)
+from impactcont.simulate.simulator import SimulationResult, SimulationStatus, simulate
+
+try:
+    __version__ = version("impactcont")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0+unknown"
+
+__all__ = [
+    "Flow",
+    "IllConditionedWarning",
+    "ImpactOscillator",
+    "ImpactcontError",
+    "ModalBasis",
+    "NoPeriodicMotionError",
+    "ParameterError",
+    "PeriodicOrbit",
+    "ResonanceError",
+    "SimulationResult",
+    "SimulationStatus",
+    "__version__",
+    "amplitude_squared",
+    "chain_stiffness",
+    "periodic_orbits",
+    "simulate",
+]

@@ -1,0 +1,36 @@
+"""Shared fixtures: the paper's example system (section 4) and a few others."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from impactcont import ImpactOscillator
+
+
+@pytest.fixture
+def paper() -> ImpactOscillator:
+    """Cao & Shu section 4: n = 2, M = I, K = [[1,-1],[-1,2]], eta = 0.1, R = 0.6, F = [1, 0]."""
+    return ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                            b=0.6, omega=1.0, eta=0.1)
+
+
+def _chain(n: int, **params) -> ImpactOscillator:
+    """A chain of n unequal masses and springs, forced on mass 1 and mass n."""
+    rng = np.random.default_rng(n)
+    masses = 1.0 + 0.5 * rng.random(n)
+    springs = 1.0 + rng.random(n)
+    F = np.zeros(n)
+    F[0] = 1.0
+    F[-1] = 0.3
+    defaults = {"F": F, "R": 0.7, "b": 0.1, "omega": 1.1, "eta": 0.05}
+    if "alpha" in params or "beta" in params:
+        del defaults["eta"]
+    defaults.update(params)
+    return ImpactOscillator.chain(masses=masses, springs=springs, **defaults)
+
+
+@pytest.fixture
+def make_chain():
+    """Factory ``make_chain(n, **params)`` of test chains."""
+    return _chain

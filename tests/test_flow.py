@@ -1,0 +1,140 @@
+"""The exact modal transfer and state flow (eq. 5-10) against independent references."""
+
+from __future__ import annotations
+
+import mpmath
+import numpy as np
+import pytest
+import scipy.linalg
+
+from impactcont import Flow, ImpactOscillator
+from impactcont.model.modal import free_transfer
+
+mpmath.mp.dps = 50
+
+
+def _mp_transfer(w: float, a: float, t: float) -> np.ndarray:
+    """50-digit exp([[0, 1], [-w^2, -2a]] t) by the eigenvalue (Sylvester) formula."""
+    w, a, t = mpmath.mpf(w), mpmath.mpf(a), mpmath.mpf(t)
+    A = mpmath.matrix([[0, 1], [-w * w, -2 * a]])
+    disc = mpmath.sqrt(mpmath.mpc(a * a - w * w))
+    if abs(disc) < mpmath.mpf(10) ** -40:  # critical: exp(-a t) (I + (A + a I) t)
+        out = mpmath.exp(-a * t) * (mpmath.eye(2) + (A + a * mpmath.eye(2)) * t)
+    else:
+        r1, r2 = -a + disc, -a - disc
+        out = (mpmath.exp(r1 * t) * (A - r2 * mpmath.eye(2))
+               - mpmath.exp(r2 * t) * (A - r1 * mpmath.eye(2))) / (r1 - r2)
+    return np.array([[float(mpmath.re(out[i, j])) for j in range(2)] for i in range(2)])
+
+
+def _ours(w: float, a: float, t: float) -> np.ndarray:
+    W11, W12, W21, W22 = free_transfer(np.array([w]), np.array([a]), np.array([t]))
+    return np.array([[W11[0, 0], W12[0, 0]], [W21[0, 0], W22[0, 0]]])
+
+
+REGIMES = {
+    "undamped": 0.0,
+    "underdamped": 0.2,
+    "near-critical-below": 1.0 - 1e-9,
+    "critical": 1.0,
+    "near-critical-above": 1.0 + 1e-9,
+    "overdamped": 3.0,
+    "heavily-overdamped": 1e4,
+}
+TIMES = [0.0, 1e-7, 0.05, 0.9, 3.0, 25.0]
+
+
+@pytest.mark.parametrize("xi", REGIMES.values(), ids=REGIMES.keys())
+def test_free_transfer_against_expm(xi):
+    w = 1.7
+    a = xi * w
+    for t in TIMES:
+        ref = scipy.linalg.expm(np.array([[0.0, 1.0], [-w * w, -2.0 * a]]) * t)
+        ours = _ours(w, a, t)
+        scale = np.abs(ref).max()
+        # expm itself is only accurate to about cond * eps for the stiff cases
+        tol = 1e-13 if xi < 10 else 1e-9
+        assert np.abs(ours - ref).max() <= tol * max(scale, 1.0), (xi, t, ours, ref)
+
+
+@pytest.mark.parametrize("xi", REGIMES.values(), ids=REGIMES.keys())
+def test_free_transfer_against_50_digits(xi):
+    w = 1.7
+    for t in TIMES[1:]:
+        ref = _mp_transfer(w, xi * w, t)
+        ours = _ours(w, xi * w, t)
+        # entrywise relative error: no cancellation near xi = 1 or for heavy damping
+        err = np.abs(ours - ref) / np.maximum(np.abs(ref), 1e-300)
+        assert err.max() < 5e-13, (xi, t, ours, ref)
+
+
+def test_free_transfer_no_overflow_for_huge_damping_times():
+    W = free_transfer(np.array([1.0, 1.0]), np.array([1e6, 0.5]), np.array([1e4]))
+    for blk in W:
+        assert np.all(np.isfinite(blk))
+    # slow over-damped decay rate is w^2 / (a + k) ~ 5e-7: W11 ~ exp(-5e-3)
+    assert W[0][0, 0] == pytest.approx(np.exp(-1e4 / (2e6)), rel=1e-6)
+
+
+def _augmented_flow(osc: ImpactOscillator, t: float, X0: np.ndarray, delta: float) -> np.ndarray:
+    """Reference: expm of the first-order system with the forcing as two extra states."""
+    n, om = osc.n, osc.omega
+    Minv = np.linalg.inv(osc.M)
+    A = np.zeros((2 * n + 2, 2 * n + 2))
+    A[:n, n:2 * n] = np.eye(n)
+    A[n:2 * n, :n] = -Minv @ osc.K
+    A[n:2 * n, n:2 * n] = -Minv @ osc.C
+    A[n:2 * n, 2 * n] = Minv @ osc.F
+    A[2 * n, 2 * n + 1] = -om
+    A[2 * n + 1, 2 * n] = om
+    Y0 = np.concatenate([X0, [np.cos(delta), np.sin(delta)]])
+    return (scipy.linalg.expm(A * t) @ Y0)[: 2 * n]
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 8])
+@pytest.mark.parametrize("damping", [{"eta": 0.0}, {"eta": 0.1}, {"eta": 1.5},
+                                     {"alpha": 0.2, "beta": 0.01}])
+def test_state_flow_against_expm(n, damping, make_chain):
+    osc = make_chain(n, omega=1.3, **damping)
+    flow = Flow(osc)
+    rng = np.random.default_rng(7)
+    X0 = rng.normal(size=2 * n)
+    delta = 0.4
+    ts = np.array([0.0, 0.3, 2.0, 7.5])
+    states = flow.state(ts, X0, delta)
+    for t, X in zip(ts, states, strict=True):
+        ref = _augmented_flow(osc, t, X0, delta)
+        np.testing.assert_allclose(X, ref, rtol=0, atol=1e-11 * max(1.0, np.abs(ref).max()))
+    # the matrix form of eq. (9) gives the same state
+    t = 2.0
+    X9 = flow.transition_matrix(t) @ X0 + flow.forcing_matrix(t) @ [np.cos(delta), np.sin(delta)]
+    np.testing.assert_allclose(X9, states[2], atol=1e-12)
+
+
+def test_state_derivative_is_the_vector_field(paper):
+    flow = Flow(paper)
+    X0 = np.array([0.2, -0.1, 0.5, 0.3])
+    delta = 1.1
+    ts = np.linspace(0.1, 6.0, 7)
+    dX = flow.state_derivative(ts, X0, delta)
+    X = flow.state(ts, X0, delta)
+    Minv = np.linalg.inv(paper.M)
+    for t, x, dx in zip(ts, X, dX, strict=True):
+        force = paper.F * np.cos(paper.omega * t + delta)
+        acc = Minv @ (force - paper.C @ x[2:] - paper.K @ x[:2])
+        np.testing.assert_allclose(dx, np.concatenate([x[2:], acc]), atol=1e-13)
+    h = 1e-5
+    fd = (flow.state(ts + h, X0, delta) - flow.state(ts - h, X0, delta)) / (2 * h)
+    np.testing.assert_allclose(dX, fd, atol=1e-9)
+
+
+def test_mass1_motion_matches_full_state(paper):
+    flow = Flow(paper)
+    X0 = np.array([0.6, 0.1, -0.5, 0.3])
+    ts = np.linspace(0.0, 9.0, 13)
+    x1, v1, a1 = flow.mass1(X0, 0.7)(ts)
+    X = flow.state(ts, X0, 0.7)
+    dX = flow.state_derivative(ts, X0, 0.7)
+    np.testing.assert_allclose(x1, X[:, 0], atol=1e-14)
+    np.testing.assert_allclose(v1, X[:, 2], atol=1e-14)
+    np.testing.assert_allclose(a1, dX[:, 2], atol=1e-13)

@@ -1,0 +1,210 @@
+"""Closed-form N-1 motions (eq. 12-16) and G (eq. 25) against the simulator."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from impactcont import Flow, ParameterError, amplitude_squared, periodic_orbits, simulate
+from impactcont.simulate import next_impact
+
+PAPER_G0 = np.array([
+    [-0.177445, 0.039713, -0.070643, 0.345996],
+    [-0.020169, 0.323905, 0.144022, -0.213799],
+    [0.262554, -0.049062, -0.179735, -0.154322],
+    [0.090393, 0.292730, 0.161324, 0.112559],
+])
+
+
+def simulated_impact_map(osc, N, z):
+    """The impact map on the section x1 = b, by the event-driven simulator.
+
+    z = [x2..xn, x1'..xn', delta] right after an impact -> the same right after the next one.
+    """
+    n = osc.n
+    X = np.concatenate([[osc.b], z[: 2 * n - 1]])
+    delta = z[-1]
+    T = 2 * math.pi * N / osc.omega
+    tc, X_minus = next_impact(Flow(osc), X, delta, 1.5 * T)
+    X_plus = X_minus.copy()
+    X_plus[n] *= -osc.R
+    return np.concatenate([X_plus[1:], [delta + osc.omega * tc - 2 * math.pi * N]])
+
+
+def section_point(orbit):
+    return np.concatenate([orbit.state[1:], [orbit.delta]])
+
+
+def test_paper_amplitude_and_G0(paper):
+    assert amplitude_squared(paper, 1) == pytest.approx(1.74355, abs=5e-6)
+    orbits = periodic_orbits(paper, 1)
+    physical = [o for o in orbits if o.physical]
+    assert len(orbits) == 2 and len(physical) == 1
+    np.testing.assert_allclose(physical[0].G, PAPER_G0, atol=5e-7)
+    assert physical[0].stable
+
+
+def test_roots_satisfy_eq14_and_periodicity(paper):
+    flow = Flow(paper)
+    for orbit in periodic_orbits(paper, 1):
+        assert orbit.state[0] == pytest.approx(paper.b, abs=1e-14)
+        X_T = flow.state(orbit.period, orbit.state, orbit.delta)[0]
+        X_plus = X_T.copy()
+        X_plus[paper.n] *= -paper.R
+        np.testing.assert_allclose(X_plus, orbit.state, atol=1e-13)
+        assert X_T[paper.n] == pytest.approx(orbit.impact_velocity, rel=1e-14)
+
+
+def test_no_motion_when_gap_exceeds_amplitude(paper):
+    r = math.sqrt(amplitude_squared(paper, 1))
+    assert periodic_orbits(paper.replace(b=1.001 * r), 1) == []
+    assert len(periodic_orbits(paper.replace(b=0.999 * r), 1)) == 2
+
+
+def test_bad_N_raises(paper):
+    for bad in (0, -1, 1.5, "2", True):
+        with pytest.raises(ParameterError, match="N must be an integer >= 1"):
+            periodic_orbits(paper, bad)
+
+
+CASES = [
+    # (n, params, N)
+    (1, {"omega": 1.3, "b": 0.2, "R": 0.8, "eta": 0.05}, 1),
+    (2, {"omega": 1.0, "b": 0.6}, 1),
+    (2, {"omega": 1.2, "b": 0.0}, 1),
+    (2, {"omega": 2.4, "b": 0.0}, 2),
+    (3, {"omega": 1.1, "b": 0.1}, 1),
+    (3, {"omega": 3.0, "b": -0.2}, 2),
+    (12, {"omega": 0.7, "b": 0.05}, 1),
+]
+
+
+def _system(n, params, paper, make_chain):
+    if n == 2:
+        return paper.replace(**params)
+    return make_chain(n, **params)
+
+
+def _all_orbits(paper, make_chain):
+    for n, params, N in CASES:
+        osc = _system(n, params, paper, make_chain)
+        orbits = periodic_orbits(osc, N)
+        assert orbits, (n, params, N)
+        yield from orbits
+
+
+@pytest.mark.parametrize("case", range(len(CASES)))
+def test_G_against_finite_differences_of_simulated_map(case, paper, make_chain):
+    n, params, N = CASES[case]
+    osc = _system(n, params, paper, make_chain)
+    for orbit in periodic_orbits(osc, N):
+        if not orbit.impact_velocity > 0.05 or not orbit.gap_min > 0.01:
+            continue  # the simulated map is the physical one only
+        z0 = section_point(orbit)
+        np.testing.assert_allclose(simulated_impact_map(osc, N, z0), z0, atol=1e-11)
+        h = 1e-6
+        fd = np.empty_like(orbit.G)
+        for j in range(z0.size):
+            e = np.zeros_like(z0)
+            e[j] = h
+            fd[:, j] = (simulated_impact_map(osc, N, z0 + e)
+                        - simulated_impact_map(osc, N, z0 - e)) / (2 * h)
+        scale = max(1.0, np.abs(orbit.G).max())
+        assert np.abs(fd - orbit.G).max() < 1e-7 * scale, (orbit, fd - orbit.G)
+
+
+def test_liouville_determinant(paper, make_chain):
+    """det G = R^2 exp(-T tr(M^-1 C)) for every root, physical or not."""
+    for orbit in _all_orbits(paper, make_chain):
+        osc = orbit.oscillator
+        trace = np.trace(np.linalg.solve(osc.M, osc.C))
+        expected = osc.R**2 * math.exp(-orbit.period * trace)
+        assert np.linalg.det(orbit.G) == pytest.approx(expected, rel=1e-9, abs=1e-300)
+        assert np.prod(orbit.multipliers).real == pytest.approx(expected, rel=1e-8)
+
+
+def test_physical_orbits_are_reproduced_by_simulation(paper, make_chain):
+    for orbit in _all_orbits(paper, make_chain):
+        if not orbit.physical:
+            continue
+        res = simulate(orbit.oscillator, orbit.state, orbit.delta, 5 * orbit.N + 0.5)
+        assert res.success
+        assert res.impact_times.size == 5
+        np.testing.assert_allclose(res.impact_times, orbit.period * np.arange(1, 6),
+                                   rtol=0, atol=1e-9 * orbit.period)
+        np.testing.assert_allclose(res.impact_velocities, orbit.impact_velocity, rtol=1e-9)
+        np.testing.assert_allclose(res.impact_states[-1], orbit.state, atol=1e-9)
+
+
+def test_non_physical_roots_are_flagged_with_a_reason(paper):
+    orbits = periodic_orbits(paper, 1)
+    bad = [o for o in orbits if not o.physical]
+    assert len(bad) == 1
+    assert bad[0].impact_velocity < 0
+    assert "impact velocity" in bad[0].reason
+
+
+def test_gap_min_against_dense_sampling(paper, make_chain):
+    for orbit in _all_orbits(paper, make_chain):
+        t, X = orbit.time_series(num=200_001)
+        x1 = X[:, 0]
+        inner = (x1[1:-1] > x1[:-2]) & (x1[1:-1] >= x1[2:])
+        peaks = x1[1:-1][inner]
+        if peaks.size == 0:
+            assert math.isinf(orbit.gap_min)
+            continue
+        sampled = orbit.oscillator.b - peaks.max()
+        # the located maximum is at least as high as any sample, and close to the best one
+        assert orbit.gap_min <= sampled + 1e-14
+        assert orbit.gap_min == pytest.approx(sampled, abs=1e-8)
+
+
+def test_grazing_orbit_is_flagged_by_interior_contact(paper):
+    """At b = 0, omega = 2.6 the N = 3 roots enter the stop inside the period (eq. 16)."""
+    for orbit in periodic_orbits(paper.replace(b=0.0, omega=2.6), 3):
+        assert not orbit.physical
+        assert orbit.gap_min < 0
+        # the simulator from the same start sees an earlier impact
+        res = simulate(orbit.oscillator, orbit.state, orbit.delta, 3.0)
+        if orbit.impact_velocity > 0:
+            assert res.impact_times[0] < 0.99 * orbit.period
+
+
+def _perturbed_start(orbit, size):
+    rng = np.random.default_rng(3)
+    z = section_point(orbit) + size * rng.normal(size=orbit.state.size)
+    return np.concatenate([[orbit.oscillator.b], z[:-1]]), z[-1]
+
+
+def _section_distance(orbit, res, k):
+    z = np.concatenate([res.impact_states[k][1:], [res.impact_phases[k]]])
+    d = z - section_point(orbit)
+    d[-1] = math.remainder(d[-1], 2 * math.pi)
+    return np.abs(d).max()
+
+
+def test_stable_orbit_attracts_a_nearby_start(paper):
+    orbit = next(o for o in periodic_orbits(paper, 1) if o.physical)
+    X, delta = _perturbed_start(orbit, 1e-3)
+    res = simulate(paper, X, delta, 30.5)
+    d0, d_end = _section_distance(orbit, res, 0), _section_distance(orbit, res, -1)
+    assert d_end < 1e-9 and d_end < d0 * orbit.spectral_radius**20
+
+
+def test_unstable_orbit_repels_a_nearby_start(paper):
+    """A physical but unstable N-1 motion: find one on a branch and check it repels."""
+    osc = None
+    for omega in np.linspace(2.0, 4.0, 81):
+        for orbit in periodic_orbits(paper.replace(b=0.0, omega=float(omega)), 1):
+            if orbit.physical and orbit.spectral_radius > 1.2 and orbit.impact_velocity > 0.1:
+                osc = orbit.oscillator
+                break
+        if osc is not None:
+            break
+    assert osc is not None, "no physical unstable N=1 motion found on the scan"
+    X, delta = _perturbed_start(orbit, 1e-7)
+    res = simulate(osc, X, delta, 40.5)
+    distances = [_section_distance(orbit, res, k) for k in range(min(res.impact_times.size, 30))]
+    assert max(distances) > 1e3 * distances[0]
