@@ -130,7 +130,7 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
                              f"got {np.asarray(state).tolist()!r}")
     tol = 1e-12 * max(1.0, abs(osc.b))
     if X[0] > osc.b + tol:
-        raise ParameterError(f"state[0] = x1 = {X[0]!r} is beyond the stop b = {osc.b!r}; "
+        raise ParameterError(f"state[0] = x1 = {float(X[0])!r} is beyond the stop b = {osc.b!r}; "
                              "x1 <= b is required")
     return X
 
@@ -184,7 +184,13 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     v_scale = 0.0
 
     while True:
-        hit = next_impact(flow, X, phase, t_end - t_now)
+        if X[0] >= osc.b and X[n] >= 0:  # on the stop, moving into it: impact now
+            hit = (0.0, X.copy())
+            if X[n] == 0 and flow.state_derivative(0.0, X, phase)[0][n] > 0:
+                status = SimulationStatus.STICKING
+                break
+        else:
+            hit = next_impact(flow, X, phase, t_end - t_now)
         flight = hit[0] if hit is not None else t_end - t_now
         if trajectory:
             tau = np.arange(0.0, flight, dt_sample)
