@@ -56,13 +56,15 @@ class ContinuationOptions:
         Largest step.
     newton_tol : float, default 1e-10
         Newton converges when both the max-norm of the residual and the
-        max-norm of the last Newton update are at most this value.
+        max-norm of the last Newton update are at most this value (a guess
+        whose residual is already within it is accepted as is).
     newton_max_iter : int, default 10
         Largest number of Newton iterations per point.
     max_points : int, default 1000
         Largest number of points per direction, the start point included.
     direction : int, default 1
-        Sign of ``dlam`` at the start point, ``+1`` or ``-1``.
+        Sign of ``dlam`` at the start point, ``+1`` or ``-1``; at a start on
+        a fold, the sign of the largest ``du`` component instead.
     both_directions : bool, default False
         Also continue from the start point in the opposite direction and join
         both parts into one branch.
@@ -133,9 +135,7 @@ class ContinuationOptions:
                 raise _option_error(name, value, "it must be > 0")
             self._set(name, value)
         if self.ds_min > self.ds_max:
-            raise _option_error(
-                "ds_min", self.ds_min, f"it must be <= ds_max = {self.ds_max!r}"
-            )
+            raise _option_error("ds_min", self.ds_min, f"it must be <= ds_max = {self.ds_max!r}")
         if not self.ds_min <= self.ds <= self.ds_max:
             raise _option_error(
                 "ds",

@@ -11,7 +11,7 @@ from impactcont.continuation.problem import FloatArray
 __all__ = ["ContinuationPoint"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ContinuationPoint:
     """An accepted point ``(u, lam)`` of a branch with its tangent.
 

@@ -1,0 +1,463 @@
+"""Continuation loop: run the stepper, stop on bounds, loops and failures.
+
+:func:`continue_branch` computes a whole branch. :func:`iter_points` runs one
+direction lazily and yields every accepted point, for callers (such as a
+bifurcation-detection layer) that watch the stream of points.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import math
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from impactcont.continuation.options import ContinuationOptions
+from impactcont.continuation.point import ContinuationPoint
+from impactcont.continuation.problem import FloatArray, Problem
+from impactcont.continuation.stepper import (
+    NewtonConvergenceError,
+    PalcStepper,
+    StepSizeBelowMinimumError,
+)
+from impactcont.errors import ParameterError
+
+__all__ = [
+    "BranchRun",
+    "ContinuationResult",
+    "ContinuationStatus",
+    "continue_branch",
+    "iter_points",
+]
+
+logger = logging.getLogger(__name__)
+
+LOOP_CLOSING_DISTANCE = 1.0
+"""A loop closes when the last chord passes within this many steps ``ds`` of the start."""
+LOOP_AWAY_DISTANCE = 3.0
+"""The branch must first have gone this many steps ``ds`` away from the start."""
+
+
+class ContinuationStatus(enum.Enum):
+    """Why a continuation run stopped; the values are readable messages."""
+
+    BOUNDS_REACHED = "parameter bound reached"
+    MAX_POINTS_REACHED = "maximum number of points reached"
+    STEP_BELOW_MINIMUM = "step size fell below ds_min"
+    CLOSED_LOOP = "closed loop detected"
+    NEWTON_FAILED_AT_START = "Newton failed at the start point"
+
+
+class BranchRun:
+    """One continuation run in one direction, iterated lazily.
+
+    Iterating yields every accepted :class:`ContinuationPoint`, the start point
+    first (``index == 0``). When the iteration ends, :attr:`status` and
+    :attr:`message` tell why. A run can be iterated once.
+
+    Parameters
+    ----------
+    problem : Problem
+        The system ``F(u, lam) = 0``.
+    u0 : array_like, shape (m,)
+        Guess of the unknowns at the start.
+    lam0 : float
+        Parameter of the start point, within ``options.bounds``.
+    options : ContinuationOptions
+        Continuation options.
+    direction : int, optional
+        Sign of ``dlam`` at the start, ``+1`` or ``-1``; defaults to
+        ``options.direction``.
+    """
+
+    def __init__(
+        self,
+        problem: Problem,
+        u0: FloatArray | Sequence[float],
+        lam0: float,
+        options: ContinuationOptions,
+        direction: int | None = None,
+    ) -> None:
+        self.u0, self.lam0 = _validated_start(u0, lam0, options)
+        self.problem = problem
+        self.options = options
+        self.direction = options.direction if direction is None else direction
+        if self.direction not in (1, -1):
+            raise ParameterError(f"direction = {direction!r} is invalid; it must be +1 or -1")
+        self.status: ContinuationStatus | None = None
+        self.message = "not run yet"
+        self._started = False
+
+    def __iter__(self) -> Iterator[ContinuationPoint]:
+        if self._started:
+            raise RuntimeError("a BranchRun can be iterated only once; create a new one")
+        self._started = True
+        return self._run()
+
+    def _finish(self, status: ContinuationStatus, detail: str) -> None:
+        self.status = status
+        self.message = f"{status.value}: {detail}"
+        logger.info("continuation (direction %+d) stopped, %s", self.direction, self.message)
+
+    def _run(self) -> Iterator[ContinuationPoint]:
+        stepper = PalcStepper(self.problem, self.options, self.direction)
+        try:
+            start = stepper.init(self.u0, self.lam0)
+        except NewtonConvergenceError as error:
+            self._finish(ContinuationStatus.NEWTON_FAILED_AT_START, str(error))
+            return
+        yield start
+        farthest_from_start = 0.0
+        previous = start
+        while True:
+            if previous.index + 1 >= self.options.max_points:
+                self._finish(
+                    ContinuationStatus.MAX_POINTS_REACHED,
+                    f"{self.options.max_points} points, last at lam = {previous.lam:.10g}",
+                )
+                return
+            try:
+                current = stepper.step()
+            except StepSizeBelowMinimumError as error:
+                self._finish(ContinuationStatus.STEP_BELOW_MINIMUM, str(error))
+                return
+            bound = self._crossed_bound(current.lam)
+            if bound is not None:
+                yield from self._land_on_bound(stepper, previous, current, bound)
+                return
+            yield current
+            if self._closes_loop(stepper, start, previous, current, farthest_from_start):
+                self._finish(
+                    ContinuationStatus.CLOSED_LOOP,
+                    f"branch returned to the start lam = {start.lam:.10g} "
+                    f"after {current.index + 1} points",
+                )
+                return
+            farthest_from_start = max(
+                farthest_from_start, stepper.scaled_norm(current.state - start.state)
+            )
+            previous = current
+
+    def _crossed_bound(self, lam: float) -> float | None:
+        """The bound that `lam` reached or crossed, ``None`` when inside."""
+        lam_min, lam_max = self.options.bounds
+        if lam <= lam_min:
+            return lam_min
+        if lam >= lam_max:
+            return lam_max
+        return None
+
+    def _land_on_bound(
+        self,
+        stepper: PalcStepper,
+        previous: ContinuationPoint,
+        current: ContinuationPoint,
+        bound: float,
+    ) -> Iterator[ContinuationPoint]:
+        """Yield the point exactly on `bound` (if new) and finish the run."""
+        detail = f"lam = {bound:.10g}"
+        if current.lam == bound:
+            yield current
+        elif previous.lam != bound:
+            try:
+                landed = stepper.land_on_parameter(previous, current, bound)
+            except NewtonConvergenceError as error:
+                logger.warning("could not land on the bound lam = %.10g: %s", bound, error)
+                detail = (
+                    f"lam = {bound:.10g} crossed, but the point on it was not found ({error}); "
+                    f"last point at lam = {previous.lam:.10g}"
+                )
+            else:
+                yield landed
+        self._finish(ContinuationStatus.BOUNDS_REACHED, detail)
+
+    @staticmethod
+    def _closes_loop(
+        stepper: PalcStepper,
+        start: ContinuationPoint,
+        previous: ContinuationPoint,
+        current: ContinuationPoint,
+        farthest_from_start: float,
+    ) -> bool:
+        """Whether the chord ``previous -> current`` passes by the start point again.
+
+        The branch must first have gone more than ``LOOP_AWAY_DISTANCE`` steps
+        away from the start; the chord must then pass within
+        ``LOOP_CLOSING_DISTANCE`` steps of the start, travelling in the
+        direction of the start tangent.
+        """
+        if farthest_from_start <= LOOP_AWAY_DISTANCE * current.ds:
+            return False
+        if stepper.scaled_dot(current.tangent, start.tangent) <= 0.0:
+            return False
+        chord = current.state - previous.state
+        to_start = start.state - previous.state
+        chord_length_squared = stepper.scaled_dot(chord, chord)
+        if chord_length_squared == 0.0:
+            return False
+        fraction = stepper.scaled_dot(to_start, chord) / chord_length_squared
+        if not 0.0 <= fraction <= 1.0:
+            return False
+        distance = stepper.scaled_norm(to_start - fraction * chord)
+        return distance <= LOOP_CLOSING_DISTANCE * current.ds
+
+
+def iter_points(
+    problem: Problem,
+    u0: FloatArray | Sequence[float],
+    lam0: float,
+    options: ContinuationOptions,
+    direction: int | None = None,
+) -> BranchRun:
+    """Continue in one direction, yielding the accepted points lazily.
+
+    Parameters
+    ----------
+    problem : Problem
+        The system ``F(u, lam) = 0``.
+    u0 : array_like, shape (m,)
+        Guess of the unknowns at the start.
+    lam0 : float
+        Parameter of the start point, within ``options.bounds``.
+    options : ContinuationOptions
+        Continuation options; ``both_directions`` is ignored here.
+    direction : int, optional
+        Sign of ``dlam`` at the start; defaults to ``options.direction``.
+
+    Returns
+    -------
+    BranchRun
+        Iterable of :class:`ContinuationPoint`; read ``status`` and ``message``
+        after the iteration ends.
+
+    Examples
+    --------
+    >>> run = iter_points(problem, u0, lam0, options)  # doctest: +SKIP
+    >>> folds, previous = [], None
+    >>> for point in run:  # doctest: +SKIP
+    ...     if previous is not None and previous.dlam * point.dlam < 0:
+    ...         folds.append((previous, point))
+    ...     previous = point
+    >>> run.status  # doctest: +SKIP
+    """
+    return BranchRun(problem, u0, lam0, options, direction)
+
+
+@dataclass(frozen=True, eq=False)
+class ContinuationResult:
+    """A computed branch and why its computation stopped.
+
+    With ``both_directions`` the points are ordered along the whole branch:
+    the backward part reversed, then the start point, then the forward part.
+    All tangents point along this order.
+
+    Attributes
+    ----------
+    u : ndarray, shape (npoints, m)
+        Unknowns of the accepted points.
+    lam : ndarray, shape (npoints,)
+        Parameter values.
+    tangent : ndarray, shape (npoints, m + 1)
+        Unit tangents ``(du, dlam)`` in the scaled norm.
+    ds : ndarray, shape (npoints,)
+        Scaled arclength step that produced each point (0 at the start).
+    newton_iterations : ndarray of int, shape (npoints,)
+        Newton iterations spent on each point.
+    monitors : dict of str to ndarray
+        Monitor values per point, shape ``(npoints,)`` each.
+    status : ContinuationStatus
+        Why the run in ``options.direction`` stopped.
+    backward_status : ContinuationStatus or None
+        Why the opposite run stopped; ``None`` without ``both_directions``.
+        When the forward run closed a loop or Newton failed at the start, the
+        backward run is not computed and gets the same status.
+    message : str
+        Readable summary of both statuses.
+    start_index : int
+        Index of the start point in the arrays.
+    """
+
+    u: FloatArray
+    lam: FloatArray
+    tangent: FloatArray
+    ds: FloatArray
+    newton_iterations: np.ndarray
+    monitors: dict[str, FloatArray]
+    status: ContinuationStatus
+    backward_status: ContinuationStatus | None
+    message: str
+    start_index: int = 0
+
+    @property
+    def statuses(self) -> tuple[ContinuationStatus, ...]:
+        """The status of each direction, forward first."""
+        if self.backward_status is None:
+            return (self.status,)
+        return (self.status, self.backward_status)
+
+    def __len__(self) -> int:
+        return int(self.lam.shape[0])
+
+
+def continue_branch(
+    problem: Problem,
+    u0: FloatArray | Sequence[float],
+    lam0: float,
+    options: ContinuationOptions,
+    on_point: Callable[[ContinuationPoint], None] | None = None,
+) -> ContinuationResult:
+    """Compute a branch of ``F(u, lam) = 0`` by pseudo-arclength continuation.
+
+    Parameters
+    ----------
+    problem : Problem
+        The system ``F(u, lam) = 0``.
+    u0 : array_like, shape (m,)
+        Guess of the unknowns at the start; corrected at fixed `lam0`.
+    lam0 : float
+        Parameter of the start point, within ``options.bounds``.
+    options : ContinuationOptions
+        Continuation options.
+    on_point : callable, optional
+        Called with every accepted :class:`ContinuationPoint` in the order
+        computed: the run in ``options.direction`` first (start point with
+        ``index == 0``), then, with ``both_directions``, the opposite run,
+        which starts again with the start point (``index == 0``).
+
+    Returns
+    -------
+    ContinuationResult
+        The accepted points and the stop statuses.
+
+    Raises
+    ------
+    ParameterError
+        If `u0` is not a non-empty 1-D finite array or `lam0` is outside
+        ``options.bounds``.
+    """
+    forward = _collect(BranchRun(problem, u0, lam0, options), on_point)
+    if not options.both_directions:
+        return _result_one_direction(forward)
+    if forward.status in _STATUSES_SKIPPING_BACKWARD:
+        return _result_one_direction(
+            forward, forward.status, f"skipped, {_STATUSES_SKIPPING_BACKWARD[forward.status]}"
+        )
+    backward = _collect(BranchRun(problem, u0, lam0, options, -options.direction), on_point)
+    return _result_both_directions(forward, backward)
+
+
+_STATUSES_SKIPPING_BACKWARD = {
+    ContinuationStatus.CLOSED_LOOP: "the branch is a closed loop",
+    ContinuationStatus.NEWTON_FAILED_AT_START: "Newton failed at the shared start point",
+}
+"""Forward statuses after which the backward run is not computed, with the reason."""
+
+
+@dataclass
+class _CollectedRun:
+    """The points of a finished run with its status."""
+
+    points: list[ContinuationPoint]
+    status: ContinuationStatus
+    message: str
+
+
+def _collect(run: BranchRun, on_point: Callable[[ContinuationPoint], None] | None) -> _CollectedRun:
+    points = []
+    for point in run:
+        points.append(point)
+        if on_point is not None:
+            on_point(point)
+    if run.status is None:
+        raise RuntimeError("continuation run ended without a status")
+    return _CollectedRun(points, run.status, run.message)
+
+
+def _result_one_direction(
+    run: _CollectedRun,
+    backward_status: ContinuationStatus | None = None,
+    backward_message: str = "",
+) -> ContinuationResult:
+    message = run.message
+    if backward_status is not None:
+        message = f"forward: {run.message}; backward: {backward_message}"
+    return _build_result(run.points, run.status, backward_status, message, start_index=0)
+
+
+def _result_both_directions(forward: _CollectedRun, backward: _CollectedRun) -> ContinuationResult:
+    """Join ``reversed(backward[1:]) + forward`` with tangents along the joined order."""
+    reversed_backward = [_reverse_tangent(point) for point in reversed(backward.points[1:])]
+    points = reversed_backward + forward.points
+    message = f"forward: {forward.message}; backward: {backward.message}"
+    return _build_result(
+        points, forward.status, backward.status, message, start_index=len(reversed_backward)
+    )
+
+
+def _reverse_tangent(point: ContinuationPoint) -> ContinuationPoint:
+    return ContinuationPoint(
+        u=point.u,
+        lam=point.lam,
+        tangent=-point.tangent,
+        ds=point.ds,
+        newton_iterations=point.newton_iterations,
+        index=point.index,
+        direction=point.direction,
+        monitors=point.monitors,
+    )
+
+
+def _build_result(
+    points: list[ContinuationPoint],
+    status: ContinuationStatus,
+    backward_status: ContinuationStatus | None,
+    message: str,
+    start_index: int,
+) -> ContinuationResult:
+    if points:
+        u = np.array([point.u for point in points])
+        tangent = np.array([point.tangent for point in points])
+    else:
+        u = np.empty((0, 0))
+        tangent = np.empty((0, 0))
+    return ContinuationResult(
+        u=u,
+        lam=np.array([point.lam for point in points], dtype=float),
+        tangent=tangent,
+        ds=np.array([point.ds for point in points], dtype=float),
+        newton_iterations=np.array([point.newton_iterations for point in points], dtype=int),
+        monitors=_stack_monitors(points),
+        status=status,
+        backward_status=backward_status,
+        message=message,
+        start_index=start_index,
+    )
+
+
+def _stack_monitors(points: list[ContinuationPoint]) -> dict[str, FloatArray]:
+    names = list(dict.fromkeys(name for point in points for name in point.monitors))
+    return {
+        name: np.array([point.monitors.get(name, math.nan) for point in points], dtype=float)
+        for name in names
+    }
+
+
+def _validated_start(
+    u0: FloatArray | Sequence[float], lam0: float, options: ContinuationOptions
+) -> tuple[FloatArray, float]:
+    """Check the start point and return it as ``(float array, float)``."""
+    u = np.array(u0, dtype=float)
+    if u.ndim != 1 or u.size == 0 or not np.all(np.isfinite(u)):
+        raise ParameterError(
+            f"u0 = {u0!r} is invalid; it must be a non-empty 1-D array of finite floats"
+        )
+    lam = float(lam0)
+    lam_min, lam_max = options.bounds
+    if not lam_min <= lam <= lam_max:
+        raise ParameterError(
+            f"lam0 = {lam0!r} is invalid; it must lie within bounds [{lam_min}, {lam_max}]"
+        )
+    return u, lam

@@ -1,0 +1,425 @@
+"""Pseudo-arclength continuation (PALC) stepper with an adaptive step.
+
+The stepper follows the solution curve of ``F(u, lam) = 0`` in the extended
+space ``x = (u, lam)``. Lengths and angles are measured in the scaled norm
+
+    ``||(du, dlam)||^2 = ||du||^2 / m + theta * dlam^2``,
+
+with ``m`` the number of unknowns and ``theta`` the weight of the parameter.
+One step is a tangent predictor ``x_pred = x + ds * t`` followed by Newton on
+the bordered system ``[F(x); <t, x - x_pred>] = 0``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from impactcont.continuation.options import ContinuationOptions
+from impactcont.continuation.point import ContinuationPoint
+from impactcont.continuation.problem import (
+    FloatArray,
+    Problem,
+    check_problem_outputs,
+    evaluate_monitors,
+)
+
+__all__ = [
+    "ContinuationStepError",
+    "NewtonConvergenceError",
+    "PalcStepper",
+    "StepSizeBelowMinimumError",
+]
+
+logger = logging.getLogger(__name__)
+
+STEP_GROWTH_FACTOR = 1.5
+"""Factor applied to the step after an easy step."""
+STEP_SLOW_NEWTON_FACTOR = 0.75
+"""Factor applied to the step when Newton needed more than the target iterations."""
+STEP_REJECTION_FACTOR = 0.5
+"""Factor applied to the step after a rejected step."""
+FOLD_DLAM_TOLERANCE = 1e-12
+"""Relative size below which the ``dlam`` of the initial tangent counts as zero."""
+SINGULAR_CONDITION = 1.0 / np.finfo(float).eps
+"""Condition number above which a matrix is singular to working precision."""
+
+
+class ContinuationStepError(RuntimeError):
+    """Base class of the failures of the stepper."""
+
+
+class NewtonConvergenceError(ContinuationStepError):
+    """Newton's method did not converge."""
+
+
+class StepSizeBelowMinimumError(ContinuationStepError):
+    """No step of at least ``ds_min`` could be accepted."""
+
+
+class PalcStepper:
+    """Pseudo-arclength stepper along the solution curve of a :class:`Problem`.
+
+    Parameters
+    ----------
+    problem : Problem
+        The system ``F(u, lam) = 0``.
+    options : ContinuationOptions
+        Step sizes, Newton tolerances and the adaptive rule.
+    direction : int, optional
+        Sign of ``dlam`` of the initial tangent, ``+1`` or ``-1``; defaults to
+        ``options.direction``.
+
+    Notes
+    -----
+    Call :meth:`init` once, then :meth:`step` repeatedly. :attr:`current`
+    holds the last accepted point.
+    """
+
+    def __init__(
+        self, problem: Problem, options: ContinuationOptions, direction: int | None = None
+    ) -> None:
+        self.problem = problem
+        self.options = options
+        self.direction = options.direction if direction is None else direction
+        if self.direction not in (1, -1):
+            raise ValueError(f"direction = {direction!r} is invalid; it must be +1 or -1")
+        self.ds = options.ds
+        self._weights: FloatArray | None = None
+        self._current: ContinuationPoint | None = None
+
+    # ------------------------------------------------------------------ state
+
+    @property
+    def current(self) -> ContinuationPoint:
+        """The last accepted point."""
+        if self._current is None:
+            raise RuntimeError("PalcStepper.init(u0, lam0) must be called before stepping")
+        return self._current
+
+    def scaled_dot(self, a: FloatArray, b: FloatArray) -> float:
+        """Scaled inner product of two extended vectors ``(u, lam)``.
+
+        Overflow gives ``inf`` silently; the Newton loops reject non-finite values.
+        """
+        with np.errstate(over="ignore", invalid="ignore"):
+            return float(np.sum(self._metric_weights() * a * b))
+
+    def scaled_norm(self, a: FloatArray) -> float:
+        """Scaled norm of an extended vector ``(u, lam)``."""
+        return math.sqrt(self.scaled_dot(a, a))
+
+    def _metric_weights(self) -> FloatArray:
+        if self._weights is None:
+            raise RuntimeError("PalcStepper.init(u0, lam0) must be called first")
+        return self._weights
+
+    # ------------------------------------------------------------------- init
+
+    def init(self, u0: FloatArray, lam0: float) -> ContinuationPoint:
+        """Correct the start point at fixed parameter and compute its tangent.
+
+        Parameters
+        ----------
+        u0 : ndarray, shape (m,)
+            Guess of the unknowns at the start.
+        lam0 : float
+            Parameter value of the start point, kept fixed.
+
+        Returns
+        -------
+        ContinuationPoint
+            The corrected start point (index 0, ``ds = 0``).
+
+        Raises
+        ------
+        NewtonConvergenceError
+            If Newton does not converge at ``lam0``.
+        ProblemOutputError
+            If the problem's methods return arrays of the wrong shape.
+        """
+        u0 = np.array(u0, dtype=float)
+        lam0 = float(lam0)
+        m = u0.shape[0]
+        self._weights = np.append(np.full(m, 1.0 / m), self.options.theta)
+        check_problem_outputs(self.problem, u0, lam0)
+        u, iterations = self.correct_at_fixed_parameter(u0, lam0)
+        tangent = self._initial_tangent(u, lam0)
+        self._current = self._make_point(u, lam0, tangent, 0.0, iterations, index=0)
+        logger.debug("start point corrected at lam = %.10g in %d iterations", lam0, iterations)
+        return self._current
+
+    def _initial_tangent(self, u: FloatArray, lam: float) -> FloatArray:
+        """Null vector of ``[J | dF/dlam]`` oriented by the run direction."""
+        extended = np.column_stack([self._jacobian(u, lam), self._dparam(u, lam)])
+        if not np.all(np.isfinite(extended)):
+            raise NewtonConvergenceError(f"non-finite extended Jacobian at lam = {lam:.10g}")
+        _, singular_values, vh = np.linalg.svd(extended)
+        tangent = vh[-1]
+        if singular_values.size and singular_values[-1] <= (
+            singular_values[0] * tangent.size * np.finfo(float).eps
+        ):
+            logger.warning(
+                "extended Jacobian [J | dF/dlam] has rank below m at lam = %.10g "
+                "(singular values %s): the start may be a branch point",
+                lam,
+                singular_values,
+            )
+        return self._oriented(tangent, lam) / self.scaled_norm(tangent)
+
+    def _oriented(self, tangent: FloatArray, lam: float) -> FloatArray:
+        """Flip `tangent` so that its ``dlam`` has the sign of the run direction.
+
+        At a fold (``dlam`` zero to working precision) the largest ``u``
+        component gets the sign of the direction instead, so that the two
+        directions still leave the start on opposite sides.
+        """
+        if abs(tangent[-1]) > FOLD_DLAM_TOLERANCE * np.max(np.abs(tangent)):
+            return tangent if np.sign(tangent[-1]) == self.direction else -tangent
+        largest = int(np.argmax(np.abs(tangent[:-1])))
+        logger.warning(
+            "initial tangent has dlam = 0 at lam = %.10g (start at a fold); "
+            "orienting it by the sign of its largest component u[%d] instead",
+            lam,
+            largest,
+        )
+        return tangent if np.sign(tangent[largest]) == self.direction else -tangent
+
+    # ------------------------------------------------------------------- step
+
+    def step(self) -> ContinuationPoint:
+        """Take one adaptive pseudo-arclength step from :attr:`current`.
+
+        Returns
+        -------
+        ContinuationPoint
+            The new accepted point, also stored in :attr:`current`.
+
+        Raises
+        ------
+        StepSizeBelowMinimumError
+            If the step had to shrink below ``options.ds_min``.
+        """
+        previous = self.current
+        while True:
+            try:
+                point, angle = self._try_step(previous, self.ds)
+            except NewtonConvergenceError as error:
+                reason = f"Newton failed ({error})"
+            else:
+                if angle <= self.options.max_angle:
+                    self.ds = self._adapted_step(self.ds, point.newton_iterations, angle)
+                    self._current = point
+                    return point
+                reason = f"tangent turned by {angle:.3g} rad > max_angle"
+            self._shrink_after_rejection(previous, reason)
+
+    def _shrink_after_rejection(self, previous: ContinuationPoint, reason: str) -> None:
+        rejected_ds = self.ds
+        self.ds = rejected_ds * STEP_REJECTION_FACTOR
+        logger.debug(
+            "step ds = %.3g from lam = %.10g rejected: %s", rejected_ds, previous.lam, reason
+        )
+        if self.ds < self.options.ds_min:
+            raise StepSizeBelowMinimumError(
+                f"step {self.ds:.3g} fell below ds_min = {self.options.ds_min:.3g} "
+                f"at lam = {previous.lam:.10g}: {reason}"
+            )
+
+    def _try_step(self, previous: ContinuationPoint, ds: float) -> tuple[ContinuationPoint, float]:
+        """Predict, correct and compute the new tangent; return the point and turn angle."""
+        predicted = previous.state + ds * previous.tangent
+        state, iterations = self._correct_on_hyperplane(predicted, previous.tangent)
+        u, lam = state[:-1], float(state[-1])
+        tangent = self._tangent_at(u, lam, previous.tangent)
+        cosine = np.clip(self.scaled_dot(previous.tangent, tangent), -1.0, 1.0)
+        point = self._make_point(u, lam, tangent, ds, iterations, index=previous.index + 1)
+        return point, float(np.arccos(cosine))
+
+    def _adapted_step(self, ds: float, iterations: int, angle: float) -> float:
+        """Step size for the next step after an accepted one."""
+        if iterations <= self.options.target_newton_iter and angle <= self.options.max_angle / 2:
+            ds *= STEP_GROWTH_FACTOR
+        elif iterations > self.options.target_newton_iter:
+            ds *= STEP_SLOW_NEWTON_FACTOR
+        return float(np.clip(ds, self.options.ds_min, self.options.ds_max))
+
+    def _tangent_at(self, u: FloatArray, lam: float, reference: FloatArray) -> FloatArray:
+        """Unit tangent at ``(u, lam)`` with positive scaled dot product with `reference`."""
+        bordered = self._bordered_matrix(u, lam, reference)
+        right_hand_side = np.zeros(bordered.shape[0])
+        right_hand_side[-1] = 1.0
+        tangent = self._solve(bordered, right_hand_side, lam)
+        return tangent / self.scaled_norm(tangent)
+
+    # ----------------------------------------------------------- bound landing
+
+    def land_on_parameter(
+        self, previous: ContinuationPoint, current: ContinuationPoint, lam_target: float
+    ) -> ContinuationPoint:
+        """Solve for the point at ``lam = lam_target`` between two accepted points.
+
+        The guess is the linear interpolation of `previous` and `current` at
+        `lam_target`, which must lie between their parameter values. The
+        result replaces `current` as :attr:`current`.
+
+        Parameters
+        ----------
+        previous, current : ContinuationPoint
+            Consecutive accepted points whose parameters bracket `lam_target`.
+        lam_target : float
+            Parameter value of the new point.
+
+        Returns
+        -------
+        ContinuationPoint
+            The point on the branch at ``lam_target``, with the index of `current`.
+
+        Raises
+        ------
+        NewtonConvergenceError
+            If Newton at fixed ``lam_target`` does not converge.
+        """
+        fraction = (lam_target - previous.lam) / (current.lam - previous.lam)
+        u_guess = previous.u + fraction * (current.u - previous.u)
+        u, iterations = self.correct_at_fixed_parameter(u_guess, lam_target)
+        tangent = self._tangent_at(u, lam_target, previous.tangent)
+        ds = self.scaled_norm(np.append(u, lam_target) - previous.state)
+        point = self._make_point(u, lam_target, tangent, ds, iterations, index=current.index)
+        self._current = point
+        return point
+
+    # ----------------------------------------------------------------- Newton
+
+    def correct_at_fixed_parameter(self, u_guess: FloatArray, lam: float) -> tuple[FloatArray, int]:
+        """Newton's method on ``F(u, lam) = 0`` in ``u`` at fixed `lam`.
+
+        Returns
+        -------
+        u : ndarray, shape (m,)
+            The converged unknowns.
+        iterations : int
+            Number of Newton updates.
+
+        Raises
+        ------
+        NewtonConvergenceError
+            If the iteration does not converge in ``options.newton_max_iter``
+            updates or produces non-finite values.
+        """
+        u = np.array(u_guess, dtype=float)
+        last_update_norm = math.inf
+        for iteration in range(self.options.newton_max_iter + 1):
+            residual = self._residual(u, lam)
+            if self._converged(residual, last_update_norm, iteration):
+                return u, iteration
+            if iteration == self.options.newton_max_iter:
+                break
+            update = self._solve(self._jacobian(u, lam), -residual, lam)
+            last_update_norm = float(np.max(np.abs(update)))
+            u = u + update
+        raise NewtonConvergenceError(
+            f"no convergence at fixed lam = {lam:.10g} in {self.options.newton_max_iter} "
+            f"iterations (residual {np.max(np.abs(residual)):.3g})"
+        )
+
+    def _correct_on_hyperplane(
+        self, predicted: FloatArray, tangent: FloatArray
+    ) -> tuple[FloatArray, int]:
+        """Newton on ``[F(x); <tangent, x - predicted>] = 0`` starting at `predicted`."""
+        state = predicted.copy()
+        last_update_norm = math.inf
+        for iteration in range(self.options.newton_max_iter + 1):
+            u, lam = state[:-1], float(state[-1])
+            residual = self._residual(u, lam)
+            if self._converged(residual, last_update_norm, iteration):
+                return state, iteration
+            if iteration == self.options.newton_max_iter:
+                break
+            bordered_residual = np.append(residual, self.scaled_dot(tangent, state - predicted))
+            update = self._solve(self._bordered_matrix(u, lam, tangent), -bordered_residual, lam)
+            last_update_norm = float(np.max(np.abs(update)))
+            state = state + update
+        raise NewtonConvergenceError(
+            f"corrector did not converge in {self.options.newton_max_iter} iterations "
+            f"(residual {np.max(np.abs(residual)):.3g})"
+        )
+
+    def _converged(self, residual: FloatArray, last_update_norm: float, iteration: int) -> bool:
+        """Residual within tolerance and, after at least one update, the last update too.
+
+        A guess that already satisfies the residual is accepted without any
+        update, so that an exact start at a fold (singular ``J``) is accepted.
+        """
+        tolerance = self.options.newton_tol
+        if float(np.max(np.abs(residual))) > tolerance:
+            return False
+        return iteration == 0 or last_update_norm <= tolerance
+
+    def _bordered_matrix(self, u: FloatArray, lam: float, tangent: FloatArray) -> FloatArray:
+        """``[[J, dF/dlam], [W tangent]]`` with ``W`` the scaled-norm weights."""
+        top = np.column_stack([self._jacobian(u, lam), self._dparam(u, lam)])
+        return np.vstack([top, self._metric_weights() * tangent])
+
+    def _solve(self, matrix: FloatArray, right_hand_side: FloatArray, lam: float) -> FloatArray:
+        """Solve a linear system, warning when it is singular to working precision."""
+        if not (np.all(np.isfinite(matrix)) and np.all(np.isfinite(right_hand_side))):
+            raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
+        condition = _condition_number(matrix)
+        if condition > SINGULAR_CONDITION:
+            logger.warning(
+                "matrix singular to working precision at lam = %.10g (condition number %.3e)",
+                lam,
+                condition,
+            )
+        try:
+            solution = np.linalg.solve(matrix, right_hand_side)
+        except np.linalg.LinAlgError as error:
+            raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}") from error
+        if not np.all(np.isfinite(solution)):
+            raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
+        return solution
+
+    # ------------------------------------------------------ problem evaluation
+
+    def _residual(self, u: FloatArray, lam: float) -> FloatArray:
+        residual = np.asarray(self.problem.residual(u.copy(), lam), dtype=float)
+        if not np.all(np.isfinite(residual)):
+            raise NewtonConvergenceError(f"non-finite residual at lam = {lam:.10g}")
+        return residual
+
+    def _jacobian(self, u: FloatArray, lam: float) -> FloatArray:
+        return np.asarray(self.problem.jacobian(u.copy(), lam), dtype=float)
+
+    def _dparam(self, u: FloatArray, lam: float) -> FloatArray:
+        return np.asarray(self.problem.dparam(u.copy(), lam), dtype=float)
+
+    def _make_point(
+        self,
+        u: FloatArray,
+        lam: float,
+        tangent: FloatArray,
+        ds: float,
+        iterations: int,
+        index: int,
+    ) -> ContinuationPoint:
+        return ContinuationPoint(
+            u=np.array(u, dtype=float),
+            lam=float(lam),
+            tangent=np.array(tangent, dtype=float),
+            ds=float(ds),
+            newton_iterations=int(iterations),
+            index=index,
+            direction=self.direction,
+            monitors=evaluate_monitors(self.problem, u, lam),
+        )
+
+
+def _condition_number(matrix: FloatArray) -> float:
+    """2-norm condition number, ``inf`` for an exactly singular matrix."""
+    singular_values = np.linalg.svd(matrix, compute_uv=False)
+    if singular_values[-1] == 0.0:
+        return math.inf
+    return float(singular_values[0] / singular_values[-1])

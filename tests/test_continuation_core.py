@@ -1,0 +1,404 @@
+"""Known-answer tests of the generic pseudo-arclength continuation core."""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+
+import numpy as np
+import pytest
+
+from impactcont.continuation import (
+    ContinuationOptionError,
+    ContinuationOptions,
+    ContinuationPoint,
+    ContinuationResult,
+    ContinuationStatus,
+    NewtonConvergenceError,
+    PalcStepper,
+    Problem,
+    continue_branch,
+    iter_points,
+)
+from impactcont.errors import ParameterError
+
+CUBIC_FOLD_LAM = 2.0 / (3.0 * math.sqrt(3.0))
+PLASTIC_NUMBER = 1.324717957244746  # real root of u^3 - u - 1
+
+
+class Circle:
+    """``u^2 + lam^2 = 1``: folds at ``lam = +-1``, a closed loop."""
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] ** 2 + lam**2 - 1.0])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([[2.0 * u[0]]])
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([2.0 * lam])
+
+
+class Cubic:
+    """``u^3 - u - lam = 0``: folds at ``lam = +-2/(3 sqrt 3)``, with a monitor."""
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] ** 3 - u[0] - lam])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([[3.0 * u[0] ** 2 - 1.0]])
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([-1.0])
+
+    def monitors(self, u: np.ndarray, lam: float) -> dict[str, float]:
+        return {"u_squared": float(u[0] ** 2)}
+
+
+class TiltedCircle:
+    """Unit sphere cut by the plane ``u1 = lam``.
+
+    On it ``u2^2 = 1 - 2 lam^2``: a closed loop with folds at ``lam = +-1/sqrt 2``.
+    """
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] ** 2 + u[1] ** 2 + lam**2 - 1.0, u[0] - lam])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([[2.0 * u[0], 2.0 * u[1]], [1.0, 0.0]])
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([2.0 * lam, -1.0])
+
+
+class Helix:
+    """``u = (cos lam, sin lam)``: no fold, tests exact landing with ``m = 2``."""
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] - math.cos(lam), u[1] - math.sin(lam)])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.eye(2)
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([math.sin(lam), -math.cos(lam)])
+
+
+class SquareRootEnd:
+    """``u - sqrt(lam) = 0``: the branch ends at ``(0, 0)``, where dF/dlam is infinite."""
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] - math.sqrt(lam) if lam >= 0.0 else math.nan])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([[1.0]])
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([-0.5 / math.sqrt(lam) if lam > 0.0 else math.nan])
+
+
+class Parabola:
+    """``u^2 - lam = 0``: a fold at the origin."""
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] ** 2 - lam])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([[2.0 * u[0]]])
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([-1.0])
+
+
+class Line:
+    """``u - lam = 0``."""
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([u[0] - lam])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([[1.0]])
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        return np.array([-1.0])
+
+
+def max_residual(problem: Problem, result: ContinuationResult) -> float:
+    return max(
+        float(np.max(np.abs(problem.residual(u, lam))))
+        for u, lam in zip(result.u, result.lam, strict=True)
+    )
+
+
+def fold_lams(result: ContinuationResult) -> np.ndarray:
+    """Parameter values at the points just before a sign change of dlam."""
+    dlam = result.tangent[:, -1]
+    before_change = np.nonzero(dlam[:-1] * dlam[1:] < 0.0)[0]
+    return result.lam[before_change]
+
+
+# ----------------------------------------------------------------- (1) circle
+
+
+def test_circle_goes_round_both_folds_and_closes_the_loop() -> None:
+    options = ContinuationOptions(bounds=(-2.0, 2.0), ds=0.05, ds_max=0.1, both_directions=True)
+    problem = Circle()
+
+    result = continue_branch(problem, np.array([1.0]), 0.0, options)
+
+    assert result.status is ContinuationStatus.CLOSED_LOOP
+    assert result.backward_status is ContinuationStatus.CLOSED_LOOP
+    assert max_residual(problem, result) <= options.newton_tol
+    assert np.all(np.abs(result.lam) <= 1.0)
+    folds = fold_lams(result)
+    assert len(folds) == 2
+    assert np.sort(folds) == pytest.approx([-1.0, 1.0], abs=options.ds_max)
+    # Going round once: the angle of (u, lam) increases monotonically by ~2 pi.
+    angle = np.unwrap(np.arctan2(result.lam, result.u[:, 0]))
+    assert np.all(np.diff(angle) > 0.0)
+    assert 2.0 * math.pi - options.ds_max <= angle[-1] - angle[0] <= 2.0 * math.pi + options.ds_max
+
+
+def test_circle_in_negative_direction_starts_downwards() -> None:
+    options = ContinuationOptions(bounds=(-2.0, 2.0), ds=0.05, direction=-1)
+
+    result = continue_branch(Circle(), [1.0], 0.0, options)
+
+    assert result.lam[1] < 0.0
+    assert result.status is ContinuationStatus.CLOSED_LOOP
+
+
+# ------------------------------------------------------------------ (2) cubic
+
+
+def test_cubic_passes_both_folds_and_lands_exactly_on_the_bound() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, ds_max=0.1)
+    problem = Cubic()
+    u_start = -1.2
+
+    result = continue_branch(problem, [u_start], u_start**3 - u_start, options)
+
+    assert result.status is ContinuationStatus.BOUNDS_REACHED
+    assert result.backward_status is None
+    assert result.lam[-1] == 1.0
+    assert result.u[-1, 0] == pytest.approx(PLASTIC_NUMBER, abs=1e-9)
+    assert max_residual(problem, result) <= options.newton_tol
+    folds = fold_lams(result)
+    assert np.sort(folds) == pytest.approx([-CUBIC_FOLD_LAM, CUBIC_FOLD_LAM], abs=options.ds_max)
+    assert np.all(np.diff(result.u[:, 0]) > 0.0)
+    assert result.monitors["u_squared"] == pytest.approx(result.u[:, 0] ** 2)
+
+
+def test_cubic_both_directions_joins_one_ordered_branch() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, both_directions=True)
+    u_start = -1.2
+    lam_start = u_start**3 - u_start
+
+    result = continue_branch(Cubic(), [u_start], lam_start, options)
+
+    assert result.statuses == (
+        ContinuationStatus.BOUNDS_REACHED,
+        ContinuationStatus.BOUNDS_REACHED,
+    )
+    assert (result.lam[0], result.lam[-1]) == (-1.0, 1.0)
+    assert result.u[0, 0] == pytest.approx(-PLASTIC_NUMBER, abs=1e-9)
+    # One ordered branch: u increases strictly, so the start point is not duplicated.
+    assert np.all(np.diff(result.u[:, 0]) > 0.0)
+    assert result.u[result.start_index, 0] == pytest.approx(u_start, abs=1e-12)
+    assert np.count_nonzero(np.isclose(result.u[:, 0], u_start)) == 1
+    # Tangents point along the joined order.
+    chords = np.diff(np.column_stack([result.u, result.lam]), axis=0)
+    assert np.all(np.sum(chords * result.tangent[1:], axis=1) > 0.0)
+    assert len(result) == result.u.shape[0] == result.tangent.shape[0] == result.ds.shape[0]
+
+
+# ------------------------------------------------------------------- (3) m > 1
+
+
+def test_tilted_circle_with_two_unknowns() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, both_directions=True)
+    problem = TiltedCircle()
+
+    result = continue_branch(problem, [0.0, 1.0], 0.0, options)
+
+    assert result.status is ContinuationStatus.CLOSED_LOOP
+    assert result.u.shape == (len(result), 2)
+    assert result.tangent.shape == (len(result), 3)
+    assert max_residual(problem, result) <= options.newton_tol
+    assert np.sort(fold_lams(result)) == pytest.approx(
+        [-1.0 / math.sqrt(2.0), 1.0 / math.sqrt(2.0)], abs=options.ds_max
+    )
+    assert np.all(np.abs(result.lam) <= 1.0 / math.sqrt(2.0))
+
+
+def test_helix_lands_exactly_on_the_bound_with_two_unknowns() -> None:
+    options = ContinuationOptions(bounds=(0.0, 2.0 * math.pi), ds=0.05)
+    problem = Helix()
+
+    result = continue_branch(problem, [0.9, 0.1], 0.0, options)
+
+    assert result.status is ContinuationStatus.BOUNDS_REACHED
+    assert result.lam[-1] == 2.0 * math.pi
+    assert result.u[-1] == pytest.approx([1.0, 0.0], abs=1e-9)
+    assert result.u[0] == pytest.approx([1.0, 0.0], abs=1e-9)
+    assert max_residual(problem, result) <= options.newton_tol
+    assert np.all(np.diff(result.lam) > 0.0)
+
+
+# --------------------------------------------------------------- (4) options
+
+
+@pytest.mark.parametrize(
+    ("overrides", "pattern"),
+    [
+        ({"ds": -0.1}, r"ds = -0\.1 .*> 0"),
+        ({"ds": 0.5, "ds_max": 0.1}, r"ds = 0\.5 .*ds_min <= ds <= ds_max"),
+        ({"ds_min": 0.2, "ds": 0.2, "ds_max": 0.1}, r"ds_min = 0\.2 .*<= ds_max"),
+        ({"newton_tol": 0.0}, r"newton_tol = 0\.0 .*> 0"),
+        ({"newton_max_iter": 0}, r"newton_max_iter = 0 .*integer >= 1"),
+        ({"newton_max_iter": 2.5}, r"newton_max_iter = 2\.5 .*integer"),
+        ({"max_points": 1}, r"max_points = 1 .*integer >= 2"),
+        ({"direction": 0}, r"direction = 0 .*\+1 or -1"),
+        ({"both_directions": "yes"}, r"both_directions = 'yes' .*bool"),
+        ({"max_angle": 2.0}, r"max_angle = 2\.0 .*\(0, pi/2\]"),
+        ({"target_newton_iter": 0}, r"target_newton_iter = 0 .*integer >= 1"),
+        ({"theta": 0.0}, r"theta = 0\.0 .*\(0, 1\]"),
+        ({"theta": math.nan}, r"theta = nan .*finite"),
+        ({"bounds": (1.0, -1.0)}, r"bounds = \(1\.0, -1\.0\) .*lam_min < lam_max"),
+        ({"bounds": (0.0, math.inf)}, r"bounds = \(0\.0, inf\) .*finite"),
+        ({"bounds": 3.0}, r"bounds = 3\.0 .*pair"),
+    ],
+)
+def test_bad_option_names_option_value_and_allowed_values(
+    overrides: dict[str, object], pattern: str
+) -> None:
+    arguments = {"bounds": (-1.0, 1.0), **overrides}
+
+    with pytest.raises(ContinuationOptionError, match=pattern):
+        ContinuationOptions(**arguments)
+
+
+def test_option_error_is_a_value_error_and_options_are_frozen() -> None:
+    assert issubclass(ContinuationOptionError, ValueError)
+    options = ContinuationOptions(bounds=(-1, 1))
+    assert options.bounds == (-1.0, 1.0)
+    with pytest.raises(AttributeError):
+        options.ds = 1.0  # type: ignore[misc]
+
+
+def test_start_outside_bounds_is_rejected() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0))
+
+    with pytest.raises(ParameterError, match=r"lam0 = 2\.0 .*within bounds"):
+        continue_branch(Line(), [2.0], 2.0, options)
+
+
+# ---------------------------------------------------- (5) step below minimum
+
+
+def test_branch_ending_at_a_singularity_stops_with_step_below_minimum() -> None:
+    options = ContinuationOptions(
+        bounds=(-1.0, 2.0), ds=0.05, ds_min=1e-5, direction=-1, max_points=500
+    )
+    problem = SquareRootEnd()
+
+    result = continue_branch(problem, [1.0], 1.0, options)
+
+    assert result.status is ContinuationStatus.STEP_BELOW_MINIMUM
+    assert "ds_min" in result.message
+    assert max_residual(problem, result) <= options.newton_tol
+    # The branch was followed down to its end point (0, 0).
+    assert result.lam[-1] < 1e-6
+    assert 0.0 < result.u[-1, 0] < 1e-3
+
+
+def test_newton_failure_at_start_is_reported() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0), both_directions=True)
+
+    failed = continue_branch(SquareRootEnd(), [1.0], -0.5, options)
+
+    assert failed.statuses == (
+        ContinuationStatus.NEWTON_FAILED_AT_START,
+        ContinuationStatus.NEWTON_FAILED_AT_START,
+    )
+    assert len(failed) == 0
+
+
+def test_singular_jacobian_is_logged_with_its_condition_number(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    stepper = PalcStepper(Parabola(), ContinuationOptions(bounds=(-2.0, 2.0)))
+
+    with (
+        caplog.at_level(logging.WARNING, logger="impactcont.continuation"),
+        pytest.raises(NewtonConvergenceError, match="singular"),
+    ):
+        stepper.correct_at_fixed_parameter(np.array([0.0]), -1.0)
+
+    assert "condition number inf" in caplog.text
+
+
+def test_start_exactly_at_a_fold_follows_both_sheets() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, both_directions=True)
+
+    result = continue_branch(Parabola(), [0.0], 0.0, options)
+
+    assert result.statuses == (
+        ContinuationStatus.BOUNDS_REACHED,
+        ContinuationStatus.BOUNDS_REACHED,
+    )
+    assert (result.lam[0], result.lam[-1]) == (1.0, 1.0)
+    assert sorted([result.u[0, 0], result.u[-1, 0]]) == pytest.approx([-1.0, 1.0], abs=1e-9)
+    assert np.all(np.diff(result.u[:, 0]) * np.sign(result.u[-1, 0]) > 0.0)
+
+
+# ------------------------------------------------------------ (6) max points
+
+
+def test_max_points_status() -> None:
+    options = ContinuationOptions(bounds=(-10.0, 10.0), ds=0.01, max_points=7)
+
+    result = continue_branch(Line(), [0.3], 0.0, options)
+
+    assert result.status is ContinuationStatus.MAX_POINTS_REACHED
+    assert len(result) == 7
+    assert result.u[:, 0] == pytest.approx(result.lam, abs=1e-12)
+    assert result.u[0, 0] == pytest.approx(0.0, abs=1e-12)
+
+
+# ------------------------------------------------- streaming of the points
+
+
+def test_on_point_and_iter_points_stream_the_accepted_points() -> None:
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, both_directions=True)
+    seen: list[ContinuationPoint] = []
+
+    result = continue_branch(Cubic(), [-1.2], -0.528, options, on_point=seen.append)
+
+    starts = [point for point in seen if point.index == 0]
+    assert [point.direction for point in starts] == [1, -1]
+    assert len(seen) == len(result) + 1  # the start point is seen once per direction
+    forward = [point for point in seen if point.direction == 1]
+    run = iter_points(Cubic(), [-1.2], -0.528, options)
+    streamed = list(run)
+    assert run.status is ContinuationStatus.BOUNDS_REACHED
+    assert [point.lam for point in streamed] == [point.lam for point in forward]
+    folds_seen = sum(
+        previous.dlam * current.dlam < 0.0 for previous, current in itertools.pairwise(streamed)
+    )
+    assert folds_seen == 2
+
+
+def test_stepper_tangent_stays_oriented_and_unit() -> None:
+    options = ContinuationOptions(bounds=(-2.0, 2.0), ds=0.05, theta=0.3)
+    stepper = PalcStepper(Circle(), options)
+    previous = stepper.init(np.array([1.0]), 0.0)
+
+    assert previous.tangent == pytest.approx([0.0, 1.0 / math.sqrt(options.theta)])
+    for _ in range(40):
+        current = stepper.step()
+        assert stepper.scaled_norm(current.tangent) == pytest.approx(1.0)
+        assert stepper.scaled_dot(previous.tangent, current.tangent) > 0.0
+        assert stepper.scaled_norm(current.state - previous.state) <= current.ds * 1.01
+        previous = current
