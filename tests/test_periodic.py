@@ -27,7 +27,9 @@ def simulated_impact_map(osc, N, z):
     X = np.concatenate([[osc.b], z[: 2 * n - 1]])
     delta = z[-1]
     T = 2 * math.pi * N / osc.omega
-    tc, X_minus = next_impact(Flow(osc), X, delta, 1.5 * T)
+    hit = next_impact(Flow(osc), X, delta, 1.5 * T)
+    assert hit is not None, "the simulated orbit has no next impact"
+    tc, X_minus = hit
     X_plus = X_minus.copy()
     X_plus[n] *= -osc.R
     return np.concatenate([X_plus[1:], [delta + osc.omega * tc - 2 * math.pi * N]])
@@ -148,7 +150,7 @@ def test_non_physical_roots_are_flagged_with_a_reason(paper):
 
 def test_gap_min_against_dense_sampling(paper, make_chain):
     for orbit in _all_orbits(paper, make_chain):
-        t, X = orbit.time_series(num=200_001)
+        _, X = orbit.time_series(num=200_001)
         x1 = X[:, 0]
         inner = (x1[1:-1] > x1[:-2]) & (x1[1:-1] >= x1[2:])
         peaks = x1[1:-1][inner]
