@@ -219,7 +219,10 @@ class ImpactOscillator:
             changes.setdefault("beta", None)
         if ("alpha" in changes or "beta" in changes) and changes.get("eta") is None:
             changes["eta"] = None
-        return dataclasses.replace(self, **changes)
+        new = dataclasses.replace(self, **changes)
+        if "modes" in self.__dict__ and not set(changes) & {"M", "K", "F", "eta", "alpha", "beta"}:
+            new.__dict__["modes"] = self.modes  # omega, b and R leave the modal basis unchanged
+        return new
 
     # -- derived quantities -------------------------------------------------------------------
     @property

@@ -91,26 +91,31 @@ class Flow:
     # -- matrices of eq. (9) --------------------------------------------------------------------
     def transition_matrix(self, t: float) -> np.ndarray:
         """``U W(t) U^-1``, the free state transition over time t, shape (2n, 2n)."""
-        W11, W12, W21, W22 = (blk[0] for blk in self.transfer(t))
-        u, ui = self.u, self.u_inv
-        return np.block([[(u * W11) @ ui, (u * W12) @ ui],
-                         [(u * W21) @ ui, (u * W22) @ ui]])
+        return self.matrices(t)[0]
 
     def forcing_matrix(self, t: float) -> np.ndarray:
         """``U E(t)`` of eq. (9), shape (2n, 2): columns multiply ``cos delta, sin delta``."""
+        return self.matrices(t)[1]
+
+    def matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """``U W(t) U^-1`` (2n, 2n) and ``U E(t)`` (2n, 2) of eq. (9) from one modal transfer."""
         W11, W12, W21, W22 = (blk[0] for blk in self.transfer(t))
+        u, ui = self.u, self.u_inv
+        transition = np.block([[(u * W11) @ ui, (u * W12) @ ui],
+                               [(u * W21) @ ui, (u * W22) @ ui]])
         om = self.omega
         ct, st = np.cos(om * t), np.sin(om * t)
         g, b = self.gamma, self.beta
         phi, psi = g * ct + b * st, b * ct - g * st
         dphi, dpsi = om * (b * ct - g * st), -om * (g * ct + b * st)
-        # P(0) = [[g, b], [om b, -om g]]
+        # E = P(t) - W(t) P(0) with P(0) = [[g, b], [om b, -om g]]
         e_y_cos = phi - W11 * g - W12 * om * b
         e_y_sin = psi - W11 * b + W12 * om * g
         e_v_cos = dphi - W21 * g - W22 * om * b
         e_v_sin = dpsi - W21 * b + W22 * om * g
-        return np.vstack([self.u @ np.column_stack([e_y_cos, e_y_sin]),
-                          self.u @ np.column_stack([e_v_cos, e_v_sin])])
+        forcing = np.vstack([u @ np.column_stack([e_y_cos, e_y_sin]),
+                             u @ np.column_stack([e_v_cos, e_v_sin])])
+        return transition, forcing
 
     def mass1(self, X0: np.ndarray, delta: float) -> Mass1Motion:
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""

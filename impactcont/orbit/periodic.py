@@ -147,8 +147,9 @@ def periodic_matrix(flow: Flow, N: int) -> tuple[np.ndarray, np.ndarray, float]:
     T = 2.0 * math.pi * N / osc.omega
     d = np.ones(2 * osc.n)
     d[osc.n] = -osc.R
-    DPhi = d[:, None] * flow.transition_matrix(T)
-    DUE = d[:, None] * flow.forcing_matrix(T)
+    transition, forcing = flow.matrices(T)
+    DPhi = d[:, None] * transition
+    DUE = d[:, None] * forcing
     S = _solve(np.eye(2 * osc.n) - DPhi, DUE, "I - D U W(T) U^-1 of eq. (12)")
     return S, DPhi, T
 
