@@ -24,6 +24,7 @@ from impactcont.orbit.periodic import (
     amplitude_squared,
     periodic_orbits,
 )
+from impactcont.orbit.robust import RobustStability, lyapunov_matrix, robust_bound, robust_stability
 from impactcont.simulate.simulator import SimulationResult, SimulationStatus, simulate
 
 try:
@@ -41,11 +42,15 @@ __all__ = [
     "ParameterError",
     "PeriodicOrbit",
     "ResonanceError",
+    "RobustStability",
     "SimulationResult",
     "SimulationStatus",
     "__version__",
     "amplitude_squared",
     "chain_stiffness",
+    "lyapunov_matrix",
     "periodic_orbits",
+    "robust_bound",
+    "robust_stability",
     "simulate",
 ]
