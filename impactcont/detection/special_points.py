@@ -1,0 +1,263 @@
+"""Special points on a branch of periodic motions: detected, then located.
+
+Each label has a test function of a branch point that changes sign at the
+special point:
+
+========  ==========================================  =================================
+label     test function                               meaning
+========  ==========================================  =================================
+``SN``    ``d lam / ds`` (tangent)                    fold: saddle-node, a multiplier +1
+``PD``    ``prod_i (mu_i + 1)`` = det(G + I)          a real multiplier through -1
+``NS``    ``prod_{i<j} (mu_i mu_j - 1)``              a complex pair through ``|mu| = 1``
+``GR``    ``gap_min``                                 x1 touches b inside the period
+``ZV``    ``impact_velocity``                         impact at zero velocity
+========  ==========================================  =================================
+
+A sign change between two accepted points brackets a special point; it is
+then located by Brent's method on the branch parametrised by the parameter
+(or by ``delta`` where the branch folds inside the bracket), except ``SN``,
+located by Newton on the augmented system ``r = dr/d delta = 0``. The NS test
+function also vanishes at a neutral saddle (two real multipliers with product
+1); such a point is checked and discarded. A located point whose test
+function does not vanish there (a jump, e.g. of ``gap_min`` when the highest
+interior maximum changes) keeps status ``"bracketed"``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from scipy.optimize import brentq
+
+from impactcont.orbit.periodic import PeriodicOrbit
+from impactcont.problems.periodic_branch import PeriodicBranchProblem
+
+__all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function"]
+
+log = logging.getLogger(__name__)
+
+LABELS = ("SN", "PD", "NS", "GR", "ZV")
+_XTOL = 1e-13
+_UNIT_TOL = 1e-7
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class BranchSample:
+    """An accepted branch point as detection sees it."""
+
+    delta: float
+    lam: float
+    dlam: float
+    orbit: PeriodicOrbit
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SpecialPoint:
+    """A located special point of a branch.
+
+    Attributes
+    ----------
+    label : str
+        One of :data:`LABELS`.
+    value : float
+        The parameter at the special point.
+    delta : float
+        Impact phase there.
+    point : int
+        Index of the nearest accepted branch point.
+    bracket : tuple of float
+        Parameter values of the two accepted points that bracket it.
+    precision : float
+        Bound on the error of `value` in the parameter.
+    status : str
+        ``"located"`` or ``"bracketed"`` (location failed; `value` is the best estimate).
+    orbit : PeriodicOrbit
+        The motion at the special point.
+    """
+
+    label: str
+    value: float
+    delta: float
+    point: int
+    bracket: tuple[float, float]
+    precision: float
+    status: str
+    orbit: PeriodicOrbit
+
+
+def _bialternate(mu: np.ndarray) -> float:
+    prod = 1.0 + 0.0j
+    for i in range(mu.size):
+        for j in range(i + 1, mu.size):
+            prod *= mu[i] * mu[j] - 1.0
+    return float(prod.real)
+
+
+def event_function(label: str, orbit: PeriodicOrbit) -> float:
+    """Value of the test function of `label` (all but SN) at a motion."""
+    if label == "PD":
+        return float(np.prod(orbit.multipliers + 1.0).real)
+    if label == "NS":
+        return _bialternate(orbit.multipliers)
+    if label == "GR":
+        return orbit.gap_min
+    if label == "ZV":
+        return orbit.impact_velocity
+    raise ValueError(f"label must be one of PD, NS, GR, ZV here; got {label!r}")
+
+
+def _changes(a: float, b: float) -> bool:
+    return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
+
+
+class _Segment:
+    """The branch between two accepted points, parametrised by lam or by delta."""
+
+    def __init__(self, problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample):
+        self.problem = problem
+        self.left, self.right = left, right
+        self.by_lam = (left.dlam > 0) == (right.dlam > 0) and left.lam != right.lam
+
+    def coordinate(self, sample: BranchSample) -> float:
+        return sample.lam if self.by_lam else sample.delta
+
+    def point(self, x: float) -> tuple[float, float]:
+        """``(delta, lam)`` on the branch at coordinate x, by Newton from the chord."""
+        a, b = self.coordinate(self.left), self.coordinate(self.right)
+        t = (x - a) / (b - a)
+        delta = self.left.delta + t * (self.right.delta - self.left.delta)
+        lam = self.left.lam + t * (self.right.lam - self.left.lam)
+        u = np.array([delta])
+        for _ in range(30):
+            r = self.problem.residual(u, lam)[0]
+            if self.by_lam:
+                step = r / self.problem.jacobian(u, lam)[0, 0]
+                u = u - step
+            else:
+                step = r / self.problem.dparam(u, lam)[0]
+                lam = lam - step
+            if abs(step) < 1e-15 * max(1.0, abs(u[0]), abs(lam)):
+                break
+        return float(u[0]), float(lam)
+
+
+def _locate_by_test(problem: PeriodicBranchProblem, label: str, seg: _Segment,
+                    ) -> tuple[float, float, float, str]:
+    fun_cache: dict[float, float] = {}
+
+    def g(x: float) -> float:
+        if x not in fun_cache:
+            delta, lam = seg.point(x)
+            fun_cache[x] = event_function(label, problem.orbit(delta, lam))
+        return fun_cache[x]
+
+    a, b = seg.coordinate(seg.left), seg.coordinate(seg.right)
+    lo, hi = min(a, b), max(a, b)
+    xtol = _XTOL * max(1.0, abs(lo), abs(hi))
+    x = brentq(g, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
+    delta, lam = seg.point(x)
+    precision = 2 * (xtol + 4 * np.finfo(float).eps * abs(x))
+    if not seg.by_lam:  # error in delta maps to lam through the branch slope
+        slope = abs(problem.jacobian(np.array([delta]), lam)[0, 0]
+                    / problem.dparam(np.array([delta]), lam)[0])
+        precision *= max(slope, 1.0)
+    scale = max(abs(g(lo)), abs(g(hi)))
+    status = "located" if abs(g(x)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
+    return delta, lam, precision, status
+
+
+def _locate_fold(problem: PeriodicBranchProblem, seg: _Segment
+                 ) -> tuple[float, float, float, str]:
+    left, right = seg.left, seg.right
+    x = np.array([0.5 * (left.delta + right.delta), 0.5 * (left.lam + right.lam)])
+    step = np.full(2, np.inf)
+    for _ in range(50):
+        F = problem.fold_residual(x[0], x[1])
+        step = np.linalg.solve(problem.fold_jacobian(x[0], x[1]), F)
+        x = x - step
+        if abs(step[1]) < 1e-15 * max(1.0, abs(x[1])) and abs(step[0]) < 1e-14:
+            break
+    # at a fold lam is extremal, so both bracketing points lie on one side of it in lam;
+    # delta runs monotonically through the fold and must be bracketed
+    lo, hi = sorted((left.delta, right.delta))
+    slack = 1e-9 * max(hi - lo, 1e-12)
+    inside = lo - slack <= x[0] <= hi + slack
+    # Newton on r = r_delta = 0 converges quadratically; the last step bounds the error,
+    # the finite-difference parameter derivative only slows it down
+    precision = max(abs(step[1]) * 10, 4 * np.finfo(float).eps * abs(x[1]))
+    return float(x[0]), float(x[1]), precision, "located" if inside else "bracketed"
+
+
+def _is_ns(orbit: PeriodicOrbit) -> bool:
+    mu = orbit.multipliers
+    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL ** 0.5
+    return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
+
+
+def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[BranchSample],
+                          labels: Sequence[str] = LABELS,
+                          on_found: Callable[[SpecialPoint], None] | None = None,
+                          ) -> list[SpecialPoint]:
+    """Detect and locate special points between consecutive accepted points.
+
+    Parameters
+    ----------
+    problem : PeriodicBranchProblem
+    samples : sequence of BranchSample
+        The accepted points in branch order.
+    labels : sequence of str
+        Which special points to look for (subset of :data:`LABELS`).
+    on_found : callable, optional
+        Called with each special point as it is located.
+
+    Returns
+    -------
+    list of SpecialPoint
+        In branch order.
+    """
+    unknown = set(labels) - set(LABELS)
+    if unknown:
+        raise ValueError(f"labels must be a subset of {LABELS}; got unknown {sorted(unknown)}")
+    found: list[SpecialPoint] = []
+    for k in range(len(samples) - 1):
+        left, right = samples[k], samples[k + 1]
+        seg = _Segment(problem, left, right)
+        for label in labels:
+            if label == "SN":
+                if (left.dlam > 0) == (right.dlam > 0):
+                    continue
+                delta, lam, precision, status = _locate_fold(problem, seg)
+            else:
+                before = event_function(label, left.orbit)
+                if not _changes(before, event_function(label, right.orbit)):
+                    continue
+                try:
+                    delta, lam, precision, status = _locate_by_test(problem, label, seg)
+                except ValueError as exc:  # brentq: no sign change on the re-solved segment
+                    log.warning("could not locate %s between points %d and %d: %s", label, k,
+                                k + 1, exc)
+                    continue
+            orbit = problem.orbit(delta, lam)
+            if label == "NS" and not _is_ns(orbit):
+                log.debug("neutral saddle near %s=%.12g: not a Neimark-Sacker point",
+                          problem.parameter, lam)
+                continue
+            if label == "PD" and not np.min(np.abs(orbit.multipliers + 1.0)) < _UNIT_TOL:
+                # det(G + I) also changes sign through the pole of G at h2 = 0 (eq. 25)
+                log.debug("det(G+I) changes sign near %s=%.12g without a multiplier at -1",
+                          problem.parameter, lam)
+                continue
+            nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
+            special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
+                                   bracket=(left.lam, right.lam), precision=precision,
+                                   status=status, orbit=orbit)
+            log.info("%s at %s = %.12g (%s, precision %.1e)", label, problem.parameter, lam,
+                     status, precision)
+            found.append(special)
+            if on_found is not None:
+                on_found(special)
+    return found
