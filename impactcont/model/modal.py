@@ -7,16 +7,16 @@ transfer over a time ``t`` is the 2x2 matrix
     W(t) = exp(-a t) [[C + a S, S], [-w^2 S, C - a S]]
 
 with ``C = cos(w_d t)``, ``S = sin(w_d t) / w_d`` and ``w_d^2 = w^2 - a^2``
-(eq. 9; the paper's ``g/w_d`` and ``h``). Writing ``z = w_d^2 t^2``,
-``C`` and ``S/t`` are entire functions of ``z``, so one formula serves the
-undamped, under-, critically and over-damped cases:
+(eq. 9; the paper's ``g/w_d`` and ``h``), in three forms that are each
+free of cancellation and overflow:
 
-- ``|z| <= 1``: Taylor series in ``z`` (exact through ``xi = 1``, no
-  cancellation, no division by a small ``w_d``);
-- ``z > 1``: the trigonometric form;
-- ``z < -1`` (over-damped): the two real exponentials
-  ``exp(-(a -+ k) t)`` with ``a - k = w^2 / (a + k)``, which never overflow
-  and have no cancellation however heavy the damping.
+- under-damped (``w_d^2 > 0``, undamped included): the trigonometric form;
+  ``sin(w_d t)/w_d`` stays accurate however small ``w_d`` is near ``xi = 1``;
+- critically damped: ``C = 1``, ``S = t``;
+- over-damped (``w_d^2 = -k^2 < 0``): the two real exponentials
+  ``exp(-(a -+ k) t)`` with ``a - k = w^2 / (a + k)`` and ``expm1`` for
+  ``sinh(k t)/k``, which never overflow and keep full relative precision
+  however heavy the damping.
 """
 
 from __future__ import annotations
@@ -29,9 +29,6 @@ import scipy.linalg
 from impactcont.errors import ParameterError, ResonanceError
 
 __all__ = ["ModalBasis", "forced_coefficients", "free_transfer"]
-
-_SERIES_TERMS = 14  # |z| <= 1: 1/(2*14)! < 1e-29
-
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class ModalBasis:
@@ -85,20 +82,6 @@ class ModalBasis:
         return np.sqrt(np.maximum(d, 0.0))
 
 
-def _series(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``cos(sqrt z)`` and ``sin(sqrt z)/sqrt z`` by Taylor series, ``|z| <= 1``."""
-    c = np.ones_like(z)
-    s = np.ones_like(z)
-    term_c = np.ones_like(z)
-    term_s = np.ones_like(z)
-    for k in range(1, _SERIES_TERMS):
-        term_c = term_c * (-z) / ((2 * k - 1) * (2 * k))
-        term_s = term_s * (-z) / ((2 * k) * (2 * k + 1))
-        c = c + term_c
-        s = s + term_s
-    return c, s
-
-
 def free_transfer(w: np.ndarray, a: np.ndarray, t: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Exact free modal transfer ``W(t)`` of eq. (9), every damping regime.
@@ -119,53 +102,44 @@ def free_transfer(w: np.ndarray, a: np.ndarray, t: np.ndarray
         ``[y; y'](t) = [[W11, W12], [W21, W22]] [y; y'](0)``.
     """
     t = np.asarray(t, dtype=float)[:, None]
-    w = np.asarray(w, dtype=float)[None, :]
-    a = np.asarray(a, dtype=float)[None, :]
+    w = np.asarray(w, dtype=float)
+    a = np.asarray(a, dtype=float)
     d = (w - a) * (w + a)  # w_d^2, signed, without cancellation in w^2 - a^2
-    z = d * t * t
-    shape = z.shape
-    ec = np.empty(shape)  # exp(-a t) C
-    es = np.empty(shape)  # exp(-a t) S
-    w22 = np.empty(shape)
+    ec = np.empty((t.shape[0], w.size))  # exp(-a t) C
+    es = np.empty_like(ec)  # exp(-a t) S
+    w22 = np.empty_like(ec)
 
-    series = np.abs(z) <= 1.0
-    trig = (~series) & (d > 0)
-    hyper = (~series) & (d < 0)
-
-    if np.any(series):
-        zs = z[series]
-        ts = np.broadcast_to(t, shape)[series]
-        as_ = np.broadcast_to(a, shape)[series]
-        c, s = _series(zs)
-        decay = np.exp(-as_ * ts)
-        ec[series] = decay * c
-        es[series] = decay * ts * s
-        w22[series] = ec[series] - as_ * es[series]
-    if np.any(trig):
-        tt = np.broadcast_to(t, shape)[trig]
-        at = np.broadcast_to(a, shape)[trig]
-        wd = np.sqrt(np.broadcast_to(d, shape)[trig])
-        decay = np.exp(-at * tt)
-        ec[trig] = decay * np.cos(wd * tt)
-        es[trig] = decay * np.sin(wd * tt) / wd
-        w22[trig] = ec[trig] - at * es[trig]
-    if np.any(hyper):
-        th = np.broadcast_to(t, shape)[hyper]
-        ah = np.broadcast_to(a, shape)[hyper]
-        wh = np.broadcast_to(w, shape)[hyper]
-        k = np.sqrt(-np.broadcast_to(d, shape)[hyper])
-        slow = wh * wh / (ah + k)  # a - k, no cancellation
-        e_slow = np.exp(-slow * th)
-        e_fast = np.exp(-(ah + k) * th)
-        ec[hyper] = 0.5 * (e_slow + e_fast)
-        es[hyper] = e_slow * (-np.expm1(-2.0 * k * th)) / (2.0 * k)
-        # C - a S = [(1 - a/k) e_slow + (1 + a/k) e_fast] / 2 with 1 - a/k = -w^2/((a+k)k)
-        w22[hyper] = 0.5 * (-(wh * wh) / ((ah + k) * k) * e_slow + (1.0 + ah / k) * e_fast)
+    under = d > 0  # sin(w_d t) / w_d is accurate for any w_d > 0: no series needed
+    if np.any(under):
+        wd, au = np.sqrt(d[under]), a[under]
+        decay = np.exp(-au * t)
+        ec[:, under] = decay * np.cos(wd * t)
+        es[:, under] = decay * np.sin(wd * t) / wd
+        w22[:, under] = ec[:, under] - au * es[:, under]
+    critical = d == 0
+    if np.any(critical):
+        decay = np.exp(-a[critical] * t)
+        ec[:, critical] = decay
+        es[:, critical] = decay * t
+        w22[:, critical] = decay * (1.0 - a[critical] * t)
+    over = d < 0
+    if np.any(over):
+        ao, wo = a[over], w[over]
+        k = np.sqrt(-d[over])
+        e_slow = np.exp(-(wo * wo / (ao + k)) * t)  # a - k = w^2 / (a + k): no cancellation
+        e_fast = np.exp(-(ao + k) * t)
+        c_over = 0.5 * (e_slow + e_fast)
+        s_over = e_slow * (-np.expm1(-2.0 * k * t)) / (2.0 * k)
+        ec[:, over] = c_over
+        es[:, over] = s_over
+        # C - a S: direct while k t < 1; for k t >= 1 (heavy damping: C and a S nearly
+        # equal) as [(1 - a/k) e_slow + (1 + a/k) e_fast] / 2, 1 - a/k = -w^2/((a+k)k)
+        split = 0.5 * (-(wo * wo) / ((ao + k) * k) * e_slow + (1.0 + ao / k) * e_fast)
+        w22[:, over] = np.where(k * t < 1.0, c_over - ao * s_over, split)
 
     w11 = ec + a * es
-    w12 = es
     w21 = -(w * w) * es
-    return w11, w12, w21, w22
+    return w11, es, w21, w22
 
 
 def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: float

@@ -6,19 +6,18 @@ the shortest damped period, and geometrically refined near the start for fast
 over-damped decays). In each cell the roots of ``x1''`` split ``x1'`` into
 monotone pieces, each holding at most one root of ``x1'``; those roots split
 ``x1`` into monotone pieces, each holding at most one crossing of the stop.
-Every root is then polished by Brent's method to machine precision. A root is
+Every root is then polished to machine precision by safeguarded Newton. A root is
 missed only if ``x1''`` changes sign twice inside one cell, i.e. only for a
 component faster than the grid was built for.
 """
 
 from __future__ import annotations
 
-import itertools
 import logging
 import math
+from collections.abc import Callable
 
 import numpy as np
-from scipy.optimize import brentq
 
 from impactcont.orbit.flow import Flow, Mass1Motion
 
@@ -30,6 +29,7 @@ _CELLS_PER_PERIOD = 16
 _MAX_SAMPLES = 2_000_000
 _XTOL = 1e-15
 _RTOL = 4.0 * np.finfo(float).eps
+_MAX_ITER = 200
 
 
 def _time_scales(flow: Flow) -> tuple[float, float]:
@@ -76,12 +76,52 @@ def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
     return grid
 
 
-def _root(fun, lo: float, hi: float) -> float:
-    return brentq(fun, lo, hi, xtol=_XTOL, rtol=_RTOL)
-
-
 def _changes(left: np.ndarray, right: np.ndarray) -> np.ndarray:
     return (left < 0) != (right < 0)
+
+
+def _bracketed_roots(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                     lo: np.ndarray, hi: np.ndarray, g_lo: np.ndarray) -> np.ndarray:
+    """Roots of ``g`` in many brackets at once by safeguarded Newton.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(t) -> (g(t), g'(t))`` for an array of times.
+    lo, hi : ndarray
+        Brackets, ``lo < hi``, with ``g(lo)`` and ``g(hi)`` of opposite signs.
+    g_lo : ndarray
+        ``g(lo)`` (its sign is what matters).
+
+    Returns
+    -------
+    ndarray
+        One root per bracket, to a few ulps: a Newton step that would leave the
+        current bracket is replaced by bisection, so each bracket shrinks
+        every iteration and convergence is quadratic near a simple root.
+    """
+    a, b = lo.astype(float).copy(), hi.astype(float).copy()
+    ga = g_lo.astype(float).copy()
+    x = 0.5 * (a + b)
+    active = np.arange(x.size)
+    for _ in range(_MAX_ITER):
+        if active.size == 0:
+            break
+        g, dg = fun(x[active])
+        xa = x[active]
+        left = (g < 0) == (ga[active] < 0)  # root lies right of x
+        a[active] = np.where(left, xa, a[active])
+        ga[active] = np.where(left, g, ga[active])
+        b[active] = np.where(left, b[active], xa)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xn = xa - g / dg
+        inside = np.isfinite(xn) & (xn > a[active]) & (xn < b[active])
+        xn = np.where(inside, xn, 0.5 * (a[active] + b[active]))
+        tol = _XTOL + _RTOL * np.abs(xa)
+        done = (g == 0) | (np.abs(xn - xa) <= tol) | (b[active] - a[active] <= tol)
+        x[active] = np.where(g == 0, xa, xn)
+        active = active[~done]
+    return x
 
 
 def critical_points(motion: Mass1Motion, grid: np.ndarray) -> np.ndarray:
@@ -90,7 +130,7 @@ def critical_points(motion: Mass1Motion, grid: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     motion : Mass1Motion
-        Evaluator of ``x1, x1', x1''``.
+        Evaluator of ``x1`` and its derivatives.
     grid : ndarray
         Sorted times from :func:`sample_times`.
 
@@ -99,22 +139,16 @@ def critical_points(motion: Mass1Motion, grid: np.ndarray) -> np.ndarray:
     ndarray
         Times where the velocity of mass 1 vanishes.
     """
-    _, v, acc = motion(grid)
-    cells = np.flatnonzero(_changes(v[:-1], v[1:]) | _changes(acc[:-1], acc[1:]))
-    vel = lambda s: motion(s)[1][0]  # noqa: E731
-    accel = lambda s: motion(s)[2][0]  # noqa: E731
-    roots: list[float] = []
-    for i in cells:
-        ta, tb = grid[i], grid[i + 1]
-        bounds = [(ta, v[i]), (tb, v[i + 1])]
-        if (acc[i] < 0) != (acc[i + 1] < 0):
-            tc = _root(accel, ta, tb)
-            bounds.insert(1, (tc, vel(tc)))
-        for (lo, vlo), (hi, vhi) in itertools.pairwise(bounds):
-            if (vlo < 0) != (vhi < 0):
-                roots.append(_root(vel, lo, hi))
-    inner = [r for r in roots if grid[0] < r < grid[-1]]
-    return np.unique(np.array(inner, dtype=float))
+    _, _, acc, _ = motion.derivatives(grid)
+    cells = np.flatnonzero(_changes(acc[:-1], acc[1:]))
+    inflections = _bracketed_roots(lambda s: motion.derivatives(s)[2:4], grid[cells],
+                                   grid[cells + 1], acc[cells])
+    points = np.union1d(grid, inflections)  # x1' is monotone between consecutive points
+    _, v, acc, _ = motion.derivatives(points)
+    cells = np.flatnonzero(_changes(v[:-1], v[1:]))
+    roots = _bracketed_roots(lambda s: motion.derivatives(s)[1:3], points[cells],
+                             points[cells + 1], v[cells])
+    return np.unique(roots[(roots > grid[0]) & (roots < grid[-1])])
 
 
 def interior_maxima(motion: Mass1Motion, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -144,11 +178,15 @@ def first_upward_crossing(motion: Mass1Motion, level: float, grid: np.ndarray
     float or None
         The crossing time, to machine precision, or None if ``x1 < level`` throughout.
     """
-    cp = critical_points(motion, grid)
-    points = np.union1d(grid, cp)
+    points = np.union1d(grid, critical_points(motion, grid))  # x1 monotone in between
     x = motion(points)[0] - level
     hit = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
     if hit.size == 0:
         return None
-    i = int(hit[0])
-    return _root(lambda s: motion(s)[0][0] - level, points[i], points[i + 1])
+    i = hit[:1]
+
+    def shifted(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        x1, v1, _ = motion(s)
+        return x1 - level, v1
+
+    return float(_bracketed_roots(shifted, points[i], points[i + 1], x[i])[0])

@@ -140,6 +140,11 @@ class Mass1Motion:
 
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``x1, x1', x1''`` at times t (each shape (nt,))."""
+        return self.derivatives(t)[:3]
+
+    def derivatives(self, t: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Return ``x1`` and its first three time derivatives at times t (each (nt,))."""
         fl = self.flow
         t = np.atleast_1d(np.asarray(t, dtype=float))
         W11, W12, W21, W22 = fl.transfer(t)
@@ -148,4 +153,5 @@ class Mass1Motion:
         y = fl.gamma * c + fl.beta * s + W11 * self.dy + W12 * self.dv
         v = fl.omega * (fl.beta * c - fl.gamma * s) + W21 * self.dy + W22 * self.dv
         acc = fl.f * c - 2.0 * fl.a * v - fl.w**2 * y
-        return y @ self.u0, v @ self.u0, acc @ self.u0
+        jerk = -fl.omega * fl.f * s - 2.0 * fl.a * acc - fl.w**2 * v
+        return y @ self.u0, v @ self.u0, acc @ self.u0, jerk @ self.u0
