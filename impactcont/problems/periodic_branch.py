@@ -23,6 +23,7 @@ CONTINUABLE_PARAMETERS = ("omega", "b", "R", "eta", "alpha", "beta")
 """Model parameters a branch can be continued in."""
 
 _FD_STEP = 1e-6
+_DERIVATIVE_REUSE = 1e-5
 
 
 class PeriodicBranchProblem:
@@ -42,8 +43,9 @@ class PeriodicBranchProblem:
     ``c, s`` (eq. 13) are computed once per parameter value and cached; when
     the parameter is the gap ``b`` they do not depend on it at all. The
     parameter derivative of ``c, s`` uses central differences (relative step
-    1e-6); it only steers the predictor and Newton, never the accuracy of a
-    point, which is set by the residual.
+    1e-6), reused while the parameter moves by less than 1e-5 (relative), as
+    within one corrector; it only steers the predictor and Newton, never the
+    accuracy of a point, which is set by the residual.
     """
 
     def __init__(self, osc: ImpactOscillator, N: int, parameter: str) -> None:
@@ -60,6 +62,7 @@ class PeriodicBranchProblem:
         self.N = N
         self.parameter = parameter
         self._cache: dict[float, tuple[ImpactOscillator, Flow, np.ndarray, np.ndarray]] = {}
+        self._derivative_cache: tuple[float, tuple[float, float, float]] | None = None
 
     # -- the oscillator along the branch ------------------------------------------------------
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -90,6 +93,14 @@ class PeriodicBranchProblem:
     def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:
         if self.parameter == "b":
             return 0.0, 0.0, 1.0
+        last = self._derivative_cache
+        if last is not None and abs(lam - last[0]) <= _DERIVATIVE_REUSE * max(1.0, abs(lam)):
+            return last[1]  # a chord step: Newton's iterates of one corrector stay this close
+        value = self._difference_quotient(lam)
+        self._derivative_cache = (lam, value)
+        return value
+
+    def _difference_quotient(self, lam: float) -> tuple[float, float, float]:
         h = _FD_STEP * max(1.0, abs(lam))
         if self.parameter in ("R", "eta", "alpha", "beta"):
             lo = max(lam - h, 0.0)

@@ -1,0 +1,498 @@
+"""The schema of a branch dataset: variable names, dimensions, units and attributes.
+
+This module is the one place that knows how a branch of periodic N-1 motions
+(one impact every N forcing periods) is laid out in an :class:`xarray.Dataset`.
+The continuation code hands it plain arrays (:func:`branch_dataset`); plots,
+the CLI and :func:`impactcont.dataset.io.load` check a dataset against it
+(:func:`validate_branch_dataset`). ``docs/dataset.md`` documents the layout.
+
+Dimensions
+----------
+``point``
+    Accepted continuation points, with an integer coordinate ``0 .. npoints-1``.
+``multiplier``
+    The ``2n`` eigenvalues of the impact-map Jacobian ``G`` (eq. 25).
+``component``
+    The ``2n`` entries of the state ``[x1 .. xn, x1' .. xn']`` with a string
+    coordinate ``["x1", .., "xn", "v1", .., "vn"]``.
+``special``
+    Special points (SN, PD, NS, GR, ZV) found on the branch; may be empty.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.model.oscillator import ImpactOscillator
+
+__all__ = [
+    "CONVENTIONS",
+    "PARAMETERS",
+    "POINT_VARIABLES",
+    "SPECIAL_LABELS",
+    "SPECIAL_STATUSES",
+    "branch_dataset",
+    "oscillator_from_dataset",
+    "special_variable",
+    "state_component_names",
+    "validate_branch_dataset",
+]
+
+logger = logging.getLogger(__name__)
+
+CONVENTIONS = "CF-1.10"
+
+#: Labels of special points: saddle-node, period-doubling, Neimark-Sacker,
+#: grazing and zero-velocity impact.
+SPECIAL_LABELS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+#: ``located``: refined to ``precision``; ``bracketed``: only known to lie
+#: between two accepted points.
+SPECIAL_STATUSES: tuple[str, ...] = ("located", "bracketed")
+
+# Fixed-width string dtypes so that labels and statuses compare and round-trip
+# through NetCDF with one dtype (xarray reads an empty string array back as <U1).
+_LABEL_DTYPE = np.dtype(f"<U{max(map(len, SPECIAL_LABELS))}")
+_STATUS_DTYPE = np.dtype(f"<U{max(map(len, SPECIAL_STATUSES))}")
+
+
+@dataclasses.dataclass(frozen=True)
+class _Var:
+    """Metadata of one variable: dims after ``point``/``special``, dtype kind, attrs."""
+
+    long_name: str
+    units: str
+    description: str
+    kind: str = "f"  # numpy dtype kind: f float, b bool, c complex, i integer, U string
+    extra_dims: tuple[str, ...] = ()
+
+    def attrs(self) -> dict[str, str]:
+        return {"long_name": self.long_name, "units": self.units,
+                "description": self.description}
+
+
+#: Parameters a branch may be continued in, with their metadata. ``omega`` and
+#: ``b`` are always stored; another continued parameter adds its own column.
+PARAMETERS: dict[str, _Var] = {
+    "omega": _Var("forcing frequency", "1",
+                  "Nondimensional forcing frequency omega of eq. (1)."),
+    "b": _Var("gap", "1", "Position b of the stop met by mass 1 (eq. 3)."),
+    "R": _Var("coefficient of restitution", "1",
+              "Coefficient of restitution R of the impact law (eq. 4)."),
+    "eta": _Var("damping coefficient", "1", "Damping eta of C = 2 eta K."),
+    "alpha": _Var("Rayleigh mass damping", "1", "alpha of C = alpha M + beta K."),
+    "beta": _Var("Rayleigh stiffness damping", "1", "beta of C = alpha M + beta K."),
+}
+
+#: Variables on the ``point`` dimension, in the order they are stored.
+POINT_VARIABLES: dict[str, _Var] = {
+    "omega": PARAMETERS["omega"],
+    "b": PARAMETERS["b"],
+    "delta": _Var("impact phase", "rad",
+                  "Forcing phase delta at the impact, in (-pi, pi] (eq. 15)."),
+    "impact_velocity": _Var("impact velocity", "1",
+                            "Velocity x1'(T-) of mass 1 just before the impact (h2 of eq. 22)."),
+    "gap_min": _Var("minimum gap", "1",
+                    "Smallest b - x1 at the interior maxima of x1 over one period; "
+                    "+inf when x1 has none (eq. 16)."),
+    "spectral_radius": _Var("spectral radius", "1",
+                            "Largest modulus of the multipliers, rho(G) (eq. 25)."),
+    "stable": _Var("asymptotically stable", "1",
+                   "spectral_radius < 1 (Theorem 3.1).", kind="b"),
+    "physical": _Var("physically realisable", "1",
+                     "impact_velocity > 0 and gap_min > 0: no contact inside the period "
+                     "(eq. 16).", kind="b"),
+    "arclength": _Var("pseudo-arclength", "1",
+                      "Pseudo-arclength of the continuation at the point."),
+    "multipliers": _Var("Floquet multipliers", "1",
+                        "Eigenvalues of the impact-map Jacobian G (eq. 25), "
+                        "largest modulus first.", kind="c", extra_dims=("multiplier",)),
+    "state": _Var("state after impact", "1",
+                  "State X(0) = [x1..xn, x1'..xn'] right after the impact (eq. 13).",
+                  extra_dims=("component",)),
+}
+
+# Keys of a special-point dict that are not parameter values.
+_SPECIAL_FIELDS: dict[str, _Var] = {
+    "label": _Var("special point label", "1",
+                  "SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "
+                  "ZV zero-velocity impact.", kind="U"),
+    "delta": _Var("impact phase at special point", "rad",
+                  "Forcing phase delta at the impact at the special point."),
+    "point": _Var("nearest point", "1",
+                  "Index on the point dimension of the accepted point nearest to the "
+                  "special point.", kind="i"),
+    "bracket_lo": _Var("bracket lower end", "1",
+                       "Lower end of the interval of the continued parameter that brackets "
+                       "the special point."),
+    "bracket_hi": _Var("bracket upper end", "1",
+                       "Upper end of the interval of the continued parameter that brackets "
+                       "the special point."),
+    "precision": _Var("location precision", "1",
+                      "Precision of the special point in the continued parameter."),
+    "status": _Var("location status", "1",
+                   "located: refined to precision; bracketed: only bracketed.", kind="U"),
+    "multipliers": _Var("Floquet multipliers at special point", "1",
+                        "Eigenvalues of G (eq. 25) at the special point.", kind="c",
+                        extra_dims=("multiplier",)),
+}
+
+# Dataset attributes every branch dataset carries.
+_REQUIRED_ATTRS = ("title", "N", "parameter", "oscillator", "options", "impactcont_version",
+                   "Conventions", "history")
+
+
+def special_variable(key: str) -> str:
+    """Name of the dataset variable holding special-point field ``key`` (``special_<key>``)."""
+    return f"special_{key}"
+
+
+def state_component_names(n: int) -> list[str]:
+    """Names of the state components ``[x1..xn, v1..vn]`` (``v`` for ``x'``)."""
+    return [f"x{i}" for i in range(1, n + 1)] + [f"v{i}" for i in range(1, n + 1)]
+
+
+def _point_variables(parameter: str) -> dict[str, _Var]:
+    """The point variables of a branch continued in ``parameter``."""
+    out = dict(POINT_VARIABLES)
+    if parameter not in out:
+        out = {parameter: PARAMETERS[parameter], **out}
+    return out
+
+
+def _special_variables(parameter: str) -> dict[str, _Var]:
+    """Special-point fields (dict keys) of a branch continued in ``parameter``."""
+    fields = {"label": _SPECIAL_FIELDS["label"]}
+    for name in dict.fromkeys(["omega", "b", parameter]):
+        p = PARAMETERS[name]
+        fields[name] = _Var(f"{p.long_name} at special point", p.units,
+                            f"{p.description.rstrip('.')} at the special point.")
+    fields.update({k: v for k, v in _SPECIAL_FIELDS.items() if k != "label"})
+    return fields
+
+
+def _parameter_name(parameter: Any) -> str:
+    if not isinstance(parameter, str):
+        raise TypeError(f"parameter must be a str, one of {sorted(PARAMETERS)}; "
+                        f"got {parameter!r}")
+    if parameter not in PARAMETERS:
+        raise ValueError(f"parameter must be one of {sorted(PARAMETERS)}; got {parameter!r}")
+    return parameter
+
+
+def _N(N: Any) -> int:
+    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+        raise ValueError(f"N (forcing periods per impact) must be an integer >= 1; got {N!r}")
+    return int(N)
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (tuple, set, frozenset)):
+        return list(value)
+    raise TypeError(f"options must be JSON-serialisable; got {value!r} "
+                    f"of type {type(value).__name__}")
+
+
+def _options_json(options: Any) -> str:
+    if dataclasses.is_dataclass(options) and not isinstance(options, type):
+        options = dataclasses.asdict(options)
+    if not isinstance(options, Mapping):
+        raise TypeError(f"options must be a mapping (or a dataclass instance); got {options!r}")
+    return json.dumps(dict(options), default=_json_default, sort_keys=True)
+
+
+def _column(key: str, value: Any, spec: _Var, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """``value`` as an array of ``spec.kind`` and ``shape``; ValueError naming ``key`` if not."""
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # pragma: no cover - ragged input
+        raise ValueError(f"{what} {key!r} must be array_like; got {value!r}") from exc
+    if a.shape != shape:
+        raise ValueError(f"{what} {key!r} must have shape {shape}; got shape {a.shape}")
+    if spec.kind == "b":
+        if a.dtype.kind == "b":
+            return a.astype(bool)
+        if a.dtype.kind in "iuf" and np.all(np.isin(a, (0, 1))):
+            return a.astype(bool)
+        raise ValueError(f"{what} {key!r} must be boolean (or 0/1); got dtype {a.dtype} "
+                         f"with values {np.unique(a)[:5].tolist()}")
+    if spec.kind == "c":
+        if a.dtype.kind not in "iufc":
+            raise ValueError(f"{what} {key!r} must be numeric (complex); got dtype {a.dtype}")
+        return a.astype(np.complex128)
+    if spec.kind == "f":
+        if a.dtype.kind not in "iuf":
+            raise ValueError(f"{what} {key!r} must be real numbers; got dtype {a.dtype}")
+        return a.astype(np.float64)
+    raise AssertionError(f"unhandled kind {spec.kind}")  # pragma: no cover - schema bug
+
+
+def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
+                    ) -> dict[str, np.ndarray]:
+    """Columns (on ``special``) of the special-point dicts, validated."""
+    if isinstance(special_points, (str, Mapping)) or not isinstance(special_points, Sequence):
+        raise TypeError(f"special_points must be a list of dicts; got {special_points!r}")
+    fields = _special_variables(parameter)
+    cols: dict[str, list[Any]] = {key: [] for key in fields}
+    for i, sp in enumerate(special_points):
+        where = f"special_points[{i}]"
+        if not isinstance(sp, Mapping):
+            raise TypeError(f"{where} must be a dict; got {sp!r}")
+        missing = [k for k in fields if k not in sp]
+        if missing:
+            raise ValueError(f"{where} is missing key(s) {missing}; required: {list(fields)}")
+        unknown = sorted(set(sp) - set(fields))
+        if unknown:
+            raise ValueError(f"{where} has unknown key(s) {unknown}; allowed: {list(fields)}")
+        label = sp["label"]
+        if label not in SPECIAL_LABELS:
+            raise ValueError(f"{where}['label'] must be one of {list(SPECIAL_LABELS)}; "
+                             f"got {label!r}")
+        status = sp["status"]
+        if status not in SPECIAL_STATUSES:
+            raise ValueError(f"{where}['status'] must be one of {list(SPECIAL_STATUSES)}; "
+                             f"got {status!r}")
+        point = sp["point"]
+        if (isinstance(point, bool) or not isinstance(point, (int, np.integer))
+                or not 0 <= point < npoints):
+            raise ValueError(f"{where}['point'] must be an integer index in [0, {npoints}); "
+                             f"got {point!r}")
+        for key, spec in fields.items():
+            if spec.kind != "f":
+                continue
+            value = sp[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                                 np.floating)):
+                raise ValueError(f"{where}[{key!r}] must be a real number; got {value!r}")
+        precision = float(sp["precision"])
+        if not (precision >= 0 or math.isnan(precision)):
+            raise ValueError(f"{where}['precision'] must be >= 0 (or NaN); got {precision!r}")
+        lo, hi = float(sp["bracket_lo"]), float(sp["bracket_hi"])
+        if lo > hi:
+            raise ValueError(f"{where} must have bracket_lo <= bracket_hi; got "
+                             f"bracket_lo={lo!r}, bracket_hi={hi!r}")
+        mult = _column("multipliers", sp["multipliers"], fields["multipliers"], (2 * n,),
+                       f"{where} key")
+        for key in fields:
+            cols[key].append(mult if key == "multipliers" else sp[key])
+    out: dict[str, np.ndarray] = {}
+    count = len(special_points)
+    for key, spec in fields.items():
+        if spec.kind == "U":
+            dtype = _LABEL_DTYPE if key == "label" else _STATUS_DTYPE
+            out[key] = np.array(cols[key], dtype=dtype).reshape(count)
+        elif spec.kind == "i":
+            out[key] = np.array(cols[key], dtype=np.int64).reshape(count)
+        elif spec.kind == "c":
+            out[key] = np.array(cols[key], dtype=np.complex128).reshape(count, 2 * n)
+        else:
+            out[key] = np.array(cols[key], dtype=np.float64).reshape(count)
+    return out
+
+
+def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, options: Any,
+                   columns: Mapping[str, Any], special_points: Sequence[Mapping[str, Any]],
+                   title: str | None = None) -> xr.Dataset:
+    """Assemble the dataset of one continued branch of periodic N-1 motions.
+
+    Parameters
+    ----------
+    parameter : str
+        The continued parameter, one of :data:`PARAMETERS` (``"omega"``, ``"b"``,
+        ``"R"``, ``"eta"``, ``"alpha"``, ``"beta"``).
+    N : int
+        Forcing periods per impact (``>= 1``).
+    oscillator : ImpactOscillator
+        The oscillator; stored as JSON (its continued parameter is the value
+        at the start of the branch, or any value: the columns are authoritative).
+    options : dict or dataclass instance
+        Continuation options, stored as JSON text.
+    columns : mapping of str to array_like
+        One entry per variable of :data:`POINT_VARIABLES`, each of shape
+        ``(npoints,)`` except ``multipliers`` (``(npoints, 2n)``, complex) and
+        ``state`` (``(npoints, 2n)``, real). ``stable`` and ``physical`` are
+        boolean. A ``parameter`` other than ``omega``/``b`` needs its own column.
+    special_points : sequence of dict
+        Each with keys ``label`` (one of :data:`SPECIAL_LABELS`), ``omega``,
+        ``b`` (and the continued parameter), ``delta``, ``point`` (index of the
+        nearest point), ``bracket_lo <= bracket_hi`` (parameter values),
+        ``precision`` (``>= 0`` or NaN), ``status`` (one of
+        :data:`SPECIAL_STATUSES`) and ``multipliers`` (shape ``(2n,)``).
+    title : str, optional
+        Dataset title; a description of the branch by default.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``point``, ``multiplier``, ``component``, ``special``;
+        see ``docs/dataset.md``.
+
+    Raises
+    ------
+    ValueError
+        A column or special-point key is missing, unknown, of the wrong
+        shape or dtype, or a label/status/index is out of range.
+    TypeError
+        ``oscillator``, ``options``, ``columns`` or ``special_points`` has the
+        wrong type.
+    """
+    from impactcont import __version__
+
+    parameter = _parameter_name(parameter)
+    N = _N(N)
+    if not isinstance(oscillator, ImpactOscillator):
+        raise TypeError(f"oscillator must be an ImpactOscillator; got {oscillator!r}")
+    if not isinstance(columns, Mapping):
+        raise TypeError(f"columns must be a mapping of variable name to array; got {columns!r}")
+    n = oscillator.n
+    specs = _point_variables(parameter)
+    missing = [k for k in specs if k not in columns]
+    if missing:
+        raise ValueError(f"columns is missing key(s) {missing}; required: {list(specs)}")
+    unknown = sorted(set(columns) - set(specs))
+    if unknown:
+        raise ValueError(f"columns has unknown key(s) {unknown}; allowed: {list(specs)}")
+    first = np.asarray(columns[parameter])
+    if first.ndim != 1:
+        raise ValueError(f"column {parameter!r} must be 1-D (npoints,); got shape {first.shape}")
+    npoints = first.shape[0]
+    if npoints == 0:
+        raise ValueError(f"column {parameter!r} must have at least one point; got length 0")
+
+    data_vars: dict[str, Any] = {}
+    for key, spec in specs.items():
+        shape = (npoints,) + (2 * n,) * len(spec.extra_dims)
+        arr = _column(key, columns[key], spec, shape, "column")
+        data_vars[key] = (("point", *spec.extra_dims), arr, spec.attrs())
+    for key in (parameter, "arclength"):
+        bad = ~np.isfinite(data_vars[key][1])
+        if np.any(bad):
+            raise ValueError(f"column {key!r} must be finite; got non-finite values at points "
+                             f"{np.flatnonzero(bad)[:10].tolist()}")
+
+    special = _special_arrays(special_points, parameter, n, npoints)
+    for key, spec in _special_variables(parameter).items():
+        data_vars[special_variable(key)] = (("special", *spec.extra_dims), special[key],
+                                            spec.attrs())
+
+    coords = {
+        "point": ("point", np.arange(npoints, dtype=np.int64),
+                  {"long_name": "continuation point index", "units": "1"}),
+        "component": ("component", np.array(state_component_names(n)),
+                      {"long_name": "state component",
+                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
+    }
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    attrs = {
+        "title": title if title is not None else
+        f"Branch of periodic {N}-1 impacting motions continued in {parameter}",
+        "N": N,
+        "parameter": parameter,
+        "oscillator": oscillator.to_json(),
+        "options": _options_json(options),
+        "impactcont_version": __version__,
+        "Conventions": CONVENTIONS,
+        "history": f"{now} created by impactcont {__version__}",
+    }
+    ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    logger.debug("branch dataset: parameter=%s N=%d npoints=%d special=%d", parameter, N,
+                 npoints, ds.sizes["special"])
+    return ds
+
+
+def validate_branch_dataset(ds: Any) -> xr.Dataset:
+    """Check that ``ds`` has the layout of :func:`branch_dataset`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` itself, for chaining.
+
+    Raises
+    ------
+    TypeError
+        ``ds`` is not an :class:`xarray.Dataset`.
+    ValueError
+        An attribute, variable or dimension is missing or has the wrong
+        dimensions or dtype; the message names it.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"expected an xarray.Dataset of a branch; got {type(ds).__name__}")
+    missing = [a for a in _REQUIRED_ATTRS if a not in ds.attrs]
+    if missing:
+        raise ValueError(f"not a branch dataset: missing attribute(s) {missing}")
+    parameter = ds.attrs["parameter"]
+    if parameter not in PARAMETERS:
+        raise ValueError(f"not a branch dataset: attribute 'parameter' must be one of "
+                         f"{sorted(PARAMETERS)}; got {parameter!r}")
+    expected: dict[str, tuple[tuple[str, ...], str]] = {}
+    for key, spec in _point_variables(parameter).items():
+        expected[key] = (("point", *spec.extra_dims), spec.kind)
+    for key, spec in _special_variables(parameter).items():
+        expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)
+    missing = [k for k in expected if k not in ds.variables]
+    if missing:
+        raise ValueError(f"not a branch dataset: missing variable(s) {missing}")
+    for key, (dims, kind) in expected.items():
+        var = ds[key]
+        if var.dims != dims:
+            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
+        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
+            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; "
+                             f"got dtype {var.dtype}")
+    if ds.sizes["multiplier"] != ds.sizes["component"] or ds.sizes["component"] % 2:
+        raise ValueError(f"dims 'multiplier' and 'component' must both have size 2n; got "
+                         f"{ds.sizes['multiplier']} and {ds.sizes['component']}")
+    labels = set(np.asarray(ds["special_label"]).tolist())
+    if not labels <= set(SPECIAL_LABELS):
+        raise ValueError(f"variable 'special_label' must hold labels in "
+                         f"{list(SPECIAL_LABELS)}; got {sorted(labels)}")
+    return ds
+
+
+def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactOscillator:
+    """The oscillator stored in a branch dataset.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A branch dataset (its ``oscillator`` attribute holds the JSON).
+    point : int, optional
+        If given, return the oscillator at that point of the branch: ``omega``,
+        ``b`` and the continued parameter replaced by their values there.
+
+    Returns
+    -------
+    ImpactOscillator
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
+    text = ds.attrs.get("oscillator")
+    if not isinstance(text, str):
+        raise ValueError(f"dataset has no 'oscillator' attribute with JSON text; got {text!r}")
+    osc = ImpactOscillator.from_json(text)
+    if point is None:
+        return osc
+    npoints = ds.sizes.get("point", 0)
+    if isinstance(point, bool) or not isinstance(point, (int, np.integer)) \
+            or not -npoints <= point < npoints:
+        raise ValueError(f"point must be an integer index in [{-npoints}, {npoints}); "
+                         f"got {point!r}")
+    names = dict.fromkeys(["omega", "b", ds.attrs.get("parameter", "omega")])
+    return osc.replace(**{k: float(ds[k].values[point]) for k in names})
