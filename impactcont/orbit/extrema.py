@@ -114,11 +114,14 @@ def _bracketed_roots(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
         ga[active] = np.where(left, g, ga[active])
         b[active] = np.where(left, b[active], xa)
         with np.errstate(divide="ignore", invalid="ignore"):
-            xn = xa - g / dg
-        inside = np.isfinite(xn) & (xn > a[active]) & (xn < b[active])
-        xn = np.where(inside, xn, 0.5 * (a[active] + b[active]))
+            step = g / dg
         tol = _XTOL + _RTOL * np.abs(xa)
-        done = (g == 0) | (np.abs(xn - xa) <= tol) | (b[active] - a[active] <= tol)
+        # converged: the Newton correction is below the tolerance (judged before the
+        # safeguard, which would otherwise bisect away from a root sitting on the bracket end)
+        done = (g == 0) | (np.abs(step) <= tol) | (b[active] - a[active] <= tol)
+        xn = xa - step
+        inside = np.isfinite(xn) & (xn >= a[active]) & (xn <= b[active])
+        xn = np.where(inside | done, xn, 0.5 * (a[active] + b[active]))
         x[active] = np.where(g == 0, xa, xn)
         active = active[~done]
     return x
