@@ -2,13 +2,17 @@
 
 The closed-form periodic N-1 motions of Cao & Shu (eq. 12-16), their stability
 (eq. 25) and robust stability (eq. 26-29), with an exact event-driven
-simulator as the independent witness.
+simulator as the independent witness; branches of these motions continued in
+a parameter with their special points, stored as xarray datasets / NetCDF.
+Plots live in :mod:`impactcont.plots` (imported on demand: it loads matplotlib).
 """
 
 from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
+from impactcont.branch import continuation
+from impactcont.dataset import load, save
 from impactcont.errors import (
     ImpactcontError,
     NoPeriodicMotionError,
@@ -48,9 +52,12 @@ __all__ = [
     "__version__",
     "amplitude_squared",
     "chain_stiffness",
+    "continuation",
+    "load",
     "lyapunov_matrix",
     "periodic_orbits",
     "robust_bound",
     "robust_stability",
+    "save",
     "simulate",
 ]

@@ -1,0 +1,185 @@
+"""Continuation of N-1 branches: special points located, then checked independently."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import impactcont as ic
+from impactcont.continuation import ContinuationOptionError
+
+
+@pytest.fixture(scope="module")
+def paper_system():
+    return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                               b=0.0, omega=1.0, eta=0.1)
+
+
+@pytest.fixture(scope="module")
+def branch_b0(paper_system):
+    return ic.continuation(paper_system, N=1, parameter="omega", bounds=(0.5, 6.0))
+
+
+@pytest.fixture(scope="module")
+def branch_b05(paper_system):
+    return ic.continuation(paper_system.replace(b=0.5), N=1, parameter="omega",
+                           bounds=(0.5, 3.0))
+
+
+def special(ds, label):
+    rows = np.flatnonzero(ds.special_label.values == label)
+    assert rows.size >= 1, f"no {label} found: {ds.special_label.values}"
+    return ds.isel(special=int(rows[0]))
+
+
+def orbit_at(osc, N, delta_guess):
+    orbits = ic.periodic_orbits(osc, N)
+    return min(orbits, key=lambda o: abs(math.remainder(o.delta - delta_guess, 2 * math.pi)))
+
+
+def test_points_lie_on_the_closed_form(branch_b0, paper_system):
+    assert branch_b0.attrs["parameter"] == "omega"
+    assert branch_b0.omega.min() == 0.5 and branch_b0.omega.max() == 6.0
+    for i in range(0, branch_b0.sizes["point"], 37):
+        pt = branch_b0.isel(point=i)
+        orbit = orbit_at(paper_system.replace(omega=float(pt.omega)), 1, float(pt.delta))
+        assert math.remainder(orbit.delta - float(pt.delta), 2 * math.pi) == pytest.approx(
+            0.0, abs=1e-10)
+        assert orbit.impact_velocity == pytest.approx(float(pt.impact_velocity), rel=1e-9)
+        np.testing.assert_allclose(np.sort_complex(orbit.multipliers),
+                                   np.sort_complex(pt.multipliers.values), atol=1e-9)
+
+
+def test_period_doubling_confirmed_by_simulation(branch_b0, paper_system):
+    pd = special(branch_b0, "PD")
+    w = float(pd.special_omega)
+    assert pd.special_status == "located"
+    assert np.min(np.abs(pd.special_multipliers.values + 1)) < 1e-8
+    for side, w_side in (("below", w - 0.02), ("above", w + 0.02)):
+        osc = paper_system.replace(omega=w_side)
+        orbit = orbit_at(osc, 1, float(pd.special_delta))
+        assert orbit.physical
+        X = orbit.state.copy()
+        X[1] += 1e-6
+        res = ic.simulate(osc, X, orbit.delta, 400.0)
+        v = res.impact_velocities[-20:]
+        spread = v.max() - v.min()
+        if side == "below":  # stable N = 1 motion: one impact velocity
+            assert orbit.stable
+            assert spread < 1e-9
+        else:  # beyond PD: period-2 impacts, alternating velocities
+            assert not orbit.stable
+            assert spread > 1e-3
+            np.testing.assert_allclose(v[2::2], v[:-2:2], atol=1e-8)
+
+
+def test_grazing_confirmed_by_simulation(branch_b0, paper_system):
+    gr = special(branch_b0, "GR")
+    w = float(gr.special_omega)
+    k = int(gr.special_point)
+    orbit = orbit_at(paper_system.replace(omega=w), 1, float(gr.special_delta))
+    assert abs(orbit.gap_min) < 1e-9
+    # the physical side of the graze keeps its motion; the other side hits the stop early
+    outcomes = {}
+    for w_side in (w - 0.01, w + 0.01):
+        osc = paper_system.replace(omega=w_side)
+        o = orbit_at(osc, 1, float(gr.special_delta))
+        res = ic.simulate(osc, o.state, o.delta, 1.5)
+        outcomes[o.physical] = res.impact_times[0] / o.period
+    assert set(outcomes) == {True, False}
+    assert outcomes[True] == pytest.approx(1.0, abs=1e-9)
+    assert outcomes[False] < 0.99
+    assert bool(branch_b0.physical[k - 3]) != bool(branch_b0.physical[k + 3])
+
+
+def test_fold_matches_closed_form_existence_limit(branch_b05, paper_system):
+    sn = special(branch_b05, "SN")
+    w = float(sn.special_omega)
+    osc = paper_system.replace(b=0.5, omega=w)
+    assert ic.amplitude_squared(osc, 1) == pytest.approx(0.25, abs=1e-10)
+    assert np.min(np.abs(sn.special_multipliers.values - 1)) < 1e-6
+    assert len(ic.periodic_orbits(osc.replace(omega=w + 1e-4), 1)) == 0
+    assert len(ic.periodic_orbits(osc.replace(omega=w - 1e-4), 1)) == 2
+
+
+def test_zero_velocity_impact_is_the_linear_response_touching_the_stop(branch_b05,
+                                                                       paper_system):
+    zv = special(branch_b05, "ZV")
+    w = float(zv.special_omega)
+    osc = paper_system.replace(b=0.5, omega=w)
+    # independent: steady linear response amplitude (K - w^2 M + i w C)^-1 F
+    X = np.linalg.solve(osc.K - w**2 * osc.M + 1j * w * osc.C, osc.F)
+    assert abs(X[0]) == pytest.approx(0.5, abs=1e-9)
+
+
+def test_neimark_sacker_confirmed_by_simulation(branch_b05, paper_system):
+    ns = special(branch_b05, "NS")
+    w = float(ns.special_omega)
+    mu = ns.special_multipliers.values
+    critical = mu[np.argmin(np.abs(np.abs(mu) - 1))]
+    assert abs(abs(critical) - 1) < 1e-8 and abs(critical.imag) > 1e-3
+    growth = {}
+    for w_side in (w - 2e-3, w + 5e-4):
+        osc = paper_system.replace(b=0.5, omega=w_side)
+        o = orbit_at(osc, 1, float(ns.special_delta))
+        X = o.state.copy()
+        X[1] += 1e-7
+        res = ic.simulate(osc, X, o.delta, 300.5)
+        v = res.impact_velocities
+        growth[o.stable] = abs(v[-1] - o.impact_velocity) / abs(v[0] - o.impact_velocity)
+    assert set(growth) == {True, False}
+    assert growth[True] < 1e-3 and growth[False] > 10
+
+
+@pytest.mark.parametrize("label", ["SN", "NS", "ZV"])
+def test_located_values_stable_when_the_step_is_halved(branch_b05, paper_system, label):
+    fine = ic.continuation(paper_system.replace(b=0.5), N=1, parameter="omega",
+                           bounds=(0.5, 3.0), ds=0.01, ds_max=0.025)
+    a = float(special(branch_b05, label).special_omega)
+    b = float(special(fine, label).special_omega)
+    assert a == pytest.approx(b, abs=1e-9)
+
+
+def test_special_points_lie_in_their_brackets(branch_b0, branch_b05):
+    for ds in (branch_b0, branch_b05):
+        for i in range(ds.sizes["special"]):
+            sp = ds.isel(special=i)
+            if str(sp.special_label.values) == "SN":
+                continue  # a fold is an extremum of the parameter: outside its bracket
+            lo, hi = float(sp.special_bracket_lo), float(sp.special_bracket_hi)
+            assert lo - 1e-12 <= float(sp.special_omega) <= hi + 1e-12
+            assert float(sp.special_precision) < 1e-9
+
+
+def test_continuation_in_the_gap(paper_system):
+    ds = ic.continuation(paper_system.replace(omega=1.0), N=1, parameter="b",
+                         bounds=(-1.0, 2.0))
+    sn = special(ds, "SN")
+    assert float(sn.special_b) ** 2 == pytest.approx(ic.amplitude_squared(
+        paper_system.replace(omega=1.0), 1), rel=1e-12)
+
+
+def test_netcdf_round_trip_of_a_real_branch(branch_b05, tmp_path):
+    path = ic.save(branch_b05, tmp_path / "branch.nc")
+    back = ic.load(path)
+    xr.testing.assert_identical(back, branch_b05)
+    osc = ic.ImpactOscillator.from_json(back.attrs["oscillator"])
+    assert osc.b == 0.5
+
+
+def test_bad_options_raise(paper_system):
+    with pytest.raises(ic.ParameterError, match="parameter must be one of"):
+        ic.continuation(paper_system, parameter="gap", bounds=(0, 1))
+    with pytest.raises(ContinuationOptionError, match="bounds"):
+        ic.continuation(paper_system, bounds=(6.0, 0.5))
+    with pytest.raises(ContinuationOptionError, match="ds_max"):
+        ic.continuation(paper_system, bounds=(0.5, 6.0), ds_max=-1.0)
+    with pytest.raises(ic.ParameterError, match="N must be an integer"):
+        ic.continuation(paper_system, N=0, bounds=(0.5, 6.0))
+    with pytest.raises(ValueError, match="labels must be a subset"):
+        ic.continuation(paper_system, bounds=(0.5, 6.0), detect=["XX"])
+    with pytest.raises(ic.NoPeriodicMotionError, match="no N=1 motion anywhere"):
+        ic.continuation(paper_system.replace(b=50.0), bounds=(0.5, 6.0))
