@@ -112,7 +112,12 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float
     start = 0.0
     while start < t_max:
         stop = min(start + window, t_max)
-        tc = first_upward_crossing(motion, flow.osc.b, sample_times(flow, start, stop))
+        grid = sample_times(flow, start, stop)
+        if start > 0 and motion(grid[:1])[0][0] >= flow.osc.b:
+            # the previous window ended just below the stop at this very time: the impact
+            # sits on the boundary (the two evaluations differ only by rounding)
+            return start, flow.state(start, X, phase)[0]
+        tc = first_upward_crossing(motion, flow.osc.b, grid)
         if tc is not None:
             return tc, flow.state(tc, X, phase)[0]
         start = stop
