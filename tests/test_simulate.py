@@ -9,7 +9,7 @@ import pytest
 import scipy.linalg
 from scipy.optimize import brentq
 
-from impactcont import Flow, ParameterError, SimulationStatus, simulate
+from impactcont import Flow, ParameterError, SimulationStatus, periodic_orbits, simulate
 from impactcont.orbit.extrema import interior_maxima, sample_times
 
 
@@ -103,3 +103,15 @@ def test_bad_inputs(paper):
         simulate(paper, np.zeros(4), 0.0, -1)
     with pytest.raises(ParameterError, match="delta must be a finite"):
         simulate(paper, np.zeros(4), math.nan, 1.0)
+
+
+def test_plastic_impact_motion_is_followed(paper):
+    """R = 0: mass 1 stops dead on the stop and leaves it again (no sticking, no chatter)."""
+    osc = paper.replace(R=0.0)
+    orbit = next(o for o in periodic_orbits(osc, 1) if o.physical)
+    assert orbit.state[osc.n] == 0.0
+    res = simulate(osc, orbit.state, orbit.delta, 10.5)
+    assert res.success
+    np.testing.assert_allclose(np.diff(res.impact_times), orbit.period, rtol=1e-12)
+    np.testing.assert_allclose(res.impact_velocities, orbit.impact_velocity, rtol=1e-10)
+

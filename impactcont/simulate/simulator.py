@@ -27,6 +27,7 @@ __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
 log = logging.getLogger(__name__)
 
 TWO_PI = 2.0 * math.pi
+_ON_STOP = 1e-12  # a state this close to the stop (relative), moving into it, impacts now
 
 
 class SimulationStatus(enum.Enum):
@@ -108,18 +109,22 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float
         impact happens within ``t_max``.
     """
     motion = flow.mass1(X, phase)
+    b = flow.osc.b
     window = TWO_PI / flow.omega
     start = 0.0
+    below_at_start = True
     while start < t_max:
         stop = min(start + window, t_max)
         grid = sample_times(flow, start, stop)
-        if start > 0 and motion(grid[:1])[0][0] >= flow.osc.b:
-            # the previous window ended just below the stop at this very time: the impact
-            # sits on the boundary (the two evaluations differ only by rounding)
+        x, v, _ = motion(grid)
+        if start > 0 and below_at_start and x[0] >= b and v[0] >= 0:
+            # the previous window ended just below the stop at this very time, moving up:
+            # the impact sits on the boundary (the two evaluations differ only by rounding)
             return start, flow.state(start, X, phase)[0]
-        tc = first_upward_crossing(motion, flow.osc.b, grid)
+        tc = first_upward_crossing(motion, b, grid)
         if tc is not None:
             return tc, flow.state(tc, X, phase)[0]
+        below_at_start = bool(x[-1] < b)
         start = stop
     return None
 
@@ -133,8 +138,7 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     if X.shape != (2 * osc.n,) or not np.all(np.isfinite(X)):
         raise ParameterError(f"state must be a finite vector [x; x'] of length {2 * osc.n}; "
                              f"got {np.asarray(state).tolist()!r}")
-    tol = 1e-12 * max(1.0, abs(osc.b))
-    if X[0] > osc.b + tol:
+    if X[0] > osc.b + _ON_STOP * max(1.0, abs(osc.b)):
         raise ParameterError(f"state[0] = x1 = {float(X[0])!r} is beyond the stop b = {osc.b!r}; "
                              "x1 <= b is required")
     return X
@@ -179,6 +183,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
     flow = Flow(osc)
     n = osc.n
+    on_stop = _ON_STOP * max(1.0, abs(osc.b))
     t_end = periods * TWO_PI / osc.omega
     dt_sample = TWO_PI / osc.omega / int(samples_per_period)
     times, vels, phases, states = [], [], [], []
@@ -189,11 +194,12 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     v_scale = 0.0
 
     while True:
-        if X[0] >= osc.b and X[n] >= 0:  # on the stop, moving into it: impact now
+        on_the_stop = X[0] >= osc.b - on_stop and X[n] >= 0
+        if on_the_stop and X[n] > 0:  # moving into the stop: impact now
             hit = (0.0, X.copy())
-            if X[n] == 0 and flow.state_derivative(0.0, X, phase)[0][n] > 0:
-                status = SimulationStatus.STICKING
-                break
+        elif on_the_stop and flow.state_derivative(0.0, X, phase)[0][n] > 0:
+            status = SimulationStatus.STICKING  # at rest on the stop, pushed into it
+            break
         else:
             hit = next_impact(flow, X, phase, t_end - t_now)
         flight = hit[0] if hit is not None else t_end - t_now
@@ -221,11 +227,6 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         if v < chatter_velocity * max(v_scale, 1.0):
             status = SimulationStatus.CHATTER
             break
-        if osc.R == 0.0:
-            acc = flow.state_derivative(0.0, X, phase)[0][n]
-            if acc > 0:
-                status = SimulationStatus.STICKING
-                break
         if len(times) >= max_impacts:
             status = SimulationStatus.MAX_IMPACTS
             break
