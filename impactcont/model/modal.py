@@ -22,13 +22,18 @@ free of cancellation and overflow:
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import scipy.linalg
 
-from impactcont.errors import ParameterError, ResonanceError
+from impactcont.errors import NearResonanceWarning, ParameterError, ResonanceError
 
 __all__ = ["ModalBasis", "forced_coefficients", "free_transfer"]
+
+# warn when the forced amplitude of a mode is known to worse than this (relative) because
+# omega sits within the rounding error of omega_i^2 (eigh: about eps * omega_max^2)
+_RESONANCE_REL_ERROR_WARN = 1e-8
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class ModalBasis:
@@ -46,6 +51,9 @@ class ModalBasis:
         ``a_i = xi_i omega_i = (alpha + beta omega_i^2) / 2``.
     modal_forces : ndarray, shape (n,)
         ``f_i = u.T F`` (eq. 6).
+    eigenvalue_errors : ndarray, shape (n,)
+        Rounding-error scale of ``omega_i^2``: ``eps |u_i|^T |K| |u_i|`` (componentwise,
+        so that graded stiff chains are not charged ``eps * max omega^2`` on every mode).
     """
 
     u: np.ndarray
@@ -53,6 +61,7 @@ class ModalBasis:
     natural_frequencies: np.ndarray
     decay_rates: np.ndarray
     modal_forces: np.ndarray
+    eigenvalue_errors: np.ndarray | None = None
 
     @classmethod
     def from_matrices(cls, M: np.ndarray, K: np.ndarray, alpha: float, beta: float,
@@ -66,8 +75,10 @@ class ModalBasis:
         sign = np.where(u[0] < 0, -1.0, 1.0)
         u = u * sign
         w = np.sqrt(lam)
+        errors = np.finfo(float).eps * np.einsum("ji,jk,ki->i", np.abs(u), np.abs(K), np.abs(u))
         return cls(u=u, u_inv=u.T @ M, natural_frequencies=w,
-                   decay_rates=0.5 * (alpha + beta * lam), modal_forces=u.T @ F)
+                   decay_rates=0.5 * (alpha + beta * lam), modal_forces=u.T @ F,
+                   eigenvalue_errors=errors)
 
     @property
     def damping_ratios(self) -> np.ndarray:
@@ -142,7 +153,8 @@ def free_transfer(w: np.ndarray, a: np.ndarray, t: np.ndarray
     return w11, es, w21, w22
 
 
-def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: float
+def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: float, *,
+                        eigenvalue_errors: np.ndarray | None = None
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Steady forced amplitudes ``gamma_i, beta_i`` of eq. (7).
 
@@ -150,10 +162,27 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
     ``phi = gamma cos(omega t) + beta sin(omega t)``,
     ``psi = beta cos(omega t) - gamma sin(omega t)``.
 
+    Parameters
+    ----------
+    w, a, f : ndarray, shape (n,)
+        Natural frequencies, decay rates and modal forces.
+    omega : float or ndarray broadcasting against (n,)
+        Forcing frequency.
+    eigenvalue_errors : ndarray, shape (n,), optional
+        Rounding-error scale of ``w_i^2`` (:attr:`ModalBasis.eigenvalue_errors`); when
+        given, a near-resonance that this error makes inexact warns.
+
     Raises
     ------
     ResonanceError
         If an undamped, forced mode has ``omega_i == omega`` (``Delta_i = 0``).
+
+    Warns
+    -----
+    NearResonanceWarning
+        If omega is so close to the natural frequency of a lightly damped, forced
+        mode that its amplitude is known to worse than 1e-8 (relative): the
+        error of ``omega_i^2`` times ``|omega_i^2 - omega^2| / Delta_i``.
     """
     detune = (w - omega) * (w + omega)
     damp = 2.0 * a * omega
@@ -166,4 +195,21 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
             "the forced response of eq. (6) does not exist; choose omega != omega_i or add damping"
         )
     safe = np.where(delta == 0.0, 1.0, delta)
+    # omega_i^2 carries an absolute error ~ eigenvalue_errors from the eigensolver; the
+    # amplitude f / sqrt(Delta_i) then has relative error ~ that * |detune| / Delta_i, which
+    # grows without bound at an undamped resonance: say so rather than return it silently
+    if eigenvalue_errors is None:
+        return detune * f / safe, damp * f / safe
+    scale = 4.0 * eigenvalue_errors + 4.0 * np.finfo(float).eps * w * w
+    rel_error = np.where(f != 0.0, scale * np.abs(detune) / safe, 0.0)
+    worst = float(np.max(rel_error, initial=0.0))
+    if worst > _RESONANCE_REL_ERROR_WARN:
+        i = np.unravel_index(int(np.argmax(rel_error)), rel_error.shape)
+        w_i = float(np.broadcast_to(w, rel_error.shape)[i])
+        om_i = float(np.broadcast_to(omega, rel_error.shape)[i])
+        warnings.warn(
+            f"omega={om_i!r} is within {abs(om_i / w_i - 1.0):.2g} (relative) of the natural "
+            f"frequency {w_i!r} of a lightly damped mode: its forced amplitude (eq. 7) is known "
+            f"only to a relative error of about {worst:.1g}; move omega away from omega_i or "
+            "add damping", NearResonanceWarning, stacklevel=2)
     return detune * f / safe, damp * f / safe

@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import logging
 import math
+import warnings
 from collections.abc import Callable
 
 import numpy as np
 
+from impactcont.errors import UnresolvedMotionWarning
 from impactcont.orbit.flow import Flow, Mass1Motion
 
 __all__ = ["critical_points", "first_upward_crossing", "interior_maxima", "sample_times"]
@@ -61,9 +63,11 @@ def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
     length = t1 - t0
     count = max(math.ceil(length / h), 8)
     if count > _MAX_SAMPLES:
-        log.warning("x1 search grid capped at %d cells for an interval of %.3g (fastest "
-                    "frequency %.3g); short excursions may be missed", _MAX_SAMPLES, length,
-                    osc_rate)
+        warnings.warn(f"x1 search grid capped at {_MAX_SAMPLES} cells for an interval of "
+                      f"{length:.3g} (fastest damped frequency {osc_rate:.3g} would need "
+                      f"{count} cells): a short excursion of mass 1 past the stop (eq. 16) may "
+                      "be missed; damping the fastest modes or a shorter period avoids this",
+                      UnresolvedMotionWarning, stacklevel=2)
         count = _MAX_SAMPLES
     grid = np.linspace(t0, t1, count + 1)
     cell = length / count

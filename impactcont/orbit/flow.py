@@ -20,6 +20,8 @@ from impactcont.model.oscillator import ImpactOscillator
 
 __all__ = ["Flow", "Mass1Motion"]
 
+_CHUNK = 1 << 20  # time-mode pairs per vectorised evaluation of x1 (about 100 MB of work arrays)
+
 
 class Flow:
     """Exact flow of eq. (1) between impacts for one oscillator.
@@ -45,7 +47,8 @@ class Flow:
         self.w = modes.natural_frequencies
         self.a = modes.decay_rates
         self.f = modes.modal_forces
-        self.gamma, self.beta = forced_coefficients(self.w, self.a, self.f, self.omega)
+        self.gamma, self.beta = forced_coefficients(self.w, self.a, self.f, self.omega,
+                                                    eigenvalue_errors=modes.eigenvalue_errors)
 
     # -- modal pieces ---------------------------------------------------------------------------
     def transfer(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -144,9 +147,22 @@ class Mass1Motion:
 
     def derivatives(self, t: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Return ``x1`` and its first three time derivatives at times t (each (nt,))."""
-        fl = self.flow
+        """Return ``x1`` and its first three time derivatives at times t (each (nt,)).
+
+        Evaluated in chunks of at most ``_CHUNK`` time-mode pairs, so that the dense
+        grids of stiff, lightly damped chains (up to 2e6 times) with many modes keep a
+        bounded memory footprint (about 12 arrays of ``nt x n`` floats per chunk).
+        """
         t = np.atleast_1d(np.asarray(t, dtype=float))
+        step = max(1, _CHUNK // max(self.flow.n, 1))
+        if t.size <= step:
+            return self._derivatives(t)
+        parts = [self._derivatives(t[k:k + step]) for k in range(0, t.size, step)]
+        return tuple(np.concatenate([p[i] for p in parts]) for i in range(4))  # type: ignore[return-value]
+
+    def _derivatives(self, t: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        fl = self.flow
         W11, W12, W21, W22 = fl.transfer(t)
         theta = fl.omega * t[:, None] + self.delta
         c, s = np.cos(theta), np.sin(theta)
