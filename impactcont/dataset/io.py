@@ -19,12 +19,13 @@ from typing import Any
 
 import xarray as xr
 
+# branch, curve or map dataset, by its "impactcont_dataset" attribute (branches have none)
+from impactcont.dataset.curves import normalise_dataset, validate_dataset
 from impactcont.dataset.schema import (
     _LABEL_DTYPE,
     _STATUS_DTYPE,
     CONVENTIONS,
     special_variable,
-    validate_branch_dataset,
 )
 
 __all__ = ["ENGINE", "load", "save"]
@@ -54,7 +55,7 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
     """The object to write: a branch Dataset or a DataTree of branch groups."""
     if isinstance(obj, xr.Dataset):
         if validate:
-            validate_branch_dataset(obj)
+            validate_dataset(obj)
         return obj
     if isinstance(obj, xr.DataTree):
         tree = obj
@@ -81,7 +82,7 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
         for node in tree.subtree:
             if node.has_data:
                 try:
-                    validate_branch_dataset(node.to_dataset(inherit=False))
+                    validate_dataset(node.to_dataset(inherit=False))
                 except ValueError as exc:
                     raise ValueError(f"group {node.path!r}: {exc}") from exc
     return tree
@@ -143,7 +144,7 @@ def _normalise(ds: xr.Dataset) -> xr.Dataset:
         name = special_variable(key)
         if name in ds.variables and ds[name].dtype != dtype:
             ds[name] = ds[name].astype(dtype)
-    return ds
+    return normalise_dataset(ds)
 
 
 def _read_tree(path: Path) -> xr.DataTree:
@@ -194,7 +195,7 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
         ds = _normalise(tree.to_dataset())
         if validate:
             try:
-                validate_branch_dataset(ds)
+                validate_dataset(ds)
             except ValueError as exc:
                 raise ValueError(f"file {str(path)!r}: {exc}") from exc
         return ds
@@ -203,7 +204,7 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
             node.dataset = _normalise(node.to_dataset(inherit=False))
             if validate:
                 try:
-                    validate_branch_dataset(node.to_dataset(inherit=False))
+                    validate_dataset(node.to_dataset(inherit=False))
                 except ValueError as exc:
                     raise ValueError(f"file {str(path)!r}, group {node.path!r}: {exc}") from exc
     return tree

@@ -1,0 +1,508 @@
+"""Two-parameter continuation of codim-1 curves: SN, PD, NS, GR and ZV boundaries.
+
+``curve(osc, N, kind, start=..., parameters=("omega", "b"), bounds=...)`` =
+pick a start (a special point of a branch dataset, explicit values, or one
+found by a one-parameter continuation) -> follow the augmented system of
+:mod:`impactcont.problems.codim1` with the pseudo-arclength core in both
+directions until the box ``bounds`` or a curve end -> evaluate the motion at
+every point -> detect and locate the codim-2 points
+(:mod:`impactcont.detection.codim2`) -> an :class:`xarray.Dataset` in the
+schema of :mod:`impactcont.dataset.curves`.
+
+:func:`curve_crossings` solves a curve exactly where it crosses a line
+``parameter = value`` (used to compare with one-parameter special points and
+with the grid of a map).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.branch import continuation
+from impactcont.continuation import ContinuationOptions, iter_points
+from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
+from impactcont.dataset.schema import oscillator_from_dataset, validate_branch_dataset
+from impactcont.detection.codim2 import (
+    Codim2Point,
+    detect_codim2,
+    grazing_other_gap,
+    test_values,
+)
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
+from impactcont.problems.codim1 import (
+    CURVE_KINDS,
+    CurveProblem,
+    check_parameters,
+    curve_problem,
+)
+
+__all__ = ["curve", "curve_crossings"]
+
+log = logging.getLogger(__name__)
+
+_EVENT_TOL = 1e-12
+
+
+@dataclasses.dataclass
+class _Run:
+    points: list[np.ndarray]
+    status: str
+
+
+# -- arguments ----------------------------------------------------------------------------------
+def _check_bounds(bounds: Any, parameters: tuple[str, str]) -> dict[str, tuple[float, float]]:
+    allowed = (f"a mapping {{{parameters[0]!r}: (lo, hi), {parameters[1]!r}: (lo, hi)}} or a "
+               "pair of (lo, hi) pairs in the order of parameters, finite with lo < hi")
+    if isinstance(bounds, Mapping):
+        if set(bounds) != set(parameters):
+            raise ParameterError(f"bounds must be {allowed}; got {bounds!r}")
+        pairs = [bounds[p] for p in parameters]
+    elif isinstance(bounds, Sequence) and not isinstance(bounds, str) and len(bounds) == 2:
+        pairs = list(bounds)
+    else:
+        raise ParameterError(f"bounds must be {allowed}; got {bounds!r}")
+    out = {}
+    for name, pair in zip(parameters, pairs, strict=True):
+        try:
+            lo, hi = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise ParameterError(f"bounds must be {allowed}; got {bounds!r}") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ParameterError(f"bounds[{name!r}] must be finite with lo < hi; got {pair!r}")
+        out[name] = (lo, hi)
+    return out
+
+
+def _same_system(a: ImpactOscillator, b: ImpactOscillator, free: set[str]) -> bool:
+    da, db = a.to_dict(), b.to_dict()
+    keys = (set(da) | set(db)) - free
+    return all(np.allclose(da.get(k, np.nan), db.get(k, np.nan), rtol=1e-12, atol=0.0,
+                           equal_nan=True) for k in keys)
+
+
+def _start_from_branch(ds: xr.Dataset, kind: str, special: int | None, osc: ImpactOscillator | None,
+                       N: int | None, parameters: tuple[str, str]
+                       ) -> tuple[ImpactOscillator, int, float]:
+    validate_branch_dataset(ds)
+    labels = np.asarray(ds["special_label"].values).tolist()
+    statuses = np.asarray(ds["special_status"].values).tolist()
+    if special is None:
+        rows = [k for k, (lab, st) in enumerate(zip(labels, statuses, strict=True))
+                if lab == kind and st == "located"]
+        if not rows:
+            raise ParameterError(f"start: the branch dataset has no located {kind} point; its "
+                                 f"special points are {labels} ({statuses})")
+        special = rows[0]
+    elif isinstance(special, bool) or not isinstance(special, (int, np.integer)) \
+            or not 0 <= special < len(labels):
+        raise ParameterError(f"special must be an index into the branch's {len(labels)} special "
+                             f"points; got {special!r}")
+    elif labels[special] != kind:
+        raise ParameterError(f"special={special!r} is a {labels[special]} point, not {kind}")
+    ds_N = int(ds.attrs["N"])
+    if N is not None and _check_N(N) != ds_N:
+        raise ParameterError(f"N={N!r} differs from the branch dataset's N={ds_N}")
+    row = ds.isel(special=int(special))
+    base = oscillator_from_dataset(ds)
+    names = dict.fromkeys(["omega", "b", ds.attrs["parameter"]])
+    start_osc = base.replace(**{k: float(row[f"special_{k}"]) for k in names})
+    if osc is not None and not _same_system(osc, start_osc, {"omega", "b", *names, *parameters}):
+        raise ParameterError("osc differs from the oscillator of the branch dataset given as "
+                             f"start (other than omega, b and the parameters): {osc!r} vs "
+                             f"{start_osc!r}")
+    return start_osc, ds_N, float(row["special_delta"])
+
+
+def _start_by_continuation(osc: ImpactOscillator, N: int, kind: str, special: int | None,
+                           parameters: tuple[str, str], bounds: dict[str, tuple[float, float]]
+                           ) -> tuple[ImpactOscillator, int, float]:
+    p1 = parameters[0]
+    branch = continuation(osc, N, p1, bounds[p1], detect=[kind])
+    rows = [k for k, (lab, st) in enumerate(zip(branch["special_label"].values,
+                                                branch["special_status"].values, strict=True))
+            if lab == kind and st == "located"]
+    if not rows:
+        raise NoPeriodicMotionError(
+            f"no located {kind} point on the N={N} branch in {p1} in {bounds[p1]} at "
+            f"{parameters[1]}={getattr(osc, parameters[1])!r}; give start explicitly")
+    k = rows[0] if special is None else rows[int(special)]
+    return _start_from_branch(branch, kind, k, None, N, parameters)
+
+
+def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
+                       values: Mapping[str, Any], root: int | None
+                       ) -> tuple[ImpactOscillator, float]:
+    p1, p2 = problem.parameters
+    allowed = {p1, p2, "delta"}
+    unknown = sorted(set(values) - allowed)
+    if unknown or p1 not in values or p2 not in values:
+        raise ParameterError(f"start must give {p1!r} and {p2!r} (and optionally 'delta'); got "
+                             f"keys {sorted(values)}")
+    start_osc = osc.replace(**{p1: float(values[p1]), p2: float(values[p2])})
+    if "delta" in values:
+        return start_osc, float(values["delta"])
+    pc = problem._pieces(getattr(start_osc, p1), getattr(start_osc, p2))
+    c, s = pc.S[0]
+    if problem.kind == "SN":  # the double root of eq. (15): (cos, sin) along sign(b) (c, s)
+        sign = 1.0 if start_osc.b >= 0 else -1.0
+        return start_osc, math.atan2(sign * s, sign * c)
+    orbits = periodic_orbits(start_osc, N)
+    if not orbits:
+        raise NoPeriodicMotionError(f"start: no N={N} motion at {dict(values)} "
+                                    f"(c^2 + s^2 < b^2); give 'delta' or another start")
+    if root is not None:
+        if root not in (1, -1):
+            raise ParameterError(f"root must be +1, -1 or None; got {root!r}")
+        orbits = [o for o in orbits if o.root == root] or orbits
+
+    def condition(orbit: PeriodicOrbit) -> float:
+        try:
+            u = problem.initial_unknowns(getattr(start_osc, p1), getattr(start_osc, p2),
+                                         orbit.delta)
+        except ParameterError:
+            return math.inf
+        return float(np.max(np.abs(problem.residual(u, getattr(start_osc, p2)))))
+
+    return start_osc, min(orbits, key=condition).delta
+
+
+# -- continuation -------------------------------------------------------------------------------
+def _terminal_event(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray
+                    ) -> tuple[str, Any] | None:
+    """A curve end between two points: (label, condition) or None."""
+    if problem.kind == "GR":
+        for xv in (xb,):
+            T = problem.period(xv[:-1], xv[-1])
+            if xv[2] <= 0.0:
+                return "GR+ZV", lambda y: float(y[2])
+            if xv[2] >= T:
+                return "GR+ZV", lambda y: float(y[2] - problem.period(y[:-1], y[-1]))
+    if problem.kind == "NS":
+        sa, sb = math.sin(xa[2]), math.sin(xb[2])
+        if (sa < 0) != (sb < 0) or sb == 0.0:
+            label = "R1" if math.cos(xb[2]) > 0 else "R2"
+            return label, lambda y: math.sin(float(y[2]))
+    return None
+
+
+def _follow(problem: CurveProblem, u0: np.ndarray, lam0: float, options: ContinuationOptions,
+            direction: int, p1_bounds: tuple[float, float],
+            ends: list[tuple[str, np.ndarray, float, str]]) -> _Run:
+    """One direction of a curve; ends go to ``ends`` as (label, x, precision, status)."""
+    problem.accept(u0, lam0)
+    run = iter_points(problem, u0, lam0, options, direction)
+    points: list[np.ndarray] = []
+    name = problem.parameters[0]
+    for pt in run:
+        x = pt.state
+        if points:
+            event = _terminal_event(problem, points[-1], x)
+            if event is not None:
+                label, condition = event
+                try:  # ill-conditioned at a strong resonance: a looser tolerance
+                    xe = problem.solve(0.5 * (points[-1] + x), condition, tol=1e-9)
+                    status = "located"
+                except NewtonConvergenceError as exc:
+                    # the augmented system is singular at the end itself (a Jordan block at
+                    # a strong resonance): keep the bracket
+                    log.info("%s curve end (%s) bracketed, not located: %s", problem.kind,
+                             label, exc)
+                    ga, gb = condition(points[-1]), condition(x)
+                    t = ga / (ga - gb) if ga != gb else 0.5
+                    # recorded, not appended: an interpolated point is not on the curve
+                    xe, status = points[-1] + t * (x - points[-1]), "bracketed"
+                    ends.append((label, xe, float(np.hypot(x[0] - points[-1][0],
+                                                           x[-1] - points[-1][-1])), status))
+                    return _Run(points, f"curve ends at {label} (bracketed): {name}="
+                                        f"{xe[0]:.10g}, {problem.parameters[1]}={xe[-1]:.10g}")
+                points.append(xe)
+                ends.append((label, xe, max(problem.last_step, 1e-15), status))
+                return _Run(points, f"curve ends at {label}: {name}={xe[0]:.10g}, "
+                                    f"{problem.parameters[1]}={xe[-1]:.10g}")
+            lo, hi = p1_bounds
+            if not lo <= x[0] <= hi:
+                bound = lo if x[0] < lo else hi
+                try:
+                    xe = problem.solve(points[-1] + (bound - points[-1][0])
+                                       / (x[0] - points[-1][0]) * (x - points[-1]),
+                                       lambda y, v=bound: float(y[0] - v),
+                                       np.eye(x.size)[0])
+                except NewtonConvergenceError as exc:
+                    return _Run(points, f"{name} bound {bound:.10g} crossed, point on it not "
+                                        f"found ({exc})")
+                points.append(xe)
+                return _Run(points, f"parameter bound reached: {name} = {bound:.10g}")
+        points.append(x)
+        problem.accept(pt.u, pt.lam)
+    return _Run(points, run.message)
+
+
+def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
+                   ) -> tuple[dict[str, np.ndarray], list[PeriodicOrbit], list[dict[str, float]]]:
+    kind = problem.kind
+    orbits = [problem.orbit(x[:-1], x[-1]) for x in xs]
+    n2 = 2 * problem.osc.n
+    tests = [test_values(problem, x, o) for x, o in zip(xs, orbits, strict=True)]
+    cols: dict[str, list[Any]] = {k: [] for k in (
+        "delta", "root", "impact_velocity", "gap_min", "spectral_radius", "multipliers", "state",
+        "physical", "stable_side", "residual", "tangency_time", "angle")}
+    for x, o in zip(xs, orbits, strict=True):
+        mu = o.multipliers
+        if kind == "ZV":  # G has its pole at h2 = 0 (eq. 25): multipliers undefined
+            mu = np.full(n2, np.nan + 0j)
+            rest = mu
+        elif kind == "SN":
+            rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+        elif kind == "PD":
+            rest = np.delete(mu, np.argmin(np.abs(mu + 1.0)))
+        elif kind == "NS":
+            theta = x[2]
+            crit = [np.argmin(np.abs(mu - np.exp(1j * theta))),
+                    np.argmin(np.abs(mu - np.exp(-1j * theta)))]
+            rest = np.delete(mu, crit)
+        else:
+            rest = mu
+        gap = grazing_other_gap(problem, o, float(x[2])) if kind == "GR" else o.gap_min
+        physical = bool(o.impact_velocity > 0 and gap > 0)
+        fold = problem.fold_function(x[:-1], x[-1])
+        cols["delta"].append(math.remainder(float(x[1]), 2 * math.pi))
+        cols["root"].append(0 if kind == "SN" else int(-np.sign(fold)))
+        cols["impact_velocity"].append(o.impact_velocity)
+        cols["gap_min"].append(gap)
+        cols["spectral_radius"].append(float(np.max(np.abs(mu))) if kind != "ZV" else np.nan)
+        cols["multipliers"].append(mu)
+        cols["state"].append(o.state)
+        cols["physical"].append(physical)
+        cols["stable_side"].append(bool(physical and rest.size and np.all(np.abs(rest) < 1.0))
+                                   if kind != "ZV" else False)
+        problem.accept(x[:-1], x[-1])  # borders / reference vector of this very point
+        cols["residual"].append(float(np.max(np.abs(problem.residual(x[:-1], x[-1])))))
+        cols["tangency_time"].append(float(x[2]) if kind == "GR" else np.nan)
+        cols["angle"].append(float(x[2]) if kind == "NS" else np.nan)
+    out = {k: np.array(v) for k, v in cols.items()}
+    p1, p2 = problem.parameters
+    values = {p1: np.array([x[0] for x in xs]), p2: np.array([x[-1] for x in xs])}
+    for name in dict.fromkeys(["omega", "b", p1, p2]):
+        out[name] = values[name] if name in values else \
+            np.full(len(xs), float(getattr(problem.osc, name)))
+    steps = np.hypot(np.diff(values[p1]), np.diff(values[p2]))
+    out["arclength"] = np.concatenate([[0.0], np.cumsum(steps)])
+    return out, orbits, tests
+
+
+def _codim2_record(problem: CurveProblem, cp: Codim2Point) -> dict[str, Any]:
+    osc = problem.oscillator_at(cp.x[0], cp.x[-1])
+    rec: dict[str, Any] = {"label": cp.label, "delta": math.remainder(float(cp.x[1]), 2 * math.pi),
+                           "point": cp.point, "precision": cp.precision, "status": cp.status,
+                           "multipliers": (np.full(2 * osc.n, np.nan + 0j) if problem.kind == "ZV"
+                                           else cp.orbit.multipliers)}
+    for name in dict.fromkeys(["omega", "b", *problem.parameters]):
+        rec[name] = float(getattr(osc, name))
+    return rec
+
+
+def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
+          start: xr.Dataset | Mapping[str, float] | None = None, special: int | None = None,
+          parameters: Sequence[str] = ("omega", "b"),
+          bounds: Mapping[str, Sequence[float]] | Sequence[Sequence[float]] | None = None,
+          root: int | None = None, ds: float = 0.01, ds_min: float = 1e-8, ds_max: float = 0.05,
+          newton_tol: float = 1e-11, max_points: int = 2000, both_directions: bool = True,
+          detect_codim2_points: bool = True, **options: float) -> xr.Dataset:
+    """Continue a codim-1 curve of N-1 motions in two parameters.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator or None
+        The oscillator (other parameters fixed at its values); ``None`` only
+        with a branch dataset as ``start``, whose oscillator is then used.
+    N : int or None
+        One impact every N forcing periods; ``None`` takes it from a branch
+        dataset given as ``start``.
+    kind : {"SN", "PD", "NS", "GR", "ZV"}
+        Saddle-node, period-doubling, Neimark-Sacker, grazing or
+        zero-velocity-impact curve (augmented systems in
+        :mod:`impactcont.problems.codim1`).
+    start : xarray.Dataset, mapping or None
+        A branch dataset from :func:`impactcont.continuation` (its first
+        located special point of this kind, or the one at index ``special``);
+        or explicit values ``{p1: .., p2: .., "delta": ..}`` (``delta``
+        optional), corrected by Newton at fixed ``p2``; or None: the first
+        located point of this kind on the one-parameter branch in ``p1`` at the
+        oscillator's value of ``p2`` (``special`` then counts those points).
+    special : int, optional
+        Which special point (see ``start``).
+    parameters : (str, str)
+        ``(p1, p2)``, any two of ``omega, b, R, eta, alpha, beta``. ``p2`` is the
+        continuation parameter of the core; ``p1`` is an unknown.
+    bounds : mapping or pair of pairs
+        The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
+    root : {+1, -1}, optional
+        With explicit start values and no ``delta``: the root of eq. (15).
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
+        Continuation options (:class:`impactcont.continuation.ContinuationOptions`).
+    detect_codim2_points : bool
+        Locate the codim-2 points on the curve.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``point``, ``multiplier``, ``component``, ``codim2``; schema in
+        :mod:`impactcont.dataset.curves` and ``docs/two_parameter.md``.
+
+    Raises
+    ------
+    ParameterError
+        A bad argument (named in the message).
+    NoPeriodicMotionError
+        No start point could be found.
+    """
+    if kind not in CURVE_KINDS:
+        raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
+    if osc is None and not isinstance(start, xr.Dataset):
+        raise ParameterError("osc may be None only when start is a branch dataset; got "
+                             f"start={type(start).__name__}")
+    if osc is not None and not isinstance(osc, ImpactOscillator):
+        raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
+    parameters = check_parameters(osc if osc is not None else oscillator_from_dataset(start),
+                                  tuple(parameters) if not isinstance(parameters, str)
+                                  else parameters)
+    if bounds is None:
+        raise ParameterError(f"bounds must be given for both parameters {parameters}; got None")
+    box = _check_bounds(bounds, parameters)
+    if N is not None:
+        N = _check_N(N)
+    if isinstance(start, xr.Dataset):
+        start_osc, N, delta0 = _start_from_branch(start, kind, special, osc, N, parameters)
+    elif start is None:
+        if N is None:
+            raise ParameterError("N must be given unless start is a branch dataset; got None")
+        start_osc, N, delta0 = _start_by_continuation(osc, N, kind, special, parameters, box)
+    elif isinstance(start, Mapping):
+        if N is None:
+            raise ParameterError("N must be given unless start is a branch dataset; got None")
+        start_osc, delta0 = _start_from_values(osc, N, curve_problem(kind, osc, N, parameters),
+                                               start, root)
+    else:
+        raise ParameterError(f"start must be a branch Dataset, a mapping of values or None; "
+                             f"got {type(start).__name__}")
+    p1, p2 = parameters
+    p1v, p2v = float(getattr(start_osc, p1)), float(getattr(start_osc, p2))
+    for name, value in ((p1, p1v), (p2, p2v)):
+        lo, hi = box[name]
+        if not lo <= value <= hi:
+            raise ParameterError(f"the start {name}={value!r} lies outside bounds[{name!r}] = "
+                                 f"{box[name]}")
+    opts = ContinuationOptions(bounds=box[p2], ds=ds, ds_min=ds_min, ds_max=ds_max,
+                               newton_tol=newton_tol, max_points=max_points, **options)
+    problem = curve_problem(kind, start_osc, N, parameters)
+    u0 = problem.initial_unknowns(p1v, p2v, delta0)
+    log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)
+
+    ends: list[tuple[str, np.ndarray, float, str]] = []
+    forward = _follow(problem, u0.copy(), p2v, opts, +1, box[p1], ends)
+    if not forward.points:
+        raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "
+                                    f"({forward.status})")
+    runs = [forward]
+    if both_directions:
+        problem.initial_unknowns(p1v, p2v, delta0, u0[2:])
+        backward = _follow(problem, u0.copy(), p2v, opts, -1, box[p1], ends)
+        runs.append(backward)
+        xs = backward.points[::-1] + forward.points[1:]
+    else:
+        xs = forward.points
+    status = "; ".join(f"{d}: {r.status}" for d, r in zip(("forward", "backward"), runs,
+                                                            strict=False))
+    log.info("%s curve: %d points (%s)", kind, len(xs), status)
+
+    columns, orbits, tests = _point_columns(problem, xs)
+    found: list[Codim2Point] = []
+    if detect_codim2_points:
+        found = detect_codim2(problem, xs, orbits, tests)
+    for label, xe, precision, end_status in ends:
+        k = int(np.argmin([np.linalg.norm(xe - x) for x in xs]))
+        orbit = problem.orbit(xe[:-1], xe[-1]) if end_status == "located" else orbits[k]
+        found.append(Codim2Point(label, xe, orbit, k, precision, end_status))
+    found.sort(key=lambda cp: cp.point)
+    records = [_codim2_record(problem, cp) for cp in found if cp.label in CODIM2_LABELS]
+    option_record = {**dataclasses.asdict(opts), "kind": kind, "N": N,
+                     "parameters": list(parameters), "bounds": {k: list(v) for k, v in box.items()},
+                     "start": {p1: p1v, p2: p2v, "delta": delta0}}
+    option_record["bounds_continued"] = list(opts.bounds)
+    return curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
+                         options=option_record, columns=columns, codim2_points=records,
+                         end_status=status)
+
+
+def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[str, float]]:
+    """Exact points where a continued curve crosses the line ``parameter = value``.
+
+    Each crossing between two consecutive curve points is re-solved by Newton on
+    the curve's augmented system with ``parameter`` fixed, so the result is as
+    accurate as the closed form (not an interpolation of the polyline).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A curve dataset from :func:`curve`.
+    parameter : str
+        One of the curve's two parameters.
+    value : float
+
+    Returns
+    -------
+    list of dict
+        Per crossing, in curve order: the values of ``omega``, ``b`` (and the
+        curve's parameters), ``delta``, ``root`` (of eq. 15; 0 on an SN curve)
+        and ``point`` (index of the first of the two bracketing points).
+    """
+    validate_curve_dataset(ds)
+    parameters = tuple(str(ds.attrs["parameters"]).split(","))
+    if parameter not in parameters:
+        raise ParameterError(f"parameter must be one of the curve's parameters {parameters}; "
+                             f"got {parameter!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+            or not math.isfinite(value):
+        raise ParameterError(f"value must be a finite real number; got {value!r}")
+    kind = str(ds.attrs["kind"])
+    base = ImpactOscillator.from_json(ds.attrs["oscillator"])
+    problem = curve_problem(kind, base, int(ds.attrs["N"]), parameters)
+    p = np.asarray(ds[parameter].values, dtype=float)
+    index = parameters.index(parameter)
+    out = []
+    for k in np.flatnonzero((p[:-1] - value) * (p[1:] - value) <= 0):
+        if p[k] == p[k + 1] or (k > 0 and p[k] == value and out and out[-1]["point"] == k - 1):
+            continue
+        t = (value - p[k]) / (p[k + 1] - p[k])
+        row = {name: float(ds[name].values[k] + t * (ds[name].values[k + 1]
+                                                      - ds[name].values[k]))
+               for name in parameters}
+        delta = float(ds["delta"].values[k])
+        extras = None
+        if kind == "GR":
+            extras = np.array([float(ds["tangency_time"].values[k])])
+        u = problem.initial_unknowns(row[parameters[0]], row[parameters[1]], delta, extras)
+        x = np.append(u, row[parameters[1]])
+        gradient = np.zeros(x.size)
+        gradient[0 if index == 0 else -1] = 1.0
+        x = problem.solve(x, lambda y, j=(0 if index == 0 else -1): float(y[j] - value),
+                          gradient)
+        osc = problem.oscillator_at(x[0], x[-1])
+        crossing = {name: float(getattr(osc, name))
+                    for name in dict.fromkeys(["omega", "b", *parameters])}
+        crossing["delta"] = math.remainder(float(x[1]), 2 * math.pi)
+        crossing["root"] = 0 if kind == "SN" else int(-np.sign(problem.fold_function(x[:-1],
+                                                                                    x[-1])))
+        crossing["point"] = int(k)
+        out.append(crossing)
+    return out

@@ -1,0 +1,413 @@
+"""The schema of two-parameter datasets: codim-1 curves and (N, omega, b) maps.
+
+The one place that knows how a continued curve (:func:`impactcont.curves.curve`)
+and a grid map (:func:`impactcont.maps.stability_map`) are laid out in an
+:class:`xarray.Dataset`. Both carry the attribute ``impactcont_dataset``
+(``"curve"`` or ``"map"``); a branch dataset has none. :func:`validate_dataset`
+dispatches on it, so :func:`impactcont.dataset.save` / ``load`` handle all three.
+Layout documented in ``docs/two_parameter.md``.
+
+Curve dimensions
+----------------
+``point``       accepted continuation points, in curve order;
+``multiplier``  the ``2n`` eigenvalues of ``G`` (eq. 25);
+``component``   the ``2n`` state components ``x1..xn, v1..vn``;
+``codim2``      codimension-two points found on the curve (may be empty).
+
+Map dimensions
+--------------
+``N``, ``omega``, ``b`` (the grid) and ``root`` (``+1, -1``: the sign of eq. 15).
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import logging
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.dataset.schema import (
+    CONVENTIONS,
+    PARAMETERS,
+    _options_json,
+    _Var,
+    state_component_names,
+    validate_branch_dataset,
+)
+from impactcont.model.oscillator import ImpactOscillator
+
+__all__ = [
+    "CODIM2_LABELS",
+    "CODIM2_STATUSES",
+    "CURVE_VARIABLES",
+    "MAP_VARIABLES",
+    "codim2_variable",
+    "curve_dataset",
+    "map_dataset",
+    "normalise_dataset",
+    "validate_curve_dataset",
+    "validate_dataset",
+    "validate_map_dataset",
+]
+
+logger = logging.getLogger(__name__)
+
+#: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
+#: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1
+#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi).
+CODIM2_LABELS: tuple[str, ...] = (
+    "SN+ZV", "SN+GR", "SN+PD", "SN+NS",
+    "PD+ZV", "PD+GR", "PD+SN", "PD+NS",
+    "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
+    "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
+    "ZV+SN",
+)
+CODIM2_STATUSES: tuple[str, ...] = ("located", "bracketed")
+CURVE_KINDS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+
+_LABEL_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_LABELS))}")
+_STATUS_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_STATUSES))}")
+
+#: Variables on ``point`` of a curve (parameters other than omega/b add a column).
+CURVE_VARIABLES: dict[str, _Var] = {
+    "omega": PARAMETERS["omega"],
+    "b": PARAMETERS["b"],
+    "delta": _Var("impact phase", "rad", "Forcing phase delta at the impact (eq. 15)."),
+    "root": _Var("root of eq. (15)", "1",
+                 "+1 or -1: sign in front of the square root of eq. (15), -sign(dr/d delta); "
+                 "0 on a saddle-node curve (double root).", kind="i"),
+    "impact_velocity": _Var("impact velocity", "1",
+                            "x1'(T-), h2 of eq. (22); 0 on a zero-velocity curve."),
+    "gap_min": _Var("minimum gap", "1",
+                    "Smallest b - x1 at interior maxima of x1 (eq. 16); on a grazing curve "
+                    "the tangency itself is excluded; +inf when there is none."),
+    "spectral_radius": _Var("spectral radius", "1",
+                            "rho(G) (eq. 25); NaN on a zero-velocity curve (G has a pole)."),
+    "multipliers": _Var("Floquet multipliers", "1",
+                        "Eigenvalues of G (eq. 25), largest modulus first; NaN on a "
+                        "zero-velocity curve.", kind="c", extra_dims=("multiplier",)),
+    "state": _Var("state after impact", "1", "X(0) right after the impact (eq. 13).",
+                  extra_dims=("component",)),
+    "physical": _Var("physically realisable", "1",
+                     "impact_velocity > 0 and gap_min > 0 (on a grazing curve: no contact "
+                     "inside the period other than the tangency).", kind="b"),
+    "stable_side": _Var("stable on one side", "1",
+                        "The motion is physical and every multiplier except the critical "
+                        "one(s) of the curve lies inside the unit circle: crossing the curve "
+                        "changes an observable stable motion.", kind="b"),
+    "arclength": _Var("arclength", "1",
+                      "Length of the curve in the plane of its two parameters."),
+    "residual": _Var("residual", "1",
+                     "Largest |component| of the augmented system at the point."),
+    "tangency_time": _Var("tangency time", "1",
+                          "t* of a grazing curve: x1(t*) = b, x1'(t*) = 0, 0 < t* < T; NaN "
+                          "on other curves."),
+    "angle": _Var("Neimark-Sacker angle", "rad",
+                  "theta of the critical multipliers exp(+-i theta) of an NS curve; NaN on "
+                  "other curves."),
+}
+
+_CODIM2_FIELDS: dict[str, _Var] = {
+    "label": _Var("codim-2 label", "1",
+                  "A+B: the curve (kind A) meets a curve of kind B; R1/R2: 1:1 / 1:2 "
+                  "resonance ending an NS curve.", kind="U"),
+    "delta": _Var("impact phase at codim-2 point", "rad", "Forcing phase at the impact."),
+    "point": _Var("nearest point", "1", "Index on point of the nearest accepted point.",
+                  kind="i"),
+    "precision": _Var("location precision", "1",
+                      "Bound on the error of the point in the plane of the two parameters."),
+    "status": _Var("location status", "1",
+                   "located: the test function vanishes there; bracketed: it changes sign "
+                   "with a jump (e.g. the highest interior maximum changes).", kind="U"),
+    "multipliers": _Var("multipliers at codim-2 point", "1", "Eigenvalues of G (eq. 25).",
+                        kind="c", extra_dims=("multiplier",)),
+}
+
+#: Variables of a map, with their dimensions.
+MAP_VARIABLES: dict[str, tuple[_Var, tuple[str, ...]]] = {
+    "amplitude_squared": (_Var("c^2 + s^2", "1",
+                               "c^2 + s^2 of eq. (14): N-1 motions exist iff it is >= b^2."),
+                          ("N", "omega")),
+    "exists": (_Var("motion exists", "1", "c^2 + s^2 >= b^2 (eq. 15).", kind="b"),
+               ("N", "omega", "b")),
+    "n_physical": (_Var("physical motions", "1", "Number of physical roots of eq. (15).",
+                        kind="i"), ("N", "omega", "b")),
+    "n_stable": (_Var("stable physical motions", "1",
+                      "Number of physical and asymptotically stable roots of eq. (15).",
+                      kind="i"), ("N", "omega", "b")),
+    "delta": (_Var("impact phase", "rad", "Forcing phase at the impact (eq. 15)."),
+              ("N", "omega", "b", "root")),
+    "impact_velocity": (_Var("impact velocity", "1", "x1'(T-), h2 of eq. (22)."),
+                        ("N", "omega", "b", "root")),
+    "gap_min": (_Var("minimum gap", "1",
+                     "Smallest b - x1 at interior maxima of x1 (eq. 16); +inf if none."),
+                ("N", "omega", "b", "root")),
+    "spectral_radius": (_Var("spectral radius", "1", "rho(G) (eq. 25)."),
+                        ("N", "omega", "b", "root")),
+    "critical_multiplier": (_Var("critical multiplier", "1",
+                                 "The multiplier of largest modulus (real and negative: PD "
+                                 "side; complex: NS side; real positive: SN side).", kind="c"),
+                            ("N", "omega", "b", "root")),
+    "physical": (_Var("physically realisable", "1", "impact_velocity > 0 and gap_min > 0.",
+                      kind="b"), ("N", "omega", "b", "root")),
+    "stable": (_Var("asymptotically stable", "1", "spectral_radius < 1 (Theorem 3.1).",
+                    kind="b"), ("N", "omega", "b", "root")),
+}
+
+_CURVE_ATTRS = ("title", "impactcont_dataset", "kind", "N", "parameters", "oscillator",
+                "options", "end_status", "impactcont_version", "Conventions", "history")
+_MAP_ATTRS = ("title", "impactcont_dataset", "oscillator", "options", "impactcont_version",
+              "Conventions", "history")
+
+
+def codim2_variable(key: str) -> str:
+    """Name of the dataset variable of codim-2 field ``key`` (``codim2_<key>``)."""
+    return f"codim2_{key}"
+
+
+def _curve_variables(parameters: Sequence[str]) -> dict[str, _Var]:
+    out = {name: PARAMETERS[name] for name in parameters if name not in ("omega", "b")}
+    return {**out, **CURVE_VARIABLES}
+
+
+def _codim2_fields(parameters: Sequence[str]) -> dict[str, _Var]:
+    fields = {"label": _CODIM2_FIELDS["label"]}
+    for name in dict.fromkeys(["omega", "b", *parameters]):
+        p = PARAMETERS[name]
+        fields[name] = _Var(f"{p.long_name} at codim-2 point", p.units,
+                            f"{p.description.rstrip('.')} at the codim-2 point.")
+    fields.update({k: v for k, v in _CODIM2_FIELDS.items() if k != "label"})
+    return fields
+
+
+def _now_attrs() -> dict[str, str]:
+    from impactcont import __version__
+
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    return {"impactcont_version": __version__, "Conventions": CONVENTIONS,
+            "history": f"{now} created by impactcont {__version__}"}
+
+
+def _array(key: str, value: Any, spec: _Var, shape: tuple[int, ...]) -> np.ndarray:
+    a = np.asarray(value)
+    if a.shape != shape:
+        raise ValueError(f"column {key!r} must have shape {shape}; got shape {a.shape}")
+    dtype = {"f": np.float64, "b": bool, "c": np.complex128, "i": np.int64}[spec.kind]
+    return a.astype(dtype)
+
+
+def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: ImpactOscillator,
+                  options: Any, columns: Mapping[str, Any],
+                  codim2_points: Sequence[Mapping[str, Any]], end_status: str,
+                  title: str | None = None) -> xr.Dataset:
+    """Assemble the dataset of one continued codim-1 curve.
+
+    Parameters
+    ----------
+    kind : str
+        ``"SN"``, ``"PD"``, ``"NS"``, ``"GR"`` or ``"ZV"``.
+    N : int
+        Forcing periods per impact.
+    parameters : (str, str)
+        The two parameters of the curve.
+    oscillator : ImpactOscillator
+        Stored as JSON (the columns hold the parameter values).
+    options : dict
+        Continuation options, stored as JSON.
+    columns : mapping
+        One entry per variable of :data:`CURVE_VARIABLES` (plus a column for a
+        parameter other than omega/b), shape ``(npoints,)``, ``multipliers`` and
+        ``state`` ``(npoints, 2n)``.
+    codim2_points : sequence of dict
+        Keys ``label``, ``omega``, ``b`` (and the curve's parameters),
+        ``delta``, ``point``, ``precision``, ``status``, ``multipliers``.
+    end_status : str
+        Why the continuation stopped in each direction.
+    title : str, optional
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    if kind not in CURVE_KINDS:
+        raise ValueError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
+    if not isinstance(oscillator, ImpactOscillator):
+        raise TypeError(f"oscillator must be an ImpactOscillator; got {oscillator!r}")
+    parameters = list(parameters)
+    n = oscillator.n
+    specs = _curve_variables(parameters)
+    missing = [k for k in specs if k not in columns]
+    unknown = sorted(set(columns) - set(specs))
+    if missing or unknown:
+        raise ValueError(f"columns: missing {missing}, unknown {unknown}; required {list(specs)}")
+    npoints = np.asarray(columns["omega"]).shape[0]
+    data_vars: dict[str, Any] = {}
+    for key, spec in specs.items():
+        shape = (npoints,) + (2 * n,) * len(spec.extra_dims)
+        data_vars[key] = (("point", *spec.extra_dims), _array(key, columns[key], spec, shape),
+                          spec.attrs())
+    fields = _codim2_fields(parameters)
+    count = len(codim2_points)
+    for key, spec in fields.items():
+        values = []
+        for i, cp in enumerate(codim2_points):
+            if set(cp) != set(fields):
+                raise ValueError(f"codim2_points[{i}] must have keys {sorted(fields)}; got "
+                                 f"{sorted(cp)}")
+            values.append(cp[key])
+        if key == "label":
+            bad = [v for v in values if v not in CODIM2_LABELS]
+            if bad:
+                raise ValueError(f"codim2 labels must be in {CODIM2_LABELS}; got {bad}")
+            arr = np.array(values, dtype=_LABEL_DTYPE).reshape(count)
+        elif key == "status":
+            arr = np.array(values, dtype=_STATUS_DTYPE).reshape(count)
+        elif spec.kind == "c":
+            arr = np.array(values, dtype=np.complex128).reshape(count, 2 * n)
+        elif spec.kind == "i":
+            arr = np.array(values, dtype=np.int64).reshape(count)
+        else:
+            arr = np.array(values, dtype=np.float64).reshape(count)
+        data_vars[codim2_variable(key)] = (("codim2", *spec.extra_dims), arr, spec.attrs())
+    coords = {
+        "point": ("point", np.arange(npoints, dtype=np.int64),
+                  {"long_name": "continuation point index", "units": "1"}),
+        "component": ("component", np.array(state_component_names(n)),
+                      {"long_name": "state component",
+                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
+    }
+    attrs = {
+        "title": title or f"{kind} curve of periodic {N}-1 motions in "
+                          f"({parameters[0]}, {parameters[1]})",
+        "impactcont_dataset": "curve",
+        "kind": kind,
+        "N": int(N),
+        "parameters": ",".join(parameters),
+        "oscillator": oscillator.to_json(),
+        "options": _options_json(options),
+        "end_status": str(end_status),
+        **_now_attrs(),
+    }
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.ndarray,
+                b: np.ndarray, values: Mapping[str, np.ndarray], options: Any,
+                title: str | None = None) -> xr.Dataset:
+    """Assemble a map of existence, physicality and stability on ``(N, omega, b)``.
+
+    Parameters
+    ----------
+    oscillator : ImpactOscillator
+    N, omega, b : sequences
+        The grid.
+    values : mapping
+        One array per entry of :data:`MAP_VARIABLES` with the dims listed there.
+    options : dict
+        How the map was computed (executor, chunks), stored as JSON.
+    title : str, optional
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    sizes = {"N": len(N), "omega": len(omega), "b": len(b), "root": 2}
+    data_vars = {}
+    for key, (spec, dims) in MAP_VARIABLES.items():
+        if key not in values:
+            raise ValueError(f"values is missing {key!r}; required {list(MAP_VARIABLES)}")
+        shape = tuple(sizes[d] for d in dims)
+        data_vars[key] = (dims, _array(key, values[key], spec, shape), spec.attrs())
+    coords = {
+        "N": ("N", np.asarray(N, dtype=np.int64),
+              {"long_name": "forcing periods per impact", "units": "1"}),
+        "omega": ("omega", np.asarray(omega, dtype=float), PARAMETERS["omega"].attrs()),
+        "b": ("b", np.asarray(b, dtype=float), PARAMETERS["b"].attrs()),
+        "root": ("root", np.array([1, -1], dtype=np.int64),
+                 {"long_name": "root of eq. (15)", "units": "1",
+                  "description": "Sign in front of the square root of eq. (15)."}),
+    }
+    attrs = {"title": title or "Existence, physicality and stability of N-1 motions",
+             "impactcont_dataset": "map", "oscillator": oscillator.to_json(),
+             "options": json.dumps(dict(options), sort_keys=True), **_now_attrs()}
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _check_vars(ds: xr.Dataset, expected: Mapping[str, tuple[tuple[str, ...], str]],
+                what: str) -> None:
+    missing = [k for k in expected if k not in ds.variables]
+    if missing:
+        raise ValueError(f"not a {what} dataset: missing variable(s) {missing}")
+    for key, (dims, kind) in expected.items():
+        var = ds[key]
+        if var.dims != dims:
+            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
+        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
+            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; got {var.dtype}")
+
+
+def validate_curve_dataset(ds: Any) -> xr.Dataset:
+    """Check that ``ds`` has the layout of :func:`curve_dataset`; return it.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the missing or malformed attribute or variable.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"expected an xarray.Dataset of a curve; got {type(ds).__name__}")
+    missing = [a for a in _CURVE_ATTRS if a not in ds.attrs]
+    if missing or ds.attrs.get("impactcont_dataset") != "curve":
+        raise ValueError(f"not a curve dataset: missing attribute(s) {missing} or "
+                         f"impactcont_dataset != 'curve'")
+    if ds.attrs["kind"] not in CURVE_KINDS:
+        raise ValueError(f"attribute 'kind' must be one of {CURVE_KINDS}; got {ds.attrs['kind']!r}")
+    parameters = str(ds.attrs["parameters"]).split(",")
+    if len(parameters) != 2 or not set(parameters) <= set(PARAMETERS):
+        raise ValueError(f"attribute 'parameters' must name two of {sorted(PARAMETERS)}; got "
+                         f"{ds.attrs['parameters']!r}")
+    expected = {k: (("point", *s.extra_dims), s.kind)
+                for k, s in _curve_variables(parameters).items()}
+    expected.update({codim2_variable(k): (("codim2", *s.extra_dims), s.kind)
+                     for k, s in _codim2_fields(parameters).items()})
+    _check_vars(ds, expected, "curve")
+    labels = set(np.asarray(ds[codim2_variable("label")].values).tolist())
+    if not labels <= set(CODIM2_LABELS):
+        raise ValueError(f"codim2_label must hold labels in {CODIM2_LABELS}; got {sorted(labels)}")
+    return ds
+
+
+def validate_map_dataset(ds: Any) -> xr.Dataset:
+    """Check that ``ds`` has the layout of :func:`map_dataset`; return it."""
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"expected an xarray.Dataset of a map; got {type(ds).__name__}")
+    missing = [a for a in _MAP_ATTRS if a not in ds.attrs]
+    if missing or ds.attrs.get("impactcont_dataset") != "map":
+        raise ValueError(f"not a map dataset: missing attribute(s) {missing} or "
+                         f"impactcont_dataset != 'map'")
+    _check_vars(ds, {k: (dims, s.kind) for k, (s, dims) in MAP_VARIABLES.items()}, "map")
+    return ds
+
+
+def validate_dataset(ds: Any) -> xr.Dataset:
+    """Validate a branch, curve or map dataset according to its ``impactcont_dataset`` attr."""
+    kind = ds.attrs.get("impactcont_dataset") if isinstance(ds, xr.Dataset) else None
+    if kind == "curve":
+        return validate_curve_dataset(ds)
+    if kind == "map":
+        return validate_map_dataset(ds)
+    return validate_branch_dataset(ds)
+
+
+def normalise_dataset(ds: xr.Dataset) -> xr.Dataset:
+    """Give the string variables of a curve read from NetCDF their schema dtype."""
+    if ds.attrs.get("impactcont_dataset") == "curve":
+        for key, dtype in (("label", _LABEL_DTYPE), ("status", _STATUS_DTYPE)):
+            name = codim2_variable(key)
+            if name in ds.variables and ds[name].dtype != dtype:
+                ds[name] = ds[name].astype(dtype)
+    return ds

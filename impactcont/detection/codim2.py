@@ -1,0 +1,230 @@
+"""Codimension-two points on codim-1 curves: where two curves meet, or a curve ends.
+
+Along a curve of kind A every other condition B has a test function of the
+motion; a sign change between two accepted points brackets a point where the
+curve A meets the curve B (label ``"A+B"``). It is located by Brent's method
+on the chord between the two points, each trial point corrected back onto the
+curve (Newton on the augmented system plus the hyperplane orthogonal to the
+chord), as :mod:`impactcont.detection.special_points` does on branches.
+
+=========  =====================================================  ===================
+test       function of the motion                                 on curves
+=========  =====================================================  ===================
+``ZV``     impact velocity ``h2`` (eq. 22)                         SN, PD, NS, GR
+``GR``     ``gap_min`` (eq. 16); on a GR curve the highest         SN, PD, NS, GR
+           interior maximum other than the tangency (double graze)
+``SN``     ``dr/d delta`` (eq. 14; zero at a fold)                 PD, NS, GR, ZV
+``PD``     ``det(G + I) = prod (mu_i + 1)``                        SN, NS, GR
+``NS``     ``prod_{i<j} (mu_i mu_j - 1)`` (bialternate)            SN, PD, GR
+=========  =====================================================  ===================
+
+The GR test is skipped on ZV curves: there the motion is the linear response
+touching the stop, whose every maximum (for N >= 2) sits at ``b``. PD and NS
+tests are skipped on ZV curves, where ``G`` has its pole (eq. 25). As on
+branches, a PD sign change without a multiplier at -1 (through the pole) and an
+NS sign change at a neutral saddle are discarded.
+
+Curve ends, found while continuing (:func:`impactcont.curves.curve`) rather than
+here: an NS curve ends at ``theta -> 0`` (``R1``, 1:1 resonance) or
+``theta -> pi`` (``R2``, 1:2), a GR curve where the tangency time reaches the
+impact (``t* -> 0`` or ``T``, label ``GR+ZV``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.orbit.extrema import interior_maxima, sample_times
+from impactcont.orbit.periodic import PeriodicOrbit
+from impactcont.problems.codim1 import CurveProblem
+
+__all__ = ["TESTS", "Codim2Point", "detect_codim2", "grazing_other_gap", "test_values"]
+
+log = logging.getLogger(__name__)
+
+#: The test functions watched on each kind of curve.
+TESTS: dict[str, tuple[str, ...]] = {
+    "SN": ("ZV", "GR", "PD", "NS"),
+    "PD": ("ZV", "GR", "SN", "NS"),
+    "NS": ("ZV", "GR", "SN", "PD"),
+    "GR": ("ZV", "GR", "SN", "PD", "NS"),
+    "ZV": ("SN",),
+}
+
+_UNIT_TOL = 1e-6
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Codim2Point:
+    """A codim-2 point on a curve.
+
+    Attributes
+    ----------
+    label : str
+        ``"A+B"`` (curve kind A meets kind B), ``"R1"`` or ``"R2"``.
+    x : ndarray
+        ``[u, lam]`` of the curve problem at the point.
+    orbit : PeriodicOrbit
+    point : int
+        Index of the nearest accepted curve point.
+    precision : float
+        Bound on the error in the plane of the two parameters.
+    status : str
+        ``"located"`` or ``"bracketed"``.
+    """
+
+    label: str
+    x: np.ndarray
+    orbit: PeriodicOrbit
+    point: int
+    precision: float
+    status: str
+
+
+def grazing_other_gap(problem: CurveProblem, orbit: PeriodicOrbit, tangency_time: float) -> float:
+    """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*``."""
+    flow = problem._pieces(*_params(problem, orbit)).flow
+    times, peaks = interior_maxima(flow.mass1(orbit.state, orbit.delta),
+                                   sample_times(flow, 0.0, orbit.period))
+    others = np.abs(times - tangency_time) > 1e-7 * orbit.period
+    if not np.any(others):
+        return math.inf
+    return float(orbit.oscillator.b - peaks[others].max())
+
+
+def _params(problem: CurveProblem, orbit: PeriodicOrbit) -> tuple[float, float]:
+    p1, p2 = problem.parameters
+    return getattr(orbit.oscillator, p1), getattr(orbit.oscillator, p2)
+
+
+def _bialternate(mu: np.ndarray) -> float:
+    prod = 1.0 + 0.0j
+    for i in range(mu.size):
+        for j in range(i + 1, mu.size):
+            prod *= mu[i] * mu[j] - 1.0
+    return float(prod.real)
+
+
+def test_values(problem: CurveProblem, x: np.ndarray, orbit: PeriodicOrbit) -> dict[str, float]:
+    """The test functions of :data:`TESTS` for the problem's kind at a curve point."""
+    out: dict[str, float] = {}
+    for test in TESTS[problem.kind]:
+        if test == "ZV":
+            out[test] = orbit.impact_velocity
+        elif test == "GR":
+            out[test] = (grazing_other_gap(problem, orbit, float(x[2])) if problem.kind == "GR"
+                         else orbit.gap_min)
+        elif test == "SN":
+            out[test] = problem.fold_function(x[:-1], x[-1])
+        elif test == "PD":
+            out[test] = float(np.prod(orbit.multipliers + 1.0).real)
+        else:
+            out[test] = _bialternate(orbit.multipliers)
+    return out
+
+
+def _changes(a: float, b: float) -> bool:
+    return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
+
+
+def _genuine(test: str, orbit: PeriodicOrbit) -> bool:
+    mu = orbit.multipliers
+    if test == "PD":
+        return bool(np.min(np.abs(mu + 1.0)) < _UNIT_TOL)
+    if test == "NS":
+        close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
+        return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
+    return True
+
+
+def _plane_distance(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray) -> float:
+    return float(math.hypot(xa[0] - xb[0], xa[-1] - xb[-1]))
+
+
+def _locate(problem: CurveProblem, test: str, xa: np.ndarray, xb: np.ndarray
+            ) -> tuple[np.ndarray, float, str]:
+    """Zero of ``test`` on the curve between two accepted points (Brent on the chord)."""
+    chord = xb - xa
+    cache: dict[float, tuple[np.ndarray, float]] = {}
+
+    def point(sv: float) -> tuple[np.ndarray, float]:
+        if sv not in cache:
+            if sv == 0.0:
+                x = xa
+            elif sv == 1.0:
+                x = xb
+            else:
+                guess = xa + sv * chord
+                x = problem.solve(guess, lambda y, g=guess: float(chord @ (y - g)), chord)
+            orbit = problem.orbit(x[:-1], x[-1])
+            cache[sv] = (x, test_values(problem, x, orbit)[test])
+        return cache[sv]
+
+    g0, g1 = point(0.0)[1], point(1.0)[1]
+    sroot = brentq(lambda sv: point(sv)[1], 0.0, 1.0, xtol=1e-13, rtol=4 * np.finfo(float).eps)
+    x, g = point(sroot)
+    scale = max(abs(g0), abs(g1))
+    status = "located" if abs(g) <= 1e-6 * scale + 1e-12 else "bracketed"
+    precision = max(2e-13 * _plane_distance(problem, xa, xb), 1e-15)
+    return x, precision, status
+
+
+def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[PeriodicOrbit],
+                  tests: list[dict[str, float]]) -> list[Codim2Point]:
+    """Locate the codim-2 points between consecutive accepted points of a curve.
+
+    Parameters
+    ----------
+    problem : CurveProblem
+    xs : list of ndarray
+        ``[u, lam]`` of the accepted points, in curve order.
+    orbits : list of PeriodicOrbit
+        The motion at each point.
+    tests : list of dict
+        :func:`test_values` at each point.
+
+    Returns
+    -------
+    list of Codim2Point
+        In curve order.
+    """
+    found: list[Codim2Point] = []
+    for k in range(len(xs) - 1):
+        for test in TESTS[problem.kind]:
+            if not _changes(tests[k][test], tests[k + 1][test]):
+                continue
+            if test in ("PD", "NS") and _changes(tests[k].get("ZV", 1.0),
+                                                 tests[k + 1].get("ZV", 1.0)):
+                log.debug("%s test changes sign through the pole of G at h2 = 0 (eq. 25) "
+                          "between points %d and %d: not a %s point", test, k, k + 1, test)
+                continue
+            problem.accept(xs[k][:-1], xs[k][-1])
+            try:
+                x, precision, status = _locate(problem, test, xs[k], xs[k + 1])
+            except (ValueError, NewtonConvergenceError) as exc:
+                # e.g. next to h2 = 0, where G and so the PD/NS systems have a pole:
+                # keep the bracket, placed by linear interpolation of the test values
+                log.info("%s+%s between curve points %d and %d kept as bracketed: %s",
+                         problem.kind, test, k, k + 1, exc)
+                ga, gb = tests[k][test], tests[k + 1][test]
+                x = xs[k] + ga / (ga - gb) * (xs[k + 1] - xs[k])
+                precision = _plane_distance(problem, xs[k], xs[k + 1])
+                status = "bracketed"
+            orbit = problem.orbit(x[:-1], x[-1])
+            if status == "located" and not _genuine(test, orbit):
+                log.debug("%s test changes sign without a critical multiplier near point %d",
+                          test, k)
+                continue
+            nearest = k if (_plane_distance(problem, x, xs[k])
+                            <= _plane_distance(problem, x, xs[k + 1])) else k + 1
+            label = f"{problem.kind}+{test}"
+            log.info("%s on the %s curve at %s=%.10g, %s=%.10g (%s)", label, problem.kind,
+                     problem.parameters[0], x[0], problem.parameters[1], x[-1], status)
+            found.append(Codim2Point(label, x, orbit, nearest, precision, status))
+    return found

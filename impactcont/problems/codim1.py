@@ -1,0 +1,509 @@
+"""Codimension-one curves of N-1 motions in two parameters, as problems for the PALC core.
+
+Each curve is the zero set of an augmented system ``F(u, lam) = 0`` where
+``lam`` is the second parameter ``p2`` and ``u = [p1, delta, extras...]``
+holds the first parameter, the impact phase ``delta`` and the extra unknowns
+of the defining condition. Every system contains eq. (14),
+
+    r(delta, p) = c(p) cos(delta) + s(p) sin(delta) - b = 0,
+
+and adds the condition that makes the motion special:
+
+======  =================================  ==========================  ===================
+kind    condition                          extra unknowns              equations
+======  =================================  ==========================  ===================
+``SN``  fold of eq. (14)-(15):             none                        ``r, dr/d delta``
+        ``dr/d delta = 0``
+``PD``  a multiplier -1:                   none                        ``r, g``
+        ``det(G + I) = 0`` via the
+        bordered system (below)
+``NS``  multipliers ``exp(+-i theta)``:    ``theta``, ``Re v, Im v``   ``r, G v - e^{i theta}
+        ``G v = e^{i theta} v``,           (2n each)                   v (2 x 2n), <v_ref,
+        ``<v_ref, v> = 1``                                             v> - 1 (2)``
+``GR``  x1 tangent to b at ``t*`` inside   ``t*``                      ``r, x1(t*) - b,
+        the flight (eq. 16 with equality)                              x1'(t*)``
+``ZV``  impact velocity zero:              none                        ``r, h2``
+        ``h2 = x1'(T-) = 0`` (eq. 22)
+======  =================================  ==========================  ===================
+
+Choices and why
+---------------
+``PD``: the scalar ``g`` is the last component of the solution of the bordered
+system ``[[G + I, w], [v^T, 0]] [q; g] = [0; 1]`` with ``v, w`` the right and
+left singular vectors of the smallest singular value of ``G + I`` at the last
+accepted point (Govaerts' minimally augmented system). By Cramer's rule
+``g = -det(G + I) / det(bordered)``: it vanishes exactly where ``det(G + I)``
+does, so the curve does not depend on the borders, but unlike ``det(G + I)``
+its derivative at a simple PD does not carry the product of the other
+factors ``prod (mu_i + 1)``, which can be large (``G`` has a ``1/h2`` pole,
+eq. 25) or small. The borders are renewed after every accepted point
+(:meth:`CurveProblem.accept`), which leaves the curve unchanged.
+
+``NS``: the standard augmented system of an NS point of a map (Kuznetsov,
+*Elements of Applied Bifurcation Theory*, sec. 10.2): the critical
+eigenvector ``v`` and the angle ``theta`` are unknowns. Unlike the bialternate
+product ``prod_{i<j} (mu_i mu_j - 1)`` it cannot converge to a neutral saddle
+(two real multipliers with product 1), it yields ``theta``, whose approach to
+0 or pi marks the 1:1 and 1:2 strong resonances where the curve ends, and it
+is regular at a simple NS point (``0 < theta < pi``). The phase and scale of
+``v`` are fixed by ``<v_ref, v> = v_ref^H v = 1`` with ``v_ref`` the
+eigenvector of the last accepted point divided by its squared norm, so the
+accepted point stays an exact solution when ``v_ref`` is renewed.
+
+Derivatives are central differences of the residual (step ``1e-6`` relative,
+one-sided at a parameter's domain boundary). They steer Newton and the
+predictor only; the accuracy of every point is set by the residual, which is
+evaluated in closed form.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import math
+import warnings
+from collections.abc import Callable
+
+import numpy as np
+
+from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.errors import LowImpactVelocityWarning, ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.periodic import (
+    PeriodicOrbit,
+    _check_N,
+    impact_map_jacobian,
+    orbit_at_phase,
+    periodic_matrix,
+)
+from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
+
+__all__ = [
+    "CURVE_KINDS",
+    "CurveProblem",
+    "FoldCurve",
+    "GrazingCurve",
+    "NeimarkSackerCurve",
+    "PeriodDoublingCurve",
+    "ZeroVelocityCurve",
+    "curve_problem",
+]
+
+CURVE_KINDS = ("SN", "PD", "NS", "GR", "ZV")
+"""Kinds of codimension-one curves: saddle-node, period-doubling, Neimark-Sacker,
+grazing and zero-velocity impact."""
+
+_FD_STEP = 1e-6
+_CACHE_SIZE = 48
+_DOMAINS = {"omega": (1e-300, math.inf), "b": (-math.inf, math.inf), "R": (0.0, 1.0),
+            "eta": (0.0, math.inf), "alpha": (0.0, math.inf), "beta": (0.0, math.inf)}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Pieces:
+    """The oscillator at one parameter pair and its closed-form matrices (eq. 9, 13)."""
+
+    osc: ImpactOscillator
+    flow: Flow
+    S: np.ndarray
+    DPhi: np.ndarray
+    T: float
+
+
+def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, str]:
+    """Validate a pair of distinct continuable parameter names for `osc`.
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument ``parameters`` and the value received.
+    """
+    if isinstance(parameters, str) or not isinstance(parameters, (tuple, list)) \
+            or len(parameters) != 2:
+        raise ParameterError(f"parameters must be a pair of names from {CONTINUABLE_PARAMETERS}; "
+                             f"got {parameters!r}")
+    p1, p2 = parameters
+    for name in (p1, p2):
+        if name not in CONTINUABLE_PARAMETERS:
+            raise ParameterError(f"parameters must be a pair of names from "
+                                 f"{CONTINUABLE_PARAMETERS}; got {parameters!r}")
+        if name in ("alpha", "beta") and osc.eta is not None:
+            raise ParameterError(f"parameters={parameters!r}: {name!r} needs Rayleigh damping; "
+                                 f"the oscillator uses eta={osc.eta!r}")
+        if name == "eta" and osc.eta is None:
+            raise ParameterError(f"parameters={parameters!r}: 'eta' needs the paper's damping "
+                                 "C = 2 eta K; the oscillator uses Rayleigh damping")
+    if p1 == p2:
+        raise ParameterError(f"parameters must be two different names; got {parameters!r}")
+    return str(p1), str(p2)
+
+
+class CurveProblem:
+    """Base of the codim-1 curve problems: ``F(u, lam) = 0`` with ``u = [p1, delta, extras]``.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        The oscillator; its values of the two parameters are replaced.
+    N : int
+        One impact every N forcing periods.
+    parameters : (str, str)
+        ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter
+        ``lam``. Any two of ``omega, b, R, eta, alpha, beta``.
+
+    Notes
+    -----
+    Subclasses define :attr:`kind`, :attr:`extra_names`, :meth:`_conditions`
+    (the equations after eq. 14) and :meth:`extras_from_orbit`; they may renew
+    auxiliary data in :meth:`accept`.
+    """
+
+    kind: str = ""
+    extra_names: tuple[str, ...] = ()
+
+    def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
+                 ) -> None:
+        if not isinstance(osc, ImpactOscillator):
+            raise TypeError(f"osc must be an ImpactOscillator; got {osc!r}")
+        self.osc = osc
+        self.N = _check_N(N)
+        self.parameters = check_parameters(osc, parameters)
+        self._cache: collections.OrderedDict[tuple[float, float], _Pieces] = \
+            collections.OrderedDict()
+        self._jac_cache: tuple[bytes, np.ndarray] | None = None
+        self.last_step = math.nan
+
+    # -- layout ---------------------------------------------------------------------------------
+    @property
+    def size(self) -> int:
+        """Number of unknowns ``m`` (and of equations)."""
+        return 2 + len(self.extra_names)
+
+    def values(self, u: np.ndarray, lam: float) -> dict[str, float]:
+        """The two parameter values of a point, by name."""
+        return {self.parameters[0]: float(u[0]), self.parameters[1]: float(lam)}
+
+    # -- closed-form pieces ---------------------------------------------------------------------
+    def oscillator_at(self, p1: float, p2: float) -> ImpactOscillator:
+        """The oscillator with the two parameters set to ``p1, p2``."""
+        return self._pieces(p1, p2).osc
+
+    def _pieces(self, p1: float, p2: float) -> _Pieces:
+        key = (float(p1), float(p2))
+        hit = self._cache.get(key)
+        if hit is not None:
+            self._cache.move_to_end(key)
+            return hit
+        osc = self.osc.replace(**{self.parameters[0]: key[0], self.parameters[1]: key[1]})
+        flow = Flow(osc)
+        S, DPhi, T = periodic_matrix(flow, self.N)
+        pieces = _Pieces(osc, flow, S, DPhi, T)
+        self._cache[key] = pieces
+        if len(self._cache) > _CACHE_SIZE:
+            self._cache.popitem(last=False)
+        return pieces
+
+    def orbit(self, u: np.ndarray, lam: float) -> PeriodicOrbit:
+        """The periodic motion at a point (state, G, multipliers, eq. 16 checks).
+
+        A curve meets ``h2 = 0`` on purpose (a ZV curve lies on it, other curves
+        cross it at a codim-2 point), where ``G`` has its pole (eq. 25): the
+        warning about an inexact ``G`` is not raised here; the curve flags it.
+        """
+        pc = self._pieces(u[0], lam)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LowImpactVelocityWarning)
+            return orbit_at_phase(pc.osc, self.N, float(u[1]), flow=pc.flow, S=pc.S,
+                                  DPhi=pc.DPhi)
+
+    def fold_function(self, u: np.ndarray, lam: float) -> float:
+        """``dr/d delta = -c sin(delta) + s cos(delta)``; ``= -root * sqrt(c^2+s^2-b^2)``."""
+        pc = self._pieces(u[0], lam)
+        c, s = pc.S[0]
+        return float(-c * math.sin(u[1]) + s * math.cos(u[1]))
+
+    def jacobian_G(self, u: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
+        """``G`` of eq. (25) and ``h2`` at a point."""
+        pc = self._pieces(u[0], lam)
+        delta = float(u[1])
+        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
+        return impact_map_jacobian(pc.flow, state, delta, pc.T, pc.DPhi)
+
+    # -- the Problem protocol -------------------------------------------------------------------
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``[r (eq. 14), condition...]``, shape (m,)."""
+        u = np.asarray(u, dtype=float)
+        pc = self._pieces(u[0], lam)
+        delta = float(u[1])
+        c, s = pc.S[0]
+        r = c * math.cos(delta) + s * math.sin(delta) - pc.osc.b
+        return np.concatenate([[r], self._conditions(pc, delta, u[2:])])
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/du`` by central differences, shape (m, m)."""
+        return self._full_jacobian(u, lam)[:, :-1]
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/dlam`` by central differences, shape (m,)."""
+        return self._full_jacobian(u, lam)[:, -1]
+
+    def full_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``dF/dx`` with ``x = [u, lam]``, shape (m, m + 1)."""
+        x = np.asarray(x, dtype=float)
+        return self._full_jacobian(x[:-1], float(x[-1]))
+
+    def _full_jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        x = np.append(np.asarray(u, dtype=float), float(lam))
+        key = x.tobytes()
+        if self._jac_cache is not None and self._jac_cache[0] == key:
+            return self._jac_cache[1]
+        m = x.size - 1
+        J = np.empty((m, m + 1))
+        domains = {0: _DOMAINS[self.parameters[0]], m: _DOMAINS[self.parameters[1]]}
+        for j in range(m + 1):
+            h = _FD_STEP * max(1.0, abs(x[j]))
+            lo_dom, hi_dom = domains.get(j, (-math.inf, math.inf))
+            up, down = x.copy(), x.copy()
+            if x[j] + h <= hi_dom:  # one-sided at the boundary of the parameter's domain
+                up[j] = x[j] + h
+            if x[j] - h >= lo_dom:
+                down[j] = x[j] - h
+            J[:, j] = (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
+                / (up[j] - down[j])
+        self._jac_cache = (key, J)
+        return J
+
+    # -- for subclasses -------------------------------------------------------------------------
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def extras_from_orbit(self, orbit: PeriodicOrbit) -> np.ndarray:
+        """Initial values of the extra unknowns at a motion near the curve."""
+        return np.empty(0)
+
+    def initial_unknowns(self, p1: float, p2: float, delta: float,
+                         extras: np.ndarray | None = None) -> np.ndarray:
+        """``u0 = [p1, delta, extras]`` from a guess of the point; prepares auxiliary data.
+
+        The extra unknowns are taken from the motion at the guess unless given.
+        """
+        if extras is None:
+            pc = self._pieces(p1, p2)
+            orbit = orbit_at_phase(pc.osc, self.N, float(delta), flow=pc.flow, S=pc.S,
+                                   DPhi=pc.DPhi)
+            extras = self.extras_from_orbit(orbit)
+        u0 = np.concatenate([[p1, delta], np.asarray(extras, dtype=float)])
+        self.accept(u0, p2)
+        return u0
+
+    def solve(self, x0: np.ndarray, extra: Callable[[np.ndarray], float],
+              gradient: np.ndarray | None = None, *, tol: float = 1e-12,
+              max_iter: int = 30) -> np.ndarray:
+        """Newton on ``[F(x); extra(x)] = 0`` in all of ``x = [u, lam]`` (m + 1 unknowns).
+
+        Parameters
+        ----------
+        x0 : ndarray, shape (m + 1,)
+            Guess.
+        extra : callable
+            Scalar condition closing the system (a fixed parameter, a hyperplane,
+            a test function).
+        gradient : ndarray, optional
+            ``d extra / dx`` if constant (linear conditions); else central differences.
+        tol : float
+            Converged when the Newton step is at most ``tol * max(1, |x|)``; the
+            last step is kept in :attr:`last_step` (a bound on the error).
+
+        Returns
+        -------
+        ndarray, shape (m + 1,)
+
+        Raises
+        ------
+        NewtonConvergenceError
+            If the iteration does not converge or produces non-finite values.
+        """
+        x = np.array(x0, dtype=float)
+        for _ in range(max_iter):
+            H = np.append(self.residual(x[:-1], x[-1]), extra(x))
+            if gradient is None:
+                grad = np.empty(x.size)
+                for j in range(x.size):
+                    h = 1e-7 * max(1.0, abs(x[j]))
+                    up, down = x.copy(), x.copy()
+                    up[j] += h
+                    down[j] -= h
+                    grad[j] = (extra(up) - extra(down)) / (2.0 * h)
+            else:
+                grad = gradient
+            A = np.vstack([self.full_jacobian(x), grad])
+            if not (np.all(np.isfinite(A)) and np.all(np.isfinite(H))):
+                raise NewtonConvergenceError("non-finite augmented system")
+            try:
+                step = np.linalg.solve(A, -H)
+            except np.linalg.LinAlgError as exc:
+                raise NewtonConvergenceError(f"singular augmented system: {exc}") from exc
+            x = x + step
+            self.last_step = float(np.max(np.abs(step)))
+            if self.last_step <= tol * max(1.0, float(np.max(np.abs(x)))):
+                return x
+        raise NewtonConvergenceError(f"augmented Newton did not converge in {max_iter} "
+                                     f"iterations (residual {np.max(np.abs(H)):.3g})")
+
+    def accept(self, u: np.ndarray, lam: float) -> None:
+        """Renew auxiliary data (borders, reference vectors) at an accepted point."""
+        self._jac_cache = None
+
+
+class FoldCurve(CurveProblem):
+    """Saddle-node (fold) curve: ``r = dr/d delta = 0`` (eq. 14-15 with a double root).
+
+    Its closed form is ``b^2 = c^2 + s^2``; at it ``G`` has a multiplier +1.
+    """
+
+    kind = "SN"
+
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        c, s = pc.S[0]
+        return np.array([-c * math.sin(delta) + s * math.cos(delta)])
+
+
+class PeriodDoublingCurve(CurveProblem):
+    """Period-doubling curve: a multiplier of ``G`` (eq. 25) at -1, minimally augmented.
+
+    The condition is ``g = 0`` with ``[[G + I, w], [v^T, 0]] [q; g] = [0; 1]``;
+    ``v`` and ``w`` (right and left singular vectors of ``G + I`` for its
+    smallest singular value) are renewed at every accepted point.
+    """
+
+    kind = "PD"
+
+    def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
+                 ) -> None:
+        super().__init__(osc, N, parameters)
+        m = 2 * osc.n
+        self._right = np.eye(m)[0]
+        self._left = np.eye(m)[0]
+
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
+        G, _ = impact_map_jacobian(pc.flow, state, delta, pc.T, pc.DPhi)
+        m = G.shape[0]
+        bordered = np.zeros((m + 1, m + 1))
+        bordered[:m, :m] = G + np.eye(m)
+        bordered[:m, m] = self._left
+        bordered[m, :m] = self._right
+        rhs = np.zeros(m + 1)
+        rhs[m] = 1.0
+        return np.array([np.linalg.solve(bordered, rhs)[m]])
+
+    def accept(self, u: np.ndarray, lam: float) -> None:
+        """Borders from the SVD of ``G + I`` at the accepted point."""
+        super().accept(u, lam)
+        G, _ = self.jacobian_G(u, lam)
+        U, _, Vt = np.linalg.svd(G + np.eye(G.shape[0]))
+        self._left, self._right = U[:, -1].copy(), Vt[-1].copy()
+
+
+class NeimarkSackerCurve(CurveProblem):
+    """Neimark-Sacker curve: ``G v = e^{i theta} v`` with ``<v_ref, v> = 1``.
+
+    Unknowns ``u = [p1, delta, theta, Re v (2n), Im v (2n)]``.
+    """
+
+    kind = "NS"
+
+    def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
+                 ) -> None:
+        super().__init__(osc, N, parameters)
+        m = 2 * osc.n
+        self.extra_names = ("theta", *(f"re_v{i + 1}" for i in range(m)),
+                            *(f"im_v{i + 1}" for i in range(m)))
+        self._ref = np.eye(m, dtype=complex)[0]
+
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        m = 2 * self.osc.n
+        theta = extras[0]
+        v = extras[1:1 + m] + 1j * extras[1 + m:1 + 2 * m]
+        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
+        G, _ = impact_map_jacobian(pc.flow, state, delta, pc.T, pc.DPhi)
+        eig = G @ v - complex(math.cos(theta), math.sin(theta)) * v
+        norm = np.vdot(self._ref, v) - 1.0
+        return np.concatenate([eig.real, eig.imag, [norm.real, norm.imag]])
+
+    def extras_from_orbit(self, orbit: PeriodicOrbit) -> np.ndarray:
+        """``theta`` and ``v`` of the complex multiplier closest to the unit circle."""
+        mu, vecs = np.linalg.eig(orbit.G)
+        upper = np.flatnonzero(mu.imag > 1e-12)
+        if upper.size == 0:
+            raise ParameterError(f"start of an NS curve needs a complex pair of multipliers; got "
+                                 f"multipliers {np.round(mu, 6).tolist()}")
+        k = upper[np.argmin(np.abs(np.abs(mu[upper]) - 1.0))]
+        v = vecs[:, k] / np.linalg.norm(vecs[:, k])
+        return np.concatenate([[float(np.angle(mu[k]))], v.real, v.imag])
+
+    def eigenvector(self, u: np.ndarray) -> np.ndarray:
+        """The complex critical eigenvector ``v`` of a point."""
+        m = 2 * self.osc.n
+        return u[3:3 + m] + 1j * u[3 + m:3 + 2 * m]
+
+    def accept(self, u: np.ndarray, lam: float) -> None:
+        """``v_ref = v / |v|^2`` at the accepted point, so that ``<v_ref, v> = 1`` there."""
+        super().accept(u, lam)
+        v = self.eigenvector(u)
+        self._ref = v / np.vdot(v, v).real
+
+
+class GrazingCurve(CurveProblem):
+    """Grazing curve: ``x1(t*) = b`` and ``x1'(t*) = 0`` at a time ``0 < t* < T``.
+
+    Unknowns ``u = [p1, delta, t*]``; the tangency time is an unknown.
+    """
+
+    kind = "GR"
+    extra_names = ("tangency_time",)
+
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
+        x1, v1, _ = pc.flow.mass1(state, delta)(np.array([extras[0]]))
+        return np.array([x1[0] - pc.osc.b, v1[0]])
+
+    def extras_from_orbit(self, orbit: PeriodicOrbit) -> np.ndarray:
+        """The time of the highest interior maximum of x1."""
+        if not math.isfinite(orbit.gap_min_time):
+            raise ParameterError("start of a GR curve needs an interior maximum of x1; the motion "
+                                 f"at delta={orbit.delta!r} has none")
+        return np.array([orbit.gap_min_time])
+
+    def period(self, u: np.ndarray, lam: float) -> float:
+        """``T = 2 pi N / omega`` at a point."""
+        return self._pieces(u[0], lam).T
+
+
+class ZeroVelocityCurve(CurveProblem):
+    """Zero-velocity-impact curve: ``h2 = x1'(T-) = 0`` (eq. 22).
+
+    At ``h2 = 0`` the impact does nothing: the motion is the linear forced
+    response whose amplitude of ``x1`` is ``|b|``, the same for every N.
+    """
+
+    kind = "ZV"
+
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
+        return np.array([pc.flow.state_derivative(pc.T, state, delta)[0][0]])
+
+
+_KINDS: dict[str, type[CurveProblem]] = {
+    "SN": FoldCurve, "PD": PeriodDoublingCurve, "NS": NeimarkSackerCurve,
+    "GR": GrazingCurve, "ZV": ZeroVelocityCurve,
+}
+
+
+def curve_problem(kind: str, osc: ImpactOscillator, N: int,
+                  parameters: tuple[str, str] = ("omega", "b")) -> CurveProblem:
+    """The problem of a codim-1 curve of the given kind (one of :data:`CURVE_KINDS`)."""
+    if kind not in _KINDS:
+        raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
+    return _KINDS[kind](osc, N, parameters)
