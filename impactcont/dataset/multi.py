@@ -1,0 +1,192 @@
+"""Branch datasets of N-p motions: the branch schema plus an ``impact`` dimension.
+
+A branch of periodic N-p motions (p impacts in N forcing periods) is stored
+as a branch dataset of :mod:`impactcont.dataset.schema` (so every reader,
+plot and :func:`impactcont.dataset.load` takes it unchanged) with:
+
+- the point columns read as follows: ``delta`` and ``state`` are those of
+  impact 0, ``impact_velocity`` is the smallest impact velocity over the p
+  impacts and ``gap_min`` the smallest interior gap over the p flights (the
+  ZV and GR test functions), ``multipliers`` the eigenvalues of
+  ``G = G_{p-1} .. G_0``;
+- a dimension ``impact`` (size p, integer coordinate ``0 .. p-1``) and the
+  per-impact variables of :data:`IMPACT_VARIABLES` on ``(point, impact)``
+  (``state_k`` on ``(point, impact, component)``), and the same at the
+  special points (``special_<name>`` on ``(special, impact)``);
+- the attribute ``impacts = p``.
+
+A dataset without the ``impact`` dimension (an N-1 branch of
+:func:`impactcont.continuation`) is read as ``p = 1``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.dataset.schema import (
+    _Var,
+    branch_dataset,
+    special_variable,
+    validate_branch_dataset,
+)
+from impactcont.model.oscillator import ImpactOscillator
+
+__all__ = ["IMPACT_VARIABLES", "impacts_of", "multi_impact_dataset",
+           "validate_multi_impact_dataset"]
+
+#: Per-impact variables (dims ``(point, impact)``, ``state_k`` adds ``component``).
+IMPACT_VARIABLES: dict[str, _Var] = {
+    "delta_k": _Var("impact phase of impact k", "rad",
+                    "Forcing phase theta_k at impact k, in (-pi, pi]."),
+    "impact_velocity_k": _Var("impact velocity of impact k", "1",
+                              "Velocity x1' of mass 1 just before impact k (h2 of eq. 22 of "
+                              "the flight ending there)."),
+    "flight_time_k": _Var("flight time after impact k", "1",
+                          "Time tau_k from impact k to impact k+1; they sum to 2 pi N / omega."),
+    "gap_min_k": _Var("minimum gap of flight k", "1",
+                      "Smallest b - x1 at the interior maxima of x1 on the flight after "
+                      "impact k; +inf when there is none (eq. 16)."),
+    "state_k": _Var("state after impact k", "1",
+                    "State [x1..xn, x1'..xn'] right after impact k (x1 = b).",
+                    extra_dims=("component",)),
+}
+
+#: Per-impact variables also stored at the special points (``special_<name>``).
+SPECIAL_IMPACT_VARIABLES = ("delta_k", "impact_velocity_k", "flight_time_k", "state_k")
+
+
+def impacts_of(ds: xr.Dataset) -> int:
+    """Impacts per motion of a branch dataset: ``ds.attrs["impacts"]``, 1 for an N-1 branch."""
+    return int(ds.attrs.get("impacts", 1))
+
+
+def _impact_array(key: str, value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
+    a = np.asarray(value)
+    if a.shape != shape:
+        raise ValueError(f"{what} {key!r} must have shape {shape}; got shape {a.shape}")
+    if a.dtype.kind not in "iuf":
+        raise ValueError(f"{what} {key!r} must be real numbers; got dtype {a.dtype}")
+    return a.astype(np.float64)
+
+
+def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOscillator,
+                         options: Any, columns: Mapping[str, Any],
+                         impact_columns: Mapping[str, Any],
+                         special_points: Sequence[Mapping[str, Any]],
+                         special_impact_columns: Mapping[str, Any],
+                         title: str | None = None,
+                         extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+    """Assemble the dataset of one continued branch of periodic N-p motions.
+
+    Parameters
+    ----------
+    parameter, N, oscillator, options, columns, special_points
+        As for :func:`impactcont.dataset.branch_dataset` (``columns`` hold the
+        impact-0 / minimum-over-impacts view described in the module notes).
+    p : int
+        Impacts per motion (``>= 1``).
+    impact_columns : mapping of str to array_like
+        Every key of :data:`IMPACT_VARIABLES`, shape ``(npoints, p)``
+        (``state_k``: ``(npoints, p, 2n)``).
+    special_impact_columns : mapping of str to array_like
+        Every key of :data:`SPECIAL_IMPACT_VARIABLES`, shape ``(nspecial, p)``
+        (``state_k``: ``(nspecial, p, 2n)``).
+    title : str, optional
+        Dataset title.
+    extra_attrs : mapping, optional
+        Further dataset attributes (str, int or float values), e.g. where a
+        switched branch was born.
+
+    Returns
+    -------
+    xarray.Dataset
+        A valid branch dataset with the ``impact`` dimension.
+
+    Raises
+    ------
+    ValueError, TypeError
+        As :func:`branch_dataset`, and for a missing or misshapen per-impact column.
+    """
+    if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 1:
+        raise ValueError(f"p must be an integer >= 1 (impacts per motion); got {p!r}")
+    if not isinstance(impact_columns, Mapping) or not isinstance(special_impact_columns,
+                                                                 Mapping):
+        raise TypeError("impact_columns and special_impact_columns must be mappings of "
+                        "variable name to array")
+    ds = branch_dataset(parameter=parameter, N=N, oscillator=oscillator, options=options,
+                        columns=columns, special_points=special_points,
+                        title=title if title is not None else
+                        f"Branch of periodic {N}-{p} impacting motions continued in "
+                        f"{parameter}")
+    n = oscillator.n
+    npoints, nspecial = ds.sizes["point"], ds.sizes["special"]
+    for what, cols, keys, dim, size in (
+            ("impact column", impact_columns, tuple(IMPACT_VARIABLES), "point", npoints),
+            ("special impact column", special_impact_columns, SPECIAL_IMPACT_VARIABLES,
+             "special", nspecial)):
+        missing = [k for k in keys if k not in cols]
+        unknown = sorted(set(cols) - set(keys))
+        if missing or unknown:
+            raise ValueError(f"{what}s: missing {missing}, unknown {unknown}; required: "
+                             f"{list(keys)}")
+        for key in keys:
+            spec = IMPACT_VARIABLES[key]
+            shape = (size, p) + (2 * n,) * len(spec.extra_dims)
+            arr = _impact_array(key, cols[key], shape, what)
+            name = key if dim == "point" else special_variable(key)
+            attrs = spec.attrs()
+            if dim == "special":
+                attrs = {**attrs, "long_name": f"{spec.long_name} at special point"}
+            ds[name] = ((dim, "impact", *spec.extra_dims), arr, attrs)
+    ds = ds.assign_coords(impact=("impact", np.arange(p, dtype=np.int64),
+                                  {"long_name": "impact index", "units": "1",
+                                   "description": "Impact k of the motion; impact 0 is the "
+                                   "one of delta and state."}))
+    ds.attrs["impacts"] = int(p)
+    for key, value in (extra_attrs or {}).items():
+        if not isinstance(value, (str, int, float, np.integer, np.floating)) \
+                or isinstance(value, bool):
+            raise TypeError(f"extra_attrs[{key!r}] must be a str, int or float; got {value!r}")
+        ds.attrs[str(key)] = value
+    return ds
+
+
+def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
+    """Check a branch dataset and, if it has the ``impact`` dimension, its per-impact layout.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` itself.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`validate_branch_dataset`, and for a per-impact variable that is
+        missing or has the wrong dimensions, or ``impacts`` that does not match.
+    """
+    validate_branch_dataset(ds)
+    if "impact" not in ds.dims:
+        if impacts_of(ds) != 1:
+            raise ValueError(f"attribute impacts={ds.attrs['impacts']!r} but the dataset has "
+                             "no 'impact' dimension")
+        return ds
+    p = impacts_of(ds)
+    if ds.sizes["impact"] != p:
+        raise ValueError(f"dimension 'impact' has size {ds.sizes['impact']}; attribute "
+                         f"impacts={p}")
+    for key, spec in IMPACT_VARIABLES.items():
+        expected = [(key, ("point", "impact", *spec.extra_dims))]
+        if key in SPECIAL_IMPACT_VARIABLES:
+            expected.append((special_variable(key), ("special", "impact", *spec.extra_dims)))
+        for name, dims in expected:
+            if name not in ds.variables:
+                raise ValueError(f"not an N-p branch dataset: missing variable {name!r}")
+            if ds[name].dims != dims:
+                raise ValueError(f"variable {name!r} must have dims {dims}; got "
+                                 f"{ds[name].dims}")
+    return ds

@@ -1,0 +1,320 @@
+"""One-parameter branches of periodic N-p motions: continuation, detection, dataset.
+
+``multi_impact_continuation(orbit, parameter, bounds)`` = start on an N-p motion
+-> follow the shooting system of :mod:`impactcont.orbit.multi_impact` with the
+pseudo-arclength core -> evaluate every accepted point (states, G, multipliers,
+checks on every flight) -> detect and locate SN, PD, NS, GR, ZV -> an
+:class:`xarray.Dataset` in the branch schema with an ``impact`` dimension
+(:mod:`impactcont.dataset.multi`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.continuation import ContinuationOptions, ContinuationPoint, iter_points
+from impactcont.dataset.multi import multi_impact_dataset
+from impactcont.detection.multi_impact import (
+    MultiImpactSample,
+    MultiImpactSpecialPoint,
+    detect_multi_impact_points,
+)
+from impactcont.detection.special_points import LABELS, event_function
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
+from impactcont.orbit.periodic import PeriodicOrbit
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+
+__all__ = ["multi_impact_continuation"]
+
+log = logging.getLogger(__name__)
+
+
+def _as_multi(orbit: Any) -> MultiImpactOrbit:
+    if isinstance(orbit, MultiImpactOrbit):
+        return orbit
+    if isinstance(orbit, PeriodicOrbit):
+        return multi_impact_orbit(orbit.oscillator, orbit.N, 1, orbit)
+    raise TypeError(f"start must be a MultiImpactOrbit or a PeriodicOrbit; got "
+                    f"{type(orbit).__name__}")
+
+
+def make_options(bounds: Sequence[float], **kwargs: Any) -> ContinuationOptions:
+    """:class:`ContinuationOptions` with the defaults of N-p branches."""
+    defaults = {"ds_max": 0.05, "newton_tol": 1e-11, "max_points": 2000}
+    defaults.update(kwargs)
+    # a smaller ds_max given alone also bounds the default first step and smallest step
+    defaults.setdefault("ds", min(0.02, float(defaults["ds_max"])))
+    defaults.setdefault("ds_min", min(1e-8, float(defaults["ds"])))
+    lo, hi = (float(v) for v in bounds)
+    return ContinuationOptions(bounds=(lo, hi), **defaults)
+
+
+def _pd_sign_change(a: MultiImpactOrbit, b: MultiImpactOrbit) -> bool:
+    fa, fb = event_function("PD", a), event_function("PD", b)
+    near = min(np.min(np.abs(a.multipliers + 1)), np.min(np.abs(b.multipliers + 1)))
+    return bool(math.isfinite(fa) and math.isfinite(fb) and (fa < 0) != (fb < 0) and near < 0.5)
+
+
+_PARENT_TOL = 1e-9
+
+
+def _asymmetry(orbit: MultiImpactOrbit) -> np.ndarray | None:
+    """How far an N-p motion (N, p even) is from its N/2-p/2 half repeated twice.
+
+    ``[X_k - X_{k+p/2}, tau_k - tau_{k+p/2}, theta_k - theta_{k+p/2}]`` for
+    ``k < p/2``; zero exactly on the repeated half-motion. Across the
+    period-doubling of the half-motion the branch of N-p motions comes back as
+    its own mirror image (halves swapped), so this vector changes sign there.
+    """
+    if orbit.p % 2 or orbit.N % 2:
+        return None
+    h = orbit.p // 2
+    dphase = np.remainder(orbit.phases[:h] - orbit.phases[h:] + math.pi, 2 * math.pi) - math.pi
+    return np.concatenate([(orbit.states[:h] - orbit.states[h:]).ravel(),
+                           orbit.flight_times[:h] - orbit.flight_times[h:], dphase])
+
+
+@dataclasses.dataclass
+class _Run:
+    points: list[ContinuationPoint]
+    orbits: list[MultiImpactOrbit]
+    message: str
+    status: str
+
+
+def _run(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+         options: ContinuationOptions, direction: int, stop_after_pd: int | None,
+         on_point: Callable[[MultiImpactOrbit], None] | None) -> _Run:
+    run = iter_points(problem, u0, lam0, options, direction)
+    points: list[ContinuationPoint] = []
+    orbits: list[MultiImpactOrbit] = []
+    remaining: int | None = None
+    status = message = ""
+    reference: np.ndarray | None = None
+    for point in run:
+        orbit = problem.orbit(point.u, point.lam)
+        asym = _asymmetry(orbit)
+        if asym is not None:
+            scale = max(1.0, float(np.max(np.abs(orbit.states))))
+            if reference is None and not points and np.max(np.abs(asym)) > _PARENT_TOL * scale:
+                reference = asym
+            elif reference is not None and (float(asym @ reference) <= 0.0 or np.max(
+                    np.abs(asym)) <= _PARENT_TOL * scale):
+                status = "REACHED_PARENT"
+                message = (f"reached the period-doubling of the {problem.N // 2}-"
+                           f"{problem.p // 2} motion it was born from near {problem.parameter}"
+                           f"={point.lam:.10g} (the point there is the parent repeated twice "
+                           "or its mirror image, and is left out)")
+                break
+        points.append(point)
+        orbits.append(orbit)
+        if on_point is not None:
+            on_point(orbit)
+        if remaining is not None:
+            remaining -= 1
+            if remaining <= 0:
+                status = "STOPPED_AFTER_PD"
+                message = f"stopped {stop_after_pd} point(s) after the first period-doubling"
+                break
+        elif stop_after_pd is not None and len(orbits) > 1 and _pd_sign_change(orbits[-2],
+                                                                                orbits[-1]):
+            remaining = stop_after_pd
+            if remaining <= 0:
+                status = "STOPPED_AFTER_PD"
+                message = "stopped at the first period-doubling"
+                break
+    if not status:
+        status = run.status.name if run.status is not None else "UNKNOWN"
+        message = run.message
+    return _Run(points, orbits, message, status)
+
+
+def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+                 options: ContinuationOptions, *, stop_after_pd: int | None = None,
+                 on_point: Callable[[MultiImpactOrbit], None] | None = None,
+                 ) -> tuple[list[MultiImpactSample], list[str], str]:
+    """Follow a branch (one or both directions) and return its samples in branch order.
+
+    Parameters
+    ----------
+    problem : MultiImpactBranchProblem
+    u0 : ndarray
+        Unknowns at the start (corrected at fixed ``lam0``).
+    lam0 : float
+    options : ContinuationOptions
+        ``direction`` and ``both_directions`` are honoured.
+    stop_after_pd : int, optional
+        Stop a direction this many points after the first sign change of the
+        PD test function (saves following a cascade branch to the bound).
+    on_point : callable, optional
+        Called with the orbit of every accepted point.
+
+    Returns
+    -------
+    samples : list of MultiImpactSample
+    statuses : list of str
+        Why each direction stopped.
+    message : str
+    """
+    forward = _run(problem, u0, lam0, options, options.direction, stop_after_pd, on_point)
+    if not forward.points:
+        raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {forward.message}")
+    runs = [forward]
+    if options.both_directions and forward.status != "CLOSED_LOOP":
+        runs.append(_run(problem, u0, lam0, options, -options.direction, stop_after_pd,
+                         on_point))
+    samples = [MultiImpactSample(u=pt.u, lam=pt.lam, tangent=pt.tangent, orbit=o)
+               for pt, o in zip(forward.points, forward.orbits, strict=True)]
+    if len(runs) == 2:
+        back = [MultiImpactSample(u=pt.u, lam=pt.lam, tangent=-pt.tangent, orbit=o)
+                for pt, o in zip(runs[1].points[1:], runs[1].orbits[1:], strict=True)]
+        samples = back[::-1] + samples
+    statuses = [r.status for r in runs]
+    message = "; ".join(f"{'forward' if i == 0 else 'backward'}: {r.message}"
+                        for i, r in enumerate(runs))
+    return samples, statuses, message
+
+
+def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[MultiImpactSample],
+                      specials: Sequence[MultiImpactSpecialPoint], options: Mapping[str, Any],
+                      *, title: str | None = None,
+                      extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+    """The N-p branch dataset of :mod:`impactcont.dataset.multi` from samples and special points."""
+    orbits = [s.orbit for s in samples]
+    parameter = problem.parameter
+    x = np.array([np.append(s.u, s.lam) for s in samples])
+    steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1)) if len(samples) > 1 else []
+    columns: dict[str, Any] = {
+        "omega": np.array([o.oscillator.omega for o in orbits]),
+        "b": np.array([o.oscillator.b for o in orbits]),
+        "delta": np.array([o.delta for o in orbits]),
+        "impact_velocity": np.array([o.impact_velocity for o in orbits]),
+        "gap_min": np.array([o.gap_min for o in orbits]),
+        "spectral_radius": np.array([o.spectral_radius for o in orbits]),
+        "stable": np.array([o.stable for o in orbits]),
+        "physical": np.array([o.physical for o in orbits]),
+        "arclength": np.concatenate([[0.0], np.cumsum(steps)]),
+        "multipliers": np.array([o.multipliers for o in orbits]),
+        "state": np.array([o.state for o in orbits]),
+    }
+    if parameter not in columns:
+        columns[parameter] = np.array([s.lam for s in samples])
+    impact_columns = {
+        "delta_k": np.array([o.phases for o in orbits]),
+        "impact_velocity_k": np.array([o.impact_velocities for o in orbits]),
+        "flight_time_k": np.array([o.flight_times for o in orbits]),
+        "gap_min_k": np.array([o.flight_gap_min for o in orbits]),
+        "state_k": np.array([o.states for o in orbits]),
+    }
+    special_points = []
+    for sp in specials:
+        osc = sp.orbit.oscillator
+        row = {"label": sp.label, "omega": osc.omega, "b": osc.b, "delta": sp.delta,
+               "point": sp.point, "bracket_lo": sp.bracket[0], "bracket_hi": sp.bracket[1],
+               "precision": sp.precision, "status": sp.status,
+               "multipliers": sp.orbit.multipliers}
+        if parameter not in row:
+            row[parameter] = sp.value
+        special_points.append(row)
+    n, p = problem.osc.n, problem.p
+    special_impact_columns = {
+        "delta_k": np.array([sp.orbit.phases for sp in specials]).reshape(-1, p),
+        "impact_velocity_k": np.array([sp.orbit.impact_velocities for sp in specials]
+                                      ).reshape(-1, p),
+        "flight_time_k": np.array([sp.orbit.flight_times for sp in specials]).reshape(-1, p),
+        "state_k": np.array([sp.orbit.states for sp in specials]).reshape(-1, p, 2 * n),
+    }
+    return multi_impact_dataset(parameter=parameter, N=problem.N, p=p, oscillator=problem.osc,
+                                options=dict(options), columns=columns,
+                                impact_columns=impact_columns, special_points=special_points,
+                                special_impact_columns=special_impact_columns, title=title,
+                                extra_attrs=extra_attrs)
+
+
+def _check_labels(detect: Sequence[str]) -> list[str]:
+    if isinstance(detect, str):
+        raise ParameterError(f"detect must be a sequence of labels; got the string {detect!r}")
+    unknown = sorted(set(detect) - set(LABELS))
+    if unknown:
+        raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
+    return list(detect)
+
+
+def follow(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+           options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
+           stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
+           extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+    """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``."""
+    labels = _check_labels(detect)
+    samples, statuses, message = trace_branch(problem, u0, lam0, options,
+                                              stop_after_pd=stop_after_pd)
+    specials = detect_multi_impact_points(problem, samples, labels)
+    log.info("N=%d p=%d branch in %s: %d points, %d special (%s)", problem.N, problem.p,
+             problem.parameter, len(samples), len(specials), message)
+    option_record = {**dataclasses.asdict(options), "N": problem.N, "p": problem.p,
+                     "parameter": problem.parameter, "start": float(lam0),
+                     "start_delta": float(u0[0]), "detect": labels, "status": statuses,
+                     "message": message, **(record or {})}
+    option_record["bounds"] = list(options.bounds)
+    return branch_to_dataset(problem, samples, specials, option_record,
+                             extra_attrs=extra_attrs)
+
+
+def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter: str = "omega",
+                              bounds: Sequence[float] = (0.5, 6.0), *,
+                              detect: Sequence[str] = LABELS, ds: float | None = None,
+                              ds_min: float | None = None, ds_max: float = 0.05,
+                              newton_tol: float = 1e-11, max_points: int = 2000,
+                              both_directions: bool = True, direction: int = 1,
+                              **options: Any) -> xr.Dataset:
+    """Continue the branch of periodic N-p motions through a given motion.
+
+    Parameters
+    ----------
+    start : MultiImpactOrbit or PeriodicOrbit
+        A motion on the branch (e.g. from :func:`impactcont.orbit.multi_impact.multi_impact_orbit`);
+        its oscillator's value of `parameter` is the start.
+    parameter : str
+        ``"omega"``, ``"b"``, ``"R"``, ``"eta"``, ``"alpha"`` or ``"beta"``.
+    bounds : (float, float)
+        Range of the parameter; must contain the start.
+    detect : sequence of str
+        Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``; GR and
+        ZV use the minimum over the flights and impacts.
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **options
+        Continuation options (:class:`impactcont.continuation.ContinuationOptions`);
+        ``ds`` defaults to ``min(0.02, ds_max)`` and ``ds_min`` to ``min(1e-8, ds)``.
+
+    Returns
+    -------
+    xarray.Dataset
+        The branch with an ``impact`` dimension (``docs/multi_impact.md``);
+        valid for :func:`impactcont.save`, :func:`impactcont.load` and the plots.
+
+    Raises
+    ------
+    ParameterError
+        Bad parameter, bounds not containing the start, unknown labels.
+    NoPeriodicMotionError
+        Newton fails at the start.
+    """
+    orbit = _as_multi(start)
+    labels = _check_labels(detect)
+    problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter)
+    lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
+    steps = {"ds": ds, "ds_min": ds_min}
+    opts = make_options(bounds, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+                        both_directions=both_directions, direction=direction,
+                        **{k: v for k, v in steps.items() if v is not None}, **options)
+    if not opts.lam_min <= lam0 <= opts.lam_max:
+        raise ParameterError(f"bounds {tuple(bounds)} must contain the start {parameter}="
+                             f"{lam0!r} of the orbit")
+    return follow(problem, orbit.unknowns, lam0, opts, detect=labels)

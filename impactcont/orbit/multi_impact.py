@@ -1,0 +1,624 @@
+"""Periodic N-p motions: p impacts in N forcing periods, by shooting with the exact flow.
+
+Impacts are numbered ``k = 0 .. p-1``; flight ``k`` runs from impact ``k`` to
+impact ``k+1`` (impact ``p`` is impact 0 again, N forcing periods later). On
+flight ``k`` the state starts at ``X_k = [b, z_k]`` (right after impact ``k``,
+on the section ``x1 = b``) with forcing phase ``theta_k`` and lasts ``tau_k``;
+by eq. (9) it arrives at
+
+    X_k^- = U W(tau_k) U^-1 X_k + U E(tau_k) [cos theta_k; sin theta_k]
+
+and the impact law (eq. 4) gives the next post-impact state ``D X_k^-``. The
+N-p motion solves, for every flight,
+
+    r_k = D X_k^- - X_{k+1} = 0          (2n equations: x1 = b and the next state)
+
+with ``theta_k = delta + omega (tau_0 + .. + tau_{k-1})`` and the last flight time
+fixed by the period, ``tau_{p-1} = 2 pi N / omega - (tau_0 + .. + tau_{p-2})``.
+The unknowns
+
+    u = [delta, tau_0 .. tau_{p-2}, z_0 .. z_{p-1}],     z_k = [x2..xn, x1'..xn'] of X_k
+
+are ``2 n p`` numbers for ``2 n p`` equations. Newton uses the exact derivatives
+of the flow: ``dX^-/dX_k = U W U^-1``, ``dX^-/dtheta = U E [-sin; cos]`` and
+``dX^-/dtau = X'(tau^-)`` (the state derivative). For ``p = 1`` the system is
+eq. (12)-(14) written as shooting, and its solution is the closed form.
+
+Stability: each flight-and-impact has the Jacobian ``G_k`` of eq. (25) (with
+``T`` replaced by ``tau_k`` and ``delta`` by ``theta_k``); the motion's impact map
+over N periods has ``G = G_{p-1} ... G_1 G_0``, multipliers ``eig(G)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import warnings
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.extrema import interior_maxima, sample_times
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.periodic import (
+    IllConditionedWarning,
+    PeriodicOrbit,
+    _check_N,
+    impact_map_jacobian,
+)
+from impactcont.simulate.simulator import SimulationResult
+
+__all__ = [
+    "MultiImpactOrbit",
+    "Shooting",
+    "check_impacts",
+    "initial_unknowns",
+    "multi_impact_orbit",
+    "newton",
+    "omega_partial",
+    "orbit_from_unknowns",
+    "shooting",
+    "split_unknowns",
+]
+
+log = logging.getLogger(__name__)
+
+TWO_PI = 2.0 * math.pi
+_COND_WARN = 1e12
+
+
+def check_impacts(p: object) -> int:
+    """``p`` as an int ``>= 1`` (impacts per N forcing periods), else :class:`ParameterError`."""
+    if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 1:
+        raise ParameterError(f"p must be an integer >= 1 (impacts per N forcing periods); "
+                             f"got {p!r}")
+    return int(p)
+
+
+def _wrap(phase: float) -> float:
+    """Phase wrapped to ``(-pi, pi]``."""
+    return math.atan2(math.sin(phase), math.cos(phase))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class MultiImpactOrbit:
+    """One periodic N-p motion: p impacts in N forcing periods.
+
+    Per-impact arrays are indexed by the impact ``k = 0 .. p-1``; per-flight
+    arrays by the flight ``k`` from impact ``k`` to impact ``k+1``.
+
+    Attributes
+    ----------
+    oscillator : ImpactOscillator
+    N : int
+        Forcing periods of the motion, ``period = 2 pi N / omega``.
+    p : int
+        Impacts per period.
+    phases : ndarray, shape (p,)
+        Forcing phase ``theta_k`` at impact k, in ``(-pi, pi]``.
+    flight_times : ndarray, shape (p,)
+        ``tau_k``, time from impact k to impact k+1; they sum to the period.
+    states : ndarray, shape (p, 2n)
+        State ``X_k = [x; x']`` right after impact k (``x1 = b``).
+    impact_velocities : ndarray, shape (p,)
+        Velocity ``x1'`` of mass 1 just before impact k (``h2`` of eq. 22 of the
+        flight that ends there).
+    flight_gap_min : ndarray, shape (p,)
+        Smallest ``b - x1`` at the interior maxima of ``x1`` on flight k
+        (eq. 16); ``+inf`` when there is none.
+    flight_gap_min_times : ndarray, shape (p,)
+        Time of that maximum after impact k (NaN when there is none).
+    jacobians : ndarray, shape (p, 2n, 2n)
+        ``G_k``, Jacobian of flight k and the impact ending it (eq. 25) in
+        ``z = [dx2..dxn, dx1'..dxn', d theta]``.
+    G : ndarray, shape (2n, 2n)
+        ``G_{p-1} ... G_0``: the impact map over the whole motion, from impact 0.
+    multipliers : ndarray of complex, shape (2n,)
+        Eigenvalues of ``G``, largest modulus first.
+    physical : bool
+        Every flight time ``> 0``, every impact velocity ``> 0`` and every
+        ``flight_gap_min > 0`` (no contact inside any flight).
+    reason : str
+        Why the motion is not physical ("" when it is).
+    residual : float
+        Max-norm of the shooting residual at the solution.
+    """
+
+    oscillator: ImpactOscillator
+    N: int
+    p: int
+    phases: np.ndarray
+    flight_times: np.ndarray
+    states: np.ndarray
+    impact_velocities: np.ndarray
+    flight_gap_min: np.ndarray
+    flight_gap_min_times: np.ndarray
+    jacobians: np.ndarray
+    G: np.ndarray
+    multipliers: np.ndarray
+    physical: bool
+    reason: str
+    residual: float
+
+    # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
+    @property
+    def delta(self) -> float:
+        """Forcing phase at impact 0."""
+        return float(self.phases[0])
+
+    @property
+    def state(self) -> np.ndarray:
+        """State right after impact 0, shape (2n,)."""
+        return self.states[0]
+
+    @property
+    def period(self) -> float:
+        """``2 pi N / omega``."""
+        return TWO_PI * self.N / self.oscillator.omega
+
+    @property
+    def impact_velocity(self) -> float:
+        """Smallest impact velocity over the p impacts (the ZV test function)."""
+        return float(np.min(self.impact_velocities))
+
+    @property
+    def gap_min(self) -> float:
+        """Smallest interior gap over the p flights (the GR test function)."""
+        return float(np.min(self.flight_gap_min))
+
+    @property
+    def spectral_radius(self) -> float:
+        """``rho(G)``, the largest multiplier modulus."""
+        return float(np.abs(self.multipliers).max())
+
+    @property
+    def stable(self) -> bool:
+        """Asymptotically stable (Theorem 3.1 applied to G): ``rho(G) < 1``."""
+        return self.spectral_radius < 1.0
+
+    @property
+    def unknowns(self) -> np.ndarray:
+        """The shooting unknowns ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``, (2np,)."""
+        return np.concatenate([[self.delta], self.flight_times[:-1],
+                               self.states[:, 1:].ravel()])
+
+    def time_series(self, num: int = 200) -> tuple[np.ndarray, np.ndarray]:
+        """Exact state over one period of the motion (for plots).
+
+        Parameters
+        ----------
+        num : int
+            Samples per flight (``>= 2``), both ends included.
+
+        Returns
+        -------
+        t : ndarray, shape (p*num,)
+            Time since impact 0.
+        X : ndarray, shape (p*num, 2n)
+            State; each flight starts at its post-impact state.
+        """
+        if isinstance(num, bool) or not isinstance(num, (int, np.integer)) or num < 2:
+            raise ParameterError(f"num must be an integer >= 2; got {num!r}")
+        flow = Flow(self.oscillator)
+        ts, Xs, start = [], [], 0.0
+        for k in range(self.p):
+            tau = np.linspace(0.0, self.flight_times[k], num)
+            ts.append(start + tau)
+            Xs.append(flow.state(tau, self.states[k], self.phases[k]))
+            start += self.flight_times[k]
+        return np.concatenate(ts), np.vstack(Xs)
+
+    def __repr__(self) -> str:
+        v = ", ".join(f"{x:.6g}" for x in self.impact_velocities)
+        return (f"MultiImpactOrbit(N={self.N}, p={self.p}, delta={self.delta:.12g}, "
+                f"impact_velocities=[{v}], gap_min={self.gap_min:.6g}, "
+                f"rho={self.spectral_radius:.6g}, stable={self.stable}, "
+                f"physical={self.physical})")
+
+
+# ------------------------------------------------------------------------------------------
+# The shooting system
+# ------------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True, eq=False)
+class Shooting:
+    """The shooting system of an N-p motion evaluated at one ``u``.
+
+    Attributes
+    ----------
+    phases : ndarray, shape (p,)
+        ``theta_k`` (not wrapped).
+    flight_times : ndarray, shape (p,)
+        ``tau_k``.
+    starts : ndarray, shape (p, 2n)
+        ``X_k = [b, z_k]``.
+    arrivals : ndarray, shape (p, 2n)
+        ``X_k^-``, state just before the impact that ends flight k.
+    arrival_rates : ndarray, shape (p, 2n)
+        ``X'(tau_k^-)``.
+    transitions : ndarray, shape (p, 2n, 2n)
+        ``U W(tau_k) U^-1``.
+    phase_columns : ndarray, shape (p, 2n)
+        ``U E(tau_k) [-sin theta_k; cos theta_k]`` (``dX^-/dtheta_k``).
+    residual : ndarray, shape (2np,)
+        ``[r_0, .., r_{p-1}]``, ``r_k = D X_k^- - X_{k+1}``.
+    jacobian : ndarray, shape (2np, 2np) or None
+        ``dr/du``, exact.
+    """
+
+    phases: np.ndarray
+    flight_times: np.ndarray
+    starts: np.ndarray
+    arrivals: np.ndarray
+    arrival_rates: np.ndarray
+    transitions: np.ndarray
+    phase_columns: np.ndarray
+    residual: np.ndarray
+    jacobian: np.ndarray | None
+
+
+def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float
+                   ) -> tuple[float, np.ndarray, np.ndarray]:
+    """``delta``, the p flight times and the p post-impact states ``X_k`` from ``u``."""
+    u = np.asarray(u, dtype=float)
+    if u.shape != (2 * n * p,):
+        raise ParameterError(f"u must have shape ({2 * n * p},) = (2 n p,) for n={n}, p={p}; "
+                             f"got shape {u.shape}")
+    taus = np.empty(p)
+    taus[:-1] = u[1:p]
+    taus[-1] = period - np.sum(u[1:p])
+    starts = np.empty((p, 2 * n))
+    starts[:, 0] = b
+    starts[:, 1:] = u[p:].reshape(p, 2 * n - 1)
+    return float(u[0]), taus, starts
+
+
+def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True) -> Shooting:
+    """Residual (and exact Jacobian) of the N-p shooting system at ``u``.
+
+    Parameters
+    ----------
+    flow : Flow
+        Flow of the oscillator (gives omega, b, R).
+    N, p : int
+        Forcing periods and impacts of the motion.
+    u : ndarray, shape (2np,)
+        ``[delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``.
+    jacobian : bool
+        Also build ``dr/du``.
+
+    Returns
+    -------
+    Shooting
+    """
+    osc = flow.osc
+    n, omega = osc.n, osc.omega
+    m = 2 * n
+    period = TWO_PI * N / omega
+    delta, taus, starts = split_unknowns(u, n, p, period, osc.b)
+    phases = delta + omega * np.concatenate([[0.0], np.cumsum(taus[:-1])])
+    d = np.ones(m)
+    d[n] = -osc.R
+    transitions = np.empty((p, m, m))
+    arrivals = np.empty((p, m))
+    rates = np.empty((p, m))
+    phase_cols = np.empty((p, m))
+    residual = np.empty(p * m)
+    for k in range(p):
+        trans, forcing = flow.matrices(taus[k])
+        c, s = math.cos(phases[k]), math.sin(phases[k])
+        transitions[k] = trans
+        arrivals[k] = trans @ starts[k] + forcing @ np.array([c, s])
+        phase_cols[k] = forcing @ np.array([-s, c])
+        rates[k] = flow.state_derivative(taus[k], starts[k], phases[k])[0]
+        residual[k * m:(k + 1) * m] = d * arrivals[k] - starts[(k + 1) % p]
+    J = None
+    if jacobian:
+        J = np.zeros((p * m, p * m))
+        zcol = p  # first column of z_0
+        for k in range(p):
+            rows = slice(k * m, (k + 1) * m)
+            q = d * phase_cols[k]
+            J[rows, 0] = q  # d theta_k / d delta = 1
+            for j in range(k):  # theta_k depends on tau_j, j < k (all unknowns: j <= p-2)
+                J[rows, 1 + j] += omega * q
+            g = d * rates[k]
+            if k < p - 1:
+                J[rows, 1 + k] += g
+            else:  # tau_{p-1} = period - sum(tau_0..tau_{p-2})
+                J[rows, 1:p] -= g[:, None]
+            # x1 = b on the section: only the columns of z = X[1:] are unknowns
+            J[rows, zcol + k * (m - 1): zcol + (k + 1) * (m - 1)] += (
+                d[:, None] * transitions[k][:, 1:])
+            nxt = (k + 1) % p
+            J[rows, zcol + nxt * (m - 1): zcol + (nxt + 1) * (m - 1)] -= np.eye(m)[:, 1:]
+    return Shooting(phases=phases, flight_times=taus, starts=starts, arrivals=arrivals,
+                    arrival_rates=rates, transitions=transitions, phase_columns=phase_cols,
+                    residual=residual, jacobian=J)
+
+
+def omega_partial(flow: Flow, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
+    """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
+
+    Only the forced part of eq. (9) depends on omega: with the modal steady
+    amplitudes ``gamma - i beta = f / (w^2 - omega^2 + 2 i a omega)`` (eq. 7) and
+    ``P(t) = [y_p; y_p'](t)``, ``X(t) = U [P(t) + W(t) (Y0 - P(0))]`` gives
+    ``dX/d omega = U [dP(t) - W(t) dP(0)]``.
+
+    Returns
+    -------
+    ndarray, shape (2n,)
+    """
+    om = flow.omega
+    den = (flow.w - om) * (flow.w + om) + 2j * flow.a * om
+    A = flow.gamma - 1j * flow.beta
+    dA = A * (2.0 * om - 2j * flow.a) / den
+    dg, db = dA.real, -dA.imag
+    g, b = flow.gamma, flow.beta
+
+    def dP(time: float) -> tuple[np.ndarray, np.ndarray]:
+        c, s = math.cos(om * time + theta), math.sin(om * time + theta)
+        y = g * c + b * s
+        dy = dg * c + db * s + time * (b * c - g * s)
+        dv = (b * c - g * s) + om * (db * c - dg * s) - om * time * y
+        return dy, dv
+
+    dy_t, dv_t = dP(t)
+    dy_0, dv_0 = dP(0.0)
+    W11, W12, W21, W22 = (blk[0] for blk in flow.transfer(np.array([t])))
+    dy = dy_t - (W11 * dy_0 + W12 * dv_0)
+    dv = dv_t - (W21 * dy_0 + W22 * dv_0)
+    return np.concatenate([flow.u @ dy, flow.u @ dv])
+
+
+# ------------------------------------------------------------------------------------------
+# Guesses, Newton, the orbit
+# ------------------------------------------------------------------------------------------
+def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
+                  ) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(delta, flight_times (p,), states (p, 2n))`` from any accepted kind of guess."""
+    n = osc.n
+    if isinstance(guess, (MultiImpactOrbit, PeriodicOrbit)):
+        gp = guess.p if isinstance(guess, MultiImpactOrbit) else 1
+        if isinstance(guess, MultiImpactOrbit):
+            taus, states, delta = guess.flight_times, guess.states, guess.delta
+        else:
+            taus, states, delta = np.array([guess.period]), guess.state[None, :], guess.delta
+        if guess.oscillator.n != n:
+            raise ParameterError(f"guess has n={guess.oscillator.n} degrees of freedom; the "
+                                 f"oscillator has n={n}")
+        if gp == p and guess.N == N:
+            return delta, np.array(taus, float), np.array(states, float)
+        reps, rem = divmod(p, gp)
+        if rem == 0 and reps * guess.N == N:  # the guess repeated: e.g. a doubled N-1 orbit
+            return delta, np.tile(taus, reps), np.tile(states, (reps, 1))
+        raise ParameterError(f"guess is an {guess.N}-{gp} motion; it can seed an N-p motion "
+                             f"with p a multiple k*{gp} and N = k*{guess.N}; got N={N}, p={p}")
+    if isinstance(guess, SimulationResult):
+        k = guess.impact_times.size
+        if k < p + 1:
+            raise ParameterError(f"guess: the simulation has {k} impacts; at least p+1={p + 1} "
+                                 "are needed to seed an N-p motion")
+        times = guess.impact_times[-(p + 1):]
+        return (float(guess.impact_phases[-(p + 1)]), np.diff(times),
+                np.array(guess.impact_states[-(p + 1):-1], float))
+    if isinstance(guess, Mapping):
+        try:
+            delta = float(guess["delta"])
+            taus = np.array(guess["flight_times"], dtype=float).reshape(-1)
+            states = np.array(guess["states"], dtype=float)
+        except KeyError as exc:
+            raise ParameterError(f"guess mapping needs keys 'delta', 'flight_times', 'states'; "
+                                 f"missing {exc}") from None
+        if taus.shape != (p,) or states.shape != (p, 2 * n):
+            raise ParameterError(f"guess: flight_times must have shape ({p},) and states "
+                                 f"({p}, {2 * n}); got {taus.shape} and {states.shape}")
+        return delta, taus, states
+    raise TypeError(f"guess must be a MultiImpactOrbit, a PeriodicOrbit, a SimulationResult or "
+                    f"a mapping with 'delta', 'flight_times', 'states'; got "
+                    f"{type(guess).__name__}")
+
+
+def initial_unknowns(guess: Any, osc: ImpactOscillator, N: int, p: int) -> np.ndarray:
+    """Shooting unknowns ``u`` (2np,) seeded by ``guess`` (see :func:`multi_impact_orbit`)."""
+    N = _check_N(N)
+    p = check_impacts(p)
+    delta, taus, states = _guess_arrays(guess, osc, N, p)
+    if not (math.isfinite(delta) and np.all(np.isfinite(taus)) and np.all(np.isfinite(states))):
+        raise ParameterError("guess must hold finite phases, flight times and states")
+    return np.concatenate([[delta], taus[:-1], states[:, 1:].ravel()])
+
+
+def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
+           max_iter: int = 40) -> tuple[np.ndarray, Shooting, int]:
+    """Solve the shooting system by Newton's method with a backtracking line search.
+
+    Converged when the max-norm of the residual is ``<= tol * max(1, |u|_max)`` and
+    the last update is ``<= tol * max(1, |u|_max)`` (at least one update is made, so
+    a guess that already solves the system is polished to working precision).
+
+    Raises
+    ------
+    NoPeriodicMotionError
+        No convergence within ``max_iter`` iterations, or a singular Jacobian.
+    """
+    u = np.array(u0, dtype=float)
+    sh = shooting(flow, N, p, u)
+    norm = float(np.max(np.abs(sh.residual)))
+    step_norm = math.inf
+    for it in range(max_iter + 1):
+        scale = max(1.0, float(np.max(np.abs(u))))
+        small = norm <= tol * scale
+        if small and (step_norm <= tol * scale or it == max_iter):
+            return u, sh, it
+        if it == max_iter:
+            break
+        J = sh.jacobian
+        if not np.all(np.isfinite(J)):
+            break
+        try:
+            step = np.linalg.solve(J, -sh.residual)
+        except np.linalg.LinAlgError:
+            raise NoPeriodicMotionError(
+                f"N={N}, p={p}: singular shooting Jacobian at residual {norm:.3g}") from None
+        lam = 1.0
+        while True:
+            trial = u + lam * step
+            tsh = shooting(flow, N, p, trial)
+            tnorm = float(np.max(np.abs(tsh.residual)))
+            if np.isfinite(tnorm) and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
+                break
+            lam *= 0.5
+        step_norm = lam * float(np.max(np.abs(step)))
+        u, sh, norm = trial, tsh, tnorm
+    raise NoPeriodicMotionError(
+        f"N={N}, p={p}: Newton did not converge in {max_iter} iterations (residual "
+        f"{norm:.3g}, last update {step_norm:.3g}) at omega={flow.omega!r}, b={flow.osc.b!r}")
+
+
+def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
+                        sh: Shooting | None = None, *, checks: bool = True) -> MultiImpactOrbit:
+    """The N-p motion at the solution ``u`` of the shooting system, with G and every check.
+
+    Parameters
+    ----------
+    flow : Flow
+    N, p : int
+    u : ndarray, shape (2np,)
+        A (converged) solution of :func:`shooting`.
+    sh : Shooting, optional
+        :func:`shooting` at ``u`` if already computed.
+    checks : bool
+        Search every flight for interior contact (eq. 16). Without it (a cheap
+        evaluation of the multipliers, e.g. to locate a PD point) ``flight_gap_min``
+        is NaN and the motion is reported not physical with that reason.
+
+    Returns
+    -------
+    MultiImpactOrbit
+        Per-impact states, phases, velocities, per-flight gaps, ``G_k``, ``G``,
+        multipliers and the physical checks.
+    """
+    osc = flow.osc
+    n = osc.n
+    if sh is None:
+        sh = shooting(flow, N, p, u, jacobian=False)
+    d = np.ones(2 * n)
+    d[n] = -osc.R
+    jacs = np.empty((p, 2 * n, 2 * n))
+    h2 = np.empty(p)
+    for k in range(p):
+        with np.errstate(divide="ignore", invalid="ignore"):  # h2 = 0: flagged below
+            jacs[k], h2[k] = impact_map_jacobian(flow, sh.starts[k], float(sh.phases[k]),
+                                             float(sh.flight_times[k]),
+                                             d[:, None] * sh.transitions[k])
+    G = np.eye(2 * n)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(p):
+            G = jacs[k] @ G
+    if np.all(np.isfinite(G)):
+        multipliers = np.linalg.eigvals(G)
+        multipliers = multipliers[np.argsort(-np.abs(multipliers), kind="stable")]
+    else:  # an impact at exactly zero velocity: G has a pole (eq. 25)
+        multipliers = np.full(2 * n, complex(math.nan, math.nan))
+    gaps = np.full(p, math.inf)
+    gap_times = np.full(p, math.nan)
+    reasons = []
+    if not checks:
+        gaps[:] = math.nan
+        reasons.append("interior contact not checked")
+    for k in range(p):
+        tau = float(sh.flight_times[k])
+        if not tau > 0:
+            reasons.append(f"flight {k} has duration {tau:.3g} <= 0")
+            continue
+        if not checks:
+            continue
+        times, peaks = interior_maxima(flow.mass1(sh.starts[k], float(sh.phases[k])),
+                                       sample_times(flow, 0.0, tau))
+        if peaks.size:
+            i = int(np.argmax(peaks))
+            gaps[k], gap_times[k] = float(osc.b - peaks[i]), float(times[i])
+    # velocity before impact k is the arrival velocity of flight k-1
+    velocities = np.roll(h2, 1)
+    for k in range(p):
+        if not velocities[k] > 0:
+            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, mass 1 does not "
+                           "arrive towards the stop")
+        if checks and not gaps[k] > 0:
+            reasons.append(f"flight {k}: x1 reaches the stop inside the flight (gap_min="
+                           f"{gaps[k]:.3g} at t={gap_times[k]:.6g})")
+    phases = np.array([_wrap(float(t)) for t in sh.phases])
+    states = sh.starts.copy()
+    return MultiImpactOrbit(
+        oscillator=osc, N=N, p=p, phases=phases, flight_times=sh.flight_times.copy(),
+        states=states, impact_velocities=velocities, flight_gap_min=gaps,
+        flight_gap_min_times=gap_times, jacobians=jacs, G=G, multipliers=multipliers,
+        physical=not reasons, reason="; ".join(reasons),
+        residual=float(np.max(np.abs(sh.residual))))
+
+
+def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
+                       tol: float = 1e-12, max_iter: int = 40) -> MultiImpactOrbit:
+    """The periodic N-p motion (p impacts in N forcing periods) near a guess.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+    N : int
+        Forcing periods of the motion (``>= 1``).
+    p : int
+        Impacts per motion (``>= 1``).
+    guess : MultiImpactOrbit, PeriodicOrbit, SimulationResult or mapping
+        Where Newton starts:
+
+        - an N-p motion (e.g. at a nearby parameter value);
+        - an N'-p' motion with ``p = k p'`` and ``N = k N'``, repeated k times
+          (a doubled N-1 motion seeds a 2N-2 motion);
+        - a simulation: its last p+1 impacts (states, phases, flight times);
+        - a mapping ``{"delta": float, "flight_times": (p,), "states": (p, 2n)}``.
+    tol : float
+        Newton tolerance on the residual and the last update (relative to
+        ``max(1, |u|)``).
+    max_iter : int
+        Largest number of Newton iterations.
+
+    Returns
+    -------
+    MultiImpactOrbit
+        The motion with its stability and physical checks: a solution that is
+        not a physical motion is returned flagged, never dropped.
+
+    Raises
+    ------
+    ParameterError, TypeError
+        Bad ``N``, ``p`` or ``guess``.
+    NoPeriodicMotionError
+        Newton does not converge from the guess.
+
+    Examples
+    --------
+    >>> res = simulate(osc, X0, 0.0, 400.0)          # doctest: +SKIP
+    >>> orbit = multi_impact_orbit(osc, 2, 2, res)   # doctest: +SKIP
+    """
+    N = _check_N(N)
+    p = check_impacts(p)
+    if not isinstance(osc, ImpactOscillator):
+        raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
+        raise ParameterError(f"tol must be a real number > 0; got {tol!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+        raise ParameterError(f"max_iter must be an integer >= 1; got {max_iter!r}")
+    flow = Flow(osc)
+    u0 = initial_unknowns(guess, osc, N, p)
+    u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter)
+    cond = np.linalg.cond(sh.jacobian)
+    if not np.isfinite(cond) or cond > _COND_WARN:
+        warnings.warn(f"the N={N}, p={p} shooting Jacobian is ill-conditioned (condition number "
+                      f"{cond:.3g}): a multiplier is close to +1 (fold); the motion may be "
+                      "inexact", IllConditionedWarning, stacklevel=2)
+    log.debug("N=%d p=%d motion in %d Newton iterations", N, p, iterations)
+    return orbit_from_unknowns(flow, N, p, u, sh)

@@ -1,0 +1,158 @@
+"""The branch of periodic N-p motions as a curve for the continuation core.
+
+``F(u, lam) = 0`` is the shooting system of :mod:`impactcont.orbit.multi_impact`
+(p flights with the exact flow of eq. 9, p impacts with the law of eq. 4) in
+``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]`` (2np unknowns) and one model
+parameter ``lam``. ``dF/du`` is exact; ``dF/dlam`` is exact for ``omega``, ``b``
+and ``R`` and a central difference (relative step 1e-6) for the damping
+parameters, where it only steers the predictor and Newton.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impactcont.errors import ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import (
+    MultiImpactOrbit,
+    Shooting,
+    check_impacts,
+    omega_partial,
+    orbit_from_unknowns,
+    shooting,
+)
+from impactcont.orbit.periodic import _check_N
+from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
+
+__all__ = ["MultiImpactBranchProblem"]
+
+_FD_STEP = 1e-6
+_CACHE_SIZE = 64
+
+
+class MultiImpactBranchProblem:
+    """The N-p shooting system as ``F(u, lam) = 0`` for :func:`impactcont.continuation`.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        The oscillator; its value of `parameter` is replaced by ``lam``.
+    N : int
+        Forcing periods of the motion.
+    p : int
+        Impacts per motion.
+    parameter : str
+        One of :data:`impactcont.problems.CONTINUABLE_PARAMETERS`.
+
+    Notes
+    -----
+    The shooting system at the last few ``(u, lam)`` is cached, so that the
+    residual, Jacobian and orbit of one point are computed from one shot.
+    """
+
+    def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str) -> None:
+        if not isinstance(osc, ImpactOscillator):
+            raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
+        if parameter not in CONTINUABLE_PARAMETERS:
+            raise ParameterError(f"parameter must be one of {CONTINUABLE_PARAMETERS}; "
+                                 f"got {parameter!r}")
+        if parameter in ("alpha", "beta") and osc.eta is not None:
+            raise ParameterError(f"parameter={parameter!r} needs Rayleigh damping; the "
+                                 f"oscillator uses eta={osc.eta!r}")
+        if parameter == "eta" and osc.eta is None:
+            raise ParameterError("parameter='eta' needs the paper's damping C = 2 eta K; the "
+                                 "oscillator uses Rayleigh damping (alpha, beta)")
+        self.osc = osc
+        self.N = _check_N(N)
+        self.p = check_impacts(p)
+        self.parameter = parameter
+        self.size = 2 * osc.n * self.p
+        self._flows: dict[float, Flow] = {}
+        self._shots: dict[tuple[bytes, float], Shooting] = {}
+
+    # -- the oscillator along the branch ------------------------------------------------------
+    def flow_at(self, lam: float) -> Flow:
+        """The flow of the oscillator with ``parameter = lam``."""
+        lam = float(lam)
+        flow = self._flows.get(lam)
+        if flow is None:
+            if len(self._flows) > _CACHE_SIZE:
+                self._flows.clear()
+            flow = self._flows[lam] = Flow(self.osc.replace(**{self.parameter: lam}))
+        return flow
+
+    def oscillator_at(self, lam: float) -> ImpactOscillator:
+        """The oscillator with ``parameter = lam``."""
+        return self.flow_at(lam).osc
+
+    def _shoot(self, u: np.ndarray, lam: float) -> Shooting:
+        u = np.asarray(u, dtype=float)
+        if u.shape != (self.size,):
+            raise ParameterError(f"u must have shape ({self.size},) = (2 n p,); got {u.shape}")
+        key = (u.tobytes(), float(lam))
+        sh = self._shots.get(key)
+        if sh is None:
+            if len(self._shots) > _CACHE_SIZE:
+                self._shots.clear()
+            sh = self._shots[key] = shooting(self.flow_at(lam), self.N, self.p, u)
+        return sh
+
+    # -- the Problem protocol ------------------------------------------------------------------
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``[r_0, .., r_{p-1}]``, ``r_k = D X_k^- - X_{k+1}``, shape (2np,)."""
+        return self._shoot(u, lam).residual.copy()
+
+    def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/du`` from the exact flow, shape (2np, 2np)."""
+        return self._shoot(u, lam).jacobian.copy()
+
+    def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/dlam``, shape (2np,)."""
+        sh = self._shoot(u, lam)
+        osc = self.oscillator_at(lam)
+        n, p, m = osc.n, self.p, 2 * osc.n
+        d = np.ones(m)
+        d[n] = -osc.R
+        out = np.zeros(p * m)
+        if self.parameter == "b":
+            for k in range(p):  # x1 = b at every start and at every arrival
+                out[k * m:(k + 1) * m] = d * sh.transitions[k][:, 0]
+                out[k * m] -= 1.0
+            return out
+        if self.parameter == "R":
+            out[n::m] = -sh.arrivals[:, n]
+            return out
+        if self.parameter == "omega":
+            flow = self.flow_at(lam)
+            period = 2.0 * math.pi * self.N / osc.omega
+            elapsed = 0.0
+            for k in range(p):
+                rows = slice(k * m, (k + 1) * m)
+                explicit = omega_partial(flow, float(sh.flight_times[k]), sh.starts[k],
+                                         float(sh.phases[k]))
+                # theta_k = delta + omega * (time elapsed since impact 0)
+                out[rows] = d * (explicit + elapsed * sh.phase_columns[k])
+                elapsed += float(sh.flight_times[k])
+            # tau_{p-1} = 2 pi N / omega - sum(others)
+            out[(p - 1) * m:] += d * sh.arrival_rates[p - 1] * (-period / osc.omega)
+            return out
+        return self._difference_quotient(u, lam)
+
+    def _difference_quotient(self, u: np.ndarray, lam: float) -> np.ndarray:
+        h = _FD_STEP * max(1.0, abs(lam))
+        lo, hi = max(lam - h, 0.0), lam + h
+        return (self.residual(u, hi) - self.residual(u, lo)) / (hi - lo)
+
+    # -- what the branch carries ----------------------------------------------------------------
+    def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
+        """The full N-p motion (states, G, multipliers, checks) at a branch point.
+
+        ``checks=False`` skips the interior-contact search (see
+        :func:`~impactcont.orbit.multi_impact.orbit_from_unknowns`).
+        """
+        return orbit_from_unknowns(self.flow_at(lam), self.N, self.p, np.asarray(u, float),
+                                   self._shoot(u, lam), checks=checks)
