@@ -1,0 +1,310 @@
+"""Figures of scene outputs: one drawing function per plot kind, and ``plot`` of a file.
+
+Every function reads datasets (never computes orbits, apart from evaluating
+the exact flow of eq. 9 along a stored periodic motion to draw it) and
+returns a :class:`matplotlib.figure.Figure` built without pyplot, so it
+works in any process, with any backend, and leaks no global figure state.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.flow import Flow
+
+__all__ = ["DEFAULT_KINDS", "draw_bifurcation", "draw_curves", "draw_map", "draw_multipliers",
+           "draw_orbits", "draw_robust", "draw_simulations", "plot_file", "save_figure"]
+
+log = logging.getLogger(__name__)
+
+_MAX_ROWS = 12
+
+
+def _option(plot: Any, name: str, default: Any) -> Any:
+    value = getattr(plot, name, None) if plot is not None else None
+    return default if value is None else value
+
+
+def _finish(fig: Figure, plot: Any, default_title: str) -> Figure:
+    fig.suptitle(_option(plot, "title", default_title), fontsize="medium")
+    return fig
+
+
+def draw_bifurcation(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Bifurcation diagram of branches (``plot.y``, default ``impact_velocity``)."""
+    from impactcont.plots import bifurcation_diagram
+
+    fig = Figure(figsize=(7.5, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    bifurcation_diagram(dict(datasets), y=_option(plot, "y", "impact_velocity"), ax=ax)
+    gaps = {json.loads(ds.attrs["oscillator"])["b"] for ds in datasets.values()
+            if ds.attrs.get("parameter") != "b"}
+    suffix = f" (b = {gaps.pop():g})" if len(gaps) == 1 else ""
+    return _finish(fig, plot, "Bifurcation diagram" + suffix)
+
+
+def draw_multipliers(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Multipliers along one branch."""
+    from impactcont.plots import multipliers_plot
+
+    name, ds = next(iter(datasets.items()))
+    fig = Figure(figsize=(11.0, 4.5), layout="constrained")
+    axes = fig.subplots(1, 2)
+    multipliers_plot(ds, ax=tuple(axes), yscale=_option(plot, "yscale", "linear"))
+    return _finish(fig, plot, f"Multipliers along {name}")
+
+
+def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Dataset, int]]:
+    rows = [(name, ds, k) for name, ds in datasets.items() for k in range(ds.sizes["orbit"])]
+    if len(rows) > _MAX_ROWS:
+        log.warning("orbits plot: drawing the first %d of %d orbits", _MAX_ROWS, len(rows))
+    return rows[:_MAX_ROWS]
+
+
+def _empty(fig: Figure, text: str) -> Figure:
+    ax = fig.add_subplot()
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes)
+    ax.set_axis_off()
+    return fig
+
+
+def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """x1(t) over one period and the phase portrait (x1, x1') of every stored orbit."""
+    rows = _orbit_rows(datasets)
+    fig = Figure(figsize=(10.0, 2.6 * max(len(rows), 1) + 0.6), layout="constrained")
+    if not rows:
+        return _finish(_empty(fig, "no periodic orbit in these entries"), plot, "Orbits")
+    axes = np.atleast_2d(fig.subplots(len(rows), 2, squeeze=False))
+    for (ax_t, ax_p), (name, ds, k) in zip(axes, rows, strict=True):
+        osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+        n = osc.n
+        T = float(ds["period"][k])
+        tau = np.linspace(0.0, T, 600)
+        X = Flow(osc).state(tau, np.asarray(ds["state"][k].values), float(ds["delta"][k]))
+        style = "-" if bool(ds["stable"][k]) else "--"
+        alpha = 1.0 if bool(ds["physical"][k]) else 0.4
+        ax_t.plot(tau, X[:, 0], style, color="C0", alpha=alpha)
+        ax_t.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+        ax_t.set_xlabel("t (since impact)")
+        ax_t.set_ylabel("x1")
+        ax_p.plot(X[:, 0], X[:, n], style, color="C0", alpha=alpha)
+        ax_p.plot([X[-1, 0], X[0, 0]], [X[-1, n], X[0, n]], color="C3", linewidth=0.8,
+                  label="impact")
+        ax_p.axvline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+        ax_p.set_xlabel("x1")
+        ax_p.set_ylabel("x1'")
+        verdict = ("stable" if bool(ds["stable"][k]) else "unstable") + \
+            ("" if bool(ds["physical"][k]) else ", not physical")
+        ax_t.set_title(f"{name}: N={int(ds.attrs['N'])}, root {int(ds['root'][k]):+d}, "
+                       f"omega={osc.omega:g}, b={osc.b:g} ({verdict})", fontsize="small")
+    axes[0, 1].legend(fontsize="small", loc="best")
+    return _finish(fig, plot, "Periodic impacting motions")
+
+
+def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Simulated trajectories (x1(t), phase portrait) or, without one, the impacts."""
+    items = list(datasets.items())[:_MAX_ROWS]
+    fig = Figure(figsize=(10.0, 2.8 * max(len(items), 1) + 0.6), layout="constrained")
+    if not items:
+        return _finish(_empty(fig, "no simulation"), plot, "Simulations")
+    axes = np.atleast_2d(fig.subplots(len(items), 2, squeeze=False))
+    for (ax_l, ax_r), (name, ds) in zip(axes, items, strict=True):
+        osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+        n = osc.n
+        if "X" in ds:
+            t = np.asarray(ds["t"].values)
+            X = np.asarray(ds["X"].values)
+            ax_l.plot(t, X[:, 0], linewidth=0.8)
+            ax_l.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+            ax_l.set_xlabel("t")
+            ax_l.set_ylabel("x1")
+            ax_r.plot(X[:, 0], X[:, n], linewidth=0.6)
+            ax_r.axvline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+            ax_r.set_xlabel("x1")
+            ax_r.set_ylabel("x1'")
+        else:
+            k = np.arange(ds.sizes["impact"])
+            ax_l.plot(k, ds["impact_phases"].values, ".", markersize=3)
+            ax_l.set_xlabel("impact number")
+            ax_l.set_ylabel("impact phase [rad]")
+            ax_r.plot(k, ds["impact_velocities"].values, ".", markersize=3)
+            ax_r.set_xlabel("impact number")
+            ax_r.set_ylabel("impact velocity")
+        ax_l.set_title(f"{name}: omega={osc.omega:g}, b={osc.b:g}, {ds.sizes['impact']} "
+                       f"impacts ({ds.attrs.get('status', '')})", fontsize="small")
+    return _finish(fig, plot, "Simulations")
+
+
+def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Gamma of eq. (28) of each robust-stability entry, with epsilon and epsilon0."""
+    items = list(datasets.items())[:_MAX_ROWS]
+    fig = Figure(figsize=(5.0 * max(len(items), 1), 4.4), layout="constrained")
+    if not items:
+        return _finish(_empty(fig, "no robust-stability entry"), plot, "Robust stability")
+    axes = np.atleast_1d(fig.subplots(1, len(items), squeeze=False)[0])
+    for ax, (name, ds) in zip(axes, items, strict=True):
+        gamma = np.asarray(ds["Gamma"].values, dtype=float)
+        im = ax.imshow(gamma, cmap="viridis", vmin=0.0, vmax=1.0)
+        labels = [str(v) for v in ds["g_row"].values]
+        ax.set_xticks(range(len(labels)), labels, rotation=45)
+        ax.set_yticks(range(len(labels)), labels)
+        for (i, j), v in np.ndenumerate(gamma):
+            ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize="x-small",
+                    color="white" if v < 0.6 else "black")
+        verdict = "robustly stable" if bool(ds["robust"]) else "not established"
+        ax.set_title(f"{name}: epsilon = {float(ds['epsilon']):.4g}, epsilon0 = "
+                     f"{float(ds['epsilon0']):.4g}\n{verdict}", fontsize="small")
+        fig.colorbar(im, ax=ax, label="Gamma")
+    return _finish(fig, plot, "Robust stability: perturbation pattern Gamma (eq. 28)")
+
+
+def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Codim-1 curves in their parameter plane; dashed where no stable motion changes."""
+    fig = Figure(figsize=(7.5, 5.5), layout="constrained")
+    ax = fig.add_subplot()
+    p1 = p2 = ""
+    for k, (name, ds) in enumerate(datasets.items()):
+        p1, p2 = str(ds.attrs["parameters"]).split(",")
+        x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
+        observable = np.asarray(ds["stable_side"].values, dtype=bool)
+        color = f"C{k % 10}"
+        ax.plot(x, y, color=color, linewidth=0.8, linestyle=":", alpha=0.6)
+        ax.plot(np.where(observable, x, np.nan), np.where(observable, y, np.nan),
+                color=color, linewidth=1.8, label=f"{name} ({ds.attrs['kind']}, "
+                                                   f"N={int(ds.attrs['N'])})")
+        for j in range(ds.sizes.get("codim2", 0)):
+            cx, cy = float(ds[f"codim2_{p1}"].values[j]), float(ds[f"codim2_{p2}"].values[j])
+            ax.plot(cx, cy, "o", markerfacecolor="white", markeredgecolor="black", zorder=3)
+            ax.annotate(str(ds["codim2_label"].values[j]), (cx, cy), xytext=(4, 4),
+                        textcoords="offset points", fontsize="x-small")
+    ax.set_xlabel(p1)
+    ax.set_ylabel(p2)
+    ax.legend(fontsize="small", loc="best")
+    return _finish(fig, plot, "Codim-1 curves (solid: a stable motion changes across)")
+
+
+def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Number of stable physical N-1 motions on the (omega, b) grid, one panel per N."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    name, ds = next(iter(datasets.items()))
+    Ns = [int(N) for N in np.asarray(ds["N"].values)]
+    cols = min(len(Ns), 2)
+    rows = -(-len(Ns) // cols)
+    fig = Figure(figsize=(5.2 * cols, 4.2 * rows), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
+    w, b = np.asarray(ds["omega"].values), np.asarray(ds["b"].values)
+    cmap = ListedColormap(["0.92", "tab:blue", "tab:orange"])
+    norm = BoundaryNorm([-0.5, 0.5, 1.5, 2.5], cmap.N)
+    mesh = None
+    for ax, N in zip(axes, Ns, strict=False):
+        n_stable = np.asarray(ds["n_stable"].sel(N=N).values, dtype=float)
+        exists = np.asarray(ds["exists"].sel(N=N).values, dtype=bool)
+        mesh = ax.pcolormesh(w, b, n_stable.T, cmap=cmap, norm=norm, shading="nearest")
+        ax.contour(w, b, exists.T.astype(float), levels=[0.5], colors="0.3",
+                   linewidths=0.8)
+        ax.set_title(f"N = {N}", fontsize="small")
+        ax.set_xlabel("omega")
+        ax.set_ylabel("b")
+    for ax in axes[len(Ns):]:
+        ax.set_axis_off()
+    if mesh is not None:
+        fig.colorbar(mesh, ax=list(axes[:len(Ns)]), ticks=[0, 1, 2],
+                     label="stable physical motions")
+    return _finish(fig, plot, f"{name}: stable N-1 motions (line: existence boundary)")
+
+
+#: The plot kind ``impactcont plot`` draws by default for each kind of file.
+DEFAULT_KINDS = {"branches": "bifurcation_diagram", "orbits": "orbits",
+                 "simulations": "simulation", "robust": "robust", "curves": "curves",
+                 "maps": "map"}
+
+
+class _Options:
+    def __init__(self, **kw: Any) -> None:
+        self.__dict__.update(kw)
+
+
+def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, *,
+              kind: str | None = None, y: str | None = None, dpi: int = 150) -> list[Path]:
+    """Draw the contents of a NetCDF file written by a scene run (or :func:`impactcont.save`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    output : str or os.PathLike, optional
+        PNG to write; default the file name with ``.png``. When branches
+        continued in different parameters are drawn, one PNG per parameter is
+        written, the parameter added to the name.
+    kind : str, optional
+        A plot kind that reads this file's section; default the section's
+        first (e.g. ``bifurcation_diagram`` for branches).
+    y : str, optional
+        Variable on the vertical axis of a bifurcation diagram.
+    dpi : int
+        Resolution.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG files written.
+
+    Raises
+    ------
+    ValueError
+        The file is not an impactcont file, or ``kind`` does not read it.
+    """
+    from impactcont.scene.files import read_output
+    from impactcont.scene.sections import plot_kinds
+
+    out = read_output(path)
+    kinds = {k: v for k, v in plot_kinds().items() if v.section == out.kind}
+    if not kinds:
+        raise ValueError(f"no plot kind draws {out.kind!r} files")
+    chosen = kind or DEFAULT_KINDS.get(out.kind, next(iter(kinds)))
+    if chosen not in kinds:
+        raise ValueError(f"kind {chosen!r} does not draw {out.kind!r} files; allowed: "
+                         f"{', '.join(kinds)}")
+    draw = kinds[chosen].load_draw()
+    target = Path(output) if output is not None else out.path.with_suffix(".png")
+    groups: list[tuple[str, dict[str, xr.Dataset]]]
+    if out.kind == "branches" and chosen == "bifurcation_diagram":
+        by_parameter: dict[str, dict[str, xr.Dataset]] = {}
+        for name, ds in out.datasets.items():
+            by_parameter.setdefault(ds.attrs["parameter"], {})[name] = ds
+        groups = list(by_parameter.items())
+    elif not kinds[chosen].many:
+        groups = [(name, {name: ds}) for name, ds in out.datasets.items()]
+    else:
+        groups = [("", dict(out.datasets))]
+    written = []
+    for suffix, datasets in groups:
+        png = target if len(groups) == 1 else target.with_name(
+            f"{target.stem}_{suffix}{target.suffix}")
+        fig = draw(datasets, _Options(y=y, title=None, yscale=None))
+        written.append(save_figure(fig, png, dpi))
+        log.info("wrote %s", png)
+    return written
+
+
+def save_figure(fig: Figure, path: Path, dpi: int) -> Path:
+    """Write a figure to PNG atomically (temporary file + :func:`os.replace`)."""
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    try:
+        fig.savefig(tmp, dpi=dpi)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+

@@ -1,0 +1,136 @@
+"""The NetCDF files a scene run writes, and reading them back.
+
+Every section of a scene is written to ``<section>.nc``: a DataTree whose
+root group holds only attributes and which has one group per entry (named
+after the entry). The root attributes:
+
+``title``, ``impactcont_kind`` (the section, e.g. ``"branches"``),
+``impactcont_version``, ``Conventions``, ``history``, ``scene`` (the
+resolved scene as JSON: defaults filled in, ``--set`` overrides applied) and
+``scene_file``.
+
+``branches.nc`` can be read with :func:`impactcont.load` (every group is a
+branch dataset of ``docs/dataset.md``); the other files with
+:func:`read_output` or ``xarray.open_datatree(path, auto_complex=True)``.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import xarray as xr
+
+from impactcont.dataset import load, save
+from impactcont.dataset.schema import CONVENTIONS, validate_branch_dataset
+
+__all__ = ["KIND_ATTRIBUTE", "SceneOutput", "read_output", "write_output"]
+
+#: Root attribute naming the section a file holds.
+KIND_ATTRIBUTE = "impactcont_kind"
+
+
+def _version() -> str:
+    from impactcont import __version__
+
+    return __version__
+
+
+def write_output(path: str | os.PathLike, kind: str, datasets: Mapping[str, xr.Dataset], *,
+                 title: str, scene_json: str = "", scene_file: str = "") -> Path:
+    """Write the datasets of one section to a NetCDF file, one group per entry, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file (its directory must exist).
+    kind : str
+        The section (stored in the ``impactcont_kind`` attribute).
+    datasets : mapping of str to xarray.Dataset
+        ``entry name -> dataset``.
+    title : str
+        Title of the file.
+    scene_json, scene_file : str
+        The resolved scene as JSON and the scene file it came from.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    stamp = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    root = xr.Dataset(attrs={
+        "title": title, KIND_ATTRIBUTE: kind, "impactcont_version": _version(),
+        "Conventions": CONVENTIONS, "history": f"{stamp} written by impactcont run",
+        "scene": scene_json, "scene_file": scene_file})
+    tree = xr.DataTree.from_dict({"/": root, **{f"/{k}": v for k, v in datasets.items()}})
+    # Branch groups follow the branch schema and are checked as such; the other
+    # sections have their own layouts (see impactcont.scene.tasks).
+    return save(tree, path, validate=kind == "branches")
+
+
+class SceneOutput:
+    """A file read by :func:`read_output`.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+    kind : str
+        The section: ``"branches"``, ``"orbits"``, ... (``"branches"`` for a
+        file of :func:`impactcont.save`).
+    attrs : dict
+        Root attributes.
+    datasets : dict of str to xarray.Dataset
+        ``entry name -> dataset``, in file order.
+    """
+
+    def __init__(self, path: Path, kind: str, attrs: dict[str, Any],
+                 datasets: dict[str, xr.Dataset]) -> None:
+        self.path = path
+        self.kind = kind
+        self.attrs = attrs
+        self.datasets = datasets
+
+    def __repr__(self) -> str:
+        return f"SceneOutput({str(self.path)!r}, kind={self.kind!r}, " \
+               f"entries={list(self.datasets)})"
+
+
+def read_output(path: str | os.PathLike) -> SceneOutput:
+    """Read a file written by a scene run (or by :func:`impactcont.save`).
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    ValueError
+        ``path`` is not a NetCDF file of impactcont.
+    """
+    p = Path(path)
+    data = load(p, validate=False)
+    if isinstance(data, xr.Dataset):
+        attrs = dict(data.attrs)
+        datasets = {p.stem: data}
+    else:
+        attrs = dict(data.attrs)
+        datasets = {node.name or p.stem: node.to_dataset(inherit=False)
+                    for node in data.subtree if node.has_data}
+    kind = attrs.get(KIND_ATTRIBUTE)
+    if kind is None:
+        # a file of impactcont.save: two-parameter datasets say what they are
+        tags = {ds.attrs.get("impactcont_dataset") for ds in datasets.values()}
+        kind = {frozenset({"curve"}): "curves", frozenset({"map"}): "maps"}.get(
+            frozenset(tags))
+    if kind is None:
+        try:
+            for ds in datasets.values():
+                validate_branch_dataset(ds)
+        except ValueError as exc:
+            raise ValueError(f"{str(path)!r} is not a file written by impactcont "
+                             f"(no {KIND_ATTRIBUTE!r} attribute, and {exc})") from None
+        kind = "branches"
+    if not datasets and kind == "branches":
+        raise ValueError(f"{str(path)!r} holds no data")
+    return SceneOutput(p, str(kind), attrs, datasets)

@@ -1,0 +1,393 @@
+"""What each built-in scene section computes, as datasets, and how they are described.
+
+One handler per section (see :mod:`impactcont.scene.sections`): ``compute``
+turns one validated entry into an :class:`xarray.Dataset` with the public
+API (:func:`~impactcont.periodic_orbits`, :func:`~impactcont.continuation`,
+:func:`~impactcont.robust_stability`, :func:`~impactcont.simulate`);
+``describe`` writes Markdown tables from datasets (used by ``summary.md``
+and ``impactcont info``). Only what an entry asks for is computed: no
+trajectory unless ``trajectory = true``, no robust pass unless a
+``[[robust]]`` table exists.
+
+Layouts (every variable has ``long_name``, ``units`` and ``description``):
+
+* orbits: dims ``orbit``, ``multiplier``, ``component``, ``g_row``/``g_col``
+  (the coordinates of ``z`` of eq. 19);
+* branches: the branch schema of ``docs/dataset.md``;
+* robust: ``G0``, ``P``, ``theta``, ``Gamma`` on ``(g_row, g_col)`` and the
+  scalars ``epsilon``, ``epsilon0``, ``robust``;
+* simulations: dims ``impact``, ``component`` and, with a trajectory, ``sample``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.branch import continuation
+from impactcont.dataset import special_variable, state_component_names
+from impactcont.errors import NoPeriodicMotionError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.periodic import PeriodicOrbit, amplitude_squared, periodic_orbits
+from impactcont.orbit.robust import robust_stability
+from impactcont.scene.schema import BranchSpec, OrbitSpec, RobustSpec, SimulationSpec
+from impactcont.simulate import simulate
+
+__all__ = ["BRANCHES", "ORBITS", "ROBUST", "SIMULATIONS", "g_labels", "points_table",
+           "special_points_table"]
+
+log = logging.getLogger(__name__)
+
+
+def g_labels(n: int) -> list[str]:
+    """Names of the coordinates of ``z`` (eq. 19): ``dx2..dxn, dv1..dvn, ddelta``."""
+    return [f"dx{i}" for i in range(2, n + 1)] + [f"dv{i}" for i in range(1, n + 1)] + \
+        ["ddelta"]
+
+
+def _attrs(long_name: str, description: str, units: str = "1") -> dict[str, str]:
+    return {"long_name": long_name, "units": units, "description": description}
+
+
+def _coords(n: int) -> dict[str, Any]:
+    labels = g_labels(n)
+    return {"component": state_component_names(n), "g_row": labels, "g_col": labels}
+
+
+def _var(dims: tuple[str, ...], data: Any, long_name: str, description: str,
+         units: str = "1") -> xr.Variable:
+    return xr.Variable(dims, data, attrs=_attrs(long_name, description, units))
+
+
+def _fmt(x: Any, digits: int = 6) -> str:
+    if isinstance(x, (bool, np.bool_)):
+        return "yes" if x else "no"
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    x = float(x)
+    if math.isnan(x):
+        return "-"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return f"{x:.{digits}g}"
+
+
+def _table(header: list[str], rows: list[list[Any]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(c if isinstance(c, str) else _fmt(c) for c in row) + " |"
+            for row in rows]
+    return out
+
+
+def _changes_text(osc_json: str) -> str:
+    osc = json.loads(osc_json)
+    return f"omega={_fmt(osc['omega'])}, b={_fmt(osc['b'])}"
+
+
+# ---------------------------------------------------------------------------------------------
+# [[orbits]]
+# ---------------------------------------------------------------------------------------------
+class Orbits:
+    """``[[orbits]]``: every root of eq. (15) at one parameter point."""
+
+    def compute(self, entry: OrbitSpec, context: Any = None) -> xr.Dataset:
+        osc = entry.oscillator
+        orbits = periodic_orbits(osc, entry.N)
+        if entry.which == "physical":
+            orbits = [o for o in orbits if o.physical]
+        elif entry.which == "stable":
+            orbits = [o for o in orbits if o.physical and o.stable]
+        ds = orbits_dataset(orbits, osc, entry.N)
+        ds.attrs.update(name=entry.name, which=entry.which,
+                        amplitude_squared=amplitude_squared(osc, entry.N))
+        log.info("orbits %s: %d root(s) of eq. (15) with N=%d at %s", entry.name,
+                 len(orbits), entry.N, _changes_text(osc.to_json()))
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        rows = []
+        for name, ds in datasets.items():
+            where = _changes_text(ds.attrs["oscillator"])
+            amplitude = float(ds.attrs.get("amplitude_squared", math.nan))
+            if ds.sizes["orbit"] == 0:
+                rows.append([name, ds.attrs["N"], where, amplitude, "-", "-", "-", "-", "-",
+                             "-", "-", f"no motion kept (which = {ds.attrs.get('which')})"])
+                continue
+            for k in range(ds.sizes["orbit"]):
+                rows.append([name, ds.attrs["N"], where, amplitude, f"{int(ds['root'][k]):+d}",
+                             float(ds["delta"][k]), float(ds["impact_velocity"][k]),
+                             float(ds["gap_min"][k]), float(ds["spectral_radius"][k]),
+                             bool(ds["stable"][k]), bool(ds["physical"][k]),
+                             str(ds["reason"].values[k]) or "-"])
+        return _table(["entry", "N", "at", "c^2+s^2", "root", "delta", "impact velocity",
+                       "gap_min",
+                       "rho(G)", "stable", "physical", "note"], rows)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        return []
+
+
+def orbits_dataset(orbits: list[PeriodicOrbit], osc: ImpactOscillator, N: int) -> xr.Dataset:
+    """Dataset of periodic orbits (dimension ``orbit``), as written to ``orbits.nc``."""
+    n = osc.n
+    k = len(orbits)
+
+    def col(attr: str, dtype: Any = float) -> np.ndarray:
+        return np.array([getattr(o, attr) for o in orbits], dtype=dtype).reshape(k)
+
+    data = {
+        "root": _var(("orbit",), col("root", np.int64), "root of eq. (15)",
+                     "Sign in front of the square root of eq. (15)."),
+        "delta": _var(("orbit",), col("delta"), "impact phase",
+                      "Forcing phase at the impact, in (-pi, pi] (eq. 15).", "rad"),
+        "period": _var(("orbit",), col("period"), "period", "T = 2 pi N / omega."),
+        "impact_velocity": _var(("orbit",), col("impact_velocity"), "impact velocity",
+                                "x1'(T-), velocity of mass 1 just before the impact (h2)."),
+        "gap_min": _var(("orbit",), col("gap_min"), "smallest interior gap",
+                        "Smallest b - x1 at interior maxima of x1 (eq. 16); +inf if none."),
+        "spectral_radius": _var(("orbit",), col("spectral_radius"), "spectral radius",
+                                "rho(G), largest multiplier modulus."),
+        "stable": _var(("orbit",), col("stable", bool), "stable",
+                       "rho(G) < 1 (Theorem 3.1)."),
+        "physical": _var(("orbit",), col("physical", bool), "physical",
+                         "impact_velocity > 0 and gap_min > 0 (eq. 16)."),
+        "reason": _var(("orbit",), np.array([o.reason for o in orbits], dtype=object)
+                       if k else np.array([], dtype=str), "why not physical",
+                       "Empty when the motion is physical."),
+        "multipliers": _var(("orbit", "multiplier"),
+                            np.array([o.multipliers for o in orbits], dtype=complex)
+                            .reshape(k, 2 * n), "Floquet multipliers",
+                            "Eigenvalues of G (eq. 25), largest modulus first."),
+        "state": _var(("orbit", "component"),
+                      np.array([o.state for o in orbits], dtype=float).reshape(k, 2 * n),
+                      "state after impact", "X(0) right after the impact (eq. 13)."),
+        "G": _var(("orbit", "g_row", "g_col"),
+                  np.array([o.G for o in orbits], dtype=float).reshape(k, 2 * n, 2 * n),
+                  "impact-map Jacobian", "G of eq. (25) in z = [dx2..dxn, dv1..dvn, ddelta]."),
+    }
+    return xr.Dataset(data, coords=_coords(n),
+                      attrs={"title": f"Periodic N-1 motions, N = {N}", "N": N,
+                             "oscillator": osc.to_json()})
+
+
+ORBITS = Orbits()
+
+
+# ---------------------------------------------------------------------------------------------
+# [[branches]]
+# ---------------------------------------------------------------------------------------------
+class Branches:
+    """``[[branches]]``: :func:`impactcont.continuation` of one branch."""
+
+    def compute(self, entry: BranchSpec, context: Any = None) -> xr.Dataset:
+        t0 = time.perf_counter()
+        ds = continuation(entry.oscillator, **entry.continuation_kwargs())
+        ds.attrs["name"] = entry.name
+        log.info("branch %s: N=%d in %s, %d points, %d special point(s) (%.1f s)", entry.name,
+                 entry.N, entry.parameter, ds.sizes["point"], ds.sizes["special"],
+                 time.perf_counter() - t0)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        rows = []
+        for name, ds in datasets.items():
+            p = ds.attrs["parameter"]
+            x = np.asarray(ds[p].values, dtype=float)
+            stable = np.asarray(ds["stable"].values, bool) & np.asarray(ds["physical"].values,
+                                                                        bool)
+            options = json.loads(ds.attrs.get("options", "{}"))
+            rows.append([name, int(ds.attrs["N"]), p,
+                         f"[{_fmt(x.min())}, {_fmt(x.max())}]" if x.size else "-",
+                         int(x.size), int(np.count_nonzero(np.asarray(ds["physical"].values,
+                                                                      bool))),
+                         int(np.count_nonzero(stable)), int(ds.sizes["special"]),
+                         str(options.get("message", "-")).replace("|", "/")])
+        return _table(["branch", "N", "parameter", "range", "points", "physical", "stable",
+                       "special points", "stop"], rows)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        out = []
+        for name, ds in datasets.items():
+            p = ds.attrs["parameter"]
+            physical = np.asarray(ds["physical"].values, dtype=bool)
+            for k in range(ds.sizes["special"]):
+                mult = np.asarray(ds[special_variable("multipliers")].values[k])
+                nearest = int(ds[special_variable("point")].values[k])
+                out.append({
+                    "branch": name, "N": int(ds.attrs["N"]), "parameter": p,
+                    "label": str(ds[special_variable("label")].values[k]),
+                    "value": float(ds[special_variable(p)].values[k]),
+                    "omega": float(ds[special_variable("omega")].values[k]),
+                    "b": float(ds[special_variable("b")].values[k]),
+                    "delta": float(ds[special_variable("delta")].values[k]),
+                    "status": str(ds[special_variable("status")].values[k]),
+                    "precision": float(ds[special_variable("precision")].values[k]),
+                    "rho": float(np.max(np.abs(mult))) if mult.size else math.nan,
+                    "physical": bool(physical[nearest]) if 0 <= nearest < physical.size
+                    else False,
+                })
+        return out
+
+
+BRANCHES = Branches()
+
+
+def special_points_table(points: list[dict[str, Any]]) -> list[str]:
+    """Markdown table of special points (rows from :meth:`Branches.special_points`)."""
+    rows = [[p["branch"], p["N"], p["label"], f"{p['parameter']} = {_fmt(p['value'], 8)}",
+             p["omega"], p["b"], p["delta"], p["rho"], p["physical"], p["status"],
+             p["precision"]] for p in points]
+    return _table(["branch", "N", "label", "at", "omega", "b", "delta", "rho(G)",
+                   "physical", "status", "precision"], rows)
+
+
+# ---------------------------------------------------------------------------------------------
+# [[robust]]
+# ---------------------------------------------------------------------------------------------
+class Robust:
+    """``[[robust]]``: :func:`impactcont.robust_stability` over a box."""
+
+    def compute(self, entry: RobustSpec, context: Any = None) -> xr.Dataset:
+        rs = robust_stability(entry.oscillator, entry.N, vary=entry.vary, nominal=entry.nominal,
+                              root=entry.root, samples=entry.samples)
+        n = entry.oscillator.n
+        shape = (2 * n, 2 * n)
+        P = rs.P if rs.P is not None else np.full(shape, np.nan)
+        g = ("g_row", "g_col")
+        data = {
+            "G0": _var(g, rs.G0, "G at the nominal point", "G0 = G(q0) (eq. 25, 26)."),
+            "P": _var(g, P, "Lyapunov matrix", "G0^T P G0 - P = -I (eq. 27); NaN if G0 is "
+                      "not Schur stable."),
+            "theta": _var(g, rs.theta, "largest perturbation",
+                          "theta_ij = max over the box of |G_ij - G0_ij| (eq. 28)."),
+            "grid_theta": _var(g, rs.grid_theta, "largest perturbation on the grid",
+                               "The maxima over the sampled grid alone."),
+            "Gamma": _var(g, rs.Gamma, "perturbation pattern",
+                          "Gamma = theta / epsilon (eq. 28)."),
+            "epsilon": _var((), rs.epsilon, "perturbation size", "max theta_ij (eq. 28)."),
+            "epsilon0": _var((), rs.epsilon0, "robust bound",
+                             "epsilon^0 of eq. (29); NaN if G0 is not Schur stable."),
+            "robust": _var((), bool(rs.robust), "robustly stable",
+                           "G0 Schur stable and epsilon < epsilon0 (Theorem 3.2)."),
+            "spectral_radius": _var((), rs.orbit.spectral_radius, "spectral radius of G0",
+                                    "rho(G0)."),
+            "delta": _var((), rs.orbit.delta, "impact phase at q0", "Eq. (15).", "rad"),
+            "state": _var(("component",), rs.orbit.state, "state after impact at q0",
+                          "X(0) of eq. (13) at the nominal point."),
+            "multipliers": _var(("multiplier",), rs.orbit.multipliers, "multipliers of G0",
+                                "Eigenvalues of G0, largest modulus first."),
+        }
+        argmax = {f"{i},{j}": q for (i, j), q in rs.argmax.items()}
+        ds = xr.Dataset(data, coords=_coords(n), attrs={
+            "title": f"Robust stability of the N={entry.N} motion", "name": entry.name,
+            "N": entry.N, "root": rs.root, "samples": rs.samples,
+            "evaluations": rs.evaluations, "vary": json.dumps(rs.vary),
+            "nominal": json.dumps(rs.nominal), "argmax": json.dumps(argmax),
+            "message": rs.message, "oscillator": rs.orbit.oscillator.to_json()})
+        log.info("robust %s: %s", entry.name, rs.message)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        rows = []
+        for name, ds in datasets.items():
+            vary = json.loads(ds.attrs["vary"])
+            nominal = json.loads(ds.attrs["nominal"])
+            box = ", ".join(f"{k} in [{_fmt(lo)}, {_fmt(hi)}]" for k, (lo, hi) in vary.items())
+            q0 = ", ".join(f"{k} = {_fmt(v)}" for k, v in nominal.items())
+            rows.append([name, int(ds.attrs["N"]), box, q0, float(ds["spectral_radius"]),
+                         float(ds["epsilon"]), float(ds["epsilon0"]), bool(ds["robust"])])
+        return _table(["entry", "N", "box", "nominal", "rho(G0)", "epsilon", "epsilon0",
+                       "robustly stable"], rows)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        return []
+
+
+ROBUST = Robust()
+
+
+# ---------------------------------------------------------------------------------------------
+# [[simulations]]
+# ---------------------------------------------------------------------------------------------
+class Simulations:
+    """``[[simulations]]``: :func:`impactcont.simulate` from an orbit or a given state."""
+
+    def compute(self, entry: SimulationSpec, context: Any = None) -> xr.Dataset:
+        osc = entry.oscillator
+        n = osc.n
+        if entry.start == "state":
+            state, delta = np.array(entry.state, dtype=float), float(entry.delta)
+            start = "state"
+        else:
+            orbits = periodic_orbits(osc, entry.N)
+            if entry.root is not None:
+                orbits = [o for o in orbits if o.root == entry.root]
+            if not orbits:
+                raise NoPeriodicMotionError(
+                    f"simulation {entry.name}: no N={entry.N} motion"
+                    f"{'' if entry.root is None else f' with root {entry.root:+d}'} at "
+                    f"{_changes_text(osc.to_json())} to start from")
+            orbit = sorted(orbits, key=lambda o: (not o.physical, not o.stable))[0]
+            state, delta = orbit.state.copy(), orbit.delta
+            start = f"N={entry.N} motion, root {orbit.root:+d}"
+        state[n:] += entry.perturbation
+        res = simulate(osc, state, delta, entry.periods, trajectory=entry.trajectory,
+                       samples_per_period=entry.samples_per_period,
+                       max_impacts=entry.max_impacts)
+        data = {
+            "impact_times": _var(("impact",), res.impact_times, "impact time",
+                                 "Time of each impact since the start."),
+            "impact_velocities": _var(("impact",), res.impact_velocities, "impact velocity",
+                                      "Velocity of mass 1 just before each impact."),
+            "impact_phases": _var(("impact",), res.impact_phases, "impact phase",
+                                  "Forcing phase at each impact, in (-pi, pi].", "rad"),
+            "impact_states": _var(("impact", "component"),
+                                  res.impact_states.reshape(-1, 2 * n), "state after impact",
+                                  "State right after each impact."),
+            "start_state": _var(("component",), state, "start state",
+                                "State at t = 0 (perturbation included)."),
+        }
+        if entry.trajectory and res.t is not None:
+            data["t"] = _var(("sample",), res.t, "time", "Trajectory sample times.")
+            data["X"] = _var(("sample", "component"), res.X, "state",
+                             "Sampled state (both sides of each impact).")
+        ds = xr.Dataset(data, coords={"component": state_component_names(n)}, attrs={
+            "title": f"Simulation {entry.name}", "name": entry.name, "start": start,
+            "start_delta": delta, "periods": entry.periods, "perturbation": entry.perturbation,
+            "status": res.status.name, "message": res.message,
+            "final_time": res.final_time, "oscillator": osc.to_json()})
+        log.info("simulation %s: %d impacts in %g periods (%s)", entry.name,
+                 res.impact_times.size, entry.periods, res.status.name)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        rows = []
+        for name, ds in datasets.items():
+            v = np.asarray(ds["impact_velocities"].values)
+            rows.append([name, _changes_text(ds.attrs["oscillator"]), str(ds.attrs["start"]),
+                         float(ds.attrs["periods"]), int(ds.sizes["impact"]),
+                         float(v[-1]) if v.size else math.nan,
+                         "yes" if "X" in ds else "no", str(ds.attrs["status"])])
+        return _table(["entry", "at", "start", "periods", "impacts", "last impact velocity",
+                       "trajectory", "status"], rows)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        return []
+
+
+SIMULATIONS = Simulations()
+
+
+def points_table(points: list[dict[str, Any]]) -> list[str]:
+    """Markdown table of points given as dicts (columns: the keys of the first one)."""
+    if not points:
+        return []
+    header = list(points[0])
+    return _table(header, [[p.get(k, "-") for k in header] for p in points])

@@ -1,0 +1,314 @@
+"""Scene sections for two-parameter studies: ``[[curves]]`` and ``[[maps]]``.
+
+``[[curves]]`` continues a codim-1 curve (SN, PD, NS, GR or ZV) in two
+parameters with :func:`impactcont.curves.curve`, started from a special point
+of a computed ``[[branches]]`` entry, from explicit values, or from a
+one-parameter continuation; ``[[maps]]`` evaluates the existence,
+physicality and stability of every N-1 motion on an ``(omega, b)`` grid with
+:func:`impactcont.maps.stability_map`. Both datasets follow
+:mod:`impactcont.dataset.curves` (``docs/two_parameter.md``). The sections are
+registered by :mod:`impactcont.scene.sections` when those modules exist.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import json
+import logging
+import time
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+import xarray as xr
+
+from impactcont.errors import ImpactcontError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.scene.keys import (
+    NAME_ALLOWED,
+    NAME_PATTERN,
+    Boolean,
+    Integer,
+    Interval,
+    Real,
+    String,
+    ValueType,
+    Where,
+    declare,
+    show,
+)
+from impactcont.scene.schema import PARAMETER_RANGES, EntrySpec
+
+__all__ = ["CURVES", "MAPS", "CurveSpec", "MapSpec", "check_curves_plot"]
+
+log = logging.getLogger(__name__)
+
+_CURVE_KINDS = ("SN", "PD", "NS", "GR", "ZV")
+
+
+def _defaults(func_path: str) -> dict[str, Any]:
+    module, _, name = func_path.partition(":")
+    func = getattr(__import__(module, fromlist=[name]), name)
+    return {k: p.default for k, p in inspect.signature(func).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+
+
+_CURVE = _defaults("impactcont.curves:curve")
+
+
+class _ParameterPair(ValueType):
+    allowed = ("a pair of distinct parameter names [p1, p2] from " +
+               ", ".join(json.dumps(p) for p in PARAMETER_RANGES))
+
+    def check(self, value: Any, where: Where) -> tuple[str, str]:
+        if (not isinstance(value, list) or len(value) != 2
+                or not all(isinstance(v, str) and v in PARAMETER_RANGES for v in value)
+                or value[0] == value[1]):
+            raise self.fail(value, where, "not a pair of distinct parameters")
+        return value[0], value[1]
+
+
+class _Bounds(ValueType):
+    allowed = "a table {p1 = [lo, hi], p2 = [lo, hi]} for the two parameters"
+
+    def check(self, value: Any, where: Where) -> dict[str, tuple[float, float]]:
+        if not isinstance(value, dict) or not value:
+            raise self.fail(value, where, "wrong type or empty")
+        out = {}
+        for name, interval in value.items():
+            if name not in PARAMETER_RANGES:
+                raise where.key(name).error(f"unknown parameter {name!r}",
+                                            ", ".join(PARAMETER_RANGES))
+            out[name] = Interval(PARAMETER_RANGES[name]).check(interval, where.key(name))
+        return out
+
+
+class _Start(ValueType):
+    allowed = (f"the name of a [[branches]] entry ({NAME_ALLOWED}), or a table "
+               "{p1 = value, p2 = value, delta = value} (delta optional)")
+
+    def check(self, value: Any, where: Where) -> str | dict[str, float]:
+        if isinstance(value, str):
+            return String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED).check(value, where)
+        if isinstance(value, dict) and value:
+            return {k: Real().check(v, where.key(k)) for k, v in value.items()}
+        raise self.fail(value, where, "wrong type")
+
+
+class _NList(ValueType):
+    allowed = "an integer >= 1 or an array of distinct integers >= 1"
+
+    def check(self, value: Any, where: Where) -> tuple[int, ...]:
+        items = value if isinstance(value, list) else [value]
+        if not items or any(isinstance(v, bool) or not isinstance(v, int) or v < 1
+                            for v in items) or len(set(items)) != len(items):
+            raise self.fail(value, where, "invalid")
+        return tuple(int(v) for v in items)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class CurveSpec(EntrySpec):
+    """``[[curves]]``: a codim-1 curve of N-1 motions in two parameters."""
+
+    section: ClassVar[str] = "curves"
+
+    kind: str = declare(String(_CURVE_KINDS), "the curve: SN, PD, NS, GR or ZV", required=True)
+    N: int | None = declare(Integer(1, 1000), "one impact every N forcing periods (default: "
+                            "the start branch's, else 1)")
+    parameters: tuple[str, str] = declare(_ParameterPair(), "the two parameters [p1, p2]",
+                                          ("omega", "b"))
+    bounds: Mapping[str, tuple[float, float]] = declare(
+        _Bounds(), "the box of the two parameters", required=True)
+    start: str | Mapping[str, float] | None = declare(
+        _Start(), "a [[branches]] entry, or values {p1, p2, delta}; default: found by a "
+        "one-parameter continuation in p1")
+    special: int | None = declare(Integer(0), "which special point of the kind on the start")
+    root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to start on")
+    ds: float = declare(Real(0.0, low_open=True), "initial arclength step", _CURVE["ds"])
+    ds_min: float = declare(Real(0.0, low_open=True), "smallest step", _CURVE["ds_min"])
+    ds_max: float = declare(Real(0.0, low_open=True), "largest step", _CURVE["ds_max"])
+    newton_tol: float = declare(Real(0.0, low_open=True), "Newton tolerance",
+                                _CURVE["newton_tol"])
+    max_points: int = declare(Integer(2, 10_000_000), "largest number of points per direction",
+                              _CURVE["max_points"])
+    both_directions: bool = declare(Boolean(), "continue both ways from the start",
+                                    _CURVE["both_directions"])
+    codim2: bool = declare(Boolean(), "detect and locate codimension-two points",
+                           _CURVE["detect_codim2_points"])
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        if set(self.bounds) != set(self.parameters):
+            raise where.key("bounds").error(
+                f"gives {sorted(self.bounds)} for parameters {list(self.parameters)}",
+                f"exactly the two parameters {list(self.parameters)}")
+        if isinstance(self.start, dict):
+            allowed = {*self.parameters, "delta"}
+            extra = sorted(set(self.start) - allowed)
+            missing = [p for p in self.parameters if p not in self.start]
+            if extra or missing:
+                raise where.key("start").error(
+                    f"{show(self.start)} " + (f"has unknown {extra}" if extra
+                                              else f"lacks {missing}"),
+                    f"values of {', '.join(sorted(allowed))} (delta optional)")
+        if not self.ds_min <= self.ds <= self.ds_max:
+            raise where.key("ds").error(
+                f"{self.ds!r} with ds_min = {self.ds_min!r} and ds_max = {self.ds_max!r}",
+                "ds_min <= ds <= ds_max")
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        if not isinstance(self.start, str):
+            return
+        branches = {e.name: e for e in sections.get("branches", ())}
+        if self.start not in branches:
+            raise where.key("start").error(f"{self.start!r} is not a [[branches]] entry",
+                                           ", ".join(branches) or "a [[branches]] entry")
+        branch = branches[self.start]
+        if branch.parameter not in self.parameters:
+            raise where.key("start").error(
+                f"branch {self.start!r} is continued in {branch.parameter!r}",
+                f"a branch continued in one of {list(self.parameters)}")
+        if self.N is not None and self.N != branch.N:
+            raise where.key("N").error(f"{self.N} differs from N = {branch.N} of branch "
+                                       f"{self.start!r}", f"{branch.N}, or leave it out")
+        if self.changes:
+            raise where.key(next(iter(self.changes))).error(
+                "a curve started from a branch uses the branch's oscillator",
+                "leave out the oscillator parameters")
+
+
+def _span(v: np.ndarray) -> str:
+    return f"[{v.min():.6g}, {v.max():.6g}]" if v.size else "-"
+
+
+class Curves:
+    """``[[curves]]``: :func:`impactcont.curves.curve`."""
+
+    def compute(self, entry: CurveSpec, context: Any = None) -> xr.Dataset:
+        from impactcont.curves import curve
+
+        t0 = time.perf_counter()
+        osc: ImpactOscillator | None = entry.oscillator
+        start: Any = entry.start
+        N: int | None = entry.N if entry.N is not None else 1
+        if isinstance(start, str):
+            branches = context.datasets.get("branches", {}) if context is not None else {}
+            if start not in branches:
+                raise ImpactcontError(f"curve {entry.name}: its start branch {start!r} was "
+                                      f"not computed (it failed)")
+            start, osc, N = branches[start], None, entry.N
+        ds = curve(osc, N, entry.kind, start=start, special=entry.special,
+                   parameters=entry.parameters, bounds=dict(entry.bounds), root=entry.root,
+                   ds=entry.ds, ds_min=entry.ds_min, ds_max=entry.ds_max,
+                   newton_tol=entry.newton_tol, max_points=entry.max_points,
+                   both_directions=entry.both_directions, detect_codim2_points=entry.codim2)
+        ds.attrs["name"] = entry.name
+        log.info("curve %s: %s in %s, %d points, %d codim-2 point(s) (%.1f s)", entry.name,
+                 entry.kind, "/".join(entry.parameters), ds.sizes["point"],
+                 ds.sizes.get("codim2", 0), time.perf_counter() - t0)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        from impactcont.scene.tasks import _table
+
+        rows = []
+        for name, ds in datasets.items():
+            p1, p2 = str(ds.attrs["parameters"]).split(",")
+            x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
+            rows.append([name, str(ds.attrs["kind"]), int(ds.attrs["N"]), f"{p1}, {p2}",
+                         int(ds.sizes["point"]), _span(x), _span(y),
+                         int(ds.sizes.get("codim2", 0)),
+                         str(ds.attrs.get("end_status", "-")).replace("|", "/")])
+        return _table(["curve", "kind", "N", "parameters", "points", "p1 range", "p2 range",
+                       "codim-2 points", "end"], rows)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        out = []
+        for name, ds in datasets.items():
+            p1, p2 = str(ds.attrs["parameters"]).split(",")
+            for k in range(ds.sizes.get("codim2", 0)):
+                out.append({"curve": name, "kind": str(ds.attrs["kind"]),
+                            "label": str(ds["codim2_label"].values[k]),
+                            p1: float(ds[f"codim2_{p1}"].values[k]),
+                            p2: float(ds[f"codim2_{p2}"].values[k]),
+                            "status": str(ds["codim2_status"].values[k]),
+                            "precision": float(ds["codim2_precision"].values[k])})
+        return out
+
+
+CURVES = Curves()
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MapSpec(EntrySpec):
+    """``[[maps]]``: existence, physicality and stability of N-1 motions on an (omega, b) grid."""
+
+    section: ClassVar[str] = "maps"
+
+    N: tuple[int, ...] = declare(_NList(), "forcing periods per impact", (1, 2, 3, 4))
+    omega_range: tuple[float, float] = declare(Interval(PARAMETER_RANGES["omega"]),
+                                               "[lo, hi] of the omega grid", required=True)
+    omega_points: int = declare(Integer(2, 100_000), "points of the omega grid", 101)
+    b_range: tuple[float, float] = declare(Interval(), "[lo, hi] of the b grid",
+                                           required=True)
+    b_points: int = declare(Integer(2, 100_000), "points of the b grid", 101)
+    executor: str = declare(String(("serial", "process")),
+                            "run in this process or in a process pool", "serial")
+    max_workers: int | None = declare(Integer(1, 1024), "processes of the pool")
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        for key in ("omega", "b"):
+            if getattr(self, key) is not None:
+                raise where.key(key).error(f"a map spans {key}_range; {key} is not used",
+                                           f"{key}_range and {key}_points")
+        if len(self.N) * self.omega_points * self.b_points > 50_000_000:
+            raise where.key("omega_points").error(
+                "the grid is too large", "at most 5e7 points over N x omega x b")
+
+
+class Maps:
+    """``[[maps]]``: :func:`impactcont.maps.stability_map`."""
+
+    def compute(self, entry: MapSpec, context: Any = None) -> xr.Dataset:
+        from impactcont.maps import stability_map
+
+        t0 = time.perf_counter()
+        ds = stability_map(entry.oscillator, N=list(entry.N),
+                           omega=np.linspace(*entry.omega_range, entry.omega_points),
+                           b=np.linspace(*entry.b_range, entry.b_points),
+                           executor=entry.executor, max_workers=entry.max_workers)
+        ds.attrs["name"] = entry.name
+        log.info("map %s: N = %s on %d x %d points (%.1f s)", entry.name, list(entry.N),
+                 entry.omega_points, entry.b_points, time.perf_counter() - t0)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        from impactcont.scene.tasks import _table
+
+        rows = []
+        for name, ds in datasets.items():
+            w, b = np.asarray(ds["omega"].values), np.asarray(ds["b"].values)
+            for N in np.asarray(ds["N"].values):
+                stable = np.asarray(ds["n_stable"].sel(N=N).values) > 0
+                exists = np.asarray(ds["exists"].sel(N=N).values, dtype=bool)
+                rows.append([name, int(N), f"[{w.min():.6g}, {w.max():.6g}] x {w.size}",
+                             f"[{b.min():.6g}, {b.max():.6g}] x {b.size}",
+                             f"{100 * exists.mean():.1f}%", f"{100 * stable.mean():.1f}%"])
+        return _table(["map", "N", "omega grid", "b grid", "motion exists",
+                       "stable physical motion"], rows)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        return []
+
+
+MAPS = Maps()
+
+
+
+def check_curves_plot(plot: Any, entries: list[CurveSpec], where: Where) -> None:
+    """A ``curves`` plot draws curves in one parameter plane."""
+    planes = {tuple(e.parameters) for e in entries}
+    if len(planes) > 1:
+        raise where.key("data").error(f"curves in different parameter planes {sorted(planes)}",
+                                      "curves with the same parameters [p1, p2]")

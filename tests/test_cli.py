@@ -1,0 +1,211 @@
+"""The ``impactcont`` command: run, info, plot, list-problems; exit codes; logging levels."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import _fake_plugins
+import pytest
+from _scene_data import ORBITS_SCENE, OSCILLATOR, SMALL_SCENE, write
+
+from impactcont.cli import EXIT_FAILURE, EXIT_OK, EXIT_USAGE, main
+from impactcont.scene import read_output
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def ran(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``impactcont run`` of a small scene with one entry of every section; its output dir."""
+    directory = tmp_path_factory.mktemp("cli")
+    out = directory / "out"
+    code = main(["run", str(write(directory, SMALL_SCENE)), "--output", str(out), "-q"])
+    assert code == EXIT_OK
+    return out
+
+fake_entry_points = pytest.fixture(_fake_plugins.fake_entry_points)
+
+
+def test_run_writes_netcdf_png_and_summary(ran: Path) -> None:
+    names = sorted(p.name for p in ran.iterdir())
+    assert names == ["bif.png", "branches.nc", "mult.png", "orb.png", "orbits.nc", "rob.png",
+                     "robust.nc", "simp.png", "simulations.nc", "summary.md"]
+
+
+def test_run_reports_what_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["run", str(write(tmp_path, ORBITS_SCENE)), "-o", str(tmp_path / "o")])
+    out = capsys.readouterr().out
+    assert code == EXIT_OK
+    assert "orbits.nc" in out and "summary.md" in out and str(tmp_path / "o") in out
+
+
+@pytest.mark.parametrize("name", ["branches", "orbits", "robust", "simulations"])
+def test_info_describes_each_file(ran: Path, name: str, capsys: pytest.CaptureFixture[str]
+                                  ) -> None:
+    assert main(["info", str(ran / f"{name}.nc")]) == EXIT_OK
+    out = capsys.readouterr().out
+    assert f"({name})" in out
+    assert "scene: 'small'" in out
+    assert "groups:" in out
+    assert "| entry |" in out or "| branch |" in out
+
+
+def test_info_lists_special_points(ran: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    main(["info", str(ran / "branches.nc")])
+    out = capsys.readouterr().out
+    assert "special points:" in out
+    for label in ("NS", "ZV", "SN"):
+        assert f"| br | 1 | {label} |" in out
+
+
+@pytest.mark.parametrize(("name", "kind"), [("branches", None), ("branches", "multipliers"),
+                                            ("orbits", None), ("robust", None),
+                                            ("simulations", None)])
+def test_plot_draws_each_file(ran: Path, tmp_path: Path, name: str, kind: str | None) -> None:
+    png = tmp_path / f"{name}.png"
+    argv = ["plot", str(ran / f"{name}.nc"), "-o", str(png), "--dpi", "40"]
+    assert main(argv + (["--kind", kind] if kind else [])) == EXIT_OK
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plot_default_output_beside_the_file(ran: Path, tmp_path: Path) -> None:
+    copy = tmp_path / "branches.nc"
+    copy.write_bytes((ran / "branches.nc").read_bytes())
+    assert main(["plot", str(copy), "--y", "spectral_radius", "--dpi", "40"]) == EXIT_OK
+    assert (tmp_path / "branches.png").is_file()
+
+
+def test_plot_and_info_reject_bad_files(ran: Path, tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["info", str(tmp_path / "missing.nc")]) == EXIT_USAGE
+    not_netcdf = tmp_path / "x.nc"
+    not_netcdf.write_text("hello")
+    assert main(["info", str(not_netcdf)]) == EXIT_USAGE
+    assert main(["plot", str(ran / "orbits.nc"), "--kind", "multipliers"]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "error:" in err and "does not draw 'orbits' files" in err
+
+
+def test_malformed_scene_exits_2_naming_key_and_allowed(tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]
+                                                        ) -> None:
+    path = write(tmp_path, OSCILLATOR + "[[branches]]\nbounds = [1, 2]\nds_maxx = 0.1\n")
+    assert main(["run", str(path)]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert f"{path}:11: branches[0].ds_maxx: unknown key; did you mean 'ds_max'?" in err
+    assert "allowed: name, F, R, b, omega" in err
+    assert not (tmp_path / "output").exists()  # nothing computed
+
+
+def test_set_overrides_the_scene(tmp_path: Path) -> None:
+    path = write(tmp_path, ORBITS_SCENE)
+    out = tmp_path / "o"
+    assert main(["run", str(path), "-o", str(out), "-q", "--set", "orbits[paper].b=0.2",
+                 "--set", "output.summary=false"]) == EXIT_OK
+    scene = json.loads(read_output(out / "orbits.nc").attrs["scene"])
+    assert scene["orbits"][0]["b"] == 0.2 and scene["output"]["summary"] is False
+    assert not (out / "summary.md").exists()
+    assert main(["run", str(path), "--set", "oscillator.R=3", "--check"]) == EXIT_USAGE
+
+
+def test_check_validates_without_computing(tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, SMALL_SCENE)
+    assert main(["run", str(path), "--check"]) == EXIT_OK
+    assert "valid scene 'small'" in capsys.readouterr().out
+    assert not (tmp_path / "output").exists()
+
+
+def test_compute_failure_exits_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    text = ORBITS_SCENE + '[[simulations]]\nname = "nowhere"\nb = 100.0\nperiods = 2\n'
+    path = write(tmp_path, text)
+    assert main(["run", str(path), "-o", str(tmp_path / "o")]) == EXIT_FAILURE
+    err = capsys.readouterr().err
+    assert "simulations nowhere" in err and "NoPeriodicMotionError" in err
+    assert (tmp_path / "o" / "orbits.nc").is_file()
+    assert main(["run", str(path), "-o", str(tmp_path / "o2"), "--fail-fast"]) == EXIT_FAILURE
+
+
+def test_logging_levels(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, ORBITS_SCENE)
+    assert main(["run", str(path), "-o", str(tmp_path / "a"), "-q"]) == EXIT_OK
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""
+    assert main(["-v", "run", str(path), "-o", str(tmp_path / "b")]) == EXIT_OK
+    assert "info: orbits paper: 2 root(s)" in capsys.readouterr().err
+    assert main(["run", str(path), "-o", str(tmp_path / "c"), "-vv"]) == EXIT_OK
+    assert "info: impactcont.scene.run: scene 'orbits only'" in capsys.readouterr().err
+
+
+def test_progress_is_logged_without_tqdm(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setitem(sys.modules, "tqdm", None)  # import tqdm now fails
+    path = write(tmp_path, ORBITS_SCENE)
+    assert main(["run", str(path), "-o", str(tmp_path / "o"), "--progress"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert "info: [1/2] orbits paper" in err and "info: [2/2] orbits fig3" in err
+
+
+def test_progress_bar_with_tqdm(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("tqdm")
+    path = write(tmp_path, ORBITS_SCENE)
+    assert main(["run", str(path), "-o", str(tmp_path / "o"), "--progress"]) == EXIT_OK
+    assert "2/2" in capsys.readouterr().err
+    # not a terminal and no --progress: no bar
+    assert main(["run", str(path), "-o", str(tmp_path / "o")]) == EXIT_OK
+    assert "2/2" not in capsys.readouterr().err
+
+
+def test_usage_errors_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([]) == EXIT_USAGE
+    assert main(["frobnicate"]) == EXIT_USAGE
+    assert main(["run"]) == EXIT_USAGE
+    assert main(["run", "/nonexistent/scene.toml"]) == EXIT_USAGE
+    assert "no such scene file" in capsys.readouterr().err
+    assert main(["--version"]) == EXIT_OK
+    assert "impactcont" in capsys.readouterr().out
+
+
+def test_list_problems_with_plugins(capsys: pytest.CaptureFixture[str],
+                                    fake_entry_points) -> None:
+    fake_entry_points(("good", "tests_fake_plugin:GoodProblem"),
+                      ("broken", "tests_no_such_module_xyz:Problem"))
+    assert main(["list-problems"]) == EXIT_OK
+    captured = capsys.readouterr()
+    assert "periodic_n1" in captured.out and "built-in" in captured.out
+    assert "good" in captured.out and "A problem from a plugin." in captured.out
+    assert "broken" not in captured.out
+    assert "warning:" in captured.err and "'broken'" in captured.err
+    assert "ModuleNotFoundError" in captured.err
+
+
+def test_python_m_impactcont(tmp_path: Path) -> None:
+    path = write(tmp_path, ORBITS_SCENE)
+    run = subprocess.run([sys.executable, "-m", "impactcont", "run", str(path), "-o",
+                          str(tmp_path / "o")], capture_output=True, text=True, timeout=300,
+                         check=False)
+    assert run.returncode == EXIT_OK, run.stderr
+    assert "orbits.nc" in run.stdout
+    info = subprocess.run([sys.executable, "-m", "impactcont", "info",
+                           str(tmp_path / "o" / "orbits.nc")], capture_output=True, text=True,
+                          timeout=300, check=False)
+    assert info.returncode == EXIT_OK and "(orbits), 2 entries" in info.stdout
+    bad = subprocess.run([sys.executable, "-m", "impactcont", "run", str(tmp_path / "x.toml")],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert bad.returncode == EXIT_USAGE and "no such scene file" in bad.stderr
+
+
+
+def test_info_and_plot_on_a_file_of_impactcont_save(ran: Path, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    import impactcont as ic
+
+    branch = read_output(ran / "branches.nc").datasets["br"]
+    path = ic.save(branch, tmp_path / "one_branch.nc")
+    assert main(["info", str(path)]) == EXIT_OK
+    assert "(branches), 1 entry" in capsys.readouterr().out
+    assert main(["plot", str(path), "--dpi", "40"]) == EXIT_OK
+    assert (tmp_path / "one_branch.png").is_file()
