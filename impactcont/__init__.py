@@ -14,16 +14,20 @@ from importlib.metadata import PackageNotFoundError, version
 from impactcont.branch import continuation
 from impactcont.dataset import load, save
 from impactcont.errors import (
+    IllConditionedWarning,
     ImpactcontError,
+    LowImpactVelocityWarning,
+    NearFoldWarning,
+    NearResonanceWarning,
     NoPeriodicMotionError,
     ParameterError,
     ResonanceError,
+    UnresolvedMotionWarning,
 )
 from impactcont.model.modal import ModalBasis
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import (
-    IllConditionedWarning,
     PeriodicOrbit,
     amplitude_squared,
     periodic_orbits,
@@ -41,7 +45,10 @@ __all__ = [
     "IllConditionedWarning",
     "ImpactOscillator",
     "ImpactcontError",
+    "LowImpactVelocityWarning",
     "ModalBasis",
+    "NearFoldWarning",
+    "NearResonanceWarning",
     "NoPeriodicMotionError",
     "ParameterError",
     "PeriodicOrbit",
@@ -49,6 +56,7 @@ __all__ = [
     "RobustStability",
     "SimulationResult",
     "SimulationStatus",
+    "UnresolvedMotionWarning",
     "__version__",
     "amplitude_squared",
     "chain_stiffness",

@@ -402,3 +402,31 @@ def test_stepper_tangent_stays_oriented_and_unit() -> None:
         assert stepper.scaled_dot(previous.tangent, current.tangent) > 0.0
         assert stepper.scaled_norm(current.state - previous.state) <= current.ds * 1.01
         previous = current
+
+
+class _DomainLimited:
+    """u - lam = 0, defined only for lam > -0.05: iterates past it are refused."""
+
+    def _check(self, lam: float) -> None:
+        if lam <= -0.05:
+            raise ParameterError(f"lam must be > -0.05; got {lam!r}")
+
+    def residual(self, u, lam):
+        self._check(lam)
+        return np.array([u[0] - lam])
+
+    def jacobian(self, u, lam):
+        self._check(lam)
+        return np.array([[1.0]])
+
+    def dparam(self, u, lam):
+        self._check(lam)
+        return np.array([-1.0])
+
+
+def test_iterate_outside_the_problem_domain_is_a_failed_step_not_a_crash():
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.2, ds_min=1e-4, ds_max=0.2,
+                                  direction=-1)
+    result = continue_branch(_DomainLimited(), np.array([0.5]), 0.5, options)
+    assert result.status is ContinuationStatus.STEP_BELOW_MINIMUM
+    assert result.lam.min() > -0.05

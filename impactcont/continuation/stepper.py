@@ -25,6 +25,7 @@ from impactcont.continuation.problem import (
     check_problem_outputs,
     evaluate_monitors,
 )
+from impactcont.errors import ParameterError
 
 __all__ = [
     "ContinuationStepError",
@@ -384,17 +385,26 @@ class PalcStepper:
 
     # ------------------------------------------------------ problem evaluation
 
+    def _evaluate(self, what: str, u: FloatArray, lam: float) -> FloatArray:
+        try:
+            return np.asarray(getattr(self.problem, what)(u.copy(), lam), dtype=float)
+        except ParameterError as error:
+            # an iterate left the problem's domain (e.g. a parameter that must stay > 0):
+            # a failed corrector, retried with a smaller step, not a crash
+            raise NewtonConvergenceError(f"the problem refused lam = {lam:.10g}: {error}") \
+                from error
+
     def _residual(self, u: FloatArray, lam: float) -> FloatArray:
-        residual = np.asarray(self.problem.residual(u.copy(), lam), dtype=float)
+        residual = self._evaluate("residual", u, lam)
         if not np.all(np.isfinite(residual)):
             raise NewtonConvergenceError(f"non-finite residual at lam = {lam:.10g}")
         return residual
 
     def _jacobian(self, u: FloatArray, lam: float) -> FloatArray:
-        return np.asarray(self.problem.jacobian(u.copy(), lam), dtype=float)
+        return self._evaluate("jacobian", u, lam)
 
     def _dparam(self, u: FloatArray, lam: float) -> FloatArray:
-        return np.asarray(self.problem.dparam(u.copy(), lam), dtype=float)
+        return self._evaluate("dparam", u, lam)
 
     def _make_point(
         self,
