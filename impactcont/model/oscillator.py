@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import math
@@ -17,6 +18,11 @@ from impactcont.model.modal import ModalBasis
 __all__ = ["ImpactOscillator", "chain_stiffness"]
 
 _SYMMETRY_RTOL = 1e-12
+_SCALAR_RULES: dict[str, dict[str, Any]] = {
+    "R": {"allowed": "in [0, 1]", "low": 0.0, "high": 1.0},
+    "b": {"allowed": "a finite real number"},
+    "omega": {"allowed": "finite and > 0", "low": 0.0, "low_open": True},
+}
 
 
 def _matrix(name: str, value: Any) -> np.ndarray:
@@ -155,9 +161,9 @@ class ImpactOscillator:
             raise ParameterError(f"M and K must have the same shape; got {M.shape} and {K.shape}")
         n = M.shape[0]
         F = _vector("F", self.F, n)
-        R = _real("R", self.R, allowed="in [0, 1]", low=0.0, high=1.0)
-        b = _real("b", self.b, allowed="a finite real number")
-        omega = _real("omega", self.omega, allowed="finite and > 0", low=0.0, low_open=True)
+        R = _real("R", self.R, **_SCALAR_RULES["R"])
+        b = _real("b", self.b, **_SCALAR_RULES["b"])
+        omega = _real("omega", self.omega, **_SCALAR_RULES["omega"])
         if self.eta is not None and (self.alpha is not None or self.beta is not None):
             raise ParameterError(
                 f"give either eta (C = 2 eta K) or alpha/beta (C = alpha M + beta K), not both; "
@@ -219,10 +225,14 @@ class ImpactOscillator:
             changes.setdefault("beta", None)
         if ("alpha" in changes or "beta" in changes) and changes.get("eta") is None:
             changes["eta"] = None
-        new = dataclasses.replace(self, **changes)
-        if "modes" in self.__dict__ and not set(changes) & {"M", "K", "F", "eta", "alpha", "beta"}:
-            new.__dict__["modes"] = self.modes  # omega, b and R leave the modal basis unchanged
-        return new
+        if set(changes) <= set(_SCALAR_RULES):
+            # omega, b and R leave M, K, F (already validated) and the modal basis unchanged:
+            # validate only what changes and share the rest (the continuation's hot path)
+            new = copy.copy(self)
+            for name, value in changes.items():
+                object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
+            return new
+        return dataclasses.replace(self, **changes)
 
     # -- derived quantities -------------------------------------------------------------------
     @property

@@ -58,6 +58,7 @@ class PeriodicBranchProblem:
         if parameter == "eta" and osc.eta is None:
             raise ParameterError("parameter='eta' needs the paper's damping C = 2 eta K; the "
                                  "oscillator uses Rayleigh damping (alpha, beta)")
+        _ = osc.modes  # computed once here, then shared by every replace() along the branch
         self.osc = osc
         self.N = N
         self.parameter = parameter
