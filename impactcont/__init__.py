@@ -26,7 +26,9 @@ from impactcont.errors import (
 )
 from impactcont.model.modal import ModalBasis
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit, primitive_orbit
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
     amplitude_squared,
@@ -34,6 +36,13 @@ from impactcont.orbit.periodic import (
 )
 from impactcont.orbit.robust import RobustStability, lyapunov_matrix, robust_bound, robust_stability
 from impactcont.simulate.simulator import SimulationResult, SimulationStatus, simulate
+from impactcont.switching import (
+    Cascade,
+    grazing_switch,
+    period_doubling_cascade,
+    period_doubling_switch,
+    special_orbit,
+)
 
 try:
     __version__ = version("impactcont")
@@ -41,12 +50,14 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
 __all__ = [
+    "Cascade",
     "Flow",
     "IllConditionedWarning",
     "ImpactOscillator",
     "ImpactcontError",
     "LowImpactVelocityWarning",
     "ModalBasis",
+    "MultiImpactOrbit",
     "NearFoldWarning",
     "NearResonanceWarning",
     "NoPeriodicMotionError",
@@ -61,11 +72,18 @@ __all__ = [
     "amplitude_squared",
     "chain_stiffness",
     "continuation",
+    "grazing_switch",
     "load",
     "lyapunov_matrix",
+    "multi_impact_continuation",
+    "multi_impact_orbit",
+    "period_doubling_cascade",
+    "period_doubling_switch",
     "periodic_orbits",
+    "primitive_orbit",
     "robust_bound",
     "robust_stability",
     "save",
     "simulate",
+    "special_orbit",
 ]

@@ -51,6 +51,7 @@ from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 __all__ = [
     "Cascade",
     "critical_direction",
+    "grazing_split",
     "grazing_switch",
     "period_doubling_cascade",
     "period_doubling_switch",

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import os
+
+# one BLAS thread: the closed form does many tiny solves, which threads only slow down
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import numpy as np
 import pytest
 

@@ -12,7 +12,12 @@ import impactcont as ic
 from impactcont.dataset.multi import impacts_of, validate_multi_impact_dataset
 from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.flow import Flow
-from impactcont.orbit.multi_impact import initial_unknowns, multi_impact_orbit, shooting
+from impactcont.orbit.multi_impact import (
+    initial_unknowns,
+    multi_impact_orbit,
+    primitive_orbit,
+    shooting,
+)
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.switching import (
     critical_direction,
@@ -129,6 +134,18 @@ def test_liouville_determinant_of_the_product(paper_b0, make_chain):
         trace = np.trace(np.linalg.solve(osc.M, osc.C))
         expected = osc.R ** (2 * m.p) * math.exp(-m.period * trace)
         assert np.linalg.det(m.G) == pytest.approx(expected, rel=1e-9)
+
+
+def test_primitive_orbit_undoes_a_repetition(paper_b0):
+    osc = paper_b0.replace(omega=1.75)
+    n1 = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
+    twice = multi_impact_orbit(osc, 2, 2, n1)  # the N-1 motion is also a 2-2 solution
+    prim = primitive_orbit(twice)
+    assert (prim.N, prim.p) == (1, 1)
+    assert abs(wrap(prim.delta - n1.delta)) < 1e-12
+    np.testing.assert_allclose(prim.multipliers, n1.multipliers, atol=1e-12)
+    genuine = multi_impact_orbit(osc, 2, 2, ic.simulate(osc, n1.state, n1.delta + 1e-3, 200.0))
+    assert primitive_orbit(genuine) is genuine
 
 
 @pytest.mark.parametrize(("n", "N", "p"), [(2, 2, 2), (3, 3, 3), (2, 1, 1)])

@@ -61,6 +61,7 @@ __all__ = [
     "newton",
     "omega_partial",
     "orbit_from_unknowns",
+    "primitive_orbit",
     "shooting",
     "split_unknowns",
 ]
@@ -622,3 +623,39 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
                       "inexact", IllConditionedWarning, stacklevel=2)
     log.debug("N=%d p=%d motion in %d Newton iterations", N, p, iterations)
     return orbit_from_unknowns(flow, N, p, u, sh)
+
+
+def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpactOrbit:
+    """The shortest motion whose repetition is ``orbit``.
+
+    An N-p motion can be an N'-p' motion repeated ``k`` times (``N = k N'``,
+    ``p = k p'``), e.g. a Newton solve of the 4-2 system seeded near a 2-1 motion.
+    The repetition is recognised when the impacts ``j`` and ``j + p'`` have the same
+    state, flight time and forcing phase within ``tol``; the shorter motion is then
+    re-solved by Newton (its multipliers are the k-th roots' own, not their k-th powers).
+
+    Parameters
+    ----------
+    orbit : MultiImpactOrbit
+    tol : float
+        Tolerance (max-norm) of the comparison.
+
+    Returns
+    -------
+    MultiImpactOrbit
+        ``orbit`` itself when it is no repetition.
+    """
+    for k in range(2, math.gcd(orbit.N, orbit.p) + 1):
+        if orbit.N % k or orbit.p % k:
+            continue
+        q = orbit.p // k
+        shifted = np.roll(np.arange(orbit.p), -q)
+        dphase = np.remainder(orbit.phases - orbit.phases[shifted] + math.pi, TWO_PI) - math.pi
+        if (np.max(np.abs(orbit.states - orbit.states[shifted])) <= tol
+                and np.max(np.abs(orbit.flight_times - orbit.flight_times[shifted])) <= tol
+                and np.max(np.abs(dphase)) <= tol):
+            guess = {"delta": orbit.delta, "flight_times": orbit.flight_times[:q],
+                     "states": orbit.states[:q]}
+            short = multi_impact_orbit(orbit.oscillator, orbit.N // k, q, guess)
+            return primitive_orbit(short, tol=tol)
+    return orbit

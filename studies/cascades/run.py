@@ -54,7 +54,7 @@ import xarray as xr
 import impactcont as ic
 from impactcont.dataset.multi import impacts_of
 from impactcont.multi_branch import multi_impact_continuation
-from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.orbit.multi_impact import multi_impact_orbit, primitive_orbit
 from impactcont.plots.impacts import impact_diagram
 from impactcont.switching import (
     grazing_switch,
@@ -405,10 +405,12 @@ def branches_from_simulation(name: str, records: list[dict[str, Any]],
             final_time=0.0, final_state=rec["states"][-1], final_phase=0.0,
             status=ic.SimulationStatus.COMPLETED)
         try:
-            orbit = multi_impact_orbit(osc, P, p, res)
+            # a pattern caught while still settling may be a shorter motion repeated
+            orbit = primitive_orbit(multi_impact_orbit(osc, P, p, res))
         except ic.NoPeriodicMotionError as exc:
             log_rows.append({"omega": rec["omega"], "pattern": f"{P}-{p}", "result": str(exc)})
             continue
+        P, p = orbit.N, orbit.p
         known = any(
             np.max(np.abs(np.sort(o.impact_velocities) - np.sort(orbit.impact_velocities)))
             < MATCH_TOL for ds in {**branches, **found}.values()
