@@ -21,17 +21,13 @@ import numpy as np
 
 from impactcont.model.modal import forced_coefficients, free_transfer
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.extrema import bracketed_roots
 from impactcont.orbit.periodic import IllConditionedWarning
 
 __all__ = ["OrbitBatch", "batched_matrices", "batched_orbits"]
 
 _CELLS_PER_PERIOD = 16
 _COND_WARN = 1e12
-# a root of x1' to 1e-13 (relative) puts the maximum of x1 within ~1e-26 of its value:
-# tighter only costs iterations lost in rounding noise
-_XTOL = 1e-15
-_RTOL = 1e-13
-_MAX_ITER = 60
 
 
 def batched_matrices(osc: ImpactOscillator, N: int, omega: np.ndarray
@@ -177,38 +173,6 @@ class OrbitBatch:
         return tuple((q @ self.u0).reshape(shape) for q in (y, v, acc, jerk))
 
 
-def _roots(fun, index: np.ndarray, lo: np.ndarray, hi: np.ndarray, g_lo: np.ndarray
-           ) -> np.ndarray:
-    """Roots of ``g`` in many brackets at once by safeguarded Newton.
-
-    ``fun(index, t) -> (g, g')``; ``g(lo)`` and ``g(hi)`` have opposite signs.
-    A Newton step leaving the current bracket is replaced by bisection.
-    """
-    a, b = lo.astype(float).copy(), hi.astype(float).copy()
-    ga = g_lo.astype(float).copy()
-    x = 0.5 * (a + b)
-    active = np.arange(x.size)
-    for _ in range(_MAX_ITER):
-        if active.size == 0:
-            break
-        g, dg = fun(index[active], x[active])
-        xa = x[active]
-        left = (g < 0) == (ga[active] < 0)
-        a[active] = np.where(left, xa, a[active])
-        ga[active] = np.where(left, g, ga[active])
-        b[active] = np.where(left, b[active], xa)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = g / dg
-        tol = _XTOL + _RTOL * np.abs(xa)
-        done = (g == 0) | (np.abs(step) <= tol) | (b[active] - a[active] <= tol)
-        xn = xa - step
-        inside = np.isfinite(xn) & (xn >= a[active]) & (xn <= b[active])
-        xn = np.where(inside | done, xn, 0.5 * (a[active] + b[active]))
-        x[active] = np.where(g == 0, xa, xn)
-        active = active[~done]
-    return x
-
-
 def _time_grid(osc: ImpactOscillator, omega: float, T: float) -> np.ndarray:
     """Normalised grid ``tau`` on [0, 1] (``t = tau T``) for one forcing frequency.
 
@@ -260,8 +224,8 @@ def _highest_interior_maxima(batch: OrbitBatch, T: np.ndarray, tau: np.ndarray
     v, acc = batch.on_grid(times)
     # 1. split the cells where x1'' changes sign at its root: x1' is then monotone per piece
     o, c = np.nonzero((acc[:, :-1] < 0) != (acc[:, 1:] < 0))
-    infl = _roots(lambda i, t: batch.derivatives(i, t)[2:4], o, times[o, c], times[o, c + 1],
-                  acc[o, c])
+    infl = bracketed_roots(lambda i, t: batch.derivatives(i, t)[2:4], times[o, c],
+                           times[o, c + 1], acc[o, c], index=o)
     v_infl = batch.derivatives(o, infl)[1]
     split = np.zeros(acc[:, :-1].shape, dtype=bool)
     split[o, c] = True
@@ -274,7 +238,7 @@ def _highest_interior_maxima(batch: OrbitBatch, T: np.ndarray, tau: np.ndarray
     # 2. one root of x1' per monotone piece with a sign change
     sel = (v_lo < 0) != (v_hi < 0)
     owner, lo, hi, v_lo = owner[sel], lo[sel], hi[sel], v_lo[sel]
-    crit = _roots(lambda i, t: batch.derivatives(i, t)[1:3], owner, lo, hi, v_lo)
+    crit = bracketed_roots(lambda i, t: batch.derivatives(i, t)[1:3], lo, hi, v_lo, index=owner)
     x, _, a2, _ = batch.derivatives(owner, crit)
     keep = (a2 < 0) & (crit > 0) & (crit < T[owner])
     owner, crit, x = owner[keep], crit[keep], x[keep]

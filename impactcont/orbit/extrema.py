@@ -23,7 +23,8 @@ import numpy as np
 from impactcont.errors import UnresolvedMotionWarning
 from impactcont.orbit.flow import Flow, Mass1Motion
 
-__all__ = ["critical_points", "first_upward_crossing", "interior_maxima", "sample_times"]
+__all__ = ["bracketed_roots", "critical_points", "first_upward_crossing", "interior_maxima",
+           "sample_times"]
 
 log = logging.getLogger(__name__)
 
@@ -84,18 +85,22 @@ def _changes(left: np.ndarray, right: np.ndarray) -> np.ndarray:
     return (left < 0) != (right < 0)
 
 
-def _bracketed_roots(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
-                     lo: np.ndarray, hi: np.ndarray, g_lo: np.ndarray) -> np.ndarray:
+def bracketed_roots(fun: Callable[..., tuple[np.ndarray, np.ndarray]],
+                    lo: np.ndarray, hi: np.ndarray, g_lo: np.ndarray,
+                    index: np.ndarray | None = None) -> np.ndarray:
     """Roots of ``g`` in many brackets at once by safeguarded Newton.
 
     Parameters
     ----------
     fun : callable
-        ``fun(t) -> (g(t), g'(t))`` for an array of times.
+        ``fun(t) -> (g(t), g'(t))`` for an array of times, or with `index`,
+        ``fun(k, t)`` where ``k`` says which bracket each time belongs to.
     lo, hi : ndarray
         Brackets, ``lo < hi``, with ``g(lo)`` and ``g(hi)`` of opposite signs.
     g_lo : ndarray
         ``g(lo)`` (its sign is what matters).
+    index : ndarray, optional
+        A label per bracket, passed to `fun` for the brackets still iterating.
 
     Returns
     -------
@@ -111,7 +116,7 @@ def _bracketed_roots(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     for _ in range(_MAX_ITER):
         if active.size == 0:
             break
-        g, dg = fun(x[active])
+        g, dg = fun(x[active]) if index is None else fun(index[active], x[active])
         xa = x[active]
         left = (g < 0) == (ga[active] < 0)  # root lies right of x
         a[active] = np.where(left, xa, a[active])
@@ -148,12 +153,12 @@ def critical_points(motion: Mass1Motion, grid: np.ndarray) -> np.ndarray:
     """
     _, _, acc, _ = motion.derivatives(grid)
     cells = np.flatnonzero(_changes(acc[:-1], acc[1:]))
-    inflections = _bracketed_roots(lambda s: motion.derivatives(s)[2:4], grid[cells],
+    inflections = bracketed_roots(lambda s: motion.derivatives(s)[2:4], grid[cells],
                                    grid[cells + 1], acc[cells])
     points = np.union1d(grid, inflections)  # x1' is monotone between consecutive points
     _, v, acc, _ = motion.derivatives(points)
     cells = np.flatnonzero(_changes(v[:-1], v[1:]))
-    roots = _bracketed_roots(lambda s: motion.derivatives(s)[1:3], points[cells],
+    roots = bracketed_roots(lambda s: motion.derivatives(s)[1:3], points[cells],
                              points[cells + 1], v[cells])
     return np.unique(roots[(roots > grid[0]) & (roots < grid[-1])])
 
@@ -196,4 +201,4 @@ def first_upward_crossing(motion: Mass1Motion, level: float, grid: np.ndarray
         x1, v1, _ = motion(s)
         return x1 - level, v1
 
-    return float(_bracketed_roots(shifted, points[i], points[i + 1], x[i])[0])
+    return float(bracketed_roots(shifted, points[i], points[i + 1], x[i])[0])
