@@ -12,6 +12,7 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from impactcont.branch import continuation
+from impactcont.curves import curve, curve_crossings
 from impactcont.dataset import load, save
 from impactcont.errors import (
     IllConditionedWarning,
@@ -24,6 +25,7 @@ from impactcont.errors import (
     ResonanceError,
     UnresolvedMotionWarning,
 )
+from impactcont.maps import stability_map
 from impactcont.model.modal import ModalBasis
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.multi_branch import multi_impact_continuation
@@ -72,6 +74,8 @@ __all__ = [
     "amplitude_squared",
     "chain_stiffness",
     "continuation",
+    "curve",
+    "curve_crossings",
     "grazing_switch",
     "load",
     "lyapunov_matrix",
@@ -86,4 +90,5 @@ __all__ = [
     "save",
     "simulate",
     "special_orbit",
+    "stability_map",
 ]
