@@ -209,16 +209,19 @@ def _follow(problem: CurveProblem, u0: np.ndarray, lam0: float, options: Continu
             event = _terminal_event(problem, points[-1], x)
             if event is not None:
                 label, condition = event
+                ga, gb = condition(points[-1]), condition(x)
+                t = ga / (ga - gb) if ga != gb else 0.5
                 try:  # ill-conditioned at a strong resonance: a looser tolerance
-                    xe = problem.solve(0.5 * (points[-1] + x), condition, tol=1e-9)
+                    # Newton stagnates at the singular end: start it from the secant
+                    # estimate and accept a rounding-size residual (its step is the precision)
+                    xe = problem.solve(points[-1] + t * (x - points[-1]), condition, tol=1e-9,
+                                       residual_tol=1e-9)
                     status = "located"
                 except NewtonConvergenceError as exc:
                     # the augmented system is singular at the end itself (a Jordan block at
                     # a strong resonance): keep the bracket
                     log.info("%s curve end (%s) bracketed, not located: %s", problem.kind,
                              label, exc)
-                    ga, gb = condition(points[-1]), condition(x)
-                    t = ga / (ga - gb) if ga != gb else 0.5
                     # recorded, not appended: an interpolated point is not on the curve
                     xe, status = points[-1] + t * (x - points[-1]), "bracketed"
                     ends.append((label, xe, float(np.hypot(x[0] - points[-1][0],

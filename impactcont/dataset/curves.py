@@ -295,6 +295,9 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
+_OPTIONAL_MAP_VARIABLES = ("spectral_radius", "critical_multiplier")
+
+
 def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.ndarray,
                 b: np.ndarray, values: Mapping[str, np.ndarray], options: Any,
                 title: str | None = None) -> xr.Dataset:
@@ -318,6 +321,8 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     sizes = {"N": len(N), "omega": len(omega), "b": len(b), "root": 2}
     data_vars = {}
     for key, (spec, dims) in MAP_VARIABLES.items():
+        if key in _OPTIONAL_MAP_VARIABLES and key not in values:
+            continue  # a map computed without eigenvalues
         if key not in values:
             raise ValueError(f"values is missing {key!r}; required {list(MAP_VARIABLES)}")
         shape = tuple(sizes[d] for d in dims)

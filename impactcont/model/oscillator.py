@@ -232,7 +232,16 @@ class ImpactOscillator:
             for name, value in changes.items():
                 object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
             return new
-        return dataclasses.replace(self, **changes)
+        new = dataclasses.replace(self, **changes)
+        if "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES, "eta", "alpha", "beta"}:
+            # only the damping changed: the modes of K u = lambda M u are the same, the decay
+            # rates a_i = (alpha + beta omega_i^2) / 2 follow (no new eigensolve per point of a
+            # branch in eta, alpha or beta)
+            alpha, beta = new.rayleigh
+            w = self.modes.natural_frequencies
+            new.__dict__["modes"] = dataclasses.replace(self.modes,
+                                                        decay_rates=0.5 * (alpha + beta * w * w))
+        return new
 
     # -- derived quantities -------------------------------------------------------------------
     @property

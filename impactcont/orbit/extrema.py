@@ -173,8 +173,8 @@ def interior_maxima(motion: Mass1Motion, grid: np.ndarray) -> tuple[np.ndarray, 
     return cp[keep], x[keep]
 
 
-def first_upward_crossing(motion: Mass1Motion, level: float, grid: np.ndarray
-                          ) -> float | None:
+def first_upward_crossing(motion: Mass1Motion, level: float, grid: np.ndarray, *,
+                          after: float = -math.inf) -> float | None:
     """First time in ``(grid[0], grid[-1]]`` where ``x1`` reaches ``level`` from below.
 
     Parameters
@@ -184,6 +184,9 @@ def first_upward_crossing(motion: Mass1Motion, level: float, grid: np.ndarray
         The stop position ``b``.
     grid : ndarray
         Sorted times from :func:`sample_times`.
+    after : float
+        Ignore crossings completed by this time (the rounding-size excursion of a
+        flight that starts on the stop at rest and leaves it).
 
     Returns
     -------
@@ -192,7 +195,7 @@ def first_upward_crossing(motion: Mass1Motion, level: float, grid: np.ndarray
     """
     points = np.union1d(grid, critical_points(motion, grid))  # x1 monotone in between
     x = motion(points)[0] - level
-    hit = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
+    hit = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0) & (points[1:] > after))
     if hit.size == 0:
         return None
     i = hit[:1]

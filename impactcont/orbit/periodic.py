@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 import warnings
@@ -14,10 +15,12 @@ from impactcont.errors import (
     IllConditionedWarning,
     LowImpactVelocityWarning,
     NearFoldWarning,
+    NearResonanceWarning,
     ParameterError,
+    ResonanceError,
+    UnresolvedMotionWarning,
 )
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
 
 __all__ = [
@@ -35,6 +38,8 @@ _EPS = float(np.finfo(float).eps)
 _COND_WARN = 1e10
 # warn when G of eq. (25) may carry a relative error above ~1e-8 (eps |v| / |h2|)
 _H2_REL_ERROR_WARN = 1e-8
+# warn when the forced amplitude of a mode is known to worse than this (relative)
+_RESONANCE_REL_ERROR_WARN = 1e-8
 # warn when the impact phase of eq. (15) may carry an error above ~1e-10 (eps r / sqrt(r^2-b^2))
 _FOLD_ERROR_WARN = 1e-10
 
@@ -42,6 +47,10 @@ _FOLD_ERROR_WARN = 1e-10
 @dataclasses.dataclass(frozen=True, eq=False)
 class PeriodicOrbit:
     """One periodic N-1 motion: one impact every N forcing periods.
+
+    A thin view over the compiled kernel's arrays (:mod:`impactcont.orbit.kernel`):
+    the phase, impact velocity and interior-contact check are computed with it;
+    the state, ``G`` and the multipliers are built on first access.
 
     Attributes
     ----------
@@ -52,15 +61,11 @@ class PeriodicOrbit:
         Forcing phase at the impact, in ``(-pi, pi]`` (eq. 15).
     root : int
         +1 or -1: the sign in front of the square root of eq. (15)
-        (``sin delta = (b s + root c r) / (c^2 + s^2)``, ``r = sqrt(c^2+s^2-b^2)``).
-    state : ndarray, shape (2n,)
-        ``X(0) = [x; x']`` right after the impact (eq. 13).
+        (``sin delta = (b s + root c r) / (c^2 + s^2)``, ``r = sqrt(c^2+s^2-b^2)``);
+        for elastic impacts without damping, +1 where the forced motion of mass 1
+        is at its maximum at the impact, -1 at its minimum.
     period : float
         ``T``.
-    G : ndarray, shape (2n, 2n)
-        Jacobian of the impact map in ``z = [dx2..dxn, dx1'..dxn', d delta]`` (eq. 25).
-    multipliers : ndarray of complex, shape (2n,)
-        Eigenvalues of G, largest modulus first.
     impact_velocity : float
         ``x1'(T^-)``, velocity of mass 1 just before impact (``h2`` of eq. 22).
     gap_min : float
@@ -79,15 +84,48 @@ class PeriodicOrbit:
     N: int
     delta: float
     root: int
-    state: np.ndarray
     period: float
-    G: np.ndarray
-    multipliers: np.ndarray
     impact_velocity: float
     gap_min: float
     gap_min_time: float
     physical: bool
     reason: str
+    modal: np.ndarray = dataclasses.field(repr=False)
+    """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`)."""
+
+    @functools.cached_property
+    def state(self) -> np.ndarray:
+        """``X(0) = [x; x']`` right after the impact (eq. 13), shape (2n,)."""
+        from impactcont.orbit import kernel
+
+        osc = self.oscillator
+        y, v = kernel.orbit_states(self.modal, osc.omega, osc.R, self.delta,
+                                   self.impact_velocity)
+        u = osc.modes.u
+        state = np.concatenate([u @ y, u @ v])
+        state[osc.n] = -osc.R * self.impact_velocity  # eq. (4) exactly (0 for R = 0)
+        return state
+
+    @functools.cached_property
+    def G(self) -> np.ndarray:
+        """Jacobian of the impact map in ``z = [dx2..dxn, dx1'..dxn', d delta]`` (eq. 25)."""
+        from impactcont.orbit import kernel
+
+        osc = self.oscillator
+        w, a, f, u, ui = osc.modes.kernel_arrays[:5]
+        G, _ = kernel.impact_jacobian(self.modal, w, a, f, u, ui, osc.omega, osc.R,
+                                      self.delta, self.impact_velocity)
+        return G
+
+    @functools.cached_property
+    def multipliers(self) -> np.ndarray:
+        """Eigenvalues of G, largest modulus first, shape (2n,) complex."""
+        from impactcont.orbit import kernel
+
+        G = self.G
+        if not np.all(np.isfinite(G)):
+            return np.full(G.shape[0], np.nan + 0j)
+        return kernel.multipliers(G)
 
     @property
     def spectral_radius(self) -> float:
@@ -238,42 +276,79 @@ def impact_map_jacobian(flow: Flow, state: np.ndarray, delta: float, T: float,
     return G, float(h2)
 
 
-def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0,
-                   flow: Flow | None = None, S: np.ndarray | None = None,
-                   DPhi: np.ndarray | None = None) -> PeriodicOrbit:
-    """The periodic N-1 motion with impact phase ``delta`` (which must satisfy eq. 14).
+def _check_oscillator(osc: object) -> ImpactOscillator:
+    if not isinstance(osc, ImpactOscillator):
+        raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
+    return osc
 
-    Computes the state (eq. 13), G (eq. 25), multipliers, impact velocity and the
-    interior-contact check of eq. (16).
-    """
-    N = _check_N(N)
-    flow = flow or Flow(osc)
-    if S is None or DPhi is None:
-        S, DPhi, T = periodic_matrix(flow, N)
-    else:
-        T = 2.0 * math.pi * N / osc.omega
-    state = S @ np.array([math.cos(delta), math.sin(delta)])
-    G, h2 = impact_map_jacobian(flow, state, delta, T, DPhi)
-    multipliers = np.linalg.eigvals(G)
-    multipliers = multipliers[np.argsort(-np.abs(multipliers), kind="stable")]
 
-    times, peaks = interior_maxima(flow.mass1(state, delta), sample_times(flow, 0.0, T))
-    if peaks.size:
-        k = int(np.argmax(peaks))
-        gap_min, gap_time = float(osc.b - peaks[k]), float(times[k])
-    else:
-        gap_min, gap_time = math.inf, math.nan
+def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> None:
+    """Refuse an exact resonance; warn when eq. (12)-(13) are inexact at this omega."""
+    cond, res_err = scalars[7], scalars[8]
+    if res_err == math.inf:
+        w = osc.modes.natural_frequencies
+        i = int(np.argmin(np.abs(w - osc.omega)))
+        raise ResonanceError(
+            f"omega={osc.omega!r} equals the natural frequency {w[i]!r} of undamped mode "
+            f"{i + 1}: the forced response of eq. (6) does not exist; choose omega != omega_i "
+            "or add damping")
+    if res_err > _RESONANCE_REL_ERROR_WARN:
+        w = osc.modes.natural_frequencies
+        i = int(np.argmin(np.abs(w - osc.omega)))
+        warnings.warn(
+            f"omega={osc.omega!r} is within {abs(osc.omega / w[i] - 1.0):.2g} (relative) of the "
+            f"natural frequency {w[i]!r} of a lightly damped mode: its forced amplitude (eq. 7) "
+            f"is known only to a relative error of about {res_err:.1g}; move omega away from "
+            "omega_i or add damping", NearResonanceWarning, stacklevel=stacklevel)
+    if not cond <= _COND_WARN:
+        warnings.warn(
+            f"eq. (12) is ill-conditioned at omega={osc.omega!r} (condition estimate "
+            f"{cond:.3g}): the periodic motion may carry a relative error up to about "
+            f"{min(cond * _EPS, 1.0):.1g}. Typical cause: omega_i T close to a multiple of "
+            "2 pi for an undamped or very lightly damped mode (omega near N omega_i / k), "
+            "where the free motion of that mode is itself T-periodic",
+            IllConditionedWarning, stacklevel=stacklevel)
 
+
+def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delta: float,
+                root: int, sigma: float, gap_min: float, gap_time: float) -> PeriodicOrbit:
     reasons = []
-    if not h2 > 0:
-        reasons.append(f"impact velocity {h2:.3g} <= 0: mass 1 does not arrive towards the stop")
+    if not sigma > 0:
+        reasons.append(f"impact velocity {sigma:.3g} <= 0: mass 1 does not arrive towards the "
+                       "stop")
     if not gap_min > 0:
         reasons.append(f"x1 reaches the stop inside the period (gap_min={gap_min:.3g} at "
                        f"t={gap_time:.6g})")
-    return PeriodicOrbit(oscillator=osc, N=N, delta=float(delta), root=root, state=state,
-                         period=T, G=G, multipliers=multipliers, impact_velocity=h2,
-                         gap_min=gap_min, gap_min_time=gap_time, physical=not reasons,
-                         reason="; ".join(reasons))
+    return PeriodicOrbit(oscillator=osc, N=N, delta=delta, root=root, period=T,
+                         impact_velocity=sigma, gap_min=gap_min, gap_min_time=gap_time,
+                         physical=not reasons, reason="; ".join(reasons), modal=modal)
+
+
+def _warn_capped(capped: bool, T: float) -> None:
+    if capped:
+        warnings.warn(f"x1 search grid capped at 2000000 cells for a period of {T:.3g}: a short "
+                      "excursion of mass 1 past the stop (eq. 16) may be missed; damping the "
+                      "fastest modes or a shorter period avoids this", UnresolvedMotionWarning,
+                      stacklevel=3)
+
+
+def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
+                   ) -> PeriodicOrbit:
+    """The periodic N-1 motion with impact phase ``delta`` (which must satisfy eq. 14).
+
+    The impact velocity follows from the phase (``sigma = x1p'(delta) / Delta``, see
+    :mod:`impactcont.orbit.kernel`; for elastic impacts without damping from the gap),
+    then the interior-contact check of eq. (16); state, G and multipliers on access.
+    """
+    from impactcont.orbit import kernel
+
+    N = _check_N(N)
+    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    modal, sc, sigma, gap, gap_t, capped = kernel.phase_orbit(
+        w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
+    _warn_capped(capped, sc[0])
+    return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
+                       float(gap), float(gap_t))
 
 
 def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
@@ -290,37 +365,49 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     list of PeriodicOrbit
         Zero (``c^2 + s^2 < b^2``), one (a double root) or two motions. Each
         carries its ``physical`` flag and ``reason``: a root that is not a
-        physical motion is reported, never silently dropped.
+        physical motion is reported, never silently dropped. For elastic impacts
+        without damping (``R = 1``, no damping) eq. (12) is singular for every
+        omega; the two isolated motions are then those whose forced motion of
+        mass 1 is at rest at the impact (see :mod:`impactcont.orbit.kernel`).
+
+    Raises
+    ------
+    ParameterError
+        If `osc` is not an oscillator, `N` is not an integer >= 1, or the forcing
+        does not reach mass 1 so that every phase (or none) would solve eq. (14).
+    ResonanceError
+        If omega equals the natural frequency of an undamped, forced mode.
     """
+    from impactcont.orbit import kernel
+
+    osc = _check_oscillator(osc)
     N = _check_N(N)
-    flow = Flow(osc)
-    S, DPhi, _ = periodic_matrix(flow, N)
-    c, s = S[0]
-    r2 = c * c + s * s
-    b = osc.b
-    if r2 == 0.0:
-        if b == 0.0:
-            raise ParameterError("c = s = 0 and b = 0: every phase satisfies eq. (14); the "
-                                 "forcing does not reach mass 1 (check F)")
+    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped = kernel.point_orbits(
+        w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b)
+    _warn_setup(osc, sc, stacklevel=2)
+    if count == -1:
+        raise ParameterError("c = s = 0 and b = 0: every phase satisfies eq. (14); the "
+                             "forcing does not reach mass 1 (check F)")
+    if count == -2:
+        raise ParameterError("elastic impacts without damping and no forced motion of mass 1 "
+                             "(check F): eq. (12) does not fix the impact phase")
+    if count == 0:
+        log.debug("no N=%d motion: c^2 + s^2 = %.6g < b^2 = %.6g", N,
+                  sc[5] ** 2 + sc[6] ** 2, osc.b ** 2)
         return []
-    disc = r2 - b * b
-    if disc < 0:
-        log.debug("no N=%d motion: c^2 + s^2 = %.6g < b^2 = %.6g", N, r2, b * b)
-        return []
-    root_r = math.sqrt(disc)
-    # the phase of eq. (15) inherits the rounding of disc amplified by r / sqrt(disc)
-    phase_error = _EPS * math.sqrt(r2) / root_r if root_r > 0 else math.sqrt(_EPS)
-    if phase_error > _FOLD_ERROR_WARN:
-        warnings.warn(f"c^2 + s^2 = {r2:.17g} is within {disc / r2:.2g} (relative) of b^2 = "
-                      f"{b * b:.17g}: a fold of eq. (15), where the two roots merge; the impact "
-                      f"phase is known only to about {phase_error:.1g} rad", NearFoldWarning,
+    if fold_error > _FOLD_ERROR_WARN:
+        r2 = sc[5] ** 2 + sc[6] ** 2
+        b = osc.b
+        warnings.warn(f"c^2 + s^2 = {r2:.17g} is within {(r2 - b * b) / r2:.2g} (relative) of "
+                      f"b^2 = {b * b:.17g}: a fold of eq. (15), where the two roots merge; the "
+                      f"impact phase is known only to about {fold_error:.1g} rad", NearFoldWarning,
                       stacklevel=2)
+    _warn_capped(capped, sc[0])
     out = []
-    for sign in ((+1, -1) if root_r > 0 else (+1,)):
-        sin_d = (b * s + sign * c * root_r) / r2
-        cos_d = (b * c - sign * s * root_r) / r2
-        delta = math.atan2(sin_d, cos_d)
-        orbit = orbit_at_phase(osc, N, delta, root=sign, flow=flow, S=S, DPhi=DPhi)
+    for k in range(count):
+        orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k],
+                            float(sigma[k]), float(gap[k]), float(gap_t[k]))
         _warn_low_impact_velocity(orbit)
         out.append(orbit)
     return out
@@ -347,5 +434,10 @@ def _warn_low_impact_velocity(orbit: PeriodicOrbit) -> None:
 
 def amplitude_squared(osc: ImpactOscillator, N: int) -> float:
     """``c^2 + s^2`` of eq. (14)-(15): motions exist iff it is ``>= b^2``."""
-    S, _, _ = periodic_matrix(Flow(osc), _check_N(N))
-    return float(S[0, 0] ** 2 + S[0, 1] ** 2)
+    from impactcont.orbit import kernel
+
+    osc = _check_oscillator(osc)
+    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    _, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, _check_N(N))
+    _warn_setup(osc, sc, stacklevel=2)
+    return float(sc[5] ** 2 + sc[6] ** 2)

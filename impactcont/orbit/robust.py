@@ -317,8 +317,8 @@ class _Follower:
     def check_physical(self, q: tuple[float, ...]) -> PeriodicOrbit:
         """Full eq. (16) check (no contact inside the period) and G at q."""
         q = tuple(float(v) for v in q)
-        osc, flow, S, DPhi, _, delta = self._phase(q)
-        orbit = orbit_at_phase(osc, self.N, delta, root=self.root, flow=flow, S=S, DPhi=DPhi)
+        osc, _, _, _, _, delta = self._phase(q)
+        orbit = orbit_at_phase(osc, self.N, delta, root=self.root)
         if not orbit.physical:
             raise self._fail(q, f"is not physical ({orbit.reason})")
         if q not in self.cache:

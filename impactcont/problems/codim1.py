@@ -218,8 +218,7 @@ class CurveProblem:
         pc = self._pieces(u[0], lam)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", LowImpactVelocityWarning)
-            return orbit_at_phase(pc.osc, self.N, float(u[1]), flow=pc.flow, S=pc.S,
-                                  DPhi=pc.DPhi)
+            return orbit_at_phase(pc.osc, self.N, float(u[1]))
 
     def fold_function(self, u: np.ndarray, lam: float) -> float:
         """``dr/d delta = -c sin(delta) + s cos(delta)``; ``= -root * sqrt(c^2+s^2-b^2)``."""
@@ -294,8 +293,7 @@ class CurveProblem:
         """
         if extras is None:
             pc = self._pieces(p1, p2)
-            orbit = orbit_at_phase(pc.osc, self.N, float(delta), flow=pc.flow, S=pc.S,
-                                   DPhi=pc.DPhi)
+            orbit = orbit_at_phase(pc.osc, self.N, float(delta))
             extras = self.extras_from_orbit(orbit)
         u0 = np.concatenate([[p1, delta], np.asarray(extras, dtype=float)])
         self.accept(u0, p2)
@@ -303,7 +301,7 @@ class CurveProblem:
 
     def solve(self, x0: np.ndarray, extra: Callable[[np.ndarray], float],
               gradient: np.ndarray | None = None, *, tol: float = 1e-12,
-              max_iter: int = 30) -> np.ndarray:
+              max_iter: int = 30, residual_tol: float = 0.0) -> np.ndarray:
         """Newton on ``[F(x); extra(x)] = 0`` in all of ``x = [u, lam]`` (m + 1 unknowns).
 
         Parameters
@@ -318,6 +316,13 @@ class CurveProblem:
         tol : float
             Converged when the Newton step is at most ``tol * max(1, |x|)``; the
             last step is kept in :attr:`last_step` (a bound on the error).
+        max_iter : int
+            Newton iterations allowed.
+        residual_tol : float
+            At a singular solution (a Jordan block at a strong resonance) Newton
+            stagnates at a residual of rounding size before its steps reach `tol`:
+            accept the iterate once the residual is at most this and the step stops
+            shrinking; :attr:`last_step` then states the (larger) error.
 
         Returns
         -------
@@ -329,8 +334,12 @@ class CurveProblem:
             If the iteration does not converge or produces non-finite values.
         """
         x = np.array(x0, dtype=float)
+        best: tuple[float, np.ndarray, float] | None = None
         for _ in range(max_iter):
             H = np.append(self.residual(x[:-1], x[-1]), extra(x))
+            size = float(np.max(np.abs(H)))
+            if size <= residual_tol and (best is None or size < best[0]):
+                best = (size, x.copy(), self.last_step)
             if gradient is None:
                 grad = np.empty(x.size)
                 for j in range(x.size):
@@ -352,6 +361,9 @@ class CurveProblem:
             self.last_step = float(np.max(np.abs(step)))
             if self.last_step <= tol * max(1.0, float(np.max(np.abs(x)))):
                 return x
+        if best is not None:
+            self.last_step = best[2]
+            return best[1]
         raise NewtonConvergenceError(f"augmented Newton did not converge in {max_iter} "
                                      f"iterations (residual {np.max(np.abs(H)):.3g})")
 

@@ -14,16 +14,17 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.flow import Flow
-from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase, periodic_matrix
+from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem"]
 
 CONTINUABLE_PARAMETERS = ("omega", "b", "R", "eta", "alpha", "beta")
 """Model parameters a branch can be continued in."""
 
-_FD_STEP = 1e-6
-_DERIVATIVE_REUSE = 1e-5
+_DAMPING_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
+"""``d a_i / d lam = p + q omega_i^2`` for the damping parameters (``a_i = eta omega_i^2``,
+``a_i = (alpha + beta omega_i^2) / 2``)."""
+_KERNEL_WHICH = {"omega": 0, "R": 1, "eta": 2, "alpha": 2, "beta": 2}
 
 
 class PeriodicBranchProblem:
@@ -40,12 +41,10 @@ class PeriodicBranchProblem:
 
     Notes
     -----
-    ``c, s`` (eq. 13) are computed once per parameter value and cached; when
-    the parameter is the gap ``b`` they do not depend on it at all. The
-    parameter derivative of ``c, s`` uses central differences (relative step
-    1e-6), reused while the parameter moves by less than 1e-5 (relative), as
-    within one corrector; it only steers the predictor and Newton, never the
-    accuracy of a point, which is set by the residual.
+    ``c, s`` (eq. 13) come from the compiled kernel in modal form (O(n) per
+    parameter value, cached); when the parameter is the gap ``b`` they do not
+    depend on it at all. Their parameter derivative is exact: one complex-step
+    evaluation of the same kernel (no step-size error, no cancellation).
     """
 
     def __init__(self, osc: ImpactOscillator, N: int, parameter: str) -> None:
@@ -58,59 +57,82 @@ class PeriodicBranchProblem:
         if parameter == "eta" and osc.eta is None:
             raise ParameterError("parameter='eta' needs the paper's damping C = 2 eta K; the "
                                  "oscillator uses Rayleigh damping (alpha, beta)")
-        _ = osc.modes  # computed once here, then shared by every replace() along the branch
         self.osc = osc
         self.N = N
         self.parameter = parameter
-        self._cache: dict[float, tuple[ImpactOscillator, Flow, np.ndarray, np.ndarray]] = {}
-        self._derivative_cache: tuple[float, tuple[float, float, float]] | None = None
+        w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
+        self._w = w
+        if parameter in _DAMPING_DIRECTION:
+            p, q = _DAMPING_DIRECTION[parameter]
+            self._da = p + q * w * w
+        else:
+            self._da = np.zeros_like(w)
+        self._cache: dict[float, tuple[float, float, float]] = {}
+        self._osc_cache: dict[float, ImpactOscillator] = {}
 
     # -- the oscillator along the branch ------------------------------------------------------
     def oscillator_at(self, lam: float) -> ImpactOscillator:
-        """The oscillator with ``parameter = lam``."""
-        return self._pieces(lam)[0]
+        """The oscillator with ``parameter = lam`` (sharing the modal basis)."""
+        lam = float(lam)
+        hit = self._osc_cache.get(lam)
+        if hit is None:
+            if len(self._osc_cache) > 64:
+                self._osc_cache.clear()
+            hit = self._osc_cache[lam] = self.osc.replace(**{self.parameter: lam})
+        return hit
 
-    def _pieces(self, lam: float) -> tuple[ImpactOscillator, Flow, np.ndarray, np.ndarray]:
+    def _arguments(self, lam: float) -> tuple:
+        """Kernel arguments ``(a, R, omega)`` at ``lam``."""
+        osc = self.osc
+        a = osc.modes.kernel_arrays[1]
+        R, omega = osc.R, osc.omega
+        if self.parameter == "omega":
+            omega = lam
+        elif self.parameter == "R":
+            R = lam
+        elif self.parameter in _DAMPING_DIRECTION:
+            current = float(getattr(osc, self.parameter) or 0.0)
+            a = a + (lam - current) * self._da
+        return a, R, omega
+
+    def amplitude(self, lam: float) -> tuple[float, float, float]:
+        """``c, s`` of eq. (14) and the gap ``b`` at ``lam``."""
+        from impactcont.orbit import kernel
+
         lam = float(lam)
         hit = self._cache.get(lam)
         if hit is not None:
             return hit
-        osc = self.osc.replace(**{self.parameter: lam})
-        flow = Flow(osc)
         if self.parameter == "b" and self._cache:
-            _, _, S, DPhi = next(iter(self._cache.values()))  # c, s do not depend on the gap
+            c, s, _ = next(iter(self._cache.values()))  # c, s do not depend on the gap
+            value = (c, s, lam)
         else:
-            S, DPhi, _ = periodic_matrix(flow, self.N)
-        if len(self._cache) > 64:
+            self._check(lam)
+            a, R, omega = self._arguments(lam)
+            c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
+            value = (float(c), float(s), lam if self.parameter == "b" else self.osc.b)
+        if len(self._cache) > 256:
             self._cache.clear()
-        self._cache[lam] = (osc, flow, S, DPhi)
-        return self._cache[lam]
-
-    def amplitude(self, lam: float) -> tuple[float, float, float]:
-        """``c, s`` of eq. (14) and the gap ``b`` at ``lam``."""
-        osc, _, S, _ = self._pieces(lam)
-        return float(S[0, 0]), float(S[0, 1]), osc.b
-
-    def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:
-        if self.parameter == "b":
-            return 0.0, 0.0, 1.0
-        last = self._derivative_cache
-        if last is not None and abs(lam - last[0]) <= _DERIVATIVE_REUSE * max(1.0, abs(lam)):
-            return last[1]  # a chord step: Newton's iterates of one corrector stay this close
-        value = self._difference_quotient(lam)
-        self._derivative_cache = (lam, value)
+        self._cache[lam] = value
         return value
 
-    def _difference_quotient(self, lam: float) -> tuple[float, float, float]:
-        h = _FD_STEP * max(1.0, abs(lam))
-        if self.parameter in ("R", "eta", "alpha", "beta"):
-            lo = max(lam - h, 0.0)
-            hi = min(lam + h, 1.0) if self.parameter == "R" else lam + h
-        else:
-            lo, hi = lam - h, lam + h
-        c1, s1, _ = self.amplitude(hi)
-        c0, s0, _ = self.amplitude(lo)
-        return (c1 - c0) / (hi - lo), (s1 - s0) / (hi - lo), 0.0
+    def _check(self, lam: float) -> None:
+        """Refuse an iterate outside the parameter's range (the corrector then halves)."""
+        if not math.isfinite(lam) or (self.parameter == "omega" and lam <= 0.0) or (
+                self.parameter == "R" and not 0.0 <= lam <= 1.0) or (
+                self.parameter in _DAMPING_DIRECTION and lam < 0.0):
+            raise ParameterError(f"{self.parameter}={lam!r} is outside its allowed range")
+
+    def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:
+        from impactcont.orbit import kernel
+
+        if self.parameter == "b":
+            return 0.0, 0.0, 1.0
+        self._check(lam)
+        a, R, omega = self._arguments(float(lam))
+        dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R, omega,
+                                             self.N, _KERNEL_WHICH[self.parameter], self._da)
+        return float(dc), float(ds), 0.0
 
     # -- the Problem protocol ------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
@@ -134,8 +156,7 @@ class PeriodicBranchProblem:
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, delta: float, lam: float) -> PeriodicOrbit:
         """The full periodic motion (state, G, multipliers, checks) at a branch point."""
-        osc, flow, S, DPhi = self._pieces(lam)
-        return orbit_at_phase(osc, self.N, delta, flow=flow, S=S, DPhi=DPhi)
+        return orbit_at_phase(self.oscillator_at(lam), self.N, delta)
 
     def fold_residual(self, delta: float, lam: float) -> np.ndarray:
         """``[r, dr/d delta]``: both vanish at a fold (saddle-node) of the branch."""

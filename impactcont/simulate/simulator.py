@@ -88,8 +88,8 @@ def _wrap(phase: float) -> float:
     return math.remainder(phase, TWO_PI)
 
 
-def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float
-                ) -> tuple[float, np.ndarray] | None:
+def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
+                after: float = -math.inf) -> tuple[float, np.ndarray] | None:
     """First impact within ``t_max`` of a flight starting at state X and phase.
 
     Parameters
@@ -101,6 +101,8 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float
         Forcing phase at the start.
     t_max : float
         Longest flight to search.
+    after : float
+        Ignore an upward crossing completed by this time (see :func:`simulate`).
 
     Returns
     -------
@@ -121,7 +123,7 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float
             # the previous window ended just below the stop at this very time, moving up:
             # the impact sits on the boundary (the two evaluations differ only by rounding)
             return start, flow.state(start, X, phase)[0]
-        tc = first_upward_crossing(motion, b, grid)
+        tc = first_upward_crossing(motion, b, grid, after=after)
         if tc is not None:
             return tc, flow.state(tc, X, phase)[0]
         below_at_start = bool(x[-1] < b)
@@ -201,7 +203,11 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             status = SimulationStatus.STICKING  # at rest on the stop, pushed into it
             break
         else:
-            hit = next_impact(flow, X, phase, t_end - t_now)
+            # a start on the stop at rest that leaves it (R = 0 after every impact): x1' = 0
+            # there only up to the rounding of the modal transform, which may show a
+            # crossing of the stop a few ulps after the start; it is not an impact
+            after = _ON_STOP * TWO_PI / osc.omega if on_the_stop else -math.inf
+            hit = next_impact(flow, X, phase, t_end - t_now, after=after)
         flight = hit[0] if hit is not None else t_end - t_now
         if trajectory:
             tau = np.arange(0.0, flight, dt_sample)

@@ -1,0 +1,872 @@
+"""The compiled evaluation kernel: periodic N-1 motions in modal form, O(n) per motion.
+
+Everything here is a numba function over floats and arrays (no Python objects),
+compiled on first use and cached on disk (``cache=True``); importing
+:mod:`impactcont` does not import this module.
+
+The modal form of eq. (12)-(16)
+-------------------------------
+In mass-normalised modal coordinates ``z = [y; y']`` the flow over one period
+``T = 2 pi N / omega`` is block diagonal (``W_i(T)``, eq. 9) and the impact
+(eq. 4) is the rank-one map ``z+ = (I - kappa p q^T) z-`` with
+``kappa = 1 + R``, ``q = [0; u_1.]`` (the velocity of mass 1) and
+``p = [0; (u^-1)_.1]``. Because ``omega T = 2 pi N`` the forcing block of
+eq. (9) is ``E_i = (I - W_i) P_i`` with ``P_i`` the forced response (eq. 7),
+and the solve of eq. (12) collapses (Sherman-Morrison) to per-mode scalars:
+
+    x1(0)  = x1p(delta) - kappa sigma g,         g     = sum_i c_i W12_i / d_i
+    sigma  = x1p'(delta) / Delta,                Delta = (1 - R)/2 + kappa sum_i c_i h_i
+
+with ``c_i = u_1i (u^-1)_i1`` (``sum_i c_i = 1``), ``d_i = det(I - W_i)``,
+``h_i = (1 - det W_i + W22_i - W11_i) / (2 d_i)`` and the forced motion of mass 1
+``x1p(delta) = Gamma cos(delta) + B sin(delta)``. ``sigma`` is the impact
+velocity ``x1'(T^-)`` (``h2`` of eq. 22). Eq. (14) is therefore
+
+    c cos(delta) + s sin(delta) = b,   c = Gamma - rho B,   s = B + rho Gamma,
+    rho = kappa omega g / Delta.
+
+Every ``d_i``, ``h_i`` and ``1 - W11_i`` is written without cancellation
+(``expm1``, half-angle sines, and for over-damped modes the divided difference of
+``lambda coth(lambda T / 2)``), so the cost is O(n) per frequency and O(1) per
+root, with no dense solve.
+
+Elastic impacts without damping (``R = 1``, every ``a_i = 0``) give ``h_i = 0``
+and ``Delta = 0`` exactly: ``I - D Phi`` of eq. (12) is singular for every
+omega. The motions are still isolated: ``x1p'(delta) = 0`` fixes the phase
+(``delta = atan2(B, Gamma)`` or that plus pi) and the impact condition fixes
+``sigma = (x1p(delta) - b) / (kappa g)``; for one mass this is the classical
+``V = -(b -+ gamma)(1 - cos T)/sin T``.
+
+Stability without eigenvalues: the characteristic polynomial of G (eq. 25),
+from its Hessenberg form, and the Schur-Cohn recursion decide whether every
+multiplier lies strictly inside the unit circle.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+from numba.extending import overload
+from numba.np.linalg import _LAPACK, ensure_lapack
+
+__all__ = [
+    "amplitude",
+    "amplitude_derivative",
+    "block_map",
+    "charpoly",
+    "impact_jacobian",
+    "omega_setup",
+    "orbit_roots",
+    "orbit_states",
+    "schur_stable",
+    "x1_maximum",
+]
+
+_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
+
+ensure_lapack()  # numba's LAPACK bindings resolve to scipy's
+_rgeev = _LAPACK().numba_ez_rgeev(nb.float64)
+_KIND = np.int8(ord("d"))
+_NO = np.int8(ord("N"))
+
+_EPS = 2.220446049250313e-16
+_CELLS_PER_PERIOD = 16
+_MAX_SAMPLES = 2_000_000
+_XTOL = 1e-15
+_RTOL = 4.0 * _EPS
+_MAX_ITER = 200
+_END_TOL = 1e-12  # critical points this close (relative to T) to an impact are the impact
+
+
+# -- scalar helpers usable for float and complex (complex step) ---------------------------------
+def _expm1(x):  # pragma: no cover - replaced by the overload inside compiled code
+    return math.expm1(x)
+
+
+@overload(_expm1)
+def _expm1_overload(x):
+    if isinstance(x, nb.types.Complex):
+        def impl(x):
+            # expm1(x + iy) = e^x (cos y + i sin y) - 1, accurate for the tiny y of a complex step
+            ex = math.exp(x.real)
+            return complex(math.expm1(x.real) - 2.0 * ex * math.sin(0.5 * x.imag) ** 2,
+                           ex * math.sin(x.imag))
+        return impl
+    return lambda x: math.expm1(x)
+
+
+@_jit
+def _re(x):
+    return x.real
+
+
+# -- one mode: the exact free transfer W(t) of eq. (9) ------------------------------------------
+@_jit
+def mode_transfer(w, a, t):
+    """``W11, W12, W21, W22`` of one mode at time t, every damping class (eq. 9)."""
+    d = (w - a) * (w + a)
+    if _re(d) > 0.0:
+        wd = np.sqrt(d)
+        e = np.exp(-a * t)
+        ec = e * np.cos(wd * t)
+        es = e * np.sin(wd * t) / wd
+        w22 = ec - a * es
+    elif _re(d) == 0.0:
+        e = np.exp(-a * t)
+        ec = e
+        es = e * t
+        w22 = e * (1.0 - a * t)
+    else:
+        k = np.sqrt(-d)
+        e_slow = np.exp(-(w * w / (a + k)) * t)
+        e_fast = np.exp(-(a + k) * t)
+        ec = 0.5 * (e_slow + e_fast)
+        es = e_slow * (-_expm1(-2.0 * k * t)) / (2.0 * k)
+        if _re(k * t) < 1.0:
+            w22 = ec - a * es
+        else:
+            w22 = 0.5 * (-(w * w) / ((a + k) * k) * e_slow + (1.0 + a / k) * e_fast)
+    return ec + a * es, es, -(w * w) * es, w22
+
+
+@_jit
+def mode_period(w, a, T):
+    """One mode over a period: ``W(T)``, ``d = det(I - W)``, ``h`` and ``1 - W11``.
+
+    Returns ``(W11, W12, W21, W22, d, h, one_minus_w11, cond)`` where
+    ``h = (1 - det W + W22 - W11) / (2 d)`` and ``cond`` bounds the relative error
+    of ``d`` caused by the rounding of ``omega_d T`` (large only close to an undamped
+    resonance of the free mode, ``omega_d T`` near a multiple of 2 pi).
+    """
+    w11, w12, w21, w22 = mode_transfer(w, a, T)
+    d = (w - a) * (w + a)
+    aT = a * T
+    em1 = _expm1(-aT)
+    cond = 1.0
+    if _re(d) > 0.0:
+        wd = np.sqrt(d)
+        th = wd * T
+        e = np.exp(-aT)
+        sh = np.sin(0.5 * th)
+        det = em1 * em1 + 4.0 * e * sh * sh
+        one_m_w11 = -em1 + 2.0 * e * sh * sh - a * w12
+        h = (-_expm1(-2.0 * aT) - 2.0 * a * w12) / (2.0 * det)
+        if _re(det) > 0.0:
+            cond = 1.0 + _re(th) * abs(_re(e * np.sin(th))) / abs(_re(det))
+    elif _re(d) == 0.0:
+        det = em1 * em1
+        one_m_w11 = -em1 - aT * np.exp(-aT)
+        h = (-_expm1(-2.0 * aT) - 2.0 * a * w12) / (2.0 * det)
+    else:
+        k = np.sqrt(-d)
+        ls = w * w / (a + k)
+        lf = a + k
+        ems = _expm1(-ls * T)
+        emf = _expm1(-lf * T)
+        det = ems * emf
+        if _re(k) >= 0.5 * _re(a):
+            # heavy damping: W11 = (lf e_s - ls e_f)/(lf - ls) and the divided difference of
+            # phi(l) = l coth(l T / 2), free of the cancellation of 1 - e_s against a/k
+            one_m_w11 = (-lf * ems + ls * emf) / (lf - ls)
+            phi_f = lf * (2.0 + emf) / (-emf)
+            phi_s = ls * (2.0 + ems) / (-ems)
+            h = (phi_f - phi_s) / (2.0 * (lf - ls))
+        else:
+            one_m_w11 = -0.5 * (ems + emf) - a * w12
+            h = (-_expm1(-2.0 * aT) - 2.0 * a * w12) / (2.0 * det)
+    return w11, w12, w21, w22, det, h, one_m_w11, cond
+
+
+# -- one frequency: S of eq. (13) in modal form ---------------------------------------------------
+@_jit
+def forced(w, a, f, omega, eig_err):
+    """``gamma_i, beta_i`` of eq. (7) and the worst relative error near a resonance."""
+    n = w.size
+    gamma = np.empty_like(w * (a[0] * omega))  # complex when any input is (complex step)
+    beta = np.empty_like(gamma)
+    worst = 0.0
+    for i in range(n):
+        detune = (w[i] - omega) * (w[i] + omega)
+        damp = 2.0 * a[i] * omega
+        den = detune * detune + damp * damp
+        if _re(den) == 0.0:
+            gamma[i] = np.nan if f[i] != 0.0 else 0.0
+            beta[i] = gamma[i]
+            if f[i] != 0.0:
+                worst = np.inf
+            continue
+        gamma[i] = detune * f[i] / den
+        beta[i] = damp * f[i] / den
+        if f[i] != 0.0:
+            scale = 4.0 * eig_err[i] + 4.0 * _EPS * _re(w[i] * w[i])
+            rel = scale * abs(_re(detune)) / _re(den)
+            if rel > worst:
+                worst = rel
+    return gamma, beta, worst
+
+
+@_jit
+def omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N):
+    """Everything eq. (12)-(15) needs at one forcing frequency, O(n).
+
+    Parameters
+    ----------
+    w, a, f : ndarray, shape (n,)
+        Natural frequencies, decay rates, modal forces.
+    u0, ui0 : ndarray, shape (n,)
+        First row of ``u`` and first column of ``u^-1``.
+    eig_err : ndarray, shape (n,)
+        Rounding-error scale of ``w_i^2``.
+    R, omega : float
+    N : int
+
+    Returns
+    -------
+    modal : ndarray, shape (8, n)
+        Rows ``gamma, beta, W11, W12, W21, W22, dy, dv`` (``dy, dv``: the free
+        modal deviation ``z(0) - z_p(0)`` per unit ``kappa sigma``).
+    scalars : ndarray, shape (10,)
+        ``T, Gamma, B, g, Delta, c, s, cond, resonance_error, elastic``.
+    """
+    n = w.size
+    T = 2.0 * np.pi * N / omega
+    kappa = 1.0 + R
+    gamma, beta, worst = forced(w, a, f, omega, eig_err)
+    modal = np.empty((8, n), dtype=gamma.dtype)
+    Gam = 0.0 * gamma[0]
+    B = 0.0 * gamma[0]
+    g = 0.0 * gamma[0]
+    hs = 0.0 * gamma[0]
+    g_abs = 0.0
+    h_abs = 0.0
+    mode_cond = 1.0
+    damped = False
+    for i in range(n):
+        w11, w12, w21, w22, det, h, omw, cond = mode_period(w[i], a[i], T)
+        ci = u0[i] * ui0[i]
+        modal[0, i] = gamma[i]
+        modal[1, i] = beta[i]
+        modal[2, i] = w11
+        modal[3, i] = w12
+        modal[4, i] = w21
+        modal[5, i] = w22
+        modal[6, i] = -ui0[i] * w12 / det
+        modal[7, i] = -ui0[i] * omw / det
+        Gam += u0[i] * gamma[i]
+        B += u0[i] * beta[i]
+        g += ci * w12 / det
+        hs += ci * h
+        g_abs += abs(_re(ci * w12 / det))
+        h_abs += abs(_re(ci * h))
+        if ci != 0.0 and cond > mode_cond:
+            mode_cond = cond
+        if _re(a[i]) != 0.0:
+            damped = True
+    Delta = 0.5 * (1.0 - R) + kappa * hs
+    elastic = (not damped) and _re(R) == 1.0
+    scalars = np.empty(10, dtype=gamma.dtype)
+    if elastic:
+        rho = 0.0 * Gam
+        cond_total = mode_cond * (1.0 + g_abs / max(abs(_re(g)), 1e-300))
+    else:
+        rho = kappa * omega * g / Delta
+        cond_d = (0.5 * (1.0 - _re(R)) + _re(kappa) * h_abs) / max(abs(_re(Delta)), 1e-300)
+        cond_g = g_abs / max(abs(_re(g)), 1e-300)
+        cond_total = mode_cond * (1.0 + abs(_re(rho)) * (cond_d + cond_g))
+    scalars[0] = T
+    scalars[1] = Gam
+    scalars[2] = B
+    scalars[3] = g
+    scalars[4] = Delta
+    scalars[5] = Gam - rho * B
+    scalars[6] = B + rho * Gam
+    scalars[7] = cond_total
+    scalars[8] = worst
+    scalars[9] = 1.0 if elastic else 0.0
+    return modal, scalars
+
+
+@_jit
+def amplitude(w, a, f, u0, ui0, R, omega, N):
+    """``c, s`` of eq. (14) (float or complex inputs: complex-step differentiable)."""
+    eig_err = np.zeros(w.size)
+    _, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
+    return sc[5], sc[6]
+
+
+_STEP = 1e-100
+
+
+@_jit
+def amplitude_derivative(w, a, f, u0, ui0, R, omega, N, which, da):
+    """Exact ``d(c, s)/d lam`` by one complex-step evaluation (no cancellation, no step error).
+
+    ``which``: 0 omega, 1 R, 2 the damping (``a`` moves along ``da``).
+    """
+    h = _STEP * max(1.0, abs(omega))
+    wc = w.astype(np.complex128)
+    ac = a.astype(np.complex128)
+    Rc = complex(R, 0.0)
+    omc = complex(omega, 0.0)
+    if which == 0:
+        omc = complex(omega, h)
+    elif which == 1:
+        h = _STEP
+        Rc = complex(R, h)
+    else:
+        h = _STEP
+        for i in range(a.size):
+            ac[i] = complex(a[i], h * da[i])
+    c, s = amplitude(wc, ac, f, u0, ui0, Rc, omc, N)
+    return c.imag / h, s.imag / h
+
+
+# -- roots of eq. (15) ----------------------------------------------------------------------
+@_jit
+def orbit_roots(scalars, b, omega, R):
+    """Impact phases and velocities of the motions at gap b.
+
+    Returns ``(count, delta[2], sigma[2], sign[2], fold_error)``; ``count`` is 0, 1
+    (double root) or 2, ``-1`` when every phase solves eq. (14) (no forcing reaches
+    mass 1) and ``-2`` for an elastic system whose forced motion of mass 1 vanishes.
+    """
+    Gam, B, g, Delta, c, s = scalars[1], scalars[2], scalars[3], scalars[4], scalars[5], scalars[6]
+    elastic = scalars[9] != 0.0
+    kappa = 1.0 + R
+    delta = np.zeros(2)
+    sigma = np.zeros(2)
+    sign = np.array([1.0, -1.0])
+    if elastic:
+        amp = math.hypot(Gam, B)
+        if amp == 0.0 or g == 0.0:
+            return -2, delta, sigma, sign, 0.0
+        d0 = math.atan2(B, Gam)
+        for k in range(2):
+            dk = d0 if k == 0 else d0 + math.pi
+            if dk > math.pi:
+                dk -= 2.0 * math.pi
+            delta[k] = dk
+            sigma[k] = ((amp if k == 0 else -amp) - b) / (kappa * g)
+        return 2, delta, sigma, sign, 0.0
+    r2 = c * c + s * s
+    if r2 == 0.0:
+        return (-1 if b == 0.0 else 0), delta, sigma, sign, 0.0
+    disc = r2 - b * b
+    if disc < 0.0:
+        return 0, delta, sigma, sign, 0.0
+    root_r = math.sqrt(disc)
+    fold_error = _EPS * math.sqrt(r2) / root_r if root_r > 0.0 else math.sqrt(_EPS)
+    count = 2 if root_r > 0.0 else 1
+    for k in range(count):
+        sg = sign[k]
+        sin_d = (b * s + sg * c * root_r) / r2
+        cos_d = (b * c - sg * s * root_r) / r2
+        dk = math.atan2(sin_d, cos_d)
+        delta[k] = dk
+        sigma[k] = omega * (B * math.cos(dk) - Gam * math.sin(dk)) / Delta
+    return count, delta, sigma, sign, fold_error
+
+
+@_jit
+def orbit_states(modal, omega, R, delta, sigma):
+    """Modal state right after the impact, ``y(0), y'(0)`` (eq. 13 in modal form)."""
+    n = modal.shape[1]
+    ks = (1.0 + R) * sigma
+    cd, sd = math.cos(delta), math.sin(delta)
+    y = np.empty(n)
+    v = np.empty(n)
+    for i in range(n):
+        gm, bt = modal[0, i], modal[1, i]
+        y[i] = gm * cd + bt * sd + ks * modal[6, i]
+        v[i] = omega * (bt * cd - gm * sd) + ks * modal[7, i]
+    return y, v
+
+
+# -- G of eq. (25) ---------------------------------------------------------------------------------
+@_jit
+def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
+    """G of eq. (22)-(25) in ``[dx2..dxn, dx1'..dxn', d delta]``, shape (2n, 2n)."""
+    n = modal.shape[1]
+    m = 2 * n
+    _, v0 = orbit_states(modal, omega, R, delta, sigma)
+    kappa = 1.0 + R
+    cd, sd = math.cos(delta), math.sin(delta)
+    # physical transition U W(T) U^-1, rows scaled by D (eq. 4)
+    tr = np.empty((m, m))
+    for r in range(n):
+        for col in range(n):
+            s11 = 0.0
+            s12 = 0.0
+            s21 = 0.0
+            s22 = 0.0
+            for i in range(n):
+                p = u[r, i] * ui[i, col]
+                s11 += p * modal[2, i]
+                s12 += p * modal[3, i]
+                s21 += p * modal[4, i]
+                s22 += p * modal[5, i]
+            tr[r, col] = s11
+            tr[r, n + col] = s12
+            tr[n + r, col] = s21
+            tr[n + r, n + col] = s22
+    for col in range(m):
+        tr[n, col] *= -R
+    # d/d delta of the forcing term, E_delta = (I - W) P_delta per mode, then D U
+    e_y = np.empty(n)
+    e_v = np.empty(n)
+    acc = np.empty(n)
+    v_pre = np.empty(n)
+    for i in range(n):
+        gm, bt = modal[0, i], modal[1, i]
+        py = -gm * sd + bt * cd
+        pv = omega * (-bt * sd - gm * cd)
+        e_y[i] = (1.0 - modal[2, i]) * py - modal[3, i] * pv
+        e_v[i] = -modal[4, i] * py + (1.0 - modal[5, i]) * pv
+        v_pre[i] = v0[i] + kappa * sigma * ui[i, 0]
+        # forced part harmonic (-omega^2 y_p), free part by the mode's equation: no
+        # cancellation of f cos(delta) against w^2 y for stiff, quasi-static modes
+        free_v = modal[7, i] + ui[i, 0]
+        acc[i] = (-omega * omega * (gm * cd + bt * sd)
+                  + kappa * sigma * (-w[i] * w[i] * modal[6, i] - 2.0 * a[i] * free_v))
+    dE = np.empty(m)
+    dX = np.empty(m)
+    for r in range(n):
+        sy = 0.0
+        sv = 0.0
+        xv = 0.0
+        xa = 0.0
+        for i in range(n):
+            sy += u[r, i] * e_y[i]
+            sv += u[r, i] * e_v[i]
+            xv += u[r, i] * v_pre[i]
+            xa += u[r, i] * acc[i]
+        dE[r] = sy
+        dE[n + r] = sv
+        dX[r] = xv
+        dX[n + r] = xa
+    dE[n] *= -R
+    dX[n] *= -R
+    h2 = dX[0]
+    h1 = dE[0]
+    G = np.empty((m, m))
+    for r in range(m - 1):
+        for col in range(m - 1):
+            G[r, col] = tr[r + 1, col + 1] - dX[r + 1] * tr[0, col + 1] / h2
+        G[r, m - 1] = dE[r + 1] - dX[r + 1] * h1 / h2
+    for col in range(m - 1):
+        G[m - 1, col] = -omega * tr[0, col + 1] / h2
+    G[m - 1, m - 1] = 1.0 - omega * h1 / h2
+    return G, h2
+
+
+# -- stability without eigenvalues -----------------------------------------------------------------
+@_jit
+def charpoly(A):
+    """Coefficients (ascending, monic) of ``det(lambda I - A)`` via the Hessenberg form."""
+    m = A.shape[0]
+    H = A.copy()
+    for k in range(m - 2):  # Householder reduction to upper Hessenberg form
+        alpha = 0.0
+        for i in range(k + 1, m):
+            alpha += H[i, k] * H[i, k]
+        alpha = math.sqrt(alpha)
+        if alpha == 0.0:
+            continue
+        if H[k + 1, k] > 0.0:
+            alpha = -alpha
+        v = np.zeros(m)
+        v[k + 1] = H[k + 1, k] - alpha
+        for i in range(k + 2, m):
+            v[i] = H[i, k]
+        vv = 0.0
+        for i in range(k + 1, m):
+            vv += v[i] * v[i]
+        if vv == 0.0:
+            continue
+        for col in range(m):  # H <- (I - 2 v v^T / vv) H
+            t = 0.0
+            for i in range(k + 1, m):
+                t += v[i] * H[i, col]
+            t *= 2.0 / vv
+            for i in range(k + 1, m):
+                H[i, col] -= t * v[i]
+        for r in range(m):  # H <- H (I - 2 v v^T / vv)
+            t = 0.0
+            for i in range(k + 1, m):
+                t += H[r, i] * v[i]
+            t *= 2.0 / vv
+            for i in range(k + 1, m):
+                H[r, i] -= t * v[i]
+    # p_k(l) = (l - h_kk) p_{k-1} - sum_{i<k} h_ik (prod_{j=i+1..k} h_{j,j-1}) p_{i-1}
+    P = np.zeros((m + 1, m + 1))
+    P[0, 0] = 1.0
+    for k in range(1, m + 1):
+        for j in range(k):
+            P[k, j + 1] += P[k - 1, j]
+            P[k, j] -= H[k - 1, k - 1] * P[k - 1, j]
+        prod = 1.0
+        for i in range(k - 1, 0, -1):
+            prod *= H[i, i - 1]
+            coef = H[i - 1, k - 1] * prod
+            if coef != 0.0:
+                for j in range(i):
+                    P[k, j] -= coef * P[i - 1, j]
+    return P[m].copy()
+
+
+@_jit
+def schur_stable(p):
+    """All roots of the real polynomial ``p`` (ascending) strictly inside the unit circle.
+
+    Schur-Cohn: ``p`` of degree m is Schur stable iff ``|p_0| < |p_m|`` and the
+    degree ``m - 1`` polynomial ``(p_m p(z) - p_0 p*(z)) / z`` is.
+    """
+    c = p.copy()
+    m = c.size - 1
+    while m > 0:
+        scale = 0.0
+        for k in range(m + 1):
+            scale = max(scale, abs(c[k]))
+        if scale == 0.0 or not np.isfinite(scale):
+            return False
+        if abs(c[0]) >= abs(c[m]):
+            return False
+        new = np.empty(m)
+        for k in range(m):
+            new[k] = (c[m] * c[k + 1] - c[0] * c[m - 1 - k]) / (scale * scale)
+        c = new
+        m -= 1
+    return True
+
+
+# -- the interior-contact check of eq. (16) --------------------------------------------------
+@_jit
+def time_grid(w, a, u0, omega, T):
+    """Times on [0, T], each cell at most 1/16 of the fastest period seen by mass 1.
+
+    With a geometric refinement near 0 for fast over-damped decays (as
+    :func:`impactcont.orbit.extrema.sample_times`). Returns ``(times, capped)``.
+    """
+    rate = omega
+    decay = 0.0
+    for i in range(w.size):
+        if u0[i] == 0.0:
+            continue
+        d = (w[i] - a[i]) * (w[i] + a[i])
+        if d > 0.0:
+            rate = max(rate, math.sqrt(d))
+        fast = a[i] + (math.sqrt(-d) if d < 0.0 else 0.0)
+        decay = max(decay, fast)
+    h = 2.0 * math.pi / (_CELLS_PER_PERIOD * rate)
+    count = max(math.ceil(T / h), 8)
+    capped = count > _MAX_SAMPLES
+    if capped:
+        count = _MAX_SAMPLES
+    cell = T / count
+    extra = 0
+    if decay > 0.0:
+        tau = 1.0 / (_CELLS_PER_PERIOD * decay)
+        if tau < cell:
+            extra = math.ceil(math.log2(cell / tau))
+    times = np.empty(count + 1 + extra)
+    times[0] = 0.0
+    for j in range(extra):
+        times[1 + j] = cell * 2.0 ** (-(extra - j))
+    for j in range(1, count + 1):
+        times[extra + j] = T * j / count
+    times[extra + count] = T
+    return times, capped
+
+
+@_jit
+def free_x1(t, w, a, u0, dy, dv):
+    """x1 and its first three time derivatives of the free deviation (per unit kappa sigma)."""
+    x0 = 0.0
+    x1 = 0.0
+    x2 = 0.0
+    x3 = 0.0
+    for i in range(w.size):
+        if u0[i] == 0.0:
+            continue
+        w11, w12, w21, w22 = mode_transfer(w[i], a[i], t)
+        y = w11 * dy[i] + w12 * dv[i]
+        v = w21 * dy[i] + w22 * dv[i]
+        acc = -w[i] * w[i] * y - 2.0 * a[i] * v
+        jerk = -w[i] * w[i] * v - 2.0 * a[i] * acc
+        x0 += u0[i] * y
+        x1 += u0[i] * v
+        x2 += u0[i] * acc
+        x3 += u0[i] * jerk
+    return x0, x1, x2, x3
+
+
+@_jit
+def free_on_grid(times, w, a, u0, dy, dv):
+    """``free_x1`` at every grid time, shape (3, nt): x1, x1', x1''."""
+    out = np.empty((3, times.size))
+    for k in range(times.size):
+        x0, x1, x2, _ = free_x1(times[k], w, a, u0, dy, dv)
+        out[0, k] = x0
+        out[1, k] = x1
+        out[2, k] = x2
+    return out
+
+
+@_jit
+def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    th = omega * t + delta
+    c, s = math.cos(th), math.sin(th)
+    p = Gam * c + B * s
+    dp = omega * (B * c - Gam * s)
+    f0, f1, f2, f3 = free_x1(t, w, a, u0, dy, dv)
+    return (p + ks * f0, dp + ks * f1, -omega * omega * p + ks * f2,
+            -omega * omega * dp + ks * f3)
+
+
+@_jit
+def _polish(order, lo, hi, g_lo, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton."""
+    left, right = lo, hi
+    ga = g_lo
+    x = 0.5 * (left + right)
+    for _ in range(_MAX_ITER):
+        d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        g = d[order]
+        dg = d[order + 1]
+        if (g < 0.0) == (ga < 0.0):
+            left = x
+            ga = g
+        else:
+            right = x
+        if g == 0.0:
+            return x
+        step = g / dg if dg != 0.0 else np.inf
+        tol = _XTOL + _RTOL * abs(x)
+        xn = x - step
+        if abs(step) <= tol or right - left <= tol:
+            return xn if np.isfinite(xn) else x
+        if not (np.isfinite(xn) and left <= xn <= right):
+            xn = 0.5 * (left + right)
+        x = xn
+    return x
+
+
+@_jit
+def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
+
+    ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
+    ``omega times``. Cells where ``x1''`` changes sign are split at its root, so
+    that ``x1'`` is monotone on every piece; each sign change of ``x1'`` from + to -
+    is polished by safeguarded Newton. ``(-inf, nan)`` when there is none.
+    """
+    cd, sd = math.cos(delta), math.sin(delta)
+    nt = times.size
+    T = times[nt - 1]
+    best = -np.inf
+    best_t = np.nan
+    om2 = omega * omega
+    prev_v = 0.0
+    prev_a = 0.0
+    for k in range(nt):
+        c = cw[k] * cd - sw[k] * sd
+        s = sw[k] * cd + cw[k] * sd
+        p = Gam * c + B * s
+        v = omega * (B * c - Gam * s) + ks * free[1, k]
+        acc = -om2 * p + ks * free[2, k]
+        if k > 0:
+            lo = times[k - 1]
+            hi = times[k]
+            pts_t0 = lo
+            pts_v0 = prev_v
+            if (prev_a < 0.0) != (acc < 0.0):
+                tm = _polish(2, lo, hi, prev_a, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+                vm = _x1_derivs(tm, Gam, B, omega, delta, ks, w, a, u0, dy, dv)[1]
+                if (pts_v0 < 0.0) != (vm < 0.0):
+                    best, best_t = _take(best, best_t, pts_t0, tm, pts_v0, T, Gam, B, omega,
+                                         delta, ks, w, a, u0, dy, dv)
+                pts_t0 = tm
+                pts_v0 = vm
+            if (pts_v0 < 0.0) != (v < 0.0):
+                best, best_t = _take(best, best_t, pts_t0, hi, pts_v0, T, Gam, B, omega, delta,
+                                     ks, w, a, u0, dy, dv)
+        prev_v = v
+        prev_a = acc
+    return best, best_t
+
+
+@_jit
+def _take(best, best_t, lo, hi, v_lo, T, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    r = _polish(1, lo, hi, v_lo, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
+        # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
+        # its rounding would otherwise place a "maximum" a few ulps after the impact)
+        return best, best_t
+    x, _, acc, _ = _x1_derivs(r, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    if acc < 0.0 and x > best:
+        return x, r
+    return best, best_t
+
+
+# -- a block of the (omega, b) plane ---------------------------------------------------------
+@_jit
+def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
+    """Every root of eq. (15) on ``omegas x bs``: existence, checks, stability.
+
+    Returns ``r2 (nw,)``, ``cond (nw,)``, ``count (nw, nb)`` (of :func:`orbit_roots`)
+    and, on ``(nw, nb, 2)``: ``delta``,
+    ``impact_velocity``, ``gap_min``, ``gap_min_time``, ``stable`` (Schur-Cohn on
+    the characteristic polynomial of G), ``spectral_radius`` and
+    ``critical_multiplier`` (NaN unless ``want_rho``).
+    """
+    n = w.size
+    nw = omegas.size
+    nb = bs.size
+    u0 = u[0].copy()
+    ui0 = ui[:, 0].copy()
+    r2 = np.empty(nw)
+    conds = np.empty(nw)
+    delta = np.full((nw, nb, 2), np.nan)
+    vel = np.full((nw, nb, 2), np.nan)
+    gap = np.full((nw, nb, 2), np.nan)
+    gap_t = np.full((nw, nb, 2), np.nan)
+    stable = np.zeros((nw, nb, 2), dtype=np.bool_)
+    rho = np.full((nw, nb, 2), np.nan)
+    crit = np.full((nw, nb, 2), np.nan + 0j)
+    counts = np.zeros((nw, nb), dtype=np.int8)
+    for iw in range(nw):
+        om = omegas[iw]
+        modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, om, N)
+        r2[iw] = sc[5] * sc[5] + sc[6] * sc[6]
+        conds[iw] = sc[7]
+        times, _ = time_grid(w, a, u0, om, sc[0])
+        dy = modal[6].copy()
+        dv = modal[7].copy()
+        free = free_on_grid(times, w, a, u0, dy, dv)
+        cw = np.cos(om * times)
+        sw = np.sin(om * times)
+        for ib in range(nb):
+            count, dl, sg, _, _ = orbit_roots(sc, bs[ib], om, R)
+            counts[iw, ib] = count
+            for idx in range(max(count, 0)):
+                k = idx
+                delta[iw, ib, idx] = dl[k]
+                vel[iw, ib, idx] = sg[k]
+                ks = (1.0 + R) * sg[k]
+                best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], om, dl[k], ks,
+                                          w, a, u0, dy, dv)
+                gap[iw, ib, idx] = bs[ib] - best
+                gap_t[iw, ib, idx] = best_t
+                G, _ = impact_jacobian(modal, w, a, f, u, ui, om, R, dl[k], sg[k])
+                finite = True
+                for r in range(2 * n):
+                    for col in range(2 * n):
+                        if not np.isfinite(G[r, col]):
+                            finite = False
+                if not finite:
+                    continue
+                stable[iw, ib, idx] = schur_stable(charpoly(G))
+                if want_rho:
+                    mu = eigvals(G)
+                    j = np.argmax(np.abs(mu))
+                    crit[iw, ib, idx] = mu[j]
+                    rho[iw, ib, idx] = abs(mu[j])
+            if count == 1:  # a double root: both labels describe the same motion
+                for arr in (delta, vel, gap, gap_t, rho):
+                    arr[iw, ib, 1] = arr[iw, ib, 0]
+                crit[iw, ib, 1] = crit[iw, ib, 0]
+                stable[iw, ib, 1] = stable[iw, ib, 0]
+    return r2, conds, counts, delta, vel, gap, gap_t, stable, rho, crit
+
+
+# -- one point: what periodic_orbits needs --------------------------------------------------------
+@_jit
+def point_orbits(w, a, f, u0, ui0, eig_err, R, omega, N, b):
+    """Every root of eq. (15) at one ``(omega, b)`` with its interior-contact check.
+
+    Returns ``(modal, scalars, count, delta, sigma, fold_error, gap_min, gap_min_time,
+    capped)`` (see :func:`omega_setup`, :func:`orbit_roots`, :func:`x1_maximum`).
+    """
+    modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
+    count, dl, sg, _, fold_error = orbit_roots(sc, b, omega, R)
+    gap = np.full(2, np.inf)
+    gap_t = np.full(2, np.nan)
+    capped = False
+    if count > 0:
+        times, capped = time_grid(w, a, u0, omega, sc[0])
+        dy = modal[6].copy()
+        dv = modal[7].copy()
+        free = free_on_grid(times, w, a, u0, dy, dv)
+        cw = np.cos(omega * times)
+        sw = np.sin(omega * times)
+        for k in range(count):
+            best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, dl[k],
+                                      (1.0 + R) * sg[k], w, a, u0, dy, dv)
+            gap[k] = b - best
+            gap_t[k] = best_t
+    return modal, sc, count, dl, sg, fold_error, gap, gap_t, capped
+
+
+@_jit
+def eigvals(A):
+    """Eigenvalues of a real square matrix by LAPACK ``dgeev`` (exact conjugate pairs).
+
+    numba's ``np.linalg.eigvals`` refuses real input with complex eigenvalues, and
+    the complex ``zgeev`` does not return exact conjugate pairs; this calls numba's
+    own binding of the real routine (scipy's LAPACK, cacheable). The transpose has
+    the same eigenvalues, so the row-major copy is passed as it is.
+    """
+    m = A.shape[0]
+    a = A.copy()
+    wr = np.empty(m)
+    wi = np.empty(m)
+    vl = np.empty(1)
+    vr = np.empty(1)
+    info = _rgeev(_KIND, _NO, _NO, m, a.ctypes, m, wr.ctypes, wi.ctypes, vl.ctypes, 1,
+                  vr.ctypes, 1)
+    out = np.empty(m, dtype=np.complex128)
+    for i in range(m):
+        out[i] = complex(wr[i], wi[i]) if info == 0 else np.nan
+    _keep_alive(a.size + wr.size + wi.size + vl.size + vr.size)
+    return out
+
+
+@_jit
+def _keep_alive(size):
+    """``.ctypes`` does not keep its array alive; a use after the call does."""
+    return size
+
+
+@_jit
+def multipliers(G):
+    """Eigenvalues of G, largest modulus first (stable order among equal moduli)."""
+    mu = eigvals(G)
+    order = np.argsort(-np.abs(mu), kind="mergesort")
+    return mu[order]
+
+
+@_jit
+def phase_sigma(scalars, omega, R, b, delta):
+    """Impact velocity of the motion with impact phase ``delta`` (a root of eq. 14)."""
+    Gam, B, g, Delta = scalars[1], scalars[2], scalars[3], scalars[4]
+    cd, sd = math.cos(delta), math.sin(delta)
+    if scalars[9] != 0.0:  # elastic, undamped: from the impact condition x1(0) = b
+        return (Gam * cd + B * sd - b) / ((1.0 + R) * g)
+    return omega * (B * cd - Gam * sd) / Delta
+
+
+@_jit
+def phase_orbit(w, a, f, u0, ui0, eig_err, R, omega, N, b, delta):
+    """The motion with impact phase ``delta``: ``(modal, scalars, sigma, gap_min,
+    gap_min_time, capped)``."""
+    modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
+    sigma = phase_sigma(sc, omega, R, b, delta)
+    times, capped = time_grid(w, a, u0, omega, sc[0])
+    dy = modal[6].copy()
+    dv = modal[7].copy()
+    free = free_on_grid(times, w, a, u0, dy, dv)
+    best, best_t = x1_maximum(times, free, np.cos(omega * times), np.sin(omega * times),
+                              sc[1], sc[2], omega, delta, (1.0 + R) * sigma, w, a, u0, dy, dv)
+    return modal, sc, sigma, b - best, best_t, capped
