@@ -77,6 +77,7 @@ _MAX_SAMPLES = 2_000_000
 _XTOL = 1e-15
 _RTOL = 4.0 * _EPS
 _MAX_ITER = 200
+EAGER_JACOBIAN = 16  # G is returned with the orbit up to this size (2n)
 _END_TOL = 1e-12  # critical points this close (relative to T) to an impact are the impact
 
 
@@ -384,6 +385,31 @@ def orbit_states(modal, omega, R, delta, sigma):
     return y, v
 
 
+@_jit
+def physical_state(modal, u, omega, R, delta, sigma):
+    """``X(0) = [x; x']`` right after the impact and the velocity scale of the motion.
+
+    ``x1' = -R sigma`` is set exactly (eq. 4). The scale ``max(|x'|, omega |x|)``
+    bounds the rounding of ``h2`` (``eps`` times it).
+    """
+    n = modal.shape[1]
+    y, v = orbit_states(modal, omega, R, delta, sigma)
+    X = np.empty(2 * n)
+    scale = 0.0
+    for r in range(n):
+        sx = 0.0
+        sv = 0.0
+        for i in range(n):
+            sx += u[r, i] * y[i]
+            sv += u[r, i] * v[i]
+        X[r] = sx
+        X[n + r] = sv
+    X[n] = -R * sigma
+    for r in range(n):
+        scale = max(scale, abs(X[n + r]), omega * abs(X[r]))
+    return X, scale
+
+
 # -- G of eq. (25) ---------------------------------------------------------------------------------
 @_jit
 def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
@@ -463,11 +489,11 @@ def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
 
 # -- stability without eigenvalues -----------------------------------------------------------------
 @_jit
-def charpoly(A):
-    """Coefficients (ascending, monic) of ``det(lambda I - A)`` via the Hessenberg form."""
+def hessenberg(A):
+    """Upper Hessenberg form of A by Householder reflections (similar to A)."""
     m = A.shape[0]
     H = A.copy()
-    for k in range(m - 2):  # Householder reduction to upper Hessenberg form
+    for k in range(m - 2):
         alpha = 0.0
         for i in range(k + 1, m):
             alpha += H[i, k] * H[i, k]
@@ -499,6 +525,16 @@ def charpoly(A):
             t *= 2.0 / vv
             for i in range(k + 1, m):
                 H[r, i] -= t * v[i]
+        for i in range(k + 2, m):
+            H[i, k] = 0.0
+    return H
+
+
+@_jit
+def charpoly(A):
+    """Coefficients (ascending, monic) of ``det(lambda I - A)`` via the Hessenberg form."""
+    m = A.shape[0]
+    H = hessenberg(A)
     # p_k(l) = (l - h_kk) p_{k-1} - sum_{i<k} h_ik (prod_{j=i+1..k} h_{j,j-1}) p_{i-1}
     P = np.zeros((m + 1, m + 1))
     P[0, 0] = 1.0
@@ -602,15 +638,50 @@ def free_x1(t, w, a, u0, dy, dv):
     return x0, x1, x2, x3
 
 
+_ANCHOR = 32  # grid steps of the recurrence between direct evaluations
+
+
 @_jit
 def free_on_grid(times, w, a, u0, dy, dv):
-    """``free_x1`` at every grid time, shape (3, nt): x1, x1', x1''."""
-    out = np.empty((3, times.size))
-    for k in range(times.size):
+    """``free_x1`` at every grid time, shape (3, nt): x1, x1', x1''.
+
+    On the uniform part of the grid the modal deviation is advanced by the one-step
+    transfer ``W(h)`` (the flow is a semigroup: four products per mode and step
+    instead of three transcendental functions) and evaluated directly every
+    ``_ANCHOR`` steps, so rounding cannot accumulate beyond a few dozen ulps; the
+    grid only brackets roots, which are then polished by direct evaluation.
+    """
+    nt = times.size
+    out = np.zeros((3, nt))
+    # the uniform part ends the grid: find where it starts (after the refinement near 0)
+    j0 = nt - 1
+    while j0 > 1 and abs((times[j0] - times[j0 - 1]) - (times[nt - 1] - times[nt - 2])) <= (
+            1e-9 * (times[nt - 1] - times[nt - 2])):
+        j0 -= 1
+    for k in range(j0):
         x0, x1, x2, _ = free_x1(times[k], w, a, u0, dy, dv)
         out[0, k] = x0
         out[1, k] = x1
         out[2, k] = x2
+    h = (times[nt - 1] - times[j0]) / max(nt - 1 - j0, 1)
+    for i in range(w.size):
+        if u0[i] == 0.0:
+            continue
+        s11, s12, s21, s22 = mode_transfer(w[i], a[i], h)
+        wi2 = w[i] * w[i]
+        ai2 = 2.0 * a[i]
+        y = 0.0
+        yv = 0.0
+        for k in range(j0, nt):
+            if (k - j0) % _ANCHOR == 0:
+                w11, w12, w21, w22 = mode_transfer(w[i], a[i], times[k])
+                y = w11 * dy[i] + w12 * dv[i]
+                yv = w21 * dy[i] + w22 * dv[i]
+            else:
+                y, yv = s11 * y + s12 * yv, s21 * y + s22 * yv
+            out[0, k] += u0[i] * y
+            out[1, k] += u0[i] * yv
+            out[2, k] += u0[i] * (-wi2 * y - ai2 * yv)
     return out
 
 
@@ -658,42 +729,84 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
-    ``omega times``. Cells where ``x1''`` changes sign are split at its root, so
-    that ``x1'`` is monotone on every piece; each sign change of ``x1'`` from + to -
-    is polished by safeguarded Newton. ``(-inf, nan)`` when there is none.
+    ``omega times``. Each grid cell holds at most one root of ``x1''`` (the grid is
+    built so), hence at most two roots of ``x1'``:
+
+    - ``x1''`` keeps its sign: ``x1'`` is monotone, a maximum iff ``x1'`` goes from
+      ``>= 0`` to ``< 0``;
+    - ``x1''`` changes sign: ``x1'`` is unimodal; with ``x1'`` of opposite signs at
+      the ends there is one root and the cell brackets it; with equal signs the
+      root of ``x1''`` is polished first and splits the cell in two monotone pieces.
+
+    A candidate piece ``[p, q]`` with ``x1'`` decreasing through 0 has
+    ``x1 <= x1(p) + x1'(p) (q - p)``; candidates are polished (safeguarded Newton)
+    in decreasing order of that bound, and the search stops once the bound is
+    below the best maximum found: the result is the same as polishing every one.
+    ``(-inf, nan)`` when there is none.
     """
     cd, sd = math.cos(delta), math.sin(delta)
     nt = times.size
     T = times[nt - 1]
-    best = -np.inf
-    best_t = np.nan
     om2 = omega * omega
-    prev_v = 0.0
-    prev_a = 0.0
+    x = np.empty(nt)
+    v = np.empty(nt)
+    acc = np.empty(nt)
     for k in range(nt):
         c = cw[k] * cd - sw[k] * sd
         s = sw[k] * cd + cw[k] * sd
         p = Gam * c + B * s
-        v = omega * (B * c - Gam * s) + ks * free[1, k]
-        acc = -om2 * p + ks * free[2, k]
-        if k > 0:
-            lo = times[k - 1]
-            hi = times[k]
-            pts_t0 = lo
-            pts_v0 = prev_v
-            if (prev_a < 0.0) != (acc < 0.0):
-                tm = _polish(2, lo, hi, prev_a, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
-                vm = _x1_derivs(tm, Gam, B, omega, delta, ks, w, a, u0, dy, dv)[1]
-                if (pts_v0 < 0.0) != (vm < 0.0):
-                    best, best_t = _take(best, best_t, pts_t0, tm, pts_v0, T, Gam, B, omega,
-                                         delta, ks, w, a, u0, dy, dv)
-                pts_t0 = tm
-                pts_v0 = vm
-            if (pts_v0 < 0.0) != (v < 0.0):
-                best, best_t = _take(best, best_t, pts_t0, hi, pts_v0, T, Gam, B, omega, delta,
-                                     ks, w, a, u0, dy, dv)
-        prev_v = v
-        prev_a = acc
+        x[k] = p + ks * free[0, k]
+        v[k] = omega * (B * c - Gam * s) + ks * free[1, k]
+        acc[k] = -om2 * p + ks * free[2, k]
+    # candidate pieces: lo, hi, v(lo), upper bound of x1 on the piece
+    c_lo = np.empty(2 * nt)
+    c_hi = np.empty(2 * nt)
+    c_v = np.empty(2 * nt)
+    c_ub = np.empty(2 * nt)
+    m = 0
+    for k in range(1, nt):
+        lo, hi = times[k - 1], times[k]
+        v0, v1 = v[k - 1], v[k]
+        if (acc[k - 1] < 0.0) == (acc[k] < 0.0) or (v0 < 0.0) != (v1 < 0.0):
+            if v0 >= 0.0 and v1 < 0.0:  # one root of x1', a maximum
+                c_lo[m] = lo
+                c_hi[m] = hi
+                c_v[m] = v0
+                c_ub[m] = x[k - 1] + v0 * (hi - lo)
+                m += 1
+            continue
+        # x1'' changes sign and x1' has the same sign at both ends: zero or two roots
+        if (acc[k - 1] < 0.0) and v0 < 0.0:
+            continue  # x1' falls then rises from below 0: no maximum
+        if (acc[k - 1] >= 0.0) and v0 >= 0.0:
+            continue  # x1' rises then falls to >= 0: no maximum
+        tm = _polish(2, lo, hi, acc[k - 1], Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        xm, vm, _, _ = _x1_derivs(tm, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
+            c_lo[m] = lo
+            c_hi[m] = tm
+            c_v[m] = v0
+            c_ub[m] = x[k - 1] + v0 * (tm - lo)
+            m += 1
+        elif vm >= 0.0 and v1 < 0.0:  # rises above 0, then falls through it
+            c_lo[m] = tm
+            c_hi[m] = hi
+            c_v[m] = vm
+            c_ub[m] = xm + vm * (hi - tm)
+            m += 1
+    best = -np.inf
+    best_t = np.nan
+    done = np.zeros(m, dtype=np.bool_)
+    for _ in range(m):
+        j = -1
+        for i in range(m):
+            if not done[i] and (j < 0 or c_ub[i] > c_ub[j]):
+                j = i
+        if c_ub[j] <= best:
+            break
+        done[j] = True
+        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], T, Gam, B, omega, delta,
+                             ks, w, a, u0, dy, dv)
     return best, best_t
 
 
@@ -704,9 +817,9 @@ def _take(best, best_t, lo, hi, v_lo, T, Gam, B, omega, delta, ks, w, a, u0, dy,
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
         return best, best_t
-    x, _, acc, _ = _x1_derivs(r, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
-    if acc < 0.0 and x > best:
-        return x, r
+    xr, _, acc, _ = _x1_derivs(r, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    if acc < 0.0 and xr > best:
+        return xr, r
     return best, best_t
 
 
@@ -769,7 +882,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
                     continue
                 stable[iw, ib, idx] = schur_stable(charpoly(G))
                 if want_rho:
-                    mu = eigvals(G)
+                    mu = multipliers_of(G)
                     j = np.argmax(np.abs(mu))
                     crit[iw, ib, idx] = mu[j]
                     rho[iw, ib, idx] = abs(mu[j])
@@ -783,17 +896,28 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
 
 # -- one point: what periodic_orbits needs --------------------------------------------------------
 @_jit
-def point_orbits(w, a, f, u0, ui0, eig_err, R, omega, N, b):
+def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
     """Every root of eq. (15) at one ``(omega, b)`` with its interior-contact check.
 
     Returns ``(modal, scalars, count, delta, sigma, fold_error, gap_min, gap_min_time,
-    capped)`` (see :func:`omega_setup`, :func:`orbit_roots`, :func:`x1_maximum`).
+    capped, states, velocity_scales, jacobians)`` (see :func:`omega_setup`,
+    :func:`orbit_roots`, :func:`x1_maximum`, :func:`physical_state`); ``jacobians``
+    holds G of each root when ``2n <= EAGER_JACOBIAN`` (cheaper here than a later
+    call), an empty array otherwise.
     """
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     count, dl, sg, _, fold_error = orbit_roots(sc, b, omega, R)
     gap = np.full(2, np.inf)
     gap_t = np.full(2, np.nan)
+    states = np.zeros((2, 2 * w.size))
+    scales = np.zeros(2)
     capped = False
+    m = 2 * w.size
+    jacobians = np.zeros((2, m, m) if m <= EAGER_JACOBIAN else (2, 0, 0))
+    for k in range(max(count, 0)):
+        states[k], scales[k] = physical_state(modal, u, omega, R, dl[k], sg[k])
+        if m <= EAGER_JACOBIAN:
+            jacobians[k], _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
     if count > 0:
         times, capped = time_grid(w, a, u0, omega, sc[0])
         dy = modal[6].copy()
@@ -806,7 +930,198 @@ def point_orbits(w, a, f, u0, ui0, eig_err, R, omega, N, b):
                                       (1.0 + R) * sg[k], w, a, u0, dy, dv)
             gap[k] = b - best
             gap_t[k] = best_t
-    return modal, sc, count, dl, sg, fold_error, gap, gap_t, capped
+    return modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales, jacobians
+
+
+@_jit
+def _balance(a):
+    """Diagonal similarity by powers of 2 that equalises row and column norms (in place)."""
+    m = a.shape[0]
+    done = False
+    while not done:
+        done = True
+        for i in range(m):
+            r = 0.0
+            c = 0.0
+            for j in range(m):
+                if j != i:
+                    c += abs(a[j, i])
+                    r += abs(a[i, j])
+            if c == 0.0 or r == 0.0:
+                continue
+            g = r / 2.0
+            f = 1.0
+            total = c + r
+            while c < g:
+                f *= 2.0
+                c *= 4.0
+            g = r * 2.0
+            while c > g:
+                f /= 2.0
+                c /= 4.0
+            if (c + r) / f < 0.95 * total:
+                done = False
+                for j in range(m):
+                    a[i, j] /= f
+                for j in range(m):
+                    a[j, i] *= f
+
+
+@_jit
+def _hqr(a, out):
+    """Eigenvalues of the upper Hessenberg ``a`` by Francis double-shift QR (in place).
+
+    The classical EISPACK ``hqr`` iteration (as in Numerical Recipes, 3rd ed.,
+    ``Unsymmeig::hqr``). Returns False if an eigenvalue needs more than 60 iterations.
+    """
+    n = a.shape[0]
+    anorm = 0.0
+    for i in range(n):
+        for j in range(max(i - 1, 0), n):
+            anorm += abs(a[i, j])
+    nn = n - 1
+    t = 0.0
+    p = q = r = s = w = x = y = z = 0.0
+    while nn >= 0:
+        its = 0
+        while True:
+            ll = nn
+            while ll > 0:
+                s = abs(a[ll - 1, ll - 1]) + abs(a[ll, ll])
+                if s == 0.0:
+                    s = anorm
+                if abs(a[ll, ll - 1]) <= _EPS * s:
+                    a[ll, ll - 1] = 0.0
+                    break
+                ll -= 1
+            x = a[nn, nn]
+            if ll == nn:  # one root found
+                out[nn] = x + t
+                nn -= 1
+                break
+            y = a[nn - 1, nn - 1]
+            w = a[nn, nn - 1] * a[nn - 1, nn]
+            if ll == nn - 1:  # two roots found
+                p = 0.5 * (y - x)
+                q = p * p + w
+                z = math.sqrt(abs(q))
+                x += t
+                if q >= 0.0:
+                    z = p + (z if p >= 0.0 else -z)
+                    out[nn - 1] = x + z
+                    out[nn] = x + z
+                    if z != 0.0:
+                        out[nn] = x - w / z
+                else:
+                    out[nn] = complex(x + p, -z)
+                    out[nn - 1] = complex(x + p, z)
+                nn -= 2
+                break
+            if its == 60:
+                return False
+            if its == 10 or its == 20:  # exceptional shift
+                t += x
+                for i in range(nn + 1):
+                    a[i, i] -= x
+                s = abs(a[nn, nn - 1]) + abs(a[nn - 1, nn - 2])
+                x = 0.75 * s
+                y = x
+                w = -0.4375 * s * s
+            its += 1
+            mm = nn - 2
+            while mm >= ll:
+                z = a[mm, mm]
+                r = x - z
+                s = y - z
+                p = (r * s - w) / a[mm + 1, mm] + a[mm, mm + 1]
+                q = a[mm + 1, mm + 1] - z - r - s
+                r = a[mm + 2, mm + 1]
+                s = abs(p) + abs(q) + abs(r)
+                p /= s
+                q /= s
+                r /= s
+                if mm == ll:
+                    break
+                u = abs(a[mm, mm - 1]) * (abs(q) + abs(r))
+                v = abs(p) * (abs(a[mm - 1, mm - 1]) + abs(z) + abs(a[mm + 1, mm + 1]))
+                if u <= _EPS * v:
+                    break
+                mm -= 1
+            for i in range(mm, nn - 1):
+                a[i + 2, i] = 0.0
+                if i != mm:
+                    a[i + 2, i - 1] = 0.0
+            for k in range(mm, nn):
+                if k != mm:
+                    p = a[k, k - 1]
+                    q = a[k + 1, k - 1]
+                    r = 0.0
+                    if k + 1 != nn:
+                        r = a[k + 2, k - 1]
+                    x = abs(p) + abs(q) + abs(r)
+                    if x != 0.0:
+                        p /= x
+                        q /= x
+                        r /= x
+                s = math.sqrt(p * p + q * q + r * r)
+                if p < 0.0:
+                    s = -s
+                if s != 0.0:
+                    if k == mm:
+                        if ll != mm:
+                            a[k, k - 1] = -a[k, k - 1]
+                    else:
+                        a[k, k - 1] = -s * x
+                    p += s
+                    x = p / s
+                    y = q / s
+                    z = r / s
+                    q /= p
+                    r /= p
+                    for j in range(k, nn + 1):
+                        p = a[k, j] + q * a[k + 1, j]
+                        if k + 1 != nn:
+                            p += r * a[k + 2, j]
+                            a[k + 2, j] -= p * z
+                        a[k + 1, j] -= p * y
+                        a[k, j] -= p * x
+                    mmin = nn if nn < k + 3 else k + 3
+                    for i in range(ll, mmin + 1):
+                        p = x * a[i, k] + y * a[i, k + 1]
+                        if k + 1 != nn:
+                            p += z * a[i, k + 2]
+                            a[i, k + 2] -= p * r
+                        a[i, k + 1] -= p * q
+                        a[i, k] -= p
+    return True
+
+
+SMALL_EIG = 16  # matrices up to this size get the in-kernel QR; larger ones LAPACK
+
+
+@_jit
+def multipliers_of(G):
+    """Eigenvalues of G: balanced Hessenberg QR for small G, LAPACK ``dgeev`` otherwise.
+
+    Non-finite G gives NaN. The QR is the classical double-shift iteration on the
+    balanced Hessenberg form (no allocation of LAPACK workspaces, no BLAS): about
+    ten times cheaper than ``dgeev`` for 4 x 4; it falls back to ``dgeev`` if it
+    does not converge.
+    """
+    m = G.shape[0]
+    out = np.empty(m, dtype=np.complex128)
+    for r in range(m):
+        for col in range(m):
+            if not np.isfinite(G[r, col]):
+                out[:] = np.nan
+                return out
+    if m <= SMALL_EIG:
+        a = G.copy()
+        _balance(a)
+        H = hessenberg(a)
+        if _hqr(H, out):
+            return out
+    return eigvals(G)
 
 
 @_jit
@@ -842,7 +1157,7 @@ def _keep_alive(size):
 @_jit
 def multipliers(G):
     """Eigenvalues of G, largest modulus first (stable order among equal moduli)."""
-    mu = eigvals(G)
+    mu = multipliers_of(G)
     order = np.argsort(-np.abs(mu), kind="mergesort")
     return mu[order]
 
@@ -858,15 +1173,16 @@ def phase_sigma(scalars, omega, R, b, delta):
 
 
 @_jit
-def phase_orbit(w, a, f, u0, ui0, eig_err, R, omega, N, b, delta):
+def phase_orbit(w, a, f, u, u0, ui0, eig_err, R, omega, N, b, delta):
     """The motion with impact phase ``delta``: ``(modal, scalars, sigma, gap_min,
-    gap_min_time, capped)``."""
+    gap_min_time, capped, state)``."""
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     sigma = phase_sigma(sc, omega, R, b, delta)
+    state, _ = physical_state(modal, u, omega, R, delta, sigma)
     times, capped = time_grid(w, a, u0, omega, sc[0])
     dy = modal[6].copy()
     dv = modal[7].copy()
     free = free_on_grid(times, w, a, u0, dy, dv)
     best, best_t = x1_maximum(times, free, np.cos(omega * times), np.sin(omega * times),
                               sc[1], sc[2], omega, delta, (1.0 + R) * sigma, w, a, u0, dy, dv)
-    return modal, sc, sigma, b - best, best_t, capped
+    return modal, sc, sigma, b - best, best_t, capped, state

@@ -66,6 +66,8 @@ class PeriodicOrbit:
         is at its maximum at the impact, -1 at its minimum.
     period : float
         ``T``.
+    state : ndarray, shape (2n,)
+        ``X(0) = [x; x']`` right after the impact (eq. 13).
     impact_velocity : float
         ``x1'(T^-)``, velocity of mass 1 just before impact (``h2`` of eq. 22).
     gap_min : float
@@ -90,21 +92,10 @@ class PeriodicOrbit:
     gap_min_time: float
     physical: bool
     reason: str
+    state: np.ndarray = dataclasses.field(repr=False)
+    """``X(0) = [x; x']`` right after the impact (eq. 13), shape (2n,)."""
     modal: np.ndarray = dataclasses.field(repr=False)
     """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`)."""
-
-    @functools.cached_property
-    def state(self) -> np.ndarray:
-        """``X(0) = [x; x']`` right after the impact (eq. 13), shape (2n,)."""
-        from impactcont.orbit import kernel
-
-        osc = self.oscillator
-        y, v = kernel.orbit_states(self.modal, osc.omega, osc.R, self.delta,
-                                   self.impact_velocity)
-        u = osc.modes.u
-        state = np.concatenate([u @ y, u @ v])
-        state[osc.n] = -osc.R * self.impact_velocity  # eq. (4) exactly (0 for R = 0)
-        return state
 
     @functools.cached_property
     def G(self) -> np.ndarray:
@@ -122,10 +113,7 @@ class PeriodicOrbit:
         """Eigenvalues of G, largest modulus first, shape (2n,) complex."""
         from impactcont.orbit import kernel
 
-        G = self.G
-        if not np.all(np.isfinite(G)):
-            return np.full(G.shape[0], np.nan + 0j)
-        return kernel.multipliers(G)
+        return kernel.multipliers(self.G)  # NaN when G is not finite
 
     @property
     def spectral_radius(self) -> float:
@@ -311,7 +299,14 @@ def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> 
 
 
 def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delta: float,
-                root: int, sigma: float, gap_min: float, gap_time: float) -> PeriodicOrbit:
+                root: int, sigma: float, gap_min: float, gap_time: float, state: np.ndarray,
+                G: np.ndarray | None = None) -> PeriodicOrbit:
+    """A :class:`PeriodicOrbit` from the kernel's values (G too when already computed).
+
+    Built without the frozen dataclass's ``__init__`` (one ``object.__setattr__`` per
+    field, which costs more than the kernel call for small systems); the fields are
+    exactly the dataclass fields.
+    """
     reasons = []
     if not sigma > 0:
         reasons.append(f"impact velocity {sigma:.3g} <= 0: mass 1 does not arrive towards the "
@@ -319,9 +314,14 @@ def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delt
     if not gap_min > 0:
         reasons.append(f"x1 reaches the stop inside the period (gap_min={gap_min:.3g} at "
                        f"t={gap_time:.6g})")
-    return PeriodicOrbit(oscillator=osc, N=N, delta=delta, root=root, period=T,
-                         impact_velocity=sigma, gap_min=gap_min, gap_min_time=gap_time,
-                         physical=not reasons, reason="; ".join(reasons), modal=modal)
+    orbit = object.__new__(PeriodicOrbit)
+    orbit.__dict__.update(oscillator=osc, N=N, delta=delta, root=root, period=T,
+                          impact_velocity=sigma, gap_min=gap_min, gap_min_time=gap_time,
+                          physical=not reasons, reason="; ".join(reasons), state=state,
+                          modal=modal)
+    if G is not None:
+        orbit.__dict__["G"] = G  # the cached property's value
+    return orbit
 
 
 def _warn_capped(capped: bool, T: float) -> None:
@@ -343,12 +343,12 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     from impactcont.orbit import kernel
 
     N = _check_N(N)
-    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    modal, sc, sigma, gap, gap_t, capped = kernel.phase_orbit(
-        w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
+    w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
+        w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
     _warn_capped(capped, sc[0])
     return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
-                       float(gap), float(gap_t))
+                       float(gap), float(gap_t), state)
 
 
 def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
@@ -382,9 +382,10 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
 
     osc = _check_oscillator(osc)
     N = _check_N(N)
-    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped = kernel.point_orbits(
-        w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b)
+    w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
+     jacobians) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R, osc.omega, N,
+                                      osc.b)
     _warn_setup(osc, sc, stacklevel=2)
     if count == -1:
         raise ParameterError("c = s = 0 and b = 0: every phase satisfies eq. (14); the "
@@ -407,23 +408,23 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     out = []
     for k in range(count):
         orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k],
-                            float(sigma[k]), float(gap[k]), float(gap_t[k]))
-        _warn_low_impact_velocity(orbit)
+                            float(sigma[k]), float(gap[k]), float(gap_t[k]), states[k],
+                            jacobians[k] if jacobians.shape[1] else None)
+        _warn_low_impact_velocity(orbit, float(scales[k]))
         out.append(orbit)
     return out
 
 
-def _warn_low_impact_velocity(orbit: PeriodicOrbit) -> None:
+def _warn_low_impact_velocity(orbit: PeriodicOrbit, v_scale: float) -> None:
     """Warn when G is inexact because the impact velocity is tiny (G ~ 1/h2, eq. 25).
 
-    ``h2`` is a sum of terms of the size of the velocities of the motion, so it carries
-    an absolute error of about ``eps * v_scale``; G inherits ``eps * v_scale / |h2|``.
+    ``h2`` is a sum of terms of the size of the velocities of the motion
+    (``v_scale = max(|x'|, omega |x|)`` at the impact), so it carries an absolute
+    error of about ``eps * v_scale``; G inherits ``eps * v_scale / |h2|``.
     Only the single-point API warns: a branch passes through ``h2 = 0`` at a ZV point
     on purpose, and its detection evaluates G there.
     """
-    osc, state, h2 = orbit.oscillator, orbit.state, orbit.impact_velocity
-    n = osc.n
-    v_scale = max(float(np.abs(state[n:]).max()), osc.omega * float(np.abs(state[:n]).max()))
+    osc, h2 = orbit.oscillator, orbit.impact_velocity
     if not abs(h2) * _H2_REL_ERROR_WARN >= _EPS * v_scale:
         warnings.warn(f"impact velocity h2 = {h2:.3g} is tiny against the velocity scale "
                       f"{v_scale:.3g} of the motion: G of eq. (25) grows like 1/h2 and may carry "

@@ -1,0 +1,130 @@
+"""The compiled kernel against the dense implementation of eq. (12)-(16), (25).
+
+The dense path (``periodic_matrix``: ``I - D U W(T) U^-1`` solved by equilibrated LU;
+``impact_map_jacobian`` from the physical transition matrix; the interior maxima
+of ``x1`` by :mod:`impactcont.orbit.extrema` along :class:`Flow`) is independent
+of the kernel's modal form (Sherman-Morrison scalars, per-frequency time grid,
+pruned maximum search). Random oscillators, every damping class, n = 1..12.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.orbit import kernel
+from impactcont.orbit.extrema import interior_maxima, sample_times
+from impactcont.orbit.periodic import impact_map_jacobian, periodic_matrix
+
+DAMPING = {
+    "undamped": {},
+    "paper": {"eta": 0.05},
+    "rayleigh": {"alpha": 0.2, "beta": 0.03},
+    "mass-proportional over-damped": {"alpha": 6.0, "beta": 0.0},
+    "heavy": {"eta": 3.0},
+}
+
+
+def _random_oscillator(rng: np.random.Generator, n: int, damping: dict) -> ic.ImpactOscillator:
+    A = rng.standard_normal((n, n))
+    K = A @ A.T + n * np.eye(n)
+    M = np.diag(0.5 + rng.random(n))
+    F = rng.standard_normal(n)
+    return ic.ImpactOscillator(M=M, K=K, F=F, R=float(rng.uniform(0.1, 0.95)),
+                               b=float(rng.uniform(-0.2, 0.2)),
+                               omega=float(rng.uniform(0.4, 3.0)), **damping)
+
+
+def _dense(osc: ic.ImpactOscillator, N: int, delta: float):
+    flow = ic.Flow(osc)
+    S, DPhi, T = periodic_matrix(flow, N)
+    state = S @ np.array([math.cos(delta), math.sin(delta)])
+    G, h2 = impact_map_jacobian(flow, state, delta, T, DPhi)
+    times, peaks = interior_maxima(flow.mass1(state, delta), sample_times(flow, 0.0, T))
+    keep = (times > 1e-12 * T) & (times < (1 - 1e-12) * T)
+    gap = osc.b - peaks[keep].max() if keep.any() else math.inf
+    return S[0], state, G, h2, gap
+
+
+@pytest.mark.parametrize("damping", list(DAMPING))
+@pytest.mark.parametrize("n", [1, 2, 3, 5, 8, 12])
+def test_kernel_matches_the_dense_path(n, damping):
+    rng = np.random.default_rng(1000 * n + len(damping))
+    checked = 0
+    for trial in range(6):
+        osc = _random_oscillator(rng, n, DAMPING[damping])
+        N = 1 + trial % 3
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                # a gap inside the range of the motion, so that both roots exist
+                r = math.sqrt(ic.amplitude_squared(osc, N))
+                osc = osc.replace(b=float(rng.uniform(-0.9, 0.9)) * r)
+                orbits = ic.periodic_orbits(osc, N)
+                cs, *_ = _dense(osc, N, 0.0)
+            except ic.ParameterError:
+                continue
+        w, a, f, _, _, err, u0, ui0 = osc.modes.kernel_arrays
+        _, sc = kernel.omega_setup(w, a, f, u0, ui0, err, osc.R, osc.omega, N)
+        if not sc[7] < 1e8:
+            continue  # near a free-mode resonance both paths are inexact (and warn)
+        scale = np.abs(cs).max()
+        assert abs(sc[5] - cs[0]) <= 1e-12 * scale and abs(sc[6] - cs[1]) <= 1e-12 * scale
+        for orbit in orbits:
+            _, state, G, h2, gap = _dense(osc, N, orbit.delta)
+            assert np.abs(orbit.state - state).max() <= 1e-12 * np.abs(state).max()
+            assert abs(orbit.impact_velocity - h2) <= 1e-12 * np.abs(state).max() * max(
+                1.0, osc.omega)
+            if abs(h2) > 1e-3 * np.abs(state).max():
+                assert np.abs(orbit.G - G).max() <= 1e-10 * max(1.0, np.abs(G).max())
+                mu = np.linalg.eigvals(G)
+                assert orbit.stable == (np.abs(mu).max() < 1.0) or abs(
+                    np.abs(mu).max() - 1.0) < 1e-9
+            if math.isinf(gap):
+                assert math.isinf(orbit.gap_min)
+            else:
+                assert abs(orbit.gap_min - gap) <= 1e-12 * max(1.0, np.abs(state[:n]).max())
+            checked += 1
+    assert checked > 0
+
+
+def test_schur_cohn_agrees_with_eigenvalues():
+    rng = np.random.default_rng(3)
+    for m in (1, 2, 4, 7, 10):
+        for _ in range(200):
+            A = rng.standard_normal((m, m)) * rng.uniform(0.1, 0.6)
+            rho = np.abs(np.linalg.eigvals(A)).max()
+            if abs(rho - 1.0) < 1e-6:
+                continue
+            assert kernel.schur_stable(kernel.charpoly(A)) == (rho < 1.0), (m, rho)
+
+
+def test_characteristic_polynomial_matches_numpy():
+    rng = np.random.default_rng(4)
+    for m in (1, 3, 6, 9):
+        A = rng.standard_normal((m, m))
+        np.testing.assert_allclose(kernel.charpoly(A)[::-1], np.poly(A), rtol=1e-9, atol=1e-9)
+
+
+def test_lapack_eigenvalues_come_in_exact_conjugate_pairs():
+    A = np.random.default_rng(5).standard_normal((8, 8))
+    mu = kernel.eigvals(A)
+    np.testing.assert_allclose(np.sort_complex(mu), np.sort_complex(np.linalg.eigvals(A)),
+                               atol=1e-12)
+    complex_ones = mu[mu.imag != 0]
+    assert set(complex_ones.conj().tolist()) == set(complex_ones.tolist())
+
+
+@pytest.mark.parametrize("parameter", ["omega", "R", "eta"])
+def test_complex_step_derivative_matches_finite_differences(paper, parameter):
+    problem = ic.continuation.__globals__["PeriodicBranchProblem"](paper, 1, parameter)
+    lam = float(getattr(paper, parameter))
+    exact = problem._amplitude_derivative(lam)
+    h = 1e-6
+    up, down = problem.amplitude(lam + h), problem.amplitude(lam - h)
+    for k in range(2):
+        assert exact[k] == pytest.approx((up[k] - down[k]) / (2 * h), rel=1e-7, abs=1e-9)
