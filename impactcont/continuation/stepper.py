@@ -105,8 +105,11 @@ class PalcStepper:
 
         Overflow gives ``inf`` silently; the Newton loops reject non-finite values.
         """
-        with np.errstate(over="ignore", invalid="ignore"):
-            return float(np.sum(self._metric_weights() * a * b))
+        # Python floats: no numpy call overhead on these short vectors, and overflow
+        # gives inf without a warning
+        return math.fsum(w * x * y for w, x, y in zip(self._metric_weights().tolist(),
+                                                       np.ravel(a).tolist(),
+                                                       np.ravel(b).tolist(), strict=True))
 
     def scaled_norm(self, a: FloatArray) -> float:
         """Scaled norm of an extended vector ``(u, lam)``."""
@@ -339,7 +342,8 @@ class PalcStepper:
                 return state, iteration
             if iteration == self.options.newton_max_iter:
                 break
-            bordered_residual = np.append(residual, self.scaled_dot(tangent, state - predicted))
+            bordered_residual = np.concatenate(
+                [residual, [self.scaled_dot(tangent, state - predicted)]])
             update = self._solve(self._bordered_matrix(u, lam, tangent), -bordered_residual, lam)
             last_update_norm = float(np.max(np.abs(update)))
             state = state + update
@@ -366,7 +370,7 @@ class PalcStepper:
 
     def _solve(self, matrix: FloatArray, right_hand_side: FloatArray, lam: float) -> FloatArray:
         """Solve a linear system, warning when it is singular to working precision."""
-        if not (np.all(np.isfinite(matrix)) and np.all(np.isfinite(right_hand_side))):
+        if not (np.isfinite(matrix).all() and np.isfinite(right_hand_side).all()):
             raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
         condition = _condition_number(matrix)
         if condition > SINGULAR_CONDITION:
@@ -375,11 +379,20 @@ class PalcStepper:
                 lam,
                 condition,
             )
-        try:
-            solution = np.linalg.solve(matrix, right_hand_side)
-        except np.linalg.LinAlgError as error:
-            raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}") from error
-        if not np.all(np.isfinite(solution)):
+        if matrix.shape == (2, 2) and math.isfinite(condition):
+            # one unknown and the parameter: Cramer's rule (numpy's solve costs more in
+            # call overhead than the arithmetic), accurate for any condition number
+            # that does not already warn
+            (a, b), (c, d) = matrix.tolist()
+            e, f = right_hand_side.tolist()
+            det = a * d - b * c
+            solution = np.array([(e * d - b * f) / det, (a * f - e * c) / det])
+        else:
+            try:
+                solution = np.linalg.solve(matrix, right_hand_side)
+            except np.linalg.LinAlgError as error:
+                raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}") from error
+        if not np.isfinite(solution).all():
             raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
         return solution
 
@@ -396,7 +409,7 @@ class PalcStepper:
 
     def _residual(self, u: FloatArray, lam: float) -> FloatArray:
         residual = self._evaluate("residual", u, lam)
-        if not np.all(np.isfinite(residual)):
+        if not np.isfinite(residual).all():
             raise NewtonConvergenceError(f"non-finite residual at lam = {lam:.10g}")
         return residual
 
@@ -429,6 +442,15 @@ class PalcStepper:
 
 def _condition_number(matrix: FloatArray) -> float:
     """2-norm condition number, ``inf`` for an exactly singular matrix."""
+    if matrix.shape == (2, 2):  # the bordered system of a one-unknown problem: closed form
+        (a, b), (c, d) = matrix.tolist()
+        det = abs(a * d - b * c)
+        frob2 = a * a + b * b + c * c + d * d
+        if det == 0.0:
+            return math.inf
+        # sigma_max / sigma_min from sigma_max^2 + sigma_min^2 = |A|_F^2, product = |det|
+        root = math.sqrt(max(frob2 * frob2 - 4.0 * det * det, 0.0))
+        return (frob2 + root) / (2.0 * det)
     singular_values = np.linalg.svd(matrix, compute_uv=False)
     if singular_values[-1] == 0.0:
         return math.inf
