@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -28,6 +29,26 @@ __all__ = ["continuation"]
 log = logging.getLogger(__name__)
 
 _EXISTENCE_SCAN = 400
+
+
+_PARAMETER_RANGES = {"omega": (0.0, math.inf, "> 0"), "b": (-math.inf, math.inf, "finite"),
+                     "R": (0.0, 1.0, "in [0, 1]"), "eta": (0.0, math.inf, ">= 0"),
+                     "alpha": (0.0, math.inf, ">= 0"), "beta": (0.0, math.inf, ">= 0")}
+
+
+def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
+    """``(lo, hi)`` with ``lo < hi`` inside the parameter's allowed range."""
+    try:
+        lo, hi = (float(v) for v in bounds)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise ParameterError(f"bounds must be two numbers (lo, hi); got {bounds!r}") from None
+    low, high, allowed = _PARAMETER_RANGES[parameter]
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ParameterError(f"bounds must be finite with lo < hi; got {bounds!r}")
+    if lo < low or hi > high or (parameter == "omega" and lo <= 0.0):
+        raise ParameterError(f"bounds for {parameter} must lie where {parameter} is {allowed}; "
+                             f"got {bounds!r}")
+    return lo, hi
 
 
 def _start_value(problem: PeriodicBranchProblem, bounds: tuple[float, float],
@@ -100,8 +121,8 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     unknown = sorted(set(detect) - set(LABELS))
     if unknown:
         raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
-    lo, hi = (float(v) for v in bounds)
     problem = PeriodicBranchProblem(osc, N, parameter)
+    lo, hi = _check_bounds(parameter, bounds)
     opts = ContinuationOptions(bounds=(lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
                                newton_tol=newton_tol, max_points=max_points,
                                both_directions=both_directions, **options)
@@ -130,12 +151,16 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         "multipliers": np.array([o.multipliers for o in orbits]),
         "state": np.array([o.state for o in orbits]),
     }
+    # the continued parameter's own column (omega and b are always there)
+    columns.setdefault(parameter, np.asarray(result.lam, dtype=float))
     special_points = [{
         "label": sp.label, "omega": sp.orbit.oscillator.omega, "b": sp.orbit.oscillator.b,
         "delta": sp.delta, "point": sp.point, "bracket_lo": min(sp.bracket),
         "bracket_hi": max(sp.bracket), "precision": sp.precision, "status": sp.status,
         "multipliers": sp.orbit.multipliers,
     } for sp in specials]
+    for row, sp in zip(special_points, specials, strict=True):
+        row.setdefault(parameter, sp.value)
     option_record = {**dataclasses.asdict(opts), "N": N, "parameter": parameter,
                      "start": lam0, "start_delta": delta0, "detect": list(detect),
                      "status": [s.name for s in result.statuses],

@@ -117,10 +117,13 @@ class PeriodicBranchProblem:
         return value
 
     def _check(self, lam: float) -> None:
-        """Refuse an iterate outside the parameter's range (the corrector then halves)."""
-        if not math.isfinite(lam) or (self.parameter == "omega" and lam <= 0.0) or (
-                self.parameter == "R" and not 0.0 <= lam <= 1.0) or (
-                self.parameter in _DAMPING_DIRECTION and lam < 0.0):
+        """Refuse an iterate where eq. (14) is undefined (the corrector then halves).
+
+        ``c, s`` are analytic in R and the damping beyond their physical ranges, so a
+        predictor may overshoot ``R = 1`` or ``eta = 0`` and the driver lands on the
+        bound; only ``omega <= 0`` (no period) and non-finite values are refused.
+        """
+        if not math.isfinite(lam) or (self.parameter == "omega" and lam <= 0.0):
             raise ParameterError(f"{self.parameter}={lam!r} is outside its allowed range")
 
     def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:

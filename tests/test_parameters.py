@@ -1,0 +1,65 @@
+"""Continuation in every parameter the API accepts, each point checked independently.
+
+Every point of a branch in omega, b, R, eta, alpha or beta is recomputed with
+``periodic_orbits`` on a freshly built oscillator (its own modal basis) at the
+point's parameter value: the branch's phase must be one of its roots and the
+multipliers must agree.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+
+PAPER = {"M": np.eye(2), "K": [[1.0, -1.0], [-1.0, 2.0]], "F": [1.0, 0.0], "R": 0.6, "b": 0.6,
+         "omega": 1.0}
+CASES = [
+    ("omega", {"eta": 0.1}, (0.8, 2.5)),
+    ("b", {"eta": 0.1}, (-0.5, 1.0)),
+    ("R", {"eta": 0.1}, (0.0, 1.0)),
+    ("eta", {"eta": 0.1}, (0.0, 0.4)),
+    ("alpha", {"alpha": 0.05, "beta": 0.1}, (0.0, 0.5)),
+    ("beta", {"alpha": 0.05, "beta": 0.1}, (0.0, 0.5)),
+]
+
+
+@pytest.mark.parametrize(("parameter", "damping", "bounds"), CASES)
+def test_branch_in_every_parameter_matches_periodic_orbits(parameter, damping, bounds):
+    osc = ic.ImpactOscillator(**PAPER, **damping)
+    branch = ic.continuation(osc, N=1, parameter=parameter, bounds=bounds)
+    values = branch[parameter].values
+    assert values.min() >= bounds[0] and values.max() <= bounds[1]
+    statuses = branch.attrs["options"]
+    assert "STEP_BELOW_MINIMUM" not in statuses and "NEWTON" not in statuses
+    for i in range(0, branch.sizes["point"], max(1, branch.sizes["point"] // 8)):
+        pt = branch.isel(point=i)
+        fresh = ic.ImpactOscillator(**{**PAPER, **damping, parameter: float(pt[parameter])})
+        orbits = ic.periodic_orbits(fresh, 1)
+        d = [abs(math.remainder(o.delta - float(pt.delta), 2 * math.pi)) for o in orbits]
+        k = int(np.argmin(d))
+        assert d[k] < 1e-9, (parameter, float(pt[parameter]), d)
+        np.testing.assert_allclose(np.sort_complex(orbits[k].multipliers),
+                                   np.sort_complex(pt.multipliers.values), atol=1e-8)
+        assert orbits[k].impact_velocity == pytest.approx(float(pt.impact_velocity), rel=1e-8,
+                                                          abs=1e-10)
+    for label, value in zip(branch.special_label.values, branch[f"special_{parameter}"].values,
+                            strict=True):
+        assert bounds[0] <= value <= bounds[1], label
+
+
+def test_branch_reaches_both_ends_of_the_restitution_range():
+    branch = ic.continuation(ic.ImpactOscillator(**PAPER, eta=0.1), 1, "R", (0.0, 1.0))
+    assert branch.R.values.min() == 0.0 and branch.R.values.max() == 1.0
+
+
+@pytest.mark.parametrize(("parameter", "bounds", "match"), [
+    ("R", (0.0, 1.5), "R is in \\[0, 1\\]"), ("omega", (0.0, 2.0), "omega is > 0"),
+    ("eta", (-0.1, 0.2), "eta is >= 0"), ("omega", (2.0, 1.0), "lo < hi"),
+    ("omega", (0.5,), "two numbers")])
+def test_bounds_outside_the_parameter_range_are_refused(parameter, bounds, match):
+    with pytest.raises(ic.ParameterError, match=match):
+        ic.continuation(ic.ImpactOscillator(**PAPER, eta=0.1), 1, parameter, bounds)
