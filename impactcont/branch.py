@@ -37,14 +37,13 @@ _PARAMETER_RANGES = {"omega": (0.0, math.inf, "> 0"), "b": (-math.inf, math.inf,
 
 
 def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
-    """``(lo, hi)`` with ``lo < hi`` inside the parameter's allowed range."""
+    """``(lo, hi)`` inside the parameter's allowed range."""
     try:
         lo, hi = (float(v) for v in bounds)  # type: ignore[union-attr]
     except (TypeError, ValueError):
         raise ParameterError(f"bounds must be two numbers (lo, hi); got {bounds!r}") from None
     low, high, allowed = _PARAMETER_RANGES[parameter]
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ParameterError(f"bounds must be finite with lo < hi; got {bounds!r}")
+    # order and finiteness: ContinuationOptions says what is allowed
     if lo < low or hi > high or (parameter == "omega" and lo <= 0.0):
         raise ParameterError(f"bounds for {parameter} must lie where {parameter} is {allowed}; "
                              f"got {bounds!r}")
