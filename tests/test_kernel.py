@@ -128,3 +128,17 @@ def test_complex_step_derivative_matches_finite_differences(paper, parameter):
     up, down = problem.amplitude(lam + h), problem.amplitude(lam - h)
     for k in range(2):
         assert exact[k] == pytest.approx((up[k] - down[k]) / (2 * h), rel=1e-7, abs=1e-9)
+
+
+@pytest.mark.parametrize("n", [33, 60])
+def test_large_system_jacobian_by_matrix_products_matches_the_dense_path(n):
+    """Above 32 degrees of freedom G's transition blocks come from BLAS products."""
+    F = np.zeros(n)
+    F[0] = 1.0
+    osc = ic.ImpactOscillator.chain(masses=np.linspace(1.0, 2.0, n), springs=np.ones(n), F=F,
+                                    R=0.7, b=0.1, omega=1.1, eta=0.05)
+    orbits = ic.periodic_orbits(osc, 1)
+    assert orbits
+    for orbit in orbits:
+        _, state, G, h2, _ = _dense(osc, 1, orbit.delta)
+        assert np.abs(orbit.G - G).max() <= 1e-10 * max(1.0, np.abs(G).max())

@@ -77,6 +77,7 @@ _MAX_SAMPLES = 2_000_000
 _XTOL = 1e-15
 _RTOL = 4.0 * _EPS
 _MAX_ITER = 200
+_BLAS_MIN = 32  # degrees of freedom above which G's matrix products go to BLAS
 EAGER_JACOBIAN = 16  # G is returned with the orbit up to this size (2n)
 _END_TOL = 1e-12  # critical points this close (relative to T) to an impact are the impact
 
@@ -412,50 +413,68 @@ def physical_state(modal, u, omega, R, delta, sigma):
 
 # -- G of eq. (25) ---------------------------------------------------------------------------------
 @_jit
-def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
-    """G of eq. (22)-(25) in ``[dx2..dxn, dx1'..dxn', d delta]``, shape (2n, 2n)."""
+def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
+    """The modal ingredients of G (eq. 22-25) at a motion, each shape (n,).
+
+    ``e_y, e_v``: d/d delta of the forcing term over a period, ``E_delta = (I - W) P_delta``
+    per mode; ``v_pre, acc``: modal velocity and acceleration just before the impact,
+    ``z'(T^-)`` (forced part harmonic, ``-omega^2 y_p``; free part by the mode's
+    equation: no cancellation of ``f cos(delta)`` against ``w^2 y`` for stiff modes).
+    """
     n = modal.shape[1]
-    m = 2 * n
-    _, v0 = orbit_states(modal, omega, R, delta, sigma)
     kappa = 1.0 + R
     cd, sd = math.cos(delta), math.sin(delta)
-    # physical transition U W(T) U^-1, rows scaled by D (eq. 4)
-    tr = np.empty((m, m))
-    for r in range(n):
-        for col in range(n):
-            s11 = 0.0
-            s12 = 0.0
-            s21 = 0.0
-            s22 = 0.0
-            for i in range(n):
-                p = u[r, i] * ui[i, col]
-                s11 += p * modal[2, i]
-                s12 += p * modal[3, i]
-                s21 += p * modal[4, i]
-                s22 += p * modal[5, i]
-            tr[r, col] = s11
-            tr[r, n + col] = s12
-            tr[n + r, col] = s21
-            tr[n + r, n + col] = s22
-    for col in range(m):
-        tr[n, col] *= -R
-    # d/d delta of the forcing term, E_delta = (I - W) P_delta per mode, then D U
     e_y = np.empty(n)
     e_v = np.empty(n)
-    acc = np.empty(n)
     v_pre = np.empty(n)
+    acc = np.empty(n)
     for i in range(n):
         gm, bt = modal[0, i], modal[1, i]
         py = -gm * sd + bt * cd
         pv = omega * (-bt * sd - gm * cd)
         e_y[i] = (1.0 - modal[2, i]) * py - modal[3, i] * pv
         e_v[i] = -modal[4, i] * py + (1.0 - modal[5, i]) * pv
-        v_pre[i] = v0[i] + kappa * sigma * ui[i, 0]
-        # forced part harmonic (-omega^2 y_p), free part by the mode's equation: no
-        # cancellation of f cos(delta) against w^2 y for stiff, quasi-static modes
-        free_v = modal[7, i] + ui[i, 0]
+        free_v = modal[7, i] + ui0[i]
+        v_pre[i] = omega * (bt * cd - gm * sd) + kappa * sigma * free_v
         acc[i] = (-omega * omega * (gm * cd + bt * sd)
                   + kappa * sigma * (-w[i] * w[i] * modal[6, i] - 2.0 * a[i] * free_v))
+    return e_y, e_v, v_pre, acc
+
+
+@_jit
+def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
+    """G of eq. (22)-(25) in ``[dx2..dxn, dx1'..dxn', d delta]``, shape (2n, 2n)."""
+    n = modal.shape[1]
+    m = 2 * n
+    e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui[:, 0].copy(), omega, R, delta,
+                                           sigma)
+    # physical transition U W(T) U^-1, rows scaled by D (eq. 4)
+    tr = np.empty((m, m))
+    if n > _BLAS_MIN:  # large: four matrix products (BLAS), O(n^3) either way
+        for blk in range(4):
+            scaled = u * modal[2 + blk]
+            r0 = n * (blk // 2)
+            c0 = n * (blk % 2)
+            tr[r0:r0 + n, c0:c0 + n] = np.dot(scaled, ui)
+    else:  # small: plain loops, no BLAS call on tiny arrays
+        for r in range(n):
+            for col in range(n):
+                s11 = 0.0
+                s12 = 0.0
+                s21 = 0.0
+                s22 = 0.0
+                for i in range(n):
+                    p = u[r, i] * ui[i, col]
+                    s11 += p * modal[2, i]
+                    s12 += p * modal[3, i]
+                    s21 += p * modal[4, i]
+                    s22 += p * modal[5, i]
+                tr[r, col] = s11
+                tr[r, n + col] = s12
+                tr[n + r, col] = s21
+                tr[n + r, n + col] = s22
+    for col in range(m):
+        tr[n, col] *= -R
     dE = np.empty(m)
     dX = np.empty(m)
     for r in range(n):
