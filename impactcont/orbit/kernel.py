@@ -716,11 +716,17 @@ def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
 
 
 @_jit
-def _polish(order, lo, hi, g_lo, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
-    """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton."""
+def _polish(order, lo, hi, g_lo, g_hi, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton.
+
+    Started at the secant point of the bracket (one or two Newton steps fewer than
+    its midpoint); a step that would leave the shrinking bracket bisects instead.
+    """
     left, right = lo, hi
     ga = g_lo
-    x = 0.5 * (left + right)
+    x = lo + (hi - lo) * (g_lo / (g_lo - g_hi)) if g_lo != g_hi else 0.5 * (lo + hi)
+    if not (lo < x < hi):
+        x = 0.5 * (left + right)
     for _ in range(_MAX_ITER):
         d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
         g = d[order]
@@ -744,12 +750,13 @@ def _polish(order, lo, hi, g_lo, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
 
 
 @_jit
-def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work):
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
-    ``omega times``. Each grid cell holds at most one root of ``x1''`` (the grid is
-    built so), hence at most two roots of ``x1'``:
+    ``omega times``; ``work``: scratch of shape ``(8, 2 nt)`` (reused across calls).
+    Each grid cell holds at most one root of ``x1''`` (the grid is built so), hence
+    at most two roots of ``x1'``:
 
     - ``x1''`` keeps its sign: ``x1'`` is monotone, a maximum iff ``x1'`` goes from
       ``>= 0`` to ``< 0``;
@@ -767,9 +774,14 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     nt = times.size
     T = times[nt - 1]
     om2 = omega * omega
-    x = np.empty(nt)
-    v = np.empty(nt)
-    acc = np.empty(nt)
+    x = work[0]
+    v = work[1]
+    acc = work[2]
+    c_lo = work[3]
+    c_hi = work[4]
+    c_v = work[5]
+    c_ub = work[6]
+    c_vh = work[7]
     for k in range(nt):
         c = cw[k] * cd - sw[k] * sd
         s = sw[k] * cd + cw[k] * sd
@@ -777,11 +789,6 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
         x[k] = p + ks * free[0, k]
         v[k] = omega * (B * c - Gam * s) + ks * free[1, k]
         acc[k] = -om2 * p + ks * free[2, k]
-    # candidate pieces: lo, hi, v(lo), upper bound of x1 on the piece
-    c_lo = np.empty(2 * nt)
-    c_hi = np.empty(2 * nt)
-    c_v = np.empty(2 * nt)
-    c_ub = np.empty(2 * nt)
     m = 0
     for k in range(1, nt):
         lo, hi = times[k - 1], times[k]
@@ -791,6 +798,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
                 c_lo[m] = lo
                 c_hi[m] = hi
                 c_v[m] = v0
+                c_vh[m] = v1
                 c_ub[m] = x[k - 1] + v0 * (hi - lo)
                 m += 1
             continue
@@ -799,39 +807,41 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
             continue  # x1' falls then rises from below 0: no maximum
         if (acc[k - 1] >= 0.0) and v0 >= 0.0:
             continue  # x1' rises then falls to >= 0: no maximum
-        tm = _polish(2, lo, hi, acc[k - 1], Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        tm = _polish(2, lo, hi, acc[k - 1], acc[k], Gam, B, omega, delta, ks, w, a, u0, dy,
+                     dv)
         xm, vm, _, _ = _x1_derivs(tm, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
             c_lo[m] = lo
             c_hi[m] = tm
             c_v[m] = v0
+            c_vh[m] = vm
             c_ub[m] = x[k - 1] + v0 * (tm - lo)
             m += 1
         elif vm >= 0.0 and v1 < 0.0:  # rises above 0, then falls through it
             c_lo[m] = tm
             c_hi[m] = hi
             c_v[m] = vm
+            c_vh[m] = v1
             c_ub[m] = xm + vm * (hi - tm)
             m += 1
     best = -np.inf
     best_t = np.nan
-    done = np.zeros(m, dtype=np.bool_)
     for _ in range(m):
-        j = -1
-        for i in range(m):
-            if not done[i] and (j < 0 or c_ub[i] > c_ub[j]):
+        j = 0
+        for i in range(1, m):
+            if c_ub[i] > c_ub[j]:
                 j = i
-        if c_ub[j] <= best:
+        if not c_ub[j] > best:
             break
-        done[j] = True
-        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], T, Gam, B, omega, delta,
-                             ks, w, a, u0, dy, dv)
+        c_ub[j] = -np.inf  # done
+        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], T, Gam, B, omega,
+                             delta, ks, w, a, u0, dy, dv)
     return best, best_t
 
 
 @_jit
-def _take(best, best_t, lo, hi, v_lo, T, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
-    r = _polish(1, lo, hi, v_lo, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+def _take(best, best_t, lo, hi, v_lo, v_hi, T, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    r = _polish(1, lo, hi, v_lo, v_hi, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
@@ -879,6 +889,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
         free = free_on_grid(times, w, a, u0, dy, dv)
         cw = np.cos(om * times)
         sw = np.sin(om * times)
+        work = np.empty((8, 2 * times.size))
         for ib in range(nb):
             count, dl, sg, _, _ = orbit_roots(sc, bs[ib], om, R)
             counts[iw, ib] = count
@@ -888,7 +899,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
                 vel[iw, ib, idx] = sg[k]
                 ks = (1.0 + R) * sg[k]
                 best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], om, dl[k], ks,
-                                          w, a, u0, dy, dv)
+                                          w, a, u0, dy, dv, work)
                 gap[iw, ib, idx] = bs[ib] - best
                 gap_t[iw, ib, idx] = best_t
                 G, _ = impact_jacobian(modal, w, a, f, u, ui, om, R, dl[k], sg[k])
@@ -944,9 +955,10 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
         free = free_on_grid(times, w, a, u0, dy, dv)
         cw = np.cos(omega * times)
         sw = np.sin(omega * times)
+        work = np.empty((8, 2 * times.size))
         for k in range(count):
             best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, dl[k],
-                                      (1.0 + R) * sg[k], w, a, u0, dy, dv)
+                                      (1.0 + R) * sg[k], w, a, u0, dy, dv, work)
             gap[k] = b - best
             gap_t[k] = best_t
     return modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales, jacobians
@@ -1203,5 +1215,6 @@ def phase_orbit(w, a, f, u, u0, ui0, eig_err, R, omega, N, b, delta):
     dv = modal[7].copy()
     free = free_on_grid(times, w, a, u0, dy, dv)
     best, best_t = x1_maximum(times, free, np.cos(omega * times), np.sin(omega * times),
-                              sc[1], sc[2], omega, delta, (1.0 + R) * sigma, w, a, u0, dy, dv)
+                              sc[1], sc[2], omega, delta, (1.0 + R) * sigma, w, a, u0, dy, dv,
+                              np.empty((8, 2 * times.size)))
     return modal, sc, sigma, b - best, best_t, capped, state
