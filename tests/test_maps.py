@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import math
+import os
 
 import matplotlib
 
@@ -93,3 +94,42 @@ def test_two_parameter_figure(paper, serial_map, tmp_path):
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     texts = [t.get_text() for ax in fig.axes for t in ax.texts]
     assert "ZV" in texts
+
+
+def test_results_are_bit_identical_for_every_block_size_and_executor(paper, serial_map):
+    for block, executor in ((1, None), (5, None), (7, "process"), (23, "process")):
+        other = stability_map(paper, [1, 2, 3], OMEGA, GAP, omega_block=block, executor=executor,
+                              max_workers=2)
+        xr.testing.assert_identical(other.drop_attrs(), serial_map.drop_attrs())
+
+
+def test_a_map_written_to_disk_opens_lazily_and_equals_the_in_memory_one(paper, serial_map,
+                                                                       tmp_path):
+    pytest.importorskip("dask")
+    lazy = stability_map(paper, [1, 2, 3], OMEGA, GAP, out=tmp_path / "map.nc", omega_block=4)
+    assert hasattr(lazy.n_stable.data, "dask")  # nothing read yet
+    xr.testing.assert_identical(lazy.load().drop_attrs(), serial_map.drop_attrs())
+    pooled = stability_map(paper, [1, 2, 3], OMEGA, GAP, out=tmp_path / "pooled.nc",
+                           executor="process", max_workers=2, omega_block=6)
+    xr.testing.assert_identical(pooled.load().drop_attrs(), serial_map.drop_attrs())
+
+
+def test_a_map_larger_than_the_memory_limit_goes_to_a_file(paper, serial_map, caplog):
+    pytest.importorskip("dask")
+    with caplog.at_level("WARNING", logger="impactcont.maps"):
+        lazy = stability_map(paper, [1, 2, 3], OMEGA, GAP, memory_limit=1e4)
+    assert "more than memory_limit" in caplog.text
+    path = lazy.encoding["source"]
+    xr.testing.assert_identical(lazy.load().drop_attrs(), serial_map.drop_attrs())
+    lazy.close()
+    os.unlink(path)
+
+
+def test_map_without_eigenvalues_has_the_same_stability(paper, serial_map):
+    quick = stability_map(paper, [1, 2, 3], OMEGA, GAP, spectral_radius=False)
+    assert "spectral_radius" not in quick and "critical_multiplier" not in quick
+    for key in ("exists", "n_physical", "n_stable", "delta", "gap_min", "stable", "physical"):
+        xr.testing.assert_identical(quick[key], serial_map[key])
+    rho = serial_map.spectral_radius.values
+    decided = np.isfinite(rho) & (np.abs(rho - 1.0) > 1e-9)
+    assert np.array_equal(serial_map.stable.values[decided], rho[decided] < 1.0)

@@ -193,7 +193,8 @@ def _now_attrs() -> dict[str, str]:
 
 
 def _array(key: str, value: Any, spec: _Var, shape: tuple[int, ...]) -> np.ndarray:
-    a = np.asarray(value)
+    # a dask array (a map larger than memory) stays lazy: shape and dtype only
+    a = value if hasattr(value, "dask") else np.asarray(value)
     if a.shape != shape:
         raise ValueError(f"column {key!r} must have shape {shape}; got shape {a.shape}")
     dtype = {"f": np.float64, "b": bool, "c": np.complex128, "i": np.int64}[spec.kind]

@@ -28,7 +28,7 @@ from impactcont.dataset.schema import (
     special_variable,
 )
 
-__all__ = ["ENGINE", "load", "save"]
+__all__ = ["ENGINE", "load", "open_lazy", "save"]
 
 logger = logging.getLogger(__name__)
 
@@ -89,7 +89,7 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
 
 
 def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | os.PathLike,
-         *, validate: bool = True) -> Path:
+         *, validate: bool = True, encoding: Mapping[str, Any] | None = None) -> Path:
     """Write one branch or several to a NetCDF-4 file, atomically.
 
     Parameters
@@ -102,6 +102,9 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
         only once the new one is completely written.
     validate : bool, optional
         Check every dataset against the branch schema first (default).
+    encoding : mapping, optional
+        Per-variable NetCDF encoding (chunk sizes, compression) of a single Dataset.
+        A dask-backed Dataset is computed and written chunk by chunk.
 
     Returns
     -------
@@ -129,7 +132,8 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     # atomic rename on the same file system; the random name avoids clashes.
     tmp = directory / f".{target.name}.{uuid.uuid4().hex}.tmp"
     try:
-        data.to_netcdf(tmp, mode="w", engine=ENGINE, auto_complex=True)
+        kwargs = {"encoding": dict(encoding)} if encoding else {}
+        data.to_netcdf(tmp, mode="w", engine=ENGINE, auto_complex=True, **kwargs)
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -145,6 +149,19 @@ def _normalise(ds: xr.Dataset) -> xr.Dataset:
         if name in ds.variables and ds[name].dtype != dtype:
             ds[name] = ds[name].astype(dtype)
     return normalise_dataset(ds)
+
+
+def open_lazy(path: str | os.PathLike) -> xr.Dataset:
+    """Open a single-dataset file lazily (dask-backed; the file stays open).
+
+    For results larger than memory, such as big :func:`impactcont.stability_map`
+    maps: values are read chunk by chunk when computed. Needs dask
+    (``pip install 'impactcont[dask]'``).
+    """
+    target = _path(path)
+    if not target.is_file():
+        raise FileNotFoundError(f"path {str(path)!r} does not exist or is not a file")
+    return _normalise(xr.open_dataset(target, engine=ENGINE, auto_complex=True, chunks={}))
 
 
 def _read_tree(path: Path) -> xr.DataTree:
