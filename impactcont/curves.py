@@ -152,7 +152,7 @@ def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
     if "delta" in values:
         return start_osc, float(values["delta"])
     pc = problem._pieces(getattr(start_osc, p1), getattr(start_osc, p2))
-    c, s = pc.S[0]
+    c, s = pc.S0
     if problem.kind == "SN":  # the double root of eq. (15): (cos, sin) along sign(b) (c, s)
         sign = 1.0 if start_osc.b >= 0 else -1.0
         return start_osc, math.atan2(sign * s, sign * c)

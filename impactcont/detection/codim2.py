@@ -41,6 +41,7 @@ from scipy.optimize import brentq
 
 from impactcont.continuation.stepper import NewtonConvergenceError
 from impactcont.orbit.extrema import interior_maxima, sample_times
+from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.codim1 import CurveProblem
 
@@ -89,7 +90,7 @@ class Codim2Point:
 
 def grazing_other_gap(problem: CurveProblem, orbit: PeriodicOrbit, tangency_time: float) -> float:
     """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*``."""
-    flow = problem._pieces(*_params(problem, orbit)).flow
+    flow = Flow(problem._pieces(*_params(problem, orbit)).osc)
     times, peaks = interior_maxima(flow.mass1(orbit.state, orbit.delta),
                                    sample_times(flow, 0.0, orbit.period))
     others = np.abs(times - tangency_time) > 1e-7 * orbit.period

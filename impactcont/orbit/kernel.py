@@ -705,6 +705,16 @@ def free_on_grid(times, w, a, u0, dy, dv):
 
 
 @_jit
+def x1_derivatives(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+    """``x1`` and its first three derivatives at time t after the impact at ``delta``.
+
+    ``Gam, B``: the forced motion of mass 1 (``scalars[1:3]`` of :func:`omega_setup`);
+    ``ks = kappa sigma``; ``dy, dv``: ``modal[6], modal[7]``.
+    """
+    return _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+
+
+@_jit
 def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     th = omega * t + delta
     c, s = math.cos(th), math.sin(th)

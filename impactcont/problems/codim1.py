@@ -69,12 +69,9 @@ import numpy as np
 from impactcont.continuation.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.batched import batched_matrices
-from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
-    impact_map_jacobian,
     orbit_at_phase,
 )
 from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
@@ -102,13 +99,52 @@ _DOMAINS = {"omega": (1e-300, math.inf), "b": (-math.inf, math.inf), "R": (0.0, 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class _Pieces:
-    """The oscillator at one parameter pair and its closed-form matrices (eq. 9, 13)."""
+    """The oscillator at one parameter pair and the kernel's modal pieces (eq. 12-15).
+
+    Everything a curve's residual needs is O(n) or one G: ``c, s`` of eq. (14), the
+    impact velocity and ``x1`` along the flight for a phase, G (eq. 25).
+    """
 
     osc: ImpactOscillator
-    flow: Flow
-    S: np.ndarray
-    DPhi: np.ndarray
-    T: float
+    modal: np.ndarray
+    scalars: np.ndarray
+
+    @property
+    def S0(self) -> tuple[float, float]:
+        """``c, s`` of eq. (14) (the first row of S, eq. 13)."""
+        return float(self.scalars[5]), float(self.scalars[6])
+
+    @property
+    def T(self) -> float:
+        return float(self.scalars[0])
+
+    def impact_velocity(self, delta: float) -> float:
+        """``h2 = x1'(T^-)`` of the motion with impact phase ``delta``."""
+        from impactcont.orbit import kernel
+
+        osc = self.osc
+        return float(kernel.phase_sigma(self.scalars, osc.omega, osc.R, osc.b, delta))
+
+    def jacobian(self, delta: float) -> tuple[np.ndarray, float]:
+        """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
+        from impactcont.orbit import kernel
+
+        osc = self.osc
+        w, a, f, u, ui = osc.modes.kernel_arrays[:5]
+        return kernel.impact_jacobian(self.modal, w, a, f, u, ui, osc.omega, osc.R, delta,
+                                      self.impact_velocity(delta))
+
+    def mass1(self, delta: float, t: float) -> tuple[float, float]:
+        """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
+        from impactcont.orbit import kernel
+
+        osc = self.osc
+        w, a, _, _, _, _, u0, _ = osc.modes.kernel_arrays
+        ks = (1.0 + osc.R) * self.impact_velocity(delta)
+        x, v, _, _ = kernel.x1_derivatives(t, self.scalars[1], self.scalars[2], osc.omega,
+                                           delta, ks, w, a, u0, self.modal[6].copy(),
+                                           self.modal[7].copy())
+        return float(x), float(v)
 
 
 def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, str]:
@@ -166,6 +202,7 @@ class CurveProblem:
                  ) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {osc!r}")
+        _ = osc.modes  # computed once here, shared by every replace() along the curve
         self.osc = osc
         self.N = _check_N(N)
         self.parameters = check_parameters(osc, parameters)
@@ -195,14 +232,12 @@ class CurveProblem:
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
+        from impactcont.orbit import kernel
+
         osc = self.osc.replace(**{self.parameters[0]: key[0], self.parameters[1]: key[1]})
-        flow = Flow(osc)
-        # the batched form of eq. (12)-(13) (numpy LAPACK): the same S as periodic_matrix,
-        # without its per-call overhead, which dominates the many evaluations of a curve
-        S, transition, _, T = batched_matrices(osc, self.N, np.array([osc.omega]))
-        d = np.ones(2 * osc.n)
-        d[osc.n] = -osc.R
-        pieces = _Pieces(osc, flow, S[0], d[:, None] * transition[0], float(T[0]))
+        w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+        modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, self.N)
+        pieces = _Pieces(osc, modal, scalars)
         self._cache[key] = pieces
         if len(self._cache) > _CACHE_SIZE:
             self._cache.popitem(last=False)
@@ -223,15 +258,12 @@ class CurveProblem:
     def fold_function(self, u: np.ndarray, lam: float) -> float:
         """``dr/d delta = -c sin(delta) + s cos(delta)``; ``= -root * sqrt(c^2+s^2-b^2)``."""
         pc = self._pieces(u[0], lam)
-        c, s = pc.S[0]
+        c, s = pc.S0
         return float(-c * math.sin(u[1]) + s * math.cos(u[1]))
 
     def jacobian_G(self, u: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
         """``G`` of eq. (25) and ``h2`` at a point."""
-        pc = self._pieces(u[0], lam)
-        delta = float(u[1])
-        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
-        return impact_map_jacobian(pc.flow, state, delta, pc.T, pc.DPhi)
+        return self._pieces(u[0], lam).jacobian(float(u[1]))
 
     # -- the Problem protocol -------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
@@ -239,7 +271,7 @@ class CurveProblem:
         u = np.asarray(u, dtype=float)
         pc = self._pieces(u[0], lam)
         delta = float(u[1])
-        c, s = pc.S[0]
+        c, s = pc.S0
         r = c * math.cos(delta) + s * math.sin(delta) - pc.osc.b
         return np.concatenate([[r], self._conditions(pc, delta, u[2:])])
 
@@ -381,7 +413,7 @@ class FoldCurve(CurveProblem):
     kind = "SN"
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        c, s = pc.S[0]
+        c, s = pc.S0
         return np.array([-c * math.sin(delta) + s * math.cos(delta)])
 
 
@@ -403,8 +435,7 @@ class PeriodDoublingCurve(CurveProblem):
         self._left = np.eye(m)[0]
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
-        G, _ = impact_map_jacobian(pc.flow, state, delta, pc.T, pc.DPhi)
+        G, _ = pc.jacobian(delta)
         m = G.shape[0]
         bordered = np.zeros((m + 1, m + 1))
         bordered[:m, :m] = G + np.eye(m)
@@ -442,8 +473,7 @@ class NeimarkSackerCurve(CurveProblem):
         m = 2 * self.osc.n
         theta = extras[0]
         v = extras[1:1 + m] + 1j * extras[1 + m:1 + 2 * m]
-        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
-        G, _ = impact_map_jacobian(pc.flow, state, delta, pc.T, pc.DPhi)
+        G, _ = pc.jacobian(delta)
         eig = G @ v - complex(math.cos(theta), math.sin(theta)) * v
         norm = np.vdot(self._ref, v) - 1.0
         return np.concatenate([eig.real, eig.imag, [norm.real, norm.imag]])
@@ -481,9 +511,8 @@ class GrazingCurve(CurveProblem):
     extra_names = ("tangency_time",)
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
-        x1, v1, _ = pc.flow.mass1(state, delta)(np.array([extras[0]]))
-        return np.array([x1[0] - pc.osc.b, v1[0]])
+        x1, v1 = pc.mass1(delta, float(extras[0]))
+        return np.array([x1 - pc.osc.b, v1])
 
     def extras_from_orbit(self, orbit: PeriodicOrbit) -> np.ndarray:
         """The time of the highest interior maximum of x1."""
@@ -507,8 +536,7 @@ class ZeroVelocityCurve(CurveProblem):
     kind = "ZV"
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        state = pc.S @ np.array([math.cos(delta), math.sin(delta)])
-        return np.array([pc.flow.state_derivative(pc.T, state, delta)[0][0]])
+        return np.array([pc.impact_velocity(delta)])
 
 
 _KINDS: dict[str, type[CurveProblem]] = {
