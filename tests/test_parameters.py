@@ -62,3 +62,23 @@ def test_branch_reaches_both_ends_of_the_restitution_range():
 def test_bounds_outside_the_parameter_range_are_refused(parameter, bounds, match):
     with pytest.raises(ic.ParameterError, match=match):
         ic.continuation(ic.ImpactOscillator(**PAPER, eta=0.1), 1, parameter, bounds)
+
+
+@pytest.mark.parametrize("eta", [0.1, 0.0])
+def test_a_branch_that_closes_modulo_two_pi_stops_with_each_special_point_once(eta):
+    """In b the branch is a closed curve in (delta mod 2 pi, b); it used to run to max_points."""
+    osc = ic.ImpactOscillator(**{**PAPER, "omega": 1.2, "b": 0.0}, eta=eta)
+    branch = ic.continuation(osc, N=1, parameter="b", bounds=(-3.0, 3.0))
+    options = branch.attrs["options"]
+    assert '"status": ["CLOSED_LOOP", "CLOSED_LOOP"]' in options
+    assert branch.sizes["point"] < 500
+    assert np.ptp(branch.delta.values) < 2 * math.pi + 0.5
+    found = sorted(zip(branch.special_label.values.tolist(),
+                       np.round(branch.special_b.values, 6).tolist(), strict=True))
+    assert len(found) == len(set(found)) > 0
+    if eta > 0:
+        # the solution set is symmetric under (b, delta) -> (-b, delta + pi): so are its
+        # points. (Undamped, one PD next to the pole of G at ZV is still missed on one side
+        # only: the step-dependent detection of issue 11, item 6.)
+        for label, b in found:
+            assert (label, round(-b, 6)) in found or label == "GR"

@@ -195,6 +195,13 @@ class BranchRun:
             return False
         chord = current.state - previous.state
         to_start = start.state - previous.state
+        # unknowns that are angles (a phase): the branch closes when it returns to the
+        # start modulo the period, not only to the start itself
+        periods = getattr(stepper.problem, "periods", None)
+        if periods is not None:
+            periods = np.append(np.asarray(periods, dtype=float), 0.0)
+            wrap = periods > 0
+            to_start[wrap] -= periods[wrap] * np.round(to_start[wrap] / periods[wrap])
         chord_length_squared = stepper.scaled_dot(chord, chord)
         if chord_length_squared == 0.0:
             return False

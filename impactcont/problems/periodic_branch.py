@@ -47,6 +47,10 @@ class PeriodicBranchProblem:
     evaluation of the same kernel (no step-size error, no cancellation).
     """
 
+    periods = (2.0 * math.pi,)
+    """The unknown ``delta`` is a phase: a branch that returns to its start modulo 2 pi is
+    a closed loop (read by the continuation driver)."""
+
     def __init__(self, osc: ImpactOscillator, N: int, parameter: str) -> None:
         if parameter not in CONTINUABLE_PARAMETERS:
             raise ParameterError(f"parameter must be one of {CONTINUABLE_PARAMETERS}; "
