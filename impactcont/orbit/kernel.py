@@ -77,7 +77,7 @@ _MAX_SAMPLES = 2_000_000
 _XTOL = 1e-15
 _RTOL = 4.0 * _EPS
 _MAX_ITER = 200
-_BLAS_MIN = 32  # degrees of freedom above which G's matrix products go to BLAS
+BLAS_MIN = 32  # degrees of freedom above which G's matrix products go to BLAS (numpy)
 EAGER_JACOBIAN = 16  # G is returned with the orbit up to this size (2n)
 _END_TOL = 1e-12  # critical points this close (relative to T) to an impact are the impact
 
@@ -442,39 +442,40 @@ def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
 
 
 @_jit
-def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
-    """G of eq. (22)-(25) in ``[dx2..dxn, dx1'..dxn', d delta]``, shape (2n, 2n)."""
+def transition(modal, u, ui):
+    """Physical transition ``U W(T) U^-1`` (eq. 9), shape (2n, 2n), by plain loops.
+
+    For small systems (no BLAS call on tiny arrays); above ``BLAS_MIN`` degrees of
+    freedom :func:`impactcont.orbit.periodic.impact_jacobian` forms it with numpy
+    matrix products instead.
+    """
+    n = modal.shape[1]
+    tr = np.empty((2 * n, 2 * n))
+    for r in range(n):
+        for col in range(n):
+            s11 = 0.0
+            s12 = 0.0
+            s21 = 0.0
+            s22 = 0.0
+            for i in range(n):
+                p = u[r, i] * ui[i, col]
+                s11 += p * modal[2, i]
+                s12 += p * modal[3, i]
+                s21 += p * modal[4, i]
+                s22 += p * modal[5, i]
+            tr[r, col] = s11
+            tr[r, n + col] = s12
+            tr[n + r, col] = s21
+            tr[n + r, n + col] = s22
+    return tr
+
+
+@_jit
+def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
+    """G of eq. (22)-(25) from the transition ``tr = U W(T) U^-1``, O(n^2)."""
     n = modal.shape[1]
     m = 2 * n
-    e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui[:, 0].copy(), omega, R, delta,
-                                           sigma)
-    # physical transition U W(T) U^-1, rows scaled by D (eq. 4)
-    tr = np.empty((m, m))
-    if n > _BLAS_MIN:  # large: four matrix products (BLAS), O(n^3) either way
-        for blk in range(4):
-            scaled = u * modal[2 + blk]
-            r0 = n * (blk // 2)
-            c0 = n * (blk % 2)
-            tr[r0:r0 + n, c0:c0 + n] = np.dot(scaled, ui)
-    else:  # small: plain loops, no BLAS call on tiny arrays
-        for r in range(n):
-            for col in range(n):
-                s11 = 0.0
-                s12 = 0.0
-                s21 = 0.0
-                s22 = 0.0
-                for i in range(n):
-                    p = u[r, i] * ui[i, col]
-                    s11 += p * modal[2, i]
-                    s12 += p * modal[3, i]
-                    s21 += p * modal[4, i]
-                    s22 += p * modal[5, i]
-                tr[r, col] = s11
-                tr[r, n + col] = s12
-                tr[n + r, col] = s21
-                tr[n + r, n + col] = s22
-    for col in range(m):
-        tr[n, col] *= -R
+    e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
     dE = np.empty(m)
     dX = np.empty(m)
     for r in range(n):
@@ -491,19 +492,28 @@ def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
         dE[n + r] = sv
         dX[r] = xv
         dX[n + r] = xa
+    # the impact law (eq. 4) scales the velocity row of mass 1 by -R
     dE[n] *= -R
     dX[n] *= -R
     h2 = dX[0]
     h1 = dE[0]
     G = np.empty((m, m))
     for r in range(m - 1):
+        dr = -R if r + 1 == n else 1.0
         for col in range(m - 1):
-            G[r, col] = tr[r + 1, col + 1] - dX[r + 1] * tr[0, col + 1] / h2
+            G[r, col] = dr * tr[r + 1, col + 1] - dX[r + 1] * tr[0, col + 1] / h2
         G[r, m - 1] = dE[r + 1] - dX[r + 1] * h1 / h2
     for col in range(m - 1):
         G[m - 1, col] = -omega * tr[0, col + 1] / h2
     G[m - 1, m - 1] = 1.0 - omega * h1 / h2
     return G, h2
+
+
+@_jit
+def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
+    """G of eq. (22)-(25) in ``[dx2..dxn, dx1'..dxn', d delta]``, shape (2n, 2n)."""
+    return assemble_jacobian(transition(modal, u, ui), modal, w, a, f, u, ui[:, 0].copy(),
+                             omega, R, delta, sigma)
 
 
 # -- stability without eigenvalues -----------------------------------------------------------------

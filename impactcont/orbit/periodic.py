@@ -27,6 +27,7 @@ __all__ = [
     "IllConditionedWarning",  # defined in impactcont.errors, re-exported here
     "PeriodicOrbit",
     "impact_map_jacobian",
+    "modal_jacobian",
     "orbit_at_phase",
     "periodic_orbits",
 ]
@@ -100,13 +101,7 @@ class PeriodicOrbit:
     @functools.cached_property
     def G(self) -> np.ndarray:
         """Jacobian of the impact map in ``z = [dx2..dxn, dx1'..dxn', d delta]`` (eq. 25)."""
-        from impactcont.orbit import kernel
-
-        osc = self.oscillator
-        w, a, f, u, ui = osc.modes.kernel_arrays[:5]
-        G, _ = kernel.impact_jacobian(self.modal, w, a, f, u, ui, osc.omega, osc.R,
-                                      self.delta, self.impact_velocity)
-        return G
+        return modal_jacobian(self.oscillator, self.modal, self.delta, self.impact_velocity)[0]
 
     @functools.cached_property
     def multipliers(self) -> np.ndarray:
@@ -149,6 +144,24 @@ class PeriodicOrbit:
                 f"impact_velocity={self.impact_velocity:.6g}, gap_min={self.gap_min:.6g}, "
                 f"rho={self.spectral_radius:.6g}, stable={self.stable}, "
                 f"physical={self.physical})")
+
+
+def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float
+                   ) -> tuple[np.ndarray, float]:
+    """G of eq. (25) and ``h2`` from the kernel's modal pieces at one frequency.
+
+    The transition ``U W(T) U^-1`` costs O(n^3): plain compiled loops for small
+    systems, numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of freedom.
+    """
+    from impactcont.orbit import kernel
+
+    w, a, f, u, ui = osc.modes.kernel_arrays[:5]
+    if osc.n <= kernel.BLAS_MIN:
+        return kernel.impact_jacobian(modal, w, a, f, u, ui, osc.omega, osc.R, delta, sigma)
+    tr = np.block([[(u * modal[2]) @ ui, (u * modal[3]) @ ui],
+                   [(u * modal[4]) @ ui, (u * modal[5]) @ ui]])
+    return kernel.assemble_jacobian(tr, modal, w, a, f, u, osc.modes.kernel_arrays[7],
+                                    osc.omega, osc.R, delta, sigma)
 
 
 def _check_N(N: object) -> int:

@@ -72,6 +72,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
+    modal_jacobian,
     orbit_at_phase,
 )
 from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
@@ -127,12 +128,7 @@ class _Pieces:
 
     def jacobian(self, delta: float) -> tuple[np.ndarray, float]:
         """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
-        from impactcont.orbit import kernel
-
-        osc = self.osc
-        w, a, f, u, ui = osc.modes.kernel_arrays[:5]
-        return kernel.impact_jacobian(self.modal, w, a, f, u, ui, osc.omega, osc.R, delta,
-                                      self.impact_velocity(delta))
+        return modal_jacobian(self.osc, self.modal, delta, self.impact_velocity(delta))
 
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
