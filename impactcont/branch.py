@@ -85,7 +85,7 @@ def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) ->
 def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  bounds: Sequence[float] = (0.5, 6.0), *, start: float | None = None,
                  root: int | None = None, detect: Sequence[str] = LABELS,
-                 ds: float = 0.02, ds_min: float = 1e-8, ds_max: float = 0.05,
+                 ds: float | None = None, ds_min: float = 1e-8, ds_max: float = 0.05,
                  newton_tol: float = 1e-12, max_points: int = 5000,
                  both_directions: bool = True, **options: float) -> xr.Dataset:
     """Continue the branch of periodic N-1 motions in one parameter and find its special points.
@@ -108,7 +108,8 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     detect : sequence of str
         Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``.
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
-        Continuation options (see :class:`impactcont.continuation.ContinuationOptions`).
+        Continuation options (see :class:`impactcont.continuation.ContinuationOptions`);
+        the first step ``ds`` defaults to ``min(0.02, ds_max)``.
 
     Returns
     -------
@@ -122,6 +123,9 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
     problem = PeriodicBranchProblem(osc, N, parameter)
     lo, hi = _check_bounds(parameter, bounds)
+    if ds is None:  # the first step adapts to a smaller ds_max
+        positive = isinstance(ds_max, (int, float)) and ds_max > 0  # else options say why
+        ds = min(0.02, ds_max) if positive else 0.02
     opts = ContinuationOptions(bounds=(lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
                                newton_tol=newton_tol, max_points=max_points,
                                both_directions=both_directions, **options)

@@ -76,9 +76,32 @@ def test_a_branch_that_closes_modulo_two_pi_stops_with_each_special_point_once(e
     found = sorted(zip(branch.special_label.values.tolist(),
                        np.round(branch.special_b.values, 6).tolist(), strict=True))
     assert len(found) == len(set(found)) > 0
-    if eta > 0:
-        # the solution set is symmetric under (b, delta) -> (-b, delta + pi): so are its
-        # points. (Undamped, one PD next to the pole of G at ZV is still missed on one side
-        # only: the step-dependent detection of issue 11, item 6.)
-        for label, b in found:
-            assert (label, round(-b, 6)) in found or label == "GR"
+    # the solution set is symmetric under (b, delta) -> (-b, delta + pi): so are its points
+    # (undamped, the PD next to the pole of G at ZV used to be found on one side only)
+    for label, b in found:
+        assert (label, round(-b, 6)) in found or label == "GR"
+
+
+def test_special_points_do_not_depend_on_the_step():
+    """A PD and a ZV in one step: det(G + I) had a pole between them and the PD was lost."""
+    osc = ic.ImpactOscillator(**PAPER, eta=0.1)
+    runs = [ic.continuation(osc.replace(b=0.5), 1, "omega", (0.6, 2.0), ds_max=ds_max)
+            for ds_max in (0.05, 0.02, 0.005)]
+    reference = sorted(zip(runs[-1].special_label.values.tolist(),
+                           runs[-1].special_omega.values.tolist(), strict=True))
+    assert [label for label, _ in reference] == sorted(["GR", "NS", "PD", "SN", "ZV"])
+    for run in runs[:-1]:
+        found = sorted(zip(run.special_label.values.tolist(), run.special_omega.values.tolist(),
+                           strict=True))
+        assert [label for label, _ in found] == [label for label, _ in reference]
+        for (_, a), (_, b) in zip(found, reference, strict=True):
+            assert a == pytest.approx(b, abs=1e-9)
+
+
+def test_first_step_adapts_to_a_small_ds_max():
+    """ds_max below the default first step used to raise unless ds was given too."""
+    osc = ic.ImpactOscillator(**PAPER, eta=0.1)
+    fine = ic.continuation(osc, 1, "omega", (0.8, 1.2), ds_max=0.004)
+    coarse = ic.continuation(osc, 1, "omega", (0.8, 1.2))
+    assert '"ds": 0.004' in fine.attrs["options"]
+    assert fine.sizes["point"] > 2 * coarse.sizes["point"]

@@ -14,8 +14,8 @@ test       function of the motion                                 on curves
 ``GR``     ``gap_min`` (eq. 16); on a GR curve the highest         SN, PD, NS, GR
            interior maximum other than the tangency (double graze)
 ``SN``     ``dr/d delta`` (eq. 14; zero at a fold)                 PD, NS, GR, ZV
-``PD``     ``det(G + I) = prod (mu_i + 1)``                        SN, NS, GR
-``NS``     ``prod_{i<j} (mu_i mu_j - 1)`` (bialternate)            SN, PD, GR
+``PD``     ``h2 det(G + I) = h2 prod (mu_i + 1)``                  SN, NS, GR
+``NS``     ``h2^(m-1) prod_{i<j} (mu_i mu_j - 1)`` (bialternate)   SN, PD, GR
 =========  =====================================================  ===================
 
 The GR test is skipped on ZV curves: there the motion is the linear response
@@ -40,6 +40,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.detection.special_points import pole_free
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import PeriodicOrbit
@@ -104,14 +105,6 @@ def _params(problem: CurveProblem, orbit: PeriodicOrbit) -> tuple[float, float]:
     return getattr(orbit.oscillator, p1), getattr(orbit.oscillator, p2)
 
 
-def _bialternate(mu: np.ndarray) -> float:
-    prod = 1.0 + 0.0j
-    for i in range(mu.size):
-        for j in range(i + 1, mu.size):
-            prod *= mu[i] * mu[j] - 1.0
-    return float(prod.real)
-
-
 def test_values(problem: CurveProblem, x: np.ndarray, orbit: PeriodicOrbit) -> dict[str, float]:
     """The test functions of :data:`TESTS` for the problem's kind at a curve point."""
     out: dict[str, float] = {}
@@ -123,10 +116,8 @@ def test_values(problem: CurveProblem, x: np.ndarray, orbit: PeriodicOrbit) -> d
                          else orbit.gap_min)
         elif test == "SN":
             out[test] = problem.fold_function(x[:-1], x[-1])
-        elif test == "PD":
-            out[test] = float(np.prod(orbit.multipliers + 1.0).real)
-        else:
-            out[test] = _bialternate(orbit.multipliers)
+        else:  # PD, NS: free of the pole of G at h2 = 0
+            out[test] = pole_free(test, orbit.multipliers, np.array([orbit.impact_velocity]))
     return out
 
 

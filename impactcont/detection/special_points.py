@@ -7,8 +7,8 @@ special point:
 label     test function                               meaning
 ========  ==========================================  =================================
 ``SN``    ``d lam / ds`` (tangent)                    fold: saddle-node, a multiplier +1
-``PD``    ``prod_i (mu_i + 1)`` = det(G + I)          a real multiplier through -1
-``NS``    ``prod_{i<j} (mu_i mu_j - 1)``              a complex pair through ``|mu| = 1``
+``PD``    ``h2 prod_i (mu_i + 1)`` = h2 det(G + I)    a real multiplier through -1
+``NS``    ``h2^(m-1) prod_{i<j} (mu_i mu_j - 1)``     a complex pair through ``|mu| = 1``
 ``GR``    ``gap_min``                                 x1 touches b inside the period
 ``ZV``    ``impact_velocity``                         impact at zero velocity
 ========  ==========================================  =================================
@@ -36,7 +36,8 @@ from scipy.optimize import brentq
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 
-__all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function"]
+__all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function",
+           "pole_free"]
 
 log = logging.getLogger(__name__)
 
@@ -97,12 +98,32 @@ def _bialternate(mu: np.ndarray) -> float:
     return float(prod.real)
 
 
+def pole_free(label: str, multipliers: np.ndarray, impact_velocities: np.ndarray) -> float:
+    """The PD or NS test function multiplied free of the poles of G at ``h2 = 0``.
+
+    G of eq. (25) is ``A + x y^T / h2``: a rank-one term with the pole. Hence
+    ``det(G + I)`` is affine in ``1/h2`` and ``h2 det(G + I)`` is smooth through a
+    zero-velocity impact, vanishing only where a multiplier is -1; the bialternate
+    product ``prod_{i<j}(mu_i mu_j - 1)`` is a polynomial of degree ``m - 1`` in
+    ``1/h2`` (the rank-one term's own bialternate vanishes), so ``h2^(m-1)`` clears it.
+    For an N-p motion G is a product of such factors, one per impact ``k`` with its
+    own ``h2_k``. Without this a PD and a ZV in one step cancelled or were discarded
+    as a pole crossing, and detection depended on the step size.
+    """
+    mu = np.asarray(multipliers)
+    h = np.asarray(impact_velocities, dtype=float)
+    if label == "PD":
+        return float(np.prod(mu + 1.0).real * np.prod(h))
+    return _bialternate(mu) * float(np.prod(h ** (mu.size - 1)))
+
+
 def event_function(label: str, orbit: PeriodicOrbit) -> float:
     """Value of the test function of `label` (all but SN) at a motion."""
-    if label == "PD":
-        return float(np.prod(orbit.multipliers + 1.0).real)
-    if label == "NS":
-        return _bialternate(orbit.multipliers)
+    if label in ("PD", "NS"):
+        velocities = getattr(orbit, "impact_velocities", None)
+        if velocities is None:
+            velocities = np.array([orbit.impact_velocity])
+        return pole_free(label, orbit.multipliers, velocities)
     if label == "GR":
         return orbit.gap_min
     if label == "ZV":
