@@ -78,7 +78,7 @@ _XTOL = 1e-15
 _RTOL = 4.0 * _EPS
 _MAX_ITER = 200
 BLAS_MIN = 32  # degrees of freedom above which G's matrix products go to BLAS (numpy)
-EAGER_JACOBIAN = 16  # G is returned with the orbit up to this size (2n)
+EAGER_JACOBIAN = 16  # G and its multipliers come with the orbit up to this size (2n)
 _END_TOL = 1e-12  # critical points this close (relative to T) to an impact are the impact
 
 
@@ -950,10 +950,10 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
     """Every root of eq. (15) at one ``(omega, b)`` with its interior-contact check.
 
     Returns ``(modal, scalars, count, delta, sigma, fold_error, gap_min, gap_min_time,
-    capped, states, velocity_scales, jacobians)`` (see :func:`omega_setup`,
+    capped, states, velocity_scales, jacobians, multipliers)`` (see :func:`omega_setup`,
     :func:`orbit_roots`, :func:`x1_maximum`, :func:`physical_state`); ``jacobians``
-    holds G of each root when ``2n <= EAGER_JACOBIAN`` (cheaper here than a later
-    call), an empty array otherwise.
+    and ``multipliers`` hold G of each root and its eigenvalues when
+    ``2n <= EAGER_JACOBIAN`` (cheaper here than later calls), empty arrays otherwise.
     """
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     count, dl, sg, _, fold_error = orbit_roots(sc, b, omega, R)
@@ -963,11 +963,14 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
     scales = np.zeros(2)
     capped = False
     m = 2 * w.size
-    jacobians = np.zeros((2, m, m) if m <= EAGER_JACOBIAN else (2, 0, 0))
+    small = m <= EAGER_JACOBIAN
+    jacobians = np.zeros((2, m, m) if small else (2, 0, 0))
+    mults = np.zeros((2, m) if small else (2, 0), dtype=np.complex128)
     for k in range(max(count, 0)):
         states[k], scales[k] = physical_state(modal, u, omega, R, dl[k], sg[k])
-        if m <= EAGER_JACOBIAN:
+        if small:
             jacobians[k], _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
+            mults[k] = multipliers(jacobians[k])
     if count > 0:
         times, capped = time_grid(w, a, u0, omega, sc[0])
         dy = modal[6].copy()
@@ -981,7 +984,8 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
                                       (1.0 + R) * sg[k], w, a, u0, dy, dv, work)
             gap[k] = b - best
             gap_t[k] = best_t
-    return modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales, jacobians
+    return (modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales,
+            jacobians, mults)
 
 
 @_jit

@@ -313,8 +313,9 @@ def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> 
 
 def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delta: float,
                 root: int, sigma: float, gap_min: float, gap_time: float, state: np.ndarray,
-                G: np.ndarray | None = None) -> PeriodicOrbit:
-    """A :class:`PeriodicOrbit` from the kernel's values (G too when already computed).
+                G: np.ndarray | None = None, multipliers: np.ndarray | None = None
+                ) -> PeriodicOrbit:
+    """A :class:`PeriodicOrbit` from the kernel's values (G and multipliers when computed).
 
     Built without the frozen dataclass's ``__init__`` (one ``object.__setattr__`` per
     field, which costs more than the kernel call for small systems); the fields are
@@ -332,8 +333,9 @@ def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delt
                           impact_velocity=sigma, gap_min=gap_min, gap_min_time=gap_time,
                           physical=not reasons, reason="; ".join(reasons), state=state,
                           modal=modal)
-    if G is not None:
-        orbit.__dict__["G"] = G  # the cached property's value
+    if G is not None:  # the cached properties' values
+        orbit.__dict__["G"] = G
+        orbit.__dict__["multipliers"] = multipliers
     return orbit
 
 
@@ -397,8 +399,8 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     N = _check_N(N)
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
-     jacobians) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R, osc.omega, N,
-                                      osc.b)
+     jacobians, mults) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
+                                             osc.omega, N, osc.b)
     _warn_setup(osc, sc, stacklevel=2)
     if count == -1:
         raise ParameterError("c = s = 0 and b = 0: every phase satisfies eq. (14); the "
@@ -422,7 +424,7 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     for k in range(count):
         orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k],
                             float(sigma[k]), float(gap[k]), float(gap_t[k]), states[k],
-                            jacobians[k] if jacobians.shape[1] else None)
+                            *((jacobians[k], mults[k]) if jacobians.shape[1] else ()))
         _warn_low_impact_velocity(orbit, float(scales[k]))
         out.append(orbit)
     return out
