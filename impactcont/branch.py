@@ -11,10 +11,13 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import warnings
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import xarray as xr
+from scipy.optimize import minimize_scalar
 
 from impactcont.continuation import ContinuationOptions, continue_branch
 from impactcont.dataset import branch_dataset
@@ -29,6 +32,7 @@ __all__ = ["continuation"]
 log = logging.getLogger(__name__)
 
 _EXISTENCE_SCAN = 400
+_SAME_ROOT = 0.05  # rad: a seed this close to a computed point of a component lies on it
 
 
 _PARAMETER_RANGES = {"omega": (0.0, math.inf, "> 0"), "b": (-math.inf, math.inf, "finite"),
@@ -85,9 +89,10 @@ def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) ->
 def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  bounds: Sequence[float] = (0.5, 6.0), *, start: float | None = None,
                  root: int | None = None, detect: Sequence[str] = LABELS,
-                 ds: float | None = None, ds_min: float = 1e-8, ds_max: float = 0.05,
+                 ds: float = 0.02, ds_min: float = 1e-8, ds_max: float = 0.05,
                  newton_tol: float = 1e-12, max_points: int = 5000,
-                 both_directions: bool = True, **options: float) -> xr.Dataset:
+                 both_directions: bool = True, components: str = "all",
+                 **options: float) -> xr.Dataset:
     """Continue the branch of periodic N-1 motions in one parameter and find its special points.
 
     Parameters
@@ -107,15 +112,25 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         Which root of eq. (15) to start on; default the physical (then stable) one.
     detect : sequence of str
         Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``.
+    components : {"all", "start"}
+        ``"all"`` (default): every connected component of the solution set in
+        `bounds`, found by a scan of eq. (15) and followed one by one (component 0
+        goes through the start); ``"start"``: only the component through the start.
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
         Continuation options (see :class:`impactcont.continuation.ContinuationOptions`);
-        the first step ``ds`` defaults to ``min(0.02, ds_max)``.
+        a first step ``ds`` above ``ds_max`` is lowered to ``ds_max``.
 
     Returns
     -------
     xarray.Dataset
         The branch (dimension ``point``) with its special points (dimension
-        ``special``); schema in ``docs/dataset.md``.
+        ``special``); schema in ``docs/dataset.md``. ``connected_component`` numbers
+        the components; points are in continuation order within each.
+
+    Warns
+    -----
+    RuntimeWarning
+        When a component stops at ``max_points`` (naming where it started).
     """
     N = _check_N(N)
     unknown = sorted(set(detect) - set(LABELS))
@@ -123,24 +138,129 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
     problem = PeriodicBranchProblem(osc, N, parameter)
     lo, hi = _check_bounds(parameter, bounds)
-    if ds is None:  # the first step adapts to a smaller ds_max
-        positive = isinstance(ds_max, (int, float)) and ds_max > 0  # else options say why
-        ds = min(0.02, ds_max) if positive else 0.02
+    if isinstance(ds_max, (int, float)) and 0 < ds_max < ds:  # else the options say why
+        log.info("first step ds=%g lowered to ds_max=%g", ds, ds_max)
+        ds = ds_max
     opts = ContinuationOptions(bounds=(lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
                                newton_tol=newton_tol, max_points=max_points,
                                both_directions=both_directions, **options)
+    if components not in ("all", "start"):
+        raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
     lam0 = _start_value(problem, (lo, hi), start)
     delta0 = _start_root(problem, lam0, root)
-    result = continue_branch(problem, np.array([delta0]), lam0, opts)
-    log.info("N=%d branch in %s: %d points (%s)", N, parameter, len(result), result.message)
+    runs = [_follow(problem, lam0, delta0, opts, detect)]
+    if components == "all":
+        for lam, delta in _component_seeds(problem, (lo, hi)):
+            if not any(_passes(run, lam, delta) for run in runs):
+                runs.append(_follow(problem, lam, delta, opts, detect))
+    return _branch_dataset(problem, osc, opts, detect, runs)
 
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Run:
+    """One connected component: its continuation result, samples and special points."""
+
+    start: float
+    start_delta: float
+    result: Any
+    samples: list[BranchSample]
+    specials: list[Any]
+
+
+def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
+            opts: ContinuationOptions, detect: Sequence[str]) -> _Run:
+    result = continue_branch(problem, np.array([delta0]), lam0, opts)
+    log.info("N=%d branch in %s from %s=%.10g: %d points (%s)", problem.N, problem.parameter,
+             problem.parameter, lam0, len(result), result.message)
+    if any(st.name == "MAX_POINTS" for st in result.statuses):
+        warnings.warn(f"the N={problem.N} component through {problem.parameter}={lam0:.10g} "
+                      f"stopped at max_points={opts.max_points}: the rest of it is not in the "
+                      "branch; raise max_points or ds_max", RuntimeWarning, stacklevel=4)
     samples = [BranchSample(delta=float(u[0]), lam=float(lam), dlam=float(t[-1]),
                             orbit=problem.orbit(float(u[0]), float(lam)))
                for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
-    specials = detect_special_points(problem, samples, detect)
+    return _Run(lam0, delta0, result, samples, detect_special_points(problem, samples, detect))
 
-    orbits = [s.orbit for s in samples]
-    ds_steps = np.sqrt(np.diff(result.u[:, 0]) ** 2 + np.diff(result.lam) ** 2)
+
+def _component_seeds(problem: PeriodicBranchProblem, bounds: tuple[float, float]
+                     ) -> list[tuple[float, float]]:
+    """Both roots of eq. (15) at the best-separated scan value of every existence interval.
+
+    Motions exist where ``c^2 + s^2 >= b^2`` (eq. 15); each maximal interval of scan
+    values where they do holds one or two connected components of the solution set
+    (the roots join at the folds that end the interval, or run to the bounds apart).
+    Between scan values the discriminant is maximised wherever it has a local maximum
+    below 0, so an interval narrower than the scan step is found too.
+    """
+    def discriminant(lam: float) -> float:
+        c, s, b = problem.amplitude(lam)
+        return c * c + s * s - b * b
+
+    lams = list(np.linspace(bounds[0], bounds[1], _EXISTENCE_SCAN))
+    disc = [discriminant(float(lam)) for lam in lams]
+    # a component narrower than the scan step shows as a local maximum of the
+    # discriminant below 0 between scan values: maximise it there and keep it if >= 0
+    for k in range(len(lams) - 2, 0, -1):
+        if disc[k] < 0 and disc[k] >= disc[k - 1] and disc[k] >= disc[k + 1]:
+            best = minimize_scalar(lambda x: -discriminant(x), bounds=(lams[k - 1], lams[k + 1]),
+                                   method="bounded", options={"xatol": 1e-12})
+            if -best.fun >= 0:
+                log.info("narrow component found at %s=%.12g", problem.parameter, best.x)
+                lams.insert(k + 1, float(best.x))
+                disc.insert(k + 1, -float(best.fun))
+    seeds = []
+    exists = np.asarray(disc) >= 0
+    edges = np.flatnonzero(np.diff(np.r_[0, exists.astype(int), 0]))
+    for first, last in zip(edges[::2], edges[1::2], strict=True):
+        k = first + int(np.argmax(disc[first:last]))
+        c, s, b = problem.amplitude(float(lams[k]))
+        r2, root = c * c + s * s, math.sqrt(max(disc[k], 0.0))
+        for sign in (1.0, -1.0):
+            seeds.append((float(lams[k]), math.atan2((b * s + sign * c * root) / r2,
+                                                     (b * c - sign * s * root) / r2)))
+    return seeds
+
+
+def _passes(run: _Run, lam: float, delta: float) -> bool:
+    """Whether the component of `run` goes through ``(lam, delta)`` (delta modulo 2 pi)."""
+    lams = np.array([s.lam for s in run.samples])
+    deltas = np.array([s.delta for s in run.samples])
+    if lams.size == 1:
+        return lams[0] == lam and abs(math.remainder(deltas[0] - delta, 2 * math.pi)) < 1e-6
+    side = lams - lam
+    for i in np.flatnonzero(side[:-1] * side[1:] <= 0):
+        span = lams[i + 1] - lams[i]
+        t = 0.5 if span == 0 else (lam - lams[i]) / span
+        guess = deltas[i] + t * (deltas[i + 1] - deltas[i])
+        if abs(math.remainder(guess - delta, 2 * math.pi)) < _SAME_ROOT:
+            return True
+    return False
+
+
+def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
+                    opts: ContinuationOptions, detect: Sequence[str], runs: list[_Run]
+                    ) -> xr.Dataset:
+    """One dataset of every component (the variable ``connected_component`` tells them apart)."""
+    parameter, N = problem.parameter, problem.N
+    orbits = [s.orbit for run in runs for s in run.samples]
+    arclength, component, lam = [], [], []
+    special_points = []
+    offset = 0
+    for index, run in enumerate(runs):
+        res = run.result
+        steps = np.sqrt(np.diff(res.u[:, 0]) ** 2 + np.diff(res.lam) ** 2)
+        arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
+        component.append(np.full(len(run.samples), index))
+        lam.append(np.asarray(res.lam, dtype=float))
+        for sp in run.specials:
+            row = {"label": sp.label, "omega": sp.orbit.oscillator.omega,
+                   "b": sp.orbit.oscillator.b, "delta": sp.delta, "point": sp.point + offset,
+                   "bracket_lo": min(sp.bracket), "bracket_hi": max(sp.bracket),
+                   "precision": sp.precision, "status": sp.status,
+                   "multipliers": sp.orbit.multipliers}
+            row.setdefault(parameter, sp.value)
+            special_points.append(row)
+        offset += len(run.samples)
     columns = {
         "omega": np.array([o.oscillator.omega for o in orbits]),
         "b": np.array([o.oscillator.b for o in orbits]),
@@ -150,24 +270,23 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         "spectral_radius": np.array([o.spectral_radius for o in orbits]),
         "stable": np.array([o.stable for o in orbits]),
         "physical": np.array([o.physical for o in orbits]),
-        "arclength": np.concatenate([[0.0], np.cumsum(ds_steps)]),
+        "arclength": np.concatenate(arclength),
         "multipliers": np.array([o.multipliers for o in orbits]),
         "state": np.array([o.state for o in orbits]),
+        "connected_component": np.concatenate(component),
     }
     # the continued parameter's own column (omega and b are always there)
-    columns.setdefault(parameter, np.asarray(result.lam, dtype=float))
-    special_points = [{
-        "label": sp.label, "omega": sp.orbit.oscillator.omega, "b": sp.orbit.oscillator.b,
-        "delta": sp.delta, "point": sp.point, "bracket_lo": min(sp.bracket),
-        "bracket_hi": max(sp.bracket), "precision": sp.precision, "status": sp.status,
-        "multipliers": sp.orbit.multipliers,
-    } for sp in specials]
-    for row, sp in zip(special_points, specials, strict=True):
-        row.setdefault(parameter, sp.value)
+    columns.setdefault(parameter, np.concatenate(lam))
+    first = runs[0]
     option_record = {**dataclasses.asdict(opts), "N": N, "parameter": parameter,
-                     "start": lam0, "start_delta": delta0, "detect": list(detect),
-                     "status": [s.name for s in result.statuses],
-                     "message": result.message}
+                     "start": first.start, "start_delta": first.start_delta,
+                     "detect": list(detect),
+                     "status": [st.name for st in first.result.statuses],
+                     "message": first.result.message,
+                     "components": [{"start": run.start, "start_delta": run.start_delta,
+                                     "points": len(run.samples),
+                                     "status": [st.name for st in run.result.statuses],
+                                     "message": run.result.message} for run in runs]}
     option_record["bounds"] = list(opts.bounds)
     return branch_dataset(parameter=parameter, N=N, oscillator=osc, options=option_record,
                           columns=columns, special_points=special_points)

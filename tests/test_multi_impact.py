@@ -37,7 +37,8 @@ def paper_b0():
 
 @pytest.fixture(scope="module")
 def branch_n1(paper_b0):
-    return ic.continuation(paper_b0, N=1, parameter="omega", bounds=(1.4, 2.0))
+    return ic.continuation(paper_b0, N=1, parameter="omega", bounds=(1.4, 2.0),
+                           components="start")
 
 
 @pytest.fixture(scope="module")

@@ -120,6 +120,13 @@ POINT_VARIABLES: dict[str, _Var] = {
                   extra_dims=("component",)),
 }
 
+#: Point variables a branch may carry (older files and other drivers do without).
+OPTIONAL_POINT_VARIABLES: dict[str, _Var] = {
+    "connected_component": _Var("connected component", "1",
+                                "Index of the connected component of the solution set the "
+                                "point belongs to (continuation order within each).", kind="i"),
+}
+
 # Keys of a special-point dict that are not parameter values.
 _SPECIAL_FIELDS: dict[str, _Var] = {
     "label": _Var("special point label", "1",
@@ -236,6 +243,10 @@ def _column(key: str, value: Any, spec: _Var, shape: tuple[int, ...], what: str)
         if a.dtype.kind not in "iuf":
             raise ValueError(f"{what} {key!r} must be real numbers; got dtype {a.dtype}")
         return a.astype(np.float64)
+    if spec.kind == "i":
+        if a.dtype.kind not in "iu":
+            raise ValueError(f"{what} {key!r} must be integers; got dtype {a.dtype}")
+        return a.astype(np.int64)
     raise AssertionError(f"unhandled kind {spec.kind}")  # pragma: no cover - schema bug
 
 
@@ -361,6 +372,7 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
     missing = [k for k in specs if k not in columns]
     if missing:
         raise ValueError(f"columns is missing key(s) {missing}; required: {list(specs)}")
+    specs.update({k: v for k, v in OPTIONAL_POINT_VARIABLES.items() if k in columns})
     unknown = sorted(set(columns) - set(specs))
     if unknown:
         raise ValueError(f"columns has unknown key(s) {unknown}; allowed: {list(specs)}")
@@ -442,7 +454,8 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"not a branch dataset: attribute 'parameter' must be one of "
                          f"{sorted(PARAMETERS)}; got {parameter!r}")
     expected: dict[str, tuple[tuple[str, ...], str]] = {}
-    for key, spec in _point_variables(parameter).items():
+    present = {k: v for k, v in OPTIONAL_POINT_VARIABLES.items() if k in ds.variables}
+    for key, spec in {**_point_variables(parameter), **present}.items():
         expected[key] = (("point", *spec.extra_dims), spec.kind)
     for key, spec in _special_variables(parameter).items():
         expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)

@@ -273,7 +273,8 @@ def find_special(osc: ic.ImpactOscillator, label: str, bounds: tuple[float, floa
     """A special point on a physical part of the N = 1 branch: (omega, root, delta, t_gap)."""
     start = osc.replace(omega=0.5 * (bounds[0] + bounds[1]))
     try:
-        ds = ic.continuation(start, N=1, parameter="omega", bounds=bounds, detect=(label,))
+        ds = ic.continuation(start, N=1, parameter="omega", bounds=bounds, detect=(label,),
+                             components="start")
     except ic.ImpactcontError as exc:
         # seen with a concurrent version of the continuation core: a corrector iterate left
         # omega > 0; fall back to Brent's method on the closed form over the bracket
@@ -399,7 +400,7 @@ def location_study(n: int, cache: ReferenceCache, quick: bool) -> dict[str, Any]
                          "tol": xtol, "time": t, "error": abs(w - w_true) / w_true})
         ds, t = timed(lambda lo=lo, hi=hi, label=label: ic.continuation(
             osc.replace(omega=lo), N=1, parameter="omega", bounds=(lo, hi), detect=(label,),
-            both_directions=False))
+            both_directions=False, components="start"))
         found = [float(v) for v, s in zip(ds.special_omega.values, ds.special_label.values,
                                           strict=True) if str(s) == label] if (
             "special" in ds.sizes) else []

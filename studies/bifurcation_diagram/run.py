@@ -305,7 +305,8 @@ def branches_for(b: float, N: int, scan: int = EXISTENCE_SCAN) -> dict[str, Any]
                 if any(on_branch(ds, float(w), orbit.delta) for ds in found):
                     continue
                 ds = ic.continuation(osc, N=N, parameter="omega", bounds=OMEGA_RANGE,
-                                     start=float(w), root=orbit.root, **CONTINUATION)
+                                     start=float(w), root=orbit.root, components="start",
+                                     **CONTINUATION)
                 if not on_branch(ds, float(w), orbit.delta):
                     log.warning("b=%g N=%d: the branch started at omega=%.4f, delta=%.4f does "
                                 "not pass through its start; kept", b, N, w, orbit.delta)

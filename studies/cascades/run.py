@@ -147,7 +147,7 @@ def compute_branches(name: str, quick: bool) -> dict[str, Any]:
     for N in N_VALUES:
         try:
             ds = ic.continuation(oscillator(name, 0.5 * (lo + hi)), N=N, parameter="omega",
-                                 bounds=(lo, hi))
+                                 bounds=(lo, hi), components="start")
         except ic.NoPeriodicMotionError as exc:
             log.info("%s: no N=%d motion in range (%s)", name, N, exc)
             continue

@@ -61,7 +61,8 @@ def chain(n: int, *, masses: Any = None, springs: Any = None, **params: Any
 
 def grazing_omega() -> float:
     """A grazing point (gap_min = 0, eq. 16) of the paper's N = 1 branch at b = 0."""
-    ds = ic.continuation(paper(), N=1, parameter="omega", bounds=(0.5, 3.0), detect=("GR",))
+    ds = ic.continuation(paper(), N=1, parameter="omega", bounds=(0.5, 3.0), detect=("GR",),
+                         components="start")
     labels = [str(v) for v in ds.special_label.values]
     return float(ds.special_omega.values[labels.index("GR")])
 

@@ -215,7 +215,10 @@ def branch_and_curve(repeat: int, shooting_time: float) -> tuple[dict, dict]:
     osc = paper()
 
     def branch():
-        return ic.continuation(osc.replace(b=0.0), N=1, parameter="omega", bounds=(0.5, 6.0))
+        # the component through the start, as the issue measured it (components="all", the
+        # default, also follows the second root's branch at b = 0)
+        return ic.continuation(osc.replace(b=0.0), N=1, parameter="omega", bounds=(0.5, 6.0),
+                               components="start")
 
     br = branch()
     t_br = best(branch, repeat)
