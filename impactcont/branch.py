@@ -54,6 +54,25 @@ def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
     return lo, hi
 
 
+def _refuse_elastic(osc: ImpactOscillator, parameter: str, lo: float, hi: float) -> None:
+    """Refuse a range that reaches elastic impacts without damping (R = 1, C = 0).
+
+    There eq. (12) is singular and eq. (14) is replaced by ``x1p'(delta) = 0``
+    (``docs/kernel.md``): the branch equation changes, so a branch cannot be followed
+    into that case; :func:`impactcont.periodic_orbits` solves it point by point.
+    """
+    alpha, beta = osc.rayleigh
+    undamped = {"eta": lo == 0.0, "alpha": lo == 0.0 and beta == 0.0,
+                "beta": lo == 0.0 and alpha == 0.0}.get(parameter, alpha == 0.0 and beta == 0.0)
+    elastic = hi >= 1.0 if parameter == "R" else osc.R == 1.0
+    if undamped and elastic:
+        raise ParameterError(
+            f"continuation in {parameter} over [{lo!r}, {hi!r}] reaches elastic impacts without "
+            "damping (R = 1, no damping), where eq. (12) is singular and the motions obey "
+            "another equation; use periodic_orbits at each value there, add damping or keep "
+            "R below 1")
+
+
 def _start_value(problem: PeriodicBranchProblem, bounds: tuple[float, float],
                  start: float | None) -> float:
     lo, hi = bounds
@@ -138,6 +157,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
     problem = PeriodicBranchProblem(osc, N, parameter)
     lo, hi = _check_bounds(parameter, bounds)
+    _refuse_elastic(osc, parameter, lo, hi)
     if isinstance(ds_max, (int, float)) and 0 < ds_max < ds:  # else the options say why
         log.info("first step ds=%g lowered to ds_max=%g", ds, ds_max)
         ds = ds_max

@@ -107,3 +107,19 @@ def test_no_forced_motion_of_mass_one_is_refused():
                               omega=1.3)
     with pytest.raises(ic.ParameterError, match="no forced motion of mass 1"):
         ic.periodic_orbits(osc, 1)
+
+
+@pytest.mark.parametrize(("parameter", "bounds", "params"), [
+    ("omega", (2.0, 3.0), {}), ("b", (0.0, 0.2), {}), ("R", (0.5, 1.0), {}),
+    ("eta", (0.0, 0.1), {"eta": 0.05})])
+def test_continuation_into_the_elastic_undamped_case_is_refused(parameter, bounds, params):
+    osc = _one_mass(2.8, 0.05, **params)
+    if parameter == "R":
+        osc = osc.replace(R=0.7)
+    with pytest.raises(ic.ParameterError, match="elastic impacts without damping"):
+        ic.continuation(osc, 1, parameter, bounds)
+
+
+def test_continuation_with_restitution_below_one_is_not_refused():
+    osc = _one_mass(2.8, 0.05).replace(R=0.7)
+    assert ic.continuation(osc, 1, "R", (0.5, 0.9)).sizes["point"] > 1
