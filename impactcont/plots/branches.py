@@ -87,15 +87,20 @@ def stability_segments(ds: xr.Dataset) -> list[tuple[str, slice]]:
     list of (str, slice)
         ``(kind, points)``: each run of consecutive points of one kind, its
         slice extended by one point into the next run so the drawn segments
-        join. ``kind`` is a key of :data:`SEGMENT_STYLES`.
+        join; runs never join across two connected components of the branch
+        (variable ``connected_component``). ``kind`` is a key of :data:`SEGMENT_STYLES`.
     """
     physical = np.asarray(ds["physical"].values, dtype=bool)
     stable = np.asarray(ds["stable"].values, dtype=bool)
     code = np.where(~physical, 2, np.where(stable, 0, 1))
     npoints = code.size
-    starts = np.concatenate([[0], np.flatnonzero(np.diff(code)) + 1])
+    part = (np.asarray(ds["connected_component"].values) if "connected_component" in ds
+            else np.zeros(npoints, dtype=int))
+    new_part = np.diff(part) != 0
+    starts = np.concatenate([[0], np.flatnonzero((np.diff(code) != 0) | new_part) + 1])
     ends = np.concatenate([starts[1:], [npoints]])
-    return [(_KINDS[code[s]], slice(int(s), int(min(e + 1, npoints))))
+    return [(_KINDS[code[s]], slice(int(s), int(e + 1 if e < npoints and not new_part[e - 1]
+                                                else e)))
             for s, e in zip(starts, ends, strict=True)]
 
 
