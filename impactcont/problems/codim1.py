@@ -93,6 +93,7 @@ CURVE_KINDS = ("SN", "PD", "NS", "GR", "ZV")
 grazing and zero-velocity impact."""
 
 _FD_STEP = 1e-6
+_CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
 _DOMAINS = {"omega": (1e-300, math.inf), "b": (-math.inf, math.inf), "R": (0.0, 1.0),
             "eta": (0.0, math.inf), "alpha": (0.0, math.inf), "beta": (0.0, math.inf)}
@@ -204,7 +205,7 @@ class CurveProblem:
         self.parameters = check_parameters(osc, parameters)
         self._cache: collections.OrderedDict[tuple[float, float], _Pieces] = \
             collections.OrderedDict()
-        self._jac_cache: tuple[bytes, np.ndarray] | None = None
+        self._jac_cache: tuple[np.ndarray, np.ndarray] | None = None
         self.last_step = math.nan
 
     # -- layout ---------------------------------------------------------------------------------
@@ -286,8 +287,10 @@ class CurveProblem:
 
     def _full_jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
         x = np.append(np.asarray(u, dtype=float), float(lam))
-        key = x.tobytes()
-        if self._jac_cache is not None and self._jac_cache[0] == key:
+        if self._jac_cache is not None and np.max(np.abs(self._jac_cache[0] - x)) <= (
+                _CHORD * max(1.0, float(np.max(np.abs(x))))):
+            # a chord step: the iterates of one corrector stay this close; Newton then
+            # converges linearly instead of quadratically, the accuracy is the residual's
             return self._jac_cache[1]
         m = x.size - 1
         J = np.empty((m, m + 1))
@@ -302,7 +305,7 @@ class CurveProblem:
                 down[j] = x[j] - h
             J[:, j] = (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
                 / (up[j] - down[j])
-        self._jac_cache = (key, J)
+        self._jac_cache = (x, J)
         return J
 
     # -- for subclasses -------------------------------------------------------------------------
