@@ -26,6 +26,7 @@ from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
+from impactcont.threads import blas_limited
 
 __all__ = ["continuation"]
 
@@ -105,6 +106,7 @@ def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) ->
     return chosen[0].delta
 
 
+@blas_limited
 def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  bounds: Sequence[float] = (0.5, 6.0), *, start: float | None = None,
                  root: int | None = None, detect: Sequence[str] = LABELS,

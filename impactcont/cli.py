@@ -21,7 +21,8 @@ Exit codes
 2
     Bad scene or usage: malformed or missing scene (the message names the
     file, the key and what is allowed), unknown option, a file that is not
-    an impactcont NetCDF file.
+    an impactcont NetCDF file, an output path that cannot be written
+    (checked before anything is computed).
 130
     Interrupted (Ctrl-C).
 """
@@ -62,11 +63,14 @@ def _out(text: str) -> None:
 # Commands
 # ---------------------------------------------------------------------------------------------
 def _cmd_run(args: argparse.Namespace) -> int:
+    from impactcont.dataset.io import check_output_directory
     from impactcont.scene import SceneError, load_scene, run_scene
 
     try:
         scene = load_scene(args.scene, settings=args.set or (), output=args.output)
-    except SceneError as exc:
+        # before computing anything (and in --check): can the outputs be written?
+        check_output_directory(scene.output_dir, create=not args.check)
+    except (SceneError, OSError) as exc:
         raise _UsageError(str(exc)) from None
     if args.check:
         counts = ", ".join(f"{len(e)} {k}" for k, e in scene.sections.items() if e) or "nothing"
@@ -105,7 +109,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
     try:
         written = plot_file(args.file, args.output, kind=args.kind, y=args.y, dpi=args.dpi)
-    except (FileNotFoundError, ValueError) as exc:
+    except (FileNotFoundError, NotADirectoryError, PermissionError, ValueError) as exc:
         raise _read_error(exc) from None
     if not args.quiet:
         for path in written:
@@ -159,8 +163,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="impactcont", parents=[common],
         description="Bifurcation analysis of vibro-impact oscillators: run a scene (a TOML "
                     "study description), describe and draw the NetCDF files it writes.",
-        epilog="exit codes: 0 success, 1 failure during computation, 2 bad scene or usage, "
-               "130 interrupted. Documentation: docs/ (mkdocs).")
+        epilog="exit codes: 0 success, 1 failure during computation, 2 bad scene or usage "
+               "(including an output path that cannot be written), 130 interrupted. "
+               "Documentation: docs/ (mkdocs).")
     parser.add_argument("--version", action="version", version=f"impactcont {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 

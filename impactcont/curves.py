@@ -45,6 +45,7 @@ from impactcont.problems.codim1 import (
     check_parameters,
     curve_problem,
 )
+from impactcont.threads import blas_limited
 
 __all__ = ["curve", "curve_crossings"]
 
@@ -314,6 +315,7 @@ def _codim2_record(problem: CurveProblem, cp: Codim2Point) -> dict[str, Any]:
     return rec
 
 
+@blas_limited
 def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
           start: xr.Dataset | Mapping[str, float] | None = None, special: int | None = None,
           parameters: Sequence[str] = ("omega", "b"),

@@ -41,6 +41,7 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.periodic import _check_N
+from impactcont.threads import blas_limited
 
 __all__ = ["stability_map"]
 
@@ -54,6 +55,7 @@ _ROOT_FIELDS = ("delta", "impact_velocity", "gap_min", "spectral_radius", "criti
                 "physical", "stable")
 
 
+@blas_limited
 def _map_task(osc_json: str, N: int, omega: np.ndarray, b: np.ndarray,
               spectral_radius: bool = True) -> dict[str, np.ndarray]:
     """One task: every motion for one N and a block of omega values (picklable, top level)."""
@@ -91,6 +93,7 @@ def _executor(executor: Any, max_workers: int | None) -> tuple[cf.Executor | Non
                          f"Executor or a dask.distributed.Client; got {executor!r}")
 
 
+@blas_limited
 def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                   omega: Sequence[float] | np.ndarray = (),
                   b: Sequence[float] | np.ndarray = (), *, executor: Any = None,

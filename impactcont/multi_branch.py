@@ -31,6 +31,7 @@ from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.threads import blas_limited
 
 __all__ = ["multi_impact_continuation"]
 
@@ -268,6 +269,7 @@ def follow(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
                              extra_attrs=extra_attrs)
 
 
+@blas_limited
 def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter: str = "omega",
                               bounds: Sequence[float] = (0.5, 6.0), *,
                               detect: Sequence[str] = LABELS, ds: float | None = None,

@@ -47,6 +47,7 @@ from impactcont.orbit.multi_impact import (
 )
 from impactcont.orbit.periodic import orbit_at_phase
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.threads import blas_limited
 
 __all__ = [
     "Cascade",
@@ -240,6 +241,7 @@ def _check_epsilon(epsilon: object) -> float:
     return float(epsilon)
 
 
+@blas_limited
 def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
                            bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                            detect: Sequence[str] = LABELS, stop_after_pd: int | None = None,
@@ -341,6 +343,7 @@ def _first_pd(ds: xr.Dataset, after: float | None, sign: int) -> int | None:
     return None
 
 
+@blas_limited
 def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings: int = 6,
                             bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                             detect: Sequence[str] = LABELS, min_spacing: float = 1e-9,
@@ -470,6 +473,7 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
             "states": np.array(states)}, k + 1
 
 
+@blas_limited
 def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float] | None = None,
                    epsilon: float = 1e-4, detect: Sequence[str] = LABELS,
                    **options: Any) -> xr.Dataset | None:

@@ -209,3 +209,16 @@ def test_info_and_plot_on_a_file_of_impactcont_save(ran: Path, tmp_path: Path,
     assert "(branches), 1 entry" in capsys.readouterr().out
     assert main(["plot", str(path), "--dpi", "40"]) == EXIT_OK
     assert (tmp_path / "one_branch.png").is_file()
+
+
+def test_readme_test_command_is_what_ci_runs() -> None:
+    """The README's test command and .ci/run must not drift apart (issue 13)."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    commands = [line.strip() for line in ci.splitlines()
+                if line.startswith("python3 -m venv")]
+    assert len(commands) == 1, "no single command line in .ci/run"
+    (command,) = commands
+    assert f"\n    {command}\n" in readme, "README.md does not show the command .ci/run runs"
+    assert "pytest" in command and "ruff check" in command and "mkdocs build --strict" in command
+    assert "export" not in ci, ".ci/run sets variables the README command does not have"

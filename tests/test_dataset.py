@@ -246,10 +246,17 @@ def test_single_branch_round_trip(branch, tmp_path):
     assert back["stable"].dtype == bool and back["physical"].dtype == bool
     assert back["special_label"].dtype == np.dtype("<U2")
     assert oscillator_from_dataset(back).to_dict() == oscillator_from_dataset(branch).to_dict()
-    # On disk: complex as a compound type, booleans as int8 tagged dtype=bool.
+    # On disk: complex as real and imaginary float parts, booleans as int8 tagged dtype=bool.
     with netCDF4.Dataset(path) as nc:
         assert nc.data_model == "NETCDF4"
-        assert nc.variables["multipliers"].dtype.names == ("r", "i")
+        assert "multipliers" not in nc.variables
+        real, imag = nc.variables["multipliers_real"], nc.variables["multipliers_imag"]
+        assert real.dtype == imag.dtype == np.float64
+        assert real.dimensions == ("point", "multiplier")
+        assert real.getncattr("long_name") == "real part of Floquet multipliers"
+        assert imag.getncattr("impactcont_complex_part") == "imag"
+        assert imag.getncattr("impactcont_complex_variable") == "multipliers"
+        np.testing.assert_array_equal(real[:] + 1j * imag[:], branch["multipliers"].values)
         assert nc.variables["stable"].dtype == np.int8
         assert nc.variables["stable"].getncattr("dtype") == "bool"
 
@@ -393,12 +400,15 @@ def test_bifurcation_diagram_renders(branch, tmp_path):
     assert len(ax.collections) == 3  # one marker set per special label present
     assert sorted(t.get_text() for t in ax.texts) == ["GR", "NS", "ZV"]
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert legend == ["stable", "unstable", "non-physical", "NS", "GR", "ZV"]
+    assert legend == ["stable", "unstable", "non-physical", "NS Neimark-Sacker", "GR grazing",
+                      "ZV zero-velocity impact", "N = 1"]
     # Special markers sit on the drawn curve at their parameter value.
     offsets = np.vstack([c.get_offsets() for c in ax.collections])
     np.testing.assert_allclose(np.sort(offsets[:, 0]), np.sort(branch["special_omega"].values),
                                rtol=0, atol=1e-12)
-    assert "omega" in ax.get_xlabel() and "impact_velocity" in ax.get_ylabel()
+    assert ax.get_xlabel() == r"forcing frequency $\omega$"
+    assert ax.get_ylabel() == r"impact velocity $\dot{x}_1(T^-)$"  # no "(impact_velocity)"
+    assert ax.get_title() == "Periodic 1-1 motions at b = 0"
     out = tmp_path / "diagram.png"
     ax.figure.savefig(out)
     assert out.stat().st_size > 0
@@ -412,7 +422,9 @@ def test_bifurcation_diagram_many_branches_and_y(branch, tmp_path):
     assert out is ax
     assert len(ax.get_lines()) == 8 and len(ax.texts) == 0
     assert {ln.get_color() for ln in ax.get_lines()} == {"C0", "C1"}
-    assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == ["a", "b"]
+    assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == ["a (N = 1)",
+                                                                        "b (N = 1)"]
+    assert ax.get_ylabel() == r"impact phase $\delta$ [rad]"
     np.testing.assert_allclose(ax.collections[0].get_offsets()[:, 1],
                                branch["special_delta"].values[:1], rtol=0, atol=1e-12)
     fig.savefig(tmp_path / "many.png")
@@ -439,3 +451,143 @@ def test_multipliers_plot_renders(branch, tmp_path):
     plt.close(ax_abs.figure)
     with pytest.raises(TypeError, match="pair of matplotlib Axes"):
         multipliers_plot(branch, ax=ax_abs)
+
+
+# -- figures a user can publish (issue 13) ----------------------------------------------------
+def _crowded(osc) -> xr.Dataset:
+    """Six special points on six neighbouring points: their labels would pile up."""
+    cols = _columns()
+    specials = [_special(label, p, cols) for label, p in
+                zip(("SN", "PD", "NS", "GR", "ZV", "SN"), range(20, 26), strict=True)]
+    return branch_dataset(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
+                          special_points=specials)
+
+
+def _extents(fig, artists) -> list:
+    """Window extents after drawing; of an annotation, its text only (not its leader line)."""
+    from matplotlib.text import Annotation, Text
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    return [Text.get_window_extent(a, renderer) if isinstance(a, Annotation)
+            else a.get_window_extent(renderer) for a in artists]
+
+
+def test_special_point_labels_avoid_each_other(osc):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5, 3.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ds = _crowded(osc)
+    bifurcation_diagram(ds, ax=ax)
+    labels = [t for t in ax.texts if t.get_text() in SPECIAL_LABELS]
+    assert sorted(t.get_text() for t in labels) == sorted(["SN", "PD", "NS", "GR", "ZV", "SN"])
+    boxes = _extents(fig, labels)
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1:]:
+            assert not a.overlaps(b), "two special-point labels overlap"
+    # each label still names its point
+    np.testing.assert_allclose(sorted(t.xy[0] for t in labels),
+                               np.sort(ds["special_omega"].values), rtol=0, atol=1e-12)
+    legend, frame = _extents(fig, [ax.get_legend(), ax])
+    assert legend.x0 >= frame.x1, "the legend must not cover the curves"
+
+
+def test_naive_offsets_would_overlap(osc):
+    """The case above is a real collision: fixed offsets (the former layout) overlap."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5, 3.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ds = _crowded(osc)
+    bifurcation_diagram(ds, ax=ax, label_special=False)
+    naive = [ax.annotate(str(lab), (x, 0), xytext=(4, 4), textcoords="offset points",
+                         fontsize="small")
+             for lab, x in zip(ds["special_label"].values, ds["special_omega"].values,
+                               strict=True)]
+    boxes = _extents(fig, naive)
+    assert any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+
+
+def test_special_points_of_non_physical_motions_are_grey_and_unlabelled(osc):
+    cols = _columns()
+    ds = branch_dataset(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
+                        special_points=[_special("PD", 40, cols), _special("NS", 20, cols)])
+    ax = bifurcation_diagram(ds)
+    assert [t.get_text() for t in ax.texts] == ["NS"]
+    edges = {tuple(np.round(c.get_edgecolor()[0][:3], 2)) for c in ax.collections}
+    assert edges == {(0.0, 0.0, 0.0), (0.6, 0.6, 0.6)}
+    plt.close(ax.figure)
+
+
+def test_vertical_range_fits_the_physical_motions(branch):
+    far = (branch["point"] > 36) & (branch["point"] < 43)  # inside the non-physical run
+    wild = branch.assign(impact_velocity=branch["impact_velocity"].where(~far, 50.0))
+    ax = bifurcation_diagram(wild)
+    lo, hi = ax.get_ylim()
+    physical = wild["impact_velocity"].values[wild["physical"].values]
+    assert lo < physical.min() and physical.max() < hi < 5.0
+    ax_all = bifurcation_diagram(wild, physical_range=False)
+    assert ax_all.get_ylim()[1] > 50.0
+    plt.close("all")
+
+
+def test_scene_diagram_has_one_panel_per_system(branch, osc):
+    from impactcont.scene.figures import draw_bifurcation
+
+    cols = _columns()
+    cols["b"] = np.full(NPOINTS, 0.5)
+    other = branch_dataset(parameter="omega", N=2, oscillator=osc.replace(b=0.5), options={},
+                           columns=cols, special_points=[])
+    fig = draw_bifurcation({"b0": branch, "b0p5": other})
+    axes = fig.get_axes()
+    assert [ax.get_title() for ax in axes] == ["b = 0", "b = 0.5"]
+    assert fig._suptitle.get_text() == ("Bifurcation diagram: impact velocity against "
+                                        "forcing frequency")
+    assert [ax.get_legend().get_texts()[-1].get_text() for ax in axes] == [
+        "b0 (N = 1)", "b0p5 (N = 2)"]
+    single = draw_bifurcation({"b0": branch, "again": branch.assign(omega=branch["omega"] + 1)})
+    (ax,) = single.get_axes()
+    assert ax.get_title() == "Periodic 1-1 motions at b = 0"
+
+
+def test_one_axis_of_several_systems_names_the_system_of_each_branch(branch, osc):
+    cols = _columns()
+    cols["b"] = np.full(NPOINTS, 0.5)
+    other = branch_dataset(parameter="omega", N=1, oscillator=osc.replace(b=0.5), options={},
+                           columns=cols, special_points=[])
+    ax = bifurcation_diagram({"a": branch, "c": other})
+    assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == [
+        "a (N = 1, b = 0)", "c (N = 1, b = 0.5)"]
+    plt.close(ax.figure)
+
+
+def test_multipliers_plot_keeps_components_apart_and_frames_poles(branch):
+    component = np.where(np.arange(NPOINTS) < 30, 0, 1)
+    mult = branch["multipliers"].values.copy()
+    mult[10, 0] = -1e14  # the pole of G at a zero-velocity impact
+    ds = branch.assign(connected_component=("point", component),
+                       multipliers=(branch["multipliers"].dims, mult,
+                                    branch["multipliers"].attrs))
+    ax_abs, ax_c = multipliers_plot(ds)
+    rho = ax_abs.get_lines()[0].get_ydata()
+    assert np.isnan(rho[30]) and rho.size == NPOINTS + 1  # no chord between the components
+    assert ax_c.get_xlim()[1] < 10.0
+    assert any("outside the frame" in t.get_text() for t in ax_c.texts)
+    plt.close(ax_abs.figure)
+
+
+def test_figures_leave_no_temporary_file(tmp_path):
+    from matplotlib.figure import Figure
+
+    from impactcont.scene.figures import save_figure
+
+    fig = Figure()
+    fig.add_subplot().plot([0, 1])
+    assert save_figure(fig, tmp_path / "f.png", 40).read_bytes()[:4] == b"\x89PNG"
+    assert save_figure(fig, tmp_path / "f.pdf", 40).read_bytes()[:4] == b"%PDF"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.pdf", "f.png"]

@@ -19,6 +19,7 @@ import impactcont as ic
 from impactcont.orbit import kernel
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.periodic import impact_map_jacobian, periodic_matrix
+from impactcont.problems import PeriodicBranchProblem
 
 DAMPING = {
     "undamped": {},
@@ -122,7 +123,7 @@ def test_lapack_eigenvalues_come_in_exact_conjugate_pairs():
 
 @pytest.mark.parametrize("parameter", ["omega", "R", "eta"])
 def test_complex_step_derivative_matches_finite_differences(paper, parameter):
-    problem = ic.continuation.__globals__["PeriodicBranchProblem"](paper, 1, parameter)
+    problem = PeriodicBranchProblem(paper, 1, parameter)
     lam = float(getattr(paper, parameter))
     exact = problem._amplitude_derivative(lam)
     h = 1e-6

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -333,7 +334,8 @@ def test_orbits_match_the_library(small_run) -> None:
                                atol=1e-14)
     np.testing.assert_allclose(ds["G"].values[1], orbits[1].G, rtol=0, atol=1e-14)
     assert ds["multipliers"].dtype.kind == "c"
-    assert abs(ds.attrs["amplitude_squared"] - 1.7435511) < 1e-6  # the paper's 1.74355
+    assert abs(float(ds["amplitude_squared"]) - 1.7435511) < 1e-6  # the paper's 1.74355
+    assert float(ds["omega"]) == 1.0 and float(ds["b"]) == 0.6  # variables, not only JSON
 
 
 def test_robust_and_simulation_files(small_run) -> None:
@@ -354,7 +356,10 @@ def test_summary_lists_the_special_points(small_run) -> None:
     for label in ("NS", "ZV", "SN"):
         assert re.search(rf"\| br \| 1 \| {label} \| omega = 1\.21", text)
     assert "## Robust stability" in text and "## Files" in text
-    assert len(small_run.special_points) == 3
+    branch = small_run.datasets["branches"]["br"]
+    assert len(small_run.special_points) == branch.sizes["special"] >= 3
+    rows = re.findall(r"\| br \| 1 \| (?:SN|PD|NS|GR|ZV) \|", text)
+    assert len(rows) == branch.sizes["special"]  # one row each
 
 
 def test_scene_stores_only_what_it_asks_for(tmp_path: Path) -> None:
@@ -430,3 +435,107 @@ def test_registered_section_is_validated_and_run(tmp_path: Path,
     assert out.kind == "counts" and out.datasets["counts1"].sizes["k"] == 3
     assert "## Counts" in (tmp_path / "o" / "summary.md").read_text(encoding="utf-8")
     assert result.ok
+
+
+# -- malformed systems (issue 13) ---------------------------------------------------------------
+PAPER = {"M": np.eye(2), "K": [[1.0, -1.0], [-1.0, 2.0]], "F": [1.0, 0.0], "R": 0.6, "b": 0.6,
+         "omega": 1.0, "eta": 0.1}
+
+
+@pytest.mark.parametrize(("name", "value"), [
+    ("K", [[1 + 1j, -1.0], [-1.0, 2.0]]),
+    ("K", np.array([[1.0, -1.0], [-1.0, 2.0]], dtype=complex)),  # even with zero imaginary parts
+    ("M", np.eye(2) * (1 + 0.5j)),
+    ("F", [1.0, 0.2j]),
+])
+def test_complex_system_matrices_are_refused(name: str, value: object) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # not merely a ComplexWarning
+        with pytest.raises(TypeError, match=rf"^{name} must be a real .* with real entries; got "
+                                            rf"complex values"):
+            ic.ImpactOscillator(**{**PAPER, name: value})
+
+
+def test_zero_forcing_is_refused(tmp_path: Path) -> None:
+    match = r"F must have a nonzero entry: .* F = 0 gives no motion at all; got F = \[0.0, 0.0\]"
+    with pytest.raises(ic.ParameterError, match=match):
+        ic.ImpactOscillator(**{**PAPER, "F": [0, 0]})
+    with pytest.raises(ic.ParameterError, match=match):
+        ic.ImpactOscillator(**PAPER).replace(F=np.zeros(2))
+    err = scene_error(tmp_path, ORBITS_SCENE.replace("F = [1.0, 0.0]", "F = [0.0, 0.0]"))
+    assert err.key == "oscillator.F" and "nonzero entry" in str(err)
+
+
+def test_a_gap_out_of_reach_says_why(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    text = (OSCILLATOR + '[[orbits]]\nname = "far"\nb = 100.0\n'
+            '[[orbits]]\nname = "stable_only"\nwhich = "stable"\nN = 3\nb = 0.0\nomega = 2.6\n'
+            '[[branches]]\nname = "br"\nb = 100.0\nbounds = [0.5, 3.0]\n'
+            '[[plots]]\nname = "orb"\nkind = "orbits"\ndata = ["far"]\n')
+    with caplog.at_level("WARNING", logger="impactcont"):
+        result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+    far = ("no motion: c^2 + s^2 = 1.74355 < b^2 = 10000 (eq. 15), the stop at b = 100 is out "
+           "of reach of the forced motion; N-1 motions exist here only for b between -1.32044 "
+           "and 1.32044")
+    assert result.datasets["orbits"]["far"].attrs["note"] == far
+    assert f"orbits far: {far}" in caplog.text
+    stable = result.datasets["orbits"]["stable_only"].attrs["note"]
+    assert stable.startswith("no motion kept (which = stable): none of the 2 roots is physical "
+                             "and stable (root +1: not physical, unstable (rho(G) = 6.782)")
+    (failure,) = result.failures
+    assert failure.name == "br" and "NoPeriodicMotionError" in failure.error
+    assert re.search(r"closest at omega = 0\.61\d+, where c\^2 \+ s\^2 = 237\.\d+ against "
+                     r"b\^2 = 10000 \(eq\. 15\): the stop is out of reach", failure.error)
+    summary = (tmp_path / "o" / "summary.md").read_text(encoding="utf-8")
+    assert far in summary and "closest at omega = 0.61" in summary
+    assert "no motion kept (which = all)" not in summary
+
+
+# -- BLAS threads (issue 13) --------------------------------------------------------------------
+def test_blas_threads_are_limited_inside_the_library_and_restored(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from impactcont.threads import blas_limited, limit_blas_threads
+
+    def blas_threads() -> set[int]:
+        return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        if blas_threads() != {2}:
+            pytest.skip("the BLAS here does not run 2 threads, so no limit can be seen")
+        seen = []
+        work = blas_limited(lambda: seen.append(blas_threads()) or 42)
+        assert work() == 42 and seen == [{1}]
+        with limit_blas_threads():
+            with limit_blas_threads():  # nested: one limit, lifted by the outermost only
+                assert blas_threads() == {1}
+            assert blas_threads() == {1}
+        assert blas_threads() == {2}
+        monkeypatch.setenv("IMPACTCONT_BLAS_THREADS", "none")
+        with limit_blas_threads():
+            assert blas_threads() == {2}
+        monkeypatch.setenv("IMPACTCONT_BLAS_THREADS", "lots")
+        with pytest.raises(ValueError, match="IMPACTCONT_BLAS_THREADS must be a positive "
+                                             "integer or 'none'; got 'lots'"):
+            limit_blas_threads().__enter__()
+        assert blas_threads() == {2}
+
+
+def test_a_scene_runs_with_one_blas_thread(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+                                           ) -> None:
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from impactcont.scene import tasks
+
+    seen = []
+    compute = tasks.Orbits.compute
+
+    def spy(self, entry, context=None):
+        seen.append({lib["num_threads"] for lib in threadpool_info()
+                     if lib["user_api"] == "blas"})
+        return compute(self, entry, context)
+
+    monkeypatch.setattr(tasks.Orbits, "compute", spy)
+    with threadpool_limits(limits=2, user_api="blas"):
+        run_scene(write(tmp_path, ORBITS_SCENE), output=tmp_path / "o")
+    assert seen == [{1}, {1}]

@@ -1,9 +1,12 @@
 """Branch datasets: the schema (names, units, attributes) and NetCDF I/O.
 
 :func:`branch_dataset` turns the plain arrays of a continued branch into an
-:class:`xarray.Dataset`; :func:`save` and :func:`load` write and read one
-branch or many (DataTree groups) with complex multipliers and an atomic write.
-The layout is documented in ``docs/dataset.md``.
+:class:`xarray.Dataset`; :func:`save` and :func:`load` write and read any
+dataset of impactcont, one or many (DataTree groups): atomically, safe to
+interrupt with Ctrl-C, readable by plain NetCDF tools (complex multipliers as
+real and imaginary parts, an index of the groups in the root group), and read
+back by :func:`load` as they were written. The layout is documented in
+``docs/dataset.md`` and ``docs/outputs.md``.
 """
 
 from __future__ import annotations

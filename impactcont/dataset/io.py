@@ -1,22 +1,48 @@
-"""NetCDF save and load of branch datasets, one branch or many (DataTree groups).
+"""NetCDF save and load of impactcont datasets, one or many (DataTree groups).
 
-Files are written with the ``netcdf4`` engine and ``auto_complex=True`` so that
-complex multipliers are stored as a compound type and read back as complex.
-Booleans are stored by xarray as ``int8`` with a ``dtype: bool`` attribute and
-decoded back to ``bool``. Every write goes to a temporary file in the target's
-directory, replaced atomically onto the target with :func:`os.replace`; a
-failed write leaves the previous file untouched and no temporary file behind.
+What is on disk (``docs/outputs.md``) reads with plain xarray, netCDF4 or
+``ncdump``, and :func:`load` gives back exactly what :func:`save` was given:
+
+- complex variables (the multipliers) are stored as two float variables
+  ``<name>_real`` and ``<name>_imag`` (attributes ``impactcont_complex_part``
+  and ``impactcont_complex_variable`` say so) and joined again by :func:`load`;
+- a file of several groups has an index in its root group (``group_name``,
+  ``group_kind``, ``group_title``, ``group_N`` on the dimension ``group``),
+  which :func:`load` drops again;
+- booleans are stored by xarray as ``int8`` with a ``dtype: bool`` attribute.
+
+Every write goes to a temporary file in the target's directory, moved onto
+the target with :func:`os.replace`: a failed or interrupted write leaves the
+previous file untouched and no temporary file behind. Temporary files are
+named ``.<target>.<host>-<pid>.<random>.tmp``; one left by a writer that was
+killed is removed by the next write to that directory once its process is
+gone. Ctrl-C ends a save promptly and never lands inside the NetCDF library
+(where it used to deadlock xarray's file manager): a large in-memory dataset
+is written by a child process (``fork``) that the interrupted parent kills at
+once; a small one (written in milliseconds), or where a child cannot be used
+(dask-backed data, no ``fork``), is written with the interrupt held until the
+write is complete.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import logging
 import os
-import uuid
-from collections.abc import Mapping
+import pickle
+import re
+import secrets
+import signal
+import socket
+import sys
+import threading
+import warnings
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 # branch, curve or map dataset, by its "impactcont_dataset" attribute (branches have none)
@@ -28,14 +54,31 @@ from impactcont.dataset.schema import (
     special_variable,
 )
 
-__all__ = ["ENGINE", "load", "open_lazy", "save"]
+__all__ = ["ENGINE", "SECTION_ATTRIBUTE", "atomic_output", "check_output_directory",
+           "check_output_file", "load", "open_lazy", "remove_stale_temporaries", "save",
+           "temporary_path"]
 
 logger = logging.getLogger(__name__)
 
 #: The NetCDF engine used for every read and write.
 ENGINE = "netcdf4"
+#: Root attribute of a scene output naming its section (``"orbits"``, ``"branches"``, ...).
+SECTION_ATTRIBUTE = "impactcont_kind"
+
+# Datasets validated against a schema by validate_dataset: branches (no tag), curves, maps.
+_SCHEMA_TAGS = (None, "curve", "map")
+_PART, _OF = "impactcont_complex_part", "impactcont_complex_variable"
+_INDEX = {
+    "group_name": ("group name", "Path of the group: xarray.open_dataset(file, group=NAME)."),
+    "group_kind": ("group content", "branch, curve, map, orbits, robust or simulation."),
+    "group_title": ("group title", "The title attribute of the group."),
+    "group_N": ("forcing periods per impact", "N of the group's motions; 0 if it has none."),
+}
 
 
+# ---------------------------------------------------------------------------------------------
+# Paths: checks before any work, temporary files
+# ---------------------------------------------------------------------------------------------
 def _path(path: Any) -> Path:
     if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path must be a str or os.PathLike; got {path!r}")
@@ -45,17 +88,216 @@ def _path(path: Any) -> Path:
     return p
 
 
+_HOST = re.sub(r"[^A-Za-z0-9]", "", socket.gethostname())[:32] or "host"
+_TEMPORARY = re.compile(r"^\.(?P<target>.+)\.(?P<host>[A-Za-z0-9]+)-(?P<pid>[0-9]+)"
+                        r"\.[0-9a-f]{8}\.tmp$")
+
+
+def temporary_path(target: Path) -> Path:
+    """A fresh temporary path beside ``target``: ``.<name>.<host>-<pid>.<random>.tmp``.
+
+    The host and process id say who writes it, so that
+    :func:`remove_stale_temporaries` can tell a file whose writer was killed.
+    """
+    return target.parent / f".{target.name}.{_HOST}-{os.getpid()}.{secrets.token_hex(4)}.tmp"
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. another user's process: it exists
+        return True
+    return True
+
+
+def remove_stale_temporaries(directory: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files of killed writers from ``directory``.
+
+    Only files named by :func:`temporary_path` on this host whose process no
+    longer runs are removed; anything else, and any file that cannot be
+    removed, is left alone.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed.
+    """
+    removed = []
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _TEMPORARY.match(entry.name)
+        if match is None or match["host"] != _HOST:
+            continue
+        pid = int(match["pid"])
+        if pid == os.getpid() or _running(pid):
+            continue
+        try:
+            if entry.is_file(follow_symlinks=False):
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+                logger.info("removed %s, left by process %d that no longer runs", entry.path, pid)
+        except OSError as exc:
+            logger.debug("cannot remove stale temporary file %s: %s", entry.path, exc)
+    return removed
+
+
+def _named(exc: OSError, message: str) -> OSError:
+    """``exc``'s type with ``message`` (naming the user's path), keeping its errno."""
+    new = type(exc)(message)
+    new.errno = exc.errno
+    return new
+
+
+def _probe(directory: Path, message: str) -> None:
+    """Create and remove a file in ``directory``; OSError with ``message`` if that fails."""
+    probe = temporary_path(directory / "impactcont-write-test")
+    try:
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        os.unlink(probe)
+    except OSError as exc:
+        raise _named(exc, message.format(reason=exc.strerror or exc)) from None
+
+
+def check_output_file(path: str | os.PathLike) -> Path:
+    """Check, before any work, that a file can be written at ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        ``path`` is a directory.
+    FileNotFoundError, NotADirectoryError, PermissionError
+        Its directory does not exist, is not a directory or is not writable;
+        the message names ``path`` and says what to do.
+    """
+    target = _path(path)
+    shown = str(path)
+    if target.is_dir():
+        raise ValueError(f"path must be a file, not a directory; got {shown!r}")
+    parent = target.parent
+    if not parent.exists():
+        raise FileNotFoundError(f"cannot write {shown!r}: directory {str(parent)!r} does not "
+                                f"exist; create it first or choose another path")
+    if not parent.is_dir():
+        raise NotADirectoryError(f"cannot write {shown!r}: {str(parent)!r} is not a directory")
+    _probe(parent, f"cannot write {shown!r}: directory {str(parent)!r} is not writable "
+                   f"({{reason}}); choose another path or change its permissions")
+    return target
+
+
+def check_output_directory(directory: str | os.PathLike, *, create: bool = False) -> Path:
+    """Check, before any work, that files can be written in ``directory``.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        An existing directory, or one to be created.
+    create : bool, optional
+        Create it (and its parents) if missing. Without ``create`` nothing is
+        left on disk: a missing directory is checked through the nearest
+        existing parent.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    NotADirectoryError
+        ``directory`` (or a parent) exists and is a file.
+    PermissionError, OSError
+        It cannot be created or written; the message names ``directory`` and
+        says what to do.
+    """
+    d = Path(directory)
+    shown = str(directory)
+    if d.exists() and not d.is_dir():
+        raise NotADirectoryError(f"output directory {shown!r} is an existing file, not a "
+                                 f"directory; choose a directory (it is created if missing)")
+    if d.is_dir():
+        _probe(d, f"output directory {shown!r} is not writable ({{reason}}); choose another "
+                  f"or change its permissions")
+        return d
+    parent = next(p for p in d.absolute().parents if p.exists())
+    if not parent.is_dir():
+        raise NotADirectoryError(f"output directory {shown!r} cannot be created: "
+                                 f"{str(parent)!r} is a file, not a directory")
+    message = (f"output directory {shown!r} cannot be created in {str(parent)!r} "
+               f"({{reason}}); choose another or change the permissions of {str(parent)!r}")
+    if not create:
+        _probe(parent, message)
+        return d
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _named(exc, message.format(reason=exc.strerror or exc)) from None
+    return check_output_directory(d)
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
+    """Write a file atomically: yield a temporary path, then move it onto ``path``.
+
+    The directory is checked first (:func:`check_output_file`) and cleared of
+    stale temporary files. If the body raises (Ctrl-C included), ``path`` is
+    left as it was and the temporary file is removed.
+
+    Yields
+    ------
+    pathlib.Path
+        Where to write.
+    """
+    target = check_output_file(path)
+    remove_stale_temporaries(target.parent)
+    tmp = temporary_path(target)
+    try:
+        yield tmp
+        os.replace(tmp, target)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# What is written: groups, the root index, complex variables as real and imaginary parts
+# ---------------------------------------------------------------------------------------------
 def _check_group_name(name: Any) -> str:
     if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
         raise ValueError(f"branch names must be non-empty str without '/'; got {name!r}")
     return name
 
 
+def _validate(ds: xr.Dataset, section: Any) -> None:
+    """Check ``ds`` against its schema: branch, curve or map.
+
+    Other results (orbits, robust, simulations, sections a plugin registers)
+    have no schema here: their layout is their section's (``docs/outputs.md``).
+    """
+    tag = ds.attrs.get("impactcont_dataset")
+    if tag in _SCHEMA_TAGS and (tag is not None or section in (None, "branches")):
+        validate_dataset(ds)
+
+
 def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
-    """The object to write: a branch Dataset or a DataTree of branch groups."""
+    """The object to write: a Dataset, or a DataTree of groups."""
     if isinstance(obj, xr.Dataset):
         if validate:
-            validate_dataset(obj)
+            _validate(obj, None)
         return obj
     if isinstance(obj, xr.DataTree):
         tree = obj
@@ -79,29 +321,275 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
         raise TypeError(f"obj must be an xarray.Dataset, a mapping of name to Dataset or an "
                         f"xarray.DataTree; got {type(obj).__name__}")
     if validate:
+        section = tree.attrs.get(SECTION_ATTRIBUTE)
         for node in tree.subtree:
             if node.has_data:
                 try:
-                    validate_dataset(node.to_dataset(inherit=False))
+                    _validate(node.to_dataset(inherit=False), section)
                 except ValueError as exc:
                     raise ValueError(f"group {node.path!r}: {exc}") from exc
     return tree
 
 
+def _kind(ds: xr.Dataset) -> str:
+    tag = ds.attrs.get("impactcont_dataset")
+    if tag is not None:
+        return str(tag)
+    return "branch" if "parameter" in ds.attrs and "point" in ds.dims else ""
+
+
+def _index(tree: xr.DataTree) -> xr.Dataset:
+    """The root index of a file of groups: one entry per group holding data."""
+    nodes = [node for node in tree.subtree if node.has_data and node is not tree]
+    attrs = [node.to_dataset(inherit=False).attrs for node in nodes]
+    N = [a.get("N", 0) for a in attrs]
+    columns = {
+        "group_name": np.array([node.path.lstrip("/") for node in nodes], dtype=str),
+        "group_kind": np.array([_kind(node.to_dataset(inherit=False)) for node in nodes],
+                               dtype=str),
+        "group_title": np.array([str(a.get("title", "")) for a in attrs], dtype=str),
+        "group_N": np.array([int(n) if isinstance(n, (int, np.integer)) else 0 for n in N],
+                            dtype=np.int64),
+    }
+    return xr.Dataset({key: ("group", columns[key], {"long_name": ln, "description": text,
+                                                    **({"units": "1"} if key == "group_N"
+                                                       else {})})
+                       for key, (ln, text) in _INDEX.items()}, attrs=tree.attrs)
+
+
+def _split_complex(ds: xr.Dataset) -> xr.Dataset:
+    """Complex variables as ``<name>_real`` and ``<name>_imag`` float variables."""
+    names = [k for k, v in ds.data_vars.items() if v.dtype.kind == "c"]
+    if not names:
+        return ds
+    out = ds.drop_vars(names)
+    for name in names:
+        var = ds[name].variable
+        for part, values in (("real", var.real), ("imag", var.imag)):
+            key = f"{name}_{part}"
+            if key in ds.variables:
+                raise ValueError(f"cannot store complex variable {name!r} as {key!r}: the "
+                                 f"dataset already has a variable {key!r}")
+            attrs = dict(var.attrs)
+            if "long_name" in attrs:
+                words = "real part" if part == "real" else "imaginary part"
+                attrs["long_name"] = f"{words} of {attrs['long_name']}"
+            attrs.update({_PART: part, _OF: name})
+            out[key] = xr.Variable(var.dims, values.data, attrs)
+    return out
+
+
+def _join_complex(ds: xr.Dataset) -> xr.Dataset:
+    """Inverse of :func:`_split_complex`."""
+    for key in [k for k, v in ds.data_vars.items() if v.attrs.get(_PART) == "real"]:
+        name = str(ds[key].attrs.get(_OF))
+        real, imag = ds[key].variable, ds.get(f"{name}_imag")
+        if imag is None or imag.attrs.get(_PART) != "imag" or name in ds.variables:
+            continue
+        attrs = {k: v for k, v in real.attrs.items() if k not in (_PART, _OF)}
+        if "long_name" in attrs:
+            attrs["long_name"] = str(attrs["long_name"]).removeprefix("real part of ")
+        data = real.data + 1j * imag.variable.data
+        ds = ds.drop_vars([key, f"{name}_imag"]).assign({name: (real.dims, data, attrs)})
+    return ds
+
+
+def _for_disk(data: xr.Dataset | xr.DataTree) -> xr.Dataset | xr.DataTree:
+    if isinstance(data, xr.Dataset):
+        return _split_complex(data)
+    nodes = {node.path: _split_complex(node.to_dataset(inherit=False))
+             for node in data.subtree}
+    if not data.has_data and data.children:
+        nodes["/"] = _index(data)
+    return xr.DataTree.from_dict(nodes)
+
+
+def _disk_encoding(encoding: Mapping[str, Any], ds: xr.Dataset) -> dict[str, Any]:
+    """``encoding`` with the entry of a complex variable given to both of its parts."""
+    out = {}
+    for key, value in encoding.items():
+        if key in ds.data_vars and ds[key].dtype.kind == "c":
+            out[f"{key}_real"] = out[f"{key}_imag"] = dict(value)
+        else:
+            out[key] = value
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing that Ctrl-C can stop
+# ---------------------------------------------------------------------------------------------
+_CAN_FORK = hasattr(os, "fork") and sys.platform != "darwin"
+# Below this size a write lasts milliseconds: holding Ctrl-C that long is prompt, and
+# cheaper than a child process (20-40 ms to fork a process of 160 MB).
+_FORK_BYTES = 16 * 2**20
+
+
+def _fork_worthy(data: xr.Dataset | xr.DataTree) -> bool:
+    """Large and fully in memory (a child cannot share dask tasks or open files)."""
+    nodes = [data] if isinstance(data, xr.Dataset) else [n.dataset for n in data.subtree]
+    variables = [var for ds in nodes for var in ds.variables.values()]
+    return (all(var._in_memory for var in variables)
+            and sum(var.nbytes for var in variables) >= _FORK_BYTES)
+
+
+def _between_dask_tasks(received: list[int]) -> contextlib.AbstractContextManager[Any]:
+    """Stop a dask computation at the next task once Ctrl-C was received.
+
+    Dask calls this between tasks, where no NetCDF lock is held: a dask-backed
+    write (a map computed as it is written) stops after the chunks in flight.
+    """
+    try:
+        from dask.callbacks import Callback
+    except ImportError:
+        return contextlib.nullcontext()
+
+    def pretask(key: Any, dsk: Any, state: Any) -> None:
+        if received:
+            raise KeyboardInterrupt
+
+    return Callback(pretask=pretask)
+
+
+@contextlib.contextmanager
+def _sigint_held(what: Path) -> Iterator[None]:
+    """Hold Ctrl-C (SIGINT) while the body runs, then deliver it to the previous handler.
+
+    A dask computation in the body stops at its next task. In the main thread
+    only: signals reach no other thread.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+
+    def hold(signum: int, frame: Any) -> None:
+        if not received:
+            logger.warning("interrupted: finishing the write of %s first", what)
+        received.append(signum)
+
+    previous = signal.signal(signal.SIGINT, hold)
+    try:
+        with _between_dask_tasks(received):
+            yield
+    finally:
+        # None: a handler installed outside Python, which cannot be put back
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+        # delivered here and now, not at some later bytecode (after os.replace, say)
+        if received and previous is signal.default_int_handler:
+            raise KeyboardInterrupt
+        if received and callable(previous):
+            previous(signal.SIGINT, None)
+        elif received and previous == signal.SIG_DFL:
+            signal.raise_signal(signal.SIGINT)
+
+
+def _xarray_locks() -> list[Any]:
+    try:
+        from xarray.backends.locks import HDF5_LOCK, NETCDFC_LOCK
+    except ImportError:  # pragma: no cover - other xarray layouts
+        return []
+    return [HDF5_LOCK, NETCDFC_LOCK]
+
+
+def _child_write(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str, Any],
+                 pipe: int) -> None:
+    """In the forked child: write, report a failure on ``pipe``, never return."""
+    code = 1
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides, and kills us
+        data.to_netcdf(tmp, mode="w", engine=ENGINE, auto_complex=True, **kwargs)
+        code = 0
+    except BaseException as exc:
+        try:
+            payload = pickle.dumps(exc)
+        except Exception:
+            payload = pickle.dumps(OSError(f"{type(exc).__name__}: {exc}"))
+        with contextlib.suppress(OSError):
+            os.write(pipe, payload)
+    finally:
+        os._exit(code)
+
+
+def _write_in_child(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str, Any],
+                    target: Path) -> bool:
+    """Write ``data`` to ``tmp`` in a forked child; Ctrl-C here kills the child at once.
+
+    The child shares the data (copy-on-write) and leaves with ``os._exit``: the
+    NetCDF library of this process is never interrupted halfway. Returns False,
+    having written nothing, if no child can be started.
+    """
+    read_end, write_end = os.pipe()
+    pid = 0
+    try:
+        locks = _xarray_locks()
+        with _sigint_held(target), warnings.catch_warnings():
+            # Python 3.12 warns that a lock held by another thread at the fork stays held
+            # in the child. The child only writes and leaves: the locks that write takes,
+            # xarray's, are taken here around the fork, so none is held by another thread.
+            warnings.filterwarnings("ignore", message=".*fork.*", category=DeprecationWarning)
+            for lock in locks:
+                lock.acquire()
+            try:
+                pid = os.fork()
+            except OSError as exc:  # no memory or processes left: write here instead
+                logger.debug("cannot fork to write %s (%s): writing in this process", tmp, exc)
+                return False
+            finally:
+                for lock in locks:
+                    lock.release()
+            if pid == 0:
+                os.close(read_end)
+                _child_write(data, tmp, kwargs, write_end)
+        os.close(write_end)
+        write_end = -1
+        chunks = []
+        while chunk := os.read(read_end, 1 << 16):
+            chunks.append(chunk)
+        _, status = os.waitpid(pid, 0)
+        pid = 0
+    except BaseException:
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+        raise
+    finally:
+        for fd in (read_end, write_end):
+            if fd >= 0:
+                os.close(fd)
+    if chunks:
+        raise pickle.loads(b"".join(chunks))
+    code = os.waitstatus_to_exitcode(status)
+    if code:
+        raise OSError(errno.EIO, f"the process writing {tmp} ended with "
+                                 f"{f'signal {-code}' if code < 0 else f'exit code {code}'}")
+    return True
+
+
+def _write(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str, Any],
+           target: Path) -> None:
+    if (_CAN_FORK and threading.current_thread() is threading.main_thread()
+            and _fork_worthy(data) and _write_in_child(data, tmp, kwargs, target)):
+        return
+    with _sigint_held(target):
+        data.to_netcdf(tmp, mode="w", engine=ENGINE, auto_complex=True, **kwargs)
+
+
 def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | os.PathLike,
          *, validate: bool = True, encoding: Mapping[str, Any] | None = None) -> Path:
-    """Write one branch or several to a NetCDF-4 file, atomically.
+    """Write one dataset or several to a NetCDF-4 file, atomically.
 
     Parameters
     ----------
     obj : xarray.Dataset, mapping of str to Dataset, or xarray.DataTree
-        One branch dataset (written to the root group), or several (one group
-        per mapping key; a DataTree is written as it is).
+        One dataset (written to the root group), or several (one group per
+        mapping key, with an index in the root group; a DataTree is written
+        as it is, with that index if its root holds no data).
     path : str or os.PathLike
         Target file; its directory must exist. An existing file is replaced
         only once the new one is completely written.
     validate : bool, optional
-        Check every dataset against the branch schema first (default).
+        Check branch, curve and map datasets against their schema first (default).
     encoding : mapping, optional
         Per-variable NetCDF encoding (chunk sizes, compression) of a single Dataset.
         A dask-backed Dataset is computed and written chunk by chunk.
@@ -118,23 +606,27 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     ValueError
         A dataset does not follow the schema, a group name is invalid or
         ``path`` is a directory.
-    FileNotFoundError
-        The directory of ``path`` does not exist.
+    FileNotFoundError, NotADirectoryError, PermissionError
+        The directory of ``path`` does not exist or is not writable.
+    KeyboardInterrupt
+        Ctrl-C: the target is untouched and the temporary file removed.
     """
     target = _path(path)
     data = _tree(obj, validate)
-    if target.is_dir():
-        raise ValueError(f"path must be a file, not a directory; got {str(path)!r}")
-    directory = target.parent
-    if not directory.is_dir():
-        raise FileNotFoundError(f"directory of path {str(path)!r} does not exist: {directory}")
-    # The temporary file lives next to the target so that os.replace is an
-    # atomic rename on the same file system; the random name avoids clashes.
-    tmp = directory / f".{target.name}.{uuid.uuid4().hex}.tmp"
+    check_output_file(target)
+    remove_stale_temporaries(target.parent)
+    kwargs = {}
+    if encoding:
+        kwargs["encoding"] = _disk_encoding(encoding, data) if isinstance(
+            data, xr.Dataset) else dict(encoding)
+    disk = _for_disk(data)
+    tmp = temporary_path(target)
     try:
-        kwargs = {"encoding": dict(encoding)} if encoding else {}
-        data.to_netcdf(tmp, mode="w", engine=ENGINE, auto_complex=True, **kwargs)
+        _write(disk, tmp, kwargs, target)
         os.replace(tmp, target)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise _named(exc, f"cannot write {str(path)!r}: {exc}") from exc
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -142,8 +634,12 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     return target
 
 
+# ---------------------------------------------------------------------------------------------
+# Reading
+# ---------------------------------------------------------------------------------------------
 def _normalise(ds: xr.Dataset) -> xr.Dataset:
-    """Give strings back their schema dtype (an empty array is read back as <U1)."""
+    """Complex variables joined; strings with their schema dtype (empty ones read as <U1)."""
+    ds = _join_complex(ds)
     for key, dtype in (("label", _LABEL_DTYPE), ("status", _STATUS_DTYPE)):
         name = special_variable(key)
         if name in ds.variables and ds[name].dtype != dtype:
@@ -177,27 +673,32 @@ def _read_tree(path: Path) -> xr.DataTree:
 
 
 def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.DataTree:
-    """Read a file written by :func:`save`, fully into memory (the file is closed).
+    """Read a file written by impactcont, fully into memory (the file is closed).
+
+    Reads every file the package writes: :func:`save` of a branch, curve or
+    map, and each ``<section>.nc`` of a scene run (orbits, branches, robust,
+    simulations, curves, maps).
 
     Parameters
     ----------
     path : str or os.PathLike
         A NetCDF-4 file.
     validate : bool, optional
-        Check every branch against the schema (default).
+        Check branches, curves and maps against their schema (default).
 
     Returns
     -------
     xarray.Dataset or xarray.DataTree
-        A Dataset if the file holds one branch in its root group, a DataTree
-        if it holds groups.
+        A Dataset if the file holds one dataset in its root group, a DataTree
+        (one group per entry, the root index dropped) if it holds groups.
+        Complex variables are complex again.
 
     Raises
     ------
     FileNotFoundError
         ``path`` does not exist.
     ValueError
-        ``path`` is not a readable NetCDF file or holds no branch dataset.
+        ``path`` is not a readable NetCDF file or holds no impactcont dataset.
     """
     target = _path(path)
     if not target.is_file():
@@ -208,20 +709,23 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
         raise ValueError(f"cannot read {str(path)!r} as NetCDF-4: {exc}") from exc
     if not tree.children:
         if not tree.has_data:
-            raise ValueError(f"file {str(path)!r} holds no branch dataset (empty root group)")
+            raise ValueError(f"file {str(path)!r} holds no dataset (empty root group)")
         ds = _normalise(tree.to_dataset())
         if validate:
             try:
-                validate_dataset(ds)
+                _validate(ds, None)
             except ValueError as exc:
                 raise ValueError(f"file {str(path)!r}: {exc}") from exc
         return ds
+    if set(tree.data_vars) == set(_INDEX):
+        tree.dataset = xr.Dataset(attrs=tree.attrs)
+    section = tree.attrs.get(SECTION_ATTRIBUTE)
     for node in tree.subtree:
         if node.has_data:
             node.dataset = _normalise(node.to_dataset(inherit=False))
             if validate:
                 try:
-                    validate_dataset(node.to_dataset(inherit=False))
+                    _validate(node.to_dataset(inherit=False), section)
                 except ValueError as exc:
                     raise ValueError(f"file {str(path)!r}, group {node.path!r}: {exc}") from exc
     return tree

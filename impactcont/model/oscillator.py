@@ -6,6 +6,7 @@ import copy
 import dataclasses
 import json
 import math
+import numbers
 from collections.abc import Sequence
 from functools import cached_property
 from typing import Any
@@ -25,12 +26,29 @@ _SCALAR_RULES: dict[str, dict[str, Any]] = {
 }
 
 
+def _real_array(name: str, value: Any, what: str) -> np.ndarray:
+    """``value`` as a float array; TypeError naming ``name`` unless it holds real numbers.
+
+    Complex input is refused rather than cast: numpy would drop the imaginary
+    part with only a ComplexWarning, a silently wrong system.
+    """
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nesting
+        raise TypeError(f"{name} must be {what}; got {value!r}") from exc
+    items = a.ravel().tolist() if a.dtype.kind == "O" else []
+    if a.dtype.kind == "c" or any(isinstance(x, complex) for x in items):
+        raise TypeError(f"{name} must be {what} with real entries; got complex values "
+                        f"{value!r} (pass the real part, e.g. np.real({name}), if the "
+                        f"imaginary parts are meant to vanish)")
+    if a.dtype.kind not in "biufO" or not all(isinstance(x, numbers.Real) for x in items):
+        raise TypeError(f"{name} must be {what}; got {value!r}")
+    return a.astype(float)
+
+
 def _matrix(name: str, value: Any) -> np.ndarray:
     """Return ``value`` as a finite, square, symmetric, positive definite float matrix."""
-    try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"{name} must be a real square matrix (array_like); got {value!r}") from exc
+    a = _real_array(name, value, "a real square matrix (array_like)")
     if a.ndim == 0:
         a = a.reshape(1, 1)
     if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] == 0:
@@ -55,11 +73,7 @@ def _matrix(name: str, value: Any) -> np.ndarray:
 
 
 def _vector(name: str, value: Any, n: int) -> np.ndarray:
-    try:
-        v = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"{name} must be a real vector of length {n}; got {value!r}") from exc
-    v = np.atleast_1d(v)
+    v = np.atleast_1d(_real_array(name, value, f"a real vector of length {n}"))
     if v.shape != (n,):
         raise ParameterError(f"{name} must have shape ({n},) to match M and K; got shape {v.shape}")
     if not np.all(np.isfinite(v)):
@@ -161,6 +175,10 @@ class ImpactOscillator:
             raise ParameterError(f"M and K must have the same shape; got {M.shape} and {K.shape}")
         n = M.shape[0]
         F = _vector("F", self.F, n)
+        if not np.any(F):
+            raise ParameterError(f"F must have a nonzero entry: the forcing F cos(omega t) is "
+                                 f"what drives the impacting motions (eq. 1), and F = 0 gives "
+                                 f"no motion at all; got F = {F.tolist()}")
         R = _real("R", self.R, **_SCALAR_RULES["R"])
         b = _real("b", self.b, **_SCALAR_RULES["b"])
         omega = _real("omega", self.omega, **_SCALAR_RULES["omega"])

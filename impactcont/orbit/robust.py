@@ -37,6 +37,7 @@ from impactcont.orbit.periodic import (
     periodic_matrix,
     periodic_orbits,
 )
+from impactcont.threads import blas_limited
 
 __all__ = ["RobustStability", "lyapunov_matrix", "robust_bound", "robust_stability"]
 
@@ -491,6 +492,7 @@ def _refine(follower: _Follower, i: int, j: int, axes: list[np.ndarray],
     return value(q), q
 
 
+@blas_limited
 def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[float, float]],
                      *, nominal: Mapping[str, float] | None = None, root: int | None = None,
                      samples: int = 33) -> RobustStability:

@@ -7,6 +7,7 @@ the Axes; they never call ``plt.show`` so they work with any backend (Agg).
 
 from __future__ import annotations
 
+import json
 import logging
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -21,22 +22,35 @@ from impactcont.dataset.schema import (
     special_variable,
     validate_branch_dataset,
 )
+from impactcont.plots.labels import place_labels
 
-__all__ = ["SEGMENT_STYLES", "SPECIAL_MARKERS", "bifurcation_diagram", "multipliers_plot",
-           "stability_segments"]
+__all__ = ["SEGMENT_STYLES", "SPECIAL_MARKERS", "SPECIAL_NAMES", "axis_label",
+           "bifurcation_diagram", "differing_parameters", "fixed_parameters",
+           "multipliers_plot", "stability_segments"]
 
 logger = logging.getLogger(__name__)
 
 #: Line style of each kind of segment: stable and physical, unstable and
 #: physical, not physical (whatever the stability).
+#: Every figure of impactcont draws motions with these styles.
 SEGMENT_STYLES: dict[str, dict[str, Any]] = {
     "stable": {"linestyle": "-", "linewidth": 1.6, "alpha": 1.0},
     "unstable": {"linestyle": "--", "linewidth": 1.2, "alpha": 1.0},
-    "non-physical": {"linestyle": ":", "linewidth": 0.8, "alpha": 0.25},
+    "non-physical": {"linestyle": ":", "linewidth": 1.0, "alpha": 0.45},
 }
 
 #: Marker of each special-point label.
 SPECIAL_MARKERS: dict[str, str] = {"SN": "o", "PD": "s", "NS": "D", "GR": "^", "ZV": "v"}
+#: What each special-point label stands for (legends).
+SPECIAL_NAMES: dict[str, str] = {"SN": "saddle-node", "PD": "period doubling",
+                                 "NS": "Neimark-Sacker", "GR": "grazing",
+                                 "ZV": "zero-velocity impact"}
+
+# Symbols of the paper next to the long names on axes (mathtext).
+_SYMBOLS = {"omega": r"$\omega$", "b": "$b$", "R": "$R$", "eta": r"$\eta$",
+            "alpha": r"$\alpha$", "beta": r"$\beta$", "delta": r"$\delta$",
+            "impact_velocity": r"$\dot{x}_1(T^-)$", "spectral_radius": r"$\rho(G)$"}
+_OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0}
 
 _KINDS = tuple(SEGMENT_STYLES)
 
@@ -104,11 +118,43 @@ def stability_segments(ds: xr.Dataset) -> list[tuple[str, slice]]:
             for s, e in zip(starts, ends, strict=True)]
 
 
-def _label(ds: xr.Dataset, name: str) -> str:
+def axis_label(ds: xr.Dataset, name: str) -> str:
+    """``long name symbol [units]`` of variable ``name``, e.g. ``impact phase $\\delta$ [rad]``."""
     attrs = ds[name].attrs
-    text = f"{attrs.get('long_name', name)} ({name})" if attrs.get("long_name") else name
+    text = str(attrs.get("long_name", name))
+    if name in _SYMBOLS:
+        text = f"{text} {_SYMBOLS[name]}"
     units = attrs.get("units")
     return f"{text} [{units}]" if units and units != "1" else text
+
+
+def fixed_parameters(datasets: Sequence[xr.Dataset]) -> dict[str, float]:
+    """``omega``, ``b``, ``R`` and the damping held fixed and equal along all ``datasets``.
+
+    Read from each dataset's ``oscillator`` attribute, without the continued
+    ``parameter`` of a branch (or the ``parameters`` of a curve).
+    """
+    values: dict[str, set[float]] = {}
+    for ds in datasets:
+        free = {ds.attrs.get("parameter"), *str(ds.attrs.get("parameters", "")).split(",")}
+        osc = json.loads(ds.attrs.get("oscillator", "{}"))
+        for key in ("omega", "b", "R", "eta", "alpha", "beta"):
+            if key not in free and isinstance(osc.get(key), (int, float)):
+                values.setdefault(key, set()).add(float(osc[key]))
+            else:
+                values.setdefault(key, set()).add(float("nan"))
+    return {k: v.pop() for k, v in values.items() if len(v) == 1 and not np.isnan(next(iter(v)))}
+
+
+def differing_parameters(groups: Sequence[Sequence[xr.Dataset]]) -> list[str]:
+    """The parameters of :func:`fixed_parameters` whose values differ between ``groups``."""
+    fixed = [fixed_parameters(list(g)) for g in groups]
+    keys = dict.fromkeys(k for f in fixed for k in f)
+    return [k for k in keys if len({f.get(k) for f in fixed}) > 1]
+
+
+def _system_text(values: Mapping[str, float], keys: Iterable[str]) -> str:
+    return ", ".join(f"{k} = {values[k]:g}" for k in keys if k in values)
 
 
 def _y_variable(ds: xr.Dataset, y: Any) -> str:
@@ -138,14 +184,26 @@ def _special_xy(ds: xr.Dataset, x: np.ndarray, y: np.ndarray, yname: str, k: int
     return float(x[p]), float(y[p])
 
 
+def _borders_physical(ds: xr.Dataset, physical: np.ndarray, k: int) -> bool:
+    """Special point ``k`` lies on, or at the edge of, physical motions (GR and ZV are edges)."""
+    p = int(ds[special_variable("point")].values[k])
+    return bool(np.any(physical[max(p - 1, 0):p + 2]))
+
+
 def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes | None = None,
-                        label_special: bool = True) -> Axes:
+                        label_special: bool = True, title: str | None = None,
+                        physical_range: bool = True) -> Axes:
     """Draw branches against their continued parameter, styled by stability.
 
     Stable physical motions are solid, unstable physical ones dashed and
     non-physical ones faint and dotted (:data:`SEGMENT_STYLES`); the line is
-    split wherever the kind changes. Special points get one marker per label
-    (:data:`SPECIAL_MARKERS`) and, optionally, a text label.
+    split wherever the kind changes. Each branch has its colour, named in the
+    legend with its N (and the parameters that differ, if the branches belong
+    to different systems: draw those on separate axes for a clear figure).
+    Special points get one marker per label (:data:`SPECIAL_MARKERS`) and,
+    optionally, a text label placed clear of the others; those of non-physical
+    motions (not even at the edge of a physical one) are small, grey and
+    unlabelled. The legend sits outside the axes, so it never hides a curve.
 
     Parameters
     ----------
@@ -158,6 +216,12 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         Where to draw; a new pyplot figure by default.
     label_special : bool, optional
         Write each special point's label next to its marker.
+    title : str, optional
+        Axes title; by default what is drawn (``Periodic N-1 motions at b = 0.5``),
+        ``""`` for none.
+    physical_range : bool, optional
+        Fit the vertical range to the physical motions (default), clipping
+        non-physical ones at the frame; False fits everything drawn.
 
     Returns
     -------
@@ -170,9 +234,13 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
                          f"{sorted(parameters)}")
     if ax is None:
         ax = _new_axes()
+    fixed = fixed_parameters([ds for _, ds in branches])
+    differing = differing_parameters([[ds] for _, ds in branches])
     kinds_seen: set[str] = set()
     labels_seen: set[str] = set()
     branch_handles = []
+    specials: list[tuple[float, float, str]] = []
+    seen: list[np.ndarray] = []  # y of the physical motions
     for b, (name, ds) in enumerate(branches):
         yname = _y_variable(ds, y)
         parameter = ds.attrs["parameter"]
@@ -182,30 +250,53 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         for kind, sl in stability_segments(ds):
             ax.plot(x[sl], yv[sl], color=color, **SEGMENT_STYLES[kind])
             kinds_seen.add(kind)
-        if name:
-            branch_handles.append(Line2D([], [], color=color, label=name))
+        seen.append(yv[np.asarray(ds["physical"].values, dtype=bool)])
+        own = fixed_parameters([ds])
+        about = ", ".join([f"N = {int(ds.attrs['N'])}",
+                           *([_system_text(own, differing)] if differing else [])])
+        branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
+                                     label=f"{name} ({about})" if name else about))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
+        physical = np.asarray(ds["physical"].values, dtype=bool)
         for label in SPECIAL_LABELS:
             ks = [k for k, lab in enumerate(labels) if lab == label]
             if not ks:
                 continue
+            shown = [_borders_physical(ds, physical, k) for k in ks]
             pts = np.array([_special_xy(ds, x, yv, yname, k) for k in ks])
-            ax.scatter(pts[:, 0], pts[:, 1], marker=SPECIAL_MARKERS[label], s=36,
-                       facecolors="white", edgecolors="black", linewidths=1.0, zorder=3)
+            for keep, size, edge in ((True, 36, "black"), (False, 16, "0.6")):
+                sel = np.array(shown) == keep
+                if np.any(sel):  # special points of non-physical motions: small, grey, unlabelled
+                    ax.scatter(pts[sel, 0], pts[sel, 1], marker=SPECIAL_MARKERS[label], s=size,
+                               facecolors="white", edgecolors=edge, linewidths=1.0, zorder=3)
             labels_seen.add(label)
-            if label_special:
-                for px, py in pts:
-                    ax.annotate(label, (px, py), xytext=(4, 4), textcoords="offset points",
-                                fontsize="small")
+            specials += [(float(px), float(py), label)
+                         for (px, py), keep in zip(pts, shown, strict=True) if keep]
+    shown = np.concatenate([*seen, [py for _, py, _ in specials]])
+    shown = shown[np.isfinite(shown)]
+    if physical_range and shown.size:
+        lo, hi = float(shown.min()), float(shown.max())
+        pad = 0.08 * (hi - lo) if hi > lo else 0.1 * max(abs(hi), 1.0)
+        ax.set_ylim(lo - pad, hi + pad)
     first = branches[0][1]
-    ax.set_xlabel(_label(first, first.attrs["parameter"]))
-    ax.set_ylabel(_label(first, y))
+    ax.set_xlabel(axis_label(first, first.attrs["parameter"]))
+    ax.set_ylabel(axis_label(first, y))
+    if title is None:
+        Ns = sorted({int(ds.attrs["N"]) for _, ds in branches})
+        where = _system_text(fixed, [k for k in ("omega", "b") if k not in parameters])
+        title = (f"Periodic {Ns[0] if len(Ns) == 1 else 'N'}-1 motions"
+                 + (f" at {where}" if where else ""))
+    if title:
+        ax.set_title(title, fontsize="medium")
     handles = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
                for kind in _KINDS if kind in kinds_seen]
     handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
-                       markerfacecolor="white", markeredgecolor="black", label=label)
+                       markerfacecolor="white", markeredgecolor="black",
+                       label=f"{label} {SPECIAL_NAMES[label]}")
                 for label in SPECIAL_LABELS if label in labels_seen]
-    ax.legend(handles=handles + branch_handles, fontsize="small", loc="best")
+    ax.legend(handles=handles + branch_handles, fontsize="small", **_OUTSIDE)
+    if label_special and specials:
+        place_labels(ax, [(px, py) for px, py, _ in specials], [t for _, _, t in specials])
     logger.debug("bifurcation diagram: %d branch(es), y=%s", len(branches), y)
     return ax
 
@@ -254,12 +345,16 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
     common = {"c": xx, "cmap": "viridis", "vmin": norm_range[0], "vmax": norm_range[1],
               "s": 6, "linewidths": 0}
     ax_abs.scatter(xx, np.abs(mult).ravel(), **common)
-    ax_abs.plot(x, ds["spectral_radius"].values, color="black", linewidth=1.0,
-                label="spectral radius")
-    ax_abs.axhline(1.0, color="0.4", linestyle="--", linewidth=1.0, label="|mu| = 1")
+    # one line per connected component of the branch, never a chord between two
+    rho = np.asarray(ds["spectral_radius"].values, dtype=float)
+    if "connected_component" in ds:
+        cut = np.flatnonzero(np.diff(np.asarray(ds["connected_component"].values)) != 0) + 1
+        x, rho = np.insert(x, cut, np.nan), np.insert(rho, cut, np.nan)
+    ax_abs.plot(x, rho, color="black", linewidth=1.0, label="spectral radius")
+    ax_abs.axhline(1.0, color="0.4", linestyle="--", linewidth=1.0, label=r"$|\mu| = 1$")
     ax_abs.set_yscale(yscale)
-    ax_abs.set_xlabel(_label(ds, parameter))
-    ax_abs.set_ylabel("|multipliers|")
+    ax_abs.set_xlabel(axis_label(ds, parameter))
+    ax_abs.set_ylabel(r"moduli of the multipliers $|\mu|$")
 
     theta = np.linspace(0.0, 2.0 * np.pi, 361)
     ax_c.plot(np.cos(theta), np.sin(theta), color="0.4", linestyle="--", linewidth=1.0)
@@ -267,24 +362,35 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
     labels = np.asarray(ds[special_variable("label")].values).tolist()
     smult = np.asarray(ds[special_variable("multipliers")].values, dtype=complex)
     sx = np.asarray(ds[special_variable(parameter)].values, dtype=float)
+    at_one: list[tuple[float, str]] = []
     for label in SPECIAL_LABELS:
         ks = [k for k, lab in enumerate(labels) if lab == label]
         if not ks:
             continue
         m = smult[ks].ravel()
         ax_c.scatter(m.real, m.imag, marker=SPECIAL_MARKERS[label], s=36, facecolors="none",
-                     edgecolors="black", linewidths=1.0, zorder=3, label=label)
+                     edgecolors="black", linewidths=1.0, zorder=3,
+                     label=f"{label} {SPECIAL_NAMES[label]}")
         if label_special:
             for k in ks:
                 ax_abs.axvline(sx[k], color="0.6", linestyle=":", linewidth=0.8)
-                ax_abs.annotate(label, (sx[k], 1.0), xytext=(2, 4), textcoords="offset points",
-                                fontsize="small")
-    ax_c.set_aspect("equal", adjustable="datalim")
-    ax_c.set_xlabel("Re multiplier")
-    ax_c.set_ylabel("Im multiplier")
+                at_one.append((float(sx[k]), label))
+    # near a ZV point G has a pole (multipliers ~ 1/h2): frame the bulk, say what is cut
+    moduli = np.abs(mult[np.isfinite(mult)])
+    reach = max(1.25, float(np.percentile(moduli, 95)) * 1.05) if moduli.size else 1.25
+    ax_c.set_xlim(-reach, reach)
+    ax_c.set_ylim(-reach, reach)
+    ax_c.set_aspect("equal", adjustable="box")
+    if moduli.size and (moduli.max() > reach or np.any(np.abs(smult) > reach)):
+        ax_c.text(0.02, 0.02, rf"$|\mu| > {reach:.3g}$ outside the frame", fontsize="x-small",
+                  color="0.35", transform=ax_c.transAxes)
+    ax_c.set_xlabel(r"Re $\mu$")
+    ax_c.set_ylabel(r"Im $\mu$")
     if labels:
         ax_c.legend(fontsize="small", loc="best")
     ax_abs.legend(fontsize="small", loc="best")
-    ax_c.figure.colorbar(sc, ax=ax_c, label=_label(ds, parameter))
+    ax_c.figure.colorbar(sc, ax=ax_c, label=axis_label(ds, parameter))
+    if at_one:
+        place_labels(ax_abs, [(px, 1.0) for px, _ in at_one], [t for _, t in at_one])
     logger.debug("multipliers plot: %d points", x.size)
     return ax_abs, ax_c

@@ -19,6 +19,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from impactcont.dataset.io import atomic_output, check_output_file
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow
 
@@ -36,21 +37,54 @@ def _option(plot: Any, name: str, default: Any) -> Any:
 
 
 def _finish(fig: Figure, plot: Any, default_title: str) -> Figure:
-    fig.suptitle(_option(plot, "title", default_title), fontsize="medium")
+    title = _option(plot, "title", default_title)
+    if title:
+        fig.suptitle(title, fontsize="medium")
     return fig
 
 
-def draw_bifurcation(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Bifurcation diagram of branches (``plot.y``, default ``impact_velocity``)."""
-    from impactcont.plots import bifurcation_diagram
+def _systems(datasets: Mapping[str, xr.Dataset]) -> list[dict[str, xr.Dataset]]:
+    """Branches grouped by system: the same oscillator apart from the continued parameter."""
+    groups: dict[str, dict[str, xr.Dataset]] = {}
+    for name, ds in datasets.items():
+        osc = json.loads(ds.attrs["oscillator"])
+        osc.pop(ds.attrs.get("parameter"), None)
+        groups.setdefault(json.dumps(osc, sort_keys=True), {})[name] = ds
+    return list(groups.values())
 
-    fig = Figure(figsize=(7.5, 5.0), layout="constrained")
-    ax = fig.add_subplot()
-    bifurcation_diagram(dict(datasets), y=_option(plot, "y", "impact_velocity"), ax=ax)
-    gaps = {json.loads(ds.attrs["oscillator"])["b"] for ds in datasets.values()
-            if ds.attrs.get("parameter") != "b"}
-    suffix = f" (b = {gaps.pop():g})" if len(gaps) == 1 else ""
-    return _finish(fig, plot, "Bifurcation diagram" + suffix)
+
+def draw_bifurcation(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
+    """Bifurcation diagram of branches (``plot.y``, default ``impact_velocity``).
+
+    One panel per system (branches at b = 0 and at b = 0.5 are not drawn on one
+    axis), titled with what differs between them; special-point labels avoid
+    each other.
+    """
+    from impactcont.plots import bifurcation_diagram
+    from impactcont.plots.branches import differing_parameters, fixed_parameters
+
+    panels = _systems(datasets)
+    fig = Figure(figsize=(9.0, 0.6 + 4.4 * len(panels)), layout="constrained")
+    axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+    y = _option(plot, "y", "impact_velocity")
+    first = next(iter(datasets.values()))
+    names = [first[v].attrs.get("long_name", v) if v in first else v
+             for v in (y, first.attrs["parameter"])]
+    _finish(fig, plot, f"Bifurcation diagram: {names[0]} against {names[1]}"
+            if len(panels) > 1 else "")
+    differing = differing_parameters([list(panel.values()) for panel in panels])
+    for number, (ax, panel) in enumerate(zip(axes, panels, strict=True), start=1):
+        title = None  # one panel: what bifurcation_diagram says it draws
+        if len(panels) > 1:
+            own = fixed_parameters(list(panel.values()))
+            title = ", ".join(f"{k} = {own[k]:g}" for k in differing if k in own) or \
+                f"system {number} (M, K or F differ)"
+        bifurcation_diagram(panel, y=y, ax=ax, title=title)
+        if ax is not axes[-1]:
+            ax.set_xlabel("")
+    if len(panels) == 1 and _option(plot, "title", None):
+        axes[0].set_title("")
+    return fig
 
 
 def draw_multipliers(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
@@ -64,8 +98,10 @@ def draw_multipliers(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
     return _finish(fig, plot, f"Multipliers along {name}")
 
 
-def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Dataset, int]]:
-    rows = [(name, ds, k) for name, ds in datasets.items() for k in range(ds.sizes["orbit"])]
+def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Dataset, int | None]]:
+    """One row per stored orbit, and one (``None``) per entry that kept none."""
+    rows = [(name, ds, k) for name, ds in datasets.items()
+            for k in (range(ds.sizes["orbit"]) if ds.sizes["orbit"] else [None])]
     if len(rows) > _MAX_ROWS:
         log.warning("orbits plot: drawing the first %d of %d orbits", _MAX_ROWS, len(rows))
     return rows[:_MAX_ROWS]
@@ -73,41 +109,73 @@ def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Datase
 
 def _empty(fig: Figure, text: str) -> Figure:
     ax = fig.add_subplot()
-    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes)
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, wrap=True)
     ax.set_axis_off()
     return fig
 
 
+def _no_orbit(ax_t: Any, ax_p: Any, name: str, ds: xr.Dataset) -> None:
+    """An entry that kept no orbit: say why across its row."""
+    note = ds.attrs.get("note") or f"no motion kept (which = {ds.attrs.get('which')})"
+    ax_t.text(0.0, 0.5, f"{name}: {note}", ha="left", va="center", transform=ax_t.transAxes,
+              fontsize="small", wrap=True)
+    for ax in (ax_t, ax_p):
+        ax.set_axis_off()
+
+
+def _style_legend(fig: Figure, kinds: set[str]) -> None:
+    from matplotlib.lines import Line2D
+
+    from impactcont.plots import SEGMENT_STYLES
+
+    handles = [Line2D([], [], color="C0", label=kind, **SEGMENT_STYLES[kind])
+               for kind in SEGMENT_STYLES if kind in kinds]
+    handles += [Line2D([], [], color="C3", linewidth=0.8, label="impact"),
+                Line2D([], [], color="0.3", linewidth=0.8, linestyle=":", label="stop x1 = b")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles),
+               fontsize="small", frameon=False)
+
+
 def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """x1(t) over one period and the phase portrait (x1, x1') of every stored orbit."""
+    """x1(t) over one period and the phase portrait (x1, x1') of every stored orbit.
+
+    Line styles are those of the bifurcation diagrams (stable, unstable,
+    non-physical); an entry that kept no orbit says why.
+    """
+    from impactcont.plots import SEGMENT_STYLES
+
     rows = _orbit_rows(datasets)
-    fig = Figure(figsize=(10.0, 2.6 * max(len(rows), 1) + 0.6), layout="constrained")
+    fig = Figure(figsize=(10.0, 2.6 * max(len(rows), 1) + 0.9), layout="constrained")
     if not rows:
         return _finish(_empty(fig, "no periodic orbit in these entries"), plot, "Orbits")
     axes = np.atleast_2d(fig.subplots(len(rows), 2, squeeze=False))
+    kinds = set()
     for (ax_t, ax_p), (name, ds, k) in zip(axes, rows, strict=True):
+        if k is None:
+            _no_orbit(ax_t, ax_p, name, ds)
+            continue
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
         n = osc.n
         T = float(ds["period"][k])
         tau = np.linspace(0.0, T, 600)
         X = Flow(osc).state(tau, np.asarray(ds["state"][k].values), float(ds["delta"][k]))
-        style = "-" if bool(ds["stable"][k]) else "--"
-        alpha = 1.0 if bool(ds["physical"][k]) else 0.4
-        ax_t.plot(tau, X[:, 0], style, color="C0", alpha=alpha)
+        stable, physical = bool(ds["stable"][k]), bool(ds["physical"][k])
+        kind = "non-physical" if not physical else "stable" if stable else "unstable"
+        kinds.add(kind)
+        ax_t.plot(tau, X[:, 0], color="C0", **SEGMENT_STYLES[kind])
         ax_t.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
-        ax_t.set_xlabel("t (since impact)")
+        ax_t.set_xlabel("time since the impact t")
         ax_t.set_ylabel("x1")
-        ax_p.plot(X[:, 0], X[:, n], style, color="C0", alpha=alpha)
-        ax_p.plot([X[-1, 0], X[0, 0]], [X[-1, n], X[0, n]], color="C3", linewidth=0.8,
-                  label="impact")
+        ax_p.plot(X[:, 0], X[:, n], color="C0", **SEGMENT_STYLES[kind])
+        ax_p.plot([X[-1, 0], X[0, 0]], [X[-1, n], X[0, n]], color="C3", linewidth=0.8)
         ax_p.axvline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
         ax_p.set_xlabel("x1")
         ax_p.set_ylabel("x1'")
-        verdict = ("stable" if bool(ds["stable"][k]) else "unstable") + \
-            ("" if bool(ds["physical"][k]) else ", not physical")
+        verdict = ("stable" if stable else "unstable") + ("" if physical else ", not physical")
         ax_t.set_title(f"{name}: N={int(ds.attrs['N'])}, root {int(ds['root'][k]):+d}, "
                        f"omega={osc.omega:g}, b={osc.b:g} ({verdict})", fontsize="small")
-    axes[0, 1].legend(fontsize="small", loc="best")
+    if kinds:
+        _style_legend(fig, kinds)
     return _finish(fig, plot, "Periodic impacting motions")
 
 
@@ -170,9 +238,13 @@ def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 
 def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     """Codim-1 curves in their parameter plane; dashed where no stable motion changes."""
-    fig = Figure(figsize=(7.5, 5.5), layout="constrained")
+    from impactcont.plots.branches import axis_label
+    from impactcont.plots.labels import place_labels
+
+    fig = Figure(figsize=(9.0, 5.5), layout="constrained")
     ax = fig.add_subplot()
     p1 = p2 = ""
+    codim2: list[tuple[float, float, str]] = []
     for k, (name, ds) in enumerate(datasets.items()):
         p1, p2 = str(ds.attrs["parameters"]).split(",")
         x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
@@ -185,12 +257,16 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         for j in range(ds.sizes.get("codim2", 0)):
             cx, cy = float(ds[f"codim2_{p1}"].values[j]), float(ds[f"codim2_{p2}"].values[j])
             ax.plot(cx, cy, "o", markerfacecolor="white", markeredgecolor="black", zorder=3)
-            ax.annotate(str(ds["codim2_label"].values[j]), (cx, cy), xytext=(4, 4),
-                        textcoords="offset points", fontsize="x-small")
-    ax.set_xlabel(p1)
-    ax.set_ylabel(p2)
-    ax.legend(fontsize="small", loc="best")
-    return _finish(fig, plot, "Codim-1 curves (solid: a stable motion changes across)")
+            codim2.append((cx, cy, str(ds["codim2_label"].values[j])))
+    if p1:
+        first = next(iter(datasets.values()))
+        ax.set_xlabel(axis_label(first, p1))
+        ax.set_ylabel(axis_label(first, p2))
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    _finish(fig, plot, "Codim-1 curves (solid: a stable motion changes across)")
+    place_labels(ax, [(x, y) for x, y, _ in codim2], [t for _, _, t in codim2],
+                 fontsize="x-small")
+    return fig
 
 
 def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
@@ -264,6 +340,9 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     ------
     ValueError
         The file is not an impactcont file, or ``kind`` does not read it.
+    FileNotFoundError, NotADirectoryError, PermissionError
+        The file does not exist, or the figure cannot be written where asked
+        (checked before drawing; the message names the path).
     """
     from impactcont.scene.files import read_output
     from impactcont.scene.sections import plot_kinds
@@ -278,6 +357,7 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
                          f"{', '.join(kinds)}")
     draw = kinds[chosen].load_draw()
     target = Path(output) if output is not None else out.path.with_suffix(".png")
+    check_output_file(target)  # before drawing
     groups: list[tuple[str, dict[str, xr.Dataset]]]
     if out.kind == "branches" and chosen == "bifurcation_diagram":
         by_parameter: dict[str, dict[str, xr.Dataset]] = {}
@@ -299,12 +379,10 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
 
 
 def save_figure(fig: Figure, path: Path, dpi: int) -> Path:
-    """Write a figure to PNG atomically (temporary file + :func:`os.replace`)."""
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    try:
-        fig.savefig(tmp, dpi=dpi)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    """Write a figure atomically (temporary file + :func:`os.replace`), PNG unless
+    ``path`` names another format matplotlib writes (``.pdf``, ``.svg``, ...)."""
+    path = Path(path)
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
     return path
 

@@ -1,17 +1,17 @@
 """The NetCDF files a scene run writes, and reading them back.
 
-Every section of a scene is written to ``<section>.nc``: a DataTree whose
-root group holds only attributes and which has one group per entry (named
-after the entry). The root attributes:
+Every section of a scene is written to ``<section>.nc``: a DataTree with one
+group per entry (named after the entry) and, in the root group, an index of
+the groups (see :func:`impactcont.dataset.save`). The root attributes:
 
 ``title``, ``impactcont_kind`` (the section, e.g. ``"branches"``),
 ``impactcont_version``, ``Conventions``, ``history``, ``scene`` (the
 resolved scene as JSON: defaults filled in, ``--set`` overrides applied) and
 ``scene_file``.
 
-``branches.nc`` can be read with :func:`impactcont.load` (every group is a
-branch dataset of ``docs/dataset.md``); the other files with
-:func:`read_output` or ``xarray.open_datatree(path, auto_complex=True)``.
+Every file reads back with :func:`impactcont.load` (a DataTree of the
+entries), with :func:`read_output` (the entries by name, and the section),
+or with plain ``xarray.open_datatree(path)`` (``docs/outputs.md``).
 """
 
 from __future__ import annotations
@@ -25,12 +25,13 @@ from typing import Any
 import xarray as xr
 
 from impactcont.dataset import load, save
+from impactcont.dataset.io import SECTION_ATTRIBUTE
 from impactcont.dataset.schema import CONVENTIONS, validate_branch_dataset
 
 __all__ = ["KIND_ATTRIBUTE", "SceneOutput", "read_output", "write_output"]
 
 #: Root attribute naming the section a file holds.
-KIND_ATTRIBUTE = "impactcont_kind"
+KIND_ATTRIBUTE = SECTION_ATTRIBUTE
 
 
 def _version() -> str:
@@ -66,9 +67,9 @@ def write_output(path: str | os.PathLike, kind: str, datasets: Mapping[str, xr.D
         "Conventions": CONVENTIONS, "history": f"{stamp} written by impactcont run",
         "scene": scene_json, "scene_file": scene_file})
     tree = xr.DataTree.from_dict({"/": root, **{f"/{k}": v for k, v in datasets.items()}})
-    # Branch groups follow the branch schema and are checked as such; the other
-    # sections have their own layouts (see impactcont.scene.tasks).
-    return save(tree, path, validate=kind == "branches")
+    # branches, curves and maps are checked against their schema; the other
+    # sections have their own layouts (see impactcont.scene.tasks)
+    return save(tree, path)
 
 
 class SceneOutput:

@@ -28,9 +28,11 @@ from typing import Any
 
 import xarray as xr
 
+from impactcont.dataset.io import atomic_output, check_output_directory
 from impactcont.scene.files import write_output
 from impactcont.scene.schema import Scene, load_scene
 from impactcont.scene.sections import RunContext, plot_kinds, scene_sections
+from impactcont.threads import limit_blas_threads
 
 __all__ = ["RunResult", "TaskFailure", "run_scene"]
 
@@ -143,21 +145,6 @@ class _Progress:
                 self.bar.update(1)
 
 
-def _single_threaded_blas() -> contextlib.AbstractContextManager[Any]:
-    """Limit BLAS to one thread while a scene runs, when threadpoolctl is installed.
-
-    The matrices are 2n x 2n with small n: BLAS threads bring no speed, and on
-    a loaded machine their spinning made a branch ten times slower (29 s
-    against 3 s for one N = 1 branch on two busy cores).
-    """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        log.debug("threadpoolctl is not installed: BLAS threads are left as they are")
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
-
-
 def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
@@ -188,6 +175,9 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
     ------
     impactcont.scene.SceneError
         The scene file is malformed.
+    NotADirectoryError, PermissionError, OSError
+        The output directory cannot be created or written (checked before
+        anything is computed).
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene, settings=settings, output=output)
@@ -195,8 +185,7 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
         raise TypeError("settings and output apply to a scene file; pass a path, or use "
                         "load_scene(path, settings=..., output=...)")
     t0 = time.perf_counter()
-    out_dir = scene.output_dir
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = check_output_directory(scene.output_dir, create=True)  # before any computing
     result = RunResult(scene=scene, output_dir=out_dir)
     sections = scene_sections()
     used = {key: entries for key, entries in scene.sections.items() if entries}
@@ -205,7 +194,7 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
     scene_file = str(scene.source) if scene.source else ""
     log.info("scene %r: %d task(s), output in %s", scene.title, total, out_dir)
 
-    with _single_threaded_blas(), _Progress(total, progress) as bar:
+    with limit_blas_threads(), _Progress(total, progress) as bar:
         for key, entries in used.items():
             section = sections[key]
             handler = section.load_handler()
@@ -261,9 +250,8 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
     if scene.output.summary:
         path = out_dir / SUMMARY_FILE
         text = summary_markdown(result)
-        tmp = path.with_name(f".{path.name}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(path)
+        with atomic_output(path) as tmp:
+            tmp.write_text(text, encoding="utf-8")
         result.files.append(path)
     log.info("scene %r done in %.1f s: %d file(s), %d failure(s)", scene.title,
              result.elapsed, len(result.files), len(result.failures))

@@ -9,14 +9,18 @@ and ``impactcont info``). Only what an entry asks for is computed: no
 trajectory unless ``trajectory = true``, no robust pass unless a
 ``[[robust]]`` table exists.
 
-Layouts (every variable has ``long_name``, ``units`` and ``description``):
+Layouts (every variable has ``long_name``, ``units`` and ``description``;
+the attribute ``impactcont_dataset`` says which layout a dataset has):
 
-* orbits: dims ``orbit``, ``multiplier``, ``component``, ``g_row``/``g_col``
-  (the coordinates of ``z`` of eq. 19);
+* orbits (``"orbits"``): dims ``orbit``, ``multiplier``, ``component``,
+  ``g_row``/``g_col`` (the coordinates of ``z`` of eq. 19), and the scalars
+  ``omega``, ``b``, ``amplitude_squared``;
 * branches: the branch schema of ``docs/dataset.md``;
-* robust: ``G0``, ``P``, ``theta``, ``Gamma`` on ``(g_row, g_col)`` and the
-  scalars ``epsilon``, ``epsilon0``, ``robust``;
-* simulations: dims ``impact``, ``component`` and, with a trajectory, ``sample``.
+* robust (``"robust"``): ``G0``, ``P``, ``theta``, ``Gamma`` on
+  ``(g_row, g_col)`` and the scalars ``epsilon``, ``epsilon0``, ``robust``,
+  ``omega``, ``b`` (of the nominal point);
+* simulations (``"simulation"``): dims ``impact``, ``component`` and, with a
+  trajectory, ``sample``; the scalars ``omega``, ``b``.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import json
 import logging
 import math
 import time
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -66,6 +71,13 @@ def _var(dims: tuple[str, ...], data: Any, long_name: str, description: str,
     return xr.Variable(dims, data, attrs=_attrs(long_name, description, units))
 
 
+def _parameters(osc: ImpactOscillator) -> dict[str, xr.Variable]:
+    """``omega`` and ``b`` as scalar variables: readable without parsing the JSON."""
+    return {"omega": _var((), osc.omega, "forcing frequency",
+                          "Nondimensional forcing frequency omega of eq. (1)."),
+            "b": _var((), osc.b, "gap", "Position b of the stop met by mass 1 (eq. 3).")}
+
+
 def _fmt(x: Any, digits: int = 6) -> str:
     if isinstance(x, (bool, np.bool_)):
         return "yes" if x else "no"
@@ -100,25 +112,31 @@ class Orbits:
     def compute(self, entry: OrbitSpec, context: Any = None) -> xr.Dataset:
         osc = entry.oscillator
         orbits = periodic_orbits(osc, entry.N)
+        kept = orbits
         if entry.which == "physical":
-            orbits = [o for o in orbits if o.physical]
+            kept = [o for o in orbits if o.physical]
         elif entry.which == "stable":
-            orbits = [o for o in orbits if o.physical and o.stable]
-        ds = orbits_dataset(orbits, osc, entry.N)
-        ds.attrs.update(name=entry.name, which=entry.which,
-                        amplitude_squared=amplitude_squared(osc, entry.N))
+            kept = [o for o in orbits if o.physical and o.stable]
+        ds = orbits_dataset(kept, osc, entry.N)
+        ds.attrs.update(name=entry.name, which=entry.which)
         log.info("orbits %s: %d root(s) of eq. (15) with N=%d at %s", entry.name,
-                 len(orbits), entry.N, _changes_text(osc.to_json()))
+                 len(kept), entry.N, _changes_text(osc.to_json()))
+        if not kept:
+            ds.attrs["note"] = _no_motion_note(orbits, float(ds["amplitude_squared"]), osc,
+                                               entry.which)
+            log.warning("orbits %s: %s", entry.name, ds.attrs["note"])
         return ds
 
     def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
         rows = []
         for name, ds in datasets.items():
             where = _changes_text(ds.attrs["oscillator"])
-            amplitude = float(ds.attrs.get("amplitude_squared", math.nan))
+            amplitude = float(ds["amplitude_squared"]) if "amplitude_squared" in ds else \
+                float(ds.attrs.get("amplitude_squared", math.nan))
             if ds.sizes["orbit"] == 0:
+                note = ds.attrs.get("note") or f"no motion kept (which = {ds.attrs.get('which')})"
                 rows.append([name, ds.attrs["N"], where, amplitude, "-", "-", "-", "-", "-",
-                             "-", "-", f"no motion kept (which = {ds.attrs.get('which')})"])
+                             "-", "-", str(note).replace("|", "/")])
                 continue
             for k in range(ds.sizes["orbit"]):
                 rows.append([name, ds.attrs["N"], where, amplitude, f"{int(ds['root'][k]):+d}",
@@ -132,6 +150,22 @@ class Orbits:
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         return []
+
+
+def _no_motion_note(roots: list[PeriodicOrbit], amplitude: float, osc: ImpactOscillator,
+                    which: str) -> str:
+    """Why an ``[[orbits]]`` entry keeps no motion, with the numbers."""
+    if not roots:
+        reach = math.sqrt(amplitude)
+        return (f"no motion: c^2 + s^2 = {amplitude:.6g} < b^2 = {osc.b ** 2:.6g} (eq. 15), "
+                f"the stop at b = {osc.b:g} is out of reach of the forced motion; N-1 "
+                f"motions exist here only for b between {-reach:.6g} and {reach:.6g}")
+    wanted = "physical" if which == "physical" else "physical and stable"
+    found = "; ".join(f"root {o.root:+d}: " + ("physical" if o.physical else "not physical")
+                      + (", stable" if o.stable else f", unstable (rho(G) = "
+                         f"{o.spectral_radius:.4g})") for o in roots)
+    return f"no motion kept (which = {which}): none of the {len(roots)} roots is {wanted} " \
+           f"({found})"
 
 
 def orbits_dataset(orbits: list[PeriodicOrbit], osc: ImpactOscillator, N: int) -> xr.Dataset:
@@ -171,10 +205,13 @@ def orbits_dataset(orbits: list[PeriodicOrbit], osc: ImpactOscillator, N: int) -
         "G": _var(("orbit", "g_row", "g_col"),
                   np.array([o.G for o in orbits], dtype=float).reshape(k, 2 * n, 2 * n),
                   "impact-map Jacobian", "G of eq. (25) in z = [dx2..dxn, dv1..dvn, ddelta]."),
+        **_parameters(osc),
+        "amplitude_squared": _var((), amplitude_squared(osc, N), "c^2 + s^2",
+                                  "c^2 + s^2 of eq. (14): N-1 motions exist iff it is >= b^2."),
     }
     return xr.Dataset(data, coords=_coords(n),
                       attrs={"title": f"Periodic N-1 motions, N = {N}", "N": N,
-                             "oscillator": osc.to_json()})
+                             "impactcont_dataset": "orbits", "oscillator": osc.to_json()})
 
 
 ORBITS = Orbits()
@@ -188,7 +225,13 @@ class Branches:
 
     def compute(self, entry: BranchSpec, context: Any = None) -> xr.Dataset:
         t0 = time.perf_counter()
-        ds = continuation(entry.oscillator, **entry.continuation_kwargs())
+        try:
+            ds = continuation(entry.oscillator, **entry.continuation_kwargs())
+        except NoPeriodicMotionError as exc:
+            why = _out_of_reach(entry)
+            if why is None:
+                raise
+            raise NoPeriodicMotionError(f"{exc}: {why}") from exc
         ds.attrs["name"] = entry.name
         log.info("branch %s: N=%d in %s, %d points, %d special point(s) (%.1f s)", entry.name,
                  entry.N, entry.parameter, ds.sizes["point"], ds.sizes["special"],
@@ -239,6 +282,31 @@ class Branches:
 BRANCHES = Branches()
 
 
+def _out_of_reach(entry: BranchSpec, samples: int = 400) -> str | None:
+    """The numbers behind "no motion anywhere in bounds": c^2 + s^2 against b^2.
+
+    None if the scan finds a motion (then the failure has another cause).
+    """
+    values = np.linspace(*entry.bounds, samples)
+    margin = np.empty(samples)
+    amplitude = np.empty(samples)
+    gap = np.empty(samples)
+    with warnings.catch_warnings():  # only for the message: accuracy warnings do not matter
+        warnings.simplefilter("ignore")
+        for i, value in enumerate(values):
+            osc = entry.oscillator.replace(**{entry.parameter: float(value)})
+            amplitude[i], gap[i] = amplitude_squared(osc, entry.N), osc.b
+            margin[i] = amplitude[i] - gap[i] ** 2
+    best = int(np.nanargmax(margin)) if np.any(np.isfinite(margin)) else 0
+    if margin[best] >= 0:
+        return None
+    reach = math.sqrt(max(amplitude[best], 0.0))
+    return (f"closest at {entry.parameter} = {values[best]:.6g}, where c^2 + s^2 = "
+            f"{amplitude[best]:.6g} against b^2 = {gap[best] ** 2:.6g} (eq. 15): the stop is "
+            f"out of reach of the forced motion; N-1 motions there need b between "
+            f"{-reach:.6g} and {reach:.6g}")
+
+
 def special_points_table(points: list[dict[str, Any]]) -> list[str]:
     """Markdown table of special points (rows from :meth:`Branches.special_points`)."""
     rows = [[p["branch"], p["N"], p["label"], f"{p['parameter']} = {_fmt(p['value'], 8)}",
@@ -283,10 +351,12 @@ class Robust:
                           "X(0) of eq. (13) at the nominal point."),
             "multipliers": _var(("multiplier",), rs.orbit.multipliers, "multipliers of G0",
                                 "Eigenvalues of G0, largest modulus first."),
+            **_parameters(rs.orbit.oscillator),
         }
         argmax = {f"{i},{j}": q for (i, j), q in rs.argmax.items()}
         ds = xr.Dataset(data, coords=_coords(n), attrs={
             "title": f"Robust stability of the N={entry.N} motion", "name": entry.name,
+            "impactcont_dataset": "robust",
             "N": entry.N, "root": rs.root, "samples": rs.samples,
             "evaluations": rs.evaluations, "vary": json.dumps(rs.vary),
             "nominal": json.dumps(rs.nominal), "argmax": json.dumps(argmax),
@@ -353,13 +423,15 @@ class Simulations:
                                   "State right after each impact."),
             "start_state": _var(("component",), state, "start state",
                                 "State at t = 0 (perturbation included)."),
+            **_parameters(osc),
         }
         if entry.trajectory and res.t is not None:
             data["t"] = _var(("sample",), res.t, "time", "Trajectory sample times.")
             data["X"] = _var(("sample", "component"), res.X, "state",
                              "Sampled state (both sides of each impact).")
         ds = xr.Dataset(data, coords={"component": state_component_names(n)}, attrs={
-            "title": f"Simulation {entry.name}", "name": entry.name, "start": start,
+            "title": f"Simulation {entry.name}", "name": entry.name,
+            "impactcont_dataset": "simulation", "start": start,
             "start_delta": delta, "periods": entry.periods, "perturbation": entry.perturbation,
             "status": res.status.name, "message": res.message,
             "final_time": res.final_time, "oscillator": osc.to_json()})

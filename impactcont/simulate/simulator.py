@@ -21,6 +21,7 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.extrema import first_upward_crossing, sample_times
 from impactcont.orbit.flow import Flow
+from impactcont.threads import blas_limited
 
 __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
 
@@ -146,6 +147,7 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     return X
 
 
+@blas_limited
 def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: float, *,
              trajectory: bool = False, samples_per_period: int = 200,
              max_impacts: int = 1_000_000, chatter_velocity: float = 1e-9) -> SimulationResult:

@@ -1,0 +1,121 @@
+"""Text labels that avoid each other, the markers they name and, where they can, the curves.
+
+Special points crowd together (NS, ZV and SN within 0.003 in omega on the
+paper's b = 0.5 branch): a label written at a fixed offset from each marker
+covers its neighbours. :func:`place_labels` puts each label at the nearest
+free place around its point, on rings of growing radius, with a thin leader
+line when it had to move away. Positions are computed in points on the laid-out
+figure, so the result holds for the size the figure is saved at.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.font_manager import FontProperties
+from matplotlib.text import Annotation
+
+__all__ = ["place_labels"]
+
+_RINGS = (4.0, 12.0, 22.0, 34.0, 48.0, 64.0)  # distance of a label from its point, in points
+_MARKER = 4.0  # half-size of a marker, in points
+
+
+def _candidates(w: float, h: float) -> list[tuple[float, float, int]]:
+    """Lower-left corners ``(dx, dy)`` of a ``w x h`` box around a point, nearest first."""
+    out = []
+    for ring, r in enumerate(_RINGS):
+        for dx, dy in ((r, r / 2), (r, -r / 2 - h), (-r - w, r / 2), (-r - w, -r / 2 - h),
+                       (-w / 2, r), (-w / 2, -r - h), (r, -h / 2), (-r - w, -h / 2)):
+            out.append((dx, dy, ring))
+    return out
+
+
+def _overlap(box: np.ndarray, boxes: np.ndarray) -> float:
+    """Total overlap area of ``box`` (x0, y0, x1, y1) with the rows of ``boxes``."""
+    if boxes.size == 0:
+        return 0.0
+    w = np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0])
+    h = np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1])
+    return float(np.sum(np.clip(w, 0, None) * np.clip(h, 0, None)))
+
+
+def _curve_points(ax: Axes, to_points: Any) -> np.ndarray:
+    """Vertices of the lines drawn on ``ax``, in points (soft obstacles)."""
+    parts = [line.get_xydata() for line in ax.get_lines() if line.get_visible()]
+    xy = np.vstack([p for p in parts if len(p)]) if parts else np.empty((0, 2))
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    return to_points(xy) if len(xy) else xy
+
+
+def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[str], *,
+                 fontsize: Any = "small", **text_kw: Any) -> list[Annotation]:
+    """Annotate the data points ``xy`` with ``texts`` so that no two labels overlap.
+
+    Call it last, once everything else is drawn on the figure: it lays the
+    figure out (:meth:`matplotlib.figure.Figure.draw_without_rendering`) to
+    know where the points are.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    xy : sequence of (float, float)
+        The points, in data coordinates.
+    texts : sequence of str
+        One label per point.
+    fontsize : str or float, optional
+    **text_kw
+        Passed on to :meth:`matplotlib.axes.Axes.annotate`.
+
+    Returns
+    -------
+    list of matplotlib.text.Annotation
+    """
+    if len(xy) != len(texts):
+        raise ValueError(f"xy and texts must have the same length; got {len(xy)} and "
+                         f"{len(texts)}")
+    if not len(xy):
+        return []
+    fig = ax.figure
+    fig.draw_without_rendering()
+    scale = 72.0 / fig.dpi
+
+    def to_points(data: np.ndarray) -> np.ndarray:
+        return ax.transData.transform(data) * scale
+
+    pts = to_points(np.asarray(xy, dtype=float))
+    frame = np.asarray(ax.get_window_extent().extents) * scale
+    size = FontProperties(size=fontsize).get_size_in_points()
+    curves = _curve_points(ax, to_points)
+    markers = np.hstack([pts - _MARKER, pts + _MARKER])
+    # texts already there (an earlier call on these axes) are obstacles too
+    placed: list[np.ndarray] = [np.asarray(t.get_window_extent().extents) * scale
+                                for t in ax.texts if t.get_visible() and t.get_text()]
+    out = []
+    for k in np.argsort(pts[:, 0], kind="stable"):
+        px, py = pts[k]
+        w, h = 0.62 * size * len(texts[k]) + 2.0, 1.2 * size
+        best: tuple[float, float, float, int] | None = None
+        for dx, dy, ring in _candidates(w, h):
+            box = np.array([px + dx, py + dy, px + dx + w, py + dy + h])
+            hard = _overlap(box, np.array(placed).reshape(-1, 4)) + _overlap(box, markers)
+            outside = (max(frame[0] - box[0], 0) + max(box[2] - frame[2], 0)
+                       + max(frame[1] - box[1], 0) + max(box[3] - frame[3], 0))
+            crossed = np.count_nonzero((curves[:, 0] > box[0]) & (curves[:, 0] < box[2])
+                                       & (curves[:, 1] > box[1]) & (curves[:, 1] < box[3]))
+            score = 100.0 * hard + 50.0 * h * outside + 20.0 * crossed + 30.0 * ring
+            if best is None or score < best[0]:
+                best = (score, dx, dy, ring)
+        _, dx, dy, ring = best  # type: ignore[misc]
+        placed.append(np.array([px + dx, py + dy, px + dx + w, py + dy + h]))
+        arrow = ({"arrowstyle": "-", "color": "0.45", "linewidth": 0.6, "shrinkA": 0,
+                  "shrinkB": _MARKER} if ring > 0 else None)
+        label = ax.annotate(texts[k], xy[k], xytext=(dx, dy), textcoords="offset points",
+                            ha="left", va="bottom", fontsize=fontsize, arrowprops=arrow,
+                            **text_kw)
+        label.set_in_layout(False)  # placed inside the frame; never let it move the axes
+        out.append(label)
+    return out
