@@ -872,6 +872,23 @@ def _take(best, best_t, lo, hi, v_lo, v_hi, T, Gam, B, omega, delta, ks, w, a, u
     return best, best_t
 
 
+@_jit
+def flight_tables(w, a, u0, modal, omega, T):
+    """Per-frequency tables of the interior-contact check, shared by every gap and root.
+
+    Returns ``(times, capped, free, cw, sw, dy, dv, work)``: the grid of
+    :func:`time_grid`, the free response of :func:`free_on_grid` on it, cos and sin of
+    ``omega t``, the free modal deviation per unit ``kappa sigma`` and the scratch of
+    :func:`x1_maximum`.
+    """
+    times, capped = time_grid(w, a, u0, omega, T)
+    dy = modal[6].copy()
+    dv = modal[7].copy()
+    free = free_on_grid(times, w, a, u0, dy, dv)
+    return (times, capped, free, np.cos(omega * times), np.sin(omega * times), dy, dv,
+            np.empty((8, 2 * times.size)))
+
+
 # -- a block of the (omega, b) plane ---------------------------------------------------------
 @_jit
 def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
@@ -903,13 +920,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
         modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, om, N)
         r2[iw] = sc[5] * sc[5] + sc[6] * sc[6]
         conds[iw] = sc[7]
-        times, _ = time_grid(w, a, u0, om, sc[0])
-        dy = modal[6].copy()
-        dv = modal[7].copy()
-        free = free_on_grid(times, w, a, u0, dy, dv)
-        cw = np.cos(om * times)
-        sw = np.sin(om * times)
-        work = np.empty((8, 2 * times.size))
+        times, _, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, om, sc[0])
         for ib in range(nb):
             count, dl, sg, _, _ = orbit_roots(sc, bs[ib], om, R)
             counts[iw, ib] = count
@@ -972,13 +983,8 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
             jacobians[k], _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
             mults[k] = multipliers(jacobians[k])
     if count > 0:
-        times, capped = time_grid(w, a, u0, omega, sc[0])
-        dy = modal[6].copy()
-        dv = modal[7].copy()
-        free = free_on_grid(times, w, a, u0, dy, dv)
-        cw = np.cos(omega * times)
-        sw = np.sin(omega * times)
-        work = np.empty((8, 2 * times.size))
+        times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega,
+                                                                  sc[0])
         for k in range(count):
             best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, dl[k],
                                       (1.0 + R) * sg[k], w, a, u0, dy, dv, work)
@@ -1234,11 +1240,7 @@ def phase_orbit(w, a, f, u, u0, ui0, eig_err, R, omega, N, b, delta):
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     sigma = phase_sigma(sc, omega, R, b, delta)
     state, _ = physical_state(modal, u, omega, R, delta, sigma)
-    times, capped = time_grid(w, a, u0, omega, sc[0])
-    dy = modal[6].copy()
-    dv = modal[7].copy()
-    free = free_on_grid(times, w, a, u0, dy, dv)
-    best, best_t = x1_maximum(times, free, np.cos(omega * times), np.sin(omega * times),
-                              sc[1], sc[2], omega, delta, (1.0 + R) * sigma, w, a, u0, dy, dv,
-                              np.empty((8, 2 * times.size)))
+    times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, sc[0])
+    best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, delta,
+                              (1.0 + R) * sigma, w, a, u0, dy, dv, work)
     return modal, sc, sigma, b - best, best_t, capped, state
