@@ -446,7 +446,7 @@ def transition(modal, u, ui):
     """Physical transition ``U W(T) U^-1`` (eq. 9), shape (2n, 2n), by plain loops.
 
     For small systems (no BLAS call on tiny arrays); above ``BLAS_MIN`` degrees of
-    freedom :func:`impactcont.orbit.periodic.impact_jacobian` forms it with numpy
+    freedom :func:`impactcont.orbit.periodic.modal_jacobian` forms it with numpy
     matrix products instead.
     """
     n = modal.shape[1]
