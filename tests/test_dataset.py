@@ -536,13 +536,18 @@ def test_vertical_range_fits_the_physical_motions(branch):
     plt.close("all")
 
 
+def _branch_at_gap(osc, b: float, N: int):
+    """A synthetic branch of the test columns with every point at gap b."""
+    cols = _columns()
+    cols["b"] = np.full(NPOINTS, b)
+    return branch_dataset(parameter="omega", N=N, oscillator=osc.replace(b=b), options={},
+                          columns=cols, special_points=[])
+
+
 def test_scene_diagram_has_one_panel_per_system(branch, osc):
     from impactcont.scene.figures import draw_bifurcation
 
-    cols = _columns()
-    cols["b"] = np.full(NPOINTS, 0.5)
-    other = branch_dataset(parameter="omega", N=2, oscillator=osc.replace(b=0.5), options={},
-                           columns=cols, special_points=[])
+    other = _branch_at_gap(osc, 0.5, N=2)
     fig = draw_bifurcation({"b0": branch, "b0p5": other})
     axes = fig.get_axes()
     assert [ax.get_title() for ax in axes] == ["b = 0", "b = 0.5"]
@@ -556,10 +561,7 @@ def test_scene_diagram_has_one_panel_per_system(branch, osc):
 
 
 def test_one_axis_of_several_systems_names_the_system_of_each_branch(branch, osc):
-    cols = _columns()
-    cols["b"] = np.full(NPOINTS, 0.5)
-    other = branch_dataset(parameter="omega", N=1, oscillator=osc.replace(b=0.5), options={},
-                           columns=cols, special_points=[])
+    other = _branch_at_gap(osc, 0.5, N=1)
     ax = bifurcation_diagram({"a": branch, "c": other})
     assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == [
         "a (N = 1, b = 0)", "c (N = 1, b = 0.5)"]

@@ -72,6 +72,16 @@ def _start_save(target: Path, groups: int, how: str, **popen) -> subprocess.Pope
     return proc
 
 
+def _finish(proc: subprocess.Popen, timeout: float, hung: str) -> tuple[str, str]:
+    """``(stdout, stderr)`` of an interrupted child; fail with `hung` if it does not end."""
+    try:
+        return proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail(hung)
+
+
 @pytest.mark.parametrize("target_of_signal", ["process", "process group"])
 def test_ctrl_c_ends_a_large_save_promptly(tmp_path: Path, target_of_signal: str) -> None:
     """SIGINT in the middle of writing a large DataTree (once a 10-minute hang)."""
@@ -84,12 +94,7 @@ def test_ctrl_c_ends_a_large_save_promptly(tmp_path: Path, target_of_signal: str
         os.killpg(proc.pid, signal.SIGINT)
     else:
         proc.send_signal(signal.SIGINT)
-    try:
-        _, err = proc.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
-        pytest.fail("the save hung after Ctrl-C")
+    _, err = _finish(proc, 30, "the save hung after Ctrl-C")
     elapsed = time.monotonic() - start
     assert proc.returncode == -signal.SIGINT, err  # ended by KeyboardInterrupt
     assert "KeyboardInterrupt" in err
@@ -141,12 +146,7 @@ def test_ctrl_c_stops_a_dask_backed_map_between_chunks(tmp_path: Path) -> None:
     assert proc.poll() is None
     start = time.monotonic()
     proc.send_signal(signal.SIGINT)
-    try:
-        out, err = proc.communicate(timeout=60)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
-        pytest.fail("the map went on after Ctrl-C")
+    out, err = _finish(proc, 60, "the map went on after Ctrl-C")
     assert proc.returncode == -signal.SIGINT and "saved" not in out, err
     assert time.monotonic() - start < 10.0
     assert target.read_bytes() == b"the previous file"
