@@ -978,10 +978,18 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
     jacobians = np.zeros((2, m, m) if small else (2, 0, 0))
     mults = np.zeros((2, m) if small else (2, 0), dtype=np.complex128)
     for k in range(max(count, 0)):
-        states[k], scales[k] = physical_state(modal, u, omega, R, dl[k], sg[k])
+        # element loops, not slice assignment: numba's broadcasting setitem (with its
+        # error-message formatting) would add seconds to the first compilation
+        state, scales[k] = physical_state(modal, u, omega, R, dl[k], sg[k])
+        for r in range(m):
+            states[k, r] = state[r]
         if small:
-            jacobians[k], _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
-            mults[k] = multipliers(jacobians[k])
+            G, _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
+            mu = multipliers(G)
+            for r in range(m):
+                mults[k, r] = mu[r]
+                for col in range(m):
+                    jacobians[k, r, col] = G[r, col]
     if count > 0:
         times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega,
                                                                   sc[0])
@@ -1218,9 +1226,26 @@ def _keep_alive(size):
 @_jit
 def multipliers(G):
     """Eigenvalues of G, largest modulus first (stable order among equal moduli)."""
-    mu = multipliers_of(G)
-    order = np.argsort(-np.abs(mu), kind="mergesort")
-    return mu[order]
+    return by_modulus(multipliers_of(G))
+
+
+@_jit
+def by_modulus(mu):
+    """``mu`` sorted by decreasing modulus, stable among equal moduli (insertion sort:
+    a few entries; numba's mergesort would add seconds to the first compilation)."""
+    out = mu.copy()
+    size = np.abs(out)
+    for i in range(1, out.size):
+        z = out[i]
+        r = size[i]
+        j = i - 1
+        while j >= 0 and size[j] < r:
+            out[j + 1] = out[j]
+            size[j + 1] = size[j]
+            j -= 1
+        out[j + 1] = z
+        size[j + 1] = r
+    return out
 
 
 @_jit

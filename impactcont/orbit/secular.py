@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from impactcont.orbit.kernel import _EPS, _jit, jacobian_pieces
+from impactcont.orbit.kernel import _EPS, _jit, by_modulus, jacobian_pieces
 
 __all__ = ["POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers"]
 
@@ -299,5 +299,4 @@ def secular_multipliers(modal, w, a, f, u0, ui0, omega, R, delta, sigma):
     _pair_conjugates(z)
     traces = power_sums(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2, xn)
     ok = ok and power_sums_agree(z, *traces)
-    order = np.argsort(-np.abs(z), kind="mergesort")
-    return z[order], ok
+    return by_modulus(z), ok
