@@ -245,7 +245,7 @@ def write_table(rows: list[dict[str, Any]], path: Path) -> None:
             err = " / ".join(_fmt(worst[k]) for k in ("state", "delta", "G", "multipliers",
                                                       "gap_min"))
         elif "det_G" in r:
-            err = (f"periodicity residual {r['residual']:.1e}, |det G| - 1: {r['det_G']:.1e}"
+            err = (f"periodicity residual {r['residual']:.1e}, abs(det G) - 1: {r['det_G']:.1e}"
                    + (f", impact velocity vs Budd & Dux {r['budd_dux']:.1e}"
                       if "budd_dux" in r else ""))
         elif "residual" in r:
