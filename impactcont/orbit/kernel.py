@@ -770,6 +770,12 @@ def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
             -omega * omega * dp + ks * f3)
 
 
+# the derivative a polish finds a root of, as run-time integers: a literal argument would
+# make numba compile _polish once per value
+_ORDER_VEL = np.int64(1)
+_ORDER_ACC = np.int64(2)
+
+
 @_jit
 def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, Gam, B, omega, delta, ks, w, a, u0,
             dy, dv):
@@ -911,8 +917,8 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         # x1' falls then rises from below 0, or rises then falls to >= 0
         if (a0 < 0.0) == (v0 < 0.0):
             continue
-        tm, xm, vm, am = _polish(2, lo, hi, a0, a1, np.inf, np.inf, Gam, B, omega, delta, ks, w,
-                                 a, u0, dy, dv)
+        tm, xm, vm, am = _polish(_ORDER_ACC, lo, hi, a0, a1, np.inf, np.inf, Gam, B, omega,
+                                 delta, ks, w, a, u0, dy, dv)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
             c_lo[m] = lo
             c_hi[m] = tm
@@ -949,8 +955,8 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
 @_jit
 def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, T, Gam, B, omega, delta, ks, w, a, u0,
           dy, dv):
-    r, xr, _, acc = _polish(1, lo, hi, v_lo, v_hi, a_lo, a_hi, Gam, B, omega, delta, ks, w, a,
-                            u0, dy, dv)
+    r, xr, _, acc = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, Gam, B, omega, delta,
+                            ks, w, a, u0, dy, dv)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
