@@ -104,3 +104,16 @@ def test_orbit_falls_back_to_dense_eigenvalues_when_the_guard_refuses(monkeypatc
     monkeypatch.setattr(secular, "secular_multipliers",
                         lambda *args: (np.zeros(40, dtype=complex), False))
     np.testing.assert_array_equal(orbit.multipliers, dense)
+
+
+def test_heavily_damped_chain_matches_high_precision_eigenvalues():
+    """Over-damped modes: their fast multipliers (below eps) are exact zeros of the
+    secular polynomial; left in they made a ring of 1e-8 spurious multipliers."""
+    mpmath = pytest.importorskip("mpmath")
+    orbit = ic.periodic_orbits(_chain(16, eta=3.0), 1)[0]
+    mu, ok = _secular(orbit)
+    assert ok
+    mpmath.mp.dps = 40
+    exact = np.array([complex(e) for e in mpmath.eig(mpmath.matrix(orbit.G.tolist()),
+                                                     left=False, right=False)])
+    assert _distance(mu, exact) <= 1e-13 * abs(exact).max()

@@ -24,6 +24,14 @@ iteration (as in MPSolve's secular solver) from the modal multipliers, using onl
 the logarithmic derivative ``sum_i d_i'/d_i + 1/(mu - 1) + (det S)'/det S - 1/mu``.
 Cost: O(n) per root and sweep instead of the O(n^3) of a dense eigenvalue solve.
 
+Modal multipliers below ``DEAD`` (the fast decay of over-damped modes) are set apart as
+exact zeros: left in, they would make a near-multiple root at 0 that a root finder
+working from function values resolves only to about ``eps^(1/k)`` (a ring of 1e-8
+spurious multipliers for a heavily damped chain), while the eigenvalues of G there
+are well conditioned. Clusters of small but not negligible multipliers keep a
+smaller absolute error of that kind: up to 1e-11 was seen for multipliers of size
+1e-11 (random over-damped 2-DOF systems; this path serves n >= ``SECULAR_MIN``).
+
 The accuracy guard: the result is accepted only if every root converged and the
 first two power sums of the roots agree with ``tr G = tr M`` and ``tr G^2 = tr M^2``
 (both O(n) in closed form) to ``POWER_SUM_TOL`` relative to the sizes of the roots and
@@ -39,7 +47,7 @@ import numpy as np
 
 from impactcont.orbit.kernel import _EPS, _jit, by_modulus, jacobian_pieces
 
-__all__ = ["POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers"]
+__all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers"]
 
 SECULAR_MIN = 16
 """Systems with at least this many degrees of freedom get their multipliers here (below,
@@ -48,16 +56,39 @@ POWER_SUM_TOL = 1e-9
 """Largest accepted ``|sum mu^k - tr G^k| / sum |mu|^k`` (k = 1, 2) of the roots."""
 _MAX_SWEEPS = 200
 _STAGNATION = 1e-9  # a root whose correction stops shrinking below this (relative) is done
+DEAD = _EPS
+"""Modal multipliers (eigenvalues of ``W_i(T)``, dimensionless) below this are set apart as
+exact zeros: the fast decay of over-damped modes, modes that die out within the period."""
+
+
+@_jit
+def _modal_multipliers(t, p):
+    """Both eigenvalues of a 2 x 2 block from its trace and determinant, without
+    cancellation (the smaller of a real pair as ``p / larger``); larger modulus first."""
+    disc = 0.25 * t * t - p
+    if disc >= 0.0:
+        big = 0.5 * t + math.copysign(math.sqrt(disc), t)
+        small = p / big if big != 0.0 else 0.0
+        return complex(big), complex(small)
+    root = 1j * math.sqrt(-disc)
+    return 0.5 * t + root, 0.5 * t - root
 
 
 @_jit
 def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
-    """The modal pieces of ``S(mu)``: coefficients ``(6, 2, n)``, ``t_i``, ``p_i``, ``h2``, ``Xn``.
+    """The modal pieces of ``S(mu)``: ``(coef, kind, t, p, lam, const, zeros, h2, xn)``.
 
     ``coef[k, 0, i] mu + coef[k, 1, i]`` over ``d_i(mu) = mu^2 - t_i mu + p_i`` is mode
     i's share of ``row^T (mu - W_i)^-1 column``: rows ``v`` (velocity of mass 1, even
     k) and ``x`` (its displacement, odd k); columns ``kappa e_v1`` (k = 0, 1),
     ``D dX / h2`` (k = 2, 3) and ``dE`` (k = 4, 5, entering with ``omega / (h2 (mu-1))``).
+
+    A modal multiplier below ``DEAD`` (the fast decay of an over-damped mode, or both
+    of a mode that has died out over the period) is taken as exactly 0: it is a zero
+    of ``det(mu - A)`` set apart (``zeros`` counts them, less M's extra zero), and
+    the mode's share of ``mu S`` loses that pole: ``kind`` 1 keeps the one pole
+    ``lam_i``, ``kind`` 0 leaves the constant ``const[k]``. Left in, such multipliers
+    make a near-multiple root at 0 that no root finder resolves from values.
     """
     n = modal.shape[1]
     kappa = 1.0 + R
@@ -67,13 +98,21 @@ def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
         h2 += u0[i] * v_pre[i]
         xn += u0[i] * acc[i]
     coef = np.empty((6, 2, n))
+    kind = np.empty(n, dtype=np.int64)
     t = np.empty(n)
     p = np.empty(n)
+    lam = np.empty(n, dtype=np.complex128)
+    const = np.zeros(6)
     cols = np.empty((3, 2))
+    removed = 0
     for i in range(n):
         w11, w12, w21, w22 = modal[2, i], modal[3, i], modal[4, i], modal[5, i]
         t[i] = w11 + w22
         p[i] = w11 * w22 - w12 * w21
+        big, small = _modal_multipliers(t[i], p[i])
+        lam[i] = big
+        kind[i] = 2 if abs(small) > DEAD else 1 if abs(big) > DEAD else 0
+        removed += 2 - kind[i]
         cols[0, 0] = 0.0
         cols[0, 1] = kappa * ui0[i]
         cols[1, 0] = v_pre[i] / h2
@@ -86,19 +125,38 @@ def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
             coef[2 * k, 1, i] = u0[i] * (w21 * cy - w11 * cv)
             coef[2 * k + 1, 0, i] = u0[i] * cy
             coef[2 * k + 1, 1, i] = u0[i] * (w12 * cv - w22 * cy)
-    return coef, t, p, h2, xn
+            if kind[i] == 0:  # mu (alpha mu + 0) / mu^2
+                const[2 * k] += coef[2 * k, 0, i]
+                const[2 * k + 1] += coef[2 * k + 1, 0, i]
+    return coef, kind, t, p, lam, const, removed - 1, h2, xn
 
 
 @_jit
-def log_derivative(mu, coef, t, p, omega, R, h2, xn):
-    """``F'(mu) / F(mu)`` of ``F = det(mu - A) det S(mu) / mu``, O(n)."""
+def log_derivative(mu, coef, kind, t, p, lam, const, zeros, omega, R, h2, xn):
+    """``F'(mu) / F(mu)`` of the polynomial whose zeros are the multipliers not set apart, O(n).
+
+    ``F = det(mu - A) det S(mu) / mu`` when no modal multiplier is set apart
+    (``zeros = -1``); otherwise ``det(mu - A)`` without its zeros at 0, times
+    ``det S(mu)``.
+    """
     n = t.size
     if mu == 0 or mu == 1:
         return complex(np.inf, 0.0)  # M's extra zero root / the phase pole: stop here
-    F = np.zeros(6, dtype=np.complex128)
-    dF = np.zeros(6, dtype=np.complex128)
+    # G_k = mu F_k: mu row^T (mu - A)^-1 column, mode by mode; dG_k its derivative
+    G = np.zeros(6, dtype=np.complex128)
+    dG = np.zeros(6, dtype=np.complex128)
     logd = 0j
     for i in range(n):
+        if kind[i] == 0:
+            continue
+        if kind[i] == 1:  # mu (alpha mu + beta) / (mu (mu - lam))
+            inv = 1.0 / (mu - lam[i])
+            logd += inv
+            for k in range(6):
+                num = coef[k, 0, i] * mu + coef[k, 1, i]
+                G[k] += num * inv
+                dG[k] += (coef[k, 0, i] - num * inv) * inv
+            continue
         dd = 2.0 * mu - t[i]
         d = mu * (mu - t[i]) + p[i]
         if d == 0:
@@ -107,27 +165,26 @@ def log_derivative(mu, coef, t, p, omega, R, h2, xn):
         logd += dd * inv
         for k in range(6):
             num = coef[k, 0, i] * mu + coef[k, 1, i]
-            F[k] += num * inv
-            dF[k] += (coef[k, 0, i] - num * dd * inv) * inv
+            f = num * inv
+            G[k] += mu * f
+            dG[k] += f + mu * (coef[k, 0, i] - num * dd * inv) * inv
+    G += const
     q = omega / h2
     z = 1.0 / (mu - 1.0)
-    s11 = -R + mu * F[0]
-    s21 = mu * F[1]
-    ds11 = F[0] + mu * dF[0]
-    ds21 = F[1] + mu * dF[1]
-    g_v = F[2] + q * z * F[4]
-    g_x = F[3] + q * z * F[5]
-    dg_v = dF[2] + q * z * (dF[4] - z * F[4])
-    dg_x = dF[3] + q * z * (dF[5] - z * F[5])
-    s12 = R * xn / h2 + mu * g_v
-    s22 = mu * g_x
-    ds12 = g_v + mu * dg_v
-    ds22 = g_x + mu * dg_x
+    s11 = -R + G[0]
+    s21 = G[1]
+    s12 = R * xn / h2 + G[2] + q * z * G[4]
+    s22 = G[3] + q * z * G[5]
+    ds11 = dG[0]
+    ds21 = dG[1]
+    ds12 = dG[2] + q * z * (dG[4] - z * G[4])
+    ds22 = dG[3] + q * z * (dG[5] - z * G[5])
     det = s11 * s22 - s12 * s21
     if det == 0:
         return complex(np.inf, 0.0)
     ddet = ds11 * s22 + s11 * ds22 - ds12 * s21 - s12 * ds21
-    return logd + z + ddet / det - 1.0 / mu
+    out = logd + z + ddet / det
+    return out - 1.0 / mu if zeros < 0 else out
 
 
 @_jit
@@ -185,22 +242,30 @@ def power_sums(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2, xn):
 
 
 @_jit
-def _starts(t, p):
-    """The modal multipliers (eigenvalues of each ``W_i``), nudged apart off the real axis."""
-    n = t.size
-    z = np.empty(2 * n, dtype=np.complex128)
+def _starts(kind, lam, t, p, zeros):
+    """The modal multipliers not set apart, nudged apart off the real axis, and one more
+    start near 1/2 when some are (the degree is then one more than their count)."""
+    n = kind.size
+    m = 0
     for i in range(n):
-        root = np.sqrt(complex(0.25 * t[i] * t[i] - p[i]))
-        for j in range(2):
-            lam = 0.5 * t[i] + (root if j == 0 else -root)
-            k = 2 * i + j
-            nudge = 1e-3 * np.exp(1j * (0.7 + 2.0 * math.pi * k / (2 * n)))
-            z[k] = lam * (1.0 + nudge) if lam != 0 else nudge
+        m += kind[i]
+    m += 1 if zeros >= 0 else 0
+    z = np.empty(m, dtype=np.complex128)
+    k = 0
+    for i in range(n):
+        big, small = _modal_multipliers(t[i], p[i])
+        for j in range(kind[i]):
+            mu = big if j == 0 else small
+            nudge = 1e-3 * np.exp(1j * (0.7 + 2.0 * math.pi * k / m))
+            z[k] = mu * (1.0 + nudge) if mu != 0 else nudge
+            k += 1
+    if zeros >= 0:
+        z[k] = 0.5 + 0.01j
     return z
 
 
 @_jit
-def aberth(coef, t, p, omega, R, h2, xn, z):
+def aberth(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn, z):
     """Aberth-Ehrlich iteration on every root at once (Gauss-Seidel order), in place.
 
     Returns whether every root converged: its correction fell to rounding level, or
@@ -220,7 +285,7 @@ def aberth(coef, t, p, omega, R, h2, xn, z):
         for k in range(m):
             if done[k]:
                 continue
-            L = log_derivative(z[k], coef, t, p, omega, R, h2, xn)
+            L = log_derivative(z[k], coef, kind, t, p, lam, const, zeros, omega, R, h2, xn)
             if not (np.isfinite(L.real) and np.isfinite(L.imag)):
                 done[k] = True  # sits on a root: nothing to correct
                 continue
@@ -293,10 +358,13 @@ def secular_multipliers(modal, w, a, f, u0, ui0, omega, R, delta, sigma):
     or the power sums disagree with ``tr G``, ``tr G^2`` (then use the dense path).
     """
     e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
-    coef, t, p, h2, xn = secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc)
-    z = _starts(t, p)
-    ok = aberth(coef, t, p, omega, R, h2, xn, z)
+    coef, kind, t, p, lam, const, zeros, h2, xn = secular_coefficients(
+        modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc)
+    z = _starts(kind, lam, t, p, zeros)
+    ok = aberth(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn, z)
     _pair_conjugates(z)
+    if zeros > 0:  # the modal multipliers set apart, less M's extra zero
+        z = np.concatenate((z, np.zeros(zeros, dtype=np.complex128)))
     traces = power_sums(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2, xn)
     ok = ok and power_sums_agree(z, *traces)
     return by_modulus(z), ok
