@@ -28,8 +28,7 @@ from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.orbit.robust import robust_stability
 from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.scene.keys import (
-    NAME_ALLOWED,
-    NAME_PATTERN,
+    ENTRY_NAME,
     Boolean,
     Integer,
     Interval,
@@ -175,7 +174,7 @@ class EntrySpec:
 
     section: ClassVar[str] = ""
 
-    name: str = declare(String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED),
+    name: str = declare(ENTRY_NAME,
                      "entry name, unique in the scene (default <section><number>)", "")
     F: tuple | None = declare(RealArray(1), "forcing vector for this entry")
     R: float | None = declare(_RESTITUTION, "restitution for this entry")

@@ -39,8 +39,7 @@ from impactcont.scene.entries import (
     spec_dict,
 )
 from impactcont.scene.keys import (
-    NAME_ALLOWED,
-    NAME_PATTERN,
+    ENTRY_NAME,
     Boolean,
     Integer,
     Key,
@@ -90,7 +89,7 @@ class PlotSpec:
 
     section: ClassVar[str] = "plots"
 
-    name: str = declare(String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED),
+    name: str = declare(ENTRY_NAME,
                      "plot name; the file is <name>.png unless file is given", "")
     kind: str = declare(String(), "what to draw (see the list of plot kinds)", required=True)
     data: tuple[str, ...] | None = declare(Names(), "names of the entries to draw (default: all "

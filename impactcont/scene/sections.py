@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from typing import Any
 
 import xarray as xr
 
@@ -67,45 +68,43 @@ class RunContext:
     datasets: Mapping[str, Mapping[str, xr.Dataset]]
 
 
-def _section(key: str, entry: type, handler: str, title: str, *plots: PlotKind,
-             problem: type | None = None) -> SceneSection:
+def _section(key: str, entry: type, handler: str, title: str,
+             plots: tuple[tuple[Any, ...], ...], problem: type | None = None) -> SceneSection:
     """A built-in section whose driver, description and points are a handler's methods.
 
-    ``handler`` is ``"module:OBJECT"``; its methods are looked up at each call.
+    ``handler`` is ``"module:OBJECT"`` (its methods are looked up at each call);
+    ``plots`` holds ``(kind, many, drawing function of scene.figures, doc[, check])``.
     """
+    kinds = tuple(PlotKind(kind, key, many, f"{_FIGURES}:{draw}", *rest)
+                  for kind, many, draw, *rest in plots)
     return SceneSection(key, entry, f"{handler}.compute", title, describe=f"{handler}.describe",
-                        special_points=f"{handler}.special_points", plots=plots,
+                        special_points=f"{handler}.special_points", plots=kinds,
                         problem=problem)
 
 
-ORBITS = _section(
-    "orbits", OrbitSpec, f"{_TASKS}:ORBITS", "Periodic orbits",
-    PlotKind("orbits", "orbits", True, f"{_FIGURES}:draw_orbits",
-             "x1(t) over one period and the phase portrait (x1, x1') of each orbit"))
-BRANCHES = _section(
-    "branches", BranchSpec, f"{_TASKS}:BRANCHES", "Branches",
-    PlotKind("bifurcation_diagram", "branches", True, f"{_FIGURES}:draw_bifurcation",
-             "branches against their parameter, styled by stability, special points marked"),
-    PlotKind("multipliers", "branches", False, f"{_FIGURES}:draw_multipliers",
-             "multiplier moduli along one branch and the multipliers in the complex plane"),
+ORBITS = _section("orbits", OrbitSpec, f"{_TASKS}:ORBITS", "Periodic orbits", (
+    ("orbits", True, "draw_orbits",
+     "x1(t) over one period and the phase portrait (x1, x1') of each orbit"),))
+BRANCHES = _section("branches", BranchSpec, f"{_TASKS}:BRANCHES", "Branches", (
+    ("bifurcation_diagram", True, "draw_bifurcation",
+     "branches against their parameter, styled by stability, special points marked"),
+    ("multipliers", False, "draw_multipliers",
+     "multiplier moduli along one branch and the multipliers in the complex plane")),
     problem=PeriodicBranchProblem)
-ROBUST = _section(
-    "robust", RobustSpec, f"{_TASKS}:ROBUST", "Robust stability",
-    PlotKind("robust", "robust", True, f"{_FIGURES}:draw_robust",
-             "Gamma of eq. (28) as a heat map, with epsilon and epsilon0"))
-SIMULATIONS = _section(
-    "simulations", SimulationSpec, f"{_TASKS}:SIMULATIONS", "Simulations",
-    PlotKind("simulation", "simulations", True, f"{_FIGURES}:draw_simulations",
-             "x1(t) and phase portrait of simulated trajectories (impacts if no trajectory)"))
-CURVES = _section(
-    "curves", twoparam.CurveSpec, f"{_TWO}:CURVES", "Two-parameter curves",
-    PlotKind("curves", "curves", True, f"{_FIGURES}:draw_curves",
-             "codim-1 curves in their parameter plane, codim-2 points marked",
-             check=twoparam.check_curves_plot))
-MAPS = _section(
-    "maps", twoparam.MapSpec, f"{_TWO}:MAPS", "Stability maps",
-    PlotKind("map", "maps", False, f"{_FIGURES}:draw_map",
-             "number of stable physical motions on the (omega, b) grid, one panel per N"))
+ROBUST = _section("robust", RobustSpec, f"{_TASKS}:ROBUST", "Robust stability", (
+    ("robust", True, "draw_robust", "Gamma of eq. (28) as a heat map, with epsilon and "
+     "epsilon0"),))
+SIMULATIONS = _section("simulations", SimulationSpec, f"{_TASKS}:SIMULATIONS", "Simulations", (
+    ("simulation", True, "draw_simulations",
+     "x1(t) and phase portrait of simulated trajectories (impacts if no trajectory)"),))
+CURVES = _section("curves", twoparam.CurveSpec, f"{_TWO}:CURVES", "Two-parameter curves", (
+    ("curves", True, "draw_curves",
+     "codim-1 curves in their parameter plane, codim-2 points marked",
+     twoparam.check_curves_plot),))
+MAPS = _section("maps", twoparam.MapSpec, f"{_TWO}:MAPS", "Stability maps", (
+    ("map", False, "draw_map",
+     "number of stable physical motions on the (omega, b) grid, one panel per N"),))
+
 
 def register_section(section: SceneSection, *, replace: bool = False) -> None:
     """Add a section to the scene format in this process: a problem named after its key.

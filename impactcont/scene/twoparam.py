@@ -33,8 +33,8 @@ from impactcont.scene.entries import (
     defaults_of,
 )
 from impactcont.scene.keys import (
+    ENTRY_NAME,
     NAME_ALLOWED,
-    NAME_PATTERN,
     Boolean,
     Integer,
     Interval,
@@ -90,7 +90,7 @@ class _Start(ValueType):
 
     def check(self, value: Any, where: Where) -> str | dict[str, float]:
         if isinstance(value, str):
-            return String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED).check(value, where)
+            return ENTRY_NAME.check(value, where)
         if isinstance(value, dict) and value:
             return {k: Real().check(v, where.key(k)) for k, v in value.items()}
         raise self.fail(value, where, "wrong type")
