@@ -17,7 +17,7 @@ from impactcont.problems import plugins
 from impactcont.scene.entries import EntrySpec
 from impactcont.scene.keys import Integer, declare
 
-BUILTINS = ["orbits", "branches", "robust", "simulations", "curves", "maps"]
+BUILTINS = ["orbits", "branches", "robust", "simulations", "curves", "maps", "switches"]
 
 
 class GoodProblem:

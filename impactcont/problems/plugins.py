@@ -6,7 +6,8 @@ dataclass that declares and validates the keys of one table, and the
 *driver* that computes one validated table into an :class:`xarray.Dataset`
 (which a scene run writes to ``<key>.nc`` and draws). It may also bring plot
 kinds (:class:`PlotKind`) and the continuation problem class it follows. The
-built-in tasks (orbits, branches, robust, simulations, curves, maps) are
+built-in tasks (orbits, branches, robust, simulations, curves, maps,
+switches) are
 registered here the same way as a third-party problem; the scene parser, the
 runner, ``impactcont run`` and ``impactcont list-problems`` read this registry
 only.
@@ -79,7 +80,7 @@ _SECTION_KEY = re.compile(r"^[a-z][a-z0-9_]*$")
 #: name -> ``"module:attribute"`` of their :class:`SceneSection`.
 BUILTIN_PROBLEMS: dict[str, str] = {
     name: f"impactcont.scene.sections:{name.upper()}"
-    for name in ("orbits", "branches", "robust", "simulations", "curves", "maps")
+    for name in ("orbits", "branches", "robust", "simulations", "curves", "maps", "switches")
 }
 
 
@@ -130,6 +131,9 @@ class PlotKind:
         One line for the documentation and ``--help``.
     check : callable, optional
         Extra validation ``check(plot, entries, where)`` raising ``where.error``.
+    also : tuple of str
+        Other sections whose entries it draws too (the bifurcation diagram
+        draws ``[[switches]]`` entries beside ``[[branches]]`` ones).
     """
 
     key: str
@@ -138,6 +142,12 @@ class PlotKind:
     draw: str | Callable[..., Any]
     doc: str
     check: Callable[[Any, Sequence[Any], Any], None] | None = None
+    also: tuple[str, ...] = ()
+
+    @property
+    def sections(self) -> tuple[str, ...]:
+        """Every section whose entries it draws, its own first."""
+        return (self.section, *self.also)
 
     def load_draw(self) -> Callable[..., Any]:
         """Import and return the drawing function."""

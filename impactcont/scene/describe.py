@@ -65,6 +65,7 @@ def describe_file(path: str | os.PathLike) -> str:
         lines += ["", *section.describe_datasets(out.datasets)]
         points = section.find_points(out.datasets)
         if points:
-            table = special_points_table if out.kind == "branches" else points_table
+            table = (special_points_table if out.kind in ("branches", "switches")
+                     else points_table)
             lines += ["", "special points:", *table(points)]
     return "\n".join(lines) + "\n"

@@ -16,7 +16,7 @@ import dataclasses
 import difflib
 import inspect
 import re
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -248,14 +248,48 @@ class OrbitSpec(EntrySpec):
                       "ones, or only physical and stable ones", "all")
 
 
-def continuation_entry(func: Callable[..., Any], name: str) -> type[EntrySpec]:
-    """A base entry with the continuation keys of ``func``, its defaults included.
+#: The keys every continuing entry has (:func:`continuation_entry`).
+CONTINUATION_KEYS = ("ds", "ds_min", "ds_max", "newton_tol", "max_points", "both_directions")
 
-    Every continuing section (``[[branches]]``, ``[[curves]]``, a plugin's)
-    subclasses it, so the keys ``ds``, ``ds_min``, ``ds_max``, ``newton_tol``,
-    ``max_points`` and ``both_directions`` are spelled, checked and passed the
-    same way everywhere, with the defaults of the driver ``func`` (a scene
-    never restates them).
+_POSITIVE = Real(0.0, low_open=True)
+#: Value type, meaning and Python type of each continuation key.
+_CONTINUATION_FIELDS: dict[str, tuple[ValueType, str, type]] = {
+    "ds": (_POSITIVE, "initial arclength step", float),
+    "ds_min": (_POSITIVE, "smallest step", float),
+    "ds_max": (_POSITIVE, "largest step", float),
+    "newton_tol": (_POSITIVE, "Newton tolerance", float),
+    "max_points": (Integer(2, 10_000_000), "largest number of points per direction", int),
+    "both_directions": (Boolean(), "continue both ways from the start", bool),
+}
+
+
+def _check_steps(self: Any, where: Where, osc: ImpactOscillator) -> None:
+    steps = [getattr(self, k, None) for k in ("ds_min", "ds", "ds_max")]
+    known = [v for v in steps if v is not None]
+    if known != sorted(known):
+        shown = ", ".join(f"{k} = {v!r}" for k, v in zip(("ds_min", "ds", "ds_max"), steps,
+                                                          strict=True) if v is not None)
+        raise where.key("ds").error(shown, "ds_min <= ds <= ds_max")
+
+
+def _continuation_options(self: Any) -> dict[str, Any]:
+    """The continuation keys given (or defaulted) as keyword arguments of the driver."""
+    return {k: getattr(self, k) for k in CONTINUATION_KEYS
+            if hasattr(self, k) and getattr(self, k) is not None}
+
+
+def continuation_entry(func: Callable[..., Any], name: str,
+                       keys: Sequence[str] = CONTINUATION_KEYS) -> type[EntrySpec]:
+    """A base entry with continuation keys that take the defaults of ``func``.
+
+    Every continuing section (``[[branches]]``, ``[[curves]]``,
+    ``[[switches]]``, a plugin's) subclasses it, so the keys ``ds``,
+    ``ds_min``, ``ds_max``, ``newton_tol``, ``max_points`` and
+    ``both_directions`` are spelled, checked (``ds_min <= ds <= ds_max``) and
+    passed the same way everywhere, with the defaults of the driver ``func``
+    (a scene never restates them; a key ``func`` defaults to None, or does not
+    have, is left to the driver when the scene omits it).
+    ``entry.continuation_options()`` gives them as keyword arguments.
 
     Parameters
     ----------
@@ -263,37 +297,19 @@ def continuation_entry(func: Callable[..., Any], name: str) -> type[EntrySpec]:
         The driver whose keyword defaults the keys take.
     name : str
         The class name (for error messages and the documentation).
+    keys : sequence of str
+        The continuation keys the section has (a subset of ``CONTINUATION_KEYS``).
     """
-    d = defaults_of(func)
-
-    @dataclasses.dataclass(frozen=True, kw_only=True)
-    class ContinuationEntry(EntrySpec):
-        ds: float = declare(Real(0.0, low_open=True), "initial arclength step", d["ds"])
-        ds_min: float = declare(Real(0.0, low_open=True), "smallest step", d["ds_min"])
-        ds_max: float = declare(Real(0.0, low_open=True), "largest step", d["ds_max"])
-        newton_tol: float = declare(Real(0.0, low_open=True), "Newton tolerance",
-                                    d["newton_tol"])
-        max_points: int = declare(Integer(2, 10_000_000),
-                                  "largest number of points per direction", d["max_points"])
-        both_directions: bool = declare(Boolean(), "continue both ways from the start",
-                                        d["both_directions"])
-
-        def check(self, where: Where, osc: ImpactOscillator) -> None:
-            if not self.ds_min <= self.ds <= self.ds_max:
-                raise where.key("ds").error(
-                    f"{self.ds!r} with ds_min = {self.ds_min!r} and ds_max = {self.ds_max!r}",
-                    "ds_min <= ds <= ds_max")
-
-        def continuation_options(self) -> dict[str, Any]:
-            """The continuation keys as keyword arguments of the driver."""
-            return {k: getattr(self, k) for k in CONTINUATION_KEYS}
-
-    ContinuationEntry.__name__ = ContinuationEntry.__qualname__ = name
-    return ContinuationEntry
-
-
-#: The keys every continuing entry has (:func:`continuation_entry`).
-CONTINUATION_KEYS = ("ds", "ds_min", "ds_max", "newton_tol", "max_points", "both_directions")
+    defaults = defaults_of(func)
+    fields = [(k, _CONTINUATION_FIELDS[k][2] | None,
+               declare(_CONTINUATION_FIELDS[k][0], _CONTINUATION_FIELDS[k][1], defaults.get(k)))
+              for k in keys]
+    return dataclasses.make_dataclass(
+        name, fields, bases=(EntrySpec,), frozen=True, kw_only=True,
+        namespace={"check": _check_steps, "continuation_options": _continuation_options,
+                   "__module__": __name__,
+                   "__doc__": f"Continuation keys {', '.join(keys)} (defaults of "
+                              f"{func.__module__}.{func.__qualname__})."})
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

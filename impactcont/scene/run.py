@@ -210,8 +210,9 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
             for entry in entries:
                 with bar.task(f"{key} {entry.name}"):
                     try:
-                        datasets[entry.name] = _checked(section.compute(
-                            entry, RunContext(result.datasets)), key, entry.name)
+                        context = RunContext({**result.datasets, key: dict(datasets)})
+                        datasets[entry.name] = _checked(section.compute(entry, context), key,
+                                                        entry.name)
                     except Exception as exc:
                         if fail_fast:
                             raise
@@ -225,7 +226,7 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
                 result.files.append(path)
                 result.datasets[key] = datasets
                 points = section.find_points(datasets)
-                if key == "branches":
+                if key in ("branches", "switches"):
                     result.special_points += points
                 elif points:
                     result.other_points[key] = points
@@ -234,7 +235,8 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
         for plot in scene.plots:
             with bar.task(f"plot {plot.name}"):
                 kind = kinds[plot.kind]
-                available = result.datasets.get(kind.section, {})
+                available = {name: ds for s in kind.sections
+                             for name, ds in result.datasets.get(s, {}).items()}
                 missing = [n for n in plot.data if n not in available]
                 if missing:
                     result.failures.append(TaskFailure(
@@ -280,7 +282,7 @@ def summary_markdown(result: RunResult) -> str:
         lines += [scene.description.strip(), ""]
     lines += [f"Computed from {source} by impactcont {__version__} on {stamp} in "
               f"{result.elapsed:.1f} s.", ""]
-    if scene.entries("branches"):
+    if scene.entries("branches") or scene.entries("switches"):
         lines += ["## Special points", ""]
         if result.special_points:
             lines += ["SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "

@@ -304,7 +304,7 @@ def _check_plot(plot: PlotSpec, where: Where, kinds: Mapping[str, PlotKind],
         hint = f"did you mean {close[0]!r}?" if close else "not a plot kind"
         raise where.key("kind").error(f"{plot.kind!r}: {hint}", ", ".join(kinds))
     kind = kinds[plot.kind]
-    available = {e.name: e for e in parsed.get(kind.section, ())}
+    available = {e.name: e for s in kind.sections for e in parsed.get(s, ())}
     names = plot.data if plot.data is not None else tuple(available)
     if not names:
         raise where.key("data").error(
@@ -320,13 +320,20 @@ def _check_plot(plot: PlotSpec, where: Where, kinds: Mapping[str, PlotKind],
         raise where.key("data").error(f"kind {plot.kind!r} draws exactly one entry; got "
                                       f"{len(names)}", "one name of " + ", ".join(available))
     if kind.section == "branches":
-        parameters = {available[n].parameter for n in names}
+        parameters = {_parameter(available[n], available) for n in names}
         if len(parameters) > 1:
             raise where.key("data").error(
                 f"branches continued in different parameters {sorted(parameters)}",
                 "branches all continued in one parameter")
     if kind.check is not None:
         kind.check(plot, [available[n] for n in names], where)
+
+
+def _parameter(entry: EntrySpec, entries: Mapping[str, EntrySpec]) -> str:
+    """The continued parameter of a branch, or of the branch a switch starts from."""
+    while getattr(entry, "parameter", None) is None and getattr(entry, "start", None) in entries:
+        entry = entries[entry.start]
+    return getattr(entry, "parameter", "?")
 
 
 def load_scene(path: str | Path, *, settings: Sequence[str] = (),

@@ -22,6 +22,7 @@ from typing import Any
 
 import xarray as xr
 
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.problems.plugins import (
     PlotKind,
@@ -30,7 +31,7 @@ from impactcont.problems.plugins import (
     register_problem,
     scene_sections,
 )
-from impactcont.scene import twoparam
+from impactcont.scene import switches, twoparam
 from impactcont.scene.entries import BranchSpec, OrbitSpec, RobustSpec, SimulationSpec
 
 __all__ = [
@@ -40,6 +41,7 @@ __all__ = [
     "ORBITS",
     "ROBUST",
     "SIMULATIONS",
+    "SWITCHES",
     "PlotKind",
     "RunContext",
     "SceneSection",
@@ -51,6 +53,7 @@ __all__ = [
 _FIGURES = "impactcont.scene.figures"
 _TASKS = "impactcont.scene.tasks"
 _TWO = "impactcont.scene.twoparam"
+_SWITCH = "impactcont.scene.switches"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,10 +76,11 @@ def _section(key: str, entry: type, handler: str, title: str,
     """A built-in section whose driver, description and points are a handler's methods.
 
     ``handler`` is ``"module:OBJECT"`` (its methods are looked up at each call);
-    ``plots`` holds ``(kind, many, drawing function of scene.figures, doc[, check])``.
+    ``plots`` holds ``(kind, many, drawing function of scene.figures, doc[, options])``
+    with ``options`` the other keywords of :class:`PlotKind`.
     """
-    kinds = tuple(PlotKind(kind, key, many, f"{_FIGURES}:{draw}", *rest)
-                  for kind, many, draw, *rest in plots)
+    kinds = tuple(PlotKind(kind, key, many, f"{_FIGURES}:{draw}", doc, **(rest[0] if rest else {}))
+                  for kind, many, draw, doc, *rest in plots)
     return SceneSection(key, entry, f"{handler}.compute", title, describe=f"{handler}.describe",
                         special_points=f"{handler}.special_points", plots=kinds,
                         problem=problem)
@@ -87,7 +91,8 @@ ORBITS = _section("orbits", OrbitSpec, f"{_TASKS}:ORBITS", "Periodic orbits", (
      "x1(t) over one period and the phase portrait (x1, x1') of each orbit"),))
 BRANCHES = _section("branches", BranchSpec, f"{_TASKS}:BRANCHES", "Branches", (
     ("bifurcation_diagram", True, "draw_bifurcation",
-     "branches against their parameter, styled by stability, special points marked"),
+     "branches (and switches) against their parameter, styled by stability, special points "
+     "marked", {"also": ("switches",)}),
     ("multipliers", False, "draw_multipliers",
      "multiplier moduli along one branch and the multipliers in the complex plane")),
     problem=PeriodicBranchProblem)
@@ -100,10 +105,15 @@ SIMULATIONS = _section("simulations", SimulationSpec, f"{_TASKS}:SIMULATIONS", "
 CURVES = _section("curves", twoparam.CurveSpec, f"{_TWO}:CURVES", "Two-parameter curves", (
     ("curves", True, "draw_curves",
      "codim-1 curves in their parameter plane, codim-2 points marked",
-     twoparam.check_curves_plot),))
+     {"check": twoparam.check_curves_plot}),))
 MAPS = _section("maps", twoparam.MapSpec, f"{_TWO}:MAPS", "Stability maps", (
     ("map", False, "draw_map",
      "number of stable physical motions on the (omega, b) grid, one panel per N"),))
+SWITCHES = _section("switches", switches.SwitchSpec, f"{_SWITCH}:SWITCHES",
+                    "Branches switched at special points", (
+    ("switch_multipliers", False, "draw_multipliers",
+     "multiplier moduli along one switched branch and the multipliers in the complex plane"),),
+    problem=MultiImpactBranchProblem)
 
 
 def register_section(section: SceneSection, *, replace: bool = False) -> None:

@@ -1,0 +1,125 @@
+"""Scene section ``[[switches]]``: the branch of N-p motions born at a special point.
+
+A switch starts from a computed branch (a ``[[branches]]`` entry, or an
+earlier ``[[switches]]`` entry, so that entries chain into a cascade) at one of
+its period-doubling points (:func:`impactcont.period_doubling_switch`: the
+2N-2p motion) or grazing points (:func:`impactcont.grazing_switch`: the motion
+with one more impact), and follows the new branch with
+:func:`impactcont.multi_impact_continuation`'s options. The dataset is an N-p
+branch (``docs/multi_impact.md``), described and drawn as the branches are.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import xarray as xr
+
+from impactcont.detection import LABELS
+from impactcont.errors import ImpactcontError, NoPeriodicMotionError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.multi_branch import multi_impact_continuation
+from impactcont.scene.entries import EntrySpec, continuation_entry
+from impactcont.scene.keys import (
+    ENTRY_NAME,
+    Integer,
+    Interval,
+    Real,
+    String,
+    StringList,
+    Where,
+    declare,
+)
+from impactcont.scene.tasks import BRANCHES
+from impactcont.switching import grazing_switch, period_doubling_switch
+
+__all__ = ["SWITCHES", "SwitchSpec"]
+
+log = logging.getLogger(__name__)
+
+#: The continuation keys of a switch: it goes one way, away from the special point.
+_KEYS = ("ds", "ds_min", "ds_max", "newton_tol", "max_points")
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _KEYS)):
+    """``[[switches]]``: the branch born at a PD or grazing point of a computed branch."""
+
+    section: ClassVar[str] = "switches"
+
+    start: str = declare(ENTRY_NAME, "the [[branches]] entry, or an earlier [[switches]] "
+                         "entry, to switch from", required=True)
+    at: str = declare(String(("PD", "GR")), "switch at a period-doubling (PD) point or at a "
+                      "grazing (GR) point of the start", "PD")
+    which: int = declare(Integer(0), "which point of that kind on the start (branch order)", 0)
+    bounds: tuple[float, float] | None = declare(
+        Interval(), "range of the parameter (default: the start's)")
+    epsilon: float | None = declare(
+        Real(0.0, 1.0, low_open=True, high_open=True),
+        "first step away from the point along the new branch (default 1e-3 at PD, 1e-4 at GR)")
+    detect: tuple[str, ...] = declare(StringList(tuple(LABELS)),
+                                      "special points to detect ([] for none)", tuple(LABELS))
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        super().check(where, osc)
+        if self.changes:
+            raise where.key(next(iter(self.changes))).error(
+                "a switch uses the oscillator of the branch it starts from",
+                "leave out the oscillator parameters")
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        branches = [e.name for e in sections.get("branches", ())]
+        earlier = []
+        for e in sections.get("switches", ()):
+            if e is self:
+                break
+            earlier.append(e.name)
+        if self.start not in branches + earlier:
+            raise where.key("start").error(
+                f"{self.start!r} is not a [[branches]] entry nor an earlier [[switches]] entry",
+                ", ".join(branches + earlier) or "the name of a [[branches]] entry")
+
+
+class Switches:
+    """``[[switches]]``: :func:`~impactcont.period_doubling_switch` or
+    :func:`~impactcont.grazing_switch`."""
+
+    def compute(self, entry: SwitchSpec, context: Any) -> xr.Dataset:
+        t0 = time.perf_counter()
+        computed = {**context.datasets.get("branches", {}), **context.datasets.get("switches", {})}
+        if entry.start not in computed:
+            raise ImpactcontError(f"switch {entry.name}: its start {entry.start!r} was not "
+                                  f"computed (it failed)")
+        kwargs: dict[str, Any] = {"bounds": entry.bounds, "detect": entry.detect,
+                                  **entry.continuation_options()}
+        if entry.epsilon is not None:
+            kwargs["epsilon"] = entry.epsilon
+        start = computed[entry.start]
+        if entry.at == "PD":
+            ds = period_doubling_switch(start, entry.which, **kwargs)
+        else:
+            ds = grazing_switch(start, entry.which, **kwargs)
+            if ds is None:
+                raise NoPeriodicMotionError(
+                    f"switch {entry.name}: no motion with one more impact is born at GR point "
+                    f"{entry.which} of {entry.start!r} (Newton fails there)")
+        ds.attrs.update(name=entry.name, start=entry.start)
+        log.info("switch %s: %s %d of %s -> N=%d with %d impacts, %d points, %d special "
+                 "point(s) (%.1f s)", entry.name, entry.at, entry.which, entry.start,
+                 int(ds.attrs["N"]), int(ds.attrs.get("impacts", 1)), ds.sizes["point"],
+                 ds.sizes["special"], time.perf_counter() - t0)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        return BRANCHES.describe(datasets)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        return BRANCHES.special_points(datasets)
+
+
+SWITCHES = Switches()
