@@ -91,3 +91,48 @@ def test_a_switch_whose_start_failed_fails_alone(tmp_path: Path) -> None:
     assert ("switches", "two") in failed and ("switches", "four") in failed
     assert "was not computed" in next(f.error for f in result.failures if f.name == "four")
     assert read_output(tmp_path / "o" / "branches.nc").datasets["N1"].sizes["point"] > 2
+
+
+MULTI = SCENE.split("[[switches]]")[0] + """
+[[simulations]]
+name = "settled"
+omega = 1.8
+periods = 200
+perturbation = 1e-3
+
+[[multi_impact]]
+name = "seen"
+start = "settled"
+N = 2
+p = 2
+bounds = [1.6, 1.9]
+ds_max = 0.02
+"""
+
+
+def test_a_simulated_attractor_becomes_a_branch(tmp_path: Path) -> None:
+    result = run_scene(write(tmp_path, MULTI), output=tmp_path / "o")
+    assert result.ok, result.failures
+    seen = read_output(tmp_path / "o" / "multi_impact.nc").datasets["seen"]
+    assert int(seen.attrs["N"]) == 2 and seen.sizes["impact"] == 2
+    # the same motion as the 2-2 branch born at the PD of N1: its PD at 1.80053912289
+    pd = [float(v) for v, label in zip(seen["special_omega"].values,
+                                       seen["special_label"].values, strict=True)
+          if str(label) == "PD"]
+    assert any(abs(v - 1.80053912289) < 1e-10 for v in pd), pd
+
+
+@pytest.mark.parametrize(("change", "key"), [
+    ('start = "N1"', "multi_impact[0].start"),           # not a simulation
+    ('bounds = [1.0, 1.5]', "multi_impact[0].bounds"),    # omega = 1.8 outside
+    ('omega = 1.7', "multi_impact[0].omega"),
+])
+def test_multi_impact_errors_name_the_key(tmp_path: Path, change: str, key: str) -> None:
+    name = change.split(" =")[0]
+    lines = [ln for ln in MULTI.split("[[multi_impact]]")[1].splitlines()
+             if not ln.startswith(f"{name} =")]
+    text = MULTI.split("[[multi_impact]]")[0] + "[[multi_impact]]\n" + change + "\n" + \
+        "\n".join(lines)
+    with pytest.raises(SceneError) as info:
+        load_scene(write(tmp_path, text))
+    assert info.value.key == key

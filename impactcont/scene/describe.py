@@ -65,7 +65,7 @@ def describe_file(path: str | os.PathLike) -> str:
         lines += ["", *section.describe_datasets(out.datasets)]
         points = section.find_points(out.datasets)
         if points:
-            table = (special_points_table if out.kind in ("branches", "switches")
+            table = (special_points_table if out.kind in ("branches", "switches", "multi_impact")
                      else points_table)
             lines += ["", "special points:", *table(points)]
     return "\n".join(lines) + "\n"

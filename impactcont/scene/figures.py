@@ -303,7 +303,8 @@ def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 #: The plot kind ``impactcont plot`` draws by default for each kind of file.
 DEFAULT_KINDS = {"branches": "bifurcation_diagram", "orbits": "orbits",
                  "simulations": "simulation", "robust": "robust", "curves": "curves",
-                 "maps": "map", "switches": "bifurcation_diagram"}
+                 "maps": "map", "switches": "bifurcation_diagram",
+                 "multi_impact": "bifurcation_diagram"}
 
 
 class _Options:

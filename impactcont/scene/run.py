@@ -226,7 +226,7 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
                 result.files.append(path)
                 result.datasets[key] = datasets
                 points = section.find_points(datasets)
-                if key in ("branches", "switches"):
+                if key in ("branches", "switches", "multi_impact"):
                     result.special_points += points
                 elif points:
                     result.other_points[key] = points
@@ -282,7 +282,7 @@ def summary_markdown(result: RunResult) -> str:
         lines += [scene.description.strip(), ""]
     lines += [f"Computed from {source} by impactcont {__version__} on {stamp} in "
               f"{result.elapsed:.1f} s.", ""]
-    if scene.entries("branches") or scene.entries("switches"):
+    if any(scene.entries(k) for k in ("branches", "switches", "multi_impact")):
         lines += ["## Special points", ""]
         if result.special_points:
             lines += ["SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "

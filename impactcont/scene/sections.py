@@ -38,6 +38,7 @@ __all__ = [
     "BRANCHES",
     "CURVES",
     "MAPS",
+    "MULTI_IMPACT",
     "ORBITS",
     "ROBUST",
     "SIMULATIONS",
@@ -92,7 +93,7 @@ ORBITS = _section("orbits", OrbitSpec, f"{_TASKS}:ORBITS", "Periodic orbits", (
 BRANCHES = _section("branches", BranchSpec, f"{_TASKS}:BRANCHES", "Branches", (
     ("bifurcation_diagram", True, "draw_bifurcation",
      "branches (and switches) against their parameter, styled by stability, special points "
-     "marked", {"also": ("switches",)}),
+     "marked", {"also": ("switches", "multi_impact")}),
     ("multipliers", False, "draw_multipliers",
      "multiplier moduli along one branch and the multipliers in the complex plane")),
     problem=PeriodicBranchProblem)
@@ -113,6 +114,11 @@ SWITCHES = _section("switches", switches.SwitchSpec, f"{_SWITCH}:SWITCHES",
                     "Branches switched at special points", (
     ("switch_multipliers", False, "draw_multipliers",
      "multiplier moduli along one switched branch and the multipliers in the complex plane"),),
+    problem=MultiImpactBranchProblem)
+MULTI_IMPACT = _section("multi_impact", switches.MultiImpactSpec, f"{_SWITCH}:MULTI_IMPACT",
+                        "Branches of N-p motions from simulations", (
+    ("multi_impact_multipliers", False, "draw_multipliers",
+     "multiplier moduli along one N-p branch and the multipliers in the complex plane"),),
     problem=MultiImpactBranchProblem)
 
 

@@ -1,4 +1,4 @@
-"""Scene section ``[[switches]]``: the branch of N-p motions born at a special point.
+"""Scene sections of N-p motions: ``[[switches]]`` and ``[[multi_impact]]``.
 
 A switch starts from a computed branch (a ``[[branches]]`` entry, or an
 earlier ``[[switches]]`` entry, so that entries chain into a cascade) at one of
@@ -7,6 +7,12 @@ its period-doubling points (:func:`impactcont.period_doubling_switch`: the
 with one more impact), and follows the new branch with
 :func:`impactcont.multi_impact_continuation`'s options. The dataset is an N-p
 branch (``docs/multi_impact.md``), described and drawn as the branches are.
+
+A ``[[multi_impact]]`` entry continues the branch of N-p motions (p impacts
+in N forcing periods) through the motion that Newton finds
+(:func:`impactcont.multi_impact_orbit`) from the last p + 1 impacts of a
+computed ``[[simulations]]`` entry: an attractor seen by brute force becomes
+a branch (:func:`impactcont.multi_impact_continuation`).
 """
 
 from __future__ import annotations
@@ -17,13 +23,16 @@ import time
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
+import numpy as np
 import xarray as xr
 
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import multi_impact_continuation
-from impactcont.scene.entries import EntrySpec, continuation_entry
+from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.problems import CONTINUABLE_PARAMETERS
+from impactcont.scene.entries import PARAMETER_RANGES, EntrySpec, continuation_entry
 from impactcont.scene.keys import (
     ENTRY_NAME,
     Integer,
@@ -37,7 +46,7 @@ from impactcont.scene.keys import (
 from impactcont.scene.tasks import BRANCHES
 from impactcont.switching import grazing_switch, period_doubling_switch
 
-__all__ = ["SWITCHES", "SwitchSpec"]
+__all__ = ["MULTI_IMPACT", "SWITCHES", "MultiImpactSpec", "SwitchSpec"]
 
 log = logging.getLogger(__name__)
 
@@ -123,3 +132,82 @@ class Switches:
 
 
 SWITCHES = Switches()
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpactEntry")):
+    """``[[multi_impact]]``: the branch of N-p motions through an attractor a simulation found."""
+
+    section: ClassVar[str] = "multi_impact"
+
+    start: str = declare(ENTRY_NAME, "the [[simulations]] entry whose last p + 1 impacts "
+                         "seed Newton", required=True)
+    N: int = declare(Integer(1, 1000), "forcing periods of the motion", required=True)
+    p: int = declare(Integer(1, 1000), "impacts per motion", required=True)
+    parameter: str = declare(String(tuple(CONTINUABLE_PARAMETERS)), "the continued parameter",
+                             "omega")
+    bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
+    detect: tuple[str, ...] = declare(StringList(tuple(LABELS)),
+                                      "special points to detect ([] for none)", tuple(LABELS))
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        super().check(where, osc)
+        if self.changes:
+            raise where.key(next(iter(self.changes))).error(
+                "the motion is found at the oscillator of the simulation it starts from",
+                "leave out the oscillator parameters")
+        admissible = PARAMETER_RANGES[self.parameter]
+        if not all(admissible.inside(v) for v in self.bounds):
+            raise where.key("bounds").error(f"{list(self.bounds)} leaves the admissible values "
+                                            f"of {self.parameter}", admissible.allowed)
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        simulations = {e.name: e for e in sections.get("simulations", ())}
+        if self.start not in simulations:
+            raise where.key("start").error(f"{self.start!r} is not a [[simulations]] entry",
+                                           ", ".join(simulations) or "a [[simulations]] entry")
+        value = getattr(simulations[self.start].oscillator, self.parameter)
+        lo, hi = self.bounds
+        if value is None or not lo <= value <= hi:
+            raise where.key("bounds").error(
+                f"{list(self.bounds)} does not contain {self.parameter} = {value!r} of "
+                f"simulation {self.start!r}", f"bounds around {self.parameter} = {value!r}")
+
+
+class MultiImpact:
+    """``[[multi_impact]]``: :func:`~impactcont.multi_impact_orbit` from a simulation, then
+    :func:`~impactcont.multi_impact_continuation`."""
+
+    def compute(self, entry: MultiImpactSpec, context: Any) -> xr.Dataset:
+        t0 = time.perf_counter()
+        sim = context.datasets.get("simulations", {}).get(entry.start)
+        if sim is None:
+            raise ImpactcontError(f"multi_impact {entry.name}: its start {entry.start!r} was "
+                                  f"not computed (it failed)")
+        p = entry.p
+        if sim.sizes["impact"] < p + 1:
+            raise NoPeriodicMotionError(
+                f"multi_impact {entry.name}: simulation {entry.start!r} recorded "
+                f"{sim.sizes['impact']} impacts; at least p + 1 = {p + 1} are needed")
+        times = np.asarray(sim["impact_times"].values)[-(p + 1):]
+        guess = {"delta": float(sim["impact_phases"].values[-(p + 1)]),
+                 "flight_times": np.diff(times),
+                 "states": np.asarray(sim["impact_states"].values)[-(p + 1):-1]}
+        osc = ImpactOscillator.from_json(sim.attrs["oscillator"])
+        orbit = multi_impact_orbit(osc, entry.N, p, guess)
+        ds = multi_impact_continuation(orbit, entry.parameter, entry.bounds,
+                                       detect=entry.detect, **entry.continuation_options())
+        ds.attrs.update(name=entry.name, start=entry.start)
+        log.info("multi_impact %s: %d-%d motion from simulation %s (%s, %s), %d points, %d "
+                 "special point(s) (%.1f s)", entry.name, entry.N, p, entry.start,
+                 "physical" if orbit.physical else "not physical",
+                 "stable" if orbit.stable else "unstable", ds.sizes["point"],
+                 ds.sizes["special"], time.perf_counter() - t0)
+        return ds
+
+    describe = Switches.describe
+    special_points = Switches.special_points
+
+
+MULTI_IMPACT = MultiImpact()
