@@ -128,3 +128,21 @@ def test_unknown_problem_names_the_available_ones(fake_entry_points) -> None:
     with pytest.raises(ParameterError, match=r"did you mean 'orbits'\?.*available: "
                                              r"orbits, branches, .*, multi_impact, good"):
         get_problem("orbit")
+
+
+def test_a_driver_that_fails_fails_its_entry_only(tmp_path: Path) -> None:
+    from _fake_plugins import TallyEntry
+
+    from impactcont.problems.plugins import register_problem, unregister_problem
+
+    register_problem("odd", SceneSection("odd", TallyEntry, lambda entry, context: {"k": 1},
+                                         "Odd"))
+    try:
+        text = OSCILLATOR + '[[odd]]\nupto = 2\n\n[[orbits]]\nname = "o"\n'
+        result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+    finally:
+        unregister_problem("odd")
+    assert [(f.section, f.name) for f in result.failures] == [("odd", "odd1")]
+    assert "returned dict" in result.failures[0].error and "xarray.Dataset" in \
+        result.failures[0].error
+    assert (tmp_path / "o" / "orbits.nc").exists() and not (tmp_path / "o" / "odd.nc").exists()

@@ -6,20 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _scene_data import write
+from _scene_data import OSCILLATOR, write
 
 import impactcont as ic
 from impactcont.scene import SceneError, load_scene, read_output, run_scene
 
-SCENE = """
-[oscillator]
-K = [[1.0, -1.0], [-1.0, 2.0]]
-F = [1.0, 0.0]
-R = 0.6
-eta = 0.1
-b = 0.0
-omega = 1.75
-
+SCENE = OSCILLATOR.replace("b = 0.6", "b = 0.0").replace("omega = 1.0", "omega = 1.75") + """
 [[branches]]
 name = "N1"
 bounds = [1.6, 1.9]

@@ -56,6 +56,8 @@ __all__ = [
     "SimulationSpec",
     "continuation_entry",
     "defaults_of",
+    "detect_key",
+    "refuse_changes",
     "spec_dict",
 ]
 
@@ -225,6 +227,19 @@ class EntrySpec:
         return spec_dict(self)
 
 
+def detect_key() -> Any:
+    """The ``detect`` key of a continuing entry: the special points to detect (default all)."""
+    return declare(StringList(tuple(LABELS)), "special points to detect ([] for none)",
+                   tuple(LABELS))
+
+
+def refuse_changes(entry: EntrySpec, where: Where, why: str) -> None:
+    """Raise when an entry that takes another entry's oscillator changes the oscillator."""
+    if entry.changes:
+        raise where.key(next(iter(entry.changes))).error(why,
+                                                         "leave out the oscillator parameters")
+
+
 def _check_damping_parameter(name: str, osc: ImpactOscillator, where: Where) -> None:
     if name == "eta" and osc.eta is None:
         raise where.error("'eta' needs the paper's damping C = 2 eta K; the oscillator uses "
@@ -324,8 +339,7 @@ class BranchSpec(continuation_entry(continuation, "BranchEntry")):
     bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
     start: float | None = declare(Real(), "parameter value to start from (inside bounds)")
     root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to start on")
-    detect: tuple[str, ...] = declare(StringList(tuple(LABELS)),
-                                      "special points to detect ([] for none)", tuple(LABELS))
+    detect: tuple[str, ...] = detect_key()
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
         super().check(where, osc)

@@ -26,20 +26,24 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
-from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.problems import CONTINUABLE_PARAMETERS
-from impactcont.scene.entries import PARAMETER_RANGES, EntrySpec, continuation_entry
+from impactcont.scene.entries import (
+    PARAMETER_RANGES,
+    EntrySpec,
+    continuation_entry,
+    detect_key,
+    refuse_changes,
+)
 from impactcont.scene.keys import (
     ENTRY_NAME,
     Integer,
     Interval,
     Real,
     String,
-    StringList,
     Where,
     declare,
 )
@@ -70,15 +74,11 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
     epsilon: float | None = declare(
         Real(0.0, 1.0, low_open=True, high_open=True),
         "first step away from the point along the new branch (default 1e-3 at PD, 1e-4 at GR)")
-    detect: tuple[str, ...] = declare(StringList(tuple(LABELS)),
-                                      "special points to detect ([] for none)", tuple(LABELS))
+    detect: tuple[str, ...] = detect_key()
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
         super().check(where, osc)
-        if self.changes:
-            raise where.key(next(iter(self.changes))).error(
-                "a switch uses the oscillator of the branch it starts from",
-                "leave out the oscillator parameters")
+        refuse_changes(self, where, "a switch uses the oscillator of the branch it starts from")
 
     def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
                     ) -> None:
@@ -147,15 +147,12 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
     parameter: str = declare(String(tuple(CONTINUABLE_PARAMETERS)), "the continued parameter",
                              "omega")
     bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
-    detect: tuple[str, ...] = declare(StringList(tuple(LABELS)),
-                                      "special points to detect ([] for none)", tuple(LABELS))
+    detect: tuple[str, ...] = detect_key()
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
         super().check(where, osc)
-        if self.changes:
-            raise where.key(next(iter(self.changes))).error(
-                "the motion is found at the oscillator of the simulation it starts from",
-                "leave out the oscillator parameters")
+        refuse_changes(self, where,
+                       "the motion is found at the oscillator of the simulation it starts from")
         admissible = PARAMETER_RANGES[self.parameter]
         if not all(admissible.inside(v) for v in self.bounds):
             raise where.key("bounds").error(f"{list(self.bounds)} leaves the admissible values "

@@ -31,6 +31,7 @@ from impactcont.scene.entries import (
     EntrySpec,
     continuation_entry,
     defaults_of,
+    refuse_changes,
 )
 from impactcont.scene.keys import (
     ENTRY_NAME,
@@ -160,10 +161,7 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
         if self.N is not None and self.N != branch.N:
             raise where.key("N").error(f"{self.N} differs from N = {branch.N} of branch "
                                        f"{self.start!r}", f"{branch.N}, or leave it out")
-        if self.changes:
-            raise where.key(next(iter(self.changes))).error(
-                "a curve started from a branch uses the branch's oscillator",
-                "leave out the oscillator parameters")
+        refuse_changes(self, where, "a curve started from a branch uses the branch's oscillator")
 
 
 def _span(v: np.ndarray) -> str:
