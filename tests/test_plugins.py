@@ -35,7 +35,7 @@ def test_builtin_problems_without_plugins(fake_entry_points) -> None:
                for p in problems.values())
     assert list(scene_sections()) == BUILTINS  # the scene format reads the same registry
     branches = problems["branches"]
-    assert branches.section.problem is PeriodicBranchProblem
+    assert load_target(branches.section.problem) is PeriodicBranchProblem
     assert "one-parameter branch" in branches.summary
     assert {k.section for k in plot_kinds().values()} == set(BUILTINS)  # each draws its own
 
@@ -89,7 +89,7 @@ def test_broken_plugin_warns_and_the_rest_works(fake_entry_points, tmp_path: Pat
     assert any("'missing_attr'" in m and "AttributeError" in m for m in messages)
     assert any("'reserved'" in m and "'plots' is reserved" in m for m in messages)
     assert list(problems) == [*BUILTINS, "good", "tally"]
-    assert get_problem("branches").problem is PeriodicBranchProblem
+    assert load_target(get_problem("branches").problem) is PeriodicBranchProblem
     result = run_scene(write(tmp_path, OSCILLATOR + "[[tally]]\nupto = 2\n"),
                        output=tmp_path / "o")
     assert result.ok

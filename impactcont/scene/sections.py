@@ -22,8 +22,6 @@ from typing import Any
 
 import xarray as xr
 
-from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
-from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.problems.plugins import (
     PlotKind,
     SceneSection,
@@ -72,8 +70,11 @@ class RunContext:
     datasets: Mapping[str, Mapping[str, xr.Dataset]]
 
 
+_NP_PROBLEM = "impactcont.problems.multi_impact_branch:MultiImpactBranchProblem"
+
+
 def _section(key: str, entry: type, handler: str, title: str,
-             plots: tuple[tuple[Any, ...], ...], problem: type | None = None) -> SceneSection:
+             plots: tuple[tuple[Any, ...], ...], problem: str | None = None) -> SceneSection:
     """A built-in section whose driver, description and points are a handler's methods.
 
     ``handler`` is ``"module:OBJECT"`` (its methods are looked up at each call);
@@ -96,7 +97,7 @@ BRANCHES = _section("branches", BranchSpec, f"{_TASKS}:BRANCHES", "Branches", (
      "marked", {"also": ("switches", "multi_impact")}),
     ("multipliers", False, "draw_multipliers",
      "multiplier moduli along one branch and the multipliers in the complex plane")),
-    problem=PeriodicBranchProblem)
+    problem="impactcont.problems.periodic_branch:PeriodicBranchProblem")
 ROBUST = _section("robust", RobustSpec, f"{_TASKS}:ROBUST", "Robust stability", (
     ("robust", True, "draw_robust", "Gamma of eq. (28) as a heat map, with epsilon and "
      "epsilon0"),))
@@ -114,12 +115,12 @@ SWITCHES = _section("switches", switches.SwitchSpec, f"{_SWITCH}:SWITCHES",
                     "Branches switched at special points", (
     ("switch_multipliers", False, "draw_multipliers",
      "multiplier moduli along one switched branch and the multipliers in the complex plane"),),
-    problem=MultiImpactBranchProblem)
+    problem=_NP_PROBLEM)
 MULTI_IMPACT = _section("multi_impact", switches.MultiImpactSpec, f"{_SWITCH}:MULTI_IMPACT",
                         "Branches of N-p motions from simulations", (
     ("multi_impact_multipliers", False, "draw_multipliers",
      "multiplier moduli along one N-p branch and the multipliers in the complex plane"),),
-    problem=MultiImpactBranchProblem)
+    problem=_NP_PROBLEM)
 
 
 def register_section(section: SceneSection, *, replace: bool = False) -> None:
