@@ -31,7 +31,6 @@ from impactcont.scene.keys import Integer, declare
 from impactcont.scene.schema import EntrySpec, scene_keys
 
 ROOT = Path(__file__).resolve().parents[1]
-STUDY_SCENES = sorted(ROOT.glob("studies/*/scene.toml"))
 
 
 def scene_error(tmp_path: Path, text: str, settings: tuple[str, ...] = ()) -> SceneError:
@@ -42,22 +41,8 @@ def scene_error(tmp_path: Path, text: str, settings: tuple[str, ...] = ()) -> Sc
 
 
 # ---------------------------------------------------------------------------------------------
-# The scenes of the studies are valid
+# The scenes of the studies (every study has one: tests/test_study_scenes.py)
 # ---------------------------------------------------------------------------------------------
-def test_every_study_has_a_scene() -> None:
-    names = {p.parent.name for p in STUDY_SCENES}
-    assert {"main_job", "paper_example", "bifurcation_diagram"} <= names
-
-
-@pytest.mark.parametrize("path", STUDY_SCENES, ids=lambda p: p.parent.name)
-def test_study_scenes_validate(path: Path) -> None:
-    scene = load_scene(path)
-    assert any(scene.sections.values())
-    assert scene.output_dir.is_absolute()
-    # output.directory is relative to the scene file, not to the working directory
-    assert scene.output_dir.is_relative_to(path.parent.resolve())
-
-
 def test_main_job_asks_for_the_readme_main_job() -> None:
     scene = load_scene(ROOT / "studies/main_job/scene.toml")
     branches = scene.entries("branches")

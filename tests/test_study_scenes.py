@@ -34,7 +34,8 @@ def test_study_scene_validates(study: Path, tmp_path: Path,
                                capsys: pytest.CaptureFixture[str]) -> None:
     scene = load_scene(study / "scene.toml")
     assert any(scene.sections.values()) and scene.plots
-    assert scene.output_dir.is_relative_to(study.resolve())  # beside the study, by default
+    # output.directory is relative to the scene file, not to the working directory
+    assert scene.output_dir.is_absolute() and scene.output_dir.is_relative_to(study.resolve())
     assert main(["run", str(study / "scene.toml"), "--check", "--output",
                  str(tmp_path / "out")]) == EXIT_OK
     assert "valid scene" in capsys.readouterr().out
