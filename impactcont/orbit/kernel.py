@@ -421,24 +421,26 @@ def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
     ``z'(T^-)`` (forced part harmonic, ``-omega^2 y_p``; free part by the mode's
     equation: no cancellation of ``f cos(delta)`` against ``w^2 y`` for stiff modes).
     """
-    n = modal.shape[1]
+    pieces = np.empty((4, modal.shape[1]))
+    _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces)
+    return pieces[0], pieces[1], pieces[2], pieces[3]
+
+
+@_jit
+def _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces):
+    """:func:`jacobian_pieces` as the rows of ``pieces`` (4, n), no allocation."""
     kappa = 1.0 + R
     cd, sd = math.cos(delta), math.sin(delta)
-    e_y = np.empty(n)
-    e_v = np.empty(n)
-    v_pre = np.empty(n)
-    acc = np.empty(n)
-    for i in range(n):
+    for i in range(modal.shape[1]):
         gm, bt = modal[0, i], modal[1, i]
         py = -gm * sd + bt * cd
         pv = omega * (-bt * sd - gm * cd)
-        e_y[i] = (1.0 - modal[2, i]) * py - modal[3, i] * pv
-        e_v[i] = -modal[4, i] * py + (1.0 - modal[5, i]) * pv
+        pieces[0, i] = (1.0 - modal[2, i]) * py - modal[3, i] * pv
+        pieces[1, i] = -modal[4, i] * py + (1.0 - modal[5, i]) * pv
         free_v = modal[7, i] + ui0[i]
-        v_pre[i] = omega * (bt * cd - gm * sd) + kappa * sigma * free_v
-        acc[i] = (-omega * omega * (gm * cd + bt * sd)
-                  + kappa * sigma * (-w[i] * w[i] * modal[6, i] - 2.0 * a[i] * free_v))
-    return e_y, e_v, v_pre, acc
+        pieces[2, i] = omega * (bt * cd - gm * sd) + kappa * sigma * free_v
+        pieces[3, i] = (-omega * omega * (gm * cd + bt * sd)
+                        + kappa * sigma * (-w[i] * w[i] * modal[6, i] - 2.0 * a[i] * free_v))
 
 
 @_jit
@@ -451,6 +453,13 @@ def transition(modal, u, ui):
     """
     n = modal.shape[1]
     tr = np.empty((2 * n, 2 * n))
+    _transition_into(modal, u, ui, tr)
+    return tr
+
+
+@_jit
+def _transition_into(modal, u, ui, tr):
+    n = modal.shape[1]
     for r in range(n):
         for col in range(n):
             s11 = 0.0
@@ -467,27 +476,36 @@ def transition(modal, u, ui):
             tr[r, n + col] = s12
             tr[n + r, col] = s21
             tr[n + r, n + col] = s22
-    return tr
 
 
 @_jit
 def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     """G of eq. (22)-(25) from the transition ``tr = U W(T) U^-1``, O(n^2)."""
+    m = 2 * modal.shape[1]
+    G = np.empty((m, m))
+    h2 = _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma,
+                        np.empty((4, m // 2)), np.empty((2, m)), G)
+    return G, h2
+
+
+@_jit
+def _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx, G):
+    """:func:`assemble_jacobian` into ``G`` with scratch ``pieces`` (4, n), ``dedx`` (2, 2n)."""
     n = modal.shape[1]
     m = 2 * n
-    e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
-    dE = np.empty(m)
-    dX = np.empty(m)
+    _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces)
+    dE = dedx[0]
+    dX = dedx[1]
     for r in range(n):
         sy = 0.0
         sv = 0.0
         xv = 0.0
         xa = 0.0
         for i in range(n):
-            sy += u[r, i] * e_y[i]
-            sv += u[r, i] * e_v[i]
-            xv += u[r, i] * v_pre[i]
-            xa += u[r, i] * acc[i]
+            sy += u[r, i] * pieces[0, i]
+            sv += u[r, i] * pieces[1, i]
+            xv += u[r, i] * pieces[2, i]
+            xa += u[r, i] * pieces[3, i]
         dE[r] = sy
         dE[n + r] = sv
         dX[r] = xv
@@ -497,7 +515,6 @@ def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     dX[n] *= -R
     h2 = dX[0]
     h1 = dE[0]
-    G = np.empty((m, m))
     for r in range(m - 1):
         dr = -R if r + 1 == n else 1.0
         for col in range(m - 1):
@@ -506,7 +523,7 @@ def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     for col in range(m - 1):
         G[m - 1, col] = -omega * tr[0, col + 1] / h2
     G[m - 1, m - 1] = 1.0 - omega * h1 / h2
-    return G, h2
+    return h2
 
 
 @_jit
@@ -520,8 +537,15 @@ def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
 @_jit
 def hessenberg(A):
     """Upper Hessenberg form of A by Householder reflections (similar to A)."""
-    m = A.shape[0]
     H = A.copy()
+    _hessenberg_in_place(H, np.empty(A.shape[0]))
+    return H
+
+
+@_jit
+def _hessenberg_in_place(H, v):
+    """Reduce ``H`` to upper Hessenberg form in place; ``v``: scratch of size m."""
+    m = H.shape[0]
     for k in range(m - 2):
         alpha = 0.0
         for i in range(k + 1, m):
@@ -531,7 +555,6 @@ def hessenberg(A):
             continue
         if H[k + 1, k] > 0.0:
             alpha = -alpha
-        v = np.zeros(m)
         v[k + 1] = H[k + 1, k] - alpha
         for i in range(k + 2, m):
             v[i] = H[i, k]
@@ -556,16 +579,24 @@ def hessenberg(A):
                 H[r, i] -= t * v[i]
         for i in range(k + 2, m):
             H[i, k] = 0.0
-    return H
 
 
 @_jit
 def charpoly(A):
     """Coefficients (ascending, monic) of ``det(lambda I - A)`` via the Hessenberg form."""
     m = A.shape[0]
-    H = hessenberg(A)
-    # p_k(l) = (l - h_kk) p_{k-1} - sum_{i<k} h_ik (prod_{j=i+1..k} h_{j,j-1}) p_{i-1}
     P = np.zeros((m + 1, m + 1))
+    _charpoly_in_place(A.copy(), P, np.empty(m))
+    return P[m].copy()
+
+
+@_jit
+def _charpoly_in_place(H, P, v):
+    """Characteristic polynomial of ``H`` (overwritten) into row m of ``P`` (m+1, m+1)."""
+    m = H.shape[0]
+    _hessenberg_in_place(H, v)
+    # p_k(l) = (l - h_kk) p_{k-1} - sum_{i<k} h_ik (prod_{j=i+1..k} h_{j,j-1}) p_{i-1}
+    P[:, :] = 0.0
     P[0, 0] = 1.0
     for k in range(1, m + 1):
         for j in range(k):
@@ -578,7 +609,6 @@ def charpoly(A):
             if coef != 0.0:
                 for j in range(i):
                     P[k, j] -= coef * P[i - 1, j]
-    return P[m].copy()
 
 
 @_jit
@@ -588,7 +618,12 @@ def schur_stable(p):
     Schur-Cohn: ``p`` of degree m is Schur stable iff ``|p_0| < |p_m|`` and the
     degree ``m - 1`` polynomial ``(p_m p(z) - p_0 p*(z)) / z`` is.
     """
-    c = p.copy()
+    return _schur_stable_in_place(p.copy(), np.empty(p.size))
+
+
+@_jit
+def _schur_stable_in_place(c, new):
+    """:func:`schur_stable` of ``c`` (overwritten); ``new``: scratch of the same size."""
     m = c.size - 1
     while m > 0:
         scale = 0.0
@@ -598,10 +633,10 @@ def schur_stable(p):
             return False
         if abs(c[0]) >= abs(c[m]):
             return False
-        new = np.empty(m)
         for k in range(m):
             new[k] = (c[m] * c[k + 1] - c[0] * c[m - 1 - k]) / (scale * scale)
-        c = new
+        for k in range(m):
+            c[k] = new[k]
         m -= 1
     return True
 
@@ -736,17 +771,22 @@ def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
 
 
 @_jit
-def _polish(order, lo, hi, g_lo, g_hi, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, Gam, B, omega, delta, ks, w, a, u0,
+            dy, dv):
     """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton.
 
-    Started at the secant point of the bracket (one or two Newton steps fewer than
-    its midpoint); a step that would leave the shrinking bracket bisects instead.
+    Returns ``(t, x1, x1', x1'')`` at the root. The start is the root of the cubic
+    Hermite interpolant of the ``order``-th derivative from its values ``g`` and
+    slopes ``dg`` at the ends (the secant point when a slope is not finite), so one
+    or two Newton steps reach rounding level; a step that would leave the shrinking
+    bracket bisects instead. For ``order = 1`` a Newton step whose predicted error
+    (the third derivative over twice the second, times the step squared) is below
+    the tolerance is the last: the values at the root then follow from the Taylor
+    series at the last evaluation (exact to rounding, no further evaluation).
     """
     left, right = lo, hi
     ga = g_lo
-    x = lo + (hi - lo) * (g_lo / (g_lo - g_hi)) if g_lo != g_hi else 0.5 * (lo + hi)
-    if not (lo < x < hi):
-        x = 0.5 * (left + right)
+    x = _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi)
     for _ in range(_MAX_ITER):
         d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
         g = d[order]
@@ -757,16 +797,54 @@ def _polish(order, lo, hi, g_lo, g_hi, Gam, B, omega, delta, ks, w, a, u0, dy, d
         else:
             right = x
         if g == 0.0:
-            return x
+            return x, d[0], d[1], d[2]
         step = g / dg if dg != 0.0 else np.inf
         tol = _XTOL + _RTOL * abs(x)
         xn = x - step
+        if order == 1 and np.isfinite(xn) and left <= xn <= right and (
+                abs(d[3] / (2.0 * dg)) * step * step <= tol):
+            h = -step  # Taylor from the last evaluation: the remainder is O(step^4)
+            return (xn, d[0] + h * (d[1] + h * (0.5 * d[2] + h * d[3] / 6.0)),
+                    d[1] + h * (d[2] + 0.5 * h * d[3]), d[2] + h * d[3])
         if abs(step) <= tol or right - left <= tol:
-            return xn if np.isfinite(xn) else x
+            r = xn if np.isfinite(xn) else x
+            d = _x1_derivs(r, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+            return r, d[0], d[1], d[2]
         if not (np.isfinite(xn) and left <= xn <= right):
             xn = 0.5 * (left + right)
         x = xn
-    return x
+    d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    return x, d[0], d[1], d[2]
+
+
+@_jit
+def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi):
+    """Root in (lo, hi) of the cubic Hermite interpolant of g from its values and slopes
+    at the ends (g of opposite signs there), by three Newton steps from the secant
+    point; the secant point (or the midpoint) when a slope is not finite or a step
+    leaves the interval."""
+    h = hi - lo
+    x = g_lo / (g_lo - g_hi) if g_lo != g_hi else 0.5
+    if not 0.0 < x < 1.0:
+        return 0.5 * (lo + hi)
+    if not (np.isfinite(dg_lo) and np.isfinite(dg_hi)):
+        return lo + h * x
+    m0 = h * dg_lo
+    m1 = h * dg_hi
+    for _ in range(3):
+        x2 = x * x
+        x3 = x2 * x
+        p = ((2 * x3 - 3 * x2 + 1) * g_lo + (x3 - 2 * x2 + x) * m0
+             + (-2 * x3 + 3 * x2) * g_hi + (x3 - x2) * m1)
+        dp = ((6 * x2 - 6 * x) * g_lo + (3 * x2 - 4 * x + 1) * m0
+              + (-6 * x2 + 6 * x) * g_hi + (3 * x2 - 2 * x) * m1)
+        if dp == 0.0:
+            break
+        xn = x - p / dp
+        if not 0.0 < xn < 1.0:
+            break
+        x = xn
+    return lo + h * x
 
 
 @_jit
@@ -774,7 +852,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
-    ``omega times``; ``work``: scratch of shape ``(8, 2 nt)`` (reused across calls).
+    ``omega times``; ``work``: scratch of shape ``(10, 2 nt)`` (reused across calls).
     Each grid cell holds at most one root of ``x1''`` (the grid is built so), hence
     at most two roots of ``x1'``:
 
@@ -802,6 +880,10 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
     c_v = work[5]
     c_ub = work[6]
     c_vh = work[7]
+    c_a = work[8]
+    c_ah = work[9]
+    # first x1, x1', x1'' on the whole grid (a branch-free loop the compiler vectorises:
+    # faster than one pass that classifies each cell as it goes)
     for k in range(nt):
         c = cw[k] * cd - sw[k] * sd
         s = sw[k] * cd + cw[k] * sd
@@ -813,28 +895,31 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
     for k in range(1, nt):
         lo, hi = times[k - 1], times[k]
         v0, v1 = v[k - 1], v[k]
-        if (acc[k - 1] < 0.0) == (acc[k] < 0.0) or (v0 < 0.0) != (v1 < 0.0):
+        a0, a1 = acc[k - 1], acc[k]
+        if (a0 < 0.0) == (a1 < 0.0) or (v0 < 0.0) != (v1 < 0.0):
             if v0 >= 0.0 and v1 < 0.0:  # one root of x1', a maximum
                 c_lo[m] = lo
                 c_hi[m] = hi
                 c_v[m] = v0
                 c_vh[m] = v1
+                c_a[m] = a0
+                c_ah[m] = a1
                 c_ub[m] = x[k - 1] + v0 * (hi - lo)
                 m += 1
             continue
-        # x1'' changes sign and x1' has the same sign at both ends: zero or two roots
-        if (acc[k - 1] < 0.0) and v0 < 0.0:
-            continue  # x1' falls then rises from below 0: no maximum
-        if (acc[k - 1] >= 0.0) and v0 >= 0.0:
-            continue  # x1' rises then falls to >= 0: no maximum
-        tm = _polish(2, lo, hi, acc[k - 1], acc[k], Gam, B, omega, delta, ks, w, a, u0, dy,
-                     dv)
-        xm, vm, _, _ = _x1_derivs(tm, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        # x1'' changes sign, x1' has one sign at both ends: zero or two roots; none when
+        # x1' falls then rises from below 0, or rises then falls to >= 0
+        if (a0 < 0.0) == (v0 < 0.0):
+            continue
+        tm, xm, vm, am = _polish(2, lo, hi, a0, a1, np.inf, np.inf, Gam, B, omega, delta, ks, w,
+                                 a, u0, dy, dv)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
             c_lo[m] = lo
             c_hi[m] = tm
             c_v[m] = v0
             c_vh[m] = vm
+            c_a[m] = a0
+            c_ah[m] = am
             c_ub[m] = x[k - 1] + v0 * (tm - lo)
             m += 1
         elif vm >= 0.0 and v1 < 0.0:  # rises above 0, then falls through it
@@ -842,6 +927,8 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
             c_hi[m] = hi
             c_v[m] = vm
             c_vh[m] = v1
+            c_a[m] = am
+            c_ah[m] = a1
             c_ub[m] = xm + vm * (hi - tm)
             m += 1
     best = -np.inf
@@ -854,19 +941,20 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         if not c_ub[j] > best:
             break
         c_ub[j] = -np.inf  # done
-        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], T, Gam, B, omega,
-                             delta, ks, w, a, u0, dy, dv)
+        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j], T,
+                             Gam, B, omega, delta, ks, w, a, u0, dy, dv)
     return best, best_t
 
 
 @_jit
-def _take(best, best_t, lo, hi, v_lo, v_hi, T, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
-    r = _polish(1, lo, hi, v_lo, v_hi, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, T, Gam, B, omega, delta, ks, w, a, u0,
+          dy, dv):
+    r, xr, _, acc = _polish(1, lo, hi, v_lo, v_hi, a_lo, a_hi, Gam, B, omega, delta, ks, w, a,
+                            u0, dy, dv)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
         return best, best_t
-    xr, _, acc, _ = _x1_derivs(r, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
     if acc < 0.0 and xr > best:
         return xr, r
     return best, best_t
@@ -886,7 +974,7 @@ def flight_tables(w, a, u0, modal, omega, T):
     dv = modal[7].copy()
     free = free_on_grid(times, w, a, u0, dy, dv)
     return (times, capped, free, np.cos(omega * times), np.sin(omega * times), dy, dv,
-            np.empty((8, 2 * times.size)))
+            np.empty((10, 2 * times.size)))
 
 
 # -- a block of the (omega, b) plane ---------------------------------------------------------
@@ -915,12 +1003,23 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
     rho = np.full((nw, nb, 2), np.nan)
     crit = np.full((nw, nb, 2), np.nan + 0j)
     counts = np.zeros((nw, nb), dtype=np.int8)
+    # scratch of G and its stability test, reused for every root (no allocation per root)
+    m = 2 * n
+    tr = np.empty((m, m))
+    G = np.empty((m, m))
+    H = np.empty((m, m))
+    P = np.empty((m + 1, m + 1))
+    pieces = np.empty((4, n))
+    dedx = np.empty((2, m))
+    v = np.empty(m)
+    v_new = np.empty(m + 1)
     for iw in range(nw):
         om = omegas[iw]
         modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, om, N)
         r2[iw] = sc[5] * sc[5] + sc[6] * sc[6]
         conds[iw] = sc[7]
         times, _, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, om, sc[0])
+        _transition_into(modal, u, ui, tr)
         for ib in range(nb):
             count, dl, sg, _, _ = orbit_roots(sc, bs[ib], om, R)
             counts[iw, ib] = count
@@ -933,15 +1032,18 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
                                           w, a, u0, dy, dv, work)
                 gap[iw, ib, idx] = bs[ib] - best
                 gap_t[iw, ib, idx] = best_t
-                G, _ = impact_jacobian(modal, w, a, f, u, ui, om, R, dl[k], sg[k])
+                _assemble_into(tr, modal, w, a, f, u, ui0, om, R, dl[k], sg[k], pieces,
+                               dedx, G)
                 finite = True
-                for r in range(2 * n):
-                    for col in range(2 * n):
+                for r in range(m):
+                    for col in range(m):
+                        H[r, col] = G[r, col]
                         if not np.isfinite(G[r, col]):
                             finite = False
                 if not finite:
                     continue
-                stable[iw, ib, idx] = schur_stable(charpoly(G))
+                _charpoly_in_place(H, P, v)
+                stable[iw, ib, idx] = _schur_stable_in_place(P[m], v_new)
                 if want_rho:
                     mu = multipliers_of(G)
                     j = np.argmax(np.abs(mu))
@@ -978,10 +1080,18 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
     jacobians = np.zeros((2, m, m) if small else (2, 0, 0))
     mults = np.zeros((2, m) if small else (2, 0), dtype=np.complex128)
     for k in range(max(count, 0)):
-        states[k], scales[k] = physical_state(modal, u, omega, R, dl[k], sg[k])
+        # element loops, not slice assignment: numba's broadcasting setitem (with its
+        # error-message formatting) would add seconds to the first compilation
+        state, scales[k] = physical_state(modal, u, omega, R, dl[k], sg[k])
+        for r in range(m):
+            states[k, r] = state[r]
         if small:
-            jacobians[k], _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
-            mults[k] = multipliers(jacobians[k])
+            G, _ = impact_jacobian(modal, w, a, f, u, ui, omega, R, dl[k], sg[k])
+            mu = multipliers(G)
+            for r in range(m):
+                mults[k, r] = mu[r]
+                for col in range(m):
+                    jacobians[k, r, col] = G[r, col]
     if count > 0:
         times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega,
                                                                   sc[0])
@@ -1218,9 +1328,26 @@ def _keep_alive(size):
 @_jit
 def multipliers(G):
     """Eigenvalues of G, largest modulus first (stable order among equal moduli)."""
-    mu = multipliers_of(G)
-    order = np.argsort(-np.abs(mu), kind="mergesort")
-    return mu[order]
+    return by_modulus(multipliers_of(G))
+
+
+@_jit
+def by_modulus(mu):
+    """``mu`` sorted by decreasing modulus, stable among equal moduli (insertion sort:
+    a few entries; numba's mergesort would add seconds to the first compilation)."""
+    out = mu.copy()
+    size = np.abs(out)
+    for i in range(1, out.size):
+        z = out[i]
+        r = size[i]
+        j = i - 1
+        while j >= 0 and size[j] < r:
+            out[j + 1] = out[j]
+            size[j + 1] = size[j]
+            j -= 1
+        out[j + 1] = z
+        size[j + 1] = r
+    return out
 
 
 @_jit

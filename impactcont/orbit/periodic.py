@@ -105,9 +105,23 @@ class PeriodicOrbit:
 
     @functools.cached_property
     def multipliers(self) -> np.ndarray:
-        """Eigenvalues of G, largest modulus first, shape (2n,) complex."""
-        from impactcont.orbit import kernel
+        """Eigenvalues of G, largest modulus first, shape (2n,) complex.
 
+        From ``n >= secular.SECULAR_MIN`` degrees of freedom by the O(n)-per-root
+        secular function of :mod:`impactcont.orbit.secular` (G is not formed); the
+        dense eigenvalues of G where its accuracy guard refuses, and for small systems.
+        """
+        from impactcont.orbit import kernel, secular
+
+        osc = self.oscillator
+        if osc.n >= secular.SECULAR_MIN:
+            w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
+            mu, ok = secular.secular_multipliers(self.modal, w, a, f, u0, ui0, osc.omega,
+                                                 osc.R, self.delta, self.impact_velocity)
+            if ok:
+                return mu
+            log.debug("secular multipliers refused by their guard (n = %d, delta = %.12g); "
+                      "dense eigenvalues of G instead", osc.n, self.delta)
         return kernel.multipliers(self.G)  # NaN when G is not finite
 
     @property

@@ -242,7 +242,15 @@ def branch_and_curve(repeat: int, shooting_time: float) -> tuple[dict, dict]:
 
 
 # -- 6. cost against n -----------------------------------------------------------------------------
+def _matched_distance(mu: np.ndarray, reference: np.ndarray) -> float:
+    """Largest distance from a multiplier of either set to the nearest of the other."""
+    d = np.abs(mu[:, None] - reference[None, :])
+    return float(max(d.min(axis=0).max(), d.min(axis=1).max()))
+
+
 def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
+    from impactcont.orbit import kernel, secular
+
     rng = np.random.default_rng(3)
     rows = []
     for n in sizes:
@@ -257,15 +265,25 @@ def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
         def with_mult():
             return [(o.G, o.spectral_radius, o.multipliers[0]) for o in orbits()]
 
+        def with_dense_mult():  # the path below secular.SECULAR_MIN: eigenvalues of G
+            return [kernel.multipliers(o.G) for o in orbits()]
+
         roots = len(with_mult())  # compiles and computes the modal basis once
+        with_dense_mult()
         A = rng.standard_normal((2 * n, 2 * n))
         G = orbits()[0].G
         row = {"n": n, "roots": roots,
                "orbits": best(orbits, repeat), "orbits_G": best(with_g, repeat),
                "orbits_G_multipliers": best(with_mult, repeat),
+               "orbits_G_dense_multipliers": best(with_dense_mult, repeat),
                "dense_eigvals_2n": best(lambda A=A: np.linalg.eigvals(A), repeat),
                "numpy_eigvals_of_G": best(lambda G=G: np.linalg.eigvals(G), repeat)}
         row["per_orbit_G_multipliers"] = row["orbits_G_multipliers"] / roots
+        # the multipliers reported (secular from SECULAR_MIN on) against LAPACK's of G
+        row["multipliers_vs_dense"] = max(
+            _matched_distance(o.multipliers, kernel.multipliers(o.G))
+            / max(1.0, abs(o.multipliers[0])) for o in orbits())
+        row["secular"] = n >= secular.SECULAR_MIN
         rows.append(row)
         log.info("n=%3d: orbits %.3g ms, +G %.3g ms, +multipliers %.3g ms (%d roots); dense "
                  "eigvals(%d x %d) %.3g ms, of G %.3g ms", n, 1e3 * row["orbits"],
@@ -281,6 +299,7 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
                        ("orbits_G", "+ G"),
                        ("orbits_G_multipliers", "+ multipliers, spectral radius"),
                        ("per_orbit_G_multipliers", "the same per orbit (call / roots)"),
+                       ("orbits_G_dense_multipliers", "+ G, multipliers by LAPACK from G"),
                        ("dense_eigvals_2n", "one np.linalg.eigvals, random 2n x 2n")):
         ax.loglog(n, [1e3 * r[key] for r in rows], marker="o", label=label,
                   ls={"dense_eigvals_2n": "--", "per_orbit_G_multipliers": ":"}.get(key, "-"))
@@ -383,11 +402,16 @@ def table(res: dict[str, Any]) -> str:
     lines += [f"| {w} | {v} | {t} | {'n/a' if ok is None else 'yes' if ok else '**no**'} | {r}"
               f"{'' if ok in (True, None) else '; see Notes'} |" for w, v, t, ok, r in rows]
     lines += ["", "| n | `periodic_orbits` (ms, both roots) | + G | + multipliers, spectral radius "
-              "| that per orbit | one dense `eigvals`, 2n x 2n | numpy `eigvals` of one G |",
-              "|---|---|---|---|---|---|---|"]
+              "| that per orbit | + G and LAPACK multipliers of G | one dense `eigvals`, 2n x 2n "
+              "| numpy `eigvals` of one G | multipliers | max distance to LAPACK's (relative) |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
     lines += ["| {n} | {orbits:.3g} | {orbits_G:.3g} | {orbits_G_multipliers:.3g} | "
-              "{per_orbit_G_multipliers:.3g} | {dense_eigvals_2n:.3g} | {numpy_eigvals_of_G:.3g} |"
-              .format(**{k: v if k == "n" else 1e3 * v for k, v in r.items()})
+              "{per_orbit_G_multipliers:.3g} | {orbits_G_dense_multipliers:.3g} | "
+              "{dense_eigvals_2n:.3g} | {numpy_eigvals_of_G:.3g} | {how} | {distance:.1e} |"
+              .format(**{k: 1e3 * v for k, v in r.items() if isinstance(v, float)
+                         and k != "multipliers_vs_dense"}, n=r["n"],
+                      how="secular" if r["secular"] else "in-kernel QR" if r["n"] <= 8
+                      else "LAPACK", distance=r["multipliers_vs_dense"])
               for r in res["cost_vs_n"]]
     return "\n".join(lines) + "\n"
 
