@@ -50,7 +50,12 @@ from impactcont.scene.keys import (
 from impactcont.scene.tasks import BRANCHES
 from impactcont.switching import grazing_switch, period_doubling_switch
 
-__all__ = ["MULTI_IMPACT", "SWITCHES", "MultiImpactSpec", "SwitchSpec"]
+__all__ = [
+    "MULTI_IMPACT",
+    "SWITCHES",
+    "MultiImpactSpec",
+    "SwitchSpec",
+]
 
 log = logging.getLogger(__name__)
 
