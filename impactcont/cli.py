@@ -7,6 +7,10 @@
     impactcont info FILE.nc
     impactcont list-problems
 
+``run`` computes every section of the scene, the built-in ones and those of
+problem plugins (entry-point group ``impactcont.problems``, see
+``docs/plugins.md``); ``list-problems`` lists them with their scene section.
+
 Also ``python -m impactcont``. Options ``-v`` (info; ``-vv`` debug) and
 ``-q`` (errors only) set the logging level, before or after the command.
 
@@ -132,12 +136,14 @@ def _cmd_list_problems(args: argparse.Namespace) -> int:
     from impactcont.problems.plugins import list_problems
 
     problems = list_problems()
-    width = max(len(n) for n in problems)
-    origin_width = max(len(p.origin) for p in problems.values())
-    for name, info in problems.items():
-        _out(f"{name:<{width}}  {info.origin:<{origin_width}}  {info.target}")
+    rows = [(name, info.origin,
+             f"[[{info.section.key}]]" if info.section is not None else "(no scene section)",
+             info.target) for name, info in problems.items()]
+    widths = [max(len(row[i]) for row in rows) for i in range(3)]
+    for row, info in zip(rows, problems.values(), strict=True):
+        _out("  ".join(f"{c:<{w}}" for c, w in zip(row, widths, strict=False)) + f"  {row[3]}")
         if info.summary and not args.quiet:
-            _out(f"{'':<{width}}  {info.summary}")
+            _out(f"{'':<{widths[0]}}  {info.summary}")
     return EXIT_OK
 
 
@@ -203,9 +209,11 @@ def build_parser() -> argparse.ArgumentParser:
     info.set_defaults(func=_cmd_info)
 
     problems = sub.add_parser("list-problems", parents=[common],
-                              help="list built-in and plugin problems",
-                              description="List the problems: built-in ones and those of "
-                                          "the entry-point group impactcont.problems.")
+                              help="list built-in and plugin problems and their scene sections",
+                              description="List the problems a scene can run: built-in ones "
+                                          "and those of the entry-point group "
+                                          "impactcont.problems, with the scene section "
+                                          "([[key]]) each brings.")
     problems.set_defaults(func=_cmd_list_problems)
     return parser
 

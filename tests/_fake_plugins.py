@@ -2,14 +2,23 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.metadata
 import sys
 import types
 from collections.abc import Callable, Iterator
+from typing import ClassVar
 
+import numpy as np
 import pytest
+import xarray as xr
 
 from impactcont.problems import plugins
+from impactcont.scene.entries import EntrySpec
+from impactcont.scene.keys import Integer, declare
+
+BUILTINS = ["orbits", "branches", "robust", "simulations", "curves", "maps", "switches",
+            "multi_impact"]
 
 
 class GoodProblem:
@@ -19,16 +28,38 @@ class GoodProblem:
     """
 
 
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class TallyEntry(EntrySpec):
+    """``[[tally]]``: count up to a number (a plugin's section)."""
+
+    section: ClassVar[str] = "tally"
+
+    upto: int = declare(Integer(1, 10), "how far to count", required=True)
+
+
+def tally(entry: TallyEntry, context: object) -> xr.Dataset:
+    """The driver of ``[[tally]]``."""
+    return xr.Dataset({"k": ("k", np.arange(entry.upto))}, attrs={"name": entry.name})
+
+
+TALLY = plugins.SceneSection("tally", TallyEntry, tally, "Tallies")
+#: A malformed section: its key is reserved.
+RESERVED = plugins.SceneSection("plots", TallyEntry, tally, "Plots")
+
+
 def fake_entry_points(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., None]]:
     """Fixture body: ``install((name, "module:attr"), ...)`` makes those the group's entry points.
 
     Use in a test module as ``fake_entry_points = pytest.fixture(_fake_plugins.fake_entry_points)``.
 
-    ``tests_fake_plugin:GoodProblem`` is importable; the discovery cache is
-    cleared before and after.
+    ``tests_fake_plugin:GoodProblem``, ``tests_fake_plugin:TALLY`` (a scene
+    section) and ``tests_fake_plugin:RESERVED`` (a malformed one) are
+    importable; the discovery cache is cleared before and after.
     """
     module = types.ModuleType("tests_fake_plugin")
     module.GoodProblem = GoodProblem
+    module.TALLY = TALLY
+    module.RESERVED = RESERVED
     monkeypatch.setitem(sys.modules, "tests_fake_plugin", module)
 
     def install(*pairs: tuple[str, str]) -> None:

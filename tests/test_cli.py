@@ -172,10 +172,14 @@ def test_usage_errors_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
 def test_list_problems_with_plugins(capsys: pytest.CaptureFixture[str],
                                     fake_entry_points) -> None:
     fake_entry_points(("good", "tests_fake_plugin:GoodProblem"),
-                      ("broken", "tests_no_such_module_xyz:Problem"))
+                      ("broken", "tests_no_such_module_xyz:Problem"),
+                      ("tally", "tests_fake_plugin:TALLY"))
     assert main(["list-problems"]) == EXIT_OK
     captured = capsys.readouterr()
-    assert "periodic_n1" in captured.out and "built-in" in captured.out
+    lines = captured.out.splitlines()
+    assert any(line.split()[:3] == ["branches", "built-in", "[[branches]]"] for line in lines)
+    assert any(line.split()[:3] == ["tally", "plugin", "[[tally]]"] for line in lines)
+    assert any(line.startswith("good ") and "(no scene section)" in line for line in lines)
     assert "good" in captured.out and "A problem from a plugin." in captured.out
     assert "broken" not in captured.out
     assert "warning:" in captured.err and "'broken'" in captured.err

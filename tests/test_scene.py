@@ -6,6 +6,7 @@ import dataclasses
 import json
 import re
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ import xarray as xr
 from _scene_data import ORBITS_SCENE, OSCILLATOR, SMALL_SCENE, write
 
 import impactcont as ic
+from impactcont.problems.plugins import list_problems, register_problem, unregister_problem
 from impactcont.scene import (
     SceneError,
     SceneSection,
@@ -29,7 +31,6 @@ from impactcont.scene.keys import Integer, declare
 from impactcont.scene.schema import EntrySpec, scene_keys
 
 ROOT = Path(__file__).resolve().parents[1]
-STUDY_SCENES = sorted(ROOT.glob("studies/*/scene.toml"))
 
 
 def scene_error(tmp_path: Path, text: str, settings: tuple[str, ...] = ()) -> SceneError:
@@ -40,22 +41,8 @@ def scene_error(tmp_path: Path, text: str, settings: tuple[str, ...] = ()) -> Sc
 
 
 # ---------------------------------------------------------------------------------------------
-# The scenes of the studies are valid
+# The scenes of the studies (every study has one: tests/test_study_scenes.py)
 # ---------------------------------------------------------------------------------------------
-def test_every_study_has_a_scene() -> None:
-    names = {p.parent.name for p in STUDY_SCENES}
-    assert {"main_job", "paper_example", "bifurcation_diagram"} <= names
-
-
-@pytest.mark.parametrize("path", STUDY_SCENES, ids=lambda p: p.parent.name)
-def test_study_scenes_validate(path: Path) -> None:
-    scene = load_scene(path)
-    assert any(scene.sections.values())
-    assert scene.output_dir.is_absolute()
-    # output.directory is relative to the scene file, not to the working directory
-    assert scene.output_dir.is_relative_to(path.parent.resolve())
-
-
 def test_main_job_asks_for_the_readme_main_job() -> None:
     scene = load_scene(ROOT / "studies/main_job/scene.toml")
     branches = scene.entries("branches")
@@ -419,14 +406,26 @@ class _CountHandler:
 COUNT_HANDLER = _CountHandler()
 
 
-def test_registered_section_is_validated_and_run(tmp_path: Path,
-                                                 monkeypatch: pytest.MonkeyPatch) -> None:
-    from impactcont.scene import sections
+@pytest.fixture
+def counts_section() -> Iterator[SceneSection]:
+    section = SceneSection("counts", _CountSpec, f"{__name__}:COUNT_HANDLER.compute", "Counts",
+                           describe=COUNT_HANDLER.describe)
+    register_section(section)
+    yield section
+    unregister_problem("counts")
 
-    monkeypatch.setattr(sections, "_SECTIONS", dict(sections._SECTIONS))
-    register_section(SceneSection("counts", _CountSpec, f"{__name__}:COUNT_HANDLER", "Counts"))
+
+def test_registered_section_is_validated_and_run(tmp_path: Path,
+                                                 counts_section: SceneSection) -> None:
     with pytest.raises(ValueError, match="already registered"):
         register_section(SceneSection("counts", _CountSpec, "x:y", "Counts"))
+    with pytest.raises(ValueError, match=r"\[\[branches\]\] is already brought by problem "
+                                         r"'branches'"):
+        register_problem("other", SceneSection("branches", _CountSpec, "x:y", "Other"))
+    for key in ("plots", "Bad-key"):
+        with pytest.raises(ValueError, match=f"section key '{key}' is"):
+            register_problem("other", SceneSection(key, _CountSpec, "x:y", "Other"))
+    assert list_problems()["counts"].origin == "registered"
     err = scene_error(tmp_path, OSCILLATOR + "[[counts]]\nupto = 11\n")
     assert err.key == "counts[0].upto" and err.allowed == "an integer in [1, 10]"
     result = run_scene(write(tmp_path, OSCILLATOR + "[[counts]]\nupto = 3\n"),

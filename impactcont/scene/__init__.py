@@ -4,9 +4,11 @@
 >>> result = run_scene("studies/main_job/scene.toml", output="output/main_job")  # doctest: +SKIP
 
 The format is in ``docs/scenes.md``; :mod:`impactcont.scene.schema` validates
-it, :mod:`impactcont.scene.run` computes it, :mod:`impactcont.scene.sections`
-is the registry of sections and plot kinds, :mod:`impactcont.scene.files`
-reads the NetCDF files back.
+it, :mod:`impactcont.scene.run` computes it, :mod:`impactcont.scene.files`
+reads the NetCDF files back. Sections and plot kinds come from the one
+problem registry, :mod:`impactcont.problems.plugins` (the built-in ones are
+in :mod:`impactcont.scene.sections`; other packages add theirs through the
+entry-point group ``impactcont.problems``, ``docs/plugins.md``).
 """
 
 from __future__ import annotations
@@ -16,15 +18,16 @@ from impactcont.scene.run import RunResult, TaskFailure, run_scene
 from impactcont.scene.schema import Scene, SceneError, apply_settings, load_scene, parse_scene
 from impactcont.scene.sections import (
     PlotKind,
+    RunContext,
     SceneSection,
     plot_kinds,
-    register_plot_kind,
     register_section,
     scene_sections,
 )
 
 __all__ = [
     "PlotKind",
+    "RunContext",
     "RunResult",
     "Scene",
     "SceneError",
@@ -36,7 +39,6 @@ __all__ = [
     "parse_scene",
     "plot_kinds",
     "read_output",
-    "register_plot_kind",
     "register_section",
     "run_scene",
     "scene_sections",

@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 import os
 
+from impactcont.problems.plugins import scene_sections
 from impactcont.scene.files import read_output
-from impactcont.scene.sections import scene_sections
 
 __all__ = ["describe_file"]
 
@@ -62,10 +62,10 @@ def describe_file(path: str | os.PathLike) -> str:
         dims = ", ".join(f"{d}={n}" for d, n in ds.sizes.items())
         lines.append(f"  {name}: {dims}; variables: {', '.join(map(str, ds.data_vars))}")
     if section is not None:
-        handler = section.load_handler()
-        lines += ["", *handler.describe(out.datasets)]
-        points = handler.special_points(out.datasets)
+        lines += ["", *section.describe_datasets(out.datasets)]
+        points = section.find_points(out.datasets)
         if points:
-            table = special_points_table if out.kind == "branches" else points_table
+            table = (special_points_table if out.kind in ("branches", "switches", "multi_impact")
+                     else points_table)
             lines += ["", "special points:", *table(points)]
     return "\n".join(lines) + "\n"

@@ -303,7 +303,8 @@ def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 #: The plot kind ``impactcont plot`` draws by default for each kind of file.
 DEFAULT_KINDS = {"branches": "bifurcation_diagram", "orbits": "orbits",
                  "simulations": "simulation", "robust": "robust", "curves": "curves",
-                 "maps": "map"}
+                 "maps": "map", "switches": "bifurcation_diagram",
+                 "multi_impact": "bifurcation_diagram"}
 
 
 class _Options:
@@ -344,11 +345,11 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
         The file does not exist, or the figure cannot be written where asked
         (checked before drawing; the message names the path).
     """
+    from impactcont.problems.plugins import plot_kinds
     from impactcont.scene.files import read_output
-    from impactcont.scene.sections import plot_kinds
 
     out = read_output(path)
-    kinds = {k: v for k, v in plot_kinds().items() if v.section == out.kind}
+    kinds = {k: v for k, v in plot_kinds().items() if out.kind in v.sections}
     if not kinds:
         raise ValueError(f"no plot kind draws {out.kind!r} files")
     chosen = kind or DEFAULT_KINDS.get(out.kind, next(iter(kinds)))
@@ -359,7 +360,7 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     target = Path(output) if output is not None else out.path.with_suffix(".png")
     check_output_file(target)  # before drawing
     groups: list[tuple[str, dict[str, xr.Dataset]]]
-    if out.kind == "branches" and chosen == "bifurcation_diagram":
+    if chosen == "bifurcation_diagram":
         by_parameter: dict[str, dict[str, xr.Dataset]] = {}
         for name, ds in out.datasets.items():
             by_parameter.setdefault(ds.attrs["parameter"], {})[name] = ds

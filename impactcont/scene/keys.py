@@ -20,6 +20,7 @@ from typing import Any
 from impactcont.errors import ImpactcontError
 
 __all__ = [
+    "ENTRY_NAME",
     "NAME_ALLOWED",
     "NAME_PATTERN",
     "Boolean",
@@ -253,6 +254,10 @@ class StringList(ValueType):
         return out
 
 
+#: The value type of entry and plot names (``name = ...``).
+ENTRY_NAME = String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED)
+
+
 class Names(ValueType):
     """An array of entry names (references to other tables of the scene)."""
 
@@ -263,7 +268,7 @@ class Names(ValueType):
             value = [value]
         if not isinstance(value, list) or not value:
             raise self.fail(value, where, "wrong type or empty")
-        item = String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED)
+        item = ENTRY_NAME
         out = tuple(item.check(v, where.item(i)) for i, v in enumerate(value))
         if len(set(out)) != len(out):
             raise self.fail(value, where, "repeated name")

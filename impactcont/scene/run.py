@@ -29,9 +29,10 @@ from typing import Any
 import xarray as xr
 
 from impactcont.dataset.io import atomic_output, check_output_directory
+from impactcont.problems.plugins import plot_kinds, scene_sections
 from impactcont.scene.files import write_output
 from impactcont.scene.schema import Scene, load_scene
-from impactcont.scene.sections import RunContext, plot_kinds, scene_sections
+from impactcont.scene.sections import RunContext
 from impactcont.threads import limit_blas_threads
 
 __all__ = ["RunResult", "TaskFailure", "run_scene"]
@@ -145,6 +146,14 @@ class _Progress:
                 self.bar.update(1)
 
 
+def _checked(ds: Any, section: str, name: str) -> xr.Dataset:
+    """The driver's result, if it is a dataset (a plugin's driver may return anything)."""
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"the driver of [[{section}]] returned {type(ds).__name__} for entry "
+                        f"{name!r}; allowed: an xarray.Dataset")
+    return ds
+
+
 def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
@@ -197,13 +206,13 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
     with limit_blas_threads(), _Progress(total, progress) as bar:
         for key, entries in used.items():
             section = sections[key]
-            handler = section.load_handler()
             datasets: dict[str, xr.Dataset] = {}
             for entry in entries:
                 with bar.task(f"{key} {entry.name}"):
                     try:
-                        datasets[entry.name] = handler.compute(
-                            entry, RunContext(result.datasets))
+                        context = RunContext({**result.datasets, key: dict(datasets)})
+                        datasets[entry.name] = _checked(section.compute(entry, context), key,
+                                                        entry.name)
                     except Exception as exc:
                         if fail_fast:
                             raise
@@ -216,8 +225,8 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
                                     scene_json=scene_json, scene_file=scene_file)
                 result.files.append(path)
                 result.datasets[key] = datasets
-                points = handler.special_points(datasets)
-                if key == "branches":
+                points = section.find_points(datasets)
+                if key in ("branches", "switches", "multi_impact"):
                     result.special_points += points
                 elif points:
                     result.other_points[key] = points
@@ -226,7 +235,8 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
         for plot in scene.plots:
             with bar.task(f"plot {plot.name}"):
                 kind = kinds[plot.kind]
-                available = result.datasets.get(kind.section, {})
+                available = {name: ds for s in kind.sections
+                             for name, ds in result.datasets.get(s, {}).items()}
                 missing = [n for n in plot.data if n not in available]
                 if missing:
                     result.failures.append(TaskFailure(
@@ -272,7 +282,7 @@ def summary_markdown(result: RunResult) -> str:
         lines += [scene.description.strip(), ""]
     lines += [f"Computed from {source} by impactcont {__version__} on {stamp} in "
               f"{result.elapsed:.1f} s.", ""]
-    if scene.entries("branches"):
+    if any(scene.entries(k) for k in ("branches", "switches", "multi_impact")):
         lines += ["## Special points", ""]
         if result.special_points:
             lines += ["SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "
@@ -289,7 +299,7 @@ def summary_markdown(result: RunResult) -> str:
         lines.append("")
     for key, datasets in result.datasets.items():
         lines += [f"## {sections[key].title}", ""]
-        lines += sections[key].load_handler().describe(datasets)
+        lines += sections[key].describe_datasets(datasets)
         lines.append("")
     if result.failures:
         lines += ["## Failures", ""]

@@ -1,6 +1,6 @@
 """What each built-in scene section computes, as datasets, and how they are described.
 
-One handler per section (see :mod:`impactcont.scene.sections`): ``compute``
+One handler per section (registered by :mod:`impactcont.scene.sections`): ``compute``
 turns one validated entry into an :class:`xarray.Dataset` with the public
 API (:func:`~impactcont.periodic_orbits`, :func:`~impactcont.continuation`,
 :func:`~impactcont.robust_stability`, :func:`~impactcont.simulate`);
@@ -42,11 +42,11 @@ from impactcont.errors import NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import PeriodicOrbit, amplitude_squared, periodic_orbits
 from impactcont.orbit.robust import robust_stability
-from impactcont.scene.schema import BranchSpec, OrbitSpec, RobustSpec, SimulationSpec
+from impactcont.scene.entries import BranchSpec, OrbitSpec, RobustSpec, SimulationSpec
 from impactcont.simulate import simulate
 
-__all__ = ["BRANCHES", "ORBITS", "ROBUST", "SIMULATIONS", "g_labels", "points_table",
-           "special_points_table"]
+__all__ = ["BRANCHES", "ORBITS", "ROBUST", "SIMULATIONS", "g_labels", "markdown_table",
+           "points_table", "special_points_table"]
 
 log = logging.getLogger(__name__)
 
@@ -91,7 +91,8 @@ def _fmt(x: Any, digits: int = 6) -> str:
     return f"{x:.{digits}g}"
 
 
-def _table(header: list[str], rows: list[list[Any]]) -> list[str]:
+def markdown_table(header: list[str], rows: list[list[Any]]) -> list[str]:
+    """Markdown table lines; numbers formatted to 6 significant digits."""
     out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     out += ["| " + " | ".join(c if isinstance(c, str) else _fmt(c) for c in row) + " |"
             for row in rows]
@@ -144,7 +145,7 @@ class Orbits:
                              float(ds["gap_min"][k]), float(ds["spectral_radius"][k]),
                              bool(ds["stable"][k]), bool(ds["physical"][k]),
                              str(ds["reason"].values[k]) or "-"])
-        return _table(["entry", "N", "at", "c^2+s^2", "root", "delta", "impact velocity",
+        return markdown_table(["entry", "N", "at", "c^2+s^2", "root", "delta", "impact velocity",
                        "gap_min",
                        "rho(G)", "stable", "physical", "note"], rows)
 
@@ -252,7 +253,7 @@ class Branches:
                                                                       bool))),
                          int(np.count_nonzero(stable)), int(ds.sizes["special"]),
                          str(options.get("message", "-")).replace("|", "/")])
-        return _table(["branch", "N", "parameter", "range", "points", "physical", "stable",
+        return markdown_table(["branch", "N", "parameter", "range", "points", "physical", "stable",
                        "special points", "stop"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
@@ -312,7 +313,7 @@ def special_points_table(points: list[dict[str, Any]]) -> list[str]:
     rows = [[p["branch"], p["N"], p["label"], f"{p['parameter']} = {_fmt(p['value'], 8)}",
              p["omega"], p["b"], p["delta"], p["rho"], p["physical"], p["status"],
              p["precision"]] for p in points]
-    return _table(["branch", "N", "label", "at", "omega", "b", "delta", "rho(G)",
+    return markdown_table(["branch", "N", "label", "at", "omega", "b", "delta", "rho(G)",
                    "physical", "status", "precision"], rows)
 
 
@@ -373,7 +374,7 @@ class Robust:
             q0 = ", ".join(f"{k} = {_fmt(v)}" for k, v in nominal.items())
             rows.append([name, int(ds.attrs["N"]), box, q0, float(ds["spectral_radius"]),
                          float(ds["epsilon"]), float(ds["epsilon0"]), bool(ds["robust"])])
-        return _table(["entry", "N", "box", "nominal", "rho(G0)", "epsilon", "epsilon0",
+        return markdown_table(["entry", "N", "box", "nominal", "rho(G0)", "epsilon", "epsilon0",
                        "robustly stable"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
@@ -447,7 +448,7 @@ class Simulations:
                          float(ds.attrs["periods"]), int(ds.sizes["impact"]),
                          float(v[-1]) if v.size else math.nan,
                          "yes" if "X" in ds else "no", str(ds.attrs["status"])])
-        return _table(["entry", "at", "start", "periods", "impacts", "last impact velocity",
+        return markdown_table(["entry", "at", "start", "periods", "impacts", "last impact velocity",
                        "trajectory", "status"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
@@ -462,4 +463,4 @@ def points_table(points: list[dict[str, Any]]) -> list[str]:
     if not points:
         return []
     header = list(points[0])
-    return _table(header, [[p.get(k, "-") for k in header] for p in points])
+    return markdown_table(header, [[p.get(k, "-") for k in header] for p in points])

@@ -7,13 +7,12 @@ one-parameter continuation; ``[[maps]]`` evaluates the existence,
 physicality and stability of every N-1 motion on an ``(omega, b)`` grid with
 :func:`impactcont.maps.stability_map`. Both datasets follow
 :mod:`impactcont.dataset.curves` (``docs/two_parameter.md``). The sections are
-registered by :mod:`impactcont.scene.sections` when those modules exist.
+registered by :mod:`impactcont.scene.sections`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import json
 import logging
 import time
@@ -23,11 +22,20 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
+from impactcont.curves import curve
 from impactcont.errors import ImpactcontError
+from impactcont.maps import stability_map
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.scene.entries import (
+    PARAMETER_RANGES,
+    EntrySpec,
+    continuation_entry,
+    defaults_of,
+    refuse_changes,
+)
 from impactcont.scene.keys import (
+    ENTRY_NAME,
     NAME_ALLOWED,
-    NAME_PATTERN,
     Boolean,
     Integer,
     Interval,
@@ -38,7 +46,7 @@ from impactcont.scene.keys import (
     declare,
     show,
 )
-from impactcont.scene.schema import PARAMETER_RANGES, EntrySpec
+from impactcont.scene.tasks import markdown_table
 
 __all__ = ["CURVES", "MAPS", "CurveSpec", "MapSpec", "check_curves_plot"]
 
@@ -47,14 +55,7 @@ log = logging.getLogger(__name__)
 _CURVE_KINDS = ("SN", "PD", "NS", "GR", "ZV")
 
 
-def _defaults(func_path: str) -> dict[str, Any]:
-    module, _, name = func_path.partition(":")
-    func = getattr(__import__(module, fromlist=[name]), name)
-    return {k: p.default for k, p in inspect.signature(func).parameters.items()
-            if p.default is not inspect.Parameter.empty}
-
-
-_CURVE = _defaults("impactcont.curves:curve")
+_CURVE = defaults_of(curve)
 
 
 class _ParameterPair(ValueType):
@@ -90,7 +91,7 @@ class _Start(ValueType):
 
     def check(self, value: Any, where: Where) -> str | dict[str, float]:
         if isinstance(value, str):
-            return String(pattern=NAME_PATTERN, pattern_text=NAME_ALLOWED).check(value, where)
+            return ENTRY_NAME.check(value, where)
         if isinstance(value, dict) and value:
             return {k: Real().check(v, where.key(k)) for k, v in value.items()}
         raise self.fail(value, where, "wrong type")
@@ -108,7 +109,7 @@ class _NList(ValueType):
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
-class CurveSpec(EntrySpec):
+class CurveSpec(continuation_entry(curve, "CurveEntry")):
     """``[[curves]]``: a codim-1 curve of N-1 motions in two parameters."""
 
     section: ClassVar[str] = "curves"
@@ -125,19 +126,11 @@ class CurveSpec(EntrySpec):
         "one-parameter continuation in p1")
     special: int | None = declare(Integer(0), "which special point of the kind on the start")
     root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to start on")
-    ds: float = declare(Real(0.0, low_open=True), "initial arclength step", _CURVE["ds"])
-    ds_min: float = declare(Real(0.0, low_open=True), "smallest step", _CURVE["ds_min"])
-    ds_max: float = declare(Real(0.0, low_open=True), "largest step", _CURVE["ds_max"])
-    newton_tol: float = declare(Real(0.0, low_open=True), "Newton tolerance",
-                                _CURVE["newton_tol"])
-    max_points: int = declare(Integer(2, 10_000_000), "largest number of points per direction",
-                              _CURVE["max_points"])
-    both_directions: bool = declare(Boolean(), "continue both ways from the start",
-                                    _CURVE["both_directions"])
     codim2: bool = declare(Boolean(), "detect and locate codimension-two points",
                            _CURVE["detect_codim2_points"])
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
+        super().check(where, osc)
         if set(self.bounds) != set(self.parameters):
             raise where.key("bounds").error(
                 f"gives {sorted(self.bounds)} for parameters {list(self.parameters)}",
@@ -151,10 +144,6 @@ class CurveSpec(EntrySpec):
                     f"{show(self.start)} " + (f"has unknown {extra}" if extra
                                               else f"lacks {missing}"),
                     f"values of {', '.join(sorted(allowed))} (delta optional)")
-        if not self.ds_min <= self.ds <= self.ds_max:
-            raise where.key("ds").error(
-                f"{self.ds!r} with ds_min = {self.ds_min!r} and ds_max = {self.ds_max!r}",
-                "ds_min <= ds <= ds_max")
 
     def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
                     ) -> None:
@@ -172,10 +161,7 @@ class CurveSpec(EntrySpec):
         if self.N is not None and self.N != branch.N:
             raise where.key("N").error(f"{self.N} differs from N = {branch.N} of branch "
                                        f"{self.start!r}", f"{branch.N}, or leave it out")
-        if self.changes:
-            raise where.key(next(iter(self.changes))).error(
-                "a curve started from a branch uses the branch's oscillator",
-                "leave out the oscillator parameters")
+        refuse_changes(self, where, "a curve started from a branch uses the branch's oscillator")
 
 
 def _span(v: np.ndarray) -> str:
@@ -186,8 +172,6 @@ class Curves:
     """``[[curves]]``: :func:`impactcont.curves.curve`."""
 
     def compute(self, entry: CurveSpec, context: Any = None) -> xr.Dataset:
-        from impactcont.curves import curve
-
         t0 = time.perf_counter()
         osc: ImpactOscillator | None = entry.oscillator
         start: Any = entry.start
@@ -200,9 +184,7 @@ class Curves:
             start, osc, N = branches[start], None, entry.N
         ds = curve(osc, N, entry.kind, start=start, special=entry.special,
                    parameters=entry.parameters, bounds=dict(entry.bounds), root=entry.root,
-                   ds=entry.ds, ds_min=entry.ds_min, ds_max=entry.ds_max,
-                   newton_tol=entry.newton_tol, max_points=entry.max_points,
-                   both_directions=entry.both_directions, detect_codim2_points=entry.codim2)
+                   detect_codim2_points=entry.codim2, **entry.continuation_options())
         ds.attrs["name"] = entry.name
         log.info("curve %s: %s in %s, %d points, %d codim-2 point(s) (%.1f s)", entry.name,
                  entry.kind, "/".join(entry.parameters), ds.sizes["point"],
@@ -210,8 +192,6 @@ class Curves:
         return ds
 
     def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
-        from impactcont.scene.tasks import _table
-
         rows = []
         for name, ds in datasets.items():
             p1, p2 = str(ds.attrs["parameters"]).split(",")
@@ -220,7 +200,7 @@ class Curves:
                          int(ds.sizes["point"]), _span(x), _span(y),
                          int(ds.sizes.get("codim2", 0)),
                          str(ds.attrs.get("end_status", "-")).replace("|", "/")])
-        return _table(["curve", "kind", "N", "parameters", "points", "p1 range", "p2 range",
+        return markdown_table(["curve", "kind", "N", "parameters", "points", "p1 range", "p2 range",
                        "codim-2 points", "end"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
@@ -271,8 +251,6 @@ class Maps:
     """``[[maps]]``: :func:`impactcont.maps.stability_map`."""
 
     def compute(self, entry: MapSpec, context: Any = None) -> xr.Dataset:
-        from impactcont.maps import stability_map
-
         t0 = time.perf_counter()
         ds = stability_map(entry.oscillator, N=list(entry.N),
                            omega=np.linspace(*entry.omega_range, entry.omega_points),
@@ -284,8 +262,6 @@ class Maps:
         return ds
 
     def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
-        from impactcont.scene.tasks import _table
-
         rows = []
         for name, ds in datasets.items():
             w, b = np.asarray(ds["omega"].values), np.asarray(ds["b"].values)
@@ -295,7 +271,7 @@ class Maps:
                 rows.append([name, int(N), f"[{w.min():.6g}, {w.max():.6g}] x {w.size}",
                              f"[{b.min():.6g}, {b.max():.6g}] x {b.size}",
                              f"{100 * exists.mean():.1f}%", f"{100 * stable.mean():.1f}%"])
-        return _table(["map", "N", "omega grid", "b grid", "motion exists",
+        return markdown_table(["map", "N", "omega grid", "b grid", "motion exists",
                        "stable physical motion"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:

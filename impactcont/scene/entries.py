@@ -1,0 +1,479 @@
+"""The entries of the built-in scene sections: one dataclass per table, validated.
+
+A scene section (``[[branches]]``, ...) is an array of tables; each table is
+validated into a frozen dataclass, a subclass of :class:`EntrySpec`, whose
+keys are declared once as fields made by :func:`~impactcont.scene.keys.declare`.
+This module holds the base class, the ``[oscillator]`` table, the keys every
+continuation entry shares (:func:`continuation_entry`) and the entries of
+``[[orbits]]``, ``[[branches]]``, ``[[robust]]`` and ``[[simulations]]``.
+A problem of another package subclasses :class:`EntrySpec` the same way
+(``docs/plugins.md``). The scene as a whole is in :mod:`impactcont.scene.schema`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import inspect
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from impactcont.branch import continuation
+from impactcont.detection import LABELS
+from impactcont.errors import ImpactcontError
+from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.orbit.robust import robust_stability
+from impactcont.problems import CONTINUABLE_PARAMETERS
+from impactcont.scene.keys import (
+    ENTRY_NAME,
+    Boolean,
+    Integer,
+    Interval,
+    Real,
+    RealArray,
+    String,
+    StringList,
+    ValueType,
+    Where,
+    declare,
+    read_table,
+    scene_keys,
+    show,
+)
+from impactcont.simulate import simulate
+
+__all__ = [
+    "CONTINUATION_KEYS",
+    "PARAMETER_RANGES",
+    "BranchSpec",
+    "EntrySpec",
+    "OrbitSpec",
+    "OscillatorSpec",
+    "RobustSpec",
+    "SimulationSpec",
+    "continuation_entry",
+    "defaults_of",
+    "detect_key",
+    "refuse_changes",
+    "spec_dict",
+]
+
+
+def _value_to_toml(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return [_value_to_toml(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _value_to_toml(v) for k, v in value.items()}
+    return value
+
+
+def spec_dict(spec: Any) -> dict[str, Any]:
+    """The scene keys of a spec with their values, ``None`` left out (TOML has no null)."""
+    return {name: _value_to_toml(getattr(spec, name)) for name in scene_keys(type(spec))
+            if getattr(spec, name) is not None}
+
+
+# ---------------------------------------------------------------------------------------------
+# The oscillator
+# ---------------------------------------------------------------------------------------------
+_OMEGA = Real(0.0, low_open=True)
+_NONNEGATIVE = Real(0.0)
+_RESTITUTION = Real(0.0, 1.0)
+#: Admissible values of each scalar model parameter.
+PARAMETER_RANGES: dict[str, Real] = {"omega": _OMEGA, "b": Real(), "R": _RESTITUTION,
+                                     "eta": _NONNEGATIVE, "alpha": _NONNEGATIVE,
+                                     "beta": _NONNEGATIVE}
+
+
+def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
+    """The argument a library error message starts with, if it is one of ``keys``."""
+    first = re.split(r"[\s,;:]", message.strip(), maxsplit=1)[0]
+    return first if first in keys else None
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class OscillatorSpec:
+    """``[oscillator]``: the machine of eq. (1)-(4).
+
+    Give the stiffness as ``K`` (a full symmetric matrix) or ``springs`` (the
+    chain of eq. 2), the mass as ``M`` or ``masses`` (default: unit masses),
+    and the damping as ``eta`` (``C = 2 eta K``) or ``alpha``/``beta``
+    (``C = alpha M + beta K``); none means undamped.
+    """
+
+    M: tuple | None = declare(RealArray(2), "mass matrix (symmetric positive definite)")
+    K: tuple | None = declare(RealArray(2), "stiffness matrix (symmetric positive definite)")
+    masses: tuple | None = declare(RealArray(1, positive=True), "chain masses m_1..m_n (eq. 2)")
+    springs: tuple | None = declare(RealArray(1, positive=True), "chain springs k_1..k_n (eq. 2)")
+    F: tuple = declare(RealArray(1), "forcing amplitude vector, length n", required=True)
+    R: float = declare(_RESTITUTION, "coefficient of restitution (eq. 4)", required=True)
+    b: float = declare(Real(), "gap: mass 1 meets the stop at x1 = b (eq. 3)", required=True)
+    omega: float = declare(_OMEGA, "forcing frequency", required=True)
+    eta: float | None = declare(_NONNEGATIVE, "damping C = 2 eta K (the paper's)")
+    alpha: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
+    beta: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
+
+    @classmethod
+    def parse(cls, raw: Any, where: Where) -> OscillatorSpec:
+        values = read_table(cls, raw, where)
+        for a, b in (("M", "masses"), ("K", "springs")):
+            if a in values and b in values:
+                raise where.key(b).error(f"give either {a} or {b}, not both",
+                                         f"{a} (a matrix) or {b} (the chain of eq. 2)")
+        if "K" not in values and "springs" not in values:
+            raise where.key("K").error("the stiffness is missing",
+                                       "K (a matrix) or springs (the chain of eq. 2)")
+        if "eta" in values and ("alpha" in values or "beta" in values):
+            key = "alpha" if "alpha" in values else "beta"
+            raise where.key(key).error("give either eta or alpha/beta, not both",
+                                       "eta (C = 2 eta K) or alpha, beta (C = alpha M + beta K)")
+        spec = cls(**values)
+        try:
+            spec.build()
+        except (ImpactcontError, ValueError, TypeError) as exc:
+            key = _library_error_key(str(exc), scene_keys(cls))
+            raise (where.key(key) if key else where).error(str(exc)) from None
+        return spec
+
+    def build(self) -> ImpactOscillator:
+        """The :class:`~impactcont.ImpactOscillator` this table describes."""
+        damping = {k: getattr(self, k) for k in ("eta", "alpha", "beta")
+                   if getattr(self, k) is not None}
+        params = {"F": list(self.F), "R": self.R, "b": self.b, "omega": self.omega, **damping}
+        K = (chain_stiffness(list(self.springs)) if self.springs is not None
+             else np.array(self.K, dtype=float))
+        if self.M is not None:
+            M = np.array(self.M, dtype=float)
+        elif self.masses is not None:
+            M = np.diag(np.array(self.masses, dtype=float))
+        else:
+            M = np.eye(K.shape[0])
+        return ImpactOscillator(M=M, K=K, **params)
+
+
+# ---------------------------------------------------------------------------------------------
+# Entries of the sections
+# ---------------------------------------------------------------------------------------------
+def defaults_of(func: Callable[..., Any]) -> dict[str, Any]:
+    """Keyword defaults of a library function, so a scene never restates them."""
+    return {name: p.default for name, p in inspect.signature(func).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class EntrySpec:
+    """Base of one table of a section (``[[branches]]``, ...).
+
+    Every entry has a ``name`` (unique in the scene; default
+    ``<section><number>``) and may change the oscillator's parameters for
+    itself: ``F``, ``R``, ``b``, ``omega``, ``eta``, ``alpha``, ``beta``.
+    Subclasses add their keys and override :meth:`check` for the rules that
+    involve several keys or the oscillator.
+    """
+
+    section: ClassVar[str] = ""
+
+    name: str = declare(ENTRY_NAME,
+                     "entry name, unique in the scene (default <section><number>)", "")
+    F: tuple | None = declare(RealArray(1), "forcing vector for this entry")
+    R: float | None = declare(_RESTITUTION, "restitution for this entry")
+    b: float | None = declare(Real(), "gap for this entry")
+    omega: float | None = declare(_OMEGA, "forcing frequency for this entry")
+    eta: float | None = declare(_NONNEGATIVE, "damping eta for this entry")
+    alpha: float | None = declare(_NONNEGATIVE, "Rayleigh alpha for this entry")
+    beta: float | None = declare(_NONNEGATIVE, "Rayleigh beta for this entry")
+
+    #: The oscillator of this entry (the scene's with this entry's changes); set by parsing.
+    oscillator: ImpactOscillator | None = dataclasses.field(default=None, repr=False,
+                                                            compare=False)
+
+    @property
+    def changes(self) -> dict[str, Any]:
+        """The oscillator parameters this entry changes."""
+        out = {k: getattr(self, k) for k in ("F", "R", "b", "omega", "eta", "alpha", "beta")
+               if getattr(self, k) is not None}
+        if "F" in out:
+            out["F"] = list(out["F"])
+        return out
+
+    @classmethod
+    def parse(cls, raw: Any, where: Where, base: ImpactOscillator, index: int, *,
+              section: str | None = None) -> EntrySpec:
+        """Validate one table (``index`` in its section ``section``, default ``cls.section``)."""
+        values = read_table(cls, raw, where)
+        values.setdefault("name", f"{section or cls.section}{index + 1}")
+        spec = cls(**values)
+        try:
+            osc = base.replace(**spec.changes)
+        except (ImpactcontError, ValueError, TypeError) as exc:
+            key = _library_error_key(str(exc), spec.changes)
+            raise (where.key(key) if key else where).error(str(exc)) from None
+        spec = dataclasses.replace(spec, oscillator=osc)
+        spec.check(where, osc)
+        return spec
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        """Rules involving several keys or the oscillator; raise ``where.error(...)``."""
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        """Rules involving other entries of the scene (references by name)."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The entry as a TOML table (defaults filled in)."""
+        return spec_dict(self)
+
+
+def detect_key() -> Any:
+    """The ``detect`` key of a continuing entry: the special points to detect (default all)."""
+    return declare(StringList(tuple(LABELS)), "special points to detect ([] for none)",
+                   tuple(LABELS))
+
+
+def refuse_changes(entry: EntrySpec, where: Where, why: str) -> None:
+    """Raise when an entry that takes another entry's oscillator changes the oscillator."""
+    if entry.changes:
+        raise where.key(next(iter(entry.changes))).error(why,
+                                                         "leave out the oscillator parameters")
+
+
+def _check_damping_parameter(name: str, osc: ImpactOscillator, where: Where) -> None:
+    if name == "eta" and osc.eta is None:
+        raise where.error("'eta' needs the paper's damping C = 2 eta K; the oscillator uses "
+                          "alpha/beta", "alpha, beta (the damping the oscillator uses)")
+    if name in ("alpha", "beta") and osc.eta is not None:
+        raise where.error(f"{name!r} needs Rayleigh damping; the oscillator uses eta",
+                          "eta (the damping the oscillator uses)")
+
+
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class OrbitSpec(EntrySpec):
+    """``[[orbits]]``: every root of eq. (15) at one parameter point, with G and its checks."""
+
+    section: ClassVar[str] = "orbits"
+
+    N: int = declare(Integer(1, 1000), "one impact every N forcing periods", 1)
+    which: str = declare(String(("all", "physical", "stable")),
+                      "which roots to keep: all (with their physical flag), only physical "
+                      "ones, or only physical and stable ones", "all")
+
+
+#: The keys every continuing entry has (:func:`continuation_entry`).
+CONTINUATION_KEYS = ("ds", "ds_min", "ds_max", "newton_tol", "max_points", "both_directions")
+
+_POSITIVE = Real(0.0, low_open=True)
+#: Value type, meaning and Python type of each continuation key.
+_CONTINUATION_FIELDS: dict[str, tuple[ValueType, str, type]] = {
+    "ds": (_POSITIVE, "initial arclength step", float),
+    "ds_min": (_POSITIVE, "smallest step", float),
+    "ds_max": (_POSITIVE, "largest step", float),
+    "newton_tol": (_POSITIVE, "Newton tolerance", float),
+    "max_points": (Integer(2, 10_000_000), "largest number of points per direction", int),
+    "both_directions": (Boolean(), "continue both ways from the start", bool),
+}
+
+
+def _check_steps(self: Any, where: Where, osc: ImpactOscillator) -> None:
+    steps = [getattr(self, k, None) for k in ("ds_min", "ds", "ds_max")]
+    known = [v for v in steps if v is not None]
+    if known != sorted(known):
+        shown = ", ".join(f"{k} = {v!r}" for k, v in zip(("ds_min", "ds", "ds_max"), steps,
+                                                          strict=True) if v is not None)
+        raise where.key("ds").error(shown, "ds_min <= ds <= ds_max")
+
+
+def _continuation_options(self: Any) -> dict[str, Any]:
+    """The continuation keys given (or defaulted) as keyword arguments of the driver."""
+    return {k: getattr(self, k) for k in CONTINUATION_KEYS
+            if hasattr(self, k) and getattr(self, k) is not None}
+
+
+def continuation_entry(func: Callable[..., Any], name: str,
+                       keys: Sequence[str] = CONTINUATION_KEYS) -> type[EntrySpec]:
+    """A base entry with continuation keys that take the defaults of ``func``.
+
+    Every continuing section (``[[branches]]``, ``[[curves]]``,
+    ``[[switches]]``, a plugin's) subclasses it, so the keys ``ds``,
+    ``ds_min``, ``ds_max``, ``newton_tol``, ``max_points`` and
+    ``both_directions`` are spelled, checked (``ds_min <= ds <= ds_max``) and
+    passed the same way everywhere, with the defaults of the driver ``func``
+    (a scene never restates them; a key ``func`` defaults to None, or does not
+    have, is left to the driver when the scene omits it).
+    ``entry.continuation_options()`` gives them as keyword arguments.
+
+    Parameters
+    ----------
+    func : callable
+        The driver whose keyword defaults the keys take.
+    name : str
+        The class name (for error messages and the documentation).
+    keys : sequence of str
+        The continuation keys the section has (a subset of ``CONTINUATION_KEYS``).
+    """
+    defaults = defaults_of(func)
+    fields = [(k, _CONTINUATION_FIELDS[k][2] | None,
+               declare(_CONTINUATION_FIELDS[k][0], _CONTINUATION_FIELDS[k][1], defaults.get(k)))
+              for k in keys]
+    return dataclasses.make_dataclass(
+        name, fields, bases=(EntrySpec,), frozen=True, kw_only=True,
+        namespace={"check": _check_steps, "continuation_options": _continuation_options,
+                   "__module__": __name__,
+                   "__doc__": f"Continuation keys {', '.join(keys)} (defaults of "
+                              f"{func.__module__}.{func.__qualname__})."})
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class BranchSpec(continuation_entry(continuation, "BranchEntry")):
+    """``[[branches]]``: a one-parameter branch of N-1 motions with its special points."""
+
+    section: ClassVar[str] = "branches"
+
+    N: int = declare(Integer(1, 1000), "one impact every N forcing periods", 1)
+    parameter: str = declare(String(tuple(CONTINUABLE_PARAMETERS)), "the continued parameter",
+                             "omega")
+    bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
+    start: float | None = declare(Real(), "parameter value to start from (inside bounds)")
+    root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to start on")
+    detect: tuple[str, ...] = detect_key()
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        super().check(where, osc)
+        lo, hi = self.bounds
+        admissible = PARAMETER_RANGES[self.parameter]
+        if not (admissible.inside(lo) and admissible.inside(hi)):
+            raise where.key("bounds").error(
+                f"{show(list(self.bounds))} leaves the admissible values of "
+                f"{self.parameter}", f"bounds inside the range of {self.parameter}: "
+                f"{admissible.allowed}")
+        if self.start is not None and not lo <= self.start <= hi:
+            raise where.key("start").error(f"{self.start!r} is outside bounds "
+                                           f"{show(list(self.bounds))}",
+                                           f"a real number in [{lo:g}, {hi:g}]")
+        _check_damping_parameter(self.parameter, osc, where.key("parameter"))
+
+    def continuation_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`impactcont.continuation` for this branch."""
+        return {"N": self.N, "parameter": self.parameter, "bounds": self.bounds,
+                "start": self.start, "root": self.root, "detect": self.detect,
+                **self.continuation_options()}
+
+
+_VARY_NAME = re.compile(r"^(b|omega|R|eta|alpha|beta|F\[\d+\])$")
+
+
+class _Box(ValueType):
+    """A table ``{name = [lo, hi], ...}`` of uncertain parameters."""
+
+    allowed = ("a table {name = [lo, hi]} with names b, omega, R, eta, alpha, beta or "
+               "\"F[i]\", and lo < hi")
+
+    def check(self, value: Any, where: Where) -> dict[str, tuple[float, float]]:
+        if not isinstance(value, dict) or not value:
+            raise self.fail(value, where, "wrong type or empty")
+        out = {}
+        for name, interval in value.items():
+            if not _VARY_NAME.match(name):
+                close = difflib.get_close_matches(name, list(PARAMETER_RANGES), n=1)
+                hint = f"; did you mean {close[0]!r}?" if close else ""
+                raise where.key(name).error(f"unknown parameter {name!r}{hint}", self.allowed)
+            bound = PARAMETER_RANGES.get(name, Real())
+            out[name] = Interval(bound).check(interval, where.key(name))
+        return out
+
+
+class _Point(ValueType):
+    allowed = "a table {name = value} of real numbers"
+
+    def check(self, value: Any, where: Where) -> dict[str, float]:
+        if not isinstance(value, dict):
+            raise self.fail(value, where, "wrong type")
+        return {k: Real().check(v, where.key(k)) for k, v in value.items()}
+
+
+_ROBUST = defaults_of(robust_stability)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class RobustSpec(EntrySpec):
+    """``[[robust]]``: robust stability of an N-1 motion over a parameter box (eq. 26-29)."""
+
+    section: ClassVar[str] = "robust"
+
+    N: int = declare(Integer(1, 1000), "one impact every N forcing periods", 1)
+    vary: Mapping[str, tuple[float, float]] = declare(
+        _Box(), "the box Q of uncertain parameters", required=True)
+    nominal: Mapping[str, float] | None = declare(
+        _Point(), "q0 inside the box (default its centre)")
+    root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to follow")
+    samples: int = declare(Integer(2, 100_001), "grid points per parameter", _ROBUST["samples"])
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        for name in self.vary:
+            m = re.match(r"^F\[(\d+)\]$", name)
+            if m and int(m.group(1)) >= osc.n:
+                raise where.key("vary").key(name).error(
+                    f"indexes past F (length {osc.n})", f'"F[i]" with 0 <= i < {osc.n}')
+            if not m:
+                _check_damping_parameter(name, osc, where.key("vary").key(name))
+        for name, value in (self.nominal or {}).items():
+            if name not in self.vary:
+                raise where.key("nominal").key(name).error(
+                    "not a parameter of vary", ", ".join(self.vary))
+            lo, hi = self.vary[name]
+            if not lo <= value <= hi:
+                raise where.key("nominal").key(name).error(
+                    f"{value!r} is outside the box", f"a real number in [{lo:g}, {hi:g}]")
+        if self.samples ** len(self.vary) > 1_000_000:
+            raise where.key("samples").error(
+                f"{self.samples} per parameter for {len(self.vary)} parameters is "
+                f"{self.samples ** len(self.vary)} grid points", "at most 1000000 grid points")
+
+
+_SIM = defaults_of(simulate)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class SimulationSpec(EntrySpec):
+    """``[[simulations]]``: the event-driven simulator from a periodic motion or a state."""
+
+    section: ClassVar[str] = "simulations"
+
+    periods: float = declare(Real(0.0, 1e7, low_open=True), "duration in forcing periods",
+                          required=True)
+    start: str = declare(String(("orbit", "state")),
+                      "start on the N-1 motion (orbit) or at a given state and phase", "orbit")
+    N: int = declare(Integer(1, 1000), "with start = orbit: the N of the motion", 1)
+    root: int | None = declare(Integer(choices=(1, -1)), "with start = orbit: which root")
+    state: tuple | None = declare(RealArray(1), "with start = state: [x1..xn, v1..vn] at t = 0")
+    delta: float | None = declare(Real(), "with start = state: forcing phase at t = 0")
+    perturbation: float = declare(Real(0.0), "added to every velocity of the start state", 0.0)
+    trajectory: bool = declare(Boolean(), "store the sampled time history (dense)", False)
+    samples_per_period: int = declare(Integer(2, 100_000), "trajectory samples per period",
+                                   _SIM["samples_per_period"])
+    max_impacts: int = declare(Integer(1), "stop after this many impacts", _SIM["max_impacts"])
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        if self.start == "state":
+            for key in ("state", "delta"):
+                if getattr(self, key) is None:
+                    raise where.key(key).error("required with start = \"state\"",
+                                               "a start state [x1..xn, v1..vn] and its phase"
+                                               " delta")
+            if len(self.state) != 2 * osc.n:
+                raise where.key("state").error(f"has length {len(self.state)}",
+                                               f"an array of 2n = {2 * osc.n} real numbers")
+            if self.state[0] > osc.b:
+                raise where.key("state").error(f"x1 = {self.state[0]!r} is beyond the stop "
+                                               f"b = {osc.b!r}", "x1 <= b")
+        else:
+            for key in ("state", "delta"):
+                if getattr(self, key) is not None:
+                    raise where.key(key).error("only used with start = \"state\"",
+                                               "leave it out, or set start = \"state\"")
+
+

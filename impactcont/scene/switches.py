@@ -1,0 +1,215 @@
+"""Scene sections of N-p motions: ``[[switches]]`` and ``[[multi_impact]]``.
+
+A switch starts from a computed branch (a ``[[branches]]`` entry, or an
+earlier ``[[switches]]`` entry, so that entries chain into a cascade) at one of
+its period-doubling points (:func:`impactcont.period_doubling_switch`: the
+2N-2p motion) or grazing points (:func:`impactcont.grazing_switch`: the motion
+with one more impact), and follows the new branch with
+:func:`impactcont.multi_impact_continuation`'s options. The dataset is an N-p
+branch (``docs/multi_impact.md``), described and drawn as the branches are.
+
+A ``[[multi_impact]]`` entry continues the branch of N-p motions (p impacts
+in N forcing periods) through the motion that Newton finds
+(:func:`impactcont.multi_impact_orbit`) from the last p + 1 impacts of a
+computed ``[[simulations]]`` entry: an attractor seen by brute force becomes
+a branch (:func:`impactcont.multi_impact_continuation`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+import xarray as xr
+
+from impactcont.errors import ImpactcontError, NoPeriodicMotionError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.multi_branch import multi_impact_continuation
+from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.problems import CONTINUABLE_PARAMETERS
+from impactcont.scene.entries import (
+    PARAMETER_RANGES,
+    EntrySpec,
+    continuation_entry,
+    detect_key,
+    refuse_changes,
+)
+from impactcont.scene.keys import (
+    ENTRY_NAME,
+    Integer,
+    Interval,
+    Real,
+    String,
+    Where,
+    declare,
+)
+from impactcont.scene.tasks import BRANCHES
+from impactcont.switching import grazing_switch, period_doubling_switch
+
+__all__ = [
+    "MULTI_IMPACT",
+    "SWITCHES",
+    "MultiImpactSpec",
+    "SwitchSpec",
+]
+
+log = logging.getLogger(__name__)
+
+#: The continuation keys of a switch: it goes one way, away from the special point.
+_KEYS = ("ds", "ds_min", "ds_max", "newton_tol", "max_points")
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _KEYS)):
+    """``[[switches]]``: the branch born at a PD or grazing point of a computed branch."""
+
+    section: ClassVar[str] = "switches"
+
+    start: str = declare(ENTRY_NAME, "the [[branches]] entry, or an earlier [[switches]] "
+                         "entry, to switch from", required=True)
+    at: str = declare(String(("PD", "GR")), "switch at a period-doubling (PD) point or at a "
+                      "grazing (GR) point of the start", "PD")
+    which: int = declare(Integer(0), "which point of that kind on the start (branch order)", 0)
+    bounds: tuple[float, float] | None = declare(
+        Interval(), "range of the parameter (default: the start's)")
+    epsilon: float | None = declare(
+        Real(0.0, 1.0, low_open=True, high_open=True),
+        "first step away from the point along the new branch (default 1e-3 at PD, 1e-4 at GR)")
+    detect: tuple[str, ...] = detect_key()
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        super().check(where, osc)
+        refuse_changes(self, where, "a switch uses the oscillator of the branch it starts from")
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        branches = [e.name for e in sections.get("branches", ())]
+        earlier = []
+        for e in sections.get("switches", ()):
+            if e is self:
+                break
+            earlier.append(e.name)
+        if self.start not in branches + earlier:
+            raise where.key("start").error(
+                f"{self.start!r} is not a [[branches]] entry nor an earlier [[switches]] entry",
+                ", ".join(branches + earlier) or "the name of a [[branches]] entry")
+
+
+class Switches:
+    """``[[switches]]``: :func:`~impactcont.period_doubling_switch` or
+    :func:`~impactcont.grazing_switch`."""
+
+    def compute(self, entry: SwitchSpec, context: Any) -> xr.Dataset:
+        t0 = time.perf_counter()
+        computed = {**context.datasets.get("branches", {}), **context.datasets.get("switches", {})}
+        if entry.start not in computed:
+            raise ImpactcontError(f"switch {entry.name}: its start {entry.start!r} was not "
+                                  f"computed (it failed)")
+        kwargs: dict[str, Any] = {"bounds": entry.bounds, "detect": entry.detect,
+                                  **entry.continuation_options()}
+        if entry.epsilon is not None:
+            kwargs["epsilon"] = entry.epsilon
+        start = computed[entry.start]
+        if entry.at == "PD":
+            ds = period_doubling_switch(start, entry.which, **kwargs)
+        else:
+            ds = grazing_switch(start, entry.which, **kwargs)
+            if ds is None:
+                raise NoPeriodicMotionError(
+                    f"switch {entry.name}: no motion with one more impact is born at GR point "
+                    f"{entry.which} of {entry.start!r} (Newton fails there)")
+        ds.attrs.update(name=entry.name, start=entry.start)
+        log.info("switch %s: %s %d of %s -> N=%d with %d impacts, %d points, %d special "
+                 "point(s) (%.1f s)", entry.name, entry.at, entry.which, entry.start,
+                 int(ds.attrs["N"]), int(ds.attrs.get("impacts", 1)), ds.sizes["point"],
+                 ds.sizes["special"], time.perf_counter() - t0)
+        return ds
+
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        return BRANCHES.describe(datasets)
+
+    def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
+        return BRANCHES.special_points(datasets)
+
+
+SWITCHES = Switches()
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpactEntry")):
+    """``[[multi_impact]]``: the branch of N-p motions through an attractor a simulation found."""
+
+    section: ClassVar[str] = "multi_impact"
+
+    start: str = declare(ENTRY_NAME, "the [[simulations]] entry whose last p + 1 impacts "
+                         "seed Newton", required=True)
+    N: int = declare(Integer(1, 1000), "forcing periods of the motion", required=True)
+    p: int = declare(Integer(1, 1000), "impacts per motion", required=True)
+    parameter: str = declare(String(tuple(CONTINUABLE_PARAMETERS)), "the continued parameter",
+                             "omega")
+    bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
+    detect: tuple[str, ...] = detect_key()
+
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        super().check(where, osc)
+        refuse_changes(self, where,
+                       "the motion is found at the oscillator of the simulation it starts from")
+        admissible = PARAMETER_RANGES[self.parameter]
+        if not all(admissible.inside(v) for v in self.bounds):
+            raise where.key("bounds").error(f"{list(self.bounds)} leaves the admissible values "
+                                            f"of {self.parameter}", admissible.allowed)
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        simulations = {e.name: e for e in sections.get("simulations", ())}
+        if self.start not in simulations:
+            raise where.key("start").error(f"{self.start!r} is not a [[simulations]] entry",
+                                           ", ".join(simulations) or "a [[simulations]] entry")
+        value = getattr(simulations[self.start].oscillator, self.parameter)
+        lo, hi = self.bounds
+        if value is None or not lo <= value <= hi:
+            raise where.key("bounds").error(
+                f"{list(self.bounds)} does not contain {self.parameter} = {value!r} of "
+                f"simulation {self.start!r}", f"bounds around {self.parameter} = {value!r}")
+
+
+class MultiImpact:
+    """``[[multi_impact]]``: :func:`~impactcont.multi_impact_orbit` from a simulation, then
+    :func:`~impactcont.multi_impact_continuation`."""
+
+    def compute(self, entry: MultiImpactSpec, context: Any) -> xr.Dataset:
+        t0 = time.perf_counter()
+        sim = context.datasets.get("simulations", {}).get(entry.start)
+        if sim is None:
+            raise ImpactcontError(f"multi_impact {entry.name}: its start {entry.start!r} was "
+                                  f"not computed (it failed)")
+        p = entry.p
+        if sim.sizes["impact"] < p + 1:
+            raise NoPeriodicMotionError(
+                f"multi_impact {entry.name}: simulation {entry.start!r} recorded "
+                f"{sim.sizes['impact']} impacts; at least p + 1 = {p + 1} are needed")
+        times = np.asarray(sim["impact_times"].values)[-(p + 1):]
+        guess = {"delta": float(sim["impact_phases"].values[-(p + 1)]),
+                 "flight_times": np.diff(times),
+                 "states": np.asarray(sim["impact_states"].values)[-(p + 1):-1]}
+        osc = ImpactOscillator.from_json(sim.attrs["oscillator"])
+        orbit = multi_impact_orbit(osc, entry.N, p, guess)
+        ds = multi_impact_continuation(orbit, entry.parameter, entry.bounds,
+                                       detect=entry.detect, **entry.continuation_options())
+        ds.attrs.update(name=entry.name, start=entry.start)
+        log.info("multi_impact %s: %d-%d motion from simulation %s (%s, %s), %d points, %d "
+                 "special point(s) (%.1f s)", entry.name, entry.N, p, entry.start,
+                 "physical" if orbit.physical else "not physical",
+                 "stable" if orbit.stable else "unstable", ds.sizes["point"],
+                 ds.sizes["special"], time.perf_counter() - t0)
+        return ds
+
+    describe = Switches.describe
+    special_points = Switches.special_points
+
+
+MULTI_IMPACT = MultiImpact()
