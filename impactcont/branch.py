@@ -21,12 +21,13 @@ from scipy.optimize import minimize_scalar
 
 from impactcont.continuation import ContinuationOptions, continue_branch
 from impactcont.dataset import branch_dataset
-from impactcont.detection import LABELS, BranchSample, detect_special_points
+from impactcont.detection import BranchSample, detect_special_points
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS, PARAMETERS, check_labels
 
 __all__ = ["continuation"]
 
@@ -36,22 +37,17 @@ _EXISTENCE_SCAN = 400
 _SAME_ROOT = 0.05  # rad: a seed this close to a computed point of a component lies on it
 
 
-_PARAMETER_RANGES = {"omega": (0.0, math.inf, "> 0"), "b": (-math.inf, math.inf, "finite"),
-                     "R": (0.0, 1.0, "in [0, 1]"), "eta": (0.0, math.inf, ">= 0"),
-                     "alpha": (0.0, math.inf, ">= 0"), "beta": (0.0, math.inf, ">= 0")}
-
-
 def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
     """``(lo, hi)`` inside the parameter's allowed range."""
     try:
         lo, hi = (float(v) for v in bounds)  # type: ignore[union-attr]
     except (TypeError, ValueError):
         raise ParameterError(f"bounds must be two numbers (lo, hi); got {bounds!r}") from None
-    low, high, allowed = _PARAMETER_RANGES[parameter]
+    table = PARAMETERS[parameter]
     # order and finiteness: ContinuationOptions says what is allowed
-    if lo < low or hi > high or (parameter == "omega" and lo <= 0.0):
-        raise ParameterError(f"bounds for {parameter} must lie where {parameter} is {allowed}; "
-                             f"got {bounds!r}")
+    if any(math.isfinite(v) and not table.contains(v) for v in (lo, hi)):
+        raise ParameterError(f"bounds for {parameter} must lie where {parameter} is "
+                             f"{table.allowed}; got {bounds!r}")
     return lo, hi
 
 
@@ -132,7 +128,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     root : {+1, -1}, optional
         Which root of eq. (15) to start on; default the physical (then stable) one.
     detect : sequence of str
-        Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``.
+        Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`.
     components : {"all", "start"}
         ``"all"`` (default): every connected component of the solution set in
         `bounds`, found by a scan of eq. (15) and followed one by one (component 0
@@ -154,9 +150,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         When a component stops at ``max_points`` (naming where it started).
     """
     N = _check_N(N)
-    unknown = sorted(set(detect) - set(LABELS))
-    if unknown:
-        raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
+    detect = check_labels(detect)
     problem = PeriodicBranchProblem(osc, N, parameter)
     lo, hi = _check_bounds(parameter, bounds)
     _refuse_elastic(osc, parameter, lo, hi)

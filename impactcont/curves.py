@@ -46,6 +46,7 @@ from impactcont.problems.codim1 import (
     curve_problem,
 )
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import Label
 
 __all__ = ["curve", "curve_crossings"]
 
@@ -333,7 +334,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     N : int or None
         One impact every N forcing periods; ``None`` takes it from a branch
         dataset given as ``start``.
-    kind : {"SN", "PD", "NS", "GR", "ZV"}
+    kind : Label or str
         Saddle-node, period-doubling, Neimark-Sacker, grazing or
         zero-velocity-impact curve (augmented systems in
         :mod:`impactcont.problems.codim1`).
@@ -371,6 +372,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     NoPeriodicMotionError
         No start point could be found.
     """
+    kind = kind.value if isinstance(kind, Label) else kind
     if kind not in CURVE_KINDS:
         raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
     if osc is None and not isinstance(start, xr.Dataset):

@@ -26,12 +26,13 @@ from impactcont.detection.multi_impact import (
     MultiImpactSpecialPoint,
     detect_multi_impact_points,
 )
-from impactcont.detection.special_points import LABELS, event_function
+from impactcont.detection.special_points import event_function
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["multi_impact_continuation"]
 
@@ -240,21 +241,12 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
                                 extra_attrs=extra_attrs)
 
 
-def _check_labels(detect: Sequence[str]) -> list[str]:
-    if isinstance(detect, str):
-        raise ParameterError(f"detect must be a sequence of labels; got the string {detect!r}")
-    unknown = sorted(set(detect) - set(LABELS))
-    if unknown:
-        raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
-    return list(detect)
-
-
 def follow(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
            extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
     """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``."""
-    labels = _check_labels(detect)
+    labels = check_labels(detect)
     samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                               stop_after_pd=stop_after_pd)
     specials = detect_multi_impact_points(problem, samples, labels)
@@ -289,7 +281,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     bounds : (float, float)
         Range of the parameter; must contain the start.
     detect : sequence of str
-        Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``; GR and
+        Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`; GR and
         ZV use the minimum over the flights and impacts.
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **options
         Continuation options (:class:`impactcont.continuation.ContinuationOptions`);
@@ -309,7 +301,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         Newton fails at the start.
     """
     orbit = _as_multi(start)
-    labels = _check_labels(detect)
+    labels = check_labels(detect)
     problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter)
     lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
     steps = {"ds": ds, "ds_min": ds_min}

@@ -37,7 +37,6 @@ import xarray as xr
 
 from impactcont.dataset.multi import impacts_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
-from impactcont.detection.special_points import LABELS
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.multi_branch import follow, make_options
 from impactcont.orbit.multi_impact import (
@@ -48,6 +47,7 @@ from impactcont.orbit.multi_impact import (
 from impactcont.orbit.periodic import orbit_at_phase
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS
 
 __all__ = [
     "Cascade",

@@ -39,6 +39,7 @@ from impactcont.dataset.schema import (
     validate_branch_dataset,
 )
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.vocabulary import CODIM2_LABELS, LABELS, STATUSES
 
 __all__ = [
     "CODIM2_LABELS",
@@ -56,18 +57,8 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-#: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
-#: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1
-#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi).
-CODIM2_LABELS: tuple[str, ...] = (
-    "SN+ZV", "SN+GR", "SN+PD", "SN+NS",
-    "PD+ZV", "PD+GR", "PD+SN", "PD+NS",
-    "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
-    "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
-    "ZV+SN",
-)
-CODIM2_STATUSES: tuple[str, ...] = ("located", "bracketed")
-CURVE_KINDS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+CODIM2_STATUSES: tuple[str, ...] = STATUSES
+CURVE_KINDS: tuple[str, ...] = LABELS
 
 _LABEL_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_LABELS))}")
 _STATUS_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_STATUSES))}")

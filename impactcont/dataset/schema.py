@@ -33,6 +33,8 @@ import numpy as np
 import xarray as xr
 
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.vocabulary import LABELS, STATUSES
+from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
 
 __all__ = [
     "CONVENTIONS",
@@ -53,10 +55,10 @@ CONVENTIONS = "CF-1.10"
 
 #: Labels of special points: saddle-node, period-doubling, Neimark-Sacker,
 #: grazing and zero-velocity impact.
-SPECIAL_LABELS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+SPECIAL_LABELS: tuple[str, ...] = LABELS
 #: ``located``: refined to ``precision``; ``bracketed``: only known to lie
 #: between two accepted points.
-SPECIAL_STATUSES: tuple[str, ...] = ("located", "bracketed")
+SPECIAL_STATUSES: tuple[str, ...] = STATUSES
 
 # Fixed-width string dtypes so that labels and statuses compare and round-trip
 # through NetCDF with one dtype (xarray reads an empty string array back as <U1).
@@ -81,16 +83,8 @@ class _Var:
 
 #: Parameters a branch may be continued in, with their metadata. ``omega`` and
 #: ``b`` are always stored; another continued parameter adds its own column.
-PARAMETERS: dict[str, _Var] = {
-    "omega": _Var("forcing frequency", "1",
-                  "Nondimensional forcing frequency omega of eq. (1)."),
-    "b": _Var("gap", "1", "Position b of the stop met by mass 1 (eq. 3)."),
-    "R": _Var("coefficient of restitution", "1",
-              "Coefficient of restitution R of the impact law (eq. 4)."),
-    "eta": _Var("damping coefficient", "1", "Damping eta of C = 2 eta K."),
-    "alpha": _Var("Rayleigh mass damping", "1", "alpha of C = alpha M + beta K."),
-    "beta": _Var("Rayleigh stiffness damping", "1", "beta of C = alpha M + beta K."),
-}
+PARAMETERS: dict[str, _Var] = {name: _Var(p.long_name, p.unit, p.description)
+                               for name, p in _PARAMETER_TABLE.items()}
 
 #: Variables on the ``point`` dimension, in the order they are stored.
 POINT_VARIABLES: dict[str, _Var] = {

@@ -37,9 +37,10 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from impactcont.detection.special_points import LABELS, event_function
+from impactcont.detection.special_points import event_function
 from impactcont.errors import ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.vocabulary import LABELS
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
            "tangent_at"]
@@ -84,7 +85,7 @@ class MultiImpactSpecialPoint:
     Attributes
     ----------
     label : str
-        One of ``SN, PD, NS, GR, ZV``.
+        One of :data:`impactcont.vocabulary.LABELS`.
     value : float
         The parameter at the special point.
     u : ndarray, shape (m,)
@@ -202,7 +203,7 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
     samples : sequence of MultiImpactSample
         The accepted points in branch order.
     labels : sequence of str
-        Which special points to look for (subset of ``SN, PD, NS, GR, ZV``).
+        Which special points to look for (subset of :data:`impactcont.vocabulary.LABELS`).
     on_found : callable, optional
         Called with each special point as it is located.
 

@@ -35,13 +35,13 @@ from scipy.optimize import brentq
 
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
+from impactcont.vocabulary import LABELS
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function",
            "pole_free"]
 
 log = logging.getLogger(__name__)
 
-LABELS = ("SN", "PD", "NS", "GR", "ZV")
 _XTOL = 1e-13
 _UNIT_TOL = 1e-7
 

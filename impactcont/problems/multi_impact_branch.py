@@ -26,7 +26,7 @@ from impactcont.orbit.multi_impact import (
     shooting,
 )
 from impactcont.orbit.periodic import _check_N
-from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
+from impactcont.vocabulary import check_parameter
 
 __all__ = ["MultiImpactBranchProblem"]
 
@@ -57,15 +57,7 @@ class MultiImpactBranchProblem:
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
-        if parameter not in CONTINUABLE_PARAMETERS:
-            raise ParameterError(f"parameter must be one of {CONTINUABLE_PARAMETERS}; "
-                                 f"got {parameter!r}")
-        if parameter in ("alpha", "beta") and osc.eta is not None:
-            raise ParameterError(f"parameter={parameter!r} needs Rayleigh damping; the "
-                                 f"oscillator uses eta={osc.eta!r}")
-        if parameter == "eta" and osc.eta is None:
-            raise ParameterError("parameter='eta' needs the paper's damping C = 2 eta K; the "
-                                 "oscillator uses Rayleigh damping (alpha, beta)")
+        check_parameter(osc, parameter)
         self.osc = osc
         self.N = _check_N(N)
         self.p = check_impacts(p)
