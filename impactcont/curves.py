@@ -26,7 +26,13 @@ import numpy as np
 import xarray as xr
 
 from impactcont.branch import continuation
-from impactcont.continuation import ContinuationOptions, iter_points
+from impactcont.continuation import (
+    ContinuationOptions,
+    ContinuationPoint,
+    ContinuationStatus,
+    Stop,
+    follow,
+)
 from impactcont.continuation.stepper import NewtonConvergenceError
 from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
 from impactcont.dataset.schema import oscillator_from_dataset, validate_branch_dataset
@@ -53,12 +59,6 @@ __all__ = ["curve", "curve_crossings"]
 log = logging.getLogger(__name__)
 
 _EVENT_TOL = 1e-12
-
-
-@dataclasses.dataclass
-class _Run:
-    points: list[np.ndarray]
-    status: str
 
 
 # -- arguments ----------------------------------------------------------------------------------
@@ -197,59 +197,66 @@ def _terminal_event(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray
     return None
 
 
-def _follow(problem: CurveProblem, u0: np.ndarray, lam0: float, options: ContinuationOptions,
-            direction: int, p1_bounds: tuple[float, float],
-            ends: list[tuple[str, np.ndarray, float, str]]) -> _Run:
-    """One direction of a curve; ends go to ``ends`` as (label, x, precision, status)."""
-    problem.accept(u0, lam0)
-    run = iter_points(problem, u0, lam0, options, direction)
-    points: list[np.ndarray] = []
-    name = problem.parameters[0]
-    for pt in run:
-        x = pt.state
-        if points:
-            event = _terminal_event(problem, points[-1], x)
-            if event is not None:
-                label, condition = event
-                ga, gb = condition(points[-1]), condition(x)
-                t = ga / (ga - gb) if ga != gb else 0.5
-                try:  # ill-conditioned at a strong resonance: a looser tolerance
-                    # Newton stagnates at the singular end: start it from the secant
-                    # estimate and accept a rounding-size residual (its step is the precision)
-                    xe = problem.solve(points[-1] + t * (x - points[-1]), condition, tol=1e-9,
-                                       residual_tol=1e-9)
-                    status = "located"
-                except NewtonConvergenceError as exc:
-                    # the augmented system is singular at the end itself (a Jordan block at
-                    # a strong resonance): keep the bracket
-                    log.info("%s curve end (%s) bracketed, not located: %s", problem.kind,
-                             label, exc)
-                    # recorded, not appended: an interpolated point is not on the curve
-                    xe, status = points[-1] + t * (x - points[-1]), "bracketed"
-                    ends.append((label, xe, float(np.hypot(x[0] - points[-1][0],
-                                                           x[-1] - points[-1][-1])), status))
-                    return _Run(points, f"curve ends at {label} (bracketed): {name}="
-                                        f"{xe[0]:.10g}, {problem.parameters[1]}={xe[-1]:.10g}")
-                points.append(xe)
-                ends.append((label, xe, max(problem.last_step, 1e-15), status))
-                return _Run(points, f"curve ends at {label}: {name}={xe[0]:.10g}, "
-                                    f"{problem.parameters[1]}={xe[-1]:.10g}")
-            lo, hi = p1_bounds
-            if not lo <= x[0] <= hi:
-                bound = lo if x[0] < lo else hi
-                try:
-                    xe = problem.solve(points[-1] + (bound - points[-1][0])
-                                       / (x[0] - points[-1][0]) * (x - points[-1]),
-                                       lambda y, v=bound: float(y[0] - v),
-                                       np.eye(x.size)[0])
-                except NewtonConvergenceError as exc:
-                    return _Run(points, f"{name} bound {bound:.10g} crossed, point on it not "
-                                        f"found ({exc})")
-                points.append(xe)
-                return _Run(points, f"parameter bound reached: {name} = {bound:.10g}")
-        points.append(x)
-        problem.accept(pt.u, pt.lam)
-    return _Run(points, run.message)
+class _CurveWatch:
+    """The stop rule of one direction of a curve: its ends and the bounds of ``p1``.
+
+    A curve ends at a codim-2 point (GR+ZV on a grazing curve, R1/R2 on a
+    Neimark-Sacker curve), recorded in ``ends`` as ``(label, x, precision,
+    status)``; the located end replaces the last point. ``p1`` is an unknown,
+    so the core does not see its bounds: the point on the bound ends the curve.
+    """
+
+    def __init__(self, problem: CurveProblem, p1_bounds: tuple[float, float],
+                 ends: list[tuple[str, np.ndarray, float, str]]) -> None:
+        self.problem = problem
+        self.p1_bounds = p1_bounds
+        self.ends = ends
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        if previous is None:
+            return None
+        problem, xa, x = self.problem, previous.state, current.state
+        p1, p2 = problem.parameters
+        event = _terminal_event(problem, xa, x)
+        if event is not None:
+            label, condition = event
+            ga, gb = condition(xa), condition(x)
+            t = ga / (ga - gb) if ga != gb else 0.5
+            try:  # ill-conditioned at a strong resonance: a looser tolerance
+                # Newton stagnates at the singular end: start it from the secant
+                # estimate and accept a rounding-size residual (its step is the precision)
+                xe = problem.solve(xa + t * (x - xa), condition, tol=1e-9, residual_tol=1e-9)
+            except NewtonConvergenceError as exc:
+                # the augmented system is singular at the end itself (a Jordan block at
+                # a strong resonance): keep the bracket
+                log.info("%s curve end (%s) bracketed, not located: %s", problem.kind, label, exc)
+                # recorded, not kept: an interpolated point is not on the curve
+                xe = xa + t * (x - xa)
+                self.ends.append((label, xe, float(np.hypot(x[0] - xa[0], x[-1] - xa[-1])),
+                                  "bracketed"))
+                return Stop(ContinuationStatus.CURVE_END, f"at {label} (bracketed): {p1}="
+                            f"{xe[0]:.10g}, {p2}={xe[-1]:.10g}", keep=False)
+            self.ends.append((label, xe, max(problem.last_step, 1e-15), "located"))
+            return Stop(ContinuationStatus.CURVE_END, f"at {label}: {p1}={xe[0]:.10g}, "
+                        f"{p2}={xe[-1]:.10g}", point=_on_curve(current, xe))
+        lo, hi = self.p1_bounds
+        if lo <= x[0] <= hi:
+            return None
+        bound = lo if x[0] < lo else hi
+        try:
+            xe = problem.solve(xa + (bound - xa[0]) / (x[0] - xa[0]) * (x - xa),
+                               lambda y, v=bound: float(y[0] - v), np.eye(x.size)[0])
+        except NewtonConvergenceError as exc:
+            return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} bound {bound:.10g} crossed, "
+                        f"point on it not found ({exc})", keep=False)
+        return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} = {bound:.10g}",
+                    point=_on_curve(current, xe))
+
+
+def _on_curve(point: ContinuationPoint, x: np.ndarray) -> ContinuationPoint:
+    """`point` moved to the extended state ``x = [u, lam]`` (same tangent)."""
+    return dataclasses.replace(point, u=x[:-1].copy(), lam=float(x[-1]))
 
 
 def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
@@ -416,20 +423,14 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)
 
     ends: list[tuple[str, np.ndarray, float, str]] = []
-    forward = _follow(problem, u0.copy(), p2v, opts, +1, box[p1], ends)
-    if not forward.points:
+    result = follow(problem, u0, p2v, dataclasses.replace(opts, direction=1,
+                                                          both_directions=both_directions),
+                    stop=lambda direction: _CurveWatch(problem, box[p1], ends))
+    if result.status is ContinuationStatus.NEWTON_FAILED_AT_START:
         raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "
-                                    f"({forward.status})")
-    runs = [forward]
-    if both_directions:
-        problem.initial_unknowns(p1v, p2v, delta0, u0[2:])
-        backward = _follow(problem, u0.copy(), p2v, opts, -1, box[p1], ends)
-        runs.append(backward)
-        xs = backward.points[::-1] + forward.points[1:]
-    else:
-        xs = forward.points
-    status = "; ".join(f"{d}: {r.status}" for d, r in zip(("forward", "backward"), runs,
-                                                            strict=False))
+                                    f"({result.message})")
+    xs = [np.append(u, lam) for u, lam in zip(result.u, result.lam, strict=True)]
+    status = result.message
     log.info("%s curve: %d points (%s)", kind, len(xs), status)
 
     columns, orbits, tests = _point_columns(problem, xs)

@@ -19,7 +19,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.continuation import ContinuationOptions, ContinuationPoint, iter_points
+from impactcont.continuation import (
+    ContinuationOptions,
+    ContinuationPoint,
+    ContinuationStatus,
+    Stop,
+    follow,
+)
 from impactcont.dataset.multi import multi_impact_dataset
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
@@ -84,59 +90,54 @@ def _asymmetry(orbit: MultiImpactOrbit) -> np.ndarray | None:
                            orbit.flight_times[:h] - orbit.flight_times[h:], dphase])
 
 
-@dataclasses.dataclass
-class _Run:
-    points: list[ContinuationPoint]
-    orbits: list[MultiImpactOrbit]
-    message: str
-    status: str
+class _Watch:
+    """The stop rule of one direction of an N-p branch; keeps the orbit of every kept point.
 
+    Stops when the branch returns to the motion it was born from (the N/2-p/2
+    motion repeated twice, or its mirror image: that point is left out) and,
+    with `stop_after_pd`, that many points after the first sign change of the
+    PD test function.
+    """
 
-def _run(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
-         options: ContinuationOptions, direction: int, stop_after_pd: int | None,
-         on_point: Callable[[MultiImpactOrbit], None] | None) -> _Run:
-    run = iter_points(problem, u0, lam0, options, direction)
-    points: list[ContinuationPoint] = []
-    orbits: list[MultiImpactOrbit] = []
-    remaining: int | None = None
-    status = message = ""
-    reference: np.ndarray | None = None
-    for point in run:
-        orbit = problem.orbit(point.u, point.lam)
+    def __init__(self, problem: MultiImpactBranchProblem, stop_after_pd: int | None,
+                 on_point: Callable[[MultiImpactOrbit], None] | None) -> None:
+        self.problem = problem
+        self.stop_after_pd = stop_after_pd
+        self.on_point = on_point
+        self.orbits: list[MultiImpactOrbit] = []
+        self.reference: np.ndarray | None = None
+        self.remaining: int | None = None
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        problem = self.problem
+        orbit = problem.orbit(current.u, current.lam)
         asym = _asymmetry(orbit)
         if asym is not None:
-            scale = max(1.0, float(np.max(np.abs(orbit.states))))
-            if reference is None and not points and np.max(np.abs(asym)) > _PARENT_TOL * scale:
-                reference = asym
-            elif reference is not None and (float(asym @ reference) <= 0.0 or np.max(
-                    np.abs(asym)) <= _PARENT_TOL * scale):
-                status = "REACHED_PARENT"
-                message = (f"reached the period-doubling of the {problem.N // 2}-"
-                           f"{problem.p // 2} motion it was born from near {problem.parameter}"
-                           f"={point.lam:.10g} (the point there is the parent repeated twice "
-                           "or its mirror image, and is left out)")
-                break
-        points.append(point)
-        orbits.append(orbit)
-        if on_point is not None:
-            on_point(orbit)
-        if remaining is not None:
-            remaining -= 1
-            if remaining <= 0:
-                status = "STOPPED_AFTER_PD"
-                message = f"stopped {stop_after_pd} point(s) after the first period-doubling"
-                break
-        elif stop_after_pd is not None and len(orbits) > 1 and _pd_sign_change(orbits[-2],
-                                                                                orbits[-1]):
-            remaining = stop_after_pd
-            if remaining <= 0:
-                status = "STOPPED_AFTER_PD"
-                message = "stopped at the first period-doubling"
-                break
-    if not status:
-        status = run.status.name if run.status is not None else "UNKNOWN"
-        message = run.message
-    return _Run(points, orbits, message, status)
+            small = np.max(np.abs(asym)) <= _PARENT_TOL * max(1.0, float(np.max(np.abs(
+                orbit.states))))
+            if self.reference is None and not self.orbits and not small:
+                self.reference = asym
+            elif self.reference is not None and (float(asym @ self.reference) <= 0.0 or small):
+                return Stop(ContinuationStatus.REACHED_PARENT,
+                            f"the period-doubling of the {problem.N // 2}-{problem.p // 2} "
+                            f"motion it was born from, near {problem.parameter}="
+                            f"{current.lam:.10g} (the point there is the parent repeated twice "
+                            "or its mirror image, and is left out)", keep=False)
+        self.orbits.append(orbit)
+        if self.on_point is not None:
+            self.on_point(orbit)
+        if self.remaining is not None:
+            self.remaining -= 1
+            if self.remaining <= 0:
+                return Stop(ContinuationStatus.STOPPED_AFTER_EVENT,
+                            f"{self.stop_after_pd} point(s) after the first period-doubling")
+        elif self.stop_after_pd is not None and len(self.orbits) > 1 and _pd_sign_change(
+                self.orbits[-2], self.orbits[-1]):
+            self.remaining = self.stop_after_pd
+            if self.remaining <= 0:
+                return Stop(ContinuationStatus.STOPPED_AFTER_EVENT, "at the first period-doubling")
+        return None
 
 
 def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
@@ -163,26 +164,26 @@ def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
     -------
     samples : list of MultiImpactSample
     statuses : list of str
-        Why each direction stopped.
+        Why each direction stopped (names of
+        :class:`~impactcont.continuation.ContinuationStatus`).
     message : str
     """
-    forward = _run(problem, u0, lam0, options, options.direction, stop_after_pd, on_point)
-    if not forward.points:
-        raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {forward.message}")
-    runs = [forward]
-    if options.both_directions and forward.status != "CLOSED_LOOP":
-        runs.append(_run(problem, u0, lam0, options, -options.direction, stop_after_pd,
-                         on_point))
-    samples = [MultiImpactSample(u=pt.u, lam=pt.lam, tangent=pt.tangent, orbit=o)
-               for pt, o in zip(forward.points, forward.orbits, strict=True)]
-    if len(runs) == 2:
-        back = [MultiImpactSample(u=pt.u, lam=pt.lam, tangent=-pt.tangent, orbit=o)
-                for pt, o in zip(runs[1].points[1:], runs[1].orbits[1:], strict=True)]
-        samples = back[::-1] + samples
-    statuses = [r.status for r in runs]
-    message = "; ".join(f"{'forward' if i == 0 else 'backward'}: {r.message}"
-                        for i, r in enumerate(runs))
-    return samples, statuses, message
+    watches: dict[int, _Watch] = {}
+
+    def watch(direction: int) -> _Watch:
+        watches[direction] = _Watch(problem, stop_after_pd, on_point)
+        return watches[direction]
+
+    result = follow(problem, u0, lam0, options, stop=watch)
+    forward = watches[options.direction].orbits
+    if not forward:
+        raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
+    orbits = forward
+    if -options.direction in watches:
+        orbits = watches[-options.direction].orbits[:0:-1] + forward
+    samples = [MultiImpactSample(u=u, lam=float(lam), tangent=t, orbit=o)
+               for u, lam, t, o in zip(result.u, result.lam, result.tangent, orbits, strict=True)]
+    return samples, [st.name for st in result.statuses], result.message
 
 
 def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[MultiImpactSample],
@@ -241,7 +242,7 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
                                 extra_attrs=extra_attrs)
 
 
-def follow(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
            extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
@@ -311,4 +312,4 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     if not opts.lam_min <= lam0 <= opts.lam_max:
         raise ParameterError(f"bounds {tuple(bounds)} must contain the start {parameter}="
                              f"{lam0!r} of the orbit")
-    return follow(problem, orbit.unknowns, lam0, opts, detect=labels)
+    return run_branch(problem, orbit.unknowns, lam0, opts, detect=labels)

@@ -38,7 +38,7 @@ import xarray as xr
 from impactcont.dataset.multi import impacts_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.errors import NoPeriodicMotionError, ParameterError
-from impactcont.multi_branch import follow, make_options
+from impactcont.multi_branch import make_options, run_branch
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     initial_unknowns,
@@ -289,7 +289,7 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
     if not lo <= lam1 <= hi:
         raise ParameterError(f"bounds ({lo}, {hi}) must contain the switched point "
                              f"{parameter}={lam1!r}")
-    return follow(problem, u1, lam1, opts, detect=detect, stop_after_pd=stop_after_pd,
+    return run_branch(problem, u1, lam1, opts, detect=detect, stop_after_pd=stop_after_pd,
                   record={"switch": info}, extra_attrs=info)
 
 
@@ -550,5 +550,5 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
         raise ParameterError(f"bounds ({lo}, {hi}) must contain the grazing point "
                              f"{parameter}={lam1!r}")
     opts = make_options((lo, hi), direction=direction, both_directions=False, **options)
-    return follow(problem, u1, lam1, opts, detect=detect, record={"switch": info},
+    return run_branch(problem, u1, lam1, opts, detect=detect, record={"switch": info},
                   extra_attrs=info)

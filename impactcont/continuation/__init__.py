@@ -10,8 +10,10 @@ from impactcont.continuation.driver import (
     ContinuationResult,
     ContinuationStatus,
     continue_branch,
+    follow,
     iter_points,
 )
+from impactcont.continuation.events import Stop, StopRule
 from impactcont.continuation.options import ContinuationOptionError, ContinuationOptions
 from impactcont.continuation.point import ContinuationPoint
 from impactcont.continuation.problem import Problem, ProblemOutputError
@@ -35,6 +37,9 @@ __all__ = [
     "Problem",
     "ProblemOutputError",
     "StepSizeBelowMinimumError",
+    "Stop",
+    "StopRule",
     "continue_branch",
+    "follow",
     "iter_points",
 ]

@@ -1,13 +1,16 @@
-"""Continuation loop: run the stepper, stop on bounds, loops and failures.
+"""Continuation loop: run the stepper, stop on bounds, loops, failures and the driver's rules.
 
-:func:`continue_branch` computes a whole branch. :func:`iter_points` runs one
-direction lazily and yields every accepted point, for callers (such as a
-bifurcation-detection layer) that watch the stream of points.
+:func:`follow` computes a whole branch or curve (both directions joined); every
+driver of impactcont runs on it. :func:`iter_points` runs one direction lazily
+and yields every accepted point, for callers that watch the stream of points.
+
+The problem may provide an ``accept(u, lam)`` hook: the core calls it with the
+start guess before each direction and with every accepted point, before the
+next step (problems with borders or reference vectors renew them there).
 """
 
 from __future__ import annotations
 
-import enum
 import logging
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -15,6 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from impactcont.continuation.events import (
+    ContinuationStatus,
+    Stop,
+    StopRule,
+    StopRuleFactory,
+)
 from impactcont.continuation.options import ContinuationOptions
 from impactcont.continuation.point import ContinuationPoint
 from impactcont.continuation.problem import FloatArray, Problem
@@ -30,6 +39,7 @@ __all__ = [
     "ContinuationResult",
     "ContinuationStatus",
     "continue_branch",
+    "follow",
     "iter_points",
 ]
 
@@ -41,14 +51,11 @@ LOOP_AWAY_DISTANCE = 3.0
 """The branch must first have gone this many steps ``ds`` away from the start."""
 
 
-class ContinuationStatus(enum.Enum):
-    """Why a continuation run stopped; the values are readable messages."""
-
-    BOUNDS_REACHED = "parameter bound reached"
-    MAX_POINTS_REACHED = "maximum number of points reached"
-    STEP_BELOW_MINIMUM = "step size fell below ds_min"
-    CLOSED_LOOP = "closed loop detected"
-    NEWTON_FAILED_AT_START = "Newton failed at the start point"
+def _accept(problem: Problem, u: FloatArray, lam: float) -> None:
+    """Call the problem's optional ``accept`` hook."""
+    accept = getattr(problem, "accept", None)
+    if accept is not None:
+        accept(u, lam)
 
 
 class BranchRun:
@@ -71,6 +78,9 @@ class BranchRun:
     direction : int, optional
         Sign of ``dlam`` at the start, ``+1`` or ``-1``; defaults to
         ``options.direction``.
+    stop : StopRule, optional
+        The driver's rule, shown every accepted point (the start with
+        ``previous=None``) before it is yielded.
     """
 
     def __init__(
@@ -80,6 +90,7 @@ class BranchRun:
         lam0: float,
         options: ContinuationOptions,
         direction: int | None = None,
+        stop: StopRule | None = None,
     ) -> None:
         self.u0, self.lam0 = _validated_start(u0, lam0, options)
         self.problem = problem
@@ -87,6 +98,7 @@ class BranchRun:
         self.direction = options.direction if direction is None else direction
         if self.direction not in (1, -1):
             raise ParameterError(f"direction = {direction!r} is invalid; it must be +1 or -1")
+        self.stop = stop
         self.status: ContinuationStatus | None = None
         self.message = "not run yet"
         self._started = False
@@ -102,14 +114,30 @@ class BranchRun:
         self.message = f"{status.value}: {detail}"
         logger.info("continuation (direction %+d) stopped, %s", self.direction, self.message)
 
+    def _ruled(self, previous: ContinuationPoint | None, current: ContinuationPoint
+               ) -> tuple[list[ContinuationPoint], Stop | None]:
+        """The points to yield for `current` and the stop rule's verdict on it."""
+        stop = None if self.stop is None else self.stop(previous, current)
+        if stop is None:
+            return [current], None
+        if not stop.keep:
+            return [], stop
+        return [stop.point if stop.point is not None else current], stop
+
     def _run(self) -> Iterator[ContinuationPoint]:
+        _accept(self.problem, self.u0, self.lam0)
         stepper = PalcStepper(self.problem, self.options, self.direction)
         try:
             start = stepper.init(self.u0, self.lam0)
         except NewtonConvergenceError as error:
             self._finish(ContinuationStatus.NEWTON_FAILED_AT_START, str(error))
             return
-        yield start
+        kept, stop = self._ruled(None, start)
+        yield from kept
+        if stop is not None:
+            self._finish(stop.status, stop.detail)
+            return
+        _accept(self.problem, start.u, start.lam)
         farthest_from_start = 0.0
         previous = start
         while True:
@@ -128,7 +156,12 @@ class BranchRun:
             if bound is not None:
                 yield from self._land_on_bound(stepper, previous, current, bound)
                 return
-            yield current
+            kept, stop = self._ruled(previous, current)
+            yield from kept
+            if stop is not None:
+                self._finish(stop.status, stop.detail)
+                return
+            _accept(self.problem, current.u, current.lam)
             if self._closes_loop(stepper, start, previous, current, farthest_from_start):
                 self._finish(
                     ContinuationStatus.CLOSED_LOOP,
@@ -159,8 +192,9 @@ class BranchRun:
     ) -> Iterator[ContinuationPoint]:
         """Yield the point exactly on `bound` (if new) and finish the run."""
         detail = f"lam = {bound:.10g}"
+        landed: ContinuationPoint | None = None
         if current.lam == bound:
-            yield current
+            landed = current
         elif previous.lam != bound:
             try:
                 landed = stepper.land_on_parameter(previous, current, bound)
@@ -170,8 +204,12 @@ class BranchRun:
                     f"lam = {bound:.10g} crossed, but the point on it was not found ({error}); "
                     f"last point at lam = {previous.lam:.10g}"
                 )
-            else:
-                yield landed
+        if landed is not None:
+            kept, stop = self._ruled(previous, landed)
+            yield from kept
+            if stop is not None:
+                self._finish(stop.status, stop.detail)
+                return
         self._finish(ContinuationStatus.BOUNDS_REACHED, detail)
 
     @staticmethod
@@ -309,14 +347,22 @@ class ContinuationResult:
         return int(self.lam.shape[0])
 
 
-def continue_branch(
+def follow(
     problem: Problem,
     u0: FloatArray | Sequence[float],
     lam0: float,
     options: ContinuationOptions,
     on_point: Callable[[ContinuationPoint], None] | None = None,
+    *,
+    stop: StopRuleFactory | None = None,
 ) -> ContinuationResult:
     """Compute a branch of ``F(u, lam) = 0`` by pseudo-arclength continuation.
+
+    Every branch and curve of impactcont is computed here: both directions
+    from the start, joined into one ordered branch; bounds, ``max_points``,
+    closed loops (modulo the problem's ``periods``) and the driver's stop
+    rules end a direction. The problem's optional ``accept`` hook is called
+    with the start guess and every accepted point.
 
     Parameters
     ----------
@@ -333,6 +379,9 @@ def continue_branch(
         computed: the run in ``options.direction`` first (start point with
         ``index == 0``), then, with ``both_directions``, the opposite run,
         which starts again with the start point (``index == 0``).
+    stop : callable, optional
+        Called with the direction (``+1``, ``-1``) at the start of each run;
+        returns that run's :class:`~impactcont.continuation.events.StopRule`.
 
     Returns
     -------
@@ -345,15 +394,23 @@ def continue_branch(
         If `u0` is not a non-empty 1-D finite array or `lam0` is outside
         ``options.bounds``.
     """
-    forward = _collect(BranchRun(problem, u0, lam0, options), on_point)
+    def run(direction: int) -> BranchRun:
+        return BranchRun(problem, u0, lam0, options, direction,
+                         None if stop is None else stop(direction))
+
+    forward = _collect(run(options.direction), on_point)
     if not options.both_directions:
         return _result_one_direction(forward)
     if forward.status in _STATUSES_SKIPPING_BACKWARD:
         return _result_one_direction(
             forward, forward.status, f"skipped, {_STATUSES_SKIPPING_BACKWARD[forward.status]}"
         )
-    backward = _collect(BranchRun(problem, u0, lam0, options, -options.direction), on_point)
+    backward = _collect(run(-options.direction), on_point)
     return _result_both_directions(forward, backward)
+
+
+continue_branch = follow
+"""The former name of :func:`follow`."""
 
 
 _STATUSES_SKIPPING_BACKWARD = {
