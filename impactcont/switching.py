@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.continuation.corrector import solve_on_hyperplane
 from impactcont.dataset.multi import impacts_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.errors import NoPeriodicMotionError, ParameterError
@@ -154,21 +155,13 @@ def critical_direction(orbit: MultiImpactOrbit) -> tuple[np.ndarray, complex]:
 def _hyperplane_newton(problem: MultiImpactBranchProblem, x_pred: np.ndarray,
                        normal: np.ndarray) -> np.ndarray:
     """Solve ``F(u, lam) = 0`` on the hyperplane ``<normal, x - x_pred> = 0`` from ``x_pred``."""
-    x = x_pred.copy()
-    scale = max(1.0, float(np.max(np.abs(x))))
-    for _ in range(_MAX_ITER):
-        u, lam = x[:-1], float(x[-1])
-        r = problem.residual(u, lam)
-        A = np.vstack([np.column_stack([problem.jacobian(u, lam), problem.dparam(u, lam)]),
-                       normal])
-        step = np.linalg.solve(A, -np.append(r, normal @ (x - x_pred)))
-        x = x + step
-        # quadratic convergence: a step this small leaves a residual at rounding level; the
-        # residual is the accuracy that counts (long motions make the solve less accurate)
-        if np.max(np.abs(step)) <= _STEP_TOL * scale:
-            u, lam = x[:-1], float(x[-1])
-            if np.max(np.abs(problem.residual(u, lam))) <= _CORRECTOR_TOL * scale:
-                return x
+    # quadratic convergence: a step this small leaves a residual at rounding level; the
+    # residual is the accuracy that counts (long motions make the solve less accurate)
+    found = solve_on_hyperplane(problem, x_pred, normal, tol=_STEP_TOL, max_iter=_MAX_ITER,
+                                residual_tol=_CORRECTOR_TOL)
+    if found.converged:
+        return found.x
+    x = found.x
     raise NoPeriodicMotionError(
         f"branch switching: Newton on the shooting system of the N={problem.N}, p={problem.p} "
         f"motion did not converge from the predicted point (residual "

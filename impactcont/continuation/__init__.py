@@ -5,6 +5,7 @@ its derivatives (:class:`Problem`), :func:`continue_branch` computes a branch
 and :func:`iter_points` streams the accepted points of one direction.
 """
 
+from impactcont.continuation.corrector import HyperplanePoint, solve_on_hyperplane
 from impactcont.continuation.driver import (
     BranchRun,
     ContinuationResult,
@@ -32,6 +33,7 @@ __all__ = [
     "ContinuationResult",
     "ContinuationStatus",
     "ContinuationStepError",
+    "HyperplanePoint",
     "NewtonConvergenceError",
     "PalcStepper",
     "Problem",
@@ -42,4 +44,5 @@ __all__ = [
     "continue_branch",
     "follow",
     "iter_points",
+    "solve_on_hyperplane",
 ]

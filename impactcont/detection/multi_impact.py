@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
+from impactcont.continuation.corrector import solve_on_hyperplane
 from impactcont.detection.special_points import event_function
 from impactcont.errors import ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit
@@ -142,22 +143,11 @@ class _Chord:
             return self.left.u, self.left.lam
         if s == 1.0:
             return self.right.u, self.right.lam
-        target = self.x0 + s * self.chord
-        x = target.copy()
-        scale = max(1.0, float(np.max(np.abs(x))))
-        for _ in range(30):
-            u, lam = x[:-1], float(x[-1])
-            r = self.problem.residual(u, lam)
-            A = np.vstack([np.column_stack([self.problem.jacobian(u, lam),
-                                            self.problem.dparam(u, lam)]), self.chord])
-            step = np.linalg.solve(A, -np.append(r, self.chord @ (x - target)))
-            x = x + step
-            if np.max(np.abs(step)) <= _NEWTON_TOL * scale:
-                break
-        else:
-            log.debug("chord Newton at s=%.3g stopped with last step %.3g", s,
-                      np.max(np.abs(step)))
-        self._cache[s] = (x[:-1], float(x[-1]))
+        found = solve_on_hyperplane(self.problem, self.x0 + s * self.chord, self.chord,
+                                    tol=_NEWTON_TOL)
+        if not found.converged:
+            log.debug("chord Newton at s=%.3g stopped with last step %.3g", s, found.last_step)
+        self._cache[s] = (found.u, found.lam)
         return self._cache[s]
 
     def fold_test(self, s: float) -> float:

@@ -33,6 +33,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.optimize import brentq
 
+from impactcont.continuation.corrector import solve_on_hyperplane
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.vocabulary import LABELS
@@ -150,20 +151,12 @@ class _Segment:
         """``(delta, lam)`` on the branch at coordinate x, by Newton from the chord."""
         a, b = self.coordinate(self.left), self.coordinate(self.right)
         t = (x - a) / (b - a)
-        delta = self.left.delta + t * (self.right.delta - self.left.delta)
-        lam = self.left.lam + t * (self.right.lam - self.left.lam)
-        u = np.array([delta])
-        for _ in range(30):
-            r = self.problem.residual(u, lam)[0]
-            if self.by_lam:
-                step = r / self.problem.jacobian(u, lam)[0, 0]
-                u = u - step
-            else:
-                step = r / self.problem.dparam(u, lam)[0]
-                lam = lam - step
-            if abs(step) < 1e-15 * max(1.0, abs(u[0]), abs(lam)):
-                break
-        return float(u[0]), float(lam)
+        target = np.array([self.left.delta + t * (self.right.delta - self.left.delta),
+                           self.left.lam + t * (self.right.lam - self.left.lam)])
+        # the hyperplane lam = const (or delta = const) through the chord point
+        normal = np.array([0.0, 1.0]) if self.by_lam else np.array([1.0, 0.0])
+        found = solve_on_hyperplane(self.problem, target, normal, tol=1e-15)
+        return float(found.x[0]), found.lam
 
 
 def _locate_by_test(problem: PeriodicBranchProblem, label: str, seg: _Segment,
