@@ -61,10 +61,12 @@ LABELS: tuple[str, ...] = tuple(label.value for label in Label)
 
 #: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
 #: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1
-#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi).
+#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi);
+#: ``SN+SN`` (a double multiplier +1 on an SN curve, Bogdanov-Takens-like) and
+#: ``PD+PD`` (a double -1 on a PD curve) are the same resonances met on SN and PD curves.
 CODIM2_LABELS: tuple[str, ...] = (
-    "SN+ZV", "SN+GR", "SN+PD", "SN+NS",
-    "PD+ZV", "PD+GR", "PD+SN", "PD+NS",
+    "SN+ZV", "SN+GR", "SN+PD", "SN+NS", "SN+SN",
+    "PD+ZV", "PD+GR", "PD+SN", "PD+NS", "PD+PD",
     "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
     "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
     "ZV+SN",

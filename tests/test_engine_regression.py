@@ -2,6 +2,11 @@
 
 ``tests/data/engine_reference.json`` was written by ``tests/data/make_engine_reference.py``
 on the code before the refactor; every run is recomputed here and compared.
+
+One entry changed on purpose since: ``curve_SN`` gained the SN+PD point that one
+default step held together with the SN+ZV (it was discarded as a pole crossing)
+and names its double multipliers +1 ``SN+SN`` (1:1 resonances), found at every step
+size (issue 11, item 5; ``tests/test_step_independence.py``); its SN+ZV is unchanged.
 """
 
 from __future__ import annotations

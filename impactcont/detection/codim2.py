@@ -125,14 +125,36 @@ def _changes(a: float, b: float) -> bool:
     return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
 
 
-def _genuine(test: str, orbit: PeriodicOrbit) -> bool:
+_CRITICAL = {"SN": 1.0, "PD": -1.0}
+"""The multiplier that stays on the unit circle along an SN or a PD curve."""
+
+
+def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
+    """What a zero of `test` on a curve of `kind` is, or ``None`` when it is none.
+
+    The PD test vanishes only with a multiplier at -1. The NS test (the
+    bialternate product) vanishes where two multipliers have product 1: a
+    complex pair on the unit circle (``kind+NS``), a second multiplier at the
+    curve's own critical value (a repeated +1 on an SN curve: the 1:1
+    resonance ``SN+SN``; a repeated -1 on a PD curve: the 1:2 resonance
+    ``PD+PD``), or a real reciprocal pair (a neutral saddle: no bifurcation).
+    The repeated multiplier is a Jordan block whose two copies split by the
+    square root of rounding, possibly into a complex pair: it is recognised by
+    distance, before the imaginary part is looked at.
+    """
     mu = orbit.multipliers
     if test == "PD":
-        return bool(np.min(np.abs(mu + 1.0)) < _UNIT_TOL)
-    if test == "NS":
-        close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
-        return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
-    return True
+        return f"{kind}+PD" if np.min(np.abs(mu + 1.0)) < _UNIT_TOL else None
+    if test != "NS":
+        return f"{kind}+{test}"
+    critical = _CRITICAL.get(kind)
+    if critical is not None:
+        rest = np.delete(mu, np.argmin(np.abs(mu - critical)))
+        if rest.size and np.min(np.abs(rest - critical)) < _UNIT_TOL ** 0.5:
+            return f"{kind}+{kind}"
+        mu = rest
+    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
+    return f"{kind}+NS" if np.any(close & (np.abs(mu.imag) > 1e-8)) else None
 
 
 def _plane_distance(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray) -> float:
@@ -191,11 +213,8 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
         for test in TESTS[problem.kind]:
             if not _changes(tests[k][test], tests[k + 1][test]):
                 continue
-            if test in ("PD", "NS") and _changes(tests[k].get("ZV", 1.0),
-                                                 tests[k + 1].get("ZV", 1.0)):
-                log.debug("%s test changes sign through the pole of G at h2 = 0 (eq. 25) "
-                          "between points %d and %d: not a %s point", test, k, k + 1, test)
-                continue
+            # the PD and NS tests are free of the pole of G at h2 = 0 (pole_free): a step
+            # that also holds a zero-velocity impact keeps its PD or NS point
             problem.accept(xs[k][:-1], xs[k][-1])
             try:
                 x, precision, status = _locate(problem, test, xs[k], xs[k + 1])
@@ -209,13 +228,14 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
                 precision = _plane_distance(problem, xs[k], xs[k + 1])
                 status = "bracketed"
             orbit = problem.orbit(x[:-1], x[-1])
-            if status == "located" and not _genuine(test, orbit):
+            label = _name(problem.kind, test, orbit) if status == "located" else \
+                f"{problem.kind}+{test}"
+            if label is None:
                 log.debug("%s test changes sign without a critical multiplier near point %d",
                           test, k)
                 continue
             nearest = k if (_plane_distance(problem, x, xs[k])
                             <= _plane_distance(problem, x, xs[k + 1])) else k + 1
-            label = f"{problem.kind}+{test}"
             log.info("%s on the %s curve at %s=%.10g, %s=%.10g (%s)", label, problem.kind,
                      problem.parameters[0], x[0], problem.parameters[1], x[-1], status)
             found.append(Codim2Point(label, x, orbit, nearest, precision, status))

@@ -247,14 +247,19 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                 delta, lam, precision, status = _locate_fold(problem, seg)
             else:
                 before = event_function(label, left.orbit)
-                if not _changes(before, event_function(label, right.orbit)):
+                after = event_function(label, right.orbit)
+                if not _changes(before, after):
                     continue
                 try:
                     delta, lam, precision, status = _locate_by_test(problem, label, seg)
                 except ValueError as exc:  # brentq: no sign change on the re-solved segment
-                    log.warning("could not locate %s between points %d and %d: %s", label, k,
-                                k + 1, exc)
-                    continue
+                    # kept as bracketed (never dropped), placed by linear interpolation
+                    log.warning("%s between points %d and %d not located, kept as bracketed: "
+                                "%s", label, k, k + 1, exc)
+                    t = before / (before - after)
+                    delta = left.delta + t * (right.delta - left.delta)
+                    lam = left.lam + t * (right.lam - left.lam)
+                    precision, status = abs(right.lam - left.lam), "bracketed"
             orbit = problem.orbit(delta, lam)
             if label == "NS" and not _is_ns(orbit):
                 log.debug("neutral saddle near %s=%.12g: not a Neimark-Sacker point",
