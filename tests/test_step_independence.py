@@ -38,10 +38,11 @@ def osc():
 
 
 def test_sn_curve_codim2_points_do_not_depend_on_ds_max(osc):
-    runs = [ic.curve(osc, 1, "SN", start=SN_START, bounds=BOX, ds_max=d, ds=min(0.01, d))
-            for d in (0.05, 0.025)]
-    a, b = (_points(c, "codim2_") for c in runs)
-    _same(a, b)
+    runs = [ic.curve(osc, 1, "SN", start=SN_START, bounds=BOX, ds_max=d, ds=s)
+            for s, d in ((0.01, 0.05), (0.01, 0.025), (0.02, 0.05))]
+    a, *others = (_points(c, "codim2_") for c in runs)
+    for b in others:
+        _same(a, b)
     labels = [p[0] for p in a]
     # the PD and the ZV of one step are both kept; the double multipliers +1 are 1:1
     # resonances (SN+SN), not Neimark-Sacker points
