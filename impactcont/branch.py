@@ -19,7 +19,8 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import minimize_scalar
 
-from impactcont.continuation import ContinuationOptions, continue_branch
+from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset import branch_dataset
 from impactcont.detection import BranchSample, detect_special_points
 from impactcont.errors import NoPeriodicMotionError, ParameterError
@@ -33,6 +34,8 @@ __all__ = ["continuation"]
 
 log = logging.getLogger(__name__)
 
+_DEFAULTS = {"newton_tol": 1e-12}
+"""The closed form is exact to rounding: a tighter Newton tolerance than the other drivers'."""
 _EXISTENCE_SCAN = 400
 _SAME_ROOT = 0.05  # rad: a seed this close to a computed point of a component lies on it
 
@@ -103,13 +106,15 @@ def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) ->
 
 
 @blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  bounds: Sequence[float] = (0.5, 6.0), *, start: float | None = None,
                  root: int | None = None, detect: Sequence[str] = LABELS,
-                 ds: float = 0.02, ds_min: float = 1e-8, ds_max: float = 0.05,
-                 newton_tol: float = 1e-12, max_points: int = 5000,
-                 both_directions: bool = True, components: str = "all",
-                 **options: float) -> xr.Dataset:
+                 components: str = "all", options: ContinuationOptions | None = None,
+                 ds: float | None = None, ds_min: float | None = None,
+                 ds_max: float | None = None, newton_tol: float | None = None,
+                 max_points: int | None = None, both_directions: bool | None = None,
+                 **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-1 motions in one parameter and find its special points.
 
     Parameters
@@ -133,9 +138,13 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         ``"all"`` (default): every connected component of the solution set in
         `bounds`, found by a scan of eq. (15) and followed one by one (component 0
         goes through the start); ``"start"``: only the component through the start.
-    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
-        Continuation options (see :class:`impactcont.continuation.ContinuationOptions`);
-        a first step ``ds`` above ``ds_max`` is lowered to ``ds_max``.
+    options : ContinuationOptions, optional
+        Continuation options; those left out take the drivers' defaults
+        (:data:`impactcont.core.options.DRIVER_DEFAULTS`, Newton tolerance 1e-12)
+        and ``bounds`` comes from `bounds`.
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
+        Convenience keywords for single options, over `options`; given ``ds_max``
+        alone, ``ds`` and ``ds_min`` adapt to it.
 
     Returns
     -------
@@ -152,14 +161,13 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     N = _check_N(N)
     detect = check_labels(detect)
     problem = PeriodicBranchProblem(osc, N, parameter)
+    if options is not None and "bounds" in getattr(options, "given", ()):
+        bounds = options.bounds
     lo, hi = _check_bounds(parameter, bounds)
     _refuse_elastic(osc, parameter, lo, hi)
-    if isinstance(ds_max, (int, float)) and 0 < ds_max < ds:  # else the options say why
-        log.info("first step ds=%g lowered to ds_max=%g", ds, ds_max)
-        ds = ds_max
-    opts = ContinuationOptions(bounds=(lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-                               newton_tol=newton_tol, max_points=max_points,
-                               both_directions=both_directions, **options)
+    opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
+                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+                          both_directions=both_directions, **more)
     if components not in ("all", "start"):
         raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
     lam0 = _start_value(problem, (lo, hi), start)
@@ -188,7 +196,7 @@ def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
     result = continue_branch(problem, np.array([delta0]), lam0, opts)
     log.info("N=%d branch in %s from %s=%.10g: %d points (%s)", problem.N, problem.parameter,
              problem.parameter, lam0, len(result), result.message)
-    if any(st.name == "MAX_POINTS" for st in result.statuses):
+    if ContinuationStatus.MAX_POINTS_REACHED in result.statuses:
         warnings.warn(f"the N={problem.N} component through {problem.parameter}={lam0:.10g} "
                       f"stopped at max_points={opts.max_points}: the rest of it is not in the "
                       "branch; raise max_points or ds_max", RuntimeWarning, stacklevel=4)

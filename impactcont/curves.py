@@ -26,14 +26,15 @@ import numpy as np
 import xarray as xr
 
 from impactcont.branch import continuation
-from impactcont.continuation import (
+from impactcont.core import (
     ContinuationOptions,
     ContinuationPoint,
     ContinuationStatus,
     Stop,
     follow,
 )
-from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
 from impactcont.dataset.schema import oscillator_from_dataset, validate_branch_dataset
 from impactcont.detection.codim2 import (
@@ -58,7 +59,10 @@ __all__ = ["curve", "curve_crossings"]
 
 log = logging.getLogger(__name__)
 
-_EVENT_TOL = 1e-12
+_DEFAULTS = {"newton_tol": 1e-11, "ds": 0.01}
+"""The augmented systems use difference Jacobians: a looser tolerance than the closed form.
+The first step stays 0.01: the PD system is singular at a zero-velocity impact (the pole
+of G), and a point next to one is found or not depending on the steps there."""
 
 
 # -- arguments ----------------------------------------------------------------------------------
@@ -324,13 +328,16 @@ def _codim2_record(problem: CurveProblem, cp: Codim2Point) -> dict[str, Any]:
 
 
 @blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
           start: xr.Dataset | Mapping[str, float] | None = None, special: int | None = None,
           parameters: Sequence[str] = ("omega", "b"),
           bounds: Mapping[str, Sequence[float]] | Sequence[Sequence[float]] | None = None,
-          root: int | None = None, ds: float = 0.01, ds_min: float = 1e-8, ds_max: float = 0.05,
-          newton_tol: float = 1e-11, max_points: int = 2000, both_directions: bool = True,
-          detect_codim2_points: bool = True, **options: float) -> xr.Dataset:
+          root: int | None = None, detect_codim2_points: bool = True,
+          options: ContinuationOptions | None = None, ds: float | None = None,
+          ds_min: float | None = None, ds_max: float | None = None,
+          newton_tol: float | None = None, max_points: int | None = None,
+          both_directions: bool | None = None, **more: Any) -> xr.Dataset:
     """Continue a codim-1 curve of N-1 motions in two parameters.
 
     Parameters
@@ -361,10 +368,15 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
     root : {+1, -1}, optional
         With explicit start values and no ``delta``: the root of eq. (15).
-    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
-        Continuation options (:class:`impactcont.continuation.ContinuationOptions`).
     detect_codim2_points : bool
         Locate the codim-2 points on the curve.
+    options : ContinuationOptions, optional
+        Continuation options; those left out take the drivers' defaults
+        (:data:`impactcont.core.options.DRIVER_DEFAULTS`, but Newton tolerance 1e-11
+        and first step 0.01); ``bounds`` is the box's range of ``p2``.
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
+        Convenience keywords for single options, over `options`; given ``ds_max``
+        alone, ``ds`` and ``ds_min`` adapt to it.
 
     Returns
     -------
@@ -416,15 +428,15 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         if not lo <= value <= hi:
             raise ParameterError(f"the start {name}={value!r} lies outside bounds[{name!r}] = "
                                  f"{box[name]}")
-    opts = ContinuationOptions(bounds=box[p2], ds=ds, ds_min=ds_min, ds_max=ds_max,
-                               newton_tol=newton_tol, max_points=max_points, **options)
+    opts = driver_options(options, box[p2], defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
+                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+                          both_directions=both_directions, **{**more, "bounds": box[p2]})
     problem = curve_problem(kind, start_osc, N, parameters)
     u0 = problem.initial_unknowns(p1v, p2v, delta0)
     log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)
 
     ends: list[tuple[str, np.ndarray, float, str]] = []
-    result = follow(problem, u0, p2v, dataclasses.replace(opts, direction=1,
-                                                          both_directions=both_directions),
+    result = follow(problem, u0, p2v, opts,
                     stop=lambda direction: _CurveWatch(problem, box[p1], ends))
     if result.status is ContinuationStatus.NEWTON_FAILED_AT_START:
         raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "

@@ -19,13 +19,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.continuation import (
+from impactcont.core import (
     ContinuationOptions,
     ContinuationPoint,
     ContinuationStatus,
     Stop,
     follow,
 )
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import multi_impact_dataset
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
@@ -54,15 +55,18 @@ def _as_multi(orbit: Any) -> MultiImpactOrbit:
                     f"{type(orbit).__name__}")
 
 
-def make_options(bounds: Sequence[float], **kwargs: Any) -> ContinuationOptions:
-    """:class:`ContinuationOptions` with the defaults of N-p branches."""
-    defaults = {"ds_max": 0.05, "newton_tol": 1e-11, "max_points": 2000}
-    defaults.update(kwargs)
-    # a smaller ds_max given alone also bounds the default first step and smallest step
-    defaults.setdefault("ds", min(0.02, float(defaults["ds_max"])))
-    defaults.setdefault("ds_min", min(1e-8, float(defaults["ds"])))
+_DEFAULTS = {"newton_tol": 1e-11}
+"""The shooting residual of a long motion is accurate to about 1e-12."""
+
+
+def make_options(bounds: Sequence[float], options: ContinuationOptions | None = None,
+                 **keywords: Any) -> ContinuationOptions:
+    """The options of an N-p branch: the drivers' defaults < `options` < `keywords`.
+
+    See :func:`impactcont.core.options.driver_options`; ``None`` keywords are not given.
+    """
     lo, hi = (float(v) for v in bounds)
-    return ContinuationOptions(bounds=(lo, hi), **defaults)
+    return driver_options(options, (lo, hi), defaults=_DEFAULTS, **keywords)
 
 
 def _pd_sign_change(a: MultiImpactOrbit, b: MultiImpactOrbit) -> bool:
@@ -165,7 +169,7 @@ def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
     samples : list of MultiImpactSample
     statuses : list of str
         Why each direction stopped (names of
-        :class:`~impactcont.continuation.ContinuationStatus`).
+        :class:`~impactcont.core.ContinuationStatus`).
     message : str
     """
     watches: dict[int, _Watch] = {}
@@ -263,13 +267,16 @@ def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
 
 
 @blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS, "direction": 1})
 def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter: str = "omega",
                               bounds: Sequence[float] = (0.5, 6.0), *,
-                              detect: Sequence[str] = LABELS, ds: float | None = None,
-                              ds_min: float | None = None, ds_max: float = 0.05,
-                              newton_tol: float = 1e-11, max_points: int = 2000,
-                              both_directions: bool = True, direction: int = 1,
-                              **options: Any) -> xr.Dataset:
+                              detect: Sequence[str] = LABELS,
+                              options: ContinuationOptions | None = None,
+                              ds: float | None = None, ds_min: float | None = None,
+                              ds_max: float | None = None, newton_tol: float | None = None,
+                              max_points: int | None = None,
+                              both_directions: bool | None = None, direction: int | None = None,
+                              **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-p motions through a given motion.
 
     Parameters
@@ -284,9 +291,13 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     detect : sequence of str
         Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`; GR and
         ZV use the minimum over the flights and impacts.
-    ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **options
-        Continuation options (:class:`impactcont.continuation.ContinuationOptions`);
-        ``ds`` defaults to ``min(0.02, ds_max)`` and ``ds_min`` to ``min(1e-8, ds)``.
+    options : ContinuationOptions, optional
+        Continuation options; those left out take the drivers' defaults
+        (:data:`impactcont.core.options.DRIVER_DEFAULTS`, Newton tolerance 1e-11)
+        and ``bounds`` comes from `bounds`.
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **more
+        Convenience keywords for single options, over `options`; given ``ds_max``
+        alone, ``ds`` and ``ds_min`` adapt to it.
 
     Returns
     -------
@@ -305,11 +316,10 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     labels = check_labels(detect)
     problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter)
     lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
-    steps = {"ds": ds, "ds_min": ds_min}
-    opts = make_options(bounds, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
-                        both_directions=both_directions, direction=direction,
-                        **{k: v for k, v in steps.items() if v is not None}, **options)
+    opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
+                        newton_tol=newton_tol, max_points=max_points,
+                        both_directions=both_directions, direction=direction, **more)
     if not opts.lam_min <= lam0 <= opts.lam_max:
-        raise ParameterError(f"bounds {tuple(bounds)} must contain the start {parameter}="
+        raise ParameterError(f"bounds {opts.bounds} must contain the start {parameter}="
                              f"{lam0!r} of the orbit")
     return run_branch(problem, orbit.unknowns, lam0, opts, detect=labels)

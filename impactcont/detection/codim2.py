@@ -39,7 +39,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.detection.special_points import pole_free
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from impactcont.continuation.corrector import solve_on_hyperplane
+from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.detection.special_points import event_function
 from impactcont.errors import ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit

@@ -33,7 +33,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.optimize import brentq
 
-from impactcont.continuation.corrector import solve_on_hyperplane
+from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.vocabulary import LABELS

@@ -66,7 +66,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import (

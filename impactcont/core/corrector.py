@@ -4,7 +4,7 @@ A point of the branch ``F(u, lam) = 0`` is pinned by one more equation
 ``<normal, x - target> = 0`` (``x = (u, lam)``): a hyperplane through `target`
 across the branch. Locators (special points, codim-2 points) and branch
 switching solve this bordered system; the continuation stepper solves the same
-system with its tangent as the normal (:class:`~impactcont.continuation.PalcStepper`).
+system with its tangent as the normal (:class:`~impactcont.core.PalcStepper`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impactcont.continuation.problem import FloatArray, Problem
+from impactcont.core.problem import FloatArray, Problem
 
 __all__ = ["HyperplanePoint", "solve_on_hyperplane"]
 

@@ -14,7 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
-from impactcont.continuation.point import ContinuationPoint
+from impactcont.core.point import ContinuationPoint
 
 __all__ = ["ContinuationStatus", "Stop", "StopRule", "StopRuleFactory"]
 

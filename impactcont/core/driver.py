@@ -18,16 +18,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impactcont.continuation.events import (
+from impactcont.core.events import (
     ContinuationStatus,
     Stop,
     StopRule,
     StopRuleFactory,
 )
-from impactcont.continuation.options import ContinuationOptions
-from impactcont.continuation.point import ContinuationPoint
-from impactcont.continuation.problem import FloatArray, Problem
-from impactcont.continuation.stepper import (
+from impactcont.core.options import ContinuationOptions
+from impactcont.core.point import ContinuationPoint
+from impactcont.core.problem import FloatArray, Problem
+from impactcont.core.stepper import (
     NewtonConvergenceError,
     PalcStepper,
     StepSizeBelowMinimumError,
@@ -381,7 +381,7 @@ def follow(
         which starts again with the start point (``index == 0``).
     stop : callable, optional
         Called with the direction (``+1``, ``-1``) at the start of each run;
-        returns that run's :class:`~impactcont.continuation.events.StopRule`.
+        returns that run's :class:`~impactcont.core.events.StopRule`.
 
     Returns
     -------
@@ -519,6 +519,9 @@ def _validated_start(
             f"u0 = {u0!r} is invalid; it must be a non-empty 1-D array of finite floats"
         )
     lam = float(lam0)
+    if options.bounds is None:
+        raise ParameterError("options.bounds = None is invalid; the core needs the pair "
+                             "(lam_min, lam_max)")
     lam_min, lam_max = options.bounds
     if not lam_min <= lam <= lam_max:
         raise ParameterError(

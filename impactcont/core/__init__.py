@@ -5,8 +5,8 @@ its derivatives (:class:`Problem`), :func:`continue_branch` computes a branch
 and :func:`iter_points` streams the accepted points of one direction.
 """
 
-from impactcont.continuation.corrector import HyperplanePoint, solve_on_hyperplane
-from impactcont.continuation.driver import (
+from impactcont.core.corrector import HyperplanePoint, solve_on_hyperplane
+from impactcont.core.driver import (
     BranchRun,
     ContinuationResult,
     ContinuationStatus,
@@ -14,11 +14,11 @@ from impactcont.continuation.driver import (
     follow,
     iter_points,
 )
-from impactcont.continuation.events import Stop, StopRule
-from impactcont.continuation.options import ContinuationOptionError, ContinuationOptions
-from impactcont.continuation.point import ContinuationPoint
-from impactcont.continuation.problem import Problem, ProblemOutputError
-from impactcont.continuation.stepper import (
+from impactcont.core.events import Stop, StopRule
+from impactcont.core.options import ContinuationOptionError, ContinuationOptions
+from impactcont.core.point import ContinuationPoint
+from impactcont.core.problem import Problem, ProblemOutputError
+from impactcont.core.stepper import (
     ContinuationStepError,
     NewtonConvergenceError,
     PalcStepper,
