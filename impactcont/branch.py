@@ -22,6 +22,7 @@ from scipy.optimize import minimize_scalar
 from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset import branch_dataset
+from impactcont.dataset.records import orbit_columns, special_record
 from impactcont.detection import BranchSample, detect_special_points
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -276,31 +277,12 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
         arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
         component.append(np.full(len(run.samples), index))
         lam.append(np.asarray(res.lam, dtype=float))
-        for sp in run.specials:
-            row = {"label": sp.label, "omega": sp.orbit.oscillator.omega,
-                   "b": sp.orbit.oscillator.b, "delta": sp.delta, "point": sp.point + offset,
-                   "bracket_lo": min(sp.bracket), "bracket_hi": max(sp.bracket),
-                   "precision": sp.precision, "status": sp.status,
-                   "multipliers": sp.orbit.multipliers}
-            row.setdefault(parameter, sp.value)
-            special_points.append(row)
+        special_points += [special_record(sp, parameter, point=sp.point + offset,
+                                          bracket=sp.bracket) for sp in run.specials]
         offset += len(run.samples)
-    columns = {
-        "omega": np.array([o.oscillator.omega for o in orbits]),
-        "b": np.array([o.oscillator.b for o in orbits]),
-        "delta": np.array([o.delta for o in orbits]),
-        "impact_velocity": np.array([o.impact_velocity for o in orbits]),
-        "gap_min": np.array([o.gap_min for o in orbits]),
-        "spectral_radius": np.array([o.spectral_radius for o in orbits]),
-        "stable": np.array([o.stable for o in orbits]),
-        "physical": np.array([o.physical for o in orbits]),
-        "arclength": np.concatenate(arclength),
-        "multipliers": np.array([o.multipliers for o in orbits]),
-        "state": np.array([o.state for o in orbits]),
-        "connected_component": np.concatenate(component),
-    }
-    # the continued parameter's own column (omega and b are always there)
-    columns.setdefault(parameter, np.concatenate(lam))
+    columns = {**orbit_columns(orbits, parameter, np.concatenate(lam)),
+               "arclength": np.concatenate(arclength),
+               "connected_component": np.concatenate(component)}
     first = runs[0]
     option_record = {**dataclasses.asdict(opts), "N": N, "parameter": parameter,
                      "start": first.start, "start_delta": first.start_delta,

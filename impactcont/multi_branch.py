@@ -28,6 +28,7 @@ from impactcont.core import (
 )
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import multi_impact_dataset
+from impactcont.dataset.records import orbit_columns, special_record
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
     MultiImpactSpecialPoint,
@@ -199,21 +200,8 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
     parameter = problem.parameter
     x = np.array([np.append(s.u, s.lam) for s in samples])
     steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1)) if len(samples) > 1 else []
-    columns: dict[str, Any] = {
-        "omega": np.array([o.oscillator.omega for o in orbits]),
-        "b": np.array([o.oscillator.b for o in orbits]),
-        "delta": np.array([o.delta for o in orbits]),
-        "impact_velocity": np.array([o.impact_velocity for o in orbits]),
-        "gap_min": np.array([o.gap_min for o in orbits]),
-        "spectral_radius": np.array([o.spectral_radius for o in orbits]),
-        "stable": np.array([o.stable for o in orbits]),
-        "physical": np.array([o.physical for o in orbits]),
-        "arclength": np.concatenate([[0.0], np.cumsum(steps)]),
-        "multipliers": np.array([o.multipliers for o in orbits]),
-        "state": np.array([o.state for o in orbits]),
-    }
-    if parameter not in columns:
-        columns[parameter] = np.array([s.lam for s in samples])
+    columns = {**orbit_columns(orbits, parameter, [s.lam for s in samples]),
+               "arclength": np.concatenate([[0.0], np.cumsum(steps)])}
     impact_columns = {
         "delta_k": np.array([o.phases for o in orbits]),
         "impact_velocity_k": np.array([o.impact_velocities for o in orbits]),
@@ -221,16 +209,8 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
         "gap_min_k": np.array([o.flight_gap_min for o in orbits]),
         "state_k": np.array([o.states for o in orbits]),
     }
-    special_points = []
-    for sp in specials:
-        osc = sp.orbit.oscillator
-        row = {"label": sp.label, "omega": osc.omega, "b": osc.b, "delta": sp.delta,
-               "point": sp.point, "bracket_lo": sp.bracket[0], "bracket_hi": sp.bracket[1],
-               "precision": sp.precision, "status": sp.status,
-               "multipliers": sp.orbit.multipliers}
-        if parameter not in row:
-            row[parameter] = sp.value
-        special_points.append(row)
+    special_points = [special_record(sp, parameter, point=sp.point, bracket=sp.bracket)
+                      for sp in specials]
     n, p = problem.osc.n, problem.p
     special_impact_columns = {
         "delta_k": np.array([sp.orbit.phases for sp in specials]).reshape(-1, p),

@@ -146,6 +146,18 @@ _SPECIAL_FIELDS: dict[str, _Var] = {
                         extra_dims=("multiplier",)),
 }
 
+#: Special-point fields of the motion at the point (a file written by an older
+#: impactcont has none; a special-point dict without them stores NaN).
+OPTIONAL_SPECIAL_FIELDS: dict[str, _Var] = {
+    "impact_velocity": _Var("impact velocity at special point", "1",
+                            "Velocity x1'(T-) of mass 1 before the impact of the motion at the "
+                            "special point (h2 of eq. 22; the smallest over the impacts of an "
+                            "N-p motion)."),
+    "gap_min": _Var("minimum gap at special point", "1",
+                    "Smallest b - x1 at the interior maxima of x1 of the motion at the special "
+                    "point (eq. 16); +inf when x1 has none."),
+}
+
 # Dataset attributes every branch dataset carries.
 _REQUIRED_ATTRS = ("title", "N", "parameter", "oscillator", "options", "impactcont_version",
                    "Conventions", "history")
@@ -258,7 +270,7 @@ def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
         missing = [k for k in fields if k not in sp]
         if missing:
             raise ValueError(f"{where} is missing key(s) {missing}; required: {list(fields)}")
-        unknown = sorted(set(sp) - set(fields))
+        unknown = sorted(set(sp) - set(fields) - set(OPTIONAL_SPECIAL_FIELDS))
         if unknown:
             raise ValueError(f"{where} has unknown key(s) {unknown}; allowed: {list(fields)}")
         label = sp["label"]
@@ -292,7 +304,14 @@ def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
                        f"{where} key")
         for key in fields:
             cols[key].append(mult if key == "multipliers" else sp[key])
-    out: dict[str, np.ndarray] = {}
+        for key in OPTIONAL_SPECIAL_FIELDS:
+            value = sp.get(key, math.nan)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                                 np.floating)):
+                raise ValueError(f"{where}[{key!r}] must be a real number; got {value!r}")
+            cols.setdefault(key, []).append(float(value))
+    out: dict[str, np.ndarray] = {key: np.array(cols.get(key, []), dtype=np.float64).reshape(
+        len(special_points)) for key in OPTIONAL_SPECIAL_FIELDS}
     count = len(special_points)
     for key, spec in fields.items():
         if spec.kind == "U":
@@ -389,7 +408,7 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
                              f"{np.flatnonzero(bad)[:10].tolist()}")
 
     special = _special_arrays(special_points, parameter, n, npoints)
-    for key, spec in _special_variables(parameter).items():
+    for key, spec in {**_special_variables(parameter), **OPTIONAL_SPECIAL_FIELDS}.items():
         data_vars[special_variable(key)] = (("special", *spec.extra_dims), special[key],
                                             spec.attrs())
 
@@ -453,6 +472,9 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
         expected[key] = (("point", *spec.extra_dims), spec.kind)
     for key, spec in _special_variables(parameter).items():
         expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)
+    for key, spec in OPTIONAL_SPECIAL_FIELDS.items():
+        if special_variable(key) in ds.variables:
+            expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)
     missing = [k for k in expected if k not in ds.variables]
     if missing:
         raise ValueError(f"not a branch dataset: missing variable(s) {missing}")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -173,7 +174,8 @@ def _special_xy(ds: xr.Dataset, x: np.ndarray, y: np.ndarray, yname: str, k: int
     parameter = ds.attrs["parameter"]
     xs = float(ds[special_variable(parameter)].values[k])
     exact = special_variable(yname)
-    if exact in ds.data_vars and ds[exact].dims == ("special",):
+    if exact in ds.data_vars and ds[exact].dims == ("special",) and math.isfinite(
+            float(ds[exact].values[k])):  # a file from before these were stored holds NaN
         return xs, float(ds[exact].values[k])
     p = int(ds[special_variable("point")].values[k])
     for i, j in ((p - 1, p), (p, p + 1)):
