@@ -140,12 +140,10 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         `bounds`, found by a scan of eq. (15) and followed one by one (component 0
         goes through the start); ``"start"``: only the component through the start.
     options : ContinuationOptions, optional
-        Continuation options; those left out take the drivers' defaults
-        (:data:`impactcont.core.options.DRIVER_DEFAULTS`, Newton tolerance 1e-12)
-        and ``bounds`` comes from `bounds`.
+        Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
+        Newton tolerance 1e-12 by default: the closed form is exact to rounding).
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
-        Convenience keywords for single options, over `options`; given ``ds_max``
-        alone, ``ds`` and ``ds_min`` adapt to it.
+        Single options, over `options`.
 
     Returns
     -------

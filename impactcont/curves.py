@@ -371,12 +371,12 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     detect_codim2_points : bool
         Locate the codim-2 points on the curve.
     options : ContinuationOptions, optional
-        Continuation options; those left out take the drivers' defaults
-        (:data:`impactcont.core.options.DRIVER_DEFAULTS`, but Newton tolerance 1e-11
-        and first step 0.01); ``bounds`` is the box's range of ``p2``.
+        Options left out take the drivers' defaults
+        (:data:`impactcont.core.options.DRIVER_DEFAULTS`), but Newton tolerance 1e-11
+        and first step 0.01; ``bounds`` is the box's range of ``p2``.
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
-        Convenience keywords for single options, over `options`; given ``ds_max``
-        alone, ``ds`` and ``ds_min`` adapt to it.
+        Single options, over `options` (``ds`` and ``ds_min`` adapt to a ``ds_max``
+        given alone).
 
     Returns
     -------

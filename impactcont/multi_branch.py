@@ -272,12 +272,10 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`; GR and
         ZV use the minimum over the flights and impacts.
     options : ContinuationOptions, optional
-        Continuation options; those left out take the drivers' defaults
-        (:data:`impactcont.core.options.DRIVER_DEFAULTS`, Newton tolerance 1e-11)
-        and ``bounds`` comes from `bounds`.
+        Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
+        Newton tolerance 1e-11 by default).
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **more
-        Convenience keywords for single options, over `options`; given ``ds_max``
-        alone, ``ds`` and ``ds_min`` adapt to it.
+        Single options, over `options`.
 
     Returns
     -------

@@ -114,15 +114,19 @@ class BranchRun:
         self.message = f"{status.value}: {detail}"
         logger.info("continuation (direction %+d) stopped, %s", self.direction, self.message)
 
-    def _ruled(self, previous: ContinuationPoint | None, current: ContinuationPoint
-               ) -> tuple[list[ContinuationPoint], Stop | None]:
-        """The points to yield for `current` and the stop rule's verdict on it."""
-        stop = None if self.stop is None else self.stop(previous, current)
+    def _emit(self, previous: ContinuationPoint | None, current: ContinuationPoint
+              ) -> Iterator[ContinuationPoint]:
+        """Yield `current` as the stop rule decides (kept, replaced or left out).
+
+        When the rule stops the run, it is finished here (:attr:`status` is set).
+        """
+        stop: Stop | None = None if self.stop is None else self.stop(previous, current)
         if stop is None:
-            return [current], None
-        if not stop.keep:
-            return [], stop
-        return [stop.point if stop.point is not None else current], stop
+            yield current
+            return
+        if stop.keep:
+            yield stop.point if stop.point is not None else current
+        self._finish(stop.status, stop.detail)
 
     def _run(self) -> Iterator[ContinuationPoint]:
         _accept(self.problem, self.u0, self.lam0)
@@ -132,10 +136,8 @@ class BranchRun:
         except NewtonConvergenceError as error:
             self._finish(ContinuationStatus.NEWTON_FAILED_AT_START, str(error))
             return
-        kept, stop = self._ruled(None, start)
-        yield from kept
-        if stop is not None:
-            self._finish(stop.status, stop.detail)
+        yield from self._emit(None, start)
+        if self.status is not None:
             return
         _accept(self.problem, start.u, start.lam)
         farthest_from_start = 0.0
@@ -156,10 +158,8 @@ class BranchRun:
             if bound is not None:
                 yield from self._land_on_bound(stepper, previous, current, bound)
                 return
-            kept, stop = self._ruled(previous, current)
-            yield from kept
-            if stop is not None:
-                self._finish(stop.status, stop.detail)
+            yield from self._emit(previous, current)
+            if self.status is not None:
                 return
             _accept(self.problem, current.u, current.lam)
             if self._closes_loop(stepper, start, previous, current, farthest_from_start):
@@ -205,10 +205,8 @@ class BranchRun:
                     f"last point at lam = {previous.lam:.10g}"
                 )
         if landed is not None:
-            kept, stop = self._ruled(previous, landed)
-            yield from kept
-            if stop is not None:
-                self._finish(stop.status, stop.detail)
+            yield from self._emit(previous, landed)
+            if self.status is not None:
                 return
         self._finish(ContinuationStatus.BOUNDS_REACHED, detail)
 
@@ -259,18 +257,8 @@ def iter_points(
 ) -> BranchRun:
     """Continue in one direction, yielding the accepted points lazily.
 
-    Parameters
-    ----------
-    problem : Problem
-        The system ``F(u, lam) = 0``.
-    u0 : array_like, shape (m,)
-        Guess of the unknowns at the start.
-    lam0 : float
-        Parameter of the start point, within ``options.bounds``.
-    options : ContinuationOptions
-        Continuation options; ``both_directions`` is ignored here.
-    direction : int, optional
-        Sign of ``dlam`` at the start; defaults to ``options.direction``.
+    The arguments are those of :class:`BranchRun` (``options.both_directions``
+    is ignored here).
 
     Returns
     -------

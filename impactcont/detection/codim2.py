@@ -37,9 +37,9 @@ import logging
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from impactcont.core.stepper import NewtonConvergenceError
+from impactcont.detection.locator import locate_zero
 from impactcont.detection.special_points import pole_free
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
@@ -192,12 +192,8 @@ class _Step:
     def locate(self, test: str, lo: float = 0.0, hi: float = 1.0
                ) -> tuple[float, np.ndarray, float, str]:
         """Zero of ``test`` in ``[lo, hi]`` (Brent): ``(s, x, precision, status)``."""
-        g0, g1 = self.value(lo, test), self.value(hi, test)
-        sroot = brentq(lambda sv: self.value(sv, test), lo, hi, xtol=1e-13,
-                       rtol=4 * np.finfo(float).eps)
-        x, values = self.point(sroot)
-        scale = max(abs(g0), abs(g1))
-        status = "located" if abs(values[test]) <= 1e-6 * scale + 1e-12 else "bracketed"
+        sroot, status = locate_zero(lambda sv: self.value(sv, test), lo, hi, 1e-13)
+        x = self.point(sroot)[0]
         precision = max(2e-13 * _plane_distance(self.problem, self.xa, self.xb), 1e-15)
         return sroot, x, precision, status
 

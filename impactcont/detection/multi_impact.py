@@ -35,13 +35,15 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from impactcont.core.corrector import solve_on_hyperplane
-from impactcont.detection.special_points import event_function
-from impactcont.errors import ParameterError
+from impactcont.detection.locator import is_critical, locate_zero
+from impactcont.detection.special_points import (
+    detect_special_points,  # noqa: F401 (docs)
+    event_function,
+)
 from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.vocabulary import LABELS
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
            "tangent_at"]
@@ -83,24 +85,9 @@ class MultiImpactSample:
 class MultiImpactSpecialPoint:
     """A located special point of an N-p branch.
 
-    Attributes
-    ----------
-    label : str
-        One of :data:`impactcont.vocabulary.LABELS`.
-    value : float
-        The parameter at the special point.
-    u : ndarray, shape (m,)
-        Unknowns there.
-    point : int
-        Index of the nearest accepted branch point.
-    bracket : tuple of float
-        Parameter values of the two accepted points that bracket it.
-    precision : float
-        Bound on the error of `value` in the parameter.
-    status : str
-        ``"located"`` or ``"bracketed"``.
-    orbit : MultiImpactOrbit
-        The motion at the special point.
+    The fields of :class:`impactcont.detection.SpecialPoint`, with the unknowns
+    ``u`` (shape ``(m,)``) of the shooting system in place of the phase ``delta``
+    (the phase of the first impact is ``u[0]``) and a :class:`MultiImpactOrbit`.
     """
 
     label: str
@@ -155,12 +142,6 @@ class _Chord:
         return float(tangent_at(self.problem, u, lam, self.chord)[-1])
 
 
-def _is_ns(orbit: MultiImpactOrbit) -> bool:
-    mu = orbit.multipliers
-    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL ** 0.5
-    return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
-
-
 def _locate(chord: _Chord, test: Callable[[float], float]) -> tuple[float, str]:
     cache: dict[float, float] = {}
 
@@ -172,39 +153,23 @@ def _locate(chord: _Chord, test: Callable[[float], float]) -> tuple[float, str]:
     g0, g1 = g(0.0), g(1.0)
     if not (math.isfinite(g0) and math.isfinite(g1)) or (g0 < 0) == (g1 < 0):
         return 0.5, "bracketed"  # the re-evaluated ends disagree with the stream: keep bracket
-    s = brentq(g, 0.0, 1.0, xtol=_S_TOL, rtol=4 * np.finfo(float).eps)
-    scale = max(abs(g0), abs(g1))
-    status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
-    return s, status
+    return locate_zero(g, 0.0, 1.0, _S_TOL)
 
 
 def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample],
                                labels: Sequence[str] = LABELS,
                                on_found: Callable[[MultiImpactSpecialPoint], None] | None = None,
                                ) -> list[MultiImpactSpecialPoint]:
-    """Detect and locate special points between consecutive accepted points.
+    """The special points of an N-p branch, as ``detect_special_points`` for N-1 motions.
 
-    Parameters
-    ----------
-    problem
-        A problem with ``residual``, ``jacobian``, ``dparam`` and
-        ``orbit(u, lam, checks=True) -> MultiImpactOrbit`` (e.g.
-        :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`).
-    samples : sequence of MultiImpactSample
-        The accepted points in branch order.
-    labels : sequence of str
-        Which special points to look for (subset of :data:`impactcont.vocabulary.LABELS`).
-    on_found : callable, optional
-        Called with each special point as it is located.
-
-    Returns
-    -------
-    list of MultiImpactSpecialPoint
-        In branch order.
+    `problem` provides ``residual``, ``jacobian``, ``dparam`` and
+    ``orbit(u, lam, checks=True) -> MultiImpactOrbit`` (e.g.
+    :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`); the
+    samples are :class:`MultiImpactSample` and the result
+    :class:`MultiImpactSpecialPoint` in branch order; GR and ZV use the minimum
+    over the flights and impacts.
     """
-    unknown = sorted(set(labels) - set(LABELS))
-    if unknown:
-        raise ParameterError(f"labels must be a subset of {LABELS}; got unknown {unknown}")
+    check_labels(labels, "labels")
     found: list[MultiImpactSpecialPoint] = []
     parameter = getattr(problem, "parameter", "lam")
     for k in range(len(samples) - 1):
@@ -226,21 +191,21 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
                     # only GR needs the (costly) interior-contact search of every flight
                     orbit = problem.orbit(*chord.point(s), checks=label == "GR")
                     return event_function(label, orbit)
+            failed = False
             try:
                 s, status = _locate(chord, test)
             except (ValueError, np.linalg.LinAlgError) as exc:
-                log.warning("could not locate %s between points %d and %d: %s", label, k,
-                            k + 1, exc)
-                continue
+                failed = True
+                # kept as bracketed (never dropped), at the middle of the step
+                log.warning("%s between points %d and %d not located, kept as bracketed: %s",
+                            label, k, k + 1, exc)
+                s, status = 0.5, "bracketed"
             u, lam = chord.point(s)
             orbit = problem.orbit(u, lam)
-            if label == "NS" and not _is_ns(orbit):
-                log.debug("neutral saddle near %s=%.12g: not a Neimark-Sacker point",
-                          parameter, lam)
-                continue
-            if label == "PD" and not np.min(np.abs(orbit.multipliers + 1.0)) < _UNIT_TOL:
-                log.debug("det(G+I) changes sign near %s=%.12g without a multiplier at -1",
-                          parameter, lam)
+            if not failed and not is_critical(label, orbit.multipliers, _UNIT_TOL):
+                log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
+                          "(a neutral saddle, or the pole of G at h2 = 0)", label, parameter,
+                          lam)
                 continue
             ds_s = max(_S_TOL, 4 * np.finfo(float).eps)
             lams = [chord.point(min(max(s + e, 0.0), 1.0))[1] for e in (-ds_s, ds_s)]

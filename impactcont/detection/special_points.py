@@ -31,12 +31,12 @@ import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from scipy.optimize import brentq
 
 from impactcont.core.corrector import solve_on_hyperplane
+from impactcont.detection.locator import is_critical, locate_zero
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
-from impactcont.vocabulary import LABELS
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function",
            "pole_free"]
@@ -172,15 +172,13 @@ def _locate_by_test(problem: PeriodicBranchProblem, label: str, seg: _Segment,
     a, b = seg.coordinate(seg.left), seg.coordinate(seg.right)
     lo, hi = min(a, b), max(a, b)
     xtol = _XTOL * max(1.0, abs(lo), abs(hi))
-    x = brentq(g, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
+    x, status = locate_zero(g, lo, hi, xtol)
     delta, lam = seg.point(x)
     precision = 2 * (xtol + 4 * np.finfo(float).eps * abs(x))
     if not seg.by_lam:  # error in delta maps to lam through the branch slope
         slope = abs(problem.jacobian(np.array([delta]), lam)[0, 0]
                     / problem.dparam(np.array([delta]), lam)[0])
         precision *= max(slope, 1.0)
-    scale = max(abs(g(lo)), abs(g(hi)))
-    status = "located" if abs(g(x)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
     return delta, lam, precision, status
 
 
@@ -206,12 +204,6 @@ def _locate_fold(problem: PeriodicBranchProblem, seg: _Segment
     return float(x[0]), float(x[1]), precision, "located" if inside else "bracketed"
 
 
-def _is_ns(orbit: PeriodicOrbit) -> bool:
-    mu = orbit.multipliers
-    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL ** 0.5
-    return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
-
-
 def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[BranchSample],
                           labels: Sequence[str] = LABELS,
                           on_found: Callable[[SpecialPoint], None] | None = None,
@@ -233,14 +225,13 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     list of SpecialPoint
         In branch order.
     """
-    unknown = set(labels) - set(LABELS)
-    if unknown:
-        raise ValueError(f"labels must be a subset of {LABELS}; got unknown {sorted(unknown)}")
+    check_labels(labels, "labels")
     found: list[SpecialPoint] = []
     for k in range(len(samples) - 1):
         left, right = samples[k], samples[k + 1]
         seg = _Segment(problem, left, right)
         for label in labels:
+            failed = False
             if label == "SN":
                 if (left.dlam > 0) == (right.dlam > 0):
                     continue
@@ -252,7 +243,8 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                     continue
                 try:
                     delta, lam, precision, status = _locate_by_test(problem, label, seg)
-                except ValueError as exc:  # brentq: no sign change on the re-solved segment
+                except ValueError as exc:
+                    failed = True  # brentq: no sign change on the re-solved segment
                     # kept as bracketed (never dropped), placed by linear interpolation
                     log.warning("%s between points %d and %d not located, kept as bracketed: "
                                 "%s", label, k, k + 1, exc)
@@ -261,13 +253,9 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                     lam = left.lam + t * (right.lam - left.lam)
                     precision, status = abs(right.lam - left.lam), "bracketed"
             orbit = problem.orbit(delta, lam)
-            if label == "NS" and not _is_ns(orbit):
-                log.debug("neutral saddle near %s=%.12g: not a Neimark-Sacker point",
-                          problem.parameter, lam)
-                continue
-            if label == "PD" and not np.min(np.abs(orbit.multipliers + 1.0)) < _UNIT_TOL:
-                # det(G + I) also changes sign through the pole of G at h2 = 0 (eq. 25)
-                log.debug("det(G+I) changes sign near %s=%.12g without a multiplier at -1",
+            if not failed and not is_critical(label, orbit.multipliers, _UNIT_TOL):
+                log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
+                          "(a neutral saddle, or the pole of G at h2 = 0)", label,
                           problem.parameter, lam)
                 continue
             nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
