@@ -163,6 +163,38 @@ _REQUIRED_ATTRS = ("title", "N", "parameter", "oscillator", "options", "impactco
                    "Conventions", "history")
 
 
+def check_variables(ds: xr.Dataset, expected: Mapping[str, tuple[tuple[str, ...], str]],
+                    what: str) -> None:
+    """Check that `ds` has every variable of `expected` (``{name: (dims, dtype kind)}``).
+
+    Raises
+    ------
+    ValueError
+        Naming the missing variables, or the variable with other dims or dtype.
+    """
+    missing = [k for k in expected if k not in ds.variables]
+    if missing:
+        raise ValueError(f"not a {what} dataset: missing variable(s) {missing}")
+    for key, (dims, kind) in expected.items():
+        var = ds[key]
+        if var.dims != dims:
+            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
+        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
+            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; "
+                             f"got dtype {var.dtype}")
+
+
+def point_coords(npoints: int, n: int) -> dict[str, Any]:
+    """The ``point`` and ``component`` coordinates of a branch or curve of an n-mass system."""
+    return {
+        "point": ("point", np.arange(npoints, dtype=np.int64),
+                  {"long_name": "continuation point index", "units": "1"}),
+        "component": ("component", np.array(state_component_names(n)),
+                      {"long_name": "state component",
+                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
+    }
+
+
 def special_variable(key: str) -> str:
     """Name of the dataset variable holding special-point field ``key`` (``special_<key>``)."""
     return f"special_{key}"
@@ -412,13 +444,7 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         data_vars[special_variable(key)] = (("special", *spec.extra_dims), special[key],
                                             spec.attrs())
 
-    coords = {
-        "point": ("point", np.arange(npoints, dtype=np.int64),
-                  {"long_name": "continuation point index", "units": "1"}),
-        "component": ("component", np.array(state_component_names(n)),
-                      {"long_name": "state component",
-                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
-    }
+    coords = point_coords(npoints, n)
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     attrs = {
         "title": title if title is not None else
@@ -475,16 +501,7 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
     for key, spec in OPTIONAL_SPECIAL_FIELDS.items():
         if special_variable(key) in ds.variables:
             expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)
-    missing = [k for k in expected if k not in ds.variables]
-    if missing:
-        raise ValueError(f"not a branch dataset: missing variable(s) {missing}")
-    for key, (dims, kind) in expected.items():
-        var = ds[key]
-        if var.dims != dims:
-            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
-        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
-            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; "
-                             f"got dtype {var.dtype}")
+    check_variables(ds, expected, "branch")
     if ds.sizes["multiplier"] != ds.sizes["component"] or ds.sizes["component"] % 2:
         raise ValueError(f"dims 'multiplier' and 'component' must both have size 2n; got "
                          f"{ds.sizes['multiplier']} and {ds.sizes['component']}")

@@ -64,8 +64,11 @@ def _new_axes(ncols: int = 1) -> Any:
     return axes
 
 
-def _branches(datasets: Any) -> list[tuple[str, xr.Dataset]]:
-    """``(name, dataset)`` pairs from a Dataset, a sequence, a mapping or a DataTree."""
+def _branches(datasets: Any, one_parameter: bool = False) -> list[tuple[str, xr.Dataset]]:
+    """``(name, dataset)`` pairs from a Dataset, a sequence, a mapping or a DataTree.
+
+    With `one_parameter`, the branches must all be continued in the same parameter.
+    """
     if isinstance(datasets, xr.Dataset):
         items: Iterable[tuple[str, Any]] = [("", datasets)]
     elif isinstance(datasets, xr.DataTree):
@@ -86,6 +89,10 @@ def _branches(datasets: Any) -> list[tuple[str, xr.Dataset]]:
         out.append((name, validate_branch_dataset(ds)))
     if not out:
         raise ValueError("datasets holds no branch dataset")
+    parameters = {ds.attrs["parameter"] for _, ds in out}
+    if one_parameter and len(parameters) > 1:
+        raise ValueError(f"datasets must all be continued in one parameter; got "
+                         f"{sorted(parameters)}")
     return out
 
 
@@ -229,11 +236,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     -------
     matplotlib.axes.Axes
     """
-    branches = _branches(datasets)
+    branches = _branches(datasets, one_parameter=True)
     parameters = {ds.attrs["parameter"] for _, ds in branches}
-    if len(parameters) > 1:
-        raise ValueError(f"datasets must all be continued in one parameter; got "
-                         f"{sorted(parameters)}")
     if ax is None:
         ax = _new_axes()
     fixed = fixed_parameters([ds for _, ds in branches])
