@@ -96,7 +96,7 @@ def check_labels(detect: Any, argument: str = "detect") -> list[str]:
     return labels
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, slots=True)
 class Parameter:
     """One scalar parameter of the oscillator that can be continued.
 

@@ -35,18 +35,11 @@ _CACHE_SIZE = 64
 
 
 class MultiImpactBranchProblem:
-    """The N-p shooting system as ``F(u, lam) = 0`` for :func:`impactcont.continuation`.
+    """The N-p shooting system as ``F(u, lam) = 0`` for the continuation core.
 
-    Parameters
-    ----------
-    osc : ImpactOscillator
-        The oscillator; its value of `parameter` is replaced by ``lam``.
-    N : int
-        Forcing periods of the motion.
-    p : int
-        Impacts per motion.
-    parameter : str
-        One of :data:`impactcont.problems.CONTINUABLE_PARAMETERS`.
+    `osc`, `N` and `parameter` are those of
+    :class:`~impactcont.problems.PeriodicBranchProblem` (`parameter` is replaced by
+    ``lam``); the motion has `p` impacts in its N forcing periods.
 
     Notes
     -----
