@@ -15,6 +15,7 @@ from impactcont.core.driver import (
     iter_points,
 )
 from impactcont.core.events import Stop, StopRule
+from impactcont.core.locate import Event, EventPoint, locate_events
 from impactcont.core.options import ContinuationOptionError, ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import Problem, ProblemOutputError
@@ -33,6 +34,8 @@ __all__ = [
     "ContinuationResult",
     "ContinuationStatus",
     "ContinuationStepError",
+    "Event",
+    "EventPoint",
     "HyperplanePoint",
     "NewtonConvergenceError",
     "PalcStepper",
@@ -44,5 +47,6 @@ __all__ = [
     "continue_branch",
     "follow",
     "iter_points",
+    "locate_events",
     "solve_on_hyperplane",
 ]
