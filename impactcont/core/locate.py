@@ -6,7 +6,7 @@ step between two accepted points for a sign change, parametrises the branch
 there by the chord coordinate ``s in [0, 1]`` (the point of the branch on the
 hyperplane across the chord through ``x_left + s (x_right - x_left)``, found by
 :func:`~impactcont.core.corrector.solve_on_hyperplane`; this works through folds)
-and locates the zero with :func:`impactcont.detection.locator.locate_zero`.
+and locates the zero with :func:`locate_zero`.
 """
 
 from __future__ import annotations
@@ -18,11 +18,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.optimize import brentq
 
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
 
-__all__ = ["Event", "EventPoint", "locate_events", "tangent_at"]
+__all__ = ["Event", "EventPoint", "locate_events", "locate_zero", "tangent_at"]
 
 log = logging.getLogger(__name__)
 
@@ -86,6 +87,40 @@ class EventPoint:
     failed: bool = False
 
 
+def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
+                ) -> tuple[float, str]:
+    """The zero of `g` in ``[lo, hi]`` by Brent's method, and how well it is known.
+
+    Parameters
+    ----------
+    g : callable
+        The test function along the step (evaluations are best cached by the caller).
+    lo, hi : float
+        The bracket, where `g` has opposite signs.
+    xtol : float
+        Absolute tolerance in the coordinate.
+
+    Returns
+    -------
+    s : float
+        The zero, inside ``[lo, hi]``.
+    status : {"located", "bracketed"}
+        ``located`` when ``|g(s)|`` is at most 1e-6 of the larger end value (plus
+        1e-12); else the test function jumps there (a pole) and the point is only
+        bracketed.
+
+    Raises
+    ------
+    ValueError
+        When `g` has the same sign at both ends.
+    """
+    g0, g1 = g(lo), g(hi)
+    s = brentq(g, lo, hi, xtol=xtol, rtol=4 * _EPS)
+    scale = max(abs(g0), abs(g1))
+    status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
+    return s, status
+
+
 def tangent_at(problem: Problem, u: FloatArray, lam: float, reference: FloatArray) -> FloatArray:
     """Unit null vector of ``[dF/du | dF/dlam]`` with a positive dot product with `reference`."""
     extended = np.column_stack([problem.jacobian(u, lam), problem.dparam(u, lam)])
@@ -123,8 +158,6 @@ class _Chord:
 
 
 def _locate(g: Callable[[float], float], s_tol: float) -> tuple[float, str]:
-    from impactcont.detection.locator import locate_zero
-
     cache: dict[float, float] = {}
 
     def cached(s: float) -> float:

@@ -1,5 +1,8 @@
 """The one locator of special and codim-2 points: a test function's zero on a step.
 
+:func:`locate_zero` lives in the core (:mod:`impactcont.core.locate`) and is
+re-exported here with the decision :func:`is_critical`.
+
 Every detector (N-1 branches, N-p branches, codim-1 curves) parametrises the
 branch between two accepted points by one coordinate (a chord coordinate, the
 parameter or the phase), evaluates a test function there (each trial point is
@@ -10,50 +13,12 @@ is a bifurcation is decided from the multipliers there (:func:`is_critical`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
-from scipy.optimize import brentq
+
+from impactcont.core.locate import locate_zero
+from impactcont.vocabulary import STATUSES
 
 __all__ = ["STATUSES", "is_critical", "locate_zero"]
-
-STATUSES = ("located", "bracketed")
-
-_EPS = float(np.finfo(float).eps)
-
-
-def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
-                ) -> tuple[float, str]:
-    """The zero of `g` in ``[lo, hi]`` by Brent's method, and how well it is known.
-
-    Parameters
-    ----------
-    g : callable
-        The test function along the step (evaluations are best cached by the caller).
-    lo, hi : float
-        The bracket, where `g` has opposite signs.
-    xtol : float
-        Absolute tolerance in the coordinate.
-
-    Returns
-    -------
-    s : float
-        The zero, inside ``[lo, hi]``.
-    status : {"located", "bracketed"}
-        ``located`` when ``|g(s)|`` is at most 1e-6 of the larger end value (plus
-        1e-12); else the test function jumps there (a pole) and the point is only
-        bracketed.
-
-    Raises
-    ------
-    ValueError
-        When `g` has the same sign at both ends.
-    """
-    g0, g1 = g(lo), g(hi)
-    s = brentq(g, lo, hi, xtol=xtol, rtol=4 * _EPS)
-    scale = max(abs(g0), abs(g1))
-    status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
-    return s, status
 
 
 def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:

@@ -14,9 +14,10 @@ label     test function                               meaning
 ========  ==========================================  =================================
 
 A sign change between two accepted points brackets a special point; it is
-then located by Brent's method on the branch parametrised by the parameter
-(or by ``delta`` where the branch folds inside the bracket), except ``SN``,
-located by Newton on the augmented system ``r = dr/d delta = 0``. The NS test
+then located as an event of the core (:func:`impactcont.core.locate_events`:
+Brent's method on the branch parametrised by the chord between the two
+points), except ``SN``, located by Newton on the closed-form augmented system
+``r = dr/d delta = 0``. A point whose location fails is kept as ``bracketed``. The NS test
 function also vanishes at a neutral saddle (two real multipliers with product
 1); such a point is checked and discarded. A located point whose test
 function does not vanish there (a jump, e.g. of ``gap_min`` when the highest
@@ -32,8 +33,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from impactcont.core.corrector import solve_on_hyperplane
-from impactcont.detection.locator import is_critical, locate_zero
+from impactcont.core.locate import Event, locate_events
+from impactcont.detection.locator import is_critical
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.vocabulary import LABELS, check_labels
@@ -136,55 +137,9 @@ def _changes(a: float, b: float) -> bool:
     return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
 
 
-class _Segment:
-    """The branch between two accepted points, parametrised by lam or by delta."""
-
-    def __init__(self, problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample):
-        self.problem = problem
-        self.left, self.right = left, right
-        self.by_lam = (left.dlam > 0) == (right.dlam > 0) and left.lam != right.lam
-
-    def coordinate(self, sample: BranchSample) -> float:
-        return sample.lam if self.by_lam else sample.delta
-
-    def point(self, x: float) -> tuple[float, float]:
-        """``(delta, lam)`` on the branch at coordinate x, by Newton from the chord."""
-        a, b = self.coordinate(self.left), self.coordinate(self.right)
-        t = (x - a) / (b - a)
-        target = np.array([self.left.delta + t * (self.right.delta - self.left.delta),
-                           self.left.lam + t * (self.right.lam - self.left.lam)])
-        # the hyperplane lam = const (or delta = const) through the chord point
-        normal = np.array([0.0, 1.0]) if self.by_lam else np.array([1.0, 0.0])
-        found = solve_on_hyperplane(self.problem, target, normal, tol=1e-15)
-        return float(found.x[0]), found.lam
-
-
-def _locate_by_test(problem: PeriodicBranchProblem, label: str, seg: _Segment,
-                    ) -> tuple[float, float, float, str]:
-    fun_cache: dict[float, float] = {}
-
-    def g(x: float) -> float:
-        if x not in fun_cache:
-            delta, lam = seg.point(x)
-            fun_cache[x] = event_function(label, problem.orbit(delta, lam))
-        return fun_cache[x]
-
-    a, b = seg.coordinate(seg.left), seg.coordinate(seg.right)
-    lo, hi = min(a, b), max(a, b)
-    xtol = _XTOL * max(1.0, abs(lo), abs(hi))
-    x, status = locate_zero(g, lo, hi, xtol)
-    delta, lam = seg.point(x)
-    precision = 2 * (xtol + 4 * np.finfo(float).eps * abs(x))
-    if not seg.by_lam:  # error in delta maps to lam through the branch slope
-        slope = abs(problem.jacobian(np.array([delta]), lam)[0, 0]
-                    / problem.dparam(np.array([delta]), lam)[0])
-        precision *= max(slope, 1.0)
-    return delta, lam, precision, status
-
-
-def _locate_fold(problem: PeriodicBranchProblem, seg: _Segment
+def _locate_fold(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
                  ) -> tuple[float, float, float, str]:
-    left, right = seg.left, seg.right
+    """The fold between two points by Newton on ``r = dr/d delta = 0`` (eq. 14-15)."""
     x = np.array([0.5 * (left.delta + right.delta), 0.5 * (left.lam + right.lam)])
     step = np.full(2, np.inf)
     for _ in range(50):
@@ -226,45 +181,39 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
         In branch order.
     """
     check_labels(labels, "labels")
-    found: list[SpecialPoint] = []
-    for k in range(len(samples) - 1):
+    candidates: list[tuple[int, str, float, float, float, str, bool]] = []
+    for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
         left, right = samples[k], samples[k + 1]
-        seg = _Segment(problem, left, right)
-        for label in labels:
-            failed = False
-            if label == "SN":
-                if (left.dlam > 0) == (right.dlam > 0):
-                    continue
-                delta, lam, precision, status = _locate_fold(problem, seg)
-            else:
-                before = event_function(label, left.orbit)
-                after = event_function(label, right.orbit)
-                if not _changes(before, after):
-                    continue
-                try:
-                    delta, lam, precision, status = _locate_by_test(problem, label, seg)
-                except ValueError as exc:
-                    failed = True  # brentq: no sign change on the re-solved segment
-                    # kept as bracketed (never dropped), placed by linear interpolation
-                    log.warning("%s between points %d and %d not located, kept as bracketed: "
-                                "%s", label, k, k + 1, exc)
-                    t = before / (before - after)
-                    delta = left.delta + t * (right.delta - left.delta)
-                    lam = left.lam + t * (right.lam - left.lam)
-                    precision, status = abs(right.lam - left.lam), "bracketed"
-            orbit = problem.orbit(delta, lam)
-            if not failed and not is_critical(label, orbit.multipliers, _UNIT_TOL):
-                log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
-                          "(a neutral saddle, or the pole of G at h2 = 0)", label,
-                          problem.parameter, lam)
-                continue
-            nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
-            special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
-                                   bracket=(left.lam, right.lam), precision=precision,
-                                   status=status, orbit=orbit)
-            log.info("%s at %s = %.12g (%s, precision %.1e)", label, problem.parameter, lam,
-                     status, precision)
-            found.append(special)
-            if on_found is not None:
-                on_found(special)
+        if "SN" in labels and (left.dlam > 0) != (right.dlam > 0):
+            candidates.append((k, "SN", *_locate_fold(problem, left, right), False))
+
+    def event(label: str) -> Event:
+        return Event(label, lambda u, lam: event_function(label, problem.orbit(u[0], lam)),
+                     lambda k: event_function(label, samples[k].orbit))
+
+    events = [event(label) for label in labels if label != "SN"]
+    for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
+                            [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
+        candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,
+                           ep.failed))
+    order = {label: i for i, label in enumerate(labels)}
+    found: list[SpecialPoint] = []
+    for k, label, delta, lam, precision, status, failed in sorted(
+            candidates, key=lambda c: (c[0], order[c[1]])):
+        left, right = samples[k], samples[k + 1]
+        orbit = problem.orbit(delta, lam)
+        if not failed and not is_critical(label, orbit.multipliers, _UNIT_TOL):
+            log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
+                      "(a neutral saddle, or the pole of G at h2 = 0)", label,
+                      problem.parameter, lam)
+            continue
+        nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
+        special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
+                               bracket=(left.lam, right.lam), precision=precision,
+                               status=status, orbit=orbit)
+        log.info("%s at %s = %.12g (%s, precision %.1e)", label, problem.parameter, lam,
+                 status, precision)
+        found.append(special)
+        if on_found is not None:
+            on_found(special)
     return found
