@@ -53,6 +53,11 @@ from impactcont.switching import (
 # function of the same name; it is ``impactcont.core`` now. Old imports
 # (``from impactcont.continuation import ContinuationOptions``) keep working.
 sys.modules.setdefault("impactcont.continuation", core)
+for _name in ("corrector", "driver", "events", "locate", "options", "point", "problem",
+              "stepper"):
+    sys.modules.setdefault(f"impactcont.continuation.{_name}",
+                           sys.modules[f"impactcont.core.{_name}"])
+del _name
 
 try:
     __version__ = version("impactcont")

@@ -54,3 +54,12 @@ def test_every_entry_point_takes_options(paper):
     pd = ic.curve(paper, None, "PD", start=n1, bounds={"omega": (1.4, 2.0), "b": (0.0, 0.2)},
                   options=ic.ContinuationOptions(max_points=5))
     assert pd.sizes["point"] <= 10
+
+
+def test_former_submodule_paths_are_the_same_modules():
+    from impactcont.continuation.options import ContinuationOptions
+    from impactcont.continuation.stepper import NewtonConvergenceError
+
+    from impactcont.core.stepper import NewtonConvergenceError as Same
+
+    assert ContinuationOptions is ic.ContinuationOptions and NewtonConvergenceError is Same
