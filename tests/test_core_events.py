@@ -32,9 +32,10 @@ class Circle:
 
 def test_events_are_located_on_the_branch_with_an_arclength_bracket():
     options = ContinuationOptions(bounds=(-2.0, 2.0), ds=0.05, ds_max=0.1, both_directions=True)
-    branch = follow(Circle(), [1.0], 0.0, options)
     events = [Event("fold", None), Event("half", lambda u, lam: lam - 0.5)]
+    branch = follow(Circle(), [1.0], 0.0, options, events=events)
     found = locate_events(Circle(), branch.u, branch.lam, branch.tangent, events)
+    assert [e.lam for e in branch.events] == [e.lam for e in found]
     folds = [e for e in found if e.label == "fold"]
     halves = [e for e in found if e.label == "half"]
     assert folds and all(abs(abs(e.lam) - 1.0) < 1e-9 for e in folds)

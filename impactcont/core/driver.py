@@ -11,6 +11,7 @@ next step (problems with borders or reference vectors renew them there).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -24,6 +25,7 @@ from impactcont.core.events import (
     StopRule,
     StopRuleFactory,
 )
+from impactcont.core.locate import Event, EventPoint, locate_events
 from impactcont.core.options import ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import FloatArray, Problem
@@ -311,6 +313,8 @@ class ContinuationResult:
         Readable summary of both statuses.
     start_index : int
         Index of the start point in the arrays.
+    events : tuple of EventPoint
+        The events given to :func:`follow`, located along the branch.
     """
 
     u: FloatArray
@@ -323,6 +327,7 @@ class ContinuationResult:
     backward_status: ContinuationStatus | None
     message: str
     start_index: int = 0
+    events: tuple[EventPoint, ...] = ()
 
     @property
     def statuses(self) -> tuple[ContinuationStatus, ...]:
@@ -343,6 +348,7 @@ def follow(
     on_point: Callable[[ContinuationPoint], None] | None = None,
     *,
     stop: StopRuleFactory | None = None,
+    events: Sequence[Event] = (),
 ) -> ContinuationResult:
     """Compute a branch of ``F(u, lam) = 0`` by pseudo-arclength continuation.
 
@@ -370,6 +376,9 @@ def follow(
     stop : callable, optional
         Called with the direction (``+1``, ``-1``) at the start of each run;
         returns that run's :class:`~impactcont.core.events.StopRule`.
+    events : sequence of Event
+        Located along the joined branch once it is computed
+        (:func:`~impactcont.core.locate.locate_events`), in ``result.events``.
 
     Returns
     -------
@@ -388,13 +397,17 @@ def follow(
 
     forward = _collect(run(options.direction), on_point)
     if not options.both_directions:
-        return _result_one_direction(forward)
-    if forward.status in _STATUSES_SKIPPING_BACKWARD:
-        return _result_one_direction(
+        result = _result_one_direction(forward)
+    elif forward.status in _STATUSES_SKIPPING_BACKWARD:
+        result = _result_one_direction(
             forward, forward.status, f"skipped, {_STATUSES_SKIPPING_BACKWARD[forward.status]}"
         )
-    backward = _collect(run(-options.direction), on_point)
-    return _result_both_directions(forward, backward)
+    else:
+        result = _result_both_directions(forward, _collect(run(-options.direction), on_point))
+    if events and len(result) > 1:
+        found = locate_events(problem, result.u, result.lam, result.tangent, events)
+        result = dataclasses.replace(result, events=tuple(found))
+    return result
 
 
 continue_branch = follow
