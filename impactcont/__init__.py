@@ -9,9 +9,12 @@ Plots live in :mod:`impactcont.plots` (imported on demand: it loads matplotlib).
 
 from __future__ import annotations
 
+import sys
 from importlib.metadata import PackageNotFoundError, version
 
+from impactcont import core
 from impactcont.branch import continuation
+from impactcont.core import ContinuationOptions, ContinuationStatus
 from impactcont.curves import curve, curve_crossings
 from impactcont.dataset import load, save
 from impactcont.errors import (
@@ -46,6 +49,16 @@ from impactcont.switching import (
     special_orbit,
 )
 
+# The continuation core was the subpackage ``impactcont.continuation``, hidden by the
+# function of the same name; it is ``impactcont.core`` now. Old imports
+# (``from impactcont.continuation import ContinuationOptions``) keep working.
+sys.modules.setdefault("impactcont.continuation", core)
+for _name in ("corrector", "driver", "events", "locate", "options", "point", "problem",
+              "stepper"):
+    sys.modules.setdefault(f"impactcont.continuation.{_name}",
+                           sys.modules[f"impactcont.core.{_name}"])
+del _name
+
 try:
     __version__ = version("impactcont")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
@@ -53,6 +66,8 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "Cascade",
+    "ContinuationOptions",
+    "ContinuationStatus",
     "Flow",
     "IllConditionedWarning",
     "ImpactOscillator",

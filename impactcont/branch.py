@@ -19,26 +19,26 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import minimize_scalar
 
-from impactcont.continuation import ContinuationOptions, continue_branch
+from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset import branch_dataset
-from impactcont.detection import LABELS, BranchSample, detect_special_points
+from impactcont.dataset.records import orbit_columns, special_record
+from impactcont.detection import BranchSample, detect_special_points
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS, PARAMETERS, check_labels
 
 __all__ = ["continuation"]
 
 log = logging.getLogger(__name__)
 
+_DEFAULTS = {"newton_tol": 1e-12}
+"""The closed form is exact to rounding: a tighter Newton tolerance than the other drivers'."""
 _EXISTENCE_SCAN = 400
 _SAME_ROOT = 0.05  # rad: a seed this close to a computed point of a component lies on it
-
-
-_PARAMETER_RANGES = {"omega": (0.0, math.inf, "> 0"), "b": (-math.inf, math.inf, "finite"),
-                     "R": (0.0, 1.0, "in [0, 1]"), "eta": (0.0, math.inf, ">= 0"),
-                     "alpha": (0.0, math.inf, ">= 0"), "beta": (0.0, math.inf, ">= 0")}
 
 
 def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
@@ -47,11 +47,11 @@ def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
         lo, hi = (float(v) for v in bounds)  # type: ignore[union-attr]
     except (TypeError, ValueError):
         raise ParameterError(f"bounds must be two numbers (lo, hi); got {bounds!r}") from None
-    low, high, allowed = _PARAMETER_RANGES[parameter]
+    table = PARAMETERS[parameter]
     # order and finiteness: ContinuationOptions says what is allowed
-    if lo < low or hi > high or (parameter == "omega" and lo <= 0.0):
-        raise ParameterError(f"bounds for {parameter} must lie where {parameter} is {allowed}; "
-                             f"got {bounds!r}")
+    if any(math.isfinite(v) and not table.contains(v) for v in (lo, hi)):
+        raise ParameterError(f"bounds for {parameter} must lie where {parameter} is "
+                             f"{table.allowed}; got {bounds!r}")
     return lo, hi
 
 
@@ -107,13 +107,15 @@ def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) ->
 
 
 @blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  bounds: Sequence[float] = (0.5, 6.0), *, start: float | None = None,
                  root: int | None = None, detect: Sequence[str] = LABELS,
-                 ds: float = 0.02, ds_min: float = 1e-8, ds_max: float = 0.05,
-                 newton_tol: float = 1e-12, max_points: int = 5000,
-                 both_directions: bool = True, components: str = "all",
-                 **options: float) -> xr.Dataset:
+                 components: str = "all", options: ContinuationOptions | None = None,
+                 ds: float | None = None, ds_min: float | None = None,
+                 ds_max: float | None = None, newton_tol: float | None = None,
+                 max_points: int | None = None, both_directions: bool | None = None,
+                 **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-1 motions in one parameter and find its special points.
 
     Parameters
@@ -132,14 +134,16 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     root : {+1, -1}, optional
         Which root of eq. (15) to start on; default the physical (then stable) one.
     detect : sequence of str
-        Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``.
+        Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`.
     components : {"all", "start"}
         ``"all"`` (default): every connected component of the solution set in
         `bounds`, found by a scan of eq. (15) and followed one by one (component 0
         goes through the start); ``"start"``: only the component through the start.
-    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
-        Continuation options (see :class:`impactcont.continuation.ContinuationOptions`);
-        a first step ``ds`` above ``ds_max`` is lowered to ``ds_max``.
+    options : ContinuationOptions, optional
+        Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
+        Newton tolerance 1e-12 by default: the closed form is exact to rounding).
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
+        Single options, over `options`.
 
     Returns
     -------
@@ -154,18 +158,15 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         When a component stops at ``max_points`` (naming where it started).
     """
     N = _check_N(N)
-    unknown = sorted(set(detect) - set(LABELS))
-    if unknown:
-        raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
+    detect = check_labels(detect)
     problem = PeriodicBranchProblem(osc, N, parameter)
+    if options is not None and "bounds" in getattr(options, "given", ()):
+        bounds = options.bounds
     lo, hi = _check_bounds(parameter, bounds)
     _refuse_elastic(osc, parameter, lo, hi)
-    if isinstance(ds_max, (int, float)) and 0 < ds_max < ds:  # else the options say why
-        log.info("first step ds=%g lowered to ds_max=%g", ds, ds_max)
-        ds = ds_max
-    opts = ContinuationOptions(bounds=(lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-                               newton_tol=newton_tol, max_points=max_points,
-                               both_directions=both_directions, **options)
+    opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
+                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+                          both_directions=both_directions, **more)
     if components not in ("all", "start"):
         raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
     lam0 = _start_value(problem, (lo, hi), start)
@@ -194,7 +195,7 @@ def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
     result = continue_branch(problem, np.array([delta0]), lam0, opts)
     log.info("N=%d branch in %s from %s=%.10g: %d points (%s)", problem.N, problem.parameter,
              problem.parameter, lam0, len(result), result.message)
-    if any(st.name == "MAX_POINTS" for st in result.statuses):
+    if ContinuationStatus.MAX_POINTS_REACHED in result.statuses:
         warnings.warn(f"the N={problem.N} component through {problem.parameter}={lam0:.10g} "
                       f"stopped at max_points={opts.max_points}: the rest of it is not in the "
                       "branch; raise max_points or ds_max", RuntimeWarning, stacklevel=4)
@@ -274,31 +275,12 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
         arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
         component.append(np.full(len(run.samples), index))
         lam.append(np.asarray(res.lam, dtype=float))
-        for sp in run.specials:
-            row = {"label": sp.label, "omega": sp.orbit.oscillator.omega,
-                   "b": sp.orbit.oscillator.b, "delta": sp.delta, "point": sp.point + offset,
-                   "bracket_lo": min(sp.bracket), "bracket_hi": max(sp.bracket),
-                   "precision": sp.precision, "status": sp.status,
-                   "multipliers": sp.orbit.multipliers}
-            row.setdefault(parameter, sp.value)
-            special_points.append(row)
+        special_points += [special_record(sp, parameter, point=sp.point + offset,
+                                          bracket=sp.bracket) for sp in run.specials]
         offset += len(run.samples)
-    columns = {
-        "omega": np.array([o.oscillator.omega for o in orbits]),
-        "b": np.array([o.oscillator.b for o in orbits]),
-        "delta": np.array([o.delta for o in orbits]),
-        "impact_velocity": np.array([o.impact_velocity for o in orbits]),
-        "gap_min": np.array([o.gap_min for o in orbits]),
-        "spectral_radius": np.array([o.spectral_radius for o in orbits]),
-        "stable": np.array([o.stable for o in orbits]),
-        "physical": np.array([o.physical for o in orbits]),
-        "arclength": np.concatenate(arclength),
-        "multipliers": np.array([o.multipliers for o in orbits]),
-        "state": np.array([o.state for o in orbits]),
-        "connected_component": np.concatenate(component),
-    }
-    # the continued parameter's own column (omega and b are always there)
-    columns.setdefault(parameter, np.concatenate(lam))
+    columns = {**orbit_columns(orbits, parameter, np.concatenate(lam)),
+               "arclength": np.concatenate(arclength),
+               "connected_component": np.concatenate(component)}
     first = runs[0]
     option_record = {**dataclasses.asdict(opts), "N": N, "parameter": parameter,
                      "start": first.start, "start_delta": first.start_delta,

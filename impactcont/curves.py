@@ -26,8 +26,15 @@ import numpy as np
 import xarray as xr
 
 from impactcont.branch import continuation
-from impactcont.continuation import ContinuationOptions, iter_points
-from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.core import (
+    ContinuationOptions,
+    ContinuationPoint,
+    ContinuationStatus,
+    Stop,
+    follow,
+)
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
 from impactcont.dataset.schema import oscillator_from_dataset, validate_branch_dataset
 from impactcont.detection.codim2 import (
@@ -46,18 +53,16 @@ from impactcont.problems.codim1 import (
     curve_problem,
 )
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import Label
 
 __all__ = ["curve", "curve_crossings"]
 
 log = logging.getLogger(__name__)
 
-_EVENT_TOL = 1e-12
-
-
-@dataclasses.dataclass
-class _Run:
-    points: list[np.ndarray]
-    status: str
+_DEFAULTS = {"newton_tol": 1e-11, "ds": 0.01}
+"""The augmented systems use difference Jacobians: a looser tolerance than the closed form.
+The first step stays 0.01: the PD system is singular at a zero-velocity impact (the pole
+of G), and a point next to one is found or not depending on the steps there."""
 
 
 # -- arguments ----------------------------------------------------------------------------------
@@ -196,59 +201,66 @@ def _terminal_event(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray
     return None
 
 
-def _follow(problem: CurveProblem, u0: np.ndarray, lam0: float, options: ContinuationOptions,
-            direction: int, p1_bounds: tuple[float, float],
-            ends: list[tuple[str, np.ndarray, float, str]]) -> _Run:
-    """One direction of a curve; ends go to ``ends`` as (label, x, precision, status)."""
-    problem.accept(u0, lam0)
-    run = iter_points(problem, u0, lam0, options, direction)
-    points: list[np.ndarray] = []
-    name = problem.parameters[0]
-    for pt in run:
-        x = pt.state
-        if points:
-            event = _terminal_event(problem, points[-1], x)
-            if event is not None:
-                label, condition = event
-                ga, gb = condition(points[-1]), condition(x)
-                t = ga / (ga - gb) if ga != gb else 0.5
-                try:  # ill-conditioned at a strong resonance: a looser tolerance
-                    # Newton stagnates at the singular end: start it from the secant
-                    # estimate and accept a rounding-size residual (its step is the precision)
-                    xe = problem.solve(points[-1] + t * (x - points[-1]), condition, tol=1e-9,
-                                       residual_tol=1e-9)
-                    status = "located"
-                except NewtonConvergenceError as exc:
-                    # the augmented system is singular at the end itself (a Jordan block at
-                    # a strong resonance): keep the bracket
-                    log.info("%s curve end (%s) bracketed, not located: %s", problem.kind,
-                             label, exc)
-                    # recorded, not appended: an interpolated point is not on the curve
-                    xe, status = points[-1] + t * (x - points[-1]), "bracketed"
-                    ends.append((label, xe, float(np.hypot(x[0] - points[-1][0],
-                                                           x[-1] - points[-1][-1])), status))
-                    return _Run(points, f"curve ends at {label} (bracketed): {name}="
-                                        f"{xe[0]:.10g}, {problem.parameters[1]}={xe[-1]:.10g}")
-                points.append(xe)
-                ends.append((label, xe, max(problem.last_step, 1e-15), status))
-                return _Run(points, f"curve ends at {label}: {name}={xe[0]:.10g}, "
-                                    f"{problem.parameters[1]}={xe[-1]:.10g}")
-            lo, hi = p1_bounds
-            if not lo <= x[0] <= hi:
-                bound = lo if x[0] < lo else hi
-                try:
-                    xe = problem.solve(points[-1] + (bound - points[-1][0])
-                                       / (x[0] - points[-1][0]) * (x - points[-1]),
-                                       lambda y, v=bound: float(y[0] - v),
-                                       np.eye(x.size)[0])
-                except NewtonConvergenceError as exc:
-                    return _Run(points, f"{name} bound {bound:.10g} crossed, point on it not "
-                                        f"found ({exc})")
-                points.append(xe)
-                return _Run(points, f"parameter bound reached: {name} = {bound:.10g}")
-        points.append(x)
-        problem.accept(pt.u, pt.lam)
-    return _Run(points, run.message)
+class _CurveWatch:
+    """The stop rule of one direction of a curve: its ends and the bounds of ``p1``.
+
+    A curve ends at a codim-2 point (GR+ZV on a grazing curve, R1/R2 on a
+    Neimark-Sacker curve), recorded in ``ends`` as ``(label, x, precision,
+    status)``; the located end replaces the last point. ``p1`` is an unknown,
+    so the core does not see its bounds: the point on the bound ends the curve.
+    """
+
+    def __init__(self, problem: CurveProblem, p1_bounds: tuple[float, float],
+                 ends: list[tuple[str, np.ndarray, float, str]]) -> None:
+        self.problem = problem
+        self.p1_bounds = p1_bounds
+        self.ends = ends
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        if previous is None:
+            return None
+        problem, xa, x = self.problem, previous.state, current.state
+        p1, p2 = problem.parameters
+        event = _terminal_event(problem, xa, x)
+        if event is not None:
+            label, condition = event
+            ga, gb = condition(xa), condition(x)
+            t = ga / (ga - gb) if ga != gb else 0.5
+            try:  # ill-conditioned at a strong resonance: a looser tolerance
+                # Newton stagnates at the singular end: start it from the secant
+                # estimate and accept a rounding-size residual (its step is the precision)
+                xe = problem.solve(xa + t * (x - xa), condition, tol=1e-9, residual_tol=1e-9)
+            except NewtonConvergenceError as exc:
+                # the augmented system is singular at the end itself (a Jordan block at
+                # a strong resonance): keep the bracket
+                log.info("%s curve end (%s) bracketed, not located: %s", problem.kind, label, exc)
+                # recorded, not kept: an interpolated point is not on the curve
+                xe = xa + t * (x - xa)
+                self.ends.append((label, xe, float(np.hypot(x[0] - xa[0], x[-1] - xa[-1])),
+                                  "bracketed"))
+                return Stop(ContinuationStatus.CURVE_END, f"at {label} (bracketed): {p1}="
+                            f"{xe[0]:.10g}, {p2}={xe[-1]:.10g}", keep=False)
+            self.ends.append((label, xe, max(problem.last_step, 1e-15), "located"))
+            return Stop(ContinuationStatus.CURVE_END, f"at {label}: {p1}={xe[0]:.10g}, "
+                        f"{p2}={xe[-1]:.10g}", point=_on_curve(current, xe))
+        lo, hi = self.p1_bounds
+        if lo <= x[0] <= hi:
+            return None
+        bound = lo if x[0] < lo else hi
+        try:
+            xe = problem.solve(xa + (bound - xa[0]) / (x[0] - xa[0]) * (x - xa),
+                               lambda y, v=bound: float(y[0] - v), np.eye(x.size)[0])
+        except NewtonConvergenceError as exc:
+            return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} bound {bound:.10g} crossed, "
+                        f"point on it not found ({exc})", keep=False)
+        return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} = {bound:.10g}",
+                    point=_on_curve(current, xe))
+
+
+def _on_curve(point: ContinuationPoint, x: np.ndarray) -> ContinuationPoint:
+    """`point` moved to the extended state ``x = [u, lam]`` (same tangent)."""
+    return dataclasses.replace(point, u=x[:-1].copy(), lam=float(x[-1]))
 
 
 def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
@@ -316,13 +328,16 @@ def _codim2_record(problem: CurveProblem, cp: Codim2Point) -> dict[str, Any]:
 
 
 @blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
           start: xr.Dataset | Mapping[str, float] | None = None, special: int | None = None,
           parameters: Sequence[str] = ("omega", "b"),
           bounds: Mapping[str, Sequence[float]] | Sequence[Sequence[float]] | None = None,
-          root: int | None = None, ds: float = 0.01, ds_min: float = 1e-8, ds_max: float = 0.05,
-          newton_tol: float = 1e-11, max_points: int = 2000, both_directions: bool = True,
-          detect_codim2_points: bool = True, **options: float) -> xr.Dataset:
+          root: int | None = None, detect_codim2_points: bool = True,
+          options: ContinuationOptions | None = None, ds: float | None = None,
+          ds_min: float | None = None, ds_max: float | None = None,
+          newton_tol: float | None = None, max_points: int | None = None,
+          both_directions: bool | None = None, **more: Any) -> xr.Dataset:
     """Continue a codim-1 curve of N-1 motions in two parameters.
 
     Parameters
@@ -333,7 +348,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     N : int or None
         One impact every N forcing periods; ``None`` takes it from a branch
         dataset given as ``start``.
-    kind : {"SN", "PD", "NS", "GR", "ZV"}
+    kind : Label or str
         Saddle-node, period-doubling, Neimark-Sacker, grazing or
         zero-velocity-impact curve (augmented systems in
         :mod:`impactcont.problems.codim1`).
@@ -353,10 +368,15 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
     root : {+1, -1}, optional
         With explicit start values and no ``delta``: the root of eq. (15).
-    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **options
-        Continuation options (:class:`impactcont.continuation.ContinuationOptions`).
     detect_codim2_points : bool
         Locate the codim-2 points on the curve.
+    options : ContinuationOptions, optional
+        Options left out take the drivers' defaults
+        (:data:`impactcont.core.options.DRIVER_DEFAULTS`), but Newton tolerance 1e-11
+        and first step 0.01; ``bounds`` is the box's range of ``p2``.
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
+        Single options, over `options` (``ds`` and ``ds_min`` adapt to a ``ds_max``
+        given alone).
 
     Returns
     -------
@@ -371,6 +391,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     NoPeriodicMotionError
         No start point could be found.
     """
+    kind = kind.value if isinstance(kind, Label) else kind
     if kind not in CURVE_KINDS:
         raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
     if osc is None and not isinstance(start, xr.Dataset):
@@ -407,27 +428,21 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         if not lo <= value <= hi:
             raise ParameterError(f"the start {name}={value!r} lies outside bounds[{name!r}] = "
                                  f"{box[name]}")
-    opts = ContinuationOptions(bounds=box[p2], ds=ds, ds_min=ds_min, ds_max=ds_max,
-                               newton_tol=newton_tol, max_points=max_points, **options)
+    opts = driver_options(options, box[p2], defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
+                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+                          both_directions=both_directions, **{**more, "bounds": box[p2]})
     problem = curve_problem(kind, start_osc, N, parameters)
     u0 = problem.initial_unknowns(p1v, p2v, delta0)
     log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)
 
     ends: list[tuple[str, np.ndarray, float, str]] = []
-    forward = _follow(problem, u0.copy(), p2v, opts, +1, box[p1], ends)
-    if not forward.points:
+    result = follow(problem, u0, p2v, opts,
+                    stop=lambda direction: _CurveWatch(problem, box[p1], ends))
+    if result.status is ContinuationStatus.NEWTON_FAILED_AT_START:
         raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "
-                                    f"({forward.status})")
-    runs = [forward]
-    if both_directions:
-        problem.initial_unknowns(p1v, p2v, delta0, u0[2:])
-        backward = _follow(problem, u0.copy(), p2v, opts, -1, box[p1], ends)
-        runs.append(backward)
-        xs = backward.points[::-1] + forward.points[1:]
-    else:
-        xs = forward.points
-    status = "; ".join(f"{d}: {r.status}" for d, r in zip(("forward", "backward"), runs,
-                                                            strict=False))
+                                    f"({result.message})")
+    xs = [np.append(u, lam) for u, lam in zip(result.u, result.lam, strict=True)]
+    status = result.message
     log.info("%s curve: %d points (%s)", kind, len(xs), status)
 
     columns, orbits, tests = _point_columns(problem, xs)

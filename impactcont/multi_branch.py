@@ -19,19 +19,28 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.continuation import ContinuationOptions, ContinuationPoint, iter_points
+from impactcont.core import (
+    ContinuationOptions,
+    ContinuationPoint,
+    ContinuationStatus,
+    Stop,
+    follow,
+)
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import multi_impact_dataset
+from impactcont.dataset.records import orbit_columns, special_record
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
     MultiImpactSpecialPoint,
     detect_multi_impact_points,
 )
-from impactcont.detection.special_points import LABELS, event_function
+from impactcont.detection.special_points import event_function
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["multi_impact_continuation"]
 
@@ -47,15 +56,18 @@ def _as_multi(orbit: Any) -> MultiImpactOrbit:
                     f"{type(orbit).__name__}")
 
 
-def make_options(bounds: Sequence[float], **kwargs: Any) -> ContinuationOptions:
-    """:class:`ContinuationOptions` with the defaults of N-p branches."""
-    defaults = {"ds_max": 0.05, "newton_tol": 1e-11, "max_points": 2000}
-    defaults.update(kwargs)
-    # a smaller ds_max given alone also bounds the default first step and smallest step
-    defaults.setdefault("ds", min(0.02, float(defaults["ds_max"])))
-    defaults.setdefault("ds_min", min(1e-8, float(defaults["ds"])))
+_DEFAULTS = {"newton_tol": 1e-11}
+"""The shooting residual of a long motion is accurate to about 1e-12."""
+
+
+def make_options(bounds: Sequence[float], options: ContinuationOptions | None = None,
+                 **keywords: Any) -> ContinuationOptions:
+    """The options of an N-p branch: the drivers' defaults < `options` < `keywords`.
+
+    See :func:`impactcont.core.options.driver_options`; ``None`` keywords are not given.
+    """
     lo, hi = (float(v) for v in bounds)
-    return ContinuationOptions(bounds=(lo, hi), **defaults)
+    return driver_options(options, (lo, hi), defaults=_DEFAULTS, **keywords)
 
 
 def _pd_sign_change(a: MultiImpactOrbit, b: MultiImpactOrbit) -> bool:
@@ -83,59 +95,54 @@ def _asymmetry(orbit: MultiImpactOrbit) -> np.ndarray | None:
                            orbit.flight_times[:h] - orbit.flight_times[h:], dphase])
 
 
-@dataclasses.dataclass
-class _Run:
-    points: list[ContinuationPoint]
-    orbits: list[MultiImpactOrbit]
-    message: str
-    status: str
+class _Watch:
+    """The stop rule of one direction of an N-p branch; keeps the orbit of every kept point.
 
+    Stops when the branch returns to the motion it was born from (the N/2-p/2
+    motion repeated twice, or its mirror image: that point is left out) and,
+    with `stop_after_pd`, that many points after the first sign change of the
+    PD test function.
+    """
 
-def _run(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
-         options: ContinuationOptions, direction: int, stop_after_pd: int | None,
-         on_point: Callable[[MultiImpactOrbit], None] | None) -> _Run:
-    run = iter_points(problem, u0, lam0, options, direction)
-    points: list[ContinuationPoint] = []
-    orbits: list[MultiImpactOrbit] = []
-    remaining: int | None = None
-    status = message = ""
-    reference: np.ndarray | None = None
-    for point in run:
-        orbit = problem.orbit(point.u, point.lam)
+    def __init__(self, problem: MultiImpactBranchProblem, stop_after_pd: int | None,
+                 on_point: Callable[[MultiImpactOrbit], None] | None) -> None:
+        self.problem = problem
+        self.stop_after_pd = stop_after_pd
+        self.on_point = on_point
+        self.orbits: list[MultiImpactOrbit] = []
+        self.reference: np.ndarray | None = None
+        self.remaining: int | None = None
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        problem = self.problem
+        orbit = problem.orbit(current.u, current.lam)
         asym = _asymmetry(orbit)
         if asym is not None:
-            scale = max(1.0, float(np.max(np.abs(orbit.states))))
-            if reference is None and not points and np.max(np.abs(asym)) > _PARENT_TOL * scale:
-                reference = asym
-            elif reference is not None and (float(asym @ reference) <= 0.0 or np.max(
-                    np.abs(asym)) <= _PARENT_TOL * scale):
-                status = "REACHED_PARENT"
-                message = (f"reached the period-doubling of the {problem.N // 2}-"
-                           f"{problem.p // 2} motion it was born from near {problem.parameter}"
-                           f"={point.lam:.10g} (the point there is the parent repeated twice "
-                           "or its mirror image, and is left out)")
-                break
-        points.append(point)
-        orbits.append(orbit)
-        if on_point is not None:
-            on_point(orbit)
-        if remaining is not None:
-            remaining -= 1
-            if remaining <= 0:
-                status = "STOPPED_AFTER_PD"
-                message = f"stopped {stop_after_pd} point(s) after the first period-doubling"
-                break
-        elif stop_after_pd is not None and len(orbits) > 1 and _pd_sign_change(orbits[-2],
-                                                                                orbits[-1]):
-            remaining = stop_after_pd
-            if remaining <= 0:
-                status = "STOPPED_AFTER_PD"
-                message = "stopped at the first period-doubling"
-                break
-    if not status:
-        status = run.status.name if run.status is not None else "UNKNOWN"
-        message = run.message
-    return _Run(points, orbits, message, status)
+            small = np.max(np.abs(asym)) <= _PARENT_TOL * max(1.0, float(np.max(np.abs(
+                orbit.states))))
+            if self.reference is None and not self.orbits and not small:
+                self.reference = asym
+            elif self.reference is not None and (float(asym @ self.reference) <= 0.0 or small):
+                return Stop(ContinuationStatus.REACHED_PARENT,
+                            f"the period-doubling of the {problem.N // 2}-{problem.p // 2} "
+                            f"motion it was born from, near {problem.parameter}="
+                            f"{current.lam:.10g} (the point there is the parent repeated twice "
+                            "or its mirror image, and is left out)", keep=False)
+        self.orbits.append(orbit)
+        if self.on_point is not None:
+            self.on_point(orbit)
+        if self.remaining is not None:
+            self.remaining -= 1
+            if self.remaining <= 0:
+                return Stop(ContinuationStatus.STOPPED_AFTER_EVENT,
+                            f"{self.stop_after_pd} point(s) after the first period-doubling")
+        elif self.stop_after_pd is not None and len(self.orbits) > 1 and _pd_sign_change(
+                self.orbits[-2], self.orbits[-1]):
+            self.remaining = self.stop_after_pd
+            if self.remaining <= 0:
+                return Stop(ContinuationStatus.STOPPED_AFTER_EVENT, "at the first period-doubling")
+        return None
 
 
 def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
@@ -162,26 +169,26 @@ def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
     -------
     samples : list of MultiImpactSample
     statuses : list of str
-        Why each direction stopped.
+        Why each direction stopped (names of
+        :class:`~impactcont.core.ContinuationStatus`).
     message : str
     """
-    forward = _run(problem, u0, lam0, options, options.direction, stop_after_pd, on_point)
-    if not forward.points:
-        raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {forward.message}")
-    runs = [forward]
-    if options.both_directions and forward.status != "CLOSED_LOOP":
-        runs.append(_run(problem, u0, lam0, options, -options.direction, stop_after_pd,
-                         on_point))
-    samples = [MultiImpactSample(u=pt.u, lam=pt.lam, tangent=pt.tangent, orbit=o)
-               for pt, o in zip(forward.points, forward.orbits, strict=True)]
-    if len(runs) == 2:
-        back = [MultiImpactSample(u=pt.u, lam=pt.lam, tangent=-pt.tangent, orbit=o)
-                for pt, o in zip(runs[1].points[1:], runs[1].orbits[1:], strict=True)]
-        samples = back[::-1] + samples
-    statuses = [r.status for r in runs]
-    message = "; ".join(f"{'forward' if i == 0 else 'backward'}: {r.message}"
-                        for i, r in enumerate(runs))
-    return samples, statuses, message
+    watches: dict[int, _Watch] = {}
+
+    def watch(direction: int) -> _Watch:
+        watches[direction] = _Watch(problem, stop_after_pd, on_point)
+        return watches[direction]
+
+    result = follow(problem, u0, lam0, options, stop=watch)
+    forward = watches[options.direction].orbits
+    if not forward:
+        raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
+    orbits = forward
+    if -options.direction in watches:
+        orbits = watches[-options.direction].orbits[:0:-1] + forward
+    samples = [MultiImpactSample(u=u, lam=float(lam), tangent=t, orbit=o)
+               for u, lam, t, o in zip(result.u, result.lam, result.tangent, orbits, strict=True)]
+    return samples, [st.name for st in result.statuses], result.message
 
 
 def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[MultiImpactSample],
@@ -193,21 +200,8 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
     parameter = problem.parameter
     x = np.array([np.append(s.u, s.lam) for s in samples])
     steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1)) if len(samples) > 1 else []
-    columns: dict[str, Any] = {
-        "omega": np.array([o.oscillator.omega for o in orbits]),
-        "b": np.array([o.oscillator.b for o in orbits]),
-        "delta": np.array([o.delta for o in orbits]),
-        "impact_velocity": np.array([o.impact_velocity for o in orbits]),
-        "gap_min": np.array([o.gap_min for o in orbits]),
-        "spectral_radius": np.array([o.spectral_radius for o in orbits]),
-        "stable": np.array([o.stable for o in orbits]),
-        "physical": np.array([o.physical for o in orbits]),
-        "arclength": np.concatenate([[0.0], np.cumsum(steps)]),
-        "multipliers": np.array([o.multipliers for o in orbits]),
-        "state": np.array([o.state for o in orbits]),
-    }
-    if parameter not in columns:
-        columns[parameter] = np.array([s.lam for s in samples])
+    columns = {**orbit_columns(orbits, parameter, [s.lam for s in samples]),
+               "arclength": np.concatenate([[0.0], np.cumsum(steps)])}
     impact_columns = {
         "delta_k": np.array([o.phases for o in orbits]),
         "impact_velocity_k": np.array([o.impact_velocities for o in orbits]),
@@ -215,16 +209,8 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
         "gap_min_k": np.array([o.flight_gap_min for o in orbits]),
         "state_k": np.array([o.states for o in orbits]),
     }
-    special_points = []
-    for sp in specials:
-        osc = sp.orbit.oscillator
-        row = {"label": sp.label, "omega": osc.omega, "b": osc.b, "delta": sp.delta,
-               "point": sp.point, "bracket_lo": sp.bracket[0], "bracket_hi": sp.bracket[1],
-               "precision": sp.precision, "status": sp.status,
-               "multipliers": sp.orbit.multipliers}
-        if parameter not in row:
-            row[parameter] = sp.value
-        special_points.append(row)
+    special_points = [special_record(sp, parameter, point=sp.point, bracket=sp.bracket)
+                      for sp in specials]
     n, p = problem.osc.n, problem.p
     special_impact_columns = {
         "delta_k": np.array([sp.orbit.phases for sp in specials]).reshape(-1, p),
@@ -240,21 +226,12 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
                                 extra_attrs=extra_attrs)
 
 
-def _check_labels(detect: Sequence[str]) -> list[str]:
-    if isinstance(detect, str):
-        raise ParameterError(f"detect must be a sequence of labels; got the string {detect!r}")
-    unknown = sorted(set(detect) - set(LABELS))
-    if unknown:
-        raise ParameterError(f"detect: labels must be a subset of {LABELS}; got unknown {unknown}")
-    return list(detect)
-
-
-def follow(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
            extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
     """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``."""
-    labels = _check_labels(detect)
+    labels = check_labels(detect)
     samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                               stop_after_pd=stop_after_pd)
     specials = detect_multi_impact_points(problem, samples, labels)
@@ -270,13 +247,16 @@ def follow(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
 
 
 @blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS, "direction": 1})
 def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter: str = "omega",
                               bounds: Sequence[float] = (0.5, 6.0), *,
-                              detect: Sequence[str] = LABELS, ds: float | None = None,
-                              ds_min: float | None = None, ds_max: float = 0.05,
-                              newton_tol: float = 1e-11, max_points: int = 2000,
-                              both_directions: bool = True, direction: int = 1,
-                              **options: Any) -> xr.Dataset:
+                              detect: Sequence[str] = LABELS,
+                              options: ContinuationOptions | None = None,
+                              ds: float | None = None, ds_min: float | None = None,
+                              ds_max: float | None = None, newton_tol: float | None = None,
+                              max_points: int | None = None,
+                              both_directions: bool | None = None, direction: int | None = None,
+                              **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-p motions through a given motion.
 
     Parameters
@@ -289,11 +269,13 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     bounds : (float, float)
         Range of the parameter; must contain the start.
     detect : sequence of str
-        Special points to detect, subset of ``("SN", "PD", "NS", "GR", "ZV")``; GR and
+        Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`; GR and
         ZV use the minimum over the flights and impacts.
-    ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **options
-        Continuation options (:class:`impactcont.continuation.ContinuationOptions`);
-        ``ds`` defaults to ``min(0.02, ds_max)`` and ``ds_min`` to ``min(1e-8, ds)``.
+    options : ContinuationOptions, optional
+        Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
+        Newton tolerance 1e-11 by default).
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **more
+        Single options, over `options`.
 
     Returns
     -------
@@ -309,14 +291,13 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         Newton fails at the start.
     """
     orbit = _as_multi(start)
-    labels = _check_labels(detect)
+    labels = check_labels(detect)
     problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter)
     lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
-    steps = {"ds": ds, "ds_min": ds_min}
-    opts = make_options(bounds, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
-                        both_directions=both_directions, direction=direction,
-                        **{k: v for k, v in steps.items() if v is not None}, **options)
+    opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
+                        newton_tol=newton_tol, max_points=max_points,
+                        both_directions=both_directions, direction=direction, **more)
     if not opts.lam_min <= lam0 <= opts.lam_max:
-        raise ParameterError(f"bounds {tuple(bounds)} must contain the start {parameter}="
+        raise ParameterError(f"bounds {opts.bounds} must contain the start {parameter}="
                              f"{lam0!r} of the orbit")
-    return follow(problem, orbit.unknowns, lam0, opts, detect=labels)
+    return run_branch(problem, orbit.unknowns, lam0, opts, detect=labels)

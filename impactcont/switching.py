@@ -35,11 +35,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.core import ContinuationOptions
+from impactcont.core.corrector import solve_on_hyperplane
+from impactcont.core.options import DRIVER_DEFAULTS
 from impactcont.dataset.multi import impacts_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
-from impactcont.detection.special_points import LABELS
 from impactcont.errors import NoPeriodicMotionError, ParameterError
-from impactcont.multi_branch import follow, make_options
+from impactcont.multi_branch import make_options, run_branch
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     initial_unknowns,
@@ -48,6 +50,7 @@ from impactcont.orbit.multi_impact import (
 from impactcont.orbit.periodic import orbit_at_phase
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS
 
 __all__ = [
     "Cascade",
@@ -154,21 +157,13 @@ def critical_direction(orbit: MultiImpactOrbit) -> tuple[np.ndarray, complex]:
 def _hyperplane_newton(problem: MultiImpactBranchProblem, x_pred: np.ndarray,
                        normal: np.ndarray) -> np.ndarray:
     """Solve ``F(u, lam) = 0`` on the hyperplane ``<normal, x - x_pred> = 0`` from ``x_pred``."""
-    x = x_pred.copy()
-    scale = max(1.0, float(np.max(np.abs(x))))
-    for _ in range(_MAX_ITER):
-        u, lam = x[:-1], float(x[-1])
-        r = problem.residual(u, lam)
-        A = np.vstack([np.column_stack([problem.jacobian(u, lam), problem.dparam(u, lam)]),
-                       normal])
-        step = np.linalg.solve(A, -np.append(r, normal @ (x - x_pred)))
-        x = x + step
-        # quadratic convergence: a step this small leaves a residual at rounding level; the
-        # residual is the accuracy that counts (long motions make the solve less accurate)
-        if np.max(np.abs(step)) <= _STEP_TOL * scale:
-            u, lam = x[:-1], float(x[-1])
-            if np.max(np.abs(problem.residual(u, lam))) <= _CORRECTOR_TOL * scale:
-                return x
+    # quadratic convergence: a step this small leaves a residual at rounding level; the
+    # residual is the accuracy that counts (long motions make the solve less accurate)
+    found = solve_on_hyperplane(problem, x_pred, normal, tol=_STEP_TOL, max_iter=_MAX_ITER,
+                                residual_tol=_CORRECTOR_TOL)
+    if found.converged:
+        return found.x
+    x = found.x
     raise NoPeriodicMotionError(
         f"branch switching: Newton on the shooting system of the N={problem.N}, p={problem.p} "
         f"motion did not converge from the predicted point (residual "
@@ -245,7 +240,8 @@ def _check_epsilon(epsilon: object) -> float:
 def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
                            bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                            detect: Sequence[str] = LABELS, stop_after_pd: int | None = None,
-                           **options: Any) -> xr.Dataset:
+                           options: ContinuationOptions | None = None,
+                           **more: Any) -> xr.Dataset:
     """Start and follow the 2N-2p branch born at a period-doubling point of a branch.
 
     Parameters
@@ -263,8 +259,11 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
         Special points to detect on the new branch.
     stop_after_pd : int, optional
         Stop this many points after the first PD of the new branch.
-    **options
-        Continuation options (``ds``, ``ds_max``, ``max_points``, ...).
+    options : ContinuationOptions, optional
+        Continuation options (the drivers' defaults for those left out); the
+        switch sets ``direction`` (away from the parent) and one direction only.
+    **more
+        Convenience keywords for single options (``ds``, ``ds_max``, ``max_points``, ...).
 
     Returns
     -------
@@ -285,11 +284,11 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
     parameter = branch.attrs["parameter"]
     lo, hi = _dataset_bounds(branch, bounds)
     problem, u1, lam1, direction, info = _pd_start(orbit, parameter, epsilon)
-    opts = make_options((lo, hi), direction=direction, both_directions=False, **options)
+    opts = make_options((lo, hi), options, direction=direction, both_directions=False, **more)
     if not lo <= lam1 <= hi:
         raise ParameterError(f"bounds ({lo}, {hi}) must contain the switched point "
                              f"{parameter}={lam1!r}")
-    return follow(problem, u1, lam1, opts, detect=detect, stop_after_pd=stop_after_pd,
+    return run_branch(problem, u1, lam1, opts, detect=detect, stop_after_pd=stop_after_pd,
                   record={"switch": info}, extra_attrs=info)
 
 
@@ -347,7 +346,8 @@ def _first_pd(ds: xr.Dataset, after: float | None, sign: int) -> int | None:
 def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings: int = 6,
                             bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                             detect: Sequence[str] = LABELS, min_spacing: float = 1e-9,
-                            **options: Any) -> Cascade:
+                            options: ContinuationOptions | None = None,
+                            **more: Any) -> Cascade:
     """Follow a period-doubling cascade: switch at a PD, find the next PD, repeat.
 
     Parameters
@@ -368,8 +368,10 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     min_spacing : float
         Stop when successive PD points are closer than this in the parameter
         (the numbers no longer resolve the cascade).
-    **options
-        Continuation options for the new branches; ``ds_max`` is reduced with
+    options : ContinuationOptions, optional
+        Continuation options for the new branches (see below).
+    **more
+        Convenience keywords over `options`. ``ds_max`` is reduced with
         the spacing of the PD points; ``max_points`` defaults to 300 per branch. Each
         new branch after the first is confined to twice the last PD spacing around
         its PD.
@@ -392,9 +394,11 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     pd_physical = [special_orbit(branch, "PD", which).physical]
     current, current_which = branch, which
     message = f"reached max_doublings={max_doublings}"
-    base_ds_max = float(options.pop("ds_max", 0.05))
-    base_ds = float(options.pop("ds", 0.02))
-    options.setdefault("max_points", 300)  # a child branch that finds no PD is not followed far
+    given = {} if options is None else {k: getattr(options, k) for k in options.given}
+    base_ds_max = float(more.pop("ds_max", given.get("ds_max", DRIVER_DEFAULTS["ds_max"])))
+    base_ds = float(more.pop("ds", given.get("ds", DRIVER_DEFAULTS["ds"])))
+    if "max_points" not in given:
+        more.setdefault("max_points", 300)  # a child branch that finds no PD is not followed far
     for level in range(max_doublings):
         spacing = abs(pd_values[-1] - pd_values[-2]) if len(pd_values) > 1 else None
         child_bounds = (lo, hi)
@@ -411,7 +415,7 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
             child = period_doubling_switch(
                 current, current_which, bounds=child_bounds, epsilon=eps, detect=labels,
                 stop_after_pd=3, ds=min(base_ds, ds_max), ds_max=ds_max,
-                ds_min=min(1e-8, ds_max * 1e-4), **options)
+                ds_min=min(1e-8, ds_max * 1e-4), options=options, **more)
         except (NoPeriodicMotionError, np.linalg.LinAlgError) as exc:
             message = f"switching at the PD {parameter}={pd_values[-1]:.12g} failed: {exc}"
             break
@@ -476,7 +480,8 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
 @blas_limited
 def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float] | None = None,
                    epsilon: float = 1e-4, detect: Sequence[str] = LABELS,
-                   **options: Any) -> xr.Dataset | None:
+                   options: ContinuationOptions | None = None,
+                   **more: Any) -> xr.Dataset | None:
     """Follow the motion with one more impact born at a grazing point of a branch.
 
     Parameters
@@ -492,8 +497,11 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
         velocity is positive, before continuing (max-norm of the unknowns).
     detect : sequence of str
         Special points to detect on the new branch.
-    **options
-        Continuation options.
+    options : ContinuationOptions, optional
+        Continuation options (the drivers' defaults for those left out); the
+        switch sets ``direction`` (away from the grazing point) and one direction only.
+    **more
+        Convenience keywords for single options (``ds``, ``ds_max``, ``max_points``, ...).
 
     Returns
     -------
@@ -549,6 +557,6 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     if not lo <= lam1 <= hi:
         raise ParameterError(f"bounds ({lo}, {hi}) must contain the grazing point "
                              f"{parameter}={lam1!r}")
-    opts = make_options((lo, hi), direction=direction, both_directions=False, **options)
-    return follow(problem, u1, lam1, opts, detect=detect, record={"switch": info},
+    opts = make_options((lo, hi), options, direction=direction, both_directions=False, **more)
+    return run_branch(problem, u1, lam1, opts, detect=detect, record={"switch": info},
                   extra_attrs=info)

@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.continuation import ContinuationOptionError
+from impactcont.core import ContinuationOptionError
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from impactcont.continuation import (
+from impactcont.core import (
     ContinuationOptionError,
     ContinuationOptions,
     ContinuationPoint,
@@ -331,7 +331,7 @@ def test_singular_jacobian_is_logged_with_its_condition_number(
     stepper = PalcStepper(Parabola(), ContinuationOptions(bounds=(-2.0, 2.0)))
 
     with (
-        caplog.at_level(logging.WARNING, logger="impactcont.continuation"),
+        caplog.at_level(logging.WARNING, logger="impactcont.core"),
         pytest.raises(NewtonConvergenceError, match="singular"),
     ):
         stepper.correct_at_fixed_parameter(np.array([0.0]), -1.0)

@@ -57,8 +57,8 @@ def test_branch_reaches_both_ends_of_the_restitution_range():
 
 
 @pytest.mark.parametrize(("parameter", "bounds", "match"), [
-    ("R", (0.0, 1.5), "R is in \\[0, 1\\]"), ("omega", (0.0, 2.0), "omega is > 0"),
-    ("eta", (-0.1, 0.2), "eta is >= 0"), ("omega", (0.5,), "two numbers")])
+    ("R", (0.0, 1.5), "R is in \\[0, 1\\]"), ("omega", (0.0, 2.0), "omega is finite and > 0"),
+    ("eta", (-0.1, 0.2), "eta is finite and >= 0"), ("omega", (0.5,), "two numbers")])
 def test_bounds_outside_the_parameter_range_are_refused(parameter, bounds, match):
     with pytest.raises(ic.ParameterError, match=match):
         ic.continuation(ic.ImpactOscillator(**PAPER, eta=0.1), 1, parameter, bounds)

@@ -231,7 +231,7 @@ def test_unphysical_root_at_nominal_raises(osc):
     ({"b": (-float("inf"), 1.0)}, "lower end must be a finite real number; got -inf"),
     ({"b": (0.2,)}, re.escape("must be an interval (lo, hi); got (0.2,)")),
     ({"F[2]": (0.9, 1.1)}, re.escape("'F[2]' indexes past F")),
-    ({"alpha": (0.0, 0.1)}, "vary 'eta' instead"),
+    ({"alpha": (0.0, 0.1)}, "use 'eta' instead"),
     ({"R": (0.5, 1.2)}, "R must be in \\[0, 1\\]; got 1.2"),
     ({"omega": (-1.0, 1.0)}, "omega must be finite and > 0; got -1.0"),
     ({}, "non-empty"),

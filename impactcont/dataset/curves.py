@@ -35,10 +35,12 @@ from impactcont.dataset.schema import (
     PARAMETERS,
     _options_json,
     _Var,
-    state_component_names,
+    check_variables,
+    point_coords,
     validate_branch_dataset,
 )
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.vocabulary import CODIM2_LABELS, LABELS, STATUSES
 
 __all__ = [
     "CODIM2_LABELS",
@@ -56,18 +58,8 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-#: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
-#: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1
-#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi).
-CODIM2_LABELS: tuple[str, ...] = (
-    "SN+ZV", "SN+GR", "SN+PD", "SN+NS",
-    "PD+ZV", "PD+GR", "PD+SN", "PD+NS",
-    "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
-    "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
-    "ZV+SN",
-)
-CODIM2_STATUSES: tuple[str, ...] = ("located", "bracketed")
-CURVE_KINDS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+CODIM2_STATUSES: tuple[str, ...] = STATUSES
+CURVE_KINDS: tuple[str, ...] = LABELS
 
 _LABEL_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_LABELS))}")
 _STATUS_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_STATUSES))}")
@@ -274,13 +266,7 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
         else:
             arr = np.array(values, dtype=np.float64).reshape(count)
         data_vars[codim2_variable(key)] = (("codim2", *spec.extra_dims), arr, spec.attrs())
-    coords = {
-        "point": ("point", np.arange(npoints, dtype=np.int64),
-                  {"long_name": "continuation point index", "units": "1"}),
-        "component": ("component", np.array(state_component_names(n)),
-                      {"long_name": "state component",
-                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
-    }
+    coords = point_coords(npoints, n)
     attrs = {
         "title": title or f"{kind} curve of periodic {N}-1 motions in "
                           f"({parameters[0]}, {parameters[1]})",
@@ -343,17 +329,14 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
-def _check_vars(ds: xr.Dataset, expected: Mapping[str, tuple[tuple[str, ...], str]],
-                what: str) -> None:
-    missing = [k for k in expected if k not in ds.variables]
-    if missing:
-        raise ValueError(f"not a {what} dataset: missing variable(s) {missing}")
-    for key, (dims, kind) in expected.items():
-        var = ds[key]
-        if var.dims != dims:
-            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
-        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
-            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; got {var.dtype}")
+def _check_kind(ds: Any, kind: str, attrs: Sequence[str]) -> None:
+    """`ds` is a Dataset with the attributes of a dataset of `kind` (``impactcont_dataset``)."""
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"expected an xarray.Dataset of a {kind}; got {type(ds).__name__}")
+    missing = [a for a in attrs if a not in ds.attrs]
+    if missing or ds.attrs.get("impactcont_dataset") != kind:
+        raise ValueError(f"not a {kind} dataset: missing attribute(s) {missing} or "
+                         f"impactcont_dataset != {kind!r}")
 
 
 def validate_curve_dataset(ds: Any) -> xr.Dataset:
@@ -364,12 +347,7 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
     TypeError, ValueError
         Naming the missing or malformed attribute or variable.
     """
-    if not isinstance(ds, xr.Dataset):
-        raise TypeError(f"expected an xarray.Dataset of a curve; got {type(ds).__name__}")
-    missing = [a for a in _CURVE_ATTRS if a not in ds.attrs]
-    if missing or ds.attrs.get("impactcont_dataset") != "curve":
-        raise ValueError(f"not a curve dataset: missing attribute(s) {missing} or "
-                         f"impactcont_dataset != 'curve'")
+    _check_kind(ds, "curve", _CURVE_ATTRS)
     if ds.attrs["kind"] not in CURVE_KINDS:
         raise ValueError(f"attribute 'kind' must be one of {CURVE_KINDS}; got {ds.attrs['kind']!r}")
     parameters = str(ds.attrs["parameters"]).split(",")
@@ -380,7 +358,7 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
                 for k, s in _curve_variables(parameters).items()}
     expected.update({codim2_variable(k): (("codim2", *s.extra_dims), s.kind)
                      for k, s in _codim2_fields(parameters).items()})
-    _check_vars(ds, expected, "curve")
+    check_variables(ds, expected, "curve")
     labels = set(np.asarray(ds[codim2_variable("label")].values).tolist())
     if not labels <= set(CODIM2_LABELS):
         raise ValueError(f"codim2_label must hold labels in {CODIM2_LABELS}; got {sorted(labels)}")
@@ -389,13 +367,8 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
 
 def validate_map_dataset(ds: Any) -> xr.Dataset:
     """Check that ``ds`` has the layout of :func:`map_dataset`; return it."""
-    if not isinstance(ds, xr.Dataset):
-        raise TypeError(f"expected an xarray.Dataset of a map; got {type(ds).__name__}")
-    missing = [a for a in _MAP_ATTRS if a not in ds.attrs]
-    if missing or ds.attrs.get("impactcont_dataset") != "map":
-        raise ValueError(f"not a map dataset: missing attribute(s) {missing} or "
-                         f"impactcont_dataset != 'map'")
-    _check_vars(ds, {k: (dims, s.kind) for k, (s, dims) in MAP_VARIABLES.items()}, "map")
+    _check_kind(ds, "map", _MAP_ATTRS)
+    check_variables(ds, {k: (dims, s.kind) for k, (s, dims) in MAP_VARIABLES.items()}, "map")
     return ds
 
 

@@ -33,6 +33,8 @@ import numpy as np
 import xarray as xr
 
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.vocabulary import LABELS, STATUSES
+from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
 
 __all__ = [
     "CONVENTIONS",
@@ -53,10 +55,10 @@ CONVENTIONS = "CF-1.10"
 
 #: Labels of special points: saddle-node, period-doubling, Neimark-Sacker,
 #: grazing and zero-velocity impact.
-SPECIAL_LABELS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+SPECIAL_LABELS: tuple[str, ...] = LABELS
 #: ``located``: refined to ``precision``; ``bracketed``: only known to lie
 #: between two accepted points.
-SPECIAL_STATUSES: tuple[str, ...] = ("located", "bracketed")
+SPECIAL_STATUSES: tuple[str, ...] = STATUSES
 
 # Fixed-width string dtypes so that labels and statuses compare and round-trip
 # through NetCDF with one dtype (xarray reads an empty string array back as <U1).
@@ -81,16 +83,8 @@ class _Var:
 
 #: Parameters a branch may be continued in, with their metadata. ``omega`` and
 #: ``b`` are always stored; another continued parameter adds its own column.
-PARAMETERS: dict[str, _Var] = {
-    "omega": _Var("forcing frequency", "1",
-                  "Nondimensional forcing frequency omega of eq. (1)."),
-    "b": _Var("gap", "1", "Position b of the stop met by mass 1 (eq. 3)."),
-    "R": _Var("coefficient of restitution", "1",
-              "Coefficient of restitution R of the impact law (eq. 4)."),
-    "eta": _Var("damping coefficient", "1", "Damping eta of C = 2 eta K."),
-    "alpha": _Var("Rayleigh mass damping", "1", "alpha of C = alpha M + beta K."),
-    "beta": _Var("Rayleigh stiffness damping", "1", "beta of C = alpha M + beta K."),
-}
+PARAMETERS: dict[str, _Var] = {name: _Var(p.long_name, p.unit, p.description)
+                               for name, p in _PARAMETER_TABLE.items()}
 
 #: Variables on the ``point`` dimension, in the order they are stored.
 POINT_VARIABLES: dict[str, _Var] = {
@@ -152,9 +146,53 @@ _SPECIAL_FIELDS: dict[str, _Var] = {
                         extra_dims=("multiplier",)),
 }
 
+#: Special-point fields of the motion at the point (a file written by an older
+#: impactcont has none; a special-point dict without them stores NaN).
+OPTIONAL_SPECIAL_FIELDS: dict[str, _Var] = {
+    "impact_velocity": _Var("impact velocity at special point", "1",
+                            "Velocity x1'(T-) of mass 1 before the impact of the motion at the "
+                            "special point (h2 of eq. 22; the smallest over the impacts of an "
+                            "N-p motion)."),
+    "gap_min": _Var("minimum gap at special point", "1",
+                    "Smallest b - x1 at the interior maxima of x1 of the motion at the special "
+                    "point (eq. 16); +inf when x1 has none."),
+}
+
 # Dataset attributes every branch dataset carries.
 _REQUIRED_ATTRS = ("title", "N", "parameter", "oscillator", "options", "impactcont_version",
                    "Conventions", "history")
+
+
+def check_variables(ds: xr.Dataset, expected: Mapping[str, tuple[tuple[str, ...], str]],
+                    what: str) -> None:
+    """Check that `ds` has every variable of `expected` (``{name: (dims, dtype kind)}``).
+
+    Raises
+    ------
+    ValueError
+        Naming the missing variables, or the variable with other dims or dtype.
+    """
+    missing = [k for k in expected if k not in ds.variables]
+    if missing:
+        raise ValueError(f"not a {what} dataset: missing variable(s) {missing}")
+    for key, (dims, kind) in expected.items():
+        var = ds[key]
+        if var.dims != dims:
+            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
+        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
+            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; "
+                             f"got dtype {var.dtype}")
+
+
+def point_coords(npoints: int, n: int) -> dict[str, Any]:
+    """The ``point`` and ``component`` coordinates of a branch or curve of an n-mass system."""
+    return {
+        "point": ("point", np.arange(npoints, dtype=np.int64),
+                  {"long_name": "continuation point index", "units": "1"}),
+        "component": ("component", np.array(state_component_names(n)),
+                      {"long_name": "state component",
+                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
+    }
 
 
 def special_variable(key: str) -> str:
@@ -264,7 +302,7 @@ def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
         missing = [k for k in fields if k not in sp]
         if missing:
             raise ValueError(f"{where} is missing key(s) {missing}; required: {list(fields)}")
-        unknown = sorted(set(sp) - set(fields))
+        unknown = sorted(set(sp) - set(fields) - set(OPTIONAL_SPECIAL_FIELDS))
         if unknown:
             raise ValueError(f"{where} has unknown key(s) {unknown}; allowed: {list(fields)}")
         label = sp["label"]
@@ -298,7 +336,14 @@ def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
                        f"{where} key")
         for key in fields:
             cols[key].append(mult if key == "multipliers" else sp[key])
-    out: dict[str, np.ndarray] = {}
+        for key in OPTIONAL_SPECIAL_FIELDS:
+            value = sp.get(key, math.nan)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                                 np.floating)):
+                raise ValueError(f"{where}[{key!r}] must be a real number; got {value!r}")
+            cols.setdefault(key, []).append(float(value))
+    out: dict[str, np.ndarray] = {key: np.array(cols.get(key, []), dtype=np.float64).reshape(
+        len(special_points)) for key in OPTIONAL_SPECIAL_FIELDS}
     count = len(special_points)
     for key, spec in fields.items():
         if spec.kind == "U":
@@ -395,17 +440,11 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
                              f"{np.flatnonzero(bad)[:10].tolist()}")
 
     special = _special_arrays(special_points, parameter, n, npoints)
-    for key, spec in _special_variables(parameter).items():
+    for key, spec in {**_special_variables(parameter), **OPTIONAL_SPECIAL_FIELDS}.items():
         data_vars[special_variable(key)] = (("special", *spec.extra_dims), special[key],
                                             spec.attrs())
 
-    coords = {
-        "point": ("point", np.arange(npoints, dtype=np.int64),
-                  {"long_name": "continuation point index", "units": "1"}),
-        "component": ("component", np.array(state_component_names(n)),
-                      {"long_name": "state component",
-                       "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
-    }
+    coords = point_coords(npoints, n)
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     attrs = {
         "title": title if title is not None else
@@ -459,16 +498,10 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
         expected[key] = (("point", *spec.extra_dims), spec.kind)
     for key, spec in _special_variables(parameter).items():
         expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)
-    missing = [k for k in expected if k not in ds.variables]
-    if missing:
-        raise ValueError(f"not a branch dataset: missing variable(s) {missing}")
-    for key, (dims, kind) in expected.items():
-        var = ds[key]
-        if var.dims != dims:
-            raise ValueError(f"variable {key!r} must have dims {dims}; got {var.dims}")
-        if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
-            raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; "
-                             f"got dtype {var.dtype}")
+    for key, spec in OPTIONAL_SPECIAL_FIELDS.items():
+        if special_variable(key) in ds.variables:
+            expected[special_variable(key)] = (("special", *spec.extra_dims), spec.kind)
+    check_variables(ds, expected, "branch")
     if ds.sizes["multiplier"] != ds.sizes["component"] or ds.sizes["component"] % 2:
         raise ValueError(f"dims 'multiplier' and 'component' must both have size 2n; got "
                          f"{ds.sizes['multiplier']} and {ds.sizes['component']}")

@@ -37,9 +37,9 @@ import logging
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
-from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.core.stepper import NewtonConvergenceError
+from impactcont.detection.locator import locate_zero
 from impactcont.detection.special_points import pole_free
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
@@ -125,46 +125,103 @@ def _changes(a: float, b: float) -> bool:
     return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
 
 
-def _genuine(test: str, orbit: PeriodicOrbit) -> bool:
+_CRITICAL = {"SN": 1.0, "PD": -1.0}
+"""The multiplier that stays on the unit circle along an SN or a PD curve."""
+
+
+def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
+    """What a zero of `test` on a curve of `kind` is, or ``None`` when it is none.
+
+    The PD test vanishes only with a multiplier at -1. The NS test (the
+    bialternate product) vanishes where two multipliers have product 1: a
+    complex pair on the unit circle (``kind+NS``), a second multiplier at the
+    curve's own critical value (a repeated +1 on an SN curve: the 1:1
+    resonance ``SN+SN``; a repeated -1 on a PD curve: the 1:2 resonance
+    ``PD+PD``), or a real reciprocal pair (a neutral saddle: no bifurcation).
+    The repeated multiplier is a Jordan block whose two copies split by the
+    square root of rounding, possibly into a complex pair: it is recognised by
+    distance, before the imaginary part is looked at.
+    """
     mu = orbit.multipliers
     if test == "PD":
-        return bool(np.min(np.abs(mu + 1.0)) < _UNIT_TOL)
-    if test == "NS":
-        close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
-        return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
-    return True
+        return f"{kind}+PD" if np.min(np.abs(mu + 1.0)) < _UNIT_TOL else None
+    if test != "NS":
+        return f"{kind}+{test}"
+    critical = _CRITICAL.get(kind)
+    if critical is not None:
+        rest = np.delete(mu, np.argmin(np.abs(mu - critical)))
+        if rest.size and np.min(np.abs(rest - critical)) < _UNIT_TOL ** 0.5:
+            return f"{kind}+{kind}"
+        mu = rest
+    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
+    return f"{kind}+NS" if np.any(close & (np.abs(mu.imag) > 1e-8)) else None
 
 
 def _plane_distance(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray) -> float:
     return float(math.hypot(xa[0] - xb[0], xa[-1] - xb[-1]))
 
 
-def _locate(problem: CurveProblem, test: str, xa: np.ndarray, xb: np.ndarray
-            ) -> tuple[np.ndarray, float, str]:
-    """Zero of ``test`` on the curve between two accepted points (Brent on the chord)."""
-    chord = xb - xa
-    cache: dict[float, tuple[np.ndarray, float]] = {}
+class _Step:
+    """The curve between two accepted points, by the chord coordinate ``s in [0, 1]``.
 
-    def point(sv: float) -> tuple[np.ndarray, float]:
-        if sv not in cache:
+    A point at ``s`` is the curve's intersection with the hyperplane across the
+    chord through ``xa + s (xb - xa)``; its test values are cached.
+    """
+
+    def __init__(self, problem: CurveProblem, xa: np.ndarray, xb: np.ndarray) -> None:
+        self.problem, self.xa, self.xb = problem, xa, xb
+        self.chord = xb - xa
+        self._cache: dict[float, tuple[np.ndarray, dict[str, float]]] = {}
+
+    def point(self, sv: float) -> tuple[np.ndarray, dict[str, float]]:
+        if sv not in self._cache:
             if sv == 0.0:
-                x = xa
+                x = self.xa
             elif sv == 1.0:
-                x = xb
+                x = self.xb
             else:
-                guess = xa + sv * chord
-                x = problem.solve(guess, lambda y, g=guess: float(chord @ (y - g)), chord)
-            orbit = problem.orbit(x[:-1], x[-1])
-            cache[sv] = (x, test_values(problem, x, orbit)[test])
-        return cache[sv]
+                guess, chord = self.xa + sv * self.chord, self.chord
+                x = self.problem.solve(guess, lambda y, g=guess: float(chord @ (y - g)), chord)
+            orbit = self.problem.orbit(x[:-1], x[-1])
+            self._cache[sv] = (x, test_values(self.problem, x, orbit))
+        return self._cache[sv]
 
-    g0, g1 = point(0.0)[1], point(1.0)[1]
-    sroot = brentq(lambda sv: point(sv)[1], 0.0, 1.0, xtol=1e-13, rtol=4 * np.finfo(float).eps)
-    x, g = point(sroot)
-    scale = max(abs(g0), abs(g1))
-    status = "located" if abs(g) <= 1e-6 * scale + 1e-12 else "bracketed"
-    precision = max(2e-13 * _plane_distance(problem, xa, xb), 1e-15)
-    return x, precision, status
+    def value(self, sv: float, test: str) -> float:
+        return self.point(sv)[1][test]
+
+    def locate(self, test: str, lo: float = 0.0, hi: float = 1.0
+               ) -> tuple[float, np.ndarray, float, str]:
+        """Zero of ``test`` in ``[lo, hi]`` (Brent): ``(s, x, precision, status)``."""
+        sroot, status = locate_zero(lambda sv: self.value(sv, test), lo, hi, 1e-13)
+        x = self.point(sroot)[0]
+        precision = max(2e-13 * _plane_distance(self.problem, self.xa, self.xb), 1e-15)
+        return sroot, x, precision, status
+
+
+_POLE_GAP = 1e-5
+"""Half-width (in the chord coordinate) of the gap left around a zero-velocity impact
+when a step is split there."""
+
+
+def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[str, float]
+               ) -> list[tuple[float, float]]:
+    """The parts of a step on which `test` is watched for a sign change.
+
+    At a zero-velocity impact inside the step (``h2 = 0``, the pole of G, eq. 25)
+    the pole-free PD and NS tests may vanish too, without a bifurcation (when a
+    multiplier tends to 0 as another tends to infinity): the step is split there so
+    that a PD or NS point in the same step is neither cancelled nor discarded.
+    """
+    whole = [(0.0, 1.0)]
+    if test not in ("PD", "NS") or "ZV" not in tests_a or not _changes(tests_a["ZV"],
+                                                                         tests_b["ZV"]):
+        return whole
+    step.problem.accept(step.xa[:-1], step.xa[-1])
+    try:
+        s_zv = step.locate("ZV")[0]
+    except (ValueError, NewtonConvergenceError):
+        return whole
+    return [(0.0, max(0.0, s_zv - _POLE_GAP)), (min(1.0, s_zv + _POLE_GAP), 1.0)]
 
 
 def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[PeriodicOrbit],
@@ -188,35 +245,48 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
     """
     found: list[Codim2Point] = []
     for k in range(len(xs) - 1):
+        step = _Step(problem, xs[k], xs[k + 1])
         for test in TESTS[problem.kind]:
-            if not _changes(tests[k][test], tests[k + 1][test]):
+            if test not in ("PD", "NS") and not _changes(tests[k][test], tests[k + 1][test]):
                 continue
-            if test in ("PD", "NS") and _changes(tests[k].get("ZV", 1.0),
-                                                 tests[k + 1].get("ZV", 1.0)):
-                log.debug("%s test changes sign through the pole of G at h2 = 0 (eq. 25) "
-                          "between points %d and %d: not a %s point", test, k, k + 1, test)
-                continue
-            problem.accept(xs[k][:-1], xs[k][-1])
-            try:
-                x, precision, status = _locate(problem, test, xs[k], xs[k + 1])
-            except (ValueError, NewtonConvergenceError) as exc:
-                # e.g. next to h2 = 0, where G and so the PD/NS systems have a pole:
-                # keep the bracket, placed by linear interpolation of the test values
-                log.info("%s+%s between curve points %d and %d kept as bracketed: %s",
-                         problem.kind, test, k, k + 1, exc)
-                ga, gb = tests[k][test], tests[k + 1][test]
-                x = xs[k] + ga / (ga - gb) * (xs[k + 1] - xs[k])
-                precision = _plane_distance(problem, xs[k], xs[k + 1])
-                status = "bracketed"
-            orbit = problem.orbit(x[:-1], x[-1])
-            if status == "located" and not _genuine(test, orbit):
-                log.debug("%s test changes sign without a critical multiplier near point %d",
-                          test, k)
-                continue
-            nearest = k if (_plane_distance(problem, x, xs[k])
-                            <= _plane_distance(problem, x, xs[k + 1])) else k + 1
-            label = f"{problem.kind}+{test}"
-            log.info("%s on the %s curve at %s=%.10g, %s=%.10g (%s)", label, problem.kind,
-                     problem.parameters[0], x[0], problem.parameters[1], x[-1], status)
-            found.append(Codim2Point(label, x, orbit, nearest, precision, status))
+            for lo, hi in _intervals(step, test, tests[k], tests[k + 1]):
+                if (lo, hi) == (0.0, 1.0):
+                    ga, gb = tests[k][test], tests[k + 1][test]
+                else:
+                    problem.accept(xs[k][:-1], xs[k][-1])
+                    ga, gb = step.value(lo, test), step.value(hi, test)
+                if not _changes(ga, gb):
+                    continue
+                point = _codim2_in(problem, step, test, k, lo, hi, ga, gb)
+                if point is not None:
+                    found.append(point)
     return found
+
+
+def _codim2_in(problem: CurveProblem, step: _Step, test: str, k: int, lo: float, hi: float,
+               ga: float, gb: float) -> Codim2Point | None:
+    """The codim-2 point where `test` changes sign in ``[lo, hi]`` of step `k`, or None."""
+    xs = (step.xa, step.xb)
+    problem.accept(step.xa[:-1], step.xa[-1])
+    try:
+        _, x, precision, status = step.locate(test, lo, hi)
+    except (ValueError, NewtonConvergenceError) as exc:
+        # e.g. next to h2 = 0, where G and so the PD/NS systems have a pole:
+        # keep the bracket, placed by linear interpolation of the test values
+        log.info("%s+%s between curve points %d and %d kept as bracketed: %s",
+                 problem.kind, test, k, k + 1, exc)
+        sv = lo + ga / (ga - gb) * (hi - lo)
+        x = step.xa + sv * step.chord
+        precision = _plane_distance(problem, *xs)
+        status = "bracketed"
+    orbit = problem.orbit(x[:-1], x[-1])
+    label = _name(problem.kind, test, orbit) if status == "located" else \
+        f"{problem.kind}+{test}"
+    if label is None:
+        log.debug("%s test changes sign without a critical multiplier near point %d", test, k)
+        return None
+    nearest = k if (_plane_distance(problem, x, xs[0])
+                    <= _plane_distance(problem, x, xs[1])) else k + 1
+    log.info("%s on the %s curve at %s=%.10g, %s=%.10g (%s)", label, problem.kind,
+             problem.parameters[0], x[0], problem.parameters[1], x[-1], status)
+    return Codim2Point(label, x, orbit, nearest, precision, status)

@@ -30,16 +30,16 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
-from impactcont.detection.special_points import LABELS, event_function
-from impactcont.errors import ParameterError
+from impactcont.core.locate import Event, locate_events, tangent_at
+from impactcont.detection.locator import is_critical
+from impactcont.detection.special_points import event_function
 from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
            "tangent_at"]
@@ -81,24 +81,9 @@ class MultiImpactSample:
 class MultiImpactSpecialPoint:
     """A located special point of an N-p branch.
 
-    Attributes
-    ----------
-    label : str
-        One of ``SN, PD, NS, GR, ZV``.
-    value : float
-        The parameter at the special point.
-    u : ndarray, shape (m,)
-        Unknowns there.
-    point : int
-        Index of the nearest accepted branch point.
-    bracket : tuple of float
-        Parameter values of the two accepted points that bracket it.
-    precision : float
-        Bound on the error of `value` in the parameter.
-    status : str
-        ``"located"`` or ``"bracketed"``.
-    orbit : MultiImpactOrbit
-        The motion at the special point.
+    The fields of :class:`impactcont.detection.SpecialPoint`, with the unknowns
+    ``u`` (shape ``(m,)``) of the shooting system in place of the phase ``delta``
+    (the phase of the first impact is ``u[0]``) and a :class:`MultiImpactOrbit`.
     """
 
     label: str
@@ -116,152 +101,50 @@ class MultiImpactSpecialPoint:
         return self.orbit.delta
 
 
-def tangent_at(problem: Any, u: np.ndarray, lam: float, reference: np.ndarray) -> np.ndarray:
-    """Unit null vector of ``[dF/du | dF/dlam]`` with a positive dot product with `reference`."""
-    extended = np.column_stack([problem.jacobian(u, lam), problem.dparam(u, lam)])
-    t = np.linalg.svd(extended)[2][-1]
-    return t if float(t @ reference) >= 0 else -t
-
-
-class _Chord:
-    """The branch between two accepted points, parametrised by the chord ``s in [0, 1]``."""
-
-    def __init__(self, problem: Any, left: MultiImpactSample, right: MultiImpactSample):
-        self.problem = problem
-        self.left, self.right = left, right
-        self.x0 = np.append(left.u, left.lam)
-        self.chord = np.append(right.u, right.lam) - self.x0
-        self._cache: dict[float, tuple[np.ndarray, float]] = {}
-
-    def point(self, s: float) -> tuple[np.ndarray, float]:
-        """``(u, lam)`` of the branch on the hyperplane at chord coordinate ``s``."""
-        if s in self._cache:
-            return self._cache[s]
-        if s == 0.0:
-            return self.left.u, self.left.lam
-        if s == 1.0:
-            return self.right.u, self.right.lam
-        target = self.x0 + s * self.chord
-        x = target.copy()
-        scale = max(1.0, float(np.max(np.abs(x))))
-        for _ in range(30):
-            u, lam = x[:-1], float(x[-1])
-            r = self.problem.residual(u, lam)
-            A = np.vstack([np.column_stack([self.problem.jacobian(u, lam),
-                                            self.problem.dparam(u, lam)]), self.chord])
-            step = np.linalg.solve(A, -np.append(r, self.chord @ (x - target)))
-            x = x + step
-            if np.max(np.abs(step)) <= _NEWTON_TOL * scale:
-                break
-        else:
-            log.debug("chord Newton at s=%.3g stopped with last step %.3g", s,
-                      np.max(np.abs(step)))
-        self._cache[s] = (x[:-1], float(x[-1]))
-        return self._cache[s]
-
-    def fold_test(self, s: float) -> float:
-        u, lam = self.point(s)
-        return float(tangent_at(self.problem, u, lam, self.chord)[-1])
-
-
-def _is_ns(orbit: MultiImpactOrbit) -> bool:
-    mu = orbit.multipliers
-    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL ** 0.5
-    return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
-
-
-def _locate(chord: _Chord, test: Callable[[float], float]) -> tuple[float, str]:
-    cache: dict[float, float] = {}
-
-    def g(s: float) -> float:
-        if s not in cache:
-            cache[s] = test(s)
-        return cache[s]
-
-    g0, g1 = g(0.0), g(1.0)
-    if not (math.isfinite(g0) and math.isfinite(g1)) or (g0 < 0) == (g1 < 0):
-        return 0.5, "bracketed"  # the re-evaluated ends disagree with the stream: keep bracket
-    s = brentq(g, 0.0, 1.0, xtol=_S_TOL, rtol=4 * np.finfo(float).eps)
-    scale = max(abs(g0), abs(g1))
-    status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
-    return s, status
-
-
 def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample],
                                labels: Sequence[str] = LABELS,
                                on_found: Callable[[MultiImpactSpecialPoint], None] | None = None,
                                ) -> list[MultiImpactSpecialPoint]:
-    """Detect and locate special points between consecutive accepted points.
+    """The special points of an N-p branch, as ``detect_special_points`` for N-1 motions.
 
-    Parameters
-    ----------
-    problem
-        A problem with ``residual``, ``jacobian``, ``dparam`` and
-        ``orbit(u, lam, checks=True) -> MultiImpactOrbit`` (e.g.
-        :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`).
-    samples : sequence of MultiImpactSample
-        The accepted points in branch order.
-    labels : sequence of str
-        Which special points to look for (subset of ``SN, PD, NS, GR, ZV``).
-    on_found : callable, optional
-        Called with each special point as it is located.
-
-    Returns
-    -------
-    list of MultiImpactSpecialPoint
-        In branch order.
+    `problem` provides ``residual``, ``jacobian``, ``dparam`` and
+    ``orbit(u, lam, checks=True) -> MultiImpactOrbit`` (e.g.
+    :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`); the
+    samples are :class:`MultiImpactSample` and the result
+    :class:`MultiImpactSpecialPoint` in branch order; GR and ZV use the minimum
+    over the flights and impacts.
     """
-    unknown = sorted(set(labels) - set(LABELS))
-    if unknown:
-        raise ParameterError(f"labels must be a subset of {LABELS}; got unknown {unknown}")
-    found: list[MultiImpactSpecialPoint] = []
+    check_labels(labels, "labels")
     parameter = getattr(problem, "parameter", "lam")
-    for k in range(len(samples) - 1):
-        left, right = samples[k], samples[k + 1]
-        chord = _Chord(problem, left, right)
-        for label in labels:
-            if label == "SN":
-                if (left.dlam > 0) == (right.dlam > 0):
-                    continue
-                test = chord.fold_test
-            else:
-                before = event_function(label, left.orbit)
-                after = event_function(label, right.orbit)
-                if not (math.isfinite(before) and math.isfinite(after)
-                        and (before < 0) != (after < 0)):
-                    continue
 
-                def test(s: float, label: str = label, chord: _Chord = chord) -> float:
-                    # only GR needs the (costly) interior-contact search of every flight
-                    orbit = problem.orbit(*chord.point(s), checks=label == "GR")
-                    return event_function(label, orbit)
-            try:
-                s, status = _locate(chord, test)
-            except (ValueError, np.linalg.LinAlgError) as exc:
-                log.warning("could not locate %s between points %d and %d: %s", label, k,
-                            k + 1, exc)
-                continue
-            u, lam = chord.point(s)
-            orbit = problem.orbit(u, lam)
-            if label == "NS" and not _is_ns(orbit):
-                log.debug("neutral saddle near %s=%.12g: not a Neimark-Sacker point",
-                          parameter, lam)
-                continue
-            if label == "PD" and not np.min(np.abs(orbit.multipliers + 1.0)) < _UNIT_TOL:
-                log.debug("det(G+I) changes sign near %s=%.12g without a multiplier at -1",
-                          parameter, lam)
-                continue
-            ds_s = max(_S_TOL, 4 * np.finfo(float).eps)
-            lams = [chord.point(min(max(s + e, 0.0), 1.0))[1] for e in (-ds_s, ds_s)]
-            precision = 2 * max(abs(v - lam) for v in lams) + 4 * np.finfo(float).eps * abs(lam)
-            nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
-            special = MultiImpactSpecialPoint(
-                label=label, value=lam, u=np.array(u, float), point=nearest,
-                bracket=(min(left.lam, right.lam), max(left.lam, right.lam)),
-                precision=float(precision), status=status, orbit=orbit)
-            log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", label, parameter, lam,
-                     orbit.N, orbit.p, status, precision)
-            found.append(special)
-            if on_found is not None:
-                on_found(special)
+    def event(label: str) -> Event:
+        if label == "SN":
+            return Event(label, None)
+
+        def test(u: np.ndarray, lam: float) -> float:
+            # only GR needs the (costly) interior-contact search of every flight
+            return event_function(label, problem.orbit(u, lam, checks=label == "GR"))
+
+        return Event(label, test, lambda k: event_function(label, samples[k].orbit))
+
+    found: list[MultiImpactSpecialPoint] = []
+    for ep in locate_events(problem, [s.u for s in samples], [s.lam for s in samples],
+                            [s.tangent for s in samples], [event(lab) for lab in labels],
+                            s_tol=_S_TOL, newton_tol=_NEWTON_TOL):
+        orbit = problem.orbit(ep.u, ep.lam)
+        if not ep.failed and not is_critical(ep.label, orbit.multipliers, _UNIT_TOL):
+            log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
+                      "(a neutral saddle, or the pole of G at h2 = 0)", ep.label, parameter,
+                      ep.lam)
+            continue
+        left, right = samples[ep.step], samples[ep.step + 1]
+        nearest = ep.step if abs(ep.lam - left.lam) <= abs(ep.lam - right.lam) else ep.step + 1
+        special = MultiImpactSpecialPoint(
+            label=ep.label, value=ep.lam, u=ep.u, point=nearest, bracket=ep.bracket,
+            precision=ep.precision, status=ep.status, orbit=orbit)
+        log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", ep.label, parameter,
+                 ep.lam, orbit.N, orbit.p, ep.status, ep.precision)
+        found.append(special)
+        if on_found is not None:
+            on_found(special)
     return found

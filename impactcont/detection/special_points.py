@@ -14,9 +14,10 @@ label     test function                               meaning
 ========  ==========================================  =================================
 
 A sign change between two accepted points brackets a special point; it is
-then located by Brent's method on the branch parametrised by the parameter
-(or by ``delta`` where the branch folds inside the bracket), except ``SN``,
-located by Newton on the augmented system ``r = dr/d delta = 0``. The NS test
+then located as an event of the core (:func:`impactcont.core.locate_events`:
+Brent's method on the branch parametrised by the chord between the two
+points), except ``SN``, located by Newton on the closed-form augmented system
+``r = dr/d delta = 0``. A point whose location fails is kept as ``bracketed``. The NS test
 function also vanishes at a neutral saddle (two real multipliers with product
 1); such a point is checked and discarded. A located point whose test
 function does not vanish there (a jump, e.g. of ``gap_min`` when the highest
@@ -31,17 +32,18 @@ import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from scipy.optimize import brentq
 
+from impactcont.core.locate import Event, locate_events
+from impactcont.detection.locator import is_critical
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function",
            "pole_free"]
 
 log = logging.getLogger(__name__)
 
-LABELS = ("SN", "PD", "NS", "GR", "ZV")
 _XTOL = 1e-13
 _UNIT_TOL = 1e-7
 
@@ -135,65 +137,9 @@ def _changes(a: float, b: float) -> bool:
     return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
 
 
-class _Segment:
-    """The branch between two accepted points, parametrised by lam or by delta."""
-
-    def __init__(self, problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample):
-        self.problem = problem
-        self.left, self.right = left, right
-        self.by_lam = (left.dlam > 0) == (right.dlam > 0) and left.lam != right.lam
-
-    def coordinate(self, sample: BranchSample) -> float:
-        return sample.lam if self.by_lam else sample.delta
-
-    def point(self, x: float) -> tuple[float, float]:
-        """``(delta, lam)`` on the branch at coordinate x, by Newton from the chord."""
-        a, b = self.coordinate(self.left), self.coordinate(self.right)
-        t = (x - a) / (b - a)
-        delta = self.left.delta + t * (self.right.delta - self.left.delta)
-        lam = self.left.lam + t * (self.right.lam - self.left.lam)
-        u = np.array([delta])
-        for _ in range(30):
-            r = self.problem.residual(u, lam)[0]
-            if self.by_lam:
-                step = r / self.problem.jacobian(u, lam)[0, 0]
-                u = u - step
-            else:
-                step = r / self.problem.dparam(u, lam)[0]
-                lam = lam - step
-            if abs(step) < 1e-15 * max(1.0, abs(u[0]), abs(lam)):
-                break
-        return float(u[0]), float(lam)
-
-
-def _locate_by_test(problem: PeriodicBranchProblem, label: str, seg: _Segment,
-                    ) -> tuple[float, float, float, str]:
-    fun_cache: dict[float, float] = {}
-
-    def g(x: float) -> float:
-        if x not in fun_cache:
-            delta, lam = seg.point(x)
-            fun_cache[x] = event_function(label, problem.orbit(delta, lam))
-        return fun_cache[x]
-
-    a, b = seg.coordinate(seg.left), seg.coordinate(seg.right)
-    lo, hi = min(a, b), max(a, b)
-    xtol = _XTOL * max(1.0, abs(lo), abs(hi))
-    x = brentq(g, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
-    delta, lam = seg.point(x)
-    precision = 2 * (xtol + 4 * np.finfo(float).eps * abs(x))
-    if not seg.by_lam:  # error in delta maps to lam through the branch slope
-        slope = abs(problem.jacobian(np.array([delta]), lam)[0, 0]
-                    / problem.dparam(np.array([delta]), lam)[0])
-        precision *= max(slope, 1.0)
-    scale = max(abs(g(lo)), abs(g(hi)))
-    status = "located" if abs(g(x)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
-    return delta, lam, precision, status
-
-
-def _locate_fold(problem: PeriodicBranchProblem, seg: _Segment
+def _locate_fold(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
                  ) -> tuple[float, float, float, str]:
-    left, right = seg.left, seg.right
+    """The fold between two points by Newton on ``r = dr/d delta = 0`` (eq. 14-15)."""
     x = np.array([0.5 * (left.delta + right.delta), 0.5 * (left.lam + right.lam)])
     step = np.full(2, np.inf)
     for _ in range(50):
@@ -211,12 +157,6 @@ def _locate_fold(problem: PeriodicBranchProblem, seg: _Segment
     # the finite-difference parameter derivative only slows it down
     precision = max(abs(step[1]) * 10, 4 * np.finfo(float).eps * abs(x[1]))
     return float(x[0]), float(x[1]), precision, "located" if inside else "bracketed"
-
-
-def _is_ns(orbit: PeriodicOrbit) -> bool:
-    mu = orbit.multipliers
-    close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL ** 0.5
-    return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
 
 
 def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[BranchSample],
@@ -240,45 +180,40 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     list of SpecialPoint
         In branch order.
     """
-    unknown = set(labels) - set(LABELS)
-    if unknown:
-        raise ValueError(f"labels must be a subset of {LABELS}; got unknown {sorted(unknown)}")
-    found: list[SpecialPoint] = []
-    for k in range(len(samples) - 1):
+    check_labels(labels, "labels")
+    candidates: list[tuple[int, str, float, float, float, str, bool]] = []
+    for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
         left, right = samples[k], samples[k + 1]
-        seg = _Segment(problem, left, right)
-        for label in labels:
-            if label == "SN":
-                if (left.dlam > 0) == (right.dlam > 0):
-                    continue
-                delta, lam, precision, status = _locate_fold(problem, seg)
-            else:
-                before = event_function(label, left.orbit)
-                if not _changes(before, event_function(label, right.orbit)):
-                    continue
-                try:
-                    delta, lam, precision, status = _locate_by_test(problem, label, seg)
-                except ValueError as exc:  # brentq: no sign change on the re-solved segment
-                    log.warning("could not locate %s between points %d and %d: %s", label, k,
-                                k + 1, exc)
-                    continue
-            orbit = problem.orbit(delta, lam)
-            if label == "NS" and not _is_ns(orbit):
-                log.debug("neutral saddle near %s=%.12g: not a Neimark-Sacker point",
-                          problem.parameter, lam)
-                continue
-            if label == "PD" and not np.min(np.abs(orbit.multipliers + 1.0)) < _UNIT_TOL:
-                # det(G + I) also changes sign through the pole of G at h2 = 0 (eq. 25)
-                log.debug("det(G+I) changes sign near %s=%.12g without a multiplier at -1",
-                          problem.parameter, lam)
-                continue
-            nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
-            special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
-                                   bracket=(left.lam, right.lam), precision=precision,
-                                   status=status, orbit=orbit)
-            log.info("%s at %s = %.12g (%s, precision %.1e)", label, problem.parameter, lam,
-                     status, precision)
-            found.append(special)
-            if on_found is not None:
-                on_found(special)
+        if "SN" in labels and (left.dlam > 0) != (right.dlam > 0):
+            candidates.append((k, "SN", *_locate_fold(problem, left, right), False))
+
+    def event(label: str) -> Event:
+        return Event(label, lambda u, lam: event_function(label, problem.orbit(u[0], lam)),
+                     lambda k: event_function(label, samples[k].orbit))
+
+    events = [event(label) for label in labels if label != "SN"]
+    for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
+                            [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
+        candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,
+                           ep.failed))
+    order = {label: i for i, label in enumerate(labels)}
+    found: list[SpecialPoint] = []
+    for k, label, delta, lam, precision, status, failed in sorted(
+            candidates, key=lambda c: (c[0], order[c[1]])):
+        left, right = samples[k], samples[k + 1]
+        orbit = problem.orbit(delta, lam)
+        if not failed and not is_critical(label, orbit.multipliers, _UNIT_TOL):
+            log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
+                      "(a neutral saddle, or the pole of G at h2 = 0)", label,
+                      problem.parameter, lam)
+            continue
+        nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
+        special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
+                               bracket=(left.lam, right.lam), precision=precision,
+                               status=status, orbit=orbit)
+        log.info("%s at %s = %.12g (%s, precision %.1e)", label, problem.parameter, lam,
+                 status, precision)
+        found.append(special)
+        if on_found is not None:
+            on_found(special)
     return found

@@ -15,15 +15,19 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.modal import ModalBasis
+from impactcont.vocabulary import PARAMETERS
 
 __all__ = ["ImpactOscillator", "chain_stiffness"]
 
 _SYMMETRY_RTOL = 1e-12
-_SCALAR_RULES: dict[str, dict[str, Any]] = {
-    "R": {"allowed": "in [0, 1]", "low": 0.0, "high": 1.0},
-    "b": {"allowed": "a finite real number"},
-    "omega": {"allowed": "finite and > 0", "low": 0.0, "low_open": True},
-}
+def _rule(name: str) -> dict[str, Any]:
+    """The keyword arguments of :func:`_real` for parameter `name` (from the vocabulary)."""
+    p = PARAMETERS[name]
+    return {"allowed": p.allowed, "low": p.low, "low_open": p.low_open, "high": p.high}
+
+
+#: Parameters whose change leaves M, K, F and the modal basis alone.
+_SCALAR_RULES: dict[str, dict[str, Any]] = {name: _rule(name) for name in ("R", "b", "omega")}
 
 
 def _real_array(name: str, value: Any, what: str) -> np.ndarray:
@@ -189,12 +193,10 @@ class ImpactOscillator:
             )
         eta = alpha = beta = None
         if self.eta is not None:
-            eta = _real("eta", self.eta, allowed="finite and >= 0", low=0.0)
+            eta = _real("eta", self.eta, **_rule("eta"))
         if self.alpha is not None or self.beta is not None:
-            alpha = _real("alpha", 0.0 if self.alpha is None else self.alpha,
-                          allowed="finite and >= 0", low=0.0)
-            beta = _real("beta", 0.0 if self.beta is None else self.beta,
-                         allowed="finite and >= 0", low=0.0)
+            alpha = _real("alpha", 0.0 if self.alpha is None else self.alpha, **_rule("alpha"))
+            beta = _real("beta", 0.0 if self.beta is None else self.beta, **_rule("beta"))
         for name, value in [("M", M), ("K", K), ("F", F)]:
             value.setflags(write=False)
             object.__setattr__(self, name, value)

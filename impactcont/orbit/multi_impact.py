@@ -173,13 +173,13 @@ class MultiImpactOrbit:
 
     @property
     def spectral_radius(self) -> float:
-        """``rho(G)``, the largest multiplier modulus."""
-        return float(np.abs(self.multipliers).max())
+        """Largest modulus ``rho(G)`` of the multipliers of the product G of the p maps."""
+        return float(np.max(np.abs(self.multipliers)))
 
     @property
     def stable(self) -> bool:
-        """Asymptotically stable (Theorem 3.1 applied to G): ``rho(G) < 1``."""
-        return self.spectral_radius < 1.0
+        """Theorem 3.1 on the product G of the p impact maps: ``rho(G) < 1``."""
+        return bool(self.spectral_radius < 1.0)
 
     @property
     def unknowns(self) -> np.ndarray:

@@ -38,13 +38,14 @@ from impactcont.orbit.periodic import (
     periodic_orbits,
 )
 from impactcont.threads import blas_limited
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_damping
 
 __all__ = ["RobustStability", "lyapunov_matrix", "robust_bound", "robust_stability"]
 
 log = logging.getLogger(__name__)
 
 #: Scalar parameters of :class:`ImpactOscillator` that may be uncertain.
-_SCALAR_PARAMS = ("b", "omega", "R", "eta", "alpha", "beta")
+_SCALAR_PARAMS = CONTINUABLE_PARAMETERS
 _F_ENTRY = re.compile(r"^F\[(\d+)\]$")
 # Relative (to the box width) x-tolerance of the 1-D bounded refinement. Near a
 # smooth interior maximum the value error is of order xtol^2, far below 1e-12.
@@ -189,12 +190,7 @@ def _check_name(osc: ImpactOscillator, name: Any) -> None:
         return
     if name not in _SCALAR_PARAMS:
         raise ParameterError(f"unknown parameter {name!r} in vary; allowed: {allowed}")
-    if name == "eta" and osc.eta is None:
-        raise ParameterError(f"vary has 'eta' but the oscillator uses Rayleigh damping "
-                             f"(alpha={osc.alpha!r}, beta={osc.beta!r}); vary alpha/beta instead")
-    if name in ("alpha", "beta") and osc.eta is not None:
-        raise ParameterError(f"vary has {name!r} but the oscillator uses the paper's damping "
-                             f"C = 2 eta K (eta={osc.eta!r}); vary 'eta' instead")
+    check_damping(osc, name, "vary key")
 
 
 def _check_vary(osc: ImpactOscillator, vary: Any) -> dict[str, tuple[float, float]]:

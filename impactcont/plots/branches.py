@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -63,8 +64,11 @@ def _new_axes(ncols: int = 1) -> Any:
     return axes
 
 
-def _branches(datasets: Any) -> list[tuple[str, xr.Dataset]]:
-    """``(name, dataset)`` pairs from a Dataset, a sequence, a mapping or a DataTree."""
+def _branches(datasets: Any, one_parameter: bool = False) -> list[tuple[str, xr.Dataset]]:
+    """``(name, dataset)`` pairs from a Dataset, a sequence, a mapping or a DataTree.
+
+    With `one_parameter`, the branches must all be continued in the same parameter.
+    """
     if isinstance(datasets, xr.Dataset):
         items: Iterable[tuple[str, Any]] = [("", datasets)]
     elif isinstance(datasets, xr.DataTree):
@@ -85,6 +89,10 @@ def _branches(datasets: Any) -> list[tuple[str, xr.Dataset]]:
         out.append((name, validate_branch_dataset(ds)))
     if not out:
         raise ValueError("datasets holds no branch dataset")
+    parameters = {ds.attrs["parameter"] for _, ds in out}
+    if one_parameter and len(parameters) > 1:
+        raise ValueError(f"datasets must all be continued in one parameter; got "
+                         f"{sorted(parameters)}")
     return out
 
 
@@ -173,7 +181,8 @@ def _special_xy(ds: xr.Dataset, x: np.ndarray, y: np.ndarray, yname: str, k: int
     parameter = ds.attrs["parameter"]
     xs = float(ds[special_variable(parameter)].values[k])
     exact = special_variable(yname)
-    if exact in ds.data_vars and ds[exact].dims == ("special",):
+    if exact in ds.data_vars and ds[exact].dims == ("special",) and math.isfinite(
+            float(ds[exact].values[k])):  # a file from before these were stored holds NaN
         return xs, float(ds[exact].values[k])
     p = int(ds[special_variable("point")].values[k])
     for i, j in ((p - 1, p), (p, p + 1)):
@@ -227,11 +236,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     -------
     matplotlib.axes.Axes
     """
-    branches = _branches(datasets)
+    branches = _branches(datasets, one_parameter=True)
     parameters = {ds.attrs["parameter"] for _, ds in branches}
-    if len(parameters) > 1:
-        raise ValueError(f"datasets must all be continued in one parameter; got "
-                         f"{sorted(parameters)}")
     if ax is None:
         ax = _new_axes()
     fixed = fixed_parameters([ds for _, ds in branches])

@@ -92,11 +92,7 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
     unknown = sorted(set(specials) - set(SPECIAL_LABELS))
     if unknown:
         raise ValueError(f"specials must be a subset of {SPECIAL_LABELS}; got unknown {unknown}")
-    branches = _branches(datasets)
-    parameters = {ds.attrs["parameter"] for _, ds in branches}
-    if len(parameters) > 1:
-        raise ValueError(f"datasets must all be continued in one parameter; got "
-                         f"{sorted(parameters)}")
+    branches = _branches(datasets, one_parameter=True)
     if ax is None:
         ax = _new_axes()
     kinds_seen: set[str] = set()

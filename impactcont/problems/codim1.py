@@ -66,7 +66,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from impactcont.continuation.stepper import NewtonConvergenceError
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import (
@@ -75,7 +75,7 @@ from impactcont.orbit.periodic import (
     modal_jacobian,
     orbit_at_phase,
 )
-from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
 __all__ = [
     "CURVE_KINDS",
@@ -88,15 +88,13 @@ __all__ = [
     "curve_problem",
 ]
 
-CURVE_KINDS = ("SN", "PD", "NS", "GR", "ZV")
+CURVE_KINDS = LABELS
 """Kinds of codimension-one curves: saddle-node, period-doubling, Neimark-Sacker,
 grazing and zero-velocity impact."""
 
 _FD_STEP = 1e-6
 _CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
-_DOMAINS = {"omega": (1e-300, math.inf), "b": (-math.inf, math.inf), "R": (0.0, 1.0),
-            "eta": (0.0, math.inf), "alpha": (0.0, math.inf), "beta": (0.0, math.inf)}
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -161,12 +159,7 @@ def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, st
         if name not in CONTINUABLE_PARAMETERS:
             raise ParameterError(f"parameters must be a pair of names from "
                                  f"{CONTINUABLE_PARAMETERS}; got {parameters!r}")
-        if name in ("alpha", "beta") and osc.eta is not None:
-            raise ParameterError(f"parameters={parameters!r}: {name!r} needs Rayleigh damping; "
-                                 f"the oscillator uses eta={osc.eta!r}")
-        if name == "eta" and osc.eta is None:
-            raise ParameterError(f"parameters={parameters!r}: 'eta' needs the paper's damping "
-                                 "C = 2 eta K; the oscillator uses Rayleigh damping")
+        check_parameter(osc, name, "parameters")
     if p1 == p2:
         raise ParameterError(f"parameters must be two different names; got {parameters!r}")
     return str(p1), str(p2)
@@ -294,7 +287,8 @@ class CurveProblem:
             return self._jac_cache[1]
         m = x.size - 1
         J = np.empty((m, m + 1))
-        domains = {0: _DOMAINS[self.parameters[0]], m: _DOMAINS[self.parameters[1]]}
+        p1, p2 = self.parameters
+        domains = {0: PARAMETERS[p1].domain, m: PARAMETERS[p2].domain}
         for j in range(m + 1):
             h = _FD_STEP * max(1.0, abs(x[j]))
             lo_dom, hi_dom = domains.get(j, (-math.inf, math.inf))

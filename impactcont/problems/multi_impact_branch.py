@@ -26,7 +26,7 @@ from impactcont.orbit.multi_impact import (
     shooting,
 )
 from impactcont.orbit.periodic import _check_N
-from impactcont.problems.periodic_branch import CONTINUABLE_PARAMETERS
+from impactcont.vocabulary import check_parameter
 
 __all__ = ["MultiImpactBranchProblem"]
 
@@ -35,18 +35,11 @@ _CACHE_SIZE = 64
 
 
 class MultiImpactBranchProblem:
-    """The N-p shooting system as ``F(u, lam) = 0`` for :func:`impactcont.continuation`.
+    """The N-p shooting system as ``F(u, lam) = 0`` for the continuation core.
 
-    Parameters
-    ----------
-    osc : ImpactOscillator
-        The oscillator; its value of `parameter` is replaced by ``lam``.
-    N : int
-        Forcing periods of the motion.
-    p : int
-        Impacts per motion.
-    parameter : str
-        One of :data:`impactcont.problems.CONTINUABLE_PARAMETERS`.
+    `osc`, `N` and `parameter` are those of
+    :class:`~impactcont.problems.PeriodicBranchProblem` (`parameter` is replaced by
+    ``lam``); the motion has `p` impacts in its N forcing periods.
 
     Notes
     -----
@@ -57,15 +50,7 @@ class MultiImpactBranchProblem:
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
-        if parameter not in CONTINUABLE_PARAMETERS:
-            raise ParameterError(f"parameter must be one of {CONTINUABLE_PARAMETERS}; "
-                                 f"got {parameter!r}")
-        if parameter in ("alpha", "beta") and osc.eta is not None:
-            raise ParameterError(f"parameter={parameter!r} needs Rayleigh damping; the "
-                                 f"oscillator uses eta={osc.eta!r}")
-        if parameter == "eta" and osc.eta is None:
-            raise ParameterError("parameter='eta' needs the paper's damping C = 2 eta K; the "
-                                 "oscillator uses Rayleigh damping (alpha, beta)")
+        check_parameter(osc, parameter)
         self.osc = osc
         self.N = _check_N(N)
         self.p = check_impacts(p)

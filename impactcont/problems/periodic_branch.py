@@ -15,11 +15,9 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem"]
-
-CONTINUABLE_PARAMETERS = ("omega", "b", "R", "eta", "alpha", "beta")
-"""Model parameters a branch can be continued in."""
 
 _DAMPING_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
 """``d a_i / d lam = p + q omega_i^2`` for the damping parameters (``a_i = eta omega_i^2``,
@@ -52,15 +50,7 @@ class PeriodicBranchProblem:
     a closed loop (read by the continuation driver)."""
 
     def __init__(self, osc: ImpactOscillator, N: int, parameter: str) -> None:
-        if parameter not in CONTINUABLE_PARAMETERS:
-            raise ParameterError(f"parameter must be one of {CONTINUABLE_PARAMETERS}; "
-                                 f"got {parameter!r}")
-        if parameter in ("alpha", "beta") and osc.eta is not None:
-            raise ParameterError(f"parameter={parameter!r} needs Rayleigh damping; the "
-                                 f"oscillator uses eta={osc.eta!r}")
-        if parameter == "eta" and osc.eta is None:
-            raise ParameterError("parameter='eta' needs the paper's damping C = 2 eta K; the "
-                                 "oscillator uses Rayleigh damping (alpha, beta)")
+        check_parameter(osc, parameter)
         self.osc = osc
         self.N = N
         self.parameter = parameter

@@ -5,17 +5,21 @@ its derivatives (:class:`Problem`), :func:`continue_branch` computes a branch
 and :func:`iter_points` streams the accepted points of one direction.
 """
 
-from impactcont.continuation.driver import (
+from impactcont.core.corrector import HyperplanePoint, solve_on_hyperplane
+from impactcont.core.driver import (
     BranchRun,
     ContinuationResult,
     ContinuationStatus,
     continue_branch,
+    follow,
     iter_points,
 )
-from impactcont.continuation.options import ContinuationOptionError, ContinuationOptions
-from impactcont.continuation.point import ContinuationPoint
-from impactcont.continuation.problem import Problem, ProblemOutputError
-from impactcont.continuation.stepper import (
+from impactcont.core.events import Stop, StopRule
+from impactcont.core.locate import Event, EventPoint, locate_events
+from impactcont.core.options import ContinuationOptionError, ContinuationOptions
+from impactcont.core.point import ContinuationPoint
+from impactcont.core.problem import Problem, ProblemOutputError
+from impactcont.core.stepper import (
     ContinuationStepError,
     NewtonConvergenceError,
     PalcStepper,
@@ -30,11 +34,19 @@ __all__ = [
     "ContinuationResult",
     "ContinuationStatus",
     "ContinuationStepError",
+    "Event",
+    "EventPoint",
+    "HyperplanePoint",
     "NewtonConvergenceError",
     "PalcStepper",
     "Problem",
     "ProblemOutputError",
     "StepSizeBelowMinimumError",
+    "Stop",
+    "StopRule",
     "continue_branch",
+    "follow",
     "iter_points",
+    "locate_events",
+    "solve_on_hyperplane",
 ]

@@ -17,9 +17,9 @@ import math
 
 import numpy as np
 
-from impactcont.continuation.options import ContinuationOptions
-from impactcont.continuation.point import ContinuationPoint
-from impactcont.continuation.problem import (
+from impactcont.core.options import ContinuationOptions
+from impactcont.core.point import ContinuationPoint
+from impactcont.core.problem import (
     FloatArray,
     Problem,
     check_problem_outputs,

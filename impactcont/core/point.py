@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from impactcont.continuation.problem import FloatArray
+from impactcont.core.problem import FloatArray
 
 __all__ = ["ContinuationPoint"]
 

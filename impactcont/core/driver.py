@@ -1,13 +1,17 @@
-"""Continuation loop: run the stepper, stop on bounds, loops and failures.
+"""Continuation loop: run the stepper, stop on bounds, loops, failures and the driver's rules.
 
-:func:`continue_branch` computes a whole branch. :func:`iter_points` runs one
-direction lazily and yields every accepted point, for callers (such as a
-bifurcation-detection layer) that watch the stream of points.
+:func:`follow` computes a whole branch or curve (both directions joined); every
+driver of impactcont runs on it. :func:`iter_points` runs one direction lazily
+and yields every accepted point, for callers that watch the stream of points.
+
+The problem may provide an ``accept(u, lam)`` hook: the core calls it with the
+start guess before each direction and with every accepted point, before the
+next step (problems with borders or reference vectors renew them there).
 """
 
 from __future__ import annotations
 
-import enum
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -15,10 +19,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impactcont.continuation.options import ContinuationOptions
-from impactcont.continuation.point import ContinuationPoint
-from impactcont.continuation.problem import FloatArray, Problem
-from impactcont.continuation.stepper import (
+from impactcont.core.events import (
+    ContinuationStatus,
+    Stop,
+    StopRule,
+    StopRuleFactory,
+)
+from impactcont.core.locate import Event, EventPoint, locate_events
+from impactcont.core.options import ContinuationOptions
+from impactcont.core.point import ContinuationPoint
+from impactcont.core.problem import FloatArray, Problem
+from impactcont.core.stepper import (
     NewtonConvergenceError,
     PalcStepper,
     StepSizeBelowMinimumError,
@@ -30,6 +41,7 @@ __all__ = [
     "ContinuationResult",
     "ContinuationStatus",
     "continue_branch",
+    "follow",
     "iter_points",
 ]
 
@@ -41,14 +53,11 @@ LOOP_AWAY_DISTANCE = 3.0
 """The branch must first have gone this many steps ``ds`` away from the start."""
 
 
-class ContinuationStatus(enum.Enum):
-    """Why a continuation run stopped; the values are readable messages."""
-
-    BOUNDS_REACHED = "parameter bound reached"
-    MAX_POINTS_REACHED = "maximum number of points reached"
-    STEP_BELOW_MINIMUM = "step size fell below ds_min"
-    CLOSED_LOOP = "closed loop detected"
-    NEWTON_FAILED_AT_START = "Newton failed at the start point"
+def _accept(problem: Problem, u: FloatArray, lam: float) -> None:
+    """Call the problem's optional ``accept`` hook."""
+    accept = getattr(problem, "accept", None)
+    if accept is not None:
+        accept(u, lam)
 
 
 class BranchRun:
@@ -71,6 +80,9 @@ class BranchRun:
     direction : int, optional
         Sign of ``dlam`` at the start, ``+1`` or ``-1``; defaults to
         ``options.direction``.
+    stop : StopRule, optional
+        The driver's rule, shown every accepted point (the start with
+        ``previous=None``) before it is yielded.
     """
 
     def __init__(
@@ -80,6 +92,7 @@ class BranchRun:
         lam0: float,
         options: ContinuationOptions,
         direction: int | None = None,
+        stop: StopRule | None = None,
     ) -> None:
         self.u0, self.lam0 = _validated_start(u0, lam0, options)
         self.problem = problem
@@ -87,6 +100,7 @@ class BranchRun:
         self.direction = options.direction if direction is None else direction
         if self.direction not in (1, -1):
             raise ParameterError(f"direction = {direction!r} is invalid; it must be +1 or -1")
+        self.stop = stop
         self.status: ContinuationStatus | None = None
         self.message = "not run yet"
         self._started = False
@@ -102,14 +116,32 @@ class BranchRun:
         self.message = f"{status.value}: {detail}"
         logger.info("continuation (direction %+d) stopped, %s", self.direction, self.message)
 
+    def _emit(self, previous: ContinuationPoint | None, current: ContinuationPoint
+              ) -> Iterator[ContinuationPoint]:
+        """Yield `current` as the stop rule decides (kept, replaced or left out).
+
+        When the rule stops the run, it is finished here (:attr:`status` is set).
+        """
+        stop: Stop | None = None if self.stop is None else self.stop(previous, current)
+        if stop is None:
+            yield current
+            return
+        if stop.keep:
+            yield stop.point if stop.point is not None else current
+        self._finish(stop.status, stop.detail)
+
     def _run(self) -> Iterator[ContinuationPoint]:
+        _accept(self.problem, self.u0, self.lam0)
         stepper = PalcStepper(self.problem, self.options, self.direction)
         try:
             start = stepper.init(self.u0, self.lam0)
         except NewtonConvergenceError as error:
             self._finish(ContinuationStatus.NEWTON_FAILED_AT_START, str(error))
             return
-        yield start
+        yield from self._emit(None, start)
+        if self.status is not None:
+            return
+        _accept(self.problem, start.u, start.lam)
         farthest_from_start = 0.0
         previous = start
         while True:
@@ -128,7 +160,10 @@ class BranchRun:
             if bound is not None:
                 yield from self._land_on_bound(stepper, previous, current, bound)
                 return
-            yield current
+            yield from self._emit(previous, current)
+            if self.status is not None:
+                return
+            _accept(self.problem, current.u, current.lam)
             if self._closes_loop(stepper, start, previous, current, farthest_from_start):
                 self._finish(
                     ContinuationStatus.CLOSED_LOOP,
@@ -159,8 +194,9 @@ class BranchRun:
     ) -> Iterator[ContinuationPoint]:
         """Yield the point exactly on `bound` (if new) and finish the run."""
         detail = f"lam = {bound:.10g}"
+        landed: ContinuationPoint | None = None
         if current.lam == bound:
-            yield current
+            landed = current
         elif previous.lam != bound:
             try:
                 landed = stepper.land_on_parameter(previous, current, bound)
@@ -170,8 +206,10 @@ class BranchRun:
                     f"lam = {bound:.10g} crossed, but the point on it was not found ({error}); "
                     f"last point at lam = {previous.lam:.10g}"
                 )
-            else:
-                yield landed
+        if landed is not None:
+            yield from self._emit(previous, landed)
+            if self.status is not None:
+                return
         self._finish(ContinuationStatus.BOUNDS_REACHED, detail)
 
     @staticmethod
@@ -221,18 +259,8 @@ def iter_points(
 ) -> BranchRun:
     """Continue in one direction, yielding the accepted points lazily.
 
-    Parameters
-    ----------
-    problem : Problem
-        The system ``F(u, lam) = 0``.
-    u0 : array_like, shape (m,)
-        Guess of the unknowns at the start.
-    lam0 : float
-        Parameter of the start point, within ``options.bounds``.
-    options : ContinuationOptions
-        Continuation options; ``both_directions`` is ignored here.
-    direction : int, optional
-        Sign of ``dlam`` at the start; defaults to ``options.direction``.
+    The arguments are those of :class:`BranchRun` (``options.both_directions``
+    is ignored here).
 
     Returns
     -------
@@ -285,6 +313,8 @@ class ContinuationResult:
         Readable summary of both statuses.
     start_index : int
         Index of the start point in the arrays.
+    events : tuple of EventPoint
+        The events given to :func:`follow`, located along the branch.
     """
 
     u: FloatArray
@@ -297,6 +327,7 @@ class ContinuationResult:
     backward_status: ContinuationStatus | None
     message: str
     start_index: int = 0
+    events: tuple[EventPoint, ...] = ()
 
     @property
     def statuses(self) -> tuple[ContinuationStatus, ...]:
@@ -309,14 +340,23 @@ class ContinuationResult:
         return int(self.lam.shape[0])
 
 
-def continue_branch(
+def follow(
     problem: Problem,
     u0: FloatArray | Sequence[float],
     lam0: float,
     options: ContinuationOptions,
     on_point: Callable[[ContinuationPoint], None] | None = None,
+    *,
+    stop: StopRuleFactory | None = None,
+    events: Sequence[Event] = (),
 ) -> ContinuationResult:
     """Compute a branch of ``F(u, lam) = 0`` by pseudo-arclength continuation.
+
+    Every branch and curve of impactcont is computed here: both directions
+    from the start, joined into one ordered branch; bounds, ``max_points``,
+    closed loops (modulo the problem's ``periods``) and the driver's stop
+    rules end a direction. The problem's optional ``accept`` hook is called
+    with the start guess and every accepted point.
 
     Parameters
     ----------
@@ -333,6 +373,12 @@ def continue_branch(
         computed: the run in ``options.direction`` first (start point with
         ``index == 0``), then, with ``both_directions``, the opposite run,
         which starts again with the start point (``index == 0``).
+    stop : callable, optional
+        Called with the direction (``+1``, ``-1``) at the start of each run;
+        returns that run's :class:`~impactcont.core.events.StopRule`.
+    events : sequence of Event
+        Located along the joined branch once it is computed
+        (:func:`~impactcont.core.locate.locate_events`), in ``result.events``.
 
     Returns
     -------
@@ -345,15 +391,27 @@ def continue_branch(
         If `u0` is not a non-empty 1-D finite array or `lam0` is outside
         ``options.bounds``.
     """
-    forward = _collect(BranchRun(problem, u0, lam0, options), on_point)
+    def run(direction: int) -> BranchRun:
+        return BranchRun(problem, u0, lam0, options, direction,
+                         None if stop is None else stop(direction))
+
+    forward = _collect(run(options.direction), on_point)
     if not options.both_directions:
-        return _result_one_direction(forward)
-    if forward.status in _STATUSES_SKIPPING_BACKWARD:
-        return _result_one_direction(
+        result = _result_one_direction(forward)
+    elif forward.status in _STATUSES_SKIPPING_BACKWARD:
+        result = _result_one_direction(
             forward, forward.status, f"skipped, {_STATUSES_SKIPPING_BACKWARD[forward.status]}"
         )
-    backward = _collect(BranchRun(problem, u0, lam0, options, -options.direction), on_point)
-    return _result_both_directions(forward, backward)
+    else:
+        result = _result_both_directions(forward, _collect(run(-options.direction), on_point))
+    if events and len(result) > 1:
+        found = locate_events(problem, result.u, result.lam, result.tangent, events)
+        result = dataclasses.replace(result, events=tuple(found))
+    return result
+
+
+continue_branch = follow
+"""The former name of :func:`follow`."""
 
 
 _STATUSES_SKIPPING_BACKWARD = {
@@ -462,6 +520,9 @@ def _validated_start(
             f"u0 = {u0!r} is invalid; it must be a non-empty 1-D array of finite floats"
         )
     lam = float(lam0)
+    if options.bounds is None:
+        raise ParameterError("options.bounds = None is invalid; the core needs the pair "
+                             "(lam_min, lam_max)")
     lam_min, lam_max = options.bounds
     if not lam_min <= lam <= lam_max:
         raise ParameterError(

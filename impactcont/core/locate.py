@@ -1,0 +1,234 @@
+"""Events along a branch: where a test function changes sign, located on the branch.
+
+An :class:`Event` names a test function of the accepted points (or a fold: the
+sign of the tangent's parameter component). :func:`locate_events` watches every
+step between two accepted points for a sign change, parametrises the branch
+there by the chord coordinate ``s in [0, 1]`` (the point of the branch on the
+hyperplane across the chord through ``x_left + s (x_right - x_left)``, found by
+:func:`~impactcont.core.corrector.solve_on_hyperplane`; this works through folds)
+and locates the zero with :func:`locate_zero`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from impactcont.core.corrector import solve_on_hyperplane
+from impactcont.core.problem import FloatArray, Problem
+
+__all__ = ["Event", "EventPoint", "locate_events", "locate_zero", "tangent_at"]
+
+log = logging.getLogger(__name__)
+
+_EPS = float(np.finfo(float).eps)
+
+
+@dataclass(frozen=True, eq=False)
+class Event:
+    """A point to watch along a branch.
+
+    Attributes
+    ----------
+    label : str
+        What the point is called (e.g. a :class:`~impactcont.vocabulary.Label`).
+    test : callable or None
+        ``test(u, lam) -> float``, changing sign at the point; ``None``: a fold,
+        where the parameter component of the tangent changes sign.
+    at_point : callable, optional
+        ``at_point(k) -> float``: the test's value at accepted point ``k`` when
+        the driver already has it (else ``test`` is evaluated there).
+    """
+
+    label: str
+    test: Callable[[FloatArray, float], float] | None
+    at_point: Callable[[int], float] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class EventPoint:
+    """Where an event's test function vanishes between accepted points ``k`` and ``k + 1``.
+
+    Attributes
+    ----------
+    label : str
+    u : ndarray
+    lam : float
+    step : int
+        ``k``, the first of the two bracketing accepted points.
+    s : float
+        Chord coordinate in ``[0, 1]``.
+    status : {"located", "bracketed"}
+    precision : float
+        Bound on the error of `lam`.
+    bracket : (float, float)
+        The parameter values of the two bracketing points, ascending.
+    arclength : (float, float)
+        The bracket as an interval of the chord arclength from the branch start.
+    failed : bool
+        The locator failed (the point is the middle of the step, ``bracketed``).
+    """
+
+    label: str
+    u: FloatArray
+    lam: float
+    step: int
+    s: float
+    status: str
+    precision: float
+    bracket: tuple[float, float]
+    arclength: tuple[float, float]
+    failed: bool = False
+
+
+def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
+                ) -> tuple[float, str]:
+    """The zero of `g` in ``[lo, hi]`` by Brent's method, and how well it is known.
+
+    Parameters
+    ----------
+    g : callable
+        The test function along the step (evaluations are best cached by the caller).
+    lo, hi : float
+        The bracket, where `g` has opposite signs.
+    xtol : float
+        Absolute tolerance in the coordinate.
+
+    Returns
+    -------
+    s : float
+        The zero, inside ``[lo, hi]``.
+    status : {"located", "bracketed"}
+        ``located`` when ``|g(s)|`` is at most 1e-6 of the larger end value (plus
+        1e-12); else the test function jumps there (a pole) and the point is only
+        bracketed.
+
+    Raises
+    ------
+    ValueError
+        When `g` has the same sign at both ends.
+    """
+    g0, g1 = g(lo), g(hi)
+    s = brentq(g, lo, hi, xtol=xtol, rtol=4 * _EPS)
+    scale = max(abs(g0), abs(g1))
+    status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
+    return s, status
+
+
+def tangent_at(problem: Problem, u: FloatArray, lam: float, reference: FloatArray) -> FloatArray:
+    """Unit null vector of ``[dF/du | dF/dlam]`` with a positive dot product with `reference`."""
+    extended = np.column_stack([problem.jacobian(u, lam), problem.dparam(u, lam)])
+    t = np.linalg.svd(extended)[2][-1]
+    return t if float(t @ reference) >= 0 else -t
+
+
+class _Chord:
+    """The branch between two accepted points, parametrised by the chord ``s in [0, 1]``."""
+
+    def __init__(self, problem: Problem, x0: FloatArray, x1: FloatArray, newton_tol: float):
+        self.problem, self.x0, self.x1 = problem, x0, x1
+        self.chord = x1 - x0
+        self.newton_tol = newton_tol
+        self._cache: dict[float, tuple[FloatArray, float]] = {}
+
+    def point(self, s: float) -> tuple[FloatArray, float]:
+        """``(u, lam)`` of the branch on the hyperplane at chord coordinate ``s``."""
+        if s in self._cache:
+            return self._cache[s]
+        if s == 0.0:
+            return self.x0[:-1], float(self.x0[-1])
+        if s == 1.0:
+            return self.x1[:-1], float(self.x1[-1])
+        found = solve_on_hyperplane(self.problem, self.x0 + s * self.chord, self.chord,
+                                    tol=self.newton_tol)
+        if not found.converged:
+            log.debug("chord Newton at s=%.3g stopped with last step %.3g", s, found.last_step)
+        self._cache[s] = (found.u, found.lam)
+        return self._cache[s]
+
+    def fold_test(self, s: float) -> float:
+        u, lam = self.point(s)
+        return float(tangent_at(self.problem, u, lam, self.chord)[-1])
+
+
+def _locate(g: Callable[[float], float], s_tol: float) -> tuple[float, str]:
+    cache: dict[float, float] = {}
+
+    def cached(s: float) -> float:
+        if s not in cache:
+            cache[s] = g(s)
+        return cache[s]
+
+    g0, g1 = cached(0.0), cached(1.0)
+    if not (math.isfinite(g0) and math.isfinite(g1)) or (g0 < 0) == (g1 < 0):
+        return 0.5, "bracketed"  # the re-evaluated ends disagree with the stream: keep bracket
+    return locate_zero(cached, 0.0, 1.0, s_tol)
+
+
+def _changes(a: float, b: float) -> bool:
+    return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
+
+
+def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequence[Event],
+                  *, s_tol: float = 1e-13, newton_tol: float = 1e-13) -> list[EventPoint]:
+    """Every sign change of every event between consecutive accepted points, located.
+
+    Parameters
+    ----------
+    problem : Problem
+    u, lam, tangent : array_like
+        The accepted points in branch order (shapes ``(n, m)``, ``(n,)``, ``(n, m + 1)``),
+        tangents along the branch order.
+    events : sequence of Event
+    s_tol, newton_tol : float
+        Tolerances of the chord coordinate and of the hyperplane Newton.
+
+    Returns
+    -------
+    list of EventPoint
+        By step, then in the order of `events`; a failed location is kept with
+        ``failed=True`` and status ``bracketed`` at the middle of the step.
+    """
+    x = np.column_stack([np.asarray(u, dtype=float), np.asarray(lam, dtype=float)])
+    dlam = np.asarray(tangent, dtype=float)[:, -1]
+    arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
+    found: list[EventPoint] = []
+    for k in range(len(x) - 1):
+        chord = _Chord(problem, x[k], x[k + 1], newton_tol)
+        for event in events:
+            if event.test is None:
+                if (dlam[k] > 0) == (dlam[k + 1] > 0):
+                    continue
+                g = chord.fold_test
+            else:
+                value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
+                if not _changes(value(k), value(k + 1)):
+                    continue
+
+                def g(s: float, test: Callable[..., float] = event.test,
+                      chord: _Chord = chord) -> float:
+                    return test(*chord.point(s))
+            failed = False
+            try:
+                s, status = _locate(g, s_tol)
+            except (ValueError, np.linalg.LinAlgError) as exc:
+                failed = True  # kept as bracketed (never dropped), at the middle of the step
+                log.warning("%s between points %d and %d not located, kept as bracketed: %s",
+                            event.label, k, k + 1, exc)
+                s, status = 0.5, "bracketed"
+            uk, lamk = chord.point(s)
+            ds_s = max(s_tol, 4 * _EPS)
+            lams = [chord.point(min(max(s + e, 0.0), 1.0))[1] for e in (-ds_s, ds_s)]
+            precision = 2 * max(abs(v - lamk) for v in lams) + 4 * _EPS * abs(lamk)
+            found.append(EventPoint(
+                label=event.label, u=np.array(uk, float), lam=float(lamk), step=k, s=float(s),
+                status=status, precision=float(precision),
+                bracket=(min(x[k, -1], x[k + 1, -1]), max(x[k, -1], x[k + 1, -1])),
+                arclength=(float(arclength[k]), float(arclength[k + 1])), failed=failed))
+    return found

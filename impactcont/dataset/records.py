@@ -1,0 +1,84 @@
+"""Typed results to dataset columns: the one place where drivers' results become records.
+
+The drivers hand over the motions they computed (:class:`~impactcont.PeriodicOrbit`
+or :class:`~impactcont.MultiImpactOrbit`, one per accepted point) and their special
+points; :func:`orbit_columns` and :func:`special_record` turn them into the columns
+and dicts of the branch schema (``docs/dataset.md``), so that every driver stores
+the same variables.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["orbit_columns", "special_record"]
+
+
+def orbit_columns(orbits: Any, parameter: str, values: Any) -> dict[str, np.ndarray]:
+    """The ``point`` columns of a branch from the motion at each point.
+
+    Parameters
+    ----------
+    orbits : sequence of PeriodicOrbit or MultiImpactOrbit
+        The motion at each accepted point, in branch order.
+    parameter : str
+        The continued parameter; its column is added when it is not ``omega`` or ``b``.
+    values : array_like
+        The continued parameter's value at each point.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``omega, b, delta, impact_velocity, gap_min, spectral_radius, stable,
+        physical, multipliers, state`` (and the continued parameter).
+    """
+    columns = {
+        "omega": np.array([o.oscillator.omega for o in orbits]),
+        "b": np.array([o.oscillator.b for o in orbits]),
+        "delta": np.array([o.delta for o in orbits]),
+        "impact_velocity": np.array([o.impact_velocity for o in orbits]),
+        "gap_min": np.array([o.gap_min for o in orbits]),
+        "spectral_radius": np.array([o.spectral_radius for o in orbits]),
+        "stable": np.array([o.stable for o in orbits]),
+        "physical": np.array([o.physical for o in orbits]),
+        "multipliers": np.array([o.multipliers for o in orbits]),
+        "state": np.array([o.state for o in orbits]),
+    }
+    columns.setdefault(parameter, np.asarray(values, dtype=float))
+    return columns
+
+
+def special_record(special: Any, parameter: str, *, point: int,
+                   bracket: tuple[float, float]) -> dict[str, Any]:
+    """The special-point dict of the branch schema for a located (or bracketed) point.
+
+    Parameters
+    ----------
+    special : SpecialPoint or MultiImpactSpecialPoint
+        With ``label``, ``value`` (of the continued parameter), ``delta``,
+        ``precision``, ``status`` and ``orbit`` (the motion at the point).
+    parameter : str
+        The continued parameter.
+    point : int
+        Index of the nearest accepted point in the dataset.
+    bracket : (float, float)
+        The continued parameter's values at the two bracketing points.
+
+    Returns
+    -------
+    dict
+        Keys of the schema's special points, with the motion's ``impact_velocity``
+        and ``gap_min`` at the point.
+    """
+    orbit = special.orbit
+    record = {"label": str(special.label), "omega": orbit.oscillator.omega,
+              "b": orbit.oscillator.b, "delta": special.delta, "point": point,
+              "bracket_lo": min(bracket), "bracket_hi": max(bracket),
+              "precision": special.precision, "status": special.status,
+              "multipliers": orbit.multipliers,
+              "impact_velocity": float(orbit.impact_velocity),
+              "gap_min": float(orbit.gap_min)}
+    record.setdefault(parameter, special.value)
+    return record

@@ -1,0 +1,204 @@
+"""The words of impactcont, defined once: special-point labels and the parameter table.
+
+Every module that names a special point or checks a parameter uses this module:
+the labels of the special points (:class:`Label`), the codimension-two labels, the
+continuable parameters with their allowed ranges, units and the damping each
+needs (:data:`PARAMETERS`), and the rule that ``eta`` (``C = 2 eta K``, the
+paper's damping) and the Rayleigh coefficients ``alpha, beta``
+(``C = alpha M + beta K``) exclude each other (:func:`check_damping`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from typing import Any
+
+from impactcont.errors import ParameterError
+
+__all__ = [
+    "CODIM2_LABELS",
+    "CONTINUABLE_PARAMETERS",
+    "LABELS",
+    "PARAMETERS",
+    "STATUSES",
+    "Label",
+    "Parameter",
+    "check_damping",
+    "check_labels",
+    "check_parameter",
+    "damping_kind",
+]
+
+
+class Label(str, enum.Enum):
+    """A special point of a branch (a codim-1 point of the two-parameter plane).
+
+    The members are strings (``Label.PD == "PD"``), so comparisons with the
+    labels stored in datasets keep working.
+    """
+
+    SN = "SN"
+    """Saddle-node (fold): a multiplier crosses +1 (eq. 25)."""
+    PD = "PD"
+    """Period-doubling (flip): a multiplier crosses -1."""
+    NS = "NS"
+    """Neimark-Sacker: a pair of complex multipliers crosses the unit circle."""
+    GR = "GR"
+    """Grazing: mass 1 touches the stop between impacts (eq. 16 with equality)."""
+    ZV = "ZV"
+    """Zero-velocity impact: the impact velocity h2 of eq. (22) vanishes."""
+
+    def __str__(self) -> str:
+        return str(self.value)
+
+    __format__ = str.__format__
+
+
+#: The special-point labels as plain strings, in their canonical order.
+LABELS: tuple[str, ...] = tuple(label.value for label in Label)
+
+#: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
+#: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1
+#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi);
+#: ``SN+SN`` (a double multiplier +1 on an SN curve, Bogdanov-Takens-like) and
+#: ``PD+PD`` (a double -1 on a PD curve) are the same resonances met on SN and PD curves.
+CODIM2_LABELS: tuple[str, ...] = (
+    "SN+ZV", "SN+GR", "SN+PD", "SN+NS", "SN+SN",
+    "PD+ZV", "PD+GR", "PD+SN", "PD+NS", "PD+PD",
+    "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
+    "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
+    "ZV+SN",
+)
+
+#: How well a special point is known: ``located`` (refined to its precision) or
+#: ``bracketed`` (only known to lie between two accepted points).
+STATUSES: tuple[str, ...] = ("located", "bracketed")
+
+
+def check_labels(detect: Any, argument: str = "detect") -> list[str]:
+    """The labels of `detect` as a list of str, refused unless all are known.
+
+    Raises
+    ------
+    ParameterError
+        Naming `argument`, the unknown labels and the allowed ones.
+    """
+    if isinstance(detect, str):
+        raise ParameterError(f"{argument} must be a sequence of labels; got the string "
+                             f"{detect!r}")
+    labels = [str(label) for label in detect]
+    unknown = sorted(set(labels) - set(LABELS))
+    if unknown:
+        raise ParameterError(f"{argument}: labels must be a subset of {LABELS}; got unknown "
+                             f"{unknown}")
+    return labels
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Parameter:
+    """One scalar parameter of the oscillator that can be continued.
+
+    Attributes
+    ----------
+    name : str
+        As in the paper and as the attribute of :class:`ImpactOscillator`.
+    long_name, description : str
+        Readable name and one sentence with the equation it enters.
+    unit : str
+        ``"1"``: the model is nondimensional.
+    low, high : float
+        Allowed range; ``low_open`` excludes ``low`` itself.
+    allowed : str
+        The range in words, for error messages.
+    damping : {"eta", "rayleigh", None}
+        The damping model the parameter belongs to (``None``: any).
+    """
+
+    name: str
+    long_name: str
+    description: str
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    allowed: str = "a finite real number"
+    unit: str = "1"
+    damping: str | None = None
+
+    def contains(self, value: float) -> bool:
+        """Whether `value` lies in the allowed range (finite)."""
+        if not math.isfinite(value):
+            return False
+        above = value > self.low if self.low_open else value >= self.low
+        return above and value <= self.high
+
+    @property
+    def domain(self) -> tuple[float, float]:
+        """The closed interval of representable allowed values."""
+        low = math.nextafter(self.low, math.inf) if self.low_open else self.low
+        return low, self.high
+
+
+_NONNEGATIVE = dict(low=0.0, allowed="finite and >= 0")
+
+#: The continuable parameters, in the order of the API documentation.
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
+    Parameter("omega", "forcing frequency", "Nondimensional forcing frequency omega of eq. (1).",
+              low=0.0, low_open=True, allowed="finite and > 0"),
+    Parameter("b", "gap", "Position b of the stop met by mass 1 (eq. 3)."),
+    Parameter("R", "coefficient of restitution",
+              "Coefficient of restitution R of the impact law (eq. 4).",
+              low=0.0, high=1.0, allowed="in [0, 1]"),
+    Parameter("eta", "damping coefficient", "Damping eta of C = 2 eta K.", damping="eta",
+              **_NONNEGATIVE),
+    Parameter("alpha", "Rayleigh mass damping", "alpha of C = alpha M + beta K.",
+              damping="rayleigh", **_NONNEGATIVE),
+    Parameter("beta", "Rayleigh stiffness damping", "beta of C = alpha M + beta K.",
+              damping="rayleigh", **_NONNEGATIVE),
+)}
+
+#: Names of the continuable parameters.
+CONTINUABLE_PARAMETERS: tuple[str, ...] = tuple(PARAMETERS)
+
+
+def damping_kind(osc: Any) -> str:
+    """``"eta"`` when `osc` uses the paper's damping ``C = 2 eta K``, else ``"rayleigh"``."""
+    return "eta" if osc.eta is not None else "rayleigh"
+
+
+def check_damping(osc: Any, name: str, argument: str = "parameter") -> None:
+    """Refuse a parameter of the other damping model than the oscillator's.
+
+    ``eta`` exists only with ``C = 2 eta K``, ``alpha`` and ``beta`` only with
+    Rayleigh damping ``C = alpha M + beta K``.
+
+    Raises
+    ------
+    ParameterError
+        Naming `argument`, the parameter and the oscillator's damping.
+    """
+    needs = PARAMETERS[name].damping if name in PARAMETERS else None
+    if needs is None or needs == damping_kind(osc):
+        return
+    if needs == "rayleigh":
+        raise ParameterError(f"{argument}={name!r} needs Rayleigh damping (C = alpha M + beta K); "
+                             f"the oscillator uses the paper's damping C = 2 eta K "
+                             f"(eta={osc.eta!r}); use 'eta' instead")
+    raise ParameterError(f"{argument}={name!r} needs the paper's damping C = 2 eta K; the "
+                         f"oscillator uses Rayleigh damping (alpha={osc.alpha!r}, "
+                         f"beta={osc.beta!r}); use 'alpha' or 'beta' instead")
+
+
+def check_parameter(osc: Any, name: Any, argument: str = "parameter") -> str:
+    """`name` as a continuable parameter of `osc`: known, and of the oscillator's damping.
+
+    Raises
+    ------
+    ParameterError
+        Naming `argument`, the value and the allowed names.
+    """
+    if not isinstance(name, str) or name not in PARAMETERS:
+        raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS}; got {name!r}")
+    check_damping(osc, name, argument)
+    return name

@@ -1,0 +1,65 @@
+"""One shape for every continuation entry point: keyword-only ``options=`` (issue 12)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                               b=0.0, omega=1.5, eta=0.1)
+
+
+def test_options_exported_and_core_subpackage_named_core():
+    import impactcont.core
+
+    assert ic.ContinuationOptions is impactcont.core.ContinuationOptions
+    assert callable(ic.continuation)  # the function, not a subpackage
+    from impactcont.continuation import ContinuationOptions  # the former path still works
+
+    assert ContinuationOptions is ic.ContinuationOptions
+
+
+def test_defaults_adapt_to_a_small_ds_max():
+    opts = ic.ContinuationOptions(ds_max=0.001)
+    assert opts.ds == 0.001 and opts.ds_min <= opts.ds and opts.given == {"ds_max"}
+    merged = driver_options(ic.ContinuationOptions(max_points=7), (0.0, 1.0), ds_max=0.004)
+    assert merged.ds == 0.004 and merged.max_points == 7 and merged.bounds == (0.0, 1.0)
+    assert merged.both_directions is DRIVER_DEFAULTS["both_directions"]
+    with pytest.raises(ic.ParameterError, match="options must be a ContinuationOptions"):
+        driver_options({"ds": 0.1}, (0.0, 1.0))  # type: ignore[arg-type]
+
+
+def test_every_entry_point_takes_options(paper):
+    opts = ic.ContinuationOptions(ds_max=0.01, max_points=400)
+    n1 = ic.continuation(paper, 1, "omega", (1.4, 2.0), components="start", options=opts)
+    assert n1.sizes["point"] <= 800  # two directions of at most 400 points
+    same = ic.continuation(paper, 1, "omega", (1.4, 2.0), components="start", ds_max=0.01,
+                           max_points=400)
+    np.testing.assert_array_equal(n1.omega.values, same.omega.values)
+    # a convenience keyword overrides the same option given in options
+    coarse = ic.continuation(paper, 1, "omega", (1.4, 2.0), components="start", options=opts,
+                             ds_max=0.05)
+    assert coarse.sizes["point"] < n1.sizes["point"]
+    child = ic.period_doubling_switch(n1, bounds=(1.6, 1.9), options=opts)
+    assert child.attrs["impacts"] == 2
+    np_branch = ic.multi_impact_continuation(ic.special_orbit(n1, "PD"), "omega", (1.6, 1.9),
+                                             options=ic.ContinuationOptions(max_points=20))
+    assert np_branch.sizes["point"] <= 40
+    pd = ic.curve(paper, None, "PD", start=n1, bounds={"omega": (1.4, 2.0), "b": (0.0, 0.2)},
+                  options=ic.ContinuationOptions(max_points=5))
+    assert pd.sizes["point"] <= 10
+
+
+def test_former_submodule_paths_are_the_same_modules():
+    from impactcont.continuation.options import ContinuationOptions
+    from impactcont.continuation.stepper import NewtonConvergenceError
+
+    from impactcont.core.stepper import NewtonConvergenceError as Same
+
+    assert ContinuationOptions is ic.ContinuationOptions and NewtonConvergenceError is Same

@@ -1,0 +1,70 @@
+"""Detection does not depend on the step (issue 11, items 5 and 6).
+
+Halving ``ds_max`` changes neither the set of special (codim-2) points nor their
+values beyond 1e-9; points are named by what they are.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+
+PAPER = dict(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6, eta=0.1)
+SN_START = {"omega": 1.0, "b": 1.3204359424}
+BOX = {"omega": (0.6, 2.0), "b": (0.0, 2.0)}
+
+
+def _points(ds, prefix):
+    dim = prefix.rstrip("_")
+    return sorted((str(ds[prefix + "label"].values[k]), float(ds[prefix + "omega"].values[k]),
+                   float(ds[prefix + "b"].values[k]), str(ds[prefix + "status"].values[k]))
+                  for k in range(ds.sizes[dim]))
+
+
+def _same(a, b):
+    assert [p[0] for p in a] == [p[0] for p in b]
+    for p, q in zip(a, b, strict=True):
+        assert p[3] == q[3] == "located", (p, q)
+        assert abs(p[1] - q[1]) < 1e-9 and abs(p[2] - q[2]) < 1e-9, (p, q)
+
+
+@pytest.fixture(scope="module")
+def osc():
+    return ic.ImpactOscillator(b=SN_START["b"], omega=SN_START["omega"], **PAPER)
+
+
+def test_sn_curve_codim2_points_do_not_depend_on_ds_max(osc):
+    runs = [ic.curve(osc, 1, "SN", start=SN_START, bounds=BOX, ds_max=d, ds=s)
+            for s, d in ((0.01, 0.05), (0.01, 0.025), (0.02, 0.05))]
+    a, *others = (_points(c, "codim2_") for c in runs)
+    for b in others:
+        _same(a, b)
+    labels = [p[0] for p in a]
+    # the PD and the ZV of one step are both kept; the double multipliers +1 are 1:1
+    # resonances (SN+SN), not Neimark-Sacker points
+    assert "SN+PD" in labels and "SN+ZV" in labels and "SN+NS" not in labels
+    for k in np.flatnonzero(runs[0].codim2_label.values == "SN+SN"):
+        mu = runs[0].codim2_multipliers.values[k]
+        assert np.sort(np.abs(mu - 1.0))[1] < 1e-6  # two multipliers at +1
+
+
+def test_omega_branch_special_points_do_not_depend_on_ds_max(osc):
+    runs = [ic.continuation(osc.replace(b=0.5), 1, "omega", (0.5, 3.0), ds_max=d)
+            for d in (0.05, 0.025)]
+    _same(*(_points(r, "special_") for r in runs))
+
+
+def test_located_points_lie_in_their_bracket_or_are_bracketed(osc):
+    ds = ic.continuation(osc.replace(b=0.5), 1, "omega", (0.5, 3.0))
+    for k in range(ds.sizes["special"]):
+        row = ds.isel(special=k)
+        if str(row.special_label.values) == "SN":
+            continue  # a fold is extremal in omega: its bracket is in arclength
+        w = float(row.special_omega)
+        assert float(row.special_bracket_lo) <= w <= float(row.special_bracket_hi) or \
+            str(row.special_status.values) == "bracketed", (row.special_label.values, w)
+        assert math.isfinite(w)

@@ -1,0 +1,38 @@
+"""The vocabulary: labels and parameters defined once, used everywhere."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont import vocabulary as vocab
+from impactcont.dataset import PARAMETERS, SPECIAL_LABELS
+from impactcont.detection import LABELS
+
+
+def test_labels_are_strings_and_the_old_names_are_the_same_tuple():
+    assert vocab.Label.PD == "PD" and f"{vocab.Label.PD}" == "PD" and str(vocab.Label.NS) == "NS"
+    assert LABELS == SPECIAL_LABELS == vocab.LABELS == ("SN", "PD", "NS", "GR", "ZV")
+    assert set(PARAMETERS) == set(vocab.CONTINUABLE_PARAMETERS)
+
+
+def test_damping_rule_is_one_function():
+    eta = ic.ImpactOscillator(M=np.eye(1), K=[[1.0]], F=[1.0], R=0.5, b=0.1, omega=1.5, eta=0.1)
+    rayleigh = eta.replace(eta=None, alpha=0.1, beta=0.0)
+    vocab.check_damping(eta, "eta")
+    vocab.check_damping(rayleigh, "beta")
+    with pytest.raises(ic.ParameterError, match="needs Rayleigh damping"):
+        ic.continuation(eta, 1, "alpha", (0.0, 0.2))
+    with pytest.raises(ic.ParameterError, match="needs the paper's damping"):
+        vocab.check_parameter(rayleigh, "eta")
+    with pytest.raises(ic.ParameterError, match="must be one of"):
+        vocab.check_parameter(eta, "gap")
+    with pytest.raises(ic.ParameterError, match="labels must be a subset"):
+        vocab.check_labels(["PD", "XX"])
+
+
+def test_parameter_ranges():
+    assert not vocab.PARAMETERS["omega"].contains(0.0)
+    assert vocab.PARAMETERS["R"].contains(1.0) and not vocab.PARAMETERS["R"].contains(1.1)
+    assert vocab.PARAMETERS["b"].contains(-3.0)
