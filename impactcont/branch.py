@@ -125,7 +125,8 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     N : int
         One impact every N forcing periods.
     parameter : str
-        ``"omega"``, ``"b"``, ``"R"``, ``"eta"``, ``"alpha"`` or ``"beta"``.
+        ``"omega"``, ``"b"``, ``"R"``, ``"eta"``, ``"alpha"``, ``"beta"`` or ``"F0"`` (the forcing
+        amplitude, the largest |F_i|: F is scaled, its shape kept).
     bounds : (float, float)
         Range of the parameter.
     start : float, optional

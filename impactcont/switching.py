@@ -494,7 +494,9 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
         Parameter range; default the bounds of ``branch``.
     epsilon : float
         Step from the grazing point into the side where the new impact's
-        velocity is positive, before continuing (max-norm of the unknowns).
+        velocity is positive, before continuing (max-norm of the unknowns); also
+        the first continuation step unless ``ds`` or `options` is given (the
+        steps then grow geometrically away from the graze).
     detect : sequence of str
         Special points to detect on the new branch.
     options : ContinuationOptions, optional
@@ -557,6 +559,11 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     if not lo <= lam1 <= hi:
         raise ParameterError(f"bounds ({lo}, {hi}) must contain the grazing point "
                              f"{parameter}={lam1!r}")
+    if options is None and more.get("ds") is None:
+        # the new motion changes fastest at its birth (its multipliers grow like
+        # 1/|lam - lam_GR|): start with a step of the size of epsilon and let the core
+        # grow it geometrically, so the diagram shows the motion being born
+        more["ds"] = epsilon
     opts = make_options((lo, hi), options, direction=direction, both_directions=False, **more)
     return run_branch(problem, u1, lam1, opts, detect=detect, record={"switch": info},
-                  extra_attrs=info)
+                      extra_attrs=info)

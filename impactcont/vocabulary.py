@@ -156,6 +156,10 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
               damping="rayleigh", **_NONNEGATIVE),
     Parameter("beta", "Rayleigh stiffness damping", "beta of C = alpha M + beta K.",
               damping="rayleigh", **_NONNEGATIVE),
+    Parameter("F0", "forcing amplitude",
+              "Amplitude of the periodic forcing F of eq. (1), the largest |F_i|; "
+              "changing it scales F and keeps its shape.",
+              low=0.0, low_open=True, allowed="finite and > 0"),
 )}
 
 #: Names of the continuable parameters.

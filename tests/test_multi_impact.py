@@ -315,3 +315,21 @@ def test_plots_accept_np_branches(branch_n1, branch_22):
     bifurcation_diagram([branch_n1, branch_22])
     with pytest.raises(ValueError, match="y must be one of"):
         impact_diagram(branch_22, y="state")
+
+
+def test_grazing_switch_steps_geometrically_away_from_the_graze():
+    """Its multipliers grow like 1/|omega - omega_GR|: the steps start at epsilon's size and
+    grow by a bounded factor (the first stored step used to jump 3.9e-6 -> 1.3e-3)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.0, omega=1.5, eta=0.1)
+    branch = ic.continuation(osc, N=1, parameter="omega", bounds=(0.5, 3.0), detect=("GR",),
+                             components="start")
+    gr = float(branch.special_omega.values[0])
+    switched = grazing_switch(branch, bounds=(0.5, 3.0), max_points=40)
+    distance = np.abs(switched.omega.values[:12] - gr)
+    assert distance[0] < 1e-5
+    assert np.all(np.diff(distance) > 0)
+    assert np.all(distance[1:] / distance[:-1] < 3.0)  # no jump: the birth is resolved
+    rho = switched.spectral_radius.values[:12]
+    assert rho[0] > 1e3 and np.all(np.diff(rho) < 0)  # 1/|omega - omega_GR| decay seen
+    assert_reproduced_by_simulator(orbit_at_point(switched, 6), 1, tol=1e-8)

@@ -1,9 +1,9 @@
 """Continuation in every parameter the API accepts, each point checked independently.
 
-Every point of a branch in omega, b, R, eta, alpha or beta is recomputed with
-``periodic_orbits`` on a freshly built oscillator (its own modal basis) at the
-point's parameter value: the branch's phase must be one of its roots and the
-multipliers must agree.
+Every point of a branch in omega, b, R, eta, alpha, beta or the forcing amplitude F0 is
+recomputed with ``periodic_orbits`` on a freshly built oscillator (its own modal basis,
+F written out for F0) at the point's parameter value: the branch's phase must be one of
+its roots and the multipliers must agree.
 """
 
 from __future__ import annotations
@@ -24,7 +24,15 @@ CASES = [
     ("eta", {"eta": 0.1}, (0.0, 0.4)),
     ("alpha", {"alpha": 0.05, "beta": 0.1}, (0.0, 0.5)),
     ("beta", {"alpha": 0.05, "beta": 0.1}, (0.0, 0.5)),
+    ("F0", {"eta": 0.1}, (0.3, 3.0)),
 ]
+
+
+def _fresh(damping: dict, parameter: str, value: float) -> ic.ImpactOscillator:
+    """The oscillator at one parameter value, built from scratch (F written out for F0)."""
+    if parameter == "F0":
+        return ic.ImpactOscillator(**{**PAPER, **damping, "F": [value, 0.0]})
+    return ic.ImpactOscillator(**{**PAPER, **damping, parameter: value})
 
 
 @pytest.mark.parametrize(("parameter", "damping", "bounds"), CASES)
@@ -37,7 +45,7 @@ def test_branch_in_every_parameter_matches_periodic_orbits(parameter, damping, b
     assert "STEP_BELOW_MINIMUM" not in statuses and "NEWTON" not in statuses
     for i in range(0, branch.sizes["point"], max(1, branch.sizes["point"] // 8)):
         pt = branch.isel(point=i)
-        fresh = ic.ImpactOscillator(**{**PAPER, **damping, parameter: float(pt[parameter])})
+        fresh = _fresh(damping, parameter, float(pt[parameter]))
         orbits = ic.periodic_orbits(fresh, 1)
         d = [abs(math.remainder(o.delta - float(pt.delta), 2 * math.pi)) for o in orbits]
         k = int(np.argmin(d))
@@ -127,3 +135,44 @@ def test_every_component_in_the_range_is_returned():
             assert gaps.size and gaps.min() < 0.3, (w, orbit)
             if orbit.physical:
                 assert branch.physical.values[near].any()
+
+
+def test_forcing_amplitude_scales_the_forcing_and_keeps_the_modes():
+    osc = ic.ImpactOscillator(**{**PAPER, "F": [0.5, -0.25]}, eta=0.1)
+    assert osc.F0 == 0.5
+    stronger = osc.replace(F0=2.0)
+    np.testing.assert_array_equal(stronger.F, [2.0, -1.0])
+    assert stronger.F0 == 2.0
+    np.testing.assert_allclose(stronger.modes.modal_forces, 4.0 * osc.modes.modal_forces,
+                               rtol=1e-15)
+    np.testing.assert_array_equal(stronger.modes.u, osc.modes.u)
+    for bad, match in ((0.0, "F0 must be finite and > 0"), (-1.0, "F0 must be finite and > 0"),
+                       (math.inf, "F0")):
+        with pytest.raises(ic.ParameterError, match=match):
+            osc.replace(F0=bad)
+    with pytest.raises(ic.ParameterError, match="F or F0"):
+        osc.replace(F0=1.0, F=[1.0, 0.0])
+
+
+def test_branch_in_forcing_amplitude_at_zero_gap_keeps_its_phase():
+    """With b = 0 eq. (14) is homogeneous in F: the motion scales, its phase does not."""
+    osc = ic.ImpactOscillator(**{**PAPER, "b": 0.0, "omega": 1.2}, eta=0.1)
+    branch = ic.continuation(osc, N=1, parameter="F0", bounds=(0.5, 2.0), components="start")
+    assert np.ptp(branch.delta.values) < 1e-12
+    scale = branch.F0.values / osc.F0
+    reference = ic.periodic_orbits(osc, 1)
+    k = int(np.argmin([abs(o.delta - float(branch.delta[0])) for o in reference]))
+    np.testing.assert_allclose(branch.impact_velocity.values,
+                               scale * reference[k].impact_velocity, rtol=1e-12)
+
+
+def test_period_doubling_curve_in_forcing_amplitude_at_zero_gap_is_vertical():
+    """At b = 0 the motion scales with F0 and G does not change: PD sits at one omega."""
+    osc = ic.ImpactOscillator(**{**PAPER, "b": 0.0, "omega": 1.5}, eta=0.1)
+    branch = ic.continuation(osc, N=1, parameter="omega", bounds=(0.5, 3.0), detect=("PD",),
+                             components="start")
+    pd_omega = float(branch.special_omega.values[0])
+    curve = ic.curve(osc, 1, "PD", start=branch, parameters=("omega", "F0"),
+                     bounds={"omega": (0.5, 3.0), "F0": (0.2, 3.0)})
+    assert float(curve.F0.min()) == pytest.approx(0.2) and float(curve.F0.max()) == 3.0
+    np.testing.assert_allclose(curve.omega.values, pd_omega, rtol=1e-10)

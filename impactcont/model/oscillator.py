@@ -232,10 +232,20 @@ class ImpactOscillator:
     def replace(self, **changes: Any) -> ImpactOscillator:
         """Return a copy with some parameters changed (validated again).
 
+        ``F0`` (the forcing amplitude, :attr:`F0`) scales ``F`` and keeps its shape.
+
         Examples
         --------
         >>> osc2 = osc.replace(omega=1.5, b=0.2)  # doctest: +SKIP
+        >>> stronger = osc.replace(F0=2.0 * osc.F0)  # doctest: +SKIP
         """
+        scale = None
+        if "F0" in changes:
+            if "F" in changes:
+                raise ParameterError("give F or F0, not both: F0 scales the oscillator's F")
+            value = _real("F0", changes.pop("F0"), **_rule("F0"))
+            scale = value / self.F0
+            changes["F"] = self.F / self.F0 * value  # exactly F0 = value for the largest |F_i|
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
             allowed = ", ".join(f.name for f in dataclasses.fields(self))
@@ -253,6 +263,12 @@ class ImpactOscillator:
                 object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
             return new
         new = dataclasses.replace(self, **changes)
+        if scale is not None and "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES,
+                                                                              "F"}:
+            # only the forcing's amplitude changed: the same modes, modal forces scaled
+            new.__dict__["modes"] = dataclasses.replace(
+                self.modes, modal_forces=self.modes.modal_forces * scale)
+            return new
         if "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES, "eta", "alpha", "beta"}:
             # only the damping changed: the modes of K u = lambda M u are the same, the decay
             # rates a_i = (alpha + beta omega_i^2) / 2 follow (no new eigensolve per point of a
@@ -264,6 +280,11 @@ class ImpactOscillator:
         return new
 
     # -- derived quantities -------------------------------------------------------------------
+    @property
+    def F0(self) -> float:
+        """Forcing amplitude: the largest ``|F_i|`` (continuable: ``replace(F0=...)`` scales F)."""
+        return float(np.max(np.abs(self.F)))
+
     @property
     def n(self) -> int:
         """Number of degrees of freedom."""

@@ -176,7 +176,7 @@ class CurveProblem:
         One impact every N forcing periods.
     parameters : (str, str)
         ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter
-        ``lam``. Any two of ``omega, b, R, eta, alpha, beta``.
+        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0``.
 
     Notes
     -----

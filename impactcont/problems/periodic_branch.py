@@ -41,7 +41,8 @@ class PeriodicBranchProblem:
     -----
     ``c, s`` (eq. 13) come from the compiled kernel in modal form (O(n) per
     parameter value, cached); when the parameter is the gap ``b`` they do not
-    depend on it at all. Their parameter derivative is exact: one complex-step
+    depend on it at all, and they are linear in the forcing amplitude ``F0``
+    (eq. 13 is linear in F). Their parameter derivative is exact: one complex-step
     evaluation of the same kernel (no step-size error, no cancellation).
     """
 
@@ -100,6 +101,10 @@ class PeriodicBranchProblem:
         if self.parameter == "b" and self._cache:
             c, s, _ = next(iter(self._cache.values()))  # c, s do not depend on the gap
             value = (c, s, lam)
+        elif self.parameter == "F0":
+            self._check(lam)
+            c, s = self._unit_amplitude()
+            value = (c * lam, s * lam, self.osc.b)
         else:
             self._check(lam)
             a, R, omega = self._arguments(lam)
@@ -110,14 +115,24 @@ class PeriodicBranchProblem:
         self._cache[lam] = value
         return value
 
+    def _unit_amplitude(self) -> tuple[float, float]:
+        """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
+        from impactcont.orbit import kernel
+
+        if not hasattr(self, "_per_unit_force"):
+            a, R, omega = self._arguments(self.osc.F0)
+            c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
+            self._per_unit_force = (float(c) / self.osc.F0, float(s) / self.osc.F0)
+        return self._per_unit_force
+
     def _check(self, lam: float) -> None:
         """Refuse an iterate where eq. (14) is undefined (the corrector then halves).
 
         ``c, s`` are analytic in R and the damping beyond their physical ranges, so a
         predictor may overshoot ``R = 1`` or ``eta = 0`` and the driver lands on the
-        bound; only ``omega <= 0`` (no period) and non-finite values are refused.
+        bound; only ``omega <= 0`` (no period), ``F0 <= 0`` and non-finite values are refused.
         """
-        if not math.isfinite(lam) or (self.parameter == "omega" and lam <= 0.0):
+        if not math.isfinite(lam) or (self.parameter in ("omega", "F0") and lam <= 0.0):
             raise ParameterError(f"{self.parameter}={lam!r} is outside its allowed range")
 
     def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:
@@ -126,6 +141,8 @@ class PeriodicBranchProblem:
         if self.parameter == "b":
             return 0.0, 0.0, 1.0
         self._check(lam)
+        if self.parameter == "F0":
+            return (*self._unit_amplitude(), 0.0)
         a, R, omega = self._arguments(float(lam))
         dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R, omega,
                                              self.N, _KERNEL_WHICH[self.parameter], self._da)
