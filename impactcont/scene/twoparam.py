@@ -47,12 +47,13 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.scene.tasks import markdown_table
+from impactcont.vocabulary import LABELS
 
 __all__ = ["CURVES", "MAPS", "CurveSpec", "MapSpec", "check_curves_plot"]
 
 log = logging.getLogger(__name__)
 
-_CURVE_KINDS = ("SN", "PD", "NS", "GR", "ZV")
+_CURVE_KINDS = LABELS  # every special point has its codim-1 curve
 
 
 _CURVE = defaults_of(curve)

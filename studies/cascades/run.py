@@ -604,5 +604,5 @@ if __name__ == "__main__":
     parser.add_argument("--copy-figures", action="store_true")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
-    logging.getLogger("impactcont.continuation").setLevel(logging.WARNING)
+    logging.getLogger("impactcont.core").setLevel(logging.WARNING)
     main(args.output, quick=args.quick, workers=args.workers, copy_figures=args.copy_figures)
