@@ -64,7 +64,10 @@ def special_record(special: Any, parameter: str, *, point: int,
     point : int
         Index of the nearest accepted point in the dataset.
     bracket : (float, float)
-        The continued parameter's values at the two bracketing points.
+        The continued parameter's values at the two bracketing points. The record's
+        bracket is the range of the parameter the branch covers between them: it also
+        holds the located value, which at a fold (SN) lies beyond both (the branch
+        turns there), so a location always lies in its bracket.
 
     Returns
     -------
@@ -73,9 +76,10 @@ def special_record(special: Any, parameter: str, *, point: int,
         and ``gap_min`` at the point.
     """
     orbit = special.orbit
+    ends = [*bracket, special.value] if np.isfinite(special.value) else list(bracket)
     record = {"label": str(special.label), "omega": orbit.oscillator.omega,
               "b": orbit.oscillator.b, "delta": special.delta, "point": point,
-              "bracket_lo": min(bracket), "bracket_hi": max(bracket),
+              "bracket_lo": min(ends), "bracket_hi": max(ends),
               "precision": special.precision, "status": special.status,
               "multipliers": orbit.multipliers,
               "impact_velocity": float(orbit.impact_velocity),
