@@ -68,3 +68,25 @@ def test_located_points_lie_in_their_bracket_or_are_bracketed(osc):
         assert float(row.special_bracket_lo) <= w <= float(row.special_bracket_hi) or \
             str(row.special_status.values) == "bracketed", (row.special_label.values, w)
         assert math.isfinite(w)
+
+
+def test_pd_curve_codim2_points_do_not_depend_on_the_step(osc):
+    """Through a zero-velocity impact the PD system uses G + I with its 1/h2 pole set apart;
+    with G + I itself ds = 0.02 found a spurious PD+NS and only bracketed PD+ZV."""
+    branch = ic.continuation(osc.replace(b=0.5), 1, "omega", (0.5, 3.0))
+    box = {"omega": (0.6, 2.0), "b": (0.0, 2.0)}
+    runs = [ic.curve(osc.replace(b=0.5), 1, "PD", start=branch, bounds=box, ds=s, ds_max=d)
+            for s, d in ((0.02, 0.05), (0.01, 0.05), (0.005, 0.025))]
+    a, *others = (_points(c, "codim2_") for c in runs)
+    for b in others:
+        _same(a, b)
+    assert [p[0] for p in a] == ["PD+NS", "PD+PD", "PD+SN", "PD+ZV"]
+    labels = runs[0].codim2_label.values.tolist()
+    mu = runs[0].codim2_multipliers.values[labels.index("PD+PD")]
+    assert np.sort(np.abs(mu + 1.0))[1] < 1e-6  # two multipliers at -1: a 1:2 resonance
+    # the ZV point is a zero of the impact velocity, recomputed from scratch
+    k = labels.index("PD+ZV")
+    with pytest.warns(ic.LowImpactVelocityWarning):  # G's 1/h2 pole: the library says so
+        zv = ic.periodic_orbits(osc.replace(omega=float(runs[0].codim2_omega[k]),
+                                            b=float(runs[0].codim2_b[k])), 1)
+    assert min(abs(o.impact_velocity) for o in zv) < 1e-9

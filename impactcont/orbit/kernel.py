@@ -491,8 +491,57 @@ def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
 @_jit
 def _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx, G):
     """:func:`assemble_jacobian` into ``G`` with scratch ``pieces`` (4, n), ``dedx`` (2, 2n)."""
+    m = 2 * modal.shape[1]
+    h1, h2 = _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx)
+    dE = dedx[0]
+    dX = dedx[1]
+    n = m // 2
+    for r in range(m - 1):
+        dr = -R if r + 1 == n else 1.0
+        for col in range(m - 1):
+            G[r, col] = dr * tr[r + 1, col + 1] - dX[r + 1] * tr[0, col + 1] / h2
+        G[r, m - 1] = dE[r + 1] - dX[r + 1] * h1 / h2
+    for col in range(m - 1):
+        G[m - 1, col] = -omega * tr[0, col + 1] / h2
+    G[m - 1, m - 1] = 1.0 - omega * h1 / h2
+    return h2
+
+
+@_jit
+def jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
+    """G of eq. (25) as ``G_reg + a b^T / h2``: its 1/h2 pole (a rank-one term) set apart.
+
+    Returns ``(G_reg, a, b, h2)``; every piece is finite where the impact velocity
+    ``h2`` vanishes (ZV). ``det [[G_reg + I, a], [b^T, -h2]] = -h2 det(G + I)`` (Schur
+    complement) is then a pole-free form of the period-doubling condition.
+    """
     n = modal.shape[1]
     m = 2 * n
+    dedx = np.empty((2, m))
+    h1, h2 = _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma,
+                             np.empty((4, n)), dedx)
+    G_reg = np.zeros((m, m))
+    av = np.empty(m)
+    bv = np.empty(m)
+    for r in range(m - 1):
+        dr = -R if r + 1 == n else 1.0
+        for col in range(m - 1):
+            G_reg[r, col] = dr * tr[r + 1, col + 1]
+        G_reg[r, m - 1] = dedx[0, r + 1]
+        av[r] = -dedx[1, r + 1]
+        bv[r] = tr[0, r + 1]
+    G_reg[m - 1, m - 1] = 1.0
+    av[m - 1] = -omega
+    bv[m - 1] = h1
+    return G_reg, av, bv, h2
+
+
+@_jit
+def _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx):
+    """``dE`` (phase derivative of the forcing term) and ``dX`` (state derivative before
+    the impact), both after the impact law, into the rows of ``dedx``; returns
+    ``(h1, h2)`` (eq. 22)."""
+    n = modal.shape[1]
     _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces)
     dE = dedx[0]
     dX = dedx[1]
@@ -513,17 +562,7 @@ def _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, d
     # the impact law (eq. 4) scales the velocity row of mass 1 by -R
     dE[n] *= -R
     dX[n] *= -R
-    h2 = dX[0]
-    h1 = dE[0]
-    for r in range(m - 1):
-        dr = -R if r + 1 == n else 1.0
-        for col in range(m - 1):
-            G[r, col] = dr * tr[r + 1, col + 1] - dX[r + 1] * tr[0, col + 1] / h2
-        G[r, m - 1] = dE[r + 1] - dX[r + 1] * h1 / h2
-    for col in range(m - 1):
-        G[m - 1, col] = -omega * tr[0, col + 1] / h2
-    G[m - 1, m - 1] = 1.0 - omega * h1 / h2
-    return h2
+    return dE[0], dX[0]
 
 
 @_jit

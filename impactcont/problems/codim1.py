@@ -15,7 +15,7 @@ kind    condition                          extra unknowns              equations
 ``SN``  fold of eq. (14)-(15):             none                        ``r, dr/d delta``
         ``dr/d delta = 0``
 ``PD``  a multiplier -1:                   none                        ``r, g``
-        ``det(G + I) = 0`` via the
+        ``h2 det(G + I) = 0`` via the
         bordered system (below)
 ``NS``  multipliers ``exp(+-i theta)``:    ``theta``, ``Re v, Im v``   ``r, G v - e^{i theta}
         ``G v = e^{i theta} v``,           (2n each)                   v (2 x 2n), <v_ref,
@@ -29,15 +29,19 @@ kind    condition                          extra unknowns              equations
 Choices and why
 ---------------
 ``PD``: the scalar ``g`` is the last component of the solution of the bordered
-system ``[[G + I, w], [v^T, 0]] [q; g] = [0; 1]`` with ``v, w`` the right and
-left singular vectors of the smallest singular value of ``G + I`` at the last
-accepted point (Govaerts' minimally augmented system). By Cramer's rule
-``g = -det(G + I) / det(bordered)``: it vanishes exactly where ``det(G + I)``
-does, so the curve does not depend on the borders, but unlike ``det(G + I)``
+system ``[[E, w], [v^T, 0]] [q; g] = [0; 1]`` with ``v, w`` the right and
+left singular vectors of the smallest singular value of ``E`` at the last
+accepted point (Govaerts' minimally augmented system). ``E`` is ``G + I`` with
+the ``1/h2`` pole of G (eq. 25, a rank-one term ``a b^T / h2``) set apart:
+``E = [[G_reg + I, a], [b^T, -h2]]``, finite through a zero-velocity impact, with
+``det E = -h2 det(G + I)`` (Schur complement). By Cramer's rule
+``g = -det(E) / det(bordered)``: it vanishes exactly where ``h2 det(G + I)``
+does, so the curve does not depend on the borders, but unlike a determinant
 its derivative at a simple PD does not carry the product of the other
-factors ``prod (mu_i + 1)``, which can be large (``G`` has a ``1/h2`` pole,
-eq. 25) or small. The borders are renewed after every accepted point
-(:meth:`CurveProblem.accept`), which leaves the curve unchanged.
+factors ``prod (mu_i + 1)``. With ``G + I`` itself the system blew up at ZV, and
+PD+ZV and the 1:2 resonance next to it depended on the step. The borders are
+renewed after every accepted point (:meth:`CurveProblem.accept`), which leaves
+the curve unchanged.
 
 ``NS``: the standard augmented system of an NS point of a map (Kuznetsov,
 *Elements of Applied Bifurcation Theory*, sec. 10.2): the critical
@@ -73,6 +77,7 @@ from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
     modal_jacobian,
+    modal_jacobian_split,
     orbit_at_phase,
 )
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
@@ -128,6 +133,22 @@ class _Pieces:
     def jacobian(self, delta: float) -> tuple[np.ndarray, float]:
         """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
         return modal_jacobian(self.osc, self.modal, delta, self.impact_velocity(delta))
+
+    def pole_free_pd_matrix(self, delta: float) -> np.ndarray:
+        """``E = [[G_reg + I, a], [b^T, -h2]]`` with ``G = G_reg + a b^T / h2``, (m+1, m+1).
+
+        Finite through a zero-velocity impact; ``det E = -h2 det(G + I)`` (Schur
+        complement), so ``E`` is singular exactly at a period-doubling (``h2 != 0``).
+        """
+        G_reg, a, b, h2 = modal_jacobian_split(self.osc, self.modal, delta,
+                                               self.impact_velocity(delta))
+        m = G_reg.shape[0]
+        E = np.empty((m + 1, m + 1))
+        E[:m, :m] = G_reg + np.eye(m)
+        E[:m, m] = a
+        E[m, :m] = b
+        E[m, m] = -h2
+        return E
 
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
@@ -413,9 +434,12 @@ class FoldCurve(CurveProblem):
 class PeriodDoublingCurve(CurveProblem):
     """Period-doubling curve: a multiplier of ``G`` (eq. 25) at -1, minimally augmented.
 
-    The condition is ``g = 0`` with ``[[G + I, w], [v^T, 0]] [q; g] = [0; 1]``;
-    ``v`` and ``w`` (right and left singular vectors of ``G + I`` for its
-    smallest singular value) are renewed at every accepted point.
+    The condition is ``g = 0`` with ``[[E, w], [v^T, 0]] [q; g] = [0; 1]`` where
+    ``E = [[G_reg + I, a], [b^T, -h2]]`` is ``G + I`` with its ``1/h2`` pole set
+    apart (``G = G_reg + a b^T / h2``, ``det E = -h2 det(G + I)``): the system stays
+    regular through a zero-velocity impact, where ``G + I`` itself blows up.
+    ``v`` and ``w`` (right and left singular vectors of ``E`` for its smallest
+    singular value) are renewed at every accepted point.
     """
 
     kind = "PD"
@@ -423,15 +447,15 @@ class PeriodDoublingCurve(CurveProblem):
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
         super().__init__(osc, N, parameters)
-        m = 2 * osc.n
+        m = 2 * osc.n + 1
         self._right = np.eye(m)[0]
         self._left = np.eye(m)[0]
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        G, _ = pc.jacobian(delta)
-        m = G.shape[0]
+        E = pc.pole_free_pd_matrix(delta)
+        m = E.shape[0]
         bordered = np.zeros((m + 1, m + 1))
-        bordered[:m, :m] = G + np.eye(m)
+        bordered[:m, :m] = E
         bordered[:m, m] = self._left
         bordered[m, :m] = self._right
         rhs = np.zeros(m + 1)
@@ -439,10 +463,11 @@ class PeriodDoublingCurve(CurveProblem):
         return np.array([np.linalg.solve(bordered, rhs)[m]])
 
     def accept(self, u: np.ndarray, lam: float) -> None:
-        """Borders from the SVD of ``G + I`` at the accepted point."""
+        """Borders from the SVD of the pole-free ``E`` at the accepted point."""
         super().accept(u, lam)
-        G, _ = self.jacobian_G(u, lam)
-        U, _, Vt = np.linalg.svd(G + np.eye(G.shape[0]))
+        p1, delta = float(u[0]), float(u[1])
+        E = self._pieces(p1, lam).pole_free_pd_matrix(delta)
+        U, _, Vt = np.linalg.svd(E)
         self._left, self._right = U[:, -1].copy(), Vt[-1].copy()
 
 
