@@ -333,6 +333,8 @@ class PalcStepper:
         self, predicted: FloatArray, tangent: FloatArray
     ) -> tuple[FloatArray, int]:
         """Newton on ``[F(x); <tangent, x - predicted>] = 0`` starting at `predicted`."""
+        if predicted.size == 2:
+            return self._correct_one_unknown(predicted, tangent)
         state = predicted.copy()
         last_update_norm = math.inf
         for iteration in range(self.options.newton_max_iter + 1):
@@ -350,6 +352,51 @@ class PalcStepper:
         raise NewtonConvergenceError(
             f"corrector did not converge in {self.options.newton_max_iter} iterations "
             f"(residual {np.max(np.abs(residual)):.3g})"
+        )
+
+    def _correct_one_unknown(self, predicted: FloatArray, tangent: FloatArray
+                             ) -> tuple[FloatArray, int]:
+        """:meth:`_correct_on_hyperplane` for one unknown, in Python floats.
+
+        The same arithmetic as the general loop (the 2 x 2 bordered system by Cramer's
+        rule, the same tests), without building small numpy arrays: a branch of the
+        N-1 motions spends most of its time here.
+        """
+        (w_u, w_lam), (t_u, t_lam) = self._metric_weights().tolist(), tangent.tolist()
+        p_u, p_lam = predicted.tolist()
+        c, d = w_u * t_u, w_lam * t_lam  # the border: the scaled tangent
+        x, lam = p_u, p_lam
+        last_update_norm = math.inf
+        residual = math.nan
+        for iteration in range(self.options.newton_max_iter + 1):
+            u = np.array([x])
+            residual = float(self._residual(u, lam)[0])
+            if abs(residual) <= self.options.newton_tol and (
+                    iteration == 0 or last_update_norm <= self.options.newton_tol):
+                return np.array([x, lam]), iteration
+            if iteration == self.options.newton_max_iter:
+                break
+            a = float(self._jacobian(u, lam)[0, 0])
+            b = float(self._dparam(u, lam)[0])
+            e = -residual
+            f = -math.fsum((c * (x - p_u), d * (lam - p_lam)))
+            if not all(map(math.isfinite, (a, b, c, d, e, f))):
+                raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
+            condition = _condition_number(np.array([[a, b], [c, d]]))
+            if condition > SINGULAR_CONDITION:
+                logger.warning("matrix singular to working precision at lam = %.10g "
+                               "(condition number %.3e)", lam, condition)
+            if not math.isfinite(condition):
+                raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}")
+            det = a * d - b * c
+            dx, dlam = (e * d - b * f) / det, (a * f - e * c) / det
+            if not (math.isfinite(dx) and math.isfinite(dlam)):
+                raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
+            last_update_norm = max(abs(dx), abs(dlam))
+            x, lam = x + dx, lam + dlam
+        raise NewtonConvergenceError(
+            f"corrector did not converge in {self.options.newton_max_iter} iterations "
+            f"(residual {abs(residual):.3g})"
         )
 
     def _converged(self, residual: FloatArray, last_update_norm: float, iteration: int) -> bool:
