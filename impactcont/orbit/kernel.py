@@ -537,6 +537,62 @@ def jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
 
 
 @_jit
+def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right):
+    """The period-doubling condition ``g`` of a motion, free of G's 1/h2 pole.
+
+    ``g`` is the last component of the solution of ``[[E, w], [v^T, 0]] [q; g] =
+    [0; 1]`` with ``E = [[G_reg + I, a], [b^T, -h2]]`` (:func:`jacobian_split`,
+    ``det E = -h2 det(G + I)``) and the borders ``w = left``, ``v = right`` (size
+    2n + 1): it vanishes exactly where ``h2 det(G + I)`` does. One compiled call:
+    Gaussian elimination with partial pivoting (as LAPACK's ``dgesv``).
+    """
+    G_reg, av, bv, h2 = jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma)
+    m = G_reg.shape[0]
+    k = m + 2
+    A = np.zeros((k, k))
+    for r in range(m):
+        for col in range(m):
+            A[r, col] = G_reg[r, col]
+        A[r, r] += 1.0
+        A[r, m] = av[r]
+        A[m, r] = bv[r]
+    A[m, m] = -h2
+    for r in range(m + 1):
+        A[r, m + 1] = left[r]
+        A[m + 1, r] = right[r]
+    rhs = np.zeros(k)
+    rhs[k - 1] = 1.0
+    return _solve_small(A, rhs)[k - 1]
+
+
+@_jit
+def _solve_small(A, x):
+    """Solve ``A y = x`` in place (both overwritten) by Gaussian elimination with partial
+    pivoting; returns ``x`` holding ``y`` (inf or NaN when A is singular)."""
+    k = x.size
+    for j in range(k):
+        p = j
+        for r in range(j + 1, k):
+            if abs(A[r, j]) > abs(A[p, j]):
+                p = r
+        if p != j:
+            for col in range(k):
+                A[j, col], A[p, col] = A[p, col], A[j, col]
+            x[j], x[p] = x[p], x[j]
+        for r in range(j + 1, k):
+            factor = A[r, j] / A[j, j]
+            for col in range(j + 1, k):
+                A[r, col] -= factor * A[j, col]
+            x[r] -= factor * x[j]
+    for j in range(k - 1, -1, -1):
+        acc = x[j]
+        for col in range(j + 1, k):
+            acc -= A[j, col] * x[col]
+        x[j] = acc / A[j, j]
+    return x
+
+
+@_jit
 def _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx):
     """``dE`` (phase derivative of the forcing term) and ``dX`` (state derivative before
     the impact), both after the impact law, into the rows of ``dedx``; returns

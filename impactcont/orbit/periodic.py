@@ -190,6 +190,17 @@ def modal_jacobian_split(osc: ImpactOscillator, modal: np.ndarray, delta: float,
                                  osc.modes.kernel_arrays[7], osc.omega, osc.R, delta, sigma)
 
 
+def pd_condition(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float,
+                 left: np.ndarray, right: np.ndarray) -> float:
+    """The pole-free period-doubling condition of a motion (:func:`kernel.pd_condition`)."""
+    from impactcont.orbit import kernel
+
+    w, a, f, u = osc.modes.kernel_arrays[:4]
+    return float(kernel.pd_condition(_transition(osc, modal), modal, w, a, f, u,
+                                     osc.modes.kernel_arrays[7], osc.omega, osc.R, delta,
+                                     sigma, left, right))
+
+
 def _transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     """The physical transition ``U W(T) U^-1`` (eq. 9): compiled loops for small systems,
     numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of freedom."""

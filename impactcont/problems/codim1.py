@@ -79,6 +79,7 @@ from impactcont.orbit.periodic import (
     modal_jacobian,
     modal_jacobian_split,
     orbit_at_phase,
+    pd_condition,
 )
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
@@ -452,15 +453,8 @@ class PeriodDoublingCurve(CurveProblem):
         self._left = np.eye(m)[0]
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        E = pc.pole_free_pd_matrix(delta)
-        m = E.shape[0]
-        bordered = np.zeros((m + 1, m + 1))
-        bordered[:m, :m] = E
-        bordered[:m, m] = self._left
-        bordered[m, :m] = self._right
-        rhs = np.zeros(m + 1)
-        rhs[m] = 1.0
-        return np.array([np.linalg.solve(bordered, rhs)[m]])
+        return np.array([pd_condition(pc.osc, pc.modal, delta, pc.impact_velocity(delta),
+                                      self._left, self._right)])
 
     def accept(self, u: np.ndarray, lam: float) -> None:
         """Borders from the SVD of the pole-free ``E`` at the accepted point."""
