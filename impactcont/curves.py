@@ -241,7 +241,17 @@ class _CurveWatch:
                                   "bracketed"))
                 return Stop(ContinuationStatus.CURVE_END, f"at {label} (bracketed): {p1}="
                             f"{xe[0]:.10g}, {p2}={xe[-1]:.10g}", keep=False)
-            self.ends.append((label, xe, max(problem.last_step, 1e-15), "located"))
+            precision = max(problem.last_step, 1e-15)
+            if label in ("R1", "R2"):
+                # the NS system is singular there: locate the double multiplier +-1 on a
+                # regular system; without it the end is only bracketed
+                refined = problem.resonance_end(xe, label)
+                if refined is None:
+                    self.ends.append((label, xe, precision, "bracketed"))
+                    return Stop(ContinuationStatus.CURVE_END, f"at {label} (bracketed): "
+                                f"{p1}={xe[0]:.10g}, {p2}={xe[-1]:.10g}", keep=False)
+                xe, precision = refined
+            self.ends.append((label, xe, precision, "located"))
             return Stop(ContinuationStatus.CURVE_END, f"at {label}: {p1}={xe[0]:.10g}, "
                         f"{p2}={xe[-1]:.10g}", point=_on_curve(current, xe))
         lo, hi = self.p1_bounds

@@ -90,3 +90,25 @@ def test_pd_curve_codim2_points_do_not_depend_on_the_step(osc):
         zv = ic.periodic_orbits(osc.replace(omega=float(runs[0].codim2_omega[k]),
                                             b=float(runs[0].codim2_b[k])), 1)
     assert min(abs(o.impact_velocity) for o in zv) < 1e-9
+
+
+def test_ns_curve_ends_at_the_strong_resonances_found_by_the_sn_and_pd_curves(osc):
+    """The NS system is singular at its 1:1 / 1:2 ends (theta -> 0, pi): they used to be
+    'located' 1e-5 apart for two step sizes; now they are the double multipliers +1 / -1
+    located on a regular system, equal to the SN curve's SN+SN and the PD curve's PD+PD."""
+    at_half = osc.replace(b=0.5)
+    branch = ic.continuation(at_half, 1, "omega", (0.5, 3.0))
+    box = {"omega": (0.6, 2.0), "b": (0.0, 2.0)}
+    runs = [ic.curve(at_half, 1, "NS", start=branch, bounds=box, ds=s, ds_max=d)
+            for s, d in ((0.02, 0.05), (0.01, 0.05), (0.005, 0.025))]
+    a, *others = (_points(c, "codim2_") for c in runs)
+    for b in others:
+        _same(a, b)
+    ends = {p[0]: p for p in a if p[0] in ("R1", "R2")}
+    assert set(ends) == {"R1", "R2"}
+    pd = ic.curve(at_half, 1, "PD", start=branch, bounds=box)
+    sn = ic.curve(osc, 1, "SN", start=SN_START, bounds=BOX)
+    for curve, label, end in ((pd, "PD+PD", "R2"), (sn, "SN+SN", "R1")):
+        twins = [p for p in _points(curve, "codim2_") if p[0] == label]
+        nearest = min(twins, key=lambda p: abs(p[1] - ends[end][1]) + abs(p[2] - ends[end][2]))
+        assert abs(nearest[1] - ends[end][1]) < 1e-9 and abs(nearest[2] - ends[end][2]) < 1e-9

@@ -249,6 +249,8 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
         for test in TESTS[problem.kind]:
             if test not in ("PD", "NS") and not _changes(tests[k][test], tests[k + 1][test]):
                 continue
+            if _ends_at_resonance(problem, test, xs[k], xs[k + 1]):
+                continue  # the multiplier +-1 of the R1/R2 end: that end itself
             for lo, hi in _intervals(step, test, tests[k], tests[k + 1]):
                 if (lo, hi) == (0.0, 1.0):
                     ga, gb = tests[k][test], tests[k + 1][test]
@@ -261,6 +263,16 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
                 if point is not None:
                     found.append(point)
     return found
+
+
+def _ends_at_resonance(problem: CurveProblem, test: str, xa: np.ndarray, xb: np.ndarray
+                       ) -> bool:
+    """Whether `test` (SN: a multiplier +1, PD: -1) of an NS curve's step vanishes at an
+    end of the step that is the curve's 1:1 (``theta = 0``) or 1:2 (``theta = pi``) end."""
+    if problem.kind != "NS" or test not in ("SN", "PD"):
+        return False
+    target = 0.0 if test == "SN" else math.pi
+    return any(float(x[2]) == target for x in (xa, xb))
 
 
 def _codim2_in(problem: CurveProblem, step: _Step, test: str, k: int, lo: float, hi: float,

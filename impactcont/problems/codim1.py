@@ -512,6 +512,70 @@ class NeimarkSackerCurve(CurveProblem):
         v = self.eigenvector(u)
         self._ref = v / np.vdot(v, v).real
 
+    def resonance_end(self, x: np.ndarray, label: str, tol: float = 1e-13,
+                      max_iter: int = 20) -> tuple[np.ndarray, float] | None:
+        """The strong resonance that ends the curve, located on a regular system.
+
+        At ``R1``/``R2`` (``theta -> 0, pi``) the NS system is singular (a Jordan
+        block), so its own Newton stops 1e-5 away. There the characteristic polynomial
+        of G has a double root at ``+1``/``-1``: with ``P(mu) = det [[mu I - G_reg, a],
+        [b^T, h2]] = h2 det(mu I - G)`` (pole-free), Newton on ``[r, P(+-1), P'(+-1)]``
+        in ``(p1, delta, p2)`` (``P'`` by a complex step, central differences for the
+        Jacobian) is regular. Returns the full NS state there (``theta = 0`` or ``pi``,
+        ``v`` the real eigenvector, scaled to ``<v_ref, v> = 1``) and the last Newton
+        step, or None when Newton does not converge.
+        """
+        sign = 1.0 if label == "R1" else -1.0
+        m = 2 * self.osc.n
+
+        def pencil(pc: _Pieces, delta: float, mu: complex) -> np.ndarray:
+            G_reg, a, b, h2 = modal_jacobian_split(pc.osc, pc.modal, delta,
+                                                   pc.impact_velocity(delta))
+            E = np.zeros((m + 1, m + 1), dtype=complex)
+            E[:m, :m] = mu * np.eye(m) - G_reg
+            E[:m, m] = a
+            E[m, :m] = b
+            E[m, m] = h2
+            return E
+
+        def system(y: np.ndarray) -> np.ndarray:
+            pc = self._pieces(y[0], y[2])
+            c, s = pc.S0
+            residual = c * math.cos(y[1]) + s * math.sin(y[1]) - pc.osc.b
+            value = np.linalg.det(pencil(pc, float(y[1]), sign)).real
+            slope = np.linalg.det(pencil(pc, float(y[1]), sign + 1e-30j)).imag / 1e-30
+            return np.array([residual, value, slope])
+
+        y = np.array([x[0], x[1], x[-1]], dtype=float)
+        step = math.inf
+        for _ in range(max_iter):
+            f = system(y)
+            h = 1e-7 * np.maximum(1.0, np.abs(y))
+            J = np.empty((3, 3))
+            for j in range(3):
+                e = np.zeros(3)
+                e[j] = h[j]
+                J[:, j] = (system(y + e) - system(y - e)) / (2.0 * h[j])
+            try:
+                dy = np.linalg.solve(J, -f)
+            except np.linalg.LinAlgError:
+                return None
+            y = y + dy
+            step = float(np.max(np.abs(dy)))
+            if not np.all(np.isfinite(y)):
+                return None
+            if step <= tol * max(1.0, float(np.max(np.abs(y)))):
+                break
+        else:
+            return None
+        pc = self._pieces(y[0], y[2])
+        _, _, vh = np.linalg.svd(pencil(pc, float(y[1]), sign).real)
+        v = vh[-1, :m].astype(complex)
+        v = v / np.vdot(self._ref, v)
+        theta = 0.0 if sign > 0 else math.pi
+        full = np.concatenate([[y[0], y[1], theta], v.real, v.imag, [y[2]]])
+        return full, max(step, 1e-15)
+
 
 class GrazingCurve(CurveProblem):
     """Grazing curve: ``x1(t*) = b`` and ``x1'(t*) = 0`` at a time ``0 < t* < T``.
