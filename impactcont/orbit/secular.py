@@ -242,7 +242,7 @@ def power_sums(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2, xn):
 
 
 @_jit
-def _starts(kind, lam, t, p, zeros):
+def _starts(kind, t, p, zeros):
     """The modal multipliers not set apart, nudged apart off the real axis, and one more
     start near 1/2 when some are (the degree is then one more than their count)."""
     n = kind.size
@@ -360,7 +360,7 @@ def secular_multipliers(modal, w, a, f, u0, ui0, omega, R, delta, sigma):
     e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
     coef, kind, t, p, lam, const, zeros, h2, xn = secular_coefficients(
         modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc)
-    z = _starts(kind, lam, t, p, zeros)
+    z = _starts(kind, t, p, zeros)
     ok = aberth(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn, z)
     _pair_conjugates(z)
     if zeros > 0:  # the modal multipliers set apart, less M's extra zero
