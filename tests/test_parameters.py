@@ -176,3 +176,11 @@ def test_period_doubling_curve_in_forcing_amplitude_at_zero_gap_is_vertical():
                      bounds={"omega": (0.5, 3.0), "F0": (0.2, 3.0)})
     assert float(curve.F0.min()) == pytest.approx(0.2) and float(curve.F0.max()) == 3.0
     np.testing.assert_allclose(curve.omega.values, pd_omega, rtol=1e-10)
+
+
+def test_fold_in_forcing_amplitude_is_where_the_amplitude_reaches_the_gap():
+    """c, s are linear in F0, so the fold of eq. (15) sits at F0 = b / sqrt(c^2 + s^2)."""
+    osc = ic.ImpactOscillator(**{**PAPER, "b": 0.3, "omega": 1.5}, eta=0.1)
+    branch = ic.continuation(osc, N=1, parameter="F0", bounds=(0.1, 5.0), detect=("SN",))
+    expected = 0.3 / math.sqrt(ic.amplitude_squared(osc, 1))
+    assert branch.special_F0.values.tolist() == pytest.approx([expected], rel=1e-14)
