@@ -23,6 +23,7 @@ from impactcont.dataset.curves import (
     validate_curve_dataset,
     validate_map_dataset,
 )
+from impactcont.plots.labels import place_labels
 
 __all__ = ["CURVE_STYLES", "REGIONS", "region_codes", "two_parameter_diagram",
            "two_parameter_figure"]
@@ -152,6 +153,7 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
         handles += [Patch(facecolor=REGIONS[k][1], edgecolor="0.6", label=REGIONS[k][0])
                     for k in sorted(REGIONS) if k in present]
     kinds_seen = []
+    codim2_labels: dict[tuple[float, float], str] = {}  # one label per place
     for c in curve_list:
         kind = c.attrs["kind"]
         if kind != "ZV" and int(c.attrs["N"]) != N:
@@ -187,8 +189,9 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
             ax.scatter(cx[~seen], cy[~seen], marker="*", s=25, color="0.6", zorder=3)
             if label_codim2:  # only where the motion is physical: the others crowd the panel
                 for lab, xx, yy in zip(labels[seen], cx[seen], cy[seen], strict=True):
-                    ax.annotate(str(lab), (xx, yy), xytext=(4, -8), textcoords="offset points",
-                                fontsize="x-small")
+                    # the same point found from both curves (PD+SN and SN+PD): one label
+                    codim2_labels.setdefault((round(float(xx), 6), round(float(yy), 6)),
+                                             str(lab))
     handles += [Line2D([], [], linewidth=2.0, label=kind, **CURVE_STYLES[kind])
                 for kind in kinds_seen]
     if any(c[codim2_variable("label")].size for c in curve_list):
@@ -202,6 +205,10 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
         ax.set_ylim(float(map_ds["b"].min()), float(map_ds["b"].max()))
     if legend:
         ax.legend(handles=handles, fontsize="x-small", loc="upper right", framealpha=0.85)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    inside = {xy: t for xy, t in codim2_labels.items()
+              if x0 <= xy[0] <= x1 and y0 <= xy[1] <= y1}
+    place_labels(ax, list(inside), list(inside.values()), fontsize="x-small")
     logger.debug("two-parameter diagram N=%d: %d curve(s)", N, len(curve_list))
     return ax
 
