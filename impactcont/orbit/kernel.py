@@ -999,14 +999,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         a0, a1 = acc[k - 1], acc[k]
         if (a0 < 0.0) == (a1 < 0.0) or (v0 < 0.0) != (v1 < 0.0):
             if v0 >= 0.0 and v1 < 0.0:  # one root of x1', a maximum
-                c_lo[m] = lo
-                c_hi[m] = hi
-                c_v[m] = v0
-                c_vh[m] = v1
-                c_a[m] = a0
-                c_ah[m] = a1
-                c_ub[m] = x[k - 1] + v0 * (hi - lo)
-                m += 1
+                m = _candidate(work, m, lo, hi, v0, v1, a0, a1, x[k - 1] + v0 * (hi - lo))
             continue
         # x1'' changes sign, x1' has one sign at both ends: zero or two roots; none when
         # x1' falls then rises from below 0, or rises then falls to >= 0
@@ -1015,23 +1008,9 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         tm, xm, vm, am = _polish(_ORDER_ACC, lo, hi, a0, a1, np.inf, np.inf, Gam, B, omega,
                                  delta, ks, w, a, u0, dy, dv)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
-            c_lo[m] = lo
-            c_hi[m] = tm
-            c_v[m] = v0
-            c_vh[m] = vm
-            c_a[m] = a0
-            c_ah[m] = am
-            c_ub[m] = x[k - 1] + v0 * (tm - lo)
-            m += 1
+            m = _candidate(work, m, lo, tm, v0, vm, a0, am, x[k - 1] + v0 * (tm - lo))
         elif vm >= 0.0 and v1 < 0.0:  # rises above 0, then falls through it
-            c_lo[m] = tm
-            c_hi[m] = hi
-            c_v[m] = vm
-            c_vh[m] = v1
-            c_a[m] = am
-            c_ah[m] = a1
-            c_ub[m] = xm + vm * (hi - tm)
-            m += 1
+            m = _candidate(work, m, tm, hi, vm, v1, am, a1, xm + vm * (hi - tm))
     best = -np.inf
     best_t = np.nan
     for _ in range(m):
@@ -1045,6 +1024,20 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j], T,
                              Gam, B, omega, delta, ks, w, a, u0, dy, dv)
     return best, best_t
+
+
+@_jit
+def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, bound):
+    """Record the piece ``[lo, hi]`` where x1' falls through 0 (a maximum) as candidate ``m``
+    in the rows 3-9 of ``work`` with the upper bound of x1 on it; returns ``m + 1``."""
+    work[3, m] = lo
+    work[4, m] = hi
+    work[5, m] = v_lo
+    work[6, m] = bound
+    work[7, m] = v_hi
+    work[8, m] = a_lo
+    work[9, m] = a_hi
+    return m + 1
 
 
 @_jit
