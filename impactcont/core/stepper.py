@@ -252,10 +252,33 @@ class PalcStepper:
 
     def _tangent_at(self, u: FloatArray, lam: float, reference: FloatArray) -> FloatArray:
         """Unit tangent at ``(u, lam)`` with positive scaled dot product with `reference`."""
+        if u.size == 1:  # one unknown: the 2 x 2 bordered system in Python floats
+            return self._tangent_one_unknown(u, lam, reference)
         bordered = self._bordered_matrix(u, lam, reference)
         right_hand_side = np.zeros(bordered.shape[0])
         right_hand_side[-1] = 1.0
         tangent = self._solve(bordered, right_hand_side, lam)
+        return tangent / self.scaled_norm(tangent)
+
+    def _tangent_one_unknown(self, u: FloatArray, lam: float, reference: FloatArray
+                             ) -> FloatArray:
+        """:meth:`_tangent_at` for one unknown: the same Cramer solve and normalisation."""
+        (w_u, w_lam), (r_u, r_lam) = self._metric_weights().tolist(), reference.tolist()
+        a = float(self._jacobian(u, lam)[0, 0])
+        b = float(self._dparam(u, lam)[0])
+        c, d = w_u * r_u, w_lam * r_lam
+        if not all(map(math.isfinite, (a, b, c, d))):
+            raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
+        condition = _condition_number(np.array([[a, b], [c, d]]))
+        if condition > SINGULAR_CONDITION:
+            logger.warning("matrix singular to working precision at lam = %.10g "
+                           "(condition number %.3e)", lam, condition)
+        if not math.isfinite(condition):
+            raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}")
+        det = a * d - b * c
+        tangent = np.array([(0.0 * d - b * 1.0) / det, (a * 1.0 - 0.0 * c) / det])
+        if not np.isfinite(tangent).all():
+            raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
         return tangent / self.scaled_norm(tangent)
 
     # ----------------------------------------------------------- bound landing
