@@ -266,19 +266,7 @@ class PalcStepper:
         (w_u, w_lam), (r_u, r_lam) = self._metric_weights().tolist(), reference.tolist()
         a = float(self._jacobian(u, lam)[0, 0])
         b = float(self._dparam(u, lam)[0])
-        c, d = w_u * r_u, w_lam * r_lam
-        if not all(map(math.isfinite, (a, b, c, d))):
-            raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
-        condition = _condition_number(np.array([[a, b], [c, d]]))
-        if condition > SINGULAR_CONDITION:
-            logger.warning("matrix singular to working precision at lam = %.10g "
-                           "(condition number %.3e)", lam, condition)
-        if not math.isfinite(condition):
-            raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}")
-        det = a * d - b * c
-        tangent = np.array([(0.0 * d - b * 1.0) / det, (a * 1.0 - 0.0 * c) / det])
-        if not np.isfinite(tangent).all():
-            raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
+        tangent = np.array(_solve_2x2(a, b, w_u * r_u, w_lam * r_lam, 0.0, 1.0, lam))
         return tangent / self.scaled_norm(tangent)
 
     # ----------------------------------------------------------- bound landing
@@ -401,20 +389,8 @@ class PalcStepper:
                 break
             a = float(self._jacobian(u, lam)[0, 0])
             b = float(self._dparam(u, lam)[0])
-            e = -residual
             f = -math.fsum((c * (x - p_u), d * (lam - p_lam)))
-            if not all(map(math.isfinite, (a, b, c, d, e, f))):
-                raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
-            condition = _condition_number(np.array([[a, b], [c, d]]))
-            if condition > SINGULAR_CONDITION:
-                logger.warning("matrix singular to working precision at lam = %.10g "
-                               "(condition number %.3e)", lam, condition)
-            if not math.isfinite(condition):
-                raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}")
-            det = a * d - b * c
-            dx, dlam = (e * d - b * f) / det, (a * f - e * c) / det
-            if not (math.isfinite(dx) and math.isfinite(dlam)):
-                raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
+            dx, dlam = _solve_2x2(a, b, c, d, -residual, f, lam)
             last_update_norm = max(abs(dx), abs(dlam))
             x, lam = x + dx, lam + dlam
         raise NewtonConvergenceError(
@@ -450,13 +426,8 @@ class PalcStepper:
                 condition,
             )
         if matrix.shape == (2, 2) and math.isfinite(condition):
-            # one unknown and the parameter: Cramer's rule (numpy's solve costs more in
-            # call overhead than the arithmetic), accurate for any condition number
-            # that does not already warn
             (a, b), (c, d) = matrix.tolist()
-            e, f = right_hand_side.tolist()
-            det = a * d - b * c
-            solution = np.array([(e * d - b * f) / det, (a * f - e * c) / det])
+            solution = np.array(_cramer(a, b, c, d, *right_hand_side.tolist()))
         else:
             try:
                 solution = np.linalg.solve(matrix, right_hand_side)
@@ -508,6 +479,33 @@ class PalcStepper:
             direction=self.direction,
             monitors=evaluate_monitors(self.problem, u, lam),
         )
+
+
+def _solve_2x2(a: float, b: float, c: float, d: float, e: float, f: float, lam: float
+               ) -> tuple[float, float]:
+    """``[[a, b], [c, d]] y = [e, f]`` in Python floats, with the checks of
+    :meth:`PalcStepper._solve` (non-finite system, singular or near-singular matrix,
+    non-finite solution)."""
+    if not all(map(math.isfinite, (a, b, c, d, e, f))):
+        raise NewtonConvergenceError(f"non-finite linear system at lam = {lam:.10g}")
+    condition = _condition_number(np.array([[a, b], [c, d]]))
+    if condition > SINGULAR_CONDITION:
+        logger.warning("matrix singular to working precision at lam = %.10g "
+                       "(condition number %.3e)", lam, condition)
+    if not math.isfinite(condition):
+        raise NewtonConvergenceError(f"singular matrix at lam = {lam:.10g}")
+    y = _cramer(a, b, c, d, e, f)
+    if not (math.isfinite(y[0]) and math.isfinite(y[1])):
+        raise NewtonConvergenceError(f"non-finite Newton update at lam = {lam:.10g}")
+    return y
+
+
+def _cramer(a: float, b: float, c: float, d: float, e: float, f: float) -> tuple[float, float]:
+    """Cramer's rule for one unknown and the parameter (numpy's solve costs more in call
+    overhead than the arithmetic), accurate for any condition number that does not
+    already warn."""
+    det = a * d - b * c
+    return (e * d - b * f) / det, (a * f - e * c) / det
 
 
 def _condition_number(matrix: FloatArray) -> float:
