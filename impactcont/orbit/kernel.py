@@ -459,6 +459,7 @@ def transition(modal, u, ui):
 
 @_jit
 def _transition_into(modal, u, ui, tr):
+    """:func:`transition` into ``tr`` (2n, 2n), no allocation."""
     n = modal.shape[1]
     for r in range(n):
         for col in range(n):
