@@ -172,36 +172,11 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
     w, a, f, u, ui = osc.modes.kernel_arrays[:5]
     if osc.n <= kernel.BLAS_MIN:
         return kernel.impact_jacobian(modal, w, a, f, u, ui, osc.omega, osc.R, delta, sigma)
-    return kernel.assemble_jacobian(_transition(osc, modal), modal, w, a, f, u,
+    return kernel.assemble_jacobian(physical_transition(osc, modal), modal, w, a, f, u,
                                     osc.modes.kernel_arrays[7], osc.omega, osc.R, delta, sigma)
 
 
-def modal_jacobian_split(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """G of eq. (25) as ``(G_reg, a, b, h2)`` with ``G = G_reg + a b^T / h2``.
-
-    The pieces stay finite where the impact velocity ``h2`` vanishes; see
-    :func:`impactcont.orbit.kernel.jacobian_split`.
-    """
-    from impactcont.orbit import kernel
-
-    w, a, f, u = osc.modes.kernel_arrays[:4]
-    return kernel.jacobian_split(_transition(osc, modal), modal, w, a, f, u,
-                                 osc.modes.kernel_arrays[7], osc.omega, osc.R, delta, sigma)
-
-
-def pd_condition(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float,
-                 left: np.ndarray, right: np.ndarray) -> float:
-    """The pole-free period-doubling condition of a motion (:func:`kernel.pd_condition`)."""
-    from impactcont.orbit import kernel
-
-    w, a, f, u = osc.modes.kernel_arrays[:4]
-    return float(kernel.pd_condition(_transition(osc, modal), modal, w, a, f, u,
-                                     osc.modes.kernel_arrays[7], osc.omega, osc.R, delta,
-                                     sigma, left, right))
-
-
-def _transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
+def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     """The physical transition ``U W(T) U^-1`` (eq. 9): compiled loops for small systems,
     numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of freedom."""
     from impactcont.orbit import kernel

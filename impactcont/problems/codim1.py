@@ -64,6 +64,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import functools
 import math
 import warnings
 from collections.abc import Callable
@@ -77,9 +78,8 @@ from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
     modal_jacobian,
-    modal_jacobian_split,
     orbit_at_phase,
-    pd_condition,
+    physical_transition,
 )
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
@@ -135,14 +135,39 @@ class _Pieces:
         """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
         return modal_jacobian(self.osc, self.modal, delta, self.impact_velocity(delta))
 
+    @functools.cached_property
+    def transition(self) -> np.ndarray:
+        """``U W(T) U^-1`` (eq. 9): it depends on the parameters, not on ``delta``."""
+        return physical_transition(self.osc, self.modal)
+
+    def _kernel_args(self, delta: float) -> tuple:
+        """The arguments of the kernel's G functions after the transition."""
+        osc = self.osc
+        w, a, f, u = osc.modes.kernel_arrays[:4]
+        return (self.modal, w, a, f, u, osc.modes.kernel_arrays[7], osc.omega, osc.R, delta,
+                self.impact_velocity(delta))
+
+    def split(self, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """G of eq. (25) as ``(G_reg, a, b, h2)``, ``G = G_reg + a b^T / h2``, every piece
+        finite where ``h2`` vanishes (:func:`kernel.jacobian_split`)."""
+        from impactcont.orbit import kernel
+
+        return kernel.jacobian_split(self.transition, *self._kernel_args(delta))
+
+    def pd_condition(self, delta: float, left: np.ndarray, right: np.ndarray) -> float:
+        """The pole-free period-doubling condition ``g`` (:func:`kernel.pd_condition`)."""
+        from impactcont.orbit import kernel
+
+        return float(kernel.pd_condition(self.transition, *self._kernel_args(delta), left,
+                                         right))
+
     def pole_free_pd_matrix(self, delta: float) -> np.ndarray:
         """``E = [[G_reg + I, a], [b^T, -h2]]`` with ``G = G_reg + a b^T / h2``, (m+1, m+1).
 
         Finite through a zero-velocity impact; ``det E = -h2 det(G + I)`` (Schur
         complement), so ``E`` is singular exactly at a period-doubling (``h2 != 0``).
         """
-        G_reg, a, b, h2 = modal_jacobian_split(self.osc, self.modal, delta,
-                                               self.impact_velocity(delta))
+        G_reg, a, b, h2 = self.split(delta)
         m = G_reg.shape[0]
         E = np.empty((m + 1, m + 1))
         E[:m, :m] = G_reg + np.eye(m)
@@ -453,8 +478,7 @@ class PeriodDoublingCurve(CurveProblem):
         self._left = np.eye(m)[0]
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        return np.array([pd_condition(pc.osc, pc.modal, delta, pc.impact_velocity(delta),
-                                      self._left, self._right)])
+        return np.array([pc.pd_condition(delta, self._left, self._right)])
 
     def accept(self, u: np.ndarray, lam: float) -> None:
         """Borders from the SVD of the pole-free ``E`` at the accepted point."""
@@ -529,8 +553,7 @@ class NeimarkSackerCurve(CurveProblem):
         m = 2 * self.osc.n
 
         def pencil(pc: _Pieces, delta: float, mu: complex) -> np.ndarray:
-            G_reg, a, b, h2 = modal_jacobian_split(pc.osc, pc.modal, delta,
-                                                   pc.impact_velocity(delta))
+            G_reg, a, b, h2 = pc.split(delta)
             E = np.zeros((m + 1, m + 1), dtype=complex)
             E[:m, :m] = mu * np.eye(m) - G_reg
             E[:m, m] = a

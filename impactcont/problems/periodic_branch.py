@@ -63,6 +63,7 @@ class PeriodicBranchProblem:
         else:
             self._da = np.zeros_like(w)
         self._cache: dict[float, tuple[float, float, float]] = {}
+        self._per_unit_force: tuple[float, float] | None = None  # c, s at F0 = 1
         self._osc_cache: dict[float, ImpactOscillator] = {}
 
     # -- the oscillator along the branch ------------------------------------------------------
@@ -119,7 +120,7 @@ class PeriodicBranchProblem:
         """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
         from impactcont.orbit import kernel
 
-        if not hasattr(self, "_per_unit_force"):
+        if self._per_unit_force is None:
             a, R, omega = self._arguments(self.osc.F0)
             c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
             self._per_unit_force = (float(c) / self.osc.F0, float(s) / self.osc.F0)
