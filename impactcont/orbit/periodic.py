@@ -95,8 +95,10 @@ class PeriodicOrbit:
     reason: str
     state: np.ndarray = dataclasses.field(repr=False)
     """``X(0) = [x; x']`` right after the impact (eq. 13), shape (2n,)."""
-    modal: np.ndarray = dataclasses.field(repr=False)
-    """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`)."""
+    modal: np.ndarray | None = dataclasses.field(repr=False)
+    """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`); None on the
+    first-order path (general damping matrix or complex F), where G and the multipliers
+    are computed with the motion."""
 
     @functools.cached_property
     def G(self) -> np.ndarray:
@@ -335,7 +337,7 @@ def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> 
             IllConditionedWarning, stacklevel=stacklevel)
 
 
-def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delta: float,
+def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray | None, T: float, delta: float,
                 root: int, sigma: float, gap_min: float, gap_time: float, state: np.ndarray,
                 G: np.ndarray | None = None, multipliers: np.ndarray | None = None
                 ) -> PeriodicOrbit:
@@ -382,6 +384,10 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     from impactcont.orbit import kernel
 
     N = _check_N(N)
+    if osc.general:
+        from impactcont.orbit.general import general_orbit_at_phase
+
+        return general_orbit_at_phase(osc, N, float(delta), root)  # type: ignore[return-value]
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
         w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
@@ -421,6 +427,10 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
 
     osc = _check_oscillator(osc)
     N = _check_N(N)
+    if osc.general:  # a general damping matrix or complex F: the first-order path
+        from impactcont.orbit.general import general_orbits
+
+        return general_orbits(osc, N)
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
      jacobians, mults) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
@@ -477,6 +487,11 @@ def amplitude_squared(osc: ImpactOscillator, N: int) -> float:
     from impactcont.orbit import kernel
 
     osc = _check_oscillator(osc)
+    if osc.general:
+        from impactcont.orbit.general import amplitude
+
+        c, s = amplitude(osc, _check_N(N))[:2]
+        return c * c + s * s
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     _, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, _check_N(N))
     _warn_setup(osc, sc, stacklevel=2)
