@@ -30,7 +30,8 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow, GeneralFlow
 
-__all__ = ["amplitude", "general_orbit_at_phase", "general_orbits", "orbit_pieces"]
+__all__ = ["amplitude", "general_orbit_at_phase", "general_orbits", "orbit_from_pieces",
+           "orbit_pieces", "roots"]
 
 
 def _refuse_elastic(osc: ImpactOscillator) -> None:
@@ -98,7 +99,7 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     return c, s, float(dS[0, 0]), float(dS[0, 1])
 
 
-def _roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
+def roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
     """The phases of eq. (15) with their root signs (+1 first), as the kernel orders them."""
     r2 = c * c + s * s
     if r2 == 0.0:
@@ -118,8 +119,8 @@ def _roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
     return out
 
 
-def _orbit(osc: ImpactOscillator, N: int, flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray,
-           T: float, delta: float, root: int) -> object:
+def orbit_from_pieces(osc: ImpactOscillator, N: int, flow: GeneralFlow, S: np.ndarray,
+                      DPhi: np.ndarray, T: float, delta: float, root: int) -> object:
     """The :class:`PeriodicOrbit` at phase delta: state, h2, G, multipliers and eq. (16)."""
     from impactcont.orbit.periodic import _make_orbit, impact_map_jacobian
 
@@ -140,8 +141,8 @@ def _orbit(osc: ImpactOscillator, N: int, flow: GeneralFlow, S: np.ndarray, DPhi
 def general_orbits(osc: ImpactOscillator, N: int) -> list:
     """Every root of eq. (15) on the first-order path (see :func:`periodic.periodic_orbits`)."""
     flow, S, DPhi, T = orbit_pieces(osc, N)
-    return [_orbit(osc, N, flow, S, DPhi, T, delta, root)
-            for delta, root in _roots(float(S[0, 0]), float(S[0, 1]), osc.b)]
+    return [orbit_from_pieces(osc, N, flow, S, DPhi, T, delta, root)
+            for delta, root in roots(float(S[0, 0]), float(S[0, 1]), osc.b)]
 
 
 def general_orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, root: int = 0
@@ -149,4 +150,4 @@ def general_orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, root: in
     """The motion with impact phase delta on the first-order path (see
     :func:`periodic.orbit_at_phase`)."""
     flow, S, DPhi, T = orbit_pieces(osc, N)
-    return _orbit(osc, N, flow, S, DPhi, T, float(delta), root)
+    return orbit_from_pieces(osc, N, flow, S, DPhi, T, float(delta), root)
