@@ -31,6 +31,7 @@ therefore computed with the basis; above :data:`COND_WARN` an
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import warnings
 
@@ -133,6 +134,41 @@ class FirstOrderBasis:
         for x in (A, lam, V, V_inv):
             x.setflags(write=False)
         return cls(M=M, K=K, C=C, A=A, eigenvalues=lam, V=V, V_inv=V_inv, condition=cond)
+
+    @functools.cached_property
+    def scalar_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The modes grouped in n pairs, each the two roots of one real scalar equation
+        ``y'' + 2 a y' + w^2 y = 0`` (``w^2 = lambda_k lambda_j``, ``2 a = -(lambda_k +
+        lambda_j)``): a complex conjugate pair, or two real (over-damped) eigenvalues,
+        adjacent in value. A real combination ``Re(c_k e^{lambda_k t} + c_j e^{lambda_j t})``
+        of a pair is then ``W11(t) y(0) + W12(t) y'(0)`` with the exact, cancellation-free
+        modal transfer of eq. (9), so the proportional kernel's interior-contact search
+        (eq. 16) serves any C.
+
+        Returns
+        -------
+        w, a : ndarray, shape (n,)
+            ``w > 0`` and ``a >= 0`` of each pair.
+        k, j : ndarray of int, shape (n,)
+            Indices of the pair's two eigenvalues (``Im lambda_k >= 0``).
+        """
+        lam = self.eigenvalues
+        upper = [int(i) for i in np.flatnonzero(lam.imag > 0)]
+        lower = [int(i) for i in np.flatnonzero(lam.imag < 0)]
+        real = sorted((int(i) for i in np.flatnonzero(lam.imag == 0)), key=lambda i: lam[i].real)
+        ks, js = [], []
+        for k in upper:  # the exact conjugate (LAPACK), else the nearest one
+            j = min(lower, key=lambda i: abs(lam[i] - lam[k].conjugate()))
+            lower.remove(j)
+            ks.append(k)
+            js.append(j)
+        ks += real[0::2]
+        js += real[1::2]
+        k_idx, j_idx = np.array(ks, dtype=np.int64), np.array(js, dtype=np.int64)
+        prod = (lam[k_idx] * lam[j_idx]).real
+        w = np.sqrt(np.maximum(prod, 0.0))
+        a = -0.5 * (lam[k_idx] + lam[j_idx]).real
+        return w, a, k_idx, j_idx
 
     def transition(self, t: float) -> np.ndarray:
         """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, the free flow over time t (2n, 2n)."""

@@ -211,6 +211,7 @@ class GeneralFlow(Flow):
         self.V = basis.V
         self.V_inv = basis.V_inv
         self.Z = basis.forced_amplitude(osc.F, osc.omega)
+        self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
 
     def time_scales(self) -> tuple[float, float]:
         """Fastest oscillation frequency and fastest decay rate seen by mass 1."""
@@ -245,18 +246,22 @@ class GeneralFlow(Flow):
 
     def transition_matrix(self, t: float) -> np.ndarray:
         """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, shape (2n, 2n)."""
-        return self.basis.transition(float(np.asarray(t).reshape(-1)[0]))
+        return self.matrices(t)[0]
 
     def matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """``Phi(t)`` (2n, 2n) and the forcing columns ``P(t) - Phi(t) P(0)`` (2n, 2) of
         eq. (9), ``P(t) = [Re(Z e^{i omega t}), -Im(Z e^{i omega t})]`` (columns multiply
         ``cos delta, sin delta``)."""
         t = float(np.asarray(t).reshape(-1)[0])
+        if self._last is not None and self._last[0] == t:  # eq. (12) and G use the same T
+            return self._last[1]
         transition = self.basis.transition(t)
         zt = self.Z * np.exp(1j * self.omega * t)
         P_t = np.column_stack([zt.real, -zt.imag])
         P_0 = np.column_stack([self.Z.real, -self.Z.imag])
-        return transition, P_t - transition @ P_0
+        out = (transition, P_t - transition @ P_0)
+        self._last = (t, out)
+        return out
 
     def transfer(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
         raise NotImplementedError("a general damping matrix has no real 2x2 modal blocks; use "

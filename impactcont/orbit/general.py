@@ -22,12 +22,12 @@ dynamic stiffness.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
-from impactcont.errors import ParameterError
+from impactcont.errors import ParameterError, UnresolvedMotionWarning
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow, GeneralFlow
 
 __all__ = ["amplitude", "general_orbit_at_phase", "general_orbits", "orbit_from_pieces",
@@ -99,6 +99,43 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     return c, s, float(dS[0, 0]), float(dS[0, 1])
 
 
+def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float
+               ) -> tuple[float, float]:
+    """Highest interior local maximum of ``x1`` on ``(0, T)`` (eq. 16): ``(value, time)``,
+    ``(-inf, nan)`` when there is none.
+
+    The free part of ``x1`` is a sum over the scalar pairs of
+    :attr:`FirstOrderBasis.scalar_pairs`, each ``W11 y(0) + W12 y'(0)`` with the exact
+    modal transfer, and the forced part is ``Re(Z_1 e^{i theta})``: the compiled
+    kernel's search (:func:`impactcont.orbit.kernel.x1_maximum`, with its grid, bounds
+    and polish) runs on them unchanged, with unit weights.
+    """
+    from impactcont.orbit import kernel
+
+    w, a, k, j = flow.basis.scalar_pairs
+    lam = flow.lam
+    c = flow.V[0] * flow.modal_deviation(state, delta)  # x1's free part: Re sum c e^{lam t}
+    conj = np.abs(lam[k].imag) > 0
+    # a conjugate pair: Re((c_k + conj c_j) e^{lam_k t}); a real pair: c_k e^.. + c_j e^..
+    total = np.where(conj, c[k] + np.conj(c[j]), c[k] + c[j])
+    slope = np.where(conj, (c[k] + np.conj(c[j])) * lam[k], c[k] * lam[k] + c[j] * lam[j])
+    dy = np.ascontiguousarray(total.real)
+    dv = np.ascontiguousarray(slope.real)
+    ones = np.ones_like(w)
+    times, capped = kernel.time_grid(w, a, ones, flow.omega, T)
+    if capped:
+        warnings.warn(f"x1 search grid capped at 2000000 cells for a period of {T:.3g}: a short "
+                      "excursion of mass 1 past the stop (eq. 16) may be missed",
+                      UnresolvedMotionWarning, stacklevel=3)
+    free = kernel.free_on_grid(times, w, a, ones, dy, dv)
+    work = np.empty((10, 2 * times.size))
+    best, best_t = kernel.x1_maximum(times, free, np.cos(flow.omega * times),
+                                     np.sin(flow.omega * times), float(flow.Z[0].real),
+                                     float(-flow.Z[0].imag), flow.omega, float(delta), 1.0, w,
+                                     a, ones, dy, dv, work)
+    return float(best), float(best_t)
+
+
 def roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
     """The phases of eq. (15) with their root signs (+1 first), as the kernel orders them."""
     r2 = c * c + s * s
@@ -129,12 +166,8 @@ def orbit_from_pieces(osc: ImpactOscillator, N: int, flow: GeneralFlow, S: np.nd
     state[osc.n] = -osc.R * h2  # eq. (4), as the kernel sets it
     mu = np.linalg.eigvals(G) if np.all(np.isfinite(G)) else np.full(G.shape[0], np.nan + 0j)
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
-    times, peaks = interior_maxima(flow.mass1(state, delta), sample_times(flow, 0.0, T))
-    if peaks.size:
-        k = int(np.argmax(peaks))
-        gap, gap_t = osc.b - float(peaks[k]), float(times[k])
-    else:
-        gap, gap_t = math.inf, math.nan
+    best, gap_t = x1_maximum(flow, state, delta, T)
+    gap = osc.b - best
     return _make_orbit(osc, N, None, T, float(delta), root, float(h2), gap, gap_t, state, G, mu)
 
 
