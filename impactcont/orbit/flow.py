@@ -260,6 +260,8 @@ class GeneralFlow(Flow):
         P_t = np.column_stack([zt.real, -zt.imag])
         P_0 = np.column_stack([self.Z.real, -self.Z.imag])
         out = (transition, P_t - transition @ P_0)
+        for x in out:
+            x.setflags(write=False)  # shared by the next call at the same t
         self._last = (t, out)
         return out
 
