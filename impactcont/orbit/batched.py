@@ -98,12 +98,11 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
         for j, bj in enumerate(b):
             roots = general.roots(c, s, float(bj))
             count[i, j] = len(roots)
-            for k, (d, root) in enumerate(roots):
-                orbit = general.orbit_from_pieces(at.replace(b=float(bj)), N, flow, S, DPhi, T,
-                                                  d, root)
-                delta[i, j, k], vel[i, j, k] = orbit.delta, orbit.impact_velocity
-                gap[i, j, k], gap_t[i, j, k] = orbit.gap_min, orbit.gap_min_time
-                mu = orbit.multipliers
+            for k, (d, _) in enumerate(roots):
+                _, h2, _, mu, g, g_t = general.orbit_values(at.replace(b=float(bj)), flow, S,
+                                                            DPhi, T, d)
+                delta[i, j, k], vel[i, j, k] = d, h2
+                gap[i, j, k], gap_t[i, j, k] = g, g_t
                 stable[i, j, k] = bool(np.all(np.abs(mu) < 1.0))
                 if spectral_radius:
                     rho[i, j, k], crit[i, j, k] = float(np.abs(mu[0])), mu[0]

@@ -10,7 +10,7 @@ in closed form:
   diag(exp(lambda T)) V^-1)`` and ``Z_c = [Re Z, -Im Z]`` the forced state's columns
   (``omega T = 2 pi N`` makes ``P(T) = P(0)``);
 - eq. (15) for the phases, ``h2 = x1'(T^-)`` from the exact time derivative;
-- G of eq. (25) by :func:`impactcont.orbit.periodic.impact_map_jacobian`, its
+- G of eq. (25) by :func:`impactcont.orbit.dense.impact_map_jacobian`, its
   eigenvalues by LAPACK;
 - eq. (16) by the extrema search along the exact flow (:mod:`impactcont.orbit.extrema`).
 
@@ -28,10 +28,10 @@ import numpy as np
 
 from impactcont.errors import ParameterError, UnresolvedMotionWarning
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.dense import impact_map_jacobian, periodic_matrix
 from impactcont.orbit.flow import Flow, GeneralFlow
 
-__all__ = ["amplitude", "general_orbit_at_phase", "general_orbits", "orbit_from_pieces",
-           "orbit_pieces", "roots"]
+__all__ = ["amplitude", "orbit_pieces", "orbit_values", "roots", "x1_maximum"]
 
 
 def _refuse_elastic(osc: ImpactOscillator) -> None:
@@ -42,20 +42,13 @@ def _refuse_elastic(osc: ImpactOscillator) -> None:
             "(whose modal path solves that case)")
 
 
-def _periodic_matrix(flow: GeneralFlow, N: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """``S`` of eq. (13), ``D Phi(T)`` and ``T`` (see :func:`periodic.periodic_matrix`)."""
-    from impactcont.orbit.periodic import periodic_matrix
-
-    return periodic_matrix(flow, N)
-
-
 def orbit_pieces(osc: ImpactOscillator, N: int) -> tuple[GeneralFlow, np.ndarray, np.ndarray,
                                                              float]:
     """The flow, ``S`` (2n, 2), ``D Phi(T)`` and ``T`` of eq. (12)-(13) at the oscillator's
     parameters."""
     _refuse_elastic(osc)
     flow = Flow(osc)
-    S, DPhi, T = _periodic_matrix(flow, N)  # type: ignore[arg-type]
+    S, DPhi, T = periodic_matrix(flow, N)
     return flow, S, DPhi, T  # type: ignore[return-value]
 
 
@@ -156,31 +149,15 @@ def roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
     return out
 
 
-def orbit_from_pieces(osc: ImpactOscillator, N: int, flow: GeneralFlow, S: np.ndarray,
-                      DPhi: np.ndarray, T: float, delta: float, root: int) -> object:
-    """The :class:`PeriodicOrbit` at phase delta: state, h2, G, multipliers and eq. (16)."""
-    from impactcont.orbit.periodic import _make_orbit, impact_map_jacobian
-
+def orbit_values(osc: ImpactOscillator, flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray,
+                 T: float, delta: float) -> tuple[np.ndarray, float, np.ndarray, np.ndarray,
+                                                  float, float]:
+    """The motion at phase delta from :func:`orbit_pieces`: ``(state, h2, G, multipliers,
+    gap_min, gap_min_time)`` (eq. 13, 22, 25, 16); multipliers largest modulus first."""
     state = S @ np.array([math.cos(delta), math.sin(delta)])
     G, h2 = impact_map_jacobian(flow, state, delta, T, DPhi)
     state[osc.n] = -osc.R * h2  # eq. (4), as the kernel sets it
     mu = np.linalg.eigvals(G) if np.all(np.isfinite(G)) else np.full(G.shape[0], np.nan + 0j)
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
     best, gap_t = x1_maximum(flow, state, delta, T)
-    gap = osc.b - best
-    return _make_orbit(osc, N, None, T, float(delta), root, float(h2), gap, gap_t, state, G, mu)
-
-
-def general_orbits(osc: ImpactOscillator, N: int) -> list:
-    """Every root of eq. (15) on the first-order path (see :func:`periodic.periodic_orbits`)."""
-    flow, S, DPhi, T = orbit_pieces(osc, N)
-    return [orbit_from_pieces(osc, N, flow, S, DPhi, T, delta, root)
-            for delta, root in roots(float(S[0, 0]), float(S[0, 1]), osc.b)]
-
-
-def general_orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, root: int = 0
-                           ) -> object:
-    """The motion with impact phase delta on the first-order path (see
-    :func:`periodic.orbit_at_phase`)."""
-    flow, S, DPhi, T = orbit_pieces(osc, N)
-    return orbit_from_pieces(osc, N, flow, S, DPhi, T, float(delta), root)
+    return state, float(h2), G, mu, osc.b - best, gap_t
