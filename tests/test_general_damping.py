@@ -20,6 +20,7 @@ import mpmath
 import numpy as np
 import pytest
 import scipy.linalg
+from _scene_data import SMALL_SCENE, write
 from test_periodic import section_point, simulated_impact_map
 
 import impactcont as ic
@@ -28,6 +29,7 @@ from impactcont.orbit import general
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.flow import GeneralFlow
 from impactcont.orbit.periodic import amplitude_squared
+from impactcont.scene import SceneError, load_scene, read_output, run_scene
 
 K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])
 
@@ -380,3 +382,46 @@ def test_repeated_eigenvalues_are_diagonalised():
     T = 2 * math.pi / osc.omega
     np.testing.assert_allclose(ic.Flow(osc).transition_matrix(T),
                                scipy.linalg.expm(_augmented(osc) * T)[:4, :4], atol=1e-14)
+
+
+# -- scenes and datasets ------------------------------------------------------------------------
+GENERAL_SCENE = SMALL_SCENE.replace("eta = 0.1",
+                                    "C = [[0.3, 0.0], [0.0, 0.02]]\nF_imag = [0.0, 0.4]")
+
+
+def test_scene_with_C_and_phases_runs_and_its_files_keep_the_oscillator(tmp_path):
+    run = run_scene(write(tmp_path, GENERAL_SCENE), output=tmp_path / "out")
+    assert run.ok, run.failures
+    osc = run.scene.osc
+    assert osc.general_damping and osc.F.dtype.kind == "c"
+    np.testing.assert_array_equal(osc.C, [[0.3, 0.0], [0.0, 0.02]])
+    np.testing.assert_array_equal(osc.F, [1.0, 0.4j])
+    orbits = read_output(tmp_path / "out" / "orbits.nc").datasets["o1"]
+    expected = ic.periodic_orbits(osc, 1)
+    np.testing.assert_allclose(orbits["delta"].values, [o.delta for o in expected], atol=1e-14)
+    branch = ic.load(tmp_path / "out" / "branches.nc")["br"].to_dataset()
+    back = ic.ImpactOscillator.from_json(branch.attrs["oscillator"])
+    np.testing.assert_array_equal(back.C, osc.C)
+    np.testing.assert_array_equal(back.F, osc.F.copy())
+    assert back.b == 0.5  # the entry's gap
+    at = back.replace(omega=float(branch["omega"][3]))
+    c, s = general.amplitude(at, 1)[:2]
+    d = float(branch["delta"][3])
+    assert c * math.cos(d) + s * math.sin(d) == pytest.approx(0.5, abs=1e-10)
+
+
+def test_scene_refuses_C_with_eta(tmp_path):
+    text = SMALL_SCENE.replace("eta = 0.1", "eta = 0.1\nC = [[0.3, 0.0], [0.0, 0.0]]")
+    with pytest.raises(SceneError, match="give either a damping matrix C or eta"):
+        load_scene(write(tmp_path, text))
+
+
+def test_branch_netcdf_round_trip_keeps_C(tmp_path):
+    osc = _damper_on_mass1()
+    branch = ic.continuation(osc, 1, "b", (0.0, 1.0))
+    ic.save(branch, tmp_path / "b.nc")
+    back = ic.load(tmp_path / "b.nc")
+    again = ic.ImpactOscillator.from_json(back.attrs["oscillator"])
+    assert again.general_damping
+    np.testing.assert_array_equal(again.C, osc.C)
+    np.testing.assert_allclose(back["delta"].values, branch["delta"].values, rtol=0, atol=0)
