@@ -430,7 +430,7 @@ def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
 def _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces):
     """:func:`jacobian_pieces` as the rows of ``pieces`` (4, n), no allocation."""
     kappa = 1.0 + R
-    cd, sd = math.cos(delta), math.sin(delta)
+    cd, sd = np.cos(delta), np.sin(delta)
     for i in range(modal.shape[1]):
         gm, bt = modal[0, i], modal[1, i]
         py = -gm * sd + bt * cd
@@ -452,7 +452,7 @@ def transition(modal, u, ui):
     matrix products instead.
     """
     n = modal.shape[1]
-    tr = np.empty((2 * n, 2 * n))
+    tr = np.empty((2 * n, 2 * n), dtype=modal.dtype)
     _transition_into(modal, u, ui, tr)
     return tr
 
@@ -483,9 +483,10 @@ def _transition_into(modal, u, ui, tr):
 def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     """G of eq. (22)-(25) from the transition ``tr = U W(T) U^-1``, O(n^2)."""
     m = 2 * modal.shape[1]
-    G = np.empty((m, m))
+    G = np.empty((m, m), dtype=modal.dtype)
     h2 = _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma,
-                        np.empty((4, m // 2)), np.empty((2, m)), G)
+                        np.empty((4, m // 2), dtype=modal.dtype),
+                        np.empty((2, m), dtype=modal.dtype), G)
     return G, h2
 
 
@@ -518,12 +519,12 @@ def jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     """
     n = modal.shape[1]
     m = 2 * n
-    dedx = np.empty((2, m))
+    dedx = np.empty((2, m), dtype=modal.dtype)
     h1, h2 = _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma,
-                             np.empty((4, n)), dedx)
-    G_reg = np.zeros((m, m))
-    av = np.empty(m)
-    bv = np.empty(m)
+                             np.empty((4, n), dtype=modal.dtype), dedx)
+    G_reg = np.zeros((m, m), dtype=modal.dtype)
+    av = np.empty(m, dtype=modal.dtype)
+    bv = np.empty(m, dtype=modal.dtype)
     for r in range(m - 1):
         dr = -R if r + 1 == n else 1.0
         for col in range(m - 1):
@@ -550,7 +551,7 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     G_reg, av, bv, h2 = jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma)
     m = G_reg.shape[0]
     k = m + 2
-    A = np.zeros((k, k))
+    A = np.zeros((k, k), dtype=G_reg.dtype)
     for r in range(m):
         for col in range(m):
             A[r, col] = G_reg[r, col]
@@ -561,7 +562,7 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     for r in range(m + 1):
         A[r, m + 1] = left[r]
         A[m + 1, r] = right[r]
-    rhs = np.zeros(k)
+    rhs = np.zeros(k, dtype=G_reg.dtype)
     rhs[k - 1] = 1.0
     return _solve_small(A, rhs)[k - 1]
 
@@ -858,7 +859,7 @@ def x1_derivatives(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
 @_jit
 def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     th = omega * t + delta
-    c, s = math.cos(th), math.sin(th)
+    c, s = np.cos(th), np.sin(th)
     p = Gam * c + B * s
     dp = omega * (B * c - Gam * s)
     f0, f1, f2, f3 = free_x1(t, w, a, u0, dy, dv)
@@ -950,7 +951,7 @@ def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi):
 
 
 @_jit
-def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work):
+def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude):
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
@@ -968,7 +969,8 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
     ``x1 <= x1(p) + x1'(p) (q - p)``; candidates are polished (safeguarded Newton)
     in decreasing order of that bound, and the search stops once the bound is
     below the best maximum found: the result is the same as polishing every one.
-    ``(-inf, nan)`` when there is none.
+    A maximum within ``1e-7 T`` of the time ``exclude`` is skipped (NaN: none is),
+    e.g. the tangency of a grazing motion. ``(-inf, nan)`` when there is none.
     """
     cd, sd = math.cos(delta), math.sin(delta)
     nt = times.size
@@ -1023,7 +1025,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
             break
         c_ub[j] = -np.inf  # done
         best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j], T,
-                             Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+                             Gam, B, omega, delta, ks, w, a, u0, dy, dv, exclude)
     return best, best_t
 
 
@@ -1043,16 +1045,21 @@ def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, bound):
 
 @_jit
 def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, T, Gam, B, omega, delta, ks, w, a, u0,
-          dy, dv):
+          dy, dv, exclude):
     r, xr, _, acc = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, Gam, B, omega, delta,
                             ks, w, a, u0, dy, dv)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
         return best, best_t
+    if abs(r - exclude) <= _EXCLUDE_TOL * T:
+        return best, best_t
     if acc < 0.0 and xr > best:
         return xr, r
     return best, best_t
+
+
+_EXCLUDE_TOL = 1e-7  # relative to T: a maximum this close to ``exclude`` is the same one
 
 
 @_jit
@@ -1124,7 +1131,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
                 vel[iw, ib, idx] = sg[k]
                 ks = (1.0 + R) * sg[k]
                 best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], om, dl[k], ks,
-                                          w, a, u0, dy, dv, work)
+                                          w, a, u0, dy, dv, work, np.nan)
                 gap[iw, ib, idx] = bs[ib] - best
                 gap_t[iw, ib, idx] = best_t
                 _assemble_into(tr, modal, w, a, f, u, ui0, om, R, dl[k], sg[k], pieces,
@@ -1192,7 +1199,7 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
                                                                   sc[0])
         for k in range(count):
             best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, dl[k],
-                                      (1.0 + R) * sg[k], w, a, u0, dy, dv, work)
+                                      (1.0 + R) * sg[k], w, a, u0, dy, dv, work, np.nan)
             gap[k] = b - best
             gap_t[k] = best_t
     return (modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales,
@@ -1449,7 +1456,7 @@ def by_modulus(mu):
 def phase_sigma(scalars, omega, R, b, delta):
     """Impact velocity of the motion with impact phase ``delta`` (a root of eq. 14)."""
     Gam, B, g, Delta = scalars[1], scalars[2], scalars[3], scalars[4]
-    cd, sd = math.cos(delta), math.sin(delta)
+    cd, sd = np.cos(delta), np.sin(delta)
     if scalars[9] != 0.0:  # elastic, undamped: from the impact condition x1(0) = b
         return (Gam * cd + B * sd - b) / ((1.0 + R) * g)
     return omega * (B * cd - Gam * sd) / Delta
@@ -1464,5 +1471,14 @@ def phase_orbit(w, a, f, u, u0, ui0, eig_err, R, omega, N, b, delta):
     state, _ = physical_state(modal, u, omega, R, delta, sigma)
     times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, sc[0])
     best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, delta,
-                              (1.0 + R) * sigma, w, a, u0, dy, dv, work)
+                              (1.0 + R) * sigma, w, a, u0, dy, dv, work, np.nan)
     return modal, sc, sigma, b - best, best_t, capped, state
+
+
+@_jit
+def other_maximum(w, a, u0, modal, scalars, omega, R, delta, sigma, exclude):
+    """Highest interior maximum of ``x1`` other than the one at time ``exclude``:
+    ``(value, time)``, ``(-inf, nan)`` when there is none (:func:`x1_maximum`)."""
+    times, _, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, scalars[0])
+    return x1_maximum(times, free, cw, sw, scalars[1], scalars[2], omega, delta,
+                      (1.0 + R) * sigma, w, a, u0, dy, dv, work, exclude)
