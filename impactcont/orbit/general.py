@@ -125,7 +125,7 @@ def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float
     best, best_t = kernel.x1_maximum(times, free, np.cos(flow.omega * times),
                                      np.sin(flow.omega * times), float(flow.Z[0].real),
                                      float(-flow.Z[0].imag), flow.omega, float(delta), 1.0, w,
-                                     a, ones, dy, dv, work)
+                                     a, ones, dy, dv, work, math.nan)
     return float(best), float(best_t)
 
 
