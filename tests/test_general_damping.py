@@ -101,6 +101,27 @@ def _expm_G(osc, N, delta):
     return G, X0, h2
 
 
+def _expm_highest_interior_x1(osc, N, delta, steps=20000):
+    """Highest interior local maximum of x1 over a period, by the expm semigroup on a fine
+    grid (one-step propagator) and a parabola through the three best samples."""
+    T, _, _, S, _ = _expm_orbit_pieces(osc, N)
+    h = T / steps
+    step = scipy.linalg.expm(_augmented(osc) * h)
+    X = np.concatenate([S @ [math.cos(delta), math.sin(delta)], [math.cos(delta),
+                                                                  math.sin(delta)]])
+    x1 = np.empty(steps + 1)
+    for k in range(steps + 1):
+        x1[k] = X[0]
+        X = step @ X
+    interior = np.flatnonzero((x1[1:-1] >= x1[:-2]) & (x1[1:-1] >= x1[2:])) + 1
+    best = -math.inf
+    for k in interior:
+        a, b, c = x1[k - 1], x1[k], x1[k + 1]
+        den = a - 2 * b + c
+        best = max(best, b - 0.125 * (c - a) ** 2 / den if den != 0 else b)
+    return best
+
+
 # -- proportional C through the general path ----------------------------------------------------
 PROPORTIONAL = [
     ({"eta": 0.1}, 1.0, 0.6, 1),
@@ -272,9 +293,9 @@ def test_branch_special_points_against_expm(parameter, bounds):
     branch = ic.continuation(osc, 1, parameter, bounds)
     assert branch.sizes["point"] > 10
     labels = list(branch["special_label"].values)
-    checked = 0
+    checked = set()
     for k, label in enumerate(labels):
-        if label not in ("PD", "NS", "SN", "ZV"):
+        if label not in ("PD", "NS", "SN", "ZV", "GR"):
             continue
         lam = float(branch[f"special_{parameter}"][k])
         delta = float(branch["special_delta"][k])
@@ -283,6 +304,8 @@ def test_branch_special_points_against_expm(parameter, bounds):
         mu = np.linalg.eigvals(G)
         if label == "ZV":  # zero impact velocity
             assert abs(h2) < 1e-9
+        elif label == "GR":  # grazing: the highest interior maximum of x1 touches the stop
+            assert abs(_expm_highest_interior_x1(at, 1, delta) - at.b) < 1e-9
         elif label == "PD":
             assert np.min(np.abs(mu + 1.0)) < 1e-8
         elif label == "NS":
@@ -290,9 +313,10 @@ def test_branch_special_points_against_expm(parameter, bounds):
         else:  # fold of eq. (15): c^2 + s^2 = b^2, i.e. the residual and its delta-derivative
             S = _expm_orbit_pieces(at, 1)[3]
             assert math.hypot(S[0, 0], S[0, 1]) == pytest.approx(abs(at.b), rel=1e-9)
-        checked += 1
-    if parameter in ("omega", "b"):
-        assert checked > 0, labels
+        checked.add(label)
+    expected = {"omega": {"GR", "NS", "ZV", "SN", "PD"}, "b": {"SN", "ZV", "PD"},
+                "R": set(), "F0": {"PD", "ZV", "SN"}}[parameter]
+    assert checked == expected, labels
 
 
 def test_damping_parameters_are_refused_for_continuation():

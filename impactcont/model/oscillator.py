@@ -418,7 +418,10 @@ class ImpactOscillator:
             what = ("a general damping matrix C" if self.general_damping
                     else f"a complex F={self.F.tolist()} (per-mass phases)")
             raise ParameterError(f"the oscillator has {what}: the proportional modal basis of "
-                                 "eq. (5)-(6) does not apply; its flow uses first_order")
+                                 "eq. (5)-(6) does not apply; its flow uses first_order "
+                                 "(periodic motions, branches in omega, b, R, F0, maps, robust "
+                                 "stability and the simulator do; two-parameter curves need "
+                                 "the modal basis and do not support it yet)")
         alpha, beta = self.rayleigh
         return ModalBasis.from_matrices(self.M, self.K, alpha, beta, self.F)
 
