@@ -449,3 +449,23 @@ def test_branch_netcdf_round_trip_keeps_C(tmp_path):
     assert again.general_damping
     np.testing.assert_array_equal(again.C, osc.C)
     np.testing.assert_allclose(back["delta"].values, branch["delta"].values, rtol=0, atol=0)
+
+
+def test_robust_stability_on_a_proportional_C_matches_the_modal_path():
+    prop = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.6, omega=1.0,
+                               eta=0.1)
+    gen = ic.ImpactOscillator(M=prop.M, K=prop.K, C=prop.C, F=prop.F, R=0.6, b=0.6, omega=1.0)
+    a = ic.robust_stability(prop, 1, vary={"b": (0.2, 1.0)}, nominal={"b": 0.6})
+    g = ic.robust_stability(gen, 1, vary={"b": (0.2, 1.0)}, nominal={"b": 0.6})
+    assert g.epsilon == pytest.approx(a.epsilon, rel=1e-9)
+    assert g.epsilon0 == pytest.approx(a.epsilon0, rel=1e-9)
+    assert g.robust == a.robust
+
+
+def test_two_parameter_curves_refuse_a_general_C_clearly():
+    osc = _damper_on_mass1()
+    branch = ic.continuation(osc, 1, "omega", (0.8, 3.0))
+    k = list(branch["special_label"].values).index("PD")
+    with pytest.raises(ParameterError, match="two-parameter curves need the modal basis"):
+        ic.curve(osc, 1, "PD", start=branch, special=k,
+                 bounds={"omega": (0.8, 3.0), "b": (0.0, 1.0)})
