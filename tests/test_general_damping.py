@@ -68,11 +68,13 @@ def _augmented(osc: ic.ImpactOscillator) -> np.ndarray:
     return A
 
 
-def _expm_orbit_pieces(osc, N):
-    """``Phi``, the forcing columns, and the fixed point's S by expm (eq. 12-13)."""
+def _expm_orbit_pieces(osc, N, E=None):
+    """``Phi``, the forcing columns, and the fixed point's S by expm (eq. 12-13); `E`, the
+    flow of the augmented system over T, when computed otherwise (mpmath)."""
     n = osc.n
     T = 2.0 * math.pi * N / osc.omega
-    E = scipy.linalg.expm(_augmented(osc) * T)
+    if E is None:
+        E = scipy.linalg.expm(_augmented(osc) * T)
     Phi, P = E[:2 * n, :2 * n], E[:2 * n, 2 * n:]
     d = np.ones(2 * n)
     d[n] = -osc.R
@@ -80,10 +82,10 @@ def _expm_orbit_pieces(osc, N):
     return T, Phi, P, S, d
 
 
-def _expm_G(osc, N, delta):
+def _expm_G(osc, N, delta, E=None):
     """G of eq. (25) assembled from the expm pieces (independent of impactcont's)."""
     n = osc.n
-    T, Phi, P, S, d = _expm_orbit_pieces(osc, N)
+    T, Phi, P, S, d = _expm_orbit_pieces(osc, N, E)
     cs = np.array([math.cos(delta), math.sin(delta)])
     X0 = S @ cs
     Xa = np.concatenate([Phi @ X0 + P @ cs, cs * 0.0])
@@ -231,21 +233,27 @@ def _mp_fixed_point(osc, N, dps=50):
                 B[r, k] -= dr * E[r, k]
             rhs[0][r], rhs[1][r] = dr * E[r, 2 * n], dr * E[r, 2 * n + 1]
         S = [mpmath.lu_solve(B, col) for col in rhs]
-        return np.array([[float(S[k][r]) for k in range(2)] for r in range(2 * n)])
+        E_float = np.array([[float(E[r, k]) for k in range(2 * n + 2)] for r in range(2 * n + 2)])
+        return (np.array([[float(S[k][r]) for k in range(2)] for r in range(2 * n)]), E_float)
 
 
 def test_orbit_against_50_digit_mpmath_reference():
     """The entries of M^-1 K, M^-1 C and M^-1 F are exact binary fractions here, so the
     mpmath system is the floating-point one exactly."""
     osc = ic.ImpactOscillator(M=np.diag([1.0, 2.0]), K=K2, C=[[0.25, 0.0], [0.0, 0.0]],
-                              F=[1.0, 0.0], R=0.6, b=0.3, omega=1.0)
-    S = _mp_fixed_point(osc, 1)
+                              F=[1.0, 0.0], R=0.625, b=0.25, omega=0.75)
+    S, E = _mp_fixed_point(osc, 1)
     c, s = general.amplitude(osc, 1)[:2]
-    assert c == pytest.approx(S[0, 0], rel=1e-13)
-    assert s == pytest.approx(S[0, 1], rel=1e-13)
-    for orbit in ic.periodic_orbits(osc, 1):
+    assert math.hypot(S[0, 0], S[0, 1]) > 0.5  # mass 1 responds (no anti-resonance)
+    assert c == pytest.approx(S[0, 0], rel=1e-13, abs=0)
+    assert s == pytest.approx(S[0, 1], rel=1e-13, abs=0)
+    orbits = ic.periodic_orbits(osc, 1)
+    assert len(orbits) == 2
+    for orbit in orbits:
         X0 = S @ np.array([math.cos(orbit.delta), math.sin(orbit.delta)])
         np.testing.assert_allclose(orbit.state, X0, rtol=0, atol=1e-12 * np.abs(X0).max())
+        G = _expm_G(osc, 1, orbit.delta, E)[0]  # from the 50-digit flow, rounded once
+        np.testing.assert_allclose(orbit.G, G, rtol=0, atol=1e-9 * np.abs(G).max())
 
 
 # -- the simulator ------------------------------------------------------------------------------
