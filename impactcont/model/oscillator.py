@@ -285,7 +285,7 @@ class ImpactOscillator:
         springs : sequence of float, length n
             ``k_1 ... k_n``; see :func:`chain_stiffness`.
         **params
-            ``F, R, b, omega`` and the damping (``eta`` or ``alpha``/``beta``).
+            ``F, R, b, omega`` and the damping (``eta``, ``alpha``/``beta`` or a matrix ``C``).
         """
         m = np.atleast_1d(np.array(masses, dtype=float))
         if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)) or np.any(m <= 0):
