@@ -173,10 +173,15 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
     ``phi = gamma cos(omega t) + beta sin(omega t)``,
     ``psi = beta cos(omega t) - gamma sin(omega t)``.
 
+    A complex modal force ``f = f_r + i f_i`` (forcing ``Re(f e^{i(omega t + delta)})``,
+    per-mass phases) gives ``gamma = (detune f_r + damp f_i) / Delta_i`` and
+    ``beta = (damp f_r - detune f_i) / Delta_i`` (``detune = omega_i^2 - omega^2``,
+    ``damp = 2 xi_i omega_i omega``): the same real form of ``y_p``.
+
     Parameters
     ----------
     w, a, f : ndarray, shape (n,)
-        Natural frequencies, decay rates and modal forces.
+        Natural frequencies, decay rates and modal forces (f real or complex).
     omega : float or ndarray broadcasting against (n,)
         Forcing frequency.
     eigenvalue_errors : ndarray, shape (n,), optional
@@ -206,11 +211,17 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
             "the forced response of eq. (6) does not exist; choose omega != omega_i or add damping"
         )
     safe = np.where(delta == 0.0, 1.0, delta)
+    if np.iscomplexobj(f):  # per-mass phases: Re(f e^{i theta}) = f_r cos - f_i sin
+        fr, fi = f.real, f.imag
+        out = (detune * fr + damp * fi) / safe, (damp * fr - detune * fi) / safe
+        f = np.abs(f)  # the size of the force, for the accuracy warning below
+    else:
+        out = detune * f / safe, damp * f / safe
     # omega_i^2 carries an absolute error ~ eigenvalue_errors from the eigensolver; the
     # amplitude f / sqrt(Delta_i) then has relative error ~ that * |detune| / Delta_i, which
     # grows without bound at an undamped resonance: say so rather than return it silently
     if eigenvalue_errors is None:
-        return detune * f / safe, damp * f / safe
+        return out
     scale = 4.0 * eigenvalue_errors + 4.0 * np.finfo(float).eps * w * w
     rel_error = np.where(f != 0.0, scale * np.abs(detune) / safe, 0.0)
     worst = float(np.max(rel_error, initial=0.0))
@@ -223,4 +234,4 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
             f"frequency {w_i!r} of a lightly damped mode: its forced amplitude (eq. 7) is known "
             f"only to a relative error of about {worst:.1g}; move omega away from omega_i or "
             "add damping", NearResonanceWarning, stacklevel=2)
-    return detune * f / safe, damp * f / safe
+    return out

@@ -1003,7 +1003,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
-    ``omega times``; ``work``: scratch of shape ``(12, 2 nt)`` (reused across calls).
+    ``omega times``; ``work``: scratch of shape ``(WORK_ROWS, 2 nt)`` (reused across calls).
     Each grid cell holds at most one root of ``x1''`` (the grid is built so), hence
     at most two roots of ``x1'``:
 
@@ -1144,6 +1144,7 @@ def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, T, Gam, B, o
     return best, best_t
 
 
+WORK_ROWS = 12  # rows of the scratch of x1_maximum (its grid values and candidates)
 _EXCLUDE_TOL = 1e-7  # relative to T: a maximum this close to ``exclude`` is the same one
 
 
@@ -1161,7 +1162,7 @@ def flight_tables(w, a, u0, modal, omega, T):
     dv = modal[7].copy()
     free = free_on_grid(times, w, a, u0, dy, dv)
     return (times, capped, free, np.cos(omega * times), np.sin(omega * times), dy, dv,
-            np.empty((12, 2 * times.size)))
+            np.empty((WORK_ROWS, 2 * times.size)))
 
 
 # -- a block of the (omega, b) plane ---------------------------------------------------------

@@ -14,6 +14,7 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
 
@@ -55,6 +56,12 @@ class PeriodicBranchProblem:
         self.osc = osc
         self.N = N
         self.parameter = parameter
+        self._general = osc.general  # general damping matrix or complex F: first-order path
+        self._cache: dict[float, tuple[float, float, float]] = {}
+        self._per_unit_force: tuple[float, float] | None = None  # c, s at F0 = 1
+        self._osc_cache: dict[float, ImpactOscillator] = {}
+        if self._general:
+            return
         w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
         self._w = w
         if parameter in _DAMPING_DIRECTION:
@@ -62,9 +69,6 @@ class PeriodicBranchProblem:
             self._da = p + q * w * w
         else:
             self._da = np.zeros_like(w)
-        self._cache: dict[float, tuple[float, float, float]] = {}
-        self._per_unit_force: tuple[float, float] | None = None  # c, s at F0 = 1
-        self._osc_cache: dict[float, ImpactOscillator] = {}
 
     # -- the oscillator along the branch ------------------------------------------------------
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -106,6 +110,10 @@ class PeriodicBranchProblem:
             self._check(lam)
             c, s = self._unit_amplitude()
             value = (c * lam, s * lam, self.osc.b)
+        elif self._general:
+            self._check(lam)
+            c, s = general.amplitude(self.oscillator_at(lam), self.N)[:2]
+            value = (c, s, lam if self.parameter == "b" else self.osc.b)
         else:
             self._check(lam)
             a, R, omega = self._arguments(lam)
@@ -120,6 +128,9 @@ class PeriodicBranchProblem:
         """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
         from impactcont.orbit import kernel
 
+        if self._per_unit_force is None and self._general:
+            c, s = general.amplitude(self.osc, self.N)[:2]
+            self._per_unit_force = (c / self.osc.F0, s / self.osc.F0)
         if self._per_unit_force is None:
             a, R, omega = self._arguments(self.osc.F0)
             c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
@@ -144,6 +155,9 @@ class PeriodicBranchProblem:
         self._check(lam)
         if self.parameter == "F0":
             return (*self._unit_amplitude(), 0.0)
+        if self._general:
+            _, _, dc, ds = general.amplitude(self.oscillator_at(lam), self.N, self.parameter)
+            return dc, ds, 0.0
         a, R, omega = self._arguments(float(lam))
         dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R, omega,
                                              self.N, _KERNEL_WHICH[self.parameter], self._da)
