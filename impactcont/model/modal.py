@@ -30,7 +30,8 @@ import scipy.linalg
 
 from impactcont.errors import NearResonanceWarning, ParameterError, ResonanceError
 
-__all__ = ["ModalBasis", "forced_coefficients", "free_transfer"]
+__all__ = ["DAMPING_PARAMETERS", "ModalBasis", "decay_rate_derivative", "forced_coefficients",
+           "free_transfer"]
 
 # warn when the forced amplitude of a mode is known to worse than this (relative) because
 # omega sits within the rounding error of omega_i^2 (eigh: about eps * omega_max^2)
@@ -102,6 +103,22 @@ class ModalBasis:
         d = (self.natural_frequencies - self.decay_rates) * (
             self.natural_frequencies + self.decay_rates)
         return np.sqrt(np.maximum(d, 0.0))
+
+
+_DECAY_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
+DAMPING_PARAMETERS = tuple(_DECAY_DIRECTION)
+"""The damping parameters of proportional damping, which move the decay rates only."""
+
+
+def decay_rate_derivative(parameter: str, w: np.ndarray) -> np.ndarray:
+    """``d a_i / d parameter`` of the decay rates for a damping parameter.
+
+    ``a_i = eta omega_i^2`` (``C = 2 eta K``) and ``a_i = (alpha + beta omega_i^2) / 2``
+    (``C = alpha M + beta K``): linear in each parameter, so the derivative is exact at
+    every value (the modes themselves do not move).
+    """
+    p, q = _DECAY_DIRECTION[parameter]
+    return p + q * w * w
 
 
 def free_transfer(w: np.ndarray, a: np.ndarray, t: np.ndarray

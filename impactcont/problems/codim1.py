@@ -77,6 +77,7 @@ import numpy as np
 
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
+from impactcont.model.modal import decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
@@ -105,9 +106,6 @@ _STEP = 1e-30  # complex step, relative to max(1, |x_j|): derivatives exact to r
 _CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
 
-_DAMPING_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
-"""``d a_i / d p = p0 + q0 omega_i^2`` for the damping parameters (``a_i = eta omega_i^2``,
-``a_i = (alpha + beta omega_i^2) / 2``)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -166,8 +164,7 @@ class _Pieces:
             elif name == "F0":
                 f = f * complex(1.0, h / self.osc.F0)
             else:
-                p0, q0 = _DAMPING_DIRECTION[name]
-                a = a + 1j * h * (p0 + q0 * w * w)
+                a = a + 1j * h * decay_rate_derivative(name, self.w)
             _, _, _, _, _, eig_err, u0, ui0 = self.osc.modes.kernel_arrays
             modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, omega, self.N)
         return _Pieces(self.osc, self.N, modal, scalars, omega, R, b, w, a, f)

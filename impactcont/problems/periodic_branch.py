@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from impactcont.errors import ParameterError
+from impactcont.model.modal import DAMPING_PARAMETERS, decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
@@ -20,9 +21,6 @@ from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem"]
 
-_DAMPING_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
-"""``d a_i / d lam = p + q omega_i^2`` for the damping parameters (``a_i = eta omega_i^2``,
-``a_i = (alpha + beta omega_i^2) / 2``)."""
 _KERNEL_WHICH = {"omega": 0, "R": 1, "eta": 2, "alpha": 2, "beta": 2}
 
 
@@ -64,9 +62,8 @@ class PeriodicBranchProblem:
             return
         w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
         self._w = w
-        if parameter in _DAMPING_DIRECTION:
-            p, q = _DAMPING_DIRECTION[parameter]
-            self._da = p + q * w * w
+        if parameter in DAMPING_PARAMETERS:
+            self._da = decay_rate_derivative(parameter, w)
         else:
             self._da = np.zeros_like(w)
 
@@ -90,7 +87,7 @@ class PeriodicBranchProblem:
             omega = lam
         elif self.parameter == "R":
             R = lam
-        elif self.parameter in _DAMPING_DIRECTION:
+        elif self.parameter in DAMPING_PARAMETERS:
             current = float(getattr(osc, self.parameter) or 0.0)
             a = a + (lam - current) * self._da
         return a, R, omega
