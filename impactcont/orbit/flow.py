@@ -13,6 +13,8 @@ here as ``P(t) - W(t) P(0)`` from the forced columns ``P = [[phi, psi], [phi', p
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from impactcont.model.modal import forced_coefficients, free_transfer
@@ -140,6 +142,39 @@ class Flow:
     def mass1(self, X0: np.ndarray, delta: float) -> Mass1Motion:
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return Mass1Motion(self, X0, delta)
+
+    def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
+        """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
+
+        Only the forced part of eq. (9) depends on omega: with the modal steady
+        amplitudes ``gamma - i beta = f / (w^2 - omega^2 + 2 i a omega)`` (eq. 7) and
+        ``P(t) = [y_p; y_p'](t)``, ``X(t) = U [P(t) + W(t) (Y0 - P(0))]`` gives
+        ``dX/d omega = U [dP(t) - W(t) dP(0)]``.
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+        """
+        om = self.omega
+        den = (self.w - om) * (self.w + om) + 2j * self.a * om
+        A = self.gamma - 1j * self.beta
+        dA = A * (2.0 * om - 2j * self.a) / den
+        dg, db = dA.real, -dA.imag
+        g, b = self.gamma, self.beta
+
+        def dP(time: float) -> tuple[np.ndarray, np.ndarray]:
+            c, s = math.cos(om * time + theta), math.sin(om * time + theta)
+            y = g * c + b * s
+            dy = dg * c + db * s + time * (b * c - g * s)
+            dv = (b * c - g * s) + om * (db * c - dg * s) - om * time * y
+            return dy, dv
+
+        dy_t, dv_t = dP(t)
+        dy_0, dv_0 = dP(0.0)
+        W11, W12, W21, W22 = (blk[0] for blk in self.transfer(np.array([t])))
+        dy = dy_t - (W11 * dy_0 + W12 * dv_0)
+        dv = dv_t - (W21 * dy_0 + W22 * dv_0)
+        return np.concatenate([self.u @ dy, self.u @ dv])
 
 
 class Mass1Motion:
@@ -272,6 +307,25 @@ class GeneralFlow(Flow):
     def mass1(self, X0: np.ndarray, delta: float) -> GeneralMass1Motion:
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return GeneralMass1Motion(self, X0, delta)
+
+    def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
+        """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
+
+        Only the forced state depends on omega: ``X(t) = X_p(t) + Phi(t) (X0 - X_p(0))``
+        with ``X_p(t) = Re(Z e^{i(omega t + theta)})`` gives ``dX/d omega = dX_p(t) -
+        Phi(t) dX_p(0)``, ``dX_p(t) = Re((dZ/d omega + i t Z) e^{i(omega t + theta)})``
+        (``dZ/d omega`` exact from the dynamic stiffness,
+        :meth:`FirstOrderBasis.forced_amplitude_derivative`).
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+        """
+        dZ = self.basis.forced_amplitude_derivative(self.Z, self.omega)
+        rot_t = np.exp(1j * (self.omega * t + theta))
+        d_t = ((dZ + 1j * t * self.Z) * rot_t).real
+        d_0 = (dZ * np.exp(1j * theta)).real
+        return d_t - self.transition_matrix(t) @ d_0
 
 
 class GeneralMass1Motion(Mass1Motion):
