@@ -143,6 +143,11 @@ class Flow:
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return Mass1Motion(self, X0, delta)
 
+    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0
+               ) -> Mass1Motion:
+        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``."""
+        return Mass1Motion(self, X0, delta, index, sign)
+
     def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
         """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
 
@@ -181,17 +186,20 @@ class Mass1Motion:
     """``x1(t), x1'(t), x1''(t)`` along one flight, vectorised over t.
 
     Used to locate impacts and interior maxima: it evaluates only the first
-    row of ``u``, O(n) per time instead of O(n^2).
+    row of ``u``, O(n) per time instead of O(n^2). With ``index`` and ``sign`` it
+    evaluates ``sign * x_j`` of mass ``j = index + 1`` instead (a stop on another
+    mass, or the lower stop met moving down).
     """
 
-    def __init__(self, flow: Flow, X0: np.ndarray, delta: float) -> None:
+    def __init__(self, flow: Flow, X0: np.ndarray, delta: float, index: int = 0,
+                 sign: float = 1.0) -> None:
         self.flow = flow
         self.delta = float(delta)
         y0, v0 = flow.to_modal(X0)
         yp0, vp0 = flow.forced(0.0, delta)
         self.dy = y0 - yp0[0]
         self.dv = v0 - vp0[0]
-        self.u0 = flow.u[0]
+        self.u0 = flow.u[index] if sign == 1.0 else sign * flow.u[index]
 
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``x1, x1', x1''`` at times t (each shape (nt,))."""
@@ -308,6 +316,11 @@ class GeneralFlow(Flow):
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return GeneralMass1Motion(self, X0, delta)
 
+    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0
+               ) -> GeneralMass1Motion:
+        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``."""
+        return GeneralMass1Motion(self, X0, delta, index, sign)
+
     def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
         """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
 
@@ -334,16 +347,18 @@ class GeneralMass1Motion(Mass1Motion):
         x1^(j) = Re((i omega)^j Z_1 e^{i theta}) + Re(sum_k lambda_k^j V_1k zeta_k e^{lambda_k t})
     """
 
-    def __init__(self, flow: GeneralFlow, X0: np.ndarray, delta: float) -> None:
+    def __init__(self, flow: GeneralFlow, X0: np.ndarray, delta: float, index: int = 0,
+                 sign: float = 1.0) -> None:
         self.flow = flow
         self.delta = float(delta)
-        self.c = flow.V[0] * flow.modal_deviation(X0, delta)  # V_1k zeta_k
+        self.c = sign * flow.V[index] * flow.modal_deviation(X0, delta)  # V_jk zeta_k
+        self.z = sign * flow.Z[index]
 
     def _derivatives(self, t: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         fl = self.flow
         e = np.exp(t[:, None] * fl.lam) * self.c
-        forced = fl.Z[0] * np.exp(1j * (fl.omega * t + self.delta))
+        forced = self.z * np.exp(1j * (fl.omega * t + self.delta))
         iw = 1j * fl.omega
         out = []
         for j in range(4):
