@@ -60,9 +60,9 @@ class Flow:
         self.gamma, self.beta = forced_coefficients(self.w, self.a, self.f, self.omega,
                                                     eigenvalue_errors=modes.eigenvalue_errors)
 
-    def time_scales(self) -> tuple[float, float]:
-        """Fastest oscillation frequency and fastest decay rate seen by mass 1."""
-        part = np.abs(self.u[0]) > 0
+    def time_scales(self, row: int = 0) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
+        part = np.abs(self.u[row]) > 0
         w, a = self.w[part], self.a[part]
         d = (w - a) * (w + a)
         wd = np.sqrt(np.maximum(d, 0.0))
@@ -256,9 +256,9 @@ class GeneralFlow(Flow):
         self.Z = basis.forced_amplitude(osc.F, osc.omega)
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
 
-    def time_scales(self) -> tuple[float, float]:
-        """Fastest oscillation frequency and fastest decay rate seen by mass 1."""
-        part = np.abs(self.V[0]) > 0
+    def time_scales(self, row: int = 0) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
+        part = np.abs(self.V[row]) > 0
         lam = self.lam[part]
         return (float(max(self.omega, np.abs(lam.imag).max(initial=0.0))),
                 float((-lam.real).max(initial=0.0)))
