@@ -84,7 +84,8 @@ from impactcont.orbit.periodic import (
     orbit_at_phase,
     physical_transition,
 )
-from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, check_parameter
+from impactcont.problems.general_pieces import STEPPED_PARAMETERS, GeneralPieces
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
 __all__ = [
     "CURVE_KINDS",
@@ -104,6 +105,7 @@ grazing and zero-velocity impact."""
 _STEP = 1e-30  # complex step, relative to max(1, |x_j|): derivatives exact to rounding
 _CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
+_FD_STEP = 1e-6  # relative difference step of the first-order path's parameter columns
 
 _DAMPING_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
 """``d a_i / d p = p0 + q0 omega_i^2`` for the damping parameters (``a_i = eta omega_i^2``,
@@ -294,11 +296,13 @@ class CurveProblem:
                  ) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {osc!r}")
-        _ = osc.modes  # computed once here, shared by every replace() along the curve
+        self._general = osc.general  # a damping matrix C or complex F: the first-order path
+        # computed once here, shared by every replace() along the curve
+        _ = osc.first_order if self._general else osc.modes
         self.osc = osc
         self.N = _check_N(N)
         self.parameters = check_parameters(osc, parameters)
-        self._cache: collections.OrderedDict[tuple[float, float], _Pieces] = \
+        self._cache: collections.OrderedDict[tuple[float, float], _Pieces | GeneralPieces] = \
             collections.OrderedDict()
         self._jac_cache: tuple[np.ndarray, np.ndarray] | None = None
         self.last_step = math.nan
@@ -318,14 +322,14 @@ class CurveProblem:
         """The oscillator with the two parameters set to ``p1, p2``."""
         return self._pieces(p1, p2).osc
 
-    def _pieces(self, p1: float, p2: float) -> _Pieces:
+    def _pieces(self, p1: float, p2: float) -> _Pieces | GeneralPieces:
         key = (float(p1), float(p2))
         hit = self._cache.get(key)
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
         osc = self.osc.replace(**{self.parameters[0]: key[0], self.parameters[1]: key[1]})
-        pieces = _Pieces.at(osc, self.N)
+        pieces = GeneralPieces.at(osc, self.N) if self._general else _Pieces.at(osc, self.N)
         self._cache[key] = pieces
         if len(self._cache) > _CACHE_SIZE:
             self._cache.popitem(last=False)
@@ -396,6 +400,9 @@ class CurveProblem:
         J = np.empty((m, m + 1))
         p1, p2 = self.parameters
         for j, name in ((0, p1), (m, p2)):
+            if self._general and name not in STEPPED_PARAMETERS:
+                J[:, j] = self._parameter_column(pc, x, j, name)
+                continue
             h = _STEP * max(1.0, abs(x[j]))
             J[:, j] = self._residual(pc.stepped(name, h), delta, extras).imag / h
         still = pc.stepped(None, 0.0)
@@ -412,6 +419,30 @@ class CurveProblem:
                 J[:, 2 + k] = self._residual(still, delta, stepped).imag / h
         self._jac_cache = (x, J)
         return J
+
+    def _parameter_column(self, pc: GeneralPieces, x: np.ndarray, j: int, name: str
+                          ) -> np.ndarray:
+        """``dF/d name`` on the first-order path, where no exact complex step exists
+        (:mod:`impactcont.problems.general_pieces`): central differences of the residual
+        with the step ``1e-6 max(1, |p|)``, one-sided at the boundary of the parameter's
+        domain; the rows that depend on ``omega`` or ``R`` only through ``c, s`` (eq. 14,
+        and the fold condition) from the exact ``dc, ds``."""
+        h = _FD_STEP * max(1.0, abs(x[j]))
+        lo_dom, hi_dom = PARAMETERS[name].domain
+        up, down = x.copy(), x.copy()
+        if x[j] + h <= hi_dom:
+            up[j] = x[j] + h
+        if x[j] - h >= lo_dom:
+            down[j] = x[j] - h
+        column = (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
+            / (up[j] - down[j])
+        if name in ("omega", "R"):
+            dc, ds = pc.cs_derivative(name)
+            cd, sd = math.cos(x[1]), math.sin(x[1])
+            column[0] = dc * cd + ds * sd
+            if self.kind == "SN":
+                column[1] = -dc * sd + ds * cd
+        return column
 
     def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray
                        ) -> np.ndarray | None:
