@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from _scene_data import OSCILLATOR, write
 
 import impactcont as ic
 from impactcont.curves import curve, curve_crossings
@@ -20,6 +21,7 @@ from impactcont.orbit.dense import impact_map_jacobian
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import orbit_at_phase, periodic_orbits
 from impactcont.problems.codim1 import curve_problem
+from impactcont.scene import read_output, run_scene
 
 K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])
 BOX = {"omega": (0.6, 2.0), "b": (0.0, 0.6)}
@@ -263,3 +265,20 @@ def test_bad_inputs_on_the_first_order_path(damper):
                                   eta=0.0)
     with pytest.raises(ParameterError, match=r"R=1\.0 without damping"):
         curve(elastic, 1, "SN", start={"omega": 1.2, "b": 0.5}, bounds=BOX)
+
+
+# -- (e) a scene with a damping matrix --------------------------------------------------------
+def test_scene_curve_entry_with_a_damping_matrix(tmp_path):
+    text = (OSCILLATOR.replace("eta = 0.1", "C = [[0.0, 0.0], [0.0, 0.2]]")
+            + '[[branches]]\nname = "br"\nb = 0.5\nbounds = [0.9, 1.5]\n'
+            + '[[curves]]\nname = "sn"\nkind = "SN"\nstart = "br"\n'
+            + "bounds = { omega = [0.9, 1.6], b = [0.45, 0.7] }\nds_max = 0.1\n")
+    result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+    assert result.ok, result.failures
+    c = read_output(tmp_path / "o" / "curves.nc").datasets["sn"]
+    osc = ic.ImpactOscillator.from_json(c.attrs["oscillator"])
+    assert osc.general_damping and c.attrs["kind"] == "SN" and c.sizes["point"] > 2
+    np.testing.assert_array_equal(osc.C, [[0.0, 0.0], [0.0, 0.2]])
+    for w, b in zip(c.omega.values, c.b.values, strict=True):
+        cs, s = general.amplitude(osc.replace(omega=float(w)), 1)[:2]
+        assert abs(cs**2 + s**2 - b**2) < 1e-10
