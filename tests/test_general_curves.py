@@ -76,6 +76,29 @@ def test_proportional_C_as_a_matrix_gives_the_modal_curves(damping):
     assert len(labels) >= 4, labels  # codim-2 points of several kinds were compared
 
 
+@pytest.mark.parametrize(("kind", "parameters", "bounds"), [
+    ("PD", ("omega", "R"), {"omega": (1.0, 2.0), "R": (0.4, 0.9)}),
+    ("NS", ("F0", "omega"), {"F0": (0.6, 1.4), "omega": (1.2, 1.8)}),
+])
+def test_proportional_C_as_a_matrix_in_other_parameter_pairs(kind, parameters, bounds):
+    """R and F0 as parameters: the difference columns (R) and the F0 step agree too."""
+    modal = _paper(eta=0.1)
+    if kind == "PD":
+        modal = modal.replace(b=0.3)
+        start = {"omega": 1.3737, "R": 0.6}
+    else:
+        found = _starts(modal, ["NS"])["NS"]
+        start = {"F0": 1.0, "omega": found["omega"], "delta": found["delta"]}
+    matrix = _paper(C=modal.C).replace(b=modal.b)
+    a, g = (curve(osc, 1, kind, start=start, parameters=parameters, bounds=bounds)
+            for osc in (modal, matrix))
+    assert matrix.general and g.sizes["point"] == a.sizes["point"] > 5
+    assert max(np.ptp(g[p].values) for p in parameters) > 0.1
+    for name in (*parameters, "delta"):
+        assert np.max(np.abs(g[name].values - a[name].values)) < 1e-9, name
+    assert g.codim2_label.values.tolist() == a.codim2_label.values.tolist()
+
+
 # -- (b) a damper on mass 2 only: no modal decoupling --------------------------------------------
 @pytest.fixture(scope="module")
 def damper():
@@ -109,6 +132,19 @@ def test_damper_curve_passes_through_one_parameter_special_points(damper, damper
             assert np.min(np.abs(found - cr["omega"])) < 1e-8, (kind, b, cr, found)
             compared += 1
     assert compared >= 3
+
+
+def test_damper_pd_curve_in_omega_and_R(damper):
+    osc = damper.replace(b=0.3)
+    c = curve(osc, 1, "PD", start={"omega": 0.70646, "R": 0.6}, parameters=("omega", "R"),
+              bounds={"omega": (0.6, 1.0), "R": (0.4, 0.9)}, detect_codim2_points=False)
+    compared = 0
+    for R in (0.45, 0.85):
+        for cr in curve_crossings(c, "R", R):
+            found = _one_parameter_points(osc.replace(R=R), "PD", 0.3, cr["omega"])
+            assert found.size and np.min(np.abs(found - cr["omega"])) < 1e-8, (R, cr, found)
+            compared += 1
+    assert compared >= 2
 
 
 def _motion(osc, point):
