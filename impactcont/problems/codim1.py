@@ -62,6 +62,14 @@ size, including next to a domain boundary of a parameter (``R = 1``,
 ``eta = 0``), since a complex step never leaves the real point. Newton reuses a
 Jacobian within a relative distance of 1e-4 (chord steps); the accuracy of every
 point is set by the residual, which is evaluated in closed form.
+
+With a damping matrix C or a complex F (:attr:`ImpactOscillator.general`) the same
+systems run on the first-order path: the pieces are
+:class:`~impactcont.problems.general_pieces.GeneralPieces` (dense closed form on the
+complex modes), exact in the phase, the extra unknowns, ``b`` and ``F0``; the ``omega``
+and ``R`` columns are central differences except the rows through ``c, s`` (why: the
+docstring of :mod:`impactcont.problems.general_pieces`). ``eta, alpha, beta`` do not
+exist with a matrix C and are refused.
 """
 
 from __future__ import annotations
@@ -280,7 +288,8 @@ class CurveProblem:
         One impact every N forcing periods.
     parameters : (str, str)
         ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter
-        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0``.
+        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0`` (of the
+        oscillator's damping model: not ``eta, alpha, beta`` with a damping matrix C).
 
     Notes
     -----
