@@ -280,6 +280,23 @@ def test_complex_F_zero_velocity_curve_in_omega_and_F0_is_the_linear_response(ph
         assert abs(abs(X[0]) - osc.b) < 1e-10
 
 
+def test_complex_F_pd_curve_in_omega_and_eta(phased):
+    """eta exists with a complex F on C = 2 eta K: its column is a central difference."""
+    osc = phased.replace(b=0.0)
+    start = _starts(phased, ["PD"])["PD"]
+    c = curve(osc, 1, "PD", start={"omega": start["omega"], "eta": 0.1, "delta": start["delta"]},
+              parameters=("omega", "eta"), bounds={"omega": (1.0, 2.5), "eta": (0.02, 0.2)},
+              detect_codim2_points=False)
+    assert np.ptp(c.eta.values) > 0.15
+    compared = 0
+    for eta in (0.05, 0.15):
+        for cr in curve_crossings(c, "eta", eta):
+            found = _one_parameter_points(osc.replace(eta=eta), "PD", 0.0, cr["omega"])
+            assert found.size and np.min(np.abs(found - cr["omega"])) < 1e-8, (eta, cr, found)
+            compared += 1
+    assert compared >= 2
+
+
 # -- (d) bad input --------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["eta", "alpha", "beta"])
 def test_damping_parameters_are_refused_with_a_matrix_C(damper, name):
