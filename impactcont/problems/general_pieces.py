@@ -58,8 +58,7 @@ import numpy as np
 
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit import general
-from impactcont.orbit.dense import periodic_matrix
-from impactcont.orbit.flow import Flow, GeneralFlow
+from impactcont.orbit.flow import GeneralFlow
 
 __all__ = ["STEPPED_PARAMETERS", "GeneralPieces"]
 
@@ -104,9 +103,7 @@ class GeneralPieces:
     @classmethod
     def at(cls, osc: ImpactOscillator, N: int) -> GeneralPieces:
         """The real pieces of `osc`."""
-        general._refuse_elastic(osc)
-        flow = Flow(osc)
-        S, DPhi, T = periodic_matrix(flow, N)
+        flow, S, DPhi, T = general.orbit_pieces(osc, N)  # eq. (12)-(13)
         n = osc.n
         d = np.ones(2 * n)
         d[n] = -osc.R
