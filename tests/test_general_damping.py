@@ -470,10 +470,13 @@ def test_robust_stability_on_a_proportional_C_matches_the_modal_path():
     assert g.robust == a.robust
 
 
-def test_two_parameter_curves_refuse_a_general_C_clearly():
+def test_two_parameter_curves_accept_a_general_C():
+    """Curves run on the first-order path (tests/test_general_curves.py checks them)."""
     osc = _damper_on_mass1()
     branch = ic.continuation(osc, 1, "omega", (0.8, 3.0))
     k = list(branch["special_label"].values).index("PD")
-    with pytest.raises(ParameterError, match="two-parameter curves need the modal basis"):
-        ic.curve(osc, 1, "PD", start=branch, special=k,
+    c = ic.curve(osc, 1, "PD", start=branch, special=k,
                  bounds={"omega": (0.8, 3.0), "b": (0.0, 1.0)})
+    assert c.sizes["point"] > 2 and float(c["residual"].max()) < 1e-10
+    crossings = [x["omega"] for x in ic.curve_crossings(c, "b", osc.b)]
+    assert min(abs(w - float(branch["special_omega"][k])) for w in crossings) < 1e-8

@@ -419,9 +419,8 @@ class ImpactOscillator:
                     else f"a complex F={self.F.tolist()} (per-mass phases)")
             raise ParameterError(f"the oscillator has {what}: the proportional modal basis of "
                                  "eq. (5)-(6) does not apply; its flow uses first_order "
-                                 "(periodic motions, branches in omega, b, R, F0, maps, robust "
-                                 "stability and the simulator do; two-parameter curves need "
-                                 "the modal basis and do not support it yet)")
+                                 "(periodic motions, branches in omega, b, R, F0, curves, maps, "
+                                 "robust stability and the simulator do)")
         alpha, beta = self.rayleigh
         return ModalBasis.from_matrices(self.M, self.K, alpha, beta, self.F)
 

@@ -31,7 +31,8 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.dense import impact_map_jacobian, periodic_matrix
 from impactcont.orbit.flow import Flow, GeneralFlow
 
-__all__ = ["amplitude", "orbit_pieces", "orbit_values", "roots", "x1_maximum"]
+__all__ = ["amplitude", "amplitude_derivative", "orbit_pieces", "orbit_values", "roots",
+           "x1_maximum"]
 
 
 def _refuse_elastic(osc: ImpactOscillator) -> None:
@@ -71,6 +72,14 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     c, s = float(S[0, 0]), float(S[0, 1])
     if which is None:
         return c, s, 0.0, 0.0
+    return (c, s, *amplitude_derivative(flow, S, DPhi, T, which))
+
+
+def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: float,
+                         which: str) -> tuple[float, float]:
+    """``dc, ds`` (eq. 14) in ``which`` (``"omega"``, ``"R"``) from :func:`orbit_pieces`
+    (formulas in :func:`amplitude`)."""
+    osc = flow.osc
     n = osc.n
     d = np.ones(2 * n)
     d[n] = -osc.R
@@ -89,13 +98,14 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
         raise ParameterError(f"which must be 'omega' or 'R' (the derivative of c, s of eq. 14); "
                              f"got {which!r}")
     dS = np.linalg.solve(B, rhs)
-    return c, s, float(dS[0, 0]), float(dS[0, 1])
+    return float(dS[0, 0]), float(dS[0, 1])
 
 
-def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float
-               ) -> tuple[float, float]:
+def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float,
+               exclude: float = math.nan) -> tuple[float, float]:
     """Highest interior local maximum of ``x1`` on ``(0, T)`` (eq. 16): ``(value, time)``,
-    ``(-inf, nan)`` when there is none.
+    ``(-inf, nan)`` when there is none. A maximum within ``1e-7 T`` of the time
+    ``exclude`` is skipped (NaN: none is), e.g. the tangency of a grazing motion.
 
     The free part of ``x1`` is a sum over the scalar pairs of
     :attr:`FirstOrderBasis.scalar_pairs`, each ``W11 y(0) + W12 y'(0)`` with the exact
@@ -125,7 +135,7 @@ def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float
     best, best_t = kernel.x1_maximum(times, free, np.cos(flow.omega * times),
                                      np.sin(flow.omega * times), float(flow.Z[0].real),
                                      float(-flow.Z[0].imag), flow.omega, float(delta), 1.0, w,
-                                     a, ones, dy, dv, work, math.nan)
+                                     a, ones, dy, dv, work, float(exclude))
     return float(best), float(best_t)
 
 

@@ -62,6 +62,14 @@ size, including next to a domain boundary of a parameter (``R = 1``,
 ``eta = 0``), since a complex step never leaves the real point. Newton reuses a
 Jacobian within a relative distance of 1e-4 (chord steps); the accuracy of every
 point is set by the residual, which is evaluated in closed form.
+
+With a damping matrix C or a complex F (:attr:`ImpactOscillator.general`) the same
+systems run on the first-order path: the pieces are
+:class:`~impactcont.problems.general_pieces.GeneralPieces` (dense closed form on the
+complex modes), exact in the phase, the extra unknowns, ``b`` and ``F0``; the ``omega``
+and ``R`` columns are central differences except the rows through ``c, s`` (why: the
+docstring of :mod:`impactcont.problems.general_pieces`). ``eta, alpha, beta`` do not
+exist with a matrix C and are refused.
 """
 
 from __future__ import annotations
@@ -85,7 +93,8 @@ from impactcont.orbit.periodic import (
     orbit_at_phase,
     physical_transition,
 )
-from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, check_parameter
+from impactcont.problems.general_pieces import STEPPED_PARAMETERS, GeneralPieces
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
 __all__ = [
     "CURVE_KINDS",
@@ -105,6 +114,7 @@ grazing and zero-velocity impact."""
 _STEP = 1e-30  # complex step, relative to max(1, |x_j|): derivatives exact to rounding
 _CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
+_FD_STEP = 1e-6  # relative difference step of the first-order path's parameter columns
 
 
 
@@ -275,7 +285,8 @@ class CurveProblem:
         One impact every N forcing periods.
     parameters : (str, str)
         ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter
-        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0``.
+        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0`` (of the
+        oscillator's damping model: not ``eta, alpha, beta`` with a damping matrix C).
 
     Notes
     -----
@@ -291,11 +302,13 @@ class CurveProblem:
                  ) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {osc!r}")
-        _ = osc.modes  # computed once here, shared by every replace() along the curve
+        self._general = osc.general  # a damping matrix C or complex F: the first-order path
+        # computed once here, shared by every replace() along the curve
+        _ = osc.first_order if self._general else osc.modes
         self.osc = osc
         self.N = _check_N(N)
         self.parameters = check_parameters(osc, parameters)
-        self._cache: collections.OrderedDict[tuple[float, float], _Pieces] = \
+        self._cache: collections.OrderedDict[tuple[float, float], _Pieces | GeneralPieces] = \
             collections.OrderedDict()
         self._jac_cache: tuple[np.ndarray, np.ndarray] | None = None
         self.last_step = math.nan
@@ -315,14 +328,14 @@ class CurveProblem:
         """The oscillator with the two parameters set to ``p1, p2``."""
         return self._pieces(p1, p2).osc
 
-    def _pieces(self, p1: float, p2: float) -> _Pieces:
+    def _pieces(self, p1: float, p2: float) -> _Pieces | GeneralPieces:
         key = (float(p1), float(p2))
         hit = self._cache.get(key)
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
         osc = self.osc.replace(**{self.parameters[0]: key[0], self.parameters[1]: key[1]})
-        pieces = _Pieces.at(osc, self.N)
+        pieces = GeneralPieces.at(osc, self.N) if self._general else _Pieces.at(osc, self.N)
         self._cache[key] = pieces
         if len(self._cache) > _CACHE_SIZE:
             self._cache.popitem(last=False)
@@ -393,6 +406,9 @@ class CurveProblem:
         J = np.empty((m, m + 1))
         p1, p2 = self.parameters
         for j, name in ((0, p1), (m, p2)):
+            if self._general and name not in STEPPED_PARAMETERS:
+                J[:, j] = self._parameter_column(pc, x, j, name)
+                continue
             h = _STEP * max(1.0, abs(x[j]))
             J[:, j] = self._residual(pc.stepped(name, h), delta, extras).imag / h
         still = pc.stepped(None, 0.0)
@@ -409,6 +425,30 @@ class CurveProblem:
                 J[:, 2 + k] = self._residual(still, delta, stepped).imag / h
         self._jac_cache = (x, J)
         return J
+
+    def _parameter_column(self, pc: GeneralPieces, x: np.ndarray, j: int, name: str
+                          ) -> np.ndarray:
+        """``dF/d name`` on the first-order path, where no exact complex step exists
+        (:mod:`impactcont.problems.general_pieces`): central differences of the residual
+        with the step ``1e-6 max(1, |p|)``, one-sided at the boundary of the parameter's
+        domain; the rows that depend on ``omega`` or ``R`` only through ``c, s`` (eq. 14,
+        and the fold condition) from the exact ``dc, ds``."""
+        h = _FD_STEP * max(1.0, abs(x[j]))
+        lo_dom, hi_dom = PARAMETERS[name].domain
+        up, down = x.copy(), x.copy()
+        if x[j] + h <= hi_dom:
+            up[j] = x[j] + h
+        if x[j] - h >= lo_dom:
+            down[j] = x[j] - h
+        column = (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
+            / (up[j] - down[j])
+        if name in ("omega", "R"):
+            dc, ds = pc.cs_derivative(name)
+            cd, sd = math.cos(x[1]), math.sin(x[1])
+            column[0] = dc * cd + ds * sd
+            if self.kind == "SN":
+                column[1] = -dc * sd + ds * cd
+        return column
 
     def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray
                        ) -> np.ndarray | None:
