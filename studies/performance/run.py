@@ -397,7 +397,11 @@ def table(res: dict[str, Any]) -> str:
         (f"map {' x '.join(map(str, m['grid']))}, no spectral radius",
          f"{nf['points_per_s']:.2e} points/s", ">= 1e6 points/s", nf["points_per_s"] >= 1e6,
          f"one batched `eigvals` of {m['points']} 4 x 4: {m['batched_eigvals_4x4']['time']:.2f} "
-         f"s; map / eigvals = {nf['fraction_of_eigvals']:.2f} (target <= 0.5)"),
+         f"s ({m['batched_eigvals_4x4']['points_per_s']:.2e} matrices/s)"),
+        ("the same map against one batched 4 x 4 `eigvals` per point",
+         f"map / eigvals = {nf['fraction_of_eigvals']:.2f}", "<= 0.5",
+         nf["fraction_of_eigvals"] <= 0.5, "the issue's \"at most half the cost of one "
+         "batched 4 x 4 eigvals per point\", timed in the same run"),
         ("the same map with the spectral radius", f"{nt['points_per_s']:.2e} points/s",
          ">= 3e5 points/s", nt["points_per_s"] >= 3e5,
          f"map / eigvals = {nt['fraction_of_eigvals']:.2f}"),
