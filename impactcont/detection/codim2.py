@@ -43,7 +43,6 @@ from impactcont.detection.locator import locate_zero
 from impactcont.detection.special_points import pole_free
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.codim1 import CurveProblem
-from impactcont.problems.general_pieces import GeneralPieces
 
 __all__ = ["TESTS", "Codim2Point", "detect_codim2", "grazing_other_gap", "test_values"]
 
@@ -90,18 +89,10 @@ class Codim2Point:
 
 def grazing_other_gap(problem: CurveProblem, orbit: PeriodicOrbit, tangency_time: float) -> float:
     """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*``
-    (the kernel's exact search, :func:`kernel.other_maximum`, on the first-order path
-    on its paired modes, :func:`impactcont.orbit.general.x1_maximum`; inf when there
+    (the exact search of the curve's pieces, with the tangency excluded; inf when there
     is none)."""
-    from impactcont.orbit import kernel
-
     pc = problem._pieces(*_params(problem, orbit))
-    if isinstance(pc, GeneralPieces):
-        return float(pc.b - pc.other_maximum(orbit.delta, float(tangency_time)))
-    w, a, _, _, _, _, u0, _ = pc.osc.modes.kernel_arrays
-    best, _ = kernel.other_maximum(w, a, u0, pc.modal, pc.scalars, pc.omega, pc.R, orbit.delta,
-                                   orbit.impact_velocity, float(tangency_time))
-    return float(pc.b - best)
+    return float(pc.b - pc.other_maximum(orbit.delta, float(tangency_time)))
 
 
 def _params(problem: CurveProblem, orbit: PeriodicOrbit) -> tuple[float, float]:

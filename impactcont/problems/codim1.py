@@ -239,6 +239,16 @@ class _Pieces:
         E[m, m] = -h2
         return E
 
+    def other_maximum(self, delta: float, exclude: float) -> float:
+        """The highest interior maximum of ``x1`` other than the one at time ``exclude``
+        (:func:`kernel.other_maximum`); ``-inf`` when there is none."""
+        from impactcont.orbit import kernel
+
+        w, a, _, _, _, _, u0, _ = self.osc.modes.kernel_arrays
+        best, _ = kernel.other_maximum(w, a, u0, self.modal, self.scalars, self.omega, self.R,
+                                       delta, self.impact_velocity(delta), exclude)
+        return float(best)
+
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
         from impactcont.orbit import kernel
