@@ -36,11 +36,26 @@ __all__ = ["amplitude", "amplitude_derivative", "orbit_pieces", "orbit_values", 
 
 
 def _refuse_elastic(osc: ImpactOscillator) -> None:
-    if osc.R == 1.0 and not np.any(osc.C):
-        raise ParameterError(
-            "R=1.0 without damping (C = 0) on the first-order path (complex F): eq. (12) is "
-            "singular for elastic impacts without damping; use R < 1, add damping, or a real F "
-            "(whose modal path solves that case)")
+    """Refuse ``R = 1`` without damping: ``I - D Phi(T)`` of eq. (12) is singular there.
+
+    The modal path solves that case (a family of motions, :mod:`impactcont.orbit.kernel`);
+    the message names what put the oscillator on the first-order path instead: a damping
+    matrix ``C = 0`` (give ``eta=0``), or a complex F (per-mass phases).
+    """
+    if osc.R != 1.0 or np.any(osc.C):
+        return
+    why, fix = [], []
+    if osc.general_damping:
+        why.append(f"the damping matrix C={osc.C.tolist()} (given as a matrix)")
+        fix.append("give the undamped case as eta=0 instead of C")
+    if osc.F.dtype.kind == "c":
+        why.append(f"the complex F={osc.F.tolist()} (per-mass phases)")
+        fix.append("a real F")
+    raise ParameterError(
+        f"R=1.0 without damping is singular on the first-order path of eq. (1) (taken for "
+        f"{' and '.join(why)}): eq. (12) has no unique solution for elastic impacts without "
+        f"damping. Use R < 1, add damping, or {' and '.join(fix)}: the modal path solves "
+        "that case")
 
 
 def orbit_pieces(osc: ImpactOscillator, N: int) -> tuple[GeneralFlow, np.ndarray, np.ndarray,
@@ -94,6 +109,12 @@ def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: 
         dZ = flow.basis.forced_amplitude_derivative(flow.Z, osc.omega)
         dZc = np.column_stack([dZ.real, -dZ.imag])
         rhs = d[:, None] * (dPhi @ S - dPhi @ Zc + dZc - Phi @ dZc)
+    elif which in ("eta", "alpha", "beta"):
+        raise ParameterError(
+            f"parameter={which!r}: a branch on the first-order path (complex F={osc.F.tolist()}, "
+            "per-mass phases) cannot be continued in the damping eta, alpha or beta (eq. 12-14 "
+            "have no exact derivative in them there); continue in omega, b, R or F0, follow a "
+            f"curve with {which!r} as its second parameter (impactcont.curve), or use a real F")
     else:
         raise ParameterError(f"which must be 'omega' or 'R' (the derivative of c, s of eq. 14); "
                              f"got {which!r}")

@@ -1,0 +1,102 @@
+"""A user's first hour with the first-order path (damping matrix C, complex F): the
+problems found by trying the public API, each with its witness.
+
+- refusals that named the wrong cause (C = 0 given as a matrix with R = 1; a critically
+  damped proportional C that is on the first-order path only because F is complex);
+- continuation in ``eta``/``alpha``/``beta`` with a complex F (an internal error);
+- robust stability varying ``"F[i]"`` of a complex F (the entry's phase was dropped);
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.errors import ParameterError
+
+K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])
+
+
+def _phased(**params) -> ic.ImpactOscillator:
+    """n = 2, the paper's damping, mass 2 forced a quarter period later (complex F)."""
+    base = {"M": np.diag([1.0, 1.5]), "K": K2, "eta": 0.05, "F": [1.0, 0.5j], "R": 0.6,
+            "b": 0.3, "omega": 1.0}
+    base.update(params)
+    return ic.ImpactOscillator(**base)
+
+
+# -- the elastic undamped case on the first-order path -------------------------------------
+def test_zero_C_matrix_with_elastic_impacts_names_the_matrix_not_a_complex_F():
+    osc = ic.ImpactOscillator(M=np.eye(2), K=K2, C=np.zeros((2, 2)), F=[1.0, 0.0], R=1.0,
+                              b=0.3, omega=1.0)
+    with pytest.raises(ParameterError) as info:
+        ic.periodic_orbits(osc, 1)
+    text = str(info.value)
+    assert "complex F" not in text  # F is real here
+    assert "C=[[0.0, 0.0], [0.0, 0.0]]" in text and "eta=0" in text
+    # the advice works: the same machine with eta = 0 is solved on the modal path
+    assert len(ic.periodic_orbits(osc.replace(C=None, eta=0.0), 1)) == 2
+
+
+def test_elastic_undamped_complex_F_names_the_forcing():
+    with pytest.raises(ParameterError) as info:
+        ic.periodic_orbits(_phased(eta=0.0, R=1.0), 1)
+    text = str(info.value)
+    assert "F=[" in text and "complex" in text and "eta=0" not in text
+
+
+# -- a critically damped mode --------------------------------------------------------------
+def test_critical_proportional_damping_with_complex_F_does_not_advise_eta():
+    """eta = 1 on n = 1 is critical. The refusal used to advise 'use proportional damping
+    (eta or alpha/beta)', which the user had done: the first-order path is taken because
+    of the complex F."""
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], eta=1.0, F=[1.0j], R=0.5, b=0.01,
+                              omega=1.2)
+    with pytest.raises(ParameterError, match="defective or nearly so") as info:
+        ic.periodic_orbits(osc, 1)
+    text = str(info.value)
+    assert "proportional" in text and "real F" in text
+    # the modal path does solve it with a real F (the advice is usable)
+    assert len(ic.periodic_orbits(osc.replace(F=[1.0]), 1)) == 2
+
+
+def test_critical_general_C_still_advises_proportional_damping():
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], C=[[2.0]], F=[1.0], R=0.5, b=0.01,
+                              omega=1.2)
+    with pytest.raises(ParameterError, match="critically damped"):
+        ic.periodic_orbits(osc, 1)
+
+
+# -- continuation in the damping with a complex F ------------------------------------------
+@pytest.mark.parametrize("name, damping", [("eta", {"eta": 0.05}),
+                                           ("alpha", {"eta": None, "alpha": 0.05, "beta": 0.0}),
+                                           ("beta", {"eta": None, "alpha": 0.0, "beta": 0.1})])
+def test_continuation_in_the_damping_with_complex_F_is_refused_clearly(name, damping):
+    osc = _phased(**damping)
+    with pytest.raises(ParameterError) as info:
+        ic.continuation(osc, 1, name, (0.01, 0.2))
+    text = str(info.value)
+    assert f"parameter={name!r}" in text and "complex F" in text
+    assert "omega, b, R or F0" in text
+
+
+# -- robust stability varying an entry of a complex F --------------------------------------
+def test_robust_stability_refuses_a_phased_F_entry():
+    osc = _phased()
+    with pytest.raises(ParameterError) as info:
+        ic.robust_stability(osc, 1, {"F[1]": (0.4, 0.6)})
+    text = str(info.value)
+    assert "'F[1]'" in text and "0.5j" in text and "F0" in text
+    # the advice works: F0 scales the whole F and keeps the phases
+    assert np.isfinite(ic.robust_stability(osc, 1, {"F0": (0.9, 1.1)}, samples=5).epsilon)
+
+
+def test_robust_stability_varies_a_real_entry_of_a_complex_F():
+    """An entry with no phase keeps its meaning: F[0] = value, F[1] keeps its phase, so
+    the nominal motion (box centre F[0] = 1) is the oscillator's own."""
+    osc = _phased()
+    box = ic.robust_stability(osc, 1, {"F[0]": (0.95, 1.05)}, samples=5)
+    orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.root == box.root)
+    np.testing.assert_allclose(box.G0, orbit.G, rtol=1e-12, atol=1e-12)
+    assert np.isfinite(box.epsilon)
