@@ -100,3 +100,24 @@ def test_robust_stability_varies_a_real_entry_of_a_complex_F():
     orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.root == box.root)
     np.testing.assert_allclose(box.G0, orbit.G, rtol=1e-12, atol=1e-12)
     assert np.isfinite(box.epsilon)
+
+
+# -- a singular stiffness ------------------------------------------------------------------
+K_FREE = np.array([[2.0, -1.0, -1.0], [-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]])
+"""Masses 2 and 3 hang on mass 1 only and nothing holds mass 1: ``K [1, 1, 1] = 0`` (a
+rigid-body mode). Its Cholesky factorisation succeeds in rounding, so ``ImpactOscillator``
+accepts it; the modal path refuses it, the first-order path returned an ill-conditioned
+warning and numbers of no meaning (condition number 1.7e17 of eq. 12)."""
+
+
+@pytest.mark.parametrize("damping", [{"C": np.diag([0.2, 0.0, 0.0])},
+                                     {"eta": 0.05, "F": [1.0, 0.3j, 0.0]}])
+def test_singular_stiffness_is_refused_on_the_first_order_path(damping):
+    params = {"F": [1.0, 0.0, 0.0], "R": 0.5, "b": 0.1, "omega": 1.3, **damping}
+    osc = ic.ImpactOscillator(M=np.eye(3), K=K_FREE, **params)
+    with pytest.raises(ParameterError, match=r"K must be positive definite relative to M"):
+        ic.periodic_orbits(osc, 1)
+    with pytest.raises(ParameterError, match=r"K must be positive definite relative to M"):
+        ic.periodic_orbits(ic.ImpactOscillator(M=np.eye(3), K=K_FREE, eta=0.05,
+                                               F=[1.0, 0.0, 0.0], R=0.5, b=0.1, omega=1.3),
+                           1)  # the modal path's own refusal

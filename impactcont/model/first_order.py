@@ -105,7 +105,8 @@ class FirstOrderBasis:
         Raises
         ------
         ParameterError
-            If the eigenvector matrix is singular or its condition number exceeds
+            If K is not positive definite relative to M (a free mode: eq. 12 singular),
+            or if the eigenvector matrix is singular or its condition number exceeds
             :data:`COND_REFUSE` (a defective or nearly defective eigenvalue, e.g. a
             critically damped mode).
 
@@ -115,6 +116,12 @@ class FirstOrderBasis:
             If the condition number exceeds :data:`COND_WARN`.
         """
         n = M.shape[0]
+        stiffness = scipy.linalg.eigh(K, M, eigvals_only=True)
+        if not stiffness[0] > 4 * n * _EPS * abs(stiffness[-1]):
+            # a free (rigid-body) mode: a zero eigenvalue of A, I - D Phi(T) of eq. (12) singular
+            raise ParameterError(f"K must be positive definite relative to M; got modal "
+                                 f"eigenvalues {stiffness.tolist()} (a mode that nothing holds: "
+                                 "support the chain, e.g. a spring from mass 1 to the frame)")
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -np.linalg.solve(M, K)
