@@ -121,3 +121,53 @@ def test_singular_stiffness_is_refused_on_the_first_order_path(damping):
         ic.periodic_orbits(ic.ImpactOscillator(M=np.eye(3), K=K_FREE, eta=0.05,
                                                F=[1.0, 0.0, 0.0], R=0.5, b=0.1, omega=1.3),
                            1)  # the modal path's own refusal
+
+
+# -- stability maps: the batched first-order block against point-by-point orbits ---------
+def _map_cases() -> dict[str, ic.ImpactOscillator]:
+    return {
+        "damper_on_mass1": ic.ImpactOscillator(M=np.diag([1.0, 1.5]), K=K2,
+                                               C=[[0.3, 0.0], [0.0, 0.02]], F=[1.0, 0.0],
+                                               R=0.6, b=0.3, omega=1.0),
+        "overdamped_chain3": ic.ImpactOscillator.chain(
+            masses=[1.0, 1.2, 0.8], springs=[1.0, 1.5, 2.0], C=np.diag([0.05, 0.0, 6.0]),
+            F=[1.0, 0.0, 0.3], R=0.7, b=0.1, omega=1.1),
+        "phased": _phased(),
+        "n1": ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], C=[[0.1]], F=[1.0], R=0.5, b=0.1,
+                                  omega=1.2),
+    }
+
+
+@pytest.mark.parametrize("name", sorted(_map_cases()))
+def test_general_stability_map_matches_point_orbits_in_every_field(name):
+    """The block is batched over the gaps (G by broadcasting, the x1 search grid shared);
+    each field must still be the motion's own."""
+    osc = _map_cases()[name]
+    from impactcont.orbit.batched import batched_orbits
+
+    omega = np.array([0.7, 1.05, 1.9])
+    b = np.array([-0.4, 0.0, 0.2, 0.45])
+    for N in (1, 2):
+        out = batched_orbits(osc, N, omega, b)
+        checked = 0
+        for i, w in enumerate(omega):
+            for j, bb in enumerate(b):
+                orbits = ic.periodic_orbits(osc.replace(omega=float(w), b=float(bb)), N)
+                assert out["exists"][i, j] == bool(orbits)
+                for k, orbit in enumerate(orbits):
+                    checked += 1
+                    assert out["delta"][i, j, k] == orbit.delta
+                    assert out["impact_velocity"][i, j, k] == pytest.approx(
+                        orbit.impact_velocity, rel=1e-11, abs=1e-13)
+                    assert out["gap_min"][i, j, k] == pytest.approx(orbit.gap_min, rel=1e-9,
+                                                                    abs=1e-11)
+                    if np.isfinite(orbit.gap_min):
+                        assert out["gap_min_time"][i, j, k] == pytest.approx(
+                            orbit.gap_min_time, rel=1e-7)
+                    assert out["spectral_radius"][i, j, k] == pytest.approx(
+                        orbit.spectral_radius, rel=1e-10)
+                    assert out["critical_multiplier"][i, j, k] == pytest.approx(
+                        orbit.multipliers[0], rel=1e-9, abs=1e-12)
+                    assert out["stable"][i, j, k] == orbit.stable
+                    assert out["physical"][i, j, k] == orbit.physical
+        assert checked >= 8
