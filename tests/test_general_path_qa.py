@@ -171,3 +171,50 @@ def test_general_stability_map_matches_point_orbits_in_every_field(name):
                     assert out["stable"][i, j, k] == orbit.stable
                     assert out["physical"][i, j, k] == orbit.physical
         assert checked >= 8
+
+
+# -- scenes: an entry's F on an oscillator with forcing phases ------------------------------
+_PHASED_SCENE = """
+[oscillator]
+K = [[1.0, -1.0], [-1.0, 2.0]]
+F = [1.0, 0.0]
+F_imag = [0.0, 0.5]
+eta = 0.05
+R = 0.6
+b = 0.3
+omega = 1.0
+[[orbits]]
+name = "same"
+[[orbits]]
+name = "louder"
+F = [2.0, 0.0]
+[[orbits]]
+name = "rephased"
+F_imag = [0.0, -0.5]
+[[orbits]]
+name = "unphased"
+F_imag = [0.0, 0.0]
+"""
+
+
+def test_scene_entry_F_keeps_the_oscillators_phases(tmp_path):
+    """An entry with ``F = [2, 0]`` used to drop the oscillator's ``F_imag`` silently (the
+    entry's motion had no phase on mass 2); now F is the real part, as in [oscillator],
+    and an entry may give its own ``F_imag``."""
+    from impactcont.scene import load_scene
+
+    path = tmp_path / "scene.toml"
+    path.write_text(_PHASED_SCENE, encoding="utf-8")
+    scene = load_scene(path)
+    entries = {e.name: e.oscillator for e in scene.entries("orbits")}
+    np.testing.assert_array_equal(entries["same"].F, [1.0, 0.5j])
+    np.testing.assert_array_equal(entries["louder"].F, [2.0, 0.5j])
+    np.testing.assert_array_equal(entries["rephased"].F, [1.0, -0.5j])
+    assert entries["unphased"].F.dtype == float and not entries["unphased"].general
+    np.testing.assert_array_equal(entries["unphased"].F, [1.0, 0.0])
+    bad = _PHASED_SCENE.replace('F_imag = [0.0, -0.5]', 'F_imag = [0.0, -0.5, 1.0]')
+    path.write_text(bad, encoding="utf-8")
+    from impactcont.scene import SceneError
+
+    with pytest.raises(SceneError, match="F_imag must have the length of F"):
+        load_scene(path)
