@@ -218,3 +218,29 @@ def test_scene_entry_F_keeps_the_oscillators_phases(tmp_path):
 
     with pytest.raises(SceneError, match="F_imag must have the length of F"):
         load_scene(path)
+
+
+# -- a map column at an undamped resonance --------------------------------------------------
+def test_general_map_leaves_a_resonant_column_empty_instead_of_failing():
+    """A dashpot between two equal masses leaves their in-phase mode (omega_1 = 1)
+    undamped. A map whose grid holds omega = 1 used to stop with ResonanceError, losing
+    every other column; now that column is empty (no forced response, so no motion),
+    with a warning naming omega, and the other columns are the motions'."""
+    K = np.array([[2.0, -1.0], [-1.0, 2.0]])
+    d = np.array([1.0, -1.0])
+    osc = ic.ImpactOscillator(M=np.eye(2), K=K, C=0.2 * np.outer(d, d), F=[1.0, 0.0], R=0.6,
+                              b=0.1, omega=1.2)
+    with pytest.raises(ic.ResonanceError):
+        ic.periodic_orbits(osc.replace(omega=1.0), 1)
+    omega = np.array([0.7, 1.0, 1.3])
+    b = np.array([0.0, 0.1])
+    with pytest.warns(ic.NearResonanceWarning, match=r"omega=1\.0"):
+        m = ic.stability_map(osc, 1, omega, b)
+    exists = m["exists"].sel(N=1).values
+    assert not exists[1].any() and np.isnan(m["amplitude_squared"].sel(N=1).values[1])
+    for i in (0, 2):
+        for j, bb in enumerate(b):
+            orbits = ic.periodic_orbits(osc.replace(omega=float(omega[i]), b=float(bb)), 1)
+            assert exists[i, j] == bool(orbits)
+            assert int(m["n_stable"].sel(N=1).values[i, j]) == sum(
+                o.stable for o in orbits if o.physical)

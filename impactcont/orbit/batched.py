@@ -81,7 +81,10 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     """:func:`batched_orbits` on the first-order path (general damping matrix or complex F):
     per omega the dense eq. (12)-(13) once (:func:`impactcont.orbit.general.orbit_pieces`),
     per gap the roots of eq. (15); their G, multipliers and eq. (16) for all gaps at once
-    (:func:`impactcont.orbit.general.orbit_values_many`)."""
+    (:func:`impactcont.orbit.general.orbit_values_many`). An omega at the natural
+    frequency of an undamped mode (no forced response, eq. 6) leaves its column empty,
+    with a :class:`~impactcont.errors.NearResonanceWarning`."""
+    from impactcont.errors import NearResonanceWarning, ResonanceError
     from impactcont.orbit import general
 
     nw, nb = omega.size, b.size
@@ -93,7 +96,12 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     stable = np.zeros(shape, dtype=bool)
     for i, w in enumerate(omega):
         at = osc.replace(omega=float(w))
-        flow, S, DPhi, T = general.orbit_pieces(at, N)
+        try:
+            flow, S, DPhi, T = general.orbit_pieces(at, N)
+        except ResonanceError as exc:  # no forced response at this omega: an empty column
+            warnings.warn(f"stability map: no motion at omega={float(w)!r} (column left "
+                          f"empty): {exc}", NearResonanceWarning, stacklevel=3)
+            continue
         c, s = float(S[0, 0]), float(S[0, 1])
         r2[i] = c * c + s * s
         where, phases = [], []
