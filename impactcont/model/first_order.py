@@ -57,6 +57,18 @@ COND_REFUSE = 1e8
 _RESONANCE_REL_ERROR_WARN = 1e-8
 
 
+def _rayleigh_coefficients(M: np.ndarray, K: np.ndarray, C: np.ndarray
+                           ) -> tuple[float, float] | None:
+    """``(alpha, beta)`` when ``C = alpha M + beta K`` to rounding (least squares over the
+    entries, relative residual ``<= 1e-12``), else None."""
+    basis = np.column_stack([M.ravel(), K.ravel()])
+    coef, *_ = np.linalg.lstsq(basis, C.ravel(), rcond=None)
+    scale = max(float(np.max(np.abs(C))), np.finfo(float).tiny)
+    if np.max(np.abs(basis @ coef - C.ravel())) > 1e-12 * scale:
+        return None
+    return float(coef[0]), float(coef[1])
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class FirstOrderBasis:
     """Complex first-order modes ``A = V diag(lambda) V^-1`` of eq. (1) with any C.
@@ -93,7 +105,8 @@ class FirstOrderBasis:
         Raises
         ------
         ParameterError
-            If the eigenvector matrix is singular or its condition number exceeds
+            If K is not positive definite relative to M (a free mode: eq. 12 singular),
+            or if the eigenvector matrix is singular or its condition number exceeds
             :data:`COND_REFUSE` (a defective or nearly defective eigenvalue, e.g. a
             critically damped mode).
 
@@ -103,6 +116,12 @@ class FirstOrderBasis:
             If the condition number exceeds :data:`COND_WARN`.
         """
         n = M.shape[0]
+        stiffness = scipy.linalg.eigh(K, M, eigvals_only=True)
+        if not stiffness[0] > 4 * n * _EPS * abs(stiffness[-1]):
+            # a free (rigid-body) mode: a zero eigenvalue of A, I - D Phi(T) of eq. (12) singular
+            raise ParameterError(f"K must be positive definite relative to M; got modal "
+                                 f"eigenvalues {stiffness.tolist()} (a mode that nothing holds: "
+                                 "support the chain, e.g. a spring from mass 1 to the frame)")
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -np.linalg.solve(M, K)
@@ -117,13 +136,24 @@ class FirstOrderBasis:
         i, j = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
         closest = f"the closest eigenvalues are {complex(lam[i]):.12g} and {complex(lam[j]):.12g}"
         if not cond <= COND_REFUSE:
+            rayleigh = _rayleigh_coefficients(M, K, C)
+            if rayleigh is None:
+                advice = ("Move the damping away from critical, or use proportional damping "
+                          "(eta or alpha/beta, with a real F), whose modal path handles "
+                          "critical modes exactly")
+            else:  # already proportional: the first-order path was taken for a complex F
+                advice = (f"This C is proportional (C = alpha M + beta K with alpha="
+                          f"{rayleigh[0]:.12g}, beta={rayleigh[1]:.12g}): the modal path "
+                          "handles its critical modes exactly, but only with a real F (given "
+                          "as eta or alpha/beta); a complex F (per-mass phases) needs this "
+                          "first-order path. Use a real F, or move the damping away from "
+                          "critical")
             raise ParameterError(
                 f"C={C.tolist()}: the first-order eigen-decomposition of eq. (1) is defective or "
                 f"nearly so (condition number of the eigenvector matrix {cond:.3g} > "
                 f"{COND_REFUSE:.0e}; {closest}), so the exact flow would carry a relative "
                 f"error of about {min(cond * _EPS, 1.0):.1g}. Typical cause: a critically damped "
-                "mode. Move the damping away from critical, or use proportional damping "
-                "(eta or alpha/beta), whose modal path handles critical modes exactly")
+                f"mode. {advice}")
         if cond > COND_WARN:
             warnings.warn(
                 f"the first-order eigenvector matrix of eq. (1) has condition number {cond:.3g} "

@@ -80,7 +80,11 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
                    spectral_radius: bool) -> dict[str, np.ndarray]:
     """:func:`batched_orbits` on the first-order path (general damping matrix or complex F):
     per omega the dense eq. (12)-(13) once (:func:`impactcont.orbit.general.orbit_pieces`),
-    per gap the roots of eq. (15), each with its state, G, multipliers and eq. (16)."""
+    per gap the roots of eq. (15); their G, multipliers and eq. (16) for all gaps at once
+    (:func:`impactcont.orbit.general.orbit_values_many`). An omega at the natural
+    frequency of an undamped mode (no forced response, eq. 6) leaves its column empty,
+    with a :class:`~impactcont.errors.NearResonanceWarning`."""
+    from impactcont.errors import NearResonanceWarning, ResonanceError
     from impactcont.orbit import general
 
     nw, nb = omega.size, b.size
@@ -92,20 +96,30 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     stable = np.zeros(shape, dtype=bool)
     for i, w in enumerate(omega):
         at = osc.replace(omega=float(w))
-        flow, S, DPhi, T = general.orbit_pieces(at, N)
+        try:
+            flow, S, DPhi, T = general.orbit_pieces(at, N)
+        except ResonanceError as exc:  # no forced response at this omega: an empty column
+            warnings.warn(f"stability map: no motion at omega={float(w)!r} (column left "
+                          f"empty): {exc}", NearResonanceWarning, stacklevel=3)
+            continue
         c, s = float(S[0, 0]), float(S[0, 1])
         r2[i] = c * c + s * s
+        where, phases = [], []
         for j, bj in enumerate(b):
             roots = general.roots(c, s, float(bj))
             count[i, j] = len(roots)
             for k, (d, _) in enumerate(roots):
-                _, h2, _, mu, g, g_t = general.orbit_values(at.replace(b=float(bj)), flow, S,
-                                                            DPhi, T, d)
-                delta[i, j, k], vel[i, j, k] = d, h2
-                gap[i, j, k], gap_t[i, j, k] = g, g_t
-                stable[i, j, k] = bool(np.all(np.abs(mu) < 1.0))
-                if spectral_radius:
-                    rho[i, j, k], crit[i, j, k] = float(np.abs(mu[0])), mu[0]
+                where.append((j, k))
+                phases.append(d)
+        if not phases:
+            continue
+        jj, kk = np.array(where).T
+        h2, mu, g, g_t = general.orbit_values_many(flow, S, DPhi, T, np.array(phases), b[jj])
+        delta[i, jj, kk], vel[i, jj, kk] = phases, h2
+        gap[i, jj, kk], gap_t[i, jj, kk] = g, g_t
+        stable[i, jj, kk] = np.all(np.abs(mu) < 1.0, axis=1)
+        if spectral_radius:
+            rho[i, jj, kk], crit[i, jj, kk] = np.abs(mu[:, 0]), mu[:, 0]
     exists = count > 0
     return {"amplitude_squared": r2, "exists": exists, "delta": delta,
             "impact_velocity": vel, "gap_min": gap, "gap_min_time": gap_t,

@@ -187,6 +187,12 @@ def _check_name(osc: ImpactOscillator, name: Any) -> None:
         if int(m.group(1)) >= osc.n:
             raise ParameterError(f"vary key {name!r} indexes past F (length {osc.n}); "
                                  f"allowed: {allowed}")
+        entry = complex(osc.F[int(m.group(1))])
+        if entry.imag != 0.0:  # a real value would silently drop the entry's forcing phase
+            raise ParameterError(
+                f"vary key {name!r}: F[{m.group(1)}]={entry!r} has its own forcing phase "
+                "(complex F), and a real value for it would drop that phase; vary 'F0' (the "
+                "amplitude of the whole F, phases kept) or an entry of F with no imaginary part")
         return
     if name not in _SCALAR_PARAMS:
         raise ParameterError(f"unknown parameter {name!r} in vary; allowed: {allowed}")

@@ -65,9 +65,6 @@ __all__ = ["STEPPED_PARAMETERS", "GeneralPieces"]
 STEPPED_PARAMETERS = ("b", "F0")
 """Parameters whose column :meth:`GeneralPieces.stepped` differentiates exactly."""
 
-_ROTATE = np.array([[0.0, 1.0], [-1.0, 0.0]])
-"""``[-sin delta, cos delta] = e @ _ROTATE`` for ``e = [cos delta, sin delta]``."""
-
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class GeneralPieces:
@@ -104,19 +101,8 @@ class GeneralPieces:
     def at(cls, osc: ImpactOscillator, N: int) -> GeneralPieces:
         """The real pieces of `osc`."""
         flow, S, DPhi, T = general.orbit_pieces(osc, N)  # eq. (12)-(13)
-        n = osc.n
-        d = np.ones(2 * n)
-        d[n] = -osc.R
-        _, E = flow.matrices(T)
-        lam, V, V_inv, Z = flow.lam, flow.V, flow.V_inv, flow.Z
-        zt = Z * np.exp(1j * osc.omega * T)
-        P0 = np.column_stack([Z.real, -Z.imag])
-        dP_T = np.column_stack([(1j * osc.omega * zt).real, -(1j * osc.omega * zt).imag])
-        deviation = V_inv @ (S - P0)  # complex modal coordinates of the free part, per column
-        dPhi_free = (V * (lam * np.exp(lam * T))) @ deviation
-        Y = d[:, None] * (dPhi_free.real + dP_T)
-        J1 = d[:, None] * (E @ _ROTATE.T)
-        U = V[0][:, None] * deviation
+        J1, Y, U = general.phase_matrices(flow, S, T)
+        Z = flow.Z
         return cls(osc=osc, N=N, flow=flow, T=float(T), DPhi=DPhi, S=S, J1=J1, Y=Y, U=U,
                    Z1=complex(Z[0]), b=osc.b, omega=osc.omega)
 

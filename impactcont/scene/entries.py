@@ -183,7 +183,10 @@ class EntrySpec:
 
     Every entry has a ``name`` (unique in the scene; default
     ``<section><number>``) and may change the oscillator's parameters for
-    itself: ``F``, ``R``, ``b``, ``omega``, ``eta``, ``alpha``, ``beta``.
+    itself: ``F``, ``F_imag``, ``R``, ``b``, ``omega``, ``eta``, ``alpha``, ``beta``.
+    As in ``[oscillator]``, ``F`` is the real part of the forcing vector and ``F_imag``
+    its imaginary part (per-mass phases); each one an entry leaves out is the
+    oscillator's, so ``F`` alone changes the amplitudes and keeps the phases.
     Subclasses add their keys and override :meth:`check` for the rules that
     involve several keys or the oscillator.
     """
@@ -192,13 +195,15 @@ class EntrySpec:
 
     name: str = declare(ENTRY_NAME,
                      "entry name, unique in the scene (default <section><number>)", "")
-    F: tuple | None = declare(RealArray(1), "forcing vector for this entry")
+    F: tuple | None = declare(RealArray(1), "forcing vector (real part) for this entry")
     R: float | None = declare(_RESTITUTION, "restitution for this entry")
     b: float | None = declare(Real(), "gap for this entry")
     omega: float | None = declare(_OMEGA, "forcing frequency for this entry")
     eta: float | None = declare(_NONNEGATIVE, "damping eta for this entry")
     alpha: float | None = declare(_NONNEGATIVE, "Rayleigh alpha for this entry")
     beta: float | None = declare(_NONNEGATIVE, "Rayleigh beta for this entry")
+    F_imag: tuple | None = declare(RealArray(1), "imaginary part of F for this entry "
+                                   "(default: the oscillator's)")
 
     #: The oscillator of this entry (the scene's with this entry's changes); set by parsing.
     oscillator: ImpactOscillator | None = dataclasses.field(default=None, repr=False,
@@ -207,10 +212,27 @@ class EntrySpec:
     @property
     def changes(self) -> dict[str, Any]:
         """The oscillator parameters this entry changes."""
-        out = {k: getattr(self, k) for k in ("F", "R", "b", "omega", "eta", "alpha", "beta")
-               if getattr(self, k) is not None}
-        if "F" in out:
-            out["F"] = list(out["F"])
+        out = {k: getattr(self, k) for k in ("F", "F_imag", "R", "b", "omega", "eta", "alpha",
+                                             "beta") if getattr(self, k) is not None}
+        for key in ("F", "F_imag"):
+            if key in out:
+                out[key] = list(out[key])
+        return out
+
+    def _parameters(self, base: ImpactOscillator) -> dict[str, Any]:
+        """:attr:`changes` as arguments of ``base.replace``: ``F`` and ``F_imag`` combined
+        into one forcing vector, the part the entry leaves out taken from ``base``."""
+        out = self.changes
+        if "F" in out or "F_imag" in out:
+            real = np.array(out.get("F", base.F.real), dtype=float)
+            if "F_imag" in out:
+                imag = np.array(out.pop("F_imag"), dtype=float)
+            else:
+                imag = base.F.imag if base.F.dtype.kind == "c" else np.zeros(real.shape)
+            if imag.shape != real.shape:
+                raise ParameterError(f"F_imag must have the length of F ({real.size}); got "
+                                     f"{imag.tolist()!r}")
+            out["F"] = real + 1j * imag  # a zero imaginary part gives a real F
         return out
 
     @classmethod
@@ -221,7 +243,7 @@ class EntrySpec:
         values.setdefault("name", f"{section or cls.section}{index + 1}")
         spec = cls(**values)
         try:
-            osc = base.replace(**spec.changes)
+            osc = base.replace(**spec._parameters(base))
         except (ImpactcontError, ValueError, TypeError) as exc:
             key = _library_error_key(str(exc), spec.changes)
             raise (where.key(key) if key else where).error(str(exc)) from None
