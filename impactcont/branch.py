@@ -21,6 +21,7 @@ from scipy.optimize import minimize_scalar
 
 from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset import branch_dataset
 from impactcont.dataset.records import orbit_columns, special_record
 from impactcont.detection import BranchSample, detect_special_points
@@ -180,7 +181,18 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         for lam, delta in _component_seeds(problem, (lo, hi)):
             if not any(_passes(run, lam, delta) for run in runs):
                 runs.append(_follow(problem, lam, delta, opts, detect))
-    return _branch_dataset(problem, osc, opts, detect, runs)
+    started = [run for run in runs if run.samples]
+    for run in runs:
+        if not run.samples:  # its corrector failed at the seed: say so, keep the others
+            warnings.warn(f"the N={N} component through {parameter}={run.start:.10g} "
+                          f"(delta={run.start_delta:.10g}) could not be started: "
+                          f"{run.result.message}; it is not in the branch", RuntimeWarning,
+                          stacklevel=3)
+    if not started:
+        raise NewtonConvergenceError(f"no component of the N={N} branch in {parameter} over "
+                                     f"[{lo:.10g}, {hi:.10g}] could be started: "
+                                     f"{runs[0].result.message}")
+    return _branch_dataset(problem, osc, opts, detect, started)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

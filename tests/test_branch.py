@@ -183,3 +183,20 @@ def test_bad_options_raise(paper_system):
         ic.continuation(paper_system, bounds=(0.5, 6.0), detect=["XX"])
     with pytest.raises(ic.NoPeriodicMotionError, match="no N=1 motion anywhere"):
         ic.continuation(paper_system.replace(b=50.0), bounds=(0.5, 6.0))
+
+
+def test_a_component_that_cannot_start_is_reported_not_fatal():
+    """An undamped chain whose second component's seed sits where the corrector fails: the
+    branch keeps the components that started and warns about the one that did not (it
+    crashed with an IndexError in the event search before)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[2.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.5, omega=1.0, eta=0.0)
+    with pytest.warns(RuntimeWarning, match="could not be started"):
+        branch = ic.continuation(osc, 1, "omega", (0.5, 1.5))
+    assert branch.sizes["point"] > 100
+    from impactcont.orbit.periodic import orbit_at_phase
+
+    for k in range(1, branch.sizes["point"], 97):
+        orbit = orbit_at_phase(osc.replace(omega=float(branch.omega[k])), 1,
+                               float(branch.delta[k]))
+        assert abs(orbit.state[0] - osc.b) < 1e-9  # a motion of eq. (14): x1(0) = b

@@ -195,6 +195,8 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
         By step, then in the order of `events`; a failed location is kept with
         ``failed=True`` and status ``bracketed`` at the middle of the step.
     """
+    if len(lam) < 2:  # no step to search (a run that failed at its start)
+        return []
     x = np.column_stack([np.asarray(u, dtype=float), np.asarray(lam, dtype=float)])
     dlam = np.asarray(tangent, dtype=float)[:, -1]
     arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
