@@ -15,6 +15,7 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.modal import ModalBasis
+from impactcont.model.stops import Stops
 from impactcont.vocabulary import PARAMETERS
 
 __all__ = ["ImpactOscillator", "chain_stiffness"]
@@ -155,6 +156,10 @@ class ImpactOscillator:
     alpha, beta : float, optional
         Rayleigh damping ``C = alpha M + beta K``. Give either ``eta`` or
         ``alpha``/``beta``; with none the system is undamped.
+    stops : Stops or mapping, optional
+        Which mass meets the stops and an optional lower stop with its own
+        restitution (:class:`~impactcont.model.stops.Stops`; ``b`` and ``R`` stay
+        those of the upper stop). None: the paper's single stop on mass 1.
 
     Notes
     -----
@@ -171,6 +176,7 @@ class ImpactOscillator:
     eta: float | None = None
     alpha: float | None = None
     beta: float | None = None
+    stops: Stops | None = None
 
     def __post_init__(self) -> None:
         M = _matrix("M", self.M)
@@ -197,6 +203,12 @@ class ImpactOscillator:
         if self.alpha is not None or self.beta is not None:
             alpha = _real("alpha", 0.0 if self.alpha is None else self.alpha, **_rule("alpha"))
             beta = _real("beta", 0.0 if self.beta is None else self.beta, **_rule("beta"))
+        # -- stops (two-sided clearance, stop on any mass): begin ---------------------------
+        stops = self.stops if self.stops is not None else Stops()
+        if not isinstance(stops, Stops):
+            stops = Stops.from_dict(stops)
+        object.__setattr__(self, "stops", stops.check(n, b, R))
+        # -- stops: end -------------------------------------------------------------------------
         for name, value in [("M", M), ("K", K), ("F", F)]:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -261,6 +273,8 @@ class ImpactOscillator:
             new = copy.copy(self)
             for name, value in changes.items():
                 object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
+            if "b" in changes:  # stops: the lower stop must stay below the upper one
+                new.stops.check(new.n, new.b, new.R)
             return new
         new = dataclasses.replace(self, **changes)
         if scale is not None and "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES,
@@ -305,9 +319,13 @@ class ImpactOscillator:
 
     @property
     def D(self) -> np.ndarray:
-        """Impact matrix of eq. (4): ``diag(1, ..., 1, -R, 1, ..., 1)``, shape (2n, 2n)."""
+        """Impact matrix of eq. (4) at the upper stop: ``diag(1, ..., -R, ..., 1)``, (2n, 2n).
+
+        ``-R`` multiplies the velocity of the impacting mass (mass 1 in the paper;
+        ``stops.mass`` in general).
+        """
         d = np.ones(2 * self.n)
-        d[self.n] = -self.R
+        d[self.n + self.stops.index] = -self.R
         return np.diag(d)
 
     @cached_property
@@ -326,6 +344,8 @@ class ImpactOscillator:
         if self.alpha is not None:
             out["alpha"] = self.alpha
             out["beta"] = self.beta
+        if not self.stops.paper:
+            out["stops"] = self.stops.to_dict()
         return out
 
     def to_json(self) -> str:
@@ -345,5 +365,6 @@ class ImpactOscillator:
     def __repr__(self) -> str:
         damping = (f"eta={self.eta!r}" if self.eta is not None
                    else f"alpha={self.alpha!r}, beta={self.beta!r}")
+        stops = "" if self.stops.paper else f", stops={self.stops!r}"
         return (f"ImpactOscillator(n={self.n}, R={self.R!r}, b={self.b!r}, "
-                f"omega={self.omega!r}, {damping}, F={self.F.tolist()})")
+                f"omega={self.omega!r}, {damping}, F={self.F.tolist()}{stops})")

@@ -35,9 +35,9 @@ _RTOL = 4.0 * np.finfo(float).eps
 _MAX_ITER = 200
 
 
-def _time_scales(flow: Flow) -> tuple[float, float]:
-    """Fastest oscillation frequency and fastest decay rate seen by mass 1."""
-    part = np.abs(flow.u[0]) > 0
+def _time_scales(flow: Flow, row: int = 0) -> tuple[float, float]:
+    """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
+    part = np.abs(flow.u[row]) > 0
     w, a = flow.w[part], flow.a[part]
     d = (w - a) * (w + a)
     wd = np.sqrt(np.maximum(d, 0.0))
@@ -45,7 +45,7 @@ def _time_scales(flow: Flow) -> tuple[float, float]:
     return float(max(flow.omega, wd.max(initial=0.0))), float(fast.max(initial=0.0))
 
 
-def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
+def sample_times(flow: Flow, t0: float, t1: float, *, row: int = 0) -> np.ndarray:
     """Grid on ``[t0, t1]`` fine enough that each cell holds at most one root of ``x1''``.
 
     Parameters
@@ -53,13 +53,15 @@ def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
     flow : Flow
     t0, t1 : float
         Interval, ``t1 > t0``.
+    row : int
+        0-based index of the mass whose motion is searched (the impacting mass).
 
     Returns
     -------
     ndarray
         Sorted times including both ends.
     """
-    osc_rate, decay_rate = _time_scales(flow)
+    osc_rate, decay_rate = _time_scales(flow, row)
     h = 2.0 * math.pi / (_CELLS_PER_PERIOD * osc_rate)
     length = t1 - t0
     count = max(math.ceil(length / h), 8)

@@ -21,6 +21,7 @@ from impactcont.errors import (
     UnresolvedMotionWarning,
 )
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.flow import Flow
 
 __all__ = [
@@ -304,6 +305,7 @@ def impact_map_jacobian(flow: Flow, state: np.ndarray, delta: float, T: float,
 def _check_oscillator(osc: object) -> ImpactOscillator:
     if not isinstance(osc, ImpactOscillator):
         raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
+    require_paper_stops(osc, "the N-1 closed form")  # stops: mass 1, one stop only
     return osc
 
 
@@ -382,6 +384,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     from impactcont.orbit import kernel
 
     N = _check_N(N)
+    _check_oscillator(osc)
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
         w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
