@@ -132,7 +132,9 @@ def bracketed_roots(fun: Callable[..., tuple[np.ndarray, np.ndarray]],
         done = (g == 0) | (np.abs(step) <= tol) | (b[active] - a[active] <= tol)
         xn = xa - step
         inside = np.isfinite(xn) & (xn >= a[active]) & (xn <= b[active])
-        xn = np.where(inside | done, xn, 0.5 * (a[active] + b[active]))
+        # (a bracket that closed with a Newton step leaving it, e.g. at a near-zero slope,
+        # returns its midpoint, not the step)
+        xn = np.where(inside | (done & (np.abs(step) <= tol)), xn, 0.5 * (a[active] + b[active]))
         x[active] = np.where(g == 0, xa, xn)
         active = active[~done]
     return x

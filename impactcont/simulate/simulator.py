@@ -36,6 +36,10 @@ log = logging.getLogger(__name__)
 
 TWO_PI = 2.0 * math.pi
 _ON_STOP = 1e-12  # a state this close to the stop (relative), moving into it, impacts now
+# a bounce off a stop whose apex v^2 / (2 |x_j''|) lies within this many ulps of the stop
+# position cannot be resolved (the crossing test sees rounding, not the motion): complete
+# chatter, whatever chatter_velocity says
+_BOUNCE_ULPS = 1e3
 
 
 class SimulationStatus(enum.Enum):
@@ -145,6 +149,17 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     return None
 
 
+def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, side: str, level: float,
+                       v: float) -> bool:
+    """The bounce after an impact at speed ``v`` rises less than ``_BOUNCE_ULPS`` ulps."""
+    floor = _BOUNCE_ULPS * np.finfo(float).eps * max(1.0, abs(level))
+    if v * v > 1e10 * floor:  # cheap exit: |x_j''| would have to exceed 5e9
+        return False
+    j = flow.osc.stops.index
+    acc = abs(float(flow.state_derivative(0.0, X, phase)[0][flow.n + j]))
+    return bool(v * v < 2.0 * acc * floor)
+
+
 def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     try:
         X = np.array(state, dtype=float).reshape(-1)
@@ -191,7 +206,9 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     chatter_velocity : float
         Stop with status CHATTER when an impact velocity falls below this
         fraction of the largest impact velocity seen (or below it in absolute
-        value, if none yet).
+        value, if none yet), or when the bounce after an impact would rise less
+        than 1000 ulps of the stop position above it (``v^2 / (2 |x_j''|)``: below
+        that the motion cannot be told from rounding).
 
     Returns
     -------
@@ -261,7 +278,8 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         states.append(X.copy())
         hits.append(side)
         v_scale = max(v_scale, v)
-        if v < chatter_velocity * max(v_scale, 1.0):
+        if v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(flow, X, phase, side,
+                                                                          level[side], v):
             status = SimulationStatus.CHATTER
             break
         if len(times) >= max_impacts:
