@@ -25,7 +25,7 @@ from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import multi_impact_orbit, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.simulate import SimulationStatus
-from impactcont.switching import special_orbit
+from impactcont.switching import grazing_switch, special_orbit
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
 
@@ -222,6 +222,25 @@ def test_grazing_of_the_lower_stop_is_located(upper_branch):
     o = multi_impact_orbit(g.oscillator.replace(omega=float(beyond[np.argmin(np.abs(
         beyond - omega_g))])), 1, 1, g)
     assert not o.physical and "reaches a stop" in o.reason and o.gap_lower < 0
+
+
+def test_grazing_switch_at_the_lower_stop_adds_an_impact_there(upper_branch):
+    labels = list(upper_branch["special_label"].values)
+    which = [abs(special_orbit(upper_branch, "GR", w).gap_lower) < 1e-6
+             for w in range(labels.count("GR"))].index(True)
+    new = grazing_switch(upper_branch, which, max_points=20)
+    assert new is not None and new.attrs["pattern"] == "UL"
+    assert bool(new["physical"].values[1])
+    # a point of the new branch is a 1-2 motion with one impact on each stop, confirmed by
+    # the simulator
+    i = new.sizes["point"] // 2
+    o = multi_impact_orbit(ic.dataset.oscillator_from_dataset(new, i), 1, 2, {
+        "delta": float(new["delta_k"].values[i, 0]),
+        "flight_times": new["flight_time_k"].values[i], "states": new["state_k"].values[i],
+        "pattern": "UL"})
+    res = ic.simulate(o.oscillator, o.states[0], o.delta, 10.0)
+    assert res.impact_stops[:4] == "LULU"
+    np.testing.assert_allclose(res.impact_times[:2], np.cumsum(o.flight_times), atol=1e-9)
 
 
 def test_two_sided_branch_derivatives_are_exact(unequal):

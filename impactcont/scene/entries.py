@@ -25,6 +25,7 @@ from impactcont.branch import continuation
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.model.stops import Stops
 from impactcont.orbit.robust import robust_stability
 from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.scene.keys import (
@@ -101,7 +102,9 @@ class OscillatorSpec:
     Give the stiffness as ``K`` (a full symmetric matrix) or ``springs`` (the
     chain of eq. 2), the mass as ``M`` or ``masses`` (default: unit masses),
     and the damping as ``eta`` (``C = 2 eta K``) or ``alpha``/``beta``
-    (``C = alpha M + beta K``); none means undamped.
+    (``C = alpha M + beta K``); none means undamped. ``stop_mass``, ``b_low`` and
+    ``R_low`` place the stops on another mass and add a lower stop
+    (:class:`~impactcont.model.stops.Stops`).
     """
 
     M: tuple | None = declare(RealArray(2), "mass matrix (symmetric positive definite)")
@@ -115,6 +118,10 @@ class OscillatorSpec:
     eta: float | None = declare(_NONNEGATIVE, "damping C = 2 eta K (the paper's)")
     alpha: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
     beta: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
+    stop_mass: int | None = declare(Integer(1), "the mass meeting the stops (1-based; "
+                                    "default 1)")
+    b_low: float | None = declare(Real(), "a lower stop at x_j = -b_low (j = stop_mass)")
+    R_low: float | None = declare(_RESTITUTION, "restitution of the lower stop (default R)")
 
     @classmethod
     def parse(cls, raw: Any, where: Where) -> OscillatorSpec:
@@ -143,6 +150,9 @@ class OscillatorSpec:
         damping = {k: getattr(self, k) for k in ("eta", "alpha", "beta")
                    if getattr(self, k) is not None}
         params = {"F": list(self.F), "R": self.R, "b": self.b, "omega": self.omega, **damping}
+        if self.stop_mass is not None or self.b_low is not None or self.R_low is not None:
+            params["stops"] = Stops(mass=1 if self.stop_mass is None else self.stop_mass,
+                                    b_low=self.b_low, R_low=self.R_low)
         K = (chain_stiffness(list(self.springs)) if self.springs is not None
              else np.array(self.K, dtype=float))
         if self.M is not None:
