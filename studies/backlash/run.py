@@ -216,13 +216,12 @@ def branches_for(b: float, sw: dict[str, Any]) -> tuple[list[dict[str, Any]], di
 
 
 def _on_branch(br: dict[str, Any], orbit: ic.MultiImpactOrbit) -> bool:
+    """The motion lies on the branch: a point within 0.02 in omega and in both velocities."""
     ds = br["ds"]
-    om = orbit.oscillator.omega
-    i = int(np.argmin(np.abs(ds["omega"].values - om)))
-    if abs(ds["omega"].values[i] - om) > 0.05:
-        return False
-    vel = np.sort(ds["impact_velocity_k"].values[i])
-    return bool(np.max(np.abs(vel - np.sort(orbit.impact_velocities))) < 0.05)
+    near = np.flatnonzero(np.abs(ds["omega"].values - orbit.oscillator.omega) < 0.02)
+    vel = np.sort(ds["impact_velocity_k"].values[near], axis=1)
+    return bool(near.size and np.min(np.max(np.abs(
+        vel - np.sort(orbit.impact_velocities)), axis=1)) < 0.02)
 
 
 # ------------------------------------------------------------------------------------------
@@ -246,7 +245,12 @@ def agreement(b: float, sw: dict[str, Any], branches: list[dict[str, Any]]) -> d
             near = np.flatnonzero(stable & (np.abs(om - row["omega"]) < 0.03))
             if near.size == 0:
                 continue
-            i = near[np.argmin(np.abs(om[near] - row["omega"]))]
+            # the nearest stored motion in (omega, both velocities): a loop through both
+            # mirror images passes every omega twice
+            stored = ds["impact_velocity_k"].values[near]
+            order = [sim[c] for c in ds.attrs["pattern"]]
+            i = near[np.argmin(np.max(np.abs(stored - order), axis=1)
+                               + np.abs(om[near] - row["omega"]))]
             o = orbit_at(ds, int(i), row["omega"])
             if not (o.physical and o.stable):
                 continue
@@ -256,7 +260,7 @@ def agreement(b: float, sw: dict[str, Any], branches: list[dict[str, Any]]) -> d
             explained += 1
             worst = max(worst, best)
         else:
-            mismatch.append(row["omega"])
+            mismatch.append([row["omega"], best])
     return {"one_two_attractors": total, "explained": explained, "worst_velocity_error": worst,
             "unexplained_omegas": mismatch}
 
@@ -264,15 +268,12 @@ def agreement(b: float, sw: dict[str, Any], branches: list[dict[str, Any]]) -> d
 # ------------------------------------------------------------------------------------------
 # Figure
 # ------------------------------------------------------------------------------------------
-STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C1"}
+STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C3"}
 
 
 def draw(ax, b: float, sw: dict[str, Any], branches: list[dict[str, Any]],
          forks: list[float]) -> None:
-    for row in sw["rows"]:
-        v = np.array(row["velocities"], float)
-        sign = np.array([1.0 if c == "U" else -1.0 for c in row["stops"]])
-        ax.plot(np.full(v.size, row["omega"]), sign * v, ",", color="0.55")
+    labelled: set[str] = set()
     for br in branches:
         ds = br["ds"]
         om = ds["omega"].values
@@ -282,8 +283,19 @@ def draw(ax, b: float, sw: dict[str, Any], branches: list[dict[str, Any]],
         for k in range(vel.shape[1]):
             for mask, ls in ((phys & stab, "-"), (phys & ~stab, ":")):
                 y = np.where(mask, vel[:, k], np.nan)
+                label = None
+                if k == 0 and ls == "-" and br["kind"] not in labelled:
+                    label = "asymmetric (mirror pair)" if br["kind"] != "symmetric" else (
+                        "symmetric")
+                    labelled.update({br["kind"], "mirror"} if br["kind"] != "symmetric"
+                                    else {"symmetric"})
                 ax.plot(om, y, ls, color=STYLE[br["kind"]], lw=1.3 if ls == "-" else 1.0,
-                        label=br["kind"] if (k == 0 and ls == "-") else None)
+                        label=label)
+    for i, row in enumerate(sw["rows"]):  # the sweep on top: each recorded impact
+        v = np.array(row["velocities"], float)
+        sign = np.array([1.0 if c == "U" else -1.0 for c in row["stops"]])
+        ax.plot(np.full(v.size, row["omega"]), sign * v, ".", color="k", ms=1.5,
+                label="simulated sweep" if i == 0 else None)
     for w in forks:
         ax.axvline(w, color="k", lw=0.6, ls="--")
     ax.axhline(0.0, color="k", lw=0.5)
@@ -307,7 +319,8 @@ def main(output: Path, quick: bool = False) -> dict[str, Any]:
         sw = sweep(b, omegas)
         t_sweep = time.perf_counter() - t0
         branches, timing = branches_for(b, sw)
-        forks = [w for br in branches if br["kind"] == "symmetric" for w in pitchforks(br["ds"])]
+        forks = sorted({round(w, 10) for br in branches if br["kind"] == "symmetric"
+                        for w in pitchforks(br["ds"])})
         agree = agreement(b, sw, branches)
         info: dict[str, Any] = {"sweep_s": t_sweep, **timing, "pitchforks": forks,
                                 "agreement": agree, "branches": []}
@@ -335,7 +348,7 @@ def main(output: Path, quick: bool = False) -> dict[str, Any]:
     axes[0][0].set_ylabel("impact velocity (lower stop: negative)")
     axes[0][0].legend(fontsize=7, loc="lower left")
     fig.suptitle("Backlash on mass 1 of the paper's 2-DOF chain: 1-2 motions (solid: stable, "
-                 "dotted: unstable; grey: simulated sweep; dashed: pitchforks)", fontsize=9)
+                 "dotted: unstable; dots: simulated sweep; dashed: pitchforks)", fontsize=9)
     fig.tight_layout()
     fig.savefig(output / "backlash.png", dpi=110)
     ic.save(groups, output / "branches.nc")
