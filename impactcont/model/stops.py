@@ -211,7 +211,7 @@ def require_paper_stops(osc: Any, what: str) -> None:
     stops = getattr(osc, "stops", None)
     if stops is not None and not stops.paper:
         raise ParameterError(
-            f"{what} is the closed form of eq. (12)-(16) for one stop on mass 1; got "
+            f"{what}: the closed form of eq. (12)-(16) handles one stop on mass 1 only; got "
             f"stops={stops!r}. Use the N-p shooting path instead: "
             "impactcont.multi_impact_orbit(osc, N, p, guess, pattern=...) and "
             "multi_impact_continuation (p = 1, pattern 'U' for an N-1 motion)")
