@@ -282,6 +282,23 @@ def test_two_sided_branch_in_omega_round_trip(tmp_path, symmetric):
                                atol=1e-10)
 
 
+def test_two_sided_branch_in_b_moves_the_upper_stop_only(unequal):
+    ds = multi_impact_continuation(unequal, "b", (0.6, 0.8), max_points=12,
+                                   both_directions=True)
+    assert ds.sizes["point"] >= 5 and pattern_of(ds) == unequal.pattern
+    j = unequal.pattern.index("U")
+    for i in (0, ds.sizes["point"] - 1):
+        osc = ic.dataset.oscillator_from_dataset(ds, i)
+        assert osc.stops == unequal.oscillator.stops  # b_low, R_low unchanged
+        states = ds["state_k"].values[i]
+        assert states[j, 0] == pytest.approx(osc.b, abs=1e-12)
+        assert states[1 - j, 0] == pytest.approx(-0.5, abs=1e-12)
+        o = multi_impact_orbit(osc, 1, 2, {"delta": float(ds["delta_k"].values[i, 0]),
+                                           "flight_times": ds["flight_time_k"].values[i],
+                                           "states": states, "pattern": unequal.pattern})
+        np.testing.assert_allclose(o.states, states, atol=1e-10)
+
+
 # ------------------------------------------------------------------------------------------
 # A stop on mass k of a chain
 # ------------------------------------------------------------------------------------------
