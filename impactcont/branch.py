@@ -62,7 +62,10 @@ def _refuse_elastic(osc: ImpactOscillator, parameter: str, lo: float, hi: float)
     (``docs/kernel.md``): the branch equation changes, so a branch cannot be followed
     into that case; :func:`impactcont.periodic_orbits` solves it point by point.
     """
-    alpha, beta = osc.rayleigh
+    if osc.general_damping:  # only whether the damping vanishes matters here
+        alpha, beta = (1.0 if np.any(osc.C) else 0.0), 0.0
+    else:
+        alpha, beta = osc.rayleigh
     undamped = {"eta": lo == 0.0, "alpha": lo == 0.0 and beta == 0.0,
                 "beta": lo == 0.0 and alpha == 0.0}.get(parameter, alpha == 0.0 and beta == 0.0)
     elastic = hi >= 1.0 if parameter == "R" else osc.R == 1.0

@@ -372,8 +372,9 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     special : int, optional
         Which special point (see ``start``).
     parameters : (str, str)
-        ``(p1, p2)``, any two of ``omega, b, R, eta, alpha, beta``. ``p2`` is the
-        continuation parameter of the core; ``p1`` is an unknown.
+        ``(p1, p2)``, any two of ``omega, b, R, eta, alpha, beta, F0`` (with a
+        damping matrix C: ``omega, b, R, F0``). ``p2`` is the continuation parameter
+        of the core; ``p1`` is an unknown.
     bounds : mapping or pair of pairs
         The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
     root : {+1, -1}, optional

@@ -23,6 +23,7 @@ that pickles works.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import functools
 import logging
 import math
 import os
@@ -59,9 +60,16 @@ _ROOT_FIELDS = ("delta", "impact_velocity", "gap_min", "spectral_radius", "criti
 def _map_task(osc_json: str, N: int, omega: np.ndarray, b: np.ndarray,
               spectral_radius: bool = True) -> dict[str, np.ndarray]:
     """One task: every motion for one N and a block of omega values (picklable, top level)."""
-    osc = ImpactOscillator.from_json(osc_json)
+    osc = _oscillator(osc_json)
     out = batched_orbits(osc, N, omega, b, spectral_radius=spectral_radius)
     return {k: out[k] for k in ("amplitude_squared", "exists", *_ROOT_FIELDS)}
+
+
+@functools.lru_cache(maxsize=4)
+def _oscillator(osc_json: str) -> ImpactOscillator:
+    """The oscillator of a task, built (and its modes computed) once per process: a map
+    sends the same one with every block."""
+    return ImpactOscillator.from_json(osc_json)
 
 
 def _grid(name: str, values: Any) -> np.ndarray:

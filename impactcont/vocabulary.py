@@ -167,7 +167,10 @@ CONTINUABLE_PARAMETERS: tuple[str, ...] = tuple(PARAMETERS)
 
 
 def damping_kind(osc: Any) -> str:
-    """``"eta"`` when `osc` uses the paper's damping ``C = 2 eta K``, else ``"rayleigh"``."""
+    """``"eta"`` when `osc` uses the paper's damping ``C = 2 eta K``, ``"matrix"`` for a
+    general damping matrix C, else ``"rayleigh"``."""
+    if getattr(osc, "general_damping", False):
+        return "matrix"
     return "eta" if osc.eta is not None else "rayleigh"
 
 
@@ -183,8 +186,13 @@ def check_damping(osc: Any, name: str, argument: str = "parameter") -> None:
         Naming `argument`, the parameter and the oscillator's damping.
     """
     needs = PARAMETERS[name].damping if name in PARAMETERS else None
-    if needs is None or needs == damping_kind(osc):
+    kind = damping_kind(osc)
+    if needs is None or needs == kind:
         return
+    if kind == "matrix":
+        raise ParameterError(f"{argument}={name!r} is meaningless with a general damping matrix "
+                             f"C={osc.C.tolist()}: eta, alpha and beta exist only for C = 2 eta K "
+                             "or C = alpha M + beta K; continue in omega, b, R or F0")
     if needs == "rayleigh":
         raise ParameterError(f"{argument}={name!r} needs Rayleigh damping (C = alpha M + beta K); "
                              f"the oscillator uses the paper's damping C = 2 eta K "

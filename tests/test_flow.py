@@ -138,3 +138,39 @@ def test_mass1_motion_matches_full_state(paper):
     np.testing.assert_allclose(x1, X[:, 0], atol=1e-14)
     np.testing.assert_allclose(v1, X[:, 2], atol=1e-14)
     np.testing.assert_allclose(a1, dX[:, 2], atol=1e-13)
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.1}, {"alpha": 0.05, "beta": 0.02},
+                                     {"C": [[0.0, 0.0], [0.0, 0.2]]}])
+@pytest.mark.parametrize("complex_forcing", [False, True])
+def test_omega_partial_matches_differences(damping, complex_forcing):
+    """``dX(t)/d omega`` of the modal and of the first-order flow against central differences
+    of the exact flow (state, start state and start phase fixed)."""
+    F = [1.0, 0.3j] if complex_forcing else [1.0, 0.3]
+    osc = ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=F, R=0.6, b=0.5,
+                           omega=1.3, **damping)
+    X0 = np.array([0.5, -0.2, -0.3, 0.4])
+    t, theta, h = 2.7, 0.4, 1e-5
+    exact = Flow(osc).omega_partial(t, X0, theta)
+    up = Flow(osc.replace(omega=1.3 + h)).state(np.array([t]), X0, theta)[0]
+    down = Flow(osc.replace(omega=1.3 - h)).state(np.array([t]), X0, theta)[0]
+    assert np.max(np.abs(exact - (up - down) / (2 * h))) < 1e-8 * max(1.0, np.max(np.abs(exact)))
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.1}, {"C": [[0.1, 0.0], [0.0, 0.3]]}])
+@pytest.mark.parametrize("index, sign", [(0, 1.0), (1, 1.0), (1, -1.0), (0, -1.0)])
+def test_motion_of_any_mass_matches_the_state(damping, index, sign):
+    """``flow.motion(X0, delta, index, sign)`` is ``sign`` times mass ``index + 1``'s
+    displacement, velocity and acceleration of the full state, modal and first-order."""
+    osc = ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.4], R=0.6,
+                           b=0.5, omega=1.3, **damping)
+    flow = Flow(osc)
+    X0 = np.array([0.5, -0.2, -0.3, 0.4])
+    t = np.linspace(0.0, 4.0, 9)
+    x, v, a, _ = flow.motion(X0, 0.7, index, sign).derivatives(t)
+    X = flow.state(t, X0, 0.7)
+    dX = flow.state_derivative(t, X0, 0.7)
+    n = osc.n
+    assert np.allclose(x, sign * X[:, index], rtol=0, atol=1e-13)
+    assert np.allclose(v, sign * X[:, n + index], rtol=0, atol=1e-13)
+    assert np.allclose(a, sign * dX[:, n + index], rtol=0, atol=1e-12)

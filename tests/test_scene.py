@@ -445,8 +445,7 @@ PAPER = {"M": np.eye(2), "K": [[1.0, -1.0], [-1.0, 2.0]], "F": [1.0, 0.0], "R": 
     ("K", [[1 + 1j, -1.0], [-1.0, 2.0]]),
     ("K", np.array([[1.0, -1.0], [-1.0, 2.0]], dtype=complex)),  # even with zero imaginary parts
     ("M", np.eye(2) * (1 + 0.5j)),
-    ("F", [1.0, 0.2j]),
-])
+])  # a complex F is accepted: per-mass forcing phases (tests/test_forcing_phase.py)
 def test_complex_system_matrices_are_refused(name: str, value: object) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # not merely a ComplexWarning

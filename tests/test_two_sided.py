@@ -60,6 +60,15 @@ def unequal():
     return settled_orbit(paper2(0.7, 0.9, b_low=0.5, R_low=0.8), 1, 2)
 
 
+@pytest.fixture(scope="module")
+def damper():
+    """A non-proportional damper on mass 1 only (first-order flow) with b_low = b."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.8, omega=0.8,
+                              C=[[0.3, 0.0], [0.0, 0.0]], stops=Stops(b_low=0.8))
+    assert osc.general
+    return settled_orbit(osc, 1, 2)
+
+
 def _stop_positions(osc, pattern):
     return np.array([osc.stops.position(s, osc.b) for s in pattern])
 
@@ -67,7 +76,7 @@ def _stop_positions(osc, pattern):
 # ------------------------------------------------------------------------------------------
 # The simulator confirms the motions
 # ------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("name", ["symmetric", "asymmetric", "unequal"])
+@pytest.mark.parametrize("name", ["symmetric", "asymmetric", "unequal", "damper"])
 def test_simulator_confirms_two_sided_motion(name, request):
     orbit = request.getfixturevalue(name)
     assert orbit.physical, orbit.reason
@@ -100,7 +109,7 @@ def _simulated_map(osc, p, stop, j, z, theta):
     return np.delete(res.impact_states[-1], j), float(res.impact_phases[-1])
 
 
-@pytest.mark.parametrize("name", ["symmetric", "asymmetric", "unequal"])
+@pytest.mark.parametrize("name", ["symmetric", "asymmetric", "unequal", "damper"])
 def test_multipliers_match_finite_differences_of_the_simulated_map(name, request):
     orbit = request.getfixturevalue(name)
     osc = orbit.oscillator

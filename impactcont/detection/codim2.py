@@ -41,8 +41,6 @@ import numpy as np
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.detection.locator import locate_zero
 from impactcont.detection.special_points import pole_free
-from impactcont.orbit.extrema import interior_maxima, sample_times
-from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.codim1 import CurveProblem
 
@@ -90,14 +88,11 @@ class Codim2Point:
 
 
 def grazing_other_gap(problem: CurveProblem, orbit: PeriodicOrbit, tangency_time: float) -> float:
-    """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*``."""
-    flow = Flow(problem._pieces(*_params(problem, orbit)).osc)
-    times, peaks = interior_maxima(flow.mass1(orbit.state, orbit.delta),
-                                   sample_times(flow, 0.0, orbit.period))
-    others = np.abs(times - tangency_time) > 1e-7 * orbit.period
-    if not np.any(others):
-        return math.inf
-    return float(orbit.oscillator.b - peaks[others].max())
+    """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*``
+    (the exact search of the curve's pieces, with the tangency excluded; inf when there
+    is none)."""
+    pc = problem._pieces(*_params(problem, orbit))
+    return float(pc.b - pc.other_maximum(orbit.delta, float(tangency_time)))
 
 
 def _params(problem: CurveProblem, orbit: PeriodicOrbit) -> tuple[float, float]:

@@ -30,7 +30,8 @@ import scipy.linalg
 
 from impactcont.errors import NearResonanceWarning, ParameterError, ResonanceError
 
-__all__ = ["ModalBasis", "forced_coefficients", "free_transfer"]
+__all__ = ["DAMPING_PARAMETERS", "ModalBasis", "decay_rate_derivative", "forced_coefficients",
+           "free_transfer"]
 
 # warn when the forced amplitude of a mode is known to worse than this (relative) because
 # omega sits within the rounding error of omega_i^2 (eigh: about eps * omega_max^2)
@@ -104,6 +105,22 @@ class ModalBasis:
         return np.sqrt(np.maximum(d, 0.0))
 
 
+_DECAY_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
+DAMPING_PARAMETERS = tuple(_DECAY_DIRECTION)
+"""The damping parameters of proportional damping, which move the decay rates only."""
+
+
+def decay_rate_derivative(parameter: str, w: np.ndarray) -> np.ndarray:
+    """``d a_i / d parameter`` of the decay rates for a damping parameter.
+
+    ``a_i = eta omega_i^2`` (``C = 2 eta K``) and ``a_i = (alpha + beta omega_i^2) / 2``
+    (``C = alpha M + beta K``): linear in each parameter, so the derivative is exact at
+    every value (the modes themselves do not move).
+    """
+    p, q = _DECAY_DIRECTION[parameter]
+    return p + q * w * w
+
+
 def free_transfer(w: np.ndarray, a: np.ndarray, t: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Exact free modal transfer ``W(t)`` of eq. (9), every damping regime.
@@ -173,10 +190,15 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
     ``phi = gamma cos(omega t) + beta sin(omega t)``,
     ``psi = beta cos(omega t) - gamma sin(omega t)``.
 
+    A complex modal force ``f = f_r + i f_i`` (forcing ``Re(f e^{i(omega t + delta)})``,
+    per-mass phases) gives ``gamma = (detune f_r + damp f_i) / Delta_i`` and
+    ``beta = (damp f_r - detune f_i) / Delta_i`` (``detune = omega_i^2 - omega^2``,
+    ``damp = 2 xi_i omega_i omega``): the same real form of ``y_p``.
+
     Parameters
     ----------
     w, a, f : ndarray, shape (n,)
-        Natural frequencies, decay rates and modal forces.
+        Natural frequencies, decay rates and modal forces (f real or complex).
     omega : float or ndarray broadcasting against (n,)
         Forcing frequency.
     eigenvalue_errors : ndarray, shape (n,), optional
@@ -206,11 +228,17 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
             "the forced response of eq. (6) does not exist; choose omega != omega_i or add damping"
         )
     safe = np.where(delta == 0.0, 1.0, delta)
+    if np.iscomplexobj(f):  # per-mass phases: Re(f e^{i theta}) = f_r cos - f_i sin
+        fr, fi = f.real, f.imag
+        out = (detune * fr + damp * fi) / safe, (damp * fr - detune * fi) / safe
+        f = np.abs(f)  # the size of the force, for the accuracy warning below
+    else:
+        out = detune * f / safe, damp * f / safe
     # omega_i^2 carries an absolute error ~ eigenvalue_errors from the eigensolver; the
     # amplitude f / sqrt(Delta_i) then has relative error ~ that * |detune| / Delta_i, which
     # grows without bound at an undamped resonance: say so rather than return it silently
     if eigenvalue_errors is None:
-        return detune * f / safe, damp * f / safe
+        return out
     scale = 4.0 * eigenvalue_errors + 4.0 * np.finfo(float).eps * w * w
     rel_error = np.where(f != 0.0, scale * np.abs(detune) / safe, 0.0)
     worst = float(np.max(rel_error, initial=0.0))
@@ -223,4 +251,4 @@ def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: floa
             f"frequency {w_i!r} of a lightly damped mode: its forced amplitude (eq. 7) is known "
             f"only to a relative error of about {worst:.1g}; move omega away from omega_i or "
             "add damping", NearResonanceWarning, stacklevel=2)
-    return detune * f / safe, damp * f / safe
+    return out

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from impactcont.errors import ParameterError
+from impactcont.model.first_order import FirstOrderBasis
 from impactcont.model.modal import ModalBasis
 from impactcont.model.stops import Stops
 from impactcont.vocabulary import PARAMETERS
@@ -21,6 +22,7 @@ from impactcont.vocabulary import PARAMETERS
 __all__ = ["ImpactOscillator", "chain_stiffness"]
 
 _SYMMETRY_RTOL = 1e-12
+_PSD_RTOL = 1e-13  # relative rounding allowance on the smallest eigenvalue of C
 def _rule(name: str) -> dict[str, Any]:
     """The keyword arguments of :func:`_real` for parameter `name` (from the vocabulary)."""
     p = PARAMETERS[name]
@@ -79,6 +81,28 @@ def _matrix(name: str, value: Any) -> np.ndarray:
 
 def _vector(name: str, value: Any, n: int) -> np.ndarray:
     v = np.atleast_1d(_real_array(name, value, f"a real vector of length {n}"))
+    return _check_vector(name, v, n)
+
+
+def _forcing(value: Any, n: int) -> np.ndarray:
+    """F as a float vector, or a complex one when it has a nonzero imaginary part.
+
+    Complex ``F`` gives each mass its own forcing phase: the forcing is
+    ``Re(F e^{i(omega t + delta)})`` (so a real F keeps its meaning ``F cos(omega t +
+    delta)`` exactly). A complex F whose imaginary parts all vanish is stored as real.
+    """
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nesting
+        raise TypeError(f"F must be a real or complex vector of length {n}; got {value!r}"
+                        ) from exc
+    if a.dtype.kind != "c":
+        return _vector("F", value, n)
+    v = _check_vector("F", np.atleast_1d(a.astype(complex)), n)
+    return v.real.copy() if not np.any(v.imag) else v
+
+
+def _check_vector(name: str, v: np.ndarray, n: int) -> np.ndarray:
     if v.shape != (n,):
         raise ParameterError(f"{name} must have shape ({n},) to match M and K; got shape {v.shape}")
     if not np.all(np.isfinite(v)):
@@ -99,6 +123,28 @@ def _real(name: str, value: Any, *, allowed: str, low: float | None = None,
     if bad:
         raise ParameterError(f"{name} must be {allowed}; got {value!r}")
     return x
+
+
+def _damping(value: Any, n: int) -> np.ndarray:
+    """A general damping matrix: finite, square (n, n), symmetric, positive semi-definite."""
+    a = _real_array("C", value, "a real square matrix (array_like)")
+    if a.ndim == 0:
+        a = a.reshape(1, 1)
+    if a.shape != (n, n):
+        raise ParameterError(f"C must be a square matrix of shape ({n}, {n}) to match M and K; "
+                             f"got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ParameterError(f"C must be finite; got {a.tolist()}")
+    scale = np.max(np.abs(a))
+    if np.max(np.abs(a - a.T)) > _SYMMETRY_RTOL * scale:
+        raise ParameterError(f"C must be symmetric (|C - C.T| <= {_SYMMETRY_RTOL:g}*max|C|); "
+                             f"got {a.tolist()}")
+    a = 0.5 * (a + a.T)
+    eig = np.linalg.eigvalsh(a)
+    if eig.size and eig[0] < -_PSD_RTOL * max(scale, 0.0) * n:
+        raise ParameterError(f"C must be positive semi-definite (a damping matrix dissipates "
+                             f"energy); got eigenvalues {eig.tolist()} of {a.tolist()}")
+    return a
 
 
 def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
@@ -135,7 +181,8 @@ def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
 class ImpactOscillator:
     """A chain of masses, springs and dampers whose mass 1 strikes a rigid stop.
 
-    Between impacts ``M x'' + C x' + K x = F cos(omega t + delta)`` (eq. 1);
+    Between impacts ``M x'' + C x' + K x = Re(F e^{i(omega t + delta)})`` (eq. 1; for a
+    real F this is the paper's ``F cos(omega t + delta)``);
     mass 1 hits the stop when ``x1 = b`` moving towards it (eq. 3) and its
     velocity is multiplied by ``-R`` (eq. 4).
 
@@ -144,7 +191,8 @@ class ImpactOscillator:
     M, K : array_like, shape (n, n)
         Symmetric positive definite mass and stiffness matrices.
     F : array_like, shape (n,)
-        Forcing amplitude vector.
+        Forcing amplitude vector. Complex entries give the masses their own phases:
+        ``F_j = |F_j| e^{i phi_j}`` forces mass j with ``|F_j| cos(omega t + delta + phi_j)``.
     R : float
         Coefficient of restitution, ``0 <= R <= 1``.
     b : float
@@ -156,6 +204,10 @@ class ImpactOscillator:
     alpha, beta : float, optional
         Rayleigh damping ``C = alpha M + beta K``. Give either ``eta`` or
         ``alpha``/``beta``; with none the system is undamped.
+    C : array_like, shape (n, n), optional
+        Any symmetric positive semi-definite damping matrix (instead of ``eta`` or
+        ``alpha``/``beta``). The flow then comes from the first-order complex modes
+        (:mod:`impactcont.model.first_order`), as it does for a complex F.
     stops : Stops or mapping, optional
         Which mass meets the stops and an optional lower stop with its own
         restitution (:class:`~impactcont.model.stops.Stops`; ``b`` and ``R`` stay
@@ -164,7 +216,9 @@ class ImpactOscillator:
     Notes
     -----
     The oscillator is immutable; use :meth:`replace` to change parameters.
-    Its modal basis is computed once, on first use.
+    Its modal basis is computed once, on first use. After construction ``C`` holds the
+    damping matrix for every damping model; :attr:`general_damping` says whether it was
+    given as a matrix.
     """
 
     M: np.ndarray
@@ -176,6 +230,7 @@ class ImpactOscillator:
     eta: float | None = None
     alpha: float | None = None
     beta: float | None = None
+    C: Any = None
     stops: Stops | None = None
 
     def __post_init__(self) -> None:
@@ -184,7 +239,7 @@ class ImpactOscillator:
         if M.shape != K.shape:
             raise ParameterError(f"M and K must have the same shape; got {M.shape} and {K.shape}")
         n = M.shape[0]
-        F = _vector("F", self.F, n)
+        F = _forcing(self.F, n)
         if not np.any(F):
             raise ParameterError(f"F must have a nonzero entry: the forcing F cos(omega t) is "
                                  f"what drives the impacting motions (eq. 1), and F = 0 gives "
@@ -197,6 +252,12 @@ class ImpactOscillator:
                 f"give either eta (C = 2 eta K) or alpha/beta (C = alpha M + beta K), not both; "
                 f"got eta={self.eta!r}, alpha={self.alpha!r}, beta={self.beta!r}"
             )
+        if self.C is not None and not (self.eta is None and self.alpha is None
+                                       and self.beta is None):
+            raise ParameterError(
+                f"give either a damping matrix C or eta (C = 2 eta K) or alpha/beta (C = alpha M "
+                f"+ beta K), not both; got C={np.asarray(self.C).tolist()!r} with eta="
+                f"{self.eta!r}, alpha={self.alpha!r}, beta={self.beta!r}")
         eta = alpha = beta = None
         if self.eta is not None:
             eta = _real("eta", self.eta, **_rule("eta"))
@@ -209,7 +270,14 @@ class ImpactOscillator:
             stops = Stops.from_dict(stops)
         object.__setattr__(self, "stops", stops.check(n, b, R))
         # -- stops: end -------------------------------------------------------------------------
-        for name, value in [("M", M), ("K", K), ("F", F)]:
+        general = self.C is not None
+        if general:
+            C = _damping(self.C, n)
+        else:
+            ra, rb = (0.0, 2.0 * eta) if eta is not None else (alpha or 0.0, beta or 0.0)
+            C = ra * M + rb * K
+        object.__setattr__(self, "_general_damping", general)
+        for name, value in [("M", M), ("K", K), ("F", F), ("C", C)]:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         for name, value in [("R", R), ("b", b), ("omega", omega), ("eta", eta),
@@ -229,7 +297,7 @@ class ImpactOscillator:
         springs : sequence of float, length n
             ``k_1 ... k_n``; see :func:`chain_stiffness`.
         **params
-            ``F, R, b, omega`` and the damping (``eta`` or ``alpha``/``beta``).
+            ``F, R, b, omega`` and the damping (``eta``, ``alpha``/``beta`` or a matrix ``C``).
         """
         m = np.atleast_1d(np.array(masses, dtype=float))
         if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)) or np.any(m <= 0):
@@ -276,7 +344,11 @@ class ImpactOscillator:
             if "b" in changes:  # stops: the lower stop must stay below the upper one
                 new.stops.check(new.n, new.b, new.R)
             return new
-        new = dataclasses.replace(self, **changes)
+        # the damping matrix follows eta / alpha / beta unless it was given as a matrix
+        implied = {} if self.general_damping or "C" in changes else {"C": None}
+        new = dataclasses.replace(self, **changes, **implied)
+        if "first_order" in self.__dict__ and set(changes) <= {*_SCALAR_RULES, "F"}:
+            new.__dict__["first_order"] = self.first_order  # independent of F
         if scale is not None and "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES,
                                                                               "F"}:
             # only the forcing's amplitude changed: the same modes, modal forces scaled
@@ -306,16 +378,38 @@ class ImpactOscillator:
 
     @property
     def rayleigh(self) -> tuple[float, float]:
-        """Damping as Rayleigh coefficients ``(alpha, beta)``, ``C = alpha M + beta K``."""
+        """Damping as Rayleigh coefficients ``(alpha, beta)``, ``C = alpha M + beta K``.
+
+        Raises
+        ------
+        ParameterError
+            If the damping was given as a general matrix C (it has no such coefficients).
+        """
+        if self.general_damping:
+            raise ParameterError(f"the damping is a general matrix C={self.C.tolist()}, not "
+                                 "C = alpha M + beta K: it has no Rayleigh coefficients")
         if self.eta is not None:
             return 0.0, 2.0 * self.eta
         return (self.alpha or 0.0, self.beta or 0.0)
 
     @property
-    def C(self) -> np.ndarray:
-        """Damping matrix ``C = alpha M + beta K`` (``2 eta K`` for the paper's damping)."""
-        alpha, beta = self.rayleigh
-        return alpha * self.M + beta * self.K
+    def general_damping(self) -> bool:
+        """Whether the damping was given as a matrix ``C`` (not ``eta`` or ``alpha/beta``)."""
+        return bool(self.__dict__.get("_general_damping", False))
+
+    @property
+    def general(self) -> bool:
+        """Whether the flow needs the first-order complex modes (:attr:`first_order`).
+
+        True for a general damping matrix C and for a complex F (per-mass phases); the
+        proportional modal basis (:attr:`modes`) and the compiled kernel serve the rest.
+        """
+        return self.general_damping or self.F.dtype.kind == "c"
+
+    @cached_property
+    def first_order(self) -> FirstOrderBasis:
+        """First-order complex modes of eq. (1) with the damping matrix C, computed once."""
+        return FirstOrderBasis.from_matrices(self.M, self.K, self.C)
 
     @property
     def D(self) -> np.ndarray:
@@ -330,15 +424,34 @@ class ImpactOscillator:
 
     @cached_property
     def modes(self) -> ModalBasis:
-        """Mass-normalised modal basis of eq. (5)-(6), computed once."""
+        """Mass-normalised modal basis of eq. (5)-(6), computed once.
+
+        Raises
+        ------
+        ParameterError
+            For a general damping matrix C or a complex F (see :attr:`general`): the
+            undamped modes do not decouple such a system; :attr:`first_order` does.
+        """
+        if self.general:
+            what = ("a general damping matrix C" if self.general_damping
+                    else f"a complex F={self.F.tolist()} (per-mass phases)")
+            raise ParameterError(f"the oscillator has {what}: the proportional modal basis of "
+                                 "eq. (5)-(6) does not apply; its flow uses first_order "
+                                 "(periodic motions, branches in omega, b, R, F0, curves, maps, "
+                                 "robust stability and the simulator do)")
         alpha, beta = self.rayleigh
         return ModalBasis.from_matrices(self.M, self.K, alpha, beta, self.F)
 
     # -- serialisation ------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """Plain-Python description (JSON-able) of the oscillator."""
-        out: dict[str, Any] = {"M": self.M.tolist(), "K": self.K.tolist(), "F": self.F.tolist(),
-                               "R": self.R, "b": self.b, "omega": self.omega}
+        out: dict[str, Any] = {"M": self.M.tolist(), "K": self.K.tolist(),
+                               "F": self.F.real.tolist(), "R": self.R, "b": self.b,
+                               "omega": self.omega}
+        if self.F.dtype.kind == "c":
+            out["F_imag"] = self.F.imag.tolist()  # JSON has no complex numbers
+        if self.general_damping:
+            out["C"] = self.C.tolist()
         if self.eta is not None:
             out["eta"] = self.eta
         if self.alpha is not None:
@@ -354,7 +467,15 @@ class ImpactOscillator:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ImpactOscillator:
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict` (``F_imag``, when present, is the imaginary part of F)."""
+        data = dict(data)
+        if "F_imag" in data:
+            imag = data.pop("F_imag")
+            try:
+                data["F"] = np.asarray(data["F"], dtype=float) + 1j * np.asarray(imag, dtype=float)
+            except (TypeError, ValueError, KeyError) as exc:
+                raise ParameterError(f"F_imag must be a real vector matching F; got {imag!r}"
+                                     ) from exc
         return cls(**data)
 
     @classmethod
@@ -363,7 +484,8 @@ class ImpactOscillator:
         return cls.from_dict(json.loads(text))
 
     def __repr__(self) -> str:
-        damping = (f"eta={self.eta!r}" if self.eta is not None
+        damping = (f"C={self.C.tolist()}" if self.general_damping
+                   else f"eta={self.eta!r}" if self.eta is not None
                    else f"alpha={self.alpha!r}, beta={self.beta!r}")
         stops = "" if self.stops.paper else f", stops={self.stops!r}"
         return (f"ImpactOscillator(n={self.n}, R={self.R!r}, b={self.b!r}, "

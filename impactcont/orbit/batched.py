@@ -60,6 +60,8 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     omega = np.ascontiguousarray(np.atleast_1d(np.asarray(omega, dtype=float)))
     b = np.ascontiguousarray(np.atleast_1d(np.asarray(b, dtype=float)))
     require_paper_stops(osc, "the N-1 stability map")  # stops: mass 1, one stop only
+    if osc.general:
+        return _general_block(osc, int(N), omega, b, bool(spectral_radius))
     w, a, f, u, ui, eig_err, _, _ = osc.modes.kernel_arrays
     (r2, cond, count, delta, vel, gap, gap_t, stable, rho,
      crit) = kernel.block_map(w, a, f, u, ui, eig_err, osc.R, int(N), omega, b,
@@ -69,6 +71,43 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
         warnings.warn(f"eq. (12) is ill-conditioned at omega = {omega[bad][:5].tolist()} "
                       f"(condition estimates {cond[bad][:5].tolist()}); the periodic motions "
                       "there may be inexact", IllConditionedWarning, stacklevel=2)
+    exists = count > 0
+    return {"amplitude_squared": r2, "exists": exists, "delta": delta,
+            "impact_velocity": vel, "gap_min": gap, "gap_min_time": gap_t,
+            "spectral_radius": rho, "critical_multiplier": crit,
+            "physical": exists[..., None] & (vel > 0) & (gap > 0), "stable": stable}
+
+
+def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarray,
+                   spectral_radius: bool) -> dict[str, np.ndarray]:
+    """:func:`batched_orbits` on the first-order path (general damping matrix or complex F):
+    per omega the dense eq. (12)-(13) once (:func:`impactcont.orbit.general.orbit_pieces`),
+    per gap the roots of eq. (15), each with its state, G, multipliers and eq. (16)."""
+    from impactcont.orbit import general
+
+    nw, nb = omega.size, b.size
+    r2 = np.full(nw, np.nan)
+    count = np.zeros((nw, nb), dtype=np.int64)
+    shape = (nw, nb, 2)
+    delta, vel, gap, gap_t, rho = (np.full(shape, np.nan) for _ in range(5))
+    crit = np.full(shape, np.nan + 0j)
+    stable = np.zeros(shape, dtype=bool)
+    for i, w in enumerate(omega):
+        at = osc.replace(omega=float(w))
+        flow, S, DPhi, T = general.orbit_pieces(at, N)
+        c, s = float(S[0, 0]), float(S[0, 1])
+        r2[i] = c * c + s * s
+        for j, bj in enumerate(b):
+            roots = general.roots(c, s, float(bj))
+            count[i, j] = len(roots)
+            for k, (d, _) in enumerate(roots):
+                _, h2, _, mu, g, g_t = general.orbit_values(at.replace(b=float(bj)), flow, S,
+                                                            DPhi, T, d)
+                delta[i, j, k], vel[i, j, k] = d, h2
+                gap[i, j, k], gap_t[i, j, k] = g, g_t
+                stable[i, j, k] = bool(np.all(np.abs(mu) < 1.0))
+                if spectral_radius:
+                    rho[i, j, k], crit[i, j, k] = float(np.abs(mu[0])), mu[0]
     exists = count > 0
     return {"amplitude_squared": r2, "exists": exists, "delta": delta,
             "impact_velocity": vel, "gap_min": gap, "gap_min_time": gap_t,

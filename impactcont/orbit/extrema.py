@@ -37,12 +37,7 @@ _MAX_ITER = 200
 
 def _time_scales(flow: Flow, row: int = 0) -> tuple[float, float]:
     """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
-    part = np.abs(flow.u[row]) > 0
-    w, a = flow.w[part], flow.a[part]
-    d = (w - a) * (w + a)
-    wd = np.sqrt(np.maximum(d, 0.0))
-    fast = a + np.sqrt(np.maximum(-d, 0.0))
-    return float(max(flow.omega, wd.max(initial=0.0))), float(fast.max(initial=0.0))
+    return flow.time_scales(row)
 
 
 def sample_times(flow: Flow, t0: float, t1: float, *, row: int = 0) -> np.ndarray:

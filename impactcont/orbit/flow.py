@@ -13,12 +13,14 @@ here as ``P(t) - W(t) P(0)`` from the forced columns ``P = [[phi, psi], [phi', p
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from impactcont.model.modal import forced_coefficients, free_transfer
 from impactcont.model.oscillator import ImpactOscillator
 
-__all__ = ["Flow", "Mass1Motion"]
+__all__ = ["Flow", "GeneralFlow", "GeneralMass1Motion", "Mass1Motion"]
 
 _CHUNK = 1 << 20  # time-mode pairs per vectorised evaluation of x1 (about 100 MB of work arrays)
 
@@ -35,7 +37,15 @@ class Flow:
     -----
     States are ``X = [x; x']`` of length 2n; ``delta`` is the forcing phase at
     ``t = 0``. All time arguments accept arrays and are evaluated at once.
+    ``Flow(osc)`` of an oscillator with a general damping matrix or a complex F
+    (:attr:`ImpactOscillator.general`) is a :class:`GeneralFlow`, with the same
+    interface, from the first-order complex modes.
     """
+
+    def __new__(cls, osc: ImpactOscillator) -> Flow:
+        if cls is Flow and isinstance(osc, ImpactOscillator) and osc.general:
+            return super().__new__(GeneralFlow)
+        return super().__new__(cls)
 
     def __init__(self, osc: ImpactOscillator) -> None:
         modes = osc.modes
@@ -49,6 +59,15 @@ class Flow:
         self.f = modes.modal_forces
         self.gamma, self.beta = forced_coefficients(self.w, self.a, self.f, self.omega,
                                                     eigenvalue_errors=modes.eigenvalue_errors)
+
+    def time_scales(self, row: int = 0) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
+        part = np.abs(self.u[row]) > 0
+        w, a = self.w[part], self.a[part]
+        d = (w - a) * (w + a)
+        wd = np.sqrt(np.maximum(d, 0.0))
+        fast = a + np.sqrt(np.maximum(-d, 0.0))
+        return float(max(self.omega, wd.max(initial=0.0))), float(fast.max(initial=0.0))
 
     # -- modal pieces ---------------------------------------------------------------------------
     def transfer(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -124,22 +143,63 @@ class Flow:
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return Mass1Motion(self, X0, delta)
 
+    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0
+               ) -> Mass1Motion:
+        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``."""
+        return Mass1Motion(self, X0, delta, index, sign)
+
+    def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
+        """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
+
+        Only the forced part of eq. (9) depends on omega: with the modal steady
+        amplitudes ``gamma - i beta = f / (w^2 - omega^2 + 2 i a omega)`` (eq. 7) and
+        ``P(t) = [y_p; y_p'](t)``, ``X(t) = U [P(t) + W(t) (Y0 - P(0))]`` gives
+        ``dX/d omega = U [dP(t) - W(t) dP(0)]``.
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+        """
+        om = self.omega
+        den = (self.w - om) * (self.w + om) + 2j * self.a * om
+        A = self.gamma - 1j * self.beta
+        dA = A * (2.0 * om - 2j * self.a) / den
+        dg, db = dA.real, -dA.imag
+        g, b = self.gamma, self.beta
+
+        def dP(time: float) -> tuple[np.ndarray, np.ndarray]:
+            c, s = math.cos(om * time + theta), math.sin(om * time + theta)
+            y = g * c + b * s
+            dy = dg * c + db * s + time * (b * c - g * s)
+            dv = (b * c - g * s) + om * (db * c - dg * s) - om * time * y
+            return dy, dv
+
+        dy_t, dv_t = dP(t)
+        dy_0, dv_0 = dP(0.0)
+        W11, W12, W21, W22 = (blk[0] for blk in self.transfer(np.array([t])))
+        dy = dy_t - (W11 * dy_0 + W12 * dv_0)
+        dv = dv_t - (W21 * dy_0 + W22 * dv_0)
+        return np.concatenate([self.u @ dy, self.u @ dv])
+
 
 class Mass1Motion:
     """``x1(t), x1'(t), x1''(t)`` along one flight, vectorised over t.
 
     Used to locate impacts and interior maxima: it evaluates only the first
-    row of ``u``, O(n) per time instead of O(n^2).
+    row of ``u``, O(n) per time instead of O(n^2). With ``index`` and ``sign`` it
+    evaluates ``sign * x_j`` of mass ``j = index + 1`` instead (a stop on another
+    mass, or the lower stop met moving down).
     """
 
-    def __init__(self, flow: Flow, X0: np.ndarray, delta: float) -> None:
+    def __init__(self, flow: Flow, X0: np.ndarray, delta: float, index: int = 0,
+                 sign: float = 1.0) -> None:
         self.flow = flow
         self.delta = float(delta)
         y0, v0 = flow.to_modal(X0)
         yp0, vp0 = flow.forced(0.0, delta)
         self.dy = y0 - yp0[0]
         self.dv = v0 - vp0[0]
-        self.u0 = flow.u[0]
+        self.u0 = flow.u[index] if sign == 1.0 else sign * flow.u[index]
 
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``x1, x1', x1''`` at times t (each shape (nt,))."""
@@ -171,3 +231,136 @@ class Mass1Motion:
         acc = fl.f * c - 2.0 * fl.a * v - fl.w**2 * y
         jerk = -fl.omega * fl.f * s - 2.0 * fl.a * acc - fl.w**2 * v
         return y @ self.u0, v @ self.u0, acc @ self.u0, jerk @ self.u0
+
+
+class GeneralFlow(Flow):
+    """Exact flow of eq. (1) with any damping matrix C and complex F, from the complex modes.
+
+    With ``A = V diag(lambda) V^-1`` (:class:`impactcont.model.first_order.FirstOrderBasis`)
+    and the steady forced state ``X_p(t) = Re(Z e^{i(omega t + delta)})``,
+
+        X(t) = X_p(t) + Re(V diag(exp(lambda t)) V^-1 (X(0) - X_p(0)))         (eq. 9)
+
+    in closed form (no integration). Same interface as :class:`Flow`.
+    """
+
+    def __init__(self, osc: ImpactOscillator) -> None:
+        basis = osc.first_order
+        self.osc = osc
+        self.n = osc.n
+        self.omega = osc.omega
+        self.basis = basis
+        self.lam = basis.eigenvalues
+        self.V = basis.V
+        self.V_inv = basis.V_inv
+        self.Z = basis.forced_amplitude(osc.F, osc.omega)
+        self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
+
+    def time_scales(self, row: int = 0) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
+        part = np.abs(self.V[row]) > 0
+        lam = self.lam[part]
+        return (float(max(self.omega, np.abs(lam.imag).max(initial=0.0))),
+                float((-lam.real).max(initial=0.0)))
+
+    def forced_state(self, t: np.ndarray, delta: float) -> np.ndarray:
+        """Steady forced state ``Re(Z e^{i(omega t + delta)})``, shape (nt, 2n)."""
+        theta = self.omega * np.atleast_1d(np.asarray(t, dtype=float))[:, None] + delta
+        return (self.Z * np.exp(1j * theta)).real
+
+    def modal_deviation(self, X0: np.ndarray, delta: float) -> np.ndarray:
+        """Complex modal coordinates ``V^-1 (X(0) - X_p(0))`` of the free part, (2n,)."""
+        return self.V_inv @ (np.asarray(X0, dtype=float) - self.forced_state(0.0, delta)[0])
+
+    def state(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
+        """State ``X(t) = [x; x'](t)`` of eq. (9), shape (nt, 2n)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        zeta = self.modal_deviation(X0, delta)
+        free = (np.exp(t[:, None] * self.lam) * zeta) @ self.V.T
+        return self.forced_state(t, delta) + free.real
+
+    def state_derivative(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
+        """Time derivative ``X'(t) = [x'; x''](t)``, shape (nt, 2n)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        zeta = self.modal_deviation(X0, delta)
+        free = (np.exp(t[:, None] * self.lam) * (self.lam * zeta)) @ self.V.T
+        theta = self.omega * t[:, None] + delta
+        return (1j * self.omega * self.Z * np.exp(1j * theta)).real + free.real
+
+    def transition_matrix(self, t: float) -> np.ndarray:
+        """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, shape (2n, 2n)."""
+        return self.matrices(t)[0]
+
+    def matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """``Phi(t)`` (2n, 2n) and the forcing columns ``P(t) - Phi(t) P(0)`` (2n, 2) of
+        eq. (9), ``P(t) = [Re(Z e^{i omega t}), -Im(Z e^{i omega t})]`` (columns multiply
+        ``cos delta, sin delta``)."""
+        t = float(np.asarray(t).reshape(-1)[0])
+        if self._last is not None and self._last[0] == t:  # eq. (12) and G use the same T
+            return self._last[1]
+        transition = self.basis.transition(t)
+        zt = self.Z * np.exp(1j * self.omega * t)
+        P_t = np.column_stack([zt.real, -zt.imag])
+        P_0 = np.column_stack([self.Z.real, -self.Z.imag])
+        out = (transition, P_t - transition @ P_0)
+        for x in out:
+            x.setflags(write=False)  # shared by the next call at the same t
+        self._last = (t, out)
+        return out
+
+    def transfer(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        raise NotImplementedError("a general damping matrix has no real 2x2 modal blocks; use "
+                                  "state, matrices or the first-order basis")
+
+    def mass1(self, X0: np.ndarray, delta: float) -> GeneralMass1Motion:
+        """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
+        return GeneralMass1Motion(self, X0, delta)
+
+    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0
+               ) -> GeneralMass1Motion:
+        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``."""
+        return GeneralMass1Motion(self, X0, delta, index, sign)
+
+    def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
+        """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
+
+        Only the forced state depends on omega: ``X(t) = X_p(t) + Phi(t) (X0 - X_p(0))``
+        with ``X_p(t) = Re(Z e^{i(omega t + theta)})`` gives ``dX/d omega = dX_p(t) -
+        Phi(t) dX_p(0)``, ``dX_p(t) = Re((dZ/d omega + i t Z) e^{i(omega t + theta)})``
+        (``dZ/d omega`` exact from the dynamic stiffness,
+        :meth:`FirstOrderBasis.forced_amplitude_derivative`).
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+        """
+        dZ = self.basis.forced_amplitude_derivative(self.Z, self.omega)
+        rot_t = np.exp(1j * (self.omega * t + theta))
+        d_t = ((dZ + 1j * t * self.Z) * rot_t).real
+        d_0 = (dZ * np.exp(1j * theta)).real
+        return d_t - self.transition_matrix(t) @ d_0
+
+
+class GeneralMass1Motion(Mass1Motion):
+    """``x1(t)`` and its derivatives along one flight of a :class:`GeneralFlow`, O(n) per time:
+
+        x1^(j) = Re((i omega)^j Z_1 e^{i theta}) + Re(sum_k lambda_k^j V_1k zeta_k e^{lambda_k t})
+    """
+
+    def __init__(self, flow: GeneralFlow, X0: np.ndarray, delta: float, index: int = 0,
+                 sign: float = 1.0) -> None:
+        self.flow = flow
+        self.delta = float(delta)
+        self.c = sign * flow.V[index] * flow.modal_deviation(X0, delta)  # V_jk zeta_k
+        self.z = sign * flow.Z[index]
+
+    def _derivatives(self, t: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        fl = self.flow
+        e = np.exp(t[:, None] * fl.lam) * self.c
+        forced = self.z * np.exp(1j * (fl.omega * t + self.delta))
+        iw = 1j * fl.omega
+        out = []
+        for j in range(4):
+            out.append((forced * iw**j).real + (e @ fl.lam**j).real)
+        return tuple(out)  # type: ignore[return-value]

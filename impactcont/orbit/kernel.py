@@ -430,7 +430,7 @@ def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
 def _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces):
     """:func:`jacobian_pieces` as the rows of ``pieces`` (4, n), no allocation."""
     kappa = 1.0 + R
-    cd, sd = math.cos(delta), math.sin(delta)
+    cd, sd = np.cos(delta), np.sin(delta)
     for i in range(modal.shape[1]):
         gm, bt = modal[0, i], modal[1, i]
         py = -gm * sd + bt * cd
@@ -452,7 +452,7 @@ def transition(modal, u, ui):
     matrix products instead.
     """
     n = modal.shape[1]
-    tr = np.empty((2 * n, 2 * n))
+    tr = np.empty((2 * n, 2 * n), dtype=modal.dtype)
     _transition_into(modal, u, ui, tr)
     return tr
 
@@ -483,9 +483,10 @@ def _transition_into(modal, u, ui, tr):
 def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     """G of eq. (22)-(25) from the transition ``tr = U W(T) U^-1``, O(n^2)."""
     m = 2 * modal.shape[1]
-    G = np.empty((m, m))
+    G = np.empty((m, m), dtype=modal.dtype)
     h2 = _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma,
-                        np.empty((4, m // 2)), np.empty((2, m)), G)
+                        np.empty((4, m // 2), dtype=modal.dtype),
+                        np.empty((2, m), dtype=modal.dtype), G)
     return G, h2
 
 
@@ -518,12 +519,12 @@ def jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     """
     n = modal.shape[1]
     m = 2 * n
-    dedx = np.empty((2, m))
+    dedx = np.empty((2, m), dtype=modal.dtype)
     h1, h2 = _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma,
-                             np.empty((4, n)), dedx)
-    G_reg = np.zeros((m, m))
-    av = np.empty(m)
-    bv = np.empty(m)
+                             np.empty((4, n), dtype=modal.dtype), dedx)
+    G_reg = np.zeros((m, m), dtype=modal.dtype)
+    av = np.empty(m, dtype=modal.dtype)
+    bv = np.empty(m, dtype=modal.dtype)
     for r in range(m - 1):
         dr = -R if r + 1 == n else 1.0
         for col in range(m - 1):
@@ -550,7 +551,7 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     G_reg, av, bv, h2 = jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma)
     m = G_reg.shape[0]
     k = m + 2
-    A = np.zeros((k, k))
+    A = np.zeros((k, k), dtype=G_reg.dtype)
     for r in range(m):
         for col in range(m):
             A[r, col] = G_reg[r, col]
@@ -561,7 +562,7 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     for r in range(m + 1):
         A[r, m + 1] = left[r]
         A[m + 1, r] = right[r]
-    rhs = np.zeros(k)
+    rhs = np.zeros(k, dtype=G_reg.dtype)
     rhs[k - 1] = 1.0
     return _solve_small(A, rhs)[k - 1]
 
@@ -778,11 +779,12 @@ def time_grid(w, a, u0, omega, T):
 
 @_jit
 def free_x1(t, w, a, u0, dy, dv):
-    """x1 and its first three time derivatives of the free deviation (per unit kappa sigma)."""
+    """x1 and its first four time derivatives of the free deviation (per unit kappa sigma)."""
     x0 = 0.0
     x1 = 0.0
     x2 = 0.0
     x3 = 0.0
+    x4 = 0.0
     for i in range(w.size):
         if u0[i] == 0.0:
             continue
@@ -795,7 +797,8 @@ def free_x1(t, w, a, u0, dy, dv):
         x1 += u0[i] * v
         x2 += u0[i] * acc
         x3 += u0[i] * jerk
-    return x0, x1, x2, x3
+        x4 += u0[i] * (-w[i] * w[i] * acc - 2.0 * a[i] * jerk)
+    return x0, x1, x2, x3, x4
 
 
 _ANCHOR = 32  # grid steps of the recurrence between direct evaluations
@@ -803,7 +806,7 @@ _ANCHOR = 32  # grid steps of the recurrence between direct evaluations
 
 @_jit
 def free_on_grid(times, w, a, u0, dy, dv):
-    """``free_x1`` at every grid time, shape (3, nt): x1, x1', x1''.
+    """``free_x1`` at every grid time, shape (5, nt): x1 and its first four derivatives.
 
     On the uniform part of the grid the modal deviation is advanced by the one-step
     transfer ``W(h)`` (the flow is a semigroup: four products per mode and step
@@ -812,17 +815,19 @@ def free_on_grid(times, w, a, u0, dy, dv):
     grid only brackets roots, which are then polished by direct evaluation.
     """
     nt = times.size
-    out = np.zeros((3, nt))
+    out = np.zeros((5, nt))
     # the uniform part ends the grid: find where it starts (after the refinement near 0)
     j0 = nt - 1
     while j0 > 1 and abs((times[j0] - times[j0 - 1]) - (times[nt - 1] - times[nt - 2])) <= (
             1e-9 * (times[nt - 1] - times[nt - 2])):
         j0 -= 1
     for k in range(j0):
-        x0, x1, x2, _ = free_x1(times[k], w, a, u0, dy, dv)
+        x0, x1, x2, x3, x4 = free_x1(times[k], w, a, u0, dy, dv)
         out[0, k] = x0
         out[1, k] = x1
         out[2, k] = x2
+        out[3, k] = x3
+        out[4, k] = x4
     h = (times[nt - 1] - times[j0]) / max(nt - 1 - j0, 1)
     for i in range(w.size):
         if u0[i] == 0.0:
@@ -839,9 +844,13 @@ def free_on_grid(times, w, a, u0, dy, dv):
                 yv = w21 * dy[i] + w22 * dv[i]
             else:
                 y, yv = s11 * y + s12 * yv, s21 * y + s22 * yv
+            ya = -wi2 * y - ai2 * yv
+            yj = -wi2 * yv - ai2 * ya
             out[0, k] += u0[i] * y
             out[1, k] += u0[i] * yv
-            out[2, k] += u0[i] * (-wi2 * y - ai2 * yv)
+            out[2, k] += u0[i] * ya
+            out[3, k] += u0[i] * yj
+            out[4, k] += u0[i] * (-wi2 * ya - ai2 * yj)
     return out
 
 
@@ -852,18 +861,20 @@ def x1_derivatives(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     ``Gam, B``: the forced motion of mass 1 (``scalars[1:3]`` of :func:`omega_setup`);
     ``ks = kappa sigma``; ``dy, dv``: ``modal[6], modal[7]``.
     """
-    return _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    d = _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    return d[0], d[1], d[2], d[3]
 
 
 @_jit
 def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     th = omega * t + delta
-    c, s = math.cos(th), math.sin(th)
+    c, s = np.cos(th), np.sin(th)
     p = Gam * c + B * s
     dp = omega * (B * c - Gam * s)
-    f0, f1, f2, f3 = free_x1(t, w, a, u0, dy, dv)
-    return (p + ks * f0, dp + ks * f1, -omega * omega * p + ks * f2,
-            -omega * omega * dp + ks * f3)
+    f0, f1, f2, f3, f4 = free_x1(t, w, a, u0, dy, dv)
+    om2 = omega * omega
+    return (p + ks * f0, dp + ks * f1, -om2 * p + ks * f2, -om2 * dp + ks * f3,
+            om2 * om2 * p + ks * f4)
 
 
 # the derivative a polish finds a root of, as run-time integers: a literal argument would
@@ -873,22 +884,23 @@ _ORDER_ACC = np.int64(2)
 
 
 @_jit
-def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, Gam, B, omega, delta, ks, w, a, u0,
-            dy, dv):
+def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi, Gam, B, omega, delta, ks,
+            w, a, u0, dy, dv):
     """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton.
 
-    Returns ``(t, x1, x1', x1'')`` at the root. The start is the root of the cubic
-    Hermite interpolant of the ``order``-th derivative from its values ``g`` and
-    slopes ``dg`` at the ends (the secant point when a slope is not finite), so one
-    or two Newton steps reach rounding level; a step that would leave the shrinking
-    bracket bisects instead. For ``order = 1`` a Newton step whose predicted error
-    (the third derivative over twice the second, times the step squared) is below
-    the tolerance is the last: the values at the root then follow from the Taylor
-    series at the last evaluation (exact to rounding, no further evaluation).
+    Returns the root and x1 with its first three derivatives there. The start is the
+    root of the quintic Hermite interpolant of the ``order``-th derivative from its
+    values ``g``, slopes ``dg`` and curvatures ``ddg`` at the ends (cubic when a
+    curvature is not finite, the secant point when a slope is not), so one Newton
+    step (two from a cubic start) reaches rounding level; a step that would leave the
+    shrinking bracket bisects instead. A Newton step below the tolerance, or whose predicted
+    error (the next derivative over twice the slope, times the step squared) is, is
+    the last: the values at the root then follow from the Taylor series at the last
+    evaluation (exact to rounding, no further evaluation).
     """
     left, right = lo, hi
     ga = g_lo
-    x = _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi)
+    x = _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi)
     for _ in range(_MAX_ITER):
         d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
         g = d[order]
@@ -899,32 +911,41 @@ def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, Gam, B, omega, delta, ks, w
         else:
             right = x
         if g == 0.0:
-            return x, d[0], d[1], d[2]
+            return x, d[0], d[1], d[2], d[3]
         step = g / dg if dg != 0.0 else np.inf
         tol = _XTOL + _RTOL * abs(x)
         xn = x - step
-        if order == 1 and np.isfinite(xn) and left <= xn <= right and (
-                abs(d[3] / (2.0 * dg)) * step * step <= tol):
-            h = -step  # Taylor from the last evaluation: the remainder is O(step^4)
-            return (xn, d[0] + h * (d[1] + h * (0.5 * d[2] + h * d[3] / 6.0)),
-                    d[1] + h * (d[2] + 0.5 * h * d[3]), d[2] + h * d[3])
-        if abs(step) <= tol or right - left <= tol:
-            r = xn if np.isfinite(xn) else x
-            d = _x1_derivs(r, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
-            return r, d[0], d[1], d[2]
+        if np.isfinite(xn) and (abs(step) <= tol or (
+                left <= xn <= right and abs(d[order + 2] / (2.0 * dg)) * step * step <= tol)):
+            return _taylor(xn, -step, d)  # the Newton step is the last
+        if right - left <= tol:
+            d = _x1_derivs(xn, Gam, B, omega, delta, ks, w, a, u0, dy, dv) if np.isfinite(xn) \
+                else d
+            return (xn if np.isfinite(xn) else x), d[0], d[1], d[2], d[3]
         if not (np.isfinite(xn) and left <= xn <= right):
             xn = 0.5 * (left + right)
         x = xn
     d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
-    return x, d[0], d[1], d[2]
+    return x, d[0], d[1], d[2], d[3]
 
 
 @_jit
-def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi):
-    """Root in (lo, hi) of the cubic Hermite interpolant of g from its values and slopes
-    at the ends (g of opposite signs there), by three Newton steps from the secant
-    point; the secant point (or the midpoint) when a slope is not finite or a step
-    leaves the interval."""
+def _taylor(t, h, d):
+    """``t`` and x1 with its first three derivatives at ``t`` from ``d`` (x1 to its fourth)
+    at ``t - h``: for the tiny last Newton step ``h`` the remainder is O(h^4) or less."""
+    return (t, d[0] + h * (d[1] + h * (0.5 * d[2] + h * (d[3] / 6.0 + h * d[4] / 24.0))),
+            d[1] + h * (d[2] + h * (0.5 * d[3] + h * d[4] / 6.0)),
+            d[2] + h * (d[3] + 0.5 * h * d[4]), d[3] + h * d[4])
+
+
+@_jit
+def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi):
+    """Root in (lo, hi) of the Hermite interpolant of g (g of opposite signs at the ends).
+
+    The cubic one from the values and slopes at the ends, by three Newton steps from the
+    secant point, then, when the second derivatives ``ddg`` are finite, the quintic one
+    by two Newton steps from there; the secant point (or the midpoint) when a slope is
+    not finite; a step that leaves the interval ends the iteration."""
     h = hi - lo
     x = g_lo / (g_lo - g_hi) if g_lo != g_hi else 0.5
     if not 0.0 < x < 1.0:
@@ -946,15 +967,43 @@ def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi):
         if not 0.0 < xn < 1.0:
             break
         x = xn
+    if not (np.isfinite(ddg_lo) and np.isfinite(ddg_hi)):
+        return lo + h * x
+    c0 = h * h * ddg_lo
+    c1 = h * h * ddg_hi
+    for _ in range(2):
+        # quintic Hermite basis on [0, 1]: values, slopes and curvatures at 0 and 1
+        x2 = x * x
+        x3 = x2 * x
+        x4 = x3 * x
+        x5 = x4 * x
+        p = ((1.0 - 10.0 * x3 + 15.0 * x4 - 6.0 * x5) * g_lo
+             + (x - 6.0 * x3 + 8.0 * x4 - 3.0 * x5) * m0
+             + 0.5 * (x2 - 3.0 * x3 + 3.0 * x4 - x5) * c0
+             + 0.5 * (x3 - 2.0 * x4 + x5) * c1
+             + (-4.0 * x3 + 7.0 * x4 - 3.0 * x5) * m1
+             + (10.0 * x3 - 15.0 * x4 + 6.0 * x5) * g_hi)
+        dp = ((-30.0 * x2 + 60.0 * x3 - 30.0 * x4) * g_lo
+              + (1.0 - 18.0 * x2 + 32.0 * x3 - 15.0 * x4) * m0
+              + 0.5 * (2.0 * x - 9.0 * x2 + 12.0 * x3 - 5.0 * x4) * c0
+              + 0.5 * (3.0 * x2 - 8.0 * x3 + 5.0 * x4) * c1
+              + (-12.0 * x2 + 28.0 * x3 - 15.0 * x4) * m1
+              + (30.0 * x2 - 60.0 * x3 + 30.0 * x4) * g_hi)
+        if dp == 0.0:
+            break
+        xn = x - p / dp
+        if not 0.0 < xn < 1.0:
+            break
+        x = xn
     return lo + h * x
 
 
 @_jit
-def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work):
+def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude):
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
-    ``omega times``; ``work``: scratch of shape ``(10, 2 nt)`` (reused across calls).
+    ``omega times``; ``work``: scratch of shape ``(WORK_ROWS, 2 nt)`` (reused across calls).
     Each grid cell holds at most one root of ``x1''`` (the grid is built so), hence
     at most two roots of ``x1'``:
 
@@ -964,11 +1013,13 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
       the ends there is one root and the cell brackets it; with equal signs the
       root of ``x1''`` is polished first and splits the cell in two monotone pieces.
 
-    A candidate piece ``[p, q]`` with ``x1'`` decreasing through 0 has
-    ``x1 <= x1(p) + x1'(p) (q - p)``; candidates are polished (safeguarded Newton)
-    in decreasing order of that bound, and the search stops once the bound is
-    below the best maximum found: the result is the same as polishing every one.
-    ``(-inf, nan)`` when there is none.
+    A candidate piece ``[p, q]`` with ``x1'`` decreasing through 0 is concave, so x1
+    lies below the meeting point of its tangents at ``p`` and ``q``; candidates are
+    polished (safeguarded Newton from a quintic Hermite start, :func:`_polish`) in
+    decreasing order of that bound, and the search stops once the bound is below the
+    best maximum found: the result is the same as polishing every one.
+    A maximum within ``1e-7 T`` of the time ``exclude`` is skipped (NaN: none is),
+    e.g. the tangency of a grazing motion. ``(-inf, nan)`` when there is none.
     """
     cd, sd = math.cos(delta), math.sin(delta)
     nt = times.size
@@ -1000,18 +1051,27 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         a0, a1 = acc[k - 1], acc[k]
         if (a0 < 0.0) == (a1 < 0.0) or (v0 < 0.0) != (v1 < 0.0):
             if v0 >= 0.0 and v1 < 0.0:  # one root of x1', a maximum
-                m = _candidate(work, m, lo, hi, v0, v1, a0, a1, x[k - 1] + v0 * (hi - lo))
+                m = _candidate(work, m, lo, hi, v0, v1, a0, a1,
+                               _jerk(omega, ks, v0, free[1, k - 1], free[3, k - 1]),
+                               _jerk(omega, ks, v1, free[1, k], free[3, k]),
+                               _concave_bound(lo, hi, x[k - 1], x[k], v0, v1))
             continue
         # x1'' changes sign, x1' has one sign at both ends: zero or two roots; none when
         # x1' falls then rises from below 0, or rises then falls to >= 0
         if (a0 < 0.0) == (v0 < 0.0):
             continue
-        tm, xm, vm, am = _polish(_ORDER_ACC, lo, hi, a0, a1, np.inf, np.inf, Gam, B, omega,
-                                 delta, ks, w, a, u0, dy, dv)
+        j0 = _jerk(omega, ks, v0, free[1, k - 1], free[3, k - 1])
+        j1 = _jerk(omega, ks, v1, free[1, k], free[3, k])
+        tm, xm, vm, am, jm = _polish(_ORDER_ACC, lo, hi, a0, a1, j0, j1,
+                                     _snap(omega, ks, x[k - 1], free[0, k - 1], free[4, k - 1]),
+                                     _snap(omega, ks, x[k], free[0, k], free[4, k]),
+                                     Gam, B, omega, delta, ks, w, a, u0, dy, dv)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
-            m = _candidate(work, m, lo, tm, v0, vm, a0, am, x[k - 1] + v0 * (tm - lo))
+            m = _candidate(work, m, lo, tm, v0, vm, a0, am, j0, jm,
+                           _concave_bound(lo, tm, x[k - 1], xm, v0, vm))
         elif vm >= 0.0 and v1 < 0.0:  # rises above 0, then falls through it
-            m = _candidate(work, m, tm, hi, vm, v1, am, a1, xm + vm * (hi - tm))
+            m = _candidate(work, m, tm, hi, vm, v1, am, a1, jm, j1,
+                           _concave_bound(tm, hi, xm, x[k], vm, v1))
     best = -np.inf
     best_t = np.nan
     for _ in range(m):
@@ -1022,15 +1082,39 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         if not c_ub[j] > best:
             break
         c_ub[j] = -np.inf  # done
-        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j], T,
-                             Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j],
+                             work[10, j], work[11, j], T, Gam, B, omega, delta, ks, w, a, u0,
+                             dy, dv, exclude)
     return best, best_t
 
 
 @_jit
-def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, bound):
+def _jerk(omega, ks, v, free_v, free_jerk):
+    """The third derivative of x1 at a grid point from ``x1'`` there: the forced part's
+    is ``-omega^2`` times its velocity ``x1' - ks free'``."""
+    return ks * free_jerk - omega * omega * (v - ks * free_v)
+
+
+@_jit
+def _snap(omega, ks, x, free_x, free_snap):
+    """The fourth derivative of x1 at a grid point from ``x1`` there: the forced part's
+    is ``omega^4`` times its displacement ``x1 - ks free``."""
+    return ks * free_snap + omega ** 4 * (x - ks * free_x)
+
+
+@_jit
+def _concave_bound(p, q, xp, xq, vp, vq):
+    """An upper bound of x1 on ``[p, q]`` where it is concave (``x1'' < 0``) with
+    ``x1'(p) >= 0 > x1'(q)``: the meeting point of the tangents at both ends."""
+    t = (xq - xp + vp * p - vq * q) / (vp - vq)
+    return xp + vp * (min(max(t, p), q) - p)
+
+
+@_jit
+def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, bound):
     """Record the piece ``[lo, hi]`` where x1' falls through 0 (a maximum) as candidate ``m``
-    in the rows 3-9 of ``work`` with the upper bound of x1 on it; returns ``m + 1``."""
+    in the rows 3-11 of ``work`` with the upper bound of x1 on it (``j``: its third
+    derivative at the ends, NaN where unknown); returns ``m + 1``."""
     work[3, m] = lo
     work[4, m] = hi
     work[5, m] = v_lo
@@ -1038,21 +1122,30 @@ def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, bound):
     work[7, m] = v_hi
     work[8, m] = a_lo
     work[9, m] = a_hi
+    work[10, m] = j_lo
+    work[11, m] = j_hi
     return m + 1
 
 
 @_jit
-def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, T, Gam, B, omega, delta, ks, w, a, u0,
-          dy, dv):
-    r, xr, _, acc = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, Gam, B, omega, delta,
+def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, T, Gam, B, omega, delta, ks,
+          w, a, u0, dy, dv, exclude):
+    r, xr, _, acc, _ = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, Gam, B,
+                            omega, delta,
                             ks, w, a, u0, dy, dv)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
         return best, best_t
+    if abs(r - exclude) <= _EXCLUDE_TOL * T:
+        return best, best_t
     if acc < 0.0 and xr > best:
         return xr, r
     return best, best_t
+
+
+WORK_ROWS = 12  # rows of the scratch of x1_maximum (its grid values and candidates)
+_EXCLUDE_TOL = 1e-7  # relative to T: a maximum this close to ``exclude`` is the same one
 
 
 @_jit
@@ -1069,7 +1162,7 @@ def flight_tables(w, a, u0, modal, omega, T):
     dv = modal[7].copy()
     free = free_on_grid(times, w, a, u0, dy, dv)
     return (times, capped, free, np.cos(omega * times), np.sin(omega * times), dy, dv,
-            np.empty((10, 2 * times.size)))
+            np.empty((WORK_ROWS, 2 * times.size)))
 
 
 # -- a block of the (omega, b) plane ---------------------------------------------------------
@@ -1124,7 +1217,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
                 vel[iw, ib, idx] = sg[k]
                 ks = (1.0 + R) * sg[k]
                 best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], om, dl[k], ks,
-                                          w, a, u0, dy, dv, work)
+                                          w, a, u0, dy, dv, work, np.nan)
                 gap[iw, ib, idx] = bs[ib] - best
                 gap_t[iw, ib, idx] = best_t
                 _assemble_into(tr, modal, w, a, f, u, ui0, om, R, dl[k], sg[k], pieces,
@@ -1192,7 +1285,7 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
                                                                   sc[0])
         for k in range(count):
             best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, dl[k],
-                                      (1.0 + R) * sg[k], w, a, u0, dy, dv, work)
+                                      (1.0 + R) * sg[k], w, a, u0, dy, dv, work, np.nan)
             gap[k] = b - best
             gap_t[k] = best_t
     return (modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales,
@@ -1449,7 +1542,7 @@ def by_modulus(mu):
 def phase_sigma(scalars, omega, R, b, delta):
     """Impact velocity of the motion with impact phase ``delta`` (a root of eq. 14)."""
     Gam, B, g, Delta = scalars[1], scalars[2], scalars[3], scalars[4]
-    cd, sd = math.cos(delta), math.sin(delta)
+    cd, sd = np.cos(delta), np.sin(delta)
     if scalars[9] != 0.0:  # elastic, undamped: from the impact condition x1(0) = b
         return (Gam * cd + B * sd - b) / ((1.0 + R) * g)
     return omega * (B * cd - Gam * sd) / Delta
@@ -1464,5 +1557,14 @@ def phase_orbit(w, a, f, u, u0, ui0, eig_err, R, omega, N, b, delta):
     state, _ = physical_state(modal, u, omega, R, delta, sigma)
     times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, sc[0])
     best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, delta,
-                              (1.0 + R) * sigma, w, a, u0, dy, dv, work)
+                              (1.0 + R) * sigma, w, a, u0, dy, dv, work, np.nan)
     return modal, sc, sigma, b - best, best_t, capped, state
+
+
+@_jit
+def other_maximum(w, a, u0, modal, scalars, omega, R, delta, sigma, exclude):
+    """Highest interior maximum of ``x1`` other than the one at time ``exclude``:
+    ``(value, time)``, ``(-inf, nan)`` when there is none (:func:`x1_maximum`)."""
+    times, _, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, scalars[0])
+    return x1_maximum(times, free, cw, sw, scalars[1], scalars[2], omega, delta,
+                      (1.0 + R) * sigma, w, a, u0, dy, dv, work, exclude)

@@ -463,35 +463,14 @@ def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.n
 def omega_partial(flow: Flow, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
     """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
 
-    Only the forced part of eq. (9) depends on omega: with the modal steady
-    amplitudes ``gamma - i beta = f / (w^2 - omega^2 + 2 i a omega)`` (eq. 7) and
-    ``P(t) = [y_p; y_p'](t)``, ``X(t) = U [P(t) + W(t) (Y0 - P(0))]`` gives
-    ``dX/d omega = U [dP(t) - W(t) dP(0)]``.
+    Only the forced part of eq. (9) depends on omega; the flow gives it exactly
+    (:meth:`impactcont.orbit.flow.Flow.omega_partial`, modal or first-order).
 
     Returns
     -------
     ndarray, shape (2n,)
     """
-    om = flow.omega
-    den = (flow.w - om) * (flow.w + om) + 2j * flow.a * om
-    A = flow.gamma - 1j * flow.beta
-    dA = A * (2.0 * om - 2j * flow.a) / den
-    dg, db = dA.real, -dA.imag
-    g, b = flow.gamma, flow.beta
-
-    def dP(time: float) -> tuple[np.ndarray, np.ndarray]:
-        c, s = math.cos(om * time + theta), math.sin(om * time + theta)
-        y = g * c + b * s
-        dy = dg * c + db * s + time * (b * c - g * s)
-        dv = (b * c - g * s) + om * (db * c - dg * s) - om * time * y
-        return dy, dv
-
-    dy_t, dv_t = dP(t)
-    dy_0, dv_0 = dP(0.0)
-    W11, W12, W21, W22 = (blk[0] for blk in flow.transfer(np.array([t])))
-    dy = dy_t - (W11 * dy_0 + W12 * dv_0)
-    dv = dv_t - (W21 * dy_0 + W22 * dv_0)
-    return np.concatenate([flow.u @ dy, flow.u @ dv])
+    return flow.omega_partial(t, X0, theta)
 
 
 # ------------------------------------------------------------------------------------------

@@ -9,7 +9,6 @@ import math
 import warnings
 
 import numpy as np
-from scipy.linalg import lapack, lu_solve
 
 from impactcont.errors import (
     IllConditionedWarning,
@@ -22,6 +21,8 @@ from impactcont.errors import (
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
+from impactcont.orbit import general
+from impactcont.orbit.dense import impact_map_jacobian, periodic_matrix
 from impactcont.orbit.flow import Flow
 
 __all__ = [
@@ -30,6 +31,7 @@ __all__ = [
     "impact_map_jacobian",
     "modal_jacobian",
     "orbit_at_phase",
+    "periodic_matrix",  # defined in impactcont.orbit.dense, re-exported here
     "periodic_orbits",
 ]
 
@@ -96,8 +98,10 @@ class PeriodicOrbit:
     reason: str
     state: np.ndarray = dataclasses.field(repr=False)
     """``X(0) = [x; x']`` right after the impact (eq. 13), shape (2n,)."""
-    modal: np.ndarray = dataclasses.field(repr=False)
-    """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`)."""
+    modal: np.ndarray | None = dataclasses.field(repr=False)
+    """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`); None on the
+    first-order path (general damping matrix or complex F), where G and the multipliers
+    are computed with the motion."""
 
     @functools.cached_property
     def G(self) -> np.ndarray:
@@ -196,112 +200,6 @@ def _check_N(N: object) -> int:
     return int(N)
 
 
-def _power_of_two_scale(v: np.ndarray) -> np.ndarray:
-    """``2^-round(log2 v)`` where ``v > 0`` (1 elsewhere): an exact rescaling."""
-    out = np.ones_like(v)
-    pos = v > 0
-    out[pos] = np.exp2(-np.round(np.log2(v[pos])))
-    return out
-
-
-def _solve(A: np.ndarray, B: np.ndarray, what: str) -> np.ndarray:
-    """``A^-1 B`` by LU of the row- and column-equilibrated A, warning when ill-conditioned.
-
-    Positions and velocities of a stiff chain differ by orders of magnitude, so the raw
-    condition number of A mostly measures the units; after exact power-of-two row and
-    column scaling it measures the problem. The 1-norm estimate (LAPACK ``gecon``) costs
-    O(n^2) after the factorisation, against O(n^3) for the SVD of ``numpy.linalg.cond``.
-    """
-    r = _power_of_two_scale(np.max(np.abs(A), axis=1))
-    As = r[:, None] * A
-    c = _power_of_two_scale(np.max(np.abs(As), axis=0))
-    As = As * c
-    if not np.all(np.isfinite(As)):
-        raise ParameterError(f"{what} has non-finite entries; check the parameters "
-                             "(e.g. omega at an undamped resonance)")
-    lu, piv, info = lapack.dgetrf(As)
-    if info > 0:  # exactly singular
-        cond = math.inf
-    else:
-        rcond, _ = lapack.dgecon(lu, np.linalg.norm(As, 1), norm="1")
-        cond = 1.0 / rcond if rcond > 0 else math.inf
-    if not cond <= _COND_WARN:
-        warnings.warn(f"{what} is ill-conditioned (condition number {cond:.3g} after "
-                      f"equilibration): the periodic motion may carry a relative error up to "
-                      f"about {min(cond * _EPS, 1.0):.1g}. Typical causes: no damping with R = 1 "
-                      "(a family of motions), or omega_i T close to a multiple of 2 pi for an "
-                      "undamped mode (omega near N omega_i / k)", IllConditionedWarning,
-                      stacklevel=3)
-    if info > 0:
-        return np.full((A.shape[0], B.shape[1]), np.nan)
-    return c[:, None] * lu_solve((lu, piv), r[:, None] * B, check_finite=False)
-
-
-def periodic_matrix(flow: Flow, N: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """``S`` of eq. (13) with the flow pieces at ``T``.
-
-    Returns
-    -------
-    S : ndarray, shape (2n, 2)
-        ``X(0) = S [cos delta; sin delta]``.
-    DPhi : ndarray, shape (2n, 2n)
-        ``D U W(T) U^-1``.
-    T : float
-    """
-    osc = flow.osc
-    T = 2.0 * math.pi * N / osc.omega
-    d = np.ones(2 * osc.n)
-    d[osc.n] = -osc.R
-    transition, forcing = flow.matrices(T)
-    DPhi = d[:, None] * transition
-    DUE = d[:, None] * forcing
-    S = _solve(np.eye(2 * osc.n) - DPhi, DUE, "I - D U W(T) U^-1 of eq. (12)")
-    return S, DPhi, T
-
-
-def impact_map_jacobian(flow: Flow, state: np.ndarray, delta: float, T: float,
-                        DPhi: np.ndarray | None = None) -> tuple[np.ndarray, float]:
-    """Jacobian ``G`` of the impact map at a periodic motion, eq. (22)-(25).
-
-    Parameters
-    ----------
-    flow : Flow
-    state : ndarray, shape (2n,)
-        State right after the impact.
-    delta : float
-        Forcing phase at the impact.
-    T : float
-        Time to the next impact.
-    DPhi : ndarray, optional
-        ``D U W(T) U^-1`` if already computed.
-
-    Returns
-    -------
-    G : ndarray, shape (2n, 2n)
-    h2 : float
-        ``x1'(T^-)``, the impact velocity.
-    """
-    osc = flow.osc
-    n = osc.n
-    d = np.ones(2 * n)
-    d[n] = -osc.R
-    if DPhi is None:
-        DPhi = d[:, None] * flow.transition_matrix(T)
-    h0_p = DPhi[0, 1:]
-    H0 = DPhi[1:, 1:]
-    dE = d * (flow.forcing_matrix(T) @ np.array([-math.sin(delta), math.cos(delta)]))
-    h1, H1 = dE[0], dE[1:]
-    dX = d * flow.state_derivative(T, state, delta)[0]
-    h2, H2 = dX[0], dX[1:]
-    omega = osc.omega
-    G = np.empty((2 * n, 2 * n))
-    G[:-1, :-1] = H0 - np.outer(H2, h0_p) / h2
-    G[:-1, -1] = H1 - H2 * h1 / h2
-    G[-1, :-1] = -omega * h0_p / h2
-    G[-1, -1] = 1.0 - omega * h1 / h2
-    return G, float(h2)
-
-
 def _check_oscillator(osc: object) -> ImpactOscillator:
     if not isinstance(osc, ImpactOscillator):
         raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
@@ -337,7 +235,7 @@ def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> 
             IllConditionedWarning, stacklevel=stacklevel)
 
 
-def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delta: float,
+def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray | None, T: float, delta: float,
                 root: int, sigma: float, gap_min: float, gap_time: float, state: np.ndarray,
                 G: np.ndarray | None = None, multipliers: np.ndarray | None = None
                 ) -> PeriodicOrbit:
@@ -365,6 +263,15 @@ def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray, T: float, delt
     return orbit
 
 
+def _general_orbit(osc: ImpactOscillator, N: int, pieces: tuple, delta: float, root: int
+                   ) -> PeriodicOrbit:
+    """The motion at phase delta on the first-order path (:mod:`impactcont.orbit.general`),
+    with its G and multipliers."""
+    state, h2, G, mu, gap, gap_t = general.orbit_values(osc, *pieces, delta)
+    return _make_orbit(osc, N, None, pieces[3], float(delta), root, h2, gap, gap_t, state, G,
+                       mu)
+
+
 def _warn_capped(capped: bool, T: float) -> None:
     if capped:
         warnings.warn(f"x1 search grid capped at 2000000 cells for a period of {T:.3g}: a short "
@@ -385,6 +292,8 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
 
     N = _check_N(N)
     _check_oscillator(osc)
+    if osc.general:  # a general damping matrix or complex F: the first-order path
+        return _general_orbit(osc, N, general.orbit_pieces(osc, N), float(delta), root)
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
         w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
@@ -424,6 +333,11 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
 
     osc = _check_oscillator(osc)
     N = _check_N(N)
+    if osc.general:  # a general damping matrix or complex F: the first-order path
+        pieces = general.orbit_pieces(osc, N)
+        S = pieces[1]
+        return [_general_orbit(osc, N, pieces, delta, root)
+                for delta, root in general.roots(float(S[0, 0]), float(S[0, 1]), osc.b)]
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
      jacobians, mults) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
@@ -480,6 +394,9 @@ def amplitude_squared(osc: ImpactOscillator, N: int) -> float:
     from impactcont.orbit import kernel
 
     osc = _check_oscillator(osc)
+    if osc.general:
+        c, s = general.amplitude(osc, _check_N(N))[:2]
+        return c * c + s * s
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     _, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, _check_N(N))
     _warn_setup(osc, sc, stacklevel=2)

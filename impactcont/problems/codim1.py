@@ -54,10 +54,22 @@ is regular at a simple NS point (``0 < theta < pi``). The phase and scale of
 eigenvector of the last accepted point divided by its squared norm, so the
 accepted point stays an exact solution when ``v_ref`` is renewed.
 
-Derivatives are central differences of the residual (step ``1e-6`` relative,
-one-sided at a parameter's domain boundary). They steer Newton and the
-predictor only; the accuracy of every point is set by the residual, which is
-evaluated in closed form.
+Derivatives are exact: complex steps of the residual in the two parameters, the
+phase and the grazing time (the kernel evaluates eq. 12-15, G and ``x1(t)`` in
+complex arithmetic), closed form in the NS system's ``theta`` and ``v``. No
+finite differences: the Jacobian is as accurate as the residual at every step
+size, including next to a domain boundary of a parameter (``R = 1``,
+``eta = 0``), since a complex step never leaves the real point. Newton reuses a
+Jacobian within a relative distance of 1e-4 (chord steps); the accuracy of every
+point is set by the residual, which is evaluated in closed form.
+
+With a damping matrix C or a complex F (:attr:`ImpactOscillator.general`) the same
+systems run on the first-order path: the pieces are
+:class:`~impactcont.problems.general_pieces.GeneralPieces` (dense closed form on the
+complex modes), exact in the phase, the extra unknowns, ``b`` and ``F0``; the ``omega``
+and ``R`` columns are central differences except the rows through ``c, s`` (why: the
+docstring of :mod:`impactcont.problems.general_pieces`). ``eta, alpha, beta`` do not
+exist with a matrix C and are refused.
 """
 
 from __future__ import annotations
@@ -73,14 +85,15 @@ import numpy as np
 
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
+from impactcont.model.modal import decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
-    modal_jacobian,
     orbit_at_phase,
     physical_transition,
 )
+from impactcont.problems.general_pieces import STEPPED_PARAMETERS, GeneralPieces
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
 __all__ = [
@@ -98,42 +111,88 @@ CURVE_KINDS = LABELS
 """Kinds of codimension-one curves: saddle-node, period-doubling, Neimark-Sacker,
 grazing and zero-velocity impact."""
 
-_FD_STEP = 1e-6
+_STEP = 1e-30  # complex step, relative to max(1, |x_j|): derivatives exact to rounding
 _CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
+_FD_STEP = 1e-6  # relative difference step of the first-order path's parameter columns
+
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class _Pieces:
-    """The oscillator at one parameter pair and the kernel's modal pieces (eq. 12-15).
+    """The kernel's modal pieces (eq. 12-15) at one parameter pair, real or complex-stepped.
 
     Everything a curve's residual needs is O(n) or one G: ``c, s`` of eq. (14), the
-    impact velocity and ``x1`` along the flight for a phase, G (eq. 25).
+    impact velocity and ``x1`` along the flight for a phase, G (eq. 25). The
+    kernel arguments ``omega, R, b, a, f`` are held here, not read from
+    :attr:`osc`, so that the same methods evaluate a complex step
+    (:meth:`stepped`): one parameter moved by ``i h`` gives its derivative as the
+    imaginary part divided by ``h``, exact to rounding (no cancellation, no step
+    error), because every residual is analytic in the parameters and the phase.
     """
 
     osc: ImpactOscillator
+    """The oscillator at the (real) parameter pair."""
+    N: int
     modal: np.ndarray
     scalars: np.ndarray
+    omega: float | complex
+    R: float | complex
+    b: float | complex
+    w: np.ndarray
+    a: np.ndarray
+    f: np.ndarray
+
+    @classmethod
+    def at(cls, osc: ImpactOscillator, N: int) -> _Pieces:
+        """The real pieces of `osc` (:func:`kernel.omega_setup`)."""
+        from impactcont.orbit import kernel
+
+        w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+        modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N)
+        return cls(osc, N, modal, scalars, osc.omega, osc.R, osc.b, w, a, f)
+
+    def stepped(self, name: str | None, h: float) -> _Pieces:
+        """These pieces in complex arithmetic with parameter `name` moved to ``p + i h``.
+
+        ``name=None`` moves nothing (the phase or an extra unknown is stepped by the
+        caller). Damping parameters move the decay rates along ``d a / d p``; ``F0``
+        scales the modal forces (eq. 13 is linear in F). ``b`` leaves ``c, s`` alone.
+        """
+        from impactcont.orbit import kernel
+
+        w, a, f = (np.asarray(x, dtype=complex) for x in (self.w, self.a, self.f))
+        omega, R, b = complex(self.omega), complex(self.R), complex(self.b)
+        if name is None or name == "b":
+            b += 1j * h if name == "b" else 0.0
+            modal, scalars = self.modal.astype(complex), self.scalars.astype(complex)
+        else:
+            if name == "omega":
+                omega += 1j * h
+            elif name == "R":
+                R += 1j * h
+            elif name == "F0":
+                f = f * complex(1.0, h / self.osc.F0)
+            else:
+                a = a + 1j * h * decay_rate_derivative(name, self.w)
+            _, _, _, _, _, eig_err, u0, ui0 = self.osc.modes.kernel_arrays
+            modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, omega, self.N)
+        return _Pieces(self.osc, self.N, modal, scalars, omega, R, b, w, a, f)
 
     @property
     def S0(self) -> tuple[float, float]:
         """``c, s`` of eq. (14) (the first row of S, eq. 13)."""
-        return float(self.scalars[5]), float(self.scalars[6])
+        return self.scalars[5], self.scalars[6]
 
     @property
     def T(self) -> float:
-        return float(self.scalars[0])
+        return float(self.scalars[0].real)
 
     def impact_velocity(self, delta: float) -> float:
         """``h2 = x1'(T^-)`` of the motion with impact phase ``delta``."""
         from impactcont.orbit import kernel
 
-        osc = self.osc
-        return float(kernel.phase_sigma(self.scalars, osc.omega, osc.R, osc.b, delta))
-
-    def jacobian(self, delta: float) -> tuple[np.ndarray, float]:
-        """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
-        return modal_jacobian(self.osc, self.modal, delta, self.impact_velocity(delta))
+        return kernel.phase_sigma(self.scalars, self.omega, self.R, self.b, delta)
 
     @functools.cached_property
     def transition(self) -> np.ndarray:
@@ -142,10 +201,15 @@ class _Pieces:
 
     def _kernel_args(self, delta: float) -> tuple:
         """The arguments of the kernel's G functions after the transition."""
-        osc = self.osc
-        w, a, f, u = osc.modes.kernel_arrays[:4]
-        return (self.modal, w, a, f, u, osc.modes.kernel_arrays[7], osc.omega, osc.R, delta,
+        u, ui0 = self.osc.modes.kernel_arrays[3], self.osc.modes.kernel_arrays[7]
+        return (self.modal, self.w, self.a, self.f, u, ui0, self.omega, self.R, delta,
                 self.impact_velocity(delta))
+
+    def jacobian(self, delta: float) -> tuple[np.ndarray, float]:
+        """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
+        from impactcont.orbit import kernel
+
+        return kernel.assemble_jacobian(self.transition, *self._kernel_args(delta))
 
     def split(self, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """G of eq. (25) as ``(G_reg, a, b, h2)``, ``G = G_reg + a b^T / h2``, every piece
@@ -158,8 +222,7 @@ class _Pieces:
         """The pole-free period-doubling condition ``g`` (:func:`kernel.pd_condition`)."""
         from impactcont.orbit import kernel
 
-        return float(kernel.pd_condition(self.transition, *self._kernel_args(delta), left,
-                                         right))
+        return kernel.pd_condition(self.transition, *self._kernel_args(delta), left, right)
 
     def pole_free_pd_matrix(self, delta: float) -> np.ndarray:
         """``E = [[G_reg + I, a], [b^T, -h2]]`` with ``G = G_reg + a b^T / h2``, (m+1, m+1).
@@ -169,24 +232,33 @@ class _Pieces:
         """
         G_reg, a, b, h2 = self.split(delta)
         m = G_reg.shape[0]
-        E = np.empty((m + 1, m + 1))
+        E = np.empty((m + 1, m + 1), dtype=G_reg.dtype)
         E[:m, :m] = G_reg + np.eye(m)
         E[:m, m] = a
         E[m, :m] = b
         E[m, m] = -h2
         return E
 
+    def other_maximum(self, delta: float, exclude: float) -> float:
+        """The highest interior maximum of ``x1`` other than the one at time ``exclude``
+        (:func:`kernel.other_maximum`); ``-inf`` when there is none."""
+        from impactcont.orbit import kernel
+
+        w, a, _, _, _, _, u0, _ = self.osc.modes.kernel_arrays
+        best, _ = kernel.other_maximum(w, a, u0, self.modal, self.scalars, self.omega, self.R,
+                                       delta, self.impact_velocity(delta), exclude)
+        return float(best)
+
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
         from impactcont.orbit import kernel
 
-        osc = self.osc
-        w, a, _, _, _, _, u0, _ = osc.modes.kernel_arrays
-        ks = (1.0 + osc.R) * self.impact_velocity(delta)
-        x, v, _, _ = kernel.x1_derivatives(t, self.scalars[1], self.scalars[2], osc.omega,
-                                           delta, ks, w, a, u0, self.modal[6].copy(),
+        u0 = self.osc.modes.kernel_arrays[6]
+        ks = (1.0 + self.R) * self.impact_velocity(delta)
+        x, v, _, _ = kernel.x1_derivatives(t, self.scalars[1], self.scalars[2], self.omega,
+                                           delta, ks, self.w, self.a, u0, self.modal[6].copy(),
                                            self.modal[7].copy())
-        return float(x), float(v)
+        return x, v
 
 
 def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, str]:
@@ -223,7 +295,8 @@ class CurveProblem:
         One impact every N forcing periods.
     parameters : (str, str)
         ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter
-        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0``.
+        ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0`` (of the
+        oscillator's damping model: not ``eta, alpha, beta`` with a damping matrix C).
 
     Notes
     -----
@@ -239,11 +312,13 @@ class CurveProblem:
                  ) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {osc!r}")
-        _ = osc.modes  # computed once here, shared by every replace() along the curve
+        self._general = osc.general  # a damping matrix C or complex F: the first-order path
+        # computed once here, shared by every replace() along the curve
+        _ = osc.first_order if self._general else osc.modes
         self.osc = osc
         self.N = _check_N(N)
         self.parameters = check_parameters(osc, parameters)
-        self._cache: collections.OrderedDict[tuple[float, float], _Pieces] = \
+        self._cache: collections.OrderedDict[tuple[float, float], _Pieces | GeneralPieces] = \
             collections.OrderedDict()
         self._jac_cache: tuple[np.ndarray, np.ndarray] | None = None
         self.last_step = math.nan
@@ -263,18 +338,14 @@ class CurveProblem:
         """The oscillator with the two parameters set to ``p1, p2``."""
         return self._pieces(p1, p2).osc
 
-    def _pieces(self, p1: float, p2: float) -> _Pieces:
+    def _pieces(self, p1: float, p2: float) -> _Pieces | GeneralPieces:
         key = (float(p1), float(p2))
         hit = self._cache.get(key)
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
-        from impactcont.orbit import kernel
-
         osc = self.osc.replace(**{self.parameters[0]: key[0], self.parameters[1]: key[1]})
-        w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-        modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, self.N)
-        pieces = _Pieces(osc, modal, scalars)
+        pieces = GeneralPieces.at(osc, self.N) if self._general else _Pieces.at(osc, self.N)
         self._cache[key] = pieces
         if len(self._cache) > _CACHE_SIZE:
             self._cache.popitem(last=False)
@@ -298,26 +369,24 @@ class CurveProblem:
         c, s = pc.S0
         return float(-c * math.sin(u[1]) + s * math.cos(u[1]))
 
-    def jacobian_G(self, u: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
-        """``G`` of eq. (25) and ``h2`` at a point."""
-        return self._pieces(u[0], lam).jacobian(float(u[1]))
-
     # -- the Problem protocol -------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
         """``[r (eq. 14), condition...]``, shape (m,)."""
         u = np.asarray(u, dtype=float)
-        pc = self._pieces(u[0], lam)
-        delta = float(u[1])
+        return self._residual(self._pieces(u[0], lam), float(u[1]), u[2:])
+
+    def _residual(self, pc: _Pieces, delta: float | complex, extras: np.ndarray) -> np.ndarray:
+        """The residual from the pieces: real, or complex along a complex step."""
         c, s = pc.S0
-        r = c * math.cos(delta) + s * math.sin(delta) - pc.osc.b
-        return np.concatenate([[r], self._conditions(pc, delta, u[2:])])
+        r = c * np.cos(delta) + s * np.sin(delta) - pc.b
+        return np.concatenate([[r], self._conditions(pc, delta, extras)])
 
     def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
-        """``dF/du`` by central differences, shape (m, m)."""
+        """``dF/du`` (exact, :meth:`full_jacobian`), shape (m, m)."""
         return self._full_jacobian(u, lam)[:, :-1]
 
     def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
-        """``dF/dlam`` by central differences, shape (m,)."""
+        """``dF/dlam`` (exact, :meth:`full_jacobian`), shape (m,)."""
         return self._full_jacobian(u, lam)[:, -1]
 
     def full_jacobian(self, x: np.ndarray) -> np.ndarray:
@@ -326,6 +395,15 @@ class CurveProblem:
         return self._full_jacobian(x[:-1], float(x[-1]))
 
     def _full_jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/dx`` by complex steps: column j is ``Im F(x + i h e_j) / h``.
+
+        Exact to rounding: every residual is analytic in the two parameters, the
+        phase and the extra unknowns (the kernel's functions run in complex
+        arithmetic), so there is no step-size error and no cancellation. A parameter
+        column costs one complex ``omega_setup`` and transition; the phase and extra
+        columns reuse the real pieces. Subclasses may give the extra columns in
+        closed form (:meth:`_extra_columns`).
+        """
         x = np.append(np.asarray(u, dtype=float), float(lam))
         if self._jac_cache is not None and np.max(np.abs(self._jac_cache[0] - x)) <= (
                 _CHORD * max(1.0, float(np.max(np.abs(x))))):
@@ -333,21 +411,59 @@ class CurveProblem:
             # converges linearly instead of quadratically, the accuracy is the residual's
             return self._jac_cache[1]
         m = x.size - 1
+        pc = self._pieces(x[0], x[-1])
+        delta, extras = float(x[1]), x[2:-1]
         J = np.empty((m, m + 1))
         p1, p2 = self.parameters
-        domains = {0: PARAMETERS[p1].domain, m: PARAMETERS[p2].domain}
-        for j in range(m + 1):
-            h = _FD_STEP * max(1.0, abs(x[j]))
-            lo_dom, hi_dom = domains.get(j, (-math.inf, math.inf))
-            up, down = x.copy(), x.copy()
-            if x[j] + h <= hi_dom:  # one-sided at the boundary of the parameter's domain
-                up[j] = x[j] + h
-            if x[j] - h >= lo_dom:
-                down[j] = x[j] - h
-            J[:, j] = (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
-                / (up[j] - down[j])
+        for j, name in ((0, p1), (m, p2)):
+            if self._general and name not in STEPPED_PARAMETERS:
+                J[:, j] = self._parameter_column(pc, x, j, name)
+                continue
+            h = _STEP * max(1.0, abs(x[j]))
+            J[:, j] = self._residual(pc.stepped(name, h), delta, extras).imag / h
+        still = pc.stepped(None, 0.0)
+        h = _STEP * max(1.0, abs(delta))
+        J[:, 1] = self._residual(still, complex(delta, h), extras).imag / h
+        closed = self._extra_columns(pc, delta, extras)
+        if closed is not None:
+            J[:, 2:m] = closed
+        else:
+            for k in range(extras.size):
+                h = _STEP * max(1.0, abs(extras[k]))
+                stepped = extras.astype(complex)
+                stepped[k] += 1j * h
+                J[:, 2 + k] = self._residual(still, delta, stepped).imag / h
         self._jac_cache = (x, J)
         return J
+
+    def _parameter_column(self, pc: GeneralPieces, x: np.ndarray, j: int, name: str
+                          ) -> np.ndarray:
+        """``dF/d name`` on the first-order path, where no exact complex step exists
+        (:mod:`impactcont.problems.general_pieces`): central differences of the residual
+        with the step ``1e-6 max(1, |p|)``, one-sided at the boundary of the parameter's
+        domain; the rows that depend on ``omega`` or ``R`` only through ``c, s`` (eq. 14,
+        and the fold condition) from the exact ``dc, ds``."""
+        h = _FD_STEP * max(1.0, abs(x[j]))
+        lo_dom, hi_dom = PARAMETERS[name].domain
+        up, down = x.copy(), x.copy()
+        if x[j] + h <= hi_dom:
+            up[j] = x[j] + h
+        if x[j] - h >= lo_dom:
+            down[j] = x[j] - h
+        column = (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
+            / (up[j] - down[j])
+        if name in ("omega", "R"):
+            dc, ds = pc.cs_derivative(name)
+            cd, sd = math.cos(x[1]), math.sin(x[1])
+            column[0] = dc * cd + ds * sd
+            if self.kind == "SN":
+                column[1] = -dc * sd + ds * cd
+        return column
+
+    def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray
+                       ) -> np.ndarray | None:
+        """``dF/d extras`` in closed form, shape (m, m - 2), or None (complex steps)."""
+        return None
 
     # -- for subclasses -------------------------------------------------------------------------
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
@@ -454,7 +570,7 @@ class FoldCurve(CurveProblem):
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         c, s = pc.S0
-        return np.array([-c * math.sin(delta) + s * math.cos(delta)])
+        return np.array([-c * np.sin(delta) + s * np.cos(delta)])
 
 
 class PeriodDoublingCurve(CurveProblem):
@@ -506,13 +622,36 @@ class NeimarkSackerCurve(CurveProblem):
         self._ref = np.eye(m, dtype=complex)[0]
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        # in real arithmetic on (Re v, Im v), so that a complex step differentiates it
         m = 2 * self.osc.n
         theta = extras[0]
-        v = extras[1:1 + m] + 1j * extras[1 + m:1 + 2 * m]
+        vr, vi = extras[1:1 + m], extras[1 + m:1 + 2 * m]
         G, _ = pc.jacobian(delta)
-        eig = G @ v - complex(math.cos(theta), math.sin(theta)) * v
-        norm = np.vdot(self._ref, v) - 1.0
-        return np.concatenate([eig.real, eig.imag, [norm.real, norm.imag]])
+        ct, st = np.cos(theta), np.sin(theta)
+        rr, ri = self._ref.real, self._ref.imag
+        return np.concatenate([G @ vr - (ct * vr - st * vi), G @ vi - (st * vr + ct * vi),
+                               [rr @ vr + ri @ vi - 1.0, rr @ vi - ri @ vr]])
+
+    def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        """``d/d(theta, Re v, Im v)`` of ``[r, G v - e^{i theta} v, <v_ref, v> - 1]``."""
+        m = 2 * self.osc.n
+        theta = extras[0]
+        vr, vi = extras[1:1 + m], extras[1 + m:1 + 2 * m]
+        G, _ = pc.jacobian(delta)
+        ct, st = math.cos(theta), math.sin(theta)
+        eye = np.eye(m)
+        J = np.zeros((1 + 2 * m + 2, 1 + 2 * m))
+        J[1:1 + m, 0] = st * vr + ct * vi
+        J[1 + m:1 + 2 * m, 0] = -(ct * vr - st * vi)
+        J[1:1 + m, 1:1 + m] = G - ct * eye
+        J[1:1 + m, 1 + m:] = st * eye
+        J[1 + m:1 + 2 * m, 1:1 + m] = -st * eye
+        J[1 + m:1 + 2 * m, 1 + m:] = G - ct * eye
+        J[1 + 2 * m, 1:1 + m] = self._ref.real
+        J[1 + 2 * m, 1 + m:] = self._ref.imag
+        J[2 + 2 * m, 1:1 + m] = -self._ref.imag
+        J[2 + 2 * m, 1 + m:] = self._ref.real
+        return J
 
     def extras_from_orbit(self, orbit: PeriodicOrbit) -> np.ndarray:
         """``theta`` and ``v`` of the complex multiplier closest to the unit circle."""
@@ -610,8 +749,8 @@ class GrazingCurve(CurveProblem):
     extra_names = ("tangency_time",)
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        x1, v1 = pc.mass1(delta, float(extras[0]))
-        return np.array([x1 - pc.osc.b, v1])
+        x1, v1 = pc.mass1(delta, extras[0])
+        return np.array([x1 - pc.b, v1])
 
     def extras_from_orbit(self, orbit: PeriodicOrbit) -> np.ndarray:
         """The time of the highest interior maximum of x1."""

@@ -13,16 +13,15 @@ import math
 import numpy as np
 
 from impactcont.errors import ParameterError
+from impactcont.model.modal import DAMPING_PARAMETERS, decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
+from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem"]
 
-_DAMPING_DIRECTION = {"eta": (0.0, 1.0), "alpha": (0.5, 0.0), "beta": (0.0, 0.5)}
-"""``d a_i / d lam = p + q omega_i^2`` for the damping parameters (``a_i = eta omega_i^2``,
-``a_i = (alpha + beta omega_i^2) / 2``)."""
 _KERNEL_WHICH = {"omega": 0, "R": 1, "eta": 2, "alpha": 2, "beta": 2}
 
 
@@ -57,16 +56,18 @@ class PeriodicBranchProblem:
         self.osc = osc
         self.N = N
         self.parameter = parameter
-        w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
-        self._w = w
-        if parameter in _DAMPING_DIRECTION:
-            p, q = _DAMPING_DIRECTION[parameter]
-            self._da = p + q * w * w
-        else:
-            self._da = np.zeros_like(w)
+        self._general = osc.general  # general damping matrix or complex F: first-order path
         self._cache: dict[float, tuple[float, float, float]] = {}
         self._per_unit_force: tuple[float, float] | None = None  # c, s at F0 = 1
         self._osc_cache: dict[float, ImpactOscillator] = {}
+        if self._general:
+            return
+        w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
+        self._w = w
+        if parameter in DAMPING_PARAMETERS:
+            self._da = decay_rate_derivative(parameter, w)
+        else:
+            self._da = np.zeros_like(w)
 
     # -- the oscillator along the branch ------------------------------------------------------
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -88,7 +89,7 @@ class PeriodicBranchProblem:
             omega = lam
         elif self.parameter == "R":
             R = lam
-        elif self.parameter in _DAMPING_DIRECTION:
+        elif self.parameter in DAMPING_PARAMETERS:
             current = float(getattr(osc, self.parameter) or 0.0)
             a = a + (lam - current) * self._da
         return a, R, omega
@@ -108,6 +109,10 @@ class PeriodicBranchProblem:
             self._check(lam)
             c, s = self._unit_amplitude()
             value = (c * lam, s * lam, self.osc.b)
+        elif self._general:
+            self._check(lam)
+            c, s = general.amplitude(self.oscillator_at(lam), self.N)[:2]
+            value = (c, s, lam if self.parameter == "b" else self.osc.b)
         else:
             self._check(lam)
             a, R, omega = self._arguments(lam)
@@ -122,6 +127,9 @@ class PeriodicBranchProblem:
         """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
         from impactcont.orbit import kernel
 
+        if self._per_unit_force is None and self._general:
+            c, s = general.amplitude(self.osc, self.N)[:2]
+            self._per_unit_force = (c / self.osc.F0, s / self.osc.F0)
         if self._per_unit_force is None:
             a, R, omega = self._arguments(self.osc.F0)
             c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
@@ -146,6 +154,9 @@ class PeriodicBranchProblem:
         self._check(lam)
         if self.parameter == "F0":
             return (*self._unit_amplitude(), 0.0)
+        if self._general:
+            _, _, dc, ds = general.amplitude(self.oscillator_at(lam), self.N, self.parameter)
+            return dc, ds, 0.0
         a, R, omega = self._arguments(float(lam))
         dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R, omega,
                                              self.N, _KERNEL_WHICH[self.parameter], self._da)

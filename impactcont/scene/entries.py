@@ -23,7 +23,7 @@ import numpy as np
 
 from impactcont.branch import continuation
 from impactcont.detection import LABELS
-from impactcont.errors import ImpactcontError
+from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.model.stops import Stops
 from impactcont.orbit.robust import robust_stability
@@ -102,9 +102,10 @@ class OscillatorSpec:
     Give the stiffness as ``K`` (a full symmetric matrix) or ``springs`` (the
     chain of eq. 2), the mass as ``M`` or ``masses`` (default: unit masses),
     and the damping as ``eta`` (``C = 2 eta K``) or ``alpha``/``beta``
-    (``C = alpha M + beta K``); none means undamped. ``stop_mass``, ``b_low`` and
-    ``R_low`` place the stops on another mass and add a lower stop
-    (:class:`~impactcont.model.stops.Stops`).
+    (``C = alpha M + beta K``) or a damping matrix ``C``; none means undamped.
+    ``F_imag`` (the imaginary part of F) gives the masses their own forcing phases.
+    ``stop_mass``, ``b_low`` and ``R_low`` place the stops on another mass and add a
+    lower stop (:class:`~impactcont.model.stops.Stops`).
     """
 
     M: tuple | None = declare(RealArray(2), "mass matrix (symmetric positive definite)")
@@ -118,6 +119,8 @@ class OscillatorSpec:
     eta: float | None = declare(_NONNEGATIVE, "damping C = 2 eta K (the paper's)")
     alpha: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
     beta: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
+    C: tuple | None = declare(RealArray(2), "damping matrix (symmetric positive semi-definite)")
+    F_imag: tuple | None = declare(RealArray(1), "imaginary part of F: per-mass forcing phases")
     stop_mass: int | None = declare(Integer(1), "the mass meeting the stops (1-based; "
                                     "default 1)")
     b_low: float | None = declare(Real(), "a lower stop at x_j = -b_low (j = stop_mass)")
@@ -137,6 +140,9 @@ class OscillatorSpec:
             key = "alpha" if "alpha" in values else "beta"
             raise where.key(key).error("give either eta or alpha/beta, not both",
                                        "eta (C = 2 eta K) or alpha, beta (C = alpha M + beta K)")
+        if "C" in values and {"eta", "alpha", "beta"} & set(values):
+            raise where.key("C").error("give either a damping matrix C or eta or alpha/beta",
+                                       "C (any damping matrix) without eta, alpha, beta")
         spec = cls(**values)
         try:
             spec.build()
@@ -149,7 +155,15 @@ class OscillatorSpec:
         """The :class:`~impactcont.ImpactOscillator` this table describes."""
         damping = {k: getattr(self, k) for k in ("eta", "alpha", "beta")
                    if getattr(self, k) is not None}
-        params = {"F": list(self.F), "R": self.R, "b": self.b, "omega": self.omega, **damping}
+        if self.C is not None:
+            damping["C"] = np.array(self.C, dtype=float)
+        F = np.array(self.F, dtype=float)
+        if self.F_imag is not None:
+            if len(self.F_imag) != F.size:
+                raise ParameterError(f"F_imag must have the length of F ({F.size}); got "
+                                     f"{list(self.F_imag)!r}")
+            F = F + 1j * np.array(self.F_imag, dtype=float)
+        params = {"F": F, "R": self.R, "b": self.b, "omega": self.omega, **damping}
         if self.stop_mass is not None or self.b_low is not None or self.R_low is not None:
             params["stops"] = Stops(mass=1 if self.stop_mass is None else self.stop_mass,
                                     b_low=self.b_low, R_low=self.R_low)
@@ -251,6 +265,9 @@ def refuse_changes(entry: EntrySpec, where: Where, why: str) -> None:
 
 
 def _check_damping_parameter(name: str, osc: ImpactOscillator, where: Where) -> None:
+    if name in ("eta", "alpha", "beta") and osc.general_damping:
+        raise where.error(f"{name!r} is meaningless with a damping matrix C",
+                          "omega, b, R, F0 (C fixes the damping)")
     if name == "eta" and osc.eta is None:
         raise where.error("'eta' needs the paper's damping C = 2 eta K; the oscillator uses "
                           "alpha/beta", "alpha, beta (the damping the oscillator uses)")

@@ -6,10 +6,10 @@ are the same problem for the signed coordinate ``y = s x_j`` (``s = +1`` for the
 upper stop, ``-1`` for the lower) reaching the level ``s c`` from below
 (``c = b`` or ``-b_low``), so the reliable bracketing of
 :mod:`impactcont.orbit.extrema` (cells cut at the critical points of ``x_j``, each
-root polished to a few ulps) serves both stops: :class:`StopMotion` is the
-evaluator of ``y`` and its derivatives, :func:`next_contact` the first impact on
-either stop, :func:`flight_clearances` the interior check of eq. (16) against
-both stops.
+root polished to a few ulps) serves both stops: ``flow.motion(X0, delta, j, s)``
+is the evaluator of ``y`` and its derivatives (modal or first-order flow),
+:func:`next_contact` the first impact on either stop, :func:`flight_clearances`
+the interior check of eq. (16) against both stops.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ import numpy as np
 
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.extrema import critical_points, first_upward_crossing, sample_times
-from impactcont.orbit.flow import Flow, Mass1Motion
+from impactcont.orbit.flow import Flow
 
-__all__ = ["StopMotion", "flight_clearances", "next_contact", "stop_sign"]
+__all__ = ["flight_clearances", "next_contact", "stop_sign"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -30,31 +30,6 @@ TWO_PI = 2.0 * math.pi
 def stop_sign(stop: str) -> float:
     """``+1`` for the upper stop (met moving up), ``-1`` for the lower (met moving down)."""
     return 1.0 if stop == UPPER else -1.0
-
-
-class StopMotion(Mass1Motion):
-    """``s x_j(t)`` and its first three time derivatives along one flight.
-
-    :class:`~impactcont.orbit.flow.Mass1Motion` with the row ``s u[j]`` of the
-    modal matrix in place of ``u[0]`` (O(n) per time).
-
-    Parameters
-    ----------
-    flow : Flow
-    X0 : ndarray, shape (2n,)
-        State at the start of the flight.
-    delta : float
-        Forcing phase at the start.
-    index : int
-        0-based index ``j`` of the impacting mass.
-    sign : float
-        ``+1`` (towards the upper stop) or ``-1`` (towards the lower stop).
-    """
-
-    def __init__(self, flow: Flow, X0: np.ndarray, delta: float, index: int,
-                 sign: float = 1.0) -> None:
-        super().__init__(flow, X0, delta)
-        self.u0 = sign * flow.u[index] if sign != 1.0 else flow.u[index]
 
 
 def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
@@ -83,7 +58,7 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
     """
     osc = flow.osc
     j = osc.stops.index
-    motion = StopMotion(flow, X0, delta, j)
+    motion = flow.motion(X0, delta, j)
     cp = critical_points(motion, sample_times(flow, 0.0, tau, row=j))
     gap_u = gap_l = math.inf
     t_u = t_l = math.nan
@@ -128,7 +103,7 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     j = osc.stops.index
     after = after or {}
     stops = [UPPER, LOWER] if osc.stops.two_sided else [UPPER]
-    motions = {s: StopMotion(flow, X, phase, j, stop_sign(s)) for s in stops}
+    motions = {s: flow.motion(X, phase, j, stop_sign(s)) for s in stops}
     levels = {s: stop_sign(s) * osc.stops.position(s, osc.b) for s in stops}
     below = dict.fromkeys(stops, True)
     window = TWO_PI / flow.omega

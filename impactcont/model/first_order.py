@@ -1,0 +1,217 @@
+"""First-order complex modes: the exact flow of eq. (1) with any damping matrix C.
+
+With a damping matrix that is not proportional (``C != alpha M + beta K``) the
+undamped modes of eq. (5) no longer decouple eq. (1). The first-order form
+``X' = A X + [0; M^-1 Re(F e^{i(omega t + delta)})]`` with ``X = [x; x']`` and
+
+    A = [[0, I], [-M^-1 K, -M^-1 C]]                                      (eq. 1, first order)
+
+is diagonalised by its eigenvectors, ``A = V diag(lambda_k) V^-1``; each complex mode
+evolves as ``exp(lambda_k t)``, so the free flow of eq. (9) is, in closed form,
+
+    Phi(t) = U W(t) U^-1 = Re(V diag(exp(lambda_k t)) V^-1)                (eq. 9, general C)
+
+(real up to rounding, since the modes of a real A come in conjugate pairs) and the
+steady forced response is ``X_p(t) = Re(Z e^{i(omega t + delta)})`` with
+``Z = [x_hat; i omega x_hat]``, ``(K - omega^2 M + i omega C) x_hat = F`` (eq. 7 in
+physical coordinates; complex ``F`` carries per-mass phases, see
+:class:`impactcont.model.oscillator.ImpactOscillator`).
+
+Over-damped modes are real eigenvalues, ``exp(lambda t)`` with ``lambda < 0``: no
+overflow and no cancellation. Repeated eigenvalues with independent eigenvectors
+(a symmetric structure) are diagonalised like any others. A defective eigenvalue (an
+exactly critically damped mode) has no eigenvector basis, and near one (nearly critical
+damping) the basis is ill-conditioned: the error of ``Phi`` is about
+``eps * cond(V)``. The 2-norm condition number of the column-normalised ``V`` is
+therefore computed with the basis; above :data:`COND_WARN` an
+:class:`~impactcont.errors.IllConditionedWarning` states the error bound, above
+:data:`COND_REFUSE` the basis is refused (:class:`~impactcont.errors.ParameterError`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import warnings
+
+import numpy as np
+import scipy.linalg
+
+from impactcont.errors import (
+    IllConditionedWarning,
+    NearResonanceWarning,
+    ParameterError,
+    ResonanceError,
+)
+
+__all__ = ["COND_REFUSE", "COND_WARN", "FirstOrderBasis"]
+
+_EPS = float(np.finfo(float).eps)
+
+#: Warn when the eigenvector matrix's condition number exceeds this (error ~ 2e-11 of Phi).
+COND_WARN = 1e5
+#: Refuse the decomposition above this condition number (error ~ 2e-8 of Phi).
+COND_REFUSE = 1e8
+# warn when the forced response is known to worse than this (relative)
+_RESONANCE_REL_ERROR_WARN = 1e-8
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FirstOrderBasis:
+    """Complex first-order modes ``A = V diag(lambda) V^-1`` of eq. (1) with any C.
+
+    Attributes
+    ----------
+    M, K, C : ndarray, shape (n, n)
+        The system matrices (C symmetric positive semi-definite).
+    A : ndarray, shape (2n, 2n)
+        ``[[0, I], [-M^-1 K, -M^-1 C]]``.
+    eigenvalues : ndarray, shape (2n,), complex
+        ``lambda_k``; real parts ``<= 0``. Conjugate pairs are exact (LAPACK ``dgeev``).
+    V, V_inv : ndarray, shape (2n, 2n), complex
+        Right eigenvectors (unit 2-norm columns) and their inverse (rows are the left
+        eigenvectors, scaled so that ``V_inv V = I``).
+    condition : float
+        2-norm condition number of ``V``: the flow carries a relative error of about
+        ``eps * condition``.
+    """
+
+    M: np.ndarray
+    K: np.ndarray
+    C: np.ndarray
+    A: np.ndarray
+    eigenvalues: np.ndarray
+    V: np.ndarray
+    V_inv: np.ndarray
+    condition: float
+
+    @classmethod
+    def from_matrices(cls, M: np.ndarray, K: np.ndarray, C: np.ndarray) -> FirstOrderBasis:
+        """Eigen-decompose the first-order matrix A, checking its conditioning.
+
+        Raises
+        ------
+        ParameterError
+            If the eigenvector matrix is singular or its condition number exceeds
+            :data:`COND_REFUSE` (a defective or nearly defective eigenvalue, e.g. a
+            critically damped mode).
+
+        Warns
+        -----
+        IllConditionedWarning
+            If the condition number exceeds :data:`COND_WARN`.
+        """
+        n = M.shape[0]
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        A[n:, :n] = -np.linalg.solve(M, K)
+        A[n:, n:] = -np.linalg.solve(M, C)
+        lam, V = scipy.linalg.eig(A)  # balanced dgeev: conjugate pairs exact
+        # reproducible order: slowest decay first, then by frequency (conjugates adjacent)
+        order = np.lexsort((-lam.imag, np.abs(lam.imag), -lam.real))
+        lam, V = lam[order], V[:, order]
+        V = V / np.linalg.norm(V, axis=0)
+        cond = float(np.linalg.cond(V))
+        gaps = np.abs(lam[:, None] - lam[None, :]) + np.diag(np.full(2 * n, np.inf))
+        i, j = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
+        closest = f"the closest eigenvalues are {complex(lam[i]):.12g} and {complex(lam[j]):.12g}"
+        if not cond <= COND_REFUSE:
+            raise ParameterError(
+                f"C={C.tolist()}: the first-order eigen-decomposition of eq. (1) is defective or "
+                f"nearly so (condition number of the eigenvector matrix {cond:.3g} > "
+                f"{COND_REFUSE:.0e}; {closest}), so the exact flow would carry a relative "
+                f"error of about {min(cond * _EPS, 1.0):.1g}. Typical cause: a critically damped "
+                "mode. Move the damping away from critical, or use proportional damping "
+                "(eta or alpha/beta), whose modal path handles critical modes exactly")
+        if cond > COND_WARN:
+            warnings.warn(
+                f"the first-order eigenvector matrix of eq. (1) has condition number {cond:.3g} "
+                f"(> {COND_WARN:.0e}; {closest}): the flow may carry a relative error of about "
+                f"{cond * _EPS:.1g} (nearly critical damping)", IllConditionedWarning,
+                stacklevel=3)
+        V_inv = np.linalg.inv(V)
+        for x in (A, lam, V, V_inv):
+            x.setflags(write=False)
+        return cls(M=M, K=K, C=C, A=A, eigenvalues=lam, V=V, V_inv=V_inv, condition=cond)
+
+    @functools.cached_property
+    def scalar_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The modes grouped in n pairs, each the two roots of one real scalar equation
+        ``y'' + 2 a y' + w^2 y = 0`` (``w^2 = lambda_k lambda_j``, ``2 a = -(lambda_k +
+        lambda_j)``): a complex conjugate pair, or two real (over-damped) eigenvalues,
+        adjacent in value. A real combination ``Re(c_k e^{lambda_k t} + c_j e^{lambda_j t})``
+        of a pair is then ``W11(t) y(0) + W12(t) y'(0)`` with the exact, cancellation-free
+        modal transfer of eq. (9), so the proportional kernel's interior-contact search
+        (eq. 16) serves any C.
+
+        Returns
+        -------
+        w, a : ndarray, shape (n,)
+            ``w > 0`` and ``a >= 0`` of each pair.
+        k, j : ndarray of int, shape (n,)
+            Indices of the pair's two eigenvalues (``Im lambda_k >= 0``).
+        """
+        lam = self.eigenvalues
+        upper = [int(i) for i in np.flatnonzero(lam.imag > 0)]
+        lower = [int(i) for i in np.flatnonzero(lam.imag < 0)]
+        real = sorted((int(i) for i in np.flatnonzero(lam.imag == 0)), key=lambda i: lam[i].real)
+        ks, js = [], []
+        for k in upper:  # the exact conjugate (LAPACK), else the nearest one
+            j = min(lower, key=lambda i: abs(lam[i] - lam[k].conjugate()))
+            lower.remove(j)
+            ks.append(k)
+            js.append(j)
+        ks += real[0::2]
+        js += real[1::2]
+        k_idx, j_idx = np.array(ks, dtype=np.int64), np.array(js, dtype=np.int64)
+        prod = (lam[k_idx] * lam[j_idx]).real
+        w = np.sqrt(np.maximum(prod, 0.0))
+        a = -0.5 * (lam[k_idx] + lam[j_idx]).real
+        return w, a, k_idx, j_idx
+
+    def transition(self, t: float) -> np.ndarray:
+        """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, the free flow over time t (2n, 2n)."""
+        return ((self.V * np.exp(self.eigenvalues * float(t))) @ self.V_inv).real
+
+    def forced_amplitude(self, F: np.ndarray, omega: float) -> np.ndarray:
+        """Complex amplitude ``Z`` of the steady forced state, ``X_p = Re(Z e^{i theta})``.
+
+        ``(K - omega^2 M + i omega C) x_hat = F`` and ``Z = [x_hat; i omega x_hat]``
+        (eq. 7 in physical coordinates), with ``theta = omega t + delta``.
+
+        Raises
+        ------
+        ResonanceError
+            If the dynamic stiffness is singular (omega at an undamped resonance).
+
+        Warns
+        -----
+        NearResonanceWarning
+            If its condition number makes ``x_hat`` inexact beyond 1e-8 (relative).
+        """
+        H = self.K - omega * omega * self.M + 1j * omega * self.C
+        cond = float(np.linalg.cond(H))
+        if not math.isfinite(cond) or cond * _EPS >= 1.0:
+            raise ResonanceError(
+                f"omega={omega!r} is a natural frequency of an undamped mode (the dynamic "
+                f"stiffness K - omega^2 M + i omega C is singular, condition number {cond:.3g}): "
+                "the forced response of eq. (6) does not exist; choose another omega or add "
+                "damping to that mode")
+        if cond * _EPS > _RESONANCE_REL_ERROR_WARN:
+            warnings.warn(
+                f"omega={omega!r} is so close to the natural frequency of a lightly damped mode "
+                f"that the forced response (eq. 7) is known only to a relative error of about "
+                f"{cond * _EPS:.1g} (condition number {cond:.3g} of K - omega^2 M + i omega C)",
+                NearResonanceWarning, stacklevel=3)
+        x_hat = np.linalg.solve(H, np.asarray(F, dtype=complex))
+        return np.concatenate([x_hat, 1j * omega * x_hat])
+
+    def forced_amplitude_derivative(self, Z: np.ndarray, omega: float) -> np.ndarray:
+        """``dZ/d omega`` of :meth:`forced_amplitude` (exact):
+        ``d x_hat = -H^-1 (-2 omega M + i C) x_hat``, ``Z = [x_hat; i omega x_hat]``."""
+        n = self.M.shape[0]
+        x_hat = Z[:n]
+        H = self.K - omega * omega * self.M + 1j * omega * self.C
+        dx = -np.linalg.solve(H, (-2.0 * omega * self.M + 1j * self.C) @ x_hat)
+        return np.concatenate([dx, 1j * x_hat + 1j * omega * dx])

@@ -1,0 +1,482 @@
+"""A general damping matrix C: the first-order complex-mode path against its witnesses.
+
+- proportional C given as a matrix: the first-order path against the modal kernel
+  (orbit state, c/s, impact velocity, G, multipliers) to 1e-12;
+- non-proportional C: the flow and the periodic motion against ``scipy.linalg.expm`` of
+  the first-order system augmented with the forcing oscillator, G assembled from the
+  expm pieces (eq. 22-25), and a 50-digit mpmath reference of the fixed point;
+- the event-driven simulator (impacts repeat over 50 periods) and finite differences
+  of its impact map (G);
+- branches: special points against a recomputation of G by the expm reference;
+- the refusals: bad C, C with eta/alpha/beta, continuation in the damping parameters,
+  a defective (critically damped) decomposition.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mpmath
+import numpy as np
+import pytest
+import scipy.linalg
+from _scene_data import SMALL_SCENE, write
+from test_periodic import section_point, simulated_impact_map
+
+import impactcont as ic
+from impactcont.errors import IllConditionedWarning, ParameterError
+from impactcont.orbit import general
+from impactcont.orbit.batched import batched_orbits
+from impactcont.orbit.flow import GeneralFlow
+from impactcont.orbit.periodic import amplitude_squared
+from impactcont.scene import SceneError, load_scene, read_output, run_scene
+
+K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])
+
+
+def _damper_on_mass1() -> ic.ImpactOscillator:
+    """n = 2, unequal masses, a dashpot on mass 1 (and a weak one on mass 2)."""
+    return ic.ImpactOscillator(M=np.diag([1.0, 1.5]), K=K2, C=[[0.3, 0.0], [0.0, 0.02]],
+                               F=[1.0, 0.0], R=0.6, b=0.3, omega=1.0)
+
+
+def _chain3_overdamped() -> ic.ImpactOscillator:
+    """n = 3 chain, a heavy dashpot on mass 3: two real (over-damped) eigenvalues."""
+    return ic.ImpactOscillator.chain(masses=[1.0, 1.2, 0.8], springs=[1.0, 1.5, 2.0],
+                                     C=np.diag([0.05, 0.0, 6.0]), F=[1.0, 0.0, 0.3], R=0.7,
+                                     b=0.1, omega=1.1)
+
+
+NONPROPORTIONAL = {"damper_on_mass1": _damper_on_mass1, "chain3_overdamped": _chain3_overdamped}
+
+
+# -- the expm reference -------------------------------------------------------------------------
+def _augmented(osc: ic.ImpactOscillator) -> np.ndarray:
+    """``d/dt [X; cos theta; sin theta]``: eq. (1) in first order with the forcing's own
+    oscillator (theta = omega t + delta), so one ``expm`` gives the whole flow."""
+    n = osc.n
+    Minv = np.linalg.inv(osc.M)
+    F = np.asarray(osc.F, dtype=complex)
+    A = np.zeros((2 * n + 2, 2 * n + 2))
+    A[:n, n:2 * n] = np.eye(n)
+    A[n:2 * n, :n] = -Minv @ osc.K
+    A[n:2 * n, n:2 * n] = -Minv @ osc.C
+    A[n:2 * n, 2 * n] = Minv @ F.real  # Re(F e^{i theta}) = F_r cos - F_i sin
+    A[n:2 * n, 2 * n + 1] = -Minv @ F.imag
+    A[2 * n, 2 * n + 1] = -osc.omega
+    A[2 * n + 1, 2 * n] = osc.omega
+    return A
+
+
+def _expm_orbit_pieces(osc, N, E=None):
+    """``Phi``, the forcing columns, and the fixed point's S by expm (eq. 12-13); `E`, the
+    flow of the augmented system over T, when computed otherwise (mpmath)."""
+    n = osc.n
+    T = 2.0 * math.pi * N / osc.omega
+    if E is None:
+        E = scipy.linalg.expm(_augmented(osc) * T)
+    Phi, P = E[:2 * n, :2 * n], E[:2 * n, 2 * n:]
+    d = np.ones(2 * n)
+    d[n] = -osc.R
+    S = np.linalg.solve(np.eye(2 * n) - d[:, None] * Phi, d[:, None] * P)
+    return T, Phi, P, S, d
+
+
+def _expm_G(osc, N, delta, E=None):
+    """G of eq. (25) assembled from the expm pieces (independent of impactcont's)."""
+    n = osc.n
+    T, Phi, P, S, d = _expm_orbit_pieces(osc, N, E)
+    cs = np.array([math.cos(delta), math.sin(delta)])
+    X0 = S @ cs
+    Xa = np.concatenate([Phi @ X0 + P @ cs, cs * 0.0])
+    Xa[2 * n:] = [math.cos(delta + osc.omega * T), math.sin(delta + osc.omega * T)]
+    dX = d * (_augmented(osc) @ Xa)[:2 * n]
+    DPhi = d[:, None] * Phi
+    dE = d * (P @ np.array([-math.sin(delta), math.cos(delta)]))
+    h2 = dX[0]
+    p = DPhi[0, 1:]
+    G = np.empty((2 * n, 2 * n))
+    G[:-1, :-1] = DPhi[1:, 1:] - np.outer(dX[1:], p) / h2
+    G[:-1, -1] = dE[1:] - dX[1:] * dE[0] / h2
+    G[-1, :-1] = -osc.omega * p / h2
+    G[-1, -1] = 1.0 - osc.omega * dE[0] / h2
+    return G, X0, h2
+
+
+def _expm_highest_interior_x1(osc, N, delta, steps=20000):
+    """Highest interior local maximum of x1 over a period, by the expm semigroup on a fine
+    grid (one-step propagator) and a parabola through the three best samples."""
+    T, _, _, S, _ = _expm_orbit_pieces(osc, N)
+    h = T / steps
+    step = scipy.linalg.expm(_augmented(osc) * h)
+    X = np.concatenate([S @ [math.cos(delta), math.sin(delta)], [math.cos(delta),
+                                                                  math.sin(delta)]])
+    x1 = np.empty(steps + 1)
+    for k in range(steps + 1):
+        x1[k] = X[0]
+        X = step @ X
+    interior = np.flatnonzero((x1[1:-1] >= x1[:-2]) & (x1[1:-1] >= x1[2:])) + 1
+    best = -math.inf
+    for k in interior:
+        a, b, c = x1[k - 1], x1[k], x1[k + 1]
+        den = a - 2 * b + c
+        best = max(best, b - 0.125 * (c - a) ** 2 / den if den != 0 else b)
+    return best
+
+
+# -- proportional C through the general path ----------------------------------------------------
+PROPORTIONAL = [
+    ({"eta": 0.1}, 1.0, 0.6, 1),
+    ({"eta": 0.1}, 2.4, 0.0, 2),
+    ({"alpha": 0.05, "beta": 0.3}, 1.3, 0.2, 1),
+    ({"alpha": 0.0, "beta": 1.4}, 0.9, 0.1, 1),  # the higher mode over-damped (xi = 1.83)
+]
+
+
+@pytest.mark.parametrize(("damping", "omega", "b", "N"), PROPORTIONAL)
+def test_general_path_on_proportional_C_agrees_with_the_modal_path(damping, omega, b, N):
+    prop = ic.ImpactOscillator(M=np.diag([1.0, 1.3]), K=K2, F=[1.0, 0.4], R=0.6, b=b,
+                               omega=omega, **damping)
+    gen = ic.ImpactOscillator(M=prop.M, K=prop.K, C=prop.C, F=prop.F, R=0.6, b=b, omega=omega)
+    assert gen.general_damping and not prop.general
+    c, s = general.amplitude(gen, N)[:2]
+    assert c * c + s * s == pytest.approx(amplitude_squared(prop, N), rel=1e-12)
+    op, og = ic.periodic_orbits(prop, N), ic.periodic_orbits(gen, N)
+    assert len(op) == len(og) == 2
+    for a, g in zip(op, og, strict=True):
+        assert g.delta == pytest.approx(a.delta, abs=1e-12)
+        np.testing.assert_allclose(g.state, a.state, rtol=0, atol=1e-12 * np.abs(a.state).max())
+        assert g.impact_velocity == pytest.approx(a.impact_velocity, rel=1e-12, abs=1e-13)
+        scale = np.abs(a.G).max()
+        np.testing.assert_allclose(g.G, a.G, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(np.sort_complex(g.multipliers), np.sort_complex(a.multipliers),
+                                   rtol=0, atol=1e-12 * max(1.0, scale))
+        assert g.physical == a.physical
+        if math.isfinite(a.gap_min):
+            assert g.gap_min == pytest.approx(a.gap_min, abs=1e-12)
+
+
+@pytest.mark.parametrize("which", ["omega", "R"])
+def test_amplitude_derivatives_are_exact(which):
+    osc = _damper_on_mass1()
+    _, _, dc, ds = general.amplitude(osc, 1, which)
+    h = 1e-6 * (osc.omega if which == "omega" else 1.0)
+    plus = general.amplitude(osc.replace(**{which: getattr(osc, which) + h}), 1)
+    minus = general.amplitude(osc.replace(**{which: getattr(osc, which) - h}), 1)
+    assert dc == pytest.approx((plus[0] - minus[0]) / (2 * h), rel=1e-7)
+    assert ds == pytest.approx((plus[1] - minus[1]) / (2 * h), rel=1e-7)
+
+
+# -- non-proportional C against expm and mpmath -------------------------------------------------
+@pytest.mark.parametrize("name", NONPROPORTIONAL)
+def test_flow_against_expm(name):
+    osc = NONPROPORTIONAL[name]()
+    flow = ic.Flow(osc)
+    assert isinstance(flow, GeneralFlow)
+    rng = np.random.default_rng(3)
+    X0 = rng.standard_normal(2 * osc.n)
+    for t in (0.3, 2.0, 7.5):
+        E = scipy.linalg.expm(_augmented(osc) * t)
+        for delta in (0.0, 1.1):
+            ref = E @ np.concatenate([X0, [math.cos(delta), math.sin(delta)]])
+            np.testing.assert_allclose(flow.state(t, X0, delta)[0], ref[:2 * osc.n], rtol=0,
+                                       atol=1e-13 * np.abs(ref).max())
+            dref = (_augmented(osc) @ ref)[:2 * osc.n]
+            np.testing.assert_allclose(flow.state_derivative(t, X0, delta)[0], dref, rtol=0,
+                                       atol=1e-13 * np.abs(dref).max())
+            x, v, acc = flow.mass1(X0, delta)(np.array([t]))
+            np.testing.assert_allclose([x[0], v[0], acc[0]], [ref[0], ref[osc.n], dref[osc.n]],
+                                       rtol=0, atol=1e-13 * np.abs(dref).max())
+        np.testing.assert_allclose(flow.transition_matrix(t), E[:2 * osc.n, :2 * osc.n], rtol=0,
+                                   atol=1e-13)
+
+
+@pytest.mark.parametrize("name", NONPROPORTIONAL)
+@pytest.mark.parametrize("N", [1, 2])
+def test_orbits_and_G_against_expm(name, N):
+    osc = NONPROPORTIONAL[name]()
+    T, _, _, S, _ = _expm_orbit_pieces(osc, N)
+    c, s = general.amplitude(osc, N)[:2]
+    assert c == pytest.approx(S[0, 0], rel=1e-12)
+    assert s == pytest.approx(S[0, 1], rel=1e-12)
+    orbits = ic.periodic_orbits(osc, N)
+    assert len(orbits) == 2
+    for orbit in orbits:
+        assert orbit.period == pytest.approx(T, rel=1e-15)
+        G, X0, h2 = _expm_G(osc, N, orbit.delta)
+        assert X0[0] == pytest.approx(osc.b, abs=1e-12)
+        np.testing.assert_allclose(orbit.state, X0, rtol=0, atol=1e-12 * np.abs(X0).max())
+        assert orbit.impact_velocity == pytest.approx(h2, rel=1e-12)
+        np.testing.assert_allclose(orbit.G, G, rtol=0, atol=1e-9 * np.abs(G).max())
+        np.testing.assert_allclose(np.sort_complex(orbit.multipliers),
+                                   np.sort_complex(np.linalg.eigvals(G)), atol=1e-9)
+        # Liouville: det G = R^2 exp(-T tr(M^-1 C))
+        trace = np.trace(np.linalg.solve(osc.M, osc.C))
+        assert np.linalg.det(orbit.G) == pytest.approx(osc.R**2 * math.exp(-T * trace),
+                                                       rel=1e-10)
+
+
+def _mp_fixed_point(osc, N, dps=50):
+    """``S`` of eq. (13) at `dps` digits: mpmath ``expm`` of the augmented first-order system."""
+    with mpmath.workdps(dps):
+        n = osc.n
+        A = mpmath.matrix(_augmented(osc).tolist())
+        A[2 * n, 2 * n + 1] = -mpmath.mpf(osc.omega)
+        A[2 * n + 1, 2 * n] = mpmath.mpf(osc.omega)
+        T = 2 * mpmath.pi * N / mpmath.mpf(osc.omega)
+        E = mpmath.expm(A * T)
+        B = mpmath.eye(2 * n)
+        rhs = [mpmath.matrix(2 * n, 1), mpmath.matrix(2 * n, 1)]
+        for r in range(2 * n):
+            dr = -mpmath.mpf(osc.R) if r == n else mpmath.mpf(1)
+            for k in range(2 * n):
+                B[r, k] -= dr * E[r, k]
+            rhs[0][r], rhs[1][r] = dr * E[r, 2 * n], dr * E[r, 2 * n + 1]
+        S = [mpmath.lu_solve(B, col) for col in rhs]
+        E_float = np.array([[float(E[r, k]) for k in range(2 * n + 2)] for r in range(2 * n + 2)])
+        return (np.array([[float(S[k][r]) for k in range(2)] for r in range(2 * n)]), E_float)
+
+
+def test_orbit_against_50_digit_mpmath_reference():
+    """The entries of M^-1 K, M^-1 C and M^-1 F are exact binary fractions here, so the
+    mpmath system is the floating-point one exactly."""
+    osc = ic.ImpactOscillator(M=np.diag([1.0, 2.0]), K=K2, C=[[0.25, 0.0], [0.0, 0.0]],
+                              F=[1.0, 0.0], R=0.625, b=0.25, omega=0.75)
+    S, E = _mp_fixed_point(osc, 1)
+    c, s = general.amplitude(osc, 1)[:2]
+    assert math.hypot(S[0, 0], S[0, 1]) > 0.5  # mass 1 responds (no anti-resonance)
+    assert c == pytest.approx(S[0, 0], rel=1e-13, abs=0)
+    assert s == pytest.approx(S[0, 1], rel=1e-13, abs=0)
+    orbits = ic.periodic_orbits(osc, 1)
+    assert len(orbits) == 2
+    for orbit in orbits:
+        X0 = S @ np.array([math.cos(orbit.delta), math.sin(orbit.delta)])
+        np.testing.assert_allclose(orbit.state, X0, rtol=0, atol=1e-12 * np.abs(X0).max())
+        G = _expm_G(osc, 1, orbit.delta, E)[0]  # from the 50-digit flow, rounded once
+        np.testing.assert_allclose(orbit.G, G, rtol=0, atol=1e-9 * np.abs(G).max())
+
+
+# -- the simulator ------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", NONPROPORTIONAL)
+def test_simulator_repeats_the_motion_over_50_periods(name):
+    osc = NONPROPORTIONAL[name]()
+    orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
+    assert orbit.stable
+    res = ic.simulate(osc, orbit.state, orbit.delta, 50.5)
+    assert res.success and res.impact_times.size == 50
+    np.testing.assert_allclose(res.impact_times, orbit.period * np.arange(1, 51), rtol=0,
+                               atol=1e-9 * orbit.period)
+    np.testing.assert_allclose(res.impact_velocities, orbit.impact_velocity, rtol=1e-9)
+
+
+@pytest.mark.parametrize("name", NONPROPORTIONAL)
+def test_G_against_finite_differences_of_the_simulated_map(name):
+    osc = NONPROPORTIONAL[name]()
+    orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
+    z0 = section_point(orbit)
+    np.testing.assert_allclose(simulated_impact_map(osc, 1, z0), z0, atol=1e-11)
+    h = 1e-6
+    fd = np.empty_like(orbit.G)
+    for j in range(z0.size):
+        e = np.zeros_like(z0)
+        e[j] = h
+        fd[:, j] = (simulated_impact_map(osc, 1, z0 + e)
+                    - simulated_impact_map(osc, 1, z0 - e)) / (2 * h)
+    assert np.abs(fd - orbit.G).max() < 1e-7 * max(1.0, np.abs(orbit.G).max())
+
+
+def test_gap_min_against_a_fine_sampling():
+    osc = _chain3_overdamped()
+    for orbit in ic.periodic_orbits(osc, 2):
+        t = np.linspace(0.0, orbit.period, 200001)[1:-1]
+        x1 = ic.Flow(osc).state(t, orbit.state, orbit.delta)[:, 0]
+        assert osc.b - x1.max() == pytest.approx(orbit.gap_min, abs=1e-8)
+
+
+# -- branches -----------------------------------------------------------------------------------
+@pytest.mark.parametrize(("parameter", "bounds"), [("omega", (0.8, 3.0)), ("b", (0.0, 1.2)),
+                                                   ("R", (0.3, 0.9)), ("F0", (0.5, 2.0))])
+def test_branch_special_points_against_expm(parameter, bounds):
+    osc = _damper_on_mass1()
+    branch = ic.continuation(osc, 1, parameter, bounds)
+    assert branch.sizes["point"] > 10
+    labels = list(branch["special_label"].values)
+    checked = set()
+    for k, label in enumerate(labels):
+        if label not in ("PD", "NS", "SN", "ZV", "GR"):
+            continue
+        lam = float(branch[f"special_{parameter}"][k])
+        delta = float(branch["special_delta"][k])
+        at = osc.replace(**{parameter: lam})
+        G, _, h2 = _expm_G(at, 1, delta)
+        mu = np.linalg.eigvals(G)
+        if label == "ZV":  # zero impact velocity
+            assert abs(h2) < 1e-9
+        elif label == "GR":  # grazing: the highest interior maximum of x1 touches the stop
+            assert abs(_expm_highest_interior_x1(at, 1, delta) - at.b) < 1e-9
+        elif label == "PD":
+            assert np.min(np.abs(mu + 1.0)) < 1e-8
+        elif label == "NS":
+            assert np.min(np.abs(np.abs(mu[np.abs(mu.imag) > 1e-6]) - 1.0)) < 1e-8
+        else:  # fold of eq. (15): c^2 + s^2 = b^2, i.e. the residual and its delta-derivative
+            S = _expm_orbit_pieces(at, 1)[3]
+            assert math.hypot(S[0, 0], S[0, 1]) == pytest.approx(abs(at.b), rel=1e-9)
+        checked.add(label)
+    expected = {"omega": {"GR", "NS", "ZV", "SN", "PD"}, "b": {"SN", "ZV", "PD"},
+                "R": set(), "F0": {"PD", "ZV", "SN"}}[parameter]
+    assert checked == expected, labels
+
+
+def test_damping_parameters_are_refused_for_continuation():
+    osc = _damper_on_mass1()
+    for name in ("eta", "alpha", "beta"):
+        with pytest.raises(ParameterError, match="meaningless with a general damping matrix"):
+            ic.continuation(osc, 1, name, (0.0, 0.5))
+
+
+def test_stability_map_matches_point_orbits():
+    osc = _damper_on_mass1()
+    omega = np.array([0.9, 1.0, 1.7])
+    b = np.array([0.0, 0.3])
+    out = batched_orbits(osc, 1, omega, b)
+    for i, w in enumerate(omega):
+        for j, bb in enumerate(b):
+            orbits = ic.periodic_orbits(osc.replace(omega=float(w), b=float(bb)), 1)
+            assert out["exists"][i, j] == bool(orbits)
+            for k, orbit in enumerate(orbits):
+                assert out["delta"][i, j, k] == pytest.approx(orbit.delta, abs=1e-12)
+                assert out["stable"][i, j, k] == orbit.stable
+                assert out["spectral_radius"][i, j, k] == pytest.approx(orbit.spectral_radius,
+                                                                        rel=1e-12)
+
+
+# -- construction, serialisation and refusals ---------------------------------------------------
+def test_json_round_trip_keeps_C():
+    osc = _damper_on_mass1()
+    back = ic.ImpactOscillator.from_json(osc.to_json())
+    assert back.general_damping
+    np.testing.assert_array_equal(back.C, osc.C)
+    assert ic.periodic_orbits(back, 1)[1].delta == ic.periodic_orbits(osc, 1)[1].delta
+    prop = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.6, omega=1.0, eta=0.1)
+    assert "C" not in prop.to_dict()
+    assert not prop.replace(eta=0.2).general_damping
+
+
+@pytest.mark.parametrize(("C", "match"), [
+    ([[0.1, 0.2], [0.0, 0.1]], "C must be symmetric"),
+    ([[0.1, 0.0], [0.0, -0.1]], "C must be positive semi-definite"),
+    ([[0.1]], r"C must be a square matrix of shape \(2, 2\)"),
+    ([[0.1, np.nan], [np.nan, 0.1]], "C must be finite"),
+])
+def test_bad_C_is_refused(C, match):
+    with pytest.raises(ParameterError, match=match):
+        ic.ImpactOscillator(M=np.eye(2), K=K2, C=C, F=[1.0, 0.0], R=0.6, b=0.3, omega=1.0)
+
+
+def test_C_with_eta_or_rayleigh_is_refused():
+    for extra in ({"eta": 0.1}, {"alpha": 0.1}, {"beta": 0.0}):
+        with pytest.raises(ParameterError, match="give either a damping matrix C or eta"):
+            ic.ImpactOscillator(M=np.eye(2), K=K2, C=0.1 * K2, F=[1.0, 0.0], R=0.6, b=0.3,
+                                omega=1.0, **extra)
+    osc = _damper_on_mass1()
+    with pytest.raises(ParameterError, match="give either a damping matrix C or eta"):
+        osc.replace(eta=0.1)
+    assert not osc.replace(C=None, eta=0.1).general_damping
+    with pytest.raises(ParameterError, match="no Rayleigh coefficients"):
+        _ = osc.rayleigh
+    with pytest.raises(ParameterError, match="proportional modal basis"):
+        _ = osc.modes
+
+
+def test_critical_damping_is_refused_and_near_critical_is_accurate():
+    """One mass, C = 2 sqrt(K M) (xi = 1: a defective eigenvalue) is refused with the
+    numbers; xi = 1 + 1e-6 is diagonalised and agrees with the modal path."""
+    base = {"M": [[1.0]], "K": [[4.0]], "F": [1.0], "R": 0.5, "b": 0.1, "omega": 1.3}
+    with pytest.raises(ParameterError, match=r"defective or nearly so \(condition number"):
+        ic.ImpactOscillator(C=[[4.0]], **base).first_order  # noqa: B018
+    xi = 1.0 + 1e-6
+    gen = ic.ImpactOscillator(C=[[4.0 * xi]], **base)
+    prop = ic.ImpactOscillator(alpha=4.0 * xi, **base)
+    assert gen.first_order.condition < 1e4
+    for a, g in zip(ic.periodic_orbits(prop, 1), ic.periodic_orbits(gen, 1), strict=True):
+        np.testing.assert_allclose(g.state, a.state, atol=1e-11)
+        np.testing.assert_allclose(g.G, a.G, atol=1e-10 * np.abs(a.G).max())
+    warn_xi = 1.0 + 1e-11
+    with pytest.warns(IllConditionedWarning, match="condition number"):
+        ic.ImpactOscillator(C=[[4.0 * warn_xi]], **base).first_order  # noqa: B018
+
+
+def test_repeated_eigenvalues_are_diagonalised():
+    """Two identical uncoupled oscillators: every eigenvalue is double, the basis is fine."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=np.eye(2), C=[[0.1, 0.0], [0.0, 0.1]],
+                              F=[1.0, 0.5], R=0.6, b=0.2, omega=1.4)
+    assert osc.first_order.condition < 10
+    T = 2 * math.pi / osc.omega
+    np.testing.assert_allclose(ic.Flow(osc).transition_matrix(T),
+                               scipy.linalg.expm(_augmented(osc) * T)[:4, :4], atol=1e-14)
+
+
+# -- scenes and datasets ------------------------------------------------------------------------
+GENERAL_SCENE = SMALL_SCENE.replace("eta = 0.1",
+                                    "C = [[0.3, 0.0], [0.0, 0.02]]\nF_imag = [0.0, 0.4]")
+
+
+def test_scene_with_C_and_phases_runs_and_its_files_keep_the_oscillator(tmp_path):
+    run = run_scene(write(tmp_path, GENERAL_SCENE), output=tmp_path / "out")
+    assert run.ok, run.failures
+    osc = run.scene.osc
+    assert osc.general_damping and osc.F.dtype.kind == "c"
+    np.testing.assert_array_equal(osc.C, [[0.3, 0.0], [0.0, 0.02]])
+    np.testing.assert_array_equal(osc.F, [1.0, 0.4j])
+    orbits = read_output(tmp_path / "out" / "orbits.nc").datasets["o1"]
+    expected = ic.periodic_orbits(osc, 1)
+    np.testing.assert_allclose(orbits["delta"].values, [o.delta for o in expected], atol=1e-14)
+    branch = ic.load(tmp_path / "out" / "branches.nc")["br"].to_dataset()
+    back = ic.ImpactOscillator.from_json(branch.attrs["oscillator"])
+    np.testing.assert_array_equal(back.C, osc.C)
+    np.testing.assert_array_equal(back.F, osc.F.copy())
+    assert back.b == 0.5  # the entry's gap
+    at = back.replace(omega=float(branch["omega"][3]))
+    c, s = general.amplitude(at, 1)[:2]
+    d = float(branch["delta"][3])
+    assert c * math.cos(d) + s * math.sin(d) == pytest.approx(0.5, abs=1e-10)
+
+
+def test_scene_refuses_C_with_eta(tmp_path):
+    text = SMALL_SCENE.replace("eta = 0.1", "eta = 0.1\nC = [[0.3, 0.0], [0.0, 0.0]]")
+    with pytest.raises(SceneError, match="give either a damping matrix C or eta"):
+        load_scene(write(tmp_path, text))
+
+
+def test_branch_netcdf_round_trip_keeps_C(tmp_path):
+    osc = _damper_on_mass1()
+    branch = ic.continuation(osc, 1, "b", (0.0, 1.0))
+    ic.save(branch, tmp_path / "b.nc")
+    back = ic.load(tmp_path / "b.nc")
+    again = ic.ImpactOscillator.from_json(back.attrs["oscillator"])
+    assert again.general_damping
+    np.testing.assert_array_equal(again.C, osc.C)
+    np.testing.assert_allclose(back["delta"].values, branch["delta"].values, rtol=0, atol=0)
+
+
+def test_robust_stability_on_a_proportional_C_matches_the_modal_path():
+    prop = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.6, omega=1.0,
+                               eta=0.1)
+    gen = ic.ImpactOscillator(M=prop.M, K=prop.K, C=prop.C, F=prop.F, R=0.6, b=0.6, omega=1.0)
+    a = ic.robust_stability(prop, 1, vary={"b": (0.2, 1.0)}, nominal={"b": 0.6})
+    g = ic.robust_stability(gen, 1, vary={"b": (0.2, 1.0)}, nominal={"b": 0.6})
+    assert g.epsilon == pytest.approx(a.epsilon, rel=1e-9)
+    assert g.epsilon0 == pytest.approx(a.epsilon0, rel=1e-9)
+    assert g.robust == a.robust
+
+
+def test_two_parameter_curves_accept_a_general_C():
+    """Curves run on the first-order path (tests/test_general_curves.py checks them)."""
+    osc = _damper_on_mass1()
+    branch = ic.continuation(osc, 1, "omega", (0.8, 3.0))
+    k = list(branch["special_label"].values).index("PD")
+    c = ic.curve(osc, 1, "PD", start=branch, special=k,
+                 bounds={"omega": (0.8, 3.0), "b": (0.0, 1.0)})
+    assert c.sizes["point"] > 2 and float(c["residual"].max()) < 1e-10
+    crossings = [x["omega"] for x in ic.curve_crossings(c, "b", osc.b)]
+    assert min(abs(w - float(branch["special_omega"][k])) for w in crossings) < 1e-8
