@@ -31,6 +31,7 @@ from impactcont.errors import (
 from impactcont.maps import stability_map
 from impactcont.model.modal import ModalBasis
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.model.stops import Stops
 from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit, primitive_orbit
@@ -84,6 +85,7 @@ __all__ = [
     "RobustStability",
     "SimulationResult",
     "SimulationStatus",
+    "Stops",
     "UnresolvedMotionWarning",
     "__version__",
     "amplitude_squared",

@@ -223,7 +223,7 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
                                 options=dict(options), columns=columns,
                                 impact_columns=impact_columns, special_points=special_points,
                                 special_impact_columns=special_impact_columns, title=title,
-                                extra_attrs=extra_attrs)
+                                extra_attrs=extra_attrs, pattern=problem.pattern)
 
 
 def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
@@ -292,7 +292,8 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     """
     orbit = _as_multi(start)
     labels = check_labels(detect)
-    problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter)
+    problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
+                                       pattern=orbit.pattern or None)
     lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
     opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                         newton_tol=newton_tol, max_points=max_points,

@@ -38,7 +38,7 @@ import xarray as xr
 from impactcont.core import ContinuationOptions
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS
-from impactcont.dataset.multi import impacts_of
+from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.multi_branch import make_options, run_branch
@@ -115,7 +115,8 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
     if "impact" in branch.dims:
         guess = {"delta": float(branch[special_variable("delta_k")].values[k, 0]),
                  "flight_times": branch[special_variable("flight_time_k")].values[k],
-                 "states": branch[special_variable("state_k")].values[k]}
+                 "states": branch[special_variable("state_k")].values[k],
+                 "pattern": pattern_of(branch)}
     else:
         guess = orbit_at_phase(osc, N, float(branch[special_variable("delta")].values[k]))
     return multi_impact_orbit(osc, N, p, guess)
@@ -175,7 +176,8 @@ def _pd_start(orbit: MultiImpactOrbit, parameter: str, epsilon: float
     """First point of the 2N-2p branch born at the PD ``orbit``; direction away from it."""
     osc = orbit.oscillator
     N2, p2 = 2 * orbit.N, 2 * orbit.p
-    problem = MultiImpactBranchProblem(osc, N2, p2, parameter)
+    problem = MultiImpactBranchProblem(osc, N2, p2, parameter,
+                                       pattern=2 * orbit.pattern if orbit.pattern else None)
     lam_pd = float(getattr(osc, parameter) or 0.0)
     u_pd = initial_unknowns(orbit, osc, N2, p2)
     w, mu = critical_direction(orbit)
@@ -454,7 +456,7 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
     Returns
     -------
     guess : dict
-        ``delta``, ``flight_times`` (p+1,), ``states`` (p+1, 2n) for
+        ``delta``, ``flight_times`` (p+1,), ``states`` (p+1, 2n), ``pattern`` for
         :func:`impactcont.orbit.multi_impact.multi_impact_orbit`.
     index : int
         Index of the new (zero-velocity) impact in the N-(p+1) motion.
@@ -466,15 +468,22 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
     if not math.isfinite(t_g):
         raise NoPeriodicMotionError("the motion has no interior maximum of x1: it does not graze")
     osc = orbit.oscillator
+    pattern = orbit.pattern or "U" * orbit.p
+    # the stop grazed: the lower one when its clearance is the smallest (two stops)
+    lower = orbit.flight_gap_lower is not None and \
+        orbit.flight_gap_lower[k] == orbit.flight_gap_min[k]
+    stop = "L" if lower else "U"
+    j = osc.stops.index
     X = Flow(osc).state(t_g, orbit.states[k], orbit.phases[k])[0]
-    X[0] = osc.b
-    X[osc.n] *= -osc.R
+    X[j] = osc.stops.position(stop, osc.b)
+    X[osc.n + j] *= -osc.stops.restitution(stop, osc.R)
     taus = list(orbit.flight_times)
     taus[k:k + 1] = [t_g, float(orbit.flight_times[k]) - t_g]
     states = list(orbit.states)
     states.insert(k + 1, X)
     return {"delta": orbit.delta, "flight_times": np.array(taus),
-            "states": np.array(states)}, k + 1
+            "states": np.array(states),
+            "pattern": pattern[:k + 1] + stop + pattern[k + 1:]}, k + 1
 
 
 @blas_limited
@@ -527,7 +536,7 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
         log.warning("no %d-%d motion through the grazing point %s=%.12g: %s", orbit.N, p1,
                     parameter, lam_g, exc)
         return None
-    problem = MultiImpactBranchProblem(osc, orbit.N, p1, parameter)
+    problem = MultiImpactBranchProblem(osc, orbit.N, p1, parameter, pattern=graze.pattern)
     u_g = graze.unknowns
     extended = np.column_stack([problem.jacobian(u_g, lam_g), problem.dparam(u_g, lam_g)])
     t = np.linalg.svd(extended)[2][-1]
@@ -536,7 +545,10 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     n = osc.n
 
     def new_velocity(x: np.ndarray) -> float:
-        return float(problem._shoot(x[:-1], float(x[-1])).arrivals[new - 1, n])
+        # towards the stop hit: +x_j' at the upper stop, -x_j' at the lower
+        sign = 1.0 if graze.pattern[new] == "U" else -1.0
+        return sign * float(problem._shoot(x[:-1], float(x[-1])).arrivals[new - 1,
+                                                                           n + osc.stops.index])
 
     x_g = np.append(u_g, lam_g)
     h = 1e-7

@@ -13,7 +13,9 @@ plot and :func:`impactcont.dataset.load` takes it unchanged) with:
   per-impact variables of :data:`IMPACT_VARIABLES` on ``(point, impact)``
   (``state_k`` on ``(point, impact, component)``), and the same at the
   special points (``special_<name>`` on ``(special, impact)``);
-- the attribute ``impacts = p``.
+- the attribute ``impacts = p``, and ``pattern`` (p letters ``U``/``L``: the stop
+  of each impact, see :mod:`impactcont.model.stops`; all ``U`` for the paper's
+  single stop, and read so when absent).
 
 A dataset without the ``impact`` dimension (an N-1 branch of
 :func:`impactcont.continuation`) is read as ``p = 1``.
@@ -35,7 +37,7 @@ from impactcont.dataset.schema import (
 )
 from impactcont.model.oscillator import ImpactOscillator
 
-__all__ = ["IMPACT_VARIABLES", "impacts_of", "multi_impact_dataset",
+__all__ = ["IMPACT_VARIABLES", "impacts_of", "multi_impact_dataset", "pattern_of",
            "validate_multi_impact_dataset"]
 
 #: Per-impact variables (dims ``(point, impact)``, ``state_k`` adds ``component``).
@@ -43,15 +45,19 @@ IMPACT_VARIABLES: dict[str, _Var] = {
     "delta_k": _Var("impact phase of impact k", "rad",
                     "Forcing phase theta_k at impact k, in (-pi, pi]."),
     "impact_velocity_k": _Var("impact velocity of impact k", "1",
-                              "Velocity x1' of mass 1 just before impact k (h2 of eq. 22 of "
-                              "the flight ending there)."),
+                              "Speed of the impacting mass towards the stop just before "
+                              "impact k (x1' for the paper's stop; h2 of eq. 22 of the flight "
+                              "ending there, signed by the stop)."),
     "flight_time_k": _Var("flight time after impact k", "1",
                           "Time tau_k from impact k to impact k+1; they sum to 2 pi N / omega."),
     "gap_min_k": _Var("minimum gap of flight k", "1",
-                      "Smallest b - x1 at the interior maxima of x1 on the flight after "
-                      "impact k; +inf when there is none (eq. 16)."),
+                      "Smallest clearance on the flight after impact k: b - x_j at the "
+                      "interior maxima of the impacting mass (x1 for the paper's stop) and, "
+                      "with a lower stop, x_j + b_low at its interior minima; +inf when "
+                      "there is none (eq. 16)."),
     "state_k": _Var("state after impact k", "1",
-                    "State [x1..xn, x1'..xn'] right after impact k (x1 = b).",
+                    "State [x1..xn, x1'..xn'] right after impact k (x_j at the stop hit; "
+                    "x1 = b for the paper's stop).",
                     extra_dims=("component",)),
 }
 
@@ -62,6 +68,11 @@ SPECIAL_IMPACT_VARIABLES = ("delta_k", "impact_velocity_k", "flight_time_k", "st
 def impacts_of(ds: xr.Dataset) -> int:
     """Impacts per motion of a branch dataset: ``ds.attrs["impacts"]``, 1 for an N-1 branch."""
     return int(ds.attrs.get("impacts", 1))
+
+
+def pattern_of(ds: xr.Dataset) -> str:
+    """The impact sequence of a branch dataset: ``ds.attrs["pattern"]``, all ``U`` if absent."""
+    return str(ds.attrs.get("pattern", "U" * impacts_of(ds)))
 
 
 def _impact_array(key: str, value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
@@ -79,7 +90,8 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                          special_points: Sequence[Mapping[str, Any]],
                          special_impact_columns: Mapping[str, Any],
                          title: str | None = None,
-                         extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+                         extra_attrs: Mapping[str, Any] | None = None,
+                         pattern: str | None = None) -> xr.Dataset:
     """Assemble the dataset of one continued branch of periodic N-p motions.
 
     Parameters
@@ -100,6 +112,8 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
     extra_attrs : mapping, optional
         Further dataset attributes (str, int or float values), e.g. where a
         switched branch was born.
+    pattern : str, optional
+        The stop of each impact (p letters ``U``/``L``); all ``U`` by default.
 
     Returns
     -------
@@ -147,12 +161,21 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                                    "description": "Impact k of the motion; impact 0 is the "
                                    "one of delta and state."}))
     ds.attrs["impacts"] = int(p)
+    pattern = "U" * int(p) if pattern is None else pattern
+    _check_pattern_attr(pattern, int(p))
+    ds.attrs["pattern"] = pattern
     for key, value in (extra_attrs or {}).items():
         if not isinstance(value, (str, int, float, np.integer, np.floating)) \
                 or isinstance(value, bool):
             raise TypeError(f"extra_attrs[{key!r}] must be a str, int or float; got {value!r}")
         ds.attrs[str(key)] = value
     return ds
+
+
+def _check_pattern_attr(pattern: Any, p: int) -> None:
+    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - {"U", "L"}:
+        raise ValueError(f"attribute pattern must be {p} letters U/L (the stop of each "
+                         f"impact); got {pattern!r}")
 
 
 def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
@@ -179,6 +202,8 @@ def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
     if ds.sizes["impact"] != p:
         raise ValueError(f"dimension 'impact' has size {ds.sizes['impact']}; attribute "
                          f"impacts={p}")
+    if "pattern" in ds.attrs:
+        _check_pattern_attr(ds.attrs["pattern"], p)
     for key, spec in IMPACT_VARIABLES.items():
         expected = [(key, ("point", "impact", *spec.extra_dims))]
         if key in SPECIAL_IMPACT_VARIABLES:

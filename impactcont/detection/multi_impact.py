@@ -10,9 +10,14 @@ label     test function                                  meaning
 ``SN``    ``d lam / ds`` of the tangent                  fold, a multiplier +1
 ``PD``    ``det(G + I)``, ``G = G_{p-1} .. G_0``          a real multiplier through -1
 ``NS``    ``prod_{i<j} (mu_i mu_j - 1)``                 a complex pair through |mu| = 1
-``GR``    ``min_k gap_min_k`` over the p flights         x1 touches b inside a flight
+``GR``    ``min_k gap_min_k`` over the p flights         x1 touches a stop inside a flight
 ``ZV``    ``min_k impact_velocity_k`` over the p impacts an impact at zero velocity
 ========  =============================================  ==============================
+
+With two stops (:mod:`impactcont.model.stops`) ``gap_min_k`` is the smallest clearance
+of flight k to either stop, so GR locates the grazing of the lower stop as well (the
+located motion's ``flight_gap_lower`` tells which stop is grazed), and ZV uses the speed
+towards the stop hit.
 
 A sign change between two accepted points brackets a special point. The
 branch between them is parametrised by the chord: ``s in [0, 1]`` gives the

@@ -16,6 +16,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.first_order import FirstOrderBasis
 from impactcont.model.modal import ModalBasis
+from impactcont.model.stops import Stops
 from impactcont.vocabulary import PARAMETERS
 
 __all__ = ["ImpactOscillator", "chain_stiffness"]
@@ -207,6 +208,10 @@ class ImpactOscillator:
         Any symmetric positive semi-definite damping matrix (instead of ``eta`` or
         ``alpha``/``beta``). The flow then comes from the first-order complex modes
         (:mod:`impactcont.model.first_order`), as it does for a complex F.
+    stops : Stops or mapping, optional
+        Which mass meets the stops and an optional lower stop with its own
+        restitution (:class:`~impactcont.model.stops.Stops`; ``b`` and ``R`` stay
+        those of the upper stop). None: the paper's single stop on mass 1.
 
     Notes
     -----
@@ -226,6 +231,7 @@ class ImpactOscillator:
     alpha: float | None = None
     beta: float | None = None
     C: Any = None
+    stops: Stops | None = None
 
     def __post_init__(self) -> None:
         M = _matrix("M", self.M)
@@ -258,6 +264,12 @@ class ImpactOscillator:
         if self.alpha is not None or self.beta is not None:
             alpha = _real("alpha", 0.0 if self.alpha is None else self.alpha, **_rule("alpha"))
             beta = _real("beta", 0.0 if self.beta is None else self.beta, **_rule("beta"))
+        # -- stops (two-sided clearance, stop on any mass): begin ---------------------------
+        stops = self.stops if self.stops is not None else Stops()
+        if not isinstance(stops, Stops):
+            stops = Stops.from_dict(stops)
+        object.__setattr__(self, "stops", stops.check(n, b, R))
+        # -- stops: end -------------------------------------------------------------------------
         general = self.C is not None
         if general:
             C = _damping(self.C, n)
@@ -329,6 +341,8 @@ class ImpactOscillator:
             new = copy.copy(self)
             for name, value in changes.items():
                 object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
+            if "b" in changes:  # stops: the lower stop must stay below the upper one
+                new.stops.check(new.n, new.b, new.R)
             return new
         # the damping matrix follows eta / alpha / beta unless it was given as a matrix
         implied = {} if self.general_damping or "C" in changes else {"C": None}
@@ -399,9 +413,13 @@ class ImpactOscillator:
 
     @property
     def D(self) -> np.ndarray:
-        """Impact matrix of eq. (4): ``diag(1, ..., 1, -R, 1, ..., 1)``, shape (2n, 2n)."""
+        """Impact matrix of eq. (4) at the upper stop: ``diag(1, ..., -R, ..., 1)``, (2n, 2n).
+
+        ``-R`` multiplies the velocity of the impacting mass (mass 1 in the paper;
+        ``stops.mass`` in general).
+        """
         d = np.ones(2 * self.n)
-        d[self.n] = -self.R
+        d[self.n + self.stops.index] = -self.R
         return np.diag(d)
 
     @cached_property
@@ -439,6 +457,8 @@ class ImpactOscillator:
         if self.alpha is not None:
             out["alpha"] = self.alpha
             out["beta"] = self.beta
+        if not self.stops.paper:
+            out["stops"] = self.stops.to_dict()
         return out
 
     def to_json(self) -> str:
@@ -467,5 +487,6 @@ class ImpactOscillator:
         damping = (f"C={self.C.tolist()}" if self.general_damping
                    else f"eta={self.eta!r}" if self.eta is not None
                    else f"alpha={self.alpha!r}, beta={self.beta!r}")
+        stops = "" if self.stops.paper else f", stops={self.stops!r}"
         return (f"ImpactOscillator(n={self.n}, R={self.R!r}, b={self.b!r}, "
-                f"omega={self.omega!r}, {damping}, F={self.F.tolist()})")
+                f"omega={self.omega!r}, {damping}, F={self.F.tolist()}{stops})")

@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.periodic import IllConditionedWarning
 
 __all__ = ["batched_orbits"]
@@ -58,6 +59,7 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
 
     omega = np.ascontiguousarray(np.atleast_1d(np.asarray(omega, dtype=float)))
     b = np.ascontiguousarray(np.atleast_1d(np.asarray(b, dtype=float)))
+    require_paper_stops(osc, "the N-1 stability map")  # stops: mass 1, one stop only
     if osc.general:
         return _general_block(osc, int(N), omega, b, bool(spectral_radius))
     w, a, f, u, ui, eig_err, _, _ = osc.modes.kernel_arrays

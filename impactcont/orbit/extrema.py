@@ -35,12 +35,12 @@ _RTOL = 4.0 * np.finfo(float).eps
 _MAX_ITER = 200
 
 
-def _time_scales(flow: Flow) -> tuple[float, float]:
-    """Fastest oscillation frequency and fastest decay rate seen by mass 1."""
-    return flow.time_scales()
+def _time_scales(flow: Flow, row: int = 0) -> tuple[float, float]:
+    """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
+    return flow.time_scales(row)
 
 
-def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
+def sample_times(flow: Flow, t0: float, t1: float, *, row: int = 0) -> np.ndarray:
     """Grid on ``[t0, t1]`` fine enough that each cell holds at most one root of ``x1''``.
 
     Parameters
@@ -48,13 +48,15 @@ def sample_times(flow: Flow, t0: float, t1: float) -> np.ndarray:
     flow : Flow
     t0, t1 : float
         Interval, ``t1 > t0``.
+    row : int
+        0-based index of the mass whose motion is searched (the impacting mass).
 
     Returns
     -------
     ndarray
         Sorted times including both ends.
     """
-    osc_rate, decay_rate = _time_scales(flow)
+    osc_rate, decay_rate = _time_scales(flow, row)
     h = 2.0 * math.pi / (_CELLS_PER_PERIOD * osc_rate)
     length = t1 - t0
     count = max(math.ceil(length / h), 8)
@@ -125,7 +127,9 @@ def bracketed_roots(fun: Callable[..., tuple[np.ndarray, np.ndarray]],
         done = (g == 0) | (np.abs(step) <= tol) | (b[active] - a[active] <= tol)
         xn = xa - step
         inside = np.isfinite(xn) & (xn >= a[active]) & (xn <= b[active])
-        xn = np.where(inside | done, xn, 0.5 * (a[active] + b[active]))
+        # (a bracket that closed with a Newton step leaving it, e.g. at a near-zero slope,
+        # returns its midpoint, not the step)
+        xn = np.where(inside | (done & (np.abs(step) <= tol)), xn, 0.5 * (a[active] + b[active]))
         x[active] = np.where(g == 0, xa, xn)
         active = active[~done]
     return x

@@ -27,6 +27,20 @@ eq. (12)-(14) written as shooting, and its solution is the closed form.
 Stability: each flight-and-impact has the Jacobian ``G_k`` of eq. (25) (with
 ``T`` replaced by ``tau_k`` and ``delta`` by ``theta_k``); the motion's impact map
 over N periods has ``G = G_{p-1} ... G_1 G_0``, multipliers ``eig(G)``.
+
+Two stops, a stop on any mass (``osc.stops``, :mod:`impactcont.model.stops`): the
+impacting mass is ``j`` and impact ``k`` hits the stop ``pattern[k]`` (``"U"``:
+``x_j = b``, restitution ``R``; ``"L"``: ``x_j = -b_low``, restitution ``R_low``).
+Everything above holds with ``x1`` replaced by ``x_j``, ``b`` by the position
+``c_k`` of the stop of impact k, and ``D`` by the impact matrix ``D_k`` of that
+stop (``-R_k`` on ``x_j'``): ``X_k = [.., x_j = c_k, ..]``, ``z_k`` is ``X_k``
+without ``x_j``, ``r_k = D_{k+1} X_k^- - X_{k+1}``, and ``G_k`` is eq. (25) on the
+section ``x_j = c_{k+1}`` with ``D_{k+1}``. The product G is taken in the same
+coordinates ``[z, theta]`` for both stops, so its eigenvalues are the
+multipliers whatever the pattern. A flight must not touch either stop inside
+(eq. 16 against both: the interior maxima of ``x_j`` below ``b``, its interior
+minima above ``-b_low``), and each impact must arrive towards its stop
+(``x_j' > 0`` at ``U``, ``< 0`` at ``L``).
 """
 
 from __future__ import annotations
@@ -42,20 +56,22 @@ import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.extrema import interior_maxima, sample_times
+from impactcont.model.stops import UPPER, check_pattern
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import (
     IllConditionedWarning,
     PeriodicOrbit,
     _check_N,
-    impact_map_jacobian,
 )
+from impactcont.simulate.contact import flight_clearances, stop_sign
 from impactcont.simulate.simulator import SimulationResult
 
 __all__ = [
     "MultiImpactOrbit",
     "Shooting",
     "check_impacts",
+    "flight_jacobian",
+    "impact_geometry",
     "initial_unknowns",
     "multi_impact_orbit",
     "newton",
@@ -104,15 +120,18 @@ class MultiImpactOrbit:
     flight_times : ndarray, shape (p,)
         ``tau_k``, time from impact k to impact k+1; they sum to the period.
     states : ndarray, shape (p, 2n)
-        State ``X_k = [x; x']`` right after impact k (``x1 = b``).
+        State ``X_k = [x; x']`` right after impact k (``x_j`` at the stop of impact k;
+        ``x1 = b`` for the paper's stop).
     impact_velocities : ndarray, shape (p,)
-        Velocity ``x1'`` of mass 1 just before impact k (``h2`` of eq. 22 of the
-        flight that ends there).
+        Speed of the impacting mass towards the stop just before impact k: ``x_j'``
+        at the upper stop, ``-x_j'`` at the lower (``h2`` of eq. 22 of the flight
+        that ends there, signed by the stop).
     flight_gap_min : ndarray, shape (p,)
-        Smallest ``b - x1`` at the interior maxima of ``x1`` on flight k
-        (eq. 16); ``+inf`` when there is none.
+        Smallest clearance on flight k at the interior extrema of ``x_j`` (eq. 16):
+        ``b - x_j`` at its maxima and, with a lower stop, ``x_j + b_low`` at its
+        minima; ``+inf`` when there is none.
     flight_gap_min_times : ndarray, shape (p,)
-        Time of that maximum after impact k (NaN when there is none).
+        Time of that extremum after impact k (NaN when there is none).
     jacobians : ndarray, shape (p, 2n, 2n)
         ``G_k``, Jacobian of flight k and the impact ending it (eq. 25) in
         ``z = [dx2..dxn, dx1'..dxn', d theta]``.
@@ -127,6 +146,12 @@ class MultiImpactOrbit:
         Why the motion is not physical ("" when it is).
     residual : float
         Max-norm of the shooting residual at the solution.
+    pattern : str
+        The stop of each impact, ``"U"`` (upper) or ``"L"`` (lower), length p.
+    flight_gap_lower : ndarray, shape (p,)
+        Smallest ``x_j + b_low`` at the interior minima of ``x_j`` on flight k
+        (``+inf`` without a lower stop or a minimum): the lower-stop part of
+        ``flight_gap_min``.
     """
 
     oscillator: ImpactOscillator
@@ -144,6 +169,8 @@ class MultiImpactOrbit:
     physical: bool
     reason: str
     residual: float
+    pattern: str = ""
+    flight_gap_lower: np.ndarray | None = None
 
     # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
     @property
@@ -184,8 +211,15 @@ class MultiImpactOrbit:
     @property
     def unknowns(self) -> np.ndarray:
         """The shooting unknowns ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``, (2np,)."""
-        return np.concatenate([[self.delta], self.flight_times[:-1],
-                               self.states[:, 1:].ravel()])
+        z = np.delete(self.states, self.oscillator.stops.index, axis=1)
+        return np.concatenate([[self.delta], self.flight_times[:-1], z.ravel()])
+
+    @property
+    def gap_lower(self) -> float:
+        """Smallest lower-stop clearance ``x_j + b_low`` over the p flights (+inf: none)."""
+        if self.flight_gap_lower is None:
+            return math.inf
+        return float(np.min(self.flight_gap_lower))
 
     def time_series(self, num: int = 200) -> tuple[np.ndarray, np.ndarray]:
         """Exact state over one period of the motion (for plots).
@@ -215,7 +249,8 @@ class MultiImpactOrbit:
 
     def __repr__(self) -> str:
         v = ", ".join(f"{x:.6g}" for x in self.impact_velocities)
-        return (f"MultiImpactOrbit(N={self.N}, p={self.p}, delta={self.delta:.12g}, "
+        return (f"MultiImpactOrbit(N={self.N}, p={self.p}, pattern={self.pattern!r}, "
+                f"delta={self.delta:.12g}, "
                 f"impact_velocities=[{v}], gap_min={self.gap_min:.6g}, "
                 f"rho={self.spectral_radius:.6g}, stable={self.stable}, "
                 f"physical={self.physical})")
@@ -261,9 +296,39 @@ class Shooting:
     jacobian: np.ndarray | None
 
 
-def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float
-                   ) -> tuple[float, np.ndarray, np.ndarray]:
-    """``delta``, the p flight times and the p post-impact states ``X_k`` from ``u``."""
+def impact_geometry(osc: ImpactOscillator, pattern: str) -> tuple[int, np.ndarray, np.ndarray]:
+    """Index of the impacting mass, stop positions and impact-law diagonals per impact.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+    pattern : str
+        The stop of each impact (``"U"``/``"L"``), validated.
+
+    Returns
+    -------
+    j : int
+        0-based index of the impacting mass.
+    positions : ndarray, shape (p,)
+        ``c_k``: ``b`` or ``-b_low``.
+    diagonals : ndarray, shape (p, 2n)
+        Diagonal of ``D_k`` (eq. 4 at the stop of impact k: ``-R_k`` on ``x_j'``).
+    """
+    stops = osc.stops
+    j, n = stops.index, osc.n
+    positions = np.array([stops.position(s, osc.b) for s in pattern])
+    diagonals = np.ones((len(pattern), 2 * n))
+    diagonals[:, n + j] = [-stops.restitution(s, osc.R) for s in pattern]
+    return j, positions, diagonals
+
+
+def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float | np.ndarray,
+                   index: int = 0) -> tuple[float, np.ndarray, np.ndarray]:
+    """``delta``, the p flight times and the p post-impact states ``X_k`` from ``u``.
+
+    ``b`` is the stop position (one for every impact, or one per impact, shape
+    (p,)) and ``index`` the 0-based index of the impacting mass.
+    """
     u = np.asarray(u, dtype=float)
     if u.shape != (2 * n * p,):
         raise ParameterError(f"u must have shape ({2 * n * p},) = (2 n p,) for n={n}, p={p}; "
@@ -272,24 +337,28 @@ def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float
     taus[:-1] = u[1:p]
     taus[-1] = period - np.sum(u[1:p])
     starts = np.empty((p, 2 * n))
-    starts[:, 0] = b
-    starts[:, 1:] = u[p:].reshape(p, 2 * n - 1)
+    rest = np.delete(np.arange(2 * n), index)
+    starts[:, index] = b
+    starts[:, rest] = u[p:].reshape(p, 2 * n - 1)
     return float(u[0]), taus, starts
 
 
-def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True) -> Shooting:
+def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True,
+             pattern: str | None = None) -> Shooting:
     """Residual (and exact Jacobian) of the N-p shooting system at ``u``.
 
     Parameters
     ----------
     flow : Flow
-        Flow of the oscillator (gives omega, b, R).
+        Flow of the oscillator (gives omega, the stops and their restitutions).
     N, p : int
         Forcing periods and impacts of the motion.
     u : ndarray, shape (2np,)
         ``[delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``.
     jacobian : bool
         Also build ``dr/du``.
+    pattern : str, optional
+        The stop of each impact (``"U"``/``"L"``); all ``"U"`` by default.
 
     Returns
     -------
@@ -299,10 +368,10 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
     n, omega = osc.n, osc.omega
     m = 2 * n
     period = TWO_PI * N / omega
-    delta, taus, starts = split_unknowns(u, n, p, period, osc.b)
+    pattern = check_pattern(pattern, p, osc.stops)
+    j, positions, diagonals = impact_geometry(osc, pattern)
+    delta, taus, starts = split_unknowns(u, n, p, period, positions, j)
     phases = delta + omega * np.concatenate([[0.0], np.cumsum(taus[:-1])])
-    d = np.ones(m)
-    d[n] = -osc.R
     transitions = np.empty((p, m, m))
     arrivals = np.empty((p, m))
     rates = np.empty((p, m))
@@ -315,87 +384,121 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
         arrivals[k] = trans @ starts[k] + forcing @ np.array([c, s])
         phase_cols[k] = forcing @ np.array([-s, c])
         rates[k] = flow.state_derivative(taus[k], starts[k], phases[k])[0]
-        residual[k * m:(k + 1) * m] = d * arrivals[k] - starts[(k + 1) % p]
+        residual[k * m:(k + 1) * m] = diagonals[(k + 1) % p] * arrivals[k] - starts[(k + 1) % p]
     J = None
     if jacobian:
+        rest = np.delete(np.arange(m), j)
         J = np.zeros((p * m, p * m))
         zcol = p  # first column of z_0
         for k in range(p):
+            d = diagonals[(k + 1) % p]
             rows = slice(k * m, (k + 1) * m)
             q = d * phase_cols[k]
             J[rows, 0] = q  # d theta_k / d delta = 1
-            for j in range(k):  # theta_k depends on tau_j, j < k (all unknowns: j <= p-2)
-                J[rows, 1 + j] += omega * q
+            for i in range(k):  # theta_k depends on tau_i, i < k (all unknowns: i <= p-2)
+                J[rows, 1 + i] += omega * q
             g = d * rates[k]
             if k < p - 1:
                 J[rows, 1 + k] += g
             else:  # tau_{p-1} = period - sum(tau_0..tau_{p-2})
                 J[rows, 1:p] -= g[:, None]
-            # x1 = b on the section: only the columns of z = X[1:] are unknowns
+            # x_j = c_k on the section: only the columns of z = X without x_j are unknowns
             J[rows, zcol + k * (m - 1): zcol + (k + 1) * (m - 1)] += (
-                d[:, None] * transitions[k][:, 1:])
+                d[:, None] * transitions[k][:, rest])
             nxt = (k + 1) % p
-            J[rows, zcol + nxt * (m - 1): zcol + (nxt + 1) * (m - 1)] -= np.eye(m)[:, 1:]
+            J[rows, zcol + nxt * (m - 1): zcol + (nxt + 1) * (m - 1)] -= np.eye(m)[:, rest]
     return Shooting(phases=phases, flight_times=taus, starts=starts, arrivals=arrivals,
                     arrival_rates=rates, transitions=transitions, phase_columns=phase_cols,
                     residual=residual, jacobian=J)
 
 
+def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.ndarray,
+                    d: np.ndarray, index: int, omega: float) -> tuple[np.ndarray, float]:
+    """Jacobian ``G_k`` of one flight and the impact ending it, eq. (22)-(25) on ``x_j = c``.
+
+    The impact time is fixed by ``x_j(tau) = c`` (``c`` the position of the stop hit),
+    so ``dtau = -(dx_j^-) / x_j'(tau^-)``; with ``D`` the impact law of that stop the
+    post-impact state moves by ``D (Phi dX + E' dtheta + X' dtau)``. In the section
+    coordinates ``[z, theta]`` (``z = X`` without ``x_j``) this is eq. (25) with row
+    and column ``j`` in place of 0.
+
+    Parameters
+    ----------
+    transition : ndarray, shape (2n, 2n)
+        ``Phi = U W(tau) U^-1`` of the flight.
+    phase_column : ndarray, shape (2n,)
+        ``U E(tau) [-sin theta; cos theta]`` (``dX^-/dtheta``).
+    rate : ndarray, shape (2n,)
+        ``X'(tau^-)``.
+    d : ndarray, shape (2n,)
+        Diagonal of ``D`` of the stop that ends the flight.
+    index : int
+        0-based index ``j`` of the impacting mass.
+    omega : float
+        Forcing frequency.
+
+    Returns
+    -------
+    G : ndarray, shape (2n, 2n)
+    h2 : float
+        ``x_j'(tau^-)``, the signed arrival velocity (the pole of G at 0).
+    """
+    m = d.size
+    rest = np.delete(np.arange(m), index)
+    DPhi = d[:, None] * transition
+    h0_p = DPhi[index, rest]
+    H0 = DPhi[np.ix_(rest, rest)]
+    dE = d * phase_column
+    h1, H1 = dE[index], dE[rest]
+    dX = d * rate
+    h2, H2 = dX[index], dX[rest]
+    G = np.empty((m, m))
+    G[:-1, :-1] = H0 - np.outer(H2, h0_p) / h2
+    G[:-1, -1] = H1 - H2 * h1 / h2
+    G[-1, :-1] = -omega * h0_p / h2
+    G[-1, -1] = 1.0 - omega * h1 / h2
+    return G, float(h2)
+
+
 def omega_partial(flow: Flow, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
     """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
 
-    Only the forced part of eq. (9) depends on omega: with the modal steady
-    amplitudes ``gamma - i beta = f / (w^2 - omega^2 + 2 i a omega)`` (eq. 7) and
-    ``P(t) = [y_p; y_p'](t)``, ``X(t) = U [P(t) + W(t) (Y0 - P(0))]`` gives
-    ``dX/d omega = U [dP(t) - W(t) dP(0)]``.
+    Only the forced part of eq. (9) depends on omega; the flow gives it exactly
+    (:meth:`impactcont.orbit.flow.Flow.omega_partial`, modal or first-order).
 
     Returns
     -------
     ndarray, shape (2n,)
     """
-    om = flow.omega
-    den = (flow.w - om) * (flow.w + om) + 2j * flow.a * om
-    A = flow.gamma - 1j * flow.beta
-    dA = A * (2.0 * om - 2j * flow.a) / den
-    dg, db = dA.real, -dA.imag
-    g, b = flow.gamma, flow.beta
-
-    def dP(time: float) -> tuple[np.ndarray, np.ndarray]:
-        c, s = math.cos(om * time + theta), math.sin(om * time + theta)
-        y = g * c + b * s
-        dy = dg * c + db * s + time * (b * c - g * s)
-        dv = (b * c - g * s) + om * (db * c - dg * s) - om * time * y
-        return dy, dv
-
-    dy_t, dv_t = dP(t)
-    dy_0, dv_0 = dP(0.0)
-    W11, W12, W21, W22 = (blk[0] for blk in flow.transfer(np.array([t])))
-    dy = dy_t - (W11 * dy_0 + W12 * dv_0)
-    dv = dv_t - (W21 * dy_0 + W22 * dv_0)
-    return np.concatenate([flow.u @ dy, flow.u @ dv])
+    return flow.omega_partial(t, X0, theta)
 
 
 # ------------------------------------------------------------------------------------------
 # Guesses, Newton, the orbit
 # ------------------------------------------------------------------------------------------
 def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
-                  ) -> tuple[float, np.ndarray, np.ndarray]:
-    """``(delta, flight_times (p,), states (p, 2n))`` from any accepted kind of guess."""
+                  ) -> tuple[float, np.ndarray, np.ndarray, str | None]:
+    """``(delta, flight_times (p,), states (p, 2n), pattern)`` from any kind of guess.
+
+    ``pattern`` is the guess's own impact sequence (None for a mapping without one).
+    """
     n = osc.n
     if isinstance(guess, (MultiImpactOrbit, PeriodicOrbit)):
         gp = guess.p if isinstance(guess, MultiImpactOrbit) else 1
         if isinstance(guess, MultiImpactOrbit):
             taus, states, delta = guess.flight_times, guess.states, guess.delta
+            gpat = guess.pattern or UPPER * gp
         else:
             taus, states, delta = np.array([guess.period]), guess.state[None, :], guess.delta
+            gpat = UPPER
         if guess.oscillator.n != n:
             raise ParameterError(f"guess has n={guess.oscillator.n} degrees of freedom; the "
                                  f"oscillator has n={n}")
         if gp == p and guess.N == N:
-            return delta, np.array(taus, float), np.array(states, float)
+            return delta, np.array(taus, float), np.array(states, float), gpat
         reps, rem = divmod(p, gp)
         if rem == 0 and reps * guess.N == N:  # the guess repeated: e.g. a doubled N-1 orbit
-            return delta, np.tile(taus, reps), np.tile(states, (reps, 1))
+            return (delta, np.tile(taus, reps), np.tile(states, (reps, 1)), gpat * reps)
         raise ParameterError(f"guess is an {guess.N}-{gp} motion; it can seed an N-p motion "
                              f"with p a multiple k*{gp} and N = k*{guess.N}; got N={N}, p={p}")
     if isinstance(guess, SimulationResult):
@@ -404,8 +507,9 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
             raise ParameterError(f"guess: the simulation has {k} impacts; at least p+1={p + 1} "
                                  "are needed to seed an N-p motion")
         times = guess.impact_times[-(p + 1):]
+        spat = guess.impact_stops[-(p + 1):-1] if guess.impact_stops else UPPER * p
         return (float(guess.impact_phases[-(p + 1)]), np.diff(times),
-                np.array(guess.impact_states[-(p + 1):-1], float))
+                np.array(guess.impact_states[-(p + 1):-1], float), spat)
     if isinstance(guess, Mapping):
         try:
             delta = float(guess["delta"])
@@ -417,7 +521,7 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
         if taus.shape != (p,) or states.shape != (p, 2 * n):
             raise ParameterError(f"guess: flight_times must have shape ({p},) and states "
                                  f"({p}, {2 * n}); got {taus.shape} and {states.shape}")
-        return delta, taus, states
+        return delta, taus, states, guess.get("pattern")
     raise TypeError(f"guess must be a MultiImpactOrbit, a PeriodicOrbit, a SimulationResult or "
                     f"a mapping with 'delta', 'flight_times', 'states'; got "
                     f"{type(guess).__name__}")
@@ -425,16 +529,34 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
 
 def initial_unknowns(guess: Any, osc: ImpactOscillator, N: int, p: int) -> np.ndarray:
     """Shooting unknowns ``u`` (2np,) seeded by ``guess`` (see :func:`multi_impact_orbit`)."""
+    return _seed(guess, osc, N, p, None)[0]
+
+
+def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
+          ) -> tuple[np.ndarray, str]:
+    """Unknowns and impact sequence from ``guess``; `pattern` (if given) must match it."""
     N = _check_N(N)
     p = check_impacts(p)
-    delta, taus, states = _guess_arrays(guess, osc, N, p)
+    if pattern is not None:
+        pattern = check_pattern(pattern, p, osc.stops)
+    delta, taus, states, gpat = _guess_arrays(guess, osc, N, p)
     if not (math.isfinite(delta) and np.all(np.isfinite(taus)) and np.all(np.isfinite(states))):
         raise ParameterError("guess must hold finite phases, flight times and states")
-    return np.concatenate([[delta], taus[:-1], states[:, 1:].ravel()])
+    if gpat is not None:
+        gpat = check_pattern(gpat, p, osc.stops)
+        if pattern is not None and gpat != pattern:
+            raise ParameterError(f"pattern={pattern!r} differs from the guess's impact sequence "
+                                 f"{gpat!r}; give pattern={gpat!r}, or a guess with the "
+                                 "wanted sequence")
+        pattern = gpat
+    if pattern is None:
+        pattern = UPPER * p
+    z = np.delete(states, osc.stops.index, axis=1)
+    return np.concatenate([[delta], taus[:-1], z.ravel()]), pattern
 
 
 def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
-           max_iter: int = 40) -> tuple[np.ndarray, Shooting, int]:
+           max_iter: int = 40, pattern: str | None = None) -> tuple[np.ndarray, Shooting, int]:
     """Solve the shooting system by Newton's method with a backtracking line search.
 
     Converged when the max-norm of the residual is ``<= tol * max(1, |u|_max)`` and
@@ -447,7 +569,7 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         No convergence within ``max_iter`` iterations, or a singular Jacobian.
     """
     u = np.array(u0, dtype=float)
-    sh = shooting(flow, N, p, u)
+    sh = shooting(flow, N, p, u, pattern=pattern)
     norm = float(np.max(np.abs(sh.residual)))
     step_norm = math.inf
     for it in range(max_iter + 1):
@@ -468,7 +590,7 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         lam = 1.0
         while True:
             trial = u + lam * step
-            tsh = shooting(flow, N, p, trial)
+            tsh = shooting(flow, N, p, trial, pattern=pattern)
             tnorm = float(np.max(np.abs(tsh.residual)))
             if np.isfinite(tnorm) and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
                 break
@@ -481,7 +603,8 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
 
 
 def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
-                        sh: Shooting | None = None, *, checks: bool = True) -> MultiImpactOrbit:
+                        sh: Shooting | None = None, *, checks: bool = True,
+                        pattern: str | None = None) -> MultiImpactOrbit:
     """The N-p motion at the solution ``u`` of the shooting system, with G and every check.
 
     Parameters
@@ -491,11 +614,14 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
     u : ndarray, shape (2np,)
         A (converged) solution of :func:`shooting`.
     sh : Shooting, optional
-        :func:`shooting` at ``u`` if already computed.
+        :func:`shooting` at ``u`` (with the same `pattern`) if already computed.
     checks : bool
-        Search every flight for interior contact (eq. 16). Without it (a cheap
-        evaluation of the multipliers, e.g. to locate a PD point) ``flight_gap_min``
-        is NaN and the motion is reported not physical with that reason.
+        Search every flight for interior contact with either stop (eq. 16). Without
+        it (a cheap evaluation of the multipliers, e.g. to locate a PD point)
+        ``flight_gap_min`` is NaN and the motion is reported not physical with that
+        reason.
+    pattern : str, optional
+        The stop of each impact (``"U"``/``"L"``); all ``"U"`` by default.
 
     Returns
     -------
@@ -505,17 +631,17 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
     """
     osc = flow.osc
     n = osc.n
+    pattern = check_pattern(pattern, p, osc.stops)
+    j, _, diagonals = impact_geometry(osc, pattern)
     if sh is None:
-        sh = shooting(flow, N, p, u, jacobian=False)
-    d = np.ones(2 * n)
-    d[n] = -osc.R
+        sh = shooting(flow, N, p, u, jacobian=False, pattern=pattern)
     jacs = np.empty((p, 2 * n, 2 * n))
     h2 = np.empty(p)
     for k in range(p):
         with np.errstate(divide="ignore", invalid="ignore"):  # h2 = 0: flagged below
-            jacs[k], h2[k] = impact_map_jacobian(flow, sh.starts[k], float(sh.phases[k]),
-                                             float(sh.flight_times[k]),
-                                             d[:, None] * sh.transitions[k])
+            jacs[k], h2[k] = flight_jacobian(sh.transitions[k], sh.phase_columns[k],
+                                             sh.arrival_rates[k], diagonals[(k + 1) % p], j,
+                                             osc.omega)
     G = np.eye(2 * n)
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(p):
@@ -527,9 +653,11 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
         multipliers = np.full(2 * n, complex(math.nan, math.nan))
     gaps = np.full(p, math.inf)
     gap_times = np.full(p, math.nan)
+    gaps_low = np.full(p, math.inf)
     reasons = []
     if not checks:
         gaps[:] = math.nan
+        gaps_low[:] = math.nan
         reasons.append("interior contact not checked")
     for k in range(p):
         tau = float(sh.flight_times[k])
@@ -538,19 +666,19 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
             continue
         if not checks:
             continue
-        times, peaks = interior_maxima(flow.mass1(sh.starts[k], float(sh.phases[k])),
-                                       sample_times(flow, 0.0, tau))
-        if peaks.size:
-            i = int(np.argmax(peaks))
-            gaps[k], gap_times[k] = float(osc.b - peaks[i]), float(times[i])
-    # velocity before impact k is the arrival velocity of flight k-1
-    velocities = np.roll(h2, 1)
+        gap_u, t_u, gap_l, t_l = flight_clearances(flow, sh.starts[k], float(sh.phases[k]), tau)
+        gaps_low[k] = gap_l
+        gaps[k], gap_times[k] = (gap_u, t_u) if gap_u <= gap_l else (gap_l, t_l)
+    # velocity before impact k is the arrival velocity of flight k-1, towards its stop
+    velocities = np.roll(h2, 1) * np.array([stop_sign(s) for s in pattern])
+    mass = f"x{j + 1}"
     for k in range(p):
         if not velocities[k] > 0:
-            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, mass 1 does not "
-                           "arrive towards the stop")
+            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, mass {j + 1} does "
+                           f"not arrive towards the {'upper' if pattern[k] == UPPER else 'lower'}"
+                           " stop")
         if checks and not gaps[k] > 0:
-            reasons.append(f"flight {k}: x1 reaches the stop inside the flight (gap_min="
+            reasons.append(f"flight {k}: {mass} reaches a stop inside the flight (gap_min="
                            f"{gaps[k]:.3g} at t={gap_times[k]:.6g})")
     phases = np.array([_wrap(float(t)) for t in sh.phases])
     states = sh.starts.copy()
@@ -559,11 +687,13 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
         states=states, impact_velocities=velocities, flight_gap_min=gaps,
         flight_gap_min_times=gap_times, jacobians=jacs, G=G, multipliers=multipliers,
         physical=not reasons, reason="; ".join(reasons),
-        residual=float(np.max(np.abs(sh.residual))))
+        residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
+        flight_gap_lower=gaps_low)
 
 
 def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
-                       tol: float = 1e-12, max_iter: int = 40) -> MultiImpactOrbit:
+                       tol: float = 1e-12, max_iter: int = 40,
+                       pattern: str | None = None) -> MultiImpactOrbit:
     """The periodic N-p motion (p impacts in N forcing periods) near a guess.
 
     Parameters
@@ -580,12 +710,17 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
         - an N'-p' motion with ``p = k p'`` and ``N = k N'``, repeated k times
           (a doubled N-1 motion seeds a 2N-2 motion);
         - a simulation: its last p+1 impacts (states, phases, flight times);
-        - a mapping ``{"delta": float, "flight_times": (p,), "states": (p, 2n)}``.
+        - a mapping ``{"delta": float, "flight_times": (p,), "states": (p, 2n)}``
+          (optionally ``"pattern"``).
     tol : float
         Newton tolerance on the residual and the last update (relative to
         ``max(1, |u|)``).
     max_iter : int
         Largest number of Newton iterations.
+    pattern : str, optional
+        The stop of each impact, ``p`` letters ``"U"`` (upper stop ``x_j = b``) and
+        ``"L"`` (lower stop ``x_j = -b_low``), e.g. ``"UL"``; by default the
+        guess's own sequence (a simulation records it), else all ``"U"``.
 
     Returns
     -------
@@ -596,7 +731,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     Raises
     ------
     ParameterError, TypeError
-        Bad ``N``, ``p`` or ``guess``.
+        Bad ``N``, ``p``, ``guess`` or ``pattern``.
     NoPeriodicMotionError
         Newton does not converge from the guess.
 
@@ -614,15 +749,15 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
         raise ParameterError(f"max_iter must be an integer >= 1; got {max_iter!r}")
     flow = Flow(osc)
-    u0 = initial_unknowns(guess, osc, N, p)
-    u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter)
+    u0, pattern = _seed(guess, osc, N, p, pattern)
+    u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter, pattern=pattern)
     cond = np.linalg.cond(sh.jacobian)
     if not np.isfinite(cond) or cond > _COND_WARN:
         warnings.warn(f"the N={N}, p={p} shooting Jacobian is ill-conditioned (condition number "
                       f"{cond:.3g}): a multiplier is close to +1 (fold); the motion may be "
                       "inexact", IllConditionedWarning, stacklevel=2)
-    log.debug("N=%d p=%d motion in %d Newton iterations", N, p, iterations)
-    return orbit_from_unknowns(flow, N, p, u, sh)
+    log.debug("N=%d p=%d %s motion in %d Newton iterations", N, p, pattern, iterations)
+    return orbit_from_unknowns(flow, N, p, u, sh, pattern=pattern)
 
 
 def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpactOrbit:
@@ -651,11 +786,13 @@ def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpac
         q = orbit.p // k
         shifted = np.roll(np.arange(orbit.p), -q)
         dphase = np.remainder(orbit.phases - orbit.phases[shifted] + math.pi, TWO_PI) - math.pi
-        if (np.max(np.abs(orbit.states - orbit.states[shifted])) <= tol
+        pattern = orbit.pattern or UPPER * orbit.p
+        if (pattern == pattern[q:] + pattern[:q]
+                and np.max(np.abs(orbit.states - orbit.states[shifted])) <= tol
                 and np.max(np.abs(orbit.flight_times - orbit.flight_times[shifted])) <= tol
                 and np.max(np.abs(dphase)) <= tol):
             guess = {"delta": orbit.delta, "flight_times": orbit.flight_times[:q],
-                     "states": orbit.states[:q]}
+                     "states": orbit.states[:q], "pattern": pattern[:q]}
             short = multi_impact_orbit(orbit.oscillator, orbit.N // k, q, guess)
             return primitive_orbit(short, tol=tol)
     return orbit

@@ -20,6 +20,7 @@ from impactcont.errors import (
     UnresolvedMotionWarning,
 )
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
 from impactcont.orbit.dense import impact_map_jacobian, periodic_matrix
 from impactcont.orbit.flow import Flow
@@ -202,6 +203,7 @@ def _check_N(N: object) -> int:
 def _check_oscillator(osc: object) -> ImpactOscillator:
     if not isinstance(osc, ImpactOscillator):
         raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
+    require_paper_stops(osc, "the N-1 closed form")  # stops: mass 1, one stop only
     return osc
 
 
@@ -289,6 +291,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     from impactcont.orbit import kernel
 
     N = _check_N(N)
+    _check_oscillator(osc)
     if osc.general:  # a general damping matrix or complex F: the first-order path
         return _general_orbit(osc, N, general.orbit_pieces(osc, N), float(delta), root)
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays

@@ -6,6 +6,10 @@
 parameter ``lam``. ``dF/du`` is exact; ``dF/dlam`` is exact for ``omega``, ``b``
 and ``R`` and a central difference (relative step 1e-6) for the damping
 parameters, where it only steers the predictor and Newton.
+
+With two stops (``osc.stops``) the impact sequence ``pattern`` says which stop
+each impact hits; ``b`` and ``R`` are those of the upper stop, so their
+derivatives act on the ``"U"`` impacts only.
 """
 
 from __future__ import annotations
@@ -16,11 +20,13 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import UPPER, check_pattern
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
     check_impacts,
+    impact_geometry,
     omega_partial,
     orbit_from_unknowns,
     shooting,
@@ -39,7 +45,8 @@ class MultiImpactBranchProblem:
 
     `osc`, `N` and `parameter` are those of
     :class:`~impactcont.problems.PeriodicBranchProblem` (`parameter` is replaced by
-    ``lam``); the motion has `p` impacts in its N forcing periods.
+    ``lam``); the motion has `p` impacts in its N forcing periods, impact k on the
+    stop ``pattern[k]`` (``"U"``/``"L"``, all ``"U"`` by default).
 
     Notes
     -----
@@ -47,13 +54,15 @@ class MultiImpactBranchProblem:
     residual, Jacobian and orbit of one point are computed from one shot.
     """
 
-    def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str) -> None:
+    def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
+                 pattern: str | None = None) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
         check_parameter(osc, parameter)
         self.osc = osc
         self.N = _check_N(N)
         self.p = check_impacts(p)
+        self.pattern = check_pattern(pattern, self.p, osc.stops)
         self.parameter = parameter
         self.size = 2 * osc.n * self.p
         self._flows: dict[float, Flow] = {}
@@ -83,7 +92,8 @@ class MultiImpactBranchProblem:
         if sh is None:
             if len(self._shots) > _CACHE_SIZE:
                 self._shots.clear()
-            sh = self._shots[key] = shooting(self.flow_at(lam), self.N, self.p, u)
+            sh = self._shots[key] = shooting(self.flow_at(lam), self.N, self.p, u,
+                                             pattern=self.pattern)
         return sh
 
     # -- the Problem protocol ------------------------------------------------------------------
@@ -100,16 +110,20 @@ class MultiImpactBranchProblem:
         sh = self._shoot(u, lam)
         osc = self.oscillator_at(lam)
         n, p, m = osc.n, self.p, 2 * osc.n
-        d = np.ones(m)
-        d[n] = -osc.R
+        j, _, diagonals = impact_geometry(osc, self.pattern)
+        upper = np.array([s == UPPER for s in self.pattern])
         out = np.zeros(p * m)
         if self.parameter == "b":
-            for k in range(p):  # x1 = b at every start and at every arrival
-                out[k * m:(k + 1) * m] = d * sh.transitions[k][:, 0]
-                out[k * m] -= 1.0
+            for k in range(p):  # x_j = b at every start and arrival on the upper stop
+                nxt = (k + 1) % p
+                if upper[k]:
+                    out[k * m:(k + 1) * m] = diagonals[nxt] * sh.transitions[k][:, j]
+                if upper[nxt]:
+                    out[k * m + j] -= 1.0
             return out
         if self.parameter == "R":
-            out[n::m] = -sh.arrivals[:, n]
+            arriving_up = np.roll(upper, -1)  # flight k ends at impact k+1
+            out[n + j::m] = np.where(arriving_up, -sh.arrivals[:, n + j], 0.0)
             return out
         if self.parameter == "omega":
             flow = self.flow_at(lam)
@@ -120,10 +134,10 @@ class MultiImpactBranchProblem:
                 explicit = omega_partial(flow, float(sh.flight_times[k]), sh.starts[k],
                                          float(sh.phases[k]))
                 # theta_k = delta + omega * (time elapsed since impact 0)
-                out[rows] = d * (explicit + elapsed * sh.phase_columns[k])
+                out[rows] = diagonals[(k + 1) % p] * (explicit + elapsed * sh.phase_columns[k])
                 elapsed += float(sh.flight_times[k])
             # tau_{p-1} = 2 pi N / omega - sum(others)
-            out[(p - 1) * m:] += d * sh.arrival_rates[p - 1] * (-period / osc.omega)
+            out[(p - 1) * m:] += diagonals[0] * sh.arrival_rates[p - 1] * (-period / osc.omega)
             return out
         return self._difference_quotient(u, lam)
 
@@ -140,4 +154,4 @@ class MultiImpactBranchProblem:
         :func:`~impactcont.orbit.multi_impact.orbit_from_unknowns`).
         """
         return orbit_from_unknowns(self.flow_at(lam), self.N, self.p, np.asarray(u, float),
-                                   self._shoot(u, lam), checks=checks)
+                                   self._shoot(u, lam), checks=checks, pattern=self.pattern)

@@ -15,6 +15,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.modal import DAMPING_PARAMETERS, decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
@@ -51,6 +52,7 @@ class PeriodicBranchProblem:
 
     def __init__(self, osc: ImpactOscillator, N: int, parameter: str) -> None:
         check_parameter(osc, parameter)
+        require_paper_stops(osc, "the N-1 branch")  # stops: mass 1, one stop only
         self.osc = osc
         self.N = N
         self.parameter = parameter

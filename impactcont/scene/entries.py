@@ -25,6 +25,7 @@ from impactcont.branch import continuation
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.model.stops import Stops
 from impactcont.orbit.robust import robust_stability
 from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.scene.keys import (
@@ -103,6 +104,8 @@ class OscillatorSpec:
     and the damping as ``eta`` (``C = 2 eta K``) or ``alpha``/``beta``
     (``C = alpha M + beta K``) or a damping matrix ``C``; none means undamped.
     ``F_imag`` (the imaginary part of F) gives the masses their own forcing phases.
+    ``stop_mass``, ``b_low`` and ``R_low`` place the stops on another mass and add a
+    lower stop (:class:`~impactcont.model.stops.Stops`).
     """
 
     M: tuple | None = declare(RealArray(2), "mass matrix (symmetric positive definite)")
@@ -118,6 +121,10 @@ class OscillatorSpec:
     beta: float | None = declare(_NONNEGATIVE, "Rayleigh damping C = alpha M + beta K")
     C: tuple | None = declare(RealArray(2), "damping matrix (symmetric positive semi-definite)")
     F_imag: tuple | None = declare(RealArray(1), "imaginary part of F: per-mass forcing phases")
+    stop_mass: int | None = declare(Integer(1), "the mass meeting the stops (1-based; "
+                                    "default 1)")
+    b_low: float | None = declare(Real(), "a lower stop at x_j = -b_low (j = stop_mass)")
+    R_low: float | None = declare(_RESTITUTION, "restitution of the lower stop (default R)")
 
     @classmethod
     def parse(cls, raw: Any, where: Where) -> OscillatorSpec:
@@ -157,6 +164,9 @@ class OscillatorSpec:
                                      f"{list(self.F_imag)!r}")
             F = F + 1j * np.array(self.F_imag, dtype=float)
         params = {"F": F, "R": self.R, "b": self.b, "omega": self.omega, **damping}
+        if self.stop_mass is not None or self.b_low is not None or self.R_low is not None:
+            params["stops"] = Stops(mass=1 if self.stop_mass is None else self.stop_mass,
+                                    b_low=self.b_low, R_low=self.R_low)
         K = (chain_stiffness(list(self.springs)) if self.springs is not None
              else np.array(self.K, dtype=float))
         if self.M is not None:

@@ -196,6 +196,9 @@ class MultiImpact:
         guess = {"delta": float(sim["impact_phases"].values[-(p + 1)]),
                  "flight_times": np.diff(times),
                  "states": np.asarray(sim["impact_states"].values)[-(p + 1):-1]}
+        stops = str(sim.attrs.get("impact_stops", ""))  # which stop each impact hit
+        if stops:
+            guess["pattern"] = stops[-(p + 1):-1]
         osc = ImpactOscillator.from_json(sim.attrs["oscillator"])
         orbit = multi_impact_orbit(osc, entry.N, p, guess)
         ds = multi_impact_continuation(orbit, entry.parameter, entry.bounds,

@@ -435,7 +435,8 @@ class Simulations:
             "impactcont_dataset": "simulation", "start": start,
             "start_delta": delta, "periods": entry.periods, "perturbation": entry.perturbation,
             "status": res.status.name, "message": res.message,
-            "final_time": res.final_time, "oscillator": osc.to_json()})
+            "final_time": res.final_time, "oscillator": osc.to_json(),
+            "impact_stops": res.impact_stops})
         log.info("simulation %s: %d impacts in %g periods (%s)", entry.name,
                  res.impact_times.size, entry.periods, res.status.name)
         return ds

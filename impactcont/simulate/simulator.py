@@ -6,6 +6,11 @@ time-stepping error). Impacts are located as the first upward crossing of
 each flight at the critical points of ``x1`` and so cannot miss a short
 excursion past the stop inside a sampling cell; each impact time is polished
 by Brent's method to a few ulps. The impact law is eq. (4).
+
+With a stop on another mass or a lower stop (``osc.stops``, see
+:mod:`impactcont.model.stops`) the impacting mass ``j`` is followed to the first
+contact with either stop (:func:`impactcont.simulate.contact.next_contact`) and
+the restitution of the stop hit applies; sticking is detected at either stop.
 """
 
 from __future__ import annotations
@@ -19,8 +24,10 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.extrema import first_upward_crossing, sample_times
 from impactcont.orbit.flow import Flow
+from impactcont.simulate.contact import next_contact, stop_sign
 from impactcont.threads import blas_limited
 
 __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
@@ -29,14 +36,19 @@ log = logging.getLogger(__name__)
 
 TWO_PI = 2.0 * math.pi
 _ON_STOP = 1e-12  # a state this close to the stop (relative), moving into it, impacts now
+# a bounce off a stop whose apex v^2 / (2 |x_j''|) lies within this many ulps of the stop
+# position cannot be resolved (the crossing test sees rounding, not the motion): complete
+# chatter, whatever chatter_velocity says
+_BOUNCE_ULPS = 1e3
 
 
 class SimulationStatus(enum.Enum):
     """Why a simulation stopped; the value is the message."""
 
     COMPLETED = "reached the requested number of forcing periods"
-    STICKING = ("mass 1 sticks to the stop (zero velocity after impact and acceleration "
-                "towards the stop); sticking phases are outside the model of eq. (1)-(4)")
+    STICKING = ("the impacting mass sticks to a stop (zero velocity after impact and "
+                "acceleration towards the stop); sticking phases are outside the model of "
+                "eq. (1)-(4)")
     CHATTER = ("impact velocity fell below the chatter threshold (accumulating impacts, "
                "complete chatter); stopped rather than resolve infinitely many impacts")
     MAX_IMPACTS = "reached max_impacts"
@@ -51,7 +63,8 @@ class SimulationResult:
     impact_times : ndarray, shape (k,)
         Times of the impacts since the start.
     impact_velocities : ndarray, shape (k,)
-        Velocity of mass 1 just before each impact (``> 0``).
+        Speed of the impacting mass towards the stop just before each impact
+        (``> 0``): ``x_j'`` at the upper stop, ``-x_j'`` at the lower.
     impact_phases : ndarray, shape (k,)
         Forcing phase ``omega t + delta`` at each impact, wrapped to ``(-pi, pi]``.
     impact_states : ndarray, shape (k, 2n)
@@ -61,6 +74,9 @@ class SimulationResult:
     status : SimulationStatus
     t, X : ndarray or None
         Trajectory samples (times, states; both sides of each impact), if requested.
+    impact_stops : str
+        The stop of each impact, ``"U"`` (upper, ``x_j = b``) or ``"L"`` (lower,
+        ``x_j = -b_low``); all ``"U"`` for the paper's single stop.
     """
 
     impact_times: np.ndarray
@@ -73,6 +89,7 @@ class SimulationResult:
     status: SimulationStatus
     t: np.ndarray | None = None
     X: np.ndarray | None = None
+    impact_stops: str = ""
 
     @property
     def message(self) -> str:
@@ -132,6 +149,17 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     return None
 
 
+def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, side: str, level: float,
+                       v: float) -> bool:
+    """The bounce after an impact at speed ``v`` rises less than ``_BOUNCE_ULPS`` ulps."""
+    floor = _BOUNCE_ULPS * np.finfo(float).eps * max(1.0, abs(level))
+    if v * v > 1e10 * floor:  # cheap exit: |x_j''| would have to exceed 5e9
+        return False
+    j = flow.osc.stops.index
+    acc = abs(float(flow.state_derivative(0.0, X, phase)[0][flow.n + j]))
+    return bool(v * v < 2.0 * acc * floor)
+
+
 def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     try:
         X = np.array(state, dtype=float).reshape(-1)
@@ -141,9 +169,15 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     if X.shape != (2 * osc.n,) or not np.all(np.isfinite(X)):
         raise ParameterError(f"state must be a finite vector [x; x'] of length {2 * osc.n}; "
                              f"got {np.asarray(state).tolist()!r}")
-    if X[0] > osc.b + _ON_STOP * max(1.0, abs(osc.b)):
-        raise ParameterError(f"state[0] = x1 = {float(X[0])!r} is beyond the stop b = {osc.b!r}; "
-                             "x1 <= b is required")
+    j = osc.stops.index
+    if X[j] > osc.b + _ON_STOP * max(1.0, abs(osc.b)):
+        raise ParameterError(f"state[{j}] = x{j + 1} = {float(X[j])!r} is beyond the stop "
+                             f"b = {osc.b!r}; x{j + 1} <= b is required")
+    if osc.stops.two_sided:
+        low = -osc.stops.b_low
+        if X[j] < low - _ON_STOP * max(1.0, abs(low)):
+            raise ParameterError(f"state[{j}] = x{j + 1} = {float(X[j])!r} is beyond the lower "
+                                 f"stop -b_low = {low!r}; x{j + 1} >= -b_low is required")
     return X
 
 
@@ -157,7 +191,8 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     ----------
     osc : ImpactOscillator
     state : array_like, shape (2n,)
-        ``[x; x']`` at ``t = 0``, with ``x1 <= b``.
+        ``[x; x']`` at ``t = 0``, with ``x1 <= b`` (``-b_low <= x_j <= b`` for the
+        impacting mass j of ``osc.stops``).
     delta : float
         Forcing phase at ``t = 0`` (the forcing is ``F cos(omega t + delta)``).
     periods : float
@@ -171,7 +206,9 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     chatter_velocity : float
         Stop with status CHATTER when an impact velocity falls below this
         fraction of the largest impact velocity seen (or below it in absolute
-        value, if none yet).
+        value, if none yet), or when the bounce after an impact would rise less
+        than 1000 ulps of the stop position above it (``v^2 / (2 |x_j''|)``: below
+        that the motion cannot be told from rounding).
 
     Returns
     -------
@@ -187,10 +224,15 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
     flow = Flow(osc)
     n = osc.n
-    on_stop = _ON_STOP * max(1.0, abs(osc.b))
+    j = osc.stops.index
+    vj = n + j
+    sides = [UPPER, LOWER] if osc.stops.two_sided else [UPPER]
+    level = {s: osc.stops.position(s, osc.b) for s in sides}
+    restitution = {s: osc.stops.restitution(s, osc.R) for s in sides}
+    on_stop = {s: _ON_STOP * max(1.0, abs(level[s])) for s in sides}
     t_end = periods * TWO_PI / osc.omega
     dt_sample = TWO_PI / osc.omega / int(samples_per_period)
-    times, vels, phases, states = [], [], [], []
+    times, vels, phases, states, hits = [], [], [], [], []
     t_chunks: list[np.ndarray] = []
     X_chunks: list[np.ndarray] = []
     t_now, phase = 0.0, _wrap(float(delta))
@@ -198,18 +240,21 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     v_scale = 0.0
 
     while True:
-        on_the_stop = X[0] >= osc.b - on_stop and X[n] >= 0
-        if on_the_stop and X[n] > 0:  # moving into the stop: impact now
-            hit = (0.0, X.copy())
-        elif on_the_stop and flow.state_derivative(0.0, X, phase)[0][n] > 0:
+        # on a stop (within rounding), not moving away from it: s x_j >= s c, s x_j' >= 0
+        on = [s for s in sides if stop_sign(s) * (X[j] - level[s]) >= -on_stop[s]
+              and stop_sign(s) * X[vj] >= 0]
+        hit: tuple[float, np.ndarray, str] | None
+        if on and stop_sign(on[0]) * X[vj] > 0:  # moving into the stop: impact now
+            hit = (0.0, X.copy(), on[0])
+        elif on and stop_sign(on[0]) * flow.state_derivative(0.0, X, phase)[0][vj] > 0:
             status = SimulationStatus.STICKING  # at rest on the stop, pushed into it
             break
         else:
-            # a start on the stop at rest that leaves it (R = 0 after every impact): x1' = 0
+            # a start on the stop at rest that leaves it (R = 0 after every impact): x_j' = 0
             # there only up to the rounding of the modal transform, which may show a
             # crossing of the stop a few ulps after the start; it is not an impact
-            after = _ON_STOP * TWO_PI / osc.omega if on_the_stop else -math.inf
-            hit = next_impact(flow, X, phase, t_end - t_now, after=after)
+            after = {s: _ON_STOP * TWO_PI / osc.omega for s in on}
+            hit = next_contact(flow, X, phase, t_end - t_now, after=after)
         flight = hit[0] if hit is not None else t_end - t_now
         if trajectory:
             tau = np.arange(0.0, flight, dt_sample)
@@ -220,19 +265,21 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             phase = _wrap(phase + osc.omega * flight)
             t_now = t_end
             break
-        tc, X_minus = hit
-        v = float(X_minus[n])
+        tc, X_minus, side = hit
+        v = stop_sign(side) * float(X_minus[vj])  # speed towards the stop hit
         t_now += tc
         phase = _wrap(phase + osc.omega * tc)
         X = X_minus.copy()
-        X[0] = osc.b
-        X[n] = -osc.R * v
+        X[j] = level[side]
+        X[vj] = -restitution[side] * float(X_minus[vj])
         times.append(t_now)
         vels.append(v)
         phases.append(phase)
         states.append(X.copy())
+        hits.append(side)
         v_scale = max(v_scale, v)
-        if v < chatter_velocity * max(v_scale, 1.0):
+        if v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(flow, X, phase, side,
+                                                                          level[side], v):
             status = SimulationStatus.CHATTER
             break
         if len(times) >= max_impacts:
@@ -249,4 +296,5 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         final_time=t_now, final_state=X, final_phase=phase, status=status,
         t=np.concatenate(t_chunks) if trajectory else None,
         X=np.vstack(X_chunks) if trajectory else None,
+        impact_stops="".join(hits),
     )

@@ -1,0 +1,217 @@
+"""The stops of the oscillator: which mass meets them, and an optional second stop below.
+
+The paper (eq. 3-4) has one rigid stop, above mass 1: ``x1 = b`` with restitution
+``R``. :class:`Stops` generalises the geometry without changing that meaning:
+
+- ``mass``: the mass ``j`` (1-based, as the paper's "mass 1") that meets the
+  stops; the upper stop is ``x_j = b`` with restitution ``R`` (the oscillator's
+  own ``b`` and ``R``, eq. 3-4 with ``x1`` replaced by ``x_j``);
+- ``b_low``, ``R_low``: an optional lower stop at ``x_j = -b_low``, met moving
+  downwards (``x_j' < 0``), with its own restitution ``x_j'^+ = -R_low x_j'^-``
+  (the impact matrix of eq. 4 with ``-R_low`` on the velocity of mass j).
+
+A two-sided clearance (backlash) of total width ``b + b_low`` is ``b_low`` given;
+the symmetric case is ``b_low = b``. An impact is labelled ``"U"`` (upper stop)
+or ``"L"`` (lower stop); an N-p motion's impact sequence is a string of these
+(:data:`UPPER`, :data:`LOWER`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from impactcont.errors import ParameterError
+
+__all__ = ["LOWER", "UPPER", "Stops", "check_pattern", "require_paper_stops"]
+
+#: Label of an impact on the upper stop ``x_j = b``.
+UPPER = "U"
+#: Label of an impact on the lower stop ``x_j = -b_low``.
+LOWER = "L"
+
+
+def _finite(name: str, value: Any, *, low: float | None = None, high: float | None = None,
+            allowed: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number ({allowed}); got {value!r}")
+    x = float(value)
+    if not math.isfinite(x) or (low is not None and x < low) or (high is not None and x > high):
+        raise ParameterError(f"{name} must be {allowed}; got {value!r}")
+    return x
+
+
+@dataclasses.dataclass(frozen=True)
+class Stops:
+    """Which mass meets the stops, and the optional lower stop.
+
+    Parameters
+    ----------
+    mass : int
+        The impacting mass ``j``, 1-based (``1 <= mass <= n``; the paper's is 1).
+    b_low : float, optional
+        The lower stop sits at ``x_j = -b_low`` (any real number with
+        ``-b_low < b``, checked by the oscillator). None: no lower stop (the paper).
+    R_low : float, optional
+        Restitution of the lower stop, ``0 <= R_low <= 1``; only with ``b_low``.
+        Defaults to the oscillator's ``R`` when ``b_low`` is given without it
+        (resolved by :class:`~impactcont.model.oscillator.ImpactOscillator`).
+
+    Examples
+    --------
+    >>> Stops(mass=2, b_low=0.5, R_low=0.8)
+    Stops(mass=2, b_low=0.5, R_low=0.8)
+    """
+
+    mass: int = 1
+    b_low: float | None = None
+    R_low: float | None = None
+
+    def __post_init__(self) -> None:
+        mass = self.mass
+        if isinstance(mass, bool) or not isinstance(mass, (int, np.integer)) or mass < 1:
+            raise ParameterError(f"stops.mass must be an integer >= 1 (the impacting mass, "
+                                 f"1-based as the paper's mass 1); got {mass!r}")
+        object.__setattr__(self, "mass", int(mass))
+        if self.b_low is None:
+            if self.R_low is not None:
+                raise ParameterError(f"stops.R_low={self.R_low!r} needs a lower stop: give "
+                                     "b_low (the lower stop at x_j = -b_low) or drop R_low")
+            return
+        object.__setattr__(self, "b_low", _finite("stops.b_low", self.b_low,
+                                                   allowed="a finite real number"))
+        if self.R_low is not None:
+            object.__setattr__(self, "R_low", _finite("stops.R_low", self.R_low, low=0.0,
+                                                       high=1.0, allowed="in [0, 1]"))
+
+    # -- views ----------------------------------------------------------------------------------
+    @property
+    def index(self) -> int:
+        """0-based index ``j - 1`` of the impacting mass in ``x``."""
+        return self.mass - 1
+
+    @property
+    def two_sided(self) -> bool:
+        """A lower stop is present."""
+        return self.b_low is not None
+
+    @property
+    def paper(self) -> bool:
+        """The paper's geometry: one stop, on mass 1."""
+        return self.mass == 1 and self.b_low is None
+
+    def check(self, n: int, b: float, R: float) -> Stops:
+        """Validated against an oscillator of ``n`` masses with upper stop ``b``, ``R``.
+
+        Returns the stops with ``R_low`` resolved (``R`` when not given).
+
+        Raises
+        ------
+        ParameterError
+            ``mass > n``, or the lower stop not below the upper one (``-b_low >= b``).
+        """
+        if self.mass > n:
+            raise ParameterError(f"stops.mass must be in 1..{n} (the oscillator has n={n} "
+                                 f"masses); got {self.mass!r}")
+        if self.b_low is None:
+            return self
+        if not -self.b_low < b:
+            raise ParameterError(f"the lower stop x_{self.mass} = -b_low = {-self.b_low!r} must "
+                                 f"lie below the upper stop x_{self.mass} = b = {b!r} "
+                                 f"(b + b_low > 0); got b={b!r}, stops.b_low={self.b_low!r}")
+        if self.R_low is None:
+            return dataclasses.replace(self, R_low=R)
+        return self
+
+    def position(self, stop: str, b: float) -> float:
+        """Position of the stop ``"U"`` (``b``) or ``"L"`` (``-b_low``) of mass j."""
+        if stop == UPPER:
+            return b
+        if stop == LOWER and self.b_low is not None:
+            return -self.b_low
+        raise ParameterError(f"stop must be {UPPER!r}" + (f" or {LOWER!r}" if self.two_sided
+                                                          else " (no lower stop)")
+                             + f"; got {stop!r}")
+
+    def restitution(self, stop: str, R: float) -> float:
+        """Restitution of the stop ``"U"`` (``R``) or ``"L"`` (``R_low``)."""
+        if stop == UPPER:
+            return R
+        self.position(stop, 0.0)  # validates
+        return float(R if self.R_low is None else self.R_low)
+
+    # -- serialisation --------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python description (JSON-able)."""
+        out: dict[str, Any] = {"mass": self.mass}
+        if self.b_low is not None:
+            out["b_low"] = self.b_low
+            out["R_low"] = self.R_low
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Stops:
+        """Inverse of :meth:`to_dict`; unknown keys are refused."""
+        if not isinstance(data, Mapping):
+            raise TypeError(f"stops must be a Stops or a mapping with keys mass, b_low, R_low; "
+                            f"got {type(data).__name__}")
+        unknown = set(data) - {"mass", "b_low", "R_low"}
+        if unknown:
+            raise ParameterError(f"stops: unknown key(s) {sorted(unknown)}; allowed: mass, "
+                                 "b_low, R_low")
+        return cls(**data)
+
+
+def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
+    """An impact sequence of an N-p motion: ``p`` letters ``U``/``L``.
+
+    Parameters
+    ----------
+    pattern : str or None
+        Which stop impact ``k`` hits, e.g. ``"UL"``; None: every impact on the
+        upper stop (the one-sided motion).
+    p : int
+        Impacts per motion.
+    stops : Stops
+
+    Raises
+    ------
+    ParameterError
+        Wrong length, a letter other than U/L, or ``L`` without a lower stop.
+    """
+    if pattern is None:
+        return UPPER * p
+    if not isinstance(pattern, str):
+        raise TypeError(f"pattern must be a string of {p} letters U/L; got {pattern!r}")
+    if len(pattern) != p or set(pattern) - {UPPER, LOWER}:
+        raise ParameterError(f"pattern must be {p} letters (one per impact) from 'U' (upper "
+                             f"stop) and 'L' (lower stop); got {pattern!r}")
+    if LOWER in pattern and not stops.two_sided:
+        raise ParameterError(f"pattern={pattern!r} has impacts on the lower stop, but the "
+                             "oscillator has none: give stops=Stops(b_low=...)")
+    return pattern
+
+
+def require_paper_stops(osc: Any, what: str) -> None:
+    """Refuse a stop geometry other than the paper's on the closed-form N-1 path.
+
+    The closed form of eq. (12)-(16) and its kernel are written for one stop on
+    mass 1 (the section ``x1 = b``, ``-R`` on ``x1'``): with a stop on another
+    mass or a lower stop they would give motions checked against the wrong stop.
+
+    Raises
+    ------
+    ParameterError
+        Naming `what`, the stops given and the shooting path that handles them.
+    """
+    stops = getattr(osc, "stops", None)
+    if stops is not None and not stops.paper:
+        raise ParameterError(
+            f"{what}: the closed form of eq. (12)-(16) handles one stop on mass 1 only; got "
+            f"stops={stops!r}. Use the N-p shooting path instead: "
+            "impactcont.multi_impact_orbit(osc, N, p, guess, pattern=...) and "
+            "multi_impact_continuation (p = 1, pattern 'U' for an N-1 motion)")

@@ -1,0 +1,373 @@
+"""Backlash: a two-sided clearance on mass 1 of the paper's 2-DOF chain.
+
+The system is the paper's example (Cao & Shu, section 4: M = I, K = [[1, -1], [-1, 2]],
+F = [1, 0], C = 2 eta K with eta = 0.1) with mass 1 between two stops, x1 = b above and
+x1 = -b below (a symmetric backlash of width 2b), both with R = 0.6. For each clearance
+b in CLEARANCES this study
+
+1. sweeps omega up with the event-driven simulator (state carried from one omega to the
+   next, transient discarded, impacts recorded with the stop they hit);
+2. takes every attractor of the sweep that is a 1-2 motion with one impact on each stop,
+   solves it by shooting and continues its branch in omega (both directions): the
+   symmetric motions (X_1 = -X_0, equal flight times) and the asymmetric ones, which come
+   in mirror pairs;
+3. locates where they switch: the symmetry-breaking pitchfork of the symmetric branch,
+   where a multiplier of its half-map H = S G_0 (flight U -> L, then the reflection S)
+   passes -1 (G = H^2 gets a multiplier +1), by Brent's method on det(H + I);
+4. checks the diagram against the sweep: at every omega where the simulator settled on a
+   1-2 motion, its impact velocities against the stable branch motion there;
+5. draws one bifurcation diagram per clearance (impact velocities, lower-stop impacts
+   negative) with the sweep overlaid.
+
+Writes into the output directory ``branches.nc`` (one group per branch), ``sweeps.nc``,
+``backlash.json`` (pitchforks, ranges, agreement, timings) and ``backlash.png``. Only the
+public API of impactcont is used. Run::
+
+    PYTHONPATH=. python studies/backlash/run.py [--output DIR] [--quick] [--copy-figures]
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # tiny matrices: threads only cost
+
+import argparse
+import json
+import logging
+import math
+import shutil
+import time
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import scipy.optimize
+import xarray as xr
+
+import impactcont as ic
+from impactcont.orbit.multi_impact import orbit_from_unknowns
+
+log = logging.getLogger("backlash")
+
+HERE = Path(__file__).resolve().parent
+CLEARANCES = (0.3, 0.5, 0.8)
+OMEGA = (0.5, 2.5)
+TRANSIENT, RECORD = 150.0, 30.0  # forcing periods discarded, recorded per sweep omega
+
+
+def system(b: float, omega: float) -> ic.ImpactOscillator:
+    """The paper's 2-DOF chain with mass 1 between x1 = -b and x1 = b (R = R_low = 0.6)."""
+    return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                               R=0.6, b=b, omega=omega, eta=0.1,
+                               stops=ic.Stops(b_low=b, R_low=0.6))
+
+
+# ------------------------------------------------------------------------------------------
+# Brute force
+# ------------------------------------------------------------------------------------------
+def one_two(res: ic.SimulationResult, omega: float) -> bool:
+    """The recorded impacts are a 1-2 motion: one impact on each stop per period, repeating."""
+    v, s, t = res.impact_velocities, res.impact_stops, res.impact_times
+    if v.size < 8 or not res.success:
+        return False
+    T = 2 * math.pi / omega
+    return (set(s[-8:]) == {"U", "L"} and all(a != c for a, c in zip(s[-8:-1], s[-7:], strict=True))
+            and float(np.max(np.abs(v[-6:] - v[-8:-2]))) < 1e-6
+            and abs(t[-1] - t[-3] - T) < 1e-6 * T)
+
+
+def sweep(b: float, omegas: np.ndarray) -> dict[str, Any]:
+    """Omega swept up; per omega the recorded impacts (velocity, stop) and the 1-2 verdict."""
+    state, phase = np.zeros(4), 0.0
+    rows: list[dict[str, Any]] = []
+    for om in omegas:
+        osc = system(b, float(om))
+        res = ic.simulate(osc, state, phase, TRANSIENT)
+        if not res.success:  # sticking or chatter: start again from rest
+            res = ic.simulate(osc, np.zeros(4), 0.0, TRANSIENT)
+        rec = ic.simulate(osc, res.final_state, res.final_phase, RECORD) if res.success else res
+        state, phase = (rec.final_state, rec.final_phase) if rec.success else (np.zeros(4), 0.0)
+        rows.append({"omega": float(om), "velocities": rec.impact_velocities.tolist(),
+                     "stops": rec.impact_stops, "status": rec.status.name,
+                     "one_two": one_two(rec, float(om)), "result": rec})
+    return {"b": b, "rows": rows}
+
+
+# ------------------------------------------------------------------------------------------
+# Branches, symmetry, pitchforks
+# ------------------------------------------------------------------------------------------
+def reflection(n: int) -> np.ndarray:
+    """``S`` in the section coordinates ``[z, theta]``: ``z -> -z``, ``theta -> theta + pi``."""
+    return np.diag([-1.0] * (2 * n - 1) + [1.0])
+
+
+def asymmetry(orbit: ic.MultiImpactOrbit) -> float:
+    """How far a 1-2 motion is from its mirror image: ``max |X_1 + X_0|, |tau_1 - tau_0|``."""
+    return float(max(np.max(np.abs(orbit.states[1] + orbit.states[0])),
+                     abs(orbit.flight_times[1] - orbit.flight_times[0])))
+
+
+def half_map_test(orbit: ic.MultiImpactOrbit) -> float:
+    """``det(S G_0 + I)``: vanishes where the half-map of a symmetric motion has -1."""
+    H = reflection(orbit.oscillator.n) @ orbit.jacobians[0]
+    return float(np.linalg.det(H + np.eye(H.shape[0])))
+
+
+def orbit_at(ds: xr.Dataset, i: int, omega: float | None = None) -> ic.MultiImpactOrbit:
+    """The motion of branch point i (or at ``omega``, seeded by point i), re-solved."""
+    osc = ic.dataset.oscillator_from_dataset(ds, i)
+    if omega is not None:
+        osc = osc.replace(omega=omega)
+    return ic.multi_impact_orbit(osc, 1, 2, {
+        "delta": float(ds["delta_k"].values[i, 0]), "flight_times": ds["flight_time_k"].values[i],
+        "states": ds["state_k"].values[i], "pattern": ds.attrs["pattern"]})
+
+
+def symmetric_orbit(osc: ic.ImpactOscillator, seed: ic.MultiImpactOrbit
+                    ) -> ic.MultiImpactOrbit:
+    """The symmetric 1-2 motion near `seed`, solved as a fixed point of the half-map.
+
+    With ``X_1 = -X_0`` and ``tau_0 = T/2`` the motion solves
+    ``-D_L (Phi(T/2) X_0 + E(T/2) [cos delta; sin delta]) = X_0`` (eq. 9 and eq. 4 at the
+    lower stop, then the reflection): 2n equations in ``delta`` and ``z_0``, regular at the
+    symmetry-breaking pitchfork (where the 1-2 shooting system of the full period is
+    singular). The full motion (G, multipliers, checks) is then evaluated at that solution.
+    """
+    flow = ic.Flow(osc)
+    n, T = osc.n, 2 * math.pi / osc.omega
+    k = seed.pattern.index("U")
+    Phi, E = flow.matrices(T / 2)
+    d = np.ones(2 * n)
+    d[n] = -osc.stops.R_low
+
+    def half(v: np.ndarray) -> np.ndarray:
+        X = np.concatenate([[osc.b], v[1:]])
+        arrival = Phi @ X + E @ np.array([math.cos(v[0]), math.sin(v[0])])
+        return -(d * arrival) - X
+
+    v, _, _, msg = scipy.optimize.fsolve(half, np.concatenate([[seed.phases[k]],
+                                                              seed.states[k][1:]]),
+                                         xtol=1e-14, full_output=True)
+    if np.max(np.abs(half(v))) > 1e-11:  # (fsolve may say xtol is too small: judged here)
+        raise ic.NoPeriodicMotionError(f"symmetric motion at omega={osc.omega!r}: {msg}")
+    X0 = np.concatenate([[osc.b], v[1:]])
+    u = np.concatenate([[v[0], T / 2], X0[1:], -X0[1:]])
+    return orbit_from_unknowns(flow, 1, 2, u, pattern="UL")
+
+
+def pitchforks(ds: xr.Dataset) -> list[float]:
+    """Omega of every symmetry-breaking pitchfork on a symmetric branch (to ~1e-12)."""
+    orbits = [orbit_at(ds, i) for i in range(ds.sizes["point"])]
+    tests = np.array([half_map_test(o) for o in orbits])
+    found = []
+    for i in np.flatnonzero(np.sign(tests[:-1]) != np.sign(tests[1:])):
+        w0, w1 = float(ds["omega"].values[i]), float(ds["omega"].values[i + 1])
+        if not (orbits[i].physical and orbits[i + 1].physical):
+            continue
+        osc = orbits[i].oscillator
+
+        def test(om: float, seed: ic.MultiImpactOrbit = orbits[i],
+                 osc: ic.ImpactOscillator = osc) -> float:
+            return half_map_test(symmetric_orbit(osc.replace(omega=om), seed))
+
+        w = scipy.optimize.brentq(test, min(w0, w1), max(w0, w1), xtol=1e-13)
+        found.append(w)
+    return found
+
+
+def branches_for(b: float, sw: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    """Branches of the 1-2 motions the sweep settled on (one symmetric, one per mirror pair)."""
+    out: list[dict[str, Any]] = []
+    timing: dict[str, float] = {}
+    for row in sw["rows"]:
+        if not row["one_two"]:
+            continue
+        res = row["result"]
+        t0 = time.perf_counter()
+        orbit = ic.multi_impact_orbit(system(b, row["omega"]), 1, 2, res)
+        timing.setdefault("orbit_s", time.perf_counter() - t0)
+        kind = "symmetric" if asymmetry(orbit) < 1e-8 else "asymmetric"
+        # one branch per motion: skip seeds on a branch already followed
+        kinds = ("symmetric",) if kind == "symmetric" else ("asymmetric", "mirror")
+        if any(_on_branch(br, orbit) for br in out if br["kind"] in kinds):
+            continue
+        t0 = time.perf_counter()
+        ds = ic.multi_impact_continuation(orbit, "omega", OMEGA, both_directions=True,
+                                          max_points=600, ds_max=0.02)
+        timing.setdefault(f"branch_{kind}_s", time.perf_counter() - t0)
+        timing.setdefault(f"branch_{kind}_points", ds.sizes["point"])
+        out.append({"kind": kind, "ds": ds, "seed": row["omega"]})
+        log.info("b=%g: %s branch from the sweep at omega=%.4f: %d points", b, kind,
+                 row["omega"], ds.sizes["point"])
+        if kind == "asymmetric":  # its mirror image, by symmetry
+            mirror = ic.multi_impact_orbit(orbit.oscillator, 1, 2, {
+                "delta": float(orbit.phases[1]) + math.pi,
+                "flight_times": orbit.flight_times[::-1], "states": -orbit.states[::-1],
+                "pattern": orbit.pattern})
+            mds = ic.multi_impact_continuation(mirror, "omega", OMEGA, both_directions=True,
+                                               max_points=600, ds_max=0.02)
+            out.append({"kind": "mirror", "ds": mds, "seed": row["omega"]})
+    return out, timing
+
+
+def _on_branch(br: dict[str, Any], orbit: ic.MultiImpactOrbit) -> bool:
+    """The motion lies on the branch: a point within 0.02 in omega and in both velocities."""
+    ds = br["ds"]
+    near = np.flatnonzero(np.abs(ds["omega"].values - orbit.oscillator.omega) < 0.02)
+    vel = np.sort(ds["impact_velocity_k"].values[near], axis=1)
+    return bool(near.size and np.min(np.max(np.abs(
+        vel - np.sort(orbit.impact_velocities)), axis=1)) < 0.02)
+
+
+# ------------------------------------------------------------------------------------------
+# Agreement with the sweep
+# ------------------------------------------------------------------------------------------
+def agreement(b: float, sw: dict[str, Any], branches: list[dict[str, Any]]) -> dict[str, Any]:
+    """Every 1-2 attractor of the sweep against the stable physical branch motions there."""
+    worst, explained, total, mismatch = 0.0, 0, 0, []
+    for row in sw["rows"]:
+        if not row["one_two"]:
+            continue
+        total += 1
+        v = np.array(row["velocities"][-2:])
+        s = row["stops"][-2:]
+        sim = {s[0]: v[0], s[1]: v[1]}
+        best = math.inf
+        for br in branches:
+            ds = br["ds"]
+            stable = ds["stable"].values & ds["physical"].values
+            om = ds["omega"].values
+            near = np.flatnonzero(stable & (np.abs(om - row["omega"]) < 0.03))
+            if near.size == 0:
+                continue
+            # the nearest stored motion in (omega, both velocities): a loop through both
+            # mirror images passes every omega twice
+            stored = ds["impact_velocity_k"].values[near]
+            order = [sim[c] for c in ds.attrs["pattern"]]
+            i = near[np.argmin(np.max(np.abs(stored - order), axis=1)
+                               + np.abs(om[near] - row["omega"]))]
+            o = orbit_at(ds, int(i), row["omega"])
+            if not (o.physical and o.stable):
+                continue
+            mine = dict(zip(o.pattern, o.impact_velocities, strict=True))
+            best = min(best, max(abs(mine["U"] - sim["U"]), abs(mine["L"] - sim["L"])))
+        if best < 1e-6:
+            explained += 1
+            worst = max(worst, best)
+        else:
+            mismatch.append([row["omega"], best])
+    return {"one_two_attractors": total, "explained": explained, "worst_velocity_error": worst,
+            "unexplained_omegas": mismatch}
+
+
+# ------------------------------------------------------------------------------------------
+# Figure
+# ------------------------------------------------------------------------------------------
+STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C3"}
+
+
+def draw(ax, b: float, sw: dict[str, Any], branches: list[dict[str, Any]],
+         forks: list[float]) -> None:
+    labelled: set[str] = set()
+    for br in branches:
+        ds = br["ds"]
+        om = ds["omega"].values
+        sign = np.array([1.0 if c == "U" else -1.0 for c in ds.attrs["pattern"]])
+        vel = ds["impact_velocity_k"].values * sign
+        phys, stab = ds["physical"].values, ds["stable"].values
+        for k in range(vel.shape[1]):
+            for mask, ls in ((phys & stab, "-"), (phys & ~stab, ":")):
+                y = np.where(mask, vel[:, k], np.nan)
+                label = None
+                if k == 0 and ls == "-" and br["kind"] not in labelled:
+                    label = "asymmetric (mirror pair)" if br["kind"] != "symmetric" else (
+                        "symmetric")
+                    labelled.update({br["kind"], "mirror"} if br["kind"] != "symmetric"
+                                    else {"symmetric"})
+                ax.plot(om, y, ls, color=STYLE[br["kind"]], lw=1.3 if ls == "-" else 1.0,
+                        label=label)
+    for i, row in enumerate(sw["rows"]):  # the sweep on top: each recorded impact
+        v = np.array(row["velocities"], float)
+        sign = np.array([1.0 if c == "U" else -1.0 for c in row["stops"]])
+        ax.plot(np.full(v.size, row["omega"]), sign * v, ".", color="k", ms=1.5,
+                label="simulated sweep" if i == 0 else None)
+    for w in forks:
+        ax.axvline(w, color="k", lw=0.6, ls="--")
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_title(f"b = b_low = {b}", fontsize=9)
+    ax.set_xlabel("omega")
+    ax.set_xlim(*OMEGA)
+
+
+def main(output: Path, quick: bool = False) -> dict[str, Any]:
+    output.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    omegas = np.linspace(OMEGA[0], OMEGA[1], 21 if quick else 81)
+    clearances = CLEARANCES[1:2] if quick else CLEARANCES
+    summary: dict[str, Any] = {"clearances": {}, "quick": quick}
+    fig, axes = plt.subplots(1, len(clearances), figsize=(5.2 * len(clearances), 4.4),
+                             squeeze=False)
+    groups: dict[str, xr.Dataset] = {}
+    sweeps = []
+    for ax, b in zip(axes[0], clearances, strict=True):
+        t0 = time.perf_counter()
+        sw = sweep(b, omegas)
+        t_sweep = time.perf_counter() - t0
+        branches, timing = branches_for(b, sw)
+        forks = sorted({round(w, 10) for br in branches if br["kind"] == "symmetric"
+                        for w in pitchforks(br["ds"])})
+        agree = agreement(b, sw, branches)
+        info: dict[str, Any] = {"sweep_s": t_sweep, **timing, "pitchforks": forks,
+                                "agreement": agree, "branches": []}
+        for br in branches:
+            ds = br["ds"]
+            ok = ds["physical"].values & ds["stable"].values
+            om = ds["omega"].values
+            specials = [(str(lab), float(w)) for lab, w in zip(
+                ds["special_label"].values, ds["special_omega"].values, strict=True)]
+            info["branches"].append({
+                "kind": br["kind"], "seed_omega": br["seed"], "points": int(ds.sizes["point"]),
+                "pattern": ds.attrs["pattern"],
+                "stable_physical_omega": [float(om[ok].min()), float(om[ok].max())]
+                if ok.any() else None, "special_points": specials})
+            groups[f"b{b}_{br['kind']}"] = ds
+        summary["clearances"][str(b)] = info
+        sweeps.append(xr.Dataset({
+            "omega": ("row", omegas),
+            "one_two": ("row", [r["one_two"] for r in sw["rows"]]),
+            "impacts_recorded": ("row", [len(r["velocities"]) for r in sw["rows"]]),
+            "pattern_tail": ("row", [r["stops"][-8:] for r in sw["rows"]])},
+            attrs={"b": b}))
+        draw(ax, b, sw, branches, forks)
+        log.info("b=%g: pitchforks %s, agreement %s", b, forks, agree)
+    axes[0][0].set_ylabel("impact velocity (lower stop: negative)")
+    axes[0][0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("Backlash on mass 1 of the paper's 2-DOF chain: 1-2 motions (solid: stable, "
+                 "dotted: unstable; dots: simulated sweep; dashed: pitchforks)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(output / "backlash.png", dpi=110)
+    ic.save(groups, output / "branches.nc")
+    ic.save({f"b{s.attrs['b']}": s for s in sweeps}, output / "sweeps.nc", validate=False)
+    summary["total_s"] = time.perf_counter() - t_start
+    (output / "backlash.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--output", type=Path, default=HERE / "output")
+    parser.add_argument("--quick", action="store_true", help="one clearance, 21 omegas")
+    parser.add_argument("--copy-figures", action="store_true",
+                        help="copy the figure into figures/ (tracked)")
+    args = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    result = main(args.output, quick=args.quick)
+    if args.copy_figures:
+        (HERE / "figures").mkdir(exist_ok=True)
+        shutil.copy(args.output / "backlash.png", HERE / "figures" / "backlash.png")
+    log.info("done in %.1f s", result["total_s"])
