@@ -379,9 +379,11 @@ def test_C_with_eta_or_rayleigh_is_refused():
             ic.ImpactOscillator(M=np.eye(2), K=K2, C=0.1 * K2, F=[1.0, 0.0], R=0.6, b=0.3,
                                 omega=1.0, **extra)
     osc = _damper_on_mass1()
-    with pytest.raises(ParameterError, match="give either a damping matrix C or eta"):
-        osc.replace(eta=0.1)
+    # replace() switches the damping model: eta replaces the matrix (both at once: refused)
+    assert not osc.replace(eta=0.1).general_damping
     assert not osc.replace(C=None, eta=0.1).general_damping
+    with pytest.raises(ParameterError, match="give either a damping matrix C or eta"):
+        osc.replace(eta=0.1, C=0.1 * K2)
     with pytest.raises(ParameterError, match="no Rayleigh coefficients"):
         _ = osc.rayleigh
     with pytest.raises(ParameterError, match="proportional modal basis"):

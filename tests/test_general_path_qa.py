@@ -244,3 +244,48 @@ def test_general_map_leaves_a_resonant_column_empty_instead_of_failing():
             assert exists[i, j] == bool(orbits)
             assert int(m["n_stable"].sel(N=1).values[i, j]) == sum(
                 o.stable for o in orbits if o.physical)
+
+
+def test_replace_switches_between_a_damping_matrix_and_eta_alpha_beta():
+    """eta / alpha / beta given to replace() replace a matrix C and a matrix C replaces them
+    (both were refused with 'give either ...'); C=None leaves the oscillator undamped."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.5, omega=1.2, C=[[0.0, 0.0], [0.0, 0.2]])
+    prop = osc.replace(eta=0.1)
+    assert not prop.general_damping and prop.eta == 0.1
+    assert np.allclose(prop.C, 0.2 * np.asarray(prop.K))
+    back = prop.replace(C=[[0.0, 0.0], [0.0, 0.2]])
+    assert back.general_damping and back.eta is None and back.alpha is None
+    assert np.array_equal(back.C, osc.C)
+    rayleigh = osc.replace(alpha=0.05, beta=0.02)
+    assert rayleigh.rayleigh == (0.05, 0.02) and not rayleigh.general_damping
+    bare = osc.replace(C=None)
+    assert not np.any(bare.C) and "undamped" in repr(bare)
+    with pytest.raises(ic.ParameterError, match="not both"):
+        osc.replace(eta=0.1, C=[[0.1, 0.0], [0.0, 0.1]])
+
+
+def test_f_imag_must_have_the_shape_of_f():
+    """A shorter F_imag was broadcast over F (every mass the same phase) or blamed on F."""
+    data = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.5j],
+                               R=0.6, b=0.5, omega=1.2, eta=0.1).to_dict()
+    assert ic.ImpactOscillator.from_dict(data).F.tolist() == [1.0, 0.5j]
+    with pytest.raises(ic.ParameterError, match="F_imag must have the shape of F"):
+        ic.ImpactOscillator.from_dict({**data, "F_imag": [0.5]})
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.1}, {"C": [[0.0, 0.0], [0.0, 0.2]]}])
+def test_orbit_at_phase_refuses_a_phase_off_eq_14(damping):
+    """A phase that does not satisfy eq. (14) gave a 'motion' with x1(0) != b, reported
+    physical; now it is refused, and the roots of eq. (15) are accepted."""
+    from impactcont.orbit.periodic import orbit_at_phase
+
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.3, omega=1.25, **damping)
+    roots = ic.periodic_orbits(osc, 1)
+    assert roots
+    for orbit in roots:
+        again = orbit_at_phase(osc, 1, orbit.delta)
+        assert abs(again.state[0] - osc.b) < 1e-12
+    with pytest.raises(ic.ParameterError, match=r"does not satisfy eq\. \(14\)"):
+        orbit_at_phase(osc, 1, roots[0].delta + 0.3)

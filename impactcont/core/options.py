@@ -265,6 +265,13 @@ def driver_options(options: ContinuationOptions | None, bounds: Any, /, *,
     if options is not None:
         given |= options.given
         values.update({name: getattr(options, name) for name in options.given})
+    known = {f.name for f in dataclasses.fields(ContinuationOptions) if f.init}
+    unknown = sorted(set(keywords) - known)
+    if unknown:
+        raise ContinuationOptionError(
+            f"unknown keyword argument(s) {', '.join(map(repr, unknown))} (got "
+            f"{', '.join(f'{k}={keywords[k]!r}' for k in unknown)}); the continuation "
+            f"options are {', '.join(sorted(known))}, besides the function's own arguments")
     extra = {name: value for name, value in keywords.items() if value is not None}
     given |= set(extra)
     values.update(extra)

@@ -344,8 +344,18 @@ class ImpactOscillator:
             if "b" in changes:  # stops: the lower stop must stay below the upper one
                 new.stops.check(new.n, new.b, new.R)
             return new
-        # the damping matrix follows eta / alpha / beta unless it was given as a matrix
-        implied = {} if self.general_damping or "C" in changes else {"C": None}
+        # the damping model: a matrix C given here replaces eta / alpha / beta, and eta /
+        # alpha / beta given here replace a matrix C; otherwise the damping matrix follows
+        # eta / alpha / beta unless it was given as a matrix
+        proportional = any(changes.get(k) is not None for k in ("eta", "alpha", "beta"))
+        if changes.get("C") is not None:
+            for name in ("eta", "alpha", "beta"):
+                changes.setdefault(name, None)
+            implied: dict[str, Any] = {}
+        elif "C" in changes:
+            implied = {}
+        else:
+            implied = {"C": None} if proportional or not self.general_damping else {}
         new = dataclasses.replace(self, **changes, **implied)
         if "first_order" in self.__dict__ and set(changes) <= {*_SCALAR_RULES, "F"}:
             new.__dict__["first_order"] = self.first_order  # independent of F
@@ -472,10 +482,15 @@ class ImpactOscillator:
         if "F_imag" in data:
             imag = data.pop("F_imag")
             try:
-                data["F"] = np.asarray(data["F"], dtype=float) + 1j * np.asarray(imag, dtype=float)
+                real = np.atleast_1d(np.asarray(data["F"], dtype=float))
+                imag_part = np.atleast_1d(np.asarray(imag, dtype=float))
             except (TypeError, ValueError, KeyError) as exc:
                 raise ParameterError(f"F_imag must be a real vector matching F; got {imag!r}"
                                      ) from exc
+            if imag_part.shape != real.shape:  # no broadcasting: each mass has its own phase
+                raise ParameterError(f"F_imag must have the shape of F, {real.shape}; got "
+                                     f"shape {imag_part.shape} ({imag!r})")
+            data["F"] = real + 1j * imag_part
         return cls(**data)
 
     @classmethod
@@ -486,7 +501,8 @@ class ImpactOscillator:
     def __repr__(self) -> str:
         damping = (f"C={self.C.tolist()}" if self.general_damping
                    else f"eta={self.eta!r}" if self.eta is not None
-                   else f"alpha={self.alpha!r}, beta={self.beta!r}")
+                   else f"alpha={self.alpha!r}, beta={self.beta!r}"
+                   if self.alpha is not None or self.beta is not None else "undamped")
         stops = "" if self.stops.paper else f", stops={self.stops!r}"
         return (f"ImpactOscillator(n={self.n}, R={self.R!r}, b={self.b!r}, "
                 f"omega={self.omega!r}, {damping}, F={self.F.tolist()}{stops})")

@@ -280,26 +280,54 @@ def _warn_capped(capped: bool, T: float) -> None:
                       stacklevel=3)
 
 
-def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
-                   ) -> PeriodicOrbit:
+_PHASE_TOL = 1e-7  # relative residual of eq. (14) above which a phase is no motion
+
+
+def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0,
+                   check: bool = True) -> PeriodicOrbit:
     """The periodic N-1 motion with impact phase ``delta`` (which must satisfy eq. 14).
 
     The impact velocity follows from the phase (``sigma = x1p'(delta) / Delta``, see
     :mod:`impactcont.orbit.kernel`; for elastic impacts without damping from the gap),
     then the interior-contact check of eq. (16); state, G and multipliers on access.
+
+    Raises
+    ------
+    ParameterError
+        With `check` (the default), if ``delta`` does not satisfy eq. (14),
+        ``|c cos(delta) + s sin(delta) - b| > 1e-7 max(1, |b|, sqrt(c^2 + s^2))``:
+        such a phase is not a periodic motion (its ``x1(0)`` is not ``b``).
+        ``check=False`` is for callers that evaluate guesses on purpose.
     """
     from impactcont.orbit import kernel
 
     N = _check_N(N)
     _check_oscillator(osc)
     if osc.general:  # a general damping matrix or complex F: the first-order path
-        return _general_orbit(osc, N, general.orbit_pieces(osc, N), float(delta), root)
+        pieces = general.orbit_pieces(osc, N)
+        if check:
+            _check_phase(osc, float(pieces[1][0, 0]), float(pieces[1][0, 1]), delta)
+        return _general_orbit(osc, N, pieces, float(delta), root)
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
         w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
+    if check and sc[9] == 0.0:  # elastic undamped motions satisfy the impact condition instead
+        _check_phase(osc, float(sc[5]), float(sc[6]), delta)
     _warn_capped(capped, sc[0])
     return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
                        float(gap), float(gap_t), state)
+
+
+def _check_phase(osc: ImpactOscillator, c: float, s: float, delta: float) -> None:
+    """Refuse a phase that does not satisfy eq. (14) (see :func:`orbit_at_phase`)."""
+    residual = c * math.cos(delta) + s * math.sin(delta) - osc.b
+    scale = max(1.0, abs(osc.b), math.hypot(c, s))
+    if not abs(residual) <= _PHASE_TOL * scale:
+        raise ParameterError(
+            f"delta={delta!r} does not satisfy eq. (14) at omega={osc.omega!r}, b={osc.b!r}: "
+            f"c cos(delta) + s sin(delta) - b = {residual:.3g} (allowed: below "
+            f"{_PHASE_TOL * scale:.1g}); the phases of the periodic motions are those of "
+            "periodic_orbits(osc, N)")
 
 
 def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:

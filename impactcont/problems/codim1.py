@@ -481,7 +481,7 @@ class CurveProblem:
         """
         if extras is None:
             pc = self._pieces(p1, p2)
-            orbit = orbit_at_phase(pc.osc, self.N, float(delta))
+            orbit = orbit_at_phase(pc.osc, self.N, float(delta), check=False)  # a guess
             extras = self.extras_from_orbit(orbit)
         u0 = np.concatenate([[p1, delta], np.asarray(extras, dtype=float)])
         self.accept(u0, p2)
