@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.core.options import DRIVER_DEFAULTS, driver_options
+from impactcont.core.options import DRIVER_DEFAULTS, ContinuationOptionError, driver_options
 
 
 @pytest.fixture(scope="module")
@@ -63,3 +63,15 @@ def test_former_submodule_paths_are_the_same_modules():
     from impactcont.core.stepper import NewtonConvergenceError as Same
 
     assert ContinuationOptions is ic.ContinuationOptions and NewtonConvergenceError is Same
+
+
+def test_unknown_keyword_arguments_are_refused_with_the_options_listed():
+    """A misspelt or foreign keyword (here `special`, which belongs to `curve`) reached the
+    options dataclass and failed with a bare TypeError."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.0, omega=1.0, eta=0.1)
+    with pytest.raises(ContinuationOptionError, match=r"unknown keyword argument\(s\) 'special'"
+                       r".*ds_max"):
+        ic.continuation(osc, 1, "omega", (0.5, 2.0), special=0)
+    with pytest.raises(ContinuationOptionError, match="'dsmax'"):
+        ic.continuation(osc, 1, "omega", (0.5, 2.0), dsmax=0.01)
