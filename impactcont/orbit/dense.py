@@ -17,7 +17,7 @@ from scipy.linalg import lapack, lu_solve
 from impactcont.errors import IllConditionedWarning, ParameterError
 from impactcont.orbit.flow import Flow
 
-__all__ = ["impact_map_jacobian", "periodic_matrix"]
+__all__ = ["impact_map_jacobian", "periodic_matrix", "pole_free_pd_matrix"]
 
 _EPS = float(np.finfo(float).eps)
 # warn when the relative error bound cond * eps of the solve of eq. (12) exceeds ~1e-6
@@ -128,3 +128,21 @@ def impact_map_jacobian(flow: Flow, state: np.ndarray, delta: float, T: float,
     G[-1, :-1] = -omega * h0_p / h2
     G[-1, -1] = 1.0 - omega * h1 / h2
     return G, float(h2)
+
+
+def pole_free_pd_matrix(G_reg: np.ndarray, a: np.ndarray, b: np.ndarray, h2: complex
+                        ) -> np.ndarray:
+    """``E = [[G_reg + I, a], [b^T, -h2]]``, shape (m+1, m+1), of G's split
+    ``G = G_reg + a b^T / h2`` (eq. 25).
+
+    Finite through a zero-velocity impact; ``det E = -h2 det(G + I)`` (Schur
+    complement), so ``E`` is singular exactly at a period-doubling (``h2 != 0``).
+    Real or complex (a complex step) like its inputs.
+    """
+    m = G_reg.shape[0]
+    E = np.empty((m + 1, m + 1), dtype=np.result_type(G_reg, a, b, h2))
+    E[:m, :m] = G_reg + np.eye(m)
+    E[:m, m] = a
+    E[m, :m] = b
+    E[m, m] = -h2
+    return E

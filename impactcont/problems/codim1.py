@@ -87,6 +87,7 @@ from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.model.modal import decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.dense import pole_free_pd_matrix
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
@@ -230,14 +231,7 @@ class _Pieces:
         Finite through a zero-velocity impact; ``det E = -h2 det(G + I)`` (Schur
         complement), so ``E`` is singular exactly at a period-doubling (``h2 != 0``).
         """
-        G_reg, a, b, h2 = self.split(delta)
-        m = G_reg.shape[0]
-        E = np.empty((m + 1, m + 1), dtype=G_reg.dtype)
-        E[:m, :m] = G_reg + np.eye(m)
-        E[:m, m] = a
-        E[m, :m] = b
-        E[m, m] = -h2
-        return E
+        return pole_free_pd_matrix(*self.split(delta))
 
     def other_maximum(self, delta: float, exclude: float) -> float:
         """The highest interior maximum of ``x1`` other than the one at time ``exclude``

@@ -58,6 +58,7 @@ import numpy as np
 
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit import general
+from impactcont.orbit.dense import pole_free_pd_matrix
 from impactcont.orbit.flow import GeneralFlow
 
 __all__ = ["STEPPED_PARAMETERS", "GeneralPieces"]
@@ -170,14 +171,7 @@ class GeneralPieces:
 
     def pole_free_pd_matrix(self, delta: float | complex) -> np.ndarray:
         """``E = [[G_reg + I, a], [b^T, -h2]]`` (m+1, m+1); ``det E = -h2 det(G + I)``."""
-        G_reg, a, b, h2 = self.split(delta)
-        m = G_reg.shape[0]
-        E = np.empty((m + 1, m + 1), dtype=G_reg.dtype)
-        E[:m, :m] = G_reg + np.eye(m)
-        E[:m, m] = a
-        E[m, :m] = b
-        E[m, m] = -h2
-        return E
+        return pole_free_pd_matrix(*self.split(delta))
 
     def pd_condition(self, delta: float | complex, left: np.ndarray, right: np.ndarray
                      ) -> float | complex:
