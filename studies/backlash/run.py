@@ -17,7 +17,10 @@ b in CLEARANCES this study
 4. checks the diagram against the sweep: at every omega where the simulator settled on a
    1-2 motion, its impact velocities against the stable branch motion there;
 5. draws one bifurcation diagram per clearance (impact velocities, lower-stop impacts
-   negative) with the sweep overlaid.
+   negative) with the sweep overlaid;
+6. repeats 1-5 for the b = 0.5 system with a non-proportional damping matrix (only the
+   damper between the masses, :data:`JOINT_DAMPER`): the effect of the damping's
+   distribution on the same backlash.
 
 Writes into the output directory ``branches.nc`` (one group per branch), ``sweeps.nc``,
 ``backlash.json`` (pitchforks, ranges, agreement, timings) and ``backlash.png``. Only the
@@ -58,12 +61,19 @@ HERE = Path(__file__).resolve().parent
 CLEARANCES = (0.3, 0.5, 0.8)
 OMEGA = (0.5, 2.5)
 TRANSIENT, RECORD = 150.0, 30.0  # forcing periods discarded, recorded per sweep omega
+PAPER_DAMPING: dict[str, Any] = {"eta": 0.1}  # C = 2 eta K = [[0.2, -0.2], [-0.2, 0.4]]
+JOINT_DAMPER: dict[str, Any] = {"C": [[0.2, -0.2], [-0.2, 0.2]]}
+"""Non-proportional: only the damper between the masses (the paper's C without its part to
+the ground), as in a gear mesh whose bearings are undamped."""
+JOINT_CLEARANCE = 0.5
 
 
-def system(b: float, omega: float) -> ic.ImpactOscillator:
-    """The paper's 2-DOF chain with mass 1 between x1 = -b and x1 = b (R = R_low = 0.6)."""
+def system(b: float, omega: float, damping: dict[str, Any] | None = None
+           ) -> ic.ImpactOscillator:
+    """The paper's 2-DOF chain with mass 1 between x1 = -b and x1 = b (R = R_low = 0.6);
+    the paper's damping unless `damping` gives another (``eta``, ``alpha/beta`` or ``C``)."""
     return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
-                               R=0.6, b=b, omega=omega, eta=0.1,
+                               R=0.6, b=b, omega=omega, **(damping or PAPER_DAMPING),
                                stops=ic.Stops(b_low=b, R_low=0.6))
 
 
@@ -81,12 +91,13 @@ def one_two(res: ic.SimulationResult, omega: float) -> bool:
             and abs(t[-1] - t[-3] - T) < 1e-6 * T)
 
 
-def sweep(b: float, omegas: np.ndarray) -> dict[str, Any]:
+def sweep(b: float, omegas: np.ndarray, damping: dict[str, Any] | None = None
+          ) -> dict[str, Any]:
     """Omega swept up; per omega the recorded impacts (velocity, stop) and the 1-2 verdict."""
     state, phase = np.zeros(4), 0.0
     rows: list[dict[str, Any]] = []
     for om in omegas:
-        osc = system(b, float(om))
+        osc = system(b, float(om), damping)
         res = ic.simulate(osc, state, phase, TRANSIENT)
         if not res.success:  # sticking or chatter: start again from rest
             res = ic.simulate(osc, np.zeros(4), 0.0, TRANSIENT)
@@ -95,7 +106,7 @@ def sweep(b: float, omegas: np.ndarray) -> dict[str, Any]:
         rows.append({"omega": float(om), "velocities": rec.impact_velocities.tolist(),
                      "stops": rec.impact_stops, "status": rec.status.name,
                      "one_two": one_two(rec, float(om)), "result": rec})
-    return {"b": b, "rows": rows}
+    return {"b": b, "rows": rows, "damping": damping}
 
 
 # ------------------------------------------------------------------------------------------
@@ -189,7 +200,7 @@ def branches_for(b: float, sw: dict[str, Any]) -> tuple[list[dict[str, Any]], di
             continue
         res = row["result"]
         t0 = time.perf_counter()
-        orbit = ic.multi_impact_orbit(system(b, row["omega"]), 1, 2, res)
+        orbit = ic.multi_impact_orbit(system(b, row["omega"], sw["damping"]), 1, 2, res)
         timing.setdefault("orbit_s", time.perf_counter() - t0)
         kind = "symmetric" if asymmetry(orbit) < 1e-8 else "asymmetric"
         # one branch per motion: skip seeds on a branch already followed
@@ -304,47 +315,63 @@ def draw(ax, b: float, sw: dict[str, Any], branches: list[dict[str, Any]],
     ax.set_xlim(*OMEGA)
 
 
+def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: str,
+         groups: dict[str, xr.Dataset]) -> tuple[dict[str, Any], xr.Dataset]:
+    """One system: sweep, branches, pitchforks, agreement, its panel; returns its summary
+    and its sweep (the branches go into `groups` under `key`)."""
+    t0 = time.perf_counter()
+    sw = sweep(b, omegas, damping)
+    t_sweep = time.perf_counter() - t0
+    branches, timing = branches_for(b, sw)
+    forks = sorted({round(w, 10) for br in branches if br["kind"] == "symmetric"
+                    for w in pitchforks(br["ds"])})
+    agree = agreement(b, sw, branches)
+    info: dict[str, Any] = {"damping": damping or PAPER_DAMPING, "sweep_s": t_sweep,
+                            **timing, "pitchforks": forks, "agreement": agree,
+                            "branches": []}
+    for br in branches:
+        ds = br["ds"]
+        ok = ds["physical"].values & ds["stable"].values
+        om = ds["omega"].values
+        specials = [(str(lab), float(w)) for lab, w in zip(
+            ds["special_label"].values, ds["special_omega"].values, strict=True)]
+        info["branches"].append({
+            "kind": br["kind"], "seed_omega": br["seed"], "points": int(ds.sizes["point"]),
+            "pattern": ds.attrs["pattern"],
+            "stable_physical_omega": [float(om[ok].min()), float(om[ok].max())]
+            if ok.any() else None, "special_points": specials})
+        groups[f"{key}_{br['kind']}"] = ds
+    sweep_ds = xr.Dataset({
+        "omega": ("row", omegas),
+        "one_two": ("row", [r["one_two"] for r in sw["rows"]]),
+        "impacts_recorded": ("row", [len(r["velocities"]) for r in sw["rows"]]),
+        "pattern_tail": ("row", [r["stops"][-8:] for r in sw["rows"]])},
+        attrs={"b": b, "damping": json.dumps(damping or PAPER_DAMPING)})
+    draw(ax, b, sw, branches, forks)
+    if damping is not None:
+        ax.set_title(f"b = b_low = {b}, joint damper only (C non-proportional)", fontsize=9)
+    log.info("%s: pitchforks %s, agreement %s", key, forks, agree)
+    return info, sweep_ds
+
+
 def main(output: Path, quick: bool = False) -> dict[str, Any]:
     output.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
     omegas = np.linspace(OMEGA[0], OMEGA[1], 21 if quick else 81)
     clearances = CLEARANCES[1:2] if quick else CLEARANCES
-    summary: dict[str, Any] = {"clearances": {}, "quick": quick}
-    fig, axes = plt.subplots(1, len(clearances), figsize=(5.2 * len(clearances), 4.4),
-                             squeeze=False)
+    cases = [(b, None, f"b{b}") for b in clearances]
+    cases.append((JOINT_CLEARANCE, JOINT_DAMPER, f"b{JOINT_CLEARANCE}_joint_damper"))
+    summary: dict[str, Any] = {"clearances": {}, "joint_damper": {}, "quick": quick}
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.2 * len(cases), 4.4), squeeze=False)
     groups: dict[str, xr.Dataset] = {}
-    sweeps = []
-    for ax, b in zip(axes[0], clearances, strict=True):
-        t0 = time.perf_counter()
-        sw = sweep(b, omegas)
-        t_sweep = time.perf_counter() - t0
-        branches, timing = branches_for(b, sw)
-        forks = sorted({round(w, 10) for br in branches if br["kind"] == "symmetric"
-                        for w in pitchforks(br["ds"])})
-        agree = agreement(b, sw, branches)
-        info: dict[str, Any] = {"sweep_s": t_sweep, **timing, "pitchforks": forks,
-                                "agreement": agree, "branches": []}
-        for br in branches:
-            ds = br["ds"]
-            ok = ds["physical"].values & ds["stable"].values
-            om = ds["omega"].values
-            specials = [(str(lab), float(w)) for lab, w in zip(
-                ds["special_label"].values, ds["special_omega"].values, strict=True)]
-            info["branches"].append({
-                "kind": br["kind"], "seed_omega": br["seed"], "points": int(ds.sizes["point"]),
-                "pattern": ds.attrs["pattern"],
-                "stable_physical_omega": [float(om[ok].min()), float(om[ok].max())]
-                if ok.any() else None, "special_points": specials})
-            groups[f"b{b}_{br['kind']}"] = ds
-        summary["clearances"][str(b)] = info
-        sweeps.append(xr.Dataset({
-            "omega": ("row", omegas),
-            "one_two": ("row", [r["one_two"] for r in sw["rows"]]),
-            "impacts_recorded": ("row", [len(r["velocities"]) for r in sw["rows"]]),
-            "pattern_tail": ("row", [r["stops"][-8:] for r in sw["rows"]])},
-            attrs={"b": b}))
-        draw(ax, b, sw, branches, forks)
-        log.info("b=%g: pitchforks %s, agreement %s", b, forks, agree)
+    sweeps = {}
+    for ax, (b, damping, key) in zip(axes[0], cases, strict=True):
+        info, sweep_ds = case(b, damping, omegas, ax, key, groups)
+        if damping is None:
+            summary["clearances"][str(b)] = info
+        else:
+            summary["joint_damper"][str(b)] = info
+        sweeps[key] = sweep_ds
     axes[0][0].set_ylabel("impact velocity (lower stop: negative)")
     axes[0][0].legend(fontsize=7, loc="lower left")
     fig.suptitle("Backlash on mass 1 of the paper's 2-DOF chain: 1-2 motions (solid: stable, "
@@ -352,7 +379,7 @@ def main(output: Path, quick: bool = False) -> dict[str, Any]:
     fig.tight_layout()
     fig.savefig(output / "backlash.png", dpi=110)
     ic.save(groups, output / "branches.nc")
-    ic.save({f"b{s.attrs['b']}": s for s in sweeps}, output / "sweeps.nc", validate=False)
+    ic.save(sweeps, output / "sweeps.nc", validate=False)
     summary["total_s"] = time.perf_counter() - t_start
     (output / "backlash.json").write_text(json.dumps(summary, indent=2))
     return summary
