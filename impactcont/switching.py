@@ -118,7 +118,9 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
                  "states": branch[special_variable("state_k")].values[k],
                  "pattern": pattern_of(branch)}
     else:
-        guess = orbit_at_phase(osc, N, float(branch[special_variable("delta")].values[k]))
+        # a guess for the shooting Newton (a bracketed point may sit off eq. 14)
+        guess = orbit_at_phase(osc, N, float(branch[special_variable("delta")].values[k]),
+                               check=False)
     return multi_impact_orbit(osc, N, p, guess)
 
 
