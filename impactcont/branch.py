@@ -160,7 +160,13 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     Warns
     -----
     RuntimeWarning
-        When a component stops at ``max_points`` (naming where it started).
+        When a component stops at ``max_points`` (naming where it started), or when the
+        corrector fails at a component's seed (that component is left out).
+
+    Raises
+    ------
+    NewtonConvergenceError
+        When no component could be started.
     """
     N = _check_N(N)
     detect = check_labels(detect)
