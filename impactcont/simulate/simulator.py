@@ -127,7 +127,26 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     (float, ndarray) or None
         Flight time to the impact and the state just before it; None if no
         impact happens within ``t_max``.
+
+    Raises
+    ------
+    ParameterError
+        The oscillator has a lower stop (``osc.stops.b_low``): the result would not
+        say which stop is hit; :func:`impactcont.simulate.contact.next_contact` does.
+
+    Notes
+    -----
+    With the stop on another mass (``osc.stops.mass = j``) the impact is the first
+    upward crossing of ``x_j = b`` (eq. 3 with ``x1`` replaced by ``x_j``).
     """
+    stops = flow.osc.stops
+    if stops.two_sided:
+        raise ParameterError(f"next_impact follows one stop; the oscillator has two (stops="
+                             f"{stops!r}): use impactcont.simulate.contact.next_contact, which "
+                             "also returns the stop hit ('U' or 'L')")
+    if not stops.paper:  # one stop on mass j: the first contact on it
+        hit = next_contact(flow, X, phase, t_max, after={UPPER: after})
+        return None if hit is None else (hit[0], hit[1])
     motion = flow.mass1(X, phase)
     b = flow.osc.b
     window = TWO_PI / flow.omega

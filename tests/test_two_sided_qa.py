@@ -1,0 +1,75 @@
+"""QA of the two-sided stops as a user meets them: what was silently wrong or unclear.
+
+Each test pins one problem found by trying the API (issue 14 item 2): the
+witness is the event-driven simulator or the refusal's own message.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _scene_data import write
+
+import impactcont as ic
+from impactcont.errors import ParameterError
+from impactcont.model.stops import Stops
+from impactcont.orbit.flow import Flow
+from impactcont.scene import SceneError, load_scene
+from impactcont.simulate import next_impact
+
+K2 = [[1.0, -1.0], [-1.0, 2.0]]
+
+
+def paper2(**kw) -> ic.ImpactOscillator:
+    """The paper's 2-DOF system (section 4), parameters overridden by `kw`."""
+    params = dict(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.8, omega=0.8, eta=0.1)
+    params.update(kw)
+    return ic.ImpactOscillator(**params)
+
+
+# ------------------------------------------------------------------------------------------
+# next_impact (public in impactcont.simulate) ignored osc.stops: it followed x1 to x1 = b
+# ------------------------------------------------------------------------------------------
+def test_next_impact_follows_the_stop_mass():
+    """Stop on mass 2: the first impact is the simulator's (x2 = b), not x1's crossing."""
+    osc = paper2(F=[0.0, 1.0], b=0.2, stops=Stops(mass=2))
+    X = np.zeros(4)
+    tau, X_minus = next_impact(Flow(osc), X, 0.0, 50.0)
+    res = ic.simulate(osc, X, 0.0, 3.0)
+    assert tau == pytest.approx(res.impact_times[0], abs=1e-10)
+    assert X_minus[1] == pytest.approx(0.2, abs=1e-12)
+
+
+def test_next_impact_refuses_two_stops():
+    """With a lower stop next_impact cannot say which stop is hit: refused, naming next_contact."""
+    osc = paper2(stops=Stops(b_low=0.8))
+    with pytest.raises(ParameterError, match="next_contact"):
+        next_impact(Flow(osc), np.array([-0.7, 0.0, -1.0, 0.0]), 0.0, 50.0)
+
+
+# ------------------------------------------------------------------------------------------
+# Scene: a bad stop key was reported at [oscillator], not at the key the user wrote
+# ------------------------------------------------------------------------------------------
+_SCENE = """
+[oscillator]
+K = [[1.0, -1.0], [-1.0, 2.0]]
+F = [1.0, 0.0]
+R = 0.6
+eta = 0.1
+b = 0.7
+omega = 0.9
+{extra}
+"""
+
+
+@pytest.mark.parametrize("extra, key", [
+    ("stop_mass = 3", "oscillator.stop_mass"),
+    ("R_low = 0.5", "oscillator.R_low"),
+    ("b_low = -0.7", "oscillator.b_low"),
+])
+def test_scene_stop_errors_point_at_the_key(tmp_path: Path, extra: str, key: str):
+    with pytest.raises(SceneError) as info:
+        load_scene(write(tmp_path, _SCENE.format(extra=extra)))
+    assert info.value.key == key, str(info.value)
