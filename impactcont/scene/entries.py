@@ -89,10 +89,25 @@ PARAMETER_RANGES: dict[str, Real] = {"omega": _OMEGA, "b": Real(), "R": _RESTITU
                                      "beta": _NONNEGATIVE}
 
 
+#: The scene key of a :class:`~impactcont.model.stops.Stops` error, by how its message starts.
+_STOPS_ERROR_KEYS = (("stops.mass", "stop_mass"), ("stops.b_low", "b_low"),
+                     ("stops.R_low", "R_low"), ("the lower stop", "b_low"))
+
+
 def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
-    """The argument a library error message starts with, if it is one of ``keys``."""
-    first = re.split(r"[\s,;:]", message.strip(), maxsplit=1)[0]
-    return first if first in keys else None
+    """The argument a library error message starts with, if it is one of ``keys``.
+
+    The stops' errors name the library's ``stops.<field>``; their scene keys are
+    ``stop_mass``, ``b_low`` and ``R_low``.
+    """
+    text = message.strip()
+    first = re.split(r"[\s,;:]", text, maxsplit=1)[0]
+    if first in keys:
+        return first
+    for start, key in _STOPS_ERROR_KEYS:
+        if text.startswith(start) and key in keys:
+            return key
+    return None
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
