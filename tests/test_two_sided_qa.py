@@ -73,3 +73,55 @@ def test_scene_stop_errors_point_at_the_key(tmp_path: Path, extra: str, key: str
     with pytest.raises(SceneError) as info:
         load_scene(write(tmp_path, _SCENE.format(extra=extra)))
     assert info.value.key == key, str(info.value)
+
+
+# ------------------------------------------------------------------------------------------
+# Scene outputs: a [[simulations]] + [[multi_impact]] scene with two stops
+# ------------------------------------------------------------------------------------------
+_RUN = _SCENE.format(extra="b_low = 0.5\nR_low = 0.8") + """
+[[simulations]]
+name = "sim"
+periods = 200
+start = "state"
+state = [0.0, 0.0, 0.0, 0.0]
+delta = 0.0
+
+[[multi_impact]]
+name = "mi"
+start = "sim"
+N = 1
+p = 2
+bounds = [0.85, 0.95]
+max_points = 40
+"""
+
+
+@pytest.fixture(scope="module")
+def two_stop_run(tmp_path_factory):
+    from impactcont.scene import run_scene
+
+    tmp = tmp_path_factory.mktemp("run")
+    result = run_scene(write(tmp, _RUN), output=tmp / "o")
+    assert result.ok, result.failures
+    return tmp / "o"
+
+
+def test_scene_simulation_describes_its_impact_velocities(two_stop_run):
+    """The stored speeds are towards the stop hit (x_j' at U, -x_j' at L), not mass 1's velocity."""
+    from impactcont.scene import read_output
+
+    sim = read_output(two_stop_run / "simulations.nc").datasets["sim"]
+    stops = sim.attrs["impact_stops"]
+    assert set(stops) == {"U", "L"}
+    v = sim["impact_velocities"].values
+    assert np.all(v > 0)
+    assert "mass 1" not in sim["impact_velocities"].attrs["description"]
+    assert "stop" in sim["impact_velocities"].attrs["description"]
+
+
+def test_scene_info_shows_the_impact_pattern(two_stop_run):
+    """``impactcont info`` of an N-p branch names p and the pattern (here 'LU')."""
+    from impactcont.scene.describe import describe_file
+
+    text = describe_file(two_stop_run / "multi_impact.nc")
+    assert "LU" in text, text

@@ -416,7 +416,9 @@ class Simulations:
             "impact_times": _var(("impact",), res.impact_times, "impact time",
                                  "Time of each impact since the start."),
             "impact_velocities": _var(("impact",), res.impact_velocities, "impact velocity",
-                                      "Velocity of mass 1 just before each impact."),
+                                      "Speed of the impacting mass towards the stop hit "
+                                      "just before each impact: x_j' at the upper stop, "
+                                      "-x_j' at the lower (impact_stops)."),
             "impact_phases": _var(("impact",), res.impact_phases, "impact phase",
                                   "Forcing phase at each impact, in (-pi, pi].", "rad"),
             "impact_states": _var(("impact", "component"),
