@@ -125,3 +125,21 @@ def test_scene_info_shows_the_impact_pattern(two_stop_run):
 
     text = describe_file(two_stop_run / "multi_impact.nc")
     assert "LU" in text, text
+
+
+# ------------------------------------------------------------------------------------------
+# A failed Newton names the impact sequence it tried
+# ------------------------------------------------------------------------------------------
+def test_newton_failure_names_the_pattern():
+    """Complex F, two stops: the attractor is a 1-4 motion; asking for a 1-2 one fails, and
+    the message says which sequence of stops was tried (the simulation's last impacts)."""
+    osc = paper2(F=np.array([1.0, 0.5j]), b=0.7, omega=0.9,
+                 stops=Stops(b_low=0.5, R_low=0.8))
+    res = ic.simulate(osc, np.zeros(4), 0.0, 300.0)
+    assert len(set(res.impact_stops[-8:])) == 2
+    with pytest.raises(ic.NoPeriodicMotionError,
+                       match=f"pattern {res.impact_stops[-3:-1]!r}"):
+        ic.multi_impact_orbit(osc, 1, 2, res)
+    orbit = ic.multi_impact_orbit(osc, 1, 4, res)  # the motion it settled on
+    assert orbit.physical and orbit.stable
+    assert sorted(orbit.pattern) == sorted(res.impact_stops[-5:-1])
