@@ -143,3 +143,23 @@ def test_newton_failure_names_the_pattern():
     orbit = ic.multi_impact_orbit(osc, 1, 4, res)  # the motion it settled on
     assert orbit.physical and orbit.stable
     assert sorted(orbit.pattern) == sorted(res.impact_stops[-5:-1])
+
+
+# ------------------------------------------------------------------------------------------
+# The "returned to its parent" stop of an N-p branch compared halves with different stops
+# ------------------------------------------------------------------------------------------
+def test_asymmetry_ignores_halves_on_different_stops():
+    """A 2-2 motion "UL" can never be a 1-1 motion repeated: its halves hit different stops,
+    so the parent test (halves equal, or swapped) must not apply. Its phase difference
+    sits at +-pi, whose sign flips by rounding and would end the branch spuriously."""
+    from types import SimpleNamespace
+
+    from impactcont.multi_branch import _asymmetry
+
+    def orbit(pattern, dphase):
+        return SimpleNamespace(N=2, p=2, pattern=pattern, phases=np.array([0.0, dphase]),
+                               states=np.array([[0.8, 0.1, 0.3, 0.2], [-0.8, -0.1, -0.3, -0.2]]),
+                               flight_times=np.array([3.0, 3.0]))
+
+    assert _asymmetry(orbit("UL", np.pi)) is None
+    assert _asymmetry(orbit("UU", np.pi)) is not None  # same stops: the test applies
