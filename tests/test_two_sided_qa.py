@@ -163,3 +163,26 @@ def test_asymmetry_ignores_halves_on_different_stops():
 
     assert _asymmetry(orbit("UL", np.pi)) is None
     assert _asymmetry(orbit("UU", np.pi)) is not None  # same stops: the test applies
+
+
+# ------------------------------------------------------------------------------------------
+# Datasets: a pattern with lower-stop impacts needs an oscillator with a lower stop
+# ------------------------------------------------------------------------------------------
+def test_dataset_refuses_a_lower_stop_pattern_without_a_lower_stop(tmp_path: Path):
+    """A branch saved with pattern 'LU' but an oscillator with one stop was accepted, and
+    failed only later (special_orbit, switching) with a message about the orbit."""
+    import json
+
+    from impactcont.dataset.multi import validate_multi_impact_dataset
+
+    osc = paper2(b=0.7, omega=0.9, stops=Stops(b_low=0.5, R_low=0.8))
+    orbit = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 200.0))
+    assert orbit.pattern == "LU"
+    ds = ic.multi_impact_continuation(orbit, "omega", (0.88, 0.92), max_points=5)
+    validate_multi_impact_dataset(ds)
+    data = json.loads(ds.attrs["oscillator"])
+    del data["stops"]
+    bad = ds.copy()
+    bad.attrs["oscillator"] = json.dumps(data)
+    with pytest.raises(ValueError, match="lower stop"):
+        validate_multi_impact_dataset(bad)
