@@ -186,3 +186,42 @@ def test_dataset_refuses_a_lower_stop_pattern_without_a_lower_stop(tmp_path: Pat
     bad.attrs["oscillator"] = json.dumps(data)
     with pytest.raises(ValueError, match="lower stop"):
         validate_multi_impact_dataset(bad)
+
+
+# ------------------------------------------------------------------------------------------
+# Scene [[simulations]]: the start state is checked against the stops of stop_mass
+# ------------------------------------------------------------------------------------------
+_SIM = """
+[[simulations]]
+name = "sim"
+periods = 5
+{start}
+"""
+
+
+def test_scene_simulation_state_on_another_mass_is_accepted(tmp_path: Path):
+    """stop_mass = 2: x1 = 0.75 > b is allowed (mass 1 meets no stop); it was refused."""
+    text = (_SCENE.format(extra="stop_mass = 2")
+            + _SIM.format(start='start = "state"\nstate = [0.75, 0.0, 0.0, 0.0]\ndelta = 0.0'))
+    load_scene(write(tmp_path, text))
+
+
+@pytest.mark.parametrize("extra, state, what", [
+    ("stop_mass = 2", "[0.0, 0.75, 0.0, 0.0]", "x2 = 0.75"),
+    ("b_low = 0.5", "[-0.6, 0.0, 0.0, 0.0]", "x1 = -0.6"),
+])
+def test_scene_simulation_state_beyond_a_stop_is_refused(tmp_path: Path, extra, state, what):
+    text = (_SCENE.format(extra=extra)
+            + _SIM.format(start=f'start = "state"\nstate = {state}\ndelta = 0.0'))
+    with pytest.raises(SceneError, match=what) as info:
+        load_scene(write(tmp_path, text))
+    assert info.value.key.endswith("state")
+
+
+def test_scene_simulation_orbit_start_with_stops_is_refused_at_start(tmp_path: Path):
+    """start = "orbit" needs the closed-form N-1 motion (one stop on mass 1): refused when
+    the scene is read, at the key start, naming start = "state"."""
+    text = _SCENE.format(extra="b_low = 0.5") + _SIM.format(start="")
+    with pytest.raises(SceneError, match='start = "state"') as info:
+        load_scene(write(tmp_path, text))
+    assert info.value.key.endswith("start")

@@ -531,10 +531,20 @@ class SimulationSpec(EntrySpec):
             if len(self.state) != 2 * osc.n:
                 raise where.key("state").error(f"has length {len(self.state)}",
                                                f"an array of 2n = {2 * osc.n} real numbers")
-            if self.state[0] > osc.b:
-                raise where.key("state").error(f"x1 = {self.state[0]!r} is beyond the stop "
-                                               f"b = {osc.b!r}", "x1 <= b")
+            j = osc.stops.mass  # the mass meeting the stops (1-based)
+            x = self.state[j - 1]
+            if x > osc.b:
+                raise where.key("state").error(f"x{j} = {x!r} is beyond the stop b = {osc.b!r}",
+                                               f"x{j} <= b")
+            if osc.stops.two_sided and x < -osc.stops.b_low:
+                raise where.key("state").error(f"x{j} = {x!r} is beyond the lower stop -b_low "
+                                               f"= {-osc.stops.b_low!r}", f"x{j} >= -b_low")
         else:
+            if not osc.stops.paper:
+                raise where.key("start").error(
+                    "\"orbit\" starts on the closed-form N-1 motion, which handles one stop "
+                    f"on mass 1 only (the oscillator has stops={osc.stops!r})",
+                    'start = "state" with state and delta')
             for key in ("state", "delta"):
                 if getattr(self, key) is not None:
                     raise where.key(key).error("only used with start = \"state\"",
