@@ -225,3 +225,13 @@ def test_scene_simulation_orbit_start_with_stops_is_refused_at_start(tmp_path: P
     with pytest.raises(SceneError, match='start = "state"') as info:
         load_scene(write(tmp_path, text))
     assert info.value.key.endswith("start")
+
+
+def test_scene_info_shows_the_simulation_stops(two_stop_run):
+    """``impactcont info`` of a two-stop simulation shows the stops of its last impacts."""
+    from impactcont.scene import read_output
+    from impactcont.scene.describe import describe_file
+
+    stops = read_output(two_stop_run / "simulations.nc").datasets["sim"].attrs["impact_stops"]
+    text = describe_file(two_stop_run / "simulations.nc")
+    assert stops[-8:] in text, text

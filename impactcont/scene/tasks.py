@@ -450,9 +450,10 @@ class Simulations:
             rows.append([name, _changes_text(ds.attrs["oscillator"]), str(ds.attrs["start"]),
                          float(ds.attrs["periods"]), int(ds.sizes["impact"]),
                          float(v[-1]) if v.size else math.nan,
-                         "yes" if "X" in ds else "no", str(ds.attrs["status"])])
+                         "yes" if "X" in ds else "no", str(ds.attrs["status"]),
+                         str(ds.attrs.get("impact_stops", ""))[-8:] or "-"])
         return markdown_table(["entry", "at", "start", "periods", "impacts", "last impact velocity",
-                       "trajectory", "status"], rows)
+                       "trajectory", "status", "last stops (U/L)"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         return []
