@@ -235,3 +235,18 @@ def test_scene_info_shows_the_simulation_stops(two_stop_run):
     stops = read_output(two_stop_run / "simulations.nc").datasets["sim"].attrs["impact_stops"]
     text = describe_file(two_stop_run / "simulations.nc")
     assert stops[-8:] in text, text
+
+
+# ------------------------------------------------------------------------------------------
+# simulate: numpy integers for periods / delta were refused as "not a finite number"
+# ------------------------------------------------------------------------------------------
+def test_simulate_accepts_numpy_numbers():
+    osc = paper2(stops=Stops(b_low=0.8))
+    ref = ic.simulate(osc, np.zeros(4), 0.0, 20.0)
+    res = ic.simulate(osc, np.zeros(4), np.int64(0), np.int64(20))
+    np.testing.assert_array_equal(res.impact_times, ref.impact_times)
+    assert res.impact_stops == ref.impact_stops
+    with pytest.raises(ParameterError, match="periods"):
+        ic.simulate(osc, np.zeros(4), 0.0, np.float64("nan"))
+    with pytest.raises(ParameterError, match="periods"):
+        ic.simulate(osc, np.zeros(4), 0.0, True)

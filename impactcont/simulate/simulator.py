@@ -19,6 +19,7 @@ import dataclasses
 import enum
 import logging
 import math
+import numbers
 
 import numpy as np
 
@@ -234,11 +235,13 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     SimulationResult
     """
     X = _check_state(osc, state)
-    if isinstance(periods, bool) or not isinstance(periods, (int, float)) or not (
+    if isinstance(periods, bool) or not isinstance(periods, numbers.Real) or not (
             math.isfinite(periods) and periods > 0):
         raise ParameterError(f"periods must be a finite number > 0; got {periods!r}")
-    if not isinstance(delta, (int, float)) or not math.isfinite(delta):
+    if isinstance(delta, bool) or not isinstance(delta, numbers.Real) or not math.isfinite(
+            delta):
         raise ParameterError(f"delta must be a finite real number; got {delta!r}")
+    periods, delta = float(periods), float(delta)
     if int(samples_per_period) < 2:
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
     flow = Flow(osc)
