@@ -86,10 +86,15 @@ def _asymmetry(orbit: MultiImpactOrbit) -> np.ndarray | None:
     ``k < p/2``; zero exactly on the repeated half-motion. Across the
     period-doubling of the half-motion the branch of N-p motions comes back as
     its own mirror image (halves swapped), so this vector changes sign there.
+    None when N or p is odd, or when the halves hit different stops (pattern
+    ``"UL"``: no repeated half-motion can be met on the branch).
     """
     if orbit.p % 2 or orbit.N % 2:
         return None
     h = orbit.p // 2
+    pattern = orbit.pattern or ""
+    if pattern[:h] != pattern[h:]:
+        return None
     dphase = np.remainder(orbit.phases[:h] - orbit.phases[h:] + math.pi, 2 * math.pi) - math.pi
     return np.concatenate([(orbit.states[:h] - orbit.states[h:]).ravel(),
                            orbit.flight_times[:h] - orbit.flight_times[h:], dphase])

@@ -23,6 +23,7 @@ A dataset without the ``impact`` dimension (an N-1 branch of
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -162,7 +163,7 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                                    "one of delta and state."}))
     ds.attrs["impacts"] = int(p)
     pattern = "U" * int(p) if pattern is None else pattern
-    _check_pattern_attr(pattern, int(p))
+    _check_pattern_attr(pattern, int(p), oscillator.stops.two_sided)
     ds.attrs["pattern"] = pattern
     for key, value in (extra_attrs or {}).items():
         if not isinstance(value, (str, int, float, np.integer, np.floating)) \
@@ -172,10 +173,28 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
     return ds
 
 
-def _check_pattern_attr(pattern: Any, p: int) -> None:
+def _check_pattern_attr(pattern: Any, p: int, two_sided: bool | None = None) -> None:
+    """The ``pattern`` attribute: p letters U/L, ``L`` only with a lower stop.
+
+    ``two_sided``: whether the dataset's oscillator has a lower stop (None: unknown).
+    """
     if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - {"U", "L"}:
         raise ValueError(f"attribute pattern must be {p} letters U/L (the stop of each "
                          f"impact); got {pattern!r}")
+    if two_sided is False and "L" in pattern:
+        raise ValueError(f"attribute pattern={pattern!r} has impacts on the lower stop, but the "
+                         "dataset's oscillator has none (its stops have no b_low); allowed: "
+                         f"{'U' * p}")
+
+
+def _two_sided(ds: xr.Dataset) -> bool | None:
+    """Whether the oscillator JSON of a dataset has a lower stop (None if unreadable)."""
+    try:
+        data = json.loads(ds.attrs["oscillator"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    stops = data.get("stops") if isinstance(data, dict) else None
+    return isinstance(stops, dict) and stops.get("b_low") is not None
 
 
 def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
@@ -203,7 +222,7 @@ def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"dimension 'impact' has size {ds.sizes['impact']}; attribute "
                          f"impacts={p}")
     if "pattern" in ds.attrs:
-        _check_pattern_attr(ds.attrs["pattern"], p)
+        _check_pattern_attr(ds.attrs["pattern"], p, _two_sided(ds))
     for key, spec in IMPACT_VARIABLES.items():
         expected = [(key, ("point", "impact", *spec.extra_dims))]
         if key in SPECIAL_IMPACT_VARIABLES:

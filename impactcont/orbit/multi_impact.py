@@ -56,7 +56,7 @@ import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import UPPER, check_pattern
+from impactcont.model.stops import LOWER, UPPER, check_pattern
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import (
     IllConditionedWarning,
@@ -586,7 +586,9 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
             step = np.linalg.solve(J, -sh.residual)
         except np.linalg.LinAlgError:
             raise NoPeriodicMotionError(
-                f"N={N}, p={p}: singular shooting Jacobian at residual {norm:.3g}") from None
+                f"N={N}, p={p}: singular shooting Jacobian at residual {norm:.3g}"
+                + (f" with the impact pattern {pattern!r}"
+                   if pattern is not None and LOWER in pattern else "")) from None
         lam = 1.0
         while True:
             trial = u + lam * step
@@ -599,7 +601,10 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         u, sh, norm = trial, tsh, tnorm
     raise NoPeriodicMotionError(
         f"N={N}, p={p}: Newton did not converge in {max_iter} iterations (residual "
-        f"{norm:.3g}, last update {step_norm:.3g}) at omega={flow.omega!r}, b={flow.osc.b!r}")
+        f"{norm:.3g}, last update {step_norm:.3g}) at omega={flow.omega!r}, b={flow.osc.b!r}"
+        + (f" with the impact pattern {pattern!r} (is the guess an N-p motion with this "
+           "sequence of stops? a simulation's impact_stops show the one it settled on)"
+           if pattern is not None and LOWER in pattern else ""))
 
 
 def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,

@@ -89,10 +89,25 @@ PARAMETER_RANGES: dict[str, Real] = {"omega": _OMEGA, "b": Real(), "R": _RESTITU
                                      "beta": _NONNEGATIVE}
 
 
+#: The scene key of a :class:`~impactcont.model.stops.Stops` error, by how its message starts.
+_STOPS_ERROR_KEYS = (("stops.mass", "stop_mass"), ("stops.b_low", "b_low"),
+                     ("stops.R_low", "R_low"), ("the lower stop", "b_low"))
+
+
 def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
-    """The argument a library error message starts with, if it is one of ``keys``."""
-    first = re.split(r"[\s,;:]", message.strip(), maxsplit=1)[0]
-    return first if first in keys else None
+    """The argument a library error message starts with, if it is one of ``keys``.
+
+    The stops' errors name the library's ``stops.<field>``; their scene keys are
+    ``stop_mass``, ``b_low`` and ``R_low``.
+    """
+    text = message.strip()
+    first = re.split(r"[\s,;:]", text, maxsplit=1)[0]
+    if first in keys:
+        return first
+    for start, key in _STOPS_ERROR_KEYS:
+        if text.startswith(start) and key in keys:
+            return key
+    return None
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -516,10 +531,20 @@ class SimulationSpec(EntrySpec):
             if len(self.state) != 2 * osc.n:
                 raise where.key("state").error(f"has length {len(self.state)}",
                                                f"an array of 2n = {2 * osc.n} real numbers")
-            if self.state[0] > osc.b:
-                raise where.key("state").error(f"x1 = {self.state[0]!r} is beyond the stop "
-                                               f"b = {osc.b!r}", "x1 <= b")
+            j = osc.stops.mass  # the mass meeting the stops (1-based)
+            x = self.state[j - 1]
+            if x > osc.b:
+                raise where.key("state").error(f"x{j} = {x!r} is beyond the stop b = {osc.b!r}",
+                                               f"x{j} <= b")
+            if osc.stops.two_sided and x < -osc.stops.b_low:
+                raise where.key("state").error(f"x{j} = {x!r} is beyond the lower stop -b_low "
+                                               f"= {-osc.stops.b_low!r}", f"x{j} >= -b_low")
         else:
+            if not osc.stops.paper:
+                raise where.key("start").error(
+                    "\"orbit\" starts on the closed-form N-1 motion, which handles one stop "
+                    f"on mass 1 only (the oscillator has stops={osc.stops!r})",
+                    'start = "state" with state and delta')
             for key in ("state", "delta"):
                 if getattr(self, key) is not None:
                     raise where.key(key).error("only used with start = \"state\"",

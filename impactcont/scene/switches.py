@@ -26,6 +26,7 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
+from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import multi_impact_continuation
@@ -47,7 +48,7 @@ from impactcont.scene.keys import (
     Where,
     declare,
 )
-from impactcont.scene.tasks import BRANCHES
+from impactcont.scene.tasks import BRANCHES, markdown_table
 from impactcont.switching import grazing_switch, period_doubling_switch
 
 __all__ = [
@@ -211,7 +212,13 @@ class MultiImpact:
                  ds.sizes["special"], time.perf_counter() - t0)
         return ds
 
-    describe = Switches.describe
+    def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
+        """The branches table, then each branch's motion: N, p and the stop of each impact."""
+        rows = [[name, int(ds.attrs["N"]), impacts_of(ds), pattern_of(ds)]
+                for name, ds in datasets.items()]
+        return [*BRANCHES.describe(datasets), "",
+                *markdown_table(["branch", "N", "p", "pattern (U upper, L lower stop)"], rows)]
+
     special_points = Switches.special_points
 
 

@@ -416,7 +416,9 @@ class Simulations:
             "impact_times": _var(("impact",), res.impact_times, "impact time",
                                  "Time of each impact since the start."),
             "impact_velocities": _var(("impact",), res.impact_velocities, "impact velocity",
-                                      "Velocity of mass 1 just before each impact."),
+                                      "Speed of the impacting mass towards the stop hit "
+                                      "just before each impact: x_j' at the upper stop, "
+                                      "-x_j' at the lower (impact_stops)."),
             "impact_phases": _var(("impact",), res.impact_phases, "impact phase",
                                   "Forcing phase at each impact, in (-pi, pi].", "rad"),
             "impact_states": _var(("impact", "component"),
@@ -448,9 +450,10 @@ class Simulations:
             rows.append([name, _changes_text(ds.attrs["oscillator"]), str(ds.attrs["start"]),
                          float(ds.attrs["periods"]), int(ds.sizes["impact"]),
                          float(v[-1]) if v.size else math.nan,
-                         "yes" if "X" in ds else "no", str(ds.attrs["status"])])
+                         "yes" if "X" in ds else "no", str(ds.attrs["status"]),
+                         str(ds.attrs.get("impact_stops", ""))[-8:] or "-"])
         return markdown_table(["entry", "at", "start", "periods", "impacts", "last impact velocity",
-                       "trajectory", "status"], rows)
+                       "trajectory", "status", "last stops (U/L)"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         return []

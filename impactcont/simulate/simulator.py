@@ -19,6 +19,7 @@ import dataclasses
 import enum
 import logging
 import math
+import numbers
 
 import numpy as np
 
@@ -127,7 +128,26 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     (float, ndarray) or None
         Flight time to the impact and the state just before it; None if no
         impact happens within ``t_max``.
+
+    Raises
+    ------
+    ParameterError
+        The oscillator has a lower stop (``osc.stops.b_low``): the result would not
+        say which stop is hit; :func:`impactcont.simulate.contact.next_contact` does.
+
+    Notes
+    -----
+    With the stop on another mass (``osc.stops.mass = j``) the impact is the first
+    upward crossing of ``x_j = b`` (eq. 3 with ``x1`` replaced by ``x_j``).
     """
+    stops = flow.osc.stops
+    if stops.two_sided:
+        raise ParameterError(f"next_impact follows one stop; the oscillator has two (stops="
+                             f"{stops!r}): use impactcont.simulate.contact.next_contact, which "
+                             "also returns the stop hit ('U' or 'L')")
+    if not stops.paper:  # one stop on mass j: the first contact on it
+        hit = next_contact(flow, X, phase, t_max, after={UPPER: after})
+        return None if hit is None else (hit[0], hit[1])
     motion = flow.mass1(X, phase)
     b = flow.osc.b
     window = TWO_PI / flow.omega
@@ -215,11 +235,13 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     SimulationResult
     """
     X = _check_state(osc, state)
-    if isinstance(periods, bool) or not isinstance(periods, (int, float)) or not (
+    if isinstance(periods, bool) or not isinstance(periods, numbers.Real) or not (
             math.isfinite(periods) and periods > 0):
         raise ParameterError(f"periods must be a finite number > 0; got {periods!r}")
-    if not isinstance(delta, (int, float)) or not math.isfinite(delta):
+    if isinstance(delta, bool) or not isinstance(delta, numbers.Real) or not math.isfinite(
+            delta):
         raise ParameterError(f"delta must be a finite real number; got {delta!r}")
+    periods, delta = float(periods), float(delta)
     if int(samples_per_period) < 2:
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
     flow = Flow(osc)
