@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from test_periodic import section_point, simulated_impact_map
+from test_periodic import section_point, simulated_impact_map, simulated_map_jacobian
 
 import impactcont as ic
 
@@ -78,13 +78,7 @@ def test_elastic_motions_are_fixed_points_of_the_exact_impact_map(n, omega, b):
         checked += 1
         z0 = section_point(orbit)
         np.testing.assert_allclose(simulated_impact_map(osc, 1, z0), z0, atol=1e-11)
-        h = 1e-6
-        fd = np.empty_like(orbit.G)
-        for j in range(z0.size):
-            e = np.zeros_like(z0)
-            e[j] = h
-            fd[:, j] = (simulated_impact_map(osc, 1, z0 + e)
-                        - simulated_impact_map(osc, 1, z0 - e)) / (2 * h)
+        fd = simulated_map_jacobian(osc, 1, z0)
         assert np.abs(fd - orbit.G).max() < 1e-7 * max(1.0, np.abs(orbit.G).max())
         # area preserving: det G = R^2 exp(-T tr M^-1 C) = 1
         assert abs(np.prod(orbit.multipliers)) == pytest.approx(1.0, rel=1e-9)

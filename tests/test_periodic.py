@@ -39,6 +39,18 @@ def section_point(orbit):
     return np.concatenate([orbit.state[1:], [orbit.delta]])
 
 
+def simulated_map_jacobian(osc, N, z0, h=1e-6):
+    """Central differences (step h) of :func:`simulated_impact_map` at ``z0``: the witness
+    of G (eq. 25)."""
+    fd = np.empty((z0.size, z0.size))
+    for j in range(z0.size):
+        e = np.zeros_like(z0)
+        e[j] = h
+        fd[:, j] = (simulated_impact_map(osc, N, z0 + e)
+                    - simulated_impact_map(osc, N, z0 - e)) / (2 * h)
+    return fd
+
+
 def test_paper_amplitude_and_G0(paper):
     assert amplitude_squared(paper, 1) == pytest.approx(1.74355, abs=5e-6)
     orbits = periodic_orbits(paper, 1)
@@ -106,13 +118,7 @@ def test_G_against_finite_differences_of_simulated_map(case, paper, make_chain):
             continue  # the simulated map is the physical one only
         z0 = section_point(orbit)
         np.testing.assert_allclose(simulated_impact_map(osc, N, z0), z0, atol=1e-11)
-        h = 1e-6
-        fd = np.empty_like(orbit.G)
-        for j in range(z0.size):
-            e = np.zeros_like(z0)
-            e[j] = h
-            fd[:, j] = (simulated_impact_map(osc, N, z0 + e)
-                        - simulated_impact_map(osc, N, z0 - e)) / (2 * h)
+        fd = simulated_map_jacobian(osc, N, z0)
         scale = max(1.0, np.abs(orbit.G).max())
         assert np.abs(fd - orbit.G).max() < 1e-7 * scale, (orbit, fd - orbit.G)
 
