@@ -20,6 +20,9 @@ __all__ = ["HyperplanePoint", "solve_on_hyperplane"]
 
 log = logging.getLogger(__name__)
 
+#: how often a Newton step that leaves the problem's domain is halved before giving up
+_MAX_HALVINGS = 40
+
 
 @dataclass(frozen=True, eq=False)
 class HyperplanePoint:
@@ -96,20 +99,48 @@ def solve_on_hyperplane(problem: Problem, target: FloatArray, normal: FloatArray
     ------
     numpy.linalg.LinAlgError
         When the bordered matrix is singular (the hyperplane is tangent to the branch).
+    ValueError
+        When the problem refuses `target` itself (outside its domain).
+
+    Notes
+    -----
+    A Newton step to a point outside the problem's domain (the problem raises
+    ``ValueError`` there, e.g. ``omega <= 0``) is halved, up to
+    ``_MAX_HALVINGS`` times: Newton never leaves the domain.
     """
     x = np.array(target, dtype=float)
     normal = np.asarray(normal, dtype=float)
     scale = max(1.0, float(np.max(np.abs(x))))
     last = np.inf
-    for iteration in range(1, max_iter + 1):
+    step: FloatArray | None = None
+    halvings = 0
+    iteration = 0
+    while iteration < max_iter:
         u, lam = x[:-1], float(x[-1])
-        rhs = -np.append(problem.residual(u, lam), normal @ (x - target))
-        matrix = np.vstack([np.column_stack([problem.jacobian(u, lam), problem.dparam(u, lam)]),
-                            normal])
+        try:
+            residual = problem.residual(u, lam)
+            matrix = np.vstack([np.column_stack([problem.jacobian(u, lam),
+                                                 problem.dparam(u, lam)]), normal])
+        except ValueError:
+            if step is None or halvings >= _MAX_HALVINGS:
+                raise
+            halvings += 1  # the last step left the domain: take half of it
+            step = 0.5 * step
+            x = x - step
+            continue
+        iteration += 1
+        rhs = -np.append(residual, normal @ (x - target))
         step = _solve(matrix, rhs)
         x = x + step
         last = float(np.max(np.abs(step)))
-        if last <= tol * scale and (residual_tol is None or float(np.max(np.abs(
-                problem.residual(x[:-1], float(x[-1]))))) <= residual_tol * scale):
+        if last <= tol * scale and (residual_tol is None or _small_residual(
+                problem, x, residual_tol * scale)):
             return HyperplanePoint(x, True, last, iteration)
     return HyperplanePoint(x, False, last, max_iter)
+
+
+def _small_residual(problem: Problem, x: FloatArray, bound: float) -> bool:
+    try:
+        return float(np.max(np.abs(problem.residual(x[:-1], float(x[-1]))))) <= bound
+    except ValueError:  # outside the domain: not converged, the next step halves
+        return False

@@ -29,6 +29,12 @@ log = logging.getLogger(__name__)
 
 _EPS = float(np.finfo(float).eps)
 
+#: the rounding noise of a test function, in units of eps times its size at the step's ends
+_NOISE_ULPS = 1024.0
+
+#: a chord Newton that stopped with a larger last step (relative) found no branch point
+_FAR_STEP = 1e-8
+
 
 @dataclass(frozen=True, eq=False)
 class Event:
@@ -115,7 +121,8 @@ def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
         When `g` has the same sign at both ends.
     """
     g0, g1 = g(lo), g(hi)
-    s = brentq(g, lo, hi, xtol=xtol, rtol=4 * _EPS)
+    # Brent is slow on a double zero (superlinear steps keep failing): room to finish
+    s = brentq(g, lo, hi, xtol=xtol, rtol=4 * _EPS, maxiter=500)
     scale = max(abs(g0), abs(g1))
     status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
     return s, status
@@ -149,6 +156,9 @@ class _Chord:
                                     tol=self.newton_tol)
         if not found.converged:
             log.debug("chord Newton at s=%.3g stopped with last step %.3g", s, found.last_step)
+            if not found.last_step <= _FAR_STEP * max(1.0, float(np.max(np.abs(found.x)))):
+                raise ValueError(f"no branch point found on the step at chord coordinate "
+                                 f"s={s:.6g} (Newton's last step {found.last_step:.3g})")
         self._cache[s] = (found.u, found.lam)
         return self._cache[s]
 
@@ -169,6 +179,40 @@ def _locate(g: Callable[[float], float], s_tol: float) -> tuple[float, str]:
     if not (math.isfinite(g0) and math.isfinite(g1)) or (g0 < 0) == (g1 < 0):
         return 0.5, "bracketed"  # the re-evaluated ends disagree with the stream: keep bracket
     return locate_zero(cached, 0.0, 1.0, s_tol)
+
+
+def _middle(chord: _Chord) -> tuple[float, str, tuple[FloatArray, float]]:
+    """The branch point in the middle of a step, or its first end if that cannot be found."""
+    try:
+        return 0.5, "bracketed", chord.point(0.5)
+    except (ValueError, np.linalg.LinAlgError):
+        return 0.0, "bracketed", chord.point(0.0)
+
+
+def _precision(g: Callable[[float], float], chord: _Chord, s: float, lam: float,
+               s_tol: float) -> float:
+    """A bound on the error of a located zero's parameter value `lam`.
+
+    Two sources: Brent's tolerance `s_tol` on the chord, and the rounding noise of
+    the test function, taken as ``_NOISE_ULPS`` eps times its size at the step's
+    ends. The zero is known only within the interval around `s` where ``|g|`` is below
+    that noise: it is searched outwards from `s` by factors of 10 until ``|g|`` rises
+    above the noise on both sides. A simple zero leaves that interval at the first
+    try; a double zero (``g ~ (s - s0)^2``, e.g. a grazing at a zero-velocity impact)
+    is known only to about the square root of the noise, and the bound says so.
+    """
+    noise = _NOISE_ULPS * _EPS * max(abs(g(0.0)), abs(g(1.0)))
+    ds = max(s_tol, 4 * _EPS)
+    reach = 0.0
+    for side in (-1.0, 1.0):
+        h = ds
+        while True:
+            t = min(max(s + side * h, 0.0), 1.0)
+            reach = max(reach, abs(chord.point(t)[1] - lam))
+            if t in (0.0, 1.0) or h >= 0.5 or abs(g(t)) > noise:
+                break
+            h *= 10.0
+    return 2 * reach + 4 * _EPS * abs(lam)
 
 
 def _changes(a: float, b: float) -> bool:
@@ -219,15 +263,16 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
             failed = False
             try:
                 s, status = _locate(g, s_tol)
-            except (ValueError, np.linalg.LinAlgError) as exc:
+                uk, lamk = chord.point(s)
+            except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
                 failed = True  # kept as bracketed (never dropped), at the middle of the step
                 log.warning("%s between points %d and %d not located, kept as bracketed: %s",
                             event.label, k, k + 1, exc)
-                s, status = 0.5, "bracketed"
-            uk, lamk = chord.point(s)
-            ds_s = max(s_tol, 4 * _EPS)
-            lams = [chord.point(min(max(s + e, 0.0), 1.0))[1] for e in (-ds_s, ds_s)]
-            precision = 2 * max(abs(v - lamk) for v in lams) + 4 * _EPS * abs(lamk)
+                s, status, (uk, lamk) = _middle(chord)
+            if status == "located":
+                precision = _precision(g, chord, s, lamk, s_tol)
+            else:  # somewhere on the step: as far as its farther end
+                precision = max(abs(lamk - x[k, -1]), abs(lamk - x[k + 1, -1]))
             found.append(EventPoint(
                 label=event.label, u=np.array(uk, float), lam=float(lamk), step=k, s=float(s),
                 status=status, precision=float(precision),

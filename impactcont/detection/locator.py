@@ -13,12 +13,20 @@ is a bifurcation is decided from the multipliers there (:func:`is_critical`).
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Sequence
+from typing import TypeVar
+
 import numpy as np
 
 from impactcont.core.locate import locate_zero
 from impactcont.vocabulary import STATUSES
 
-__all__ = ["STATUSES", "is_critical", "locate_zero"]
+log = logging.getLogger(__name__)
+
+_Point = TypeVar("_Point")
+
+__all__ = ["STATUSES", "drop_grazing_at_zero_velocity", "is_critical", "locate_zero"]
 
 
 def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
@@ -35,3 +43,36 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
         close = np.abs(np.abs(mu) - 1.0) < unit_tol ** 0.5
         return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
     return True
+
+
+def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "lam"
+                                  ) -> list[_Point]:
+    """The special points without each GR that is the grazing of a ZV impact.
+
+    An impact whose velocity ``h2`` passes through zero is itself a grazing contact:
+    on the side ``h2 < 0`` the free flight reaches its maximum ``x = b + h2^2 / (2 |a|)``
+    just before the impact (``a`` the acceleration there), so the GR test function
+    (the smallest clearance inside the flights) is ``-h2^2 / (2 |a|)`` near the ZV
+    point and touches zero quadratically there. When the clearance on the other side
+    is finite and positive (another flight's maximum, N-p motions) the GR test changes
+    sign at the ZV point and is located there, but only to about the square root of
+    its rounding noise (1e-9..1e-7 instead of 1e-14): one codim-1 point, the grazing
+    impact, found twice. It is reported once, as the ZV (its test ``h2`` is simple).
+
+    A GR is dropped when a ZV was located on the same step within the two points'
+    precisions; every other point is kept, in order.
+    """
+    zv = [z for z in points if z.label == "ZV" and z.status == "located"]
+    kept = []
+    for point in points:
+        twin = None
+        if point.label == "GR":
+            twin = next((z for z in zv if z.bracket == point.bracket and abs(
+                z.value - point.value) <= z.precision + point.precision), None)
+        if twin is None:
+            kept.append(point)
+        else:
+            log.info("GR at %s=%.12g (precision %.1e) is the grazing of the zero-velocity "
+                     "impact ZV at %.12g: reported once, as ZV", parameter, point.value,
+                     point.precision, twin.value)
+    return kept

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from impactcont.core.locate import Event, locate_events, tangent_at
-from impactcont.detection.locator import is_critical
+from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
 from impactcont.detection.special_points import event_function
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.vocabulary import LABELS, check_labels
@@ -147,9 +147,12 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
         special = MultiImpactSpecialPoint(
             label=ep.label, value=ep.lam, u=ep.u, point=nearest, bracket=ep.bracket,
             precision=ep.precision, status=ep.status, orbit=orbit)
-        log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", ep.label, parameter,
-                 ep.lam, orbit.N, orbit.p, ep.status, ep.precision)
         found.append(special)
+    found = drop_grazing_at_zero_velocity(found, parameter)
+    for special in found:
+        log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
+                 parameter, special.value, special.orbit.N, special.orbit.p, special.status,
+                 special.precision)
         if on_found is not None:
             on_found(special)
     return found

@@ -34,7 +34,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from impactcont.core.locate import Event, locate_events
-from impactcont.detection.locator import is_critical
+from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
+from impactcont.errors import ParameterError
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.vocabulary import LABELS, check_labels
@@ -138,21 +139,61 @@ def _changes(a: float, b: float) -> bool:
 
 
 def _locate_fold(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
+                 ) -> tuple[float, float, float, str, bool]:
+    """The fold between two points: Newton on ``r = dr/d delta = 0`` (eq. 14-15).
+
+    Newton starts at the middle of the step and is held to a box around it (the
+    step's phases and parameters widened by the step's own size on each side): at
+    a fold both bracketing points lie on one side of it in the parameter, close to
+    it on a step the continuation accepted. When Newton leaves the box, would leave
+    the parameter's domain (e.g. ``omega <= 0``) or does not converge, the fold is
+    located as a sign change of the tangent's parameter component on the branch
+    between the two points (:func:`~impactcont.core.locate_events`), which never
+    leaves the step; a failure there keeps the point as bracketed.
+
+    Returns
+    -------
+    delta, lam, precision, status, failed
+    """
+    try:
+        return (*_fold_newton(problem, left, right), False)
+    except (ParameterError, np.linalg.LinAlgError, _LeftTheStepError) as exc:
+        log.debug("fold Newton between %s=%.12g and %.12g gave up (%s); locating the sign "
+                  "change of d%s/ds on the branch", problem.parameter, left.lam, right.lam,
+                  exc, problem.parameter)
+    (ep,) = locate_events(problem, [[left.delta], [right.delta]], [left.lam, right.lam],
+                          [[0.0, left.dlam], [0.0, right.dlam]], [Event("SN", None)],
+                          s_tol=_XTOL)
+    return float(ep.u[0]), ep.lam, ep.precision, ep.status, ep.failed
+
+
+class _LeftTheStepError(ArithmeticError):
+    """Newton on the fold system left the box around the step."""
+
+
+def _fold_newton(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
                  ) -> tuple[float, float, float, str]:
-    """The fold between two points by Newton on ``r = dr/d delta = 0`` (eq. 14-15)."""
-    x = np.array([0.5 * (left.delta + right.delta), 0.5 * (left.lam + right.lam)])
+    lo = np.array([min(left.delta, right.delta), min(left.lam, right.lam)])
+    hi = np.array([max(left.delta, right.delta), max(left.lam, right.lam)])
+    width = hi - lo
+    box_lo, box_hi = lo - width, hi + width
+    x = 0.5 * (lo + hi)
     step = np.full(2, np.inf)
     for _ in range(50):
         F = problem.fold_residual(x[0], x[1])
         step = np.linalg.solve(problem.fold_jacobian(x[0], x[1]), F)
         x = x - step
+        if not (np.all(np.isfinite(x)) and np.all(box_lo <= x) and np.all(x <= box_hi)):
+            raise _LeftTheStepError(f"Newton reached (delta, {problem.parameter}) = "
+                               f"({x[0]:.6g}, {x[1]:.6g})")
         if abs(step[1]) < 1e-15 * max(1.0, abs(x[1])) and abs(step[0]) < 1e-14:
             break
+    else:
+        raise _LeftTheStepError("Newton did not converge in 50 steps")
     # at a fold lam is extremal, so both bracketing points lie on one side of it in lam;
     # delta runs monotonically through the fold and must be bracketed
-    lo, hi = sorted((left.delta, right.delta))
-    slack = 1e-9 * max(hi - lo, 1e-12)
-    inside = lo - slack <= x[0] <= hi + slack
+    slack = 1e-9 * max(width[0], 1e-12)
+    inside = lo[0] - slack <= x[0] <= hi[0] + slack
     # Newton on r = r_delta = 0 converges quadratically; the last step bounds the error,
     # the finite-difference parameter derivative only slows it down
     precision = max(abs(step[1]) * 10, 4 * np.finfo(float).eps * abs(x[1]))
@@ -185,7 +226,7 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
         left, right = samples[k], samples[k + 1]
         if "SN" in labels and (left.dlam > 0) != (right.dlam > 0):
-            candidates.append((k, "SN", *_locate_fold(problem, left, right), False))
+            candidates.append((k, "SN", *_locate_fold(problem, left, right)))
 
     def event(label: str) -> Event:
         return Event(label, lambda u, lam: event_function(label, problem.orbit(u[0], lam)),
@@ -211,9 +252,11 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
         special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
                                bracket=(left.lam, right.lam), precision=precision,
                                status=status, orbit=orbit)
-        log.info("%s at %s = %.12g (%s, precision %.1e)", label, problem.parameter, lam,
-                 status, precision)
         found.append(special)
+    found = drop_grazing_at_zero_velocity(found, problem.parameter)
+    for special in found:
+        log.info("%s at %s = %.12g (%s, precision %.1e)", special.label, problem.parameter,
+                 special.value, special.status, special.precision)
         if on_found is not None:
             on_found(special)
     return found

@@ -1,0 +1,136 @@
+"""Located points carry the precision they claim; locators stay in the domain (issue 19).
+
+- A zero-velocity impact is a grazing contact: on N-p branches the GR test touched zero
+  quadratically there and was located 1e-9 off the ZV, differently on other processors.
+  It is reported once, as ZV, whose location the simulator confirms.
+- A located zero's precision includes the rounding noise of its test function: a double
+  zero is known to about the square root of that noise, and says so.
+- Newton in the locators never steps outside the parameter's domain; a fold that
+  cannot be located is kept as bracketed and the branch goes on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.core import Event, locate_events, solve_on_hyperplane
+
+PAPER = dict(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6, eta=0.1)
+
+
+def paper(b: float, omega: float) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(b=b, omega=omega, **PAPER)
+
+
+@pytest.fixture(scope="module")
+def doubled():
+    parent = ic.continuation(paper(0.0, 1.5), N=1, parameter="omega", bounds=(1.4, 2.0),
+                             components="start")
+    return ic.period_doubling_switch(parent, bounds=(1.6, 1.9))
+
+
+def test_grazing_impact_is_reported_once_as_zv(doubled):
+    labels = [str(v) for v in doubled.special_label.values]
+    assert labels == ["PD", "ZV"], labels
+    zv = doubled.isel(special=1)
+    assert str(zv.special_status.values) == "located"
+    assert float(zv.special_precision) < 1e-12
+    assert abs(float(zv.special_impact_velocity)) < 1e-12
+
+
+def _simulated_first_impact_velocity(orbit: ic.MultiImpactOrbit) -> float:
+    """The speed at the first impact after one period of the motion, by the simulator."""
+    res = ic.simulate(orbit.oscillator, orbit.states[0], orbit.phases[0],
+                      periods=orbit.N * (1 + 1e-7))
+    # the last impact is impact 0 again, one period (N forcing periods) later
+    return float(res.impact_velocities[-1])
+
+
+def test_zv_location_confirmed_by_the_simulator(doubled):
+    """The simulated impact velocity, linear in omega, vanishes at the located ZV."""
+    zv = doubled.isel(special=1)
+    omega_zv = float(zv.special_omega)
+    guess = {"delta": float(zv.special_delta_k[0]), "pattern": "UU",
+             "flight_times": zv.special_flight_time_k.values,
+             "states": zv.special_state_k.values}
+    omegas, speeds = [], []
+    for d in (2e-6, 4e-6):  # the physical side: the impact velocity is positive below
+        osc = paper(0.0, omega_zv - d)
+        orbit = ic.multi_impact_orbit(osc, 2, 2, guess)
+        v = _simulated_first_impact_velocity(orbit)
+        assert v > 0
+        omegas.append(omega_zv - d)
+        speeds.append(v)
+    root = omegas[0] - speeds[0] * (omegas[1] - omegas[0]) / (speeds[1] - speeds[0])
+    # linear extrapolation over 4e-6 carries a curvature error ~1e-11
+    assert root == pytest.approx(omega_zv, abs=1e-9)
+
+
+class _Line:
+    """``F(u, lam) = u - lam``: the branch ``u = lam``, refused for ``lam <= 0``."""
+
+    def residual(self, u, lam):
+        if not lam > 0:
+            raise ic.ParameterError(f"lam must be > 0; got {lam}")
+        return np.array([u[0] - lam])
+
+    def jacobian(self, u, lam):
+        return np.array([[1.0]])
+
+    def dparam(self, u, lam):
+        return np.array([-1.0])
+
+
+def _located(test) -> tuple[float, float]:
+    lams = np.array([0.2, 0.5])
+    (ep,) = locate_events(_Line(), lams[:, None], lams, [[1.0, 1.0]] * 2,
+                          [Event("X", lambda u, lam: test(lam))])
+    assert ep.status == "located"
+    return ep.lam, ep.precision
+
+
+def test_precision_of_a_simple_zero_is_tight():
+    lam, precision = _located(lambda lam: lam - 1 / 3)
+    assert abs(lam - 1 / 3) <= precision < 1e-12
+
+
+def test_precision_of_a_double_zero_says_how_little_is_known():
+    """``g = (lam - 1/3) |lam - 1/3|``: rounding hides the zero within ~sqrt(eps)."""
+    lam, precision = _located(lambda lam: (lam - 1 / 3) * abs(lam - 1 / 3))
+    assert abs(lam - 1 / 3) <= precision
+    assert precision > 1e-9  # the old bound claimed 1e-14 here
+
+
+def test_hyperplane_newton_halves_a_step_that_leaves_the_domain():
+    class Cubic(_Line):  # u = lam^3 near lam = 0.05: Newton from lam = 0.3 overshoots below 0
+        def residual(self, u, lam):
+            super().residual(u, lam)
+            return np.array([u[0] - lam ** 3])
+
+        def dparam(self, u, lam):
+            return np.array([-3 * lam ** 2])
+
+    found = solve_on_hyperplane(Cubic(), np.array([1.25e-4, 0.3]), np.array([1.0, 0.0]),
+                                tol=1e-14)
+    assert found.converged
+    assert found.lam == pytest.approx(0.05, rel=1e-12)
+
+
+@pytest.mark.parametrize("lower", [0.01, 0.05])
+def test_ordinary_bounds_do_not_crash_the_fold_locator(lower):
+    """The fold near omega = 0.17 made the closed-form Newton jump to omega = -1.44."""
+    branch = ic.continuation(paper(0.5, 1.0), 1, "omega", (lower, 6.0))
+    folds = branch.special_omega.values[branch.special_label.values == "SN"]
+    assert np.any((folds > 0.1) & (folds < 0.25)), folds
+    assert np.any(np.isclose(folds, 1.21474699458251, atol=1e-9))
+    for k in range(branch.sizes["special"]):
+        row = branch.isel(special=k)
+        omega, precision = float(row.special_omega), float(row.special_precision)
+        assert omega > 0 and math.isfinite(precision)
+        if str(row.special_status.values) == "bracketed":
+            lo, hi = float(row.special_bracket_lo), float(row.special_bracket_hi)
+            assert precision >= max(omega - lo, hi - omega) - 1e-15
