@@ -23,7 +23,8 @@ from scipy.optimize import brentq
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
 
-__all__ = ["Event", "EventPoint", "locate_events", "locate_zero", "tangent_at"]
+__all__ = ["Event", "EventPoint", "locate_events", "locate_zero", "tangent_at",
+           "zero_precision"]
 
 log = logging.getLogger(__name__)
 
@@ -162,6 +163,10 @@ class _Chord:
         self._cache[s] = (found.u, found.lam)
         return self._cache[s]
 
+    def lam(self, s: float) -> float:
+        """The parameter of the branch point at ``s``."""
+        return self.point(s)[1]
+
     def fold_test(self, s: float) -> float:
         u, lam = self.point(s)
         return float(tangent_at(self.problem, u, lam, self.chord)[-1])
@@ -189,30 +194,45 @@ def _middle(chord: _Chord) -> tuple[float, str, tuple[FloatArray, float]]:
         return 0.0, "bracketed", chord.point(0.0)
 
 
-def _precision(g: Callable[[float], float], chord: _Chord, s: float, lam: float,
-               s_tol: float) -> float:
-    """A bound on the error of a located zero's parameter value `lam`.
+def zero_precision(g: Callable[[float], float], position: Callable[[float], Any], s: float,
+                   s_tol: float, lo: float = 0.0, hi: float = 1.0) -> float:
+    """A bound on the error of a located zero ``s`` of `g`, measured in `position`.
 
-    Two sources: Brent's tolerance `s_tol` on the chord, and the rounding noise of
-    the test function, taken as ``_NOISE_ULPS`` eps times its size at the step's
-    ends. The zero is known only within the interval around `s` where ``|g|`` is below
-    that noise: it is searched outwards from `s` by factors of 10 until ``|g|`` rises
-    above the noise on both sides. A simple zero leaves that interval at the first
-    try; a double zero (``g ~ (s - s0)^2``, e.g. a grazing at a zero-velocity impact)
-    is known only to about the square root of the noise, and the bound says so.
+    Two sources: Brent's tolerance `s_tol` on the coordinate, and the rounding noise of
+    the test function, taken as ``_NOISE_ULPS`` eps times its size at the ends `lo` and
+    `hi` of the bracket. The zero is known only within the interval around `s` where ``|g|``
+    is below that noise: it is searched outwards from `s` by factors of 10 until
+    ``|g|`` rises above the noise on both sides. A simple zero leaves that interval at
+    the first try; a double zero (``g ~ (s - s0)^2``, e.g. a grazing at a zero-velocity
+    impact) is known only to about the square root of the noise, and the bound says so.
+
+    Parameters
+    ----------
+    g : callable
+        The test function of the coordinate ``s in [lo, hi]`` (best cached by the caller).
+    position : callable
+        ``position(s)``: where the point at ``s`` is (the parameter, or the parameters of
+        a curve); the bound is twice the largest max-norm distance from ``position(s)``.
+    s : float
+        The located zero.
+    s_tol : float
+        Brent's tolerance on ``s``.
+    lo, hi : float
+        The bracket searched.
     """
-    noise = _NOISE_ULPS * _EPS * max(abs(g(0.0)), abs(g(1.0)))
+    noise = _NOISE_ULPS * _EPS * max(abs(g(lo)), abs(g(hi)))
+    here = np.asarray(position(s), dtype=float)
     ds = max(s_tol, 4 * _EPS)
     reach = 0.0
     for side in (-1.0, 1.0):
         h = ds
         while True:
-            t = min(max(s + side * h, 0.0), 1.0)
-            reach = max(reach, abs(chord.point(t)[1] - lam))
-            if t in (0.0, 1.0) or h >= 0.5 or abs(g(t)) > noise:
+            t = min(max(s + side * h, lo), hi)
+            reach = max(reach, float(np.max(np.abs(np.asarray(position(t)) - here))))
+            if t in (lo, hi) or abs(g(t)) > noise:
                 break
             h *= 10.0
-    return 2 * reach + 4 * _EPS * abs(lam)
+    return 2 * reach + 4 * _EPS * float(np.max(np.abs(here)))
 
 
 def _changes(a: float, b: float) -> bool:
@@ -270,7 +290,7 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
                             event.label, k, k + 1, exc)
                 s, status, (uk, lamk) = _middle(chord)
             if status == "located":
-                precision = _precision(g, chord, s, lamk, s_tol)
+                precision = zero_precision(g, chord.lam, s, s_tol)
             else:  # somewhere on the step: as far as its farther end
                 precision = max(abs(lamk - x[k, -1]), abs(lamk - x[k + 1, -1]))
             found.append(EventPoint(

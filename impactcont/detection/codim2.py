@@ -38,6 +38,7 @@ import math
 
 import numpy as np
 
+from impactcont.core.locate import zero_precision
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.detection.locator import locate_zero
 from impactcont.detection.special_points import pole_free
@@ -189,7 +190,9 @@ class _Step:
         """Zero of ``test`` in ``[lo, hi]`` (Brent): ``(s, x, precision, status)``."""
         sroot, status = locate_zero(lambda sv: self.value(sv, test), lo, hi, 1e-13)
         x = self.point(sroot)[0]
-        precision = max(2e-13 * _plane_distance(self.problem, self.xa, self.xb), 1e-15)
+        precision = zero_precision(lambda sv: self.value(sv, test),
+                                   lambda sv: self.point(sv)[0][[0, -1]], sroot, 1e-13,
+                                   lo, hi)
         return sroot, x, precision, status
 
 
