@@ -10,6 +10,14 @@ root polished to a few ulps) serves both stops: ``flow.motion(X0, delta, j, s)``
 is the evaluator of ``y`` and its derivatives (modal or first-order flow),
 :func:`next_contact` the first impact on either stop, :func:`flight_clearances`
 the interior check of eq. (16) against both stops.
+
+The cost of :func:`next_contact` follows the motion's own time scales, not the
+length of the flight searched: the flight is searched in windows of at most
+``_WINDOW_PERIODS`` periods of its fastest component (or one forcing period, if
+shorter), and a stretch where an envelope of the motion stays clear of both stops
+is skipped in one step (:func:`contact_free_until`). A flight at a forcing
+frequency far below the natural ones (quasi-static forcing) thus costs a few
+windows per impact and per approach to a stop, however long the forcing period.
 """
 
 from __future__ import annotations
@@ -20,11 +28,18 @@ import numpy as np
 
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.extrema import critical_points, first_upward_crossing, sample_times
-from impactcont.orbit.flow import Flow
+from impactcont.orbit.flow import Flow, GeneralMass1Motion, Mass1Motion
 
-__all__ = ["flight_clearances", "next_contact", "stop_sign"]
+__all__ = ["contact_free_until", "flight_clearances", "next_contact", "search_window",
+           "stop_sign"]
 
 TWO_PI = 2.0 * math.pi
+_EPS = float(np.finfo(float).eps)
+# longest contact-search window, in periods of the fastest component seen by the impacting
+# mass (16 grid cells each): the cost of one window, not the flight, is what an impact costs
+_WINDOW_PERIODS = 64
+# rounding allowance of the envelope test, in ulps of the size of the motion
+_ENVELOPE_ULPS = 1e3
 
 
 def stop_sign(stop: str) -> float:
@@ -75,6 +90,104 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
     return gap_u, t_u, gap_l, t_l
 
 
+def search_window(flow: Flow, index: int = 0) -> float:
+    """Length of one contact-search window for the impacting mass ``index + 1``.
+
+    The forcing period ``2 pi / omega``, or ``_WINDOW_PERIODS`` periods of the
+    fastest damped oscillation seen by that mass if shorter (a forcing far slower
+    than the natural motion: the window then follows the natural time scale).
+
+    Parameters
+    ----------
+    flow : Flow
+    index : int
+        0-based index of the impacting mass.
+
+    Returns
+    -------
+    float
+    """
+    rate, _ = flow.time_scales(index)  # >= omega
+    return min(TWO_PI / flow.omega, _WINDOW_PERIODS * TWO_PI / rate)
+
+
+def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float] | None:
+    """Forced amplitude, a bound on the free part from ``t0`` on, and the motion's size.
+
+    ``y(t) = Re(Z e^{i(omega t + delta)}) + y_free(t)`` for the evaluated coordinate
+    ``y = s x_j``, with ``|y_free(t)| <= bound`` for every ``t >= t0``:
+
+    - modal flow: each free mode ``y_i'' + 2 a_i y_i' + w_i^2 y_i = 0`` (``a_i >= 0``)
+      has the non-increasing energy ``(y_i'^2 + w_i^2 y_i^2) / 2``, so
+      ``|y_i(t)| <= sqrt(y_i(t0)^2 + (y_i'(t0) / w_i)^2)``;
+    - first-order flow: ``|sum_k c_k e^{lambda_k t}| <= sum_k |c_k| e^{Re(lambda_k) t0}``
+      (``Re lambda_k <= 0``).
+
+    None when a mode grows (negative damping): no bound.
+    """
+    flow = motion.flow
+    if isinstance(motion, GeneralMass1Motion):
+        rates = flow.lam.real
+        if np.any(rates > 0.0):
+            return None
+        start = float(np.sum(np.abs(motion.c)))
+        free = float(np.sum(np.abs(motion.c) * np.exp(rates * t0)))
+        return complex(motion.z), free, start
+    if np.any(flow.a < 0.0):
+        return None
+    W11, W12, W21, W22 = (blk[0] for blk in flow.transfer(np.array([t0])))
+    y = W11 * motion.dy + W12 * motion.dv
+    v = W21 * motion.dy + W22 * motion.dv
+    weights = np.abs(motion.u0)
+    free = float(weights @ np.hypot(y, v / flow.w))
+    start = float(weights @ np.hypot(motion.dy, motion.dv / flow.w))
+    forced = complex(motion.u0 @ (flow.gamma - 1j * flow.beta))
+    return forced, free, start
+
+
+def contact_free_until(motion: Mass1Motion, level: float, t0: float) -> float:
+    """A time up to which ``y = s x_j`` provably stays below ``level``, from ``t0`` on.
+
+    With the envelope of :func:`_envelope`, ``y(t) <= A cos(omega t + phi) + bound``
+    for ``t >= t0``; the result is the first ``t >= t0`` where the right-hand side
+    (less a rounding allowance) reaches ``level``: no contact can happen before it.
+
+    Parameters
+    ----------
+    motion : Mass1Motion
+        Evaluator of ``y = s x_j`` (``flow.motion(X0, delta, j, s)``).
+    level : float
+        The stop's level in ``y`` (``s c``).
+    t0 : float
+        Start of the stretch, time since the start of the flight.
+
+    Returns
+    -------
+    float
+        ``t0`` when contact is possible at once, ``inf`` when never.
+    """
+    env = _envelope(motion, t0)
+    if env is None:
+        return t0
+    forced, free, start = env
+    amplitude = abs(forced)
+    allowance = _ENVELOPE_ULPS * _EPS * (abs(level) + amplitude + start)
+    clear = level - free - allowance  # the forced part must reach this for contact
+    if clear > amplitude:
+        return math.inf
+    if clear <= -amplitude:
+        return t0
+    omega = motion.flow.omega
+    reach = math.acos(clear / amplitude)  # forced >= clear <=> |phase| <= reach (mod 2 pi)
+    psi = omega * t0 + motion.delta + math.atan2(forced.imag, forced.real)
+    phase = math.remainder(psi, TWO_PI)
+    if abs(phase) <= reach:
+        return t0
+    ahead = (-reach if phase < 0 else TWO_PI - reach) - phase
+    slack = 1e-9 + 8.0 * _EPS * abs(psi)  # the rounding of the phase, on the safe side
+    return t0 + max(ahead - slack, 0.0) / omega
+
+
 def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
                  after: dict[str, float] | None = None
                  ) -> tuple[float, np.ndarray, str] | None:
@@ -98,6 +211,14 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     (float, ndarray, str) or None
         Flight time to the impact, the state just before it and the stop hit
         (``"U"``/``"L"``); None when neither stop is reached within ``t_max``.
+
+    Notes
+    -----
+    The flight is searched window by window (:func:`search_window`), each window
+    on the reliable grid of :func:`impactcont.orbit.extrema.sample_times`; before
+    each window, a stretch that :func:`contact_free_until` proves free of contact
+    with both stops is skipped when it is longer than a window. The cost is thus a
+    few windows per approach to a stop, not proportional to ``t_max``.
     """
     osc = flow.osc
     j = osc.stops.index
@@ -106,9 +227,16 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     motions = {s: flow.motion(X, phase, j, stop_sign(s)) for s in stops}
     levels = {s: stop_sign(s) * osc.stops.position(s, osc.b) for s in stops}
     below = dict.fromkeys(stops, True)
-    window = TWO_PI / flow.omega
+    window = search_window(flow, j)
     start = 0.0
     while start < t_max:
+        free = min(contact_free_until(motions[s], levels[s], start) for s in stops)
+        if free >= start + window:  # no contact with either stop before `free`: skip there
+            if free >= t_max:
+                return None
+            start = free
+            below = dict.fromkeys(stops, True)
+            continue
         stop_time = min(start + window, t_max)
         grid = sample_times(flow, start, stop_time, row=j)
         best: tuple[float, str] | None = None

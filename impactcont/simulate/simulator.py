@@ -26,7 +26,6 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
-from impactcont.orbit.extrema import first_upward_crossing, sample_times
 from impactcont.orbit.flow import Flow
 from impactcont.simulate.contact import next_contact, stop_sign
 from impactcont.threads import blas_limited
@@ -50,8 +49,9 @@ class SimulationStatus(enum.Enum):
     STICKING = ("the impacting mass sticks to a stop (zero velocity after impact and "
                 "acceleration towards the stop); sticking phases are outside the model of "
                 "eq. (1)-(4)")
-    CHATTER = ("impact velocity fell below the chatter threshold (accumulating impacts, "
-               "complete chatter); stopped rather than resolve infinitely many impacts")
+    CHATTER = ("accumulating impacts (complete chatter): the impact velocity fell below the "
+               "chatter threshold, or the next bounce would rise too little above the stop to "
+               "be resolved; stopped rather than resolve infinitely many impacts")
     MAX_IMPACTS = "reached max_impacts"
 
 
@@ -138,35 +138,17 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     Notes
     -----
     With the stop on another mass (``osc.stops.mass = j``) the impact is the first
-    upward crossing of ``x_j = b`` (eq. 3 with ``x1`` replaced by ``x_j``).
+    upward crossing of ``x_j = b`` (eq. 3 with ``x1`` replaced by ``x_j``). The
+    search is :func:`impactcont.simulate.contact.next_contact`'s: its cost follows
+    the motion's time scales, not ``t_max``.
     """
     stops = flow.osc.stops
     if stops.two_sided:
         raise ParameterError(f"next_impact follows one stop; the oscillator has two (stops="
                              f"{stops!r}): use impactcont.simulate.contact.next_contact, which "
                              "also returns the stop hit ('U' or 'L')")
-    if not stops.paper:  # one stop on mass j: the first contact on it
-        hit = next_contact(flow, X, phase, t_max, after={UPPER: after})
-        return None if hit is None else (hit[0], hit[1])
-    motion = flow.mass1(X, phase)
-    b = flow.osc.b
-    window = TWO_PI / flow.omega
-    start = 0.0
-    below_at_start = True
-    while start < t_max:
-        stop = min(start + window, t_max)
-        grid = sample_times(flow, start, stop)
-        x, v, _ = motion(grid)
-        if start > 0 and below_at_start and x[0] >= b and v[0] >= 0:
-            # the previous window ended just below the stop at this very time, moving up:
-            # the impact sits on the boundary (the two evaluations differ only by rounding)
-            return start, flow.state(start, X, phase)[0]
-        tc = first_upward_crossing(motion, b, grid, after=after)
-        if tc is not None:
-            return tc, flow.state(tc, X, phase)[0]
-        below_at_start = bool(x[-1] < b)
-        start = stop
-    return None
+    hit = next_contact(flow, X, phase, t_max, after={UPPER: after})
+    return None if hit is None else (hit[0], hit[1])
 
 
 def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, side: str, level: float,
@@ -308,7 +290,10 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             status = SimulationStatus.MAX_IMPACTS
             break
     if status is not SimulationStatus.COMPLETED:
-        log.warning("simulation stopped at t=%.6g: %s", t_now, status.value)
+        last = (f"; last impact on the {'upper' if hits[-1] == UPPER else 'lower'} stop at "
+                f"speed {vels[-1]:.3g}" if hits else "")
+        log.warning("simulation stopped at t=%.6g (%.6g forcing periods, %d impacts%s): %s",
+                    t_now, t_now * osc.omega / TWO_PI, len(times), last, status.value)
     k = len(times)
     return SimulationResult(
         impact_times=np.array(times, dtype=float),
