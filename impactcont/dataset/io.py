@@ -19,9 +19,10 @@ killed is removed by the next write to that directory once its process is
 gone. Ctrl-C ends a save promptly and never lands inside the NetCDF library
 (where it used to deadlock xarray's file manager): a large in-memory dataset
 is written by a child process (``fork``) that the interrupted parent kills at
-once; a small one (written in milliseconds), or where a child cannot be used
-(dask-backed data, no ``fork``), is written with the interrupt held until the
-write is complete.
+once, and that ends by itself, removing its temporary file, if the parent is
+killed (``kill -9`` included); a small one (written in milliseconds), or where
+a child cannot be used (dask-backed data, no ``fork``), is written with the
+interrupt held until the write is complete.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import os
 import pickle
 import re
 import secrets
+import select
 import signal
 import socket
 import sys
@@ -491,12 +493,38 @@ def _xarray_locks() -> list[Any]:
     return [HDF5_LOCK, NETCDFC_LOCK]
 
 
+def _end_with_parent(parent: int, parent_alive: int, tmp: Path) -> None:
+    """In the forked child: end at once, removing ``tmp``, when the parent ``parent`` ends.
+
+    ``parent_alive`` is the read end of a pipe whose write end only the parent
+    holds: the kernel closes it when the parent ends, however it ends (``kill -9``
+    included), and the pipe reads as ended. A thread waits for that (the NetCDF
+    library releases the GIL while it writes), removes the temporary file and
+    ends the process. The parent's pid is polled as well, in case another
+    process forked meanwhile holds the write end too. (Linux's
+    ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` would end the child as promptly, but
+    nothing would remove the file; this works on every system with ``fork``.)
+    """
+    def watch() -> None:
+        while os.getppid() == parent and not select.select([parent_alive], [], [], 0.5)[0]:
+            pass
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="impactcont-save-watch", daemon=True).start()
+
+
 def _child_write(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str, Any],
-                 pipe: int) -> None:
-    """In the forked child: write, report a failure on ``pipe``, never return."""
+                 pipe: int, parent: int, parent_alive: int) -> None:
+    """In the forked child: write, report a failure on ``pipe``, never return.
+
+    The child ends with its parent (:func:`_end_with_parent`).
+    """
     code = 1
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides, and kills us
+        _end_with_parent(parent, parent_alive, tmp)
         data.to_netcdf(tmp, mode="w", engine=ENGINE, auto_complex=True, **kwargs)
         code = 0
     except BaseException as exc:
@@ -515,10 +543,13 @@ def _write_in_child(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str,
     """Write ``data`` to ``tmp`` in a forked child; Ctrl-C here kills the child at once.
 
     The child shares the data (copy-on-write) and leaves with ``os._exit``: the
-    NetCDF library of this process is never interrupted halfway. Returns False,
-    having written nothing, if no child can be started.
+    NetCDF library of this process is never interrupted halfway. If this process
+    is killed, the child ends too and removes ``tmp``. Returns False, having
+    written nothing, if no child can be started.
     """
-    read_end, write_end = os.pipe()
+    read_end, write_end = os.pipe()  # the child's error, if any
+    alive_read, alive_write = os.pipe()  # ends when this process does
+    parent = os.getpid()
     pid = 0
     try:
         locks = _xarray_locks()
@@ -539,9 +570,11 @@ def _write_in_child(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str,
                     lock.release()
             if pid == 0:
                 os.close(read_end)
-                _child_write(data, tmp, kwargs, write_end)
+                os.close(alive_write)
+                _child_write(data, tmp, kwargs, write_end, parent, alive_read)
         os.close(write_end)
-        write_end = -1
+        os.close(alive_read)
+        write_end = alive_read = -1
         chunks = []
         while chunk := os.read(read_end, 1 << 16):
             chunks.append(chunk)
@@ -554,7 +587,7 @@ def _write_in_child(data: xr.Dataset | xr.DataTree, tmp: Path, kwargs: dict[str,
                 os.waitpid(pid, 0)
         raise
     finally:
-        for fd in (read_end, write_end):
+        for fd in (read_end, write_end, alive_read, alive_write):
             if fd >= 0:
                 os.close(fd)
     if chunks:
