@@ -110,6 +110,50 @@ def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
     return None
 
 
+#: The damping keys of [oscillator] that exclude each other: (keys, other keys, problem,
+#: allowed).
+_EXCLUSIVE_DAMPING = (
+    (("eta",), ("alpha", "beta"), "give either eta or alpha/beta, not both",
+     "eta (C = 2 eta K) or alpha, beta (C = alpha M + beta K)"),
+    (("eta", "alpha", "beta"), ("C",), "give either a damping matrix C or eta or alpha/beta",
+     "C (any damping matrix) without eta, alpha, beta"),
+)
+
+
+def damping_keys(osc: ImpactOscillator) -> set[str]:
+    """The damping keys of the ``[oscillator]`` table ``osc`` was built from."""
+    if osc.general_damping:
+        return {"C"}
+    if osc.eta is not None:
+        return {"eta"}
+    return {"alpha", "beta"} if osc.alpha is not None or osc.beta is not None else set()
+
+
+def check_damping_keys(keys: Iterable[str], where: Where, inherited: Iterable[str] = ()
+                       ) -> None:
+    """Refuse damping keys that exclude each other (eta, alpha/beta, C).
+
+    ``keys`` are those of one table (reported at ``where``), ``inherited`` those of
+    the ``[oscillator]`` an entry changes: an entry's keys are refused exactly when
+    ``[oscillator]`` would refuse them written into it, so that no key is dropped.
+    """
+    own, inherited = set(keys), set(inherited) - set(keys)
+    given = own | inherited
+    for first, second, problem, allowed in _EXCLUSIVE_DAMPING:
+        if not (given & set(first) and given & set(second)):
+            continue
+        key = next((k for k in (*second, *first) if k in own), None)
+        if key is None:
+            continue
+        clash = sorted(inherited & {*first, *second})
+        if clash:
+            problem += (f": [oscillator] has {' and '.join(clash)}, so an entry cannot set "
+                        f"{key}")
+            allowed = (f"the damping keys of [oscillator] ({', '.join(sorted(inherited))}), "
+                       "or change the damping in [oscillator]")
+        raise where.key(key).error(problem, allowed)
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class OscillatorSpec:
     """``[oscillator]``: the machine of eq. (1)-(4).
@@ -151,13 +195,7 @@ class OscillatorSpec:
         if "K" not in values and "springs" not in values:
             raise where.key("K").error("the stiffness is missing",
                                        "K (a matrix) or springs (the chain of eq. 2)")
-        if "eta" in values and ("alpha" in values or "beta" in values):
-            key = "alpha" if "alpha" in values else "beta"
-            raise where.key(key).error("give either eta or alpha/beta, not both",
-                                       "eta (C = 2 eta K) or alpha, beta (C = alpha M + beta K)")
-        if "C" in values and {"eta", "alpha", "beta"} & set(values):
-            raise where.key("C").error("give either a damping matrix C or eta or alpha/beta",
-                                       "C (any damping matrix) without eta, alpha, beta")
+        check_damping_keys(values, where)
         spec = cls(**values)
         try:
             spec.build()
@@ -267,6 +305,7 @@ class EntrySpec:
         values = read_table(cls, raw, where)
         values.setdefault("name", f"{section or cls.section}{index + 1}")
         spec = cls(**values)
+        check_damping_keys(spec.changes, where, inherited=damping_keys(base))
         try:
             osc = base.replace(**spec._parameters(base))
         except (ImpactcontError, ValueError, TypeError) as exc:
@@ -496,6 +535,12 @@ class RobustSpec(EntrySpec):
             raise where.key("samples").error(
                 f"{self.samples} per parameter for {len(self.vary)} parameters is "
                 f"{self.samples ** len(self.vary)} grid points", "at most 1000000 grid points")
+        for name in self.vary:
+            if name in self.changes:
+                raise where.key(name).error(
+                    f"{name} is varied over the box, where its nominal value is nominal.{name} "
+                    f"(default the box centre): {name} = {self.changes[name]!r} would not be "
+                    "used", f"nominal = {{ {name} = {self.changes[name]!r} }} instead")
 
 
 _SIM = defaults_of(simulate)
