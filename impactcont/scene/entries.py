@@ -21,13 +21,16 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from impactcont import branch as _branch
 from impactcont.branch import continuation
+from impactcont.core.options import driver_options
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
-from impactcont.model.stops import Stops
+from impactcont.model.stops import Stops, require_paper_stops
+from impactcont.orbit import robust as _robust
 from impactcont.orbit.robust import robust_stability
-from impactcont.problems import CONTINUABLE_PARAMETERS
+from impactcont.problems import CONTINUABLE_PARAMETERS, PeriodicBranchProblem
 from impactcont.scene.keys import (
     ENTRY_NAME,
     Boolean,
@@ -45,6 +48,7 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.simulate import simulate
+from impactcont.vocabulary import check_labels
 
 __all__ = [
     "CONTINUATION_KEYS",
@@ -55,9 +59,12 @@ __all__ = [
     "OscillatorSpec",
     "RobustSpec",
     "SimulationSpec",
+    "check_closed_form",
+    "check_continuation",
     "continuation_entry",
     "defaults_of",
     "detect_key",
+    "library_check",
     "refuse_changes",
     "spec_dict",
 ]
@@ -86,7 +93,7 @@ _RESTITUTION = Real(0.0, 1.0)
 #: Admissible values of each scalar model parameter.
 PARAMETER_RANGES: dict[str, Real] = {"omega": _OMEGA, "b": Real(), "R": _RESTITUTION,
                                      "eta": _NONNEGATIVE, "alpha": _NONNEGATIVE,
-                                     "beta": _NONNEGATIVE}
+                                     "beta": _NONNEGATIVE, "F0": _OMEGA}
 
 
 #: The scene key of a :class:`~impactcont.model.stops.Stops` error, by how its message starts.
@@ -101,13 +108,65 @@ def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
     ``stop_mass``, ``b_low`` and ``R_low``.
     """
     text = message.strip()
-    first = re.split(r"[\s,;:]", text, maxsplit=1)[0]
+    first = re.split(r"[\s,;:=\[]", text, maxsplit=1)[0]
     if first in keys:
         return first
     for start, key in _STOPS_ERROR_KEYS:
         if text.startswith(start) and key in keys:
             return key
     return None
+
+
+def library_check(where: Where, check: Callable[..., Any], *args: Any,
+                  keys: Iterable[str] = (), allowed: str | None = None, **kwargs: Any) -> Any:
+    """Run an argument check of the library on an entry's arguments; refuse the scene if it fails.
+
+    An entry is validated with the checks its driver's API function makes before it
+    computes, on the arguments the driver passes, so that a scene that validates
+    (``impactcont run --check``) does not then fail on its input.
+
+    Parameters
+    ----------
+    where : Where
+        The entry (or key) the arguments come from.
+    check : callable
+        The library's check, called as ``check(*args, **kwargs)``.
+    keys : iterable of str
+        Scene keys of the entry: an error message that starts with one of them is
+        reported at that key.
+    allowed : str, optional
+        What is allowed, for the message.
+
+    Returns
+    -------
+    object
+        What ``check`` returns.
+
+    Raises
+    ------
+    SceneError
+        With the library's message, at the key it names (else at ``where``).
+    """
+    try:
+        return check(*args, **kwargs)
+    except (ImpactcontError, ValueError, TypeError) as exc:
+        key = _library_error_key(str(exc), keys)
+        raise (where.key(key) if key else where).error(str(exc), allowed) from None
+
+
+#: What the closed-form sections take: the paper's single stop on mass 1.
+_CLOSED_FORM_ALLOWED = ("an [oscillator] without stop_mass, b_low and R_low (the paper's single "
+                        "stop on mass 1); [[simulations]] with start = \"state\" and "
+                        "[[multi_impact]] take other stops")
+
+
+def check_closed_form(osc: ImpactOscillator, where: Where, what: str) -> None:
+    """Refuse an oscillator the closed form of eq. (12)-(16) cannot take (its stops).
+
+    The check :func:`~impactcont.periodic_orbits`, :func:`~impactcont.continuation`,
+    the robust stability, curves and maps make (``what`` names the computation).
+    """
+    library_check(where, require_paper_stops, osc, what, allowed=_CLOSED_FORM_ALLOWED)
 
 
 #: The damping keys of [oscillator] that exclude each other: (keys, other keys, problem,
@@ -365,6 +424,9 @@ class OrbitSpec(EntrySpec):
                       "which roots to keep: all (with their physical flag), only physical "
                       "ones, or only physical and stable ones", "all")
 
+    def check(self, where: Where, osc: ImpactOscillator) -> None:
+        check_closed_form(osc, where, "the N-1 closed form")
+
 
 #: The keys every continuing entry has (:func:`continuation_entry`).
 CONTINUATION_KEYS = ("ds", "ds_min", "ds_max", "newton_tol", "max_points", "both_directions")
@@ -394,6 +456,29 @@ def _continuation_options(self: Any) -> dict[str, Any]:
     """The continuation keys given (or defaulted) as keyword arguments of the driver."""
     return {k: getattr(self, k) for k in CONTINUATION_KEYS
             if hasattr(self, k) and getattr(self, k) is not None}
+
+
+def check_continuation(osc: ImpactOscillator, where: Where, N: int, parameter: str,
+                       bounds: tuple[float, float], *, start: float | None = None,
+                       root: int | None = None, detect: Sequence[str] = tuple(LABELS),
+                       **options: Any) -> None:
+    """The checks :func:`impactcont.continuation` makes before it computes, on its arguments.
+
+    ``where`` is the entry; the arguments are those the entry passes to the driver
+    (:meth:`BranchSpec.continuation_kwargs`). A failing check is reported at the key
+    its message names (``parameter``, ``bounds``, ``ds``, ...), else at the entry.
+    """
+    check_closed_form(osc, where, "the N-1 branch")
+
+    def checks() -> None:  # continuation's own order: labels, problem, bounds, options
+        check_labels(detect)
+        PeriodicBranchProblem(osc, N, parameter)  # the parameter and the damping model
+        lo, hi = _branch._check_bounds(parameter, bounds)
+        _branch._refuse_elastic(osc, parameter, lo, hi)
+        driver_options(None, (lo, hi), defaults=_branch._DEFAULTS, **options)
+
+    library_check(where, checks, keys=("N", "parameter", "bounds", "start", "root", "detect",
+                                       *CONTINUATION_KEYS))
 
 
 def continuation_entry(func: Callable[..., Any], name: str,
@@ -458,6 +543,7 @@ class BranchSpec(continuation_entry(continuation, "BranchEntry")):
                                            f"{show(list(self.bounds))}",
                                            f"a real number in [{lo:g}, {hi:g}]")
         _check_damping_parameter(self.parameter, osc, where.key("parameter"))
+        check_continuation(osc, where, **self.continuation_kwargs())
 
     def continuation_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`impactcont.continuation` for this branch."""
@@ -541,6 +627,30 @@ class RobustSpec(EntrySpec):
                     f"{name} is varied over the box, where its nominal value is nominal.{name} "
                     f"(default the box centre): {name} = {self.changes[name]!r} would not be "
                     "used", f"nominal = {{ {name} = {self.changes[name]!r} }} instead")
+        _check_robust(osc, where, self.vary, self.nominal)
+
+
+def _check_robust(osc: ImpactOscillator, where: Where, vary: Mapping[str, tuple[float, float]],
+                  nominal: Mapping[str, float] | None) -> None:
+    """The checks :func:`impactcont.robust_stability` makes before it computes: the box, the
+    nominal point, every end of the box admissible (the others at nominal), the stops."""
+
+    def checks() -> None:
+        box = _robust._check_vary(osc, vary)
+        q0 = _robust._check_nominal(box, nominal)
+        names = list(box)
+        for k, name in enumerate(names):
+            for end in box[name]:
+                q = [q0[m] for m in names]
+                q[k] = end
+                try:
+                    _robust._oscillator_at(osc, names, tuple(q))
+                except ParameterError as exc:
+                    raise ParameterError(f"vary[{name!r}] = {box[name]!r} leaves the admissible "
+                                         f"parameters: {exc}") from None
+
+    library_check(where.key("vary"), checks)
+    check_closed_form(osc, where, "the N-1 closed form")
 
 
 _SIM = defaults_of(simulate)

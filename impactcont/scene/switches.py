@@ -29,14 +29,16 @@ import xarray as xr
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.multi_branch import multi_impact_continuation
+from impactcont.multi_branch import make_options, multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.scene.entries import (
+    CONTINUATION_KEYS,
     PARAMETER_RANGES,
     EntrySpec,
     continuation_entry,
     detect_key,
+    library_check,
     refuse_changes,
 )
 from impactcont.scene.keys import (
@@ -47,9 +49,11 @@ from impactcont.scene.keys import (
     String,
     Where,
     declare,
+    show,
 )
 from impactcont.scene.tasks import BRANCHES, markdown_table
 from impactcont.switching import grazing_switch, period_doubling_switch
+from impactcont.vocabulary import check_parameter
 
 __all__ = [
     "MULTI_IMPACT",
@@ -98,6 +102,24 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
             raise where.key("start").error(
                 f"{self.start!r} is not a [[branches]] entry nor an earlier [[switches]] entry",
                 ", ".join(branches + earlier) or "the name of a [[branches]] entry")
+        start = _origin(self, sections)  # the [[branches]] entry the chain starts from
+        lo, hi = self.bounds if self.bounds is not None else start.bounds
+        admissible = PARAMETER_RANGES[start.parameter]
+        if not (admissible.inside(lo) and admissible.inside(hi)):
+            raise where.key("bounds").error(
+                f"{show([lo, hi])} leaves the admissible values of {start.parameter} (the "
+                f"parameter of branch {start.name!r})", admissible.allowed)
+        library_check(where, make_options, (lo, hi), both_directions=False,
+                      keys=("bounds", *CONTINUATION_KEYS), **self.continuation_options())
+
+
+def _origin(entry: SwitchSpec, sections: Mapping[str, tuple[EntrySpec, ...]]) -> Any:
+    """The ``[[branches]]`` entry a chain of switches starts from."""
+    switches = {e.name: e for e in sections.get("switches", ())}
+    branches = {e.name: e for e in sections.get("branches", ())}
+    while entry.start in switches:
+        entry = switches[entry.start]
+    return branches[entry.start]
 
 
 class Switches:
@@ -170,7 +192,11 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
         if self.start not in simulations:
             raise where.key("start").error(f"{self.start!r} is not a [[simulations]] entry",
                                            ", ".join(simulations) or "a [[simulations]] entry")
-        value = getattr(simulations[self.start].oscillator, self.parameter)
+        osc = simulations[self.start].oscillator  # the motion is found at its oscillator
+        library_check(where.key("parameter"), check_parameter, osc, self.parameter)
+        library_check(where, make_options, self.bounds, keys=("bounds", *CONTINUATION_KEYS),
+                      **self.continuation_options())
+        value = getattr(osc, self.parameter)
         lo, hi = self.bounds
         if value is None or not lo <= value <= hi:
             raise where.key("bounds").error(

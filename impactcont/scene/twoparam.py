@@ -22,15 +22,22 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
+from impactcont import curves as _curves
+from impactcont.core.options import driver_options
 from impactcont.curves import curve
 from impactcont.errors import ImpactcontError
 from impactcont.maps import stability_map
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.problems.codim1 import check_parameters, curve_problem
 from impactcont.scene.entries import (
+    CONTINUATION_KEYS,
     PARAMETER_RANGES,
     EntrySpec,
+    check_closed_form,
+    check_continuation,
     continuation_entry,
     defaults_of,
+    library_check,
     refuse_changes,
 )
 from impactcont.scene.keys import (
@@ -145,6 +152,39 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
                     f"{show(self.start)} " + (f"has unknown {extra}" if extra
                                               else f"lacks {missing}"),
                     f"values of {', '.join(sorted(allowed))} (delta optional)")
+        if not isinstance(self.start, str):  # a start from a branch: check_scene
+            self._check_arguments(where, osc)
+
+    def _check_arguments(self, where: Where, osc: ImpactOscillator) -> None:
+        """The checks :func:`impactcont.curves.curve` makes before it computes, on the
+        arguments :meth:`Curves.compute` passes (``osc`` is the branch's for a start from a
+        branch)."""
+        keys = ("kind", "N", "parameters", "bounds", "start", "special", "root",
+                *CONTINUATION_KEYS)
+        N = self.N if self.N is not None else 1
+        p1, p2 = library_check(where, check_parameters, osc, self.parameters, keys=keys)
+        check_closed_form(osc, where, f"the {self.kind} curve")
+        box = library_check(where.key("bounds"), _curves._check_bounds, dict(self.bounds),
+                            (p1, p2))
+        if self.start is None:  # a branch in p1 at the oscillator's p2 finds the start
+            check_continuation(osc, where, N, p1, box[p1], detect=(self.kind,))
+            start = {p2: getattr(osc, p2)}
+        elif isinstance(self.start, Mapping):
+            library_check(where, curve_problem, self.kind, osc, N, (p1, p2), keys=keys)
+            start = {name: v for name, v in self.start.items() if name in box}
+        else:
+            start = {}
+        for name, value in start.items():
+            lo, hi = box[name]
+            if value is None or not lo <= value <= hi:
+                raise where.key("start" if self.start is not None else "bounds").error(
+                    f"the start {name} = {value!r} lies outside bounds.{name} = [{lo:g}, {hi:g}]"
+                    + ("" if self.start is not None else f" (the oscillator's {name}: the curve "
+                       f"starts on the branch in {p1} at this {name})"),
+                    f"bounds.{name} containing {value!r}" if value is not None
+                    else f"a parameter the oscillator has ({name} = None)")
+        library_check(where, driver_options, None, box[p2], defaults=_curves._DEFAULTS,
+                      keys=keys, **self.continuation_options())
 
     def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
                     ) -> None:
@@ -163,6 +203,7 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
             raise where.key("N").error(f"{self.N} differs from N = {branch.N} of branch "
                                        f"{self.start!r}", f"{branch.N}, or leave it out")
         refuse_changes(self, where, "a curve started from a branch uses the branch's oscillator")
+        self._check_arguments(where, branch.oscillator)
 
 
 def _span(v: np.ndarray) -> str:
@@ -246,6 +287,7 @@ class MapSpec(EntrySpec):
         if len(self.N) * self.omega_points * self.b_points > 50_000_000:
             raise where.key("omega_points").error(
                 "the grid is too large", "at most 5e7 points over N x omega x b")
+        check_closed_form(osc, where, "the N-1 stability map")
 
 
 class Maps:
