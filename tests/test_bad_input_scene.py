@@ -1,18 +1,26 @@
 """Scenes a new user gets wrong are refused, never run silently wrong (issue 19).
 
 An entry's oscillator keys combine with ``[oscillator]`` as if written into it; ``--check``
-runs the argument checks of every entry's driver.
+runs the argument checks of every entry's driver; a ``[[multi_impact]]`` p must be what its
+simulation shows.
 """
 
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
+import xarray as xr
 from _scene_data import OSCILLATOR, write
 
+from impactcont import ImpactOscillator, Stops
 from impactcont.cli import EXIT_OK, EXIT_USAGE, main
-from impactcont.scene import SceneError, load_scene
+from impactcont.errors import ParameterError
+from impactcont.scene import SceneError, load_scene, run_scene
+from impactcont.scene.switches import MultiImpactSpec, simulation_seed
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -121,3 +129,92 @@ def test_check_refuses_the_main_job_with_the_stop_on_mass_2(
     assert main(["run", scene, "--check", "--set", "oscillator.stop_mass=2"]) == EXIT_USAGE
     assert "orbits[0]: the N-1 closed form" in capsys.readouterr().err
     assert main(["-q", "run", scene, "--check"]) == EXIT_OK
+
+
+# ---------------------------------------------------------------------------------------------
+# [[multi_impact]]: p must be what the simulation shows
+# ---------------------------------------------------------------------------------------------
+BACKLASH = """
+[oscillator]
+masses = [1.0, 1.0]
+springs = [1.0, 1.0]
+F = [1.0, 0.0]
+R = 0.6
+eta = 0.1
+b = 0.5
+b_low = 0.5
+omega = 1.6
+
+[[simulations]]
+name = "settled"
+start = "state"
+state = [0.0, 0.0, 0.0, 0.0]
+delta = 0.0
+periods = 60
+
+[[multi_impact]]
+name = "ulu"
+start = "settled"
+N = 1
+p = 3
+bounds = [1.5, 1.7]
+"""
+
+
+def test_a_p_the_simulation_does_not_show_is_refused(tmp_path: Path) -> None:
+    """The simulation settles on the symmetric 1-2 motion (one impact on each stop per
+    period): p = 3 was solved as a "ULU" motion, none of its points physical."""
+    result = run_scene(write(tmp_path, BACKLASH), output=tmp_path / "o")
+    (failure,) = result.failures
+    assert failure.name == "ulu" and failure.error.startswith("ParameterError")
+    assert "shows 2 impact(s) in its last N = 1 forcing period(s) (stops 'UL')" in failure.error
+    assert "allowed: p = 2 with N = 1" in failure.error
+    assert not (tmp_path / "o" / "multi_impact.nc").exists()
+
+
+def oscillator(omega: float) -> ImpactOscillator:
+    return ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                            b=0.5, omega=omega, eta=0.1, stops=Stops(b_low=0.5))
+
+
+def simulation(times: list[float], stops: str, osc: ImpactOscillator) -> xr.Dataset:
+    """A simulation dataset with impacts at ``times`` (in forcing periods) on ``stops``."""
+    t = np.array(times) * 2.0 * math.pi / osc.omega
+    return xr.Dataset({"impact_times": ("impact", t),
+                       "impact_phases": ("impact", np.zeros(t.size)),
+                       "impact_states": (("impact", "component"), np.zeros((t.size, 4)))},
+                      attrs={"impact_stops": stops, "oscillator": osc.to_json()})
+
+
+def entry(N: int, p: int) -> MultiImpactSpec:
+    return MultiImpactSpec(name="np", start="sim", N=N, p=p, bounds=(0.5, 2.0))
+
+
+def test_the_seed_takes_the_impacts_of_n_periods() -> None:
+    # a 1-2 motion: impacts 0.38 and 0.62 periods apart, upper then lower stop
+    times = [k + d for k in range(10) for d in (0.0, 0.38)]
+    osc = oscillator(1.3)
+    sim = simulation(times, "UL" * 10, osc)
+    seed = simulation_seed(sim, entry(1, 2), osc)
+    assert seed["pattern"] == "LU"  # the stops of the impacts that start the two flights
+    assert np.allclose(seed["flight_times"] * 1.3 / (2 * math.pi), [0.62, 0.38])
+    assert simulation_seed(sim, entry(2, 4), osc)["pattern"] == "LULU"  # the motion twice
+    for N, p, shown in ((1, 1, "2 impact(s)"), (1, 3, "2 impact(s)"), (2, 3, "4 impact(s)")):
+        with pytest.raises(ParameterError, match=rf"shows {re.escape(shown)} in its last "
+                                                 rf"N = {N} forcing period\(s\) \(stops "
+                                                 rf"'(UL)+'\), not p = {p}"):
+            simulation_seed(sim, entry(N, p), osc)
+
+
+def test_a_simulation_that_has_not_settled_is_named() -> None:
+    osc = oscillator(1.0)
+    sparse = simulation([0.0, 3.0, 6.0, 9.0], "UUUU", osc)  # one impact every 3 periods
+    with pytest.raises(ParameterError, match=r"shows 1 impact\(s\) in its last N = 2 .* "
+                                             r"has not settled"):
+        simulation_seed(sparse, entry(2, 1), osc)
+    short = simulation([0.0, 0.3, 0.6], "UUU", osc)
+    with pytest.raises(ParameterError, match=r"span 0.6 forcing periods, fewer than N = 1"):
+        simulation_seed(short, entry(1, 1), osc)
+    flipped = simulation([0.0, 0.5, 1.0, 1.5, 2.0], "UULUU", osc)  # 1 period back: L
+    with pytest.raises(ParameterError, match="hit the lower stop and the last the other"):
+        simulation_seed(flipped, entry(1, 2), osc)

@@ -12,7 +12,9 @@ A ``[[multi_impact]]`` entry continues the branch of N-p motions (p impacts
 in N forcing periods) through the motion that Newton finds
 (:func:`impactcont.multi_impact_orbit`) from the last p + 1 impacts of a
 computed ``[[simulations]]`` entry: an attractor seen by brute force becomes
-a branch (:func:`impactcont.multi_impact_continuation`).
+a branch (:func:`impactcont.multi_impact_continuation`). The simulation must
+show that motion: p impacts in its last N forcing periods
+(:func:`simulation_seed`).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.dataset.multi import impacts_of, pattern_of
-from impactcont.errors import ImpactcontError, NoPeriodicMotionError
+from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import make_options, multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
@@ -57,9 +59,11 @@ from impactcont.vocabulary import check_parameter
 
 __all__ = [
     "MULTI_IMPACT",
+    "SETTLED",
     "SWITCHES",
     "MultiImpactSpec",
     "SwitchSpec",
+    "simulation_seed",
 ]
 
 log = logging.getLogger(__name__)
@@ -204,6 +208,75 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
                 f"simulation {self.start!r}", f"bounds around {self.parameter} = {value!r}")
 
 
+#: How far (in forcing periods) the impact N periods before a simulation's last one may lie
+#: from exactly N periods: the p flight times of the seed must add up to the N periods of the
+#: motion (the shooting system's condition), and a seed a quarter period off is no N-p motion.
+SETTLED = 0.25
+
+
+def _impacts_in_periods(times: np.ndarray, period: float, N: int) -> tuple[int, float]:
+    """``(q, offset)``: the impact nearest ``N`` periods before the last is ``q`` impacts
+    before it, ``offset`` periods further back than ``N`` (negative: nearer)."""
+    back = (times[-1] - times[:-1]) / period
+    i = int(np.argmin(np.abs(back - N)))
+    return times.size - 1 - i, float(back[i] - N)
+
+
+def simulation_seed(sim: xr.Dataset, entry: MultiImpactSpec, osc: ImpactOscillator
+                    ) -> dict[str, Any]:
+    """The Newton guess of an entry's N-p motion: the last p + 1 impacts of its simulation.
+
+    They seed an N-p motion only if the simulation shows one: p impacts in its last N
+    forcing periods, the impact N periods before the last (to within :data:`SETTLED`
+    periods) on the same stop as the last. The pattern of the motion is the stops of
+    the impacts that start its p flights.
+
+    Raises
+    ------
+    ParameterError
+        The simulation shows another number of impacts in N periods, or no motion
+        repeating after N periods, naming its impacts per N periods and their stops.
+    """
+    N, p = entry.N, entry.p
+    what = f"multi_impact {entry.name}: N = {N}, p = {p}"
+    times = np.asarray(sim["impact_times"].values, dtype=float)
+    stops = str(sim.attrs.get("impact_stops", ""))  # which stop each impact hit
+    k = times.size
+    if k < p + 1:
+        raise NoPeriodicMotionError(f"{what}: simulation {entry.start!r} recorded {k} impacts; "
+                                    f"at least p + 1 = {p + 1} are needed")
+    period = 2.0 * np.pi / osc.omega
+    span = (times[-1] - times[0]) / period
+    if span < N - SETTLED:
+        raise ParameterError(f"{what}: the {k} impacts of simulation {entry.start!r} span "
+                             f"{span:.3g} forcing periods, fewer than N = {N}; allowed: a "
+                             "simulation with more periods, or a smaller N")
+    q, offset = _impacts_in_periods(times, period, N)
+    shown = f"{q} impact(s) in its last N = {N} forcing period(s)" + (
+        f" (stops {stops[-q:]!r})" if stops else "")
+    if abs(offset) > SETTLED:
+        raise ParameterError(
+            f"{what}: simulation {entry.start!r} shows {shown}, and no impact N periods before "
+            f"its last one (the nearest is {offset:+.3g} periods off): it has not settled on a "
+            f"motion that repeats after N = {N} periods; allowed: the N of the motion it "
+            "settled on (impactcont info shows its last stops), or a longer simulation")
+    if stops and stops[-(q + 1)] != stops[-1]:
+        raise ParameterError(
+            f"{what}: simulation {entry.start!r} shows {shown}; the impact N periods before "
+            f"its last one hit the {'upper' if stops[-(q + 1)] == 'U' else 'lower'} stop and "
+            "the last the other: it has not settled on a motion that repeats after N = "
+            f"{N} periods; allowed: the N of the motion it settled on, or a longer simulation")
+    if q != p:
+        raise ParameterError(f"{what}: simulation {entry.start!r} shows {shown}, not p = {p}; "
+                             f"allowed: p = {q} with N = {N}")
+    guess = {"delta": float(sim["impact_phases"].values[-(p + 1)]),
+             "flight_times": np.diff(times[-(p + 1):]),
+             "states": np.asarray(sim["impact_states"].values)[-(p + 1):-1]}
+    if stops:
+        guess["pattern"] = stops[-(p + 1):-1]
+    return guess
+
+
 class MultiImpact:
     """``[[multi_impact]]``: :func:`~impactcont.multi_impact_orbit` from a simulation, then
     :func:`~impactcont.multi_impact_continuation`."""
@@ -215,19 +288,8 @@ class MultiImpact:
             raise ImpactcontError(f"multi_impact {entry.name}: its start {entry.start!r} was "
                                   f"not computed (it failed)")
         p = entry.p
-        if sim.sizes["impact"] < p + 1:
-            raise NoPeriodicMotionError(
-                f"multi_impact {entry.name}: simulation {entry.start!r} recorded "
-                f"{sim.sizes['impact']} impacts; at least p + 1 = {p + 1} are needed")
-        times = np.asarray(sim["impact_times"].values)[-(p + 1):]
-        guess = {"delta": float(sim["impact_phases"].values[-(p + 1)]),
-                 "flight_times": np.diff(times),
-                 "states": np.asarray(sim["impact_states"].values)[-(p + 1):-1]}
-        stops = str(sim.attrs.get("impact_stops", ""))  # which stop each impact hit
-        if stops:
-            guess["pattern"] = stops[-(p + 1):-1]
         osc = ImpactOscillator.from_json(sim.attrs["oscillator"])
-        orbit = multi_impact_orbit(osc, entry.N, p, guess)
+        orbit = multi_impact_orbit(osc, entry.N, p, simulation_seed(sim, entry, osc))
         ds = multi_impact_continuation(orbit, entry.parameter, entry.bounds,
                                        detect=entry.detect, **entry.continuation_options())
         ds.attrs.update(name=entry.name, start=entry.start)
