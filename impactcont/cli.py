@@ -200,7 +200,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="PNG to write (default: FILE.png beside the file)")
     plot.add_argument("--kind", help="plot kind (default: the usual one for the file)")
     plot.add_argument("--y", help="bifurcation diagram: variable on the vertical axis")
-    plot.add_argument("--dpi", type=int, default=150, help="resolution (default 150)")
+    plot.add_argument("--dpi", type=int, default=150,
+                      help="resolution in dots per inch, 10 to 1200 (default 150)")
     plot.set_defaults(func=_cmd_plot)
 
     info = sub.add_parser("info", parents=[common], help="describe a NetCDF file",

@@ -2,7 +2,7 @@
 
 An entry's oscillator keys combine with ``[oscillator]`` as if written into it; ``--check``
 runs the argument checks of every entry's driver; a ``[[multi_impact]]`` p must be what its
-simulation shows.
+simulation shows; a binary scene file and an absurd ``--dpi`` get clear messages.
 """
 
 from __future__ import annotations
@@ -14,12 +14,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from _scene_data import OSCILLATOR, write
+from _scene_data import ORBITS_SCENE, OSCILLATOR, write
+from matplotlib.figure import Figure
 
 from impactcont import ImpactOscillator, Stops
 from impactcont.cli import EXIT_OK, EXIT_USAGE, main
 from impactcont.errors import ParameterError
 from impactcont.scene import SceneError, load_scene, run_scene
+from impactcont.scene.figures import plot_file, save_figure
 from impactcont.scene.switches import MultiImpactSpec, simulation_seed
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -218,3 +220,54 @@ def test_a_simulation_that_has_not_settled_is_named() -> None:
     flipped = simulation([0.0, 0.5, 1.0, 1.5, 2.0], "UULUU", osc)  # 1 period back: L
     with pytest.raises(ParameterError, match="hit the lower stop and the last the other"):
         simulation_seed(flipped, entry(1, 2), osc)
+
+
+# ---------------------------------------------------------------------------------------------
+# Clear messages: a binary scene file, an absurd --dpi
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(("content", "fragment"), [
+    (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR", "not a UTF-8 TOML scene: byte 0x89 at offset 0"),
+    (b'title = "x"\x00\n', "not a TOML scene: it holds a NUL byte at offset 11"),
+])
+def test_a_binary_file_is_not_a_scene(tmp_path: Path, content: bytes, fragment: str,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "picture.toml"
+    path.write_bytes(content)
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert str(info.value).startswith(f"{path}: {fragment}")
+    assert main(["run", str(path), "--check"]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert f"error: {path}: {fragment}" in err and "codec" not in err
+    assert main(["run", str(tmp_path), "--check"]) == EXIT_USAGE
+    assert f"{tmp_path}: is a directory, not a scene file" in capsys.readouterr().err
+
+
+def test_a_scene_with_a_byte_order_mark_reads(tmp_path: Path) -> None:
+    path = tmp_path / "scene.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + ORBITS_SCENE.encode("utf-8"))
+    assert load_scene(path).title == "orbits only"
+
+
+@pytest.mark.parametrize("dpi", ["100000", "0", "-5", "9"])
+def test_plot_refuses_a_dpi_out_of_range(tmp_path: Path, dpi: str,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "o"
+    assert main(["-q", "run", str(write(tmp_path, ORBITS_SCENE)), "-o", str(out)]) == EXIT_OK
+    png = tmp_path / "x.png"
+    assert main(["plot", str(out / "orbits.nc"), "-o", str(png), "--dpi", dpi]) == EXIT_USAGE
+    assert f"dpi must be an integer in [10, 1200] (dots per inch of the image); got {dpi}" \
+        in capsys.readouterr().err
+    assert not png.exists()
+    with pytest.raises(ParameterError, match="dpi must be an integer in"):
+        plot_file(out / "orbits.nc", png, dpi=int(dpi))
+    err = scene_error(tmp_path, ORBITS_SCENE + f"[output]\ndpi = {dpi}\n")
+    assert err.key == "output.dpi" and err.allowed == "an integer in [10, 1200]"
+
+
+def test_a_figure_too_large_to_draw_is_refused(tmp_path: Path) -> None:
+    fig = Figure(figsize=(40.0, 30.0))
+    with pytest.raises(ParameterError, match=r"48000 x 36000 pixels, more than 1e\+08; "
+                                             r"allowed: dpi <= 288 for it"):
+        save_figure(fig, tmp_path / "big.png", 1200)
+    assert not (tmp_path / "big.png").exists()

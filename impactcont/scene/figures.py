@@ -20,15 +20,35 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from impactcont.dataset.io import atomic_output, check_output_file
+from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow
+from impactcont.scene.keys import DPI_RANGE
 
-__all__ = ["DEFAULT_KINDS", "draw_bifurcation", "draw_curves", "draw_map", "draw_multipliers",
-           "draw_orbits", "draw_robust", "draw_simulations", "plot_file", "save_figure"]
+__all__ = ["DEFAULT_KINDS", "MAX_PIXELS", "check_dpi", "draw_bifurcation", "draw_curves",
+           "draw_map", "draw_multipliers", "draw_orbits", "draw_robust", "draw_simulations",
+           "plot_file", "save_figure"]
 
 log = logging.getLogger(__name__)
 
 _MAX_ROWS = 12
+#: The largest image written (width x height in pixels): 4e8 bytes of RGBA while drawing.
+MAX_PIXELS = 100_000_000
+
+
+def check_dpi(dpi: Any) -> int:
+    """``dpi`` as an int, refused outside :data:`~impactcont.scene.keys.DPI_RANGE`.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``dpi``, the value and the allowed range.
+    """
+    lo, hi = DPI_RANGE
+    if isinstance(dpi, bool) or not isinstance(dpi, (int, np.integer)) or not lo <= dpi <= hi:
+        raise ParameterError(f"dpi must be an integer in [{lo}, {hi}] (dots per inch of the "
+                             f"image); got {dpi!r}")
+    return int(dpi)
 
 
 def _option(plot: Any, name: str, default: Any) -> Any:
@@ -341,6 +361,8 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     ------
     ValueError
         The file is not an impactcont file, or ``kind`` does not read it.
+    ParameterError
+        ``dpi`` outside [10, 1200], or a figure that would exceed :data:`MAX_PIXELS`.
     FileNotFoundError, NotADirectoryError, PermissionError
         The file does not exist, or the figure cannot be written where asked
         (checked before drawing; the message names the path).
@@ -348,6 +370,7 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     from impactcont.problems.plugins import plot_kinds
     from impactcont.scene.files import read_output
 
+    dpi = check_dpi(dpi)
     out = read_output(path)
     kinds = {k: v for k, v in plot_kinds().items() if out.kind in v.sections}
     if not kinds:
@@ -381,7 +404,21 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
 
 def save_figure(fig: Figure, path: Path, dpi: int) -> Path:
     """Write a figure atomically (temporary file + :func:`os.replace`), PNG unless
-    ``path`` names another format matplotlib writes (``.pdf``, ``.svg``, ...)."""
+    ``path`` names another format matplotlib writes (``.pdf``, ``.svg``, ...).
+
+    Raises
+    ------
+    ParameterError
+        ``dpi`` outside [10, 1200], or a figure of more than :data:`MAX_PIXELS` pixels at
+        that ``dpi`` (named with the largest ``dpi`` the figure allows).
+    """
+    dpi = check_dpi(dpi)
+    width, height = (float(x) for x in fig.get_size_inches())
+    if width * height * dpi * dpi > MAX_PIXELS:
+        largest = int((MAX_PIXELS / (width * height)) ** 0.5)
+        raise ParameterError(f"dpi={dpi} draws this {width:.3g} x {height:.3g} inch figure on "
+                             f"{width * dpi:.0f} x {height * dpi:.0f} pixels, more than "
+                             f"{MAX_PIXELS:.0e}; allowed: dpi <= {largest} for it")
     path = Path(path)
     with atomic_output(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")

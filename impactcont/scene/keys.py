@@ -20,6 +20,7 @@ from typing import Any
 from impactcont.errors import ImpactcontError
 
 __all__ = [
+    "DPI_RANGE",
     "ENTRY_NAME",
     "NAME_ALLOWED",
     "NAME_PATTERN",
@@ -42,6 +43,9 @@ __all__ = [
     "type_name",
     "unknown_key",
 ]
+
+#: Dots per inch a figure may be drawn at (``[output] dpi``, ``impactcont plot --dpi``).
+DPI_RANGE = (10, 1200)
 
 #: Names of entries (``name = ...``): they become NetCDF group names and file names.
 NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")

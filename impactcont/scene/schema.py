@@ -39,6 +39,7 @@ from impactcont.scene.entries import (
     spec_dict,
 )
 from impactcont.scene.keys import (
+    DPI_RANGE,
     ENTRY_NAME,
     Boolean,
     Integer,
@@ -116,7 +117,7 @@ class OutputSpec:
 
     directory: str = declare(String(), "output directory, relative to the scene file", "output")
     summary: bool = declare(Boolean(), "write summary.md", True)
-    dpi: int = declare(Integer(30, 1200), "resolution of the PNG files", 150)
+    dpi: int = declare(Integer(*DPI_RANGE), "resolution of the PNG files (dots per inch)", 150)
 
     def to_dict(self) -> dict[str, Any]:
         return spec_dict(self)
@@ -336,6 +337,35 @@ def _parameter(entry: EntrySpec, entries: Mapping[str, EntrySpec]) -> str:
     return getattr(entry, "parameter", "?")
 
 
+_SCENE_FILE = "a TOML scene file (UTF-8 text)"
+
+
+def _scene_text(path: Path, name: str) -> str:
+    """The text of a scene file, refused with a :class:`SceneError` naming ``name`` when it
+    is missing, a directory, unreadable, or not UTF-8 text (a binary file)."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise SceneError("no such scene file", file=name) from None
+    except IsADirectoryError:
+        raise SceneError("is a directory, not a scene file", allowed=_SCENE_FILE,
+                         file=name) from None
+    except OSError as exc:
+        raise SceneError(f"cannot read the scene file: {exc.strerror or exc}",
+                         allowed=_SCENE_FILE, file=name) from None
+    try:
+        text = raw.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"not a UTF-8 TOML scene: byte {raw[exc.start]:#04x} at offset "
+                         f"{exc.start} is not UTF-8 text (a binary file?)", allowed=_SCENE_FILE,
+                         file=name) from None
+    if "\x00" in text:
+        raise SceneError(f"not a TOML scene: it holds a NUL byte at offset "
+                         f"{raw.index(0)} (a binary file?)", allowed=_SCENE_FILE,
+                         file=name) from None
+    return text
+
+
 def load_scene(path: str | Path, *, settings: Sequence[str] = (),
                output: str | Path | None = None) -> Scene:
     """Read, override and validate a scene file.
@@ -356,15 +386,11 @@ def load_scene(path: str | Path, *, settings: Sequence[str] = (),
     Raises
     ------
     SceneError
-        The file is missing, is not valid TOML, or the scene is malformed.
+        The file is missing, is a directory, is not UTF-8 text, is not valid TOML, or
+        the scene is malformed.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError("no such scene file", file=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"cannot read the scene file: {exc}", file=str(path)) from None
+    text = _scene_text(p, str(path))
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
