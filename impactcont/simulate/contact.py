@@ -12,7 +12,7 @@ is the evaluator of ``y`` and its derivatives (modal or first-order flow),
 the interior check of eq. (16) against both stops.
 
 The cost of :func:`next_contact` follows the motion's own time scales, not the
-length of the flight searched: the flight is searched in windows of at most
+length of the flight searched: the flight is searched in windows of a few up to
 ``_WINDOW_PERIODS`` periods of its fastest component (or one forcing period, if
 shorter), and a stretch where an envelope of the motion stays clear of both stops
 is skipped in one step (:func:`contact_free_until`). A flight at a forcing
@@ -35,8 +35,10 @@ __all__ = ["contact_free_until", "flight_clearances", "next_contact", "search_wi
 
 TWO_PI = 2.0 * math.pi
 _EPS = float(np.finfo(float).eps)
-# longest contact-search window, in periods of the fastest component seen by the impacting
-# mass (16 grid cells each): the cost of one window, not the flight, is what an impact costs
+# first and longest contact-search windows, in periods of the fastest component seen by the
+# impacting mass (16 grid cells each): the cost of a window, not of the flight searched, is
+# what an impact costs
+_FIRST_WINDOW_PERIODS = 2
 _WINDOW_PERIODS = 64
 # rounding allowance of the envelope test, in ulps of the size of the motion
 _ENVELOPE_ULPS = 1e3
@@ -90,12 +92,16 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
     return gap_u, t_u, gap_l, t_l
 
 
-def search_window(flow: Flow, index: int = 0) -> float:
-    """Length of one contact-search window for the impacting mass ``index + 1``.
+def search_window(flow: Flow, index: int = 0) -> tuple[float, float]:
+    """First and longest contact-search windows for the impacting mass ``index + 1``.
 
-    The forcing period ``2 pi / omega``, or ``_WINDOW_PERIODS`` periods of the
-    fastest damped oscillation seen by that mass if shorter (a forcing far slower
-    than the natural motion: the window then follows the natural time scale).
+    The forcing period ``2 pi / omega`` when it holds at most ``_FIRST_WINDOW_PERIODS``
+    periods of the fastest damped oscillation seen by that mass (then both windows are
+    that period). A slower forcing (the natural motion far faster) is searched from
+    ``_FIRST_WINDOW_PERIODS`` fastest periods on, the window doubling up to
+    ``_WINDOW_PERIODS`` of them (or the forcing period): a short flight, e.g. in
+    chatter, costs a short window, a long one a number of windows that grows with
+    its length over ``_WINDOW_PERIODS`` fastest periods.
 
     Parameters
     ----------
@@ -105,10 +111,11 @@ def search_window(flow: Flow, index: int = 0) -> float:
 
     Returns
     -------
-    float
+    first, longest : float
     """
     rate, _ = flow.time_scales(index)  # >= omega
-    return min(TWO_PI / flow.omega, _WINDOW_PERIODS * TWO_PI / rate)
+    forcing, fast = TWO_PI / flow.omega, TWO_PI / rate
+    return min(forcing, _FIRST_WINDOW_PERIODS * fast), min(forcing, _WINDOW_PERIODS * fast)
 
 
 def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float] | None:
@@ -214,7 +221,8 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
 
     Notes
     -----
-    The flight is searched window by window (:func:`search_window`), each window
+    The flight is searched window by window (:func:`search_window`: each window
+    twice the last, up to the longest), each window
     on the reliable grid of :func:`impactcont.orbit.extrema.sample_times`; before
     each window, a stretch that :func:`contact_free_until` proves free of contact
     with both stops is skipped when it is longer than a window. The cost is thus a
@@ -227,14 +235,15 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     motions = {s: flow.motion(X, phase, j, stop_sign(s)) for s in stops}
     levels = {s: stop_sign(s) * osc.stops.position(s, osc.b) for s in stops}
     below = dict.fromkeys(stops, True)
-    window = search_window(flow, j)
+    first, longest = search_window(flow, j)
+    window = first
     start = 0.0
     while start < t_max:
         free = min(contact_free_until(motions[s], levels[s], start) for s in stops)
         if free >= start + window:  # no contact with either stop before `free`: skip there
             if free >= t_max:
                 return None
-            start = free
+            start, window = free, first
             below = dict.fromkeys(stops, True)
             continue
         stop_time = min(start + window, t_max)
@@ -255,5 +264,5 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
             return best[0], flow.state(best[0], X, phase)[0], best[1]
         for s in stops:
             below[s] = bool(motions[s](grid[-1:])[0][0] < levels[s])
-        start = stop_time
+        start, window = stop_time, min(2.0 * window, longest)
     return None
