@@ -184,16 +184,42 @@ def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
         watches[direction] = _Watch(problem, stop_after_pd, on_point)
         return watches[direction]
 
+    options, limit = _within_limits(problem, options)
     result = follow(problem, u0, lam0, options, stop=watch)
     forward = watches[options.direction].orbits
     if not forward:
         raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
+    message = result.message
+    if limit is not None and any(getattr(o.oscillator, problem.parameter) == limit
+                                 for w in watches.values() for o in w.orbits[-1:]):
+        message += (f"; the branch ends at {problem.parameter} = {limit!r}, ds_min from the "
+                    f"end of its range: {problem.limit_reason()}")
     orbits = forward
     if -options.direction in watches:
         orbits = watches[-options.direction].orbits[:0:-1] + forward
     samples = [MultiImpactSample(u=u, lam=float(lam), tangent=t, orbit=o)
                for u, lam, t, o in zip(result.u, result.lam, result.tangent, orbits, strict=True)]
-    return samples, [st.name for st in result.statuses], result.message
+    return samples, [st.name for st in result.statuses], message
+
+
+def _within_limits(problem: MultiImpactBranchProblem, options: ContinuationOptions
+                   ) -> tuple[ContinuationOptions, float | None]:
+    """`options` with the bounds kept ``ds_min`` inside the problem's parameter limits.
+
+    :func:`run_branch` refuses bounds beyond the limits; a direct caller of
+    :func:`trace_branch` gets a branch that ends on the clipped bound (the limit
+    itself, e.g. closed stops, has no motion) instead of steps refused until ds_min.
+    Returns the options and the clipped bound (None when nothing was clipped).
+    """
+    lower, _ = problem.parameter_limits()  # the stops limit b from below only
+    lo, hi = options.bounds
+    if lo > lower:
+        return options, None
+    clipped = lower + options.ds_min * max(1.0, abs(lower))
+    if not clipped < hi:
+        raise ParameterError(f"bounds {options.bounds} of parameter {problem.parameter!r} "
+                             f"leave no range: {problem.limit_reason()}")
+    return dataclasses.replace(options, bounds=(clipped, hi)), clipped
 
 
 def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[MultiImpactSample],
@@ -237,6 +263,7 @@ def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
            extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
     """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``."""
     labels = check_labels(detect)
+    problem.check_bounds(options.bounds)
     samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                               stop_after_pd=stop_after_pd)
     specials = detect_multi_impact_points(problem, samples, labels)
@@ -291,7 +318,8 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     Raises
     ------
     ParameterError
-        Bad parameter, bounds not containing the start, unknown labels.
+        Bad parameter, bounds not containing the start, unknown labels; bounds in ``b``
+        that reach ``-b_low`` (the upper stop would meet the lower one).
     NoPeriodicMotionError
         Newton fails at the start.
     """
@@ -303,6 +331,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                         newton_tol=newton_tol, max_points=max_points,
                         both_directions=both_directions, direction=direction, **more)
+    problem.check_bounds(opts.bounds)
     if not opts.lam_min <= lam0 <= opts.lam_max:
         raise ParameterError(f"bounds {opts.bounds} must contain the start {parameter}="
                              f"{lam0!r} of the orbit")

@@ -9,7 +9,10 @@ parameters, where it only steers the predictor and Newton.
 
 With two stops (``osc.stops``) the impact sequence ``pattern`` says which stop
 each impact hits; ``b`` and ``R`` are those of the upper stop, so their
-derivatives act on the ``"U"`` impacts only.
+derivatives act on the ``"U"`` impacts only. The upper stop must stay above the
+lower one: in ``b`` the problem is defined for ``b > -b_low`` only
+(:meth:`MultiImpactBranchProblem.parameter_limits`), where the clearance
+``b + b_low`` between the stops is open.
 """
 
 from __future__ import annotations
@@ -67,6 +70,51 @@ class MultiImpactBranchProblem:
         self.size = 2 * osc.n * self.p
         self._flows: dict[float, Flow] = {}
         self._shots: dict[tuple[bytes, float], Shooting] = {}
+
+    # -- where the parameter may go -----------------------------------------------------------
+    def parameter_limits(self) -> tuple[float, float]:
+        """Open interval of the parameter in which the stops exist as given.
+
+        Continued in ``b`` with a lower stop, the upper stop ``x_j = b`` must stay
+        above the lower one ``x_j = -b_low``: ``b > -b_low``. Every other case is
+        unlimited here (a parameter's own range, e.g. ``R`` in [0, 1], is checked
+        by the oscillator).
+
+        Returns
+        -------
+        (float, float)
+            ``(lower, upper)``, either possibly infinite.
+        """
+        stops = self.osc.stops
+        if self.parameter == "b" and stops.two_sided:
+            return -float(stops.b_low), math.inf
+        return -math.inf, math.inf
+
+    def limit_reason(self) -> str:
+        """Why the parameter cannot reach :meth:`parameter_limits` ("" when unlimited)."""
+        lower, _ = self.parameter_limits()
+        if not math.isfinite(lower):
+            return ""
+        stops = self.osc.stops
+        return (f"at b = -b_low = {lower!r} the upper stop x_{stops.mass} = b meets the lower "
+                f"stop x_{stops.mass} = -b_low (stops={stops!r}): the clearance b + b_low "
+                "between them closes")
+
+    def check_bounds(self, bounds: tuple[float, float]) -> None:
+        """Refuse bounds that reach beyond :meth:`parameter_limits`.
+
+        Raises
+        ------
+        ParameterError
+            Naming the parameter, the bounds, the limit and the stops.
+        """
+        lower, upper = self.parameter_limits()
+        lo, hi = (float(v) for v in bounds)
+        if lo <= lower or hi >= upper:
+            raise ParameterError(
+                f"bounds ({lo!r}, {hi!r}) of parameter {self.parameter!r} reach "
+                f"{self.parameter} = {lower!r}: {self.limit_reason()}; give bounds with "
+                f"{self.parameter} > {lower!r}")
 
     # -- the oscillator along the branch ------------------------------------------------------
     def flow_at(self, lam: float) -> Flow:
