@@ -5,15 +5,22 @@ result or a clear message, never a hang or a silently inexact number."""
 from __future__ import annotations
 
 import math
+import re
+import warnings
 
 import numpy as np
 import pytest
 import scipy.linalg
-from scipy.optimize import brentq
+from scipy.optimize import brentq, fsolve
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate
+from impactcont.errors import IllConditionedWarning, ParameterError
+from impactcont.model.stops import Stops
+from impactcont.multi_branch import make_options, multi_impact_continuation, trace_branch
 from impactcont.orbit.flow import Mass1Motion
+from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.simulate import next_impact
 
 # ------------------------------------------------------------------------------------------
@@ -26,7 +33,7 @@ from impactcont.simulate import next_impact
 # which the motion is evaluated (wall time is noisy) and stop a run that exceeds a
 # budget far above what the motion needs.
 
-_BUDGET = 500_000  # evaluated times per run; the old search used 2e6 per window
+_BUDGET = 100_000  # evaluated times per test; the old search used 2e6 per window (about 5e3 now)
 
 
 class _OverBudgetError(Exception):
@@ -133,3 +140,138 @@ def test_slow_forcing_next_impact(evaluations):
     assert hit is not None
     assert hit[0] == pytest.approx(_first_crossing_expm(osc, np.zeros(4), 0.0, 1.0, 1.4),
                                    abs=1e-9)
+
+
+# ------------------------------------------------------------------------------------------
+# The symmetric two-sided system of studies/backlash (b = b_low = 0.5, R = R_low = 0.6)
+# ------------------------------------------------------------------------------------------
+def _backlash(omega: float) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.5,
+                               omega=omega, eta=0.1, stops=Stops(b_low=0.5, R_low=0.6))
+
+
+@pytest.fixture(scope="module")
+def symmetric_motion():
+    """The symmetric 1-2 motion (one impact on each stop) at omega = 1.6, from rest."""
+    osc = _backlash(1.6)
+    return multi_impact_orbit(osc, 1, 2, simulate(osc, np.zeros(4), 0.0, 30.0))
+
+
+# 8. Bounds in b that close the clearance between the stops
+def test_bounds_in_b_that_close_the_clearance_are_refused(symmetric_motion):
+    """b <= -b_low puts the upper stop on or below the lower one: refused at the start,
+    naming the parameter, the bounds and the stops (it ran until 'step size fell below
+    ds_min')."""
+    with pytest.raises(ParameterError, match=r"bounds \(-2.0, 1.0\) of parameter 'b' reach "
+                       r"b = -0.5.*Stops\(mass=1, b_low=0.5, R_low=0.6\).*clearance"):
+        multi_impact_continuation(symmetric_motion, "b", (-2, 1))
+    with pytest.raises(ParameterError, match=re.escape("b > -0.5")):
+        multi_impact_continuation(symmetric_motion, "b", (-0.5, 1))
+
+
+def test_branch_traced_to_the_closing_clearance_says_so(symmetric_motion):
+    """Traced directly (no start check), the branch ends ds_min short of b = -b_low with a
+    reason naming the stops, not with steps refused until ds_min."""
+    problem = MultiImpactBranchProblem(symmetric_motion.oscillator, 1, 2, "b",
+                                       pattern=symmetric_motion.pattern)
+    options = make_options((-2.0, 1.0), direction=-1, both_directions=False, ds_max=0.1)
+    samples, statuses, message = trace_branch(problem, symmetric_motion.unknowns, 0.5, options)
+    assert statuses == ["BOUNDS_REACHED"]
+    assert samples[-1].lam == pytest.approx(-0.5, abs=1e-7) and samples[-1].lam > -0.5
+    assert "upper stop x_1 = b meets the lower stop" in message
+    assert "Stops(mass=1, b_low=0.5, R_low=0.6)" in message
+    assert "ds_min" not in message.split(";")[0]  # the core's own reason is the bound
+
+
+# ------------------------------------------------------------------------------------------
+# 3. The symmetric motion near its symmetry-breaking pitchfork
+# ------------------------------------------------------------------------------------------
+# On the symmetric motion (X_1 = -X_0, tau_0 = tau_1 = T/2) G is the square of the half-map
+# H = S G_0; the pitchfork where the asymmetric pair is born is det(H + I) = 0 (studies/
+# backlash: omega = 1.3378193721). The 1-2 shooting system is singular there; the half-map
+# fixed point below (2n equations in delta and z_0) is regular, and is the reference.
+_S = np.diag([-1.0, -1.0, -1.0, 1.0])  # the reflection in [z, theta]
+
+
+def _symmetric_reference(omega: float, seed: np.ndarray) -> tuple[np.ndarray, object]:
+    """The symmetric motion at omega as a fixed point of the half-map: (seed, orbit)."""
+    osc = _backlash(omega)
+    flow = Flow(osc)
+    T = 2 * math.pi / omega
+    Phi, E = flow.matrices(T / 2)
+    d = np.array([1.0, 1.0, -osc.stops.R_low, 1.0])  # lower-stop impact law
+
+    def half(v):  # flight from the upper stop, impact below, reflection: back to the start
+        X = np.concatenate([[osc.b], v[1:]])
+        return -(d * (Phi @ X + E @ np.array([math.cos(v[0]), math.sin(v[0])]))) - X
+
+    v = fsolve(half, seed, xtol=1e-14, full_output=True)[0]
+    assert np.max(np.abs(half(v))) < 1e-13
+    X0 = np.concatenate([[osc.b], v[1:]])
+    u = np.concatenate([[v[0], T / 2], X0[1:], -X0[1:]])
+    return v, orbit_from_unknowns(flow, 1, 2, u, pattern="UL")
+
+
+@pytest.fixture(scope="module")
+def pitchfork(symmetric_motion):
+    """(omega at the pitchfork, half-map seed) of the symmetric motion."""
+    orbit = symmetric_motion
+    for omega in (1.5, 1.42, 1.36):
+        orbit = multi_impact_orbit(_backlash(omega), 1, 2, orbit)
+    k = orbit.pattern.index("U")
+    seed = np.concatenate([[orbit.phases[k]], orbit.states[k][1:]])
+
+    def test(omega):
+        H = _S @ _symmetric_reference(omega, seed)[1].jacobians[0]
+        return np.linalg.det(H + np.eye(4))
+
+    omega = brentq(test, 1.3378, 1.3379, xtol=1e-15)
+    assert omega == pytest.approx(1.3378193721, abs=1e-9)  # studies/backlash
+    return omega, seed
+
+
+def _guess(orbit):
+    return {"delta": orbit.delta, "flight_times": orbit.flight_times, "states": orbit.states,
+            "pattern": orbit.pattern}
+
+
+def test_at_the_pitchfork_the_motion_is_reported_singular(pitchfork):
+    """From the exact motion at the pitchfork: the motion comes back (it used to be moved
+    off by 8e-6 silently, or Newton failed blaming the guess's impact sequence), with a
+    warning naming the bifurcation point and an error estimate that covers the error."""
+    omega, seed = pitchfork
+    exact = _symmetric_reference(omega, seed)[1]
+    with pytest.warns(IllConditionedWarning,
+                      match=rf"singular: a bifurcation point at omega={re.escape(repr(omega))}"):
+        orbit = multi_impact_orbit(_backlash(omega), 1, 2, _guess(exact))
+    assert orbit.error_estimate > 1e-6
+    assert np.linalg.norm(orbit.unknowns - exact.unknowns) <= orbit.error_estimate
+
+
+def test_next_to_the_pitchfork_the_error_estimate_is_stated(pitchfork):
+    """1e-11 from the pitchfork, from the motion 1e-4 away: the condition number (1.3e11)
+    allows errors of ~1e-5 in the motion; the warning says so and the estimate covers the
+    actual error (no warning before: the threshold was a condition number of 1e12)."""
+    omega, seed = pitchfork
+    guess = _guess(_symmetric_reference(omega + 1e-4, seed)[1])
+    target = omega + 1e-11
+    exact = _symmetric_reference(target, seed)[1]
+    with pytest.warns(IllConditionedWarning, match=r"bifurcation point at omega=.*condition "
+                      r"number [0-9.e+]+.*error of about"):
+        orbit = multi_impact_orbit(_backlash(target), 1, 2, guess)
+    assert np.linalg.norm(orbit.unknowns - exact.unknowns) <= orbit.error_estimate
+    assert orbit.condition_number > 1e10
+
+
+def test_away_from_the_pitchfork_no_warning_and_accurate(pitchfork):
+    """1e-6 from the pitchfork the motion is accurate to its (small) error estimate."""
+    omega, seed = pitchfork
+    target = omega + 1e-6
+    exact = _symmetric_reference(target, seed)[1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", IllConditionedWarning)
+        orbit = multi_impact_orbit(_backlash(target), 1, 2,
+                                   _guess(_symmetric_reference(omega + 1e-4, seed)[1]))
+    scale = max(1.0, float(np.max(np.abs(orbit.unknowns))))
+    assert orbit.error_estimate <= 1e-6 * scale
+    assert np.linalg.norm(orbit.unknowns - exact.unknowns) <= max(orbit.error_estimate, 1e-12)

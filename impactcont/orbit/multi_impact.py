@@ -79,13 +79,22 @@ __all__ = [
     "orbit_from_unknowns",
     "primitive_orbit",
     "shooting",
+    "shooting_accuracy",
     "split_unknowns",
 ]
 
 log = logging.getLogger(__name__)
 
 TWO_PI = 2.0 * math.pi
-_COND_WARN = 1e12
+_EPS = float(np.finfo(float).eps)
+# warn when the error estimate of a solution (shooting_accuracy) exceeds this, relative to
+# max(1, |u|): the closed form's threshold (cond * eps ~ 1e-6 of eq. 12, orbit.periodic)
+_ERROR_WARN = 1e-6
+# a failed Newton whose residual is this small (relative) stopped next to a solution
+_NEAR_SOLUTION = 1e-6
+# an error estimate this large (relative) says nothing about the motion along the null
+# direction of the Jacobian: singular, a bifurcation point
+_SINGULAR = 1e-3
 
 
 def check_impacts(p: object) -> int:
@@ -152,6 +161,14 @@ class MultiImpactOrbit:
         Smallest ``x_j + b_low`` at the interior minima of ``x_j`` on flight k
         (``+inf`` without a lower stop or a minimum): the lower-stop part of
         ``flight_gap_min``.
+    condition_number : float
+        Condition number (2-norm) of the shooting Jacobian at the solution; large next
+        to a bifurcation point with a multiplier +1 (fold, symmetry-breaking pitchfork).
+    error_estimate : float
+        How far the unknowns ``u`` may be from the exact motion (2-norm), from
+        :func:`shooting_accuracy`: ``|J^-1 r| + cond eps max(1, |u|)``.
+        :func:`multi_impact_orbit` fills both and warns when the error exceeds 1e-6
+        relative; NaN when not computed (:func:`orbit_from_unknowns`, branch points).
     """
 
     oscillator: ImpactOscillator
@@ -171,6 +188,8 @@ class MultiImpactOrbit:
     residual: float
     pattern: str = ""
     flight_gap_lower: np.ndarray | None = None
+    condition_number: float = math.nan
+    error_estimate: float = math.nan
 
     # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
     @property
@@ -555,18 +574,74 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
     return np.concatenate([[delta], taus[:-1], z.ravel()]), pattern
 
 
+def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
+                      ) -> tuple[float, float]:
+    """Condition number of the shooting Jacobian and the error it allows in ``u``.
+
+    A solution ``u`` of the shooting system with residual ``r`` is off the exact one by
+    about the Newton correction it still lacks, ``|J^-1 r|``, plus the rounding of the
+    flow's evaluation amplified by the inverse Jacobian, ``cond eps max(1, |u|)``
+    (``cond = s_max / s_min``, the singular values of ``J``). Both grow like the
+    condition number next to a bifurcation point with a multiplier +1 (``|J^-1 r| <=
+    cond |r| / |J|``).
+
+    Parameters
+    ----------
+    jacobian : ndarray, shape (m, m)
+    residual : ndarray, shape (m,)
+    u : ndarray, shape (m,)
+
+    Returns
+    -------
+    cond : float
+        ``s_max / s_min`` (2-norm; ``inf`` when ``J`` is exactly singular or not finite).
+    error : float
+        The error estimate above, in the 2-norm of ``u`` (``inf`` likewise).
+    """
+    if not (np.all(np.isfinite(jacobian)) and np.all(np.isfinite(residual))):
+        return math.inf, math.inf
+    left, s, _ = np.linalg.svd(jacobian)
+    if not s[-1] > 0:
+        return math.inf, math.inf
+    cond = float(s[0] / s[-1])
+    correction = float(np.linalg.norm((left.T @ residual) / s))  # |J^-1 r| = |S^-1 U^T r|
+    return cond, correction + cond * _EPS * max(1.0, float(np.max(np.abs(u))))
+
+
+def _parameters(osc: ImpactOscillator) -> str:
+    """``omega=.., b=..`` (and the lower stop) for messages."""
+    text = f"omega={osc.omega!r}, b={osc.b!r}"
+    return text + (f", b_low={osc.stops.b_low!r}" if osc.stops.two_sided else "")
+
+
+def _bifurcation(N: int, p: int, osc: ImpactOscillator, cond: float, error: float) -> str:
+    """The message of a singular shooting Jacobian: a bifurcation point, not a bad guess."""
+    return (f"the N={N}, p={p} shooting Jacobian is singular: a bifurcation point at "
+            f"{_parameters(osc)} (condition number {cond:.3g}; a multiplier of G at +1: a "
+            "fold, or the symmetry-breaking pitchfork of a symmetric motion), where the motion "
+            f"is determined only to about {error:.1g}; solve it at a nearby parameter value, or "
+            "follow its branch through the point (multi_impact_continuation)")
+
+
 def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
            max_iter: int = 40, pattern: str | None = None) -> tuple[np.ndarray, Shooting, int]:
     """Solve the shooting system by Newton's method with a backtracking line search.
 
     Converged when the max-norm of the residual is ``<= tol * max(1, |u|_max)`` and
     the last update is ``<= tol * max(1, |u|_max)`` (at least one update is made, so
-    a guess that already solves the system is polished to working precision).
+    a guess that already solves the system is polished to working precision). Once
+    the residual is within ``tol``, an update is made only if it lowers the residual;
+    otherwise the point is returned as it is: the residual is at its rounding floor,
+    and the update is that rounding amplified by the inverse Jacobian (large where the
+    Jacobian is nearly singular, next to a bifurcation point; see
+    :func:`shooting_accuracy` for the error that remains).
 
     Raises
     ------
     NoPeriodicMotionError
-        No convergence within ``max_iter`` iterations, or a singular Jacobian.
+        No convergence within ``max_iter`` iterations, or a singular Jacobian: then
+        the message says whether the point is a bifurcation point (a singular Jacobian
+        near a solution) or the guess is not near a motion with this impact pattern.
     """
     u = np.array(u0, dtype=float)
     sh = shooting(flow, N, p, u, pattern=pattern)
@@ -585,23 +660,34 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         try:
             step = np.linalg.solve(J, -sh.residual)
         except np.linalg.LinAlgError:
-            raise NoPeriodicMotionError(
-                f"N={N}, p={p}: singular shooting Jacobian at residual {norm:.3g}"
-                + (f" with the impact pattern {pattern!r}"
-                   if pattern is not None and LOWER in pattern else "")) from None
+            break
         lam = 1.0
         while True:
             trial = u + lam * step
             tsh = shooting(flow, N, p, trial, pattern=pattern)
             tnorm = float(np.max(np.abs(tsh.residual)))
-            if np.isfinite(tnorm) and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
+            finite = bool(np.isfinite(tnorm))
+            if small and not (finite and tnorm < norm):
+                # within tol, and the update does not lower the residual: it is at its
+                # rounding floor and the update is that rounding amplified by J^-1 (large
+                # where J is nearly singular); u is as good as Newton can make it
+                return u, sh, it
+            if finite and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
                 break
             lam *= 0.5
         step_norm = lam * float(np.max(np.abs(step)))
         u, sh, norm = trial, tsh, tnorm
+    scale = max(1.0, float(np.max(np.abs(u))))
+    cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
+    if norm <= _NEAR_SOLUTION * scale and not cond * _EPS <= _ERROR_WARN:
+        raise NoPeriodicMotionError(
+            f"{_bifurcation(N, p, flow.osc, cond, error)}; Newton stopped at residual "
+            f"{norm:.3g} (last update {step_norm:.3g}) after {it} iterations")
     raise NoPeriodicMotionError(
-        f"N={N}, p={p}: Newton did not converge in {max_iter} iterations (residual "
-        f"{norm:.3g}, last update {step_norm:.3g}) at omega={flow.omega!r}, b={flow.osc.b!r}"
+        f"N={N}, p={p}: Newton did not converge in {it} iterations (residual "
+        f"{norm:.3g}, last update {step_norm:.3g}"
+        + (", singular Jacobian" if not math.isfinite(cond) else "")
+        + f") at {_parameters(flow.osc)}"
         + (f" with the impact pattern {pattern!r} (is the guess an N-p motion with this "
            "sequence of stops? a simulation's impact_stops show the one it settled on)"
            if pattern is not None and LOWER in pattern else ""))
@@ -756,13 +842,25 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     flow = Flow(osc)
     u0, pattern = _seed(guess, osc, N, p, pattern)
     u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter, pattern=pattern)
-    cond = np.linalg.cond(sh.jacobian)
-    if not np.isfinite(cond) or cond > _COND_WARN:
-        warnings.warn(f"the N={N}, p={p} shooting Jacobian is ill-conditioned (condition number "
-                      f"{cond:.3g}): a multiplier is close to +1 (fold); the motion may be "
-                      "inexact", IllConditionedWarning, stacklevel=2)
+    cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
+    scale = max(1.0, float(np.max(np.abs(u))))
+    residual = float(np.max(np.abs(sh.residual)))
+    if not error <= _ERROR_WARN * scale:
+        if not error <= _SINGULAR * scale:
+            warnings.warn(f"{_bifurcation(N, p, osc, cond, error)} (residual {residual:.3g})",
+                          IllConditionedWarning, stacklevel=2)
+        else:
+            warnings.warn(f"the N={N}, p={p} shooting Jacobian is nearly singular, next to a "
+                          f"bifurcation point at {_parameters(osc)} (condition number "
+                          f"{cond:.3g}, residual {residual:.3g}; a multiplier of G close to "
+                          "+1: a fold, or the symmetry-breaking pitchfork of a symmetric "
+                          f"motion): the motion may carry an error of about {error:.1g} in its "
+                          "phases, flight times and states (the Newton correction |J^-1 r| "
+                          "plus condition number x eps |u|)", IllConditionedWarning,
+                          stacklevel=2)
     log.debug("N=%d p=%d %s motion in %d Newton iterations", N, p, pattern, iterations)
-    return orbit_from_unknowns(flow, N, p, u, sh, pattern=pattern)
+    orbit = orbit_from_unknowns(flow, N, p, u, sh, pattern=pattern)
+    return dataclasses.replace(orbit, condition_number=cond, error_estimate=error)
 
 
 def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpactOrbit:
