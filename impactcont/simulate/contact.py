@@ -155,9 +155,11 @@ def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float] | 
 def contact_free_until(motion: Mass1Motion, level: float, t0: float) -> float:
     """A time up to which ``y = s x_j`` provably stays below ``level``, from ``t0`` on.
 
-    With the envelope of :func:`_envelope`, ``y(t) <= A cos(omega t + phi) + bound``
-    for ``t >= t0``; the result is the first ``t >= t0`` where the right-hand side
-    (less a rounding allowance) reaches ``level``: no contact can happen before it.
+    The motion is its forced part plus a free part bounded from ``t0`` on (the
+    modal energy, or the decay of the complex modes), so ``y(t) <= A cos(omega t +
+    phi) + bound`` for ``t >= t0``; the result is the first ``t >= t0`` where the
+    right-hand side (less a rounding allowance) reaches ``level``: no contact can
+    happen before it.
 
     Parameters
     ----------
