@@ -15,11 +15,11 @@ from scipy.optimize import brentq, fsolve
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate
-from impactcont.errors import IllConditionedWarning, ParameterError
+from impactcont.errors import IllConditionedWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.stops import Stops
 from impactcont.multi_branch import make_options, multi_impact_continuation, trace_branch
 from impactcont.orbit.flow import Mass1Motion
-from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns
+from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.simulate import next_impact
 
@@ -275,3 +275,20 @@ def test_away_from_the_pitchfork_no_warning_and_accurate(pitchfork):
     scale = max(1.0, float(np.max(np.abs(orbit.unknowns))))
     assert orbit.error_estimate <= 1e-6 * scale
     assert np.linalg.norm(orbit.unknowns - exact.unknowns) <= max(orbit.error_estimate, 1e-12)
+
+
+def test_newton_stalled_at_the_pitchfork_names_the_bifurcation(pitchfork):
+    """Newton cut short next to the singular point (1e-5 off along the null vector, two
+    iterations: it converges only linearly there) names the bifurcation point and its
+    parameters; it used to ask whether the guess has the right sequence of stops."""
+    omega, seed = pitchfork
+    exact = _symmetric_reference(omega, seed)[1]
+    flow = Flow(_backlash(omega))
+    J = shooting(flow, 1, 2, exact.unknowns, pattern="UL").jacobian
+    null = np.linalg.svd(J)[2][-1]
+    guess = orbit_from_unknowns(flow, 1, 2, exact.unknowns + 1e-5 * null, pattern="UL",
+                                checks=False)
+    with pytest.raises(NoPeriodicMotionError, match=rf"singular: a bifurcation point at "
+                       rf"omega={re.escape(repr(omega))}, b=0.5, b_low=0.5") as info:
+        multi_impact_orbit(flow.osc, 1, 2, _guess(guess), max_iter=2)
+    assert "is the guess" not in str(info.value)
