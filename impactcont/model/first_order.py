@@ -22,8 +22,10 @@ overflow and no cancellation. Repeated eigenvalues with independent eigenvectors
 (a symmetric structure) are diagonalised like any others. A defective eigenvalue (an
 exactly critically damped mode) has no eigenvector basis, and near one (nearly critical
 damping) the basis is ill-conditioned: the error of ``Phi`` is about
-``eps * cond(V)``. The 2-norm condition number of the column-normalised ``V`` is
-therefore computed with the basis; above :data:`COND_WARN` an
+``eps * cond(V)``. The 2-norm condition number of the column-normalised ``V`` of the
+balanced ``A`` (LAPACK ``dgebal`` scaling, as ``dgeev`` uses: invariant to the units
+of each coordinate, so that a graded chain is not charged its grading) is therefore
+computed with the basis; above :data:`COND_WARN` an
 :class:`~impactcont.errors.IllConditionedWarning` states the error bound, above
 :data:`COND_REFUSE` the basis is refused (:class:`~impactcont.errors.ParameterError`).
 """
@@ -57,6 +59,14 @@ COND_REFUSE = 1e8
 _RESONANCE_REL_ERROR_WARN = 1e-8
 
 
+def _power_of_two_scale(v: np.ndarray) -> np.ndarray:
+    """``2^-round(log2 v)`` where ``v > 0`` (1 elsewhere): an exact rescaling."""
+    out = np.ones_like(v, dtype=float)
+    pos = v > 0
+    out[pos] = np.exp2(-np.round(np.log2(v[pos])))
+    return out
+
+
 def _rayleigh_coefficients(M: np.ndarray, K: np.ndarray, C: np.ndarray
                            ) -> tuple[float, float] | None:
     """``(alpha, beta)`` when ``C = alpha M + beta K`` to rounding (least squares over the
@@ -85,7 +95,8 @@ class FirstOrderBasis:
         Right eigenvectors (unit 2-norm columns) and their inverse (rows are the left
         eigenvectors, scaled so that ``V_inv V = I``).
     condition : float
-        2-norm condition number of ``V``: the flow carries a relative error of about
+        2-norm condition number of the eigenvectors of the balanced ``A`` (invariant to
+        the units of each coordinate): the flow carries a relative error of about
         ``eps * condition``.
     """
 
@@ -116,12 +127,18 @@ class FirstOrderBasis:
             If the condition number exceeds :data:`COND_WARN`.
         """
         n = M.shape[0]
-        stiffness = scipy.linalg.eigh(K, M, eigvals_only=True)
-        if not stiffness[0] > 4 * n * _EPS * abs(stiffness[-1]):
+        stiffness, modes = scipy.linalg.eigh(K, M)
+        # each eigenvalue against its own rounding scale, componentwise (as ModalBasis),
+        # not against eps times the largest: a graded chain such as M = diag(1e-12, 1,
+        # 1e12) (eigenvalues 1e-12 .. 1e12) holds every mode; invariant to the units of
+        # each coordinate (M -> D M D, K -> D K D) like the eigenvalues themselves
+        errors = _EPS * np.einsum("ji,jk,ki->i", np.abs(modes), np.abs(K), np.abs(modes))
+        if not np.all(stiffness > 4 * n * errors):
             # a free (rigid-body) mode: a zero eigenvalue of A, I - D Phi(T) of eq. (12) singular
             raise ParameterError(f"K must be positive definite relative to M; got modal "
-                                 f"eigenvalues {stiffness.tolist()} (a mode that nothing holds: "
-                                 "support the chain, e.g. a spring from mass 1 to the frame)")
+                                 f"eigenvalues {stiffness.tolist()} (rounding scale "
+                                 f"{errors.tolist()}: a mode that nothing holds: support the "
+                                 "chain, e.g. a spring from mass 1 to the frame)")
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -np.linalg.solve(M, K)
@@ -131,7 +148,11 @@ class FirstOrderBasis:
         order = np.lexsort((-lam.imag, np.abs(lam.imag), -lam.real))
         lam, V = lam[order], V[:, order]
         V = V / np.linalg.norm(V, axis=0)
-        cond = float(np.linalg.cond(V))
+        # the condition of the eigenvectors of the balanced A (D^-1 A D, D a diagonal of
+        # powers of two): invariant to the units of each coordinate (X -> D X)
+        _, (scale, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+        balanced = V / scale[:, None]
+        cond = float(np.linalg.cond(balanced / np.linalg.norm(balanced, axis=0)))
         gaps = np.abs(lam[:, None] - lam[None, :]) + np.diag(np.full(2 * n, np.inf))
         i, j = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
         closest = f"the closest eigenvalues are {complex(lam[i]):.12g} and {complex(lam[j]):.12g}"
@@ -218,9 +239,15 @@ class FirstOrderBasis:
         Warns
         -----
         NearResonanceWarning
-            If its condition number makes ``x_hat`` inexact beyond 1e-8 (relative).
+            If its condition number makes ``x_hat`` inexact beyond 1e-8 (relative): that
+            of the row- and column-equilibrated stiffness (invariant to the units of each
+            coordinate), which is solved.
         """
         H = self.K - omega * omega * self.M + 1j * omega * self.C
+        rows = _power_of_two_scale(np.max(np.abs(H), axis=1))
+        H = rows[:, None] * H
+        cols = _power_of_two_scale(np.max(np.abs(H), axis=0))
+        H = H * cols
         cond = float(np.linalg.cond(H))
         if not math.isfinite(cond) or cond * _EPS >= 1.0:
             raise ResonanceError(
@@ -234,7 +261,7 @@ class FirstOrderBasis:
                 f"that the forced response (eq. 7) is known only to a relative error of about "
                 f"{cond * _EPS:.1g} (condition number {cond:.3g} of K - omega^2 M + i omega C)",
                 NearResonanceWarning, stacklevel=3)
-        x_hat = np.linalg.solve(H, np.asarray(F, dtype=complex))
+        x_hat = cols * np.linalg.solve(H, rows * np.asarray(F, dtype=complex))
         return np.concatenate([x_hat, 1j * omega * x_hat])
 
     def forced_amplitude_derivative(self, Z: np.ndarray, omega: float) -> np.ndarray:
