@@ -47,7 +47,7 @@ from impactcont.errors import (
     ResonanceError,
 )
 
-__all__ = ["COND_REFUSE", "COND_WARN", "FirstOrderBasis"]
+__all__ = ["COND_REFUSE", "COND_WARN", "FirstOrderBasis", "coth_remainder"]
 
 _EPS = float(np.finfo(float).eps)
 
@@ -57,6 +57,61 @@ COND_WARN = 1e5
 COND_REFUSE = 1e8
 # warn when the forced response is known to worse than this (relative)
 _RESONANCE_REL_ERROR_WARN = 1e-8
+
+
+# B_2k / (2k)!: the Taylor coefficients of coth(x/2)/2 - 1/x = sum_k B_2k x^(2k-1) / (2k)!
+_BERNOULLI = np.array([
+    8.3333333333333333333e-2, -1.3888888888888888889e-3, 3.3068783068783068783e-5,
+    -8.2671957671957671958e-7, 2.0876756987868098979e-8, -5.2841901386874931848e-10,
+    1.3382536530684678833e-11, -3.3896802963225828668e-13, 8.5860620562778445641e-15,
+    -2.174868698558061873e-16, 5.5090028283602295152e-18])
+_SERIES_RADIUS = 1.0  # the series (radius 2 pi) has converged to 1e-19 here
+
+
+def coth_remainder(x: np.ndarray, derivative: bool = False) -> np.ndarray:
+    """``s(x) = 1/expm1(x) + 1/2 - 1/x = coth(x/2)/2 - 1/x`` (or ``s'(x)``), complex x.
+
+    The free transfer over a period enters eq. (12) through ``(I - Phi(T))^-1 = -V
+    diag(1/expm1(lambda T)) V^-1``, and ``1/expm1(x) = 1/x - 1/2 + s(x)``: the ``1/x``
+    part sums to ``A^-1 / T`` exactly, so splitting it off leaves the bounded ``s``
+    (``s(x) ~ x/12`` at small ``|x|``, a high forcing frequency), free of the
+    cancellation of large ``1/(lambda T)`` terms. Taylor series (Bernoulli numbers) for
+    ``|x| < 1``, the closed form (terms of order one, absolute error a few eps) beyond.
+    ``s`` has poles where ``expm1(x) = 0`` (an undamped mode with ``omega_i T`` a
+    multiple of 2 pi): inf/NaN there, as the equations themselves.
+
+    Parameters
+    ----------
+    x : ndarray, complex
+        ``lambda_k T`` (nonzero).
+    derivative : bool
+        Return ``s'(x) = 1/x^2 - e^x / expm1(x)^2`` instead.
+    """
+    x = np.asarray(x, dtype=complex)
+    out = np.empty_like(x)
+    near = np.abs(x) < _SERIES_RADIUS
+    if np.any(near):
+        xn = x[near]
+        x2 = xn * xn
+        acc = np.zeros_like(xn)
+        if derivative:  # sum_k (2k - 1) B_2k / (2k)! x^(2k-2), Horner in x^2
+            for k in range(_BERNOULLI.size, 0, -1):
+                acc = acc * x2 + (2 * k - 1) * _BERNOULLI[k - 1]
+            out[near] = acc
+        else:
+            for c in _BERNOULLI[::-1]:
+                acc = acc * x2 + c
+            out[near] = acc * xn
+    far = ~near
+    if np.any(far):
+        xf = x[far]
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            em1 = np.expm1(xf)
+            if derivative:
+                out[far] = 1.0 / (xf * xf) - (em1 + 1.0) / (em1 * em1)
+            else:
+                out[far] = 1.0 / em1 + 0.5 - 1.0 / xf
+    return out
 
 
 def _power_of_two_scale(v: np.ndarray) -> np.ndarray:
@@ -185,6 +240,17 @@ class FirstOrderBasis:
         for x in (A, lam, V, V_inv):
             x.setflags(write=False)
         return cls(M=M, K=K, C=C, A=A, eigenvalues=lam, V=V, V_inv=V_inv, condition=cond)
+
+    @functools.cached_property
+    def impact_column(self) -> np.ndarray:
+        """``A^-1 e_{n+1} = [-K^-1 M e_1; 0]`` (2n,): the ``1/T`` part of the free motion
+        that an impact on mass 1 starts, ``-(I - Phi(T))^-1 e_{n+1} = A^-1 e_{n+1} / T +
+        O(1)`` (:func:`coth_remainder`), from ``A^-1 = [[-K^-1 C, -K^-1 M], [I, 0]]``."""
+        n = self.M.shape[0]
+        col = np.zeros(2 * n)
+        col[:n] = -scipy.linalg.solve(self.K, self.M[:, 0], assume_a="pos")
+        col.setflags(write=False)
+        return col
 
     @functools.cached_property
     def scalar_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -9,17 +9,28 @@ check) is shared by every gap and root.
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
 
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
-from impactcont.orbit.periodic import IllConditionedWarning
+from impactcont.orbit.dense import COND_WARN, VELOCITY_POLISH, second_form, velocity_errors
+from impactcont.orbit.periodic import IllConditionedWarning, modal_jacobian
 
 __all__ = ["batched_orbits"]
 
-_COND_WARN = 1e10
+_EPS = float(np.finfo(float).eps)
+
+
+def _warn_grid(omega: np.ndarray, cond: np.ndarray) -> None:
+    """One warning for the frequencies of a map where eq. (12) is ill-conditioned."""
+    bad = ~(cond <= COND_WARN)
+    if np.any(bad):
+        warnings.warn(f"eq. (12) is ill-conditioned at omega = {omega[bad][:5].tolist()} "
+                      f"(condition estimates {cond[bad][:5].tolist()}); the periodic motions "
+                      "there may be inexact", IllConditionedWarning, stacklevel=3)
 
 
 def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarray, *,
@@ -66,11 +77,9 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     (r2, cond, count, delta, vel, gap, gap_t, stable, rho,
      crit) = kernel.block_map(w, a, f, u, ui, eig_err, osc.R, int(N), omega, b,
                               bool(spectral_radius))
-    bad = ~(cond <= _COND_WARN)
-    if np.any(bad):
-        warnings.warn(f"eq. (12) is ill-conditioned at omega = {omega[bad][:5].tolist()} "
-                      f"(condition estimates {cond[bad][:5].tolist()}); the periodic motions "
-                      "there may be inexact", IllConditionedWarning, stacklevel=2)
+    _warn_grid(omega, cond)
+    _polish_modal_block(osc, int(N), omega, b, count, delta, vel, gap, gap_t, stable, rho,
+                        crit, bool(spectral_radius))
     exists = count > 0
     return {"amplitude_squared": r2, "exists": exists, "delta": delta,
             "impact_velocity": vel, "gap_min": gap, "gap_min_time": gap_t,
@@ -78,19 +87,69 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
             "physical": exists[..., None] & (vel > 0) & (gap > 0), "stable": stable}
 
 
+def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarray,
+                        count: np.ndarray, delta: np.ndarray, vel: np.ndarray, gap: np.ndarray,
+                        gap_t: np.ndarray, stable: np.ndarray, rho: np.ndarray,
+                        crit: np.ndarray, spectral_radius: bool) -> None:
+    """Re-evaluate, in place, the motions of the kernel's map whose impact velocity lost
+    digits (:func:`impactcont.orbit.dense.impact_velocity`: far above the lowest natural
+    frequency the kernel's form cancels), with the velocity's second exact form: gap
+    (eq. 16), G (eq. 25), its multipliers and stability. A bound per frequency keeps the
+    check off the grid points that need none."""
+    from impactcont.orbit import kernel
+
+    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    R = osc.R
+    for iw, om in enumerate(omega):
+        if not np.any(count[iw] > 0):
+            continue
+        modal, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, float(om), N)
+        if sc[9] != 0.0:  # elastic undamped: the kernel already uses the impact condition
+            continue
+        Gam, B, g, Delta = (float(x) for x in sc[1:5])
+        bound = _EPS * om * (abs(Gam) + abs(B)) * (2.0 + math.pi) / (abs(Delta) + 1e-300)
+        with np.errstate(invalid="ignore"):
+            flagged = np.argwhere(bound > VELOCITY_POLISH * np.abs(vel[iw]))
+        for ib, k in flagged:
+            if k >= count[iw, ib]:  # no root, or the copy of a double root
+                continue
+            d, sg, bb = float(delta[iw, ib, k]), float(vel[iw, ib, k]), float(b[ib])
+            cd, sd = math.cos(d), math.sin(d)
+            err_a, err_b = velocity_errors(Gam, B, g, Delta, float(om), R, bb, d, cd, sd)
+            if not err_b < err_a:
+                continue
+            better = (Gam * cd + B * sd - bb) / ((1.0 + R) * g)
+            if not second_form(sg, better, err_a, err_b):
+                continue
+            sg = better
+            best, best_t = kernel.other_maximum(w, a, u0, modal, sc, float(om), R, d, sg,
+                                                math.nan)
+            G, _ = modal_jacobian(osc, modal, d, sg, omega=float(om))
+            mu = kernel.multipliers(G)
+            ks = slice(k, 2) if count[iw, ib] == 1 else slice(k, k + 1)  # a double root: both
+            vel[iw, ib, ks] = sg
+            gap[iw, ib, ks], gap_t[iw, ib, ks] = bb - best, best_t
+            stable[iw, ib, ks] = bool(np.all(np.abs(mu) < 1.0))
+            if spectral_radius:
+                j = int(np.argmax(np.abs(mu)))
+                rho[iw, ib, ks], crit[iw, ib, ks] = abs(mu[j]), mu[j]
+
+
 def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarray,
                    spectral_radius: bool) -> dict[str, np.ndarray]:
     """:func:`batched_orbits` on the first-order path (general damping matrix or complex F):
-    per omega the dense eq. (12)-(13) once (:func:`impactcont.orbit.general.orbit_pieces`),
-    per gap the roots of eq. (15); their G, multipliers and eq. (16) for all gaps at once
+    per omega eq. (12)-(14) once (:func:`impactcont.orbit.general.periodic_form`), per gap
+    the roots of eq. (15); their G, multipliers and eq. (16) for all gaps at once
     (:func:`impactcont.orbit.general.orbit_values_many`). An omega at the natural
     frequency of an undamped mode (no forced response, eq. 6) leaves its column empty,
-    with a :class:`~impactcont.errors.NearResonanceWarning`."""
+    with a :class:`~impactcont.errors.NearResonanceWarning`; the ill-conditioned
+    frequencies are named in one warning, as on the modal path."""
     from impactcont.errors import NearResonanceWarning, ResonanceError
     from impactcont.orbit import general
 
     nw, nb = omega.size, b.size
     r2 = np.full(nw, np.nan)
+    cond = np.ones(nw)
     count = np.zeros((nw, nb), dtype=np.int64)
     shape = (nw, nb, 2)
     delta, vel, gap, gap_t, rho = (np.full(shape, np.nan) for _ in range(5))
@@ -99,13 +158,13 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     for i, w in enumerate(omega):
         at = osc.replace(omega=float(w))
         try:
-            flow, S, DPhi, T = general.orbit_pieces(at, N)
+            form = general.periodic_form(at, N, warn=False)
         except ResonanceError as exc:  # no forced response at this omega: an empty column
             warnings.warn(f"stability map: no motion at omega={float(w)!r} (column left "
                           f"empty): {exc}", NearResonanceWarning, stacklevel=3)
             continue
-        c, s = float(S[0, 0]), float(S[0, 1])
-        r2[i] = c * c + s * s
+        c, s = form.c, form.s
+        r2[i], cond[i] = c * c + s * s, form.cond
         where, phases = [], []
         for j, bj in enumerate(b):
             roots = general.roots(c, s, float(bj))
@@ -116,12 +175,13 @@ def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
         if not phases:
             continue
         jj, kk = np.array(where).T
-        h2, mu, g, g_t = general.orbit_values_many(flow, S, DPhi, T, np.array(phases), b[jj])
+        h2, mu, g, g_t = general.orbit_values_many(form, np.array(phases), b[jj])
         delta[i, jj, kk], vel[i, jj, kk] = phases, h2
         gap[i, jj, kk], gap_t[i, jj, kk] = g, g_t
         stable[i, jj, kk] = np.all(np.abs(mu) < 1.0, axis=1)
         if spectral_radius:
             rho[i, jj, kk], crit[i, jj, kk] = np.abs(mu[:, 0]), mu[:, 0]
+    _warn_grid(omega, cond)
     exists = count > 0
     return {"amplitude_squared": r2, "exists": exists, "delta": delta,
             "impact_velocity": vel, "gap_min": gap, "gap_min_time": gap_t,

@@ -17,11 +17,97 @@ from scipy.linalg import lapack, lu_solve
 from impactcont.errors import IllConditionedWarning, ParameterError
 from impactcont.orbit.flow import Flow
 
-__all__ = ["impact_map_jacobian", "periodic_matrix", "pole_free_pd_matrix"]
+__all__ = ["COND_WARN", "VELOCITY_POLISH", "impact_map_jacobian", "impact_velocity",
+           "periodic_matrix", "pole_free_pd_matrix", "second_form", "velocity_errors",
+           "warn_ill_conditioned"]
 
 _EPS = float(np.finfo(float).eps)
 # warn when the relative error bound cond * eps of the solve of eq. (12) exceeds ~1e-6
-_COND_WARN = 1e10
+_COND_WARN = COND_WARN = 1e10
+#: The impact velocity is taken from its second exact form (:func:`impact_velocity`) when
+#: the first is estimated to carry a relative error above this.
+VELOCITY_POLISH = 1e-12
+# ... and the two forms agree within this many times their rounding estimates (delta is a
+# root of eq. 15 to rounding; off a root only the first form solves eq. 12)
+_VELOCITY_AGREE = 16.0
+
+
+def warn_ill_conditioned(omega: float, cond: float, stacklevel: int) -> None:
+    """Warn that eq. (12) is ill-conditioned at omega (the closed form's condition estimate
+    ``cond``, :func:`impactcont.orbit.kernel.omega_setup`), when ``cond > COND_WARN``: the
+    one message of the modal and the first-order paths."""
+    if cond <= COND_WARN:
+        return
+    warnings.warn(
+        f"eq. (12) is ill-conditioned at omega={omega!r} (condition estimate "
+        f"{cond:.3g}): the periodic motion may carry a relative error up to about "
+        f"{min(cond * _EPS, 1.0):.1g}. Typical cause: omega_i T close to a multiple of "
+        "2 pi for an undamped or very lightly damped mode (omega near N omega_i / k), "
+        "where the free motion of that mode is itself T-periodic",
+        IllConditionedWarning, stacklevel=stacklevel + 1)
+
+
+def velocity_errors(Gam, B, g, Delta, omega, R, b, delta, cos_d, sin_d):
+    """Absolute rounding errors of the two exact forms of the impact velocity
+    (:func:`impact_velocity`): ``(err_a, err_b)``, floats or arrays like the inputs.
+
+    Each is ``eps`` times the size of the terms summed (the forced position or velocity
+    of mass 1 at the phase, and its change over the rounding of ``delta``, about
+    ``eps (1 + |delta|)``) over the divisor: ``|Delta|`` for the first form, ``|kappa g|``
+    for the second.
+    """
+    tilt = 1.0 + abs(delta)  # ulp(delta) and the rounding of cos, sin
+    xp = abs(Gam * cos_d + B * sin_d)  # |x1p(delta)|, the derivative of -x1p'/omega
+    vp = abs(B * cos_d - Gam * sin_d)  # |x1p'(delta)| / omega
+    err_a = _EPS * omega * (abs(B * cos_d) + abs(Gam * sin_d) + xp * tilt) / (abs(Delta)
+                                                                           + 1e-300)
+    err_b = _EPS * (abs(Gam * cos_d) + abs(B * sin_d) + abs(b) + vp * tilt) / (
+        abs((1.0 + R) * g) + 1e-300)
+    return err_a, err_b
+
+
+def second_form(sigma_a, sigma_b, err_a, err_b):
+    """Whether to take the impact velocity's second form (:func:`impact_velocity`): the
+    first lost digits (relative error estimate above :data:`VELOCITY_POLISH`), the second
+    lost fewer, and both agree within their rounding (``delta`` solves eq. 15)."""
+    return ((err_a > VELOCITY_POLISH * abs(sigma_a)) & (err_b < err_a)
+            & (abs(sigma_a - sigma_b) <= _VELOCITY_AGREE * (err_a + err_b)))
+
+
+def impact_velocity(Gam, B, g, Delta, omega, R, b, delta):
+    """Impact velocity ``sigma = x1'(T^-)`` (``h2`` of eq. 22) of the N-1 motion with
+    impact phase ``delta`` (a root of eq. 15), and its estimated relative error.
+
+    With ``x1p(delta) = Gam cos(delta) + B sin(delta)`` the forced motion of mass 1 and
+    ``c, s = Gam - rho B, B + rho Gam``, ``rho = kappa omega g / Delta`` (eq. 14 in the
+    kernel's form, :mod:`impactcont.orbit.kernel`), a root satisfies two exact forms:
+
+    - ``sigma = x1p'(delta) / Delta`` (eq. 12 at the velocity of mass 1);
+    - ``sigma = (x1p(delta) - b) / (kappa g)`` (the impact condition ``x1(0) = b``).
+
+    The first is a small difference of large terms when the forced velocity of mass 1
+    nearly vanishes at the impact, which happens far above the lowest natural frequency
+    (``|c, s| >> b``, with a small ``Delta``): its digits are lost there, while the second
+    is exact. The first is used unless its error estimate (:func:`velocity_errors`)
+    exceeds :data:`VELOCITY_POLISH` (relative), the second's is smaller and the two agree
+    within their estimates (:func:`second_form`; off a root of eq. 15, e.g. a guess, only
+    the first solves eq. 12). Vectorised over ``delta`` and ``b``.
+
+    Returns
+    -------
+    sigma, rel_error : ndarray
+        The velocity and ``eps`` times the cancellation of the form used.
+    """
+    delta = np.asarray(delta, dtype=float)
+    cd, sd = np.cos(delta), np.sin(delta)
+    err_a, err_b = velocity_errors(Gam, B, g, Delta, omega, R, b, delta, cd, sd)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sigma_a = omega * (B * cd - Gam * sd) / Delta
+        sigma_b = (Gam * cd + B * sd - b) / ((1.0 + R) * g)
+        second = second_form(sigma_a, sigma_b, err_a, err_b)
+        sigma = np.where(second, sigma_b, sigma_a)
+        rel = np.where(second, err_b, err_a) / np.abs(sigma)
+    return sigma, rel
 
 
 def _power_of_two_scale(v: np.ndarray) -> np.ndarray:

@@ -2,37 +2,53 @@
 
 The proportional system's closed form (:mod:`impactcont.orbit.kernel`) relies on the
 real 2x2 modal blocks of eq. (9). With a general damping matrix C, or with forcing
-phases that differ between masses (complex F), the same equations are solved densely
-from the first-order complex modes (:class:`impactcont.orbit.flow.GeneralFlow`), still
-in closed form:
+phases that differ between masses (complex F), the same equations are solved from the
+first-order complex modes ``A = V diag(lambda) V^-1``
+(:class:`impactcont.model.first_order.FirstOrderBasis`), still in closed form and in
+the kernel's rank-one form (:class:`PeriodicForm`):
 
-- eq. (12)-(13): ``S = (I - D Phi(T))^-1 D (I - Phi(T)) Z_c`` with ``Phi(T) = Re(V
-  diag(exp(lambda T)) V^-1)`` and ``Z_c = [Re Z, -Im Z]`` the forced state's columns
-  (``omega T = 2 pi N`` makes ``P(T) = P(0)``);
-- eq. (15) for the phases, ``h2 = x1'(T^-)`` from the exact time derivative;
-- G of eq. (25) by :func:`impactcont.orbit.dense.impact_map_jacobian`, its
-  eigenvalues by LAPACK;
-- eq. (16) by the extrema search along the exact flow (:mod:`impactcont.orbit.extrema`).
+- the impact (eq. 4) changes only ``x1'``: ``D = I - kappa e e^T`` (``e = e_{n+1}``,
+  ``kappa = 1 + R``), so eq. (12)-(13) give ``X(0) = P(0) e_d + kappa sigma y`` with
+  ``P(0) = [Re Z, -Im Z]`` the forced state's columns, ``e_d = [cos delta, sin delta]``,
+  ``sigma = x1'(T^-)`` the impact velocity and ``y = -(I - Phi(T))^-1 e``;
+- ``y = V diag(1/expm1(lambda T)) V^-1 e = A^-1 e / T - e / 2 + Re(V diag(s(lambda T))
+  V^-1 e)`` with the bounded ``s`` of :func:`impactcont.model.first_order.coth_remainder`:
+  the large ``1/(lambda T)`` terms of a high forcing frequency sum to ``A^-1 e / T``
+  exactly instead of cancelling in floating point (``Phi(T) - I`` and ``(I - Phi) P(0)``
+  likewise from ``expm1``);
+- eq. (14): ``c, s = Gam - rho B, B + rho Gam`` with ``Gam - i B = Z_1``,
+  ``rho = kappa omega g / Delta``, ``g = -y_1``, ``Delta = (1 - R)/2 - kappa Re(V_{n+1}
+  diag(s) V^-1 e)``; eq. (15) for the phases;
+- ``sigma`` from the better of its two exact forms
+  (:func:`impactcont.orbit.dense.impact_velocity`), then ``X(0)``, and G of eq. (25)
+  from ``D Phi(T)``, ``D (I - Phi(T)) P(0)`` and ``X'(T^-) = P'(0) e_d + kappa sigma
+  A (y + e)``; its eigenvalues by LAPACK;
+- eq. (16) by the extrema search along the exact flow (:mod:`impactcont.orbit.extrema`);
+- the condition estimate of eq. (12) is the kernel's, summed over the scalar pairs of
+  modes (:attr:`FirstOrderBasis.scalar_pairs`), so both paths warn alike.
 
 The parameter derivatives of ``c, s`` used by continuation are exact too
-(:func:`amplitude`): ``dPhi/d omega = A Phi dT/d omega`` and ``dZ/d omega`` from the
-dynamic stiffness.
+(:func:`amplitude`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
+import weakref
 
 import numpy as np
 
 from impactcont.errors import ParameterError, UnresolvedMotionWarning
+from impactcont.model.first_order import coth_remainder
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.dense import impact_map_jacobian, periodic_matrix
+from impactcont.orbit.dense import impact_velocity, warn_ill_conditioned
 from impactcont.orbit.flow import Flow, GeneralFlow
 
-__all__ = ["amplitude", "amplitude_derivative", "orbit_pieces", "orbit_values",
-           "orbit_values_many", "phase_matrices", "roots", "x1_maximum"]
+__all__ = ["PeriodicForm", "amplitude", "amplitude_derivative", "orbit_pieces",
+           "orbit_values", "orbit_values_many", "periodic_form", "phase_matrices", "roots",
+           "x1_maximum"]
 
 
 def _refuse_elastic(osc: ImpactOscillator) -> None:
@@ -58,68 +74,214 @@ def _refuse_elastic(osc: ImpactOscillator) -> None:
         "that case")
 
 
+@dataclasses.dataclass(frozen=True, eq=False)
+class PeriodicForm:
+    """Eq. (12)-(15) at one frequency in the impact's rank-one form (see the module).
+
+    ``X(0) = P0 e_d + kappa sigma y`` and ``sigma = P0[n] e_d / Delta``
+    (``e_d = [cos delta, sin delta]``); ``S = P0 + kappa y (P0[n] / Delta)`` of eq. (13).
+    """
+
+    flow: GeneralFlow
+    T: float
+    DPhi: np.ndarray
+    """``D Phi(T)`` (2n, 2n), ``Phi(T) = I + Re(V diag(expm1(lambda T)) V^-1)``."""
+    P0: np.ndarray
+    """``[Re Z, -Im Z]`` (2n, 2): the forced state ``P0 e_d`` at the impact."""
+    rate0: np.ndarray
+    """``[Re(i omega Z), -Im(i omega Z)]`` (2n, 2): its time derivative."""
+    E: np.ndarray
+    """``(I - Phi(T)) P0`` (2n, 2): the forcing columns of eq. (9) over a period."""
+    y: np.ndarray
+    """``-(I - Phi(T))^-1 e_{n+1}`` (2n,): the free deviation per unit ``kappa sigma``."""
+    y_modal: np.ndarray
+    """``V^-1 y = diag(1/expm1(lambda T)) V^-1 e_{n+1}`` (2n,), complex."""
+    rate: np.ndarray
+    """``A (y + e_{n+1})`` (2n,): the free deviation's derivative before the impact."""
+    g: float
+    Delta: float
+    cond: float
+    """The kernel's condition estimate of eq. (12) (relative error about ``cond * eps``)."""
+    S: np.ndarray
+    """``X(0) = S e_d`` (2n, 2), eq. (13)."""
+
+    @property
+    def c(self) -> float:
+        """``c`` of eq. (14)."""
+        return float(self.S[0, 0])
+
+    @property
+    def s(self) -> float:
+        """``s`` of eq. (14)."""
+        return float(self.S[0, 1])
+
+    def velocity(self, deltas: np.ndarray, b: np.ndarray | float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Impact velocities and their relative error estimates at the phases ``deltas``
+        (roots of eq. 15 at the gaps ``b``): :func:`impactcont.orbit.dense.impact_velocity`."""
+        osc = self.flow.osc
+        return impact_velocity(float(self.P0[0, 0]), float(self.P0[0, 1]), self.g, self.Delta,
+                               osc.omega, osc.R, b, deltas)
+
+
+# the form of the last periodic_form call per flow, for the pieces that callers keep as
+# (flow, S, DPhi, T) (phase_matrices, amplitude_derivative)
+_FORMS: weakref.WeakKeyDictionary[GeneralFlow, PeriodicForm] = weakref.WeakKeyDictionary()
+
+
+def periodic_form(osc: ImpactOscillator, N: int, *, warn: bool = True) -> PeriodicForm:
+    """Eq. (12)-(14) of the N-1 motions at the oscillator's parameters (first-order path).
+
+    Warns (:class:`~impactcont.errors.IllConditionedWarning`) when the condition
+    estimate exceeds :data:`impactcont.orbit.dense.COND_WARN`, unless ``warn=False``
+    (the caller reports :attr:`PeriodicForm.cond` itself).
+
+    Raises
+    ------
+    ParameterError
+        ``R = 1`` without damping (eq. 12 singular on this path).
+    ResonanceError
+        omega at the natural frequency of an undamped mode (no forced response).
+    """
+    _refuse_elastic(osc)
+    flow = Flow(osc)
+    form = _form_at(flow, 2.0 * math.pi * N / osc.omega)
+    if warn:
+        warn_ill_conditioned(osc.omega, form.cond, stacklevel=2)
+    return form
+
+
+def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
+    """:class:`PeriodicForm` of `flow` over the period ``T`` (``omega T = 2 pi N``)."""
+    cached = _FORMS.get(flow)
+    if cached is not None and cached.T == T:
+        return cached
+    osc, basis = flow.osc, flow.basis
+    n, R, omega = osc.n, osc.R, osc.omega
+    kappa = 1.0 + R
+    lam, V, Vi = basis.eigenvalues, basis.V, basis.V_inv
+    x = lam * T
+    em1 = np.expm1(x)
+    w = Vi[:, n]  # V^-1 e_{n+1}
+    sw = coth_remainder(x) * w
+    part = (V @ sw).real
+    y = basis.impact_column / T + part
+    y[n] -= 0.5
+    Delta = 0.5 * (1.0 - R) - kappa * float(part[n])
+    g = -float(y[0])
+    Z = flow.Z
+    P0 = np.column_stack([Z.real, -Z.imag])
+    iwZ = 1j * omega * Z
+    rate0 = np.column_stack([iwZ.real, -iwZ.imag])
+    E = -(V @ (em1[:, None] * (Vi @ P0))).real
+    d = np.ones(2 * n)
+    d[n] = -R
+    DPhi = d[:, None] * (np.eye(2 * n) + ((V * em1) @ Vi).real)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y_modal = w / em1
+    e = np.zeros(2 * n)
+    e[n] = 1.0
+    rate = basis.A @ (y + e)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        S = P0 + kappa * np.outer(y, P0[n] / Delta)
+    cond = _condition(basis, x, em1, sw, w, R, omega, g, Delta)
+    form = PeriodicForm(flow=flow, T=T, DPhi=DPhi, P0=P0, rate0=rate0, E=E, y=y, y_modal=y_modal,
+                        rate=rate, g=g, Delta=Delta, cond=cond, S=S)
+    _FORMS[flow] = form
+    return form
+
+
+def _condition(basis, x: np.ndarray, em1: np.ndarray, sw: np.ndarray, w: np.ndarray,
+               R: float, omega: float, g: float, Delta: float) -> float:
+    """The kernel's condition estimate of eq. (12) (:func:`impactcont.orbit.kernel.
+    omega_setup`) from the scalar pairs of modes: ``mode_cond (1 + |rho| (cond_d +
+    cond_g))``, ``cond_d = ((1 - R)/2 + kappa sum |c_i h_i|) / |Delta|``, ``cond_g =
+    sum |c_i W12_i / d_i| / |g|``, ``mode_cond`` the worst free-mode resonance
+    ``1 + omega_d T |Im e^{lambda T}| / |expm1(lambda T)|^2`` of a mode that moves mass 1.
+    For proportional damping each pair is one real mode and the terms are the kernel's."""
+    n = basis.M.shape[0]
+    V, Vi = basis.V, basis.V_inv
+    _, _, k, j = basis.scalar_pairs
+    kappa = 1.0 + R
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ci = (V[0, k] * Vi[k, 0] + V[0, j] * Vi[j, 0]).real
+        hi = (V[n, k] * sw[k] + V[n, j] * sw[j]).real
+        gi = (V[0, k] * w[k] / em1[k] + V[0, j] * w[j] / em1[j]).real
+        resonance = 1.0 + np.abs(x[k].imag) * np.abs(em1[k].imag) / np.abs(em1[k]) ** 2
+    coupled = (x[k].imag != 0.0) & (np.abs(ci) > 1e-12 * np.abs(ci).sum())
+    mode_cond = float(np.max(resonance[coupled], initial=1.0))
+    rho = kappa * omega * g / max(abs(Delta), 1e-300)
+    cond_d = (0.5 * (1.0 - R) + kappa * float(np.abs(hi).sum())) / max(abs(Delta), 1e-300)
+    cond_g = float(np.abs(gi).sum()) / max(abs(g), 1e-300)
+    cond = mode_cond * (1.0 + abs(rho) * (cond_d + cond_g))
+    return cond if math.isfinite(cond) else math.inf
+
+
 def orbit_pieces(osc: ImpactOscillator, N: int) -> tuple[GeneralFlow, np.ndarray, np.ndarray,
                                                              float]:
     """The flow, ``S`` (2n, 2), ``D Phi(T)`` and ``T`` of eq. (12)-(13) at the oscillator's
-    parameters."""
-    _refuse_elastic(osc)
-    flow = Flow(osc)
-    S, DPhi, T = periodic_matrix(flow, N)
-    return flow, S, DPhi, T  # type: ignore[return-value]
+    parameters (:func:`periodic_form`)."""
+    form = periodic_form(osc, N)
+    return form.flow, form.S, form.DPhi, form.T
 
 
 def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
               ) -> tuple[float, float, float, float]:
     """``c, s`` of eq. (14) and their exact derivative in ``which`` (``"omega"``, ``"R"``).
 
-    With ``B = I - D Phi(T)``, ``P = (I - Phi(T)) Z_c`` and ``S = B^-1 D P``:
-
-    - ``dS/dR = B^-1 dD (Phi S + P)``, ``dD = -e_{n+1} e_{n+1}^T`` (eq. 4);
-    - ``dS/d omega = B^-1 D (Phi' S - Phi' Z_c + (I - Phi) Z_c')`` with
-      ``Phi' = A Phi(T) dT/d omega``, ``dT/d omega = -T / omega``.
+    With ``rho = kappa omega g / Delta`` (:class:`PeriodicForm`), ``c = Gam - rho B``,
+    ``s = B + rho Gam``: ``Gam - i B = Z_1`` moves with omega through the dynamic
+    stiffness (:meth:`FirstOrderBasis.forced_amplitude_derivative`), ``g`` and ``Delta``
+    through ``T = 2 pi N / omega`` (``s'`` of :func:`coth_remainder`), ``Delta`` with R
+    (``d Delta / d R = -1/2 - Re(V_{n+1} diag(s) V^-1 e)``).
 
     Returns
     -------
     c, s, dc, ds : float
         ``dc = ds = 0`` when `which` is None.
     """
-    flow, S, DPhi, T = orbit_pieces(osc, N)
-    c, s = float(S[0, 0]), float(S[0, 1])
+    form = periodic_form(osc, N)
     if which is None:
-        return c, s, 0.0, 0.0
-    return (c, s, *amplitude_derivative(flow, S, DPhi, T, which))
+        return form.c, form.s, 0.0, 0.0
+    return (form.c, form.s, *amplitude_derivative(form.flow, form.S, form.DPhi, form.T, which))
 
 
 def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: float,
                          which: str) -> tuple[float, float]:
-    """``dc, ds`` (eq. 14) in ``which`` (``"omega"``, ``"R"``) from :func:`orbit_pieces`
-    (formulas in :func:`amplitude`)."""
+    """``dc, ds`` (eq. 14) in ``which`` (``"omega"``, ``"R"``) at the motion of
+    :func:`orbit_pieces` (whose ``S`` and ``D Phi`` are those of ``flow`` at ``T``;
+    formulas in :func:`amplitude`)."""
     osc = flow.osc
-    n = osc.n
-    d = np.ones(2 * n)
-    d[n] = -osc.R
-    Phi = flow.transition_matrix(T)
-    B = np.eye(2 * n) - DPhi
-    Zc = np.column_stack([flow.Z.real, -flow.Z.imag])
-    if which == "R":
-        rhs = np.zeros((2 * n, 2))
-        rhs[n] = -(Phi @ S + (Zc - Phi @ Zc))[n]
-    elif which == "omega":
-        dPhi = flow.basis.A @ Phi * (-T / osc.omega)
-        dZ = flow.basis.forced_amplitude_derivative(flow.Z, osc.omega)
-        dZc = np.column_stack([dZ.real, -dZ.imag])
-        rhs = d[:, None] * (dPhi @ S - dPhi @ Zc + dZc - Phi @ dZc)
-    elif which in ("eta", "alpha", "beta"):
+    n, R, omega = osc.n, osc.R, osc.omega
+    kappa = 1.0 + R
+    if which in ("eta", "alpha", "beta"):
         raise ParameterError(
             f"parameter={which!r}: a branch on the first-order path (complex F={osc.F.tolist()}, "
             "per-mass phases) cannot be continued in the damping eta, alpha or beta (eq. 12-14 "
             "have no exact derivative in them there); continue in omega, b, R or F0, follow a "
             f"curve with {which!r} as its second parameter (impactcont.curve), or use a real F")
-    else:
+    if which not in ("omega", "R"):
         raise ParameterError(f"which must be 'omega' or 'R' (the derivative of c, s of eq. 14); "
                              f"got {which!r}")
-    dS = np.linalg.solve(B, rhs)
-    return float(dS[0, 0]), float(dS[0, 1])
+    form = _form_at(flow, float(T))
+    basis = flow.basis
+    g, Delta = form.g, form.Delta
+    Gam, B = float(form.P0[0, 0]), float(form.P0[0, 1])
+    rho = kappa * omega * g / Delta
+    if which == "R":
+        part_n = (0.5 * (1.0 - R) - Delta) / kappa  # Re(V_{n+1} diag(s) V^-1 e)
+        d_rho = omega * g / Delta - rho * (-0.5 - part_n) / Delta
+        return -d_rho * B, d_rho * Gam
+    lam, V, Vi = basis.eigenvalues, basis.V, basis.V_inv
+    dT = -T / omega
+    rate = (V @ (lam * coth_remainder(lam * T, derivative=True) * Vi[:, n])).real
+    d_y0 = (-basis.impact_column[0] / (T * T) + rate[0]) * dT
+    d_g = -d_y0
+    d_Delta = -kappa * rate[n] * dT
+    dZ = basis.forced_amplitude_derivative(flow.Z, omega)
+    d_Gam, d_B = float(dZ[0].real), float(-dZ[0].imag)
+    d_rho = kappa * (g + omega * d_g) / Delta - rho * d_Delta / Delta
+    return d_Gam - d_rho * B - rho * d_B, d_B + d_rho * Gam + rho * d_Gam
 
 
 def _pair_coefficients(flow: GeneralFlow, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -163,6 +325,18 @@ def _search(flow: GeneralFlow, times: np.ndarray, free: np.ndarray, dy: np.ndarr
     return float(best), float(best_t)
 
 
+def _x1_maximum_of(flow: GeneralFlow, coefficients: np.ndarray, delta: float, T: float,
+                   exclude: float) -> tuple[float, float]:
+    """:func:`x1_maximum` from the complex coefficients of ``x1``'s free part."""
+    from impactcont.orbit import kernel
+
+    w, a, _, _ = flow.basis.scalar_pairs
+    dy, dv = _pair_coefficients(flow, coefficients)
+    times = _search_grid(flow, T)
+    free = kernel.free_on_grid(times, w, a, np.ones_like(w), dy, dv)
+    return _search(flow, times, free, dy, dv, delta, exclude)
+
+
 def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float,
                exclude: float = math.nan) -> tuple[float, float]:
     """Highest interior local maximum of ``x1`` on ``(0, T)`` (eq. 16): ``(value, time)``,
@@ -175,75 +349,82 @@ def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float,
     kernel's search (:func:`impactcont.orbit.kernel.x1_maximum`, with its grid, bounds
     and polish) runs on them unchanged, with unit weights.
     """
-    from impactcont.orbit import kernel
-
-    w, a, _, _ = flow.basis.scalar_pairs
-    dy, dv = _pair_coefficients(flow, flow.V[0] * flow.modal_deviation(state, delta))
-    times = _search_grid(flow, T)
-    free = kernel.free_on_grid(times, w, a, np.ones_like(w), dy, dv)
-    return _search(flow, times, free, dy, dv, delta, exclude)
+    return _x1_maximum_of(flow, flow.V[0] * flow.modal_deviation(state, delta), delta, T,
+                          exclude)
 
 
 def phase_matrices(flow: GeneralFlow, S: np.ndarray, T: float
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The impact-phase-linear pieces of the motion ``X(0) = S e``, ``e = [cos delta,
-    sin delta]`` (eq. 13), for G of eq. (22)-(25) and the search of eq. (16):
+    sin delta]`` (eq. 13), for G of eq. (22)-(25) and the search of eq. (16), at the
+    motion of :func:`orbit_pieces` (``S`` is that of ``flow`` at ``T``):
 
-    - ``J1`` (2n, 2): ``[h1; H1] = D E(T) [-sin delta; cos delta] = J1 e``;
-    - ``Y`` (2n, 2): ``[h2; H2] = D X'(T^-) = Y e``, ``X'(T^-) = (Phi'(T) (S - P(0)) +
-      P'(T)) e``, ``P(t) = [Re(Z e^{i omega t}), -Im(Z e^{i omega t})]``;
+    - ``J1`` (2n, 2): ``[h1; H1] = D E(T) [-sin delta; cos delta] = J1 e``,
+      ``E(T) = (I - Phi(T)) P(0)``;
+    - ``Y`` (2n, 2): ``[h2; H2] = D X'(T^-) = Y e``, ``X'(T^-) = P'(0) e + kappa sigma
+      A (y + e_{n+1})`` with ``sigma = P(0)[n+1] e / Delta`` (:class:`PeriodicForm`);
     - ``U`` (2n, 2), complex: ``V_1k (V^-1 (S - P(0)))_k``, the coefficients of ``x1``'s
       free part ``Re sum_k (U e)_k e^{lambda_k t}``.
     """
+    form = _form_at(flow, float(T))
     osc = flow.osc
     n = osc.n
+    kappa = 1.0 + osc.R
     d = np.ones(2 * n)
     d[n] = -osc.R
-    _, E = flow.matrices(T)
-    lam, V, Z = flow.lam, flow.V, flow.Z
-    zt = Z * np.exp(1j * osc.omega * T)
-    P0 = np.column_stack([Z.real, -Z.imag])
-    dP_T = np.column_stack([(1j * osc.omega * zt).real, -(1j * osc.omega * zt).imag])
-    deviation = flow.V_inv @ (S - P0)  # complex modal coordinates of the free part
-    dPhi_free = (V * (lam * np.exp(lam * T))) @ deviation
-    Y = d[:, None] * (dPhi_free.real + dP_T)
-    J1 = d[:, None] * np.column_stack([E[:, 1], -E[:, 0]])  # E [-sin, cos] = J1 [cos, sin]
-    U = V[0][:, None] * deviation
+    sigma_row = form.P0[n] / form.Delta
+    Y = d[:, None] * (form.rate0 + kappa * np.outer(form.rate, sigma_row))
+    J1 = d[:, None] * np.column_stack([form.E[:, 1], -form.E[:, 0]])  # E [-sin, cos] = J1 e
+    U = np.outer(flow.V[0] * form.y_modal, kappa * sigma_row)
     return J1, Y, U
 
 
-def orbit_values_many(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: float,
-                      deltas: np.ndarray, b: np.ndarray
+def _jacobians(form: PeriodicForm, deltas: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """G of eq. (25) at the phases ``deltas`` with impact velocities ``sigma``, (m, 2n, 2n):
+    ``[h0'; H0] = D Phi(T)`` without its first column, ``[h1; H1] = D E(T) [-sin; cos]``,
+    ``[h2; H2] = D X'(T^-)`` with ``h2 = sigma``."""
+    osc = form.flow.osc
+    n, omega = osc.n, osc.omega
+    d = np.ones(2 * n)
+    d[n] = -osc.R
+    e = np.column_stack([np.cos(deltas), np.sin(deltas)])  # (m, 2)
+    dE = (np.column_stack([-e[:, 1], e[:, 0]]) @ form.E.T) * d
+    dX = (e @ form.rate0.T + ((1.0 + osc.R) * sigma)[:, None] * form.rate) * d
+    h0_p = form.DPhi[0, 1:]
+    m = deltas.size
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        H2 = dX[:, 1:] / sigma[:, None]
+        G = np.empty((m, 2 * n, 2 * n))
+        G[:, :-1, :-1] = form.DPhi[1:, 1:] - H2[:, :, None] * h0_p[None, None, :]
+        G[:, :-1, -1] = dE[:, 1:] - H2 * dE[:, :1]
+        G[:, -1, :-1] = -omega * h0_p[None, :] / sigma[:, None]
+        G[:, -1, -1] = 1.0 - omega * dE[:, 0] / sigma
+    return G
+
+
+def orbit_values_many(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`orbit_values` for many impact phases at once, one omega (e.g. the gaps of a
     stability map): ``(h2, multipliers, gap_min, gap_min_time)`` of the motions with
     impact phases ``deltas`` at the gaps ``b`` (each phase a root of eq. 15 at its gap),
     shapes ``(m,)``, ``(m, 2n)`` (largest modulus first), ``(m,)``, ``(m,)``.
 
-    Everything that depends on the phase is linear in ``e = [cos delta, sin delta]``
-    (:func:`phase_matrices`): G of eq. (25) is assembled for all phases by broadcasting,
-    the multipliers by one batched LAPACK call, and the free part of ``x1`` on the search
-    grid of eq. (16) is computed for the two columns of ``e`` once. Agrees with
-    :func:`orbit_values` to rounding.
+    G of eq. (25) is assembled for all phases by broadcasting, the multipliers by one
+    batched LAPACK call, and the free part of ``x1`` on the search grid of eq. (16) is
+    computed once per column of ``[cos delta, sin delta]`` and once more per phase whose
+    impact velocity is taken from its second form (:func:`impactcont.orbit.dense.
+    impact_velocity`). Agrees with :func:`orbit_values` to rounding.
     """
     from impactcont.orbit import kernel
 
+    flow = form.flow
     osc = flow.osc
+    kappa = 1.0 + osc.R
     deltas = np.asarray(deltas, dtype=float)
     b = np.broadcast_to(np.asarray(b, dtype=float), deltas.shape)
     m = deltas.size
-    e = np.column_stack([np.cos(deltas), np.sin(deltas)])  # (m, 2)
-    J1, Y, U = phase_matrices(flow, S, T)
-    dE, dX = e @ J1.T, e @ Y.T  # (m, 2n)
-    h2 = dX[:, 0]
-    h0_p = DPhi[0, 1:]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        H2 = dX[:, 1:] / h2[:, None]
-        G = np.empty((m, 2 * osc.n, 2 * osc.n))
-        G[:, :-1, :-1] = DPhi[1:, 1:] - H2[:, :, None] * h0_p[None, None, :]
-        G[:, :-1, -1] = dE[:, 1:] - H2 * dE[:, :1]
-        G[:, -1, :-1] = -osc.omega * h0_p[None, :] / h2[:, None]
-        G[:, -1, -1] = 1.0 - osc.omega * dE[:, 0] / h2
+    h2, _ = form.velocity(deltas, b)
+    G = _jacobians(form, deltas, h2)
     mu = np.full((m, 2 * osc.n), np.nan + 0j)
     good = np.all(np.isfinite(G), axis=(1, 2))
     if np.any(good):
@@ -252,14 +433,15 @@ def orbit_values_many(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: flo
     gap, gap_t = np.full(m, -math.inf), np.full(m, math.nan)
     if m:
         w, a, _, _ = flow.basis.scalar_pairs
-        dy, dv = _pair_coefficients(flow, U)  # (pairs, 2): the columns of e
-        times = _search_grid(flow, T)
-        ones = np.ones_like(w)
-        free = [kernel.free_on_grid(times, w, a, ones, np.ascontiguousarray(dy[:, col]),
-                                    np.ascontiguousarray(dv[:, col])) for col in (0, 1)]
-        for i, (cd, sd) in enumerate(e):
-            best, gap_t[i] = _search(flow, times, cd * free[0] + sd * free[1],
-                                     dy @ e[i], dv @ e[i], deltas[i], math.nan)
+        # x1's free part is kappa sigma Re sum_k V_1k (V^-1 y)_k e^{lambda_k t}: one search
+        # table per unit velocity, scaled by each motion's kappa sigma
+        dy, dv = _pair_coefficients(flow, flow.V[0] * form.y_modal)
+        times = _search_grid(flow, form.T)
+        unit = kernel.free_on_grid(times, w, a, np.ones_like(w), dy, dv)
+        for i in range(m):
+            ks = kappa * h2[i]
+            best, gap_t[i] = _search(flow, times, ks * unit, ks * dy, ks * dv, deltas[i],
+                                     math.nan)
             gap[i] = b[i] - best
     return h2, mu, gap, gap_t
 
@@ -284,15 +466,40 @@ def roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
     return out
 
 
-def orbit_values(osc: ImpactOscillator, flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray,
-                 T: float, delta: float) -> tuple[np.ndarray, float, np.ndarray, np.ndarray,
-                                                  float, float]:
-    """The motion at phase delta from :func:`orbit_pieces`: ``(state, h2, G, multipliers,
-    gap_min, gap_min_time)`` (eq. 13, 22, 25, 16); multipliers largest modulus first."""
-    state = S @ np.array([math.cos(delta), math.sin(delta)])
-    G, h2 = impact_map_jacobian(flow, state, delta, T, DPhi)
-    state[osc.n] = -osc.R * h2  # eq. (4), as the kernel sets it
+@dataclasses.dataclass(frozen=True)
+class OrbitValues:
+    """One motion of :func:`orbit_values`."""
+
+    state: np.ndarray
+    """``X(0)`` (eq. 13), with ``x1' = -R h2`` exactly (eq. 4)."""
+    h2: float
+    """The impact velocity ``x1'(T^-)``."""
+    h2_error: float
+    """Estimated relative error of ``h2`` (:func:`impactcont.orbit.dense.impact_velocity`)."""
+    velocity_scale: float
+    """``max(|x'|, omega |x|)`` of ``X(0)``: the rounding scale of ``h2`` in G."""
+    G: np.ndarray
+    multipliers: np.ndarray
+    """Eigenvalues of G, largest modulus first."""
+    gap_min: float
+    gap_min_time: float
+
+
+def orbit_values(form: PeriodicForm, delta: float) -> OrbitValues:
+    """The motion at phase delta (a root of eq. 15) from :func:`periodic_form`: state,
+    impact velocity, G, multipliers and eq. (16)."""
+    flow = form.flow
+    osc = flow.osc
+    n, R, omega = osc.n, osc.R, osc.omega
+    sigma, rel = form.velocity(np.array([delta]), osc.b)
+    G = _jacobians(form, np.array([float(delta)]), sigma)[0]
+    h2, rel = float(sigma[0]), float(rel[0])
+    state = form.P0 @ np.array([math.cos(delta), math.sin(delta)]) + (1.0 + R) * h2 * form.y
+    state[n] = -R * h2  # eq. (4), as the kernel sets it
+    scale = float(max(np.abs(state[n:]).max(), omega * np.abs(state[:n]).max()))
     mu = np.linalg.eigvals(G) if np.all(np.isfinite(G)) else np.full(G.shape[0], np.nan + 0j)
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
-    best, gap_t = x1_maximum(flow, state, delta, T)
-    return state, float(h2), G, mu, osc.b - best, gap_t
+    best, gap_t = _x1_maximum_of(flow, flow.V[0] * form.y_modal * ((1.0 + R) * h2), delta,
+                                 form.T, math.nan)
+    return OrbitValues(state=state, h2=h2, h2_error=rel, velocity_scale=scale, G=G,
+                       multipliers=mu, gap_min=osc.b - best, gap_min_time=gap_t)

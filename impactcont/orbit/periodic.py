@@ -22,7 +22,14 @@ from impactcont.errors import (
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
-from impactcont.orbit.dense import impact_map_jacobian, periodic_matrix
+from impactcont.orbit.dense import (
+    VELOCITY_POLISH,
+    impact_map_jacobian,
+    periodic_matrix,
+    second_form,
+    velocity_errors,
+    warn_ill_conditioned,
+)
 from impactcont.orbit.flow import Flow
 
 __all__ = [
@@ -38,8 +45,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 _EPS = float(np.finfo(float).eps)
-# warn when the relative error bound cond * eps of the solve of eq. (12) exceeds ~1e-6
-_COND_WARN = 1e10
 # warn when G of eq. (25) may carry a relative error above ~1e-8 (eps |v| / |h2|)
 _H2_REL_ERROR_WARN = 1e-8
 # warn when the forced amplitude of a mode is known to worse than this (relative)
@@ -165,20 +170,28 @@ class PeriodicOrbit:
                 f"physical={self.physical})")
 
 
-def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float
-                   ) -> tuple[np.ndarray, float]:
-    """G of eq. (25) and ``h2`` from the kernel's modal pieces at one frequency.
+def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float,
+                   *, omega: float | None = None) -> tuple[np.ndarray, float]:
+    """G of eq. (25) and ``h2`` from the kernel's modal pieces at one frequency (the
+    oscillator's, or `omega`: the frequency `modal` was computed at).
 
-    The transition ``U W(T) U^-1`` costs O(n^3): plain compiled loops for small
-    systems, numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of freedom.
+    Assembled as ``G_reg + a b^T / sigma`` (:func:`impactcont.orbit.kernel.jacobian_split`)
+    with the motion's own impact velocity ``sigma`` as the pole: the kernel's
+    recomputation of ``h2 = x1'(T^-)`` from the forced velocity at the phase is the form
+    that cancels far above the lowest natural frequency (:func:`impactcont.orbit.dense.
+    impact_velocity`). The transition ``U W(T) U^-1`` costs O(n^3): plain compiled loops
+    for small systems, numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of
+    freedom.
     """
     from impactcont.orbit import kernel
 
-    w, a, f, u, ui = osc.modes.kernel_arrays[:5]
-    if osc.n <= kernel.BLAS_MIN:
-        return kernel.impact_jacobian(modal, w, a, f, u, ui, osc.omega, osc.R, delta, sigma)
-    return kernel.assemble_jacobian(physical_transition(osc, modal), modal, w, a, f, u,
-                                    osc.modes.kernel_arrays[7], osc.omega, osc.R, delta, sigma)
+    w, a, f, u = osc.modes.kernel_arrays[:4]
+    om = osc.omega if omega is None else omega
+    G_reg, av, bv, _ = kernel.jacobian_split(physical_transition(osc, modal), modal, w, a, f,
+                                             u, osc.modes.kernel_arrays[7], om, osc.R, delta,
+                                             sigma)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # sigma = 0: a pole
+        return G_reg + np.outer(av, bv) / sigma, float(sigma)
 
 
 def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
@@ -225,14 +238,7 @@ def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> 
             f"natural frequency {w[i]!r} of a lightly damped mode: its forced amplitude (eq. 7) "
             f"is known only to a relative error of about {res_err:.1g}; move omega away from "
             "omega_i or add damping", NearResonanceWarning, stacklevel=stacklevel)
-    if not cond <= _COND_WARN:
-        warnings.warn(
-            f"eq. (12) is ill-conditioned at omega={osc.omega!r} (condition estimate "
-            f"{cond:.3g}): the periodic motion may carry a relative error up to about "
-            f"{min(cond * _EPS, 1.0):.1g}. Typical cause: omega_i T close to a multiple of "
-            "2 pi for an undamped or very lightly damped mode (omega near N omega_i / k), "
-            "where the free motion of that mode is itself T-periodic",
-            IllConditionedWarning, stacklevel=stacklevel)
+    warn_ill_conditioned(osc.omega, float(cond), stacklevel=stacklevel + 1)
 
 
 def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray | None, T: float, delta: float,
@@ -263,13 +269,59 @@ def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray | None, T: floa
     return orbit
 
 
-def _general_orbit(osc: ImpactOscillator, N: int, pieces: tuple, delta: float, root: int
-                   ) -> PeriodicOrbit:
+def _general_orbit(osc: ImpactOscillator, N: int, form: general.PeriodicForm, delta: float,
+                   root: int, warn: bool) -> PeriodicOrbit:
     """The motion at phase delta on the first-order path (:mod:`impactcont.orbit.general`),
-    with its G and multipliers."""
-    state, h2, G, mu, gap, gap_t = general.orbit_values(osc, *pieces, delta)
-    return _make_orbit(osc, N, None, pieces[3], float(delta), root, h2, gap, gap_t, state, G,
-                       mu)
+    with its G and multipliers; `warn`: the low-impact-velocity warning of the single-point
+    API."""
+    v = general.orbit_values(form, float(delta))
+    orbit = _make_orbit(osc, N, None, form.T, float(delta), root, v.h2, v.gap_min,
+                        v.gap_min_time, v.state, v.G, v.multipliers)
+    if warn:
+        _warn_low_impact_velocity(orbit, v.velocity_scale, v.h2_error)
+    return orbit
+
+
+def _velocity_bound(osc: ImpactOscillator, scalars: np.ndarray) -> float:
+    """An upper bound of the rounding error of the kernel's impact velocity
+    ``x1p'(delta) / Delta`` at any phase (:func:`impactcont.orbit.dense.velocity_errors`
+    with ``|cos|, |sin| <= 1``, ``|delta| <= pi``): one cheap test per frequency that
+    keeps the exact check off the fast path. Zero for elastic undamped impacts, whose
+    velocity the kernel takes from the impact condition."""
+    _, Gam, B, _, Delta, _, _, _, _, elastic = scalars.tolist()
+    if elastic != 0.0:
+        return 0.0
+    return _EPS * (2.0 + math.pi) * osc.omega * (abs(Gam) + abs(B)) / (abs(Delta) + 1e-300)
+
+
+def _polished_velocity(osc: ImpactOscillator, scalars: np.ndarray, delta: float,
+                       sigma: float) -> tuple[float | None, float]:
+    """The impact velocity from its second exact form when the kernel's first has lost
+    digits (:func:`impactcont.orbit.dense.impact_velocity`): ``(sigma or None, relative
+    error estimate of the velocity kept)``."""
+    Gam, B, g, Delta = (float(x) for x in scalars[1:5])
+    cd, sd = math.cos(delta), math.sin(delta)
+    err_a, err_b = velocity_errors(Gam, B, g, Delta, osc.omega, osc.R, osc.b, delta, cd, sd)
+    if err_b < err_a:
+        better = (Gam * cd + B * sd - osc.b) / ((1.0 + osc.R) * g)
+        if second_form(sigma, better, err_a, err_b):
+            return better, err_b / max(abs(better), 1e-300)
+    return None, err_a / max(abs(sigma), 1e-300)
+
+
+def _repolish(osc: ImpactOscillator, modal: np.ndarray, scalars: np.ndarray, delta: float,
+              sigma: float) -> tuple:
+    """State, velocity scale, gap, its time, G and multipliers of the modal motion at phase
+    delta with the impact velocity ``sigma`` (a polished one; the dense multipliers of G
+    at any n: the secular ones recompute ``h2`` in the kernel's form)."""
+    from impactcont.orbit import kernel
+
+    w, a, _, u, _, _, u0, _ = osc.modes.kernel_arrays
+    state, scale = kernel.physical_state(modal, u, osc.omega, osc.R, delta, sigma)
+    best, gap_t = kernel.other_maximum(w, a, u0, modal, scalars, osc.omega, osc.R, delta,
+                                       sigma, math.nan)
+    G = modal_jacobian(osc, modal, delta, sigma)[0]
+    return state, float(scale), osc.b - float(best), float(gap_t), G, kernel.multipliers(G)
 
 
 def _warn_capped(capped: bool, T: float) -> None:
@@ -288,8 +340,10 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     """The periodic N-1 motion with impact phase ``delta`` (which must satisfy eq. 14).
 
     The impact velocity follows from the phase (``sigma = x1p'(delta) / Delta``, see
-    :mod:`impactcont.orbit.kernel`; for elastic impacts without damping from the gap),
-    then the interior-contact check of eq. (16); state, G and multipliers on access.
+    :mod:`impactcont.orbit.kernel`; for elastic impacts without damping from the gap;
+    from the gap too where the first form has lost digits and the phase is a root,
+    :func:`impactcont.orbit.dense.impact_velocity`), then the interior-contact check of
+    eq. (16); state, G and multipliers on access.
 
     Raises
     ------
@@ -304,16 +358,23 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     N = _check_N(N)
     _check_oscillator(osc)
     if osc.general:  # a general damping matrix or complex F: the first-order path
-        pieces = general.orbit_pieces(osc, N)
+        form = general.periodic_form(osc, N)
         if check:
-            _check_phase(osc, float(pieces[1][0, 0]), float(pieces[1][0, 1]), delta)
-        return _general_orbit(osc, N, pieces, float(delta), root)
+            _check_phase(osc, form.c, form.s, delta)
+        return _general_orbit(osc, N, form, float(delta), root, warn=False)
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
         w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
     if check and sc[9] == 0.0:  # elastic undamped motions satisfy the impact condition instead
         _check_phase(osc, float(sc[5]), float(sc[6]), delta)
     _warn_capped(capped, sc[0])
+    if _velocity_bound(osc, sc) > VELOCITY_POLISH * abs(sigma):
+        better, _ = _polished_velocity(osc, sc, float(delta), float(sigma))
+        if better is not None:
+            sigma = better
+            state, _, gap, gap_t, G, mu = _repolish(osc, modal, sc, float(delta), better)
+            return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
+                               float(gap), float(gap_t), state, G, mu)
     return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
                        float(gap), float(gap_t), state)
 
@@ -362,10 +423,14 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     osc = _check_oscillator(osc)
     N = _check_N(N)
     if osc.general:  # a general damping matrix or complex F: the first-order path
-        pieces = general.orbit_pieces(osc, N)
-        S = pieces[1]
-        return [_general_orbit(osc, N, pieces, delta, root)
-                for delta, root in general.roots(float(S[0, 0]), float(S[0, 1]), osc.b)]
+        form = general.periodic_form(osc, N)
+        found = general.roots(form.c, form.s, osc.b)
+        if len(found) == 2:
+            r2 = form.c ** 2 + form.s ** 2
+            _warn_fold(r2, osc.b, _EPS * math.sqrt(r2) / math.sqrt(r2 - osc.b ** 2))
+        elif found:  # a double root: c^2 + s^2 = b^2 exactly
+            _warn_fold(osc.b ** 2, osc.b, math.sqrt(_EPS))
+        return [_general_orbit(osc, N, form, delta, root, warn=True) for delta, root in found]
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
      jacobians, mults) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
@@ -381,35 +446,59 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
         log.debug("no N=%d motion: c^2 + s^2 = %.6g < b^2 = %.6g", N,
                   sc[5] ** 2 + sc[6] ** 2, osc.b ** 2)
         return []
-    if fold_error > _FOLD_ERROR_WARN:
-        r2 = sc[5] ** 2 + sc[6] ** 2
-        b = osc.b
-        warnings.warn(f"c^2 + s^2 = {r2:.17g} is within {(r2 - b * b) / r2:.2g} (relative) of "
-                      f"b^2 = {b * b:.17g}: a fold of eq. (15), where the two roots merge; the "
-                      f"impact phase is known only to about {fold_error:.1g} rad", NearFoldWarning,
-                      stacklevel=2)
+    _warn_fold(sc[5] ** 2 + sc[6] ** 2, osc.b, fold_error)
     _warn_capped(capped, sc[0])
+    eager = bool(jacobians.shape[1])
+    bound = _velocity_bound(osc, sc)
     out = []
     for k in range(count):
-        orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k],
-                            float(sigma[k]), float(gap[k]), float(gap_t[k]), states[k],
-                            *((jacobians[k], mults[k]) if jacobians.shape[1] else ()))
-        _warn_low_impact_velocity(orbit, float(scales[k]))
+        dk, sk, state, scale = float(delta[k]), float(sigma[k]), states[k], float(scales[k])
+        gk, tk = float(gap[k]), float(gap_t[k])
+        G, mu = (jacobians[k], mults[k]) if eager else (None, None)
+        h2_error = bound / max(abs(sk), 1e-300)
+        if h2_error > VELOCITY_POLISH:  # digits may be lost: the exact estimate
+            better, h2_error = _polished_velocity(osc, sc, dk, sk)
+            if better is not None:
+                sk = better
+                state, scale, gk, tk, G, mu = _repolish(osc, modal, sc, dk, better)
+        orbit = _make_orbit(osc, N, modal, float(sc[0]), dk, (1, -1)[k], sk, gk, tk, state,
+                            *((G, mu) if G is not None else ()))
+        _warn_low_impact_velocity(orbit, scale, h2_error)
         out.append(orbit)
     return out
 
 
-def _warn_low_impact_velocity(orbit: PeriodicOrbit, v_scale: float) -> None:
+def _warn_fold(r2: float, b: float, fold_error: float) -> None:
+    """Warn when the impact phase of eq. (15) is inexact near a fold (``fold_error`` rad)."""
+    if fold_error > _FOLD_ERROR_WARN:
+        warnings.warn(f"c^2 + s^2 = {r2:.17g} is within {(r2 - b * b) / r2:.2g} (relative) of "
+                      f"b^2 = {b * b:.17g}: a fold of eq. (15), where the two roots merge; the "
+                      f"impact phase is known only to about {fold_error:.1g} rad", NearFoldWarning,
+                      stacklevel=3)
+
+
+def _warn_low_impact_velocity(orbit: PeriodicOrbit, v_scale: float,
+                              h2_error: float = 0.0) -> None:
     """Warn when G is inexact because the impact velocity is tiny (G ~ 1/h2, eq. 25).
 
     ``h2`` is a sum of terms of the size of the velocities of the motion
     (``v_scale = max(|x'|, omega |x|)`` at the impact), so it carries an absolute
     error of about ``eps * v_scale``; G inherits ``eps * v_scale / |h2|``.
     Only the single-point API warns: a branch passes through ``h2 = 0`` at a ZV point
-    on purpose, and its detection evaluates G there.
+    on purpose, and its detection evaluates G there. ``h2_error`` is the estimated
+    relative error of ``h2`` itself (:func:`impactcont.orbit.dense.impact_velocity`):
+    both its exact forms are small differences of large terms near a zero-velocity
+    impact.
     """
     osc, h2 = orbit.oscillator, orbit.impact_velocity
-    if not abs(h2) * _H2_REL_ERROR_WARN >= _EPS * v_scale:
+    if h2_error > _H2_REL_ERROR_WARN:
+        warnings.warn(f"impact velocity h2 = {h2:.3g} is a small difference of large terms "
+                      f"in eq. (12)-(15) (either exact form): it is known only to a relative "
+                      f"error of about {min(h2_error, 1.0):.1g}, and G of eq. (25) ~ 1/h2 "
+                      f"with it (root {orbit.root:+d}, delta={orbit.delta!r}, "
+                      f"omega={osc.omega!r}, b={osc.b!r})", LowImpactVelocityWarning,
+                      stacklevel=3)
+    elif not abs(h2) * _H2_REL_ERROR_WARN >= _EPS * v_scale:
         warnings.warn(f"impact velocity h2 = {h2:.3g} is tiny against the velocity scale "
                       f"{v_scale:.3g} of the motion: G of eq. (25) grows like 1/h2 and may carry "
                       f"a relative error of about {_EPS * v_scale / max(abs(h2), 1e-300):.1g} "
