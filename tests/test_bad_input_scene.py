@@ -108,6 +108,9 @@ _CASES = [
     ("multi_impact in eta with C", damped(C) + _SIM + '[[multi_impact]]\nstart = "sim"\nN = 1\n'
      'p = 1\nparameter = "eta"\nbounds = [0.0, 0.5]\n', "multi_impact[0].parameter",
      "damping matrix"),
+    ("multi_impact in b closing the clearance", OSCILLATOR + "b_low = 0.5\n" + _SIM
+     + '[[multi_impact]]\nstart = "sim"\nN = 1\np = 2\nparameter = "b"\nbounds = [-1.0, 1.0]\n',
+     "multi_impact[0].bounds", "the clearance b + b_low between them closes"),
 ]
 
 

@@ -87,6 +87,7 @@ from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.model.modal import decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.dense import pole_free_pd_matrix
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
@@ -306,6 +307,7 @@ class CurveProblem:
                  ) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {osc!r}")
+        require_paper_stops(osc, "the codim-1 curves")  # stops: mass 1, one stop only
         self._general = osc.general  # a damping matrix C or complex F: the first-order path
         # computed once here, shared by every replace() along the curve
         _ = osc.first_order if self._general else osc.modes

@@ -34,6 +34,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import make_options, multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.problems import CONTINUABLE_PARAMETERS
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.scene.entries import (
     CONTINUATION_KEYS,
     PARAMETER_RANGES,
@@ -200,12 +201,22 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
         library_check(where.key("parameter"), check_parameter, osc, self.parameter)
         library_check(where, make_options, self.bounds, keys=("bounds", *CONTINUATION_KEYS),
                       **self.continuation_options())
+        # the stops bound the parameter (b > -b_low with a lower stop), as the run refuses
+        library_check(where.key("bounds"), _check_stop_limits, osc, self.N, self.p,
+                      self.parameter, self.bounds)
         value = getattr(osc, self.parameter)
         lo, hi = self.bounds
         if value is None or not lo <= value <= hi:
             raise where.key("bounds").error(
                 f"{list(self.bounds)} does not contain {self.parameter} = {value!r} of "
                 f"simulation {self.start!r}", f"bounds around {self.parameter} = {value!r}")
+
+
+def _check_stop_limits(osc: ImpactOscillator, N: int, p: int, parameter: str,
+                       bounds: tuple[float, float]) -> None:
+    """The check :func:`~impactcont.multi_impact_continuation` makes of bounds against the
+    stops (with a lower stop, ``b`` must stay above ``-b_low``)."""
+    MultiImpactBranchProblem(osc, N, p, parameter).check_bounds(bounds)
 
 
 #: How far (in forcing periods) the impact N periods before a simulation's last one may lie
