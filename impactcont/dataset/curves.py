@@ -30,6 +30,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.dataset.attributes import check_attributes, dataset_tag
+from impactcont.dataset.multi import validate_multi_impact_dataset
 from impactcont.dataset.schema import (
     CONVENTIONS,
     PARAMETERS,
@@ -37,7 +39,6 @@ from impactcont.dataset.schema import (
     _Var,
     check_variables,
     point_coords,
-    validate_branch_dataset,
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.vocabulary import CODIM2_LABELS, LABELS, STATUSES
@@ -334,7 +335,7 @@ def _check_kind(ds: Any, kind: str, attrs: Sequence[str]) -> None:
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"expected an xarray.Dataset of a {kind}; got {type(ds).__name__}")
     missing = [a for a in attrs if a not in ds.attrs]
-    if missing or ds.attrs.get("impactcont_dataset") != kind:
+    if missing or dataset_tag(ds) != kind:
         raise ValueError(f"not a {kind} dataset: missing attribute(s) {missing} or "
                          f"impactcont_dataset != {kind!r}")
 
@@ -348,43 +349,60 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
         Naming the missing or malformed attribute or variable.
     """
     _check_kind(ds, "curve", _CURVE_ATTRS)
-    if ds.attrs["kind"] not in CURVE_KINDS:
-        raise ValueError(f"attribute 'kind' must be one of {CURVE_KINDS}; got {ds.attrs['kind']!r}")
-    parameters = str(ds.attrs["parameters"]).split(",")
+    kind = ds.attrs["kind"]
+    if not isinstance(kind, str) or kind not in CURVE_KINDS:
+        raise ValueError(f"attribute 'kind' must be one of {CURVE_KINDS}; got {kind!r}")
+    text = ds.attrs["parameters"]
+    parameters = text.split(",") if isinstance(text, str) else []
     if len(parameters) != 2 or not set(parameters) <= set(PARAMETERS):
         raise ValueError(f"attribute 'parameters' must name two of {sorted(PARAMETERS)}; got "
-                         f"{ds.attrs['parameters']!r}")
+                         f"{text!r}")
     expected = {k: (("point", *s.extra_dims), s.kind)
                 for k, s in _curve_variables(parameters).items()}
     expected.update({codim2_variable(k): (("codim2", *s.extra_dims), s.kind)
                      for k, s in _codim2_fields(parameters).items()})
     check_variables(ds, expected, "curve")
-    labels = set(np.asarray(ds[codim2_variable("label")].values).tolist())
-    if not labels <= set(CODIM2_LABELS):
-        raise ValueError(f"codim2_label must hold labels in {CODIM2_LABELS}; got {sorted(labels)}")
+    for key, allowed in (("label", CODIM2_LABELS), ("status", CODIM2_STATUSES)):
+        values = set(np.asarray(ds[codim2_variable(key)].values).tolist())
+        if not values <= set(allowed):
+            raise ValueError(f"{codim2_variable(key)} must hold values in {allowed}; got "
+                             f"{sorted(values)}")
+    check_attributes(ds, "curve")
     return ds
 
 
 def validate_map_dataset(ds: Any) -> xr.Dataset:
-    """Check that ``ds`` has the layout of :func:`map_dataset`; return it."""
+    """Check that ``ds`` has the layout of :func:`map_dataset`; return it.
+
+    ``spectral_radius`` and ``critical_multiplier`` are optional (a map computed
+    with ``spectral_radius=False`` has neither); the other variables of
+    :data:`MAP_VARIABLES` are required.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the missing or malformed attribute or variable.
+    """
     _check_kind(ds, "map", _MAP_ATTRS)
-    check_variables(ds, {k: (dims, s.kind) for k, (s, dims) in MAP_VARIABLES.items()}, "map")
+    check_variables(ds, {k: (dims, s.kind) for k, (s, dims) in MAP_VARIABLES.items()
+                         if k not in _OPTIONAL_MAP_VARIABLES or k in ds.variables}, "map")
+    check_attributes(ds, "map")
     return ds
 
 
 def validate_dataset(ds: Any) -> xr.Dataset:
-    """Validate a branch, curve or map dataset according to its ``impactcont_dataset`` attr."""
-    kind = ds.attrs.get("impactcont_dataset") if isinstance(ds, xr.Dataset) else None
+    """Validate a branch (N-1 or N-p), curve or map dataset by its ``impactcont_dataset``."""
+    kind = dataset_tag(ds) if isinstance(ds, xr.Dataset) else None
     if kind == "curve":
         return validate_curve_dataset(ds)
     if kind == "map":
         return validate_map_dataset(ds)
-    return validate_branch_dataset(ds)
+    return validate_multi_impact_dataset(ds)
 
 
 def normalise_dataset(ds: xr.Dataset) -> xr.Dataset:
     """Give the string variables of a curve read from NetCDF their schema dtype."""
-    if ds.attrs.get("impactcont_dataset") == "curve":
+    if dataset_tag(ds) == "curve":
         for key, dtype in (("label", _LABEL_DTYPE), ("status", _STATUS_DTYPE)):
             name = codim2_variable(key)
             if name in ds.variables and ds[name].dtype != dtype:

@@ -48,6 +48,13 @@ import numpy as np
 import xarray as xr
 
 # branch, curve or map dataset, by its "impactcont_dataset" attribute (branches have none)
+from impactcont.dataset.attributes import (
+    SECTION_KINDS,
+    check_attributes,
+    check_file_attributes,
+    dataset_kind,
+    dataset_tag,
+)
 from impactcont.dataset.curves import normalise_dataset, validate_dataset
 from impactcont.dataset.schema import (
     _LABEL_DTYPE,
@@ -67,8 +74,8 @@ ENGINE = "netcdf4"
 #: Root attribute of a scene output naming its section (``"orbits"``, ``"branches"``, ...).
 SECTION_ATTRIBUTE = "impactcont_kind"
 
-# Datasets validated against a schema by validate_dataset: branches (no tag), curves, maps.
-_SCHEMA_TAGS = (None, "curve", "map")
+# Kinds of dataset validated against a schema by validate_dataset.
+_SCHEMA_KINDS = ("branch", "curve", "map")
 _PART, _OF = "impactcont_complex_part", "impactcont_complex_variable"
 _INDEX = {
     "group_name": ("group name", "Path of the group: xarray.open_dataset(file, group=NAME)."),
@@ -284,22 +291,44 @@ def _check_group_name(name: Any) -> str:
     return name
 
 
-def _validate(ds: xr.Dataset, section: Any) -> None:
-    """Check ``ds`` against its schema: branch, curve or map.
+def _check(ds: xr.Dataset, section: Any, validate: bool) -> None:
+    """Check the attributes impactcont reads and, with ``validate``, the schema of ``ds``.
 
-    Other results (orbits, robust, simulations, sections a plugin registers)
-    have no schema here: their layout is their section's (``docs/outputs.md``).
+    The attributes (:mod:`impactcont.dataset.attributes`) are checked whatever
+    ``validate``; the schema of branches (N-1 and N-p), curves and maps only with
+    it. Other results (orbits, robust, simulations, sections a plugin registers)
+    have no schema of variables here: their layout is their section's
+    (``docs/outputs.md``). A dataset of no known kind in a file of
+    :func:`save` (no section) is checked as a branch.
+
+    Raises
+    ------
+    _SchemaError
+        The schema check failed (only with ``validate``).
+    ValueError
+        An attribute is missing or wrong.
     """
-    tag = ds.attrs.get("impactcont_dataset")
-    if tag in _SCHEMA_TAGS and (tag is not None or section in (None, "branches")):
-        validate_dataset(ds)
+    kind = dataset_kind(ds, section)
+    if kind is not None:
+        check_attributes(ds, kind, in_section=isinstance(section, str)
+                         and section in SECTION_KINDS)
+    if not validate:
+        return
+    if kind in _SCHEMA_KINDS or (kind is None and dataset_tag(ds) is None and section is None):
+        try:
+            validate_dataset(ds)
+        except ValueError as exc:
+            raise _SchemaError(str(exc)) from exc
+
+
+class _SchemaError(ValueError):
+    """A dataset that does not follow its schema: ``validate=False`` reads or writes it."""
 
 
 def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
     """The object to write: a Dataset, or a DataTree of groups."""
     if isinstance(obj, xr.Dataset):
-        if validate:
-            _validate(obj, None)
+        _check(obj, None, validate)
         return obj
     if isinstance(obj, xr.DataTree):
         tree = obj
@@ -322,19 +351,19 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
     else:
         raise TypeError(f"obj must be an xarray.Dataset, a mapping of name to Dataset or an "
                         f"xarray.DataTree; got {type(obj).__name__}")
-    if validate:
-        section = tree.attrs.get(SECTION_ATTRIBUTE)
-        for node in tree.subtree:
-            if node.has_data:
-                try:
-                    _validate(node.to_dataset(inherit=False), section)
-                except ValueError as exc:
-                    raise ValueError(f"group {node.path!r}: {exc}") from exc
+    check_file_attributes(tree.attrs)
+    section = tree.attrs.get(SECTION_ATTRIBUTE)
+    for node in tree.subtree:
+        if node.has_data:
+            try:
+                _check(node.to_dataset(inherit=False), section, validate)
+            except ValueError as exc:
+                raise ValueError(f"group {node.path!r}: {exc}") from exc
     return tree
 
 
 def _kind(ds: xr.Dataset) -> str:
-    tag = ds.attrs.get("impactcont_dataset")
+    tag = dataset_tag(ds)
     if tag is not None:
         return str(tag)
     return "branch" if "parameter" in ds.attrs and "point" in ds.dims else ""
@@ -381,13 +410,23 @@ def _split_complex(ds: xr.Dataset) -> xr.Dataset:
     return out
 
 
+def _is_part(var: Any, part: str) -> bool:
+    value = var.attrs.get(_PART)
+    return isinstance(value, str) and value == part
+
+
 def _join_complex(ds: xr.Dataset) -> xr.Dataset:
     """Inverse of :func:`_split_complex`."""
-    for key in [k for k, v in ds.data_vars.items() if v.attrs.get(_PART) == "real"]:
+    for key in [k for k, v in ds.data_vars.items() if _is_part(v, "real")]:
         name = str(ds[key].attrs.get(_OF))
         real, imag = ds[key].variable, ds.get(f"{name}_imag")
-        if imag is None or imag.attrs.get(_PART) != "imag" or name in ds.variables:
+        if imag is None or not _is_part(imag, "imag") or name in ds.variables:
             continue
+        if (real.dims != imag.dims or real.shape != imag.shape
+                or real.dtype.kind not in "iuf" or imag.dtype.kind not in "iuf"):
+            raise ValueError(f"variables {key!r} and {name + '_imag'!r} (the real and imaginary "
+                             f"parts of {name!r}) must be real numbers of the same dimensions; "
+                             f"got {real.dims} {real.dtype} and {imag.dims} {imag.dtype}")
         attrs = {k: v for k, v in real.attrs.items() if k not in (_PART, _OF)}
         if "long_name" in attrs:
             attrs["long_name"] = str(attrs["long_name"]).removeprefix("real part of ")
@@ -705,12 +744,41 @@ def _read_tree(path: Path) -> xr.DataTree:
     return tree
 
 
+def _loaded(ds: xr.Dataset, section: Any, validate: bool, where: str) -> xr.Dataset:
+    """``ds`` as read (:func:`_normalise`), checked (:func:`_check`); errors name ``where``."""
+    try:
+        ds = _normalise(ds)
+        _check(ds, section, validate)
+    except _SchemaError as exc:
+        raise ValueError(f"{where}: {exc}. impactcont.load(path, validate=False) reads it "
+                         f"without this check (impactcont.save(..., validate=False) writes "
+                         f"such files)") from exc
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc} (impactcont checks the attributes it reads, "
+                         f"whatever validate; xarray.open_datatree(path) opens the file "
+                         f"unchecked)") from exc
+    return ds
+
+
 def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.DataTree:
     """Read a file written by impactcont, fully into memory (the file is closed).
 
     Reads every file the package writes: :func:`save` of a branch, curve or
     map, and each ``<section>.nc`` of a scene run (orbits, branches, robust,
-    simulations, curves, maps).
+    simulations, curves, maps, switches, multi_impact).
+
+    Two checks, the same as :func:`save`'s, so that what :func:`save` writes
+    :func:`load` reads with the same ``validate``:
+
+    - the attributes impactcont reads (the oscillator JSON, ``N``, the
+      continued parameter, the impact pattern, ...: the table of
+      :mod:`impactcont.dataset.attributes`) are checked always, whatever
+      ``validate``: a file whose attributes were edited is refused rather than
+      misread (:func:`save` never writes one);
+    - with ``validate`` (default), branches (N-1 and N-p), curves and maps are
+      checked against their schema (variables, dimensions, dtypes). A dataset
+      written with ``save(..., validate=False)`` that does not follow it reads
+      with ``validate=False``; ``validate=True`` refuses it and says so.
 
     Parameters
     ----------
@@ -731,7 +799,10 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
     FileNotFoundError
         ``path`` does not exist.
     ValueError
-        ``path`` is not a readable NetCDF file or holds no impactcont dataset.
+        ``path`` is not a readable NetCDF file, holds no impactcont dataset, an
+        attribute impactcont reads is missing or wrong, or (with ``validate``) a
+        dataset does not follow its schema; the message names the file, the
+        group and the attribute or variable, its value and what is allowed.
     """
     target = _path(path)
     if not target.is_file():
@@ -740,25 +811,20 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
         tree = _read_tree(target)
     except (OSError, ValueError, RuntimeError) as exc:
         raise ValueError(f"cannot read {str(path)!r} as NetCDF-4: {exc}") from exc
+    shown = f"file {str(path)!r}"
     if not tree.children:
         if not tree.has_data:
-            raise ValueError(f"file {str(path)!r} holds no dataset (empty root group)")
-        ds = _normalise(tree.to_dataset())
-        if validate:
-            try:
-                _validate(ds, None)
-            except ValueError as exc:
-                raise ValueError(f"file {str(path)!r}: {exc}") from exc
-        return ds
+            raise ValueError(f"{shown} holds no dataset (empty root group)")
+        return _loaded(tree.to_dataset(), None, validate, shown)
+    try:
+        check_file_attributes(tree.attrs)
+    except ValueError as exc:
+        raise ValueError(f"{shown}, root group: {exc}") from exc
     if set(tree.data_vars) == set(_INDEX):
         tree.dataset = xr.Dataset(attrs=tree.attrs)
     section = tree.attrs.get(SECTION_ATTRIBUTE)
     for node in tree.subtree:
         if node.has_data:
-            node.dataset = _normalise(node.to_dataset(inherit=False))
-            if validate:
-                try:
-                    _validate(node.to_dataset(inherit=False), section)
-                except ValueError as exc:
-                    raise ValueError(f"file {str(path)!r}, group {node.path!r}: {exc}") from exc
+            node.dataset = _loaded(node.to_dataset(inherit=False), section, validate,
+                                   f"{shown}, group {node.path!r}")
     return tree

@@ -23,20 +23,26 @@ A dataset without the ``impact`` dimension (an N-1 branch of
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from impactcont.dataset.attributes import (
+    check_pattern_attribute,
+    impacts_attribute,
+    oscillator_attribute,
+)
 from impactcont.dataset.schema import (
     _Var,
     branch_dataset,
+    check_variables,
     special_variable,
     validate_branch_dataset,
 )
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import UPPER
 
 __all__ = ["IMPACT_VARIABLES", "impacts_of", "multi_impact_dataset", "pattern_of",
            "validate_multi_impact_dataset"]
@@ -67,13 +73,29 @@ SPECIAL_IMPACT_VARIABLES = ("delta_k", "impact_velocity_k", "flight_time_k", "st
 
 
 def impacts_of(ds: xr.Dataset) -> int:
-    """Impacts per motion of a branch dataset: ``ds.attrs["impacts"]``, 1 for an N-1 branch."""
-    return int(ds.attrs.get("impacts", 1))
+    """Impacts per motion of a branch dataset: ``ds.attrs["impacts"]``, 1 for an N-1 branch.
+
+    Raises
+    ------
+    ValueError
+        ``impacts`` is not an integer >= 1 or differs from the size of the
+        dimension ``impact``.
+    """
+    return impacts_attribute(ds)
 
 
 def pattern_of(ds: xr.Dataset) -> str:
-    """The impact sequence of a branch dataset: ``ds.attrs["pattern"]``, all ``U`` if absent."""
-    return str(ds.attrs.get("pattern", "U" * impacts_of(ds)))
+    """The impact sequence of a branch dataset: ``ds.attrs["pattern"]``, all ``U`` if absent.
+
+    Raises
+    ------
+    ValueError
+        ``pattern`` is not p letters ``U``/``L`` (``L`` only with a lower stop).
+    """
+    p = impacts_of(ds)
+    if "pattern" not in ds.attrs:
+        return UPPER * p
+    return check_pattern_attribute(ds.attrs["pattern"], p, _two_sided(ds))
 
 
 def _impact_array(key: str, value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
@@ -162,9 +184,8 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                                    "description": "Impact k of the motion; impact 0 is the "
                                    "one of delta and state."}))
     ds.attrs["impacts"] = int(p)
-    pattern = "U" * int(p) if pattern is None else pattern
-    _check_pattern_attr(pattern, int(p), oscillator.stops.two_sided)
-    ds.attrs["pattern"] = pattern
+    pattern = UPPER * int(p) if pattern is None else pattern
+    ds.attrs["pattern"] = check_pattern_attribute(pattern, int(p), oscillator.stops.two_sided)
     for key, value in (extra_attrs or {}).items():
         if not isinstance(value, (str, int, float, np.integer, np.floating)) \
                 or isinstance(value, bool):
@@ -173,28 +194,12 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
     return ds
 
 
-def _check_pattern_attr(pattern: Any, p: int, two_sided: bool | None = None) -> None:
-    """The ``pattern`` attribute: p letters U/L, ``L`` only with a lower stop.
-
-    ``two_sided``: whether the dataset's oscillator has a lower stop (None: unknown).
-    """
-    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - {"U", "L"}:
-        raise ValueError(f"attribute pattern must be {p} letters U/L (the stop of each "
-                         f"impact); got {pattern!r}")
-    if two_sided is False and "L" in pattern:
-        raise ValueError(f"attribute pattern={pattern!r} has impacts on the lower stop, but the "
-                         "dataset's oscillator has none (its stops have no b_low); allowed: "
-                         f"{'U' * p}")
-
-
 def _two_sided(ds: xr.Dataset) -> bool | None:
-    """Whether the oscillator JSON of a dataset has a lower stop (None if unreadable)."""
+    """Whether the dataset's oscillator has a lower stop (None if its attribute is unreadable)."""
     try:
-        data = json.loads(ds.attrs["oscillator"])
-    except (KeyError, TypeError, ValueError):
+        return oscillator_attribute(ds).stops.two_sided
+    except ValueError:
         return None
-    stops = data.get("stops") if isinstance(data, dict) else None
-    return isinstance(stops, dict) and stops.get("b_low") is not None
 
 
 def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
@@ -211,26 +216,14 @@ def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
         As :func:`validate_branch_dataset`, and for a per-impact variable that is
         missing or has the wrong dimensions, or ``impacts`` that does not match.
     """
-    validate_branch_dataset(ds)
+    validate_branch_dataset(ds)  # with the attributes impacts and pattern
     if "impact" not in ds.dims:
-        if impacts_of(ds) != 1:
-            raise ValueError(f"attribute impacts={ds.attrs['impacts']!r} but the dataset has "
-                             "no 'impact' dimension")
         return ds
-    p = impacts_of(ds)
-    if ds.sizes["impact"] != p:
-        raise ValueError(f"dimension 'impact' has size {ds.sizes['impact']}; attribute "
-                         f"impacts={p}")
-    if "pattern" in ds.attrs:
-        _check_pattern_attr(ds.attrs["pattern"], p, _two_sided(ds))
+    expected: dict[str, tuple[tuple[str, ...], str]] = {}
     for key, spec in IMPACT_VARIABLES.items():
-        expected = [(key, ("point", "impact", *spec.extra_dims))]
+        expected[key] = (("point", "impact", *spec.extra_dims), spec.kind)
         if key in SPECIAL_IMPACT_VARIABLES:
-            expected.append((special_variable(key), ("special", "impact", *spec.extra_dims)))
-        for name, dims in expected:
-            if name not in ds.variables:
-                raise ValueError(f"not an N-p branch dataset: missing variable {name!r}")
-            if ds[name].dims != dims:
-                raise ValueError(f"variable {name!r} must have dims {dims}; got "
-                                 f"{ds[name].dims}")
+            expected[special_variable(key)] = (("special", "impact", *spec.extra_dims),
+                                               spec.kind)
+    check_variables(ds, expected, "N-p branch")
     return ds

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.dataset.attributes import check_attributes, oscillator_attribute
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.vocabulary import LABELS, STATUSES
 from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
@@ -489,7 +490,7 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
     if missing:
         raise ValueError(f"not a branch dataset: missing attribute(s) {missing}")
     parameter = ds.attrs["parameter"]
-    if parameter not in PARAMETERS:
+    if not isinstance(parameter, str) or parameter not in PARAMETERS:
         raise ValueError(f"not a branch dataset: attribute 'parameter' must be one of "
                          f"{sorted(PARAMETERS)}; got {parameter!r}")
     expected: dict[str, tuple[tuple[str, ...], str]] = {}
@@ -509,6 +510,11 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
     if not labels <= set(SPECIAL_LABELS):
         raise ValueError(f"variable 'special_label' must hold labels in "
                          f"{list(SPECIAL_LABELS)}; got {sorted(labels)}")
+    statuses = set(np.asarray(ds["special_status"]).tolist())
+    if not statuses <= set(SPECIAL_STATUSES):
+        raise ValueError(f"variable 'special_status' must hold statuses in "
+                         f"{list(SPECIAL_STATUSES)}; got {sorted(statuses)}")
+    check_attributes(ds, "branch")
     return ds
 
 
@@ -526,13 +532,17 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
     Returns
     -------
     ImpactOscillator
+
+    Raises
+    ------
+    ValueError
+        The ``oscillator`` attribute is missing or is not an oscillator's JSON
+        (:func:`~impactcont.dataset.attributes.oscillator_attribute`), or
+        ``point`` is out of range.
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
-    text = ds.attrs.get("oscillator")
-    if not isinstance(text, str):
-        raise ValueError(f"dataset has no 'oscillator' attribute with JSON text; got {text!r}")
-    osc = ImpactOscillator.from_json(text)
+    osc = oscillator_attribute(ds)
     if point is None:
         return osc
     npoints = ds.sizes.get("point", 0)
@@ -540,5 +550,11 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
             or not -npoints <= point < npoints:
         raise ValueError(f"point must be an integer index in [{-npoints}, {npoints}); "
                          f"got {point!r}")
-    names = dict.fromkeys(["omega", "b", ds.attrs.get("parameter", "omega")])
+    parameter = ds.attrs.get("parameter", "omega")
+    names = dict.fromkeys(["omega", "b", parameter if isinstance(parameter, str) else "?"])
+    missing = [k for k in names if k not in ds.variables or ds[k].dims != ("point",)]
+    if missing:
+        raise ValueError(f"the dataset has no column (on 'point') of {missing}: the values of "
+                         f"omega, b and the continued parameter (attribute 'parameter') "
+                         f"at each point are needed")
     return osc.replace(**{k: float(ds[k].values[point]) for k in names})

@@ -1,0 +1,463 @@
+"""The attributes impactcont reads back from its datasets, and their check.
+
+Readers of a saved dataset (``impactcont info`` and ``plot``, the plots, the
+drivers that start from a branch) interpret some of its attributes: the
+oscillator as JSON, ``N``, the continued parameter, the impact pattern of an
+N-p branch, ... A file whose attributes were edited would be misread (a
+pattern ``"XX"`` listed as a motion) or fail deep inside a reader.
+:func:`check_attributes` checks every attribute impactcont reads, for each
+kind of dataset it writes, and names the attribute, its value and what is
+allowed. :func:`impactcont.dataset.save` and :func:`impactcont.dataset.load`
+run it on every dataset whatever their ``validate`` (which switches the check
+of the variables against the schema): a dataset with wrong attributes is never
+written, and a file with wrong attributes is never read as if it were right.
+
+The kind of a dataset is its attribute ``impactcont_dataset`` (a branch has
+none); in a file of a built-in scene section it must be the section's
+(:data:`SECTION_KINDS`). Datasets of other kinds (a plugin's) are left to
+their section. Each attribute of :data:`KIND_ATTRIBUTES` is checked where the
+dataset has it; which attributes a dataset must have is part of its schema
+(:func:`~impactcont.dataset.validate_branch_dataset`, ...), except in a file of
+a built-in scene section, whose description reads :data:`SECTION_ATTRIBUTES`.
+
+========== ==================================================================
+kind       attributes checked, and what must hold
+========== ==================================================================
+any        ``oscillator``: JSON of an :class:`~impactcont.ImpactOscillator`
+           with ``2n`` = the sizes of ``component`` and ``multiplier``;
+           ``title``, ``impactcont_version``, ``history``: text
+branch     ``N``: integer >= 1, ``2 pi N / omega`` the period of the N-p
+           motions stored (the sum of ``flight_time_k``); ``parameter``: a
+           continuable parameter with its column; ``options``: a JSON
+           object; ``impacts``: p >= 1, the size of ``impact`` (required
+           with that dimension); ``pattern``: p letters ``U``/``L``, ``L``
+           only with a lower stop (required with a lower stop)
+curve      ``kind``: SN, PD, NS, GR or ZV; ``N``; ``parameters``: two
+           different parameters with their columns; ``options``
+map        ``options``
+orbits     ``N`` (``2 pi N / omega`` = the variable ``period``); ``which``,
+           ``note``: text
+robust     ``N``; ``vary``: JSON object of ``[low, high]``; ``nominal``: JSON
+           object of numbers; ``argmax``: JSON object
+simulation ``start``, ``status``: text; ``periods``: a number > 0;
+           ``impact_stops``: one letter ``U``/``L`` per impact (required
+           with a lower stop)
+========== ==================================================================
+
+The root attributes of a scene file (``impactcont_kind``, ``scene``,
+``scene_file``, ``title``, ...) are checked by :func:`check_file_attributes`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import LOWER, UPPER
+from impactcont.vocabulary import LABELS, PARAMETERS
+
+__all__ = ["KIND_ATTRIBUTES", "SECTION_ATTRIBUTES", "SECTION_KINDS", "check_attributes",
+           "check_file_attributes", "check_pattern_attribute", "dataset_kind", "dataset_tag",
+           "impacts_attribute", "oscillator_attribute"]
+
+#: The kind of the datasets in a file of each built-in scene section.
+SECTION_KINDS: dict[str, str] = {
+    "orbits": "orbits", "branches": "branch", "switches": "branch", "multi_impact": "branch",
+    "robust": "robust", "simulations": "simulation", "curves": "curve", "maps": "map"}
+
+# Attributes every kind may carry, shown as text by ``impactcont info``.
+_TEXT = ("title", "impactcont_version", "history")
+
+#: ``kind -> attributes checked where present`` (``oscillator`` first: the others may
+#: depend on it).
+KIND_ATTRIBUTES: dict[str, tuple[str, ...]] = {
+    "branch": ("oscillator", "N", "parameter", "options", "impacts", "pattern", *_TEXT),
+    "curve": ("oscillator", "kind", "N", "parameters", "options", *_TEXT),
+    "map": ("oscillator", "options", *_TEXT),
+    "orbits": ("oscillator", "N", "which", "note", *_TEXT),
+    "robust": ("oscillator", "N", "vary", "nominal", "argmax", *_TEXT),
+    "simulation": ("oscillator", "start", "periods", "status", "impact_stops", *_TEXT),
+}
+
+#: ``kind -> attributes a dataset in a file of a built-in scene section must carry``
+#: (the section's description and plots read them).
+SECTION_ATTRIBUTES: dict[str, tuple[str, ...]] = {
+    "branch": ("oscillator", "N", "parameter"),
+    "curve": ("oscillator", "kind", "N", "parameters"),
+    "map": ("oscillator",),
+    "orbits": ("oscillator", "N"),
+    "robust": ("oscillator", "N", "vary", "nominal"),
+    "simulation": ("oscillator", "start", "periods", "status"),
+}
+
+_OSCILLATOR = "the oscillator as JSON text (ImpactOscillator.to_json())"
+
+
+def _shown(value: Any, limit: int = 100) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit - 3]}..."
+
+
+def _refused(name: str, value: Any, allowed: str, why: str = "") -> ValueError:
+    return ValueError(f"attribute {name!r} must be {allowed}; got {_shown(value)}{why}")
+
+
+def _integer(name: str, value: Any, allowed: str) -> int:
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer))
+            or value < 1):
+        raise _refused(name, value, allowed)
+    return int(value)
+
+
+def _json(name: str, value: Any, allowed: str) -> Any:
+    if not isinstance(value, str):
+        raise _refused(name, value, allowed)
+    try:
+        return json.loads(value)
+    except ValueError as exc:  # json.JSONDecodeError
+        raise _refused(name, value, allowed, f", which is not JSON ({exc})") from None
+
+
+def _json_object(name: str, value: Any, allowed: str = "a JSON object (text)") -> dict:
+    data = _json(name, value, allowed)
+    if not isinstance(data, dict):
+        raise _refused(name, value, allowed)
+    return data
+
+
+def _real(x: Any) -> bool:
+    return (not isinstance(x, (bool, np.bool_)) and isinstance(x, (int, float, np.integer,
+                                                                   np.floating))
+            and math.isfinite(x))
+
+
+def oscillator_attribute(ds: xr.Dataset) -> ImpactOscillator:
+    """The oscillator of a dataset, from its ``oscillator`` attribute, checked.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+
+    Returns
+    -------
+    ImpactOscillator
+
+    Raises
+    ------
+    ValueError
+        The attribute is missing, is not JSON, does not describe an oscillator,
+        or its number of masses ``n`` differs from the dataset's dimensions
+        ``component`` and ``multiplier`` (``2n``).
+    """
+    if "oscillator" not in ds.attrs:
+        raise ValueError(f"attribute 'oscillator' is missing: it must be {_OSCILLATOR}")
+    text = ds.attrs["oscillator"]
+    data = _json("oscillator", text, _OSCILLATOR)
+    if not isinstance(data, dict):
+        raise _refused("oscillator", text, f"{_OSCILLATOR}: a JSON object")
+    try:
+        osc = ImpactOscillator.from_dict(data)
+    except (TypeError, ValueError, KeyError) as exc:
+        raise _refused("oscillator", text, _OSCILLATOR,
+                       f", which is not a valid oscillator ({exc})") from None
+    for dim in ("component", "multiplier"):
+        if dim in ds.sizes and ds.sizes[dim] != 2 * osc.n:
+            raise ValueError(f"attribute 'oscillator' has n={osc.n} masses, but dimension "
+                             f"{dim!r} has size {ds.sizes[dim]}; allowed: an oscillator of "
+                             f"{ds.sizes[dim] / 2:g} masses (size 2n)")
+    return osc
+
+
+def impacts_attribute(ds: xr.Dataset) -> int:
+    """Impacts per motion ``p`` of a branch: attribute ``impacts``, 1 when absent.
+
+    Raises
+    ------
+    ValueError
+        ``impacts`` is not an integer >= 1, or differs from the size of the
+        dimension ``impact`` (a branch without that dimension has ``p = 1``).
+    """
+    p = _integer("impacts", ds.attrs.get("impacts", 1),
+                 "an integer >= 1 (impacts per motion)")
+    size = ds.sizes.get("impact", 1)
+    if p != size:
+        where = (f"the dimension 'impact' has size {size}" if "impact" in ds.sizes
+                 else "the dataset has no dimension 'impact' (p = 1)")
+        raise ValueError(f"attribute 'impacts' must equal the impacts per motion: {where}; "
+                         f"got {_shown(ds.attrs.get('impacts'))}")
+    return p
+
+
+def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
+                            name: str = "pattern") -> str:
+    """The impact pattern of an N-p branch: ``p`` letters, the stop of each impact.
+
+    Parameters
+    ----------
+    pattern : Any
+        The attribute's value.
+    p : int
+        Impacts per motion.
+    two_sided : bool or None
+        Whether the dataset's oscillator has a lower stop (None: unknown).
+    name : str
+        The attribute, for the message.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        Not ``p`` letters from ``U`` (upper stop) and ``L`` (lower stop), or ``L``
+        without a lower stop.
+    """
+    letters = (UPPER, LOWER) if two_sided is not False else (UPPER,)
+    stops = " and ".join(f"{s!r} ({w} stop)" for s, w in zip(letters, ("upper", "lower"),
+                                                               strict=False))
+    allowed = (f"{p} letter{'s' if p != 1 else ''} (one per impact) from {stops}"
+               + ("" if two_sided is not False else ": the oscillator has no lower stop"))
+    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - set(letters):
+        raise _refused(name, pattern, allowed)
+    return pattern
+
+
+def _impact_stops(value: Any, ds: xr.Dataset, osc: ImpactOscillator | None) -> None:
+    check_pattern_attribute(value, ds.sizes.get("impact", 0),
+                            None if osc is None else osc.stops.two_sided, "impact_stops")
+
+
+def _parameter(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    if not isinstance(value, str) or value not in PARAMETERS:
+        raise _refused("parameter", value, f"one of {list(PARAMETERS)}")
+    if value not in ds.variables:
+        raise ValueError(f"attribute 'parameter' = {value!r} names no variable of the "
+                         f"dataset; allowed: a parameter with its column, one of "
+                         f"{[k for k in PARAMETERS if k in ds.variables]}")
+
+
+def _parameters(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    allowed = f"two different names of {list(PARAMETERS)} joined by ',' (e.g. 'omega,b')"
+    names = value.split(",") if isinstance(value, str) else []
+    if len(names) != 2 or len(set(names)) != 2 or not set(names) <= set(PARAMETERS):
+        raise _refused("parameters", value, allowed)
+    missing = [k for k in names if k not in ds.variables]
+    if missing:
+        raise ValueError(f"attribute 'parameters' = {value!r} names {missing}, which the "
+                         "dataset has no variable of; allowed: the curve's two parameters, "
+                         "each with its column")
+
+
+def _vary(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    allowed = "a JSON object of parameter name to [low, high] (the box of eq. 26)"
+    box = _json_object("vary", value, allowed)
+    if not box:
+        raise _refused("vary", value, allowed, " (no parameter varies)")
+    for bounds in box.values():
+        if (not isinstance(bounds, list) or len(bounds) != 2 or not all(map(_real, bounds))
+                or bounds[0] > bounds[1]):
+            raise _refused("vary", value, allowed)
+
+
+def _nominal(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    allowed = "a JSON object of parameter name to its nominal value"
+    if not all(map(_real, _json_object("nominal", value, allowed).values())):
+        raise _refused("nominal", value, allowed)
+
+
+def _text(name: str) -> Callable[[Any, xr.Dataset, Any], None]:
+    def check(value: Any, ds: xr.Dataset, osc: Any) -> None:
+        if not isinstance(value, str):
+            raise _refused(name, value, "a text")
+    return check
+
+
+def _curve_kind(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    if not isinstance(value, str) or value not in LABELS:
+        raise _refused("kind", value, f"one of {list(LABELS)} (the kind of curve)")
+
+
+def _periods(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    if not _real(value) or value <= 0:
+        raise _refused("periods", value, "a finite number > 0 (forcing periods simulated)")
+
+
+def _stored_periods(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(period, omega)`` of the motions stored in ``ds``, where its variables give both.
+
+    The period of an N-p branch is the sum of its flight times; an orbits dataset
+    stores it. None where the dataset has neither (an N-1 branch, a map, ...).
+    """
+    def values(name: str, dims: tuple[str, ...]) -> np.ndarray | None:
+        var = ds.variables.get(name)
+        if var is None or var.dims != dims or var.dtype.kind not in "iuf":
+            return None
+        return np.asarray(var.values, dtype=float)
+
+    omega = values("omega", ("point",))
+    taus = values("flight_time_k", ("point", "impact"))
+    if omega is not None and taus is not None:
+        return taus.sum(axis=1), omega
+    omega, period = values("omega", ()), values("period", ("orbit",))
+    if omega is not None and period is not None:
+        return period, np.broadcast_to(omega, period.shape)
+    return None
+
+
+def _forcing_periods(value: Any, ds: xr.Dataset, osc: Any) -> None:
+    N = _integer("N", value, "an integer >= 1 (forcing periods per impact)")
+    stored = _stored_periods(ds)
+    if stored is None:
+        return
+    period, omega = stored
+    ok = np.isfinite(period) & np.isfinite(omega) & (omega > 0)
+    # the period is 2 pi N / omega by construction (the last flight time closes it):
+    # only rounding separates them, a wrong N at least a factor (N + 1) / N
+    ratio = period[ok] * omega[ok] / (2 * np.pi)
+    if ratio.size and np.max(np.abs(ratio - N)) > 1e-8 * N:
+        stored_N = np.unique(np.round(ratio)).astype(int).tolist()
+        raise ValueError(f"attribute 'N' = {N!r} does not match the motions stored: their "
+                         f"period T = 2 pi N / omega gives N = {stored_N}; allowed: "
+                         f"{stored_N[0] if len(stored_N) == 1 else stored_N}")
+
+
+# Checks of the attributes other than oscillator, run with the dataset and its oscillator.
+_CHECKS: dict[str, Callable[[Any, xr.Dataset, Any], Any]] = {
+    "N": _forcing_periods,
+    "parameter": _parameter,
+    "parameters": _parameters,
+    "kind": _curve_kind,
+    "options": lambda v, ds, osc: _json_object("options", v),
+    "impacts": lambda v, ds, osc: impacts_attribute(ds),
+    "pattern": lambda v, ds, osc: check_pattern_attribute(
+        v, impacts_attribute(ds), None if osc is None else osc.stops.two_sided),
+    "vary": _vary,
+    "nominal": _nominal,
+    "argmax": lambda v, ds, osc: _json_object("argmax", v),
+    "start": _text("start"),
+    "status": _text("status"),
+    "which": _text("which"),
+    "note": _text("note"),
+    **{name: _text(name) for name in _TEXT},
+    "periods": _periods,
+    "impact_stops": _impact_stops,
+}
+
+
+def dataset_tag(ds: xr.Dataset) -> str | None:
+    """The attribute ``impactcont_dataset`` of ``ds`` (its layout), None if absent.
+
+    Raises
+    ------
+    ValueError
+        The attribute is not a text.
+    """
+    tag = ds.attrs.get("impactcont_dataset")
+    if tag is not None and not isinstance(tag, str):
+        raise _refused("impactcont_dataset", tag, "a text naming the layout of the dataset "
+                       "(curve, map, orbits, robust, simulation, ...), or absent (a branch)")
+    return tag
+
+
+def dataset_kind(ds: xr.Dataset, section: Any = None) -> str | None:
+    """The kind of ``ds`` whose attributes impactcont reads (a key of :data:`KIND_ATTRIBUTES`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    section : str, optional
+        The scene section of the file holding ``ds`` (root attribute
+        ``impactcont_kind``); None for a file of :func:`impactcont.dataset.save`.
+
+    Returns
+    -------
+    str or None
+        None for a dataset that is not one of impactcont's kinds (a plugin's,
+        or a dataset without ``impactcont_dataset`` nor ``parameter``).
+
+    Raises
+    ------
+    ValueError
+        In a file of a built-in section, ``impactcont_dataset`` is not that
+        section's kind.
+    """
+    tag = dataset_tag(ds)
+    expected = SECTION_KINDS.get(section) if isinstance(section, str) else None
+    if expected is not None:
+        if expected == "branch" and tag is not None:
+            raise ValueError(f"attribute 'impactcont_dataset' must be absent (a branch) in a "
+                             f"file of section {section!r}; got {_shown(tag)}")
+        if expected != "branch" and tag != expected:
+            raise _refused("impactcont_dataset", tag,
+                           f"{expected!r} in a file of section {section!r}")
+        return expected
+    if tag is None:
+        return "branch" if "parameter" in ds.attrs else None
+    return tag if tag in KIND_ATTRIBUTES else None
+
+
+def check_attributes(ds: xr.Dataset, kind: str, *, in_section: bool = False) -> None:
+    """Check every attribute impactcont reads from a dataset of ``kind``, where present.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    kind : str
+        A key of :data:`KIND_ATTRIBUTES` (see :func:`dataset_kind`).
+    in_section : bool, optional
+        ``ds`` is in a file of a built-in scene section, whose description reads
+        the attributes of :data:`SECTION_ATTRIBUTES`: they must be present.
+
+    Raises
+    ------
+    ValueError
+        An attribute is missing (``in_section``) or has a value a reader would
+        misread, or an N-p branch has no ``impacts``; the message names the
+        attribute, its value and what is allowed.
+    """
+    missing = [name for name in SECTION_ATTRIBUTES[kind] if name not in ds.attrs]
+    if in_section and missing:
+        raise ValueError(f"attribute(s) {missing} missing: a {kind} dataset of a scene file "
+                         f"carries {list(SECTION_ATTRIBUTES[kind])}")
+    osc = oscillator_attribute(ds) if "oscillator" in ds.attrs else None
+    for name in KIND_ATTRIBUTES[kind]:
+        if name != "oscillator" and name in ds.attrs:
+            _CHECKS[name](ds.attrs[name], ds, osc)
+    if kind == "branch" and "impact" in ds.sizes:
+        impacts_attribute(ds)  # present, and the size of the impact dimension
+    # which stop each impact hit: all U is the only reading without a lower stop
+    stops = {"branch": "pattern", "simulation": "impact_stops"}.get(kind)
+    if stops and osc is not None and osc.stops.two_sided and stops not in ds.attrs:
+        raise ValueError(f"attribute {stops!r} is missing: the oscillator has a lower stop, "
+                         "so the stop of each impact (letters U/L) must be stored")
+
+
+def check_file_attributes(attrs: Mapping[str, Any]) -> None:
+    """Check the root attributes of a scene file that readers use.
+
+    ``impactcont_kind`` (the section) and ``scene_file`` must be text, ``scene``
+    the resolved scene as a JSON object (or empty).
+
+    Raises
+    ------
+    ValueError
+        Naming the attribute, its value and what is allowed.
+    """
+    for name in _TEXT:
+        if name in attrs and not isinstance(attrs[name], str):
+            raise _refused(name, attrs[name], "a text")
+    kind = attrs.get("impactcont_kind", "section")
+    if not isinstance(kind, str) or not kind:
+        raise _refused("impactcont_kind", kind, "the name of a scene section (text)")
+    if not isinstance(attrs.get("scene_file", ""), str):
+        raise _refused("scene_file", attrs["scene_file"], "a text (the scene file's path)")
+    scene = attrs.get("scene", "")
+    if not (isinstance(scene, str) and scene == ""):
+        _json_object("scene", scene, "the resolved scene as a JSON object (text), or empty")
