@@ -11,6 +11,12 @@ What is on disk (``docs/outputs.md``) reads with plain xarray, netCDF4 or
   which :func:`load` drops again;
 - booleans are stored by xarray as ``int8`` with a ``dtype: bool`` attribute.
 
+:func:`save` and :func:`load` check the same things: always the attributes
+impactcont reads back (:mod:`impactcont.dataset.attributes`), and with
+``validate`` (the default) the schema of branches, curves and maps. What
+``save(..., validate=False)`` wrote, ``load(..., validate=False)`` reads;
+``load`` with ``validate`` names what is wrong with it and says so.
+
 Every write goes to a temporary file in the target's directory, moved onto
 the target with :func:`os.replace`: a failed or interrupted write leaves the
 previous file untouched and no temporary file behind. Temporary files are
@@ -661,7 +667,10 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
         Target file; its directory must exist. An existing file is replaced
         only once the new one is completely written.
     validate : bool, optional
-        Check branch, curve and map datasets against their schema first (default).
+        Check branch (N-1 and N-p), curve and map datasets against their schema
+        first (default). Whatever ``validate``, the attributes impactcont reads
+        back (:mod:`impactcont.dataset.attributes`) are checked: a file written
+        with ``validate=False`` reads with ``load(..., validate=False)``.
     encoding : mapping, optional
         Per-variable NetCDF encoding (chunk sizes, compression) of a single Dataset.
         A dask-backed Dataset is computed and written chunk by chunk.
@@ -676,8 +685,9 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     TypeError
         ``obj`` or ``path`` has an unsupported type.
     ValueError
-        A dataset does not follow the schema, a group name is invalid or
-        ``path`` is a directory.
+        A dataset does not follow the schema (with ``validate``), an attribute
+        impactcont reads is wrong, a group name is invalid or ``path`` is a
+        directory.
     FileNotFoundError, NotADirectoryError, PermissionError
         The directory of ``path`` does not exist or is not writable.
     KeyboardInterrupt
@@ -785,7 +795,8 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
     path : str or os.PathLike
         A NetCDF-4 file.
     validate : bool, optional
-        Check branches, curves and maps against their schema (default).
+        Check branches (N-1 and N-p), curves and maps against their schema
+        (default); the attributes are checked whatever ``validate``.
 
     Returns
     -------
