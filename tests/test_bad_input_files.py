@@ -22,6 +22,7 @@ from test_files import _start_save, _temporaries
 import impactcont as ic
 from impactcont.cli import EXIT_USAGE, main
 from impactcont.dataset import branch_dataset, oscillator_from_dataset, validate_branch_dataset
+from impactcont.dataset import io as dataset_io
 from impactcont.dataset.curves import map_dataset
 from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
 from impactcont.model.stops import Stops
@@ -329,3 +330,20 @@ def test_kill_9_of_a_saving_process_ends_its_writer_and_removes_the_temporary(
     finally:
         if _alive(writer):  # only before the fix: do not leave it writing
             os.kill(writer, signal.SIGKILL)
+
+
+def test_a_variable_that_cannot_be_decoded_is_named(tmp_path: Path) -> None:
+    path = ic.save(_np_branch(), tmp_path / "b.nc")
+    with netCDF4.Dataset(path, "a") as nc:
+        nc["omega"].setncattr("scale_factor", "x")  # CF decoding multiplies by it
+    with pytest.raises(ValueError, match=r"cannot read '.*b\.nc': a variable cannot be decoded "
+                                         r"from its attributes .*TypeError"):
+        ic.load(path)
+
+
+def test_open_lazy_checks_the_attributes_too(tmp_path: Path) -> None:
+    pytest.importorskip("dask")
+    path = ic.save(_np_branch(), tmp_path / "b.nc")
+    _tamper(path, None, pattern="XX")
+    with pytest.raises(ValueError, match=r"b\.nc': attribute 'pattern' must be 2 letters"):
+        dataset_io.open_lazy(path)

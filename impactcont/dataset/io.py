@@ -734,12 +734,25 @@ def open_lazy(path: str | os.PathLike) -> xr.Dataset:
 
     For results larger than memory, such as big :func:`impactcont.stability_map`
     maps: values are read chunk by chunk when computed. Needs dask
-    (``pip install 'impactcont[dask]'``).
+    (``pip install 'impactcont[dask]'``). The attributes are checked as by
+    :func:`load`; the schema is not (it would not change what is read).
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    ValueError
+        An attribute impactcont reads is wrong (see :func:`load`).
     """
     target = _path(path)
     if not target.is_file():
         raise FileNotFoundError(f"path {str(path)!r} does not exist or is not a file")
-    return _normalise(xr.open_dataset(target, engine=ENGINE, auto_complex=True, chunks={}))
+    ds = xr.open_dataset(target, engine=ENGINE, auto_complex=True, chunks={})
+    try:
+        return _loaded(ds, None, False, f"file {str(path)!r}")
+    except BaseException:
+        ds.close()
+        raise
 
 
 def _read_tree(path: Path) -> xr.DataTree:
@@ -822,6 +835,10 @@ def load(path: str | os.PathLike, *, validate: bool = True) -> xr.Dataset | xr.D
         tree = _read_tree(target)
     except (OSError, ValueError, RuntimeError) as exc:
         raise ValueError(f"cannot read {str(path)!r} as NetCDF-4: {exc}") from exc
+    except (TypeError, ArithmeticError) as exc:  # xarray's decoding of CF attributes
+        raise ValueError(f"cannot read {str(path)!r}: a variable cannot be decoded from its "
+                         f"attributes (units, scale_factor, ...): {type(exc).__name__}: "
+                         f"{exc}") from exc
     shown = f"file {str(path)!r}"
     if not tree.children:
         if not tree.has_data:
