@@ -23,6 +23,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
 from impactcont.orbit.dense import (
+    COND_WARN,
     VELOCITY_POLISH,
     impact_map_jacobian,
     periodic_matrix,
@@ -238,7 +239,8 @@ def _warn_setup(osc: ImpactOscillator, scalars: np.ndarray, stacklevel: int) -> 
             f"natural frequency {w[i]!r} of a lightly damped mode: its forced amplitude (eq. 7) "
             f"is known only to a relative error of about {res_err:.1g}; move omega away from "
             "omega_i or add damping", NearResonanceWarning, stacklevel=stacklevel)
-    warn_ill_conditioned(osc.omega, float(cond), stacklevel=stacklevel + 1)
+    if not cond <= COND_WARN:
+        warn_ill_conditioned(osc.omega, float(cond), stacklevel=stacklevel + 1)
 
 
 def _make_orbit(osc: ImpactOscillator, N: int, modal: np.ndarray | None, T: float, delta: float,
@@ -446,31 +448,35 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
         log.debug("no N=%d motion: c^2 + s^2 = %.6g < b^2 = %.6g", N,
                   sc[5] ** 2 + sc[6] ** 2, osc.b ** 2)
         return []
-    _warn_fold(sc[5] ** 2 + sc[6] ** 2, osc.b, fold_error)
+    if fold_error > _FOLD_ERROR_WARN:
+        _warn_fold(sc[5] ** 2 + sc[6] ** 2, osc.b, fold_error)
     _warn_capped(capped, sc[0])
-    eager = bool(jacobians.shape[1])
-    bound = _velocity_bound(osc, sc)
+    # the kernel's impact velocity may have lost digits only above this (one bound per
+    # frequency, the exact check and the re-evaluation per root only past it)
+    limit = _velocity_bound(osc, sc) / VELOCITY_POLISH
     out = []
     for k in range(count):
-        dk, sk, state, scale = float(delta[k]), float(sigma[k]), states[k], float(scales[k])
-        gk, tk = float(gap[k]), float(gap_t[k])
-        G, mu = (jacobians[k], mults[k]) if eager else (None, None)
-        h2_error = bound / max(abs(sk), 1e-300)
-        if h2_error > VELOCITY_POLISH:  # digits may be lost: the exact estimate
-            better, h2_error = _polished_velocity(osc, sc, dk, sk)
+        sk, h2_error = float(sigma[k]), 0.0
+        if abs(sk) < limit:
+            better, h2_error = _polished_velocity(osc, sc, float(delta[k]), sk)
             if better is not None:
-                sk = better
-                state, scale, gk, tk, G, mu = _repolish(osc, modal, sc, dk, better)
-        orbit = _make_orbit(osc, N, modal, float(sc[0]), dk, (1, -1)[k], sk, gk, tk, state,
-                            *((G, mu) if G is not None else ()))
-        _warn_low_impact_velocity(orbit, scale, h2_error)
+                state, scale, gk, tk, G, mu = _repolish(osc, modal, sc, float(delta[k]), better)
+                orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k],
+                                    better, gk, tk, state, G, mu)
+                _warn_low_impact_velocity(orbit, scale, h2_error)
+                out.append(orbit)
+                continue
+        orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k], sk,
+                            float(gap[k]), float(gap_t[k]), states[k],
+                            *((jacobians[k], mults[k]) if jacobians.shape[1] else ()))
+        _warn_low_impact_velocity(orbit, float(scales[k]), h2_error)
         out.append(orbit)
     return out
 
 
 def _warn_fold(r2: float, b: float, fold_error: float) -> None:
     """Warn when the impact phase of eq. (15) is inexact near a fold (``fold_error`` rad)."""
-    if fold_error > _FOLD_ERROR_WARN:
+    if fold_error > _FOLD_ERROR_WARN:  # (also tested by the caller on the fast path)
         warnings.warn(f"c^2 + s^2 = {r2:.17g} is within {(r2 - b * b) / r2:.2g} (relative) of "
                       f"b^2 = {b * b:.17g}: a fold of eq. (15), where the two roots merge; the "
                       f"impact phase is known only to about {fold_error:.1g} rad", NearFoldWarning,
@@ -491,7 +497,7 @@ def _warn_low_impact_velocity(orbit: PeriodicOrbit, v_scale: float,
     impact.
     """
     osc, h2 = orbit.oscillator, orbit.impact_velocity
-    if h2_error > _H2_REL_ERROR_WARN:
+    if h2_error > _H2_REL_ERROR_WARN:  # both forms lost digits: say how many
         warnings.warn(f"impact velocity h2 = {h2:.3g} is a small difference of large terms "
                       f"in eq. (12)-(15) (either exact form): it is known only to a relative "
                       f"error of about {min(h2_error, 1.0):.1g}, and G of eq. (25) ~ 1/h2 "
