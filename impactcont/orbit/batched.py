@@ -100,39 +100,39 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
 
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     R = osc.R
-    for iw, om in enumerate(omega):
-        if not np.any(count[iw] > 0):
+    setups = [kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, float(om), N) for om in omega]
+    sc = np.array([s for _, s in setups])  # (nw, 10): T, Gam, B, g, Delta, c, s, ...
+    # an upper bound of the rounding error of x1p'(delta) / Delta at any phase (0 where
+    # the kernel takes elastic undamped velocities from the impact condition)
+    bound = (_EPS * (2.0 + math.pi) * omega * (np.abs(sc[:, 1]) + np.abs(sc[:, 2]))
+             / (np.abs(sc[:, 4]) + 1e-300)) * (sc[:, 9] == 0.0)
+    with np.errstate(invalid="ignore"):  # NaN where no motion
+        flagged = np.argwhere(bound[:, None, None] > VELOCITY_POLISH * np.abs(vel))
+    for iw, ib, k in flagged.tolist():
+        if k >= count[iw, ib]:  # the copy of a double root
             continue
-        modal, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, float(om), N)
-        if sc[9] != 0.0:  # elastic undamped: the kernel already uses the impact condition
+        om, bb = omega.item(iw), b.item(ib)
+        modal, scalars = setups[iw]
+        Gam, B, g, Delta = scalars[1:5].tolist()
+        d, sg = delta.item(iw, ib, k), vel.item(iw, ib, k)
+        cd, sd = math.cos(d), math.sin(d)
+        err_a, err_b = velocity_errors(Gam, B, g, Delta, om, R, bb, d, cd, sd)
+        if not err_b < err_a:
             continue
-        Gam, B, g, Delta = (float(x) for x in sc[1:5])
-        bound = _EPS * om * (abs(Gam) + abs(B)) * (2.0 + math.pi) / (abs(Delta) + 1e-300)
-        with np.errstate(invalid="ignore"):
-            flagged = np.argwhere(bound > VELOCITY_POLISH * np.abs(vel[iw]))
-        for ib, k in flagged:
-            if k >= count[iw, ib]:  # no root, or the copy of a double root
-                continue
-            d, sg, bb = float(delta[iw, ib, k]), float(vel[iw, ib, k]), float(b[ib])
-            cd, sd = math.cos(d), math.sin(d)
-            err_a, err_b = velocity_errors(Gam, B, g, Delta, float(om), R, bb, d, cd, sd)
-            if not err_b < err_a:
-                continue
-            better = (Gam * cd + B * sd - bb) / ((1.0 + R) * g)
-            if not second_form(sg, better, err_a, err_b):
-                continue
-            sg = better
-            best, best_t = kernel.other_maximum(w, a, u0, modal, sc, float(om), R, d, sg,
-                                                math.nan)
-            G, _ = modal_jacobian(osc, modal, d, sg, omega=float(om))
-            mu = kernel.multipliers(G)
-            ks = slice(k, 2) if count[iw, ib] == 1 else slice(k, k + 1)  # a double root: both
-            vel[iw, ib, ks] = sg
-            gap[iw, ib, ks], gap_t[iw, ib, ks] = bb - best, best_t
-            stable[iw, ib, ks] = bool(np.all(np.abs(mu) < 1.0))
-            if spectral_radius:
-                j = int(np.argmax(np.abs(mu)))
-                rho[iw, ib, ks], crit[iw, ib, ks] = abs(mu[j]), mu[j]
+        better = (Gam * cd + B * sd - bb) / ((1.0 + R) * g)
+        if not second_form(sg, better, err_a, err_b):
+            continue
+        best, best_t = kernel.other_maximum(w, a, u0, modal, scalars, om, R, d, better,
+                                            math.nan)
+        G, _ = modal_jacobian(osc, modal, d, better, omega=om)
+        mu = kernel.multipliers(G)
+        ks = slice(k, 2) if count[iw, ib] == 1 else slice(k, k + 1)  # a double root: both
+        vel[iw, ib, ks] = better
+        gap[iw, ib, ks], gap_t[iw, ib, ks] = bb - best, best_t
+        stable[iw, ib, ks] = bool(np.all(np.abs(mu) < 1.0))
+        if spectral_radius:
+            j = int(np.argmax(np.abs(mu)))
+            rho[iw, ib, ks], crit[iw, ib, ks] = abs(mu[j]), mu[j]
 
 
 def _general_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarray,
