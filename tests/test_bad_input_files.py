@@ -23,7 +23,12 @@ import impactcont as ic
 from impactcont.cli import EXIT_USAGE, main
 from impactcont.dataset import branch_dataset, oscillator_from_dataset, validate_branch_dataset
 from impactcont.dataset import io as dataset_io
-from impactcont.dataset.curves import map_dataset
+from impactcont.dataset.curves import (
+    CURVE_VARIABLES,
+    curve_dataset,
+    map_dataset,
+    validate_curve_dataset,
+)
 from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
 from impactcont.model.stops import Stops
 from impactcont.scene.files import write_output
@@ -347,3 +352,44 @@ def test_open_lazy_checks_the_attributes_too(tmp_path: Path) -> None:
     _tamper(path, None, pattern="XX")
     with pytest.raises(ValueError, match=r"b\.nc': attribute 'pattern' must be 2 letters"):
         dataset_io.open_lazy(path)
+
+
+def _curve(**changes: Any) -> xr.Dataset:
+    """A made-up SN curve in (omega, b) of three points with one codim-2 point."""
+    kinds = {"root": int, "physical": bool, "stable_side": bool}
+    columns = {key: np.zeros((3, 4) if key in ("multipliers", "state") else 3,
+                             dtype=kinds.get(key, complex if key == "multipliers" else float))
+               for key in CURVE_VARIABLES}
+    codim2 = {"label": "R1", "omega": 1.0, "b": 0.5, "delta": 0.0, "point": 1, "precision": 0.0,
+              "status": "located", "multipliers": np.zeros(4)}
+    kwargs = {"kind": "SN", "N": 1, "parameters": ("omega", "b"), "oscillator": OSC,
+              "options": {}, "columns": columns, "codim2_points": [codim2],
+              "end_status": "bounds"}
+    for key, value in changes.items():
+        if key.startswith("cp_"):
+            codim2[key.removeprefix("cp_")] = value
+        else:
+            kwargs[key] = value
+    return curve_dataset(**kwargs)
+
+
+@pytest.mark.parametrize(("changes", "error", "match"), [
+    ({"parameters": ("omega", "mass")}, ValueError, r"parameter must be one of .* got 'mass'"),
+    ({"parameters": ("omega", "omega")}, ValueError, r"two different parameters"),
+    ({"N": 0}, ValueError, r"N \(forcing periods per impact\) must be an integer >= 1; got 0"),
+    ({"cp_status": "located precisely"}, ValueError,
+     r"codim2 statuses must be in \('located', 'bracketed'\); got \['located precisely'\]"),
+    ({"codim2_points": [5]}, TypeError, r"codim2_points\[0\] must be a dict; got 5"),
+])
+def test_curve_datasets_refuse_bad_input_naming_it(changes: dict, error: type,
+                                                   match: str) -> None:
+    assert validate_curve_dataset(_curve()).attrs["parameters"] == "omega,b"
+    with pytest.raises(error, match=match):
+        _curve(**changes)
+
+
+def test_map_datasets_refuse_bad_input_naming_it() -> None:
+    with pytest.raises(TypeError, match=r"oscillator must be an ImpactOscillator; got 'osc'"):
+        map_dataset(oscillator="osc", N=[1], omega=[1.0], b=[0.5], values={}, options={})
+    with pytest.raises(ValueError, match=r"N \(forcing periods per impact\) .* got 0"):
+        map_dataset(oscillator=OSC, N=[0], omega=[1.0], b=[0.5], values={}, options={})

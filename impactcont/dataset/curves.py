@@ -33,9 +33,11 @@ import xarray as xr
 from impactcont.dataset.attributes import check_attributes, dataset_tag
 from impactcont.dataset.multi import validate_multi_impact_dataset
 from impactcont.dataset.schema import (
+    _N,
     CONVENTIONS,
     PARAMETERS,
     _options_json,
+    _parameter_name,
     _Var,
     check_variables,
     point_coords,
@@ -231,7 +233,10 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
         raise ValueError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
     if not isinstance(oscillator, ImpactOscillator):
         raise TypeError(f"oscillator must be an ImpactOscillator; got {oscillator!r}")
-    parameters = list(parameters)
+    N = _N(N)
+    parameters = [_parameter_name(name) for name in parameters]
+    if len(parameters) != 2 or parameters[0] == parameters[1]:
+        raise ValueError(f"parameters must be two different parameters; got {parameters!r}")
     n = oscillator.n
     specs = _curve_variables(parameters)
     missing = [k for k in specs if k not in columns]
@@ -249,6 +254,8 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
     for key, spec in fields.items():
         values = []
         for i, cp in enumerate(codim2_points):
+            if not isinstance(cp, Mapping):
+                raise TypeError(f"codim2_points[{i}] must be a dict; got {cp!r}")
             if set(cp) != set(fields):
                 raise ValueError(f"codim2_points[{i}] must have keys {sorted(fields)}; got "
                                  f"{sorted(cp)}")
@@ -259,6 +266,9 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
                 raise ValueError(f"codim2 labels must be in {CODIM2_LABELS}; got {bad}")
             arr = np.array(values, dtype=_LABEL_DTYPE).reshape(count)
         elif key == "status":
+            bad = [v for v in values if v not in CODIM2_STATUSES]
+            if bad:  # a longer text would be cut to the dtype's width
+                raise ValueError(f"codim2 statuses must be in {CODIM2_STATUSES}; got {bad}")
             arr = np.array(values, dtype=_STATUS_DTYPE).reshape(count)
         elif spec.kind == "c":
             arr = np.array(values, dtype=np.complex128).reshape(count, 2 * n)
@@ -273,7 +283,7 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
                           f"({parameters[0]}, {parameters[1]})",
         "impactcont_dataset": "curve",
         "kind": kind,
-        "N": int(N),
+        "N": N,
         "parameters": ",".join(parameters),
         "oscillator": oscillator.to_json(),
         "options": _options_json(options),
@@ -306,6 +316,14 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     -------
     xarray.Dataset
     """
+    if not isinstance(oscillator, ImpactOscillator):
+        raise TypeError(f"oscillator must be an ImpactOscillator; got {oscillator!r}")
+    N = [_N(k) for k in N]
+    omega, b = (np.asarray(x, dtype=float) for x in (omega, b))
+    if omega.ndim != 1 or b.ndim != 1:
+        raise ValueError(f"omega and b must be 1-D grids; got shapes {omega.shape} and {b.shape}")
+    if not isinstance(options, Mapping):
+        raise TypeError(f"options must be a mapping; got {options!r}")
     sizes = {"N": len(N), "omega": len(omega), "b": len(b), "root": 2}
     data_vars = {}
     for key, (spec, dims) in MAP_VARIABLES.items():
