@@ -5,7 +5,9 @@
 dataset of impactcont, one or many (DataTree groups): atomically, safe to
 interrupt with Ctrl-C, readable by plain NetCDF tools (complex multipliers as
 real and imaginary parts, an index of the groups in the root group), and read
-back by :func:`load` as they were written. The layout is documented in
+back by :func:`load` as they were written. Both check the attributes impactcont
+reads back (:mod:`impactcont.dataset.attributes`) whatever their ``validate``,
+which switches the check of the schema. The layout is documented in
 ``docs/dataset.md`` and ``docs/outputs.md``.
 """
 

@@ -482,7 +482,11 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
         ``ds`` is not an :class:`xarray.Dataset`.
     ValueError
         An attribute, variable or dimension is missing or has the wrong
-        dimensions or dtype; the message names it.
+        dimensions or dtype, a special point has an unknown label or status, or
+        an attribute impactcont reads has a wrong value
+        (:func:`~impactcont.dataset.attributes.check_attributes`: the oscillator
+        JSON, N, the impacts and pattern of an N-p branch, ...); the message
+        names it.
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"expected an xarray.Dataset of a branch; got {type(ds).__name__}")
