@@ -324,9 +324,9 @@ def test_kill_9_of_a_saving_process_ends_its_writer_and_removes_the_temporary(
     proc = _start_save(target, 6, "fork")  # 60 MB in memory: about 2 s of writing in a child
     (writer,) = _children(proc.pid)
     try:
-        proc.kill()
-        proc.communicate(timeout=30)
         start = time.monotonic()
+        proc.kill()
+        proc.wait(timeout=30)  # not communicate(): the writer holds the same pipes
         while (_alive(writer) or _temporaries(tmp_path)) and time.monotonic() - start < 3.0:
             time.sleep(0.01)
         assert not _alive(writer), "the writing child survived its parent's kill -9"
@@ -335,6 +335,7 @@ def test_kill_9_of_a_saving_process_ends_its_writer_and_removes_the_temporary(
     finally:
         if _alive(writer):  # only before the fix: do not leave it writing
             os.kill(writer, signal.SIGKILL)
+        proc.communicate(timeout=30)
 
 
 def test_a_variable_that_cannot_be_decoded_is_named(tmp_path: Path) -> None:
