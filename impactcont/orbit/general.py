@@ -43,7 +43,12 @@ import numpy as np
 from impactcont.errors import ParameterError, UnresolvedMotionWarning
 from impactcont.model.first_order import coth_remainder
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.dense import impact_velocity, warn_ill_conditioned
+from impactcont.orbit.dense import (
+    impact_velocity,
+    second_form,
+    velocity_errors,
+    warn_ill_conditioned,
+)
 from impactcont.orbit.flow import Flow, GeneralFlow
 
 __all__ = ["PeriodicForm", "amplitude", "amplitude_derivative", "orbit_pieces",
@@ -122,6 +127,21 @@ class PeriodicForm:
         osc = self.flow.osc
         return impact_velocity(float(self.P0[0, 0]), float(self.P0[0, 1]), self.g, self.Delta,
                                osc.omega, osc.R, b, deltas)
+
+
+    def velocity_at(self, delta: float, b: float) -> tuple[float, float]:
+        """:meth:`velocity` at one phase, in scalar arithmetic (no array overhead)."""
+        osc = self.flow.osc
+        Gam, B = self.P0[0].tolist()
+        cd, sd = math.cos(delta), math.sin(delta)
+        err_a, err_b = velocity_errors(Gam, B, self.g, self.Delta, osc.omega, osc.R, b, delta,
+                                       cd, sd)
+        first = osc.omega * (B * cd - Gam * sd) / self.Delta if self.Delta else math.inf
+        if err_b < err_a and self.g:
+            second = (Gam * cd + B * sd - b) / ((1.0 + osc.R) * self.g)
+            if second_form(first, second, err_a, err_b):
+                return second, err_b / max(abs(second), 1e-300)
+        return first, err_a / max(abs(first), 1e-300)
 
 
 # the form of the last periodic_form call per flow, for the pieces that callers keep as
@@ -491,10 +511,21 @@ def orbit_values(form: PeriodicForm, delta: float) -> OrbitValues:
     flow = form.flow
     osc = flow.osc
     n, R, omega = osc.n, osc.R, osc.omega
-    sigma, rel = form.velocity(np.array([delta]), osc.b)
-    G = _jacobians(form, np.array([float(delta)]), sigma)[0]
-    h2, rel = float(sigma[0]), float(rel[0])
-    state = form.P0 @ np.array([math.cos(delta), math.sin(delta)]) + (1.0 + R) * h2 * form.y
+    h2, rel = form.velocity_at(float(delta), osc.b)
+    cd, sd = math.cos(delta), math.sin(delta)
+    d = np.ones(2 * n)
+    d[n] = -R
+    # G of eq. (25) (as _jacobians, for one phase)
+    dE = d * (form.E[:, 1] * cd - form.E[:, 0] * sd)
+    dX = d * (form.rate0[:, 0] * cd + form.rate0[:, 1] * sd + (1.0 + R) * h2 * form.rate)
+    h0_p = form.DPhi[0, 1:]
+    G = np.empty((2 * n, 2 * n))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        G[:-1, :-1] = form.DPhi[1:, 1:] - np.outer(dX[1:], h0_p) / h2
+        G[:-1, -1] = dE[1:] - dX[1:] * dE[0] / h2
+        G[-1, :-1] = -omega * h0_p / h2
+        G[-1, -1] = 1.0 - omega * dE[0] / h2
+    state = form.P0[:, 0] * cd + form.P0[:, 1] * sd + (1.0 + R) * h2 * form.y
     state[n] = -R * h2  # eq. (4), as the kernel sets it
     scale = float(max(np.abs(state[n:]).max(), omega * np.abs(state[:n]).max()))
     mu = np.linalg.eigvals(G) if np.all(np.isfinite(G)) else np.full(G.shape[0], np.nan + 0j)
