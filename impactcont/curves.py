@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -43,7 +44,7 @@ from impactcont.detection.codim2 import (
     grazing_other_gap,
     test_values,
 )
-from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.errors import LowImpactVelocityWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
@@ -162,7 +163,10 @@ def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
     if problem.kind == "SN":  # the double root of eq. (15): (cos, sin) along sign(b) (c, s)
         sign = 1.0 if start_osc.b >= 0 else -1.0
         return start_osc, math.atan2(sign * s, sign * c)
-    orbits = periodic_orbits(start_osc, N)
+    with warnings.catch_warnings():
+        if problem.kind == "ZV":  # the start is a zero-velocity impact: G's pole is expected
+            warnings.simplefilter("ignore", LowImpactVelocityWarning)  # only delta is used
+        orbits = periodic_orbits(start_osc, N)
     if not orbits:
         raise NoPeriodicMotionError(f"start: no N={N} motion at {dict(values)} "
                                     f"(c^2 + s^2 < b^2); give 'delta' or another start")
