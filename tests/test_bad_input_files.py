@@ -394,3 +394,14 @@ def test_map_datasets_refuse_bad_input_naming_it() -> None:
         map_dataset(oscillator="osc", N=[1], omega=[1.0], b=[0.5], values={}, options={})
     with pytest.raises(ValueError, match=r"N \(forcing periods per impact\) .* got 0"):
         map_dataset(oscillator=OSC, N=[0], omega=[1.0], b=[0.5], values={}, options={})
+
+
+def test_info_names_a_branch_file_whose_variable_was_dropped(multi_file: Path, capsys) -> None:
+    """``impactcont info`` read files without the schema check: a dropped variable ended in
+    a raw KeyError inside the description."""
+    with netCDF4.Dataset(multi_file, "a") as nc:
+        nc.groups["m"].renameVariable("stable", "stable_was_here")
+    assert main(["info", str(multi_file)]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "multi_impact.nc" in err and "stable" in err
+    assert "Traceback" not in err and "KeyError" not in err
