@@ -36,7 +36,7 @@ samples = 5
 
 [[simulations]]
 name = "sim"
-periods = 3
+periods = 3.5
 trajectory = true
 
 [[plots]]

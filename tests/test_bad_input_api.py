@@ -23,3 +23,28 @@ def test_a_curve_refuses_stops_other_than_the_papers(kind):
     with pytest.raises(ic.ParameterError, match="one stop on mass 1 only"):
         ic.curve(two_stops(stops=ic.Stops(mass=2)), 1, kind, start={"omega": 1.2, "b": 0.5},
                  bounds={"omega": (0.6, 2.0), "b": (0.0, 2.0)})
+
+
+K_FREE = np.array([[2.0, -1.0, -1.0], [-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]])  # K [1, 1, 1] = 0
+
+
+@pytest.mark.parametrize("masses", [[1.0, 1.0, 1.0], [1.0, 2.0, 3.0], [1.0, 0.5, 2.0],
+                                    [1.5, 1.0, 1.0], [1.0, 1e-3, 1e3]])
+@pytest.mark.parametrize("damping", [{"eta": 0.05}, {"C": np.diag([0.2, 0.0, 0.0])}])
+def test_a_free_mode_is_refused_whatever_the_masses(masses, damping):
+    """The free mode's eigenvalue is rounding noise of either sign (-4.4e-16 with unit
+    masses, +7.7e-17 with masses 1, 2, 3, 0.0 with 1.5, 1, 1): the modal path refused it
+    only when rounding made it negative."""
+    with pytest.raises(ic.ParameterError, match="K must be positive definite"):
+        # refused by the constructor's Cholesky for some masses, by the modal basis for others
+        osc = ic.ImpactOscillator(M=np.diag(masses), K=K_FREE, F=[1.0, 0.0, 0.0], R=0.5,
+                                  b=0.1, omega=1.3, **damping)
+        ic.periodic_orbits(osc, 1)
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.05}, {"C": np.diag([0.1, 0.0, 0.0])}])
+def test_a_graded_chain_is_held_on_both_paths(damping):
+    """M = diag(1e-12, 1, 1e12): eigenvalues 1e-12..1e12, every mode held."""
+    osc = ic.ImpactOscillator.chain(masses=[1e-12, 1.0, 1e12], springs=[1.0, 1.0, 1.0],
+                                    F=[1e-12, 0.0, 0.0], R=0.5, b=0.0, omega=1.3, **damping)
+    ic.periodic_orbits(osc, 1)  # refused before on the first-order path

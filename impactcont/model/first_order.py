@@ -46,6 +46,7 @@ from impactcont.errors import (
     ParameterError,
     ResonanceError,
 )
+from impactcont.model.modal import check_held_modes
 
 __all__ = ["COND_REFUSE", "COND_WARN", "FirstOrderBasis", "coth_remainder"]
 
@@ -183,17 +184,7 @@ class FirstOrderBasis:
         """
         n = M.shape[0]
         stiffness, modes = scipy.linalg.eigh(K, M)
-        # each eigenvalue against its own rounding scale, componentwise (as ModalBasis),
-        # not against eps times the largest: a graded chain such as M = diag(1e-12, 1,
-        # 1e12) (eigenvalues 1e-12 .. 1e12) holds every mode; invariant to the units of
-        # each coordinate (M -> D M D, K -> D K D) like the eigenvalues themselves
-        errors = _EPS * np.einsum("ji,jk,ki->i", np.abs(modes), np.abs(K), np.abs(modes))
-        if not np.all(stiffness > 4 * n * errors):
-            # a free (rigid-body) mode: a zero eigenvalue of A, I - D Phi(T) of eq. (12) singular
-            raise ParameterError(f"K must be positive definite relative to M; got modal "
-                                 f"eigenvalues {stiffness.tolist()} (rounding scale "
-                                 f"{errors.tolist()}: a mode that nothing holds: support the "
-                                 "chain, e.g. a spring from mass 1 to the frame)")
+        check_held_modes(stiffness, modes, K)  # a free mode: I - D Phi(T) of eq. (12) singular
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -np.linalg.solve(M, K)

@@ -30,12 +30,51 @@ import scipy.linalg
 
 from impactcont.errors import NearResonanceWarning, ParameterError, ResonanceError
 
-__all__ = ["DAMPING_PARAMETERS", "ModalBasis", "decay_rate_derivative", "forced_coefficients",
-           "free_transfer"]
+__all__ = ["DAMPING_PARAMETERS", "ModalBasis", "check_held_modes", "decay_rate_derivative",
+           "forced_coefficients", "free_transfer"]
 
 # warn when the forced amplitude of a mode is known to worse than this (relative) because
 # omega sits within the rounding error of omega_i^2 (eigh: about eps * omega_max^2)
 _RESONANCE_REL_ERROR_WARN = 1e-8
+
+def check_held_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """The rounding scale of each modal eigenvalue; refuse a mode that nothing holds.
+
+    Each eigenvalue ``lam_i`` of ``K u = lam M u`` is known to about
+    ``eps |u_i|^T |K| |u_i|`` (componentwise, so invariant to the units of each
+    coordinate, ``M -> D M D``, ``K -> D K D``): a graded chain such as
+    ``M = diag(1e-12, 1, 1e12)`` holds every mode, while a free (rigid-body) mode has
+    an eigenvalue of that size and either sign, decided by rounding. A mode is held
+    when ``lam_i > 4 n`` times its scale.
+
+    Parameters
+    ----------
+    stiffness : ndarray, shape (n,)
+        The eigenvalues ``lam`` (``omega_i^2``).
+    modes : ndarray, shape (n, n)
+        The eigenvectors, by column.
+    K : ndarray, shape (n, n)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The rounding scale of each eigenvalue.
+
+    Raises
+    ------
+    ParameterError
+        When a mode is not held (K not positive definite relative to M).
+    """
+    n = stiffness.size
+    a = np.abs(modes)
+    errors = np.finfo(float).eps * np.sum(a * (np.abs(K) @ a), axis=0)  # BLAS, not einsum
+    if not np.all(stiffness > 4 * n * errors):
+        raise ParameterError(f"K must be positive definite relative to M; got modal "
+                             f"eigenvalues {stiffness.tolist()} (rounding scale "
+                             f"{errors.tolist()}): a mode that nothing holds: support the "
+                             "chain, e.g. a spring from mass 1 to the frame")
+    return errors
+
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class ModalBasis:
@@ -70,14 +109,11 @@ class ModalBasis:
                       F: np.ndarray) -> ModalBasis:
         """Solve the generalised eigenproblem and mass-normalise (eq. 5)."""
         lam, u = scipy.linalg.eigh(K, M)
-        if np.any(lam <= 0):
-            raise ParameterError(f"K must be positive definite relative to M; got modal "
-                                 f"eigenvalues {lam.tolist()}")
+        errors = check_held_modes(lam, u, K)
         # eigh returns M-orthonormal vectors; fix the sign so that u[0, i] >= 0 (reproducible).
         sign = np.where(u[0] < 0, -1.0, 1.0)
         u = u * sign
         w = np.sqrt(lam)
-        errors = np.finfo(float).eps * np.einsum("ji,jk,ki->i", np.abs(u), np.abs(K), np.abs(u))
         return cls(u=u, u_inv=u.T @ M, natural_frequencies=w,
                    decay_rates=0.5 * (alpha + beta * lam), modal_forces=u.T @ F,
                    eigenvalue_errors=errors)
