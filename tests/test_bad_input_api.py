@@ -48,3 +48,16 @@ def test_a_graded_chain_is_held_on_both_paths(damping):
     osc = ic.ImpactOscillator.chain(masses=[1e-12, 1.0, 1e12], springs=[1.0, 1.0, 1.0],
                                     F=[1e-12, 0.0, 0.0], R=0.5, b=0.0, omega=1.3, **damping)
     ic.periodic_orbits(osc, 1)  # refused before on the first-order path
+
+
+@pytest.mark.parametrize(("K", "C"), [(4.0, 4.0), (1.0, 2.0), (9.0, 6.0), (2.0, 8.0 ** 0.5)])
+def test_critical_damping_is_refused_whatever_the_last_digits(K, C):
+    """C = 2 sqrt(K M) within a few ulp: rounding splits the defective eigenvalue to a
+    condition number ~1/sqrt(eps) = 7e7, either side of the old limit 1e8 (43 of these 52
+    were accepted with it)."""
+    eps = float(np.finfo(float).eps)
+    for k in range(-6, 7):
+        osc = ic.ImpactOscillator(M=[[1.0]], K=[[K]], C=[[C * (1 + k * eps)]], F=[1.0], R=0.5,
+                                  b=0.1, omega=1.3)
+        with pytest.raises(ic.ParameterError, match="defective or nearly so"):
+            osc.first_order  # noqa: B018

@@ -67,9 +67,11 @@ def _errors(osc: ic.ImpactOscillator, N: int = 1, *, multipliers: bool = True,
     return out
 
 
-def _assert_within(errors: list[dict[str, float]], tol: float) -> None:
+def _assert_within(errors: list[dict[str, float]], tol: float, **tols: float) -> None:
+    """Every error below `tol`, or below its own tolerance in `tols` (by key)."""
     for err in errors:
-        assert max(err.values()) < tol, errors
+        for key, value in err.items():
+            assert value < tols.get(key, tol), (key, errors)
 
 
 # -- stiffness, mass ratios, damping ------------------------------------------------------------
@@ -82,7 +84,11 @@ def test_stiff_chain(ratio, eta):
     # the reference's own interior-maxima grid (64 cells per fastest period, 50 digits) is
     # too slow for an undamped 1e4 rad/s mode: there check the value at impactcont's maximum
     full_gap = eta > 0
-    _assert_within(_errors(osc, gap=full_gap), 1e-11)
+    # an undamped fast mode turns its multipliers' phase by omega_max T, known to that many
+    # ulp (1.6e-11 for ratio 1e8: 2.3e-11 seen under 1-ulp changes of the inputs)
+    w_max = float(osc.modes.natural_frequencies.max())
+    turns = 100 * w_max * 2 * math.pi / osc.omega * EPS
+    _assert_within(_errors(osc, gap=full_gap), 1e-11, multipliers=max(1e-11, turns))
     if not full_gap:
         system = ref.MPSystem(osc.M, osc.K, osc.F, osc.R, osc.b, *osc.rayleigh)
         for o in ic.periodic_orbits(osc, 1):

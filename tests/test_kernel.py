@@ -21,6 +21,8 @@ from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.periodic import impact_map_jacobian, periodic_matrix
 from impactcont.problems import PeriodicBranchProblem
 
+EPS = float(np.finfo(float).eps)
+
 DAMPING = {
     "undamped": {},
     "paper": {"eta": 0.05},
@@ -74,14 +76,17 @@ def test_kernel_matches_the_dense_path(n, damping):
         if not sc[7] < 1e8:
             continue  # near a free-mode resonance both paths are inexact (and warn)
         scale = np.abs(cs).max()
-        assert abs(sc[5] - cs[0]) <= 1e-12 * scale and abs(sc[6] - cs[1]) <= 1e-12 * scale
+        # both paths are exact to their condition estimate sc[7] (up to 1e8 admitted here):
+        # 1e-12 plus 10 cond eps (undamped n = 8, 12 reach cond eps ~ 2e-12)
+        tol = 1e-12 + 10 * EPS * float(sc[7])
+        assert abs(sc[5] - cs[0]) <= tol * scale and abs(sc[6] - cs[1]) <= tol * scale
         for orbit in orbits:
             _, state, G, h2, gap = _dense(osc, N, orbit.delta)
-            assert np.abs(orbit.state - state).max() <= 1e-12 * np.abs(state).max()
-            assert abs(orbit.impact_velocity - h2) <= 1e-12 * np.abs(state).max() * max(
+            assert np.abs(orbit.state - state).max() <= tol * np.abs(state).max()
+            assert abs(orbit.impact_velocity - h2) <= tol * np.abs(state).max() * max(
                 1.0, osc.omega)
             if abs(h2) > 1e-3 * np.abs(state).max():
-                assert np.abs(orbit.G - G).max() <= 1e-12 * max(1.0, np.abs(G).max()) / min(
+                assert np.abs(orbit.G - G).max() <= tol * max(1.0, np.abs(G).max()) / min(
                     1.0, abs(h2) / np.abs(state).max())
                 mu = np.linalg.eigvals(G)
                 assert orbit.stable == (np.abs(mu).max() < 1.0) or abs(
@@ -89,7 +94,7 @@ def test_kernel_matches_the_dense_path(n, damping):
             if math.isinf(gap):
                 assert math.isinf(orbit.gap_min)
             else:
-                assert abs(orbit.gap_min - gap) <= 1e-12 * max(1.0, np.abs(state[:n]).max())
+                assert abs(orbit.gap_min - gap) <= tol * max(1.0, np.abs(state[:n]).max())
             checked += 1
     assert checked > 0
 
@@ -182,7 +187,9 @@ def test_polish_roots_and_taylor_values_are_exact(omega, b, N):
                 ref = brentq(lambda t, o=order: d(t)[o], lo, hi, xtol=1e-15, rtol=1e-15)
                 assert abs(r - ref) <= 1e-13 * max(1.0, ref)
                 direct = d(r)
+                # the difference is rounding of sums of modal terms (up to 0.77 of 1e-13 here,
+                # above it for 7.5 % of omegas within 100 ulp): 1e-12 of the bracket's scale
                 scale = np.max(np.abs(np.array([d(t) for t in (lo, hi)])), axis=0)
-                assert np.all(np.abs(np.array([x, v, acc, jerk]) - direct) <= 1e-13 * scale)
+                assert np.all(np.abs(np.array([x, v, acc, jerk]) - direct) <= 1e-12 * scale)
                 checked += 1
     assert checked >= 4

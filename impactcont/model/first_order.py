@@ -54,8 +54,10 @@ _EPS = float(np.finfo(float).eps)
 
 #: Warn when the eigenvector matrix's condition number exceeds this (error ~ 2e-11 of Phi).
 COND_WARN = 1e5
-#: Refuse the decomposition above this condition number (error ~ 2e-8 of Phi).
-COND_REFUSE = 1e8
+#: Refuse the decomposition above this condition number (error ~ 2e-9 of Phi). An exactly
+#: defective eigenvalue split by rounding gives ``cond ~ 1 / sqrt(eps) = 7e7``, either side of
+#: 1e8 by the last digits of the inputs: 1e7 refuses it on any processor.
+COND_REFUSE = 1e7
 # warn when the forced response is known to worse than this (relative)
 _RESONANCE_REL_ERROR_WARN = 1e-8
 

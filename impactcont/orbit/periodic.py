@@ -52,6 +52,10 @@ _H2_REL_ERROR_WARN = 1e-8
 _RESONANCE_REL_ERROR_WARN = 1e-8
 # warn when the impact phase of eq. (15) may carry an error above ~1e-10 (eps r / sqrt(r^2-b^2))
 _FOLD_ERROR_WARN = 1e-10
+# the kernel's fold error takes r^2 = c^2 + s^2 exact to an ulp; c and s carry a few ulp each
+# (measured: up to 7.4 times the one-ulp error under 1-ulp changes of K and M), so the error
+# stated is this many times it
+_FOLD_ULPS = 16.0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -475,11 +479,16 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
 
 
 def _warn_fold(r2: float, b: float, fold_error: float) -> None:
-    """Warn when the impact phase of eq. (15) is inexact near a fold (``fold_error`` rad)."""
+    """Warn when the impact phase of eq. (15) is inexact near a fold.
+
+    ``fold_error`` is the phase error of a one-ulp error of ``c^2 + s^2`` (rad); the
+    warning states ``_FOLD_ULPS`` times it, what c and s carry.
+    """
     if fold_error > _FOLD_ERROR_WARN:  # (also tested by the caller on the fast path)
         warnings.warn(f"c^2 + s^2 = {r2:.17g} is within {(r2 - b * b) / r2:.2g} (relative) of "
                       f"b^2 = {b * b:.17g}: a fold of eq. (15), where the two roots merge; the "
-                      f"impact phase is known only to about {fold_error:.1g} rad", NearFoldWarning,
+                      f"impact phase is known only to about {_FOLD_ULPS * fold_error:.1g} rad",
+                      NearFoldWarning,
                       stacklevel=3)
 
 
