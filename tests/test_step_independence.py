@@ -49,7 +49,8 @@ def test_sn_curve_codim2_points_do_not_depend_on_ds_max(osc):
     assert "SN+PD" in labels and "SN+ZV" in labels and "SN+NS" not in labels
     for k in np.flatnonzero(runs[0].codim2_label.values == "SN+SN"):
         mu = runs[0].codim2_multipliers.values[k]
-        assert np.sort(np.abs(mu - 1.0))[1] < 1e-6  # two multipliers at +1
+        # at a Jordan block a multiplier moves as the square root of the location error
+        assert np.sort(np.abs(mu - 1.0))[1] < 1e-5  # two multipliers at +1
 
 
 def test_omega_branch_special_points_do_not_depend_on_ds_max(osc):
@@ -83,7 +84,7 @@ def test_pd_curve_codim2_points_do_not_depend_on_the_step(osc):
     assert [p[0] for p in a] == ["PD+NS", "PD+PD", "PD+SN", "PD+ZV"]
     labels = runs[0].codim2_label.values.tolist()
     mu = runs[0].codim2_multipliers.values[labels.index("PD+PD")]
-    assert np.sort(np.abs(mu + 1.0))[1] < 1e-6  # two multipliers at -1: a 1:2 resonance
+    assert np.sort(np.abs(mu + 1.0))[1] < 1e-5  # two multipliers at -1 (a Jordan block)
     # the ZV point is a zero of the impact velocity, recomputed from scratch
     k = labels.index("PD+ZV")
     with pytest.warns(ic.LowImpactVelocityWarning):  # G's 1/h2 pole: the library says so

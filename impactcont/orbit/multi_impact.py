@@ -664,7 +664,9 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         lam = 1.0
         while True:
             trial = u + lam * step
-            tsh = shooting(flow, N, p, trial, pattern=pattern)
+            # a diverging trial may overflow the flow's exponentials: not finite, halved
+            with np.errstate(over="ignore", invalid="ignore"):
+                tsh = shooting(flow, N, p, trial, pattern=pattern)
             tnorm = float(np.max(np.abs(tsh.residual)))
             finite = bool(np.isfinite(tnorm))
             if small and not (finite and tnorm < norm):
