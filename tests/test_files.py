@@ -36,8 +36,11 @@ def _temporaries(directory: Path) -> list[str]:
 
 # -- Ctrl-C and kill -9 during a save ---------------------------------------------------------
 # A tree of compressed random data: about 5 s to write on a 2-core machine (20 MB/s).
+# A runner started in the background by a shell without job control ignores SIGINT, and its
+# children inherit that: each child script puts Python's own handler back first.
 _SAVER = textwrap.dedent("""
-    import sys
+    import signal, sys
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import numpy as np, xarray as xr
     import impactcont as ic
     from impactcont.dataset import io
@@ -118,7 +121,8 @@ def test_ctrl_c_is_held_until_an_in_process_write_ends(tmp_path: Path) -> None:
 
 
 _MAP = textwrap.dedent("""
-    import sys
+    import signal, sys
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import numpy as np
     import impactcont as ic
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.5,
