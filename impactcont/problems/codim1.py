@@ -54,6 +54,13 @@ is regular at a simple NS point (``0 < theta < pi``). The phase and scale of
 eigenvector of the last accepted point divided by its squared norm, so the
 accepted point stays an exact solution when ``v_ref`` is renewed.
 
+Far above the lowest natural frequency (``|c, s| >> b``) eq. (14) is divided by its
+scale (:func:`~impactcont.problems.periodic_branch.residual_scale`: its rounding would
+exceed the Newton tolerance), and where the kernel's impact velocity
+``x1p'(delta) / Delta`` cancels the pieces of a parameter pair take the impact
+condition's ``(x1p(delta) - b) / (kappa g)`` for every phase, with G's pole at it
+(:attr:`_Pieces.impact_form`, ``docs/kernel.md``).
+
 Derivatives are exact: complex steps of the residual in the two parameters, the
 phase and the grazing time (the kernel evaluates eq. 12-15, G and ``x1(t)`` in
 complex arithmetic), closed form in the NS system's ``theta`` and ``v``. No
@@ -95,7 +102,13 @@ from impactcont.orbit.periodic import (
     orbit_at_phase,
     physical_transition,
 )
-from impactcont.problems.general_pieces import STEPPED_PARAMETERS, GeneralPieces
+from impactcont.problems.general_pieces import (
+    STEPPED_PARAMETERS,
+    GeneralPieces,
+    bordered_condition,
+    impact_condition_form,
+)
+from impactcont.problems.periodic_branch import residual_scale, root_phase, scaled_derivative
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
 
 __all__ = [
@@ -120,7 +133,7 @@ _FD_STEP = 1e-6  # relative difference step of the first-order path's parameter 
 
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
+@dataclasses.dataclass(eq=False)
 class _Pieces:
     """The kernel's modal pieces (eq. 12-15) at one parameter pair, real or complex-stepped.
 
@@ -131,6 +144,8 @@ class _Pieces:
     (:meth:`stepped`): one parameter moved by ``i h`` gives its derivative as the
     imaginary part divided by ``h``, exact to rounding (no cancellation, no step
     error), because every residual is analytic in the parameters and the phase.
+    Not a frozen dataclass (nothing changes them once built): one is built per Newton
+    iterate and complex step, and a frozen one's construction costs 1.2 us more.
     """
 
     osc: ImpactOscillator
@@ -144,6 +159,14 @@ class _Pieces:
     w: np.ndarray
     a: np.ndarray
     f: np.ndarray
+    scale: float | complex = 1.0
+    """:func:`~impactcont.problems.periodic_branch.residual_scale` of eq. (14) (complex
+    along a complex step, where it is not 1)."""
+    impact_form: bool = False
+    """The impact velocity from the impact condition ``x1(0) = b`` instead of the kernel's
+    ``x1p'(delta) / Delta``, for every phase of this pair
+    (:func:`~impactcont.problems.general_pieces.impact_condition_form`); G's pole is then
+    that velocity, not the kernel's recomputation of ``x1'(T^-)``."""
 
     @classmethod
     def at(cls, osc: ImpactOscillator, N: int) -> _Pieces:
@@ -152,7 +175,10 @@ class _Pieces:
 
         w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
         modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N)
-        return cls(osc, N, modal, scalars, osc.omega, osc.R, osc.b, w, a, f)
+        _, Gam, B, g, Delta, c, s = scalars[:7].tolist()
+        return cls(osc, N, modal, scalars, osc.omega, osc.R, osc.b, w, a, f,
+                   residual_scale(c, s),
+                   impact_condition_form(Gam, B, g, Delta, osc.omega, osc.R, osc.b))
 
     def stepped(self, name: str | None, h: float) -> _Pieces:
         """These pieces in complex arithmetic with parameter `name` moved to ``p + i h``.
@@ -179,7 +205,9 @@ class _Pieces:
                 a = a + 1j * h * decay_rate_derivative(name, self.w)
             _, _, _, _, _, eig_err, u0, ui0 = self.osc.modes.kernel_arrays
             modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, omega, self.N)
-        return _Pieces(self.osc, self.N, modal, scalars, omega, R, b, w, a, f)
+        scale = self.scale if self.scale == 1.0 else residual_scale(scalars[5], scalars[6])
+        return _Pieces(self.osc, self.N, modal, scalars, omega, R, b, w, a, f, scale,
+                       self.impact_form)
 
     @property
     def S0(self) -> tuple[float, float]:
@@ -191,9 +219,13 @@ class _Pieces:
         return float(self.scalars[0].real)
 
     def impact_velocity(self, delta: float) -> float:
-        """``h2 = x1'(T^-)`` of the motion with impact phase ``delta``."""
+        """``h2 = x1'(T^-)`` of the motion with impact phase ``delta``, from the form of
+        :attr:`impact_form`."""
         from impactcont.orbit import kernel
 
+        if self.impact_form:  # the impact condition x1(0) = b
+            Gam, B, g = self.scalars[1], self.scalars[2], self.scalars[3]
+            return (Gam * np.cos(delta) + B * np.sin(delta) - self.b) / ((1.0 + self.R) * g)
         return kernel.phase_sigma(self.scalars, self.omega, self.R, self.b, delta)
 
     @functools.cached_property
@@ -211,19 +243,29 @@ class _Pieces:
         """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
         from impactcont.orbit import kernel
 
+        if self.impact_form:  # the pole at the motion's own velocity (split)
+            G_reg, a, b, h2 = self.split(delta)
+            return G_reg + np.outer(a, b) / h2, h2
         return kernel.assemble_jacobian(self.transition, *self._kernel_args(delta))
 
     def split(self, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """G of eq. (25) as ``(G_reg, a, b, h2)``, ``G = G_reg + a b^T / h2``, every piece
-        finite where ``h2`` vanishes (:func:`kernel.jacobian_split`)."""
+        finite where ``h2`` vanishes (:func:`kernel.jacobian_split`; with
+        :attr:`impact_form`, ``h2`` is the motion's velocity, not the kernel's
+        recomputation of ``x1'(T^-)``, which cancels there)."""
         from impactcont.orbit import kernel
 
-        return kernel.jacobian_split(self.transition, *self._kernel_args(delta))
+        args = self._kernel_args(delta)
+        G_reg, a, b, h2 = kernel.jacobian_split(self.transition, *args)
+        return G_reg, a, b, (args[-1] if self.impact_form else h2)
 
     def pd_condition(self, delta: float, left: np.ndarray, right: np.ndarray) -> float:
-        """The pole-free period-doubling condition ``g`` (:func:`kernel.pd_condition`)."""
+        """The pole-free period-doubling condition ``g`` (:func:`kernel.pd_condition`; with
+        :attr:`impact_form` the same bordered solve on :meth:`pole_free_pd_matrix`)."""
         from impactcont.orbit import kernel
 
+        if self.impact_form:
+            return bordered_condition(self.pole_free_pd_matrix(delta), left, right)
         return kernel.pd_condition(self.transition, *self._kernel_args(delta), left, right)
 
     def pole_free_pd_matrix(self, delta: float) -> np.ndarray:
@@ -316,7 +358,7 @@ class CurveProblem:
         self.parameters = check_parameters(osc, parameters)
         self._cache: collections.OrderedDict[tuple[float, float], _Pieces | GeneralPieces] = \
             collections.OrderedDict()
-        self._jac_cache: tuple[np.ndarray, np.ndarray] | None = None
+        self._jac_cache: tuple[np.ndarray, np.ndarray, bool] | None = None
         self.last_step = math.nan
 
     # -- layout ---------------------------------------------------------------------------------
@@ -352,12 +394,21 @@ class CurveProblem:
 
         A curve meets ``h2 = 0`` on purpose (a ZV curve lies on it, other curves
         cross it at a codim-2 point), where ``G`` has its pole (eq. 25): the
-        warning about an inexact ``G`` is not raised here; the curve flags it.
+        warning about an inexact ``G`` is not raised here; the curve flags it. Where the
+        pieces take the impact velocity from the impact condition (:attr:`_Pieces.
+        impact_form`: the kernel's form cancels) the motion is that of the root of
+        eq. (14) nearest the point's phase
+        (:func:`~impactcont.problems.periodic_branch.root_phase`): a point solves its
+        system to the Newton tolerance only, and the orbit takes that form at a root.
         """
         pc = self._pieces(u[0], lam)
+        delta = float(u[1])
+        if pc.impact_form:
+            c, s = pc.S0
+            delta = root_phase(float(c), float(s), float(pc.b), delta)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", LowImpactVelocityWarning)
-            return orbit_at_phase(pc.osc, self.N, float(u[1]))
+            return orbit_at_phase(pc.osc, self.N, delta)
 
     def fold_function(self, u: np.ndarray, lam: float) -> float:
         """``dr/d delta = -c sin(delta) + s cos(delta)``; ``= -root * sqrt(c^2+s^2-b^2)``."""
@@ -372,9 +423,11 @@ class CurveProblem:
         return self._residual(self._pieces(u[0], lam), float(u[1]), u[2:])
 
     def _residual(self, pc: _Pieces, delta: float | complex, extras: np.ndarray) -> np.ndarray:
-        """The residual from the pieces: real, or complex along a complex step."""
+        """The residual from the pieces: real, or complex along a complex step. Eq. (14)
+        is divided by its :func:`~impactcont.problems.periodic_branch.residual_scale`
+        (analytic in a complex step too: :attr:`_Pieces.scale`)."""
         c, s = pc.S0
-        r = c * np.cos(delta) + s * np.sin(delta) - pc.b
+        r = (c * np.cos(delta) + s * np.sin(delta) - pc.b) / pc.scale
         return np.concatenate([[r], self._conditions(pc, delta, extras)])
 
     def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
@@ -401,13 +454,14 @@ class CurveProblem:
         closed form (:meth:`_extra_columns`).
         """
         x = np.append(np.asarray(u, dtype=float), float(lam))
-        if self._jac_cache is not None and np.max(np.abs(self._jac_cache[0] - x)) <= (
-                _CHORD * max(1.0, float(np.max(np.abs(x))))):
+        pc = self._pieces(x[0], x[-1])
+        if self._jac_cache is not None and self._jac_cache[2] == pc.impact_form and np.max(
+                np.abs(self._jac_cache[0] - x)) <= _CHORD * max(1.0, float(np.max(np.abs(x)))):
             # a chord step: the iterates of one corrector stay this close; Newton then
             # converges linearly instead of quadratically, the accuracy is the residual's
+            # (not across a change of the velocity's form: the two agree on eq. 14 only)
             return self._jac_cache[1]
         m = x.size - 1
-        pc = self._pieces(x[0], x[-1])
         delta, extras = float(x[1]), x[2:-1]
         J = np.empty((m, m + 1))
         p1, p2 = self.parameters
@@ -429,7 +483,7 @@ class CurveProblem:
                 stepped = extras.astype(complex)
                 stepped[k] += 1j * h
                 J[:, 2 + k] = self._residual(still, delta, stepped).imag / h
-        self._jac_cache = (x, J)
+        self._jac_cache = (x, J, pc.impact_form)
         return J
 
     def _parameter_column(self, pc: GeneralPieces, x: np.ndarray, j: int, name: str
@@ -451,9 +505,12 @@ class CurveProblem:
         if name in ("omega", "R"):
             dc, ds = pc.cs_derivative(name)
             cd, sd = math.cos(x[1]), math.sin(x[1])
-            column[0] = dc * cd + ds * sd
+            c, s = pc.S0
+            column[0] = scaled_derivative(c * cd + s * sd - pc.b, dc * cd + ds * sd, c, s, dc,
+                                          ds)
             if self.kind == "SN":
-                column[1] = -dc * sd + ds * cd
+                column[1] = scaled_derivative(-c * sd + s * cd, -dc * sd + ds * cd, c, s, dc,
+                                              ds)
         return column
 
     def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray
@@ -565,8 +622,8 @@ class FoldCurve(CurveProblem):
     kind = "SN"
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        c, s = pc.S0
-        return np.array([-c * np.sin(delta) + s * np.cos(delta)])
+        c, s = pc.S0  # over the scale of eq. (14), as r
+        return np.array([(-c * np.sin(delta) + s * np.cos(delta)) / pc.scale])
 
 
 class PeriodDoublingCurve(CurveProblem):

@@ -4,10 +4,18 @@ Eq. (14) written as ``r(delta, lam) = c(lam) cos(delta) + s(lam) sin(delta) - b(
 is a smooth curve in ``(delta, lam)``; its two roots of eq. (15) meet at
 folds (``c^2 + s^2 = b^2``), where the curve simply turns, so pseudo-arclength
 continuation goes round them.
+
+Far above the lowest natural frequency ``|c, s|`` grows far above ``b`` (``1e9`` against
+``0.3`` at ``omega / omega_1 = 670`` on issue 19's system): ``r`` is then a difference of
+terms of that size, known only to about ``eps sqrt(c^2 + s^2)``, so it is divided by
+:func:`residual_scale`, and the motion at a point is evaluated at the root of eq. (14)
+nearest its phase (:func:`root_phase`), where the impact velocity's exact form does not
+depend on the corrector's tolerance.
 """
 
 from __future__ import annotations
 
+import cmath
 import math
 
 import numpy as np
@@ -20,9 +28,64 @@ from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
 
-__all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem"]
+__all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem", "residual_scale", "root_phase",
+           "scaled_derivative"]
 
 _KERNEL_WHICH = {"omega": 0, "R": 1, "eta": 2, "alpha": 2, "beta": 2}
+_ROOT_STEP = 1e-6  # rad: the largest correction root_phase makes (far above any tolerance)
+_UNSCALED = 64.0  # |c, s| up to which eq. (14) is not scaled (residual_scale)
+
+
+def residual_scale(c: float | complex, s: float | complex) -> float | complex:
+    """The scale of eq. (14) at one parameter value: ``max(1, sqrt(c^2 + s^2) / 64)``.
+
+    ``r = c cos(delta) + s sin(delta) - b`` sums terms up to ``sqrt(c^2 + s^2)`` (at a
+    root ``|b| <= sqrt(c^2 + s^2)`` too), so it is known only to a few
+    ``eps sqrt(c^2 + s^2)``: far above the lowest natural frequency that exceeds any
+    absolute Newton tolerance, and no point could be corrected (issue 19's system at
+    omega = 300, ``|c, s| = 1.2e9``, stopped at a residual of 5.6e-8; an undamped chain
+    near its resonance at 1e-12). Divided by this scale the residual's rounding stays
+    below ``64 sqrt(2) 2 eps = 4e-14``, under the tightest tolerance of the drivers
+    (1e-13, the event location), and eq. (14) is unchanged where ``|c, s| <= 64`` (the
+    paper's system: below 7). The solutions and the tangent do not change. Complex
+    ``c, s`` (a complex step) give the analytic ``sqrt(c^2 + s^2) / 64`` on the side of
+    its real part: the step differentiates the scaled residual exactly;
+    :func:`scaled_derivative` does it for a derivative.
+    """
+    if isinstance(c, float) and isinstance(s, float):  # (numpy's float64 too)
+        return max(1.0, math.hypot(c, s) / _UNSCALED)
+    if math.hypot(c.real, s.real) <= _UNSCALED:
+        return 1.0
+    return cmath.sqrt(complex(c * c + s * s)) / _UNSCALED
+
+
+def scaled_derivative(f: float, df: float, c: float, s: float, dc: float, ds: float
+                      ) -> float:
+    """``d(f / scale)`` from ``f``, its derivative ``df`` and those of ``c, s``, with
+    ``scale`` = :func:`residual_scale` ``(c, s)``."""
+    rho = math.hypot(c, s)
+    if rho <= _UNSCALED:
+        return df
+    return (df - f * (c * dc + s * ds) / (rho * rho)) * (_UNSCALED / rho)
+
+
+def root_phase(c: float, s: float, b: float, delta: float) -> float:
+    """The root of eq. (14) nearest `delta`: one Newton step ``delta - r / (dr/d delta)``.
+
+    A continuation point solves eq. (14) to the corrector's tolerance (1e-12 relative,
+    or looser on a bound or a located point), not to rounding. Far above the lowest
+    natural frequency the kernel's impact velocity ``x1p'(delta) / Delta`` moves with the
+    phase like ``sqrt(c^2 + s^2) / (kappa g)`` (0.1 % for a phase 7e-13 off on issue 19's
+    system) and :func:`impactcont.orbit.periodic.orbit_at_phase` takes the exact form
+    that does not (:func:`impactcont.orbit.dense.impact_velocity`) only at a root: one
+    step from within the tolerance reaches the root to rounding. No step is taken where
+    it would exceed 1e-6 rad (next to a fold, where ``dr/d delta`` vanishes and the phase
+    is known only to about ``sqrt(eps)`` anyway).
+    """
+    cd, sd = math.cos(delta), math.sin(delta)
+    slope = -c * sd + s * cd
+    step = (c * cd + s * sd - b) / slope if slope != 0.0 else math.inf
+    return delta - step if abs(step) <= _ROOT_STEP else delta
 
 
 class PeriodicBranchProblem:
@@ -43,7 +106,8 @@ class PeriodicBranchProblem:
     parameter value, cached); when the parameter is the gap ``b`` they do not
     depend on it at all, and they are linear in the forcing amplitude ``F0``
     (eq. 13 is linear in F). Their parameter derivative is exact: one complex-step
-    evaluation of the same kernel (no step-size error, no cancellation).
+    evaluation of the same kernel (no step-size error, no cancellation). Eq. (14) is
+    divided by :func:`residual_scale`, and differentiated with it.
     """
 
     periods = (2.0 * math.pi,)
@@ -57,7 +121,7 @@ class PeriodicBranchProblem:
         self.N = N
         self.parameter = parameter
         self._general = osc.general  # general damping matrix or complex F: first-order path
-        self._cache: dict[float, tuple[float, float, float]] = {}
+        self._cache: dict[float, tuple[float, float, float, float]] = {}
         self._per_unit_force: tuple[float, float] | None = None  # c, s at F0 = 1
         self._osc_cache: dict[float, ImpactOscillator] = {}
         if self._general:
@@ -96,32 +160,33 @@ class PeriodicBranchProblem:
 
     def amplitude(self, lam: float) -> tuple[float, float, float]:
         """``c, s`` of eq. (14) and the gap ``b`` at ``lam``."""
+        lam = float(lam)
+        return (self._cache.get(lam) or self._setup(lam))[:3]
+
+    def _setup(self, lam: float) -> tuple[float, float, float, float]:
+        """``c, s, b`` and :func:`residual_scale` (real) at ``lam`` (a float), cached (the
+        callers read the cache first)."""
         from impactcont.orbit import kernel
 
-        lam = float(lam)
-        hit = self._cache.get(lam)
-        if hit is not None:
-            return hit
+        b = lam if self.parameter == "b" else self.osc.b
         if self.parameter == "b" and self._cache:
-            c, s, _ = next(iter(self._cache.values()))  # c, s do not depend on the gap
-            value = (c, s, lam)
+            c, s = next(iter(self._cache.values()))[:2]  # c, s do not depend on the gap
         elif self.parameter == "F0":
             self._check(lam)
             c, s = self._unit_amplitude()
-            value = (c * lam, s * lam, self.osc.b)
+            c, s = c * lam, s * lam
         elif self._general:
             self._check(lam)
             c, s = general.amplitude(self.oscillator_at(lam), self.N)[:2]
-            value = (c, s, lam if self.parameter == "b" else self.osc.b)
         else:
             self._check(lam)
             a, R, omega = self._arguments(lam)
             c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
-            value = (float(c), float(s), lam if self.parameter == "b" else self.osc.b)
+            c, s = float(c), float(s)
         if len(self._cache) > 256:
             self._cache.clear()
-        self._cache[lam] = value
-        return value
+        hit = self._cache[lam] = (c, s, b, max(1.0, math.hypot(c, s) / _UNSCALED))
+        return hit
 
     def _unit_amplitude(self) -> tuple[float, float]:
         """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
@@ -164,27 +229,38 @@ class PeriodicBranchProblem:
 
     # -- the Problem protocol ------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
-        """``r = c cos(delta) + s sin(delta) - b`` (eq. 14), shape (1,)."""
-        c, s, b = self.amplitude(lam)
+        """``r = c cos(delta) + s sin(delta) - b`` (eq. 14) over :func:`residual_scale`,
+        shape (1,)."""
+        lam = float(lam)
+        c, s, b, scale = self._cache.get(lam) or self._setup(lam)
         d = float(u[0])
-        return np.array([c * math.cos(d) + s * math.sin(d) - b])
+        return np.array([(c * math.cos(d) + s * math.sin(d) - b) / scale])
 
     def jacobian(self, u: np.ndarray, lam: float) -> np.ndarray:
-        """``dr/d delta``, shape (1, 1)."""
-        c, s, _ = self.amplitude(lam)
+        """``dr/d delta`` over :func:`residual_scale`, shape (1, 1)."""
+        lam = float(lam)
+        c, s, _, scale = self._cache.get(lam) or self._setup(lam)
         d = float(u[0])
-        return np.array([[-c * math.sin(d) + s * math.cos(d)]])
+        return np.array([[(-c * math.sin(d) + s * math.cos(d)) / scale]])
 
     def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
-        """``dr/d lam``, shape (1,)."""
+        """``d/d lam`` of :meth:`residual` (:func:`scaled_derivative`), shape (1,)."""
         dc, ds, db = self._amplitude_derivative(lam)
-        d = float(u[0])
-        return np.array([dc * math.cos(d) + ds * math.sin(d) - db])
+        cd, sd = math.cos(float(u[0])), math.sin(float(u[0]))
+        lam = float(lam)
+        c, s, b, scale = self._cache.get(lam) or self._setup(lam)
+        if scale == 1.0:
+            return np.array([dc * cd + ds * sd - db])
+        return np.array([scaled_derivative(c * cd + s * sd - b, dc * cd + ds * sd - db, c, s,
+                                           dc, ds)])
 
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, delta: float, lam: float) -> PeriodicOrbit:
-        """The full periodic motion (state, G, multipliers, checks) at a branch point."""
-        return orbit_at_phase(self.oscillator_at(lam), self.N, delta)
+        """The full periodic motion (state, G, multipliers, checks) at a branch point: that
+        of the root of eq. (14) nearest its phase (:func:`root_phase`)."""
+        lam = float(lam)
+        c, s, b, _ = self._cache.get(lam) or self._setup(lam)
+        return orbit_at_phase(self.oscillator_at(lam), self.N, root_phase(c, s, b, delta))
 
     def fold_residual(self, delta: float, lam: float) -> np.ndarray:
         """``[r, dr/d delta]``: both vanish at a fold (saddle-node) of the branch."""
