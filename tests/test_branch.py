@@ -185,17 +185,23 @@ def test_bad_options_raise(paper_system):
         ic.continuation(paper_system.replace(b=50.0), bounds=(0.5, 6.0))
 
 
-def test_a_component_that_cannot_start_is_reported_not_fatal():
-    """An undamped chain whose second component's seed sits where the corrector fails: the
-    branch keeps the components that started and warns about the one that did not (it
-    crashed with an IndexError in the event search before)."""
+def test_a_component_that_cannot_start_is_reported_not_fatal(monkeypatch):
+    """A component whose seed sits where the corrector fails (here where eq. (15) has no
+    root): the branch keeps the components that started and warns about the one that did
+    not (it crashed with an IndexError in the event search before). The undamped chain's
+    own second seed failed until eq. (14) was scaled by |c, s| (issue 19); it starts now."""
+    import impactcont.branch as branch_module
+    from impactcont.orbit.periodic import amplitude_squared, orbit_at_phase
+
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[2.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                               b=0.5, omega=1.0, eta=0.0)
+    assert amplitude_squared(osc.replace(omega=1.45), 1) < osc.b ** 2  # no motion there
+    seeds = branch_module._component_seeds
+    monkeypatch.setattr(branch_module, "_component_seeds",
+                        lambda problem, bounds: [*seeds(problem, bounds), (1.45, 0.0)])
     with pytest.warns(RuntimeWarning, match="could not be started"):
         branch = ic.continuation(osc, 1, "omega", (0.5, 1.5))
     assert branch.sizes["point"] > 100
-    from impactcont.orbit.periodic import orbit_at_phase
-
     for k in range(1, branch.sizes["point"], 97):
         orbit = orbit_at_phase(osc.replace(omega=float(branch.omega[k])), 1,
                                float(branch.delta[k]))
