@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -134,3 +135,16 @@ def test_ordinary_bounds_do_not_crash_the_fold_locator(lower):
         if str(row.special_status.values) == "bracketed":
             lo, hi = float(row.special_bracket_lo), float(row.special_bracket_hi)
             assert precision >= max(omega - lo, hi - omega) - 1e-15
+
+
+def test_no_event_where_the_test_changes_sign_by_rounding_only():
+    """Far above the natural frequencies (omega ~ 1e8) the N-1 'motions' rest against the
+    stop (x1 = b, impact velocity -1e-8 against a velocity scale 5e7): gap_min is
+    +-4e-16 and its sign is rounding. 183 GR points were located on this stretch alone
+    (4521 over omega in (1e-8, 1e8)); a step whose two ends are both within the test's
+    rounding of zero is no event."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # ill-conditioned; max_points
+        branch = ic.continuation(paper(0.5, 1.0), 1, "omega", (9.62e7, 9.63e7), max_points=300)
+    assert branch.sizes["point"] > 1000 and not np.any(branch.physical.values)
+    assert branch.sizes["special"] == 0, branch.special_label.values

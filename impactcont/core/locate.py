@@ -51,11 +51,17 @@ class Event:
     at_point : callable, optional
         ``at_point(k) -> float``: the test's value at accepted point ``k`` when
         the driver already has it (else ``test`` is evaluated there).
+    noise : callable, optional
+        ``noise(k) -> float``: the rounding error of the test's value at accepted
+        point ``k``. A step whose two ends are both within it of zero changes sign
+        by rounding only (a degenerate branch on which the test is zero, e.g. a
+        motion resting against the stop) and is not an event.
     """
 
     label: str
     test: Callable[[FloatArray, float], float] | None
     at_point: Callable[[int], float] | None = None
+    noise: Callable[[int], float] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -275,6 +281,11 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
             else:
                 value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
                 if not _changes(value(k), value(k + 1)):
+                    continue
+                if event.noise is not None and all(
+                        abs(value(j)) <= event.noise(j) for j in (k, k + 1)):
+                    log.debug("%s between points %d and %d: a sign change by rounding only",
+                              event.label, k, k + 1)
                     continue
 
                 def g(s: float, test: Callable[..., float] = event.test,

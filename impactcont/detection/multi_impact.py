@@ -42,7 +42,7 @@ import numpy as np
 
 from impactcont.core.locate import Event, locate_events, tangent_at
 from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
-from impactcont.detection.special_points import event_function
+from impactcont.detection.special_points import event_function, event_noise
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.vocabulary import LABELS, check_labels
 
@@ -130,7 +130,8 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
             # only GR needs the (costly) interior-contact search of every flight
             return event_function(label, problem.orbit(u, lam, checks=label == "GR"))
 
-        return Event(label, test, lambda k: event_function(label, samples[k].orbit))
+        return Event(label, test, lambda k: event_function(label, samples[k].orbit),
+                     lambda k: event_noise(label, samples[k].orbit))
 
     found: list[MultiImpactSpecialPoint] = []
     for ep in locate_events(problem, [s.u for s in samples], [s.lam for s in samples],

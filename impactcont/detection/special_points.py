@@ -41,11 +41,12 @@ from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function",
-           "pole_free"]
+           "event_noise", "pole_free"]
 
 log = logging.getLogger(__name__)
 
 _XTOL = 1e-13
+_EPS = float(np.finfo(float).eps)
 _UNIT_TOL = 1e-7
 
 
@@ -132,6 +133,29 @@ def event_function(label: str, orbit: PeriodicOrbit) -> float:
     if label == "ZV":
         return orbit.impact_velocity
     raise ValueError(f"label must be one of PD, NS, GR, ZV here; got {label!r}")
+
+
+#: rounding of the GR and ZV test functions, in eps times the size of the motion
+_NOISE_ULPS = 64.0
+
+
+def event_noise(label: str, orbit: PeriodicOrbit) -> float:
+    """The rounding error of :func:`event_function` of `label` at a motion (0 if unknown).
+
+    GR: ``b - x_j`` at an interior maximum, sums of terms of the size of the
+    displacements; ZV: the impact velocity, sums of terms of the size of the
+    velocities ``max(|x'|, omega |x|)``; both ``_NOISE_ULPS`` eps times that size.
+    """
+    # an N-p motion's states at its p impacts, or an N-1 motion's one state
+    states = np.atleast_2d(np.asarray(getattr(orbit, "states", orbit.state), dtype=float))
+    n = states.shape[1] // 2
+    size = float(np.max(np.abs(states[:, :n])))
+    if label == "GR":
+        return _NOISE_ULPS * _EPS * max(size, abs(orbit.oscillator.b))
+    if label == "ZV":
+        omega = orbit.oscillator.omega
+        return _NOISE_ULPS * _EPS * max(float(np.max(np.abs(states[:, n:]))), omega * size)
+    return 0.0
 
 
 def _changes(a: float, b: float) -> bool:
@@ -230,7 +254,8 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
 
     def event(label: str) -> Event:
         return Event(label, lambda u, lam: event_function(label, problem.orbit(u[0], lam)),
-                     lambda k: event_function(label, samples[k].orbit))
+                     lambda k: event_function(label, samples[k].orbit),
+                     lambda k: event_noise(label, samples[k].orbit))
 
     events = [event(label) for label in labels if label != "SN"]
     for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
