@@ -18,6 +18,7 @@ There ``|c, s| >> b`` (1.2e9 against 0.3 on issue 19's system at omega / omega_1
 from __future__ import annotations
 
 import math
+import warnings
 
 import mpmath
 import numpy as np
@@ -212,3 +213,15 @@ def test_branch_of_a_16_mass_chain_far_above_its_first_mode(chain16_reference):
                                                              abs=0)
     assert ref.matched_error(branch.multipliers.values[k], mu_ref) <= (
         1e-10 * np.abs(mu_ref).max())
+
+
+@PATHS
+def test_no_neimark_sacker_point_from_rounding_far_above_the_first_mode(matrix):
+    """R = 1 and light damping far above the first mode: a factor mu_big mu_small - 1 of
+    the NS test is about -4e-4 while mu_small is known only to eps |mu_big|, so the test
+    changed sign by rounding: 5 (modal) and 7 (damping matrix) NS points were reported
+    'bracketed' on this branch, none of them a Neimark-Sacker point."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        branch = ic.continuation(_far(matrix=matrix), 1, "b", (0.5, 1.5), components="start")
+    assert branch.special_label.values.tolist() == ["ZV"]

@@ -145,7 +145,25 @@ def event_noise(label: str, orbit: PeriodicOrbit) -> float:
     GR: ``b - x_j`` at an interior maximum, sums of terms of the size of the
     displacements; ZV: the impact velocity, sums of terms of the size of the
     velocities ``max(|x'|, omega |x|)``; both ``_NOISE_ULPS`` eps times that size.
+    PD and NS: products of factors ``mu_i + 1`` and ``mu_i mu_j - 1`` of multipliers
+    known to ``_NOISE_ULPS eps max(1, rho(G))`` each; the product's relative error is
+    the sum of its factors'. Far above the natural frequencies (``R = 1``, light
+    damping) a factor ``mu_big mu_small - 1`` is that small, and its sign rounding.
     """
+    if label in ("PD", "NS"):
+        mu = np.asarray(orbit.multipliers)
+        if not np.all(np.isfinite(mu)):
+            return math.inf
+        err = _NOISE_ULPS * _EPS * max(1.0, float(np.max(np.abs(mu))))
+        if label == "PD":
+            factors, errors = mu + 1.0, np.full(mu.size, err)
+        else:
+            i, j = np.triu_indices(mu.size, 1)
+            factors, errors = mu[i] * mu[j] - 1.0, err * (np.abs(mu[i]) + np.abs(mu[j]))
+        with np.errstate(divide="ignore"):
+            relative = float(np.sum(errors / np.abs(factors)))
+        return abs(event_function(label, orbit)) * relative if math.isfinite(relative) \
+            else math.inf
     # an N-p motion's states at its p impacts, or an N-1 motion's one state
     states = np.atleast_2d(np.asarray(getattr(orbit, "states", orbit.state), dtype=float))
     n = states.shape[1] // 2
