@@ -7,8 +7,7 @@ import dataclasses
 import json
 import math
 import numbers
-from collections.abc import Sequence
-from functools import cached_property
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -31,6 +30,31 @@ def _rule(name: str) -> dict[str, Any]:
 
 #: Parameters whose change leaves M, K, F and the modal basis alone.
 _SCALAR_RULES: dict[str, dict[str, Any]] = {name: _rule(name) for name in ("R", "b", "omega")}
+#: Parameters on which the modal basis of eq. (5)-(6) (M, K, the damping, F) does not depend.
+_MODES_KEPT = frozenset({*_SCALAR_RULES, "stops"})
+#: Parameters on which the first-order basis (M, K, C only) does not depend.
+_FIRST_ORDER_KEPT = frozenset({*_MODES_KEPT, "F"})
+
+
+class _Shared:
+    """A basis computed on first use, shared by the oscillators that
+    :meth:`ImpactOscillator.replace` derives from one another while it cannot change.
+
+    An oscillator cannot hold it in its own cache: a continuation derives every point's
+    oscillator from the same start, which may never compute the basis itself, so each
+    point would eigen-decompose again.
+    """
+
+    __slots__ = ("value",)
+
+    def __init__(self, value: Any = None) -> None:
+        self.value = value
+
+    def get(self, compute: Callable[[], Any]) -> Any:
+        """The value, computed by ``compute()`` on the first call."""
+        if self.value is None:
+            self.value = compute()
+        return self.value
 
 
 def _real_array(name: str, value: Any, what: str) -> np.ndarray:
@@ -216,7 +240,9 @@ class ImpactOscillator:
     Notes
     -----
     The oscillator is immutable; use :meth:`replace` to change parameters.
-    Its modal basis is computed once, on first use. After construction ``C`` holds the
+    Its modal and first-order bases are computed once, on first use, and shared with the
+    oscillators :meth:`replace` makes from it while the changed parameters cannot move them
+    (omega, b, R, stops; F or F0 for the first-order basis). After construction ``C`` holds the
     damping matrix for every damping model; :attr:`general_damping` says whether it was
     given as a matrix.
     """
@@ -277,6 +303,8 @@ class ImpactOscillator:
             ra, rb = (0.0, 2.0 * eta) if eta is not None else (alpha or 0.0, beta or 0.0)
             C = ra * M + rb * K
         object.__setattr__(self, "_general_damping", general)
+        object.__setattr__(self, "_first_order", _Shared())
+        object.__setattr__(self, "_modes", _Shared())
         for name, value in [("M", M), ("K", K), ("F", F), ("C", C)]:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -357,22 +385,21 @@ class ImpactOscillator:
         else:
             implied = {"C": None} if proportional or not self.general_damping else {}
         new = dataclasses.replace(self, **changes, **implied)
-        if "first_order" in self.__dict__ and set(changes) <= {*_SCALAR_RULES, "F"}:
-            new.__dict__["first_order"] = self.first_order  # independent of F
-        if scale is not None and "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES,
-                                                                              "F"}:
+        if set(changes) <= _FIRST_ORDER_KEPT:  # M, K, C kept (F may come from F0)
+            object.__setattr__(new, "_first_order", self._first_order)
+        modes = self._modes.value
+        if set(changes) <= _MODES_KEPT:
+            object.__setattr__(new, "_modes", self._modes)
+        elif scale is not None and modes is not None and set(changes) <= _FIRST_ORDER_KEPT:
             # only the forcing's amplitude changed: the same modes, modal forces scaled
-            new.__dict__["modes"] = dataclasses.replace(
-                self.modes, modal_forces=self.modes.modal_forces * scale)
-            return new
-        if "modes" in self.__dict__ and set(changes) <= {*_SCALAR_RULES, "eta", "alpha", "beta"}:
+            new._modes.value = dataclasses.replace(modes, modal_forces=modes.modal_forces * scale)
+        elif modes is not None and set(changes) <= {*_MODES_KEPT, "eta", "alpha", "beta"}:
             # only the damping changed: the modes of K u = lambda M u are the same, the decay
             # rates a_i = (alpha + beta omega_i^2) / 2 follow (no new eigensolve per point of a
             # branch in eta, alpha or beta)
             alpha, beta = new.rayleigh
-            w = self.modes.natural_frequencies
-            new.__dict__["modes"] = dataclasses.replace(self.modes,
-                                                        decay_rates=0.5 * (alpha + beta * w * w))
+            w = modes.natural_frequencies
+            new._modes.value = dataclasses.replace(modes, decay_rates=0.5 * (alpha + beta * w * w))
         return new
 
     # -- derived quantities -------------------------------------------------------------------
@@ -416,10 +443,12 @@ class ImpactOscillator:
         """
         return self.general_damping or self.F.dtype.kind == "c"
 
-    @cached_property
+    @property
     def first_order(self) -> FirstOrderBasis:
-        """First-order complex modes of eq. (1) with the damping matrix C, computed once."""
-        return FirstOrderBasis.from_matrices(self.M, self.K, self.C)
+        """First-order complex modes of eq. (1) with the damping matrix C, computed once
+        (and kept by :meth:`replace` unless M, K or the damping change)."""
+        return self._first_order.get(lambda: FirstOrderBasis.from_matrices(self.M, self.K,
+                                                                           self.C))
 
     @property
     def D(self) -> np.ndarray:
@@ -432,9 +461,10 @@ class ImpactOscillator:
         d[self.n + self.stops.index] = -self.R
         return np.diag(d)
 
-    @cached_property
+    @property
     def modes(self) -> ModalBasis:
-        """Mass-normalised modal basis of eq. (5)-(6), computed once.
+        """Mass-normalised modal basis of eq. (5)-(6), computed once (and kept by
+        :meth:`replace` unless M, K, the damping or F change).
 
         Raises
         ------
@@ -450,7 +480,8 @@ class ImpactOscillator:
                                  "(periodic motions, branches in omega, b, R, F0, curves, maps, "
                                  "robust stability and the simulator do)")
         alpha, beta = self.rayleigh
-        return ModalBasis.from_matrices(self.M, self.K, alpha, beta, self.F)
+        return self._modes.get(lambda: ModalBasis.from_matrices(self.M, self.K, alpha, beta,
+                                                                self.F))
 
     # -- serialisation ------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
