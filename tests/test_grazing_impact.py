@@ -148,3 +148,17 @@ def test_no_event_where_the_test_changes_sign_by_rounding_only():
         branch = ic.continuation(paper(0.5, 1.0), 1, "omega", (9.62e7, 9.63e7), max_points=300)
     assert branch.sizes["point"] > 1000 and not np.any(branch.physical.values)
     assert branch.sizes["special"] == 0, branch.special_label.values
+
+
+def test_precision_of_a_zero_next_to_where_the_corrector_fails():
+    """The precision search widens around a located zero; where no branch point can be found
+    there, the bound goes as far as that end of the step instead of failing the branch."""
+    from impactcont.core import zero_precision
+
+    def position(s: float) -> float:  # the step's ends are accepted points: always known
+        if 0.5 < s < 1.0:
+            raise ValueError("no branch point")
+        return s
+
+    precision = zero_precision(lambda s: (s - 0.5) * abs(s - 0.5), position, 0.5, 1e-13)
+    assert precision >= 2 * 0.5  # as far as the end s = 1 on the failing side

@@ -15,7 +15,7 @@ from impactcont.core.driver import (
     iter_points,
 )
 from impactcont.core.events import Stop, StopRule
-from impactcont.core.locate import Event, EventPoint, locate_events
+from impactcont.core.locate import Event, EventPoint, locate_events, zero_precision
 from impactcont.core.options import ContinuationOptionError, ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import Problem, ProblemOutputError
@@ -49,4 +49,5 @@ __all__ = [
     "iter_points",
     "locate_events",
     "solve_on_hyperplane",
+    "zero_precision",
 ]

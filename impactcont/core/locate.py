@@ -228,14 +228,23 @@ def zero_precision(g: Callable[[float], float], position: Callable[[float], Any]
     """
     noise = _NOISE_ULPS * _EPS * max(abs(g(lo)), abs(g(hi)))
     here = np.asarray(position(s), dtype=float)
+
+    def distance(t: float) -> float:
+        return float(np.max(np.abs(np.asarray(position(t)) - here)))
+
     ds = max(s_tol, 4 * _EPS)
     reach = 0.0
-    for side in (-1.0, 1.0):
+    for side, end in ((-1.0, lo), (1.0, hi)):
         h = ds
         while True:
             t = min(max(s + side * h, lo), hi)
-            reach = max(reach, float(np.max(np.abs(np.asarray(position(t)) - here))))
-            if t in (lo, hi) or abs(g(t)) > noise:
+            try:
+                reach = max(reach, distance(t))
+                if t == end or abs(g(t)) > noise:
+                    break
+            except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
+                # no branch point there (the corrector failed): as far as that end
+                reach = max(reach, distance(end))
                 break
             h *= 10.0
     return 2 * reach + 4 * _EPS * float(np.max(np.abs(here)))
