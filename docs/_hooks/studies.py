@@ -7,6 +7,7 @@ The studies live outside ``docs/``; this hook adds, for every directory of
   the study's ``scene.toml`` and how to run it;
 * the files the README links to that exist in the study directory (figures,
   the scene), at the same relative place, so that the README's links work;
+  links to files of ``docs/`` point to their page of the site;
   links to files that are not there (outputs are not committed) become code
   text;
 * ``studies/index.md``: the list of studies, and a "Studies" nav section.
@@ -15,6 +16,7 @@ The studies live outside ``docs/``; this hook adds, for every directory of
 from __future__ import annotations
 
 import logging
+import os
 import re
 from pathlib import Path
 
@@ -63,7 +65,13 @@ def _page(study: Path, config, files: Files) -> str:
         bang, label, target = match.groups()
         if re.match(r"^[a-z]+:|^#|^/", target):
             return match.group(0)
-        path = (study / target.split("#")[0]).resolve()
+        target_path, hash_, fragment = target.partition("#")
+        path = (study / target_path).resolve()
+        docs = Path(config["docs_dir"]).resolve()
+        if path.is_file() and path.is_relative_to(docs):
+            # A page of the site: link to it from studies/<name>/index.md.
+            page = Path(os.path.relpath(path, docs / "studies" / study.name)).as_posix()
+            return f"{bang}[{label}]({page}{hash_}{fragment})"
         if path.is_file() and path.is_relative_to(study.resolve()):
             uri = f"studies/{study.name}/{path.relative_to(study.resolve()).as_posix()}"
             if files.get_file_from_path(uri) is None:
