@@ -32,7 +32,7 @@ from impactcont.problems import PeriodicBranchProblem
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, PARAMETERS, check_labels
 
-__all__ = ["continuation"]
+__all__ = ["check_continuation_arguments", "continuation"]
 
 log = logging.getLogger(__name__)
 
@@ -76,6 +76,71 @@ def _refuse_elastic(osc: ImpactOscillator, parameter: str, lo: float, hi: float)
             "damping (R = 1, no damping), where eq. (12) is singular and the motions obey "
             "another equation; use periodic_orbits at each value there, add damping or keep "
             "R below 1")
+
+
+def check_continuation_arguments(
+        osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
+        bounds: Sequence[float] = (0.5, 6.0), *, detect: Sequence[str] = LABELS,
+        components: str = "all", options: ContinuationOptions | None = None, **single: Any
+        ) -> tuple[PeriodicBranchProblem, list[str], tuple[float, float], ContinuationOptions]:
+    """The checks :func:`continuation` makes of its arguments before it computes.
+
+    :func:`continuation` calls it first; a scene's validation (``impactcont run
+    --check``) calls it on an entry's arguments, so both refuse the same input with the
+    same message. The arguments are those of :func:`continuation`.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        The oscillator.
+    N : int
+        One impact every N forcing periods.
+    parameter : str
+        The continued parameter.
+    bounds : (float, float)
+        Range of the parameter (``options.bounds`` instead when `options` gives it).
+    detect : sequence of str
+        Special points to detect.
+    components : {"all", "start"}
+        Which connected components to follow.
+    options : ContinuationOptions, optional
+        Continuation options.
+    **single
+        Single options (``ds``, ``ds_min``, ``ds_max``, ``newton_tol``, ``max_points``,
+        ``both_directions``, ...; ``None`` means not given), over `options`.
+
+    Returns
+    -------
+    problem : PeriodicBranchProblem
+        Eq. (14) in `parameter` for `osc` and `N`.
+    detect : list of str
+        The labels to detect.
+    bounds : (float, float)
+        ``(lo, hi)``, floats.
+    options : ContinuationOptions
+        The options of the run (this driver's defaults, then `options`, then `single`).
+
+    Raises
+    ------
+    ParameterError
+        Bad `N`, `detect`, `parameter` (or one the oscillator's damping model does not
+        have), `bounds` (not two numbers, or outside the parameter's allowed range),
+        `components`, or a range reaching elastic impacts without damping (R = 1, no
+        damping), where eq. (12) is singular.
+    ContinuationOptionError
+        A bad option (named; a ParameterError).
+    """
+    N = _check_N(N)
+    detect = check_labels(detect)
+    problem = PeriodicBranchProblem(osc, N, parameter)
+    if options is not None and "bounds" in getattr(options, "given", ()):
+        bounds = options.bounds
+    lo, hi = _check_bounds(parameter, bounds)
+    _refuse_elastic(osc, parameter, lo, hi)
+    opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, **single)
+    if components not in ("all", "start"):
+        raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
+    return problem, detect, (lo, hi), opts
 
 
 def _start_value(problem: PeriodicBranchProblem, bounds: tuple[float, float],
@@ -168,18 +233,11 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     NewtonConvergenceError
         When no component could be started.
     """
-    N = _check_N(N)
-    detect = check_labels(detect)
-    problem = PeriodicBranchProblem(osc, N, parameter)
-    if options is not None and "bounds" in getattr(options, "given", ()):
-        bounds = options.bounds
-    lo, hi = _check_bounds(parameter, bounds)
-    _refuse_elastic(osc, parameter, lo, hi)
-    opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
-                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
-                          both_directions=both_directions, **more)
-    if components not in ("all", "start"):
-        raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
+    problem, detect, (lo, hi), opts = check_continuation_arguments(
+        osc, N, parameter, bounds, detect=detect, components=components, options=options,
+        ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+        both_directions=both_directions, **more)
+    N = problem.N
     lam0 = _start_value(problem, (lo, hi), start)
     delta0 = _start_root(problem, lam0, root)
     runs = [_follow(problem, lam0, delta0, opts, detect)]

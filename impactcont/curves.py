@@ -56,7 +56,7 @@ from impactcont.problems.codim1 import (
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import Label
 
-__all__ = ["curve", "curve_crossings"]
+__all__ = ["check_curve_arguments", "curve", "curve_crossings"]
 
 log = logging.getLogger(__name__)
 
@@ -341,6 +341,81 @@ def _codim2_record(problem: CurveProblem, cp: Codim2Point) -> dict[str, Any]:
     return rec
 
 
+def check_curve_arguments(
+        osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
+        start: xr.Dataset | Mapping[str, float] | None = None,
+        parameters: Sequence[str] = ("omega", "b"),
+        bounds: Mapping[str, Sequence[float]] | Sequence[Sequence[float]] | None = None,
+        options: ContinuationOptions | None = None, **single: Any
+        ) -> tuple[str, tuple[str, str], dict[str, tuple[float, float]], int | None,
+                   ContinuationOptions]:
+    """The checks :func:`curve` makes of its arguments before it computes.
+
+    :func:`curve` calls it first; a scene's validation (``impactcont run --check``)
+    calls it on an entry's arguments, so both refuse the same input with the same
+    message. The arguments are those of :func:`curve`; `start` is only looked at to
+    tell whether `osc` may be None (a branch dataset gives the oscillator).
+
+    Parameters
+    ----------
+    osc : ImpactOscillator or None
+        The oscillator; ``None`` only with a branch dataset as `start`.
+    N : int or None
+        One impact every N forcing periods.
+    kind : Label or str
+        The kind of curve.
+    start : xarray.Dataset, mapping or None
+        The start (see :func:`curve`).
+    parameters : (str, str)
+        ``(p1, p2)``.
+    bounds : mapping or pair of pairs
+        The box ``{p1: (lo, hi), p2: (lo, hi)}``.
+    options : ContinuationOptions, optional
+        Continuation options.
+    **single
+        Single options (``ds``, ``ds_max``, ...; ``None`` means not given), over `options`.
+
+    Returns
+    -------
+    kind : str
+    parameters : (str, str)
+    box : dict of str to (float, float)
+        The bounds of `p1` and `p2`.
+    N : int or None
+    options : ContinuationOptions
+        The options of the run, ``bounds`` the box's range of ``p2``.
+
+    Raises
+    ------
+    ParameterError
+        `kind` not one of :data:`impactcont.problems.codim1.CURVE_KINDS`; `osc` None
+        without a branch dataset as `start`, or not an ImpactOscillator; `parameters` not
+        two different continuable parameters of the oscillator; `bounds` missing, not
+        finite intervals ``lo < hi`` for exactly those parameters; `N` not an integer
+        >= 1; or a bad option (:class:`ContinuationOptionError`, named).
+    """
+    kind = kind.value if isinstance(kind, Label) else kind
+    if kind not in CURVE_KINDS:
+        raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
+    if osc is None and not isinstance(start, xr.Dataset):
+        raise ParameterError("osc may be None only when start is a branch dataset; got "
+                             f"start={type(start).__name__}")
+    if osc is not None and not isinstance(osc, ImpactOscillator):
+        raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
+    parameters = check_parameters(osc if osc is not None else oscillator_from_dataset(start),
+                                  tuple(parameters) if not isinstance(parameters, str)
+                                  else parameters)
+    if bounds is None:
+        raise ParameterError(f"bounds must be given for both parameters {parameters}; got None")
+    box = _check_bounds(bounds, parameters)
+    if N is not None:
+        N = _check_N(N)
+    p2 = parameters[1]
+    opts = driver_options(options, box[p2], defaults=_DEFAULTS,
+                          **{**single, "bounds": box[p2]})
+    return kind, parameters, box, N, opts
+
+
 @blas_limited
 @option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
@@ -406,22 +481,10 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     NoPeriodicMotionError
         No start point could be found.
     """
-    kind = kind.value if isinstance(kind, Label) else kind
-    if kind not in CURVE_KINDS:
-        raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
-    if osc is None and not isinstance(start, xr.Dataset):
-        raise ParameterError("osc may be None only when start is a branch dataset; got "
-                             f"start={type(start).__name__}")
-    if osc is not None and not isinstance(osc, ImpactOscillator):
-        raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
-    parameters = check_parameters(osc if osc is not None else oscillator_from_dataset(start),
-                                  tuple(parameters) if not isinstance(parameters, str)
-                                  else parameters)
-    if bounds is None:
-        raise ParameterError(f"bounds must be given for both parameters {parameters}; got None")
-    box = _check_bounds(bounds, parameters)
-    if N is not None:
-        N = _check_N(N)
+    kind, parameters, box, N, opts = check_curve_arguments(
+        osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
+        ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+        both_directions=both_directions, **more)
     if isinstance(start, xr.Dataset):
         start_osc, N, delta0 = _start_from_branch(start, kind, special, osc, N, parameters)
     elif start is None:
@@ -443,9 +506,6 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         if not lo <= value <= hi:
             raise ParameterError(f"the start {name}={value!r} lies outside bounds[{name!r}] = "
                                  f"{box[name]}")
-    opts = driver_options(options, box[p2], defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
-                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
-                          both_directions=both_directions, **{**more, "bounds": box[p2]})
     problem = curve_problem(kind, start_osc, N, parameters)
     u0 = problem.initial_unknowns(p1v, p2v, delta0)
     log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)

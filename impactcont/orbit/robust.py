@@ -40,7 +40,13 @@ from impactcont.orbit.periodic import (
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_damping
 
-__all__ = ["RobustStability", "lyapunov_matrix", "robust_bound", "robust_stability"]
+__all__ = [
+    "RobustStability",
+    "check_robust_arguments",
+    "lyapunov_matrix",
+    "robust_bound",
+    "robust_stability",
+]
 
 log = logging.getLogger(__name__)
 
@@ -494,6 +500,86 @@ def _refine(follower: _Follower, i: int, j: int, axes: list[np.ndarray],
     return value(q), q
 
 
+def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[float, float]],
+                           *, nominal: Mapping[str, float] | None = None,
+                           root: int | None = None, samples: int = 33
+                           ) -> tuple[int, int, dict[str, tuple[float, float]], dict[str, float]]:
+    """The checks :func:`robust_stability` makes of its arguments before it computes.
+
+    :func:`robust_stability` calls it first; a scene's validation (``impactcont run
+    --check``) calls it on an entry's arguments, so both refuse the same input with the
+    same message. The arguments are those of :func:`robust_stability`.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        The system.
+    N : int
+        One impact every N forcing periods.
+    vary : dict of str to (float, float)
+        The box ``Q``.
+    nominal : dict of str to float, optional
+        ``q0`` (default the box centre).
+    root : {None, +1, -1}, optional
+        Which root of eq. (15) to follow.
+    samples : int, optional
+        Grid points per parameter.
+
+    Returns
+    -------
+    N : int
+    samples : int
+    box : dict of str to (float, float)
+        `vary` with float ends.
+    q0 : dict of str to float
+        The nominal point, every parameter of the box (the centre where not given).
+
+    Raises
+    ------
+    TypeError
+        `osc` is not an :class:`ImpactOscillator`.
+    ParameterError
+        `N` not an integer >= 1; `root` not None, +1 or -1; `samples` not an integer
+        >= 2 or a grid of more than 1000000 points; `vary` not a non-empty mapping of
+        known parameter names (``"F[i]"`` inside F, with a real entry; a damping
+        parameter of the oscillator's damping model) to finite intervals ``lo < hi``;
+        `nominal` naming a parameter not in `vary` or a value outside its interval; or
+        an end of an interval (the others at nominal) that leaves the oscillator's
+        admissible parameters.
+    """
+    if not isinstance(osc, ImpactOscillator):
+        raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
+    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+        raise ParameterError(f"N must be an integer >= 1 (impact every N forcing periods); "
+                             f"got {N!r}")
+    N = int(N)
+    if root is not None and (isinstance(root, bool) or root not in (1, -1)):
+        raise ParameterError(f"root must be None, +1 or -1 (sign in eq. 15); got {root!r}")
+    if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))
+            or samples < 2):
+        raise ParameterError(f"samples must be an integer >= 2 (grid points per parameter, "
+                             f"both ends included); got {samples!r}")
+    samples = int(samples)
+    box = _check_vary(osc, vary)
+    if samples ** len(box) > _MAX_GRID_POINTS:
+        raise ParameterError(f"samples={samples} for {len(box)} parameters gives "
+                             f"{samples ** len(box)} grid points; at most "
+                             f"{_MAX_GRID_POINTS} allowed")
+    q0 = _check_nominal(box, nominal)
+    names = list(box)
+    # The box must be admissible: every interval end, the others at nominal.
+    for k, name in enumerate(names):
+        for end in box[name]:
+            q = [q0[m] for m in names]
+            q[k] = end
+            try:
+                _oscillator_at(osc, names, tuple(q))
+            except ParameterError as exc:
+                raise ParameterError(f"vary[{name!r}] = {box[name]!r} leaves the admissible "
+                                     f"parameters: {exc}") from None
+    return N, samples, box, q0
+
+
 @blas_limited
 def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[float, float]],
                      *, nominal: Mapping[str, float] | None = None, root: int | None = None,
@@ -565,39 +651,11 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     checked at every evaluation; the full contact check of eq. (16) at every
     grid point and at every refined argmax.
     """
-    if not isinstance(osc, ImpactOscillator):
-        raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ParameterError(f"N must be an integer >= 1 (impact every N forcing periods); "
-                             f"got {N!r}")
-    N = int(N)
-    if root is not None and (isinstance(root, bool) or root not in (1, -1)):
-        raise ParameterError(f"root must be None, +1 or -1 (sign in eq. 15); got {root!r}")
-    if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))
-            or samples < 2):
-        raise ParameterError(f"samples must be an integer >= 2 (grid points per parameter, "
-                             f"both ends included); got {samples!r}")
-    samples = int(samples)
-    box = _check_vary(osc, vary)
-    if samples ** len(box) > _MAX_GRID_POINTS:
-        raise ParameterError(f"samples={samples} for {len(box)} parameters gives "
-                             f"{samples ** len(box)} grid points; at most "
-                             f"{_MAX_GRID_POINTS} allowed")
-    q0 = _check_nominal(box, nominal)
+    N, samples, box, q0 = check_robust_arguments(osc, N, vary, nominal=nominal, root=root,
+                                                 samples=samples)
     names = list(box)
     lo = np.array([box[k][0] for k in names])
     hi = np.array([box[k][1] for k in names])
-
-    # The box must be admissible: every interval end, the others at nominal.
-    for k, name in enumerate(names):
-        for end in box[name]:
-            q = [q0[m] for m in names]
-            q[k] = end
-            try:
-                _oscillator_at(osc, names, tuple(q))
-            except ParameterError as exc:
-                raise ParameterError(f"vary[{name!r}] = {box[name]!r} leaves the admissible "
-                                     f"parameters: {exc}") from None
     nominal_q = tuple(q0[m] for m in names)
     orbit = _select_nominal_orbit(_oscillator_at(osc, names, nominal_q), N, root, q0)
     G0 = orbit.G.copy()

@@ -21,16 +21,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from impactcont import branch as _branch
-from impactcont.branch import continuation
-from impactcont.core.options import driver_options
+from impactcont.branch import check_continuation_arguments, continuation
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.model.stops import Stops, require_paper_stops
-from impactcont.orbit import robust as _robust
-from impactcont.orbit.robust import robust_stability
-from impactcont.problems import CONTINUABLE_PARAMETERS, PeriodicBranchProblem
+from impactcont.orbit.robust import check_robust_arguments, robust_stability
+from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.scene.keys import (
     ENTRY_NAME,
     Boolean,
@@ -48,7 +45,6 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.simulate import simulate
-from impactcont.vocabulary import check_labels
 
 __all__ = [
     "CONTINUATION_KEYS",
@@ -469,16 +465,10 @@ def check_continuation(osc: ImpactOscillator, where: Where, N: int, parameter: s
     its message names (``parameter``, ``bounds``, ``ds``, ...), else at the entry.
     """
     check_closed_form(osc, where, "the N-1 branch")
-
-    def checks() -> None:  # continuation's own order: labels, problem, bounds, options
-        check_labels(detect)
-        PeriodicBranchProblem(osc, N, parameter)  # the parameter and the damping model
-        lo, hi = _branch._check_bounds(parameter, bounds)
-        _branch._refuse_elastic(osc, parameter, lo, hi)
-        driver_options(None, (lo, hi), defaults=_branch._DEFAULTS, **options)
-
-    library_check(where, checks, keys=("N", "parameter", "bounds", "start", "root", "detect",
-                                       *CONTINUATION_KEYS))
+    library_check(where, check_continuation_arguments, osc, N, parameter, bounds,
+                  detect=detect, **options,
+                  keys=("N", "parameter", "bounds", "start", "root", "detect",
+                        *CONTINUATION_KEYS))
 
 
 def continuation_entry(func: Callable[..., Any], name: str,
@@ -627,29 +617,15 @@ class RobustSpec(EntrySpec):
                     f"{name} is varied over the box, where its nominal value is nominal.{name} "
                     f"(default the box centre): {name} = {self.changes[name]!r} would not be "
                     "used", f"nominal = {{ {name} = {self.changes[name]!r} }} instead")
-        _check_robust(osc, where, self.vary, self.nominal)
+        _check_robust(osc, where, self)
 
 
-def _check_robust(osc: ImpactOscillator, where: Where, vary: Mapping[str, tuple[float, float]],
-                  nominal: Mapping[str, float] | None) -> None:
-    """The checks :func:`impactcont.robust_stability` makes before it computes: the box, the
-    nominal point, every end of the box admissible (the others at nominal), the stops."""
-
-    def checks() -> None:
-        box = _robust._check_vary(osc, vary)
-        q0 = _robust._check_nominal(box, nominal)
-        names = list(box)
-        for k, name in enumerate(names):
-            for end in box[name]:
-                q = [q0[m] for m in names]
-                q[k] = end
-                try:
-                    _robust._oscillator_at(osc, names, tuple(q))
-                except ParameterError as exc:
-                    raise ParameterError(f"vary[{name!r}] = {box[name]!r} leaves the admissible "
-                                         f"parameters: {exc}") from None
-
-    library_check(where.key("vary"), checks)
+def _check_robust(osc: ImpactOscillator, where: Where, spec: RobustSpec) -> None:
+    """The checks :func:`impactcont.robust_stability` makes before it computes
+    (:func:`~impactcont.orbit.robust.check_robust_arguments`: the box, the nominal point,
+    every end of the box admissible), then the stops."""
+    library_check(where.key("vary"), check_robust_arguments, osc, spec.N, spec.vary,
+                  nominal=spec.nominal, root=spec.root, samples=spec.samples)
     check_closed_form(osc, where, "the N-1 closed form")
 
 

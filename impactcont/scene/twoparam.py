@@ -22,13 +22,11 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
-from impactcont import curves as _curves
-from impactcont.core.options import driver_options
-from impactcont.curves import curve
+from impactcont.curves import check_curve_arguments, curve
 from impactcont.errors import ImpactcontError
 from impactcont.maps import stability_map
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.problems.codim1 import check_parameters, curve_problem
+from impactcont.problems.codim1 import curve_problem
 from impactcont.scene.entries import (
     CONTINUATION_KEYS,
     PARAMETER_RANGES,
@@ -162,10 +160,10 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
         keys = ("kind", "N", "parameters", "bounds", "start", "special", "root",
                 *CONTINUATION_KEYS)
         N = self.N if self.N is not None else 1
-        p1, p2 = library_check(where, check_parameters, osc, self.parameters, keys=keys)
+        _, (p1, p2), box, _, _ = library_check(
+            where, check_curve_arguments, osc, N, self.kind, parameters=self.parameters,
+            bounds=dict(self.bounds), keys=keys, **self.continuation_options())
         check_closed_form(osc, where, f"the {self.kind} curve")
-        box = library_check(where.key("bounds"), _curves._check_bounds, dict(self.bounds),
-                            (p1, p2))
         if self.start is None:  # a branch in p1 at the oscillator's p2 finds the start
             check_continuation(osc, where, N, p1, box[p1], detect=(self.kind,))
             start = {p2: getattr(osc, p2)}
@@ -183,8 +181,6 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
                        f"starts on the branch in {p1} at this {name})"),
                     f"bounds.{name} containing {value!r}" if value is not None
                     else f"a parameter the oscillator has ({name} = None)")
-        library_check(where, driver_options, None, box[p2], defaults=_curves._DEFAULTS,
-                      keys=keys, **self.continuation_options())
 
     def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
                     ) -> None:
