@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +18,9 @@ import xarray as xr
 from _scene_data import ORBITS_SCENE, OSCILLATOR, write
 from matplotlib.figure import Figure
 
-from impactcont import ImpactOscillator, Stops
+from impactcont import ImpactOscillator, Stops, continuation, robust_stability
 from impactcont.cli import EXIT_OK, EXIT_USAGE, main
+from impactcont.curves import curve
 from impactcont.errors import ParameterError
 from impactcont.scene import SceneError, load_scene, run_scene
 from impactcont.scene.figures import plot_file, save_figure
@@ -126,6 +128,35 @@ def test_check_refuses_what_the_run_would_refuse(tmp_path: Path, text: str, key:
     assert f"{key}: " in capsys.readouterr().err
     assert main(["-q", "run", str(path), "--output", str(tmp_path / "o")]) == EXIT_USAGE
     assert not (tmp_path / "o").exists()  # refused before anything was computed
+
+
+def _scene_oscillator(eta: float) -> ImpactOscillator:
+    """The oscillator of ``OSCILLATOR`` with damping ``eta``."""
+    return ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                            eta=eta, b=0.6, omega=1.0)
+
+
+_SAME_CHECK = [
+    ("continuation", damped("eta = 0.0") + '[[branches]]\nparameter = "R"\nbounds = [0.5, 1.0]\n',
+     lambda: continuation(_scene_oscillator(0.0), 1, "R", (0.5, 1.0))),
+    ("robust_stability", OSCILLATOR + '[[robust]]\nvary = { "F[0]" = [0.0, 1.0] }\n',
+     lambda: robust_stability(_scene_oscillator(0.1), 1, {"F[0]": (0.0, 1.0)})),
+    ("curve", damped(C) + '[[curves]]\nkind = "PD"\nparameters = ["eta", "omega"]\n'
+     'bounds = { eta = [0, 1], omega = [1, 3] }\n',
+     lambda: curve(_scene_oscillator(0.1).replace(eta=None, C=[[0.2, 0.0], [0.0, 0.0]]), 1,
+                   "PD", parameters=("eta", "omega"), bounds={"eta": (0, 1), "omega": (1, 3)})),
+]
+
+
+@pytest.mark.parametrize(("text", "run"), [c[1:] for c in _SAME_CHECK],
+                         ids=[c[0] for c in _SAME_CHECK])
+def test_check_and_driver_refuse_with_the_same_message(tmp_path: Path, text: str,
+                                                       run: Callable[[], object]) -> None:
+    # --check runs the driver's own argument check: the very same message
+    err = scene_error(tmp_path, text)
+    with pytest.raises(ParameterError) as driver:
+        run()
+    assert err.problem == str(driver.value)
 
 
 def test_check_refuses_the_main_job_with_the_stop_on_mass_2(
