@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from scipy.optimize import brentq, fsolve
+from test_general_damping import _augmented
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate
@@ -64,14 +65,7 @@ def _slow(**params):
 
 def _first_crossing_expm(osc, X0, delta, t_lo, t_hi):
     """First impact time from the matrix exponential of the forced system (independent)."""
-    n = osc.n
-    A = np.zeros((2 * n + 2, 2 * n + 2))
-    A[:n, n:2 * n] = np.eye(n)
-    A[n:2 * n, :n] = -osc.K
-    A[n:2 * n, n:2 * n] = -osc.C
-    A[n:2 * n, 2 * n] = osc.F
-    A[2 * n, 2 * n + 1] = -osc.omega
-    A[2 * n + 1, 2 * n] = osc.omega
+    A = _augmented(osc)
     Y0 = np.concatenate([X0, [math.cos(delta), math.sin(delta)]])
     return brentq(lambda t: (scipy.linalg.expm(A * t) @ Y0)[0] - osc.b, t_lo, t_hi, xtol=1e-14)
 
