@@ -226,7 +226,7 @@ def test_the_fast_path_pays_nothing_at_ordinary_omega(monkeypatch):
 
     monkeypatch.setattr(periodic, "_polished_velocity", refuse)
     monkeypatch.setattr(periodic, "_repolish", refuse)
-    monkeypatch.setattr(batched, "velocity_errors", refuse)
+    monkeypatch.setattr(batched, "polished_velocity", refuse)
     osc = _paper(1.0, False)
     assert len(ic.periodic_orbits(osc, 1)) == 2
     ic.stability_map(osc, 1, np.linspace(0.5, 6.0, 12), np.linspace(0.0, 1.0, 5))

@@ -16,7 +16,7 @@ import numpy as np
 
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
-from impactcont.orbit.dense import COND_WARN, VELOCITY_POLISH, second_form, velocity_errors
+from impactcont.orbit.dense import COND_WARN, VELOCITY_POLISH, polished_velocity, velocity_bound
 from impactcont.orbit.periodic import IllConditionedWarning, modal_jacobian
 
 __all__ = ["batched_orbits"]
@@ -104,8 +104,7 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
     sc = np.array([s for _, s in setups])  # (nw, 10): T, Gam, B, g, Delta, c, s, ...
     # an upper bound of the rounding error of x1p'(delta) / Delta at any phase (0 where
     # the kernel takes elastic undamped velocities from the impact condition)
-    bound = (_EPS * (2.0 + math.pi) * omega * (np.abs(sc[:, 1]) + np.abs(sc[:, 2]))
-             / (np.abs(sc[:, 4]) + 1e-300)) * (sc[:, 9] == 0.0)
+    bound = velocity_bound(sc[:, 1], sc[:, 2], sc[:, 4], omega) * (sc[:, 9] == 0.0)
     with np.errstate(invalid="ignore"):  # NaN where no motion
         flagged = np.argwhere(bound[:, None, None] > VELOCITY_POLISH * np.abs(vel))
     for iw, ib, k in flagged.tolist():
@@ -115,12 +114,8 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
         modal, scalars = setups[iw]
         Gam, B, g, Delta = scalars[1:5].tolist()
         d, sg = delta.item(iw, ib, k), vel.item(iw, ib, k)
-        cd, sd = math.cos(d), math.sin(d)
-        err_a, err_b = velocity_errors(Gam, B, g, Delta, om, R, bb, d, cd, sd)
-        if not err_b < err_a:
-            continue
-        better = (Gam * cd + B * sd - bb) / ((1.0 + R) * g)
-        if not second_form(sg, better, err_a, err_b):
+        better, _ = polished_velocity(Gam, B, g, Delta, om, R, bb, d, sg)
+        if better is None:
             continue
         best, best_t = kernel.other_maximum(w, a, u0, modal, scalars, om, R, d, better,
                                             math.nan)

@@ -18,8 +18,8 @@ from impactcont.errors import IllConditionedWarning, ParameterError
 from impactcont.orbit.flow import Flow
 
 __all__ = ["COND_WARN", "VELOCITY_POLISH", "impact_map_jacobian", "impact_velocity",
-           "periodic_matrix", "pole_free_pd_matrix", "second_form", "velocity_errors",
-           "warn_ill_conditioned"]
+           "periodic_matrix", "pole_free_pd_matrix", "polished_velocity", "second_form",
+           "velocity_bound", "velocity_errors", "warn_ill_conditioned"]
 
 _EPS = float(np.finfo(float).eps)
 # warn when the relative error bound cond * eps of the solve of eq. (12) exceeds ~1e-6
@@ -108,6 +108,35 @@ def impact_velocity(Gam, B, g, Delta, omega, R, b, delta):
         sigma = np.where(second, sigma_b, sigma_a)
         rel = np.where(second, err_b, err_a) / np.abs(sigma)
     return sigma, rel
+
+
+def velocity_bound(Gam, B, Delta, omega):
+    """An upper bound of the rounding error of the first form ``x1p'(delta) / Delta`` at
+    any phase (:func:`velocity_errors` with ``|cos|, |sin| <= 1``, ``|delta| <= pi``): one
+    cheap test per frequency that keeps the exact check off the fast path. Vectorised."""
+    return _EPS * (2.0 + math.pi) * omega * (np.abs(Gam) + np.abs(B)) / (np.abs(Delta)
+                                                                        + 1e-300)
+
+
+def polished_velocity(Gam: float, B: float, g: float, Delta: float, omega: float, R: float,
+                      b: float, delta: float, sigma: float) -> tuple[float | None, float]:
+    """The impact velocity from its second exact form where the first, ``sigma``, lost
+    digits (:func:`impact_velocity`, one motion).
+
+    Returns
+    -------
+    better : float or None
+        The second form's velocity, or None where ``sigma`` is kept.
+    rel_error : float
+        The estimated relative error of the velocity kept.
+    """
+    cd, sd = math.cos(delta), math.sin(delta)
+    err_a, err_b = velocity_errors(Gam, B, g, Delta, omega, R, b, delta, cd, sd)
+    if err_b < err_a:
+        better = (Gam * cd + B * sd - b) / ((1.0 + R) * g)
+        if second_form(sigma, better, err_a, err_b):
+            return better, err_b / max(abs(better), 1e-300)
+    return None, err_a / max(abs(sigma), 1e-300)
 
 
 def _power_of_two_scale(v: np.ndarray) -> np.ndarray:

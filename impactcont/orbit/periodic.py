@@ -27,8 +27,8 @@ from impactcont.orbit.dense import (
     VELOCITY_POLISH,
     impact_map_jacobian,
     periodic_matrix,
-    second_form,
-    velocity_errors,
+    polished_velocity,
+    velocity_bound,
     warn_ill_conditioned,
 )
 from impactcont.orbit.flow import Flow
@@ -289,30 +289,18 @@ def _general_orbit(osc: ImpactOscillator, N: int, form: general.PeriodicForm, de
 
 
 def _velocity_bound(osc: ImpactOscillator, scalars: np.ndarray) -> float:
-    """An upper bound of the rounding error of the kernel's impact velocity
-    ``x1p'(delta) / Delta`` at any phase (:func:`impactcont.orbit.dense.velocity_errors`
-    with ``|cos|, |sin| <= 1``, ``|delta| <= pi``): one cheap test per frequency that
-    keeps the exact check off the fast path. Zero for elastic undamped impacts, whose
-    velocity the kernel takes from the impact condition."""
+    """:func:`impactcont.orbit.dense.velocity_bound` at one frequency; zero for elastic
+    undamped impacts, whose velocity the kernel takes from the impact condition."""
     _, Gam, B, _, Delta, _, _, _, _, elastic = scalars.tolist()
-    if elastic != 0.0:
-        return 0.0
-    return _EPS * (2.0 + math.pi) * osc.omega * (abs(Gam) + abs(B)) / (abs(Delta) + 1e-300)
+    return 0.0 if elastic != 0.0 else float(velocity_bound(Gam, B, Delta, osc.omega))
 
 
 def _polished_velocity(osc: ImpactOscillator, scalars: np.ndarray, delta: float,
                        sigma: float) -> tuple[float | None, float]:
-    """The impact velocity from its second exact form when the kernel's first has lost
-    digits (:func:`impactcont.orbit.dense.impact_velocity`): ``(sigma or None, relative
-    error estimate of the velocity kept)``."""
+    """:func:`impactcont.orbit.dense.polished_velocity` of a motion from the kernel's
+    scalars of its frequency."""
     Gam, B, g, Delta = (float(x) for x in scalars[1:5])
-    cd, sd = math.cos(delta), math.sin(delta)
-    err_a, err_b = velocity_errors(Gam, B, g, Delta, osc.omega, osc.R, osc.b, delta, cd, sd)
-    if err_b < err_a:
-        better = (Gam * cd + B * sd - osc.b) / ((1.0 + osc.R) * g)
-        if second_form(sigma, better, err_a, err_b):
-            return better, err_b / max(abs(better), 1e-300)
-    return None, err_a / max(abs(sigma), 1e-300)
+    return polished_velocity(Gam, B, g, Delta, osc.omega, osc.R, osc.b, delta, sigma)
 
 
 def _repolish(osc: ImpactOscillator, modal: np.ndarray, scalars: np.ndarray, delta: float,
