@@ -8,7 +8,9 @@ real and imaginary parts, an index of the groups in the root group), and read
 back by :func:`load` as they were written. Both check the attributes impactcont
 reads back (:mod:`impactcont.dataset.attributes`) whatever their ``validate``,
 which switches the check of the schema. The layout is documented in
-``docs/dataset.md`` and ``docs/outputs.md``.
+``docs/dataset.md`` and ``docs/outputs.md``. :func:`point_table` gives a branch or
+curve as a table of one row per point, :func:`with_parameter_coords` with its
+parameters as coordinates (to plot against them).
 """
 
 from __future__ import annotations
@@ -21,9 +23,11 @@ from impactcont.dataset.schema import (
     SPECIAL_STATUSES,
     branch_dataset,
     oscillator_from_dataset,
+    point_table,
     special_variable,
     state_component_names,
     validate_branch_dataset,
+    with_parameter_coords,
 )
 
 __all__ = [
@@ -34,8 +38,10 @@ __all__ = [
     "branch_dataset",
     "load",
     "oscillator_from_dataset",
+    "point_table",
     "save",
     "special_variable",
     "state_component_names",
     "validate_branch_dataset",
+    "with_parameter_coords",
 ]

@@ -21,7 +21,6 @@ Map dimensions
 
 from __future__ import annotations
 
-import datetime
 import json
 import logging
 from collections.abc import Mapping, Sequence
@@ -34,13 +33,13 @@ from impactcont.dataset.attributes import check_attributes, dataset_tag
 from impactcont.dataset.multi import validate_multi_impact_dataset
 from impactcont.dataset.schema import (
     _N,
-    CONVENTIONS,
     PARAMETERS,
     _options_json,
     _parameter_name,
     _Var,
     check_variables,
     point_coords,
+    provenance_attributes,
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.vocabulary import CODIM2_LABELS, LABELS, STATUSES
@@ -179,12 +178,6 @@ def _codim2_fields(parameters: Sequence[str]) -> dict[str, _Var]:
     return fields
 
 
-def _now_attrs() -> dict[str, str]:
-    from impactcont import __version__
-
-    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    return {"impactcont_version": __version__, "Conventions": CONVENTIONS,
-            "history": f"{now} created by impactcont {__version__}"}
 
 
 def _array(key: str, value: Any, spec: _Var, shape: tuple[int, ...]) -> np.ndarray:
@@ -288,7 +281,7 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
         "oscillator": oscillator.to_json(),
         "options": _options_json(options),
         "end_status": str(end_status),
-        **_now_attrs(),
+        **provenance_attributes(),
     }
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
@@ -344,7 +337,7 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     }
     attrs = {"title": title or "Existence, physicality and stability of N-1 motions",
              "impactcont_dataset": "map", "oscillator": oscillator.to_json(),
-             "options": json.dumps(dict(options), sort_keys=True), **_now_attrs()}
+             "options": json.dumps(dict(options), sort_keys=True), **provenance_attributes()}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 

@@ -10,6 +10,11 @@ Dimensions
 ----------
 ``point``
     Accepted continuation points, with an integer coordinate ``0 .. npoints-1``.
+    ``omega``, ``b`` and the continued parameter are variables on it;
+    :func:`with_parameter_coords` makes them coordinates (to plot against them:
+    ``with_parameter_coords(ds).impact_velocity.plot(x="omega")``) and
+    :func:`point_table` gives one row per point. In a file they are CF
+    auxiliary coordinates of the variables on ``point``.
 ``multiplier``
     The ``2n`` eigenvalues of the impact-map Jacobian ``G`` (eq. 25).
 ``component``
@@ -41,18 +46,26 @@ __all__ = [
     "CONVENTIONS",
     "PARAMETERS",
     "POINT_VARIABLES",
+    "REFERENCES",
     "SPECIAL_LABELS",
     "SPECIAL_STATUSES",
     "branch_dataset",
     "oscillator_from_dataset",
+    "point_table",
+    "provenance_attributes",
     "special_variable",
     "state_component_names",
     "validate_branch_dataset",
+    "with_parameter_coords",
 ]
 
 logger = logging.getLogger(__name__)
 
 CONVENTIONS = "CF-1.10"
+#: The method every dataset comes from (CF attribute ``references``).
+REFERENCES = ("Cao Dengqing and Shu Zhongzhou, Periodic motions and robust stability of the "
+              "multi-degree-of-freedom systems with clearances, Acta Mechanica Sinica "
+              "(Lixue Xuebao); equation numbers in docs/theory.md are the paper's")
 
 #: Labels of special points: saddle-node, period-doubling, Neimark-Sacker,
 #: grazing and zero-velocity impact.
@@ -194,6 +207,144 @@ def point_coords(npoints: int, n: int) -> dict[str, Any]:
                       {"long_name": "state component",
                        "description": "x<i>: displacement of mass i; v<i>: its velocity."}),
     }
+
+
+def provenance_attributes(action: str = "created") -> dict[str, str]:
+    """The CF attributes saying where a dataset comes from, and which conventions it follows.
+
+    Parameters
+    ----------
+    action : str, optional
+        What impactcont did, for ``history`` (``"created"``, ``"written"``).
+
+    Returns
+    -------
+    dict of str to str
+        ``impactcont_version``, ``Conventions`` (:data:`CONVENTIONS`), ``history``
+        (ISO 8601 UTC time, ``action`` and the version), ``source`` (the package
+        and its method) and ``references`` (:data:`REFERENCES`, the paper).
+    """
+    from impactcont import __version__
+
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    return {"impactcont_version": __version__, "Conventions": CONVENTIONS,
+            "history": f"{now} {action} by impactcont {__version__}",
+            "source": f"impactcont {__version__}: periodic impacting motions in closed form "
+                      "(eq. 12-15), their stability from the impact-map Jacobian G (eq. 25), "
+                      "pseudo-arclength continuation, exact event-driven simulation",
+            "references": REFERENCES}
+
+
+def parameter_names(ds: xr.Dataset) -> list[str]:
+    """The parameters that label the points of a branch or curve, in the order stored.
+
+    ``omega``, ``b`` and the continued parameter (attribute ``parameter``, a
+    branch) or the two parameters (attribute ``parameters``, a curve), where
+    the dataset has them as variables on ``point``; none for other datasets.
+    """
+    names = ["omega", "b"]
+    for key in ("parameter", "parameters"):
+        value = ds.attrs.get(key)
+        if isinstance(value, str):
+            names += value.split(",")
+    if not ({"parameter", "parameters"} & set(ds.attrs)):
+        return []
+    return [k for k in dict.fromkeys(names)
+            if k in ds.variables and ds.variables[k].dims == ("point",)]
+
+
+def with_parameter_coords(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with ``omega``, ``b`` and the continued parameter(s) as coordinates on ``point``.
+
+    A branch (or curve) stores its parameters as data variables; as
+    coordinates every variable on ``point`` carries them, so that it plots
+    against them: ``with_parameter_coords(branch).impact_velocity.plot(x="omega")``.
+    The values are not copied.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A branch or curve dataset.
+
+    Returns
+    -------
+    xarray.Dataset
+
+    Raises
+    ------
+    TypeError
+        ``ds`` is not an :class:`xarray.Dataset`.
+    ValueError
+        ``ds`` has no parameter column on ``point`` (not a branch or curve).
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
+    names = parameter_names(ds)
+    if not names:
+        raise ValueError("ds must be a branch or curve dataset (attribute 'parameter' or "
+                         "'parameters', with the parameters' columns on 'point'); got a "
+                         f"dataset with attributes {sorted(ds.attrs)} and variables "
+                         f"{sorted(map(str, ds.variables))}")
+    return ds.set_coords(names)
+
+
+def point_table(ds: xr.Dataset, dim: str = "point") -> Any:
+    """One row per entry of ``dim`` (per point of a branch or curve): a pandas DataFrame.
+
+    ``ds.to_dataframe()`` of a branch crosses every dimension (``point`` x
+    ``multiplier`` x ``component`` x ``special``); this table has one row per
+    point and one column per value there: each variable on ``dim`` alone, and
+    one column per entry of the further dimensions of the others
+    (``state_x1``, ..., ``multipliers_0``, ...; ``state_k_1_v2`` for impact 1 of
+    an N-p branch). The parameters (:func:`parameter_names`: ``omega``, ``b``,
+    the continued parameter) come first. ``dim="special"`` gives the special
+    points.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A branch, curve or any dataset with the dimension ``dim``.
+    dim : str, optional
+        The dimension of the rows (``"point"`` by default).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Indexed by the coordinate of ``dim`` (``0 .. npoints-1``).
+
+    Raises
+    ------
+    TypeError
+        ``ds`` is not an :class:`xarray.Dataset`.
+    ValueError
+        ``ds`` has no dimension ``dim``.
+    """
+    import pandas as pd
+
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
+    if not isinstance(dim, str) or dim not in ds.dims:
+        raise ValueError(f"dim must be a dimension of the dataset, one of {sorted(ds.dims)}; "
+                         f"got {dim!r}")
+    index = ds.indexes[dim] if dim in ds.indexes else pd.RangeIndex(ds.sizes[dim], name=dim)
+    columns: dict[str, np.ndarray] = {}
+    first = parameter_names(ds) if dim == "point" else []
+    names = dict.fromkeys([*first, *(k for k in ds.coords if k != dim), *ds.data_vars])
+    for name in names:
+        var = ds[name].variable
+        if var.dims[:1] != (dim,) or dim in var.dims[1:]:
+            continue
+        values = np.asarray(var.values)
+        if var.ndim == 1:
+            columns[str(name)] = values
+            continue
+        labels = [ds[d].values if d in ds.coords else np.arange(ds.sizes[d])
+                  for d in var.dims[1:]]
+        flat = values.reshape(values.shape[0], -1)
+        for j, where in enumerate(np.ndindex(*values.shape[1:])):
+            suffix = "_".join(str(labels[axis][i]) for axis, i in enumerate(where))
+            columns[f"{name}_{suffix}"] = flat[:, j]
+    return pd.DataFrame(columns, index=index)
 
 
 def special_variable(key: str) -> str:
@@ -405,8 +556,6 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         ``oscillator``, ``options``, ``columns`` or ``special_points`` has the
         wrong type.
     """
-    from impactcont import __version__
-
     parameter = _parameter_name(parameter)
     N = _N(N)
     if not isinstance(oscillator, ImpactOscillator):
@@ -446,7 +595,6 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
                                             spec.attrs())
 
     coords = point_coords(npoints, n)
-    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     attrs = {
         "title": title if title is not None else
         f"Branch of periodic {N}-1 impacting motions continued in {parameter}",
@@ -454,9 +602,7 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         "parameter": parameter,
         "oscillator": oscillator.to_json(),
         "options": _options_json(options),
-        "impactcont_version": __version__,
-        "Conventions": CONVENTIONS,
-        "history": f"{now} created by impactcont {__version__}",
+        **provenance_attributes(),
     }
     ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
     logger.debug("branch dataset: parameter=%s N=%d npoints=%d special=%d", parameter, N,
