@@ -47,6 +47,7 @@ from impactcont.switching import (
     grazing_switch,
     period_doubling_cascade,
     period_doubling_switch,
+    pitchfork_switch,
     special_orbit,
 )
 
@@ -101,6 +102,7 @@ __all__ = [
     "period_doubling_cascade",
     "period_doubling_switch",
     "periodic_orbits",
+    "pitchfork_switch",
     "primitive_orbit",
     "robust_bound",
     "robust_stability",

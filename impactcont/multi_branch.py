@@ -3,7 +3,8 @@
 ``multi_impact_continuation(orbit, parameter, bounds)`` = start on an N-p motion
 -> follow the shooting system of :mod:`impactcont.orbit.multi_impact` with the
 pseudo-arclength core -> evaluate every accepted point (states, G, multipliers,
-checks on every flight) -> detect and locate SN, PD, NS, GR, ZV -> an
+checks on every flight) -> detect and locate SN, PD, NS, GR, ZV (and BP on a
+branch of symmetric motions, followed as their half-motion) -> an
 :class:`xarray.Dataset` in the branch schema with an ``impact`` dimension
 (:mod:`impactcont.dataset.multi`).
 """
@@ -38,11 +39,16 @@ from impactcont.detection.special_points import event_function
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
+from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.problems.symmetric_branch import SYMMETRY_BREAKING, SymmetricBranchProblem
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS, check_labels
+from impactcont.vocabulary import LABELS, check_labels, check_parameter
 
 __all__ = ["multi_impact_continuation"]
+
+#: The problem of an N-p branch: any N-p motion, or a symmetric one by its half.
+BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
 
 log = logging.getLogger(__name__)
 
@@ -109,7 +115,7 @@ class _Watch:
     PD test function.
     """
 
-    def __init__(self, problem: MultiImpactBranchProblem, stop_after_pd: int | None,
+    def __init__(self, problem: BranchProblem, stop_after_pd: int | None,
                  on_point: Callable[[MultiImpactOrbit], None] | None) -> None:
         self.problem = problem
         self.stop_after_pd = stop_after_pd
@@ -150,7 +156,7 @@ class _Watch:
         return None
 
 
-def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                  options: ContinuationOptions, *, stop_after_pd: int | None = None,
                  on_point: Callable[[MultiImpactOrbit], None] | None = None,
                  ) -> tuple[list[MultiImpactSample], list[str], str]:
@@ -202,7 +208,7 @@ def trace_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
     return samples, [st.name for st in result.statuses], message
 
 
-def _within_limits(problem: MultiImpactBranchProblem, options: ContinuationOptions
+def _within_limits(problem: BranchProblem, options: ContinuationOptions
                    ) -> tuple[ContinuationOptions, float | None]:
     """`options` with the bounds kept ``ds_min`` inside the problem's parameter limits.
 
@@ -222,7 +228,7 @@ def _within_limits(problem: MultiImpactBranchProblem, options: ContinuationOptio
     return dataclasses.replace(options, bounds=(clipped, hi)), clipped
 
 
-def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[MultiImpactSample],
+def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSample],
                       specials: Sequence[MultiImpactSpecialPoint], options: Mapping[str, Any],
                       *, title: str | None = None,
                       extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
@@ -257,7 +263,7 @@ def branch_to_dataset(problem: MultiImpactBranchProblem, samples: Sequence[Multi
                                 extra_attrs=extra_attrs, pattern=problem.pattern)
 
 
-def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
+def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
            extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
@@ -278,6 +284,55 @@ def run_branch(problem: MultiImpactBranchProblem, u0: np.ndarray, lam0: float,
                              extra_attrs=extra_attrs)
 
 
+def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | None = None
+                   ) -> tuple[BranchProblem, np.ndarray]:
+    """The branch problem through an N-p motion, and the motion's unknowns in it.
+
+    Parameters
+    ----------
+    orbit : MultiImpactOrbit
+    parameter : str
+    symmetric : bool, optional
+        Follow the motion as a symmetric one (its half closed by the reflection,
+        :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`: regular
+        through the symmetry-breaking pitchfork, which is detected as ``BP``) or as a
+        general N-p motion. ``None``: symmetric when the motion is symmetric
+        (:func:`~impactcont.orbit.symmetry.symmetry_defect` at most 1e-8) and
+        `parameter` keeps the system symmetric (not ``b`` or ``R``).
+
+    Raises
+    ------
+    ParameterError
+        ``symmetric=True`` for a motion that is not symmetric or a parameter that breaks
+        the symmetry.
+    """
+    pattern = orbit.pattern or None
+    if symmetric is None:
+        symmetric = (parameter not in SYMMETRY_BREAKING
+                     and admits_symmetric_motions(orbit.oscillator, orbit.N, orbit.p,
+                                                  orbit.pattern or "")
+                     and symmetry_defect(orbit) <= _SYMMETRY_TOL)
+    elif not isinstance(symmetric, (bool, np.bool_)):
+        raise ParameterError(f"symmetric must be True, False or None (decide from the motion); "
+                             f"got {symmetric!r}")
+    if not symmetric:
+        problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
+                                           pattern=pattern)
+        return problem, orbit.unknowns
+    sym = SymmetricBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
+                                 pattern=orbit.pattern)
+    defect = symmetry_defect(orbit)
+    if not defect <= _SYMMETRY_TOL:
+        raise ParameterError(f"symmetric=True: the N={orbit.N}, p={orbit.p} motion is not "
+                             f"symmetric (X_(k+p/2) + X_k, tau_(k+p/2) - tau_k up to {defect:.3g} "
+                             f"relative, allowed {_SYMMETRY_TOL:g}); give symmetric=False or a "
+                             "symmetric motion")
+    return sym, sym.half_unknowns(orbit.unknowns)
+
+
+_SYMMETRY_TOL = 1e-8
+
+
 @blas_limited
 @option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS, "direction": 1})
 def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter: str = "omega",
@@ -288,7 +343,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
                               ds_max: float | None = None, newton_tol: float | None = None,
                               max_points: int | None = None,
                               both_directions: bool | None = None, direction: int | None = None,
-                              **more: Any) -> xr.Dataset:
+                              symmetric: bool | None = None, **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-p motions through a given motion.
 
     Parameters
@@ -308,6 +363,15 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         Newton tolerance 1e-11 by default).
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **more
         Single options, over `options`.
+    symmetric : bool, optional
+        Follow a symmetric motion of a symmetric two-sided system (``b_low == b``,
+        ``R_low == R``; N odd, the pattern's second half the mirror of its first) as
+        such: its half-motion closed by the reflection, regular through the
+        symmetry-breaking pitchforks, which are located and labelled ``BP``
+        (:func:`impactcont.switching.pitchfork_switch` follows the asymmetric pair born
+        there). ``None`` (default): when the start is symmetric and `parameter` keeps
+        the system symmetric (not ``b`` or ``R``). ``False``: as any N-p motion (its
+        shooting Jacobian is singular at a pitchfork; no BP).
 
     Returns
     -------
@@ -325,8 +389,8 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     """
     orbit = _as_multi(start)
     labels = check_labels(detect)
-    problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
-                                       pattern=orbit.pattern or None)
+    check_parameter(orbit.oscillator, parameter)
+    problem, u0 = branch_problem(orbit, parameter, symmetric)
     lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
     opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                         newton_tol=newton_tol, max_points=max_points,
@@ -335,4 +399,5 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     if not opts.lam_min <= lam0 <= opts.lam_max:
         raise ParameterError(f"bounds {opts.bounds} must contain the start {parameter}="
                              f"{lam0!r} of the orbit")
-    return run_branch(problem, orbit.unknowns, lam0, opts, detect=labels)
+    return run_branch(problem, u0, lam0, opts, detect=labels,
+                      record={"symmetric": isinstance(problem, SymmetricBranchProblem)})

@@ -1,4 +1,5 @@
-"""Branch switching: period-doubling (N-p -> 2N-2p) and grazing (N-p -> N-(p+1)).
+"""Branch switching: period-doubling (N-p -> 2N-2p), grazing (N-p -> N-(p+1)) and the
+symmetry-breaking pitchfork (symmetric -> the asymmetric pair).
 
 Period-doubling
 ---------------
@@ -22,6 +23,18 @@ Where an N-p motion grazes (``gap_min -> 0`` on flight k, at time ``t_g``), the
 grazing point is an impact at zero velocity: splitting flight k at ``t_g`` gives
 an exact solution of the N-(p+1) shooting system. Its branch is followed in
 the direction where the new impact's velocity becomes positive.
+
+Symmetry-breaking pitchfork
+---------------------------
+At a BP of a branch of symmetric motions (:mod:`impactcont.orbit.symmetry`) the
+full N-p shooting system has a two-dimensional null space of ``[J | F_lam]``: the
+tangent of the symmetric branch and an antisymmetric direction ``e`` (the halves of
+the motion move in opposite directions). The symmetric motion at the BP is solved on
+its half system (regular there); ``e`` is the null vector of the full system
+orthogonal to the symmetric tangent. Displaced by ``+epsilon e`` and by
+``-epsilon e`` and corrected on the hyperplane orthogonal to ``e``, Newton lands on
+the two asymmetric motions, mirror images of each other; each is followed away from
+the BP.
 """
 
 from __future__ import annotations
@@ -48,7 +61,9 @@ from impactcont.orbit.multi_impact import (
     multi_impact_orbit,
 )
 from impactcont.orbit.periodic import orbit_at_phase
+from impactcont.orbit.symmetry import symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
 
@@ -59,6 +74,7 @@ __all__ = [
     "grazing_switch",
     "period_doubling_cascade",
     "period_doubling_switch",
+    "pitchfork_switch",
     "special_orbit",
 ]
 
@@ -581,3 +597,144 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     opts = make_options((lo, hi), options, direction=direction, both_directions=False, **more)
     return run_branch(problem, u1, lam1, opts, detect=detect, record={"switch": info},
                       extra_attrs=info)
+
+
+# ------------------------------------------------------------------------------------------
+# Symmetry-breaking pitchfork
+# ------------------------------------------------------------------------------------------
+def _symmetric_at(branch: xr.Dataset, which: int) -> tuple[SymmetricBranchProblem, np.ndarray,
+                                                           float]:
+    """The half problem and the symmetric motion (half unknowns, parameter) at a BP point."""
+    k = _special_index(branch, "BP", which)
+    parameter = branch.attrs["parameter"]
+    N, p = int(branch.attrs["N"]), impacts_of(branch)
+    values = {name: float(branch[special_variable(name)].values[k])
+              for name in dict.fromkeys(["omega", "b", parameter])}
+    osc = oscillator_from_dataset(branch).replace(**values)
+    lam = float(getattr(osc, parameter) or 0.0)
+    problem = SymmetricBranchProblem(osc, N, p, parameter, pattern_of(branch))
+    guess = {"delta": float(branch[special_variable("delta_k")].values[k, 0]),
+             "flight_times": branch[special_variable("flight_time_k")].values[k],
+             "states": branch[special_variable("state_k")].values[k],
+             "pattern": pattern_of(branch)}
+    v0 = problem.half_unknowns(initial_unknowns(guess, osc, N, p))
+    # the half system is regular at the BP: Newton at fixed lam (hyperplane lam = const)
+    x0 = np.append(v0, lam)
+    normal = np.zeros(x0.size)
+    normal[-1] = 1.0
+    x = _hyperplane_newton(problem, x0, normal)
+    return problem, x[:-1], lam
+
+
+def _pitchfork_direction(problem: SymmetricBranchProblem, v: np.ndarray, lam: float
+                         ) -> tuple[np.ndarray, float, float]:
+    """The antisymmetric null direction ``e`` of the full system at the BP.
+
+    Returns ``e`` (shape ``(2np + 1,)``, max-norm 1 on the unknowns, zero-ish parameter
+    part), the two smallest singular values' ratio to the largest (``s_min``: how
+    singular the full system is there, ``s_next``: how well the null space is separated).
+    """
+    full = problem.full
+    u = problem.full_unknowns(v, lam)
+    extended = np.column_stack([full.jacobian(u, lam), full.dparam(u, lam)])
+    _, sing, vt = np.linalg.svd(extended)
+    basis = vt[-2:].T
+    # the symmetric tangent in the full unknowns: du = E dv + de/dlam dlam
+    half_ext = np.column_stack([problem.jacobian(v, lam), problem.dparam(v, lam)])
+    t_half = np.linalg.svd(half_ext)[2][-1]
+    du = problem.halves.embedding @ t_half[:-1]
+    if problem.parameter == "omega":
+        du = du + problem.halves.offset_derivative(lam) * t_half[-1]
+    t_sym = np.append(du, t_half[-1])
+    t_sym /= np.linalg.norm(t_sym)
+    a = basis.T @ t_sym
+    e = basis @ np.array([-a[1], a[0]])
+    e /= np.max(np.abs(e[:-1]))
+    return e, float(sing[-1] / sing[0]), float(sing[-2] / sing[0])
+
+
+@blas_limited
+def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
+                     bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
+                     detect: Sequence[str] = LABELS, options: ContinuationOptions | None = None,
+                     **more: Any) -> tuple[xr.Dataset, xr.Dataset]:
+    """Follow the two asymmetric branches born at a symmetry-breaking pitchfork (BP).
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        A branch of symmetric motions with a BP point
+        (:func:`impactcont.multi_branch.multi_impact_continuation` of a symmetric motion).
+    which : int
+        Which BP point (index among the BP points, branch order).
+    bounds : (float, float), optional
+        Parameter range; default the bounds of ``branch``.
+    epsilon : float
+        Displacement from the BP along the antisymmetric direction (max-norm of the
+        full unknowns), in (0, 1).
+    detect : sequence of str
+        Special points to detect on the new branches.
+    options : ContinuationOptions, optional
+        Continuation options (the drivers' defaults for those left out); the switch sets
+        ``direction`` (away from the BP) and one direction only.
+    **more
+        Convenience keywords for single options (``ds``, ``ds_max``, ``max_points``, ...).
+
+    Returns
+    -------
+    (xarray.Dataset, xarray.Dataset)
+        The asymmetric N-p branches through ``+epsilon e`` and ``-epsilon e``, mirror
+        images of each other (:func:`impactcont.orbit.symmetry.mirror_image` maps a
+        motion of one onto a motion of the other), each followed away from the BP;
+        attributes ``born_at = "BP"``, ``born_at_value``, ``parent_N``,
+        ``parent_impacts``, ``switch_side`` (+1, -1).
+
+    Raises
+    ------
+    ParameterError
+        No such BP point, bad `epsilon` or bounds.
+    NoPeriodicMotionError
+        The symmetric motion at the BP or a switched point could not be computed, or
+        Newton fell back onto the symmetric branch.
+    """
+    epsilon = _check_epsilon(epsilon)
+    if not isinstance(branch, xr.Dataset):
+        raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
+    if "impact" not in branch.dims:
+        raise ParameterError("branch must be a branch of N-p motions (an N-1 motion is never "
+                             "symmetric: it has one impact per period)")
+    half, v, lam_bp = _symmetric_at(branch, which)
+    parameter, full = half.parameter, half.full
+    lo, hi = _dataset_bounds(branch, bounds)
+    e, s_min, s_next = _pitchfork_direction(half, v, lam_bp)
+    log.info("BP at %s=%.12g: [J | F_lam] of the full system has singular values %.2e and "
+             "%.2e (relative) below the rest", parameter, lam_bp, s_min, s_next)
+    x_bp = np.append(half.full_unknowns(v, lam_bp), lam_bp)
+    out = []
+    for side in (1, -1):
+        x1 = _hyperplane_newton(full, x_bp + side * epsilon * e, e)
+        u1, lam1 = x1[:-1], float(x1[-1])
+        first = full.orbit(u1, lam1, checks=False)
+        defect = symmetry_defect(first)
+        # the symmetric branch has defect 0; the new one starts about epsilon away from it
+        if not defect > 0.01 * epsilon:
+            raise NoPeriodicMotionError(
+                f"branch switching at the BP {parameter}={lam_bp:.12g}: the corrected point is "
+                f"the symmetric motion again (asymmetry {defect:.3g})")
+        if not lo <= lam1 <= hi:
+            raise ParameterError(f"bounds ({lo}, {hi}) must contain the switched point "
+                                 f"{parameter}={lam1!r}")
+        if lam1 == lam_bp:
+            log.warning("the switched point has the BP's parameter value exactly; going up")
+        direction = 1 if lam1 >= lam_bp else -1
+        info = {"born_at": "BP", "born_at_value": lam_bp, "parent_N": half.N,
+                "parent_impacts": half.p, "switch_side": side, "switch_epsilon": epsilon,
+                "switch_singular_value": s_min, "switch_asymmetry": defect}
+        log.info("switched to the asymmetric %d-%d branch (side %+d) at %s=%.12g "
+                 "(asymmetry %.3g), going %s", half.N, half.p, side, parameter, lam1, defect,
+                 "up" if direction > 0 else "down")
+        opts = make_options((lo, hi), options, direction=direction, both_directions=False,
+                            **more)
+        out.append(run_branch(full, u1, lam1, opts, detect=detect,
+                              record={"switch": info, "symmetric": False}, extra_attrs=info))
+    return out[0], out[1]

@@ -20,6 +20,7 @@ from impactcont.errors import ParameterError
 __all__ = [
     "CODIM2_LABELS",
     "CONTINUABLE_PARAMETERS",
+    "CURVE_KINDS",
     "LABELS",
     "PARAMETERS",
     "STATUSES",
@@ -49,6 +50,10 @@ class Label(str, enum.Enum):
     """Grazing: mass 1 touches the stop between impacts (eq. 16 with equality)."""
     ZV = "ZV"
     """Zero-velocity impact: the impact velocity h2 of eq. (22) vanishes."""
+    BP = "BP"
+    """Symmetry-breaking pitchfork of a symmetric motion of a symmetric two-sided system:
+    a multiplier of its half-map crosses -1 (G gets +1 without a fold) and a pair of
+    asymmetric motions, mirror images, branches off (:mod:`impactcont.orbit.symmetry`)."""
 
     def __str__(self) -> str:
         return str(self.value)
@@ -58,6 +63,10 @@ class Label(str, enum.Enum):
 
 #: The special-point labels as plain strings, in their canonical order.
 LABELS: tuple[str, ...] = tuple(label.value for label in Label)
+
+#: The kinds of codimension-one curves (two-parameter continuation of a special point):
+#: every label but ``BP``, which exists only on symmetric N-p motions (no curves yet).
+CURVE_KINDS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
 
 #: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
 #: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1

@@ -12,7 +12,20 @@ label     test function                                  meaning
 ``NS``    ``prod_{i<j} (mu_i mu_j - 1)``                 a complex pair through |mu| = 1
 ``GR``    ``min_k gap_min_k`` over the p flights         x1 touches a stop inside a flight
 ``ZV``    ``min_k impact_velocity_k`` over the p impacts an impact at zero velocity
+``BP``    ``det(H + I)``, ``H = S G_{h-1} .. G_0``         symmetry-breaking pitchfork
 ========  =============================================  ==============================
+
+BP is tested only on a branch of symmetric motions (a problem with ``symmetric =
+True``, :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`):
+``H`` is the half-map of :mod:`impactcont.orbit.symmetry`, and a zero of its test
+is kept only where ``H`` has a multiplier within 1e-7 of -1. An asymmetric branch
+(followed as a general N-p motion) meets the symmetric one at a BP, where its
+parameter turns (``lam - lam_BP`` grows like the square of the asymmetry): that fold
+is reported as the BP it is when the motion there is nearly symmetric (asymmetry at most
+1e-2, :func:`~impactcont.orbit.symmetry.symmetry_defect`: it grows like the square root of
+the distance to the BP, and the fold next to a BP is often only bracketed: the full
+system is singular there) with a multiplier of ``H`` within 1e-2 of -1, there or at
+one of the two branch points around it.
 
 With two stops (:mod:`impactcont.model.stops`) ``gap_min_k`` is the smallest clearance
 of flight k to either stop, so GR locates the grazing of the lower stop as well (the
@@ -44,6 +57,7 @@ from impactcont.core.locate import Event, locate_events, tangent_at
 from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
 from impactcont.detection.special_points import event_function, event_noise
 from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.symmetry import half_map, pitchfork_noise, pitchfork_test, symmetry_defect
 from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
@@ -119,12 +133,18 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
     :class:`MultiImpactSpecialPoint` in branch order; GR and ZV use the minimum
     over the flights and impacts.
     """
-    check_labels(labels, "labels")
+    labels = check_labels(labels, "labels")
     parameter = getattr(problem, "parameter", "lam")
+    if not getattr(problem, "symmetric", False):
+        labels = [label for label in labels if label != "BP"]
 
     def event(label: str) -> Event:
         if label == "SN":
             return Event(label, None)
+        if label == "BP":  # G_k only: no interior-contact search
+            return Event(label, lambda u, lam: pitchfork_test(problem.orbit(u, lam, checks=False)),
+                         lambda k: pitchfork_test(samples[k].orbit),
+                         lambda k: pitchfork_noise(samples[k].orbit))
 
         def test(u: np.ndarray, lam: float) -> float:
             # only GR needs the (costly) interior-contact search of every flight
@@ -138,15 +158,21 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
                             [s.tangent for s in samples], [event(lab) for lab in labels],
                             s_tol=_S_TOL, newton_tol=_NEWTON_TOL):
         orbit = problem.orbit(ep.u, ep.lam)
-        if not ep.failed and not is_critical(ep.label, orbit.multipliers, _UNIT_TOL):
+        if not ep.failed and not _critical(ep.label, orbit):
             log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
                       "(a neutral saddle, or the pole of G at h2 = 0)", ep.label, parameter,
                       ep.lam)
             continue
+        label = ep.label
+        if label == "SN" and any(_meets_symmetric_branch(o) for o in (
+                orbit, samples[ep.step].orbit, samples[ep.step + 1].orbit)):
+            log.debug("the fold at %s=%.12g is where the branch meets the symmetric branch: BP",
+                      parameter, ep.lam)
+            label = "BP"
         left, right = samples[ep.step], samples[ep.step + 1]
         nearest = ep.step if abs(ep.lam - left.lam) <= abs(ep.lam - right.lam) else ep.step + 1
         special = MultiImpactSpecialPoint(
-            label=ep.label, value=ep.lam, u=ep.u, point=nearest, bracket=ep.bracket,
+            label=label, value=ep.lam, u=ep.u, point=nearest, bracket=ep.bracket,
             precision=ep.precision, status=ep.status, orbit=orbit)
         found.append(special)
     found = drop_grazing_at_zero_velocity(found, parameter)
@@ -157,3 +183,26 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
         if on_found is not None:
             on_found(special)
     return found
+
+
+def _critical(label: str, orbit: MultiImpactOrbit) -> bool:
+    """Whether a zero of `label`'s test is a bifurcation (see :func:`is_critical`); BP: a
+    multiplier of the half-map within ``_UNIT_TOL`` of -1."""
+    if label == "BP":
+        H = half_map(orbit)
+        return bool(np.all(np.isfinite(H)) and np.min(np.abs(np.linalg.eigvals(H) + 1.0))
+                    < _UNIT_TOL)
+    return is_critical(label, orbit.multipliers, _UNIT_TOL)
+
+
+_MEETS_TOL = 1e-2
+
+
+def _meets_symmetric_branch(orbit: MultiImpactOrbit) -> bool:
+    """Whether a fold of a general N-p branch is a BP: the motion there is symmetric to
+    ``_MEETS_TOL`` and its half-map has a multiplier within ``_MEETS_TOL`` of -1."""
+    if not symmetry_defect(orbit) <= _MEETS_TOL:
+        return False
+    H = half_map(orbit)
+    return bool(np.all(np.isfinite(H))
+                and np.min(np.abs(np.linalg.eigvals(H) + 1.0)) <= _MEETS_TOL)

@@ -275,7 +275,8 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                      lambda k: event_function(label, samples[k].orbit),
                      lambda k: event_noise(label, samples[k].orbit))
 
-    events = [event(label) for label in labels if label != "SN"]
+    # BP needs a symmetric motion (p even, two stops): an N-1 motion never is one
+    events = [event(label) for label in labels if label not in ("SN", "BP")]
     for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
                             [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
         candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,

@@ -41,11 +41,13 @@ SEGMENT_STYLES: dict[str, dict[str, Any]] = {
 }
 
 #: Marker of each special-point label.
-SPECIAL_MARKERS: dict[str, str] = {"SN": "o", "PD": "s", "NS": "D", "GR": "^", "ZV": "v"}
+SPECIAL_MARKERS: dict[str, str] = {"SN": "o", "PD": "s", "NS": "D", "GR": "^", "ZV": "v",
+                                   "BP": "P"}
 #: What each special-point label stands for (legends).
 SPECIAL_NAMES: dict[str, str] = {"SN": "saddle-node", "PD": "period doubling",
                                  "NS": "Neimark-Sacker", "GR": "grazing",
-                                 "ZV": "zero-velocity impact"}
+                                 "ZV": "zero-velocity impact",
+                                 "BP": "symmetry-breaking pitchfork"}
 
 # Symbols of the paper next to the long names on axes (mathtext).
 _SYMBOLS = {"omega": r"$\omega$", "b": "$b$", "R": "$R$", "eta": r"$\eta$",

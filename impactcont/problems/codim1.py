@@ -109,7 +109,12 @@ from impactcont.problems.general_pieces import (
     impact_condition_form,
 )
 from impactcont.problems.periodic_branch import residual_scale, root_phase, scaled_derivative
-from impactcont.vocabulary import CONTINUABLE_PARAMETERS, LABELS, PARAMETERS, check_parameter
+from impactcont.vocabulary import (
+    CONTINUABLE_PARAMETERS,
+    CURVE_KINDS,
+    PARAMETERS,
+    check_parameter,
+)
 
 __all__ = [
     "CURVE_KINDS",
@@ -122,7 +127,6 @@ __all__ = [
     "curve_problem",
 ]
 
-CURVE_KINDS = LABELS
 """Kinds of codimension-one curves: saddle-node, period-doubling, Neimark-Sacker,
 grazing and zero-velocity impact."""
 

@@ -52,13 +52,13 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.scene.tasks import markdown_table
-from impactcont.vocabulary import LABELS
+from impactcont.vocabulary import CURVE_KINDS
 
 __all__ = ["CURVES", "MAPS", "CurveSpec", "MapSpec", "check_curves_plot"]
 
 log = logging.getLogger(__name__)
 
-_CURVE_KINDS = LABELS  # every special point has its codim-1 curve
+_CURVE_KINDS = CURVE_KINDS  # every special point but BP has its codim-1 curve
 
 
 _CURVE = defaults_of(curve)

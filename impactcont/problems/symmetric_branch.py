@@ -1,0 +1,155 @@
+"""The branch of symmetric N-p motions: the half-motion closed by the reflection.
+
+A symmetric motion of a symmetric two-sided system (:mod:`impactcont.orbit.symmetry`)
+is fixed by its first half: ``v = [delta, tau_0..tau_{h-2}, z_0..z_{h-1}]`` with
+the full unknowns ``u = E v + e(omega)`` (:class:`~impactcont.orbit.symmetry.HalfUnknowns`).
+The full shooting residual at such a ``u`` is equivariant (``r_{k+h} = -r_k``), so
+its first ``h`` blocks,
+
+    r_k = D_{k+1} X_k^- - X_{k+1}  (k < h - 1),     r_{h-1} = D_h X_{h-1}^- + X_0,
+
+are the whole system: ``F(v, lam) = r_{0..h-1}(E v + e, lam)``, with the exact
+``dF/dv = J_{0..h-1} E`` and ``dF/dlam`` from the full problem (plus the column of
+``tau_{h-1}`` times ``de/domega`` in omega). Unlike the full system it is regular
+at the symmetry-breaking pitchfork (the null vector of the full Jacobian there is
+antisymmetric), so the branch is followed through it and the pitchfork located on
+it like any other special point. Parameters that keep the system symmetric:
+``omega``, ``F0`` and the damping (``b`` or ``R`` move only the upper stop).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from impactcont.errors import ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.symmetry import HalfUnknowns, admits_symmetric_motions
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+
+__all__ = ["SymmetricBranchProblem"]
+
+#: Parameters that move only the upper stop: they break the symmetry.
+SYMMETRY_BREAKING = ("b", "R")
+
+
+class SymmetricBranchProblem:
+    """Symmetric N-p motions as ``F(v, lam) = 0`` for the continuation core.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        A symmetric system (``b_low == b``, ``R_low == R``).
+    N, p : int
+        ``N`` odd, ``p`` even.
+    parameter : str
+        Continued parameter; not ``b`` or ``R`` (they move one stop only).
+    pattern : str
+        The stops of the p impacts; its second half mirrors the first.
+
+    Attributes
+    ----------
+    full : MultiImpactBranchProblem
+        The full shooting system of the motion (its orbits, G, checks).
+    halves : HalfUnknowns
+        The map between the half and the full unknowns.
+    symmetric : bool
+        Always True: detection adds the pitchfork test (BP) on such a branch.
+    """
+
+    symmetric = True
+
+    def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
+                 pattern: str) -> None:
+        self.full = MultiImpactBranchProblem(osc, N, p, parameter, pattern=pattern)
+        if parameter in SYMMETRY_BREAKING:
+            raise ParameterError(f"parameter {parameter!r} moves only the upper stop and breaks "
+                                 "the symmetry: continue symmetric motions in another "
+                                 "parameter, or the motion as an N-p motion (symmetric=False)")
+        if not admits_symmetric_motions(osc, self.full.N, self.full.p, self.full.pattern):
+            raise ParameterError(
+                f"the N={N}, p={p} motions with pattern {self.full.pattern!r} of {osc!r} cannot "
+                "be symmetric: that needs N odd, p even, the second half of the pattern the "
+                "mirror of the first (UL, UULL, ...), and b_low == b, R_low == R")
+        self.halves = HalfUnknowns(osc.n, self.full.p, self.full.N)
+        self._E = self.halves.embedding
+        self.size = self.halves.size
+
+    # -- what the full problem says -------------------------------------------------------------
+    @property
+    def osc(self) -> ImpactOscillator:
+        return self.full.osc
+
+    @property
+    def N(self) -> int:
+        return self.full.N
+
+    @property
+    def p(self) -> int:
+        return self.full.p
+
+    @property
+    def pattern(self) -> str:
+        return self.full.pattern
+
+    @property
+    def parameter(self) -> str:
+        return self.full.parameter
+
+    def parameter_limits(self) -> tuple[float, float]:
+        """As :meth:`MultiImpactBranchProblem.parameter_limits`."""
+        return self.full.parameter_limits()
+
+    def limit_reason(self) -> str:
+        """As :meth:`MultiImpactBranchProblem.limit_reason`."""
+        return self.full.limit_reason()
+
+    def check_bounds(self, bounds: tuple[float, float]) -> None:
+        """As :meth:`MultiImpactBranchProblem.check_bounds`."""
+        self.full.check_bounds(bounds)
+
+    def flow_at(self, lam: float) -> Flow:
+        """The flow of the oscillator with ``parameter = lam``."""
+        return self.full.flow_at(lam)
+
+    def oscillator_at(self, lam: float) -> ImpactOscillator:
+        """The oscillator with ``parameter = lam``."""
+        return self.full.oscillator_at(lam)
+
+    # -- the map between the unknowns -------------------------------------------------------------
+    def full_unknowns(self, v: np.ndarray, lam: float) -> np.ndarray:
+        """The full shooting unknowns of the symmetric motion `v` at ``lam``."""
+        v = np.asarray(v, dtype=float)
+        if v.shape != (self.size,):
+            raise ParameterError(f"v must have shape ({self.size},) = (2 n p/2,); got {v.shape}")
+        return self.halves.full(v, self.oscillator_at(lam).omega)
+
+    def half_unknowns(self, u: np.ndarray) -> np.ndarray:
+        """The half unknowns of the full unknowns `u` of a symmetric motion."""
+        return self.halves.half(u)
+
+    # -- the Problem protocol ------------------------------------------------------------------
+    def _rows(self) -> slice:
+        return slice(0, self.size)
+
+    def residual(self, v: np.ndarray, lam: float) -> np.ndarray:
+        """``r_0 .. r_{h-1}`` of the full system at ``E v + e``, shape (2nh,)."""
+        return self.full.residual(self.full_unknowns(v, lam), lam)[self._rows()]
+
+    def jacobian(self, v: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/dv = J_{0..h-1} E``, exact, shape (2nh, 2nh)."""
+        return self.full.jacobian(self.full_unknowns(v, lam), lam)[self._rows()] @ self._E
+
+    def dparam(self, v: np.ndarray, lam: float) -> np.ndarray:
+        """``dF/dlam`` at fixed ``v``, shape (2nh,)."""
+        u = self.full_unknowns(v, lam)
+        out = self.full.dparam(u, lam)[self._rows()]
+        if self.parameter == "omega":  # tau_{h-1} = N pi / omega - ...
+            rows = self.full.jacobian(u, lam)[self._rows()]
+            out = out + rows @ self.halves.offset_derivative(float(lam))
+        return out
+
+    def orbit(self, v: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
+        """The full symmetric N-p motion (states, G, multipliers, checks) at ``(v, lam)``."""
+        return self.full.orbit(self.full_unknowns(v, lam), lam, checks=checks)
