@@ -116,12 +116,17 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
     Returns
     -------
     MultiImpactOrbit
-        Re-solved by Newton at the special point's parameter value.
+        Re-solved by Newton at the special point's parameter value (a BP: the symmetric
+        motion solved on its half system, where the full one is singular).
     """
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
     if label not in LABELS:
         raise ParameterError(f"label must be one of {LABELS}; got {label!r}")
+    if label == "BP" and "impact" in branch.dims:
+        # singular for the full shooting system: solved on the half system (regular there)
+        half, v, lam = _symmetric_at(branch, which)
+        return half.orbit(v, lam)
     k = _special_index(branch, label, which)
     parameter = branch.attrs["parameter"]
     N, p = int(branch.attrs["N"]), impacts_of(branch)
