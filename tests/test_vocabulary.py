@@ -13,7 +13,11 @@ from impactcont.detection import LABELS
 
 def test_labels_are_strings_and_the_old_names_are_the_same_tuple():
     assert vocab.Label.PD == "PD" and f"{vocab.Label.PD}" == "PD" and str(vocab.Label.NS) == "NS"
-    assert LABELS == SPECIAL_LABELS == vocab.LABELS == ("SN", "PD", "NS", "GR", "ZV")
+    assert LABELS == SPECIAL_LABELS == vocab.LABELS == ("SN", "PD", "NS", "GR", "ZV", "BP")
+    # every label but BP (symmetric N-p motions only) has its codim-1 curve
+    assert vocab.CURVE_KINDS == ("SN", "PD", "NS", "GR", "ZV")
+    from impactcont.problems.codim1 import CURVE_KINDS
+    assert CURVE_KINDS == vocab.CURVE_KINDS
     assert set(PARAMETERS) == set(vocab.CONTINUABLE_PARAMETERS)
 
 
