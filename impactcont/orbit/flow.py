@@ -14,15 +14,38 @@ here as ``P(t) - W(t) P(0)`` from the forced columns ``P = [[phi, psi], [phi', p
 from __future__ import annotations
 
 import math
+import weakref
+from typing import Any
 
 import numpy as np
 
 from impactcont.model.modal import forced_coefficients, free_transfer
 from impactcont.model.oscillator import ImpactOscillator
 
-__all__ = ["Flow", "GeneralFlow", "GeneralMass1Motion", "Mass1Motion"]
+__all__ = ["Flow", "GeneralFlow", "GeneralMass1Motion", "Mass1Motion", "flow_of"]
 
 _CHUNK = 1 << 20  # time-mode pairs per vectorised evaluation of x1 (about 100 MB of work arrays)
+
+
+def _kernel_array(x: Any, dtype: type) -> np.ndarray:
+    """``x`` as a new contiguous, writable array of ``dtype`` (one argument type per kernel)."""
+    return np.array(x, dtype=dtype, order="C")
+
+
+_FLOWS: weakref.WeakKeyDictionary[ImpactOscillator, Flow] = weakref.WeakKeyDictionary()
+
+
+def flow_of(osc: ImpactOscillator) -> Flow:
+    """``Flow(osc)``, built once per oscillator and kept while the oscillator lives.
+
+    A flow holds only what its oscillator fixes (and caches of it), so the motions of
+    one oscillator can share one; :func:`impactcont.orbit.multi_impact.multi_impact_orbit`
+    solved repeatedly on one oscillator then builds its flow and the kernel's arrays once.
+    """
+    flow = _FLOWS.get(osc)
+    if flow is None:
+        flow = _FLOWS[osc] = Flow(osc)
+    return flow
 
 
 class Flow:
@@ -59,6 +82,39 @@ class Flow:
         self.f = modes.modal_forces
         self.gamma, self.beta = forced_coefficients(self.w, self.a, self.f, self.omega,
                                                     eigenvalue_errors=modes.eigenvalue_errors)
+        self._arrays: tuple[Any, ...] | None = None
+        self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def shooting_arrays(self) -> tuple[Any, ...]:
+        """The flow's inputs of :mod:`impactcont.orbit.shooting_kernel` (built once).
+
+        ``(general, w, a, gamma, beta, f, u, u^-1, lambda, V, V^-1, Z, w_p, a_p, k_p,
+        j_p)``: the modal arrays, empty first-order arrays and the scalar pairs (here
+        the modes themselves), each contiguous with a fixed dtype so that the kernel
+        compiles once for both flows.
+        """
+        if self._arrays is None:
+            n = self.n
+            real = (self.w, self.a, self.gamma, self.beta, self.f)
+            w, a, g, b, f = (_kernel_array(x, float) for x in real)
+            self._arrays = (False, w, a, g, b, f, _kernel_array(self.u, float),
+                            _kernel_array(self.u_inv, float),
+                            np.zeros(0, complex), np.zeros((0, 0), complex),
+                            np.zeros((0, 0), complex), np.zeros(0, complex), w, a,
+                            np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64))
+        return self._arrays
+
+    def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``d gamma / d omega``, ``d beta / d omega`` (modal flow; empty for the first-order
+        flow) and ``dZ / d omega`` (first-order flow; empty for the modal flow), the inputs
+        of :func:`impactcont.orbit.shooting_kernel.omega_partials` (built once)."""
+        if self._omega_arrays is None:
+            om = self.omega
+            den = (self.w - om) * (self.w + om) + 2j * self.a * om
+            dA = (self.gamma - 1j * self.beta) * (2.0 * om - 2j * self.a) / den
+            self._omega_arrays = (_kernel_array(dA.real, float), _kernel_array(-dA.imag, float),
+                                  np.zeros(0, complex))
+        return self._omega_arrays
 
     def time_scales(self, row: int = 0) -> tuple[float, float]:
         """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
@@ -255,6 +311,33 @@ class GeneralFlow(Flow):
         self.V_inv = basis.V_inv
         self.Z = basis.forced_amplitude(osc.F, osc.omega)
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
+        self._arrays: tuple[Any, ...] | None = None
+        self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def shooting_arrays(self) -> tuple[Any, ...]:
+        """The flow's inputs of :mod:`impactcont.orbit.shooting_kernel` (built once).
+
+        ``(general, w, a, gamma, beta, f, u, u^-1, lambda, V, V^-1, Z, w_p, a_p, k_p,
+        j_p)``: empty modal arrays, the first-order arrays and the scalar pairs of
+        :attr:`FirstOrderBasis.scalar_pairs` (the contact search's modes).
+        """
+        if self._arrays is None:
+            none, empty = np.zeros(0), np.zeros((0, 0))
+            pw, pa, pk, pj = self.basis.scalar_pairs
+            cplx = (self.lam, self.V, self.V_inv, self.Z)
+            lam, V, Vi, Z = (_kernel_array(x, complex) for x in cplx)
+            self._arrays = (True, none, none, none, none, none, empty, empty, lam, V, Vi, Z,
+                            _kernel_array(pw, float), _kernel_array(pa, float),
+                            _kernel_array(pk, np.int64), _kernel_array(pj, np.int64))
+        return self._arrays
+
+    def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Empty modal derivatives and ``dZ / d omega`` (:meth:`Flow.omega_arrays`)."""
+        if self._omega_arrays is None:
+            dZ = self.basis.forced_amplitude_derivative(self.Z, self.omega)
+            self._omega_arrays = (np.zeros(0), np.zeros(0),
+                                  _kernel_array(dZ, complex))
+        return self._omega_arrays
 
     def time_scales(self, row: int = 0) -> tuple[float, float]:
         """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""

@@ -54,17 +54,16 @@ from typing import Any
 
 import numpy as np
 
-from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.errors import NoPeriodicMotionError, ParameterError, UnresolvedMotionWarning
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, check_pattern
-from impactcont.orbit.flow import Flow
+from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.periodic import (
     IllConditionedWarning,
     PeriodicOrbit,
     _check_N,
 )
-from impactcont.simulate.contact import flight_clearances, stop_sign
-from impactcont.simulate.simulator import SimulationResult
+from impactcont.orbit.stop_geometry import impact_geometry, stop_sign
 
 __all__ = [
     "MultiImpactOrbit",
@@ -76,6 +75,7 @@ __all__ = [
     "multi_impact_orbit",
     "newton",
     "omega_partial",
+    "omega_partials",
     "orbit_from_unknowns",
     "primitive_orbit",
     "shooting",
@@ -315,32 +315,6 @@ class Shooting:
     jacobian: np.ndarray | None
 
 
-def impact_geometry(osc: ImpactOscillator, pattern: str) -> tuple[int, np.ndarray, np.ndarray]:
-    """Index of the impacting mass, stop positions and impact-law diagonals per impact.
-
-    Parameters
-    ----------
-    osc : ImpactOscillator
-    pattern : str
-        The stop of each impact (``"U"``/``"L"``), validated.
-
-    Returns
-    -------
-    j : int
-        0-based index of the impacting mass.
-    positions : ndarray, shape (p,)
-        ``c_k``: ``b`` or ``-b_low``.
-    diagonals : ndarray, shape (p, 2n)
-        Diagonal of ``D_k`` (eq. 4 at the stop of impact k: ``-R_k`` on ``x_j'``).
-    """
-    stops = osc.stops
-    j, n = stops.index, osc.n
-    positions = np.array([stops.position(s, osc.b) for s in pattern])
-    diagonals = np.ones((len(pattern), 2 * n))
-    diagonals[:, n + j] = [-stops.restitution(s, osc.R) for s in pattern]
-    return j, positions, diagonals
-
-
 def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float | np.ndarray,
                    index: int = 0) -> tuple[float, np.ndarray, np.ndarray]:
     """``delta``, the p flight times and the p post-impact states ``X_k`` from ``u``.
@@ -384,51 +358,54 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
     Shooting
     """
     osc = flow.osc
-    n, omega = osc.n, osc.omega
-    m = 2 * n
-    period = TWO_PI * N / omega
     pattern = check_pattern(pattern, p, osc.stops)
-    j, positions, diagonals = impact_geometry(osc, pattern)
-    delta, taus, starts = split_unknowns(u, n, p, period, positions, j)
-    phases = delta + omega * np.concatenate([[0.0], np.cumsum(taus[:-1])])
-    transitions = np.empty((p, m, m))
-    arrivals = np.empty((p, m))
-    rates = np.empty((p, m))
-    phase_cols = np.empty((p, m))
-    residual = np.empty(p * m)
-    for k in range(p):
-        trans, forcing = flow.matrices(taus[k])
-        c, s = math.cos(phases[k]), math.sin(phases[k])
-        transitions[k] = trans
-        arrivals[k] = trans @ starts[k] + forcing @ np.array([c, s])
-        phase_cols[k] = forcing @ np.array([-s, c])
-        rates[k] = flow.state_derivative(taus[k], starts[k], phases[k])[0]
-        residual[k * m:(k + 1) * m] = diagonals[(k + 1) % p] * arrivals[k] - starts[(k + 1) % p]
-    J = None
-    if jacobian:
-        rest = np.delete(np.arange(m), j)
-        J = np.zeros((p * m, p * m))
-        zcol = p  # first column of z_0
-        for k in range(p):
-            d = diagonals[(k + 1) % p]
-            rows = slice(k * m, (k + 1) * m)
-            q = d * phase_cols[k]
-            J[rows, 0] = q  # d theta_k / d delta = 1
-            for i in range(k):  # theta_k depends on tau_i, i < k (all unknowns: i <= p-2)
-                J[rows, 1 + i] += omega * q
-            g = d * rates[k]
-            if k < p - 1:
-                J[rows, 1 + k] += g
-            else:  # tau_{p-1} = period - sum(tau_0..tau_{p-2})
-                J[rows, 1:p] -= g[:, None]
-            # x_j = c_k on the section: only the columns of z = X without x_j are unknowns
-            J[rows, zcol + k * (m - 1): zcol + (k + 1) * (m - 1)] += (
-                d[:, None] * transitions[k][:, rest])
-            nxt = (k + 1) % p
-            J[rows, zcol + nxt * (m - 1): zcol + (nxt + 1) * (m - 1)] -= np.eye(m)[:, rest]
+    j, positions, diagonals = _geometry(flow, pattern)
+    x = np.asarray(u, dtype=float)
+    if x.shape != (2 * osc.n * p,):
+        raise ParameterError(f"u must have shape ({2 * osc.n * p},) = (2 n p,) for n={osc.n}, "
+                             f"p={p}; got shape {x.shape}")
+    arrays = flow.shooting_arrays()
+    out = _kernel().shooting_system(*arrays[:12], osc.omega, TWO_PI * N / osc.omega, j,
+                                    positions, diagonals, _writable(x), jacobian)
+    return _as_shooting(out, jacobian)
+
+
+def _kernel() -> Any:
+    """:mod:`impactcont.orbit.shooting_kernel`, imported on first use (numba is not imported
+    with :mod:`impactcont`)."""
+    from impactcont.orbit import shooting_kernel
+
+    return shooting_kernel
+
+
+def _writable(a: np.ndarray) -> np.ndarray:
+    """``a`` as a writable, contiguous float array (the kernel's argument types: one compile)."""
+    if (type(a) is np.ndarray and a.dtype == np.float64 and a.flags.c_contiguous
+            and a.flags.writeable):
+        return a
+    return np.array(a, dtype=float, order="C")
+
+
+def _signs(pattern: str) -> np.ndarray:
+    """:func:`stop_sign` of each impact of `pattern`."""
+    return np.array([stop_sign(s) for s in pattern])
+
+
+def _geometry(flow: Flow, pattern: str) -> tuple[int, np.ndarray, np.ndarray]:
+    """:func:`impact_geometry` of the flow's oscillator, kept on the flow per pattern."""
+    cache = flow.__dict__.setdefault("_impact_geometry", {})
+    geometry = cache.get(pattern)
+    if geometry is None:
+        geometry = cache[pattern] = impact_geometry(flow.osc, pattern)
+    return geometry
+
+
+def _as_shooting(out: tuple[np.ndarray, ...], jacobian: bool) -> Shooting:
+    """:class:`Shooting` from the tuple of :func:`shooting_kernel.shooting_system`."""
+    phases, taus, starts, arrivals, rates, transitions, pcols, residual, J = out
     return Shooting(phases=phases, flight_times=taus, starts=starts, arrivals=arrivals,
-                    arrival_rates=rates, transitions=transitions, phase_columns=phase_cols,
-                    residual=residual, jacobian=J)
+                    arrival_rates=rates, transitions=transitions, phase_columns=pcols,
+                    residual=residual, jacobian=J if jacobian else None)
 
 
 def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.ndarray,
@@ -492,9 +469,35 @@ def omega_partial(flow: Flow, t: float, X0: np.ndarray, theta: float) -> np.ndar
     return flow.omega_partial(t, X0, theta)
 
 
+def omega_partials(flow: Flow, sh: Shooting) -> np.ndarray:
+    """:func:`omega_partial` of every flight of a shooting system at once (compiled).
+
+    Parameters
+    ----------
+    flow : Flow
+    sh : Shooting
+        :func:`shooting` of this flow (its flight times, starts, phases and transitions).
+
+    Returns
+    -------
+    ndarray, shape (p, 2n)
+        ``dX_k^-/d omega`` at fixed ``tau_k``, ``X_k`` and ``theta_k``.
+    """
+    arrays = flow.shooting_arrays()
+    dgam, dbet, dZ = flow.omega_arrays()
+    return _kernel().omega_partials(
+        arrays[0], arrays[6], arrays[3], arrays[4], dgam, dbet, arrays[11], dZ, flow.omega,
+        *(_writable(a) for a in (sh.flight_times, sh.starts, sh.phases, sh.transitions)))
+
+
 # ------------------------------------------------------------------------------------------
 # Guesses, Newton, the orbit
 # ------------------------------------------------------------------------------------------
+_SIMULATION_FIELDS = ("impact_times", "impact_phases", "impact_states", "impact_stops")
+"""What a simulation guess must carry (:class:`impactcont.simulate.SimulationResult`; the
+orbit code does not import the simulator, its independent witness)."""
+
+
 def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
                   ) -> tuple[float, np.ndarray, np.ndarray, str | None]:
     """``(delta, flight_times (p,), states (p, 2n), pattern)`` from any kind of guess.
@@ -520,7 +523,7 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
             return (delta, np.tile(taus, reps), np.tile(states, (reps, 1)), gpat * reps)
         raise ParameterError(f"guess is an {guess.N}-{gp} motion; it can seed an N-p motion "
                              f"with p a multiple k*{gp} and N = k*{guess.N}; got N={N}, p={p}")
-    if isinstance(guess, SimulationResult):
+    if all(hasattr(guess, name) for name in _SIMULATION_FIELDS):  # a SimulationResult
         k = guess.impact_times.size
         if k < p + 1:
             raise ParameterError(f"guess: the simulation has {k} impacts; at least p+1={p + 1} "
@@ -600,11 +603,14 @@ def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
     """
     if not (np.all(np.isfinite(jacobian)) and np.all(np.isfinite(residual))):
         return math.inf, math.inf
-    left, s, _ = np.linalg.svd(jacobian)
+    s = np.linalg.svd(jacobian, compute_uv=False)
     if not s[-1] > 0:
         return math.inf, math.inf
     cond = float(s[0] / s[-1])
-    correction = float(np.linalg.norm((left.T @ residual) / s))  # |J^-1 r| = |S^-1 U^T r|
+    try:
+        correction = float(np.linalg.norm(np.linalg.solve(jacobian, residual)))  # |J^-1 r|
+    except np.linalg.LinAlgError:  # an exact zero pivot where s_min > 0 only by rounding
+        return math.inf, math.inf
     return cond, correction + cond * _EPS * max(1.0, float(np.max(np.abs(u))))
 
 
@@ -643,42 +649,20 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         the message says whether the point is a bifurcation point (a singular Jacobian
         near a solution) or the guess is not near a motion with this impact pattern.
     """
-    u = np.array(u0, dtype=float)
-    sh = shooting(flow, N, p, u, pattern=pattern)
-    norm = float(np.max(np.abs(sh.residual)))
-    step_norm = math.inf
-    for it in range(max_iter + 1):
-        scale = max(1.0, float(np.max(np.abs(u))))
-        small = norm <= tol * scale
-        if small and (step_norm <= tol * scale or it == max_iter):
-            return u, sh, it
-        if it == max_iter:
-            break
-        J = sh.jacobian
-        if not np.all(np.isfinite(J)):
-            break
-        try:
-            step = np.linalg.solve(J, -sh.residual)
-        except np.linalg.LinAlgError:
-            break
-        lam = 1.0
-        while True:
-            trial = u + lam * step
-            # a diverging trial may overflow the flow's exponentials: not finite, halved
-            with np.errstate(over="ignore", invalid="ignore"):
-                tsh = shooting(flow, N, p, trial, pattern=pattern)
-            tnorm = float(np.max(np.abs(tsh.residual)))
-            finite = bool(np.isfinite(tnorm))
-            if small and not (finite and tnorm < norm):
-                # within tol, and the update does not lower the residual: it is at its
-                # rounding floor and the update is that rounding amplified by J^-1 (large
-                # where J is nearly singular); u is as good as Newton can make it
-                return u, sh, it
-            if finite and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
-                break
-            lam *= 0.5
-        step_norm = lam * float(np.max(np.abs(step)))
-        u, sh, norm = trial, tsh, tnorm
+    osc = flow.osc
+    pattern = check_pattern(pattern, p, osc.stops)
+    j, positions, diagonals = _geometry(flow, pattern)
+    x0 = np.array(u0, dtype=float)
+    if x0.shape != (2 * osc.n * p,):
+        raise ParameterError(f"u0 must have shape ({2 * osc.n * p},) = (2 n p,) for "
+                             f"n={osc.n}, p={p}; got shape {x0.shape}")
+    arrays = flow.shooting_arrays()
+    u, status, it, norm, step_norm, out = _kernel().newton_solve(
+        *arrays[:12], osc.omega, TWO_PI * N / osc.omega, j, positions, diagonals, x0,
+        float(tol), int(max_iter))
+    sh = _as_shooting(out, True)
+    if status == 0:
+        return u, sh, int(it)
     scale = max(1.0, float(np.max(np.abs(u))))
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
     if norm <= _NEAR_SOLUTION * scale and not cond * _EPS <= _ERROR_WARN:
@@ -722,48 +706,43 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
         Per-impact states, phases, velocities, per-flight gaps, ``G_k``, ``G``,
         multipliers and the physical checks.
     """
-    osc = flow.osc
-    n = osc.n
-    pattern = check_pattern(pattern, p, osc.stops)
-    j, _, diagonals = impact_geometry(osc, pattern)
+    pattern = check_pattern(pattern, p, flow.osc.stops)
     if sh is None:
         sh = shooting(flow, N, p, u, jacobian=False, pattern=pattern)
-    jacs = np.empty((p, 2 * n, 2 * n))
-    h2 = np.empty(p)
-    for k in range(p):
-        with np.errstate(divide="ignore", invalid="ignore"):  # h2 = 0: flagged below
-            jacs[k], h2[k] = flight_jacobian(sh.transitions[k], sh.phase_columns[k],
-                                             sh.arrival_rates[k], diagonals[(k + 1) % p], j,
-                                             osc.omega)
-    G = np.eye(2 * n)
-    with np.errstate(over="ignore", invalid="ignore"):
-        for k in range(p):
-            G = jacs[k] @ G
-    if np.all(np.isfinite(G)):
-        multipliers = np.linalg.eigvals(G)
-        multipliers = multipliers[np.argsort(-np.abs(multipliers), kind="stable")]
-    else:  # an impact at exactly zero velocity: G has a pole (eq. 25)
-        multipliers = np.full(2 * n, complex(math.nan, math.nan))
-    gaps = np.full(p, math.inf)
-    gap_times = np.full(p, math.nan)
-    gaps_low = np.full(p, math.inf)
+    return _orbit(flow, N, p, sh, checks, pattern)
+
+
+def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
+           condition_number: float = math.nan, error_estimate: float = math.nan
+           ) -> MultiImpactOrbit:
+    """:func:`orbit_from_unknowns` from the shooting system at the solution (`pattern`
+    validated), with the accuracy of the solution when known."""
+    osc = flow.osc
+    j, _, diagonals = _geometry(flow, pattern)
+    arrays = flow.shooting_arrays()
+    stops = osc.stops
+    jacs, h2, G, multipliers, gaps, gap_times, gaps_low, times_low, capped = (
+        _kernel().motion_checks(
+            *arrays[:5], *arrays[6:8], *arrays[12:16], *arrays[8:12], osc.omega, j,
+            stops.two_sided, float(osc.b), float(stops.b_low) if stops.two_sided else 0.0,
+            diagonals, *(_writable(a) for a in (
+                sh.phases, sh.flight_times, sh.starts, sh.transitions, sh.phase_columns,
+                sh.arrival_rates)), checks))
+    if capped:
+        warnings.warn(f"x{j + 1} search grid capped at 2000000 cells on a flight of the N={N}, "
+                      f"p={p} motion: a short excursion past a stop (eq. 16) may be missed",
+                      UnresolvedMotionWarning, stacklevel=2)
     reasons = []
     if not checks:
-        gaps[:] = math.nan
-        gaps_low[:] = math.nan
         reasons.append("interior contact not checked")
     for k in range(p):
         tau = float(sh.flight_times[k])
         if not tau > 0:
             reasons.append(f"flight {k} has duration {tau:.3g} <= 0")
-            continue
-        if not checks:
-            continue
-        gap_u, t_u, gap_l, t_l = flight_clearances(flow, sh.starts[k], float(sh.phases[k]), tau)
-        gaps_low[k] = gap_l
-        gaps[k], gap_times[k] = (gap_u, t_u) if gap_u <= gap_l else (gap_l, t_l)
+        elif checks and gaps_low[k] < gaps[k]:  # the nearer stop's clearance and its time
+            gaps[k], gap_times[k] = gaps_low[k], times_low[k]
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
-    velocities = np.roll(h2, 1) * np.array([stop_sign(s) for s in pattern])
+    velocities = h2[np.arange(-1, p - 1)] * _signs(pattern)
     mass = f"x{j + 1}"
     for k in range(p):
         if not velocities[k] > 0:
@@ -781,7 +760,8 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
         flight_gap_min_times=gap_times, jacobians=jacs, G=G, multipliers=multipliers,
         physical=not reasons, reason="; ".join(reasons),
         residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
-        flight_gap_lower=gaps_low)
+        flight_gap_lower=gaps_low, condition_number=condition_number,
+        error_estimate=error_estimate)
 
 
 def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
@@ -841,7 +821,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
         raise ParameterError(f"tol must be a real number > 0; got {tol!r}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
         raise ParameterError(f"max_iter must be an integer >= 1; got {max_iter!r}")
-    flow = Flow(osc)
+    flow = flow_of(osc)
     u0, pattern = _seed(guess, osc, N, p, pattern)
     u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter, pattern=pattern)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
@@ -861,8 +841,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
                           "plus condition number x eps |u|)", IllConditionedWarning,
                           stacklevel=2)
     log.debug("N=%d p=%d %s motion in %d Newton iterations", N, p, pattern, iterations)
-    orbit = orbit_from_unknowns(flow, N, p, u, sh, pattern=pattern)
-    return dataclasses.replace(orbit, condition_number=cond, error_estimate=error)
+    return _orbit(flow, N, p, sh, True, pattern, cond, error)
 
 
 def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpactOrbit:

@@ -30,7 +30,7 @@ from impactcont.orbit.multi_impact import (
     Shooting,
     check_impacts,
     impact_geometry,
-    omega_partial,
+    omega_partials,
     orbit_from_unknowns,
     shooting,
 )
@@ -174,16 +174,12 @@ class MultiImpactBranchProblem:
             out[n + j::m] = np.where(arriving_up, -sh.arrivals[:, n + j], 0.0)
             return out
         if self.parameter == "omega":
-            flow = self.flow_at(lam)
             period = 2.0 * math.pi * self.N / osc.omega
-            elapsed = 0.0
-            for k in range(p):
-                rows = slice(k * m, (k + 1) * m)
-                explicit = omega_partial(flow, float(sh.flight_times[k]), sh.starts[k],
-                                         float(sh.phases[k]))
-                # theta_k = delta + omega * (time elapsed since impact 0)
-                out[rows] = diagonals[(k + 1) % p] * (explicit + elapsed * sh.phase_columns[k])
-                elapsed += float(sh.flight_times[k])
+            explicit = omega_partials(self.flow_at(lam), sh)
+            # theta_k = delta + omega * (time elapsed since impact 0)
+            elapsed = np.concatenate([[0.0], np.cumsum(sh.flight_times[:-1])])
+            out[:] = (np.roll(diagonals, -1, axis=0)
+                      * (explicit + elapsed[:, None] * sh.phase_columns)).ravel()
             # tau_{p-1} = 2 pi N / omega - sum(others)
             out[(p - 1) * m:] += diagonals[0] * sh.arrival_rates[p - 1] * (-period / osc.omega)
             return out

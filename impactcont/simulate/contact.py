@@ -29,6 +29,7 @@ import numpy as np
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.extrema import critical_points, first_upward_crossing, sample_times
 from impactcont.orbit.flow import Flow, GeneralMass1Motion, Mass1Motion
+from impactcont.orbit.stop_geometry import stop_sign
 
 __all__ = ["contact_free_until", "flight_clearances", "next_contact", "search_window",
            "stop_sign"]
@@ -42,11 +43,6 @@ _FIRST_WINDOW_PERIODS = 2
 _WINDOW_PERIODS = 64
 # rounding allowance of the envelope test, in ulps of the size of the motion
 _ENVELOPE_ULPS = 1e3
-
-
-def stop_sign(stop: str) -> float:
-    """``+1`` for the upper stop (met moving up), ``-1`` for the lower (met moving down)."""
-    return 1.0 if stop == UPPER else -1.0
 
 
 def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float

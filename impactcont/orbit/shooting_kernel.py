@@ -1,0 +1,597 @@
+"""Compiled shooting of N-p motions: flights, residual, exact Jacobian, G and contact search.
+
+The numba counterpart of :mod:`impactcont.orbit.multi_impact` (which documents the
+shooting system, its unknowns ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]`` and G).
+Everything is a function of floats and arrays (``cache=True``), written for both flows
+of :mod:`impactcont.orbit.flow`, each diagonal in its own modal coordinates:
+
+- modal (proportional damping): the exact 2 x 2 transfer ``W_i(t)`` of each mode
+  (:func:`impactcont.orbit.kernel.mode_transfer`, every damping class without
+  cancellation), ``Phi = U W U^-1`` and the forcing block of eq. (9) from the steady
+  modal amplitudes ``gamma_i, beta_i``;
+- first order (any C, complex F): ``Phi = Re(V diag(exp(lambda t)) V^-1)`` and the
+  forcing block ``P(t) - Phi P(0)`` from the complex steady amplitude ``Z``.
+
+``general`` selects the flow; the arrays of the other are passed empty, so that each
+entry point compiles once. The flow's arrays come from
+:meth:`impactcont.orbit.flow.Flow.shooting_arrays` (in this order: ``w, a, gamma,
+beta, f, u, u^-1, lambda, V, V^-1, Z`` and the scalar pairs ``w_p, a_p``, ``k_p, j_p``).
+
+The interior-contact check of eq. (16) against both stops is the compiled kernel's
+search (:func:`impactcont.orbit.kernel.x1_maximum` on its grid): for the modal flow
+with the weights ``u_j.`` of the impacting mass, for the first-order flow on the
+scalar pairs of :attr:`impactcont.model.first_order.FirstOrderBasis.scalar_pairs`
+with unit weights (as :mod:`impactcont.orbit.general`). The lower stop is the same
+search on ``-x_j`` (forced part and free part negated).
+
+Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
+:func:`motion_checks` and :func:`omega_partials`. Importing :mod:`impactcont` does not
+import this module.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from impactcont.orbit.kernel import (
+    WORK_ROWS,
+    free_on_grid,
+    mode_transfer,
+    multipliers,
+    time_grid,
+    x1_maximum,
+)
+
+__all__ = ["motion_checks", "newton_solve", "omega_partials", "shooting_system"]
+
+_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
+
+#: ``newton_solve`` status: converged, or stopped without convergence
+CONVERGED = 0
+FAILED = 1
+
+
+# -- one flight -------------------------------------------------------------------------------
+@_jit
+def _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, rate):
+    """Flight of the modal flow: ``Phi``, ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place."""
+    n = w.size
+    W = np.empty((4, n))
+    for i in range(n):
+        W[0, i], W[1, i], W[2, i], W[3, i] = mode_transfer(w[i], a[i], t)
+    for r in range(n):
+        for c in range(n):
+            s11 = 0.0
+            s12 = 0.0
+            s21 = 0.0
+            s22 = 0.0
+            for i in range(n):
+                q = u[r, i] * ui[i, c]
+                s11 += q * W[0, i]
+                s12 += q * W[1, i]
+                s21 += q * W[2, i]
+                s22 += q * W[3, i]
+            tr[r, c] = s11
+            tr[r, n + c] = s12
+            tr[n + r, c] = s21
+            tr[n + r, n + c] = s22
+    ct = math.cos(omega * t)
+    st = math.sin(omega * t)
+    c0 = math.cos(theta)
+    s0 = math.sin(theta)
+    cth = math.cos(omega * t + theta)
+    sth = math.sin(omega * t + theta)
+    fy = np.empty(n)  # modal forcing block times [cos theta, sin theta]
+    fv = np.empty(n)
+    py = np.empty(n)  # ... times [-sin theta, cos theta]
+    pv = np.empty(n)
+    vel = np.empty(n)  # modal velocity and acceleration at t
+    acc = np.empty(n)
+    for i in range(n):
+        g = gam[i]
+        b = bet[i]
+        w11, w12, w21, w22 = W[0, i], W[1, i], W[2, i], W[3, i]
+        phi = g * ct + b * st
+        psi = b * ct - g * st
+        # E = P(t) - W(t) P(0), P(0) = [[g, b], [om b, -om g]] (Flow.matrices)
+        eyc = phi - w11 * g - w12 * omega * b
+        eys = psi - w11 * b + w12 * omega * g
+        evc = omega * psi - w21 * g - w22 * omega * b
+        evs = -omega * phi - w21 * b + w22 * omega * g
+        fy[i] = eyc * c0 + eys * s0
+        fv[i] = evc * c0 + evs * s0
+        py[i] = -eyc * s0 + eys * c0
+        pv[i] = -evc * s0 + evs * c0
+        # the modal state at t from the deviation of the start from the steady motion
+        y0 = 0.0
+        v0 = 0.0
+        for c in range(n):
+            y0 += ui[i, c] * X0[c]
+            v0 += ui[i, c] * X0[n + c]
+        dy = y0 - (g * c0 + b * s0)
+        dv = v0 - omega * (b * c0 - g * s0)
+        y = g * cth + b * sth + w11 * dy + w12 * dv
+        v = omega * (b * cth - g * sth) + w21 * dy + w22 * dv
+        vel[i] = v
+        acc[i] = f[i] * cth - 2.0 * a[i] * v - w[i] * w[i] * y
+    m = 2 * n
+    for r in range(m):
+        s = 0.0
+        for c in range(m):
+            s += tr[r, c] * X0[c]
+        arr[r] = s
+    for r in range(n):
+        ay = 0.0
+        av = 0.0
+        qy = 0.0
+        qv = 0.0
+        ry = 0.0
+        rv = 0.0
+        for i in range(n):
+            ay += u[r, i] * fy[i]
+            av += u[r, i] * fv[i]
+            qy += u[r, i] * py[i]
+            qv += u[r, i] * pv[i]
+            ry += u[r, i] * vel[i]
+            rv += u[r, i] * acc[i]
+        arr[r] += ay
+        arr[n + r] += av
+        pcol[r] = qy
+        pcol[n + r] = qv
+        rate[r] = ry
+        rate[n + r] = rv
+
+
+@_jit
+def _flight_general(lam, V, Vi, Z, omega, t, X0, theta, tr, arr, pcol, rate):
+    """Flight of the first-order flow: as :func:`_flight_modal` (``GeneralFlow.matrices``)."""
+    m = lam.size
+    e = np.exp(lam * t)
+    for r in range(m):
+        for c in range(m):
+            s = 0j
+            for k in range(m):
+                s += V[r, k] * e[k] * Vi[k, c]
+            tr[r, c] = s.real
+    c0 = math.cos(theta)
+    s0 = math.sin(theta)
+    rot_t = complex(math.cos(omega * t), math.sin(omega * t))
+    rot_0 = complex(c0, s0)
+    # columns multiplying cos theta, sin theta: P(t) - Phi P(0), P(t) = [Re, -Im](Z e^{i om t})
+    for r in range(m):
+        fc = 0.0
+        fs = 0.0
+        for c in range(m):
+            fc += tr[r, c] * Z[c].real
+            fs -= tr[r, c] * Z[c].imag
+        zt = Z[r] * rot_t
+        ec = zt.real - fc
+        es = -zt.imag - fs
+        s = 0.0
+        for c in range(m):
+            s += tr[r, c] * X0[c]
+        arr[r] = s + ec * c0 + es * s0
+        pcol[r] = -ec * s0 + es * c0
+    # X'(t) = Re(i om Z e^{i(om t + theta)}) + Re(V diag(lam e^{lam t}) V^-1 (X0 - X_p(0)))
+    dev = np.empty(m)
+    for c in range(m):
+        dev[c] = X0[c] - (Z[c] * rot_0).real
+    zeta = np.empty(m, dtype=np.complex128)
+    for k in range(m):
+        s = 0j
+        for c in range(m):
+            s += Vi[k, c] * dev[c]
+        zeta[k] = s * lam[k] * e[k]
+    rot = rot_t * rot_0
+    for r in range(m):
+        s = 0j
+        for k in range(m):
+            s += V[r, k] * zeta[k]
+        rate[r] = (1j * omega * Z[r] * rot).real + s.real
+
+
+@_jit
+def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, t, X0, theta, tr, arr,
+            pcol, rate):
+    if general:
+        _flight_general(lam, V, Vi, Z, omega, t, X0, theta, tr, arr, pcol, rate)
+    else:
+        _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, rate)
+
+
+# -- the shooting system ------------------------------------------------------------------------
+@_jit
+def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
+                    positions, diagonals, x, want_jacobian):
+    """Residual (and exact Jacobian) of the N-p shooting system at the unknowns ``x``.
+
+    Parameters are the flow's arrays (module docstring), ``omega``, the motion's
+    ``period = 2 pi N / omega``, the 0-based index ``j`` of the impacting mass, the
+    stop position ``c_k`` and the diagonal of ``D_k`` of each impact (``positions``
+    (p,), ``diagonals`` (p, 2n)), the unknowns ``x`` (2np,) and whether to build the
+    Jacobian (else it is returned with shape (0, 0)).
+
+    Returns
+    -------
+    tuple
+        ``(phases, flight_times, starts, arrivals, arrival_rates, transitions,
+        phase_columns, residual, jacobian)``, the fields of
+        :class:`impactcont.orbit.multi_impact.Shooting` in that order.
+    """
+    p = positions.size
+    m = diagonals.shape[1]
+    taus = np.empty(p)
+    elapsed = 0.0
+    for k in range(p - 1):
+        taus[k] = x[1 + k]
+        elapsed += x[1 + k]
+    taus[p - 1] = period - elapsed
+    starts = np.empty((p, m))
+    for k in range(p):
+        col = p + k * (m - 1)
+        for c in range(m):
+            if c == j:
+                starts[k, c] = positions[k]
+            else:
+                starts[k, c] = x[col]
+                col += 1
+    phases = np.empty(p)
+    phases[0] = x[0]
+    elapsed = 0.0
+    for k in range(1, p):
+        elapsed += taus[k - 1]
+        phases[k] = x[0] + omega * elapsed
+    transitions = np.empty((p, m, m))
+    arrivals = np.empty((p, m))
+    rates = np.empty((p, m))
+    pcols = np.empty((p, m))
+    residual = np.empty(p * m)
+    for k in range(p):
+        _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, taus[k], starts[k],
+                phases[k], transitions[k], arrivals[k], pcols[k], rates[k])
+        nxt = (k + 1) % p
+        for r in range(m):
+            residual[k * m + r] = diagonals[nxt, r] * arrivals[k, r] - starts[nxt, r]
+    if not want_jacobian:
+        return (phases, taus, starts, arrivals, rates, transitions, pcols, residual,
+                np.zeros((0, 0)))
+    J = np.zeros((p * m, p * m))
+    zcol = p  # first column of z_0
+    for k in range(p):
+        nxt = (k + 1) % p
+        for r in range(m):
+            d = diagonals[nxt, r]
+            row = k * m + r
+            q = d * pcols[k, r]
+            J[row, 0] = q  # d theta_k / d delta = 1
+            for i in range(k):  # theta_k depends on tau_i, i < k
+                J[row, 1 + i] += omega * q
+            g = d * rates[k, r]
+            if k < p - 1:
+                J[row, 1 + k] += g
+            else:  # tau_{p-1} = period - sum(tau_0..tau_{p-2})
+                for i in range(p - 1):
+                    J[row, 1 + i] -= g
+            # x_j = c_k on the section: the columns of z = X without x_j are the unknowns
+            col = zcol + k * (m - 1)
+            for c in range(m):
+                if c != j:
+                    J[row, col] += d * transitions[k, r, c]
+                    col += 1
+            if r != j:
+                J[row, zcol + nxt * (m - 1) + (r if r < j else r - 1)] -= 1.0
+    return phases, taus, starts, arrivals, rates, transitions, pcols, residual, J
+
+
+@_jit
+def _max_abs(v):
+    """``max |v|``, NaN when any entry is NaN (as ``np.max(np.abs(v))``)."""
+    out = 0.0
+    for x in v:
+        if x != x:
+            return np.nan
+        if abs(x) > out:
+            out = abs(x)
+    return out
+
+
+@_jit
+def _solve(A, rhs):
+    """``A^-1 rhs`` by Gaussian elimination with partial pivoting; ``ok`` False when a
+    pivot is exactly zero (a singular matrix, as LAPACK's ``getrf`` reports it)."""
+    size = rhs.size
+    M = A.copy()
+    x = rhs.copy()
+    for c in range(size):
+        piv = c
+        big = abs(M[c, c])
+        for r in range(c + 1, size):
+            if abs(M[r, c]) > big:
+                big = abs(M[r, c])
+                piv = r
+        if big == 0.0:
+            return x, False
+        if piv != c:
+            for k in range(size):
+                M[c, k], M[piv, k] = M[piv, k], M[c, k]
+            x[c], x[piv] = x[piv], x[c]
+        for r in range(c + 1, size):
+            factor = M[r, c] / M[c, c]
+            if factor != 0.0:
+                for k in range(c + 1, size):
+                    M[r, k] -= factor * M[c, k]
+                x[r] -= factor * x[c]
+    for c in range(size - 1, -1, -1):
+        s = x[c]
+        for k in range(c + 1, size):
+            s -= M[c, k] * x[k]
+        x[c] = s / M[c, c]
+    return x, True
+
+
+@_jit
+def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
+                 positions, diagonals, x0, tol, max_iter):
+    """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
+
+    The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
+    stopping rules), compiled.
+
+    Returns
+    -------
+    tuple
+        ``(x, status, iterations, residual_norm, last_step_norm, shooting)``:
+        ``status`` is :data:`CONVERGED` or :data:`FAILED`, ``shooting`` the tuple of
+        :func:`shooting_system` at ``x`` (with its Jacobian).
+    """
+    x = x0.copy()
+    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
+                         positions, diagonals, x, True)
+    norm = _max_abs(sh[7])
+    step_norm = np.inf
+    it = 0
+    for it in range(max_iter + 1):
+        scale = max(1.0, _max_abs(x))
+        small = norm <= tol * scale
+        if small and (step_norm <= tol * scale or it == max_iter):
+            return x, CONVERGED, it, norm, step_norm, sh
+        if it == max_iter:
+            break
+        J = sh[8]
+        if not np.all(np.isfinite(J)):
+            break
+        step, ok = _solve(J, -sh[7])
+        if not ok:
+            break
+        lam_step = 1.0
+        while True:
+            trial = x + lam_step * step
+            tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
+                                  period, j, positions, diagonals, trial, True)
+            tnorm = _max_abs(tsh[7])
+            finite = np.isfinite(tnorm)
+            if small and not (finite and tnorm < norm):
+                # within tol and the update does not lower the residual: at its rounding floor
+                return x, CONVERGED, it, norm, step_norm, sh
+            if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
+                break
+            lam_step *= 0.5
+        step_norm = lam_step * _max_abs(step)
+        x = trial
+        sh = tsh
+        norm = tnorm
+    return x, FAILED, it, norm, step_norm, sh
+
+
+# -- G, multipliers and the interior-contact check ----------------------------------------------
+@_jit
+def _flight_jacobian(tr, pcol, rate, d, j, omega, G):
+    """``G_k`` of eq. (25) on ``x_j = c`` into ``G`` (as ``multi_impact.flight_jacobian``);
+    returns ``h2 = x_j'(tau^-)``."""
+    m = d.size
+    h2 = d[j] * rate[j]
+    h1 = d[j] * pcol[j]
+    row = 0
+    for r in range(m):
+        if r == j:
+            continue
+        H2 = d[r] * rate[r]
+        col = 0
+        for c in range(m):
+            if c == j:
+                continue
+            G[row, col] = d[r] * tr[r, c] - H2 * (d[j] * tr[j, c]) / h2
+            col += 1
+        G[row, m - 1] = d[r] * pcol[r] - H2 * h1 / h2
+        row += 1
+    col = 0
+    for c in range(m):
+        if c == j:
+            continue
+        G[m - 1, col] = -omega * (d[j] * tr[j, c]) / h2
+        col += 1
+    G[m - 1, m - 1] = 1.0 - omega * h1 / h2
+    return h2
+
+
+@_jit
+def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
+                   X0, theta):
+    """``(w, a, weights, Gamma, B, dy, dv)`` of ``x_j`` along a flight for the kernel's
+    search: the forced part ``Gamma cos + B sin`` of the phase and the free deviation."""
+    c0 = math.cos(theta)
+    s0 = math.sin(theta)
+    if general:
+        m = lam.size
+        rot = complex(c0, s0)
+        dev = np.empty(m)
+        for c in range(m):
+            dev[c] = X0[c] - (Z[c] * rot).real
+        coef = np.empty(m, dtype=np.complex128)  # V_jk zeta_k
+        for k in range(m):
+            s = 0j
+            for c in range(m):
+                s += Vi[k, c] * dev[c]
+            coef[k] = V[j, k] * s
+        npair = pw.size
+        dy = np.empty(npair)
+        dv = np.empty(npair)
+        for i in range(npair):
+            k = pk[i]
+            q = pj[i]
+            if lam[k].imag != 0.0:  # a conjugate pair: Re((c_k + conj c_q) e^{lam_k t})
+                total = coef[k] + np.conj(coef[q])
+                dy[i] = total.real
+                dv[i] = (total * lam[k]).real
+            else:  # two real eigenvalues
+                dy[i] = (coef[k] + coef[q]).real
+                dv[i] = (coef[k] * lam[k] + coef[q] * lam[q]).real
+        return pw, pa, np.ones(npair), Z[j].real, -Z[j].imag, dy, dv
+    n = w.size
+    u0 = u[j].copy()
+    dy = np.empty(n)
+    dv = np.empty(n)
+    Gam = 0.0
+    B = 0.0
+    for i in range(n):
+        y0 = 0.0
+        v0 = 0.0
+        for c in range(n):
+            y0 += ui[i, c] * X0[c]
+            v0 += ui[i, c] * X0[n + c]
+        dy[i] = y0 - (gam[i] * c0 + bet[i] * s0)
+        dv[i] = v0 - omega * (bet[i] * c0 - gam[i] * s0)
+        Gam += u0[i] * gam[i]
+        B += u0[i] * bet[i]
+    return w, a, u0, Gam, B, dy, dv
+
+
+@_jit
+def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
+                two_sided, b, b_low, X0, theta, tau):
+    """Eq. (16) on one flight against both stops: ``(gap_upper, time_upper, gap_lower,
+    time_lower, capped)`` (a gap ``+inf`` and its time NaN where there is no extremum)."""
+    ww, aa, u0, Gam, B, dy, dv = _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
+                                                lam, V, Vi, Z, omega, j, X0, theta)
+    times, capped = time_grid(ww, aa, u0, omega, tau)
+    free = free_on_grid(times, ww, aa, u0, dy, dv)
+    cw = np.cos(omega * times)
+    sw = np.sin(omega * times)
+    work = np.empty((WORK_ROWS, 2 * times.size))
+    top, t_top = x1_maximum(times, free, cw, sw, Gam, B, omega, theta, 1.0, ww, aa, u0, dy, dv,
+                            work, np.nan)
+    gap_l = np.inf
+    t_l = np.nan
+    if two_sided:  # the highest maximum of -x_j is the lowest minimum of x_j
+        low, t_low = x1_maximum(times, free, cw, sw, -Gam, -B, omega, theta, -1.0, ww, aa, u0,
+                                dy, dv, work, np.nan)
+        gap_l = b_low - low
+        t_l = t_low
+    return b - top, t_top, gap_l, t_l, capped
+
+
+@_jit
+def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
+                  two_sided, b, b_low, diagonals, phases, taus, starts, transitions, pcols,
+                  rates, checks):
+    """Per-flight ``G_k``, their product G, its multipliers and the contact check (eq. 16).
+
+    Returns
+    -------
+    tuple
+        ``(jacobians (p, 2n, 2n), h2 (p,), G, multipliers (largest modulus first; NaN
+        when G is not finite), gap_upper, time_upper, gap_lower, time_lower (each
+        (p,)), capped)``: the gaps are those of
+        :func:`impactcont.simulate.contact.flight_clearances` (NaN when ``checks`` is
+        False or the flight time is not positive), ``capped`` whether a search grid
+        was capped.
+    """
+    p = taus.size
+    m = diagonals.shape[1]
+    jacs = np.empty((p, m, m))
+    h2 = np.empty(p)
+    G = np.eye(m)
+    tmp = np.empty((m, m))
+    for k in range(p):
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], diagonals[(k + 1) % p], j,
+                                 omega, jacs[k])
+        for r in range(m):
+            for c in range(m):
+                s = 0.0
+                for i in range(m):
+                    s += jacs[k, r, i] * G[i, c]
+                tmp[r, c] = s
+        G[:, :] = tmp
+    mu = multipliers(G)
+    gap_u = np.full(p, np.nan)
+    t_u = np.full(p, np.nan)
+    gap_l = np.full(p, np.nan)
+    t_l = np.full(p, np.nan)
+    capped = False
+    if checks:
+        for k in range(p):
+            if not taus[k] > 0.0:
+                gap_u[k] = np.inf
+                gap_l[k] = np.inf
+                continue
+            gu, tu, gl, tl, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
+                                              lam, V, Vi, Z, omega, j, two_sided, b, b_low,
+                                              starts[k], phases[k], taus[k])
+            gap_u[k] = gu
+            t_u[k] = tu
+            gap_l[k] = gl
+            t_l[k] = tl
+            capped = capped or cap
+    return jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, capped
+
+
+@_jit
+def omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts, phases,
+                   transitions):
+    """``dX_k^-/d omega`` of every flight at fixed flight time, start and start phase.
+
+    Only the steady forced state ``X_p(t) = Re(Z e^{i(omega t + theta)})`` depends on
+    omega: ``dX/d omega = D(t) - Phi(t) D(0)``, ``D(t) = Re((dZ + i t Z) e^{i(omega t +
+    theta)})`` (``Flow.omega_partial``). For the modal flow ``Z = [U A; i omega U A]``
+    with ``A = gamma - i beta`` (eq. 7), ``dA = dgamma - i dbeta`` given.
+
+    Returns
+    -------
+    ndarray, shape (p, 2n)
+    """
+    p = taus.size
+    m = starts.shape[1]
+    n = m // 2
+    Zp = np.empty(m, dtype=np.complex128)
+    dZp = np.empty(m, dtype=np.complex128)
+    if general:
+        Zp[:] = Z
+        dZp[:] = dZ
+    else:
+        for r in range(n):
+            s = 0j
+            ds = 0j
+            for i in range(n):
+                s += u[r, i] * complex(gam[i], -bet[i])
+                ds += u[r, i] * complex(dgam[i], -dbet[i])
+            Zp[r] = s
+            Zp[n + r] = 1j * omega * s
+            dZp[r] = ds
+            dZp[n + r] = 1j * s + 1j * omega * ds
+    out = np.empty((p, m))
+    d0 = np.empty(m)
+    for k in range(p):
+        t = taus[k]
+        rot_0 = complex(math.cos(phases[k]), math.sin(phases[k]))
+        rot_t = complex(math.cos(omega * t + phases[k]), math.sin(omega * t + phases[k]))
+        for c in range(m):
+            d0[c] = (dZp[c] * rot_0).real
+        for r in range(m):
+            s = 0.0
+            for c in range(m):
+                s += transitions[k, r, c] * d0[c]
+            out[k, r] = ((dZp[r] + 1j * t * Zp[r]) * rot_t).real - s
+    return out
