@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import json
 import logging
 import os
 import pickle
@@ -65,7 +66,8 @@ from impactcont.dataset.curves import normalise_dataset, validate_dataset
 from impactcont.dataset.schema import (
     _LABEL_DTYPE,
     _STATUS_DTYPE,
-    CONVENTIONS,
+    parameter_names,
+    provenance_attributes,
     special_variable,
 )
 
@@ -348,12 +350,8 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
                 raise TypeError(f"obj[{name!r}] must be an xarray.Dataset; "
                                 f"got {type(ds).__name__}")
             groups[f"/{name}"] = ds
-        from impactcont import __version__
-
-        root = xr.Dataset(attrs={"title": "Branches of periodic impacting motions",
-                                 "impactcont_version": __version__,
-                                 "Conventions": CONVENTIONS})
-        tree = xr.DataTree.from_dict({"/": root, **groups})
+        # the root's title, provenance and description are written with its index
+        tree = xr.DataTree.from_dict({"/": xr.Dataset(), **groups})
     else:
         raise TypeError(f"obj must be an xarray.Dataset, a mapping of name to Dataset or an "
                         f"xarray.DataTree; got {type(obj).__name__}")
@@ -391,7 +389,9 @@ def _index(tree: xr.DataTree) -> xr.Dataset:
     return xr.Dataset({key: ("group", columns[key], {"long_name": ln, "description": text,
                                                     **({"units": "1"} if key == "group_N"
                                                        else {})})
-                       for key, (ln, text) in _INDEX.items()}, attrs=tree.attrs)
+                       for key, (ln, text) in _INDEX.items()},
+                      attrs=_root_attributes(tree.attrs, columns["group_name"].tolist(),
+                                             columns["group_kind"].tolist()))
 
 
 def _split_complex(ds: xr.Dataset) -> xr.Dataset:
@@ -441,13 +441,167 @@ def _join_complex(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
+# The CF form on disk (CF 1.10, readable by netCDF classic readers), undone by load: a text
+# dimension coordinate becomes an integer index with flag_values / flag_meanings, int64 values
+# int32, booleans and texts carry no units, coordinates no _FillValue, the parameters of a
+# branch or curve are auxiliary coordinates of its points, and every dataset says where it
+# comes from (Conventions, history, source, references).
+_MEMORY_DTYPE = "impactcont_dtype"  # the dtype in memory of a variable stored otherwise
+_MEMORY_UNITS = "impactcont_units"  # the units in memory of a boolean or text variable
+_FILE_ATTRIBUTES = "impactcont_file_attributes"  # dataset attributes only the file has
+_FLAG_MEANING = re.compile(r"^[0-9A-Za-z_\-.+@]+$")  # one word of flag_meanings (CF 3.5)
+_TEXT_KINDS = "USO"
+_KIND_WORDS = {"branch": "branches of periodic impacting motions",
+               "curve": "codimension-1 curves", "map": "stability maps",
+               "orbits": "periodic impacting motions", "robust": "robust stability results",
+               "simulation": "simulations"}
+
+
+def _cf_variable(name: Any, var: xr.Variable, coordinate: bool) -> xr.Variable:
+    """``var`` in its CF form on disk (the same object if nothing changes)."""
+    attrs, encoding = dict(var.attrs), dict(var.encoding)
+    data = var.data
+    if coordinate:
+        encoding["_FillValue"] = None  # CF 2.5.1: no missing values in a coordinate
+    labels = var.values.tolist() if coordinate and var.dtype.kind in _TEXT_KINDS else None
+    if labels is not None and (not labels or len(set(labels)) != len(labels)
+                               or not all(isinstance(x, str) and _FLAG_MEANING.match(x)
+                                          for x in labels)):
+        logger.info("coordinate %r stays text in the file: its labels %s are not distinct "
+                    "words (CF flag_meanings)", name, labels[:8])
+        labels = None
+    if labels is not None:  # CF coordinates are numbers: the index, the labels its flags
+        data = np.arange(len(labels), dtype=np.int32)
+        attrs.update({"flag_values": data, "flag_meanings": " ".join(labels),
+                      _MEMORY_DTYPE: "str"})
+        encoding.pop("dtype", None)
+        if "long_name" not in attrs and "standard_name" not in attrs:  # CF 3.3
+            attrs.update({"long_name": f"index of {name}", _FILE_ATTRIBUTES: "long_name"})
+    elif (var.dtype.kind in "iu" and var.dtype.itemsize == 8 and isinstance(data, np.ndarray)
+          and (data.size == 0 or (data.min() >= np.iinfo(np.int32).min
+                                  and data.max() <= np.iinfo(np.int32).max))):
+        data = data.astype(np.int32)  # netCDF classic has no 64-bit integers
+        attrs[_MEMORY_DTYPE] = str(var.dtype)
+        encoding.pop("dtype", None)
+    if (var.dtype.kind in "b" + _TEXT_KINDS or labels is not None) and "units" in attrs:
+        attrs[_MEMORY_UNITS] = attrs.pop("units")  # a flag or a text has no units
+    attrs = {k: _cf_attribute(v) for k, v in attrs.items()}
+    if data is var.data and attrs == var.attrs and encoding == var.encoding:
+        return var
+    return xr.Variable(var.dims, data, attrs, encoding)
+
+
+def _cf_attribute(value: Any) -> Any:
+    """An attribute without 64-bit integers where its values fit in 32 bits."""
+    if isinstance(value, (bool, np.bool_)):
+        return value
+    if isinstance(value, (int, np.integer)) and np.iinfo(np.int32).min <= value \
+            <= np.iinfo(np.int32).max:
+        return np.int32(value)
+    return value
+
+
+def _to_cf(ds: xr.Dataset) -> xr.Dataset:
+    """The CF form of one dataset (a file's root dataset or a group) on disk."""
+    out = ds.set_coords(parameter_names(ds))  # the points of a branch or curve are labelled
+    changed = {name: _cf_variable(name, var, name in out.coords)
+               for name, var in out.variables.items()}
+    out = out.assign_coords({k: v for k, v in changed.items()
+                             if k in out.coords and v is not out.variables[k]})
+    out = out.assign({k: v for k, v in changed.items()
+                      if k not in out.coords and v is not out.variables[k]})
+    provenance = provenance_attributes("written")
+    added = [key for key in provenance if key not in ds.attrs]
+    attrs = {k: _cf_attribute(v) for k, v in ds.attrs.items()}
+    if added:
+        attrs.update({key: provenance[key] for key in added})
+        attrs[_FILE_ATTRIBUTES] = " ".join(added)
+    out.attrs = attrs
+    return out
+
+
+def _from_cf(ds: xr.Dataset) -> xr.Dataset:
+    """Inverse of :func:`_to_cf`: the dataset as it was given to :func:`save`.
+
+    Files written before the CF form read unchanged (they have none of its marks).
+
+    Raises
+    ------
+    ValueError
+        A mark of the CF form contradicts the variable it is on.
+    """
+    names = parameter_names(ds)
+    ds = ds.reset_coords([k for k in names if k in ds.coords and k not in ds.dims])
+    for name, var in list(ds.variables.items()):
+        if not {_MEMORY_DTYPE, _MEMORY_UNITS, _FILE_ATTRIBUTES} & set(var.attrs):
+            continue
+        attrs = _without_file_attributes(var.attrs)
+        dtype, units = attrs.pop(_MEMORY_DTYPE, None), attrs.pop(_MEMORY_UNITS, None)
+        data = var.data
+        if dtype == "str":
+            labels = str(attrs.pop("flag_meanings", "")).split()
+            attrs.pop("flag_values", None)
+            if len(labels) != var.size or var.ndim != 1:
+                raise ValueError(f"variable {name!r} (attribute {_MEMORY_DTYPE} = 'str') must "
+                                 f"be a 1-D index with one word of flag_meanings per entry; "
+                                 f"got shape {var.shape} and {len(labels)} word(s)")
+            data = np.array(labels)[np.asarray(var.values, dtype=np.int64)]
+        elif dtype is not None:
+            if dtype not in ("int64", "uint64") or var.dtype.kind not in "iu":
+                raise ValueError(f"variable {name!r}: attribute {_MEMORY_DTYPE} must be "
+                                 f"'str', 'int64' or 'uint64' on an integer variable; got "
+                                 f"{dtype!r} on dtype {var.dtype}")
+            data = data.astype(dtype)
+        if units is not None:
+            attrs["units"] = units
+        new = xr.Variable(var.dims, data, attrs)
+        if name in ds.coords:
+            ds = ds.assign_coords({name: new})
+        else:
+            ds[name] = new
+    ds.attrs = _without_file_attributes(ds.attrs)
+    return ds
+
+
+def _without_file_attributes(attrs: Mapping[str, Any]) -> dict[str, Any]:
+    """``attrs`` without those the file alone has (named by ``impactcont_file_attributes``)."""
+    added = attrs.get(_FILE_ATTRIBUTES)
+    if not isinstance(added, str):
+        return dict(attrs)
+    return {k: v for k, v in attrs.items() if k != _FILE_ATTRIBUTES and k not in added.split()}
+
+
+def _root_attributes(attrs: Mapping[str, Any], names: list[str], kinds: list[str]
+                     ) -> dict[str, Any]:
+    """The attributes of the root group of a file of groups: what it holds, how to open it."""
+    out = {"title": _contents_title(kinds), **provenance_attributes("written"), **attrs}
+    out["impactcont_groups"] = json.dumps(names)
+    counts = {kind: kinds.count(kind) for kind in dict.fromkeys(kinds)}
+    listed = ", ".join(f"{kind or 'other'} ({count})" for kind, count in counts.items())
+    out["comment"] = (
+        f"Groups of impactcont results: {listed} (attribute impactcont_groups, variables "
+        "group_name, group_kind, group_title, group_N). This root group holds only that index: "
+        "open a group with xarray.open_dataset(path, group=NAME), every group with "
+        "xarray.open_datatree(path), or read the file with impactcont.load(path) (complex "
+        "multipliers and text coordinates restored).")
+    return {k: _cf_attribute(v) for k, v in out.items()}
+
+
+def _contents_title(kinds: list[str]) -> str:
+    """The title of a file of groups of these kinds (``"Branches of ..."`` for branches)."""
+    words = [_KIND_WORDS.get(kind, "impactcont results") for kind in dict.fromkeys(kinds)]
+    text = ", ".join(words[:-1]) + (" and " if len(words) > 1 else "") + words[-1]
+    return text[:1].upper() + text[1:]
+
+
 def _for_disk(data: xr.Dataset | xr.DataTree) -> xr.Dataset | xr.DataTree:
+    """What is written: complex variables split, each dataset in its CF form, the index."""
     if isinstance(data, xr.Dataset):
-        return _split_complex(data)
-    nodes = {node.path: _split_complex(node.to_dataset(inherit=False))
-             for node in data.subtree}
+        return _to_cf(_split_complex(data))
+    nodes = {node.path: _to_cf(_split_complex(node.to_dataset(inherit=False)))
+             if node.has_data else node.to_dataset(inherit=False) for node in data.subtree}
     if not data.has_data and data.children:
-        nodes["/"] = _index(data)
+        nodes["/"] = _to_cf(_index(data))
     return xr.DataTree.from_dict(nodes)
 
 
@@ -720,8 +874,9 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
 # Reading
 # ---------------------------------------------------------------------------------------------
 def _normalise(ds: xr.Dataset) -> xr.Dataset:
-    """Complex variables joined; strings with their schema dtype (empty ones read as <U1)."""
-    ds = _join_complex(ds)
+    """The dataset given to save: its CF form undone (:func:`_from_cf`), complex variables
+    joined, strings with their schema dtype (empty ones read as <U1)."""
+    ds = _join_complex(_from_cf(ds))
     for key, dtype in (("label", _LABEL_DTYPE), ("status", _STATUS_DTYPE)):
         name = special_variable(key)
         if name in ds.variables and ds[name].dtype != dtype:
