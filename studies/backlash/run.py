@@ -8,12 +8,14 @@ b in CLEARANCES this study
 1. sweeps omega up with the event-driven simulator (state carried from one omega to the
    next, transient discarded, impacts recorded with the stop they hit);
 2. takes every attractor of the sweep that is a 1-2 motion with one impact on each stop,
-   solves it by shooting and continues its branch in omega (both directions): the
-   symmetric motions (X_1 = -X_0, equal flight times) and the asymmetric ones, which come
-   in mirror pairs;
-3. locates where they switch: the symmetry-breaking pitchfork of the symmetric branch,
-   where a multiplier of its half-map H = S G_0 (flight U -> L, then the reflection S)
-   passes -1 (G = H^2 gets a multiplier +1), by Brent's method on det(H + I);
+   solves it by shooting and continues its branch in omega (both directions); a
+   symmetric motion (X_1 = -X_0, equal flight times) is followed as such by the package
+   (its half-motion closed by the reflection), which locates and labels the
+   symmetry-breaking pitchforks BP, where a multiplier of the half-map H = S G_0 passes
+   -1 (G = H^2 gets a multiplier +1);
+3. switches at every BP onto the asymmetric pair born there (`pitchfork_switch`: two
+   branches, mirror images of each other); an asymmetric attractor of the sweep on no
+   switched branch is continued from the sweep (with its mirror image);
 4. checks the diagram against the sweep: at every omega where the simulator settled on a
    1-2 motion, its impact velocities against the stable branch motion there;
 5. draws one bifurcation diagram per clearance (impact velocities, lower-stop impacts
@@ -49,11 +51,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-import scipy.optimize
 import xarray as xr
 
 import impactcont as ic
-from impactcont.orbit.multi_impact import orbit_from_unknowns
+from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 
 log = logging.getLogger("backlash")
 
@@ -112,21 +113,9 @@ def sweep(b: float, omegas: np.ndarray, damping: dict[str, Any] | None = None
 # ------------------------------------------------------------------------------------------
 # Branches, symmetry, pitchforks
 # ------------------------------------------------------------------------------------------
-def reflection(n: int) -> np.ndarray:
-    """``S`` in the section coordinates ``[z, theta]``: ``z -> -z``, ``theta -> theta + pi``."""
-    return np.diag([-1.0] * (2 * n - 1) + [1.0])
-
-
 def asymmetry(orbit: ic.MultiImpactOrbit) -> float:
-    """How far a 1-2 motion is from its mirror image: ``max |X_1 + X_0|, |tau_1 - tau_0|``."""
-    return float(max(np.max(np.abs(orbit.states[1] + orbit.states[0])),
-                     abs(orbit.flight_times[1] - orbit.flight_times[0])))
-
-
-def half_map_test(orbit: ic.MultiImpactOrbit) -> float:
-    """``det(S G_0 + I)``: vanishes where the half-map of a symmetric motion has -1."""
-    H = reflection(orbit.oscillator.n) @ orbit.jacobians[0]
-    return float(np.linalg.det(H + np.eye(H.shape[0])))
+    """How far a 1-2 motion is from its mirror image (relative; the package's measure)."""
+    return symmetry_defect(orbit)
 
 
 def orbit_at(ds: xr.Dataset, i: int, omega: float | None = None) -> ic.MultiImpactOrbit:
@@ -139,69 +128,62 @@ def orbit_at(ds: xr.Dataset, i: int, omega: float | None = None) -> ic.MultiImpa
         "states": ds["state_k"].values[i], "pattern": ds.attrs["pattern"]})
 
 
-def symmetric_orbit(osc: ic.ImpactOscillator, seed: ic.MultiImpactOrbit
-                    ) -> ic.MultiImpactOrbit:
-    """The symmetric 1-2 motion near `seed`, solved as a fixed point of the half-map.
-
-    With ``X_1 = -X_0`` and ``tau_0 = T/2`` the motion solves
-    ``-D_L (Phi(T/2) X_0 + E(T/2) [cos delta; sin delta]) = X_0`` (eq. 9 and eq. 4 at the
-    lower stop, then the reflection): 2n equations in ``delta`` and ``z_0``, regular at the
-    symmetry-breaking pitchfork (where the 1-2 shooting system of the full period is
-    singular). The full motion (G, multipliers, checks) is then evaluated at that solution.
-    """
-    flow = ic.Flow(osc)
-    n, T = osc.n, 2 * math.pi / osc.omega
-    k = seed.pattern.index("U")
-    Phi, E = flow.matrices(T / 2)
-    d = np.ones(2 * n)
-    d[n] = -osc.stops.R_low
-
-    def half(v: np.ndarray) -> np.ndarray:
-        X = np.concatenate([[osc.b], v[1:]])
-        arrival = Phi @ X + E @ np.array([math.cos(v[0]), math.sin(v[0])])
-        return -(d * arrival) - X
-
-    v, _, _, msg = scipy.optimize.fsolve(half, np.concatenate([[seed.phases[k]],
-                                                              seed.states[k][1:]]),
-                                         xtol=1e-14, full_output=True)
-    if np.max(np.abs(half(v))) > 1e-11:  # (fsolve may say xtol is too small: judged here)
-        raise ic.NoPeriodicMotionError(f"symmetric motion at omega={osc.omega!r}: {msg}")
-    X0 = np.concatenate([[osc.b], v[1:]])
-    u = np.concatenate([[v[0], T / 2], X0[1:], -X0[1:]])
-    return orbit_from_unknowns(flow, 1, 2, u, pattern="UL")
+def pitchforks(ds: xr.Dataset) -> list[tuple[float, float]]:
+    """``(omega, precision)`` of every BP the package located on a symmetric branch."""
+    return [(float(w), float(p)) for lab, w, p, st in zip(
+        ds["special_label"].values, ds["special_omega"].values,
+        ds["special_precision"].values, ds["special_status"].values, strict=True)
+        if lab == "BP" and st == "located"]
 
 
-def pitchforks(ds: xr.Dataset) -> list[float]:
-    """Omega of every symmetry-breaking pitchfork on a symmetric branch (to ~1e-12)."""
-    orbits = [orbit_at(ds, i) for i in range(ds.sizes["point"])]
-    tests = np.array([half_map_test(o) for o in orbits])
-    found = []
-    for i in np.flatnonzero(np.sign(tests[:-1]) != np.sign(tests[1:])):
-        w0, w1 = float(ds["omega"].values[i]), float(ds["omega"].values[i + 1])
-        if not (orbits[i].physical and orbits[i + 1].physical):
-            continue
-        osc = orbits[i].oscillator
+WITNESS_OFFSET = 0.005  # omega either side of a pitchfork where the simulator is asked
+WITNESS_PERIODS = 400.0
 
-        def test(om: float, seed: ic.MultiImpactOrbit = orbits[i],
-                 osc: ic.ImpactOscillator = osc) -> float:
-            return half_map_test(symmetric_orbit(osc.replace(omega=om), seed))
 
-        w = scipy.optimize.brentq(test, min(w0, w1), max(w0, w1), xtol=1e-13)
-        found.append(w)
-    return found
+def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which: int
+                 ) -> dict[str, Any]:
+    """The simulator either side of a BP: started next to the symmetric motion (nudged
+    asymmetrically), does it stay symmetric where the branch says stable and leave it
+    for an asymmetric 1-2 motion where the branch says unstable?"""
+    fork = ic.special_orbit(ds, "BP", which)
+    w = fork.oscillator.omega
+    out: dict[str, Any] = {"omega": w, "sides": []}
+    for side in (-1.0, 1.0):
+        om = w + side * WITNESS_OFFSET
+        osc = system(b, om, damping)
+        sym = ic.multi_impact_orbit(osc, 1, 2, fork)
+        X = sym.states[0] + np.array([0.0, 1e-4, 1e-4, 0.0])
+        res = ic.simulate(osc, X, float(sym.phases[0]), WITNESS_PERIODS)
+        settled = None
+        if one_two(res, om):
+            settled = ic.multi_impact_orbit(osc, 1, 2, res)
+        out["sides"].append({
+            "omega": om, "branch_stable": bool(sym.stable and sym.physical),
+            "simulated_one_two": settled is not None,
+            "simulated_asymmetry": asymmetry(settled) if settled is not None else None})
+    out["agrees"] = all(
+        (s["simulated_one_two"] and s["simulated_asymmetry"] < 1e-6) == s["branch_stable"]
+        for s in out["sides"])
+    return out
 
 
 def branches_for(b: float, sw: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[str, Any]]:
-    """Branches of the 1-2 motions the sweep settled on (one symmetric, one per mirror pair)."""
+    """Branches of the 1-2 motions: the symmetric ones the sweep settled on, the asymmetric
+    pairs switched onto at their pitchforks, and any asymmetric attractor left over."""
     out: list[dict[str, Any]] = []
     timing: dict[str, float] = {}
+    covered: set[float] = set()  # BPs whose asymmetric pair is followed
+    seeds = []
     for row in sw["rows"]:
         if not row["one_two"]:
             continue
-        res = row["result"]
         t0 = time.perf_counter()
-        orbit = ic.multi_impact_orbit(system(b, row["omega"], sw["damping"]), 1, 2, res)
+        orbit = ic.multi_impact_orbit(system(b, row["omega"], sw["damping"]), 1, 2,
+                                      row["result"])
         timing.setdefault("orbit_s", time.perf_counter() - t0)
+        seeds.append((row["omega"], orbit))
+    # symmetric motions first: their pitchforks give the asymmetric pairs
+    for omega, orbit in sorted(seeds, key=lambda s: asymmetry(s[1]) >= 1e-8):
         kind = "symmetric" if asymmetry(orbit) < 1e-8 else "asymmetric"
         # one branch per motion: skip seeds on a branch already followed
         kinds = ("symmetric",) if kind == "symmetric" else ("asymmetric", "mirror")
@@ -212,17 +194,29 @@ def branches_for(b: float, sw: dict[str, Any]) -> tuple[list[dict[str, Any]], di
                                           max_points=600, ds_max=0.02)
         timing.setdefault(f"branch_{kind}_s", time.perf_counter() - t0)
         timing.setdefault(f"branch_{kind}_points", ds.sizes["point"])
-        out.append({"kind": kind, "ds": ds, "seed": row["omega"]})
-        log.info("b=%g: %s branch from the sweep at omega=%.4f: %d points", b, kind,
-                 row["omega"], ds.sizes["point"])
-        if kind == "asymmetric":  # its mirror image, by symmetry
-            mirror = ic.multi_impact_orbit(orbit.oscillator, 1, 2, {
-                "delta": float(orbit.phases[1]) + math.pi,
-                "flight_times": orbit.flight_times[::-1], "states": -orbit.states[::-1],
-                "pattern": orbit.pattern})
+        out.append({"kind": kind, "ds": ds, "seed": omega, "born_at": "sweep"})
+        log.info("b=%g: %s branch from the sweep at omega=%.4f: %d points", b, kind, omega,
+                 ds.sizes["point"])
+        if kind == "symmetric":
+            for which, (w, _) in enumerate(pitchforks(ds)):
+                if any(abs(w - v) < 1e-8 for v in covered):
+                    continue  # the pair of this BP came from another one (a loop between BPs)
+                t0 = time.perf_counter()
+                pair = ic.pitchfork_switch(ds, which, max_points=600, ds_max=0.02)
+                timing.setdefault("switch_s", time.perf_counter() - t0)
+                for sub, side in zip(pair, ("asymmetric", "mirror"), strict=True):
+                    out.append({"kind": side, "ds": sub, "seed": w, "born_at": "BP"})
+                    covered.update(float(v) for lab, v in zip(
+                        sub["special_label"].values, sub["special_omega"].values, strict=True)
+                        if lab == "BP")
+                covered.add(w)
+                log.info("b=%g: asymmetric pair switched onto at the BP omega=%.10f: %d and %d "
+                         "points", b, w, pair[0].sizes["point"], pair[1].sizes["point"])
+        else:  # an asymmetric attractor on no switched branch: its mirror image too
+            mirror = mirror_image(orbit)
             mds = ic.multi_impact_continuation(mirror, "omega", OMEGA, both_directions=True,
                                                max_points=600, ds_max=0.02)
-            out.append({"kind": "mirror", "ds": mds, "seed": row["omega"]})
+            out.append({"kind": "mirror", "ds": mds, "seed": omega, "born_at": "sweep"})
     return out, timing
 
 
@@ -323,24 +317,31 @@ def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: 
     sw = sweep(b, omegas, damping)
     t_sweep = time.perf_counter() - t0
     branches, timing = branches_for(b, sw)
-    forks = sorted({round(w, 10) for br in branches if br["kind"] == "symmetric"
-                    for w in pitchforks(br["ds"])})
+    located = sorted({(round(w, 13), prec) for br in branches if br["kind"] == "symmetric"
+                      for w, prec in pitchforks(br["ds"])})
+    forks = [w for w, _ in located]
+    witness = [fork_witness(b, damping, br["ds"], which)
+               for br in branches if br["kind"] == "symmetric"
+               for which in range(len(pitchforks(br["ds"])))]
     agree = agreement(b, sw, branches)
     info: dict[str, Any] = {"damping": damping or PAPER_DAMPING, "sweep_s": t_sweep,
-                            **timing, "pitchforks": forks, "agreement": agree,
+                            **timing, "pitchforks": forks,
+                            "pitchfork_precision": [p for _, p in located],
+                            "pitchfork_simulated": witness, "agreement": agree,
                             "branches": []}
-    for br in branches:
+    for i, br in enumerate(branches):
         ds = br["ds"]
         ok = ds["physical"].values & ds["stable"].values
         om = ds["omega"].values
         specials = [(str(lab), float(w)) for lab, w in zip(
             ds["special_label"].values, ds["special_omega"].values, strict=True)]
         info["branches"].append({
-            "kind": br["kind"], "seed_omega": br["seed"], "points": int(ds.sizes["point"]),
+            "kind": br["kind"], "born_at": br["born_at"], "seed_omega": br["seed"],
+            "points": int(ds.sizes["point"]),
             "pattern": ds.attrs["pattern"],
             "stable_physical_omega": [float(om[ok].min()), float(om[ok].max())]
             if ok.any() else None, "special_points": specials})
-        groups[f"{key}_{br['kind']}"] = ds
+        groups[f"{key}_{i}_{br['kind']}"] = ds
     sweep_ds = xr.Dataset({
         "omega": ("row", omegas),
         "one_two": ("row", [r["one_two"] for r in sw["rows"]]),
