@@ -9,7 +9,13 @@ What is on disk (``docs/outputs.md``) reads with plain xarray, netCDF4 or
 - a file of several groups has an index in its root group (``group_name``,
   ``group_kind``, ``group_title``, ``group_N`` on the dimension ``group``),
   which :func:`load` drops again;
-- booleans are stored by xarray as ``int8`` with a ``dtype: bool`` attribute.
+- booleans are stored by xarray as ``int8`` with a ``dtype: bool`` attribute;
+- each dataset is in a CF 1.10 form (``_to_cf``, undone by :func:`load`): text
+  coordinates as integer flags, int32 for int64, no units on flags and texts, no
+  ``_FillValue`` on coordinates, the parameters of a branch or curve as auxiliary
+  coordinates, provenance (``Conventions``, ``history``, ``source``,
+  ``references``) in every group, and a root that names its groups and how to
+  open them.
 
 :func:`save` and :func:`load` check the same things: always the attributes
 impactcont reads back (:mod:`impactcont.dataset.attributes`), and with
