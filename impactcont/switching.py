@@ -74,6 +74,7 @@ __all__ = [
     "grazing_switch",
     "period_doubling_cascade",
     "period_doubling_switch",
+    "pitchfork_branch",
     "pitchfork_switch",
     "special_orbit",
 ]
@@ -658,12 +659,20 @@ def _pitchfork_direction(problem: SymmetricBranchProblem, v: np.ndarray, lam: fl
     return e, float(sing[-1] / sing[0]), float(sing[-2] / sing[0])
 
 
+def _check_side(side: object) -> int:
+    if isinstance(side, bool) or side not in (1, -1):
+        raise ParameterError(f"side must be +1 or -1 (which motion of the asymmetric pair: "
+                             f"the step +epsilon or -epsilon along the antisymmetric direction); "
+                             f"got {side!r}")
+    return int(side)
+
+
 @blas_limited
-def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
+def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
                      bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                      detect: Sequence[str] = LABELS, options: ContinuationOptions | None = None,
-                     **more: Any) -> tuple[xr.Dataset, xr.Dataset]:
-    """Follow the two asymmetric branches born at a symmetry-breaking pitchfork (BP).
+                     **more: Any) -> xr.Dataset:
+    """Follow one asymmetric branch born at a symmetry-breaking pitchfork (BP).
 
     Parameters
     ----------
@@ -672,13 +681,16 @@ def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
         (:func:`impactcont.multi_branch.multi_impact_continuation` of a symmetric motion).
     which : int
         Which BP point (index among the BP points, branch order).
+    side : {1, -1}
+        Which motion of the pair: the step ``+epsilon`` or ``-epsilon`` along the
+        antisymmetric direction (the two are mirror images of each other).
     bounds : (float, float), optional
         Parameter range; default the bounds of ``branch``.
     epsilon : float
         Displacement from the BP along the antisymmetric direction (max-norm of the
         full unknowns), in (0, 1).
     detect : sequence of str
-        Special points to detect on the new branches.
+        Special points to detect on the new branch.
     options : ContinuationOptions, optional
         Continuation options (the drivers' defaults for those left out); the switch sets
         ``direction`` (away from the BP) and one direction only.
@@ -687,22 +699,21 @@ def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
 
     Returns
     -------
-    (xarray.Dataset, xarray.Dataset)
-        The asymmetric N-p branches through ``+epsilon e`` and ``-epsilon e``, mirror
-        images of each other (:func:`impactcont.orbit.symmetry.mirror_image` maps a
-        motion of one onto a motion of the other), each followed away from the BP;
+    xarray.Dataset
+        The asymmetric N-p branch through the step, followed away from the BP;
         attributes ``born_at = "BP"``, ``born_at_value``, ``parent_N``,
-        ``parent_impacts``, ``switch_side`` (+1, -1).
+        ``parent_impacts``, ``switch_side``.
 
     Raises
     ------
     ParameterError
-        No such BP point, bad `epsilon` or bounds.
+        No such BP point, bad `side`, `epsilon` or bounds.
     NoPeriodicMotionError
-        The symmetric motion at the BP or a switched point could not be computed, or
+        The symmetric motion at the BP or the switched point could not be computed, or
         Newton fell back onto the symmetric branch.
     """
     epsilon = _check_epsilon(epsilon)
+    side = _check_side(side)
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
     if "impact" not in branch.dims:
@@ -715,31 +726,47 @@ def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
     log.info("BP at %s=%.12g: [J | F_lam] of the full system has singular values %.2e and "
              "%.2e (relative) below the rest", parameter, lam_bp, s_min, s_next)
     x_bp = np.append(half.full_unknowns(v, lam_bp), lam_bp)
-    out = []
-    for side in (1, -1):
-        x1 = _hyperplane_newton(full, x_bp + side * epsilon * e, e)
-        u1, lam1 = x1[:-1], float(x1[-1])
-        first = full.orbit(u1, lam1, checks=False)
-        defect = symmetry_defect(first)
-        # the symmetric branch has defect 0; the new one starts about epsilon away from it
-        if not defect > 0.01 * epsilon:
-            raise NoPeriodicMotionError(
-                f"branch switching at the BP {parameter}={lam_bp:.12g}: the corrected point is "
-                f"the symmetric motion again (asymmetry {defect:.3g})")
-        if not lo <= lam1 <= hi:
-            raise ParameterError(f"bounds ({lo}, {hi}) must contain the switched point "
-                                 f"{parameter}={lam1!r}")
-        if lam1 == lam_bp:
-            log.warning("the switched point has the BP's parameter value exactly; going up")
-        direction = 1 if lam1 >= lam_bp else -1
-        info = {"born_at": "BP", "born_at_value": lam_bp, "parent_N": half.N,
-                "parent_impacts": half.p, "switch_side": side, "switch_epsilon": epsilon,
-                "switch_singular_value": s_min, "switch_asymmetry": defect}
-        log.info("switched to the asymmetric %d-%d branch (side %+d) at %s=%.12g "
-                 "(asymmetry %.3g), going %s", half.N, half.p, side, parameter, lam1, defect,
-                 "up" if direction > 0 else "down")
-        opts = make_options((lo, hi), options, direction=direction, both_directions=False,
-                            **more)
-        out.append(run_branch(full, u1, lam1, opts, detect=detect,
-                              record={"switch": info, "symmetric": False}, extra_attrs=info))
-    return out[0], out[1]
+    x1 = _hyperplane_newton(full, x_bp + side * epsilon * e, e)
+    u1, lam1 = x1[:-1], float(x1[-1])
+    defect = symmetry_defect(full.orbit(u1, lam1, checks=False))
+    # the symmetric branch has defect 0; the new one starts about epsilon away from it
+    if not defect > 0.01 * epsilon:
+        raise NoPeriodicMotionError(
+            f"branch switching at the BP {parameter}={lam_bp:.12g}: the corrected point is "
+            f"the symmetric motion again (asymmetry {defect:.3g})")
+    if not lo <= lam1 <= hi:
+        raise ParameterError(f"bounds ({lo}, {hi}) must contain the switched point "
+                             f"{parameter}={lam1!r}")
+    if lam1 == lam_bp:
+        log.warning("the switched point has the BP's parameter value exactly; going up")
+    direction = 1 if lam1 >= lam_bp else -1
+    info = {"born_at": "BP", "born_at_value": lam_bp, "parent_N": half.N,
+            "parent_impacts": half.p, "switch_side": side, "switch_epsilon": epsilon,
+            "switch_singular_value": s_min, "switch_asymmetry": defect}
+    log.info("switched to the asymmetric %d-%d branch (side %+d) at %s=%.12g "
+             "(asymmetry %.3g), going %s", half.N, half.p, side, parameter, lam1, defect,
+             "up" if direction > 0 else "down")
+    opts = make_options((lo, hi), options, direction=direction, both_directions=False, **more)
+    return run_branch(full, u1, lam1, opts, detect=detect,
+                      record={"switch": info, "symmetric": False}, extra_attrs=info)
+
+
+def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
+                     bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
+                     detect: Sequence[str] = LABELS, options: ContinuationOptions | None = None,
+                     **more: Any) -> tuple[xr.Dataset, xr.Dataset]:
+    """Follow both asymmetric branches born at a symmetry-breaking pitchfork (BP).
+
+    :func:`pitchfork_branch` with ``side = +1`` and ``side = -1``; the arguments are its own.
+
+    Returns
+    -------
+    (xarray.Dataset, xarray.Dataset)
+        The asymmetric N-p branches through ``+epsilon e`` and ``-epsilon e``, mirror
+        images of each other (:func:`impactcont.orbit.symmetry.mirror_image` maps a
+        motion of one onto a motion of the other), each followed away from the BP.
+    """
+    kwargs = {"bounds": bounds, "epsilon": epsilon, "detect": detect, "options": options,
+              **more}
+    return (pitchfork_branch(branch, which, 1, **kwargs),
+            pitchfork_branch(branch, which, -1, **kwargs))

@@ -1,4 +1,4 @@
-"""Scene section ``[[switches]]``: branches born at PD and grazing points, chained."""
+"""Scene section ``[[switches]]``: branches born at PD, grazing and pitchfork points, chained."""
 
 from __future__ import annotations
 
@@ -61,7 +61,8 @@ def test_switches_chain_into_a_cascade_as_the_api_does(tmp_path: Path) -> None:
     ('start = "two"', "switches[0].start", "N1"),           # not an earlier entry
     ('start = "nothing"', "switches[0].start", "N1"),
     ('b = 0.5', "switches[0].b", "leave out the oscillator parameters"),
-    ('at = "NS"', "switches[0].at", '"PD", "GR"'),
+    ('at = "NS"', "switches[0].at", '"PD", "GR", "BP"'),
+    ('side = 0', "switches[0].side", "one of +1, -1"),
     ('ds = 0.5', "switches[0].ds", "ds_min <= ds <= ds_max"),
     ('both_directions = false', "switches[0].both_directions", "start, at, which"),
 ])
@@ -128,3 +129,54 @@ def test_multi_impact_errors_name_the_key(tmp_path: Path, change: str, key: str)
     with pytest.raises(SceneError) as info:
         load_scene(write(tmp_path, text))
     assert info.value.key == key
+
+
+BACKLASH = """
+[oscillator]
+masses = [1.0, 1.0]
+springs = [1.0, 1.0]
+F = [1.0, 0.0]
+R = 0.6
+eta = 0.1
+b = 0.5
+b_low = 0.5
+R_low = 0.6
+omega = 1.6
+
+[[simulations]]
+name = "settled"
+start = "state"
+state = [0.0, 0.0, 0.0, 0.0]
+delta = 0.0
+periods = 150
+
+[[multi_impact]]
+name = "symmetric"
+start = "settled"
+N = 1
+p = 2
+bounds = [1.2, 1.7]
+ds_max = 0.02
+
+[[switches]]
+name = "mirror"
+start = "symmetric"
+at = "BP"
+side = -1
+max_points = 20
+"""
+
+
+def test_a_switch_at_a_pitchfork_of_a_multi_impact_branch(tmp_path: Path) -> None:
+    """multi_impact entries are computed before switches, which may start from them."""
+    result = run_scene(write(tmp_path, BACKLASH), output=tmp_path / "o")
+    assert result.ok, result.failures
+    symmetric = read_output(tmp_path / "o" / "multi_impact.nc").datasets["symmetric"]
+    mirror = read_output(tmp_path / "o" / "switches.nc").datasets["mirror"]
+    bp = [float(v) for v, label in zip(symmetric["special_omega"].values,
+                                       symmetric["special_label"].values, strict=True)
+          if str(label) == "BP"]
+    assert len(bp) == 1 and abs(bp[0] - 1.3378193720929) < 1e-9
+    assert mirror.attrs["born_at"] == "BP" and int(mirror.attrs["switch_side"]) == -1
+    direct = ic.switching.pitchfork_branch(symmetric, 0, -1, max_points=20)
+    np.testing.assert_allclose(mirror["state_k"].values, direct["state_k"].values, atol=1e-10)

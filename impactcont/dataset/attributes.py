@@ -60,7 +60,7 @@ import xarray as xr
 
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
-from impactcont.vocabulary import LABELS, PARAMETERS
+from impactcont.vocabulary import CURVE_KINDS, PARAMETERS
 
 __all__ = ["KIND_ATTRIBUTES", "SECTION_ATTRIBUTES", "SECTION_KINDS", "check_attributes",
            "check_file_attributes", "check_pattern_attribute", "dataset_kind", "dataset_tag",
@@ -280,8 +280,8 @@ def _text(name: str) -> Callable[[Any, xr.Dataset, Any], None]:
 
 
 def _curve_kind(value: Any, ds: xr.Dataset, osc: Any) -> None:
-    if not isinstance(value, str) or value not in LABELS:
-        raise _refused("kind", value, f"one of {list(LABELS)} (the kind of curve)")
+    if not isinstance(value, str) or value not in CURVE_KINDS:
+        raise _refused("kind", value, f"one of {list(CURVE_KINDS)} (the kind of curve)")
 
 
 def _periods(value: Any, ds: xr.Dataset, osc: Any) -> None:

@@ -42,7 +42,7 @@ from impactcont.dataset.schema import (
     provenance_attributes,
 )
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.vocabulary import CODIM2_LABELS, LABELS, STATUSES
+from impactcont.vocabulary import CODIM2_LABELS, CURVE_KINDS, STATUSES
 
 __all__ = [
     "CODIM2_LABELS",
@@ -61,7 +61,6 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 CODIM2_STATUSES: tuple[str, ...] = STATUSES
-CURVE_KINDS: tuple[str, ...] = LABELS
 
 _LABEL_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_LABELS))}")
 _STATUS_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_STATUSES))}")

@@ -80,8 +80,8 @@ _SECTION_KEY = re.compile(r"^[a-z][a-z0-9_]*$")
 #: name -> ``"module:attribute"`` of their :class:`SceneSection`.
 BUILTIN_PROBLEMS: dict[str, str] = {
     name: f"impactcont.scene.sections:{name.upper()}"
-    for name in ("orbits", "branches", "robust", "simulations", "curves", "maps", "switches",
-                 "multi_impact")
+    for name in ("orbits", "branches", "robust", "simulations", "curves", "maps",
+                 "multi_impact", "switches")
 }
 
 

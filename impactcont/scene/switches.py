@@ -1,10 +1,12 @@
 """Scene sections of N-p motions: ``[[switches]]`` and ``[[multi_impact]]``.
 
-A switch starts from a computed branch (a ``[[branches]]`` entry, or an
-earlier ``[[switches]]`` entry, so that entries chain into a cascade) at one of
-its period-doubling points (:func:`impactcont.period_doubling_switch`: the
-2N-2p motion) or grazing points (:func:`impactcont.grazing_switch`: the motion
-with one more impact), and follows the new branch with
+A switch starts from a computed branch (a ``[[branches]]`` or ``[[multi_impact]]``
+entry, or an earlier ``[[switches]]`` entry, so that entries chain into a cascade)
+at one of its period-doubling points (:func:`impactcont.period_doubling_switch`: the
+2N-2p motion), grazing points (:func:`impactcont.grazing_switch`: the motion with
+one more impact) or symmetry-breaking pitchforks of a symmetric N-p branch
+(:func:`impactcont.switching.pitchfork_branch`: one motion of the asymmetric pair,
+``side`` +1 or -1), and follows the new branch with
 :func:`impactcont.multi_impact_continuation`'s options. The dataset is an N-p
 branch (``docs/multi_impact.md``), described and drawn as the branches are.
 
@@ -55,7 +57,7 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.scene.tasks import BRANCHES, markdown_table
-from impactcont.switching import grazing_switch, period_doubling_switch
+from impactcont.switching import grazing_switch, period_doubling_switch, pitchfork_branch
 from impactcont.vocabulary import check_parameter
 
 __all__ = [
@@ -79,11 +81,14 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
 
     section: ClassVar[str] = "switches"
 
-    start: str = declare(ENTRY_NAME, "the [[branches]] entry, or an earlier [[switches]] "
-                         "entry, to switch from", required=True)
-    at: str = declare(String(("PD", "GR")), "switch at a period-doubling (PD) point or at a "
-                      "grazing (GR) point of the start", "PD")
+    start: str = declare(ENTRY_NAME, "the [[branches]] or [[multi_impact]] entry, or an "
+                         "earlier [[switches]] entry, to switch from", required=True)
+    at: str = declare(String(("PD", "GR", "BP")), "switch at a period-doubling (PD) point, "
+                      "a grazing (GR) point or a symmetry-breaking pitchfork (BP) of the start",
+                      "PD")
     which: int = declare(Integer(0), "which point of that kind on the start (branch order)", 0)
+    side: int = declare(Integer(choices=(1, -1)), "at BP: which motion of the asymmetric "
+                        "pair, +1 or -1 (mirror images)", 1)
     bounds: tuple[float, float] | None = declare(
         Interval(), "range of the parameter (default: the start's)")
     epsilon: float | None = declare(
@@ -97,7 +102,8 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
 
     def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
                     ) -> None:
-        branches = [e.name for e in sections.get("branches", ())]
+        branches = [e.name for e in sections.get("branches", ())] + [
+            e.name for e in sections.get("multi_impact", ())]
         earlier = []
         for e in sections.get("switches", ()):
             if e is self:
@@ -105,7 +111,8 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
             earlier.append(e.name)
         if self.start not in branches + earlier:
             raise where.key("start").error(
-                f"{self.start!r} is not a [[branches]] entry nor an earlier [[switches]] entry",
+                f"{self.start!r} is not a [[branches]] or [[multi_impact]] entry nor an earlier "
+                "[[switches]] entry",
                 ", ".join(branches + earlier) or "the name of a [[branches]] entry")
         start = _origin(self, sections)  # the [[branches]] entry the chain starts from
         lo, hi = self.bounds if self.bounds is not None else start.bounds
@@ -119,21 +126,24 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
 
 
 def _origin(entry: SwitchSpec, sections: Mapping[str, tuple[EntrySpec, ...]]) -> Any:
-    """The ``[[branches]]`` entry a chain of switches starts from."""
+    """The ``[[branches]]`` or ``[[multi_impact]]`` entry a chain of switches starts from."""
     switches = {e.name: e for e in sections.get("switches", ())}
-    branches = {e.name: e for e in sections.get("branches", ())}
+    branches = {e.name: e for e in (*sections.get("branches", ()),
+                                    *sections.get("multi_impact", ()))}
     while entry.start in switches:
         entry = switches[entry.start]
     return branches[entry.start]
 
 
 class Switches:
-    """``[[switches]]``: :func:`~impactcont.period_doubling_switch` or
-    :func:`~impactcont.grazing_switch`."""
+    """``[[switches]]``: :func:`~impactcont.period_doubling_switch`,
+    :func:`~impactcont.grazing_switch` or :func:`~impactcont.switching.pitchfork_branch`."""
 
     def compute(self, entry: SwitchSpec, context: Any) -> xr.Dataset:
         t0 = time.perf_counter()
-        computed = {**context.datasets.get("branches", {}), **context.datasets.get("switches", {})}
+        computed = {**context.datasets.get("branches", {}),
+                    **context.datasets.get("multi_impact", {}),
+                    **context.datasets.get("switches", {})}
         if entry.start not in computed:
             raise ImpactcontError(f"switch {entry.name}: its start {entry.start!r} was not "
                                   f"computed (it failed)")
@@ -144,6 +154,8 @@ class Switches:
         start = computed[entry.start]
         if entry.at == "PD":
             ds = period_doubling_switch(start, entry.which, **kwargs)
+        elif entry.at == "BP":
+            ds = pitchfork_branch(start, entry.which, entry.side, **kwargs)
         else:
             ds = grazing_switch(start, entry.which, **kwargs)
             if ds is None:
