@@ -9,7 +9,10 @@ upper stop, ``-1`` for the lower) reaching the level ``s c`` from below
 root polished to a few ulps) serves both stops: ``flow.motion(X0, delta, j, s)``
 is the evaluator of ``y`` and its derivatives (modal or first-order flow),
 :func:`next_contact` the first impact on either stop, :func:`flight_clearances`
-the interior check of eq. (16) against both stops.
+the interior check of eq. (16) against both stops (the simulator's own, in numpy: the
+shooting of N-p motions runs the compiled search of
+:mod:`impactcont.orbit.shooting_kernel`, and the tests hold one against the other).
+:func:`stop_sign` comes from :mod:`impactcont.orbit.stop_geometry`, below both.
 
 The cost of :func:`next_contact` follows the motion's own time scales, not the
 length of the flight searched: the flight is searched in windows of a few up to

@@ -1,0 +1,222 @@
+"""N-p, two-sided and any-C motions against the compiled N-1 closed form, side by side.
+
+The ratios of issue 20 ("one motion model"), measured in one process with BLAS pinned
+to one thread; every number is the best of interleaved rounds (each round times every
+workload once, so all see the same load):
+
+1. one 2-2 ``multi_impact_orbit`` Newton solve of the paper system (b = 0, omega = 1.75,
+   on the branch born at the N = 1 period doubling) from the motion at omega = 1.749
+   against ``periodic_orbits(osc, 2)`` (both roots with state, G, multipliers, physical),
+   also per impact (the 2-2 solve over twice the closed form);
+2. ``multi_impact_continuation`` of that 2-2 motion over omega in [1.65, 1.85], per point,
+   against a point of the N = 1 branch ``continuation(b = 0, N = 1, omega in [0.5, 6])``;
+3. the two-sided symmetric 1-2 motion of the backlash system (``studies/backlash``,
+   b = b_low = 0.8, omega = 0.8) continued over omega in [0.7, 0.9], per point, against
+   the same N = 1 branch point;
+4. one N = 1 orbit of the paper system with a damping matrix that is not proportional
+   (only the damper between the masses: the first-order path) against the proportional
+   one (``periodic_orbits``, both roots, as in 1);
+5. one 1-2 backlash solve with that damping matrix against the proportional one (the
+   shooting kernel's first-order flow against its modal flow);
+6. the cold compile the shooting kernel adds: in a fresh interpreter with an empty
+   ``NUMBA_CACHE_DIR``, the N = 1 verbs first (compiling the kernel they share), then the
+   first N-p solve and the first N-p continuation (CPU seconds).
+
+Run from the repository root::
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python studies/performance/np_motions.py [--rounds 7]
+
+Prints the table of the README's "N-p motions" section and writes it with every number
+to ``output/np_motions.json`` next to this file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+import impactcont as ic
+from impactcont.multi_branch import multi_impact_continuation
+from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.switching import period_doubling_switch
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+log = logging.getLogger("np_motions")
+K2 = [[1.0, -1.0], [-1.0, 2.0]]
+JOINT_DAMPER = [[0.2, -0.2], [-0.2, 0.2]]
+
+COLD = """
+import json, time
+import numpy as np
+import impactcont as ic
+from impactcont.multi_branch import multi_impact_continuation
+from impactcont.orbit.multi_impact import multi_impact_orbit
+osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                          b=0.0, omega=1.5, eta=0.1)
+c0 = time.process_time()
+ic.continuation(osc, N=1, parameter="omega", bounds=(1.4, 2.0), components="start")
+orbits = ic.periodic_orbits(osc, 1)
+[(o.state, o.G, o.multipliers, o.physical) for o in orbits]
+orbit = next(o for o in orbits if o.physical)
+c1 = time.process_time()
+motion = multi_impact_orbit(osc, 1, 1, orbit)
+c2 = time.process_time()
+multi_impact_continuation(motion, "omega", (1.45, 1.55), max_points=5)
+c3 = time.process_time()
+print(json.dumps({"n1_verbs": c1 - c0, "np_solve": c2 - c1, "np_continuation": c3 - c2}))
+"""
+
+
+def paper(**kw: Any) -> ic.ImpactOscillator:
+    args = {"M": np.eye(2), "K": K2, "F": [1.0, 0.0], "R": 0.6, "b": 0.0, "omega": 1.5,
+            "eta": 0.1}
+    return ic.ImpactOscillator(**{**args, **kw})
+
+
+def backlash(**kw: Any) -> ic.ImpactOscillator:
+    return paper(**{"b": 0.8, "omega": 0.8, "stops": ic.Stops(b_low=0.8), **kw})
+
+
+def closed_form(osc: ic.ImpactOscillator, N: int) -> None:
+    for o in ic.periodic_orbits(osc, N):
+        o.state, o.G, o.multipliers, o.physical  # noqa: B018 - the access is the work
+
+
+def interleaved(work: dict[str, Callable[[], Any]], rounds: int, budget: float = 0.1
+                ) -> dict[str, float]:
+    """Best time per call of each workload over `rounds` interleaved rounds."""
+    numbers = {}
+    for name, fn in work.items():
+        start = time.perf_counter()
+        fn()
+        numbers[name] = max(1, int(budget / max(time.perf_counter() - start, 1e-7)))
+    best = dict.fromkeys(work, np.inf)
+    for _ in range(rounds):
+        for name, fn in work.items():
+            start = time.perf_counter()
+            for _ in range(numbers[name]):
+                fn()
+            best[name] = min(best[name], (time.perf_counter() - start) / numbers[name])
+    return best
+
+
+def cold_compile() -> dict[str, float]:
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        run = subprocess.run([sys.executable, "-c", COLD], env=env, cwd=ROOT,
+                             capture_output=True, text=True, check=True)
+    return json.loads(run.stdout.splitlines()[-1])
+
+
+def main() -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=7)
+    args = parser.parse_args()
+    threadpool_limits(1)
+    # the 2-2 motion of the period-doubled branch, and a guess at a nearby omega
+    n1 = ic.continuation(paper(), N=1, parameter="omega", bounds=(1.4, 2.0), components="start")
+    b22 = period_doubling_switch(n1, bounds=(1.6, 1.9))
+    i = int(np.argmin(np.abs(b22.omega.values - 1.75)))
+    seed = {"delta": float(b22.delta_k.values[i, 0]), "flight_times": b22.flight_time_k.values[i],
+            "states": b22.state_k.values[i]}
+    osc22 = paper(omega=1.75)
+    guess = multi_impact_orbit(paper(omega=1.749), 2, 2, seed)
+    motion22 = multi_impact_orbit(osc22, 2, 2, guess)
+    res = ic.simulate(backlash(), np.zeros(4), 0.0, 200.0)
+    symmetric = multi_impact_orbit(backlash(), 1, 2, res)
+    general_backlash = backlash(eta=None, C=JOINT_DAMPER)
+    res_c = ic.simulate(general_backlash, np.zeros(4), 0.0, 200.0)
+    symmetric_c = multi_impact_orbit(general_backlash, 1, 2, res_c)
+    near_c = multi_impact_orbit(general_backlash.replace(omega=0.801), 1, 2, symmetric_c)
+    near = multi_impact_orbit(backlash(omega=0.801), 1, 2, symmetric)
+    proportional_backlash = backlash()
+    points = {}
+
+    def branch_n1():
+        ds = ic.continuation(paper(b=0.0), N=1, parameter="omega", bounds=(0.5, 6.0),
+                             components="start")
+        points["n1"] = ds.sizes["point"]
+
+    def branch_22():
+        ds = multi_impact_continuation(motion22, "omega", (1.65, 1.85))
+        points["22"] = ds.sizes["point"]
+
+    def branch_12():
+        ds = multi_impact_continuation(symmetric, "omega", (0.7, 0.9))
+        points["12"] = ds.sizes["point"]
+
+    general = paper(b=0.6, omega=1.0, eta=None, C=JOINT_DAMPER)
+    proportional = paper(b=0.6, omega=1.0)
+    work = {
+        "solve_22": lambda: multi_impact_orbit(osc22, 2, 2, guess),
+        "closed_form_N2": lambda: closed_form(osc22, 2),
+        "branch_n1": branch_n1,
+        "branch_22": branch_22,
+        "branch_12": branch_12,
+        "orbit_any_C": lambda: closed_form(general, 1),
+        "orbit_proportional": lambda: closed_form(proportional, 1),
+        "solve_12_any_C": lambda: multi_impact_orbit(general_backlash, 1, 2, near_c),
+        "solve_12_proportional": lambda: multi_impact_orbit(proportional_backlash, 1, 2, near),
+    }
+    t = interleaved(work, args.rounds)
+    per_point = {k: t[f"branch_{k}"] / points[k] for k in ("n1", "22", "12")}
+    cold = cold_compile()
+    res_out = {"times": t, "points": points, "per_point": per_point, "cold_compile_cpu": cold,
+               "loadavg": os.getloadavg()}
+    rows = [
+        ("one 2-2 `multi_impact_orbit` Newton solve from a nearby guess",
+         f"{1e6 * t['solve_22']:.0f} us", f"{1e6 * t['closed_form_N2']:.1f} us "
+         "(`periodic_orbits(osc, 2)`)",
+         t["solve_22"] / t["closed_form_N2"], t["solve_22"] / (2 * t["closed_form_N2"]), 3.0),
+        ("2-2 `multi_impact_continuation`, per point",
+         f"{1e3 * per_point['22']:.2f} ms ({points['22']} points)",
+         f"{1e3 * per_point['n1']:.2f} ms (N = 1 branch, {points['n1']} points)",
+         per_point["22"] / per_point["n1"], None, 3.0),
+        ("two-sided symmetric 1-2 continuation, per point",
+         f"{1e3 * per_point['12']:.2f} ms ({points['12']} points)",
+         f"{1e3 * per_point['n1']:.2f} ms", per_point["12"] / per_point["n1"], None, 3.0),
+        ("one N = 1 orbit with a damping matrix (damper between the masses)",
+         f"{1e6 * t['orbit_any_C']:.0f} us", f"{1e6 * t['orbit_proportional']:.1f} us",
+         t["orbit_any_C"] / t["orbit_proportional"], None, 2.0),
+        ("one 1-2 backlash solve with that damping matrix",
+         f"{1e6 * t['solve_12_any_C']:.0f} us",
+         f"{1e6 * t['solve_12_proportional']:.0f} us (proportional)",
+         t["solve_12_any_C"] / t["solve_12_proportional"], None, 2.0),
+    ]
+    lines = ["| work | measured | compiled reference | ratio | target | met? |",
+             "|---|---|---|---|---|---|"]
+    for name, meas, ref, ratio, per_impact, target in rows:
+        shown = f"{ratio:.1f}x" + (f" ({per_impact:.1f}x per impact)" if per_impact else "")
+        judged = per_impact if per_impact is not None else ratio
+        lines.append(f"| {name} | {meas} | {ref} | {shown} | <= {target:g}x | "
+                     f"{'yes' if judged <= target else '**no**'} |")
+    lines.append(f"| cold compile added by the shooting kernel (empty cache, after the N = 1 "
+                 f"continuation and orbits) | first N-p solve {cold['np_solve']:.1f} s, first "
+                 f"N-p continuation {cold['np_continuation']:.1f} s CPU | N = 1 branch and "
+                 f"orbits (their own compile) {cold['n1_verbs']:.1f} s | | | |")
+    table = "\n".join(lines)
+    res_out["table"] = table
+    out = HERE / "output" / "np_motions.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(res_out, indent=1))
+    print(table)
+    return res_out
+
+
+if __name__ == "__main__":
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    logging.getLogger("impactcont").setLevel(logging.WARNING)
+    main()
