@@ -22,14 +22,15 @@ that pickles works.
 
 from __future__ import annotations
 
+import collections
 import concurrent.futures as cf
 import functools
+import json
 import logging
 import math
 import os
-import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -37,8 +38,9 @@ import numpy as np
 import xarray as xr
 
 from impactcont.dataset.curves import map_dataset
-from impactcont.dataset.io import open_lazy, save
+from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.errors import ParameterError
+from impactcont.map_storage import open_temporary_map, temporary_map_file
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.periodic import _check_N
@@ -48,9 +50,20 @@ __all__ = ["stability_map"]
 
 log = logging.getLogger(__name__)
 
-_OMEGA_BLOCK = 32
-_POINTS_PER_TASK = 1 << 17  # omega x b points per task at most (fewer omega for long b grids)
-_BYTES_PER_MOTION = 70  # delta, velocity, gap, time, rho (8 each), multiplier (16), flags
+_OMEGA_BLOCK = 32  # omega values per task at most
+_MAX_TASK_POINTS = 1 << 17  # omega x b points per task at most (a long b grid is split)
+_MIN_TASK_POINTS = 1 << 10  # ... and at least (fewer: the per-task costs show)
+# Memory of a task in flight per omega x b point: its working arrays (measured 145-148 B,
+# both roots, with or without the spectral radius) and its result (101 B) while it is
+# copied into the map or sent back from a worker process.
+_TASK_BYTES = 256
+# The same for a map written to disk: the chunks of its block encoded for the file
+# (booleans as int8, complex as two floats) and compressed as well.
+_DISK_TASK_BYTES = 512
+# What writing to disk takes whatever the blocks (the NetCDF and HDF5 libraries: measured
+# 15-25 MB, 35 MB on their first use in a process).
+_DISK_FIXED_BYTES = 32_000_000
+_TASK_SHARE = 0.25  # the tasks in flight of a map in memory: at most this share of it
 _DTYPES = {"physical": bool, "stable": bool, "critical_multiplier": complex}
 _ROOT_FIELDS = ("delta", "impact_velocity", "gap_min", "spectral_radius", "critical_multiplier",
                 "physical", "stable")
@@ -107,7 +120,7 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                   b: Sequence[float] | np.ndarray = (), *, executor: Any = None,
                   max_workers: int | None = None, omega_block: int | None = None,
                   spectral_radius: bool = True, out: str | os.PathLike | None = None,
-                  memory_limit: float = 2e9) -> xr.Dataset:
+                  memory_limit: float = 1e9) -> xr.Dataset:
     """Existence, physicality and stability of every N-1 motion on an (N, omega, b) grid.
 
     Parameters
@@ -123,19 +136,28 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     max_workers : int, optional
         Processes of the ``"process"`` pool.
     omega_block : int, optional
-        Omega values per task; default: up to 32, fewer for long b grids (a fixed
-        block: memory per task is bounded and results do not depend on the executor).
+        Omega values per task; default: up to 32, fewer for long b grids. Tasks hold
+        at most 131072 points (a long b grid is split too) and fewer when the memory
+        asks for it; results do not depend on the blocks or the executor.
     spectral_radius : bool
         Store ``spectral_radius`` and ``critical_multiplier`` (LAPACK eigenvalues of
         every G). Without them the map is about 3x faster: ``stable`` comes from the
         Schur-Cohn test of the characteristic polynomial of G either way.
     out : str or os.PathLike, optional
         Write the map to this NetCDF-4 file (chunked by task, compressed) as the
-        blocks finish and return it opened lazily (dask-backed). Without it a map
-        larger than `memory_limit` goes to a temporary file the same way (with a
-        warning naming it). Needs the extra ``impactcont[dask]``.
+        blocks finish and return it opened lazily (dask-backed; ``close()`` closes
+        the file). Without it, a map that does not fit in `memory_limit` goes to a
+        temporary file the same way (with a warning naming it), removed when the
+        returned dataset is closed (``close()`` or the end of a ``with`` block) or at
+        the latest when the interpreter exits. Needs the extra ``impactcont[dask]``.
     memory_limit : float
-        Bytes a map may take in memory (default 2e9; about 70 bytes per motion).
+        Bytes the map may add to the memory of this process and its pool workers at
+        its peak (default 1e9). A map is kept in memory when it fits with the tasks
+        in flight (these take at most a quarter of the result: the peak is at most
+        1.25 times the map); otherwise it goes to a file, with blocks small enough
+        that the tasks in flight and the NetCDF writes stay within `memory_limit`
+        (the NetCDF library and dask take about 20 MB whatever the limit). The
+        interpreters of pool workers are not counted.
 
     Returns
     -------
@@ -149,7 +171,11 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     Raises
     ------
     ParameterError
-        A bad grid, N or executor (named in the message).
+        A bad grid, N, executor, block or memory limit (named in the message), or a
+        map for a file without dask installed.
+    concurrent.futures.process.BrokenProcessPool
+        A worker of the process pool died twice while computing the same task: the
+        message names the task (N and the omega and b ranges).
     """
     if not isinstance(osc, ImpactOscillator):
         raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
@@ -169,66 +195,49 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     if max_workers is not None and (isinstance(max_workers, bool)
                                     or not isinstance(max_workers, int) or max_workers < 1):
         raise ParameterError(f"max_workers must be an integer >= 1 or None; got {max_workers!r}")
-    if omega_block is None:
-        # a fixed block, whatever the executor and the number of omega values: memory per
-        # task bounded (about 70 bytes per motion), results independent of how they ran
-        omega_block = max(1, min(_OMEGA_BLOCK, _POINTS_PER_TASK // bb.size))
-    elif isinstance(omega_block, bool) or not isinstance(omega_block, int) or omega_block < 1:
+    if omega_block is not None and (isinstance(omega_block, bool)
+                                    or not isinstance(omega_block, int) or omega_block < 1):
         raise ParameterError(f"omega_block must be an integer >= 1 or None; got {omega_block!r}")
     if not (isinstance(memory_limit, (int, float)) and not isinstance(memory_limit, bool)
             and memory_limit > 0):
         raise ParameterError(f"memory_limit must be a number of bytes > 0; got {memory_limit!r}")
-    blocks = [slice(i, min(i + omega_block, w.size)) for i in range(0, w.size, omega_block)]
-    tasks = [(k, sl) for k in range(len(Ns)) for sl in blocks]
     shape = (len(Ns), w.size, bb.size)
-    size = _BYTES_PER_MOTION * 2 * math.prod(shape)
-    if out is None and size > memory_limit:
-        out = Path(tempfile.mkstemp(prefix="impactcont-map-", suffix=".nc")[1])
-        log.warning("the map needs about %.3g GB, more than memory_limit=%.3g GB: it is "
-                    "written to %s and returned lazily", size / 1e9, memory_limit / 1e9, out)
-    pool, owned, name = _executor(executor, max_workers)
-    options = {"executor": name, "tasks": len(tasks), "omega_block": omega_block,
-               "spectral_radius": spectral_radius}
-    start = time.perf_counter()
-    path = None
+    result = _result_bytes(shape, spectral_radius)
+    runner = _Runner(osc, Ns, w, bb, spectral_radius, executor, max_workers)
     try:
-        if out is not None:
-            path = _map_to_file(osc, Ns, w, bb, tasks, spectral_radius, pool, name, options,
-                                out)
-            results = []
-        elif pool is None:
-            text = osc.to_json()
-            results = [_map_task(text, Ns[k], w[sl], bb, spectral_radius) for k, sl in tasks]
+        in_memory, points = _plan(result, float(memory_limit), runner.workers, out is None,
+                                  w.size * bb.size)
+        temporary = out is None and not in_memory
+        if not in_memory:
+            _require_dask()
+        if temporary:
+            out = temporary_map_file()
+            log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB with its "
+                        "tasks: it is written to %s (removed when the returned dataset is "
+                        "closed) and returned lazily", result / 1e9, memory_limit / 1e9, out)
+        ob, bs = _block_shape(points, w.size, bb.size, omega_block)
+        tasks = [(k, slice(i, min(i + ob, w.size)), slice(j, min(j + bs, bb.size)))
+                 for k in range(len(Ns)) for i in range(0, w.size, ob)
+                 for j in range(0, bb.size, bs)]
+        options = {"executor": runner.name, "tasks": len(tasks), "omega_block": ob,
+                   "b_block": bs, "spectral_radius": spectral_radius}
+        start = time.perf_counter()
+        if in_memory:
+            ds = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
         else:
-            text = osc.to_json()
-            futures = [pool.submit(_map_task, text, Ns[k], w[sl], bb, spectral_radius)
-                       for k, sl in tasks]
-            results = [f.result() for f in futures]
+            path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
     finally:
-        if owned:
-            pool.shutdown()
-    if path is not None:
-        # opened once the workers are gone: a worker forked while the file was being
-        # written holds its HDF5 lock until it exits
-        return open_lazy(path)
+        runner.close()
     elapsed = time.perf_counter() - start
-    values: dict[str, np.ndarray] = {
-        "amplitude_squared": np.empty(shape[:2]),
-        "exists": np.empty(shape, dtype=bool),
-    }
-    for key in _fields(spectral_radius):
-        values[key] = np.empty((*shape, 2), dtype=_DTYPES.get(key, float))
-    for (k, sl), res in zip(tasks, results, strict=True):
-        values["amplitude_squared"][k, sl] = res["amplitude_squared"]
-        values["exists"][k, sl] = res["exists"]
-        for key in _fields(spectral_radius):
-            values[key][k, sl] = res[key]
-    values["n_physical"] = values["physical"].sum(axis=-1)
-    values["n_stable"] = (values["physical"] & values["stable"]).sum(axis=-1)
-    log.info("map of %d x %d x %d points in %.2f s (%d tasks, executor %s)", *shape, elapsed,
-             len(tasks), name)
-    options["elapsed_seconds"] = round(elapsed, 3)
-    return map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=values, options=options)
+    log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
+             "computed" if in_memory else f"written to {out}", elapsed, len(tasks), runner.name)
+    if in_memory:
+        options["elapsed_seconds"] = round(elapsed, 3)
+        ds.attrs["options"] = json.dumps(options, sort_keys=True)
+        return ds
+    # opened once the workers are gone: a worker forked while the file was being written
+    # holds its HDF5 lock until it exits
+    return open_temporary_map(path) if temporary else open_lazy(path)
 
 
 def _fields(spectral_radius: bool) -> tuple[str, ...]:
@@ -236,54 +245,229 @@ def _fields(spectral_radius: bool) -> tuple[str, ...]:
                  if spectral_radius or k not in ("spectral_radius", "critical_multiplier"))
 
 
-def _map_to_file(osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
-                 tasks: list[tuple[int, slice]], spectral_radius: bool, pool: Any,
-                 name: str, options: dict[str, Any], out: Any) -> Path:
-    """Compute the map block by block into a chunked, compressed NetCDF-4 file.
+def _result_bytes(shape: tuple[int, int, int], spectral_radius: bool) -> int:
+    """Bytes of the map's variables on the grid ``shape`` (N, omega, b)."""
+    per_point = 1 + 2 * 8  # exists, n_physical, n_stable
+    per_point += 2 * sum(np.dtype(_DTYPES.get(k, float)).itemsize
+                         for k in _fields(spectral_radius))
+    return per_point * math.prod(shape) + 8 * (shape[0] * shape[1] + sum(shape) + 2)
 
-    Each task is one dask chunk along ``(N, omega)``; writing the file computes the
-    chunks and stores each as it finishes, so no more than the blocks in flight are
-    held in memory, in the workers or here.
+
+def _task_points(budget: float, in_flight: int, per_point: int, grid: int) -> int:
+    """omega x b points per task: as many as `budget` allows for `in_flight` tasks, within
+    [_MIN_TASK_POINTS, _MAX_TASK_POINTS] (and no more than one N's grid)."""
+    points = int(budget // (in_flight * per_point)) if budget > 0 else 0
+    return max(1, min(grid, _MAX_TASK_POINTS, max(_MIN_TASK_POINTS, points)))
+
+
+def _plan(result: int, memory_limit: float, workers: int, may_stay: bool,
+          grid: int) -> tuple[bool, int]:
+    """Whether the map stays in memory, and the points per task.
+
+    In memory, the peak is the map plus its tasks in flight (``workers + 1``: those
+    running and one result being copied in), which take at most `_TASK_SHARE` of it;
+    the map stays if that fits in `memory_limit`. On disk, the tasks in flight (one
+    per writing thread) and the fixed cost of the NetCDF write fit in it.
     """
+    if may_stay:
+        budget = min(max(_TASK_SHARE * result, (workers + 1) * _MIN_TASK_POINTS * _TASK_BYTES),
+                     memory_limit - result)
+        points = _task_points(budget, workers + 1, _TASK_BYTES, grid)
+        if result + (workers + 1) * points * _TASK_BYTES <= memory_limit:
+            return True, points
+    return False, _task_points(memory_limit - _DISK_FIXED_BYTES, workers, _DISK_TASK_BYTES,
+                               grid)
+
+
+def _block_shape(points: int, nw: int, nb: int, omega_block: int | None) -> tuple[int, int]:
+    """omega and b values per task for tasks of at most `points` points (at least 1 x 1)."""
+    if omega_block is not None:
+        return omega_block, max(1, min(nb, points // omega_block))
+    if nb >= points:
+        return 1, points
+    return max(1, min(_OMEGA_BLOCK, nw, points // nb)), nb
+
+
+def _require_dask() -> None:
     try:
-        import dask
-        import dask.array as da
+        import dask  # noqa: F401
     except ImportError:
         raise ParameterError("a map written to disk (out=..., or larger than memory_limit) "
                              "needs dask: pip install 'impactcont[dask]'") from None
-    text = osc.to_json()
-    nb = bb.size
-    if pool is None:
-        compute = _map_task
-    else:
-        def compute(*args: Any) -> dict[str, np.ndarray]:
-            # runs in a thread of this process (dask's threaded scheduler): the task goes
-            # to the executor, the NetCDF writes stay here
-            return pool.submit(_map_task, *args).result()
-    per_n: dict[str, list[list[Any]]] = {}
-    for k, sl in tasks:
-        part = dask.delayed(compute, pure=True)(text, Ns[k], w[sl], bb, spectral_radius)
-        width = sl.stop - sl.start
-        pieces = {"amplitude_squared": ((width,), float), "exists": ((width, nb), bool)}
-        for key in _fields(spectral_radius):
-            pieces[key] = ((width, nb, 2), _DTYPES.get(key, float))
-        for key, (shape, dtype) in pieces.items():
-            rows = per_n.setdefault(key, [[] for _ in Ns])
-            rows[k].append(da.from_delayed(part[key], shape=shape, dtype=dtype))
-    values = {key: da.stack([da.concatenate(row, axis=0) for row in rows])
-              for key, rows in per_n.items()}
-    values["n_physical"] = values["physical"].sum(axis=-1)
-    values["n_stable"] = (values["physical"] & values["stable"]).sum(axis=-1)
-    ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=values, options=options)
-    block = tasks[0][1].stop - tasks[0][1].start
+
+
+class _Runner:
+    """The tasks of one map: in this process or on an executor, as they finish.
+
+    A process pool that breaks (one of its worker processes died: killed, out of
+    memory) is replaced by a new pool of the same size and the tasks that did not
+    finish are retried once there, one at a time: a task that breaks the pool again
+    is the one that kills its worker, and ends the map with
+    :class:`~concurrent.futures.process.BrokenProcessPool` naming it.
+    """
+
+    def __init__(self, osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
+                 spectral_radius: bool, executor: Any, max_workers: int | None) -> None:
+        self.pool, owned, self.name = _executor(executor, max_workers)
+        self._owned = [self.pool] if owned else []
+        self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
+        self._spectral_radius = spectral_radius
+        self._renewals = 0
+        if owned and isinstance(self.pool, cf.ProcessPoolExecutor):
+            # the workers forked now, before the map's arrays exist: a worker forked later
+            # would keep the pages it shares with this process as this process fills them
+            # (copy on write), up to a second copy of the map
+            self.pool.submit(int).result()
+
+    @property
+    def workers(self) -> int:
+        """Tasks running at once."""
+        if self.pool is None:
+            return 1
+        return int(getattr(self.pool, "_max_workers", None) or os.cpu_count() or 1)
+
+    def _args(self, task: tuple[int, slice, slice]) -> tuple[Any, ...]:
+        k, osl, bsl = task
+        return self._text, self._Ns[k], self._w[osl], self._bb[bsl], self._spectral_radius
+
+    def describe(self, task: tuple[int, slice, slice]) -> str:
+        """`task` in words: its N and its omega and b ranges."""
+        k, osl, bsl = task
+        w, bb = self._w[osl], self._bb[bsl]
+        return (f"N = {self._Ns[k]}, omega[{osl.start}:{osl.stop}] in [{w[0]:.6g}, "
+                f"{w[-1]:.6g}], b[{bsl.start}:{bsl.stop}] in [{bb[0]:.6g}, {bb[-1]:.6g}]")
+
+    def _renew(self, pool: Any, exc: BaseException, task: tuple[int, slice, slice],
+               most: int) -> None:
+        """Replace the broken `pool` (if it is still the one in use) by a new one; `most`
+        pools in all (a pool that breaks before running anything must not loop)."""
+        if pool is not self.pool:
+            return
+        if not isinstance(pool, cf.ProcessPoolExecutor) or self._renewals >= most:
+            raise type(exc)(f"stability_map: the executor broke ({exc}) while computing the "
+                            f"task {self.describe(task)}") from exc
+        self._renewals += 1
+        log.warning("a worker process of the pool died (%s: %s): the unfinished tasks are "
+                    "retried once in a new pool", type(exc).__name__, exc)
+        self.pool = cf.ProcessPoolExecutor(max_workers=getattr(pool, "_max_workers", None),
+                                           mp_context=getattr(pool, "_mp_context", None))
+        self._owned.append(self.pool)
+
+    def results(self, tasks: list[tuple[int, slice, slice]]
+                ) -> Iterator[tuple[tuple[int, slice, slice], dict[str, np.ndarray]]]:
+        """Every task with its result, as they finish (``2 x workers`` submitted at once)."""
+        if self.pool is None:
+            for task in tasks:
+                yield task, _map_task(*self._args(task))
+            return
+        waiting = collections.deque(tasks)
+        retry: collections.deque[tuple[int, slice, slice]] = collections.deque()
+        running: dict[cf.Future, tuple[tuple[int, slice, slice], Any, bool]] = {}
+        try:
+            while waiting or retry or running:
+                # after a break, the unfinished tasks one by one: a task that breaks the
+                # new pool is then the one that kills its worker
+                while (retry and not running) or (not retry and waiting
+                                                  and len(running) < 2 * self.workers):
+                    alone = bool(retry)
+                    task = retry.popleft() if alone else waiting.popleft()
+                    pool = self.pool
+                    try:
+                        running[pool.submit(_map_task, *self._args(task))] = task, pool, alone
+                    except cf.BrokenExecutor as exc:  # broken by a task that ran before
+                        (retry if alone else waiting).appendleft(task)
+                        self._renew(pool, exc, task, len(tasks))
+                done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                for future in done:
+                    task, pool, alone = running.pop(future)
+                    try:
+                        res = future.result()
+                    except cf.BrokenExecutor as exc:
+                        if alone:
+                            raise type(exc)(
+                                f"stability_map: a worker process died computing the task "
+                                f"{self.describe(task)}, and again when the task was retried "
+                                f"in a new process pool ({exc})") from exc
+                        self._renew(pool, exc, task, len(tasks))
+                        retry.append(task)
+                        continue
+                    yield task, res
+                    del res
+        finally:
+            for future in running:
+                future.cancel()
+
+    def close(self) -> None:
+        """Shut down the pools created here."""
+        for pool in self._owned:
+            pool.shutdown(cancel_futures=True)
+        self._owned = []
+
+
+def _layout(shape: tuple[int, int, int], fields: tuple[str, ...]
+            ) -> dict[str, tuple[tuple[int, ...], Any]]:
+    """Shape and dtype of every variable of a map on the grid ``shape`` (N, omega, b)."""
+    return {"amplitude_squared": (shape[:2], float), "exists": (shape, bool),
+            "n_physical": (shape, np.int64), "n_stable": (shape, np.int64),
+            **{k: ((*shape, 2), _DTYPES.get(k, float)) for k in fields}}
+
+
+def _blocks(runner: _Runner, tasks: list[tuple[int, slice, slice]], fields: tuple[str, ...]
+            ) -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+    """Each task's block of the map as it finishes: its region of (N, omega, b) and values."""
+    for (k, osl, bsl), res in runner.results(tasks):
+        values = {key: res[key] for key in ("exists", *fields)}
+        values["n_physical"] = res["physical"].sum(axis=-1)
+        values["n_stable"] = (res["physical"] & res["stable"]).sum(axis=-1)
+        if bsl.start == 0:  # the same for every block of b
+            values["amplitude_squared"] = res["amplitude_squared"]
+        del res
+        yield {"N": k, "omega": osl, "b": bsl}, values
+
+
+def _map_in_memory(runner: _Runner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
+                   bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
+                   options: dict[str, Any]) -> xr.Dataset:
+    """The map in memory: its arrays allocated once, each task's block copied in as it
+    finishes (no list of results, no assembled copies)."""
+    layout = _layout((len(Ns), w.size, bb.size), _fields(options["spectral_radius"]))
+    # placeholders of no memory: map_dataset makes the arrays, which the blocks fill
+    placeholders = {k: np.broadcast_to(np.zeros((), dtype), shape)
+                    for k, (shape, dtype) in layout.items()}
+    ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=placeholders,
+                     options=options)
+    arrays = {k: _writable(ds.variables[k]) for k in layout}
+    for region, values in _blocks(runner, tasks, _fields(options["spectral_radius"])):
+        for key, block in values.items():
+            arrays[key][tuple(region[d] for d in ds[key].dims if d in region)] = block
+    return ds
+
+
+def _writable(var: xr.Variable) -> np.ndarray:
+    """The numpy array of `var`, which the map fills in place (a new one if it cannot be)."""
+    data = var.data
+    if not (isinstance(data, np.ndarray) and data.flags.writeable and data.flags.owndata):
+        data = np.empty(var.shape, var.dtype)
+        var.data = data
+    return data
+
+
+def _map_to_file(runner: _Runner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
+                 bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
+                 options: dict[str, Any], out: Any, block: tuple[int, int]) -> Path:
+    """The map written to a chunked, compressed NetCDF-4 file, each task's block (one chunk
+    of every variable) as it finishes; nothing else of the map is held in memory."""
+    import dask.array as da
+
+    layout = _layout((len(Ns), w.size, bb.size), _fields(options["spectral_radius"]))
+    # placeholders of the right shape, never computed: the blocks are the values
+    placeholders = {k: da.empty(shape, dtype=dtype, chunks=-1)
+                    for k, (shape, dtype) in layout.items()}
+    ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=placeholders,
+                     options=options)
+    chunk = {"N": 1, "omega": block[0], "b": block[1], "root": 2}
     encoding = {key: {"zlib": True, "complevel": 1,
-                      "chunksizes": (1, min(block, w.size), *ds[key].shape[2:])}
+                      "chunksizes": tuple(min(chunk[d], ds.sizes[d]) for d in ds[key].dims)}
                 for key in ds.data_vars}
-    settings = ({"scheduler": "synchronous"} if pool is None else
-                {"scheduler": "threads", "num_workers": max(1, getattr(pool, "_max_workers", 2))})
-    start = time.perf_counter()
-    with dask.config.set(**settings):
-        path = save(ds, out, validate=False, encoding=encoding)
-    log.info("map of %d x %d x %d points written to %s in %.2f s (%d tasks, executor %s)",
-             len(Ns), w.size, nb, path, time.perf_counter() - start, len(tasks), name)
-    return path
+    return save_blocks(ds, out, _blocks(runner, tasks, _fields(options["spectral_radius"])),
+                       encoding=encoding)

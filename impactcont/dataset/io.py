@@ -53,7 +53,7 @@ import socket
 import sys
 import threading
 import warnings
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -68,6 +68,7 @@ from impactcont.dataset.attributes import (
     dataset_kind,
     dataset_tag,
 )
+from impactcont.dataset.chunk_cache import chunk_cache
 from impactcont.dataset.curves import normalise_dataset, validate_dataset
 from impactcont.dataset.schema import (
     _LABEL_DTYPE,
@@ -79,7 +80,7 @@ from impactcont.dataset.schema import (
 
 __all__ = ["ENGINE", "SECTION_ATTRIBUTE", "atomic_output", "check_output_directory",
            "check_output_file", "load", "open_lazy", "remove_stale_temporaries", "save",
-           "temporary_path"]
+           "save_blocks", "temporary_path"]
 
 logger = logging.getLogger(__name__)
 
@@ -876,6 +877,110 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     return target
 
 
+def _write_blocks(ds: xr.Dataset, tmp: Path,
+                  blocks: Iterable[tuple[Mapping[str, Any], Mapping[str, Any]]],
+                  encoding: dict[str, Any], target: Path) -> None:
+    """:func:`save_blocks` into ``tmp``: the layout, then the blocks; Ctrl-C between blocks."""
+    import netCDF4
+
+    with _sigint_held(target):
+        # the layout, attributes and coordinates; the data variables, dask arrays, are only
+        # handed to a writer that is dropped (never computed)
+        store = xr.backends.NetCDF4DataStore.open(tmp, mode="w", format="NETCDF4")
+        try:
+            _for_disk(ds).dump_to_store(store, encoding=encoding)
+        finally:
+            store.close()
+        with chunk_cache():
+            nc = netCDF4.Dataset(tmp, "a")
+    try:
+        nc.set_auto_maskandscale(False)
+        for name in ds.data_vars:
+            for key in ([f"{name}_real", f"{name}_imag"] if ds[name].dtype.kind == "c"
+                        else [name]):
+                bad = {"scale_factor", "add_offset", "calendar"} & set(nc[key].ncattrs())
+                if bad or nc[key].dtype.kind not in "iuf":
+                    raise ValueError(f"variable {key!r} is stored as {nc[key].dtype} with "
+                                     f"attributes {sorted(bad)}: not a plain cast of its "
+                                     f"values, which save_blocks writes")
+        for region, values in blocks:
+            with _sigint_held(target):
+                for name, block in values.items():
+                    where = tuple(region[d] for d in ds[name].dims if d in region)
+                    block = np.asarray(block)
+                    if block.dtype.kind == "c":
+                        nc[f"{name}_real"][where] = block.real
+                        nc[f"{name}_imag"][where] = block.imag
+                    else:
+                        nc[name][where] = block.astype(nc[name].dtype, copy=False)
+    finally:
+        with _sigint_held(target):
+            nc.close()
+
+
+def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
+                blocks: Iterable[tuple[Mapping[str, Any], Mapping[str, Any]]], *,
+                encoding: Mapping[str, Any] | None = None) -> Path:
+    """Write a dataset larger than memory block by block, atomically (as :func:`save`).
+
+    The file is laid out as :func:`save` would write `ds` (same attributes, CF form,
+    complex variables as two parts, `encoding`), then each block is written as it
+    comes; nothing but the block in hand is held in memory, and the NetCDF library
+    caches no chunk (:mod:`impactcont.dataset.chunk_cache`). Ctrl-C is held while a
+    block is written and acts between blocks: the target is untouched and the
+    temporary file removed. Needs dask.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset, its data variables dask arrays of the right shape, dtype and
+        attributes, never computed (their values are those of `blocks`).
+    path : str or os.PathLike
+        Target file; its directory must exist.
+    blocks : iterable of (region, values)
+        ``region`` maps every dimension of the values to an int or a slice;
+        ``values`` maps data variables to their arrays over that region (dims in
+        the variable's order, those indexed by an int dropped). Every value of
+        every data variable should be in one block (those in none read as the
+        fill value).
+    encoding : mapping, optional
+        Per-variable NetCDF encoding (chunk sizes, compression), as in :func:`save`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`save`; a data variable that is not a dask array, or whose encoding
+        on disk is not a plain cast of its values (scale factors, ...).
+    """
+    target = _path(path)
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
+    eager = [k for k, v in ds.data_vars.items() if not hasattr(v.data, "dask")]
+    if eager:
+        raise ValueError(f"the data variables of ds must be dask arrays (placeholders, never "
+                         f"computed); got other arrays in {eager}")
+    data = _tree(ds, False)
+    check_output_file(target)
+    remove_stale_temporaries(target.parent)
+    tmp = temporary_path(target)
+    try:
+        _write_blocks(data, tmp, blocks, _disk_encoding(encoding or {}, data), target)
+        os.replace(tmp, target)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise _named(exc, f"cannot write {str(path)!r}: {exc}") from exc
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    logger.info("saved Dataset to %s block by block", target)
+    return target
+
+
 # ---------------------------------------------------------------------------------------------
 # Reading
 # ---------------------------------------------------------------------------------------------
@@ -890,13 +995,24 @@ def _normalise(ds: xr.Dataset) -> xr.Dataset:
     return normalise_dataset(ds)
 
 
-def open_lazy(path: str | os.PathLike) -> xr.Dataset:
+def open_lazy(path: str | os.PathLike, *,
+              on_close: Callable[[], None] | None = None) -> xr.Dataset:
     """Open a single-dataset file lazily (dask-backed; the file stays open).
 
     For results larger than memory, such as big :func:`impactcont.stability_map`
-    maps: values are read chunk by chunk when computed. Needs dask
-    (``pip install 'impactcont[dask]'``). The attributes are checked as by
-    :func:`load`; the schema is not (it would not change what is read).
+    maps: values are read chunk by chunk when computed, without the NetCDF
+    library's chunk cache (:mod:`impactcont.dataset.chunk_cache`: each chunk is
+    read once). Needs dask (``pip install 'impactcont[dask]'``). The attributes
+    are checked as by :func:`load`; the schema is not (it would not change what
+    is read). ``close()`` on the dataset (or the end of a ``with`` block) closes
+    the file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    on_close : callable, optional
+        Called without arguments once the dataset's file is closed (e.g. to remove
+        a temporary file).
 
     Raises
     ------
@@ -908,12 +1024,25 @@ def open_lazy(path: str | os.PathLike) -> xr.Dataset:
     target = _path(path)
     if not target.is_file():
         raise FileNotFoundError(f"path {str(path)!r} does not exist or is not a file")
-    ds = xr.open_dataset(target, engine=ENGINE, auto_complex=True, chunks={})
+    with chunk_cache():
+        raw = xr.open_dataset(target, engine=ENGINE, auto_complex=True, chunks={})
     try:
-        return _loaded(ds, None, False, f"file {str(path)!r}")
+        # a copy: the dataset returned closes `raw` (the variables joined by _normalise
+        # are new datasets, which would not close the file)
+        ds = _loaded(raw.copy(), None, False, f"file {str(path)!r}")
     except BaseException:
-        ds.close()
+        raw.close()
         raise
+
+    def close() -> None:
+        try:
+            raw.close()
+        finally:
+            if on_close is not None:
+                on_close()
+
+    ds.set_close(close)
+    return ds
 
 
 def _read_tree(path: Path) -> xr.DataTree:
