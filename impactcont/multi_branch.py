@@ -298,7 +298,8 @@ def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | No
         through the symmetry-breaking pitchfork, which is detected as ``BP``) or as a
         general N-p motion. ``None``: symmetric when the motion is symmetric
         (:func:`~impactcont.orbit.symmetry.symmetry_defect` at most 1e-8) and
-        `parameter` keeps the system symmetric (not ``b`` or ``R``).
+        `parameter` keeps the system symmetric (not ``b`` or ``R``, unless the stops are
+        mirrored: ``Stops(mirror=True)``).
 
     Raises
     ------
@@ -308,7 +309,7 @@ def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | No
     """
     pattern = orbit.pattern or None
     if symmetric is None:
-        symmetric = (parameter not in SYMMETRY_BREAKING
+        symmetric = ((parameter not in SYMMETRY_BREAKING or orbit.oscillator.stops.mirror)
                      and admits_symmetric_motions(orbit.oscillator, orbit.N, orbit.p,
                                                   orbit.pattern or "")
                      and symmetry_defect(orbit) <= _SYMMETRY_TOL)
@@ -370,8 +371,9 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         symmetry-breaking pitchforks, which are located and labelled ``BP``
         (:func:`impactcont.switching.pitchfork_switch` follows the asymmetric pair born
         there). ``None`` (default): when the start is symmetric and `parameter` keeps
-        the system symmetric (not ``b`` or ``R``). ``False``: as any N-p motion (its
-        shooting Jacobian is singular at a pitchfork; no BP).
+        the system symmetric (not ``b`` or ``R``, unless ``Stops(mirror=True)``).
+        ``False``: as any N-p motion (its shooting Jacobian is singular at a pitchfork;
+        no BP).
 
     Returns
     -------

@@ -18,7 +18,8 @@ import impactcont as ic
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
 from impactcont.multi_branch import multi_impact_continuation
-from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns
 from impactcont.orbit.symmetry import (
     admits_symmetric_motions,
     half_map,
@@ -303,3 +304,66 @@ def test_bad_switch_requests(branch, symmetric):
     n1 = ic.continuation(osc, 1, "omega", (1.9, 2.1))
     with pytest.raises(ParameterError, match="never symmetric"):
         pitchfork_switch(n1, 0)
+
+
+# ------------------------------------------------------------------------------------------
+# Mirrored stops: a symmetric backlash that stays symmetric in b and R
+# ------------------------------------------------------------------------------------------
+def mirrored(omega: float, b: float = 0.5) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=b, omega=omega,
+                               eta=0.1, stops=Stops(mirror=True))
+
+
+def test_mirrored_stops_follow_b_and_r():
+    osc = mirrored(1.6)
+    assert osc.stops.two_sided and (osc.stops.b_low, osc.stops.R_low) == (0.5, 0.6)
+    moved = osc.replace(b=0.4, R=0.7)
+    assert (moved.stops.b_low, moved.stops.R_low) == (0.4, 0.7) and symmetric_system(moved)
+    assert (osc.stops.b_low, osc.stops.R_low) == (0.5, 0.6)  # the original is unchanged
+    back = ic.ImpactOscillator.from_dict(json_round_trip(moved.to_dict()))
+    assert back.stops.mirror and (back.stops.b_low, back.stops.R_low) == (0.4, 0.7)
+    # the same motions as the equal stops given by value
+    o = settled(osc)
+    same = multi_impact_orbit(backlash(1.6), 1, 2, o)
+    assert np.max(np.abs(o.states - same.states)) < 1e-12
+    with pytest.raises(ParameterError, match="give no b_low"):
+        Stops(mirror=True, b_low=0.5)
+    with pytest.raises(ParameterError, match="need b > 0"):
+        mirrored(1.6, b=-0.1)
+    with pytest.raises(ParameterError, match="need b > 0"):
+        osc.replace(b=0.0)
+    with pytest.raises(TypeError, match="mirror must be"):
+        Stops(mirror="yes")
+
+
+def json_round_trip(data):
+    import json
+    return json.loads(json.dumps(data))
+
+
+@pytest.mark.parametrize("parameter", ["b", "R"])
+def test_mirrored_stops_derivatives_are_exact(parameter):
+    o = settled(mirrored(1.6))
+    problem = SymmetricBranchProblem(o.oscillator, 1, 2, parameter, o.pattern)
+    lam = float(getattr(o.oscillator, parameter))
+    v = problem.half_unknowns(o.unknowns)
+    h = 1e-6
+    for prob, x in ((problem, v), (problem.full, o.unknowns)):  # half and full systems
+        d_fd = (prob.residual(x, lam + h) - prob.residual(x, lam - h)) / (2 * h)
+        assert np.max(np.abs(prob.dparam(x, lam) - d_fd)) < 1e-8
+    assert problem.full.parameter_limits() == (0.0, math.inf) if parameter == "b" else True
+
+
+def test_bp_in_the_clearance_meets_the_bp_in_omega(branch):
+    """A symmetric branch in b (both stops move) at the omega of a BP found in omega has
+    its BP at that branch's b = 0.5: the two one-parameter searches meet."""
+    omega_bp = float(branch["special_omega"].values[_bps(branch)[1]])
+    bp = ic.special_orbit(branch, "BP", 1)  # solved on the half system (regular there)
+    # the same motion in the same system, with the stops given as mirrored
+    start = orbit_from_unknowns(Flow(mirrored(omega_bp)), 1, 2, bp.unknowns, pattern=bp.pattern)
+    assert symmetry_defect(start) < 1e-12
+    ds = multi_impact_continuation(start, "b", (0.4, 0.6), both_directions=True, ds_max=0.01)
+    assert '"symmetric": true' in ds.attrs["options"]
+    bps = _bps(ds)
+    assert len(bps) == 1
+    assert abs(float(ds["special_b"].values[bps[0]]) - 0.5) < 1e-9

@@ -369,8 +369,9 @@ class ImpactOscillator:
             new = copy.copy(self)
             for name, value in changes.items():
                 object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
-            if "b" in changes:  # stops: the lower stop must stay below the upper one
-                new.stops.check(new.n, new.b, new.R)
+            if "b" in changes or "R" in changes:
+                # the lower stop must stay below the upper one; mirrored stops follow b, R
+                object.__setattr__(new, "stops", new.stops.check(new.n, new.b, new.R))
             return new
         # the damping model: a matrix C given here replaces eta / alpha / beta, and eta /
         # alpha / beta given here replace a matrix C; otherwise the damping matrix follows

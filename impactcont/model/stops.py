@@ -11,13 +11,16 @@ The paper (eq. 3-4) has one rigid stop, above mass 1: ``x1 = b`` with restitutio
   (the impact matrix of eq. 4 with ``-R_low`` on the velocity of mass j).
 
 A two-sided clearance (backlash) of total width ``b + b_low`` is ``b_low`` given;
-the symmetric case is ``b_low = b``. An impact is labelled ``"U"`` (upper stop)
+the symmetric case is ``b_low = b``, and ``mirror=True`` keeps it symmetric when ``b``
+or ``R`` change (the lower stop at ``-b`` with restitution ``R``: continuing such a
+system in ``b`` widens the backlash on both sides). An impact is labelled ``"U"`` (upper stop)
 or ``"L"`` (lower stop); an N-p motion's impact sequence is a string of these
 (:data:`UPPER`, :data:`LOWER`).
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from collections.abc import Mapping
@@ -60,16 +63,22 @@ class Stops:
         Restitution of the lower stop, ``0 <= R_low <= 1``; only with ``b_low``.
         Defaults to the oscillator's ``R`` when ``b_low`` is given without it
         (resolved by :class:`~impactcont.model.oscillator.ImpactOscillator`).
+    mirror : bool
+        A lower stop that mirrors the upper one: ``x_j = -b`` with restitution ``R``,
+        moving with ``b`` and ``R`` (a symmetric backlash of width ``2 b``: continued in
+        ``b`` or ``R``, the system stays symmetric). ``b_low`` and ``R_low`` are not
+        given: the oscillator sets them to ``b`` and ``R``.
 
     Examples
     --------
     >>> Stops(mass=2, b_low=0.5, R_low=0.8)
-    Stops(mass=2, b_low=0.5, R_low=0.8)
+    Stops(mass=2, b_low=0.5, R_low=0.8, mirror=False)
     """
 
     mass: int = 1
     b_low: float | None = None
     R_low: float | None = None
+    mirror: bool = False
 
     def __post_init__(self) -> None:
         mass = self.mass
@@ -77,6 +86,16 @@ class Stops:
             raise ParameterError(f"stops.mass must be an integer >= 1 (the impacting mass, "
                                  f"1-based as the paper's mass 1); got {mass!r}")
         object.__setattr__(self, "mass", int(mass))
+        if not isinstance(self.mirror, (bool, np.bool_)):
+            raise TypeError(f"stops.mirror must be True or False; got {self.mirror!r}")
+        object.__setattr__(self, "mirror", bool(self.mirror))
+        if self.mirror:
+            if self.b_low is not None or self.R_low is not None:
+                raise ParameterError(
+                    f"stops.mirror=True: the lower stop mirrors the upper one (x_j = -b, "
+                    f"restitution R, moving with them); give no b_low, R_low (got "
+                    f"b_low={self.b_low!r}, R_low={self.R_low!r})")
+            return
         if self.b_low is None:
             if self.R_low is not None:
                 raise ParameterError(f"stops.R_low={self.R_low!r} needs a lower stop: give "
@@ -97,12 +116,12 @@ class Stops:
     @property
     def two_sided(self) -> bool:
         """A lower stop is present."""
-        return self.b_low is not None
+        return self.b_low is not None or self.mirror
 
     @property
     def paper(self) -> bool:
         """The paper's geometry: one stop, on mass 1."""
-        return self.mass == 1 and self.b_low is None
+        return self.mass == 1 and not self.two_sided
 
     def check(self, n: int, b: float, R: float) -> Stops:
         """Validated against an oscillator of ``n`` masses with upper stop ``b``, ``R``.
@@ -117,6 +136,14 @@ class Stops:
         if self.mass > n:
             raise ParameterError(f"stops.mass must be in 1..{n} (the oscillator has n={n} "
                                  f"masses); got {self.mass!r}")
+        if self.mirror:
+            if not b > 0:
+                raise ParameterError(f"mirrored stops x_{self.mass} = +-b need b > 0 (the "
+                                     f"clearance 2 b between them); got b={b!r}")
+            resolved = copy.copy(self)  # b_low, R_low follow b, R (not given by the user)
+            object.__setattr__(resolved, "b_low", float(b))
+            object.__setattr__(resolved, "R_low", float(R))
+            return resolved
         if self.b_low is None:
             return self
         if not -self.b_low < b:
@@ -148,7 +175,9 @@ class Stops:
     def to_dict(self) -> dict[str, Any]:
         """Plain-Python description (JSON-able)."""
         out: dict[str, Any] = {"mass": self.mass}
-        if self.b_low is not None:
+        if self.mirror:
+            out["mirror"] = True
+        elif self.b_low is not None:
             out["b_low"] = self.b_low
             out["R_low"] = self.R_low
         return out
@@ -157,12 +186,12 @@ class Stops:
     def from_dict(cls, data: Mapping[str, Any]) -> Stops:
         """Inverse of :meth:`to_dict`; unknown keys are refused."""
         if not isinstance(data, Mapping):
-            raise TypeError(f"stops must be a Stops or a mapping with keys mass, b_low, R_low; "
-                            f"got {type(data).__name__}")
-        unknown = set(data) - {"mass", "b_low", "R_low"}
+            raise TypeError(f"stops must be a Stops or a mapping with keys mass, b_low, R_low, "
+                            f"mirror; got {type(data).__name__}")
+        unknown = set(data) - {"mass", "b_low", "R_low", "mirror"}
         if unknown:
             raise ParameterError(f"stops: unknown key(s) {sorted(unknown)}; allowed: mass, "
-                                 "b_low, R_low")
+                                 "b_low, R_low, mirror")
         return cls(**data)
 
 

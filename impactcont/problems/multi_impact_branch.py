@@ -9,9 +9,11 @@ parameters, where it only steers the predictor and Newton.
 
 With two stops (``osc.stops``) the impact sequence ``pattern`` says which stop
 each impact hits; ``b`` and ``R`` are those of the upper stop, so their
-derivatives act on the ``"U"`` impacts only. The upper stop must stay above the
-lower one: in ``b`` the problem is defined for ``b > -b_low`` only
-(:meth:`MultiImpactBranchProblem.parameter_limits`), where the clearance
+derivatives act on the ``"U"`` impacts only, unless the stops are mirrored
+(``Stops(mirror=True)``: the lower stop at ``-b`` with ``R`` moves with them). The
+upper stop must stay above the lower one: in ``b`` the problem is defined for
+``b > -b_low`` only (``b > 0`` for mirrored stops;
+:meth:`MultiImpactBranchProblem.parameter_limits`), where the clearance
 ``b + b_low`` between the stops is open.
 """
 
@@ -86,6 +88,8 @@ class MultiImpactBranchProblem:
             ``(lower, upper)``, either possibly infinite.
         """
         stops = self.osc.stops
+        if self.parameter == "b" and stops.mirror:
+            return 0.0, math.inf
         if self.parameter == "b" and stops.two_sided:
             return -float(stops.b_low), math.inf
         return -math.inf, math.inf
@@ -96,6 +100,9 @@ class MultiImpactBranchProblem:
         if not math.isfinite(lower):
             return ""
         stops = self.osc.stops
+        if stops.mirror:
+            return (f"at b = 0 the mirrored stops x_{stops.mass} = +-b meet (stops={stops!r}): "
+                    "the clearance 2 b between them closes")
         return (f"at b = -b_low = {lower!r} the upper stop x_{stops.mass} = b meets the lower "
                 f"stop x_{stops.mass} = -b_low (stops={stops!r}): the clearance b + b_low "
                 "between them closes")
@@ -160,18 +167,19 @@ class MultiImpactBranchProblem:
         n, p, m = osc.n, self.p, 2 * osc.n
         j, _, diagonals = impact_geometry(osc, self.pattern)
         upper = np.array([s == UPPER for s in self.pattern])
+        # d(stop position)/db per impact: 1 on the upper stop x_j = b, and -1 on the lower
+        # stop x_j = -b of mirrored stops (which move with b; a lower stop at -b_low does not)
+        moves = np.where(upper, 1.0, -1.0 if osc.stops.mirror else 0.0)
         out = np.zeros(p * m)
         if self.parameter == "b":
-            for k in range(p):  # x_j = b at every start and arrival on the upper stop
+            for k in range(p):  # x_j = c_k at every start and arrival on a moving stop
                 nxt = (k + 1) % p
-                if upper[k]:
-                    out[k * m:(k + 1) * m] = diagonals[nxt] * sh.transitions[k][:, j]
-                if upper[nxt]:
-                    out[k * m + j] -= 1.0
+                out[k * m:(k + 1) * m] = moves[k] * diagonals[nxt] * sh.transitions[k][:, j]
+                out[k * m + j] -= moves[nxt]
             return out
-        if self.parameter == "R":
-            arriving_up = np.roll(upper, -1)  # flight k ends at impact k+1
-            out[n + j::m] = np.where(arriving_up, -sh.arrivals[:, n + j], 0.0)
+        if self.parameter == "R":  # the restitution of the upper stop (and of a mirror)
+            arriving = np.roll(moves != 0.0, -1)  # flight k ends at impact k+1
+            out[n + j::m] = np.where(arriving, -sh.arrivals[:, n + j], 0.0)
             return out
         if self.parameter == "omega":
             period = 2.0 * math.pi * self.N / osc.omega

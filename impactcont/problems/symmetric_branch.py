@@ -14,7 +14,8 @@ are the whole system: ``F(v, lam) = r_{0..h-1}(E v + e, lam)``, with the exact
 at the symmetry-breaking pitchfork (the null vector of the full Jacobian there is
 antisymmetric), so the branch is followed through it and the pitchfork located on
 it like any other special point. Parameters that keep the system symmetric:
-``omega``, ``F0`` and the damping (``b`` or ``R`` move only the upper stop).
+``omega``, ``F0``, the damping, and ``b`` and ``R`` of mirrored stops
+(``Stops(mirror=True)``; otherwise they move only the upper stop).
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 __all__ = ["SymmetricBranchProblem"]
 
-#: Parameters that move only the upper stop: they break the symmetry.
+#: Parameters that move only the upper stop (unless the stops are mirrored): they break
+#: the symmetry.
 SYMMETRY_BREAKING = ("b", "R")
 
 
@@ -44,7 +46,8 @@ class SymmetricBranchProblem:
     N, p : int
         ``N`` odd, ``p`` even.
     parameter : str
-        Continued parameter; not ``b`` or ``R`` (they move one stop only).
+        Continued parameter; ``b`` or ``R`` only with mirrored stops (else they move one
+        stop only).
     pattern : str
         The stops of the p impacts; its second half mirrors the first.
 
@@ -63,10 +66,12 @@ class SymmetricBranchProblem:
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str) -> None:
         self.full = MultiImpactBranchProblem(osc, N, p, parameter, pattern=pattern)
-        if parameter in SYMMETRY_BREAKING:
+        if parameter in SYMMETRY_BREAKING and not osc.stops.mirror:
             raise ParameterError(f"parameter {parameter!r} moves only the upper stop and breaks "
                                  "the symmetry: continue symmetric motions in another "
-                                 "parameter, or the motion as an N-p motion (symmetric=False)")
+                                 "parameter, mirror the stops (Stops(mirror=True): the lower "
+                                 "stop moves with b and R), or follow the motion as an N-p "
+                                 "motion (symmetric=False)")
         if not admits_symmetric_motions(osc, self.full.N, self.full.p, self.full.pattern):
             raise ParameterError(
                 f"the N={N}, p={p} motions with pattern {self.full.pattern!r} of {osc!r} cannot "
