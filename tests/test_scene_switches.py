@@ -180,3 +180,13 @@ def test_a_switch_at_a_pitchfork_of_a_multi_impact_branch(tmp_path: Path) -> Non
     assert mirror.attrs["born_at"] == "BP" and int(mirror.attrs["switch_side"]) == -1
     direct = ic.switching.pitchfork_branch(symmetric, 0, -1, max_points=20)
     np.testing.assert_allclose(mirror["state_k"].values, direct["state_k"].values, atol=1e-10)
+
+
+def test_mirror_stop_key(tmp_path: Path) -> None:
+    text = BACKLASH.replace("b_low = 0.5\nR_low = 0.6\n", "mirror_stop = true\n")
+    osc = load_scene(write(tmp_path, text)).osc
+    assert osc.stops.mirror and (osc.stops.b_low, osc.stops.R_low) == (0.5, 0.6)
+    with pytest.raises(SceneError) as info:
+        load_scene(write(tmp_path, text.replace("mirror_stop = true", "mirror_stop = true\n"
+                                                "b_low = 0.4")))
+    assert info.value.key == "oscillator.mirror_stop"

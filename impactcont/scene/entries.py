@@ -94,7 +94,8 @@ PARAMETER_RANGES: dict[str, Real] = {"omega": _OMEGA, "b": Real(), "R": _RESTITU
 
 #: The scene key of a :class:`~impactcont.model.stops.Stops` error, by how its message starts.
 _STOPS_ERROR_KEYS = (("stops.mass", "stop_mass"), ("stops.b_low", "b_low"),
-                     ("stops.R_low", "R_low"), ("the lower stop", "b_low"))
+                     ("stops.R_low", "R_low"), ("the lower stop", "b_low"),
+                     ("stops.mirror", "mirror_stop"), ("mirrored stops", "b"))
 
 
 def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
@@ -151,7 +152,8 @@ def library_check(where: Where, check: Callable[..., Any], *args: Any,
 
 
 #: What the closed-form sections take: the paper's single stop on mass 1.
-_CLOSED_FORM_ALLOWED = ("an [oscillator] without stop_mass, b_low and R_low (the paper's single "
+_CLOSED_FORM_ALLOWED = ("an [oscillator] without stop_mass, b_low, R_low and mirror_stop (the "
+                        "paper's single "
                         "stop on mass 1); [[simulations]] with start = \"state\" and "
                         "[[multi_impact]] take other stops")
 
@@ -219,7 +221,8 @@ class OscillatorSpec:
     (``C = alpha M + beta K``) or a damping matrix ``C``; none means undamped.
     ``F_imag`` (the imaginary part of F) gives the masses their own forcing phases.
     ``stop_mass``, ``b_low`` and ``R_low`` place the stops on another mass and add a
-    lower stop (:class:`~impactcont.model.stops.Stops`).
+    lower stop (:class:`~impactcont.model.stops.Stops`); ``mirror_stop`` adds the lower
+    stop as the mirror of the upper one.
     """
 
     M: tuple | None = declare(RealArray(2), "mass matrix (symmetric positive definite)")
@@ -239,6 +242,8 @@ class OscillatorSpec:
                                     "default 1)")
     b_low: float | None = declare(Real(), "a lower stop at x_j = -b_low (j = stop_mass)")
     R_low: float | None = declare(_RESTITUTION, "restitution of the lower stop (default R)")
+    mirror_stop: bool = declare(Boolean(), "a lower stop at x_j = -b with restitution R that "
+                                "moves with b and R (a symmetric backlash)", False)
 
     @classmethod
     def parse(cls, raw: Any, where: Where) -> OscillatorSpec:
@@ -272,9 +277,10 @@ class OscillatorSpec:
                                      f"{list(self.F_imag)!r}")
             F = F + 1j * np.array(self.F_imag, dtype=float)
         params = {"F": F, "R": self.R, "b": self.b, "omega": self.omega, **damping}
-        if self.stop_mass is not None or self.b_low is not None or self.R_low is not None:
+        if (self.stop_mass is not None or self.b_low is not None or self.R_low is not None
+                or self.mirror_stop):
             params["stops"] = Stops(mass=1 if self.stop_mass is None else self.stop_mass,
-                                    b_low=self.b_low, R_low=self.R_low)
+                                    b_low=self.b_low, R_low=self.R_low, mirror=self.mirror_stop)
         K = (chain_stiffness(list(self.springs)) if self.springs is not None
              else np.array(self.K, dtype=float))
         if self.M is not None:
