@@ -6,8 +6,8 @@ eq. (15) at every grid point with the batched closed form of
 of eq. 13 once per ``omega``) and returns an :class:`xarray.Dataset` with dims
 ``(N, omega, b, root)`` (schema: :mod:`impactcont.dataset.curves`).
 
-The work is split into tasks of ``(N, block of omega values)`` run through a
-standard :class:`concurrent.futures.Executor`:
+The work is split into tasks of ``(N, block of omega, block of b)`` (at most
+131072 points) run through a standard :class:`concurrent.futures.Executor`:
 
 - ``executor=None`` or ``"serial"``: in this process;
 - ``"process"``: a :class:`~concurrent.futures.ProcessPoolExecutor` created and
@@ -17,7 +17,14 @@ standard :class:`concurrent.futures.Executor`:
   itself is accepted too (optional extra ``impactcont[dask]``).
 
 Tasks receive the oscillator as JSON and return plain arrays, so any executor
-that pickles works.
+that pickles works. A process pool that breaks (a worker killed) is replaced and
+the unfinished tasks are retried once, one at a time.
+
+Memory: the map's arrays are made once and each task's block is copied in (or
+written to the file) as it finishes, with ``2 x workers`` tasks submitted at once;
+`memory_limit` bounds the peak, and a map that does not fit in it goes to a
+temporary file, returned lazily and removed when closed
+(:mod:`impactcont.map_storage`). ``docs/two_parameter.md`` has the measurements.
 """
 
 from __future__ import annotations

@@ -147,14 +147,15 @@ _LEFT_OPEN = textwrap.dedent("""
 
 def test_temporary_maps_go_at_exit_and_those_of_killed_processes_with_the_next_map(paper):
     pytest.importorskip("dask")
-    left = subprocess.run([sys.executable, "-c", _LEFT_OPEN, "exit"], capture_output=True,
-                          text=True, timeout=120)
-    assert left.returncode == 0, left.stderr
-    assert not Path(left.stdout.strip()).exists()  # never closed: removed at exit
-    killed = subprocess.run([sys.executable, "-c", _LEFT_OPEN, "killed"],
-                            capture_output=True, text=True, timeout=120)
-    assert killed.returncode == -signal.SIGKILL
-    path = Path(killed.stdout.strip())
+    left, killed = (subprocess.Popen([sys.executable, "-c", _LEFT_OPEN, how], text=True,
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                    for how in ("exit", "killed"))  # both at once
+    out, err = left.communicate(timeout=120)
+    assert left.returncode == 0, err
+    assert not Path(out.strip()).exists()  # never closed: removed at exit
+    out, err = killed.communicate(timeout=120)
+    assert killed.returncode == -signal.SIGKILL, err
+    path = Path(out.strip())
     assert path.is_file()  # nothing runs in a killed process...
     stability_map(paper, [1], OMEGA, GAP, memory_limit=1e3).close()
     assert not path.exists()  # ...the next temporary map removes its file
