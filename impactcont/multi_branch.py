@@ -231,14 +231,22 @@ def _within_limits(problem: BranchProblem, options: ContinuationOptions
 def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSample],
                       specials: Sequence[MultiImpactSpecialPoint], options: Mapping[str, Any],
                       *, title: str | None = None,
-                      extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
-    """The N-p branch dataset of :mod:`impactcont.dataset.multi` from samples and special points."""
+                      extra_attrs: Mapping[str, Any] | None = None,
+                      extra_columns: Sequence[str] = ()) -> xr.Dataset:
+    """The N-p branch dataset of :mod:`impactcont.dataset.multi` from samples and special points.
+
+    `extra_columns` are further oscillator parameters stored per point (the first
+    parameter of a two-parameter curve).
+    """
     orbits = [s.orbit for s in samples]
     parameter = problem.parameter
     x = np.array([np.append(s.u, s.lam) for s in samples])
     steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1)) if len(samples) > 1 else []
     columns = {**orbit_columns(orbits, parameter, [s.lam for s in samples]),
                "arclength": np.concatenate([[0.0], np.cumsum(steps)])}
+    for name in extra_columns:
+        columns.setdefault(name, np.array([float(getattr(o.oscillator, name) or 0.0)
+                                           for o in orbits]))
     impact_columns = {
         "delta_k": np.array([o.phases for o in orbits]),
         "impact_velocity_k": np.array([o.impact_velocities for o in orbits]),

@@ -702,6 +702,10 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
                          f"got {point!r}")
     parameter = ds.attrs.get("parameter", "omega")
     names = dict.fromkeys(["omega", "b", parameter if isinstance(parameter, str) else "?"])
+    # a two-parameter curve stores its other parameter too (attribute "parameters")
+    names.update(dict.fromkeys(
+        name for name in str(ds.attrs.get("parameters", "")).split(",")
+        if name in PARAMETERS and name in ds.variables and ds[name].dims == ("point",)))
     missing = [k for k in names if k not in ds.variables or ds[k].dims != ("point",)]
     if missing:
         raise ValueError(f"the dataset has no column (on 'point') of {missing}: the values of "

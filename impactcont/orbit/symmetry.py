@@ -31,6 +31,7 @@ system is regular at the pitchfork, where the full one is singular
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -233,9 +234,9 @@ class HalfUnknowns:
         """Column of ``tau_{h-1}`` among the full unknowns (it depends on omega)."""
         return self.h
 
-    @property
+    @functools.cached_property
     def embedding(self) -> np.ndarray:
-        """``E = du/dv``, shape ``(2np, 2nh)``."""
+        """``E = du/dv``, shape ``(2np, 2nh)`` (computed once; do not modify it)."""
         n, p, h = self.n, self.p, self.h
         q = 2 * n - 1
         E = np.zeros((2 * n * p, self.size))

@@ -1,0 +1,204 @@
+"""Two-parameter curves of the special points of N-p motions (two stops, any C, BP).
+
+``multi_impact_curve(branch, kind, ...)`` = take a located special point of an N-p
+branch (:func:`impactcont.multi_impact_continuation`, a switched branch, ...) ->
+follow it in the branch's parameter ``p1`` and a second parameter ``p2`` with the
+augmented system of :mod:`impactcont.problems.multi_impact_curve` and the
+pseudo-arclength core -> a dataset of the motion at every curve point.
+
+The dataset is an N-p branch dataset (:mod:`impactcont.dataset.multi`) continued in
+``p2`` that also holds the column of ``p1`` (so it loads, plots and re-solves as a
+branch does), with the attributes ``curve_kind`` (the label followed), ``parameters =
+"p1,p2"`` and ``born_at_value`` (``p1`` at the start). Codim-2 points on these curves
+are not located (the N-1 curves of :func:`impactcont.curve` locate them).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
+from impactcont.core.corrector import solve_on_hyperplane
+from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.dataset.multi import impacts_of, pattern_of
+from impactcont.dataset.schema import special_variable
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.multi_branch import MultiImpactSample, branch_to_dataset
+from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
+from impactcont.switching import special_orbit
+from impactcont.threads import blas_limited
+from impactcont.vocabulary import LABELS
+
+__all__ = ["multi_impact_curve"]
+
+log = logging.getLogger(__name__)
+
+_DEFAULTS = {"newton_tol": 1e-10, "ds": 0.01}
+_START_TOL = 1e-11
+
+
+def _check_box(bounds: Any, parameters: tuple[str, str]) -> dict[str, tuple[float, float]]:
+    if not isinstance(bounds, Mapping) or set(bounds) != set(parameters):
+        raise ParameterError(f"bounds must be a mapping with the keys {list(parameters)} "
+                             f"(the box of the curve); got {bounds!r}")
+    box = {}
+    for name in parameters:
+        try:
+            lo, hi = (float(v) for v in bounds[name])
+        except (TypeError, ValueError):
+            raise ParameterError(f"bounds[{name!r}] must be a pair (lo, hi) of numbers; got "
+                                 f"{bounds[name]!r}") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ParameterError(f"bounds[{name!r}] must be finite with lo < hi; got "
+                                 f"{bounds[name]!r}")
+        box[name] = (lo, hi)
+    return box
+
+
+class _Box:
+    """Ends a direction of the curve where ``p1`` leaves its bounds (``p1`` is an unknown:
+    the core sees only the bounds of ``p2``); keeps the motion of every accepted point."""
+
+    def __init__(self, problem: MultiImpactCurveProblem, p1_bounds: tuple[float, float]
+                 ) -> None:
+        self.problem, self.p1_bounds = problem, p1_bounds
+        self.orbits: list[Any] = []
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        p1 = float(current.u[-1])
+        lo, hi = self.p1_bounds
+        if not lo <= p1 <= hi:
+            return Stop(ContinuationStatus.BOUNDS_REACHED,
+                        f"{self.problem.parameters[0]} = {p1:.10g} left its bounds "
+                        f"({lo:g}, {hi:g})", keep=False)
+        self.orbits.append(self.problem.orbit(current.u, current.lam))
+        return None
+
+
+@blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS, "both_directions": True})
+def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
+                       parameter: str = "b",
+                       bounds: Mapping[str, Sequence[float]] | None = None,
+                       options: Any = None, ds: float | None = None,
+                       ds_min: float | None = None, ds_max: float | None = None,
+                       newton_tol: float | None = None, max_points: int | None = None,
+                       both_directions: bool | None = None, **more: Any) -> xr.Dataset:
+    """Follow a special point of an N-p branch in two parameters.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        An N-p branch (:func:`impactcont.multi_impact_continuation`, a switched branch)
+        continued in ``p1``, with a special point of `kind`.
+    kind : str
+        ``SN, PD, NS, GR, ZV`` or ``BP`` (BP: a branch of symmetric motions).
+    which : int
+        Which point of that kind on the branch (branch order).
+    parameter : str
+        ``p2``, the second parameter (``b`` or ``R`` of a symmetric motion need mirrored
+        stops, ``Stops(mirror=True)``).
+    bounds : mapping
+        The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
+    options, ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
+        Continuation options (the drivers' defaults for those left out; Newton tolerance
+        1e-10, first step 0.01, both directions).
+
+    Returns
+    -------
+    xarray.Dataset
+        The curve as an N-p branch dataset in ``p2`` with the column of ``p1`` and the
+        attributes ``curve_kind``, ``parameters`` (``"p1,p2"``), ``born_at_value``.
+
+    Raises
+    ------
+    ParameterError
+        A bad argument (named in the message), no such special point.
+    NoPeriodicMotionError
+        The start could not be put on the curve.
+    """
+    if not isinstance(branch, xr.Dataset):
+        raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
+    if kind not in LABELS:
+        raise ParameterError(f"kind must be one of {LABELS}; got {kind!r}")
+    p1 = str(branch.attrs["parameter"])
+    parameters = (p1, parameter)
+    if bounds is None:
+        raise ParameterError(f"bounds must be given: the box {{{p1!r}: (lo, hi), "
+                             f"{parameter!r}: (lo, hi)}} of the curve")
+    box = _check_box(bounds, parameters)
+    symmetric = bool(json.loads(branch.attrs.get("options", "{}")).get("symmetric", False))
+    orbit = special_orbit(branch, kind, which)
+    k = [i for i, lab in enumerate(branch[special_variable("label")].values.tolist())
+         if lab == kind][which]
+    if branch[special_variable("status")].values[k] != "located":
+        log.warning("the %s point %d of the branch is only bracketed: the curve starts from "
+                    "the motion re-solved there", kind, which)
+    osc = orbit.oscillator
+    N, p, pattern = int(branch.attrs["N"]), impacts_of(branch), pattern_of(branch)
+    problem = MultiImpactCurveProblem(osc, N, p, pattern, kind, parameters, symmetric=symmetric)
+    lam0 = float(getattr(osc, parameter) or 0.0)
+    if not box[parameter][0] <= lam0 <= box[parameter][1]:
+        raise ParameterError(f"bounds[{parameter!r}] = {box[parameter]} must contain the "
+                             f"start {parameter}={lam0!r}")
+    start_p1 = float(getattr(osc, p1) or 0.0)
+    base = problem.branch_problem(lam0)
+    u0 = base.half_unknowns(orbit.unknowns) if symmetric else orbit.unknowns
+    x0 = np.append(u0, start_p1)
+    # on the curve at fixed p2 (the special point is located to its precision only)
+    target = np.append(x0, lam0)
+    normal = np.zeros(target.size)
+    normal[-1] = 1.0
+    found = solve_on_hyperplane(problem, target, normal, tol=_START_TOL, max_iter=30)
+    if not found.converged:
+        raise NoPeriodicMotionError(f"the {kind} point at {p1}={start_p1!r} could not be put "
+                                    f"on the augmented system (last step {found.step:.3g})")
+    x0 = found.x[:-1]
+    opts = driver_options(options, box[parameter], defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
+                          ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
+                          both_directions=both_directions, **more)
+    watches: dict[int, _Box] = {}
+
+    def watch(direction: int) -> _Box:
+        watches[direction] = _Box(problem, box[p1])
+        return watches[direction]
+
+    result = follow(problem, x0, lam0, opts, stop=watch)
+    orbits = watches[opts.direction].orbits
+    if -opts.direction in watches:
+        orbits = watches[-opts.direction].orbits[:0:-1] + orbits
+    if not orbits:
+        raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
+    samples = [MultiImpactSample(u=x, lam=float(lam), tangent=t, orbit=o)
+               for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
+                                       strict=True)]
+    log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
+             parameter, len(samples), result.message)
+    record = {"kind": kind, "parameters": [p1, parameter], "start": start_p1,
+              "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
+              "status": [st.name for st in result.statuses], "message": result.message,
+              **{key: value for key, value in dataclasses.asdict(opts).items()
+                 if key != "bounds"}}
+    info = {"curve_kind": kind, "parameters": f"{p1},{parameter}",
+            "born_at_value": start_p1}
+    view = _CurveView(problem, parameter, osc)
+    return branch_to_dataset(view, samples, [], record,
+                             title=f"{kind} curve of periodic {N}-{p} impacting motions in "
+                             f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,))
+
+
+class _CurveView:
+    """What :func:`~impactcont.multi_branch.branch_to_dataset` reads of a problem."""
+
+    def __init__(self, problem: MultiImpactCurveProblem, parameter: str, osc: Any) -> None:
+        self.parameter, self.osc = parameter, osc
+        self.N, self.p, self.pattern = problem.N, problem.p, problem.pattern

@@ -1,0 +1,195 @@
+"""Codim-1 curves of N-p motions: any branch problem augmented by one test function.
+
+A special point of a branch of N-p motions (:mod:`impactcont.multi_branch`) is a zero
+of a scalar test function ``g`` of the motion. Followed in two parameters ``(p1, p2)``
+it is the curve
+
+    F(u, p1; p2) = 0,      g(u, p1; p2) = 0
+
+in the unknowns ``x = [u, p1]`` with ``p2`` the continuation parameter of the core:
+the branch problem (:class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`,
+or :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem` for a
+symmetric motion) augmented by one equation. One wrapper serves every kind:
+
+========  ========================================================  ===================
+kind      g                                                         vanishes where
+========  ========================================================  ===================
+``SN``    ``sigma(dF/du)``                                          the branch folds
+``PD``    ``sigma(G + I)``                                          G has -1
+``BP``    ``sigma(H + I)``, ``H`` the half-map (symmetric motions)  H has -1
+``NS``    ``prod_{i<j} (mu_i mu_j - 1)``, pole-free                 a pair crosses |mu|=1
+``GR``    ``min_k gap_min_k``                                        a stop is grazed
+``ZV``    ``min_k impact_velocity_k``                                an impact at rest
+========  ========================================================  ===================
+
+``sigma(A)`` is the signed smallest singular value ``sign(det A) s_min(A)``: it
+changes sign with ``det A`` and, unlike the determinant, keeps the size of the
+distance to the singular matrices (a regular zero where ``s_min`` is simple, as a
+minimally augmented system's bordered test). ``dF/du`` and ``dF/dp1``, ``dF/dp2`` are
+the branch problems' own (exact for omega, b, R); the row of ``g`` is a forward
+difference (relative step 1.5e-8, about the square root of eps), the one finite
+difference of the curve: it steers Newton only, the points solve ``g = 0`` exactly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impactcont.detection.special_points import event_function
+from impactcont.errors import ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.symmetry import half_map
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.problems.symmetric_branch import SymmetricBranchProblem
+from impactcont.vocabulary import LABELS, check_parameter
+
+__all__ = ["MultiImpactCurveProblem", "signed_smallest_singular_value"]
+
+_FD_STEP = 1.5e-8  # about sqrt(eps): forward differences
+_CACHE_SIZE = 32
+
+BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
+
+
+def signed_smallest_singular_value(matrix: np.ndarray) -> float:
+    """``sign(det A) s_min(A)``: a smooth test for the singularity of ``A`` (NaN if not finite)."""
+    if not np.all(np.isfinite(matrix)):
+        return math.nan
+    s = np.linalg.svd(matrix, compute_uv=False)
+    sign, _ = np.linalg.slogdet(matrix)
+    return float(sign * s[-1])
+
+
+class MultiImpactCurveProblem:
+    """A codim-1 curve of N-p motions in ``(p1, p2)``: ``x = [u, p1]``, ``lam = p2``.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        The oscillator (other parameters fixed at its values).
+    N, p : int
+        The motion's forcing periods and impacts.
+    pattern : str
+        The stop of each impact.
+    kind : str
+        One of ``SN, PD, NS, GR, ZV, BP`` (see the module notes).
+    parameters : (str, str)
+        ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter.
+    symmetric : bool
+        Follow symmetric motions by their half (needed for BP).
+
+    Raises
+    ------
+    ParameterError
+        An unknown kind, equal or unknown parameters, BP without ``symmetric``.
+    """
+
+    def __init__(self, osc: ImpactOscillator, N: int, p: int, pattern: str, kind: str,
+                 parameters: tuple[str, str], *, symmetric: bool) -> None:
+        if kind not in LABELS:
+            raise ParameterError(f"kind must be one of {LABELS}; got {kind!r}")
+        if kind == "BP" and not symmetric:
+            raise ParameterError("kind='BP' is a curve of symmetric motions: the branch must "
+                                 "be a branch of symmetric motions (symmetric=True)")
+        p1, p2 = parameters
+        if p1 == p2:
+            raise ParameterError(f"parameters must be two different parameters; got {p1!r} "
+                                 "twice")
+        for name in (p1, p2):
+            check_parameter(osc, name)
+        self.osc, self.N, self.p, self.pattern = osc, N, p, pattern
+        self.kind, self.parameters, self.symmetric = kind, (p1, p2), symmetric
+        self._problems: dict[tuple[str, float, float], BranchProblem] = {}
+        self._gradient: tuple[tuple[bytes, float], tuple[np.ndarray, float]] | None = None
+        self.size = self._base(float(getattr(osc, p2) or 0.0), p1).size + 1
+
+    # -- the branch problems ----------------------------------------------------------------------
+    def _base(self, lam: float, parameter: str, p1: float | None = None) -> BranchProblem:
+        """The branch problem in `parameter` of the oscillator with ``p2 = lam`` (and p1)."""
+        p1_name, p2_name = self.parameters
+        key = (parameter, float(lam), math.nan if p1 is None else float(p1))
+        problem = self._problems.get(key)
+        if problem is None:
+            if len(self._problems) > _CACHE_SIZE:
+                self._problems.clear()
+            values = {p2_name: float(lam)}
+            if p1 is not None:
+                values[p1_name] = float(p1)
+            osc = self.osc.replace(**values)
+            cls = SymmetricBranchProblem if self.symmetric else MultiImpactBranchProblem
+            problem = self._problems[key] = cls(osc, self.N, self.p, parameter,
+                                                pattern=self.pattern)
+        return problem
+
+    def branch_problem(self, lam: float) -> BranchProblem:
+        """The branch problem in ``p1`` at ``p2 = lam`` (its unknowns are ``x[:-1]``)."""
+        return self._base(lam, self.parameters[0])
+
+    def orbit(self, x: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
+        """The N-p motion at the curve point ``(x, lam)``."""
+        x = np.asarray(x, dtype=float)
+        return self.branch_problem(lam).orbit(x[:-1], float(x[-1]), checks=checks)
+
+    # -- the test function ----------------------------------------------------------------------
+    def test(self, x: np.ndarray, lam: float) -> float:
+        """``g(u, p1; p2)`` of the curve's kind (module notes)."""
+        x = np.asarray(x, dtype=float)
+        u, p1 = x[:-1], float(x[-1])
+        kind = self.kind
+        if kind == "SN":
+            return signed_smallest_singular_value(self.branch_problem(lam).jacobian(u, p1))
+        orbit = self.orbit(x, lam, checks=kind == "GR")
+        return self.test_of(orbit)
+
+    def test_of(self, orbit: MultiImpactOrbit) -> float:
+        """The test function at a motion (all kinds but SN, which needs the problem)."""
+        kind = self.kind
+        if kind == "PD":
+            return signed_smallest_singular_value(orbit.G + np.eye(orbit.G.shape[0]))
+        if kind == "BP":
+            H = half_map(orbit)
+            return signed_smallest_singular_value(H + np.eye(H.shape[0]))
+        return float(event_function(kind, orbit))
+
+    def _test_gradient(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
+        """``dg/dx`` and ``dg/dlam`` by forward differences (the last one kept: the core
+        asks for the Jacobian and ``dparam`` at the same point)."""
+        key = (x.tobytes(), float(lam))
+        if self._gradient is not None and self._gradient[0] == key:
+            return self._gradient[1]
+        g0 = self.test(x, lam)
+        grad = np.empty(x.size)
+        for i in range(x.size):
+            h = _FD_STEP * max(1.0, abs(x[i]))
+            e = np.zeros(x.size)
+            e[i] = h
+            grad[i] = (self.test(x + e, lam) - g0) / h
+        h = _FD_STEP * max(1.0, abs(lam))
+        value = grad, (self.test(x, lam + h) - g0) / h
+        self._gradient = (key, value)
+        return value
+
+    # -- the Problem protocol ------------------------------------------------------------------
+    def residual(self, x: np.ndarray, lam: float) -> np.ndarray:
+        """``[F(u, p1; p2), g(u, p1; p2)]``, shape (m + 1,)."""
+        x = np.asarray(x, dtype=float)
+        base = self.branch_problem(lam)
+        return np.append(base.residual(x[:-1], float(x[-1])), self.test(x, lam))
+
+    def jacobian(self, x: np.ndarray, lam: float) -> np.ndarray:
+        """``d[F, g]/d[u, p1]``: the branch problem's exact blocks and the row of ``g``."""
+        x = np.asarray(x, dtype=float)
+        u, p1 = x[:-1], float(x[-1])
+        base = self.branch_problem(lam)
+        top = np.column_stack([base.jacobian(u, p1), base.dparam(u, p1)])
+        return np.vstack([top, self._test_gradient(x, lam)[0]])
+
+    def dparam(self, x: np.ndarray, lam: float) -> np.ndarray:
+        """``d[F, g]/dp2``: the branch problem in ``p2`` (exact for omega, b, R) and ``dg/dp2``."""
+        x = np.asarray(x, dtype=float)
+        u, p1 = x[:-1], float(x[-1])
+        other = self._base(lam, self.parameters[1], p1)
+        return np.append(other.dparam(u, float(lam)), self._test_gradient(x, lam)[1])
