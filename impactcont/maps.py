@@ -212,7 +212,7 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     result = _result_bytes(shape, spectral_radius)
     runner = _Runner(osc, Ns, w, bb, spectral_radius, executor, max_workers)
     try:
-        in_memory, points = _plan(result, float(memory_limit), runner.workers, out is None,
+        in_memory, points = _plan(result, float(memory_limit), runner.in_flight, out is None,
                                   w.size * bb.size)
         temporary = out is None and not in_memory
         if not in_memory:
@@ -267,22 +267,22 @@ def _task_points(budget: float, in_flight: int, per_point: int, grid: int) -> in
     return max(1, min(grid, _MAX_TASK_POINTS, max(_MIN_TASK_POINTS, points)))
 
 
-def _plan(result: int, memory_limit: float, workers: int, may_stay: bool,
+def _plan(result: int, memory_limit: float, in_flight: int, may_stay: bool,
           grid: int) -> tuple[bool, int]:
     """Whether the map stays in memory, and the points per task.
 
-    In memory, the peak is the map plus its tasks in flight (``workers + 1``: those
-    running and one result being copied in), which take at most `_TASK_SHARE` of it;
-    the map stays if that fits in `memory_limit`. On disk, the tasks in flight (one
-    per writing thread) and the fixed cost of the NetCDF write fit in it.
+    `in_flight` tasks are in memory at once (running in this process or a worker, or
+    their results waiting to be copied in or written). In memory, the peak is the map
+    plus these, which take at most `_TASK_SHARE` of it: the map stays if that fits in
+    `memory_limit`. On disk, these and the NetCDF library's own memory fit in it.
     """
     if may_stay:
-        budget = min(max(_TASK_SHARE * result, (workers + 1) * _MIN_TASK_POINTS * _TASK_BYTES),
+        budget = min(max(_TASK_SHARE * result, in_flight * _MIN_TASK_POINTS * _TASK_BYTES),
                      memory_limit - result)
-        points = _task_points(budget, workers + 1, _TASK_BYTES, grid)
-        if result + (workers + 1) * points * _TASK_BYTES <= memory_limit:
+        points = _task_points(budget, in_flight, _TASK_BYTES, grid)
+        if result + in_flight * points * _TASK_BYTES <= memory_limit:
             return True, points
-    return False, _task_points(memory_limit - _DISK_FIXED_BYTES, workers, _DISK_TASK_BYTES,
+    return False, _task_points(memory_limit - _DISK_FIXED_BYTES, in_flight, _DISK_TASK_BYTES,
                                grid)
 
 
@@ -320,7 +320,7 @@ class _Runner:
         self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
         self._spectral_radius = spectral_radius
         self._renewals = 0
-        if owned and isinstance(self.pool, cf.ProcessPoolExecutor):
+        if isinstance(self.pool, cf.ProcessPoolExecutor):
             # the workers forked now, before the map's arrays exist: a worker forked later
             # would keep the pages it shares with this process as this process fills them
             # (copy on write), up to a second copy of the map
@@ -332,6 +332,12 @@ class _Runner:
         if self.pool is None:
             return 1
         return int(getattr(self.pool, "_max_workers", None) or os.cpu_count() or 1)
+
+    @property
+    def in_flight(self) -> int:
+        """Tasks in memory at once at most: submitted (``2 x workers``), and the result
+        being copied into the map or written."""
+        return 1 if self.pool is None else 2 * self.workers + 1
 
     def _args(self, task: tuple[int, slice, slice]) -> tuple[Any, ...]:
         k, osl, bsl = task
