@@ -1,0 +1,133 @@
+"""Two-parameter curves of N-p motions (``multi_impact_curve``).
+
+Witnesses: the closed-form N-1 curves (the same motion followed by shooting as a 1-1
+motion must give the same PD curve), the one-parameter pitchforks located in omega on
+branches at other clearances (the BP curve must pass through them), and the numpy
+contact search of the simulator's module (the GR curve grazes).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.errors import ParameterError
+from impactcont.model.stops import Stops
+from impactcont.multi_curves import multi_impact_curve
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import initial_unknowns, orbit_from_unknowns
+from impactcont.orbit.symmetry import half_map
+from impactcont.simulate.contact import flight_clearances
+
+K2 = [[1.0, -1.0], [-1.0, 2.0]]
+
+
+def paper(**kw) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, eta=0.1, **kw)
+
+
+def mirrored(omega: float, b: float) -> ic.ImpactOscillator:
+    return paper(b=b, omega=omega, stops=Stops(mirror=True))
+
+
+def symmetric_branch(omega: float, b: float, bounds) -> ic.xr.Dataset:
+    res = ic.simulate(mirrored(omega, b), np.zeros(4), 0.0, 150.0)
+    o = ic.multi_impact_orbit(mirrored(omega, b), 1, 2, res)
+    return ic.multi_impact_continuation(o, "omega", bounds, both_directions=True, ds_max=0.02)
+
+
+def _bp_omegas(ds) -> list[float]:
+    return [float(w) for lab, w in zip(ds["special_label"].values, ds["special_omega"].values,
+                                       strict=True) if lab == "BP"]
+
+
+def test_pd_curve_by_shooting_is_the_closed_form_curve():
+    osc = paper(b=0.0, omega=1.75)
+    box = {"omega": (1.0, 3.0), "b": (-0.2, 0.3)}
+    closed = ic.curve(None, None, "PD", start=ic.continuation(osc, 1, "omega", (1.6, 1.9),
+                                                              detect=("PD",)), bounds=box)
+    physical = next(q for q in ic.periodic_orbits(osc, 1) if q.physical)
+    start = ic.multi_impact_orbit(osc, 1, 1, physical)
+    branch = ic.multi_impact_continuation(start, "omega", (1.6, 1.9), detect=("PD",),
+                                          both_directions=True)
+    cv = multi_impact_curve(branch, "PD", 0, parameter="b", bounds=box)
+    assert cv.attrs["curve_kind"] == "PD" and cv.attrs["parameters"] == "omega,b"
+    assert cv.sizes["point"] > 10
+    assert cv["b"].values.min() == pytest.approx(-0.2) and cv["b"].values.max() == \
+        pytest.approx(0.3)
+    for omega, b in zip(cv["omega"].values, cv["b"].values, strict=True):
+        crossings = ic.curve_crossings(closed, "b", float(b))
+        assert min(abs(c["omega"] - omega) for c in crossings) < 1e-9
+    assert np.all(np.min(np.abs(cv["multipliers"].values + 1.0), axis=1) < 1e-8)
+
+
+@pytest.fixture(scope="module")
+def bp_curve():
+    branch = symmetric_branch(1.6, 0.5, (0.9, 1.7))
+    assert len(_bp_omegas(branch)) == 2
+    return multi_impact_curve(branch, "BP", 1, parameter="b",
+                              bounds={"omega": (0.5, 2.5), "b": (0.3, 0.8)}, ds_max=0.02)
+
+
+def test_bp_curve_passes_through_the_pitchforks_at_other_clearances(bp_curve):
+    assert bp_curve.attrs["curve_kind"] == "BP"
+    b, omega = bp_curve["b"].values, bp_curve["omega"].values
+    ends = {round(float(b[i]), 12): float(omega[i]) for i in (0, -1)}
+    assert set(ends) == {0.3, 0.8}  # the curve ends on both edges of the box in b
+    # the pitchforks of the symmetric branches at b = 0.3 and 0.8, found in omega
+    forks_03 = _bp_omegas(symmetric_branch(2.0, 0.3, (1.5, 2.1)))
+    forks_08 = _bp_omegas(symmetric_branch(0.9, 0.8, (0.85, 1.25)))
+    assert min(abs(w - ends[0.3]) for w in forks_03) < 1e-9
+    assert min(abs(w - ends[0.8]) for w in forks_08) < 1e-9
+
+
+def test_every_bp_curve_point_has_a_half_map_multiplier_minus_one(bp_curve):
+    for i in range(0, bp_curve.sizes["point"], 5):
+        osc = ic.dataset.oscillator_from_dataset(bp_curve, i)
+        assert osc.stops.mirror and osc.stops.b_low == osc.b
+        # the stored motion as it is (Newton on the full system is singular at a BP)
+        u = initial_unknowns({"delta": float(bp_curve["delta_k"].values[i, 0]),
+                              "flight_times": bp_curve["flight_time_k"].values[i],
+                              "states": bp_curve["state_k"].values[i],
+                              "pattern": bp_curve.attrs["pattern"]}, osc, 1, 2)
+        motion = orbit_from_unknowns(Flow(osc), 1, 2, u, pattern=bp_curve.attrs["pattern"])
+        assert motion.residual < 1e-9
+        mu = np.linalg.eigvals(half_map(motion))
+        assert np.min(np.abs(mu + 1.0)) < 1e-7
+
+
+def test_gr_curve_grazes():
+    branch = symmetric_branch(1.6, 0.5, (0.7, 1.7))
+    assert "GR" in branch["special_label"].values.tolist()
+    cv = multi_impact_curve(branch, "GR", 0, parameter="F0",
+                            bounds={"omega": (0.5, 1.5), "F0": (0.9, 1.1)}, ds_max=0.02)
+    assert cv.sizes["point"] > 3 and cv["F0"].values.min() == pytest.approx(0.9)
+    for i in (0, cv.sizes["point"] // 2, -1):
+        osc = ic.dataset.oscillator_from_dataset(cv, i)
+        assert pytest.approx(float(cv["F0"].values[i])) == osc.F0
+        flow = Flow(osc)
+        gaps = [min(flight_clearances(flow, cv["state_k"].values[i, k],
+                                      float(cv["delta_k"].values[i, k]),
+                                      float(cv["flight_time_k"].values[i, k]))[::2])
+                for k in range(2)]
+        assert abs(min(gaps)) < 1e-8
+
+
+def test_bad_curve_requests():
+    branch = symmetric_branch(1.6, 0.5, (1.2, 1.7))
+    box = {"omega": (0.5, 2.5), "b": (0.3, 0.8)}
+    with pytest.raises(ParameterError, match="kind must be one of"):
+        multi_impact_curve(branch, "XX", bounds=box)
+    with pytest.raises(ParameterError, match="bounds must be given"):
+        multi_impact_curve(branch, "BP")
+    with pytest.raises(ParameterError, match="bounds must be a mapping"):
+        multi_impact_curve(branch, "BP", bounds={"omega": (0.5, 2.5)})
+    with pytest.raises(ParameterError, match="two different parameters"):
+        multi_impact_curve(branch, "BP", parameter="omega", bounds={"omega": (0.5, 2.5)})
+    with pytest.raises(ParameterError, match="out of range"):
+        multi_impact_curve(branch, "PD", bounds=box)
+    with pytest.raises(ParameterError, match="must contain the start"):
+        multi_impact_curve(branch, "BP", bounds={"omega": (0.5, 2.5), "b": (0.6, 0.8)})
+    with pytest.raises(TypeError, match="branch must be"):
+        multi_impact_curve({"omega": 1.0}, "BP", bounds=box)
