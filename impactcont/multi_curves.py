@@ -29,15 +29,17 @@ from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import impacts_of, pattern_of
-from impactcont.dataset.schema import special_variable
+from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import MultiImpactSample, branch_to_dataset
+from impactcont.orbit.multi_impact import initial_unknowns
 from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
 from impactcont.switching import special_orbit
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
 
-__all__ = ["multi_impact_curve"]
+__all__ = ["multi_impact_curve", "multi_impact_curve_crossings"]
 
 log = logging.getLogger(__name__)
 
@@ -161,7 +163,7 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     found = solve_on_hyperplane(problem, target, normal, tol=_START_TOL, max_iter=30)
     if not found.converged:
         raise NoPeriodicMotionError(f"the {kind} point at {p1}={start_p1!r} could not be put "
-                                    f"on the augmented system (last step {found.step:.3g})")
+                                    f"on the augmented system (last step {found.last_step:.3g})")
     x0 = found.x[:-1]
     opts = driver_options(options, box[parameter], defaults=_DEFAULTS, ds=ds, ds_min=ds_min,
                           ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
@@ -194,6 +196,91 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     return branch_to_dataset(view, samples, [], record,
                              title=f"{kind} curve of periodic {N}-{p} impacting motions in "
                              f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,))
+
+
+def _problem_of(ds: xr.Dataset) -> MultiImpactCurveProblem:
+    """The augmented problem a curve dataset of :func:`multi_impact_curve` was followed on."""
+    if not isinstance(ds, xr.Dataset) or "curve_kind" not in ds.attrs:
+        raise ParameterError("ds must be a curve dataset of multi_impact_curve (attribute "
+                             "'curve_kind')")
+    record = json.loads(ds.attrs["options"])
+    p1, p2 = str(ds.attrs["parameters"]).split(",")
+    osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+    return MultiImpactCurveProblem(osc, int(ds.attrs["N"]), impacts_of(ds), pattern_of(ds),
+                                   str(ds.attrs["curve_kind"]), (p1, p2),
+                                   symmetric=bool(record.get("symmetric", False)))
+
+
+def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
+                                 ) -> list[dict[str, float]]:
+    """Exact points where a curve of :func:`multi_impact_curve` crosses ``parameter = value``.
+
+    Each crossing between two consecutive curve points is re-solved by Newton on the
+    curve's augmented system with ``parameter`` fixed (not an interpolation).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A curve dataset of :func:`multi_impact_curve`.
+    parameter : str
+        One of the curve's two parameters.
+    value : float
+
+    Returns
+    -------
+    list of dict
+        Per crossing, in curve order: the values of ``omega``, ``b`` and the curve's
+        parameters, and ``point`` (index of the first of the two bracketing points).
+
+    Raises
+    ------
+    ParameterError
+        Not such a curve dataset, a parameter that is not the curve's, a bad value.
+    NoPeriodicMotionError
+        Newton fails at a crossing.
+    """
+    problem = _problem_of(ds)
+    if parameter not in problem.parameters:
+        raise ParameterError(f"parameter must be one of the curve's parameters "
+                             f"{problem.parameters}; got {parameter!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+            or not math.isfinite(value):
+        raise ParameterError(f"value must be a finite real number; got {value!r}")
+    symmetric = problem.symmetric
+    values = np.asarray(ds[parameter].values, dtype=float)
+    out: list[dict[str, float]] = []
+    for k in np.flatnonzero((values[:-1] - value) * (values[1:] - value) <= 0):
+        if values[k] == values[k + 1] or (out and out[-1]["point"] == k - 1
+                                          and values[k] == value):
+            continue
+        t = (value - values[k]) / (values[k + 1] - values[k])
+        xs = []
+        for i in (k, k + 1):  # the stored motions as unknowns of the curve problem
+            lam = float(ds[problem.parameters[1]].values[i])
+            osc = oscillator_from_dataset(ds, int(i))
+            u = initial_unknowns({"delta": float(ds["delta_k"].values[i, 0]),
+                                  "flight_times": ds["flight_time_k"].values[i],
+                                  "states": ds["state_k"].values[i],
+                                  "pattern": pattern_of(ds)}, osc, problem.N, problem.p)
+            base = problem.branch_problem(lam)
+            v = base.half_unknowns(u) if symmetric else u
+            xs.append(np.concatenate([v, [float(getattr(osc, problem.parameters[0]))], [lam]]))
+        target = xs[0] + t * (xs[1] - xs[0])
+        normal = np.zeros(target.size)
+        normal[-1 if parameter == problem.parameters[1] else -2] = 1.0
+        target[-1 if parameter == problem.parameters[1] else -2] = value
+        found = solve_on_hyperplane(problem, target, normal, tol=_START_TOL, max_iter=30)
+        if not found.converged:
+            raise NoPeriodicMotionError(f"the crossing of {parameter} = {value!r} between "
+                                        f"points {k} and {k + 1} was not found (last Newton "
+                                        f"step {found.last_step:.3g})")
+        x, lam = found.x[:-1], float(found.x[-1])
+        osc = problem.branch_problem(lam).oscillator_at(float(x[-1]))
+        crossing = {name: float(getattr(osc, name) or 0.0)
+                    for name in dict.fromkeys(["omega", "b", *problem.parameters])}
+        crossing["point"] = int(k)
+        out.append(crossing)
+    return out
 
 
 class _CurveView:

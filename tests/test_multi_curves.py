@@ -14,7 +14,7 @@ import pytest
 import impactcont as ic
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.multi_curves import multi_impact_curve
+from impactcont.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import initial_unknowns, orbit_from_unknowns
 from impactcont.orbit.symmetry import half_map
@@ -67,19 +67,20 @@ def bp_curve():
     branch = symmetric_branch(1.6, 0.5, (0.9, 1.7))
     assert len(_bp_omegas(branch)) == 2
     return multi_impact_curve(branch, "BP", 1, parameter="b",
-                              bounds={"omega": (0.5, 2.5), "b": (0.3, 0.8)}, ds_max=0.02)
+                              bounds={"omega": (0.5, 2.5), "b": (0.2, 1.0)}, ds_max=0.02)
 
 
-def test_bp_curve_passes_through_the_pitchforks_at_other_clearances(bp_curve):
+@pytest.mark.parametrize(("b", "omega", "bounds"), [(0.3, 2.0, (0.9, 2.1)),
+                                                    (0.8, 0.9, (0.85, 1.25))])
+def test_bp_curve_passes_through_the_pitchforks_at_other_clearances(bp_curve, b, omega,
+                                                                    bounds):
+    """One curve through both pitchforks of b = 0.5 (it turns at a fold in b near 0.98)
+    crosses b = 0.3 and 0.8 exactly at the pitchforks located in omega there."""
     assert bp_curve.attrs["curve_kind"] == "BP"
-    b, omega = bp_curve["b"].values, bp_curve["omega"].values
-    ends = {round(float(b[i]), 12): float(omega[i]) for i in (0, -1)}
-    assert set(ends) == {0.3, 0.8}  # the curve ends on both edges of the box in b
-    # the pitchforks of the symmetric branches at b = 0.3 and 0.8, found in omega
-    forks_03 = _bp_omegas(symmetric_branch(2.0, 0.3, (1.5, 2.1)))
-    forks_08 = _bp_omegas(symmetric_branch(0.9, 0.8, (0.85, 1.25)))
-    assert min(abs(w - ends[0.3]) for w in forks_03) < 1e-9
-    assert min(abs(w - ends[0.8]) for w in forks_08) < 1e-9
+    crossings = sorted(c["omega"] for c in multi_impact_curve_crossings(bp_curve, "b", b))
+    forks = sorted(_bp_omegas(symmetric_branch(omega, b, bounds)))
+    assert len(crossings) == len(forks) == 2
+    np.testing.assert_allclose(crossings, forks, rtol=0, atol=1e-9)
 
 
 def test_every_bp_curve_point_has_a_half_map_multiplier_minus_one(bp_curve):
@@ -131,3 +132,13 @@ def test_bad_curve_requests():
         multi_impact_curve(branch, "BP", bounds={"omega": (0.5, 2.5), "b": (0.6, 0.8)})
     with pytest.raises(TypeError, match="branch must be"):
         multi_impact_curve({"omega": 1.0}, "BP", bounds=box)
+    with pytest.raises(ParameterError, match="curve dataset of multi_impact_curve"):
+        multi_impact_curve_crossings(branch, "b", 0.5)
+
+
+def test_crossing_in_the_first_parameter_returns_the_start(bp_curve):
+    start = float(bp_curve.attrs["born_at_value"])
+    crossings = multi_impact_curve_crossings(bp_curve, "omega", start)
+    assert min(abs(c["b"] - 0.5) for c in crossings) < 1e-9
+    with pytest.raises(ParameterError, match="one of the curve's parameters"):
+        multi_impact_curve_crossings(bp_curve, "R", 0.5)

@@ -148,6 +148,9 @@ def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which
     fork = ic.special_orbit(ds, "BP", which)
     w = fork.oscillator.omega
     out: dict[str, Any] = {"omega": w, "sides": []}
+    if not fork.physical:  # the simulator cannot follow a motion through a stop
+        out.update(agrees=None, skipped=f"the motion at the BP is not physical ({fork.reason})")
+        return out
     for side in (-1.0, 1.0):
         om = w + side * WITNESS_OFFSET
         osc = system(b, om, damping)
@@ -217,6 +220,22 @@ def branches_for(b: float, sw: dict[str, Any]) -> tuple[list[dict[str, Any]], di
             mds = ic.multi_impact_continuation(mirror, "omega", OMEGA, both_directions=True,
                                                max_points=600, ds_max=0.02)
             out.append({"kind": "mirror", "ds": mds, "seed": omega, "born_at": "sweep"})
+    # a pair from the sweep (not switched onto) may meet a symmetric branch the sweep never
+    # settled on (an unstable one): its BP gives that symmetric motion, followed as such
+    known = [w for br in out if br["kind"] == "symmetric" for w, _ in pitchforks(br["ds"])]
+    for br in [br for br in out if br["born_at"] == "sweep" and br["kind"] == "asymmetric"]:
+        labels = br["ds"]["special_label"].values.tolist()
+        for which in range(labels.count("BP")):
+            sym = ic.special_orbit(br["ds"], "BP", which)  # solved on the half system
+            w = sym.oscillator.omega
+            if any(abs(w - v) < 1e-6 for v in known):
+                continue
+            ds = ic.multi_impact_continuation(sym, "omega", OMEGA, both_directions=True,
+                                              max_points=600, ds_max=0.02)
+            out.append({"kind": "symmetric", "ds": ds, "seed": w, "born_at": "BP"})
+            known.extend(v for v, _ in pitchforks(ds))
+            log.info("b=%g: symmetric branch through the BP omega=%.10f of an asymmetric "
+                     "branch: %d points, its BPs %s", b, w, ds.sizes["point"], pitchforks(ds))
     return out, timing
 
 
@@ -317,16 +336,20 @@ def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: 
     sw = sweep(b, omegas, damping)
     t_sweep = time.perf_counter() - t0
     branches, timing = branches_for(b, sw)
-    located = sorted({(round(w, 13), prec) for br in branches if br["kind"] == "symmetric"
-                      for w, prec in pitchforks(br["ds"])})
-    forks = [w for w, _ in located]
-    witness = [fork_witness(b, damping, br["ds"], which)
-               for br in branches if br["kind"] == "symmetric"
-               for which in range(len(pitchforks(br["ds"])))]
+    best: dict[float, tuple[float, float, xr.Dataset, int]] = {}  # one entry per BP
+    for br in branches:
+        if br["kind"] == "symmetric":
+            for which, (w, prec) in enumerate(pitchforks(br["ds"])):
+                rounded = round(w, 9)
+                if rounded not in best or prec < best[rounded][1]:
+                    best[rounded] = (w, prec, br["ds"], which)
+    located = sorted(best.values(), key=lambda item: item[0])
+    forks = [w for w, *_ in located]
+    witness = [fork_witness(b, damping, ds, which) for _, _, ds, which in located]
     agree = agreement(b, sw, branches)
     info: dict[str, Any] = {"damping": damping or PAPER_DAMPING, "sweep_s": t_sweep,
                             **timing, "pitchforks": forks,
-                            "pitchfork_precision": [p for _, p in located],
+                            "pitchfork_precision": [p for _, p, *_ in located],
                             "pitchfork_simulated": witness, "agreement": agree,
                             "branches": []}
     for i, br in enumerate(branches):
