@@ -17,6 +17,7 @@ from impactcont.branch import continuation
 from impactcont.core import ContinuationOptions, ContinuationStatus
 from impactcont.curves import curve, curve_crossings
 from impactcont.dataset import load, save
+from impactcont.dataset.io import open_lazy
 from impactcont.errors import (
     IllConditionedWarning,
     ImpactcontError,
@@ -99,6 +100,7 @@ __all__ = [
     "lyapunov_matrix",
     "multi_impact_continuation",
     "multi_impact_orbit",
+    "open_lazy",
     "period_doubling_cascade",
     "period_doubling_switch",
     "periodic_orbits",
