@@ -54,6 +54,7 @@ import numpy as np
 import xarray as xr
 
 import impactcont as ic
+from impactcont.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 
 log = logging.getLogger("backlash")
@@ -136,12 +137,9 @@ def pitchforks(ds: xr.Dataset) -> list[tuple[float, float]]:
         if lab == "BP" and st == "located"]
 
 
-WITNESS_OFFSET = 0.005  # omega either side of a pitchfork where the simulator is asked
-WITNESS_PERIODS = 400.0
-
-
-def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which: int
-                 ) -> dict[str, Any]:
+def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which: int,
+                 system_of: Any = None, offset: float = 0.005,
+                 periods: float = 400.0) -> dict[str, Any]:
     """The simulator either side of a BP: started next to the symmetric motion (nudged
     asymmetrically), does it stay symmetric where the branch says stable and leave it
     for an asymmetric 1-2 motion where the branch says unstable?"""
@@ -152,11 +150,11 @@ def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which
         out.update(agrees=None, skipped=f"the motion at the BP is not physical ({fork.reason})")
         return out
     for side in (-1.0, 1.0):
-        om = w + side * WITNESS_OFFSET
-        osc = system(b, om, damping)
+        om = w + side * offset
+        osc = system(b, om, damping) if system_of is None else system_of(b, om)
         sym = ic.multi_impact_orbit(osc, 1, 2, fork)
         X = sym.states[0] + np.array([0.0, 1e-4, 1e-4, 0.0])
-        res = ic.simulate(osc, X, float(sym.phases[0]), WITNESS_PERIODS)
+        res = ic.simulate(osc, X, float(sym.phases[0]), periods)
         settled = None
         if one_two(res, om):
             settled = ic.multi_impact_orbit(osc, 1, 2, res)
@@ -378,6 +376,125 @@ def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: 
     return info, sweep_ds
 
 
+# ------------------------------------------------------------------------------------------
+# The (omega, b) plane: where the symmetric and asymmetric motions exist and switch
+# ------------------------------------------------------------------------------------------
+PLANE = {"omega": (0.5, 2.5), "b": (0.2, 1.0)}
+PLANE_WITNESS_B = (0.35, 0.6, 0.9)  # clearances where the simulator checks the BP curve
+PLANE_WITNESS_OFFSET, PLANE_WITNESS_PERIODS = 0.01, 800.0
+
+
+def mirrored(b: float, omega: float) -> ic.ImpactOscillator:
+    """The backlash with mirrored stops: continued in b, both stops move (x1 = +-b)."""
+    return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                               R=0.6, b=b, omega=omega, **PAPER_DAMPING,
+                               stops=ic.Stops(mirror=True))
+
+
+def plane(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, Any]:
+    """The curves of the pitchforks (BP) and of the grazings (GR) of the symmetric and the
+    asymmetric motions in (omega, b), checked against the pitchforks located in omega at
+    each clearance and against the simulator either side of the BP curve."""
+    t0 = time.perf_counter()
+    seed = ic.multi_impact_orbit(mirrored(0.5, 1.6), 1, 2,
+                                 ic.simulate(mirrored(0.5, 1.6), np.zeros(4), 0.0, TRANSIENT))
+    sym = ic.multi_impact_continuation(seed, "omega", OMEGA, both_directions=True,
+                                       ds_max=0.02, max_points=600)
+    labels = sym["special_label"].values.tolist()
+    curves = {"BP": multi_impact_curve(sym, "BP", 0, parameter="b", bounds=PLANE, ds_max=0.02,
+                                       max_points=800)}
+    if "GR" in labels:
+        curves["GR symmetric"] = multi_impact_curve(sym, "GR", 0, parameter="b", bounds=PLANE,
+                                                    ds_max=0.02, max_points=800)
+    asym = ic.switching.pitchfork_branch(sym, 0, 1, max_points=600, ds_max=0.02)
+    grazing = [float(w) for lab, w in zip(asym["special_label"].values,
+                                          asym["special_omega"].values, strict=True)
+               if lab == "GR"]
+    for which, w in enumerate(grazing):
+        # the loop passes each graze twice (both mirror images): one curve per graze
+        if any(abs(c["omega"] - w) < 1e-7 for name, ds in curves.items()
+               if name.startswith("GR asymmetric")
+               for c in multi_impact_curve_crossings(ds, "b", 0.5)):
+            continue
+        try:
+            curves[f"GR asymmetric {which}"] = multi_impact_curve(
+                asym, "GR", which, parameter="b", bounds=PLANE, ds_max=0.02, max_points=800)
+        except (ic.NoPeriodicMotionError, ic.ParameterError) as exc:
+            log.warning("GR %d of the asymmetric branch: no curve (%s)", which, exc)
+    t_curves = time.perf_counter() - t0
+    # the BP curve against the pitchforks located in omega on each clearance's branch
+    located = {b: info["pitchforks"] for b, info in summary["clearances"].items()}
+    check = {}
+    for b, forks in located.items():
+        crossing = [c["omega"] for c in multi_impact_curve_crossings(curves["BP"], "b",
+                                                                     float(b))]
+        check[b] = {"located_in_omega": forks, "curve_crossings": crossing,
+                    "distance_to_curve": [min((abs(w - c) for c in crossing), default=None)
+                                          for w in forks]}
+    # the simulator either side of the BP curve at other clearances
+    witness = []
+    for b in PLANE_WITNESS_B:
+        for c in multi_impact_curve_crossings(curves["BP"], "b", b):
+            branch = ic.multi_impact_continuation(
+                ic.multi_impact_orbit(mirrored(b, c["omega"] + 0.02), 1, 2, _nearest_symmetric(
+                    curves["BP"], b, c["omega"])), "omega", (c["omega"] - 0.03, c["omega"] + 0.03),
+                both_directions=True, ds_max=0.005)
+            forks = pitchforks(branch)
+            if not forks:
+                continue
+            which = int(np.argmin([abs(w - c["omega"]) for w, _ in forks]))
+            result = fork_witness(b, None, branch, which, system_of=mirrored,
+                                  offset=PLANE_WITNESS_OFFSET, periods=PLANE_WITNESS_PERIODS)
+            result["b"] = b
+            witness.append(result)
+    for name, ds in curves.items():
+        groups[f"plane_{name.replace(' ', '_')}"] = ds
+    return {"curves": {name: {"points": int(ds.sizes["point"]),
+                              "omega": [float(ds["omega"].min()), float(ds["omega"].max())],
+                              "b": [float(ds["b"].min()), float(ds["b"].max())]}
+                       for name, ds in curves.items()},
+            "bp_curve_vs_located": check, "simulated": witness, "curves_s": t_curves,
+            "datasets": curves, "symmetric": sym}
+
+
+def _nearest_symmetric(curve: xr.Dataset, b: float, omega: float) -> dict[str, Any]:
+    """The stored motion of the BP curve point nearest (omega, b), as a Newton guess."""
+    i = int(np.argmin(np.hypot(curve["omega"].values - omega, curve["b"].values - b)))
+    return {"delta": float(curve["delta_k"].values[i, 0]),
+            "flight_times": curve["flight_time_k"].values[i],
+            "states": curve["state_k"].values[i], "pattern": curve.attrs["pattern"]}
+
+
+def draw_plane(ax, info: dict[str, Any], summary: dict[str, Any]) -> None:
+    styles = {"BP": ("k", "-", "BP: symmetry-breaking pitchfork"),
+              "GR symmetric": ("C0", "--", "GR of the symmetric motion"),
+              "GR asymmetric": ("C3", "--", "GR of the asymmetric pair")}
+    seen = set()
+    for name, ds in info["datasets"].items():
+        key = "GR asymmetric" if name.startswith("GR asymmetric") else name
+        color, ls, label = styles[key]
+        ax.plot(ds["omega"].values, ds["b"].values, ls, color=color, lw=1.2,
+                label=None if key in seen else label)
+        seen.add(key)
+    for b, forks in ((float(b), v["pitchforks"]) for b, v in summary["clearances"].items()):
+        ax.plot(forks, [b] * len(forks), "o", color="k", ms=4, mfc="none",
+                label="BP located in omega" if b == float(min(summary["clearances"])) else None)
+    for w in info["simulated"]:
+        for side in w.get("sides", []):
+            sym = side["simulated_one_two"] and side["simulated_asymmetry"] < 1e-6
+            ax.plot(side["omega"], w["b"], "s" if sym else "x", color="C2", ms=4,
+                    label=None)
+    ax.plot([], [], "s", color="C2", ms=4, label="simulated: stays symmetric")
+    ax.plot([], [], "x", color="C2", ms=4, label="simulated: leaves the symmetric motion")
+    ax.set_xlabel("omega")
+    ax.set_ylabel("b = b_low (clearance on each side)")
+    ax.set_xlim(*PLANE["omega"])
+    ax.set_ylim(*PLANE["b"])
+    ax.legend(fontsize=7, loc="upper right")
+    ax.set_title("Backlash 1-2 motions in (omega, b): pitchfork (BP) and grazing (GR) "
+                 "curves", fontsize=9)
+
+
 def main(output: Path, quick: bool = False) -> dict[str, Any]:
     output.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
@@ -402,6 +519,13 @@ def main(output: Path, quick: bool = False) -> dict[str, Any]:
                  "dotted: unstable; dots: simulated sweep; dashed: pitchforks)", fontsize=9)
     fig.tight_layout()
     fig.savefig(output / "backlash.png", dpi=110)
+    if not quick:
+        info = plane(summary, groups)
+        fig2, ax2 = plt.subplots(figsize=(6.5, 4.8))
+        draw_plane(ax2, info, summary)
+        fig2.tight_layout()
+        fig2.savefig(output / "backlash_plane.png", dpi=110)
+        summary["plane"] = {k: v for k, v in info.items() if k not in ("datasets", "symmetric")}
     ic.save(groups, output / "branches.nc")
     ic.save(sweeps, output / "sweeps.nc", validate=False)
     summary["total_s"] = time.perf_counter() - t_start
@@ -420,5 +544,7 @@ if __name__ == "__main__":
     result = main(args.output, quick=args.quick)
     if args.copy_figures:
         (HERE / "figures").mkdir(exist_ok=True)
-        shutil.copy(args.output / "backlash.png", HERE / "figures" / "backlash.png")
+        for name in ("backlash.png", "backlash_plane.png"):
+            if (args.output / name).exists():
+                shutil.copy(args.output / name, HERE / "figures" / name)
     log.info("done in %.1f s", result["total_s"])
