@@ -1,0 +1,455 @@
+"""Stability maps of one N-p motion family over two parameters, followed from a seed.
+
+``multi_impact_map(start, ("omega", "b"), grid={"omega": ..., "b": ...})`` solves the
+motion of `start` (an N-p motion of :func:`impactcont.multi_impact_orbit`, from a
+simulation or a branch point, or an N-1 motion of the closed form) at every grid
+point it can reach: Newton on the shooting system of
+:mod:`impactcont.orbit.multi_impact` at each grid point, started from a solved
+neighbour (natural-parameter continuation on the grid, a secant predictor through
+two solved points in line), in one compiled sweep (:mod:`impactcont.orbit.map_kernel`).
+A symmetric motion of a symmetric system is solved on its half system closed by the
+reflection, as :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`
+does, which stays regular through the symmetry-breaking pitchforks where the full
+shooting Jacobian is singular.
+
+What such a map is: **one family followed from its seed**, not every motion that
+exists. A grid point is "found" when Newton from a solved neighbour converges (to a
+solution within ``max_change`` of the predictor). Motions of the family that are
+reached only around a fold of the parameters, other motions with the same pattern
+(the asymmetric pair born at a pitchfork, the other member of a saddle-node pair),
+motions with another pattern, and parts of the family cut off from the seed by a
+region where Newton fails are not in the map; a grid line that crosses a fold may
+jump to the other member of the pair. Where the family is found it is exact (the
+shooting solution to ``tol``), and its stability and physicality are those of
+:func:`impactcont.multi_impact_orbit` at that point.
+
+Schema: :mod:`impactcont.dataset.multi_maps`; plots: :mod:`impactcont.plots.multi_maps`;
+``docs/multi_maps.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.dataset.multi_maps import (
+    MULTI_MAP_KIND,
+    multi_impact_map_dataset,
+    validate_multi_impact_map_dataset,
+)
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
+from impactcont.orbit.periodic import PeriodicOrbit
+from impactcont.orbit.stop_geometry import impact_geometry, stop_sign
+from impactcont.orbit.symmetry import (
+    SYMMETRY_TOL,
+    HalfUnknowns,
+    admits_symmetric_motions,
+    symmetry_defect,
+)
+from impactcont.problems.symmetric_branch import SYMMETRY_BREAKING
+from impactcont.threads import blas_limited
+from impactcont.vocabulary import check_parameter
+
+__all__ = ["multi_impact_map", "multi_impact_map_orbit"]
+
+log = logging.getLogger(__name__)
+
+#: Parameters that move the stops only (the flow does not depend on them).
+STOP_PARAMETERS = ("b", "R")
+_SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
+
+
+def _as_multi(start: Any) -> MultiImpactOrbit:
+    if isinstance(start, MultiImpactOrbit):
+        return start
+    if isinstance(start, PeriodicOrbit):
+        return multi_impact_orbit(start.oscillator, start.N, 1, start)
+    raise TypeError(f"start must be a MultiImpactOrbit (multi_impact_orbit, special_orbit) or a "
+                    f"PeriodicOrbit (periodic_orbits); got {type(start).__name__}")
+
+
+def _check_parameters(osc: ImpactOscillator, parameters: Any) -> tuple[str, str]:
+    if isinstance(parameters, str) or not isinstance(parameters, Sequence) or len(
+            parameters) != 2:
+        raise ParameterError(f"parameters must be two parameter names, e.g. ('omega', 'b'); "
+                             f"got {parameters!r}")
+    names = tuple(check_parameter(osc, name, "parameters") for name in parameters)
+    if names[0] == names[1]:
+        raise ParameterError(f"parameters must be two different parameters; got {parameters!r}")
+    return names[0], names[1]
+
+
+def _check_grid(grid: Any, parameters: tuple[str, str]) -> dict[str, np.ndarray]:
+    if not isinstance(grid, Mapping) or set(grid) != set(parameters):
+        raise ParameterError(f"grid must map each of the parameters {list(parameters)} to a 1-D "
+                             f"array of values; got {grid!r}")
+    out = {}
+    for name in parameters:
+        values = grid[name]
+        try:
+            a = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"grid[{name!r}] must be a 1-D array of finite numbers; got "
+                                 f"{values!r}") from None
+        if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
+            raise ParameterError(f"grid[{name!r}] must be a non-empty 1-D array of finite "
+                                 f"numbers; got {values!r}")
+        if a.size > 1 and not np.all(np.diff(a) > 0):
+            raise ParameterError(f"grid[{name!r}] must be strictly increasing; got {values!r}")
+        out[name] = a
+    return out
+
+
+def _positive_number(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not (
+            value > 0 and math.isfinite(value)):
+        raise ParameterError(f"{name} must be a finite number > 0; got {value!r}")
+    return float(value)
+
+
+def _positive_int(name: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ParameterError(f"{name} must be an integer >= 1; got {value!r}")
+    return int(value)
+
+
+def _decide_symmetric(orbit: MultiImpactOrbit, parameters: tuple[str, str],
+                      symmetric: Any) -> bool:
+    """Whether to solve on the half system (as ``multi_branch.branch_problem`` decides)."""
+    osc = orbit.oscillator
+    pattern = orbit.pattern or "U" * orbit.p
+    keeps = osc.stops.mirror or not set(parameters) & set(SYMMETRY_BREAKING)
+    admits = admits_symmetric_motions(osc, orbit.N, orbit.p, pattern)
+    if symmetric is None:
+        return bool(keeps and admits and symmetry_defect(orbit) <= SYMMETRY_TOL)
+    if not isinstance(symmetric, (bool, np.bool_)):
+        raise ParameterError(f"symmetric must be True, False or None (decide from the motion); "
+                             f"got {symmetric!r}")
+    if symmetric:
+        if not keeps:
+            raise ParameterError(f"symmetric=True: parameters {list(parameters)} move only the "
+                                 "upper stop and break the symmetry; mirror the stops "
+                                 "(Stops(mirror=True)) or give symmetric=False")
+        if not admits:
+            raise ParameterError(f"symmetric=True: the N={orbit.N}, p={orbit.p} motions with "
+                                 f"pattern {pattern!r} of {osc!r} cannot be symmetric (N odd, p "
+                                 "even, the pattern's second half the mirror of its first, "
+                                 "b_low == b, R_low == R)")
+        defect = symmetry_defect(orbit)
+        if not defect <= SYMMETRY_TOL:
+            raise ParameterError(f"symmetric=True: the start is not symmetric (symmetry_defect "
+                                 f"{defect:.3g} > {SYMMETRY_TOL:g}); give symmetric=False or a "
+                                 "symmetric motion")
+    return bool(symmetric)
+
+
+class _Tables:
+    """The flows and stop geometries of a grid, stacked for the compiled sweep.
+
+    A flow is built once per value of the parameters that change it (all but ``b`` and
+    ``R``), a geometry once per value of those that move the stops (``b``, ``R``).
+    """
+
+    def __init__(self, osc: ImpactOscillator, parameters: tuple[str, str],
+                 grid: dict[str, np.ndarray], pattern: str, solved: int) -> None:
+        self.osc, self.parameters, self.pattern, self.solved = osc, parameters, pattern, solved
+        shape = tuple(grid[name].size for name in parameters)
+        flow_axes = [k for k, name in enumerate(parameters) if name not in STOP_PARAMETERS]
+        stop_axes = [k for k, name in enumerate(parameters) if name in STOP_PARAMETERS]
+        flow_values, self.flow_index = _combinations(parameters, grid, flow_axes, shape)
+        geometry_values, self.geometry_index = _combinations(parameters, grid, stop_axes, shape)
+        self.flows = [Flow(_replaced(osc, values)) for values in flow_values]
+        geometries = [self.geometry(_replaced(osc, values)) for values in geometry_values]
+        self.flow_arrays = _stack([flow.shooting_arrays()[1:] for flow in self.flows])
+        self.omegas = np.array([flow.omega for flow in self.flows], dtype=float)
+        (self.positions, self.diagonals, self.full_diagonals, self.b_upper,
+         self.b_lower) = (np.ascontiguousarray(np.array(column)) for column in zip(*geometries,
+                                                                                  strict=True))
+        self.general = bool(self.flows[0].shooting_arrays()[0])
+
+    def geometry(self, osc: ImpactOscillator) -> tuple[Any, ...]:
+        """Positions and diagonals of the impacts solved, all diagonals, ``b``, ``b_low``."""
+        _, positions, diagonals = impact_geometry(osc, self.pattern)
+        stops = osc.stops
+        b_low = float(stops.b_low) if stops.two_sided else 0.0
+        return (positions[:self.solved], diagonals[:self.solved], diagonals, float(osc.b),
+                b_low)
+
+
+def _replaced(osc: ImpactOscillator, values: dict[str, float]) -> ImpactOscillator:
+    if not values:
+        return osc
+    try:
+        return osc.replace(**values)
+    except ParameterError as exc:
+        raise ParameterError(f"grid: the oscillator at {values} cannot be built: {exc}") from None
+
+
+def _combinations(parameters: tuple[str, str], grid: dict[str, np.ndarray], axes: list[int],
+                  shape: tuple[int, int]) -> tuple[list[dict[str, float]], np.ndarray]:
+    """The distinct values of the parameters on `axes` and the index of each grid point."""
+    index = np.zeros(shape, dtype=np.int64)
+    if not axes:
+        return [{}], index
+    if len(axes) == 1:
+        k = axes[0]
+        name = parameters[k]
+        index += np.arange(shape[k]).reshape((-1, 1) if k == 0 else (1, -1))
+        return [{name: float(v)} for v in grid[name]], index
+    index[:] = np.arange(shape[0] * shape[1]).reshape(shape)
+    return [{parameters[0]: float(v0), parameters[1]: float(v1)} for v0 in grid[parameters[0]]
+            for v1 in grid[parameters[1]]], index
+
+
+def _stack(arrays: list[tuple[Any, ...]]) -> tuple[np.ndarray, ...]:
+    """Each of the flows' arrays stacked on a new first axis (one row per flow)."""
+    columns = list(zip(*arrays, strict=True))
+    for column in columns:
+        if len({a.shape for a in column}) != 1:
+            raise ParameterError("the flows of the grid have modal arrays of different shapes "
+                                 "(the first-order modes change their structure across the "
+                                 "grid); map a smaller range of the damping parameter")
+    return tuple(np.ascontiguousarray(np.stack(column)) for column in columns)
+
+
+def _nearest(grid: dict[str, np.ndarray], parameters: tuple[str, str],
+             values: tuple[float, float]) -> tuple[int, int]:
+    """The grid point nearest `values`, distances in units of each axis's range."""
+    out = []
+    for name, value in zip(parameters, values, strict=True):
+        axis = grid[name]
+        out.append(int(np.argmin(np.abs(axis - value))))
+    return out[0], out[1]
+
+
+def _kernel() -> Any:
+    from impactcont.orbit import map_kernel
+
+    return map_kernel
+
+
+def _solve_at(osc: ImpactOscillator, tables: _Tables, N: int, symmetric: bool,
+              x0: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, bool, int]:
+    """Newton at one oscillator (off the grid: the seed's way to its grid point)."""
+    flow = Flow(osc)
+    arrays = flow.shooting_arrays()
+    positions, diagonals, *_ = tables.geometry(osc)
+    return _kernel().solve_point(*arrays[:12], flow.omega, N, symmetric, osc.stops.index,
+                                 positions, diagonals, x0, tol, max_iter)
+
+
+def _seed(orbit: MultiImpactOrbit, tables: _Tables, grid: dict[str, np.ndarray], N: int,
+          symmetric: bool, x_start: np.ndarray, tol: float, max_iter: int
+          ) -> tuple[tuple[int, int], np.ndarray]:
+    """The seed grid point (nearest the start) and its unknowns, reached from the start in
+    up to 32 equal steps of both parameters."""
+    parameters = tables.parameters
+    osc = orbit.oscillator
+    start = tuple(float(getattr(osc, name) or 0.0) for name in parameters)
+    i0, i1 = _nearest(grid, parameters, start)
+    target = (grid[parameters[0]][i0], grid[parameters[1]][i1])
+    for steps in _SEED_SUBSTEPS:
+        x = x_start
+        for s in range(1, steps + 1):
+            values = {name: a + (b - a) * s / steps
+                      for name, a, b in zip(parameters, start, target, strict=True)}
+            x, ok, _ = _solve_at(_replaced(osc, values), tables, N, symmetric, x, tol,
+                                 max_iter)
+            if not ok:
+                break
+        else:
+            return (i0, i1), x
+    raise NoPeriodicMotionError(
+        f"the start motion (N={N}, p={orbit.p}, pattern {orbit.pattern!r} at "
+        f"{dict(zip(parameters, start, strict=True))}) could not be followed to the nearest grid "
+        f"point {dict(zip(parameters, target, strict=True))} by Newton in up to "
+        f"{_SEED_SUBSTEPS[-1]} steps; start from a motion at or next to a grid point")
+
+
+@blas_limited
+def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
+                     parameters: Sequence[str] = ("omega", "b"),
+                     grid: Mapping[str, Any] | None = None, *, symmetric: bool | None = None,
+                     checks: bool = True, tol: float = 1e-11, max_iter: int = 12,
+                     max_change: float = 0.5, max_attempts: int = 4,
+                     title: str | None = None) -> xr.Dataset:
+    """Stability map of the N-p motion family of `start` over a grid of two parameters.
+
+    Every grid point is solved by Newton from a neighbour that was solved, starting
+    at the grid point nearest the start (reached from it by Newton in a few steps):
+    natural-parameter continuation over the grid, breadth first, with a secant
+    predictor through two solved points in line. A point whose Newton fails (or
+    converges farther than `max_change` from its predictor) is "not found" and seeds
+    no other point. The map is **one family followed from its seed**, not every
+    motion that exists: motions reached only around a fold, other motions of the
+    same pattern (an asymmetric pair born at a pitchfork, the other member of a
+    saddle-node pair) and parts of the family cut off from the seed are not in it,
+    and a grid line crossing a fold may continue on the other member of the pair
+    (``docs/multi_maps.md``).
+
+    Parameters
+    ----------
+    start : MultiImpactOrbit or PeriodicOrbit
+        A motion of the family: :func:`impactcont.multi_impact_orbit` (from a
+        simulation), :func:`impactcont.special_orbit` (a branch point), or an N-1
+        motion of :func:`impactcont.periodic_orbits` (solved as a 1-impact motion).
+        Its oscillator is the map's; its values of the two parameters place the seed.
+    parameters : (str, str)
+        Two different continuable parameters (``omega``, ``b``, ``R``, ``eta``,
+        ``alpha``, ``beta``, ``F0``), the grid's axes in this order.
+    grid : mapping
+        ``{parameter: strictly increasing 1-D values}`` for both parameters.
+    symmetric : bool, optional
+        Solve a symmetric motion of a symmetric two-sided system on its half system
+        (regular through the symmetry-breaking pitchforks). ``None`` (default): when
+        the start is symmetric and both parameters keep the system symmetric (not
+        ``b`` or ``R`` unless ``Stops(mirror=True)``), as
+        :func:`impactcont.multi_impact_continuation` decides.
+    checks : bool
+        Search every flight for contact with a stop (eq. 16). Without it ``gap_min``
+        is NaN and no point is physical.
+    tol : float
+        Newton tolerance (residual and last update, relative to ``max(1, |u|)``).
+    max_iter : int
+        Newton iterations per attempt.
+    max_change : float
+        Largest max-norm distance between a solution and its predictor: a solution
+        farther away is taken for another motion and refused.
+    max_attempts : int
+        Newton attempts per grid point at most (one from each solved neighbour).
+    title : str, optional
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(parameters[0], parameters[1])`` with their grids as coordinates,
+        ``impact`` and ``component``: ``found``, ``newton_iterations``, ``stable``,
+        ``physical``, ``spectral_radius``, ``critical_multiplier``, ``delta``,
+        ``gap_min``, ``impact_velocity_k``, ``flight_time_k``, ``state_k`` and, in a
+        system that admits symmetric motions of the pattern, ``asymmetry``
+        (:mod:`impactcont.dataset.multi_maps`). Values are NaN where not found.
+        Round-trips through :func:`impactcont.save` / :func:`impactcont.load`.
+
+    Raises
+    ------
+    TypeError, ParameterError
+        A bad start, parameter, grid, option, or a grid value where the oscillator
+        cannot be built (named in the message).
+    NoPeriodicMotionError
+        The start cannot be followed to its nearest grid point.
+    """
+    orbit = _as_multi(start)
+    osc = orbit.oscillator
+    names = _check_parameters(osc, parameters)
+    axes = _check_grid(grid, names)
+    tol = _positive_number("tol", tol)
+    max_change = _positive_number("max_change", max_change)
+    max_iter = _positive_int("max_iter", max_iter)
+    max_attempts = _positive_int("max_attempts", max_attempts)
+    if not isinstance(checks, (bool, np.bool_)):
+        raise ParameterError(f"checks must be True or False; got {checks!r}")
+    half = _decide_symmetric(orbit, names, symmetric)
+    N, p = orbit.N, orbit.p
+    pattern = orbit.pattern or "U" * p
+    admits = bool(admits_symmetric_motions(osc, N, p, pattern)
+                  and (osc.stops.mirror or not set(names) & set(SYMMETRY_BREAKING)))
+    t0 = time.perf_counter()
+    tables = _Tables(osc, names, axes, pattern, p // 2 if half else p)
+    x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
+    (s0, s1), x_seed = _seed(orbit, tables, axes, N, half, x_start, tol, max_iter)
+    t_setup = time.perf_counter() - t0
+    shape = (axes[names[0]].size, axes[names[1]].size)
+    npts, m = shape[0] * shape[1], 2 * osc.n
+    out = {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
+           "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
+           "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
+           "critical_multiplier": np.full(npts, np.nan, complex),
+           "gap_min": np.full(npts, np.nan), "impact_velocity_k": np.full((npts, p), np.nan),
+           "flight_time_k": np.full((npts, p), np.nan),
+           "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
+    unknowns = np.empty((npts, x_seed.size))
+    signs = np.array([stop_sign(s) for s in pattern])
+    t1 = time.perf_counter()
+    solved, attempts, iterations, capped = _kernel().sweep(
+        tables.general, *tables.flow_arrays, tables.omegas, tables.flow_index, tables.positions,
+        tables.diagonals, tables.full_diagonals, tables.b_upper, tables.b_lower,
+        tables.geometry_index, axes[names[0]], axes[names[1]], signs, N, half, admits,
+        osc.stops.index, osc.stops.two_sided, s0, s1, x_seed, tol, max_iter, max_change,
+        checks, max_attempts, unknowns, out["found"], out["newton_iterations"], out["delta"],
+        out["stable"], out["physical"], out["spectral_radius"], out["critical_multiplier"],
+        out["gap_min"], out["impact_velocity_k"], out["flight_time_k"], out["state_k"],
+        out["asymmetry"])
+    t_sweep = time.perf_counter() - t1
+    if capped:
+        log.warning("a contact-search grid was capped at 2000000 cells on some flight of the "
+                    "map: a short excursion past a stop (eq. 16) may be missed there")
+    if not admits:
+        del out["asymmetry"]
+    values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
+    seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1]),
+            "index": [int(s0), int(s1)],
+            "start": {name: float(getattr(osc, name) or 0.0) for name in names}}
+    options = {"tol": tol, "max_iter": max_iter, "max_change": max_change,
+               "max_attempts": max_attempts, "checks": bool(checks), "attempts": int(attempts),
+               "newton_iterations": int(iterations), "flows": len(tables.flows),
+               "setup_seconds": round(t_setup, 4), "sweep_seconds": round(t_sweep, 4)}
+    log.info("N=%d p=%d map over %s x %s: %d of %d points found (%d Newton attempts) in "
+             "%.3g s (%.3g points/s; setup %.3g s)", N, p, names[0], names[1], solved, npts,
+             attempts, t_sweep, npts / t_sweep if t_sweep > 0 else math.inf, t_setup)
+    return multi_impact_map_dataset(oscillator=osc, N=N, pattern=pattern, parameters=names,
+                                    grid=axes, values=values, symmetric=half, seed=seed,
+                                    options=options, title=title)
+
+
+def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
+    """The motion of a map at one grid point, re-solved by Newton from what the map stored.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A map of :func:`multi_impact_map`.
+    **values : float
+        The grid point: a value of each of the map's two parameters (the nearest grid
+        value is taken).
+
+    Returns
+    -------
+    MultiImpactOrbit
+        With its G, multipliers and checks (:func:`impactcont.multi_impact_orbit`).
+
+    Raises
+    ------
+    ParameterError
+        Not the map's two parameters, or no motion found at that grid point.
+    """
+    validate_multi_impact_map_dataset(ds)
+    names = tuple(ds.attrs["parameters"].split(","))
+    if set(values) != set(names):
+        raise ParameterError(f"give a value of each of the map's parameters {list(names)}; got "
+                             f"{sorted(values)}")
+    index = {name: int(np.argmin(np.abs(ds[name].values - float(values[name]))))
+             for name in names}
+    point = ds.isel(index)
+    where = {name: float(point[name]) for name in names}
+    if not bool(point["found"]):
+        raise ParameterError(f"no motion of the map's family was found at {where}")
+    osc = ImpactOscillator.from_json(ds.attrs["oscillator"]).replace(**where)
+    guess = {"delta": float(point["delta"]), "flight_times": point["flight_time_k"].values,
+             "states": point["state_k"].values, "pattern": ds.attrs["pattern"]}
+    return multi_impact_orbit(osc, int(ds.attrs["N"]), int(ds.attrs["impacts"]), guess)
+
+
+def _seed_of(ds: xr.Dataset) -> dict[str, Any]:
+    """The seed record of a map (for plots)."""
+    return json.loads(ds.attrs["seed"]) if ds.attrs.get("impactcont_dataset") == \
+        MULTI_MAP_KIND else {}
