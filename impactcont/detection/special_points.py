@@ -46,6 +46,8 @@ __all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "e
 log = logging.getLogger(__name__)
 
 _XTOL = 1e-13
+#: The labels with a test function on branches of N-1 motions (besides the fold, SN).
+N1_EVENTS = ("PD", "NS", "GR", "ZV")
 _EPS = float(np.finfo(float).eps)
 _UNIT_TOL = 1e-7
 
@@ -275,8 +277,9 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                      lambda k: event_function(label, samples[k].orbit),
                      lambda k: event_noise(label, samples[k].orbit))
 
-    # BP needs a symmetric motion (p even, two stops): an N-1 motion never is one
-    events = [event(label) for label in labels if label not in ("SN", "BP")]
+    # the events of an N-1 branch (the fold is located on eq. 14-15 above); the others,
+    # e.g. BP (a symmetric motion has p even), cannot occur on it
+    events = [event(label) for label in labels if label in N1_EVENTS]
     for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
                             [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
         candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,

@@ -18,7 +18,11 @@ workload once, so all see the same load):
    one (``periodic_orbits``, both roots, as in 1);
 5. one 1-2 backlash solve with that damping matrix against the proportional one (the
    shooting kernel's first-order flow against its modal flow);
-6. the cold compile the shooting kernel adds: in a fresh interpreter with an empty
+6. the curve of a symmetry-breaking pitchfork of the symmetric 1-2 backlash motion in
+   ``(omega, b)`` (mirrored stops; ``multi_impact_curve``), per point, against a point of
+   the closed-form N = 1 PD curve of the paper system (``curve``); the issue's target is
+   2 ms per point;
+7. the cold compile the shooting kernel adds: in a fresh interpreter with an empty
    ``NUMBA_CACHE_DIR``, the N = 1 verbs first (compiling the kernel they share), then the
    first N-p solve and the first N-p continuation (CPU seconds).
 
@@ -144,6 +148,25 @@ def main() -> dict[str, Any]:
     near = multi_impact_orbit(backlash(omega=0.801), 1, 2, symmetric)
     proportional_backlash = backlash()
     points = {}
+    # the symmetric 1-2 motion of the backlash with mirrored stops (b moves both) and its
+    # branch in omega with both pitchforks (BP), for the curve of a pitchfork in (omega, b)
+    mirrored = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.5, omega=1.6,
+                                   eta=0.1, stops=ic.Stops(mirror=True))
+    sym_m = multi_impact_orbit(mirrored, 1, 2, ic.simulate(mirrored, np.zeros(4), 0.0, 150.0))
+    sym_branch = multi_impact_continuation(sym_m, "omega", (0.9, 1.7), both_directions=True,
+                                           ds_max=0.02)
+    pd_branch = ic.continuation(paper(b=0.0, omega=1.75), N=1, parameter="omega",
+                                bounds=(1.6, 1.9), detect=("PD",))
+
+    def curve_bp():
+        ds = ic.multi_impact_curve(sym_branch, "BP", 1, parameter="b",
+                                   bounds={"omega": (0.5, 2.5), "b": (0.2, 1.0)}, ds_max=0.02)
+        points["bp"] = ds.sizes["point"]
+
+    def curve_pd_n1():
+        ds = ic.curve(None, None, "PD", start=pd_branch,
+                      bounds={"omega": (0.5, 3.0), "b": (-0.2, 0.3)})
+        points["pd_n1"] = ds.sizes["point"]
 
     def branch_n1():
         ds = ic.continuation(paper(b=0.0), N=1, parameter="omega", bounds=(0.5, 6.0),
@@ -170,9 +193,12 @@ def main() -> dict[str, Any]:
         "orbit_proportional": lambda: closed_form(proportional, 1),
         "solve_12_any_C": lambda: multi_impact_orbit(general_backlash, 1, 2, near_c),
         "solve_12_proportional": lambda: multi_impact_orbit(proportional_backlash, 1, 2, near),
+        "curve_bp": curve_bp,
+        "curve_pd_n1": curve_pd_n1,
     }
     t = interleaved(work, args.rounds)
     per_point = {k: t[f"branch_{k}"] / points[k] for k in ("n1", "22", "12")}
+    per_point.update({k: t[f"curve_{k}"] / points[k] for k in ("bp", "pd_n1")})
     cold = cold_compile()
     res_out = {"times": t, "points": points, "per_point": per_point, "cold_compile_cpu": cold,
                "loadavg": os.getloadavg()}
@@ -203,6 +229,12 @@ def main() -> dict[str, Any]:
         judged = per_impact if per_impact is not None else ratio
         lines.append(f"| {name} | {meas} | {ref} | {shown} | <= {target:g}x | "
                      f"{'yes' if judged <= target else '**no**'} |")
+    bp_ms = 1e3 * per_point["bp"]
+    lines.append(f"| BP curve of the symmetric 1-2 backlash motion in (omega, b), per point | "
+                 f"{bp_ms:.2f} ms ({points['bp']} points) | {1e3 * per_point['pd_n1']:.2f} ms "
+                 f"(N = 1 PD curve, closed form, {points['pd_n1']} points) | "
+                 f"{per_point['bp'] / per_point['pd_n1']:.1f}x | <= 2 ms | "
+                 f"{'yes' if bp_ms <= 2.0 else '**no**'} |")
     lines.append(f"| cold compile added by the shooting kernel (empty cache, after the N = 1 "
                  f"continuation and orbits) | first N-p solve {cold['np_solve']:.1f} s, first "
                  f"N-p continuation {cold['np_continuation']:.1f} s CPU | N = 1 branch and "
