@@ -9,6 +9,7 @@ point (state, G, multipliers, checks) -> detect and locate the special points
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
 import math
 import warnings
@@ -21,18 +22,25 @@ from scipy.optimize import minimize_scalar
 
 from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
-from impactcont.core.stepper import NewtonConvergenceError
+from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
 from impactcont.dataset import branch_dataset
 from impactcont.dataset.records import orbit_columns, special_record
+from impactcont.dataset.schema import (
+    oscillator_from_dataset,
+    special_variable,
+    validate_branch_dataset,
+)
 from impactcont.detection import BranchSample, detect_special_points
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.multi_branch import restart_problem, run_branch
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
+from impactcont.progress import ProgressOption, Reporter, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, PARAMETERS, check_labels
 
-__all__ = ["check_continuation_arguments", "continuation"]
+__all__ = ["check_continuation_arguments", "continuation", "continuation_from", "extend"]
 
 log = logging.getLogger(__name__)
 
@@ -184,7 +192,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  ds: float | None = None, ds_min: float | None = None,
                  ds_max: float | None = None, newton_tol: float | None = None,
                  max_points: int | None = None, both_directions: bool | None = None,
-                 **more: Any) -> xr.Dataset:
+                 progress: ProgressOption = None, **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-1 motions in one parameter and find its special points.
 
     Parameters
@@ -214,6 +222,11 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         Newton tolerance 1e-12 by default: the closed form is exact to rounding).
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
         Single options, over `options`.
+    progress : None, bool or callable
+        A progress bar on stderr (``None``: when stderr is a terminal, after 2 s;
+        ``True``: always; ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record at every point
+        (:mod:`impactcont.progress`). A call longer than a minute logs a line a minute.
 
     Returns
     -------
@@ -240,11 +253,12 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     N = problem.N
     lam0 = _start_value(problem, (lo, hi), start)
     delta0 = _start_root(problem, lam0, root)
-    runs = [_follow(problem, lam0, delta0, opts, detect)]
-    if components == "all":
-        for lam, delta in _component_seeds(problem, (lo, hi)):
-            if not any(_passes(run, lam, delta) for run in runs):
-                runs.append(_follow(problem, lam, delta, opts, detect))
+    with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
+        runs = [_follow(problem, lam0, delta0, opts, detect, rep)]
+        if components == "all":
+            for lam, delta in _component_seeds(problem, (lo, hi)):
+                if not any(_passes(run, lam, delta) for run in runs):
+                    runs.append(_follow(problem, lam, delta, opts, detect, rep))
     started = [run for run in runs if run.samples]
     for run in runs:
         if not run.samples:  # its corrector failed at the seed: say so, keep the others
@@ -271,8 +285,10 @@ class _Run:
 
 
 def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
-            opts: ContinuationOptions, detect: Sequence[str]) -> _Run:
-    result = continue_branch(problem, np.array([delta0]), lam0, opts)
+            opts: ContinuationOptions, detect: Sequence[str], rep: Reporter | None = None
+            ) -> _Run:
+    result = continue_branch(problem, np.array([delta0]), lam0, opts,
+                             None if rep is None else rep.point)
     log.info("N=%d branch in %s from %s=%.10g: %d points (%s)", problem.N, problem.parameter,
              problem.parameter, lam0, len(result), result.message)
     if ContinuationStatus.MAX_POINTS_REACHED in result.statuses:
@@ -341,8 +357,8 @@ def _passes(run: _Run, lam: float, delta: float) -> bool:
 
 
 def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
-                    opts: ContinuationOptions, detect: Sequence[str], runs: list[_Run]
-                    ) -> xr.Dataset:
+                    opts: ContinuationOptions, detect: Sequence[str], runs: list[_Run],
+                    record: dict[str, Any] | None = None) -> xr.Dataset:
     """One dataset of every component (the variable ``connected_component`` tells them apart)."""
     parameter, N = problem.parameter, problem.N
     orbits = [s.orbit for run in runs for s in run.samples]
@@ -372,5 +388,425 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
                                      "status": [st.name for st in run.result.statuses],
                                      "message": run.result.message} for run in runs]}
     option_record["bounds"] = list(opts.bounds)
+    option_record.update(record or {})
     return branch_dataset(parameter=parameter, N=N, oscillator=osc, options=option_record,
                           columns=columns, special_points=special_points)
+
+
+# -- restart and extension ----------------------------------------------------------------------
+def _check_branch(branch: Any) -> xr.Dataset:
+    """`branch` if it is a branch dataset (N-1 or N-p), else a clear error."""
+    if not isinstance(branch, xr.Dataset):
+        raise TypeError(f"branch must be a branch xarray.Dataset (of continuation, "
+                        f"multi_impact_continuation or a switch, or impactcont.load of its "
+                        f"file); got {type(branch).__name__}")
+    if "curve_kind" in branch.attrs or "parameters" in branch.attrs:
+        raise ParameterError("branch must be a one-parameter branch; got a two-parameter curve "
+                             f"dataset (parameters {branch.attrs.get('parameters')!r})")
+    try:
+        validate_branch_dataset(branch)
+    except ValueError as exc:
+        raise ParameterError(f"branch is not a branch dataset: {exc}") from None
+    return branch
+
+
+def _record(branch: xr.Dataset) -> dict[str, Any]:
+    return json.loads(branch.attrs.get("options", "{}"))
+
+
+def _recorded_options(branch: xr.Dataset, options: ContinuationOptions | None
+                      ) -> ContinuationOptions:
+    """The branch's recorded options, with those `options` gives over them."""
+    if options is not None and not isinstance(options, ContinuationOptions):
+        raise ParameterError(f"options must be a ContinuationOptions; got "
+                             f"{type(options).__name__}")
+    known = {f.name for f in dataclasses.fields(ContinuationOptions) if f.init}
+    values = {k: v for k, v in _record(branch).items()
+              if k in known and k not in ("bounds", "direction", "both_directions")}
+    if options is not None:
+        values.update({name: getattr(options, name) for name in options.given})
+    return ContinuationOptions(**values)
+
+
+def _branch_bounds(branch: xr.Dataset) -> tuple[float, float]:
+    try:
+        lo, hi = _record(branch)["bounds"]
+    except (KeyError, ValueError, TypeError):
+        raise ParameterError("bounds must be given: the branch's options record no bounds"
+                             ) from None
+    return float(lo), float(hi)
+
+
+def _start_row(branch: xr.Dataset, point: Any, label: Any, which: Any) -> tuple[int, bool]:
+    """The row to restart from and whether it is a special point's."""
+    if (point is None) == (label is None):
+        raise ParameterError(f"give either point= (an index of the branch's points) or label= "
+                             f"(a special point's label, with which=); got point={point!r}, "
+                             f"label={label!r}")
+    if point is not None:
+        n = branch.sizes["point"]
+        if isinstance(point, bool) or not isinstance(point, (int, np.integer)) \
+                or not -n <= point < n:
+            raise ParameterError(f"point must be an integer index in [{-n}, {n}) (the branch "
+                                 f"has {n} points); got {point!r}")
+        return int(point) % n, False
+    if label not in LABELS:
+        raise ParameterError(f"label must be one of {LABELS}; got {label!r}")
+    labels = np.asarray(branch[special_variable("label")].values).tolist()
+    rows = [k for k, lab in enumerate(labels) if lab == label]
+    if isinstance(which, bool) or not isinstance(which, (int, np.integer)) \
+            or not -len(rows) <= which < len(rows):
+        raise ParameterError(f"which must be an integer index among the branch's "
+                             f"{len(rows)} {label} point(s) (its special points: {labels}); "
+                             f"got {which!r}")
+    return rows[int(which)], True
+
+
+def _problem_at(branch: xr.Dataset, row: int, special: bool) -> tuple[Any, np.ndarray, float]:
+    """The branch's problem at a point (or special point) and the unknowns there."""
+    if "impact" in branch.dims:
+        return restart_problem(branch, row, special=special)
+    parameter, N = str(branch.attrs["parameter"]), int(branch.attrs["N"])
+
+    def at(name: str) -> float:
+        return float(branch[special_variable(name) if special else name].values[row])
+
+    osc = oscillator_from_dataset(branch).replace(
+        **{name: at(name) for name in dict.fromkeys(["omega", "b", parameter])})
+    lam = float(getattr(osc, parameter) or 0.0)
+    return PeriodicBranchProblem(osc, N, parameter), np.array([at("delta")]), lam
+
+
+def _component_rows(branch: xr.Dataset, row: int) -> np.ndarray:
+    """The rows of the connected component of point `row` (all rows of an N-p branch)."""
+    if "connected_component" not in branch:
+        return np.arange(branch.sizes["point"])
+    component = branch["connected_component"].values
+    return np.flatnonzero(component == component[row])
+
+
+def _first_step(branch: xr.Dataset, row: int, special: bool, along: int, problem: Any,
+                u0: np.ndarray, lam0: float, theta: float) -> tuple[int, float | None]:
+    """The core's ``direction`` that leaves the start the way `along` runs the branch, and
+    the first step that lands on the branch's next point (None without one).
+
+    The step is the scaled projection of the chord to the next point on the start's
+    tangent: the core's first step then lands on that point (within the Newton
+    tolerance) and the restarted branch goes on through the points of the branch.
+    """
+    rows = _component_rows(branch, int(branch[special_variable("point")].values[row])
+                           if special else row)
+    k = int(branch[special_variable("point")].values[row]) if special else row
+    position = int(np.searchsorted(rows, k))
+    ahead = position + along
+    behind = position - along
+    step_exact = not special and 0 <= ahead < rows.size
+    if step_exact or (special and 0 <= ahead < rows.size):
+        a, b = k, int(rows[ahead])
+    elif 0 <= behind < rows.size:
+        a, b = int(rows[behind]), k
+    else:  # a component of one point: no way along it to follow
+        return along, None
+    (_, ua, la), (_, ub, lb) = _problem_at(branch, a, False), _problem_at(branch, b, False)
+    chord = np.append(ub - ua, lb - la)  # along the way the restart goes
+    chord[0] = math.remainder(chord[0], 2 * math.pi)  # delta, the first unknown, is a phase
+    accept = getattr(problem, "accept", None)
+    if accept is not None:
+        accept(u0, lam0)
+    extended = np.column_stack([problem.jacobian(u0, lam0), problem.dparam(u0, lam0)])
+    tangent = np.linalg.svd(extended)[2][-1]
+    weights = np.append(np.full(u0.size, 1.0 / u0.size), theta)
+    tangent = tangent / math.sqrt(float(np.sum(weights * tangent * tangent)))
+    projection = float(np.sum(weights * tangent * chord))
+    if projection < 0:
+        tangent, projection = -tangent, -projection
+    # the core's rule (PalcStepper._oriented): the sign of dlam, or at a fold the sign of
+    # the largest unknown
+    if abs(tangent[-1]) > FOLD_DLAM_TOLERANCE * np.max(np.abs(tangent)):
+        direction = 1 if tangent[-1] > 0 else -1
+    else:
+        largest = int(np.argmax(np.abs(tangent[:-1])))
+        direction = 1 if tangent[largest] > 0 else -1
+    return direction, projection if step_exact else None
+
+
+def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
+             bounds: tuple[float, float], detect: Sequence[str] | None,
+             options: ContinuationOptions | None, single: dict[str, Any],
+             progress: Any, record: dict[str, Any]) -> xr.Dataset:
+    """The branch continued from a row of `branch` (one way, or both with `along=None`)."""
+    problem, u0, lam0 = _problem_at(branch, row, special)
+    parameter = problem.parameter
+    lo, hi = bounds
+    if not lo <= lam0 <= hi:
+        raise ParameterError(f"bounds ({lo!r}, {hi!r}) must contain the restart point "
+                             f"{parameter}={lam0!r}")
+    detect = check_labels(_record(branch).get("detect", LABELS) if detect is None else detect)
+    base = _recorded_options(branch, options)
+    direction, step = _first_step(branch, row, special, 1 if along is None else along, problem,
+                                  u0, lam0, base.theta)
+    user_ds = ("ds" in single and single["ds"] is not None) or (
+        options is not None and "ds" in options.given)
+    record = {**record, "restart": {**record.get("restart", {}), parameter: lam0}}
+    if "impact" in branch.dims:
+        opts = driver_options(base, (lo, hi), direction=direction,
+                              both_directions=along is None, **single)
+        if step is not None and not user_ds:
+            opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
+        symmetric = _record(branch).get("symmetric", False)
+        return run_branch(problem, u0, lam0, opts, detect=detect, progress=progress,
+                          record={"symmetric": symmetric, **record})
+    _, detect, (lo, hi), opts = check_continuation_arguments(
+        problem.osc, problem.N, parameter, (lo, hi), detect=detect, components="start",
+        options=base, direction=direction, both_directions=along is None, **single)
+    if step is not None and not user_ds:
+        opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
+    with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
+        run = _follow(problem, lam0, float(u0[0]), opts, detect, rep)
+    if not run.samples:
+        raise NewtonConvergenceError(f"the restart at {parameter}={lam0:.10g} could not be "
+                                     f"started: {run.result.message}")
+    return _branch_dataset(problem, problem.osc, opts, detect, [run], record)
+
+
+def _check_along(along: Any) -> int | None:
+    if along is None or (not isinstance(along, bool) and along in (1, -1)):
+        return along
+    raise ParameterError(f"along must be +1 (on the way the branch's points run), -1 (the "
+                         f"other way) or None (both ways); got {along!r}")
+
+
+@blas_limited
+def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: str | None = None,
+                      which: int = 0, along: int | None = 1,
+                      bounds: Sequence[float] | None = None,
+                      detect: Sequence[str] | None = None,
+                      options: ContinuationOptions | None = None,
+                      progress: ProgressOption = None, **single: Any) -> xr.Dataset:
+    """Restart the continuation of a branch from one of its points or special points.
+
+    Works on an N-1 branch (:func:`continuation`) and an N-p branch
+    (:func:`~impactcont.multi_branch.multi_impact_continuation`, a switch), computed
+    now or loaded from its file (:func:`impactcont.load`). The motion there is
+    corrected by Newton on the problem the branch was followed on (the half system of
+    a symmetric N-p branch) and followed with the branch's recorded options (those
+    given here over them). From a point the first step lands on the branch's next
+    point, so the restarted branch goes through the points of the branch (within the
+    Newton tolerance) until it leaves its old bounds or ends as the branch did.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        A one-parameter branch dataset.
+    point : int, optional
+        Index of the point to restart from (negative counts from the end: ``-1`` is
+        the last point).
+    label : str, optional
+        Instead of `point`: restart from a special point with this label (``"PD"``,
+        ``"GR"``, ...), at its located values.
+    which : int
+        With `label`: which of the points with that label (branch order).
+    along : {+1, -1, None}
+        ``+1`` (default): on the way the branch's points run (past the point towards
+        higher indices; from ``point=-1``, past the end of the branch); ``-1``: the
+        other way; ``None``: both ways. The points of an N-1 branch run in each
+        connected component's own order.
+    bounds : (float, float), optional
+        Range of the parameter; default the branch's. Must contain the restart point.
+    detect : sequence of str, optional
+        Special points to detect; default the branch's.
+    options : ContinuationOptions, optional
+        Options over the branch's recorded ones.
+    progress : None, bool or callable
+        See :mod:`impactcont.progress`.
+    **single
+        Single options (``ds``, ``ds_max``, ``max_points``, ...) over `options`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The restarted branch (one component: the one through the restart point), in
+        the schema of `branch`; its ``options`` record ``restart`` (the row and the
+        parameter value it started from).
+
+    Raises
+    ------
+    TypeError
+        `branch` is not an xarray.Dataset.
+    ParameterError
+        Not a branch dataset; neither or both of `point` and `label`; a point index out
+        of range; no such special point; bad `along`, `bounds` (not containing the
+        restart point), `detect` or options.
+    """
+    _check_branch(branch)
+    along = _check_along(along)
+    row, special = _start_row(branch, point, label, which)
+    parameter = str(branch.attrs["parameter"])
+    lo, hi = _branch_bounds(branch) if bounds is None else _check_bounds(parameter, bounds)
+    record = {"restart": {"point": None if special else row, "label": label,
+                          "which": which if special else None, "along": along}}
+    return _restart(branch, row, special, along, (lo, hi), detect, options, single, progress,
+                    record)
+
+
+@blas_limited
+def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str] | None = None,
+           options: ContinuationOptions | None = None, progress: ProgressOption = None,
+           **single: Any) -> xr.Dataset:
+    """A branch continued past its bounds: the branch and its continuations joined.
+
+    Every end of the branch (of each connected component of an N-1 branch) that lies on
+    one of its bounds is continued from there (:func:`continuation_from`) until the new
+    `bounds`, and the new points are joined to the branch: one dataset, the points in
+    branch order, the special points of the branch and of the new parts, the point at
+    the join once. Ends inside the bounds (a fold of the component, a closed loop, the
+    motion a switched branch was born from, ``max_points``) are left as they are.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        A one-parameter branch dataset (N-1 or N-p), computed or loaded.
+    bounds : (float, float)
+        The new range of the parameter: contains the branch's bounds and goes past at
+        least one of them.
+    detect : sequence of str, optional
+        Special points to detect on the new parts; default the branch's.
+    options : ContinuationOptions, optional
+        Options over the branch's recorded ones.
+    progress : None, bool or callable
+        See :mod:`impactcont.progress` (one bar over all the new parts).
+    **single
+        Single options (``ds``, ``ds_max``, ``max_points``, ...) over `options`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The extended branch in the schema of `branch`; its ``options`` record the new
+        ``bounds`` and, in ``extended``, each end continued.
+
+    Raises
+    ------
+    TypeError
+        `branch` is not an xarray.Dataset.
+    ParameterError
+        Not a branch dataset; `bounds` not two numbers that contain the branch's bounds
+        and reach past them; bad `detect` or options.
+    """
+    _check_branch(branch)
+    parameter = str(branch.attrs["parameter"])
+    old = _branch_bounds(branch)
+    lo, hi = _check_bounds(parameter, bounds)
+    if not (lo <= old[0] and hi >= old[1] and (lo, hi) != old):
+        raise ParameterError(f"bounds must contain the branch's bounds {list(old)} and reach "
+                             f"past at least one of them; got {bounds!r}")
+    lam = np.asarray(branch[parameter].values, dtype=float)
+    parts: dict[tuple[int, int], xr.Dataset] = {}
+    extended = []
+    with reporter(progress, f"extension in {parameter}", parameter=parameter) as rep:
+        for rows in _components(branch):
+            for end, along in ((int(rows[-1]), 1), (int(rows[0]), -1)):
+                if rows.size == 1 and along == -1:
+                    break
+                if not ((lam[end] == old[1] and hi > old[1])
+                        or (lam[end] == old[0] and lo < old[0])):
+                    continue
+                part = _restart(branch, end, False, along, (lo, hi), detect, options, single,
+                                rep, {"restart": {"point": end, "along": along}})
+                parts[(int(rows[0]), along)] = part
+                info = _record(part)
+                extended.append({"from_point": end, parameter: float(lam[end]),
+                                 "along": along, "points": part.sizes["point"] - 1,
+                                 "status": info.get("status"), "message": info.get("message")})
+    if not parts:
+        log.info("extend: no end of the branch lies on a bound it moves past: unchanged")
+    joined = _join(branch, parts)
+    record = _record(branch)
+    record["bounds"] = [lo, hi]
+    record["extended"] = record.get("extended", []) + extended
+    joined.attrs["options"] = json.dumps(record, sort_keys=True)
+    return joined
+
+
+def _components(branch: xr.Dataset) -> list[np.ndarray]:
+    """The rows of each connected component, in dataset order."""
+    if "connected_component" not in branch:
+        return [np.arange(branch.sizes["point"])]
+    component = branch["connected_component"].values
+    return [np.flatnonzero(component == c) for c in dict.fromkeys(component.tolist())]
+
+
+def _join(branch: xr.Dataset, parts: dict[tuple[int, int], xr.Dataset]) -> xr.Dataset:
+    """`branch` with the new parts before (``along = -1``) and after (``+1``) components.
+
+    A part starts with the point it was continued from (the component's end), which is
+    left out; its special points get the index of their nearest point in the join.
+    """
+    point_vars = [k for k, v in branch.variables.items() if "point" in v.dims and k != "point"]
+    special_vars = [k for k, v in branch.variables.items() if "special" in v.dims
+                    and k != special_variable("point")]
+    index_var = special_variable("point")
+    pieces: list[tuple[xr.Dataset, np.ndarray]] = []  # (dataset, rows) in joined order
+    arclength: list[np.ndarray] = []
+    specials: list[tuple[xr.Dataset, np.ndarray, np.ndarray]] = []  # (ds, rows, new index)
+    old_special_point = branch[index_var].values
+    offset = 0
+    for rows in _components(branch):
+        front, back = parts.get((int(rows[0]), -1)), parts.get((int(rows[0]), 1))
+        arcs = []
+        if front is not None:
+            nf = front.sizes["point"] - 1
+            order = np.arange(nf, 0, -1)
+            pieces.append((front, order))
+            arcs.append(-front["arclength"].values[order])
+            specials.append((front, np.arange(front.sizes["special"]),
+                             offset + nf - front[index_var].values))
+            offset += nf
+        pieces.append((branch, rows))
+        arcs.append(branch["arclength"].values[rows] - branch["arclength"].values[rows[0]])
+        mine = np.flatnonzero(np.isin(old_special_point, rows))
+        specials.append((branch, mine, offset + np.searchsorted(rows, old_special_point[mine])))
+        offset += rows.size
+        if back is not None:
+            nb = back.sizes["point"] - 1
+            pieces.append((back, np.arange(1, nb + 1)))
+            arcs.append(arcs[-1][-1] + back["arclength"].values[1:])
+            specials.append((back, np.arange(back.sizes["special"]),
+                             offset - 1 + back[index_var].values))
+            offset += nb
+        joined_arcs = np.concatenate(arcs)
+        arclength.append(joined_arcs - joined_arcs[0])
+    out = branch.drop_vars([*point_vars, *special_vars, index_var, "point"])
+    for name in point_vars:
+        var = branch[name]
+        axis = var.dims.index("point")
+        data = np.concatenate([np.take(ds[name].values, rows, axis=axis)
+                               for ds, rows in pieces], axis=axis)
+        out[name] = xr.Variable(var.dims, data, var.attrs)
+    out["arclength"] = xr.Variable(("point",), np.concatenate(arclength),
+                                   branch["arclength"].attrs)
+    if "connected_component" in branch:
+        component = branch["connected_component"]
+        ids = np.array(list(dict.fromkeys(component.values.tolist())))
+        out["connected_component"] = xr.Variable(
+            ("point",), np.repeat(ids, _piece_counts(branch, parts)).astype(component.dtype),
+            component.attrs)
+    order = np.argsort(np.concatenate([index for _, _, index in specials]), kind="stable")
+    for name in special_vars:
+        var = branch[name]
+        data = np.concatenate([np.take(ds[name].values, rows, axis=0)
+                               for ds, rows, _ in specials], axis=0)[order]
+        out[name] = xr.Variable(var.dims, data, var.attrs)
+    out[index_var] = xr.Variable(("special",),
+                                 np.concatenate([index for _, _, index in specials])[order]
+                                 .astype(branch[index_var].dtype), branch[index_var].attrs)
+    n = out.sizes["point"]
+    out = out.assign_coords(point=xr.Variable(("point",), np.arange(n), branch["point"].attrs))
+    out = out.set_coords([k for k in branch.coords if k in out.data_vars])
+    return out[list(branch.data_vars)].assign_attrs(branch.attrs)
+
+
+def _piece_counts(branch: xr.Dataset, parts: dict[tuple[int, int], xr.Dataset]) -> list[int]:
+    """Points of each component after the join."""
+    return [rows.size + sum(parts[(int(rows[0]), along)].sizes["point"] - 1
+                            for along in (-1, 1) if (int(rows[0]), along) in parts)
+            for rows in _components(branch)]

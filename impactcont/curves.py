@@ -53,6 +53,7 @@ from impactcont.problems.codim1 import (
     check_parameters,
     curve_problem,
 )
+from impactcont.progress import ProgressOption, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import Label
 
@@ -134,7 +135,7 @@ def _start_by_continuation(osc: ImpactOscillator, N: int, kind: str, special: in
                            parameters: tuple[str, str], bounds: dict[str, tuple[float, float]]
                            ) -> tuple[ImpactOscillator, int, float]:
     p1 = parameters[0]
-    branch = continuation(osc, N, p1, bounds[p1], detect=[kind])
+    branch = continuation(osc, N, p1, bounds[p1], detect=[kind], progress=False)
     rows = [k for k, (lab, st) in enumerate(zip(branch["special_label"].values,
                                                 branch["special_status"].values, strict=True))
             if lab == kind and st == "located"]
@@ -426,7 +427,8 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
           options: ContinuationOptions | None = None, ds: float | None = None,
           ds_min: float | None = None, ds_max: float | None = None,
           newton_tol: float | None = None, max_points: int | None = None,
-          both_directions: bool | None = None, **more: Any) -> xr.Dataset:
+          both_directions: bool | None = None, progress: ProgressOption = None,
+          **more: Any) -> xr.Dataset:
     """Continue a codim-1 curve of N-1 motions in two parameters.
 
     Parameters
@@ -467,6 +469,12 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
         Single options, over `options` (``ds`` and ``ds_min`` adapt to a ``ds_max``
         given alone).
+    progress : None, bool or callable
+        A progress bar on stderr (``None``: when stderr is a terminal, after 2 s;
+        ``True``: always; ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record at every curve point, with the
+        value of ``p2`` (:mod:`impactcont.progress`). A call longer than a minute logs
+        a line a minute.
 
     Returns
     -------
@@ -511,8 +519,9 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)
 
     ends: list[tuple[str, np.ndarray, float, str]] = []
-    result = follow(problem, u0, p2v, opts,
-                    stop=lambda direction: _CurveWatch(problem, box[p1], ends))
+    with reporter(progress, f"{kind} curve in ({p1}, {p2})", parameter=p2) as rep:
+        result = follow(problem, u0, p2v, opts, rep.point,
+                        stop=lambda direction: _CurveWatch(problem, box[p1], ends))
     if result.status is ContinuationStatus.NEWTON_FAILED_AT_START:
         raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "
                                     f"({result.message})")

@@ -51,6 +51,7 @@ from impactcont.map_storage import open_temporary_map, temporary_map_file
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.periodic import _check_N
+from impactcont.progress import ProgressOption, Reporter, reporter
 from impactcont.threads import blas_limited
 
 __all__ = ["stability_map"]
@@ -127,7 +128,7 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                   b: Sequence[float] | np.ndarray = (), *, executor: Any = None,
                   max_workers: int | None = None, omega_block: int | None = None,
                   spectral_radius: bool = True, out: str | os.PathLike | None = None,
-                  memory_limit: float = 1e9) -> xr.Dataset:
+                  memory_limit: float = 1e9, progress: ProgressOption = None) -> xr.Dataset:
     """Existence, physicality and stability of every N-1 motion on an (N, omega, b) grid.
 
     Parameters
@@ -165,6 +166,12 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         that the tasks in flight and the NetCDF writes stay within `memory_limit`
         (the NetCDF library and dask take about 20 MB whatever the limit). The
         interpreters of pool workers are not counted.
+    progress : None, bool or callable
+        A progress bar on stderr over the grid points (``None``: when stderr is a
+        terminal, after 2 s; ``True``: always; ``False``: never) or a callable
+        receiving a :class:`~impactcont.progress.Progress` record as each task
+        finishes (:mod:`impactcont.progress`). A map longer than a minute logs a line
+        a minute.
 
     Returns
     -------
@@ -210,31 +217,32 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         raise ParameterError(f"memory_limit must be a number of bytes > 0; got {memory_limit!r}")
     shape = (len(Ns), w.size, bb.size)
     result = _result_bytes(shape, spectral_radius)
-    runner = _Runner(osc, Ns, w, bb, spectral_radius, executor, max_workers)
-    try:
-        in_memory, points = _plan(result, float(memory_limit), runner.in_flight, out is None,
-                                  w.size * bb.size)
-        temporary = out is None and not in_memory
-        if not in_memory:
-            _require_dask()
-        if temporary:
-            out = temporary_map_file()
-            log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB with its "
-                        "tasks: it is written to %s (removed when the returned dataset is "
-                        "closed) and returned lazily", result / 1e9, memory_limit / 1e9, out)
-        ob, bs = _block_shape(points, w.size, bb.size, omega_block)
-        tasks = [(k, slice(i, min(i + ob, w.size)), slice(j, min(j + bs, bb.size)))
-                 for k in range(len(Ns)) for i in range(0, w.size, ob)
-                 for j in range(0, bb.size, bs)]
-        options = {"executor": runner.name, "tasks": len(tasks), "omega_block": ob,
-                   "b_block": bs, "spectral_radius": spectral_radius}
-        start = time.perf_counter()
-        if in_memory:
-            ds = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
-        else:
-            path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
-    finally:
-        runner.close()
+    with reporter(progress, "stability map", total=math.prod(shape)) as rep:
+        runner = _Runner(osc, Ns, w, bb, spectral_radius, executor, max_workers, rep)
+        try:
+            in_memory, points = _plan(result, float(memory_limit), runner.in_flight, out is None,
+                                      w.size * bb.size)
+            temporary = out is None and not in_memory
+            if not in_memory:
+                _require_dask()
+            if temporary:
+                out = temporary_map_file()
+                log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB with its "
+                            "tasks: it is written to %s (removed when the returned dataset is "
+                            "closed) and returned lazily", result / 1e9, memory_limit / 1e9, out)
+            ob, bs = _block_shape(points, w.size, bb.size, omega_block)
+            tasks = [(k, slice(i, min(i + ob, w.size)), slice(j, min(j + bs, bb.size)))
+                     for k in range(len(Ns)) for i in range(0, w.size, ob)
+                     for j in range(0, bb.size, bs)]
+            options = {"executor": runner.name, "tasks": len(tasks), "omega_block": ob,
+                       "b_block": bs, "spectral_radius": spectral_radius}
+            start = time.perf_counter()
+            if in_memory:
+                ds = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
+            else:
+                path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
+        finally:
+            runner.close()
     elapsed = time.perf_counter() - start
     log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
              "computed" if in_memory else f"written to {out}", elapsed, len(tasks), runner.name)
@@ -314,7 +322,9 @@ class _Runner:
     """
 
     def __init__(self, osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
-                 spectral_radius: bool, executor: Any, max_workers: int | None) -> None:
+                 spectral_radius: bool, executor: Any, max_workers: int | None,
+                 reporter: Reporter) -> None:
+        self.reporter = reporter
         self.pool, owned, self.name = _executor(executor, max_workers)
         self._owned = [self.pool] if owned else []
         self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
@@ -372,6 +382,7 @@ class _Runner:
         if self.pool is None:
             for task in tasks:
                 yield task, _map_task(*self._args(task))
+                self._done(task)
             return
         waiting = collections.deque(tasks)
         retry: collections.deque[tuple[int, slice, slice]] = collections.deque()
@@ -406,9 +417,15 @@ class _Runner:
                         continue
                     yield task, res
                     del res
+                    self._done(task)
         finally:
             for future in running:
                 future.cancel()
+
+    def _done(self, task: tuple[int, slice, slice]) -> None:
+        """Count the points of a task whose block is in the map."""
+        _, osl, bsl = task
+        self.reporter.advance((osl.stop - osl.start) * (bsl.stop - bsl.start))
 
     def close(self) -> None:
         """Shut down the pools created here."""

@@ -12,6 +12,7 @@ branch of symmetric motions, followed as their half-motion) -> an
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -28,8 +29,9 @@ from impactcont.core import (
     follow,
 )
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
-from impactcont.dataset.multi import multi_impact_dataset
+from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
 from impactcont.dataset.records import orbit_columns, special_record
+from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
     MultiImpactSpecialPoint,
@@ -37,15 +39,16 @@ from impactcont.detection.multi_impact import (
 )
 from impactcont.detection.special_points import event_function
 from impactcont.errors import NoPeriodicMotionError, ParameterError
-from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
+from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SYMMETRY_BREAKING, SymmetricBranchProblem
+from impactcont.progress import ProgressOption, Reporter, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, check_labels, check_parameter
 
-__all__ = ["multi_impact_continuation"]
+__all__ = ["multi_impact_continuation", "restart_problem"]
 
 #: The problem of an N-p branch: any N-p motion, or a symmetric one by its half.
 BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
@@ -159,6 +162,7 @@ class _Watch:
 def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                  options: ContinuationOptions, *, stop_after_pd: int | None = None,
                  on_point: Callable[[MultiImpactOrbit], None] | None = None,
+                 progress: Reporter | None = None,
                  ) -> tuple[list[MultiImpactSample], list[str], str]:
     """Follow a branch (one or both directions) and return its samples in branch order.
 
@@ -175,6 +179,8 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
         PD test function (saves following a cascade branch to the bound).
     on_point : callable, optional
         Called with the orbit of every accepted point.
+    progress : Reporter, optional
+        Counts every accepted point (:mod:`impactcont.progress`).
 
     Returns
     -------
@@ -191,7 +197,8 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
         return watches[direction]
 
     options, limit = _within_limits(problem, options)
-    result = follow(problem, u0, lam0, options, stop=watch)
+    result = follow(problem, u0, lam0, options, None if progress is None else progress.point,
+                    stop=watch)
     forward = watches[options.direction].orbits
     if not forward:
         raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
@@ -274,12 +281,19 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
 def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
-           extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
-    """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``."""
+           extra_attrs: Mapping[str, Any] | None = None,
+           progress: ProgressOption | Reporter = None) -> xr.Dataset:
+    """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``.
+
+    `progress` is a driver's ``progress=`` option or the reporter of an enclosing call
+    (:func:`impactcont.progress.reporter`).
+    """
     labels = check_labels(detect)
     problem.check_bounds(options.bounds)
-    samples, statuses, message = trace_branch(problem, u0, lam0, options,
-                                              stop_after_pd=stop_after_pd)
+    with reporter(progress, f"continuation of {problem.N}-{problem.p} motions in "
+                  f"{problem.parameter}", parameter=problem.parameter) as rep:
+        samples, statuses, message = trace_branch(problem, u0, lam0, options,
+                                                  stop_after_pd=stop_after_pd, progress=rep)
     specials = detect_multi_impact_points(problem, samples, labels)
     log.info("N=%d p=%d branch in %s: %d points, %d special (%s)", problem.N, problem.p,
              problem.parameter, len(samples), len(specials), message)
@@ -352,7 +366,8 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
                               ds_max: float | None = None, newton_tol: float | None = None,
                               max_points: int | None = None,
                               both_directions: bool | None = None, direction: int | None = None,
-                              symmetric: bool | None = None, **more: Any) -> xr.Dataset:
+                              symmetric: bool | None = None, progress: ProgressOption = None,
+                              **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-p motions through a given motion.
 
     Parameters
@@ -382,6 +397,11 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         the system symmetric (not ``b`` or ``R``, unless ``Stops(mirror=True)``).
         ``False``: as any N-p motion (its shooting Jacobian is singular at a pitchfork;
         no BP).
+    progress : None, bool or callable
+        A progress bar on stderr (``None``: when stderr is a terminal, after 2 s;
+        ``True``: always; ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record at every point
+        (:mod:`impactcont.progress`). A call longer than a minute logs a line a minute.
 
     Returns
     -------
@@ -410,4 +430,50 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         raise ParameterError(f"bounds {opts.bounds} must contain the start {parameter}="
                              f"{lam0!r} of the orbit")
     return run_branch(problem, u0, lam0, opts, detect=labels,
-                      record={"symmetric": isinstance(problem, SymmetricBranchProblem)})
+                      record={"symmetric": isinstance(problem, SymmetricBranchProblem)},
+                      progress=progress)
+
+
+def restart_problem(branch: xr.Dataset, row: int, *, special: bool = False
+                    ) -> tuple[BranchProblem, np.ndarray, float]:
+    """The problem of an N-p branch dataset and the unknowns of one of its motions.
+
+    What a restart of the branch (:func:`impactcont.branch.continuation_from`,
+    :func:`impactcont.branch.extend`) continues from: the problem the branch was
+    followed on (its half system when the options record ``symmetric``) at the
+    oscillator of the motion.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        An N-p branch dataset of :func:`multi_impact_continuation` or a switch.
+    row : int
+        Index of the point (or of the special point with `special`).
+    special : bool
+        Read the special point `row` (``special_state_k``, ...) instead of a point.
+
+    Returns
+    -------
+    problem : MultiImpactBranchProblem or SymmetricBranchProblem
+    u : ndarray
+        The motion's unknowns in `problem` (corrected by the continuation's first
+        Newton solve).
+    lam : float
+        Its value of the continued parameter.
+    """
+    parameter = str(branch.attrs["parameter"])
+    N, p, pattern = int(branch.attrs["N"]), impacts_of(branch), pattern_of(branch)
+
+    def at(name: str) -> Any:
+        return branch[special_variable(name) if special else name].values[row]
+
+    osc = oscillator_from_dataset(branch).replace(
+        **{name: float(at(name)) for name in dict.fromkeys(["omega", "b", parameter])})
+    u = initial_unknowns({"delta": float(at("delta_k")[0]), "flight_times": at("flight_time_k"),
+                          "states": at("state_k"), "pattern": pattern}, osc, N, p)
+    symmetric = bool(json.loads(branch.attrs.get("options", "{}")).get("symmetric", False))
+    lam = float(getattr(osc, parameter) or 0.0)
+    if symmetric:
+        problem: BranchProblem = SymmetricBranchProblem(osc, N, p, parameter, pattern=pattern)
+        return problem, problem.half_unknowns(u), lam
+    return MultiImpactBranchProblem(osc, N, p, parameter, pattern=pattern or None), u, lam

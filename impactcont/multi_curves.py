@@ -35,6 +35,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import MultiImpactSample, branch_to_dataset
 from impactcont.orbit.multi_impact import initial_unknowns
 from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
+from impactcont.progress import ProgressOption, reporter
 from impactcont.switching import special_orbit
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
@@ -94,7 +95,8 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
                        options: Any = None, ds: float | None = None,
                        ds_min: float | None = None, ds_max: float | None = None,
                        newton_tol: float | None = None, max_points: int | None = None,
-                       both_directions: bool | None = None, **more: Any) -> xr.Dataset:
+                       both_directions: bool | None = None, progress: ProgressOption = None,
+                       **more: Any) -> xr.Dataset:
     """Follow a special point of an N-p branch in two parameters.
 
     Parameters
@@ -114,6 +116,12 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     options, ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
         Continuation options (the drivers' defaults for those left out; Newton tolerance
         1e-10, first step 0.01, both directions).
+    progress : None, bool or callable
+        A progress bar on stderr (``None``: when stderr is a terminal, after 2 s;
+        ``True``: always; ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record at every curve point, with the
+        value of `parameter` (:mod:`impactcont.progress`). A call longer than a minute
+        logs a line a minute.
 
     Returns
     -------
@@ -174,7 +182,9 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         watches[direction] = _Box(problem, box[p1])
         return watches[direction]
 
-    result = follow(problem, x0, lam0, opts, stop=watch)
+    with reporter(progress, f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})",
+                  parameter=parameter) as rep:
+        result = follow(problem, x0, lam0, opts, rep.point, stop=watch)
     orbits = watches[opts.direction].orbits
     if -opts.direction in watches:
         orbits = watches[-opts.direction].orbits[:0:-1] + orbits

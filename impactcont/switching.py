@@ -64,6 +64,7 @@ from impactcont.orbit.periodic import orbit_at_phase
 from impactcont.orbit.symmetry import symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
+from impactcont.progress import ProgressOption, Reporter, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
 
@@ -267,6 +268,7 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
                            bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                            detect: Sequence[str] = LABELS, stop_after_pd: int | None = None,
                            options: ContinuationOptions | None = None,
+                           progress: ProgressOption | Reporter = None,
                            **more: Any) -> xr.Dataset:
     """Start and follow the 2N-2p branch born at a period-doubling point of a branch.
 
@@ -288,6 +290,12 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
     options : ContinuationOptions, optional
         Continuation options (the drivers' defaults for those left out); the
         switch sets ``direction`` (away from the parent) and one direction only.
+    progress : None, bool or callable
+        A progress bar on stderr (``None``: when stderr is a terminal, after 2 s;
+        ``True``: always; ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record at every point
+        (:mod:`impactcont.progress`); the reporter of an enclosing call (a cascade)
+        counts the points in its own bar.
     **more
         Convenience keywords for single options (``ds``, ``ds_max``, ``max_points``, ...).
 
@@ -315,7 +323,7 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
         raise ParameterError(f"bounds ({lo}, {hi}) must contain the switched point "
                              f"{parameter}={lam1!r}")
     return run_branch(problem, u1, lam1, opts, detect=detect, stop_after_pd=stop_after_pd,
-                  record={"switch": info}, extra_attrs=info)
+                      record={"switch": info}, extra_attrs=info, progress=progress)
 
 
 # ------------------------------------------------------------------------------------------
@@ -373,7 +381,7 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
                             bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
                             detect: Sequence[str] = LABELS, min_spacing: float = 1e-9,
                             options: ContinuationOptions | None = None,
-                            **more: Any) -> Cascade:
+                            progress: ProgressOption = None, **more: Any) -> Cascade:
     """Follow a period-doubling cascade: switch at a PD, find the next PD, repeat.
 
     Parameters
@@ -401,6 +409,12 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
         the spacing of the PD points; ``max_points`` defaults to 300 per branch. Each
         new branch after the first is confined to twice the last PD spacing around
         its PD.
+    progress : None, bool or callable
+        A progress bar on stderr over the points of all the new branches (``None``:
+        when stderr is a terminal, after 2 s; ``True``: always; ``False``: never) or a
+        callable receiving a :class:`~impactcont.progress.Progress` record at every
+        point (:mod:`impactcont.progress`). A call longer than a minute logs a line a
+        minute.
 
     Returns
     -------
@@ -425,44 +439,47 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     base_ds = float(more.pop("ds", given.get("ds", DRIVER_DEFAULTS["ds"])))
     if "max_points" not in given:
         more.setdefault("max_points", 300)  # a child branch that finds no PD is not followed far
-    for level in range(max_doublings):
-        spacing = abs(pd_values[-1] - pd_values[-2]) if len(pd_values) > 1 else None
-        child_bounds = (lo, hi)
-        ds_max = base_ds_max
-        eps = epsilon
-        if spacing is not None:
-            # near a PD the new branch is a parabola, lam - lam_PD ~ a^2 in its amplitude a:
-            # the next PD (about spacing / 4.67 away in lam) is ~sqrt(spacing) away in u
-            ds_max = min(base_ds_max, 0.25 * math.sqrt(spacing))
-            eps = min(epsilon, max(math.sqrt(spacing) * 0.05, 1e-6))
-            child_bounds = (max(lo, pd_values[-1] - 2 * spacing),
-                            min(hi, pd_values[-1] + 2 * spacing))
-        try:
-            child = period_doubling_switch(
-                current, current_which, bounds=child_bounds, epsilon=eps, detect=labels,
-                stop_after_pd=3, ds=min(base_ds, ds_max), ds_max=ds_max,
-                ds_min=min(1e-8, ds_max * 1e-4), options=options, **more)
-        except (NoPeriodicMotionError, np.linalg.LinAlgError) as exc:
-            message = f"switching at the PD {parameter}={pd_values[-1]:.12g} failed: {exc}"
-            break
-        branches.append(child)
-        sign = 1 if float(child[parameter].values[-1]) >= pd_values[-1] else -1
-        j = _first_pd(child, pd_values[-1], sign)
-        if j is None:
-            message = (f"the {child.attrs['N']}-{child.attrs['impacts']} branch has no located "
-                       f"PD point in {parameter} in ({lo}, {hi}) ({level + 1} doubling(s))")
-            break
-        k = _special_index(child, "PD", j)
-        value = float(child[special_variable(parameter)].values[k])
-        if abs(value - pd_values[-1]) < min_spacing:
-            message = f"PD spacing {abs(value - pd_values[-1]):.3g} < min_spacing"
-            break
-        pd_values.append(value)
-        pd_precision.append(float(child[special_variable("precision")].values[k]))
-        pd_physical.append(special_orbit(child, "PD", j).physical)
-        log.info("cascade: %d-%d branch has its PD at %s=%.12g", int(child.attrs["N"]),
-                 int(child.attrs["impacts"]), parameter, value)
-        current, current_which = child, j
+    with reporter(progress, f"period-doubling cascade in {parameter}",
+                  parameter=parameter) as rep:
+        for level in range(max_doublings):
+            spacing = abs(pd_values[-1] - pd_values[-2]) if len(pd_values) > 1 else None
+            child_bounds = (lo, hi)
+            ds_max = base_ds_max
+            eps = epsilon
+            if spacing is not None:
+                # near a PD the new branch is a parabola, lam - lam_PD ~ a^2 in its amplitude a:
+                # the next PD (about spacing / 4.67 away in lam) is ~sqrt(spacing) away in u
+                ds_max = min(base_ds_max, 0.25 * math.sqrt(spacing))
+                eps = min(epsilon, max(math.sqrt(spacing) * 0.05, 1e-6))
+                child_bounds = (max(lo, pd_values[-1] - 2 * spacing),
+                                min(hi, pd_values[-1] + 2 * spacing))
+            try:
+                child = period_doubling_switch(
+                    current, current_which, bounds=child_bounds, epsilon=eps, detect=labels,
+                    stop_after_pd=3, ds=min(base_ds, ds_max), ds_max=ds_max,
+                    ds_min=min(1e-8, ds_max * 1e-4), options=options, progress=rep,
+                    **more)
+            except (NoPeriodicMotionError, np.linalg.LinAlgError) as exc:
+                message = f"switching at the PD {parameter}={pd_values[-1]:.12g} failed: {exc}"
+                break
+            branches.append(child)
+            sign = 1 if float(child[parameter].values[-1]) >= pd_values[-1] else -1
+            j = _first_pd(child, pd_values[-1], sign)
+            if j is None:
+                message = (f"the {child.attrs['N']}-{child.attrs['impacts']} branch has no located "
+                           f"PD point in {parameter} in ({lo}, {hi}) ({level + 1} doubling(s))")
+                break
+            k = _special_index(child, "PD", j)
+            value = float(child[special_variable(parameter)].values[k])
+            if abs(value - pd_values[-1]) < min_spacing:
+                message = f"PD spacing {abs(value - pd_values[-1]):.3g} < min_spacing"
+                break
+            pd_values.append(value)
+            pd_precision.append(float(child[special_variable("precision")].values[k]))
+            pd_physical.append(special_orbit(child, "PD", j).physical)
+            log.info("cascade: %d-%d branch has its PD at %s=%.12g", int(child.attrs["N"]),
+                     int(child.attrs["impacts"]), parameter, value)
+            current, current_which = child, j
     pd = np.array(pd_values)
     gaps = np.diff(pd)
     ratios = gaps[:-1] / gaps[1:] if gaps.size >= 2 else np.empty(0)

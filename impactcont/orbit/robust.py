@@ -37,6 +37,7 @@ from impactcont.orbit.periodic import (
     periodic_matrix,
     periodic_orbits,
 )
+from impactcont.progress import ProgressOption, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_damping
 
@@ -583,7 +584,7 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
 @blas_limited
 def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[float, float]],
                      *, nominal: Mapping[str, float] | None = None, root: int | None = None,
-                     samples: int = 33) -> RobustStability:
+                     samples: int = 33, progress: ProgressOption = None) -> RobustStability:
     """Test the robust stability of a periodic N-1 motion over a parameter box (eq. 26-29).
 
     Parameters
@@ -608,6 +609,12 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     samples : int, optional
         Grid points per parameter (including both ends), ``>= 2``; an odd number
         also samples the centre. The grid has ``samples ** len(vary)`` points.
+    progress : None, bool or callable
+        A progress bar on stderr over the grid points and the refined entries of
+        ``dG`` (``None``: when stderr is a terminal, after 2 s; ``True``: always;
+        ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record after each
+        (:mod:`impactcont.progress`). A call longer than a minute logs a line a minute.
 
     Returns
     -------
@@ -667,25 +674,29 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     axes = [np.linspace(lo[k], hi[k], samples) for k in range(len(names))]
     indices = list(itertools.product(range(samples), repeat=len(names)))
     dG = np.empty((len(indices), *G0.shape))
-    for p, idx in enumerate(indices):
-        q = tuple(float(axes[k][idx[k]]) for k in range(len(names)))
-        follower.check_physical(q)
-        dG[p] = np.abs(follower.jacobian(q) - G0)
-    best = np.argmax(dG, axis=0)
-    grid_theta = np.max(dG, axis=0)
+    with reporter(progress, "robust stability", total=len(indices) + G0.size,
+                  unit="steps") as rep:
+        for p, idx in enumerate(indices):
+            q = tuple(float(axes[k][idx[k]]) for k in range(len(names)))
+            follower.check_physical(q)
+            dG[p] = np.abs(follower.jacobian(q) - G0)
+            rep.advance()
+        best = np.argmax(dG, axis=0)
+        grid_theta = np.max(dG, axis=0)
 
-    theta = grid_theta.copy()
-    argmax: dict[tuple[int, int], dict[str, float]] = {}
-    for i, j in itertools.product(range(G0.shape[0]), repeat=2):
-        idx = indices[int(best[i, j])]
-        q_grid = tuple(float(axes[k][idx[k]]) for k in range(len(names)))
-        q_best = q_grid
-        if grid_theta[i, j] > 0.0:
-            val, q_ref = _refine(follower, i, j, axes, idx, lo, hi)
-            if val > grid_theta[i, j]:
-                follower.check_physical(q_ref)
-                theta[i, j], q_best = val, q_ref
-        argmax[(i, j)] = follower.params(q_best)
+        theta = grid_theta.copy()
+        argmax: dict[tuple[int, int], dict[str, float]] = {}
+        for i, j in itertools.product(range(G0.shape[0]), repeat=2):
+            idx = indices[int(best[i, j])]
+            q_grid = tuple(float(axes[k][idx[k]]) for k in range(len(names)))
+            q_best = q_grid
+            if grid_theta[i, j] > 0.0:
+                val, q_ref = _refine(follower, i, j, axes, idx, lo, hi)
+                if val > grid_theta[i, j]:
+                    follower.check_physical(q_ref)
+                    theta[i, j], q_best = val, q_ref
+            argmax[(i, j)] = follower.params(q_best)
+            rep.advance()
     refinement = theta - grid_theta
     refinement_gain = float(refinement.max())
     epsilon = float(theta.max())

@@ -1,0 +1,228 @@
+"""Progress of long work: a tqdm bar, a callback for programs, a log line per minute.
+
+Every long call of impactcont (:func:`~impactcont.continuation`,
+:func:`~impactcont.curve`, :func:`~impactcont.stability_map`,
+:func:`~impactcont.multi_impact_continuation`, :func:`~impactcont.multi_impact_curve`,
+:func:`~impactcont.period_doubling_cascade`, :func:`~impactcont.robust_stability`)
+takes ``progress=``:
+
+- ``None`` (default): a tqdm bar on stderr when stderr is a terminal, shown once the
+  work has taken :data:`BAR_DELAY` seconds (short calls stay quiet); nothing otherwise;
+- ``True``: a bar on stderr at once, terminal or not; ``False``: no bar;
+- a callable: called with a :class:`Progress` record after every step of the work
+  (a continuation point, a block of a map, an evaluation), and no bar.
+
+Whatever the option, a call that works for more than a minute writes one INFO line per
+minute at most on the ``impactcont.progress`` logger, e.g. ``continuation in omega:
+1234 points, omega = 2.31, 61 s``. Continuation-type work has no known total (the
+points and the parameter value are shown); maps and robust stability have one.
+
+Drivers open a :class:`Reporter` with :func:`reporter` and call :meth:`Reporter.advance`
+(or pass :meth:`Reporter.point` as the core's ``on_point``); a driver that runs another
+one passes its reporter on, so nested work counts in one bar.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Any
+
+__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Progress", "ProgressOption", "Reporter", "reporter"]
+
+log = logging.getLogger(__name__)
+
+LOG_INTERVAL = 60.0
+"""Seconds of work between two progress lines in the log, at least."""
+BAR_DELAY = 2.0
+"""Seconds before the default bar (``progress=None`` on a terminal) appears."""
+
+clock: Callable[[], float] = time.monotonic
+"""The clock of the reporters made from now on (replaced by a fake one in tests)."""
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Where a long call is: the record a ``progress=`` callable receives.
+
+    Attributes
+    ----------
+    what : str
+        The work, e.g. ``"continuation in omega"`` or ``"stability map"``.
+    done : int
+        Units of work done so far (points, map points, evaluations); increases.
+    total : int or None
+        Units of the whole work when known (maps, robust stability), else None.
+    parameter : str or None
+        The continued parameter, None for work without one.
+    value : float or None
+        Its value at the last point, None when there is none.
+    elapsed : float
+        Seconds since the work started.
+    """
+
+    what: str
+    done: int
+    total: int | None
+    parameter: str | None
+    value: float | None
+    elapsed: float
+
+
+ProgressOption = bool | Callable[[Progress], Any] | None
+"""What ``progress=`` accepts: None (a bar on a terminal), True, False or a callable."""
+
+
+def _stderr_is_terminal() -> bool:
+    isatty = getattr(sys.stderr, "isatty", None)
+    try:
+        return bool(isatty and isatty())
+    except (ValueError, OSError):  # a closed or detached stream
+        return False
+
+
+class Reporter:
+    """The progress of one long call: counts its work, draws, calls back and logs.
+
+    Parameters
+    ----------
+    what : str
+        The work, in words (the bar's title and the start of the log line).
+    progress : None, bool or callable
+        The ``progress=`` option of the driver (see the module docstring).
+    total : int, optional
+        Units of the whole work, when known.
+    parameter : str, optional
+        The continued parameter (shown with its value).
+    unit : str
+        The unit of work, plural (``"points"``).
+
+    Raises
+    ------
+    TypeError
+        `progress` is not None, True, False or a callable.
+    """
+
+    def __init__(self, what: str, progress: ProgressOption = None, *, total: int | None = None,
+                 parameter: str | None = None, unit: str = "points") -> None:
+        if not (progress is None or isinstance(progress, bool) or callable(progress)):
+            raise TypeError(f"progress must be None (a bar when stderr is a terminal), True, "
+                            f"False or a callable taking a Progress record; got {progress!r}")
+        self.what, self.total, self.parameter, self.unit = what, total, parameter, unit
+        self.done = 0
+        self.value: float | None = None
+        self._clock = clock
+        self.start = self._clock()
+        self._next_log = self.start + LOG_INTERVAL
+        self._callback = progress if callable(progress) else None
+        self._bar: Any = None
+        if progress is True or (progress is None and _stderr_is_terminal()):
+            self._bar = self._open_bar(delay=0.0 if progress is True else BAR_DELAY)
+
+    def _open_bar(self, delay: float) -> Any:
+        try:
+            from tqdm import tqdm
+        except ImportError:  # a dependency; a broken install still computes
+            log.warning("tqdm is not installed: no progress bar for %s", self.what)
+            return None
+        return tqdm(total=self.total, desc=self.what, unit=f" {self.unit}", file=sys.stderr,
+                    delay=delay, leave=False, dynamic_ncols=True)
+
+    @property
+    def elapsed(self) -> float:
+        """Seconds since the work started."""
+        return self._clock() - self.start
+
+    def record(self) -> Progress:
+        """The work done so far as a :class:`Progress` record."""
+        return Progress(self.what, self.done, self.total, self.parameter, self.value,
+                        self.elapsed)
+
+    def advance(self, count: int = 1, value: float | None = None) -> None:
+        """Count `count` more units of work, the last at parameter value `value`."""
+        self.done += count
+        if value is not None:
+            self.value = value
+        now = self._clock()
+        if now >= self._next_log:
+            self._next_log = now + LOG_INTERVAL
+            log.info("%s", self.line(now - self.start))
+        if self._bar is not None:
+            if value is not None:
+                self._bar.set_postfix_str(f"{self.parameter} = {value:.6g}", refresh=False)
+            self._bar.update(count)
+        if self._callback is not None:
+            self._callback(Progress(self.what, self.done, self.total, self.parameter,
+                                    self.value, now - self.start))
+
+    def point(self, point: Any) -> None:
+        """:meth:`advance` by one continuation point (the core's ``on_point``)."""
+        self.advance(1, point.lam)
+
+    def line(self, elapsed: float) -> str:
+        """The log line: ``what: done [of total (pc %)] unit[, parameter = value], s``."""
+        if self.total:
+            count = (f"{self.done} of {self.total} {self.unit} "
+                     f"({100.0 * self.done / self.total:.0f} %)")
+        else:
+            count = f"{self.done} {self.unit}"
+        where = (f", {self.parameter} = {self.value:.6g}"
+                 if self.parameter is not None and self.value is not None else "")
+        return f"{self.what}: {count}{where}, {elapsed:.0f} s"
+
+    def close(self) -> None:
+        """Close the bar (idempotent)."""
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self) -> Reporter:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 trace: TracebackType | None) -> None:
+        self.close()
+
+
+class _Shared:
+    """A reporter of an enclosing call, entered again by a nested driver: not closed."""
+
+    def __init__(self, shared: Reporter) -> None:
+        self.shared = shared
+
+    def __enter__(self) -> Reporter:
+        return self.shared
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def reporter(progress: ProgressOption | Reporter, what: str, *, total: int | None = None,
+             parameter: str | None = None, unit: str = "points") -> Reporter | _Shared:
+    """The reporter of a driver call, to use as a context manager.
+
+    Parameters
+    ----------
+    progress : None, bool, callable or Reporter
+        The driver's ``progress=`` option; a :class:`Reporter` of an enclosing call is
+        used as it is (and left open).
+    what, total, parameter, unit
+        See :class:`Reporter`.
+
+    Returns
+    -------
+    context manager
+        Entering it gives the :class:`Reporter`; leaving it closes the bar.
+
+    Raises
+    ------
+    TypeError
+        `progress` is not None, True, False, a callable or a Reporter.
+    """
+    if isinstance(progress, Reporter):
+        return _Shared(progress)
+    return Reporter(what, progress, total=total, parameter=parameter, unit=unit)
