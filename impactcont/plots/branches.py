@@ -23,11 +23,12 @@ from impactcont.dataset.schema import (
     special_variable,
     validate_branch_dataset,
 )
-from impactcont.plots.labels import place_labels
+from impactcont.plots.labels import coincident_groups, place_labels
 
-__all__ = ["SEGMENT_STYLES", "SPECIAL_MARKERS", "SPECIAL_NAMES", "axis_label",
-           "bifurcation_diagram", "differing_parameters", "fixed_parameters",
-           "multipliers_plot", "stability_segments"]
+__all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "SEGMENT_STYLES", "SPECIAL_MARKERS",
+           "SPECIAL_NAMES", "axis_label", "bifurcation_diagram", "differing_parameters",
+           "fit_text", "fixed_parameters", "legend_below", "legend_fontsize", "motion_text",
+           "multipliers_plot", "parameter_text", "stability_segments", "system_text"]
 
 logger = logging.getLogger(__name__)
 
@@ -62,7 +63,7 @@ def _new_axes(ncols: int = 1) -> Any:
     # pyplot so that notebooks display the figure; nothing here calls show().
     import matplotlib.pyplot as plt
 
-    _, axes = plt.subplots(1, ncols, figsize=(5.0 * ncols, 4.0), layout="constrained")
+    _, axes = plt.subplots(1, ncols, figsize=(5.0 * ncols, 5.0), layout="constrained")
     return axes
 
 
@@ -201,9 +202,243 @@ def _borders_physical(ds: xr.Dataset, physical: np.ndarray, k: int) -> bool:
     return bool(np.any(physical[max(p - 1, 0):p + 2]))
 
 
+#: Where :func:`bifurcation_diagram` puts its legend.
+LEGEND_PLACES = ("below", "right", "inside", None)
+#: Grey of the special points of non-physical motions (small, unlabelled).
+NONPHYSICAL_GREY = "0.6"
+_MARKER_SIZE = 6.0  # points
+_MATH = {"omega": r"\omega", "eta": r"\eta", "alpha": r"\alpha", "beta": r"\beta",
+         "b_low": r"b_{low}", "R_low": r"R_{low}"}
+
+
+def parameter_text(values: Mapping[str, float], keys: Iterable[str]) -> str:
+    """``$b = 0.5$, $R = 0.6$, ...``: the parameters ``keys`` of ``values`` in mathtext."""
+    return ", ".join(f"${_MATH.get(k, k)} = {values[k]:g}$" for k in keys if k in values)
+
+
+def _stops(ds: xr.Dataset) -> dict[str, Any]:
+    """The stops of a dataset's oscillator: ``{"mass": 1}`` for the paper's one stop."""
+    osc = json.loads(ds.attrs.get("oscillator", "{}"))
+    stops = osc.get("stops") or {}
+    out = {"mass": int(stops.get("mass", 1))}
+    if stops.get("b_low") is not None or stops.get("mirror"):
+        out["b_low"] = float(stops["b_low"]) if stops.get("b_low") is not None \
+            else float(osc.get("b", float("nan")))
+        out["R_low"] = float(stops["R_low"]) if stops.get("R_low") is not None \
+            else float(osc.get("R", float("nan")))
+    return out
+
+
+def motion_text(datasets: Sequence[xr.Dataset]) -> str:
+    """What motions ``datasets`` hold: ``Periodic 1-2 motions (impacts LU)``, ``N-1``, ...
+
+    N impacts-per-N-periods ``N-p`` (``p`` the attribute ``impacts``, 1 for an
+    N-1 branch) and, between two stops, the sequence of stops hit (``U``
+    upper, ``L`` lower).
+    """
+    Ns = sorted({int(ds.attrs["N"]) for ds in datasets})
+    ps = sorted({int(ds.attrs.get("impacts", 1)) for ds in datasets})
+    patterns = sorted({str(ds.attrs["pattern"]) for ds in datasets
+                       if "pattern" in ds.attrs and "b_low" in _stops(ds)})
+    n = str(Ns[0]) if len(Ns) == 1 else "N"
+    p = str(ps[0]) if len(ps) == 1 else "p"
+    text = f"Periodic {n}-{p} motions"
+    if len(patterns) == 1:
+        text += f" (impacts {patterns[0]}: U upper, L lower stop)"
+    return text
+
+
+def system_text(datasets: Sequence[xr.Dataset], skip: Iterable[str] = ()) -> str:
+    """The parameters held fixed along all ``datasets``, the stops included, in mathtext."""
+    fixed = fixed_parameters(datasets)
+    stops = [_stops(ds) for ds in datasets]
+    for key in ("b_low", "R_low"):
+        values = {s.get(key) for s in stops}
+        if len(values) == 1 and None not in values:
+            fixed[key] = values.pop()
+    skip = set(skip)
+    return parameter_text(fixed, [k for k in ("b", "b_low", "R", "R_low", "omega", "eta",
+                                              "alpha", "beta") if k not in skip])
+
+
+def _y_label(ds: xr.Dataset, y: str) -> str:
+    """The vertical axis: the impact velocity of a two-stop branch is a speed towards the stop."""
+    stops = _stops(ds)
+    j = stops["mass"]
+    if y == "impact_velocity" and "b_low" in stops:
+        return rf"impact speed towards the stop hit $|\dot{{x}}_{j}(T^-)|$"
+    if y == "impact_velocity" and j != 1:
+        return rf"impact velocity $\dot{{x}}_{j}(T^-)$"
+    return axis_label(ds, y)
+
+
+def fit_text(text_artist: Any, width: float | None = None) -> None:
+    """Break ``text_artist`` at ``, `` into lines that fit ``width`` display units.
+
+    By default the width that keeps the text, centred where it is, inside its
+    figure. Call it on a laid-out figure.
+    """
+    text = text_artist.get_text()
+    if not text or "\n" in text:
+        return
+    if width is None:
+        box = text_artist.get_window_extent()
+        centre = 0.5 * (box.x0 + box.x1)
+        width = 2.0 * min(centre, text_artist.figure.bbox.width - centre) - 4.0
+    if text_artist.get_window_extent().width <= width:
+        return
+    lines = [""]
+    for part in text.split(", "):
+        trial = f"{lines[-1]}, {part}" if lines[-1] else part
+        text_artist.set_text(trial)
+        if lines[-1] and text_artist.get_window_extent().width > width:
+            lines[-1] += ","
+            lines.append(part)
+        else:
+            lines[-1] = trial
+    text_artist.set_text("\n".join(lines))
+
+
+def legend_fontsize(fig: Any) -> str:
+    """``small`` on a figure of 5 in or more, ``x-small`` on a narrower one (one column)."""
+    return "small" if fig.get_size_inches()[0] >= 5.0 else "x-small"
+
+
+def legend_below(ax: Axes, handles: Sequence[Any], *, fontsize: Any = None) -> Any:
+    """A legend under the axis labels of ``ax``, in as many columns as its width allows.
+
+    The offset under the axes is in inches (the height of the tick labels and
+    the axis label), so it holds wherever a constrained layout moves the axes.
+    """
+    from matplotlib.transforms import ScaledTranslation
+
+    fig = ax.figure
+    fontsize = fontsize or legend_fontsize(fig)
+    fig.draw_without_rendering()
+    below = (ax.get_window_extent().y0 - ax.xaxis.get_tightbbox().y0) / fig.dpi + 0.04
+    shift = ax.transAxes + ScaledTranslation(0.0, -below, fig.dpi_scale_trans)
+    room = 0.96 * fig.bbox.width
+    legend = None
+    for ncols in range(min(len(handles), 6), 0, -1):
+        legend = ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                           bbox_transform=shift, ncols=ncols, fontsize=fontsize,
+                           frameon=False, handlelength=2.4, columnspacing=1.2,
+                           borderaxespad=0.0)
+        if legend.get_window_extent().width <= room:
+            break
+    return legend
+
+
+def _y_range(values: np.ndarray) -> tuple[float, float, float]:
+    lo, hi = float(values.min()), float(values.max())
+    pad = 0.08 * (hi - lo) if hi > lo else 0.1 * max(abs(hi), 1.0)
+    return lo - pad, hi + pad, pad
+
+
+def _inset_place(ax: Axes, cluster: np.ndarray, size: tuple[float, float]
+                 ) -> list[float] | None:
+    """Axes-fraction rectangle of an inset that covers the fewest curves, never the cluster."""
+    to_axes = ax.transData + ax.transAxes.inverted()
+    parts = [np.asarray(line.get_xydata(), dtype=float) for line in ax.get_lines()
+             if line.get_visible() and len(line.get_xydata())]
+    xy = to_axes.transform(np.vstack(parts)) if parts else np.empty((0, 2))
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    c = to_axes.transform(cluster)
+    w, h = size
+    best = None
+    for x0 in (0.02, 0.5 - w / 2, 0.98 - w):
+        for y0 in (0.98 - h, 0.02, 0.5 - h / 2):
+            box = (x0 - 0.02, y0 - 0.02, x0 + w + 0.02, y0 + h + 0.02)
+
+            def inside(p: np.ndarray, box: tuple[float, ...] = box) -> np.ndarray:
+                return ((p[:, 0] > box[0]) & (p[:, 0] < box[2]) & (p[:, 1] > box[1])
+                        & (p[:, 1] < box[3]))
+
+            if np.any(inside(c)):
+                continue
+            score = int(np.count_nonzero(inside(xy)))
+            if best is None or score < best[0]:
+                best = (score, [x0, y0, w, h])
+    return None if best is None else best[1]
+
+
+def _zoom(ax: Axes, points: np.ndarray) -> Axes | None:
+    """An inset of ``ax`` showing the data points ``points`` apart, or None if none fits."""
+    x0, y0 = points.min(axis=0)
+    x1, y1 = points.max(axis=0)
+    (X0, X1), (Y0, Y1) = ax.get_xlim(), ax.get_ylim()
+    dx = max(x1 - x0, 0.01 * (X1 - X0))
+    dy = max(y1 - y0, 0.05 * (Y1 - Y0))
+    place = _inset_place(ax, points, (0.4, 0.42))
+    if place is None:
+        return None
+    inset = ax.inset_axes(place)
+    xlim, ylim = (x0 - 0.25 * dx, x1 + 0.25 * dx), (y0 - 0.3 * dy, y1 + 0.3 * dy)
+    for line in ax.get_lines():
+        xy = np.asarray(line.get_xydata(), dtype=float)
+        if line.get_linestyle() in ("None", "none", " ", ""):  # a marker: inside, or not at all
+            mx, my = 0.08 * (xlim[1] - xlim[0]), 0.1 * (ylim[1] - ylim[0])
+            xy = xy[(xy[:, 0] >= xlim[0] + mx) & (xy[:, 0] <= xlim[1] - mx)
+                    & (xy[:, 1] >= ylim[0] + my) & (xy[:, 1] <= ylim[1] - my)]
+            if not len(xy):
+                continue
+        copy = Line2D(*xy.T)
+        copy.update_from(line)
+        copy.set_transform(inset.transData)
+        inset.add_line(copy)
+    inset.set_xlim(*xlim)
+    inset.set_ylim(*ylim)
+    inset.tick_params(labelsize="x-small", length=2, pad=1.5)
+    from matplotlib.ticker import MaxNLocator
+
+    inset.xaxis.set_major_locator(MaxNLocator(3))
+    inset.yaxis.set_major_locator(MaxNLocator(3))
+    inset.set_facecolor("white")
+    inset.set_zorder(5)
+    ax.indicate_inset_zoom(inset, edgecolor="0.35", linewidth=0.8)
+    return inset
+
+
+def _label_points(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
+                  fontsize: Any = "small", avoid: Sequence[Any] = ()) -> None:
+    """One label per place: points closer than a marker share a label (``SN, GR``)."""
+    if not specials:
+        return
+    xy = [(px, py) for px, py, _ in specials]
+    ax.figure.draw_without_rendering()
+    groups = coincident_groups(ax, xy)
+    texts = [", ".join(dict.fromkeys(specials[i][2] for i in g)) for g in groups]
+    place_labels(ax, [xy[g[0]] for g in groups], texts, fontsize=fontsize, avoid=avoid)
+
+
+def _zoom_group(ax: Axes, xy: np.ndarray, inset_size: tuple[float, float] = (0.4, 0.42),
+                magnify: float = 3.0) -> np.ndarray:
+    """Indices of the crowded points of ``xy`` that an inset should show apart, or empty.
+
+    Points chained within a label's size (16 points on the page) crowd each
+    other; the chain is cut at ever smaller distances (a cluster inside a
+    cluster) until its largest group of three or more points fits an inset of
+    ``inset_size`` (axes fractions) ``magnify`` times larger than on the axes.
+    """
+    (X0, X1), (Y0, Y1) = ax.get_xlim(), ax.get_ylim()
+    room = np.array([X1 - X0, Y1 - Y0]) * np.asarray(inset_size)
+    floor = np.array([0.01 * (X1 - X0), 0.05 * (Y1 - Y0)])
+    for distance in (16.0, 8.0, 4.0, 2.0):
+        groups = [g for g in coincident_groups(ax, [tuple(p) for p in xy], distance=distance)
+                  if len(g) >= 3]
+        if not groups:
+            return np.empty(0, dtype=int)
+        group = np.array(max(groups, key=len), dtype=int)
+        span = np.maximum(np.ptp(xy[group], axis=0), floor) * np.array([1.5, 1.6])
+        if np.min(room / span) >= magnify:
+            return group
+    return np.empty(0, dtype=int)
+
+
 def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes | None = None,
                         label_special: bool = True, title: str | None = None,
-                        physical_range: bool = True) -> Axes:
+                        physical_range: bool = True, legend: str | None = "below",
+                        zoom: bool = True) -> Axes:
     """Draw branches against their continued parameter, styled by stability.
 
     Stable physical motions are solid, unstable physical ones dashed and
@@ -211,10 +446,13 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     split wherever the kind changes. Each branch has its colour, named in the
     legend with its N (and the parameters that differ, if the branches belong
     to different systems: draw those on separate axes for a clear figure).
-    Special points get one marker per label (:data:`SPECIAL_MARKERS`) and,
-    optionally, a text label placed clear of the others; those of non-physical
-    motions (not even at the edge of a physical one) are small, grey and
-    unlabelled. The legend sits outside the axes, so it never hides a curve.
+    Special points get one marker per label (:data:`SPECIAL_MARKERS`), drawn
+    in the colour of their branch, and optionally a text label placed clear of
+    the others and of the curves (points closer than a marker share one label,
+    ``SN, GR``); those of non-physical motions (not even at the edge of a
+    physical one) are small, grey (:data:`NONPHYSICAL_GREY`) and unlabelled.
+    Three or more special points crowded within a label's size get a zoomed
+    inset, placed where it hides the fewest curves, with their labels.
 
     Parameters
     ----------
@@ -224,31 +462,45 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         Name of a real variable on ``point`` (``impact_velocity``, ``delta``,
         ``gap_min``, ``spectral_radius``, ...).
     ax : matplotlib.axes.Axes, optional
-        Where to draw; a new pyplot figure by default.
+        Where to draw; a new pyplot figure by default. With ``legend="below"``
+        its figure should use the constrained layout (the default figure does).
     label_special : bool, optional
         Write each special point's label next to its marker.
     title : str, optional
-        Axes title; by default what is drawn (``Periodic N-1 motions at b = 0.5``),
-        ``""`` for none.
+        Axes title; by default the motions and the system drawn
+        (``Periodic N-1 motions, b = 0.5, R = 0.6, eta = 0.1``), ``""`` for none.
     physical_range : bool, optional
         Fit the vertical range to the physical motions (default), clipping
         non-physical ones at the frame; False fits everything drawn.
+    legend : {"below", "right", "inside", None}, optional
+        Under the axes (default: the axes keep the figure's width), outside on
+        the right, inside the axes (``loc="best"``), or none.
+    zoom : bool, optional
+        Draw crowded special points again in an inset.
 
     Returns
     -------
     matplotlib.axes.Axes
+
+    Raises
+    ------
+    ValueError
+        ``y`` or ``legend`` is not allowed, or the branches are continued in
+        different parameters.
     """
+    if legend not in LEGEND_PLACES:
+        raise ValueError(f"legend must be one of {LEGEND_PLACES}; got {legend!r}")
     branches = _branches(datasets, one_parameter=True)
     parameters = {ds.attrs["parameter"] for _, ds in branches}
     if ax is None:
         ax = _new_axes()
-    fixed = fixed_parameters([ds for _, ds in branches])
     differing = differing_parameters([[ds] for _, ds in branches])
     kinds_seen: set[str] = set()
     labels_seen: set[str] = set()
     branch_handles = []
-    specials: list[tuple[float, float, str]] = []
+    specials: list[tuple[float, float, str, str, bool]] = []  # x, y, label, colour, shown
     seen: list[np.ndarray] = []  # y of the physical motions
+    counts = {int(ds.attrs["N"]) for _, ds in branches}
     for b, (name, ds) in enumerate(branches):
         yname = _y_variable(ds, y)
         parameter = ds.attrs["parameter"]
@@ -258,53 +510,83 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         for kind, sl in stability_segments(ds):
             ax.plot(x[sl], yv[sl], color=color, **SEGMENT_STYLES[kind])
             kinds_seen.add(kind)
-        seen.append(yv[np.asarray(ds["physical"].values, dtype=bool)])
-        own = fixed_parameters([ds])
-        about = ", ".join([f"N = {int(ds.attrs['N'])}",
-                           *([_system_text(own, differing)] if differing else [])])
-        branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
-                                     label=f"{name} ({about})" if name else about))
-        labels = np.asarray(ds[special_variable("label")].values).tolist()
         physical = np.asarray(ds["physical"].values, dtype=bool)
-        for label in SPECIAL_LABELS:
-            ks = [k for k, lab in enumerate(labels) if lab == label]
-            if not ks:
-                continue
-            shown = [_borders_physical(ds, physical, k) for k in ks]
-            pts = np.array([_special_xy(ds, x, yv, yname, k) for k in ks])
-            for keep, size, edge in ((True, 36, "black"), (False, 16, "0.6")):
-                sel = np.array(shown) == keep
-                if np.any(sel):  # special points of non-physical motions: small, grey, unlabelled
-                    ax.scatter(pts[sel, 0], pts[sel, 1], marker=SPECIAL_MARKERS[label], s=size,
-                               facecolors="white", edgecolors=edge, linewidths=1.0, zorder=3)
-            labels_seen.add(label)
-            specials += [(float(px), float(py), label)
-                         for (px, py), keep in zip(pts, shown, strict=True) if keep]
-    shown = np.concatenate([*seen, [py for _, py, _ in specials]])
-    shown = shown[np.isfinite(shown)]
-    if physical_range and shown.size:
-        lo, hi = float(shown.min()), float(shown.max())
-        pad = 0.08 * (hi - lo) if hi > lo else 0.1 * max(abs(hi), 1.0)
-        ax.set_ylim(lo - pad, hi + pad)
+        seen.append(yv[physical])
+        p = int(ds.attrs.get("impacts", 1))
+        about = ", ".join([f"N = {int(ds.attrs['N'])}" if p == 1
+                           else f"{int(ds.attrs['N'])}-{p}",
+                           *([_system_text(fixed_parameters([ds]), differing)]
+                             if differing else [])])
+        unique = len(counts) == len(branches) and not differing
+        branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
+                                     label=f"{name} ({about})" if name and not unique
+                                     else about))
+        labels = np.asarray(ds[special_variable("label")].values).tolist()
+        for k, label in enumerate(labels):
+            px, py = _special_xy(ds, x, yv, yname, k)
+            specials.append((px, py, str(label), color, _borders_physical(ds, physical, k)))
+    kept = [s for s in specials if s[4]]
+    values = np.concatenate([*seen, [s[1] for s in kept]])
+    values = values[np.isfinite(values)]
+    lo = hi = pad = None
+    if physical_range and values.size:
+        lo, hi, pad = _y_range(values)
+        ax.set_ylim(lo, hi)
+    grey = False
+    for label in SPECIAL_LABELS:
+        for shown in (True, False):
+            pts = [(px, py, c) for px, py, lab, c, keep in specials
+                   if lab == label and keep == shown]
+            if not shown and lo is not None:  # never cut by the frame: inside or not drawn
+                pts = [q for q in pts if lo + 0.5 * pad <= q[1] <= hi - 0.5 * pad]
+            for px, py, c in pts:
+                ax.plot([px], [py], linestyle="none", marker=SPECIAL_MARKERS[label],
+                        markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
+                        markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
+                        markeredgecolor=c if shown else NONPHYSICAL_GREY, zorder=3)
+            labels_seen.update([label] if pts else [])
+            grey |= bool(pts) and not shown
     first = branches[0][1]
     ax.set_xlabel(axis_label(first, first.attrs["parameter"]))
-    ax.set_ylabel(axis_label(first, y))
+    ax.set_ylabel(_y_label(first, y))
     if title is None:
-        Ns = sorted({int(ds.attrs["N"]) for _, ds in branches})
-        where = _system_text(fixed, [k for k in ("omega", "b") if k not in parameters])
-        title = (f"Periodic {Ns[0] if len(Ns) == 1 else 'N'}-1 motions"
-                 + (f" at {where}" if where else ""))
-    if title:
-        ax.set_title(title, fontsize="medium")
+        where = system_text([ds for _, ds in branches], skip=parameters)
+        title = motion_text([ds for _, ds in branches]) + (f", {where}" if where else "")
     handles = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
                for kind in _KINDS if kind in kinds_seen]
     handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
-                       markerfacecolor="white", markeredgecolor="black",
-                       label=f"{label} {SPECIAL_NAMES[label]}")
+                       markersize=_MARKER_SIZE, markerfacecolor="white",
+                       markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
                 for label in SPECIAL_LABELS if label in labels_seen]
-    ax.legend(handles=handles + branch_handles, fontsize="small", **_OUTSIDE)
-    if label_special and specials:
-        place_labels(ax, [(px, py) for px, py, _ in specials], [t for _, _, t in specials])
+    if grey:
+        handles.append(Line2D([], [], linestyle="none", marker="o",
+                              markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
+                              markeredgecolor=NONPHYSICAL_GREY,
+                              label="(grey) on a non-physical motion"))
+    handles += branch_handles
+    if legend == "below":
+        legend_below(ax, handles)
+    elif legend == "right":
+        ax.legend(handles=handles, fontsize="small", **_OUTSIDE)
+    elif legend == "inside":
+        ax.legend(handles=handles, fontsize="x-small", loc="best")
+    if title:
+        ax.set_title(title, fontsize="medium")
+        ax.figure.draw_without_rendering()
+        fit_text(ax.title)
+    if label_special and kept:
+        labelled = [(px, py, lab) for px, py, lab, _, _ in kept]
+        ax.figure.draw_without_rendering()
+        crowd = (_zoom_group(ax, np.array([(px, py) for px, py, _ in labelled]))
+                 if zoom else np.empty(0, dtype=int))
+        inset = _zoom(ax, np.array([labelled[i][:2] for i in crowd])) if crowd.size else None
+        avoid = []
+        if inset is not None:
+            _label_points(inset, [labelled[i] for i in crowd], fontsize="x-small")
+            ax.figure.draw_without_rendering()
+            avoid = [inset.get_tightbbox()]
+            labelled = [s for i, s in enumerate(labelled) if i not in set(crowd.tolist())]
+        _label_points(ax, labelled, avoid=avoid)
     logger.debug("bifurcation diagram: %d branch(es), y=%s", len(branches), y)
     return ax
 

@@ -18,7 +18,7 @@ from matplotlib.axes import Axes
 from matplotlib.font_manager import FontProperties
 from matplotlib.text import Annotation
 
-__all__ = ["place_labels"]
+__all__ = ["coincident_groups", "place_labels"]
 
 _RINGS = (4.0, 12.0, 22.0, 34.0, 48.0, 64.0)  # distance of a label from its point, in points
 _MARKER = 4.0  # half-size of a marker, in points
@@ -51,8 +51,74 @@ def _curve_points(ax: Axes, to_points: Any) -> np.ndarray:
     return to_points(xy) if len(xy) else xy
 
 
+def _leader_crossings(p: np.ndarray, box: np.ndarray, segments: np.ndarray) -> int:
+    """How many curve segments the leader from point ``p`` to ``box`` crosses (points)."""
+    if segments.size == 0:
+        return 0
+    a = np.clip(p, box[:2], box[2:])
+    d = a - p
+    length = float(np.hypot(*d))
+    if length <= _MARKER:
+        return 0
+    b = p + d * (_MARKER / length)
+    q0, q1 = segments[:, 0], segments[:, 1]
+
+    def orient(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
+        return np.sign((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
+                       - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
+
+    cross = ((orient(a, b, q0) * orient(a, b, q1) < 0) & (orient(q0, q1, a) * orient(q0, q1, b)
+                                                          < 0))
+    return int(np.count_nonzero(cross))
+
+
+def _curve_segments(ax: Axes, to_points: Any) -> np.ndarray:
+    """``(m, 2, 2)`` segments of the lines drawn on ``ax`` with a line style, in points."""
+    out = []
+    for line in ax.get_lines():
+        if not line.get_visible() or line.get_linestyle() in ("None", "none", " ", ""):
+            continue
+        xy = np.asarray(line.get_xydata(), dtype=float)
+        if len(xy) < 2:
+            continue
+        xy = to_points(xy)
+        ok = np.all(np.isfinite(xy), axis=1)
+        seg = ok[:-1] & ok[1:]
+        out.append(np.stack([xy[:-1][seg], xy[1:][seg]], axis=1))
+    return np.concatenate(out) if out else np.empty((0, 2, 2))
+
+
+def coincident_groups(ax: Axes, xy: Sequence[tuple[float, float]], *,
+                      distance: float = 2.0 * _MARKER) -> list[list[int]]:
+    """Indices of the points of ``xy`` drawn within ``distance`` points of each other.
+
+    Points closer than a marker are one place on the page whatever the zoom
+    (e.g. a grazing and a fold at the same frequency): they get one label.
+    Call it on a laid-out figure (see :func:`place_labels`).
+    """
+    if not len(xy):
+        return []
+    pts = ax.transData.transform(np.asarray(xy, dtype=float)) * 72.0 / ax.figure.dpi
+    group = list(range(len(pts)))
+
+    def root(i: int) -> int:
+        while group[i] != i:
+            i = group[i]
+        return i
+
+    for i in range(len(pts)):
+        for j in range(i):
+            if np.hypot(*(pts[i] - pts[j])) <= distance:
+                group[root(i)] = root(j)
+    out: dict[int, list[int]] = {}
+    for i in range(len(pts)):
+        out.setdefault(root(i), []).append(i)
+    return list(out.values())
+
+
 def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[str], *,
-                 fontsize: Any = "small", **text_kw: Any) -> list[Annotation]:
+                 fontsize: Any = "small", avoid: Sequence[Any] = (),
+                 **text_kw: Any) -> list[Annotation]:
     """Annotate the data points ``xy`` with ``texts`` so that no two labels overlap.
 
     Call it last, once everything else is drawn on the figure: it lays the
@@ -67,6 +133,9 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     texts : sequence of str
         One label per point.
     fontsize : str or float, optional
+    avoid : sequence of matplotlib.transforms.Bbox, optional
+        Further regions, in display coordinates, that no label may cover
+        (e.g. an inset).
     **text_kw
         Passed on to :meth:`matplotlib.axes.Axes.annotate`.
 
@@ -90,10 +159,15 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     frame = np.asarray(ax.get_window_extent().extents) * scale
     size = FontProperties(size=fontsize).get_size_in_points()
     curves = _curve_points(ax, to_points)
+    segments = _curve_segments(ax, to_points)
     markers = np.hstack([pts - _MARKER, pts + _MARKER])
     # texts already there (an earlier call on these axes) are obstacles too
     placed: list[np.ndarray] = [np.asarray(t.get_window_extent().extents) * scale
                                 for t in ax.texts if t.get_visible() and t.get_text()]
+    placed += [np.asarray(b.extents) * scale for b in avoid]
+    legend = ax.get_legend()
+    if legend is not None and legend.get_visible():
+        placed.append(np.asarray(legend.get_window_extent().extents) * scale)
     out = []
     for k in np.argsort(pts[:, 0], kind="stable"):
         px, py = pts[k]
@@ -106,7 +180,9 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
                        + max(frame[1] - box[1], 0) + max(box[3] - frame[3], 0))
             crossed = np.count_nonzero((curves[:, 0] > box[0]) & (curves[:, 0] < box[2])
                                        & (curves[:, 1] > box[1]) & (curves[:, 1] < box[3]))
-            score = 100.0 * hard + 50.0 * h * outside + 20.0 * crossed + 30.0 * ring
+            leader = _leader_crossings(pts[k], box, segments) if ring > 0 else 0
+            score = (100.0 * hard + 50.0 * h * outside + 20.0 * crossed + 30.0 * ring
+                     + 400.0 * leader)
             if best is None or score < best[0]:
                 best = (score, dx, dy, ring)
         _, dx, dy, ring = best  # type: ignore[misc]

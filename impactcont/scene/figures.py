@@ -56,10 +56,25 @@ def _option(plot: Any, name: str, default: Any) -> Any:
     return default if value is None else value
 
 
+#: Default width of the figures, in inches: a journal's double column (3.5 in: single).
+WIDTH = 7.0
+
+
+def _width(plot: Any) -> float:
+    """The figure width in inches (``plot.width``, default :data:`WIDTH`)."""
+    width = _option(plot, "width", WIDTH)
+    if isinstance(width, bool) or not isinstance(width, (int, float)) or not 2.0 <= width <= 20:
+        raise ParameterError(f"width must be a number of inches in [2, 20]; got {width!r}")
+    return float(width)
+
+
 def _finish(fig: Figure, plot: Any, default_title: str) -> Figure:
+    from impactcont.plots.branches import fit_text
+
     title = _option(plot, "title", default_title)
     if title:
-        fig.suptitle(title, fontsize="medium")
+        text = fig.suptitle(title, fontsize="medium")
+        fit_text(text)
     return fig
 
 
@@ -81,10 +96,16 @@ def draw_bifurcation(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
     each other.
     """
     from impactcont.plots import bifurcation_diagram
-    from impactcont.plots.branches import differing_parameters, fixed_parameters
+    from impactcont.plots.branches import (
+        differing_parameters,
+        fixed_parameters,
+        parameter_text,
+    )
 
     panels = _systems(datasets)
-    fig = Figure(figsize=(9.0, 0.6 + 4.4 * len(panels)), layout="constrained")
+    width = _width(plot)
+    fig = Figure(figsize=(width, 0.3 + (0.45 * width + 2.2) * len(panels)),
+                 layout="constrained")
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
     y = _option(plot, "y", "impact_velocity")
     first = next(iter(datasets.values()))
@@ -97,8 +118,7 @@ def draw_bifurcation(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
         title = None  # one panel: what bifurcation_diagram says it draws
         if len(panels) > 1:
             own = fixed_parameters(list(panel.values()))
-            title = ", ".join(f"{k} = {own[k]:g}" for k in differing if k in own) or \
-                f"system {number} (M, K or F differ)"
+            title = parameter_text(own, differing) or f"system {number} (M, K or F differ)"
         bifurcation_diagram(panel, y=y, ax=ax, title=title)
         if ax is not axes[-1]:
             ax.set_xlabel("")
