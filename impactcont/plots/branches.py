@@ -27,8 +27,9 @@ from impactcont.plots.labels import coincident_groups, place_labels
 
 __all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "SEGMENT_STYLES", "SPECIAL_MARKERS",
            "SPECIAL_NAMES", "axis_label", "bifurcation_diagram", "differing_parameters",
-           "fit_text", "fixed_parameters", "legend_below", "legend_fontsize", "motion_text",
-           "multipliers_plot", "parameter_text", "stability_segments", "system_text"]
+           "fit_text", "fixed_parameters", "label_specials", "legend_below", "legend_fontsize",
+           "motion_text", "multipliers_plot", "parameter_text", "stability_segments",
+           "system_text"]
 
 logger = logging.getLogger(__name__)
 
@@ -230,7 +231,7 @@ def _stops(ds: xr.Dataset) -> dict[str, Any]:
 
 
 def motion_text(datasets: Sequence[xr.Dataset]) -> str:
-    """What motions ``datasets`` hold: ``Periodic 1-2 motions (impacts LU)``, ``N-1``, ...
+    """What motions ``datasets`` hold: ``Periodic 1-2 motions, impacts LU``, ``N-1``, ...
 
     N impacts-per-N-periods ``N-p`` (``p`` the attribute ``impacts``, 1 for an
     N-1 branch) and, between two stops, the sequence of stops hit (``U``
@@ -244,7 +245,7 @@ def motion_text(datasets: Sequence[xr.Dataset]) -> str:
     p = str(ps[0]) if len(ps) == 1 else "p"
     text = f"Periodic {n}-{p} motions"
     if len(patterns) == 1:
-        text += f" (impacts {patterns[0]}: U upper, L lower stop)"
+        text += f", impacts {patterns[0]} (L: lower stop)"
     return text
 
 
@@ -304,25 +305,34 @@ def legend_fontsize(fig: Any) -> str:
     return "small" if fig.get_size_inches()[0] >= 5.0 else "x-small"
 
 
-def legend_below(ax: Axes, handles: Sequence[Any], *, fontsize: Any = None) -> Any:
+def legend_below(ax: Axes, handles: Sequence[Any], *, fontsize: Any = None,
+                 span: str = "figure") -> Any:
     """A legend under the axis labels of ``ax``, in as many columns as its width allows.
 
     The offset under the axes is in inches (the height of the tick labels and
     the axis label), so it holds wherever a constrained layout moves the axes.
+    ``span="figure"``: as wide as the figure allows around the axes' centre;
+    ``"axes"``: no wider than the axes (side-by-side panels).
     """
-    from matplotlib.transforms import ScaledTranslation
+    from matplotlib.transforms import ScaledTranslation, blended_transform_factory
 
     fig = ax.figure
     fontsize = fontsize or legend_fontsize(fig)
     fig.draw_without_rendering()
     below = (ax.get_window_extent().y0 - ax.xaxis.get_tightbbox().y0) / fig.dpi + 0.04
     shift = ax.transAxes + ScaledTranslation(0.0, -below, fig.dpi_scale_trans)
-    room = 0.96 * fig.bbox.width
+    if span == "axes":
+        room = ax.get_window_extent().width
+    else:  # centred on the figure, as wide as the figure
+        shift = blended_transform_factory(fig.transFigure, shift)
+        room = fig.bbox.width - 8.0
+    narrow = fig.get_size_inches()[0] < 5.0
     legend = None
     for ncols in range(min(len(handles), 6), 0, -1):
         legend = ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
                            bbox_transform=shift, ncols=ncols, fontsize=fontsize,
-                           frameon=False, handlelength=2.4, columnspacing=1.2,
+                           frameon=False, handlelength=1.8 if narrow else 2.4,
+                           columnspacing=0.8 if narrow else 1.2, handletextpad=0.5,
                            borderaxespad=0.0)
         if legend.get_window_extent().width <= room:
             break
@@ -433,6 +443,27 @@ def _zoom_group(ax: Axes, xy: np.ndarray, inset_size: tuple[float, float] = (0.4
         if np.min(room / span) >= magnify:
             return group
     return np.empty(0, dtype=int)
+
+
+def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
+                   zoom: bool = True) -> Axes | None:
+    """Label the special points ``(x, y, label)`` of ``ax``; crowded ones in a zoomed inset.
+
+    Call it last, once everything else is drawn. Returns the inset, if one was drawn.
+    """
+    labelled = list(specials)
+    ax.figure.draw_without_rendering()
+    crowd = (_zoom_group(ax, np.array([(px, py) for px, py, _ in labelled]))
+             if zoom and labelled else np.empty(0, dtype=int))
+    inset = _zoom(ax, np.array([labelled[i][:2] for i in crowd])) if crowd.size else None
+    avoid = []
+    if inset is not None:
+        _label_points(inset, [labelled[i] for i in crowd], fontsize="x-small")
+        ax.figure.draw_without_rendering()
+        avoid = [inset.get_tightbbox()]
+        labelled = [s for i, s in enumerate(labelled) if i not in set(crowd.tolist())]
+    _label_points(ax, labelled, avoid=avoid)
+    return inset
 
 
 def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes | None = None,
@@ -562,7 +593,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         handles.append(Line2D([], [], linestyle="none", marker="o",
                               markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
                               markeredgecolor=NONPHYSICAL_GREY,
-                              label="(grey) on a non-physical motion"))
+                              label="grey: on non-physical motion"))
     handles += branch_handles
     if legend == "below":
         legend_below(ax, handles)
@@ -575,31 +606,22 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         ax.figure.draw_without_rendering()
         fit_text(ax.title)
     if label_special and kept:
-        labelled = [(px, py, lab) for px, py, lab, _, _ in kept]
-        ax.figure.draw_without_rendering()
-        crowd = (_zoom_group(ax, np.array([(px, py) for px, py, _ in labelled]))
-                 if zoom else np.empty(0, dtype=int))
-        inset = _zoom(ax, np.array([labelled[i][:2] for i in crowd])) if crowd.size else None
-        avoid = []
-        if inset is not None:
-            _label_points(inset, [labelled[i] for i in crowd], fontsize="x-small")
-            ax.figure.draw_without_rendering()
-            avoid = [inset.get_tightbbox()]
-            labelled = [s for i, s in enumerate(labelled) if i not in set(crowd.tolist())]
-        _label_points(ax, labelled, avoid=avoid)
+        label_specials(ax, [(px, py, lab) for px, py, lab, _, _ in kept], zoom=zoom)
     logger.debug("bifurcation diagram: %d branch(es), y=%s", len(branches), y)
     return ax
 
 
 def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
-                     yscale: str = "linear", label_special: bool = True
+                     yscale: str = "auto", label_special: bool = True
                      ) -> tuple[Axes, Axes]:
     """Multipliers of a branch: moduli against the parameter, and the complex plane.
 
     Left: ``|multipliers|`` of every point (dots coloured by the parameter),
-    the spectral radius (line) and the stability boundary ``|mu| = 1``. Right:
-    the multipliers in the complex plane with the unit circle, coloured by the
-    parameter; special points are marked with :data:`SPECIAL_MARKERS`.
+    the spectral radius (line) with the special points on it
+    (:data:`SPECIAL_MARKERS`, labelled) and the stability boundary
+    ``|mu| = 1``. Right: the multipliers in the complex plane with the unit
+    circle, coloured by the parameter, the special points' multipliers marked.
+    One legend, under the left panel, names every mark.
 
     Parameters
     ----------
@@ -607,10 +629,12 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
         One branch dataset.
     ax : pair of matplotlib.axes.Axes, optional
         Where to draw; a new figure with two panels by default.
-    yscale : {"linear", "log"}, optional
-        Scale of the moduli axis.
+    yscale : {"auto", "linear", "log"}, optional
+        Scale of the moduli axis; ``auto`` is logarithmic when the largest
+        modulus exceeds ten times the larger of 1 and the median modulus (a
+        spike near a zero-velocity impact would flatten the rest).
     label_special : bool, optional
-        Mark special points with a vertical line and their label on the left.
+        Write each special point's label beside its marker on the left.
 
     Returns
     -------
@@ -618,8 +642,8 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
         The moduli panel and the complex-plane panel.
     """
     validate_branch_dataset(ds)
-    if yscale not in ("linear", "log"):
-        raise ValueError(f"yscale must be 'linear' or 'log'; got {yscale!r}")
+    if yscale not in ("auto", "linear", "log"):
+        raise ValueError(f"yscale must be 'auto', 'linear' or 'log'; got {yscale!r}")
     if ax is None:
         ax_abs, ax_c = _new_axes(2)
     else:
@@ -630,57 +654,74 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
     parameter = ds.attrs["parameter"]
     x = np.asarray(ds[parameter].values, dtype=float)
     mult = np.asarray(ds["multipliers"].values, dtype=complex)
+    moduli_all = np.abs(mult)
+    finite = moduli_all[np.isfinite(moduli_all)]
+    if yscale == "auto":
+        yscale = ("log" if finite.size and finite.max() > 10.0 * max(1.0, np.median(finite))
+                  else "linear")
     xx = np.broadcast_to(x[:, None], mult.shape).ravel()
     norm_range = (float(np.min(x)), float(np.max(x)))
     common = {"c": xx, "cmap": "viridis", "vmin": norm_range[0], "vmax": norm_range[1],
-              "s": 6, "linewidths": 0}
-    ax_abs.scatter(xx, np.abs(mult).ravel(), **common)
+              "s": 5, "linewidths": 0}
+    shown = moduli_all.ravel() > 0 if yscale == "log" else np.ones(moduli_all.size, bool)
+    ax_abs.scatter(xx[shown], moduli_all.ravel()[shown],
+                   **{**common, "c": xx[shown]})
     # one line per connected component of the branch, never a chord between two
     rho = np.asarray(ds["spectral_radius"].values, dtype=float)
+    xr_, rho_ = x, rho
     if "connected_component" in ds:
         cut = np.flatnonzero(np.diff(np.asarray(ds["connected_component"].values)) != 0) + 1
-        x, rho = np.insert(x, cut, np.nan), np.insert(rho, cut, np.nan)
-    ax_abs.plot(x, rho, color="black", linewidth=1.0, label="spectral radius")
-    ax_abs.axhline(1.0, color="0.4", linestyle="--", linewidth=1.0, label=r"$|\mu| = 1$")
+        xr_, rho_ = np.insert(x, cut, np.nan), np.insert(rho, cut, np.nan)
+    ax_abs.plot(xr_, rho_, color="black", linewidth=1.0)
+    circle = {"color": "0.4", "linestyle": "--", "linewidth": 1.0}
+    ax_abs.axhline(1.0, **circle)
     ax_abs.set_yscale(yscale)
     ax_abs.set_xlabel(axis_label(ds, parameter))
-    ax_abs.set_ylabel(r"moduli of the multipliers $|\mu|$")
+    ax_abs.set_ylabel(r"multiplier moduli $|\mu|$")
 
     theta = np.linspace(0.0, 2.0 * np.pi, 361)
-    ax_c.plot(np.cos(theta), np.sin(theta), color="0.4", linestyle="--", linewidth=1.0)
+    ax_c.plot(np.cos(theta), np.sin(theta), **circle)
     sc = ax_c.scatter(mult.real.ravel(), mult.imag.ravel(), **common)
     labels = np.asarray(ds[special_variable("label")].values).tolist()
     smult = np.asarray(ds[special_variable("multipliers")].values, dtype=complex)
     sx = np.asarray(ds[special_variable(parameter)].values, dtype=float)
-    at_one: list[tuple[float, str]] = []
+    moduli = np.abs(mult[np.isfinite(mult)])
+    reach = max(1.25, float(np.percentile(moduli, 95)) * 1.05) if moduli.size else 1.25
+    seen: list[str] = []
+    on_rho: list[tuple[float, float, str]] = []
     for label in SPECIAL_LABELS:
         ks = [k for k, lab in enumerate(labels) if lab == label]
         if not ks:
             continue
+        seen.append(label)
         m = smult[ks].ravel()
-        ax_c.scatter(m.real, m.imag, marker=SPECIAL_MARKERS[label], s=36, facecolors="none",
-                     edgecolors="black", linewidths=1.0, zorder=3,
-                     label=f"{label} {SPECIAL_NAMES[label]}")
-        if label_special:
-            for k in ks:
-                ax_abs.axvline(sx[k], color="0.6", linestyle=":", linewidth=0.8)
-                at_one.append((float(sx[k]), label))
+        m = m[np.isfinite(m) & (np.abs(m.real) < 0.95 * reach) & (np.abs(m.imag) < 0.95 * reach)]
+        ax_c.plot(m.real, m.imag, linestyle="none", marker=SPECIAL_MARKERS[label],
+                  markersize=_MARKER_SIZE, markerfacecolor="none", markeredgecolor="black",
+                  markeredgewidth=1.0, zorder=3)
+        for k in ks:  # on the drawn spectral radius (a ZV point's own multipliers are a pole)
+            r = _special_xy(ds, x, rho, "spectral_radius", k)[1]
+            on_rho.append((float(sx[k]), r, label))
+            ax_abs.plot([sx[k]], [r], linestyle="none", marker=SPECIAL_MARKERS[label],
+                        markersize=_MARKER_SIZE, markerfacecolor="white",
+                        markeredgecolor="black", markeredgewidth=1.0, zorder=3)
     # near a ZV point G has a pole (multipliers ~ 1/h2): frame the bulk, say what is cut
-    moduli = np.abs(mult[np.isfinite(mult)])
-    reach = max(1.25, float(np.percentile(moduli, 95)) * 1.05) if moduli.size else 1.25
     ax_c.set_xlim(-reach, reach)
     ax_c.set_ylim(-reach, reach)
     ax_c.set_aspect("equal", adjustable="box")
     if moduli.size and (moduli.max() > reach or np.any(np.abs(smult) > reach)):
-        ax_c.text(0.02, 0.02, rf"$|\mu| > {reach:.3g}$ outside the frame", fontsize="x-small",
-                  color="0.35", transform=ax_c.transAxes)
+        ax_c.set_title(rf"$|\mu| > {reach:.3g}$ not shown", fontsize="small", loc="left")
     ax_c.set_xlabel(r"Re $\mu$")
     ax_c.set_ylabel(r"Im $\mu$")
-    if labels:
-        ax_c.legend(fontsize="small", loc="best")
-    ax_abs.legend(fontsize="small", loc="best")
     ax_c.figure.colorbar(sc, ax=ax_c, label=axis_label(ds, parameter))
-    if at_one:
-        place_labels(ax_abs, [(px, 1.0) for px, _ in at_one], [t for _, t in at_one])
+    handles = [Line2D([], [], color="black", linewidth=1.0, label="spectral radius"),
+               Line2D([], [], label=r"$|\mu| = 1$", **circle)]
+    handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
+                       markersize=_MARKER_SIZE, markerfacecolor="white",
+                       markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
+                for label in seen]
+    legend_below(ax_abs, handles, span="axes")
+    if label_special and on_rho:
+        label_specials(ax_abs, on_rho)
     logger.debug("multipliers plot: %d points", x.size)
     return ax_abs, ax_c

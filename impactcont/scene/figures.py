@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from impactcont.dataset.io import atomic_output, check_output_file
 from impactcont.errors import ParameterError
@@ -130,18 +131,37 @@ def draw_bifurcation(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
 def draw_multipliers(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     """Multipliers along one branch."""
     from impactcont.plots import multipliers_plot
+    from impactcont.plots.branches import motion_text, system_text
 
     name, ds = next(iter(datasets.items()))
-    fig = Figure(figsize=(11.0, 4.5), layout="constrained")
-    axes = fig.subplots(1, 2)
-    multipliers_plot(ds, ax=tuple(axes), yscale=_option(plot, "yscale", "linear"))
-    return _finish(fig, plot, f"Multipliers along {name}")
+    width = _width(plot)
+    narrow = width < 5.0  # one panel above the other
+    fig = Figure(figsize=(width, 1.7 * width + 1.2 if narrow else 0.5 * width + 1.4),
+                 layout="constrained")
+    axes = fig.subplots(2 if narrow else 1, 1 if narrow else 2).ravel()
+    multipliers_plot(ds, ax=tuple(axes), yscale=_option(plot, "yscale", "auto"))
+    where = system_text([ds], skip=[ds.attrs["parameter"]])
+    return _finish(fig, plot, f"Multipliers along {name}: {motion_text([ds])[9:]}, {where}")
 
 
 def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Dataset, int | None]]:
-    """One row per stored orbit, and one (``None``) per entry that kept none."""
-    rows = [(name, ds, k) for name, ds in datasets.items()
-            for k in (range(ds.sizes["orbit"]) if ds.sizes["orbit"] else [None])]
+    """One row per physical orbit; an entry with none: its root nearest to physical, or None.
+
+    A root of eq. (15) that is not physical is no motion of the machine: it is
+    drawn only when its entry has no physical one, to show why.
+    """
+    rows: list[tuple[str, xr.Dataset, int | None]] = []
+    for name, ds in datasets.items():
+        n = ds.sizes["orbit"]
+        physical = [k for k in range(n) if bool(ds["physical"][k])]
+        if physical:
+            rows += [(name, ds, k) for k in physical]
+        elif n:
+            gap = np.nan_to_num(np.asarray(ds["gap_min"].values, dtype=float), nan=-np.inf) \
+                if "gap_min" in ds else np.zeros(n)
+            rows.append((name, ds, int(np.argmax(gap))))
+        else:
+            rows.append((name, ds, None))
     if len(rows) > _MAX_ROWS:
         log.warning("orbits plot: drawing the first %d of %d orbits", _MAX_ROWS, len(rows))
     return rows[:_MAX_ROWS]
@@ -154,16 +174,16 @@ def _empty(fig: Figure, text: str) -> Figure:
     return fig
 
 
-def _no_orbit(ax_t: Any, ax_p: Any, name: str, ds: xr.Dataset) -> None:
+def _no_orbit(fig: Any, name: str, ds: xr.Dataset) -> None:
     """An entry that kept no orbit: say why across its row."""
+    from impactcont.plots.branches import fit_text
+
     note = ds.attrs.get("note") or f"no motion kept (which = {ds.attrs.get('which')})"
-    ax_t.text(0.0, 0.5, f"{name}: {note}", ha="left", va="center", transform=ax_t.transAxes,
-              fontsize="small", wrap=True)
-    for ax in (ax_t, ax_p):
-        ax.set_axis_off()
+    text = fig.text(0.5, 0.5, f"{name}: {note}", ha="center", va="center", fontsize="small")
+    fit_text(text)
 
 
-def _style_legend(fig: Figure, kinds: set[str]) -> None:
+def _style_legend(fig: Figure, kinds: set[str], j: int, fontsize: str) -> None:
     from matplotlib.lines import Line2D
 
     from impactcont.plots import SEGMENT_STYLES
@@ -171,141 +191,236 @@ def _style_legend(fig: Figure, kinds: set[str]) -> None:
     handles = [Line2D([], [], color="C0", label=kind, **SEGMENT_STYLES[kind])
                for kind in SEGMENT_STYLES if kind in kinds]
     handles += [Line2D([], [], color="C3", linewidth=0.8, label="impact"),
-                Line2D([], [], color="0.3", linewidth=0.8, linestyle=":", label="stop x1 = b")]
+                Line2D([], [], color="0.3", linewidth=0.8, linestyle=":",
+                       label=f"stop $x_{j} = b$")]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles),
-               fontsize="small", frameon=False)
+               fontsize=fontsize, frameon=False, handlelength=1.8, columnspacing=1.0)
+
+
+def _verdict(ds: xr.Dataset, k: int) -> str:
+    """``stable``, ``unstable`` or why a root is no motion (eq. 16-17)."""
+    if bool(ds["physical"][k]):
+        return "stable" if bool(ds["stable"][k]) else "unstable"
+    if "gap_min" in ds and float(ds["gap_min"][k]) < 0:
+        return f"no physical motion, crosses the stop (min gap {float(ds['gap_min'][k]):.3g})"
+    if "impact_velocity" in ds and float(ds["impact_velocity"][k]) < 0:
+        return (f"no physical motion, impact velocity {float(ds['impact_velocity'][k]):.3g} "
+                f"< 0")
+    return "no physical motion"
 
 
 def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """x1(t) over one period and the phase portrait (x1, x1') of every stored orbit.
+    """$x_j(t)$ over one period and the phase portrait of every physical orbit.
 
     Line styles are those of the bifurcation diagrams (stable, unstable,
-    non-physical); an entry that kept no orbit says why.
+    non-physical). A root of eq. (15) that is not physical is no motion: it is
+    drawn (dotted) only for an entry without a physical one, titled with the
+    reason; an entry that kept no orbit says why. Each row is titled with its
+    entry, N, omega, b and the verdict.
     """
     from impactcont.plots import SEGMENT_STYLES
+    from impactcont.plots.branches import fit_text, legend_fontsize
 
     rows = _orbit_rows(datasets)
-    fig = Figure(figsize=(10.0, 2.6 * max(len(rows), 1) + 0.9), layout="constrained")
+    width = _width(plot)
+    fig = Figure(figsize=(width, (0.3 * width + 0.75) * max(len(rows), 1) + 0.9),
+                 layout="constrained")
     if not rows:
         return _finish(_empty(fig, "no periodic orbit in these entries"), plot, "Orbits")
-    axes = np.atleast_2d(fig.subplots(len(rows), 2, squeeze=False))
+    subfigs = np.atleast_1d(fig.subfigures(len(rows), 1, squeeze=False)[:, 0])
     kinds = set()
-    for (ax_t, ax_p), (name, ds, k) in zip(axes, rows, strict=True):
+    j = 1
+    for sub, (name, ds, k) in zip(subfigs, rows, strict=True):
         if k is None:
-            _no_orbit(ax_t, ax_p, name, ds)
+            _no_orbit(sub, name, ds)
             continue
+        ax_t, ax_p = sub.subplots(1, 2)
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
-        n = osc.n
+        n, i = osc.n, osc.stops.index
+        j = i + 1
         T = float(ds["period"][k])
         tau = np.linspace(0.0, T, 600)
         X = Flow(osc).state(tau, np.asarray(ds["state"][k].values), float(ds["delta"][k]))
         stable, physical = bool(ds["stable"][k]), bool(ds["physical"][k])
         kind = "non-physical" if not physical else "stable" if stable else "unstable"
         kinds.add(kind)
-        ax_t.plot(tau, X[:, 0], color="C0", **SEGMENT_STYLES[kind])
+        ax_t.plot(tau, X[:, i], color="C0", **SEGMENT_STYLES[kind])
         ax_t.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
-        ax_t.set_xlabel("time since the impact t")
-        ax_t.set_ylabel("x1")
-        ax_p.plot(X[:, 0], X[:, n], color="C0", **SEGMENT_STYLES[kind])
-        ax_p.plot([X[-1, 0], X[0, 0]], [X[-1, n], X[0, n]], color="C3", linewidth=0.8)
+        ax_t.set_xlabel("time since the impact $t$")
+        ax_t.set_ylabel(f"$x_{j}$")
+        ax_p.plot(X[:, i], X[:, n + i], color="C0", **SEGMENT_STYLES[kind])
+        ax_p.plot([X[-1, i], X[0, i]], [X[-1, n + i], X[0, n + i]], color="C3", linewidth=0.8)
         ax_p.axvline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
-        ax_p.set_xlabel("x1")
-        ax_p.set_ylabel("x1'")
-        verdict = ("stable" if stable else "unstable") + ("" if physical else ", not physical")
-        ax_t.set_title(f"{name}: N={int(ds.attrs['N'])}, root {int(ds['root'][k]):+d}, "
-                       f"omega={osc.omega:g}, b={osc.b:g} ({verdict})", fontsize="small")
+        ax_p.set_xlabel(f"$x_{j}$")
+        ax_p.set_ylabel(rf"$\dot{{x}}_{j}$")
+        ticks = 3 if width < 5.0 else 6
+        for ax in (ax_t, ax_p):
+            ax.xaxis.set_major_locator(MaxNLocator(ticks))
+            ax.yaxis.set_major_locator(MaxNLocator(ticks))
+        title = sub.suptitle(f"{name}: $N = {int(ds.attrs['N'])}$, root {int(ds['root'][k]):+d}, "
+                             rf"$\omega = {osc.omega:g}$, $b = {osc.b:g}$, {_verdict(ds, k)}",
+                             fontsize="medium")
+        fit_text(title)
     if kinds:
-        _style_legend(fig, kinds)
+        _style_legend(fig, kinds, j, legend_fontsize(fig))
     return _finish(fig, plot, "Periodic impacting motions")
 
 
 def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Simulated trajectories (x1(t), phase portrait) or, without one, the impacts."""
+    """Simulated trajectories ($x_j(t)$, phase portrait) or, without one, the impacts."""
+    from matplotlib.lines import Line2D
+
+    from impactcont.plots.branches import fit_text, legend_fontsize
+
     items = list(datasets.items())[:_MAX_ROWS]
-    fig = Figure(figsize=(10.0, 2.8 * max(len(items), 1) + 0.6), layout="constrained")
+    width = _width(plot)
+    fig = Figure(figsize=(width, (0.3 * width + 0.75) * max(len(items), 1) + 0.8),
+                 layout="constrained")
     if not items:
         return _finish(_empty(fig, "no simulation"), plot, "Simulations")
-    axes = np.atleast_2d(fig.subplots(len(items), 2, squeeze=False))
-    for (ax_l, ax_r), (name, ds) in zip(axes, items, strict=True):
+    subfigs = np.atleast_1d(fig.subfigures(len(items), 1, squeeze=False)[:, 0])
+    trajectories = False
+    j = 1
+    ticks = 3 if width < 5.0 else 6
+    for sub, (name, ds) in zip(subfigs, items, strict=True):
+        ax_l, ax_r = sub.subplots(1, 2)
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
-        n = osc.n
+        n, i = osc.n, osc.stops.index
+        j = i + 1
         if "X" in ds:
+            trajectories = True
             t = np.asarray(ds["t"].values)
             X = np.asarray(ds["X"].values)
-            ax_l.plot(t, X[:, 0], linewidth=0.8)
+            ax_l.plot(t, X[:, i], color="C0", linewidth=0.8)
             ax_l.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
-            ax_l.set_xlabel("t")
-            ax_l.set_ylabel("x1")
-            ax_r.plot(X[:, 0], X[:, n], linewidth=0.6)
+            ax_l.set_xlabel("time $t$")
+            ax_l.set_ylabel(f"$x_{j}$")
+            ax_r.plot(X[:, i], X[:, n + i], color="C0", linewidth=0.8)
             ax_r.axvline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
-            ax_r.set_xlabel("x1")
-            ax_r.set_ylabel("x1'")
+            ax_r.set_xlabel(f"$x_{j}$")
+            ax_r.set_ylabel(rf"$\dot{{x}}_{j}$")
         else:
             k = np.arange(ds.sizes["impact"])
-            ax_l.plot(k, ds["impact_phases"].values, ".", markersize=3)
+            ax_l.plot(k, ds["impact_phases"].values, ".", color="C0", markersize=3)
             ax_l.set_xlabel("impact number")
             ax_l.set_ylabel("impact phase [rad]")
-            ax_r.plot(k, ds["impact_velocities"].values, ".", markersize=3)
+            ax_r.plot(k, ds["impact_velocities"].values, ".", color="C0", markersize=3)
             ax_r.set_xlabel("impact number")
             ax_r.set_ylabel("impact velocity")
-        ax_l.set_title(f"{name}: omega={osc.omega:g}, b={osc.b:g}, {ds.sizes['impact']} "
-                       f"impacts ({ds.attrs.get('status', '')})", fontsize="small")
+        for ax in (ax_l, ax_r):
+            ax.xaxis.set_major_locator(MaxNLocator(ticks))
+            ax.yaxis.set_major_locator(MaxNLocator(ticks))
+        title = sub.suptitle(rf"{name}: $\omega = {osc.omega:g}$, $b = {osc.b:g}$, "
+                             f"{ds.sizes['impact']} impacts, {ds.attrs.get('status', '')}",
+                             fontsize="medium")
+        fit_text(title)
+    handles = [Line2D([], [], color="C0", linewidth=0.8, label="simulated trajectory"),
+               Line2D([], [], color="0.3", linewidth=0.8, linestyle=":",
+                      label=f"stop $x_{j} = b$")] if trajectories else \
+        [Line2D([], [], color="C0", linestyle="none", marker=".", label="impact")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles),
+               fontsize=legend_fontsize(fig), frameon=False)
     return _finish(fig, plot, "Simulations")
 
 
+def _component_symbol(name: str) -> str:
+    r"""Mathtext of a component of eq. (19): ``dv1`` -> ``$\Delta \dot{x}_1$``, ``ddelta``..."""
+    import re
+
+    if name == "ddelta":
+        return r"$\Delta\delta$"
+    match = re.fullmatch(r"d([xv])(\d+)", name)
+    if match is None:
+        return name
+    symbol = "x" if match[1] == "x" else r"\dot{x}"
+    return rf"$\Delta {symbol}_{{{match[2]}}}$"
+
+
 def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Gamma of eq. (28) of each robust-stability entry, with epsilon and epsilon0."""
+    r"""Gamma of eq. (28) of each robust-stability entry, with epsilon and epsilon0.
+
+    Rows and columns are the components of the perturbed impact state of
+    eq. (19) (``\Delta x_2 .. \Delta \dot x_n, \Delta\delta``); one panel per entry.
+    """
     items = list(datasets.items())[:_MAX_ROWS]
-    fig = Figure(figsize=(5.0 * max(len(items), 1), 4.4), layout="constrained")
+    width = _width(plot)
+    cols = max(1, min(len(items), int(width // 3.4)))
+    rows = -(-max(len(items), 1) // cols)
+    fig = Figure(figsize=(width, rows * (width / cols * 0.85 + 0.5) + 0.4),
+                 layout="constrained")
     if not items:
         return _finish(_empty(fig, "no robust-stability entry"), plot, "Robust stability")
-    axes = np.atleast_1d(fig.subplots(1, len(items), squeeze=False)[0])
-    for ax, (name, ds) in zip(axes, items, strict=True):
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
+    for ax in axes[len(items):]:
+        ax.set_visible(False)
+    for ax, (name, ds) in zip(axes, items, strict=False):
         gamma = np.asarray(ds["Gamma"].values, dtype=float)
         im = ax.imshow(gamma, cmap="viridis", vmin=0.0, vmax=1.0)
-        labels = [str(v) for v in ds["g_row"].values]
-        ax.set_xticks(range(len(labels)), labels, rotation=45)
+        labels = [_component_symbol(str(v)) for v in ds["g_row"].values]
+        ax.set_xticks(range(len(labels)), labels)
         ax.set_yticks(range(len(labels)), labels)
-        for (i, j), v in np.ndenumerate(gamma):
-            ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize="x-small",
-                    color="white" if v < 0.6 else "black")
+        ax.set_xlabel("perturbed component $j$")
+        ax.set_ylabel("component $i$ of the impact state")
+        if len(labels) <= 6:
+            for (i, j), v in np.ndenumerate(gamma):
+                ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize="x-small",
+                        color="white" if v < 0.6 else "black")
+        vary = ", ".join(f"${k}$ in [{lo:g}, {hi:g}]"
+                         for k, (lo, hi) in json.loads(ds.attrs.get("vary", "{}")).items())
         verdict = "robustly stable" if bool(ds["robust"]) else "not established"
-        ax.set_title(f"{name}: epsilon = {float(ds['epsilon']):.4g}, epsilon0 = "
-                     f"{float(ds['epsilon0']):.4g}\n{verdict}", fontsize="small")
-        fig.colorbar(im, ax=ax, label="Gamma")
-    return _finish(fig, plot, "Robust stability: perturbation pattern Gamma (eq. 28)")
+        text = ax.set_title(f"{name}: N = {int(ds.attrs['N'])}, {vary}, "
+                            rf"$\epsilon = {float(ds['epsilon']):.4g}$, "
+                            rf"$\epsilon_0 = {float(ds['epsilon0']):.4g}$: {verdict}",
+                            fontsize="small")
+        fig.colorbar(im, ax=ax, label=r"$\Gamma_{ij}$", shrink=0.9)
+        from impactcont.plots.branches import fit_text
+
+        fit_text(text)
+    return _finish(fig, plot, r"Robust stability: perturbation pattern $\Gamma$ (eq. 28)")
 
 
 def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Codim-1 curves in their parameter plane; dashed where no stable motion changes."""
-    from impactcont.plots.branches import axis_label
-    from impactcont.plots.labels import place_labels
+    """Codim-1 curves in their parameter plane; dotted where no stable motion changes."""
+    from matplotlib.lines import Line2D
 
-    fig = Figure(figsize=(9.0, 5.5), layout="constrained")
+    from impactcont.plots.branches import axis_label, legend_below
+
+    width = _width(plot)
+    fig = Figure(figsize=(width, 0.6 * width + 1.2), layout="constrained")
     ax = fig.add_subplot()
     p1 = p2 = ""
     codim2: list[tuple[float, float, str]] = []
+    handles = []
     for k, (name, ds) in enumerate(datasets.items()):
         p1, p2 = str(ds.attrs["parameters"]).split(",")
         x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
         observable = np.asarray(ds["stable_side"].values, dtype=bool)
         color = f"C{k % 10}"
-        ax.plot(x, y, color=color, linewidth=0.8, linestyle=":", alpha=0.6)
+        ax.plot(x, y, color=color, linewidth=0.8, linestyle=":")
         ax.plot(np.where(observable, x, np.nan), np.where(observable, y, np.nan),
-                color=color, linewidth=1.8, label=f"{name} ({ds.attrs['kind']}, "
-                                                   f"N={int(ds.attrs['N'])})")
-        for j in range(ds.sizes.get("codim2", 0)):
-            cx, cy = float(ds[f"codim2_{p1}"].values[j]), float(ds[f"codim2_{p2}"].values[j])
+                color=color, linewidth=1.8)
+        handles.append(Line2D([], [], color=color, linewidth=1.8,
+                              label=f"{name} ({ds.attrs['kind']}, N = {int(ds.attrs['N'])})"))
+        for c in range(ds.sizes.get("codim2", 0)):
+            cx, cy = float(ds[f"codim2_{p1}"].values[c]), float(ds[f"codim2_{p2}"].values[c])
             ax.plot(cx, cy, "o", markerfacecolor="white", markeredgecolor="black", zorder=3)
-            codim2.append((cx, cy, str(ds["codim2_label"].values[j])))
+            codim2.append((cx, cy, str(ds["codim2_label"].values[c])))
+    handles[:0] = [Line2D([], [], color="0.2", linewidth=1.8, label="a stable motion changes"),
+                   Line2D([], [], color="0.2", linewidth=0.8, linestyle=":",
+                          label="no stable motion changes")]
+    if codim2:
+        handles.append(Line2D([], [], linestyle="none", marker="o", markerfacecolor="white",
+                              markeredgecolor="black", label="codim-2 point"))
     if p1:
         first = next(iter(datasets.values()))
         ax.set_xlabel(axis_label(first, p1))
         ax.set_ylabel(axis_label(first, p2))
-    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
-    _finish(fig, plot, "Codim-1 curves (solid: a stable motion changes across)")
-    place_labels(ax, [(x, y) for x, y, _ in codim2], [t for _, _, t in codim2],
-                 fontsize="x-small")
+    legend_below(ax, handles)
+    _finish(fig, plot, "Codim-1 curves")
+    if codim2:
+        from impactcont.plots.branches import label_specials
+
+        label_specials(ax, codim2)
     return fig
 
 
@@ -317,7 +432,8 @@ def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     Ns = [int(N) for N in np.asarray(ds["N"].values)]
     cols = min(len(Ns), 2)
     rows = -(-len(Ns) // cols)
-    fig = Figure(figsize=(5.2 * cols, 4.2 * rows), layout="constrained")
+    width = _width(plot)
+    fig = Figure(figsize=(width, rows * (0.75 * width / cols + 0.3) + 0.5), layout="constrained")
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
     w, b = np.asarray(ds["omega"].values), np.asarray(ds["b"].values)
     cmap = ListedColormap(["0.92", "tab:blue", "tab:orange"])
@@ -329,15 +445,17 @@ def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         mesh = ax.pcolormesh(w, b, n_stable.T, cmap=cmap, norm=norm, shading="nearest")
         ax.contour(w, b, exists.T.astype(float), levels=[0.5], colors="0.3",
                    linewidths=0.8)
-        ax.set_title(f"N = {N}", fontsize="small")
-        ax.set_xlabel("omega")
-        ax.set_ylabel("b")
+        ax.set_title(f"$N = {N}$", fontsize="medium")
+        ax.set_xlabel(r"forcing frequency $\omega$")
+        ax.set_ylabel("gap $b$")
+        ax.xaxis.set_major_locator(MaxNLocator(3 if width / cols < 3.0 else 6))
     for ax in axes[len(Ns):]:
         ax.set_axis_off()
     if mesh is not None:
         fig.colorbar(mesh, ax=list(axes[:len(Ns)]), ticks=[0, 1, 2],
                      label="stable physical motions")
-    return _finish(fig, plot, f"{name}: stable N-1 motions (line: existence boundary)")
+    return _finish(fig, plot,
+                   f"{name}: stable physical N-1 motions, grey line: existence boundary")
 
 
 #: The plot kind ``impactcont plot`` draws by default for each kind of file.
