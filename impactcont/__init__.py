@@ -13,7 +13,7 @@ import sys
 from importlib.metadata import PackageNotFoundError, version
 
 from impactcont import core
-from impactcont.branch import continuation
+from impactcont.branch import continuation, continuation_from, extend
 from impactcont.core import ContinuationOptions, ContinuationStatus
 from impactcont.curves import curve, curve_crossings
 from impactcont.dataset import load, save
@@ -43,6 +43,7 @@ from impactcont.orbit.periodic import (
     periodic_orbits,
 )
 from impactcont.orbit.robust import RobustStability, lyapunov_matrix, robust_bound, robust_stability
+from impactcont.progress import Progress
 from impactcont.simulate.simulator import SimulationResult, SimulationStatus, simulate
 from impactcont.switching import (
     Cascade,
@@ -84,6 +85,7 @@ __all__ = [
     "NoPeriodicMotionError",
     "ParameterError",
     "PeriodicOrbit",
+    "Progress",
     "ResonanceError",
     "RobustStability",
     "SimulationResult",
@@ -94,8 +96,10 @@ __all__ = [
     "amplitude_squared",
     "chain_stiffness",
     "continuation",
+    "continuation_from",
     "curve",
     "curve_crossings",
+    "extend",
     "grazing_switch",
     "load",
     "lyapunov_matrix",
