@@ -135,8 +135,9 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
     """
     labels = check_labels(labels, "labels")
     parameter = getattr(problem, "parameter", "lam")
-    if not getattr(problem, "symmetric", False):
-        labels = [label for label in labels if label != "BP"]
+    # the events the problem declares (BP only on a branch of symmetric motions)
+    declared = getattr(problem, "events", ("SN", "PD", "NS", "GR", "ZV"))
+    labels = [label for label in labels if label in declared]
 
     def event(label: str) -> Event:
         if label == "SN":

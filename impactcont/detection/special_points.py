@@ -277,9 +277,10 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                      lambda k: event_function(label, samples[k].orbit),
                      lambda k: event_noise(label, samples[k].orbit))
 
-    # the events of an N-1 branch (the fold is located on eq. 14-15 above); the others,
-    # e.g. BP (a symmetric motion has p even), cannot occur on it
-    events = [event(label) for label in labels if label in N1_EVENTS]
+    # the events the problem declares (the fold is located on eq. 14-15 above); the others,
+    # e.g. BP (a symmetric motion has p even), cannot occur on an N-1 branch
+    declared = getattr(problem, "events", N1_EVENTS)
+    events = [event(label) for label in labels if label in declared and label != "SN"]
     for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
                             [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
         candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,

@@ -59,6 +59,9 @@ class MultiImpactBranchProblem:
     residual, Jacobian and orbit of one point are computed from one shot.
     """
 
+    #: The special points located on its branches (a symmetric motion's problem adds BP).
+    events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str | None = None) -> None:
         if not isinstance(osc, ImpactOscillator):

@@ -110,6 +110,9 @@ class PeriodicBranchProblem:
     divided by :func:`residual_scale`, and differentiated with it.
     """
 
+    #: The special points located on its branches (SN by the closed-form fold system).
+    events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+
     periods = (2.0 * math.pi,)
     """The unknown ``delta`` is a phase: a branch that returns to its start modulo 2 pi is
     a closed loop (read by the continuation driver)."""

@@ -62,6 +62,8 @@ class SymmetricBranchProblem:
     """
 
     symmetric = True
+    #: The special points located on its branches: those of any N-p motion and BP.
+    events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV", "BP")
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str) -> None:
