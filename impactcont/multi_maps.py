@@ -238,39 +238,79 @@ def _kernel() -> Any:
     return map_kernel
 
 
-def _solve_at(osc: ImpactOscillator, tables: _Tables, N: int, symmetric: bool,
-              x0: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, bool, int]:
-    """Newton at one oscillator (off the grid: the seed's way to its grid point)."""
-    flow = Flow(osc)
-    arrays = flow.shooting_arrays()
-    positions, diagonals, *_ = tables.geometry(osc)
-    return _kernel().solve_point(*arrays[:12], flow.omega, N, symmetric, osc.stops.index,
-                                 positions, diagonals, x0, tol, max_iter)
+class _Setting:
+    """What every sweep of one map shares: the motion solved and how."""
+
+    def __init__(self, osc: ImpactOscillator, N: int, pattern: str, half: bool, admits: bool,
+                 tol: float, max_iter: int, max_change: float, max_attempts: int) -> None:
+        self.osc, self.N, self.pattern, self.half, self.admits = osc, N, pattern, half, admits
+        self.tol, self.max_iter, self.max_change = tol, max_iter, max_change
+        self.max_attempts = max_attempts
+        self.signs = np.array([stop_sign(s) for s in pattern])
+
+    def sweep(self, tables: _Tables, axes: dict[str, np.ndarray], seed: tuple[int, int],
+              x_seed: np.ndarray, checks: bool
+              ) -> tuple[dict[str, np.ndarray], np.ndarray, tuple[int, int, int, bool]]:
+        """:func:`impactcont.orbit.map_kernel.sweep` over the grid `axes` from `seed`.
+
+        Returns the flat outputs, the unknowns of every point and ``(solved, attempts,
+        newton_iterations, capped)``.
+        """
+        names = tables.parameters
+        p, m = len(self.pattern), 2 * self.osc.n
+        npts = axes[names[0]].size * axes[names[1]].size
+        out = {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
+               "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
+               "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
+               "critical_multiplier": np.full(npts, np.nan, complex),
+               "gap_min": np.full(npts, np.nan),
+               "impact_velocity_k": np.full((npts, p), np.nan),
+               "flight_time_k": np.full((npts, p), np.nan),
+               "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
+        unknowns = np.full((npts, x_seed.size), np.nan)
+        stops = self.osc.stops
+        stats = _kernel().sweep(
+            tables.general, *tables.flow_arrays, tables.omegas, tables.flow_index,
+            tables.positions, tables.diagonals, tables.full_diagonals, tables.b_upper,
+            tables.b_lower, tables.geometry_index, axes[names[0]], axes[names[1]], self.signs,
+            self.N, self.half, self.admits, stops.index, stops.two_sided, seed[0], seed[1],
+            np.ascontiguousarray(x_seed, dtype=float), self.tol, self.max_iter,
+            self.max_change, bool(checks), self.max_attempts, unknowns, out["found"],
+            out["newton_iterations"], out["delta"], out["stable"], out["physical"],
+            out["spectral_radius"], out["critical_multiplier"], out["gap_min"],
+            out["impact_velocity_k"], out["flight_time_k"], out["state_k"], out["asymmetry"])
+        return out, unknowns, stats
+
+    def solve_at(self, values: dict[str, float], x0: np.ndarray) -> np.ndarray | None:
+        """Newton at one point of the two parameters (off the grid: the seed's way to its
+        grid point); None when it does not converge."""
+        names = tuple(values)
+        axes = {name: np.array([value]) for name, value in values.items()}
+        tables = _Tables(self.osc, names, axes, self.pattern, len(x0) // (2 * self.osc.n))
+        out, unknowns, _ = self.sweep(tables, axes, (0, 0), x0, False)
+        return unknowns[0] if out["found"][0] else None
 
 
-def _seed(orbit: MultiImpactOrbit, tables: _Tables, grid: dict[str, np.ndarray], N: int,
-          symmetric: bool, x_start: np.ndarray, tol: float, max_iter: int
-          ) -> tuple[tuple[int, int], np.ndarray]:
+def _seed(orbit: MultiImpactOrbit, setting: _Setting, parameters: tuple[str, str],
+          grid: dict[str, np.ndarray], x_start: np.ndarray) -> tuple[tuple[int, int], np.ndarray]:
     """The seed grid point (nearest the start) and its unknowns, reached from the start in
     up to 32 equal steps of both parameters."""
-    parameters = tables.parameters
     osc = orbit.oscillator
     start = tuple(float(getattr(osc, name) or 0.0) for name in parameters)
     i0, i1 = _nearest(grid, parameters, start)
-    target = (grid[parameters[0]][i0], grid[parameters[1]][i1])
+    target = (float(grid[parameters[0]][i0]), float(grid[parameters[1]][i1]))
     for steps in _SEED_SUBSTEPS:
-        x = x_start
+        x: np.ndarray | None = x_start
         for s in range(1, steps + 1):
             values = {name: a + (b - a) * s / steps
                       for name, a, b in zip(parameters, start, target, strict=True)}
-            x, ok, _ = _solve_at(_replaced(osc, values), tables, N, symmetric, x, tol,
-                                 max_iter)
-            if not ok:
+            x = setting.solve_at(values, x)
+            if x is None:
                 break
-        else:
+        if x is not None:
             return (i0, i1), x
     raise NoPeriodicMotionError(
-        f"the start motion (N={N}, p={orbit.p}, pattern {orbit.pattern!r} at "
+        f"the start motion (N={orbit.N}, p={orbit.p}, pattern {orbit.pattern!r} at "
         f"{dict(zip(parameters, start, strict=True))}) could not be followed to the nearest grid "
         f"point {dict(zip(parameters, target, strict=True))} by Newton in up to "
         f"{_SEED_SUBSTEPS[-1]} steps; start from a motion at or next to a grid point")
@@ -363,32 +403,17 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     pattern = orbit.pattern or "U" * p
     admits = bool(admits_symmetric_motions(osc, N, p, pattern)
                   and (osc.stops.mirror or not set(names) & set(SYMMETRY_BREAKING)))
+    setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
     t0 = time.perf_counter()
     tables = _Tables(osc, names, axes, pattern, p // 2 if half else p)
     x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
-    (s0, s1), x_seed = _seed(orbit, tables, axes, N, half, x_start, tol, max_iter)
+    (s0, s1), x_seed = _seed(orbit, setting, names, axes, x_start)
     t_setup = time.perf_counter() - t0
     shape = (axes[names[0]].size, axes[names[1]].size)
-    npts, m = shape[0] * shape[1], 2 * osc.n
-    out = {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
-           "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
-           "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
-           "critical_multiplier": np.full(npts, np.nan, complex),
-           "gap_min": np.full(npts, np.nan), "impact_velocity_k": np.full((npts, p), np.nan),
-           "flight_time_k": np.full((npts, p), np.nan),
-           "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
-    unknowns = np.empty((npts, x_seed.size))
-    signs = np.array([stop_sign(s) for s in pattern])
+    npts = shape[0] * shape[1]
     t1 = time.perf_counter()
-    solved, attempts, iterations, capped = _kernel().sweep(
-        tables.general, *tables.flow_arrays, tables.omegas, tables.flow_index, tables.positions,
-        tables.diagonals, tables.full_diagonals, tables.b_upper, tables.b_lower,
-        tables.geometry_index, axes[names[0]], axes[names[1]], signs, N, half, admits,
-        osc.stops.index, osc.stops.two_sided, s0, s1, x_seed, tol, max_iter, max_change,
-        checks, max_attempts, unknowns, out["found"], out["newton_iterations"], out["delta"],
-        out["stable"], out["physical"], out["spectral_radius"], out["critical_multiplier"],
-        out["gap_min"], out["impact_velocity_k"], out["flight_time_k"], out["state_k"],
-        out["asymmetry"])
+    out, _, (solved, attempts, iterations, capped) = setting.sweep(tables, axes, (s0, s1),
+                                                                    x_seed, checks)
     t_sweep = time.perf_counter() - t1
     if capped:
         log.warning("a contact-search grid was capped at 2000000 cells on some flight of the "

@@ -247,3 +247,22 @@ def test_refusals(start):
     with pytest.raises(ParameterError, match="no motion"):
         multi_impact_map_orbit(ds.assign(found=ds["found"] & False), omega=1.6, b=0.5)
     assert math.isfinite(float(ds["spectral_radius"].sel(omega=1.6, b=0.5)))
+
+
+def test_damping_matrix_flow_in_omega_and_forcing():
+    """A dashpot on mass 1 only (the first-order flow), both parameters changing the flow
+    (one flow per grid point): the map's points are the motions re-solved by Newton."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.5, omega=1.6,
+                              C=[[0.3, 0.0], [0.0, 0.0]], stops=Stops(b_low=0.5, R_low=0.6))
+    start = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 150.0))
+    ds = multi_impact_map(start, ("omega", "F0"),
+                          grid={"omega": np.linspace(1.6, 1.8, 5), "F0": [0.8, 1.0, 1.2]})
+    assert ds.attrs["symmetric"] == 1 and json.loads(ds.attrs["options"])["flows"] == 15
+    assert bool(ds["found"].all())
+    for omega, F0 in ((1.6, 1.0), (1.8, 0.8), (1.7, 1.2)):
+        orbit = multi_impact_map_orbit(ds, omega=omega, F0=F0)
+        point = ds.sel(omega=omega, F0=F0, method="nearest")
+        assert orbit.spectral_radius == pytest.approx(float(point["spectral_radius"]),
+                                                      rel=1e-8)
+        assert orbit.physical == bool(point["physical"])
+        np.testing.assert_allclose(orbit.states, point["state_k"].values, rtol=0, atol=1e-9)

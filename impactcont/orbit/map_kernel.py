@@ -25,8 +25,8 @@ symmetric system), as :class:`impactcont.problems.symmetric_branch.SymmetricBran
 Its G is ``H^2`` with the half-map ``H = S G_{h-1} .. G_0``, and the second half's
 velocities, flight times, gaps and states are the mirror images of the first's.
 
-Entry points (each compiled once): :func:`solve_point` and :func:`sweep`. Importing
-:mod:`impactcont` does not import this module.
+One entry point, :func:`sweep` (compiled once; a single point is a 1 x 1 grid).
+Importing :mod:`impactcont` does not import this module.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from impactcont.orbit.shooting_kernel import (
     shooting_system,
 )
 
-__all__ = ["solve_point", "sweep"]
+__all__ = ["sweep"]
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -126,19 +126,6 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
         sh = tsh
         norm = tnorm
     return x, False, it, sh
-
-
-@_jit
-def solve_point(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
-                positions, diagonals, x0, tol, max_iter):
-    """Newton at one parameter point (one flow, one geometry) from ``x0``.
-
-    Returns ``(x, converged, iterations)``; the arguments are those of one grid point
-    of :func:`sweep`.
-    """
-    x, ok, it, _ = _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N,
-                           symmetric, j, positions, diagonals, x0, tol, max_iter)
-    return x, ok, it
 
 
 @_jit
