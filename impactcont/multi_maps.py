@@ -29,7 +29,6 @@ Schema: :mod:`impactcont.dataset.multi_maps`; plots: :mod:`impactcont.plots.mult
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import time
@@ -40,7 +39,6 @@ import numpy as np
 import xarray as xr
 
 from impactcont.dataset.multi_maps import (
-    MULTI_MAP_KIND,
     multi_impact_map_dataset,
     validate_multi_impact_map_dataset,
 )
@@ -472,9 +470,3 @@ def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
     guess = {"delta": float(point["delta"]), "flight_times": point["flight_time_k"].values,
              "states": point["state_k"].values, "pattern": ds.attrs["pattern"]}
     return multi_impact_orbit(osc, int(ds.attrs["N"]), int(ds.attrs["impacts"]), guess)
-
-
-def _seed_of(ds: xr.Dataset) -> dict[str, Any]:
-    """The seed record of a map (for plots)."""
-    return json.loads(ds.attrs["seed"]) if ds.attrs.get("impactcont_dataset") == \
-        MULTI_MAP_KIND else {}

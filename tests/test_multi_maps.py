@@ -223,6 +223,7 @@ def test_plot(sym_map):
     ({"grid": {"omega": [1.1, 1.0], "b": [0.5]}}, "strictly increasing"),
     ({"grid": {"omega": [1.0, np.nan], "b": [0.5]}}, "finite"),
     ({"grid": {"omega": [-1.0, 1.0], "b": [0.5]}}, "omega"),
+    ({"grid": {"omega": [1.6], "b": [-0.1, 0.5]}}, r"oscillator at \{'b': -0.1\}.*b > 0"),
     ({"tol": -1.0}, "tol"),
     ({"max_iter": 0}, "max_iter"),
     ({"symmetric": "yes"}, "symmetric"),
