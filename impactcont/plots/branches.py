@@ -351,6 +351,8 @@ def _inset_place(ax: Axes, cluster: np.ndarray, size: tuple[float, float]
     to_axes = ax.transData + ax.transAxes.inverted()
     parts = [np.asarray(line.get_xydata(), dtype=float) for line in ax.get_lines()
              if line.get_visible() and len(line.get_xydata())]
+    parts += [np.asarray(c.get_offsets(), dtype=float) for c in ax.collections
+              if c.get_visible() and len(c.get_offsets())]  # scattered points too
     xy = to_axes.transform(np.vstack(parts)) if parts else np.empty((0, 2))
     xy = xy[np.all(np.isfinite(xy), axis=1)]
     c = to_axes.transform(cluster)
@@ -374,22 +376,25 @@ def _inset_place(ax: Axes, cluster: np.ndarray, size: tuple[float, float]
 
 def _zoom(ax: Axes, points: np.ndarray) -> Axes | None:
     """An inset of ``ax`` showing the data points ``points`` apart, or None if none fits."""
-    x0, y0 = points.min(axis=0)
-    x1, y1 = points.max(axis=0)
-    (X0, X1), (Y0, Y1) = ax.get_xlim(), ax.get_ylim()
-    dx = max(x1 - x0, 0.01 * (X1 - X0))
-    dy = max(y1 - y0, 0.05 * (Y1 - Y0))
+    to_axes = ax.transData + ax.transAxes.inverted()
+    frac = to_axes.transform(points)
+    (x0, y0), (x1, y1) = frac.min(axis=0), frac.max(axis=0)
+    dx, dy = max(x1 - x0, 0.01), max(y1 - y0, 0.05)
+    corners = to_axes.inverted().transform([(x0 - 0.25 * dx, y0 - 0.3 * dy),
+                                            (x1 + 0.25 * dx, y1 + 0.3 * dy)])
     place = _inset_place(ax, points, (0.4, 0.42))
     if place is None:
         return None
     inset = ax.inset_axes(place)
-    xlim, ylim = (x0 - 0.25 * dx, x1 + 0.25 * dx), (y0 - 0.3 * dy, y1 + 0.3 * dy)
+    inset.set_xscale(ax.get_xscale())
+    inset.set_yscale(ax.get_yscale())
+    xlim, ylim = tuple(corners[:, 0]), tuple(corners[:, 1])
     for line in ax.get_lines():
         xy = np.asarray(line.get_xydata(), dtype=float)
         if line.get_linestyle() in ("None", "none", " ", ""):  # a marker: inside, or not at all
-            mx, my = 0.08 * (xlim[1] - xlim[0]), 0.1 * (ylim[1] - ylim[0])
-            xy = xy[(xy[:, 0] >= xlim[0] + mx) & (xy[:, 0] <= xlim[1] - mx)
-                    & (xy[:, 1] >= ylim[0] + my) & (xy[:, 1] <= ylim[1] - my)]
+            f = (to_axes.transform(xy) - [x0 - 0.25 * dx, y0 - 0.3 * dy]) \
+                / [1.5 * dx, 1.6 * dy]
+            xy = xy[np.all((f >= 0.08) & (f <= 0.92), axis=1)]
             if not len(xy):
                 continue
         copy = Line2D(*xy.T)
@@ -399,10 +404,13 @@ def _zoom(ax: Axes, points: np.ndarray) -> Axes | None:
     inset.set_xlim(*xlim)
     inset.set_ylim(*ylim)
     inset.tick_params(labelsize="x-small", length=2, pad=1.5)
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import MaxNLocator, NullFormatter
 
-    inset.xaxis.set_major_locator(MaxNLocator(3))
-    inset.yaxis.set_major_locator(MaxNLocator(3))
+    for axis in (inset.xaxis, inset.yaxis):
+        if axis.get_scale() == "linear":
+            axis.set_major_locator(MaxNLocator(3))
+        else:
+            axis.set_minor_formatter(NullFormatter())
     inset.set_facecolor("white")
     inset.set_zorder(5)
     ax.indicate_inset_zoom(inset, edgecolor="0.35", linewidth=0.8)
@@ -430,16 +438,16 @@ def _zoom_group(ax: Axes, xy: np.ndarray, inset_size: tuple[float, float] = (0.4
     cluster) until its largest group of three or more points fits an inset of
     ``inset_size`` (axes fractions) ``magnify`` times larger than on the axes.
     """
-    (X0, X1), (Y0, Y1) = ax.get_xlim(), ax.get_ylim()
-    room = np.array([X1 - X0, Y1 - Y0]) * np.asarray(inset_size)
-    floor = np.array([0.01 * (X1 - X0), 0.05 * (Y1 - Y0)])
+    room = np.asarray(inset_size)  # in axes fractions, whatever the scales
+    floor = np.array([0.01, 0.05])
+    frac = (ax.transData + ax.transAxes.inverted()).transform(xy)
     for distance in (16.0, 8.0, 4.0, 2.0):
         groups = [g for g in coincident_groups(ax, [tuple(p) for p in xy], distance=distance)
                   if len(g) >= 3]
         if not groups:
             return np.empty(0, dtype=int)
         group = np.array(max(groups, key=len), dtype=int)
-        span = np.maximum(np.ptp(xy[group], axis=0), floor) * np.array([1.5, 1.6])
+        span = np.maximum(np.ptp(frac[group], axis=0), floor) * np.array([1.5, 1.6])
         if np.min(room / span) >= magnify:
             return group
     return np.empty(0, dtype=int)
