@@ -35,6 +35,7 @@ from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.model.stops import Stops
 from impactcont.multi_branch import multi_impact_continuation
 from impactcont.multi_curves import multi_impact_curve, multi_impact_curve_crossings
+from impactcont.multi_maps import multi_impact_map, multi_impact_map_orbit
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit, primitive_orbit
 from impactcont.orbit.periodic import (
@@ -106,6 +107,8 @@ __all__ = [
     "multi_impact_continuation",
     "multi_impact_curve",
     "multi_impact_curve_crossings",
+    "multi_impact_map",
+    "multi_impact_map_orbit",
     "multi_impact_orbit",
     "open_lazy",
     "period_doubling_cascade",

@@ -401,12 +401,17 @@ def validate_map_dataset(ds: Any) -> xr.Dataset:
 
 
 def validate_dataset(ds: Any) -> xr.Dataset:
-    """Validate a branch (N-1 or N-p), curve or map dataset by its ``impactcont_dataset``."""
+    """Validate a branch (N-1 or N-p), curve, map or N-p map dataset by its
+    ``impactcont_dataset``."""
     kind = dataset_tag(ds) if isinstance(ds, xr.Dataset) else None
     if kind == "curve":
         return validate_curve_dataset(ds)
     if kind == "map":
         return validate_map_dataset(ds)
+    if kind == "multi_impact_map":
+        from impactcont.dataset.multi_maps import validate_multi_impact_map_dataset
+
+        return validate_multi_impact_map_dataset(ds)
     return validate_multi_impact_dataset(ds)
 
 

@@ -90,7 +90,7 @@ ENGINE = "netcdf4"
 SECTION_ATTRIBUTE = "impactcont_kind"
 
 # Kinds of dataset validated against a schema by validate_dataset.
-_SCHEMA_KINDS = ("branch", "curve", "map")
+_SCHEMA_KINDS = ("branch", "curve", "map", "multi_impact_map")
 _PART, _OF = "impactcont_complex_part", "impactcont_complex_variable"
 _INDEX = {
     "group_name": ("group name", "Path of the group: xarray.open_dataset(file, group=NAME)."),
@@ -460,6 +460,7 @@ _FLAG_MEANING = re.compile(r"^[0-9A-Za-z_\-.+@]+$")  # one word of flag_meanings
 _TEXT_KINDS = "USO"
 _KIND_WORDS = {"branch": "branches of periodic impacting motions",
                "curve": "codimension-1 curves", "map": "stability maps",
+               "multi_impact_map": "stability maps of one N-p motion family",
                "orbits": "periodic impacting motions", "robust": "robust stability results",
                "simulation": "simulations"}
 
