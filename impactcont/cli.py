@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -61,6 +62,50 @@ class _Formatter(logging.Formatter):
 
 def _out(text: str) -> None:
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
+
+
+#: A Sphinx role (``:func:`target```, ``:py:class:`title <target>```).
+_ROLE = re.compile(r":(?:[\w-]+:)+`(?P<body>[^`]+)`")
+#: Inline literal, hyperlink reference, interpreted text, strong, emphasis.
+_INLINE = [re.compile(pattern) for pattern in (
+    r"``(?P<body>.+?)``",
+    r"`(?P<body>[^`<]+?)\s*(?:<[^`>]*>)?`__?",
+    r"`(?P<body>[^`]+)`",
+    r"(?<![\w*])\*\*(?P<body>\S(?:.*?\S)?)\*\*(?![\w*])",
+    r"(?<![\w*])\*(?P<body>\S(?:[^*]*?\S)?)\*(?![\w*])",
+)]
+
+
+def _role_text(match: re.Match[str]) -> str:
+    """What Sphinx shows for a role: its title, or its target (``~``: the last name only)."""
+    body = match.group("body").strip()
+    title = re.fullmatch(r"(?P<title>.+?)\s*<[^<>]+>", body)
+    if title is not None:
+        return title.group("title")
+    body = body.lstrip("!")
+    return body.lstrip("~").rpartition(".")[2] if body.startswith("~") else body
+
+
+def plain_text(text: str) -> str:
+    """``text`` (reStructuredText of a docstring) as a terminal shows it: the markup removed.
+
+    Sphinx roles give their title or target (``:func:`~impactcont.curve``` -> ``curve``),
+    inline literals, interpreted text, links, strong and emphasis their text.
+
+    Parameters
+    ----------
+    text : str
+        One line or paragraph of reStructuredText.
+
+    Returns
+    -------
+    str
+        The same text without markup.
+    """
+    text = _ROLE.sub(_role_text, text)
+    for pattern in _INLINE:
+        text = pattern.sub(lambda m: m.group("body"), text)
+    return text
 
 
 # ---------------------------------------------------------------------------------------------
@@ -143,7 +188,7 @@ def _cmd_list_problems(args: argparse.Namespace) -> int:
     for row, info in zip(rows, problems.values(), strict=True):
         _out("  ".join(f"{c:<{w}}" for c, w in zip(row, widths, strict=False)) + f"  {row[3]}")
         if info.summary and not args.quiet:
-            _out(f"{'':<{widths[0]}}  {info.summary}")
+            _out(f"{'':<{widths[0]}}  {plain_text(info.summary)}")
     return EXIT_OK
 
 
