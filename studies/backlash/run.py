@@ -152,7 +152,16 @@ def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which
     for side in (-1.0, 1.0):
         om = w + side * offset
         osc = system(b, om, damping) if system_of is None else system_of(b, om)
-        sym = ic.multi_impact_orbit(osc, 1, 2, fork)
+        try:
+            sym = ic.multi_impact_orbit(osc, 1, 2, fork)
+        except ic.NoPeriodicMotionError as exc:  # the symmetric branch turns before om
+            out.update(agrees=None, skipped=f"no symmetric motion next to the BP at omega="
+                       f"{om:.6g} ({exc})")
+            return out
+        if asymmetry(sym) > 1e-8:
+            out.update(agrees=None, skipped=f"Newton at omega={om:.6g} found an asymmetric "
+                       "motion, not the symmetric one")
+            return out
         X = sym.states[0] + np.array([0.0, 1e-4, 1e-4, 0.0])
         res = ic.simulate(osc, X, float(sym.phases[0]), periods)
         settled = None
@@ -165,6 +174,7 @@ def fork_witness(b: float, damping: dict[str, Any] | None, ds: xr.Dataset, which
     out["agrees"] = all(
         (s["simulated_one_two"] and s["simulated_asymmetry"] < 1e-6) == s["branch_stable"]
         for s in out["sides"])
+    out.setdefault("skipped", "")
     return out
 
 
