@@ -103,7 +103,7 @@ class MultiImpactCurveProblem:
             check_parameter(osc, name)
         self.osc, self.N, self.p, self.pattern = osc, N, p, pattern
         self.kind, self.parameters, self.symmetric = kind, (p1, p2), symmetric
-        self._problems: dict[tuple[str, float, float], BranchProblem] = {}
+        self._problems: dict[tuple[str, float, float | None], BranchProblem] = {}
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
         self.size = self._base(float(getattr(osc, p2) or 0.0), p1).size + 1
 
@@ -111,7 +111,7 @@ class MultiImpactCurveProblem:
     def _base(self, lam: float, parameter: str, p1: float | None = None) -> BranchProblem:
         """The branch problem in `parameter` of the oscillator with ``p2 = lam`` (and p1)."""
         p1_name, p2_name = self.parameters
-        key = (parameter, float(lam), math.nan if p1 is None else float(p1))
+        key = (parameter, float(lam), None if p1 is None else float(p1))
         problem = self._problems.get(key)
         if problem is None:
             if len(self._problems) > _CACHE_SIZE:
