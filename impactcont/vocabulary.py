@@ -68,14 +68,17 @@ LABELS: tuple[str, ...] = tuple(label.value for label in Label)
 #: every label but ``BP``, which exists only on symmetric N-p motions (no curves yet).
 CURVE_KINDS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
 
-#: Codimension-two points: ``A+B`` is where a curve of kind A meets the curve of
-#: kind B (its test function vanishes on the curve A); ``R1``/``R2`` are the 1:1
-#: and 1:2 strong resonances that end a Neimark-Sacker curve (theta -> 0, pi);
-#: ``SN+SN`` (a double multiplier +1 on an SN curve, Bogdanov-Takens-like) and
-#: ``PD+PD`` (a double -1 on a PD curve) are the same resonances met on SN and PD curves.
+#: Codimension-two points, one name per point: ``A+B`` is where a curve of kind A meets
+#: the curve of kind B (its test function vanishes on the curve A); ``R1`` and ``R2``
+#: are the 1:1 and 1:2 strong resonances (a double multiplier +1, a double -1), whichever
+#: curve meets them: the end of a Neimark-Sacker curve (theta -> 0, pi), or a second
+#: multiplier +1 on an SN curve (``R1``), a second -1 on a PD curve (``R2``). Files
+#: written before carry ``SN+SN`` and ``PD+PD`` for these; they read as ``R1``, ``R2``
+#: (:data:`impactcont.dataset.curves.CODIM2_FORMER_LABELS`). The standard name of each
+#: label (MatCont's LPPD, LPNS, ...) is in ``docs/two_parameter.md``.
 CODIM2_LABELS: tuple[str, ...] = (
-    "SN+ZV", "SN+GR", "SN+PD", "SN+NS", "SN+SN",
-    "PD+ZV", "PD+GR", "PD+SN", "PD+NS", "PD+PD",
+    "SN+ZV", "SN+GR", "SN+PD", "SN+NS",
+    "PD+ZV", "PD+GR", "PD+SN", "PD+NS",
     "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
     "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
     "ZV+SN",

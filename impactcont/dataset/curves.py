@@ -45,6 +45,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.vocabulary import CODIM2_LABELS, CURVE_KINDS, STATUSES
 
 __all__ = [
+    "CODIM2_FORMER_LABELS",
     "CODIM2_LABELS",
     "CODIM2_STATUSES",
     "CURVE_VARIABLES",
@@ -61,6 +62,11 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 CODIM2_STATUSES: tuple[str, ...] = STATUSES
+
+#: Codim-2 labels of files written before one point had one name: the 1:1 and 1:2
+#: resonances met on SN and PD curves. :func:`normalise_dataset` (run by
+#: :func:`impactcont.load`) gives them their name.
+CODIM2_FORMER_LABELS: dict[str, str] = {"SN+SN": "R1", "PD+PD": "R2"}
 
 _LABEL_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_LABELS))}")
 _STATUS_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_STATUSES))}")
@@ -107,7 +113,7 @@ CURVE_VARIABLES: dict[str, _Var] = {
 _CODIM2_FIELDS: dict[str, _Var] = {
     "label": _Var("codim-2 label", "1",
                   "A+B: the curve (kind A) meets a curve of kind B; R1/R2: 1:1 / 1:2 "
-                  "resonance ending an NS curve.", kind="U"),
+                  "resonance (a double multiplier +1 / -1), on any curve.", kind="U"),
     "delta": _Var("impact phase at codim-2 point", "rad", "Forcing phase at the impact."),
     "point": _Var("nearest point", "1", "Index on point of the nearest accepted point.",
                   kind="i"),
@@ -416,10 +422,19 @@ def validate_dataset(ds: Any) -> xr.Dataset:
 
 
 def normalise_dataset(ds: xr.Dataset) -> xr.Dataset:
-    """Give the string variables of a curve read from NetCDF their schema dtype."""
+    """Give the string variables of a curve read from NetCDF their schema dtype, and the
+    codim-2 labels of older files their name (:data:`CODIM2_FORMER_LABELS`)."""
     if dataset_tag(ds) == "curve":
         for key, dtype in (("label", _LABEL_DTYPE), ("status", _STATUS_DTYPE)):
             name = codim2_variable(key)
             if name in ds.variables and ds[name].dtype != dtype:
                 ds[name] = ds[name].astype(dtype)
+        name = codim2_variable("label")
+        if name in ds.variables:
+            labels = np.asarray(ds[name].values)
+            former = np.isin(labels, list(CODIM2_FORMER_LABELS))
+            if former.any():
+                renamed = labels.copy()
+                renamed[former] = [CODIM2_FORMER_LABELS[str(v)] for v in labels[former]]
+                ds[name] = ds[name].copy(data=renamed)
     return ds

@@ -26,7 +26,8 @@ NS sign change at a neutral saddle are discarded.
 
 Curve ends, found while continuing (:func:`impactcont.curves.curve`) rather than
 here: an NS curve ends at ``theta -> 0`` (``R1``, 1:1 resonance) or
-``theta -> pi`` (``R2``, 1:2), a GR curve where the tangency time reaches the
+``theta -> pi`` (``R2``, 1:2), the points that SN and PD curves meet as a double
+multiplier +1 or -1 and name the same, a GR curve where the tangency time reaches the
 impact (``t* -> 0`` or ``T``, label ``GR+ZV``).
 """
 
@@ -124,6 +125,11 @@ def _changes(a: float, b: float) -> bool:
 _CRITICAL = {"SN": 1.0, "PD": -1.0}
 """The multiplier that stays on the unit circle along an SN or a PD curve."""
 
+_RESONANCE = {"SN": "R1", "PD": "R2"}
+"""The strong resonance where a second multiplier reaches the curve's critical value:
+a double +1 (1:1, ``R1``) on an SN curve, a double -1 (1:2, ``R2``) on a PD curve; the
+same names as the ends of an NS curve there."""
+
 
 def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
     """What a zero of `test` on a curve of `kind` is, or ``None`` when it is none.
@@ -132,8 +138,9 @@ def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
     bialternate product) vanishes where two multipliers have product 1: a
     complex pair on the unit circle (``kind+NS``), a second multiplier at the
     curve's own critical value (a repeated +1 on an SN curve: the 1:1
-    resonance ``SN+SN``; a repeated -1 on a PD curve: the 1:2 resonance
-    ``PD+PD``), or a real reciprocal pair (a neutral saddle: no bifurcation).
+    resonance ``R1``; a repeated -1 on a PD curve: the 1:2 resonance ``R2``;
+    the names of the NS curve's ends at the same points), or a real reciprocal
+    pair (a neutral saddle: no bifurcation).
     The repeated multiplier is a Jordan block whose two copies split by the
     square root of rounding, possibly into a complex pair: it is recognised by
     distance, before the imaginary part is looked at.
@@ -147,7 +154,7 @@ def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
     if critical is not None:
         rest = np.delete(mu, np.argmin(np.abs(mu - critical)))
         if rest.size and np.min(np.abs(rest - critical)) < _UNIT_TOL ** 0.5:
-            return f"{kind}+{kind}"
+            return _RESONANCE[kind]
         mu = rest
     close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
     return f"{kind}+NS" if np.any(close & (np.abs(mu.imag) > 1e-8)) else None
