@@ -24,13 +24,30 @@ from impactcont.core import ContinuationOptions, ContinuationStatus, continue_br
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
 from impactcont.dataset import branch_dataset
-from impactcont.dataset.records import orbit_columns, special_record
+from impactcont.dataset.records import (
+    orbit_columns,
+    reserved_names,
+    special_record,
+    user_event_record,
+)
 from impactcont.dataset.schema import (
+    USER_EVENTS_ATTR,
+    USER_MONITORS_ATTR,
+    add_user_functions,
+    event_variable,
     oscillator_from_dataset,
+    parameter_names,
     special_variable,
     validate_branch_dataset,
 )
 from impactcont.detection import BranchSample, detect_special_points
+from impactcont.detection.special_points import (
+    UserEvent,
+    UserFunctions,
+    check_user_functions,
+    locate_user_events,
+    user_values,
+)
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import restart_problem, run_branch
@@ -192,7 +209,9 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  ds: float | None = None, ds_min: float | None = None,
                  ds_max: float | None = None, newton_tol: float | None = None,
                  max_points: int | None = None, both_directions: bool | None = None,
-                 progress: ProgressOption = None, **more: Any) -> xr.Dataset:
+                 progress: ProgressOption = None,
+                 events: dict[str, Any] | None = None, monitors: dict[str, Any] | None = None,
+                 **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-1 motions in one parameter and find its special points.
 
     Parameters
@@ -227,6 +246,16 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         ``True``: always; ``False``: never) or a callable receiving a
         :class:`~impactcont.progress.Progress` record at every point
         (:mod:`impactcont.progress`). A call longer than a minute logs a line a minute.
+    events : mapping of str to callable, optional
+        User events: ``name -> f(orbit)``, a real function of the
+        :class:`~impactcont.PeriodicOrbit` at a point (e.g. ``lambda o:
+        max_displacement(o, 2) - 0.3``, :func:`impactcont.orbit.extrema.max_displacement`).
+        Its zeros along the branch are located as the special points are and stored on
+        the dimension ``event`` (``event_name``, ``event_<parameter>``,
+        ``event_precision``, ``event_status``, ``event_point``); ``f`` is stored at every
+        point as ``monitor_<name>`` too (``docs/engine.md``).
+    monitors : mapping of str to callable, optional
+        User monitors: ``name -> f(orbit)``, stored at every point as ``monitor_<name>``.
 
     Returns
     -------
@@ -245,20 +274,25 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     ------
     NewtonConvergenceError
         When no component could be started.
+    TypeError, ParameterError
+        Bad `events` or `monitors` (a name that is not an identifier or is a built-in
+        variable or label; not callable), or one of their functions raised, returned a
+        value that is not a real number or not finite: the message names it.
     """
     problem, detect, (lo, hi), opts = check_continuation_arguments(
         osc, N, parameter, bounds, detect=detect, components=components, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
         both_directions=both_directions, **more)
+    functions = check_user_functions(events, monitors, reserved_names())
     N = problem.N
     lam0 = _start_value(problem, (lo, hi), start)
     delta0 = _start_root(problem, lam0, root)
     with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
-        runs = [_follow(problem, lam0, delta0, opts, detect, rep)]
+        runs = [_follow(problem, lam0, delta0, opts, detect, rep, functions)]
         if components == "all":
             for lam, delta in _component_seeds(problem, (lo, hi)):
                 if not any(_passes(run, lam, delta) for run in runs):
-                    runs.append(_follow(problem, lam, delta, opts, detect, rep))
+                    runs.append(_follow(problem, lam, delta, opts, detect, rep, functions))
     started = [run for run in runs if run.samples]
     for run in runs:
         if not run.samples:  # its corrector failed at the seed: say so, keep the others
@@ -270,23 +304,26 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         raise NewtonConvergenceError(f"no component of the N={N} branch in {parameter} over "
                                      f"[{lo:.10g}, {hi:.10g}] could be started: "
                                      f"{runs[0].result.message}")
-    return _branch_dataset(problem, osc, opts, detect, started)
+    return _branch_dataset(problem, osc, opts, detect, started, functions=functions)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class _Run:
-    """One connected component: its continuation result, samples and special points."""
+    """One connected component: its continuation result, samples, special points and the
+    user's functions at its points (``values``) and located events."""
 
     start: float
     start_delta: float
     result: Any
     samples: list[BranchSample]
     specials: list[Any]
+    values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    events: list[UserEvent] = dataclasses.field(default_factory=list)
 
 
 def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
-            opts: ContinuationOptions, detect: Sequence[str], rep: Reporter | None = None
-            ) -> _Run:
+            opts: ContinuationOptions, detect: Sequence[str], rep: Reporter | None = None,
+            functions: UserFunctions | None = None) -> _Run:
     result = continue_branch(problem, np.array([delta0]), lam0, opts,
                              None if rep is None else rep.point)
     log.info("N=%d branch in %s from %s=%.10g: %d points (%s)", problem.N, problem.parameter,
@@ -298,7 +335,15 @@ def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
     samples = [BranchSample(delta=float(u[0]), lam=float(lam), dlam=float(t[-1]),
                             orbit=problem.orbit(float(u[0]), float(lam)))
                for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
-    return _Run(lam0, delta0, result, samples, detect_special_points(problem, samples, detect))
+    specials = detect_special_points(problem, samples, detect)
+    if not functions:
+        return _Run(lam0, delta0, result, samples, specials)
+    values = user_values(functions, [s.orbit for s in samples], problem.parameter)
+    events = locate_user_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
+                                [[0.0, s.dlam] for s in samples], functions, values,
+                                lambda u, lam: problem.orbit(float(u[0]), float(lam)),
+                                parameter=problem.parameter)
+    return _Run(lam0, delta0, result, samples, specials, values, events)
 
 
 def _component_seeds(problem: PeriodicBranchProblem, bounds: tuple[float, float]
@@ -358,14 +403,17 @@ def _passes(run: _Run, lam: float, delta: float) -> bool:
 
 def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
                     opts: ContinuationOptions, detect: Sequence[str], runs: list[_Run],
-                    record: dict[str, Any] | None = None) -> xr.Dataset:
+                    record: dict[str, Any] | None = None, *,
+                    functions: UserFunctions | None = None) -> xr.Dataset:
     """One dataset of every component (the variable ``connected_component`` tells them apart)."""
     parameter, N = problem.parameter, problem.N
     orbits = [s.orbit for run in runs for s in run.samples]
     arclength, component, lam = [], [], []
     special_points = []
+    user_events: list[UserEvent] = []
     offset = 0
     for index, run in enumerate(runs):
+        user_events += [dataclasses.replace(ev, point=ev.point + offset) for ev in run.events]
         res = run.result
         steps = np.sqrt(np.diff(res.u[:, 0]) ** 2 + np.diff(res.lam) ** 2)
         arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
@@ -389,8 +437,16 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
                                      "message": run.result.message} for run in runs]}
     option_record["bounds"] = list(opts.bounds)
     option_record.update(record or {})
-    return branch_dataset(parameter=parameter, N=N, oscillator=osc, options=option_record,
-                          columns=columns, special_points=special_points)
+    ds = branch_dataset(parameter=parameter, N=N, oscillator=osc, options=option_record,
+                        columns=columns, special_points=special_points)
+    if not functions:
+        return ds
+    names = parameter_names(ds)
+    return add_user_functions(
+        ds, monitors={name: np.concatenate([run.values[name] for run in runs])
+                      for name in functions.functions},
+        events=list(functions.events),
+        event_points=[user_event_record(ev, names) for ev in user_events])
 
 
 # -- restart and extension ----------------------------------------------------------------------
@@ -533,7 +589,7 @@ def _first_step(branch: xr.Dataset, row: int, special: bool, along: int, problem
 def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
              bounds: tuple[float, float], detect: Sequence[str] | None,
              options: ContinuationOptions | None, single: dict[str, Any],
-             progress: Any, record: dict[str, Any]) -> xr.Dataset:
+             progress: Any, record: dict[str, Any], functions: UserFunctions) -> xr.Dataset:
     """The branch continued from a row of `branch` (one way, or both with `along=None`)."""
     problem, u0, lam0 = _problem_at(branch, row, special)
     parameter = problem.parameter
@@ -555,18 +611,19 @@ def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
             opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
         symmetric = _record(branch).get("symmetric", False)
         return run_branch(problem, u0, lam0, opts, detect=detect, progress=progress,
-                          record={"symmetric": symmetric, **record})
+                          record={"symmetric": symmetric, **record}, functions=functions)
     _, detect, (lo, hi), opts = check_continuation_arguments(
         problem.osc, problem.N, parameter, (lo, hi), detect=detect, components="start",
         options=base, direction=direction, both_directions=along is None, **single)
     if step is not None and not user_ds:
         opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
     with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
-        run = _follow(problem, lam0, float(u0[0]), opts, detect, rep)
+        run = _follow(problem, lam0, float(u0[0]), opts, detect, rep, functions)
     if not run.samples:
         raise NewtonConvergenceError(f"the restart at {parameter}={lam0:.10g} could not be "
                                      f"started: {run.result.message}")
-    return _branch_dataset(problem, problem.osc, opts, detect, [run], record)
+    return _branch_dataset(problem, problem.osc, opts, detect, [run], record,
+                           functions=functions)
 
 
 def _check_along(along: Any) -> int | None:
@@ -582,7 +639,8 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
                       bounds: Sequence[float] | None = None,
                       detect: Sequence[str] | None = None,
                       options: ContinuationOptions | None = None,
-                      progress: ProgressOption = None, **single: Any) -> xr.Dataset:
+                      progress: ProgressOption = None, events: dict[str, Any] | None = None,
+                      monitors: dict[str, Any] | None = None, **single: Any) -> xr.Dataset:
     """Restart the continuation of a branch from one of its points or special points.
 
     Works on an N-1 branch (:func:`continuation`) and an N-p branch
@@ -619,6 +677,10 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
         Options over the branch's recorded ones.
     progress : None, bool or callable
         See :mod:`impactcont.progress`.
+    events, monitors : mapping of str to callable, optional
+        User events and monitors on the restarted branch (as for
+        :func:`continuation`; functions are not stored in a file, so those of `branch`
+        are not carried over).
     **single
         Single options (``ds``, ``ds_max``, ``max_points``, ...) over `options`.
 
@@ -636,9 +698,10 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     ParameterError
         Not a branch dataset; neither or both of `point` and `label`; a point index out
         of range; no such special point; bad `along`, `bounds` (not containing the
-        restart point), `detect` or options.
+        restart point), `detect` or options; bad `events` or `monitors`.
     """
     _check_branch(branch)
+    functions = check_user_functions(events, monitors, reserved_names())
     along = _check_along(along)
     row, special = _start_row(branch, point, label, which)
     parameter = str(branch.attrs["parameter"])
@@ -646,12 +709,13 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     record = {"restart": {"point": None if special else row, "label": label,
                           "which": which if special else None, "along": along}}
     return _restart(branch, row, special, along, (lo, hi), detect, options, single, progress,
-                    record)
+                    record, functions)
 
 
 @blas_limited
 def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str] | None = None,
            options: ContinuationOptions | None = None, progress: ProgressOption = None,
+           events: dict[str, Any] | None = None, monitors: dict[str, Any] | None = None,
            **single: Any) -> xr.Dataset:
     """A branch continued past its bounds: the branch and its continuations joined.
 
@@ -675,6 +739,10 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
         Options over the branch's recorded ones.
     progress : None, bool or callable
         See :mod:`impactcont.progress` (one bar over all the new parts).
+    events, monitors : mapping of str to callable, optional
+        The user events and monitors of `branch` (its attributes ``user_events`` and
+        ``user_monitors``), with the same names: functions are not stored in a file,
+        and the new parts need them to be joined. Required when `branch` has them.
     **single
         Single options (``ds``, ``ds_max``, ``max_points``, ...) over `options`.
 
@@ -690,9 +758,11 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
         `branch` is not an xarray.Dataset.
     ParameterError
         Not a branch dataset; `bounds` not two numbers that contain the branch's bounds
-        and reach past them; bad `detect` or options.
+        and reach past them; bad `detect` or options; `events` or `monitors` with other
+        names than the branch's.
     """
     _check_branch(branch)
+    functions = _same_user_functions(branch, events, monitors)
     parameter = str(branch.attrs["parameter"])
     old = _branch_bounds(branch)
     lo, hi = _check_bounds(parameter, bounds)
@@ -711,7 +781,7 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
                         or (lam[end] == old[0] and lo < old[0])):
                     continue
                 part = _restart(branch, end, False, along, (lo, hi), detect, options, single,
-                                rep, {"restart": {"point": end, "along": along}})
+                                rep, {"restart": {"point": end, "along": along}}, functions)
                 parts[(int(rows[0]), along)] = part
                 info = _record(part)
                 extended.append({"from_point": end, parameter: float(lam[end]),
@@ -727,6 +797,19 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     return joined
 
 
+def _same_user_functions(branch: xr.Dataset, events: Any, monitors: Any) -> UserFunctions:
+    """The user's functions for an extension of `branch`: checked, with the branch's names."""
+    functions = check_user_functions(events, monitors, reserved_names())
+    for what, attr, given in (("events", USER_EVENTS_ATTR, functions.events),
+                              ("monitors", USER_MONITORS_ATTR, functions.monitors)):
+        names = [name for name in str(branch.attrs.get(attr, "")).split(",") if name]
+        if sorted(names) != sorted(given):
+            raise ParameterError(f"{what} must have the names of the branch's {what} {names} "
+                                 f"(attribute {attr!r}: functions are not stored, the new "
+                                 f"parts need them); got {sorted(given)}")
+    return functions
+
+
 def _components(branch: xr.Dataset) -> list[np.ndarray]:
     """The rows of each connected component, in dataset order."""
     if "connected_component" not in branch:
@@ -739,16 +822,21 @@ def _join(branch: xr.Dataset, parts: dict[tuple[int, int], xr.Dataset]) -> xr.Da
     """`branch` with the new parts before (``along = -1``) and after (``+1``) components.
 
     A part starts with the point it was continued from (the component's end), which is
-    left out; its special points get the index of their nearest point in the join.
+    left out; its special points (and user events) get the index of their nearest point
+    in the join.
     """
     point_vars = [k for k, v in branch.variables.items() if "point" in v.dims and k != "point"]
-    special_vars = [k for k, v in branch.variables.items() if "special" in v.dims
-                    and k != special_variable("point")]
-    index_var = special_variable("point")
+    # the rows on ``special`` (and ``event``) with the variable holding their nearest point
+    indexed = {dim: index for dim, index in (("special", special_variable("point")),
+                                              ("event", event_variable("point")))
+               if dim in branch.dims}
+    row_vars = {dim: [k for k, v in branch.variables.items() if dim in v.dims and k != index]
+                for dim, index in indexed.items()}
     pieces: list[tuple[xr.Dataset, np.ndarray]] = []  # (dataset, rows) in joined order
     arclength: list[np.ndarray] = []
-    specials: list[tuple[xr.Dataset, np.ndarray, np.ndarray]] = []  # (ds, rows, new index)
-    old_special_point = branch[index_var].values
+    # per dimension: (ds, rows, new index of their nearest point)
+    rows_of: dict[str, list[tuple[xr.Dataset, np.ndarray, np.ndarray]]] = {d: [] for d in indexed}
+    old_index = {dim: branch[index].values for dim, index in indexed.items()}
     offset = 0
     for rows in _components(branch):
         front, back = parts.get((int(rows[0]), -1)), parts.get((int(rows[0]), 1))
@@ -758,24 +846,29 @@ def _join(branch: xr.Dataset, parts: dict[tuple[int, int], xr.Dataset]) -> xr.Da
             order = np.arange(nf, 0, -1)
             pieces.append((front, order))
             arcs.append(-front["arclength"].values[order])
-            specials.append((front, np.arange(front.sizes["special"]),
-                             offset + nf - front[index_var].values))
+            for dim, index in indexed.items():
+                rows_of[dim].append((front, np.arange(front.sizes[dim]),
+                                     offset + nf - front[index].values))
             offset += nf
         pieces.append((branch, rows))
         arcs.append(branch["arclength"].values[rows] - branch["arclength"].values[rows[0]])
-        mine = np.flatnonzero(np.isin(old_special_point, rows))
-        specials.append((branch, mine, offset + np.searchsorted(rows, old_special_point[mine])))
+        for dim in indexed:
+            mine = np.flatnonzero(np.isin(old_index[dim], rows))
+            rows_of[dim].append((branch, mine,
+                                 offset + np.searchsorted(rows, old_index[dim][mine])))
         offset += rows.size
         if back is not None:
             nb = back.sizes["point"] - 1
             pieces.append((back, np.arange(1, nb + 1)))
             arcs.append(arcs[-1][-1] + back["arclength"].values[1:])
-            specials.append((back, np.arange(back.sizes["special"]),
-                             offset - 1 + back[index_var].values))
+            for dim, index in indexed.items():
+                rows_of[dim].append((back, np.arange(back.sizes[dim]),
+                                     offset - 1 + back[index].values))
             offset += nb
         joined_arcs = np.concatenate(arcs)
         arclength.append(joined_arcs - joined_arcs[0])
-    out = branch.drop_vars([*point_vars, *special_vars, index_var, "point"])
+    out = branch.drop_vars([*point_vars, *(k for names in row_vars.values() for k in names),
+                            *indexed.values(), "point"])
     for name in point_vars:
         var = branch[name]
         axis = var.dims.index("point")
@@ -790,15 +883,16 @@ def _join(branch: xr.Dataset, parts: dict[tuple[int, int], xr.Dataset]) -> xr.Da
         out["connected_component"] = xr.Variable(
             ("point",), np.repeat(ids, _piece_counts(branch, parts)).astype(component.dtype),
             component.attrs)
-    order = np.argsort(np.concatenate([index for _, _, index in specials]), kind="stable")
-    for name in special_vars:
-        var = branch[name]
-        data = np.concatenate([np.take(ds[name].values, rows, axis=0)
-                               for ds, rows, _ in specials], axis=0)[order]
-        out[name] = xr.Variable(var.dims, data, var.attrs)
-    out[index_var] = xr.Variable(("special",),
-                                 np.concatenate([index for _, _, index in specials])[order]
-                                 .astype(branch[index_var].dtype), branch[index_var].attrs)
+    for dim, index_var in indexed.items():
+        new_index = np.concatenate([index for _, _, index in rows_of[dim]])
+        order = np.argsort(new_index, kind="stable")
+        for name in row_vars[dim]:
+            var = branch[name]
+            data = np.concatenate([np.take(ds[name].values, rows, axis=0)
+                                   for ds, rows, _ in rows_of[dim]], axis=0)[order]
+            out[name] = xr.Variable(var.dims, data, var.attrs)
+        out[index_var] = xr.Variable((dim,), new_index[order].astype(branch[index_var].dtype),
+                                     branch[index_var].attrs)
     n = out.sizes["point"]
     out = out.assign_coords(point=xr.Variable(("point",), np.arange(n), branch["point"].attrs))
     out = out.set_coords([k for k in branch.coords if k in out.data_vars])

@@ -37,12 +37,24 @@ from impactcont.core import (
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
-from impactcont.dataset.schema import oscillator_from_dataset, validate_branch_dataset
+from impactcont.dataset.records import reserved_names, user_event_record
+from impactcont.dataset.schema import (
+    add_user_functions,
+    oscillator_from_dataset,
+    parameter_names,
+    validate_branch_dataset,
+)
 from impactcont.detection.codim2 import (
     Codim2Point,
     detect_codim2,
     grazing_other_gap,
     test_values,
+)
+from impactcont.detection.special_points import (
+    UserFunctions,
+    check_user_functions,
+    locate_user_events,
+    user_values,
 )
 from impactcont.errors import LowImpactVelocityWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -428,6 +440,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
           ds_min: float | None = None, ds_max: float | None = None,
           newton_tol: float | None = None, max_points: int | None = None,
           both_directions: bool | None = None, progress: ProgressOption = None,
+          events: dict[str, Any] | None = None, monitors: dict[str, Any] | None = None,
           **more: Any) -> xr.Dataset:
     """Continue a codim-1 curve of N-1 motions in two parameters.
 
@@ -475,17 +488,24 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         :class:`~impactcont.progress.Progress` record at every curve point, with the
         value of ``p2`` (:mod:`impactcont.progress`). A call longer than a minute logs
         a line a minute.
+    events, monitors : mapping of str to callable, optional
+        User events and monitors, as for :func:`impactcont.continuation`: functions of
+        the :class:`~impactcont.PeriodicOrbit` at a curve point; an event's zeros on the
+        curve are located on the dimension ``event`` (``event_precision`` bounds the
+        error in both parameters).
 
     Returns
     -------
     xarray.Dataset
-        Dimensions ``point``, ``multiplier``, ``component``, ``codim2``; schema in
-        :mod:`impactcont.dataset.curves` and ``docs/two_parameter.md``.
+        Dimensions ``point``, ``multiplier``, ``component``, ``codim2`` (and ``event``
+        with `events`); schema in :mod:`impactcont.dataset.curves` and
+        ``docs/two_parameter.md``.
 
     Raises
     ------
     ParameterError
-        A bad argument (named in the message).
+        A bad argument (named in the message), bad `events` or `monitors`, or one of
+        their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         No start point could be found.
     """
@@ -493,6 +513,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
         both_directions=both_directions, **more)
+    functions = check_user_functions(events, monitors, reserved_names())
     if isinstance(start, xr.Dataset):
         start_osc, N, delta0 = _start_from_branch(start, kind, special, osc, N, parameters)
     elif start is None:
@@ -543,9 +564,31 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
                      "parameters": list(parameters), "bounds": {k: list(v) for k, v in box.items()},
                      "start": {p1: p1v, p2: p2v, "delta": delta0}}
     option_record["bounds_continued"] = list(opts.bounds)
-    return curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
-                         options=option_record, columns=columns, codim2_points=records,
-                         end_status=status)
+    ds = curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
+                       options=option_record, columns=columns, codim2_points=records,
+                       end_status=status)
+    return _with_user_functions(ds, problem, result, orbits, functions)
+
+
+def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
+                         orbits: list[PeriodicOrbit], functions: UserFunctions) -> xr.Dataset:
+    """`ds` with the user's monitors at every curve point and its events located on the curve.
+
+    Each step with a sign change is searched after the augmented system's borders are
+    renewed at its first point (as for the codim-2 points); the precision is in both
+    parameters (``p1`` is the first unknown).
+    """
+    if not functions:
+        return ds
+    p2 = problem.parameters[1]
+    values = user_values(functions, orbits, p2)
+    found = locate_user_events(
+        problem, result.u, result.lam, result.tangent, functions, values,
+        lambda u, lam: problem.orbit(u, float(lam)), position=lambda u, lam: (u[0], lam),
+        accept=lambda k: problem.accept(result.u[k], result.lam[k]), parameter=p2)
+    names = parameter_names(ds)
+    return add_user_functions(ds, monitors=values, events=list(functions.events),
+                              event_points=[user_event_record(ev, names) for ev in found])
 
 
 def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[str, float]]:

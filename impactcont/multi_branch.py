@@ -30,14 +30,30 @@ from impactcont.core import (
 )
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
-from impactcont.dataset.records import orbit_columns, special_record
-from impactcont.dataset.schema import oscillator_from_dataset, special_variable
+from impactcont.dataset.records import (
+    orbit_columns,
+    reserved_names,
+    special_record,
+    user_event_record,
+)
+from impactcont.dataset.schema import (
+    add_user_functions,
+    oscillator_from_dataset,
+    parameter_names,
+    special_variable,
+)
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
     MultiImpactSpecialPoint,
     detect_multi_impact_points,
+    locate_multi_impact_events,
 )
-from impactcont.detection.special_points import event_function
+from impactcont.detection.special_points import (
+    UserEvent,
+    UserFunctions,
+    check_user_functions,
+    event_function,
+)
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
@@ -239,11 +255,16 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
                       specials: Sequence[MultiImpactSpecialPoint], options: Mapping[str, Any],
                       *, title: str | None = None,
                       extra_attrs: Mapping[str, Any] | None = None,
-                      extra_columns: Sequence[str] = ()) -> xr.Dataset:
+                      extra_columns: Sequence[str] = (),
+                      functions: UserFunctions | None = None,
+                      values: Mapping[str, np.ndarray] | None = None,
+                      user_events: Sequence[UserEvent] = ()) -> xr.Dataset:
     """The N-p branch dataset of :mod:`impactcont.dataset.multi` from samples and special points.
 
     `extra_columns` are further oscillator parameters stored per point (the first
-    parameter of a two-parameter curve).
+    parameter of a two-parameter curve). With `functions` (the user's events and
+    monitors), `values` (each function at every sample) and `user_events` (the located
+    zeros) are stored (:func:`~impactcont.dataset.schema.add_user_functions`).
     """
     orbits = [s.orbit for s in samples]
     parameter = problem.parameter
@@ -271,22 +292,29 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
         "flight_time_k": np.array([sp.orbit.flight_times for sp in specials]).reshape(-1, p),
         "state_k": np.array([sp.orbit.states for sp in specials]).reshape(-1, p, 2 * n),
     }
-    return multi_impact_dataset(parameter=parameter, N=problem.N, p=p, oscillator=problem.osc,
-                                options=dict(options), columns=columns,
-                                impact_columns=impact_columns, special_points=special_points,
-                                special_impact_columns=special_impact_columns, title=title,
-                                extra_attrs=extra_attrs, pattern=problem.pattern)
+    ds = multi_impact_dataset(parameter=parameter, N=problem.N, p=p, oscillator=problem.osc,
+                              options=dict(options), columns=columns,
+                              impact_columns=impact_columns, special_points=special_points,
+                              special_impact_columns=special_impact_columns, title=title,
+                              extra_attrs=extra_attrs, pattern=problem.pattern)
+    if not functions:
+        return ds
+    names = parameter_names(ds)
+    return add_user_functions(ds, monitors=dict(values or {}), events=list(functions.events),
+                              event_points=[user_event_record(ev, names) for ev in user_events])
 
 
 def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
            extra_attrs: Mapping[str, Any] | None = None,
-           progress: ProgressOption | Reporter = None) -> xr.Dataset:
+           progress: ProgressOption | Reporter = None,
+           functions: UserFunctions | None = None) -> xr.Dataset:
     """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``.
 
     `progress` is a driver's ``progress=`` option or the reporter of an enclosing call
-    (:func:`impactcont.progress.reporter`).
+    (:func:`impactcont.progress.reporter`); `functions` the user's events and monitors
+    (:func:`~impactcont.detection.special_points.check_user_functions`).
     """
     labels = check_labels(detect)
     problem.check_bounds(options.bounds)
@@ -295,6 +323,7 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
         samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                                   stop_after_pd=stop_after_pd, progress=rep)
     specials = detect_multi_impact_points(problem, samples, labels)
+    values, user_events = locate_multi_impact_events(problem, samples, functions)
     log.info("N=%d p=%d branch in %s: %d points, %d special (%s)", problem.N, problem.p,
              problem.parameter, len(samples), len(specials), message)
     option_record = {**dataclasses.asdict(options), "N": problem.N, "p": problem.p,
@@ -303,7 +332,8 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                      "message": message, **(record or {})}
     option_record["bounds"] = list(options.bounds)
     return branch_to_dataset(problem, samples, specials, option_record,
-                             extra_attrs=extra_attrs)
+                             extra_attrs=extra_attrs, functions=functions, values=values,
+                             user_events=user_events)
 
 
 def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | None = None
@@ -367,6 +397,8 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
                               max_points: int | None = None,
                               both_directions: bool | None = None, direction: int | None = None,
                               symmetric: bool | None = None, progress: ProgressOption = None,
+                              events: dict[str, Any] | None = None,
+                              monitors: dict[str, Any] | None = None,
                               **more: Any) -> xr.Dataset:
     """Continue the branch of periodic N-p motions through a given motion.
 
@@ -402,6 +434,10 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         ``True``: always; ``False``: never) or a callable receiving a
         :class:`~impactcont.progress.Progress` record at every point
         (:mod:`impactcont.progress`). A call longer than a minute logs a line a minute.
+    events, monitors : mapping of str to callable, optional
+        User events and monitors, as for :func:`impactcont.continuation`; their
+        functions receive the :class:`~impactcont.MultiImpactOrbit` at a point (the
+        full motion on a branch of symmetric motions followed by its half).
 
     Returns
     -------
@@ -413,12 +449,14 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     ------
     ParameterError
         Bad parameter, bounds not containing the start, unknown labels; bounds in ``b``
-        that reach ``-b_low`` (the upper stop would meet the lower one).
+        that reach ``-b_low`` (the upper stop would meet the lower one); bad `events` or
+        `monitors`, or one of their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         Newton fails at the start.
     """
     orbit = _as_multi(start)
     labels = check_labels(detect)
+    functions = check_user_functions(events, monitors, reserved_names())
     check_parameter(orbit.oscillator, parameter)
     problem, u0 = branch_problem(orbit, parameter, symmetric)
     lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
@@ -431,7 +469,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
                              f"{lam0!r} of the orbit")
     return run_branch(problem, u0, lam0, opts, detect=labels,
                       record={"symmetric": isinstance(problem, SymmetricBranchProblem)},
-                      progress=progress)
+                      progress=progress, functions=functions)
 
 
 def restart_problem(branch: xr.Dataset, row: int, *, special: bool = False

@@ -29,7 +29,10 @@ from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import impacts_of, pattern_of
+from impactcont.dataset.records import reserved_names
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
+from impactcont.detection.multi_impact import locate_multi_impact_events
+from impactcont.detection.special_points import check_user_functions
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.multi_branch import MultiImpactSample, branch_to_dataset
@@ -96,7 +99,8 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
                        ds_min: float | None = None, ds_max: float | None = None,
                        newton_tol: float | None = None, max_points: int | None = None,
                        both_directions: bool | None = None, progress: ProgressOption = None,
-                       **more: Any) -> xr.Dataset:
+                       events: dict[str, Any] | None = None,
+                       monitors: dict[str, Any] | None = None, **more: Any) -> xr.Dataset:
     """Follow a special point of an N-p branch in two parameters.
 
     Parameters
@@ -122,6 +126,11 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         :class:`~impactcont.progress.Progress` record at every curve point, with the
         value of `parameter` (:mod:`impactcont.progress`). A call longer than a minute
         logs a line a minute.
+    events, monitors : mapping of str to callable, optional
+        User events and monitors, as for :func:`impactcont.continuation`: functions of
+        the :class:`~impactcont.MultiImpactOrbit` at a curve point; an event's zeros on
+        the curve are located on the dimension ``event`` (``event_precision`` bounds the
+        error in both parameters).
 
     Returns
     -------
@@ -132,12 +141,14 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     Raises
     ------
     ParameterError
-        A bad argument (named in the message), no such special point.
+        A bad argument (named in the message), no such special point; bad `events` or
+        `monitors`, or one of their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         The start could not be put on the curve.
     """
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
+    functions = check_user_functions(events, monitors, reserved_names())
     if kind not in LABELS:
         raise ParameterError(f"kind must be one of {LABELS}; got {kind!r}")
     p1 = str(branch.attrs["parameter"])
@@ -195,6 +206,9 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
                                        strict=True)]
     log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
              parameter, len(samples), result.message)
+    # the user's events: located in both parameters (p1 is the last unknown)
+    values, user_events = locate_multi_impact_events(
+        problem, samples, functions, position=lambda x, lam: (x[-1], lam))
     record = {"kind": kind, "parameters": [p1, parameter], "start": start_p1,
               "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
               "status": [st.name for st in result.statuses], "message": result.message,
@@ -205,7 +219,8 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     view = _CurveView(problem, parameter, osc)
     return branch_to_dataset(view, samples, [], record,
                              title=f"{kind} curve of periodic {N}-{p} impacting motions in "
-                             f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,))
+                             f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,),
+                             functions=functions, values=values, user_events=user_events)
 
 
 def _problem_of(ds: xr.Dataset) -> MultiImpactCurveProblem:

@@ -255,7 +255,9 @@ def _changes(a: float, b: float) -> bool:
 
 
 def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequence[Event],
-                  *, s_tol: float = 1e-13, newton_tol: float = 1e-13) -> list[EventPoint]:
+                  *, s_tol: float = 1e-13, newton_tol: float = 1e-13,
+                  position: Callable[[FloatArray, float], Any] | None = None
+                  ) -> list[EventPoint]:
     """Every sign change of every event between consecutive accepted points, located.
 
     Parameters
@@ -267,6 +269,10 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     events : sequence of Event
     s_tol, newton_tol : float
         Tolerances of the chord coordinate and of the hyperplane Newton.
+    position : callable, optional
+        ``position(u, lam)``: where a point is, e.g. both parameters of a curve (one of
+        them an unknown); ``precision`` bounds the max-norm error of it. Default the
+        parameter ``lam``.
 
     Returns
     -------
@@ -309,10 +315,17 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
                 log.warning("%s between points %d and %d not located, kept as bracketed: %s",
                             event.label, k, k + 1, exc)
                 s, status, (uk, lamk) = _middle(chord)
+            if position is None:
+                where: Callable[[float], Any] = chord.lam
+            else:
+                def where(t: float, chord: _Chord = chord) -> Any:
+                    return position(*chord.point(t))
             if status == "located":
-                precision = zero_precision(g, chord.lam, s, s_tol)
+                precision = zero_precision(g, where, s, s_tol)
             else:  # somewhere on the step: as far as its farther end
-                precision = max(abs(lamk - x[k, -1]), abs(lamk - x[k + 1, -1]))
+                here = np.asarray(where(s), dtype=float)
+                precision = max(float(np.max(np.abs(np.asarray(where(end), dtype=float)
+                                                    - here))) for end in (0.0, 1.0))
             found.append(EventPoint(
                 label=event.label, u=np.array(uk, float), lam=float(lamk), step=k, s=float(s),
                 status=status, precision=float(precision),

@@ -9,11 +9,13 @@ the same variables.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-__all__ = ["orbit_columns", "special_record"]
+__all__ = ["orbit_columns", "reserved_names", "special_record", "user_event_record"]
 
 
 def orbit_columns(orbits: Any, parameter: str, values: Any) -> dict[str, np.ndarray]:
@@ -85,4 +87,44 @@ def special_record(special: Any, parameter: str, *, point: int,
               "impact_velocity": float(orbit.impact_velocity),
               "gap_min": float(orbit.gap_min)}
     record.setdefault(parameter, special.value)
+    return record
+
+
+@functools.cache
+def reserved_names() -> frozenset[str]:
+    """Names a user event or monitor may not take: the built-in variables and dimensions.
+
+    Those of branches (N-1 and N-p, their special points and events) and curves, and the
+    parameters; the labels of special points are refused by
+    :func:`~impactcont.detection.special_points.check_user_functions`.
+    """
+    from impactcont.dataset import curves, multi, schema
+
+    tables = (schema.POINT_VARIABLES, schema.OPTIONAL_POINT_VARIABLES, schema.PARAMETERS,
+              schema._SPECIAL_FIELDS, schema.OPTIONAL_SPECIAL_FIELDS, schema.EVENT_FIELDS,
+              multi.IMPACT_VARIABLES, curves.CURVE_VARIABLES)
+    dims = ("point", "multiplier", "component", "special", "impact", "event", "codim2")
+    return frozenset(name for table in (*tables, dims) for name in table)
+
+
+def user_event_record(event: Any, parameters: Sequence[str]) -> dict[str, Any]:
+    """The event dict of :func:`~impactcont.dataset.schema.add_user_functions` for a user event.
+
+    Parameters
+    ----------
+    event : UserEvent
+        With ``name``, ``point``, ``precision``, ``status`` and ``orbit`` (the motion there).
+    parameters : sequence of str
+        The parameters stored (``omega``, ``b`` and the continued one(s)): their values
+        are the motion's oscillator's.
+
+    Returns
+    -------
+    dict
+    """
+    osc = event.orbit.oscillator
+    record: dict[str, Any] = {name: float(getattr(osc, name) or 0.0) for name in parameters}
+    record.update({"name": event.name, "delta": float(event.orbit.delta),
+                   "point": int(event.point), "precision": float(event.precision),
+                   "status": event.status})
     return record

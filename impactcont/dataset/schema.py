@@ -22,6 +22,10 @@ Dimensions
     coordinate ``["x1", .., "xn", "v1", .., "vn"]``.
 ``special``
     Special points (SN, PD, NS, GR, ZV) found on the branch; may be empty.
+``event``
+    Zeros of the user's event functions (``events=`` of a driver), only when events
+    were asked for (:func:`add_user_functions`); may be empty. The user's monitors
+    (and event functions) are point variables ``monitor_<name>``.
 """
 
 from __future__ import annotations
@@ -49,7 +53,11 @@ __all__ = [
     "REFERENCES",
     "SPECIAL_LABELS",
     "SPECIAL_STATUSES",
+    "add_user_functions",
     "branch_dataset",
+    "check_user_variables",
+    "event_variable",
+    "monitor_variable",
     "oscillator_from_dataset",
     "point_table",
     "provenance_attributes",
@@ -610,6 +618,153 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
     return ds
 
 
+# -- user events and monitors -------------------------------------------------------------------
+#: Fields of a user event (dimension ``event``), besides the parameters' values there
+#: (``event_omega``, ``event_b``, ``event_<parameter>``: those of :func:`parameter_names`).
+EVENT_FIELDS: dict[str, _Var] = {
+    "name": _Var("event name", "1", "Name of the user event (its key in the driver's "
+                 "events=) whose function vanishes here.", kind="U"),
+    "delta": _Var("impact phase at event", "rad",
+                  "Forcing phase delta at the impact (impact 0 of an N-p motion) at the event."),
+    "point": _Var("nearest point", "1", "Index on the point dimension of the accepted point "
+                  "nearest to the event.", kind="i"),
+    "precision": _Var("location precision", "1",
+                      "Bound on the error of the event's location in the continued "
+                      "parameter (in both parameters of a curve, max-norm)."),
+    "status": _Var("location status", "1",
+                   "located: refined to precision; bracketed: only bracketed (the function "
+                   "jumps there, or the location failed).", kind="U"),
+}
+#: Dataset attributes naming the user's events and monitors (comma-separated names).
+USER_EVENTS_ATTR, USER_MONITORS_ATTR = "user_events", "user_monitors"
+
+
+def event_variable(key: str) -> str:
+    """Name of the dataset variable holding user-event field ``key`` (``event_<key>``)."""
+    return f"event_{key}"
+
+
+def monitor_variable(name: str) -> str:
+    """Name of the point variable holding the user's monitor (or event function) `name`."""
+    return f"monitor_{name}"
+
+
+def _names(ds: xr.Dataset, attr: str) -> list[str]:
+    value = ds.attrs.get(attr, "")
+    if not isinstance(value, str):
+        raise ValueError(f"attribute {attr!r} must be comma-separated names; got {value!r}")
+    return [name for name in value.split(",") if name]
+
+
+def _event_parameters(ds: xr.Dataset) -> list[str]:
+    names = parameter_names(ds)
+    if not names:
+        raise ValueError("a dataset with user events must be a branch or curve (attribute "
+                         "'parameter' or 'parameters', their columns on 'point')")
+    return names
+
+
+def add_user_functions(ds: xr.Dataset, *, monitors: Mapping[str, Any],
+                       events: Sequence[str], event_points: Sequence[Mapping[str, Any]]
+                       ) -> xr.Dataset:
+    """`ds` (a branch or curve) with the user's monitors and located events.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A branch or curve dataset (its parameters: :func:`parameter_names`).
+    monitors : mapping of str to array_like
+        ``name -> values`` at every point, shape ``(npoints,)``: every monitor and every
+        event function, stored as ``monitor_<name>``.
+    events : sequence of str
+        The names of the events asked for (attribute ``user_events``); the dimension
+        ``event`` is added, empty when none was found.
+    event_points : sequence of dict
+        Each with the keys of :data:`EVENT_FIELDS` and the value of every parameter.
+
+    Returns
+    -------
+    xarray.Dataset
+        A new dataset; ``user_monitors`` names the monitors (those not events).
+
+    Raises
+    ------
+    ValueError
+        A misshapen or non-finite monitor, a missing key, an unknown event name or
+        status, or a point index out of range.
+    """
+    npoints = ds.sizes["point"]
+    out = ds.copy()
+    for name, values in monitors.items():
+        column = np.asarray(values, dtype=float)
+        if column.shape != (npoints,) or not np.all(np.isfinite(column)):
+            raise ValueError(f"monitor {name!r} must be {npoints} finite values; got shape "
+                             f"{column.shape}")
+        kind = "event function" if name in events else "monitor"
+        out[monitor_variable(name)] = ("point", column, {
+            "long_name": f"user {kind} {name}", "units": "1",
+            "description": f"Value of the user's {kind} {name!r} (a function of the motion) "
+                           "at each point" + (": its zeros are the events of that name."
+                                              if name in events else ".")})
+    parameters = _event_parameters(ds)
+    fields = {**{name: PARAMETERS[name] for name in parameters}, **EVENT_FIELDS}
+    columns: dict[str, list[Any]] = {key: [] for key in fields}
+    for i, record in enumerate(event_points):
+        missing = [key for key in fields if key not in record]
+        if missing:
+            raise ValueError(f"event_points[{i}] is missing key(s) {missing}")
+        for key in fields:
+            columns[key].append(record[key])
+    for key, spec in fields.items():
+        if spec.kind == "U":
+            width = max([1, *map(len, columns[key]), *(map(len, events) if key == "name"
+                                                         else map(len, SPECIAL_STATUSES))])
+            data = np.array(columns[key], dtype=f"<U{width}")
+        else:
+            data = np.array(columns[key], dtype=np.int64 if spec.kind == "i" else np.float64)
+        attrs = spec.attrs() if key in EVENT_FIELDS else {
+            "long_name": f"{spec.long_name} at event", "units": spec.units,
+            "description": f"{spec.description.rstrip('.')} at the event."}
+        out[event_variable(key)] = ("event", data, attrs)
+    out.attrs[USER_EVENTS_ATTR] = ",".join(events)
+    out.attrs[USER_MONITORS_ATTR] = ",".join(name for name in monitors if name not in events)
+    check_user_variables(out)
+    return out
+
+
+def check_user_variables(ds: xr.Dataset) -> None:
+    """Check the user's events and monitors of a branch or curve, where it has them.
+
+    Raises
+    ------
+    ValueError
+        A monitor named by ``user_events`` or ``user_monitors`` missing or not real on
+        ``point``; an event variable missing or with other dims or dtype; an event name
+        not in ``user_events``, a status not in :data:`SPECIAL_STATUSES`, or a point
+        index out of range.
+    """
+    events, monitors = _names(ds, USER_EVENTS_ATTR), _names(ds, USER_MONITORS_ATTR)
+    check_variables(ds, {monitor_variable(name): (("point",), "f")
+                         for name in [*events, *monitors]}, "branch or curve")
+    if not events and "event" not in ds.dims:
+        return
+    fields = {**{name: PARAMETERS[name] for name in _event_parameters(ds)}, **EVENT_FIELDS}
+    check_variables(ds, {event_variable(key): (("event",), spec.kind)
+                         for key, spec in fields.items()}, "branch or curve with user events")
+    names = set(np.asarray(ds[event_variable("name")].values).tolist())
+    if not names <= set(events):
+        raise ValueError(f"variable 'event_name' must hold the names of attribute "
+                         f"{USER_EVENTS_ATTR!r} {events}; got {sorted(names)}")
+    statuses = set(np.asarray(ds[event_variable("status")].values).tolist())
+    if not statuses <= set(SPECIAL_STATUSES):
+        raise ValueError(f"variable 'event_status' must hold statuses in "
+                         f"{list(SPECIAL_STATUSES)}; got {sorted(statuses)}")
+    point = np.asarray(ds[event_variable("point")].values)
+    if point.size and not (point.min() >= 0 and point.max() < ds.sizes["point"]):
+        raise ValueError(f"variable 'event_point' must hold indices in [0, "
+                         f"{ds.sizes['point']}); got {point.tolist()}")
+
+
 def validate_branch_dataset(ds: Any) -> xr.Dataset:
     """Check that ``ds`` has the layout of :func:`branch_dataset`.
 
@@ -665,6 +820,7 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"variable 'special_status' must hold statuses in "
                          f"{list(SPECIAL_STATUSES)}; got {sorted(statuses)}")
     check_attributes(ds, "branch")
+    check_user_variables(ds)
     return ds
 
 

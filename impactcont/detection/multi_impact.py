@@ -55,13 +55,20 @@ import numpy as np
 
 from impactcont.core.locate import Event, locate_events, tangent_at
 from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
-from impactcont.detection.special_points import event_function, event_noise
+from impactcont.detection.special_points import (
+    UserEvent,
+    UserFunctions,
+    event_function,
+    event_noise,
+    locate_user_events,
+    user_values,
+)
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import half_map, pitchfork_noise, pitchfork_test, symmetry_defect
 from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
-           "tangent_at"]
+           "locate_multi_impact_events", "tangent_at"]
 
 log = logging.getLogger(__name__)
 
@@ -207,3 +214,32 @@ def _meets_symmetric_branch(orbit: MultiImpactOrbit) -> bool:
     H = half_map(orbit)
     return bool(np.all(np.isfinite(H))
                 and np.min(np.abs(np.linalg.eigvals(H) + 1.0)) <= _MEETS_TOL)
+
+
+def locate_multi_impact_events(problem: Any, samples: Sequence[MultiImpactSample],
+                               functions: UserFunctions | None, *,
+                               position: Callable[[np.ndarray, float], Any] | None = None
+                               ) -> tuple[dict[str, np.ndarray], list[UserEvent]]:
+    """The user's functions at every sample and the zeros of its events, located.
+
+    As :func:`~impactcont.detection.special_points.locate_user_events` on an N-p branch
+    (or curve: `position` gives both parameters of a point): the functions receive the
+    full :class:`MultiImpactOrbit` at a point (with its interior-contact checks), also on
+    a branch of symmetric motions followed by their half.
+
+    Returns
+    -------
+    values : dict of str to ndarray
+        Each function at every sample (empty without `functions`).
+    events : list of UserEvent
+        In branch order.
+    """
+    if not functions:
+        return {}, []
+    parameter = getattr(problem, "parameter", None)
+    values = user_values(functions, [s.orbit for s in samples], parameter)
+    events = locate_user_events(problem, [s.u for s in samples], [s.lam for s in samples],
+                                [s.tangent for s in samples], functions, values,
+                                lambda u, lam: problem.orbit(u, lam), position=position,
+                                parameter=parameter)
+    return values, events

@@ -29,7 +29,9 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Callable, Sequence
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -40,8 +42,9 @@ from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.vocabulary import LABELS, check_labels
 
-__all__ = ["LABELS", "BranchSample", "SpecialPoint", "detect_special_points", "event_function",
-           "event_noise", "pole_free"]
+__all__ = ["LABELS", "BranchSample", "SpecialPoint", "UserEvent", "UserFunctions",
+           "check_user_functions", "detect_special_points", "event_function", "event_noise",
+           "locate_user_events", "pole_free", "user_values"]
 
 log = logging.getLogger(__name__)
 
@@ -308,3 +311,266 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
         if on_found is not None:
             on_found(special)
     return found
+
+
+# -- user-defined events and monitors ----------------------------------------------------------
+#: A user event's or monitor's name: a letter, then letters, digits or underscores.
+_USER_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class UserFunctions:
+    """The user's events and monitors of one run, checked (:func:`check_user_functions`).
+
+    Attributes
+    ----------
+    events : dict of str to callable
+        ``name -> f(orbit) -> float``: the zeros of ``f`` along the branch or curve are
+        located and stored as events; ``f`` is stored at every point as a monitor too.
+    monitors : dict of str to callable
+        ``name -> f(orbit) -> float``: evaluated and stored at every point.
+    """
+
+    events: dict[str, Callable[[Any], float]]
+    monitors: dict[str, Callable[[Any], float]]
+
+    @property
+    def functions(self) -> dict[str, Callable[[Any], float]]:
+        """Every function by name (events first): each is stored at every point."""
+        return {**self.events, **self.monitors}
+
+    def __bool__(self) -> bool:
+        return bool(self.events or self.monitors)
+
+
+def _check_mapping(what: str, value: Any) -> dict[str, Callable[[Any], float]]:
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise TypeError(f"{what} must be a mapping of name to function of the motion, e.g. "
+                        f"{{'x2max': lambda orbit: max_displacement(orbit, 2) - 0.3}}; got "
+                        f"{type(value).__name__}")
+    out = {}
+    for name, fn in value.items():
+        if not isinstance(name, str) or not _USER_NAME.match(name):
+            raise ParameterError(f"{what}: a name must be a letter followed by letters, digits "
+                                 f"or underscores (it names dataset variables); got {name!r}")
+        if not callable(fn):
+            raise TypeError(f"{what}[{name!r}] must be a function of the motion returning a "
+                            f"real number; got {type(fn).__name__}")
+        out[name] = fn
+    return out
+
+
+def check_user_functions(events: Any = None, monitors: Any = None,
+                         reserved: Iterable[str] = ()) -> UserFunctions:
+    """Check a driver's ``events=`` and ``monitors=`` arguments.
+
+    Parameters
+    ----------
+    events, monitors : mapping of str to callable, optional
+        ``name -> f(orbit)``; ``f`` receives the motion at a point (a
+        :class:`~impactcont.PeriodicOrbit` on N-1 branches and curves, a
+        :class:`~impactcont.MultiImpactOrbit` on N-p ones) and returns a real number.
+    reserved : iterable of str
+        Names of the built-in dataset variables, refused as names.
+
+    Returns
+    -------
+    UserFunctions
+
+    Raises
+    ------
+    TypeError
+        Not a mapping, or a value that is not callable.
+    ParameterError
+        A name that is not an identifier, that names a special-point label (any case:
+        ``SN``, ``PD``, ...) or a built-in variable, or that is both an event and a monitor.
+    """
+    checked = UserFunctions(_check_mapping("events", events), _check_mapping("monitors", monitors))
+    taken = set(reserved)
+    for what, table in (("events", checked.events), ("monitors", checked.monitors)):
+        for name in table:
+            if name.upper() in LABELS:
+                raise ParameterError(f"{what}: the name {name!r} is a special-point label "
+                                     f"({', '.join(LABELS)}, any case); choose another name")
+            if name in taken:
+                raise ParameterError(f"{what}: the name {name!r} is a built-in variable of the "
+                                     "dataset; choose another name")
+    both = sorted(set(checked.events) & set(checked.monitors))
+    if both:
+        raise ParameterError(f"events and monitors share the name(s) {both}: an event is "
+                             "stored as a monitor too; give each name once")
+    return checked
+
+
+class _UserFunctionFailure(Exception):  # noqa: N818 - carries the error to raise
+    """A user function failed inside the locator (which would keep the point as bracketed)."""
+
+    def __init__(self, error: Exception) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+
+def _where(orbit: Any, parameter: str | None) -> str:
+    osc = orbit.oscillator
+    names = dict.fromkeys(["omega", "b", *([parameter] if parameter else [])])
+    return ", ".join(f"{k}={float(getattr(osc, k) or 0.0):.10g}" for k in names)
+
+
+def user_value(name: str, fn: Callable[[Any], float], orbit: Any,
+               parameter: str | None = None) -> float:
+    """``fn(orbit)`` as a float, or a clear error naming the event or monitor.
+
+    Raises
+    ------
+    ParameterError
+        `fn` raised (chained), or returned a value that is not finite.
+    TypeError
+        `fn` returned something else than a real scalar.
+    """
+    try:
+        value = fn(orbit)
+    except Exception as exc:  # a user function: any failure, named with where it happened
+        raise ParameterError(f"event or monitor {name!r} raised {type(exc).__name__}: {exc} "
+                             f"(at {_where(orbit, parameter)})") from exc
+    array = np.asarray(value)
+    if array.ndim != 0 or array.dtype.kind not in "iuf" or isinstance(value, bool):
+        raise TypeError(f"event or monitor {name!r} must return a real number; got {value!r} "
+                        f"(at {_where(orbit, parameter)})")
+    result = float(array)
+    if not math.isfinite(result):
+        raise ParameterError(f"event or monitor {name!r} must return a finite number; got "
+                             f"{result!r} (at {_where(orbit, parameter)})")
+    return result
+
+
+def user_values(functions: UserFunctions, orbits: Sequence[Any],
+                parameter: str | None = None) -> dict[str, np.ndarray]:
+    """Every event and monitor function at every point: ``name -> values``, shape (npoints,).
+
+    Raises
+    ------
+    ParameterError, TypeError
+        As :func:`user_value`.
+    """
+    return {name: np.array([user_value(name, fn, orbit, parameter) for orbit in orbits],
+                           dtype=float)
+            for name, fn in functions.functions.items()}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class UserEvent:
+    """A located zero of a user event's function on a branch or curve.
+
+    Attributes
+    ----------
+    name : str
+        The event's name.
+    u : ndarray
+        The problem's unknowns there.
+    lam : float
+        The continued parameter there.
+    point : int
+        Index of the nearest accepted point.
+    precision : float
+        Bound on the error of the location (max-norm of the parameters of a curve).
+    status : str
+        ``"located"`` or ``"bracketed"`` (the function jumps there, or the location
+        failed; the point is then the best estimate in the step).
+    orbit : PeriodicOrbit or MultiImpactOrbit
+        The motion there.
+    """
+
+    name: str
+    u: np.ndarray
+    lam: float
+    point: int
+    precision: float
+    status: str
+    orbit: Any
+
+
+def locate_user_events(problem: Any, u: Any, lam: Any, tangent: Any, functions: UserFunctions,
+                       values: Mapping[str, np.ndarray], orbit_at: Callable[[Any, float], Any],
+                       *, position: Callable[[Any, float], Any] | None = None,
+                       accept: Callable[[int], None] | None = None,
+                       parameter: str | None = None) -> list[UserEvent]:
+    """Locate the zeros of the user's event functions between consecutive accepted points.
+
+    As the built-in events (:func:`~impactcont.core.locate_events`, the same locator:
+    Brent's method on the branch parametrised by the chord of each step), with the
+    precision and status it reports.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem followed (a branch's or a curve's augmented system).
+    u, lam, tangent : array_like
+        The accepted points in order (as for :func:`~impactcont.core.locate_events`).
+    functions : UserFunctions
+    values : mapping of str to ndarray
+        :func:`user_values` at the accepted points.
+    orbit_at : callable
+        ``orbit_at(u, lam)``: the motion at a point of the problem.
+    position : callable, optional
+        ``position(u, lam)``: where a point is (both parameters of a curve); default
+        ``lam``.
+    accept : callable, optional
+        ``accept(k)``: called before a step from point ``k`` is searched (a curve renews
+        the borders of its augmented system there).
+    parameter : str, optional
+        The continued parameter, named in error messages.
+
+    Returns
+    -------
+    list of UserEvent
+        By step, then in the order of ``functions.events``.
+
+    Raises
+    ------
+    ParameterError, TypeError
+        An event function failed at a point the locator tried (:func:`user_value`).
+    """
+    u = np.asarray(u, dtype=float)
+    lam = np.asarray(lam, dtype=float)
+    tangent = np.asarray(tangent, dtype=float)
+    where = position if position is not None else (lambda _u, lam_: lam_)
+    found: list[UserEvent] = []
+    for k in range(len(lam) - 1):
+        watched = [name for name in functions.events
+                   if (values[name][k] < 0) != (values[name][k + 1] < 0)]
+        if not watched:
+            continue
+        if accept is not None:
+            accept(k)
+        events = [Event(name, _user_test(name, functions.events[name], orbit_at, parameter),
+                        lambda j, v=values[name], k=k: float(v[k + j]))
+                  for name in watched]
+        try:
+            located = locate_events(problem, u[k:k + 2], lam[k:k + 2], tangent[k:k + 2], events,
+                                    s_tol=_XTOL, position=position)
+        except _UserFunctionFailure as failure:
+            raise failure.error from failure.error.__cause__
+        ends = [np.asarray(where(u[j], lam[j]), dtype=float) for j in (k, k + 1)]
+        for ep in located:
+            here = np.asarray(where(ep.u, ep.lam), dtype=float)
+            nearest = k if (np.max(np.abs(here - ends[0])) <= np.max(np.abs(here - ends[1]))) \
+                else k + 1
+            orbit = orbit_at(ep.u, ep.lam)
+            event = UserEvent(ep.label, ep.u, ep.lam, nearest, ep.precision, ep.status, orbit)
+            log.info("event %s at %s (%s, precision %.1e)", event.name,
+                     _where(orbit, parameter), event.status, event.precision)
+            found.append(event)
+    return found
+
+
+def _user_test(name: str, fn: Callable[[Any], float], orbit_at: Callable[[Any, float], Any],
+               parameter: str | None) -> Callable[[np.ndarray, float], float]:
+    def test(u: np.ndarray, lam: float) -> float:
+        orbit = orbit_at(u, lam)
+        try:
+            return user_value(name, fn, orbit, parameter)
+        except (ParameterError, TypeError) as exc:  # past the locator's own error handling
+            raise _UserFunctionFailure(exc) from exc
+    return test

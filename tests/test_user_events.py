@@ -1,0 +1,335 @@
+"""User-defined events and monitors on branches and curves (``events=``, ``monitors=``).
+
+Every located event is checked independently: the closed form (``periodic_orbits``) or a
+Newton re-solve of the N-p motion at the located parameters, and a dense time series for
+displacement events. Tolerances are what the locator claims (``event_precision``) times
+the slope of the function, never the last digits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.errors import ParameterError
+from impactcont.model.stops import Stops
+from impactcont.multi_curves import multi_impact_curve
+from impactcont.orbit.extrema import displacement_extrema, max_displacement, min_displacement
+
+K2 = [[1.0, -1.0], [-1.0, 2.0]]
+V_LEVEL = 0.7   # impact velocity of the events below
+X2_LEVEL = 0.0  # largest x2 of the N-1 displacement event
+
+
+def paper(**kw) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, eta=0.1, **kw)
+
+
+def velocity_event(orbit) -> float:
+    return orbit.impact_velocity - V_LEVEL
+
+
+def x2_event(orbit) -> float:
+    return max_displacement(orbit, 2) - X2_LEVEL
+
+
+@pytest.fixture(scope="module")
+def n1_branch():
+    return ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 2.0), components="start",
+                           events={"v07": velocity_event, "x2top": x2_event},
+                           monitors={"omega_again": lambda o: o.oscillator.omega,
+                                     "x1min": lambda o: min_displacement(o, 1)},
+                           progress=False)
+
+
+@pytest.fixture(scope="module")
+def symmetric_branch():
+    """Symmetric 1-2 motions between mirrored stops (followed by their half)."""
+    osc = paper(b=0.5, omega=1.6, stops=Stops(mirror=True))
+    start = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 150.0))
+    return ic.multi_impact_continuation(
+        start, "omega", (1.3, 1.7), both_directions=True, ds_max=0.02, progress=False,
+        events={"v07": velocity_event, "x2top": lambda o: max_displacement(o, 2) - 0.6},
+        monitors={"x2max": lambda o: max_displacement(o, 2)})
+
+
+def rows(ds, name):
+    return np.flatnonzero(ds["event_name"].values == name)
+
+
+def crossings(values, level):
+    """The steps k where the stored values cross `level` between points k and k + 1."""
+    side = np.asarray(values) < level
+    return np.flatnonzero(side[:-1] != side[1:])
+
+
+def nearest_root(osc, delta):
+    return min(ic.periodic_orbits(osc, 1),
+               key=lambda o: abs(math.remainder(o.delta - delta, 2 * math.pi)))
+
+
+# -- the displacement helper -----------------------------------------------------------------
+def test_displacement_extrema_against_a_dense_time_series():
+    osc = paper(b=0.6, omega=1.0)
+    orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
+    _, X = orbit.time_series(num=40001)
+    h = orbit.period / 40000
+    for mass in (1, 2):
+        lo, hi = displacement_extrema(orbit, mass)
+        # the located extrema bound the samples and are within the grid's reach of them
+        # (h^2/8 |x''| with |x''| <= 10 here)
+        assert hi >= X[:, mass - 1].max() - 1e-12 and hi - X[:, mass - 1].max() < 2 * h * h
+        assert lo <= X[:, mass - 1].min() + 1e-12 and X[:, mass - 1].min() - lo < 2 * h * h
+    assert max_displacement(orbit, 1) == pytest.approx(osc.b, abs=1e-12)  # the stop
+    for bad in (0, 3, 1.0, True):
+        with pytest.raises(ParameterError, match=r"mass must be an integer in 1 \.\. 2"):
+            max_displacement(orbit, bad)
+    with pytest.raises(TypeError, match="PeriodicOrbit or MultiImpactOrbit"):
+        max_displacement(osc, 1)
+
+
+def test_displacement_extrema_of_an_n_p_motion_over_every_flight(symmetric_branch):
+    osc = ic.dataset.oscillator_from_dataset(symmetric_branch, 10)
+    motion = ic.multi_impact_orbit(osc, 1, 2, {
+        "delta": float(symmetric_branch["delta_k"].values[10, 0]),
+        "flight_times": symmetric_branch["flight_time_k"].values[10],
+        "states": symmetric_branch["state_k"].values[10],
+        "pattern": symmetric_branch.attrs["pattern"]})
+    _, X = motion.time_series(num=20001)
+    h = float(np.max(motion.flight_times)) / 20000
+    for mass in (1, 2):
+        lo, hi = displacement_extrema(motion, mass)
+        assert 0 <= hi - X[:, mass - 1].max() + 1e-12 < 2 * h * h
+        assert 0 <= X[:, mass - 1].min() - lo + 1e-12 < 2 * h * h
+    # the motion is symmetric: mass 1 reaches both stops
+    assert displacement_extrema(motion, 1) == pytest.approx((-osc.b, osc.b), abs=1e-10)
+
+
+# -- N-1 branches -------------------------------------------------------------------------------
+def test_velocity_event_on_an_n1_branch_is_where_the_closed_form_crosses(n1_branch):
+    ds = n1_branch
+    assert ds.attrs["user_events"] == "v07,x2top"
+    steps = crossings(ds["impact_velocity"].values, V_LEVEL)
+    found = rows(ds, "v07")
+    assert steps.size >= 1 and found.size == steps.size
+    omega = ds["omega"].values
+    for k, row in zip(steps, found, strict=True):
+        w = float(ds["event_omega"].values[row])
+        precision = float(ds["event_precision"].values[row])
+        assert ds["event_status"].values[row] == "located" and precision < 1e-9
+        assert min(omega[k], omega[k + 1]) <= w <= max(omega[k], omega[k + 1])
+        assert ds["event_point"].values[row] in (k, k + 1)
+        # the closed form at the located frequency: impact velocity at the level, within
+        # the slope times the precision claimed
+        orbit = nearest_root(paper(b=0.0, omega=w), float(ds["event_delta"].values[row]))
+        slope = abs((ds["impact_velocity"].values[k + 1] - ds["impact_velocity"].values[k])
+                    / (omega[k + 1] - omega[k]))
+        assert abs(orbit.impact_velocity - V_LEVEL) <= 10 * slope * precision + 1e-12
+
+
+def test_displacement_event_on_an_n1_branch_against_a_dense_evaluation(n1_branch):
+    ds = n1_branch
+    steps = crossings(ds["monitor_x2top"].values, 0.0)
+    found = rows(ds, "x2top")
+    assert steps.size >= 1 and found.size == steps.size
+    for row in found:
+        assert ds["event_status"].values[row] == "located"
+        w = float(ds["event_omega"].values[row])
+        orbit = nearest_root(paper(b=0.0, omega=w), float(ds["event_delta"].values[row]))
+        _, X = orbit.time_series(num=40001)
+        # the sampled maximum is below the true one by at most h^2/8 |x2''|
+        h = orbit.period / 40000
+        assert -2 * h * h <= X[:, 1].max() - X2_LEVEL <= 1e-9
+
+
+def test_monitors_are_stored_at_every_point(n1_branch):
+    ds = n1_branch
+    assert ds.attrs["user_monitors"] == "omega_again,x1min"
+    np.testing.assert_array_equal(ds["monitor_omega_again"].values, ds["omega"].values)
+    # an event function is a monitor too
+    np.testing.assert_array_equal(ds["monitor_v07"].values,
+                                  ds["impact_velocity"].values - V_LEVEL)
+    for i in (0, ds.sizes["point"] // 2, -1):
+        orbit = nearest_root(paper(b=0.0, omega=float(ds["omega"].values[i])),
+                             float(ds["delta"].values[i]))
+        assert ds["monitor_x1min"].values[i] == pytest.approx(min_displacement(orbit, 1),
+                                                              abs=1e-9)
+    assert ic.dataset.point_table(ds)["monitor_x1min"].size == ds.sizes["point"]
+
+
+def test_a_branch_without_user_functions_has_no_event_dimension(n1_branch):
+    plain = ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 1.5),
+                            components="start", progress=False)
+    assert "event" not in plain.dims and "user_events" not in plain.attrs
+    none_found = ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 1.5),
+                                 components="start", progress=False,
+                                 events={"never": lambda o: 1.0})
+    assert none_found.sizes["event"] == 0 and none_found.attrs["user_events"] == "never"
+
+
+# -- N-p branches ------------------------------------------------------------------------------
+def test_events_on_a_symmetric_n_p_branch_against_newton_re_solves(symmetric_branch):
+    ds = symmetric_branch
+    assert ds.attrs["impacts"] == 2 and '"symmetric": true' in ds.attrs["options"]
+    for name, column, level in (("v07", ds["impact_velocity"].values, V_LEVEL),
+                                ("x2top", ds["monitor_x2max"].values, 0.6)):
+        steps, found = crossings(column, level), rows(ds, name)
+        assert steps.size >= 1 and found.size == steps.size
+        for k, row in zip(steps, found, strict=True):
+            w = float(ds["event_omega"].values[row])
+            precision = float(ds["event_precision"].values[row])
+            assert ds["event_status"].values[row] == "located" and precision < 1e-9
+            # the full motion re-solved by Newton at the located frequency
+            osc = ic.dataset.oscillator_from_dataset(ds, int(k)).replace(omega=w)
+            motion = ic.multi_impact_orbit(osc, 1, 2, {
+                "delta": float(ds["delta_k"].values[k, 0]),
+                "flight_times": ds["flight_time_k"].values[k],
+                "states": ds["state_k"].values[k], "pattern": ds.attrs["pattern"]})
+            slope = abs((column[k + 1] - column[k]) / (ds["omega"].values[k + 1]
+                                                       - ds["omega"].values[k]))
+            if name == "v07":
+                assert abs(motion.impact_velocity - V_LEVEL) <= 10 * slope * precision + 1e-10
+            else:
+                _, X = motion.time_series(num=20001)
+                h = float(np.max(motion.flight_times)) / 20000
+                assert -2 * h * h - 1e-10 <= X[:, 1].max() - 0.6 <= 10 * slope * precision \
+                    + 1e-10
+
+
+def test_n_p_branch_of_n1_motions_locates_the_n1_event():
+    """The N-1 motions followed by shooting (p = 1): the same event as the closed form's."""
+    osc = paper(b=0.0, omega=1.5)
+    closed = ic.continuation(osc, 1, "omega", (1.4, 2.0), components="start",
+                             events={"v07": velocity_event}, progress=False)
+    start = ic.multi_impact_orbit(osc, 1, 1, next(o for o in ic.periodic_orbits(osc, 1)
+                                                  if o.physical))
+    shot = ic.multi_impact_continuation(start, "omega", (1.4, 2.0), both_directions=True,
+                                        events={"v07": velocity_event}, progress=False)
+    assert closed.sizes["event"] == shot.sizes["event"] >= 1
+    np.testing.assert_allclose(np.sort(shot["event_omega"].values),
+                               np.sort(closed["event_omega"].values), rtol=0, atol=1e-9)
+
+
+# -- curves ------------------------------------------------------------------------------------
+def test_events_on_the_pd_curves_of_n1_and_n_p_motions():
+    osc = paper(b=0.0, omega=1.75)
+    box = {"omega": (1.0, 3.0), "b": (-0.2, 0.3)}
+    events = {"v06": lambda o: o.impact_velocity - 0.6}
+    branch = ic.continuation(osc, 1, "omega", (1.6, 1.9), detect=("PD",), progress=False)
+    cv = ic.curve(None, None, "PD", start=branch, bounds=box, events=events,
+                  monitors={"v": lambda o: o.impact_velocity}, progress=False)
+    np.testing.assert_array_equal(cv["monitor_v"].values, cv["impact_velocity"].values)
+    assert cv.sizes["event"] == crossings(cv["impact_velocity"].values, 0.6).size == 1
+    assert cv["event_status"].values[0] == "located"
+    precision = float(cv["event_precision"].values[0])
+    w, b = float(cv["event_omega"].values[0]), float(cv["event_b"].values[0])
+    assert precision < 1e-9
+    # the closed form there: a motion with that impact velocity and a multiplier -1
+    orbit = nearest_root(paper(b=b, omega=w), float(cv["event_delta"].values[0]))
+    assert abs(orbit.impact_velocity - 0.6) < 1e-8
+    assert np.min(np.abs(orbit.multipliers + 1.0)) < 1e-6
+    # the same curve followed by shooting (p = 1) meets it at the same point
+    physical = next(q for q in ic.periodic_orbits(osc, 1) if q.physical)
+    shot = ic.multi_impact_continuation(ic.multi_impact_orbit(osc, 1, 1, physical), "omega",
+                                        (1.6, 1.9), detect=("PD",), both_directions=True,
+                                        progress=False)
+    mc = multi_impact_curve(shot, "PD", 0, parameter="b", bounds=box, events=events,
+                            progress=False)
+    assert mc.sizes["event"] == 1 and mc["event_status"].values[0] == "located"
+    assert abs(float(mc["event_omega"].values[0]) - w) < 1e-8
+    assert abs(float(mc["event_b"].values[0]) - b) < 1e-8
+
+
+# -- files -------------------------------------------------------------------------------------
+def test_save_load_round_trip(n1_branch, symmetric_branch, tmp_path):
+    for name, ds in (("n1", n1_branch), ("np", symmetric_branch)):
+        path = tmp_path / f"{name}.nc"
+        ic.save(ds, path)
+        back = ic.load(path)
+        assert back.attrs["user_events"] == ds.attrs["user_events"]
+        assert back.attrs["user_monitors"] == ds.attrs["user_monitors"]
+        for var in [k for k in ds.variables if str(k).startswith(("event_", "monitor_"))]:
+            np.testing.assert_array_equal(back[var].values, ds[var].values)
+            assert back[var].dims == ds[var].dims
+        ic.dataset.validate_branch_dataset(back)
+
+
+def test_validation_refuses_bad_user_variables(n1_branch):
+    bad = n1_branch.copy()
+    bad["event_status"] = ("event", np.full(bad.sizes["event"], "unknown"))
+    with pytest.raises(ValueError, match="event_status"):
+        ic.dataset.validate_branch_dataset(bad)
+    bad = n1_branch.copy()
+    bad["event_name"] = ("event", np.full(bad.sizes["event"], "other"))
+    with pytest.raises(ValueError, match="event_name"):
+        ic.dataset.validate_branch_dataset(bad)
+    with pytest.raises(ValueError, match="monitor_x1min"):
+        ic.dataset.validate_branch_dataset(n1_branch.drop_vars("monitor_x1min"))
+
+
+def test_extend_keeps_the_events_in_branch_order(n1_branch):
+    short = ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 1.7),
+                            components="start", events={"v07": velocity_event}, progress=False)
+    longer = ic.extend(short, (1.4, 2.0), events={"v07": velocity_event}, progress=False)
+    np.testing.assert_allclose(np.sort(longer["event_omega"].values),
+                               np.sort(n1_branch["event_omega"].values[rows(n1_branch, "v07")]),
+                               rtol=0, atol=1e-9)
+    omega = longer["omega"].values
+    for row, k in enumerate(longer["event_point"].values):  # the nearest point, re-indexed
+        assert abs(omega[k] - longer["event_omega"].values[row]) <= np.max(np.diff(omega))
+    with pytest.raises(ParameterError, match=r"events must have the names .*\['v07'\]"):
+        ic.extend(short, (1.4, 2.0), progress=False)
+
+
+# -- bad input ---------------------------------------------------------------------------------
+@pytest.mark.parametrize(("events", "monitors", "error", "match"), [
+    ({"PD": velocity_event}, None, ParameterError, "'PD' is a special-point label"),
+    ({"gr": velocity_event}, None, ParameterError, "'gr' is a special-point label"),
+    (None, {"impact_velocity": velocity_event}, ParameterError, "built-in variable"),
+    (None, {"omega": velocity_event}, ParameterError, "built-in variable"),
+    ({"x 2": velocity_event}, None, ParameterError, "a name must be a letter"),
+    ({"v": velocity_event}, {"v": velocity_event}, ParameterError, "share the name"),
+    ([velocity_event], None, TypeError, "events must be a mapping"),
+    (None, {"v": 0.7}, TypeError, r"monitors\['v'\] must be a function"),
+])
+def test_bad_names_and_functions_are_refused(events, monitors, error, match):
+    with pytest.raises(error, match=match):
+        ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 1.5), events=events,
+                        monitors=monitors, progress=False)
+
+
+def _boom(orbit):
+    raise ZeroDivisionError("no")
+
+
+@pytest.mark.parametrize(("function", "error", "match"), [
+    (_boom, ParameterError, "'bad' raised ZeroDivisionError: no"),
+    (lambda o: math.nan, ParameterError, "'bad' must return a finite number; got nan"),
+    (lambda o: np.array([1.0, 2.0]), TypeError, "'bad' must return a real number"),
+    (lambda o: 1j, TypeError, "'bad' must return a real number"),
+])
+@pytest.mark.parametrize("kind", ["events", "monitors"])
+def test_a_failing_function_is_named(function, error, match, kind):
+    with pytest.raises(error, match=match):
+        ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 1.5), components="start",
+                        progress=False, **{kind: {"bad": function}})
+
+
+def test_a_function_failing_inside_the_locator_is_named_not_bracketed(n1_branch):
+    """The locator keeps a failed location as bracketed; a user function's failure there is
+    an error naming it instead."""
+    calls = {"n": 0}
+    npoints = n1_branch.sizes["point"]
+
+    def later(orbit):
+        calls["n"] += 1
+        if calls["n"] > npoints:  # fine at every accepted point, not in between
+            raise RuntimeError("between points")
+        return orbit.impact_velocity - V_LEVEL
+
+    with pytest.raises(ParameterError, match="'late' raised RuntimeError: between points"):
+        ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 2.0), components="start",
+                        events={"late": later}, progress=False)
