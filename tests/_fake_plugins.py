@@ -17,8 +17,8 @@ from impactcont.problems import plugins
 from impactcont.scene.entries import EntrySpec
 from impactcont.scene.keys import Integer, declare
 
-BUILTINS = ["orbits", "branches", "robust", "simulations", "curves", "maps", "switches",
-            "multi_impact"]
+BUILTINS = ["orbits", "branches", "robust", "simulations", "curves", "maps", "multi_impact",
+            "switches"]
 
 
 class GoodProblem:

@@ -72,7 +72,7 @@ class Stops:
     Examples
     --------
     >>> Stops(mass=2, b_low=0.5, R_low=0.8)
-    Stops(mass=2, b_low=0.5, R_low=0.8, mirror=False)
+    Stops(mass=2, b_low=0.5, R_low=0.8)
     """
 
     mass: int = 1
@@ -106,6 +106,10 @@ class Stops:
         if self.R_low is not None:
             object.__setattr__(self, "R_low", _finite("stops.R_low", self.R_low, low=0.0,
                                                        high=1.0, allowed="in [0, 1]"))
+
+    def __repr__(self) -> str:
+        mirror = ", mirror=True" if self.mirror else ""
+        return f"Stops(mass={self.mass!r}, b_low={self.b_low!r}, R_low={self.R_low!r}{mirror})"
 
     # -- views ----------------------------------------------------------------------------------
     @property

@@ -7,7 +7,7 @@ dataclass that declares and validates the keys of one table, and the
 (which a scene run writes to ``<key>.nc`` and draws). It may also bring plot
 kinds (:class:`PlotKind`) and the continuation problem class it follows. The
 built-in tasks (orbits, branches, robust, simulations, curves, maps,
-switches, multi_impact) are
+multi_impact, switches) are
 registered here the same way as a third-party problem; the scene parser, the
 runner, ``impactcont run`` and ``impactcont list-problems`` read this registry
 only.
