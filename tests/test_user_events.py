@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.branch import continuation_from
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
 from impactcont.multi_curves import multi_impact_curve
@@ -211,6 +212,11 @@ def test_n_p_branch_of_n1_motions_locates_the_n1_event():
     assert closed.sizes["event"] == shot.sizes["event"] >= 1
     np.testing.assert_allclose(np.sort(shot["event_omega"].values),
                                np.sort(closed["event_omega"].values), rtol=0, atol=1e-9)
+    # restarted from its first point both ways: the same event
+    again = continuation_from(shot, point=0, along=None, events={"v07": velocity_event},
+                              progress=False)
+    np.testing.assert_allclose(np.sort(again["event_omega"].values),
+                               np.sort(closed["event_omega"].values), rtol=0, atol=1e-9)
 
 
 # -- curves ------------------------------------------------------------------------------------
@@ -288,6 +294,7 @@ def test_extend_keeps_the_events_in_branch_order(n1_branch):
 @pytest.mark.parametrize(("events", "monitors", "error", "match"), [
     ({"PD": velocity_event}, None, ParameterError, "'PD' is a special-point label"),
     ({"gr": velocity_event}, None, ParameterError, "'gr' is a special-point label"),
+    (None, {"R1": velocity_event}, ParameterError, "'R1' is a special-point label"),
     (None, {"impact_velocity": velocity_event}, ParameterError, "built-in variable"),
     (None, {"omega": velocity_event}, ParameterError, "built-in variable"),
     ({"x 2": velocity_event}, None, ParameterError, "a name must be a letter"),

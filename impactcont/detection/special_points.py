@@ -40,7 +40,7 @@ from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_criti
 from impactcont.errors import ParameterError
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
-from impactcont.vocabulary import LABELS, check_labels
+from impactcont.vocabulary import CODIM2_LABELS, LABELS, check_labels
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "UserEvent", "UserFunctions",
            "check_user_functions", "detect_special_points", "event_function", "event_noise",
@@ -385,15 +385,17 @@ def check_user_functions(events: Any = None, monitors: Any = None,
         Not a mapping, or a value that is not callable.
     ParameterError
         A name that is not an identifier, that names a special-point label (any case:
-        ``SN``, ``PD``, ...) or a built-in variable, or that is both an event and a monitor.
+        ``SN``, ``PD``, ..., ``R1``, ``R2``) or a built-in variable, or that is both an
+        event and a monitor.
     """
     checked = UserFunctions(_check_mapping("events", events), _check_mapping("monitors", monitors))
     taken = set(reserved)
     for what, table in (("events", checked.events), ("monitors", checked.monitors)):
         for name in table:
-            if name.upper() in LABELS:
+            if name.upper() in (*LABELS, *CODIM2_LABELS):
                 raise ParameterError(f"{what}: the name {name!r} is a special-point label "
-                                     f"({', '.join(LABELS)}, any case); choose another name")
+                                     f"({', '.join(LABELS)}, or a codim-2 one: R1, R2; any "
+                                     "case); choose another name")
             if name in taken:
                 raise ParameterError(f"{what}: the name {name!r} is a built-in variable of the "
                                      "dataset; choose another name")
