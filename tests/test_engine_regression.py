@@ -9,11 +9,11 @@ on the code before the refactor; every run is recomputed here and compared.
 
 One entry changed on purpose since: ``curve_SN`` gained the SN+PD point that one
 default step held together with the SN+ZV (it was discarded as a pole crossing)
-and names its double multipliers +1 ``SN+SN`` (1:1 resonances), found at every step
+and names its double multipliers +1 ``R1`` (1:1 resonances; ``SN+SN`` before), found at every step
 size (issue 11, item 5; ``tests/test_step_independence.py``); its SN+ZV is unchanged.
 ``curve_PD`` changed on purpose too: its system now sets apart the 1/h2 pole of G
 (regular through a zero-velocity impact), so PD+ZV is located (1.2331015327; it was
-only bracketed, at 1.2333601728) and the 1:2 resonance PD+PD next to it is found at
+only bracketed, at 1.2333601728) and the 1:2 resonance R2 (``PD+PD`` before) next to it is found at
 every step size; PD+NS and PD+SN are unchanged to 1e-15, the curve has 33 points (35).
 ``np_PD_switch`` lost its GR at omega = 1.88746016 (issue 19): it was the grazing of the
 zero-velocity impact next to it (the GR test is ``-h2^2 / (2|a|)`` there, a double zero

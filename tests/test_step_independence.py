@@ -45,9 +45,9 @@ def test_sn_curve_codim2_points_do_not_depend_on_ds_max(osc):
         _same(a, b)
     labels = [p[0] for p in a]
     # the PD and the ZV of one step are both kept; the double multipliers +1 are 1:1
-    # resonances (SN+SN), not Neimark-Sacker points
+    # resonances (R1), not Neimark-Sacker points
     assert "SN+PD" in labels and "SN+ZV" in labels and "SN+NS" not in labels
-    for k in np.flatnonzero(runs[0].codim2_label.values == "SN+SN"):
+    for k in np.flatnonzero(runs[0].codim2_label.values == "R1"):
         mu = runs[0].codim2_multipliers.values[k]
         # at a Jordan block a multiplier moves as the square root of the location error
         assert np.sort(np.abs(mu - 1.0))[1] < 1e-5  # two multipliers at +1
@@ -81,9 +81,9 @@ def test_pd_curve_codim2_points_do_not_depend_on_the_step(osc):
     a, *others = (_points(c, "codim2_") for c in runs)
     for b in others:
         _same(a, b)
-    assert [p[0] for p in a] == ["PD+NS", "PD+PD", "PD+SN", "PD+ZV"]
+    assert [p[0] for p in a] == ["PD+NS", "PD+SN", "PD+ZV", "R2"]
     labels = runs[0].codim2_label.values.tolist()
-    mu = runs[0].codim2_multipliers.values[labels.index("PD+PD")]
+    mu = runs[0].codim2_multipliers.values[labels.index("R2")]
     assert np.sort(np.abs(mu + 1.0))[1] < 1e-5  # two multipliers at -1 (a Jordan block)
     # the ZV point is a zero of the impact velocity, recomputed from scratch
     k = labels.index("PD+ZV")
@@ -96,7 +96,7 @@ def test_pd_curve_codim2_points_do_not_depend_on_the_step(osc):
 def test_ns_curve_ends_at_the_strong_resonances_found_by_the_sn_and_pd_curves(osc):
     """The NS system is singular at its 1:1 / 1:2 ends (theta -> 0, pi): they used to be
     'located' 1e-5 apart for two step sizes; now they are the double multipliers +1 / -1
-    located on a regular system, equal to the SN curve's SN+SN and the PD curve's PD+PD."""
+    located on a regular system, equal to the R1 of the SN curve and the R2 of the PD curve."""
     at_half = osc.replace(b=0.5)
     branch = ic.continuation(at_half, 1, "omega", (0.5, 3.0))
     box = {"omega": (0.6, 2.0), "b": (0.0, 2.0)}
@@ -109,7 +109,7 @@ def test_ns_curve_ends_at_the_strong_resonances_found_by_the_sn_and_pd_curves(os
     assert set(ends) == {"R1", "R2"}
     pd = ic.curve(at_half, 1, "PD", start=branch, bounds=box)
     sn = ic.curve(osc, 1, "SN", start=SN_START, bounds=BOX)
-    for curve, label, end in ((pd, "PD+PD", "R2"), (sn, "SN+SN", "R1")):
-        twins = [p for p in _points(curve, "codim2_") if p[0] == label]
+    for curve, end in ((pd, "R2"), (sn, "R1")):
+        twins = [p for p in _points(curve, "codim2_") if p[0] == end]
         nearest = min(twins, key=lambda p: abs(p[1] - ends[end][1]) + abs(p[2] - ends[end][2]))
         assert abs(nearest[1] - ends[end][1]) < 1e-9 and abs(nearest[2] - ends[end][2]) < 1e-9
