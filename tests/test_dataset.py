@@ -559,15 +559,7 @@ def _extents(fig, artists) -> list:
 ONE_PLACE = 8.0
 
 
-#: Pending a fix in impactcont.plots: coincident_groups chains points, so _label_points writes
-#: one label at the first of a row of markers each closer than a marker to the next.
-_CHAINED = pytest.mark.xfail(strict=True, reason=(
-    "one label 'SN, PD, NS, GR, ZV' at the first of six chained markers (up to 28 points "
-    "away): coincident_groups links points transitively"))
-
-
-@pytest.mark.parametrize("width", [pytest.param(3.5, marks=_CHAINED),
-                                   pytest.param(5.0, marks=_CHAINED), 7.0])
+@pytest.mark.parametrize("width", [3.5, 5.0, 7.0])
 def test_special_point_labels_avoid_each_other(osc, width):
     """Crowded special points: no two labels overlap, and each label names its point(s).
 
@@ -723,9 +715,6 @@ def test_multipliers_plot_keeps_components_apart_and_frames_poles(branch):
     plt.close(ax_abs.figure)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "multipliers_plot titles '|mu| > 1.27 not shown' yet draws the multipliers of modulus 1.3 "
-    "(the square frame holds them)"))
 def test_multipliers_plot_note_says_what_is_not_drawn(branch):
     """``|mu| > r not shown``: every dot drawn has ``|mu| <= r``, every one left out ``> r``."""
     ax_abs, ax_c = multipliers_plot(branch)

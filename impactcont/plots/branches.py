@@ -424,7 +424,7 @@ def _label_points(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
         return
     xy = [(px, py) for px, py, _ in specials]
     ax.figure.draw_without_rendering()
-    groups = coincident_groups(ax, xy)
+    groups = coincident_groups(ax, xy, chain=False)
     texts = [", ".join(dict.fromkeys(specials[i][2] for i in g)) for g in groups]
     place_labels(ax, [xy[g[0]] for g in groups], texts, fontsize=fontsize, avoid=avoid)
 
@@ -689,12 +689,14 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
 
     theta = np.linspace(0.0, 2.0 * np.pi, 361)
     ax_c.plot(np.cos(theta), np.sin(theta), **circle)
-    sc = ax_c.scatter(mult.real.ravel(), mult.imag.ravel(), **common)
+    moduli = np.abs(mult[np.isfinite(mult)])
+    reach = max(1.25, float(np.percentile(moduli, 95)) * 1.05) if moduli.size else 1.25
+    inside = np.abs(mult) <= reach  # what the note says is not shown is not drawn
+    sc = ax_c.scatter(mult.real[inside], mult.imag[inside],
+                      **{**common, "c": np.asarray(common["c"]).ravel()[inside.ravel()]})
     labels = np.asarray(ds[special_variable("label")].values).tolist()
     smult = np.asarray(ds[special_variable("multipliers")].values, dtype=complex)
     sx = np.asarray(ds[special_variable(parameter)].values, dtype=float)
-    moduli = np.abs(mult[np.isfinite(mult)])
-    reach = max(1.25, float(np.percentile(moduli, 95)) * 1.05) if moduli.size else 1.25
     seen: list[str] = []
     on_rho: list[tuple[float, float, str]] = []
     for label in SPECIAL_LABELS:

@@ -89,16 +89,30 @@ def _curve_segments(ax: Axes, to_points: Any) -> np.ndarray:
 
 
 def coincident_groups(ax: Axes, xy: Sequence[tuple[float, float]], *,
-                      distance: float = 2.0 * _MARKER) -> list[list[int]]:
+                      distance: float = 2.0 * _MARKER, chain: bool = True) -> list[list[int]]:
     """Indices of the points of ``xy`` drawn within ``distance`` points of each other.
 
     Points closer than a marker are one place on the page whatever the zoom
     (e.g. a grazing and a fold at the same frequency): they get one label.
     Call it on a laid-out figure (see :func:`place_labels`).
+
+    ``chain=True`` links points in chains (a row of markers each near the next is one
+    group: a crowd); ``chain=False`` groups only the points within ``distance`` of
+    the group's first point (one place, one label).
     """
     if not len(xy):
         return []
     pts = ax.transData.transform(np.asarray(xy, dtype=float)) * 72.0 / ax.figure.dpi
+    if not chain:
+        places: list[list[int]] = []
+        for i in np.argsort(pts[:, 0], kind="stable"):
+            for g in places:
+                if np.hypot(*(pts[i] - pts[g[0]])) <= distance:
+                    g.append(int(i))
+                    break
+            else:
+                places.append([int(i)])
+        return places
     group = list(range(len(pts)))
 
     def root(i: int) -> int:
