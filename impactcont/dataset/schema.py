@@ -22,10 +22,11 @@ Dimensions
     coordinate ``["x1", .., "xn", "v1", .., "vn"]``.
 ``special``
     Special points (SN, PD, NS, GR, ZV) found on the branch; may be empty.
-``event``
-    Zeros of the user's event functions (``events=`` of a driver), only when events
-    were asked for (:func:`add_user_functions`); may be empty. The user's monitors
-    (and event functions) are point variables ``monitor_<name>``.
+
+A branch or curve computed with user events (``events=`` of a driver) has one more
+dimension, ``event``: the zeros of the event functions (may be empty); the user's
+monitors and event functions are point variables ``monitor_<name>``
+(:func:`add_user_functions`).
 """
 
 from __future__ import annotations
