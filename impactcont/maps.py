@@ -82,7 +82,17 @@ def _map_task(osc_json: str, N: int, omega: np.ndarray, b: np.ndarray,
               spectral_radius: bool = True) -> dict[str, np.ndarray]:
     """One task: every motion for one N and a block of omega values (picklable, top level)."""
     osc = _oscillator(osc_json)
-    out = batched_orbits(osc, N, omega, b, spectral_radius=spectral_radius)
+    try:
+        out = batched_orbits(osc, N, omega, b, spectral_radius=spectral_radius)
+    except SystemError as exc:
+        # Ctrl-C during a compiled call: numba reports the pending KeyboardInterrupt as
+        # "returned a result with an exception set" (chained once per nested call)
+        cause: BaseException | None = exc
+        while isinstance(cause, SystemError):
+            cause = cause.__cause__
+        if isinstance(cause, KeyboardInterrupt):
+            raise KeyboardInterrupt from None
+        raise
     return {k: out[k] for k in ("amplitude_squared", "exists", *_ROOT_FIELDS)}
 
 

@@ -54,8 +54,6 @@ def test_the_command_line_itself_imports_nothing_heavy(argv: list[str], code: in
     assert _probe(argv, bare=True) == (code, [])
 
 
-@pytest.mark.xfail(strict=True, reason="impactcont/__init__.py imports every module (scipy, "
-                   "xarray) at import time; it must import its names on first use (PEP 562)")
 def test_impactcont_help_imports_nothing_heavy() -> None:
     assert _probe(["--help"], bare=False) == (0, [])
 

@@ -37,6 +37,7 @@ from impactcont.dataset.schema import (
     _options_json,
     _parameter_name,
     _Var,
+    check_user_variables,
     check_variables,
     point_coords,
     provenance_attributes,
@@ -383,6 +384,7 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
         if not values <= set(allowed):
             raise ValueError(f"{codim2_variable(key)} must hold values in {allowed}; got "
                              f"{sorted(values)}")
+    check_user_variables(ds)
     check_attributes(ds, "curve")
     return ds
 
