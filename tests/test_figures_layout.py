@@ -460,3 +460,24 @@ def test_scene_figures_are_written_at_their_width(data, tmp_path):
     fig = figures.draw_robust(data["robust"], _Options(width=3.5))
     path = figures.save_figure(fig, tmp_path / "r.png", 100)
     assert Path(path).stat().st_size > 0
+
+
+def test_scene_plot_width_and_automatic_yscale(data, tmp_path):
+    """``[[plots]] width`` sizes the figure; a multipliers plot's moduli scale is ``auto``."""
+    from impactcont.scene.keys import SceneError
+    from impactcont.scene.schema import load_scene
+
+    head = SCENE.split("[[orbits]]")[0] + '[[branches]]\nname = "b0p5_N1"\nb = 0.5\n' \
+        'bounds = [0.5, 6.0]\n[[plots]]\nname = "mult"\nkind = "multipliers"\n'
+    (tmp_path / "a.toml").write_text(head + "width = 3.5\n")
+    spec = load_scene(tmp_path / "a.toml").plots[0]
+    assert spec.width == 3.5 and spec.yscale == "auto"
+    fig = figures.draw_multipliers({"b0p5_N1": data["branches"]["b0p5_N1"]}, spec)
+    assert fig.get_size_inches()[0] == pytest.approx(3.5)
+    assert fig.axes[0].get_yscale() == "log"  # |mu| = 27 near omega = 1.7
+    _assert_clean(fig)
+    (tmp_path / "b.toml").write_text(head)
+    assert load_scene(tmp_path / "b.toml").plots[0].width == 7.0
+    (tmp_path / "c.toml").write_text(head + "width = 1.0\n")
+    with pytest.raises(SceneError, match=r"plots\[0\]\.width.*\[2, 20\]"):
+        load_scene(tmp_path / "c.toml")

@@ -45,6 +45,7 @@ from impactcont.scene.keys import (
     Integer,
     Key,
     Names,
+    Real,
     SceneError,
     String,
     Where,
@@ -97,7 +98,10 @@ class PlotSpec:
                                         "entries of the section the kind reads)")
     y: str = declare(String(_point_variables()), "bifurcation_diagram: the branch variable on "
                   "the vertical axis", "impact_velocity")
-    yscale: str = declare(String(("linear", "log")), "multipliers: scale of the moduli", "linear")
+    yscale: str = declare(String(("auto", "linear", "log")), "multipliers: scale of the moduli "
+                       "(auto: logarithmic when a spike would flatten the rest)", "auto")
+    width: float = declare(Real(2, 20), "figure width in inches (3.5: a journal's single "
+                        "column, 7: double)", 7.0)
     title: str | None = declare(String(), "figure title")
     file: str | None = declare(String(pattern=re.compile(r"^[^/\\]+\.png$"),
                                    pattern_text="a file name ending in .png, no directory"),
