@@ -22,14 +22,29 @@ from matplotlib.lines import Line2D
 
 from impactcont.dataset.schema import SPECIAL_LABELS, special_variable
 from impactcont.plots.branches import (
+    LEGEND_PLACES,
+    NONPHYSICAL_GREY,
     SEGMENT_STYLES,
     SPECIAL_MARKERS,
+    SPECIAL_NAMES,
+    _borders_physical,
     _branches,
     _new_axes,
+    _stops,
+    _y_range,
+    axis_label,
+    differing_parameters,
+    fit_text,
+    fixed_parameters,
+    label_specials,
+    legend_below,
+    motion_text,
+    parameter_text,
     stability_segments,
+    system_text,
 )
 
-__all__ = ["IMPACT_QUANTITIES", "impact_diagram"]
+__all__ = ["IMPACT_QUANTITIES", "impact_diagram", "impact_label"]
 
 logger = logging.getLogger(__name__)
 
@@ -58,11 +73,42 @@ def _special_per_impact(ds: xr.Dataset, y: str, values: np.ndarray, k: int) -> n
     return values[int(ds[special_variable("point")].values[k])]
 
 
+_MARKER_SIZE = 6.0  # points, as in the bifurcation diagrams
+_OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0}
+
+
+def impact_label(ds: xr.Dataset, y: str) -> str:
+    r"""The vertical axis of an impact diagram, in symbols: ``impact velocity $\dot{x}_1(T_k^-)$``.
+
+    Between two stops the stored velocity is the speed towards the stop hit.
+    """
+    stops = _stops(ds)
+    j = stops["mass"]
+    if y == "impact_velocity_k":
+        if "b_low" in stops:
+            return rf"impact speed towards the stop hit $|\dot{{x}}_{j}(T_k^-)|$"
+        return rf"impact velocity $\dot{{x}}_{j}(T_k^-)$"
+    if y == "delta_k":
+        return r"impact phase $\theta_k$ [rad]"
+    return rf"minimum gap of flight $k$ (mass {j})"
+
+
 def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | None = None,
                    label_special: bool = False, specials: tuple[str, ...] = SPECIAL_LABELS,
                    names: bool = True, nonphysical: bool = True,
-                   colors: Sequence[str] | None = None) -> Axes:
+                   colors: Sequence[str] | None = None, title: str | None = None,
+                   physical_range: bool = True, legend: str | None = "below",
+                   zoom: bool = True) -> Axes:
     """Draw every impact of every branch against the continued parameter.
+
+    Styled as :func:`impactcont.plots.bifurcation_diagram`: stable physical
+    motions solid, unstable dashed, non-physical faint and dotted
+    (:data:`~impactcont.plots.SEGMENT_STYLES`); one colour per branch, its p
+    impacts p curves of that colour; special points marked on every impact
+    (:data:`~impactcont.plots.SPECIAL_MARKERS`) in the colour of their branch,
+    small and grey (:data:`~impactcont.plots.branches.NONPHYSICAL_GREY`) on
+    non-physical motions; every mark named in the legend, the title naming
+    the motions and the system.
 
     Parameters
     ----------
@@ -71,33 +117,56 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
     y : str
         A per-impact quantity, one of :data:`IMPACT_QUANTITIES`.
     ax : matplotlib.axes.Axes, optional
-        Where to draw; a new pyplot figure by default.
+        Where to draw; a new pyplot figure by default. With ``legend="below"``
+        its figure should use the constrained layout (the default figure does).
     label_special : bool
-        Write each special point's label next to its markers.
+        Write each special point's label next to its markers (placed clear of
+        the others; crowded ones in a zoomed inset, see ``zoom``).
     specials : tuple of str
         Which special points to mark.
     names : bool
         Add the branch names (mapping keys / groups) to the legend.
     nonphysical : bool
-        Draw the non-physical parts of the branches (faint, dotted).
+        Draw the non-physical parts of the branches (faint, dotted) and their
+        special points.
     colors : sequence of str, optional
         One matplotlib colour per branch (cycled); default ``C0 .. C9``.
+    title : str, optional
+        Axes title; by default the motions and the system drawn
+        (``Periodic N-p motions, $b = 0$, $R = 0.6$, ...``), ``""`` for none.
+    physical_range : bool
+        Fit the vertical range to the physical motions (default), clipping
+        non-physical ones at the frame; False fits everything drawn.
+    legend : {"below", "right", "inside", None}
+        Under the axes (default), outside on the right, inside the axes, or none.
+    zoom : bool
+        With ``label_special``, draw crowded special points again in an inset.
 
     Returns
     -------
     matplotlib.axes.Axes
+
+    Raises
+    ------
+    ValueError
+        ``y``, ``specials`` or ``legend`` is not allowed, or the branches are
+        continued in different parameters.
     """
     if y not in IMPACT_QUANTITIES:
         raise ValueError(f"y must be one of {sorted(IMPACT_QUANTITIES)}; got {y!r}")
     unknown = sorted(set(specials) - set(SPECIAL_LABELS))
     if unknown:
         raise ValueError(f"specials must be a subset of {SPECIAL_LABELS}; got unknown {unknown}")
+    if legend not in LEGEND_PLACES:
+        raise ValueError(f"legend must be one of {LEGEND_PLACES}; got {legend!r}")
     branches = _branches(datasets, one_parameter=True)
     if ax is None:
         ax = _new_axes()
+    differing = differing_parameters([[ds] for _, ds in branches])
     kinds_seen: set[str] = set()
-    labels_seen: set[str] = set()
-    handles = []
+    branch_handles = []
+    marks: list[tuple[float, float, str, str, bool]] = []  # x, y, label, colour, physical
+    seen: list[np.ndarray] = []  # values of the physical motions
     for b, (name, ds) in enumerate(branches):
         parameter = ds.attrs["parameter"]
         x = np.asarray(ds[parameter].values, dtype=float)
@@ -108,33 +177,77 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
                 continue
             ax.plot(x[sl], values[sl], color=color, **SEGMENT_STYLES[kind])
             kinds_seen.add(kind)
-        if name and names:
-            p = values.shape[1]
-            kind = f"{ds.attrs['N']}-{p}"
-            text = name if kind in name else f"{name} ({kind})"
-            handles.append(Line2D([], [], color=color, label=text))
+        physical = np.asarray(ds["physical"].values, dtype=bool)
+        seen.append(values[physical].ravel())
+        about = ", ".join([f"{int(ds.attrs['N'])}-{values.shape[1]}",
+                           *([parameter_text(fixed_parameters([ds]), differing)]
+                             if differing else [])])
+        text = f"{name} ({about})" if name and names and about not in name else \
+            name if name and names else about
+        branch_handles.append(Line2D([], [], color=color, linewidth=1.6, label=text))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
         xs = np.asarray(ds[special_variable(parameter)].values, dtype=float)
         for k, label in enumerate(labels):
-            if label not in specials:
+            shown = _borders_physical(ds, physical, k)
+            if label not in specials or not (shown or nonphysical):
                 continue
-            ys = _special_per_impact(ds, y, values, k)
-            ax.scatter(np.full(ys.size, xs[k]), ys, marker=SPECIAL_MARKERS[label], s=30,
-                       facecolors="white", edgecolors="black", linewidths=0.9, zorder=3)
-            labels_seen.add(label)
-            if label_special:
-                ax.annotate(label, (xs[k], float(np.max(ys))), xytext=(3, 3),
-                            textcoords="offset points", fontsize="x-small")
+            for yk in _special_per_impact(ds, y, values, k):
+                if np.isfinite(yk) and np.isfinite(xs[k]):
+                    marks.append((float(xs[k]), float(yk), str(label), color, shown))
+    values = np.concatenate([*seen, [m[1] for m in marks if m[4]]])
+    values = values[np.isfinite(values)]
+    lo = hi = pad = None
+    if physical_range and values.size:
+        lo, hi, pad = _y_range(values)
+        ax.set_ylim(lo, hi)
+    labels_seen: list[str] = []
+    grey = False
+    for label in SPECIAL_LABELS:
+        for shown in (True, False):
+            pts = [m for m in marks if m[2] == label and m[4] == shown]
+            if not shown and lo is not None:  # never cut by the frame: inside or not drawn
+                pts = [m for m in pts if lo + 0.5 * pad <= m[1] <= hi - 0.5 * pad]
+            for color in dict.fromkeys(m[3] for m in pts):
+                own = np.array([m[:2] for m in pts if m[3] == color])
+                ax.plot(own[:, 0], own[:, 1], linestyle="none", marker=SPECIAL_MARKERS[label],
+                        markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
+                        markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
+                        markeredgecolor=color if shown else NONPHYSICAL_GREY, zorder=3)
+            if pts and label not in labels_seen:
+                labels_seen.append(label)
+            grey |= bool(pts) and not shown
     first = branches[0][1]
-    ax.set_xlabel(first[first.attrs["parameter"]].attrs.get("long_name",
-                                                             first.attrs["parameter"])
-                  + f" ({first.attrs['parameter']})")
-    ax.set_ylabel(y)
-    legend = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
-              for kind in SEGMENT_STYLES if kind in kinds_seen]
-    legend += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
-                      markerfacecolor="white", markeredgecolor="black", label=label)
-               for label in SPECIAL_LABELS if label in labels_seen]
-    ax.legend(handles=legend + handles, fontsize="x-small", loc="best")
+    parameter = first.attrs["parameter"]
+    ax.set_xlabel(axis_label(first, parameter))
+    ax.set_ylabel(impact_label(first, y))
+    handles = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
+               for kind in SEGMENT_STYLES if kind in kinds_seen]
+    handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
+                       markersize=_MARKER_SIZE, markerfacecolor="white",
+                       markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
+                for label in SPECIAL_LABELS if label in labels_seen]
+    if grey:
+        handles.append(Line2D([], [], linestyle="none", marker="o",
+                              markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
+                              markeredgecolor=NONPHYSICAL_GREY,
+                              label="grey: on non-physical motion"))
+    handles += branch_handles
+    if legend == "below":
+        legend_below(ax, handles)
+    elif legend == "right":
+        ax.legend(handles=handles, fontsize="small", **_OUTSIDE)
+    elif legend == "inside":
+        ax.legend(handles=handles, fontsize="x-small", loc="best")
+    if title is None:
+        datasets_ = [ds for _, ds in branches]
+        where = system_text(datasets_, skip={parameter})
+        title = motion_text(datasets_) + (f", {where}" if where else "")
+    if title:
+        ax.set_title(title, fontsize="medium")
+        ax.figure.draw_without_rendering()
+        fit_text(ax.title)
+    kept = [m[:3] for m in marks if m[4]]
+    if label_special and kept:
+        label_specials(ax, kept, zoom=zoom)
     logger.debug("impact diagram: %d branch(es), y=%s", len(branches), y)
     return ax
