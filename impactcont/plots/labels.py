@@ -18,7 +18,7 @@ from matplotlib.axes import Axes
 from matplotlib.font_manager import FontProperties
 from matplotlib.text import Annotation
 
-__all__ = ["coincident_groups", "place_labels"]
+__all__ = ["coincident_groups", "marker_boxes", "place_labels"]
 
 _RINGS = (4.0, 12.0, 22.0, 34.0, 48.0, 64.0)  # distance of a label from its point, in points
 _MARKER = 4.0  # half-size of a marker, in points
@@ -208,4 +208,23 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
                             **text_kw)
         label.set_in_layout(False)  # placed inside the frame; never let it move the axes
         out.append(label)
+    return out
+
+
+def marker_boxes(ax: Axes) -> list[Any]:
+    """Display-coordinate boxes of the markers drawn by the lines of ``ax`` (obstacles).
+
+    Pass them as ``avoid`` to :func:`place_labels` so that a label does not
+    cover a mark it does not name. Call it on a laid-out figure.
+    """
+    from matplotlib.transforms import Bbox
+
+    out = []
+    for line in ax.get_lines():
+        if not line.get_visible() or line.get_marker() in (None, "", "None", " ", "none"):
+            continue
+        r = line.get_markersize() / 2 * ax.figure.dpi / 72.0
+        xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+        out += [Bbox.from_extents(px - r, py - r, px + r, py + r)
+                for px, py in xy[np.all(np.isfinite(xy), axis=1)]]
     return out

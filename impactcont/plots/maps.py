@@ -23,20 +23,49 @@ from impactcont.dataset.curves import (
     validate_curve_dataset,
     validate_map_dataset,
 )
-from impactcont.plots.labels import place_labels
+from impactcont.plots.branches import (
+    SPECIAL_NAMES,
+    axis_label,
+    fit_text,
+    legend_below,
+    legend_fontsize,
+    system_text,
+)
+from impactcont.plots.labels import marker_boxes, place_labels
 
-__all__ = ["CURVE_STYLES", "REGIONS", "region_codes", "two_parameter_diagram",
-           "two_parameter_figure"]
+__all__ = ["CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES", "REGIONS", "region_codes",
+           "two_parameter_diagram", "two_parameter_figure"]
 
 logger = logging.getLogger(__name__)
 
-#: Colour and line style of each kind of curve.
+#: Colour of each kind of curve (the line style says what crossing it changes:
+#: :data:`CURVE_PARTS`).
 CURVE_STYLES: dict[str, dict[str, Any]] = {
-    "SN": {"color": "black", "linestyle": "-"},
-    "PD": {"color": "tab:red", "linestyle": "-"},
-    "NS": {"color": "tab:purple", "linestyle": "-"},
-    "GR": {"color": "tab:green", "linestyle": "-"},
-    "ZV": {"color": "tab:blue", "linestyle": "--"},
+    "SN": {"color": "black"},
+    "PD": {"color": "tab:red"},
+    "NS": {"color": "tab:purple"},
+    "GR": {"color": "tab:green"},
+    "ZV": {"color": "tab:blue"},
+}
+
+#: Line style of each part of a curve, as the legend names it: bold where
+#: crossing it changes an observable stable motion (``stable_side``), thin where
+#: the motion is physical but unstable on both sides, faint and dotted where it
+#: is not physical.
+CURVE_PARTS: dict[str, dict[str, Any]] = {
+    "a stable motion changes across it": {"linestyle": "-", "linewidth": 2.2, "alpha": 1.0},
+    "physical, no stable motion changes": {"linestyle": "-", "linewidth": 1.0, "alpha": 1.0},
+    "not physical": {"linestyle": ":", "linewidth": 0.8, "alpha": 0.6},
+}
+
+#: Marker of the codim-2 points on physical motions and on non-physical ones.
+CODIM2_STYLES: dict[str, dict[str, Any]] = {
+    "codim-2 point": {"marker": "*", "markersize": 10.0, "markerfacecolor": "gold",
+                      "markeredgecolor": "black", "markeredgewidth": 0.6},
+    "codim-2 point on non-physical motion": {"marker": "*", "markersize": 6.0,
+                                             "markerfacecolor": "0.6",
+                                             "markeredgecolor": "0.6",
+                                             "markeredgewidth": 0.6},
 }
 
 #: Region codes of :func:`region_codes`, with their legend text and shade.
@@ -64,14 +93,6 @@ def region_codes(map_ds: xr.Dataset, N: int) -> xr.DataArray:
     code = xr.where(m["n_stable"] > 0, 3, xr.where(m["n_physical"] > 0, 2,
                                                    xr.where(m["exists"], 1, 0)))
     return code.rename("region")
-
-
-def _new_axes(nrows: int = 1, ncols: int = 1) -> Any:
-    import matplotlib.pyplot as plt
-
-    _, axes = plt.subplots(nrows, ncols, figsize=(5.2 * ncols, 4.2 * nrows),
-                           layout="constrained", squeeze=False)
-    return axes
 
 
 def _curves(curves: Any) -> list[xr.Dataset]:
@@ -105,17 +126,120 @@ def _segments(mask: np.ndarray) -> list[slice]:
     return out
 
 
+def _system(map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]) -> str:
+    """The parameters held fixed on the (omega, b) plane, in mathtext (``$R = 0.6$, ...``)."""
+    datasets = ([map_ds] if map_ds is not None else []) + list(curve_list)
+    return system_text(datasets, skip={"omega", "b"})
+
+
+def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset], N: int,
+           label_curves: bool) -> tuple[list[Any], list[tuple[float, float, str, str]]]:
+    """Draw one N on ``ax``: its legend handles, and its labels ``(x, y, text, colour)``."""
+    handles: list[Any] = []
+    if map_ds is not None:
+        code = region_codes(map_ds, N)
+        cmap = ListedColormap([REGIONS[k][1] for k in sorted(REGIONS)])
+        ax.pcolormesh(map_ds["omega"].values, map_ds["b"].values, code.values.T, cmap=cmap,
+                      vmin=-0.5, vmax=len(REGIONS) - 0.5, shading="nearest", rasterized=True)
+        present = set(np.unique(code.values).tolist())
+        handles += [Patch(facecolor=REGIONS[k][1], edgecolor="0.6", label=REGIONS[k][0])
+                    for k in sorted(REGIONS) if k in present]
+    kinds_seen: list[str] = []
+    parts_seen: set[str] = set()
+    labels: list[tuple[float, float, str, str]] = []
+    codim2: dict[tuple[float, float], tuple[str, bool]] = {}  # one per place
+    part_names = list(CURVE_PARTS)
+    for c in curve_list:
+        kind = c.attrs["kind"]
+        if kind != "ZV" and int(c.attrs["N"]) != N:
+            continue
+        px, py = str(c.attrs["parameters"]).split(",")
+        if {px, py} != {"omega", "b"}:
+            raise ValueError(f"two_parameter_diagram draws curves in (omega, b); got a curve in "
+                             f"({px}, {py})")
+        x, y = c["omega"].values, c["b"].values
+        color = CURVE_STYLES[kind]["color"]
+        physical = c["physical"].values.astype(bool)
+        strong = c["stable_side"].values.astype(bool) & physical
+        for name, mask in zip(part_names, (strong, physical & ~strong, ~physical),
+                              strict=True):
+            for sl in _segments(mask):
+                ax.plot(x[sl], y[sl], color=color, **CURVE_PARTS[name])
+            if mask.any():
+                parts_seen.add(name)
+        if kind not in kinds_seen:
+            kinds_seen.append(kind)
+        if label_curves and x.size:
+            (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+            inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
+            pick = np.flatnonzero(physical & inside)
+            pick = pick if pick.size else np.flatnonzero(inside)
+            if pick.size:
+                k = int(pick[pick.size // 2])
+                labels.append((float(x[k]), float(y[k]), kind, color))
+        names = c[codim2_variable("label")].values
+        if names.size:
+            cx, cy = c[codim2_variable("omega")].values, c[codim2_variable("b")].values
+            on = physical[c[codim2_variable("point")].values]
+            for lab, xx, yy, shown in zip(names, cx, cy, on, strict=True):
+                # the same point found from both curves (PD+SN and SN+PD): one mark, one label
+                key = (round(float(xx), 6), round(float(yy), 6))
+                if key not in codim2 or shown:
+                    codim2[key] = (str(lab), bool(shown))
+    for style, shown in zip(CODIM2_STYLES, (True, False), strict=True):
+        xy = np.array([k for k, (_, s) in codim2.items() if s == shown]).reshape(-1, 2)
+        if xy.size:
+            ax.plot(xy[:, 0], xy[:, 1], linestyle="none", zorder=4 if shown else 3,
+                    **CODIM2_STYLES[style])
+    # only where the motion is physical: the others crowd the panel
+    labels += [(xx, yy, lab, "black") for (xx, yy), (lab, s) in codim2.items() if s]
+    handles += [Line2D([], [], color=CURVE_STYLES[kind]["color"],
+                       label=f"{kind} {SPECIAL_NAMES[kind]}",
+                       **CURVE_PARTS[part_names[0]]) for kind in kinds_seen]
+    handles += [Line2D([], [], color="0.2", label=name, **CURVE_PARTS[name])
+                for name in part_names if name in parts_seen]
+    handles += [Line2D([], [], linestyle="none", label=style, **CODIM2_STYLES[style])
+                for style, shown in zip(CODIM2_STYLES, (True, False), strict=True)
+                if any(s == shown for _, s in codim2.values())]
+    src = map_ds if map_ds is not None else next(iter(curve_list))
+    ax.set_xlabel(axis_label(src, "omega"))
+    ax.set_ylabel(axis_label(src, "b"))
+    if map_ds is not None:
+        ax.set_xlim(float(map_ds["omega"].min()), float(map_ds["omega"].max()))
+        ax.set_ylim(float(map_ds["b"].min()), float(map_ds["b"].max()))
+    return handles, labels
+
+
+def _label(ax: Axes, labels: Sequence[tuple[float, float, str, str]]) -> None:
+    """Place the labels of a laid-out panel clear of each other and of the codim-2 marks."""
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    inside = [lab for lab in labels if x0 <= lab[0] <= x1 and y0 <= lab[1] <= y1]
+    avoid = marker_boxes(ax)
+    for color in dict.fromkeys(lab[3] for lab in inside):
+        own = [lab for lab in inside if lab[3] == color]
+        place_labels(ax, [lab[:2] for lab in own], [lab[2] for lab in own], fontsize="x-small",
+                     avoid=avoid, color=color,
+                     fontweight="bold" if color != "black" else "normal")
+
+
+def _merge(handles: Iterable[Any]) -> list[Any]:
+    """One handle per label, in order."""
+    return list({h.get_label(): h for h in handles}.values())
+
+
 def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, *,
                           N: int | None = None, ax: Axes | None = None,
                           label_curves: bool = True, label_codim2: bool = True,
-                          legend: bool = True) -> Axes:
+                          legend: bool = True, title: str | None = None) -> Axes:
     """One panel: the regions of one N shaded, the curves of that N (and ZV) on top.
 
-    Curves are drawn bold where crossing them changes an observable stable
-    motion (``stable_side``), thin where the motion is physical but unstable
-    on both sides, and dotted where it is not physical. Codim-2 points are
-    stars, gold and labelled where the motion is physical, small and grey
-    where it is not.
+    Each kind of curve has its colour (:data:`CURVE_STYLES`); its line style
+    says what crossing it changes (:data:`CURVE_PARTS`): bold where an
+    observable stable motion changes (``stable_side``), thin where the motion
+    is physical but unstable on both sides, dotted where it is not physical.
+    Codim-2 points are stars (:data:`CODIM2_STYLES`), gold and labelled where
+    the motion is physical, small and grey where it is not. Every mark is
+    named in the legend under the axes; labels are placed clear of each other.
 
     Parameters
     ----------
@@ -127,14 +251,25 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
     N : int, optional
         Which N; default the map's first (or the first curve's).
     ax : matplotlib.axes.Axes, optional
+        Where to draw; a new pyplot figure by default. With ``legend`` its
+        figure should use the constrained layout (the default figure does).
     label_curves, label_codim2 : bool
         Write the kind next to each curve / the label next to each codim-2 point.
     legend : bool
-        Draw the legend.
+        Draw the legend (under the axes).
+    title : str, optional
+        Axes title; by default the motions and the system
+        (``Periodic 2-1 motions, $R = 0.6$, $\\eta = 0.1$``), ``""`` for none.
 
     Returns
     -------
     matplotlib.axes.Axes
+
+    Raises
+    ------
+    ValueError
+        Neither a map nor a curve, ``N`` not in the map, or a curve in other
+        parameters than (omega, b).
     """
     curve_list = _curves(curves)
     if map_ds is None and not curve_list:
@@ -142,85 +277,83 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
     if N is None:
         N = int(map_ds["N"].values[0]) if map_ds is not None else int(curve_list[0].attrs["N"])
     if ax is None:
-        ax = _new_axes()[0, 0]
-    handles: list[Any] = []
-    if map_ds is not None:
-        code = region_codes(map_ds, N)
-        cmap = ListedColormap([REGIONS[k][1] for k in sorted(REGIONS)])
-        ax.pcolormesh(map_ds["omega"].values, map_ds["b"].values, code.values.T, cmap=cmap,
-                      vmin=-0.5, vmax=len(REGIONS) - 0.5, shading="nearest", rasterized=True)
-        present = set(np.unique(code.values).tolist())
-        handles += [Patch(facecolor=REGIONS[k][1], edgecolor="0.6", label=REGIONS[k][0])
-                    for k in sorted(REGIONS) if k in present]
-    kinds_seen = []
-    codim2_labels: dict[tuple[float, float], str] = {}  # one label per place
-    for c in curve_list:
-        kind = c.attrs["kind"]
-        if kind != "ZV" and int(c.attrs["N"]) != N:
-            continue
-        px, py = str(c.attrs["parameters"]).split(",")
-        if {px, py} != {"omega", "b"}:
-            raise ValueError(f"two_parameter_diagram draws curves in (omega, b); got a curve in "
-                             f"({px}, {py})")
-        x, y = c["omega"].values, c["b"].values
-        style = CURVE_STYLES[kind]
-        physical = c["physical"].values.astype(bool)
-        strong = c["stable_side"].values.astype(bool)
-        ax.plot(x, y, color=style["color"], linestyle=":", linewidth=0.8, alpha=0.6)
-        for sl in _segments(physical):
-            ax.plot(x[sl], y[sl], color=style["color"], linestyle=style["linestyle"],
-                    linewidth=1.0)
-        for sl in _segments(strong):
-            ax.plot(x[sl], y[sl], color=style["color"], linestyle=style["linestyle"],
-                    linewidth=2.2)
-        if kind not in kinds_seen:
-            kinds_seen.append(kind)
-        if label_curves and x.size:
-            pick = np.flatnonzero(physical)
-            k = int(pick[pick.size // 2]) if pick.size else x.size // 2
-            ax.annotate(kind, (x[k], y[k]), xytext=(3, 3), textcoords="offset points",
-                        color=style["color"], fontsize="small", fontweight="bold")
-        labels = c[codim2_variable("label")].values
-        if labels.size:
-            cx, cy = c[codim2_variable("omega")].values, c[codim2_variable("b")].values
-            seen = physical[c[codim2_variable("point")].values]
-            ax.scatter(cx[seen], cy[seen], marker="*", s=70, color="gold", edgecolors="black",
-                       linewidths=0.6, zorder=4)
-            ax.scatter(cx[~seen], cy[~seen], marker="*", s=25, color="0.6", zorder=3)
-            if label_codim2:  # only where the motion is physical: the others crowd the panel
-                for lab, xx, yy in zip(labels[seen], cx[seen], cy[seen], strict=True):
-                    # the same point found from both curves (PD+SN and SN+PD): one label
-                    codim2_labels.setdefault((round(float(xx), 6), round(float(yy), 6)),
-                                             str(lab))
-    handles += [Line2D([], [], linewidth=2.0, label=kind, **CURVE_STYLES[kind])
-                for kind in kinds_seen]
-    if any(c[codim2_variable("label")].size for c in curve_list):
-        handles.append(Line2D([], [], linestyle="none", marker="*", markerfacecolor="gold",
-                              markeredgecolor="black", markersize=9, label="codim-2"))
-    ax.set_xlabel("forcing frequency omega")
-    ax.set_ylabel("gap b")
-    ax.set_title(f"N = {N}")
-    if map_ds is not None:
-        ax.set_xlim(float(map_ds["omega"].min()), float(map_ds["omega"].max()))
-        ax.set_ylim(float(map_ds["b"].min()), float(map_ds["b"].max()))
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(5.0, 5.4), layout="constrained")
+    handles, labels = _panel(ax, map_ds, curve_list, N, label_curves)
+    labels = [lab for lab in labels if (label_codim2 if lab[3] == "black" else label_curves)]
     if legend:
-        ax.legend(handles=handles, fontsize="x-small", loc="upper right", framealpha=0.85)
-    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
-    inside = {xy: t for xy, t in codim2_labels.items()
-              if x0 <= xy[0] <= x1 and y0 <= xy[1] <= y1}
-    place_labels(ax, list(inside), list(inside.values()), fontsize="x-small")
+        legend_below(ax, handles)
+    if title is None:
+        where = _system(map_ds, curve_list)
+        title = f"Periodic {N}-1 motions" + (f", {where}" if where else "")
+    if title:
+        ax.set_title(title, fontsize="medium")
+        ax.figure.draw_without_rendering()
+        fit_text(ax.title)
+    _label(ax, labels)
     logger.debug("two-parameter diagram N=%d: %d curve(s)", N, len(curve_list))
     return ax
 
 
-def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int = 2) -> Any:
-    """One :func:`two_parameter_diagram` panel per N of the map; returns the Figure."""
+def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int = 2,
+                         width: float = 7.0, title: str | None = None) -> Any:
+    """One :func:`two_parameter_diagram` panel per N of the map, one legend; returns the Figure.
+
+    Parameters
+    ----------
+    map_ds : xarray.Dataset
+    curves : Dataset, sequence, mapping or DataTree of curve datasets, optional
+    ncols : int
+        Panels per row (one below 5 in: a single column).
+    width : float
+        Figure width in inches, in [2, 20] (3.5: a journal's single column, 7: double).
+    title : str, optional
+        Figure title; by default the motions and the system, ``""`` for none.
+
+    Raises
+    ------
+    ValueError
+        ``ncols`` or ``width`` out of range.
+    """
+    import matplotlib.pyplot as plt
+
     validate_map_dataset(map_ds)
+    if isinstance(ncols, bool) or not isinstance(ncols, (int, np.integer)) or ncols < 1:
+        raise ValueError(f"ncols must be a positive integer; got {ncols!r}")
+    if isinstance(width, bool) or not isinstance(width, (int, float)) \
+            or not 2.0 <= width <= 20.0:
+        raise ValueError(f"width must be a number of inches in [2, 20]; got {width!r}")
+    curve_list = _curves(curves)
     Ns = [int(k) for k in map_ds["N"].values]
-    nrows = -(-len(Ns) // ncols)
-    axes = _new_axes(nrows, min(ncols, len(Ns)))
-    for i, N in enumerate(Ns):
-        two_parameter_diagram(map_ds, curves, N=N, ax=axes.flat[i], legend=i == 0)
-    for j in range(len(Ns), axes.size):
-        axes.flat[j].set_visible(False)
-    return axes.flat[0].figure
+    cols = 1 if width < 5.0 else min(ncols, len(Ns))
+    rows = -(-len(Ns) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(width, rows * (0.8 * width / cols + 0.4) + 1.6),
+                             layout="constrained", squeeze=False)
+    handles: list[Any] = []
+    labels = []
+    for ax, N in zip(axes.flat, Ns, strict=False):
+        more, own = _panel(ax, map_ds, curve_list, N, True)
+        handles += more
+        labels.append(own)
+        ax.set_title(f"$N = {N}$", fontsize="medium")
+    for ax in axes.flat[len(Ns):]:
+        ax.set_visible(False)
+    handles = _merge(handles)
+    for n in range(min(len(handles), 4), 0, -1):
+        legend = fig.legend(handles=handles, loc="outside lower center", ncols=n,
+                            fontsize=legend_fontsize(fig), frameon=False, handlelength=1.8,
+                            columnspacing=1.0)
+        fig.draw_without_rendering()
+        if legend.get_window_extent().width <= fig.bbox.width - 8.0 or n == 1:
+            break
+        legend.remove()
+    if title is None:
+        where = _system(map_ds, curve_list)
+        title = r"Periodic N-1 motions in $(\omega, b)$" + (f", {where}" if where else "")
+    if title:
+        fit_text(fig.suptitle(title, fontsize="medium"))
+    fig.draw_without_rendering()
+    for ax, own in zip(axes.flat, labels, strict=False):
+        _label(ax, own)
+    return fig
