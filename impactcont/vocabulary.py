@@ -22,6 +22,8 @@ __all__ = [
     "CONTINUABLE_PARAMETERS",
     "CURVE_KINDS",
     "LABELS",
+    "LABEL_MARKERS",
+    "LABEL_NAMES",
     "PARAMETERS",
     "STATUSES",
     "Label",
@@ -63,6 +65,15 @@ class Label(str, enum.Enum):
 
 #: The special-point labels as plain strings, in their canonical order.
 LABELS: tuple[str, ...] = tuple(label.value for label in Label)
+
+#: The marker of each label in figures (matplotlib marker codes).
+LABEL_MARKERS: dict[str, str] = {"SN": "o", "PD": "s", "NS": "D", "GR": "^", "ZV": "v",
+                                 "BP": "P"}
+
+#: What each label stands for, in words (legends).
+LABEL_NAMES: dict[str, str] = {"SN": "saddle-node", "PD": "period doubling",
+                               "NS": "Neimark-Sacker", "GR": "grazing",
+                               "ZV": "zero-velocity impact", "BP": "symmetry-breaking pitchfork"}
 
 #: The kinds of codimension-one curves (two-parameter continuation of a special point):
 #: every label but ``BP``, which exists only on symmetric N-p motions (no curves yet).

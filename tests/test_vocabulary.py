@@ -18,6 +18,8 @@ def test_labels_are_strings_and_the_old_names_are_the_same_tuple():
     assert vocab.CURVE_KINDS == ("SN", "PD", "NS", "GR", "ZV")
     from impactcont.problems.codim1 import CURVE_KINDS
     assert CURVE_KINDS == vocab.CURVE_KINDS
+    # every label has its marker and its words, defined with it (figures read them)
+    assert set(vocab.LABEL_MARKERS) == set(vocab.LABEL_NAMES) == set(LABELS)
     assert set(PARAMETERS) == set(vocab.CONTINUABLE_PARAMETERS)
 
 

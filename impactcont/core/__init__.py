@@ -15,7 +15,7 @@ from impactcont.core.driver import (
     iter_points,
 )
 from impactcont.core.events import Stop, StopRule
-from impactcont.core.locate import Event, EventPoint, locate_events, zero_precision
+from impactcont.core.locate import Event, EventPoint, MotionTest, locate_events, zero_precision
 from impactcont.core.options import ContinuationOptionError, ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import Problem, ProblemOutputError
@@ -37,6 +37,7 @@ __all__ = [
     "Event",
     "EventPoint",
     "HyperplanePoint",
+    "MotionTest",
     "NewtonConvergenceError",
     "PalcStepper",
     "Problem",

@@ -23,7 +23,7 @@ from scipy.optimize import brentq
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
 
-__all__ = ["Event", "EventPoint", "locate_events", "locate_zero", "tangent_at",
+__all__ = ["Event", "EventPoint", "MotionTest", "locate_events", "locate_zero", "tangent_at",
            "zero_precision"]
 
 log = logging.getLogger(__name__)
@@ -62,6 +62,33 @@ class Event:
     test: Callable[[FloatArray, float], float] | None
     at_point: Callable[[int], float] | None = None
     noise: Callable[[int], float] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class MotionTest:
+    """A special point a problem declares, as functions of the motion at a branch point.
+
+    A problem lists the tests of its own special points (beyond the built-in ones of
+    the detectors) in ``problem.motion_tests``: ``label -> MotionTest``; the detector
+    evaluates them on the motion ``problem.orbit(u, lam)`` of each point.
+
+    Attributes
+    ----------
+    test : callable
+        ``test(motion) -> float``, changing sign at the point.
+    noise : callable, optional
+        ``noise(motion) -> float``: the rounding error of the test (see :class:`Event`).
+    critical : callable, optional
+        ``critical(motion) -> bool``: whether a located zero is the bifurcation (not,
+        e.g., a pole of the test); every zero when None.
+    checks : bool
+        The test needs the motion's interior-contact search (costly).
+    """
+
+    test: Callable[[Any], float]
+    noise: Callable[[Any], float] | None = None
+    critical: Callable[[Any], bool] | None = None
+    checks: bool = False
 
 
 @dataclass(frozen=True, eq=False)

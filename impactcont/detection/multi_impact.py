@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from impactcont.core.locate import Event, locate_events, tangent_at
+from impactcont.core.locate import Event, MotionTest, locate_events, tangent_at
 from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
 from impactcont.detection.special_points import (
     UserEvent,
@@ -64,7 +64,7 @@ from impactcont.detection.special_points import (
     user_values,
 )
 from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.orbit.symmetry import half_map, pitchfork_noise, pitchfork_test, symmetry_defect
+from impactcont.orbit.symmetry import half_map, symmetry_defect
 from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
@@ -146,13 +146,17 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
     declared = getattr(problem, "events", ("SN", "PD", "NS", "GR", "ZV"))
     labels = [label for label in labels if label in declared]
 
+    declared_tests: dict[str, MotionTest] = dict(getattr(problem, "motion_tests", {}))
+
     def event(label: str) -> Event:
         if label == "SN":
             return Event(label, None)
-        if label == "BP":  # G_k only: no interior-contact search
-            return Event(label, lambda u, lam: pitchfork_test(problem.orbit(u, lam, checks=False)),
-                         lambda k: pitchfork_test(samples[k].orbit),
-                         lambda k: pitchfork_noise(samples[k].orbit))
+        spec = declared_tests.get(label)
+        if spec is not None:  # a special point the problem declares with its own test
+            return Event(label,
+                         lambda u, lam: spec.test(problem.orbit(u, lam, checks=spec.checks)),
+                         lambda k: spec.test(samples[k].orbit),
+                         None if spec.noise is None else lambda k: spec.noise(samples[k].orbit))
 
         def test(u: np.ndarray, lam: float) -> float:
             # only GR needs the (costly) interior-contact search of every flight
@@ -166,7 +170,10 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
                             [s.tangent for s in samples], [event(lab) for lab in labels],
                             s_tol=_S_TOL, newton_tol=_NEWTON_TOL):
         orbit = problem.orbit(ep.u, ep.lam)
-        if not ep.failed and not _critical(ep.label, orbit):
+        spec = declared_tests.get(ep.label)
+        critical = (is_critical(ep.label, orbit.multipliers, _UNIT_TOL) if spec is None
+                    else spec.critical is None or spec.critical(orbit))
+        if not ep.failed and not critical:
             log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
                       "(a neutral saddle, or the pole of G at h2 = 0)", ep.label, parameter,
                       ep.lam)
@@ -191,16 +198,6 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
         if on_found is not None:
             on_found(special)
     return found
-
-
-def _critical(label: str, orbit: MultiImpactOrbit) -> bool:
-    """Whether a zero of `label`'s test is a bifurcation (see :func:`is_critical`); BP: a
-    multiplier of the half-map within ``_UNIT_TOL`` of -1."""
-    if label == "BP":
-        H = half_map(orbit)
-        return bool(np.all(np.isfinite(H)) and np.min(np.abs(np.linalg.eigvals(H) + 1.0))
-                    < _UNIT_TOL)
-    return is_critical(label, orbit.multipliers, _UNIT_TOL)
 
 
 _MEETS_TOL = 1e-2

@@ -36,18 +36,21 @@ import math
 
 import numpy as np
 
+from impactcont.core.locate import MotionTest
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, orbit_from_unknowns
 
 __all__ = [
+    "PITCHFORK",
     "HalfUnknowns",
     "admits_symmetric_motions",
     "half_map",
     "is_symmetric",
     "mirror_image",
     "mirror_pattern",
+    "pitchfork_critical",
     "pitchfork_noise",
     "pitchfork_test",
     "symmetric_system",
@@ -162,6 +165,18 @@ def pitchfork_noise(orbit: MultiImpactOrbit) -> float:
     with np.errstate(divide="ignore"):
         relative = float(np.sum(err / np.abs(mu + 1.0)))
     return abs(pitchfork_test(orbit)) * relative if math.isfinite(relative) else math.inf
+
+
+def pitchfork_critical(orbit: MultiImpactOrbit, tol: float = 1e-7) -> bool:
+    """Whether the half-map has a multiplier within `tol` of -1 (a zero of
+    :func:`pitchfork_test` that is the pitchfork, not a pole of a ``G_k``)."""
+    H = half_map(orbit)
+    return bool(np.all(np.isfinite(H)) and np.min(np.abs(np.linalg.eigvals(H) + 1.0)) < tol)
+
+
+#: The symmetry-breaking pitchfork as a special point of branches of symmetric motions
+#: (declared by :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`).
+PITCHFORK = MotionTest(pitchfork_test, pitchfork_noise, pitchfork_critical)
 
 
 def mirror_image(orbit: MultiImpactOrbit) -> MultiImpactOrbit:

@@ -24,6 +24,7 @@ from impactcont.dataset.schema import (
     validate_branch_dataset,
 )
 from impactcont.plots.labels import coincident_groups, place_labels
+from impactcont.vocabulary import LABEL_MARKERS, LABEL_NAMES
 
 __all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "SEGMENT_STYLES", "SPECIAL_MARKERS",
            "SPECIAL_NAMES", "axis_label", "bifurcation_diagram", "differing_parameters",
@@ -42,14 +43,10 @@ SEGMENT_STYLES: dict[str, dict[str, Any]] = {
     "non-physical": {"linestyle": ":", "linewidth": 1.0, "alpha": 0.45},
 }
 
-#: Marker of each special-point label.
-SPECIAL_MARKERS: dict[str, str] = {"SN": "o", "PD": "s", "NS": "D", "GR": "^", "ZV": "v",
-                                   "BP": "P"}
+#: Marker of each special-point label (defined with the labels, in the vocabulary).
+SPECIAL_MARKERS: dict[str, str] = dict(LABEL_MARKERS)
 #: What each special-point label stands for (legends).
-SPECIAL_NAMES: dict[str, str] = {"SN": "saddle-node", "PD": "period doubling",
-                                 "NS": "Neimark-Sacker", "GR": "grazing",
-                                 "ZV": "zero-velocity impact",
-                                 "BP": "symmetry-breaking pitchfork"}
+SPECIAL_NAMES: dict[str, str] = dict(LABEL_NAMES)
 
 # Symbols of the paper next to the long names on axes (mathtext).
 _SYMBOLS = {"omega": r"$\omega$", "b": "$b$", "R": "$R$", "eta": r"$\eta$",

@@ -20,13 +20,18 @@ it like any other special point. Parameters that keep the system symmetric:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import ClassVar
+
 import numpy as np
 
+from impactcont.core.locate import MotionTest
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.orbit.symmetry import HalfUnknowns, admits_symmetric_motions
+from impactcont.orbit.symmetry import PITCHFORK, HalfUnknowns, admits_symmetric_motions
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 __all__ = ["SymmetricBranchProblem"]
@@ -64,6 +69,8 @@ class SymmetricBranchProblem:
     symmetric = True
     #: The special points located on its branches: those of any N-p motion and BP.
     events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV", "BP")
+    #: The test of its own special point, BP (the others are the detector's built-ins).
+    motion_tests: ClassVar[Mapping[str, MotionTest]] = MappingProxyType({"BP": PITCHFORK})
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str) -> None:
