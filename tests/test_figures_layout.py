@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -28,8 +29,12 @@ from matplotlib.text import Annotation, Text
 import impactcont as ic
 from impactcont.model.stops import Stops
 from impactcont.multi_branch import multi_impact_continuation
+from impactcont.multi_maps import multi_impact_map
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.plots import SPECIAL_MARKERS, bifurcation_diagram, multipliers_plot
+from impactcont.plots.impacts import impact_diagram
+from impactcont.plots.maps import two_parameter_diagram, two_parameter_figure
+from impactcont.plots.multi_maps import multi_impact_map_diagram
 from impactcont.scene import figures
 from impactcont.scene.run import run_scene
 
@@ -123,6 +128,25 @@ def two_sided():
     res = ic.simulate(osc, np.zeros(4), 0.0, 200.0)
     return multi_impact_continuation(multi_impact_orbit(osc, 1, 2, res), "omega", (0.7, 0.9),
                                      max_points=40)
+
+
+@pytest.fixture(scope="module")
+def cascade() -> dict:
+    """The 1-1 branch at b = 0 and the 2-2 branch born at its period doubling (omega 1.70)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.0, omega=1.5, eta=0.1)
+    n1 = ic.continuation(osc, N=1, parameter="omega", bounds=(1.4, 2.0), components="start")
+    return {"N1": n1, "N2": ic.period_doubling_switch(n1, bounds=(1.6, 1.9))}
+
+
+@pytest.fixture(scope="module")
+def np_map():
+    """The symmetric 1-2 motion between mirrored stops mapped over (omega, b)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              eta=0.1, b=0.5, omega=1.6, stops=Stops(mirror=True))
+    start = multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 150.0))
+    grid = {"omega": np.linspace(0.8, 1.8, 21), "b": np.linspace(0.3, 0.8, 6)}
+    return multi_impact_map(start, ("omega", "b"), grid=grid)
 
 
 class _Options:
@@ -307,6 +331,32 @@ def _assert_clean(fig: Figure) -> None:
     assert not problems, "\n".join(dict.fromkeys(problems))
 
 
+def journal_problems(fig: Figure) -> list[str]:
+    """Axis labels in symbols, not identifiers; no legend over the data of an axes."""
+    _render(fig)
+    problems = []
+    axes = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+    for ax in axes:
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            plain = re.sub(r"\$[^$]*\$", "", label)
+            if "$" not in label or "_" in plain or re.search(
+                    r"\b(omega|eta|alpha|beta|delta|b|R)\b", plain):
+                problems.append(f"axis label {label!r} is not in symbols (mathtext)")
+    legends = [*fig.legends, *[ax.get_legend() for ax in fig.axes if ax.get_legend()]]
+    for legend, ax in itertools.product(legends, _axes_of(fig)):
+        a, b = legend.get_window_extent().extents, ax.bbox.extents
+        w = min(a[2], b[2]) - max(a[0], b[0])
+        h = min(a[3], b[3]) - max(a[1], b[1])
+        if w > 1 and h > 1:
+            problems.append(f"a legend covers {w * h:.0f} px^2 of the data area of an axes")
+    return problems
+
+
+def _assert_journal(fig: Figure) -> None:
+    problems = layout_problems(fig) + journal_problems(fig)
+    assert not problems, "\n".join(dict.fromkeys(problems))
+
+
 def _figure(width: float, height: float | None = None) -> Figure:
     return Figure(figsize=(width, height or 0.75 * width), layout="constrained")
 
@@ -481,3 +531,89 @@ def test_scene_plot_width_and_automatic_yscale(data, tmp_path):
     (tmp_path / "c.toml").write_text(head + "width = 1.0\n")
     with pytest.raises(SceneError, match=r"plots\[0\]\.width.*\[2, 20\]"):
         load_scene(tmp_path / "c.toml")
+
+
+# -- impact diagrams, two-parameter diagrams and N-p maps ----------------------------------------
+@pytest.mark.parametrize("width", WIDTHS)
+def test_impact_diagram_is_clean_and_named(cascade, width):
+    fig = _figure(width, 0.75 * width + 1.0)
+    ax = impact_diagram(cascade, ax=fig.add_subplot(), label_special=True)
+    _assert_journal(fig)
+    title = ax.get_title()
+    assert "motions" in title and "b = 0" in title and "R = 0.6" in title
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_impact_diagram_with_a_dense_cluster_is_clean(data, width):
+    """The nine special points in omega [1.19, 1.26] at b = 0.5, labelled, one impact each."""
+    fig = _figure(width, 0.75 * width + 1.0)
+    impact_diagram(data["branches"], ax=fig.add_subplot(), label_special=True)
+    _assert_journal(fig)
+
+
+def test_impact_diagram_default_figure_is_clean(cascade):
+    import matplotlib.pyplot as plt
+
+    ax = impact_diagram(cascade, label_special=True)
+    try:
+        _assert_journal(ax.figure)
+    finally:
+        plt.close(ax.figure)
+
+
+def test_impact_diagram_markers_take_their_branch_colour(cascade):
+    fig = _figure(7.0)
+    ax = impact_diagram(cascade, ax=fig.add_subplot())
+    _render(fig)
+    branch_colours = {_color(line.get_color()) for line in ax.get_lines()
+                      if line.get_linestyle() == "-"}
+    special_keys = {_marker_key(m) for m in SPECIAL_MARKERS.values()}
+    edges = {c for _, key, c, _ in _marker_artists(ax) if key in special_keys}
+    assert edges and edges <= branch_colours | {_color("0.6")}
+    assert len(edges & branch_colours) == 2  # the PD of N1, the PD and ZV of the 2-2 branch
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_impact_diagram_of_two_sided_motion_names_pattern_stops_and_speed(two_sided, width):
+    fig = _figure(width, 0.75 * width + 1.0)
+    ax = impact_diagram({"sym": two_sided}, ax=fig.add_subplot())
+    _assert_journal(fig)
+    assert "1-2" in ax.get_title() and "LU" in ax.get_title() and "b_{low}" in ax.get_title()
+    assert "speed" in ax.get_ylabel() and "towards" in ax.get_ylabel()
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_two_parameter_diagram_is_clean_and_named(data, width):
+    fig = _figure(width, 0.75 * width + 1.2)
+    ax = two_parameter_diagram(data["maps"]["map"], data["curves"], N=2, ax=fig.add_subplot())
+    _assert_journal(fig)
+    title = ax.get_title()
+    assert "2-1" in title and "R = 0.6" in title and "b = " not in title
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_two_parameter_figure_is_clean_at_its_width(data, width):
+    fig = two_parameter_figure(data["maps"]["map"], data["curves"], width=width)
+    assert fig.get_size_inches()[0] == pytest.approx(width)
+    _assert_journal(fig)
+    text = _all_text(fig)
+    assert "$N = 1$" in text and "$N = 2$" in text and "R = 0.6" in text
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_multi_impact_map_diagram_is_clean_and_named(np_map, width):
+    fig = _figure(width, 0.75 * width + 1.5)
+    ax = multi_impact_map_diagram(np_map, ax=fig.add_subplot())
+    _assert_journal(fig)
+    title = ax.get_title()
+    assert "1-2" in title and "LU" in title and "R = 0.6" in title and "mirror" in title
+
+
+def test_multi_impact_map_default_figure_is_clean(np_map):
+    import matplotlib.pyplot as plt
+
+    ax = multi_impact_map_diagram(np_map)
+    try:
+        _assert_journal(ax.figure)
+    finally:
+        plt.close(ax.figure)
