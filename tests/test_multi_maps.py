@@ -210,7 +210,7 @@ def test_plot(sym_map):
     assert set(np.unique(codes.values).tolist()) <= {0, 1, 2, 3}
     assert (codes.values == 3).sum() == int((sym_map["stable"] & sym_map["physical"]).sum())
     ax = multi_impact_map_diagram(sym_map)
-    assert ax.get_xlabel() == "omega" and ax.get_ylabel() == "b"
+    assert r"$\omega$" in ax.get_xlabel() and "$b$" in ax.get_ylabel()
     assert "seed" in [t.get_text() for t in ax.get_legend().get_texts()]
     matplotlib.pyplot.close(ax.figure)
 
