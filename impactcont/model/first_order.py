@@ -35,6 +35,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import types
 import warnings
 
 import numpy as np
@@ -135,6 +136,31 @@ def _rayleigh_coefficients(M: np.ndarray, K: np.ndarray, C: np.ndarray
     if np.max(np.abs(basis @ coef - C.ravel())) > 1e-12 * scale:
         return None
     return float(coef[0]), float(coef[1])
+
+
+@functools.cache
+def _compiled() -> types.ModuleType:
+    """:mod:`impactcont.orbit.general_kernel`, imported on first use (numba loads it)."""
+    from impactcont.orbit import general_kernel
+
+    return general_kernel
+
+
+def _check_resonance(omega: float, cond: float) -> None:
+    """Refuse omega at an undamped resonance, warn near one, from the condition number
+    ``cond`` of the equilibrated dynamic stiffness (:meth:`FirstOrderBasis.forced_amplitude`)."""
+    if not math.isfinite(cond) or cond * _EPS >= 1.0:
+        raise ResonanceError(
+            f"omega={omega!r} is a natural frequency of an undamped mode (the dynamic "
+            f"stiffness K - omega^2 M + i omega C is singular, condition number {cond:.3g}): "
+            "the forced response of eq. (6) does not exist; choose another omega or add "
+            "damping to that mode")
+    if cond * _EPS > _RESONANCE_REL_ERROR_WARN:
+        warnings.warn(
+            f"omega={omega!r} is so close to the natural frequency of a lightly damped mode "
+            f"that the forced response (eq. 7) is known only to a relative error of about "
+            f"{cond * _EPS:.1g} (condition number {cond:.3g} of K - omega^2 M + i omega C)",
+            NearResonanceWarning, stacklevel=4)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -284,11 +310,35 @@ class FirstOrderBasis:
         """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, the free flow over time t (2n, 2n)."""
         return ((self.V * np.exp(self.eigenvalues * float(t))) @ self.V_inv).real
 
+    @functools.cached_property
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        """The basis as the compiled first-order path takes it
+        (:mod:`impactcont.orbit.general_kernel`): new contiguous, writable arrays of one
+        dtype each, so that every entry point is compiled once.
+
+        Returns
+        -------
+        tuple
+            ``(lambda, V, V^-1, A, impact_column, w_p, a_p, k_p, j_p, M, K, C)``, the
+            scalar pairs of :attr:`scalar_pairs` as ``w_p, a_p, k_p, j_p``.
+        """
+        w, a, k, j = self.scalar_pairs
+        cplx = tuple(np.array(x, dtype=complex, order="C")
+                     for x in (self.eigenvalues, self.V, self.V_inv))
+        real = tuple(np.array(x, dtype=float, order="C")
+                     for x in (self.A, self.impact_column, w, a))
+        index = tuple(np.array(x, dtype=np.int64, order="C") for x in (k, j))
+        mkc = tuple(np.array(x, dtype=float, order="C") for x in (self.M, self.K, self.C))
+        return (*cplx, *real, *index, *mkc)
+
     def forced_amplitude(self, F: np.ndarray, omega: float) -> np.ndarray:
         """Complex amplitude ``Z`` of the steady forced state, ``X_p = Re(Z e^{i theta})``.
 
         ``(K - omega^2 M + i omega C) x_hat = F`` and ``Z = [x_hat; i omega x_hat]``
-        (eq. 7 in physical coordinates), with ``theta = omega t + delta``.
+        (eq. 7 in physical coordinates), with ``theta = omega t + delta``; solved after an
+        exact power-of-two equilibration of rows and columns, in compiled code
+        (:func:`impactcont.orbit.general_kernel.forced_response`;
+        :meth:`forced_amplitude_reference` is the numpy form).
 
         Raises
         ------
@@ -302,30 +352,36 @@ class FirstOrderBasis:
             of the row- and column-equilibrated stiffness (invariant to the units of each
             coordinate), which is solved.
         """
+        M, K, C = self.kernel_arrays[9:]
+        Z, cond = _compiled().forced_response(K, M, C, np.array(F, dtype=complex),
+                                              float(omega))
+        _check_resonance(omega, cond)
+        return Z
+
+    def forced_amplitude_reference(self, F: np.ndarray, omega: float) -> np.ndarray:
+        """:meth:`forced_amplitude` in numpy (the reference of the compiled solve)."""
         H = self.K - omega * omega * self.M + 1j * omega * self.C
         rows = _power_of_two_scale(np.max(np.abs(H), axis=1))
         H = rows[:, None] * H
         cols = _power_of_two_scale(np.max(np.abs(H), axis=0))
         H = H * cols
         cond = float(np.linalg.cond(H))
-        if not math.isfinite(cond) or cond * _EPS >= 1.0:
-            raise ResonanceError(
-                f"omega={omega!r} is a natural frequency of an undamped mode (the dynamic "
-                f"stiffness K - omega^2 M + i omega C is singular, condition number {cond:.3g}): "
-                "the forced response of eq. (6) does not exist; choose another omega or add "
-                "damping to that mode")
-        if cond * _EPS > _RESONANCE_REL_ERROR_WARN:
-            warnings.warn(
-                f"omega={omega!r} is so close to the natural frequency of a lightly damped mode "
-                f"that the forced response (eq. 7) is known only to a relative error of about "
-                f"{cond * _EPS:.1g} (condition number {cond:.3g} of K - omega^2 M + i omega C)",
-                NearResonanceWarning, stacklevel=3)
+        _check_resonance(omega, cond)
         x_hat = cols * np.linalg.solve(H, rows * np.asarray(F, dtype=complex))
         return np.concatenate([x_hat, 1j * omega * x_hat])
 
     def forced_amplitude_derivative(self, Z: np.ndarray, omega: float) -> np.ndarray:
         """``dZ/d omega`` of :meth:`forced_amplitude` (exact):
-        ``d x_hat = -H^-1 (-2 omega M + i C) x_hat``, ``Z = [x_hat; i omega x_hat]``."""
+        ``d x_hat = -H^-1 (-2 omega M + i C) x_hat``, ``Z = [x_hat; i omega x_hat]``, in
+        compiled code (:func:`impactcont.orbit.general_kernel.forced_response_derivative`;
+        :meth:`forced_amplitude_derivative_reference` is the numpy form)."""
+        M, K, C = self.kernel_arrays[9:]
+        return _compiled().forced_response_derivative(K, M, C, np.array(Z, dtype=complex),
+                                                      float(omega))
+
+    def forced_amplitude_derivative_reference(self, Z: np.ndarray, omega: float
+                                              ) -> np.ndarray:
+        """:meth:`forced_amplitude_derivative` in numpy (the reference)."""
         n = self.M.shape[0]
         x_hat = Z[:n]
         H = self.K - omega * omega * self.M + 1j * omega * self.C

@@ -34,7 +34,9 @@ The parameter derivatives of ``c, s`` used by continuation are exact too
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+import types
 import warnings
 import weakref
 
@@ -109,13 +111,33 @@ class PeriodicForm:
     """The kernel's condition estimate of eq. (12) (relative error about ``cond * eps``)."""
     S: np.ndarray
     """``X(0) = S e_d`` (2n, 2), eq. (13)."""
+    _period_rate: tuple[float, float] = dataclasses.field(default=(math.nan, math.nan),
+                                                          repr=False)
+    """``Re(V diag(lambda s'(lambda T)) V^-1 e_{n+1})`` at rows 1 and n+1: with ``-A^-1
+    e_{n+1} / T^2`` the ``T``-derivative of ``y`` there (:func:`amplitude_derivative`)."""
+    _pieces: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    """The real fields as the rows of :func:`impactcont.orbit.general_kernel.
+    periodic_setup` (the fields are views of it), None for :func:`reference_form`."""
 
-    @property
+    def _orbit_arguments(self) -> tuple:
+        """The arguments of :func:`impactcont.orbit.general_kernel.orbit_values` before
+        the phases and gaps."""
+        flow = self.flow
+        lam, V, _, _, _, pw, pa, pk, pj = flow.basis.kernel_arrays[:9]
+        pieces, y_modal = self._pieces, self.y_modal
+        if pieces is None:  # a form built in numpy (reference_form)
+            pieces = np.vstack([self.DPhi, self.P0.T, self.rate0.T, self.E.T, self.S.T,
+                                self.y, self.rate])
+            y_modal = np.ascontiguousarray(y_modal)
+        return (pieces, y_modal, V[0], lam, pw, pa, pk, pj, float(flow.osc.omega),
+                float(flow.osc.R), float(self.T), float(self.g), float(self.Delta))
+
+    @functools.cached_property
     def c(self) -> float:
         """``c`` of eq. (14)."""
         return float(self.S[0, 0])
 
-    @property
+    @functools.cached_property
     def s(self) -> float:
         """``s`` of eq. (14)."""
         return float(self.S[0, 1])
@@ -172,10 +194,41 @@ def periodic_form(osc: ImpactOscillator, N: int, *, warn: bool = True) -> Period
 
 
 def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
-    """:class:`PeriodicForm` of `flow` over the period ``T`` (``omega T = 2 pi N``)."""
+    """:class:`PeriodicForm` of `flow` over the period ``T`` (``omega T = 2 pi N``), by
+    :func:`impactcont.orbit.general_kernel.periodic_setup` (:func:`reference_form` is
+    its numpy form)."""
     cached = _FORMS.get(flow)
     if cached is not None and cached.T == T:
         return cached
+    osc = flow.osc
+    omega, R, T = float(osc.omega), float(osc.R), float(T)
+    lam, V, Vi, A, column, _, _, pk, pj = flow.basis.kernel_arrays[:9]
+    pieces, y_modal, sc = _compiled().periodic_setup(lam, V, Vi, A, column, pk, pj, flow.Z,
+                                                     omega, R, T)
+    g, Delta, cond, d0, dn = sc.tolist()
+    m = pieces.shape[1]
+    c, s = pieces[m + 6:m + 8, 0].tolist()
+    form = object.__new__(PeriodicForm)  # the fields, without the frozen __init__'s cost
+    form.__dict__.update(flow=flow, T=T, DPhi=pieces[:m], P0=pieces[m:m + 2].T,
+                         rate0=pieces[m + 2:m + 4].T, E=pieces[m + 4:m + 6].T,
+                         y=pieces[m + 8], y_modal=y_modal, rate=pieces[m + 9], g=g,
+                         Delta=Delta, cond=cond, S=pieces[m + 6:m + 8].T,
+                         _period_rate=(d0, dn), _pieces=pieces, c=c, s=s)
+    _FORMS[flow] = form
+    return form
+
+
+@functools.cache
+def _compiled() -> types.ModuleType:
+    """:mod:`impactcont.orbit.general_kernel`, imported on first use (numba loads it)."""
+    from impactcont.orbit import general_kernel
+
+    return general_kernel
+
+
+def reference_form(flow: GeneralFlow, T: float) -> PeriodicForm:
+    """:class:`PeriodicForm` of `flow` over the period ``T`` in numpy: the reference of
+    the compiled :func:`impactcont.orbit.general_kernel.periodic_setup` (not cached)."""
     osc, basis = flow.osc, flow.basis
     n, R, omega = osc.n, osc.R, osc.omega
     kappa = 1.0 + R
@@ -205,10 +258,10 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
     with np.errstate(divide="ignore", invalid="ignore"):
         S = P0 + kappa * np.outer(y, P0[n] / Delta)
     cond = _condition(basis, x, em1, sw, w, R, omega, g, Delta)
-    form = PeriodicForm(flow=flow, T=T, DPhi=DPhi, P0=P0, rate0=rate0, E=E, y=y, y_modal=y_modal,
-                        rate=rate, g=g, Delta=Delta, cond=cond, S=S)
-    _FORMS[flow] = form
-    return form
+    d_rate = (V @ (lam * coth_remainder(x, derivative=True) * w)).real
+    return PeriodicForm(flow=flow, T=T, DPhi=DPhi, P0=P0, rate0=rate0, E=E, y=y,
+                        y_modal=y_modal, rate=rate, g=g, Delta=Delta, cond=cond, S=S,
+                        _period_rate=(float(d_rate[0]), float(d_rate[n])))
 
 
 def _condition(basis, x: np.ndarray, em1: np.ndarray, sw: np.ndarray, w: np.ndarray,
@@ -272,7 +325,7 @@ def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: 
     :func:`orbit_pieces` (whose ``S`` and ``D Phi`` are those of ``flow`` at ``T``;
     formulas in :func:`amplitude`)."""
     osc = flow.osc
-    n, R, omega = osc.n, osc.R, osc.omega
+    R, omega = osc.R, osc.omega
     kappa = 1.0 + R
     if which in ("eta", "alpha", "beta"):
         raise ParameterError(
@@ -292,12 +345,11 @@ def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: 
         part_n = (0.5 * (1.0 - R) - Delta) / kappa  # Re(V_{n+1} diag(s) V^-1 e)
         d_rho = omega * g / Delta - rho * (-0.5 - part_n) / Delta
         return -d_rho * B, d_rho * Gam
-    lam, V, Vi = basis.eigenvalues, basis.V, basis.V_inv
+    rate_0, rate_n = form._period_rate
     dT = -T / omega
-    rate = (V @ (lam * coth_remainder(lam * T, derivative=True) * Vi[:, n])).real
-    d_y0 = (-basis.impact_column[0] / (T * T) + rate[0]) * dT
+    d_y0 = (-basis.impact_column[0] / (T * T) + rate_0) * dT
     d_g = -d_y0
-    d_Delta = -kappa * rate[n] * dT
+    d_Delta = -kappa * rate_n * dT
     dZ = basis.forced_amplitude_derivative(flow.Z, omega)
     d_Gam, d_B = float(dZ[0].real), float(-dZ[0].imag)
     d_rho = kappa * (g + omega * d_g) / Delta - rho * d_Delta / Delta
@@ -326,10 +378,14 @@ def _search_grid(flow: GeneralFlow, T: float) -> np.ndarray:
     w, a, _, _ = flow.basis.scalar_pairs
     times, capped = kernel.time_grid(w, a, np.ones_like(w), flow.omega, T)
     if capped:
-        warnings.warn(f"x1 search grid capped at 2000000 cells for a period of {T:.3g}: a short "
-                      "excursion of mass 1 past the stop (eq. 16) may be missed",
-                      UnresolvedMotionWarning, stacklevel=4)
+        _warn_capped(T, stacklevel=5)
     return times
+
+
+def _warn_capped(T: float, stacklevel: int) -> None:
+    warnings.warn(f"x1 search grid capped at 2000000 cells for a period of {T:.3g}: a short "
+                  "excursion of mass 1 past the stop (eq. 16) may be missed",
+                  UnresolvedMotionWarning, stacklevel=stacklevel)
 
 
 def _search(flow: GeneralFlow, times: np.ndarray, free: np.ndarray, dy: np.ndarray,
@@ -399,29 +455,6 @@ def phase_matrices(flow: GeneralFlow, S: np.ndarray, T: float
     return J1, Y, U
 
 
-def _jacobians(form: PeriodicForm, deltas: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-    """G of eq. (25) at the phases ``deltas`` with impact velocities ``sigma``, (m, 2n, 2n):
-    ``[h0'; H0] = D Phi(T)`` without its first column, ``[h1; H1] = D E(T) [-sin; cos]``,
-    ``[h2; H2] = D X'(T^-)`` with ``h2 = sigma``."""
-    osc = form.flow.osc
-    n, omega = osc.n, osc.omega
-    d = np.ones(2 * n)
-    d[n] = -osc.R
-    e = np.column_stack([np.cos(deltas), np.sin(deltas)])  # (m, 2)
-    dE = (np.column_stack([-e[:, 1], e[:, 0]]) @ form.E.T) * d
-    dX = (e @ form.rate0.T + ((1.0 + osc.R) * sigma)[:, None] * form.rate) * d
-    h0_p = form.DPhi[0, 1:]
-    m = deltas.size
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        H2 = dX[:, 1:] / sigma[:, None]
-        G = np.empty((m, 2 * n, 2 * n))
-        G[:, :-1, :-1] = form.DPhi[1:, 1:] - H2[:, :, None] * h0_p[None, None, :]
-        G[:, :-1, -1] = dE[:, 1:] - H2 * dE[:, :1]
-        G[:, -1, :-1] = -omega * h0_p[None, :] / sigma[:, None]
-        G[:, -1, -1] = 1.0 - omega * dE[:, 0] / sigma
-    return G
-
-
 def orbit_values_many(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`orbit_values` for many impact phases at once, one omega (e.g. the gaps of a
@@ -429,41 +462,23 @@ def orbit_values_many(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray
     impact phases ``deltas`` at the gaps ``b`` (each phase a root of eq. 15 at its gap),
     shapes ``(m,)``, ``(m, 2n)`` (largest modulus first), ``(m,)``, ``(m,)``.
 
-    G of eq. (25) is assembled for all phases by broadcasting, the multipliers by one
-    batched LAPACK call, and the free part of ``x1`` on the search grid of eq. (16) is
-    computed once per column of ``[cos delta, sin delta]`` and once more per phase whose
-    impact velocity is taken from its second form (:func:`impactcont.orbit.dense.
-    impact_velocity`). Agrees with :func:`orbit_values` to rounding.
+    One compiled call (:func:`impactcont.orbit.general_kernel.orbit_values`): the search
+    tables of eq. (16) are built once per unit impact velocity and shared by every phase.
     """
-    from impactcont.orbit import kernel
+    deltas = np.array(deltas, dtype=float).reshape(-1)  # new arrays: writable, contiguous
+    b = np.array(np.broadcast_to(np.asarray(b, dtype=float), deltas.shape))
+    values, _, _, mu = _compiled_values(form, deltas, b)
+    return values[0], mu, values[3], values[4]
 
-    flow = form.flow
-    osc = flow.osc
-    kappa = 1.0 + osc.R
-    deltas = np.asarray(deltas, dtype=float)
-    b = np.broadcast_to(np.asarray(b, dtype=float), deltas.shape)
-    m = deltas.size
-    h2, _ = form.velocity(deltas, b)
-    G = _jacobians(form, deltas, h2)
-    mu = np.full((m, 2 * osc.n), np.nan + 0j)
-    good = np.all(np.isfinite(G), axis=(1, 2))
-    if np.any(good):
-        mu[good] = np.linalg.eigvals(G[good])
-    mu = np.take_along_axis(mu, np.argsort(-np.abs(mu), axis=1, kind="stable"), axis=1)
-    gap, gap_t = np.full(m, -math.inf), np.full(m, math.nan)
-    if m:
-        w, a, _, _ = flow.basis.scalar_pairs
-        # x1's free part is kappa sigma Re sum_k V_1k (V^-1 y)_k e^{lambda_k t}: one search
-        # table per unit velocity, scaled by each motion's kappa sigma
-        dy, dv = _pair_coefficients(flow, flow.V[0] * form.y_modal)
-        times = _search_grid(flow, form.T)
-        unit = kernel.free_on_grid(times, w, a, np.ones_like(w), dy, dv)
-        for i in range(m):
-            ks = kappa * h2[i]
-            best, gap_t[i] = _search(flow, times, ks * unit, ks * dy, ks * dv, deltas[i],
-                                     math.nan)
-            gap[i] = b[i] - best
-    return h2, mu, gap, gap_t
+
+def _compiled_values(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray) -> tuple:
+    """:func:`impactcont.orbit.general_kernel.orbit_values` of `form` at the phases
+    ``deltas`` and gaps ``b`` (contiguous floats), warning when the search grid of eq.
+    (16) was capped."""
+    *values, capped = _compiled().orbit_values(*form._orbit_arguments(), deltas, b)
+    if capped:
+        _warn_capped(form.T, stacklevel=4)
+    return tuple(values)
 
 
 def roots(c: float, s: float, b: float) -> list[tuple[float, int]]:
@@ -507,7 +522,40 @@ class OrbitValues:
 
 def orbit_values(form: PeriodicForm, delta: float) -> OrbitValues:
     """The motion at phase delta (a root of eq. 15) from :func:`periodic_form`: state,
-    impact velocity, G, multipliers and eq. (16)."""
+    impact velocity, G, multipliers and eq. (16), by the compiled
+    :func:`impactcont.orbit.general_kernel.orbit_values` (:func:`reference_orbit_values`
+    is its numpy form).
+
+    When delta is one of the roots of eq. (15) at the oscillator's gap (:func:`roots`),
+    every root is evaluated in that one call (the search tables of eq. 16 are shared) and
+    kept with the form: the other root's motion is then a lookup.
+    """
+    delta = float(delta)
+    pending = form.__dict__.setdefault("_pending", None)
+    if pending is not None and delta in pending:
+        return pending.pop(delta)  # handed out once: no two motions share arrays
+    b = float(form.flow.osc.b)
+    phases = [delta]
+    if pending is None:  # the first motion asked of this form
+        form.__dict__["_pending"] = {}
+        r2 = form.c ** 2 + form.s ** 2
+        found = [d for d, _ in roots(form.c, form.s, b)] if r2 > 0.0 else []
+        if delta in found:
+            phases = found
+    scalars, states, G, mu = _compiled_values(form, np.array(phases), np.array([b] * len(phases)))
+    motions = {}
+    for i, (h2, rel, scale, gap, gap_t) in enumerate(zip(*scalars.tolist(), strict=True)):
+        values = object.__new__(OrbitValues)  # the fields, without the frozen __init__'s cost
+        values.__dict__.update(state=states[i], h2=h2, h2_error=rel, velocity_scale=scale,
+                               G=G[i], multipliers=mu[i], gap_min=gap, gap_min_time=gap_t)
+        motions[phases[i]] = values
+    out = motions.pop(delta)
+    form.__dict__["_pending"].update(motions)
+    return out
+
+
+def reference_orbit_values(form: PeriodicForm, delta: float) -> OrbitValues:
+    """:func:`orbit_values` in numpy: the reference of the compiled path."""
     flow = form.flow
     osc = flow.osc
     n, R, omega = osc.n, osc.R, osc.omega
