@@ -392,6 +392,8 @@ def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: 
 PLANE = {"omega": (0.5, 2.5), "b": (0.2, 1.0)}
 PLANE_WITNESS_B = (0.35, 0.6, 0.9)  # clearances where the simulator checks the BP curve
 PLANE_WITNESS_OFFSET, PLANE_WITNESS_PERIODS = 0.01, 800.0
+PLANE_GRID = (401, 161)  # omega x b points of the stability maps (b step 0.005)
+ASYMMETRIC = 1e-6  # symmetry_defect above which a motion of the maps counts as asymmetric
 
 
 def mirrored(b: float, omega: float) -> ic.ImpactOscillator:
@@ -432,6 +434,48 @@ def plane(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, A
         except (ic.NoPeriodicMotionError, ic.ParameterError) as exc:
             log.warning("GR %d of the asymmetric branch: no curve (%s)", which, exc)
     t_curves = time.perf_counter() - t0
+    # stability maps of the symmetric family and of the asymmetric pair over the plane
+    t0 = time.perf_counter()
+    grid = {"omega": np.linspace(*PLANE["omega"], PLANE_GRID[0]),
+            "b": np.linspace(*PLANE["b"], PLANE_GRID[1])}
+    maps = {"symmetric": ic.multi_impact_map(seed, ("omega", "b"), grid)}
+    # the asymmetric pair from one seed per clearance branch (a grid sweep from one seed
+    # passes a pitchfork onto the symmetric motions and does not come back)
+    for name, ds in groups.items():
+        if not (name.startswith("b0.") and name.endswith("_asymmetric")
+                and "joint" not in name):
+            continue
+        ok = ds["stable"].values & ds["physical"].values
+        if not ok.any():
+            continue
+        om = ds["omega"].values
+        mid = 0.5 * (om[ok].min() + om[ok].max())  # mid-window: far from its pitchforks
+        i = int(np.flatnonzero(ok)[np.argmin(np.abs(om[ok] - mid))])
+        b = float(ds["b"].values[i])
+        motion = ic.multi_impact_orbit(mirrored(b, float(ds["omega"].values[i])), 1, 2, {
+            "delta": float(ds["delta_k"].values[i, 0]),
+            "flight_times": ds["flight_time_k"].values[i], "states": ds["state_k"].values[i],
+            "pattern": ds.attrs["pattern"]})
+        maps[f"asymmetric {name}"] = ic.multi_impact_map(motion, ("omega", "b"), grid)
+    t_maps = time.perf_counter() - t0
+    # the symmetric map's stability changes where the BP curve crosses a grid row
+    map_check = []
+    sym_map = maps["symmetric"]
+    for j, b in enumerate(grid["b"]):
+        if j % 10:
+            continue
+        ok = (sym_map["stable"].values[:, j] & sym_map["physical"].values[:, j]
+              & sym_map["found"].values[:, j])
+        flips = grid["omega"][:-1][ok[:-1] != ok[1:]]
+        physical = sym_map["physical"].values[:, j]
+        for c in multi_impact_curve_crossings(curves["BP"], "b", float(b)):
+            cell = float(np.min(np.abs(flips - c["omega"]))) if flips.size else math.inf
+            k = int(np.searchsorted(grid["omega"], c["omega"]))
+            map_check.append({"b": float(b), "bp_omega": c["omega"],
+                              "physical_there": bool(physical[max(k - 1, 0)]
+                                                     or physical[min(k, physical.size - 1)]),
+                              "nearest_flip_in_cells": cell / (grid["omega"][1]
+                                                               - grid["omega"][0])})
     # the BP curve against the pitchforks located in omega on each clearance's branch
     located = {b: info["pitchforks"] for b, info in summary["clearances"].items()}
     check = {}
@@ -459,12 +503,18 @@ def plane(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, A
             witness.append(result)
     for name, ds in curves.items():
         groups[f"plane_{name.replace(' ', '_')}"] = ds
+    for name, ds in maps.items():
+        groups[f"plane_map_{name.replace(' ', '_')}"] = ds
     return {"curves": {name: {"points": int(ds.sizes["point"]),
                               "omega": [float(ds["omega"].min()), float(ds["omega"].max())],
                               "b": [float(ds["b"].min()), float(ds["b"].max())]}
                        for name, ds in curves.items()},
             "bp_curve_vs_located": check, "simulated": witness, "curves_s": t_curves,
-            "datasets": curves, "symmetric": sym}
+            "maps_s": t_maps, "map_points": int(sum(m["found"].size for m in maps.values())),
+            "map_flips_within_one_cell_of_the_bp_curve": [
+                sum(c["nearest_flip_in_cells"] <= 1.0 for c in map_check if c["physical_there"]),
+                sum(c["physical_there"] for c in map_check)],
+            "map_vs_bp_curve": map_check, "datasets": curves, "maps": maps, "symmetric": sym}
 
 
 def _nearest_symmetric(curve: xr.Dataset, b: float, omega: float) -> dict[str, Any]:
@@ -479,6 +529,19 @@ def draw_plane(ax, info: dict[str, Any], summary: dict[str, Any]) -> None:
     styles = {"BP": ("k", "-", "BP: symmetry-breaking pitchfork"),
               "GR symmetric": ("C0", "--", "GR of the symmetric motion"),
               "GR asymmetric": ("C3", "--", "GR of the asymmetric pair")}
+    regions = {}
+    for name, m in info["maps"].items():
+        kind = "asymmetric" if name.startswith("asymmetric") else "symmetric"
+        ok = m["stable"] & m["physical"] & m["found"]
+        if kind == "asymmetric":  # past a BP the grid sweep reaches the symmetric motions
+            ok = ok & (m["asymmetry"] > ASYMMETRIC)
+        regions[kind] = ok if kind not in regions else regions[kind] | ok
+    for kind, color in (("symmetric", "C0"), ("asymmetric", "C3")):
+        m = info["maps"]["symmetric"]
+        ax.contourf(m["omega"].values, m["b"].values, regions[kind].values.T.astype(float),
+                    levels=[0.5, 1.5], colors=[color], alpha=0.18)
+        ax.plot([], [], "s", color=color, alpha=0.35, ms=7,
+                label=f"map: {kind} motion stable and physical")
     seen = set()
     for name, ds in info["datasets"].items():
         key = "GR asymmetric" if name.startswith("GR asymmetric") else name
@@ -535,7 +598,8 @@ def main(output: Path, quick: bool = False) -> dict[str, Any]:
         draw_plane(ax2, info, summary)
         fig2.tight_layout()
         fig2.savefig(output / "backlash_plane.png", dpi=110)
-        summary["plane"] = {k: v for k, v in info.items() if k not in ("datasets", "symmetric")}
+        summary["plane"] = {k: v for k, v in info.items()
+                            if k not in ("datasets", "maps", "symmetric")}
     ic.save(groups, output / "branches.nc")
     ic.save(sweeps, output / "sweeps.nc", validate=False)
     summary["total_s"] = time.perf_counter() - t_start
