@@ -55,7 +55,6 @@ BERNOULLI = np.array([  # impactcont.model.first_order._BERNOULLI: B_2k / (2k)!
     1.3382536530684678833e-11, -3.3896802963225828668e-13, 8.5860620562778445641e-15,
     -2.174868698558061873e-16, 5.5090028283602295152e-18])
 SERIES_RADIUS = 1.0  # impactcont.model.first_order._SERIES_RADIUS
-BLAS_MIN = 64  # matrices of this order and above: D Phi(T) by BLAS (np.dot), below by loops
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
@@ -99,23 +98,19 @@ def _cexpm1(x):
 
 
 @_jit
-def _coth_remainder(x, em1, derivative):
-    """``s(x) = 1/expm1(x) + 1/2 - 1/x`` or ``s'(x)``
+def _coth_remainder(x, em1):
+    """``s(x) = 1/expm1(x) + 1/2 - 1/x`` and ``s'(x)``
     (:func:`impactcont.model.first_order.coth_remainder`); ``em1 = expm1(x)``."""
-    if abs(x) < SERIES_RADIUS:
+    if abs(x) < SERIES_RADIUS:  # Horner in x^2: s = sum_k B_2k / (2k)! x^(2k-1) and s'
         x2 = x * x
         acc = 0j
-        k_max = BERNOULLI.size
-        if derivative:  # sum_k (2k - 1) B_2k / (2k)! x^(2k-2), Horner in x^2
-            for k in range(k_max, 0, -1):
-                acc = acc * x2 + (2 * k - 1) * BERNOULLI[k - 1]
-            return acc
-        for k in range(k_max - 1, -1, -1):
-            acc = acc * x2 + BERNOULLI[k]
-        return acc * x
-    if derivative:
-        return _cdiv(1.0 + 0j, x * x) - _cdiv(em1 + 1.0, em1 * em1)
-    return _cdiv(1.0 + 0j, em1) + 0.5 - _cdiv(1.0 + 0j, x)
+        dacc = 0j
+        for k in range(BERNOULLI.size, 0, -1):
+            acc = acc * x2 + BERNOULLI[k - 1]
+            dacc = dacc * x2 + (2 * k - 1) * BERNOULLI[k - 1]
+        return acc * x, dacc
+    return (_cdiv(1.0 + 0j, em1) + 0.5 - _cdiv(1.0 + 0j, x),
+            _cdiv(1.0 + 0j, x * x) - _cdiv(em1 + 1.0, em1 * em1))
 
 
 # -- the forced response ------------------------------------------------------------------------
@@ -123,6 +118,34 @@ def _coth_remainder(x, em1, derivative):
 def _power_of_two_scale(v):
     """``2^-round(log2 v)`` where ``v > 0`` (1 elsewhere): an exact rescaling."""
     return np.exp2(-np.round(np.log2(v))) if v > 0.0 else 1.0
+
+
+@_jit
+def _solve(H, rhs):
+    """``H^-1 rhs`` by Gaussian elimination with partial pivoting (complex, in place: H and
+    rhs are overwritten), as LAPACK ``zgesv`` pivots (largest ``|Re| + |Im|``); numba's
+    ``np.linalg.solve`` would add seconds to the first compilation."""
+    n = H.shape[0]
+    for k in range(n):
+        p = k
+        for r in range(k + 1, n):
+            if abs(H[r, k].real) + abs(H[r, k].imag) > abs(H[p, k].real) + abs(H[p, k].imag):
+                p = r
+        if p != k:
+            for c in range(k, n):
+                H[k, c], H[p, c] = H[p, c], H[k, c]
+            rhs[k], rhs[p] = rhs[p], rhs[k]
+        for r in range(k + 1, n):
+            f = _cdiv(H[r, k], H[k, k])
+            for c in range(k + 1, n):
+                H[r, c] -= f * H[k, c]
+            rhs[r] -= f * rhs[k]
+    for k in range(n - 1, -1, -1):
+        acc = rhs[k]
+        for c in range(k + 1, n):
+            acc -= H[k, c] * rhs[c]
+        rhs[k] = _cdiv(acc, H[k, k])
+    return rhs
 
 
 @_entry(_f8_2, _f8_2, _f8_2, _c16_1, _f8)
@@ -167,7 +190,7 @@ def forced_response(K, M, C, F, omega):
     cond = np.linalg.cond(H)
     if not (np.isfinite(cond) and cond * _EPS < 1.0):
         return Z, np.inf
-    sol = np.linalg.solve(H, rhs)
+    sol = _solve(H, rhs)
     iw = complex(0.0, omega)
     for r in range(n):
         Z[r] = cols[r] * sol[r]
@@ -191,7 +214,7 @@ def forced_response_derivative(K, M, C, Z, omega):
         for c in range(n):
             H[r, c] = complex(K[r, c] - omega * omega * M[r, c], omega * C[r, c])
             rhs[r] += complex(-2.0 * omega * M[r, c], C[r, c]) * Z[c]
-    dx = np.linalg.solve(H, rhs)
+    dx = _solve(H, rhs)
     dZ = np.empty(2 * n, dtype=np.complex128)
     for r in range(n):
         dZ[r] = -dx[r]
@@ -202,17 +225,23 @@ def forced_response_derivative(K, M, C, Z, omega):
 # -- eq. (12)-(14) at one frequency -------------------------------------------------------------
 @_jit
 def _re_product(Vd, Vi):
-    """``Re(Vd @ Vi)`` of two complex square matrices: loops below :data:`BLAS_MIN`, BLAS
-    (``np.dot``) from there."""
+    """``Re(Vd @ Vi)`` of two complex square matrices: only the real part, in loops over
+    real rows that the compiler vectorises (numba's BLAS ``np.dot`` would add a second to
+    the first compilation; at n = 200 these loops take tens of milliseconds)."""
     m = Vd.shape[0]
-    if m >= BLAS_MIN:
-        return np.dot(Vd, Vi).real.copy()
+    Vi_re = np.empty((m, m))
+    Vi_im = np.empty((m, m))
+    for k in range(m):
+        for c in range(m):
+            Vi_re[k, c] = Vi[k, c].real
+            Vi_im[k, c] = Vi[k, c].imag
     out = np.zeros((m, m))
     for r in range(m):
         for k in range(m):
-            v = Vd[r, k]
+            a = Vd[r, k].real
+            b = Vd[r, k].imag
             for c in range(m):
-                out[r, c] += v.real * Vi[k, c].real - v.imag * Vi[k, c].imag
+                out[r, c] += a * Vi_re[k, c] - b * Vi_im[k, c]
     return out
 
 
@@ -288,8 +317,9 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
         x[k] = lam[k] * T
         em1[k] = _cexpm1(x[k])
         w[k] = Vi[k, n]
-        sw[k] = _coth_remainder(x[k], em1[k], False) * w[k]
-        dsw[k] = lam[k] * _coth_remainder(x[k], em1[k], True) * w[k]
+        s_k, ds_k = _coth_remainder(x[k], em1[k])
+        sw[k] = s_k * w[k]
+        dsw[k] = lam[k] * ds_k * w[k]
         y_modal[k] = _cdiv(w[k], em1[k])
     pieces = np.empty((m + 10, m))
     DPhi, P0, rate0, E, S, y, rate = form_rows(pieces)
