@@ -194,10 +194,11 @@ def test_a_branch_plots_against_its_parameter_and_gives_one_row_per_point(writte
     import matplotlib.pyplot as plt
 
     branch = ic.load(written["single N-p branch"])
-    lines = with_parameter_coords(branch).impact_velocity.plot(x="omega")
+    lines = branch.impact_velocity.plot(x="omega")  # its parameters are its coordinates
     np.testing.assert_array_equal(lines[0].get_xdata(), branch["omega"].values)
     plt.close("all")
-    assert "omega" in branch.data_vars  # the schema's layout is unchanged
+    assert "omega" in branch.coords and "omega" not in branch.data_vars
+    xr.testing.assert_identical(with_parameter_coords(branch), branch)  # already so
     table = point_table(branch)
     assert len(table) == branch.sizes["point"] < len(branch.to_dataframe())
     assert list(table.columns[:2]) == ["omega", "b"]

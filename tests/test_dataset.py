@@ -122,7 +122,9 @@ def test_schema_dims_coords_and_dtypes(branch):
     assert branch["point"].dtype == np.int64
     np.testing.assert_array_equal(branch["point"].values, np.arange(NPOINTS))
     assert branch["component"].values.tolist() == ["x1", "x2", "v1", "v2"]
-    assert set(branch.coords) == {"point", "component"}
+    # the points are labelled by the parameters (coordinates on point: plots take x="omega")
+    assert set(branch.coords) == {"point", "component", "omega", "b"}
+    assert branch["impact_velocity"].coords["omega"].dims == ("point",)
     for name in ("omega", "b", "delta", "impact_velocity", "gap_min", "spectral_radius",
                  "arclength"):
         assert branch[name].dims == ("point",)
@@ -168,7 +170,7 @@ def test_schema_other_parameter_and_no_special_points(osc):
     ds = branch_dataset(parameter="R", N=2, oscillator=osc, options={}, columns=cols,
                         special_points=[])
     assert ds.sizes["special"] == 0
-    assert {"R", "special_R"} <= set(ds.data_vars)
+    assert "R" in ds.coords and "special_R" in ds.data_vars
     assert ds.attrs["parameter"] == "R"
     assert abs(oscillator_from_dataset(ds, point=-1).R - 0.9) <= 1e-15
     validate_branch_dataset(ds)
@@ -234,7 +236,7 @@ def test_validate_rejects_incomplete_datasets(branch):
         validate_branch_dataset(branch.assign(stable=branch["stable"].astype(float)))
     with pytest.raises(TypeError, match="DataArray"):
         validate_branch_dataset(branch["omega"])
-    assert set(POINT_VARIABLES) <= set(branch.data_vars)
+    assert set(POINT_VARIABLES) <= set(branch.variables)
 
 
 # -- NetCDF I/O ---------------------------------------------------------------------------------

@@ -41,6 +41,7 @@ from impactcont.dataset.schema import (
     check_variables,
     point_coords,
     provenance_attributes,
+    with_parameter_coords,
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.vocabulary import CODIM2_LABELS, CURVE_KINDS, STATUSES
@@ -289,7 +290,7 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
         "end_status": str(end_status),
         **provenance_attributes(),
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return with_parameter_coords(xr.Dataset(data_vars, coords=coords, attrs=attrs))
 
 
 _OPTIONAL_MAP_VARIABLES = ("spectral_radius", "critical_multiplier")

@@ -538,8 +538,9 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
     ValueError
         A mark of the CF form contradicts the variable it is on.
     """
-    names = parameter_names(ds)
-    ds = ds.reset_coords([k for k in names if k in ds.coords and k not in ds.dims])
+    # the points of a branch or curve are labelled by its parameters, in memory as on disk
+    # (files written before that hold them as data variables)
+    ds = ds.set_coords([k for k in parameter_names(ds) if k in ds.data_vars])
     for name, var in list(ds.variables.items()):
         if not {_MEMORY_DTYPE, _MEMORY_UNITS, _FILE_ATTRIBUTES} & set(var.attrs):
             continue

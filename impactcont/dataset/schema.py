@@ -265,10 +265,11 @@ def parameter_names(ds: xr.Dataset) -> list[str]:
 def with_parameter_coords(ds: xr.Dataset) -> xr.Dataset:
     """``ds`` with ``omega``, ``b`` and the continued parameter(s) as coordinates on ``point``.
 
-    A branch (or curve) stores its parameters as data variables; as
-    coordinates every variable on ``point`` carries them, so that it plots
-    against them: ``with_parameter_coords(branch).impact_velocity.plot(x="omega")``.
-    The values are not copied.
+    As coordinates every variable on ``point`` carries them, so that it plots
+    against them: ``branch.impact_velocity.plot(x="omega")``. The datasets the
+    package builds and loads have them so already (this function makes them so);
+    a dataset built by hand with them as data variables gets them here. The values
+    are not copied.
 
     Parameters
     ----------
@@ -613,7 +614,7 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         "options": _options_json(options),
         **provenance_attributes(),
     }
-    ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    ds = with_parameter_coords(xr.Dataset(data_vars, coords=coords, attrs=attrs))
     logger.debug("branch dataset: parameter=%s N=%d npoints=%d special=%d", parameter, N,
                  npoints, ds.sizes["special"])
     return ds
