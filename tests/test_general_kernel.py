@@ -91,8 +91,8 @@ def test_periodic_form_matches_the_numpy_reference(name, N):
         for field in ("g", "Delta"):
             _close(getattr(compiled, field), getattr(reference, field), what=f"{field}: {what}",
                    floor=1.0)
-        _close(compiled._period_rate, reference._period_rate, what=f"period rate: {what}",
-               floor=1.0)
+        _close(compiled.__dict__["_period_rate"], reference.__dict__["_period_rate"],
+               what=f"period rate: {what}", floor=1.0)
         # the condition estimate decides the same warnings
         assert compiled.cond == pytest.approx(reference.cond, rel=1e-9), what
         assert (compiled.cond > dense.COND_WARN) == (reference.cond > dense.COND_WARN), what

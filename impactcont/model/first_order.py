@@ -320,7 +320,9 @@ class FirstOrderBasis:
         -------
         tuple
             ``(lambda, V, V^-1, A, impact_column, w_p, a_p, k_p, j_p, M, K, C)``, the
-            scalar pairs of :attr:`scalar_pairs` as ``w_p, a_p, k_p, j_p``.
+            scalar pairs of :attr:`scalar_pairs` as ``w_p, a_p, k_p, j_p``, then
+            ``(lambda, V[0], w_p, a_p, k_p, j_p)`` again (the arguments of the contact
+            search in their order, ``V[0]`` the first row of V).
         """
         w, a, k, j = self.scalar_pairs
         cplx = tuple(np.array(x, dtype=complex, order="C")
@@ -329,7 +331,8 @@ class FirstOrderBasis:
                      for x in (self.A, self.impact_column, w, a))
         index = tuple(np.array(x, dtype=np.int64, order="C") for x in (k, j))
         mkc = tuple(np.array(x, dtype=float, order="C") for x in (self.M, self.K, self.C))
-        return (*cplx, *real, *index, *mkc)
+        search = (cplx[0], np.array(cplx[1][0]), *real[2:], *index)
+        return (*cplx, *real, *index, *mkc, *search)
 
     def forced_amplitude(self, F: np.ndarray, omega: float) -> np.ndarray:
         """Complex amplitude ``Z`` of the steady forced state, ``X_p = Re(Z e^{i theta})``.
@@ -352,7 +355,7 @@ class FirstOrderBasis:
             of the row- and column-equilibrated stiffness (invariant to the units of each
             coordinate), which is solved.
         """
-        M, K, C = self.kernel_arrays[9:]
+        M, K, C = self.kernel_arrays[9:12]
         Z, cond = _compiled().forced_response(K, M, C, np.array(F, dtype=complex),
                                               float(omega))
         _check_resonance(omega, cond)
@@ -375,7 +378,7 @@ class FirstOrderBasis:
         ``d x_hat = -H^-1 (-2 omega M + i C) x_hat``, ``Z = [x_hat; i omega x_hat]``, in
         compiled code (:func:`impactcont.orbit.general_kernel.forced_response_derivative`;
         :meth:`forced_amplitude_derivative_reference` is the numpy form)."""
-        M, K, C = self.kernel_arrays[9:]
+        M, K, C = self.kernel_arrays[9:12]
         return _compiled().forced_response_derivative(K, M, C, np.array(Z, dtype=complex),
                                                       float(omega))
 

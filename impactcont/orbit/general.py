@@ -22,12 +22,18 @@ the kernel's rank-one form (:class:`PeriodicForm`):
 - ``sigma`` from the better of its two exact forms
   (:func:`impactcont.orbit.dense.impact_velocity`), then ``X(0)``, and G of eq. (25)
   from ``D Phi(T)``, ``D (I - Phi(T)) P(0)`` and ``X'(T^-) = P'(0) e_d + kappa sigma
-  A (y + e)``; its eigenvalues by LAPACK;
-- eq. (16) by the extrema search along the exact flow (:mod:`impactcont.orbit.extrema`);
+  A (y + e)``; its eigenvalues as the kernel's (:func:`impactcont.orbit.kernel.
+  multipliers`: QR of the balanced Hessenberg form for small G, LAPACK otherwise);
+- eq. (16) by the kernel's search (:func:`impactcont.orbit.kernel.x1_maximum`) on the
+  scalar pairs of modes (:attr:`FirstOrderBasis.scalar_pairs`);
 - the condition estimate of eq. (12) is the kernel's, summed over the scalar pairs of
-  modes (:attr:`FirstOrderBasis.scalar_pairs`), so both paths warn alike.
+  modes, so both paths warn alike.
 
-The parameter derivatives of ``c, s`` used by continuation are exact too
+All of it runs compiled (:mod:`impactcont.orbit.general_kernel`: one call for the
+pieces of a frequency, :func:`periodic_form`, and one for the motions of its roots,
+:func:`orbit_values`); :func:`reference_form` and :func:`reference_orbit_values` are
+the same equations in numpy, kept as the reference the tests compare with. The
+parameter derivatives of ``c, s`` used by continuation are exact too
 (:func:`amplitude`).
 """
 
@@ -111,26 +117,40 @@ class PeriodicForm:
     """The kernel's condition estimate of eq. (12) (relative error about ``cond * eps``)."""
     S: np.ndarray
     """``X(0) = S e_d`` (2n, 2), eq. (13)."""
-    _period_rate: tuple[float, float] = dataclasses.field(default=(math.nan, math.nan),
-                                                          repr=False)
-    """``Re(V diag(lambda s'(lambda T)) V^-1 e_{n+1})`` at rows 1 and n+1: with ``-A^-1
-    e_{n+1} / T^2`` the ``T``-derivative of ``y`` there (:func:`amplitude_derivative`)."""
-    _pieces: np.ndarray | None = dataclasses.field(default=None, repr=False)
-    """The real fields as the rows of :func:`impactcont.orbit.general_kernel.
-    periodic_setup` (the fields are views of it), None for :func:`reference_form`."""
+    # Two private attributes come with the form (set in its __dict__, not fields, so that
+    # a form made any other way has none): ``_period_rate``, ``Re(V diag(lambda
+    # s'(lambda T)) V^-1 e_{n+1})`` at rows 1 and n+1 (with ``-A^-1 e_{n+1} / T^2`` the
+    # T-derivative of ``y`` there, :func:`amplitude_derivative`), and ``_pieces``, the
+    # real fields as the rows of :func:`impactcont.orbit.general_kernel.periodic_setup`
+    # (the fields are views of it).
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        """The real fields of a compiled form, made on first access as views of its
+        ``_pieces`` (:func:`impactcont.orbit.general_kernel.form_rows`): most motions never
+        read them (the compiled orbit takes the pieces whole)."""
+        pieces = self.__dict__.get("_pieces")
+        rows = _FIELD_ROWS.get(name)
+        if pieces is None or rows is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        m = pieces.shape[1]
+        start, stop = rows
+        view = pieces[m + start:m + stop].T if stop - start == 2 else (
+            pieces[:m] if start < 0 else pieces[m + start])
+        self.__dict__[name] = view
+        return view
 
     def _orbit_arguments(self) -> tuple:
         """The arguments of :func:`impactcont.orbit.general_kernel.orbit_values` before
         the phases and gaps."""
         flow = self.flow
-        lam, V, _, _, _, pw, pa, pk, pj = flow.basis.kernel_arrays[:9]
-        pieces, y_modal = self._pieces, self.y_modal
+        lam, V0, pw, pa, pk, pj = flow.basis.kernel_arrays[12:]
+        pieces, y_modal = self.__dict__.get("_pieces"), self.y_modal
         if pieces is None:  # a form built in numpy (reference_form)
             pieces = np.vstack([self.DPhi, self.P0.T, self.rate0.T, self.E.T, self.S.T,
                                 self.y, self.rate])
             y_modal = np.ascontiguousarray(y_modal)
-        return (pieces, y_modal, V[0], lam, pw, pa, pk, pj, float(flow.osc.omega),
-                float(flow.osc.R), float(self.T), float(self.g), float(self.Delta))
+        return (pieces, y_modal, V0, lam, pw, pa, pk, pj, float(flow.osc.omega),
+                float(flow.osc.R), self.T, self.g, self.Delta)
 
     @functools.cached_property
     def c(self) -> float:
@@ -165,6 +185,11 @@ class PeriodicForm:
                 return second, err_b / max(abs(second), 1e-300)
         return first, err_a / max(abs(first), 1e-300)
 
+
+# the real fields of PeriodicForm as the rows of general_kernel.periodic_setup's pieces,
+# (start, stop) after the first 2n rows (D Phi: (-1, 0)); two rows are a field's columns
+_FIELD_ROWS = {"DPhi": (-1, 0), "P0": (0, 2), "rate0": (2, 4), "E": (4, 6), "S": (6, 8),
+               "y": (8, 9), "rate": (9, 10)}
 
 # the form of the last periodic_form call per flow, for the pieces that callers keep as
 # (flow, S, DPhi, T) (phase_matrices, amplitude_derivative)
@@ -205,15 +230,10 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
     lam, V, Vi, A, column, _, _, pk, pj = flow.basis.kernel_arrays[:9]
     pieces, y_modal, sc = _compiled().periodic_setup(lam, V, Vi, A, column, pk, pj, flow.Z,
                                                      omega, R, T)
-    g, Delta, cond, d0, dn = sc.tolist()
-    m = pieces.shape[1]
-    c, s = pieces[m + 6:m + 8, 0].tolist()
-    form = object.__new__(PeriodicForm)  # the fields, without the frozen __init__'s cost
-    form.__dict__.update(flow=flow, T=T, DPhi=pieces[:m], P0=pieces[m:m + 2].T,
-                         rate0=pieces[m + 2:m + 4].T, E=pieces[m + 4:m + 6].T,
-                         y=pieces[m + 8], y_modal=y_modal, rate=pieces[m + 9], g=g,
-                         Delta=Delta, cond=cond, S=pieces[m + 6:m + 8].T,
-                         _period_rate=(d0, dn), _pieces=pieces, c=c, s=s)
+    g, Delta, cond, d0, dn, c, s = sc.tolist()
+    form = object.__new__(PeriodicForm)  # without the frozen __init__'s cost; the real
+    form.__dict__.update(flow=flow, T=T, y_modal=y_modal, g=g, Delta=Delta, cond=cond,
+                         c=c, s=s, _period_rate=(d0, dn), _pieces=pieces)  # fields: views
     _FORMS[flow] = form
     return form
 
@@ -259,9 +279,10 @@ def reference_form(flow: GeneralFlow, T: float) -> PeriodicForm:
         S = P0 + kappa * np.outer(y, P0[n] / Delta)
     cond = _condition(basis, x, em1, sw, w, R, omega, g, Delta)
     d_rate = (V @ (lam * coth_remainder(x, derivative=True) * w)).real
-    return PeriodicForm(flow=flow, T=T, DPhi=DPhi, P0=P0, rate0=rate0, E=E, y=y,
-                        y_modal=y_modal, rate=rate, g=g, Delta=Delta, cond=cond, S=S,
-                        _period_rate=(float(d_rate[0]), float(d_rate[n])))
+    form = PeriodicForm(flow=flow, T=T, DPhi=DPhi, P0=P0, rate0=rate0, E=E, y=y,
+                        y_modal=y_modal, rate=rate, g=g, Delta=Delta, cond=cond, S=S)
+    form.__dict__["_period_rate"] = (float(d_rate[0]), float(d_rate[n]))
+    return form
 
 
 def _condition(basis, x: np.ndarray, em1: np.ndarray, sw: np.ndarray, w: np.ndarray,
@@ -345,7 +366,7 @@ def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: 
         part_n = (0.5 * (1.0 - R) - Delta) / kappa  # Re(V_{n+1} diag(s) V^-1 e)
         d_rho = omega * g / Delta - rho * (-0.5 - part_n) / Delta
         return -d_rho * B, d_rho * Gam
-    rate_0, rate_n = form._period_rate
+    rate_0, rate_n = form.__dict__["_period_rate"]
     dT = -T / omega
     d_y0 = (-basis.impact_column[0] / (T * T) + rate_0) * dT
     d_g = -d_y0

@@ -300,9 +300,10 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
         (:func:`form_rows`): ``D Phi(T)``, then the columns of ``P0``, ``rate0``, ``E`` and
         ``S``, then ``y`` and ``rate``.
     y_modal : ndarray, shape (2n,), complex
-    scalars : ndarray, shape (5,)
-        ``g, Delta, cond`` and ``Re(V diag(lambda s'(lambda T)) V^-1 e_{n+1})`` at rows 1
-        and ``n + 1`` (the ``T``-derivative of ``y`` less ``-A^-1 e / T^2``).
+    scalars : ndarray, shape (7,)
+        ``g, Delta, cond``, ``Re(V diag(lambda s'(lambda T)) V^-1 e_{n+1})`` at rows 1
+        and ``n + 1`` (the ``T``-derivative of ``y`` less ``-A^-1 e / T^2``) and ``c, s``
+        of eq. (14) (the first row of ``S``).
     """
     m = lam.size
     n = m // 2
@@ -371,7 +372,7 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
     for r in range(m):
         for c in range(2):
             S[r, c] = P0[r, c] + kappa * (y[r] * (P0[n, c] / Delta))
-    scalars = np.empty(5)
+    scalars = np.empty(7)
     scalars[0] = g
     scalars[1] = Delta
     scalars[2] = _condition(V, Vi, pk, pj, x, em1, sw, w, R, omega, g, Delta)
@@ -382,6 +383,8 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
         dn += (V[n, k] * dsw[k]).real
     scalars[3] = d0
     scalars[4] = dn
+    scalars[5] = S[0, 0]
+    scalars[6] = S[0, 1]
     return pieces, y_modal, scalars
 
 
