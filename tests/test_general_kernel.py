@@ -12,7 +12,9 @@ omega from 1e-3 to 1e6 and N = 1..4.
 
 from __future__ import annotations
 
+import gc
 import math
+import weakref
 
 import numpy as np
 import pytest
@@ -227,3 +229,20 @@ def test_the_kernel_constants_are_the_reference_ones():
     assert general_kernel.VELOCITY_AGREE == dense._VELOCITY_AGREE
     np.testing.assert_array_equal(general_kernel.BERNOULLI, first_order._BERNOULLI)
     assert general_kernel.SERIES_RADIUS == first_order._SERIES_RADIUS
+
+
+def test_forms_and_their_flows_are_released_when_nobody_holds_them():
+    """The per-flow cache of forms held each form by a weak key that its own value (the
+    form holds its flow) kept alive: every form of a process stayed in memory (1.3 MB of
+    ``D Phi`` each at n = 200, thousands per branch)."""
+    osc = _osc("joint damper", 1.0, b=0.6)
+    orbits = ic.periodic_orbits(osc, 1)
+    form = general.periodic_form(osc, 1)
+    T = form.T
+    # while held, the pieces kept as (flow, S, DPhi, T) find their form
+    assert general._form_at(form.flow, T) is form
+    dead = weakref.ref(form), weakref.ref(form.flow)
+    del form
+    gc.collect()
+    assert dead[0]() is None and dead[1]() is None
+    assert len(orbits) == 2

@@ -192,8 +192,11 @@ _FIELD_ROWS = {"DPhi": (-1, 0), "P0": (0, 2), "rate0": (2, 4), "E": (4, 6), "S":
                "y": (8, 9), "rate": (9, 10)}
 
 # the form of the last periodic_form call per flow, for the pieces that callers keep as
-# (flow, S, DPhi, T) (phase_matrices, amplitude_derivative)
-_FORMS: weakref.WeakKeyDictionary[GeneralFlow, PeriodicForm] = weakref.WeakKeyDictionary()
+# (flow, S, DPhi, T) (phase_matrices, amplitude_derivative), while the form is in use:
+# keyed by the flow's identity (the form holds its flow, so the key is unique while the
+# entry lives) and weak in the form, so that a form nobody holds is released (a weak key
+# would be kept alive by its own value, the form, for the life of the process)
+_FORMS: weakref.WeakValueDictionary[int, PeriodicForm] = weakref.WeakValueDictionary()
 
 
 def periodic_form(osc: ImpactOscillator, N: int, *, warn: bool = True) -> PeriodicForm:
@@ -222,8 +225,8 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
     """:class:`PeriodicForm` of `flow` over the period ``T`` (``omega T = 2 pi N``), by
     :func:`impactcont.orbit.general_kernel.periodic_setup` (:func:`reference_form` is
     its numpy form)."""
-    cached = _FORMS.get(flow)
-    if cached is not None and cached.T == T:
+    cached = _FORMS.get(id(flow))
+    if cached is not None and cached.flow is flow and cached.T == T:
         return cached
     osc = flow.osc
     omega, R, T = float(osc.omega), float(osc.R), float(T)
@@ -234,7 +237,7 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
     form = object.__new__(PeriodicForm)  # without the frozen __init__'s cost; the real
     form.__dict__.update(flow=flow, T=T, y_modal=y_modal, g=g, Delta=Delta, cond=cond,
                          c=c, s=s, _period_rate=(d0, dn), _pieces=pieces)  # fields: views
-    _FORMS[flow] = form
+    _FORMS[id(flow)] = form
     return form
 
 

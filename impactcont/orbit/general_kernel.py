@@ -59,7 +59,6 @@ SERIES_RADIUS = 1.0  # impactcont.model.first_order._SERIES_RADIUS
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 _f8 = nb.float64
-_i8 = nb.int64
 _f8_1 = nb.float64[::1]
 _f8_2 = nb.float64[:, ::1]
 _c16_1 = nb.complex128[::1]
