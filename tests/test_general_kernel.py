@@ -246,3 +246,20 @@ def test_forms_and_their_flows_are_released_when_nobody_holds_them():
     gc.collect()
     assert dead[0]() is None and dead[1]() is None
     assert len(orbits) == 2
+
+
+@pytest.mark.filterwarnings("ignore::impactcont.errors.IllConditionedWarning")
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_amplitude_is_the_forms_c_s_and_its_derivatives(name):
+    """The continuation's eq. (14) (O(n), :func:`general.amplitude`) is the same sums as
+    the full form's first row of S: equal, so a branch point's phase is a root of the
+    form that evaluates its motion."""
+    for omega in OMEGAS:
+        for N in (1, 3):
+            osc = _osc(name, omega)
+            form = general.periodic_form(osc, N)
+            assert general.amplitude(osc, N)[:2] == (form.c, form.s)
+            for which in ("omega", "R"):
+                _, _, dc, ds = general.amplitude(osc, N, which)
+                assert (dc, ds) == general.amplitude_derivative(form.flow, form.S, form.DPhi,
+                                                                form.T, which)

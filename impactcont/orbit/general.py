@@ -336,11 +336,23 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     -------
     c, s, dc, ds : float
         ``dc = ds = 0`` when `which` is None.
+
+    Notes
+    -----
+    Computed in O(n) after the forced amplitude
+    (:func:`impactcont.orbit.general_kernel.amplitude_setup`: the scalars of
+    :func:`periodic_form`, equal to its ``c, s``); warns as :func:`periodic_form`.
     """
-    form = periodic_form(osc, N)
+    _refuse_elastic(osc)
+    flow = Flow(osc)
+    T = 2.0 * math.pi * N / osc.omega
+    lam, V, Vi, _, column, _, _, pk, pj = flow.basis.kernel_arrays[:9]
+    g, Delta, cond, d0, dn, c, s = _compiled().amplitude_setup(
+        lam, V, Vi, column, pk, pj, flow.Z, float(osc.omega), float(osc.R), T).tolist()
+    warn_ill_conditioned(osc.omega, cond, stacklevel=1)
     if which is None:
-        return form.c, form.s, 0.0, 0.0
-    return (form.c, form.s, *amplitude_derivative(form.flow, form.S, form.DPhi, form.T, which))
+        return c, s, 0.0, 0.0
+    return (c, s, *_cs_derivative(flow, T, g, Delta, (d0, dn), which))
 
 
 def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: float,
@@ -348,9 +360,13 @@ def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: 
     """``dc, ds`` (eq. 14) in ``which`` (``"omega"``, ``"R"``) at the motion of
     :func:`orbit_pieces` (whose ``S`` and ``D Phi`` are those of ``flow`` at ``T``;
     formulas in :func:`amplitude`)."""
-    osc = flow.osc
-    R, omega = osc.R, osc.omega
-    kappa = 1.0 + R
+    _check_which(flow.osc, which)
+    form = _form_at(flow, float(T))
+    return _cs_derivative(flow, float(T), form.g, form.Delta, form.__dict__["_period_rate"],
+                          which)
+
+
+def _check_which(osc: ImpactOscillator, which: str) -> None:
     if which in ("eta", "alpha", "beta"):
         raise ParameterError(
             f"parameter={which!r}: a branch on the first-order path (complex F={osc.F.tolist()}, "
@@ -360,16 +376,23 @@ def amplitude_derivative(flow: GeneralFlow, S: np.ndarray, DPhi: np.ndarray, T: 
     if which not in ("omega", "R"):
         raise ParameterError(f"which must be 'omega' or 'R' (the derivative of c, s of eq. 14); "
                              f"got {which!r}")
-    form = _form_at(flow, float(T))
-    basis = flow.basis
-    g, Delta = form.g, form.Delta
-    Gam, B = float(form.P0[0, 0]), float(form.P0[0, 1])
+
+
+def _cs_derivative(flow: GeneralFlow, T: float, g: float, Delta: float,
+                   period_rate: tuple[float, float], which: str) -> tuple[float, float]:
+    """``dc, ds`` in ``which`` from the scalars of eq. (14) at ``T`` (:func:`amplitude`);
+    ``period_rate``: the rows 1 and n+1 of ``Re(V diag(lambda s'(lambda T)) V^-1 e)``."""
+    _check_which(flow.osc, which)
+    osc, basis = flow.osc, flow.basis
+    R, omega = osc.R, osc.omega
+    kappa = 1.0 + R
+    Gam, B = float(flow.Z[0].real), float(-flow.Z[0].imag)
     rho = kappa * omega * g / Delta
     if which == "R":
         part_n = (0.5 * (1.0 - R) - Delta) / kappa  # Re(V_{n+1} diag(s) V^-1 e)
         d_rho = omega * g / Delta - rho * (-0.5 - part_n) / Delta
         return -d_rho * B, d_rho * Gam
-    rate_0, rate_n = form.__dict__["_period_rate"]
+    rate_0, rate_n = period_rate
     dT = -T / omega
     d_y0 = (-basis.impact_column[0] / (T * T) + rate_0) * dT
     d_g = -d_y0

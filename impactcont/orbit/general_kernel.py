@@ -3,7 +3,7 @@
 The numba counterpart of :mod:`impactcont.orbit.general` (which documents eq. 12-15 in
 the first-order modal form, :class:`impactcont.orbit.general.PeriodicForm`; its numpy
 implementation is kept there as the reference of this one). Everything here is a
-function of floats and arrays (``cache=True``), in four entry points with explicit
+function of floats and arrays (``cache=True``), in five entry points with explicit
 argument types (each compiled once, when this module is first imported):
 
 - :func:`forced_response`: ``x_hat`` of ``(K - omega^2 M + i omega C) x_hat = F`` by a
@@ -14,7 +14,8 @@ argument types (each compiled once, when this module is first imported):
 - :func:`periodic_setup`: the pieces of eq. (12)-(14) at one frequency in the impact's
   rank-one form (``D Phi(T)``, ``P(0)``, ``P'(0)``, ``E(T)``, ``y``, ``V^-1 y``,
   ``A (y + e)``, ``S``), ``g``, ``Delta``, the condition estimate of eq. (12) and the
-  rows of ``d y / dT`` the exact omega derivative of ``c, s`` needs;
+  rows of ``d y / dT`` the exact omega derivative of ``c, s`` needs; and
+  :func:`amplitude_setup`, those scalars alone in O(n) (the continuation's eq. 14);
 - :func:`orbit_values`: per impact phase (a root of eq. 15) the impact velocity from the
   better of its two exact forms, the state ``X(0)``, G of eq. (25), its eigenvalues and
   the interior-contact check of eq. (16) (the search of
@@ -42,8 +43,8 @@ from impactcont.orbit.kernel import (
     x1_maximum,
 )
 
-__all__ = ["forced_response", "forced_response_derivative", "orbit_values",
-           "periodic_setup"]
+__all__ = ["amplitude_setup", "forced_response", "forced_response_derivative",
+           "orbit_values", "periodic_setup"]
 
 _EPS = 2.220446049250313e-16
 # the constants of the numpy reference (tests/test_general_kernel.py checks they agree)
@@ -285,6 +286,65 @@ def form_rows(pieces):
             pieces[m + 6:m + 8].T, pieces[m + 8], pieces[m + 9])
 
 
+@_jit
+def _modal_terms(lam, Vi, T):
+    """Per complex mode over the period: ``x = lambda T``, ``expm1(x)``, ``w = V^-1
+    e_{n+1}``, ``s(x) w`` and ``lambda s'(x) w`` (:func:`_coth_remainder`)."""
+    m = lam.size
+    n = m // 2
+    x = np.empty(m, dtype=np.complex128)
+    em1 = np.empty(m, dtype=np.complex128)
+    w = np.empty(m, dtype=np.complex128)
+    sw = np.empty(m, dtype=np.complex128)
+    dsw = np.empty(m, dtype=np.complex128)
+    for k in range(m):
+        x[k] = lam[k] * T
+        em1[k] = _cexpm1(x[k])
+        w[k] = Vi[k, n]
+        s_k, ds_k = _coth_remainder(x[k], em1[k])
+        sw[k] = s_k * w[k]
+        dsw[k] = lam[k] * ds_k * w[k]
+    return x, em1, w, sw, dsw
+
+
+@_entry(_c16_1, _c16_2, _c16_2, _f8_1, _i8_1, _i8_1, _c16_1, _f8, _f8, _f8)
+def amplitude_setup(lam, V, Vi, impact_column, pk, pj, Z, omega, R, T):
+    """The scalars of :func:`periodic_setup` alone (``c, s`` of eq. 14 and what their
+    exact derivatives need), from rows 1 and ``n + 1`` only: O(n) after the forced
+    amplitude, the same sums in the same order (equal results).
+
+    Returns
+    -------
+    scalars : ndarray, shape (7,)
+        As :func:`periodic_setup`'s.
+    """
+    m = lam.size
+    n = m // 2
+    kappa = 1.0 + R
+    x, em1, w, sw, dsw = _modal_terms(lam, Vi, T)
+    part_0 = 0.0
+    part_n = 0.0
+    d0 = 0.0
+    dn = 0.0
+    for k in range(m):
+        part_0 += (V[0, k] * sw[k]).real
+        part_n += (V[n, k] * sw[k]).real
+        d0 += (V[0, k] * dsw[k]).real
+        dn += (V[n, k] * dsw[k]).real
+    y0 = impact_column[0] / T + part_0
+    Delta = 0.5 * (1.0 - R) - kappa * part_n
+    g = -y0
+    scalars = np.empty(7)
+    scalars[0] = g
+    scalars[1] = Delta
+    scalars[2] = _condition(V, Vi, pk, pj, x, em1, sw, w, R, omega, g, Delta)
+    scalars[3] = d0
+    scalars[4] = dn
+    scalars[5] = Z[0].real + kappa * (y0 * (Z[n].real / Delta))
+    scalars[6] = -Z[0].imag + kappa * (y0 * (-Z[n].imag / Delta))
+    return scalars
+
+
 @_entry(_c16_1, _c16_2, _c16_2, _f8_2, _f8_1, _i8_1, _i8_1, _c16_1, _f8, _f8, _f8)
 def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
     """Eq. (12)-(14) at one frequency in the rank-one form of
@@ -307,19 +367,9 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
     m = lam.size
     n = m // 2
     kappa = 1.0 + R
-    x = np.empty(m, dtype=np.complex128)
-    em1 = np.empty(m, dtype=np.complex128)
-    w = np.empty(m, dtype=np.complex128)
-    sw = np.empty(m, dtype=np.complex128)
-    dsw = np.empty(m, dtype=np.complex128)
+    x, em1, w, sw, dsw = _modal_terms(lam, Vi, T)
     y_modal = np.empty(m, dtype=np.complex128)
     for k in range(m):
-        x[k] = lam[k] * T
-        em1[k] = _cexpm1(x[k])
-        w[k] = Vi[k, n]
-        s_k, ds_k = _coth_remainder(x[k], em1[k])
-        sw[k] = s_k * w[k]
-        dsw[k] = lam[k] * ds_k * w[k]
         y_modal[k] = _cdiv(w[k], em1[k])
     pieces = np.empty((m + 10, m))
     DPhi, P0, rate0, E, S, y, rate = form_rows(pieces)
