@@ -31,11 +31,14 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures as cf
+import contextlib
 import functools
 import json
 import logging
 import math
 import os
+import signal
+import threading
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -94,6 +97,35 @@ def _map_task(osc_json: str, N: int, omega: np.ndarray, b: np.ndarray,
             raise KeyboardInterrupt from None
         raise
     return {k: out[k] for k in ("amplitude_squared", "exists", *_ROOT_FIELDS)}
+
+
+@contextlib.contextmanager
+def _interrupt_between_tasks() -> Iterator[Any]:
+    """Ctrl-C (SIGINT) taken between the tasks of a serial map, not inside one.
+
+    A KeyboardInterrupt raised inside a compiled kernel (numba's helpers check for
+    signals) can leave it in an undefined state: the process crashed with SIGSEGV
+    instead of stopping. While the tasks run in this (main) thread, SIGINT only marks
+    the interrupt, and the yielded ``check()`` raises it between tasks (and at the
+    end). A handler other than Python's default is left as it is.
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield lambda: None
+        return
+    pending: list[int] = []
+
+    def check() -> None:
+        if pending:
+            pending.clear()
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: pending.append(signum))
+    try:
+        yield check
+        check()
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @functools.lru_cache(maxsize=4)
@@ -390,9 +422,13 @@ class _Runner:
                 ) -> Iterator[tuple[tuple[int, slice, slice], dict[str, np.ndarray]]]:
         """Every task with its result, as they finish (``2 x workers`` submitted at once)."""
         if self.pool is None:
-            for task in tasks:
-                yield task, _map_task(*self._args(task))
-                self._done(task)
+            with _interrupt_between_tasks() as check:
+                for task in tasks:
+                    result = _map_task(*self._args(task))
+                    check()
+                    yield task, result
+                    self._done(task)
+                    check()
             return
         waiting = collections.deque(tasks)
         retry: collections.deque[tuple[int, slice, slice]] = collections.deque()
