@@ -471,11 +471,11 @@ def plane(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, A
         for c in multi_impact_curve_crossings(curves["BP"], "b", float(b)):
             cell = float(np.min(np.abs(flips - c["omega"]))) if flips.size else math.inf
             k = int(np.searchsorted(grid["omega"], c["omega"]))
-            map_check.append({"b": float(b), "bp_omega": c["omega"],
+            map_check.append({"b": float(b), "bp_omega": float(c["omega"]),
                               "physical_there": bool(physical[max(k - 1, 0)]
                                                      or physical[min(k, physical.size - 1)]),
-                              "nearest_flip_in_cells": cell / (grid["omega"][1]
-                                                               - grid["omega"][0])})
+                              "nearest_flip_in_cells": float(cell / (grid["omega"][1]
+                                                                     - grid["omega"][0]))})
     # the BP curve against the pitchforks located in omega on each clearance's branch
     located = {b: info["pitchforks"] for b, info in summary["clearances"].items()}
     check = {}
@@ -512,8 +512,9 @@ def plane(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, A
             "bp_curve_vs_located": check, "simulated": witness, "curves_s": t_curves,
             "maps_s": t_maps, "map_points": int(sum(m["found"].size for m in maps.values())),
             "map_flips_within_one_cell_of_the_bp_curve": [
-                sum(c["nearest_flip_in_cells"] <= 1.0 for c in map_check if c["physical_there"]),
-                sum(c["physical_there"] for c in map_check)],
+                int(sum(c["nearest_flip_in_cells"] <= 1.0 for c in map_check
+                        if c["physical_there"])),
+                int(sum(c["physical_there"] for c in map_check))],
             "map_vs_bp_curve": map_check, "datasets": curves, "maps": maps, "symmetric": sym}
 
 
