@@ -263,3 +263,27 @@ def test_amplitude_is_the_forms_c_s_and_its_derivatives(name):
                 _, _, dc, ds = general.amplitude(osc, N, which)
                 assert (dc, ds) == general.amplitude_derivative(form.flow, form.S, form.DPhi,
                                                                 form.T, which)
+
+
+@pytest.mark.filterwarnings("ignore::impactcont.errors.IllConditionedWarning")
+def test_a_large_system_takes_its_transition_from_blas_and_agrees():
+    """From ``general_kernel.BLAS_MIN`` (2n) the form's ``D Phi(T)`` is numpy's product
+    (the compiled loops cost three times BLAS at n = 200); the rest stays compiled."""
+    n = general_kernel.BLAS_MIN // 2 + 3
+    K = 2.0 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    K[-1, -1] = 1.0
+    C = 0.01 * K
+    C[5:7, 5:7] += [[0.1, -0.1], [-0.1, 0.1]]
+    F = np.zeros(n)
+    F[0] = 1.0
+    base = ic.ImpactOscillator(M=np.eye(n), K=K, C=C, F=F, R=0.6, b=0.0, omega=0.7)
+    osc = base.replace(b=_gap(base, 1))
+    compiled, reference = _forms(osc, 1)
+    _close(compiled.DPhi, reference.DPhi, floor=1.0, what="DPhi")
+    _close(compiled.S, reference.S, floor=float(np.abs(reference.P0).max()), what="S")
+    for delta, _ in general.roots(compiled.c, compiled.s, osc.b):
+        got = general.orbit_values(compiled, delta)
+        ref = general.reference_orbit_values(reference, delta)
+        assert got.h2 == pytest.approx(ref.h2, rel=1e-10)
+        _close(got.state, ref.state, rtol=1e-10)
+        assert got.gap_min == pytest.approx(ref.gap_min, abs=1e-9)

@@ -49,7 +49,7 @@ import weakref
 import numpy as np
 
 from impactcont.errors import ParameterError, UnresolvedMotionWarning
-from impactcont.model.first_order import coth_remainder
+from impactcont.model.first_order import FirstOrderBasis, coth_remainder
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.dense import (
     impact_velocity,
@@ -231,8 +231,12 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
     osc = flow.osc
     omega, R, T = float(osc.omega), float(osc.R), float(T)
     lam, V, Vi, A, column, _, _, pk, pj = flow.basis.kernel_arrays[:9]
-    pieces, y_modal, sc = _compiled().periodic_setup(lam, V, Vi, A, column, pk, pj, flow.Z,
-                                                     omega, R, T)
+    kernel = _compiled()
+    pieces, y_modal, sc = kernel.periodic_setup(lam, V, Vi, A, column, pk, pj, flow.Z, omega,
+                                                R, T)
+    m = lam.size
+    if m >= kernel.BLAS_MIN:  # D Phi(T) by BLAS, O(n^3)
+        pieces[:m] = _transition(flow.basis, T, R)
     g, Delta, cond, d0, dn, c, s = sc.tolist()
     form = object.__new__(PeriodicForm)  # without the frozen __init__'s cost; the real
     form.__dict__.update(flow=flow, T=T, y_modal=y_modal, g=g, Delta=Delta, cond=cond,
@@ -270,9 +274,7 @@ def reference_form(flow: GeneralFlow, T: float) -> PeriodicForm:
     iwZ = 1j * omega * Z
     rate0 = np.column_stack([iwZ.real, -iwZ.imag])
     E = -(V @ (em1[:, None] * (Vi @ P0))).real
-    d = np.ones(2 * n)
-    d[n] = -R
-    DPhi = d[:, None] * (np.eye(2 * n) + ((V * em1) @ Vi).real)
+    DPhi = _transition(basis, T, R)
     with np.errstate(divide="ignore", invalid="ignore"):
         y_modal = w / em1
     e = np.zeros(2 * n)
@@ -286,6 +288,15 @@ def reference_form(flow: GeneralFlow, T: float) -> PeriodicForm:
                         y_modal=y_modal, rate=rate, g=g, Delta=Delta, cond=cond, S=S)
     form.__dict__["_period_rate"] = (float(d_rate[0]), float(d_rate[n]))
     return form
+
+
+def _transition(basis: FirstOrderBasis, T: float, R: float) -> np.ndarray:
+    """``D Phi(T) = D (I + Re(V diag(expm1(lambda T)) V^-1))`` (2n, 2n) by numpy (BLAS)."""
+    m = basis.eigenvalues.size
+    d = np.ones(m)
+    d[m // 2] = -R
+    em1 = np.expm1(basis.eigenvalues * T)
+    return d[:, None] * (np.eye(m) + ((basis.V * em1) @ basis.V_inv).real)
 
 
 def _condition(basis, x: np.ndarray, em1: np.ndarray, sw: np.ndarray, w: np.ndarray,

@@ -56,6 +56,9 @@ BERNOULLI = np.array([  # impactcont.model.first_order._BERNOULLI: B_2k / (2k)!
     1.3382536530684678833e-11, -3.3896802963225828668e-13, 8.5860620562778445641e-15,
     -2.174868698558061873e-16, 5.5090028283602295152e-18])
 SERIES_RADIUS = 1.0  # impactcont.model.first_order._SERIES_RADIUS
+#: From this order of D Phi(T) (2n; n = 32 degrees of freedom, as the modal kernel's
+#: ``BLAS_MIN``) :func:`periodic_setup` leaves ``D Phi(T)`` to numpy's BLAS (the caller).
+BLAS_MIN = 64
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
@@ -224,25 +227,31 @@ def forced_response_derivative(K, M, C, Z, omega):
 
 # -- eq. (12)-(14) at one frequency -------------------------------------------------------------
 @_jit
-def _re_product(Vd, Vi):
-    """``Re(Vd @ Vi)`` of two complex square matrices: only the real part, in loops over
-    real rows that the compiler vectorises (numba's BLAS ``np.dot`` would add a second to
-    the first compilation; at n = 200 these loops take tens of milliseconds)."""
-    m = Vd.shape[0]
+def _transition_into(V, Vi, em1, R, DPhi):
+    """``D Phi(T) = D (I + Re(V diag(expm1(lambda T)) V^-1))`` into ``DPhi``: only the real
+    part, in loops over real rows that the compiler vectorises (numba's BLAS ``np.dot``
+    would add a second to the first compilation; from :data:`BLAS_MIN` the caller takes
+    numpy's instead)."""
+    m = V.shape[0]
+    n = m // 2
     Vi_re = np.empty((m, m))
     Vi_im = np.empty((m, m))
     for k in range(m):
         for c in range(m):
             Vi_re[k, c] = Vi[k, c].real
             Vi_im[k, c] = Vi[k, c].imag
-    out = np.zeros((m, m))
+            DPhi[k, c] = 0.0
     for r in range(m):
         for k in range(m):
-            a = Vd[r, k].real
-            b = Vd[r, k].imag
+            v = V[r, k] * em1[k]
+            a = v.real
+            b = v.imag
             for c in range(m):
-                out[r, c] += a * Vi_re[k, c] - b * Vi_im[k, c]
-    return out
+                DPhi[r, c] += a * Vi_re[k, c] - b * Vi_im[k, c]
+    for r in range(m):
+        for c in range(m):
+            DPhi[r, c] = (DPhi[r, c] + 1.0 if r == c else DPhi[r, c]) * (
+                -R if r == n else 1.0)
 
 
 @_jit
@@ -356,8 +365,8 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
     -------
     pieces : ndarray, shape (2n + 10, 2n)
         The real fields of :class:`~impactcont.orbit.general.PeriodicForm` as rows
-        (:func:`form_rows`): ``D Phi(T)``, then the columns of ``P0``, ``rate0``, ``E`` and
-        ``S``, then ``y`` and ``rate``.
+        (:func:`form_rows`): ``D Phi(T)`` (left unset from :data:`BLAS_MIN`: the caller's),
+        then the columns of ``P0``, ``rate0``, ``E`` and ``S``, then ``y`` and ``rate``.
     y_modal : ndarray, shape (2n,), complex
     scalars : ndarray, shape (7,)
         ``g, Delta, cond``, ``Re(V diag(lambda s'(lambda T)) V^-1 e_{n+1})`` at rows 1
@@ -404,15 +413,8 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
         for k in range(m):
             E[r, 0] -= (V[r, k] * VP[k, 0]).real
             E[r, 1] -= (V[r, k] * VP[k, 1]).real
-    Vd = np.empty((m, m), dtype=np.complex128)
-    for r in range(m):
-        for k in range(m):
-            Vd[r, k] = V[r, k] * em1[k]
-    transition = _re_product(Vd, Vi)
-    for r in range(m):
-        for c in range(m):
-            DPhi[r, c] = (transition[r, c] + 1.0 if r == c else transition[r, c]) * (
-                -R if r == n else 1.0)
+    if m < BLAS_MIN:  # else D Phi(T) by the caller (numpy's BLAS), its rows left unset
+        _transition_into(V, Vi, em1, R, DPhi)
     for r in range(m):
         acc = 0.0
         for c in range(m):
