@@ -27,7 +27,8 @@ from impactcont.plots.labels import coincident_groups, place_labels
 from impactcont.vocabulary import LABEL_MARKERS, LABEL_NAMES
 
 __all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "SEGMENT_STYLES", "SPECIAL_MARKERS",
-           "SPECIAL_NAMES", "axis_label", "bifurcation_diagram", "differing_parameters",
+           "SPECIAL_NAMES", "axis_label", "bifurcation_diagram", "diagram_legend",
+           "differing_parameters",
            "fit_text", "fixed_parameters", "label_specials", "legend_below", "legend_fontsize",
            "motion_text", "multipliers_plot", "parameter_text", "stability_segments",
            "system_text"]
@@ -300,6 +301,43 @@ def fit_text(text_artist: Any, width: float | None = None) -> None:
 def legend_fontsize(fig: Any) -> str:
     """``small`` on a figure of 5 in or more, ``x-small`` on a narrower one (one column)."""
     return "small" if fig.get_size_inches()[0] >= 5.0 else "x-small"
+
+
+def diagram_legend(ax: Axes, kinds_seen: Any, labels_seen: Any, grey: bool,
+                   branch_handles: Sequence[Any], where: str) -> None:
+    """The legend of a diagram of branches: the line styles and special-point markers
+    drawn, the grey marker of points on non-physical motions, then one entry per branch.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    kinds_seen, labels_seen : collection of str
+        The segment kinds (:data:`SEGMENT_STYLES`) and special labels drawn.
+    grey : bool
+        Whether grey (non-physical) special points are drawn.
+    branch_handles : sequence of artists
+        One per branch, last.
+    where : str
+        One of :data:`LEGEND_PLACES`; ``"none"`` draws nothing.
+    """
+    handles = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
+               for kind in _KINDS if kind in kinds_seen]
+    handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
+                       markersize=_MARKER_SIZE, markerfacecolor="white",
+                       markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
+                for label in SPECIAL_LABELS if label in labels_seen]
+    if grey:
+        handles.append(Line2D([], [], linestyle="none", marker="o",
+                              markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
+                              markeredgecolor=NONPHYSICAL_GREY,
+                              label="grey: on non-physical motion"))
+    handles += list(branch_handles)
+    if where == "below":
+        legend_below(ax, handles)
+    elif where == "right":
+        ax.legend(handles=handles, fontsize="small", **_OUTSIDE)
+    elif where == "inside":
+        ax.legend(handles=handles, fontsize="x-small", loc="best")
 
 
 def legend_below(ax: Axes, handles: Sequence[Any], *, fontsize: Any = None,
@@ -588,24 +626,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     if title is None:
         where = system_text([ds for _, ds in branches], skip=parameters)
         title = motion_text([ds for _, ds in branches]) + (f", {where}" if where else "")
-    handles = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
-               for kind in _KINDS if kind in kinds_seen]
-    handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
-                       markersize=_MARKER_SIZE, markerfacecolor="white",
-                       markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
-                for label in SPECIAL_LABELS if label in labels_seen]
-    if grey:
-        handles.append(Line2D([], [], linestyle="none", marker="o",
-                              markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
-                              markeredgecolor=NONPHYSICAL_GREY,
-                              label="grey: on non-physical motion"))
-    handles += branch_handles
-    if legend == "below":
-        legend_below(ax, handles)
-    elif legend == "right":
-        ax.legend(handles=handles, fontsize="small", **_OUTSIDE)
-    elif legend == "inside":
-        ax.legend(handles=handles, fontsize="x-small", loc="best")
+    diagram_legend(ax, kinds_seen, labels_seen, grey, branch_handles, legend)
     if title:
         ax.set_title(title, fontsize="medium")
         ax.figure.draw_without_rendering()

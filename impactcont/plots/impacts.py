@@ -26,18 +26,17 @@ from impactcont.plots.branches import (
     NONPHYSICAL_GREY,
     SEGMENT_STYLES,
     SPECIAL_MARKERS,
-    SPECIAL_NAMES,
     _borders_physical,
     _branches,
     _new_axes,
     _stops,
     _y_range,
     axis_label,
+    diagram_legend,
     differing_parameters,
     fit_text,
     fixed_parameters,
     label_specials,
-    legend_below,
     motion_text,
     parameter_text,
     stability_segments,
@@ -74,7 +73,6 @@ def _special_per_impact(ds: xr.Dataset, y: str, values: np.ndarray, k: int) -> n
 
 
 _MARKER_SIZE = 6.0  # points, as in the bifurcation diagrams
-_OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0}
 
 
 def impact_label(ds: xr.Dataset, y: str) -> str:
@@ -220,24 +218,7 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
     parameter = first.attrs["parameter"]
     ax.set_xlabel(axis_label(first, parameter))
     ax.set_ylabel(impact_label(first, y))
-    handles = [Line2D([], [], color="0.2", label=kind, **SEGMENT_STYLES[kind])
-               for kind in SEGMENT_STYLES if kind in kinds_seen]
-    handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
-                       markersize=_MARKER_SIZE, markerfacecolor="white",
-                       markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
-                for label in SPECIAL_LABELS if label in labels_seen]
-    if grey:
-        handles.append(Line2D([], [], linestyle="none", marker="o",
-                              markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
-                              markeredgecolor=NONPHYSICAL_GREY,
-                              label="grey: on non-physical motion"))
-    handles += branch_handles
-    if legend == "below":
-        legend_below(ax, handles)
-    elif legend == "right":
-        ax.legend(handles=handles, fontsize="small", **_OUTSIDE)
-    elif legend == "inside":
-        ax.legend(handles=handles, fontsize="x-small", loc="best")
+    diagram_legend(ax, kinds_seen, labels_seen, grey, branch_handles, legend)
     if title is None:
         datasets_ = [ds for _, ds in branches]
         where = system_text(datasets_, skip={parameter})
