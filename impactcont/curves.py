@@ -69,7 +69,7 @@ from impactcont.progress import ProgressOption, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import Label
 
-__all__ = ["check_curve_arguments", "curve", "curve_crossings"]
+__all__ = ["check_curve_arguments", "crossing_steps", "curve", "curve_crossings"]
 
 log = logging.getLogger(__name__)
 
@@ -591,6 +591,21 @@ def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
                               event_points=[user_event_record(ev, names) for ev in found])
 
 
+def crossing_steps(values: np.ndarray, value: float) -> list[tuple[int, float]]:
+    """The steps ``k -> k + 1`` of a polyline that cross ``value``, with the fraction
+    ``t`` of the step where the chord does.
+
+    A crossing exactly at a point is reported once (on the step that ends there), and a
+    step along ``value`` (both ends equal) is none.
+    """
+    kept: list[int] = []
+    for k in np.flatnonzero((values[:-1] - value) * (values[1:] - value) <= 0):
+        if values[k] == values[k + 1] or (kept and kept[-1] == k - 1 and values[k] == value):
+            continue
+        kept.append(int(k))
+    return [(k, float((value - values[k]) / (values[k + 1] - values[k]))) for k in kept]
+
+
 def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[str, float]]:
     """Exact points where a continued curve crosses the line ``parameter = value``.
 
@@ -627,10 +642,7 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
     p = np.asarray(ds[parameter].values, dtype=float)
     index = parameters.index(parameter)
     out = []
-    for k in np.flatnonzero((p[:-1] - value) * (p[1:] - value) <= 0):
-        if p[k] == p[k + 1] or (k > 0 and p[k] == value and out and out[-1]["point"] == k - 1):
-            continue
-        t = (value - p[k]) / (p[k + 1] - p[k])
+    for k, t in crossing_steps(p, value):
         row = {name: float(ds[name].values[k] + t * (ds[name].values[k + 1]
                                                       - ds[name].values[k]))
                for name in parameters}

@@ -28,6 +28,7 @@ import xarray as xr
 from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.curves import crossing_steps
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.records import reserved_names
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
@@ -274,11 +275,7 @@ def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
     symmetric = problem.symmetric
     values = np.asarray(ds[parameter].values, dtype=float)
     out: list[dict[str, float]] = []
-    for k in np.flatnonzero((values[:-1] - value) * (values[1:] - value) <= 0):
-        if values[k] == values[k + 1] or (out and out[-1]["point"] == k - 1
-                                          and values[k] == value):
-            continue
-        t = (value - values[k]) / (values[k + 1] - values[k])
+    for k, t in crossing_steps(values, value):
         xs = []
         for i in (k, k + 1):  # the stored motions as unknowns of the curve problem
             lam = float(ds[problem.parameters[1]].values[i])
