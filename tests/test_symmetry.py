@@ -76,20 +76,22 @@ def _bps(ds):
 def test_symmetric_and_asymmetric_motions(symmetric, asymmetric):
     assert symmetric_system(symmetric.oscillator)
     assert admits_symmetric_motions(symmetric.oscillator, 1, 2, symmetric.pattern)
-    assert symmetry_defect(symmetric) < 1e-12
+    # Newton stops at a residual of 1e-12 max(1, |u|) (|u| ~ 5 with the flight times) and
+    # the shooting Jacobian's condition is ~11: the motion is known to ~1e-10, not to eps
+    assert symmetry_defect(symmetric) < 1e-10
     assert symmetry_defect(asymmetric) > 1e-2
     # G = H^2 on the symmetric motion only
     H = half_map(symmetric)
-    assert np.max(np.abs(H @ H - symmetric.G)) < 1e-12 * max(1.0, np.max(np.abs(H)) ** 2)
+    assert np.max(np.abs(H @ H - symmetric.G)) < 1e-9 * max(1.0, np.max(np.abs(H)) ** 2)
     Ha = half_map(asymmetric)
     assert np.max(np.abs(Ha @ Ha - asymmetric.G)) > 1e-3
 
 
 def test_mirror_image(symmetric, asymmetric):
     same = mirror_image(symmetric)
-    assert np.max(np.abs(same.states - symmetric.states)) < 1e-12
+    assert np.max(np.abs(same.states - symmetric.states)) < 1e-10
     other = mirror_image(asymmetric)
-    assert other.residual < 1e-12  # a motion of the system
+    assert other.residual < 1e-10  # a motion of the system (Newton's tolerance)
     assert np.max(np.abs(other.states - asymmetric.states)) > 1e-2  # another one
     np.testing.assert_allclose(np.sort_complex(other.multipliers),
                                np.sort_complex(asymmetric.multipliers), atol=1e-10)
@@ -124,8 +126,8 @@ def test_half_system_derivatives_are_exact(symmetric, parameter):
     problem = SymmetricBranchProblem(osc, 1, 2, parameter, symmetric.pattern)
     lam = float(getattr(osc, parameter))
     v = problem.half_unknowns(symmetric.unknowns)
-    assert np.max(np.abs(problem.residual(v, lam))) < 1e-12
-    np.testing.assert_allclose(problem.full_unknowns(v, lam), symmetric.unknowns, atol=1e-13)
+    assert np.max(np.abs(problem.residual(v, lam))) < 1e-10  # Newton's tolerance
+    np.testing.assert_allclose(problem.full_unknowns(v, lam), symmetric.unknowns, atol=1e-10)
     h = 1e-6
     J_fd = np.column_stack([(problem.residual(v + h * e, lam) - problem.residual(v - h * e, lam))
                             / (2 * h) for e in np.eye(v.size)])
@@ -325,7 +327,7 @@ def test_mirrored_stops_follow_b_and_r():
     # the same motions as the equal stops given by value
     o = settled(osc)
     same = multi_impact_orbit(backlash(1.6), 1, 2, o)
-    assert np.max(np.abs(o.states - same.states)) < 1e-12
+    assert np.max(np.abs(o.states - same.states)) < 1e-10
     with pytest.raises(ParameterError, match="give no b_low"):
         Stops(mirror=True, b_low=0.5)
     with pytest.raises(ParameterError, match="need b > 0"):
