@@ -22,23 +22,24 @@ from typing import TYPE_CHECKING, Any
 
 #: Public name -> the module that defines it.
 _EXPORTS: dict[str, str] = {
-    **dict.fromkeys(("continuation", "continuation_from", "extend"), "impactcont.branch"),
+    **dict.fromkeys(("continuation", "continuation_from", "extend"), "impactcont.analysis.branch"),
     **dict.fromkeys(("ContinuationOptions", "ContinuationStatus"), "impactcont.core"),
-    **dict.fromkeys(("curve", "curve_crossings"), "impactcont.curves"),
+    **dict.fromkeys(("curve", "curve_crossings"), "impactcont.analysis.curves"),
     **dict.fromkeys(("load", "save"), "impactcont.dataset"),
     "open_lazy": "impactcont.dataset.io",
     **dict.fromkeys(("IllConditionedWarning", "ImpactcontError", "LowImpactVelocityWarning",
                      "NearFoldWarning", "NearResonanceWarning", "NoPeriodicMotionError",
                      "ParameterError", "ResonanceError", "UnresolvedMotionWarning"),
                     "impactcont.errors"),
-    "stability_map": "impactcont.maps",
+    "stability_map": "impactcont.analysis.maps",
     "ModalBasis": "impactcont.model.modal",
     **dict.fromkeys(("ImpactOscillator", "chain_stiffness"), "impactcont.model.oscillator"),
     "Stops": "impactcont.model.stops",
-    "multi_impact_continuation": "impactcont.multi_branch",
+    "multi_impact_continuation": "impactcont.analysis.multi_branch",
     **dict.fromkeys(("multi_impact_curve", "multi_impact_curve_crossings"),
-                    "impactcont.multi_curves"),
-    **dict.fromkeys(("multi_impact_map", "multi_impact_map_orbit"), "impactcont.multi_maps"),
+                    "impactcont.analysis.multi_curves"),
+    **dict.fromkeys(("multi_impact_map", "multi_impact_map_orbit"),
+                    "impactcont.analysis.multi_maps"),
     "Flow": "impactcont.orbit.flow",
     **dict.fromkeys(("displacement_extrema", "max_displacement", "min_displacement"),
                     "impactcont.orbit.extrema"),
@@ -53,7 +54,7 @@ _EXPORTS: dict[str, str] = {
                     "impactcont.simulate.simulator"),
     **dict.fromkeys(("Cascade", "grazing_switch", "period_doubling_cascade",
                      "period_doubling_switch", "pitchfork_switch", "special_orbit"),
-                    "impactcont.switching"),
+                    "impactcont.analysis.switching"),
     "core": "impactcont.core",
 }
 
@@ -135,9 +136,21 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
     from impactcont import core  # noqa: F401
-    from impactcont.branch import continuation, continuation_from, extend
+    from impactcont.analysis.branch import continuation, continuation_from, extend
+    from impactcont.analysis.curves import curve, curve_crossings
+    from impactcont.analysis.maps import stability_map
+    from impactcont.analysis.multi_branch import multi_impact_continuation
+    from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
+    from impactcont.analysis.multi_maps import multi_impact_map, multi_impact_map_orbit
+    from impactcont.analysis.switching import (
+        Cascade,
+        grazing_switch,
+        period_doubling_cascade,
+        period_doubling_switch,
+        pitchfork_switch,
+        special_orbit,
+    )
     from impactcont.core import ContinuationOptions, ContinuationStatus
-    from impactcont.curves import curve, curve_crossings
     from impactcont.dataset import load, save
     from impactcont.dataset.io import open_lazy
     from impactcont.errors import (
@@ -151,13 +164,9 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
         ResonanceError,
         UnresolvedMotionWarning,
     )
-    from impactcont.maps import stability_map
     from impactcont.model.modal import ModalBasis
     from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
     from impactcont.model.stops import Stops
-    from impactcont.multi_branch import multi_impact_continuation
-    from impactcont.multi_curves import multi_impact_curve, multi_impact_curve_crossings
-    from impactcont.multi_maps import multi_impact_map, multi_impact_map_orbit
     from impactcont.orbit.extrema import (
         displacement_extrema,
         max_displacement,
@@ -185,14 +194,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
         SimulationResult,
         SimulationStatus,
         simulate,
-    )
-    from impactcont.switching import (
-        Cascade,
-        grazing_switch,
-        period_doubling_cascade,
-        period_doubling_switch,
-        pitchfork_switch,
-        special_orbit,
     )
 
 __all__ = [

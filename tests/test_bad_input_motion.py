@@ -16,9 +16,9 @@ from test_general_damping import _augmented
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate
+from impactcont.analysis.multi_branch import make_options, multi_impact_continuation, trace_branch
 from impactcont.errors import IllConditionedWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.stops import Stops
-from impactcont.multi_branch import make_options, multi_impact_continuation, trace_branch
 from impactcont.orbit.flow import Mass1Motion
 from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem

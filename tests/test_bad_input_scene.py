@@ -19,8 +19,8 @@ from _scene_data import ORBITS_SCENE, OSCILLATOR, write
 from matplotlib.figure import Figure
 
 from impactcont import ImpactOscillator, Stops, continuation, robust_stability
+from impactcont.analysis.curves import curve
 from impactcont.cli import EXIT_OK, EXIT_USAGE, main
-from impactcont.curves import curve
 from impactcont.errors import ParameterError
 from impactcont.scene import SceneError, load_scene, run_scene
 from impactcont.scene.figures import plot_file, save_figure

@@ -190,7 +190,7 @@ def test_a_component_that_cannot_start_is_reported_not_fatal(monkeypatch):
     root): the branch keeps the components that started and warns about the one that did
     not (it crashed with an IndexError in the event search before). The undamped chain's
     own second seed failed until eq. (14) was scaled by |c, s| (issue 19); it starts now."""
-    import impactcont.branch as branch_module
+    import impactcont.analysis.branch as branch_module
     from impactcont.orbit.periodic import amplitude_squared, orbit_at_phase
 
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[2.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,

@@ -10,8 +10,8 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.curves import curve, curve_crossings
-from impactcont.maps import stability_map
+from impactcont.analysis.curves import curve, curve_crossings
+from impactcont.analysis.maps import stability_map
 from impactcont.orbit.periodic import orbit_at_phase
 
 BOX = {"omega": (0.6, 2.0), "b": (0.0, 0.6)}

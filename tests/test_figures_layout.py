@@ -27,9 +27,9 @@ from matplotlib.markers import MarkerStyle
 from matplotlib.text import Annotation, Text
 
 import impactcont as ic
+from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.multi_maps import multi_impact_map
 from impactcont.model.stops import Stops
-from impactcont.multi_branch import multi_impact_continuation
-from impactcont.multi_maps import multi_impact_map
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.plots import SPECIAL_MARKERS, bifurcation_diagram, multipliers_plot
 from impactcont.plots.impacts import impact_diagram

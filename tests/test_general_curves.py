@@ -14,7 +14,7 @@ import pytest
 from _scene_data import OSCILLATOR, write
 
 import impactcont as ic
-from impactcont.curves import curve, curve_crossings
+from impactcont.analysis.curves import curve, curve_crossings
 from impactcont.errors import ParameterError
 from impactcont.orbit import general
 from impactcont.orbit.dense import impact_map_jacobian

@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.maps import stability_map
+from impactcont.analysis.maps import stability_map
 
 OMEGA = np.linspace(0.5, 6.0, 23)
 GAP = np.linspace(-1.0, 2.0, 13)
@@ -80,7 +80,7 @@ def test_dask_distributed_local_cluster(paper, serial_map):
 
 
 def test_two_parameter_figure(paper, serial_map, tmp_path):
-    from impactcont.curves import curve
+    from impactcont.analysis.curves import curve
     from impactcont.plots.maps import region_codes, two_parameter_figure
 
     codes = region_codes(serial_map, 1)
@@ -116,7 +116,7 @@ def test_a_map_written_to_disk_opens_lazily_and_equals_the_in_memory_one(paper, 
 
 def test_a_map_larger_than_the_memory_limit_goes_to_a_file(paper, serial_map, caplog):
     pytest.importorskip("dask")
-    with caplog.at_level("WARNING", logger="impactcont.maps"):
+    with caplog.at_level("WARNING", logger="impactcont.analysis.maps"):
         lazy = stability_map(paper, [1, 2, 3], OMEGA, GAP, memory_limit=1e4)
     assert "more than memory_limit" in caplog.text
     path = lazy.encoding["source"]

@@ -28,7 +28,7 @@ import xarray as xr
 
 import impactcont as ic
 from impactcont import maps
-from impactcont.maps import stability_map
+from impactcont.analysis.maps import stability_map
 
 OMEGA = np.linspace(0.5, 6.0, 23)
 GAP = np.linspace(-1.0, 2.0, 13)
@@ -118,7 +118,7 @@ def test_long_b_grids_are_split_and_give_the_same_values(paper):
 def test_the_temporary_file_of_a_map_goes_when_the_map_is_closed(paper, caplog):
     pytest.importorskip("dask")
     serial = stability_map(paper, [1, 2, 3], OMEGA, GAP)
-    with caplog.at_level("WARNING", logger="impactcont.maps"):
+    with caplog.at_level("WARNING", logger="impactcont.analysis.maps"):
         lazy = stability_map(paper, [1, 2, 3], OMEGA, GAP, memory_limit=1e4)
     path = Path(lazy.encoding["source"])
     assert str(path) in caplog.text and path.is_file()
@@ -190,7 +190,7 @@ def test_the_tasks_of_a_killed_worker_are_retried_once(paper, monkeypatch, tmp_p
     monkeypatch.setattr(maps, "_map_task", functools.partial(_dies_once,
                                                              str(tmp_path / "died")))
     out = tmp_path / "map.nc" if to_file else None
-    with _fork_pool() as pool, caplog.at_level("WARNING", logger="impactcont.maps"):
+    with _fork_pool() as pool, caplog.at_level("WARNING", logger="impactcont.analysis.maps"):
         retried = stability_map(paper, [1, 2, 3], OMEGA, GAP, executor=pool, omega_block=4,
                                 out=out)
     assert (tmp_path / "died").exists()

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import initial_unknowns, orbit_from_unknowns
 from impactcont.orbit.symmetry import half_map

@@ -9,8 +9,14 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
+from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.switching import (
+    critical_direction,
+    grazing_switch,
+    period_doubling_switch,
+    special_orbit,
+)
 from impactcont.dataset.multi import impacts_of, validate_multi_impact_dataset
-from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import (
     initial_unknowns,
@@ -19,12 +25,6 @@ from impactcont.orbit.multi_impact import (
     shooting,
 )
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
-from impactcont.switching import (
-    critical_direction,
-    grazing_switch,
-    period_doubling_switch,
-    special_orbit,
-)
 
 PD_OMEGA = 1.70038303473  # N = 1 PD of the paper's system at b = 0 (test_branch finds it too)
 

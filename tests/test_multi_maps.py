@@ -18,10 +18,10 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
+from impactcont.analysis.multi_maps import multi_impact_map, multi_impact_map_orbit
 from impactcont.dataset.multi_maps import validate_multi_impact_map_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.multi_maps import multi_impact_map, multi_impact_map_orbit
 from impactcont.orbit.symmetry import symmetry_defect
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]

@@ -9,7 +9,7 @@ import pytest
 
 import impactcont as ic
 import impactcont.progress as progress_module
-from impactcont.multi_curves import multi_impact_curve
+from impactcont.analysis.multi_curves import multi_impact_curve
 from impactcont.progress import Progress, Reporter
 
 

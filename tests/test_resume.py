@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.branch import continuation_from, extend
+from impactcont.analysis.branch import continuation_from, extend
 from impactcont.errors import ParameterError
 
 TOL = 1e-9  # the branches' Newton tolerance is 1e-12 (N-1) and 1e-11 (N-p)

@@ -11,7 +11,7 @@ from impactcont.cli import EXIT_OK, main
 from impactcont.scene import SceneError, load_scene, read_output, run_scene, scene_sections
 
 pytestmark = pytest.mark.skipif("curves" not in scene_sections(),
-                                reason="impactcont.curves / impactcont.maps not present")
+                                reason="impactcont.analysis.curves / .maps not present")
 
 BRANCH = '[[branches]]\nname = "br"\nb = 0.5\nbounds = [0.9, 1.5]\n'
 BOX = "bounds = { omega = [0.9, 1.6], b = [0.45, 0.7] }\n"

@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.switching import pitchfork_switch
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns
 from impactcont.orbit.symmetry import (
@@ -31,7 +32,6 @@ from impactcont.orbit.symmetry import (
 )
 from impactcont.plots import bifurcation_diagram
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
-from impactcont.switching import pitchfork_switch
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
 PAPER_C = [[0.2, -0.2], [-0.2, 0.4]]  # 2 eta K, eta = 0.1, as a matrix

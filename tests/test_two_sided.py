@@ -17,15 +17,15 @@ import pytest
 import scipy.optimize
 
 import impactcont as ic
+from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.switching import grazing_switch, special_orbit
 from impactcont.dataset.multi import pattern_of, validate_multi_impact_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops, check_pattern
-from impactcont.multi_branch import multi_impact_continuation
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import multi_impact_orbit, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.simulate import SimulationStatus
-from impactcont.switching import grazing_switch, special_orbit
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
 

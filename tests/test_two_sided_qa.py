@@ -154,7 +154,7 @@ def test_asymmetry_ignores_halves_on_different_stops():
     sits at +-pi, whose sign flips by rounding and would end the branch spuriously."""
     from types import SimpleNamespace
 
-    from impactcont.multi_branch import _asymmetry
+    from impactcont.analysis.multi_branch import _asymmetry
 
     def orbit(pattern, dphase):
         return SimpleNamespace(N=2, p=2, pattern=pattern, phases=np.array([0.0, dphase]),

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.branch import continuation_from
+from impactcont.analysis.branch import continuation_from
+from impactcont.analysis.multi_curves import multi_impact_curve
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.multi_curves import multi_impact_curve
 from impactcont.orbit.extrema import displacement_extrema, max_displacement, min_displacement
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]

@@ -1,7 +1,7 @@
 """The schema of two-parameter datasets: codim-1 curves and (N, omega, b) maps.
 
-The one place that knows how a continued curve (:func:`impactcont.curves.curve`)
-and a grid map (:func:`impactcont.maps.stability_map`) are laid out in an
+The one place that knows how a continued curve (:func:`impactcont.analysis.curves.curve`)
+and a grid map (:func:`impactcont.analysis.maps.stability_map`) are laid out in an
 :class:`xarray.Dataset`. Both carry the attribute ``impactcont_dataset``
 (``"curve"`` or ``"map"``); a branch dataset has none. :func:`validate_dataset`
 dispatches on it, so :func:`impactcont.dataset.save` / ``load`` handle all three.

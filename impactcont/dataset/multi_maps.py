@@ -1,6 +1,6 @@
 """The schema of a stability map of one N-p motion family over two parameters.
 
-:func:`impactcont.multi_maps.multi_impact_map` follows one family of N-p motions over
+:func:`impactcont.analysis.multi_maps.multi_impact_map` follows one family of N-p motions over
 a grid of two parameters; this module lays the result out as an
 :class:`xarray.Dataset` (:func:`multi_impact_map_dataset`) and checks that layout
 (:func:`validate_multi_impact_map_dataset`). Layout documented in

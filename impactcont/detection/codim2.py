@@ -24,7 +24,7 @@ tests are skipped on ZV curves, where ``G`` has its pole (eq. 25). As on
 branches, a PD sign change without a multiplier at -1 (through the pole) and an
 NS sign change at a neutral saddle are discarded.
 
-Curve ends, found while continuing (:func:`impactcont.curves.curve`) rather than
+Curve ends, found while continuing (:func:`impactcont.analysis.curves.curve`) rather than
 here: an NS curve ends at ``theta -> 0`` (``R1``, 1:1 resonance) or
 ``theta -> pi`` (``R2``, 1:2), the points that SN and PD curves meet as a double
 multiplier +1 or -1 and name the same, a GR curve where the tangency time reaches the

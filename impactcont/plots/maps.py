@@ -1,7 +1,7 @@
 """Two-parameter diagrams: map regions shaded per N, continued curves drawn on top.
 
-The functions read map datasets (:func:`impactcont.maps.stability_map`) and
-curve datasets (:func:`impactcont.curves.curve`); they never compute orbits and
+The functions read map datasets (:func:`impactcont.analysis.maps.stability_map`) and
+curve datasets (:func:`impactcont.analysis.curves.curve`); they never compute orbits and
 never call ``plt.show``.
 """
 

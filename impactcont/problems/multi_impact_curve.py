@@ -1,6 +1,6 @@
 """Codim-1 curves of N-p motions: any branch problem augmented by one test function.
 
-A special point of a branch of N-p motions (:mod:`impactcont.multi_branch`) is a zero
+A special point of a branch of N-p motions (:mod:`impactcont.analysis.multi_branch`) is a zero
 of a scalar test function ``g`` of the motion. Followed in two parameters ``(p1, p2)``
 it is the curve
 

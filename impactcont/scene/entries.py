@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from impactcont.branch import check_continuation_arguments, continuation
+from impactcont.analysis.branch import check_continuation_arguments, continuation
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness

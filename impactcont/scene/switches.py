@@ -5,7 +5,7 @@ entry, or an earlier ``[[switches]]`` entry, so that entries chain into a cascad
 at one of its period-doubling points (:func:`impactcont.period_doubling_switch`: the
 2N-2p motion), grazing points (:func:`impactcont.grazing_switch`: the motion with
 one more impact) or symmetry-breaking pitchforks of a symmetric N-p branch
-(:func:`impactcont.switching.pitchfork_branch`: one motion of the asymmetric pair,
+(:func:`impactcont.analysis.switching.pitchfork_branch`: one motion of the asymmetric pair,
 ``side`` +1 or -1), and follows the new branch with
 :func:`impactcont.multi_impact_continuation`'s options. The dataset is an N-p
 branch (``docs/multi_impact.md``), described and drawn as the branches are.
@@ -30,10 +30,11 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.multi_branch import make_options, multi_impact_continuation
+from impactcont.analysis.switching import grazing_switch, period_doubling_switch, pitchfork_branch
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.multi_branch import make_options, multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
@@ -57,7 +58,6 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.scene.tasks import BRANCHES, markdown_table
-from impactcont.switching import grazing_switch, period_doubling_switch, pitchfork_branch
 from impactcont.vocabulary import check_parameter
 
 __all__ = [
@@ -137,7 +137,7 @@ def _origin(entry: SwitchSpec, sections: Mapping[str, tuple[EntrySpec, ...]]) ->
 
 class Switches:
     """``[[switches]]``: :func:`~impactcont.period_doubling_switch`,
-    :func:`~impactcont.grazing_switch` or :func:`~impactcont.switching.pitchfork_branch`."""
+    :func:`~impactcont.grazing_switch` or :func:`~impactcont.pitchfork_branch`."""
 
     def compute(self, entry: SwitchSpec, context: Any) -> xr.Dataset:
         t0 = time.perf_counter()

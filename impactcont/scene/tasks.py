@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.branch import continuation
+from impactcont.analysis.branch import continuation
 from impactcont.dataset import special_variable, state_component_names
 from impactcont.errors import NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator

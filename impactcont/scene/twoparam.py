@@ -1,11 +1,11 @@
 """Scene sections for two-parameter studies: ``[[curves]]`` and ``[[maps]]``.
 
 ``[[curves]]`` continues a codim-1 curve (SN, PD, NS, GR or ZV) in two
-parameters with :func:`impactcont.curves.curve`, started from a special point
+parameters with :func:`impactcont.analysis.curves.curve`, started from a special point
 of a computed ``[[branches]]`` entry, from explicit values, or from a
 one-parameter continuation; ``[[maps]]`` evaluates the existence,
 physicality and stability of every N-1 motion on an ``(omega, b)`` grid with
-:func:`impactcont.maps.stability_map`. Both datasets follow
+:func:`impactcont.analysis.maps.stability_map`. Both datasets follow
 :mod:`impactcont.dataset.curves` (``docs/two_parameter.md``). The sections are
 registered by :mod:`impactcont.scene.sections`.
 """
@@ -22,9 +22,9 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
-from impactcont.curves import check_curve_arguments, curve
+from impactcont.analysis.curves import check_curve_arguments, curve
+from impactcont.analysis.maps import stability_map
 from impactcont.errors import ImpactcontError
-from impactcont.maps import stability_map
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.problems.codim1 import curve_problem
 from impactcont.scene.entries import (
@@ -154,7 +154,7 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
             self._check_arguments(where, osc)
 
     def _check_arguments(self, where: Where, osc: ImpactOscillator) -> None:
-        """The checks :func:`impactcont.curves.curve` makes before it computes, on the
+        """The checks :func:`impactcont.analysis.curves.curve` makes before it computes, on the
         arguments :meth:`Curves.compute` passes (``osc`` is the branch's for a start from a
         branch)."""
         keys = ("kind", "N", "parameters", "bounds", "start", "special", "root",
@@ -207,7 +207,7 @@ def _span(v: np.ndarray) -> str:
 
 
 class Curves:
-    """``[[curves]]``: :func:`impactcont.curves.curve`."""
+    """``[[curves]]``: :func:`impactcont.analysis.curves.curve`."""
 
     def compute(self, entry: CurveSpec, context: Any = None) -> xr.Dataset:
         t0 = time.perf_counter()
@@ -287,7 +287,7 @@ class MapSpec(EntrySpec):
 
 
 class Maps:
-    """``[[maps]]``: :func:`impactcont.maps.stability_map`."""
+    """``[[maps]]``: :func:`impactcont.analysis.maps.stability_map`."""
 
     def compute(self, entry: MapSpec, context: Any = None) -> xr.Dataset:
         t0 = time.perf_counter()

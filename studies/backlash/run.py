@@ -54,7 +54,7 @@ import numpy as np
 import xarray as xr
 
 import impactcont as ic
-from impactcont.multi_curves import multi_impact_curve, multi_impact_curve_crossings
+from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 
 log = logging.getLogger("backlash")

@@ -52,16 +52,16 @@ import numpy as np
 import xarray as xr
 
 import impactcont as ic
-from impactcont.dataset.multi import impacts_of
-from impactcont.multi_branch import multi_impact_continuation
-from impactcont.orbit.multi_impact import multi_impact_orbit, primitive_orbit
-from impactcont.plots.impacts import impact_diagram
-from impactcont.switching import (
+from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.switching import (
     grazing_switch,
     period_doubling_cascade,
     period_doubling_switch,
     special_orbit,
 )
+from impactcont.dataset.multi import impacts_of
+from impactcont.orbit.multi_impact import multi_impact_orbit, primitive_orbit
+from impactcont.plots.impacts import impact_diagram
 
 log = logging.getLogger("cascades")
 

@@ -4,12 +4,12 @@ System (EQUATIONS.md section 6): n = 2, M = I, K = [[1, -1], [-1, 2]], eta = 0.1
 R = 0.6, F = [1, 0]; omega in [0.5, 6], b in [-1, 2].
 
 1. A grid map of existence, physicality and stability (batched closed form,
-   :func:`impactcont.maps.stability_map`), timed serially and on a process pool.
+   :func:`impactcont.analysis.maps.stability_map`), timed serially and on a process pool.
 2. Seeds for the boundaries read off the map: every sign change of the relevant
    quantity between two neighbouring grid cells along omega (on every
    ``SEED_STRIDE``-th row of b) where a physical motion is involved, unless a
    curve already computed passes through that cell.
-3. Each seed continued as a codim-1 curve (:func:`impactcont.curves.curve`): SN,
+3. Each seed continued as a codim-1 curve (:func:`impactcont.analysis.curves.curve`): SN,
    PD, NS, GR (and ZV once: it does not depend on N), with its codim-2 points.
 4. Checks: SN against b^2 = c^2 + s^2; ZV against the linear response; every
    curve crossing of every grid row against the map's edges; and the simulator on
@@ -43,8 +43,8 @@ import numpy as np
 import xarray as xr
 
 import impactcont as ic
-from impactcont.curves import curve, curve_crossings
-from impactcont.maps import stability_map
+from impactcont.analysis.curves import curve, curve_crossings
+from impactcont.analysis.maps import stability_map
 from impactcont.orbit.periodic import orbit_at_phase
 from impactcont.plots.maps import two_parameter_figure
 

@@ -26,7 +26,7 @@ CHILD = r"""
 import json, sys, time, os
 import numpy as np
 import impactcont as ic
-from impactcont.maps import stability_map
+from impactcont.analysis.maps import stability_map
 side = int(sys.argv[1]); kw = json.loads(sys.argv[2])
 osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.5,
                           omega=1.0, eta=0.1)

@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import minimize_scalar
 
+from impactcont.analysis.multi_branch import restart_problem, run_branch
 from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
@@ -50,7 +51,6 @@ from impactcont.detection.special_points import (
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.multi_branch import restart_problem, run_branch
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.progress import ProgressOption, Reporter, reporter
@@ -644,7 +644,7 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     """Restart the continuation of a branch from one of its points or special points.
 
     Works on an N-1 branch (:func:`continuation`) and an N-p branch
-    (:func:`~impactcont.multi_branch.multi_impact_continuation`, a switch), computed
+    (:func:`~impactcont.analysis.multi_branch.multi_impact_continuation`, a switch), computed
     now or loaded from its file (:func:`impactcont.load`). The motion there is
     corrected by Newton on the problem the branch was followed on (the half system of
     a symmetric N-p branch) and followed with the branch's recorded options (those

@@ -24,7 +24,7 @@ Memory: the map's arrays are made once and each task's block is copied in (or
 written to the file) as it finishes, with ``2 x workers`` tasks submitted at once;
 `memory_limit` bounds the peak, and a map that does not fit in it goes to a
 temporary file, returned lazily and removed when closed
-(:mod:`impactcont.map_storage`). ``docs/two_parameter.md`` has the measurements.
+(:mod:`impactcont.dataset.map_storage`). ``docs/two_parameter.md`` has the measurements.
 """
 
 from __future__ import annotations
@@ -49,8 +49,8 @@ import xarray as xr
 
 from impactcont.dataset.curves import map_dataset
 from impactcont.dataset.io import open_lazy, save_blocks
+from impactcont.dataset.map_storage import open_temporary_map, temporary_map_file
 from impactcont.errors import ParameterError
-from impactcont.map_storage import open_temporary_map, temporary_map_file
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.periodic import _check_N

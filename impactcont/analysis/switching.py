@@ -48,13 +48,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.multi_branch import make_options, run_branch
 from impactcont.core import ContinuationOptions
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.errors import NoPeriodicMotionError, ParameterError
-from impactcont.multi_branch import make_options, run_branch
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     initial_unknowns,
@@ -109,7 +109,7 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
     ----------
     branch : xarray.Dataset
         A branch dataset of :func:`impactcont.continuation` or of
-        :func:`impactcont.multi_branch.multi_impact_continuation`.
+        :func:`impactcont.analysis.multi_branch.multi_impact_continuation`.
     label : str
         ``"PD"``, ``"GR"``, ...
     which : int
@@ -695,7 +695,7 @@ def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
     ----------
     branch : xarray.Dataset
         A branch of symmetric motions with a BP point
-        (:func:`impactcont.multi_branch.multi_impact_continuation` of a symmetric motion).
+        (:func:`impactcont.analysis.multi_branch.multi_impact_continuation` of a symmetric motion).
     which : int
         Which BP point (index among the BP points, branch order).
     side : {1, -1}

@@ -424,7 +424,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         ``R_low == R``; N odd, the pattern's second half the mirror of its first) as
         such: its half-motion closed by the reflection, regular through the
         symmetry-breaking pitchforks, which are located and labelled ``BP``
-        (:func:`impactcont.switching.pitchfork_switch` follows the asymmetric pair born
+        (:func:`impactcont.analysis.switching.pitchfork_switch` follows the asymmetric pair born
         there). ``None`` (default): when the start is symmetric and `parameter` keeps
         the system symmetric (not ``b`` or ``R``, unless ``Stops(mirror=True)``).
         ``False``: as any N-p motion (its shooting Jacobian is singular at a pitchfork;
@@ -476,8 +476,8 @@ def restart_problem(branch: xr.Dataset, row: int, *, special: bool = False
                     ) -> tuple[BranchProblem, np.ndarray, float]:
     """The problem of an N-p branch dataset and the unknowns of one of its motions.
 
-    What a restart of the branch (:func:`impactcont.branch.continuation_from`,
-    :func:`impactcont.branch.extend`) continues from: the problem the branch was
+    What a restart of the branch (:func:`impactcont.analysis.branch.continuation_from`,
+    :func:`impactcont.analysis.branch.extend`) continues from: the problem the branch was
     followed on (its half system when the options record ``symmetric``) at the
     oscillator of the motion.
 

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.branch import continuation
+from impactcont.analysis.branch import continuation
 from impactcont.core import (
     ContinuationOptions,
     ContinuationPoint,

@@ -25,10 +25,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.curves import crossing_steps
+from impactcont.analysis.multi_branch import MultiImpactSample, branch_to_dataset
+from impactcont.analysis.switching import special_orbit
 from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
-from impactcont.curves import crossing_steps
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.records import reserved_names
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
@@ -36,11 +38,9 @@ from impactcont.detection.multi_impact import locate_multi_impact_events
 from impactcont.detection.special_points import check_user_functions
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.multi_branch import MultiImpactSample, branch_to_dataset
 from impactcont.orbit.multi_impact import initial_unknowns
 from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
 from impactcont.progress import ProgressOption, reporter
-from impactcont.switching import special_orbit
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
 
@@ -306,7 +306,7 @@ def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
 
 
 class _CurveView:
-    """What :func:`~impactcont.multi_branch.branch_to_dataset` reads of a problem."""
+    """What :func:`~impactcont.analysis.multi_branch.branch_to_dataset` reads of a problem."""
 
     def __init__(self, problem: MultiImpactCurveProblem, parameter: str, osc: Any) -> None:
         self.parameter, self.osc = parameter, osc
