@@ -137,7 +137,8 @@ def _origin(entry: SwitchSpec, sections: Mapping[str, tuple[EntrySpec, ...]]) ->
 
 class Switches:
     """``[[switches]]``: :func:`~impactcont.period_doubling_switch`,
-    :func:`~impactcont.grazing_switch` or :func:`~impactcont.pitchfork_branch`."""
+    :func:`~impactcont.grazing_switch` or
+    :func:`~impactcont.analysis.switching.pitchfork_branch`."""
 
     def compute(self, entry: SwitchSpec, context: Any) -> xr.Dataset:
         t0 = time.perf_counter()
