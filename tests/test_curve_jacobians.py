@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.orbit import kernel
+from impactcont.kernel import closed_form as kernel
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import periodic_orbits

@@ -1,4 +1,4 @@
-"""The compiled first-order path (:mod:`impactcont.orbit.general_kernel`) against its
+"""The compiled first-order path (:mod:`impactcont.kernel.general`) against its
 numpy reference (:func:`impactcont.orbit.general.reference_form`,
 :func:`~impactcont.orbit.general.reference_orbit_values`,
 :meth:`~impactcont.model.first_order.FirstOrderBasis.forced_amplitude_reference`).
@@ -20,8 +20,9 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.kernel import general as general_kernel
 from impactcont.model import first_order
-from impactcont.orbit import dense, general, general_kernel
+from impactcont.orbit import dense, general
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import orbit_at_phase
 

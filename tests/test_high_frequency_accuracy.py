@@ -25,8 +25,9 @@ import reference_mp as ref
 
 import impactcont as ic
 from impactcont.errors import IllConditionedWarning, ParameterError
+from impactcont.kernel import closed_form as kernel
 from impactcont.model.first_order import coth_remainder
-from impactcont.orbit import batched, general, kernel, periodic
+from impactcont.orbit import batched, general, periodic
 from impactcont.orbit.periodic import orbit_at_phase
 
 K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.orbit import kernel
+from impactcont.kernel import closed_form as kernel
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.periodic import impact_map_jacobian, periodic_matrix
 from impactcont.problems import PeriodicBranchProblem

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.orbit import kernel, secular
+from impactcont.kernel import closed_form as kernel
+from impactcont.orbit import secular
 from tests.test_kernel import DAMPING, _random_oscillator
 
 

@@ -1,4 +1,4 @@
-"""The compiled N-p shooting (impactcont.orbit.shooting_kernel) against the numpy flow."""
+"""The compiled N-p shooting (impactcont.kernel.shooting) against the numpy flow."""
 
 from __future__ import annotations
 
@@ -140,7 +140,7 @@ def test_contact_search_matches_the_reference_search(case):
 def test_solved_motions_of_both_flows_compile_each_entry_point_once():
     """A modal and a first-order motion share one compiled version of each entry point
     (fixed argument types: the flows pass empty arrays for the other flow's inputs)."""
-    from impactcont.orbit import shooting_kernel
+    from impactcont.kernel import shooting as shooting_kernel
 
     for case in ("backlash 1-2", "damper on mass 1 (any C)"):
         osc, N, pattern = CASES[case]

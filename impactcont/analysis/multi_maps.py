@@ -6,7 +6,7 @@ simulation or a branch point, or an N-1 motion of the closed form) at every grid
 point it can reach: Newton on the shooting system of
 :mod:`impactcont.orbit.multi_impact` at each grid point, started from a solved
 neighbour (natural-parameter continuation on the grid, a secant predictor through
-two solved points in line), in one compiled sweep (:mod:`impactcont.orbit.map_kernel`).
+two solved points in line), in one compiled sweep (:mod:`impactcont.kernel.sweep`).
 A symmetric motion of a symmetric system is solved on its half system closed by the
 reflection, as :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`
 does, which stays regular through the symmetry-breaking pitchforks where the full
@@ -231,7 +231,7 @@ def _nearest(grid: dict[str, np.ndarray], parameters: tuple[str, str],
 
 
 def _kernel() -> Any:
-    from impactcont.orbit import map_kernel
+    from impactcont.kernel import sweep as map_kernel
 
     return map_kernel
 
@@ -249,7 +249,7 @@ class _Setting:
     def sweep(self, tables: _Tables, axes: dict[str, np.ndarray], seed: tuple[int, int],
               x_seed: np.ndarray, checks: bool
               ) -> tuple[dict[str, np.ndarray], np.ndarray, tuple[int, int, int, bool]]:
-        """:func:`impactcont.orbit.map_kernel.sweep` over the grid `axes` from `seed`.
+        """:func:`impactcont.kernel.sweep.sweep` over the grid `axes` from `seed`.
 
         Returns the flat outputs, the unknowns of every point and ``(solved, attempts,
         newton_iterations, capped)``.

@@ -140,8 +140,8 @@ def _rayleigh_coefficients(M: np.ndarray, K: np.ndarray, C: np.ndarray
 
 @functools.cache
 def _compiled() -> types.ModuleType:
-    """:mod:`impactcont.orbit.general_kernel`, imported on first use (numba loads it)."""
-    from impactcont.orbit import general_kernel
+    """:mod:`impactcont.kernel.general`, imported on first use (numba loads it)."""
+    from impactcont.kernel import general as general_kernel
 
     return general_kernel
 
@@ -313,7 +313,7 @@ class FirstOrderBasis:
     @functools.cached_property
     def kernel_arrays(self) -> tuple[np.ndarray, ...]:
         """The basis as the compiled first-order path takes it
-        (:mod:`impactcont.orbit.general_kernel`): new contiguous, writable arrays of one
+        (:mod:`impactcont.kernel.general`): new contiguous, writable arrays of one
         dtype each, so that every entry point is compiled once.
 
         Returns
@@ -340,7 +340,7 @@ class FirstOrderBasis:
         ``(K - omega^2 M + i omega C) x_hat = F`` and ``Z = [x_hat; i omega x_hat]``
         (eq. 7 in physical coordinates), with ``theta = omega t + delta``; solved after an
         exact power-of-two equilibration of rows and columns, in compiled code
-        (:func:`impactcont.orbit.general_kernel.forced_response`;
+        (:func:`impactcont.kernel.general.forced_response`;
         :meth:`forced_amplitude_reference` is the numpy form).
 
         Raises
@@ -376,7 +376,7 @@ class FirstOrderBasis:
     def forced_amplitude_derivative(self, Z: np.ndarray, omega: float) -> np.ndarray:
         """``dZ/d omega`` of :meth:`forced_amplitude` (exact):
         ``d x_hat = -H^-1 (-2 omega M + i C) x_hat``, ``Z = [x_hat; i omega x_hat]``, in
-        compiled code (:func:`impactcont.orbit.general_kernel.forced_response_derivative`;
+        compiled code (:func:`impactcont.kernel.general.forced_response_derivative`;
         :meth:`forced_amplitude_derivative_reference` is the numpy form)."""
         M, K, C = self.kernel_arrays[9:12]
         return _compiled().forced_response_derivative(K, M, C, np.array(Z, dtype=complex),

@@ -121,7 +121,7 @@ class ModalBasis:
     @functools.cached_property
     def kernel_arrays(self) -> tuple[np.ndarray, ...]:
         """``w, a, f, u, u^-1, eigenvalue_errors, u[0], u^-1[:, 0]`` as contiguous float
-        arrays, the inputs of :mod:`impactcont.orbit.kernel` (built once per basis)."""
+        arrays, the inputs of :mod:`impactcont.kernel.closed_form` (built once per basis)."""
         errors = (np.zeros_like(self.natural_frequencies) if self.eigenvalue_errors is None
                   else self.eigenvalue_errors)
         arrays = (self.natural_frequencies, self.decay_rates, self.modal_forces, self.u,

@@ -2,7 +2,7 @@
 
 :func:`batched_orbits`: every root of eq. (15) on an ``omega x b`` grid with its
 physical checks and stability, by the compiled kernel
-(:mod:`impactcont.orbit.kernel`); ``b`` enters only eq. (14)-(15), so the
+(:mod:`impactcont.kernel.closed_form`); ``b`` enters only eq. (14)-(15), so the
 per-frequency work (eq. 12-13 in modal form, the time grid of the interior-contact
 check) is shared by every gap and root.
 """
@@ -37,7 +37,7 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
                    spectral_radius: bool = True) -> dict[str, np.ndarray]:
     """Every root of eq. (15) on the grid ``omega x b`` with its checks and stability.
 
-    Evaluated by the compiled kernel (:func:`impactcont.orbit.kernel.block_map`):
+    Evaluated by the compiled kernel (:func:`impactcont.kernel.closed_form.block_map`):
     per omega O(n) for eq. (12)-(15) and one time grid for the interior-contact
     check of eq. (16) shared by every gap and root; per motion G (eq. 25) and the
     Schur-Cohn test of its characteristic polynomial, plus LAPACK eigenvalues
@@ -66,7 +66,7 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
         where the motion does not exist; ``stable``: every multiplier strictly inside
         the unit circle).
     """
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     omega = np.ascontiguousarray(np.atleast_1d(np.asarray(omega, dtype=float)))
     b = np.ascontiguousarray(np.atleast_1d(np.asarray(b, dtype=float)))
@@ -96,7 +96,7 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
     frequency the kernel's form cancels), with the velocity's second exact form: gap
     (eq. 16), G (eq. 25), its multipliers and stability. A bound per frequency keeps the
     check off the grid points that need none."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     R = osc.R

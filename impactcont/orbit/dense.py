@@ -34,7 +34,7 @@ _VELOCITY_AGREE = 16.0
 
 def warn_ill_conditioned(omega: float, cond: float, stacklevel: int) -> None:
     """Warn that eq. (12) is ill-conditioned at omega (the closed form's condition estimate
-    ``cond``, :func:`impactcont.orbit.kernel.omega_setup`), when ``cond > COND_WARN``: the
+    ``cond``, :func:`impactcont.kernel.closed_form.omega_setup`), when ``cond > COND_WARN``: the
     one message of the modal and the first-order paths."""
     if cond <= COND_WARN:
         return
@@ -80,7 +80,7 @@ def impact_velocity(Gam, B, g, Delta, omega, R, b, delta):
 
     With ``x1p(delta) = Gam cos(delta) + B sin(delta)`` the forced motion of mass 1 and
     ``c, s = Gam - rho B, B + rho Gam``, ``rho = kappa omega g / Delta`` (eq. 14 in the
-    kernel's form, :mod:`impactcont.orbit.kernel`), a root satisfies two exact forms:
+    kernel's form, :mod:`impactcont.kernel.closed_form`), a root satisfies two exact forms:
 
     - ``sigma = x1p'(delta) / Delta`` (eq. 12 at the velocity of mass 1);
     - ``sigma = (x1p(delta) - b) / (kappa g)`` (the impact condition ``x1(0) = b``).

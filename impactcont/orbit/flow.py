@@ -86,7 +86,7 @@ class Flow:
         self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def shooting_arrays(self) -> tuple[Any, ...]:
-        """The flow's inputs of :mod:`impactcont.orbit.shooting_kernel` (built once).
+        """The flow's inputs of :mod:`impactcont.kernel.shooting` (built once).
 
         ``(general, w, a, gamma, beta, f, u, u^-1, lambda, V, V^-1, Z, w_p, a_p, k_p,
         j_p)``: the modal arrays, empty first-order arrays and the scalar pairs (here
@@ -107,7 +107,7 @@ class Flow:
     def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``d gamma / d omega``, ``d beta / d omega`` (modal flow; empty for the first-order
         flow) and ``dZ / d omega`` (first-order flow; empty for the modal flow), the inputs
-        of :func:`impactcont.orbit.shooting_kernel.omega_partials` (built once)."""
+        of :func:`impactcont.kernel.shooting.omega_partials` (built once)."""
         if self._omega_arrays is None:
             om = self.omega
             den = (self.w - om) * (self.w + om) + 2j * self.a * om
@@ -315,7 +315,7 @@ class GeneralFlow(Flow):
         self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def shooting_arrays(self) -> tuple[Any, ...]:
-        """The flow's inputs of :mod:`impactcont.orbit.shooting_kernel` (built once).
+        """The flow's inputs of :mod:`impactcont.kernel.shooting` (built once).
 
         ``(general, w, a, gamma, beta, f, u, u^-1, lambda, V, V^-1, Z, w_p, a_p, k_p,
         j_p)``: empty modal arrays, the first-order arrays and the scalar pairs of

@@ -1,6 +1,6 @@
 """Periodic N-1 motions with any damping matrix C or complex F: the dense exact path.
 
-The proportional system's closed form (:mod:`impactcont.orbit.kernel`) relies on the
+The proportional system's closed form (:mod:`impactcont.kernel.closed_form`) relies on the
 real 2x2 modal blocks of eq. (9). With a general damping matrix C, or with forcing
 phases that differ between masses (complex F), the same equations are solved from the
 first-order complex modes ``A = V diag(lambda) V^-1``
@@ -22,14 +22,14 @@ the kernel's rank-one form (:class:`PeriodicForm`):
 - ``sigma`` from the better of its two exact forms
   (:func:`impactcont.orbit.dense.impact_velocity`), then ``X(0)``, and G of eq. (25)
   from ``D Phi(T)``, ``D (I - Phi(T)) P(0)`` and ``X'(T^-) = P'(0) e_d + kappa sigma
-  A (y + e)``; its eigenvalues as the kernel's (:func:`impactcont.orbit.kernel.
+  A (y + e)``; its eigenvalues as the kernel's (:func:`impactcont.kernel.closed_form.
   multipliers`: QR of the balanced Hessenberg form for small G, LAPACK otherwise);
-- eq. (16) by the kernel's search (:func:`impactcont.orbit.kernel.x1_maximum`) on the
+- eq. (16) by the kernel's search (:func:`impactcont.kernel.closed_form.x1_maximum`) on the
   scalar pairs of modes (:attr:`FirstOrderBasis.scalar_pairs`);
 - the condition estimate of eq. (12) is the kernel's, summed over the scalar pairs of
   modes, so both paths warn alike.
 
-All of it runs compiled (:mod:`impactcont.orbit.general_kernel`: one call for the
+All of it runs compiled (:mod:`impactcont.kernel.general`: one call for the
 pieces of a frequency, :func:`periodic_form`, and one for the motions of its roots,
 :func:`orbit_values`); :func:`reference_form` and :func:`reference_orbit_values` are
 the same equations in numpy, kept as the reference the tests compare with. The
@@ -67,7 +67,7 @@ __all__ = ["PeriodicForm", "amplitude", "amplitude_derivative", "orbit_pieces",
 def _refuse_elastic(osc: ImpactOscillator) -> None:
     """Refuse ``R = 1`` without damping: ``I - D Phi(T)`` of eq. (12) is singular there.
 
-    The modal path solves that case (a family of motions, :mod:`impactcont.orbit.kernel`);
+    The modal path solves that case (a family of motions, :mod:`impactcont.kernel.closed_form`);
     the message names what put the oscillator on the first-order path instead: a damping
     matrix ``C = 0`` (give ``eta=0``), or a complex F (per-mass phases).
     """
@@ -121,12 +121,12 @@ class PeriodicForm:
     # a form made any other way has none): ``_period_rate``, ``Re(V diag(lambda
     # s'(lambda T)) V^-1 e_{n+1})`` at rows 1 and n+1 (with ``-A^-1 e_{n+1} / T^2`` the
     # T-derivative of ``y`` there, :func:`amplitude_derivative`), and ``_pieces``, the
-    # real fields as the rows of :func:`impactcont.orbit.general_kernel.periodic_setup`
+    # real fields as the rows of :func:`impactcont.kernel.general.periodic_setup`
     # (the fields are views of it).
 
     def __getattr__(self, name: str) -> np.ndarray:
         """The real fields of a compiled form, made on first access as views of its
-        ``_pieces`` (:func:`impactcont.orbit.general_kernel.form_rows`): most motions never
+        ``_pieces`` (:func:`impactcont.kernel.general.form_rows`): most motions never
         read them (the compiled orbit takes the pieces whole)."""
         pieces = self.__dict__.get("_pieces")
         rows = _FIELD_ROWS.get(name)
@@ -140,7 +140,7 @@ class PeriodicForm:
         return view
 
     def _orbit_arguments(self) -> tuple:
-        """The arguments of :func:`impactcont.orbit.general_kernel.orbit_values` before
+        """The arguments of :func:`impactcont.kernel.general.orbit_values` before
         the phases and gaps."""
         flow = self.flow
         lam, V0, pw, pa, pk, pj = flow.basis.kernel_arrays[12:]
@@ -223,7 +223,7 @@ def periodic_form(osc: ImpactOscillator, N: int, *, warn: bool = True) -> Period
 
 def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
     """:class:`PeriodicForm` of `flow` over the period ``T`` (``omega T = 2 pi N``), by
-    :func:`impactcont.orbit.general_kernel.periodic_setup` (:func:`reference_form` is
+    :func:`impactcont.kernel.general.periodic_setup` (:func:`reference_form` is
     its numpy form)."""
     cached = _FORMS.get(id(flow))
     if cached is not None and cached.flow is flow and cached.T == T:
@@ -247,15 +247,15 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
 
 @functools.cache
 def _compiled() -> types.ModuleType:
-    """:mod:`impactcont.orbit.general_kernel`, imported on first use (numba loads it)."""
-    from impactcont.orbit import general_kernel
+    """:mod:`impactcont.kernel.general`, imported on first use (numba loads it)."""
+    from impactcont.kernel import general as general_kernel
 
     return general_kernel
 
 
 def reference_form(flow: GeneralFlow, T: float) -> PeriodicForm:
     """:class:`PeriodicForm` of `flow` over the period ``T`` in numpy: the reference of
-    the compiled :func:`impactcont.orbit.general_kernel.periodic_setup` (not cached)."""
+    the compiled :func:`impactcont.kernel.general.periodic_setup` (not cached)."""
     osc, basis = flow.osc, flow.basis
     n, R, omega = osc.n, osc.R, osc.omega
     kappa = 1.0 + R
@@ -301,7 +301,7 @@ def _transition(basis: FirstOrderBasis, T: float, R: float) -> np.ndarray:
 
 def _condition(basis, x: np.ndarray, em1: np.ndarray, sw: np.ndarray, w: np.ndarray,
                R: float, omega: float, g: float, Delta: float) -> float:
-    """The kernel's condition estimate of eq. (12) (:func:`impactcont.orbit.kernel.
+    """The kernel's condition estimate of eq. (12) (:func:`impactcont.kernel.closed_form.
     omega_setup`) from the scalar pairs of modes: ``mode_cond (1 + |rho| (cond_d +
     cond_g))``, ``cond_d = ((1 - R)/2 + kappa sum |c_i h_i|) / |Delta|``, ``cond_g =
     sum |c_i W12_i / d_i| / |g|``, ``mode_cond`` the worst free-mode resonance
@@ -351,7 +351,7 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     Notes
     -----
     Computed in O(n) after the forced amplitude
-    (:func:`impactcont.orbit.general_kernel.amplitude_setup`: the scalars of
+    (:func:`impactcont.kernel.general.amplitude_setup`: the scalars of
     :func:`periodic_form`, equal to its ``c, s``); warns as :func:`periodic_form`.
     """
     _refuse_elastic(osc)
@@ -431,7 +431,7 @@ def _pair_coefficients(flow: GeneralFlow, c: np.ndarray) -> tuple[np.ndarray, np
 
 def _search_grid(flow: GeneralFlow, T: float) -> np.ndarray:
     """The kernel's grid on ``[0, T]`` for the x1 search of eq. (16), warning when capped."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, _, _ = flow.basis.scalar_pairs
     times, capped = kernel.time_grid(w, a, np.ones_like(w), flow.omega, T)
@@ -448,7 +448,7 @@ def _warn_capped(T: float, stacklevel: int) -> None:
 
 def _search(flow: GeneralFlow, times: np.ndarray, free: np.ndarray, dy: np.ndarray,
             dv: np.ndarray, delta: float, exclude: float) -> tuple[float, float]:
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, _, _ = flow.basis.scalar_pairs
     work = np.empty((kernel.WORK_ROWS, 2 * times.size))
@@ -462,7 +462,7 @@ def _search(flow: GeneralFlow, times: np.ndarray, free: np.ndarray, dy: np.ndarr
 def _x1_maximum_of(flow: GeneralFlow, coefficients: np.ndarray, delta: float, T: float,
                    exclude: float) -> tuple[float, float]:
     """:func:`x1_maximum` from the complex coefficients of ``x1``'s free part."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, _, _ = flow.basis.scalar_pairs
     dy, dv = _pair_coefficients(flow, coefficients)
@@ -480,7 +480,7 @@ def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float,
     The free part of ``x1`` is a sum over the scalar pairs of
     :attr:`FirstOrderBasis.scalar_pairs`, each ``W11 y(0) + W12 y'(0)`` with the exact
     modal transfer, and the forced part is ``Re(Z_1 e^{i theta})``: the compiled
-    kernel's search (:func:`impactcont.orbit.kernel.x1_maximum`, with its grid, bounds
+    kernel's search (:func:`impactcont.kernel.closed_form.x1_maximum`, with its grid, bounds
     and polish) runs on them unchanged, with unit weights.
     """
     return _x1_maximum_of(flow, flow.V[0] * flow.modal_deviation(state, delta), delta, T,
@@ -520,7 +520,7 @@ def orbit_values_many(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray
     impact phases ``deltas`` at the gaps ``b`` (each phase a root of eq. 15 at its gap),
     shapes ``(m,)``, ``(m, 2n)`` (largest modulus first), ``(m,)``, ``(m,)``.
 
-    One compiled call (:func:`impactcont.orbit.general_kernel.orbit_values`): the search
+    One compiled call (:func:`impactcont.kernel.general.orbit_values`): the search
     tables of eq. (16) are built once per unit impact velocity and shared by every phase.
     """
     deltas = np.array(deltas, dtype=float).reshape(-1)  # new arrays: writable, contiguous
@@ -530,7 +530,7 @@ def orbit_values_many(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray
 
 
 def _compiled_values(form: PeriodicForm, deltas: np.ndarray, b: np.ndarray) -> tuple:
-    """:func:`impactcont.orbit.general_kernel.orbit_values` of `form` at the phases
+    """:func:`impactcont.kernel.general.orbit_values` of `form` at the phases
     ``deltas`` and gaps ``b`` (contiguous floats), warning when the search grid of eq.
     (16) was capped."""
     *values, capped = _compiled().orbit_values(*form._orbit_arguments(), deltas, b)
@@ -581,7 +581,7 @@ class OrbitValues:
 def orbit_values(form: PeriodicForm, delta: float) -> OrbitValues:
     """The motion at phase delta (a root of eq. 15) from :func:`periodic_form`: state,
     impact velocity, G, multipliers and eq. (16), by the compiled
-    :func:`impactcont.orbit.general_kernel.orbit_values` (:func:`reference_orbit_values`
+    :func:`impactcont.kernel.general.orbit_values` (:func:`reference_orbit_values`
     is its numpy form).
 
     When delta is one of the roots of eq. (15) at the oscillator's gap (:func:`roots`),

@@ -371,9 +371,9 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
 
 
 def _kernel() -> Any:
-    """:mod:`impactcont.orbit.shooting_kernel`, imported on first use (numba is not imported
+    """:mod:`impactcont.kernel.shooting`, imported on first use (numba is not imported
     with :mod:`impactcont`)."""
-    from impactcont.orbit import shooting_kernel
+    from impactcont.kernel import shooting as shooting_kernel
 
     return shooting_kernel
 

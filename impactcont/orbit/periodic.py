@@ -62,7 +62,7 @@ _FOLD_ULPS = 16.0
 class PeriodicOrbit:
     """One periodic N-1 motion: one impact every N forcing periods.
 
-    A thin view over the compiled kernel's arrays (:mod:`impactcont.orbit.kernel`):
+    A thin view over the compiled kernel's arrays (:mod:`impactcont.kernel.closed_form`):
     the phase, impact velocity and interior-contact check are computed with it;
     the state, ``G`` and the multipliers are built on first access.
 
@@ -126,7 +126,8 @@ class PeriodicOrbit:
         secular function of :mod:`impactcont.orbit.secular` (G is not formed); the
         dense eigenvalues of G where its accuracy guard refuses, and for small systems.
         """
-        from impactcont.orbit import kernel, secular
+        from impactcont.kernel import closed_form as kernel
+        from impactcont.orbit import secular
 
         osc = self.oscillator
         if osc.n >= secular.SECULAR_MIN:
@@ -180,7 +181,7 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
     """G of eq. (25) and ``h2`` from the kernel's modal pieces at one frequency (the
     oscillator's, or `omega`: the frequency `modal` was computed at).
 
-    Assembled as ``G_reg + a b^T / sigma`` (:func:`impactcont.orbit.kernel.jacobian_split`)
+    Assembled as ``G_reg + a b^T / sigma`` (:func:`impactcont.kernel.closed_form.jacobian_split`)
     with the motion's own impact velocity ``sigma`` as the pole: the kernel's
     recomputation of ``h2 = x1'(T^-)`` from the forced velocity at the phase is the form
     that cancels far above the lowest natural frequency (:func:`impactcont.orbit.dense.
@@ -188,7 +189,7 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
     for small systems, numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of
     freedom.
     """
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, f, u = osc.modes.kernel_arrays[:4]
     om = osc.omega if omega is None else omega
@@ -202,7 +203,7 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
 def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     """The physical transition ``U W(T) U^-1`` (eq. 9): compiled loops for small systems,
     numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of freedom."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     u, ui = osc.modes.kernel_arrays[3:5]
     if osc.n <= kernel.BLAS_MIN:
@@ -308,7 +309,7 @@ def _repolish(osc: ImpactOscillator, modal: np.ndarray, scalars: np.ndarray, del
     """State, velocity scale, gap, its time, G and multipliers of the modal motion at phase
     delta with the impact velocity ``sigma`` (a polished one; the dense multipliers of G
     at any n: the secular ones recompute ``h2`` in the kernel's form)."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, _, u, _, _, u0, _ = osc.modes.kernel_arrays
     state, scale = kernel.physical_state(modal, u, osc.omega, osc.R, delta, sigma)
@@ -334,7 +335,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
     """The periodic N-1 motion with impact phase ``delta`` (which must satisfy eq. 14).
 
     The impact velocity follows from the phase (``sigma = x1p'(delta) / Delta``, see
-    :mod:`impactcont.orbit.kernel`; for elastic impacts without damping from the gap;
+    :mod:`impactcont.kernel.closed_form`; for elastic impacts without damping from the gap;
     from the gap too where the first form has lost digits and the phase is a root,
     :func:`impactcont.orbit.dense.impact_velocity`), then the interior-contact check of
     eq. (16); state, G and multipliers on access.
@@ -347,7 +348,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
         such a phase is not a periodic motion (its ``x1(0)`` is not ``b``).
         ``check=False`` is for callers that evaluate guesses on purpose.
     """
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     N = _check_N(N)
     _check_oscillator(osc)
@@ -402,7 +403,7 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
         physical motion is reported, never silently dropped. For elastic impacts
         without damping (``R = 1``, no damping) eq. (12) is singular for every
         omega; the two isolated motions are then those whose forced motion of
-        mass 1 is at rest at the impact (see :mod:`impactcont.orbit.kernel`).
+        mass 1 is at rest at the impact (see :mod:`impactcont.kernel.closed_form`).
 
     Raises
     ------
@@ -412,7 +413,7 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     ResonanceError
         If omega equals the natural frequency of an undamped, forced mode.
     """
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     osc = _check_oscillator(osc)
     N = _check_N(N)
@@ -511,7 +512,7 @@ def _warn_low_impact_velocity(orbit: PeriodicOrbit, v_scale: float,
 
 def amplitude_squared(osc: ImpactOscillator, N: int) -> float:
     """``c^2 + s^2`` of eq. (14)-(15): motions exist iff it is ``>= b^2``."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     osc = _check_oscillator(osc)
     if osc.general:

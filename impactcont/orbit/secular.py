@@ -58,8 +58,8 @@ import math
 
 import numpy as np
 
+from impactcont.kernel.closed_form import _EPS, _jit, by_modulus, jacobian_pieces
 from impactcont.orbit.dense import VELOCITY_POLISH
-from impactcont.orbit.kernel import _EPS, _jit, by_modulus, jacobian_pieces
 
 __all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers",
            "velocity_row_error"]
@@ -369,7 +369,7 @@ def power_sums_agree(z, tr1, tr2, size1, size2):
 def velocity_row_error(modal, u0, ui0, omega, R, delta, sigma):
     """Rounding bound of the velocity of mass 1 in modal form, ``sum_i u_1i v_i`` with
     ``v_i = omega (beta_i cos(delta) - gamma_i sin(delta)) + kappa sigma v0_i`` (the modal
-    velocities before the impact, :func:`impactcont.orbit.kernel.jacobian_pieces`):
+    velocities before the impact, :func:`impactcont.kernel.closed_form.jacobian_pieces`):
     ``eps`` times the terms summed, with the change of the forced ones over the rounding
     of ``delta`` (``eps (1 + |delta|)``), as :func:`impactcont.orbit.dense.velocity_errors`.
     """

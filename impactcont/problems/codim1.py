@@ -175,7 +175,7 @@ class _Pieces:
     @classmethod
     def at(cls, osc: ImpactOscillator, N: int) -> _Pieces:
         """The real pieces of `osc` (:func:`kernel.omega_setup`)."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
         modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N)
@@ -191,7 +191,7 @@ class _Pieces:
         caller). Damping parameters move the decay rates along ``d a / d p``; ``F0``
         scales the modal forces (eq. 13 is linear in F). ``b`` leaves ``c, s`` alone.
         """
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         w, a, f = (np.asarray(x, dtype=complex) for x in (self.w, self.a, self.f))
         omega, R, b = complex(self.omega), complex(self.R), complex(self.b)
@@ -225,7 +225,7 @@ class _Pieces:
     def impact_velocity(self, delta: float) -> float:
         """``h2 = x1'(T^-)`` of the motion with impact phase ``delta``, from the form of
         :attr:`impact_form`."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         if self.impact_form:  # the impact condition x1(0) = b
             Gam, B, g = self.scalars[1], self.scalars[2], self.scalars[3]
@@ -245,7 +245,7 @@ class _Pieces:
 
     def jacobian(self, delta: float) -> tuple[np.ndarray, float]:
         """G of eq. (25) and ``h2`` for the impact phase ``delta``."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         if self.impact_form:  # the pole at the motion's own velocity (split)
             G_reg, a, b, h2 = self.split(delta)
@@ -257,7 +257,7 @@ class _Pieces:
         finite where ``h2`` vanishes (:func:`kernel.jacobian_split`; with
         :attr:`impact_form`, ``h2`` is the motion's velocity, not the kernel's
         recomputation of ``x1'(T^-)``, which cancels there)."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         args = self._kernel_args(delta)
         G_reg, a, b, h2 = kernel.jacobian_split(self.transition, *args)
@@ -266,7 +266,7 @@ class _Pieces:
     def pd_condition(self, delta: float, left: np.ndarray, right: np.ndarray) -> float:
         """The pole-free period-doubling condition ``g`` (:func:`kernel.pd_condition`; with
         :attr:`impact_form` the same bordered solve on :meth:`pole_free_pd_matrix`)."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         if self.impact_form:
             return bordered_condition(self.pole_free_pd_matrix(delta), left, right)
@@ -283,7 +283,7 @@ class _Pieces:
     def other_maximum(self, delta: float, exclude: float) -> float:
         """The highest interior maximum of ``x1`` other than the one at time ``exclude``
         (:func:`kernel.other_maximum`); ``-inf`` when there is none."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         w, a, _, _, _, _, u0, _ = self.osc.modes.kernel_arrays
         best, _ = kernel.other_maximum(w, a, u0, self.modal, self.scalars, self.omega, self.R,
@@ -292,7 +292,7 @@ class _Pieces:
 
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         u0 = self.osc.modes.kernel_arrays[6]
         ks = (1.0 + self.R) * self.impact_velocity(delta)

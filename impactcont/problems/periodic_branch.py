@@ -169,7 +169,7 @@ class PeriodicBranchProblem:
     def _setup(self, lam: float) -> tuple[float, float, float, float]:
         """``c, s, b`` and :func:`residual_scale` (real) at ``lam`` (a float), cached (the
         callers read the cache first)."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         b = lam if self.parameter == "b" else self.osc.b
         if self.parameter == "b" and self._cache:
@@ -193,7 +193,7 @@ class PeriodicBranchProblem:
 
     def _unit_amplitude(self) -> tuple[float, float]:
         """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         if self._per_unit_force is None and self._general:
             c, s = general.amplitude(self.osc, self.N)[:2]
@@ -215,7 +215,7 @@ class PeriodicBranchProblem:
             raise ParameterError(f"{self.parameter}={lam!r} is outside its allowed range")
 
     def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:
-        from impactcont.orbit import kernel
+        from impactcont.kernel import closed_form as kernel
 
         if self.parameter == "b":
             return 0.0, 0.0, 1.0

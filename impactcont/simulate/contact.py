@@ -11,7 +11,7 @@ is the evaluator of ``y`` and its derivatives (modal or first-order flow),
 :func:`next_contact` the first impact on either stop, :func:`flight_clearances`
 the interior check of eq. (16) against both stops (the simulator's own, in numpy: the
 shooting of N-p motions runs the compiled search of
-:mod:`impactcont.orbit.shooting_kernel`, and the tests hold one against the other).
+:mod:`impactcont.kernel.shooting`, and the tests hold one against the other).
 :func:`stop_sign` comes from :mod:`impactcont.orbit.stop_geometry`, below both.
 
 The cost of :func:`next_contact` follows the motion's own time scales, not the

@@ -15,7 +15,7 @@ workload once, so all see the same load):
    the same N = 1 branch point;
 4. one N = 1 orbit of the paper system with a damping matrix that is not proportional
    (only the damper between the masses: the first-order path, compiled in
-   ``orbit/general_kernel.py``) against the proportional one (``periodic_orbits``, both
+   ``kernel/general.py``) against the proportional one (``periodic_orbits``, both
    roots, as in 1; b = 0.6, omega = 1), and the omega continuation of that N = 1 motion
    over [0.5, 6], per point, against the same continuation with proportional damping;
 5. one 1-2 backlash solve with that damping matrix against the proportional one (the
@@ -28,7 +28,7 @@ workload once, so all see the same load):
    ``NUMBA_CACHE_DIR``, the N = 1 verbs first (compiling the kernel they share), then the
    first N-p solve and the first N-p continuation (CPU seconds); and, in another fresh
    interpreter, what the first any-C orbit compiles after the N = 1 verbs (the four
-   entry points of ``orbit/general_kernel.py``).
+   entry points of ``kernel/general.py``).
 
 Run from the repository root::
 

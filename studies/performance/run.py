@@ -1,4 +1,4 @@
-"""Performance of the compiled kernel (``impactcont.orbit.kernel``), side by side in one run.
+"""Performance of the compiled kernel (``impactcont.kernel.closed_form``), side by side in one run.
 
 The machine is shared and noisy, so every number is the best of several repeats
 and every reference is timed in the same run. BLAS is pinned to one thread
@@ -72,7 +72,7 @@ t0 = time.perf_counter()
 import numpy as np
 import impactcont as ic
 t1 = time.perf_counter()
-compiled_on_import = "numba" in sys.modules or "impactcont.orbit.kernel" in sys.modules
+compiled_on_import = "numba" in sys.modules or "impactcont.kernel.closed_form" in sys.modules
 from numba.core import event
 compiles = []
 class Count(event.Listener):
@@ -162,7 +162,7 @@ def one_orbit(osc: ic.ImpactOscillator, N: int) -> None:
 
 def kernel_only(osc: ic.ImpactOscillator, N: int) -> None:
     """The compiled calls of :func:`one_orbit` without the Python wrapper (as in periodic.py)."""
-    from impactcont.orbit import kernel
+    from impactcont.kernel import closed_form as kernel
 
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     # for small systems one call returns the roots with their G and multipliers
@@ -272,7 +272,8 @@ def _matched_distance(mu: np.ndarray, reference: np.ndarray) -> float:
 
 
 def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
-    from impactcont.orbit import kernel, secular
+    from impactcont.kernel import closed_form as kernel
+    from impactcont.orbit import secular
 
     rng = np.random.default_rng(3)
     rows = []

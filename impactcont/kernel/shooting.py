@@ -6,7 +6,7 @@ Everything is a function of floats and arrays (``cache=True``), written for both
 of :mod:`impactcont.orbit.flow`, each diagonal in its own modal coordinates:
 
 - modal (proportional damping): the exact 2 x 2 transfer ``W_i(t)`` of each mode
-  (:func:`impactcont.orbit.kernel.mode_transfer`, every damping class without
+  (:func:`impactcont.kernel.closed_form.mode_transfer`, every damping class without
   cancellation), ``Phi = U W U^-1`` and the forcing block of eq. (9) from the steady
   modal amplitudes ``gamma_i, beta_i``;
 - first order (any C, complex F): ``Phi = Re(V diag(exp(lambda t)) V^-1)`` and the
@@ -18,7 +18,7 @@ entry point compiles once. The flow's arrays come from
 beta, f, u, u^-1, lambda, V, V^-1, Z`` and the scalar pairs ``w_p, a_p``, ``k_p, j_p``).
 
 The interior-contact check of eq. (16) against both stops is the compiled kernel's
-search (:func:`impactcont.orbit.kernel.x1_maximum` on its grid): for the modal flow
+search (:func:`impactcont.kernel.closed_form.x1_maximum` on its grid): for the modal flow
 with the weights ``u_j.`` of the impacting mass, for the first-order flow on the
 scalar pairs of :attr:`impactcont.model.first_order.FirstOrderBasis.scalar_pairs`
 with unit weights (as :mod:`impactcont.orbit.general`). The lower stop is the same
@@ -36,7 +36,7 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.orbit.kernel import (
+from impactcont.kernel.closed_form import (
     WORK_ROWS,
     free_on_grid,
     mode_transfer,

@@ -15,7 +15,7 @@ The flows are stacked by value of the parameters that change them (``flow_index`
 gives each grid point its row of the tables of
 :meth:`impactcont.orbit.flow.Flow.shooting_arrays`), the stop geometry by value of
 the parameters that move the stops (``geometry_index``). Flights, Newton steps, G
-and the contact search are those of :mod:`impactcont.orbit.shooting_kernel`.
+and the contact search are those of :mod:`impactcont.kernel.shooting`.
 
 The half system of a symmetric motion (``p = 2h``; ``X_{k+h} = -X_k``,
 ``tau_{k+h} = tau_k``) is the shooting system of its first ``h`` flights over half
@@ -36,8 +36,8 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.orbit.kernel import multipliers
-from impactcont.orbit.shooting_kernel import (
+from impactcont.kernel.closed_form import multipliers
+from impactcont.kernel.shooting import (
     _clearances,
     _flight_jacobian,
     _max_abs,
@@ -86,7 +86,7 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
 def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
             positions, diagonals, x0, tol, max_iter):
     """Newton with backtracking from ``x0``: the iteration and stopping rules of
-    :func:`impactcont.orbit.shooting_kernel.newton_solve` on :func:`_system`.
+    :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system`.
 
     Returns ``(x, converged, iterations, shooting)``.
     """
