@@ -178,7 +178,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_list_problems(args: argparse.Namespace) -> int:
-    from impactcont.problems.plugins import list_problems
+    from impactcont.scene.plugins import list_problems
 
     problems = list_problems()
     rows = [(name, info.origin,

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from impactcont.problems import plugins
+from impactcont.scene import plugins
 from impactcont.scene.entries import EntrySpec
 from impactcont.scene.keys import Integer, declare
 

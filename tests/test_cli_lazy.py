@@ -14,7 +14,7 @@ import pytest
 
 import impactcont
 from impactcont.cli import EXIT_OK, main, plain_text
-from impactcont.problems.plugins import register_problem, unregister_problem
+from impactcont.scene.plugins import register_problem, unregister_problem
 
 HEAVY = ("numba", "scipy", "xarray", "matplotlib")
 SOURCE = Path(impactcont.__file__).resolve().parents[1]

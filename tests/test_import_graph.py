@@ -112,7 +112,7 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_the_graph_is_read() -> None:
     graph = import_graph()
     assert "impactcont.scene.entries" in graph["impactcont.scene.schema"]
-    assert "impactcont.problems.plugins" in graph["impactcont.scene.schema"]
+    assert "impactcont.scene.plugins" in graph["impactcont.scene.schema"]
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
 
 
@@ -124,3 +124,64 @@ def test_no_import_circle_even_through_imports_inside_functions() -> None:
     # The circle of issue 12 (scene.schema -> scene.sections -> scene.twoparam ->
     # scene.tasks -> scene.schema) ran through imports deferred into functions.
     assert cycles(import_graph(functions=True)) == []
+
+
+#: The layers of the package, bottom first (../shared/ARCHITECTURE.md): a module may import
+#: its own layer and the layers below it, never one above ("arrows run down only").
+LAYERS = (
+    ("errors", "vocabulary", "threads", "progress"),
+    ("kernel",),
+    ("model",),
+    ("orbit",),
+    ("simulate",),
+    ("core",),
+    ("problems",),
+    ("detection",),
+    ("dataset",),
+    ("analysis",),
+    ("plots",),
+    ("scene",),
+    ("cli", "__main__"),
+)
+
+
+def layer_of(module: str) -> int | None:
+    """The layer index of ``impactcont.<top>...`` (``None`` for the package itself)."""
+    parts = module.split(".")
+    if len(parts) < 2:
+        return None
+    for index, names in enumerate(LAYERS):
+        if parts[1] in names:
+            return index
+    raise AssertionError(f"{module} is in no layer: add its top-level name to LAYERS")
+
+
+def upward_arrows(graph: dict[str, set[str]]) -> list[str]:
+    """Every ``a -> b`` whose target lies in a higher layer than its source."""
+    out = []
+    for source, targets in sorted(graph.items()):
+        low = layer_of(source)
+        for target in sorted(targets):
+            high = layer_of(target)
+            if low is not None and high is not None and high > low:
+                out.append(f"{source} -> {target}")
+    return out
+
+
+def test_layers_are_read() -> None:
+    assert upward_arrows({"impactcont.kernel.x": {"impactcont.scene.y"}}) == \
+        ["impactcont.kernel.x -> impactcont.scene.y"]
+    assert upward_arrows({"impactcont.scene.y": {"impactcont.kernel.x"}}) == []
+
+
+def test_arrows_run_down_only_even_inside_functions() -> None:
+    # The simulator (the independent witness) imported by the shooting code, the plugin
+    # registry naming scene sections, the kernel imported by the model: each ran up.
+    assert upward_arrows(import_graph(functions=True)) == []
+
+
+def test_the_kernel_imports_nothing_of_the_package() -> None:
+    graph = import_graph(functions=True)
+    for module, targets in graph.items():
+        if module.startswith("impactcont.kernel"):
+            assert all(t.startswith("impactcont.kernel") for t in targets), (module, targets)

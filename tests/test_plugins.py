@@ -12,7 +12,8 @@ from _scene_data import OSCILLATOR, write
 
 from impactcont.errors import ParameterError
 from impactcont.problems import PeriodicBranchProblem
-from impactcont.problems.plugins import (
+from impactcont.scene import SceneError, load_scene, read_output, run_scene
+from impactcont.scene.plugins import (
     PluginWarning,
     SceneSection,
     get_problem,
@@ -22,7 +23,6 @@ from impactcont.problems.plugins import (
     refresh_problems,
     scene_sections,
 )
-from impactcont.scene import SceneError, load_scene, read_output, run_scene
 
 fake_entry_points = pytest.fixture(_fake_plugins.fake_entry_points)
 
@@ -133,7 +133,7 @@ def test_unknown_problem_names_the_available_ones(fake_entry_points) -> None:
 def test_a_driver_that_fails_fails_its_entry_only(tmp_path: Path) -> None:
     from _fake_plugins import TallyEntry
 
-    from impactcont.problems.plugins import register_problem, unregister_problem
+    from impactcont.scene.plugins import register_problem, unregister_problem
 
     register_problem("odd", SceneSection("odd", TallyEntry, lambda entry, context: {"k": 1},
                                          "Odd"))

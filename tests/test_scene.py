@@ -15,7 +15,6 @@ import xarray as xr
 from _scene_data import ORBITS_SCENE, OSCILLATOR, SMALL_SCENE, write
 
 import impactcont as ic
-from impactcont.problems.plugins import list_problems, register_problem, unregister_problem
 from impactcont.scene import (
     SceneError,
     SceneSection,
@@ -28,6 +27,7 @@ from impactcont.scene import (
     scene_sections,
 )
 from impactcont.scene.keys import Integer, declare
+from impactcont.scene.plugins import list_problems, register_problem, unregister_problem
 from impactcont.scene.schema import EntrySpec, scene_keys
 
 ROOT = Path(__file__).resolve().parents[1]

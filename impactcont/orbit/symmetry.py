@@ -36,14 +36,12 @@ import math
 
 import numpy as np
 
-from impactcont.core.locate import MotionTest
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, orbit_from_unknowns
 
 __all__ = [
-    "PITCHFORK",
     "HalfUnknowns",
     "admits_symmetric_motions",
     "half_map",
@@ -172,11 +170,6 @@ def pitchfork_critical(orbit: MultiImpactOrbit, tol: float = 1e-7) -> bool:
     :func:`pitchfork_test` that is the pitchfork, not a pole of a ``G_k``)."""
     H = half_map(orbit)
     return bool(np.all(np.isfinite(H)) and np.min(np.abs(np.linalg.eigvals(H) + 1.0)) < tol)
-
-
-#: The symmetry-breaking pitchfork as a special point of branches of symmetric motions
-#: (declared by :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`).
-PITCHFORK = MotionTest(pitchfork_test, pitchfork_noise, pitchfork_critical)
 
 
 def mirror_image(orbit: MultiImpactOrbit) -> MultiImpactOrbit:

@@ -37,11 +37,11 @@ import math
 
 import numpy as np
 
-from impactcont.detection.special_points import event_function
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import half_map
+from impactcont.problems.events import event_function
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.vocabulary import LABELS, check_parameter

@@ -31,7 +31,8 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.orbit.symmetry import PITCHFORK, HalfUnknowns, admits_symmetric_motions
+from impactcont.orbit.symmetry import HalfUnknowns, admits_symmetric_motions
+from impactcont.problems.events import PITCHFORK
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 __all__ = ["SymmetricBranchProblem"]

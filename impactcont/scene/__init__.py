@@ -6,7 +6,7 @@
 The format is in ``docs/scenes.md``; :mod:`impactcont.scene.schema` validates
 it, :mod:`impactcont.scene.run` computes it, :mod:`impactcont.scene.files`
 reads the NetCDF files back. Sections and plot kinds come from the one
-problem registry, :mod:`impactcont.problems.plugins` (the built-in ones are
+problem registry, :mod:`impactcont.scene.plugins` (the built-in ones are
 in :mod:`impactcont.scene.sections`; other packages add theirs through the
 entry-point group ``impactcont.problems``, ``docs/plugins.md``).
 """

@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 import os
 
-from impactcont.problems.plugins import scene_sections
 from impactcont.scene.files import read_output
+from impactcont.scene.plugins import scene_sections
 
 __all__ = ["describe_file"]
 

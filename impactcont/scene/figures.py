@@ -505,8 +505,8 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
         The file does not exist, or the figure cannot be written where asked
         (checked before drawing; the message names the path).
     """
-    from impactcont.problems.plugins import plot_kinds
     from impactcont.scene.files import read_output
+    from impactcont.scene.plugins import plot_kinds
 
     dpi = check_dpi(dpi)
     out = read_output(path)

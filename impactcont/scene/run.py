@@ -29,8 +29,8 @@ from typing import Any
 import xarray as xr
 
 from impactcont.dataset.io import atomic_output, check_output_directory
-from impactcont.problems.plugins import plot_kinds, scene_sections
 from impactcont.scene.files import write_output
+from impactcont.scene.plugins import plot_kinds, scene_sections
 from impactcont.scene.schema import Scene, load_scene
 from impactcont.scene.sections import RunContext
 from impactcont.threads import limit_blas_threads

@@ -3,7 +3,7 @@
 A scene names the oscillator (``[oscillator]``), what to compute (one
 array of tables per section: ``[[orbits]]``, ``[[branches]]``, ... and the
 sections of problems from other packages, all from the one registry
-:mod:`impactcont.problems.plugins`), the figures (``[[plots]]``) and where to
+:mod:`impactcont.scene.plugins`), the figures (``[[plots]]``) and where to
 write (``[output]``). The format is documented in ``docs/scenes.md``; the
 entries of the built-in sections are in :mod:`impactcont.scene.entries`.
 
@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.problems.plugins import RESERVED_KEYS, PlotKind, plot_kinds, scene_sections
 from impactcont.scene.entries import (
     PARAMETER_RANGES,
     BranchSpec,
@@ -56,6 +55,7 @@ from impactcont.scene.keys import (
     type_name,
     unknown_key,
 )
+from impactcont.scene.plugins import RESERVED_KEYS, PlotKind, plot_kinds, scene_sections
 from impactcont.scene.source import apply_settings, locator, tomllib
 
 __all__ = [

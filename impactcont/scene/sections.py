@@ -5,8 +5,8 @@ dataclass that validates one table (a subclass of
 :class:`~impactcont.scene.entries.EntrySpec`) and the driver that computes
 one entry into an :class:`xarray.Dataset`, with how computed datasets are
 described in Markdown and the plot kinds that draw them. Each is a
-:class:`~impactcont.problems.plugins.SceneSection`; the registry
-(:mod:`impactcont.problems.plugins`) lists the objects below as the built-in
+:class:`~impactcont.scene.plugins.SceneSection`; the registry
+(:mod:`impactcont.scene.plugins`) lists the objects below as the built-in
 problems, before those of other packages, so that the scene parser, the
 runner and the command line see built-in and plugin sections the same way.
 
@@ -22,15 +22,15 @@ from typing import Any
 
 import xarray as xr
 
-from impactcont.problems.plugins import (
+from impactcont.scene import switches, twoparam
+from impactcont.scene.entries import BranchSpec, OrbitSpec, RobustSpec, SimulationSpec
+from impactcont.scene.plugins import (
     PlotKind,
     SceneSection,
     plot_kinds,
     register_problem,
     scene_sections,
 )
-from impactcont.scene import switches, twoparam
-from impactcont.scene.entries import BranchSpec, OrbitSpec, RobustSpec, SimulationSpec
 
 __all__ = [
     "BRANCHES",
