@@ -13,6 +13,8 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+import re
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 from impactcont.errors import ParameterError
@@ -21,6 +23,7 @@ __all__ = [
     "CODIM2_LABELS",
     "CONTINUABLE_PARAMETERS",
     "CURVE_KINDS",
+    "ELEMENT_FAMILIES",
     "LABELS",
     "LABEL_MARKERS",
     "LABEL_NAMES",
@@ -28,10 +31,12 @@ __all__ = [
     "STATUSES",
     "Label",
     "Parameter",
+    "ParameterTable",
     "check_damping",
     "check_labels",
     "check_parameter",
     "damping_kind",
+    "element_name",
 ]
 
 
@@ -164,9 +169,87 @@ class Parameter:
 
 
 _NONNEGATIVE = dict(low=0.0, allowed="finite and >= 0")
+_POSITIVE = dict(low=0.0, low_open=True, allowed="finite and > 0")
 
-#: The continuable parameters, in the order of the API documentation.
-PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
+
+class ParameterTable(Mapping[str, Parameter]):
+    """The continuable parameters: a table of names, and the element families.
+
+    Iterating gives the named parameters (omega, b, R, ...); a lookup also resolves the
+    names of elements (:data:`ELEMENT_FAMILIES`, 1-based as the paper's masses):
+    ``m2`` (a mass), ``k1`` (a spring of the chain of eq. 2), ``c1`` (a damper),
+    ``M[1,2]``, ``K[1,2]``, ``C[1,2]`` (an entry and its symmetric partner), ``F[2]``
+    (the forcing amplitude of one mass). Whether an element exists on a given
+    oscillator is checked by :func:`impactcont.model.parameters.model_parameter`.
+    """
+
+    def __init__(self, named: dict[str, Parameter]) -> None:
+        self._named = named
+
+    def __getitem__(self, name: str) -> Parameter:
+        hit = self._named.get(name) if isinstance(name, str) else None
+        if hit is not None:
+            return hit
+        element = element_name(name)
+        if element is None:
+            raise KeyError(name)
+        family, indices = element
+        return _element_parameter(name, family, indices)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and (name in self._named or element_name(name) is not None)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._named)
+
+    def __len__(self) -> int:
+        return len(self._named)
+
+
+#: The element families: name pattern -> (long name, description, range keywords).
+ELEMENT_FAMILIES: dict[str, tuple[str, str, dict[str, Any]]] = {
+    "m<j>": ("mass", "Mass m_j of the chain of eq. (2): the entry M[j,j] of a diagonal M.",
+             _POSITIVE),
+    "k<j>": ("spring", "Spring k_j of the chain of eq. (2): between masses j and j+1, k_n "
+             "from mass n to the ground.", _POSITIVE),
+    "c<j>": ("damper", "Damper c_j of a chain damping matrix C (laid out as the springs of "
+             "eq. 2).", _NONNEGATIVE),
+    "M[i,j]": ("mass matrix entry", "Entry M[i,j] = M[j,i] of the mass matrix (eq. 1).", {}),
+    "K[i,j]": ("stiffness matrix entry", "Entry K[i,j] = K[j,i] of the stiffness matrix "
+               "(eq. 1).", {}),
+    "C[i,j]": ("damping matrix entry", "Entry C[i,j] = C[j,i] of a damping matrix C "
+               "(eq. 1).", {}),
+    "F[j]": ("forcing amplitude of one mass", "Entry F_j of the forcing vector F of eq. (1).",
+             {}),
+}
+
+_ELEMENT = re.compile(r"^(?:([mkc])([1-9][0-9]*)|([MKC])\[([1-9][0-9]*),([1-9][0-9]*)\]"
+                      r"|F\[([1-9][0-9]*)\])$")
+
+
+def element_name(name: Any) -> tuple[str, tuple[int, ...]] | None:
+    """``(family, 1-based indices)`` of an element name (``"k2"`` -> ``("k<j>", (2,))``,
+    ``"M[1,2]"`` -> ``("M[i,j]", (1, 2))``), None for any other name."""
+    match = _ELEMENT.match(name) if isinstance(name, str) else None
+    if match is None:
+        return None
+    letter, j, matrix, i1, i2, f = match.groups()
+    if letter:
+        return f"{letter}<j>", (int(j),)
+    if matrix:
+        return f"{matrix}[i,j]", (int(i1), int(i2))
+    return "F[j]", (int(f),)
+
+
+def _element_parameter(name: str, family: str, indices: tuple[int, ...]) -> Parameter:
+    long_name, description, limits = ELEMENT_FAMILIES[family]
+    where = ",".join(str(i) for i in indices)
+    return Parameter(name, f"{long_name} {name}", f"{description} (here {where}.)", **limits)
+
+
+#: The continuable parameters, in the order of the API documentation; a lookup also
+#: resolves the element names (:class:`ParameterTable`).
+PARAMETERS: ParameterTable = ParameterTable({p.name: p for p in (
     Parameter("omega", "forcing frequency", "Nondimensional forcing frequency omega of eq. (1).",
               low=0.0, low_open=True, allowed="finite and > 0"),
     Parameter("b", "gap", "Position b of the stop met by mass 1 (eq. 3)."),
@@ -183,9 +266,18 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
               "Amplitude of the periodic forcing F of eq. (1), the largest |F_i|; "
               "changing it scales F and keeps its shape.",
               low=0.0, low_open=True, allowed="finite and > 0"),
-)}
+    Parameter("b_low", "gap of the lower stop",
+              "Position -b_low of the lower stop x_j = -b_low (stops.b_low; docs/two_sided.md)."),
+    Parameter("R_low", "restitution of the lower stop",
+              "Coefficient of restitution of the lower stop (stops.R_low), eq. (4) there.",
+              low=0.0, high=1.0, allowed="in [0, 1]"),
+    Parameter("gap", "symmetric clearance",
+              "b and b_low together: the stops x_j = +-gap of a symmetric clearance.",
+              low=0.0, low_open=True, allowed="finite and > 0"),
+)})
 
-#: Names of the continuable parameters.
+#: Names of the continuable parameters (the element names are patterns:
+#: :data:`ELEMENT_FAMILIES`).
 CONTINUABLE_PARAMETERS: tuple[str, ...] = tuple(PARAMETERS)
 
 
@@ -234,6 +326,8 @@ def check_parameter(osc: Any, name: Any, argument: str = "parameter") -> str:
         Naming `argument`, the value and the allowed names.
     """
     if not isinstance(name, str) or name not in PARAMETERS:
-        raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS}; got {name!r}")
+        raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS} or an element "
+                             f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', "
+                             f"'F[2]'); got {name!r}")
     check_damping(osc, name, argument)
     return name

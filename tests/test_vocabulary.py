@@ -33,7 +33,7 @@ def test_damping_rule_is_one_function():
     with pytest.raises(ic.ParameterError, match="needs the paper's damping"):
         vocab.check_parameter(rayleigh, "eta")
     with pytest.raises(ic.ParameterError, match="must be one of"):
-        vocab.check_parameter(eta, "gap")
+        vocab.check_parameter(eta, "clearance")
     with pytest.raises(ic.ParameterError, match="labels must be a subset"):
         vocab.check_labels(["PD", "XX"])
 

@@ -51,6 +51,7 @@ from impactcont.detection.special_points import (
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import RESTITUTION, model_parameter
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.progress import ProgressOption, Reporter, reporter
@@ -94,7 +95,9 @@ def _refuse_elastic(osc: ImpactOscillator, parameter: str, lo: float, hi: float)
         alpha, beta = osc.rayleigh
     undamped = {"eta": lo == 0.0, "alpha": lo == 0.0 and beta == 0.0,
                 "beta": lo == 0.0 and alpha == 0.0}.get(parameter, alpha == 0.0 and beta == 0.0)
-    elastic = hi >= 1.0 if parameter == "R" else osc.R == 1.0
+    param = model_parameter(osc, parameter)
+    # a parameter that is the stop's restitution (eq. 4) reaches R = 1 at hi >= 1
+    elastic = hi >= 1.0 if param.data == RESTITUTION and param.upper else osc.R == 1.0
     if undamped and elastic:
         raise ParameterError(
             f"continuation in {parameter} over [{lo!r}, {hi!r}] reaches elastic impacts without "
@@ -175,7 +178,7 @@ def _start_value(problem: PeriodicBranchProblem, bounds: tuple[float, float],
         if not lo <= start <= hi:
             raise ParameterError(f"start must lie within bounds {bounds}; got {start!r}")
         return float(start)
-    current = float(getattr(problem.osc, problem.parameter) or 0.0)
+    current = problem.param.value(problem.osc)
     candidates = [current] if lo <= current <= hi else []
     candidates += list(np.linspace(lo, hi, _EXISTENCE_SCAN))
     for lam in candidates:
@@ -527,9 +530,11 @@ def _problem_at(branch: xr.Dataset, row: int, special: bool) -> tuple[Any, np.nd
     def at(name: str) -> float:
         return float(branch[special_variable(name) if special else name].values[row])
 
-    osc = oscillator_from_dataset(branch).replace(
-        **{name: at(name) for name in dict.fromkeys(["omega", "b", parameter])})
-    lam = float(getattr(osc, parameter) or 0.0)
+    base = oscillator_from_dataset(branch)
+    osc = base.replace(omega=at("omega"), b=at("b"))
+    if parameter not in ("omega", "b"):
+        osc = model_parameter(base, parameter).at(osc, at(parameter))
+    lam = model_parameter(osc, parameter).value(osc)
     return PeriodicBranchProblem(osc, N, parameter), np.array([at("delta")]), lam
 
 

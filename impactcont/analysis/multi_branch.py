@@ -55,14 +55,15 @@ from impactcont.detection.special_points import (
     event_function,
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
-from impactcont.problems.symmetric_branch import SYMMETRY_BREAKING, SymmetricBranchProblem
+from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.progress import ProgressOption, Reporter, reporter
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS, check_labels, check_parameter
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["multi_impact_continuation", "restart_problem"]
 
@@ -219,7 +220,7 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
     if not forward:
         raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
     message = result.message
-    if limit is not None and any(getattr(o.oscillator, problem.parameter) == limit
+    if limit is not None and any(problem.param.value(o.oscillator) == limit
                                  for w in watches.values() for o in w.orbits[-1:]):
         message += (f"; the branch ends at {problem.parameter} = {limit!r}, ds_min from the "
                     f"end of its range: {problem.limit_reason()}")
@@ -361,7 +362,7 @@ def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | No
     """
     pattern = orbit.pattern or None
     if symmetric is None:
-        symmetric = ((parameter not in SYMMETRY_BREAKING or orbit.oscillator.stops.mirror)
+        symmetric = (model_parameter(orbit.oscillator, parameter).keeps_symmetry
                      and admits_symmetric_motions(orbit.oscillator, orbit.N, orbit.p,
                                                   orbit.pattern or "")
                      and symmetry_defect(orbit) <= _SYMMETRY_TOL)
@@ -457,9 +458,9 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     orbit = _as_multi(start)
     labels = check_labels(detect)
     functions = check_user_functions(events, monitors, reserved_names())
-    check_parameter(orbit.oscillator, parameter)
+    model_parameter(orbit.oscillator, parameter)
     problem, u0 = branch_problem(orbit, parameter, symmetric)
-    lam0 = float(getattr(orbit.oscillator, parameter) or 0.0)
+    lam0 = problem.param.value(orbit.oscillator)
     opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                         newton_tol=newton_tol, max_points=max_points,
                         both_directions=both_directions, direction=direction, **more)
@@ -505,12 +506,14 @@ def restart_problem(branch: xr.Dataset, row: int, *, special: bool = False
     def at(name: str) -> Any:
         return branch[special_variable(name) if special else name].values[row]
 
-    osc = oscillator_from_dataset(branch).replace(
-        **{name: float(at(name)) for name in dict.fromkeys(["omega", "b", parameter])})
+    base = oscillator_from_dataset(branch)
+    osc = base.replace(omega=float(at("omega")), b=float(at("b")))
+    if parameter not in ("omega", "b"):
+        osc = model_parameter(base, parameter).at(osc, float(at(parameter)))
     u = initial_unknowns({"delta": float(at("delta_k")[0]), "flight_times": at("flight_time_k"),
                           "states": at("state_k"), "pattern": pattern}, osc, N, p)
     symmetric = bool(json.loads(branch.attrs.get("options", "{}")).get("symmetric", False))
-    lam = float(getattr(osc, parameter) or 0.0)
+    lam = model_parameter(osc, parameter).value(osc)
     if symmetric:
         problem: BranchProblem = SymmetricBranchProblem(osc, N, p, parameter, pattern=pattern)
         return problem, problem.half_unknowns(u), lam

@@ -3,18 +3,22 @@
 ``F(u, lam) = 0`` is the shooting system of :mod:`impactcont.orbit.multi_impact`
 (p flights with the exact flow of eq. 9, p impacts with the law of eq. 4) in
 ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]`` (2np unknowns) and one model
-parameter ``lam``. ``dF/du`` is exact; ``dF/dlam`` is exact for ``omega``, ``b``
-and ``R`` and a central difference (relative step 1e-6) for the damping
-parameters, where it only steers the predictor and Newton.
+parameter ``lam`` (a :class:`~impactcont.model.parameters.ModelParameter`). ``dF/du`` is
+exact; ``dF/dlam`` is exact for the forcing frequency, the stops' positions and
+restitutions (``omega``, ``b``, ``R``, ``b_low``, ``R_low``, ``gap``) and the forcing
+amplitude (``F0``, ``F[j]``: the residual is affine in F); the damping and the elements
+take the parameter's one finite-difference fallback
+(:meth:`~impactcont.model.parameters.ModelParameter.difference`), where it only steers the
+predictor and Newton.
 
 With two stops (``osc.stops``) the impact sequence ``pattern`` says which stop
-each impact hits; ``b`` and ``R`` are those of the upper stop, so their
-derivatives act on the ``"U"`` impacts only, unless the stops are mirrored
-(``Stops(mirror=True)``: the lower stop at ``-b`` with ``R`` moves with them). The
-upper stop must stay above the lower one: in ``b`` the problem is defined for
-``b > -b_low`` only (``b > 0`` for mirrored stops;
-:meth:`MultiImpactBranchProblem.parameter_limits`), where the clearance
-``b + b_low`` between the stops is open.
+each impact hits; a parameter says how fast each stop moves with it
+(:attr:`~impactcont.model.parameters.ModelParameter.upper`, ``lower``): ``b`` and ``R`` move
+the upper stop only, unless the stops are mirrored (``Stops(mirror=True)``: the lower stop
+at ``-b`` with ``R`` moves with them), ``b_low`` and ``R_low`` the lower one, ``gap`` both.
+The upper stop must stay above the lower one: the problem is defined only where the
+clearance ``b + b_low`` between the stops is open
+(:meth:`MultiImpactBranchProblem.parameter_limits`).
 """
 
 from __future__ import annotations
@@ -25,7 +29,8 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import UPPER, check_pattern
+from impactcont.model.parameters import FREQUENCY, GAP, RESTITUTION, model_parameter
+from impactcont.model.stops import check_pattern
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
@@ -37,11 +42,9 @@ from impactcont.orbit.multi_impact import (
     shooting,
 )
 from impactcont.orbit.periodic import _check_N
-from impactcont.vocabulary import check_parameter
 
 __all__ = ["MultiImpactBranchProblem"]
 
-_FD_STEP = 1e-6
 _CACHE_SIZE = 64
 
 
@@ -66,7 +69,7 @@ class MultiImpactBranchProblem:
                  pattern: str | None = None) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
-        check_parameter(osc, parameter)
+        self.param = model_parameter(osc, parameter)
         self.osc = osc
         self.N = _check_N(N)
         self.p = check_impacts(p)
@@ -80,9 +83,11 @@ class MultiImpactBranchProblem:
     def parameter_limits(self) -> tuple[float, float]:
         """Open interval of the parameter in which the stops exist as given.
 
-        Continued in ``b`` with a lower stop, the upper stop ``x_j = b`` must stay
-        above the lower one ``x_j = -b_low``: ``b > -b_low``. Every other case is
-        unlimited here (a parameter's own range, e.g. ``R`` in [0, 1], is checked
+        A parameter that moves a stop of a two-sided system must keep the upper stop
+        ``x_j = b`` above the lower one ``x_j = -b_low`` (``b > -b_low``; ``b > 0`` for
+        mirrored stops, ``gap > 0``, ``b_low > -b``:
+        :meth:`~impactcont.model.parameters.ModelParameter.clearance_limit`). Every other
+        case is unlimited here (a parameter's own range, e.g. ``R`` in [0, 1], is checked
         by the oscillator).
 
         Returns
@@ -90,12 +95,7 @@ class MultiImpactBranchProblem:
         (float, float)
             ``(lower, upper)``, either possibly infinite.
         """
-        stops = self.osc.stops
-        if self.parameter == "b" and stops.mirror:
-            return 0.0, math.inf
-        if self.parameter == "b" and stops.two_sided:
-            return -float(stops.b_low), math.inf
-        return -math.inf, math.inf
+        return self.param.clearance_limit(self.osc), math.inf
 
     def limit_reason(self) -> str:
         """Why the parameter cannot reach :meth:`parameter_limits` ("" when unlimited)."""
@@ -103,12 +103,9 @@ class MultiImpactBranchProblem:
         if not math.isfinite(lower):
             return ""
         stops = self.osc.stops
-        if stops.mirror:
-            return (f"at b = 0 the mirrored stops x_{stops.mass} = +-b meet (stops={stops!r}): "
-                    "the clearance 2 b between them closes")
-        return (f"at b = -b_low = {lower!r} the upper stop x_{stops.mass} = b meets the lower "
-                f"stop x_{stops.mass} = -b_low (stops={stops!r}): the clearance b + b_low "
-                "between them closes")
+        return (f"at {self.parameter} = {lower!r} the upper stop x_{stops.mass} = b meets the "
+                f"lower stop x_{stops.mass} = -b_low (b={self.osc.b!r}, stops={stops!r}): the "
+                "clearance b + b_low between them closes")
 
     def check_bounds(self, bounds: tuple[float, float]) -> None:
         """Refuse bounds that reach beyond :meth:`parameter_limits`.
@@ -134,7 +131,7 @@ class MultiImpactBranchProblem:
         if flow is None:
             if len(self._flows) > _CACHE_SIZE:
                 self._flows.clear()
-            flow = self._flows[lam] = Flow(self.osc.replace(**{self.parameter: lam}))
+            flow = self._flows[lam] = Flow(self.param.at(self.osc, lam))
         return flow
 
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -165,26 +162,27 @@ class MultiImpactBranchProblem:
 
     def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
         """``dF/dlam``, shape (2np,)."""
+        data = self.param.data
+        if data not in (FREQUENCY, GAP, RESTITUTION):
+            # the fallback; exact for the forcing amplitude (the residual is affine in F)
+            return self._difference_quotient(u, lam)
         sh = self._shoot(u, lam)
         osc = self.oscillator_at(lam)
         n, p, m = osc.n, self.p, 2 * osc.n
         j, _, diagonals = impact_geometry(osc, self.pattern)
-        upper = np.array([s == UPPER for s in self.pattern])
-        # d(stop position)/db per impact: 1 on the upper stop x_j = b, and -1 on the lower
-        # stop x_j = -b of mirrored stops (which move with b; a lower stop at -b_low does not)
-        moves = np.where(upper, 1.0, -1.0 if osc.stops.mirror else 0.0)
+        # d(position c_k)/dlam or d(restitution R_k)/dlam of the stop of each impact
+        rates = self.param.stop_rates(self.pattern)
         out = np.zeros(p * m)
-        if self.parameter == "b":
+        if data == GAP:
             for k in range(p):  # x_j = c_k at every start and arrival on a moving stop
                 nxt = (k + 1) % p
-                out[k * m:(k + 1) * m] = moves[k] * diagonals[nxt] * sh.transitions[k][:, j]
-                out[k * m + j] -= moves[nxt]
+                out[k * m:(k + 1) * m] = rates[k] * diagonals[nxt] * sh.transitions[k][:, j]
+                out[k * m + j] -= rates[nxt]
             return out
-        if self.parameter == "R":  # the restitution of the upper stop (and of a mirror)
-            arriving = np.roll(moves != 0.0, -1)  # flight k ends at impact k+1
-            out[n + j::m] = np.where(arriving, -sh.arrivals[:, n + j], 0.0)
+        if data == RESTITUTION:  # x_j'^+ = -R_k x_j'^-: flight k ends at impact k+1
+            out[n + j::m] = -np.roll(rates, -1) * sh.arrivals[:, n + j]
             return out
-        if self.parameter == "omega":
+        if data == FREQUENCY:
             period = 2.0 * math.pi * self.N / osc.omega
             explicit = omega_partials(self.flow_at(lam), sh)
             # theta_k = delta + omega * (time elapsed since impact 0)
@@ -193,13 +191,12 @@ class MultiImpactBranchProblem:
                       * (explicit + elapsed[:, None] * sh.phase_columns)).ravel()
             # tau_{p-1} = 2 pi N / omega - sum(others)
             out[(p - 1) * m:] += diagonals[0] * sh.arrival_rates[p - 1] * (-period / osc.omega)
-            return out
-        return self._difference_quotient(u, lam)
+        return out
 
     def _difference_quotient(self, u: np.ndarray, lam: float) -> np.ndarray:
-        h = _FD_STEP * max(1.0, abs(lam))
-        lo, hi = max(lam - h, 0.0), lam + h
-        return (self.residual(u, hi) - self.residual(u, lo)) / (hi - lo)
+        """The parameter's one finite-difference fallback applied to the residual."""
+        return self.param.difference(lambda v: self.residual(u, v), float(lam),
+                                     self.oscillator_at(lam))
 
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:

@@ -21,17 +21,16 @@ import math
 import numpy as np
 
 from impactcont.errors import ParameterError
-from impactcont.model.modal import DAMPING_PARAMETERS, decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import FORCING, GAP, model_parameter
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
-from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_parameter
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem", "residual_scale", "root_phase",
            "scaled_derivative"]
 
-_KERNEL_WHICH = {"omega": 0, "R": 1, "eta": 2, "alpha": 2, "beta": 2}
 _ROOT_STEP = 1e-6  # rad: the largest correction root_phase makes (far above any tolerance)
 _UNSCALED = 64.0  # |c, s| up to which eq. (14) is not scaled (residual_scale)
 
@@ -98,16 +97,22 @@ class PeriodicBranchProblem:
     N : int
         One impact every N forcing periods.
     parameter : str
-        One of :data:`CONTINUABLE_PARAMETERS`.
+        One of :data:`CONTINUABLE_PARAMETERS` or an element name (``m2``, ``k1``, ``c1``,
+        ``M[1,2]``, ``K[1,2]``, ``C[1,2]``, ``F[2]``), as a
+        :class:`~impactcont.model.parameters.ModelParameter` (:attr:`param`).
 
     Notes
     -----
     ``c, s`` (eq. 13) come from the compiled kernel in modal form (O(n) per
-    parameter value, cached); when the parameter is the gap ``b`` they do not
-    depend on it at all, and they are linear in the forcing amplitude ``F0``
-    (eq. 13 is linear in F). Their parameter derivative is exact: one complex-step
-    evaluation of the same kernel (no step-size error, no cancellation). Eq. (14) is
-    divided by :func:`residual_scale`, and differentiated with it.
+    parameter value, cached); when the parameter moves the stop (``b``) they do not
+    depend on it at all, and they are affine in the forcing amplitude (``F0``, ``F[j]``:
+    eq. 13 is linear in F). Their derivative is exact in omega, R and the proportional
+    damping (one complex-step evaluation of the same kernel: no step-size error, no
+    cancellation), in the stop and the forcing; in the elements (masses, springs, dampers,
+    matrix entries: a new modal basis at each value) and on the first-order path in the
+    damping it is the parameter's finite-difference fallback
+    (:meth:`~impactcont.model.parameters.ModelParameter.difference`). Eq. (14) is divided
+    by :func:`residual_scale`, and differentiated with it.
     """
 
     #: The special points located on its branches (SN by the closed-form fold system).
@@ -118,23 +123,23 @@ class PeriodicBranchProblem:
     a closed loop (read by the continuation driver)."""
 
     def __init__(self, osc: ImpactOscillator, N: int, parameter: str) -> None:
-        check_parameter(osc, parameter)
+        self.param = model_parameter(osc, parameter)
         require_paper_stops(osc, "the N-1 branch")  # stops: mass 1, one stop only
         self.osc = osc
         self.N = N
         self.parameter = parameter
         self._general = osc.general  # general damping matrix or complex F: first-order path
         self._cache: dict[float, tuple[float, float, float, float]] = {}
-        self._per_unit_force: tuple[float, float] | None = None  # c, s at F0 = 1
+        self._forcing_slope: tuple[float, float] | None = None  # d(c, s)/d lam, affine in F
         self._osc_cache: dict[float, ImpactOscillator] = {}
+        # the compiled kernel's exact derivative serves omega, R and the decay rates on the
+        # proportional path; the elements change the modes (a new basis per value)
+        self._kernel = None if self._general else self.param.kernel
         if self._general:
             return
         w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
         self._w = w
-        if parameter in DAMPING_PARAMETERS:
-            self._da = decay_rate_derivative(parameter, w)
-        else:
-            self._da = np.zeros_like(w)
+        self._da = self.param.decay_rates_derivative(w)
 
     # -- the oscillator along the branch ------------------------------------------------------
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -144,7 +149,7 @@ class PeriodicBranchProblem:
         if hit is None:
             if len(self._osc_cache) > 64:
                 self._osc_cache.clear()
-            hit = self._osc_cache[lam] = self.osc.replace(**{self.parameter: lam})
+            hit = self._osc_cache[lam] = self.param.at(self.osc, lam)
         return hit
 
     def _arguments(self, lam: float) -> tuple:
@@ -152,13 +157,12 @@ class PeriodicBranchProblem:
         osc = self.osc
         a = osc.modes.kernel_arrays[1]
         R, omega = osc.R, osc.omega
-        if self.parameter == "omega":
+        if self._kernel == 0:
             omega = lam
-        elif self.parameter == "R":
+        elif self._kernel == 1:
             R = lam
-        elif self.parameter in DAMPING_PARAMETERS:
-            current = float(getattr(osc, self.parameter) or 0.0)
-            a = a + (lam - current) * self._da
+        elif self._kernel == 2:  # the decay rates are linear in eta, alpha, beta (eq. 6)
+            a = a + (lam - self.param.value(osc)) * self._da
         return a, R, omega
 
     def amplitude(self, lam: float) -> tuple[float, float, float]:
@@ -171,63 +175,85 @@ class PeriodicBranchProblem:
         callers read the cache first)."""
         from impactcont.kernel import closed_form as kernel
 
-        b = lam if self.parameter == "b" else self.osc.b
-        if self.parameter == "b" and self._cache:
+        data = self.param.data
+        b = self.oscillator_at(lam).b if data == GAP else self.osc.b
+        if data == GAP and self._cache:
             c, s = next(iter(self._cache.values()))[:2]  # c, s do not depend on the gap
-        elif self.parameter == "F0":
+        elif data == GAP:
+            c, s = self._amplitude_at(self.param.value(self.osc))
+        elif data == FORCING:  # affine in F: c(lam) = c(lam0) + (lam - lam0) dc/dlam
             self._check(lam)
-            c, s = self._unit_amplitude()
-            c, s = c * lam, s * lam
-        elif self._general:
-            self._check(lam)
-            c, s = general.amplitude(self.oscillator_at(lam), self.N)[:2]
-        else:
+            lam0 = self.param.value(self.osc)
+            (c0, s0), (dc, ds) = self._amplitude_at(lam0), self._forcing_derivative()
+            c, s = c0 + (lam - lam0) * dc, s0 + (lam - lam0) * ds
+        elif self._kernel is not None:
             self._check(lam)
             a, R, omega = self._arguments(lam)
             c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
             c, s = float(c), float(s)
+        else:
+            self._check(lam)
+            c, s = self._amplitude_at(lam)
         if len(self._cache) > 256:
             self._cache.clear()
         hit = self._cache[lam] = (c, s, b, max(1.0, math.hypot(c, s) / _UNSCALED))
         return hit
 
-    def _unit_amplitude(self) -> tuple[float, float]:
-        """``c, s`` per unit forcing amplitude (``F0 = 1``, F of the same shape)."""
+    def _amplitude_at(self, lam: float) -> tuple[float, float]:
+        """``c, s`` of eq. (14) of the oscillator at ``lam``, built anew (its own modal or
+        first-order basis, the kernel's parameters as they are)."""
         from impactcont.kernel import closed_form as kernel
 
-        if self._per_unit_force is None and self._general:
-            c, s = general.amplitude(self.osc, self.N)[:2]
-            self._per_unit_force = (c / self.osc.F0, s / self.osc.F0)
-        if self._per_unit_force is None:
-            a, R, omega = self._arguments(self.osc.F0)
-            c, s = kernel.amplitude(self._w, a, self._f, self._u0, self._ui0, R, omega, self.N)
-            self._per_unit_force = (float(c) / self.osc.F0, float(s) / self.osc.F0)
-        return self._per_unit_force
+        osc = self.oscillator_at(lam)
+        if osc.general:
+            c, s = general.amplitude(osc, self.N)[:2]
+            return float(c), float(s)
+        w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
+        c, s = kernel.amplitude(w, a, f, u0, ui0, osc.R, osc.omega, self.N)
+        return float(c), float(s)
+
+    def _forcing_derivative(self) -> tuple[float, float]:
+        """``d(c, s)/d lam`` in the forcing amplitude: constant (eq. 13 is linear in F), so
+        the parameter's difference with its large step is exact to rounding."""
+        if self._forcing_slope is None:
+            lam0 = self.param.value(self.osc)
+            dc, ds = self.param.difference(self._amplitude_at, lam0, self.osc)
+            self._forcing_slope = (float(dc), float(ds))
+        return self._forcing_slope
 
     def _check(self, lam: float) -> None:
         """Refuse an iterate where eq. (14) is undefined (the corrector then halves).
 
-        ``c, s`` are analytic in R and the damping beyond their physical ranges, so a
-        predictor may overshoot ``R = 1`` or ``eta = 0`` and the driver lands on the
-        bound; only ``omega <= 0`` (no period), ``F0 <= 0`` and non-finite values are refused.
+        ``c, s`` are analytic in R and the damping beyond their physical ranges (the
+        kernel's parameters 1 and 2), so a predictor may overshoot ``R = 1`` or ``eta = 0``
+        and the driver lands on the bound; outside its range every other parameter is
+        refused (``omega <= 0``: no period; ``F0 <= 0``; a mass at 0), as are non-finite
+        values.
         """
-        if not math.isfinite(lam) or (self.parameter in ("omega", "F0") and lam <= 0.0):
-            raise ParameterError(f"{self.parameter}={lam!r} is outside its allowed range")
+        analytic = self._kernel in (1, 2)
+        if not math.isfinite(lam) or not (analytic or self.param.info.contains(lam)):
+            raise ParameterError(f"{self.parameter}={lam!r} is outside its allowed range "
+                                 f"({self.param.info.allowed})")
 
     def _amplitude_derivative(self, lam: float) -> tuple[float, float, float]:
         from impactcont.kernel import closed_form as kernel
 
-        if self.parameter == "b":
-            return 0.0, 0.0, 1.0
+        data = self.param.data
+        if data == GAP:
+            return 0.0, 0.0, self.param.upper
         self._check(lam)
-        if self.parameter == "F0":
-            return (*self._unit_amplitude(), 0.0)
-        if self._general:
+        if data == FORCING:
+            return (*self._forcing_derivative(), 0.0)
+        if self._general and self.param.kernel in (0, 1):  # omega, R: exact there too
             _, _, dc, ds = general.amplitude(self.oscillator_at(lam), self.N, self.parameter)
             return dc, ds, 0.0
+        if self._kernel is None:  # the elements; the damping on the first-order path
+            dc, ds = self.param.difference(self._amplitude_at, float(lam),
+                                           self.oscillator_at(lam))
+            return float(dc), float(ds), 0.0
         a, R, omega = self._arguments(float(lam))
         dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R, omega,
-                                             self.N, _KERNEL_WHICH[self.parameter], self._da)
+                                             self.N, self._kernel, self._da)
         return float(dc), float(ds), 0.0
 
     # -- the Problem protocol ------------------------------------------------------------------

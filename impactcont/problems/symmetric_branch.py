@@ -13,9 +13,11 @@ are the whole system: ``F(v, lam) = r_{0..h-1}(E v + e, lam)``, with the exact
 ``tau_{h-1}`` times ``de/domega`` in omega). Unlike the full system it is regular
 at the symmetry-breaking pitchfork (the null vector of the full Jacobian there is
 antisymmetric), so the branch is followed through it and the pitchfork located on
-it like any other special point. Parameters that keep the system symmetric:
-``omega``, ``F0``, the damping, and ``b`` and ``R`` of mirrored stops
-(``Stops(mirror=True)``; otherwise they move only the upper stop).
+it like any other special point. Parameters that keep the system symmetric
+(:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`): ``omega``, ``F0``,
+the damping and every element, ``gap`` (both stops), and ``b`` and ``R`` of mirrored stops
+(``Stops(mirror=True)``; otherwise they move only the upper stop, as ``b_low`` and
+``R_low`` move only the lower one).
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import numpy as np
 from impactcont.core.locate import MotionTest
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import FREQUENCY, ModelParameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import HalfUnknowns, admits_symmetric_motions
@@ -37,10 +40,10 @@ from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 __all__ = ["SymmetricBranchProblem"]
 
-#: Parameters that move only the upper stop (unless the stops are mirrored): they break
-#: the symmetry.
-SYMMETRY_BREAKING = ("b", "R")
-
+#: Named parameters that move one stop only unless the stops are mirrored (``b``, ``R``)
+#: or always (``b_low``, ``R_low``). Kept for the stability maps' check; a problem asks the
+#: parameter (:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`).
+SYMMETRY_BREAKING = ("b", "R", "b_low", "R_low")
 
 class SymmetricBranchProblem:
     """Symmetric N-p motions as ``F(v, lam) = 0`` for the continuation core.
@@ -52,8 +55,8 @@ class SymmetricBranchProblem:
     N, p : int
         ``N`` odd, ``p`` even.
     parameter : str
-        Continued parameter; ``b`` or ``R`` only with mirrored stops (else they move one
-        stop only).
+        Continued parameter, one that keeps the system symmetric (``b`` or ``R`` only with
+        mirrored stops, else they move one stop only; ``gap`` moves both).
     pattern : str
         The stops of the p impacts; its second half mirrors the first.
 
@@ -76,12 +79,12 @@ class SymmetricBranchProblem:
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str) -> None:
         self.full = MultiImpactBranchProblem(osc, N, p, parameter, pattern=pattern)
-        if parameter in SYMMETRY_BREAKING and not osc.stops.mirror:
-            raise ParameterError(f"parameter {parameter!r} moves only the upper stop and breaks "
-                                 "the symmetry: continue symmetric motions in another "
-                                 "parameter, mirror the stops (Stops(mirror=True): the lower "
-                                 "stop moves with b and R), or follow the motion as an N-p "
-                                 "motion (symmetric=False)")
+        if not self.full.param.keeps_symmetry:
+            raise ParameterError(f"parameter {parameter!r} moves one stop only and breaks the "
+                                 "symmetry: continue symmetric motions in another parameter "
+                                 "('gap' moves both stops), mirror the stops (Stops(mirror="
+                                 "True): the lower stop moves with b and R), or follow the "
+                                 "motion as an N-p motion (symmetric=False)")
         if not admits_symmetric_motions(osc, self.full.N, self.full.p, self.full.pattern):
             raise ParameterError(
                 f"the N={N}, p={p} motions with pattern {self.full.pattern!r} of {osc!r} cannot "
@@ -111,6 +114,11 @@ class SymmetricBranchProblem:
     @property
     def parameter(self) -> str:
         return self.full.parameter
+
+    @property
+    def param(self) -> ModelParameter:
+        """The continued parameter as an object (that of the full problem)."""
+        return self.full.param
 
     def parameter_limits(self) -> tuple[float, float]:
         """As :meth:`MultiImpactBranchProblem.parameter_limits`."""
@@ -160,7 +168,7 @@ class SymmetricBranchProblem:
         """``dF/dlam`` at fixed ``v``, shape (2nh,)."""
         u = self.full_unknowns(v, lam)
         out = self.full.dparam(u, lam)[self._rows()]
-        if self.parameter == "omega":  # tau_{h-1} = N pi / omega - ...
+        if self.full.param.data == FREQUENCY:  # tau_{h-1} = N pi / omega - ...
             rows = self.full.jacobian(u, lam)[self._rows()]
             out = out + rows @ self.halves.offset_derivative(float(lam))
         return out

@@ -1,0 +1,385 @@
+"""Continuable parameters as objects: how each is set on the model and what it moves.
+
+A name of the vocabulary (:data:`impactcont.vocabulary.PARAMETERS`: ``omega``, ``b``,
+``R``, ``eta``, ``alpha``, ``beta``, ``F0``, ``b_low``, ``R_low``, ``gap`` and the element
+names ``m<j>``, ``k<j>``, ``c<j>``, ``M[i,j]``, ``K[i,j]``, ``C[i,j]``, ``F[j]``, 1-based as
+the paper's masses) becomes a :class:`ModelParameter` for one oscillator
+(:func:`model_parameter`). The object says
+
+- how to read it on the model and set it (:meth:`ModelParameter.value`,
+  :meth:`ModelParameter.at`: ``osc.replace(...)``, a new ``Stops`` or a new matrix);
+- which flight data it changes (:attr:`ModelParameter.data`): the forcing frequency
+  (eq. 1), the position of a stop (eq. 3), the restitution of a stop (eq. 4), the
+  damping, the stiffness or the masses (the flow of eq. 9), the forcing amplitude;
+- how a stop moves with it: the rate of the upper stop's position or restitution and of
+  the lower stop's (:attr:`ModelParameter.upper`, :attr:`ModelParameter.lower`), from
+  which the problems write their exact derivatives;
+- the derivative everything else uses: :meth:`ModelParameter.difference`, the one
+  finite-difference fallback of the package.
+
+Adding a parameter is one entry: a vocabulary record (name, range, unit) and a line of
+:func:`_build`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from impactcont.errors import ParameterError
+from impactcont.model.modal import decay_rate_derivative
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import UPPER
+from impactcont.vocabulary import (
+    CONTINUABLE_PARAMETERS,
+    ELEMENT_FAMILIES,
+    PARAMETERS,
+    Parameter,
+    check_damping,
+    element_name,
+)
+
+__all__ = ["DAMPING", "FD_RELATIVE_STEP", "FORCING", "FREQUENCY", "GAP", "MASS", "RESTITUTION",
+           "STIFFNESS", "ModelParameter", "chain_elements", "model_parameter"]
+
+#: The flight data a parameter changes.
+FREQUENCY = "forcing frequency"
+GAP = "stop position"
+RESTITUTION = "stop restitution"
+DAMPING = "damping"
+STIFFNESS = "stiffness"
+MASS = "mass"
+FORCING = "forcing amplitude"
+
+#: Relative step of the finite-difference fallback: ``eps^(1/3)``, which balances the
+#: central difference's truncation ``h^2 |f'''| / 6`` against rounding ``eps |f| / h``.
+FD_RELATIVE_STEP = float(np.finfo(float).eps) ** (1.0 / 3.0)
+_AFFINE_STEP = 0.5  # of the scale: a data affine in the parameter has no truncation error
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ModelParameter:
+    """One continuable parameter of one oscillator.
+
+    Attributes
+    ----------
+    name : str
+        The vocabulary name (``"omega"``, ``"b_low"``, ``"k2"``, ``"M[1,2]"``, ``"F[2]"``).
+    info : Parameter
+        Its vocabulary record: long name, range, unit.
+    data : str
+        The flight data it changes: :data:`FREQUENCY`, :data:`GAP`, :data:`RESTITUTION`,
+        :data:`DAMPING`, :data:`STIFFNESS`, :data:`MASS` or :data:`FORCING`.
+    upper, lower : float
+        For :data:`GAP`: ``d c / d lam`` of the stop positions (``c = b`` above,
+        ``c = -b_low`` below); for :data:`RESTITUTION`: ``d R / d lam`` of the upper and
+        the lower stop's restitution. Zero otherwise.
+    kernel : int or None
+        The closed-form kernel's exact derivative (eq. 13-14) that serves it on the
+        proportional path: 0 omega, 1 R, 2 the decay rates; None: none.
+    """
+
+    name: str
+    info: Parameter
+    data: str
+    get: Callable[[ImpactOscillator], float] = dataclasses.field(repr=False)
+    put: Callable[[ImpactOscillator, float], ImpactOscillator] = dataclasses.field(repr=False)
+    scale_of: Callable[[ImpactOscillator], float] = dataclasses.field(repr=False)
+    upper: float = 0.0
+    lower: float = 0.0
+    kernel: int | None = None
+
+    # -- the model ------------------------------------------------------------------------------
+    def value(self, osc: ImpactOscillator) -> float:
+        """The parameter's value on `osc` (0.0 for an absent damping coefficient)."""
+        return float(self.get(osc))
+
+    def at(self, osc: ImpactOscillator, value: float) -> ImpactOscillator:
+        """`osc` with the parameter set to `value` (validated by the oscillator)."""
+        return self.put(osc, float(value))
+
+    def scale(self, osc: ImpactOscillator) -> float:
+        """The size on which the parameter acts (its value, or its matrix or vector)."""
+        s = max(abs(self.value(osc)), float(self.scale_of(osc)))
+        return s if s > 0.0 and math.isfinite(s) else 1.0
+
+    # -- what it moves --------------------------------------------------------------------------
+    @property
+    def moves_stops(self) -> bool:
+        """It moves a stop (:data:`GAP`) or changes a restitution (:data:`RESTITUTION`)."""
+        return self.data in (GAP, RESTITUTION)
+
+    @property
+    def affine(self) -> bool:
+        """The flight data are affine in it (the forcing amplitude: eq. 13 is linear in F)."""
+        return self.data == FORCING
+
+    @property
+    def exact_on_shooting(self) -> bool:
+        """The N-p shooting residual has its exact derivative (frequency, stops, forcing)."""
+        return self.data in (FREQUENCY, GAP, RESTITUTION, FORCING)
+
+    @property
+    def keeps_symmetry(self) -> bool:
+        """A symmetric system (``x -> -x`` with the stops) stays symmetric as it moves.
+
+        Only the stops can break it: both positions must move oppositely (``c = +-gap``)
+        and both restitutions together.
+        """
+        if self.data == GAP:
+            return self.upper == -self.lower
+        if self.data == RESTITUTION:
+            return self.upper == self.lower
+        return True
+
+    def stop_rates(self, pattern: str) -> np.ndarray:
+        """:attr:`upper` or :attr:`lower` for the stop of each impact of `pattern`, (p,)."""
+        return np.array([self.upper if s == UPPER else self.lower for s in pattern])
+
+    def clearance_limit(self, osc: ImpactOscillator) -> float:
+        """The value at which the clearance ``b + b_low`` between two stops closes (GAP
+        parameters of a two-sided system), ``-inf`` when it never does."""
+        rate = self.upper - self.lower
+        if self.data != GAP or not osc.stops.two_sided or rate == 0.0:
+            return -math.inf
+        width = osc.b + float(osc.stops.b_low)
+        return self.value(osc) - width / rate
+
+    def decay_rates_derivative(self, w: np.ndarray) -> np.ndarray:
+        """``d a_i / d lam`` of the modal decay rates (eta, alpha, beta; eq. 6), else 0."""
+        if self.kernel == 2:
+            return decay_rate_derivative(self.name, w)
+        return np.zeros_like(w)
+
+    # -- the one finite-difference fallback ------------------------------------------------------
+    def difference(self, f: Callable[[float], Any], lam: float, osc: ImpactOscillator
+                   ) -> Any:
+        """``df/dlam`` at `lam` by a central difference: the fallback of every problem.
+
+        Parameters
+        ----------
+        f : callable
+            The problem's data (a residual, ``c, s`` of eq. 14) as a function of the
+            parameter, returning a float or an array.
+        lam : float
+            Where.
+        osc : ImpactOscillator
+            The oscillator at `lam` (its :meth:`scale`).
+
+        Notes
+        -----
+        The step is ``h = eps^(1/3) max(|lam|, scale)`` (:data:`FD_RELATIVE_STEP`, 6.1e-6):
+        the error is ``h^2 |f'''| / 6 + eps |f| / h``, about ``1e-11`` relative to the data
+        when they vary on the parameter's scale (measured in ``tests/test_parameters.py``).
+        Data affine in the parameter (:attr:`affine`: the forcing amplitude) take
+        ``h = scale / 2``: no truncation error, rounding only (exact). A side outside the
+        parameter's range (a mass at 0) is not evaluated: the difference is then one-sided
+        (error ``h |f''| / 2``).
+        """
+        lam = float(lam)
+        scale = self.scale(osc)
+        h = _AFFINE_STEP * scale if self.affine else FD_RELATIVE_STEP * max(abs(lam), scale)
+        lo = lam - h if self.info.contains(lam - h) else lam
+        hi = lam + h if self.info.contains(lam + h) else lam
+        return (np.asarray(f(hi)) - np.asarray(f(lo))) / (hi - lo)
+
+
+# -------------------------------------------------------------------------------------------
+# The table: one entry per parameter (the element families are built per index)
+# -------------------------------------------------------------------------------------------
+def _scalar(name: str) -> tuple[Callable, Callable]:
+    return (lambda osc: getattr(osc, name) or 0.0,
+            lambda osc, v: osc.replace(**{name: v}))
+
+
+def _lower_stop(key: str) -> tuple[Callable, Callable]:
+    return (lambda osc: getattr(osc.stops, key),
+            lambda osc, v: osc.replace(stops=dataclasses.replace(osc.stops, **{key: v})))
+
+
+def _set_gap(osc: ImpactOscillator, v: float) -> ImpactOscillator:
+    if osc.stops.mirror:
+        return osc.replace(b=v)
+    return osc.replace(b=v, stops=dataclasses.replace(osc.stops, b_low=v))
+
+
+def _one(_: ImpactOscillator) -> float:
+    return 1.0
+
+
+def _named(name: str, osc: ImpactOscillator) -> ModelParameter:
+    """The entry of a named parameter."""
+    info = PARAMETERS[name]
+    mirror = osc.stops.mirror
+    entries: dict[str, dict[str, Any]] = {
+        "omega": dict(data=FREQUENCY, kernel=0),
+        "b": dict(data=GAP, upper=1.0, lower=-1.0 if mirror else 0.0),
+        "R": dict(data=RESTITUTION, upper=1.0, lower=1.0 if mirror else 0.0, kernel=1),
+        "eta": dict(data=DAMPING, kernel=2),
+        "alpha": dict(data=DAMPING, kernel=2),
+        "beta": dict(data=DAMPING, kernel=2),
+        "F0": dict(data=FORCING),
+        "b_low": dict(data=GAP, lower=-1.0),
+        "R_low": dict(data=RESTITUTION, lower=1.0),
+        "gap": dict(data=GAP, upper=1.0, lower=-1.0),
+    }
+    get, put = (_lower_stop(name) if name in ("b_low", "R_low") else _scalar(name))
+    if name == "gap":
+        get, put = (lambda o: o.b), _set_gap
+    scale = (lambda o: o.F0) if name == "F0" else _one
+    return ModelParameter(name, info, get=get, put=put, scale_of=scale, **entries[name])
+
+
+def _pattern(n: int, j: int) -> np.ndarray:
+    """The stiffness pattern of element j (1-based) of the chain of eq. (2): between masses
+    j and j+1, the last one from mass n to the ground."""
+    P = np.zeros((n, n))
+    P[j - 1, j - 1] = 1.0
+    if j < n:
+        P[j, j] = 1.0
+        P[j - 1, j] = P[j, j - 1] = -1.0
+    return P
+
+
+def chain_elements(A: np.ndarray) -> np.ndarray | None:
+    """The elements ``e_1..e_n`` of a chain matrix (springs or dampers of eq. 2) with
+    ``A = sum e_j P_j``, or None when `A` is not such a chain (to rounding)."""
+    A = np.asarray(A, dtype=float)
+    n = A.shape[0]
+    e = np.array([-A[j - 1, j] for j in range(1, n)] + [A[n - 1, n - 1] + (A[n - 2, n - 1]
+                                                                           if n > 1 else 0.0)])
+    rebuilt = sum((ej * _pattern(n, j) for j, ej in enumerate(e, start=1)), np.zeros((n, n)))
+    tol = 8.0 * n * np.finfo(float).eps * max(1.0, float(np.max(np.abs(A))))
+    return e if np.max(np.abs(rebuilt - A)) <= tol else None
+
+
+def _element(name: str, family: str, indices: tuple[int, ...], osc: ImpactOscillator,
+             argument: str) -> ModelParameter:
+    """The entry of an element (mass, spring, damper, matrix entry, forcing of one mass)."""
+    n = osc.n
+    info = PARAMETERS[name]
+    letter = family[0]
+    if any(i > n for i in indices):
+        allowed = {"m": f"m1..m{n}", "k": f"k1..k{n}", "c": f"c1..c{n}", "F": f"F[1]..F[{n}]"}
+        raise ParameterError(f"{argument}={name!r} names an element past the oscillator's n={n} "
+                             f"masses (1-based); allowed: "
+                             f"{allowed.get(letter, f'{letter}[i,j] with 1 <= i, j <= {n}')}")
+    if letter in "cC" and not osc.general_damping:
+        raise ParameterError(f"{argument}={name!r} is an element of a damping matrix C; the "
+                             f"oscillator's damping is not given as a matrix "
+                             f"({'eta' if osc.eta is not None else 'alpha/beta'}): build it with "
+                             "C=... (a damper on some parts only), or continue eta, alpha or beta")
+    matrix = {"m": "M", "M": "M", "k": "K", "K": "K", "c": "C", "C": "C"}.get(letter)
+    if family == "F[j]":
+        j = indices[0] - 1
+        if osc.F.dtype.kind == "c":
+            raise ParameterError(f"{argument}={name!r}: F={osc.F.tolist()} is complex (each mass "
+                                 "its own phase) and a real F_j would drop that phase; continue "
+                                 "'F0' (the amplitude of the whole F, phases kept)")
+
+        def put_f(o: ImpactOscillator, v: float) -> ImpactOscillator:
+            F = o.F.copy()
+            F[j] = v
+            return o.replace(F=F)
+
+        return ModelParameter(name, info, FORCING, get=lambda o: float(o.F[j]), put=put_f,
+                              scale_of=lambda o: o.F0)
+    data = {"M": MASS, "K": STIFFNESS, "C": DAMPING}[matrix]
+
+    def scale_of(o: ImpactOscillator) -> float:
+        return float(np.max(np.abs(getattr(o, matrix))))
+
+    if family.endswith("[i,j]"):
+        i, j = (k - 1 for k in indices)
+
+        def put_entry(o: ImpactOscillator, v: float) -> ImpactOscillator:
+            A = np.array(getattr(o, matrix), dtype=float)
+            A[i, j] = A[j, i] = v
+            return o.replace(**{matrix: A})
+
+        return ModelParameter(name, info, data, get=lambda o: float(getattr(o, matrix)[i, j]),
+                              put=put_entry, scale_of=scale_of)
+    j = indices[0]
+    if letter == "m":
+        if np.count_nonzero(osc.M - np.diag(np.diag(osc.M))):
+            raise ParameterError(f"{argument}={name!r} is a mass of the chain of eq. (2), which "
+                                 f"needs a diagonal M; got M={osc.M.tolist()}: continue an entry "
+                                 f"'M[{j},{j}]' instead")
+
+        def put_mass(o: ImpactOscillator, v: float) -> ImpactOscillator:
+            M = np.array(o.M, dtype=float)
+            M[j - 1, j - 1] = v
+            return o.replace(M=M)
+
+        return ModelParameter(name, info, MASS, get=lambda o: float(o.M[j - 1, j - 1]),
+                              put=put_mass, scale_of=scale_of)
+    if chain_elements(getattr(osc, matrix)) is None:
+        what = "springs" if letter == "k" else "dampers"
+        raise ParameterError(f"{argument}={name!r} is one of the {what} of the chain of eq. (2) "
+                             f"(between masses j and j+1, the last to the ground); "
+                             f"{matrix}={getattr(osc, matrix).tolist()} is not such a chain: "
+                             f"continue an entry '{matrix}[i,j]' instead")
+    pattern = _pattern(n, j)
+
+    def get_chain(o: ImpactOscillator) -> float:
+        e = chain_elements(getattr(o, matrix))
+        if e is None:
+            raise ParameterError(f"{name}: {matrix}={getattr(o, matrix).tolist()} is no longer "
+                                 "a chain of eq. (2)")
+        return float(e[j - 1])
+
+    def put_chain(o: ImpactOscillator, v: float) -> ImpactOscillator:
+        return o.replace(**{matrix: getattr(o, matrix) + (v - get_chain(o)) * pattern})
+
+    return ModelParameter(name, info, data, get=get_chain, put=put_chain, scale_of=scale_of)
+
+
+def model_parameter(osc: ImpactOscillator, name: Any, argument: str = "parameter"
+                    ) -> ModelParameter:
+    """The parameter `name` of `osc` as an object, refused when it does not apply.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+    name : str
+        A vocabulary name (:data:`~impactcont.vocabulary.PARAMETERS`, element names
+        included).
+    argument : str
+        The argument's name in error messages.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name; a damping parameter of the other damping model (``eta`` with a
+        matrix C); ``b_low``, ``R_low`` without a lower stop of their own, ``gap`` without a
+        symmetric clearance; an element past the oscillator's masses (``k3`` on two
+        masses), a chain element of a matrix that is no chain, a damper without a matrix
+        C, ``F[j]`` of a complex F. The message names `argument`, the value and what is
+        allowed.
+    """
+    if not isinstance(name, str) or name not in PARAMETERS:
+        raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS} or an element "
+                             f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]'); "
+                             f"got {name!r}")
+    check_damping(osc, name, argument)
+    stops = osc.stops
+    if name in ("b_low", "R_low"):
+        if stops.mirror:
+            raise ParameterError(f"{argument}={name!r}: the stops are mirrored ({stops!r}): the "
+                                 "lower stop follows b and R; continue 'gap' (or 'b'), 'R'")
+        if not stops.two_sided:
+            raise ParameterError(f"{argument}={name!r} needs a lower stop (stops=Stops(b_low=...))"
+                                 f"; the oscillator has {stops!r}; allowed here: "
+                                 "omega, b, R, the damping, F0 and the elements")
+    if name == "gap" and not (stops.mirror or (stops.two_sided and stops.b_low == osc.b)):
+        raise ParameterError(f"{argument}='gap' moves both stops of a symmetric clearance "
+                             f"(b_low == b, or Stops(mirror=True)); the oscillator has b={osc.b!r}"
+                             f", {stops!r}: continue 'b' or 'b_low'")
+    element = element_name(name)
+    if element is not None:
+        return _element(name, *element, osc, argument)
+    return _named(name, osc)
