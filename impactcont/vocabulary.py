@@ -307,7 +307,8 @@ def check_damping(osc: Any, name: str, argument: str = "parameter") -> None:
     if kind == "matrix":
         raise ParameterError(f"{argument}={name!r} is meaningless with a general damping matrix "
                              f"C={osc.C.tolist()}: eta, alpha and beta exist only for C = 2 eta K "
-                             "or C = alpha M + beta K; continue in omega, b, R or F0")
+                             "or C = alpha M + beta K; continue in omega, b, R, F0 or an element "
+                             "of C ('c<j>', 'C[i,j]')")
     if needs == "rayleigh":
         raise ParameterError(f"{argument}={name!r} needs Rayleigh damping (C = alpha M + beta K); "
                              f"the oscillator uses the paper's damping C = 2 eta K "

@@ -14,6 +14,13 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.core import ContinuationOptions, follow
+from impactcont.model.parameters import model_parameter
+from impactcont.model.stops import Stops
+from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.problems import PeriodicBranchProblem
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 PAPER = {"M": np.eye(2), "K": [[1.0, -1.0], [-1.0, 2.0]], "F": [1.0, 0.0], "R": 0.6, "b": 0.6,
          "omega": 1.0}
@@ -184,3 +191,213 @@ def test_fold_in_forcing_amplitude_is_where_the_amplitude_reaches_the_gap():
     branch = ic.continuation(osc, N=1, parameter="F0", bounds=(0.1, 5.0), detect=("SN",))
     expected = 0.3 / math.sqrt(ic.amplitude_squared(osc, 1))
     assert branch.special_F0.values.tolist() == pytest.approx([expected], rel=1e-14)
+
+
+# ------------------------------------------------------------------------------------------
+# Parameters as objects: the stops' own parameters and every element (issue 21 item 4)
+# ------------------------------------------------------------------------------------------
+
+K2 = [[1.0, -1.0], [-1.0, 2.0]]
+NEWTON = 1e-8  # a re-solved N-p motion: Newton's residual 1e-12 times the condition (< 1e4)
+
+
+def _two_sided(b_low: float = 0.8, R_low: float | None = None, b: float = 0.8,
+               **more) -> ic.ImpactOscillator:
+    """The paper's 2-DOF system with a lower stop, built from scratch."""
+    args = {"M": np.eye(2), "K": K2, "F": [1.0, 0.0], "R": 0.6, "b": b, "omega": 0.8,
+            "eta": 0.1, **more}
+    return ic.ImpactOscillator(**args, stops=Stops(b_low=b_low, R_low=R_low))
+
+
+@pytest.fixture(scope="module")
+def backlash_motion():
+    """The 1-2 motion (one impact on each stop) the simulation from rest settles on."""
+    osc = _two_sided()
+    res = ic.simulate(osc, np.zeros(4), 0.0, 200.0)
+    orbit = multi_impact_orbit(osc, 1, 2, res)
+    assert sorted(orbit.pattern) == ["L", "U"]
+    return orbit
+
+
+def _resolve(osc: ic.ImpactOscillator, ds, i: int):
+    """Point i of an N-p branch re-solved by Newton on `osc` from its stored motion."""
+    return multi_impact_orbit(osc, int(ds.attrs["N"]), ds.sizes["impact"], {
+        "delta": float(ds["delta_k"].values[i, 0]), "flight_times": ds["flight_time_k"].values[i],
+        "states": ds["state_k"].values[i], "pattern": ds.attrs["pattern"]})
+
+
+@pytest.mark.parametrize(("parameter", "bounds", "fresh"), [
+    ("b_low", (0.7, 0.9), lambda v: _two_sided(b_low=v)),
+    ("R_low", (0.45, 0.75), lambda v: _two_sided(R_low=v)),
+    ("gap", (0.76, 0.86), lambda v: _two_sided(b_low=v, b=v)),
+])
+def test_np_branch_in_a_stop_parameter_is_solved_on_fresh_oscillators(backlash_motion, parameter,
+                                                                     bounds, fresh):
+    ds = multi_impact_continuation(backlash_motion, parameter, bounds, max_points=12,
+                                   both_directions=True, symmetric=False)
+    assert ds.sizes["point"] >= 4 and ds.attrs["parameter"] == parameter
+    values = ds[parameter].values
+    assert values.min() < values.max()
+    for i in range(ds.sizes["point"]):
+        again = _resolve(fresh(float(values[i])), ds, i)
+        np.testing.assert_allclose(again.states, ds["state_k"].values[i], rtol=0, atol=NEWTON)
+        assert again.delta == pytest.approx(float(ds["delta_k"].values[i, 0]), abs=NEWTON)
+
+
+def test_symmetric_branch_in_gap_keeps_the_system_symmetric(backlash_motion):
+    """gap moves both stops: a symmetric motion stays on its half system (BP detectable)."""
+    ds = multi_impact_continuation(backlash_motion, "gap", (0.76, 0.86), max_points=8,
+                                   both_directions=True)
+    assert json_options(ds)["symmetric"] is True
+    for i in (0, ds.sizes["point"] - 1):
+        v = float(ds["gap"].values[i])
+        again = _resolve(_two_sided(b_low=v, b=v), ds, i)
+        np.testing.assert_allclose(again.states, ds["state_k"].values[i], rtol=0, atol=NEWTON)
+    with pytest.raises(ic.ParameterError, match="breaks the symmetry"):
+        multi_impact_continuation(backlash_motion, "b_low", (0.7, 0.9), symmetric=True)
+
+
+def json_options(ds) -> dict:
+    import json
+    return json.loads(ds.attrs["options"])
+
+
+@pytest.mark.parametrize("parameter", ["b", "b_low", "gap", "R", "R_low", "omega", "F0", "F[2]"])
+def test_exact_np_derivatives_agree_with_finite_differences(backlash_motion, parameter):
+    osc = backlash_motion.oscillator
+    problem = MultiImpactBranchProblem(osc, 1, 2, parameter, pattern=backlash_motion.pattern)
+    param = problem.param
+    assert param.exact_on_shooting
+    u = np.concatenate([[backlash_motion.delta], backlash_motion.flight_times[:-1],
+                        np.delete(backlash_motion.states, osc.stops.index, axis=1).ravel()])
+    lam = param.value(osc)
+    assert np.max(np.abs(problem.residual(u, lam))) < 1e-10
+    np.testing.assert_allclose(problem.dparam(u, lam), _five_point(problem, u, lam), rtol=0,
+                               atol=1e-8)
+
+
+def _five_point(problem, u, lam, h=1e-3):
+    """A wide five-point difference of the residual (error h^4 |f^(5)| / 30, about 1e-12)."""
+    r = [problem.residual(u, lam + k * h) for k in (-2, -1, 1, 2)]
+    return (r[0] - 8 * r[1] + 8 * r[2] - r[3]) / (12 * h)
+
+
+ELEMENTS = [  # name, oscillator (2 masses), bounds, fresh oscillator at a value
+    ("k1", {}, (0.9, 1.1), lambda v: {"K": [[v, -v], [-v, v + 1.0]]}),
+    ("k2", {}, (0.9, 1.1), lambda v: {"K": [[1.0, -1.0], [-1.0, 1.0 + v]]}),
+    ("m2", {}, (0.9, 1.1), lambda v: {"M": np.diag([1.0, v])}),
+    ("M[1,2]", {}, (-0.05, 0.05), lambda v: {"M": [[1.0, v], [v, 1.0]]}),
+    ("K[1,1]", {}, (0.95, 1.05), lambda v: {"K": [[v, -1.0], [-1.0, 2.0]]}),
+    ("F[2]", {}, (-0.2, 0.2), lambda v: {"F": [1.0, v]}),
+    ("c1", {"eta": None, "C": [[0.2, -0.2], [-0.2, 0.2]]}, (0.15, 0.25),
+     lambda v: {"eta": None, "C": [[v, -v], [-v, v]]}),
+    ("C[2,2]", {"eta": None, "C": [[0.2, 0.0], [0.0, 0.1]]}, (0.05, 0.15),
+     lambda v: {"eta": None, "C": [[0.2, 0.0], [0.0, v]]}),
+]
+
+
+def _np_points(problem, u0, lam0, bounds, npoints=6):
+    options = ContinuationOptions(bounds=bounds, ds=0.02, ds_max=0.05, max_points=npoints,
+                                  both_directions=True)
+    result = follow(problem, u0, lam0, options)
+    assert result.lam.size >= 3 and np.ptp(result.lam) > 0
+    return result
+
+
+@pytest.mark.parametrize(("name", "damping", "bounds", "fresh"), ELEMENTS)
+def test_np_problem_in_an_element_is_solved_on_fresh_oscillators(backlash_motion, name, damping,
+                                                                  bounds, fresh):
+    """Every element on the shooting path: each branch point a motion of the oscillator
+    built from scratch at its value (the driver's dataset does not hold element columns
+    yet: the problem is followed by the core)."""
+    base = _two_sided(**damping)
+    seed = multi_impact_orbit(base, 1, 2, backlash_motion)
+    problem = MultiImpactBranchProblem(base, 1, 2, name, pattern=seed.pattern)
+    u0 = np.concatenate([[seed.delta], seed.flight_times[:-1],
+                         np.delete(seed.states, 0, axis=1).ravel()])
+    result = _np_points(problem, u0, problem.param.value(base), bounds)
+    for u, lam in zip(result.u, result.lam, strict=True):
+        orbit = problem.orbit(u, lam, checks=False)
+        again = multi_impact_orbit(_two_sided(**{**damping, **fresh(float(lam))}), 1, 2, orbit)
+        np.testing.assert_allclose(again.states, orbit.states, rtol=0, atol=NEWTON)
+
+
+@pytest.mark.parametrize(("name", "damping", "bounds", "fresh"), ELEMENTS)
+def test_fd_fallback_error_is_what_the_docs_say(backlash_motion, name, damping, bounds, fresh):
+    """The one finite-difference fallback against a wide five-point stencil: within 1e-8
+    absolute (measured: 1e-10 or below; exact to rounding for F[2], affine in F)."""
+    base = _two_sided(**damping)
+    seed = multi_impact_orbit(base, 1, 2, backlash_motion)
+    problem = MultiImpactBranchProblem(base, 1, 2, name, pattern=seed.pattern)
+    u = np.concatenate([[seed.delta], seed.flight_times[:-1],
+                        np.delete(seed.states, 0, axis=1).ravel()])
+    lam = problem.param.value(base)
+    np.testing.assert_allclose(problem.dparam(u, lam), _five_point(problem, u, lam), rtol=0,
+                               atol=1e-8)
+
+
+@pytest.mark.parametrize(("name", "damping", "fresh"), [
+    ("k2", {"eta": 0.1}, lambda v: {"K": [[1.0, -1.0], [-1.0, 1.0 + v]]}),
+    ("m1", {"eta": 0.1}, lambda v: {"M": np.diag([v, 1.0])}),
+    ("K[1,2]", {"eta": 0.1}, lambda v: {"K": [[1.0, v], [v, 2.0]]}),
+    ("F[2]", {"eta": 0.1}, lambda v: {"F": [1.0, v]}),
+    ("c2", {"C": [[0.2, -0.2], [-0.2, 0.3]]}, lambda v: {"C": [[0.2, -0.2], [-0.2, 0.2 + v]]}),
+    ("C[1,1]", {"C": [[0.2, 0.0], [0.0, 0.1]]}, lambda v: {"C": [[v, 0.0], [0.0, 0.1]]}),
+])
+def test_n1_branch_in_an_element_matches_periodic_orbits(name, damping, fresh):
+    """The N-1 closed form takes every element: each point's phase a root of eq. (15) of
+    the oscillator built at its value, and dr/dlam against a wide finite difference."""
+    osc = ic.ImpactOscillator(**{**PAPER, **damping})
+    problem = PeriodicBranchProblem(osc, 1, name)
+    lam0 = problem.param.value(osc)
+    delta0 = next(o for o in ic.periodic_orbits(osc, 1) if o.physical).delta
+    half = 0.2 if lam0 <= 0.0 else min(0.2, 0.5 * lam0)  # inside a positive range
+    result = follow(problem, [delta0], lam0, ContinuationOptions(
+        bounds=(lam0 - half, lam0 + half), ds=0.02, ds_max=0.05, max_points=8,
+        both_directions=True))
+    assert result.lam.size >= 5
+    for u, lam in zip(result.u, result.lam, strict=True):
+        fresh_osc = ic.ImpactOscillator(**{**PAPER, **damping, **fresh(float(lam))})
+        d = [abs(math.remainder(o.delta - u[0], 2 * math.pi))
+             for o in ic.periodic_orbits(fresh_osc, 1)]
+        assert min(d) < 1e-9, (name, lam, d)
+        h = 1e-3
+        r = [problem.residual(u, lam + k * h)[0] for k in (-2, -1, 1, 2)]
+        five = (r[0] - 8 * r[1] + 8 * r[2] - r[3]) / (12 * h)
+        assert problem.dparam(u, lam)[0] == pytest.approx(five, abs=1e-8)
+
+
+def test_setting_an_element_changes_only_that_element():
+    osc = ic.ImpactOscillator.chain(masses=[1.0, 2.0, 3.0], springs=[1.0, 2.0, 3.0], F=[1, 0, 0],
+                                    R=0.6, b=0.5, omega=1.0, eta=0.1)
+    k2 = model_parameter(osc, "k2")
+    assert k2.value(osc) == 2.0
+    moved = k2.at(osc, 2.5)
+    expected = ic.ImpactOscillator.chain(masses=[1.0, 2.0, 3.0], springs=[1.0, 2.5, 3.0],
+                                         F=[1, 0, 0], R=0.6, b=0.5, omega=1.0, eta=0.1)
+    np.testing.assert_allclose(moved.K, expected.K, rtol=0, atol=1e-15)
+    assert model_parameter(osc, "m3").at(osc, 4.0).M[2, 2] == 4.0
+    sym = model_parameter(osc, "K[2,3]").at(osc, -1.0).K
+    assert sym[1, 2] == sym[2, 1] == -1.0
+    assert model_parameter(osc, "F[3]").at(osc, 0.5).F.tolist() == [1.0, 0.0, 0.5]
+    mirrored = ic.ImpactOscillator(**PAPER, eta=0.1, stops=Stops(mirror=True))
+    assert model_parameter(mirrored, "gap").at(mirrored, 0.9).stops.b_low == 0.9
+
+
+@pytest.mark.parametrize(("name", "osc_args", "match"), [
+    ("b_low", {}, r"parameter must be one of .*got 'b_low': 'b_low' needs a lower stop"),
+    ("R_low", {"stops": Stops(mirror=True)}, "got 'R_low': the mirrored lower stop follows"),
+    ("gap", {"stops": Stops(b_low=0.3)}, "got 'gap': 'gap' moves both stops of a symmetric"),
+    ("k3", {}, r"parameter='k3' names an element past the oscillator's n=2 masses .*k1..k2"),
+    ("F[3]", {}, r"F\[1\]..F\[2\]"),
+    ("eta", {"eta": None, "C": [[0.2, 0.0], [0.0, 0.0]]}, "meaningless with a general damping"),
+    ("c1", {}, "not given as a matrix"),
+    ("m1", {"M": [[1.0, 0.1], [0.1, 1.0]]}, r"needs a diagonal M.*'M\[1,1\]'"),
+    ("k1", {"K": [[2.0, -1.0], [-1.0, 1.0]]}, r"is not such a chain.*'K\[i,j\]'"),
+    ("F[1]", {"F": [1.0 + 1.0j, 0.0]}, "complex"),
+    ("q1", {}, r"parameter must be one of .*got 'q1'"),
+])
+def test_parameters_that_do_not_apply_are_refused(name, osc_args, match):
+    osc = ic.ImpactOscillator(**{**PAPER, "eta": 0.1, **osc_args})
+    with pytest.raises(ic.ParameterError, match=match):
+        model_parameter(osc, name)

@@ -38,6 +38,7 @@ from impactcont.detection.multi_impact import locate_multi_impact_events
 from impactcont.detection.special_points import check_user_functions
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import initial_unknowns
 from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
 from impactcont.progress import ProgressOption, reporter
@@ -168,11 +169,11 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     osc = orbit.oscillator
     N, p, pattern = int(branch.attrs["N"]), impacts_of(branch), pattern_of(branch)
     problem = MultiImpactCurveProblem(osc, N, p, pattern, kind, parameters, symmetric=symmetric)
-    lam0 = float(getattr(osc, parameter) or 0.0)
+    lam0 = model_parameter(osc, parameter).value(osc)
     if not box[parameter][0] <= lam0 <= box[parameter][1]:
         raise ParameterError(f"bounds[{parameter!r}] = {box[parameter]} must contain the "
                              f"start {parameter}={lam0!r}")
-    start_p1 = float(getattr(osc, p1) or 0.0)
+    start_p1 = model_parameter(osc, p1).value(osc)
     base = problem.branch_problem(lam0)
     u0 = base.half_unknowns(orbit.unknowns) if symmetric else orbit.unknowns
     x0 = np.append(u0, start_p1)
@@ -286,11 +287,13 @@ def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
                                   "pattern": pattern_of(ds)}, osc, problem.N, problem.p)
             base = problem.branch_problem(lam)
             v = base.half_unknowns(u) if symmetric else u
-            xs.append(np.concatenate([v, [float(getattr(osc, problem.parameters[0]))], [lam]]))
+            first = model_parameter(osc, problem.parameters[0])
+            xs.append(np.concatenate([v, [first.value(osc)], [lam]]))
         target = xs[0] + t * (xs[1] - xs[0])
         normal = np.zeros(target.size)
-        normal[-1 if parameter == problem.parameters[1] else -2] = 1.0
-        target[-1 if parameter == problem.parameters[1] else -2] = value
+        column = problem.parameters.index(parameter) - 2  # (.., p1, p2): -2 or -1
+        normal[column] = 1.0
+        target[column] = value
         found = solve_on_hyperplane(problem, target, normal, tol=_START_TOL, max_iter=30)
         if not found.converged:
             raise NoPeriodicMotionError(f"the crossing of {parameter} = {value!r} between "

@@ -55,6 +55,7 @@ from impactcont.core.options import DRIVER_DEFAULTS
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
 from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.model.parameters import FREQUENCY, model_parameter
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     initial_unknowns,
@@ -203,7 +204,7 @@ def _pd_start(orbit: MultiImpactOrbit, parameter: str, epsilon: float
     N2, p2 = 2 * orbit.N, 2 * orbit.p
     problem = MultiImpactBranchProblem(osc, N2, p2, parameter,
                                        pattern=2 * orbit.pattern if orbit.pattern else None)
-    lam_pd = float(getattr(osc, parameter) or 0.0)
+    lam_pd = problem.param.value(osc)
     u_pd = initial_unknowns(orbit, osc, N2, p2)
     w, mu = critical_direction(orbit)
     J = problem.jacobian(u_pd, lam_pd)
@@ -569,7 +570,7 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     lo, hi = _dataset_bounds(branch, bounds)
     guess, new = grazing_split(orbit)
     osc = orbit.oscillator
-    lam_g = float(getattr(osc, parameter) or 0.0)
+    lam_g = model_parameter(osc, parameter).value(osc)
     p1 = orbit.p + 1
     try:
         graze = multi_impact_orbit(osc, orbit.N, p1, guess)
@@ -633,8 +634,10 @@ def _symmetric_at(branch: xr.Dataset, which: int) -> tuple[SymmetricBranchProble
     N, p = int(branch.attrs["N"]), impacts_of(branch)
     values = {name: float(branch[special_variable(name)].values[k])
               for name in dict.fromkeys(["omega", "b", parameter])}
-    osc = oscillator_from_dataset(branch).replace(**values)
-    lam = float(getattr(osc, parameter) or 0.0)
+    base = oscillator_from_dataset(branch)
+    param = model_parameter(base, parameter)
+    osc = param.at(base.replace(omega=values["omega"], b=values["b"]), values[parameter])
+    lam = param.value(osc)
     problem = SymmetricBranchProblem(osc, N, p, parameter, pattern_of(branch))
     guess = {"delta": float(branch[special_variable("delta_k")].values[k, 0]),
              "flight_times": branch[special_variable("flight_time_k")].values[k],
@@ -666,7 +669,7 @@ def _pitchfork_direction(problem: SymmetricBranchProblem, v: np.ndarray, lam: fl
     half_ext = np.column_stack([problem.jacobian(v, lam), problem.dparam(v, lam)])
     t_half = np.linalg.svd(half_ext)[2][-1]
     du = problem.halves.embedding @ t_half[:-1]
-    if problem.parameter == "omega":
+    if problem.param.data == FREQUENCY:  # the half unknowns' offset moves with omega
         du = du + problem.halves.offset_derivative(lam) * t_half[-1]
     t_sym = np.append(du, t_half[-1])
     t_sym /= np.linalg.norm(t_sym)

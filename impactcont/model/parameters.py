@@ -40,6 +40,7 @@ from impactcont.vocabulary import (
     PARAMETERS,
     Parameter,
     check_damping,
+    damping_kind,
     element_name,
 )
 
@@ -367,18 +368,19 @@ def model_parameter(osc: ImpactOscillator, name: Any, argument: str = "parameter
                              f"got {name!r}")
     check_damping(osc, name, argument)
     stops = osc.stops
-    if name in ("b_low", "R_low"):
-        if stops.mirror:
-            raise ParameterError(f"{argument}={name!r}: the stops are mirrored ({stops!r}): the "
-                                 "lower stop follows b and R; continue 'gap' (or 'b'), 'R'")
-        if not stops.two_sided:
-            raise ParameterError(f"{argument}={name!r} needs a lower stop (stops=Stops(b_low=...))"
-                                 f"; the oscillator has {stops!r}; allowed here: "
-                                 "omega, b, R, the damping, F0 and the elements")
-    if name == "gap" and not (stops.mirror or (stops.two_sided and stops.b_low == osc.b)):
-        raise ParameterError(f"{argument}='gap' moves both stops of a symmetric clearance "
-                             f"(b_low == b, or Stops(mirror=True)); the oscillator has b={osc.b!r}"
-                             f", {stops!r}: continue 'b' or 'b_low'")
+    if name in ("b_low", "R_low", "gap"):
+        symmetric = stops.mirror or (stops.two_sided and stops.b_low == osc.b)
+        stop_names = (("b_low", "R_low") if stops.two_sided and not stops.mirror else ()) + (
+            ("gap",) if symmetric else ())
+        if name not in stop_names:
+            here = tuple(k for k in CONTINUABLE_PARAMETERS if k not in ("b_low", "R_low", "gap")
+                         and PARAMETERS[k].damping in (None, damping_kind(osc))) + stop_names
+            why = ("'gap' moves both stops of a symmetric clearance (b_low == b, or "
+                   "Stops(mirror=True))" if name == "gap" else
+                   "the mirrored lower stop follows b and R" if stops.mirror else
+                   f"{name!r} needs a lower stop (stops=Stops(b_low=...))")
+            raise ParameterError(f"{argument} must be one of {here} or an element for this "
+                                 f"oscillator (b={osc.b!r}, {stops!r}); got {name!r}: {why}")
     element = element_name(name)
     if element is not None:
         return _element(name, *element, osc, argument)

@@ -302,8 +302,14 @@ class _Pieces:
         return x, v
 
 
+#: The parameters of the N-1 curves: the paper's stop and the model's named scalars (the
+#: elements and the lower stop's parameters are continued on the branches only).
+CURVE_PARAMETERS: tuple[str, ...] = tuple(
+    name for name in CONTINUABLE_PARAMETERS if name not in ("b_low", "R_low", "gap"))
+
+
 def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, str]:
-    """Validate a pair of distinct continuable parameter names for `osc`.
+    """Validate a pair of distinct parameter names of the N-1 curves for `osc`.
 
     Raises
     ------
@@ -312,13 +318,13 @@ def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, st
     """
     if isinstance(parameters, str) or not isinstance(parameters, (tuple, list)) \
             or len(parameters) != 2:
-        raise ParameterError(f"parameters must be a pair of names from {CONTINUABLE_PARAMETERS}; "
+        raise ParameterError(f"parameters must be a pair of names from {CURVE_PARAMETERS}; "
                              f"got {parameters!r}")
     p1, p2 = parameters
     for name in (p1, p2):
-        if name not in CONTINUABLE_PARAMETERS:
+        if name not in CURVE_PARAMETERS:
             raise ParameterError(f"parameters must be a pair of names from "
-                                 f"{CONTINUABLE_PARAMETERS}; got {parameters!r}")
+                                 f"{CURVE_PARAMETERS}; got {parameters!r}")
         check_parameter(osc, name, "parameters")
     if p1 == p2:
         raise ParameterError(f"parameters must be two different names; got {parameters!r}")

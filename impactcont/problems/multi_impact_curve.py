@@ -39,12 +39,13 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import half_map
 from impactcont.problems.events import event_function
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
-from impactcont.vocabulary import LABELS, check_parameter
+from impactcont.vocabulary import LABELS
 
 __all__ = ["MultiImpactCurveProblem", "signed_smallest_singular_value"]
 
@@ -99,27 +100,24 @@ class MultiImpactCurveProblem:
         if p1 == p2:
             raise ParameterError(f"parameters must be two different parameters; got {p1!r} "
                                  "twice")
-        for name in (p1, p2):
-            check_parameter(osc, name)
+        self.params = tuple(model_parameter(osc, name) for name in (p1, p2))
         self.osc, self.N, self.p, self.pattern = osc, N, p, pattern
         self.kind, self.parameters, self.symmetric = kind, (p1, p2), symmetric
         self._problems: dict[tuple[str, float, float | None], BranchProblem] = {}
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
-        self.size = self._base(float(getattr(osc, p2) or 0.0), p1).size + 1
+        self.size = self._base(self.params[1].value(osc), p1).size + 1
 
     # -- the branch problems ----------------------------------------------------------------------
     def _base(self, lam: float, parameter: str, p1: float | None = None) -> BranchProblem:
         """The branch problem in `parameter` of the oscillator with ``p2 = lam`` (and p1)."""
-        p1_name, p2_name = self.parameters
         key = (parameter, float(lam), None if p1 is None else float(p1))
         problem = self._problems.get(key)
         if problem is None:
             if len(self._problems) > _CACHE_SIZE:
                 self._problems.clear()
-            values = {p2_name: float(lam)}
+            osc = self.params[1].at(self.osc, float(lam))
             if p1 is not None:
-                values[p1_name] = float(p1)
-            osc = self.osc.replace(**values)
+                osc = self.params[0].at(osc, float(p1))
             cls = SymmetricBranchProblem if self.symmetric else MultiImpactBranchProblem
             problem = self._problems[key] = cls(osc, self.N, self.p, parameter,
                                                 pattern=self.pattern)
