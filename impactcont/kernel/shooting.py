@@ -204,15 +204,64 @@ def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, t, X0, thet
 
 # -- the shooting system ------------------------------------------------------------------------
 @_jit
+def _section_starts(x, p, m, j, normals, positions):
+    """``X_k`` from the unknowns: ``z_k`` in every component but ``x_j``, and ``x_j`` from
+    the section ``n_k . x = c_k`` of impact k."""
+    n = m // 2
+    starts = np.empty((p, m))
+    for k in range(p):
+        col = p + k * (m - 1)
+        for c in range(m):
+            if c != j:
+                starts[k, c] = x[col]
+                col += 1
+        s = positions[k]
+        for c in range(n):
+            if c != j:
+                s -= normals[k, c] * starts[k, c]
+        starts[k, j] = s / normals[k, j]
+    return starts
+
+
+@_jit
+def _apply(D, v, out):
+    """``out = D v`` skipping the zeros of ``D`` (an impact matrix is mostly identity)."""
+    m = v.size
+    for r in range(m):
+        s = 0.0
+        for c in range(m):
+            d = D[r, c]
+            if d != 0.0:
+                s += d * v[c]
+        out[r] = s
+
+
+@_jit
+def _apply_matrix(D, A, out):
+    """``out = D A`` skipping the zeros of ``D``."""
+    m = A.shape[0]
+    q = A.shape[1]
+    for r in range(m):
+        for c in range(q):
+            out[r, c] = 0.0
+        for i in range(m):
+            d = D[r, i]
+            if d != 0.0:
+                for c in range(q):
+                    out[r, c] += d * A[i, c]
+
+
+@_jit
 def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
-                    positions, diagonals, x, want_jacobian):
+                    normals, positions, matrices, x, want_jacobian):
     """Residual (and exact Jacobian) of the N-p shooting system at the unknowns ``x``.
 
     Parameters are the flow's arrays (module docstring), ``omega``, the motion's
-    ``period = 2 pi N / omega``, the 0-based index ``j`` of the impacting mass, the
-    stop position ``c_k`` and the diagonal of ``D_k`` of each impact (``positions``
-    (p,), ``diagonals`` (p, 2n)), the unknowns ``x`` (2np,) and whether to build the
-    Jacobian (else it is returned with shape (0, 0)).
+    ``period = 2 pi N / omega``, the 0-based index ``j`` of the position eliminated on
+    the sections, the normal ``n_k`` (``normals`` (p, n)), stop position ``c_k``
+    (``positions`` (p,)) and impact matrix ``D_k`` (``matrices`` (p, 2n, 2n)) of each
+    impact, the unknowns ``x`` (2np,) and whether to build the Jacobian (else it is
+    returned with shape (0, 0)).
 
     Returns
     -------
@@ -222,22 +271,15 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, per
         :class:`impactcont.orbit.multi_impact.Shooting` in that order.
     """
     p = positions.size
-    m = diagonals.shape[1]
+    m = matrices.shape[1]
+    n = m // 2
     taus = np.empty(p)
     elapsed = 0.0
     for k in range(p - 1):
         taus[k] = x[1 + k]
         elapsed += x[1 + k]
     taus[p - 1] = period - elapsed
-    starts = np.empty((p, m))
-    for k in range(p):
-        col = p + k * (m - 1)
-        for c in range(m):
-            if c == j:
-                starts[k, c] = positions[k]
-            else:
-                starts[k, c] = x[col]
-                col += 1
+    starts = _section_starts(x, p, m, j, normals, positions)
     phases = np.empty(p)
     phases[0] = x[0]
     elapsed = 0.0
@@ -249,40 +291,56 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, per
     rates = np.empty((p, m))
     pcols = np.empty((p, m))
     residual = np.empty(p * m)
+    after = np.empty(m)
     for k in range(p):
         _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, taus[k], starts[k],
                 phases[k], transitions[k], arrivals[k], pcols[k], rates[k])
         nxt = (k + 1) % p
+        _apply(matrices[nxt], arrivals[k], after)
         for r in range(m):
-            residual[k * m + r] = diagonals[nxt, r] * arrivals[k, r] - starts[nxt, r]
+            residual[k * m + r] = after[r] - starts[nxt, r]
     if not want_jacobian:
         return (phases, taus, starts, arrivals, rates, transitions, pcols, residual,
                 np.zeros((0, 0)))
     J = np.zeros((p * m, p * m))
+    DPhi = np.empty((m, m))
+    q = np.empty(m)
+    g = np.empty(m)
     zcol = p  # first column of z_0
     for k in range(p):
         nxt = (k + 1) % p
+        D = matrices[nxt]
+        _apply(D, pcols[k], q)
+        _apply(D, rates[k], g)
+        _apply_matrix(D, transitions[k], DPhi)
+        col0 = zcol + k * (m - 1)
         for r in range(m):
-            d = diagonals[nxt, r]
             row = k * m + r
-            q = d * pcols[k, r]
-            J[row, 0] = q  # d theta_k / d delta = 1
+            J[row, 0] = q[r]  # d theta_k / d delta = 1
             for i in range(k):  # theta_k depends on tau_i, i < k
-                J[row, 1 + i] += omega * q
-            g = d * rates[k, r]
+                J[row, 1 + i] += omega * q[r]
             if k < p - 1:
-                J[row, 1 + k] += g
+                J[row, 1 + k] += g[r]
             else:  # tau_{p-1} = period - sum(tau_0..tau_{p-2})
                 for i in range(p - 1):
-                    J[row, 1 + i] -= g
-            # x_j = c_k on the section: the columns of z = X without x_j are the unknowns
-            col = zcol + k * (m - 1)
+                    J[row, 1 + i] -= g[r]
+            # dX_k/dz_k: unit columns, and x_j = (c_k - sum n_c x_c) / n_j on the section
+            col = col0
             for c in range(m):
                 if c != j:
-                    J[row, col] += d * transitions[k, r, c]
+                    v = DPhi[r, c]
+                    if c < n:
+                        v -= DPhi[r, j] * normals[k, c] / normals[k, j]
+                    J[row, col] += v
                     col += 1
+            # - dX_{k+1}/dz_{k+1}
+            ncol = zcol + nxt * (m - 1)
             if r != j:
-                J[row, zcol + nxt * (m - 1) + (r if r < j else r - 1)] -= 1.0
+                J[row, ncol + (r if r < j else r - 1)] -= 1.0
+            else:
+                for c in range(n):
+                    if c != j:
+                        J[row, ncol + (c if c < j else c - 1)] += normals[nxt, c] / normals[nxt, j]
     return phases, taus, starts, arrivals, rates, transitions, pcols, residual, J
 
 
@@ -334,7 +392,7 @@ def _solve(A, rhs):
 
 @_jit
 def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
-                 positions, diagonals, x0, tol, max_iter):
+                 normals, positions, matrices, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
     The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
@@ -349,7 +407,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period
     """
     x = x0.copy()
     sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
-                         positions, diagonals, x, True)
+                         normals, positions, matrices, x, True)
     norm = _max_abs(sh[7])
     step_norm = np.inf
     it = 0
@@ -370,7 +428,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period
         while True:
             trial = x + lam_step * step
             tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
-                                  period, j, positions, diagonals, trial, True)
+                                  period, j, normals, positions, matrices, trial, True)
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -388,54 +446,89 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
 @_jit
-def _flight_jacobian(tr, pcol, rate, d, j, omega, G):
-    """``G_k`` of eq. (25) on ``x_j = c`` into ``G`` (as ``multi_impact.flight_jacobian``);
-    returns ``h2 = x_j'(tau^-)``."""
-    m = d.size
-    h2 = d[j] * rate[j]
-    h1 = d[j] * pcol[j]
-    row = 0
-    for r in range(m):
-        if r == j:
-            continue
-        H2 = d[r] * rate[r]
-        col = 0
-        for c in range(m):
-            if c == j:
-                continue
-            G[row, col] = d[r] * tr[r, c] - H2 * (d[j] * tr[j, c]) / h2
-            col += 1
-        G[row, m - 1] = d[r] * pcol[r] - H2 * h1 / h2
-        row += 1
+def _flight_jacobian(tr, pcol, rate, D, j, n_start, n_end, omega, G):
+    """``G_k`` of eq. (25) into ``G`` (as ``multi_impact.flight_jacobian``); returns
+    ``h2 = n_end . x'(tau^-)``, the arrival velocity of the stop coordinate.
+
+    The flight starts on the section ``n_start . x = c`` (coordinates ``z``: ``X``
+    without ``x_j``) and ends on ``n_end . x = c'``: with ``B = Phi dX/dz``,
+    ``h0 = n_end . B``, ``h1 = n_end . E'``, ``h2 = n_end . X'`` the impact time moves by
+    ``dtau = -(h0 dz + h1 dtheta) / h2`` and the state after the impact by
+    ``D (B dz + E' dtheta + X' dtau)``.
+    """
+    m = D.shape[0]
+    n = m // 2
+    h2 = 0.0
+    h1 = 0.0
+    for c in range(n):
+        h2 += n_end[c] * rate[c]
+        h1 += n_end[c] * pcol[c]
+    B = np.empty((m, m))  # columns: dX^-/dz (m - 1 of them), then dX^-/dtheta
     col = 0
     for c in range(m):
         if c == j:
             continue
-        G[m - 1, col] = -omega * (d[j] * tr[j, c]) / h2
+        for r in range(m):
+            v = tr[r, c]
+            if c < n:
+                v -= tr[r, j] * n_start[c] / n_start[j]
+            B[r, col] = v
         col += 1
+    for r in range(m):
+        B[r, m - 1] = pcol[r]
+    h = np.empty(m)
+    for c in range(m):
+        s = 0.0
+        for r in range(n):
+            s += n_end[r] * B[r, c]
+        h[c] = s
+    h[m - 1] = h1
+    for c in range(m):
+        for r in range(m):
+            B[r, c] -= rate[r] * h[c] / h2
+    DB = np.empty((m, m))
+    _apply_matrix(D, B, DB)
+    row = 0
+    for r in range(m):
+        if r == j:
+            continue
+        for c in range(m):
+            G[row, c] = DB[r, c]
+        row += 1
+    for c in range(m - 1):
+        G[m - 1, c] = -omega * h[c] / h2
     G[m - 1, m - 1] = 1.0 - omega * h1 / h2
     return h2
 
 
 @_jit
-def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
-                   X0, theta):
-    """``(w, a, weights, Gamma, B, dy, dv)`` of ``x_j`` along a flight for the kernel's
-    search: the forced part ``Gamma cos + B sin`` of the phase and the free deviation."""
+def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega,
+                   normal, X0, theta):
+    """``(w, a, weights, Gamma, B, dy, dv)`` of ``s = n . x`` along a flight for the
+    kernel's search: the forced part ``Gamma cos + B sin`` of the phase and the free
+    deviation (modal weights ``n^T U``; for the first-order flow ``n^T`` of the
+    position rows of ``V`` and ``Z``)."""
     c0 = math.cos(theta)
     s0 = math.sin(theta)
     if general:
         m = lam.size
+        n = m // 2
         rot = complex(c0, s0)
         dev = np.empty(m)
         for c in range(m):
             dev[c] = X0[c] - (Z[c] * rot).real
-        coef = np.empty(m, dtype=np.complex128)  # V_jk zeta_k
+        coef = np.empty(m, dtype=np.complex128)  # (n^T V)_k zeta_k
+        zn = 0j
+        for r in range(n):
+            zn += normal[r] * Z[r]
         for k in range(m):
             s = 0j
             for c in range(m):
                 s += Vi[k, c] * dev[c]
-            coef[k] = V[j, k] * s
+            vn = 0j
+            for r in range(n):
+                vn += normal[r] * V[r, k]
+            coef[k] = vn * s
         npair = pw.size
         dy = np.empty(npair)
         dv = np.empty(npair)
@@ -449,9 +542,13 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
             else:  # two real eigenvalues
                 dy[i] = (coef[k] + coef[q]).real
                 dv[i] = (coef[k] * lam[k] + coef[q] * lam[q]).real
-        return pw, pa, np.ones(npair), Z[j].real, -Z[j].imag, dy, dv
+        return pw, pa, np.ones(npair), zn.real, -zn.imag, dy, dv
     n = w.size
-    u0 = u[j].copy()
+    u0 = np.zeros(n)
+    for r in range(n):
+        if normal[r] != 0.0:
+            for i in range(n):
+                u0[i] += normal[r] * u[r, i]
     dy = np.empty(n)
     dv = np.empty(n)
     Gam = 0.0
@@ -470,12 +567,13 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
 
 
 @_jit
-def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
+def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, normal,
                 two_sided, b, b_low, X0, theta, tau):
-    """Eq. (16) on one flight against both stops: ``(gap_upper, time_upper, gap_lower,
-    time_lower, capped)`` (a gap ``+inf`` and its time NaN where there is no extremum)."""
+    """Eq. (16) on one flight against both stops of ``s = n . x``: ``(gap_upper,
+    time_upper, gap_lower, time_lower, capped)`` (a gap ``+inf`` and its time NaN where
+    there is no extremum)."""
     ww, aa, u0, Gam, B, dy, dv = _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                                lam, V, Vi, Z, omega, j, X0, theta)
+                                                lam, V, Vi, Z, omega, normal, X0, theta)
     times, capped = time_grid(ww, aa, u0, omega, tau)
     free = free_on_grid(times, ww, aa, u0, dy, dv)
     cw = np.cos(omega * times)
@@ -485,7 +583,7 @@ def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, o
                             work, np.nan)
     gap_l = np.inf
     t_l = np.nan
-    if two_sided:  # the highest maximum of -x_j is the lowest minimum of x_j
+    if two_sided:  # the highest maximum of -s is the lowest minimum of s
         low, t_low = x1_maximum(times, free, cw, sw, -Gam, -B, omega, theta, -1.0, ww, aa, u0,
                                 dy, dv, work, np.nan)
         gap_l = b_low - low
@@ -495,9 +593,12 @@ def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, o
 
 @_jit
 def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
-                  two_sided, b, b_low, diagonals, phases, taus, starts, transitions, pcols,
-                  rates, checks):
+                  normal, two_sided, b, b_low, normals, matrices, phases, taus, starts,
+                  transitions, pcols, rates, checks):
     """Per-flight ``G_k``, their product G, its multipliers and the contact check (eq. 16).
+
+    ``normal``: the stop coordinate of the contact check (both stops); ``normals``,
+    ``matrices``: those of each impact (:func:`shooting_system`).
 
     Returns
     -------
@@ -510,14 +611,15 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
         was capped.
     """
     p = taus.size
-    m = diagonals.shape[1]
+    m = matrices.shape[1]
     jacs = np.empty((p, m, m))
     h2 = np.empty(p)
     G = np.eye(m)
     tmp = np.empty((m, m))
     for k in range(p):
-        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], diagonals[(k + 1) % p], j,
-                                 omega, jacs[k])
+        nxt = (k + 1) % p
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], matrices[nxt], j,
+                                 normals[k], normals[nxt], omega, jacs[k])
         for r in range(m):
             for c in range(m):
                 s = 0.0
@@ -538,8 +640,8 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
                 gap_l[k] = np.inf
                 continue
             gu, tu, gl, tl, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                              lam, V, Vi, Z, omega, j, two_sided, b, b_low,
-                                              starts[k], phases[k], taus[k])
+                                              lam, V, Vi, Z, omega, normal, two_sided, b,
+                                              b_low, starts[k], phases[k], taus[k])
             gap_u[k] = gu
             t_u[k] = tu
             gap_l[k] = gl

@@ -25,7 +25,11 @@ symmetric system), as :class:`impactcont.problems.symmetric_branch.SymmetricBran
 Its G is ``H^2`` with the half-map ``H = S G_{h-1} .. G_0``, and the second half's
 velocities, flight times, gaps and states are the mirror images of the first's.
 
-One entry point, :func:`sweep` (compiled once; a single point is a 1 x 1 grid).
+Every stop acts on a stop coordinate ``s = n . x`` (a mass, or a clearance between two
+masses) with a full impact matrix on the velocities
+(:class:`impactcont.orbit.stop_geometry.StopGeometry`). One compiled entry point,
+:func:`sweep_stops` (compiled once; a single point is a 1 x 1 grid); :func:`sweep`
+takes stops on one mass by their impact-law diagonals and calls it.
 Importing :mod:`impactcont` does not import this module.
 """
 
@@ -45,7 +49,7 @@ from impactcont.kernel.shooting import (
     shooting_system,
 )
 
-__all__ = ["sweep"]
+__all__ = ["sweep", "sweep_stops"]
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -55,20 +59,22 @@ _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 @_jit
 def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
-            positions, diagonals, x, want_jacobian):
+            normals, positions, matrices, x, want_jacobian):
     """The shooting system (full, or the half of a symmetric motion) at ``x``.
 
-    `positions` and `diagonals` hold the impacts of the system solved (the first h
-    of a symmetric motion). Returns the tuple of :func:`shooting_system`.
+    `normals`, `positions` and `matrices` hold the impacts of the system solved (the
+    first h of a symmetric motion). Returns the tuple of :func:`shooting_system`.
     """
     if not symmetric:
         return shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
-                               2.0 * math.pi * N / omega, j, positions, diagonals, x,
+                               2.0 * math.pi * N / omega, j, normals, positions, matrices, x,
                                want_jacobian)
     out = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
-                          math.pi * N / omega, j, positions, diagonals, x, want_jacobian)
+                          math.pi * N / omega, j, normals, positions, matrices, x,
+                          want_jacobian)
     h = positions.size
-    m = diagonals.shape[1]
+    m = matrices.shape[1]
+    n = m // 2
     starts = out[2]
     residual = out[7]
     last = (h - 1) * m
@@ -76,15 +82,20 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
         residual[last + r] += 2.0 * starts[0, r]
     if want_jacobian:
         J = out[8]
-        for r in range(m):
+        for r in range(m):  # dX_0/dz_0: unit columns, and x_j from the section
             if r != j:
                 J[last + r, h + (r if r < j else r - 1)] += 2.0
+            else:
+                for c in range(n):
+                    if c != j:
+                        J[last + r, h + (c if c < j else c - 1)] -= (
+                            2.0 * normals[0, c] / normals[0, j])
     return out
 
 
 @_jit
 def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
-            positions, diagonals, x0, tol, max_iter):
+            normals, positions, matrices, x0, tol, max_iter):
     """Newton with backtracking from ``x0``: the iteration and stopping rules of
     :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system`.
 
@@ -92,7 +103,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
     """
     x = x0.copy()
     sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
-                 positions, diagonals, x, True)
+                 normals, positions, matrices, x, True)
     norm = _max_abs(sh[7])
     step_norm = np.inf
     it = 0
@@ -113,7 +124,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
         while True:
             trial = x + lam_step * step
             tsh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N,
-                          symmetric, j, positions, diagonals, trial, True)
+                          symmetric, j, normals, positions, matrices, trial, True)
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -130,8 +141,9 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
 
 @_jit
 def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omega, N,
-              symmetric, admits, j, two_sided, b, b_low, full_diagonals, signs, sh, checks,
-              point, out_rho, out_mu, out_gap, out_velocity, out_tau, out_state, out_asym):
+              symmetric, admits, j, normal, two_sided, b, b_low, full_normals, full_matrices,
+              signs, sh, checks, point, out_rho, out_mu, out_gap, out_velocity, out_tau,
+              out_state, out_asym):
     """Stability, velocities, flight times, states and the contact check of a solution.
 
     Writes the grid point `point` (flat index) of the output arrays; returns
@@ -139,15 +151,16 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     """
     phases, taus, starts, transitions, pcols, rates = sh[0], sh[1], sh[2], sh[5], sh[6], sh[4]
     p = signs.size
-    m = full_diagonals.shape[1]
+    m = full_matrices.shape[1]
     flights = taus.size  # h of a symmetric motion, else p
     h2 = np.empty(flights)
     G = np.eye(m)
     jac = np.empty((m, m))
     tmp = np.empty((m, m))
     for k in range(flights):
-        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k],
-                                 full_diagonals[(k + 1) % p], j, omega, jac)
+        nxt = (k + 1) % p
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], full_matrices[nxt], j,
+                                 full_normals[k], full_normals[nxt], omega, jac)
         for r in range(m):
             for c in range(m):
                 s = 0.0
@@ -191,8 +204,8 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
             if not taus[k] > 0.0:
                 continue
             gu, _, gl, _, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                            lam, V, Vi, Z, omega, j, two_sided, b, b_low,
-                                            starts[k], phases[k], taus[k])
+                                            lam, V, Vi, Z, omega, normal, two_sided, b,
+                                            b_low, starts[k], phases[k], taus[k])
             # a mirrored flight's clearance to one stop is the other's of its image
             gap = min(gap, gu, gl)
             capped = capped or cap
@@ -227,12 +240,43 @@ def _push(queue, tail, size, point, parent):
     return tail + 1
 
 
-@_jit
 def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omegas,
           flow_index, positions, diagonals, full_diagonals, b_upper, b_lower, geometry_index,
-          coord0, coord1, signs, N, symmetric, admits, j, two_sided, seed0, seed1, x_seed,
-          tol, max_iter, max_change, checks, max_attempts, unknowns, found, iterations, delta,
-          stable, physical, rho, mu, gap, velocity, tau, state, asym):
+          coord0, coord1, signs, N, symmetric, admits, j, two_sided, *rest):
+    """:func:`sweep_stops` for stops on mass ``j`` given by impact-law diagonals.
+
+    The arguments of :func:`sweep_stops` with ``diagonals``, ``full_diagonals`` (the
+    diagonals of the impact matrices, shapes (ng, q, 2n) and (ng, p, 2n)) in place of
+    the normals and matrices: every stop acts on ``x_j`` (normal ``e_j``).
+    """
+    diagonals = np.asarray(diagonals, dtype=float)
+    full_diagonals = np.asarray(full_diagonals, dtype=float)
+    m = full_diagonals.shape[-1]
+    unit = np.zeros(m // 2)
+    unit[j] = 1.0
+    ng = full_diagonals.shape[0]
+
+    def square(d: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(d[..., :, None] * np.eye(m))
+
+    def units(d: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(np.broadcast_to(unit, (*d.shape[:2], m // 2)))
+
+    return sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj,
+                       omegas, flow_index, positions, units(diagonals), square(diagonals),
+                       units(full_diagonals), square(full_diagonals),
+                       np.ascontiguousarray(np.tile(unit, (ng, 1))), b_upper, b_lower,
+                       geometry_index, coord0, coord1, signs, N, symmetric, admits, j,
+                       two_sided, *rest)
+
+
+@_jit
+def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omegas,
+                flow_index, positions, normals, matrices, full_normals, full_matrices,
+                contact_normals, b_upper, b_lower, geometry_index, coord0, coord1, signs, N,
+                symmetric, admits, j, two_sided, seed0, seed1, x_seed, tol, max_iter,
+                max_change, checks, max_attempts, unknowns, found, iterations, delta, stable,
+                physical, rho, mu, gap, velocity, tau, state, asym):
     """Solve every grid point reachable from the seed through solved neighbours.
 
     Parameters
@@ -244,13 +288,14 @@ def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omeg
         Forcing frequency of each flow.
     flow_index, geometry_index : ndarray of int64, shape (n0, n1)
         The flow and the stop geometry of each grid point.
-    positions, diagonals : ndarray, shape (ng, q) and (ng, q, 2n)
-        Stop position and impact-law diagonal of the q impacts solved (h of a
-        symmetric motion, else p), per geometry.
-    full_diagonals : ndarray, shape (ng, p, 2n)
-        The same diagonals for all p impacts (G of every flight).
-    b_upper, b_lower : ndarray, shape (ng,)
-        ``b`` and ``b_low`` of each geometry (the contact check).
+    positions, normals, matrices : ndarray, shape (ng, q), (ng, q, n), (ng, q, 2n, 2n)
+        Stop position, normal of the stop coordinate and impact matrix of the q impacts
+        solved (h of a symmetric motion, else p), per geometry
+        (:class:`impactcont.orbit.stop_geometry.StopGeometry`).
+    full_normals, full_matrices : ndarray, shape (ng, p, n), (ng, p, 2n, 2n)
+        The same for all p impacts (G of every flight).
+    contact_normals, b_upper, b_lower : ndarray, shape (ng, n), (ng,), (ng,)
+        The stop coordinate, ``b`` and ``b_low`` of each geometry (the contact check).
     coord0, coord1 : ndarray
         The grid's two axes (the secant predictor).
     signs : ndarray, shape (p,)
@@ -259,7 +304,7 @@ def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omeg
     symmetric, admits, two_sided, checks : bool
         Solve the half system; store the asymmetry; a lower stop; search contacts.
     j : int
-        0-based index of the impacting mass.
+        0-based index of the position eliminated on the sections (the stop's mass).
     seed0, seed1 : int
         The seed grid point, solved from ``x_seed`` (any distance).
     x_seed : ndarray
@@ -319,7 +364,7 @@ def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omeg
         attempts += 1
         x, ok, it, sh = _newton(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi],
                                 ui[fi], lam[fi], V[fi], Vi[fi], Z[fi], omega, N, symmetric, j,
-                                positions[gi], diagonals[gi], x0, tol, max_iter)
+                                normals[gi], positions[gi], matrices[gi], x0, tol, max_iter)
         total_iterations += it
         if ok and parent >= 0:
             change = 0.0
@@ -335,9 +380,10 @@ def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omeg
         delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
         phys, cap = _evaluate(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi], ui[fi],
                               lam[fi], V[fi], Vi[fi], Z[fi], pw[fi], pa[fi], pk[fi], pj[fi],
-                              omega, N, symmetric, admits, j, two_sided, b_upper[gi],
-                              b_lower[gi], full_diagonals[gi], signs, sh, checks, point, rho,
-                              mu, gap, velocity, tau, state, asym)
+                              omega, N, symmetric, admits, j, contact_normals[gi], two_sided,
+                              b_upper[gi], b_lower[gi], full_normals[gi], full_matrices[gi],
+                              signs, sh, checks, point, rho, mu, gap, velocity, tau, state,
+                              asym)
         physical[point] = phys
         stable[point] = rho[point] < 1.0
         capped = capped or cap

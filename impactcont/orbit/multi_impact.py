@@ -63,7 +63,7 @@ from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
 )
-from impactcont.orbit.stop_geometry import impact_geometry, stop_sign
+from impactcont.orbit.stop_geometry import StopGeometry, impact_geometry, stop_geometry, stop_sign
 
 __all__ = [
     "MultiImpactOrbit",
@@ -81,6 +81,7 @@ __all__ = [
     "shooting",
     "shooting_accuracy",
     "split_unknowns",
+    "stop_geometry",
 ]
 
 log = logging.getLogger(__name__)
@@ -316,11 +317,14 @@ class Shooting:
 
 
 def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float | np.ndarray,
-                   index: int = 0) -> tuple[float, np.ndarray, np.ndarray]:
+                   index: int = 0, *, normals: np.ndarray | None = None
+                   ) -> tuple[float, np.ndarray, np.ndarray]:
     """``delta``, the p flight times and the p post-impact states ``X_k`` from ``u``.
 
     ``b`` is the stop position (one for every impact, or one per impact, shape
-    (p,)) and ``index`` the 0-based index of the impacting mass.
+    (p,)), ``index`` the 0-based index ``j`` of the position eliminated on the sections
+    and ``normals`` (shape (n,) or (p, n)) the normal of the stop coordinate of each
+    impact (``e_j`` by default): ``x_j = (c_k - sum_{i != j} n_i x_i) / n_j``.
     """
     u = np.asarray(u, dtype=float)
     if u.shape != (2 * n * p,):
@@ -331,8 +335,14 @@ def split_unknowns(u: np.ndarray, n: int, p: int, period: float, b: float | np.n
     taus[-1] = period - np.sum(u[1:p])
     starts = np.empty((p, 2 * n))
     rest = np.delete(np.arange(2 * n), index)
-    starts[:, index] = b
     starts[:, rest] = u[p:].reshape(p, 2 * n - 1)
+    if normals is None:
+        starts[:, index] = b
+    else:
+        nrm = np.broadcast_to(np.asarray(normals, dtype=float), (p, n))
+        others = np.einsum("ki,ki->k", np.delete(nrm, index, axis=1),
+                           np.delete(starts[:, :n], index, axis=1))
+        starts[:, index] = (np.broadcast_to(b, (p,)) - others) / nrm[:, index]
     return float(u[0]), taus, starts
 
 
@@ -359,14 +369,15 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
     """
     osc = flow.osc
     pattern = check_pattern(pattern, p, osc.stops)
-    j, positions, diagonals = _geometry(flow, pattern)
+    geo = _geometry(flow, pattern)
     x = np.asarray(u, dtype=float)
     if x.shape != (2 * osc.n * p,):
         raise ParameterError(f"u must have shape ({2 * osc.n * p},) = (2 n p,) for n={osc.n}, "
                              f"p={p}; got shape {x.shape}")
     arrays = flow.shooting_arrays()
-    out = _kernel().shooting_system(*arrays[:12], osc.omega, TWO_PI * N / osc.omega, j,
-                                    positions, diagonals, _writable(x), jacobian)
+    out = _kernel().shooting_system(*arrays[:12], osc.omega, TWO_PI * N / osc.omega, geo.pivot,
+                                    geo.normals, geo.positions, geo.matrices, _writable(x),
+                                    jacobian)
     return _as_shooting(out, jacobian)
 
 
@@ -391,13 +402,25 @@ def _signs(pattern: str) -> np.ndarray:
     return np.array([stop_sign(s) for s in pattern])
 
 
-def _geometry(flow: Flow, pattern: str) -> tuple[int, np.ndarray, np.ndarray]:
-    """:func:`impact_geometry` of the flow's oscillator, kept on the flow per pattern."""
-    cache = flow.__dict__.setdefault("_impact_geometry", {})
+def _geometry(flow: Flow, pattern: str) -> StopGeometry:
+    """:func:`stop_geometry` of the flow's oscillator, kept on the flow per pattern."""
+    cache = flow.__dict__.setdefault("_stop_geometry", {})
     geometry = cache.get(pattern)
     if geometry is None:
-        geometry = cache[pattern] = impact_geometry(flow.osc, pattern)
+        geometry = cache[pattern] = stop_geometry(flow.osc, pattern)
     return geometry
+
+
+def _coordinate(normal: np.ndarray) -> str:
+    """The stop coordinate ``n . x`` in words: ``x2``, ``x1 - x2``, ``2 x1 + x3``."""
+    terms = []
+    for i, c in enumerate(normal):
+        if c == 0.0:
+            continue
+        size = "" if abs(c) == 1.0 else f"{abs(c):g} "
+        sign = ("-" if c < 0 else "+") if terms else ("-" if c < 0 else "")
+        terms.append(f"{sign} {size}x{i + 1}".strip() if terms else f"{sign}{size}x{i + 1}")
+    return " ".join(terms)
 
 
 def _as_shooting(out: tuple[np.ndarray, ...], jacobian: bool) -> Shooting:
@@ -409,14 +432,17 @@ def _as_shooting(out: tuple[np.ndarray, ...], jacobian: bool) -> Shooting:
 
 
 def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.ndarray,
-                    d: np.ndarray, index: int, omega: float) -> tuple[np.ndarray, float]:
-    """Jacobian ``G_k`` of one flight and the impact ending it, eq. (22)-(25) on ``x_j = c``.
+                    d: np.ndarray, index: int, omega: float, *,
+                    normal: np.ndarray | None = None, start_normal: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, float]:
+    """Jacobian ``G_k`` of one flight and the impact ending it, eq. (22)-(25) on ``n . x = c``.
 
-    The impact time is fixed by ``x_j(tau) = c`` (``c`` the position of the stop hit),
-    so ``dtau = -(dx_j^-) / x_j'(tau^-)``; with ``D`` the impact law of that stop the
-    post-impact state moves by ``D (Phi dX + E' dtheta + X' dtau)``. In the section
-    coordinates ``[z, theta]`` (``z = X`` without ``x_j``) this is eq. (25) with row
-    and column ``j`` in place of 0.
+    The flight starts on the section ``n0 . x = c0`` (`start_normal`; coordinates ``z``:
+    ``X`` without ``x_j``, and ``x_j`` from the section) and ends when ``n . x(tau) = c``
+    (`normal`), so ``dtau = -(n . dx^-) / (n . x'(tau^-))``; with ``D`` the impact matrix
+    of that stop the post-impact state moves by ``D (Phi dX + E' dtheta + X' dtau)``. In
+    the section coordinates ``[z, theta]`` this is eq. (25) with row and column ``j`` in
+    place of 0 (``n = n0 = e_j``, the stop on mass j).
 
     Parameters
     ----------
@@ -426,34 +452,42 @@ def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.n
         ``U E(tau) [-sin theta; cos theta]`` (``dX^-/dtheta``).
     rate : ndarray, shape (2n,)
         ``X'(tau^-)``.
-    d : ndarray, shape (2n,)
-        Diagonal of ``D`` of the stop that ends the flight.
+    d : ndarray, shape (2n,) or (2n, 2n)
+        Impact matrix ``D`` of the stop that ends the flight, or its diagonal.
     index : int
-        0-based index ``j`` of the impacting mass.
+        0-based index ``j`` of the position eliminated on the sections.
     omega : float
         Forcing frequency.
+    normal, start_normal : ndarray, shape (n,), optional
+        Normals of the stop coordinates at the end and the start of the flight;
+        ``e_j`` by default (`start_normal` defaults to `normal`).
 
     Returns
     -------
     G : ndarray, shape (2n, 2n)
     h2 : float
-        ``x_j'(tau^-)``, the signed arrival velocity (the pole of G at 0).
+        ``n . x'(tau^-)``, the signed arrival velocity (the pole of G at 0).
     """
-    m = d.size
+    m = rate.size
+    n = m // 2
+    D = np.diag(d) if np.ndim(d) == 1 else np.asarray(d, dtype=float)
+    if normal is None:
+        normal = np.zeros(n)
+        normal[index] = 1.0
+    normal = np.asarray(normal, dtype=float)
+    start = normal if start_normal is None else np.asarray(start_normal, dtype=float)
     rest = np.delete(np.arange(m), index)
-    DPhi = d[:, None] * transition
-    h0_p = DPhi[index, rest]
-    H0 = DPhi[np.ix_(rest, rest)]
-    dE = d * phase_column
-    h1, H1 = dE[index], dE[rest]
-    dX = d * rate
-    h2, H2 = dX[index], dX[rest]
+    L = np.eye(m)[:, rest]  # dX/dz on the start section
+    L[index, :] = np.concatenate([-start / start[index], np.zeros(n)])[rest]
+    B = np.column_stack([transition @ L, phase_column])
+    h = normal @ B[:n]
+    h2 = float(normal @ rate[:n])
+    DB = D @ (B - np.outer(rate, h) / h2)
     G = np.empty((m, m))
-    G[:-1, :-1] = H0 - np.outer(H2, h0_p) / h2
-    G[:-1, -1] = H1 - H2 * h1 / h2
-    G[-1, :-1] = -omega * h0_p / h2
-    G[-1, -1] = 1.0 - omega * h1 / h2
-    return G, float(h2)
+    G[:-1] = DB[rest]
+    G[-1, :-1] = -omega * h[:-1] / h2
+    G[-1, -1] = 1.0 - omega * h[-1] / h2
+    return G, h2
 
 
 def omega_partial(flow: Flow, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
@@ -651,15 +685,15 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
     """
     osc = flow.osc
     pattern = check_pattern(pattern, p, osc.stops)
-    j, positions, diagonals = _geometry(flow, pattern)
+    geo = _geometry(flow, pattern)
     x0 = np.array(u0, dtype=float)
     if x0.shape != (2 * osc.n * p,):
         raise ParameterError(f"u0 must have shape ({2 * osc.n * p},) = (2 n p,) for "
                              f"n={osc.n}, p={p}; got shape {x0.shape}")
     arrays = flow.shooting_arrays()
     u, status, it, norm, step_norm, out = _kernel().newton_solve(
-        *arrays[:12], osc.omega, TWO_PI * N / osc.omega, j, positions, diagonals, x0,
-        float(tol), int(max_iter))
+        *arrays[:12], osc.omega, TWO_PI * N / osc.omega, geo.pivot, geo.normals, geo.positions,
+        geo.matrices, x0, float(tol), int(max_iter))
     sh = _as_shooting(out, True)
     if status == 0:
         return u, sh, int(it)
@@ -718,19 +752,20 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     """:func:`orbit_from_unknowns` from the shooting system at the solution (`pattern`
     validated), with the accuracy of the solution when known."""
     osc = flow.osc
-    j, _, diagonals = _geometry(flow, pattern)
+    geo = _geometry(flow, pattern)
+    j = geo.pivot
     arrays = flow.shooting_arrays()
-    stops = osc.stops
     jacs, h2, G, multipliers, gaps, gap_times, gaps_low, times_low, capped = (
         _kernel().motion_checks(
             *arrays[:5], *arrays[6:8], *arrays[12:16], *arrays[8:12], osc.omega, j,
-            stops.two_sided, float(osc.b), float(stops.b_low) if stops.two_sided else 0.0,
-            diagonals, *(_writable(a) for a in (
+            geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.matrices,
+            *(_writable(a) for a in (
                 sh.phases, sh.flight_times, sh.starts, sh.transitions, sh.phase_columns,
                 sh.arrival_rates)), checks))
     if capped:
-        warnings.warn(f"x{j + 1} search grid capped at 2000000 cells on a flight of the N={N}, "
-                      f"p={p} motion: a short excursion past a stop (eq. 16) may be missed",
+        warnings.warn(f"{_coordinate(geo.normal)} search grid capped at 2000000 cells on a "
+                      f"flight of the N={N}, p={p} motion: a short excursion past a stop "
+                      "(eq. 16) may be missed",
                       UnresolvedMotionWarning, stacklevel=2)
     reasons = []
     if not checks:
@@ -743,10 +778,10 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
             gaps[k], gap_times[k] = gaps_low[k], times_low[k]
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
     velocities = h2[np.arange(-1, p - 1)] * _signs(pattern)
-    mass = f"x{j + 1}"
+    mass = _coordinate(geo.normal)
     for k in range(p):
         if not velocities[k] > 0:
-            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, mass {j + 1} does "
+            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, {mass} does "
                            f"not arrive towards the {'upper' if pattern[k] == UPPER else 'lower'}"
                            " stop")
         if checks and not gaps[k] > 0:
