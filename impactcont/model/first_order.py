@@ -47,7 +47,7 @@ from impactcont.errors import (
     ParameterError,
     ResonanceError,
 )
-from impactcont.model.modal import check_held_modes
+from impactcont.model.modal import classify_modes
 
 __all__ = ["COND_REFUSE", "COND_WARN", "FirstOrderBasis", "coth_remainder"]
 
@@ -163,6 +163,30 @@ def _check_resonance(omega: float, cond: float) -> None:
             NearResonanceWarning, stacklevel=4)
 
 
+def _check_free_damped(U_free: np.ndarray, C: np.ndarray) -> None:
+    """Refuse a free mode of K that C does not damp (a defective double zero eigenvalue).
+
+    A free mode ``u`` (``K u = 0``) with ``u^T C u > 0`` gives A the simple eigenvalue 0
+    (the position drifts freely) and the real ``-u^T C u`` (its velocity decays): A stays
+    diagonalisable. Undamped (``C u = 0``), the eigenvalue 0 is double with one
+    eigenvector (the motion ``x = u (y0 + v0 t)``): no eigenvector basis exists.
+    """
+    if not U_free.shape[1]:
+        return
+    Cf = U_free.T @ C @ U_free
+    scale = np.abs(U_free).T @ np.abs(C) @ np.abs(U_free)
+    eig = np.linalg.eigvalsh(0.5 * (Cf + Cf.T))
+    if np.all(eig > 1e-12 * max(float(np.max(np.abs(scale))), np.finfo(float).tiny)):
+        return
+    raise ParameterError(
+        f"K must be positive definite relative to M on the first-order path (any C, complex "
+        f"F) unless C damps every free mode: the free mode(s) "
+        f"{np.round(U_free.T, 12).tolist()} of K are undamped by C={C.tolist()} (u^T C u "
+        f"eigenvalues {eig.tolist()}), so the first-order matrix A has a defective double "
+        f"eigenvalue 0. Use the modal path (proportional damping eta or alpha/beta with a "
+        f"real F), whose flow of an undamped free mode is exact, or add a damper on that mode")
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class FirstOrderBasis:
     """Complex first-order modes ``A = V diag(lambda) V^-1`` of eq. (1) with any C.
@@ -182,6 +206,10 @@ class FirstOrderBasis:
         2-norm condition number of the eigenvectors of the balanced ``A`` (invariant to
         the units of each coordinate): the flow carries a relative error of about
         ``eps * condition``.
+    zero : ndarray of bool, shape (2n,)
+        The eigenvalues that are exactly 0: one per free (rigid-body) mode of K, which
+        C damps (its partner is the real ``-u^T C u`` rate of that mode); their
+        eigenvectors are ``[u_free; 0]``.
     """
 
     M: np.ndarray
@@ -192,6 +220,7 @@ class FirstOrderBasis:
     V: np.ndarray
     V_inv: np.ndarray
     condition: float
+    zero: np.ndarray | None = None
 
     @classmethod
     def from_matrices(cls, M: np.ndarray, K: np.ndarray, C: np.ndarray) -> FirstOrderBasis:
@@ -200,7 +229,8 @@ class FirstOrderBasis:
         Raises
         ------
         ParameterError
-            If K is not positive definite relative to M (a free mode: eq. 12 singular),
+            If K has a free mode that C does not damp (a double, defective zero
+            eigenvalue: the modal path of proportional damping handles it exactly),
             or if the eigenvector matrix is singular or its condition number exceeds
             :data:`COND_REFUSE` (a defective or nearly defective eigenvalue, e.g. a
             critically damped mode).
@@ -212,15 +242,26 @@ class FirstOrderBasis:
         """
         n = M.shape[0]
         stiffness, modes = scipy.linalg.eigh(K, M)
-        check_held_modes(stiffness, modes, K)  # a free mode: I - D Phi(T) of eq. (12) singular
+        _, free = classify_modes(stiffness, modes, K)
+        U_free = modes[:, free]
+        _check_free_damped(U_free, C)
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -np.linalg.solve(M, K)
         A[n:, n:] = -np.linalg.solve(M, C)
         lam, V = scipy.linalg.eig(A)  # balanced dgeev: conjugate pairs exact
+        zero = np.zeros(2 * n, dtype=bool)
+        if U_free.shape[1]:
+            # the free modes' eigenvalues are 0 up to rounding: exactly 0, with the exact
+            # eigenvectors [u_free; 0] (a basis of the free subspace)
+            nearest = np.argsort(np.abs(lam))[:U_free.shape[1]]
+            zero[nearest] = True
+            lam = np.where(zero, 0.0, lam)
+            V = V.copy()
+            V[:, nearest] = np.vstack([U_free, np.zeros_like(U_free)])
         # reproducible order: slowest decay first, then by frequency (conjugates adjacent)
         order = np.lexsort((-lam.imag, np.abs(lam.imag), -lam.real))
-        lam, V = lam[order], V[:, order]
+        lam, V, zero = lam[order], V[:, order], zero[order]
         V = V / np.linalg.norm(V, axis=0)
         # the condition of the eigenvectors of the balanced A (D^-1 A D, D a diagonal of
         # powers of two): invariant to the units of each coordinate (X -> D X)
@@ -256,9 +297,10 @@ class FirstOrderBasis:
                 f"{cond * _EPS:.1g} (nearly critical damping)", IllConditionedWarning,
                 stacklevel=3)
         V_inv = np.linalg.inv(V)
-        for x in (A, lam, V, V_inv):
+        for x in (A, lam, V, V_inv, zero):
             x.setflags(write=False)
-        return cls(M=M, K=K, C=C, A=A, eigenvalues=lam, V=V, V_inv=V_inv, condition=cond)
+        return cls(M=M, K=K, C=C, A=A, eigenvalues=lam, V=V, V_inv=V_inv, condition=cond,
+                   zero=zero)
 
     @functools.cached_property
     def impact_column(self) -> np.ndarray:
@@ -267,6 +309,10 @@ class FirstOrderBasis:
         O(1)`` (:func:`coth_remainder`), from ``A^-1 = [[-K^-1 C, -K^-1 M], [I, 0]]``."""
         n = self.M.shape[0]
         col = np.zeros(2 * n)
+        if self.zero is not None and np.any(self.zero):  # a free mode: K singular, A^-1 none
+            col[:] = np.nan  # (the N-1 closed form that uses it refuses free modes)
+            col.setflags(write=False)
+            return col
         col[:n] = -scipy.linalg.solve(self.K, self.M[:, 0], assume_a="pos")
         col.setflags(write=False)
         return col

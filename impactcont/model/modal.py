@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import warnings
 
 import numpy as np
@@ -30,22 +31,24 @@ import scipy.linalg
 
 from impactcont.errors import NearResonanceWarning, ParameterError, ResonanceError
 
-__all__ = ["DAMPING_PARAMETERS", "ModalBasis", "check_held_modes", "decay_rate_derivative",
-           "forced_coefficients", "free_transfer"]
+__all__ = ["DAMPING_PARAMETERS", "ModalBasis", "check_held_modes", "classify_modes",
+           "decay_rate_derivative", "forced_coefficients", "free_transfer", "static_response"]
 
 # warn when the forced amplitude of a mode is known to worse than this (relative) because
 # omega sits within the rounding error of omega_i^2 (eigh: about eps * omega_max^2)
 _RESONANCE_REL_ERROR_WARN = 1e-8
 
-def check_held_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray) -> np.ndarray:
-    """The rounding scale of each modal eigenvalue; refuse a mode that nothing holds.
+def classify_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The rounding scale of each modal eigenvalue, and which modes are free.
 
     Each eigenvalue ``lam_i`` of ``K u = lam M u`` is known to about
     ``eps |u_i|^T |K| |u_i|`` (componentwise, so invariant to the units of each
     coordinate, ``M -> D M D``, ``K -> D K D``): a graded chain such as
     ``M = diag(1e-12, 1, 1e12)`` holds every mode, while a free (rigid-body) mode has
     an eigenvalue of that size and either sign, decided by rounding. A mode is held
-    when ``lam_i > 4 n`` times its scale.
+    by the springs when ``lam_i > 4 n`` times its scale, free when ``|lam_i|`` is within
+    it (its eigenvalue is then exactly 0: ``omega_i = 0``).
 
     Parameters
     ----------
@@ -57,18 +60,39 @@ def check_held_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray) ->
 
     Returns
     -------
-    ndarray, shape (n,)
+    errors : ndarray, shape (n,)
         The rounding scale of each eigenvalue.
+    free : ndarray of bool, shape (n,)
+        The free (zero-frequency, rigid-body) modes.
+
+    Raises
+    ------
+    ParameterError
+        When an eigenvalue is negative beyond rounding (K not positive semi-definite).
+    """
+    n = stiffness.size
+    a = np.abs(modes)
+    errors = np.finfo(float).eps * np.sum(a * (np.abs(K) @ a), axis=0)  # BLAS, not einsum
+    tol = 4 * n * errors
+    if np.any(stiffness < -tol):
+        raise ParameterError(f"K must be positive semi-definite relative to M (a spring "
+                             f"stores energy); got modal eigenvalues {stiffness.tolist()} "
+                             f"(rounding scale {errors.tolist()})")
+    return errors, ~(stiffness > tol)
+
+
+def check_held_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """The rounding scale of each modal eigenvalue; refuse a mode that no spring holds.
+
+    :func:`classify_modes` for paths that need K positive definite.
 
     Raises
     ------
     ParameterError
         When a mode is not held (K not positive definite relative to M).
     """
-    n = stiffness.size
-    a = np.abs(modes)
-    errors = np.finfo(float).eps * np.sum(a * (np.abs(K) @ a), axis=0)  # BLAS, not einsum
-    if not np.all(stiffness > 4 * n * errors):
+    errors, free = classify_modes(stiffness, modes, K)
+    if np.any(free):
         raise ParameterError(f"K must be positive definite relative to M; got modal "
                              f"eigenvalues {stiffness.tolist()} (rounding scale "
                              f"{errors.tolist()}): a mode that nothing holds: support the "
@@ -95,6 +119,9 @@ class ModalBasis:
     eigenvalue_errors : ndarray, shape (n,)
         Rounding-error scale of ``omega_i^2``: ``eps |u_i|^T |K| |u_i|`` (componentwise,
         so that graded stiff chains are not charged ``eps * max omega^2`` on every mode).
+    free : ndarray of bool, shape (n,)
+        The free (rigid-body) modes, ``K u_i = 0``: their ``omega_i`` is exactly 0 (the
+        eigenvalue rounding, of either sign, is clamped against ``eigenvalue_errors``).
     """
 
     u: np.ndarray
@@ -103,20 +130,30 @@ class ModalBasis:
     decay_rates: np.ndarray
     modal_forces: np.ndarray
     eigenvalue_errors: np.ndarray | None = None
+    free: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.free is None:
+            object.__setattr__(self, "free", np.zeros(self.natural_frequencies.shape, bool))
 
     @classmethod
     def from_matrices(cls, M: np.ndarray, K: np.ndarray, alpha: float, beta: float,
                       F: np.ndarray) -> ModalBasis:
-        """Solve the generalised eigenproblem and mass-normalise (eq. 5)."""
+        """Solve the generalised eigenproblem and mass-normalise (eq. 5).
+
+        K may be positive semi-definite: a free mode gets ``omega_i = 0`` exactly
+        (:func:`classify_modes`); what holds it is the oscillator's check.
+        """
         lam, u = scipy.linalg.eigh(K, M)
-        errors = check_held_modes(lam, u, K)
+        errors, free = classify_modes(lam, u, K)
+        lam = np.where(free, 0.0, lam)
         # eigh returns M-orthonormal vectors; fix the sign so that u[0, i] >= 0 (reproducible).
         sign = np.where(u[0] < 0, -1.0, 1.0)
         u = u * sign
         w = np.sqrt(lam)
         return cls(u=u, u_inv=u.T @ M, natural_frequencies=w,
                    decay_rates=0.5 * (alpha + beta * lam), modal_forces=u.T @ F,
-                   eigenvalue_errors=errors)
+                   eigenvalue_errors=errors, free=free)
 
     @functools.cached_property
     def kernel_arrays(self) -> tuple[np.ndarray, ...]:
@@ -130,8 +167,10 @@ class ModalBasis:
 
     @property
     def damping_ratios(self) -> np.ndarray:
-        """``xi_i = a_i / omega_i``."""
-        return self.decay_rates / self.natural_frequencies
+        """``xi_i = a_i / omega_i`` (``inf`` for a damped free mode, 0 for an undamped one)."""
+        w, a = self.natural_frequencies, self.decay_rates
+        with np.errstate(divide="ignore"):
+            return np.where(w > 0, a / np.where(w > 0, w, 1.0), np.where(a > 0, np.inf, 0.0))
 
     @property
     def damped_frequencies(self) -> np.ndarray:
@@ -215,6 +254,67 @@ def free_transfer(w: np.ndarray, a: np.ndarray, t: np.ndarray
     w11 = ec + a * es
     w21 = -(w * w) * es
     return w11, es, w21, w22
+
+
+def _phi2(x: np.ndarray) -> np.ndarray:
+    """``2 (x + expm1(-x)) / x^2`` (1 at 0), without cancellation at small x."""
+    x = np.asarray(x, dtype=float)
+    out = np.empty_like(x)
+    small = np.abs(x) < 0.5
+    if np.any(small):  # 2 sum_k (-x)^k / (k + 2)!, 20 terms: converged to eps for |x| < 1/2
+        xs = -x[small]
+        acc = np.zeros_like(xs)
+        for k in range(20, -1, -1):
+            acc = acc * xs + 2.0 / math.factorial(k + 2)
+        out[small] = acc
+    big = ~small
+    xb = x[big]
+    out[big] = 2.0 * (xb + np.expm1(-xb)) / (xb * xb)
+    return out
+
+
+def _psi1(x: np.ndarray) -> np.ndarray:
+    """``-expm1(-x) / x`` (1 at 0)."""
+    x = np.asarray(x, dtype=float)
+    safe = np.where(x == 0.0, 1.0, x)
+    return np.where(x == 0.0, 1.0, -np.expm1(-safe) / safe)
+
+
+def static_response(w: np.ndarray, a: np.ndarray, g: np.ndarray, free: np.ndarray,
+                    t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The modal response to a constant force ``g`` (eq. 1 with ``F_static``), exact.
+
+    Each mode obeys ``y'' + 2 a y' + w^2 y = ... + g``; its state is
+    ``[y; y'](t) = Q + W(t) ([y; y'](0) - Q) + S(t)`` with
+
+    - a held mode (``w > 0``): the constant offset ``Q = [g / w^2; 0]``, ``S = 0``;
+    - a free mode (``w = 0``): ``Q = 0`` and the response from rest
+      ``S(t) = [g t^2 phi(2 a t) / 2; g t psi(2 a t)]``, ``phi(x) = 2 (x - 1 + e^-x) / x^2``,
+      ``psi(x) = (1 - e^-x) / x``: ``g t^2 / 2`` undamped, the drift ``g t / (2 a)`` in
+      the long run when damped, in a form free of cancellation at every ``a t``.
+
+    Parameters
+    ----------
+    w, a, g : ndarray, shape (n,)
+        Natural frequencies, decay rates and modal static forces ``u^T F_static``.
+    free : ndarray of bool, shape (n,)
+    t : ndarray, shape (nt,)
+
+    Returns
+    -------
+    offset : ndarray, shape (n,)
+        ``g / w^2`` of the held modes, 0 for the free ones (``Q``'s displacement).
+    s_y, s_v : ndarray, shape (nt, n)
+        ``S(t)``: zero for the held modes.
+    """
+    t = np.atleast_1d(np.asarray(t, dtype=float))[:, None]
+    w = np.asarray(w, dtype=float)
+    offset = np.where(free, 0.0, g / np.where(free, 1.0, w * w))
+    gf = np.where(free, g, 0.0)
+    x = 2.0 * a * t
+    s_y = 0.5 * gf * t * t * _phi2(x)
+    s_v = gf * t * _psi1(x)
+    return offset, s_y, s_v
 
 
 def forced_coefficients(w: np.ndarray, a: np.ndarray, f: np.ndarray, omega: float, *,

@@ -11,11 +11,12 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
 from impactcont.errors import ParameterError
 from impactcont.model.first_order import FirstOrderBasis
-from impactcont.model.modal import ModalBasis
-from impactcont.model.stops import Stops
+from impactcont.model.modal import ModalBasis, classify_modes
+from impactcont.model.stops import TOUCH_RTOL, Stops
 from impactcont.vocabulary import PARAMETERS
 
 __all__ = ["ImpactOscillator", "chain_stiffness"]
@@ -31,7 +32,7 @@ def _rule(name: str) -> dict[str, Any]:
 #: Parameters whose change leaves M, K, F and the modal basis alone.
 _SCALAR_RULES: dict[str, dict[str, Any]] = {name: _rule(name) for name in ("R", "b", "omega")}
 #: Parameters on which the modal basis of eq. (5)-(6) (M, K, the damping, F) does not depend.
-_MODES_KEPT = frozenset({*_SCALAR_RULES, "stops"})
+_MODES_KEPT = frozenset({*_SCALAR_RULES, "stops", "F_static"})
 #: Parameters on which the first-order basis (M, K, C only) does not depend.
 _FIRST_ORDER_KEPT = frozenset({*_MODES_KEPT, "F"})
 
@@ -77,8 +78,12 @@ def _real_array(name: str, value: Any, what: str) -> np.ndarray:
     return a.astype(float)
 
 
-def _matrix(name: str, value: Any) -> np.ndarray:
-    """Return ``value`` as a finite, square, symmetric, positive definite float matrix."""
+def _matrix(name: str, value: Any, *, semi: bool = False) -> np.ndarray:
+    """Return ``value`` as a finite, square, symmetric, positive definite float matrix.
+
+    With ``semi`` (the stiffness K) a matrix whose Cholesky factorisation fails is kept
+    for the oscillator's modal check (positive semi-definite: free modes).
+    """
     a = _real_array(name, value, "a real square matrix (array_like)")
     if a.ndim == 0:
         a = a.reshape(1, 1)
@@ -96,6 +101,8 @@ def _matrix(name: str, value: Any) -> np.ndarray:
     try:
         np.linalg.cholesky(a)
     except np.linalg.LinAlgError:
+        if semi:
+            return a
         eig = np.linalg.eigvalsh(a)
         raise ParameterError(
             f"{name} must be positive definite; got eigenvalues {eig.tolist()} of {a.tolist()}"
@@ -175,12 +182,16 @@ def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
     """Stiffness matrix of the chain of eq. (2).
 
     Mass 1 hangs on mass 2 by spring ``k1``, mass j on mass j+1 by ``k_j`` and
-    the last mass on the ground by ``k_n``.
+    the last mass on the ground by ``k_n``. A spring constant 0 leaves that link out:
+    ``k_n = 0`` leaves the chain free of the ground (its rigid-body mode, e.g.
+    ``springs=[k1, 0]``: two masses on one spring, free to move together), ``k_j = 0``
+    (``j < n``) frees masses ``1..j`` from the rest. The oscillator then requires a stop
+    that holds each free mode (:class:`ImpactOscillator`).
 
     Parameters
     ----------
     springs : sequence of float, length n
-        Spring constants ``k_1 ... k_n``, all > 0.
+        Spring constants ``k_1 ... k_n``, all >= 0.
 
     Returns
     -------
@@ -190,8 +201,9 @@ def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
     k = np.atleast_1d(np.array(springs, dtype=float))
     if k.ndim != 1 or k.size == 0:
         raise ParameterError(f"springs must be a non-empty 1-D sequence; got {springs!r}")
-    if not np.all(np.isfinite(k)) or np.any(k <= 0):
-        raise ParameterError(f"springs must be finite and > 0; got {k.tolist()}")
+    if not np.all(np.isfinite(k)) or np.any(k < 0):
+        raise ParameterError(f"springs must be finite and >= 0 (0: no spring, a free mass "
+                             f"held by a stop); got {k.tolist()}")
     n = k.size
     K = np.zeros((n, n))
     K[0, 0] = k[0]
@@ -201,19 +213,71 @@ def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
     return K
 
 
+def _free_modes(M: np.ndarray, K: np.ndarray, stops: Stops) -> np.ndarray:
+    """The free modes of K relative to M, (n, n_f), each checked to be held by a stop.
+
+    K positive definite (its Cholesky factorisation succeeds) has none, without an
+    eigensolve. Otherwise the modes of ``K u = lambda M u`` are classified against their
+    componentwise rounding scale (:func:`~impactcont.model.modal.classify_modes`); the
+    free ones span a subspace that the stop coordinate ``s = normal . x`` must hold:
+    ``normal . u != 0`` for one free mode, and no free motion with ``normal . u = 0`` (at
+    most one free mode for one stop coordinate).
+
+    Raises
+    ------
+    ParameterError
+        K not positive semi-definite, or a free mode no stop holds (named by its shape).
+    """
+    n = M.shape[0]
+    try:
+        np.linalg.cholesky(K)
+    except np.linalg.LinAlgError:
+        pass
+    else:
+        return np.zeros((n, 0))
+    lam, u = scipy.linalg.eigh(K, M)
+    _, free = classify_modes(lam, u, K)
+    U = u[:, free]
+    U = U * np.where(U[np.argmax(np.abs(U), axis=0), np.arange(U.shape[1])] < 0, -1.0, 1.0)
+    if not U.shape[1]:
+        return U
+    normal = stops.normal(n)
+    touch = normal @ U  # (n_f,)
+    scale = np.abs(normal) @ np.abs(U)
+    if U.shape[1] > 1 or not abs(touch[0]) > TOUCH_RTOL * scale[0]:
+        if U.shape[1] > 1:
+            # a free motion the stop coordinate does not see: orthogonal to normal^T U
+            _, _, vt = np.linalg.svd(touch[None, :])
+            shape = U @ vt[-1]
+        else:
+            shape = U[:, 0]
+        shape = shape / np.max(np.abs(shape))
+        raise ParameterError(
+            f"K has {U.shape[1]} free (rigid-body, zero-frequency) mode(s) and the free mode "
+            f"u = {np.round(shape, 12).tolist()} is held by nothing: no spring, and the stops "
+            f"(on s = {stops.coordinate}, normal {normal.tolist()}) do not touch it "
+            f"(normal . u = 0). Allowed: each free mode touched by a stop (one stop "
+            f"coordinate holds one free mode); add a spring (K positive definite) or put "
+            f"the stops on a coordinate that moves with that mode")
+    return U
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class ImpactOscillator:
     """A chain of masses, springs and dampers whose mass 1 strikes a rigid stop.
 
-    Between impacts ``M x'' + C x' + K x = Re(F e^{i(omega t + delta)})`` (eq. 1; for a
-    real F this is the paper's ``F cos(omega t + delta)``);
+    Between impacts ``M x'' + C x' + K x = Re(F e^{i(omega t + delta)}) + F_static``
+    (eq. 1 plus a constant force; for a real F this is the paper's ``F cos(omega t + delta)``);
     mass 1 hits the stop when ``x1 = b`` moving towards it (eq. 3) and its
     velocity is multiplied by ``-R`` (eq. 4).
 
     Parameters
     ----------
     M, K : array_like, shape (n, n)
-        Symmetric positive definite mass and stiffness matrices.
+        Symmetric mass and stiffness matrices; M positive definite, K positive
+        semi-definite. A free (rigid-body, zero-frequency) mode of K must be held by the
+        stops: ``stops.normal(n) . u_free != 0`` (one stop coordinate holds at most one
+        free mode); a free mode no stop touches is refused.
     F : array_like, shape (n,)
         Forcing amplitude vector. Complex entries give the masses their own phases:
         ``F_j = |F_j| e^{i phi_j}`` forces mass j with ``|F_j| cos(omega t + delta + phi_j)``.
@@ -236,6 +300,9 @@ class ImpactOscillator:
         Which mass meets the stops and an optional lower stop with its own
         restitution (:class:`~impactcont.model.stops.Stops`; ``b`` and ``R`` stay
         those of the upper stop). None: the paper's single stop on mass 1.
+    F_static : array_like, shape (n,), optional
+        A constant force (gravity, a preload, a mean torque); default zeros. On a free
+        mode it is allowed when a stop holds that mode (it takes the mean impulse).
 
     Notes
     -----
@@ -258,10 +325,11 @@ class ImpactOscillator:
     beta: float | None = None
     C: Any = None
     stops: Stops | None = None
+    F_static: Any = None
 
     def __post_init__(self) -> None:
         M = _matrix("M", self.M)
-        K = _matrix("K", self.K)
+        K = _matrix("K", self.K, semi=True)
         if M.shape != K.shape:
             raise ParameterError(f"M and K must have the same shape; got {M.shape} and {K.shape}")
         n = M.shape[0]
@@ -296,6 +364,9 @@ class ImpactOscillator:
             stops = Stops.from_dict(stops)
         object.__setattr__(self, "stops", stops.check(n, b, R))
         # -- stops: end -------------------------------------------------------------------------
+        F_static = (np.zeros(n) if self.F_static is None
+                    else _vector("F_static", self.F_static, n))
+        object.__setattr__(self, "_free_modes", _free_modes(M, K, self.stops))
         general = self.C is not None
         if general:
             C = _damping(self.C, n)
@@ -305,12 +376,47 @@ class ImpactOscillator:
         object.__setattr__(self, "_general_damping", general)
         object.__setattr__(self, "_first_order", _Shared())
         object.__setattr__(self, "_modes", _Shared())
-        for name, value in [("M", M), ("K", K), ("F", F), ("C", C)]:
+        for name, value in [("M", M), ("K", K), ("F", F), ("C", C), ("F_static", F_static)]:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         for name, value in [("R", R), ("b", b), ("omega", omega), ("eta", eta),
                             ("alpha", alpha), ("beta", beta)]:
             object.__setattr__(self, name, value)
+
+    # -- what the model holds -----------------------------------------------------------------
+    @property
+    def free_modes(self) -> np.ndarray:
+        """The free (rigid-body, zero-frequency) modes of K, M-normalised by column, (n, n_f);
+        ``n_f = 0`` for K positive definite. Each is held by the stops."""
+        return self.__dict__["_free_modes"]
+
+    @property
+    def has_static_force(self) -> bool:
+        """A nonzero constant force ``F_static``."""
+        return bool(np.any(self.F_static))
+
+    def paper_form_violations(self) -> list[str]:
+        """What sets the system apart from the paper's form (one stop above mass 1 fixed to
+        the frame, K positive definite, no constant force), as phrases; empty in that form.
+
+        The closed-form N-1 paths (:func:`~impactcont.model.stops.require_paper_stops`)
+        refuse a system with any of these.
+        """
+        out = []
+        if not self.stops.paper:
+            out.append(f"stops={self.stops!r} (not one stop on mass 1)")
+        if self.free_modes.shape[1]:
+            out.append(f"{self.free_modes.shape[1]} free mode(s) (K must be positive definite "
+                       f"relative to M for this path; the free mode shapes "
+                       f"{np.round(self.free_modes.T, 12).tolist()})")
+        if self.has_static_force:
+            out.append(f"a constant force F_static={self.F_static.tolist()}")
+        return out
+
+    @property
+    def paper_form(self) -> bool:
+        """The paper's form: the closed-form N-1 paths apply (:meth:`paper_form_violations`)."""
+        return not self.paper_form_violations()
 
     # -- construction -------------------------------------------------------------------------
     @classmethod
@@ -456,11 +562,13 @@ class ImpactOscillator:
         """Impact matrix of eq. (4) at the upper stop: ``diag(1, ..., -R, ..., 1)``, (2n, 2n).
 
         ``-R`` multiplies the velocity of the impacting mass (mass 1 in the paper;
-        ``stops.mass`` in general).
+        ``stops.mass`` in general). For a clearance between two masses the velocity block
+        is the two-body law :meth:`Stops.impact_matrix`.
         """
-        d = np.ones(2 * self.n)
-        d[self.n + self.stops.index] = -self.R
-        return np.diag(d)
+        n = self.n
+        out = np.eye(2 * n)
+        out[n:, n:] = self.stops.impact_matrix(self.M, self.R)
+        return out
 
     @property
     def modes(self) -> ModalBasis:
@@ -501,6 +609,8 @@ class ImpactOscillator:
             out["beta"] = self.beta
         if not self.stops.paper:
             out["stops"] = self.stops.to_dict()
+        if self.has_static_force:
+            out["F_static"] = self.F_static.tolist()
         return out
 
     def to_json(self) -> str:
@@ -536,5 +646,6 @@ class ImpactOscillator:
                    else f"alpha={self.alpha!r}, beta={self.beta!r}"
                    if self.alpha is not None or self.beta is not None else "undamped")
         stops = "" if self.stops.paper else f", stops={self.stops!r}"
+        static = f", F_static={self.F_static.tolist()}" if self.has_static_force else ""
         return (f"ImpactOscillator(n={self.n}, R={self.R!r}, b={self.b!r}, "
-                f"omega={self.omega!r}, {damping}, F={self.F.tolist()}{stops})")
+                f"omega={self.omega!r}, {damping}, F={self.F.tolist()}{stops}{static})")

@@ -10,6 +10,14 @@ The paper (eq. 3-4) has one rigid stop, above mass 1: ``x1 = b`` with restitutio
   downwards (``x_j' < 0``), with its own restitution ``x_j'^+ = -R_low x_j'^-``
   (the impact matrix of eq. 4 with ``-R_low`` on the velocity of mass j).
 
+- ``relative_to``: a clearance between two masses (an impact pair): both stops act on the
+  relative coordinate ``s = x_j - x_k`` (``k = relative_to``), the upper at ``s = b``, the
+  lower at ``s = -b_low``, with the two-body impact law (momentum conserved, restitution on
+  the relative velocity, :meth:`Stops.impact_matrix`).
+
+Every path reads the geometry through :meth:`Stops.normal` (the stop coordinate is
+``s = normal . x``) and :meth:`Stops.impact_matrix` (the velocity jump ``v+ = D v``).
+
 A two-sided clearance (backlash) of total width ``b + b_low`` is ``b_low`` given;
 the symmetric case is ``b_low = b``, and ``mirror=True`` keeps it symmetric when ``b``
 or ``R`` change (the lower stop at ``-b`` with restitution ``R``: continuing such a
@@ -31,6 +39,9 @@ import numpy as np
 from impactcont.errors import ParameterError
 
 __all__ = ["LOWER", "UPPER", "Stops", "check_pattern", "require_paper_stops"]
+
+#: Relative allowance of the test ``normal . u_free != 0`` (a free mode touched by a stop).
+TOUCH_RTOL = 1e-10
 
 #: Label of an impact on the upper stop ``x_j = b``.
 UPPER = "U"
@@ -68,17 +79,24 @@ class Stops:
         moving with ``b`` and ``R`` (a symmetric backlash of width ``2 b``: continued in
         ``b`` or ``R``, the system stays symmetric). ``b_low`` and ``R_low`` are not
         given: the oscillator sets them to ``b`` and ``R``.
+    relative_to : int, optional
+        A clearance between mass ``j`` and mass ``k = relative_to`` (1-based, ``k != j``):
+        the stops act on ``s = x_j - x_k`` (upper ``s = b``, lower ``s = -b_low``) with the
+        two-body impact law. None: the stops are fixed to the frame (the paper).
 
     Examples
     --------
     >>> Stops(mass=2, b_low=0.5, R_low=0.8)
     Stops(mass=2, b_low=0.5, R_low=0.8)
+    >>> Stops(mass=2, relative_to=1, mirror=True)  # a symmetric clearance between masses 1, 2
+    Stops(mass=2, b_low=None, R_low=None, mirror=True, relative_to=1)
     """
 
     mass: int = 1
     b_low: float | None = None
     R_low: float | None = None
     mirror: bool = False
+    relative_to: int | None = None
 
     def __post_init__(self) -> None:
         mass = self.mass
@@ -86,6 +104,17 @@ class Stops:
             raise ParameterError(f"stops.mass must be an integer >= 1 (the impacting mass, "
                                  f"1-based as the paper's mass 1); got {mass!r}")
         object.__setattr__(self, "mass", int(mass))
+        k = self.relative_to
+        if k is not None:
+            if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+                raise ParameterError(f"stops.relative_to must be None (stops fixed to the frame) "
+                                     f"or an integer >= 1 (the other mass of a clearance "
+                                     f"between two masses, 1-based); got {k!r}")
+            if int(k) == mass:
+                raise ParameterError(f"stops.relative_to={k!r} equals stops.mass={mass!r}: a "
+                                     "stop between a mass and itself; give another mass (the "
+                                     "clearance s = x_j - x_k needs k != j) or None")
+            object.__setattr__(self, "relative_to", int(k))
         if not isinstance(self.mirror, (bool, np.bool_)):
             raise TypeError(f"stops.mirror must be True or False; got {self.mirror!r}")
         object.__setattr__(self, "mirror", bool(self.mirror))
@@ -109,7 +138,9 @@ class Stops:
 
     def __repr__(self) -> str:
         mirror = ", mirror=True" if self.mirror else ""
-        return f"Stops(mass={self.mass!r}, b_low={self.b_low!r}, R_low={self.R_low!r}{mirror})"
+        pair = "" if self.relative_to is None else f", relative_to={self.relative_to!r}"
+        return (f"Stops(mass={self.mass!r}, b_low={self.b_low!r}, R_low={self.R_low!r}"
+                f"{mirror}{pair})")
 
     # -- views ----------------------------------------------------------------------------------
     @property
@@ -124,8 +155,82 @@ class Stops:
 
     @property
     def paper(self) -> bool:
-        """The paper's geometry: one stop, on mass 1."""
-        return self.mass == 1 and not self.two_sided
+        """The paper's geometry: one stop, on mass 1, fixed to the frame."""
+        return self.mass == 1 and not self.two_sided and self.relative_to is None
+
+    @property
+    def pair(self) -> bool:
+        """The stops act between two masses (``relative_to`` given)."""
+        return self.relative_to is not None
+
+    @property
+    def coordinate(self) -> str:
+        """The stop coordinate as text: ``"x_j"`` or ``"x_j - x_k"``."""
+        return (f"x{self.mass}" if self.relative_to is None
+                else f"x{self.mass} - x{self.relative_to}")
+
+    def normal(self, n: int) -> np.ndarray:
+        """The stop coordinate ``s = normal . x``: ``e_j``, or ``e_j - e_k`` for a pair.
+
+        Parameters
+        ----------
+        n : int
+            Degrees of freedom of the oscillator.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
+        self._check_masses(n)
+        out = np.zeros(n)
+        out[self.index] = 1.0
+        if self.relative_to is not None:
+            out[self.relative_to - 1] = -1.0
+        return out
+
+    def impact_matrix(self, M: np.ndarray, R: float) -> np.ndarray:
+        """The velocity jump ``v+ = D v`` at a stop of restitution ``R`` (eq. 4 generalised).
+
+        The rigid-impact law of a stop on ``s = normal . x``: the impulse acts along
+        ``normal``, momentum is conserved in every direction it does not touch and the
+        relative velocity ``s'`` is reversed and scaled by ``R``,
+
+            D = I - (1 + R) M^-1 n n^T / (n^T M^-1 n).
+
+        For a stop fixed to the frame (no ``relative_to``) this is eq. (4) exactly,
+        ``diag(1, .., -R, .., 1)`` with ``-R`` on ``x_j'``, for every M: with a diagonal M
+        the two laws coincide, and with a non-diagonal M (coupled inertia) eq. (4) is kept
+        so that no result of the paper's model changes.
+
+        Parameters
+        ----------
+        M : ndarray, shape (n, n)
+            Mass matrix.
+        R : float
+            Restitution of the stop hit (``R`` or ``R_low``).
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+        """
+        M = np.asarray(M, dtype=float)
+        n = M.shape[0]
+        nrm = self.normal(n)
+        if self.relative_to is None:
+            D = np.eye(n)
+            D[self.index, self.index] = -float(R)
+            return D
+        minv_n = np.linalg.solve(M, nrm)
+        return np.eye(n) - (1.0 + float(R)) * np.outer(minv_n, nrm) / float(nrm @ minv_n)
+
+    def _check_masses(self, n: int) -> None:
+        if self.mass > n:
+            raise ParameterError(f"stops.mass must be in 1..{n} (the oscillator has n={n} "
+                                 f"masses); got {self.mass!r}")
+        if self.relative_to is not None and self.relative_to > n:
+            raise ParameterError(f"stops.relative_to must be in 1..{n} (the oscillator has "
+                                 f"n={n} masses) and differ from stops.mass={self.mass}; got "
+                                 f"{self.relative_to!r}")
 
     def check(self, n: int, b: float, R: float) -> Stops:
         """Validated against an oscillator of ``n`` masses with upper stop ``b``, ``R``.
@@ -135,15 +240,15 @@ class Stops:
         Raises
         ------
         ParameterError
-            ``mass > n``, or the lower stop not below the upper one (``-b_low >= b``).
+            ``mass > n`` or ``relative_to > n``, or the lower stop not below the upper one
+            (``-b_low >= b``: a clearance that closes).
         """
-        if self.mass > n:
-            raise ParameterError(f"stops.mass must be in 1..{n} (the oscillator has n={n} "
-                                 f"masses); got {self.mass!r}")
+        self._check_masses(n)
+        s = self.coordinate
         if self.mirror:
             if not b > 0:
-                raise ParameterError(f"mirrored stops x_{self.mass} = +-b need b > 0 (the "
-                                     f"clearance 2 b between them); got b={b!r}")
+                raise ParameterError(f"mirrored stops {s} = +-b need b > 0 (the clearance "
+                                     f"2 b between them; b <= 0 closes it); got b={b!r}")
             resolved = copy.copy(self)  # b_low, R_low follow b, R (not given by the user)
             object.__setattr__(resolved, "b_low", float(b))
             object.__setattr__(resolved, "R_low", float(R))
@@ -151,9 +256,10 @@ class Stops:
         if self.b_low is None:
             return self
         if not -self.b_low < b:
-            raise ParameterError(f"the lower stop x_{self.mass} = -b_low = {-self.b_low!r} must "
-                                 f"lie below the upper stop x_{self.mass} = b = {b!r} "
-                                 f"(b + b_low > 0); got b={b!r}, stops.b_low={self.b_low!r}")
+            raise ParameterError(f"the lower stop {s} = -b_low = {-self.b_low!r} must lie below "
+                                 f"the upper stop {s} = b = {b!r} (b + b_low > 0; b + b_low "
+                                 f"<= 0 is a clearance that closes); got b={b!r}, "
+                                 f"stops.b_low={self.b_low!r}")
         if self.R_low is None:
             return dataclasses.replace(self, R_low=R)
         return self
@@ -179,6 +285,8 @@ class Stops:
     def to_dict(self) -> dict[str, Any]:
         """Plain-Python description (JSON-able)."""
         out: dict[str, Any] = {"mass": self.mass}
+        if self.relative_to is not None:
+            out["relative_to"] = self.relative_to
         if self.mirror:
             out["mirror"] = True
         elif self.b_low is not None:
@@ -191,11 +299,11 @@ class Stops:
         """Inverse of :meth:`to_dict`; unknown keys are refused."""
         if not isinstance(data, Mapping):
             raise TypeError(f"stops must be a Stops or a mapping with keys mass, b_low, R_low, "
-                            f"mirror; got {type(data).__name__}")
-        unknown = set(data) - {"mass", "b_low", "R_low", "mirror"}
+                            f"mirror, relative_to; got {type(data).__name__}")
+        unknown = set(data) - {"mass", "b_low", "R_low", "mirror", "relative_to"}
         if unknown:
             raise ParameterError(f"stops: unknown key(s) {sorted(unknown)}; allowed: mass, "
-                                 "b_low, R_low, mirror")
+                                 "b_low, R_low, mirror, relative_to")
         return cls(**data)
 
 
@@ -230,17 +338,28 @@ def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
 
 
 def require_paper_stops(osc: Any, what: str) -> None:
-    """Refuse a stop geometry other than the paper's on the closed-form N-1 path.
+    """Refuse a system other than the paper's form on the closed-form N-1 path.
 
     The closed form of eq. (12)-(16) and its kernel are written for one stop on
-    mass 1 (the section ``x1 = b``, ``-R`` on ``x1'``): with a stop on another
-    mass or a lower stop they would give motions checked against the wrong stop.
+    mass 1 (the section ``x1 = b``, ``-R`` on ``x1'``), every mode held by a spring
+    and no constant force: with a stop on another mass, a lower stop, a clearance
+    between masses, a free mass or a constant force ``F_static`` they would give
+    motions checked against the wrong stop, or the wrong motion.
 
     Raises
     ------
     ParameterError
-        Naming `what`, the stops given and the shooting path that handles them.
+        Naming `what`, what the system has and the shooting path that handles it.
     """
+    others = getattr(osc, "paper_form_violations", None)
+    problems = others() if callable(others) else []
+    if problems:
+        raise ParameterError(
+            f"{what}: the closed form of eq. (12)-(16) handles the paper's form only (one "
+            f"stop on mass 1, K positive definite, no constant force); the oscillator has "
+            f"{'; '.join(problems)}. Use the N-p shooting path instead: "
+            "impactcont.multi_impact_orbit(osc, N, p, guess, pattern=...) and "
+            "multi_impact_continuation (p = 1, pattern 'U' for an N-1 motion)")
     stops = getattr(osc, "stops", None)
     if stops is not None and not stops.paper:
         raise ParameterError(

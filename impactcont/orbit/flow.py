@@ -9,6 +9,13 @@ with ``y_p,i(t) = gamma_i cos(omega t + delta) + beta_i sin(omega t + delta)``
 (eq. 7). Collecting the ``delta`` terms gives exactly the paper's
 ``X(t) = U W(t) U^-1 X(0) + U E(t) [cos delta; sin delta]``; ``E`` is built
 here as ``P(t) - W(t) P(0)`` from the forced columns ``P = [[phi, psi], [phi', psi']]``.
+
+A constant force ``F_static`` (modal ``g = u^T F_static``) adds the exact term
+``U [(1 - W11) g/w^2 + s_y; -W21 g/w^2 + s_v]`` (:func:`~impactcont.model.modal.static_response`:
+a held mode's constant offset ``g / w^2``, a free mode's ``g t^2 / 2`` or drift
+``g t / (2 a)``), :meth:`Flow.static_term`. A free mode (``w = 0``) has the exact
+transfer ``W = [[1, (1 - e^{-2at})/(2a)], [0, e^{-2at}]]`` (``[[1, t], [0, 1]]``
+undamped) of eq. (9) in its over-damped and critical forms.
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from impactcont.model.modal import forced_coefficients, free_transfer
+from impactcont.model.modal import forced_coefficients, free_transfer, static_response
 from impactcont.model.oscillator import ImpactOscillator
 
 __all__ = ["Flow", "GeneralFlow", "GeneralMass1Motion", "Mass1Motion", "flow_of"]
@@ -82,6 +89,9 @@ class Flow:
         self.f = modes.modal_forces
         self.gamma, self.beta = forced_coefficients(self.w, self.a, self.f, self.omega,
                                                     eigenvalue_errors=modes.eigenvalue_errors)
+        self.free = np.asarray(modes.free, dtype=bool)
+        self.g = self.u.T @ osc.F_static  # modal static force (u^T M u = I)
+        self.static_offset = static_response(self.w, self.a, self.g, self.free, 0.0)[0]
         self._arrays: tuple[Any, ...] | None = None
         self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
@@ -103,6 +113,32 @@ class Flow:
                             np.zeros((0, 0), complex), np.zeros(0, complex), w, a,
                             np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64))
         return self._arrays
+
+    def static_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The constant force and the free modes, for :mod:`impactcont.kernel.shooting`.
+
+        Kept apart from :meth:`shooting_arrays` (whose 16 entries callers pass on by
+        position) so that adding them changes no existing call.
+
+        Returns
+        -------
+        g : ndarray, float, shape (n,)
+            Modal static force ``u^T F_static`` (modal flow; empty for the first-order flow).
+        free : ndarray, bool, shape (n,)
+            The free modes (``w_i = 0`` exactly; modal flow; empty for the first-order flow).
+            Each mode's state with the constant force is
+            ``Q + W(t) (Y(0) - Q) + S(t)``, :func:`~impactcont.model.modal.static_response`:
+            held ``Q = [g/w^2, 0]``, ``S = 0``; free ``Q = 0``,
+            ``S = [g t^2 phi(2at)/2, g t psi(2at)]``.
+        offset : ndarray, float, shape (2n,)
+            First-order flow: the constant part ``X_s`` of the static response (empty for
+            the modal flow), ``X(t) = X_p(t) + X_s + Phi(t) (X(0) - X_p(0) - X_s) + d t``.
+        drift : ndarray, float, shape (2n,)
+            First-order flow: ``d``, the drift of the damped free modes per unit time
+            (zero without one; empty for the modal flow).
+        """
+        return (_kernel_array(self.g, float), np.array(self.free, dtype=np.bool_),
+                np.zeros(0), np.zeros(0))
 
     def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``d gamma / d omega``, ``d beta / d omega`` (modal flow; empty for the first-order
@@ -138,6 +174,11 @@ class Flow:
         v = self.omega * (self.beta * c - self.gamma * s)
         return y, v
 
+    def static(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The constant force's modal offset ``g / w^2`` (n,) and the free modes' response
+        from rest ``s_y, s_v`` (nt, n) (:func:`~impactcont.model.modal.static_response`)."""
+        return static_response(self.w, self.a, self.g, self.free, np.atleast_1d(t))
+
     def to_modal(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Modal displacement and velocity of a physical state ``X`` (2n,)."""
         X = np.asarray(X, dtype=float)
@@ -149,10 +190,11 @@ class Flow:
         """Modal displacement and velocity ``y(t), y'(t)``, each (nt, n)."""
         y0, v0 = self.to_modal(X0)
         yp0, vp0 = self.forced(0.0, delta)
-        dy, dv = y0 - yp0[0], v0 - vp0[0]
+        offset, s_y, s_v = self.static(t)
+        dy, dv = y0 - yp0[0] - offset, v0 - vp0[0]
         W11, W12, W21, W22 = self.transfer(t)
         yp, vp = self.forced(t, delta)
-        return yp + W11 * dy + W12 * dv, vp + W21 * dy + W22 * dv
+        return yp + offset + W11 * dy + W12 * dv + s_y, vp + W21 * dy + W22 * dv + s_v
 
     def state(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
         """State ``X(t) = [x; x'](t)`` of eq. (9), shape (nt, 2n)."""
@@ -163,7 +205,7 @@ class Flow:
         """Time derivative ``X'(t) = [x'; x''](t)``, shape (nt, 2n)."""
         y, v = self.modal_state(t, X0, delta)
         theta = self.omega * np.atleast_1d(np.asarray(t, dtype=float))[:, None] + delta
-        acc = self.f * np.cos(theta) - 2.0 * self.a * v - self.w**2 * y
+        acc = self.f * np.cos(theta) + self.g - 2.0 * self.a * v - self.w**2 * y
         return np.hstack([v @ self.u.T, acc @ self.u.T])
 
     # -- matrices of eq. (9) --------------------------------------------------------------------
@@ -175,8 +217,19 @@ class Flow:
         """``U E(t)`` of eq. (9), shape (2n, 2): columns multiply ``cos delta, sin delta``."""
         return self.matrices(t)[1]
 
-    def matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """``U W(t) U^-1`` (2n, 2n) and ``U E(t)`` (2n, 2) of eq. (9) from one modal transfer."""
+    def static_term(self, t: float) -> np.ndarray:
+        """The constant force's part of ``X(t)`` from ``X(0) = 0``, (2n,):
+        ``U [(1 - W11) g/w^2 + s_y; -W21 g/w^2 + s_v]`` (exact; zero without ``F_static``),
+        so that ``X(t) = U W U^-1 X(0) + U E [cos delta; sin delta] + static_term(t)``."""
+        W11, _, W21, _ = (blk[0] for blk in self.transfer(t))
+        offset, s_y, s_v = self.static(t)
+        return np.concatenate([self.u @ (offset - W11 * offset + s_y[0]),
+                               self.u @ (-W21 * offset + s_v[0])])
+
+    def matrices(self, t: float, static: bool = False
+                 ) -> tuple[np.ndarray, ...]:
+        """``U W(t) U^-1`` (2n, 2n) and ``U E(t)`` (2n, 2) of eq. (9) from one modal transfer;
+        with ``static``, :meth:`static_term` (2n,) as a third item."""
         W11, W12, W21, W22 = (blk[0] for blk in self.transfer(t))
         u, ui = self.u, self.u_inv
         transition = np.block([[(u * W11) @ ui, (u * W12) @ ui],
@@ -193,16 +246,19 @@ class Flow:
         e_v_sin = dpsi - W21 * b + W22 * om * g
         forcing = np.vstack([u @ np.column_stack([e_y_cos, e_y_sin]),
                              u @ np.column_stack([e_v_cos, e_v_sin])])
+        if static:
+            return transition, forcing, self.static_term(t)
         return transition, forcing
 
     def mass1(self, X0: np.ndarray, delta: float) -> Mass1Motion:
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return Mass1Motion(self, X0, delta)
 
-    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0
-               ) -> Mass1Motion:
-        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``."""
-        return Mass1Motion(self, X0, delta, index, sign)
+    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0,
+               normal: np.ndarray | None = None) -> Mass1Motion:
+        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``, or of
+        ``sign * normal . x`` (a stop coordinate, :meth:`Stops.normal`) when given."""
+        return Mass1Motion(self, X0, delta, index, sign, normal)
 
     def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
         """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
@@ -248,14 +304,16 @@ class Mass1Motion:
     """
 
     def __init__(self, flow: Flow, X0: np.ndarray, delta: float, index: int = 0,
-                 sign: float = 1.0) -> None:
+                 sign: float = 1.0, normal: np.ndarray | None = None) -> None:
         self.flow = flow
         self.delta = float(delta)
         y0, v0 = flow.to_modal(X0)
         yp0, vp0 = flow.forced(0.0, delta)
-        self.dy = y0 - yp0[0]
+        self.dy = y0 - yp0[0] - flow.static_offset
         self.dv = v0 - vp0[0]
-        self.u0 = flow.u[index] if sign == 1.0 else sign * flow.u[index]
+        row = flow.u[index] if normal is None else np.asarray(normal, dtype=float) @ flow.u
+        self.u0 = row if sign == 1.0 else sign * row  # the weights normal^T U of the modes
+        self.static = bool(np.any(flow.g))
 
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``x1, x1', x1''`` at times t (each shape (nt,))."""
@@ -284,7 +342,11 @@ class Mass1Motion:
         c, s = np.cos(theta), np.sin(theta)
         y = fl.gamma * c + fl.beta * s + W11 * self.dy + W12 * self.dv
         v = fl.omega * (fl.beta * c - fl.gamma * s) + W21 * self.dy + W22 * self.dv
-        acc = fl.f * c - 2.0 * fl.a * v - fl.w**2 * y
+        if self.static:
+            offset, s_y, s_v = fl.static(t)
+            y = y + offset + s_y
+            v = v + s_v
+        acc = fl.f * c + fl.g - 2.0 * fl.a * v - fl.w**2 * y
         jerk = -fl.omega * fl.f * s - 2.0 * fl.a * acc - fl.w**2 * v
         return y @ self.u0, v @ self.u0, acc @ self.u0, jerk @ self.u0
 
