@@ -372,6 +372,7 @@ class GeneralFlow(Flow):
         self.V = basis.V
         self.V_inv = basis.V_inv
         self.Z = basis.forced_amplitude(osc.F, osc.omega)
+        self.static_offset, self.drift = self._static(osc)
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
         self._arrays: tuple[Any, ...] | None = None
         self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -392,6 +393,36 @@ class GeneralFlow(Flow):
                             _kernel_array(pw, float), _kernel_array(pa, float),
                             _kernel_array(pk, np.int64), _kernel_array(pj, np.int64))
         return self._arrays
+
+    def _static(self, osc: ImpactOscillator) -> tuple[np.ndarray, np.ndarray]:
+        """``X_s`` and ``d`` of the constant force: ``X' = A X + b``, ``b = [0; M^-1 F_s]``,
+        ``h = V^-1 b``; ``X_s = Re(sum_{lambda_k != 0} -V_k h_k / lambda_k)`` (constant) and
+        ``d = Re(sum_{lambda_k = 0} V_k h_k)`` (the damped free modes' drift per unit time;
+        ``A d = 0`` and ``A X_s + b = d``, so ``X_s + d t`` is a particular solution)."""
+        n = self.n
+        if not np.any(osc.F_static):
+            return np.zeros(2 * n), np.zeros(2 * n)
+        rhs = np.concatenate([np.zeros(n), np.linalg.solve(osc.M, osc.F_static)])
+        h = self.V_inv @ rhs
+        zero = (np.zeros(2 * n, bool) if self.basis.zero is None
+                else np.asarray(self.basis.zero, bool))
+        lam = np.where(zero, 1.0, self.lam)
+        offset = (self.V @ np.where(zero, 0.0, -h / lam)).real
+        drift = (self.V @ np.where(zero, h, 0.0)).real
+        return offset, drift
+
+    def static_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`Flow.static_arrays` of the first-order flow: empty ``g``, ``free``, then
+        ``X_s`` and ``d`` (2n,)."""
+        return (np.zeros(0), np.zeros(0, dtype=np.bool_), _kernel_array(self.static_offset,
+                                                                        float),
+                _kernel_array(self.drift, float))
+
+    def static_term(self, t: float) -> np.ndarray:
+        """The constant force's part of ``X(t)`` from ``X(0) = 0``: ``X_s - Phi(t) X_s + d t``."""
+        t = float(np.asarray(t).reshape(-1)[0])
+        return (self.static_offset - self.basis.transition(t) @ self.static_offset
+                + self.drift * t)
 
     def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Empty modal derivatives and ``dZ / d omega`` (:meth:`Flow.omega_arrays`)."""
@@ -414,15 +445,17 @@ class GeneralFlow(Flow):
         return (self.Z * np.exp(1j * theta)).real
 
     def modal_deviation(self, X0: np.ndarray, delta: float) -> np.ndarray:
-        """Complex modal coordinates ``V^-1 (X(0) - X_p(0))`` of the free part, (2n,)."""
-        return self.V_inv @ (np.asarray(X0, dtype=float) - self.forced_state(0.0, delta)[0])
+        """Complex modal coordinates ``V^-1 (X(0) - X_p(0) - X_s)`` of the free part, (2n,)."""
+        return self.V_inv @ (np.asarray(X0, dtype=float) - self.forced_state(0.0, delta)[0]
+                             - self.static_offset)
 
     def state(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
         """State ``X(t) = [x; x'](t)`` of eq. (9), shape (nt, 2n)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         zeta = self.modal_deviation(X0, delta)
         free = (np.exp(t[:, None] * self.lam) * zeta) @ self.V.T
-        return self.forced_state(t, delta) + free.real
+        return (self.forced_state(t, delta) + free.real + self.static_offset
+                + t[:, None] * self.drift)
 
     def state_derivative(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
         """Time derivative ``X'(t) = [x'; x''](t)``, shape (nt, 2n)."""
@@ -430,17 +463,19 @@ class GeneralFlow(Flow):
         zeta = self.modal_deviation(X0, delta)
         free = (np.exp(t[:, None] * self.lam) * (self.lam * zeta)) @ self.V.T
         theta = self.omega * t[:, None] + delta
-        return (1j * self.omega * self.Z * np.exp(1j * theta)).real + free.real
+        return (1j * self.omega * self.Z * np.exp(1j * theta)).real + free.real + self.drift
 
     def transition_matrix(self, t: float) -> np.ndarray:
         """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, shape (2n, 2n)."""
         return self.matrices(t)[0]
 
-    def matrices(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+    def matrices(self, t: float, static: bool = False) -> tuple[np.ndarray, ...]:
         """``Phi(t)`` (2n, 2n) and the forcing columns ``P(t) - Phi(t) P(0)`` (2n, 2) of
         eq. (9), ``P(t) = [Re(Z e^{i omega t}), -Im(Z e^{i omega t})]`` (columns multiply
-        ``cos delta, sin delta``)."""
+        ``cos delta, sin delta``); with ``static``, :meth:`static_term` (2n,) as a third item."""
         t = float(np.asarray(t).reshape(-1)[0])
+        if static:
+            return (*self.matrices(t), self.static_term(t))
         if self._last is not None and self._last[0] == t:  # eq. (12) and G use the same T
             return self._last[1]
         transition = self.basis.transition(t)
@@ -461,10 +496,11 @@ class GeneralFlow(Flow):
         """Fast evaluator of ``x1, x1', x1''`` along the flow from ``X0`` at phase ``delta``."""
         return GeneralMass1Motion(self, X0, delta)
 
-    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0
-               ) -> GeneralMass1Motion:
-        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``."""
-        return GeneralMass1Motion(self, X0, delta, index, sign)
+    def motion(self, X0: np.ndarray, delta: float, index: int = 0, sign: float = 1.0,
+               normal: np.ndarray | None = None) -> GeneralMass1Motion:
+        """Fast evaluator of ``sign * x_j`` and its derivatives, ``j = index + 1``, or of
+        ``sign * normal . x`` when given."""
+        return GeneralMass1Motion(self, X0, delta, index, sign, normal)
 
     def omega_partial(self, t: float, X0: np.ndarray, theta: float) -> np.ndarray:
         """``dX(t)/d omega`` at fixed ``t``, start state ``X0`` and start phase ``theta``.
@@ -493,11 +529,19 @@ class GeneralMass1Motion(Mass1Motion):
     """
 
     def __init__(self, flow: GeneralFlow, X0: np.ndarray, delta: float, index: int = 0,
-                 sign: float = 1.0) -> None:
+                 sign: float = 1.0, normal: np.ndarray | None = None) -> None:
         self.flow = flow
         self.delta = float(delta)
-        self.c = sign * flow.V[index] * flow.modal_deviation(X0, delta)  # V_jk zeta_k
-        self.z = sign * flow.Z[index]
+        n = flow.n
+        r = np.zeros(2 * n)
+        if normal is None:
+            r[index] = sign
+        else:
+            r[:n] = sign * np.asarray(normal, dtype=float)
+        self.c = (r @ flow.V) * flow.modal_deviation(X0, delta)  # (r V)_k zeta_k
+        self.z = complex(r @ flow.Z)
+        self.offset = float(r @ flow.static_offset)  # the constant force's constant part
+        self.rate = float(r @ flow.drift)  # and its drift per unit time
 
     def _derivatives(self, t: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -508,4 +552,6 @@ class GeneralMass1Motion(Mass1Motion):
         out = []
         for j in range(4):
             out.append((forced * iw**j).real + (e @ fl.lam**j).real)
+        out[0] = out[0] + self.offset + self.rate * t
+        out[1] = out[1] + self.rate
         return tuple(out)  # type: ignore[return-value]

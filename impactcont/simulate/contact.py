@@ -1,5 +1,9 @@
 """Contact geometry of one flight against both stops of the impacting mass.
 
+The stops act on the stop coordinate ``s = normal . x`` (:meth:`Stops.normal`: ``x_j``, or
+``x_j - x_k`` for a clearance between two masses); everything below follows ``s``, a
+modal sum with the weights ``normal^T U``. "``x_j``" below reads ``s`` in general.
+
 The impacting mass ``j`` (``osc.stops.mass``) meets the upper stop ``x_j = b``
 moving up and, when present, the lower stop ``x_j = -b_low`` moving down. Both
 are the same problem for the signed coordinate ``y = s x_j`` (``s = +1`` for the
@@ -74,7 +78,7 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
     """
     osc = flow.osc
     j = osc.stops.index
-    motion = flow.motion(X0, delta, j)
+    motion = flow.motion(X0, delta, j, normal=osc.stops.normal(osc.n))
     cp = critical_points(motion, sample_times(flow, 0.0, tau, row=j))
     gap_u = gap_l = math.inf
     t_u = t_l = math.nan
@@ -117,7 +121,7 @@ def search_window(flow: Flow, index: int = 0) -> tuple[float, float]:
     return min(forcing, _FIRST_WINDOW_PERIODS * fast), min(forcing, _WINDOW_PERIODS * fast)
 
 
-def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float] | None:
+def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float, float] | None:
     """Forced amplitude, a bound on the free part from ``t0`` on, and the motion's size.
 
     ``y(t) = Re(Z e^{i(omega t + delta)}) + y_free(t)`` for the evaluated coordinate
@@ -129,17 +133,19 @@ def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float] | 
     - first-order flow: ``|sum_k c_k e^{lambda_k t}| <= sum_k |c_k| e^{Re(lambda_k) t0}``
       (``Re lambda_k <= 0``).
 
-    None when a mode grows (negative damping): no bound.
+    A constant force adds its constant part (the fourth item, ``offset``). None when a
+    mode grows (negative damping) or a free mode moves the coordinate (a free mass
+    drifts): no bound.
     """
     flow = motion.flow
     if isinstance(motion, GeneralMass1Motion):
         rates = flow.lam.real
-        if np.any(rates > 0.0):
+        if np.any(rates > 0.0) or motion.rate != 0.0 or np.any(flow.lam == 0.0):
             return None
         start = float(np.sum(np.abs(motion.c)))
         free = float(np.sum(np.abs(motion.c) * np.exp(rates * t0)))
-        return complex(motion.z), free, start
-    if np.any(flow.a < 0.0):
+        return complex(motion.z), free, start, motion.offset
+    if np.any(flow.a < 0.0) or np.any(flow.free):
         return None
     W11, W12, W21, W22 = (blk[0] for blk in flow.transfer(np.array([t0])))
     y = W11 * motion.dy + W12 * motion.dv
@@ -148,7 +154,7 @@ def _envelope(motion: Mass1Motion, t0: float) -> tuple[complex, float, float] | 
     free = float(weights @ np.hypot(y, v / flow.w))
     start = float(weights @ np.hypot(motion.dy, motion.dv / flow.w))
     forced = complex(motion.u0 @ (flow.gamma - 1j * flow.beta))
-    return forced, free, start
+    return forced, free, start, float(motion.u0 @ flow.static_offset)
 
 
 def contact_free_until(motion: Mass1Motion, level: float, t0: float) -> float:
@@ -177,10 +183,10 @@ def contact_free_until(motion: Mass1Motion, level: float, t0: float) -> float:
     env = _envelope(motion, t0)
     if env is None:
         return t0
-    forced, free, start = env
+    forced, free, start, offset = env
     amplitude = abs(forced)
-    allowance = _ENVELOPE_ULPS * _EPS * (abs(level) + amplitude + start)
-    clear = level - free - allowance  # the forced part must reach this for contact
+    allowance = _ENVELOPE_ULPS * _EPS * (abs(level) + abs(offset) + amplitude + start)
+    clear = level - offset - free - allowance  # the forced part must reach this for contact
     if clear > amplitude:
         return math.inf
     if clear <= -amplitude:
@@ -233,7 +239,8 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     j = osc.stops.index
     after = after or {}
     stops = [UPPER, LOWER] if osc.stops.two_sided else [UPPER]
-    motions = {s: flow.motion(X, phase, j, stop_sign(s)) for s in stops}
+    normal = osc.stops.normal(osc.n)
+    motions = {s: flow.motion(X, phase, j, stop_sign(s), normal) for s in stops}
     levels = {s: stop_sign(s) * osc.stops.position(s, osc.b) for s in stops}
     below = dict.fromkeys(stops, True)
     first, longest = search_window(flow, j)

@@ -11,6 +11,13 @@ With a stop on another mass or a lower stop (``osc.stops``, see
 :mod:`impactcont.model.stops`) the impacting mass ``j`` is followed to the first
 contact with either stop (:func:`impactcont.simulate.contact.next_contact`) and
 the restitution of the stop hit applies; sticking is detected at either stop.
+
+In general the stops act on the stop coordinate ``s = normal . x``
+(:meth:`~impactcont.model.stops.Stops.normal`: ``x_j``, or ``x_j - x_k`` for a clearance
+between two masses), and an impact applies the velocity jump ``v+ = D v`` of
+:meth:`~impactcont.model.stops.Stops.impact_matrix` (eq. 4 at a stop fixed to the frame;
+the two-body law, momentum conserved and ``s'`` reversed times R, at a pair). Free masses
+and a constant force ``F_static`` come with the exact flow (:class:`Flow`).
 """
 
 from __future__ import annotations
@@ -157,8 +164,8 @@ def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, side: str, level
     floor = _BOUNCE_ULPS * np.finfo(float).eps * max(1.0, abs(level))
     if v * v > 1e10 * floor:  # cheap exit: |x_j''| would have to exceed 5e9
         return False
-    j = flow.osc.stops.index
-    acc = abs(float(flow.state_derivative(0.0, X, phase)[0][flow.n + j]))
+    normal = flow.osc.stops.normal(flow.n)
+    acc = abs(float(normal @ flow.state_derivative(0.0, X, phase)[0][flow.n:]))
     return bool(v * v < 2.0 * acc * floor)
 
 
@@ -172,14 +179,17 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
         raise ParameterError(f"state must be a finite vector [x; x'] of length {2 * osc.n}; "
                              f"got {np.asarray(state).tolist()!r}")
     j = osc.stops.index
-    if X[j] > osc.b + _ON_STOP * max(1.0, abs(osc.b)):
-        raise ParameterError(f"state[{j}] = x{j + 1} = {float(X[j])!r} is beyond the stop "
-                             f"b = {osc.b!r}; x{j + 1} <= b is required")
+    s = float(osc.stops.normal(osc.n) @ X[:osc.n])
+    name = (f"state[{j}] = x{j + 1}" if not osc.stops.pair
+            else f"the stop coordinate s = {osc.stops.coordinate}")
+    if s > osc.b + _ON_STOP * max(1.0, abs(osc.b)):
+        raise ParameterError(f"{name} = {s!r} is beyond the stop b = {osc.b!r}; s <= b is "
+                             f"required (s = {osc.stops.coordinate})")
     if osc.stops.two_sided:
         low = -osc.stops.b_low
-        if X[j] < low - _ON_STOP * max(1.0, abs(low)):
-            raise ParameterError(f"state[{j}] = x{j + 1} = {float(X[j])!r} is beyond the lower "
-                                 f"stop -b_low = {low!r}; x{j + 1} >= -b_low is required")
+        if s < low - _ON_STOP * max(1.0, abs(low)):
+            raise ParameterError(f"{name} = {s!r} is beyond the lower stop -b_low = {low!r}; "
+                                 f"s >= -b_low is required (s = {osc.stops.coordinate})")
     return X
 
 
@@ -229,10 +239,11 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     flow = Flow(osc)
     n = osc.n
     j = osc.stops.index
-    vj = n + j
+    normal = osc.stops.normal(n)
     sides = [UPPER, LOWER] if osc.stops.two_sided else [UPPER]
     level = {s: osc.stops.position(s, osc.b) for s in sides}
     restitution = {s: osc.stops.restitution(s, osc.R) for s in sides}
+    jump = {s: osc.stops.impact_matrix(osc.M, restitution[s]) for s in sides}  # v+ = D v
     on_stop = {s: _ON_STOP * max(1.0, abs(level[s])) for s in sides}
     t_end = periods * TWO_PI / osc.omega
     dt_sample = TWO_PI / osc.omega / int(samples_per_period)
@@ -244,13 +255,15 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     v_scale = 0.0
 
     while True:
-        # on a stop (within rounding), not moving away from it: s x_j >= s c, s x_j' >= 0
-        on = [s for s in sides if stop_sign(s) * (X[j] - level[s]) >= -on_stop[s]
-              and stop_sign(s) * X[vj] >= 0]
+        # on a stop (within rounding), not moving away from it: sign s >= sign c, sign s' >= 0
+        pos, vel = float(normal @ X[:n]), float(normal @ X[n:])
+        on = [s for s in sides if stop_sign(s) * (pos - level[s]) >= -on_stop[s]
+              and stop_sign(s) * vel >= 0]
         hit: tuple[float, np.ndarray, str] | None
-        if on and stop_sign(on[0]) * X[vj] > 0:  # moving into the stop: impact now
+        if on and stop_sign(on[0]) * vel > 0:  # moving into the stop: impact now
             hit = (0.0, X.copy(), on[0])
-        elif on and stop_sign(on[0]) * flow.state_derivative(0.0, X, phase)[0][vj] > 0:
+        elif on and stop_sign(on[0]) * float(
+                normal @ flow.state_derivative(0.0, X, phase)[0][n:]) > 0:
             status = SimulationStatus.STICKING  # at rest on the stop, pushed into it
             break
         else:
@@ -270,12 +283,13 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             t_now = t_end
             break
         tc, X_minus, side = hit
-        v = stop_sign(side) * float(X_minus[vj])  # speed towards the stop hit
+        v = stop_sign(side) * float(normal @ X_minus[n:])  # speed towards the stop hit
         t_now += tc
         phase = _wrap(phase + osc.omega * tc)
         X = X_minus.copy()
-        X[j] = level[side]
-        X[vj] = -restitution[side] * float(X_minus[vj])
+        k = osc.stops.relative_to
+        X[j] = level[side] + (0.0 if k is None else float(X_minus[k - 1]))  # s on the stop
+        X[n:] = jump[side] @ X_minus[n:]
         times.append(t_now)
         vels.append(v)
         phases.append(phase)
