@@ -242,13 +242,32 @@ def _apply_matrix(D, A, out):
     m = A.shape[0]
     q = A.shape[1]
     for r in range(m):
-        for c in range(q):
-            out[r, c] = 0.0
+        first = True
         for i in range(m):
             d = D[r, i]
             if d != 0.0:
-                for c in range(q):
-                    out[r, c] += d * A[i, c]
+                if first:
+                    for c in range(q):
+                        out[r, c] = d * A[i, c]
+                    first = False
+                else:
+                    for c in range(q):
+                        out[r, c] += d * A[i, c]
+        if first:
+            for c in range(q):
+                out[r, c] = 0.0
+
+
+@_jit
+def _is_diagonal(matrices):
+    """Every impact matrix is diagonal (stops on one mass: eq. 4)."""
+    m = matrices.shape[1]
+    for k in range(matrices.shape[0]):
+        for r in range(m):
+            for c in range(m):
+                if r != c and matrices[k, r, c] != 0.0:
+                    return False
+    return True
 
 
 @_jit
@@ -280,6 +299,7 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, per
         elapsed += x[1 + k]
     taus[p - 1] = period - elapsed
     starts = _section_starts(x, p, m, j, normals, positions)
+    diagonal = _is_diagonal(matrices)
     phases = np.empty(p)
     phases[0] = x[0]
     elapsed = 0.0
@@ -291,56 +311,73 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, per
     rates = np.empty((p, m))
     pcols = np.empty((p, m))
     residual = np.empty(p * m)
-    after = np.empty(m)
     for k in range(p):
         _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, taus[k], starts[k],
                 phases[k], transitions[k], arrivals[k], pcols[k], rates[k])
         nxt = (k + 1) % p
-        _apply(matrices[nxt], arrivals[k], after)
         for r in range(m):
-            residual[k * m + r] = after[r] - starts[nxt, r]
+            if diagonal:
+                s = matrices[nxt, r, r] * arrivals[k, r]
+            else:
+                s = 0.0
+                for c in range(m):
+                    s += matrices[nxt, r, c] * arrivals[k, c]
+            residual[k * m + r] = s - starts[nxt, r]
     if not want_jacobian:
         return (phases, taus, starts, arrivals, rates, transitions, pcols, residual,
                 np.zeros((0, 0)))
     J = np.zeros((p * m, p * m))
-    DPhi = np.empty((m, m))
-    q = np.empty(m)
-    g = np.empty(m)
+    row_dphi = np.empty(m)  # row r of D_{k+1} Phi_k
     zcol = p  # first column of z_0
     for k in range(p):
         nxt = (k + 1) % p
-        D = matrices[nxt]
-        _apply(D, pcols[k], q)
-        _apply(D, rates[k], g)
-        _apply_matrix(D, transitions[k], DPhi)
         col0 = zcol + k * (m - 1)
+        ncol = zcol + nxt * (m - 1)
         for r in range(m):
             row = k * m + r
-            J[row, 0] = q[r]  # d theta_k / d delta = 1
+            if diagonal:
+                d = matrices[nxt, r, r]
+                q = d * pcols[k, r]  # (D dX^-/dtheta)_r
+                g = d * rates[k, r]  # (D X')_r
+                for c in range(m):
+                    row_dphi[c] = d * transitions[k, r, c]
+            else:
+                q = 0.0
+                g = 0.0
+                for c in range(m):
+                    row_dphi[c] = 0.0
+                for i in range(m):
+                    d = matrices[nxt, r, i]
+                    if d != 0.0:
+                        q += d * pcols[k, i]
+                        g += d * rates[k, i]
+                        for c in range(m):
+                            row_dphi[c] += d * transitions[k, i, c]
+            J[row, 0] = q  # d theta_k / d delta = 1
             for i in range(k):  # theta_k depends on tau_i, i < k
-                J[row, 1 + i] += omega * q[r]
+                J[row, 1 + i] += omega * q
             if k < p - 1:
-                J[row, 1 + k] += g[r]
+                J[row, 1 + k] += g
             else:  # tau_{p-1} = period - sum(tau_0..tau_{p-2})
                 for i in range(p - 1):
-                    J[row, 1 + i] -= g[r]
+                    J[row, 1 + i] -= g
             # dX_k/dz_k: unit columns, and x_j = (c_k - sum n_c x_c) / n_j on the section
             col = col0
             for c in range(m):
                 if c != j:
-                    v = DPhi[r, c]
-                    if c < n:
-                        v -= DPhi[r, j] * normals[k, c] / normals[k, j]
+                    v = row_dphi[c]
+                    if c < n and normals[k, c] != 0.0:
+                        v -= row_dphi[j] * normals[k, c] / normals[k, j]
                     J[row, col] += v
                     col += 1
             # - dX_{k+1}/dz_{k+1}
-            ncol = zcol + nxt * (m - 1)
             if r != j:
                 J[row, ncol + (r if r < j else r - 1)] -= 1.0
             else:
                 for c in range(n):
-                    if c != j:
-                        J[row, ncol + (c if c < j else c - 1)] += normals[nxt, c] / normals[nxt, j]
+                    if c != j and normals[nxt, c] != 0.0:
+                        J[row, ncol + (c if c < j else c - 1)] += (normals[nxt, c]
+                                                                   / normals[nxt, j])
     return phases, taus, starts, arrivals, rates, transitions, pcols, residual, J
 
 
