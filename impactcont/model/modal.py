@@ -47,8 +47,9 @@ def classify_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray
     coordinate, ``M -> D M D``, ``K -> D K D``): a graded chain such as
     ``M = diag(1e-12, 1, 1e12)`` holds every mode, while a free (rigid-body) mode has
     an eigenvalue of that size and either sign, decided by rounding. A mode is held
-    by the springs when ``lam_i > 4 n`` times its scale, free when ``|lam_i|`` is within
-    it (its eigenvalue is then exactly 0: ``omega_i = 0``).
+    by the springs when ``lam_i > 4 n`` times its scale, free otherwise (its eigenvalue is
+    then exactly 0: ``omega_i = 0``); negative beyond both that and the solver's error
+    ``4 n eps max|lam|`` is refused.
 
     Parameters
     ----------
@@ -74,7 +75,11 @@ def classify_modes(stiffness: np.ndarray, modes: np.ndarray, K: np.ndarray
     a = np.abs(modes)
     errors = np.finfo(float).eps * np.sum(a * (np.abs(K) @ a), axis=0)  # BLAS, not einsum
     tol = 4 * n * errors
-    if np.any(stiffness < -tol):
+    # a free mode's eigenvalue may come out negative beyond its componentwise scale when M
+    # is graded (the solver's own error is relative to the largest eigenvalue): only a
+    # negative eigenvalue beyond both is a K that is not positive semi-definite
+    solver = 4 * n * np.finfo(float).eps * float(np.max(np.abs(stiffness), initial=0.0))
+    if np.any(stiffness < -np.maximum(tol, solver)):
         raise ParameterError(f"K must be positive semi-definite relative to M (a spring "
                              f"stores energy); got modal eigenvalues {stiffness.tolist()} "
                              f"(rounding scale {errors.tolist()})")

@@ -23,6 +23,9 @@ __all__ = ["ImpactOscillator", "chain_stiffness"]
 
 _SYMMETRY_RTOL = 1e-12
 _PSD_RTOL = 1e-13  # relative rounding allowance on the smallest eigenvalue of C
+# Cholesky pivots of K (relative to its diagonal) above this prove K positive definite; at
+# or below it (a free mode, or a nearly free one) the modes are classified by an eigensolve
+_PIVOT_PROOF = 1e-8
 def _rule(name: str) -> dict[str, Any]:
     """The keyword arguments of :func:`_real` for parameter `name` (from the vocabulary)."""
     p = PARAMETERS[name]
@@ -216,9 +219,10 @@ def chain_stiffness(springs: Sequence[float]) -> np.ndarray:
 def _free_modes(M: np.ndarray, K: np.ndarray, stops: Stops) -> np.ndarray:
     """The free modes of K relative to M, (n, n_f), each checked to be held by a stop.
 
-    K positive definite (its Cholesky factorisation succeeds) has none, without an
-    eigensolve. Otherwise the modes of ``K u = lambda M u`` are classified against their
-    componentwise rounding scale (:func:`~impactcont.model.modal.classify_modes`); the
+    K positive definite (its Cholesky factorisation succeeds with every pivot above
+    ``_PIVOT_PROOF`` of its diagonal entry) has none, without an eigensolve. Otherwise
+    the modes of ``K u = lambda M u`` are classified against their componentwise rounding
+    scale (:func:`~impactcont.model.modal.classify_modes`); the
     free ones span a subspace that the stop coordinate ``s = normal . x`` must hold:
     ``normal . u != 0`` for one free mode, and no free motion with ``normal . u = 0`` (at
     most one free mode for one stop coordinate).
@@ -230,11 +234,15 @@ def _free_modes(M: np.ndarray, K: np.ndarray, stops: Stops) -> np.ndarray:
     """
     n = M.shape[0]
     try:
-        np.linalg.cholesky(K)
+        L = np.linalg.cholesky(K)
     except np.linalg.LinAlgError:
         pass
     else:
-        return np.zeros((n, 0))
+        # a free mode can pass Cholesky in rounding (a pivot of rounding size): only pivots
+        # well above rounding prove K positive definite without an eigensolve
+        pivots = np.diag(L) ** 2 / np.diag(K)
+        if np.min(pivots) > _PIVOT_PROOF:
+            return np.zeros((n, 0))
     lam, u = scipy.linalg.eigh(K, M)
     _, free = classify_modes(lam, u, K)
     U = u[:, free]

@@ -355,8 +355,9 @@ def require_paper_stops(osc: Any, what: str) -> None:
     problems = others() if callable(others) else []
     if problems:
         raise ParameterError(
-            f"{what}: the closed form of eq. (12)-(16) handles the paper's form only (one "
-            f"stop on mass 1, K positive definite, no constant force); the oscillator has "
+            f"{what}: the closed form of eq. (12)-(16) handles one stop on mass 1 only, "
+            f"with K positive definite and no constant force (the paper's form); the "
+            f"oscillator has "
             f"{'; '.join(problems)}. Use the N-p shooting path instead: "
             "impactcont.multi_impact_orbit(osc, N, p, guess, pattern=...) and "
             "multi_impact_continuation (p = 1, pattern 'U' for an N-1 motion)")
