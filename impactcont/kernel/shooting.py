@@ -56,8 +56,31 @@ FAILED = 1
 
 # -- one flight -------------------------------------------------------------------------------
 @_jit
-def _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, rate):
-    """Flight of the modal flow: ``Phi``, ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place."""
+def _static_mode(w, a, g, free, t):
+    """A mode's response to the constant modal force ``g``: ``(Q, s_y, s_v)``, its state
+    ``Q + W(t) (Y(0) - [Q; 0]) + [s_y; s_v]`` (:func:`impactcont.model.modal.static_response`):
+    held ``Q = g / w^2``, ``s = 0``; free ``Q = 0``, ``s_y = g t^2 phi(2at) / 2``,
+    ``s_v = g t psi(2at)`` (``g t^2 / 2``, ``g t`` undamped)."""
+    if g == 0.0:
+        return 0.0, 0.0, 0.0
+    if not free:
+        return g / (w * w), 0.0, 0.0
+    x = 2.0 * a * t
+    if x < 1e-4:  # phi(x) = 2 (x - 1 + e^-x) / x^2, psi(x) = (1 - e^-x) / x by their series
+        phi = 1.0 - x / 3.0 + x * x / 12.0
+        psi = 1.0 - x / 2.0 + x * x / 6.0
+    else:
+        phi = 2.0 * (x + math.expm1(-x)) / (x * x)
+        psi = -math.expm1(-x) / x
+    return 0.0, 0.5 * g * t * t * phi, g * t * psi
+
+
+@_jit
+def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta, tr, arr,
+                  pcol, rate):
+    """Flight of the modal flow: ``Phi``, ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place
+    (the constant force ``g_static`` included: ``X(t) = Phi (X0 - P(0)) + P(t)`` with the
+    particular solution ``P`` of the forcing and of the constant force)."""
     n = w.size
     W = np.empty((4, n))
     for i in range(n):
@@ -90,6 +113,9 @@ def _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, 
     pv = np.empty(n)
     vel = np.empty(n)  # modal velocity and acceleration at t
     acc = np.empty(n)
+    sty = np.zeros(n)  # the constant force's part of the modal state from rest
+    stv = np.zeros(n)
+    static = g_static.size > 0
     for i in range(n):
         g = gam[i]
         b = bet[i]
@@ -115,8 +141,16 @@ def _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, 
         dv = v0 - omega * (b * c0 - g * s0)
         y = g * cth + b * sth + w11 * dy + w12 * dv
         v = omega * (b * cth - g * sth) + w21 * dy + w22 * dv
+        force = f[i] * cth
+        if static and g_static[i] != 0.0:
+            q, s_y, s_v = _static_mode(w[i], a[i], g_static[i], free[i], t)
+            sty[i] = (1.0 - w11) * q + s_y
+            stv[i] = -w21 * q + s_v
+            y += sty[i]
+            v += stv[i]
+            force += g_static[i]
         vel[i] = v
-        acc[i] = f[i] * cth - 2.0 * a[i] * v - w[i] * w[i] * y
+        acc[i] = force - 2.0 * a[i] * v - w[i] * w[i] * y
     m = 2 * n
     for r in range(m):
         s = 0.0
@@ -131,8 +165,8 @@ def _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, 
         ry = 0.0
         rv = 0.0
         for i in range(n):
-            ay += u[r, i] * fy[i]
-            av += u[r, i] * fv[i]
+            ay += u[r, i] * (fy[i] + sty[i])
+            av += u[r, i] * (fv[i] + stv[i])
             qy += u[r, i] * py[i]
             qv += u[r, i] * pv[i]
             ry += u[r, i] * vel[i]
@@ -146,8 +180,10 @@ def _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, 
 
 
 @_jit
-def _flight_general(lam, V, Vi, Z, omega, t, X0, theta, tr, arr, pcol, rate):
-    """Flight of the first-order flow: as :func:`_flight_modal` (``GeneralFlow.matrices``)."""
+def _flight_general(lam, V, Vi, Z, xs, xd, omega, t, X0, theta, tr, arr, pcol, rate):
+    """Flight of the first-order flow: as :func:`_flight_modal` (``GeneralFlow.matrices``);
+    the constant force adds ``X_s - Phi X_s + d t`` (``xs``, ``xd``: its offset and drift,
+    empty without one)."""
     m = lam.size
     e = np.exp(lam * t)
     for r in range(m):
@@ -175,10 +211,19 @@ def _flight_general(lam, V, Vi, Z, omega, t, X0, theta, tr, arr, pcol, rate):
             s += tr[r, c] * X0[c]
         arr[r] = s + ec * c0 + es * s0
         pcol[r] = -ec * s0 + es * c0
+    static = xs.size > 0
+    if static:
+        for r in range(m):
+            s = xs[r] + xd[r] * t
+            for c in range(m):
+                s -= tr[r, c] * xs[c]
+            arr[r] += s
     # X'(t) = Re(i om Z e^{i(om t + theta)}) + Re(V diag(lam e^{lam t}) V^-1 (X0 - X_p(0)))
     dev = np.empty(m)
     for c in range(m):
         dev[c] = X0[c] - (Z[c] * rot_0).real
+        if static:
+            dev[c] -= xs[c]
     zeta = np.empty(m, dtype=np.complex128)
     for k in range(m):
         s = 0j
@@ -191,15 +236,20 @@ def _flight_general(lam, V, Vi, Z, omega, t, X0, theta, tr, arr, pcol, rate):
         for k in range(m):
             s += V[r, k] * zeta[k]
         rate[r] = (1j * omega * Z[r] * rot).real + s.real
+        if static:
+            rate[r] += xd[r]
 
 
 @_jit
-def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, t, X0, theta, tr, arr,
-            pcol, rate):
+def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, t, X0, theta, tr,
+            arr, pcol, rate):
+    """One flight of either flow; ``st = (g, free, X_s, d)``: the constant force
+    (:meth:`impactcont.orbit.flow.Flow.static_arrays`)."""
     if general:
-        _flight_general(lam, V, Vi, Z, omega, t, X0, theta, tr, arr, pcol, rate)
+        _flight_general(lam, V, Vi, Z, st[2], st[3], omega, t, X0, theta, tr, arr, pcol, rate)
     else:
-        _flight_modal(w, a, gam, bet, f, u, ui, omega, t, X0, theta, tr, arr, pcol, rate)
+        _flight_modal(w, a, gam, bet, f, u, ui, st[0], st[1], omega, t, X0, theta, tr, arr,
+                      pcol, rate)
 
 
 # -- the shooting system ------------------------------------------------------------------------
@@ -271,7 +321,7 @@ def _is_diagonal(matrices):
 
 
 @_jit
-def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
+def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, j,
                     normals, positions, matrices, x, want_jacobian):
     """Residual (and exact Jacobian) of the N-p shooting system at the unknowns ``x``.
 
@@ -312,7 +362,7 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, per
     pcols = np.empty((p, m))
     residual = np.empty(p * m)
     for k in range(p):
-        _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, taus[k], starts[k],
+        _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, taus[k], starts[k],
                 phases[k], transitions[k], arrivals[k], pcols[k], rates[k])
         nxt = (k + 1) % p
         for r in range(m):
@@ -428,7 +478,7 @@ def _solve(A, rhs):
 
 
 @_jit
-def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
+def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, j,
                  normals, positions, matrices, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
@@ -443,7 +493,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period
         :func:`shooting_system` at ``x`` (with its Jacobian).
     """
     x = x0.copy()
-    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period, j,
+    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, j,
                          normals, positions, matrices, x, True)
     norm = _max_abs(sh[7])
     step_norm = np.inf
@@ -464,7 +514,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, period
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
+            tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
                                   period, j, normals, positions, matrices, trial, True)
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
@@ -539,21 +589,35 @@ def _flight_jacobian(tr, pcol, rate, D, j, n_start, n_end, omega, G):
 
 
 @_jit
-def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega,
+def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
                    normal, X0, theta):
-    """``(w, a, weights, Gamma, B, dy, dv)`` of ``s = n . x`` along a flight for the
-    kernel's search: the forced part ``Gamma cos + B sin`` of the phase and the free
-    deviation (modal weights ``n^T U``; for the first-order flow ``n^T`` of the
-    position rows of ``V`` and ``Z``)."""
+    """``(w, a, weights, Gamma, B, dy, dv, level, exact)`` of ``s = n . x`` along a flight
+    for the kernel's search: the forced part ``Gamma cos + B sin`` of the phase, the free
+    deviation (modal weights ``n^T U``; for the first-order flow ``n^T`` of the position
+    rows of ``V`` and ``Z``) and the constant ``level`` the constant force adds to ``s``;
+    ``exact`` is False when the constant force moves ``s`` by a polynomial in time (a
+    free mode it pushes), which the search does not represent."""
     c0 = math.cos(theta)
     s0 = math.sin(theta)
+    level = 0.0
+    exact = True
     if general:
         m = lam.size
         n = m // 2
         rot = complex(c0, s0)
+        xs = st[2]
+        xd = st[3]
         dev = np.empty(m)
         for c in range(m):
             dev[c] = X0[c] - (Z[c] * rot).real
+        if xs.size > 0:
+            for c in range(m):
+                dev[c] -= xs[c]
+            drift = 0.0
+            for r in range(n):
+                level += normal[r] * xs[r]
+                drift += normal[r] * xd[r]
+            exact = drift == 0.0
         coef = np.empty(m, dtype=np.complex128)  # (n^T V)_k zeta_k
         zn = 0j
         for r in range(n):
@@ -579,8 +643,10 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
             else:  # two real eigenvalues
                 dy[i] = (coef[k] + coef[q]).real
                 dv[i] = (coef[k] * lam[k] + coef[q] * lam[q]).real
-        return pw, pa, np.ones(npair), zn.real, -zn.imag, dy, dv
+        return pw, pa, np.ones(npair), zn.real, -zn.imag, dy, dv, level, exact
     n = w.size
+    g_static = st[0]
+    free = st[1]
     u0 = np.zeros(n)
     for r in range(n):
         if normal[r] != 0.0:
@@ -600,17 +666,28 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
         dv[i] = v0 - omega * (bet[i] * c0 - gam[i] * s0)
         Gam += u0[i] * gam[i]
         B += u0[i] * bet[i]
-    return w, a, u0, Gam, B, dy, dv
+        if g_static.size > 0 and g_static[i] != 0.0 and u0[i] != 0.0:
+            if free[i]:
+                exact = False
+            else:
+                q = g_static[i] / (w[i] * w[i])
+                dy[i] -= q
+                level += u0[i] * q
+    return w, a, u0, Gam, B, dy, dv, level, exact
 
 
 @_jit
-def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, normal,
-                two_sided, b, b_low, X0, theta, tau):
+def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
+                normal, two_sided, b, b_low, X0, theta, tau):
     """Eq. (16) on one flight against both stops of ``s = n . x``: ``(gap_upper,
     time_upper, gap_lower, time_lower, capped)`` (a gap ``+inf`` and its time NaN where
-    there is no extremum)."""
-    ww, aa, u0, Gam, B, dy, dv = _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                                lam, V, Vi, Z, omega, normal, X0, theta)
+    there is no extremum; both gaps NaN where the search cannot represent the motion: a
+    constant force on a free mode the stop coordinate sees)."""
+    ww, aa, u0, Gam, B, dy, dv, level, exact = _search_inputs(
+        general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, normal, X0,
+        theta)
+    if not exact:
+        return np.nan, np.nan, np.nan, np.nan, False
     times, capped = time_grid(ww, aa, u0, omega, tau)
     free = free_on_grid(times, ww, aa, u0, dy, dv)
     cw = np.cos(omega * times)
@@ -623,13 +700,13 @@ def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, o
     if two_sided:  # the highest maximum of -s is the lowest minimum of s
         low, t_low = x1_maximum(times, free, cw, sw, -Gam, -B, omega, theta, -1.0, ww, aa, u0,
                                 dy, dv, work, np.nan)
-        gap_l = b_low - low
+        gap_l = b_low - low + level
         t_l = t_low
-    return b - top, t_top, gap_l, t_l, capped
+    return b - top - level, t_top, gap_l, t_l, capped
 
 
 @_jit
-def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, omega, j,
+def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, j,
                   normal, two_sided, b, b_low, normals, matrices, phases, taus, starts,
                   transitions, pcols, rates, checks):
     """Per-flight ``G_k``, their product G, its multipliers and the contact check (eq. 16).
@@ -677,7 +754,7 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
                 gap_l[k] = np.inf
                 continue
             gu, tu, gl, tl, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                              lam, V, Vi, Z, omega, normal, two_sided, b,
+                                              lam, V, Vi, Z, st, omega, normal, two_sided, b,
                                               b_low, starts[k], phases[k], taus[k])
             gap_u[k] = gu
             t_u[k] = tu

@@ -58,7 +58,7 @@ _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 
 @_jit
-def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
+def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, j,
             normals, positions, matrices, x, want_jacobian):
     """The shooting system (full, or the half of a symmetric motion) at ``x``.
 
@@ -66,10 +66,10 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
     first h of a symmetric motion). Returns the tuple of :func:`shooting_system`.
     """
     if not symmetric:
-        return shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
+        return shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
                                2.0 * math.pi * N / omega, j, normals, positions, matrices, x,
                                want_jacobian)
-    out = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega,
+    out = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
                           math.pi * N / omega, j, normals, positions, matrices, x,
                           want_jacobian)
     h = positions.size
@@ -94,7 +94,7 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
 
 
 @_jit
-def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
+def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, j,
             normals, positions, matrices, x0, tol, max_iter):
     """Newton with backtracking from ``x0``: the iteration and stopping rules of
     :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system`.
@@ -102,7 +102,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
     Returns ``(x, converged, iterations, shooting)``.
     """
     x = x0.copy()
-    sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetric, j,
+    sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, j,
                  normals, positions, matrices, x, True)
     norm = _max_abs(sh[7])
     step_norm = np.inf
@@ -123,7 +123,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N,
+            tsh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N,
                           symmetric, j, normals, positions, matrices, trial, True)
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
@@ -140,7 +140,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, omega, N, symmetri
 
 
 @_jit
-def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omega, N,
+def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, st, omega, N,
               symmetric, admits, j, normal, two_sided, b, b_low, full_normals, full_matrices,
               signs, sh, checks, point, out_rho, out_mu, out_gap, out_velocity, out_tau,
               out_state, out_asym):
@@ -204,12 +204,15 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
             if not taus[k] > 0.0:
                 continue
             gu, _, gl, _, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                            lam, V, Vi, Z, omega, normal, two_sided, b,
+                                            lam, V, Vi, Z, st, omega, normal, two_sided, b,
                                             b_low, starts[k], phases[k], taus[k])
+            if not (gu == gu and gl == gl):  # not searchable: a constant force on a free mode
+                gap = np.nan
+                break
             # a mirrored flight's clearance to one stop is the other's of its image
             gap = min(gap, gu, gl)
             capped = capped or cap
-        if not gap > 0.0:
+        if not gap > 0.0:  # NaN included
             physical = False
     else:
         gap = np.nan
@@ -262,8 +265,11 @@ def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omeg
     def units(d: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(np.broadcast_to(unit, (*d.shape[:2], m // 2)))
 
+    nf = np.asarray(omegas).size
     return sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj,
-                       omegas, flow_index, positions, units(diagonals), square(diagonals),
+                       np.zeros((nf, 0)), np.zeros((nf, 0), dtype=np.bool_), np.zeros((nf, 0)),
+                       np.zeros((nf, 0)), omegas, flow_index, positions, units(diagonals),
+                       square(diagonals),
                        units(full_diagonals), square(full_diagonals),
                        np.ascontiguousarray(np.tile(unit, (ng, 1))), b_upper, b_lower,
                        geometry_index, coord0, coord1, signs, N, symmetric, admits, j,
@@ -271,7 +277,8 @@ def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omeg
 
 
 @_jit
-def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omegas,
+def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, sg, sfree,
+                sxs, sxd, omegas,
                 flow_index, positions, normals, matrices, full_normals, full_matrices,
                 contact_normals, b_upper, b_lower, geometry_index, coord0, coord1, signs, N,
                 symmetric, admits, j, two_sided, seed0, seed1, x_seed, tol, max_iter,
@@ -284,6 +291,9 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
     general, w .. Z, pw .. pj
         The flows' arrays (:meth:`impactcont.orbit.flow.Flow.shooting_arrays`), each
         stacked on a first axis of flows.
+    sg, sfree, sxs, sxd
+        The flows' constant-force arrays (:meth:`impactcont.orbit.flow.Flow.static_arrays`),
+        stacked likewise (second axis of size 0: no constant force).
     omegas : ndarray, shape (nf,)
         Forcing frequency of each flow.
     flow_index, geometry_index : ndarray of int64, shape (n0, n1)
@@ -362,8 +372,9 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
         gi = geometry_index[i0, i1]
         omega = omegas[fi]
         attempts += 1
+        st = (sg[fi], sfree[fi], sxs[fi], sxd[fi])
         x, ok, it, sh = _newton(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi],
-                                ui[fi], lam[fi], V[fi], Vi[fi], Z[fi], omega, N, symmetric, j,
+                                ui[fi], lam[fi], V[fi], Vi[fi], Z[fi], st, omega, N, symmetric, j,
                                 normals[gi], positions[gi], matrices[gi], x0, tol, max_iter)
         total_iterations += it
         if ok and parent >= 0:
@@ -380,7 +391,7 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
         delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
         phys, cap = _evaluate(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi], ui[fi],
                               lam[fi], V[fi], Vi[fi], Z[fi], pw[fi], pa[fi], pk[fi], pj[fi],
-                              omega, N, symmetric, admits, j, contact_normals[gi], two_sided,
+                              st, omega, N, symmetric, admits, j, contact_normals[gi], two_sided,
                               b_upper[gi], b_lower[gi], full_normals[gi], full_matrices[gi],
                               signs, sh, checks, point, rho, mu, gap, velocity, tau, state,
                               asym)

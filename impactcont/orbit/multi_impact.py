@@ -375,9 +375,9 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
         raise ParameterError(f"u must have shape ({2 * osc.n * p},) = (2 n p,) for n={osc.n}, "
                              f"p={p}; got shape {x.shape}")
     arrays = flow.shooting_arrays()
-    out = _kernel().shooting_system(*arrays[:12], osc.omega, TWO_PI * N / osc.omega, geo.pivot,
-                                    geo.normals, geo.positions, geo.matrices, _writable(x),
-                                    jacobian)
+    out = _kernel().shooting_system(*arrays[:12], flow.static_arrays(), osc.omega,
+                                    TWO_PI * N / osc.omega, geo.pivot, geo.normals,
+                                    geo.positions, geo.matrices, _writable(x), jacobian)
     return _as_shooting(out, jacobian)
 
 
@@ -692,8 +692,8 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
                              f"n={osc.n}, p={p}; got shape {x0.shape}")
     arrays = flow.shooting_arrays()
     u, status, it, norm, step_norm, out = _kernel().newton_solve(
-        *arrays[:12], osc.omega, TWO_PI * N / osc.omega, geo.pivot, geo.normals, geo.positions,
-        geo.matrices, x0, float(tol), int(max_iter))
+        *arrays[:12], flow.static_arrays(), osc.omega, TWO_PI * N / osc.omega, geo.pivot,
+        geo.normals, geo.positions, geo.matrices, x0, float(tol), int(max_iter))
     sh = _as_shooting(out, True)
     if status == 0:
         return u, sh, int(it)
@@ -757,7 +757,8 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     arrays = flow.shooting_arrays()
     jacs, h2, G, multipliers, gaps, gap_times, gaps_low, times_low, capped = (
         _kernel().motion_checks(
-            *arrays[:5], *arrays[6:8], *arrays[12:16], *arrays[8:12], osc.omega, j,
+            *arrays[:5], *arrays[6:8], *arrays[12:16], *arrays[8:12], flow.static_arrays(),
+            osc.omega, j,
             geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.matrices,
             *(_writable(a) for a in (
                 sh.phases, sh.flight_times, sh.starts, sh.transitions, sh.phase_columns,
@@ -784,7 +785,11 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
             reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, {mass} does "
                            f"not arrive towards the {'upper' if pattern[k] == UPPER else 'lower'}"
                            " stop")
-        if checks and not gaps[k] > 0:
+        if checks and math.isnan(gaps[k]) and math.isnan(gaps_low[k]):
+            reasons.append(f"flight {k}: interior contact not checked (the constant force "
+                           f"moves {mass} by a polynomial in time through a free mode, which "
+                           "the contact search does not represent)")
+        elif checks and not gaps[k] > 0:
             reasons.append(f"flight {k}: {mass} reaches a stop inside the flight (gap_min="
                            f"{gaps[k]:.3g} at t={gap_times[k]:.6g})")
     phases = np.array([_wrap(float(t)) for t in sh.phases])
