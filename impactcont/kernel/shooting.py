@@ -113,8 +113,6 @@ def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta,
     pv = np.empty(n)
     vel = np.empty(n)  # modal velocity and acceleration at t
     acc = np.empty(n)
-    sty = np.zeros(n)  # the constant force's part of the modal state from rest
-    stv = np.zeros(n)
     static = g_static.size > 0
     for i in range(n):
         g = gam[i]
@@ -144,10 +142,12 @@ def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta,
         force = f[i] * cth
         if static and g_static[i] != 0.0:
             q, s_y, s_v = _static_mode(w[i], a[i], g_static[i], free[i], t)
-            sty[i] = (1.0 - w11) * q + s_y
-            stv[i] = -w21 * q + s_v
-            y += sty[i]
-            v += stv[i]
+            sty = (1.0 - w11) * q + s_y  # the constant force's part of the state from rest
+            stv = -w21 * q + s_v
+            fy[i] += sty
+            fv[i] += stv
+            y += sty
+            v += stv
             force += g_static[i]
         vel[i] = v
         acc[i] = force - 2.0 * a[i] * v - w[i] * w[i] * y
@@ -165,8 +165,8 @@ def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta,
         ry = 0.0
         rv = 0.0
         for i in range(n):
-            ay += u[r, i] * (fy[i] + sty[i])
-            av += u[r, i] * (fv[i] + stv[i])
+            ay += u[r, i] * fy[i]
+            av += u[r, i] * fv[i]
             qy += u[r, i] * py[i]
             qv += u[r, i] * pv[i]
             ry += u[r, i] * vel[i]
