@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -60,11 +61,11 @@ import xarray as xr
 
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
-from impactcont.vocabulary import CURVE_KINDS, PARAMETERS
+from impactcont.vocabulary import CURVE_KINDS, ELEMENT_FAMILIES, PARAMETERS
 
 __all__ = ["KIND_ATTRIBUTES", "SECTION_ATTRIBUTES", "SECTION_KINDS", "check_attributes",
            "check_file_attributes", "check_pattern_attribute", "dataset_kind", "dataset_tag",
-           "impacts_attribute", "oscillator_attribute"]
+           "impacts_attribute", "oscillator_attribute", "split_parameters"]
 
 #: The kind of the datasets in a file of each built-in scene section.
 SECTION_KINDS: dict[str, str] = {
@@ -99,6 +100,9 @@ SECTION_ATTRIBUTES: dict[str, tuple[str, ...]] = {
 }
 
 _OSCILLATOR = "the oscillator as JSON text (ImpactOscillator.to_json())"
+# The names PARAMETERS resolves: the named parameters and the elements (k2, M[1,2], F[2]).
+_ALLOWED = (f"one of {list(PARAMETERS)} or an element name {list(ELEMENT_FAMILIES)} "
+            "(1-based, e.g. 'k2', 'M[1,2]', 'F[2]')")
 
 
 def _shown(value: Any, limit: int = 100) -> str:
@@ -238,23 +242,35 @@ def _impact_stops(value: Any, ds: xr.Dataset, osc: ImpactOscillator | None) -> N
 
 def _parameter(value: Any, ds: xr.Dataset, osc: Any) -> None:
     if not isinstance(value, str) or value not in PARAMETERS:
-        raise _refused("parameter", value, f"one of {list(PARAMETERS)}")
+        raise _refused("parameter", value, _ALLOWED)
     if value not in ds.variables:
         raise ValueError(f"attribute 'parameter' = {value!r} names no variable of the "
                          f"dataset; allowed: a parameter with its column, one of "
-                         f"{[k for k in PARAMETERS if k in ds.variables]}")
+                         f"{[str(k) for k in ds.variables if k in PARAMETERS]}")
 
 
 def _parameters(value: Any, ds: xr.Dataset, osc: Any) -> None:
-    allowed = f"two different names of {list(PARAMETERS)} joined by ',' (e.g. 'omega,b')"
-    names = value.split(",") if isinstance(value, str) else []
-    if len(names) != 2 or len(set(names)) != 2 or not set(names) <= set(PARAMETERS):
+    allowed = (f"two different names of {list(PARAMETERS)} or element names joined by ',' "
+               "(e.g. 'omega,b', 'omega,k2')")
+    names = split_parameters(value) if isinstance(value, str) else []
+    if len(names) != 2 or len(set(names)) != 2 or not all(n in PARAMETERS for n in names):
         raise _refused("parameters", value, allowed)
     missing = [k for k in names if k not in ds.variables]
     if missing:
         raise ValueError(f"attribute 'parameters' = {value!r} names {missing}, which the "
                          "dataset has no variable of; allowed: the curve's two parameters, "
                          "each with its column")
+
+
+# a comma between two names, not one inside an element's brackets (M[1,2])
+_BETWEEN_NAMES = re.compile(r",(?![^\[]*\])")
+
+
+def split_parameters(text: str) -> list[str]:
+    """The names of a comma-joined attribute ``parameters`` (``"omega,b"``): a comma inside
+    an element name's brackets is no separator (``"omega,M[1,2]"`` -> ``["omega",
+    "M[1,2]"]``)."""
+    return _BETWEEN_NAMES.split(text)
 
 
 def _vary(value: Any, ds: xr.Dataset, osc: Any) -> None:

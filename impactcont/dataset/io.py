@@ -458,6 +458,8 @@ _MEMORY_UNITS = "impactcont_units"  # the units in memory of a boolean or text v
 _FILE_ATTRIBUTES = "impactcont_file_attributes"  # dataset attributes only the file has
 _FLAG_MEANING = re.compile(r"^[0-9A-Za-z_\-.+@]+$")  # one word of flag_meanings (CF 3.5)
 _TEXT_KINDS = "USO"
+_MEMORY_NAME = "impactcont_name"  # the name in memory of a variable stored under a CF name
+_CF_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")  # CF 2.3: letters, digits, underscores
 _KIND_WORDS = {"branch": "branches of periodic impacting motions",
                "curve": "codimension-1 curves", "map": "stability maps",
                "multi_impact_map": "stability maps of one N-p motion family",
@@ -499,6 +501,38 @@ def _cf_variable(name: Any, var: xr.Variable, coordinate: bool) -> xr.Variable:
     return xr.Variable(var.dims, data, attrs, encoding)
 
 
+def cf_name(name: str) -> str:
+    """The name a variable named `name` has in a file: `name` itself when CF allows it
+    (CF 2.3: a letter, then letters, digits and underscores), else each run of other
+    characters made one underscore (``M[1,2]`` -> ``M_1_2``, ``special_F[2]`` ->
+    ``special_F_2``; ``v_`` in front of a name that does not start with a letter)."""
+    if _CF_NAME.match(name):
+        return name
+    safe = re.sub(r"[^A-Za-z0-9_]+", "_", name).rstrip("_")
+    return safe if safe[:1].isalpha() else f"v_{safe}"
+
+
+def _disk_names(ds: xr.Dataset) -> dict[str, str]:
+    """``{name in memory: name on disk}`` of the variables of `ds` CF does not allow
+    (:func:`cf_name`: an element parameter's column ``M[1,2]``, ``special_F[2]``).
+
+    Raises
+    ------
+    ValueError
+        Two names would be stored under one (``F[2]`` and ``F_2``).
+    """
+    names = [str(k) for k in ds.variables]
+    renames = {name: cf_name(name) for name in names if cf_name(name) != name}
+    taken: dict[str, str] = {cf_name(name): name for name in names if name not in renames}
+    for name, safe in renames.items():
+        if safe in taken:
+            raise ValueError(f"cannot store variable {name!r} under the CF name {safe!r} "
+                             f"(CF 2.3: letters, digits and underscores): variable "
+                             f"{taken[safe]!r} has that name in the file too")
+        taken[safe] = name
+    return renames
+
+
 def _cf_attribute(value: Any) -> Any:
     """An attribute without 64-bit integers where its values fit in 32 bits."""
     if isinstance(value, (bool, np.bool_)):
@@ -525,7 +559,45 @@ def _to_cf(ds: xr.Dataset) -> xr.Dataset:
         attrs.update({key: provenance[key] for key in added})
         attrs[_FILE_ATTRIBUTES] = " ".join(added)
     out.attrs = attrs
+    renames = _disk_names(out)
+    if renames:  # CF 2.3 names on disk; the name in memory in an attribute
+        marked = {name: out.variables[name].copy(deep=False) for name in renames}
+        for name, var in marked.items():
+            var.attrs = {**var.attrs, _MEMORY_NAME: name}
+        out = out.assign_coords({k: v for k, v in marked.items() if k in out.coords})
+        out = out.assign({k: v for k, v in marked.items() if k not in out.coords})
+        out = out.rename(renames)
     return out
+
+
+def _memory_names(ds: xr.Dataset) -> xr.Dataset:
+    """`ds` with each variable stored under a CF name (:func:`_disk_names`) given back
+    its name in memory (attribute ``impactcont_name``).
+
+    Raises
+    ------
+    ValueError
+        The attribute is not text, or names a variable the dataset has.
+    """
+    renames = {}
+    for name, var in ds.variables.items():
+        if _MEMORY_NAME not in var.attrs:
+            continue
+        memory = var.attrs[_MEMORY_NAME]
+        if not isinstance(memory, str) or not memory or memory in ds.variables \
+                or memory in renames.values():
+            raise ValueError(f"variable {name!r}: attribute {_MEMORY_NAME} must be the name "
+                             f"in memory of the variable, a name no other variable has; got "
+                             f"{memory!r}")
+        renames[str(name)] = memory
+    if not renames:
+        return ds
+    ds = ds.rename(renames)
+    for name in renames.values():
+        var = ds.variables[name].copy(deep=False)
+        var.attrs = {k: v for k, v in var.attrs.items() if k != _MEMORY_NAME}
+        ds = ds.assign_coords({name: var}) if name in ds.coords else ds.assign({name: var})
+    return ds
 
 
 def _from_cf(ds: xr.Dataset) -> xr.Dataset:
@@ -538,6 +610,7 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
     ValueError
         A mark of the CF form contradicts the variable it is on.
     """
+    ds = _memory_names(ds)
     # the points of a branch or curve are labelled by its parameters, in memory as on disk
     # (files written before that hold them as data variables)
     ds = ds.set_coords([k for k in parameter_names(ds) if k in ds.data_vars])
@@ -615,14 +688,15 @@ def _for_disk(data: xr.Dataset | xr.DataTree) -> xr.Dataset | xr.DataTree:
 
 
 def _disk_encoding(encoding: Mapping[str, Any], ds: xr.Dataset) -> dict[str, Any]:
-    """``encoding`` with the entry of a complex variable given to both of its parts."""
+    """``encoding`` with the entry of a complex variable given to both of its parts, each
+    under its name on disk (:func:`_disk_names`)."""
     out = {}
     for key, value in encoding.items():
         if key in ds.data_vars and ds[key].dtype.kind == "c":
             out[f"{key}_real"] = out[f"{key}_imag"] = dict(value)
         else:
             out[key] = value
-    return out
+    return {cf_name(key): value for key, value in out.items()}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -898,8 +972,8 @@ def _write_blocks(ds: xr.Dataset, tmp: Path,
     try:
         nc.set_auto_maskandscale(False)
         for name in ds.data_vars:
-            for key in ([f"{name}_real", f"{name}_imag"] if ds[name].dtype.kind == "c"
-                        else [name]):
+            for key in map(cf_name, [f"{name}_real", f"{name}_imag"]
+                           if ds[name].dtype.kind == "c" else [name]):
                 bad = {"scale_factor", "add_offset", "calendar"} & set(nc[key].ncattrs())
                 if bad or nc[key].dtype.kind not in "iuf":
                     raise ValueError(f"variable {key!r} is stored as {nc[key].dtype} with "
@@ -911,10 +985,11 @@ def _write_blocks(ds: xr.Dataset, tmp: Path,
                     where = tuple(region[d] for d in ds[name].dims if d in region)
                     block = np.asarray(block)
                     if block.dtype.kind == "c":
-                        nc[f"{name}_real"][where] = block.real
-                        nc[f"{name}_imag"][where] = block.imag
+                        nc[cf_name(f"{name}_real")][where] = block.real
+                        nc[cf_name(f"{name}_imag")][where] = block.imag
                     else:
-                        nc[name][where] = block.astype(nc[name].dtype, copy=False)
+                        nc[cf_name(name)][where] = block.astype(nc[cf_name(name)].dtype,
+                                                                copy=False)
     finally:
         with _sigint_held(target):
             nc.close()

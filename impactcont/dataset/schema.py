@@ -36,18 +36,24 @@ import datetime
 import json
 import logging
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from impactcont.dataset.attributes import check_attributes, oscillator_attribute
+from impactcont.dataset.attributes import (
+    check_attributes,
+    oscillator_attribute,
+    split_parameters,
+)
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.vocabulary import LABELS, STATUSES
+from impactcont.model.parameters import model_parameter
+from impactcont.vocabulary import ELEMENT_FAMILIES, LABELS, STATUSES
 from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
 
 __all__ = [
+    "ALLOWED_PARAMETERS",
     "CONVENTIONS",
     "PARAMETERS",
     "POINT_VARIABLES",
@@ -63,6 +69,7 @@ __all__ = [
     "point_table",
     "provenance_attributes",
     "special_variable",
+    "split_parameters",
     "state_component_names",
     "validate_branch_dataset",
     "with_parameter_coords",
@@ -104,10 +111,36 @@ class _Var:
                 "description": self.description}
 
 
-#: Parameters a branch may be continued in, with their metadata. ``omega`` and
-#: ``b`` are always stored; another continued parameter adds its own column.
-PARAMETERS: dict[str, _Var] = {name: _Var(p.long_name, p.unit, p.description)
-                               for name, p in _PARAMETER_TABLE.items()}
+class _ParameterVariables(Mapping[str, _Var]):
+    """The metadata of every parameter's column, looked up in the vocabulary's table.
+
+    A lookup resolves what :data:`impactcont.vocabulary.PARAMETERS` resolves: the named
+    parameters and the element names (``k2``, ``M[1,2]``, ``F[2]``, ...); iterating gives
+    the named parameters only (the elements are patterns).
+    """
+
+    def __getitem__(self, name: str) -> _Var:
+        p = _PARAMETER_TABLE[name]
+        return _Var(p.long_name, p.unit, p.description)
+
+    def __contains__(self, name: object) -> bool:
+        return name in _PARAMETER_TABLE
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(_PARAMETER_TABLE)
+
+    def __len__(self) -> int:
+        return len(_PARAMETER_TABLE)
+
+
+#: Parameters a branch may be continued in, with their metadata: the named parameters
+#: and the element names (1-based: ``m<j>``, ``k<j>``, ``c<j>``, ``M[i,j]``, ``K[i,j]``,
+#: ``C[i,j]``, ``F[j]``). ``omega`` and ``b`` are always stored; another continued
+#: parameter adds its own column.
+PARAMETERS: Mapping[str, _Var] = _ParameterVariables()
+#: The names :data:`PARAMETERS` resolves, for error messages.
+ALLOWED_PARAMETERS = (f"one of {list(_PARAMETER_TABLE)} or an element name "
+                      f"{list(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]')")
 
 #: Variables on the ``point`` dimension, in the order they are stored.
 POINT_VARIABLES: dict[str, _Var] = {
@@ -252,10 +285,11 @@ def parameter_names(ds: xr.Dataset) -> list[str]:
     the dataset has them as variables on ``point``; none for other datasets.
     """
     names = ["omega", "b"]
-    for key in ("parameter", "parameters"):
-        value = ds.attrs.get(key)
-        if isinstance(value, str):
-            names += value.split(",")
+    parameter, parameters = ds.attrs.get("parameter"), ds.attrs.get("parameters")
+    if isinstance(parameter, str):
+        names.append(parameter)
+    if isinstance(parameters, str):
+        names += split_parameters(parameters)
     if not ({"parameter", "parameters"} & set(ds.attrs)):
         return []
     return [k for k in dict.fromkeys(names)
@@ -388,10 +422,9 @@ def _special_variables(parameter: str) -> dict[str, _Var]:
 
 def _parameter_name(parameter: Any) -> str:
     if not isinstance(parameter, str):
-        raise TypeError(f"parameter must be a str, one of {sorted(PARAMETERS)}; "
-                        f"got {parameter!r}")
+        raise TypeError(f"parameter must be a str, {ALLOWED_PARAMETERS}; got {parameter!r}")
     if parameter not in PARAMETERS:
-        raise ValueError(f"parameter must be one of {sorted(PARAMETERS)}; got {parameter!r}")
+        raise ValueError(f"parameter must be {ALLOWED_PARAMETERS}; got {parameter!r}")
     return parameter
 
 
@@ -528,8 +561,8 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
     Parameters
     ----------
     parameter : str
-        The continued parameter, one of :data:`PARAMETERS` (``"omega"``, ``"b"``,
-        ``"R"``, ``"eta"``, ``"alpha"``, ``"beta"``).
+        The continued parameter, a name of :data:`PARAMETERS` (``"omega"``, ``"b"``,
+        ``"R"``, ..., or an element: ``"k2"``, ``"M[1,2]"``, ``"F[2]"``).
     N : int
         Forcing periods per impact (``>= 1``).
     oscillator : ImpactOscillator
@@ -798,8 +831,8 @@ def validate_branch_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"not a branch dataset: missing attribute(s) {missing}")
     parameter = ds.attrs["parameter"]
     if not isinstance(parameter, str) or parameter not in PARAMETERS:
-        raise ValueError(f"not a branch dataset: attribute 'parameter' must be one of "
-                         f"{sorted(PARAMETERS)}; got {parameter!r}")
+        raise ValueError(f"not a branch dataset: attribute 'parameter' must be "
+                         f"{ALLOWED_PARAMETERS}; got {parameter!r}")
     expected: dict[str, tuple[tuple[str, ...], str]] = {}
     present = {k: v for k, v in OPTIONAL_POINT_VARIABLES.items() if k in ds.variables}
     for key, spec in {**_point_variables(parameter), **present}.items():
@@ -835,7 +868,9 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
         A branch dataset (its ``oscillator`` attribute holds the JSON).
     point : int, optional
         If given, return the oscillator at that point of the branch: ``omega``,
-        ``b`` and the continued parameter replaced by their values there.
+        ``b`` and the continued parameter(s) set to their values there (each as
+        :meth:`~impactcont.model.parameters.ModelParameter.at` sets it: an element
+        name changes that element of M, K, C or F, ``b_low`` the lower stop).
 
     Returns
     -------
@@ -847,6 +882,8 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
         The ``oscillator`` attribute is missing or is not an oscillator's JSON
         (:func:`~impactcont.dataset.attributes.oscillator_attribute`), or
         ``point`` is out of range.
+    ParameterError
+        The stored oscillator has no such parameter (an element past its masses).
     """
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
@@ -862,11 +899,15 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
     names = dict.fromkeys(["omega", "b", parameter if isinstance(parameter, str) else "?"])
     # a two-parameter curve stores its other parameter too (attribute "parameters")
     names.update(dict.fromkeys(
-        name for name in str(ds.attrs.get("parameters", "")).split(",")
+        name for name in split_parameters(str(ds.attrs.get("parameters", "")))
         if name in PARAMETERS and name in ds.variables and ds[name].dims == ("point",)))
     missing = [k for k in names if k not in ds.variables or ds[k].dims != ("point",)]
     if missing:
         raise ValueError(f"the dataset has no column (on 'point') of {missing}: the values of "
                          f"omega, b and the continued parameter (attribute 'parameter') "
                          f"at each point are needed")
-    return osc.replace(**{k: float(ds[k].values[point]) for k in names})
+    values = {k: float(ds[k].values[point]) for k in names}
+    osc = osc.replace(omega=values.pop("omega"), b=values.pop("b"))
+    for name, value in values.items():
+        osc = model_parameter(osc, name, "parameter").at(osc, value)
+    return osc
