@@ -38,12 +38,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.multi_maps import (
     multi_impact_map_dataset,
     validate_multi_impact_map_dataset,
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import ModelParameter, model_parameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
@@ -54,16 +56,12 @@ from impactcont.orbit.symmetry import (
     admits_symmetric_motions,
     symmetry_defect,
 )
-from impactcont.problems.symmetric_branch import SYMMETRY_BREAKING
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import check_parameter
 
 __all__ = ["multi_impact_map", "multi_impact_map_orbit"]
 
 log = logging.getLogger(__name__)
 
-#: Parameters that move the stops only (the flow does not depend on them).
-STOP_PARAMETERS = ("b", "R")
 _SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
 
 
@@ -76,15 +74,17 @@ def _as_multi(start: Any) -> MultiImpactOrbit:
                     f"PeriodicOrbit (periodic_orbits); got {type(start).__name__}")
 
 
-def _check_parameters(osc: ImpactOscillator, parameters: Any) -> tuple[str, str]:
+def _check_parameters(osc: ImpactOscillator, parameters: Any
+                      ) -> tuple[ModelParameter, ModelParameter]:
+    """The two parameters as objects of `osc` (:func:`model_parameter`), refused clearly."""
     if isinstance(parameters, str) or not isinstance(parameters, Sequence) or len(
             parameters) != 2:
         raise ParameterError(f"parameters must be two parameter names, e.g. ('omega', 'b'); "
                              f"got {parameters!r}")
-    names = tuple(check_parameter(osc, name, "parameters") for name in parameters)
-    if names[0] == names[1]:
+    params = tuple(model_parameter(osc, name, "parameters") for name in parameters)
+    if params[0].name == params[1].name:
         raise ParameterError(f"parameters must be two different parameters; got {parameters!r}")
-    return names[0], names[1]
+    return params[0], params[1]
 
 
 def _check_grid(grid: Any, parameters: tuple[str, str]) -> dict[str, np.ndarray]:
@@ -121,12 +121,13 @@ def _positive_int(name: str, value: Any) -> int:
     return int(value)
 
 
-def _decide_symmetric(orbit: MultiImpactOrbit, parameters: tuple[str, str],
+def _decide_symmetric(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
                       symmetric: Any) -> bool:
     """Whether to solve on the half system (as ``multi_branch.branch_problem`` decides)."""
     osc = orbit.oscillator
     pattern = orbit.pattern or "U" * orbit.p
-    keeps = osc.stops.mirror or not set(parameters) & set(SYMMETRY_BREAKING)
+    parameters = [param.name for param in params]
+    keeps = all(param.keeps_symmetry for param in params)
     admits = admits_symmetric_motions(osc, orbit.N, orbit.p, pattern)
     if symmetric is None:
         return bool(keeps and admits and symmetry_defect(orbit) <= SYMMETRY_TOL)
@@ -135,9 +136,10 @@ def _decide_symmetric(orbit: MultiImpactOrbit, parameters: tuple[str, str],
                              f"got {symmetric!r}")
     if symmetric:
         if not keeps:
-            raise ParameterError(f"symmetric=True: parameters {list(parameters)} move only the "
-                                 "upper stop and break the symmetry; mirror the stops "
-                                 "(Stops(mirror=True)) or give symmetric=False")
+            raise ParameterError(f"symmetric=True: parameters {parameters} move one stop "
+                                 "only and break the symmetry; mirror the stops "
+                                 "(Stops(mirror=True)), continue 'gap', or give "
+                                 "symmetric=False")
         if not admits:
             raise ParameterError(f"symmetric=True: the N={orbit.N}, p={orbit.p} motions with "
                                  f"pattern {pattern!r} of {osc!r} cannot be symmetric (N odd, p "
@@ -154,20 +156,25 @@ def _decide_symmetric(orbit: MultiImpactOrbit, parameters: tuple[str, str],
 class _Tables:
     """The flows and stop geometries of a grid, stacked for the compiled sweep.
 
-    A flow is built once per value of the parameters that change it (all but ``b`` and
-    ``R``), a geometry once per value of those that move the stops (``b``, ``R``).
+    A flow is built once per value of the parameters that change it (all but those that
+    move a stop: :attr:`~impactcont.model.parameters.ModelParameter.moves_stops`), a
+    geometry once per value of those that move a stop (``b``, ``R``, ``b_low``,
+    ``R_low``, ``gap``).
     """
 
-    def __init__(self, osc: ImpactOscillator, parameters: tuple[str, str],
+    def __init__(self, osc: ImpactOscillator, params: tuple[ModelParameter, ...],
                  grid: dict[str, np.ndarray], pattern: str, solved: int) -> None:
+        parameters = tuple(param.name for param in params)
         self.osc, self.parameters, self.pattern, self.solved = osc, parameters, pattern, solved
         shape = tuple(grid[name].size for name in parameters)
-        flow_axes = [k for k, name in enumerate(parameters) if name not in STOP_PARAMETERS]
-        stop_axes = [k for k, name in enumerate(parameters) if name in STOP_PARAMETERS]
+        flow_axes = [k for k, param in enumerate(params) if not param.moves_stops]
+        stop_axes = [k for k, param in enumerate(params) if param.moves_stops]
         flow_values, self.flow_index = _combinations(parameters, grid, flow_axes, shape)
         geometry_values, self.geometry_index = _combinations(parameters, grid, stop_axes, shape)
-        self.flows = [Flow(_replaced(osc, values)) for values in flow_values]
-        geometries = [self.geometry(_replaced(osc, values)) for values in geometry_values]
+        by_name = {param.name: param for param in params}
+        self.flows = [Flow(_replaced(osc, by_name, values)) for values in flow_values]
+        geometries = [self.geometry(_replaced(osc, by_name, values))
+                      for values in geometry_values]
         self.flow_arrays = _stack([flow.shooting_arrays()[1:] for flow in self.flows])
         self.omegas = np.array([flow.omega for flow in self.flows], dtype=float)
         (self.positions, self.diagonals, self.full_diagonals, self.b_upper,
@@ -184,11 +191,15 @@ class _Tables:
                 b_low)
 
 
-def _replaced(osc: ImpactOscillator, values: dict[str, float]) -> ImpactOscillator:
+def _replaced(osc: ImpactOscillator, params: Mapping[str, ModelParameter],
+              values: dict[str, float]) -> ImpactOscillator:
+    """`osc` with each parameter of `values` set as its object sets it."""
     if not values:
         return osc
     try:
-        return osc.replace(**values)
+        for name, value in values.items():
+            osc = params[name].at(osc, value)
+        return osc
     except ParameterError as exc:
         raise ParameterError(f"grid: the oscillator at {values} cannot be built: {exc}") from None
 
@@ -279,22 +290,24 @@ class _Setting:
             out["impact_velocity_k"], out["flight_time_k"], out["state_k"], out["asymmetry"])
         return out, unknowns, stats
 
-    def solve_at(self, values: dict[str, float], x0: np.ndarray) -> np.ndarray | None:
+    def solve_at(self, params: tuple[ModelParameter, ModelParameter], values: dict[str, float],
+                 x0: np.ndarray) -> np.ndarray | None:
         """Newton at one point of the two parameters (off the grid: the seed's way to its
         grid point); None when it does not converge."""
-        names = tuple(values)
         axes = {name: np.array([value]) for name, value in values.items()}
-        tables = _Tables(self.osc, names, axes, self.pattern, len(x0) // (2 * self.osc.n))
+        tables = _Tables(self.osc, params, axes, self.pattern, len(x0) // (2 * self.osc.n))
         out, unknowns, _ = self.sweep(tables, axes, (0, 0), x0, False)
         return unknowns[0] if out["found"][0] else None
 
 
-def _seed(orbit: MultiImpactOrbit, setting: _Setting, parameters: tuple[str, str],
-          grid: dict[str, np.ndarray], x_start: np.ndarray) -> tuple[tuple[int, int], np.ndarray]:
+def _seed(orbit: MultiImpactOrbit, setting: _Setting,
+          params: tuple[ModelParameter, ModelParameter], grid: dict[str, np.ndarray],
+          x_start: np.ndarray) -> tuple[tuple[int, int], np.ndarray]:
     """The seed grid point (nearest the start) and its unknowns, reached from the start in
     up to 32 equal steps of both parameters."""
     osc = orbit.oscillator
-    start = tuple(float(getattr(osc, name) or 0.0) for name in parameters)
+    parameters = tuple(param.name for param in params)
+    start = tuple(param.value(osc) for param in params)
     i0, i1 = _nearest(grid, parameters, start)
     target = (float(grid[parameters[0]][i0]), float(grid[parameters[1]][i1]))
     for steps in _SEED_SUBSTEPS:
@@ -302,7 +315,7 @@ def _seed(orbit: MultiImpactOrbit, setting: _Setting, parameters: tuple[str, str
         for s in range(1, steps + 1):
             values = {name: a + (b - a) * s / steps
                       for name, a, b in zip(parameters, start, target, strict=True)}
-            x = setting.solve_at(values, x)
+            x = setting.solve_at(params, values, x)
             if x is None:
                 break
         if x is not None:
@@ -343,15 +356,19 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         motion of :func:`impactcont.periodic_orbits` (solved as a 1-impact motion).
         Its oscillator is the map's; its values of the two parameters place the seed.
     parameters : (str, str)
-        Two different continuable parameters (``omega``, ``b``, ``R``, ``eta``,
-        ``alpha``, ``beta``, ``F0``), the grid's axes in this order.
+        Two different continuable parameters of the oscillator, the grid's axes in this
+        order: ``omega``, ``b``, ``R``, ``eta``, ``alpha``, ``beta``, ``F0``, ``b_low``,
+        ``R_low``, ``gap`` or an element (``k2``, ``m1``, ``c1``, ``M[1,2]``, ``K[1,2]``,
+        ``C[1,2]``, ``F[2]``; :func:`impactcont.model.parameters.model_parameter` says
+        which apply).
     grid : mapping
         ``{parameter: strictly increasing 1-D values}`` for both parameters.
     symmetric : bool, optional
         Solve a symmetric motion of a symmetric two-sided system on its half system
         (regular through the symmetry-breaking pitchforks). ``None`` (default): when
-        the start is symmetric and both parameters keep the system symmetric (not
-        ``b`` or ``R`` unless ``Stops(mirror=True)``), as
+        the start is symmetric and both parameters keep the system symmetric
+        (:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`: not ``b``,
+        ``R``, ``b_low`` or ``R_low`` unless ``Stops(mirror=True)``), as
         :func:`impactcont.multi_impact_continuation` decides.
     checks : bool
         Search every flight for contact with a stop (eq. 16). Without it ``gap_min``
@@ -388,7 +405,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     """
     orbit = _as_multi(start)
     osc = orbit.oscillator
-    names = _check_parameters(osc, parameters)
+    params = _check_parameters(osc, parameters)
+    names = (params[0].name, params[1].name)
     axes = _check_grid(grid, names)
     tol = _positive_number("tol", tol)
     max_change = _positive_number("max_change", max_change)
@@ -396,16 +414,16 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     max_attempts = _positive_int("max_attempts", max_attempts)
     if not isinstance(checks, (bool, np.bool_)):
         raise ParameterError(f"checks must be True or False; got {checks!r}")
-    half = _decide_symmetric(orbit, names, symmetric)
+    half = _decide_symmetric(orbit, params, symmetric)
     N, p = orbit.N, orbit.p
     pattern = orbit.pattern or "U" * p
     admits = bool(admits_symmetric_motions(osc, N, p, pattern)
-                  and (osc.stops.mirror or not set(names) & set(SYMMETRY_BREAKING)))
+                  and all(param.keeps_symmetry for param in params))
     setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
     t0 = time.perf_counter()
-    tables = _Tables(osc, names, axes, pattern, p // 2 if half else p)
+    tables = _Tables(osc, params, axes, pattern, p // 2 if half else p)
     x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
-    (s0, s1), x_seed = _seed(orbit, setting, names, axes, x_start)
+    (s0, s1), x_seed = _seed(orbit, setting, params, axes, x_start)
     t_setup = time.perf_counter() - t0
     shape = (axes[names[0]].size, axes[names[1]].size)
     npts = shape[0] * shape[1]
@@ -421,7 +439,7 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
     seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1]),
             "index": [int(s0), int(s1)],
-            "start": {name: float(getattr(osc, name) or 0.0) for name in names}}
+            "start": {param.name: param.value(osc) for param in params}}
     options = {"tol": tol, "max_iter": max_iter, "max_change": max_change,
                "max_attempts": max_attempts, "checks": bool(checks), "attempts": int(attempts),
                "newton_iterations": int(iterations), "flows": len(tables.flows),
@@ -456,7 +474,7 @@ def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
         Not the map's two parameters, or no motion found at that grid point.
     """
     validate_multi_impact_map_dataset(ds)
-    names = tuple(ds.attrs["parameters"].split(","))
+    names = tuple(split_parameters(ds.attrs["parameters"]))
     if set(values) != set(names):
         raise ParameterError(f"give a value of each of the map's parameters {list(names)}; got "
                              f"{sorted(values)}")
@@ -466,7 +484,9 @@ def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
     where = {name: float(point[name]) for name in names}
     if not bool(point["found"]):
         raise ParameterError(f"no motion of the map's family was found at {where}")
-    osc = ImpactOscillator.from_json(ds.attrs["oscillator"]).replace(**where)
+    osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+    for name, value in where.items():
+        osc = model_parameter(osc, name, "parameters").at(osc, value)
     guess = {"delta": float(point["delta"]), "flight_times": point["flight_time_k"].values,
              "states": point["state_k"].values, "pattern": ds.attrs["pattern"]}
     return multi_impact_orbit(osc, int(ds.attrs["N"]), int(ds.attrs["impacts"]), guess)

@@ -15,8 +15,9 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import inspect
+import math
 import re
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -27,12 +28,12 @@ from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
 from impactcont.model.stops import Stops, require_paper_stops
 from impactcont.orbit.robust import check_robust_arguments, robust_stability
-from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.scene.keys import (
     ENTRY_NAME,
     Boolean,
     Integer,
     Interval,
+    ParameterName,
     Real,
     RealArray,
     String,
@@ -45,9 +46,11 @@ from impactcont.scene.keys import (
     show,
 )
 from impactcont.simulate import simulate
+from impactcont.vocabulary import PARAMETERS, Parameter
 
 __all__ = [
     "CONTINUATION_KEYS",
+    "PARAMETER_NAME",
     "PARAMETER_RANGES",
     "BranchSpec",
     "EntrySpec",
@@ -86,10 +89,42 @@ def spec_dict(spec: Any) -> dict[str, Any]:
 _OMEGA = Real(0.0, low_open=True)
 _NONNEGATIVE = Real(0.0)
 _RESTITUTION = Real(0.0, 1.0)
-#: Admissible values of each scalar model parameter.
-PARAMETER_RANGES: dict[str, Real] = {"omega": _OMEGA, "b": Real(), "R": _RESTITUTION,
-                                     "eta": _NONNEGATIVE, "alpha": _NONNEGATIVE,
-                                     "beta": _NONNEGATIVE, "F0": _OMEGA}
+# The scalar parameters of an [oscillator] table (iterating PARAMETER_RANGES gives them).
+_SCALARS = ("omega", "b", "R", "eta", "alpha", "beta", "F0")
+
+
+def _admissible(info: Parameter) -> Real:
+    """The vocabulary's range of a parameter as a scene value type."""
+    return Real(None if info.low == -math.inf else info.low,
+                None if info.high == math.inf else info.high, low_open=info.low_open)
+
+
+class _ParameterRanges(Mapping[str, Real]):
+    """Admissible values of each parameter, from its vocabulary record.
+
+    A lookup resolves every name :data:`impactcont.vocabulary.PARAMETERS` resolves (the
+    stops' own ``b_low``, ``R_low``, ``gap`` and the elements ``k2``, ``M[1,2]``,
+    ``F[2]``, ...); iterating gives the scalar parameters of an ``[oscillator]`` table
+    (``omega``, ``b``, ``R``, ``eta``, ``alpha``, ``beta``, ``F0``).
+    """
+
+    def __getitem__(self, name: str) -> Real:
+        return _admissible(PARAMETERS[name])
+
+    def __contains__(self, name: object) -> bool:
+        return name in PARAMETERS
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(_SCALARS)
+
+    def __len__(self) -> int:
+        return len(_SCALARS)
+
+
+#: Admissible values of each parameter (:class:`_ParameterRanges`).
+PARAMETER_RANGES: Mapping[str, Real] = _ParameterRanges()
+#: The value type of a continued parameter's name (``parameter = "k2"``).
+PARAMETER_NAME = ParameterName()
 
 
 #: The scene key of a :class:`~impactcont.model.stops.Stops` error, by how its message starts.
@@ -518,8 +553,8 @@ class BranchSpec(continuation_entry(continuation, "BranchEntry")):
     section: ClassVar[str] = "branches"
 
     N: int = declare(Integer(1, 1000), "one impact every N forcing periods", 1)
-    parameter: str = declare(String(tuple(CONTINUABLE_PARAMETERS)), "the continued parameter",
-                             "omega")
+    parameter: str = declare(PARAMETER_NAME, "the continued parameter (an element: \"k2\", "
+                             "\"M[1,2]\", \"F[2]\", ...)", "omega")
     bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
     start: float | None = declare(Real(), "parameter value to start from (inside bounds)")
     root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to start on")

@@ -18,6 +18,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 from impactcont.errors import ImpactcontError
+from impactcont.vocabulary import ELEMENT_FAMILIES, PARAMETERS
 
 __all__ = [
     "DPI_RANGE",
@@ -29,6 +30,7 @@ __all__ = [
     "Interval",
     "Key",
     "Names",
+    "ParameterName",
     "Real",
     "RealArray",
     "SceneError",
@@ -239,6 +241,28 @@ class String(ValueType):
             raise self.fail(value, where, why)
         if self.pattern is not None and not self.pattern.match(value):
             raise self.fail(value, where, "invalid")
+        return value
+
+
+class ParameterName(ValueType):
+    """A continuable parameter's name: every name :data:`impactcont.vocabulary.PARAMETERS`
+    resolves, the named parameters (``omega``, ``b``, ..., ``b_low``, ``R_low``, ``gap``)
+    and the elements (``m<j>``, ``k<j>``, ``c<j>``, ``M[i,j]``, ``K[i,j]``, ``C[i,j]``,
+    ``F[j]``, 1-based). Whether it applies to the oscillator is the driver's check."""
+
+    allowed = ("one of " + ", ".join(json.dumps(name) for name in PARAMETERS)
+               + " or an element name " + ", ".join(ELEMENT_FAMILIES)
+               + ' (1-based, e.g. "k2", "M[1,2]", "F[2]")')
+
+    def check(self, value: Any, where: Where) -> str:
+        if not isinstance(value, str):
+            raise self.fail(value, where, "wrong type")
+        if value not in PARAMETERS:
+            spaceless = re.sub(r"\s+", "", value)
+            close = [spaceless] if spaceless in PARAMETERS else difflib.get_close_matches(
+                value, list(PARAMETERS), n=1, cutoff=0.6)
+            why = f"did you mean {json.dumps(close[0])}?" if close else "not a known parameter"
+            raise self.fail(value, where, why)
         return value
 
 
