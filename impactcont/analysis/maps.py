@@ -170,8 +170,16 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                   b: Sequence[float] | np.ndarray = (), *, executor: Any = None,
                   max_workers: int | None = None, omega_block: int | None = None,
                   spectral_radius: bool = True, out: str | os.PathLike | None = None,
-                  memory_limit: float = 1e9, progress: ProgressOption = None) -> xr.Dataset:
+                  memory_limit: float = 1e9, progress: ProgressOption = None,
+                  **others: Any) -> xr.Dataset:
     """Existence, physicality and stability of every N-1 motion on an (N, omega, b) grid.
+
+    The map is of the (omega, b) plane by design: the batched closed form builds ``S``
+    of eq. (13) once per ``omega`` and solves eq. (15) for every ``b`` at once (``b``
+    only shifts its right-hand side). A map over another pair of parameters (``R``,
+    ``F0``, ``b_low``, an element such as ``k2`` or ``M[1,2]``) is
+    :func:`impactcont.multi_impact_map` of a motion of the family; another keyword
+    (``k2=[...]``) is refused and says so.
 
     Parameters
     ----------
@@ -214,6 +222,9 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         receiving a :class:`~impactcont.progress.Progress` record as each task
         finishes (:mod:`impactcont.progress`). A map longer than a minute logs a line
         a minute.
+    **others
+        None accepted: a grid of another parameter is refused (ParameterError naming
+        it and :func:`impactcont.multi_impact_map`).
 
     Returns
     -------
@@ -227,12 +238,19 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     Raises
     ------
     ParameterError
-        A bad grid, N, executor, block or memory limit (named in the message), or a
-        map for a file without dask installed.
+        A bad grid, N, executor, block or memory limit (named in the message), a grid
+        of a parameter other than omega and b, or a map for a file without dask
+        installed.
     concurrent.futures.process.BrokenProcessPool
         A worker of the process pool died twice while computing the same task: the
         message names the task (N and the omega and b ranges).
     """
+    if others:
+        raise ParameterError(
+            f"stability_map maps the (omega, b) plane only (the batched closed form of eq. 13-15 "
+            f"takes a grid of omega and b); got {sorted(others)}: for a map over other "
+            f"parameters use impactcont.multi_impact_map(start, (p1, p2), grid={{p1: ..., "
+            f"p2: ...}}) from a motion of the family")
     if not isinstance(osc, ImpactOscillator):
         raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
     Ns = [N] if isinstance(N, (int, np.integer)) and not isinstance(N, bool) else list(N)
