@@ -93,6 +93,7 @@ class Flow:
         self.g = self.u.T @ osc.F_static  # modal static force (u^T M u = I)
         self.static_offset = static_response(self.w, self.a, self.g, self.free, 0.0)[0]
         self._arrays: tuple[Any, ...] | None = None
+        self._static_arrays: tuple[np.ndarray, ...] | None = None
         self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def shooting_arrays(self) -> tuple[Any, ...]:
@@ -115,7 +116,8 @@ class Flow:
         return self._arrays
 
     def static_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The constant force and the free modes, for :mod:`impactcont.kernel.shooting`.
+        """The constant force and the free modes, for :mod:`impactcont.kernel.shooting`
+        (built once, as :meth:`shooting_arrays`: every Newton call passes them).
 
         Kept apart from :meth:`shooting_arrays` (whose 16 entries callers pass on by
         position) so that adding them changes no existing call.
@@ -137,8 +139,11 @@ class Flow:
             First-order flow: ``d``, the drift of the damped free modes per unit time
             (zero without one; empty for the modal flow).
         """
-        return (_kernel_array(self.g, float), np.array(self.free, dtype=np.bool_),
-                np.zeros(0), np.zeros(0))
+        if self._static_arrays is None:
+            self._static_arrays = (_kernel_array(self.g, float),
+                                   np.array(self.free, dtype=np.bool_), np.zeros(0),
+                                   np.zeros(0))
+        return self._static_arrays
 
     def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``d gamma / d omega``, ``d beta / d omega`` (modal flow; empty for the first-order
@@ -375,6 +380,7 @@ class GeneralFlow(Flow):
         self.static_offset, self.drift = self._static(osc)
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
         self._arrays: tuple[Any, ...] | None = None
+        self._static_arrays: tuple[np.ndarray, ...] | None = None
         self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def shooting_arrays(self) -> tuple[Any, ...]:
@@ -413,10 +419,12 @@ class GeneralFlow(Flow):
 
     def static_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`Flow.static_arrays` of the first-order flow: empty ``g``, ``free``, then
-        ``X_s`` and ``d`` (2n,)."""
-        return (np.zeros(0), np.zeros(0, dtype=np.bool_), _kernel_array(self.static_offset,
-                                                                        float),
-                _kernel_array(self.drift, float))
+        ``X_s`` and ``d`` (2n,) (built once)."""
+        if self._static_arrays is None:
+            self._static_arrays = (np.zeros(0), np.zeros(0, dtype=np.bool_),
+                                   _kernel_array(self.static_offset, float),
+                                   _kernel_array(self.drift, float))
+        return self._static_arrays
 
     def static_term(self, t: float) -> np.ndarray:
         """The constant force's part of ``X(t)`` from ``X(0) = 0``: ``X_s - Phi(t) X_s + d t``."""

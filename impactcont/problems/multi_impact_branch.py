@@ -36,12 +36,12 @@ from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
     check_impacts,
-    impact_geometry,
     omega_partials,
     orbit_from_unknowns,
     shooting,
 )
 from impactcont.orbit.periodic import _check_N
+from impactcont.orbit.stop_geometry import StopGeometry, stop_geometry
 
 __all__ = ["MultiImpactBranchProblem"]
 
@@ -161,36 +161,73 @@ class MultiImpactBranchProblem:
         return self._shoot(u, lam).jacobian.copy()
 
     def dparam(self, u: np.ndarray, lam: float) -> np.ndarray:
-        """``dF/dlam``, shape (2np,)."""
+        """``dF/dlam``, shape (2np,).
+
+        Exact for the frequency and the stops (:meth:`_frequency_derivative`,
+        :meth:`_gap_derivative`, :meth:`_restitution_derivative`, on the stop coordinate
+        ``n . x`` and the full impact matrices ``D_k`` of :func:`stop_geometry`); the
+        parameter's finite-difference fallback otherwise (exact for the forcing amplitude).
+        """
         data = self.param.data
         if data not in (FREQUENCY, GAP, RESTITUTION):
             # the fallback; exact for the forcing amplitude (the residual is affine in F)
             return self._difference_quotient(u, lam)
         sh = self._shoot(u, lam)
         osc = self.oscillator_at(lam)
-        n, p, m = osc.n, self.p, 2 * osc.n
-        j, _, diagonals = impact_geometry(osc, self.pattern)
-        # d(position c_k)/dlam or d(restitution R_k)/dlam of the stop of each impact
-        rates = self.param.stop_rates(self.pattern)
-        out = np.zeros(p * m)
+        geo = stop_geometry(osc, self.pattern)
         if data == GAP:
-            for k in range(p):  # x_j = c_k at every start and arrival on a moving stop
-                nxt = (k + 1) % p
-                out[k * m:(k + 1) * m] = rates[k] * diagonals[nxt] * sh.transitions[k][:, j]
-                out[k * m + j] -= rates[nxt]
-            return out
-        if data == RESTITUTION:  # x_j'^+ = -R_k x_j'^-: flight k ends at impact k+1
-            out[n + j::m] = -np.roll(rates, -1) * sh.arrivals[:, n + j]
-            return out
-        if data == FREQUENCY:
-            period = 2.0 * math.pi * self.N / osc.omega
-            explicit = omega_partials(self.flow_at(lam), sh)
-            # theta_k = delta + omega * (time elapsed since impact 0)
-            elapsed = np.concatenate([[0.0], np.cumsum(sh.flight_times[:-1])])
-            out[:] = (np.roll(diagonals, -1, axis=0)
-                      * (explicit + elapsed[:, None] * sh.phase_columns)).ravel()
-            # tau_{p-1} = 2 pi N / omega - sum(others)
-            out[(p - 1) * m:] += diagonals[0] * sh.arrival_rates[p - 1] * (-period / osc.omega)
+            return self._gap_derivative(sh, geo)
+        if data == RESTITUTION:
+            return self._restitution_derivative(sh, osc)
+        return self._frequency_derivative(sh, geo, lam)
+
+    def _gap_derivative(self, sh: Shooting, geo: StopGeometry) -> np.ndarray:
+        """``dF/dlam`` of a parameter moving the stops (``c_k`` of eq. 3).
+
+        On the section ``n_k . x = c_k`` the eliminated position is
+        ``x_j = (c_k - sum_{i != j} n_i x_i) / n_j``, so ``dX_k/dc_k = e_j / n_j`` at the
+        start of flight k (carried to its arrival by ``Phi_k``) and at the next start:
+        ``d r_k = D_{k+1} Phi_k e_j dc_k / n_{k,j} - e_j dc_{k+1} / n_{k+1,j}``.
+        """
+        p, m, j = self.p, 2 * self.osc.n, geo.pivot
+        rates = self.param.stop_rates(self.pattern)  # d c_k / d lam
+        out = np.zeros(p * m)
+        for k in range(p):
+            nxt = (k + 1) % p
+            out[k * m:(k + 1) * m] = (rates[k] * geo.matrices[nxt] @ sh.transitions[k][:, j]
+                                      / geo.normals[k, j])
+            out[k * m + j] -= rates[nxt] / geo.normals[nxt, j]
+        return out
+
+    def _restitution_derivative(self, sh: Shooting, osc: ImpactOscillator) -> np.ndarray:
+        """``dF/dlam`` of a parameter changing the restitutions (``R_k`` of eq. 4).
+
+        The impact law ``D = I - (1 + R) M^-1 n n^T / (n^T M^-1 n)`` on the velocities
+        (eq. 4 on one mass: ``-R`` on ``x_j'``; both stops act on one coordinate ``n . x``)
+        is affine in R, so
+        ``dD/dR = D(R=1) - D(R=0)`` exactly, and ``d r_k = dR_{k+1} (dD/dR) X_k^-``.
+        """
+        n, m = osc.n, 2 * osc.n
+        slope = np.zeros((m, m))
+        slope[n:, n:] = (osc.stops.impact_matrix(osc.M, 1.0)
+                         - osc.stops.impact_matrix(osc.M, 0.0))
+        rates = np.roll(self.param.stop_rates(self.pattern), -1)  # dR_{k+1} / dlam
+        return (rates[:, None] * (sh.arrivals @ slope.T)).ravel()
+
+    def _frequency_derivative(self, sh: Shooting, geo: StopGeometry, lam: float) -> np.ndarray:
+        """``dF/domega``: the forced part of eq. (9) at fixed flight times, the phases
+        ``theta_k = delta + omega (tau_0 + .. + tau_{k-1})`` and the last flight time
+        ``tau_{p-1} = 2 pi N / omega - (tau_0 + .. + tau_{p-2})``, each through ``D_{k+1}``.
+        """
+        flow = self.flow_at(lam)
+        omega, p, m = flow.osc.omega, self.p, 2 * self.osc.n
+        period = 2.0 * math.pi * self.N / omega
+        explicit = omega_partials(flow, sh)
+        elapsed = np.concatenate([[0.0], np.cumsum(sh.flight_times[:-1])])
+        after = np.roll(geo.matrices, -1, axis=0)  # D_{k+1}, the impact ending flight k
+        out = np.einsum("kij,kj->ki", after,
+                        explicit + elapsed[:, None] * sh.phase_columns).ravel()
+        out[(p - 1) * m:] += geo.matrices[0] @ sh.arrival_rates[p - 1] * (-period / omega)
         return out
 
     def _difference_quotient(self, u: np.ndarray, lam: float) -> np.ndarray:
