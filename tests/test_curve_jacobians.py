@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.kernel import closed_form as kernel
+from impactcont.kernel import closed_form, contact
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import periodic_orbits
@@ -124,13 +124,13 @@ def test_other_maximum_against_the_dense_search(omega, b):
         assert len(peaks) >= 2
         order = np.argsort(peaks)[::-1]
         w, a, _, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-        modal, sc = kernel.omega_setup(w, a, osc.modes.kernel_arrays[2], u0, ui0, eig_err,
+        modal, sc = closed_form.omega_setup(w, a, osc.modes.kernel_arrays[2], u0, ui0, eig_err,
                                        osc.R, osc.omega, 2)
-        top, t_top = kernel.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R, orbit.delta,
+        top, t_top = contact.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R, orbit.delta,
                                           orbit.impact_velocity, np.nan)
         assert top == pytest.approx(peaks[order[0]], abs=1e-12)
         assert t_top == pytest.approx(times[order[0]], abs=1e-8)
-        second, t_second = kernel.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R,
+        second, t_second = contact.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R,
                                                 orbit.delta, orbit.impact_velocity, t_top)
         assert second == pytest.approx(peaks[order[1]], abs=1e-12)
         assert t_second == pytest.approx(times[order[1]], abs=1e-8)

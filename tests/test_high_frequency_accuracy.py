@@ -25,7 +25,7 @@ import reference_mp as ref
 
 import impactcont as ic
 from impactcont.errors import IllConditionedWarning, ParameterError
-from impactcont.kernel import closed_form as kernel
+from impactcont.kernel import closed_form, roots
 from impactcont.model.first_order import coth_remainder
 from impactcont.orbit import batched, general, periodic
 from impactcont.orbit.periodic import orbit_at_phase
@@ -89,7 +89,7 @@ def test_damping_matrix_path_matches_the_modal_path_from_1e_minus6_to_1e8():
         (modal, w_modal), (matrix, w_matrix) = (_orbits(_paper(omega, m)) for m in (0, 1))
         assert w_modal == w_matrix, (omega, w_modal, w_matrix)
         w, a, f, _, _, eig_err, u0, ui0 = _paper(omega, False).modes.kernel_arrays
-        cond = kernel.omega_setup(w, a, f, u0, ui0, eig_err, 0.6, omega, 1)[1][7]
+        cond = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, 0.6, omega, 1)[1][7]
         tol = 1e-11 + 10.0 * EPS * cond
         assert [o.root for o in modal] == [o.root for o in matrix]
         for p, q in zip(modal, matrix, strict=True):
@@ -138,7 +138,7 @@ def test_damping_matrix_amplitude_derivative_at_high_omega(which, omega):
     w, a, f, _, _, _, u0, ui0 = _paper(omega, False).modes.kernel_arrays
     h = 1e-30 * (omega if which == "omega" else 1.0)
     step = {"omega": (R + 0j, omega + 1j * h), "R": (R + 1j * h, omega + 0j)}[which]
-    c, s = kernel.amplitude(w.astype(complex), a.astype(complex), f.astype(complex), u0, ui0,
+    c, s = closed_form.amplitude(w.astype(complex), a.astype(complex), f.astype(complex), u0, ui0,
                             *step, 1)
     assert dc == pytest.approx(c.imag / h, rel=1e-9, abs=0)
     assert ds == pytest.approx(s.imag / h, rel=1e-9, abs=0)
@@ -215,8 +215,8 @@ def test_a_guess_off_eq_14_keeps_the_kernel_velocity():
     delta = orbit.delta + 1e-6
     guess = orbit_at_phase(osc, 1, delta, check=False)
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, 1)[1]
-    assert guess.impact_velocity == kernel.phase_sigma(sc, osc.omega, osc.R, osc.b, delta)
+    sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, 1)[1]
+    assert guess.impact_velocity == roots.phase_sigma(sc, osc.omega, osc.R, osc.b, delta)
 
 
 def test_the_fast_path_pays_nothing_at_ordinary_omega(monkeypatch):

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.kernel import closed_form as kernel
+from impactcont.kernel import closed_form, contact, roots, stability
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.periodic import impact_map_jacobian, periodic_matrix
 from impactcont.problems import PeriodicBranchProblem
@@ -72,7 +72,7 @@ def test_kernel_matches_the_dense_path(n, damping):
             except ic.ParameterError:
                 continue
         w, a, f, _, _, err, u0, ui0 = osc.modes.kernel_arrays
-        _, sc = kernel.omega_setup(w, a, f, u0, ui0, err, osc.R, osc.omega, N)
+        _, sc = closed_form.omega_setup(w, a, f, u0, ui0, err, osc.R, osc.omega, N)
         if not sc[7] < 1e8:
             continue  # near a free-mode resonance both paths are inexact (and warn)
         scale = np.abs(cs).max()
@@ -107,19 +107,19 @@ def test_schur_cohn_agrees_with_eigenvalues():
             rho = np.abs(np.linalg.eigvals(A)).max()
             if abs(rho - 1.0) < 1e-6:
                 continue
-            assert kernel.schur_stable(kernel.charpoly(A)) == (rho < 1.0), (m, rho)
+            assert stability.schur_stable(stability.charpoly(A)) == (rho < 1.0), (m, rho)
 
 
 def test_characteristic_polynomial_matches_numpy():
     rng = np.random.default_rng(4)
     for m in (1, 3, 6, 9):
         A = rng.standard_normal((m, m))
-        np.testing.assert_allclose(kernel.charpoly(A)[::-1], np.poly(A), rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(stability.charpoly(A)[::-1], np.poly(A), rtol=1e-9, atol=1e-9)
 
 
 def test_lapack_eigenvalues_come_in_exact_conjugate_pairs():
     A = np.random.default_rng(5).standard_normal((8, 8))
-    mu = kernel.eigvals(A)
+    mu = stability.eigvals(A)
     np.testing.assert_allclose(np.sort_complex(mu), np.sort_complex(np.linalg.eigvals(A)),
                                atol=1e-12)
     complex_ones = mu[mu.imag != 0]
@@ -162,26 +162,26 @@ def test_polish_roots_and_taylor_values_are_exact(omega, b, N):
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                               b=b, omega=omega, eta=0.1)
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    modal, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, omega, N)
-    count, dl, sg, _, _ = kernel.orbit_roots(sc, b, omega, osc.R)
+    modal, sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, omega, N)
+    count, dl, sg, _, _ = roots.orbit_roots(sc, b, omega, osc.R)
     assert count > 0
-    times, _, _, _, _, dy, dv, _ = kernel.flight_tables(w, a, u0, modal, omega, sc[0])
+    times, _, _, _, _, dy, dv, _ = contact.flight_tables(w, a, u0, modal, omega, sc[0])
     checked = 0
     for k in range(count):
         ks = (1.0 + osc.R) * sg[k]
         args = (sc[1], sc[2], omega, dl[k], ks, w, a, u0, dy, dv)
 
         def d(t, args=args):
-            return kernel.x1_derivatives(t, *args)
+            return contact.x1_derivatives(t, *args)
 
         for order in (1, 2):
             g = np.array([d(t)[order] for t in times])
             for j in np.flatnonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0):
                 lo, hi = times[j], times[j + 1]
                 e_lo, e_hi = d(lo), d(hi)
-                snap = [kernel._x1_derivs(t, *args)[4] for t in (lo, hi)]
+                snap = [contact._x1_derivs(t, *args)[4] for t in (lo, hi)]
                 ddg = (e_lo[3], e_hi[3]) if order == 1 else tuple(snap)
-                r, x, v, acc, jerk = kernel._polish(
+                r, x, v, acc, jerk = contact._polish(
                     np.int64(order), lo, hi, e_lo[order], e_hi[order], e_lo[order + 1],
                     e_hi[order + 1], ddg[0], ddg[1], *args)
                 ref = brentq(lambda t, o=order: d(t)[o], lo, hi, xtol=1e-15, rtol=1e-15)

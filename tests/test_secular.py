@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.kernel import closed_form as kernel
+from impactcont.kernel import closed_form, stability
 from impactcont.orbit import secular
 from tests.test_kernel import DAMPING, _random_oscillator
 
@@ -49,7 +49,7 @@ def test_secular_multipliers_match_dense_eigenvalues(damping):
                 orbits = ic.periodic_orbits(osc, 1)
             for orbit in orbits:
                 mu, ok = _secular(orbit)
-                dense = kernel.multipliers(orbit.G)
+                dense = stability.multipliers(orbit.G)
                 checked += 1
                 if not ok:  # refused by the guard: the dense path takes over
                     continue
@@ -75,7 +75,7 @@ def test_large_chain_uses_the_secular_path_and_matches_dense(n, damping):
         mu, ok = _secular(orbit)
         assert ok
         np.testing.assert_array_equal(orbit.multipliers, mu)  # what the orbit reports
-        dense = kernel.multipliers(orbit.G)
+        dense = stability.multipliers(orbit.G)
         assert _distance(mu, dense) <= 1e-11 * max(1.0, abs(dense[0]))
         assert orbit.stable == (abs(dense[0]) < 1.0)
 
@@ -84,7 +84,7 @@ def test_power_sum_guard_catches_a_missing_or_moved_root():
     orbit = ic.periodic_orbits(_chain(20), 1)[0]
     osc = orbit.oscillator
     w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
-    pieces = kernel.jacobian_pieces(orbit.modal, w, a, f, ui0, osc.omega, osc.R, orbit.delta,
+    pieces = closed_form.jacobian_pieces(orbit.modal, w, a, f, ui0, osc.omega, osc.R, orbit.delta,
                                     orbit.impact_velocity)
     *_, h2, xn = secular.secular_coefficients(orbit.modal, u0, ui0, osc.omega, osc.R,
                                               *pieces)
@@ -103,7 +103,7 @@ def test_power_sum_guard_catches_a_missing_or_moved_root():
 
 def test_orbit_falls_back_to_dense_eigenvalues_when_the_guard_refuses(monkeypatch):
     orbit = ic.periodic_orbits(_chain(20), 1)[0]
-    dense = kernel.multipliers(orbit.G)
+    dense = stability.multipliers(orbit.G)
     monkeypatch.setattr(secular, "secular_multipliers",
                         lambda *args: (np.zeros(40, dtype=complex), False))
     np.testing.assert_array_equal(orbit.multipliers, dense)

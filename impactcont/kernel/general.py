@@ -19,7 +19,7 @@ argument types (each compiled once, when this module is first imported):
 - :func:`orbit_values`: per impact phase (a root of eq. 15) the impact velocity from the
   better of its two exact forms, the state ``X(0)``, G of eq. (25), its eigenvalues and
   the interior-contact check of eq. (16) (the search of
-  :func:`impactcont.kernel.closed_form.x1_maximum` on the scalar pairs of modes, its tables
+  :func:`impactcont.kernel.contact.x1_maximum` on the scalar pairs of modes, its tables
   built once per call for every phase).
 
 Complex ``expm1`` and complex division are written out as numpy computes them
@@ -35,13 +35,8 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.kernel.closed_form import (
-    WORK_ROWS,
-    free_on_grid,
-    multipliers,
-    time_grid,
-    x1_maximum,
-)
+from impactcont.kernel.contact import WORK_ROWS, free_on_grid, time_grid, x1_maximum
+from impactcont.kernel.stability import multipliers
 
 __all__ = ["amplitude_setup", "forced_response", "forced_response_derivative",
            "orbit_values", "periodic_setup"]

@@ -36,14 +36,9 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.kernel.closed_form import (
-    WORK_ROWS,
-    free_on_grid,
-    mode_transfer,
-    multipliers,
-    time_grid,
-    x1_maximum,
-)
+from impactcont.kernel.contact import WORK_ROWS, free_on_grid, time_grid, x1_maximum
+from impactcont.kernel.flights import mode_transfer
+from impactcont.kernel.stability import multipliers
 
 __all__ = ["motion_checks", "newton_solve", "omega_partials", "shooting_system"]
 

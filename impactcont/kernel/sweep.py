@@ -40,7 +40,6 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.kernel.closed_form import multipliers
 from impactcont.kernel.shooting import (
     _clearances,
     _flight_jacobian,
@@ -48,6 +47,7 @@ from impactcont.kernel.shooting import (
     _solve,
     shooting_system,
 )
+from impactcont.kernel.stability import multipliers
 
 __all__ = ["sweep", "sweep_stops"]
 

@@ -66,7 +66,7 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
         where the motion does not exist; ``stable``: every multiplier strictly inside
         the unit circle).
     """
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form
 
     omega = np.ascontiguousarray(np.atleast_1d(np.asarray(omega, dtype=float)))
     b = np.ascontiguousarray(np.atleast_1d(np.asarray(b, dtype=float)))
@@ -75,8 +75,8 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
         return _general_block(osc, int(N), omega, b, bool(spectral_radius))
     w, a, f, u, ui, eig_err, _, _ = osc.modes.kernel_arrays
     (r2, cond, count, delta, vel, gap, gap_t, stable, rho,
-     crit) = kernel.block_map(w, a, f, u, ui, eig_err, osc.R, int(N), omega, b,
-                              bool(spectral_radius))
+     crit) = closed_form.block_map(w, a, f, u, ui, eig_err, osc.R, int(N), omega, b,
+                                   bool(spectral_radius))
     _warn_grid(omega, cond)
     _polish_modal_block(osc, int(N), omega, b, count, delta, vel, gap, gap_t, stable, rho,
                         crit, bool(spectral_radius))
@@ -96,11 +96,11 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
     frequency the kernel's form cancels), with the velocity's second exact form: gap
     (eq. 16), G (eq. 25), its multipliers and stability. A bound per frequency keeps the
     check off the grid points that need none."""
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form, contact, stability
 
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     R = osc.R
-    setups = [kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, float(om), N) for om in omega]
+    setups = [closed_form.omega_setup(w, a, f, u0, ui0, eig_err, R, float(om), N) for om in omega]
     sc = np.array([s for _, s in setups])  # (nw, 10): T, Gam, B, g, Delta, c, s, ...
     # an upper bound of the rounding error of x1p'(delta) / Delta at any phase (0 where
     # the kernel takes elastic undamped velocities from the impact condition)
@@ -117,10 +117,10 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
         better, _ = polished_velocity(Gam, B, g, Delta, om, R, bb, d, sg)
         if better is None:
             continue
-        best, best_t = kernel.other_maximum(w, a, u0, modal, scalars, om, R, d, better,
-                                            math.nan)
+        best, best_t = contact.other_maximum(w, a, u0, modal, scalars, om, R, d, better,
+                                             math.nan)
         G, _ = modal_jacobian(osc, modal, d, better, omega=om)
-        mu = kernel.multipliers(G)
+        mu = stability.multipliers(G)
         ks = slice(k, 2) if count[iw, ib] == 1 else slice(k, k + 1)  # a double root: both
         vel[iw, ib, ks] = better
         gap[iw, ib, ks], gap_t[iw, ib, ks] = bb - best, best_t

@@ -22,9 +22,9 @@ the kernel's rank-one form (:class:`PeriodicForm`):
 - ``sigma`` from the better of its two exact forms
   (:func:`impactcont.orbit.dense.impact_velocity`), then ``X(0)``, and G of eq. (25)
   from ``D Phi(T)``, ``D (I - Phi(T)) P(0)`` and ``X'(T^-) = P'(0) e_d + kappa sigma
-  A (y + e)``; its eigenvalues as the kernel's (:func:`impactcont.kernel.closed_form.
+  A (y + e)``; its eigenvalues as the kernel's (:func:`impactcont.kernel.stability.
   multipliers`: QR of the balanced Hessenberg form for small G, LAPACK otherwise);
-- eq. (16) by the kernel's search (:func:`impactcont.kernel.closed_form.x1_maximum`) on the
+- eq. (16) by the kernel's search (:func:`impactcont.kernel.contact.x1_maximum`) on the
   scalar pairs of modes (:attr:`FirstOrderBasis.scalar_pairs`);
 - the condition estimate of eq. (12) is the kernel's, summed over the scalar pairs of
   modes, so both paths warn alike.
@@ -431,10 +431,10 @@ def _pair_coefficients(flow: GeneralFlow, c: np.ndarray) -> tuple[np.ndarray, np
 
 def _search_grid(flow: GeneralFlow, T: float) -> np.ndarray:
     """The kernel's grid on ``[0, T]`` for the x1 search of eq. (16), warning when capped."""
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import contact
 
     w, a, _, _ = flow.basis.scalar_pairs
-    times, capped = kernel.time_grid(w, a, np.ones_like(w), flow.omega, T)
+    times, capped = contact.time_grid(w, a, np.ones_like(w), flow.omega, T)
     if capped:
         _warn_capped(T, stacklevel=5)
     return times
@@ -448,26 +448,26 @@ def _warn_capped(T: float, stacklevel: int) -> None:
 
 def _search(flow: GeneralFlow, times: np.ndarray, free: np.ndarray, dy: np.ndarray,
             dv: np.ndarray, delta: float, exclude: float) -> tuple[float, float]:
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import contact
 
     w, a, _, _ = flow.basis.scalar_pairs
-    work = np.empty((kernel.WORK_ROWS, 2 * times.size))
-    best, best_t = kernel.x1_maximum(times, free, np.cos(flow.omega * times),
-                                     np.sin(flow.omega * times), float(flow.Z[0].real),
-                                     float(-flow.Z[0].imag), flow.omega, float(delta), 1.0, w,
-                                     a, np.ones_like(w), dy, dv, work, float(exclude))
+    work = np.empty((contact.WORK_ROWS, 2 * times.size))
+    best, best_t = contact.x1_maximum(times, free, np.cos(flow.omega * times),
+                                      np.sin(flow.omega * times), float(flow.Z[0].real),
+                                      float(-flow.Z[0].imag), flow.omega, float(delta), 1.0,
+                                      w, a, np.ones_like(w), dy, dv, work, float(exclude))
     return float(best), float(best_t)
 
 
 def _x1_maximum_of(flow: GeneralFlow, coefficients: np.ndarray, delta: float, T: float,
                    exclude: float) -> tuple[float, float]:
     """:func:`x1_maximum` from the complex coefficients of ``x1``'s free part."""
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import contact
 
     w, a, _, _ = flow.basis.scalar_pairs
     dy, dv = _pair_coefficients(flow, coefficients)
     times = _search_grid(flow, T)
-    free = kernel.free_on_grid(times, w, a, np.ones_like(w), dy, dv)
+    free = contact.free_on_grid(times, w, a, np.ones_like(w), dy, dv)
     return _search(flow, times, free, dy, dv, delta, exclude)
 
 
@@ -480,7 +480,7 @@ def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float,
     The free part of ``x1`` is a sum over the scalar pairs of
     :attr:`FirstOrderBasis.scalar_pairs`, each ``W11 y(0) + W12 y'(0)`` with the exact
     modal transfer, and the forced part is ``Re(Z_1 e^{i theta})``: the compiled
-    kernel's search (:func:`impactcont.kernel.closed_form.x1_maximum`, with its grid, bounds
+    kernel's search (:func:`impactcont.kernel.contact.x1_maximum`, with its grid, bounds
     and polish) runs on them unchanged, with unit weights.
     """
     return _x1_maximum_of(flow, flow.V[0] * flow.modal_deviation(state, delta), delta, T,

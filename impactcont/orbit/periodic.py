@@ -109,9 +109,10 @@ class PeriodicOrbit:
     state: np.ndarray = dataclasses.field(repr=False)
     """``X(0) = [x; x']`` right after the impact (eq. 13), shape (2n,)."""
     modal: np.ndarray | None = dataclasses.field(repr=False)
-    """Per-mode pieces at this frequency (rows of :func:`kernel.omega_setup`); None on the
-    first-order path (general damping matrix or complex F), where G and the multipliers
-    are computed with the motion."""
+    """Per-mode pieces at this frequency (rows of
+    :func:`impactcont.kernel.closed_form.omega_setup`); None on the first-order path
+    (general damping matrix or complex F), where G and the multipliers are computed with
+    the motion."""
 
     @functools.cached_property
     def G(self) -> np.ndarray:
@@ -126,7 +127,7 @@ class PeriodicOrbit:
         secular function of :mod:`impactcont.orbit.secular` (G is not formed); the
         dense eigenvalues of G where its accuracy guard refuses, and for small systems.
         """
-        from impactcont.kernel import closed_form as kernel
+        from impactcont.kernel import stability
         from impactcont.orbit import secular
 
         osc = self.oscillator
@@ -138,7 +139,7 @@ class PeriodicOrbit:
                 return mu
             log.debug("secular multipliers refused by their guard (n = %d, delta = %.12g); "
                       "dense eigenvalues of G instead", osc.n, self.delta)
-        return kernel.multipliers(self.G)  # NaN when G is not finite
+        return stability.multipliers(self.G)  # NaN when G is not finite
 
     @property
     def spectral_radius(self) -> float:
@@ -186,28 +187,28 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
     recomputation of ``h2 = x1'(T^-)`` from the forced velocity at the phase is the form
     that cancels far above the lowest natural frequency (:func:`impactcont.orbit.dense.
     impact_velocity`). The transition ``U W(T) U^-1`` costs O(n^3): plain compiled loops
-    for small systems, numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of
+    for small systems, numpy (BLAS) matrix products above ``closed_form.BLAS_MIN`` degrees of
     freedom.
     """
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form
 
     w, a, f, u = osc.modes.kernel_arrays[:4]
     om = osc.omega if omega is None else omega
-    G_reg, av, bv, _ = kernel.jacobian_split(physical_transition(osc, modal), modal, w, a, f,
-                                             u, osc.modes.kernel_arrays[7], om, osc.R, delta,
-                                             sigma)
+    G_reg, av, bv, _ = closed_form.jacobian_split(physical_transition(osc, modal), modal, w, a,
+                                                  f, u, osc.modes.kernel_arrays[7], om, osc.R,
+                                                  delta, sigma)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # sigma = 0: a pole
         return G_reg + np.outer(av, bv) / sigma, float(sigma)
 
 
 def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     """The physical transition ``U W(T) U^-1`` (eq. 9): compiled loops for small systems,
-    numpy (BLAS) matrix products above ``kernel.BLAS_MIN`` degrees of freedom."""
-    from impactcont.kernel import closed_form as kernel
+    numpy (BLAS) matrix products above ``closed_form.BLAS_MIN`` degrees of freedom."""
+    from impactcont.kernel import closed_form, flights
 
     u, ui = osc.modes.kernel_arrays[3:5]
-    if osc.n <= kernel.BLAS_MIN:
-        return kernel.transition(modal, u, ui)
+    if osc.n <= closed_form.BLAS_MIN:
+        return flights.transition(modal, u, ui)
     return np.block([[(u * modal[2]) @ ui, (u * modal[3]) @ ui],
                      [(u * modal[4]) @ ui, (u * modal[5]) @ ui]])
 
@@ -309,14 +310,14 @@ def _repolish(osc: ImpactOscillator, modal: np.ndarray, scalars: np.ndarray, del
     """State, velocity scale, gap, its time, G and multipliers of the modal motion at phase
     delta with the impact velocity ``sigma`` (a polished one; the dense multipliers of G
     at any n: the secular ones recompute ``h2`` in the kernel's form)."""
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form, contact, stability
 
     w, a, _, u, _, _, u0, _ = osc.modes.kernel_arrays
-    state, scale = kernel.physical_state(modal, u, osc.omega, osc.R, delta, sigma)
-    best, gap_t = kernel.other_maximum(w, a, u0, modal, scalars, osc.omega, osc.R, delta,
-                                       sigma, math.nan)
+    state, scale = closed_form.physical_state(modal, u, osc.omega, osc.R, delta, sigma)
+    best, gap_t = contact.other_maximum(w, a, u0, modal, scalars, osc.omega, osc.R, delta,
+                                        sigma, math.nan)
     G = modal_jacobian(osc, modal, delta, sigma)[0]
-    return state, float(scale), osc.b - float(best), float(gap_t), G, kernel.multipliers(G)
+    return state, float(scale), osc.b - float(best), float(gap_t), G, stability.multipliers(G)
 
 
 def _warn_capped(capped: bool, T: float) -> None:
@@ -348,7 +349,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
         such a phase is not a periodic motion (its ``x1(0)`` is not ``b``).
         ``check=False`` is for callers that evaluate guesses on purpose.
     """
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form
 
     N = _check_N(N)
     _check_oscillator(osc)
@@ -358,7 +359,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
             _check_phase(osc, form.c, form.s, delta)
         return _general_orbit(osc, N, form, float(delta), root, warn=False)
     w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    modal, sc, sigma, gap, gap_t, capped, state = kernel.phase_orbit(
+    modal, sc, sigma, gap, gap_t, capped, state = closed_form.phase_orbit(
         w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
     if check and sc[9] == 0.0:  # elastic undamped motions satisfy the impact condition instead
         _check_phase(osc, float(sc[5]), float(sc[6]), delta)
@@ -413,7 +414,7 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
     ResonanceError
         If omega equals the natural frequency of an undamped, forced mode.
     """
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form
 
     osc = _check_oscillator(osc)
     N = _check_N(N)
@@ -428,8 +429,8 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
         return [_general_orbit(osc, N, form, delta, root, warn=True) for delta, root in found]
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
-     jacobians, mults) = kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
-                                             osc.omega, N, osc.b)
+     jacobians, mults) = closed_form.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
+                                                  osc.omega, N, osc.b)
     _warn_setup(osc, sc, stacklevel=2)
     if count == -1:
         raise ParameterError("c = s = 0 and b = 0: every phase satisfies eq. (14); the "
@@ -512,13 +513,13 @@ def _warn_low_impact_velocity(orbit: PeriodicOrbit, v_scale: float,
 
 def amplitude_squared(osc: ImpactOscillator, N: int) -> float:
     """``c^2 + s^2`` of eq. (14)-(15): motions exist iff it is ``>= b^2``."""
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form
 
     osc = _check_oscillator(osc)
     if osc.general:
         c, s = general.amplitude(osc, _check_N(N))[:2]
         return c * c + s * s
     w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    _, sc = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, _check_N(N))
+    _, sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, _check_N(N))
     _warn_setup(osc, sc, stacklevel=2)
     return float(sc[5] ** 2 + sc[6] ** 2)

@@ -58,7 +58,8 @@ import math
 
 import numpy as np
 
-from impactcont.kernel.closed_form import _EPS, _jit, by_modulus, jacobian_pieces
+from impactcont.kernel.closed_form import _jit, jacobian_pieces
+from impactcont.kernel.stability import _EPS, by_modulus
 from impactcont.orbit.dense import VELOCITY_POLISH
 
 __all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers",

@@ -225,12 +225,12 @@ class _Pieces:
     def impact_velocity(self, delta: float) -> float:
         """``h2 = x1'(T^-)`` of the motion with impact phase ``delta``, from the form of
         :attr:`impact_form`."""
-        from impactcont.kernel import closed_form as kernel
+        from impactcont.kernel import roots
 
         if self.impact_form:  # the impact condition x1(0) = b
             Gam, B, g = self.scalars[1], self.scalars[2], self.scalars[3]
             return (Gam * np.cos(delta) + B * np.sin(delta) - self.b) / ((1.0 + self.R) * g)
-        return kernel.phase_sigma(self.scalars, self.omega, self.R, self.b, delta)
+        return roots.phase_sigma(self.scalars, self.omega, self.R, self.b, delta)
 
     @functools.cached_property
     def transition(self) -> np.ndarray:
@@ -282,23 +282,23 @@ class _Pieces:
 
     def other_maximum(self, delta: float, exclude: float) -> float:
         """The highest interior maximum of ``x1`` other than the one at time ``exclude``
-        (:func:`kernel.other_maximum`); ``-inf`` when there is none."""
-        from impactcont.kernel import closed_form as kernel
+        (:func:`impactcont.kernel.contact.other_maximum`); ``-inf`` when there is none."""
+        from impactcont.kernel import contact
 
         w, a, _, _, _, _, u0, _ = self.osc.modes.kernel_arrays
-        best, _ = kernel.other_maximum(w, a, u0, self.modal, self.scalars, self.omega, self.R,
-                                       delta, self.impact_velocity(delta), exclude)
+        best, _ = contact.other_maximum(w, a, u0, self.modal, self.scalars, self.omega, self.R,
+                                        delta, self.impact_velocity(delta), exclude)
         return float(best)
 
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
-        from impactcont.kernel import closed_form as kernel
+        from impactcont.kernel import contact
 
         u0 = self.osc.modes.kernel_arrays[6]
         ks = (1.0 + self.R) * self.impact_velocity(delta)
-        x, v, _, _ = kernel.x1_derivatives(t, self.scalars[1], self.scalars[2], self.omega,
-                                           delta, ks, self.w, self.a, u0, self.modal[6].copy(),
-                                           self.modal[7].copy())
+        x, v, _, _ = contact.x1_derivatives(t, self.scalars[1], self.scalars[2], self.omega,
+                                            delta, ks, self.w, self.a, u0,
+                                            self.modal[6].copy(), self.modal[7].copy())
         return x, v
 
 

@@ -162,11 +162,11 @@ def one_orbit(osc: ic.ImpactOscillator, N: int) -> None:
 
 def kernel_only(osc: ic.ImpactOscillator, N: int) -> None:
     """The compiled calls of :func:`one_orbit` without the Python wrapper (as in periodic.py)."""
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import closed_form
 
     w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     # for small systems one call returns the roots with their G and multipliers
-    kernel.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b)
+    closed_form.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b)
 
 
 def orbit_n2(repeat: int) -> dict[str, Any]:
@@ -272,7 +272,7 @@ def _matched_distance(mu: np.ndarray, reference: np.ndarray) -> float:
 
 
 def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
-    from impactcont.kernel import closed_form as kernel
+    from impactcont.kernel import stability
     from impactcont.orbit import secular
 
     rng = np.random.default_rng(3)
@@ -290,7 +290,7 @@ def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
             return [(o.G, o.spectral_radius, o.multipliers[0]) for o in orbits()]
 
         def with_dense_mult():  # the path below secular.SECULAR_MIN: eigenvalues of G
-            return [kernel.multipliers(o.G) for o in orbits()]
+            return [stability.multipliers(o.G) for o in orbits()]
 
         roots = len(with_mult())  # compiles and computes the modal basis once
         with_dense_mult()
@@ -305,7 +305,7 @@ def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
         row["per_orbit_G_multipliers"] = row["orbits_G_multipliers"] / roots
         # the multipliers reported (secular from SECULAR_MIN on) against LAPACK's of G
         row["multipliers_vs_dense"] = max(
-            _matched_distance(o.multipliers, kernel.multipliers(o.G))
+            _matched_distance(o.multipliers, stability.multipliers(o.G))
             / max(1.0, abs(o.multipliers[0])) for o in orbits())
         row["secular"] = n >= secular.SECULAR_MIN
         rows.append(row)
