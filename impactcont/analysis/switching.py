@@ -62,6 +62,7 @@ from impactcont.orbit.multi_impact import (
     multi_impact_orbit,
 )
 from impactcont.orbit.periodic import orbit_at_phase
+from impactcont.orbit.stop_geometry import stop_geometry
 from impactcont.orbit.symmetry import symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
@@ -515,10 +516,12 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
     lower = orbit.flight_gap_lower is not None and \
         orbit.flight_gap_lower[k] == orbit.flight_gap_min[k]
     stop = "L" if lower else "U"
-    j = osc.stops.index
+    geo = stop_geometry(osc, stop)
+    j, normal = geo.pivot, geo.normal
     X = Flow(osc).state(t_g, orbit.states[k], orbit.phases[k])[0]
-    X[j] = osc.stops.position(stop, osc.b)
-    X[osc.n + j] *= -osc.stops.restitution(stop, osc.R)
+    # on the stop exactly (n . x = c, solved for x_j), then the impact law D of that stop
+    X[j] += (float(geo.positions[0]) - float(normal @ X[:osc.n])) / normal[j]
+    X = geo.matrices[0] @ X
     taus = list(orbit.flight_times)
     taus[k:k + 1] = [t_g, float(orbit.flight_times[k]) - t_g]
     states = list(orbit.states)
@@ -585,12 +588,13 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     t /= np.max(np.abs(t[:-1]))
     # velocity of the new impact = arrival velocity of the flight before it
     n = osc.n
+    normal = stop_geometry(osc, graze.pattern).normals[new]
 
     def new_velocity(x: np.ndarray) -> float:
-        # towards the stop hit: +x_j' at the upper stop, -x_j' at the lower
+        # towards the stop hit: +n . x' at the upper stop, -n . x' at the lower
         sign = 1.0 if graze.pattern[new] == "U" else -1.0
-        return sign * float(problem._shoot(x[:-1], float(x[-1])).arrivals[new - 1,
-                                                                           n + osc.stops.index])
+        return sign * float(normal @ problem._shoot(x[:-1], float(x[-1])).arrivals[new - 1,
+                                                                                   n:])
 
     x_g = np.append(u_g, lam_g)
     h = 1e-7

@@ -12,7 +12,11 @@ take the parameter's one finite-difference fallback
 predictor and Newton.
 
 With two stops (``osc.stops``) the impact sequence ``pattern`` says which stop
-each impact hits; a parameter says how fast each stop moves with it
+each impact hits. Both act on one stop coordinate ``s = n . x`` (``x_j``, or ``x_j - x_k``
+for a clearance between masses) with the impact matrices ``D_k`` (eq. 4; the two-body law
+between masses), :func:`~impactcont.orbit.stop_geometry.stop_geometry`, so the derivatives
+hold for free masses, clearances between masses and a constant force ``F_static`` alike.
+A parameter says how fast each stop moves with it
 (:attr:`~impactcont.model.parameters.ModelParameter.upper`, ``lower``): ``b`` and ``R`` move
 the upper stop only, unless the stops are mirrored (``Stops(mirror=True)``: the lower stop
 at ``-b`` with ``R`` moves with them), ``b_low`` and ``R_low`` the lower one, ``gap`` both.
@@ -84,7 +88,8 @@ class MultiImpactBranchProblem:
         """Open interval of the parameter in which the stops exist as given.
 
         A parameter that moves a stop of a two-sided system must keep the upper stop
-        ``x_j = b`` above the lower one ``x_j = -b_low`` (``b > -b_low``; ``b > 0`` for
+        ``s = b`` above the lower one ``s = -b_low`` (stop coordinate ``s = n . x``: ``x_j``,
+        or ``x_j - x_k`` for a clearance between masses; ``b > -b_low``; ``b > 0`` for
         mirrored stops, ``gap > 0``, ``b_low > -b``:
         :meth:`~impactcont.model.parameters.ModelParameter.clearance_limit`). Every other
         case is unlimited here (a parameter's own range, e.g. ``R`` in [0, 1], is checked
@@ -103,8 +108,9 @@ class MultiImpactBranchProblem:
         if not math.isfinite(lower):
             return ""
         stops = self.osc.stops
-        return (f"at {self.parameter} = {lower!r} the upper stop x_{stops.mass} = b meets the "
-                f"lower stop x_{stops.mass} = -b_low (b={self.osc.b!r}, stops={stops!r}): the "
+        s = stops.coordinate
+        return (f"at {self.parameter} = {lower!r} the upper stop {s} = b meets the "
+                f"lower stop {s} = -b_low (b={self.osc.b!r}, stops={stops!r}): the "
                 "clearance b + b_low between them closes")
 
     def check_bounds(self, bounds: tuple[float, float]) -> None:
