@@ -279,3 +279,22 @@ def test_a_map_in_a_stop_of_its_own_round_trips_and_gives_its_points_back(backla
     assert orbit.oscillator.stops.b_low == 0.75 and orbit.oscillator.b == 0.8
     point = ds.sel(omega=0.82, b_low=0.75)
     np.testing.assert_allclose(orbit.states, point["state_k"].values, rtol=0, atol=NEWTON)
+
+
+def test_a_map_over_two_elements_is_stored_under_cf_names_and_read_back(backlash_motion,
+                                                                        tmp_path):
+    """The grid's dimensions are element names: on disk CF names (M_1_2, F_2), on load the
+    user's. (validate=False: the schema check of N-p maps, dataset/multi_maps.py, does not
+    resolve element names yet.)"""
+    pytest.importorskip("compliance_checker")
+    grid = {"M[1,2]": [-0.04, 0.0, 0.04], "F[2]": [-0.1, 0.0, 0.1]}
+    ds = multi_impact_map(backlash_motion, ("M[1,2]", "F[2]"), grid)
+    path = ic.save(ds, tmp_path / "map.nc", validate=False)
+    with netCDF4.Dataset(path) as nc:
+        assert list(nc.dimensions)[:2] == ["M_1_2", "F_2"]
+        assert nc["F_2"].getncattr("impactcont_name") == "F[2]"
+    assert _check(path) == ([], {})
+    back = ic.load(path, validate=False)
+    assert back["found"].dims == ("M[1,2]", "F[2]")
+    np.testing.assert_array_equal(back["state_k"].values, ds["state_k"].values)
+    assert back.identical(ds)
