@@ -22,6 +22,7 @@ import pytest
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
 from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.switching import grazing_split, grazing_switch, special_orbit
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import multi_impact_orbit
@@ -366,3 +367,22 @@ def test_a_pushed_free_mode_is_reported_unchecked_once(caplog):
     assert "interior contact is not checked" in ds.attrs["options"]
     notes = [r for r in caplog.records if "interior contact is not checked" in r.getMessage()]
     assert len(notes) == 1
+
+
+def test_grazing_of_a_clearance_between_masses_becomes_an_impact(pair_branch):
+    """The graze of the pair clearance as a new impact: on the stop s = x2 - x1 = b (not
+    x2 = b), with the two-body law (momentum kept); the N-2 branch born there is physical
+    with a small new impact velocity, and its motions solve on fresh oscillators."""
+    orbit = special_orbit(pair_branch, "GR", 0)
+    guess, new = grazing_split(orbit)
+    X = guess["states"][new]
+    osc = orbit.oscillator
+    normal = osc.stops.normal(osc.n)
+    stop = guess["pattern"][new]
+    assert normal @ X[:2] == pytest.approx(osc.stops.position(stop, osc.b), abs=1e-12)
+    assert abs(normal @ X[2:]) < 1e-6  # a graze: no relative velocity
+    ds = grazing_switch(pair_branch, 0, max_points=4)
+    assert ds is not None and bool(ds["physical"].values.all())
+    v = ds["impact_velocity_k"].values[:, new]
+    assert 0 < v[0] < 1e-3 and np.all(np.diff(v) > 0)
+    assert _resolve_every_point(ds, pair, {"omega": "omega"}, 1, 2) < 1e-8
