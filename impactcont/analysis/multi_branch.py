@@ -434,7 +434,13 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         A motion on the branch (e.g. from :func:`impactcont.orbit.multi_impact.multi_impact_orbit`);
         its oscillator's value of `parameter` is the start.
     parameter : str
-        ``"omega"``, ``"b"``, ``"R"``, ``"eta"``, ``"alpha"`` or ``"beta"``.
+        Any continuable parameter of the oscillator
+        (:func:`~impactcont.model.parameters.model_parameter`): ``"omega"``, ``"b"``,
+        ``"R"``, ``"b_low"``, ``"R_low"``, ``"gap"``, ``"F0"``, a damping parameter or an
+        element (``"m2"``, ``"K[1,1]"``, ``"F[2]"``), on any stops (a clearance between
+        masses, free masses, a constant force). Motions whose interior contact cannot be
+        checked (a constant force pushing a free mode) are reported not physical, said
+        once in a log warning and in the branch's message.
     bounds : (float, float)
         Range of the parameter; must contain the start.
     detect : sequence of str
