@@ -17,6 +17,8 @@ import pytest
 
 import impactcont as ic
 from impactcont.kernel import closed_form, contact, roots, stability
+from impactcont.kernel.arrays import ModalArrays, modal_arrays
+from impactcont.orbit import periodic
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.periodic import impact_map_jacobian, periodic_matrix
 from impactcont.problems import PeriodicBranchProblem
@@ -193,3 +195,82 @@ def test_polish_roots_and_taylor_values_are_exact(omega, b, N):
                 assert np.all(np.abs(np.array([x, v, acc, jerk]) - direct) <= 1e-12 * scale)
                 checked += 1
     assert checked >= 4
+
+
+# -- the typed modal arrays (impactcont.kernel.arrays) -----------------------------------------
+def _three_masses(**stops) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.diag([1.0, 2.0, 1.5]),
+                               K=[[3.0, -1.0, 0.0], [-1.0, 2.5, -1.2], [0.0, -1.2, 1.7]],
+                               F=[1.0, 0.3, 0.0], R=0.7, b=0.4, omega=1.1, eta=0.04,
+                               **({"stops": ic.Stops(**stops)} if stops else {}))
+
+
+def test_modal_arrays_take_the_impacting_mass_from_the_model():
+    # u0, ui0 are x_j = u_j. y and y = u^-1 x, checked from M and the modes themselves
+    for mass in (1, 2, 3):
+        osc = _three_masses(mass=mass)
+        arrays = periodic.modal_arrays(osc)
+        u = osc.modes.u
+        x = np.array([0.3, -1.1, 0.7])
+        y = np.linalg.solve(u, x)
+        assert math.isclose(arrays.u0 @ y, x[mass - 1], rel_tol=1e-12)
+        e = np.zeros(3)
+        e[mass - 1] = 1.0
+        np.testing.assert_allclose(arrays.ui0, np.linalg.solve(u, e), rtol=1e-12, atol=1e-14)
+        for field in arrays:
+            assert field.dtype == np.float64 and field.flags.c_contiguous
+    assert periodic.modal_arrays(osc) is periodic.modal_arrays(osc)  # built once per basis
+
+
+def test_modal_arrays_keep_the_order_of_the_positional_tuple(paper):
+    arrays = periodic.modal_arrays(paper)
+    assert isinstance(arrays, ModalArrays)
+    for field, old in zip(arrays, paper.modes.kernel_arrays, strict=True):
+        np.testing.assert_array_equal(field, old)
+    w, _, _, _, _, eig_err, _, ui0 = arrays
+    assert w is arrays.w and ui0 is arrays.ui0 and eig_err is arrays.eig_err
+
+
+def test_the_kernel_entry_points_take_the_modal_arrays(paper):
+    arrays = periodic.modal_arrays(paper)
+    out = closed_form.point_orbits(arrays.as_tuple(), paper.R, paper.omega, 1, paper.b)
+    modal, sc = closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
+                                        arrays.eig_err, paper.R, paper.omega, 1)
+    np.testing.assert_array_equal(out[0], modal)
+    np.testing.assert_array_equal(out[1], sc)
+    delta = out[3][0]
+    phase = closed_form.phase_orbit(arrays.as_tuple(), paper.R, paper.omega, 1, paper.b, delta)
+    assert phase[2] == out[4][0]  # the same impact velocity from the phase
+    block = closed_form.block_map(arrays.as_tuple(), paper.R, 1, np.array([paper.omega]),
+                                  np.array([paper.b]), False)
+    assert block[3][0, 0, 0] == delta
+
+
+@pytest.mark.parametrize(("change", "error", "pattern"), [
+    ({"w": [1.0, 2.0]}, TypeError, r"w must be a one-dimensional numpy array"),
+    ({"w": np.ones((2, 1))}, ValueError, r"w must be a one-dimensional numpy array"),
+    ({"a": np.ones(2, dtype=complex)}, TypeError, r"a must hold real numbers .* complex128"),
+    ({"f": np.array([True, False])}, TypeError, r"f must hold real numbers .* bool"),
+    ({"u": np.eye(3)}, ValueError, r"u must have shape \(2, 2\) .* got shape \(3, 3\)"),
+    ({"ui": np.ones(2)}, ValueError, r"ui must have shape \(2, 2\)"),
+    ({"eig_err": np.zeros(3)}, ValueError, r"eig_err must have shape \(2,\)"),
+    ({"u": [[1.0, 0.0], [0.0, 1.0]]}, TypeError, r"u must be a numpy array .* list"),
+    ({"mass": 2}, ValueError, r"mass must be in 0\.\.1 .* got 2"),
+    ({"mass": -1}, ValueError, r"mass must be in 0\.\.1"),
+    ({"mass": True}, TypeError, r"mass must be an integer"),
+    ({"mass": 0.0}, TypeError, r"mass must be an integer"),
+])
+def test_modal_arrays_refuse_wrong_shapes_and_dtypes(change, error, pattern):
+    args = {"w": np.array([1.0, 2.0]), "a": np.zeros(2), "f": np.ones(2), "u": np.eye(2),
+            "ui": np.eye(2), "eig_err": np.zeros(2), "mass": 0}
+    args.update(change)
+    with pytest.raises(error, match=pattern):
+        modal_arrays(**args)
+
+
+def test_modal_arrays_convert_real_input_to_contiguous_float():
+    u = np.asfortranarray(np.array([[1, 2], [3, 4]]))  # integers, column-major
+    arrays = modal_arrays(np.array([1, 2]), np.zeros(2), np.ones(2), u, np.eye(2), mass=1)
+    assert all(x.dtype == np.float64 and x.flags.c_contiguous for x in arrays)
+    np.testing.assert_array_equal(arrays.u0, [3.0, 4.0])
+    np.testing.assert_array_equal(arrays.eig_err, [0.0, 0.0])

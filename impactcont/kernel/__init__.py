@@ -3,6 +3,8 @@
 The bottom layer of the package: it imports nothing of impactcont's. One module per
 concern:
 
+- :mod:`.arrays`: the modal arrays of eq. (5)-(7) the entry points take
+  (:class:`~impactcont.kernel.arrays.ModalArrays`, built and checked in one place);
 - :mod:`.flights`: a flight in modal form, the free transfer ``W_i(t)`` of eq. (9) and
   the forced response of eq. (7);
 - :mod:`.roots`: the roots of eq. (15), impact phases and velocities;

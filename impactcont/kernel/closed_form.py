@@ -428,8 +428,11 @@ def impact_jacobian(modal, w, a, f, u, ui, omega, R, delta, sigma):
 
 # -- a block of the (omega, b) plane ---------------------------------------------------------
 @_jit
-def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
+def block_map(arrays, R, N, omegas, bs, want_rho):
     """Every root of eq. (15) on ``omegas x bs``: existence, checks, stability.
+
+    ``arrays``: the oscillator's modal arrays, :meth:`impactcont.kernel.arrays.
+    ModalArrays.as_tuple`.
 
     Returns ``r2 (nw,)``, ``cond (nw,)``, ``count (nw, nb)`` (of :func:`orbit_roots`)
     and, on ``(nw, nb, 2)``: ``delta``,
@@ -437,11 +440,10 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
     the characteristic polynomial of G), ``spectral_radius`` and
     ``critical_multiplier`` (NaN unless ``want_rho``).
     """
+    w, a, f, u, ui, eig_err, u0, ui0 = arrays
     n = w.size
     nw = omegas.size
     nb = bs.size
-    u0 = u[0].copy()
-    ui0 = ui[:, 0].copy()
     r2 = np.empty(nw)
     conds = np.empty(nw)
     delta = np.full((nw, nb, 2), np.nan)
@@ -508,7 +510,7 @@ def block_map(w, a, f, u, ui, eig_err, R, N, omegas, bs, want_rho):
 
 # -- one point: what periodic_orbits needs --------------------------------------------------------
 @_jit
-def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
+def point_orbits(arrays, R, omega, N, b):
     """Every root of eq. (15) at one ``(omega, b)`` with its interior-contact check.
 
     Returns ``(modal, scalars, count, delta, sigma, fold_error, gap_min, gap_min_time,
@@ -516,7 +518,10 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
     :func:`orbit_roots`, :func:`x1_maximum`, :func:`physical_state`); ``jacobians``
     and ``multipliers`` hold G of each root and its eigenvalues when
     ``2n <= EAGER_JACOBIAN`` (cheaper here than later calls), empty arrays otherwise.
+    ``arrays``: the oscillator's modal arrays, :meth:`impactcont.kernel.arrays.
+    ModalArrays.as_tuple`.
     """
+    w, a, f, u, ui, eig_err, u0, ui0 = arrays
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     count, dl, sg, _, fold_error = orbit_roots(sc, b, omega, R)
     gap = np.full(2, np.inf)
@@ -554,9 +559,11 @@ def point_orbits(w, a, f, u, ui, u0, ui0, eig_err, R, omega, N, b):
 
 
 @_jit
-def phase_orbit(w, a, f, u, u0, ui0, eig_err, R, omega, N, b, delta):
+def phase_orbit(arrays, R, omega, N, b, delta):
     """The motion with impact phase ``delta``: ``(modal, scalars, sigma, gap_min,
-    gap_min_time, capped, state)``."""
+    gap_min_time, capped, state)``; ``arrays``: the oscillator's modal arrays,
+    :meth:`impactcont.kernel.arrays.ModalArrays.as_tuple`."""
+    w, a, f, u, _, eig_err, u0, ui0 = arrays
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     sigma = phase_sigma(sc, omega, R, b, delta)
     state, _ = physical_state(modal, u, omega, R, delta, sigma)

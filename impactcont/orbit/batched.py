@@ -17,7 +17,12 @@ import numpy as np
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.dense import COND_WARN, VELOCITY_POLISH, polished_velocity, velocity_bound
-from impactcont.orbit.periodic import IllConditionedWarning, modal_jacobian
+from impactcont.orbit.periodic import (
+    IllConditionedWarning,
+    _kernel_tuple,
+    modal_arrays,
+    modal_jacobian,
+)
 
 __all__ = ["batched_orbits"]
 
@@ -73,9 +78,8 @@ def batched_orbits(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.ndarr
     require_paper_stops(osc, "the N-1 stability map")  # stops: mass 1, one stop only
     if osc.general:
         return _general_block(osc, int(N), omega, b, bool(spectral_radius))
-    w, a, f, u, ui, eig_err, _, _ = osc.modes.kernel_arrays
     (r2, cond, count, delta, vel, gap, gap_t, stable, rho,
-     crit) = closed_form.block_map(w, a, f, u, ui, eig_err, osc.R, int(N), omega, b,
+     crit) = closed_form.block_map(_kernel_tuple(osc), osc.R, int(N), omega, b,
                                    bool(spectral_radius))
     _warn_grid(omega, cond)
     _polish_modal_block(osc, int(N), omega, b, count, delta, vel, gap, gap_t, stable, rho,
@@ -98,9 +102,10 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
     check off the grid points that need none."""
     from impactcont.kernel import closed_form, contact, stability
 
-    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    arrays = modal_arrays(osc)
     R = osc.R
-    setups = [closed_form.omega_setup(w, a, f, u0, ui0, eig_err, R, float(om), N) for om in omega]
+    setups = [closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
+                                      arrays.eig_err, R, float(om), N) for om in omega]
     sc = np.array([s for _, s in setups])  # (nw, 10): T, Gam, B, g, Delta, c, s, ...
     # an upper bound of the rounding error of x1p'(delta) / Delta at any phase (0 where
     # the kernel takes elastic undamped velocities from the impact condition)
@@ -117,8 +122,8 @@ def _polish_modal_block(osc: ImpactOscillator, N: int, omega: np.ndarray, b: np.
         better, _ = polished_velocity(Gam, B, g, Delta, om, R, bb, d, sg)
         if better is None:
             continue
-        best, best_t = contact.other_maximum(w, a, u0, modal, scalars, om, R, d, better,
-                                             math.nan)
+        best, best_t = contact.other_maximum(arrays.w, arrays.a, arrays.u0, modal, scalars, om,
+                                             R, d, better, math.nan)
         G, _ = modal_jacobian(osc, modal, d, better, omega=om)
         mu = stability.multipliers(G)
         ks = slice(k, 2) if count[iw, ib] == 1 else slice(k, k + 1)  # a double root: both

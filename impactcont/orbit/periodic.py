@@ -7,6 +7,7 @@ import functools
 import logging
 import math
 import warnings
+import weakref
 
 import numpy as np
 
@@ -19,6 +20,8 @@ from impactcont.errors import (
     ResonanceError,
     UnresolvedMotionWarning,
 )
+from impactcont.kernel import arrays as _arrays
+from impactcont.kernel.arrays import ModalArrays
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
@@ -37,6 +40,7 @@ __all__ = [
     "IllConditionedWarning",  # defined in impactcont.errors, re-exported here
     "PeriodicOrbit",
     "impact_map_jacobian",
+    "modal_arrays",
     "modal_jacobian",
     "orbit_at_phase",
     "periodic_matrix",  # defined in impactcont.orbit.dense, re-exported here
@@ -132,9 +136,10 @@ class PeriodicOrbit:
 
         osc = self.oscillator
         if osc.n >= secular.SECULAR_MIN:
-            w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
-            mu, ok = secular.secular_multipliers(self.modal, w, a, f, u0, ui0, osc.omega,
-                                                 osc.R, self.delta, self.impact_velocity)
+            arrays = modal_arrays(osc)
+            mu, ok = secular.secular_multipliers(self.modal, arrays.w, arrays.a, arrays.f,
+                                                 arrays.u0, arrays.ui0, osc.omega, osc.R,
+                                                 self.delta, self.impact_velocity)
             if ok:
                 return mu
             log.debug("secular multipliers refused by their guard (n = %d, delta = %.12g); "
@@ -177,6 +182,39 @@ class PeriodicOrbit:
                 f"physical={self.physical})")
 
 
+# modal basis -> (impacting mass, its ModalArrays, their plain tuple)
+_BUILT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def modal_arrays(osc: ImpactOscillator) -> ModalArrays:
+    """The oscillator's :class:`~impactcont.kernel.arrays.ModalArrays`, the compiled kernel's
+    inputs (eq. 5-7), built and checked once per modal basis and impacting mass.
+
+    The impacting mass is the model's (``osc.stops.mass``): its row of ``u`` and column
+    of ``u^-1`` are the ones the impact law of eq. (4) sees. The closed form's G and
+    state after the impact are written for the paper's mass 1, which every closed-form
+    path requires (:func:`impactcont.model.stops.require_paper_stops`).
+    """
+    return _built(osc)[1]
+
+
+def _kernel_tuple(osc: ImpactOscillator) -> tuple[np.ndarray, ...]:
+    """:func:`modal_arrays` as the compiled entry points take them
+    (:meth:`~impactcont.kernel.arrays.ModalArrays.as_tuple`, kept with them)."""
+    return _built(osc)[2]
+
+
+def _built(osc: ImpactOscillator) -> tuple[int, ModalArrays, tuple[np.ndarray, ...]]:
+    basis = osc.modes
+    mass = osc.stops.mass - 1
+    entry = _BUILT.get(basis)
+    if entry is None or entry[0] != mass:
+        w, a, f, u, ui, eig_err = basis.kernel_arrays[:6]
+        arrays = _arrays.modal_arrays(w, a, f, u, ui, eig_err, mass=mass)
+        entry = _BUILT[basis] = (mass, arrays, arrays.as_tuple())
+    return entry
+
+
 def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma: float,
                    *, omega: float | None = None) -> tuple[np.ndarray, float]:
     """G of eq. (25) and ``h2`` from the kernel's modal pieces at one frequency (the
@@ -192,11 +230,11 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
     """
     from impactcont.kernel import closed_form
 
-    w, a, f, u = osc.modes.kernel_arrays[:4]
+    arrays = modal_arrays(osc)
     om = osc.omega if omega is None else omega
-    G_reg, av, bv, _ = closed_form.jacobian_split(physical_transition(osc, modal), modal, w, a,
-                                                  f, u, osc.modes.kernel_arrays[7], om, osc.R,
-                                                  delta, sigma)
+    G_reg, av, bv, _ = closed_form.jacobian_split(physical_transition(osc, modal), modal,
+                                                  arrays.w, arrays.a, arrays.f, arrays.u,
+                                                  arrays.ui0, om, osc.R, delta, sigma)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # sigma = 0: a pole
         return G_reg + np.outer(av, bv) / sigma, float(sigma)
 
@@ -206,7 +244,7 @@ def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     numpy (BLAS) matrix products above ``closed_form.BLAS_MIN`` degrees of freedom."""
     from impactcont.kernel import closed_form, flights
 
-    u, ui = osc.modes.kernel_arrays[3:5]
+    u, ui = modal_arrays(osc)[3:5]
     if osc.n <= closed_form.BLAS_MIN:
         return flights.transition(modal, u, ui)
     return np.block([[(u * modal[2]) @ ui, (u * modal[3]) @ ui],
@@ -312,10 +350,10 @@ def _repolish(osc: ImpactOscillator, modal: np.ndarray, scalars: np.ndarray, del
     at any n: the secular ones recompute ``h2`` in the kernel's form)."""
     from impactcont.kernel import closed_form, contact, stability
 
-    w, a, _, u, _, _, u0, _ = osc.modes.kernel_arrays
-    state, scale = closed_form.physical_state(modal, u, osc.omega, osc.R, delta, sigma)
-    best, gap_t = contact.other_maximum(w, a, u0, modal, scalars, osc.omega, osc.R, delta,
-                                        sigma, math.nan)
+    arrays = modal_arrays(osc)
+    state, scale = closed_form.physical_state(modal, arrays.u, osc.omega, osc.R, delta, sigma)
+    best, gap_t = contact.other_maximum(arrays.w, arrays.a, arrays.u0, modal, scalars,
+                                        osc.omega, osc.R, delta, sigma, math.nan)
     G = modal_jacobian(osc, modal, delta, sigma)[0]
     return state, float(scale), osc.b - float(best), float(gap_t), G, stability.multipliers(G)
 
@@ -358,9 +396,8 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
         if check:
             _check_phase(osc, form.c, form.s, delta)
         return _general_orbit(osc, N, form, float(delta), root, warn=False)
-    w, a, f, u, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
     modal, sc, sigma, gap, gap_t, capped, state = closed_form.phase_orbit(
-        w, a, f, u, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b, float(delta))
+        _kernel_tuple(osc), osc.R, osc.omega, N, osc.b, float(delta))
     if check and sc[9] == 0.0:  # elastic undamped motions satisfy the impact condition instead
         _check_phase(osc, float(sc[5]), float(sc[6]), delta)
     _warn_capped(capped, sc[0])
@@ -427,10 +464,9 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
         elif found:  # a double root: c^2 + s^2 = b^2 exactly
             _warn_fold(osc.b ** 2, osc.b, math.sqrt(_EPS))
         return [_general_orbit(osc, N, form, delta, root, warn=True) for delta, root in found]
-    w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     (modal, sc, count, delta, sigma, fold_error, gap, gap_t, capped, states, scales,
-     jacobians, mults) = closed_form.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R,
-                                                  osc.omega, N, osc.b)
+     jacobians, mults) = closed_form.point_orbits(_kernel_tuple(osc), osc.R, osc.omega, N,
+                                                  osc.b)
     _warn_setup(osc, sc, stacklevel=2)
     if count == -1:
         raise ParameterError("c = s = 0 and b = 0: every phase satisfies eq. (14); the "
@@ -519,7 +555,8 @@ def amplitude_squared(osc: ImpactOscillator, N: int) -> float:
     if osc.general:
         c, s = general.amplitude(osc, _check_N(N))[:2]
         return c * c + s * s
-    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-    _, sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, _check_N(N))
+    arrays = modal_arrays(osc)
+    _, sc = closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
+                                    arrays.eig_err, osc.R, osc.omega, _check_N(N))
     _warn_setup(osc, sc, stacklevel=2)
     return float(sc[5] ** 2 + sc[6] ** 2)

@@ -163,10 +163,10 @@ def one_orbit(osc: ic.ImpactOscillator, N: int) -> None:
 def kernel_only(osc: ic.ImpactOscillator, N: int) -> None:
     """The compiled calls of :func:`one_orbit` without the Python wrapper (as in periodic.py)."""
     from impactcont.kernel import closed_form
+    from impactcont.orbit.periodic import modal_arrays
 
-    w, a, f, u, ui, eig_err, u0, ui0 = osc.modes.kernel_arrays
     # for small systems one call returns the roots with their G and multipliers
-    closed_form.point_orbits(w, a, f, u, ui, u0, ui0, eig_err, osc.R, osc.omega, N, osc.b)
+    closed_form.point_orbits(modal_arrays(osc).as_tuple(), osc.R, osc.omega, N, osc.b)
 
 
 def orbit_n2(repeat: int) -> dict[str, Any]:
