@@ -9,6 +9,7 @@ import pytest
 from _scene_data import OSCILLATOR, write
 
 import impactcont as ic
+from impactcont.analysis.switching import pitchfork_branch
 from impactcont.scene import SceneError, load_scene, read_output, run_scene
 
 SCENE = OSCILLATOR.replace("b = 0.6", "b = 0.0").replace("omega = 1.0", "omega = 1.75") + """
@@ -178,7 +179,7 @@ def test_a_switch_at_a_pitchfork_of_a_multi_impact_branch(tmp_path: Path) -> Non
           if str(label) == "BP"]
     assert len(bp) == 1 and abs(bp[0] - 1.3378193720929) < 1e-9
     assert mirror.attrs["born_at"] == "BP" and int(mirror.attrs["switch_side"]) == -1
-    direct = ic.switching.pitchfork_branch(symmetric, 0, -1, max_points=20)
+    direct = pitchfork_branch(symmetric, 0, -1, max_points=20)
     np.testing.assert_allclose(mirror["state_k"].values, direct["state_k"].values, atol=1e-10)
 
 

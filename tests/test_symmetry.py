@@ -369,3 +369,10 @@ def test_bp_in_the_clearance_meets_the_bp_in_omega(branch):
     bps = _bps(ds)
     assert len(bps) == 1
     assert abs(float(ds["special_b"].values[bps[0]]) - 0.5) < 1e-9
+
+
+def test_a_constant_force_breaks_the_symmetry_of_a_mirrored_system():
+    osc = ic.ImpactOscillator(M=np.eye(1), K=[[1.0]], F=[1.0], eta=0.05, R=0.7, b=0.5,
+                              omega=1.2, stops=ic.Stops(mirror=True))
+    assert symmetric_system(osc)
+    assert not symmetric_system(osc.replace(F_static=[0.05]))

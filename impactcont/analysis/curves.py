@@ -36,6 +36,7 @@ from impactcont.core import (
 )
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import NewtonConvergenceError
+from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
 from impactcont.dataset.records import reserved_names, user_event_record
 from impactcont.dataset.schema import (
@@ -629,7 +630,7 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
         and ``point`` (index of the first of the two bracketing points).
     """
     validate_curve_dataset(ds)
-    parameters = tuple(str(ds.attrs["parameters"]).split(","))
+    parameters = tuple(split_parameters(str(ds.attrs["parameters"])))
     if parameter not in parameters:
         raise ParameterError(f"parameter must be one of the curve's parameters {parameters}; "
                              f"got {parameter!r}")

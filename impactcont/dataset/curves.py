@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.dataset.attributes import check_attributes, dataset_tag
+from impactcont.dataset.attributes import check_attributes, dataset_tag, split_parameters
 from impactcont.dataset.multi import validate_multi_impact_dataset
 from impactcont.dataset.schema import (
     _N,
@@ -371,8 +371,8 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
     if not isinstance(kind, str) or kind not in CURVE_KINDS:
         raise ValueError(f"attribute 'kind' must be one of {CURVE_KINDS}; got {kind!r}")
     text = ds.attrs["parameters"]
-    parameters = text.split(",") if isinstance(text, str) else []
-    if len(parameters) != 2 or not set(parameters) <= set(PARAMETERS):
+    parameters = split_parameters(text) if isinstance(text, str) else []
+    if len(parameters) != 2 or not all(name in PARAMETERS for name in parameters):
         raise ValueError(f"attribute 'parameters' must name two of {sorted(PARAMETERS)}; got "
                          f"{text!r}")
     expected = {k: (("point", *s.extra_dims), s.kind)

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.dataset.attributes import check_pattern_attribute, dataset_tag
+from impactcont.dataset.attributes import check_pattern_attribute, dataset_tag, split_parameters
 from impactcont.dataset.schema import (
     PARAMETERS,
     _options_json,
@@ -181,11 +181,12 @@ def validate_multi_impact_map_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"not a {MULTI_MAP_KIND} dataset: missing attribute(s) {missing} or "
                          f"impactcont_dataset != {MULTI_MAP_KIND!r}")
     text = ds.attrs["parameters"]
-    parameters = text.split(",") if isinstance(text, str) else []
-    if len(parameters) != 2 or parameters[0] == parameters[1] or not set(parameters) <= set(
-            PARAMETERS):
+    parameters = split_parameters(text) if isinstance(text, str) else []
+    if len(parameters) != 2 or parameters[0] == parameters[1] or not all(
+            name in PARAMETERS for name in parameters):
         raise ValueError(f"attribute 'parameters' must name two different parameters of "
-                         f"{sorted(PARAMETERS)}; got {text!r}")
+                         f"{sorted(PARAMETERS)} or elements (k2, M[1,2], F[2], ...); got "
+                         f"{text!r}")
     p = ds.attrs["impacts"]
     if isinstance(p, (bool, np.bool_)) or not isinstance(p, (int, np.integer)) or p < 1 or (
             ds.sizes.get("impact") != p):

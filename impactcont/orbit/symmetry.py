@@ -70,11 +70,13 @@ def symmetric_system(osc: ImpactOscillator) -> bool:
     """Whether ``x -> -x, t -> t + T/2`` maps the system onto itself.
 
     True when the impacting mass has two stops at the same distance with the same
-    restitution (``b_low == b`` and ``R_low == R`` exactly): the equations of motion
-    are linear with harmonic forcing, so nothing else can break the symmetry.
+    restitution (``b_low == b`` and ``R_low == R`` exactly) and no constant force
+    ``F_static`` pushes it one way: the equations of motion are linear with harmonic
+    forcing, so nothing else can break the symmetry.
     """
     stops = osc.stops
-    return bool(stops.two_sided and stops.b_low == osc.b and stops.R_low == osc.R)
+    return bool(stops.two_sided and stops.b_low == osc.b and stops.R_low == osc.R
+                and not np.any(osc.F_static))
 
 
 def admits_symmetric_motions(osc: ImpactOscillator, N: int, p: int, pattern: str) -> bool:

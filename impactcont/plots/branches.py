@@ -18,6 +18,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 
+from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.schema import (
     SPECIAL_LABELS,
     special_variable,
@@ -146,7 +147,7 @@ def fixed_parameters(datasets: Sequence[xr.Dataset]) -> dict[str, float]:
     """
     values: dict[str, set[float]] = {}
     for ds in datasets:
-        free = {ds.attrs.get("parameter"), *str(ds.attrs.get("parameters", "")).split(",")}
+        free = {ds.attrs.get("parameter"), *split_parameters(str(ds.attrs.get("parameters", "")))}
         osc = json.loads(ds.attrs.get("oscillator", "{}"))
         for key in ("omega", "b", "R", "eta", "alpha", "beta"):
             if key not in free and isinstance(osc.get(key), (int, float)):

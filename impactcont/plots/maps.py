@@ -18,6 +18,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.curves import (
     codim2_variable,
     validate_curve_dataset,
@@ -153,7 +154,7 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
         kind = c.attrs["kind"]
         if kind != "ZV" and int(c.attrs["N"]) != N:
             continue
-        px, py = str(c.attrs["parameters"]).split(",")
+        px, py = split_parameters(str(c.attrs["parameters"]))
         if {px, py} != {"omega", "b"}:
             raise ValueError(f"two_parameter_diagram draws curves in (omega, b); got a curve in "
                              f"({px}, {py})")

@@ -18,6 +18,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.multi_maps import validate_multi_impact_map_dataset
 from impactcont.plots.branches import (
     _stops,
@@ -72,7 +73,7 @@ def multi_map_title(ds: xr.Dataset) -> str:
     The parameters held fixed (those not on the map's axes) in mathtext, and
     the stops: a mirrored lower stop moves with ``b``.
     """
-    axes = set(str(ds.attrs["parameters"]).split(","))
+    axes = set(split_parameters(str(ds.attrs["parameters"])))
     osc = json.loads(ds.attrs["oscillator"])
     stops = _stops(ds)
     mirror = bool((osc.get("stops") or {}).get("mirror"))
@@ -130,7 +131,7 @@ def multi_impact_map_diagram(ds: xr.Dataset, *, ax: Axes | None = None,
     matplotlib.axes.Axes
     """
     code = multi_map_regions(ds)
-    px, py = ds.attrs["parameters"].split(",")
+    px, py = split_parameters(str(ds.attrs["parameters"]))
     x, y = ds[px].values, ds[py].values
     if ax is None:
         import matplotlib.pyplot as plt

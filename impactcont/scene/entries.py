@@ -128,7 +128,8 @@ PARAMETER_NAME = ParameterName()
 
 
 #: The scene key of a :class:`~impactcont.model.stops.Stops` error, by how its message starts.
-_STOPS_ERROR_KEYS = (("stops.mass", "stop_mass"), ("stops.b_low", "b_low"),
+_STOPS_ERROR_KEYS = (("stops.mass", "stop_mass"), ("stops.relative_to", "stop_relative_to"),
+                     ("stops.b_low", "b_low"),
                      ("stops.R_low", "R_low"), ("the lower stop", "b_low"),
                      ("stops.mirror", "mirror_stop"), ("mirrored stops", "b"))
 
@@ -187,7 +188,8 @@ def library_check(where: Where, check: Callable[..., Any], *args: Any,
 
 
 #: What the closed-form sections take: the paper's single stop on mass 1.
-_CLOSED_FORM_ALLOWED = ("an [oscillator] without stop_mass, b_low, R_low and mirror_stop (the "
+_CLOSED_FORM_ALLOWED = ("an [oscillator] without stop_mass, stop_relative_to, b_low, R_low, "
+                        "mirror_stop, F_static and free masses (the "
                         "paper's single "
                         "stop on mass 1); [[simulations]] with start = \"state\" and "
                         "[[multi_impact]] take other stops")
@@ -257,13 +259,18 @@ class OscillatorSpec:
     ``F_imag`` (the imaginary part of F) gives the masses their own forcing phases.
     ``stop_mass``, ``b_low`` and ``R_low`` place the stops on another mass and add a
     lower stop (:class:`~impactcont.model.stops.Stops`); ``mirror_stop`` adds the lower
-    stop as the mirror of the upper one.
+    stop as the mirror of the upper one; ``stop_relative_to`` puts both stops between two
+    masses (on ``x_j - x_k``: an impact pair, an impact damper's cavity). ``F_static`` is a
+    constant force (gravity, a preload, a mean torque). K (or a spring of the chain) may
+    leave a mass free when a stop holds it (docs/machines.md).
     """
 
     M: tuple | None = declare(RealArray(2), "mass matrix (symmetric positive definite)")
-    K: tuple | None = declare(RealArray(2), "stiffness matrix (symmetric positive definite)")
+    K: tuple | None = declare(RealArray(2), "stiffness matrix (symmetric positive "
+                              "semi-definite; a free mode must be held by a stop)")
     masses: tuple | None = declare(RealArray(1, positive=True), "chain masses m_1..m_n (eq. 2)")
-    springs: tuple | None = declare(RealArray(1, positive=True), "chain springs k_1..k_n (eq. 2)")
+    springs: tuple | None = declare(RealArray(1, nonnegative=True),
+                                    "chain springs k_1..k_n (eq. 2; 0 leaves a mass free)")
     F: tuple = declare(RealArray(1), "forcing amplitude vector, length n", required=True)
     R: float = declare(_RESTITUTION, "coefficient of restitution (eq. 4)", required=True)
     b: float = declare(Real(), "gap: mass 1 meets the stop at x1 = b (eq. 3)", required=True)
@@ -279,6 +286,11 @@ class OscillatorSpec:
     R_low: float | None = declare(_RESTITUTION, "restitution of the lower stop (default R)")
     mirror_stop: bool = declare(Boolean(), "a lower stop at x_j = -b with restitution R that "
                                 "moves with b and R (a symmetric backlash)", False)
+    stop_relative_to: int | None = declare(Integer(1), "a clearance between two masses: the "
+                                           "stops act on x_j - x_k (k = stop_relative_to, "
+                                           "j = stop_mass), two-body impact law")
+    F_static: tuple | None = declare(RealArray(1), "constant force vector, length n (gravity, "
+                                     "a preload, a mean torque)")
 
     @classmethod
     def parse(cls, raw: Any, where: Where) -> OscillatorSpec:
@@ -313,9 +325,12 @@ class OscillatorSpec:
             F = F + 1j * np.array(self.F_imag, dtype=float)
         params = {"F": F, "R": self.R, "b": self.b, "omega": self.omega, **damping}
         if (self.stop_mass is not None or self.b_low is not None or self.R_low is not None
-                or self.mirror_stop):
+                or self.mirror_stop or self.stop_relative_to is not None):
             params["stops"] = Stops(mass=1 if self.stop_mass is None else self.stop_mass,
-                                    b_low=self.b_low, R_low=self.R_low, mirror=self.mirror_stop)
+                                    b_low=self.b_low, R_low=self.R_low, mirror=self.mirror_stop,
+                                    relative_to=self.stop_relative_to)
+        if self.F_static is not None:
+            params["F_static"] = np.array(self.F_static, dtype=float)
         K = (chain_stiffness(list(self.springs)) if self.springs is not None
              else np.array(self.K, dtype=float))
         if self.M is not None:

@@ -20,6 +20,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.io import atomic_output, check_output_file
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -392,7 +393,7 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     codim2: list[tuple[float, float, str]] = []
     handles = []
     for k, (name, ds) in enumerate(datasets.items()):
-        p1, p2 = str(ds.attrs["parameters"]).split(",")
+        p1, p2 = split_parameters(str(ds.attrs["parameters"]))
         x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
         observable = np.asarray(ds["stable_side"].values, dtype=bool)
         color = f"C{k % 10}"

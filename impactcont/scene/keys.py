@@ -306,14 +306,17 @@ class Names(ValueType):
 class RealArray(ValueType):
     """A vector (``ndim=1``) or a matrix (``ndim=2``, array of rows) of real numbers."""
 
-    def __init__(self, ndim: int, *, positive: bool = False) -> None:
-        self.ndim, self.positive = ndim, positive
+    def __init__(self, ndim: int, *, positive: bool = False, nonnegative: bool = False
+                 ) -> None:
+        self.ndim, self.positive, self.nonnegative = ndim, positive, nonnegative
         what = "a non-empty array of real numbers" if ndim == 1 else \
             "a non-empty square matrix written as an array of rows of real numbers"
-        self.allowed = what + (", all > 0" if positive else "")
+        self.allowed = what + (", all > 0" if positive else ", all >= 0" if nonnegative
+                               else "")
 
     def check(self, value: Any, where: Where) -> tuple:
-        item = Real(0.0, low_open=True) if self.positive else Real()
+        item = (Real(0.0, low_open=True) if self.positive else Real(0.0) if self.nonnegative
+                else Real())
         if not isinstance(value, list) or not value:
             raise self.fail(value, where, "wrong type or empty")
         if self.ndim == 1:

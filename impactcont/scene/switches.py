@@ -36,10 +36,10 @@ from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.multi_impact import multi_impact_orbit
-from impactcont.problems import CONTINUABLE_PARAMETERS
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.scene.entries import (
     CONTINUATION_KEYS,
+    PARAMETER_NAME,
     PARAMETER_RANGES,
     EntrySpec,
     continuation_entry,
@@ -190,8 +190,8 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
                          "seed Newton", required=True)
     N: int = declare(Integer(1, 1000), "forcing periods of the motion", required=True)
     p: int = declare(Integer(1, 1000), "impacts per motion", required=True)
-    parameter: str = declare(String(tuple(CONTINUABLE_PARAMETERS)), "the continued parameter",
-                             "omega")
+    parameter: str = declare(PARAMETER_NAME, "the continued parameter (an element: \"k2\", "
+                             "\"M[1,2]\", \"F[2]\", ...)", "omega")
     bounds: tuple[float, float] = declare(Interval(), "range of the parameter", required=True)
     detect: tuple[str, ...] = detect_key()
 

@@ -24,6 +24,7 @@ import xarray as xr
 
 from impactcont.analysis.curves import check_curve_arguments, curve
 from impactcont.analysis.maps import stability_map
+from impactcont.dataset.attributes import split_parameters
 from impactcont.errors import ImpactcontError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.problems.codim1 import curve_problem
@@ -232,7 +233,7 @@ class Curves:
     def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
         rows = []
         for name, ds in datasets.items():
-            p1, p2 = str(ds.attrs["parameters"]).split(",")
+            p1, p2 = split_parameters(str(ds.attrs["parameters"]))
             x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
             rows.append([name, str(ds.attrs["kind"]), int(ds.attrs["N"]), f"{p1}, {p2}",
                          int(ds.sizes["point"]), _span(x), _span(y),
@@ -244,7 +245,7 @@ class Curves:
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         out = []
         for name, ds in datasets.items():
-            p1, p2 = str(ds.attrs["parameters"]).split(",")
+            p1, p2 = split_parameters(str(ds.attrs["parameters"]))
             for k in range(ds.sizes.get("codim2", 0)):
                 out.append({"curve": name, "kind": str(ds.attrs["kind"]),
                             "label": str(ds["codim2_label"].values[k]),
