@@ -1,0 +1,448 @@
+"""Impact damper: the symmetric two-impact motion against its closed form, and beyond.
+
+The system of Masri & Caughey (1966): a primary mass on a spring and a damper, forced
+harmonically, with a free particle (mass ratio ``mu``) in a cavity of length ``d`` of the
+primary. As an :class:`impactcont.ImpactOscillator` (units: ``F/k`` for lengths, ``1/w_n``
+for time)::
+
+    M = diag(1, mu), K = diag(1, 0), F = [1, 0], C = 2 eta K (eta = zeta), R = e,
+    b = d/2, stops = Stops(mass=2, relative_to=1, mirror=True)     # s = x2 - x1 in [-b, b]
+
+This study
+
+1. solves the symmetric two-impact motion ("UL", one impact on each wall per forcing
+   period, ``X(t + T/2) = -X(t)``) in closed form (:mod:`closed_form`, derived in the
+   README) over a grid of forcing frequencies and three clearances, and solves the same
+   motion with the package (``multi_impact_orbit`` seeded by the closed form); compares
+   them point by point (impact phase, particle and primary velocities before and after
+   the impact, amplitude of the primary, multipliers and the stability verdict);
+2. asks the event-driven simulator at a few points (a stable motion repeats, an unstable
+   one leaves);
+3. continues the motion with the package in omega and in the clearance (special points),
+   follows its stability boundary in (omega, b) with ``multi_impact_curve`` against the
+   closed form's boundary, and draws the package's stability map of the plane.
+
+Writes ``impact_damper.json``, ``branches.nc``, ``impact_damper.png`` and
+``impact_damper_plane.png`` into the output directory. Run::
+
+    PYTHONPATH=. python studies/impact_damper/run.py [--output DIR] [--copy-figures]
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # tiny matrices: threads only cost
+
+import argparse
+import json
+import logging
+import math
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+
+import impactcont as ic
+from impactcont.analysis.multi_curves import multi_impact_curve_crossings
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from closed_form import SymmetricMotion, symmetric_motions  # noqa: E402
+
+log = logging.getLogger("impact_damper")
+
+MU, E, ZETA = 0.2, 0.8, 0.05  # mass ratio, restitution, damping ratio of the primary
+CLEARANCES = (1.0, 2.0, 4.0)  # d = 2 b, in units of F/k
+OMEGAS = np.linspace(0.6, 3.0, 49)
+PLANE = {"omega": (0.5, 3.5), "b": (0.1, 3.0)}
+PLANE_GRID = (151, 59)  # omega x b, for the closed form's and the package's maps
+CURVE_POINTS = 600  # the NS curves stall near their lowest b (README): this caps them
+SIMULATED = ((1.5, 2.0), (2.5, 2.0), (1.0, 1.0), (2.0, 4.0))  # (r, d) for the simulator
+
+
+def system(omega: float, b: float) -> ic.ImpactOscillator:
+    """The impact damper as an ImpactOscillator (primary x1, particle x2, walls s = +-b)."""
+    return ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]],
+                               F=[1.0, 0.0], R=E, b=b, omega=omega, eta=ZETA,
+                               stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+
+
+def guess(m: SymmetricMotion) -> dict[str, Any]:
+    """The closed-form motion as a Newton guess for the package (the exact motion)."""
+    T2 = math.pi / m.r
+    return {"delta": m.delta, "flight_times": [T2, T2], "states": [m.state, -m.state],
+            "pattern": "UL"}
+
+
+def package_amplitude(orbit: ic.MultiImpactOrbit, num: int = 4001) -> float:
+    """``max |x1|`` from the package's exact time series: per flight, the largest interior
+    sample refined by the vertex of the parabola through it and its neighbours (error
+    O(h^3)), and the values at the impacts (where ``x1'`` jumps: a corner)."""
+    _, X = orbit.time_series(num)
+    best = float(np.max(np.abs(orbit.states[:, 0])))
+    for x in np.abs(X[:, 0]).reshape(orbit.p, num):
+        i = int(np.argmax(x))
+        if 0 < i < num - 1:
+            a, b, c = x[i - 1], x[i], x[i + 1]
+            best = max(best, float(b + (a - c) ** 2 / (8.0 * (2 * b - a - c))))
+    return best
+
+
+def compare(m: SymmetricMotion) -> dict[str, Any]:
+    """The package's motion seeded by the closed form; the differences."""
+    orbit = ic.multi_impact_orbit(system(m.r, 0.5 * m.d), 1, 2, guess(m))
+    k = orbit.pattern.index("U")  # the upper-wall impact: the closed form's t = 0
+    X = orbit.states[k]
+    pre_rel = orbit.impact_velocities[k]  # s' just before the upper-wall impact
+    scale = max(1.0, float(np.max(np.abs(m.state))))
+    rho_cf = float(np.max(np.abs(m.multipliers)))
+    # each closed-form multiplier against the nearest of the package's
+    mult = max(float(np.min(np.abs(orbit.multipliers - q))) / max(1.0, abs(q))
+               for q in m.multipliers)
+    amp = package_amplitude(orbit)
+    return {
+        "omega": m.r, "d": m.d, "root_delta": m.delta,
+        "phase": abs(math.remainder(orbit.phases[k] - m.delta, 2 * math.pi)),
+        "state": float(np.max(np.abs(X - m.state))) / scale,
+        "impact_velocity": abs(pre_rel - m.impact_velocity) / max(1.0, m.impact_velocity),
+        "amplitude": abs(amp - m.amplitude) / m.amplitude,
+        "multipliers": mult,
+        "spectral_radius_cf": rho_cf, "spectral_radius_pkg": orbit.spectral_radius,
+        "stable_cf": bool(m.stable), "stable_pkg": bool(orbit.stable),
+        "physical_cf": bool(m.physical), "physical_pkg": bool(orbit.physical),
+        "flight_times": float(np.max(np.abs(orbit.flight_times - math.pi / m.r))),
+        "error_estimate": orbit.error_estimate,
+        "amplitude_cf": m.amplitude, "v1_before": m.v1_before, "u_before": m.u_before,
+    }
+
+
+def agreement() -> dict[str, Any]:
+    """Closed form against the package on OMEGAS x CLEARANCES (both roots)."""
+    rows, failures = [], []
+    for d in CLEARANCES:
+        for r in OMEGAS:
+            for m in symmetric_motions(float(r), d, MU, E, ZETA):
+                try:
+                    rows.append(compare(m))
+                except ic.NoPeriodicMotionError as exc:
+                    failures.append({"omega": float(r), "d": d, "delta": m.delta,
+                                     "error": str(exc)})
+    keys = ("phase", "state", "impact_velocity", "amplitude", "multipliers", "flight_times")
+    worst = {key: max(row[key] for row in rows) for key in keys}
+    # the stability verdict where it is not on the knife edge (|rho - 1| > 1e-9)
+    decided = [r for r in rows if abs(r["spectral_radius_cf"] - 1.0) > 1e-9]
+    summary = {
+        "motions": len(rows), "newton_failures": failures, "max_relative_difference": worst,
+        "stable_verdict_agrees": [int(sum(r["stable_cf"] == r["stable_pkg"] for r in decided)),
+                                  len(decided)],
+        "physical_verdict_agrees": [int(sum(r["physical_cf"] == r["physical_pkg"]
+                                            for r in rows)), len(rows)],
+        "largest_error_estimate": max(r["error_estimate"] for r in rows),
+    }
+    log.info("closed form vs package: %d motions, worst %s", len(rows), worst)
+    return {"summary": summary, "rows": rows}
+
+
+def simulator_checks() -> list[dict[str, Any]]:
+    """The simulator from each closed-form motion: where stable and physical it repeats
+    the motion's impacts; where unstable it leaves (rounding grows)."""
+    out = []
+    for r, d in SIMULATED:
+        for m in symmetric_motions(r, d, MU, E, ZETA):
+            if not m.physical:
+                continue
+            osc = system(r, 0.5 * d)
+            res = ic.simulate(osc, m.state, m.delta, 300.0)
+            n = res.impact_times.size
+            # impact k + 1 (k = 0, 1, ...) alternates between -X0 and X0
+            dev = [float(np.max(np.abs(res.impact_states[k] - (-1) ** (k + 1) * m.state)))
+                   for k in range(n)]
+            stays = bool(n > 500 and max(dev) < 1e-6)
+            out.append({"omega": r, "d": d, "stable_cf": m.stable, "impacts": int(n),
+                        "status": res.status.name, "max_deviation": max(dev) if dev else None,
+                        "deviation_first_100": max(dev[:100]) if dev else None,
+                        "stays": stays, "agrees": stays == m.stable})
+            log.info("simulator at r=%g d=%g (%s): %d impacts, max deviation %.2e, %s", r, d,
+                     "stable" if m.stable else "unstable", n, max(dev) if dev else math.nan,
+                     "agrees" if stays == m.stable else "DISAGREES")
+    return out
+
+
+def stable_root(r: float, d: float) -> SymmetricMotion:
+    return next(m for m in symmetric_motions(r, d, MU, E, ZETA) if m.stable and m.physical)
+
+
+def specials(ds: xr.Dataset, parameter: str) -> list[dict[str, Any]]:
+    return [{"label": str(lab), parameter: float(v), "precision": float(p),
+             "status": str(st)}
+            for lab, v, p, st in zip(ds["special_label"].values,
+                                     ds[f"special_{parameter}"].values,
+                                     ds["special_precision"].values,
+                                     ds["special_status"].values, strict=True)]
+
+
+def closed_form_plane() -> dict[str, np.ndarray]:
+    """The closed form on the (omega, b) grid: is there a stable physical symmetric motion
+    (either root), and its spectral radius."""
+    om = np.linspace(*PLANE["omega"], PLANE_GRID[0])
+    bb = np.linspace(*PLANE["b"], PLANE_GRID[1])
+    ok = np.zeros((om.size, bb.size), bool)
+    exists = np.zeros_like(ok)
+    for i, r in enumerate(om):
+        for j, b in enumerate(bb):
+            ms = [m for m in symmetric_motions(float(r), 2 * float(b), MU, E, ZETA)
+                  if m.physical]
+            exists[i, j] = bool(ms)
+            ok[i, j] = any(m.stable for m in ms)
+    return {"omega": om, "b": bb, "stable": ok, "physical": exists}
+
+
+def boundary_crossings(b: float, lo: float, hi: float, num: int = 200
+                       ) -> list[dict[str, Any]]:
+    """Where the closed form's stable physical motion appears or disappears along omega
+    at clearance b (the verdict bisected to 1e-10), and why: ``stability`` (a multiplier
+    crosses the unit circle) or ``physical`` (a grazing or a zero-velocity impact)."""
+    def flags(r: float) -> tuple[bool, bool]:
+        ms = [m for m in symmetric_motions(r, 2 * b, MU, E, ZETA) if m.physical]
+        return any(m.stable for m in ms), bool(ms)
+
+    om = np.linspace(lo, hi, num)
+    f = [flags(float(r))[0] for r in om]
+    out = []
+    for i in range(num - 1):
+        if f[i] != f[i + 1]:
+            a, c = float(om[i]), float(om[i + 1])
+            while c - a > 1e-10:
+                mid = 0.5 * (a + c)
+                a, c = (mid, c) if flags(mid)[0] == f[i] else (a, mid)
+            why = "stability" if flags(a)[1] and flags(c)[1] else "physical"
+            out.append({"omega": 0.5 * (a + c), "why": why})
+    return out
+
+
+def beyond(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, Any]:
+    """What the package finds beyond the closed form: branches with special points in
+    omega and in b, curves of the boundary of stable symmetric motion, a stability map."""
+    info: dict[str, Any] = {}
+    seed = ic.multi_impact_orbit(system(1.5, 1.0), 1, 2, guess(stable_root(1.5, 2.0)))
+    t0 = time.perf_counter()
+    try:
+        br = ic.multi_impact_continuation(seed, "omega", PLANE["omega"], ds_max=0.02,
+                                          max_points=1500)
+    except Exception as exc:  # report what the package says; the comparison stands
+        log.warning("continuation in omega failed: %s: %s", type(exc).__name__, exc)
+        info["omega_branch_error"] = f"{type(exc).__name__}: {exc}"
+        return info
+    info["omega_branch"] = {"points": int(br.sizes["point"]),
+                            "seconds": time.perf_counter() - t0,
+                            "special_points": specials(br, "omega")}
+    groups["branch_omega_b1"] = br
+    # the special points against the closed form: re-solved there by the closed form
+    checks = []
+    for sp in info["omega_branch"]["special_points"]:
+        ms = symmetric_motions(sp["omega"], 2.0, MU, E, ZETA)
+        if sp["label"] in ("NS", "BP", "SN") and ms:
+            rho = [float(np.max(np.abs(m.multipliers))) for m in ms]
+            checks.append({**sp, "closed_form_rho": rho})
+    info["special_points_in_closed_form"] = checks
+    t0 = time.perf_counter()
+    try:
+        bb = ic.multi_impact_continuation(seed, "b", PLANE["b"], ds_max=0.02, max_points=1500)
+        info["b_branch"] = {"points": int(bb.sizes["point"]),
+                            "seconds": time.perf_counter() - t0,
+                            "special_points": specials(bb, "b")}
+        groups["branch_b_omega1.5"] = bb
+    except Exception as exc:
+        log.warning("continuation in b failed: %s: %s", type(exc).__name__, exc)
+        info["b_branch_error"] = f"{type(exc).__name__}: {exc}"
+    # curves of the stability boundary (NS, BP, SN of the symmetric motion) and GR
+    info["curves"] = {}
+    labels = br["special_label"].values.tolist()
+    for kind in ("NS", "BP", "SN", "GR"):
+        for which in range(labels.count(kind)):
+            name = f"{kind}{which}"
+            t0 = time.perf_counter()
+            try:
+                cv = ic.multi_impact_curve(br, kind, which, parameter="b", bounds=PLANE,
+                                           ds_max=0.02, max_points=CURVE_POINTS)
+            except Exception as exc:
+                log.warning("curve %s: %s: %s", name, type(exc).__name__, exc)
+                info["curves"][name] = {"error": f"{type(exc).__name__}: {exc}"}
+                continue
+            groups[f"curve_{name}"] = cv
+            info["curves"][name] = {"points": int(cv.sizes["point"]),
+                                    "seconds": time.perf_counter() - t0}
+    # the stability map of the package over the same grid as the closed form's
+    t0 = time.perf_counter()
+    grid = {"omega": np.linspace(*PLANE["omega"], PLANE_GRID[0]),
+            "b": np.linspace(*PLANE["b"], PLANE_GRID[1])}
+    try:
+        mp = ic.multi_impact_map(seed, ("omega", "b"), grid)
+        groups["map"] = mp
+        info["map"] = {"points": int(mp["found"].size), "seconds": time.perf_counter() - t0}
+    except Exception as exc:
+        log.warning("multi_impact_map: %s: %s", type(exc).__name__, exc)
+        info["map_error"] = f"{type(exc).__name__}: {exc}"
+    return info
+
+
+def curve_vs_closed_form(groups: dict[str, xr.Dataset]) -> list[dict[str, Any]]:
+    """Where the package's curves cross b = const against the closed form's boundary of
+    stable physical motion (bisected) at the same b: each closed-form crossing and the
+    nearest curve crossing (NS/BP/SN for a change of stability, GR for one of physics)."""
+    out = []
+    for b in (0.5, 1.0, 1.5, 2.0):
+        cf = boundary_crossings(b, *PLANE["omega"])
+        pkg = []
+        for name, ds in groups.items():
+            if name.startswith("curve_"):
+                pkg.extend({"curve": name[6:], "omega": float(c["omega"])}
+                           for c in multi_impact_curve_crossings(ds, "b", b))
+        for c in cf:
+            kinds = ("GR",) if c["why"] == "physical" else ("NS", "BP", "SN")
+            near = [p for p in pkg if p["curve"].startswith(kinds)]
+            best = min(near, key=lambda p: abs(p["omega"] - c["omega"]), default=None)
+            c["nearest_curve"] = best["curve"] if best else None
+            c["distance"] = abs(best["omega"] - c["omega"]) if best else None
+        out.append({"b": b, "closed_form_boundary": cf, "package_curves": pkg})
+    return out
+
+
+def draw(rows: list[dict[str, Any]], path: Path) -> None:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for d, color in zip(CLEARANCES, ("C0", "C1", "C2"), strict=True):
+        for root in (0, 1):
+            om = np.linspace(OMEGAS[0], OMEGAS[-1], 400)
+            amp = np.full(om.size, np.nan)
+            stab = np.zeros(om.size, bool)
+            for i, r in enumerate(om):
+                ms = sorted(symmetric_motions(float(r), d, MU, E, ZETA), key=lambda m: m.delta)
+                ms = [m for m in ms if m.physical]
+                if len(ms) > root:
+                    amp[i], stab[i] = ms[root].amplitude, ms[root].stable
+            axes[0].plot(om, np.where(stab, amp, np.nan), "-", color=color,
+                         label=f"closed form, d = {d:g}" if root == 0 else None)
+            axes[0].plot(om, np.where(~stab, amp, np.nan), ":", color=color)
+        pts = [r for r in rows if r["d"] == d and r["physical_pkg"]]
+        axes[0].plot([r["omega"] for r in pts],
+                     [r["amplitude_cf"] * (1 + r["amplitude"]) for r in pts], "o", ms=3,
+                     mfc="none", color=color)
+    om = np.linspace(0.3, OMEGAS[-1], 400)
+    lin = 1.0 / np.abs(1 - om ** 2 + 2j * ZETA * om)
+    axes[0].plot(om, lin, "k--", lw=0.8, label="without the particle")
+    axes[0].set_ylim(0, 4)
+    axes[0].set_xlabel("r = omega / w_n")
+    axes[0].set_ylabel("amplitude of the primary, max |x1| (units F/k)")
+    axes[0].legend(fontsize=7)
+    axes[0].set_title("Symmetric two-impact motion (solid: stable, dotted: unstable;\n"
+                      "circles: the package's multi_impact_orbit)", fontsize=9)
+    worst = [max(r[k] for r in rows) for k in ("phase", "state", "amplitude", "multipliers")]
+    axes[1].semilogy([r["omega"] for r in rows], [max(r["phase"], r["state"], 1e-17)
+                                                  for r in rows], ".", ms=3,
+                     label=f"phase, state (max {max(worst[:2]):.1e})")
+    axes[1].semilogy([r["omega"] for r in rows], [max(r["multipliers"], 1e-17) for r in rows],
+                     "x", ms=3, label=f"multipliers (max {worst[3]:.1e})")
+    axes[1].semilogy([r["omega"] for r in rows], [max(r["amplitude"], 1e-17) for r in rows],
+                     "+", ms=3, label=f"amplitude (max {worst[2]:.1e}; sampled)")
+    axes[1].set_xlabel("r = omega / w_n")
+    axes[1].set_ylabel("relative difference, package vs closed form")
+    axes[1].legend(fontsize=7)
+    axes[1].set_title(f"Agreement (mu = {MU}, e = {E}, zeta = {ZETA}; d = 1, 2, 4)",
+                      fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def draw_plane(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
+               info: dict[str, Any], path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(6.8, 5.0))
+    ax.contourf(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5, 1.5],
+                colors=["C0"], alpha=0.2)
+    ax.contour(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5],
+               colors=["C0"], linewidths=1.0)
+    ax.plot([], [], "s", color="C0", alpha=0.4, label="closed form: stable and physical")
+    if "map" in groups:
+        m = groups["map"]
+        ok = (m["stable"] & m["physical"] & m["found"]).values
+        ax.contour(m["omega"].values, m["b"].values, ok.T.astype(float), levels=[0.5],
+                   colors=["C3"], linewidths=1.0, linestyles="--")
+        ax.plot([], [], "--", color="C3", label="package map: edge of stable and physical")
+    styles = {"NS": "k", "BP": "C2", "SN": "C4", "GR": "C1"}
+    seen = set()
+    for name, ds in groups.items():
+        if not name.startswith("curve_"):
+            continue
+        kind = name[6:8]
+        ax.plot(ds["omega"].values, ds["b"].values, "-", color=styles[kind], lw=1.3,
+                label=None if kind in seen else f"package: {kind} curve")
+        seen.add(kind)
+    ax.set_xlim(*PLANE["omega"])
+    ax.set_ylim(*PLANE["b"])
+    ax.set_xlabel("r = omega / w_n")
+    ax.set_ylabel("b = d/2 (half the cavity, units F/k)")
+    ax.legend(fontsize=7, loc="upper right")
+    ax.set_title("Stable symmetric two-impact motion in (omega, b)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(output: Path) -> dict[str, Any]:
+    output.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    agree = agreement()
+    timings["agreement_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sim = simulator_checks()
+    timings["simulator_s"] = time.perf_counter() - t0
+    groups: dict[str, xr.Dataset] = {}
+    t0 = time.perf_counter()
+    more = beyond(agree["summary"], groups)
+    timings["package_beyond_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    cf = closed_form_plane()
+    timings["closed_form_plane_s"] = time.perf_counter() - t0
+    crossings = curve_vs_closed_form(groups)
+    if "map" in groups:
+        m = groups["map"]
+        pkg = (m["stable"] & m["physical"] & m["found"]).values
+        more["map_vs_closed_form"] = {"cells": int(pkg.size),
+                                      "same_verdict": int(np.sum(pkg == cf["stable"]))}
+    draw(agree["rows"], output / "impact_damper.png")
+    draw_plane(cf, groups, more, output / "impact_damper_plane.png")
+    if groups:
+        ic.save(groups, output / "branches.nc")
+    summary = {"parameters": {"mu": MU, "e": E, "zeta": ZETA, "d": CLEARANCES,
+                              "omega": [float(OMEGAS[0]), float(OMEGAS[-1]), OMEGAS.size]},
+               "agreement": agree["summary"], "simulator": sim, "beyond": more,
+               "boundary_vs_curves": crossings, "timings": timings,
+               "total_s": time.perf_counter() - t_start}
+    (output / "impact_damper.json").write_text(json.dumps(summary, indent=2, default=str))
+    return summary
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--output", type=Path, default=HERE / "output")
+    parser.add_argument("--copy-figures", action="store_true",
+                        help="copy the figures into figures/ (tracked)")
+    args = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    result = main(args.output)
+    if args.copy_figures:
+        (HERE / "figures").mkdir(exist_ok=True)
+        for name in ("impact_damper.png", "impact_damper_plane.png"):
+            shutil.copy(args.output / name, HERE / "figures" / name)
+    log.info("done in %.1f s", result["total_s"])
