@@ -1,0 +1,78 @@
+"""studies/impact_damper: the closed form of the symmetric two-impact motion of an impact
+damper (derived in the study, after Masri & Caughey 1966) against the package's N-p
+shooting (``multi_impact_orbit``) and its multipliers.
+
+The closed form is an independent witness: the motion from three linear equations and a
+quadratic (the phase), the stability from the half-period map written out by hand
+(``studies/impact_damper/closed_form.py``), no code shared with the package."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+
+HERE = Path(__file__).resolve().parents[1] / "studies" / "impact_damper"
+MU, E, ZETA = 0.2, 0.8, 0.05
+
+
+@pytest.fixture(scope="module")
+def cf():
+    spec = importlib.util.spec_from_file_location("impact_damper_closed_form",
+                                                  HERE / "closed_form.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look the module up by name
+    try:
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.modules.pop(spec.name, None)
+
+
+def _package(m):
+    osc = ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]],
+                              F=[1.0, 0.0], R=E, b=0.5 * m.d, omega=m.r, eta=ZETA,
+                              stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+    T2 = math.pi / m.r
+    return ic.multi_impact_orbit(osc, 1, 2, {"delta": m.delta, "flight_times": [T2, T2],
+                                             "states": [m.state, -m.state],
+                                             "pattern": "UL"})
+
+
+@pytest.mark.parametrize("r, d", [(1.5, 2.0), (2.5, 1.0), (0.7, 4.0)])
+def test_closed_form_motion_is_the_packages(cf, r, d):
+    """Both roots: phase, state after the impact, approach speed, flight times and
+    multipliers agree within Newton's guarantee (error_estimate ~ 1e-12 here)."""
+    motions = cf.symmetric_motions(r, d, MU, E, ZETA)
+    assert len(motions) == 2
+    for m in motions:
+        orbit = _package(m)
+        assert orbit.residual < 1e-12 and orbit.error_estimate < 1e-10
+        k = orbit.pattern.index("U")
+        tol = 1e-9  # >> the error estimate, << any difference in the formulas
+        assert abs(math.remainder(orbit.phases[k] - m.delta, 2 * math.pi)) < tol
+        np.testing.assert_allclose(orbit.states[k], m.state, rtol=0, atol=tol)
+        np.testing.assert_allclose(orbit.flight_times, math.pi / r, rtol=0, atol=tol)
+        assert orbit.impact_velocities[k] == pytest.approx(m.impact_velocity, abs=tol)
+        for q in m.multipliers:  # each closed-form multiplier is one of the package's
+            assert np.min(np.abs(orbit.multipliers - q)) < 1e-7 * max(1.0, abs(q))
+        assert orbit.physical == m.physical
+
+
+@pytest.mark.parametrize("r, stable", [(1.47, False), (1.48, True), (1.85, True),
+                                       (1.87, False)])
+def test_closed_form_stability_verdict_is_the_multipliers(cf, r, stable):
+    """Either side of the pitchfork (omega = 1.47404) and of the Neimark-Sacker point
+    (1.86058) of the study's b = 1 branch: the closed form's verdict on its physical
+    root, the package's multipliers, and the expected side agree."""
+    m = next(m for m in cf.symmetric_motions(r, 2.0, MU, E, ZETA) if m.physical
+             and abs(m.delta - (-3.0)) < 0.3)  # the root on the study's branch
+    orbit = _package(m)
+    assert m.stable == orbit.stable == stable
+    assert np.max(np.abs(m.multipliers)) == pytest.approx(orbit.spectral_radius, rel=1e-8)
