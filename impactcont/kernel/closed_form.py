@@ -199,7 +199,8 @@ def amplitude_derivative(w, a, f, u0, ui0, R, omega, N, which, da):
         h = _STEP
         for i in range(a.size):
             ac[i] = complex(a[i], h * da[i])
-    c, s = amplitude(wc, ac, f, u0, ui0, Rc, omc, N)
+    # complex f as every complex-stepped caller passes it: one compiled complex variant
+    c, s = amplitude(wc, ac, f.astype(np.complex128), u0, ui0, Rc, omc, N)
     return c.imag / h, s.imag / h
 
 

@@ -238,8 +238,12 @@ class _Pieces:
         return physical_transition(self.osc, self.modal)
 
     def _kernel_args(self, delta: float) -> tuple:
-        """The arguments of the kernel's G functions after the transition."""
+        """The arguments of the kernel's G functions after the transition (``delta``
+        complex with complex-stepped pieces, as when the phase itself is stepped: one
+        compiled complex variant of each kernel function)."""
         u, ui0 = self.osc.modes.kernel_arrays[3], self.osc.modes.kernel_arrays[7]
+        if self.modal.dtype.kind == "c":
+            delta = complex(delta)
         return (self.modal, self.w, self.a, self.f, u, ui0, self.omega, self.R, delta,
                 self.impact_velocity(delta))
 
