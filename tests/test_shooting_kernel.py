@@ -13,12 +13,12 @@ import impactcont as ic
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import (
-    impact_geometry,
     multi_impact_orbit,
     omega_partials,
     orbit_from_unknowns,
     shooting,
 )
+from impactcont.orbit.stop_geometry import stop_geometry
 from impactcont.simulate.contact import flight_clearances
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
@@ -52,11 +52,13 @@ def _numpy_shooting(flow, N, p, u, pattern):
     """The shooting system from the numpy flow (Flow.matrices, Flow.state_derivative)."""
     osc = flow.osc
     m, omega = 2 * osc.n, osc.omega
-    j, positions, diagonals = impact_geometry(osc, pattern)
+    geo = stop_geometry(osc, pattern)
+    j, n = geo.pivot, osc.n
     taus = np.append(u[1:p], 2 * math.pi * N / omega - np.sum(u[1:p]))
     starts = np.empty((p, m))
-    starts[:, j] = positions
     starts[:, np.delete(np.arange(m), j)] = u[p:].reshape(p, m - 1)
+    others = np.delete(np.arange(n), j)  # on the section n . x = c_k
+    starts[:, j] = (geo.positions - starts[:, others] @ geo.normals[0, others]) / geo.normals[0, j]
     phases = u[0] + omega * np.concatenate([[0.0], np.cumsum(taus[:-1])])
     out = {"transitions": [], "arrivals": [], "phase_columns": [], "arrival_rates": []}
     for k in range(p):
@@ -67,8 +69,8 @@ def _numpy_shooting(flow, N, p, u, pattern):
         out["phase_columns"].append(forcing @ [-s, c])
         out["arrival_rates"].append(flow.state_derivative(taus[k], starts[k], phases[k])[0])
     out = {key: np.array(v) for key, v in out.items()}
-    out["residual"] = (np.roll(diagonals, -1, axis=0) * out["arrivals"]
-                       - np.roll(starts, -1, axis=0)).ravel()
+    out["residual"] = (np.einsum("kij,kj->ki", np.roll(geo.matrices, -1, axis=0),
+                                 out["arrivals"]) - np.roll(starts, -1, axis=0)).ravel()
     out.update(starts=starts, phases=phases, flight_times=taus)
     return out
 

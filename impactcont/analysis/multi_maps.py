@@ -45,11 +45,11 @@ from impactcont.dataset.multi_maps import (
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import ModelParameter, model_parameter
+from impactcont.model.parameters import MASS, ModelParameter, model_parameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
-from impactcont.orbit.stop_geometry import impact_geometry, stop_sign
+from impactcont.orbit.stop_geometry import stop_geometry, stop_sign
 from impactcont.orbit.symmetry import (
     SYMMETRY_TOL,
     HalfUnknowns,
@@ -156,10 +156,14 @@ def _decide_symmetric(orbit: MultiImpactOrbit, params: tuple[ModelParameter, Mod
 class _Tables:
     """The flows and stop geometries of a grid, stacked for the compiled sweep.
 
-    A flow is built once per value of the parameters that change it (all but those that
-    move a stop: :attr:`~impactcont.model.parameters.ModelParameter.moves_stops`), a
-    geometry once per value of those that move a stop (``b``, ``R``, ``b_low``,
-    ``R_low``, ``gap``).
+    A flow (:meth:`~impactcont.orbit.flow.Flow.shooting_arrays` and the constant force's
+    :meth:`~impactcont.orbit.flow.Flow.static_arrays`) is built once per value of the
+    parameters that change it (all but those that move a stop:
+    :attr:`~impactcont.model.parameters.ModelParameter.moves_stops`), a stop geometry
+    (:func:`~impactcont.orbit.stop_geometry.stop_geometry`: normals, positions, impact
+    matrices) once per value of those that move a stop (``b``, ``R``, ``b_low``,
+    ``R_low``, ``gap``) or change the masses (the two-body impact law of a clearance
+    between masses, :meth:`~impactcont.model.stops.Stops.impact_matrix`, depends on M).
     """
 
     def __init__(self, osc: ImpactOscillator, params: tuple[ModelParameter, ...],
@@ -168,27 +172,34 @@ class _Tables:
         self.osc, self.parameters, self.pattern, self.solved = osc, parameters, pattern, solved
         shape = tuple(grid[name].size for name in parameters)
         flow_axes = [k for k, param in enumerate(params) if not param.moves_stops]
-        stop_axes = [k for k, param in enumerate(params) if param.moves_stops]
+        stop_axes = [k for k, param in enumerate(params)
+                     if param.moves_stops or param.data == MASS]
         flow_values, self.flow_index = _combinations(parameters, grid, flow_axes, shape)
         geometry_values, self.geometry_index = _combinations(parameters, grid, stop_axes, shape)
         by_name = {param.name: param for param in params}
         self.flows = [Flow(_replaced(osc, by_name, values)) for values in flow_values]
-        geometries = [self.geometry(_replaced(osc, by_name, values))
+        geometries = [stop_geometry(_replaced(osc, by_name, values), pattern)
                       for values in geometry_values]
         self.flow_arrays = _stack([flow.shooting_arrays()[1:] for flow in self.flows])
+        self.static_arrays = _stack([flow.static_arrays() for flow in self.flows])
         self.omegas = np.array([flow.omega for flow in self.flows], dtype=float)
-        (self.positions, self.diagonals, self.full_diagonals, self.b_upper,
-         self.b_lower) = (np.ascontiguousarray(np.array(column)) for column in zip(*geometries,
-                                                                                  strict=True))
         self.general = bool(self.flows[0].shooting_arrays()[0])
+        # the stop coordinate, its pivot and the lower stop's presence are the stops'
+        # structure, which no parameter changes
+        self.pivot, self.two_sided = geometries[0].pivot, geometries[0].two_sided
+        q = solved
 
-    def geometry(self, osc: ImpactOscillator) -> tuple[Any, ...]:
-        """Positions and diagonals of the impacts solved, all diagonals, ``b``, ``b_low``."""
-        _, positions, diagonals = impact_geometry(osc, self.pattern)
-        stops = osc.stops
-        b_low = float(stops.b_low) if stops.two_sided else 0.0
-        return (positions[:self.solved], diagonals[:self.solved], diagonals, float(osc.b),
-                b_low)
+        def column(get: Any) -> np.ndarray:
+            return np.ascontiguousarray(np.array([get(geo) for geo in geometries], dtype=float))
+
+        self.positions = column(lambda geo: geo.positions[:q])
+        self.normals = column(lambda geo: geo.normals[:q])
+        self.matrices = column(lambda geo: geo.matrices[:q])
+        self.full_normals = column(lambda geo: geo.normals)
+        self.full_matrices = column(lambda geo: geo.matrices)
+        self.contact_normals = column(lambda geo: geo.normal)
+        self.b_upper = column(lambda geo: geo.b)
+        self.b_lower = column(lambda geo: geo.b_low)
 
 
 def _replaced(osc: ImpactOscillator, params: Mapping[str, ModelParameter],
@@ -260,7 +271,7 @@ class _Setting:
     def sweep(self, tables: _Tables, axes: dict[str, np.ndarray], seed: tuple[int, int],
               x_seed: np.ndarray, checks: bool
               ) -> tuple[dict[str, np.ndarray], np.ndarray, tuple[int, int, int, bool]]:
-        """:func:`impactcont.kernel.sweep.sweep` over the grid `axes` from `seed`.
+        """:func:`impactcont.kernel.sweep.sweep_stops` over the grid `axes` from `seed`.
 
         Returns the flat outputs, the unknowns of every point and ``(solved, attempts,
         newton_iterations, capped)``.
@@ -277,12 +288,12 @@ class _Setting:
                "flight_time_k": np.full((npts, p), np.nan),
                "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
         unknowns = np.full((npts, x_seed.size), np.nan)
-        stops = self.osc.stops
-        stats = _kernel().sweep(
-            tables.general, *tables.flow_arrays, tables.omegas, tables.flow_index,
-            tables.positions, tables.diagonals, tables.full_diagonals, tables.b_upper,
+        stats = _kernel().sweep_stops(
+            tables.general, *tables.flow_arrays, *tables.static_arrays, tables.omegas,
+            tables.flow_index, tables.positions, tables.normals, tables.matrices,
+            tables.full_normals, tables.full_matrices, tables.contact_normals, tables.b_upper,
             tables.b_lower, tables.geometry_index, axes[names[0]], axes[names[1]], self.signs,
-            self.N, self.half, self.admits, stops.index, stops.two_sided, seed[0], seed[1],
+            self.N, self.half, self.admits, tables.pivot, tables.two_sided, seed[0], seed[1],
             np.ascontiguousarray(x_seed, dtype=float), self.tol, self.max_iter,
             self.max_change, bool(checks), self.max_attempts, unknowns, out["found"],
             out["newton_iterations"], out["delta"], out["stable"], out["physical"],
@@ -436,6 +447,16 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
                     "map: a short excursion past a stop (eq. 16) may be missed there")
     if not admits:
         del out["asymmetry"]
+    # the sweep leaves gap_min NaN at a found point exactly where the contact search did
+    # not run (checks=False) or cannot represent a flight (a constant force pushing a free
+    # mode that the stop coordinate sees, a polynomial in time): never physical there
+    out["contact_checked"] = out["found"] & ~np.isnan(out["gap_min"])
+    unchecked = int(np.count_nonzero(out["found"] & ~out["contact_checked"]))
+    if checks and unchecked:
+        log.warning("%d of %d found points: interior contact not checked (the constant force "
+                    "F_static moves %s by a polynomial in time through a free mode, which the "
+                    "contact search does not represent); they are not physical "
+                    "(contact_checked False)", unchecked, solved, osc.stops.coordinate)
     values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
     seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1]),
             "index": [int(s0), int(s1)],

@@ -64,15 +64,24 @@ MULTI_MAP_VARIABLES: dict[str, _Var] = {
                    kind="b"),
     "physical": _Var("physically realisable", "1",
                      "Every flight time > 0, every impact velocity > 0 and no contact inside a "
-                     "flight (eq. 16 against every stop); False where not found.", kind="b"),
+                     "flight (eq. 16 against every stop, searched: contact_checked); False "
+                     "where not found.", kind="b"),
+    "contact_checked": _Var("interior contact checked", "1",
+                            "Every flight of the motion was searched for contact with a stop "
+                            "(eq. 16). False where found but not searched: checks=False, or a "
+                            "constant force F_static pushes a free mode that the stop "
+                            "coordinate sees (a polynomial in time the search does not "
+                            "represent); such a point is never physical. False where not "
+                            "found.", kind="b"),
     "spectral_radius": _Var("spectral radius", "1",
                             "rho(G), G the impact map over the whole motion (eq. 25)."),
     "critical_multiplier": _Var("critical multiplier", "1",
                                 "The multiplier of G of largest modulus.", kind="c"),
     "delta": _Var("impact phase", "rad", "Forcing phase at impact 0, in (-pi, pi]."),
     "gap_min": _Var("minimum gap", "1",
-                    "Smallest clearance to any stop at the interior extrema of the impacting "
-                    "mass over all flights (eq. 16); +inf when there is none."),
+                    "Smallest clearance to any stop at the interior extrema of the stop "
+                    "coordinate over all flights (eq. 16); +inf when there is none; NaN "
+                    "where not searched (contact_checked False)."),
     "impact_velocity_k": _Var("impact velocity", "1",
                               "Speed of the impacting mass towards the stop hit just before "
                               "impact k.", extra_dims=("impact",)),

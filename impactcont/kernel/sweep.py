@@ -28,8 +28,8 @@ velocities, flight times, gaps and states are the mirror images of the first's.
 Every stop acts on a stop coordinate ``s = n . x`` (a mass, or a clearance between two
 masses) with a full impact matrix on the velocities
 (:class:`impactcont.orbit.stop_geometry.StopGeometry`). One compiled entry point,
-:func:`sweep_stops` (compiled once; a single point is a 1 x 1 grid); :func:`sweep`
-takes stops on one mass by their impact-law diagonals and calls it.
+:func:`sweep_stops` (compiled once; a single point is a 1 x 1 grid), with the constant
+force's arrays (:meth:`impactcont.orbit.flow.Flow.static_arrays`) stacked like the flows'.
 Importing :mod:`impactcont` does not import this module.
 """
 
@@ -49,7 +49,7 @@ from impactcont.kernel.shooting import (
 )
 from impactcont.kernel.stability import multipliers
 
-__all__ = ["sweep", "sweep_stops"]
+__all__ = ["sweep_stops"]
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -241,39 +241,6 @@ def _push(queue, tail, size, point, parent):
     queue[tail % size, 0] = point
     queue[tail % size, 1] = parent
     return tail + 1
-
-
-def sweep(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, omegas,
-          flow_index, positions, diagonals, full_diagonals, b_upper, b_lower, geometry_index,
-          coord0, coord1, signs, N, symmetric, admits, j, two_sided, *rest):
-    """:func:`sweep_stops` for stops on mass ``j`` given by impact-law diagonals.
-
-    The arguments of :func:`sweep_stops` with ``diagonals``, ``full_diagonals`` (the
-    diagonals of the impact matrices, shapes (ng, q, 2n) and (ng, p, 2n)) in place of
-    the normals and matrices: every stop acts on ``x_j`` (normal ``e_j``).
-    """
-    diagonals = np.asarray(diagonals, dtype=float)
-    full_diagonals = np.asarray(full_diagonals, dtype=float)
-    m = full_diagonals.shape[-1]
-    unit = np.zeros(m // 2)
-    unit[j] = 1.0
-    ng = full_diagonals.shape[0]
-
-    def square(d: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(d[..., :, None] * np.eye(m))
-
-    def units(d: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(np.broadcast_to(unit, (*d.shape[:2], m // 2)))
-
-    nf = np.asarray(omegas).size
-    return sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj,
-                       np.zeros((nf, 0)), np.zeros((nf, 0), dtype=np.bool_), np.zeros((nf, 0)),
-                       np.zeros((nf, 0)), omegas, flow_index, positions, units(diagonals),
-                       square(diagonals),
-                       units(full_diagonals), square(full_diagonals),
-                       np.ascontiguousarray(np.tile(unit, (ng, 1))), b_upper, b_lower,
-                       geometry_index, coord0, coord1, signs, N, symmetric, admits, j,
-                       two_sided, *rest)
 
 
 @_jit

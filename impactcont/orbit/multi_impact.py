@@ -63,14 +63,13 @@ from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
 )
-from impactcont.orbit.stop_geometry import StopGeometry, impact_geometry, stop_geometry, stop_sign
+from impactcont.orbit.stop_geometry import StopGeometry, stop_geometry, stop_sign
 
 __all__ = [
     "MultiImpactOrbit",
     "Shooting",
     "check_impacts",
     "flight_jacobian",
-    "impact_geometry",
     "initial_unknowns",
     "multi_impact_orbit",
     "newton",

@@ -22,7 +22,7 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER
 
-__all__ = ["StopGeometry", "impact_geometry", "stop_geometry", "stop_sign"]
+__all__ = ["StopGeometry", "stop_geometry", "stop_sign"]
 
 
 def stop_sign(stop: str) -> float:
@@ -128,41 +128,3 @@ def stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
                         signs=np.array([stop_sign(s) for s in pattern]), positions=positions,
                         matrices=matrices, normal=normal, b=float(osc.b),
                         b_low=float(stops.b_low) if two_sided else 0.0, two_sided=two_sided)
-
-
-def impact_geometry(osc: ImpactOscillator, pattern: str) -> tuple[int, np.ndarray, np.ndarray]:
-    """Index of the impacting mass, stop positions and impact-law diagonals per impact.
-
-    The diagonal view of :func:`stop_geometry` for stops whose impact matrices are
-    diagonal (a stop on one mass with a diagonal mass matrix).
-
-    Parameters
-    ----------
-    osc : ImpactOscillator
-    pattern : str
-        The stop of each impact (``"U"``/``"L"``), validated.
-
-    Returns
-    -------
-    j : int
-        0-based index of the impacting mass.
-    positions : ndarray, shape (p,)
-        ``c_k``: ``b`` or ``-b_low``.
-    diagonals : ndarray, shape (p, 2n)
-        Diagonal of ``D_k`` (eq. 4 at the stop of impact k: ``-R_k`` on ``x_j'``).
-
-    Raises
-    ------
-    ParameterError
-        When an impact matrix is not diagonal or the stop coordinate is not ``x_j``
-        (a clearance between masses): use :func:`stop_geometry`.
-    """
-    geometry = stop_geometry(osc, pattern)
-    unit = np.zeros(osc.n)
-    unit[geometry.pivot] = 1.0
-    if not geometry.diagonal or not np.array_equal(geometry.normal, unit):
-        raise ParameterError(f"impact_geometry: the stops {osc.stops!r} act on "
-                             f"n . x with n={geometry.normal.tolist()} and full impact "
-                             "matrices; use stop_geometry (normals and impact matrices)")
-    diagonals = np.ascontiguousarray(np.diagonal(geometry.matrices, axis1=1, axis2=2))
-    return geometry.pivot, geometry.positions, diagonals

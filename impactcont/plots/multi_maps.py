@@ -1,8 +1,9 @@
 """The stability map of one N-p motion family (:func:`~impactcont.multi_impact_map`).
 
 Regions of the grid shaded (not found, found but not physical, physical and unstable,
-stable and physical), the boundaries of the found region and of the stable physical
-region drawn on top, the seed marked. Reads the dataset only; never calls ``plt.show``.
+stable and physical, found with its interior contact not checked), the boundaries of the
+found region and of the stable physical region drawn on top, the seed marked. Reads the
+dataset only; never calls ``plt.show``.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ MULTI_MAP_REGIONS: dict[int, tuple[str, str]] = {
     1: ("found, not physical", "#e4e4e4"),
     2: ("physical, unstable", "#f6d7a7"),
     3: ("stable physical motion", "#8fc4e8"),
+    4: ("found, interior contact not checked", "#d8c6e6"),
 }
 
 #: Colour and line style of the boundary of each region, and its legend text.
@@ -59,11 +61,15 @@ def multi_map_regions(ds: xr.Dataset) -> xr.DataArray:
     -------
     xarray.DataArray of int, dims (parameter 0, parameter 1)
         0: not found; 1: found, not physical; 2: physical, unstable; 3: stable and
-        physical.
+        physical; 4: found, but its interior contact was not searched
+        (``contact_checked`` False: ``checks=False``, or a constant force pushing a free
+        mode), so whether it is physical is not known (it is never reported physical).
     """
     validate_multi_impact_map_dataset(ds)
-    found, physical, stable = (ds[k].astype(bool) for k in ("found", "physical", "stable"))
-    code = xr.where(physical & stable, 3, xr.where(physical, 2, xr.where(found, 1, 0)))
+    found, physical, stable, checked = (ds[k].astype(bool) for k in (
+        "found", "physical", "stable", "contact_checked"))
+    code = xr.where(physical & stable, 3, xr.where(physical, 2, xr.where(
+        found & ~checked, 4, xr.where(found, 1, 0))))
     return code.rename("region")
 
 
