@@ -333,3 +333,21 @@ def test_grazing_switch_steps_geometrically_away_from_the_graze():
     rho = switched.spectral_radius.values[:12]
     assert rho[0] > 1e3 and np.all(np.diff(rho) < 0)  # 1/|omega - omega_GR| decay seen
     assert_reproduced_by_simulator(orbit_at_point(switched, 6), 1, tol=1e-8)
+
+
+def test_a_phase_that_runs_off_does_not_loosen_newton_s_test():
+    # A bouncing ball (free mass, gravity as F_static, the table's motion as F) from a
+    # poor guess: Newton drove the phase to ~-3e14 and the test tol * max(1, |u|) then
+    # passed with a residual of 0.95. The phase now counts at most pi in the scale.
+    from impactcont.orbit.multi_impact import unknowns_scale
+
+    assert unknowns_scale(np.array([-3e14, 2.0, 0.5])) == math.pi
+    assert unknowns_scale(np.array([0.5, 2.0, -7.0])) == 7.0
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[0.0]], F=[1.06], F_static=[-1.0], omega=1.0,
+                              R=0.5, b=1000.0, stops=ic.Stops(b_low=0.0, R_low=0.5))
+    guess = {"delta": -math.pi / 2, "flight_times": [2 * math.pi], "states": [[0.0, math.pi]]}
+    try:
+        orbit = ic.multi_impact_orbit(osc, 1, 1, guess=guess, pattern="L")
+    except ic.NoPeriodicMotionError:
+        return
+    assert orbit.residual < 1e-9

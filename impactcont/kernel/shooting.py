@@ -494,7 +494,8 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
-        scale = max(1.0, _max_abs(x))
+        # the phase counts at most pi: a phase that ran off to 1e14 must not loosen the test
+        scale = max(1.0, min(abs(x[0]), math.pi), _max_abs(x[1:]))
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
             return x, CONVERGED, it, norm, step_norm, sh

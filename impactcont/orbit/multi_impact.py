@@ -610,6 +610,16 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
     return np.concatenate([[delta], taus[:-1], z.ravel()]), pattern
 
 
+def unknowns_scale(u: np.ndarray) -> float:
+    """The size ``max(1, |delta|, |tau|, |z|)`` of the unknowns that Newton's tolerance is
+    relative to, with the phase counted at most pi (the residual is 2 pi periodic in it):
+    a phase that ran off to 1e14 would otherwise loosen the test until a residual of
+    order 1 passed (a bouncing ball at Gamma = 1.06 from a poor guess did).
+    """
+    u = np.asarray(u, dtype=float)
+    return max(1.0, min(abs(float(u[0])), math.pi), float(np.max(np.abs(u[1:]), initial=0.0)))
+
+
 def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
                       ) -> tuple[float, float]:
     """Condition number of the shooting Jacobian and the error it allows in ``u``.
@@ -696,7 +706,7 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
     sh = _as_shooting(out, True)
     if status == 0:
         return u, sh, int(it)
-    scale = max(1.0, float(np.max(np.abs(u))))
+    scale = unknowns_scale(u)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
     if norm <= _NEAR_SOLUTION * scale and not cond * _EPS <= _ERROR_WARN:
         raise NoPeriodicMotionError(
@@ -864,7 +874,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     u0, pattern = _seed(guess, osc, N, p, pattern)
     u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter, pattern=pattern)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
-    scale = max(1.0, float(np.max(np.abs(u))))
+    scale = unknowns_scale(u)
     residual = float(np.max(np.abs(sh.residual)))
     if not error <= _ERROR_WARN * scale:
         if not error <= _SINGULAR * scale:
