@@ -11,7 +11,7 @@ import impactcont as ic
 from impactcont.kernel import closed_form, contact
 from impactcont.orbit.extrema import interior_maxima, sample_times
 from impactcont.orbit.flow import Flow
-from impactcont.orbit.periodic import periodic_orbits
+from impactcont.orbit.periodic import modal_arrays, periodic_orbits
 from impactcont.problems import codim1
 
 PAIRS = [("omega", "b"), ("b", "omega"), ("omega", "R"), ("R", "b"), ("omega", "F0"),
@@ -123,8 +123,9 @@ def test_other_maximum_against_the_dense_search(omega, b):
                                        sample_times(flow, 0.0, orbit.period))
         assert len(peaks) >= 2
         order = np.argsort(peaks)[::-1]
-        w, a, _, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-        modal, sc = closed_form.omega_setup(w, a, osc.modes.kernel_arrays[2], u0, ui0, eig_err,
+        arrays = modal_arrays(osc)
+        w, a, eig_err, u0, ui0 = arrays.w, arrays.a, arrays.eig_err, arrays.u0, arrays.ui0
+        modal, sc = closed_form.omega_setup(w, a, arrays.f, u0, ui0, eig_err,
                                        osc.R, osc.omega, 2)
         top, t_top = contact.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R, orbit.delta,
                                           orbit.impact_velocity, np.nan)

@@ -88,8 +88,9 @@ def test_damping_matrix_path_matches_the_modal_path_from_1e_minus6_to_1e8():
     for omega in np.geomspace(1e-6, 1e8, 15):
         (modal, w_modal), (matrix, w_matrix) = (_orbits(_paper(omega, m)) for m in (0, 1))
         assert w_modal == w_matrix, (omega, w_modal, w_matrix)
-        w, a, f, _, _, eig_err, u0, ui0 = _paper(omega, False).modes.kernel_arrays
-        cond = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, 0.6, omega, 1)[1][7]
+        arrays = periodic.modal_arrays(_paper(omega, False))
+        cond = closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
+                                       arrays.eig_err, 0.6, omega, 1)[1][7]
         tol = 1e-11 + 10.0 * EPS * cond
         assert [o.root for o in modal] == [o.root for o in matrix]
         for p, q in zip(modal, matrix, strict=True):
@@ -135,7 +136,8 @@ def test_damping_matrix_amplitude_derivative_at_high_omega(which, omega):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IllConditionedWarning)  # stated above omega ~ 3e4
         _, _, dc, ds = general.amplitude(_paper(omega, True), 1, which)
-    w, a, f, _, _, _, u0, ui0 = _paper(omega, False).modes.kernel_arrays
+    arrays = periodic.modal_arrays(_paper(omega, False))
+    w, a, f, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0
     h = 1e-30 * (omega if which == "omega" else 1.0)
     step = {"omega": (R + 0j, omega + 1j * h), "R": (R + 1j * h, omega + 0j)}[which]
     c, s = closed_form.amplitude(w.astype(complex), a.astype(complex), f.astype(complex), u0, ui0,
@@ -214,7 +216,8 @@ def test_a_guess_off_eq_14_keeps_the_kernel_velocity():
     orbit = ic.periodic_orbits(osc, 1)[1]
     delta = orbit.delta + 1e-6
     guess = orbit_at_phase(osc, 1, delta, check=False)
-    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    arrays = periodic.modal_arrays(osc)
+    w, a, f, eig_err, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.eig_err, arrays.u0, arrays.ui0
     sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, 1)[1]
     assert guess.impact_velocity == roots.phase_sigma(sc, osc.omega, osc.R, osc.b, delta)
 

@@ -28,6 +28,7 @@ from test_high_frequency_accuracy import K3, _far
 
 import impactcont as ic
 from impactcont.orbit import secular
+from impactcont.orbit.periodic import modal_arrays
 from impactcont.problems.codim1 import curve_problem
 
 OMEGA = 300.0  # issue 19's example: omega / omega_1 = 670
@@ -191,7 +192,8 @@ def test_secular_multipliers_refuse_where_the_modal_velocity_cancels(chain16_ref
     orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.root == -1)
     mu_ref = np.asarray(chain16_reference["multipliers"])
     tol = 1e-10 * np.abs(mu_ref).max()
-    w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
+    arrays = modal_arrays(osc)
+    w, a, f, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0
     mu, ok = secular.secular_multipliers(orbit.modal, w, a, f, u0, ui0, osc.omega, osc.R,
                                          orbit.delta, orbit.impact_velocity)
     assert not ok or ref.matched_error(mu, mu_ref) <= tol

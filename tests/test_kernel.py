@@ -73,7 +73,8 @@ def test_kernel_matches_the_dense_path(n, damping):
                 cs, *_ = _dense(osc, N, 0.0)
             except ic.ParameterError:
                 continue
-        w, a, f, _, _, err, u0, ui0 = osc.modes.kernel_arrays
+        arrays = periodic.modal_arrays(osc)
+        w, a, f, err, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.eig_err, arrays.u0, arrays.ui0
         _, sc = closed_form.omega_setup(w, a, f, u0, ui0, err, osc.R, osc.omega, N)
         if not sc[7] < 1e8:
             continue  # near a free-mode resonance both paths are inexact (and warn)
@@ -163,7 +164,8 @@ def test_polish_roots_and_taylor_values_are_exact(omega, b, N):
 
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                               b=b, omega=omega, eta=0.1)
-    w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
+    arrays = periodic.modal_arrays(osc)
+    w, a, f, eig_err, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.eig_err, arrays.u0, arrays.ui0
     modal, sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, omega, N)
     count, dl, sg, _, _ = roots.orbit_roots(sc, b, omega, osc.R)
     assert count > 0
@@ -222,13 +224,19 @@ def test_modal_arrays_take_the_impacting_mass_from_the_model():
     assert periodic.modal_arrays(osc) is periodic.modal_arrays(osc)  # built once per basis
 
 
-def test_modal_arrays_keep_the_order_of_the_positional_tuple(paper):
+def test_modal_arrays_are_the_one_form_of_the_modal_basis(paper):
+    """The named fields are the basis's arrays (the positional tuple of the basis is gone);
+    ``as_tuple`` keeps the order the compiled entry points unpack."""
     arrays = periodic.modal_arrays(paper)
-    assert isinstance(arrays, ModalArrays)
-    for field, old in zip(arrays, paper.modes.kernel_arrays, strict=True):
-        np.testing.assert_array_equal(field, old)
-    w, _, _, _, _, eig_err, _, ui0 = arrays
-    assert w is arrays.w and ui0 is arrays.ui0 and eig_err is arrays.eig_err
+    basis = paper.modes
+    assert isinstance(arrays, ModalArrays) and not hasattr(basis, "kernel_arrays")
+    for name, source in (("w", basis.natural_frequencies), ("a", basis.decay_rates),
+                         ("f", basis.modal_forces), ("u", basis.u), ("ui", basis.u_inv),
+                         ("eig_err", basis.eigenvalue_errors), ("u0", basis.u[0]),
+                         ("ui0", basis.u_inv[:, 0])):
+        np.testing.assert_array_equal(getattr(arrays, name), source)
+    order = ("w", "a", "f", "u", "ui", "eig_err", "u0", "ui0")
+    assert all(x is getattr(arrays, k) for x, k in zip(arrays.as_tuple(), order, strict=True))
 
 
 def test_the_kernel_entry_points_take_the_modal_arrays(paper):

@@ -14,12 +14,14 @@ import pytest
 import impactcont as ic
 from impactcont.kernel import closed_form, stability
 from impactcont.orbit import secular
+from impactcont.orbit.periodic import modal_arrays
 from tests.test_kernel import DAMPING, _random_oscillator
 
 
 def _secular(orbit: ic.PeriodicOrbit) -> tuple[np.ndarray, bool]:
     osc = orbit.oscillator
-    w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
+    arrays = modal_arrays(osc)
+    w, a, f, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0
     return secular.secular_multipliers(orbit.modal, w, a, f, u0, ui0, osc.omega, osc.R,
                                        orbit.delta, orbit.impact_velocity)
 
@@ -83,7 +85,8 @@ def test_large_chain_uses_the_secular_path_and_matches_dense(n, damping):
 def test_power_sum_guard_catches_a_missing_or_moved_root():
     orbit = ic.periodic_orbits(_chain(20), 1)[0]
     osc = orbit.oscillator
-    w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
+    arrays = modal_arrays(osc)
+    w, a, f, u0, ui0 = arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0
     pieces = closed_form.jacobian_pieces(orbit.modal, w, a, f, ui0, osc.omega, osc.R, orbit.delta,
                                     orbit.impact_velocity)
     *_, h2, xn = secular.secular_coefficients(orbit.modal, u0, ui0, osc.omega, osc.R,

@@ -22,7 +22,6 @@ free of cancellation and overflow:
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 import warnings
 
@@ -159,16 +158,6 @@ class ModalBasis:
         return cls(u=u, u_inv=u.T @ M, natural_frequencies=w,
                    decay_rates=0.5 * (alpha + beta * lam), modal_forces=u.T @ F,
                    eigenvalue_errors=errors, free=free)
-
-    @functools.cached_property
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
-        """``w, a, f, u, u^-1, eigenvalue_errors, u[0], u^-1[:, 0]`` as contiguous float
-        arrays, the inputs of :mod:`impactcont.kernel.closed_form` (built once per basis)."""
-        errors = (np.zeros_like(self.natural_frequencies) if self.eigenvalue_errors is None
-                  else self.eigenvalue_errors)
-        arrays = (self.natural_frequencies, self.decay_rates, self.modal_forces, self.u,
-                  self.u_inv, errors, self.u[0], self.u_inv[:, 0])
-        return tuple(np.ascontiguousarray(x, dtype=float) for x in arrays)
 
     @property
     def damping_ratios(self) -> np.ndarray:

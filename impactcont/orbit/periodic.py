@@ -209,8 +209,9 @@ def _built(osc: ImpactOscillator) -> tuple[int, ModalArrays, tuple[np.ndarray, .
     mass = osc.stops.mass - 1
     entry = _BUILT.get(basis)
     if entry is None or entry[0] != mass:
-        w, a, f, u, ui, eig_err = basis.kernel_arrays[:6]
-        arrays = _arrays.modal_arrays(w, a, f, u, ui, eig_err, mass=mass)
+        arrays = _arrays.modal_arrays(basis.natural_frequencies, basis.decay_rates,
+                                      basis.modal_forces, basis.u, basis.u_inv,
+                                      basis.eigenvalue_errors, mass=mass)
         entry = _BUILT[basis] = (mass, arrays, arrays.as_tuple())
     return entry
 
@@ -244,7 +245,8 @@ def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     numpy (BLAS) matrix products above ``closed_form.BLAS_MIN`` degrees of freedom."""
     from impactcont.kernel import closed_form, flights
 
-    u, ui = modal_arrays(osc)[3:5]
+    arrays = modal_arrays(osc)
+    u, ui = arrays.u, arrays.ui
     if osc.n <= closed_form.BLAS_MIN:
         return flights.transition(modal, u, ui)
     return np.block([[(u * modal[2]) @ ui, (u * modal[3]) @ ui],

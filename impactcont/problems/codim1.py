@@ -99,6 +99,7 @@ from impactcont.orbit.dense import pole_free_pd_matrix
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
+    modal_arrays,
     orbit_at_phase,
     physical_transition,
 )
@@ -177,8 +178,10 @@ class _Pieces:
         """The real pieces of `osc` (:func:`kernel.omega_setup`)."""
         from impactcont.kernel import closed_form as kernel
 
-        w, a, f, _, _, eig_err, u0, ui0 = osc.modes.kernel_arrays
-        modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, osc.omega, N)
+        arrays = modal_arrays(osc)
+        w, a, f = arrays.w, arrays.a, arrays.f
+        modal, scalars = kernel.omega_setup(w, a, f, arrays.u0, arrays.ui0, arrays.eig_err,
+                                            osc.R, osc.omega, N)
         _, Gam, B, g, Delta, c, s = scalars[:7].tolist()
         return cls(osc, N, modal, scalars, osc.omega, osc.R, osc.b, w, a, f,
                    residual_scale(c, s),
@@ -207,8 +210,9 @@ class _Pieces:
                 f = f * complex(1.0, h / self.osc.F0)
             else:
                 a = a + 1j * h * decay_rate_derivative(name, self.w)
-            _, _, _, _, _, eig_err, u0, ui0 = self.osc.modes.kernel_arrays
-            modal, scalars = kernel.omega_setup(w, a, f, u0, ui0, eig_err, R, omega, self.N)
+            arrays = modal_arrays(self.osc)
+            modal, scalars = kernel.omega_setup(w, a, f, arrays.u0, arrays.ui0, arrays.eig_err,
+                                                R, omega, self.N)
         scale = self.scale if self.scale == 1.0 else residual_scale(scalars[5], scalars[6])
         return _Pieces(self.osc, self.N, modal, scalars, omega, R, b, w, a, f, scale,
                        self.impact_form)
@@ -241,7 +245,8 @@ class _Pieces:
         """The arguments of the kernel's G functions after the transition (``delta``
         complex with complex-stepped pieces, as when the phase itself is stepped: one
         compiled complex variant of each kernel function)."""
-        u, ui0 = self.osc.modes.kernel_arrays[3], self.osc.modes.kernel_arrays[7]
+        arrays = modal_arrays(self.osc)
+        u, ui0 = arrays.u, arrays.ui0
         if self.modal.dtype.kind == "c":
             delta = complex(delta)
         return (self.modal, self.w, self.a, self.f, u, ui0, self.omega, self.R, delta,
@@ -289,16 +294,17 @@ class _Pieces:
         (:func:`impactcont.kernel.contact.other_maximum`); ``-inf`` when there is none."""
         from impactcont.kernel import contact
 
-        w, a, _, _, _, _, u0, _ = self.osc.modes.kernel_arrays
-        best, _ = contact.other_maximum(w, a, u0, self.modal, self.scalars, self.omega, self.R,
-                                        delta, self.impact_velocity(delta), exclude)
+        arrays = modal_arrays(self.osc)
+        best, _ = contact.other_maximum(arrays.w, arrays.a, arrays.u0, self.modal, self.scalars,
+                                        self.omega, self.R, delta, self.impact_velocity(delta),
+                                        exclude)
         return float(best)
 
     def mass1(self, delta: float, t: float) -> tuple[float, float]:
         """``x1(t), x1'(t)`` along the flight after the impact at phase ``delta``."""
         from impactcont.kernel import contact
 
-        u0 = self.osc.modes.kernel_arrays[6]
+        u0 = modal_arrays(self.osc).u0
         ks = (1.0 + self.R) * self.impact_velocity(delta)
         x, v, _, _ = contact.x1_derivatives(t, self.scalars[1], self.scalars[2], self.omega,
                                             delta, ks, self.w, self.a, u0,

@@ -25,7 +25,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FORCING, GAP, model_parameter
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
-from impactcont.orbit.periodic import PeriodicOrbit, orbit_at_phase
+from impactcont.orbit.periodic import PeriodicOrbit, modal_arrays, orbit_at_phase
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem", "residual_scale", "root_phase",
@@ -137,9 +137,10 @@ class PeriodicBranchProblem:
         self._kernel = None if self._general else self.param.kernel
         if self._general:
             return
-        w, _, self._f, _, _, _, self._u0, self._ui0 = osc.modes.kernel_arrays
-        self._w = w
-        self._da = self.param.decay_rates_derivative(w)
+        arrays = modal_arrays(osc)
+        self._w, self._a, self._f = arrays.w, arrays.a, arrays.f
+        self._u0, self._ui0 = arrays.u0, arrays.ui0
+        self._da = self.param.decay_rates_derivative(arrays.w)
 
     # -- the oscillator along the branch ------------------------------------------------------
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -155,7 +156,7 @@ class PeriodicBranchProblem:
     def _arguments(self, lam: float) -> tuple:
         """Kernel arguments ``(a, R, omega)`` at ``lam``."""
         osc = self.osc
-        a = osc.modes.kernel_arrays[1]
+        a = self._a
         R, omega = osc.R, osc.omega
         if self._kernel == 0:
             omega = lam
@@ -208,8 +209,9 @@ class PeriodicBranchProblem:
         if osc.general:
             c, s = general.amplitude(osc, self.N)[:2]
             return float(c), float(s)
-        w, a, f, _, _, _, u0, ui0 = osc.modes.kernel_arrays
-        c, s = kernel.amplitude(w, a, f, u0, ui0, osc.R, osc.omega, self.N)
+        arrays = modal_arrays(osc)
+        c, s = kernel.amplitude(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0, osc.R,
+                                osc.omega, self.N)
         return float(c), float(s)
 
     def _forcing_derivative(self) -> tuple[float, float]:
