@@ -282,3 +282,30 @@ def test_modal_arrays_convert_real_input_to_contiguous_float():
     assert all(x.dtype == np.float64 and x.flags.c_contiguous for x in arrays)
     np.testing.assert_array_equal(arrays.u0, [3.0, 4.0])
     np.testing.assert_array_equal(arrays.eig_err, [0.0, 0.0])
+
+
+def test_first_order_arrays_name_the_basis_fields():
+    """The first-order basis of a damping matrix, read by name: each field is the basis's
+    array (the contact search's copies included), and a length other than the basis's
+    tuple is refused."""
+    from impactcont.kernel.arrays import FirstOrderArrays
+
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              C=[[0.3, 0.0], [0.0, 0.0]], b=0.6, omega=1.0)
+    basis = osc.first_order
+    fa = FirstOrderArrays._make(basis.kernel_arrays)
+    assert FirstOrderArrays._make(fa) == fa
+    np.testing.assert_array_equal(fa.lam, basis.eigenvalues)
+    np.testing.assert_array_equal(fa.V_inv, basis.V_inv)
+    np.testing.assert_array_equal(fa.impact_column, basis.impact_column)
+    np.testing.assert_array_equal(fa.C, osc.C)
+    w, a, k, j = basis.scalar_pairs
+    for got, want in ((fa.w_p, w), (fa.a_p, a), (fa.k_p, k), (fa.j_p, j)):
+        np.testing.assert_array_equal(got, want)
+    lam, v0, *pairs = fa.contact_arguments()
+    np.testing.assert_array_equal(lam, basis.eigenvalues)
+    np.testing.assert_array_equal(v0, basis.V[0])
+    for got, want in zip(pairs, (w, a, k, j), strict=True):
+        np.testing.assert_array_equal(got, want)
+    with pytest.raises(TypeError):
+        FirstOrderArrays._make(basis.kernel_arrays[:12])

@@ -14,6 +14,10 @@ call, a tenth of the kernel call of an N-1 orbit of two masses; ``docs/kernel.md
 
 :func:`modal_arrays` is the one place it is built and checked; this module imports
 neither numba nor anything of impactcont's.
+
+:class:`FirstOrderArrays` names the fields of the first-order basis of any damping
+matrix C (:attr:`impactcont.model.first_order.FirstOrderBasis.kernel_arrays`), the
+inputs of :mod:`impactcont.kernel.general`.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["ModalArrays", "modal_arrays"]
+__all__ = ["FirstOrderArrays", "ModalArrays", "modal_arrays"]
 
 
 class ModalArrays(NamedTuple):
@@ -121,3 +125,57 @@ def modal_arrays(w: np.ndarray, a: np.ndarray, f: np.ndarray, u: np.ndarray, ui:
                          f"masses); got {mass!r}")
     return ModalArrays(w, a, f, u, ui, eig_err, np.ascontiguousarray(u[mass]),
                        np.ascontiguousarray(ui[:, mass]))
+
+
+class FirstOrderArrays(NamedTuple):
+    """The first-order basis of any damping matrix C as the compiled first-order path
+    takes it (:mod:`impactcont.kernel.general`), by name.
+
+    The order is that of
+    :attr:`impactcont.model.first_order.FirstOrderBasis.kernel_arrays`;
+    ``FirstOrderArrays._make(basis.kernel_arrays)`` reads it (and returns it unchanged
+    when it already is one). The last six fields are the arguments of the contact search
+    in their order (:meth:`contact_arguments`).
+    """
+
+    lam: np.ndarray
+    """Eigenvalues ``lambda_k`` of the first-order system, complex, shape (2n,)."""
+    V: np.ndarray
+    """Eigenvectors (columns), complex, shape (2n, 2n)."""
+    V_inv: np.ndarray
+    """``V^-1``, complex, shape (2n, 2n)."""
+    A: np.ndarray
+    """The first-order system matrix, shape (2n, 2n)."""
+    impact_column: np.ndarray
+    """The column the impact law of eq. (4) adds to the state, shape (2n,)."""
+    w_p: np.ndarray
+    """Frequencies of the scalar pairs (:attr:`FirstOrderBasis.scalar_pairs`)."""
+    a_p: np.ndarray
+    """Decay rates of the scalar pairs."""
+    k_p: np.ndarray
+    """First eigenvalue index of each pair (int64)."""
+    j_p: np.ndarray
+    """Second eigenvalue index of each pair (int64)."""
+    M: np.ndarray
+    """Mass matrix, shape (n, n)."""
+    K: np.ndarray
+    """Stiffness matrix, shape (n, n)."""
+    C: np.ndarray
+    """Damping matrix, shape (n, n)."""
+    search_lam: np.ndarray
+    """``lambda`` again, for the contact search."""
+    search_v0: np.ndarray
+    """The first row of ``V`` (mass 1's displacement), for the contact search."""
+    search_w_p: np.ndarray
+    """``w_p`` again, for the contact search."""
+    search_a_p: np.ndarray
+    """``a_p`` again, for the contact search."""
+    search_k_p: np.ndarray
+    """``k_p`` again, for the contact search."""
+    search_j_p: np.ndarray
+    """``j_p`` again, for the contact search."""
+
+    def contact_arguments(self) -> tuple[np.ndarray, ...]:
+        """``(lambda, V[0], w_p, a_p, k_p, j_p)``: the arguments of the contact search."""
+        return (self.search_lam, self.search_v0, self.search_w_p, self.search_a_p,
+                self.search_k_p, self.search_j_p)

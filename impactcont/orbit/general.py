@@ -49,6 +49,7 @@ import weakref
 import numpy as np
 
 from impactcont.errors import ParameterError, UnresolvedMotionWarning
+from impactcont.kernel.arrays import FirstOrderArrays
 from impactcont.model.first_order import FirstOrderBasis, coth_remainder
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.dense import (
@@ -143,7 +144,7 @@ class PeriodicForm:
         """The arguments of :func:`impactcont.kernel.general.orbit_values` before
         the phases and gaps."""
         flow = self.flow
-        lam, V0, pw, pa, pk, pj = flow.basis.kernel_arrays[12:]
+        lam, V0, pw, pa, pk, pj = _first_order_arrays(flow.basis).contact_arguments()
         pieces, y_modal = self.__dict__.get("_pieces"), self.y_modal
         if pieces is None:  # a form built in numpy (reference_form)
             pieces = np.vstack([self.DPhi, self.P0.T, self.rate0.T, self.E.T, self.S.T,
@@ -230,11 +231,11 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
         return cached
     osc = flow.osc
     omega, R, T = float(osc.omega), float(osc.R), float(T)
-    lam, V, Vi, A, column, _, _, pk, pj = flow.basis.kernel_arrays[:9]
+    fa = _first_order_arrays(flow.basis)
     kernel = _compiled()
-    pieces, y_modal, sc = kernel.periodic_setup(lam, V, Vi, A, column, pk, pj, flow.Z, omega,
-                                                R, T)
-    m = lam.size
+    pieces, y_modal, sc = kernel.periodic_setup(fa.lam, fa.V, fa.V_inv, fa.A, fa.impact_column,
+                                                fa.k_p, fa.j_p, flow.Z, omega, R, T)
+    m = fa.lam.size
     if m >= kernel.BLAS_MIN:  # D Phi(T) by BLAS, O(n^3)
         pieces[:m] = _transition(flow.basis, T, R)
     g, Delta, cond, d0, dn, c, s = sc.tolist()
@@ -246,6 +247,12 @@ def _form_at(flow: GeneralFlow, T: float) -> PeriodicForm:
 
 
 @functools.cache
+def _first_order_arrays(basis: FirstOrderBasis) -> FirstOrderArrays:
+    """The basis's kernel arrays by name (:class:`~impactcont.kernel.arrays.FirstOrderArrays`;
+    ``_make`` of a FirstOrderArrays is itself, of the basis's plain tuple names its fields)."""
+    return FirstOrderArrays._make(basis.kernel_arrays)
+
+
 def _compiled() -> types.ModuleType:
     """:mod:`impactcont.kernel.general`, imported on first use (numba loads it)."""
     from impactcont.kernel import general as general_kernel
@@ -357,9 +364,10 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     _refuse_elastic(osc)
     flow = Flow(osc)
     T = 2.0 * math.pi * N / osc.omega
-    lam, V, Vi, _, column, _, _, pk, pj = flow.basis.kernel_arrays[:9]
+    fa = _first_order_arrays(flow.basis)
     g, Delta, cond, d0, dn, c, s = _compiled().amplitude_setup(
-        lam, V, Vi, column, pk, pj, flow.Z, float(osc.omega), float(osc.R), T).tolist()
+        fa.lam, fa.V, fa.V_inv, fa.impact_column, fa.k_p, fa.j_p, flow.Z, float(osc.omega),
+        float(osc.R), T).tolist()
     warn_ill_conditioned(osc.omega, cond, stacklevel=1)
     if which is None:
         return c, s, 0.0, 0.0
