@@ -460,8 +460,9 @@ def main() -> dict[str, Any]:
     size, sizes, repeat, BUDGET = ((40, (2, 5, 10, 20), 3, 0.02) if args.quick else
                                    (200, (2, 5, 10, 20, 50, 100, 200), 7, 0.1))
     started = time.perf_counter()
-    kernel_file = ROOT / "impactcont" / "orbit" / "kernel.py"
-    mtime = kernel_file.stat().st_mtime
+    # the compiled kernel, split by concern (flights, roots, contact, stability, shooting, ...)
+    kernel_files = sorted((ROOT / "impactcont" / "kernel").glob("*.py"))
+    mtimes = {path: path.stat().st_mtime for path in kernel_files}
     res: dict[str, Any] = {"quick": args.quick, "machine": {
         "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
         "numba": numba.__version__, "impactcont": ic.__version__, "cpus": os.cpu_count(),
@@ -496,7 +497,9 @@ def main() -> dict[str, Any]:
     res["machine"]["loadavg_end"] = os.getloadavg()
     res["code"] = {"git_head": git("rev-parse", "HEAD"),
                    "uncommitted_in_impactcont": git("status", "--porcelain", "impactcont"),
-                   "kernel_changed_during_run": kernel_file.stat().st_mtime != mtime}
+                   "kernel_changed_during_run": sorted(
+                       path.name for path, mtime in mtimes.items()
+                       if not path.exists() or path.stat().st_mtime != mtime)}
     res["elapsed_s"] = time.perf_counter() - started
     out = HERE / "output" / ("quick" if args.quick else "") / "results.json"
     out.parent.mkdir(parents=True, exist_ok=True)
