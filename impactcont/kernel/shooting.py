@@ -6,7 +6,7 @@ Everything is a function of floats and arrays (``cache=True``), written for both
 of :mod:`impactcont.orbit.flow`, each diagonal in its own modal coordinates:
 
 - modal (proportional damping): the exact 2 x 2 transfer ``W_i(t)`` of each mode
-  (:func:`impactcont.kernel.closed_form.mode_transfer`, every damping class without
+  (:func:`impactcont.kernel.flights.mode_transfer`, every damping class without
   cancellation), ``Phi = U W U^-1`` and the forcing block of eq. (9) from the steady
   modal amplitudes ``gamma_i, beta_i``;
 - first order (any C, complex F): ``Phi = Re(V diag(exp(lambda t)) V^-1)`` and the
