@@ -203,11 +203,41 @@ def test_small_box_in_b_and_omega_is_robust(osc):
 
 
 def test_vary_forcing_entry(osc):
-    res = robust_stability(osc, 1, {"F[0]": (0.95, 1.05)}, samples=3)
-    assert res.nominal == {"F[0]": 1.0}
+    res = robust_stability(osc, 1, {"F[1]": (0.95, 1.05)}, samples=3)  # mass 1, 1-based
+    assert res.nominal == {"F[1]": 1.0}
     assert res.epsilon > 0
     G = orbit_G(osc, 1, res.root, F=[1.05, 0.0])
     assert np.all(np.abs(G - res.G0) <= res.theta + 1e-12)
+
+
+def test_vary_elements_against_the_corners_recomputed(osc):
+    """A spring and the forcing of mass 2 (1-based elements, the parameter objects'
+    names): with two samples the grid is the box's four corners, so ``grid_theta`` is
+    the largest ``|G - G0|`` over oscillators built here by hand at the corners
+    (``k2`` the spring from mass 2 to the ground: ``K[2,2] = k1 + k2``)."""
+    res = robust_stability(osc, 1, {"k2": (0.9, 1.1), "F[2]": (-0.1, 0.1)}, samples=2)
+    assert res.nominal == {"k2": 1.0, "F[2]": 0.0}
+
+    def by_hand(k2: float, f2: float) -> ImpactOscillator:
+        return ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 1.0 + k2]], F=[1.0, f2],
+                                R=0.6, b=0.6, omega=1.0, eta=0.1)
+
+    np.testing.assert_allclose(res.G0, orbit_G(by_hand(1.0, 0.0), 1, res.root),
+                               rtol=1e-10, atol=1e-12)
+    corners = [np.abs(orbit_G(by_hand(k2, f2), 1, res.root) - res.G0)
+               for k2 in (0.9, 1.1) for f2 in (-0.1, 0.1)]
+    np.testing.assert_allclose(res.grid_theta, np.max(corners, axis=0), rtol=1e-9, atol=1e-12)
+    assert np.all(res.theta >= res.grid_theta) and res.epsilon == res.theta.max() > 0
+    for q in res.argmax.values():  # the refined maxima lie in the box, at values of G
+        assert 0.9 <= q["k2"] <= 1.1 and -0.1 <= q["F[2]"] <= 0.1
+
+
+def test_two_sided_system_is_refused(osc):
+    from impactcont.model.stops import Stops
+
+    two = osc.replace(stops=Stops(b_low=0.6))
+    with pytest.raises(ParameterError, match="robust_stability: the closed form"):
+        robust_stability(two, 1, {"b": (0.5, 0.7)})
 
 
 # -- where the motion does not exist or is not physical ------------------------------------------
@@ -224,13 +254,22 @@ def test_unphysical_root_at_nominal_raises(osc):
 
 # -- bad arguments ---------------------------------------------------------------------------------
 @pytest.mark.parametrize(("vary", "pattern"), [
-    ({"gap": (0.2, 1.0)}, "unknown parameter 'gap'"),
+    ({"gap": (0.2, 1.0)}, "'gap' moves a lower stop; robust_stability follows an N-1 motion"),
+    ({"b_low": (0.2, 1.0)}, "'b_low' moves a lower stop"),
+    ({"x1": (0.2, 1.0)}, r"'x1' is not a parameter robust_stability can vary; allowed: one of "
+                         r"\['omega', 'b', 'R', 'eta', 'F0'\] or an element"),
+    ({"F[0]": (0.9, 1.1)}, re.escape("(F[j] is 1-based: 'F[1]' is the forcing of mass 1)")),
+    ({"c1": (0.0, 0.1)}, "'c1' is an element of a damping matrix C"),
+    ({"k2": (-0.5, 1.0)}, re.escape("k2 must be finite and > 0; got -0.5")),
+    ({"F0": (0.9, 1.1), "F[2]": (-0.1, 0.1)}, "'F0' and 'F\\[2\\]' both set F"),
+    ({"k1": (0.9, 1.1), "K[1,2]": (-1.1, -0.9)}, "'k1' and 'K\\[1,2\\]' both set K"),
+    ({"M[1,2]": (0.0, 0.1), "M[2,1]": (0.0, 0.1)}, "both set M \\(the same entry\\)"),
     ({"b": (1.0, 0.2)}, re.escape("lo < hi; got (1.0, 0.2)")),
     ({"b": (0.6, 0.6)}, re.escape("lo < hi; got (0.6, 0.6)")),
     ({"b": (0.2, float("nan"))}, "upper end must be a finite real number; got nan"),
     ({"b": (-float("inf"), 1.0)}, "lower end must be a finite real number; got -inf"),
     ({"b": (0.2,)}, re.escape("must be an interval (lo, hi); got (0.2,)")),
-    ({"F[2]": (0.9, 1.1)}, re.escape("'F[2]' indexes past F")),
+    ({"F[3]": (0.9, 1.1)}, re.escape("'F[3]' names an element past the oscillator's n=2")),
     ({"alpha": (0.0, 0.1)}, "use 'eta' instead"),
     ({"R": (0.5, 1.2)}, "R must be in \\[0, 1\\]; got 1.2"),
     ({"omega": (-1.0, 1.0)}, "omega must be finite and > 0; got -1.0"),

@@ -19,8 +19,7 @@ import dataclasses
 import itertools
 import logging
 import math
-import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -29,6 +28,8 @@ from scipy.optimize import minimize, minimize_scalar
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import ModelParameter, model_parameter
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.periodic import (
     PeriodicOrbit,
@@ -39,7 +40,13 @@ from impactcont.orbit.periodic import (
 )
 from impactcont.progress import ProgressOption, reporter
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import CONTINUABLE_PARAMETERS, check_damping
+from impactcont.vocabulary import (
+    CONTINUABLE_PARAMETERS,
+    ELEMENT_FAMILIES,
+    PARAMETERS,
+    damping_kind,
+    element_name,
+)
 
 __all__ = [
     "RobustStability",
@@ -51,9 +58,9 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Scalar parameters of :class:`ImpactOscillator` that may be uncertain.
-_SCALAR_PARAMS = CONTINUABLE_PARAMETERS
-_F_ENTRY = re.compile(r"^F\[(\d+)\]$")
+#: Parameters of the vocabulary robust stability cannot vary: they move a lower stop,
+#: and the N-1 closed form it follows has one stop above mass 1 (eq. 3).
+LOWER_STOP_PARAMETERS = ("b_low", "R_low", "gap")
 # Relative (to the box width) x-tolerance of the 1-D bounded refinement. Near a
 # smooth interior maximum the value error is of order xtol^2, far below 1e-12.
 _XTOL_1D = 1e-9
@@ -185,33 +192,66 @@ def _real(what: str, value: Any) -> float:
     return x
 
 
-def _check_name(osc: ImpactOscillator, name: Any) -> None:
-    allowed = (f"one of {', '.join(_SCALAR_PARAMS)} or 'F[i]' with 0 <= i < {osc.n}")
-    if not isinstance(name, str):
-        raise ParameterError(f"vary keys must be parameter names ({allowed}); got {name!r}")
-    m = _F_ENTRY.match(name)
-    if m:
-        if int(m.group(1)) >= osc.n:
-            raise ParameterError(f"vary key {name!r} indexes past F (length {osc.n}); "
-                                 f"allowed: {allowed}")
-        entry = complex(osc.F[int(m.group(1))])
-        if entry.imag != 0.0:  # a real value would silently drop the entry's forcing phase
+def _allowed(osc: ImpactOscillator) -> str:
+    """The names :func:`robust_stability` can vary on `osc`, in words."""
+    named = [k for k in CONTINUABLE_PARAMETERS if k not in LOWER_STOP_PARAMETERS
+             and PARAMETERS[k].damping in (None, damping_kind(osc))]
+    return (f"one of {named} or an element {list(ELEMENT_FAMILIES)} of the oscillator's "
+            f"n={osc.n} masses, 1-based as the paper's masses (e.g. 'k2', 'M[1,2]', 'F[2]')")
+
+
+def _check_name(osc: ImpactOscillator, name: Any) -> ModelParameter:
+    """The parameter object of a key of `vary`, or a refusal naming what is allowed."""
+    if not isinstance(name, str) or name not in PARAMETERS:
+        hint = ""
+        if isinstance(name, str) and name.replace(" ", "") == "F[0]":
+            hint = " (F[j] is 1-based: 'F[1]' is the forcing of mass 1)"
+        raise ParameterError(f"vary key {name!r} is not a parameter robust_stability can vary"
+                             f"{hint}; allowed: {_allowed(osc)}")
+    if name in LOWER_STOP_PARAMETERS:
+        raise ParameterError(f"vary key {name!r} moves a lower stop; robust_stability follows "
+                             "an N-1 motion of the closed form, one stop above mass 1 (eq. 3), "
+                             f"and cannot vary it; allowed: {_allowed(osc)}")
+    return model_parameter(osc, name, "vary key")
+
+
+def _target(param: ModelParameter) -> tuple[str, str, tuple[int, ...]]:
+    """What `param` sets on the model: ``(attribute, family, entry)``; two parameters of one
+    attribute commute only when they are of one family and set different entries."""
+    element = element_name(param.name)
+    if element is None:
+        return ("F" if param.name == "F0" else param.name), param.name, ()
+    family, indices = element
+    attribute = "F" if family == "F[j]" else family[0].upper()
+    return attribute, family, tuple(sorted(indices))
+
+
+def _check_independent(params: Sequence[ModelParameter]) -> None:
+    """Refuse two parameters whose values depend on the order they are set in (``F0`` and
+    ``F[2]`` both set F; ``k2`` and ``K[2,3]`` both an entry of K; ``M[1,2]`` and
+    ``M[2,1]`` are one entry): a point of the box would not be the values it names."""
+    seen: dict[str, tuple[str, str, tuple[int, ...]]] = {}
+    for param in params:
+        attribute, family, entry = _target(param)
+        other = seen.get(attribute)
+        if other is not None and (other[1] != family or other[2] == entry):
             raise ParameterError(
-                f"vary key {name!r}: F[{m.group(1)}]={entry!r} has its own forcing phase "
-                "(complex F), and a real value for it would drop that phase; vary 'F0' (the "
-                "amplitude of the whole F, phases kept) or an entry of F with no imaginary part")
-        return
-    if name not in _SCALAR_PARAMS:
-        raise ParameterError(f"unknown parameter {name!r} in vary; allowed: {allowed}")
-    check_damping(osc, name, "vary key")
+                f"vary keys {other[0]!r} and {param.name!r} both set {attribute} "
+                f"({'the same entry' if other[1] == family else 'overlapping entries'}), so a "
+                f"point of the box would depend on the order they are set in; vary one of "
+                f"them (or entries of one family, e.g. 'F[1]' and 'F[2]', 'k1' and 'k2')")
+        if other is None:
+            seen[attribute] = (param.name, family, entry)
 
 
-def _check_vary(osc: ImpactOscillator, vary: Any) -> dict[str, tuple[float, float]]:
+def _check_vary(osc: ImpactOscillator, vary: Any
+                ) -> tuple[dict[str, tuple[float, float]], list[ModelParameter]]:
     if not isinstance(vary, Mapping) or not vary:
         raise ParameterError(f"vary must be a non-empty dict {{name: (lo, hi)}}; got {vary!r}")
     out: dict[str, tuple[float, float]] = {}
+    params = []
     for name, interval in vary.items():
-        _check_name(osc, name)
+        params.append(_check_name(osc, name))
         try:
             lo_raw, hi_raw = interval
         except (TypeError, ValueError):
@@ -221,8 +261,14 @@ def _check_vary(osc: ImpactOscillator, vary: Any) -> dict[str, tuple[float, floa
         hi = _real(f"vary[{name!r}] upper end", hi_raw)
         if not lo < hi:
             raise ParameterError(f"vary[{name!r}] must satisfy lo < hi; got ({lo!r}, {hi!r})")
+        info = params[-1].info
+        for end in (lo, hi):
+            if not info.contains(end):
+                raise ParameterError(f"vary[{name!r}] = {(lo, hi)!r} leaves the admissible "
+                                     f"parameters: {name} must be {info.allowed}; got {end!r}")
         out[name] = (lo, hi)
-    return out
+    _check_independent(params)
+    return out, params
 
 
 def _check_nominal(vary: dict[str, tuple[float, float]], nominal: Any) -> dict[str, float]:
@@ -251,32 +297,24 @@ def _fmt_params(params: Mapping[str, float]) -> str:
     return ", ".join(f"{k}={v:.12g}" for k, v in params.items())
 
 
-def _oscillator_at(osc: ImpactOscillator, names: list[str], q: tuple[float, ...]
-                   ) -> ImpactOscillator:
-    """``osc`` with the parameters ``names`` set to the values ``q`` (validated)."""
-    changes: dict[str, Any] = {}
-    F = None
-    for name, value in zip(names, q, strict=True):
-        m = _F_ENTRY.match(name)
-        if m:
-            if F is None:
-                F = osc.F.copy()
-            F[int(m.group(1))] = value
-        else:
-            changes[name] = value
-    if F is not None:
-        changes["F"] = F
-    return osc.replace(**changes)
+def _oscillator_at(osc: ImpactOscillator, params: Sequence[ModelParameter],
+                   q: tuple[float, ...]) -> ImpactOscillator:
+    """``osc`` with the parameters `params` set to the values ``q``, one after the other
+    (they commute: :func:`_check_independent`; validated by the oscillator)."""
+    for param, value in zip(params, q, strict=True):
+        osc = param.at(osc, value)
+    return osc
 
 
 class _Follower:
     """Evaluates the followed motion (fixed root sign of eq. 15) at parameter points."""
 
-    def __init__(self, osc: ImpactOscillator, N: int, names: list[str], root: int,
-                 G0: np.ndarray) -> None:
+    def __init__(self, osc: ImpactOscillator, N: int, params: list[ModelParameter],
+                 root: int, G0: np.ndarray) -> None:
         self.osc = osc
         self.N = N
-        self.names = names
+        self.params_ = params
+        self.names = [p.name for p in params]
         self.root = root
         self.G0 = G0
         self.cache: dict[tuple[float, ...], np.ndarray] = {}
@@ -286,7 +324,7 @@ class _Follower:
         return dict(zip(self.names, q, strict=True))
 
     def oscillator(self, q: tuple[float, ...]) -> ImpactOscillator:
-        return _oscillator_at(self.osc, self.names, q)
+        return _oscillator_at(self.osc, self.params_, q)
 
     def _fail(self, q: tuple[float, ...], why: str) -> NoPeriodicMotionError:
         return NoPeriodicMotionError(
@@ -542,11 +580,15 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
     ParameterError
         `N` not an integer >= 1; `root` not None, +1 or -1; `samples` not an integer
         >= 2 or a grid of more than 1000000 points; `vary` not a non-empty mapping of
-        known parameter names (``"F[i]"`` inside F, with a real entry; a damping
-        parameter of the oscillator's damping model) to finite intervals ``lo < hi``;
-        `nominal` naming a parameter not in `vary` or a value outside its interval; or
-        an end of an interval (the others at nominal) that leaves the oscillator's
-        admissible parameters.
+        parameters robust stability can vary (every name
+        :func:`~impactcont.model.parameters.model_parameter` accepts for `osc` except those
+        of a lower stop, :data:`LOWER_STOP_PARAMETERS`; elements 1-based, ``"F[j]"`` of a
+        real F; a damping parameter of the oscillator's damping model; no two that set one
+        entry or overlapping entries, as ``F0`` and ``F[2]``) to finite intervals
+        ``lo < hi`` inside each parameter's range; `nominal` naming a parameter not in
+        `vary` or a value outside its interval; an end of an interval (the others at
+        nominal) that leaves the oscillator's admissible parameters; or an oscillator
+        other than the paper's form (one stop above mass 1).
     """
     if not isinstance(osc, ImpactOscillator):
         raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
@@ -561,7 +603,8 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
         raise ParameterError(f"samples must be an integer >= 2 (grid points per parameter, "
                              f"both ends included); got {samples!r}")
     samples = int(samples)
-    box = _check_vary(osc, vary)
+    require_paper_stops(osc, "robust_stability")
+    box, params = _check_vary(osc, vary)
     if samples ** len(box) > _MAX_GRID_POINTS:
         raise ParameterError(f"samples={samples} for {len(box)} parameters gives "
                              f"{samples ** len(box)} grid points; at most "
@@ -574,7 +617,7 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
             q = [q0[m] for m in names]
             q[k] = end
             try:
-                _oscillator_at(osc, names, tuple(q))
+                _oscillator_at(osc, params, tuple(q))
             except ParameterError as exc:
                 raise ParameterError(f"vary[{name!r}] = {box[name]!r} leaves the admissible "
                                      f"parameters: {exc}") from None
@@ -595,10 +638,15 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
         One impact every N forcing periods.
     vary : dict of str to (float, float)
         The box ``Q``: each uncertain parameter with its interval ``(lo, hi)``,
-        ``lo < hi``. Names: ``b``, ``omega``, ``R``, ``eta`` (paper's damping) or
-        ``alpha``/``beta`` (Rayleigh damping; the one the oscillator uses), and
-        entries of the forcing vector ``"F[i]"`` (0-based). The whole box must
-        be admissible for the oscillator (e.g. ``0 <= R <= 1``, ``omega > 0``).
+        ``lo < hi``. Names: the parameter objects' (:func:`~impactcont.model.parameters.
+        model_parameter`): ``b``, ``omega``, ``R``, ``F0``, ``eta`` (paper's damping) or
+        ``alpha``/``beta`` (Rayleigh damping; the one the oscillator uses), and the
+        elements, 1-based as the paper's masses: masses ``"m1"``, springs ``"k2"``,
+        dampers ``"c1"`` (a damping matrix C), matrix entries ``"M[1,2]"``,
+        ``"K[1,2]"``, ``"C[1,2]"`` and the forcing of one mass ``"F[2]"``. Not the
+        parameters of a lower stop (``b_low``, ``R_low``, ``gap``). The whole box must
+        be admissible for the oscillator (e.g. ``0 <= R <= 1``, ``omega > 0``, K
+        positive definite).
     nominal : dict of str to float, optional
         ``q0``; each value inside its interval. Parameters not given (or all,
         by default) take the box centre; the paper takes ``b0 = 0.6`` for
@@ -661,13 +709,14 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     N, samples, box, q0 = check_robust_arguments(osc, N, vary, nominal=nominal, root=root,
                                                  samples=samples)
     names = list(box)
+    params = [model_parameter(osc, name, "vary key") for name in names]  # checked above
     lo = np.array([box[k][0] for k in names])
     hi = np.array([box[k][1] for k in names])
     nominal_q = tuple(q0[m] for m in names)
-    orbit = _select_nominal_orbit(_oscillator_at(osc, names, nominal_q), N, root, q0)
+    orbit = _select_nominal_orbit(_oscillator_at(osc, params, nominal_q), N, root, q0)
     G0 = orbit.G.copy()
     G0.setflags(write=False)
-    follower = _Follower(osc, N, names, orbit.root, G0)
+    follower = _Follower(osc, N, params, orbit.root, G0)
     follower.cache[nominal_q] = G0
 
     # Grid (includes every vertex), with the full physical check at each point.
