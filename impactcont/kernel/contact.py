@@ -9,6 +9,13 @@ recurrence of eq. 9); every root and gap then reuses it. :func:`x1_maximum` brac
 the maxima cell by cell, bounds each by the tangents of a concave piece and polishes
 in decreasing order of the bound (safeguarded Newton from a quintic Hermite start),
 so the motion crosses the stop between impacts iff the maximum exceeds b (eq. 16).
+
+A constant force that pushes a free mode the stop coordinate sees adds a polynomial in
+time to the free part (:func:`drift_x1`: ``g t^2 / 2`` undamped, the drift
+``g t^2 phi(2at) / 2`` damped, a linear drift ``d t`` on the first-order flow):
+:func:`drift_on_grid` adds it to the tabulated free part and :func:`stop_maximum` to every
+evaluation of the polish, so the grid's values, slopes and curvatures, the tangent bounds
+and the Newton steps all see the whole coordinate.
 """
 
 from __future__ import annotations
@@ -20,8 +27,9 @@ import numpy as np
 
 from impactcont.kernel.flights import mode_transfer
 
-__all__ = ["WORK_ROWS", "flight_tables", "free_on_grid", "free_x1", "other_maximum",
-           "time_grid", "x1_derivatives", "x1_maximum"]
+__all__ = ["WORK_ROWS", "drift_on_grid", "drift_x1", "flight_tables", "free_on_grid",
+           "free_x1", "other_maximum", "stop_maximum", "time_grid", "x1_derivatives",
+           "x1_maximum"]
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
@@ -150,6 +158,84 @@ def free_on_grid(times, w, a, u0, dy, dv):
     return out
 
 
+_SERIES_BELOW = 0.5  # 2 a t below which phi and psi are summed as series (no cancellation)
+_SERIES_TERMS = 20  # enough for rounding level below _SERIES_BELOW
+
+
+@_jit
+def _phi_psi(x):
+    """``phi(x) = 2 (x - 1 + e^-x) / x^2`` and ``psi(x) = (1 - e^-x) / x`` (both 1 at 0),
+    by their series below ``_SERIES_BELOW`` (``2 sum (-x)^k / (k+2)!``, ``sum (-x)^k /
+    (k+1)!``; as :func:`impactcont.model.modal.static_response`), else in closed form."""
+    if x < _SERIES_BELOW:
+        phi = 0.0
+        psi = 0.0
+        fact = 1.0
+        for k in range(2, _SERIES_TERMS + 2):
+            fact *= k
+        # Horner from the highest term down, fact = (k + 1)! at term k
+        for k in range(_SERIES_TERMS, -1, -1):
+            psi = psi * (-x) + 1.0 / fact
+            phi = phi * (-x) + 2.0 / (fact * (k + 2))
+            fact /= k + 1
+        return phi, psi
+    em1 = math.expm1(-x)
+    return 2.0 * (x + em1) / (x * x), -em1 / x
+
+
+@_jit
+def drift_x1(t, pg, pa, p1):
+    """The polynomial part of the stop coordinate and its first four time derivatives.
+
+    ``p(t) = p1 t + sum_i pg_i t^2 phi(2 a_i t) / 2`` (``a_i = pa[i]``): the response
+    from rest of the free modes a constant force pushes
+    (:func:`impactcont.model.modal.static_response`, weighted by the stop's modal
+    weights), ``pg_i t^2 / 2`` undamped, and the linear drift ``p1 t`` of the
+    first-order flow. Each free mode obeys ``y'' + 2 a y' = g``, so its second, third and
+    fourth derivatives are ``g e^{-2at}`` times ``1, -2a, 4a^2`` (``g, 0, 0`` undamped).
+    """
+    x0 = p1 * t
+    x1 = p1
+    x2 = 0.0
+    x3 = 0.0
+    x4 = 0.0
+    for i in range(pg.size):
+        g = pg[i]
+        if g == 0.0:
+            continue
+        ai = pa[i]
+        if ai == 0.0:
+            x0 += 0.5 * g * t * t
+            x1 += g * t
+            x2 += g
+            continue
+        x = 2.0 * ai * t
+        phi, psi = _phi_psi(x)
+        e = g * math.exp(-x)
+        x0 += 0.5 * g * t * t * phi
+        x1 += g * t * psi
+        x2 += e
+        x3 -= 2.0 * ai * e
+        x4 += 4.0 * ai * ai * e
+    return x0, x1, x2, x3, x4
+
+
+@_jit
+def drift_on_grid(times, pg, pa, p1, free):
+    """Add :func:`drift_x1` at every grid time to ``free`` (the table of
+    :func:`free_on_grid`, shape (5, nt)) in place; returns ``free``."""
+    if pg.size == 0 and p1 == 0.0:
+        return free
+    for k in range(times.size):
+        q0, q1, q2, q3, q4 = drift_x1(times[k], pg, pa, p1)
+        free[0, k] += q0
+        free[1, k] += q1
+        free[2, k] += q2
+        free[3, k] += q3
+        free[4, k] += q4
+    return free
+
+
 @_jit
 def x1_derivatives(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     """``x1`` and its first three derivatives at time t after the impact at ``delta``.
@@ -157,17 +243,28 @@ def x1_derivatives(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     ``Gam, B``: the forced motion of mass 1 (``scalars[1:3]`` of :func:`omega_setup`);
     ``ks = kappa sigma``; ``dy, dv``: ``modal[6], modal[7]``.
     """
-    d = _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    d = _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv, None)
     return d[0], d[1], d[2], d[3]
 
 
 @_jit
-def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
+def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift=None):
+    """x1 and its first four derivatives; ``drift``: None, or ``(pg, pa, p1)`` of
+    :func:`drift_x1`, added to the free part (per unit ``ks``). A None is a type: numba
+    compiles the branch away, so the searches without a drift run the code they ran
+    before it existed."""
     th = omega * t + delta
     c, s = np.cos(th), np.sin(th)
     p = Gam * c + B * s
     dp = omega * (B * c - Gam * s)
     f0, f1, f2, f3, f4 = free_x1(t, w, a, u0, dy, dv)
+    if drift is not None:
+        q0, q1, q2, q3, q4 = drift_x1(t, drift[0], drift[1], drift[2])
+        f0 += q0
+        f1 += q1
+        f2 += q2
+        f3 += q3
+        f4 += q4
     om2 = omega * omega
     return (p + ks * f0, dp + ks * f1, -om2 * p + ks * f2, -om2 * dp + ks * f3,
             om2 * om2 * p + ks * f4)
@@ -181,7 +278,7 @@ _ORDER_ACC = np.int64(2)
 
 @_jit
 def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi, Gam, B, omega, delta, ks,
-            w, a, u0, dy, dv):
+            w, a, u0, dy, dv, drift=None):
     """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton.
 
     Returns the root and x1 with its first three derivatives there. The start is the
@@ -198,7 +295,7 @@ def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi, Gam, B, ome
     ga = g_lo
     x = _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi)
     for _ in range(_MAX_ITER):
-        d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+        d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
         g = d[order]
         dg = d[order + 1]
         if (g < 0.0) == (ga < 0.0):
@@ -215,13 +312,13 @@ def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi, Gam, B, ome
                 left <= xn <= right and abs(d[order + 2] / (2.0 * dg)) * step * step <= tol)):
             return _taylor(xn, -step, d)  # the Newton step is the last
         if right - left <= tol:
-            d = _x1_derivs(xn, Gam, B, omega, delta, ks, w, a, u0, dy, dv) if np.isfinite(xn) \
-                else d
+            if np.isfinite(xn):
+                d = _x1_derivs(xn, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
             return (xn if np.isfinite(xn) else x), d[0], d[1], d[2], d[3]
         if not (np.isfinite(xn) and left <= xn <= right):
             xn = 0.5 * (left + right)
         x = xn
-    d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+    d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
     return x, d[0], d[1], d[2], d[3]
 
 
@@ -298,6 +395,34 @@ def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi):
 def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude):
     """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
+    ``x1 = Gam cos(omega t + delta) + B sin(omega t + delta) + ks * free(t)``, the free
+    part the modal sum ``sum u0_i y_i(t)`` of :func:`free_x1` (tabulated in ``free``);
+    :func:`stop_maximum` with no polynomial part (the search of eq. 16, see there).
+    """
+    return _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work,
+                    exclude, None)
+
+
+@_jit
+def stop_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, pg, pa, p1,
+                 work, exclude):
+    """Highest interior local maximum of a stop coordinate on ``(0, T)``: ``(value, time)``.
+
+    As :func:`x1_maximum` with the polynomial part of :func:`drift_x1` (``pg, pa, p1``, a
+    free mode pushed by a constant force) in the free part: ``s = Gam cos + B sin + ks
+    (modal free part + p(t))``; ``free`` must hold it (:func:`drift_on_grid` after
+    :func:`free_on_grid`).
+    """
+    return _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work,
+                    exclude, (pg, pa, p1))
+
+
+@_jit
+def _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude,
+             drift):
+    """The search of :func:`x1_maximum` and :func:`stop_maximum` (``drift``: None, or the
+    polynomial part ``(pg, pa, p1)``).
+
     ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
     ``omega times``; ``work``: scratch of shape ``(WORK_ROWS, 2 nt)`` (reused across calls).
     Each grid cell holds at most one root of ``x1''`` (the grid is built so), hence
@@ -316,6 +441,14 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
     best maximum found: the result is the same as polishing every one.
     A maximum within ``1e-7 T`` of the time ``exclude`` is skipped (NaN: none is),
     e.g. the tangency of a grazing motion. ``(-inf, nan)`` when there is none.
+
+    A polynomial part ``p`` (a free mode a constant force pushes, :func:`drift_x1`) is in
+    the table and in every evaluation of the polish, so the classification of the
+    cells, the tangent bounds and the Newton steps all see ``x1 + p``: a bound without
+    ``p`` would misplace where a maximum can hide. It adds no faster time scale:
+    ``p''`` is a constant (undamped) or ``g e^{-2at}``, the decay of a free mode the
+    coordinate sees, which :func:`time_grid` already refines for (its ``a + sqrt(a^2 -
+    w^2) = 2a``); ``p'''`` is 0 or of one sign.
     """
     cd, sd = math.cos(delta), math.sin(delta)
     nt = times.size
@@ -361,7 +494,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         tm, xm, vm, am, jm = _polish(_ORDER_ACC, lo, hi, a0, a1, j0, j1,
                                      _snap(omega, ks, x[k - 1], free[0, k - 1], free[4, k - 1]),
                                      _snap(omega, ks, x[k], free[0, k], free[4, k]),
-                                     Gam, B, omega, delta, ks, w, a, u0, dy, dv)
+                                     Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
             m = _candidate(work, m, lo, tm, v0, vm, a0, am, j0, jm,
                            _concave_bound(lo, tm, x[k - 1], xm, v0, vm))
@@ -380,7 +513,7 @@ def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, 
         c_ub[j] = -np.inf  # done
         best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j],
                              work[10, j], work[11, j], T, Gam, B, omega, delta, ks, w, a, u0,
-                             dy, dv, exclude)
+                             dy, dv, exclude, drift)
     return best, best_t
 
 
@@ -425,10 +558,9 @@ def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, bound):
 
 @_jit
 def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, T, Gam, B, omega, delta, ks,
-          w, a, u0, dy, dv, exclude):
+          w, a, u0, dy, dv, exclude, drift):
     r, xr, _, acc, _ = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, Gam, B,
-                            omega, delta,
-                            ks, w, a, u0, dy, dv)
+                            omega, delta, ks, w, a, u0, dy, dv, drift)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)

@@ -18,11 +18,13 @@ entry point compiles once. The flow's arrays come from
 beta, f, u, u^-1, lambda, V, V^-1, Z`` and the scalar pairs ``w_p, a_p``, ``k_p, j_p``).
 
 The interior-contact check of eq. (16) against both stops is the compiled kernel's
-search (:func:`impactcont.kernel.closed_form.x1_maximum` on its grid): for the modal flow
-with the weights ``u_j.`` of the impacting mass, for the first-order flow on the
+search (:func:`impactcont.kernel.contact.stop_maximum` on its grid): for the modal flow
+with the weights ``n^T U`` of the stop coordinate, for the first-order flow on the
 scalar pairs of :attr:`impactcont.model.first_order.FirstOrderBasis.scalar_pairs`
-with unit weights (as :mod:`impactcont.orbit.general`). The lower stop is the same
-search on ``-x_j`` (forced part and free part negated).
+with unit weights (as :mod:`impactcont.orbit.general`). A constant force adds a constant
+level (held modes, ``X_s``) and, where it pushes a free mode the stop coordinate sees, a
+polynomial in time (:func:`impactcont.kernel.contact.drift_x1`), both exact in the search.
+The lower stop is the same search on ``-s`` (forced, free and polynomial parts negated).
 
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
 :func:`motion_checks` and :func:`omega_partials`. Importing :mod:`impactcont` does not
@@ -36,7 +38,13 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.kernel.contact import WORK_ROWS, free_on_grid, time_grid, x1_maximum
+from impactcont.kernel.contact import (
+    WORK_ROWS,
+    drift_on_grid,
+    free_on_grid,
+    stop_maximum,
+    time_grid,
+)
 from impactcont.kernel.flights import mode_transfer
 from impactcont.kernel.stability import multipliers
 
@@ -587,16 +595,17 @@ def _flight_jacobian(tr, pcol, rate, D, j, n_start, n_end, omega, G):
 @_jit
 def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
                    normal, X0, theta):
-    """``(w, a, weights, Gamma, B, dy, dv, level, exact)`` of ``s = n . x`` along a flight
-    for the kernel's search: the forced part ``Gamma cos + B sin`` of the phase, the free
-    deviation (modal weights ``n^T U``; for the first-order flow ``n^T`` of the position
-    rows of ``V`` and ``Z``) and the constant ``level`` the constant force adds to ``s``;
-    ``exact`` is False when the constant force moves ``s`` by a polynomial in time (a
-    free mode it pushes), which the search does not represent."""
+    """``(w, a, weights, Gamma, B, dy, dv, level, pg, pd, p1)`` of ``s = n . x`` along a
+    flight for the kernel's search: the forced part ``Gamma cos + B sin`` of the phase, the
+    free deviation (modal weights ``n^T U``; for the first-order flow ``n^T`` of the
+    position rows of ``V`` and ``Z``), the constant ``level`` the constant force adds to
+    ``s`` and its polynomial part in time (:func:`impactcont.kernel.contact.drift_x1`):
+    ``pg, pd``, the weighted static force ``(n^T U)_i g_i`` and decay ``a_i`` of each free
+    mode it pushes (modal flow), ``p1 = n . d`` the drift per unit time (first-order
+    flow)."""
     c0 = math.cos(theta)
     s0 = math.sin(theta)
     level = 0.0
-    exact = True
     if general:
         m = lam.size
         n = m // 2
@@ -606,14 +615,13 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
         dev = np.empty(m)
         for c in range(m):
             dev[c] = X0[c] - (Z[c] * rot).real
+        drift = 0.0
         if xs.size > 0:
             for c in range(m):
                 dev[c] -= xs[c]
-            drift = 0.0
             for r in range(n):
                 level += normal[r] * xs[r]
                 drift += normal[r] * xd[r]
-            exact = drift == 0.0
         coef = np.empty(m, dtype=np.complex128)  # (n^T V)_k zeta_k
         zn = 0j
         for r in range(n):
@@ -639,7 +647,8 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
             else:  # two real eigenvalues
                 dy[i] = (coef[k] + coef[q]).real
                 dv[i] = (coef[k] * lam[k] + coef[q] * lam[q]).real
-        return pw, pa, np.ones(npair), zn.real, -zn.imag, dy, dv, level, exact
+        return (pw, pa, np.ones(npair), zn.real, -zn.imag, dy, dv, level, np.zeros(0),
+                np.zeros(0), drift)
     n = w.size
     g_static = st[0]
     free = st[1]
@@ -652,6 +661,7 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
     dv = np.empty(n)
     Gam = 0.0
     B = 0.0
+    pushed = 0
     for i in range(n):
         y0 = 0.0
         v0 = 0.0
@@ -664,12 +674,22 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
         B += u0[i] * bet[i]
         if g_static.size > 0 and g_static[i] != 0.0 and u0[i] != 0.0:
             if free[i]:
-                exact = False
+                pushed += 1
             else:
                 q = g_static[i] / (w[i] * w[i])
                 dy[i] -= q
                 level += u0[i] * q
-    return w, a, u0, Gam, B, dy, dv, level, exact
+    # a free mode's state is W(t) (Y(0) - forced) + S(t), S(0) = 0: dy, dv stay its
+    # deviation and S, the polynomial part, goes to the search's drift terms
+    pg = np.empty(pushed)
+    pd = np.empty(pushed)
+    k = 0
+    for i in range(n):
+        if pushed > 0 and g_static[i] != 0.0 and u0[i] != 0.0 and free[i]:
+            pg[k] = u0[i] * g_static[i]
+            pd[k] = a[i]
+            k += 1
+    return w, a, u0, Gam, B, dy, dv, level, pg, pd, 0.0
 
 
 @_jit
@@ -677,25 +697,23 @@ def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, s
                 normal, two_sided, b, b_low, X0, theta, tau):
     """Eq. (16) on one flight against both stops of ``s = n . x``: ``(gap_upper,
     time_upper, gap_lower, time_lower, capped)`` (a gap ``+inf`` and its time NaN where
-    there is no extremum; both gaps NaN where the search cannot represent the motion: a
-    constant force on a free mode the stop coordinate sees)."""
-    ww, aa, u0, Gam, B, dy, dv, level, exact = _search_inputs(
+    there is no extremum). The constant force's level and polynomial part (a free mode
+    it pushes) are in the searched coordinate, so every flight is checked."""
+    ww, aa, u0, Gam, B, dy, dv, level, pg, pd, p1 = _search_inputs(
         general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, normal, X0,
         theta)
-    if not exact:
-        return np.nan, np.nan, np.nan, np.nan, False
     times, capped = time_grid(ww, aa, u0, omega, tau)
-    free = free_on_grid(times, ww, aa, u0, dy, dv)
+    free = drift_on_grid(times, pg, pd, p1, free_on_grid(times, ww, aa, u0, dy, dv))
     cw = np.cos(omega * times)
     sw = np.sin(omega * times)
     work = np.empty((WORK_ROWS, 2 * times.size))
-    top, t_top = x1_maximum(times, free, cw, sw, Gam, B, omega, theta, 1.0, ww, aa, u0, dy, dv,
-                            work, np.nan)
+    top, t_top = stop_maximum(times, free, cw, sw, Gam, B, omega, theta, 1.0, ww, aa, u0, dy,
+                              dv, pg, pd, p1, work, np.nan)
     gap_l = np.inf
     t_l = np.nan
     if two_sided:  # the highest maximum of -s is the lowest minimum of s
-        low, t_low = x1_maximum(times, free, cw, sw, -Gam, -B, omega, theta, -1.0, ww, aa, u0,
-                                dy, dv, work, np.nan)
+        low, t_low = stop_maximum(times, free, cw, sw, -Gam, -B, omega, theta, -1.0, ww, aa,
+                                  u0, dy, dv, pg, pd, p1, work, np.nan)
         gap_l = b_low - low + level
         t_l = t_low
     return b - top - level, t_top, gap_l, t_l, capped
@@ -717,8 +735,8 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
         when G is not finite), gap_upper, time_upper, gap_lower, time_lower (each
         (p,)), capped)``: the gaps are those of
         :func:`impactcont.simulate.contact.flight_clearances` (NaN when ``checks`` is
-        False or the flight time is not positive), ``capped`` whether a search grid
-        was capped.
+        False, ``+inf`` when the flight time is not positive), ``capped`` whether a
+        search grid was capped.
     """
     p = taus.size
     m = matrices.shape[1]
