@@ -29,9 +29,9 @@ PAIR_K = [[2.0, -1.0], [-1.0, 2.0]]
 # ------------------------------------------------------------------------------------------
 # The machines, built afresh from their data (the witnesses never reuse the map's model)
 # ------------------------------------------------------------------------------------------
-def damper(omega: float = 1.5, b: float = 1.0) -> ic.ImpactOscillator:
-    """Primary mass on a spring, a free ball of mass MU in a cavity s = x2 - x1 in [-b, b]."""
-    return ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]],
+def damper(omega: float = 1.5, b: float = 1.0, m2: float = MU) -> ic.ImpactOscillator:
+    """Primary mass on a spring, a free ball of mass m2 in a cavity s = x2 - x1 in [-b, b]."""
+    return ic.ImpactOscillator(M=np.diag([1.0, m2]), K=[[1.0, 0.0], [0.0, 0.0]],
                                F=[1.0, 0.0], R=0.8, b=b, omega=omega, eta=0.05,
                                stops=Stops(mass=2, relative_to=1, mirror=True))
 
@@ -135,6 +135,20 @@ def test_impact_damper_map_points_are_the_motions_of_fresh_oscillators(damper_ma
 def test_impact_damper_stable_map_point_stays_under_simulation(damper_map):
     point = damper_map.sel(omega=1.6, b=1.3, method="nearest")
     assert_simulated(damper_map, point, damper(float(point["omega"]), float(point["b"])))
+
+
+def test_impact_damper_map_over_the_mass_ratio_uses_each_masses_impact_law():
+    """A map over (omega, m2): the two-body impact law of the cavity depends on the masses,
+    so each grid value of m2 has its own impact matrices; points re-solved on fresh
+    oscillators with that ball mass."""
+    start = settled(damper(), 1, 2, [0.0, 0.0, 0.0, 1.0], 150.0)
+    ds = multi_impact_map(start, ("omega", "m2"), grid={"omega": np.linspace(1.4, 1.6, 3),
+                                                        "m2": np.linspace(0.1, 0.4, 4)})
+    assert ds.attrs["symmetric"] == 1 and bool(ds["found"].all())
+    for point in sample(ds, [{"omega": 1.4, "m2": 0.1}, {"omega": 1.6, "m2": 0.4},
+                             {"omega": 1.5, "m2": 0.3}]):
+        osc = damper(float(point["omega"]), m2=float(point["m2"]))
+        assert_same_motion(ds, point, resolved(ds, osc, point))
 
 
 def test_map_without_contact_checks_says_so_and_is_never_physical():

@@ -69,12 +69,6 @@ class StopGeometry:
     b_low: float
     two_sided: bool
 
-    @property
-    def diagonal(self) -> bool:
-        """Every impact matrix is diagonal (stops on one mass, a diagonal mass matrix)."""
-        m = self.matrices
-        return bool(np.all(m == m * np.eye(m.shape[1])))
-
 
 def _normal(osc: ImpactOscillator) -> np.ndarray:
     """``n`` of the stop coordinate ``s = n . x`` (``e_j`` for a stop on mass j)."""
