@@ -347,6 +347,12 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
                      title: str | None = None) -> xr.Dataset:
     """Stability map of the N-p motion family of `start` over a grid of two parameters.
 
+    Any system of the shooting path: stops on any mass or between two masses (the
+    section ``n . x = c`` and impact matrices of
+    :func:`~impactcont.orbit.stop_geometry.stop_geometry`), free masses and a constant
+    force ``F_static``; each point is the motion :func:`impactcont.multi_impact_orbit`
+    finds there.
+
     Every grid point is solved by Newton from a neighbour that was solved, starting
     at the grid point nearest the start (reached from it by Newton in a few steps):
     natural-parameter continuation over the grid, breadth first, with a secant
@@ -383,7 +389,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         :func:`impactcont.multi_impact_continuation` decides.
     checks : bool
         Search every flight for contact with a stop (eq. 16). Without it ``gap_min``
-        is NaN and no point is physical.
+        is NaN, ``contact_checked`` False and no point is physical (as where the search
+        cannot represent a flight: a constant force pushing a free mode).
     tol : float
         Newton tolerance (residual and last update, relative to ``max(1, |u|)``).
     max_iter : int
@@ -400,7 +407,7 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     xarray.Dataset
         Dims ``(parameters[0], parameters[1])`` with their grids as coordinates,
         ``impact`` and ``component``: ``found``, ``newton_iterations``, ``stable``,
-        ``physical``, ``spectral_radius``, ``critical_multiplier``, ``delta``,
+        ``physical``, ``contact_checked``, ``spectral_radius``, ``critical_multiplier``, ``delta``,
         ``gap_min``, ``impact_velocity_k``, ``flight_time_k``, ``state_k`` and, in a
         system that admits symmetric motions of the pattern, ``asymmetry``
         (:mod:`impactcont.dataset.multi_maps`). Values are NaN where not found.
