@@ -742,3 +742,68 @@ def test_figures_leave_no_temporary_file(tmp_path):
     assert save_figure(fig, tmp_path / "f.png", 40).read_bytes()[:4] == b"\x89PNG"
     assert save_figure(fig, tmp_path / "f.pdf", 40).read_bytes()[:4] == b"%PDF"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.pdf", "f.png"]
+
+
+# -- robust datasets: element names 1-based; files of before element_indexing ---------------------
+def _robust_dataset(attrs: dict) -> xr.Dataset:
+    """A robust dataset as the scene's [[robust]] writes it (the attributes readers use)."""
+    osc = ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.6,
+                           omega=1.0, eta=0.1)
+    return xr.Dataset({"epsilon": ((), 0.01), "epsilon0": ((), 0.3), "robust": ((), True)},
+                      attrs={"title": "Robust stability of the N=1 motion", "name": "rb",
+                             "impactcont_dataset": "robust", "N": 1, "root": -1,
+                             "samples": 3, "evaluations": 9, "message": "robustly stable",
+                             "oscillator": osc.to_json(), **attrs})
+
+
+def test_old_robust_file_keeps_the_meaning_of_its_forcing_entries(tmp_path):
+    """A file of before element_indexing, written by hand as the old writer did (0-based
+    F[i]), reads with the 1-based names of the same masses: its nominal F[0] = 1.0 was mass
+    1's forcing, which the 1-based F[1] of the stored oscillator is (F[2] would be 0)."""
+    from impactcont.model.parameters import model_parameter
+
+    old = _robust_dataset({
+        "vary": json.dumps({"F[0]": [0.95, 1.05], "b": [0.5, 0.7]}),
+        "nominal": json.dumps({"F[0]": 1.0, "b": 0.6}),
+        "argmax": json.dumps({"0,0": {"F[0]": 1.05, "b": 0.5}, "1,1": {"F[0]": 0.95,
+                                                                     "b": 0.7}})})
+    path = tmp_path / "old_robust.nc"
+    old.to_netcdf(path, engine="netcdf4")  # on disk as before, no element_indexing
+    ds = impactcont.load(path)
+    assert json.loads(ds.attrs["vary"]) == {"F[1]": [0.95, 1.05], "b": [0.5, 0.7]}
+    assert json.loads(ds.attrs["nominal"]) == {"F[1]": 1.0, "b": 0.6}
+    assert json.loads(ds.attrs["argmax"]) == {"0,0": {"F[1]": 1.05, "b": 0.5},
+                                              "1,1": {"F[1]": 0.95, "b": 0.7}}
+    assert ds.attrs["element_indexing"] == "1-based"
+    osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+    for name, value in json.loads(ds.attrs["nominal"]).items():
+        assert model_parameter(osc, name).value(osc) == value
+    # read again after saving: today's file, names unchanged
+    impactcont.save(ds, tmp_path / "again.nc")
+    again = impactcont.load(tmp_path / "again.nc")
+    assert again.attrs["vary"] == ds.attrs["vary"] and again.attrs["argmax"] == ds.attrs["argmax"]
+
+
+def test_new_robust_file_reads_its_names_as_written(tmp_path):
+    from impactcont.dataset.schema import robust_attributes
+
+    attrs = robust_attributes({"F[2]": (-0.1, 0.1), "k2": (0.9, 1.1)}, {"F[2]": 0.0, "k2": 1.0},
+                              {(0, 1): {"F[2]": 0.1, "k2": 0.9}})
+    impactcont.save(_robust_dataset(attrs), tmp_path / "new.nc")
+    ds = impactcont.load(tmp_path / "new.nc")
+    for key in ("vary", "nominal", "argmax", "element_indexing"):
+        assert ds.attrs[key] == attrs[key]
+    assert json.loads(ds.attrs["vary"]) == {"F[2]": [-0.1, 0.1], "k2": [0.9, 1.1]}
+
+
+@pytest.mark.parametrize(("attrs", "pattern"), [
+    ({"vary": json.dumps({"gap": [0.2, 1.0]}), "nominal": "{}"}, r"'vary'.*names \['gap'\]"),
+    ({"vary": json.dumps({"x1": [0.2, 1.0]}), "nominal": "{}"}, r"'vary'.*names \['x1'\]"),
+    ({"vary": json.dumps({"b": [0.2, 1.0]}), "nominal": "{}", "element_indexing": "0-based"},
+     "'element_indexing' must be '1-based'"),
+])
+def test_robust_file_with_what_robust_cannot_vary_is_refused(tmp_path, attrs, pattern):
+    path = tmp_path / "bad.nc"
+    _robust_dataset(attrs).to_netcdf(path, engine="netcdf4")
+    with pytest.raises(ValueError, match=pattern):
+        impactcont.load(path)

@@ -37,8 +37,13 @@ curve      ``kind``: SN, PD, NS, GR or ZV; ``N``; ``parameters``: two
 map        ``options``
 orbits     ``N`` (``2 pi N / omega`` = the variable ``period``); ``which``,
            ``note``: text
-robust     ``N``; ``vary``: JSON object of ``[low, high]``; ``nominal``: JSON
-           object of numbers; ``argmax``: JSON object
+robust     ``N``; ``vary``: JSON object of a parameter robust stability can vary
+           (:func:`~impactcont.model.parameters.model_parameter`'s names, elements
+           1-based, no lower stop's) to ``[low, high]``; ``nominal``: JSON object
+           of numbers; ``argmax``: JSON object; ``element_indexing``: ``"1-based"``
+           (absent in files written before: their ``F[i]`` counted from 0 and are
+           read as ``F[i+1]`` and the attribute added,
+           :func:`upgrade_robust_attributes`)
 simulation ``start``, ``status``: text; ``periods``: a number > 0;
            ``impact_stops``: one letter ``U``/``L`` per impact (required
            with a lower stop)
@@ -51,6 +56,7 @@ The root attributes of a scene file (``impactcont_kind``, ``scene``,
 from __future__ import annotations
 
 import json
+import logging
 import math
 import re
 from collections.abc import Callable, Mapping
@@ -63,9 +69,24 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.vocabulary import CURVE_KINDS, ELEMENT_FAMILIES, PARAMETERS
 
-__all__ = ["KIND_ATTRIBUTES", "SECTION_ATTRIBUTES", "SECTION_KINDS", "check_attributes",
-           "check_file_attributes", "check_pattern_attribute", "dataset_kind", "dataset_tag",
-           "impacts_attribute", "oscillator_attribute", "split_parameters"]
+__all__ = [
+    "KIND_ATTRIBUTES",
+    "ROBUST_INDEXING",
+    "ROBUST_INDEXING_ATTRIBUTE",
+    "SECTION_ATTRIBUTES",
+    "SECTION_KINDS",
+    "check_attributes",
+    "check_file_attributes",
+    "check_pattern_attribute",
+    "dataset_kind",
+    "dataset_tag",
+    "impacts_attribute",
+    "oscillator_attribute",
+    "split_parameters",
+    "upgrade_robust_attributes",
+]
+
+log = logging.getLogger(__name__)
 
 #: The kind of the datasets in a file of each built-in scene section.
 SECTION_KINDS: dict[str, str] = {
@@ -83,7 +104,7 @@ KIND_ATTRIBUTES: dict[str, tuple[str, ...]] = {
     "map": ("oscillator", "options", *_TEXT),
     "multi_impact_map": ("oscillator", "N", "options", "impacts", "pattern", *_TEXT),
     "orbits": ("oscillator", "N", "which", "note", *_TEXT),
-    "robust": ("oscillator", "N", "vary", "nominal", "argmax", *_TEXT),
+    "robust": ("oscillator", "N", "vary", "nominal", "argmax", "element_indexing", *_TEXT),
     "simulation": ("oscillator", "start", "periods", "status", "impact_stops", *_TEXT),
 }
 
@@ -273,11 +294,81 @@ def split_parameters(text: str) -> list[str]:
     return _BETWEEN_NAMES.split(text)
 
 
+#: The attribute of a robust dataset saying how the element names of ``vary``,
+#: ``nominal`` and ``argmax`` count the masses, and its value: 1-based, as the paper's
+#: masses and every other parameter name (``F[2]`` is the forcing of mass 2).
+ROBUST_INDEXING_ATTRIBUTE = "element_indexing"
+ROBUST_INDEXING = "1-based"
+# robust stability follows an N-1 motion with one stop: it cannot vary a lower stop
+_LOWER_STOP = ("b_low", "R_low", "gap")
+_OLD_F_ENTRY = re.compile(r"^F\[(\d+)\]$")
+
+
+def upgrade_robust_attributes(attrs: Mapping[str, Any]) -> dict[str, Any]:
+    """The attributes of a robust dataset in today's convention.
+
+    Files written before the attribute ``element_indexing`` existed stored the entries
+    of F in ``vary``, ``nominal`` and ``argmax`` with 0-based indices (``"F[0]"`` was the
+    forcing of mass 1); the parameter names are 1-based now, as the paper's masses
+    (:func:`impactcont.model.parameters.model_parameter`). Such a file's ``F[i]`` is read
+    as ``F[i+1]`` (its meaning kept) and ``element_indexing`` added; a file that has the
+    attribute is returned as it is. Other names had no index then (``b``, ``omega``, ...;
+    robust stability varied no other element), so attributes without ``F[i]`` mean the
+    same in both conventions and are returned as they are.
+
+    Parameters
+    ----------
+    attrs : mapping
+        The dataset's attributes.
+
+    Returns
+    -------
+    dict
+        A new dict (the input is not changed).
+
+    Raises
+    ------
+    ValueError
+        ``element_indexing`` is not ``"1-based"``, or an old attribute is not JSON.
+    """
+    out = dict(attrs)
+    indexing = out.get(ROBUST_INDEXING_ATTRIBUTE)
+    if indexing is not None:
+        if indexing != ROBUST_INDEXING:
+            raise _refused(ROBUST_INDEXING_ATTRIBUTE, indexing,
+                           f"{ROBUST_INDEXING!r} (element names counted as the paper's masses)")
+        return out
+
+    def renamed(names: Mapping[str, Any]) -> dict[str, Any]:
+        return {(f"F[{int(m.group(1)) + 1}]" if (m := _OLD_F_ENTRY.match(k)) else k): v
+                for k, v in names.items()}
+
+    changed = []
+    for key in ("vary", "nominal", "argmax"):
+        if key not in out:
+            continue
+        data = _json_object(key, out[key])
+        new = ({k: renamed(v) if isinstance(v, dict) else v for k, v in data.items()}
+               if key == "argmax" else renamed(data))
+        if new != data:
+            out[key] = json.dumps(new)
+            changed.append(key)
+    if changed:
+        log.info("robust dataset written before element_indexing: its 0-based F[i] in %s "
+                 "read as the 1-based F[i+1] (the same masses)", ", ".join(changed))
+        out[ROBUST_INDEXING_ATTRIBUTE] = ROBUST_INDEXING
+    return out
+
+
 def _vary(value: Any, ds: xr.Dataset, osc: Any) -> None:
-    allowed = "a JSON object of parameter name to [low, high] (the box of eq. 26)"
+    allowed = ("a JSON object of parameter name to [low, high] (the box of eq. 26): names "
+               f"robust stability can vary, {_ALLOWED}, not a lower stop's {list(_LOWER_STOP)}")
     box = _json_object("vary", value, allowed)
     if not box:
         raise _refused("vary", value, allowed, " (no parameter varies)")
+    unknown = [k for k in box if k not in PARAMETERS or k in _LOWER_STOP]
+    if unknown:
+        raise _refused("vary", value, allowed, f" (names {unknown})")
     for bounds in box.values():
         if (not isinstance(bounds, list) or len(bounds) != 2 or not all(map(_real, bounds))
                 or bounds[0] > bounds[1]):
@@ -359,6 +450,8 @@ _CHECKS: dict[str, Callable[[Any, xr.Dataset, Any], Any]] = {
     "vary": _vary,
     "nominal": _nominal,
     "argmax": lambda v, ds, osc: _json_object("argmax", v),
+    ROBUST_INDEXING_ATTRIBUTE: lambda v, ds, osc: upgrade_robust_attributes(
+        {ROBUST_INDEXING_ATTRIBUTE: v}),
     "start": _text("start"),
     "status": _text("status"),
     "which": _text("which"),
@@ -444,6 +537,10 @@ def check_attributes(ds: xr.Dataset, kind: str, *, in_section: bool = False) -> 
     if in_section and missing:
         raise ValueError(f"attribute(s) {missing} missing: a {kind} dataset of a scene file "
                          f"carries {list(SECTION_ATTRIBUTES[kind])}")
+    if kind == "robust":  # a file of before element_indexing: its F[i] counted from 0
+        upgraded = upgrade_robust_attributes(ds.attrs)
+        if upgraded != ds.attrs:
+            ds.attrs.update(upgraded)
     osc = oscillator_attribute(ds) if "oscillator" in ds.attrs else None
     for name in KIND_ATTRIBUTES[kind]:
         if name != "oscillator" and name in ds.attrs:

@@ -43,6 +43,8 @@ import numpy as np
 import xarray as xr
 
 from impactcont.dataset.attributes import (
+    ROBUST_INDEXING,
+    ROBUST_INDEXING_ATTRIBUTE,
     check_attributes,
     oscillator_attribute,
     split_parameters,
@@ -68,6 +70,7 @@ __all__ = [
     "oscillator_from_dataset",
     "point_table",
     "provenance_attributes",
+    "robust_attributes",
     "special_variable",
     "split_parameters",
     "state_component_names",
@@ -275,6 +278,28 @@ def provenance_attributes(action: str = "created") -> dict[str, str]:
                       "(eq. 12-15), their stability from the impact-map Jacobian G (eq. 25), "
                       "pseudo-arclength continuation, exact event-driven simulation",
             "references": REFERENCES}
+
+
+def robust_attributes(vary: Mapping[str, Sequence[float]], nominal: Mapping[str, float],
+                      argmax: Mapping[tuple[int, int], Mapping[str, float]]) -> dict[str, str]:
+    """The attributes of a robust dataset that name parameters: ``vary``, ``nominal`` and
+    ``argmax`` as JSON, and ``element_indexing`` (1-based, as every parameter name).
+
+    A robust dataset without ``element_indexing`` is read as written before it existed,
+    with 0-based ``F[i]`` (:func:`~impactcont.dataset.attributes.upgrade_robust_attributes`),
+    so every writer of a robust dataset writes these together.
+
+    Parameters
+    ----------
+    vary, nominal : mapping
+        :attr:`~impactcont.orbit.robust.RobustStability.vary` and ``nominal``.
+    argmax : mapping of (int, int) to mapping
+        :attr:`~impactcont.orbit.robust.RobustStability.argmax`, stored under ``"i,j"``.
+    """
+    return {"vary": json.dumps({k: [float(lo), float(hi)] for k, (lo, hi) in vary.items()}),
+            "nominal": json.dumps({k: float(v) for k, v in nominal.items()}),
+            "argmax": json.dumps({f"{i},{j}": dict(q) for (i, j), q in argmax.items()}),
+            ROBUST_INDEXING_ATTRIBUTE: ROBUST_INDEXING}
 
 
 def parameter_names(ds: xr.Dataset) -> list[str]:

@@ -587,8 +587,9 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
         entry or overlapping entries, as ``F0`` and ``F[2]``) to finite intervals
         ``lo < hi`` inside each parameter's range; `nominal` naming a parameter not in
         `vary` or a value outside its interval; an end of an interval (the others at
-        nominal) that leaves the oscillator's admissible parameters; or an oscillator
-        other than the paper's form (one stop above mass 1).
+        nominal) that leaves the oscillator's admissible parameters (an oscillator other
+        than the paper's form, one stop above mass 1, is refused by
+        :func:`robust_stability` itself, and by a scene's closed-form check).
     """
     if not isinstance(osc, ImpactOscillator):
         raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
@@ -603,7 +604,6 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
         raise ParameterError(f"samples must be an integer >= 2 (grid points per parameter, "
                              f"both ends included); got {samples!r}")
     samples = int(samples)
-    require_paper_stops(osc, "robust_stability")
     box, params = _check_vary(osc, vary)
     if samples ** len(box) > _MAX_GRID_POINTS:
         raise ParameterError(f"samples={samples} for {len(box)} parameters gives "
@@ -674,8 +674,9 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     Raises
     ------
     ParameterError
-        Bad ``vary``, ``nominal``, ``root``, ``samples``, or a box that leaves
-        the oscillator's admissible parameters.
+        Bad ``vary``, ``nominal``, ``root``, ``samples``, a box that leaves
+        the oscillator's admissible parameters (:func:`check_robust_arguments`), or
+        an oscillator other than the paper's form (one stop above mass 1).
     NoPeriodicMotionError
         The motion does not exist or is not physical at ``q0`` (or, with
         ``root=None``, no physical stable motion exists there), or it ceases to
@@ -708,6 +709,7 @@ def robust_stability(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     """
     N, samples, box, q0 = check_robust_arguments(osc, N, vary, nominal=nominal, root=root,
                                                  samples=samples)
+    require_paper_stops(osc, "robust_stability")  # the N-1 closed form: one stop, mass 1
     names = list(box)
     params = [model_parameter(osc, name, "vary key") for name in names]  # checked above
     lo = np.array([box[k][0] for k in names])
