@@ -344,10 +344,11 @@ def test_loaded_pair_branch_in_the_forcing_amplitude(loaded_orbit):
 # ------------------------------------------------------------------------------------------
 # What cannot be checked yet is said, not computed wrong
 # ------------------------------------------------------------------------------------------
-def test_a_pushed_free_mode_is_reported_unchecked_once(caplog):
+def test_a_pushed_free_mode_is_checked(caplog):
     """A ball under gravity bouncing on the primary: the constant force moves the free mode
-    by a polynomial in time, which the interior-contact search does not represent. The
-    branch's motions are not physical with that reason, said once."""
+    by a polynomial in time, which the interior-contact search represents exactly
+    (tests/test_pushed_free_mode.py). The motion is physical (the simulated flight lasts
+    the whole period: no contact inside it) and the branch reports no unchecked contact."""
     osc = ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]],
                               F=[1.0, 0.0], F_static=[0.0, -MU * 0.5], R=0.7, b=50.0,
                               omega=1.3, eta=0.05,
@@ -359,14 +360,16 @@ def test_a_pushed_free_mode_is_reported_unchecked_once(caplog):
                                            "states": [[x1, x1, 0.0, 0.25 * T]],
                                            "pattern": "L"})
     assert orbit.impact_velocity > 0 and orbit.residual < 1e-10
-    assert not orbit.physical and "interior contact not checked" in orbit.reason
+    assert orbit.physical and 0 < orbit.flight_gap_min[0] < math.inf
+    res = ic.simulate(osc, orbit.states[0], float(orbit.phases[0]), 1.5)
+    assert res.impact_stops[0] == "L"
+    assert res.impact_times[0] == pytest.approx(T, rel=0, abs=1e-8)
     with caplog.at_level(logging.WARNING, logger="impactcont.analysis.multi_branch"):
         ds = multi_impact_continuation(orbit, "omega", (1.2, 1.4), progress=False,
                                        max_points=6)
-    assert not ds["physical"].values.any()
-    assert "interior contact is not checked" in ds.attrs["options"]
-    notes = [r for r in caplog.records if "interior contact is not checked" in r.getMessage()]
-    assert len(notes) == 1
+    assert ds["physical"].values.all()
+    assert "not checked" not in ds.attrs["options"]
+    assert not [r for r in caplog.records if "not checked" in r.getMessage()]
 
 
 def test_grazing_of_a_clearance_between_masses_becomes_an_impact(pair_branch):

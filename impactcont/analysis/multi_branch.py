@@ -252,30 +252,6 @@ def _within_limits(problem: BranchProblem, options: ContinuationOptions
     return dataclasses.replace(options, bounds=(clipped, hi)), clipped
 
 
-#: What :func:`~impactcont.orbit.multi_impact.orbit_from_unknowns` reports for a flight whose
-#: interior contact (eq. 16) the contact search cannot check.
-UNCHECKED = "interior contact not checked"
-
-
-def _unchecked_contact(problem: BranchProblem, samples: Sequence[MultiImpactSample]) -> str:
-    """Say, once per branch, that its motions' interior contact could not be checked.
-
-    Where a constant force pushes a free mode, the stop coordinate moves by a polynomial
-    in time that the interior-contact search (eq. 16) does not represent: every such
-    motion is reported not physical with that reason (never physical unchecked). Logs
-    one warning for the branch and returns the note for its message ("" when none).
-    """
-    unchecked = sum(UNCHECKED in s.orbit.reason for s in samples)
-    if not unchecked:
-        return ""
-    note = (f"{unchecked} of {len(samples)} motions are not physical because their interior "
-            f"contact is not checked (the constant force F_static moves the stop coordinate "
-            f"{problem.osc.stops.coordinate} by a polynomial in time through a free mode, "
-            "which the contact search of eq. 16 does not represent; GR is not detected there)")
-    log.warning("N=%d p=%d branch in %s: %s", problem.N, problem.p, problem.parameter, note)
-    return "; " + note
-
-
 def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSample],
                       specials: Sequence[MultiImpactSpecialPoint], options: Mapping[str, Any],
                       *, title: str | None = None,
@@ -347,7 +323,6 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                   f"{problem.parameter}", parameter=problem.parameter) as rep:
         samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                                   stop_after_pd=stop_after_pd, progress=rep)
-    message += _unchecked_contact(problem, samples)
     specials = detect_multi_impact_points(problem, samples, labels)
     values, user_events = locate_multi_impact_events(problem, samples, functions)
     log.info("N=%d p=%d branch in %s: %d points, %d special (%s)", problem.N, problem.p,
