@@ -26,6 +26,7 @@ from impactcont.analysis.branch import check_continuation_arguments, continuatio
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops, require_paper_stops
 from impactcont.orbit.robust import check_robust_arguments, robust_stability
 from impactcont.scene.keys import (
@@ -598,21 +599,20 @@ class BranchSpec(continuation_entry(continuation, "BranchEntry")):
                 **self.continuation_options()}
 
 
-_VARY_NAME = re.compile(r"^(b|omega|R|eta|alpha|beta|F\[\d+\])$")
-
-
 class _Box(ValueType):
-    """A table ``{name = [lo, hi], ...}`` of uncertain parameters."""
+    """A table ``{name = [lo, hi], ...}`` of uncertain parameters (what robust stability
+    can vary of the oscillator is checked with it: :func:`~impactcont.orbit.robust.
+    check_robust_arguments`)."""
 
-    allowed = ("a table {name = [lo, hi]} with names b, omega, R, eta, alpha, beta or "
-               "\"F[i]\", and lo < hi")
+    allowed = ("a table {name = [lo, hi]} with names b, omega, R, eta, alpha, beta, F0 or "
+               "an element (\"k2\", \"M[1,2]\", \"F[2]\", 1-based), and lo < hi")
 
     def check(self, value: Any, where: Where) -> dict[str, tuple[float, float]]:
         if not isinstance(value, dict) or not value:
             raise self.fail(value, where, "wrong type or empty")
         out = {}
         for name, interval in value.items():
-            if not _VARY_NAME.match(name):
+            if name not in PARAMETERS or name in ("b_low", "R_low", "gap"):
                 close = difflib.get_close_matches(name, list(PARAMETER_RANGES), n=1)
                 hint = f"; did you mean {close[0]!r}?" if close else ""
                 raise where.key(name).error(f"unknown parameter {name!r}{hint}", self.allowed)
@@ -649,12 +649,10 @@ class RobustSpec(EntrySpec):
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
         for name in self.vary:
-            m = re.match(r"^F\[(\d+)\]$", name)
-            if m and int(m.group(1)) >= osc.n:
-                raise where.key("vary").key(name).error(
-                    f"indexes past F (length {osc.n})", f'"F[i]" with 0 <= i < {osc.n}')
-            if not m:
-                _check_damping_parameter(name, osc, where.key("vary").key(name))
+            key = where.key("vary").key(name)
+            if name in ("eta", "alpha", "beta"):
+                _check_damping_parameter(name, osc, key)
+            library_check(key, model_parameter, osc, name, "vary")
         for name, value in (self.nominal or {}).items():
             if name not in self.vary:
                 raise where.key("nominal").key(name).error(

@@ -38,6 +38,7 @@ import xarray as xr
 
 from impactcont.analysis.branch import continuation
 from impactcont.dataset import special_variable, state_component_names
+from impactcont.dataset.schema import robust_attributes
 from impactcont.errors import NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import PeriodicOrbit, amplitude_squared, periodic_orbits
@@ -354,13 +355,12 @@ class Robust:
                                 "Eigenvalues of G0, largest modulus first."),
             **_parameters(rs.orbit.oscillator),
         }
-        argmax = {f"{i},{j}": q for (i, j), q in rs.argmax.items()}
         ds = xr.Dataset(data, coords=_coords(n), attrs={
             "title": f"Robust stability of the N={entry.N} motion", "name": entry.name,
             "impactcont_dataset": "robust",
             "N": entry.N, "root": rs.root, "samples": rs.samples,
-            "evaluations": rs.evaluations, "vary": json.dumps(rs.vary),
-            "nominal": json.dumps(rs.nominal), "argmax": json.dumps(argmax),
+            "evaluations": rs.evaluations,
+            **robust_attributes(rs.vary, rs.nominal, rs.argmax),
             "message": rs.message, "oscillator": rs.orbit.oscillator.to_json()})
         log.info("robust %s: %s", entry.name, rs.message)
         return ds
