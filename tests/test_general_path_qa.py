@@ -96,9 +96,6 @@ def test_robust_stability_refuses_a_phased_F_entry():
     assert np.isfinite(ic.robust_stability(osc, 1, {"F0": (0.9, 1.1)}, samples=5).epsilon)
 
 
-@pytest.mark.xfail(strict=True, raises=ParameterError, reason=(
-    "robust varies the parameter objects; model_parameter refuses F[j] of any complex F, "
-    "even an entry with no phase (impactcont/model/parameters.py, family F[j])"))
 def test_robust_stability_varies_a_real_entry_of_a_complex_F():
     """An entry with no phase keeps its meaning: F[1] = value (mass 1, 1-based), F[2] keeps
     its phase, so the nominal motion (box centre F[1] = 1) is the oscillator's own."""

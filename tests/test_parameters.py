@@ -394,7 +394,8 @@ def test_setting_an_element_changes_only_that_element():
     ("c1", {}, "not given as a matrix"),
     ("m1", {"M": [[1.0, 0.1], [0.1, 1.0]]}, r"needs a diagonal M.*'M\[1,1\]'"),
     ("k1", {"K": [[2.0, -1.0], [-1.0, 1.0]]}, r"is not such a chain.*'K\[i,j\]'"),
-    ("F[1]", {"F": [1.0 + 1.0j, 0.0]}, "complex"),
+    ("F[1]", {"F": [1.0 + 1.0j, 0.0]}, "has a phase of its own"),
+    ("F[2]", {"F": [1.0, 0.5j]}, "has a phase of its own"),
     ("q1", {}, r"parameter must be one of .*got 'q1'"),
 ])
 def test_parameters_that_do_not_apply_are_refused(name, osc_args, match):

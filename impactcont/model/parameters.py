@@ -277,17 +277,18 @@ def _element(name: str, family: str, indices: tuple[int, ...], osc: ImpactOscill
     matrix = {"m": "M", "M": "M", "k": "K", "K": "K", "c": "C", "C": "C"}.get(letter)
     if family == "F[j]":
         j = indices[0] - 1
-        if osc.F.dtype.kind == "c":
-            raise ParameterError(f"{argument}={name!r}: F={osc.F.tolist()} is complex (each mass "
-                                 "its own phase) and a real F_j would drop that phase; continue "
-                                 "'F0' (the amplitude of the whole F, phases kept)")
+        if 0 <= j < osc.n and complex(osc.F[j]).imag != 0.0:
+            raise ParameterError(f"{argument}={name!r}: F[{j + 1}]={complex(osc.F[j])!r} has a "
+                                 "phase of its own and a real F_j would drop it; continue "
+                                 "'F0' (the amplitude of the whole F, phases kept), or an "
+                                 "entry of F without a phase")
 
         def put_f(o: ImpactOscillator, v: float) -> ImpactOscillator:
             F = o.F.copy()
             F[j] = v
             return o.replace(F=F)
 
-        return ModelParameter(name, info, FORCING, get=lambda o: float(o.F[j]), put=put_f,
+        return ModelParameter(name, info, FORCING, get=lambda o: float(o.F[j].real), put=put_f,
                               scale_of=lambda o: o.F0)
     data = {"M": MASS, "K": STIFFNESS, "C": DAMPING}[matrix]
 
