@@ -304,7 +304,7 @@ def test_damping_parameters_are_refused_with_a_matrix_C(damper, name):
                                              "matrix"):
         curve(damper, 1, "PD", start={"omega": 0.7, "b": 0.1}, parameters=("omega", name),
               bounds={"omega": (0.6, 2.0), name: (0.0, 1.0)})
-    with pytest.raises(ParameterError, match="continue in omega, b, R or F0"):
+    with pytest.raises(ParameterError, match=r"continue in omega, b, R, F0 or an element of C"):
         curve_problem("SN", damper, 1, (name, "b"))
 
 

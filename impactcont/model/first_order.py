@@ -47,6 +47,7 @@ from impactcont.errors import (
     ParameterError,
     ResonanceError,
 )
+from impactcont.kernel.arrays import FirstOrderArrays
 from impactcont.model.modal import classify_modes
 
 __all__ = ["COND_REFUSE", "COND_WARN", "FirstOrderBasis", "coth_remainder"]
@@ -357,15 +358,15 @@ class FirstOrderBasis:
         return ((self.V * np.exp(self.eigenvalues * float(t))) @ self.V_inv).real
 
     @functools.cached_property
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+    def kernel_arrays(self) -> FirstOrderArrays:
         """The basis as the compiled first-order path takes it
         (:mod:`impactcont.kernel.general`): new contiguous, writable arrays of one
         dtype each, so that every entry point is compiled once.
 
         Returns
         -------
-        tuple
-            ``(lambda, V, V^-1, A, impact_column, w_p, a_p, k_p, j_p, M, K, C)``, the
+        FirstOrderArrays
+            ``(lambda, V, V^-1, A, impact_column, w_p, a_p, k_p, j_p, M, K, C)`` by name, the
             scalar pairs of :attr:`scalar_pairs` as ``w_p, a_p, k_p, j_p``, then
             ``(lambda, V[0], w_p, a_p, k_p, j_p)`` again (the arguments of the contact
             search in their order, ``V[0]`` the first row of V).
@@ -378,7 +379,7 @@ class FirstOrderBasis:
         index = tuple(np.array(x, dtype=np.int64, order="C") for x in (k, j))
         mkc = tuple(np.array(x, dtype=float, order="C") for x in (self.M, self.K, self.C))
         search = (cplx[0], np.array(cplx[1][0]), *real[2:], *index)
-        return (*cplx, *real, *index, *mkc, *search)
+        return FirstOrderArrays(*cplx, *real, *index, *mkc, *search)
 
     def forced_amplitude(self, F: np.ndarray, omega: float) -> np.ndarray:
         """Complex amplitude ``Z`` of the steady forced state, ``X_p = Re(Z e^{i theta})``.
@@ -401,7 +402,8 @@ class FirstOrderBasis:
             of the row- and column-equilibrated stiffness (invariant to the units of each
             coordinate), which is solved.
         """
-        M, K, C = self.kernel_arrays[9:12]
+        arrays = self.kernel_arrays
+        M, K, C = arrays.M, arrays.K, arrays.C
         Z, cond = _compiled().forced_response(K, M, C, np.array(F, dtype=complex),
                                               float(omega))
         _check_resonance(omega, cond)
@@ -424,7 +426,8 @@ class FirstOrderBasis:
         ``d x_hat = -H^-1 (-2 omega M + i C) x_hat``, ``Z = [x_hat; i omega x_hat]``, in
         compiled code (:func:`impactcont.kernel.general.forced_response_derivative`;
         :meth:`forced_amplitude_derivative_reference` is the numpy form)."""
-        M, K, C = self.kernel_arrays[9:12]
+        arrays = self.kernel_arrays
+        M, K, C = arrays.M, arrays.K, arrays.C
         return _compiled().forced_response_derivative(K, M, C, np.array(Z, dtype=complex),
                                                       float(omega))
 
