@@ -27,7 +27,7 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont import maps
+from impactcont.analysis import maps
 from impactcont.analysis.maps import stability_map
 
 OMEGA = np.linspace(0.5, 6.0, 23)

@@ -55,6 +55,7 @@ import xarray as xr
 
 import impactcont as ic
 from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
+from impactcont.analysis.switching import pitchfork_branch
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 
 log = logging.getLogger("backlash")
@@ -418,7 +419,7 @@ def plane(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, A
     if "GR" in labels:
         curves["GR symmetric"] = multi_impact_curve(sym, "GR", 0, parameter="b", bounds=PLANE,
                                                     ds_max=0.02, max_points=800)
-    asym = ic.switching.pitchfork_branch(sym, 0, 1, max_points=600, ds_max=0.02)
+    asym = pitchfork_branch(sym, 0, 1, max_points=600, ds_max=0.02)
     grazing = [float(w) for lab, w in zip(asym["special_label"].values,
                                           asym["special_omega"].values, strict=True)
                if lab == "GR"]
