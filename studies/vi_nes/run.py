@@ -1,0 +1,432 @@
+"""Vibro-impact energy sink (VI-NES): its two-impact motions against their closed form.
+
+A linear primary (mass 1, stiffness 1, damping ratio ``zeta``) forced near its 1:1
+resonance carries a light free ball (mass ratio ``mu = 0.05``) in a cavity
+``s = x2 - x1`` in ``[-b_low, b]``. As an :class:`impactcont.ImpactOscillator`::
+
+    M = diag(1, mu), K = diag(1, 0), F = [1, 0], C = 2 eta K (eta = zeta),
+    stops = Stops(mass=2, relative_to=1, b_low=b_low, R_low=R_low), R, b,
+    F_static = [-g, -mu g]                        # a vertical VI-NES (g = 0: horizontal)
+
+Three machines: symmetric walls; walls of different restitution (``R_low != R``); a
+vertical VI-NES (gravity). This study
+
+1. finds every motion with one impact on each wall per forcing period ("UL") in closed
+   form (:mod:`closed_form`, derived in the README: one scalar equation in the first
+   flight time) on a grid of forcing frequencies, solves each with
+   ``multi_impact_orbit`` seeded there, and compares them (phase, states after both
+   impacts, flight times, approach speeds, multipliers, stability and physical verdicts);
+2. asks the simulator at a few points; checks that an off-centre cavity (``b_low != b``)
+   is the centred one translated (the ball is free);
+3. continues the symmetric machine's motion in omega and in ``R_low`` (special points,
+   checked in the closed form), follows its symmetry-breaking point in (omega, b) with
+   ``multi_impact_curve``, and maps (omega, b) with ``multi_impact_map``, checked against
+   the closed form on a sub-grid.
+
+Writes ``vi_nes.json``, ``branches.nc``, ``vi_nes.png`` and ``vi_nes_plane.png``. Run::
+
+    PYTHONPATH=. python studies/vi_nes/run.py [--output DIR] [--copy-figures]
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # tiny matrices: threads only cost
+
+import argparse
+import json
+import logging
+import math
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+
+import impactcont as ic
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from closed_form import VINES, Motion, ul_motions  # noqa: E402
+
+log = logging.getLogger("vi_nes")
+
+MU, ZETA, R, B = 0.05, 0.02, 0.6, 5.0  # mass ratio, primary damping, restitution, half cavity
+VARIANTS: dict[str, dict[str, float]] = {
+    "symmetric": {},
+    "restitution": {"R_low": 0.3},  # the lower wall softer
+    "vertical": {"g": 0.5},  # gravity along the cavity, per unit mass, in F/(k) w_n^2
+}
+OMEGAS = np.linspace(0.7, 1.3, 49)
+PLANE = {"omega": (0.7, 1.3), "b": (1.0, 10.0)}
+MAP_GRID = (61, 37)
+SIMULATED = (("symmetric", 1.2), ("restitution", 1.2), ("vertical", 1.2), ("symmetric", 1.0),
+             ("vertical", 0.9))
+
+
+def params(variant: str, r: float, b: float = B) -> VINES:
+    kw = {"r": float(r), "mu": MU, "zeta": ZETA, "b": b, "b_low": b, "R": R, "R_low": R}
+    kw.update(VARIANTS[variant])
+    return VINES(**kw)
+
+
+def system(p: VINES, mirror: bool = False) -> ic.ImpactOscillator:
+    """The VI-NES as an ImpactOscillator (primary x1, ball x2, walls s = b, -b_low);
+    ``mirror=True`` (symmetric walls only): the lower wall at ``-b`` moves with ``b``."""
+    if mirror:
+        if not (p.b_low == p.b and p.R_low == p.R):
+            raise ValueError(f"mirror needs symmetric walls: {p}")
+        stops = ic.Stops(mass=2, relative_to=1, mirror=True)
+    else:
+        stops = ic.Stops(mass=2, relative_to=1, b_low=p.b_low, R_low=p.R_low)
+    return ic.ImpactOscillator(M=np.diag([1.0, p.mu]), K=[[1.0, 0.0], [0.0, 0.0]],
+                               F=[1.0, 0.0], R=p.R, b=p.b, omega=p.r, eta=p.zeta,
+                               F_static=[-p.g, -p.mu * p.g], stops=stops)
+
+
+def guess(m: Motion) -> dict[str, Any]:
+    return {"delta": m.delta, "flight_times": list(m.flight_times),
+            "states": [m.state_upper, m.state_lower], "pattern": "UL"}
+
+
+def compare(variant: str, m: Motion) -> dict[str, Any]:
+    """The package's motion seeded by the closed form; the differences."""
+    orbit = ic.multi_impact_orbit(system(m.p), 1, 2, guess(m))
+    k = orbit.pattern.index("U")
+    order = [k, (k + 1) % 2]
+    scale = max(1.0, float(np.max(np.abs(m.state_upper))), float(np.max(np.abs(m.state_lower))))
+    states = float(max(np.max(np.abs(orbit.states[order[0]] - m.state_upper)),
+                       np.max(np.abs(orbit.states[order[1]] - m.state_lower)))) / scale
+    approach = np.array([m.approach_upper, m.approach_lower])
+    dv = float(np.max(np.abs(orbit.impact_velocities[order] - approach)))
+    row = {"variant": variant, "omega": m.p.r, "t1_over_T": m.t1 / m.p.T, "delta": m.delta,
+           "phase": abs(math.remainder(orbit.phases[k] - m.delta, 2 * math.pi)),
+           "state": states,
+           "flight_times": float(np.max(np.abs(orbit.flight_times[order] - m.flight_times))),
+           "approach_speed": dv / max(1.0, float(np.max(np.abs(approach)))),
+           "amplitude_cf": m.amplitude, "physical_cf": m.physical,
+           "physical_pkg": bool(orbit.physical), "error_estimate": orbit.error_estimate,
+           "spectral_radius_pkg": orbit.spectral_radius, "stable_pkg": bool(orbit.stable)}
+    if m.physical:  # the closed form's map is the impact-to-impact map of a real motion
+        row["spectral_radius_cf"] = float(np.max(np.abs(m.multipliers)))
+        row["stable_cf"] = m.stable
+        row["multipliers"] = max(float(np.min(np.abs(orbit.multipliers - q)))
+                                 / max(1.0, abs(q)) for q in m.multipliers)
+    return row
+
+
+def agreement() -> dict[str, Any]:
+    rows, failures = [], []
+    for variant in VARIANTS:
+        for r in OMEGAS:
+            for m in ul_motions(params(variant, r)):
+                try:
+                    rows.append(compare(variant, m))
+                except ic.NoPeriodicMotionError as exc:
+                    failures.append({"variant": variant, "omega": float(r),
+                                     "t1_over_T": m.t1 / m.p.T, "error": str(exc)})
+    keys = ("phase", "state", "flight_times", "approach_speed")
+    worst = {key: max(row[key] for row in rows) for key in keys}
+    phys = [r for r in rows if r["physical_cf"]]
+    worst["multipliers (physical)"] = max(r["multipliers"] for r in phys)
+    # central differences lose digits where the map expands strongly (rho ~ 1e3 .. 1e4)
+    worst["multipliers (physical, rho < 100)"] = max(r["multipliers"] for r in phys
+                                                     if r["spectral_radius_cf"] < 100)
+    decided = [r for r in phys if abs(r["spectral_radius_cf"] - 1.0) > 1e-4]
+    summary = {
+        "motions": len(rows), "physical": len(phys),
+        "asymmetric_t1": sum(abs(r["t1_over_T"] - 0.5) > 1e-6 for r in rows),
+        "newton_failures": failures, "max_relative_difference": worst,
+        "stable_verdict_agrees": [int(sum(r["stable_cf"] == r["stable_pkg"] for r in decided)),
+                                  len(decided)],
+        "physical_verdict_agrees": [int(sum(r["physical_cf"] == r["physical_pkg"] for r in rows)),
+                                    len(rows)],
+        "physical_verdict_disagrees_at": [(r["variant"], r["omega"], r["t1_over_T"])
+                                          for r in rows
+                                          if r["physical_cf"] != r["physical_pkg"]],
+        "largest_error_estimate": max(r["error_estimate"] for r in rows),
+    }
+    log.info("closed form vs package: %d motions, worst %s", len(rows), worst)
+    return {"summary": summary, "rows": rows}
+
+
+def simulator_checks() -> list[dict[str, Any]]:
+    """The simulator from each physical closed-form motion: a stable one repeats its
+    impacts (200 periods), an unstable one leaves."""
+    out = []
+    for variant, r in SIMULATED:
+        p = params(variant, r)
+        for m in ul_motions(p):
+            if not m.physical:
+                continue
+            res = ic.simulate(system(p), m.state_upper, m.delta, 200.0)
+            n = res.impact_times.size
+            expect = [m.state_lower, m.state_upper]
+            dev = [float(np.max(np.abs(res.impact_states[k] - expect[k % 2])))
+                   for k in range(n)]
+            stays = bool(n >= 399 and max(dev) < 1e-6)
+            out.append({"variant": variant, "omega": r, "t1_over_T": m.t1 / p.T,
+                        "stable_cf": m.stable, "impacts": int(n), "status": res.status.name,
+                        "max_deviation": max(dev) if dev else None, "stays": stays,
+                        "agrees": stays == m.stable})
+            log.info("simulator %s r=%g t1/T=%.4f (%s): %d impacts, deviation %.2e, %s",
+                     variant, r, m.t1 / p.T, "stable" if m.stable else "unstable", n,
+                     max(dev) if dev else math.nan,
+                     "agrees" if stays == m.stable else "DISAGREES")
+    return out
+
+
+def offset_cavity() -> dict[str, Any]:
+    """An off-centre cavity (b = 6, b_low = 4) is the centred one (5, 5) with the ball
+    translated by 1: the package's motions, primary identical, ball shifted."""
+    p = params("restitution", 1.2)
+    m = next(m for m in ul_motions(p) if m.physical)
+    o1 = ic.multi_impact_orbit(system(p), 1, 2, guess(m))
+    shifted = VINES(**{**p.__dict__, "b": 6.0, "b_low": 4.0})
+    g = guess(m)
+    g["states"] = [s + np.array([0.0, 1.0, 0.0, 0.0]) for s in g["states"]]
+    o2 = ic.multi_impact_orbit(system(shifted), 1, 2, g)
+    d = o2.states - o1.states
+    return {"primary_and_velocities": float(np.max(np.abs(d[:, [0, 2, 3]]))),
+            "ball_shift": [float(np.min(d[:, 1])), float(np.max(d[:, 1]))],
+            "phase": abs(o2.delta - o1.delta),
+            "multipliers": float(np.max(np.abs(np.sort_complex(o2.multipliers)
+                                               - np.sort_complex(o1.multipliers))))}
+
+
+def specials(ds: xr.Dataset, parameter: str) -> list[dict[str, Any]]:
+    return [{"label": str(lab), parameter: float(v), "precision": float(pr)}
+            for lab, v, pr in zip(ds["special_label"].values, ds[f"special_{parameter}"].values,
+                                  ds["special_precision"].values, strict=True)]
+
+
+def _cf_root(p: VINES, delta: float, t1_over_T: float = 0.5) -> Motion | None:
+    """The closed-form UL motion nearest to a phase and a flight-time split."""
+    ms = ul_motions(p)
+    if not ms:
+        return None
+    return min(ms, key=lambda m: abs(math.remainder(m.delta - delta, 2 * math.pi))
+               + abs(m.t1 / p.T - t1_over_T))
+
+
+def beyond(groups: dict[str, xr.Dataset]) -> dict[str, Any]:
+    info: dict[str, Any] = {}
+    p = params("symmetric", 1.2)
+    m = next(m for m in ul_motions(p) if m.physical and m.stable)
+    seed = ic.multi_impact_orbit(system(p, mirror=True), 1, 2, guess(m))
+    t0 = time.perf_counter()
+    br = ic.multi_impact_continuation(seed, "omega", PLANE["omega"], ds_max=0.01,
+                                      max_points=3000)
+    groups["branch_omega"] = br
+    sp = specials(br, "omega")
+    info["omega_branch"] = {"points": int(br.sizes["point"]),
+                            "seconds": time.perf_counter() - t0, "special_points": sp}
+    # the closed form either side of each BP: the verdict changes, a multiplier near +1
+    checks = []
+    for s in sp:
+        if s["label"] != "BP":
+            continue
+        k = int(np.argmin(np.abs(br["omega"].values - s["omega"])))
+        delta = float(br["delta"].values[k])
+        side = [(_cf_root(params("symmetric", s["omega"] + e), delta)) for e in (-1e-3, 1e-3)]
+        at = _cf_root(params("symmetric", s["omega"]), delta)
+        checks.append({**s, "closed_form_stable_either_side": [bool(q.stable) for q in side],
+                       "closed_form_multiplier_minus_1_at_BP":
+                           float(np.min(np.abs(at.multipliers - 1.0)))})
+    info["omega_branch_closed_form"] = checks
+    # the restitution of the lower wall as the parameter
+    t0 = time.perf_counter()
+    try:
+        seed_low = ic.multi_impact_orbit(system(p), 1, 2, guess(m))  # b_low, R_low own
+        bl = ic.multi_impact_continuation(seed_low, "R_low", (0.02, 0.99), ds_max=0.02,
+                                          max_points=1500)
+        groups["branch_R_low"] = bl
+        sl = specials(bl, "R_low")
+        info["R_low_branch"] = {"points": int(bl.sizes["point"]),
+                                "seconds": time.perf_counter() - t0, "special_points": sl}
+        rows = []
+        for s in sl:
+            if s["label"] != "PD":
+                continue
+            k = int(np.argmin(np.abs(bl["R_low"].values - s["R_low"])))
+            delta = float(bl["delta"].values[k])
+            t1 = float(bl["flight_time_k"].values[k, 0]) / p.T \
+                if "flight_time_k" in bl else 0.5
+            q = _cf_root(VINES(**{**p.__dict__, "R_low": s["R_low"]}), delta, t1)
+            rows.append({**s, "closed_form_multiplier_plus_1": float(
+                np.min(np.abs(q.multipliers + 1.0)))})
+        info["R_low_branch_closed_form"] = rows
+    except Exception as exc:  # report what the package says
+        log.warning("continuation in R_low: %s: %s", type(exc).__name__, exc)
+        info["R_low_branch_error"] = f"{type(exc).__name__}: {exc}"
+    # the BP curves in (omega, b); about a dozen points of each re-solved by the closed form
+    labels = br["special_label"].values.tolist()
+    info["curves"] = {}
+    for which in range(labels.count("BP")):
+        t0 = time.perf_counter()
+        name = f"BP{which}"
+        try:
+            cv = ic.multi_impact_curve(br, "BP", which, parameter="b", bounds=PLANE,
+                                       ds_max=0.05, max_points=800)
+        except Exception as exc:
+            log.warning("curve %s: %s: %s", name, type(exc).__name__, exc)
+            info["curves"][name] = {"error": f"{type(exc).__name__}: {exc}"}
+            continue
+        groups[f"curve_{name}"] = cv
+        om, bb, dl = cv["omega"].values, cv["b"].values, cv["delta"].values
+        err = []
+        for i in range(0, om.size, max(1, om.size // 12)):
+            q = _cf_root(params("symmetric", float(om[i]), float(bb[i])), float(dl[i]))
+            if q is not None:
+                err.append(float(np.min(np.abs(q.multipliers - 1.0))))
+        info["curves"][name] = {"points": int(om.size), "seconds": time.perf_counter() - t0,
+                                "omega_range": [float(om.min()), float(om.max())],
+                                "b_range": [float(bb.min()), float(bb.max())],
+                                "closed_form_multiplier_minus_1": err}
+    # the stability map; a sub-grid re-solved by the closed form
+    t0 = time.perf_counter()
+    grid = {"omega": np.linspace(*PLANE["omega"], MAP_GRID[0]),
+            "b": np.linspace(*PLANE["b"], MAP_GRID[1])}
+    try:
+        mp = ic.multi_impact_map(seed, ("omega", "b"), grid)
+        groups["map"] = mp
+        info["map"] = {"cells": int(mp["found"].size), "found": int(mp["found"].sum()),
+                       "seconds": time.perf_counter() - t0}
+        same, cells, worst = 0, 0, 0.0
+        for i in range(0, MAP_GRID[0], 6):
+            for j in range(0, MAP_GRID[1], 6):
+                if not bool(mp["found"].values[i, j]):
+                    continue
+                r, b = float(grid["omega"][i]), float(grid["b"][j])
+                t1 = float(mp["flight_time_k"].values[i, j, 0]) * r / (2 * math.pi)
+                q = _cf_root(params("symmetric", r, b), float(mp["delta"].values[i, j]), t1)
+                if q is None:
+                    continue
+                worst = max(worst, abs(math.remainder(q.delta - float(mp["delta"].values[i, j]),
+                                                      2 * math.pi)))
+                if q.physical:
+                    cells += 1
+                    same += int(q.stable == bool(mp["stable"].values[i, j]))
+        info["map_vs_closed_form"] = {"max_phase_difference": worst,
+                                      "physical_cells_checked": cells,
+                                      "same_stability": same}
+    except Exception as exc:
+        log.warning("multi_impact_map: %s: %s", type(exc).__name__, exc)
+        info["map_error"] = f"{type(exc).__name__}: {exc}"
+    return info
+
+
+def draw(rows: list[dict[str, Any]], path: Path) -> None:
+    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
+    colours = {"symmetric": "C0", "restitution": "C1", "vertical": "C2"}
+    r0 = np.linspace(*PLANE["omega"], 400)
+    bare = 1 / np.abs(1 - r0 ** 2 + 2j * ZETA * r0)
+    for ax, variant in zip(axes[:3], VARIANTS, strict=True):
+        ax.plot(r0, bare, "k--", lw=0.7, label="primary alone")
+        rr = [r for r in rows if r["variant"] == variant and r["physical_cf"]]
+        st = [r for r in rr if r["stable_cf"]]
+        un = [r for r in rr if not r["stable_cf"]]
+        ax.plot([r["omega"] for r in un], [r["amplitude_cf"] for r in un], "o", ms=5,
+                mfc="none", color=colours[variant], label="closed form, unstable")
+        ax.plot([r["omega"] for r in st], [r["amplitude_cf"] for r in st], "o", ms=5,
+                color=colours[variant], label="closed form, stable")
+        ax.plot([r["omega"] for r in rr if r["stable_pkg"]],
+                [r["amplitude_cf"] for r in rr if r["stable_pkg"]], "k+", ms=7,
+                label="package: stable")
+        ax.set_ylim(0, 30)
+        ax.set_xlabel("omega / w_n")
+        ax.set_title(f"{variant}: {VARIANTS[variant] or 'R = R_low = 0.6, g = 0'}", fontsize=9)
+    axes[0].set_ylabel("max |x1| (about the static position), F/k")
+    axes[0].legend(fontsize=7)
+    ax = axes[3]
+    for variant in VARIANTS:
+        rr = [r for r in rows if r["variant"] == variant]
+        ax.semilogy([r["omega"] for r in rr],
+                    [max(r["phase"], r["state"], r["flight_times"], 1e-17) for r in rr],
+                    ".", color=colours[variant], label=variant)
+    ax.set_xlabel("omega / w_n")
+    ax.set_title("package vs closed form: max(phase, states, flight times)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.suptitle(f"VI-NES, mu = {MU}, zeta = {ZETA}, b = b_low = {B}: UL motions "
+                 "(all roots; physical ones drawn)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def draw_plane(groups: dict[str, xr.Dataset], path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(7, 5))
+    if "map" in groups:
+        mp = groups["map"]
+        ok = (mp["found"] & mp["stable"] & mp["physical"]).values.T
+        ax.pcolormesh(mp["omega"].values, mp["b"].values, ok, cmap="Greens", alpha=0.5,
+                      shading="nearest")
+    for k, name in enumerate(n for n in groups if n.startswith("curve_BP")):
+        cv = groups[name]
+        ax.plot(cv["omega"].values, cv["b"].values, "r-",
+                label="BP curves (multi_impact_curve)" if k == 0 else None)
+    if "branch_omega" in groups:
+        for s in specials(groups["branch_omega"], "omega"):
+            ax.plot(s["omega"], B, "kx")
+            ax.annotate(s["label"], (s["omega"], B), textcoords="offset points", xytext=(3, 3),
+                        fontsize=8)
+    ax.set_xlabel("omega / w_n")
+    ax.set_ylabel("b = b_low (half cavity, F/k)")
+    ax.set_title("Symmetric VI-NES: stable physical UL motion (green, multi_impact_map)",
+                 fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(output: Path) -> dict[str, Any]:
+    output.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    agree = agreement()
+    timings["agreement_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sim = simulator_checks()
+    timings["simulator_s"] = time.perf_counter() - t0
+    offset = offset_cavity()
+    log.info("off-centre cavity: %s", offset)
+    groups: dict[str, xr.Dataset] = {}
+    t0 = time.perf_counter()
+    more = beyond(groups)
+    timings["beyond_s"] = time.perf_counter() - t0
+    draw(agree["rows"], output / "vi_nes.png")
+    draw_plane(groups, output / "vi_nes_plane.png")
+    if groups:
+        ic.save(groups, output / "branches.nc")
+    summary = {"parameters": {"mu": MU, "zeta": ZETA, "R": R, "b": B, "variants": VARIANTS,
+                              "omega": [float(OMEGAS[0]), float(OMEGAS[-1]), OMEGAS.size]},
+               "agreement": agree["summary"], "simulator": sim, "offset_cavity": offset,
+               "beyond": more, "timings": timings, "total_s": time.perf_counter() - t_start}
+    (output / "vi_nes.json").write_text(json.dumps(summary, indent=2, default=str))
+    (output / "rows.json").write_text(json.dumps(agree["rows"], indent=1, default=str))
+    return summary
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--output", type=Path, default=HERE / "output")
+    parser.add_argument("--copy-figures", action="store_true",
+                        help="copy the figures into figures/ (tracked)")
+    args = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    result = main(args.output)
+    if args.copy_figures:
+        (HERE / "figures").mkdir(exist_ok=True)
+        for name in ("vi_nes.png", "vi_nes_plane.png"):
+            shutil.copy(args.output / name, HERE / "figures" / name)
+    log.info("done in %.1f s", result["total_s"])
