@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import math
+
 import mpmath
 import numpy as np
 import pytest
 import scipy.linalg
 
 from impactcont import Flow, ImpactOscillator
+from impactcont.errors import ParameterError
 from impactcont.model.modal import free_transfer
+from impactcont.model.stops import Stops
 
 mpmath.mp.dps = 50
 
@@ -175,3 +179,36 @@ def test_motion_of_any_mass_matches_the_state(damping, index, sign):
     assert np.allclose(x, sign * X[:, index], rtol=0, atol=1e-13)
     assert np.allclose(v, sign * X[:, n + index], rtol=0, atol=1e-13)
     assert np.allclose(a, sign * dX[:, n + index], rtol=0, atol=1e-12)
+
+
+def test_time_scales_follow_the_stop_coordinate():
+    """A clearance x2 - x1 sees the modes of both masses: with mass 1 on its own stiff
+    spring (w = 50) and masses 2, 3 a slow chain, the pair's scale is the fast mode's
+    (mass 2's row alone sees the slow ones); the modal flow (Rayleigh damping) and the
+    first-order flow (the same C as a matrix) agree; e_j is mass j's row."""
+    K = np.array([[2500.0, 0.0, 0.0], [0.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
+    base = {"M": np.eye(3), "K": K, "F": [0.0, 1.0, 0.0], "R": 0.7, "b": 1.0, "omega": 1.0,
+            "stops": Stops(mass=2, relative_to=1)}
+    modal = Flow(ImpactOscillator(alpha=0.002, beta=0.001, **base))
+    general = Flow(ImpactOscillator(C=0.002 * np.eye(3) + 0.001 * K, **base))
+    assert type(general).__name__ == "GeneralFlow"
+    pair = [-1.0, 1.0, 0.0]
+    fast = (math.sqrt(2500.0 - 1.251**2), 1.251)  # w_d and a of mass 1's mode
+    for flow in (modal, general):
+        np.testing.assert_allclose(flow.time_scales(normal=pair), fast, rtol=1e-9)
+        assert flow.time_scales(normal=pair) == tuple(
+            max(a, b) for a, b in zip(flow.time_scales(0), flow.time_scales(1), strict=True))
+        for j in range(3):
+            e = np.eye(3)[j]
+            assert flow.time_scales(normal=e) == flow.time_scales(j) == flow.time_scales(row=j)
+        assert flow.time_scales() == flow.time_scales(0)
+        with pytest.raises(TypeError, match="not both"):
+            flow.time_scales(1, normal=pair)
+        with pytest.raises(ParameterError, match="normal must be"):
+            flow.time_scales(normal=[1.0, -1.0])
+        with pytest.raises(ParameterError, match="normal must be"):
+            flow.time_scales(normal=[0.0, 0.0, 0.0])
+        with pytest.raises(ParameterError, match=r"row must be in 0 \.\. 2"):
+            flow.time_scales(3)
+        with pytest.raises(TypeError, match="row must be an integer"):
+            flow.time_scales(True)

@@ -36,35 +36,39 @@ _RTOL = 4.0 * np.finfo(float).eps
 _MAX_ITER = 200
 
 
-def _time_scales(flow: Flow, row: int = 0) -> tuple[float, float]:
-    """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
-    return flow.time_scales(row)
+def sample_times(flow: Flow, t0: float, t1: float, *, row: int | None = None,
+                 normal: Any = None) -> np.ndarray:
+    """Grid on ``[t0, t1]`` fine enough that each cell holds at most one root of ``y''``.
 
-
-def sample_times(flow: Flow, t0: float, t1: float, *, row: int = 0) -> np.ndarray:
-    """Grid on ``[t0, t1]`` fine enough that each cell holds at most one root of ``x1''``.
+    ``y`` is the coordinate searched: mass ``row + 1`` (mass 1 by default) or the stop
+    coordinate ``s = normal . x``. The cells follow the time scales of the modes that
+    coordinate sees (:meth:`Flow.time_scales`): for a clearance between two masses,
+    ``x_j - x_k``, a fast mode of mass k counts, though mass j's row does not see it.
 
     Parameters
     ----------
     flow : Flow
     t0, t1 : float
         Interval, ``t1 > t0``.
-    row : int
-        0-based index of the mass whose motion is searched (the impacting mass).
+    row : int, optional
+        0-based index of the mass whose motion is searched.
+    normal : array_like, shape (n,), optional
+        The stop coordinate searched (:meth:`~impactcont.model.stops.Stops.normal`); not
+        with `row`.
 
     Returns
     -------
     ndarray
         Sorted times including both ends.
     """
-    osc_rate, decay_rate = _time_scales(flow, row)
+    osc_rate, decay_rate = flow.time_scales(row, normal=normal)
     h = 2.0 * math.pi / (_CELLS_PER_PERIOD * osc_rate)
     length = t1 - t0
     count = max(math.ceil(length / h), 8)
     if count > _MAX_SAMPLES:
-        warnings.warn(f"x1 search grid capped at {_MAX_SAMPLES} cells for an interval of "
-                      f"{length:.3g} (fastest damped frequency {osc_rate:.3g} would need "
-                      f"{count} cells): a short excursion of mass 1 past the stop (eq. 16) may "
+        warnings.warn(f"contact search grid capped at {_MAX_SAMPLES} cells for an interval "
+                      f"of {length:.3g} (fastest damped frequency {osc_rate:.3g} would need "
+                      f"{count} cells): a short excursion past the stop (eq. 16) may "
                       "be missed; damping the fastest modes or a shorter period avoids this",
                       UnresolvedMotionWarning, stacklevel=2)
         count = _MAX_SAMPLES

@@ -26,10 +26,12 @@ from typing import Any
 
 import numpy as np
 
+from impactcont.errors import ParameterError
 from impactcont.model.modal import forced_coefficients, free_transfer, static_response
 from impactcont.model.oscillator import ImpactOscillator
 
-__all__ = ["Flow", "GeneralFlow", "GeneralMass1Motion", "Mass1Motion", "flow_of"]
+__all__ = ["Flow", "GeneralFlow", "GeneralMass1Motion", "Mass1Motion", "coordinate_row",
+           "flow_of"]
 
 _CHUNK = 1 << 20  # time-mode pairs per vectorised evaluation of x1 (about 100 MB of work arrays)
 
@@ -37,6 +39,57 @@ _CHUNK = 1 << 20  # time-mode pairs per vectorised evaluation of x1 (about 100 M
 def _kernel_array(x: Any, dtype: type) -> np.ndarray:
     """``x`` as a new contiguous, writable array of ``dtype`` (one argument type per kernel)."""
     return np.array(x, dtype=dtype, order="C")
+
+
+def coordinate_row(n: int, row: Any = None, normal: Any = None) -> np.ndarray:
+    """The coordinate ``r . x`` whose time scales are asked: ``e_{row}`` or ``normal``.
+
+    Parameters
+    ----------
+    n : int
+        Degrees of freedom.
+    row : int, optional
+        0-based index of a mass (``x_{row+1}``); the default, with no `normal`, is mass 1.
+    normal : array_like, shape (n,), optional
+        A stop coordinate ``s = normal . x`` (:meth:`~impactcont.model.stops.Stops.normal`:
+        ``e_j``, or ``e_j - e_k`` for a clearance between two masses).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Raises
+    ------
+    TypeError
+        Both `row` and `normal` are given, or `row` is not an integer.
+    ParameterError
+        `row` is out of ``0 .. n-1``, or `normal` is not a finite real vector of length n
+        with a non-zero entry.
+    """
+    if normal is not None:
+        if row is not None:
+            raise TypeError(f"give row (a mass) or normal (a stop coordinate), not both; got "
+                            f"row={row!r}, normal={normal!r}")
+        try:
+            r = np.array(normal, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"normal must be a real vector of length {n} (the stop "
+                                 f"coordinate s = normal . x); got {normal!r}") from exc
+        if r.shape != (n,) or not np.all(np.isfinite(r)) or not np.any(r):
+            raise ParameterError(f"normal must be a finite real vector of length {n} with a "
+                                 f"non-zero entry (the stop coordinate s = normal . x); got "
+                                 f"{normal!r}")
+        return r
+    if row is None:
+        row = 0
+    if isinstance(row, bool) or not isinstance(row, (int, np.integer)):
+        raise TypeError(f"row must be an integer (the 0-based index of a mass); got {row!r}")
+    if not 0 <= row < n:
+        raise ParameterError(f"row must be in 0 .. {n - 1} (the 0-based index of a mass); "
+                             f"got {row!r}")
+    r = np.zeros(n)
+    r[row] = 1.0
+    return r
 
 
 _FLOWS: weakref.WeakKeyDictionary[ImpactOscillator, Flow] = weakref.WeakKeyDictionary()
@@ -157,9 +210,32 @@ class Flow:
                                   np.zeros(0, complex))
         return self._omega_arrays
 
-    def time_scales(self, row: int = 0) -> tuple[float, float]:
-        """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
-        part = np.abs(self.u[row]) > 0
+    def time_scales(self, row: int | None = None, *, normal: Any = None
+                    ) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by one coordinate.
+
+        The coordinate is mass ``row + 1`` (``x_{row+1}``, the default mass 1) or, with
+        `normal`, the stop coordinate ``s = normal . x`` (a clearance between two masses,
+        ``x_j - x_k``): the modes it sees are those of non-zero weight ``normal^T U``
+        (eq. 9), as in the contact search of :mod:`impactcont.kernel.shooting`. A mode
+        that mass j does not see but the other mass of a pair does (or one that cancels in
+        ``x_j`` and not in ``x_j - x_k``) counts for the pair.
+
+        Parameters
+        ----------
+        row : int, optional
+            0-based index of a mass.
+        normal : array_like, shape (n,), optional
+            The stop coordinate (:meth:`~impactcont.model.stops.Stops.normal`); not with
+            `row`.
+
+        Returns
+        -------
+        rate, decay : float
+            ``max(omega, fastest damped frequency)`` and the fastest decay rate of the
+            modes the coordinate sees.
+        """
+        part = np.abs(coordinate_row(self.n, row, normal) @ self.u) > 0
         w, a = self.w[part], self.a[part]
         d = (w - a) * (w + a)
         wd = np.sqrt(np.maximum(d, 0.0))
@@ -440,9 +516,12 @@ class GeneralFlow(Flow):
                                   _kernel_array(dZ, complex))
         return self._omega_arrays
 
-    def time_scales(self, row: int = 0) -> tuple[float, float]:
-        """Fastest oscillation frequency and fastest decay rate seen by mass ``row + 1``."""
-        part = np.abs(self.V[row]) > 0
+    def time_scales(self, row: int | None = None, *, normal: Any = None
+                    ) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by one coordinate
+        (:meth:`Flow.time_scales`): the complex modes of non-zero weight ``normal^T V_x``
+        (``V_x`` the position rows of ``V``), mass ``row + 1``'s row by default."""
+        part = np.abs(coordinate_row(self.n, row, normal) @ self.V[: self.n]) > 0
         lam = self.lam[part]
         return (float(max(self.omega, np.abs(lam.imag).max(initial=0.0))),
                 float((-lam.real).max(initial=0.0)))

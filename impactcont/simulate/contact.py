@@ -2,7 +2,10 @@
 
 The stops act on the stop coordinate ``s = normal . x`` (:meth:`Stops.normal`: ``x_j``, or
 ``x_j - x_k`` for a clearance between two masses); everything below follows ``s``, a
-modal sum with the weights ``normal^T U``. "``x_j``" below reads ``s`` in general.
+modal sum with the weights ``normal^T U``. "``x_j``" below reads ``s`` in general. Its
+time scales too (the search grid, the windows: :meth:`Flow.time_scales` with the normal)
+are those of the modes ``s`` sees, as in the compiled search: for a pair a fast mode of
+mass k, or one that cancels in ``x_j`` but not in ``x_j - x_k``, is resolved.
 
 The impacting mass ``j`` (``osc.stops.mass``) meets the upper stop ``x_j = b``
 moving up and, when present, the lower stop ``x_j = -b_low`` moving down. Both
@@ -44,7 +47,7 @@ __all__ = ["contact_free_until", "flight_clearances", "next_contact", "search_wi
 TWO_PI = 2.0 * math.pi
 _EPS = float(np.finfo(float).eps)
 # first and longest contact-search windows, in periods of the fastest component seen by the
-# impacting mass (16 grid cells each): the cost of a window, not of the flight searched, is
+# stop coordinate (16 grid cells each): the cost of a window, not of the flight searched, is
 # what an impact costs
 _FIRST_WINDOW_PERIODS = 2
 _WINDOW_PERIODS = 64
@@ -77,9 +80,9 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
         time of its extremum after the start (NaN when there is none).
     """
     osc = flow.osc
-    j = osc.stops.index
-    motion = flow.motion(X0, delta, j, normal=osc.stops.normal(osc.n))
-    cp = critical_points(motion, sample_times(flow, 0.0, tau, row=j))
+    normal = osc.stops.normal(osc.n)
+    motion = flow.motion(X0, delta, osc.stops.index, normal=normal)
+    cp = critical_points(motion, sample_times(flow, 0.0, tau, normal=normal))
     gap_u = gap_l = math.inf
     t_u = t_l = math.nan
     if cp.size:
@@ -95,28 +98,33 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
     return gap_u, t_u, gap_l, t_l
 
 
-def search_window(flow: Flow, index: int = 0) -> tuple[float, float]:
-    """First and longest contact-search windows for the impacting mass ``index + 1``.
+def search_window(flow: Flow, index: int | None = None, *, normal: np.ndarray | None = None
+                  ) -> tuple[float, float]:
+    """First and longest contact-search windows for the stop coordinate ``normal . x``
+    (or mass ``index + 1``).
 
     The forcing period ``2 pi / omega`` when it holds at most ``_FIRST_WINDOW_PERIODS``
-    periods of the fastest damped oscillation seen by that mass (then both windows are
-    that period). A slower forcing (the natural motion far faster) is searched from
-    ``_FIRST_WINDOW_PERIODS`` fastest periods on, the window doubling up to
-    ``_WINDOW_PERIODS`` of them (or the forcing period): a short flight, e.g. in
-    chatter, costs a short window, a long one a number of windows that grows with
+    periods of the fastest damped oscillation seen by that coordinate (then both windows
+    are that period; :meth:`Flow.time_scales`: for a clearance between two masses, the
+    modes of either mass that ``x_j - x_k`` sees). A slower forcing (the natural motion
+    far faster) is searched from ``_FIRST_WINDOW_PERIODS`` fastest periods on, the window
+    doubling up to ``_WINDOW_PERIODS`` of them (or the forcing period): a short flight,
+    e.g. in chatter, costs a short window, a long one a number of windows that grows with
     its length over ``_WINDOW_PERIODS`` fastest periods.
 
     Parameters
     ----------
     flow : Flow
-    index : int
-        0-based index of the impacting mass.
+    index : int, optional
+        0-based index of a mass (mass 1 by default); not with `normal`.
+    normal : ndarray, shape (n,), optional
+        The stop coordinate (:meth:`~impactcont.model.stops.Stops.normal`).
 
     Returns
     -------
     first, longest : float
     """
-    rate, _ = flow.time_scales(index)  # >= omega
+    rate, _ = flow.time_scales(index, normal=normal)  # >= omega
     forcing, fast = TWO_PI / flow.omega, TWO_PI / rate
     return min(forcing, _FIRST_WINDOW_PERIODS * fast), min(forcing, _WINDOW_PERIODS * fast)
 
@@ -243,7 +251,7 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     motions = {s: flow.motion(X, phase, j, stop_sign(s), normal) for s in stops}
     levels = {s: stop_sign(s) * osc.stops.position(s, osc.b) for s in stops}
     below = dict.fromkeys(stops, True)
-    first, longest = search_window(flow, j)
+    first, longest = search_window(flow, normal=normal)
     window = first
     start = 0.0
     while start < t_max:
@@ -255,7 +263,7 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
             below = dict.fromkeys(stops, True)
             continue
         stop_time = min(start + window, t_max)
-        grid = sample_times(flow, start, stop_time, row=j)
+        grid = sample_times(flow, start, stop_time, normal=normal)
         best: tuple[float, str] | None = None
         for s in stops:
             x, v, _ = motions[s](grid[:1])
