@@ -28,7 +28,9 @@ distance to the singular matrices (a regular zero where ``s_min`` is simple, as 
 minimally augmented system's bordered test). ``dF/du`` and ``dF/dp1``, ``dF/dp2`` are
 the branch problems' own (exact for omega, b, R); the row of ``g`` is a forward
 difference (relative step 1.5e-8, about the square root of eps), the one finite
-difference of the curve: it steers Newton only, the points solve ``g = 0`` exactly.
+difference of the curve: it steers Newton and the tangent only, the points solve
+``g = 0`` exactly. It is taken afresh at every step and reused only within that step's
+Newton corrections, so that the tangent follows the curve round a fold in ``p2``.
 """
 
 from __future__ import annotations
@@ -156,10 +158,16 @@ class MultiImpactCurveProblem:
     def _test_gradient(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
         """``dg/dx`` and ``dg/dlam`` by forward differences.
 
-        The last gradient is reused within ``_REUSE`` (relative) of where it was taken:
-        Newton's corrections on one step see a gradient that is off by their size, so
-        they converge linearly at that rate instead of quadratically, for a third of the
+        The last gradient is reused within ``_REUSE`` (relative) of where it was taken,
+        and only until the next accepted point (:meth:`accept` drops it): Newton's
+        corrections on one step see a gradient that is off by their size, so they
+        converge linearly at that rate instead of quadratically, for a third of the
         cost; the points themselves solve ``g = 0`` to Newton's tolerance either way.
+        The tangent at a point is taken with the gradient of its own step. Reused
+        across steps, the gradient froze wherever the steps were shorter than
+        ``_REUSE``: every tangent was that of one old point, Newton converged slowly
+        off it, the step shrank and never left the old point's neighbourhood; an
+        NS curve of the impact damper crawled at steps of 1e-6 near its fold in ``b``.
         """
         y = np.append(x, lam)
         if self._gradient is not None and np.max(np.abs(y - self._gradient[0])) <= \
@@ -178,6 +186,10 @@ class MultiImpactCurveProblem:
         return value
 
     # -- the Problem protocol ------------------------------------------------------------------
+    def accept(self, x: np.ndarray, lam: float) -> None:
+        """At an accepted point (the core's hook): the next step takes a fresh ``g`` row."""
+        self._gradient = None
+
     def residual(self, x: np.ndarray, lam: float) -> np.ndarray:
         """``[F(u, p1; p2), g(u, p1; p2)]``, shape (m + 1,)."""
         x = np.asarray(x, dtype=float)
