@@ -107,8 +107,8 @@ def test_ns_curve_goes_round_the_bottom_of_the_island(ns_curve, island_bottom):
     b, omega = curve["b"].values, curve["omega"].values
     assert abs(b[0] - 1.0) < 1e-12 and abs(b[-1] - 1.0) < 1e-12
     assert sorted([omega[0], omega[-1]]) == pytest.approx(ns, abs=1e-7)
-    # it reaches the island's bottom and never goes below it
-    assert island_bottom - 1e-9 < b.min() < island_bottom + 1e-5
+    # it reaches the island's bottom (to the spacing of its points) and never goes below it
+    assert island_bottom - 1e-9 < b.min() < island_bottom + 1e-4
 
 
 @pytest.mark.parametrize("above", [3e-4, 3e-3])
