@@ -76,3 +76,35 @@ def test_closed_form_stability_verdict_is_the_multipliers(cf, r, stable):
     orbit = _package(m)
     assert m.stable == orbit.stable == stable
     assert np.max(np.abs(m.multipliers)) == pytest.approx(orbit.spectral_radius, rel=1e-8)
+
+
+def test_stability_map_is_the_closed_form_cell_by_cell(cf):
+    """``multi_impact_map`` over (omega, b) of the damper (a clearance between masses, a
+    free mass: refused with an ``impact_geometry`` error before the map moved to
+    ``stop_geometry``), seeded by the closed form, against the closed form at every
+    cell: found exactly where a symmetric motion exists, and there the root of nearest
+    phase has the map's phase, spectral radius, physical and stable flags."""
+    seed = _package(next(m for m in cf.symmetric_motions(1.5, 2.0, MU, E, ZETA)
+                         if m.stable and m.physical))
+    omegas, bs = np.linspace(1.0, 3.0, 21), np.linspace(0.3, 2.5, 12)
+    ds = ic.multi_impact_map(seed, ("omega", "b"), {"omega": omegas, "b": bs},
+                             max_change=2.0)
+    verdicts = set()
+    for i, r in enumerate(omegas):
+        for j, b in enumerate(bs):
+            roots = cf.symmetric_motions(float(r), 2.0 * float(b), MU, E, ZETA)
+            point = ds.isel(omega=i, b=j)
+            assert bool(point["found"]) == bool(roots), (r, b)
+            if not roots:
+                continue
+            delta = float(point["delta"])
+            m = min(roots, key=lambda m: abs(math.remainder(m.delta - delta, 2 * math.pi)))
+            assert abs(math.remainder(m.delta - delta, 2 * math.pi)) < 1e-9
+            rho = float(np.max(np.abs(m.multipliers)))
+            assert float(point["spectral_radius"]) == pytest.approx(rho, rel=1e-8)
+            assert bool(point["physical"]) == m.physical, (r, b)
+            if abs(rho - 1.0) > 1e-6:  # the verdict off the knife edge
+                assert bool(point["stable"]) == m.stable, (r, b)
+            verdicts.add((m.physical, m.stable))
+    # the grid crosses the BP and NS curves and the grazing of the family
+    assert verdicts == {(True, True), (True, False), (False, False)}

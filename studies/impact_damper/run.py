@@ -20,7 +20,10 @@ This study
    one leaves);
 3. continues the motion with the package in omega and in the clearance (special points),
    follows its stability boundary in (omega, b) with ``multi_impact_curve`` against the
-   closed form's boundary, and draws the package's stability map of the plane.
+   closed form's boundary, and computes the package's stability map of the plane
+   (``multi_impact_map``), compared with the closed form cell by cell (existence of the
+   motion, its phase, spectral radius, physical and stable flags) and drawn with the
+   closed form's boundary and the package's curves on top.
 
 Writes ``impact_damper.json``, ``branches.nc``, ``impact_damper.png`` and
 ``impact_damper_plane.png`` into the output directory. Run::
@@ -50,9 +53,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.lines import Line2D
 
 import impactcont as ic
 from impactcont.analysis.multi_curves import multi_impact_curve_crossings
+from impactcont.plots.branches import legend_below
+from impactcont.plots.multi_maps import multi_impact_map_diagram
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -65,6 +71,7 @@ CLEARANCES = (1.0, 2.0, 4.0)  # d = 2 b, in units of F/k
 OMEGAS = np.linspace(0.6, 3.0, 49)
 PLANE = {"omega": (0.5, 3.5), "b": (0.1, 3.0)}
 PLANE_GRID = (151, 59)  # omega x b, for the closed form's and the package's maps
+MAP_MAX_CHANGE = 2.0  # multi_impact_map's max_change (default 0.5: README, stability map)
 CURVE_POINTS = 600  # the NS curves stall near their lowest b (README): this caps them
 SIMULATED = ((1.5, 2.0), (2.5, 2.0), (1.0, 1.0), (2.0, 4.0))  # (r, d) for the simulator
 
@@ -192,18 +199,124 @@ def specials(ds: xr.Dataset, parameter: str) -> list[dict[str, Any]]:
 
 def closed_form_plane() -> dict[str, np.ndarray]:
     """The closed form on the (omega, b) grid: is there a stable physical symmetric motion
-    (either root), and its spectral radius."""
+    (either root), is there a physical one, and every root's phase, flags and spectral
+    radius (``roots_*``, shape (omega, b, 2), NaN / False where a cell has fewer roots)."""
     om = np.linspace(*PLANE["omega"], PLANE_GRID[0])
     bb = np.linspace(*PLANE["b"], PLANE_GRID[1])
     ok = np.zeros((om.size, bb.size), bool)
     exists = np.zeros_like(ok)
+    count = np.zeros(ok.shape, int)
+    delta = np.full((*ok.shape, 2), np.nan)
+    rho = np.full_like(delta, np.nan)
+    phys = np.zeros(delta.shape, bool)
+    stab = np.zeros_like(phys)
     for i, r in enumerate(om):
         for j, b in enumerate(bb):
-            ms = [m for m in symmetric_motions(float(r), 2 * float(b), MU, E, ZETA)
-                  if m.physical]
+            roots = symmetric_motions(float(r), 2 * float(b), MU, E, ZETA)
+            count[i, j] = len(roots)
+            for k, m in enumerate(roots):
+                delta[i, j, k], phys[i, j, k], stab[i, j, k] = m.delta, m.physical, m.stable
+                rho[i, j, k] = float(np.max(np.abs(m.multipliers)))
+            ms = [m for m in roots if m.physical]
             exists[i, j] = bool(ms)
             ok[i, j] = any(m.stable for m in ms)
-    return {"omega": om, "b": bb, "stable": ok, "physical": exists}
+    return {"omega": om, "b": bb, "stable": ok, "physical": exists, "roots": count,
+            "roots_delta": delta, "roots_rho": rho, "roots_physical": phys,
+            "roots_stable": stab}
+
+
+def _on_boundary(flag: np.ndarray) -> np.ndarray:
+    """Cells with a grid neighbour (one step, diagonals included) of another value."""
+    pad = np.pad(flag, 1, mode="edge")
+    out = np.zeros(flag.shape, bool)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            out |= pad[1 + di:pad.shape[0] - 1 + di, 1 + dj:pad.shape[1] - 1 + dj] != flag
+    return out
+
+
+def map_vs_closed_form(mp: xr.Dataset, cf: dict[str, np.ndarray],
+                       default: xr.Dataset) -> dict[str, Any]:
+    """The package's map against the closed form, cell by cell.
+
+    Each found cell is matched to the closed-form root of nearest impact phase (the map
+    follows one family: one root per cell); compared are the phase, the spectral radius
+    and the physical and stable flags of that root, and the region the study shades
+    (a stable physical motion among either root). Existence: found where the closed form
+    has a root. A cell whose verdict differs is located: its grid neighbours (one step)
+    with another closed-form verdict put it on a boundary, and ``|rho - 1|`` says how
+    close it is to the unit circle. ``default`` is the map with the package's default
+    ``max_change``: the cells it does not find, and where they lie.
+    """
+    om, bb = cf["omega"], cf["b"]
+    found = mp["found"].values
+    has_root = cf["roots"] > 0
+    pkg_phys, pkg_stab = mp["physical"].values, mp["stable"].values
+    d_pkg = mp["delta"].values
+    # the matched root (nearest phase) of every found cell
+    gap = np.abs(np.remainder(cf["roots_delta"] - d_pkg[..., None] + np.pi, 2 * np.pi)
+                 - np.pi)
+    k = np.argmin(np.where(np.isnan(gap), np.inf, gap), axis=-1)[..., None]
+    take = lambda a: np.take_along_axis(a, k, axis=-1)[..., 0]  # noqa: E731
+    phase = np.where(found, take(gap), np.nan)
+    cf_phys, cf_stab, cf_rho = take(cf["roots_physical"]), take(cf["roots_stable"]), \
+        take(cf["roots_rho"])
+    rho_diff = np.where(found, np.abs(mp["spectral_radius"].values - cf_rho)
+                        / np.maximum(1.0, cf_rho), np.nan)
+    region_pkg = found & pkg_phys & pkg_stab
+
+    def located(mask: np.ndarray, verdict: np.ndarray) -> list[dict[str, Any]]:
+        out = []
+        for i, j in zip(*np.nonzero(mask), strict=True):
+            near = verdict[max(i - 1, 0):i + 2, max(j - 1, 0):j + 2]
+            out.append({"omega": float(om[i]), "b": float(bb[j]),
+                        "on_boundary": bool(near.min() != near.max()),
+                        "closed_form_rho": float(cf_rho[i, j]) if found[i, j] else None})
+        return out
+
+    n = int(found.size)
+    same = lambda a, b, where: [int(np.sum((a == b) & where)), int(np.sum(where))]  # noqa: E731
+    dfound = default["found"].values
+    missed = has_root & ~dfound
+    steps = [float(np.max(np.abs(mp["state_k"].values[i + 1, j, 0]
+                                 - mp["state_k"].values[i, j, 0])))
+             for i, j in zip(*np.nonzero(found[:-1] & found[1:] & missed[:-1]), strict=True)]
+    return {
+        "cells": n, "max_change": float(json.loads(mp.attrs["options"])["max_change"]),
+        "found": int(found.sum()), "closed_form_has_root": int(has_root.sum()),
+        "existence_agrees": [int(np.sum(found == has_root)), n],
+        "phase_max": float(np.nanmax(phase)),
+        "spectral_radius_max_relative": float(np.nanmax(rho_diff)),
+        "physical_agrees": same(pkg_phys, cf_phys, found),
+        "stable_agrees": same(pkg_stab, cf_stab, found),
+        "region_agrees": [int(np.sum(region_pkg == cf["stable"])), n],
+        # how hard the test is: cells one grid step from a change of the closed form's
+        # verdict (region, stability of the matched root), the closest to |rho| = 1
+        "region_boundary_cells": int(np.sum(_on_boundary(cf["stable"]))),
+        "stability_boundary_cells": int(np.sum(found & _on_boundary(np.where(found, cf_stab,
+                                                                           False)))),
+        "closest_to_unit_circle": float(np.nanmin(np.where(found, np.abs(cf_rho - 1), np.nan))),
+        "disagreements": {
+            "existence": located(found != has_root, has_root),
+            "physical": located(found & (pkg_phys != cf_phys), cf["physical"]),
+            "stable": located(found & (pkg_stab != cf_stab), cf["stable"]),
+            "region": located(region_pkg != cf["stable"], cf["stable"]),
+        },
+        "default_max_change": {
+            "max_change": float(json.loads(default.attrs["options"])["max_change"]),
+            "found": int(dfound.sum()),
+            "not_found_with_root": int(missed.sum()),
+            "of_which_stable_physical": int(np.sum(missed & cf["stable"])),
+            "found_cells_agree": [int(np.sum(default["found"].values & found
+                                             & (default["stable"].values == pkg_stab)
+                                             & (default["physical"].values == pkg_phys))),
+                                  int(dfound.sum())],
+            "omega_range": ([float(om[np.nonzero(missed)[0].min()]),
+                             float(om[np.nonzero(missed)[0].max()])] if missed.any()
+                            else None),
+            "largest_state_step_there": max(steps, default=None),
+        },
+    }
 
 
 def boundary_crossings(b: float, lo: float, hi: float, num: int = 200
@@ -281,17 +394,22 @@ def beyond(summary: dict[str, Any], groups: dict[str, xr.Dataset]) -> dict[str, 
             groups[f"curve_{name}"] = cv
             info["curves"][name] = {"points": int(cv.sizes["point"]),
                                     "seconds": time.perf_counter() - t0}
-    # the stability map of the package over the same grid as the closed form's
-    t0 = time.perf_counter()
+    # the stability map of the package over the same grid as the closed form's: with
+    # MAP_MAX_CHANGE (the family's state moves up to ~1.5 per omega step near resonance)
+    # and with the package's default max_change (which stops there: README)
     grid = {"omega": np.linspace(*PLANE["omega"], PLANE_GRID[0]),
             "b": np.linspace(*PLANE["b"], PLANE_GRID[1])}
-    try:
-        mp = ic.multi_impact_map(seed, ("omega", "b"), grid)
-        groups["map"] = mp
-        info["map"] = {"points": int(mp["found"].size), "seconds": time.perf_counter() - t0}
-    except Exception as exc:
-        log.warning("multi_impact_map: %s: %s", type(exc).__name__, exc)
-        info["map_error"] = f"{type(exc).__name__}: {exc}"
+    for name, options in (("map", {"max_change": MAP_MAX_CHANGE}), ("map_default", {})):
+        t0 = time.perf_counter()
+        try:
+            mp = ic.multi_impact_map(seed, ("omega", "b"), grid, **options)
+        except Exception as exc:
+            log.warning("multi_impact_map: %s: %s", type(exc).__name__, exc)
+            info[f"{name}_error"] = f"{type(exc).__name__}: {exc}"
+            continue
+        groups[name] = mp
+        info[name] = {"points": int(mp["found"].size), "found": int(mp["found"].sum()),
+                      "seconds": time.perf_counter() - t0, **options}
     return info
 
 
@@ -365,34 +483,50 @@ def draw(rows: list[dict[str, Any]], path: Path) -> None:
 
 def draw_plane(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
                info: dict[str, Any], path: Path) -> None:
-    fig, ax = plt.subplots(figsize=(6.8, 5.0))
-    ax.contourf(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5, 1.5],
-                colors=["C0"], alpha=0.2)
-    ax.contour(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5],
-               colors=["C0"], linewidths=1.0)
-    ax.plot([], [], "s", color="C0", alpha=0.4, label="closed form: stable and physical")
+    """The package's map (its regions and boundaries, ``multi_impact_map_diagram``), the
+    closed form's boundary of stable physical motion and the package's curves on top."""
+    fig, ax = plt.subplots(figsize=(7.0, 6.4), layout="constrained")
+    handles: list[Any] = []
     if "map" in groups:
-        m = groups["map"]
-        ok = (m["stable"] & m["physical"] & m["found"]).values
-        ax.contour(m["omega"].values, m["b"].values, ok.T.astype(float), levels=[0.5],
-                   colors=["C3"], linewidths=1.0, linestyles="--")
-        ax.plot([], [], "--", color="C3", label="package map: edge of stable and physical")
-    styles = {"NS": "k", "BP": "C2", "SN": "C4", "GR": "C1"}
+        multi_impact_map_diagram(groups["map"], ax=ax, title="")
+        handles = list(ax.get_legend().legend_handles)
+        ax.get_legend().remove()
+    else:  # no map: the closed form's region shaded
+        ax.contourf(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5, 1.5],
+                    colors=["C0"], alpha=0.2)
+    ax.contour(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5],
+               colors=["k"], linewidths=1.6, linestyles=[(0, (2, 2))], zorder=3)
+    handles.append(Line2D([], [], color="k", lw=1.6, ls=(0, (2, 2)),
+                          label="closed form: boundary of stable physical motion"))
+    if "map_default" in groups:
+        found = groups["map_default"]["found"].values
+        ax.contour(cf["omega"], cf["b"], found.T.astype(float), levels=[0.5],
+                   colors=["0.3"], linewidths=1.0, linestyles=[":"], zorder=3)
+        handles.append(Line2D([], [], color="0.3", lw=1.0, ls=":",
+                              label="edge of the map with the default max_change 0.5"))
+    styles = {"NS": "C3", "BP": "C2", "SN": "C4", "GR": "C1"}
     seen = set()
     for name, ds in groups.items():
         if not name.startswith("curve_"):
             continue
         kind = name[6:8]
-        ax.plot(ds["omega"].values, ds["b"].values, "-", color=styles[kind], lw=1.3,
-                label=None if kind in seen else f"package: {kind} curve")
+        ax.plot(ds["omega"].values, ds["b"].values, "-", color=styles[kind], lw=1.4,
+                zorder=4)
+        if kind not in seen:
+            handles.append(Line2D([], [], color=styles[kind], lw=1.4,
+                                  label=f"package: {kind} curve (multi_impact_curve)"))
         seen.add(kind)
     ax.set_xlim(*PLANE["omega"])
     ax.set_ylim(*PLANE["b"])
     ax.set_xlabel("r = omega / w_n")
     ax.set_ylabel("b = d/2 (half the cavity, units F/k)")
-    ax.legend(fontsize=7, loc="upper right")
-    ax.set_title("Stable symmetric two-impact motion in (omega, b)", fontsize=9)
-    fig.tight_layout()
+    legend_below(ax, handles)
+    agree = info.get("map_vs_closed_form")
+    note = "" if agree is None else (
+        f"\nmulti_impact_map (max_change {agree['max_change']:g}) and the closed form "
+        f"agree at {agree['region_agrees'][0]} of {agree['region_agrees'][1]} cells")
+    ax.set_title(f"Symmetric two-impact motion in (omega, b), mu = {MU}, e = {E}, "
+                 f"zeta = {ZETA}{note}", fontsize=8)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -415,11 +549,12 @@ def main(output: Path) -> dict[str, Any]:
     cf = closed_form_plane()
     timings["closed_form_plane_s"] = time.perf_counter() - t0
     crossings = curve_vs_closed_form(groups)
-    if "map" in groups:
-        m = groups["map"]
-        pkg = (m["stable"] & m["physical"] & m["found"]).values
-        more["map_vs_closed_form"] = {"cells": int(pkg.size),
-                                      "same_verdict": int(np.sum(pkg == cf["stable"]))}
+    if "map" in groups and "map_default" in groups:
+        more["map_vs_closed_form"] = map_vs_closed_form(groups["map"], cf,
+                                                        groups["map_default"])
+        log.info("map vs closed form: %s", {k: v for k, v in
+                                            more["map_vs_closed_form"].items()
+                                            if k != "disagreements"})
     draw(agree["rows"], output / "impact_damper.png")
     draw_plane(cf, groups, more, output / "impact_damper_plane.png")
     if groups:
