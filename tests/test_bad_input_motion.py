@@ -172,7 +172,7 @@ def test_branch_traced_to_the_closing_clearance_says_so(symmetric_motion):
     samples, statuses, message = trace_branch(problem, symmetric_motion.unknowns, 0.5, options)
     assert statuses == ["BOUNDS_REACHED"]
     assert samples[-1].lam == pytest.approx(-0.5, abs=1e-7) and samples[-1].lam > -0.5
-    assert "upper stop x_1 = b meets the lower stop" in message
+    assert "upper stop x1 = b meets the lower stop x1 = -b_low" in message
     assert "Stops(mass=1, b_low=0.5, R_low=0.6)" in message
     assert "ds_min" not in message.split(";")[0]  # the core's own reason is the bound
 

