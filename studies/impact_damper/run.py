@@ -72,7 +72,7 @@ OMEGAS = np.linspace(0.6, 3.0, 49)
 PLANE = {"omega": (0.5, 3.5), "b": (0.1, 3.0)}
 PLANE_GRID = (151, 59)  # omega x b, for the closed form's and the package's maps
 MAP_MAX_CHANGE = 2.0  # multi_impact_map's max_change (default 0.5: README, stability map)
-CURVE_POINTS = 600  # the NS curves stall near their lowest b (README): this caps them
+CURVE_POINTS = 600  # enough for each curve of the study's box (the NS curve: 260)
 SIMULATED = ((1.5, 2.0), (2.5, 2.0), (1.0, 1.0), (2.0, 4.0))  # (r, d) for the simulator
 
 
