@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from scipy.optimize import brentq, fsolve
-from test_general_damping import _augmented
+from test_general import _augmented
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 import pytest
-from test_general_damping import assert_simulation_repeats
+from test_general import assert_simulation_repeats
 
 import impactcont as ic
 from impactcont.errors import ParameterError
