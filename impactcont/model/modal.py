@@ -303,6 +303,8 @@ def static_response(w: np.ndarray, a: np.ndarray, g: np.ndarray, free: np.ndarra
     """
     t = np.atleast_1d(np.asarray(t, dtype=float))[:, None]
     w = np.asarray(w, dtype=float)
+    if not np.any(g):  # no constant force (the paper's machine): nothing to compute
+        return np.zeros(w.size), np.zeros((t.shape[0], w.size)), np.zeros((t.shape[0], w.size))
     offset = np.where(free, 0.0, g / np.where(free, 1.0, w * w))
     gf = np.where(free, g, 0.0)
     x = 2.0 * a * t

@@ -15,6 +15,7 @@ they live here, below both.
 from __future__ import annotations
 
 import dataclasses
+import weakref
 
 import numpy as np
 
@@ -95,12 +96,29 @@ def _velocity_jump(osc: ImpactOscillator, restitution: float) -> np.ndarray:
 def stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
     """The :class:`StopGeometry` of the impacts `pattern` (validated) of `osc`.
 
+    Built once per oscillator and pattern and kept while the oscillator lives (as
+    :func:`~impactcont.orbit.flow.flow_of`; a curve point asks for it a dozen times);
+    its arrays are read-only.
+
     Raises
     ------
     ParameterError
         When the stop coordinate does not involve the stop's own mass (``n_j = 0``: no
         position can be eliminated on the section).
     """
+    known = _GEOMETRIES.setdefault(osc, {})
+    geometry = known.get(pattern)
+    if geometry is None:
+        geometry = known[pattern] = _stop_geometry(osc, pattern)
+    return geometry
+
+
+#: :func:`stop_geometry` of each live oscillator, by pattern.
+_GEOMETRIES: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, StopGeometry]] = \
+    weakref.WeakKeyDictionary()
+
+
+def _stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
     stops = osc.stops
     n, p = osc.n, len(pattern)
     normal = _normal(osc)
@@ -118,7 +136,12 @@ def stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
         matrices[k, :n, :n] = np.eye(n)
         matrices[k, n:, n:] = jumps[s]
     two_sided = bool(stops.two_sided)
-    return StopGeometry(pivot=j, normals=np.tile(normal, (p, 1)),
-                        signs=np.array([stop_sign(s) for s in pattern]), positions=positions,
-                        matrices=matrices, normal=normal, b=float(osc.b),
-                        b_low=float(stops.b_low) if two_sided else 0.0, two_sided=two_sided)
+    geometry = StopGeometry(pivot=j, normals=np.tile(normal, (p, 1)),
+                            signs=np.array([stop_sign(s) for s in pattern]),
+                            positions=positions, matrices=matrices, normal=normal,
+                            b=float(osc.b), b_low=float(stops.b_low) if two_sided else 0.0,
+                            two_sided=two_sided)
+    for array in (geometry.normals, geometry.signs, geometry.positions, geometry.matrices,
+                  geometry.normal):
+        array.flags.writeable = False
+    return geometry
