@@ -430,3 +430,63 @@ def test_iterate_outside_the_problem_domain_is_a_failed_step_not_a_crash():
     result = continue_branch(_DomainLimited(), np.array([0.5]), 0.5, options)
     assert result.status is ContinuationStatus.STEP_BELOW_MINIMUM
     assert result.lam.min() > -0.05
+
+
+class _RefusedPastOne:
+    """``u^3 + u - lam = 0``, defined only for ``lam <= 1`` (like a restitution ``R <= 1``).
+
+    Every ``lam`` it was evaluated at is kept in :attr:`lams`.
+    """
+
+    def __init__(self) -> None:
+        self.lams: list[float] = []
+
+    def _check(self, lam: float) -> None:
+        self.lams.append(lam)
+        if lam > 1.0:
+            raise ParameterError(f"lam must be in [-1, 1]; got {lam!r}")
+
+    def residual(self, u, lam):
+        self._check(lam)
+        return np.array([u[0] ** 3 + u[0] - lam])
+
+    def jacobian(self, u, lam):
+        self._check(lam)
+        return np.array([[3.0 * u[0] ** 2 + 1.0]])
+
+    def dparam(self, u, lam):
+        self._check(lam)
+        return np.array([-1.0])
+
+
+def test_branch_to_a_bound_the_problem_refuses_past_lands_exactly_on_it():
+    """Every step past lam = 1 is refused by the problem; the branch lands on lam = 1 from
+    the last accepted point and ends there as at any bound (it ended 'step size fell below
+    ds_min' short of the bound). Witness: the real root of u^3 + u - 1 (numpy.roots)."""
+    problem = _RefusedPastOne()
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, ds_max=0.3, ds_min=1e-8)
+    result = continue_branch(problem, [0.0], 0.0, options)
+    assert result.status is ContinuationStatus.BOUNDS_REACHED
+    assert result.message == "parameter bound reached: lam = 1"
+    assert result.lam[-1] == 1.0
+    assert np.all(np.diff(result.lam) > 0.0)
+    root = next(r.real for r in np.roots([1.0, 0.0, 1.0, -1.0]) if abs(r.imag) < 1e-12)
+    # the landing step was corrected at lam = 1 itself: the last evaluations are there
+    assert problem.lams[-1] == 1.0
+    assert result.ds[-1] <= options.ds_max
+    assert result.u[-1, 0] == pytest.approx(root, abs=1e-9)
+    assert max_residual(problem, result) <= options.newton_tol
+
+
+def test_start_on_a_bound_the_problem_refuses_past_ends_there():
+    """From a start on lam = 1 every step leaves the bounds and is refused: the direction
+    ends at once on the bound, not at ds_min; the other direction runs as usual."""
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, ds_max=0.3, ds_min=1e-8,
+                                  both_directions=True)
+    result = continue_branch(_RefusedPastOne(), [0.5], 1.0, options)
+    assert result.statuses == (ContinuationStatus.BOUNDS_REACHED,
+                               ContinuationStatus.BOUNDS_REACHED)
+    assert result.message == ("forward: parameter bound reached: lam = 1; "
+                              "backward: parameter bound reached: lam = -1")
+    assert result.lam[0] == -1.0 and result.lam[-1] == 1.0
+    assert result.start_index == len(result) - 1

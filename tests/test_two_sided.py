@@ -308,6 +308,39 @@ def test_two_sided_branch_in_b_moves_the_upper_stop_only(unequal):
         np.testing.assert_allclose(o.states, states, atol=1e-10)
 
 
+def test_branch_in_R_low_lands_on_the_bound_one(unequal):
+    """R_low up to 1.0: the problem refuses R_low > 1, so every step past the bound was
+    refused and the branch ended 'step size fell below ds_min' at R_low = 0.99999999; it
+    lands on R_low = 1 now. The motion there, re-solved on a fresh oscillator built with
+    R_low = 1, is repeated by the simulator (elastic lower impacts)."""
+    ds = multi_impact_continuation(unequal, "R_low", (0.5, 1.0), max_points=60,
+                                   both_directions=False)
+    record = json.loads(ds.attrs["options"])
+    assert record["status"] == ["BOUNDS_REACHED"]
+    assert record["message"] == "parameter bound reached: lam = 1"
+    last = ds.sizes["point"] - 1
+    assert ds["R_low"].values[last] == 1.0
+    assert ic.dataset.oscillator_from_dataset(ds, last).stops.R_low == 1.0
+    fresh = paper2(0.7, 0.9, b_low=0.5, R_low=1.0)
+    states = ds["state_k"].values[last]
+    orbit = multi_impact_orbit(fresh, 1, 2, {"delta": float(ds["delta_k"].values[last, 0]),
+                                             "flight_times": ds["flight_time_k"].values[last],
+                                             "states": states, "pattern": unequal.pattern})
+    assert orbit.physical and orbit.stable
+    np.testing.assert_allclose(orbit.states, states, atol=1e-10)
+    np.testing.assert_allclose(orbit.flight_times, ds["flight_time_k"].values[last],
+                               atol=1e-10)
+    res = ic.simulate(fresh, orbit.states[0], float(orbit.phases[0]), 10.0)
+    k = res.impact_times.size
+    assert res.success and k >= 19
+    reps = k // orbit.p + 1
+    np.testing.assert_allclose(res.impact_times,
+                               np.cumsum(np.tile(orbit.flight_times, reps))[:k], atol=1e-9)
+    np.testing.assert_allclose(res.impact_velocities,
+                               np.tile(np.roll(orbit.impact_velocities, -1), reps)[:k],
+                               atol=1e-9)
+
+
 # ------------------------------------------------------------------------------------------
 # A stop on mass k of a chain
 # ------------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ from impactcont.core.options import ContinuationOptionError, ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import Problem, ProblemOutputError
 from impactcont.core.stepper import (
+    BoundReachedError,
     ContinuationStepError,
     NewtonConvergenceError,
     PalcStepper,
@@ -27,6 +28,7 @@ from impactcont.core.stepper import (
 )
 
 __all__ = [
+    "BoundReachedError",
     "BranchRun",
     "ContinuationOptionError",
     "ContinuationOptions",

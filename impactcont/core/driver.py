@@ -30,6 +30,7 @@ from impactcont.core.options import ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import FloatArray, Problem
 from impactcont.core.stepper import (
+    BoundReachedError,
     NewtonConvergenceError,
     PalcStepper,
     StepSizeBelowMinimumError,
@@ -155,6 +156,9 @@ class BranchRun:
                 current = stepper.step()
             except StepSizeBelowMinimumError as error:
                 self._finish(ContinuationStatus.STEP_BELOW_MINIMUM, str(error))
+                return
+            except BoundReachedError as error:  # the start lies on a bound, no step past it
+                self._finish(ContinuationStatus.BOUNDS_REACHED, f"lam = {error.bound:.10g}")
                 return
             bound = self._crossed_bound(current.lam)
             if bound is not None:

@@ -28,6 +28,7 @@ from impactcont.core.problem import (
 from impactcont.errors import ParameterError
 
 __all__ = [
+    "BoundReachedError",
     "ContinuationStepError",
     "NewtonConvergenceError",
     "PalcStepper",
@@ -60,6 +61,24 @@ class StepSizeBelowMinimumError(ContinuationStepError):
     """No step of at least ``ds_min`` could be accepted."""
 
 
+class BoundReachedError(ContinuationStepError):
+    """The last point lies on a bound of ``lam`` and every step leaves the bounds.
+
+    Raised by :meth:`PalcStepper.step` when a step from a point exactly on a
+    bound is refused past it (the problem is not defined there): the branch
+    has reached the bound, as when a step past it is accepted.
+
+    Attributes
+    ----------
+    bound : float
+        The bound of ``lam`` the last point lies on.
+    """
+
+    def __init__(self, bound: float, message: str) -> None:
+        super().__init__(message)
+        self.bound = bound
+
+
 class PalcStepper:
     """Pseudo-arclength stepper along the solution curve of a :class:`Problem`.
 
@@ -88,6 +107,7 @@ class PalcStepper:
         if self.direction not in (1, -1):
             raise ValueError(f"direction = {direction!r} is invalid; it must be +1 or -1")
         self.ds = options.ds
+        self._evaluated_lam = math.nan  # lam of the last evaluation of the problem
         self._weights: FloatArray | None = None
         self._current: ContinuationPoint | None = None
 
@@ -196,6 +216,13 @@ class PalcStepper:
     def step(self) -> ContinuationPoint:
         """Take one adaptive pseudo-arclength step from :attr:`current`.
 
+        A step whose corrector fails because it went past a bound of ``lam``
+        (``options.bounds``: the predicted ``lam`` or the ``lam`` of the
+        failing evaluation lies beyond it, typically a problem that refuses
+        such values, e.g. a restitution above 1) lands on the bound instead
+        (:meth:`_land_on_bound`): the point returned then has ``lam`` exactly
+        on the bound. Every other rejected step halves ``ds``.
+
         Returns
         -------
         ContinuationPoint
@@ -205,13 +232,24 @@ class PalcStepper:
         ------
         StepSizeBelowMinimumError
             If the step had to shrink below ``options.ds_min``.
+        BoundReachedError
+            If :attr:`current` lies on a bound and the steps past it are refused.
         """
         previous = self.current
+        landing_tried = False
         while True:
+            self._evaluated_lam = math.nan
             try:
                 point, angle = self._try_step(previous, self.ds)
             except NewtonConvergenceError as error:
                 reason = f"Newton failed ({error})"
+                bound = None if landing_tried else self._bound_passed(previous, self.ds)
+                if bound is not None:
+                    landing_tried = True
+                    landed, why_not = self._land_on_bound(previous, bound)
+                    if landed is not None:
+                        return landed
+                    reason += f"; {why_not}"
             else:
                 if angle <= self.options.max_angle:
                     self.ds = self._adapted_step(self.ds, point.newton_iterations, angle)
@@ -219,6 +257,76 @@ class PalcStepper:
                     return point
                 reason = f"tangent turned by {angle:.3g} rad > max_angle"
             self._shrink_after_rejection(previous, reason)
+
+    def _bound_passed(self, previous: ContinuationPoint, ds: float) -> float | None:
+        """The bound of ``lam`` that a failed step of size `ds` went past, ``None`` if none.
+
+        The step went past a bound when its predicted ``lam`` or the last
+        ``lam`` the problem was evaluated at (where the corrector failed) lies
+        strictly beyond it.
+        """
+        if self.options.bounds is None:
+            return None
+        lam_min, lam_max = self.options.bounds
+        predicted = previous.lam + ds * float(previous.tangent[-1])
+        tried = (predicted, self._evaluated_lam)  # nan compares False: not past
+        if any(lam > lam_max for lam in tried):
+            return lam_max
+        if any(lam < lam_min for lam in tried):
+            return lam_min
+        return None
+
+    def _land_on_bound(self, previous: ContinuationPoint, bound: float
+                       ) -> tuple[ContinuationPoint | None, str]:
+        """Land on ``lam = bound`` from `previous` after a step past it failed.
+
+        The predictor is shortened so that its ``lam`` is exactly `bound`, and
+        Newton then corrects ``u`` at that fixed ``lam``
+        (:meth:`land_on_parameter`), so the problem is never evaluated past
+        the bound. The landed point is accepted by the test of a step: the
+        tangent turns by at most ``max_angle``; the shortened step is at most
+        ``ds_max``.
+
+        Returns
+        -------
+        point : ContinuationPoint or None
+            The point on the bound (also :attr:`current`), or ``None`` when it
+            was not found (the caller shrinks the step as after any failure).
+        why_not : str
+            Why there is no point (empty when there is one).
+
+        Raises
+        ------
+        BoundReachedError
+            If `previous` itself lies on `bound` with its tangent pointing past it.
+        """
+        dlam = float(previous.tangent[-1])
+        if previous.lam == bound and (dlam > 0.0 if bound == self.options.bounds[1]
+                                      else dlam < 0.0):
+            raise BoundReachedError(bound, f"lam = {bound:.10g} reached; the steps past it "
+                                           f"were refused")
+        ds = (bound - previous.lam) / dlam if dlam != 0.0 else math.inf
+        if not 0.0 < ds <= self.options.ds_max:
+            return None, (f"the tangent does not reach the bound lam = {bound:.10g} within "
+                          f"ds_max = {self.options.ds_max:.3g}")
+        guess = previous.state + ds * previous.tangent
+        target = ContinuationPoint(u=guess[:-1], lam=bound, tangent=previous.tangent, ds=ds,
+                                   newton_iterations=0, index=previous.index + 1,
+                                   direction=self.direction)
+        try:
+            point = self.land_on_parameter(previous, target, bound)
+        except NewtonConvergenceError as error:
+            self._current = previous
+            return None, f"landing on the bound lam = {bound:.10g} failed ({error})"
+        angle = float(np.arccos(np.clip(self.scaled_dot(previous.tangent, point.tangent),
+                                        -1.0, 1.0)))
+        if angle > self.options.max_angle:
+            self._current = previous
+            return None, (f"the point on the bound lam = {bound:.10g} turns the tangent by "
+                          f"{angle:.3g} rad > max_angle")
+        logger.debug("step past the bound lam = %.10g refused; landed on it from lam = %.10g",
+                     bound, previous.lam)
+        return point, ""
 
     def _shrink_after_rejection(self, previous: ContinuationPoint, reason: str) -> None:
         rejected_ds = self.ds
@@ -440,6 +548,7 @@ class PalcStepper:
     # ------------------------------------------------------ problem evaluation
 
     def _evaluate(self, what: str, u: FloatArray, lam: float) -> FloatArray:
+        self._evaluated_lam = lam
         try:
             return np.asarray(getattr(self.problem, what)(u.copy(), lam), dtype=float)
         except ParameterError as error:
