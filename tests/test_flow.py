@@ -212,3 +212,22 @@ def test_time_scales_follow_the_stop_coordinate():
             flow.time_scales(3)
         with pytest.raises(TypeError, match="row must be an integer"):
             flow.time_scales(True)
+
+
+def test_flow_of_shares_one_flow_per_oscillator_and_lets_both_go():
+    # a weak-key table of flows kept every oscillator alive (its flow holds it)
+    import gc
+    import weakref
+
+    from impactcont.orbit.flow import flow_of
+
+    osc = ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                           R=0.6, b=0.6, omega=1.0, eta=0.1)
+    flow = flow_of(osc)
+    assert flow_of(osc) is flow
+    other = osc.replace(omega=1.3)
+    assert flow_of(other) is not flow and flow_of(other).omega == 1.3
+    gone = weakref.ref(osc), weakref.ref(flow)
+    del osc, flow
+    gc.collect()
+    assert gone[0]() is None and gone[1]() is None

@@ -401,15 +401,26 @@ class ImpactOscillator:
     @property
     def has_static_force(self) -> bool:
         """A nonzero constant force ``F_static``."""
-        return bool(np.any(self.F_static))
+        known = self.__dict__.get("_has_static_force")
+        if known is None:
+            known = bool(np.any(self.F_static))
+            object.__setattr__(self, "_has_static_force", known)
+        return known
 
     def paper_form_violations(self) -> list[str]:
         """What sets the system apart from the paper's form (one stop above mass 1 fixed to
         the frame, K positive definite, no constant force), as phrases; empty in that form.
 
         The closed-form N-1 paths (:func:`~impactcont.model.stops.require_paper_stops`)
-        refuse a system with any of these.
+        refuse a system with any of these (every call: worked out once per oscillator).
         """
+        known = self.__dict__.get("_paper_form_violations")
+        if known is None:
+            known = tuple(self._violations())
+            object.__setattr__(self, "_paper_form_violations", known)
+        return list(known)
+
+    def _violations(self) -> list[str]:
         out = []
         if not self.stops.paper:
             out.append(f"stops={self.stops!r} (not one stop on mass 1)")
@@ -481,11 +492,13 @@ class ImpactOscillator:
             # omega, b and R leave M, K, F (already validated) and the modal basis unchanged:
             # validate only what changes and share the rest (the continuation's hot path)
             new = copy.copy(self)
+            new.__dict__.pop("_flow", None)  # orbit.flow.flow_of's: the flow of self
             for name, value in changes.items():
                 object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
             if "b" in changes or "R" in changes:
                 # the lower stop must stay below the upper one; mirrored stops follow b, R
                 object.__setattr__(new, "stops", new.stops.check(new.n, new.b, new.R))
+                new.__dict__.pop("_paper_form_violations", None)  # its text names the stops
             return new
         # the damping model: a matrix C given here replaces eta / alpha / beta, and eta /
         # alpha / beta given here replace a matrix C; otherwise the damping matrix follows

@@ -21,7 +21,6 @@ undamped) of eq. (9) in its over-damped and critical forms.
 from __future__ import annotations
 
 import math
-import weakref
 from typing import Any
 
 import numpy as np
@@ -92,19 +91,19 @@ def coordinate_row(n: int, row: Any = None, normal: Any = None) -> np.ndarray:
     return r
 
 
-_FLOWS: weakref.WeakKeyDictionary[ImpactOscillator, Flow] = weakref.WeakKeyDictionary()
-
-
 def flow_of(osc: ImpactOscillator) -> Flow:
-    """``Flow(osc)``, built once per oscillator and kept while the oscillator lives.
+    """``Flow(osc)``, built once per oscillator and kept by it (released with it).
 
     A flow holds only what its oscillator fixes (and caches of it), so the motions of
     one oscillator can share one; :func:`impactcont.orbit.multi_impact.multi_impact_orbit`
     solved repeatedly on one oscillator then builds its flow and the kernel's arrays once.
+    The oscillator holds it (``ImpactOscillator.replace`` does not pass it on): a weak-key
+    table would have kept every oscillator alive, its flow holding it.
     """
-    flow = _FLOWS.get(osc)
+    flow = osc.__dict__.get("_flow")
     if flow is None:
-        flow = _FLOWS[osc] = Flow(osc)
+        flow = Flow(osc)
+        object.__setattr__(osc, "_flow", flow)
     return flow
 
 

@@ -58,7 +58,7 @@ from impactcont.orbit.dense import (
     velocity_errors,
     warn_ill_conditioned,
 )
-from impactcont.orbit.flow import Flow, GeneralFlow
+from impactcont.orbit.flow import GeneralFlow, flow_of
 
 __all__ = ["PeriodicForm", "amplitude", "amplitude_derivative", "orbit_pieces",
            "orbit_values", "orbit_values_many", "periodic_form", "phase_matrices", "roots",
@@ -215,7 +215,7 @@ def periodic_form(osc: ImpactOscillator, N: int, *, warn: bool = True) -> Period
         omega at the natural frequency of an undamped mode (no forced response).
     """
     _refuse_elastic(osc)
-    flow = Flow(osc)
+    flow = flow_of(osc)
     form = _form_at(flow, 2.0 * math.pi * N / osc.omega)
     if warn:
         warn_ill_conditioned(osc.omega, form.cond, stacklevel=2)
@@ -362,7 +362,7 @@ def amplitude(osc: ImpactOscillator, N: int, which: str | None = None
     :func:`periodic_form`, equal to its ``c, s``); warns as :func:`periodic_form`.
     """
     _refuse_elastic(osc)
-    flow = Flow(osc)
+    flow = flow_of(osc)
     T = 2.0 * math.pi * N / osc.omega
     fa = _first_order_arrays(flow.basis)
     g, Delta, cond, d0, dn, c, s = _compiled().amplitude_setup(
