@@ -108,7 +108,9 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
-        scale = max(1.0, _max_abs(x))
+        # the phase counts at most pi (as shooting.newton_solve: a phase run off to 1e14
+        # must not loosen the test)
+        scale = max(1.0, min(abs(x[0]), math.pi), _max_abs(x[1:]))
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
             return x, True, it, sh
