@@ -18,7 +18,8 @@ the paper's masses) becomes a :class:`ModelParameter` for one oscillator
   finite-difference fallback of the package.
 
 Adding a parameter is one entry: a vocabulary record (name, range, unit) and a line of
-:func:`_build`.
+:func:`_named` (an element family: one entry of
+:data:`~impactcont.vocabulary.ELEMENT_FAMILIES` and its setter in :func:`_element`).
 """
 
 from __future__ import annotations
