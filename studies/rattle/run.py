@@ -467,9 +467,13 @@ def draw(branches: dict[int, xr.Dataset], cas: Any, two: xr.Dataset | None, path
                     label=f"{name} (flights inside the clearance)")
             ax.plot(np.where(inside, np.nan, g), v[:, j], ":", color=f"C{j}", lw=0.8)
             ax.plot(g[st], v[st, j], "o", ms=2, color=f"C{j}")
-        for lab, x in zip(two["special_label"].values, two["special_F0"].values, strict=True):
+        top, span = np.nanmax(v), np.nanmax(v) - np.nanmin(v)
+        specials = sorted(zip(two["special_F0"].values, two["special_label"].values,
+                              strict=True))
+        for k, (x, lab) in enumerate(specials):  # staggered: neighbours lie close in Gamma
             ax.axvline(x, color="0.5", lw=0.6, ls="--")
-            ax.text(x, np.nanmax(v), str(lab), fontsize=7, rotation=90, va="top")
+            ax.text(x, top - 0.07 * span * (k % 4), f" {lab}", fontsize=7, va="top",
+                    ha="left")
         ax.legend(fontsize=7)
     ax.set_xlabel("Gamma")
     ax.set_ylabel("impact velocity")
