@@ -34,7 +34,7 @@ _EXPORTS: dict[str, str] = {
     "stability_map": "impactcont.analysis.maps",
     "ModalBasis": "impactcont.model.modal",
     **dict.fromkeys(("ImpactOscillator", "chain_stiffness"), "impactcont.model.oscillator"),
-    "Stops": "impactcont.model.stops",
+    **dict.fromkeys(("Stop", "Stops"), "impactcont.model.stops"),
     "multi_impact_continuation": "impactcont.analysis.multi_branch",
     **dict.fromkeys(("multi_impact_curve", "multi_impact_curve_crossings"),
                     "impactcont.analysis.multi_curves"),
@@ -166,7 +166,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
     )
     from impactcont.model.modal import ModalBasis
     from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
-    from impactcont.model.stops import Stops
+    from impactcont.model.stops import Stop, Stops
     from impactcont.orbit.extrema import (
         displacement_extrema,
         max_displacement,
@@ -217,6 +217,7 @@ __all__ = [
     "RobustStability",
     "SimulationResult",
     "SimulationStatus",
+    "Stop",
     "Stops",
     "UnresolvedMotionWarning",
     "__version__",

@@ -15,6 +15,13 @@ The paper (eq. 3-4) has one rigid stop, above mass 1: ``x1 = b`` with restitutio
   lower at ``s = -b_low``, with the two-body impact law (momentum conserved, restitution on
   the relative velocity, :meth:`Stops.impact_matrix`).
 
+- ``extra``: stops on further coordinates (:class:`Stop`, e.g. a stop above mass 2 in a
+  chain whose mass 1 meets ``U``: Wagg's two-degree-of-freedom impact oscillator with
+  constraints on two masses), each with a one-letter name, its own coordinate (a mass or
+  a pair), side, gap and restitution. An impact pattern is then a string of stop names
+  (``"UA"``, ``"AUL"``); :meth:`Stops.stop` gives any stop's normal, sign, position,
+  restitution and velocity jump, :attr:`Stops.names` every stop's name.
+
 Every path reads the geometry through :meth:`Stops.normal` (the stop coordinate is
 ``s = normal . x``) and :meth:`Stops.impact_matrix` (the velocity jump ``v+ = D v``).
 
@@ -32,13 +39,14 @@ import copy
 import dataclasses
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from impactcont.errors import ParameterError
 
-__all__ = ["LOWER", "UPPER", "Stops", "check_pattern", "require_paper_stops"]
+__all__ = ["LOWER", "UPPER", "Stop", "StopView", "Stops", "check_pattern",
+           "require_paper_stops"]
 
 #: Relative allowance of the test ``normal . u_free != 0`` (a free mode touched by a stop).
 TOUCH_RTOL = 1e-10
@@ -57,6 +65,184 @@ def _finite(name: str, value: Any, *, low: float | None = None, high: float | No
     if not math.isfinite(x) or (low is not None and x < low) or (high is not None and x > high):
         raise ParameterError(f"{name} must be {allowed}; got {value!r}")
     return x
+
+
+def _mass_index(name: str, value: Any, allowed: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ParameterError(f"{name} must be an integer >= 1 ({allowed}); got {value!r}")
+    return int(value)
+
+
+def _normal_of(mass: int, relative_to: int | None, n: int) -> np.ndarray:
+    out = np.zeros(n)
+    out[mass - 1] = 1.0
+    if relative_to is not None:
+        out[relative_to - 1] = -1.0
+    return out
+
+
+def _jump(M: np.ndarray, mass: int, relative_to: int | None, R: float) -> np.ndarray:
+    """``D`` of ``v+ = D v`` at a stop on ``x_j`` (eq. 4) or on ``x_j - x_k`` (two-body law)."""
+    M = np.asarray(M, dtype=float)
+    n = M.shape[0]
+    if relative_to is None:
+        D = np.eye(n)
+        D[mass - 1, mass - 1] = -float(R)
+        return D
+    nrm = _normal_of(mass, relative_to, n)
+    minv_n = np.linalg.solve(M, nrm)
+    return np.eye(n) - (1.0 + float(R)) * np.outer(minv_n, nrm) / float(nrm @ minv_n)
+
+
+class StopView(NamedTuple):
+    """One stop in the terms every path uses (:meth:`Stops.stop`).
+
+    Attributes
+    ----------
+    name : str
+        ``"U"``, ``"L"`` or an extra stop's name.
+    normal : ndarray, shape (n,)
+        The stop coordinate ``s = normal . x``.
+    sign : float
+        ``+1``: met moving up (``s' > 0``) at ``s = position``; ``-1``: met moving down.
+    position : float
+        ``c``: the stop sits at ``s = c``.
+    restitution : float
+    jump : ndarray, shape (n, n)
+        The velocity jump ``v+ = D v`` (eq. 4, or the two-body law for a pair).
+    pivot : int
+        0-based index of the stop's own mass (``normal[pivot] = 1``).
+    """
+
+    name: str
+    normal: np.ndarray
+    sign: float
+    position: float
+    restitution: float
+    jump: np.ndarray
+    pivot: int
+
+
+@dataclasses.dataclass(frozen=True)
+class Stop:
+    """A further stop, on any mass or between two masses (:attr:`Stops.extra`).
+
+    Parameters
+    ----------
+    name : str
+        One letter naming the stop in impact patterns (not ``"U"``/``"L"``, the
+        oscillator's own upper and lower stops), e.g. ``"A"``.
+    mass : int
+        The mass ``j`` (1-based) whose coordinate ``x_j`` the stop acts on.
+    gap : float
+        Distance of the stop from the origin of ``s``: it sits at ``s = side * gap``.
+    restitution : float
+        In [0, 1]: ``s'^+ = -restitution s'^-`` (eq. 4; the two-body law for a pair).
+    side : int
+        ``+1``: met moving up at ``s = gap`` (an upper stop); ``-1``: met moving down at
+        ``s = -gap`` (a lower stop).
+    relative_to : int, optional
+        A stop between masses ``j`` and ``k`` (``s = x_j - x_k``); None: fixed to the frame.
+
+    Examples
+    --------
+    >>> Stop("A", mass=2, gap=0.3, restitution=0.7)
+    Stop(name='A', mass=2, gap=0.3, restitution=0.7)
+    """
+
+    name: str
+    mass: int
+    gap: float
+    restitution: float
+    side: int = 1
+    relative_to: int | None = None
+
+    def __post_init__(self) -> None:
+        name = self.name
+        if not isinstance(name, str) or len(name) != 1 or not name.isalpha():
+            raise ParameterError(f"Stop name must be one letter (it names the stop in impact "
+                                 f"patterns); got {name!r}")
+        if name in (UPPER, LOWER):
+            raise ParameterError(f"Stop name {name!r} is taken: 'U' and 'L' are the "
+                                 "oscillator's own upper and lower stops; give another letter")
+        object.__setattr__(self, "mass", _mass_index(
+            f"Stop {name!r} mass", self.mass, "1-based, the mass the stop acts on"))
+        if self.relative_to is not None:
+            k = _mass_index(f"Stop {name!r} relative_to", self.relative_to,
+                            "the other mass of a stop between two masses, 1-based; or None")
+            if k == self.mass:
+                raise ParameterError(f"Stop {name!r}: relative_to={k!r} equals mass="
+                                     f"{self.mass!r}: a stop between a mass and itself; give "
+                                     "another mass (s = x_j - x_k needs k != j) or None")
+            object.__setattr__(self, "relative_to", k)
+        if isinstance(self.side, bool) or self.side not in (1, -1):
+            raise ParameterError(f"Stop {name!r} side must be +1 (met moving up at s = gap) "
+                                 f"or -1 (met moving down at s = -gap); got {self.side!r}")
+        object.__setattr__(self, "side", int(self.side))
+        object.__setattr__(self, "gap", _finite(f"Stop {name!r} gap", self.gap,
+                                                allowed="a finite real number"))
+        object.__setattr__(self, "restitution", _finite(
+            f"Stop {name!r} restitution", self.restitution, low=0.0, high=1.0,
+            allowed="in [0, 1]"))
+
+    def __repr__(self) -> str:
+        side = "" if self.side == 1 else ", side=-1"
+        pair = "" if self.relative_to is None else f", relative_to={self.relative_to!r}"
+        return (f"Stop(name={self.name!r}, mass={self.mass!r}, gap={self.gap!r}, "
+                f"restitution={self.restitution!r}{side}{pair})")
+
+    @property
+    def position(self) -> float:
+        """``c = side * gap``: the stop sits at ``s = c``."""
+        return self.side * self.gap
+
+    @property
+    def coordinate(self) -> str:
+        """The stop coordinate as text."""
+        return (f"x{self.mass}" if self.relative_to is None
+                else f"x{self.mass} - x{self.relative_to}")
+
+    def check(self, n: int) -> None:
+        """Refuse masses outside ``1..n``."""
+        for what, k in (("mass", self.mass), ("relative_to", self.relative_to)):
+            if k is not None and k > n:
+                raise ParameterError(f"Stop {self.name!r} {what} must be in 1..{n} (the "
+                                     f"oscillator has n={n} masses); got {k!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python description (JSON-able)."""
+        out: dict[str, Any] = {"name": self.name, "mass": self.mass, "gap": self.gap,
+                               "restitution": self.restitution, "side": self.side}
+        if self.relative_to is not None:
+            out["relative_to"] = self.relative_to
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Stop:
+        """Inverse of :meth:`to_dict`; unknown or missing keys are refused."""
+        keys = {"name", "mass", "gap", "restitution", "side", "relative_to"}
+        if not isinstance(data, Mapping):
+            raise TypeError(f"an extra stop must be a Stop or a mapping with keys "
+                            f"{sorted(keys)}; got {type(data).__name__}")
+        unknown = set(data) - keys
+        missing = {"name", "mass", "gap", "restitution"} - set(data)
+        if unknown or missing:
+            raise ParameterError(f"extra stop {dict(data)!r}: unknown key(s) {sorted(unknown)}"
+                                 f", missing key(s) {sorted(missing)}; allowed: "
+                                 f"{sorted(keys)} (name, mass, gap, restitution required)")
+        return cls(**data)
+
+
+def _as_extra(extra: Any) -> tuple[Stop, ...]:
+    if isinstance(extra, (str, bytes, Mapping, Stop)) or not hasattr(extra, "__iter__"):
+        raise TypeError(f"stops.extra must be a sequence of Stop (or mappings); got {extra!r}")
+    out = tuple(e if isinstance(e, Stop) else Stop.from_dict(e) for e in extra)
+    names = [e.name for e in out]
+    dup = sorted({x for x in names if names.count(x) > 1})
+    if dup:
+        raise ParameterError(f"stops.extra: duplicate stop name(s) {dup}; each stop needs "
+                             f"its own letter (got names {names})")
+    return out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,6 +269,11 @@ class Stops:
         A clearance between mass ``j`` and mass ``k = relative_to`` (1-based, ``k != j``):
         the stops act on ``s = x_j - x_k`` (upper ``s = b``, lower ``s = -b_low``) with the
         two-body impact law. None: the stops are fixed to the frame (the paper).
+    extra : sequence of Stop, optional
+        Further stops on any coordinate (:class:`Stop`, named by one letter other than
+        U/L), e.g. a stop above mass 2 besides ``U`` above mass 1. Two stops met from the
+        same side of one coordinate, or an upper stop not above a lower one on one
+        coordinate, are refused (:meth:`check`).
 
     Examples
     --------
@@ -97,8 +288,10 @@ class Stops:
     R_low: float | None = None
     mirror: bool = False
     relative_to: int | None = None
+    extra: tuple[Stop, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "extra", _as_extra(self.extra))
         mass = self.mass
         if isinstance(mass, bool) or not isinstance(mass, (int, np.integer)) or mass < 1:
             raise ParameterError(f"stops.mass must be an integer >= 1 (the impacting mass, "
@@ -139,8 +332,9 @@ class Stops:
     def __repr__(self) -> str:
         mirror = ", mirror=True" if self.mirror else ""
         pair = "" if self.relative_to is None else f", relative_to={self.relative_to!r}"
+        extra = f", extra={self.extra!r}" if self.extra else ""
         return (f"Stops(mass={self.mass!r}, b_low={self.b_low!r}, R_low={self.R_low!r}"
-                f"{mirror}{pair})")
+                f"{mirror}{pair}{extra})")
 
     # -- views ----------------------------------------------------------------------------------
     @property
@@ -156,7 +350,46 @@ class Stops:
     @property
     def paper(self) -> bool:
         """The paper's geometry: one stop, on mass 1, fixed to the frame."""
-        return self.mass == 1 and not self.two_sided and self.relative_to is None
+        return (self.mass == 1 and not self.two_sided and self.relative_to is None
+                and not self.extra)
+
+    @property
+    def names(self) -> str:
+        """Every stop's name: ``"U"``, ``"L"`` (with a lower stop), then the extra stops'."""
+        return UPPER + (LOWER if self.two_sided else "") + "".join(e.name for e in self.extra)
+
+    def stop(self, name: str, M: np.ndarray, b: float, R: float) -> StopView:
+        """The stop `name` in the terms every path uses (:class:`StopView`).
+
+        Parameters
+        ----------
+        name : str
+            ``"U"``, ``"L"`` or an extra stop's name (:attr:`names`).
+        M : ndarray, shape (n, n)
+            Mass matrix (the velocity jump of a pair depends on it).
+        b, R : float
+            The oscillator's upper stop and its restitution.
+
+        Raises
+        ------
+        ParameterError
+            `name` not one of :attr:`names`.
+        """
+        M = np.asarray(M, dtype=float)
+        n = M.shape[0]
+        if name in (UPPER, LOWER):
+            position = self.position(name, b)
+            restitution = self.restitution(name, R)
+            return StopView(name, self.normal(n), 1.0 if name == UPPER else -1.0, position,
+                            restitution, self.impact_matrix(M, restitution), self.index)
+        for e in self.extra:
+            if e.name == name:
+                e.check(n)
+                return StopView(name, _normal_of(e.mass, e.relative_to, n), float(e.side),
+                                e.position, e.restitution,
+                                _jump(M, e.mass, e.relative_to, e.restitution), e.mass - 1)
+        raise ParameterError(f"stop must be one of {list(self.names)} (the oscillator's "
+                             f"stops); got {name!r}")
 
     @property
     def pair(self) -> bool:
@@ -244,6 +477,44 @@ class Stops:
             (``-b_low >= b``: a clearance that closes).
         """
         self._check_masses(n)
+        for e in self.extra:
+            e.check(n)
+        resolved = self._check_main(n, b, R)
+        resolved._check_regions(n, b)
+        return resolved
+
+    def _check_regions(self, n: int, b: float) -> None:
+        """Refuse an extra stop that shadows or closes another on the same coordinate."""
+        entries = [(UPPER, self.normal(n), 1, b, self.coordinate)]
+        if self.two_sided:
+            entries.append((LOWER, self.normal(n), -1, -self.b_low, self.coordinate))
+        entries += [(e.name, _normal_of(e.mass, e.relative_to, n), e.side, e.position,
+                     e.coordinate) for e in self.extra]
+        for i, (na, nrm_a, side_a, c_a, s_a) in enumerate(entries):
+            for nb, nrm_b, side_b, c_b, s_b in entries[i + 1:]:
+                if nb in (UPPER, LOWER):
+                    continue
+                if np.array_equal(nrm_a, nrm_b):
+                    flip = 1
+                elif np.array_equal(nrm_a, -nrm_b):
+                    flip = -1
+                else:
+                    continue
+                side, c = flip * side_b, flip * c_b  # stop b on stop a's coordinate
+                if side == side_a:
+                    raise ParameterError(
+                        f"stops {na!r} and {nb!r} are both met "
+                        f"{'moving up' if side_a > 0 else 'moving down'} on the same "
+                        f"coordinate {s_a} (stop {nb!r} on {s_b}): one shadows the other; "
+                        "allowed: at most one upper and one lower stop per coordinate")
+                upper, lower = (c_a, c) if side_a > 0 else (c, c_a)
+                if not lower < upper:
+                    raise ParameterError(
+                        f"stops {na!r} (at {s_a} = {c_a!r}) and {nb!r} (at {s_b} = {c_b!r}) "
+                        f"on the same coordinate leave no room between them: the upper stop "
+                        f"must lie above the lower one (a clearance that closes)")
+
+    def _check_main(self, n: int, b: float, R: float) -> Stops:
         s = self.coordinate
         if self.mirror:
             if not b > 0:
@@ -292,6 +563,8 @@ class Stops:
         elif self.b_low is not None:
             out["b_low"] = self.b_low
             out["R_low"] = self.R_low
+        if self.extra:
+            out["extra"] = [e.to_dict() for e in self.extra]
         return out
 
     @classmethod
@@ -299,16 +572,19 @@ class Stops:
         """Inverse of :meth:`to_dict`; unknown keys are refused."""
         if not isinstance(data, Mapping):
             raise TypeError(f"stops must be a Stops or a mapping with keys mass, b_low, R_low, "
-                            f"mirror, relative_to; got {type(data).__name__}")
-        unknown = set(data) - {"mass", "b_low", "R_low", "mirror", "relative_to"}
+                            f"mirror, relative_to, extra; got {type(data).__name__}")
+        unknown = set(data) - {"mass", "b_low", "R_low", "mirror", "relative_to", "extra"}
         if unknown:
             raise ParameterError(f"stops: unknown key(s) {sorted(unknown)}; allowed: mass, "
-                                 "b_low, R_low, mirror, relative_to")
+                                 "b_low, R_low, mirror, relative_to, extra")
+        data = dict(data)
+        if "extra" in data:
+            data["extra"] = _as_extra(data["extra"])
         return cls(**data)
 
 
 def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
-    """An impact sequence of an N-p motion: ``p`` letters ``U``/``L``.
+    """An impact sequence of an N-p motion: ``p`` stop names (``U``/``L``, extra stops).
 
     Parameters
     ----------
@@ -322,12 +598,21 @@ def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
     Raises
     ------
     ParameterError
-        Wrong length, a letter other than U/L, or ``L`` without a lower stop.
+        Wrong length, a letter that names no stop, or ``L`` without a lower stop.
     """
     if pattern is None:
         return UPPER * p
     if not isinstance(pattern, str):
         raise TypeError(f"pattern must be a string of {p} letters U/L; got {pattern!r}")
+    extra = "".join(e.name for e in getattr(stops, "extra", ()))
+    if extra and len(pattern) == p and not set(pattern) - set(UPPER + LOWER + extra):
+        if LOWER in pattern and not stops.two_sided:
+            raise ParameterError(f"pattern={pattern!r} has impacts on the lower stop, but the "
+                                 "oscillator has none: give stops=Stops(b_low=...)")
+        return pattern
+    if extra:
+        raise ParameterError(f"pattern must be {p} stop names (one per impact) from "
+                             f"{list(stops.names)}; got {pattern!r}")
     if len(pattern) != p or set(pattern) - {UPPER, LOWER}:
         raise ParameterError(f"pattern must be {p} letters (one per impact) from 'U' (upper "
                              f"stop) and 'L' (lower stop); got {pattern!r}")

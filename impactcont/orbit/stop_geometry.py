@@ -120,6 +120,10 @@ _GEOMETRIES: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, StopGeometry]
 
 def _stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
     stops = osc.stops
+    if getattr(stops, "extra", ()):
+        raise ParameterError(f"the shooting of N-p motions handles the stops of one coordinate "
+                             f"(U, L) only, not yet several stop coordinates; got stops="
+                             f"{stops!r}. The simulator (impactcont.simulate) follows them all")
     n, p = osc.n, len(pattern)
     normal = _normal(osc)
     j = stops.index

@@ -36,7 +36,6 @@ import math
 
 import numpy as np
 
-from impactcont.model.stops import LOWER, UPPER
 from impactcont.orbit.extrema import critical_points, first_upward_crossing, sample_times
 from impactcont.orbit.flow import Flow, GeneralMass1Motion, Mass1Motion
 from impactcont.orbit.stop_geometry import stop_sign
@@ -213,26 +212,30 @@ def contact_free_until(motion: Mass1Motion, level: float, t0: float) -> float:
 def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
                  after: dict[str, float] | None = None
                  ) -> tuple[float, np.ndarray, str] | None:
-    """First impact on either stop within ``t_max`` of a flight from state X.
+    """First impact on any stop within ``t_max`` of a flight from state X.
+
+    Every stop of the oscillator (:attr:`Stops.names`: ``U``, ``L`` and the extra stops,
+    each on its own coordinate ``s = normal . x``) is searched on its own grid (the time
+    scales of its own coordinate) over the same windows; the earliest crossing wins.
 
     Parameters
     ----------
     flow : Flow
     X : ndarray, shape (2n,)
-        State at the start (``-b_low <= x_j <= b``).
+        State at the start (on the allowed side of every stop).
     phase : float
         Forcing phase at the start.
     t_max : float
         Longest flight to search.
     after : dict, optional
-        Per stop (``"U"``, ``"L"``), ignore a crossing completed by this time (a
-        flight that starts on that stop at rest and leaves it).
+        Per stop (``"U"``, ``"L"``, an extra stop's name), ignore a crossing completed by
+        this time (a flight that starts on that stop at rest and leaves it).
 
     Returns
     -------
     (float, ndarray, str) or None
         Flight time to the impact, the state just before it and the stop hit
-        (``"U"``/``"L"``); None when neither stop is reached within ``t_max``.
+        (its name); None when no stop is reached within ``t_max``.
 
     Notes
     -----
@@ -244,14 +247,16 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     few windows per approach to a stop, not proportional to ``t_max``.
     """
     osc = flow.osc
-    j = osc.stops.index
     after = after or {}
-    stops = [UPPER, LOWER] if osc.stops.two_sided else [UPPER]
-    normal = osc.stops.normal(osc.n)
-    motions = {s: flow.motion(X, phase, j, stop_sign(s), normal) for s in stops}
-    levels = {s: stop_sign(s) * osc.stops.position(s, osc.b) for s in stops}
+    views = {s: osc.stops.stop(s, osc.M, osc.b, osc.R) for s in osc.stops.names}
+    stops = list(views)
+    normals = {s: views[s].normal for s in stops}
+    motions = {s: flow.motion(X, phase, views[s].pivot, views[s].sign, normals[s])
+               for s in stops}
+    levels = {s: views[s].sign * views[s].position for s in stops}
     below = dict.fromkeys(stops, True)
-    first, longest = search_window(flow, normal=normal)
+    windows = [search_window(flow, normal=normals[s]) for s in stops]
+    first, longest = min(w[0] for w in windows), min(w[1] for w in windows)
     window = first
     start = 0.0
     while start < t_max:
@@ -263,9 +268,10 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
             below = dict.fromkeys(stops, True)
             continue
         stop_time = min(start + window, t_max)
-        grid = sample_times(flow, start, stop_time, normal=normal)
+        grids = {s: sample_times(flow, start, stop_time, normal=normals[s]) for s in stops}
         best: tuple[float, str] | None = None
         for s in stops:
+            grid = grids[s]
             x, v, _ = motions[s](grid[:1])
             if start > 0 and below[s] and x[0] >= levels[s] and v[0] >= 0:
                 # the previous window ended just short of this stop at this very time, moving
@@ -279,6 +285,6 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
         if best is not None:
             return best[0], flow.state(best[0], X, phase)[0], best[1]
         for s in stops:
-            below[s] = bool(motions[s](grid[-1:])[0][0] < levels[s])
+            below[s] = bool(motions[s](grids[s][-1:])[0][0] < levels[s])
         start, window = stop_time, min(2.0 * window, longest)
     return None

@@ -16,7 +16,10 @@ In general the stops act on the stop coordinate ``s = normal . x``
 (:meth:`~impactcont.model.stops.Stops.normal`: ``x_j``, or ``x_j - x_k`` for a clearance
 between two masses), and an impact applies the velocity jump ``v+ = D v`` of
 :meth:`~impactcont.model.stops.Stops.impact_matrix` (eq. 4 at a stop fixed to the frame;
-the two-body law, momentum conserved and ``s'`` reversed times R, at a pair). Free masses
+the two-body law, momentum conserved and ``s'`` reversed times R, at a pair). Stops on
+several coordinates (``osc.stops.extra``: e.g. one above mass 1 and one above mass 2) are
+all followed: the first crossing among every stop's coordinate is the impact, with the law
+of the stop hit (:meth:`~impactcont.model.stops.Stops.stop`). Free masses
 and a constant force ``F_static`` come with the exact flow (:class:`Flow`).
 """
 
@@ -32,9 +35,9 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import LOWER, UPPER
+from impactcont.model.stops import UPPER
 from impactcont.orbit.flow import Flow
-from impactcont.simulate.contact import next_contact, stop_sign
+from impactcont.simulate.contact import next_contact
 from impactcont.threads import blas_limited
 
 __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
@@ -83,8 +86,8 @@ class SimulationResult:
     t, X : ndarray or None
         Trajectory samples (times, states; both sides of each impact), if requested.
     impact_stops : str
-        The stop of each impact, ``"U"`` (upper, ``x_j = b``) or ``"L"`` (lower,
-        ``x_j = -b_low``); all ``"U"`` for the paper's single stop.
+        The stop of each impact, ``"U"`` (upper, ``x_j = b``), ``"L"`` (lower,
+        ``x_j = -b_low``) or an extra stop's name; all ``"U"`` for the paper's single stop.
     """
 
     impact_times: np.ndarray
@@ -150,7 +153,7 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     the motion's time scales, not ``t_max``.
     """
     stops = flow.osc.stops
-    if stops.two_sided:
+    if len(stops.names) > 1:
         raise ParameterError(f"next_impact follows one stop; the oscillator has two (stops="
                              f"{stops!r}): use impactcont.simulate.contact.next_contact, which "
                              "also returns the stop hit ('U' or 'L')")
@@ -158,13 +161,12 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     return None if hit is None else (hit[0], hit[1])
 
 
-def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, side: str, level: float,
-                       v: float) -> bool:
+def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, normal: np.ndarray,
+                       level: float, v: float) -> bool:
     """The bounce after an impact at speed ``v`` rises less than ``_BOUNCE_ULPS`` ulps."""
     floor = _BOUNCE_ULPS * np.finfo(float).eps * max(1.0, abs(level))
     if v * v > 1e10 * floor:  # cheap exit: |x_j''| would have to exceed 5e9
         return False
-    normal = flow.osc.stops.normal(flow.n)
     acc = abs(float(normal @ flow.state_derivative(0.0, X, phase)[0][flow.n:]))
     return bool(v * v < 2.0 * acc * floor)
 
@@ -190,6 +192,14 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
         if s < low - _ON_STOP * max(1.0, abs(low)):
             raise ParameterError(f"{name} = {s!r} is beyond the lower stop -b_low = {low!r}; "
                                  f"s >= -b_low is required (s = {osc.stops.coordinate})")
+    for e in osc.stops.extra:
+        view = osc.stops.stop(e.name, osc.M, osc.b, osc.R)
+        s = float(view.normal @ X[:osc.n])
+        if view.sign * (s - view.position) > _ON_STOP * max(1.0, abs(view.position)):
+            raise ParameterError(
+                f"the coordinate {e.coordinate} = {s!r} of state is beyond stop {e.name!r} "
+                f"at {view.position!r}; {e.coordinate} {'<=' if e.side > 0 else '>='} "
+                f"{view.position!r} is required")
     return X
 
 
@@ -238,12 +248,12 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
     flow = Flow(osc)
     n = osc.n
-    j = osc.stops.index
-    normal = osc.stops.normal(n)
-    sides = [UPPER, LOWER] if osc.stops.two_sided else [UPPER]
-    level = {s: osc.stops.position(s, osc.b) for s in sides}
-    restitution = {s: osc.stops.restitution(s, osc.R) for s in sides}
-    jump = {s: osc.stops.impact_matrix(osc.M, restitution[s]) for s in sides}  # v+ = D v
+    sides = list(osc.stops.names)
+    views = {s: osc.stops.stop(s, osc.M, osc.b, osc.R) for s in sides}
+    level = {s: views[s].position for s in sides}
+    sign = {s: views[s].sign for s in sides}
+    normal = {s: views[s].normal for s in sides}
+    jump = {s: views[s].jump for s in sides}  # v+ = D v, the law of the stop hit
     on_stop = {s: _ON_STOP * max(1.0, abs(level[s])) for s in sides}
     t_end = periods * TWO_PI / osc.omega
     dt_sample = TWO_PI / osc.omega / int(samples_per_period)
@@ -256,14 +266,16 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
 
     while True:
         # on a stop (within rounding), not moving away from it: sign s >= sign c, sign s' >= 0
-        pos, vel = float(normal @ X[:n]), float(normal @ X[n:])
-        on = [s for s in sides if stop_sign(s) * (pos - level[s]) >= -on_stop[s]
-              and stop_sign(s) * vel >= 0]
+        pos = {s: float(normal[s] @ X[:n]) for s in sides}
+        vel = {s: float(normal[s] @ X[n:]) for s in sides}
+        on = [s for s in sides if sign[s] * (pos[s] - level[s]) >= -on_stop[s]
+              and sign[s] * vel[s] >= 0]
+        into = [s for s in on if sign[s] * vel[s] > 0]
         hit: tuple[float, np.ndarray, str] | None
-        if on and stop_sign(on[0]) * vel > 0:  # moving into the stop: impact now
-            hit = (0.0, X.copy(), on[0])
-        elif on and stop_sign(on[0]) * float(
-                normal @ flow.state_derivative(0.0, X, phase)[0][n:]) > 0:
+        if into:  # moving into a stop: impact now
+            hit = (0.0, X.copy(), into[0])
+        elif on and any(sign[s] * float(
+                normal[s] @ flow.state_derivative(0.0, X, phase)[0][n:]) > 0 for s in on):
             status = SimulationStatus.STICKING  # at rest on the stop, pushed into it
             break
         else:
@@ -283,12 +295,12 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             t_now = t_end
             break
         tc, X_minus, side = hit
-        v = stop_sign(side) * float(normal @ X_minus[n:])  # speed towards the stop hit
+        v = sign[side] * float(normal[side] @ X_minus[n:])  # speed towards the stop hit
         t_now += tc
         phase = _wrap(phase + osc.omega * tc)
         X = X_minus.copy()
-        k = osc.stops.relative_to
-        X[j] = level[side] + (0.0 if k is None else float(X_minus[k - 1]))  # s on the stop
+        p = views[side].pivot  # s on the stop: x_p = c - sum_{i != p} n_i x_i (n_p = 1)
+        X[p] = level[side] - float(np.delete(normal[side], p) @ np.delete(X_minus[:n], p))
         X[n:] = jump[side] @ X_minus[n:]
         times.append(t_now)
         vels.append(v)
@@ -296,16 +308,15 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         states.append(X.copy())
         hits.append(side)
         v_scale = max(v_scale, v)
-        if v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(flow, X, phase, side,
-                                                                          level[side], v):
+        if v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(
+                flow, X, phase, normal[side], level[side], v):
             status = SimulationStatus.CHATTER
             break
         if len(times) >= max_impacts:
             status = SimulationStatus.MAX_IMPACTS
             break
     if status is not SimulationStatus.COMPLETED:
-        last = (f"; last impact on the {'upper' if hits[-1] == UPPER else 'lower'} stop at "
-                f"speed {vels[-1]:.3g}" if hits else "")
+        last = (f"; last impact on stop {hits[-1]!r} at speed {vels[-1]:.3g}" if hits else "")
         log.warning("simulation stopped at t=%.6g (%.6g forcing periods, %d impacts%s): %s",
                     t_now, t_now * osc.omega / TWO_PI, len(times), last, status.value)
     k = len(times)
