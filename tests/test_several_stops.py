@@ -111,7 +111,90 @@ def test_simulator_refuses_a_start_beyond_an_extra_stop():
         ic.simulate(_wagg(), [0.0, 0.7, 0.0, 0.0], 0.0, 1.0)
 
 
-def test_shooting_refuses_several_stop_coordinates_for_now():
-    res = ic.simulate(_wagg(), np.zeros(4), 0.0, 60.0)
-    with pytest.raises(ParameterError, match="not yet several stop coordinates"):
-        ic.multi_impact_orbit(_wagg(), 1, 2, res)
+
+# -- shooting, G and continuation ----------------------------------------------------------
+@pytest.fixture(scope="module")
+def two_mass_motion():
+    """The 1-2 motion with one impact on each stop (U above mass 1, A above mass 2)."""
+    osc = _wagg()
+    orbit = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 100.0))
+    assert sorted(orbit.pattern) == ["A", "U"] and orbit.physical and orbit.residual < 1e-12
+    return orbit
+
+
+def test_motion_on_two_masses_repeats_in_the_simulator(two_mass_motion):
+    orbit = two_mass_motion
+    osc = _wagg()  # a fresh oscillator
+    res = ic.simulate(osc, orbit.states[0], orbit.phases[0], 1.0)
+    assert res.impact_stops == orbit.pattern[1:] + orbit.pattern[0]
+    np.testing.assert_allclose(res.impact_times, np.cumsum(orbit.flight_times), rtol=0,
+                               atol=1e-9)
+    np.testing.assert_allclose(res.impact_states[-1], orbit.states[0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.impact_velocities[[1, 0]], orbit.impact_velocities,
+                               rtol=1e-8)
+
+
+def _impact_map(osc, orbit, z):
+    """The simulated map from impact 0 over the p impacts, in G's coordinates ``z``:
+    ``X`` without the position of the stop's own mass, and the phase."""
+    j = 1 if orbit.pattern[0] == "A" else 0
+    X = np.insert(z[:-1], j, orbit.states[0][j])
+    res = ic.simulate(osc, X, z[-1], 1.5, max_impacts=orbit.p)
+    assert res.impact_stops == orbit.pattern[1:] + orbit.pattern[0]
+    phase = orbit.phases[0] + np.remainder(res.impact_phases[-1] - orbit.phases[0] + np.pi,
+                                           2 * np.pi) - np.pi
+    return np.append(np.delete(res.impact_states[-1], j), phase)
+
+
+def test_G_of_a_motion_on_two_masses_matches_finite_differences(two_mass_motion):
+    orbit = two_mass_motion
+    osc = _wagg()
+    j = 1 if orbit.pattern[0] == "A" else 0
+    z0 = np.append(np.delete(orbit.states[0], j), orbit.phases[0])
+    h = 1e-6
+    fd = np.column_stack([(_impact_map(osc, orbit, z0 + h * e)
+                           - _impact_map(osc, orbit, z0 - h * e)) / (2 * h)
+                          for e in np.eye(z0.size)])
+    np.testing.assert_allclose(orbit.G, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
+
+
+def test_a_branch_on_one_stop_grazes_the_stop_on_the_other_mass():
+    osc = _wagg(omega=1.5)
+    start = ic.multi_impact_orbit(osc, 1, 1, ic.simulate(osc, np.zeros(4), 0.0, 100.0))
+    assert start.pattern == "U" and start.physical
+    assert start.flight_gap_min[0] == pytest.approx(0.6 - _max_x2(start), abs=1e-9)
+    branch = ic.multi_impact_continuation(start, "omega", (1.18, 1.5), direction=-1,
+                                          both_directions=False, detect=("GR",))
+    labels = list(branch["special_label"].values)
+    assert labels == ["GR"] and start.flight_gap_stops == "A"  # A is the stop grazed
+    w = float(branch["special_omega"].values[0])
+    assert 1.18 < w < 1.2
+    # re-solved on a fresh oscillator: x2 touches stop A (0.6) inside the flight, x1 stays
+    # below U
+    fresh = _wagg(omega=w)
+    graze = ic.multi_impact_orbit(fresh, 1, 1, {
+        "delta": float(branch["special_delta_k"].values[0, 0]),
+        "flight_times": branch["special_flight_time_k"].values[0],
+        "states": branch["special_state_k"].values[0]})
+    assert _max_x2(graze) == pytest.approx(0.6, abs=1e-7)
+    # on each side, the simulator: clear of A above the grazing, A met below it
+    for dw, first in ((+0.01, "U"), (-0.01, "A")):
+        near = _wagg(omega=w + dw)
+        orbit = ic.multi_impact_orbit(near, 1, 1, graze)
+        res = ic.simulate(near, orbit.states[0], orbit.phases[0], 1.0, max_impacts=1)
+        assert res.impact_stops == first
+        assert orbit.physical == (dw > 0)
+        assert (dw > 0) or "stop 'A'" in orbit.reason
+
+
+def _max_x2(orbit):
+    """Largest x2 over the flight, from solve_ivp (the independent witness)."""
+    tau = orbit.flight_times[0]
+    sol = _ivp(orbit.oscillator, orbit.states[0], orbit.phases[0], tau)
+    return float(np.max(sol(np.linspace(0.0, tau, 20001))[1]))
+
+
+def test_a_map_of_several_stop_coordinates_is_refused_for_now(two_mass_motion):
+    with pytest.raises(ParameterError, match="not yet: several stop coordinates"):
+        ic.multi_impact_map(two_mass_motion, ("omega", "b"),
+                            {"omega": [0.79, 0.8], "b": [0.3, 0.31]})

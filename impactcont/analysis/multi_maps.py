@@ -417,12 +417,19 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     ------
     TypeError, ParameterError
         A bad start, parameter, grid, option, or a grid value where the oscillator
-        cannot be built (named in the message).
+        cannot be built (named in the message); an oscillator with stops on several
+        coordinates (``Stops(extra=...)``: not yet).
     NoPeriodicMotionError
         The start cannot be followed to its nearest grid point.
     """
     orbit = _as_multi(start)
     osc = orbit.oscillator
+    if getattr(osc.stops, "extra", ()):
+        raise ParameterError(
+            f"multi_impact_map: not yet: several stop coordinates (stops.extra="
+            f"{osc.stops.extra!r}); the compiled sweep checks the stops of one coordinate "
+            "only. Follow the motion with multi_impact_continuation (every stop checked) or "
+            "solve single points with multi_impact_orbit")
     params = _check_parameters(osc, parameters)
     names = (params[0].name, params[1].name)
     axes = _check_grid(grid, names)

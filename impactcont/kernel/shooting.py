@@ -257,12 +257,13 @@ def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, t, X0, 
 
 # -- the shooting system ------------------------------------------------------------------------
 @_jit
-def _section_starts(x, p, m, j, normals, positions):
-    """``X_k`` from the unknowns: ``z_k`` in every component but ``x_j``, and ``x_j`` from
-    the section ``n_k . x = c_k`` of impact k."""
+def _section_starts(x, p, m, pivots, normals, positions):
+    """``X_k`` from the unknowns: ``z_k`` in every component but ``x_j`` (``j = pivots[k]``,
+    the stop's own mass), and ``x_j`` from the section ``n_k . x = c_k`` of impact k."""
     n = m // 2
     starts = np.empty((p, m))
     for k in range(p):
+        j = pivots[k]
         col = p + k * (m - 1)
         for c in range(m):
             if c != j:
@@ -324,16 +325,16 @@ def _is_diagonal(matrices):
 
 
 @_jit
-def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, j,
-                    normals, positions, matrices, x, want_jacobian):
+def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
+                    pivots, normals, positions, matrices, x, want_jacobian):
     """Residual (and exact Jacobian) of the N-p shooting system at the unknowns ``x``.
 
     Parameters are the flow's arrays (module docstring), ``omega``, the motion's
-    ``period = 2 pi N / omega``, the 0-based index ``j`` of the position eliminated on
-    the sections, the normal ``n_k`` (``normals`` (p, n)), stop position ``c_k``
-    (``positions`` (p,)) and impact matrix ``D_k`` (``matrices`` (p, 2n, 2n)) of each
-    impact, the unknowns ``x`` (2np,) and whether to build the Jacobian (else it is
-    returned with shape (0, 0)).
+    ``period = 2 pi N / omega``, the 0-based index ``j_k`` of the position eliminated on
+    the section of each impact (``pivots`` (p,), the mass of the stop hit), the normal
+    ``n_k`` (``normals`` (p, n)), stop position ``c_k`` (``positions`` (p,)) and impact
+    matrix ``D_k`` (``matrices`` (p, 2n, 2n)) of each impact, the unknowns ``x`` (2np,)
+    and whether to build the Jacobian (else it is returned with shape (0, 0)).
 
     Returns
     -------
@@ -351,7 +352,7 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
         taus[k] = x[1 + k]
         elapsed += x[1 + k]
     taus[p - 1] = period - elapsed
-    starts = _section_starts(x, p, m, j, normals, positions)
+    starts = _section_starts(x, p, m, pivots, normals, positions)
     diagonal = _is_diagonal(matrices)
     phases = np.empty(p)
     phases[0] = x[0]
@@ -384,6 +385,8 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
     zcol = p  # first column of z_0
     for k in range(p):
         nxt = (k + 1) % p
+        j = pivots[k]
+        jn = pivots[nxt]
         col0 = zcol + k * (m - 1)
         ncol = zcol + nxt * (m - 1)
         for r in range(m):
@@ -424,13 +427,13 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
                     J[row, col] += v
                     col += 1
             # - dX_{k+1}/dz_{k+1}
-            if r != j:
-                J[row, ncol + (r if r < j else r - 1)] -= 1.0
+            if r != jn:
+                J[row, ncol + (r if r < jn else r - 1)] -= 1.0
             else:
                 for c in range(n):
-                    if c != j and normals[nxt, c] != 0.0:
-                        J[row, ncol + (c if c < j else c - 1)] += (normals[nxt, c]
-                                                                   / normals[nxt, j])
+                    if c != jn and normals[nxt, c] != 0.0:
+                        J[row, ncol + (c if c < jn else c - 1)] += (normals[nxt, c]
+                                                                    / normals[nxt, jn])
     return phases, taus, starts, arrivals, rates, transitions, pcols, residual, J
 
 
@@ -481,7 +484,7 @@ def _solve(A, rhs):
 
 
 @_jit
-def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, j,
+def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, pivots,
                  normals, positions, matrices, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
@@ -496,8 +499,8 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
         :func:`shooting_system` at ``x`` (with its Jacobian).
     """
     x = x0.copy()
-    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, j,
-                         normals, positions, matrices, x, True)
+    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
+                         pivots, normals, positions, matrices, x, True)
     norm = _max_abs(sh[7])
     step_norm = np.inf
     it = 0
@@ -519,7 +522,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
         while True:
             trial = x + lam_step * step
             tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                                  period, j, normals, positions, matrices, trial, True)
+                                  period, pivots, normals, positions, matrices, trial, True)
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -537,12 +540,13 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
 @_jit
-def _flight_jacobian(tr, pcol, rate, D, j, n_start, n_end, omega, G):
+def _flight_jacobian(tr, pcol, rate, D, j, j_end, n_start, n_end, omega, G):
     """``G_k`` of eq. (25) into ``G`` (as ``multi_impact.flight_jacobian``); returns
     ``h2 = n_end . x'(tau^-)``, the arrival velocity of the stop coordinate.
 
     The flight starts on the section ``n_start . x = c`` (coordinates ``z``: ``X``
-    without ``x_j``) and ends on ``n_end . x = c'``: with ``B = Phi dX/dz``,
+    without ``x_j``) and ends on ``n_end . x = c'`` (coordinates ``X`` without
+    ``x_{j_end}``, the next stop's own mass): with ``B = Phi dX/dz``,
     ``h0 = n_end . B``, ``h1 = n_end . E'``, ``h2 = n_end . X'`` the impact time moves by
     ``dtau = -(h0 dz + h1 dtheta) / h2`` and the state after the impact by
     ``D (B dz + E' dtheta + X' dtau)``.
@@ -581,7 +585,7 @@ def _flight_jacobian(tr, pcol, rate, D, j, n_start, n_end, omega, G):
     _apply_matrix(D, B, DB)
     row = 0
     for r in range(m):
-        if r == j:
+        if r == j_end:
             continue
         for c in range(m):
             G[row, c] = DB[r, c]
@@ -720,20 +724,42 @@ def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, s
 
 
 @_jit
-def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, j,
-                  normal, two_sided, b, b_low, normals, matrices, phases, taus, starts,
-                  transitions, pcols, rates, checks):
+def _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
+                    normal, sign, position, X0, theta, tau):
+    """Eq. (16) on one flight against one stop met with ``sign s' > 0`` at ``s = position``
+    (``s = n . x``): ``(gap, time, capped)``, ``gap = sign (position - s)`` at the extremum
+    of ``s`` nearest the stop (``+inf`` and time NaN where there is none)."""
+    ww, aa, u0, Gam, B, dy, dv, level, pg, pd, p1 = _search_inputs(
+        general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, normal, X0,
+        theta)
+    times, capped = time_grid(ww, aa, u0, omega, tau)
+    free = drift_on_grid(times, pg, pd, p1, free_on_grid(times, ww, aa, u0, dy, dv))
+    cw = np.cos(omega * times)
+    sw = np.sin(omega * times)
+    work = np.empty((WORK_ROWS, 2 * times.size))
+    top, t_top = stop_maximum(times, free, cw, sw, sign * Gam, sign * B, omega, theta, sign,
+                              ww, aa, u0, dy, dv, pg, pd, p1, work, np.nan)
+    return sign * position - top - sign * level, t_top, capped
+
+
+@_jit
+def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
+                  pivots, normal, two_sided, b, b_low, normals, matrices, phases, taus, starts,
+                  transitions, pcols, rates, checks, extra_normals, extra_signs,
+                  extra_positions):
     """Per-flight ``G_k``, their product G, its multipliers and the contact check (eq. 16).
 
-    ``normal``: the stop coordinate of the contact check (both stops); ``normals``,
-    ``matrices``: those of each impact (:func:`shooting_system`).
+    ``normal``: the stop coordinate of the contact check (both stops U, L); ``normals``,
+    ``matrices``, ``pivots``: those of each impact (:func:`shooting_system`);
+    ``extra_normals`` (q, n), ``extra_signs``, ``extra_positions`` (q,): the further stops
+    (on other coordinates), each flight checked against every one of them as well.
 
     Returns
     -------
     tuple
         ``(jacobians (p, 2n, 2n), h2 (p,), G, multipliers (largest modulus first; NaN
         when G is not finite), gap_upper, time_upper, gap_lower, time_lower (each
-        (p,)), capped)``: the gaps are those of
+        (p,)), gap_extra, time_extra (each (p, q)), capped)``: the gaps are those of
         :func:`impactcont.simulate.contact.flight_clearances` (NaN when ``checks`` is
         False, ``+inf`` when the flight time is not positive), ``capped`` whether a
         search grid was capped.
@@ -746,8 +772,8 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
     tmp = np.empty((m, m))
     for k in range(p):
         nxt = (k + 1) % p
-        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], matrices[nxt], j,
-                                 normals[k], normals[nxt], omega, jacs[k])
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], matrices[nxt], pivots[k],
+                                 pivots[nxt], normals[k], normals[nxt], omega, jacs[k])
         for r in range(m):
             for c in range(m):
                 s = 0.0
@@ -760,13 +786,26 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
     t_u = np.full(p, np.nan)
     gap_l = np.full(p, np.nan)
     t_l = np.full(p, np.nan)
+    q = extra_signs.size
+    gap_x = np.full((p, q), np.nan)
+    t_x = np.full((p, q), np.nan)
     capped = False
     if checks:
         for k in range(p):
             if not taus[k] > 0.0:
                 gap_u[k] = np.inf
                 gap_l[k] = np.inf
+                for i in range(q):
+                    gap_x[k, i] = np.inf
                 continue
+            for i in range(q):
+                gx, tx, cap = _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
+                                              lam, V, Vi, Z, st, omega, extra_normals[i],
+                                              extra_signs[i], extra_positions[i], starts[k],
+                                              phases[k], taus[k])
+                gap_x[k, i] = gx
+                t_x[k, i] = tx
+                capped = capped or cap
             gu, tu, gl, tl, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
                                               lam, V, Vi, Z, st, omega, normal, two_sided, b,
                                               b_low, starts[k], phases[k], taus[k])
@@ -775,7 +814,7 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
             gap_l[k] = gl
             t_l[k] = tl
             capped = capped or cap
-    return jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, capped
+    return jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, gap_x, t_x, capped
 
 
 @_jit

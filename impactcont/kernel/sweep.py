@@ -67,11 +67,11 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
     """
     if not symmetric:
         return shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                               2.0 * math.pi * N / omega, j, normals, positions, matrices, x,
-                               want_jacobian)
+                               2.0 * math.pi * N / omega, np.full(positions.size, j), normals,
+                               positions, matrices, x, want_jacobian)
     out = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                          math.pi * N / omega, j, normals, positions, matrices, x,
-                          want_jacobian)
+                          math.pi * N / omega, np.full(positions.size, j), normals,
+                          positions, matrices, x, want_jacobian)
     h = positions.size
     m = matrices.shape[1]
     n = m // 2
@@ -161,7 +161,7 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     tmp = np.empty((m, m))
     for k in range(flights):
         nxt = (k + 1) % p
-        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], full_matrices[nxt], j,
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], full_matrices[nxt], j, j,
                                  full_normals[k], full_normals[nxt], omega, jac)
         for r in range(m):
             for c in range(m):

@@ -63,7 +63,7 @@ from impactcont.orbit.periodic import (
     PeriodicOrbit,
     _check_N,
 )
-from impactcont.orbit.stop_geometry import StopGeometry, stop_geometry, stop_sign
+from impactcont.orbit.stop_geometry import StopGeometry, stop_geometry
 
 __all__ = [
     "MultiImpactOrbit",
@@ -138,7 +138,8 @@ class MultiImpactOrbit:
     flight_gap_min : ndarray, shape (p,)
         Smallest clearance on flight k at the interior extrema of ``x_j`` (eq. 16):
         ``b - x_j`` at its maxima and, with a lower stop, ``x_j + b_low`` at its
-        minima; ``+inf`` when there is none.
+        minima; ``+inf`` when there is none. With stops on several coordinates
+        (``stops.extra``) the smallest over every stop (each on its own coordinate).
     flight_gap_min_times : ndarray, shape (p,)
         Time of that extremum after impact k (NaN when there is none).
     jacobians : ndarray, shape (p, 2n, 2n)
@@ -169,6 +170,10 @@ class MultiImpactOrbit:
         :func:`shooting_accuracy`: ``|J^-1 r| + cond eps max(1, |u|)``.
         :func:`multi_impact_orbit` fills both and warns when the error exceeds 1e-6
         relative; NaN when not computed (:func:`orbit_from_unknowns`, branch points).
+    flight_gap_stops : str
+        The stop nearest each flight (whose clearance is ``flight_gap_min``): ``"U"``,
+        ``"L"`` or an extra stop's name, length p ("" when contact was not checked); the
+        stop a grazing point grazes.
     """
 
     oscillator: ImpactOscillator
@@ -190,6 +195,7 @@ class MultiImpactOrbit:
     flight_gap_lower: np.ndarray | None = None
     condition_number: float = math.nan
     error_estimate: float = math.nan
+    flight_gap_stops: str = ""
 
     # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
     @property
@@ -230,8 +236,9 @@ class MultiImpactOrbit:
     @property
     def unknowns(self) -> np.ndarray:
         """The shooting unknowns ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``, (2np,)."""
-        z = np.delete(self.states, self.oscillator.stops.index, axis=1)
-        return np.concatenate([[self.delta], self.flight_times[:-1], z.ravel()])
+        pivots = stop_geometry(self.oscillator, self.pattern or UPPER * self.p).pivots
+        return np.concatenate([[self.delta], self.flight_times[:-1],
+                               _section_unknowns(self.states, pivots)])
 
     @property
     def gap_lower(self) -> float:
@@ -375,7 +382,7 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
                              f"p={p}; got shape {x.shape}")
     arrays = flow.shooting_arrays()
     out = _kernel().shooting_system(*arrays[:12], flow.static_arrays(), osc.omega,
-                                    TWO_PI * N / osc.omega, geo.pivot, geo.normals,
+                                    TWO_PI * N / osc.omega, geo.pivots, geo.normals,
                                     geo.positions, geo.matrices, _writable(x), jacobian)
     return _as_shooting(out, jacobian)
 
@@ -396,9 +403,9 @@ def _writable(a: np.ndarray) -> np.ndarray:
     return np.array(a, dtype=float, order="C")
 
 
-def _signs(pattern: str) -> np.ndarray:
-    """:func:`stop_sign` of each impact of `pattern`."""
-    return np.array([stop_sign(s) for s in pattern])
+def _section_unknowns(states: np.ndarray, pivots: np.ndarray) -> np.ndarray:
+    """``z_0..z_{p-1}`` flattened: each ``X_k`` without its pivot ``x_{j_k}``."""
+    return np.concatenate([np.delete(X, j) for X, j in zip(states, pivots, strict=True)])
 
 
 def _geometry(flow: Flow, pattern: str) -> StopGeometry:
@@ -606,8 +613,8 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
         pattern = gpat
     if pattern is None:
         pattern = UPPER * p
-    z = np.delete(states, osc.stops.index, axis=1)
-    return np.concatenate([[delta], taus[:-1], z.ravel()]), pattern
+    pivots = stop_geometry(osc, pattern).pivots
+    return np.concatenate([[delta], taus[:-1], _section_unknowns(states, pivots)]), pattern
 
 
 def unknowns_scale(u: np.ndarray) -> float:
@@ -701,7 +708,7 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
                              f"n={osc.n}, p={p}; got shape {x0.shape}")
     arrays = flow.shooting_arrays()
     u, status, it, norm, step_norm, out = _kernel().newton_solve(
-        *arrays[:12], flow.static_arrays(), osc.omega, TWO_PI * N / osc.omega, geo.pivot,
+        *arrays[:12], flow.static_arrays(), osc.omega, TWO_PI * N / osc.omega, geo.pivots,
         geo.normals, geo.positions, geo.matrices, x0, float(tol), int(max_iter))
     sh = _as_shooting(out, True)
     if status == 0:
@@ -762,40 +769,48 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     validated), with the accuracy of the solution when known."""
     osc = flow.osc
     geo = _geometry(flow, pattern)
-    j = geo.pivot
     arrays = flow.shooting_arrays()
-    jacs, h2, G, multipliers, gaps, gap_times, gaps_low, times_low, capped = (
-        _kernel().motion_checks(
+    (jacs, h2, G, multipliers, gaps, gap_times, gaps_low, times_low, gaps_x, times_x,
+     capped) = _kernel().motion_checks(
             *arrays[:5], *arrays[6:8], *arrays[12:16], *arrays[8:12], flow.static_arrays(),
-            osc.omega, j,
+            osc.omega, geo.pivots,
             geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.matrices,
             *(_writable(a) for a in (
                 sh.phases, sh.flight_times, sh.starts, sh.transitions, sh.phase_columns,
-                sh.arrival_rates)), checks))
+                sh.arrival_rates)), checks, geo.extra_normals, geo.extra_signs,
+            geo.extra_positions)
     if capped:
         warnings.warn(f"{_coordinate(geo.normal)} search grid capped at 2000000 cells on a "
                       f"flight of the N={N}, p={p} motion: a short excursion past a stop "
                       "(eq. 16) may be missed",
                       UnresolvedMotionWarning, stacklevel=2)
     reasons = []
+    nearest = [UPPER] * p
     if not checks:
         reasons.append("interior contact not checked")
     for k in range(p):
         tau = float(sh.flight_times[k])
         if not tau > 0:
             reasons.append(f"flight {k} has duration {tau:.3g} <= 0")
-        elif checks and gaps_low[k] < gaps[k]:  # the nearer stop's clearance and its time
-            gaps[k], gap_times[k] = gaps_low[k], times_low[k]
+        elif checks:
+            for i, s in enumerate((LOWER, *geo.extra_names)):  # the nearest stop's gap, time
+                gap, when = (gaps_low[k], times_low[k]) if i == 0 else (gaps_x[k, i - 1],
+                                                                        times_x[k, i - 1])
+                if gap < gaps[k]:
+                    gaps[k], gap_times[k], nearest[k] = gap, when, s
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
-    velocities = h2[np.arange(-1, p - 1)] * _signs(pattern)
-    mass = _coordinate(geo.normal)
+    velocities = h2[np.arange(-1, p - 1)] * geo.signs
     for k in range(p):
         if not velocities[k] > 0:
-            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, {mass} does "
-                           f"not arrive towards the {'upper' if pattern[k] == UPPER else 'lower'}"
-                           " stop")
+            side = {UPPER: "the upper stop", LOWER: "the lower stop"}.get(
+                pattern[k], f"stop {pattern[k]!r}")
+            reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, "
+                           f"{_coordinate(geo.normals[k])} does not arrive towards {side}")
         if checks and not gaps[k] > 0:
-            reasons.append(f"flight {k}: {mass} reaches a stop inside the flight (gap_min="
+            who = (_coordinate(geo.normal) if nearest[k] in (UPPER, LOWER)
+                   else f"{_coordinate(geo.extra_normals[geo.extra_names.index(nearest[k])])}"
+                   f" (stop {nearest[k]!r})")
+            reasons.append(f"flight {k}: {who} reaches a stop inside the flight (gap_min="
                            f"{gaps[k]:.3g} at t={gap_times[k]:.6g})")
     phases = np.array([_wrap(float(t)) for t in sh.phases])
     states = sh.starts.copy()
@@ -806,7 +821,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         physical=not reasons, reason="; ".join(reasons),
         residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
         flight_gap_lower=gaps_low, condition_number=condition_number,
-        error_estimate=error_estimate)
+        error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "")
 
 
 def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,

@@ -1,6 +1,6 @@
 """Where the stops are and how they act: the geometry shared by the orbit code and the simulator.
 
-Both stops of an oscillator act on one stop coordinate ``s = n . x`` (``osc.stops``,
+The stops U and L of an oscillator act on one stop coordinate ``s = n . x`` (``osc.stops``,
 :mod:`impactcont.model.stops`): ``n = e_j`` for a stop on mass ``j`` (the paper's
 ``x1``), ``n = e_j - e_k`` for a clearance between masses ``j`` and ``k``. The upper
 stop ``s = b`` is met moving up (``s' > 0``, restitution ``R``) and, when present, the
@@ -10,6 +10,11 @@ for two masses momentum is conserved and the restitution acts on ``s'``). Both t
 shooting of N-p motions (:mod:`impactcont.orbit.multi_impact`) and the event-driven
 simulator (:mod:`impactcont.simulate`, the independent witness) use these facts, so
 they live here, below both.
+
+Further stops on other coordinates (``osc.stops.extra``, e.g. a stop above mass 2 besides
+``U`` above mass 1) are read through :meth:`~impactcont.model.stops.Stops.stop`: each impact
+of a pattern has its own normal, sign, position, jump and pivot (its own mass), and every
+flight is checked against every stop (:attr:`StopGeometry.extra_normals`).
 """
 
 from __future__ import annotations
@@ -21,13 +26,19 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import UPPER
+from impactcont.model.stops import LOWER, UPPER
 
 __all__ = ["StopGeometry", "stop_geometry", "stop_sign"]
 
 
 def stop_sign(stop: str) -> float:
-    """``+1`` for the upper stop (met moving up), ``-1`` for the lower (met moving down)."""
+    """``+1`` for the upper stop (met moving up), ``-1`` for the lower (met moving down).
+
+    For the stops U and L only; an extra stop's sign is its side
+    (:meth:`~impactcont.model.stops.Stops.stop`, :attr:`StopGeometry.signs`)."""
+    if stop not in (UPPER, LOWER):
+        raise ParameterError(f"stop_sign knows the stops 'U' and 'L'; got {stop!r} (an extra "
+                             "stop's sign is its side: Stops.stop(name, ...).sign)")
     return 1.0 if stop == UPPER else -1.0
 
 
@@ -37,9 +48,9 @@ class StopGeometry:
 
     Attributes
     ----------
-    pivot : int
-        0-based index ``j`` of the position eliminated on the impact section
-        ``n . x = c`` (the stop's own mass, ``n_j = 1``): the shooting unknowns ``z_k``
+    pivots : ndarray, shape (p,), int
+        0-based index ``j_k`` of the position eliminated on the section ``n_k . x = c_k``
+        of impact k (the stop's own mass, ``n_j = 1``): the shooting unknowns ``z_k``
         are ``X_k`` without ``x_j``, and ``x_j = (c_k - sum_{i != j} n_i x_i) / n_j``.
     normals : ndarray, shape (p, n)
         Normal ``n`` of the stop coordinate of each impact.
@@ -58,9 +69,15 @@ class StopGeometry:
         ``-`` lower stop position (0 without a lower stop).
     two_sided : bool
         A lower stop is present.
+    extra_normals : ndarray, shape (q, n)
+        Normals of the further stops (``osc.stops.extra``), checked on every flight.
+    extra_signs, extra_positions : ndarray, shape (q,)
+        Their sides (``+1``/``-1``) and positions ``c`` (``s = c``).
+    extra_names : str
+        Their names, in that order.
     """
 
-    pivot: int
+    pivots: np.ndarray
     normals: np.ndarray
     signs: np.ndarray
     positions: np.ndarray
@@ -69,6 +86,27 @@ class StopGeometry:
     b: float
     b_low: float
     two_sided: bool
+    extra_normals: np.ndarray
+    extra_signs: np.ndarray
+    extra_positions: np.ndarray
+    extra_names: str
+
+    @property
+    def pivot(self) -> int:
+        """The pivot shared by every impact (stops of one coordinate's mass).
+
+        Raises
+        ------
+        ParameterError
+            When the impacts hit stops of different masses (several stop coordinates): a
+            path that assumes one pivot does not handle them yet.
+        """
+        if np.any(self.pivots != self.pivots[0]):
+            raise ParameterError("not yet several stop coordinates: the impacts of this "
+                                 "motion hit stops of different masses (pivots "
+                                 f"{(self.pivots + 1).tolist()}); this path handles the "
+                                 "stops of one coordinate only")
+        return int(self.pivots[0])
 
 
 def _normal(osc: ImpactOscillator) -> np.ndarray:
@@ -120,10 +158,6 @@ _GEOMETRIES: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, StopGeometry]
 
 def _stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
     stops = osc.stops
-    if getattr(stops, "extra", ()):
-        raise ParameterError(f"the shooting of N-p motions handles the stops of one coordinate "
-                             f"(U, L) only, not yet several stop coordinates; got stops="
-                             f"{stops!r}. The simulator (impactcont.simulate) follows them all")
     n, p = osc.n, len(pattern)
     normal = _normal(osc)
     j = stops.index
@@ -131,21 +165,36 @@ def _stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
         raise ParameterError(f"the stop coordinate n . x with n={normal.tolist()} does not "
                              f"involve mass {j + 1} (stops.mass): the section n . x = c "
                              "cannot be solved for its position")
-    positions = np.array([stops.position(s, osc.b) for s in pattern], dtype=float)
+    extra = tuple(getattr(stops, "extra", ()))
+    views = {}
+    for s in pattern:
+        if s not in views:
+            if s in (UPPER, LOWER):  # the one-coordinate stops, as before
+                r = stops.restitution(s, osc.R)
+                views[s] = (normal, stop_sign(s), stops.position(s, osc.b),
+                            _velocity_jump(osc, r), j)
+            else:
+                v = stops.stop(s, osc.M, osc.b, osc.R)
+                views[s] = (v.normal, v.sign, v.position, v.jump, v.pivot)
     matrices = np.zeros((p, 2 * n, 2 * n))
-    jumps = {}
     for k, s in enumerate(pattern):
-        if s not in jumps:
-            jumps[s] = _velocity_jump(osc, stops.restitution(s, osc.R))
         matrices[k, :n, :n] = np.eye(n)
-        matrices[k, n:, n:] = jumps[s]
+        matrices[k, n:, n:] = views[s][3]
+    extras = [stops.stop(e.name, osc.M, osc.b, osc.R) for e in extra]
     two_sided = bool(stops.two_sided)
-    geometry = StopGeometry(pivot=j, normals=np.tile(normal, (p, 1)),
-                            signs=np.array([stop_sign(s) for s in pattern]),
-                            positions=positions, matrices=matrices, normal=normal,
-                            b=float(osc.b), b_low=float(stops.b_low) if two_sided else 0.0,
-                            two_sided=two_sided)
-    for array in (geometry.normals, geometry.signs, geometry.positions, geometry.matrices,
-                  geometry.normal):
+    geometry = StopGeometry(
+        pivots=np.array([views[s][4] for s in pattern], dtype=np.int64),
+        normals=np.array([views[s][0] for s in pattern], dtype=float).reshape(p, n),
+        signs=np.array([views[s][1] for s in pattern], dtype=float),
+        positions=np.array([views[s][2] for s in pattern], dtype=float),
+        matrices=matrices, normal=normal,
+        b=float(osc.b), b_low=float(stops.b_low) if two_sided else 0.0, two_sided=two_sided,
+        extra_normals=np.array([v.normal for v in extras], dtype=float).reshape(len(extras), n),
+        extra_signs=np.array([v.sign for v in extras], dtype=float),
+        extra_positions=np.array([v.position for v in extras], dtype=float),
+        extra_names="".join(e.name for e in extra))
+    for array in (geometry.pivots, geometry.normals, geometry.signs, geometry.positions,
+                  geometry.matrices, geometry.normal, geometry.extra_normals,
+                  geometry.extra_signs, geometry.extra_positions):
         array.flags.writeable = False
     return geometry
