@@ -109,6 +109,10 @@ def test_simulator_meets_both_stops_with_each_stops_law():
 def test_simulator_refuses_a_start_beyond_an_extra_stop():
     with pytest.raises(ParameterError, match=r"x2 = 0\.7.*beyond stop 'A'"):
         ic.simulate(_wagg(), [0.0, 0.7, 0.0, 0.0], 0.0, 1.0)
+    from impactcont.simulate.simulator import next_impact
+
+    with pytest.raises(ParameterError, match=r"follows one stop.*\['U', 'A'\]"):
+        next_impact(Flow(_wagg()), np.zeros(4), 0.0, 10.0)
 
 
 
@@ -198,3 +202,4 @@ def test_a_map_of_several_stop_coordinates_is_refused_for_now(two_mass_motion):
     with pytest.raises(ParameterError, match="not yet: several stop coordinates"):
         ic.multi_impact_map(two_mass_motion, ("omega", "b"),
                             {"omega": [0.79, 0.8], "b": [0.3, 0.31]})
+

@@ -154,9 +154,10 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     """
     stops = flow.osc.stops
     if len(stops.names) > 1:
-        raise ParameterError(f"next_impact follows one stop; the oscillator has two (stops="
-                             f"{stops!r}): use impactcont.simulate.contact.next_contact, which "
-                             "also returns the stop hit ('U' or 'L')")
+        raise ParameterError(f"next_impact follows one stop; the oscillator has "
+                             f"{len(stops.names)} ({list(stops.names)}, stops={stops!r}): use "
+                             "impactcont.simulate.contact.next_contact, which also returns the "
+                             "stop hit (its name)")
     hit = next_contact(flow, X, phase, t_max, after={UPPER: after})
     return None if hit is None else (hit[0], hit[1])
 
