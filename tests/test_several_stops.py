@@ -7,12 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_static_force import _ivp
 
 import impactcont as ic
+from impactcont.dataset import oscillator_from_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stop, Stops, check_pattern
 from impactcont.orbit.flow import Flow
-from tests.test_static_force import _ivp
 
 M = np.eye(2)
 K = np.array([[2.0, -1.0], [-1.0, 1.0]])  # a chain: wall - k - m1 - k - m2
@@ -203,3 +204,45 @@ def test_a_map_of_several_stop_coordinates_is_refused_for_now(two_mass_motion):
         ic.multi_impact_map(two_mass_motion, ("omega", "b"),
                             {"omega": [0.79, 0.8], "b": [0.3, 0.31]})
 
+
+
+def test_a_branch_of_a_motion_on_two_masses_is_stored_and_loaded(two_mass_motion, tmp_path):
+    # the dataset's pattern names the extra stop ("A"): it was refused as not U/L
+    branch = ic.multi_impact_continuation(two_mass_motion, "omega", (0.75, 0.85),
+                                          max_points=15)
+    assert set(branch.attrs["pattern"]) == set(two_mass_motion.pattern)
+    ic.save(branch, tmp_path / "b.nc")
+    back = ic.load(tmp_path / "b.nc")
+    assert back.attrs["pattern"] == branch.attrs["pattern"]
+    osc = oscillator_from_dataset(back, 0)
+    assert [s.name for s in osc.stops.extra] == ["A"]
+
+
+def test_extra_stops_do_not_move_with_the_lower_stop_and_break_the_mirror():
+    from impactcont.model.parameters import model_parameter
+    from impactcont.orbit.symmetry import symmetric_system
+
+    mirrored = ic.ImpactOscillator(M=M, K=K, F=[1.0, 0.0], R=0.6, b=0.5, omega=0.8, eta=0.05,
+                                   stops=ic.Stops(mirror=True, extra=(
+                                       ic.Stop(name="A", mass=2, gap=0.7, restitution=0.5),)))
+    assert not symmetric_system(mirrored)
+    rates = model_parameter(mirrored, "b").stop_rates("ULA")
+    np.testing.assert_array_equal(rates, [1.0, -1.0, 0.0])
+
+
+def test_extra_stops_in_a_scene(tmp_path):
+    from impactcont.scene import SceneError, load_scene
+
+    table = ('[oscillator]\nK = [[2.0, -1.0], [-1.0, 1.0]]\nF = [1.0, 0.0]\nR = 0.8\n'
+             'b = 0.3\nomega = 0.8\neta = 0.05\n'
+             'extra_stops = [{ name = "A", mass = 2, gap = 0.6, restitution = 0.7 }]\n'
+             '[[simulations]]\nstart = "state"\nstate = [0.0, 0.0, 0.0, 0.0]\ndelta = 0.0\n'
+             'periods = 2\n')
+    path = tmp_path / "scene.toml"
+    path.write_text(table, encoding="utf-8")
+    osc = load_scene(path).oscillator.build()
+    assert osc.stops == _wagg().stops
+    path.write_text(table.replace('name = "A"', 'name = "U"'), encoding="utf-8")
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert "extra_stops" in info.value.key

@@ -512,10 +512,13 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
         raise NoPeriodicMotionError("the motion has no interior maximum of x1: it does not graze")
     osc = orbit.oscillator
     pattern = orbit.pattern or "U" * orbit.p
-    # the stop grazed: the lower one when its clearance is the smallest (two stops)
-    lower = orbit.flight_gap_lower is not None and \
-        orbit.flight_gap_lower[k] == orbit.flight_gap_min[k]
-    stop = "L" if lower else "U"
+    # the stop grazed: the one nearest in that flight (any stop, extra ones included)
+    if len(orbit.flight_gap_stops) == orbit.p:
+        stop = orbit.flight_gap_stops[k]
+    else:  # not recorded: the lower one when its clearance is the smallest (two stops)
+        lower = orbit.flight_gap_lower is not None and \
+            orbit.flight_gap_lower[k] == orbit.flight_gap_min[k]
+        stop = "L" if lower else "U"
     geo = stop_geometry(osc, stop)
     j, normal = geo.pivot, geo.normal
     X = Flow(osc).state(t_g, orbit.states[k], orbit.phases[k])[0]

@@ -222,7 +222,7 @@ def impacts_attribute(ds: xr.Dataset) -> int:
 
 
 def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
-                            name: str = "pattern") -> str:
+                            name: str = "pattern", extra: str = "") -> str:
     """The impact pattern of an N-p branch: ``p`` letters, the stop of each impact.
 
     Parameters
@@ -235,6 +235,8 @@ def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
         Whether the dataset's oscillator has a lower stop (None: unknown).
     name : str
         The attribute, for the message.
+    extra : str
+        The names of the oscillator's extra stops (:class:`~impactcont.model.stops.Stop`).
 
     Returns
     -------
@@ -249,16 +251,25 @@ def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
     letters = (UPPER, LOWER) if two_sided is not False else (UPPER,)
     stops = " and ".join(f"{s!r} ({w} stop)" for s, w in zip(letters, ("upper", "lower"),
                                                                strict=False))
+    if extra:
+        stops += "".join(f", {s!r}" for s in extra) + " (extra stops)"
     allowed = (f"{p} letter{'s' if p != 1 else ''} (one per impact) from {stops}"
                + ("" if two_sided is not False else ": the oscillator has no lower stop"))
-    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - set(letters):
+    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - set(letters) - set(
+            extra):
         raise _refused(name, pattern, allowed)
     return pattern
 
 
+def extra_stop_names(osc: ImpactOscillator) -> str:
+    """The names of `osc`'s extra stops (beyond the upper and the lower one), as a string."""
+    return "".join(stop.name for stop in getattr(osc.stops, "extra", ()))
+
+
 def _impact_stops(value: Any, ds: xr.Dataset, osc: ImpactOscillator | None) -> None:
     check_pattern_attribute(value, ds.sizes.get("impact", 0),
-                            None if osc is None else osc.stops.two_sided, "impact_stops")
+                            None if osc is None else osc.stops.two_sided, "impact_stops",
+                            "" if osc is None else extra_stop_names(osc))
 
 
 def _parameter(value: Any, ds: xr.Dataset, osc: Any) -> None:
@@ -446,7 +457,8 @@ _CHECKS: dict[str, Callable[[Any, xr.Dataset, Any], Any]] = {
     "options": lambda v, ds, osc: _json_object("options", v),
     "impacts": lambda v, ds, osc: impacts_attribute(ds),
     "pattern": lambda v, ds, osc: check_pattern_attribute(
-        v, impacts_attribute(ds), None if osc is None else osc.stops.two_sided),
+        v, impacts_attribute(ds), None if osc is None else osc.stops.two_sided,
+        extra="" if osc is None else extra_stop_names(osc)),
     "vary": _vary,
     "nominal": _nominal,
     "argmax": lambda v, ds, osc: _json_object("argmax", v),

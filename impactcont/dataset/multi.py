@@ -31,6 +31,7 @@ import xarray as xr
 
 from impactcont.dataset.attributes import (
     check_pattern_attribute,
+    extra_stop_names,
     impacts_attribute,
     oscillator_attribute,
 )
@@ -95,7 +96,11 @@ def pattern_of(ds: xr.Dataset) -> str:
     p = impacts_of(ds)
     if "pattern" not in ds.attrs:
         return UPPER * p
-    return check_pattern_attribute(ds.attrs["pattern"], p, _two_sided(ds))
+    try:
+        extra = extra_stop_names(oscillator_attribute(ds))
+    except ValueError:
+        extra = ""
+    return check_pattern_attribute(ds.attrs["pattern"], p, _two_sided(ds), extra=extra)
 
 
 def _impact_array(key: str, value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
@@ -185,7 +190,8 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                                    "one of delta and state."}))
     ds.attrs["impacts"] = int(p)
     pattern = UPPER * int(p) if pattern is None else pattern
-    ds.attrs["pattern"] = check_pattern_attribute(pattern, int(p), oscillator.stops.two_sided)
+    ds.attrs["pattern"] = check_pattern_attribute(pattern, int(p), oscillator.stops.two_sided,
+                                                  extra=extra_stop_names(oscillator))
     for key, value in (extra_attrs or {}).items():
         if not isinstance(value, (str, int, float, np.integer, np.floating)) \
                 or isinstance(value, bool):

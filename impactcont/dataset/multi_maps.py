@@ -27,7 +27,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.dataset.attributes import check_pattern_attribute, dataset_tag, split_parameters
+from impactcont.dataset.attributes import (
+    check_pattern_attribute,
+    dataset_tag,
+    extra_stop_names,
+    split_parameters,
+)
 from impactcont.dataset.schema import (
     PARAMETERS,
     _options_json,
@@ -202,7 +207,8 @@ def validate_multi_impact_map_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"attribute 'impacts' must be p >= 1, the size of dimension 'impact' "
                          f"({ds.sizes.get('impact')}); got {p!r}")
     osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
-    check_pattern_attribute(ds.attrs["pattern"], int(p), osc.stops.two_sided)
+    check_pattern_attribute(ds.attrs["pattern"], int(p), osc.stops.two_sided,
+                            extra=extra_stop_names(osc))
     check_variables(ds, {key: (_dims(parameters, spec), spec.kind)
                          for key, spec in MULTI_MAP_VARIABLES.items()
                          if key not in _OPTIONAL or key in ds.variables}, MULTI_MAP_KIND)

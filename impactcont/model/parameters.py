@@ -34,7 +34,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.modal import decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import UPPER
+from impactcont.model.stops import LOWER, UPPER
 from impactcont.vocabulary import (
     CONTINUABLE_PARAMETERS,
     ELEMENT_FAMILIES,
@@ -139,8 +139,10 @@ class ModelParameter:
         return True
 
     def stop_rates(self, pattern: str) -> np.ndarray:
-        """:attr:`upper` or :attr:`lower` for the stop of each impact of `pattern`, (p,)."""
-        return np.array([self.upper if s == UPPER else self.lower for s in pattern])
+        """:attr:`upper` or :attr:`lower` for the stop of each impact of `pattern` (0 for an
+        extra stop, :class:`~impactcont.model.stops.Stop`), (p,)."""
+        return np.array([self.upper if s == UPPER else self.lower if s == LOWER else 0.0
+                         for s in pattern])  # an extra stop does not move with them
 
     def clearance_limit(self, osc: ImpactOscillator) -> float:
         """The value at which the clearance ``b + b_low`` between two stops closes (GAP

@@ -76,7 +76,7 @@ def symmetric_system(osc: ImpactOscillator) -> bool:
     """
     stops = osc.stops
     return bool(stops.two_sided and stops.b_low == osc.b and stops.R_low == osc.R
-                and not np.any(osc.F_static))
+                and not np.any(osc.F_static) and not getattr(stops, "extra", ()))
 
 
 def admits_symmetric_motions(osc: ImpactOscillator, N: int, p: int, pattern: str) -> bool:

@@ -25,7 +25,7 @@ from impactcont.analysis.branch import check_continuation_arguments, continuatio
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
-from impactcont.model.stops import Stops, require_paper_stops
+from impactcont.model.stops import Stop, Stops, require_paper_stops
 from impactcont.orbit.robust import check_robust_arguments, robust_stability
 from impactcont.scene.keys import (
     ENTRY_NAME,
@@ -130,7 +130,9 @@ PARAMETER_NAME = ParameterName()
 _STOPS_ERROR_KEYS = (("stops.mass", "stop_mass"), ("stops.relative_to", "stop_relative_to"),
                      ("stops.b_low", "b_low"),
                      ("stops.R_low", "R_low"), ("the lower stop", "b_low"),
-                     ("stops.mirror", "mirror_stop"), ("mirrored stops", "b"))
+                     ("stops.mirror", "mirror_stop"), ("mirrored stops", "b"),
+                     ("stops '", "extra_stops"), ("Stop '", "extra_stops"),
+                     ("stops.extra", "extra_stops"))
 
 
 def _library_error_key(message: str, keys: Iterable[str]) -> str | None:
@@ -248,6 +250,44 @@ def check_damping_keys(keys: Iterable[str], where: Where, inherited: Iterable[st
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
+class ExtraStopSpec:
+    """One table of ``extra_stops``: a stop on a further coordinate
+    (:class:`~impactcont.model.stops.Stop`)."""
+
+    name: str = declare(String(), "one letter naming the stop in impact patterns (not U, L)",
+                        required=True)
+    mass: int = declare(Integer(1), "the mass the stop acts on (1-based)", required=True)
+    gap: float = declare(Real(), "the stop sits at s = side * gap", required=True)
+    restitution: float = declare(_RESTITUTION, "restitution of this stop", required=True)
+    side: int = declare(Integer(choices=(1, -1)), "+1: met moving up at s = gap; -1: met "
+                        "moving down at s = -gap", 1)
+    relative_to: int | None = declare(Integer(1), "a stop between two masses: s = x_mass - "
+                                      "x_relative_to")
+
+
+class _ExtraStops(ValueType):
+    """``extra_stops``: an array of tables, each a :class:`ExtraStopSpec`."""
+
+    allowed = ("an array of tables with keys name, mass, gap, restitution (required), side, "
+               "relative_to")
+
+    def check(self, value: Any, where: Where) -> tuple[Stop, ...]:
+        if not isinstance(value, list):
+            raise self.fail(value, where, "wrong type")
+        out = []
+        for i, raw in enumerate(value):
+            here = where.item(i)
+            values = read_table(ExtraStopSpec, raw, here)
+            try:
+                out.append(Stop(**values))
+            except (ImpactcontError, ValueError, TypeError) as exc:
+                key = next((k for k in ("restitution", "relative_to", "name", "side", "gap",
+                                        "mass") if f" {k}" in str(exc)), None)
+                raise (here.key(key) if key else here).error(str(exc)) from None
+        return tuple(out)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
 class OscillatorSpec:
     """``[oscillator]``: the machine of eq. (1)-(4).
 
@@ -259,7 +299,9 @@ class OscillatorSpec:
     ``stop_mass``, ``b_low`` and ``R_low`` place the stops on another mass and add a
     lower stop (:class:`~impactcont.model.stops.Stops`); ``mirror_stop`` adds the lower
     stop as the mirror of the upper one; ``stop_relative_to`` puts both stops between two
-    masses (on ``x_j - x_k``: an impact pair, an impact damper's cavity). ``F_static`` is a
+    masses (on ``x_j - x_k``: an impact pair, an impact damper's cavity); ``extra_stops``
+    (an array of tables: name, mass, gap, restitution, side, relative_to) adds stops on
+    further coordinates (docs/machines.md, "Stops on several masses"). ``F_static`` is a
     constant force (gravity, a preload, a mean torque). K (or a spring of the chain) may
     leave a mass free when a stop holds it (docs/machines.md).
     """
@@ -290,6 +332,9 @@ class OscillatorSpec:
                                            "j = stop_mass), two-body impact law")
     F_static: tuple | None = declare(RealArray(1), "constant force vector, length n (gravity, "
                                      "a preload, a mean torque)")
+    extra_stops: tuple | None = declare(_ExtraStops(), "stops on further coordinates, each a "
+                                        "table: name, mass, gap, restitution, side (+1/-1), "
+                                        "relative_to")
 
     @classmethod
     def parse(cls, raw: Any, where: Where) -> OscillatorSpec:
@@ -324,10 +369,11 @@ class OscillatorSpec:
             F = F + 1j * np.array(self.F_imag, dtype=float)
         params = {"F": F, "R": self.R, "b": self.b, "omega": self.omega, **damping}
         if (self.stop_mass is not None or self.b_low is not None or self.R_low is not None
-                or self.mirror_stop or self.stop_relative_to is not None):
+                or self.mirror_stop or self.stop_relative_to is not None or self.extra_stops):
             params["stops"] = Stops(mass=1 if self.stop_mass is None else self.stop_mass,
                                     b_low=self.b_low, R_low=self.R_low, mirror=self.mirror_stop,
-                                    relative_to=self.stop_relative_to)
+                                    relative_to=self.stop_relative_to,
+                                    extra=self.extra_stops or ())
         if self.F_static is not None:
             params["F_static"] = np.array(self.F_static, dtype=float)
         K = (chain_stiffness(list(self.springs)) if self.springs is not None
