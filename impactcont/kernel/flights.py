@@ -21,7 +21,7 @@ import numba as nb
 import numpy as np
 from numba.extending import overload
 
-__all__ = ["forced", "mode_period", "mode_transfer", "transition"]
+__all__ = ["forced", "mode_period", "mode_transfer", "transfer_into", "transition"]
 
 _jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
@@ -172,7 +172,14 @@ def transition(modal, u, ui):
 @_jit
 def _transition_into(modal, u, ui, tr):
     """:func:`transition` into ``tr`` (2n, 2n), no allocation."""
-    n = modal.shape[1]
+    transfer_into(modal, 2, u, ui, tr)
+
+
+@_jit
+def transfer_into(W, first, u, ui, tr):
+    """``U W U^-1`` into ``tr`` (2n, 2n): the modal transfers ``W11, W12, W21, W22`` of
+    eq. (9) are the rows ``first .. first + 3`` of ``W`` (n columns, one per mode)."""
+    n = W.shape[1]
     for r in range(n):
         for col in range(n):
             s11 = 0.0
@@ -181,10 +188,10 @@ def _transition_into(modal, u, ui, tr):
             s22 = 0.0
             for i in range(n):
                 p = u[r, i] * ui[i, col]
-                s11 += p * modal[2, i]
-                s12 += p * modal[3, i]
-                s21 += p * modal[4, i]
-                s22 += p * modal[5, i]
+                s11 += p * W[first, i]
+                s12 += p * W[first + 1, i]
+                s21 += p * W[first + 2, i]
+                s22 += p * W[first + 3, i]
             tr[r, col] = s11
             tr[r, n + col] = s12
             tr[n + r, col] = s21

@@ -45,7 +45,7 @@ from impactcont.kernel.contact import (
     stop_maximum,
     time_grid,
 )
-from impactcont.kernel.flights import mode_transfer
+from impactcont.kernel.flights import mode_transfer, transfer_into
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["motion_checks", "newton_solve", "omega_partials", "shooting_system"]
@@ -88,22 +88,7 @@ def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta,
     W = np.empty((4, n))
     for i in range(n):
         W[0, i], W[1, i], W[2, i], W[3, i] = mode_transfer(w[i], a[i], t)
-    for r in range(n):
-        for c in range(n):
-            s11 = 0.0
-            s12 = 0.0
-            s21 = 0.0
-            s22 = 0.0
-            for i in range(n):
-                q = u[r, i] * ui[i, c]
-                s11 += q * W[0, i]
-                s12 += q * W[1, i]
-                s21 += q * W[2, i]
-                s22 += q * W[3, i]
-            tr[r, c] = s11
-            tr[r, n + c] = s12
-            tr[n + r, c] = s21
-            tr[n + r, n + c] = s22
+    transfer_into(W, 0, u, ui, tr)
     ct = math.cos(omega * t)
     st = math.sin(omega * t)
     c0 = math.cos(theta)
