@@ -423,6 +423,14 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
 
 
 @_jit
+def unknowns_scale(x):
+    """``max(1, |delta|, |tau|, |z|)``, Newton's tolerance scale, the phase ``x[0]`` counted
+    at most pi (the residual is 2 pi periodic in it: a phase run off to 1e14 must not
+    loosen the test); :func:`impactcont.orbit.multi_impact.unknowns_scale` in Python."""
+    return max(1.0, min(abs(x[0]), math.pi), _max_abs(x[1:]))
+
+
+@_jit
 def _max_abs(v):
     """``max |v|``, NaN when any entry is NaN (as ``np.max(np.abs(v))``)."""
     out = 0.0
@@ -490,8 +498,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
-        # the phase counts at most pi: a phase that ran off to 1e14 must not loosen the test
-        scale = max(1.0, min(abs(x[0]), math.pi), _max_abs(x[1:]))
+        scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
             return x, CONVERGED, it, norm, step_norm, sh

@@ -46,6 +46,7 @@ from impactcont.kernel.shooting import (
     _max_abs,
     _solve,
     shooting_system,
+    unknowns_scale,
 )
 from impactcont.kernel.stability import multipliers
 
@@ -108,9 +109,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
-        # the phase counts at most pi (as shooting.newton_solve: a phase run off to 1e14
-        # must not loosen the test)
-        scale = max(1.0, min(abs(x[0]), math.pi), _max_abs(x[1:]))
+        scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
             return x, True, it, sh
