@@ -53,11 +53,12 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from impactcont.kernel.contact import flight_tables, x1_maximum
 from impactcont.kernel.flights import _re, _transition_into, forced, mode_period, transition
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.roots import orbit_roots, phase_sigma
 from impactcont.kernel.stability import (
     _charpoly_in_place,
@@ -81,7 +82,6 @@ __all__ = [
     "point_orbits",
 ]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 BLAS_MIN = 32  # degrees of freedom above which G's matrix products go to BLAS (numpy)
 EAGER_JACOBIAN = 16  # G and its multipliers come with the orbit up to this size (2n)
@@ -259,7 +259,7 @@ def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
     return pieces[0], pieces[1], pieces[2], pieces[3]
 
 
-@_jit
+@_inner
 def _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces):
     """:func:`jacobian_pieces` as the rows of ``pieces`` (4, n), no allocation."""
     kappa = 1.0 + R
@@ -287,7 +287,7 @@ def assemble_jacobian(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma):
     return G, h2
 
 
-@_jit
+@_inner
 def _assemble_into(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx, G):
     """:func:`assemble_jacobian` into ``G`` with scratch ``pieces`` (4, n), ``dedx`` (2, 2n)."""
     m = 2 * modal.shape[1]
@@ -364,7 +364,7 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     return _solve_small(A, rhs)[k - 1]
 
 
-@_jit
+@_inner
 def _solve_small(A, x):
     """Solve ``A y = x`` in place (both overwritten) by Gaussian elimination with partial
     pivoting; returns ``x`` holding ``y`` (inf or NaN when A is singular)."""
@@ -391,7 +391,7 @@ def _solve_small(A, x):
     return x
 
 
-@_jit
+@_inner
 def _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx):
     """``dE`` (phase derivative of the forcing term) and ``dX`` (state derivative before
     the impact), both after the impact law, into the rows of ``dedx``; returns

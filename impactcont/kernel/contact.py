@@ -22,16 +22,16 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from impactcont.kernel.flights import mode_transfer
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
 
 __all__ = ["WORK_ROWS", "drift_on_grid", "drift_x1", "flight_tables", "free_on_grid",
            "free_x1", "other_maximum", "stop_maximum", "time_grid", "x1_derivatives",
            "x1_maximum"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 _EPS = 2.220446049250313e-16
 _CELLS_PER_PERIOD = 16
@@ -162,7 +162,7 @@ _SERIES_BELOW = 0.5  # 2 a t below which phi and psi are summed as series (no ca
 _SERIES_TERMS = 20  # enough for rounding level below _SERIES_BELOW
 
 
-@_jit
+@_inner
 def _phi_psi(x):
     """``phi(x) = 2 (x - 1 + e^-x) / x^2`` and ``psi(x) = (1 - e^-x) / x`` (both 1 at 0),
     by their series below ``_SERIES_BELOW`` (``2 sum (-x)^k / (k+2)!``, ``sum (-x)^k /
@@ -322,7 +322,7 @@ def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi, Gam, B, ome
     return x, d[0], d[1], d[2], d[3]
 
 
-@_jit
+@_inner
 def _taylor(t, h, d):
     """``t`` and x1 with its first three derivatives at ``t`` from ``d`` (x1 to its fourth)
     at ``t - h``: for the tiny last Newton step ``h`` the remainder is O(h^4) or less."""
@@ -331,7 +331,7 @@ def _taylor(t, h, d):
             d[2] + h * (d[3] + 0.5 * h * d[4]), d[3] + h * d[4])
 
 
-@_jit
+@_inner
 def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi):
     """Root in (lo, hi) of the Hermite interpolant of g (g of opposite signs at the ends).
 
@@ -417,7 +417,7 @@ def stop_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv
                     exclude, (pg, pa, p1))
 
 
-@_jit
+@_inner
 def _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude,
              drift):
     """The search of :func:`x1_maximum` and :func:`stop_maximum` (``drift``: None, or the
@@ -517,21 +517,21 @@ def _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, wo
     return best, best_t
 
 
-@_jit
+@_inner
 def _jerk(omega, ks, v, free_v, free_jerk):
     """The third derivative of x1 at a grid point from ``x1'`` there: the forced part's
     is ``-omega^2`` times its velocity ``x1' - ks free'``."""
     return ks * free_jerk - omega * omega * (v - ks * free_v)
 
 
-@_jit
+@_inner
 def _snap(omega, ks, x, free_x, free_snap):
     """The fourth derivative of x1 at a grid point from ``x1`` there: the forced part's
     is ``omega^4`` times its displacement ``x1 - ks free``."""
     return ks * free_snap + omega ** 4 * (x - ks * free_x)
 
 
-@_jit
+@_inner
 def _concave_bound(p, q, xp, xq, vp, vq):
     """An upper bound of x1 on ``[p, q]`` where it is concave (``x1'' < 0``) with
     ``x1'(p) >= 0 > x1'(q)``: the meeting point of the tangents at both ends."""
@@ -539,7 +539,7 @@ def _concave_bound(p, q, xp, xq, vp, vq):
     return xp + vp * (min(max(t, p), q) - p)
 
 
-@_jit
+@_inner
 def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, bound):
     """Record the piece ``[lo, hi]`` where x1' falls through 0 (a maximum) as candidate ``m``
     in the rows 3-11 of ``work`` with the upper bound of x1 on it (``j``: its third
@@ -556,7 +556,7 @@ def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, bound):
     return m + 1
 
 
-@_jit
+@_inner
 def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, T, Gam, B, omega, delta, ks,
           w, a, u0, dy, dv, exclude, drift):
     r, xr, _, acc, _ = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, Gam, B,

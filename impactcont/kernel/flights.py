@@ -21,9 +21,11 @@ import numba as nb
 import numpy as np
 from numba.extending import overload
 
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
+
 __all__ = ["forced", "mode_period", "mode_transfer", "transfer_into", "transition"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 _EPS = 2.220446049250313e-16
 
@@ -45,7 +47,7 @@ def _expm1_overload(x):
     return lambda x: math.expm1(x)
 
 
-@_jit
+@_inner
 def _re(x):
     return x.real
 
@@ -169,7 +171,7 @@ def transition(modal, u, ui):
     return tr
 
 
-@_jit
+@_inner
 def _transition_into(modal, u, ui, tr):
     """:func:`transition` into ``tr`` (2n, 2n), no allocation."""
     transfer_into(modal, 2, u, ui, tr)

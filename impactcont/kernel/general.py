@@ -36,6 +36,9 @@ import numba as nb
 import numpy as np
 
 from impactcont.kernel.contact import WORK_ROWS, free_on_grid, time_grid, x1_maximum
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
+from impactcont.kernel.jit import typed_entry
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["amplitude_setup", "forced_response", "forced_response_derivative",
@@ -55,7 +58,6 @@ SERIES_RADIUS = 1.0  # impactcont.model.first_order._SERIES_RADIUS
 #: ``BLAS_MIN``) :func:`periodic_setup` leaves ``D Phi(T)`` to numpy's BLAS (the caller).
 BLAS_MIN = 64
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 _f8 = nb.float64
 _f8_1 = nb.float64[::1]
@@ -67,11 +69,11 @@ _i8_1 = nb.int64[::1]
 
 def _entry(*argument_types):
     """An entry point compiled once for exactly these argument types."""
-    return nb.njit(argument_types, cache=True, nogil=True, error_model="numpy")
+    return typed_entry(argument_types)
 
 
 # -- complex scalars as numpy computes them ----------------------------------------------------
-@_jit
+@_inner
 def _cdiv(a, b):
     """``a / b`` by numpy's algorithm (Smith's), inf/NaN for ``b = 0`` instead of raising."""
     ar, ai, br, bi = a.real, a.imag, b.real, b.imag
@@ -87,7 +89,7 @@ def _cdiv(a, b):
     return complex((ar * rat + ai) * scl, (ai * rat - ar) * scl)
 
 
-@_jit
+@_inner
 def _cexpm1(x):
     """``exp(x) - 1`` of a complex x without cancellation (numpy's formula)."""
     half = math.sin(0.5 * x.imag)
@@ -95,7 +97,7 @@ def _cexpm1(x):
                    math.exp(x.real) * math.sin(x.imag))
 
 
-@_jit
+@_inner
 def _coth_remainder(x, em1):
     """``s(x) = 1/expm1(x) + 1/2 - 1/x`` and ``s'(x)``
     (:func:`impactcont.model.first_order.coth_remainder`); ``em1 = expm1(x)``."""
@@ -221,7 +223,7 @@ def forced_response_derivative(K, M, C, Z, omega):
 
 
 # -- eq. (12)-(14) at one frequency -------------------------------------------------------------
-@_jit
+@_inner
 def _transition_into(V, Vi, em1, R, DPhi):
     """``D Phi(T) = D (I + Re(V diag(expm1(lambda T)) V^-1))`` into ``DPhi``: only the real
     part, in loops over real rows that the compiler vectorises (numba's BLAS ``np.dot``
@@ -290,7 +292,7 @@ def form_rows(pieces):
             pieces[m + 6:m + 8].T, pieces[m + 8], pieces[m + 9])
 
 
-@_jit
+@_inner
 def _modal_terms(lam, Vi, T):
     """Per complex mode over the period: ``x = lambda T``, ``expm1(x)``, ``w = V^-1
     e_{n+1}``, ``s(x) w`` and ``lambda s'(x) w`` (:func:`_coth_remainder`)."""
@@ -435,7 +437,7 @@ def periodic_setup(lam, V, Vi, A, impact_column, pk, pj, Z, omega, R, T):
 
 
 # -- one motion per impact phase ----------------------------------------------------------------
-@_jit
+@_inner
 def _velocity(Gam, B, g, Delta, omega, R, b, delta, cd, sd):
     """The impact velocity from the better of its two exact forms and its relative error
     (:meth:`impactcont.orbit.general.PeriodicForm.velocity_at`)."""
@@ -473,7 +475,7 @@ def _pair_coefficients(coef, lam, pk, pj):
     return dy, dv
 
 
-@_jit
+@_inner
 def _jacobian_into(DPhi, E, rate0, rate, omega, R, h2, cd, sd, G):
     """G of eq. (25) at one phase (:func:`impactcont.orbit.general.orbit_values`)."""
     m = DPhi.shape[0]

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
+
+from impactcont.kernel.jit import entry as _jit
 
 __all__ = ["orbit_roots", "phase_sigma"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 _EPS = 2.220446049250313e-16
 

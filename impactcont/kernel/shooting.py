@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from impactcont.kernel.contact import (
@@ -46,11 +45,12 @@ from impactcont.kernel.contact import (
     time_grid,
 )
 from impactcont.kernel.flights import mode_transfer, transfer_into
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["motion_checks", "newton_solve", "omega_partials", "shooting_system"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 #: ``newton_solve`` status: converged, or stopped without convergence
 CONVERGED = 0
@@ -58,7 +58,7 @@ FAILED = 1
 
 
 # -- one flight -------------------------------------------------------------------------------
-@_jit
+@_inner
 def _static_mode(w, a, g, free, t):
     """A mode's response to the constant modal force ``g``: ``(Q, s_y, s_v)``, its state
     ``Q + W(t) (Y(0) - [Q; 0]) + [s_y; s_v]`` (:func:`impactcont.model.modal.static_response`):
@@ -78,7 +78,7 @@ def _static_mode(w, a, g, free, t):
     return 0.0, 0.5 * g * t * t * phi, g * t * psi
 
 
-@_jit
+@_inner
 def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta, tr, arr,
                   pcol, rate):
     """Flight of the modal flow: ``Phi``, ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place
@@ -167,7 +167,7 @@ def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta,
         rate[n + r] = rv
 
 
-@_jit
+@_inner
 def _flight_general(lam, V, Vi, Z, xs, xd, omega, t, X0, theta, tr, arr, pcol, rate):
     """Flight of the first-order flow: as :func:`_flight_modal` (``GeneralFlow.matrices``);
     the constant force adds ``X_s - Phi X_s + d t`` (``xs``, ``xd``: its offset and drift,
@@ -228,7 +228,7 @@ def _flight_general(lam, V, Vi, Z, xs, xd, omega, t, X0, theta, tr, arr, pcol, r
             rate[r] += xd[r]
 
 
-@_jit
+@_inner
 def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, t, X0, theta, tr,
             arr, pcol, rate):
     """One flight of either flow; ``st = (g, free, X_s, d)``: the constant force
@@ -241,7 +241,7 @@ def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, t, X0, 
 
 
 # -- the shooting system ------------------------------------------------------------------------
-@_jit
+@_inner
 def _section_starts(x, p, m, pivots, normals, positions):
     """``X_k`` from the unknowns: ``z_k`` in every component but ``x_j`` (``j = pivots[k]``,
     the stop's own mass), and ``x_j`` from the section ``n_k . x = c_k`` of impact k."""
@@ -262,7 +262,7 @@ def _section_starts(x, p, m, pivots, normals, positions):
     return starts
 
 
-@_jit
+@_inner
 def _apply(D, v, out):
     """``out = D v`` skipping the zeros of ``D`` (an impact matrix is mostly identity)."""
     m = v.size
@@ -275,7 +275,7 @@ def _apply(D, v, out):
         out[r] = s
 
 
-@_jit
+@_inner
 def _apply_matrix(D, A, out):
     """``out = D A`` skipping the zeros of ``D``."""
     m = A.shape[0]
@@ -297,7 +297,7 @@ def _apply_matrix(D, A, out):
                 out[r, c] = 0.0
 
 
-@_jit
+@_inner
 def _is_diagonal(matrices):
     """Every impact matrix is diagonal (stops on one mass: eq. 4)."""
     m = matrices.shape[1]
@@ -430,7 +430,7 @@ def unknowns_scale(x):
     return max(1.0, min(abs(x[0]), math.pi), _max_abs(x[1:]))
 
 
-@_jit
+@_inner
 def _max_abs(v):
     """``max |v|``, NaN when any entry is NaN (as ``np.max(np.abs(v))``)."""
     out = 0.0
@@ -531,7 +531,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
 
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
-@_jit
+@_inner
 def _flight_jacobian(tr, pcol, rate, D, j, j_end, n_start, n_end, omega, G):
     """``G_k`` of eq. (25) into ``G`` (as ``multi_impact.flight_jacobian``); returns
     ``h2 = n_end . x'(tau^-)``, the arrival velocity of the stop coordinate.
@@ -588,7 +588,7 @@ def _flight_jacobian(tr, pcol, rate, D, j, j_end, n_start, n_end, omega, G):
     return h2
 
 
-@_jit
+@_inner
 def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
                    normal, X0, theta):
     """``(w, a, weights, Gamma, B, dy, dv, level, pg, pd, p1)`` of ``s = n . x`` along a
@@ -688,7 +688,7 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
     return w, a, u0, Gam, B, dy, dv, level, pg, pd, 0.0
 
 
-@_jit
+@_inner
 def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
                 normal, two_sided, b, b_low, X0, theta, tau):
     """Eq. (16) on one flight against both stops of ``s = n . x``: ``(gap_upper,
@@ -715,7 +715,7 @@ def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, s
     return b - top - level, t_top, gap_l, t_l, capped
 
 
-@_jit
+@_inner
 def _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
                     normal, sign, position, X0, theta, tau):
     """Eq. (16) on one flight against one stop met with ``sign s' > 0`` at ``s = position``

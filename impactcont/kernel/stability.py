@@ -17,10 +17,12 @@ import numba as nb
 import numpy as np
 from numba.np.linalg import _LAPACK, ensure_lapack
 
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
+
 __all__ = ["by_modulus", "charpoly", "eigvals", "hessenberg", "multipliers", "multipliers_of",
            "schur_stable"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 
 ensure_lapack()  # numba's LAPACK bindings resolve to scipy's
 _rgeev = _LAPACK().numba_ez_rgeev(nb.float64)
@@ -39,7 +41,7 @@ def hessenberg(A):
     return H
 
 
-@_jit
+@_inner
 def _hessenberg_in_place(H, v):
     """Reduce ``H`` to upper Hessenberg form in place; ``v``: scratch of size m."""
     m = H.shape[0]
@@ -87,7 +89,7 @@ def charpoly(A):
     return P[m].copy()
 
 
-@_jit
+@_inner
 def _charpoly_in_place(H, P, v):
     """Characteristic polynomial of ``H`` (overwritten) into row m of ``P`` (m+1, m+1)."""
     m = H.shape[0]
@@ -118,7 +120,7 @@ def schur_stable(p):
     return _schur_stable_in_place(p.copy(), np.empty(p.size))
 
 
-@_jit
+@_inner
 def _schur_stable_in_place(c, new):
     """:func:`schur_stable` of ``c`` (overwritten); ``new``: scratch of the same size."""
     m = c.size - 1
@@ -138,7 +140,7 @@ def _schur_stable_in_place(c, new):
     return True
 
 
-@_jit
+@_inner
 def _balance(a):
     """Diagonal similarity by powers of 2 that equalises row and column norms (in place)."""
     m = a.shape[0]
@@ -172,7 +174,7 @@ def _balance(a):
                     a[j, i] *= f
 
 
-@_jit
+@_inner
 def _hqr(a, out):
     """Eigenvalues of the upper Hessenberg ``a`` by Francis double-shift QR (in place).
 
@@ -353,7 +355,7 @@ def eigvals(A):
     return out
 
 
-@_jit
+@_inner
 def _keep_alive(size):
     """``.ctypes`` does not keep its array alive; a use after the call does."""
     return size

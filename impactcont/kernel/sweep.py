@@ -37,9 +37,10 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
     _clearances,
     _flight_jacobian,
@@ -52,7 +53,6 @@ from impactcont.kernel.stability import multipliers
 
 __all__ = ["sweep_stops"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")
 
 #: The four neighbours of a grid point.
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
@@ -237,7 +237,7 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     return physical, capped
 
 
-@_jit
+@_inner
 def _push(queue, tail, size, point, parent):
     queue[tail % size, 0] = point
     queue[tail % size, 1] = parent

@@ -56,17 +56,16 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from impactcont.kernel.closed_form import jacobian_pieces
+from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.stability import by_modulus
 from impactcont.orbit.dense import VELOCITY_POLISH
 
 __all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers",
            "velocity_row_error"]
 
-_jit = nb.njit(cache=True, nogil=True, error_model="numpy")  # x/0 -> inf, as numpy
 _EPS = float(np.finfo(np.float64).eps)  # unit roundoff of float64, a compile-time constant
 
 SECULAR_MIN = 16
