@@ -49,7 +49,7 @@ from impactcont.model.parameters import MASS, ModelParameter, model_parameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
-from impactcont.orbit.stop_geometry import stop_geometry, stop_sign
+from impactcont.orbit.stop_geometry import stop_geometry
 from impactcont.orbit.symmetry import (
     SYMMETRY_TOL,
     HalfUnknowns,
@@ -184,9 +184,13 @@ class _Tables:
         self.static_arrays = _stack([flow.static_arrays() for flow in self.flows])
         self.omegas = np.array([flow.omega for flow in self.flows], dtype=float)
         self.general = bool(self.flows[0].shooting_arrays()[0])
-        # the stop coordinate, its pivot and the lower stop's presence are the stops'
-        # structure, which no parameter changes
-        self.pivot, self.two_sided = geometries[0].pivot, geometries[0].two_sided
+        # the stop coordinates, the pivot of each impact (the own mass of the stop it hits),
+        # the sides and the lower stop's presence are the stops' structure, which no
+        # parameter changes
+        first = geometries[0]
+        self.pivots = np.ascontiguousarray(first.pivots, dtype=np.int64)
+        self.signs = np.ascontiguousarray(first.signs, dtype=float)
+        self.two_sided = first.two_sided
         q = solved
 
         def column(get: Any) -> np.ndarray:
@@ -200,6 +204,9 @@ class _Tables:
         self.contact_normals = column(lambda geo: geo.normal)
         self.b_upper = column(lambda geo: geo.b)
         self.b_lower = column(lambda geo: geo.b_low)
+        self.extra_normals = column(lambda geo: geo.extra_normals)
+        self.extra_signs = column(lambda geo: geo.extra_signs)
+        self.extra_positions = column(lambda geo: geo.extra_positions)
 
 
 def _replaced(osc: ImpactOscillator, params: Mapping[str, ModelParameter],
@@ -266,7 +273,6 @@ class _Setting:
         self.osc, self.N, self.pattern, self.half, self.admits = osc, N, pattern, half, admits
         self.tol, self.max_iter, self.max_change = tol, max_iter, max_change
         self.max_attempts = max_attempts
-        self.signs = np.array([stop_sign(s) for s in pattern])
 
     def sweep(self, tables: _Tables, axes: dict[str, np.ndarray], seed: tuple[int, int],
               x_seed: np.ndarray, checks: bool
@@ -292,8 +298,9 @@ class _Setting:
             tables.general, *tables.flow_arrays, *tables.static_arrays, tables.omegas,
             tables.flow_index, tables.positions, tables.normals, tables.matrices,
             tables.full_normals, tables.full_matrices, tables.contact_normals, tables.b_upper,
-            tables.b_lower, tables.geometry_index, axes[names[0]], axes[names[1]], self.signs,
-            self.N, self.half, self.admits, tables.pivot, tables.two_sided, seed[0], seed[1],
+            tables.b_lower, tables.extra_normals, tables.extra_signs, tables.extra_positions,
+            tables.geometry_index, axes[names[0]], axes[names[1]], tables.signs,
+            self.N, self.half, self.admits, tables.pivots, tables.two_sided, seed[0], seed[1],
             np.ascontiguousarray(x_seed, dtype=float), self.tol, self.max_iter,
             self.max_change, bool(checks), self.max_attempts, unknowns, out["found"],
             out["newton_iterations"], out["delta"], out["stable"], out["physical"],
@@ -347,11 +354,11 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
                      title: str | None = None) -> xr.Dataset:
     """Stability map of the N-p motion family of `start` over a grid of two parameters.
 
-    Any system of the shooting path: stops on any mass or between two masses (the
-    section ``n . x = c`` and impact matrices of
-    :func:`~impactcont.orbit.stop_geometry.stop_geometry`), free masses and a constant
-    force ``F_static``; each point is the motion :func:`impactcont.multi_impact_orbit`
-    finds there.
+    Any system of the shooting path: stops on any mass or between two masses, stops on
+    several coordinates (``Stops(extra=...)``: each impact's section ``n_k . x = c_k``
+    solved for its own stop's mass, every flight checked against every stop), free masses
+    and a constant force ``F_static``; each point is the motion
+    :func:`impactcont.multi_impact_orbit` finds there.
 
     Every grid point is solved by Newton from a neighbour that was solved, starting
     at the grid point nearest the start (reached from it by Newton in a few steps):
@@ -417,19 +424,12 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     ------
     TypeError, ParameterError
         A bad start, parameter, grid, option, or a grid value where the oscillator
-        cannot be built (named in the message); an oscillator with stops on several
-        coordinates (``Stops(extra=...)``: not yet).
+        cannot be built (named in the message).
     NoPeriodicMotionError
         The start cannot be followed to its nearest grid point.
     """
     orbit = _as_multi(start)
     osc = orbit.oscillator
-    if getattr(osc.stops, "extra", ()):
-        raise ParameterError(
-            f"multi_impact_map: not yet: several stop coordinates (stops.extra="
-            f"{osc.stops.extra!r}); the compiled sweep checks the stops of one coordinate "
-            "only. Follow the motion with multi_impact_continuation (every stop checked) or "
-            "solve single points with multi_impact_orbit")
     params = _check_parameters(osc, parameters)
     names = (params[0].name, params[1].name)
     axes = _check_grid(grid, names)

@@ -6,10 +6,10 @@ system of :mod:`impactcont.orbit.multi_impact` (or on the half system of a symme
 motion, :mod:`impactcont.orbit.symmetry`), started from a solved neighbour (a secant
 predictor through two solved points in line when there are two), and the solution is
 evaluated (G or the half-map, multipliers, impact velocities, the contact check of
-eq. 16 against both stops). A grid point that is solved puts its unsolved neighbours
-in a first-in first-out queue; a point whose Newton fails stays unsolved and seeds
-nothing (it is tried again, at most once per neighbour, when another neighbour is
-solved).
+eq. 16 against every stop: U, L and each further stop on its own coordinate). A grid
+point that is solved puts its unsolved neighbours in a first-in first-out queue; a point
+whose Newton fails stays unsolved and seeds nothing (it is tried again, at most once per
+neighbour, when another neighbour is solved).
 
 The flows are stacked by value of the parameters that change them (``flow_index``
 gives each grid point its row of the tables of
@@ -27,7 +27,9 @@ velocities, flight times, gaps and states are the mirror images of the first's.
 
 Every stop acts on a stop coordinate ``s = n . x`` (a mass, or a clearance between two
 masses) with a full impact matrix on the velocities
-(:class:`impactcont.orbit.stop_geometry.StopGeometry`). One compiled entry point,
+(:class:`impactcont.orbit.stop_geometry.StopGeometry`); the impacts of one motion may hit
+stops of different coordinates (``Stops(extra=...)``), each section solved for the
+position of its stop's own mass (``pivots``, one per impact). One compiled entry point,
 :func:`sweep_stops` (compiled once; a single point is a 1 x 1 grid), with the constant
 force's arrays (:meth:`impactcont.orbit.flow.Flow.static_arrays`) stacked like the flows'.
 Importing :mod:`impactcont` does not import this module.
@@ -46,6 +48,7 @@ from impactcont.kernel.shooting import (
     _flight_jacobian,
     _max_abs,
     _solve,
+    _stop_clearance,
     shooting_system,
     unknowns_scale,
 )
@@ -59,21 +62,25 @@ _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 
 @_jit
-def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, j,
+def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, pivots,
             normals, positions, matrices, x, want_jacobian):
     """The shooting system (full, or the half of a symmetric motion) at ``x``.
 
     `normals`, `positions` and `matrices` hold the impacts of the system solved (the
-    first h of a symmetric motion). Returns the tuple of :func:`shooting_system`.
+    first h of a symmetric motion), `pivots` the position eliminated on each impact's
+    section (the stop's own mass; one for all in a symmetric motion). Returns the tuple
+    of :func:`shooting_system`.
     """
+    q = positions.size
     if not symmetric:
         return shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                               2.0 * math.pi * N / omega, np.full(positions.size, j), normals,
-                               positions, matrices, x, want_jacobian)
+                               2.0 * math.pi * N / omega, pivots[:q], normals, positions,
+                               matrices, x, want_jacobian)
+    j = pivots[0]
     out = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                          math.pi * N / omega, np.full(positions.size, j), normals,
-                          positions, matrices, x, want_jacobian)
-    h = positions.size
+                          math.pi * N / omega, pivots[:q], normals, positions, matrices, x,
+                          want_jacobian)
+    h = q
     m = matrices.shape[1]
     n = m // 2
     starts = out[2]
@@ -95,16 +102,16 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
 
 
 @_jit
-def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, j,
-            normals, positions, matrices, x0, tol, max_iter):
+def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric,
+            pivots, normals, positions, matrices, x0, tol, max_iter):
     """Newton with backtracking from ``x0``: the iteration and stopping rules of
     :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system`.
 
     Returns ``(x, converged, iterations, shooting)``.
     """
     x = x0.copy()
-    sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, j,
-                 normals, positions, matrices, x, True)
+    sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric,
+                 pivots, normals, positions, matrices, x, True)
     norm = _max_abs(sh[7])
     step_norm = np.inf
     it = 0
@@ -125,7 +132,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
         while True:
             trial = x + lam_step * step
             tsh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N,
-                          symmetric, j, normals, positions, matrices, trial, True)
+                          symmetric, pivots, normals, positions, matrices, trial, True)
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -142,10 +149,16 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
 
 @_jit
 def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, st, omega, N,
-              symmetric, admits, j, normal, two_sided, b, b_low, full_normals, full_matrices,
-              signs, sh, checks, point, out_rho, out_mu, out_gap, out_velocity, out_tau,
+              symmetric, admits, pivots, normal, two_sided, b, b_low, extra_normals,
+              extra_signs, extra_positions, full_normals, full_matrices, signs, sh, checks,
+              point, out_rho, out_mu, out_gap, out_velocity, out_tau,
               out_state, out_asym):
     """Stability, velocities, flight times, states and the contact check of a solution.
+
+    The contact check (eq. 16) searches every flight against both stops U, L of the stop
+    coordinate ``normal`` and against each further stop (``extra_normals`` (q, n),
+    ``extra_signs``, ``extra_positions`` (q,)), as
+    :func:`impactcont.kernel.shooting.motion_checks` does; the gap is the smallest of all.
 
     Writes the grid point `point` (flat index) of the output arrays; returns
     ``(physical, capped)``.
@@ -160,8 +173,8 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     tmp = np.empty((m, m))
     for k in range(flights):
         nxt = (k + 1) % p
-        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], full_matrices[nxt], j, j,
-                                 full_normals[k], full_normals[nxt], omega, jac)
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], full_matrices[nxt], pivots[k],
+                                 pivots[nxt], full_normals[k], full_normals[nxt], omega, jac)
         for r in range(m):
             for c in range(m):
                 s = 0.0
@@ -213,6 +226,18 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
             # a mirrored flight's clearance to one stop is the other's of its image
             gap = min(gap, gu, gl)
             capped = capped or cap
+            for i in range(extra_signs.size):  # every further stop, each on its coordinate
+                gx, _, cap = _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
+                                             lam, V, Vi, Z, st, omega, extra_normals[i],
+                                             extra_signs[i], extra_positions[i], starts[k],
+                                             phases[k], taus[k])
+                if gx != gx:  # NaN: not searchable
+                    gap = np.nan
+                    break
+                gap = min(gap, gx)
+                capped = capped or cap
+            if gap != gap:
+                break
         if not gap > 0.0:  # NaN included
             physical = False
     else:
@@ -248,10 +273,11 @@ def _push(queue, tail, size, point, parent):
 def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, sg, sfree,
                 sxs, sxd, omegas,
                 flow_index, positions, normals, matrices, full_normals, full_matrices,
-                contact_normals, b_upper, b_lower, geometry_index, coord0, coord1, signs, N,
-                symmetric, admits, j, two_sided, seed0, seed1, x_seed, tol, max_iter,
-                max_change, checks, max_attempts, unknowns, found, iterations, delta, stable,
-                physical, rho, mu, gap, velocity, tau, state, asym):
+                contact_normals, b_upper, b_lower, extra_normals, extra_signs, extra_positions,
+                geometry_index, coord0, coord1, signs, N, symmetric, admits, pivots, two_sided,
+                seed0, seed1, x_seed, tol, max_iter, max_change, checks, max_attempts, unknowns,
+                found, iterations, delta, stable, physical, rho, mu, gap, velocity, tau, state,
+                asym):
     """Solve every grid point reachable from the seed through solved neighbours.
 
     Parameters
@@ -274,15 +300,19 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
         The same for all p impacts (G of every flight).
     contact_normals, b_upper, b_lower : ndarray, shape (ng, n), (ng,), (ng,)
         The stop coordinate, ``b`` and ``b_low`` of each geometry (the contact check).
+    extra_normals, extra_signs, extra_positions : ndarray, shape (ng, q, n), (ng, q), (ng, q)
+        The further stops (``Stops(extra=...)``) of each geometry, each checked on every
+        flight (q = 0: none).
     coord0, coord1 : ndarray
         The grid's two axes (the secant predictor).
     signs : ndarray, shape (p,)
-        ``+1``/``-1`` for an impact on the upper/lower stop.
+        ``+1``/``-1``: impact k is met moving up/down its stop coordinate.
     N : int
     symmetric, admits, two_sided, checks : bool
         Solve the half system; store the asymmetry; a lower stop; search contacts.
-    j : int
-        0-based index of the position eliminated on the sections (the stop's mass).
+    pivots : ndarray of int64, shape (p,)
+        0-based index of the position eliminated on each impact's section (the own mass
+        of the stop it hits; one for all in a symmetric motion).
     seed0, seed1 : int
         The seed grid point, solved from ``x_seed`` (any distance).
     x_seed : ndarray
@@ -342,8 +372,8 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
         attempts += 1
         st = (sg[fi], sfree[fi], sxs[fi], sxd[fi])
         x, ok, it, sh = _newton(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi],
-                                ui[fi], lam[fi], V[fi], Vi[fi], Z[fi], st, omega, N, symmetric, j,
-                                normals[gi], positions[gi], matrices[gi], x0, tol, max_iter)
+                                ui[fi], lam[fi], V[fi], Vi[fi], Z[fi], st, omega, N, symmetric,
+                                pivots, normals[gi], positions[gi], matrices[gi], x0, tol, max_iter)
         total_iterations += it
         if ok and parent >= 0:
             change = 0.0
@@ -359,8 +389,10 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
         delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
         phys, cap = _evaluate(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi], ui[fi],
                               lam[fi], V[fi], Vi[fi], Z[fi], pw[fi], pa[fi], pk[fi], pj[fi],
-                              st, omega, N, symmetric, admits, j, contact_normals[gi], two_sided,
-                              b_upper[gi], b_lower[gi], full_normals[gi], full_matrices[gi],
+                              st, omega, N, symmetric, admits, pivots, contact_normals[gi],
+                              two_sided, b_upper[gi], b_lower[gi], extra_normals[gi],
+                              extra_signs[gi], extra_positions[gi], full_normals[gi],
+                              full_matrices[gi],
                               signs, sh, checks, point, rho, mu, gap, velocity, tau, state,
                               asym)
         physical[point] = phys
