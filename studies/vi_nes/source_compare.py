@@ -20,8 +20,8 @@ Two checks:
    ``mu = 0.05 s, zeta = 0.02 s, b = 5 / s, r = 1 + (r0 - 1) s`` the difference must
    vanish like ``s`` (first order).
 
-Run ``PYTHONPATH=. python studies/vi_nes/source_compare.py`` (writes
-``output/source_compare.json``, prints a summary).
+Run ``PYTHONPATH=. python studies/vi_nes/source_compare.py [--copy-figures]`` (writes
+``output/source_compare.json`` and ``output/source_compare.png``, prints a summary).
 """
 
 from __future__ import annotations
@@ -216,7 +216,63 @@ def main() -> dict[str, Any]:
     return out
 
 
+def figure(out: dict[str, Any], path: Path) -> None:
+    """Left: ``xi`` against omega, the source's formula (its root of (W2): solid; the
+    other: dashed) and the exact symmetric roots (filled: stable and physical). Right: the
+    difference along the source's limit against ``s`` (slope 1: first order)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4))
+    dense = np.linspace(OMEGAS[0], OMEGAS[-1], 201)
+    for sign, style, label in ((1, "-", "source (W1-W7)"),
+                               (-1, "--", "source, other root of (W2)")):
+        pts = [(r, m.xi) for r in dense for m in sf.motions(float(r), MU, ZETA, B, R,
+                                                            sign=sign)]
+        ax.plot(*np.array(pts).T, style, color="C0", lw=1, label=label)
+    for r in OMEGAS:
+        p = cf.VINES(r=r, mu=MU, zeta=ZETA, b=B, b_low=B, R=R, R_low=R)
+        for m in cf.ul_motions(p, scan=60):
+            if abs(m.t1 - 0.5 * p.T) < 1e-9 * p.T:
+                good = m.physical and m.stable
+                ax.plot(r, _exact(m)["xi"], "o", ms=4, color="k",
+                        mfc="k" if good else "none")
+    ax.plot([], [], "o", color="k", ms=4, label="exact closed form (filled: stable)")
+    ax.set_xlabel("omega / w_n")
+    ax.set_ylabel("xi = |fundamental of x1| / b")
+    ax.set_title(f"symmetric VI-NES, mu = {MU}, zeta = {ZETA}, b = {B}, R = {R}", fontsize=9)
+    ax.legend(fontsize=8)
+    for i, r0 in enumerate(LIMIT_R0):
+        rows = [x for x in out["limit"] if x["r0"] == r0]
+        bx.loglog([x["s"] for x in rows], [max(x["xi"], x["theta"]) for x in rows], "o-",
+                  ms=3, color=f"C{i}", label=f"r0 = {r0}")
+    s_ = np.array(LIMIT_S)
+    bx.loglog(s_, 0.02 * s_, "k:", label="slope 1")
+    bx.set_xticks(s_, [f"{x:g}" for x in s_])
+    bx.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    bx.set_xlabel("s  (mu = 0.05 s, zeta = 0.02 s, b = 5/s, omega = 1 + (r0 - 1) s)")
+    bx.set_ylabel("max relative difference (xi, theta)")
+    bx.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 if __name__ == "__main__":
+    import argparse
+    import shutil
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--copy-figures", action="store_true",
+                        help="also refresh figures/source_compare.png (tracked)")
+    args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    summary = main()["summary"]
-    LOG.info(json.dumps(summary, indent=1))
+    result = main()
+    LOG.info(json.dumps(result["summary"], indent=1))
+    png = HERE / "output" / "source_compare.png"
+    figure(result, png)
+    if args.copy_figures:
+        shutil.copy(png, HERE / "figures" / "source_compare.png")
