@@ -36,7 +36,11 @@ class Problem(Protocol):
 
     An implementation may also provide ``monitors(u, lam) -> dict[str, float]``,
     scalar quantities recorded at every accepted point; the continuation core
-    looks it up with ``getattr`` and records nothing when it is absent.
+    looks it up with ``getattr`` and records nothing when it is absent. A problem
+    that evaluates ``F``, ``dF/du`` and ``dF/dlam`` together may provide
+    ``linearize(u, lam) -> (F, [dF/du | dF/dlam])`` (shapes ``(m,)`` and
+    ``(m, m + 1)``): the corrector then asks it once per Newton iterate instead of
+    the three methods.
     """
 
     def residual(self, u: FloatArray, lam: float) -> FloatArray:
@@ -67,8 +71,9 @@ def check_problem_outputs(problem: Problem, u: FloatArray, lam: float) -> None:
     Raises
     ------
     ProblemOutputError
-        If ``residual`` or ``dparam`` does not return shape ``(m,)`` or
-        ``jacobian`` does not return shape ``(m, m)``.
+        If ``residual`` or ``dparam`` does not return shape ``(m,)``,
+        ``jacobian`` does not return shape ``(m, m)`` or the optional ``linearize``
+        not shapes ``(m,)`` and ``(m, m + 1)``.
     """
     m = u.shape[0]
     expected = {"residual": (m,), "jacobian": (m, m), "dparam": (m,)}
@@ -78,6 +83,14 @@ def check_problem_outputs(problem: Problem, u: FloatArray, lam: float) -> None:
             raise ProblemOutputError(
                 f"problem.{method_name}(u, lam) returned shape {value.shape} for "
                 f"m = {m} unknowns; expected shape {shape}"
+            )
+    linearize = getattr(problem, "linearize", None)
+    if linearize is not None:
+        residual, extended = (np.asarray(v) for v in linearize(u.copy(), lam))
+        if residual.shape != (m,) or extended.shape != (m, m + 1):
+            raise ProblemOutputError(
+                f"problem.linearize(u, lam) returned shapes {residual.shape} and "
+                f"{extended.shape} for m = {m} unknowns; expected ({m},) and ({m}, {m + 1})"
             )
 
 

@@ -458,14 +458,15 @@ class PalcStepper:
         last_update_norm = math.inf
         for iteration in range(self.options.newton_max_iter + 1):
             u, lam = state[:-1], float(state[-1])
-            residual = self._residual(u, lam)
+            residual, extended = self._linearized(u, lam)
             if self._converged(residual, last_update_norm, iteration):
                 return state, iteration
             if iteration == self.options.newton_max_iter:
                 break
             bordered_residual = np.concatenate(
                 [residual, [self.scaled_dot(tangent, state - predicted)]])
-            update = self._solve(self._bordered_matrix(u, lam, tangent), -bordered_residual, lam)
+            update = self._solve(self._bordered_matrix(u, lam, tangent, extended),
+                                 -bordered_residual, lam)
             last_update_norm = float(np.max(np.abs(update)))
             state = state + update
         raise NewtonConvergenceError(
@@ -517,10 +518,42 @@ class PalcStepper:
             return False
         return iteration == 0 or last_update_norm <= tolerance
 
-    def _bordered_matrix(self, u: FloatArray, lam: float, tangent: FloatArray) -> FloatArray:
-        """``[[J, dF/dlam], [W tangent]]`` with ``W`` the scaled-norm weights."""
-        top = np.column_stack([self._jacobian(u, lam), self._dparam(u, lam)])
-        return np.vstack([top, self._metric_weights() * tangent])
+    def _bordered_matrix(self, u: FloatArray, lam: float, tangent: FloatArray,
+                         extended: FloatArray | None = None) -> FloatArray:
+        """``[[J, dF/dlam], [W tangent]]`` with ``W`` the scaled-norm weights.
+
+        `extended` is ``[J | dF/dlam]`` when already evaluated (:meth:`_linearized`).
+        """
+        if extended is None and getattr(self.problem, "linearize", None) is not None:
+            extended = self._linearized(u, lam)[1]
+        if extended is None:
+            extended = np.column_stack([self._jacobian(u, lam), self._dparam(u, lam)])
+        bordered = np.empty((extended.shape[0] + 1, extended.shape[1]))
+        bordered[:-1] = extended
+        np.multiply(self._metric_weights(), tangent, out=bordered[-1])
+        return bordered
+
+    def _linearized(self, u: FloatArray, lam: float) -> tuple[FloatArray, FloatArray | None]:
+        """The residual and, from a problem with ``linearize``, ``[J | dF/dlam]`` (else None).
+
+        A problem that evaluates ``F``, ``J`` and ``dF/dlam`` together (one shot of the
+        N-p shooting system) provides the optional ``linearize(u, lam) -> (F, [J | dF/dlam])``
+        (:class:`~impactcont.core.problem.Problem`); the corrector asks it once per
+        iterate, with the refusals and checks of :meth:`_residual`.
+        """
+        linearize = getattr(self.problem, "linearize", None)
+        if linearize is None:
+            return self._residual(u, lam), None
+        self._evaluated_lam = lam
+        try:
+            residual, extended = linearize(u.copy(), lam)
+        except ParameterError as error:
+            raise NewtonConvergenceError(f"the problem refused lam = {lam:.10g}: {error}") \
+                from error
+        residual = np.asarray(residual, dtype=float)
+        if not np.isfinite(residual).all():
+            raise NewtonConvergenceError(f"non-finite residual at lam = {lam:.10g}")
+        return residual, np.asarray(extended, dtype=float)
 
     def _solve(self, matrix: FloatArray, right_hand_side: FloatArray, lam: float) -> FloatArray:
         """Solve a linear system, warning when it is singular to working precision."""

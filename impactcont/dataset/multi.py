@@ -166,6 +166,7 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                         f"{parameter}")
     n = oscillator.n
     npoints, nspecial = ds.sizes["point"], ds.sizes["special"]
+    variables = {}  # added in one merge (each ds[name] = ... is a merge of its own)
     for what, cols, keys, dim, size in (
             ("impact column", impact_columns, tuple(IMPACT_VARIABLES), "point", npoints),
             ("special impact column", special_impact_columns, SPECIAL_IMPACT_VARIABLES,
@@ -183,7 +184,8 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
             attrs = spec.attrs()
             if dim == "special":
                 attrs = {**attrs, "long_name": f"{spec.long_name} at special point"}
-            ds[name] = ((dim, "impact", *spec.extra_dims), arr, attrs)
+            variables[name] = xr.Variable((dim, "impact", *spec.extra_dims), arr, attrs)
+    ds = ds.assign(variables)
     ds = ds.assign_coords(impact=("impact", np.arange(p, dtype=np.int64),
                                   {"long_name": "impact index", "units": "1",
                                    "description": "Impact k of the motion; impact 0 is the "

@@ -49,7 +49,8 @@ from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
-__all__ = ["motion_checks", "newton_solve", "omega_partials", "shooting_system"]
+__all__ = ["branch_linearization", "forced_amplitudes", "frequency_column", "motion_checks",
+           "newton_solve", "omega_partials", "shooting_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -856,3 +857,110 @@ def omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts,
                 s += transitions[k, r, c] * d0[c]
             out[k, r] = ((dZp[r] + 1j * t * Zp[r]) * rot_t).real - s
     return out
+
+
+@_jit
+def frequency_column(general, u, gam, bet, dgam, dbet, Z, dZ, omega, period, matrices, taus,
+                     starts, phases, transitions, pcols, rates):
+    """``dr/d omega`` of the shooting residual at fixed unknowns, shape (p 2n,).
+
+    The forced part of eq. (9) at fixed flight times (:func:`omega_partials`), the phases
+    ``theta_k = delta + omega (tau_0 + .. + tau_{k-1})`` (``pcols``, ``dX^-/dtheta``) and
+    the last flight time ``tau_{p-1} = period - (tau_0 + .. + tau_{p-2})`` (``rates``,
+    ``X'(tau^-)``, times ``-period / omega``), each through the impact matrix ``D_{k+1}``
+    that ends flight k (``MultiImpactBranchProblem.dparam`` of
+    :mod:`impactcont.problems.multi_impact_branch`).
+    """
+    p = taus.size
+    m = starts.shape[1]
+    explicit = omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts,
+                              phases, transitions)
+    out = np.zeros(p * m)
+    elapsed = 0.0
+    for k in range(p):
+        nxt = (k + 1) % p
+        for r in range(m):
+            s = 0.0
+            for c in range(m):
+                v = explicit[k, c] + elapsed * pcols[k, c]
+                if k == p - 1:
+                    v -= rates[k, c] * period / omega
+                s += matrices[nxt, r, c] * v
+            out[k * m + r] = s
+        elapsed += taus[k]
+    return out
+
+
+@_jit
+def forced_amplitudes(w, a, f, errors, omega):
+    """The steady modal amplitudes of eq. (7) and their omega derivatives, O(n).
+
+    ``gamma_i - i beta_i = f_i / (w_i^2 - omega^2 + 2 i a_i omega)`` and
+    ``d(gamma_i - i beta_i)/d omega = (gamma_i - i beta_i) (2 omega - 2 i a_i) / (w_i^2 -
+    omega^2 + 2 i a_i omega)`` (:func:`impactcont.model.modal.forced_coefficients`,
+    :meth:`impactcont.orbit.flow.Flow.omega_arrays`, real ``f``), with what that function
+    refuses or warns about: ``resonant`` (an undamped forced mode at ``omega_i = omega``)
+    and ``worst``, its relative error bound of the amplitudes from the eigenvalue errors.
+
+    Returns
+    -------
+    tuple
+        ``(gamma, beta, dgamma, dbeta, worst, resonant)``.
+    """
+    n = w.size
+    gam = np.empty(n)
+    bet = np.empty(n)
+    dgam = np.empty(n)
+    dbet = np.empty(n)
+    worst = 0.0
+    resonant = False
+    eps = np.finfo(np.float64).eps
+    for i in range(n):
+        detune = (w[i] - omega) * (w[i] + omega)
+        damp = 2.0 * a[i] * omega
+        delta = detune * detune + damp * damp
+        if delta == 0.0:
+            if f[i] != 0.0:
+                resonant = True
+            delta = 1.0
+        gam[i] = detune * f[i] / delta
+        bet[i] = damp * f[i] / delta
+        den = complex(detune, damp)
+        dA = complex(gam[i], -bet[i]) * complex(2.0 * omega, -2.0 * a[i]) / den
+        dgam[i] = dA.real
+        dbet[i] = -dA.imag
+        if f[i] != 0.0:
+            rel = (4.0 * errors[i] + 4.0 * eps * w[i] * w[i]) * abs(detune) / delta
+            if rel > worst or rel != rel:
+                worst = rel
+    return gam, bet, dgam, dbet, worst, resonant
+
+
+@_jit
+def branch_linearization(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
+                         pivots, normals, positions, matrices, x, dgam, dbet, dZ):
+    """The shooting system at ``x`` and its linearization in ``[x, omega]``, one call.
+
+    :func:`shooting_system` (with the Jacobian) and :func:`frequency_column`: a corrector
+    step of the continuation in omega needs the residual, ``dr/dx`` and ``dr/d omega``
+    at one point (``MultiImpactBranchProblem.linearize`` of
+    :mod:`impactcont.problems.multi_impact_branch`).
+
+    Returns
+    -------
+    tuple
+        The tuple of :func:`shooting_system` with the Jacobian, and ``[dr/dx | dr/d omega]``
+        (p 2n, p 2n + 1).
+    """
+    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
+                         pivots, normals, positions, matrices, x, True)
+    col = frequency_column(general, u, gam, bet, dgam, dbet, Z, dZ, omega, period, matrices,
+                           sh[1], sh[2], sh[0], sh[5], sh[6], sh[4])
+    size = x.size
+    extended = np.empty((size, size + 1))
+    J = sh[8]
+    for r in range(size):
+        for c in range(size):
+            extended[r, c] = J[r, c]
+        extended[r, size] = col[r]
+    return sh, extended

@@ -32,20 +32,24 @@ import math
 import numpy as np
 
 from impactcont.errors import ParameterError
+from impactcont.model.modal import _RESONANCE_REL_ERROR_WARN, forced_coefficients
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, GAP, RESTITUTION, model_parameter
 from impactcont.model.stops import check_pattern
-from impactcont.orbit.flow import Flow
+from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
+    _as_shooting,
+    _geometry,
+    _kernel,
+    _writable,
     check_impacts,
-    omega_partials,
     orbit_from_unknowns,
     shooting,
 )
 from impactcont.orbit.periodic import _check_N
-from impactcont.orbit.stop_geometry import StopGeometry, stop_geometry
+from impactcont.orbit.stop_geometry import StopGeometry
 
 __all__ = ["MultiImpactBranchProblem"]
 
@@ -81,7 +85,15 @@ class MultiImpactBranchProblem:
         self.parameter = parameter
         self.size = 2 * osc.n * self.p
         self._flows: dict[float, Flow] = {}
+        # omega leaves the modal basis, the stops and the constant force as they are: the
+        # flow at another omega is the start's with new forced amplitudes (eq. 7)
+        self._base_flow = (flow_of(osc) if self.param.data == FREQUENCY
+                           and type(flow_of(osc)) is Flow and np.isrealobj(flow_of(osc).f)
+                           else None)
+        if self._base_flow is not None:  # made here so that every flow shares it
+            _geometry(self._base_flow, self.pattern)
         self._shots: dict[tuple[bytes, float], Shooting] = {}
+        self._extended: dict[tuple[bytes, float], np.ndarray] = {}  # [J | dF/domega]
 
     # -- where the parameter may go -----------------------------------------------------------
     def parameter_limits(self) -> tuple[float, float]:
@@ -137,7 +149,9 @@ class MultiImpactBranchProblem:
         if flow is None:
             if len(self._flows) > _CACHE_SIZE:
                 self._flows.clear()
-            flow = self._flows[lam] = Flow(self.param.at(self.osc, lam))
+            osc = self.param.at(self.osc, lam)
+            flow = self._flows[lam] = (Flow(osc) if self._base_flow is None
+                                       else _at_frequency(self._base_flow, osc))
         return flow
 
     def oscillator_at(self, lam: float) -> ImpactOscillator:
@@ -153,9 +167,38 @@ class MultiImpactBranchProblem:
         if sh is None:
             if len(self._shots) > _CACHE_SIZE:
                 self._shots.clear()
-            sh = self._shots[key] = shooting(self.flow_at(lam), self.N, self.p, u,
-                                             pattern=self.pattern)
+                self._extended.clear()
+            if self._base_flow is None:
+                sh = shooting(self.flow_at(lam), self.N, self.p, u, pattern=self.pattern)
+            else:  # omega: the residual, the Jacobian and dF/domega in one compiled call
+                flow = self.flow_at(lam)
+                geo = _geometry(flow, self.pattern)
+                arrays = flow.shooting_arrays()
+                dgam, dbet, dZ = flow.omega_arrays()
+                out, extended = _kernel().branch_linearization(
+                    *arrays[:12], flow.static_arrays(), flow.omega,
+                    2.0 * math.pi * self.N / flow.omega, geo.pivots, geo.normals,
+                    geo.positions, geo.matrices, _writable(u), dgam, dbet, dZ)
+                sh = _as_shooting(out, True)
+                self._extended[key] = extended
+            self._shots[key] = sh
         return sh
+
+    def linearize(self, u: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
+        """The residual and ``[dF/du | dF/dlam]`` at ``(u, lam)``, shapes (2np,), (2np, 2np + 1).
+
+        What a corrector step of the continuation core needs at one point (the core's
+        optional one-call evaluation, :class:`~impactcont.core.problem.Problem`): in omega
+        one compiled call (:func:`impactcont.kernel.shooting.branch_linearization`), else
+        :meth:`residual`, :meth:`jacobian` and :meth:`dparam`.
+        """
+        sh = self._shoot(u, lam)
+        extended = self._extended.get((np.asarray(u, dtype=float).tobytes(), float(lam)))
+        if extended is None:
+            extended = np.column_stack([sh.jacobian, self.dparam(u, lam)])
+        else:
+            extended = extended.copy()
+        return sh.residual.copy(), extended
 
     # -- the Problem protocol ------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
@@ -179,12 +222,14 @@ class MultiImpactBranchProblem:
             # the fallback; exact for the forcing amplitude (the residual is affine in F)
             return self._difference_quotient(u, lam)
         sh = self._shoot(u, lam)
-        osc = self.oscillator_at(lam)
-        geo = stop_geometry(osc, self.pattern)
+        if self._base_flow is not None:  # dF/domega came with the shooting system
+            return self._extended[(np.asarray(u, dtype=float).tobytes(), float(lam))][:, -1].copy()
+        flow = self.flow_at(lam)
+        geo = _geometry(flow, self.pattern)
         if data == GAP:
             return self._gap_derivative(sh, geo)
         if data == RESTITUTION:
-            return self._restitution_derivative(sh, osc)
+            return self._restitution_derivative(sh, flow.osc)
         return self._frequency_derivative(sh, geo, lam)
 
     def _gap_derivative(self, sh: Shooting, geo: StopGeometry) -> np.ndarray:
@@ -195,14 +240,15 @@ class MultiImpactBranchProblem:
         start of flight k (carried to its arrival by ``Phi_k``) and at the next start:
         ``d r_k = D_{k+1} Phi_k e_j dc_k / n_{k,j} - e_j dc_{k+1} / n_{k+1,j}``.
         """
-        p, m, j = self.p, 2 * self.osc.n, geo.pivot
+        p, m = self.p, 2 * self.osc.n
         rates = self.param.stop_rates(self.pattern)  # d c_k / d lam
         out = np.zeros(p * m)
         for k in range(p):
             nxt = (k + 1) % p
+            j, jn = geo.pivots[k], geo.pivots[nxt]  # each impact's own stop's mass
             out[k * m:(k + 1) * m] = (rates[k] * geo.matrices[nxt] @ sh.transitions[k][:, j]
                                       / geo.normals[k, j])
-            out[k * m + j] -= rates[nxt] / geo.normals[nxt, j]
+            out[k * m + jn] -= rates[nxt] / geo.normals[nxt, jn]
         return out
 
     def _restitution_derivative(self, sh: Shooting, osc: ImpactOscillator) -> np.ndarray:
@@ -214,11 +260,11 @@ class MultiImpactBranchProblem:
         ``dD/dR = D(R=1) - D(R=0)`` exactly, and ``d r_k = dR_{k+1} (dD/dR) X_k^-``.
         """
         n, m = osc.n, 2 * osc.n
-        slope = np.zeros((m, m))
-        slope[n:, n:] = (osc.stops.impact_matrix(osc.M, 1.0)
-                         - osc.stops.impact_matrix(osc.M, 0.0))
+        slopes = np.zeros((self.p, m, m))  # dD_{k+1}/dR of the stop ending flight k
+        for k, s in enumerate(self.pattern[1:] + self.pattern[0]):
+            slopes[k, n:, n:] = osc.stops.restitution_slope(s, osc.M)
         rates = np.roll(self.param.stop_rates(self.pattern), -1)  # dR_{k+1} / dlam
-        return (rates[:, None] * (sh.arrivals @ slope.T)).ravel()
+        return (rates[:, None] * np.einsum("kij,kj->ki", slopes, sh.arrivals)).ravel()
 
     def _frequency_derivative(self, sh: Shooting, geo: StopGeometry, lam: float) -> np.ndarray:
         """``dF/domega``: the forced part of eq. (9) at fixed flight times, the phases
@@ -226,15 +272,13 @@ class MultiImpactBranchProblem:
         ``tau_{p-1} = 2 pi N / omega - (tau_0 + .. + tau_{p-2})``, each through ``D_{k+1}``.
         """
         flow = self.flow_at(lam)
-        omega, p, m = flow.osc.omega, self.p, 2 * self.osc.n
-        period = 2.0 * math.pi * self.N / omega
-        explicit = omega_partials(flow, sh)
-        elapsed = np.concatenate([[0.0], np.cumsum(sh.flight_times[:-1])])
-        after = np.roll(geo.matrices, -1, axis=0)  # D_{k+1}, the impact ending flight k
-        out = np.einsum("kij,kj->ki", after,
-                        explicit + elapsed[:, None] * sh.phase_columns).ravel()
-        out[(p - 1) * m:] += geo.matrices[0] @ sh.arrival_rates[p - 1] * (-period / omega)
-        return out
+        arrays = flow.shooting_arrays()
+        dgam, dbet, dZ = flow.omega_arrays()
+        return _kernel().frequency_column(
+            arrays[0], arrays[6], arrays[3], arrays[4], dgam, dbet, arrays[11], dZ,
+            flow.omega, 2.0 * math.pi * self.N / flow.omega, geo.matrices,
+            *(_writable(a) for a in (sh.flight_times, sh.starts, sh.phases, sh.transitions,
+                                     sh.phase_columns, sh.arrival_rates)))
 
     def _difference_quotient(self, u: np.ndarray, lam: float) -> np.ndarray:
         """The parameter's one finite-difference fallback applied to the residual."""
@@ -250,3 +294,37 @@ class MultiImpactBranchProblem:
         """
         return orbit_from_unknowns(self.flow_at(lam), self.N, self.p, np.asarray(u, float),
                                    self._shoot(u, lam), checks=checks, pattern=self.pattern)
+
+
+def _at_frequency(base: Flow, osc: ImpactOscillator) -> Flow:
+    """The modal flow of `osc`, which differs from ``base.osc`` in omega only.
+
+    Shares the modal basis, the constant force's arrays and the stop geometry of `base`
+    (none depends on omega; eq. 9) and takes the new steady amplitudes ``gamma_i,
+    beta_i`` of eq. (7) (:func:`~impactcont.model.modal.forced_coefficients`, with its
+    resonance refusal and warning): what ``Flow(osc)`` computes, without the modal
+    basis, the static response and the stop geometry again.
+    """
+    flow = object.__new__(Flow)
+    flow.__dict__.update(base.__dict__)
+    omega = osc.omega
+    flow.osc, flow.omega = osc, omega
+    arrays = base.shooting_arrays()
+    errors = osc.modes.eigenvalue_errors
+    gam, bet, dgam, dbet, worst, resonant = _kernel().forced_amplitudes(
+        arrays[1], arrays[2], arrays[5], _errors(errors, base.n), omega)
+    if resonant or not worst <= _RESONANCE_REL_ERROR_WARN:
+        # refused or warned about: forced_coefficients says so in its own words
+        gam, bet = (np.array(c, dtype=float) for c in forced_coefficients(
+            base.w, base.a, base.f, omega, eigenvalue_errors=errors))
+    flow.gamma, flow.beta = gam, bet
+    flow._arrays = (*arrays[:3], gam, bet, *arrays[5:])
+    flow._omega_arrays = (dgam, dbet, arrays[11])
+    return flow
+
+
+def _errors(errors: np.ndarray | None, n: int) -> np.ndarray:
+    """The eigenvalue errors as the kernel's float array (zeros when unknown)."""
+    if errors is None:
+        return np.zeros(n)
+    return _writable(np.asarray(errors, dtype=float))

@@ -173,6 +173,21 @@ class SymmetricBranchProblem:
             out = out + rows @ self.halves.offset_derivative(float(lam))
         return out
 
+    def linearize(self, v: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
+        """The residual and ``[dF/dv | dF/dlam]`` at ``(v, lam)`` from one evaluation of the
+        full system (:meth:`MultiImpactBranchProblem.linearize`), shapes (2nh,), (2nh, 2nh + 1).
+        """
+        u = self.full_unknowns(v, lam)
+        residual, extended = self.full.linearize(u, lam)
+        size = self.size
+        rows = extended[:size]
+        out = np.empty((size, size + 1))
+        np.matmul(rows[:, :-1], self._E, out=out[:, :size])
+        out[:, size] = rows[:, -1]
+        if self.full.param.data == FREQUENCY:  # tau_{h-1} = N pi / omega - ...
+            out[:, size] += rows[:, :-1] @ self.halves.offset_derivative(float(lam))
+        return residual[:size], out
+
     def orbit(self, v: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full symmetric N-p motion (states, G, multipliers, checks) at ``(v, lam)``."""
         return self.full.orbit(self.full_unknowns(v, lam), lam, checks=checks)
