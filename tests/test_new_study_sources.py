@@ -36,12 +36,12 @@ def _load(name: str, path: Path):
 
 @pytest.fixture(scope="module")
 def vi():
-    return _load("vi_nes_source_compare", STUDIES / "vi_nes" / "source_compare.py")
+    return _load("vi_nes_sources_compare", STUDIES / "vi_nes" / "source_compare.py")
 
 
 @pytest.fixture(scope="module")
 def dmp():
-    return _load("impact_damper_source_compare", STUDIES / "impact_damper" / "source_compare.py")
+    return _load("impact_damper_sources_compare", STUDIES / "impact_damper" / "source_compare.py")
 
 
 KEYS = ("xi", "theta", "phase")

@@ -58,9 +58,9 @@ def _load(name: str, path: Path):
 
 
 # the comparison helpers (fundamental harmonic, particle amplitude) and the source's formula
-sc = _load("vi_nes_source_compare", HERE.parent / "vi_nes" / "source_compare.py")
+sc = _load("vi_nes_sources_compare", HERE.parent / "vi_nes" / "source_compare.py")
 sf = sc.sf
-cfd = _load("impact_damper_closed_form", HERE / "closed_form.py")
+cfd = _load("impact_damper_sources_closed_form", HERE / "closed_form.py")
 
 
 def _exact(m) -> dict[str, float]:

@@ -59,8 +59,8 @@ def load(name: str, path: Path):
     return module
 
 
-sf = load("vi_nes_source_formula", HERE / "source_formula.py")
-cf = load("vi_nes_closed_form", HERE / "closed_form.py")
+sf = load("vi_nes_sources_formula", HERE / "source_formula.py")
+cf = load("vi_nes_sources_closed_form", HERE / "closed_form.py")
 
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(64)
 
