@@ -21,7 +21,9 @@ from pathlib import Path
 
 import pytest
 
-STUDIES = Path(__file__).resolve().parents[1] / "studies"
+# the repository root, wherever this file sits under tests/
+STUDIES = next(p / "studies" for p in Path(__file__).resolve().parents
+               if (p / "studies" / "vi_nes" / "source_formula.py").is_file())
 
 
 def _load(name: str, path: Path):
