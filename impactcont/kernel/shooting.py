@@ -49,8 +49,8 @@ from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
-__all__ = ["branch_linearization", "forced_amplitudes", "frequency_column", "motion_checks",
-           "newton_solve", "omega_partials", "shooting_system"]
+__all__ = ["branch_linearization", "forced_amplitudes", "frequency_column", "jacobian_product",
+           "motion_checks", "newton_solve", "omega_partials", "shooting_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -964,3 +964,28 @@ def branch_linearization(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, o
             extended[r, c] = J[r, c]
         extended[r, size] = col[r]
     return sh, extended
+
+
+@_jit
+def jacobian_product(pivots, normals, matrices, omega, transitions, pcols, rates, count):
+    """``G_{count-1} .. G_1 G_0``, the product of the first `count` flights' Jacobians
+    (eq. 25, as :func:`motion_checks` builds them): G itself for ``count = p``, the
+    half-map's product for ``count = p / 2`` (:func:`impactcont.orbit.symmetry.half_map`).
+    """
+    p = pivots.size
+    m = matrices.shape[1]
+    G = np.eye(m)
+    Gk = np.empty((m, m))
+    tmp = np.empty((m, m))
+    for k in range(count):
+        nxt = (k + 1) % p
+        _flight_jacobian(transitions[k], pcols[k], rates[k], matrices[nxt], pivots[k],
+                         pivots[nxt], normals[k], normals[nxt], omega, Gk)
+        for r in range(m):
+            for c in range(m):
+                s = 0.0
+                for i in range(m):
+                    s += Gk[r, i] * G[i, c]
+                tmp[r, c] = s
+        G[:, :] = tmp
+    return G

@@ -27,6 +27,7 @@ clearance ``b + b_low`` between the stops is open
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -34,7 +35,13 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.modal import _RESONANCE_REL_ERROR_WARN, forced_coefficients
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import FREQUENCY, GAP, RESTITUTION, model_parameter
+from impactcont.model.parameters import (
+    FREQUENCY,
+    GAP,
+    RESTITUTION,
+    ModelParameter,
+    model_parameter,
+)
 from impactcont.model.stops import check_pattern
 from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.multi_impact import (
@@ -141,6 +148,22 @@ class MultiImpactBranchProblem:
                 f"{self.parameter} = {lower!r}: {self.limit_reason()}; give bounds with "
                 f"{self.parameter} > {lower!r}")
 
+    def moved(self, osc: ImpactOscillator) -> MultiImpactBranchProblem:
+        """This problem on `osc`, which differs from :attr:`osc` only in omega and the stops'
+        positions and restitutions (a curve's other parameter: the modal basis, the forcing
+        and the continued parameter are the same).
+
+        What the constructor gives, without checking the parameter, the pattern and the
+        modes again: the flow at `osc` shares this problem's modal basis.
+        """
+        new = copy.copy(self)
+        new.osc = osc
+        new._flows, new._shots, new._extended = {}, {}, {}
+        if self._base_flow is not None:
+            new._base_flow = _at_frequency(self._base_flow, osc, same_stops=False)
+            _geometry(new._base_flow, self.pattern)
+        return new
+
     # -- the oscillator along the branch ------------------------------------------------------
     def flow_at(self, lam: float) -> Flow:
         """The flow of the oscillator with ``parameter = lam``."""
@@ -221,18 +244,37 @@ class MultiImpactBranchProblem:
         if data not in (FREQUENCY, GAP, RESTITUTION):
             # the fallback; exact for the forcing amplitude (the residual is affine in F)
             return self._difference_quotient(u, lam)
-        sh = self._shoot(u, lam)
-        if self._base_flow is not None:  # dF/domega came with the shooting system
+        if self._base_flow is not None:  # dF/domega comes with the shooting system
+            self._shoot(u, lam)
             return self._extended[(np.asarray(u, dtype=float).tobytes(), float(lam))][:, -1].copy()
+        return self.derivative(u, lam, self.param)
+
+    def derivative(self, u: np.ndarray, lam: float, param: ModelParameter) -> np.ndarray:
+        """``dF/dmu`` at ``(u, lam)`` for another parameter ``mu`` of the frequency or the
+        stops (`param`, of this oscillator), exact, shape (2np,): a curve's derivative in
+        its second parameter from the shot of this problem (:meth:`dparam` in `param`).
+
+        Raises
+        ------
+        ParameterError
+            `param` changes other flight data (its derivative is a finite difference of
+            the problem continued in it).
+        """
+        data = param.data
+        if data not in (FREQUENCY, GAP, RESTITUTION):
+            raise ParameterError(f"derivative: parameter {param.name!r} changes the "
+                                 f"{data}; only the frequency and the stops have it here")
+        sh = self._shoot(u, lam)
         flow = self.flow_at(lam)
         geo = _geometry(flow, self.pattern)
         if data == GAP:
-            return self._gap_derivative(sh, geo)
+            return self._gap_derivative(sh, geo, param)
         if data == RESTITUTION:
-            return self._restitution_derivative(sh, flow.osc)
+            return self._restitution_derivative(sh, flow.osc, param)
         return self._frequency_derivative(sh, geo, lam)
 
-    def _gap_derivative(self, sh: Shooting, geo: StopGeometry) -> np.ndarray:
+    def _gap_derivative(self, sh: Shooting, geo: StopGeometry, param: ModelParameter
+                        ) -> np.ndarray:
         """``dF/dlam`` of a parameter moving the stops (``c_k`` of eq. 3).
 
         On the section ``n_k . x = c_k`` the eliminated position is
@@ -241,7 +283,7 @@ class MultiImpactBranchProblem:
         ``d r_k = D_{k+1} Phi_k e_j dc_k / n_{k,j} - e_j dc_{k+1} / n_{k+1,j}``.
         """
         p, m = self.p, 2 * self.osc.n
-        rates = self.param.stop_rates(self.pattern)  # d c_k / d lam
+        rates = param.stop_rates(self.pattern)  # d c_k / d lam
         out = np.zeros(p * m)
         for k in range(p):
             nxt = (k + 1) % p
@@ -251,7 +293,8 @@ class MultiImpactBranchProblem:
             out[k * m + jn] -= rates[nxt] / geo.normals[nxt, jn]
         return out
 
-    def _restitution_derivative(self, sh: Shooting, osc: ImpactOscillator) -> np.ndarray:
+    def _restitution_derivative(self, sh: Shooting, osc: ImpactOscillator,
+                                param: ModelParameter) -> np.ndarray:
         """``dF/dlam`` of a parameter changing the restitutions (``R_k`` of eq. 4).
 
         The impact law ``D = I - (1 + R) M^-1 n n^T / (n^T M^-1 n)`` on the velocities
@@ -263,7 +306,7 @@ class MultiImpactBranchProblem:
         slopes = np.zeros((self.p, m, m))  # dD_{k+1}/dR of the stop ending flight k
         for k, s in enumerate(self.pattern[1:] + self.pattern[0]):
             slopes[k, n:, n:] = osc.stops.restitution_slope(s, osc.M)
-        rates = np.roll(self.param.stop_rates(self.pattern), -1)  # dR_{k+1} / dlam
+        rates = np.roll(param.stop_rates(self.pattern), -1)  # dR_{k+1} / dlam
         return (rates[:, None] * np.einsum("kij,kj->ki", slopes, sh.arrivals)).ravel()
 
     def _frequency_derivative(self, sh: Shooting, geo: StopGeometry, lam: float) -> np.ndarray:
@@ -285,6 +328,20 @@ class MultiImpactBranchProblem:
         return self.param.difference(lambda v: self.residual(u, v), float(lam),
                                      self.oscillator_at(lam))
 
+    def jacobian_product(self, u: np.ndarray, lam: float, count: int) -> np.ndarray:
+        """``G_{count-1} .. G_0`` (eq. 25) of the motion with unknowns `u` at ``lam``, (2n, 2n).
+
+        ``count = p`` gives G (the PD test), ``p / 2`` the product in the half-map of a
+        symmetric motion (the BP test): one compiled call on the shot, without the rest
+        of :meth:`orbit` (multipliers, contact checks).
+        """
+        sh = self._shoot(u, lam)
+        flow = self.flow_at(lam)
+        geo = _geometry(flow, self.pattern)
+        return _kernel().jacobian_product(geo.pivots, geo.normals, geo.matrices, flow.omega,
+                                          sh.transitions, sh.phase_columns, sh.arrival_rates,
+                                          int(count))
+
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full N-p motion (states, G, multipliers, checks) at a branch point.
@@ -296,17 +353,20 @@ class MultiImpactBranchProblem:
                                    self._shoot(u, lam), checks=checks, pattern=self.pattern)
 
 
-def _at_frequency(base: Flow, osc: ImpactOscillator) -> Flow:
-    """The modal flow of `osc`, which differs from ``base.osc`` in omega only.
+def _at_frequency(base: Flow, osc: ImpactOscillator, *, same_stops: bool = True) -> Flow:
+    """The modal flow of `osc`, which differs from ``base.osc`` in omega only (and, with
+    ``same_stops=False``, in the stops' positions and restitutions).
 
-    Shares the modal basis, the constant force's arrays and the stop geometry of `base`
-    (none depends on omega; eq. 9) and takes the new steady amplitudes ``gamma_i,
-    beta_i`` of eq. (7) (:func:`~impactcont.model.modal.forced_coefficients`, with its
-    resonance refusal and warning): what ``Flow(osc)`` computes, without the modal
-    basis, the static response and the stop geometry again.
+    Shares the modal basis, the constant force's arrays and (with `same_stops`) the stop
+    geometry of `base` (none depends on omega; eq. 9) and takes the new steady amplitudes
+    ``gamma_i, beta_i`` of eq. (7) (:func:`~impactcont.model.modal.forced_coefficients`,
+    with its resonance refusal and warning): what ``Flow(osc)`` computes, without the
+    modal basis, the static response and the stop geometry again.
     """
     flow = object.__new__(Flow)
     flow.__dict__.update(base.__dict__)
+    if not same_stops:
+        flow.__dict__.pop("_stop_geometry", None)
     omega = osc.omega
     flow.osc, flow.omega = osc, omega
     arrays = base.shooting_arrays()

@@ -41,7 +41,7 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import model_parameter
+from impactcont.model.parameters import FREQUENCY, GAP, RESTITUTION, model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import half_map
 from impactcont.problems.events import event_function
@@ -54,6 +54,9 @@ __all__ = ["MultiImpactCurveProblem", "signed_smallest_singular_value"]
 _FD_STEP = 1.5e-8  # about sqrt(eps): forward differences
 _CACHE_SIZE = 32
 _REUSE = 1e-3
+#: Flight data whose parameters have exact derivatives from any branch problem's shot
+#: and leave the modal basis as it is.
+_EXACT = (FREQUENCY, GAP, RESTITUTION)
 
 BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
 
@@ -106,6 +109,9 @@ class MultiImpactCurveProblem:
         self.osc, self.N, self.p, self.pattern = osc, N, p, pattern
         self.kind, self.parameters, self.symmetric = kind, (p1, p2), symmetric
         self._problems: dict[tuple[str, float, float | None], BranchProblem] = {}
+        self._first: dict[str, BranchProblem] = {}  # the first problem in each parameter
+        # both parameters move only omega and the stops: every problem has the same modes
+        self._same_modes = all(par.data in _EXACT for par in self.params)
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
         self.size = self._base(self.params[1].value(osc), p1).size + 1
 
@@ -120,9 +126,14 @@ class MultiImpactCurveProblem:
             osc = self.params[1].at(self.osc, float(lam))
             if p1 is not None:
                 osc = self.params[0].at(osc, float(p1))
-            cls = SymmetricBranchProblem if self.symmetric else MultiImpactBranchProblem
-            problem = self._problems[key] = cls(osc, self.N, self.p, parameter,
-                                                pattern=self.pattern)
+            first = self._first.get(parameter)
+            if first is None or not self._same_modes:
+                cls = SymmetricBranchProblem if self.symmetric else MultiImpactBranchProblem
+                problem = cls(osc, self.N, self.p, parameter, pattern=self.pattern)
+                self._first.setdefault(parameter, problem)
+            else:  # the first one moved: the same modes, flow and checks
+                problem = first.moved(osc)
+            self._problems[key] = problem
         return problem
 
     def branch_problem(self, lam: float) -> BranchProblem:
@@ -142,6 +153,15 @@ class MultiImpactCurveProblem:
         kind = self.kind
         if kind == "SN":
             return signed_smallest_singular_value(self.branch_problem(lam).jacobian(u, p1))
+        if kind == "BP":  # as test_of, from the shot (no multipliers, no orbit)
+            H = self.branch_problem(lam).half_map(u, p1)
+            return signed_smallest_singular_value(H + np.eye(H.shape[0]))
+        if kind == "PD":
+            base = self.branch_problem(lam)
+            full = base.full if self.symmetric else base
+            G = full.jacobian_product(base.full_unknowns(u, p1) if self.symmetric else u, p1,
+                                      self.p)
+            return signed_smallest_singular_value(G + np.eye(G.shape[0]))
         orbit = self.orbit(x, lam, checks=kind == "GR")
         return self.test_of(orbit)
 
@@ -208,5 +228,11 @@ class MultiImpactCurveProblem:
         """``d[F, g]/dp2``: the branch problem in ``p2`` (exact for omega, b, R) and ``dg/dp2``."""
         x = np.asarray(x, dtype=float)
         u, p1 = x[:-1], float(x[-1])
-        other = self._base(lam, self.parameters[1], p1)
-        return np.append(other.dparam(u, float(lam)), self._test_gradient(x, lam)[1])
+        second = self.params[1]
+        if second.data in _EXACT and (second.keeps_symmetry or not self.symmetric):
+            # from the shot of the problem in p1 (a p2 that breaks the symmetry of a
+            # symmetric curve is refused by the problem in p2, below)
+            column = self.branch_problem(lam).derivative(u, p1, self.params[1])
+        else:
+            column = self._base(lam, self.parameters[1], p1).dparam(u, float(lam))
+        return np.append(column, self._test_gradient(x, lam)[1])

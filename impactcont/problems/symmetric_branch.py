@@ -22,6 +22,7 @@ the damping and every element, ``gap`` (both stops), and ``b`` and ``R`` of mirr
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import ClassVar
@@ -34,7 +35,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, ModelParameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.orbit.symmetry import HalfUnknowns, admits_symmetric_motions
+from impactcont.orbit.symmetry import HalfUnknowns, _reflection, admits_symmetric_motions
 from impactcont.problems.events import PITCHFORK
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
@@ -173,6 +174,24 @@ class SymmetricBranchProblem:
             out = out + rows @ self.halves.offset_derivative(float(lam))
         return out
 
+    def moved(self, osc: ImpactOscillator) -> SymmetricBranchProblem:
+        """This problem on `osc` (:meth:`MultiImpactBranchProblem.moved`; `osc` must stay
+        symmetric, as the parameters of a curve of symmetric motions keep it)."""
+        new = copy.copy(self)
+        new.full = self.full.moved(osc)
+        return new
+
+    def derivative(self, v: np.ndarray, lam: float, param: ModelParameter) -> np.ndarray:
+        """``dF/dmu`` at fixed ``v`` for another parameter ``mu`` of the frequency or the
+        stops (:meth:`MultiImpactBranchProblem.derivative`), shape (2nh,)."""
+        u = self.full_unknowns(v, lam)
+        out = self.full.derivative(u, lam, param)[self._rows()]
+        if param.data == FREQUENCY:  # tau_{h-1} = N pi / omega - ...
+            omega = self.oscillator_at(lam).omega
+            rows = self.full.jacobian(u, lam)[self._rows()]
+            out = out + rows @ self.halves.offset_derivative(omega)
+        return out
+
     def linearize(self, v: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
         """The residual and ``[dF/dv | dF/dlam]`` at ``(v, lam)`` from one evaluation of the
         full system (:meth:`MultiImpactBranchProblem.linearize`), shapes (2nh,), (2nh, 2nh + 1).
@@ -187,6 +206,12 @@ class SymmetricBranchProblem:
         if self.full.param.data == FREQUENCY:  # tau_{h-1} = N pi / omega - ...
             out[:, size] += rows[:, :-1] @ self.halves.offset_derivative(float(lam))
         return residual[:size], out
+
+    def half_map(self, v: np.ndarray, lam: float) -> np.ndarray:
+        """``H = S G_{h-1} .. G_0`` of the symmetric motion `v` at ``lam``
+        (:func:`~impactcont.orbit.symmetry.half_map`, from one compiled call on the shot)."""
+        A = self.full.jacobian_product(self.full_unknowns(v, lam), lam, self.p // 2)
+        return _reflection(self.osc.n)[:, None] * A
 
     def orbit(self, v: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full symmetric N-p motion (states, G, multipliers, checks) at ``(v, lam)``."""
