@@ -29,6 +29,7 @@ __all__ = [
     "LABEL_NAMES",
     "PARAMETERS",
     "STATUSES",
+    "STOP_FAMILIES",
     "Label",
     "Parameter",
     "ParameterTable",
@@ -37,6 +38,7 @@ __all__ = [
     "check_parameter",
     "damping_kind",
     "element_name",
+    "stop_parameter_name",
 ]
 
 
@@ -179,8 +181,10 @@ class ParameterTable(Mapping[str, Parameter]):
     names of elements (:data:`ELEMENT_FAMILIES`, 1-based as the paper's masses):
     ``m2`` (a mass), ``k1`` (a spring of the chain of eq. 2), ``c1`` (a damper),
     ``M[1,2]``, ``K[1,2]``, ``C[1,2]`` (an entry and its symmetric partner), ``F[2]``
-    (the forcing amplitude of one mass). Whether an element exists on a given
-    oscillator is checked by :func:`impactcont.model.parameters.model_parameter`.
+    (the forcing amplitude of one mass), and the names of an extra stop's own data
+    (:data:`STOP_FAMILIES`: ``gap[A]``, ``R[A]`` of the stop named ``A``). Whether an
+    element or a stop exists on a given oscillator is checked by
+    :func:`impactcont.model.parameters.model_parameter`.
     """
 
     def __init__(self, named: dict[str, Parameter]) -> None:
@@ -191,13 +195,17 @@ class ParameterTable(Mapping[str, Parameter]):
         if hit is not None:
             return hit
         element = element_name(name)
-        if element is None:
+        if element is not None:
+            family, indices = element
+            return _element_parameter(name, family, indices)
+        stop = stop_parameter_name(name)
+        if stop is None:
             raise KeyError(name)
-        family, indices = element
-        return _element_parameter(name, family, indices)
+        return _stop_parameter(name, *stop)
 
     def __contains__(self, name: object) -> bool:
-        return isinstance(name, str) and (name in self._named or element_name(name) is not None)
+        return isinstance(name, str) and (name in self._named or element_name(name) is not None
+                                          or stop_parameter_name(name) is not None)
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._named)
@@ -245,6 +253,39 @@ def _element_parameter(name: str, family: str, indices: tuple[int, ...]) -> Para
     long_name, description, limits = ELEMENT_FAMILIES[family]
     where = ",".join(str(i) for i in indices)
     return Parameter(name, f"{long_name} {name}", f"{description} (here {where}.)", **limits)
+
+
+#: The data of one extra stop (:class:`impactcont.model.stops.Stop`, named by one letter
+#: ``S`` other than U/L): name pattern -> (long name, description, range keywords).
+STOP_FAMILIES: dict[str, tuple[str, str, dict[str, Any]]] = {
+    "gap[S]": ("gap of an extra stop", "Gap of the extra stop S: it sits at s = side * gap on "
+               "its own coordinate (eq. 3 on that coordinate).", {}),
+    "R[S]": ("restitution of an extra stop", "Coefficient of restitution of the extra stop S "
+             "(eq. 4 on its coordinate; the two-body law for a pair).",
+             dict(low=0.0, high=1.0, allowed="in [0, 1]")),
+}
+
+_STOP = re.compile(r"^(gap|R)\[([A-Za-z])\]$")
+
+
+def stop_parameter_name(name: Any) -> tuple[str, str] | None:
+    """``(family, stop name)`` of an extra stop's parameter name (``"gap[A]"`` ->
+    ``("gap[S]", "A")``, ``"R[B]"`` -> ``("R[S]", "B")``), None for any other name.
+
+    Whether the oscillator has that stop (and that it is not ``U`` or ``L``, whose data
+    are ``b``, ``R``, ``b_low``, ``R_low``) is checked by
+    :func:`impactcont.model.parameters.model_parameter`."""
+    match = _STOP.match(name) if isinstance(name, str) else None
+    if match is None:
+        return None
+    kind, letter = match.groups()
+    return f"{kind}[S]", letter
+
+
+def _stop_parameter(name: str, family: str, stop: str) -> Parameter:
+    long_name, description, limits = STOP_FAMILIES[family]
+    return Parameter(name, f"{long_name} {stop}", description.replace(" S", f" {stop}", 1),
+                     **limits)
 
 
 #: The continuable parameters, in the order of the API documentation; a lookup also
@@ -329,6 +370,7 @@ def check_parameter(osc: Any, name: Any, argument: str = "parameter") -> str:
     if not isinstance(name, str) or name not in PARAMETERS:
         raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS} or an element "
                              f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', "
-                             f"'F[2]'); got {name!r}")
+                             f"'F[2]') or an extra stop's {tuple(STOP_FAMILIES)} (e.g. "
+                             f"'gap[A]'); got {name!r}")
     check_damping(osc, name, argument)
     return name

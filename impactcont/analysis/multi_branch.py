@@ -274,8 +274,8 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
     columns = {**orbit_columns(orbits, parameter, [s.lam for s in samples]),
                "arclength": np.concatenate([[0.0], np.cumsum(steps)])}
     for name in extra_columns:
-        columns.setdefault(name, np.array([float(getattr(o.oscillator, name) or 0.0)
-                                           for o in orbits]))
+        columns.setdefault(name, np.array([model_parameter(o.oscillator, name).value(
+            o.oscillator) for o in orbits]))  # an element, an extra stop's gap: by its object
     impact_columns = {
         "delta_k": np.array([o.phases for o in orbits]),
         "impact_velocity_k": np.array([o.impact_velocities for o in orbits]),

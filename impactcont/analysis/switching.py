@@ -136,7 +136,9 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
     N, p = int(branch.attrs["N"]), impacts_of(branch)
     values = {name: float(branch[special_variable(name)].values[k])
               for name in dict.fromkeys(["omega", "b", parameter])}
-    osc = oscillator_from_dataset(branch).replace(**values)
+    osc = oscillator_from_dataset(branch).replace(omega=values.pop("omega"), b=values.pop("b"))
+    for name, value in values.items():  # as its object sets it (an element, an extra stop)
+        osc = model_parameter(osc, name).at(osc, value)
     if "impact" in branch.dims:
         guess = {"delta": float(branch[special_variable("delta_k")].values[k, 0]),
                  "flight_times": branch[special_variable("flight_time_k")].values[k],
@@ -520,7 +522,7 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
             orbit.flight_gap_lower[k] == orbit.flight_gap_min[k]
         stop = "L" if lower else "U"
     geo = stop_geometry(osc, stop)
-    j, normal = geo.pivot, geo.normal
+    j, normal = geo.pivot, geo.normals[0]  # the coordinate of the stop grazed
     X = Flow(osc).state(t_g, orbit.states[k], orbit.phases[k])[0]
     # on the stop exactly (n . x = c, solved for x_j), then the impact law D of that stop
     X[j] += (float(geo.positions[0]) - float(normal @ X[:osc.n])) / normal[j]
@@ -591,11 +593,11 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     t /= np.max(np.abs(t[:-1]))
     # velocity of the new impact = arrival velocity of the flight before it
     n = osc.n
-    normal = stop_geometry(osc, graze.pattern).normals[new]
+    geo = stop_geometry(osc, graze.pattern)
+    normal, sign = geo.normals[new], float(geo.signs[new])
 
     def new_velocity(x: np.ndarray) -> float:
-        # towards the stop hit: +n . x' at the upper stop, -n . x' at the lower
-        sign = 1.0 if graze.pattern[new] == "U" else -1.0
+        # towards the stop hit: +n . x' at an upper stop, -n . x' at a lower (its side)
         return sign * float(normal @ problem._shoot(x[:-1], float(x[-1])).arrivals[new - 1,
                                                                                    n:])
 

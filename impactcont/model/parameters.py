@@ -1,9 +1,10 @@
 """Continuable parameters as objects: how each is set on the model and what it moves.
 
 A name of the vocabulary (:data:`impactcont.vocabulary.PARAMETERS`: ``omega``, ``b``,
-``R``, ``eta``, ``alpha``, ``beta``, ``F0``, ``b_low``, ``R_low``, ``gap`` and the element
+``R``, ``eta``, ``alpha``, ``beta``, ``F0``, ``b_low``, ``R_low``, ``gap``, the element
 names ``m<j>``, ``k<j>``, ``c<j>``, ``M[i,j]``, ``K[i,j]``, ``C[i,j]``, ``F[j]``, 1-based as
-the paper's masses) becomes a :class:`ModelParameter` for one oscillator
+the paper's masses, and an extra stop's own gap and restitution ``gap[S]``, ``R[S]``,
+``S`` the stop's letter) becomes a :class:`ModelParameter` for one oscillator
 (:func:`model_parameter`). The object says
 
 - how to read it on the model and set it (:meth:`ModelParameter.value`,
@@ -12,8 +13,9 @@ the paper's masses) becomes a :class:`ModelParameter` for one oscillator
   (eq. 1), the position of a stop (eq. 3), the restitution of a stop (eq. 4), the
   damping, the stiffness or the masses (the flow of eq. 9), the forcing amplitude;
 - how a stop moves with it: the rate of the upper stop's position or restitution and of
-  the lower stop's (:attr:`ModelParameter.upper`, :attr:`ModelParameter.lower`), from
-  which the problems write their exact derivatives;
+  the lower stop's (:attr:`ModelParameter.upper`, :attr:`ModelParameter.lower`) and of
+  each extra stop's (:attr:`ModelParameter.extra`), from which the problems write their
+  exact derivatives (:meth:`ModelParameter.stop_rates`);
 - the derivative everything else uses: :meth:`ModelParameter.difference`, the one
   finite-difference fallback of the package.
 
@@ -39,10 +41,12 @@ from impactcont.vocabulary import (
     CONTINUABLE_PARAMETERS,
     ELEMENT_FAMILIES,
     PARAMETERS,
+    STOP_FAMILIES,
     Parameter,
     check_damping,
     damping_kind,
     element_name,
+    stop_parameter_name,
 )
 
 __all__ = ["DAMPING", "FD_RELATIVE_STEP", "FORCING", "FREQUENCY", "GAP", "MASS", "RESTITUTION",
@@ -80,6 +84,9 @@ class ModelParameter:
         For :data:`GAP`: ``d c / d lam`` of the stop positions (``c = b`` above,
         ``c = -b_low`` below); for :data:`RESTITUTION`: ``d R / d lam`` of the upper and
         the lower stop's restitution. Zero otherwise.
+    extra : tuple of (str, float)
+        The same rates for extra stops, by name (``gap[A]``: ``(("A", side),)``, the
+        stop at ``c = side * gap``; ``R[A]``: ``(("A", 1.0),)``); empty otherwise.
     kernel : int or None
         The closed-form kernel's exact derivative (eq. 13-14) that serves it on the
         proportional path: 0 omega, 1 R, 2 the decay rates; None: none.
@@ -94,6 +101,7 @@ class ModelParameter:
     upper: float = 0.0
     lower: float = 0.0
     kernel: int | None = None
+    extra: tuple[tuple[str, float], ...] = ()
 
     # -- the model ------------------------------------------------------------------------------
     def value(self, osc: ImpactOscillator) -> float:
@@ -130,8 +138,10 @@ class ModelParameter:
         """A symmetric system (``x -> -x`` with the stops) stays symmetric as it moves.
 
         Only the stops can break it: both positions must move oppositely (``c = +-gap``)
-        and both restitutions together.
+        and both restitutions together; an extra stop's data have no mirror image.
         """
+        if self.extra:
+            return False
         if self.data == GAP:
             return self.upper == -self.lower
         if self.data == RESTITUTION:
@@ -139,10 +149,11 @@ class ModelParameter:
         return True
 
     def stop_rates(self, pattern: str) -> np.ndarray:
-        """:attr:`upper` or :attr:`lower` for the stop of each impact of `pattern` (0 for an
-        extra stop, :class:`~impactcont.model.stops.Stop`), (p,)."""
-        return np.array([self.upper if s == UPPER else self.lower if s == LOWER else 0.0
-                         for s in pattern])  # an extra stop does not move with them
+        """:attr:`upper`, :attr:`lower` or the :attr:`extra` rate for the stop of each
+        impact of `pattern` (0 for an extra stop the parameter does not move), (p,)."""
+        extra = dict(self.extra)
+        return np.array([self.upper if s == UPPER else self.lower if s == LOWER
+                         else extra.get(s, 0.0) for s in pattern])
 
     def clearance_limit(self, osc: ImpactOscillator) -> float:
         """The value at which the clearance ``b + b_low`` between two stops closes (GAP
@@ -236,6 +247,30 @@ def _named(name: str, osc: ImpactOscillator) -> ModelParameter:
         get, put = (lambda o: o.b), _set_gap
     scale = (lambda o: o.F0) if name == "F0" else _one
     return ModelParameter(name, info, get=get, put=put, scale_of=scale, **entries[name])
+
+
+def _stop_datum(name: str, family: str, stop: str, osc: ImpactOscillator,
+                argument: str) -> ModelParameter:
+    """The entry of an extra stop's own gap (``gap[S]``) or restitution (``R[S]``)."""
+    names = [e.name for e in osc.stops.extra]
+    if stop not in names:
+        own = {"gap[S]": "'b' (U), 'b_low' (L)", "R[S]": "'R' (U), 'R_low' (L)"}[family]
+        why = (f"U and L are the oscillator's own stops: continue {own}" if stop in (UPPER, LOWER)
+               else f"the oscillator has no extra stop {stop!r}")
+        allowed = [f"{family[:-3]}[{e}]" for e in names]
+        raise ParameterError(f"{argument}={name!r}: {why}; allowed extra-stop parameters: "
+                             f"{allowed or 'none (no Stops(extra=...))'}")
+    info = PARAMETERS[name]
+    e = osc.stops.extra_stop(stop)
+    if family == "gap[S]":
+        return ModelParameter(
+            name, info, GAP, get=lambda o: float(o.stops.extra_stop(stop).gap),
+            put=lambda o, v: o.replace(stops=o.stops.with_extra(stop, gap=v)),
+            scale_of=_one, extra=((stop, float(e.side)),))
+    return ModelParameter(
+        name, info, RESTITUTION, get=lambda o: float(o.stops.extra_stop(stop).restitution),
+        put=lambda o, v: o.replace(stops=o.stops.with_extra(stop, restitution=v)),
+        scale_of=_one, extra=((stop, 1.0),))
 
 
 def _pattern(n: int, j: int) -> np.ndarray:
@@ -363,12 +398,14 @@ def model_parameter(osc: ImpactOscillator, name: Any, argument: str = "parameter
         matrix C); ``b_low``, ``R_low`` without a lower stop of their own, ``gap`` without a
         symmetric clearance; an element past the oscillator's masses (``k3`` on two
         masses), a chain element of a matrix that is no chain, a damper without a matrix
-        C, ``F[j]`` of a complex F. The message names `argument`, the value and what is
+        C, ``F[j]`` of a complex F; ``gap[S]``, ``R[S]`` of a stop ``S`` that is not one of
+        the oscillator's extra stops. The message names `argument`, the value and what is
         allowed.
     """
     if not isinstance(name, str) or name not in PARAMETERS:
         raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS} or an element "
-                             f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]'); "
+                             f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]') "
+                             f"or an extra stop's {tuple(STOP_FAMILIES)} (e.g. 'gap[A]'); "
                              f"got {name!r}")
     check_damping(osc, name, argument)
     stops = osc.stops
@@ -388,4 +425,7 @@ def model_parameter(osc: ImpactOscillator, name: Any, argument: str = "parameter
     element = element_name(name)
     if element is not None:
         return _element(name, *element, osc, argument)
+    stop = stop_parameter_name(name)
+    if stop is not None:
+        return _stop_datum(name, *stop, osc, argument)
     return _named(name, osc)

@@ -391,6 +391,50 @@ class Stops:
         raise ParameterError(f"stop must be one of {list(self.names)} (the oscillator's "
                              f"stops); got {name!r}")
 
+    def restitution_slope(self, name: str, M: np.ndarray) -> np.ndarray:
+        """``dD/dR`` of the velocity jump of the stop `name` in its own restitution.
+
+        The jump ``D = I - (1 + R) M^-1 n n^T / (n^T M^-1 n)`` (eq. 4 on one mass: ``-R``
+        on ``x_j'``) is affine in R, so the slope is ``D(R=1) - D(R=0)`` exactly.
+
+        Parameters
+        ----------
+        name : str
+            ``"U"``, ``"L"`` or an extra stop's name (:attr:`names`).
+        M : ndarray, shape (n, n)
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+        """
+        if name in (UPPER, LOWER):
+            self.position(name, 0.0)  # validates
+            return self.impact_matrix(M, 1.0) - self.impact_matrix(M, 0.0)
+        e = self.extra_stop(name)
+        return _jump(M, e.mass, e.relative_to, 1.0) - _jump(M, e.mass, e.relative_to, 0.0)
+
+    def extra_stop(self, name: str) -> Stop:
+        """The extra stop named `name`.
+
+        Raises
+        ------
+        ParameterError
+            No extra stop has that name.
+        """
+        for e in self.extra:
+            if e.name == name:
+                return e
+        raise ParameterError(f"stop must name an extra stop, one of "
+                             f"{[e.name for e in self.extra]}; got {name!r}")
+
+    def with_extra(self, name: str, **changes: Any) -> Stops:
+        """The stops with the extra stop `name` changed (``gap=...``, ``restitution=...``)."""
+        old = self.extra_stop(name)
+        extra = tuple(dataclasses.replace(e, **changes) if e is old else e for e in self.extra)
+        if self.mirror:  # b_low, R_low follow b, R: resolved again by the oscillator
+            return dataclasses.replace(self, b_low=None, R_low=None, extra=extra)
+        return dataclasses.replace(self, extra=extra)
+
     @property
     def pair(self) -> bool:
         """The stops act between two masses (``relative_to`` given)."""

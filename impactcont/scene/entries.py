@@ -73,6 +73,8 @@ def _value_to_toml(value: Any) -> Any:
         return [_value_to_toml(v) for v in value]
     if isinstance(value, dict):
         return {k: _value_to_toml(v) for k, v in value.items()}
+    if isinstance(value, Stop):  # an extra stop: its table of extra_stops
+        return value.to_dict()
     return value
 
 

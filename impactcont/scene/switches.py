@@ -35,6 +35,7 @@ from impactcont.analysis.switching import grazing_switch, period_doubling_switch
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.scene.entries import (
@@ -217,7 +218,7 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
         # the stops bound the parameter (b > -b_low with a lower stop), as the run refuses
         library_check(where.key("bounds"), _check_stop_limits, osc, self.N, self.p,
                       self.parameter, self.bounds)
-        value = getattr(osc, self.parameter)
+        value = model_parameter(osc, self.parameter).value(osc)  # an element, an extra stop's
         lo, hi = self.bounds
         if value is None or not lo <= value <= hi:
             raise where.key("bounds").error(
