@@ -145,3 +145,68 @@ def test_a_map_of_extra_stop_impacts_round_trips(two_mass_map, tmp_path):
     np.testing.assert_array_equal(back["physical"].values, ds["physical"].values)
     again = multi_impact_map_orbit(back, omega=OMEGA[2], R=R[3])
     np.testing.assert_allclose(again.states, ds["state_k"].values[2, 3], rtol=0, atol=1e-9)
+
+
+# -- a free mode held by an extra stop (model/oscillator.py: any stop touching it holds it) --
+G_BALL, R_BALL = 0.5, 0.5
+
+
+def _ball_on_extra_stop(F_ball: float = 1.0) -> ic.ImpactOscillator:
+    """Holmes' (1982) bouncing ball as mass 2 (free, gravity G_BALL, its table the extra
+    lower stop A at x2 = 0), beside mass 1 on a spring under the upper stop U far away."""
+    return ic.ImpactOscillator(
+        M=np.eye(2), K=np.diag([2.0, 0.0]), F=[0.3, F_ball], F_static=[0.0, -G_BALL], R=0.7,
+        b=100.0, omega=1.0, eta=0.05,
+        stops=ic.Stops(extra=(ic.Stop("A", mass=2, gap=0.0, restitution=R_BALL, side=-1),)))
+
+
+def test_a_free_mass_held_only_by_an_extra_stop_is_accepted():
+    osc = _ball_on_extra_stop()
+    np.testing.assert_allclose(osc.free_modes.T, [[0.0, 1.0]], rtol=0, atol=1e-12)
+    # without A nothing holds mass 2: refused, naming the free motion and the stops seen
+    with pytest.raises(ic.ParameterError, match=r"free mode u = \[0\.0, 1\.0\] is held by "
+                                                r"nothing.*s = x1 \(normal \[1\.0, 0\.0\]\)"):
+        osc.replace(stops=ic.Stops())
+
+
+def test_the_ball_on_the_extra_stop_is_holmes_period_one_motion():
+    """Holmes' closed form (the ball leaves its table at ``v = R g T / (1 + R)``, the phase
+    ``sin(delta) = pi g (R - 1) / ((1 + R) F)``) and the simulator."""
+    osc = _ball_on_extra_stop()
+    period = 2.0 * np.pi
+    v = R_BALL * G_BALL * period / (1.0 + R_BALL)
+    s = np.pi * G_BALL * (R_BALL - 1.0) / (1.0 + R_BALL)
+    for delta in (np.arcsin(s), np.pi - np.arcsin(s)):
+        orbit = ic.multi_impact_orbit(osc, 1, 1, {"delta": delta + 0.02,
+                                                  "flight_times": [period * 1.01],
+                                                  "states": [[0.0, 0.0, 0.0, v]],
+                                                  "pattern": "A"})
+        assert np.remainder(orbit.phases[0] - delta + np.pi, 2 * np.pi) - np.pi == \
+            pytest.approx(0.0, abs=1e-10)
+        assert orbit.states[0][3] == pytest.approx(v, abs=1e-10)  # leaves the table at v
+        assert orbit.physical
+        res = ic.simulate(osc, orbit.states[0], orbit.phases[0], 2.5)
+        assert res.impact_stops == "AA"
+        np.testing.assert_allclose(np.diff(np.append(0.0, res.impact_times)), period,
+                                   rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize("stops, held", [
+    # two free masses: a stop on each holds both
+    (ic.Stops(extra=(ic.Stop("A", mass=2, gap=0.5, restitution=0.5),)), True),
+    # one coordinate for two free modes: x2 moves freely
+    (ic.Stops(b_low=0.5), False),
+    # a clearance between them and a stop on mass 2: both held
+    (ic.Stops(mass=2, relative_to=1, extra=(ic.Stop("A", mass=2, gap=0.5, restitution=0.5),)),
+     True),
+    # a clearance only: the masses move together, freely
+    (ic.Stops(mass=2, relative_to=1, b_low=0.5), False),
+])
+def test_two_free_masses_need_two_stop_coordinates(stops, held):
+    kw = dict(M=np.diag([1.0, 0.5]), K=np.zeros((2, 2)), F=[1.0, 0.0], R=0.7, b=0.3,
+              omega=1.0, eta=0.05)
+    if held:
+        assert ic.ImpactOscillator(**kw, stops=stops).free_modes.shape == (2, 2)
+    else:
+        with pytest.raises(ic.ParameterError, match="is held by nothing"):
+            ic.ImpactOscillator(**kw, stops=stops)

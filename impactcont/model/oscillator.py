@@ -222,15 +222,19 @@ def _free_modes(M: np.ndarray, K: np.ndarray, stops: Stops) -> np.ndarray:
     K positive definite (its Cholesky factorisation succeeds with every pivot above
     ``_PIVOT_PROOF`` of its diagonal entry) has none, without an eigensolve. Otherwise
     the modes of ``K u = lambda M u`` are classified against their componentwise rounding
-    scale (:func:`~impactcont.model.modal.classify_modes`); the
-    free ones span a subspace that the stop coordinate ``s = normal . x`` must hold:
-    ``normal . u != 0`` for one free mode, and no free motion with ``normal . u = 0`` (at
-    most one free mode for one stop coordinate).
+    scale (:func:`~impactcont.model.modal.classify_modes`); the free ones span a subspace
+    that the stops must hold: every free motion ``U c`` (``c != 0``) moves some stop
+    coordinate ``s = normal . x`` (:meth:`~impactcont.model.stops.Stops.coordinates`: the
+    upper and lower stops', a clearance's, each extra stop's). With ``T = N U`` (a row per
+    stop coordinate, each column scaled by ``|N| |U|``) that is ``T`` of full column rank,
+    its smallest singular value above ``TOUCH_RTOL``; one free mode is held by any stop
+    coordinate that touches it (``normal . u != 0``), and ``q`` stop coordinates hold at
+    most ``q`` free modes.
 
     Raises
     ------
     ParameterError
-        K not positive semi-definite, or a free mode no stop holds (named by its shape).
+        K not positive semi-definite, or a free motion no stop holds (named by its shape).
     """
     n = M.shape[0]
     try:
@@ -247,26 +251,27 @@ def _free_modes(M: np.ndarray, K: np.ndarray, stops: Stops) -> np.ndarray:
     _, free = classify_modes(lam, u, K)
     U = u[:, free]
     U = U * np.where(U[np.argmax(np.abs(U), axis=0), np.arange(U.shape[1])] < 0, -1.0, 1.0)
-    if not U.shape[1]:
+    nf = U.shape[1]
+    if not nf:
         return U
-    normal = stops.normal(n)
-    touch = normal @ U  # (n_f,)
-    scale = np.abs(normal) @ np.abs(U)
-    if U.shape[1] > 1 or not abs(touch[0]) > TOUCH_RTOL * scale[0]:
-        if U.shape[1] > 1:
-            # a free motion the stop coordinate does not see: orthogonal to normal^T U
-            _, _, vt = np.linalg.svd(touch[None, :])
-            shape = U @ vt[-1]
-        else:
-            shape = U[:, 0]
+    coordinates = stops.coordinates(n)
+    N = np.array([normal for _, normal in coordinates])  # (q, n)
+    scale = np.max(np.abs(N) @ np.abs(U), axis=0)  # (n_f,): each free mode's size on the stops
+    T = (N @ U) / np.where(scale > 0.0, scale, 1.0)
+    _, sv, vt = np.linalg.svd(T)  # full_matrices: vt (n_f, n_f)
+    held = sv.size == nf and sv[-1] > TOUCH_RTOL
+    if not held:
+        shape = U @ vt[-1]  # a free motion the stop coordinates do not see: T c = 0
         shape = shape / np.max(np.abs(shape))
+        seen = "; ".join(f"s = {text} (normal {normal.tolist()})"
+                         for text, normal in coordinates)
         raise ParameterError(
-            f"K has {U.shape[1]} free (rigid-body, zero-frequency) mode(s) and the free mode "
-            f"u = {np.round(shape, 12).tolist()} is held by nothing: no spring, and the stops "
-            f"(on s = {stops.coordinate}, normal {normal.tolist()}) do not touch it "
-            f"(normal . u = 0). Allowed: each free mode touched by a stop (one stop "
-            f"coordinate holds one free mode); add a spring (K positive definite) or put "
-            f"the stops on a coordinate that moves with that mode")
+            f"K has {nf} free (rigid-body, zero-frequency) mode(s) and the free mode "
+            f"u = {np.round(shape, 12).tolist()} is held by nothing: no spring, and no stop "
+            f"touches it (normal . u = 0 for every stop coordinate: {seen}). Allowed: every "
+            f"free motion touched by a stop (the upper/lower stops, a clearance or an extra "
+            f"stop; q stop coordinates hold at most q free modes); add a spring (K positive "
+            f"definite) or a stop on a coordinate that moves with that mode")
     return U
 
 
@@ -284,8 +289,8 @@ class ImpactOscillator:
     M, K : array_like, shape (n, n)
         Symmetric mass and stiffness matrices; M positive definite, K positive
         semi-definite. A free (rigid-body, zero-frequency) mode of K must be held by the
-        stops: ``stops.normal(n) . u_free != 0`` (one stop coordinate holds at most one
-        free mode); a free mode no stop touches is refused.
+        stops: every free motion moves some stop coordinate (U/L's, a clearance's or an
+        extra stop's, ``normal . u != 0``); a free motion no stop touches is refused.
     F : array_like, shape (n,)
         Forcing amplitude vector. Complex entries give the masses their own phases:
         ``F_j = |F_j| e^{i phi_j}`` forces mass j with ``|F_j| cos(omega t + delta + phi_j)``.

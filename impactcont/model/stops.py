@@ -435,6 +435,18 @@ class Stops:
             return dataclasses.replace(self, b_low=None, R_low=None, extra=extra)
         return dataclasses.replace(self, extra=extra)
 
+    def coordinates(self, n: int) -> list[tuple[str, np.ndarray]]:
+        """Every stop coordinate, once: ``(text, normal)`` of U/L's, then of each extra
+        stop on another coordinate (``s = normal . x``; a coordinate and its negative are
+        one)."""
+        out = [(self.coordinate, self.normal(n))]
+        for e in self.extra:
+            e.check(n)
+            nrm = _normal_of(e.mass, e.relative_to, n)
+            if not any(np.array_equal(nrm, v) or np.array_equal(nrm, -v) for _, v in out):
+                out.append((e.coordinate, nrm))
+        return out
+
     @property
     def pair(self) -> bool:
         """The stops act between two masses (``relative_to`` given)."""
