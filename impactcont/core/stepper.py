@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from impactcont.errors import ParameterError
 __all__ = [
     "BoundReachedError",
     "ContinuationStepError",
+    "CorrectorResult",
     "NewtonConvergenceError",
     "PalcStepper",
     "StepSizeBelowMinimumError",
@@ -47,6 +49,49 @@ FOLD_DLAM_TOLERANCE = 1e-12
 """Relative size below which the ``dlam`` of the initial tangent counts as zero."""
 SINGULAR_CONDITION = 1.0 / np.finfo(float).eps
 """Condition number above which a matrix is singular to working precision."""
+
+
+@dataclass(frozen=True, eq=False)
+class CorrectorResult:
+    """One step's corrector and tangent computed by the problem itself (``palc_step``).
+
+    A problem may provide ``palc_step(predicted, tangent, weights, tol, max_iter) ->
+    CorrectorResult | None``: Newton on ``[F(x); <W t, x - x_pred>] = 0`` from ``x_pred``
+    with the tests of :meth:`PalcStepper._correct_on_hyperplane`, then the (not
+    normalised) tangent of :meth:`PalcStepper._tangent_at` at the point (None: the core
+    corrects as usual).
+
+    Attributes
+    ----------
+    state : ndarray, shape (m + 1,)
+        The last iterate ``(u, lam)``.
+    iterations : int
+        Newton updates taken.
+    status : str
+        ``"converged"``, ``"not converged"``, ``"refused"`` (the problem refuses ``lam``:
+        `message` says why), ``"non-finite residual"``, ``"non-finite system"``,
+        ``"singular"`` or ``"non-finite update"``.
+    lam : float
+        The last ``lam`` evaluated.
+    residual_norm : float
+        Max-norm of the last residual.
+    tangent : ndarray, shape (m + 1,)
+        The raw tangent (converged only).
+    ill_conditioned : ndarray or None
+        A bordered matrix whose condition number may exceed :data:`SINGULAR_CONDITION`
+        (the stepper checks it and warns as for its own solves).
+    message : str
+        Why ``lam`` was refused.
+    """
+
+    state: FloatArray
+    iterations: int
+    status: str
+    lam: float
+    residual_norm: float
+    tangent: FloatArray
+    ill_conditioned: FloatArray | None = None
+    message: str = ""
 
 
 class ContinuationStepError(RuntimeError):
@@ -343,12 +388,52 @@ class PalcStepper:
     def _try_step(self, previous: ContinuationPoint, ds: float) -> tuple[ContinuationPoint, float]:
         """Predict, correct and compute the new tangent; return the point and turn angle."""
         predicted = previous.state + ds * previous.tangent
-        state, iterations = self._correct_on_hyperplane(predicted, previous.tangent)
-        u, lam = state[:-1], float(state[-1])
-        tangent = self._tangent_at(u, lam, previous.tangent)
+        compiled = self._problem_step(predicted, previous.tangent)
+        if compiled is None:
+            state, iterations = self._correct_on_hyperplane(predicted, previous.tangent)
+            u, lam = state[:-1], float(state[-1])
+            tangent = self._tangent_at(u, lam, previous.tangent)
+        else:
+            state, iterations, tangent = compiled
+            u, lam = state[:-1], float(state[-1])
         cosine = np.clip(self.scaled_dot(previous.tangent, tangent), -1.0, 1.0)
         point = self._make_point(u, lam, tangent, ds, iterations, index=previous.index + 1)
         return point, float(np.arccos(cosine))
+
+    def _problem_step(self, predicted: FloatArray, tangent: FloatArray
+                      ) -> tuple[FloatArray, int, FloatArray] | None:
+        """The problem's own corrector and tangent (``palc_step``, :class:`CorrectorResult`)
+        with the stepper's errors and warnings; None when it has none."""
+        step = getattr(self.problem, "palc_step", None)
+        if step is None or predicted.size == 2:
+            return None
+        result = step(predicted.copy(), tangent.copy(), self._metric_weights(),
+                      self.options.newton_tol, self.options.newton_max_iter)
+        if result is None:
+            return None
+        lam = result.lam
+        self._evaluated_lam = lam
+        if result.ill_conditioned is not None:
+            condition = _condition_number(result.ill_conditioned)
+            if condition > SINGULAR_CONDITION:
+                logger.warning("matrix singular to working precision at lam = %.10g "
+                               "(condition number %.3e)", lam, condition)
+        failure = {
+            "not converged": f"corrector did not converge in {self.options.newton_max_iter} "
+                             f"iterations (residual {result.residual_norm:.3g})",
+            "refused": f"the problem refused lam = {lam:.10g}: {result.message}",
+            "non-finite residual": f"non-finite residual at lam = {lam:.10g}",
+            "non-finite system": f"non-finite linear system at lam = {lam:.10g}",
+            "singular": f"singular matrix at lam = {lam:.10g}",
+            "non-finite update": f"non-finite Newton update at lam = {lam:.10g}",
+        }
+        if result.status != "converged":
+            raise NewtonConvergenceError(failure.get(result.status, result.status))
+        tangent = np.asarray(result.tangent, dtype=float)
+        if not np.isfinite(tangent).all():
+            raise NewtonConvergenceError(failure["non-finite update"])
+        state = np.array(result.state, dtype=float)
+        return state, result.iterations, tangent / self.scaled_norm(tangent)
 
     def _adapted_step(self, ds: float, iterations: int, angle: float) -> float:
         """Step size for the next step after an accepted one."""

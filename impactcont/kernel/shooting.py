@@ -50,7 +50,8 @@ from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "forced_amplitudes", "frequency_column", "jacobian_product",
-           "motion_checks", "newton_solve", "omega_partials", "shooting_system"]
+           "motion_checks", "newton_solve", "omega_partials", "palc_correct",
+           "shooting_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -919,10 +920,11 @@ def forced_amplitudes(w, a, f, errors, omega):
         detune = (w[i] - omega) * (w[i] + omega)
         damp = 2.0 * a[i] * omega
         delta = detune * detune + damp * damp
-        if delta == 0.0:
+        if delta == 0.0:  # an undamped mode at omega: refused when forced, else zero
             if f[i] != 0.0:
                 resonant = True
-            delta = 1.0
+            gam[i] = bet[i] = dgam[i] = dbet[i] = 0.0
+            continue
         gam[i] = detune * f[i] / delta
         bet[i] = damp * f[i] / delta
         den = complex(detune, damp)
@@ -989,3 +991,161 @@ def jacobian_product(pivots, normals, matrices, omega, transitions, pcols, rates
                 tmp[r, c] = s
         G[:, :] = tmp
     return G
+
+
+#: ``palc_correct`` statuses besides :data:`CONVERGED` and :data:`FAILED` (no convergence)
+REFUSED = 2  # omega <= 0, not finite, or at an undamped resonance: the problem refuses it
+NONFINITE_RESIDUAL = 3
+NONFINITE_SYSTEM = 4
+SINGULAR = 5  # a pivot exactly zero
+NONFINITE_UPDATE = 6
+
+
+@_inner
+def _frobenius_condition(A):
+    """``|A|_F |A^-1|_F`` (``inf`` when a pivot is exactly zero): an upper bound of the
+    2-norm condition number, at most ``size`` times it."""
+    size = A.shape[0]
+    inv_sq = 0.0
+    e = np.zeros(size)
+    for c in range(size):
+        e[:] = 0.0
+        e[c] = 1.0
+        col, ok = _solve(A, e)
+        if not ok:
+            return np.inf
+        for r in range(size):
+            inv_sq += col[r] * col[r]
+    a_sq = 0.0
+    for r in range(size):
+        for c in range(size):
+            a_sq += A[r, c] * A[r, c]
+    return math.sqrt(a_sq) * math.sqrt(inv_sq)
+
+
+@_jit
+def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matrices, E, c,
+                 rows, predicted, tangent, weights, tol, max_iter, singular):
+    """The pseudo-arclength corrector of an N-p branch in omega (modal flow), compiled.
+
+    Newton on ``[F(v, omega); <W t, x - x_pred>] = 0`` from ``x = x_pred`` with the
+    arithmetic and tests of ``PalcStepper._correct_on_hyperplane`` (converged when
+    ``max|F| <= tol`` and, after an update, the last update's max-norm too), then the
+    tangent at the point (``PalcStepper._tangent_at``, not normalised): the bordered
+    system with the last row ``W t`` and the right-hand side ``e_m``. ``F`` is the first
+    `rows` rows of the shooting residual (:func:`branch_linearization`) at the full
+    unknowns ``u = E v + c / omega`` (the identity and zero for any N-p motion, the
+    half-motion's embedding for a symmetric one, :class:`impactcont.orbit.symmetry.HalfUnknowns`),
+    with the forced amplitudes of eq. (7) at each omega (:func:`forced_amplitudes`).
+
+    Returns
+    -------
+    tuple
+        ``(state, iterations, status, omega, residual_norm, tangent, worst, worst_omega,
+        flagged)``: the last iterate, the updates taken, :data:`CONVERGED`,
+        :data:`FAILED` or a refusal (:data:`REFUSED`, ...), the last omega evaluated, the
+        last residual's max-norm, the raw tangent (converged only), the largest
+        amplitude error bound of :func:`forced_amplitudes` and its omega, and the first
+        bordered matrix whose Frobenius condition bound exceeds `singular` (shape (0, 0)
+        when none: the caller checks its 2-norm condition number).
+    """
+    size = predicted.size - 1
+    full = E.shape[0]
+    empty_c = np.zeros(0, dtype=np.complex128)
+    empty_cc = np.zeros((0, 0), dtype=np.complex128)
+    state = predicted.copy()
+    last_update = np.inf
+    worst = 0.0
+    worst_omega = np.nan
+    flagged = np.zeros((0, 0))
+    border = weights * tangent
+    raw = np.zeros(size + 1)
+    omega = state[size]
+    norm = np.nan
+    for it in range(max_iter + 1):
+        omega = state[size]
+        if not (omega > 0.0 and omega < np.inf):
+            return state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged
+        gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
+        if resonant:
+            return state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged
+        if bound > worst or bound != bound:
+            worst = bound
+            worst_omega = omega
+        x = np.empty(full)
+        for r in range(full):
+            s = c[r] / omega
+            for k in range(size):
+                s += E[r, k] * state[k]
+            x[r] = s
+        period = 2.0 * math.pi * N / omega
+        sh, ext = branch_linearization(False, w, a, gam, bet, f, u, ui, empty_c, empty_cc,
+                                       empty_cc, empty_c, st, omega, period, pivots, normals,
+                                       positions, matrices, x, dgam, dbet, empty_c)
+        residual = sh[7]
+        norm = 0.0
+        for r in range(rows):
+            v = abs(residual[r])
+            if not v < np.inf:
+                return state, it, NONFINITE_RESIDUAL, omega, v, raw, worst, worst_omega, flagged
+            if v > norm:
+                norm = v
+        # [J E | dF/domega - J c / omega^2] on the first rows, and the border
+        A = np.empty((size + 1, size + 1))
+        for r in range(rows):
+            for k in range(size):
+                s = 0.0
+                for i in range(full):
+                    s += ext[r, i] * E[i, k]
+                A[r, k] = s
+            s = ext[r, full]
+            for i in range(full):
+                s -= ext[r, i] * c[i] / (omega * omega)
+            A[r, size] = s
+        for k in range(size + 1):
+            A[size, k] = border[k]
+        finite = True
+        for r in range(size + 1):
+            for k in range(size + 1):
+                if not abs(A[r, k]) < np.inf:
+                    finite = False
+        converged = norm <= tol and (it == 0 or last_update <= tol)
+        if (finite and (converged or it < max_iter) and flagged.shape[0] == 0
+                and _frobenius_condition(A) > singular):
+            flagged = A.copy()
+        if converged:
+            if not finite:
+                return state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega, flagged
+            e = np.zeros(size + 1)
+            e[size] = 1.0
+            t, ok = _solve(A, e)
+            if not ok:
+                return state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged
+            return state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged
+        if it == max_iter:
+            break
+        if not finite:
+            return state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega, flagged
+        rhs = np.empty(size + 1)
+        for r in range(rows):
+            rhs[r] = -residual[r]
+        s = 0.0
+        for k in range(size + 1):
+            s += border[k] * (state[k] - predicted[k])
+        rhs[size] = -s
+        if not abs(s) < np.inf:
+            return state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega, flagged
+        update, ok = _solve(A, rhs)
+        if not ok:
+            return state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged
+        last_update = 0.0
+        for k in range(size + 1):
+            v = abs(update[k])
+            if not v < np.inf:
+                return (state, it, NONFINITE_UPDATE, omega, norm, raw, worst, worst_omega,
+                        flagged)
+            if v > last_update:
+                last_update = v
+        for k in range(size + 1):
+            state[k] += update[k]
+    return state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged

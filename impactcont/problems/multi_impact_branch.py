@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from impactcont.core.stepper import SINGULAR_CONDITION, CorrectorResult
 from impactcont.errors import ParameterError
 from impactcont.model.modal import _RESONANCE_REL_ERROR_WARN, forced_coefficients
 from impactcont.model.oscillator import ImpactOscillator
@@ -61,6 +62,10 @@ from impactcont.orbit.stop_geometry import StopGeometry
 __all__ = ["MultiImpactBranchProblem"]
 
 _CACHE_SIZE = 64
+_REFUSED = 2
+#: :func:`impactcont.kernel.shooting.palc_correct`'s statuses in the core's words
+_STATUSES = ("converged", "not converged", "refused", "non-finite residual",
+             "non-finite system", "singular", "non-finite update")
 
 
 class MultiImpactBranchProblem:
@@ -341,6 +346,50 @@ class MultiImpactBranchProblem:
         return _kernel().jacobian_product(geo.pivots, geo.normals, geo.matrices, flow.omega,
                                           sh.transitions, sh.phase_columns, sh.arrival_rates,
                                           int(count))
+
+    def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
+                  tol: float, max_iter: int) -> CorrectorResult | None:
+        """The continuation core's corrector and tangent of one step, compiled (omega only).
+
+        :func:`impactcont.kernel.shooting.palc_correct`: the core's optional one-call step
+        (:class:`~impactcont.core.problem.Problem`); None when the parameter is not omega
+        or the flow is not modal (the core then corrects with :meth:`linearize`).
+        """
+        if self._base_flow is None:
+            return None
+        return self._palc_step(predicted, tangent, weights, tol, max_iter,
+                               np.eye(self.size), np.zeros(self.size), self.size)
+
+    def _palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
+                   tol: float, max_iter: int, E: np.ndarray, c: np.ndarray, rows: int
+                   ) -> CorrectorResult:
+        """:meth:`palc_step` on the unknowns ``v`` with ``u = E v + c / omega`` and the
+        first `rows` equations (a symmetric motion's half system)."""
+        base = self._base_flow
+        arrays = base.shooting_arrays()
+        errors = self.osc.modes.eigenvalue_errors
+        geo = _geometry(base, self.pattern)
+        (state, iterations, status, omega, norm, raw, worst, worst_omega,
+         flagged) = _kernel().palc_correct(
+            arrays[1], arrays[2], arrays[5], _errors(errors, base.n), arrays[6], arrays[7],
+            base.static_arrays(), float(self.N), geo.pivots, geo.normals, geo.positions,
+            geo.matrices, E, c, int(rows), _writable(predicted), _writable(tangent),
+            _writable(weights), float(tol), int(max_iter), SINGULAR_CONDITION)
+        if errors is not None and worst > _RESONANCE_REL_ERROR_WARN:
+            # an iterate near a lightly damped mode: forced_coefficients warns in its words
+            forced_coefficients(base.w, base.a, base.f, worst_omega, eigenvalue_errors=errors)
+        message = ""
+        if status == _REFUSED:
+            try:  # the oscillator's own refusal (omega <= 0, an undamped resonance)
+                self.flow_at(omega)
+                message = f"omega = {omega!r} refused"
+            except ParameterError as error:
+                message = str(error)
+        return CorrectorResult(state=state, iterations=int(iterations),
+                               status=_STATUSES[int(status)], lam=float(omega),
+                               residual_norm=float(norm), tangent=raw,
+                               ill_conditioned=flagged if flagged.size else None,
+                               message=message)
 
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:

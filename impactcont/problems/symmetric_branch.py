@@ -30,6 +30,7 @@ from typing import ClassVar
 import numpy as np
 
 from impactcont.core.locate import MotionTest
+from impactcont.core.stepper import CorrectorResult
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, ModelParameter
@@ -212,6 +213,16 @@ class SymmetricBranchProblem:
         (:func:`~impactcont.orbit.symmetry.half_map`, from one compiled call on the shot)."""
         A = self.full.jacobian_product(self.full_unknowns(v, lam), lam, self.p // 2)
         return _reflection(self.osc.n)[:, None] * A
+
+    def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
+                  tol: float, max_iter: int) -> CorrectorResult | None:
+        """The core's corrector and tangent of one step, compiled, on the half system
+        (:meth:`MultiImpactBranchProblem.palc_step` with ``u = E v + e(omega)``)."""
+        if self.full._base_flow is None:
+            return None
+        offset = -self.halves.offset_derivative(1.0)  # e(omega) = offset / omega
+        return self.full._palc_step(predicted, tangent, weights, tol, max_iter,
+                                    self._E, offset, self.size)
 
     def orbit(self, v: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full symmetric N-p motion (states, G, multipliers, checks) at ``(v, lam)``."""
