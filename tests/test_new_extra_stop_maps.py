@@ -210,3 +210,53 @@ def test_two_free_masses_need_two_stop_coordinates(stops, held):
     else:
         with pytest.raises(ic.ParameterError, match="is held by nothing"):
             ic.ImpactOscillator(**kw, stops=stops)
+
+
+# -- the simulator's clearances against every stop (simulate/contact.py) ---------------------
+def _three_extra_stops() -> ic.ImpactOscillator:
+    """The chain of ``_wagg`` with A above mass 2, B below it (met moving down) and C on
+    ``x2 - x1`` (a stop between the masses)."""
+    return _wagg(stops=ic.Stops(extra=(
+        ic.Stop("A", mass=2, gap=0.6, restitution=0.7),
+        ic.Stop("B", mass=2, gap=0.5, restitution=0.5, side=-1),
+        ic.Stop("C", mass=2, relative_to=1, gap=0.45, restitution=0.6))))
+
+
+def _interior_top(t, y):
+    """Highest interior local maximum of a densely sampled ``y`` and its time."""
+    i = np.flatnonzero((y[1:-1] >= y[:-2]) & (y[1:-1] >= y[2:])) + 1
+    k = i[np.argmax(y[i])]
+    return float(y[k]), float(t[k])
+
+
+def test_flight_clearances_against_every_stop(two_mass_map):
+    from impactcont.orbit.flow import Flow
+    from impactcont.simulate.contact import flight_clearances
+
+    osc = _three_extra_stops()
+    orbit = ic.multi_impact_orbit(osc, 1, 2, two_mass_map[0])  # the AU motion, B and C added
+    assert not orbit.physical and "stop 'B'" in orbit.reason
+    flow = Flow(osc)
+    k = int(np.argmax(orbit.flight_times))  # the long flight (the other has no extremum)
+    tau = float(orbit.flight_times[k])
+    gap_u, t_u, gap_l, t_l, gap_x, t_x = flight_clearances(
+        flow, orbit.states[k], float(orbit.phases[k]), tau, extra=True)
+    assert len(flight_clearances(flow, orbit.states[k], float(orbit.phases[k]), tau)) == 4
+    assert np.isinf(gap_l) and np.isnan(t_l)  # no lower stop L
+    # a dense sampling of the exact flow (2e5 + 1 points: the sampled extremum is within
+    # h^2 max|s''| / 8 < 1e-9 of the true one)
+    t = np.linspace(0.0, tau, 200_001)
+    X = flow.state(t, orbit.states[k], float(orbit.phases[k]))
+    x1, x2 = X[:, 0], X[:, 1]
+    for gap, when, (level, y) in zip(
+            (gap_u, *gap_x), (t_u, *t_x),
+            ((0.3, x1), (0.6, x2), (0.5, -x2), (0.45, x2 - x1)), strict=True):
+        top, at = _interior_top(t, y)
+        assert gap == pytest.approx(level - top, abs=1e-8)
+        assert when == pytest.approx(at, abs=1e-4)
+    assert np.min(gap_x) < 0.0 < min(gap_x[0], gap_u)  # B and C crossed, A and U clear
+    # the kernel's check of the same flight (multi_impact_orbit): the nearest stop and gap
+    gaps = {"U": gap_u, "A": gap_x[0], "B": gap_x[1], "C": gap_x[2]}
+    nearest = min(gaps, key=gaps.get)
+    assert orbit.flight_gap_stops[k] == nearest
+    assert orbit.flight_gap_min[k] == pytest.approx(gaps[nearest], abs=1e-9)

@@ -15,8 +15,9 @@ upper stop, ``-1`` for the lower) reaching the level ``s c`` from below
 :mod:`impactcont.orbit.extrema` (cells cut at the critical points of ``x_j``, each
 root polished to a few ulps) serves both stops: ``flow.motion(X0, delta, j, s)``
 is the evaluator of ``y`` and its derivatives (modal or first-order flow),
-:func:`next_contact` the first impact on either stop, :func:`flight_clearances`
-the interior check of eq. (16) against both stops (the simulator's own, in numpy: the
+:func:`next_contact` the first impact on any stop, :func:`flight_clearances`
+the interior check of eq. (16) against both stops and, with ``extra=True``, every extra
+stop on its own coordinate (the simulator's own, in numpy: the
 shooting of N-p motions runs the compiled search of
 :mod:`impactcont.kernel.shooting`, and the tests hold one against the other).
 :func:`stop_sign` comes from :mod:`impactcont.orbit.stop_geometry`, below both.
@@ -33,6 +34,7 @@ windows per impact and per approach to a stop, however long the forcing period.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -54,13 +56,16 @@ _WINDOW_PERIODS = 64
 _ENVELOPE_ULPS = 1e3
 
 
-def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
-                      ) -> tuple[float, float, float, float]:
-    """Smallest clearance to each stop at the interior extrema of ``x_j`` on one flight.
+def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float, *,
+                      extra: bool = False) -> tuple[Any, ...]:
+    """Smallest clearance to each stop at the interior extrema of its coordinate on one flight.
 
-    Eq. (16) for both stops: the upper clearance is ``b - x_j`` at the interior
-    maxima of ``x_j``, the lower ``x_j + b_low`` at its interior minima; a flight is
-    free of contact when both are ``> 0``.
+    Eq. (16) for every stop: the upper clearance is ``b - s`` at the interior maxima of
+    the stop coordinate ``s = normal . x``, the lower ``s + b_low`` at its interior minima;
+    an extra stop met moving up at ``s' = c`` (its own coordinate,
+    :meth:`~impactcont.model.stops.Stops.stop`) has ``c - s`` at the maxima of its ``s``,
+    one met moving down ``s - c`` at the minima. A flight is free of contact when every
+    clearance is ``> 0``.
 
     Parameters
     ----------
@@ -71,12 +76,17 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
         Forcing phase there.
     tau : float
         Flight time, ``> 0``.
+    extra : bool
+        Also return the clearances to the extra stops (``osc.stops.extra``).
 
     Returns
     -------
     gap_upper, time_upper, gap_lower, time_lower : float
         Each clearance (``+inf`` with no such extremum, or no lower stop) and the
         time of its extremum after the start (NaN when there is none).
+    gap_extra, time_extra : ndarray, shape (q,)
+        With `extra`: the same for each extra stop, in the order of ``osc.stops.extra``
+        (as :func:`impactcont.kernel.shooting.motion_checks` returns them).
     """
     osc = flow.osc
     normal = osc.stops.normal(osc.n)
@@ -94,7 +104,32 @@ def flight_clearances(flow: Flow, X0: np.ndarray, delta: float, tau: float
         if osc.stops.two_sided and np.any(bottom):
             i = int(np.argmin(np.where(bottom, x, np.inf)))
             gap_l, t_l = float(x[i] + osc.stops.b_low), float(cp[i])
-    return gap_u, t_u, gap_l, t_l
+    if not extra:
+        return gap_u, t_u, gap_l, t_l
+    stops = osc.stops.extra
+    gap_x = np.full(len(stops), math.inf)
+    t_x = np.full(len(stops), math.nan)
+    for k, e in enumerate(stops):
+        view = osc.stops.stop(e.name, osc.M, osc.b, osc.R)
+        gap_x[k], t_x[k] = _stop_clearance(flow, X0, delta, tau, view.normal, view.sign,
+                                           view.position, view.pivot)
+    return gap_u, t_u, gap_l, t_l, gap_x, t_x
+
+
+def _stop_clearance(flow: Flow, X0: np.ndarray, delta: float, tau: float, normal: np.ndarray,
+                    sign: float, position: float, pivot: int) -> tuple[float, float]:
+    """``(gap, time)`` of eq. (16) against one stop met with ``sign s' > 0`` at
+    ``s = position``: ``sign (position - s)`` at the interior extremum of ``s`` nearest it
+    (the highest maximum of ``y = sign s``); ``(inf, nan)`` when there is none."""
+    motion = flow.motion(X0, delta, pivot, sign, normal)
+    cp = critical_points(motion, sample_times(flow, 0.0, tau, normal=normal))
+    if cp.size:
+        y, _, acc = motion(cp)
+        top = acc < 0
+        if np.any(top):
+            i = int(np.argmax(np.where(top, y, -np.inf)))
+            return float(sign * position - y[i]), float(cp[i])
+    return math.inf, math.nan
 
 
 def search_window(flow: Flow, index: int | None = None, *, normal: np.ndarray | None = None
