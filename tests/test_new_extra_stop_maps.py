@@ -260,3 +260,15 @@ def test_flight_clearances_against_every_stop(two_mass_map):
     nearest = min(gaps, key=gaps.get)
     assert orbit.flight_gap_stops[k] == nearest
     assert orbit.flight_gap_min[k] == pytest.approx(gaps[nearest], abs=1e-9)
+
+
+def test_the_stop_geometry_of_a_pattern_on_two_masses_has_a_pivot_per_impact():
+    from impactcont.orbit.stop_geometry import stop_geometry
+
+    geo = stop_geometry(_wagg(), "AU")
+    np.testing.assert_array_equal(geo.pivots, [1, 0])  # x2 on A's section, x1 on U's
+    np.testing.assert_array_equal(geo.signs, [1.0, 1.0])
+    np.testing.assert_array_equal(geo.positions, [0.6, 0.3])
+    assert stop_geometry(_wagg(), "A").pivot == 1
+    with pytest.raises(ic.ParameterError, match=r"pivots \[2, 1\].*StopGeometry.pivots"):
+        _ = geo.pivot

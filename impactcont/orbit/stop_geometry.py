@@ -93,19 +93,21 @@ class StopGeometry:
 
     @property
     def pivot(self) -> int:
-        """The pivot shared by every impact (stops of one coordinate's mass).
+        """The pivot shared by every impact (a pattern of one stop, e.g. the stop a grazing
+        point's new impact hits).
+
+        Every path over a whole pattern reads :attr:`pivots` (one per impact): the
+        shooting, its derivatives, the compiled map sweep.
 
         Raises
         ------
         ParameterError
-            When the impacts hit stops of different masses (several stop coordinates): a
-            path that assumes one pivot does not handle them yet.
+            When the impacts hit stops of different masses: ask :attr:`pivots`.
         """
         if np.any(self.pivots != self.pivots[0]):
-            raise ParameterError("not yet several stop coordinates: the impacts of this "
-                                 "motion hit stops of different masses (pivots "
-                                 f"{(self.pivots + 1).tolist()}); this path handles the "
-                                 "stops of one coordinate only")
+            raise ParameterError("StopGeometry.pivot: the impacts of this pattern hit stops "
+                                 f"of different masses (pivots {(self.pivots + 1).tolist()}, "
+                                 "1-based); read StopGeometry.pivots, one per impact")
         return int(self.pivots[0])
 
 
