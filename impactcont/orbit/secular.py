@@ -50,50 +50,78 @@ G with the motion's own velocity as its pole,
 (:func:`velocity_row_error`) exceeds :data:`impactcont.orbit.dense.VELOCITY_POLISH` of the
 motion's velocity ``sigma``. Chains up to n = 200 at ordinary frequencies stay below
 1.1e-13 (relative).
+
+Plain numpy, nothing compiled (a system's first large orbit costs no compile wave): each
+Aberth-Ehrlich sweep corrects all roots not yet done at once (Jacobi order), the modal
+sums of ``S`` and its derivative for all of them as one matrix product, (2 x roots) x
+modes by modes x 12, and the Aberth repulsion as one roots x roots array.
 """
 
 from __future__ import annotations
 
-import math
+from typing import NamedTuple
 
 import numpy as np
 
-from impactcont.kernel.closed_form import jacobian_pieces
-from impactcont.kernel.jit import entry as _jit
-from impactcont.kernel.stability import by_modulus
 from impactcont.orbit.dense import VELOCITY_POLISH
 
-__all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "power_sums_agree", "secular_multipliers",
+__all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "jacobian_pieces", "power_sums",
+           "power_sums_agree", "secular_coefficients", "secular_multipliers",
            "velocity_row_error"]
 
-_EPS = float(np.finfo(np.float64).eps)  # unit roundoff of float64, a compile-time constant
+_EPS = float(np.finfo(np.float64).eps)  # unit roundoff of float64
 
 SECULAR_MIN = 16
-"""Systems with at least this many degrees of freedom get their multipliers here (below,
-the dense G and its eigenvalues cost less)."""
+"""Systems with at least this many degrees of freedom get their multipliers here, below it
+the dense G and its eigenvalues. Side by side the numpy sweeps (about 1 ms up to n ~ 40)
+are the faster path from n = 38-40 on (``studies/performance/README.md``, "Cost against
+n"); the threshold stays where the tests of the routing put it."""
 POWER_SUM_TOL = 1e-9
 """Largest accepted ``|sum mu^k - tr G^k| / sum |mu|^k`` (k = 1, 2) of the roots."""
 _MAX_SWEEPS = 200
-_STAGNATION = 1e-9  # a root whose correction stops shrinking below this (relative) is done
+_STAGNATION = 1e-9  # below this times max(largest root, 1), every correction: the noise floor
 DEAD = _EPS
 """Modal multipliers (eigenvalues of ``W_i(T)``, dimensionless) below this are set apart as
 exact zeros: the fast decay of over-damped modes, modes that die out within the period."""
 
 
-@_jit
-def _modal_multipliers(t, p):
-    """Both eigenvalues of a 2 x 2 block from its trace and determinant, without
+def _modal_multipliers(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both eigenvalues of each 2 x 2 block from its trace and determinant, without
     cancellation (the smaller of a real pair as ``p / larger``); larger modulus first."""
     disc = 0.25 * t * t - p
-    if disc >= 0.0:
-        big = 0.5 * t + math.copysign(math.sqrt(disc), t)
-        small = p / big if big != 0.0 else 0.0
-        return complex(big), complex(small)
-    root = 1j * math.sqrt(-disc)
-    return 0.5 * t + root, 0.5 * t - root
+    root = np.sqrt(np.abs(disc))
+    big = 0.5 * t + np.copysign(root, t)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        small = np.where(big != 0.0, p / np.where(big != 0.0, big, 1.0), 0.0)
+    real = disc >= 0.0
+    return (np.where(real, big, 0.5 * t + 1j * root),
+            np.where(real, small, 0.5 * t - 1j * root))
 
 
-@_jit
+def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
+    """The modal ingredients of G (eq. 22-25) at a motion, each shape (n,), in numpy.
+
+    The same quantities as the compiled
+    :func:`impactcont.kernel.closed_form.jacobian_pieces` (computed here so that the
+    secular path compiles nothing): ``e_y, e_v``, d/d delta of the forcing term over a
+    period, ``E_delta = (I - W) P_delta`` per mode; ``v_pre, acc``, modal velocity and
+    acceleration just before the impact, ``z'(T^-)`` (forced part harmonic,
+    ``-omega^2 y_p``; free part by the mode's equation).
+    """
+    kappa = 1.0 + R
+    cd, sd = np.cos(delta), np.sin(delta)
+    gm, bt = modal[0], modal[1]
+    py = -gm * sd + bt * cd
+    pv = omega * (-bt * sd - gm * cd)
+    e_y = (1.0 - modal[2]) * py - modal[3] * pv
+    e_v = -modal[4] * py + (1.0 - modal[5]) * pv
+    free_v = modal[7] + ui0
+    v_pre = omega * (bt * cd - gm * sd) + kappa * sigma * free_v
+    acc = (-omega * omega * (gm * cd + bt * sd)
+           + kappa * sigma * (-w * w * modal[6] - 2.0 * a * free_v))
+    return e_y, e_v, v_pre, acc
+
+
 def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
     """The modal pieces of ``S(mu)``: ``(coef, kind, t, p, lam, const, zeros, h2, xn)``.
 
@@ -109,286 +137,271 @@ def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
     ``lam_i``, ``kind`` 0 leaves the constant ``const[k]``. Left in, such multipliers
     make a near-multiple root at 0 that no root finder resolves from values.
     """
-    n = modal.shape[1]
     kappa = 1.0 + R
-    h2 = 0.0
-    xn = 0.0
-    for i in range(n):
-        h2 += u0[i] * v_pre[i]
-        xn += u0[i] * acc[i]
-    coef = np.empty((6, 2, n))
-    kind = np.empty(n, dtype=np.int64)
-    t = np.empty(n)
-    p = np.empty(n)
-    lam = np.empty(n, dtype=np.complex128)
-    const = np.zeros(6)
-    cols = np.empty((3, 2))
-    removed = 0
-    for i in range(n):
-        w11, w12, w21, w22 = modal[2, i], modal[3, i], modal[4, i], modal[5, i]
-        t[i] = w11 + w22
-        p[i] = w11 * w22 - w12 * w21
-        big, small = _modal_multipliers(t[i], p[i])
-        lam[i] = big
-        kind[i] = 2 if abs(small) > DEAD else 1 if abs(big) > DEAD else 0
-        removed += 2 - kind[i]
-        cols[0, 0] = 0.0
-        cols[0, 1] = kappa * ui0[i]
-        cols[1, 0] = v_pre[i] / h2
-        cols[1, 1] = (acc[i] - kappa * ui0[i] * xn) / h2
-        cols[2, 0] = e_y[i]
-        cols[2, 1] = e_v[i]
-        for k in range(3):
-            cy, cv = cols[k, 0], cols[k, 1]
-            coef[2 * k, 0, i] = u0[i] * cv
-            coef[2 * k, 1, i] = u0[i] * (w21 * cy - w11 * cv)
-            coef[2 * k + 1, 0, i] = u0[i] * cy
-            coef[2 * k + 1, 1, i] = u0[i] * (w12 * cv - w22 * cy)
-            if kind[i] == 0:  # mu (alpha mu + 0) / mu^2
-                const[2 * k] += coef[2 * k, 0, i]
-                const[2 * k + 1] += coef[2 * k + 1, 0, i]
-    return coef, kind, t, p, lam, const, removed - 1, h2, xn
+    h2 = float(np.sum(u0 * v_pre))
+    xn = float(np.sum(u0 * acc))
+    w11, w12, w21, w22 = modal[2], modal[3], modal[4], modal[5]
+    t = w11 + w22
+    p = w11 * w22 - w12 * w21
+    big, small = _modal_multipliers(t, p)
+    kind = np.where(np.abs(small) > DEAD, 2, np.where(np.abs(big) > DEAD, 1, 0))
+    zero = np.zeros_like(u0)
+    # the three columns (y and v parts) in modal coordinates
+    cy = np.stack((zero, v_pre / h2, e_y))
+    cv = np.stack((kappa * ui0, (acc - kappa * ui0 * xn) / h2, e_v))
+    coef = np.empty((6, 2, u0.size))
+    coef[0::2, 0] = u0 * cv
+    coef[0::2, 1] = u0 * (w21 * cy - w11 * cv)
+    coef[1::2, 0] = u0 * cy
+    coef[1::2, 1] = u0 * (w12 * cv - w22 * cy)
+    const = coef[:, 0, kind == 0].sum(axis=1)  # mu (alpha mu + 0) / mu^2
+    return coef, kind, t, p, big, const, int(np.sum(2 - kind)) - 1, h2, xn
 
 
-@_jit
-def log_derivative(mu, coef, kind, t, p, lam, const, zeros, omega, R, h2, xn):
-    """``F'(mu) / F(mu)`` of the polynomial whose zeros are the multipliers not set apart, O(n).
+class _Secular(NamedTuple):
+    """The secular function's pieces regrouped for evaluation at many ``mu`` at once."""
 
-    ``F = det(mu - A) det S(mu) / mu`` when no modal multiplier is set apart
-    (``zeros = -1``); otherwise ``det(mu - A)`` without its zeros at 0, times
-    ``det S(mu)``.
-    """
-    n = t.size
-    if mu == 0 or mu == 1:
-        return complex(np.inf, 0.0)  # M's extra zero root / the phase pole: stop here
-    # G_k = mu F_k: mu row^T (mu - A)^-1 column, mode by mode; dG_k its derivative
-    G = np.zeros(6, dtype=np.complex128)
-    dG = np.zeros(6, dtype=np.complex128)
-    logd = 0j
-    for i in range(n):
-        if kind[i] == 0:
-            continue
-        if kind[i] == 1:  # mu (alpha mu + beta) / (mu (mu - lam))
-            inv = 1.0 / (mu - lam[i])
-            logd += inv
-            for k in range(6):
-                num = coef[k, 0, i] * mu + coef[k, 1, i]
-                G[k] += num * inv
-                dG[k] += (coef[k, 0, i] - num * inv) * inv
-            continue
-        dd = 2.0 * mu - t[i]
-        d = mu * (mu - t[i]) + p[i]
-        if d == 0:
-            return complex(np.inf, 0.0)  # on a modal multiplier that is a root
-        inv = 1.0 / d
-        logd += dd * inv
-        for k in range(6):
-            num = coef[k, 0, i] * mu + coef[k, 1, i]
-            f = num * inv
-            G[k] += mu * f
-            dG[k] += f + mu * (coef[k, 0, i] - num * dd * inv) * inv
-    G += const
-    q = omega / h2
-    z = 1.0 / (mu - 1.0)
-    s11 = -R + G[0]
-    s21 = G[1]
-    s12 = R * xn / h2 + G[2] + q * z * G[4]
-    s22 = G[3] + q * z * G[5]
-    ds11 = dG[0]
-    ds21 = dG[1]
-    ds12 = dG[2] + q * z * (dG[4] - z * G[4])
-    ds22 = dG[3] + q * z * (dG[5] - z * G[5])
-    det = s11 * s22 - s12 * s21
-    if det == 0:
-        return complex(np.inf, 0.0)
-    ddet = ds11 * s22 + s11 * ds22 - ds12 * s21 - s12 * ds21
-    out = logd + z + ddet / det
-    return out - 1.0 / mu if zeros < 0 else out
+    t: np.ndarray  # (n2,) trace and determinant of the modes keeping both poles
+    p: np.ndarray
+    C2: np.ndarray  # (n2, 12) complex: coef[:, 0] then coef[:, 1] of those modes
+    lam: np.ndarray  # (n1,) the pole kept by the modes with one multiplier set apart
+    C1: np.ndarray  # (n1, 12) complex
+    const: np.ndarray  # (6,)
+    zeros: int
+    omega: float
+    R: float
+    h2: float
+    xn: float
 
 
-@_jit
-def _apply_a(modal, e_y, e_v, cy, cv, cd):
-    """``A [c; c_delta]`` in modal coordinates (the phase entry is unchanged)."""
-    n = cy.size
-    oy = np.empty(n)
-    ov = np.empty(n)
-    for i in range(n):
-        oy[i] = modal[2, i] * cy[i] + modal[3, i] * cv[i] + e_y[i] * cd
-        ov[i] = modal[4, i] * cy[i] + modal[5, i] * cv[i] + e_v[i] * cd
-    return oy, ov
+def _regroup(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn) -> _Secular:
+    both = kind == 2
+    one = kind == 1
+    table = np.concatenate((coef[:, 0], coef[:, 1])).T.astype(np.complex128)  # (n, 12)
+    return _Secular(t[both], p[both], np.ascontiguousarray(table[both]), lam[one],
+                    np.ascontiguousarray(table[one]), const, zeros, omega, R, h2, xn)
 
 
-@_jit
 def power_sums(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2, xn):
     """``tr G`` and ``tr G^2`` (equal to ``tr M``, ``tr M^2``) in O(n), with the sizes of
     the terms summed for each (the scale of their rounding errors)."""
-    n = u0.size
     kappa = 1.0 + R
-    # the two columns of Q in modal coordinates
-    qy = np.zeros((2, n))
-    qv = np.empty((2, n))
-    qd = np.array([0.0, omega / h2])
-    for i in range(n):
-        qv[0, i] = kappa * ui0[i]
-        qy[1, i] = v_pre[i] / h2
-        qv[1, i] = (acc[i] - kappa * ui0[i] * xn) / h2
-    eaq = np.empty((2, 2))  # E^T A Q
-    ea2q = np.empty((2, 2))  # E^T A^2 Q
-    for col in range(2):
-        y1, v1 = _apply_a(modal, e_y, e_v, qy[col], qv[col], qd[col])
-        y2, v2 = _apply_a(modal, e_y, e_v, y1, v1, qd[col])
-        eaq[0, col] = np.sum(u0 * v1)
-        eaq[1, col] = np.sum(u0 * y1)
-        ea2q[0, col] = np.sum(u0 * v2)
-        ea2q[1, col] = np.sum(u0 * y2)
-    tr_a = 1.0
-    tr_a2 = 1.0
-    size_a = 1.0
-    size_a2 = 1.0
-    for i in range(n):
-        t = modal[2, i] + modal[5, i]
-        t2 = t * t - 2.0 * (modal[2, i] * modal[5, i] - modal[3, i] * modal[4, i])
-        tr_a += t
-        tr_a2 += t2
-        size_a += abs(t)
-        size_a2 += abs(t2)
+    w11, w12, w21, w22 = modal[2], modal[3], modal[4], modal[5]
+    # the two columns of Q in modal coordinates, and A applied to them once and twice
+    qy = np.stack((np.zeros_like(u0), v_pre / h2))
+    qv = np.stack((kappa * ui0, (acc - kappa * ui0 * xn) / h2))
+    qd = np.array([0.0, omega / h2])[:, None]
+    y1 = w11 * qy + w12 * qv + e_y * qd
+    v1 = w21 * qy + w22 * qv + e_v * qd
+    y2 = w11 * y1 + w12 * v1 + e_y * qd
+    v2 = w21 * y1 + w22 * v1 + e_v * qd
+    eaq = np.stack((v1 @ u0, y1 @ u0))  # E^T A Q, rows (v, x), columns of Q
+    ea2q = np.stack((v2 @ u0, y2 @ u0))  # E^T A^2 Q
+    t = w11 + w22
+    t2 = t * t - 2.0 * (w11 * w22 - w12 * w21)
+    tr_a = 1.0 + np.sum(t)
+    tr_a2 = 1.0 + np.sum(t2)
+    size_a = 1.0 + np.sum(np.abs(t))
+    size_a2 = 1.0 + np.sum(np.abs(t2))
     tr_eaq = eaq[0, 0] + eaq[1, 1]
     tr_eaq2 = eaq[0, 0] * eaq[0, 0] + 2.0 * eaq[0, 1] * eaq[1, 0] + eaq[1, 1] * eaq[1, 1]
     tr_ea2q = ea2q[0, 0] + ea2q[1, 1]
-    sizes = (size_a + abs(eaq[0, 0]) + abs(eaq[1, 1]),
-             size_a2 + 2.0 * (abs(ea2q[0, 0]) + abs(ea2q[1, 1])) + np.sum(np.abs(eaq)) ** 2)
-    return tr_a - tr_eaq, tr_a2 - 2.0 * tr_ea2q + tr_eaq2, sizes[0], sizes[1]
+    return (float(tr_a - tr_eaq), float(tr_a2 - 2.0 * tr_ea2q + tr_eaq2),
+            float(size_a + abs(eaq[0, 0]) + abs(eaq[1, 1])),
+            float(size_a2 + 2.0 * (abs(ea2q[0, 0]) + abs(ea2q[1, 1]))
+                  + np.sum(np.abs(eaq)) ** 2))
 
 
-@_jit
 def _starts(kind, t, p, zeros):
     """The modal multipliers not set apart, nudged apart off the real axis, and one more
     start near 1/2 when some are (the degree is then one more than their count)."""
-    n = kind.size
-    m = 0
-    for i in range(n):
-        m += kind[i]
-    m += 1 if zeros >= 0 else 0
-    z = np.empty(m, dtype=np.complex128)
-    k = 0
-    for i in range(n):
-        big, small = _modal_multipliers(t[i], p[i])
-        for j in range(kind[i]):
-            mu = big if j == 0 else small
-            nudge = 1e-3 * np.exp(1j * (0.7 + 2.0 * math.pi * k / m))
-            z[k] = mu * (1.0 + nudge) if mu != 0 else nudge
-            k += 1
-    if zeros >= 0:
-        z[k] = 0.5 + 0.01j
-    return z
+    big, small = _modal_multipliers(t, p)
+    kept = np.stack((big, small), axis=1)[np.arange(2)[None, :] < kind[:, None]]
+    m = kept.size + (1 if zeros >= 0 else 0)
+    nudge = 1e-3 * np.exp(1j * (0.7 + 2.0 * np.pi * np.arange(kept.size) / m))
+    z = np.where(kept != 0, kept * (1.0 + nudge), nudge)
+    return np.append(z, 0.5 + 0.01j) if zeros >= 0 else z
 
 
-@_jit
-def aberth(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn, z):
-    """Aberth-Ehrlich iteration on every root at once (Gauss-Seidel order), in place.
+def log_derivative(mu: np.ndarray, s: _Secular, work: np.ndarray | None = None) -> np.ndarray:
+    """``F'(mu) / F(mu)`` at every ``mu`` (shape (m,)) at once, O(n) each.
+
+    ``F = det(mu - A) det S(mu) / mu`` when no modal multiplier is set apart
+    (``zeros = -1``); otherwise ``det(mu - A)`` without its zeros at 0, times
+    ``det S(mu)``. The modal sums are one matrix product, (2m x modes) by (modes x 12):
+    ``G_k = mu row_k^T (mu - A)^-1 column_k`` and its derivative ``dG_k``. Not finite
+    where F has a pole or ``mu`` sits on a root (``mu`` = 0, 1, a modal multiplier, a
+    zero of ``det S``). ``work``: scratch of at least ``(2m, n2)`` complex (n2 the modes
+    keeping both poles), reused across calls.
+    """
+    m = mu.size
+    x = mu[:, None]
+    if work is None:
+        work = np.empty((2 * m, s.t.size), dtype=np.complex128)
+    inv, slope = work[:m], work[m:2 * m]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        # modes keeping both poles: mu (alpha mu + beta) / d, d = mu^2 - t mu + p
+        np.subtract(x, s.t, out=slope)
+        slope *= x
+        slope += s.p
+        np.divide(1.0, slope, out=inv)  # d = 0 (on a modal multiplier): not finite
+        np.subtract(2.0 * x, s.t, out=slope)  # d' = 2 mu - t
+        slope *= inv
+        logd = slope.sum(axis=1)
+        slope *= inv  # d' / d^2
+        sums = work[:2 * m] @ s.C2  # (2m, 12)
+        a0, a1 = sums[:m, :6], sums[:m, 6:]
+        b0, b1 = sums[m:, :6], sums[m:, 6:]
+        xa0 = x * a0
+        f = xa0 + a1
+        G = x * f  # G_k = mu F_k, F_k = row_k^T (mu - A)^-1 column_k
+        dG = f + xa0 - x * (x * b0 + b1)
+        if s.lam.size:  # one pole kept: mu (alpha mu + beta) / (mu (mu - lam))
+            inv1 = 1.0 / (x - s.lam)
+            logd += inv1.sum(axis=1)
+            sums1 = np.concatenate((inv1, inv1 * inv1)) @ s.C1
+            c0, c1 = sums1[:m, :6], sums1[:m, 6:]
+            e0, e1 = sums1[m:, :6], sums1[m:, 6:]
+            G += x * c0 + c1
+            dG += c0 - x * e0 - e1
+        G += s.const
+        # S = [[s11, s12], [s21, s22]]: column 1 from kappa e_v1, column 2 from D dX / h2
+        # and the phase column dE, which enters with omega / (h2 (mu - 1))
+        z = (1.0 / (mu - 1.0))[:, None]
+        qz = (s.omega / s.h2) * z
+        col2 = G[:, 2:4] + qz * G[:, 4:6]
+        col2[:, 0] += s.R * s.xn / s.h2
+        dcol2 = dG[:, 2:4] + qz * (dG[:, 4:6] - z * G[:, 4:6])
+        s11 = G[:, 0] - s.R
+        det = s11 * col2[:, 1] - col2[:, 0] * G[:, 1]
+        ddet = (dG[:, 0] * col2[:, 1] + s11 * dcol2[:, 1] - dcol2[:, 0] * G[:, 1]
+                - col2[:, 0] * dG[:, 1])
+        out = logd + z[:, 0] + ddet / det
+        if s.zeros < 0:
+            out -= 1.0 / mu
+    # M's extra zero root, the phase pole, a zero of det S: stop there
+    out[(mu == 0) | (mu == 1) | (det == 0)] = np.inf
+    return out
+
+
+def _repulsion(z: np.ndarray, active: np.ndarray, work: np.ndarray) -> np.ndarray:
+    """Aberth's ``sum_j 1 / (z_k - z_j)`` for each active ``k`` over the other roots, those
+    equal to ``z_k`` left out. ``work``: scratch of at least ``(active.size, z.size)``."""
+    gaps = np.subtract(z[active, None], z, out=work[:active.size])
+    gaps[np.arange(active.size), active] = np.inf  # itself: 1 / inf = 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(1.0, gaps, out=gaps)
+    out = gaps.sum(axis=1)
+    tie = ~np.isfinite(out)  # another root equal to z_k: left out
+    if tie.any():
+        gaps = z[active[tie], None] - z
+        gaps[gaps == 0] = np.inf
+        out[tie] = (1.0 / gaps).sum(axis=1)
+    return out
+
+
+def aberth(s: _Secular, z: np.ndarray) -> bool:
+    """Aberth-Ehrlich iteration on every root at once (Jacobi order: each sweep corrects
+    all roots not yet done from the same values, as array operations), in place.
 
     Returns whether every root converged: its correction fell to rounding level, or
-    stopped shrinking (no longer below half the smallest one so far) once below
-    ``_STAGNATION`` times the largest root: the noise floor of the evaluation (a
-    cluster of tiny roots, e.g. from a nearly defective zero multiplier, is no better
-    defined by dense eigenvalues).
+    stopped shrinking (no longer below half the smallest one so far) once every
+    correction is below ``_STAGNATION`` times the largest root (or 1): the noise floor
+    of the evaluation (a cluster of tiny roots, e.g. from a nearly defective zero
+    multiplier, is no better defined by dense eigenvalues). That gate keeps a small
+    root from being taken as stagnant while large ones still move and push it about.
     """
-    m = z.size
-    done = np.zeros(m, dtype=np.bool_)
-    smallest = np.full(m, np.inf)
+    done = np.zeros(z.size, dtype=bool)
+    smallest = np.full(z.size, np.inf)
+    work = np.empty((2 * z.size, s.t.size), dtype=np.complex128)
+    pairs = np.empty((z.size, z.size), dtype=np.complex128)
     for _ in range(_MAX_SWEEPS):
-        remaining = 0
         # absolute accuracy eps * |largest root|, as for dense eigenvalues
-        largest = np.max(np.abs(z))
+        largest = np.abs(z).max()
         floor = _EPS * largest
-        for k in range(m):
-            if done[k]:
-                continue
-            L = log_derivative(z[k], coef, kind, t, p, lam, const, zeros, omega, R, h2, xn)
-            if not (np.isfinite(L.real) and np.isfinite(L.imag)):
-                done[k] = True  # sits on a root: nothing to correct
-                continue
-            if L == 0:
-                return False  # a critical point of F: the iteration cannot move this root
-            newton = 1.0 / L
-            s = 0j
-            for j in range(m):
-                if j != k and z[k] != z[j]:
-                    s += 1.0 / (z[k] - z[j])
-            step = newton / (1.0 - newton * s)
-            z[k] -= step
-            size = abs(step)
-            scale = abs(z[k])
-            if size <= 4.0 * _EPS * scale + floor or (size <= _STAGNATION * largest
-                                                         and size >= 0.5 * smallest[k]):
-                done[k] = True
-            else:
-                remaining += 1
-            smallest[k] = min(smallest[k], size)
-        if remaining == 0:
+        active = np.flatnonzero(~done)
+        L = log_derivative(z[active], s, work)
+        finite = np.isfinite(L)
+        done[active[~finite]] = True  # sits on a root: nothing to correct
+        active, L = active[finite], L[finite]
+        if not active.size:
+            return True
+        if (L == 0).any():
+            return False  # a critical point of F: the iteration cannot move this root
+        newton = 1.0 / L
+        step = newton / (1.0 - newton * _repulsion(z, active, pairs))
+        z[active] -= step
+        size = np.abs(step)
+        converged = size <= 4.0 * _EPS * np.abs(z[active]) + floor
+        if size.max() <= _STAGNATION * max(largest, 1.0):  # all small: the noise floor
+            converged |= size >= 0.5 * smallest[active]  # near, for a root not shrinking
+            smallest[active] = np.minimum(smallest[active], size)
+        done[active[converged]] = True
+        if converged.all():
             return True
     return False
 
 
-@_jit
-def _pair_conjugates(z):
-    """Make the roots an exactly conjugate-symmetric set, as the polynomial is real.
+def _pair_conjugates(z: np.ndarray) -> np.ndarray:
+    """The roots as an exactly conjugate-symmetric set, as the polynomial is real.
 
-    Each root in the upper half-plane pairs with the nearest unpaired root of the lower
-    one when that is nearer to its conjugate than to the real axis; the pair becomes an
-    exact conjugate pair (their mean). A root left without partner is real to rounding
-    (a lone non-real root is impossible) and loses its imaginary part.
+    Each root in the upper half-plane (in order) pairs with the nearest unpaired root of
+    the lower one when that is nearer to its conjugate than to the real axis; the pair
+    becomes an exact conjugate pair (their mean). A root left without partner is real to
+    rounding (a lone non-real root is impossible) and loses its imaginary part.
     """
-    m = z.size
-    used = np.zeros(m, dtype=np.bool_)
-    for k in range(m):
-        if used[k] or z[k].imag <= 0.0:
-            continue
-        best = -1
-        best_d = np.inf
-        for j in range(m):
-            if j != k and not used[j] and z[j].imag < 0.0:
-                d = abs(z[j] - np.conj(z[k]))
-                if d < best_d:
-                    best, best_d = j, d
-        if best >= 0 and best_d < abs(z[k].imag):
-            avg = 0.5 * (z[k] + np.conj(z[best]))
-            z[k] = avg
-            z[best] = np.conj(avg)
-            used[k] = True
-            used[best] = True
-    for k in range(m):
-        if not used[k]:
-            z[k] = z[k].real
+    z = z.copy()
+    upper = np.flatnonzero(z.imag > 0.0)
+    lower = np.flatnonzero(z.imag < 0.0)
+    paired = np.zeros(z.size, dtype=bool)
+    if upper.size and lower.size:
+        dist = np.abs(z[lower][None, :] - np.conj(z[upper])[:, None])
+        nearest = dist.argmin(axis=1)
+        near = dist[np.arange(upper.size), nearest]
+        keep = near < z[upper].imag  # a root refused at its nearest is refused at any other
+        if np.unique(nearest[keep]).size == keep.sum():  # no contest: every choice is free
+            ks, js = upper[keep], lower[nearest[keep]]
+        else:  # in order, each takes the nearest not yet taken
+            taken = np.zeros(lower.size, dtype=bool)
+            ks, js = [], []
+            for r, k in enumerate(upper):
+                row = np.where(taken, np.inf, dist[r])
+                j = int(row.argmin())
+                if row[j] < z[k].imag:
+                    taken[j] = True
+                    ks.append(k)
+                    js.append(lower[j])
+            ks, js = np.array(ks, dtype=np.intp), np.array(js, dtype=np.intp)
+        avg = 0.5 * (z[ks] + np.conj(z[js]))
+        z[ks] = avg
+        z[js] = np.conj(avg)
+        paired[ks] = paired[js] = True
+    z[~paired] = z[~paired].real
+    return z
 
 
-@_jit
-def power_sums_agree(z, tr1, tr2, size1, size2):
+def power_sums_agree(z, tr1, tr2, size1, size2) -> bool:
     """Whether ``sum z`` and ``sum z^2`` match ``tr G``, ``tr G^2`` to ``POWER_SUM_TOL``."""
-    return (abs(np.sum(z) - tr1) <= POWER_SUM_TOL * (np.sum(np.abs(z)) + size1)
-            and abs(np.sum(z * z) - tr2) <= POWER_SUM_TOL * (np.sum(np.abs(z) ** 2) + size2))
+    size = np.abs(z)
+    return bool(abs(np.sum(z) - tr1) <= POWER_SUM_TOL * (np.sum(size) + size1)
+                and abs(np.sum(z * z) - tr2) <= POWER_SUM_TOL * (np.sum(size * size) + size2))
 
 
-@_jit
-def velocity_row_error(modal, u0, ui0, omega, R, delta, sigma):
+def velocity_row_error(modal, u0, ui0, omega, R, delta, sigma) -> float:
     """Rounding bound of the velocity of mass 1 in modal form, ``sum_i u_1i v_i`` with
     ``v_i = omega (beta_i cos(delta) - gamma_i sin(delta)) + kappa sigma v0_i`` (the modal
-    velocities before the impact, :func:`impactcont.kernel.closed_form.jacobian_pieces`):
-    ``eps`` times the terms summed, with the change of the forced ones over the rounding
-    of ``delta`` (``eps (1 + |delta|)``), as :func:`impactcont.orbit.dense.velocity_errors`.
+    velocities before the impact, :func:`jacobian_pieces`): ``eps`` times the terms summed,
+    with the change of the forced ones over the rounding of ``delta`` (``eps (1 + |delta|)``),
+    as :func:`impactcont.orbit.dense.velocity_errors`.
     """
     kappa = 1.0 + R
-    cd, sd = math.cos(delta), math.sin(delta)
-    tilt = 1.0 + abs(delta)
-    total = 0.0
-    for i in range(u0.size):
-        gm, bt = modal[0, i], modal[1, i]
-        forced = omega * (abs(bt * cd) + abs(gm * sd) + abs(gm * cd + bt * sd) * tilt)
-        total += abs(u0[i]) * (forced + abs(kappa * sigma * (modal[7, i] + ui0[i])))
-    return _EPS * total
+    cd, sd = np.cos(delta), np.sin(delta)
+    gm, bt = modal[0], modal[1]
+    forced = omega * (np.abs(bt * cd) + np.abs(gm * sd)
+                      + np.abs(gm * cd + bt * sd) * (1.0 + abs(delta)))
+    return float(_EPS * np.sum(np.abs(u0) * (forced + np.abs(kappa * sigma * (modal[7] + ui0)))))
 
 
-@_jit
 def secular_multipliers(modal, w, a, f, u0, ui0, omega, R, delta, sigma):
     """The multipliers of G (eq. 25) from the secular function, largest modulus first.
 
@@ -400,14 +413,14 @@ def secular_multipliers(modal, w, a, f, u0, ui0, omega, R, delta, sigma):
     if not velocity_row_error(modal, u0, ui0, omega, R, delta, sigma) <= (
             VELOCITY_POLISH * abs(sigma)):
         return np.full(2 * u0.size, np.nan + 0.0j), False
-    e_y, e_v, v_pre, acc = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
+    pieces = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
     coef, kind, t, p, lam, const, zeros, h2, xn = secular_coefficients(
-        modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc)
+        modal, u0, ui0, omega, R, *pieces)
     z = _starts(kind, t, p, zeros)
-    ok = aberth(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn, z)
-    _pair_conjugates(z)
+    ok = aberth(_regroup(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn), z)
+    z = _pair_conjugates(z)
     if zeros > 0:  # the modal multipliers set apart, less M's extra zero
         z = np.concatenate((z, np.zeros(zeros, dtype=np.complex128)))
-    traces = power_sums(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2, xn)
-    ok = ok and power_sums_agree(z, *traces)
-    return by_modulus(z), ok
+    ok = ok and power_sums_agree(z, *power_sums(modal, u0, ui0, omega, R, *pieces, h2, xn))
+    # largest modulus first, stable among equal moduli (as kernel.stability.by_modulus)
+    return z[np.argsort(-np.abs(z), kind="stable")], ok

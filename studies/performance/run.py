@@ -16,17 +16,20 @@ Measured:
    one batched ``np.linalg.eigvals`` of as many 4 x 4 matrices as map points;
 4. one branch in omega with its special points, against one shooting solve;
 5. the PD curve in (omega, b), time per curve point (with a profile);
-6. the cost against n for chains, against one dense ``eigvals`` of a 2n x 2n matrix;
+6. the cost against n for chains, against one dense ``eigvals`` of a 2n x 2n matrix, and
+   one orbit's multipliers by the secular function against G and LAPACK's eigenvalues of
+   it (the two paths ``orbit.secular.SECULAR_MIN`` chooses between), interleaved rounds;
 7. the n = 2 orbit and the map again with two BLAS threads.
 
 Run from the repository root::
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python studies/performance/run.py [--quick]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python studies/performance/run.py [--quick | --cost-vs-n]
 
 ``--quick`` shrinks the map to 40 x 40, the chains to n <= 20 and the repeats
 (about 35 s, half of it the cold compile). Writes ``output/results.json``,
 ``output/table.md`` (the README's table) and ``figures/cost_vs_n.png`` next to this file;
-``--quick`` writes all three to ``output/quick/`` instead.
+``--quick`` writes all three to ``output/quick/`` instead. ``--cost-vs-n`` runs 6. alone
+(n = 2 ... 200, about 2 min) into ``output/cost_vs_n/`` and the figure.
 """
 
 from __future__ import annotations
@@ -271,9 +274,25 @@ def _matched_distance(mu: np.ndarray, reference: np.ndarray) -> float:
     return float(max(d.min(axis=0).max(), d.min(axis=1).max()))
 
 
+def interleaved_best(fns: list[Callable[[], Any]], repeat: int) -> list[float]:
+    """Best time per call of each of ``fns`` over ``repeat`` rounds, the functions taking
+    turns within each round (the machine's noise falls on all alike)."""
+    numbers = []
+    for fn in fns:
+        start = time.perf_counter()
+        fn()  # also the warm-up
+        numbers.append(max(1, int(BUDGET / max(time.perf_counter() - start, 1e-7))))
+    out = [np.inf] * len(fns)
+    for _ in range(repeat):
+        for i, (fn, number) in enumerate(zip(fns, numbers, strict=True)):
+            out[i] = min(out[i], timeit.timeit(fn, number=number) / number)
+    return out
+
+
 def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
     from impactcont.kernel import stability
     from impactcont.orbit import secular
+    from impactcont.orbit.periodic import modal_arrays, modal_jacobian
 
     rng = np.random.default_rng(3)
     rows = []
@@ -303,6 +322,20 @@ def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
                "dense_eigvals_2n": best(lambda A=A: np.linalg.eigvals(A), repeat),
                "numpy_eigvals_of_G": best(lambda G=G: np.linalg.eigvals(G), repeat)}
         row["per_orbit_G_multipliers"] = row["orbits_G_multipliers"] / roots
+        # the two ways to the multipliers of one orbit, side by side (what SECULAR_MIN
+        # chooses between): the secular function (numpy, G not formed) against G and
+        # LAPACK's eigenvalues of it
+        first = orbits()[0]
+        arrays = modal_arrays(osc)
+        args = (first.modal, arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0, osc.omega,
+                osc.R, first.delta, first.impact_velocity)
+        row["secular_accepted"] = bool(secular.secular_multipliers(*args)[1])
+        row["secular_alone"], row["G_and_lapack_alone"] = interleaved_best(
+            [lambda args=args: secular.secular_multipliers(*args),
+             lambda osc=osc, o=first: stability.multipliers(
+                 modal_jacobian(osc, o.modal, o.delta, o.impact_velocity)[0])],
+            max(repeat, 7))
+        row["secular_over_dense"] = row["secular_alone"] / row["G_and_lapack_alone"]
         # the multipliers reported (secular from SECULAR_MIN on) against LAPACK's of G
         row["multipliers_vs_dense"] = max(
             _matched_distance(o.multipliers, stability.multipliers(o.G))
@@ -310,9 +343,11 @@ def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
         row["secular"] = n >= secular.SECULAR_MIN
         rows.append(row)
         log.info("n=%3d: orbits %.3g ms, +G %.3g ms, +multipliers %.3g ms (%d roots); dense "
-                 "eigvals(%d x %d) %.3g ms, of G %.3g ms", n, 1e3 * row["orbits"],
+                 "eigvals(%d x %d) %.3g ms, of G %.3g ms; one orbit's multipliers: secular "
+                 "%.3g ms, G + LAPACK %.3g ms", n, 1e3 * row["orbits"],
                  1e3 * row["orbits_G"], 1e3 * row["orbits_G_multipliers"], roots, 2 * n, 2 * n,
-                 1e3 * row["dense_eigvals_2n"], 1e3 * row["numpy_eigvals_of_G"])
+                 1e3 * row["dense_eigvals_2n"], 1e3 * row["numpy_eigvals_of_G"],
+                 1e3 * row["secular_alone"], 1e3 * row["G_and_lapack_alone"])
     return rows
 
 
@@ -324,9 +359,12 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
                        ("orbits_G_multipliers", "+ multipliers, spectral radius"),
                        ("per_orbit_G_multipliers", "the same per orbit (call / roots)"),
                        ("orbits_G_dense_multipliers", "+ G, multipliers by LAPACK from G"),
-                       ("dense_eigvals_2n", "one np.linalg.eigvals, random 2n x 2n")):
+                       ("dense_eigvals_2n", "one np.linalg.eigvals, random 2n x 2n"),
+                       ("secular_alone", "one orbit's multipliers, secular (numpy)"),
+                       ("G_and_lapack_alone", "one orbit's multipliers, G + LAPACK")):
         ax.loglog(n, [1e3 * r[key] for r in rows], marker="o", label=label,
-                  ls={"dense_eigvals_2n": "--", "per_orbit_G_multipliers": ":"}.get(key, "-"))
+                  ls={"dense_eigvals_2n": "--", "per_orbit_G_multipliers": ":",
+                      "secular_alone": "-.", "G_and_lapack_alone": "-."}.get(key, "-"))
     ax.plot([200], [50.0], "k*", ms=10, label="target at n = 200 (50 ms per orbit)")
     ax.set_xlabel("degrees of freedom n")
     ax.set_ylabel("time per call [ms] (best of repeats)")
@@ -437,26 +475,39 @@ def table(res: dict[str, Any]) -> str:
              "|---|---|---|---|---|"]
     lines += [f"| {w} | {v} | {t} | {'n/a' if ok is None else 'yes' if ok else '**no**'} | {r}"
               f"{'' if ok in (True, None) else '; see Notes'} |" for w, v, t, ok, r in rows]
-    lines += ["", "| n | `periodic_orbits` (ms, both roots) | + G | + multipliers, spectral radius "
-              "| that per orbit | + G and LAPACK multipliers of G | one dense `eigvals`, 2n x 2n "
-              "| numpy `eigvals` of one G | multipliers | max distance to LAPACK's (relative) |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+    return "\n".join(lines) + "\n\n" + cost_table(res["cost_vs_n"])
+
+
+def cost_table(rows: list[dict[str, Any]]) -> str:
+    """The README's "Cost against n" table (times in ms)."""
+    lines = ["| n | `periodic_orbits` (ms, both roots) | + G | + multipliers, spectral radius "
+             "| that per orbit | + G and LAPACK multipliers of G | one dense `eigvals`, 2n x 2n "
+             "| numpy `eigvals` of one G | one orbit's multipliers: secular | the same: G + "
+             "LAPACK | secular / (G + LAPACK) | multipliers | max distance to LAPACK's "
+             "(relative) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += ["| {n} | {orbits:.3g} | {orbits_G:.3g} | {orbits_G_multipliers:.3g} | "
               "{per_orbit_G_multipliers:.3g} | {orbits_G_dense_multipliers:.3g} | "
-              "{dense_eigvals_2n:.3g} | {numpy_eigvals_of_G:.3g} | {how} | {distance:.1e} |"
+              "{dense_eigvals_2n:.3g} | {numpy_eigvals_of_G:.3g} | {secular_alone:.3g} | "
+              "{G_and_lapack_alone:.3g} | {ratio:.2f} | {how} | {distance:.1e} |"
               .format(**{k: 1e3 * v for k, v in r.items() if isinstance(v, float)
-                         and k != "multipliers_vs_dense"}, n=r["n"],
+                         and k not in ("multipliers_vs_dense", "secular_over_dense")},
+                      n=r["n"], ratio=r["secular_over_dense"],
                       how="secular" if r["secular"] else "in-kernel QR" if r["n"] <= 8
                       else "LAPACK", distance=r["multipliers_vs_dense"])
-              for r in res["cost_vs_n"]]
+              for r in rows]
     return "\n".join(lines) + "\n"
 
 
 def main() -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes, fewer repeats")
+    parser.add_argument("--cost-vs-n", action="store_true",
+                        help="only the cost against n (6.): output/cost_vs_n/ and the figure")
     args = parser.parse_args()
     global BUDGET
+    if args.cost_vs_n:
+        return cost_vs_n_only()
     size, sizes, repeat, BUDGET = ((40, (2, 5, 10, 20), 3, 0.02) if args.quick else
                                    (200, (2, 5, 10, 20, 50, 100, 200), 7, 0.1))
     started = time.perf_counter()
@@ -508,6 +559,31 @@ def main() -> dict[str, Any]:
     figure = out.parent / "cost_vs_n.png" if args.quick else HERE / "figures" / "cost_vs_n.png"
     plot(res["cost_vs_n"], figure)
     log.info("wrote %s, table.md and %s in %.0f s", out, figure, res["elapsed_s"])
+    return res
+
+
+COST_SIZES = (2, 5, 10, 16, 20, 24, 32, 38, 48, 64, 100, 200)
+
+
+def cost_vs_n_only() -> dict[str, Any]:
+    """Section 6 alone (``--cost-vs-n``): writes ``output/cost_vs_n/results.json``,
+    ``output/cost_vs_n/table.md`` and ``figures/cost_vs_n.png``."""
+    started = time.perf_counter()
+    res: dict[str, Any] = {"machine": {
+        "python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
+        "impactcont": ic.__version__, "cpus": os.cpu_count(), "loadavg_start": os.getloadavg()}}
+    with threadpool_limits(1):
+        res["cost_vs_n"] = cost_vs_n(COST_SIZES, 7)
+    res["machine"]["loadavg_end"] = os.getloadavg()
+    res["code"] = {"git_head": git("rev-parse", "HEAD"),
+                   "uncommitted_in_impactcont": git("status", "--porcelain", "impactcont")}
+    res["elapsed_s"] = time.perf_counter() - started
+    out = HERE / "output" / "cost_vs_n" / "results.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(res, indent=1))
+    (out.parent / "table.md").write_text(cost_table(res["cost_vs_n"]))
+    plot(res["cost_vs_n"], HERE / "figures" / "cost_vs_n.png")
+    log.info("wrote %s and table.md in %.0f s", out, res["elapsed_s"])
     return res
 
 
