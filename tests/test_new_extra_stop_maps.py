@@ -92,7 +92,7 @@ def test_an_unstable_physical_cell_is_left_in_the_simulator(two_mass_map):
     i, k = OMEGA.size - 1, R.size - 1
     assert ds["physical"].values[i, k] and not ds["stable"].values[i, k]
     orbit = multi_impact_map_orbit(ds, omega=OMEGA[i], R=R[k])
-    res = ic.simulate(orbit.oscillator, orbit.states[0], orbit.phases[0], 1.0)
+    res = ic.simulate(orbit.oscillator, orbit.states[0], orbit.phases[0], 1.5, max_impacts=orbit.p)
     # one period on the motion (physical) ...
     assert res.impact_stops == orbit.pattern[1:] + orbit.pattern[0]
     np.testing.assert_allclose(res.impact_states[-1], orbit.states[0], rtol=0, atol=1e-8)
@@ -114,7 +114,7 @@ def test_a_not_physical_cell_crosses_a_stop_in_the_simulator(two_mass_map):
     assert not ds["physical"].values[0, 0]
     orbit = multi_impact_map_orbit(ds, omega=OMEGA[0], R=R[0])
     assert "reaches a stop inside the flight" in orbit.reason
-    res = ic.simulate(orbit.oscillator, orbit.states[0], orbit.phases[0], 1.0,
+    res = ic.simulate(orbit.oscillator, orbit.states[0], orbit.phases[0], 1.5,
                       max_impacts=orbit.p)
     # the simulator meets a stop before the motion's next impact
     assert res.impact_times[0] < orbit.flight_times[0] - 1e-3

@@ -160,7 +160,7 @@ def test_the_extra_stops_gap_branch_grazes_where_the_simulator_says(gap_branch, 
     for dg in (-0.01, 0.01):
         osc = _wagg(gap=g + dg)
         near = _fresh(graze, osc)
-        res = ic.simulate(osc, near.states[0], near.phases[0], 1.0, max_impacts=near.p)
+        res = ic.simulate(osc, near.states[0], near.phases[0], 1.5, max_impacts=near.p)
         follows = (res.impact_stops == pattern
                    and np.allclose(res.impact_states[-1], near.states[0], rtol=0, atol=1e-8))
         assert follows == near.physical
@@ -235,7 +235,7 @@ def test_grazing_switch_onto_the_extra_stop_gives_the_physical_motion():
         "delta": float(switched["delta_k"].values[k, 0]),
         "flight_times": switched["flight_time_k"].values[k],
         "states": switched["state_k"].values[k], "pattern": switched.attrs["pattern"]})
-    res = ic.simulate(osc, near.states[0], near.phases[0], 1.0, max_impacts=2)
+    res = ic.simulate(osc, near.states[0], near.phases[0], 1.5, max_impacts=2)
     assert res.impact_stops == near.pattern[1:] + near.pattern[0]
     np.testing.assert_allclose(res.impact_states[-1], near.states[0], rtol=0, atol=1e-8)
 
