@@ -222,3 +222,16 @@ def test_near_resonance_still_warns_on_the_compiled_path():
     assert [type(c.message) for c in caught] == [type(c.message) for c in fresh]
     with pytest.raises(ic.ParameterError):
         problem.flow_at(target)
+
+
+def test_each_compiled_entry_has_one_signature(motion):
+    """The compiled corrector calls the kernel with the Python callers' types: nothing is
+    compiled twice (a literal False made a second shooting_system, 1.9 s of cold compile)."""
+    from impactcont.kernel import shooting as kernel
+
+    ic.multi_impact_continuation(motion, "omega", (1.55, 1.65), detect=())
+    problem = MultiImpactBranchProblem(motion.oscillator, 1, 2, "omega", pattern="UL")
+    problem.linearize(motion.unknowns, 1.6)
+    for name in ("shooting_system", "branch_linearization", "frequency_column",
+                 "omega_partials", "forced_amplitudes", "palc_correct"):
+        assert len(getattr(kernel, name).signatures) == 1, name

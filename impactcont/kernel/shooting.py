@@ -1053,6 +1053,7 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
     full = E.shape[0]
     empty_c = np.zeros(0, dtype=np.complex128)
     empty_cc = np.zeros((0, 0), dtype=np.complex128)
+    general = empty_c.size > 0  # False (the modal flow) as a run-time bool: one signature
     state = predicted.copy()
     last_update = np.inf
     worst = 0.0
@@ -1079,7 +1080,7 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
                 s += E[r, k] * state[k]
             x[r] = s
         period = 2.0 * math.pi * N / omega
-        sh, ext = branch_linearization(False, w, a, gam, bet, f, u, ui, empty_c, empty_cc,
+        sh, ext = branch_linearization(general, w, a, gam, bet, f, u, ui, empty_c, empty_cc,
                                        empty_cc, empty_c, st, omega, period, pivots, normals,
                                        positions, matrices, x, dgam, dbet, empty_c)
         residual = sh[7]
