@@ -232,6 +232,8 @@ def test_each_compiled_entry_has_one_signature(motion):
     ic.multi_impact_continuation(motion, "omega", (1.55, 1.65), detect=())
     problem = MultiImpactBranchProblem(motion.oscillator, 1, 2, "omega", pattern="UL")
     problem.linearize(motion.unknowns, 1.6)
-    for name in ("shooting_system", "branch_linearization", "frequency_column",
-                 "omega_partials", "forced_amplitudes", "palc_correct"):
-        assert len(getattr(kernel, name).signatures) == 1, name
+    for name in ("branch_linearization", "forced_amplitudes", "palc_correct"):
+        assert len(getattr(kernel, name).signatures) == 1, name  # called from Python
+    for name in ("shooting_system", "frequency_column", "omega_partials"):
+        # compiled code's callees (from the disk cache they are not registered at all)
+        assert len(getattr(kernel, name).signatures) <= 1, name
