@@ -636,6 +636,8 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
     if missing:
         raise ValueError(f"columns is missing key(s) {missing}; required: {list(specs)}")
     specs.update({k: v for k, v in OPTIONAL_POINT_VARIABLES.items() if k in columns})
+    # another parameter's column (a curve's first parameter, e.g. 'k2' or 'gap[A]')
+    specs.update({k: PARAMETERS[k] for k in columns if k not in specs and k in PARAMETERS})
     unknown = sorted(set(columns) - set(specs))
     if unknown:
         raise ValueError(f"columns has unknown key(s) {unknown}; allowed: {list(specs)}")
