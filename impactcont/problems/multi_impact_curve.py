@@ -110,6 +110,7 @@ class MultiImpactCurveProblem:
         self.kind, self.parameters, self.symmetric = kind, (p1, p2), symmetric
         self._problems: dict[tuple[str, float, float | None], BranchProblem] = {}
         self._first: dict[str, BranchProblem] = {}  # the first problem in each parameter
+        self._tests: dict[tuple[bytes, float], float] = {}
         # both parameters move only omega and the stops: every problem has the same modes
         self._same_modes = all(par.data in _EXACT for par in self.params)
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
@@ -147,8 +148,21 @@ class MultiImpactCurveProblem:
 
     # -- the test function ----------------------------------------------------------------------
     def test(self, x: np.ndarray, lam: float) -> float:
-        """``g(u, p1; p2)`` of the curve's kind (module notes)."""
+        """``g(u, p1; p2)`` of the curve's kind (module notes).
+
+        The last few values are kept: the residual and the test row of one Newton iterate
+        take ``g`` at the same point.
+        """
         x = np.asarray(x, dtype=float)
+        key = (x.tobytes(), float(lam))
+        value = self._tests.get(key)
+        if value is None:
+            if len(self._tests) > _CACHE_SIZE:
+                self._tests.clear()
+            value = self._tests[key] = self._test(x, lam)
+        return value
+
+    def _test(self, x: np.ndarray, lam: float) -> float:
         u, p1 = x[:-1], float(x[-1])
         kind = self.kind
         if kind == "SN":
@@ -224,15 +238,19 @@ class MultiImpactCurveProblem:
         top = np.column_stack([base.jacobian(u, p1), base.dparam(u, p1)])
         return np.vstack([top, self._test_gradient(x, lam)[0]])
 
-    def dparam(self, x: np.ndarray, lam: float) -> np.ndarray:
-        """``d[F, g]/dp2``: the branch problem in ``p2`` (exact for omega, b, R) and ``dg/dp2``."""
-        x = np.asarray(x, dtype=float)
-        u, p1 = x[:-1], float(x[-1])
+    def _second_column(self, base: BranchProblem, u: np.ndarray, p1: float, lam: float
+                       ) -> np.ndarray:
+        """``dF/dp2`` at ``(u, p1; p2 = lam)`` (:meth:`dparam` without the test row)."""
         second = self.params[1]
         if second.data in _EXACT and (second.keeps_symmetry or not self.symmetric):
             # from the shot of the problem in p1 (a p2 that breaks the symmetry of a
             # symmetric curve is refused by the problem in p2, below)
-            column = self.branch_problem(lam).derivative(u, p1, self.params[1])
-        else:
-            column = self._base(lam, self.parameters[1], p1).dparam(u, float(lam))
+            return base.derivative(u, p1, second)
+        return self._base(lam, self.parameters[1], p1).dparam(u, float(lam))
+
+    def dparam(self, x: np.ndarray, lam: float) -> np.ndarray:
+        """``d[F, g]/dp2``: the branch problem in ``p2`` (exact for omega, b, R) and ``dg/dp2``."""
+        x = np.asarray(x, dtype=float)
+        u, p1 = x[:-1], float(x[-1])
+        column = self._second_column(self.branch_problem(lam), u, p1, lam)
         return np.append(column, self._test_gradient(x, lam)[1])
