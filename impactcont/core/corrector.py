@@ -110,6 +110,7 @@ def solve_on_hyperplane(problem: Problem, target: FloatArray, normal: FloatArray
     """
     x = np.array(target, dtype=float)
     normal = np.asarray(normal, dtype=float)
+    linearize = getattr(problem, "linearize", None)
     scale = max(1.0, float(np.max(np.abs(x))))
     last = np.inf
     step: FloatArray | None = None
@@ -118,9 +119,13 @@ def solve_on_hyperplane(problem: Problem, target: FloatArray, normal: FloatArray
     while iteration < max_iter:
         u, lam = x[:-1], float(x[-1])
         try:
-            residual = problem.residual(u, lam)
-            matrix = np.vstack([np.column_stack([problem.jacobian(u, lam),
-                                                 problem.dparam(u, lam)]), normal])
+            if linearize is not None:  # the problem's one-call evaluation (Problem)
+                residual, extended = linearize(u, lam)
+                matrix = np.vstack([extended, normal])
+            else:
+                residual = problem.residual(u, lam)
+                matrix = np.vstack([np.column_stack([problem.jacobian(u, lam),
+                                                     problem.dparam(u, lam)]), normal])
         except ValueError:
             if step is None or halvings >= _MAX_HALVINGS:
                 raise

@@ -12,7 +12,9 @@ workload once, so all see the same load):
    against a point of the N = 1 branch ``continuation(b = 0, N = 1, omega in [0.5, 6])``;
 3. the two-sided symmetric 1-2 motion of the backlash system (``studies/backlash``,
    b = b_low = 0.8, omega = 0.8) continued over omega in [0.7, 0.9], per point, against
-   the same N = 1 branch point;
+   the same N = 1 branch point; and what sets it on so short a branch (9 points): the
+   same branch without detection (``detect=()``) and without the dataset (the core's
+   ``follow`` on its problem alone);
 4. one N = 1 orbit of the paper system with a damping matrix that is not proportional
    (only the damper between the masses: the first-order path, compiled in
    ``kernel/general.py``) against the proportional one (``periodic_orbits``, both
@@ -56,8 +58,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.multi_branch import branch_problem, make_options, multi_impact_continuation
 from impactcont.analysis.switching import period_doubling_switch
+from impactcont.core import follow
 from impactcont.orbit.multi_impact import multi_impact_orbit
 
 HERE = Path(__file__).resolve().parent
@@ -201,6 +204,15 @@ def main() -> dict[str, Any]:
         ds = multi_impact_continuation(symmetric, "omega", (0.7, 0.9))
         points["12"] = ds.sizes["point"]
 
+    def branch_12_no_detection():
+        multi_impact_continuation(symmetric, "omega", (0.7, 0.9), detect=())
+
+    options_12 = make_options((0.7, 0.9))
+
+    def branch_12_core():  # a new problem each time, as each continuation builds one
+        problem_12, v_12 = branch_problem(symmetric, "omega")
+        follow(problem_12, v_12, 0.8, options_12)
+
     general = paper(b=0.6, omega=1.0, eta=None, C=JOINT_DAMPER)
     proportional = paper(b=0.6, omega=1.0)
 
@@ -217,6 +229,8 @@ def main() -> dict[str, Any]:
         "branch_n1": branch_n1,
         "branch_22": branch_22,
         "branch_12": branch_12,
+        "branch_12_no_detection": branch_12_no_detection,
+        "branch_12_core": branch_12_core,
         "orbit_any_C": lambda: closed_form(general, 1),
         "orbit_proportional": lambda: closed_form(proportional, 1),
         "branch_any_C": branch_any_C,
@@ -268,6 +282,12 @@ def main() -> dict[str, Any]:
             continue
         lines.append(f"| {name} | {meas} | {ref} | {shown} | <= {target:g}x | "
                      f"{'yes' if judged <= target else '**no**'} |")
+    lines.append(f"| that branch: without detection; the core's `follow` alone (no orbits, no "
+                 f"dataset) | {1e3 * t['branch_12_no_detection'] / points['12']:.2f} ms; "
+                 f"{1e3 * t['branch_12_core'] / points['12']:.2f} ms per point | "
+                 f"{1e3 * per_point['n1']:.2f} ms | "
+                 f"{t['branch_12_no_detection'] / points['12'] / per_point['n1']:.1f}x; "
+                 f"{t['branch_12_core'] / points['12'] / per_point['n1']:.1f}x | - | |")
     bp_ms = 1e3 * per_point["bp"]
     lines.append(f"| BP curve of the symmetric 1-2 backlash motion in (omega, b), per point | "
                  f"{bp_ms:.2f} ms ({points['bp']} points) | {1e3 * per_point['pd_n1']:.2f} ms "
