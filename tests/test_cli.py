@@ -1,18 +1,34 @@
-"""The ``impactcont`` command: run, info, plot, list-problems; exit codes; logging levels."""
+"""The ``impactcont`` command: run, info, plot, list-problems; exit codes; logging levels.
+
+The command line answers ``--help`` and usage errors without the heavy imports; plain text.
+
+The import tests run in a subprocess (a fresh ``sys.modules``).
+
+Output paths are checked before anything is computed, and errors name the user's path
+(issue 13): ``impactcont run --output``, ``run --check``, ``plot -o`` and ``impactcont.save``.
+"""
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
 
-import _fake_plugins
+import numpy as np
 import pytest
-from _scene_data import ORBITS_SCENE, OSCILLATOR, SMALL_SCENE, write
+import xarray as xr
 
-from impactcont.cli import EXIT_FAILURE, EXIT_OK, EXIT_USAGE, main
-from impactcont.scene import read_output
+import impactcont
+import impactcont as ic
+from impactcont.cli import EXIT_FAILURE, EXIT_OK, EXIT_USAGE, main, plain_text
+from impactcont.dataset import io as dataset_io
+from impactcont.scene import read_output, tasks
+from impactcont.scene.plugins import register_problem, unregister_problem
+from tests import _fake_plugins
+from tests._scene_data import ORBITS_SCENE, OSCILLATOR, SMALL_SCENE, write
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -25,6 +41,7 @@ def ran(tmp_path_factory: pytest.TempPathFactory) -> Path:
     code = main(["run", str(write(directory, SMALL_SCENE)), "--output", str(out), "-q"])
     assert code == EXIT_OK
     return out
+
 
 fake_entry_points = pytest.fixture(_fake_plugins.fake_entry_points)
 
@@ -202,7 +219,6 @@ def test_python_m_impactcont(tmp_path: Path) -> None:
     assert bad.returncode == EXIT_USAGE and "no such scene file" in bad.stderr
 
 
-
 def test_info_and_plot_on_a_file_of_impactcont_save(ran: Path, tmp_path: Path,
                                                     capsys: pytest.CaptureFixture[str]) -> None:
     import impactcont as ic
@@ -226,3 +242,201 @@ def test_readme_test_command_is_what_ci_runs() -> None:
     assert f"\n    {command}\n" in readme, "README.md does not show the command .ci/run runs"
     assert "pytest" in command and "ruff check" in command and "mkdocs build --strict" in command
     assert "export" not in ci, ".ci/run sets variables the README command does not have"
+
+
+HEAVY = ("numba", "scipy", "xarray", "matplotlib")
+
+
+SOURCE = Path(impactcont.__file__).resolve().parents[1]
+
+
+#: Runs ``main(argv)`` and prints the heavy top-level modules then in ``sys.modules``.
+#: With ``bare``, the package ``impactcont`` is an empty module (its ``__init__`` not run):
+#: what the command line imports itself.
+_PROBE = """
+import json, sys, types
+argv, bare = json.loads(sys.argv[1])
+if bare:
+    package = types.ModuleType("impactcont")
+    package.__path__ = [{package!r}]
+    package.__version__ = "0"
+    sys.modules["impactcont"] = package
+from impactcont.cli import main
+code = main(argv)
+heavy = sorted({{name.partition(".")[0] for name in sys.modules}} & set({heavy!r}))
+print(json.dumps([code, heavy]))
+"""
+
+
+def _probe(argv: list[str], *, bare: bool) -> tuple[int, list[str]]:
+    script = _PROBE.format(package=str(SOURCE / "impactcont"), heavy=HEAVY)
+    run = subprocess.run([sys.executable, "-c", script, json.dumps([argv, bare])],
+                         cwd=SOURCE, capture_output=True, text=True, timeout=120, check=False)
+    assert run.returncode == 0, run.stderr
+    code, heavy = json.loads(run.stdout.splitlines()[-1])
+    return code, heavy
+
+
+@pytest.mark.parametrize("argv, code", [
+    (["--help"], 0), (["run", "--help"], 0), (["--version"], 0), ([], 2), (["frobnicate"], 2),
+    (["run"], 2), (["plot", "a.nc", "--dpi", "many"], 2),
+])
+def test_the_command_line_itself_imports_nothing_heavy(argv: list[str], code: int) -> None:
+    assert _probe(argv, bare=True) == (code, [])
+
+
+def test_impactcont_help_imports_nothing_heavy() -> None:
+    assert _probe(["--help"], bare=False) == (0, [])
+
+
+class _Documented:
+    """Follows :func:`~impactcont.curve` in ``[[x]]``, see :class:`the flow <impactcont.Flow>`.
+
+    More text that list-problems does not show.
+    """
+
+
+def test_list_problems_prints_plain_text(capsys: pytest.CaptureFixture[str]) -> None:
+    register_problem("documented", _Documented)
+    try:
+        assert main(["list-problems"]) == EXIT_OK
+    finally:
+        unregister_problem("documented")
+    out = capsys.readouterr().out
+    assert "Follows curve in [[x]], see the flow." in out
+    assert "[[branches]]: a one-parameter branch" in out
+    assert "`" not in out and ":func:" not in out and ":class:" not in out
+
+
+@pytest.mark.parametrize("rst, text", [
+    (":func:`impactcont.curve`", "impactcont.curve"),
+    (":py:meth:`~impactcont.scene.SceneSection.check`", "check"),
+    (":class:`Flow <impactcont.orbit.flow.Flow>`", "Flow"),
+    (":math:`\\rho(G) < 1`", "\\rho(G) < 1"),
+    ("``[[orbits]]``: every root", "[[orbits]]: every root"),
+    ("`default role` and `a link <https://example.org>`_", "default role and a link"),
+    ("**strong** and *emphasis*, but 2*x*y and a*", "strong and emphasis, but 2*x*y and a*"),
+])
+def test_plain_text(rst: str, text: str) -> None:
+    assert plain_text(rst) == text
+
+
+ORBITS = xr.Dataset({"x": ("t", np.arange(3.0))}, attrs={"impactcont_dataset": "orbits"})
+
+
+@pytest.fixture
+def no_computing(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Computing anything fails the test: the paths must be refused first."""
+    def compute(self, entry, context=None):
+        raise AssertionError("computed before the output path was checked")
+
+    monkeypatch.setattr(tasks.Orbits, "compute", compute)
+
+
+@pytest.fixture
+def read_only(tmp_path: Path):
+    """A directory nobody may write in (chmod 555), or a skip where that does not hold."""
+    directory = tmp_path / "read_only"
+    directory.mkdir()
+    directory.chmod(0o555)
+    try:
+        (directory / "probe").touch()
+    except PermissionError:
+        yield directory
+    else:
+        (directory / "probe").unlink()
+        pytest.skip("chmod 555 does not stop this user from writing (running as root): "
+                    "the real read-only case cannot be set up here")
+    finally:
+        directory.chmod(0o755)
+
+
+def test_existing_file_as_output_is_refused_before_computing(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], no_computing: None) -> None:
+    scene = write(tmp_path, ORBITS_SCENE)
+    existing = tmp_path / "results.csv"
+    existing.write_text("keep me")
+    for extra in ([], ["--check"]):
+        assert main(["run", str(scene), "--output", str(existing), *extra]) == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert f"output directory {str(existing)!r} is an existing file, not a directory" in err
+        assert "FileExistsError" not in err
+    assert existing.read_text() == "keep me"
+    below = existing / "out"
+    assert main(["run", str(scene), "--output", str(below)]) == EXIT_USAGE
+    assert f"{str(existing)!r} is a file, not a directory" in capsys.readouterr().err
+
+
+def test_read_only_output_is_refused_before_computing(
+        read_only: Path, capsys: pytest.CaptureFixture[str], no_computing: None) -> None:
+    scene = write(read_only.parent, ORBITS_SCENE)
+    for output, extra in ((read_only, []), (read_only, ["--check"]),
+                          (read_only / "new" / "dir", []), (read_only / "new", ["--check"])):
+        assert main(["run", str(scene), "--output", str(output), *extra]) == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert f"output directory {str(output)!r}" in err and ".tmp" not in err
+    assert list(read_only.iterdir()) == []
+
+
+def test_unwritable_directory_is_named_whoever_runs_the_tests(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        no_computing: None) -> None:
+    """The same refusal where the operating system says EACCES (root included)."""
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    real_open = os.open
+
+    def refusing_open(path, flags, *args):
+        if Path(path).parent == locked and flags & os.O_CREAT:
+            raise PermissionError(errno.EACCES, "Permission denied", str(path))
+        return real_open(path, flags, *args)
+
+    monkeypatch.setattr(dataset_io.os, "open", refusing_open)
+    scene = write(tmp_path, ORBITS_SCENE)
+    for extra in ([], ["--check"]):
+        assert main(["run", str(scene), "--output", str(locked), *extra]) == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert (f"error: output directory {str(locked)!r} is not writable (Permission denied); "
+                f"choose another or change its permissions") in err
+    with pytest.raises(PermissionError, match=rf"cannot write {str(locked / 'x.nc')!r}: "
+                                              rf"directory .* is not writable") as info:
+        ic.save(ORBITS, locked / "x.nc")
+    assert ".tmp" not in str(info.value) and info.value.errno == errno.EACCES
+    assert list(locked.iterdir()) == []
+
+
+def test_check_says_where_the_run_would_write(tmp_path: Path,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    scene = write(tmp_path, ORBITS_SCENE)
+    out = tmp_path / "not" / "yet"
+    assert main(["run", str(scene), "--output", str(out), "--check"]) == EXIT_OK
+    assert f"output directory {out}" in capsys.readouterr().out
+    assert not (tmp_path / "not").exists()  # --check creates nothing
+    assert main(["run", str(scene), "--output", str(out), "-q"]) == EXIT_OK
+    assert (out / "orbits.nc").is_file()
+
+
+def test_plot_into_a_missing_directory_names_it(tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    scene = write(tmp_path, ORBITS_SCENE)
+    assert main(["run", str(scene), "--output", str(tmp_path / "o"), "-q"]) == EXIT_OK
+    png = tmp_path / "missing" / "x.png"
+    assert main(["plot", str(tmp_path / "o" / "orbits.nc"), "-o", str(png)]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert (f"error: cannot write {str(png)!r}: directory {str(png.parent)!r} does not exist; "
+            f"create it first or choose another path") in err
+    assert ".tmp" not in err
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["orbits.nc", "summary.md"]
+
+
+def test_save_names_the_path_the_user_gave(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError, match=r"cannot write '.*nope/x\.nc': directory "
+                                                r"'.*nope' does not exist"):
+        ic.save(ORBITS, tmp_path / "nope" / "x.nc")
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    with pytest.raises(NotADirectoryError, match=r"'.*afile' is not a directory"):
+        ic.save(ORBITS, afile / "x.nc")
+    with pytest.raises(ValueError, match="path must be a file, not a directory"):
+        ic.save(ORBITS, tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]

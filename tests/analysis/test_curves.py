@@ -15,6 +15,8 @@ from impactcont.analysis.maps import stability_map
 from impactcont.orbit.periodic import orbit_at_phase
 
 BOX = {"omega": (0.6, 2.0), "b": (0.0, 0.6)}
+
+
 #: gaps at which each curve is compared with the one-parameter special points
 CHECK_B = {"SN": (0.45, 0.5), "PD": (0.1, 0.3, 0.45), "NS": (0.45, 0.5),
            "GR": (0.1, 0.3, 0.5), "ZV": (0.4, 0.45)}
@@ -291,23 +293,6 @@ def test_bad_inputs_raise_clear_errors(paper, branches):
         stability_map(paper, [1], [1.0], [0.0], executor="threads")
 
 
-@pytest.mark.parametrize("kind, multipliers, label", [
-    ("SN", [1.0, 1.0 + 1e-5, 0.3], "R1"),          # a double +1: the 1:1 resonance
-    ("SN", [1.0, 1.0 + 2e-5j, 0.3], "R1"),         # its Jordan block split into a pair
-    ("PD", [-1.0, -1.0 - 1e-5, 0.2], "R2"),        # a double -1: the 1:2 resonance
-    ("SN", [1.0, np.exp(0.4j), np.exp(-0.4j)], "SN+NS"),
-])
-def test_a_strong_resonance_has_one_name_on_every_curve(kind, multipliers, label):
-    """The NS curve ends at R1/R2; the SN and PD curves meeting them there name them so."""
-    from types import SimpleNamespace
-
-    from impactcont.detection.codim2 import _name
-    from impactcont.vocabulary import CODIM2_LABELS
-
-    assert _name(kind, "NS", SimpleNamespace(multipliers=np.array(multipliers))) == label
-    assert not {"SN+SN", "PD+PD"} & set(CODIM2_LABELS)
-
-
 def test_a_file_with_the_former_resonance_names_reads_them_as_r1_r2(curves, tmp_path):
     ns = curves["NS"]
     labels = ns.codim2_label.values
@@ -317,14 +302,3 @@ def test_a_file_with_the_former_resonance_names_reads_them_as_r1_r2(curves, tmp_
     old = ns.assign(codim2_label=ns.codim2_label.copy(data=former))
     back = ic.load(ic.save(old, tmp_path / "old.nc", validate=False))
     xr.testing.assert_identical(back, ns)
-
-
-def test_every_codim2_label_has_its_standard_name_in_the_docs():
-    from pathlib import Path
-
-    from impactcont.vocabulary import CODIM2_LABELS
-
-    docs = Path(ic.__file__).resolve().parents[1] / "docs" / "two_parameter.md"
-    rows = {line.split("|")[1].strip().strip("`") for line in docs.read_text().splitlines()
-            if line.startswith("| `")}
-    assert set(CODIM2_LABELS) <= rows, sorted(set(CODIM2_LABELS) - rows)

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from impactcont.core import (
-    ContinuationOptionError,
     ContinuationOptions,
     ContinuationPoint,
     ContinuationResult,
@@ -24,6 +23,8 @@ from impactcont.core import (
 from impactcont.errors import ParameterError
 
 CUBIC_FOLD_LAM = 2.0 / (3.0 * math.sqrt(3.0))
+
+
 PLASTIC_NUMBER = 1.324717957244746  # real root of u^3 - u - 1
 
 
@@ -138,9 +139,6 @@ def fold_lams(result: ContinuationResult) -> np.ndarray:
     return result.lam[before_change]
 
 
-# ----------------------------------------------------------------- (1) circle
-
-
 def test_circle_goes_round_both_folds_and_closes_the_loop() -> None:
     options = ContinuationOptions(bounds=(-2.0, 2.0), ds=0.05, ds_max=0.1, both_directions=True)
     problem = Circle()
@@ -167,9 +165,6 @@ def test_circle_in_negative_direction_starts_downwards() -> None:
 
     assert result.lam[1] < 0.0
     assert result.status is ContinuationStatus.CLOSED_LOOP
-
-
-# ------------------------------------------------------------------ (2) cubic
 
 
 def test_cubic_passes_both_folds_and_lands_exactly_on_the_bound() -> None:
@@ -213,9 +208,6 @@ def test_cubic_both_directions_joins_one_ordered_branch() -> None:
     assert len(result) == result.u.shape[0] == result.tangent.shape[0] == result.ds.shape[0]
 
 
-# ------------------------------------------------------------------- (3) m > 1
-
-
 def test_tilted_circle_with_two_unknowns() -> None:
     options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.05, both_directions=True)
     problem = TiltedCircle()
@@ -246,55 +238,11 @@ def test_helix_lands_exactly_on_the_bound_with_two_unknowns() -> None:
     assert np.all(np.diff(result.lam) > 0.0)
 
 
-# --------------------------------------------------------------- (4) options
-
-
-@pytest.mark.parametrize(
-    ("overrides", "pattern"),
-    [
-        ({"ds": -0.1}, r"ds = -0\.1 .*> 0"),
-        ({"ds": 0.5, "ds_max": 0.1}, r"ds = 0\.5 .*ds_min <= ds <= ds_max"),
-        ({"ds_min": 0.2, "ds": 0.2, "ds_max": 0.1}, r"ds_min = 0\.2 .*<= ds_max"),
-        ({"newton_tol": 0.0}, r"newton_tol = 0\.0 .*> 0"),
-        ({"newton_max_iter": 0}, r"newton_max_iter = 0 .*integer >= 1"),
-        ({"newton_max_iter": 2.5}, r"newton_max_iter = 2\.5 .*integer"),
-        ({"max_points": 1}, r"max_points = 1 .*integer >= 2"),
-        ({"direction": 0}, r"direction = 0 .*\+1 or -1"),
-        ({"both_directions": "yes"}, r"both_directions = 'yes' .*bool"),
-        ({"max_angle": 2.0}, r"max_angle = 2\.0 .*\(0, pi/2\]"),
-        ({"target_newton_iter": 0}, r"target_newton_iter = 0 .*integer >= 1"),
-        ({"theta": 0.0}, r"theta = 0\.0 .*\(0, 1\]"),
-        ({"theta": math.nan}, r"theta = nan .*finite"),
-        ({"bounds": (1.0, -1.0)}, r"bounds = \(1\.0, -1\.0\) .*lam_min < lam_max"),
-        ({"bounds": (0.0, math.inf)}, r"bounds = \(0\.0, inf\) .*finite"),
-        ({"bounds": 3.0}, r"bounds = 3\.0 .*pair"),
-    ],
-)
-def test_bad_option_names_option_value_and_allowed_values(
-    overrides: dict[str, object], pattern: str
-) -> None:
-    arguments = {"bounds": (-1.0, 1.0), **overrides}
-
-    with pytest.raises(ContinuationOptionError, match=pattern):
-        ContinuationOptions(**arguments)
-
-
-def test_option_error_is_a_value_error_and_options_are_frozen() -> None:
-    assert issubclass(ContinuationOptionError, ValueError)
-    options = ContinuationOptions(bounds=(-1, 1))
-    assert options.bounds == (-1.0, 1.0)
-    with pytest.raises(AttributeError):
-        options.ds = 1.0  # type: ignore[misc]
-
-
 def test_start_outside_bounds_is_rejected() -> None:
     options = ContinuationOptions(bounds=(-1.0, 1.0))
 
     with pytest.raises(ParameterError, match=r"lam0 = 2\.0 .*within bounds"):
         continue_branch(Line(), [2.0], 2.0, options)
-
-
-# ---------------------------------------------------- (5) step below minimum
 
 
 def test_branch_ending_at_a_singularity_stops_with_step_below_minimum() -> None:
@@ -353,9 +301,6 @@ def test_start_exactly_at_a_fold_follows_both_sheets() -> None:
     assert np.all(np.diff(result.u[:, 0]) * np.sign(result.u[-1, 0]) > 0.0)
 
 
-# ------------------------------------------------------------ (6) max points
-
-
 def test_max_points_status() -> None:
     options = ContinuationOptions(bounds=(-10.0, 10.0), ds=0.01, max_points=7)
 
@@ -365,9 +310,6 @@ def test_max_points_status() -> None:
     assert len(result) == 7
     assert result.u[:, 0] == pytest.approx(result.lam, abs=1e-12)
     assert result.u[0, 0] == pytest.approx(0.0, abs=1e-12)
-
-
-# ------------------------------------------------- streaming of the points
 
 
 def test_on_point_and_iter_points_stream_the_accepted_points() -> None:
@@ -388,20 +330,6 @@ def test_on_point_and_iter_points_stream_the_accepted_points() -> None:
         previous.dlam * current.dlam < 0.0 for previous, current in itertools.pairwise(streamed)
     )
     assert folds_seen == 2
-
-
-def test_stepper_tangent_stays_oriented_and_unit() -> None:
-    options = ContinuationOptions(bounds=(-2.0, 2.0), ds=0.05, theta=0.3)
-    stepper = PalcStepper(Circle(), options)
-    previous = stepper.init(np.array([1.0]), 0.0)
-
-    assert previous.tangent == pytest.approx([0.0, 1.0 / math.sqrt(options.theta)])
-    for _ in range(40):
-        current = stepper.step()
-        assert stepper.scaled_norm(current.tangent) == pytest.approx(1.0)
-        assert stepper.scaled_dot(previous.tangent, current.tangent) > 0.0
-        assert stepper.scaled_norm(current.state - previous.state) <= current.ds * 1.01
-        previous = current
 
 
 class _DomainLimited:

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.core import Event, locate_events, solve_on_hyperplane
+from impactcont.core import Event, locate_events
 
 PAPER = dict(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6, eta=0.1)
 
@@ -104,21 +104,6 @@ def test_precision_of_a_double_zero_says_how_little_is_known():
     lam, precision = _located(lambda lam: (lam - 1 / 3) * abs(lam - 1 / 3))
     assert abs(lam - 1 / 3) <= precision
     assert precision > 1e-9  # the old bound claimed 1e-14 here
-
-
-def test_hyperplane_newton_halves_a_step_that_leaves_the_domain():
-    class Cubic(_Line):  # u = lam^3 near lam = 0.05: Newton from lam = 0.3 overshoots below 0
-        def residual(self, u, lam):
-            super().residual(u, lam)
-            return np.array([u[0] - lam ** 3])
-
-        def dparam(self, u, lam):
-            return np.array([-3 * lam ** 2])
-
-    found = solve_on_hyperplane(Cubic(), np.array([1.25e-4, 0.3]), np.array([1.0, 0.0]),
-                                tol=1e-14)
-    assert found.converged
-    assert found.lam == pytest.approx(0.05, rel=1e-12)
 
 
 @pytest.mark.parametrize("lower", [0.01, 0.05])

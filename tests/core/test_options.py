@@ -1,12 +1,21 @@
-"""One shape for every continuation entry point: keyword-only ``options=`` (issue 12)."""
+"""Options of the continuation (:mod:`impactcont.core.options`): one shape for every
+continuation entry point, keyword-only ``options=`` (issue 12); bad option values are named
+with what is allowed, and options are frozen."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.core.options import DRIVER_DEFAULTS, ContinuationOptionError, driver_options
+from impactcont.core.options import (
+    DRIVER_DEFAULTS,
+    ContinuationOptionError,
+    ContinuationOptions,
+    driver_options,
+)
 
 
 @pytest.fixture(scope="module")
@@ -75,3 +84,41 @@ def test_unknown_keyword_arguments_are_refused_with_the_options_listed():
         ic.continuation(osc, 1, "omega", (0.5, 2.0), special=0)
     with pytest.raises(ContinuationOptionError, match="'dsmax'"):
         ic.continuation(osc, 1, "omega", (0.5, 2.0), dsmax=0.01)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "pattern"),
+    [
+        ({"ds": -0.1}, r"ds = -0\.1 .*> 0"),
+        ({"ds": 0.5, "ds_max": 0.1}, r"ds = 0\.5 .*ds_min <= ds <= ds_max"),
+        ({"ds_min": 0.2, "ds": 0.2, "ds_max": 0.1}, r"ds_min = 0\.2 .*<= ds_max"),
+        ({"newton_tol": 0.0}, r"newton_tol = 0\.0 .*> 0"),
+        ({"newton_max_iter": 0}, r"newton_max_iter = 0 .*integer >= 1"),
+        ({"newton_max_iter": 2.5}, r"newton_max_iter = 2\.5 .*integer"),
+        ({"max_points": 1}, r"max_points = 1 .*integer >= 2"),
+        ({"direction": 0}, r"direction = 0 .*\+1 or -1"),
+        ({"both_directions": "yes"}, r"both_directions = 'yes' .*bool"),
+        ({"max_angle": 2.0}, r"max_angle = 2\.0 .*\(0, pi/2\]"),
+        ({"target_newton_iter": 0}, r"target_newton_iter = 0 .*integer >= 1"),
+        ({"theta": 0.0}, r"theta = 0\.0 .*\(0, 1\]"),
+        ({"theta": math.nan}, r"theta = nan .*finite"),
+        ({"bounds": (1.0, -1.0)}, r"bounds = \(1\.0, -1\.0\) .*lam_min < lam_max"),
+        ({"bounds": (0.0, math.inf)}, r"bounds = \(0\.0, inf\) .*finite"),
+        ({"bounds": 3.0}, r"bounds = 3\.0 .*pair"),
+    ],
+)
+def test_bad_option_names_option_value_and_allowed_values(
+    overrides: dict[str, object], pattern: str
+) -> None:
+    arguments = {"bounds": (-1.0, 1.0), **overrides}
+
+    with pytest.raises(ContinuationOptionError, match=pattern):
+        ContinuationOptions(**arguments)
+
+
+def test_option_error_is_a_value_error_and_options_are_frozen() -> None:
+    assert issubclass(ContinuationOptionError, ValueError)
+    options = ContinuationOptions(bounds=(-1, 1))
+    assert options.bounds == (-1.0, 1.0)
+    with pytest.raises(AttributeError):
+        options.ds = 1.0  # type: ignore[misc]

@@ -1,7 +1,7 @@
 """Write ``engine_reference.json``: the special points of representative runs, frozen.
 
 Run on the code whose results are to be kept (``python tests/data/make_engine_reference.py``);
-``tests/test_engine_regression.py`` recomputes the same runs and compares each point to
+``tests/integration/test_engine_regression.py`` recomputes the same runs and compares each point to
 1e-10 or to the precision both runs claim for it, whichever is larger.
 """
 

@@ -1,43 +1,41 @@
-"""Branch datasets: schema, NetCDF round trips, atomic writes and plots (fast, synthetic)."""
+"""Saving and loading (:mod:`impactcont.dataset.io`): NetCDF round trips of branch datasets,
+atomic writes (fast, synthetic), robust files old and new.
+
+Files a user can trust (issue 13): Ctrl-C during a save, stale temporary files, every
+file the package writes loading back, and files that plain xarray / netCDF4 can read.
+"""
 
 from __future__ import annotations
 
 import json
 import os
-import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt
 import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
 
 import impactcont
+import impactcont as ic
 from impactcont import ImpactOscillator
-from impactcont.dataset import (
-    POINT_VARIABLES,
-    SPECIAL_LABELS,
-    branch_dataset,
-    load,
-    oscillator_from_dataset,
-    save,
-    validate_branch_dataset,
-)
+from impactcont.dataset import branch_dataset, load, oscillator_from_dataset, save
 from impactcont.dataset import io as dataset_io
-from impactcont.plots import (
-    SEGMENT_STYLES,
-    SPECIAL_MARKERS,
-    bifurcation_diagram,
-    multipliers_plot,
-    stability_segments,
-)
-from impactcont.plots.branches import NONPHYSICAL_GREY
+from impactcont.scene import run_scene, scene_sections
+from tests._scene_data import SMALL_SCENE, write
+
+matplotlib.use("Agg")
+
 
 NPOINTS = 50
+
+
 N_DOF = 2
 
 
@@ -114,129 +112,6 @@ def branch(osc) -> xr.Dataset:
     return branch_dataset(parameter="omega", N=1, oscillator=osc,
                           options={"ds": 0.03, "max_steps": 50, "tol": np.float64(1e-10)},
                           columns=cols, special_points=_specials(cols))
-
-
-# -- schema -------------------------------------------------------------------------------------
-def test_schema_dims_coords_and_dtypes(branch):
-    assert dict(branch.sizes) == {"point": NPOINTS, "multiplier": 4, "component": 4, "special": 3}
-    assert branch["point"].dtype == np.int64
-    np.testing.assert_array_equal(branch["point"].values, np.arange(NPOINTS))
-    assert branch["component"].values.tolist() == ["x1", "x2", "v1", "v2"]
-    # the points are labelled by the parameters (coordinates on point: plots take x="omega")
-    assert set(branch.coords) == {"point", "component", "omega", "b"}
-    assert branch["impact_velocity"].coords["omega"].dims == ("point",)
-    for name in ("omega", "b", "delta", "impact_velocity", "gap_min", "spectral_radius",
-                 "arclength"):
-        assert branch[name].dims == ("point",)
-        assert branch[name].dtype == np.float64
-    assert branch["stable"].dtype == bool and branch["physical"].dtype == bool
-    assert branch["multipliers"].dims == ("point", "multiplier")
-    assert branch["multipliers"].dtype == np.complex128
-    assert branch["state"].dims == ("point", "component")
-    assert branch["special_label"].dims == ("special",)
-    assert branch["special_label"].dtype == np.dtype("<U2")
-    assert branch["special_label"].values.tolist() == ["NS", "GR", "ZV"]
-    assert branch["special_status"].values.tolist() == ["located", "bracketed", "located"]
-    assert branch["special_point"].dtype == np.int64
-    assert branch["special_multipliers"].dims == ("special", "multiplier")
-    assert branch["special_multipliers"].dtype == np.complex128
-    for name in ("omega", "b", "delta", "bracket_lo", "bracket_hi", "precision"):
-        assert branch[f"special_{name}"].dtype == np.float64
-
-
-def test_schema_attributes(branch, osc):
-    for name, var in branch.data_vars.items():
-        assert {"long_name", "units", "description"} <= set(var.attrs), name
-    assert branch["delta"].attrs["units"] == "rad"
-    assert branch["special_delta"].attrs["units"] == "rad"
-    assert branch["omega"].attrs["units"] == "1"
-    attrs = branch.attrs
-    assert attrs["N"] == 1 and attrs["parameter"] == "omega"
-    assert attrs["Conventions"] == "CF-1.10"
-    assert attrs["impactcont_version"] == impactcont.__version__
-    assert json.loads(attrs["options"]) == {"ds": 0.03, "max_steps": 50, "tol": 1e-10}
-    assert attrs["oscillator"] == osc.to_json()
-    assert "omega" in attrs["title"] and attrs["history"]
-    back = oscillator_from_dataset(branch)
-    assert back.to_dict() == osc.to_dict()
-    at10 = oscillator_from_dataset(branch, point=10)
-    assert at10.omega == pytest.approx(float(branch["omega"][10]), abs=0.0)
-    assert validate_branch_dataset(branch) is branch
-
-
-def test_schema_other_parameter_and_no_special_points(osc):
-    cols = _columns()
-    cols["R"] = np.linspace(0.5, 0.9, NPOINTS)
-    ds = branch_dataset(parameter="R", N=2, oscillator=osc, options={}, columns=cols,
-                        special_points=[])
-    assert ds.sizes["special"] == 0
-    assert "R" in ds.coords and "special_R" in ds.data_vars
-    assert ds.attrs["parameter"] == "R"
-    assert abs(oscillator_from_dataset(ds, point=-1).R - 0.9) <= 1e-15
-    validate_branch_dataset(ds)
-
-
-def _bad(osc, **changes):
-    cols = _columns()
-    kw = {"parameter": "omega", "N": 1, "oscillator": osc, "options": {}, "columns": cols,
-          "special_points": _specials(cols)}
-    for key, value in changes.items():
-        if key.startswith("col_"):
-            name = key[4:]
-            if value is None:
-                del cols[name]
-            else:
-                cols[name] = value
-        elif key.startswith("sp_"):
-            kw["special_points"][0][key[3:]] = value
-        else:
-            kw[key] = value
-    return branch_dataset(**kw)
-
-
-@pytest.mark.parametrize(("changes", "error", "match"), [
-    ({"col_gap_min": None}, ValueError, r"missing key\(s\) \['gap_min'\]"),
-    ({"col_delta": np.zeros(NPOINTS - 1)}, ValueError, r"'delta' must have shape \(50,\)"),
-    ({"col_multipliers": np.zeros((NPOINTS, 3))}, ValueError, r"'multipliers' .*\(50, 4\)"),
-    ({"col_speed": np.zeros(NPOINTS)}, ValueError, r"unknown key\(s\) \['speed'\]"),
-    ({"col_stable": np.full(NPOINTS, 2.0)}, ValueError, r"'stable' must be boolean"),
-    ({"col_omega": np.full(NPOINTS, np.nan)}, ValueError, r"'omega' must be finite"),
-    ({"sp_label": "XX"}, ValueError, r"\['label'\] must be one of .*got 'XX'"),
-    ({"sp_status": "guessed"}, ValueError, r"\['status'\] .*got 'guessed'"),
-    ({"sp_point": NPOINTS}, ValueError, r"\['point'\] must be an integer index .*got 50"),
-    ({"sp_precision": -1.0}, ValueError, r"\['precision'\] must be >= 0.*-1.0"),
-    ({"sp_bracket_lo": 5.0}, ValueError, r"bracket_lo=5.0"),
-    ({"sp_multipliers": np.zeros(3)}, ValueError, r"special_points\[0\] key 'multipliers'"),
-    ({"parameter": "mass"}, ValueError, r"parameter must be one of .*got 'mass'"),
-    ({"N": 0}, ValueError, r"N .* got 0"),
-    ({"oscillator": "osc"}, TypeError, r"oscillator must be an ImpactOscillator; got 'osc'"),
-    ({"options": {"f": object}}, TypeError, r"options must be JSON-serialisable"),
-])
-def test_bad_inputs_raise_naming_the_value(osc, changes, error, match):
-    with pytest.raises(error, match=match):
-        _bad(osc, **changes)
-
-
-def test_missing_special_key_is_named(osc):
-    cols = _columns()
-    sps = _specials(cols)
-    del sps[1]["precision"]
-    with pytest.raises(ValueError, match=r"special_points\[1\] is missing key\(s\) \['precision'"):
-        branch_dataset(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
-                       special_points=sps)
-
-
-def test_validate_rejects_incomplete_datasets(branch):
-    with pytest.raises(ValueError, match=r"missing variable\(s\) \['gap_min'\]"):
-        validate_branch_dataset(branch.drop_vars("gap_min"))
-    with pytest.raises(ValueError, match=r"missing attribute\(s\) \['oscillator'\]"):
-        validate_branch_dataset(branch.drop_attrs(deep=False).assign_attrs(
-            {k: v for k, v in branch.attrs.items() if k != "oscillator"}))
-    with pytest.raises(ValueError, match="'stable' must have dtype kind 'b'"):
-        validate_branch_dataset(branch.assign(stable=branch["stable"].astype(float)))
-    with pytest.raises(TypeError, match="DataArray"):
-        validate_branch_dataset(branch["omega"])
-    assert set(POINT_VARIABLES) <= set(branch.variables)
 
 
 # -- NetCDF I/O ---------------------------------------------------------------------------------
@@ -388,362 +263,6 @@ def test_io_bad_arguments(branch, tmp_path):
     assert os.path.exists(other)
 
 
-# -- plots --------------------------------------------------------------------------------------
-def test_stability_segments(branch):
-    segs = stability_segments(branch)
-    assert [k for k, _ in segs] == ["stable", "unstable", "non-physical", "stable"]
-    assert [(s.start, s.stop) for _, s in segs] == [(0, 21), (20, 36), (35, 46), (45, 50)]
-
-
-_SHAPES = {marker: label for label, marker in SPECIAL_MARKERS.items()}
-
-
-def _is_marker(line) -> bool:
-    return line.get_linestyle() in ("None", "none", " ", "")
-
-
-def _curves(ax) -> list:
-    """The lines drawn with a line style (branches, |mu| = 1, the unit circle)."""
-    return [ln for ln in ax.get_lines() if not _is_marker(ln)]
-
-
-def _markers(ax) -> list[tuple[str, np.ndarray, object]]:
-    """``(label, xy, line)`` of every special-point marker drawn on ``ax``, one per point."""
-    return [(_SHAPES[ln.get_marker()], xy, ln) for ln in ax.get_lines() if _is_marker(ln)
-            for xy in ln.get_xydata()]
-
-
-def _on_curve(ds: xr.Dataset, y: str) -> list[tuple[str, float, float]]:
-    """``(label, parameter, y)`` of each special point on the polyline of ``y`` (omega rises)."""
-    omega = ds["special_omega"].values
-    return sorted(zip(ds["special_label"].values.tolist(), omega,
-                      np.interp(omega, ds["omega"].values, ds[y].values), strict=True))
-
-
-def _assert_same_points(drawn, expected) -> None:
-    """Equal lists of ``(label, x, y)``: labels exactly, coordinates to rounding."""
-    drawn, expected = sorted(drawn), sorted(expected)
-    assert [d[0] for d in drawn] == [e[0] for e in expected]
-    np.testing.assert_allclose([d[1:] for d in drawn], [e[1:] for e in expected],
-                               rtol=0, atol=1e-12)
-
-
-def test_bifurcation_diagram_renders(branch, tmp_path):
-    ax = bifurcation_diagram(branch)
-    lines = _curves(ax)
-    assert [ln.get_linestyle() for ln in lines] == ["-", "--", ":", "-"]
-    assert lines[2].get_alpha() == SEGMENT_STYLES["non-physical"]["alpha"]
-    # every point drawn, the segments joined (one shared point at each of the 3 joins)
-    assert sum(len(ln.get_xdata()) for ln in lines) == NPOINTS + 3
-    np.testing.assert_array_equal(np.concatenate([ln.get_xdata() for ln in lines]),
-                                  np.concatenate([branch["omega"].values[s] for _, s in
-                                                  stability_segments(branch)]))
-    assert all(ln.get_color() == "C0" for ln in lines)
-    # one marker per special point, of its label's shape, in the branch's colour, sitting
-    # on the drawn curve at its parameter value
-    markers = _markers(ax)
-    assert all(len(ln.get_xydata()) == 1 for _, _, ln in markers)
-    _assert_same_points([(lab, *xy) for lab, xy, _ in markers],
-                        _on_curve(branch, "impact_velocity"))
-    assert all(ln.get_markeredgecolor() == "C0" for _, _, ln in markers)
-    # one label per special point, anchored at its marker
-    _assert_same_points([(t.get_text(), *t.xy) for t in ax.texts],
-                        [(lab, *xy) for lab, xy, _ in markers])
-    legend = ax.get_legend()
-    assert [t.get_text() for t in legend.get_texts()] == [
-        "stable", "unstable", "non-physical", "NS Neimark-Sacker", "GR grazing",
-        "ZV zero-velocity impact", "N = 1"]
-    ax.figure.canvas.draw()
-    assert legend.get_window_extent().y1 <= ax.get_window_extent().y0, "legend over the axes"
-    assert ax.get_xlabel() == r"forcing frequency $\omega$"
-    assert ax.get_ylabel() == r"impact velocity $\dot{x}_1(T^-)$"  # no "(impact_velocity)"
-    assert ax.get_title() == r"Periodic 1-1 motions, $b = 0$, $R = 0.6$, $\eta = 0.1$"
-    out = tmp_path / "diagram.png"
-    ax.figure.savefig(out)
-    assert out.stat().st_size > 0
-    plt.close(ax.figure)
-
-
-def test_bifurcation_diagram_many_branches_and_y(branch, tmp_path):
-    fig, ax = plt.subplots()
-    shifted = branch.assign({name: branch[name] + 1 for name in (
-        "omega", "special_omega", "special_bracket_lo", "special_bracket_hi")})
-    tree = xr.DataTree.from_dict({"a": branch, "b": shifted})
-    out = bifurcation_diagram(tree, y="delta", ax=ax, label_special=False)
-    assert out is ax
-    assert [ln.get_color() for ln in _curves(ax)] == ["C0"] * 4 + ["C1"] * 4
-    assert len(ax.texts) == 0
-    assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == ["a (N = 1)",
-                                                                        "b (N = 1)"]
-    assert ax.get_ylabel() == r"impact phase $\delta$ [rad]"
-    # each branch's special points in its colour, at their stored (omega, delta)
-    markers = _markers(ax)
-    assert len(markers) == 2 * branch.sizes["special"]
-    for ds, colour in ((branch, "C0"), (shifted, "C1")):
-        expected = zip(ds["special_label"].values.tolist(), ds["special_omega"].values,
-                       ds["special_delta"].values, strict=True)
-        _assert_same_points([(lab, *xy) for lab, xy, ln in markers
-                             if ln.get_markeredgecolor() == colour], list(expected))
-    fig.savefig(tmp_path / "many.png")
-    plt.close(fig)
-    with pytest.raises(ValueError, match=r"y must name .* got 'max_x9'"):
-        bifurcation_diagram(branch, y="max_x9")
-    with pytest.raises(TypeError, match="datasets must be"):
-        bifurcation_diagram(3.0)
-    plt.close("all")
-
-
-def test_multipliers_plot_renders(branch, tmp_path):
-    ax_abs, ax_c = multipliers_plot(branch)
-    # the spectral radius at every point and |mu| = 1; every modulus as a dot
-    rho, unit = _curves(ax_abs)
-    np.testing.assert_array_equal(rho.get_xydata(), np.column_stack(
-        [branch["omega"].values, branch["spectral_radius"].values]))
-    np.testing.assert_allclose(unit.get_ydata(), [1.0, 1.0], rtol=0, atol=0)
-    assert len(ax_abs.collections) == 1
-    assert ax_abs.collections[0].get_offsets().shape == (NPOINTS * 4, 2)
-    # one marker per special point on the drawn spectral radius, labelled there
-    markers = _markers(ax_abs)
-    _assert_same_points([(lab, *xy) for lab, xy, _ in markers],
-                        _on_curve(branch, "spectral_radius"))
-    _assert_same_points([(t.get_text(), *t.xy) for t in ax_abs.texts],
-                        [(lab, *xy) for lab, xy, _ in markers])
-    # complex plane: the unit circle, every multiplier, and one marker line per special
-    # label holding the multipliers of its special points (all inside the frame here)
-    (circle,) = _curves(ax_c)
-    np.testing.assert_allclose(np.hypot(*circle.get_xydata().T), 1.0, rtol=0, atol=1e-12)
-    assert len(ax_c.collections) == 1
-    drawn = np.asarray(ax_c.collections[0].get_offsets()) @ [1.0, 1.0j]
-    mult = branch["multipliers"].values.ravel()
-    framed = mult[np.abs(mult) <= ax_c.get_xlim()[1]]  # the frame's inscribed circle
-    assert framed.size >= NPOINTS * 3 and drawn.size <= mult.size
-    assert np.all(np.min(np.abs(framed[:, None] - drawn[None, :]), axis=1) <= 1e-12)
-    labels = branch["special_label"].values
-    assert set(labels.tolist()) <= set(SPECIAL_LABELS)
-    lines = [ln for ln in ax_c.get_lines() if _is_marker(ln)]
-    assert sorted(_SHAPES[ln.get_marker()] for ln in lines) == sorted(set(labels.tolist()))
-    for ln in lines:
-        drawn = ln.get_xydata() @ [1.0, 1.0j]
-        expected = branch["special_multipliers"].values[labels == _SHAPES[ln.get_marker()]]
-        np.testing.assert_allclose(np.sort_complex(drawn), np.sort_complex(expected.ravel()),
-                                   rtol=0, atol=1e-12)
-    # one legend names every mark
-    assert [t.get_text() for t in ax_abs.get_legend().get_texts()] == [
-        "spectral radius", r"$|\mu| = 1$", "NS Neimark-Sacker", "GR grazing",
-        "ZV zero-velocity impact"]
-    ax_abs.figure.savefig(tmp_path / "multipliers.png")
-    plt.close(ax_abs.figure)
-    with pytest.raises(TypeError, match="pair of matplotlib Axes"):
-        multipliers_plot(branch, ax=ax_abs)
-
-
-# -- figures a user can publish (issue 13) ----------------------------------------------------
-def _crowded(osc) -> xr.Dataset:
-    """Six special points on six neighbouring points: their labels would pile up."""
-    cols = _columns()
-    specials = [_special(label, p, cols) for label, p in
-                zip(("SN", "PD", "NS", "GR", "ZV", "SN"), range(20, 26), strict=True)]
-    return branch_dataset(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
-                          special_points=specials)
-
-
-def _extents(fig, artists) -> list:
-    """Window extents after drawing; of an annotation, its text only (not its leader line)."""
-    from matplotlib.text import Annotation, Text
-
-    fig.canvas.draw()
-    renderer = fig.canvas.get_renderer()
-    return [Text.get_window_extent(a, renderer) if isinstance(a, Annotation)
-            else a.get_window_extent(renderer) for a in artists]
-
-
-#: Points closer than this on the page (a marker's size, in points) share one label.
-ONE_PLACE = 8.0
-
-
-@pytest.mark.parametrize("width", [3.5, 5.0, 7.0])
-def test_special_point_labels_avoid_each_other(osc, width):
-    """Crowded special points: no two labels overlap, and each label names its point(s).
-
-    A label (on the axes or in a zoomed inset) is anchored at a special point and names
-    only special points within one marker of that anchor; every special point is named
-    by such a label.
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, 3.5), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ds = _crowded(osc)
-    bifurcation_diagram(ds, ax=ax)
-    panels = [ax, *[inset for inset in ax.child_axes if inset.get_visible()]]
-    labels = [(panel, t) for panel in panels for t in panel.texts if t.get_text()]
-    boxes = _extents(fig, [t for _, t in labels])
-    for i, a in enumerate(boxes):
-        for b in boxes[i + 1:]:
-            assert not a.overlaps(b), "two special-point labels overlap"
-    specials = _on_curve(ds, "impact_velocity")
-    assert len(specials) == 6
-    named = set()
-    for panel, t in labels:
-        def points(xy, panel=panel):
-            return panel.transData.transform(xy) * 72.0 / fig.dpi
-
-        (x0, x1), (y0, y1) = sorted(panel.get_xlim()), sorted(panel.get_ylim())
-        shown = [k for k, (_, x, y) in enumerate(specials) if x0 <= x <= x1 and y0 <= y <= y1]
-        away = {k: float(np.hypot(*(points((specials[k][1], specials[k][2]))
-                                    - points(t.xy)))) for k in shown}
-        assert min(away.values()) < 0.5, f"{t.get_text()!r} is not at a special point"
-        near = [k for k in shown if away[k] <= ONE_PLACE]
-        names = t.get_text().split(", ")
-        assert len(set(names)) == len(names), t.get_text()
-        assert set(names) <= {specials[k][0] for k in near}, (
-            f"{t.get_text()!r} names a point not within a marker of it")
-        named.update(k for k in near if specials[k][0] in names)
-    assert named == set(range(len(specials))), "a special point has no label"
-    legend, frame = _extents(fig, [ax.get_legend(), ax])
-    assert legend.y1 <= frame.y0, "the legend must not cover the curves"
-
-
-def test_naive_offsets_would_overlap(osc):
-    """The case above is a real collision: fixed offsets (the former layout) overlap."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(5, 3.5), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ds = _crowded(osc)
-    bifurcation_diagram(ds, ax=ax, label_special=False)
-    naive = [ax.annotate(str(lab), (x, 0), xytext=(4, 4), textcoords="offset points",
-                         fontsize="small")
-             for lab, x in zip(ds["special_label"].values, ds["special_omega"].values,
-                               strict=True)]
-    boxes = _extents(fig, naive)
-    assert any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
-
-
-def test_special_points_of_non_physical_motions_are_grey_and_unlabelled(osc):
-    cols = _columns()
-    ds = branch_dataset(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
-                        special_points=[_special("PD", 40, cols), _special("NS", 20, cols)])
-    ax = bifurcation_diagram(ds)
-    assert [t.get_text() for t in ax.texts] == ["NS"]
-    markers = {lab: ln for lab, _, ln in _markers(ax)}
-    assert sorted(markers) == ["NS", "PD"]
-    assert markers["NS"].get_markeredgecolor() == "C0"  # physical: the branch's colour
-    assert markers["PD"].get_markeredgecolor() == NONPHYSICAL_GREY  # inside the dotted run
-    assert markers["PD"].get_markersize() < markers["NS"].get_markersize()
-    legend = {t.get_text(): h for t, h in zip(ax.get_legend().get_texts(),
-                                              ax.get_legend().legend_handles, strict=True)}
-    assert legend["grey: on non-physical motion"].get_markeredgecolor() == NONPHYSICAL_GREY
-    assert "PD period doubling" in legend
-    plt.close(ax.figure)
-
-
-def test_vertical_range_fits_the_physical_motions(branch):
-    far = (branch["point"] > 36) & (branch["point"] < 43)  # inside the non-physical run
-    wild = branch.assign(impact_velocity=branch["impact_velocity"].where(~far, 50.0))
-    ax = bifurcation_diagram(wild)
-    lo, hi = ax.get_ylim()
-    physical = wild["impact_velocity"].values[wild["physical"].values]
-    assert lo < physical.min() and physical.max() < hi < 5.0
-    ax_all = bifurcation_diagram(wild, physical_range=False)
-    assert ax_all.get_ylim()[1] > 50.0
-    plt.close("all")
-
-
-def _branch_at_gap(osc, b: float, N: int):
-    """A synthetic branch of the test columns with every point at gap b."""
-    cols = _columns()
-    cols["b"] = np.full(NPOINTS, b)
-    return branch_dataset(parameter="omega", N=N, oscillator=osc.replace(b=b), options={},
-                          columns=cols, special_points=[])
-
-
-def test_scene_diagram_has_one_panel_per_system(branch, osc):
-    from impactcont.scene.figures import draw_bifurcation
-
-    other = _branch_at_gap(osc, 0.5, N=2)
-    fig = draw_bifurcation({"b0": branch, "b0p5": other})
-    axes = fig.get_axes()
-    assert [ax.get_title() for ax in axes] == ["$b = 0$", "$b = 0.5$"]
-    assert fig._suptitle.get_text() == ("Bifurcation diagram: impact velocity against "
-                                        "forcing frequency")
-    # each panel draws its own branch only, named (by its N) in its legend
-    for ax, ds in zip(axes, (branch, other), strict=True):
-        np.testing.assert_array_equal(
-            np.concatenate([ln.get_xdata() for ln in _curves(ax)]),
-            np.concatenate([ds["omega"].values[s] for _, s in stability_segments(ds)]))
-    assert [ax.get_legend().get_texts()[-1].get_text() for ax in axes] == ["N = 1", "N = 2"]
-    assert [ax.get_xlabel() for ax in axes] == ["", r"forcing frequency $\omega$"]
-    single = draw_bifurcation({"b0": branch, "again": branch.assign(omega=branch["omega"] + 1)})
-    (ax,) = single.get_axes()
-    assert ax.get_title() == r"Periodic 1-1 motions, $b = 0$, $R = 0.6$, $\eta = 0.1$"
-    assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == ["b0 (N = 1)",
-                                                                        "again (N = 1)"]
-
-
-def test_one_axis_of_several_systems_names_the_system_of_each_branch(branch, osc):
-    other = _branch_at_gap(osc, 0.5, N=1)
-    ax = bifurcation_diagram({"a": branch, "c": other})
-    assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == [
-        "a (N = 1, b = 0)", "c (N = 1, b = 0.5)"]
-    plt.close(ax.figure)
-
-
-def test_multipliers_plot_keeps_components_apart_and_frames_poles(branch):
-    component = np.where(np.arange(NPOINTS) < 30, 0, 1)
-    mult = branch["multipliers"].values.copy()
-    mult[10, 0] = -1e14  # the pole of G at a zero-velocity impact
-    ds = branch.assign(connected_component=("point", component),
-                       multipliers=(branch["multipliers"].dims, mult,
-                                    branch["multipliers"].attrs))
-    ax_abs, ax_c = multipliers_plot(ds)
-    rho = _curves(ax_abs)[0].get_ydata()
-    assert np.isnan(rho[30]) and rho.size == NPOINTS + 1  # no chord between the components
-    np.testing.assert_array_equal(np.delete(rho, 30), ds["spectral_radius"].values)
-    # the pole is framed out, the bulk framed in, and the title says what is not shown
-    lo, hi = ax_c.get_xlim()
-    assert ax_c.get_ylim() == (lo, hi) and -hi == lo and 1.0 < hi < 10.0
-    note = re.fullmatch(r"\$\|\\mu\| > ([0-9.]+)\$ not shown", ax_c.get_title(loc="left"))
-    assert note is not None, ax_c.get_title(loc="left")
-    assert float(note.group(1)) == pytest.approx(hi, rel=5e-3)
-    bulk = np.delete(mult.ravel(), 10 * mult.shape[1])  # every multiplier but the pole
-    assert np.all(np.abs(bulk.real) <= hi) and np.all(np.abs(bulk.imag) <= hi)
-    for ln in ax_c.get_lines():  # the special markers too stay inside the frame
-        assert np.all(np.abs(ln.get_xydata()) <= hi)
-    plt.close(ax_abs.figure)
-
-
-def test_multipliers_plot_note_says_what_is_not_drawn(branch):
-    """``|mu| > r not shown``: every dot drawn has ``|mu| <= r``, every one left out ``> r``."""
-    ax_abs, ax_c = multipliers_plot(branch)
-    mult = branch["multipliers"].values.ravel()
-    drawn = np.asarray(ax_c.collections[0].get_offsets()) @ [1.0, 1.0j]
-    note = re.fullmatch(r"\$\|\\mu\| > ([0-9.]+)\$ not shown", ax_c.get_title(loc="left"))
-    if note is None:
-        assert drawn.size == mult.size, "multipliers left out without a word"
-    else:
-        r = float(note.group(1))
-        assert np.all(np.abs(drawn) <= r * (1 + 5e-3))
-        assert drawn.size == np.count_nonzero(np.abs(mult) <= r * (1 + 5e-3))
-    plt.close(ax_abs.figure)
-
-
-def test_figures_leave_no_temporary_file(tmp_path):
-    from matplotlib.figure import Figure
-
-    from impactcont.scene.figures import save_figure
-
-    fig = Figure()
-    fig.add_subplot().plot([0, 1])
-    assert save_figure(fig, tmp_path / "f.png", 40).read_bytes()[:4] == b"\x89PNG"
-    assert save_figure(fig, tmp_path / "f.pdf", 40).read_bytes()[:4] == b"%PDF"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.pdf", "f.png"]
-
-
 # -- robust datasets: element names 1-based; files of before element_indexing ---------------------
 def _robust_dataset(attrs: dict) -> xr.Dataset:
     """A robust dataset as the scene's [[robust]] writes it (the attributes readers use)."""
@@ -807,3 +326,277 @@ def test_robust_file_with_what_robust_cannot_vary_is_refused(tmp_path, attrs, pa
     _robust_dataset(attrs).to_netcdf(path, engine="netcdf4")
     with pytest.raises(ValueError, match=pattern):
         impactcont.load(path)
+
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+TWO_PARAMETER = (
+    '[[curves]]\nname = "sn"\nkind = "SN"\nstart = "br"\n'
+    "bounds = { omega = [0.9, 1.6], b = [0.45, 0.7] }\nds_max = 0.1\n"
+    '[[maps]]\nname = "m"\nN = 1\nomega_range = [0.9, 1.6]\nomega_points = 8\n'
+    "b_range = [0.45, 0.7]\nb_points = 6\n")
+
+
+def _temporaries(directory: Path) -> list[str]:
+    return sorted(p.name for p in directory.iterdir() if p.name.endswith(".tmp"))
+
+
+# -- Ctrl-C and kill -9 during a save ---------------------------------------------------------
+# A tree of compressed random data: about 5 s to write on a 2-core machine (20 MB/s).
+# A runner started in the background by a shell without job control ignores SIGINT, and its
+# children inherit that: each child script puts Python's own handler back first.
+_SAVER = textwrap.dedent("""
+    import signal, sys
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    import numpy as np, xarray as xr
+    import impactcont as ic
+    from impactcont.dataset import io
+    if sys.argv[3] == "in-process":
+        io._FORK_BYTES = float("inf")  # the path of dask-backed data: Ctrl-C is held
+    rng = np.random.default_rng(0)
+    groups = {}
+    for k in range(int(sys.argv[2])):
+        ds = xr.Dataset({"a": (("x", "y"), rng.random((1000, 1000))),
+                         "m": (("x", "z"), rng.random((1000, 100)) * (1 + 2j))})
+        for var in ds.data_vars.values():
+            var.encoding = {"zlib": True, "complevel": 9}
+        groups[f"g{k}"] = ds
+    print("saving", flush=True)
+    ic.save(xr.DataTree.from_dict(groups), sys.argv[1], validate=False)
+    print("saved", flush=True)
+""")
+
+
+def _start_save(target: Path, groups: int, how: str, **popen) -> subprocess.Popen[str]:
+    """Start a large save in a child interpreter; return once it writes its temporary file."""
+    proc = subprocess.Popen([sys.executable, "-c", _SAVER, str(target), str(groups), how],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **popen)
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "saving"
+    deadline = time.monotonic() + 60
+    while not _temporaries(target.parent):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the save never started writing"
+        time.sleep(0.02)
+    time.sleep(0.3)  # well inside the NetCDF library now
+    assert proc.poll() is None, "the save ended before it could be interrupted"
+    return proc
+
+
+def _finish(proc: subprocess.Popen, timeout: float, hung: str) -> tuple[str, str]:
+    """``(stdout, stderr)`` of an interrupted child; fail with `hung` if it does not end."""
+    try:
+        return proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail(hung)
+
+
+@pytest.mark.parametrize("target_of_signal", ["process", "process group"])
+def test_ctrl_c_ends_a_large_save_promptly(tmp_path: Path, target_of_signal: str) -> None:
+    """SIGINT in the middle of writing a large DataTree (once a 10-minute hang)."""
+    target = tmp_path / "big.nc"
+    target.write_bytes(b"the previous file")
+    group = target_of_signal == "process group"  # a terminal's Ctrl-C reaches the whole group
+    proc = _start_save(target, 12, "fork", start_new_session=group)
+    start = time.monotonic()
+    if group:
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        proc.send_signal(signal.SIGINT)
+    _, err = _finish(proc, 30, "the save hung after Ctrl-C")
+    elapsed = time.monotonic() - start
+    assert proc.returncode == -signal.SIGINT, err  # ended by KeyboardInterrupt
+    assert "KeyboardInterrupt" in err
+    assert elapsed < 3.0, f"Ctrl-C took {elapsed:.1f} s to end the save"
+    assert target.read_bytes() == b"the previous file"
+    assert _temporaries(tmp_path) == []
+
+
+def test_ctrl_c_is_held_until_an_in_process_write_ends(tmp_path: Path) -> None:
+    """Where no child process can write (dask-backed data), the write ends, then Ctrl-C."""
+    target = tmp_path / "big.nc"
+    target.write_bytes(b"the previous file")
+    proc = _start_save(target, 6, "in-process")
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == -signal.SIGINT, err
+    assert f"interrupted: finishing the write of {target} first" in err
+    assert "saved" not in out
+    assert target.read_bytes() == b"the previous file"
+    assert _temporaries(tmp_path) == []
+
+
+_MAP = textwrap.dedent("""
+    import signal, sys
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    import numpy as np
+    import impactcont as ic
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.5,
+                              omega=1.0, eta=0.1)
+    print("saving", flush=True)  # about 2 minutes uninterrupted on 2 cores
+    ic.stability_map(osc, [1, 2, 3, 4], np.linspace(0.5, 6, 4000), np.linspace(0, 1, 1000),
+                     out=sys.argv[1], omega_block=200)
+    print("saved", flush=True)
+""")
+
+
+def test_ctrl_c_stops_a_dask_backed_map_between_chunks(tmp_path: Path) -> None:
+    """A map larger than memory is computed as it is written: Ctrl-C stops at the next chunk."""
+    pytest.importorskip("dask")
+    target = tmp_path / "map.nc"
+    target.write_bytes(b"the previous file")
+    proc = subprocess.Popen([sys.executable, "-c", _MAP, str(target)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "saving"
+    deadline = time.monotonic() + 120
+    while not _temporaries(tmp_path):
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.05)
+    time.sleep(1.0)
+    assert proc.poll() is None
+    start = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = _finish(proc, 60, "the map went on after Ctrl-C")
+    assert proc.returncode == -signal.SIGINT and "saved" not in out, err
+    assert time.monotonic() - start < 10.0
+    assert target.read_bytes() == b"the previous file"
+    assert _temporaries(tmp_path) == []
+
+
+def test_the_next_save_removes_the_temporary_of_a_killed_save(tmp_path: Path) -> None:
+    target = tmp_path / "big.nc"
+    proc = _start_save(target, 6, "in-process")
+    proc.kill()  # kill -9: no cleanup possible
+    proc.communicate(timeout=30)
+    (left,) = _temporaries(tmp_path)
+    assert left.startswith(".big.nc.") and f"-{proc.pid}." in left  # recognisably ours
+    ic.save(xr.Dataset({"x": ("t", np.arange(3.0))}, attrs={"impactcont_dataset": "t"}),
+            tmp_path / "other.nc")
+    assert _temporaries(tmp_path) == []
+    assert not target.exists()
+
+
+def test_only_temporaries_of_gone_writers_on_this_host_are_removed(tmp_path: Path) -> None:
+    gone = subprocess.run([sys.executable, "-c", "pass"], check=True)
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    host = dataset_io._HOST
+    names = {
+        f".a.nc.{host}-{dead.pid}.0123abcd.tmp": False,    # writer gone: removed
+        f".b.png.{host}-{dead.pid}.89abcdef.tmp": False,   # a figure's, writer gone: removed
+        f".c.nc.{host}-{os.getpid()}.0123abcd.tmp": True,  # this process may be writing it
+        f".d.nc.{host}-{os.getppid()}.0123abcd.tmp": True,  # writer still running
+        f".e.nc.otherhost-{dead.pid}.0123abcd.tmp": True,  # another machine's (shared disk)
+        f".f.nc.{host}-{dead.pid}.zz.tmp": True,           # not our pattern
+        "notes.tmp": True,
+    }
+    for name in names:
+        (tmp_path / name).write_text("x")
+    assert gone.returncode == 0
+    removed = dataset_io.remove_stale_temporaries(tmp_path)
+    assert sorted(p.name for p in removed) == sorted(n for n, keep in names.items() if not keep)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(n for n, k in names.items() if k)
+    tmp = dataset_io.temporary_path(tmp_path / "x.nc")
+    assert tmp.parent == tmp_path and dataset_io._TEMPORARY.match(tmp.name)
+    assert f"{host}-{os.getpid()}." in tmp.name
+
+
+# -- every file the package writes loads back ------------------------------------------------
+@pytest.fixture(scope="module")
+def every_section(tmp_path_factory: pytest.TempPathFactory):
+    """A scene run with an entry of every section (curves and maps when present)."""
+    directory = tmp_path_factory.mktemp("files")
+    text = SMALL_SCENE + (TWO_PARAMETER if "curves" in scene_sections() else "")
+    result = run_scene(write(directory, text), output=directory / "out")
+    assert result.ok, result.failures
+    return result
+
+
+def test_every_scene_file_loads_back_identical(every_section) -> None:
+    expected = {"orbits", "branches", "robust", "simulations"}
+    assert expected <= set(every_section.datasets)
+    for section, datasets in every_section.datasets.items():
+        tree = ic.load(every_section.output_dir / f"{section}.nc")
+        assert isinstance(tree, xr.DataTree), section
+        assert tree.attrs["impactcont_kind"] == section
+        assert not tree.has_data  # the index of the root group is dropped
+        assert set(tree.children) == set(datasets)
+        for name, ds in datasets.items():
+            xr.testing.assert_identical(tree[name].to_dataset(inherit=False), ds)
+
+
+def test_every_single_dataset_saves_and_loads_back(every_section, tmp_path: Path) -> None:
+    for section, datasets in every_section.datasets.items():
+        for name, ds in datasets.items():
+            back = ic.load(ic.save(ds, tmp_path / f"{section}_{name}.nc"))
+            assert isinstance(back, xr.Dataset)
+            xr.testing.assert_identical(back, ds)
+            complex_vars = [k for k, v in ds.data_vars.items() if v.dtype.kind == "c"]
+            assert all(back[k].dtype == np.complex128 for k in complex_vars), section
+
+
+def test_orbits_without_any_motion_round_trip(tmp_path: Path) -> None:
+    text = SMALL_SCENE.split("[[orbits]]")[0] + '[[orbits]]\nname = "far"\nb = 100.0\n'
+    result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+    ds = result.datasets["orbits"]["far"]
+    assert ds.sizes["orbit"] == 0 and "c^2 + s^2 = 1.74355 < b^2 = 10000" in ds.attrs["note"]
+    xr.testing.assert_identical(ic.load(tmp_path / "o" / "orbits.nc")["far"].to_dataset(), ds)
+
+
+def test_load_still_refuses_what_is_not_ours(tmp_path: Path) -> None:
+    other = tmp_path / "other.nc"
+    xr.Dataset({"a": ("t", np.arange(3.0))}).to_netcdf(other, engine="netcdf4")
+    with pytest.raises(ValueError, match=r"other\.nc.*not a branch dataset"):
+        ic.load(other)
+
+
+# -- plain readers -----------------------------------------------------------------------------
+def test_plain_xarray_sees_an_index_and_plain_numbers(every_section) -> None:
+    for section, datasets in every_section.datasets.items():
+        path = every_section.output_dir / f"{section}.nc"
+        with xr.open_dataset(path) as root:  # no auto_complex, no impactcont
+            assert root["group_name"].values.tolist() == list(datasets)
+            assert set(root["group_kind"].values.tolist()) <= {
+                "branch", "orbits", "robust", "simulation", "curve", "map"}
+            assert all("long_name" in v.attrs for v in root.data_vars.values())
+        with xr.open_datatree(path) as tree:
+            for name, ds in datasets.items():
+                group = tree[name].to_dataset(inherit=False)
+                for key, var in group.data_vars.items():
+                    assert var.dtype.kind != "V", f"{section}/{name}/{key} is a void dtype"
+                    assert {"long_name", "description"} <= set(var.attrs), key
+                for key in [k for k, v in ds.data_vars.items() if v.dtype.kind == "c"]:
+                    real, imag = group[f"{key}_real"], group[f"{key}_imag"]
+                    assert real.dtype == imag.dtype == np.float64
+                    assert real.attrs["impactcont_complex_variable"] == key
+                    assert real.attrs["units"] == ds[key].attrs["units"]
+                    np.testing.assert_array_equal(np.abs(real + 1j * imag), np.abs(ds[key]))
+
+
+def test_orbit_groups_carry_omega_and_b_as_variables(every_section) -> None:
+    path = every_section.output_dir / "orbits.nc"
+    with netCDF4.Dataset(path) as nc:
+        group = nc.groups["o1"]
+        osc = json.loads(group.getncattr("oscillator"))
+        assert float(group["omega"][...]) == osc["omega"] == 1.0
+        assert float(group["b"][...]) == osc["b"] == 0.6
+        assert abs(float(group["amplitude_squared"][...]) - 1.7435511) < 1e-6
+        assert group["omega"].getncattr("long_name") == "forcing frequency"
+    for section, name in (("robust", "rb"), ("simulations", "sim")):
+        with xr.open_dataset(every_section.output_dir / f"{section}.nc", group=name) as ds:
+            assert {"omega", "b"} <= set(ds.data_vars)
+
+
+def test_ncdump_reads_the_files(every_section) -> None:
+    ncdump = "/usr/bin/ncdump" if Path("/usr/bin/ncdump").exists() else None
+    if ncdump is None:
+        pytest.skip("ncdump is not installed (Debian: apt-get install netcdf-bin)")
+    path = every_section.output_dir / "orbits.nc"
+    index = subprocess.run([ncdump, "-v", "group_name", str(path)], capture_output=True,
+                           text=True, check=True).stdout
+    assert 'group_name = "o1" ;' in index
+    values = subprocess.run([ncdump, "-g", "o1", "-v", "delta,multipliers_real", str(path)],
+                            capture_output=True, text=True, check=True).stdout
+    assert "delta = " in values and "multipliers_real =" in values

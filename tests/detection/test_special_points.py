@@ -1,9 +1,11 @@
-"""User-defined events and monitors on branches and curves (``events=``, ``monitors=``).
+"""User-defined events and monitors on branches and curves (``events=``, ``monitors=``),
+located by :mod:`impactcont.detection.special_points`.
 
 Every located event is checked independently: the closed form (``periodic_orbits``) or a
 Newton re-solve of the N-p motion at the located parameters, and a dense time series for
 displacement events. Tolerances are what the locator claims (``event_precision``) times
-the slope of the function, never the last digits.
+the slope of the function, never the last digits. Every location, folds included, lies
+in its bracket.
 """
 
 from __future__ import annotations
@@ -18,10 +20,14 @@ from impactcont.analysis.branch import continuation_from
 from impactcont.analysis.multi_curves import multi_impact_curve
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.orbit.extrema import displacement_extrema, max_displacement, min_displacement
+from impactcont.orbit.extrema import max_displacement, min_displacement
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
+
+
 V_LEVEL = 0.7   # impact velocity of the events below
+
+
 X2_LEVEL = 0.0  # largest x2 of the N-1 displacement event
 
 
@@ -70,43 +76,6 @@ def crossings(values, level):
 def nearest_root(osc, delta):
     return min(ic.periodic_orbits(osc, 1),
                key=lambda o: abs(math.remainder(o.delta - delta, 2 * math.pi)))
-
-
-# -- the displacement helper -----------------------------------------------------------------
-def test_displacement_extrema_against_a_dense_time_series():
-    osc = paper(b=0.6, omega=1.0)
-    orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
-    _, X = orbit.time_series(num=40001)
-    h = orbit.period / 40000
-    for mass in (1, 2):
-        lo, hi = displacement_extrema(orbit, mass)
-        # the located extrema bound the samples and are within the grid's reach of them
-        # (h^2/8 |x''| with |x''| <= 10 here)
-        assert hi >= X[:, mass - 1].max() - 1e-12 and hi - X[:, mass - 1].max() < 2 * h * h
-        assert lo <= X[:, mass - 1].min() + 1e-12 and X[:, mass - 1].min() - lo < 2 * h * h
-    assert max_displacement(orbit, 1) == pytest.approx(osc.b, abs=1e-12)  # the stop
-    for bad in (0, 3, 1.0, True):
-        with pytest.raises(ParameterError, match=r"mass must be an integer in 1 \.\. 2"):
-            max_displacement(orbit, bad)
-    with pytest.raises(TypeError, match="PeriodicOrbit or MultiImpactOrbit"):
-        max_displacement(osc, 1)
-
-
-def test_displacement_extrema_of_an_n_p_motion_over_every_flight(symmetric_branch):
-    osc = ic.dataset.oscillator_from_dataset(symmetric_branch, 10)
-    motion = ic.multi_impact_orbit(osc, 1, 2, {
-        "delta": float(symmetric_branch["delta_k"].values[10, 0]),
-        "flight_times": symmetric_branch["flight_time_k"].values[10],
-        "states": symmetric_branch["state_k"].values[10],
-        "pattern": symmetric_branch.attrs["pattern"]})
-    _, X = motion.time_series(num=20001)
-    h = float(np.max(motion.flight_times)) / 20000
-    for mass in (1, 2):
-        lo, hi = displacement_extrema(motion, mass)
-        assert 0 <= hi - X[:, mass - 1].max() + 1e-12 < 2 * h * h
-        assert 0 <= X[:, mass - 1].min() - lo + 1e-12 < 2 * h * h
-    # the motion is symmetric: mass 1 reaches both stops
-    assert displacement_extrema(motion, 1) == pytest.approx((-osc.b, osc.b), abs=1e-10)
 
 
 # -- N-1 branches -------------------------------------------------------------------------------
@@ -340,3 +309,19 @@ def test_a_function_failing_inside_the_locator_is_named_not_bracketed(n1_branch)
     with pytest.raises(ParameterError, match="'late' raised RuntimeError: between points"):
         ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 2.0), components="start",
                         events={"late": later}, progress=False)
+
+
+def test_every_location_lies_in_its_bracket_folds_included():
+    """At b = 0.5 the SN points used to lie outside their parameter brackets (issue 11)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.5, omega=1.0, eta=0.1)
+    branch = ic.continuation(osc, N=1, parameter="omega", bounds=(0.5, 6.0))
+    labels = branch.special_label.values.tolist()
+    assert labels.count("SN") == 2
+    value = branch.special_omega.values
+    assert np.all(branch.special_bracket_lo.values <= value)
+    assert np.all(value <= branch.special_bracket_hi.values)
+    # the fold is the end of its bracket: the branch turns there
+    for k in np.flatnonzero(np.array(labels) == "SN"):
+        assert value[k] in (branch.special_bracket_lo.values[k],
+                            branch.special_bracket_hi.values[k])

@@ -16,8 +16,6 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from test_dataset import _columns, _specials
-from test_files import _start_save, _temporaries
 
 import impactcont as ic
 from impactcont.cli import EXIT_USAGE, main
@@ -32,6 +30,8 @@ from impactcont.dataset.curves import (
 from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
 from impactcont.model.stops import Stops
 from impactcont.scene.files import write_output
+from tests.dataset.test_io import _start_save, _temporaries
+from tests.dataset.test_schema import _columns, _specials
 
 OSC = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.0, omega=1.0,
                           eta=0.1)

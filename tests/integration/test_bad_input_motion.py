@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 import scipy.linalg
 from scipy.optimize import brentq, fsolve
-from test_general import _augmented
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate
@@ -23,6 +22,7 @@ from impactcont.orbit.flow import Mass1Motion
 from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.simulate import next_impact
+from tests.orbit.test_general import _augmented
 
 # ------------------------------------------------------------------------------------------
 # 7. The simulator at a forcing frequency far below the natural ones

@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from _scene_data import ORBITS_SCENE, OSCILLATOR, write
 from matplotlib.figure import Figure
 
 from impactcont import ImpactOscillator, Stops, continuation, robust_stability
@@ -25,8 +24,9 @@ from impactcont.errors import ParameterError
 from impactcont.scene import SceneError, load_scene, run_scene
 from impactcont.scene.figures import plot_file, save_figure
 from impactcont.scene.switches import MultiImpactSpec, simulation_seed
+from tests._scene_data import ORBITS_SCENE, OSCILLATOR, write
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def scene_error(tmp_path: Path, text: str) -> SceneError:

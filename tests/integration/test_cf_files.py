@@ -13,12 +13,12 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from _scene_data import SMALL_SCENE, write
 
 import impactcont as ic
 from impactcont.dataset import io as dataset_io
 from impactcont.dataset import oscillator_from_dataset, point_table, with_parameter_coords
 from impactcont.scene import run_scene
+from tests._scene_data import SMALL_SCENE, write
 
 TWO_PARAMETER = (
     '[[curves]]\nname = "sn"\nkind = "SN"\nstart = "br"\n'

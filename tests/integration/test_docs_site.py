@@ -16,7 +16,7 @@ import impactcont
 pytest.importorskip("mkdocs", reason="mkdocs is not installed (pip install -e .[docs])")
 pytest.importorskip("mkdocstrings", reason="mkdocstrings is not installed")
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 ROLE = re.compile(r":(func|class|meth|mod|data|attr|exc):\S")
 
 

@@ -18,8 +18,6 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 import pytest
-from _scene_data import write
-from test_cf_files import CHECKER_BUG, _check, _group_as_file, _group_paths
 
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
@@ -30,6 +28,8 @@ from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops
 from impactcont.scene import load_scene, run_scene
 from impactcont.scene.keys import SceneError
+from tests._scene_data import write
+from tests.integration.test_cf_files import CHECKER_BUG, _check, _group_as_file, _group_paths
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
 PAPER = {"M": np.eye(2), "K": K2, "F": [1.0, 0.0], "R": 0.6, "b": 0.6, "omega": 1.0}

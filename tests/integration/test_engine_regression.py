@@ -10,7 +10,7 @@ on the code before the refactor; every run is recomputed here and compared.
 One entry changed on purpose since: ``curve_SN`` gained the SN+PD point that one
 default step held together with the SN+ZV (it was discarded as a pole crossing)
 and names its double multipliers +1 ``R1`` (1:1 resonances; ``SN+SN`` before), found at every step
-size (issue 11, item 5; ``tests/test_step_independence.py``); its SN+ZV is unchanged.
+size (issue 11, item 5; ``tests/integration/test_step_independence.py``); its SN+ZV is unchanged.
 ``curve_PD`` changed on purpose too: its system now sets apart the 1/h2 pole of G
 (regular through a zero-velocity impact), so PD+ZV is located (1.2331015327; it was
 only bracketed, at 1.2333601728) and the 1:2 resonance R2 (``PD+PD`` before) next to it is found at
@@ -19,7 +19,7 @@ every step size; PD+NS and PD+SN are unchanged to 1e-15, the curve has 33 points
 zero-velocity impact next to it (the GR test is ``-h2^2 / (2|a|)`` there, a double zero
 located only to about 1e-9, and differently on other processors: 1.8874601631 on one,
 1.8874601626 on another), now reported once, as the ZV at 1.8874601621, which the
-simulator confirms (``tests/test_grazing_impact.py``).
+simulator confirms (``tests/core/test_locate.py``).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import pytest
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def _maker():

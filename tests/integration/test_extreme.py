@@ -13,7 +13,6 @@ import warnings
 
 import numpy as np
 import pytest
-import reference_mp as ref
 
 import impactcont as ic
 from impactcont.errors import (
@@ -24,6 +23,7 @@ from impactcont.errors import (
     UnresolvedMotionWarning,
 )
 from impactcont.orbit.extrema import sample_times
+from tests import reference_mp as ref
 
 EPS = np.finfo(float).eps
 
@@ -137,7 +137,7 @@ def test_restitution_limits(R, eta):
     osc = _paper(R=R, eta=eta)
     if R == 1.0 and eta == 0.0:
         # no dissipation at all: I - D U W(T) U^-1 is singular, yet the motions are isolated
-        # (tests/test_elastic.py); the 50-digit reference solves eq. (12) and cannot follow
+        # (tests/orbit/test_periodic.py); the 50-digit reference solves eq. (12) and cannot follow
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             orbits = ic.periodic_orbits(osc, 1)

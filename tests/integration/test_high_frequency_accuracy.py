@@ -21,7 +21,6 @@ import warnings
 import mpmath
 import numpy as np
 import pytest
-import reference_mp as ref
 
 import impactcont as ic
 from impactcont.errors import IllConditionedWarning, ParameterError
@@ -29,6 +28,7 @@ from impactcont.kernel import closed_form, roots
 from impactcont.model.first_order import coth_remainder
 from impactcont.orbit import batched, general, periodic
 from impactcont.orbit.periodic import orbit_at_phase
+from tests import reference_mp as ref
 
 K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])
 K3 = np.array([[1.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
@@ -115,7 +115,7 @@ def test_damping_matrix_path_against_mpmath_at_high_omega(omega):
 def test_nonproportional_c_s_against_mpmath_at_high_omega(omega):
     """A damper on mass 1 only (exact binary fractions: the mpmath system is the float
     one): c, s of eq. (14) from the 60-digit expm of the augmented system."""
-    from test_general import _mp_fixed_point
+    from tests.orbit.test_general import _mp_fixed_point
 
     osc = ic.ImpactOscillator(M=np.diag([1.0, 2.0]), K=K2, C=[[0.25, 0.0], [0.0, 0.0]],
                               F=[1.0, 0.0], R=0.625, b=0.25, omega=omega)

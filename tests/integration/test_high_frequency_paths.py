@@ -23,13 +23,13 @@ import warnings
 import mpmath
 import numpy as np
 import pytest
-import reference_mp as ref
-from test_high_frequency_accuracy import K3, _far
 
 import impactcont as ic
 from impactcont.orbit import secular
 from impactcont.orbit.periodic import modal_arrays
 from impactcont.problems.codim1 import curve_problem
+from tests import reference_mp as ref
+from tests.integration.test_high_frequency_accuracy import K3, _far
 
 OMEGA = 300.0  # issue 19's example: omega / omega_1 = 670
 BOUNDS = (299.0, 301.0)

@@ -347,7 +347,7 @@ def test_loaded_pair_branch_in_the_forcing_amplitude(loaded_orbit):
 def test_a_pushed_free_mode_is_checked(caplog):
     """A ball under gravity bouncing on the primary: the constant force moves the free mode
     by a polynomial in time, which the interior-contact search represents exactly
-    (tests/test_pushed_free_mode.py). The motion is physical (the simulated flight lasts
+    (tests/kernel/test_contact.py). The motion is physical (the simulated flight lasts
     the whole period: no contact inside it) and the branch reports no unchecked contact."""
     osc = ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]],
                               F=[1.0, 0.0], F_static=[0.0, -MU * 0.5], R=0.7, b=50.0,

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_cf_files import _check
-from test_machine_branches import damper, loaded, settled
 
 import impactcont as ic
 from impactcont.dataset import oscillator_from_dataset
+from tests.integration.test_cf_files import _check
+from tests.integration.test_machine_branches import damper, loaded, settled
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-RUN = Path(__file__).resolve().parents[1] / "studies" / "paper_example" / "run.py"
+RUN = Path(__file__).resolve().parents[2] / "studies" / "paper_example" / "run.py"
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ printed text exactly, after stripping trailing whitespace.
 
 To regenerate the shown outputs after changing the tutorial or the library::
 
-    .venv/bin/python tests/test_tutorial.py --write
+    .venv/bin/python tests/integration/test_tutorial.py --write
 
 (run from the repository root; it rewrites the ```` ```text ```` blocks of
 ``docs/tutorial.md`` in place, then check the diff). The tutorial prints only
@@ -33,7 +33,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-TUTORIAL = Path(__file__).resolve().parents[1] / "docs" / "tutorial.md"
+TUTORIAL = Path(__file__).resolve().parents[2] / "docs" / "tutorial.md"
 FENCE = re.compile(r"^```(?P<lang>[\w-]*)[^\n]*\n(?P<body>.*?)^```[ \t]*$", re.M | re.S)
 TOML_NAME = re.compile(r"#\s*(?P<name>[\w.-]+\.toml)\s*$")
 
@@ -137,11 +137,11 @@ def test_tutorial_outputs_are_its_real_outputs(tmp_path):
         else:
             assert _tidy(shown.body) == printed, (
                 f"{where}\nshown output differs from the real one (regenerate with "
-                f"`python tests/test_tutorial.py --write`)")
+                f"`python tests/integration/test_tutorial.py --write`)")
 
 
 if __name__ == "__main__":
     if sys.argv[1:] == ["--write"]:
         write_outputs()
     else:
-        sys.exit("usage: python tests/test_tutorial.py --write")
+        sys.exit("usage: python tests/integration/test_tutorial.py --write")

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.optimize
-from _scene_data import write
 
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
@@ -29,6 +28,7 @@ from impactcont.orbit.multi_impact import multi_impact_orbit, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.scene import SceneError, load_scene
 from impactcont.simulate import SimulationStatus, next_impact
+from tests._scene_data import write
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
 

@@ -18,12 +18,12 @@ import math
 
 import numpy as np
 import pytest
-from test_general import assert_simulation_repeats
 
 import impactcont as ic
 from impactcont.errors import ParameterError
 from impactcont.model.modal import forced_coefficients
 from impactcont.orbit import general
+from tests.orbit.test_general import assert_simulation_repeats
 
 K2 = np.array([[1.0, -1.0], [-1.0, 2.0]])
 FA = np.array([1.0, 0.3])

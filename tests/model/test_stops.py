@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_static_force import _ivp
 
 import impactcont as ic
 from impactcont.dataset import oscillator_from_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stop, Stops, check_pattern
 from impactcont.orbit.flow import Flow
+from tests.orbit.test_flow import _ivp
 
 M = np.eye(2)
 K = np.array([[2.0, -1.0], [-1.0, 1.0]])  # a chain: wall - k - m1 - k - m2

@@ -1,4 +1,11 @@
-"""The exact modal transfer and state flow (eq. 5-10) against independent references."""
+"""The exact modal transfer and state flow (eq. 5-10) against independent references.
+
+A constant force F_static (issue 21): the exact flow against solve_ivp, and the identity
+'a constant force on a system held by springs = the stops shifted by K^-1 F_static'.
+
+Free masses (K positive semi-definite, issue 21): what holds each free mode, the exact
+flow of zero-frequency modes against solve_ivp, and the refusals.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +15,9 @@ import mpmath
 import numpy as np
 import pytest
 import scipy.linalg
+from scipy.integrate import solve_ivp
 
+import impactcont as ic
 from impactcont import Flow, ImpactOscillator
 from impactcont.errors import ParameterError
 from impactcont.model.modal import free_transfer
@@ -45,6 +54,8 @@ REGIMES = {
     "overdamped": 3.0,
     "heavily-overdamped": 1e4,
 }
+
+
 TIMES = [0.0, 1e-7, 0.05, 0.9, 3.0, 25.0]
 
 
@@ -231,3 +242,185 @@ def test_flow_of_shares_one_flow_per_oscillator_and_lets_both_go():
     del osc, flow
     gc.collect()
     assert gone[0]() is None and gone[1]() is None
+
+
+M = np.diag([1.0, 0.5])
+
+
+K = np.array([[1.0, -1.0], [-1.0, 2.0]])
+
+
+FS = np.array([-0.3, 0.2])
+
+
+def _ivp(osc, X0, delta, t_end):
+    """Independent witness: M x'' + C x' + K x = Re(F e^{i(omega t + delta)}) + F_static."""
+    n = osc.n
+    Minv = np.linalg.inv(osc.M)
+    F = np.asarray(osc.F, dtype=complex)
+
+    def rhs(t, X):
+        force = (F * np.exp(1j * (osc.omega * t + delta))).real + osc.F_static
+        acc = Minv @ (force - osc.C @ X[n:] - osc.K @ X[:n])
+        return np.concatenate([X[n:], acc])
+
+    sol = solve_ivp(rhs, (0.0, t_end), X0, method="DOP853", rtol=1e-10, atol=1e-12,
+                    dense_output=True)
+    return sol.sol
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.05}, {"C": [[0.3, -0.1], [-0.1, 0.1]]},
+                                     {"eta": 0.05, "F": [1.0, 0.4j]}])
+def test_flow_with_a_constant_force_matches_solve_ivp(damping):
+    params = {"F": [1.0, 0.0], **damping}
+    osc = ic.ImpactOscillator(M=M, K=K, R=0.5, b=1.0, omega=1.3, F_static=FS, **params)
+    flow = Flow(osc)
+    X0 = np.array([0.1, -0.2, 0.3, 0.05])
+    t = np.linspace(0.0, 12.0, 7)
+    ref = _ivp(osc, X0, 0.4, 12.0)(t).T
+    np.testing.assert_allclose(flow.state(t, X0, 0.4), ref, rtol=0, atol=1e-8)
+    # matrices(static=True) and state_derivative agree with the same flow
+    Phi, E, S = flow.matrices(12.0, static=True)
+    np.testing.assert_allclose(Phi @ X0 + E @ [np.cos(0.4), np.sin(0.4)] + S, ref[-1],
+                               rtol=0, atol=1e-8)
+    h = 1e-6
+    fd = (flow.state(5.0 + h, X0, 0.4) - flow.state(5.0 - h, X0, 0.4)) / (2 * h)
+    np.testing.assert_allclose(flow.state_derivative(5.0, X0, 0.4), fd, rtol=0, atol=1e-7)
+
+
+def test_a_constant_force_equals_shifting_the_stops():
+    """K positive definite: x = x_s + K^-1 F_static, so the system with F_static and stops
+    at b, -b_low is the system without it and stops at b - c, -b_low - c, c = (K^-1 F_s)_j;
+    two simulations, one identity."""
+    stops = Stops(mass=1, b_low=0.4, R_low=0.7)
+    shift = np.linalg.solve(K, FS)
+    c = shift[0]
+    with_force = ic.ImpactOscillator(M=M, K=K, F=[1.0, 0.0], R=0.6, b=0.5, omega=1.1,
+                                     eta=0.05, stops=stops, F_static=FS)
+    shifted = ic.ImpactOscillator(M=M, K=K, F=[1.0, 0.0], R=0.6, b=0.5 - c, omega=1.1,
+                                  eta=0.05, stops=Stops(mass=1, b_low=0.4 + c, R_low=0.7))
+    X0 = np.array([0.0, 0.0, 0.0, 0.0])
+    a = ic.simulate(with_force, X0, 0.0, 30.0)
+    b = ic.simulate(shifted, X0 - np.concatenate([shift, [0, 0]]), 0.0, 30.0)
+    assert a.impact_times.size > 10 and a.impact_stops == b.impact_stops
+    np.testing.assert_allclose(a.impact_times, b.impact_times, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(a.impact_states[:, :2] - shift, b.impact_states[:, :2],
+                               rtol=0, atol=1e-8)
+    np.testing.assert_allclose(a.impact_states[:, 2:], b.impact_states[:, 2:], rtol=0,
+                               atol=1e-8)
+
+
+def test_static_force_is_validated_and_serialised():
+    base = {"M": M, "K": K, "F": [1.0, 0.0], "R": 0.5, "b": 1.0, "omega": 1.3, "eta": 0.05}
+    with pytest.raises(ParameterError, match=r"F_static must have shape \(2,\)"):
+        ic.ImpactOscillator(**base, F_static=[1.0, 2.0, 3.0])
+    with pytest.raises(ParameterError, match="F_static must be finite"):
+        ic.ImpactOscillator(**base, F_static=[np.nan, 0.0])
+    with pytest.raises(TypeError, match="F_static must be"):
+        ic.ImpactOscillator(**base, F_static=[1j, 0.0])
+    osc = ic.ImpactOscillator(**base, F_static=FS)
+    assert "F_static=[-0.3, 0.2]" in repr(osc)
+    again = ic.ImpactOscillator.from_json(osc.to_json())
+    np.testing.assert_array_equal(again.F_static, FS)
+    assert "F_static" not in ic.ImpactOscillator(**base).to_dict()
+    np.testing.assert_array_equal(osc.replace(omega=2.0).F_static, FS)
+    np.testing.assert_array_equal(osc.replace(F_static=[0.0, 1.0]).F_static, [0.0, 1.0])
+
+
+def test_closed_form_paths_refuse_a_constant_force():
+    osc = ic.ImpactOscillator(M=M, K=K, F=[1.0, 0.0], R=0.5, b=1.0, omega=1.3, eta=0.05,
+                              F_static=FS)
+    assert not osc.paper_form
+    with pytest.raises(ParameterError, match=r"constant force.*multi_impact_orbit"):
+        ic.periodic_orbits(osc, 1)
+
+
+# a primary mass on a spring to the ground and a free ball (an impact damper)
+M2 = np.diag([1.0, 0.2])
+
+
+K2 = np.diag([1.0, 0.0])
+
+
+PAIR = Stops(mass=2, relative_to=1, mirror=True)
+
+
+def test_chain_with_a_zero_spring_has_a_free_mode_with_zero_frequency():
+    osc = ic.ImpactOscillator.chain(masses=[1.0, 0.5], springs=[2.0, 0.0], F=[1.0, 0.0],
+                                    R=0.5, b=0.1, omega=1.3, eta=0.05)
+    assert osc.free_modes.shape == (2, 1)
+    np.testing.assert_allclose(osc.free_modes[:, 0] / osc.free_modes[0, 0], [1.0, 1.0],
+                               rtol=1e-12)
+    modes = osc.modes
+    assert modes.free.tolist() == [True, False]
+    assert modes.natural_frequencies[0] == 0.0  # clamped, not rounding of either sign
+    np.testing.assert_allclose(modes.natural_frequencies[1] ** 2, 2.0 / 1.0 + 2.0 / 0.5,
+                               rtol=1e-12)
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.05}, {"alpha": 0.3, "beta": 0.02},
+                                     {"C": [[0.1, 0.0], [0.0, 0.05]]}])
+@pytest.mark.parametrize("static", [None, [0.1, -0.05]])
+def test_free_mode_flow_matches_solve_ivp(damping, static):
+    """Undamped free mode (eta: g t^2/2), damped by alpha (drift g t/(2a)) and by a damping
+    matrix (the first-order basis with an exact zero eigenvalue)."""
+    osc = ic.ImpactOscillator(M=M2, K=K2, F=[1.0, 0.3], R=0.5, b=0.3, omega=1.3,
+                              stops=PAIR, F_static=static, **damping)
+    flow = Flow(osc)
+    X0 = np.array([0.1, -0.2, 0.3, 0.05])
+    t = np.linspace(0.0, 15.0, 6)
+    ref = _ivp(osc, X0, 0.7, 15.0)(t).T
+    np.testing.assert_allclose(flow.state(t, X0, 0.7), ref, rtol=0, atol=1e-8)
+    motion = flow.motion(X0, 0.7, 1, -1.0, osc.stops.normal(2))  # -(x2 - x1)
+    s, sv, sa = motion(t)
+    np.testing.assert_allclose(s, -(ref[:, 1] - ref[:, 0]), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(sv, -(ref[:, 3] - ref[:, 2]), rtol=0, atol=1e-8)
+    acc = flow.state_derivative(t, X0, 0.7)[:, 2:]
+    np.testing.assert_allclose(sa, -(acc[:, 1] - acc[:, 0]), rtol=0, atol=1e-12)
+
+
+def test_a_free_mode_nothing_holds_is_refused():
+    with pytest.raises(ParameterError, match=r"free mode u = \[0.0, 1.0\] is held by nothing"):
+        ic.ImpactOscillator(M=M2, K=K2, F=[1.0, 0.0], R=0.5, b=0.1, omega=1.3, eta=0.05)
+    # two free masses, one stop coordinate: the common motion of both is free
+    with pytest.raises(ParameterError, match="2 free"):
+        ic.ImpactOscillator(M=np.eye(2), K=np.zeros((2, 2)), F=[1.0, 0.0], R=0.5, b=0.1,
+                            omega=1.3, stops=PAIR)
+    with pytest.raises(ParameterError, match="K must be positive semi-definite"):
+        ic.ImpactOscillator(M=M2, K=[[1.0, 0.0], [0.0, -1e-3]], F=[1.0, 0.0], R=0.5, b=0.1,
+                            omega=1.3, stops=PAIR)
+
+
+def test_undamped_free_mode_on_the_first_order_path_is_refused_naming_the_modal_path():
+    osc = ic.ImpactOscillator(M=M2, K=K2, F=[1.0, 0.0], R=0.5, b=0.1, omega=1.3, stops=PAIR,
+                              C=[[0.1, 0.0], [0.0, 0.0]])
+    with pytest.raises(ParameterError, match=r"undamped by C.*modal path"):
+        osc.first_order  # noqa: B018
+
+
+def test_closed_form_paths_refuse_free_masses():
+    osc = ic.ImpactOscillator.chain(masses=[1.0, 0.5], springs=[2.0, 0.0], F=[1.0, 0.0],
+                                    R=0.5, b=0.1, omega=1.3, eta=0.05)
+    with pytest.raises(ParameterError, match=r"free mode.*multi_impact_orbit"):
+        ic.periodic_orbits(osc, 1)
+
+
+def test_a_free_ball_between_walls_simulates_against_solve_ivp():
+    """An impact damper's ball alone would be refused; here a primary on a spring carries a
+    ball in a clearance: each simulated flight against solve_ivp of the equations."""
+    osc = ic.ImpactOscillator(M=M2, K=K2, F=[1.0, 0.0], R=0.6, b=0.3, omega=0.9, eta=0.02,
+                              stops=PAIR, F_static=[0.0, -0.05])
+    res = ic.simulate(osc, np.zeros(4), 0.0, 6.0)
+    assert res.impact_times.size >= 4  # (the ball comes to rest on the lower stop later)
+    flow = Flow(osc)
+    start, phase, t0 = np.zeros(4), 0.0, 0.0
+    for k in range(4):
+        tau = res.impact_times[k] - t0
+        X_minus = _ivp(osc, start, phase, tau)(tau)
+        s = X_minus[1] - X_minus[0]
+        level = osc.b if res.impact_stops[k] == "U" else -osc.stops.b_low
+        assert abs(s - level) < 1e-8
+        np.testing.assert_allclose(X_minus[:2], res.impact_states[k, :2], rtol=0, atol=1e-8)
+        np.testing.assert_allclose(flow.state(tau, start, phase)[0], X_minus, rtol=0,
+                                   atol=1e-8)
+        start, phase, t0 = res.impact_states[k], res.impact_phases[k], res.impact_times[k]

@@ -1,4 +1,13 @@
-"""N-p motions (p impacts in N periods), their branches and branch switching."""
+"""N-p motions (p impacts in N periods) by shooting (:mod:`impactcont.orbit.multi_impact`).
+
+The shooting path on the machines of issue 21: a clearance between masses (an impact
+damper: a free ball in a cavity of the primary mass), a constant force.
+
+Witnesses: central finite differences of the residual (the exact Jacobian), finite
+differences of the simulated Poincare map (G), the event-driven simulator over many
+periods, and the exact identity "a constant force on a system held by springs is the
+stops shifted by K^-1 F_static".
+"""
 
 from __future__ import annotations
 
@@ -6,27 +15,19 @@ import math
 
 import numpy as np
 import pytest
-import xarray as xr
 
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
-from impactcont.analysis.switching import (
-    critical_direction,
-    grazing_switch,
-    period_doubling_switch,
-    special_orbit,
-)
-from impactcont.dataset.multi import impacts_of, validate_multi_impact_dataset
-from impactcont.orbit.flow import Flow
+from impactcont.analysis.switching import grazing_switch, period_doubling_switch
+from impactcont.model.stops import Stops
+from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.multi_impact import (
-    initial_unknowns,
     multi_impact_orbit,
     primitive_orbit,
     shooting,
+    stop_geometry,
 )
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
-
-PD_OMEGA = 1.70038303473  # N = 1 PD of the paper's system at b = 0 (test_branch finds it too)
 
 
 @pytest.fixture(scope="module")
@@ -41,26 +42,8 @@ def branch_n1(paper_b0):
                            components="start")
 
 
-@pytest.fixture(scope="module")
-def branch_22(branch_n1):
-    return period_doubling_switch(branch_n1, bounds=(1.6, 1.9))
-
-
-@pytest.fixture(scope="module")
-def branch_44(branch_22):
-    return period_doubling_switch(branch_22, bounds=(1.79, 1.83), ds_max=0.005)
-
-
 def wrap(a):
     return np.remainder(np.asarray(a) + math.pi, 2 * math.pi) - math.pi
-
-
-def orbit_at_point(ds, i):
-    """The N-p motion stored at point i of a dataset, re-solved (one Newton polish)."""
-    osc = ic.dataset.oscillator_from_dataset(ds, i)
-    guess = {"delta": float(ds.delta_k.values[i, 0]), "flight_times": ds.flight_time_k.values[i],
-             "states": ds.state_k.values[i]}
-    return multi_impact_orbit(osc, int(ds.attrs["N"]), impacts_of(ds), guess)
 
 
 def assert_reproduced_by_simulator(orbit, repeats, tol=1e-9):
@@ -214,127 +197,6 @@ def test_bad_inputs_raise_clear_errors(paper_b0, branch_n1):
                                        "states": np.full((2, 4), 50.0)}, max_iter=5)
 
 
-# ---------------------------------------------------------------------------------------------
-# Branches and switching
-# ---------------------------------------------------------------------------------------------
-def test_n1_branch_through_the_shooting_problem_matches_continuation(paper_b0, branch_n1):
-    start = next(o for o in ic.periodic_orbits(paper_b0, 1) if o.physical)
-    ds = multi_impact_continuation(start, "omega", (1.4, 2.0), ds_max=0.05)
-    assert impacts_of(ds) == 1 and ds.sizes["impact"] == 1
-    pd = ds.special_omega.values[ds.special_label.values == "PD"]
-    ref = branch_n1.special_omega.values[branch_n1.special_label.values == "PD"]
-    assert pd.size == 1 and ref.size == 1
-    assert abs(pd[0] - ref[0]) < 1e-10
-
-
-def test_critical_direction_is_a_null_vector_of_the_doubled_system(branch_n1):
-    orbit = special_orbit(branch_n1, "PD")
-    assert np.min(np.abs(orbit.multipliers + 1)) < 1e-8
-    w, mu = critical_direction(orbit)
-    assert abs(mu + 1) < 1e-8
-    problem = MultiImpactBranchProblem(orbit.oscillator, 2, 2, "omega")
-    u2 = initial_unknowns(orbit, orbit.oscillator, 2, 2)  # Newton would drift along w
-    J = problem.jacobian(u2, orbit.oscillator.omega)
-    assert np.abs(J @ w).max() < 1e-7 * np.abs(J).max()
-
-
-def test_switched_branch_starts_alone_and_agrees_with_simulator(branch_22):
-    ds = branch_22
-    assert ds.attrs["born_at"] == "PD" and ds.attrs["N"] == 2 and impacts_of(ds) == 2
-    assert ds.attrs["born_at_value"] == pytest.approx(PD_OMEGA, abs=1e-9)
-    om = ds.omega.values
-    assert om[0] - PD_OMEGA < 1e-5 and np.all(np.diff(om[:10]) > 0)  # leaves the PD upwards
-    v = ds.impact_velocity_k.values
-    assert abs(v[0, 0] - v[0, 1]) < 0.01 < abs(v[8, 0] - v[8, 1])  # two impacts split apart
-    for i in (0, 1, 2, 5):
-        orbit = orbit_at_point(ds, i)
-        assert orbit.physical and orbit.stable
-        assert_reproduced_by_simulator(orbit, 20)
-    # the branch has its own PD (the next doubling), located
-    assert "PD" in ds.special_label.values.tolist()
-
-
-def test_physical_stable_orbits_of_a_branch_are_reproduced(branch_22, branch_44):
-    checked = 0
-    for ds in (branch_22, branch_44):
-        idx = np.flatnonzero(ds.physical.values & ds.stable.values)
-        for i in idx[:: max(1, idx.size // 4)]:
-            assert_reproduced_by_simulator(orbit_at_point(ds, int(i)), 60 // int(ds.attrs["N"]))
-            checked += 1
-    assert checked >= 6
-
-
-def test_second_doubling_and_grazing_are_located(branch_44):
-    labels = branch_44.special_label.values.tolist()
-    assert "GR" in labels and "PD" in labels
-    gr = branch_44.special_omega.values[labels.index("GR")]
-    pd = branch_44.special_omega.values[labels.index("PD")]
-    # the 4-4 motion grazes before its own period-doubling: that PD is virtual
-    assert gr < pd
-    assert special_orbit(branch_44, "GR").gap_min == pytest.approx(0.0, abs=1e-9)
-    assert not special_orbit(branch_44, "PD").physical
-
-
-def test_grazing_switch_adds_an_impact(branch_44):
-    ds = grazing_switch(branch_44, bounds=(1.79, 1.83), max_points=25, ds_max=0.002)
-    assert ds is not None
-    assert ds.attrs["born_at"] == "GR" and impacts_of(ds) == 5 and ds.attrs["N"] == 4
-    new = int(ds.attrs["new_impact"])
-    v_new = ds.impact_velocity_k.values[:, new]
-    assert 0 < v_new[0] < 1e-3 and v_new[5] > v_new[0]  # born at zero velocity, then grows
-    gr = float(branch_44.special_omega.values[branch_44.special_label.values == "GR"][0])
-    assert abs(ds.omega.values[0] - gr) < 1e-3
-    orbit = orbit_at_point(ds, 5)
-    assert orbit.physical
-    assert_reproduced_by_simulator(orbit, 1, tol=1e-8)  # unstable: one period only
-
-
-def test_netcdf_round_trip(branch_22, tmp_path):
-    path = tmp_path / "b22.nc"
-    ic.save(branch_22, path)
-    back = ic.load(path)
-    validate_multi_impact_dataset(back)
-    xr.testing.assert_identical(back, branch_22)
-    assert impacts_of(back) == 2
-    orbit = special_orbit(back, "PD")
-    assert np.min(np.abs(orbit.multipliers + 1)) < 1e-8
-    ic.save({"n22_head": branch_22.isel(point=slice(0, 3)), "n22": branch_22}, tmp_path / "tree.nc")
-    tree = ic.load(tmp_path / "tree.nc")
-    xr.testing.assert_identical(tree["n22"].to_dataset(), branch_22)
-
-
-def test_plots_accept_np_branches(branch_n1, branch_22):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from impactcont.plots import bifurcation_diagram
-    from impactcont.plots.impacts import impact_diagram
-
-    ax = impact_diagram({"N1": branch_n1, "N2": branch_22})
-    assert len(ax.lines) >= 3
-    bifurcation_diagram([branch_n1, branch_22])
-    with pytest.raises(ValueError, match="y must be one of"):
-        impact_diagram(branch_22, y="state")
-
-
-def test_grazing_switch_steps_geometrically_away_from_the_graze():
-    """Its multipliers grow like 1/|omega - omega_GR|: the steps start at epsilon's size and
-    grow by a bounded factor (the first stored step used to jump 3.9e-6 -> 1.3e-3)."""
-    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
-                              b=0.0, omega=1.5, eta=0.1)
-    branch = ic.continuation(osc, N=1, parameter="omega", bounds=(0.5, 3.0), detect=("GR",),
-                             components="start")
-    gr = float(branch.special_omega.values[0])
-    switched = grazing_switch(branch, bounds=(0.5, 3.0), max_points=40)
-    distance = np.abs(switched.omega.values[:12] - gr)
-    assert distance[0] < 1e-5
-    assert np.all(np.diff(distance) > 0)
-    assert np.all(distance[1:] / distance[:-1] < 3.0)  # no jump: the birth is resolved
-    rho = switched.spectral_radius.values[:12]
-    assert rho[0] > 1e3 and np.all(np.diff(rho) < 0)  # 1/|omega - omega_GR| decay seen
-    assert_reproduced_by_simulator(orbit_at_point(switched, 6), 1, tol=1e-8)
-
-
 def test_a_phase_that_runs_off_does_not_loosen_newton_s_test():
     # A bouncing ball (free mass, gravity as F_static, the table's motion as F) from a
     # poor guess: Newton drove the phase to ~-3e14 and the test tol * max(1, |u|) then
@@ -351,3 +213,157 @@ def test_a_phase_that_runs_off_does_not_loosen_newton_s_test():
     except ic.NoPeriodicMotionError:
         return
     assert orbit.residual < 1e-9
+
+
+MU = 0.2  # mass ratio ball / primary
+
+
+@pytest.fixture(scope="module")
+def damper():
+    """A symmetric two-impact (UL) motion of an impact damper: primary on a spring, a free
+    ball of mass ratio MU in a cavity of half-width b (s = x2 - x1 in [-b, b])."""
+    osc = ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]], F=[1.0, 0.0],
+                              R=0.8, b=1.0, omega=1.5, eta=0.05,
+                              stops=Stops(mass=2, relative_to=1, mirror=True))
+    res = ic.simulate(osc, np.array([0.0, 0.0, 0.0, 1.0]), 0.0, 150.0)
+    return multi_impact_orbit(osc, 1, 2, res)
+
+
+def _fd_jacobian(flow, N, p, u, pattern, h=1e-6):
+    J = np.empty((u.size, u.size))
+    for c in range(u.size):
+        e = np.zeros(u.size)
+        e[c] = h * max(1.0, abs(u[c]))
+        J[:, c] = (shooting(flow, N, p, u + e, jacobian=False, pattern=pattern).residual
+                   - shooting(flow, N, p, u - e, jacobian=False, pattern=pattern).residual
+                   ) / (2 * e[c])
+    return J
+
+
+def test_impact_damper_motion_is_physical_symmetric_and_two_body(damper):
+    osc = damper.oscillator
+    assert damper.physical and damper.stable and damper.residual < 1e-12
+    assert damper.pattern in ("UL", "LU")
+    s = damper.states[:, 1] - damper.states[:, 0]  # on the stops of s = x2 - x1
+    np.testing.assert_allclose(np.abs(s), osc.b, rtol=0, atol=1e-12)
+    # symmetric: the second impact is the mirror of the first, half a period later
+    np.testing.assert_allclose(damper.states[1], -damper.states[0], rtol=0, atol=1e-9)
+    assert damper.flight_times[0] == pytest.approx(damper.period / 2, abs=1e-9)
+    # the two-body law conserves momentum
+    geo = stop_geometry(osc, damper.pattern)
+    M = np.diag([1.0, MU])
+    for D in geo.matrices:
+        np.testing.assert_allclose(np.ones(2) @ M @ D[2:, 2:], np.ones(2) @ M, atol=1e-15)
+        np.testing.assert_allclose(geo.normal @ D[2:, 2:], -osc.R * geo.normal, atol=1e-15)
+
+
+def test_pair_clearance_jacobian_matches_finite_differences(damper):
+    """The exact Jacobian (section n . x = c with n = e2 - e1, full impact matrices) against
+    central differences at a point off the solution."""
+    flow = flow_of(damper.oscillator)
+    u = damper.unknowns + 0.01 * np.linspace(-1.0, 1.0, damper.unknowns.size)
+    J = shooting(flow, 1, 2, u, pattern=damper.pattern).jacobian
+    fd = _fd_jacobian(flow, 1, 2, u, damper.pattern)
+    np.testing.assert_allclose(J, fd, rtol=0, atol=1e-7 * max(1.0, np.abs(J).max()))
+
+
+def _section_map(osc, X0, theta, p, periods):
+    """State and phase after p impacts of the simulator from (X0, theta)."""
+    res = ic.simulate(osc, X0, theta, periods)
+    return res.impact_states[p - 1], res.impact_phases[p - 1]
+
+
+def test_pair_clearance_G_matches_the_simulated_poincare_map(damper):
+    """G (product of the flight Jacobians and two-body impact matrices) against central
+    differences of the simulator's map from impact 0 to impact p (section coordinates
+    ``[z, theta]``, z = X without x2; x2 = x1 + c on the section)."""
+    osc, p = damper.oscillator, damper.p
+    X0, th0 = damper.states[0], damper.phases[0]
+    j, m = osc.stops.index, 2 * osc.n
+    rest = np.delete(np.arange(m), j)
+    h = 1e-6
+    fd = np.empty((m, m))
+    for c in range(m):
+        out = []
+        for sgn in (1.0, -1.0):
+            X, th = X0.copy(), th0
+            if c < m - 1:
+                X[rest[c]] += sgn * h
+                X[j] = X0[j] + (X[0] - X0[0])  # stay on the section s = x2 - x1 = c_0
+            else:
+                th += sgn * h
+            Xp, thp = _section_map(osc, X, th, p, 1.5 * damper.N)
+            out.append(np.append(Xp[rest], thp))
+        d = out[0] - out[1]
+        d[-1] = math.remainder(d[-1], 2 * math.pi)
+        fd[:, c] = d / (2 * h)
+    np.testing.assert_allclose(damper.G, fd, rtol=0, atol=1e-5 * max(1.0, np.abs(fd).max()))
+
+
+def test_stable_pair_clearance_motion_stays_under_simulation(damper):
+    """Re-simulated from its impact 0 over 40 periods, the stable motion repeats its
+    impacts (the multipliers say stable: rounding does not grow)."""
+    osc = damper.oscillator
+    res = ic.simulate(osc, damper.states[0], damper.delta, 40.0)
+    assert res.impact_stops[:8] == (damper.pattern * 4)[1:9] or res.impact_stops[:2] in (
+        "LU", "UL")
+    for k in range(res.impact_times.size):
+        np.testing.assert_allclose(res.impact_states[k], damper.states[(k + 1) % 2],
+                                   rtol=0, atol=1e-7)
+
+
+def test_constant_force_equals_shifted_stops():
+    """K positive definite: F_static moves the equilibrium by x_s = K^-1 F_static; the motion
+    with the force is the motion without it with the stops shifted by n . x_s, displaced by
+    x_s (exact identity)."""
+    K = np.array([[2.0, -1.0], [-1.0, 2.0]])
+    Fs = np.array([0.3, -0.2])
+    xs = np.linalg.solve(K, Fs)
+    base = dict(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.7, omega=1.6, eta=0.05)
+    stops = Stops(mass=2, relative_to=1, b_low=0.4, R_low=0.7)
+    with_force = ic.ImpactOscillator(**base, b=0.5, F_static=Fs, stops=stops)
+    shift = xs[1] - xs[0]
+    shifted = ic.ImpactOscillator(**base, b=0.5 - shift,
+                                  stops=Stops(mass=2, relative_to=1, b_low=0.4 + shift,
+                                              R_low=0.7))
+    res = ic.simulate(shifted, np.array([0.0, 0.0, 0.0, 0.5]), 0.0, 200.0)
+    ref = multi_impact_orbit(shifted, 1, 2, res)
+    guess = {"delta": ref.delta, "flight_times": ref.flight_times,
+             "states": ref.states + np.append(xs, [0.0, 0.0]), "pattern": ref.pattern}
+    orb = multi_impact_orbit(with_force, 1, 2, guess)
+    np.testing.assert_allclose(orb.states, ref.states + np.append(xs, [0.0, 0.0]), rtol=0,
+                               atol=1e-10)
+    np.testing.assert_allclose(orb.flight_times, ref.flight_times, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(orb.G, ref.G, rtol=0, atol=1e-9 * max(1.0, abs(ref.G).max()))
+    assert orb.physical == ref.physical
+    np.testing.assert_allclose(orb.flight_gap_min, ref.flight_gap_min, rtol=0, atol=1e-9)
+
+
+def test_free_mass_under_a_constant_force_jacobian_and_flight():
+    """A free ball under gravity bouncing on the primary (the bouncing ball on a vibrating
+    table): the flight with the polynomial particular solution of the free mode and its
+    exact Jacobian, against finite differences and the simulator's flight."""
+    osc = ic.ImpactOscillator(M=np.diag([1.0, MU]), K=[[1.0, 0.0], [0.0, 0.0]],
+                              F=[1.0, 0.0], F_static=[0.0, -MU * 0.5], R=0.7, b=5.0,
+                              omega=1.3, eta=0.05,
+                              stops=Stops(mass=2, relative_to=1, b_low=0.0, R_low=0.7))
+    flow = flow_of(osc)
+    X0 = np.array([0.1, 0.1, 0.0, 0.9])  # on the lower stop s = 0, leaving it
+    u = np.concatenate([[0.4], np.delete(X0, 1)])
+    sh = shooting(flow, 1, 1, u, pattern="L")
+    fd = _fd_jacobian(flow, 1, 1, u, "L")
+    np.testing.assert_allclose(sh.jacobian, fd, rtol=0, atol=1e-7 * max(1.0, abs(fd).max()))
+    # the flight itself against an independent integration of eq. (1) with the constant force
+    from scipy.integrate import solve_ivp
+
+    M, K = np.diag([1.0, MU]), np.array([[1.0, 0.0], [0.0, 0.0]])
+    C, F, Fs = 2 * 0.05 * K, np.array([1.0, 0.0]), np.array([0.0, -MU * 0.5])
+
+    def rhs(t, X):
+        acc = np.linalg.solve(M, F * math.cos(osc.omega * t + 0.4) + Fs - C @ X[2:] - K @ X[:2])
+        return np.concatenate([X[2:], acc])
+
+    tau = sh.flight_times[0]
+    ref = solve_ivp(rhs, (0.0, tau), sh.starts[0], rtol=1e-11, atol=1e-12).y[:, -1]
+    np.testing.assert_allclose(sh.arrivals[0], ref, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(sh.arrival_rates[0], rhs(tau, ref), rtol=0, atol=1e-8)

@@ -15,7 +15,7 @@ import impactcont as ic
 from impactcont.kernel import closed_form, stability
 from impactcont.orbit import secular
 from impactcont.orbit.periodic import modal_arrays
-from tests.test_kernel import DAMPING, _random_oscillator
+from tests.kernel.test_closed_form import DAMPING, _random_oscillator
 
 
 def _secular(orbit: ic.PeriodicOrbit) -> tuple[np.ndarray, bool]:

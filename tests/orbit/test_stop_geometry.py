@@ -11,7 +11,7 @@ import impactcont as ic
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow
-from tests.test_static_force import _ivp
+from tests.orbit.test_flow import _ivp
 
 M = np.diag([1.0, 0.4])
 K = np.array([[1.5, -0.5], [-0.5, 0.5]])  # both masses held by springs

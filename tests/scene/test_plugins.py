@@ -5,10 +5,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import _fake_plugins
 import pytest
-from _fake_plugins import BUILTINS, TALLY, GoodProblem
-from _scene_data import OSCILLATOR, write
 
 from impactcont.errors import ParameterError
 from impactcont.problems import PeriodicBranchProblem
@@ -23,6 +20,9 @@ from impactcont.scene.plugins import (
     refresh_problems,
     scene_sections,
 )
+from tests import _fake_plugins
+from tests._fake_plugins import BUILTINS, TALLY, GoodProblem
+from tests._scene_data import OSCILLATOR, write
 
 fake_entry_points = pytest.fixture(_fake_plugins.fake_entry_points)
 
@@ -131,9 +131,8 @@ def test_unknown_problem_names_the_available_ones(fake_entry_points) -> None:
 
 
 def test_a_driver_that_fails_fails_its_entry_only(tmp_path: Path) -> None:
-    from _fake_plugins import TallyEntry
-
     from impactcont.scene.plugins import register_problem, unregister_problem
+    from tests._fake_plugins import TallyEntry
 
     register_problem("odd", SceneSection("odd", TallyEntry, lambda entry, context: {"k": 1},
                                          "Odd"))

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _scene_data import OSCILLATOR, write
 
 import impactcont as ic
 from impactcont.analysis.switching import pitchfork_branch
 from impactcont.scene import SceneError, load_scene, read_output, run_scene
+from tests._scene_data import OSCILLATOR, write
 
 SCENE = OSCILLATOR.replace("b = 0.6", "b = 0.0").replace("omega = 1.0", "omega = 1.75") + """
 [[branches]]

@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from _scene_data import OSCILLATOR, write
 
 from impactcont.cli import EXIT_OK, main
 from impactcont.scene import SceneError, load_scene, read_output, run_scene, scene_sections
+from tests._scene_data import OSCILLATOR, write
 
 pytestmark = pytest.mark.skipif("curves" not in scene_sections(),
                                 reason="impactcont.analysis.curves / .maps not present")

@@ -14,7 +14,7 @@ import xarray as xr
 
 import impactcont as ic
 
-RUN = Path(__file__).resolve().parents[1] / "studies" / "bifurcation_diagram" / "run.py"
+RUN = Path(__file__).resolve().parents[2] / "studies" / "bifurcation_diagram" / "run.py"
 CHECK_KEYS = {"b", "N", "label", "omega", "precision", "status", "offset", "sides", "verdict",
               "agrees", "below_text", "above_text", "expected_change"}
 

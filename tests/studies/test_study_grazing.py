@@ -11,7 +11,7 @@ import pytest
 
 import impactcont as ic
 
-RUN = Path(__file__).resolve().parents[1] / "studies" / "grazing_boundary" / "run.py"
+RUN = Path(__file__).resolve().parents[2] / "studies" / "grazing_boundary" / "run.py"
 
 
 @pytest.fixture(scope="module")

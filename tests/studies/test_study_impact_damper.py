@@ -18,7 +18,7 @@ import pytest
 
 import impactcont as ic
 
-HERE = Path(__file__).resolve().parents[1] / "studies" / "impact_damper"
+HERE = Path(__file__).resolve().parents[2] / "studies" / "impact_damper"
 MU, E, ZETA = 0.2, 0.8, 0.05
 
 

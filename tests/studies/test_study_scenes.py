@@ -16,7 +16,7 @@ import pytest
 from impactcont.cli import EXIT_OK, main
 from impactcont.scene import load_scene, read_output
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STUDIES = sorted(p for p in (ROOT / "studies").iterdir() if p.is_dir()
                  and not p.name.startswith((".", "_")))
 

@@ -19,7 +19,7 @@ import pytest
 
 import impactcont as ic
 
-HERE = Path(__file__).resolve().parents[1] / "studies" / "vi_nes"
+HERE = Path(__file__).resolve().parents[2] / "studies" / "vi_nes"
 MU, ZETA, R, B = 0.05, 0.02, 0.6, 5.0
 
 

@@ -1,0 +1,226 @@
+"""Branch datasets' schema (:mod:`impactcont.dataset.schema`): dims, coords, dtypes and
+attributes; bad inputs named; incomplete datasets refused (fast, synthetic)."""
+
+from __future__ import annotations
+
+import json
+
+import matplotlib
+import numpy as np
+import pytest
+import xarray as xr
+
+import impactcont
+from impactcont import ImpactOscillator
+from impactcont.dataset import (
+    POINT_VARIABLES,
+    branch_dataset,
+    oscillator_from_dataset,
+    validate_branch_dataset,
+)
+
+matplotlib.use("Agg")
+
+
+NPOINTS = 50
+
+
+N_DOF = 2
+
+
+@pytest.fixture
+def osc() -> ImpactOscillator:
+    return ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.0,
+                            omega=1.0, eta=0.1)
+
+
+def _radius() -> np.ndarray:
+    """Spectral radius with runs: stable 0-19, unstable 20-34, (non-physical 35-44), stable."""
+    r = np.empty(NPOINTS)
+    r[:20] = np.linspace(0.4, 0.95, 20)
+    r[20:35] = np.linspace(1.05, 1.3, 15)
+    r[35:45] = 1.1
+    r[45:] = np.linspace(0.9, 0.6, 5)
+    return r
+
+
+def _columns(n: int = N_DOF, npoints: int = NPOINTS) -> dict[str, np.ndarray]:
+    """Made-up but consistent columns of a branch in omega."""
+    p = np.arange(npoints)
+    omega = np.linspace(0.8, 2.0, npoints)
+    r = _radius()[:npoints]
+    mult = np.empty((npoints, 2 * n), dtype=complex)
+    mult[:, 0] = r * np.exp(0.4j)
+    mult[:, 1] = r * np.exp(-0.4j)
+    mult[:, 2:] = 0.05 * np.linspace(1.0, -1.0, 2 * n - 2)
+    physical = np.ones(npoints, dtype=bool)
+    physical[35:45] = False
+    state = np.zeros((npoints, 2 * n))
+    state[:, 0] = 0.0  # x1 = b right after impact
+    state[:, 1:] = np.sin(p[:, None] * 0.1 + np.arange(1, 2 * n))
+    return {
+        "omega": omega,
+        "b": np.zeros(npoints),
+        "delta": np.linspace(-3.0, 3.0, npoints),
+        "impact_velocity": 1.0 + 0.5 * np.sin(omega),
+        "gap_min": np.where(physical, 0.2, -0.1),
+        "spectral_radius": np.abs(mult).max(axis=1),
+        "stable": np.abs(mult).max(axis=1) < 1.0,
+        "physical": physical,
+        "arclength": np.cumsum(np.full(npoints, 0.03)),
+        "multipliers": mult,
+        "state": state,
+    }
+
+
+def _special(label: str, point: int, columns: dict[str, np.ndarray], status: str = "located"
+             ) -> dict:
+    omega = columns["omega"]
+    return {
+        "label": label,
+        "omega": 0.5 * (omega[point - 1] + omega[point]),
+        "b": 0.0,
+        "delta": float(columns["delta"][point]),
+        "point": point,
+        "bracket_lo": float(omega[point - 1]),
+        "bracket_hi": float(omega[point]),
+        "precision": 1e-9 if status == "located" else float(omega[point] - omega[point - 1]),
+        "status": status,
+        "multipliers": columns["multipliers"][point],
+    }
+
+
+def _specials(columns: dict[str, np.ndarray]) -> list[dict]:
+    return [_special("NS", 20, columns), _special("GR", 35, columns, "bracketed"),
+            _special("ZV", 45, columns)]
+
+
+@pytest.fixture
+def branch(osc) -> xr.Dataset:
+    cols = _columns()
+    return branch_dataset(parameter="omega", N=1, oscillator=osc,
+                          options={"ds": 0.03, "max_steps": 50, "tol": np.float64(1e-10)},
+                          columns=cols, special_points=_specials(cols))
+
+
+# -- schema -------------------------------------------------------------------------------------
+def test_schema_dims_coords_and_dtypes(branch):
+    assert dict(branch.sizes) == {"point": NPOINTS, "multiplier": 4, "component": 4, "special": 3}
+    assert branch["point"].dtype == np.int64
+    np.testing.assert_array_equal(branch["point"].values, np.arange(NPOINTS))
+    assert branch["component"].values.tolist() == ["x1", "x2", "v1", "v2"]
+    # the points are labelled by the parameters (coordinates on point: plots take x="omega")
+    assert set(branch.coords) == {"point", "component", "omega", "b"}
+    assert branch["impact_velocity"].coords["omega"].dims == ("point",)
+    for name in ("omega", "b", "delta", "impact_velocity", "gap_min", "spectral_radius",
+                 "arclength"):
+        assert branch[name].dims == ("point",)
+        assert branch[name].dtype == np.float64
+    assert branch["stable"].dtype == bool and branch["physical"].dtype == bool
+    assert branch["multipliers"].dims == ("point", "multiplier")
+    assert branch["multipliers"].dtype == np.complex128
+    assert branch["state"].dims == ("point", "component")
+    assert branch["special_label"].dims == ("special",)
+    assert branch["special_label"].dtype == np.dtype("<U2")
+    assert branch["special_label"].values.tolist() == ["NS", "GR", "ZV"]
+    assert branch["special_status"].values.tolist() == ["located", "bracketed", "located"]
+    assert branch["special_point"].dtype == np.int64
+    assert branch["special_multipliers"].dims == ("special", "multiplier")
+    assert branch["special_multipliers"].dtype == np.complex128
+    for name in ("omega", "b", "delta", "bracket_lo", "bracket_hi", "precision"):
+        assert branch[f"special_{name}"].dtype == np.float64
+
+
+def test_schema_attributes(branch, osc):
+    for name, var in branch.data_vars.items():
+        assert {"long_name", "units", "description"} <= set(var.attrs), name
+    assert branch["delta"].attrs["units"] == "rad"
+    assert branch["special_delta"].attrs["units"] == "rad"
+    assert branch["omega"].attrs["units"] == "1"
+    attrs = branch.attrs
+    assert attrs["N"] == 1 and attrs["parameter"] == "omega"
+    assert attrs["Conventions"] == "CF-1.10"
+    assert attrs["impactcont_version"] == impactcont.__version__
+    assert json.loads(attrs["options"]) == {"ds": 0.03, "max_steps": 50, "tol": 1e-10}
+    assert attrs["oscillator"] == osc.to_json()
+    assert "omega" in attrs["title"] and attrs["history"]
+    back = oscillator_from_dataset(branch)
+    assert back.to_dict() == osc.to_dict()
+    at10 = oscillator_from_dataset(branch, point=10)
+    assert at10.omega == pytest.approx(float(branch["omega"][10]), abs=0.0)
+    assert validate_branch_dataset(branch) is branch
+
+
+def test_schema_other_parameter_and_no_special_points(osc):
+    cols = _columns()
+    cols["R"] = np.linspace(0.5, 0.9, NPOINTS)
+    ds = branch_dataset(parameter="R", N=2, oscillator=osc, options={}, columns=cols,
+                        special_points=[])
+    assert ds.sizes["special"] == 0
+    assert "R" in ds.coords and "special_R" in ds.data_vars
+    assert ds.attrs["parameter"] == "R"
+    assert abs(oscillator_from_dataset(ds, point=-1).R - 0.9) <= 1e-15
+    validate_branch_dataset(ds)
+
+
+def _bad(osc, **changes):
+    cols = _columns()
+    kw = {"parameter": "omega", "N": 1, "oscillator": osc, "options": {}, "columns": cols,
+          "special_points": _specials(cols)}
+    for key, value in changes.items():
+        if key.startswith("col_"):
+            name = key[4:]
+            if value is None:
+                del cols[name]
+            else:
+                cols[name] = value
+        elif key.startswith("sp_"):
+            kw["special_points"][0][key[3:]] = value
+        else:
+            kw[key] = value
+    return branch_dataset(**kw)
+
+
+@pytest.mark.parametrize(("changes", "error", "match"), [
+    ({"col_gap_min": None}, ValueError, r"missing key\(s\) \['gap_min'\]"),
+    ({"col_delta": np.zeros(NPOINTS - 1)}, ValueError, r"'delta' must have shape \(50,\)"),
+    ({"col_multipliers": np.zeros((NPOINTS, 3))}, ValueError, r"'multipliers' .*\(50, 4\)"),
+    ({"col_speed": np.zeros(NPOINTS)}, ValueError, r"unknown key\(s\) \['speed'\]"),
+    ({"col_stable": np.full(NPOINTS, 2.0)}, ValueError, r"'stable' must be boolean"),
+    ({"col_omega": np.full(NPOINTS, np.nan)}, ValueError, r"'omega' must be finite"),
+    ({"sp_label": "XX"}, ValueError, r"\['label'\] must be one of .*got 'XX'"),
+    ({"sp_status": "guessed"}, ValueError, r"\['status'\] .*got 'guessed'"),
+    ({"sp_point": NPOINTS}, ValueError, r"\['point'\] must be an integer index .*got 50"),
+    ({"sp_precision": -1.0}, ValueError, r"\['precision'\] must be >= 0.*-1.0"),
+    ({"sp_bracket_lo": 5.0}, ValueError, r"bracket_lo=5.0"),
+    ({"sp_multipliers": np.zeros(3)}, ValueError, r"special_points\[0\] key 'multipliers'"),
+    ({"parameter": "mass"}, ValueError, r"parameter must be one of .*got 'mass'"),
+    ({"N": 0}, ValueError, r"N .* got 0"),
+    ({"oscillator": "osc"}, TypeError, r"oscillator must be an ImpactOscillator; got 'osc'"),
+    ({"options": {"f": object}}, TypeError, r"options must be JSON-serialisable"),
+])
+def test_bad_inputs_raise_naming_the_value(osc, changes, error, match):
+    with pytest.raises(error, match=match):
+        _bad(osc, **changes)
+
+
+def test_missing_special_key_is_named(osc):
+    cols = _columns()
+    sps = _specials(cols)
+    del sps[1]["precision"]
+    with pytest.raises(ValueError, match=r"special_points\[1\] is missing key\(s\) \['precision'"):
+        branch_dataset(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
+                       special_points=sps)
+
+
+def test_validate_rejects_incomplete_datasets(branch):
+    with pytest.raises(ValueError, match=r"missing variable\(s\) \['gap_min'\]"):
+        validate_branch_dataset(branch.drop_vars("gap_min"))
+    with pytest.raises(ValueError, match=r"missing attribute\(s\) \['oscillator'\]"):
+        validate_branch_dataset(branch.drop_attrs(deep=False).assign_attrs(
+            {k: v for k, v in branch.attrs.items() if k != "oscillator"}))
+    with pytest.raises(ValueError, match="'stable' must have dtype kind 'b'"):
+        validate_branch_dataset(branch.assign(stable=branch["stable"].astype(float)))
+    with pytest.raises(TypeError, match="DataArray"):
+        validate_branch_dataset(branch["omega"])
+    assert set(POINT_VARIABLES) <= set(branch.variables)
