@@ -199,13 +199,6 @@ def _max_x2(orbit):
     return float(np.max(sol(np.linspace(0.0, tau, 20001))[1]))
 
 
-def test_a_map_of_several_stop_coordinates_is_refused_for_now(two_mass_motion):
-    with pytest.raises(ParameterError, match="not yet: several stop coordinates"):
-        ic.multi_impact_map(two_mass_motion, ("omega", "b"),
-                            {"omega": [0.79, 0.8], "b": [0.3, 0.31]})
-
-
-
 def test_a_branch_of_a_motion_on_two_masses_is_stored_and_loaded(two_mass_motion, tmp_path):
     # the dataset's pattern names the extra stop ("A"): it was refused as not U/L
     branch = ic.multi_impact_continuation(two_mass_motion, "omega", (0.75, 0.85),
