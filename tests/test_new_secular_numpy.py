@@ -164,6 +164,45 @@ def test_over_damped_200_chain_cluster_is_resolved():
     _check_against_lapack(orbit, 1e-12)
 
 
+def test_over_damped_chain_with_a_root_on_a_modal_multiplier():
+    """40 masses of random size, eta = 2 (20 modes keep one multiplier): a root lands
+    exactly on a kept modal multiplier, a pole of the secular function. The compiled
+    version raised ZeroDivisionError there (``orbit.multipliers`` and ``orbit.stable``
+    with it); the root is now taken as found."""
+    rng = np.random.default_rng(6)
+    n = 40
+    osc = ic.ImpactOscillator.chain(masses=0.5 + rng.random(n), springs=0.5 + rng.random(n),
+                                    F=np.eye(n)[0], R=0.7, b=0.0, omega=1.4, eta=2.0)
+    orbit = next(o for o in ic.periodic_orbits(osc, 1) if o.root == 1)
+    assert (_kinds(orbit) == 1).sum() == 20
+    _check_against_lapack(orbit, 1e-12)
+    assert orbit.stable == (abs(stability.multipliers(orbit.G)[0]) < 1.0)
+
+
+def test_noise_limited_roots_are_refused():
+    """A 12-DOF system over-damped by ``alpha = 6``: at omega = 0.9 every multiplier is
+    between 1e-11 and 5e-8, at the noise floor of the secular function. Its roots stop
+    moving 1e-10 from LAPACK's (which mpmath confirms to 2e-23) and passed the power sums;
+    the path refuses them now (``_NOISE_OK``: the orbit takes the dense eigenvalues) and
+    agrees with LAPACK to 1e-12 wherever it accepts."""
+    rng = np.random.default_rng(42)
+    n = 12
+    A = rng.standard_normal((n, n))
+    found = 0
+    for omega in (0.5, 0.9, 1.7):
+        osc = ic.ImpactOscillator(M=np.diag(0.5 + rng.random(n)), K=A @ A.T + n * np.eye(n),
+                                  F=rng.standard_normal(n), R=0.6, b=0.0, omega=omega,
+                                  alpha=6.0, beta=0.0)
+        for orbit in ic.periodic_orbits(osc, 1):
+            dense = stability.multipliers(orbit.G)
+            if abs(dense[0]) > 1e-6:
+                continue
+            found += 1
+            mu, ok = _secular(orbit)
+            assert not ok or _distance(mu, dense) <= 1e-12
+    assert found
+
+
 @pytest.mark.parametrize("damping", [{"eta": 0.05}, {"eta": 3.0}, {}])
 def test_numpy_pieces_match_the_kernel(damping):
     """The numpy ingredients of G (the secular path computes them itself so that it

@@ -32,11 +32,12 @@ are well conditioned. Clusters of small but not negligible multipliers keep a
 smaller absolute error of that kind: up to 1e-11 was seen for multipliers of size
 1e-11 (random over-damped 2-DOF systems; this path serves n >= ``SECULAR_MIN``).
 
-The accuracy guard: the result is accepted only if every root converged and the
-first two power sums of the roots agree with ``tr G = tr M`` and ``tr G^2 = tr M^2``
-(both O(n) in closed form) to ``POWER_SUM_TOL`` relative to the sizes of the roots and
-of the terms of those traces; otherwise the caller falls back to
-the dense eigenvalues of G.
+The accuracy guard: the result is accepted only if every root converged (a root the
+noise of the evaluation leaves uncertain by more than ``_NOISE_OK`` of the largest
+multiplier, or of 1, has not) and the first two power sums of the roots agree with
+``tr G = tr M`` and ``tr G^2 = tr M^2`` (both O(n) in closed form) to ``POWER_SUM_TOL``
+relative to the sizes of the roots and of the terms of those traces; otherwise the
+caller falls back to the dense eigenvalues of G.
 
 A guard before it: the rank-two form sees the impact velocity as the velocity of mass 1
 in modal coordinates, ``h2 = sum_i u_1i v_i`` (``v = z'(T^-)``), and its zero row needs
@@ -74,12 +75,14 @@ _EPS = float(np.finfo(np.float64).eps)  # unit roundoff of float64
 SECULAR_MIN = 16
 """Systems with at least this many degrees of freedom get their multipliers here, below it
 the dense G and its eigenvalues. Side by side the numpy sweeps (about 1 ms up to n ~ 40)
-are the faster path from n = 38-40 on (``studies/performance/README.md``, "Cost against
-n"); the threshold stays where the tests of the routing put it."""
+are at parity with the dense path from n = 38 and the faster from n = 48
+(``studies/performance/README.md``, "Cost against n"); the threshold stays where the
+tests of the routing put it."""
 POWER_SUM_TOL = 1e-9
 """Largest accepted ``|sum mu^k - tr G^k| / sum |mu|^k`` (k = 1, 2) of the roots."""
 _MAX_SWEEPS = 200
 _STAGNATION = 1e-9  # below this times max(largest root, 1), every correction: the noise floor
+_NOISE_OK = 1e-12  # largest accepted correction (of max(largest root, 1)) of a stagnant root
 DEAD = _EPS
 """Modal multipliers (eigenvalues of ``W_i(T)``, dimensionless) below this are set apart as
 exact zeros: the fast decay of over-damped modes, modes that die out within the period."""
@@ -305,11 +308,16 @@ def aberth(s: _Secular, z: np.ndarray) -> bool:
     all roots not yet done from the same values, as array operations), in place.
 
     Returns whether every root converged: its correction fell to rounding level, or
-    stopped shrinking (no longer below half the smallest one so far) once every
-    correction is below ``_STAGNATION`` times the largest root (or 1): the noise floor
-    of the evaluation (a cluster of tiny roots, e.g. from a nearly defective zero
-    multiplier, is no better defined by dense eigenvalues). That gate keeps a small
-    root from being taken as stagnant while large ones still move and push it about.
+    stopped shrinking (no smaller than the smallest one so far) once every correction is
+    below ``_STAGNATION`` times the largest root (or 1): the noise floor of the
+    evaluation. That gate keeps a small root from being taken as stagnant while large
+    ones still move and push it about, and "no smaller" (not "not below half") keeps a
+    pair of close roots converging linearly from being taken as noise (a 150-mass
+    over-damped chain: a pair 2.2e-7 apart stopped 6e-8 off). A stagnant root whose
+    best correction is above ``_NOISE_OK`` of the largest root (or 1) is not
+    determined to the accuracy the path promises: False, the caller takes the dense
+    eigenvalues (clusters of tiny multipliers, all of size 2e-9 for a 12-DOF system over-
+    damped by ``alpha = 6``, were 6e-10 off).
     """
     done = np.zeros(z.size, dtype=bool)
     smallest = np.full(z.size, np.inf)
@@ -333,8 +341,12 @@ def aberth(s: _Secular, z: np.ndarray) -> bool:
         z[active] -= step
         size = np.abs(step)
         converged = size <= 4.0 * _EPS * np.abs(z[active]) + floor
-        if size.max() <= _STAGNATION * max(largest, 1.0):  # all small: the noise floor
-            converged |= size >= 0.5 * smallest[active]  # near, for a root not shrinking
+        scale = max(largest, 1.0)
+        if size.max() <= _STAGNATION * scale:  # every correction small: the noise floor
+            stagnant = ~converged & (size >= smallest[active])  # no longer shrinking
+            if (smallest[active][stagnant] > _NOISE_OK * scale).any():
+                return False  # a root the evaluation's noise leaves uncertain: refuse
+            converged |= stagnant
             smallest[active] = np.minimum(smallest[active], size)
         done[active[converged]] = True
         if converged.all():
