@@ -203,6 +203,20 @@ def test_noise_limited_roots_are_refused():
     assert found
 
 
+@pytest.mark.parametrize("damping", [{"eta": 0.05}, {"eta": 3.0}])
+def test_roots_swept_in_blocks_give_the_same_multipliers(monkeypatch, damping):
+    """Large systems sweep their roots in blocks (scratch bounded by ``_BLOCK``: an
+    n = 2000 chain needed 0.5 GB in one block); blocks of 32 roots here."""
+    orbit = ic.periodic_orbits(_chain(2 * secular.SECULAR_MIN, **damping), 1)[0]
+    whole, ok_whole = _secular(orbit)
+    monkeypatch.setattr(secular, "_BLOCK", 1)  # 32 roots per block, the least
+    blocks, ok_blocks = _secular(orbit)
+    assert ok_whole and ok_blocks
+    assert 2 * orbit.oscillator.n > 32  # more than one block
+    assert _distance(blocks, whole) <= 1e-13 * max(1.0, abs(whole[0]))
+    _check_against_lapack(orbit, 1e-12)
+
+
 @pytest.mark.parametrize("damping", [{"eta": 0.05}, {"eta": 3.0}, {}])
 def test_numpy_pieces_match_the_kernel(damping):
     """The numpy ingredients of G (the secular path computes them itself so that it

@@ -81,6 +81,7 @@ tests of the routing put it."""
 POWER_SUM_TOL = 1e-9
 """Largest accepted ``|sum mu^k - tr G^k| / sum |mu|^k`` (k = 1, 2) of the roots."""
 _MAX_SWEEPS = 200
+_BLOCK = 1 << 18  # complex entries of each scratch array of a sweep (4 MB)
 _STAGNATION = 1e-9  # below this times max(largest root, 1), every correction: the noise floor
 _NOISE_OK = 1e-12  # largest accepted correction (of max(largest root, 1)) of a stagnant root
 DEAD = _EPS
@@ -305,7 +306,8 @@ def _repulsion(z: np.ndarray, active: np.ndarray, work: np.ndarray) -> np.ndarra
 
 def aberth(s: _Secular, z: np.ndarray) -> bool:
     """Aberth-Ehrlich iteration on every root at once (Jacobi order: each sweep corrects
-    all roots not yet done from the same values, as array operations), in place.
+    all roots not yet done from the same values, as array operations, in blocks of roots
+    whose scratch stays near ``_BLOCK`` entries), in place.
 
     Returns whether every root converged: its correction fell to rounding level, or
     stopped shrinking (no smaller than the smallest one so far) once every correction is
@@ -321,14 +323,18 @@ def aberth(s: _Secular, z: np.ndarray) -> bool:
     """
     done = np.zeros(z.size, dtype=bool)
     smallest = np.full(z.size, np.inf)
-    work = np.empty((2 * z.size, s.t.size), dtype=np.complex128)
-    pairs = np.empty((z.size, z.size), dtype=np.complex128)
+    # roots per block: the scratch, (2 rows) x modes and rows x roots, stays near _BLOCK
+    rows = max(32, _BLOCK // max(z.size, 1))
+    work = np.empty((2 * min(rows, z.size), s.t.size), dtype=np.complex128)
+    pairs = np.empty((min(rows, z.size), z.size), dtype=np.complex128)
+    blocks = range(0, z.size, rows)
     for _ in range(_MAX_SWEEPS):
         # absolute accuracy eps * |largest root|, as for dense eigenvalues
         largest = np.abs(z).max()
         floor = _EPS * largest
         active = np.flatnonzero(~done)
-        L = log_derivative(z[active], s, work)
+        L = np.concatenate([log_derivative(z[active[k:k + rows]], s, work) for k in blocks
+                            if k < active.size])
         finite = np.isfinite(L)
         done[active[~finite]] = True  # sits on a root: nothing to correct
         active, L = active[finite], L[finite]
@@ -337,7 +343,9 @@ def aberth(s: _Secular, z: np.ndarray) -> bool:
         if (L == 0).any():
             return False  # a critical point of F: the iteration cannot move this root
         newton = 1.0 / L
-        step = newton / (1.0 - newton * _repulsion(z, active, pairs))
+        repel = np.concatenate([_repulsion(z, active[k:k + rows], pairs) for k in blocks
+                                if k < active.size])
+        step = newton / (1.0 - newton * repel)
         z[active] -= step
         size = np.abs(step)
         converged = size <= 4.0 * _EPS * np.abs(z[active]) + floor
