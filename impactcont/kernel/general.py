@@ -45,7 +45,7 @@ __all__ = ["amplitude_setup", "forced_response", "forced_response_derivative",
            "orbit_values", "periodic_setup"]
 
 _EPS = 2.220446049250313e-16
-# the constants of the numpy reference (tests/test_general_kernel.py checks they agree)
+# the constants of the numpy reference (tests/kernel/test_general.py checks they agree)
 VELOCITY_POLISH = 1e-12  # impactcont.orbit.dense.VELOCITY_POLISH
 VELOCITY_AGREE = 16.0  # impactcont.orbit.dense._VELOCITY_AGREE
 BERNOULLI = np.array([  # impactcont.model.first_order._BERNOULLI: B_2k / (2k)!

@@ -189,7 +189,7 @@ class ModelParameter:
         -----
         The step is ``h = eps^(1/3) max(|lam|, scale)`` (:data:`FD_RELATIVE_STEP`, 6.1e-6):
         the error is ``h^2 |f'''| / 6 + eps |f| / h``, about ``1e-11`` relative to the data
-        when they vary on the parameter's scale (measured in ``tests/test_parameters.py``).
+        when they vary on the parameter's scale (measured in ``tests/model/test_parameters.py``).
         Data affine in the parameter (:attr:`affine`: the forcing amplitude) take
         ``h = scale / 2``: no truncation error, rounding only (exact). A side outside the
         parameter's range (a mass at 0) is not evaluated: the difference is then one-sided

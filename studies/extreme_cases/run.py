@@ -5,7 +5,7 @@ and by the mpmath reference of ``tests/reference_mp.py`` (written from the
 equations, no impactcont code). For each root it reports the relative errors of
 the state, the impact phase, G, the multipliers and gap_min, the 1-norm
 condition number of ``I - D U W(T) U^-1`` (reference), and what impactcont said
-(warnings, errors). The fast cases are also tests (``tests/test_extreme.py``);
+(warnings, errors). The fast cases are also tests (``tests/integration/test_extreme.py``);
 this study adds the slow ones and the table. Run::
 
     .venv/bin/python studies/extreme_cases/run.py [--output DIR] [--quick]
