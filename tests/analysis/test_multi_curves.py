@@ -35,6 +35,7 @@ from scipy.optimize import brentq, minimize_scalar
 import impactcont as ic
 from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.errors import ParameterError
+from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import initial_unknowns, orbit_from_unknowns
@@ -261,3 +262,35 @@ def test_both_edges_of_the_island_near_its_bottom(ns_curve, island_bottom, above
     edges = [brentq(lambda w: closed_form_radius(w, b) - 1.0, lo, hi, xtol=1e-13)
              for lo, hi in ((NEAR_BOTTOM[0], top), (top, NEAR_BOTTOM[1]))]
     assert near == pytest.approx(edges, abs=1e-8)
+
+
+# -- a curve whose first parameter (the branch's) is an element ---------------------------
+@pytest.fixture(scope="module")
+def paper_motion():
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                              eta=0.1, R=0.6, b=0.6, omega=1.0)
+    return next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
+
+
+@pytest.mark.parametrize("p1", ["k2", "M[1,2]"])
+def test_a_pd_curve_in_an_element_and_omega_is_stored_and_exact(paper_motion, p1, tmp_path):
+    lo, hi = (0.2, 5.0) if p1 == "k2" else (-0.4, 0.4)
+    branch = ic.multi_impact_continuation(paper_motion, parameter=p1, bounds=(lo, hi))
+    labels = [str(v) for v in branch.special_label.values]
+    if "PD" not in labels:
+        pytest.skip(f"no PD on the {p1} branch: {labels}")
+    curve = ic.multi_impact_curve(branch, kind="PD", parameter="omega",
+                                  bounds={p1: (lo, hi), "omega": (0.5, 3.0)}, max_points=12)
+    assert p1 in curve and curve[p1].dims == ("point",)
+    assert np.all(np.isfinite(curve[p1].values))
+    osc = paper_motion.oscillator
+    for k in range(0, curve.sizes["point"], 4):  # the witness: the closed form's G there
+        at = model_parameter(osc, p1).at(osc, float(curve[p1].values[k]))
+        at = at.replace(omega=float(curve.omega.values[k]))
+        orbits = ic.periodic_orbits(at, 1)
+        near = min(orbits, key=lambda o: abs(o.delta - float(curve.delta.values[k])))
+        assert np.min(np.abs(np.asarray(near.multipliers) + 1.0)) < 1e-6
+    path = tmp_path / "curve.nc"
+    ic.save(curve, path)
+    back = ic.load(path)
+    np.testing.assert_array_equal(back[p1].values, curve[p1].values)
