@@ -237,3 +237,40 @@ def test_each_compiled_entry_has_one_signature(motion):
     for name in ("shooting_system", "frequency_column", "omega_partials"):
         # compiled code's callees (from the disk cache they are not registered at all)
         assert len(getattr(kernel, name).signatures) <= 1, name
+
+
+@pytest.mark.parametrize("symmetric", [False, True])
+def test_compiled_hyperplane_newton_is_the_core_loop(motion, symmetric):
+    """``solve_on_hyperplane`` (special points, chords) through the problem's compiled
+    Newton gives the point, the convergence and the iterations of its own numpy loop."""
+    from impactcont.core.corrector import solve_on_hyperplane
+
+    if symmetric:
+        problem = SymmetricBranchProblem(motion.oscillator, 1, 2, "omega", "UL")
+        u0 = problem.half_unknowns(motion.unknowns)
+    else:
+        problem = MultiImpactBranchProblem(motion.oscillator, 1, 2, "omega", pattern="UL")
+        u0 = motion.unknowns
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        target = np.append(u0 + 1e-4 * rng.standard_normal(u0.size), 1.6)
+        normal = np.append(0.1 * rng.standard_normal(u0.size), 1.0)  # across the branch
+        fast = solve_on_hyperplane(problem, target, normal, tol=1e-13)
+        slow = solve_on_hyperplane(Generic(problem), target, normal, tol=1e-13)
+        assert fast.converged and slow.converged
+        assert fast.iterations == slow.iterations
+        np.testing.assert_allclose(fast.x, slow.x, rtol=0, atol=1e-12)
+        assert np.max(np.abs(problem.residual(fast.u, fast.lam))) <= 1e-12
+    # one compiled call: no numpy iteration asks the problem's linearize
+    calls = []
+    original = problem.linearize
+    problem.linearize = lambda *a: calls.append(a) or original(*a)
+    assert solve_on_hyperplane(problem, target, normal, tol=1e-13).converged
+    assert calls == []
+    del problem.linearize
+    # too few iterations: not converged, the last iterate, as the numpy loop
+    fast = solve_on_hyperplane(problem, target, normal, tol=1e-13, max_iter=1)
+    slow = solve_on_hyperplane(Generic(problem), target, normal, tol=1e-13, max_iter=1)
+    assert not fast.converged and not slow.converged and fast.iterations == 1
+    np.testing.assert_allclose(fast.x, slow.x, rtol=0, atol=1e-12)
+    assert fast.last_step == pytest.approx(slow.last_step, rel=1e-6)

@@ -112,6 +112,16 @@ def solve_on_hyperplane(problem: Problem, target: FloatArray, normal: FloatArray
     normal = np.asarray(normal, dtype=float)
     linearize = getattr(problem, "linearize", None)
     scale = max(1.0, float(np.max(np.abs(x))))
+    step_of = getattr(problem, "palc_step", None)
+    if step_of is not None and residual_tol is None:
+        # the problem's compiled Newton on the same system (CorrectorResult); a refusal or a
+        # non-finite value runs the loop below, which halves the step or fails as always
+        found = step_of(x.copy(), normal.copy(), np.ones(x.size), tol * scale, max_iter,
+                        hyperplane=True)
+        if found is not None and found.status in ("converged", "not converged"):
+            return HyperplanePoint(np.array(found.state, dtype=float),
+                                   found.status == "converged", float(found.last_step),
+                                   int(found.iterations))
     last = np.inf
     step: FloatArray | None = None
     halvings = 0

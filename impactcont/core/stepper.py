@@ -82,6 +82,16 @@ class CorrectorResult:
         (the stepper checks it and warns as for its own solves).
     message : str
         Why ``lam`` was refused.
+    last_step : float
+        Max-norm of the last update.
+
+    Notes
+    -----
+    ``palc_step(..., hyperplane=True)`` is asked by
+    :func:`~impactcont.core.corrector.solve_on_hyperplane` for its own Newton (``weights``
+    ones, ``tangent`` the normal, converged when an update is at most ``tol``; the point
+    after it and no tangent); any status but ``"converged"`` and ``"not converged"``
+    makes it run its own loop.
     """
 
     state: FloatArray
@@ -92,6 +102,7 @@ class CorrectorResult:
     tangent: FloatArray
     ill_conditioned: FloatArray | None = None
     message: str = ""
+    last_step: float = math.nan
 
 
 class ContinuationStepError(RuntimeError):

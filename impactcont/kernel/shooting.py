@@ -1025,7 +1025,7 @@ def _frobenius_condition(A):
 
 @_jit
 def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matrices, E, c,
-                 rows, predicted, tangent, weights, tol, max_iter, singular):
+                 rows, predicted, tangent, weights, tol, max_iter, singular, hyperplane):
     """The pseudo-arclength corrector of an N-p branch in omega (modal flow), compiled.
 
     Newton on ``[F(v, omega); <W t, x - x_pred>] = 0`` from ``x = x_pred`` with the
@@ -1038,16 +1038,23 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
     half-motion's embedding for a symmetric one, :class:`impactcont.orbit.symmetry.HalfUnknowns`),
     with the forced amplitudes of eq. (7) at each omega (:func:`forced_amplitudes`).
 
+    With `hyperplane` it is instead the Newton of
+    :func:`impactcont.core.corrector.solve_on_hyperplane` (``weights`` ones, ``tangent``
+    the normal, ``predicted`` the target): converged when an update's max-norm is at most
+    `tol` (the point after that update, no residual test, no tangent), else after
+    `max_iter` updates; a non-finite residual is reported, not solved.
+
     Returns
     -------
     tuple
         ``(state, iterations, status, omega, residual_norm, tangent, worst, worst_omega,
-        flagged)``: the last iterate, the updates taken, :data:`CONVERGED`,
+        flagged, last_update)``: the last iterate, the updates taken, :data:`CONVERGED`,
         :data:`FAILED` or a refusal (:data:`REFUSED`, ...), the last omega evaluated, the
         last residual's max-norm, the raw tangent (converged only), the largest
-        amplitude error bound of :func:`forced_amplitudes` and its omega, and the first
+        amplitude error bound of :func:`forced_amplitudes` and its omega, the first
         bordered matrix whose Frobenius condition bound exceeds `singular` (shape (0, 0)
-        when none: the caller checks its 2-norm condition number).
+        when none: the caller checks its 2-norm condition number), and the last update's
+        max-norm.
     """
     size = predicted.size - 1
     full = E.shape[0]
@@ -1066,10 +1073,12 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
     for it in range(max_iter + 1):
         omega = state[size]
         if not (omega > 0.0 and omega < np.inf):
-            return state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged
+            return (state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
+                    last_update)
         gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
         if resonant:
-            return state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged
+            return (state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
+                    last_update)
         if bound > worst or bound != bound:
             worst = bound
             worst_omega = omega
@@ -1088,7 +1097,8 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
         for r in range(rows):
             v = abs(residual[r])
             if not v < np.inf:
-                return state, it, NONFINITE_RESIDUAL, omega, v, raw, worst, worst_omega, flagged
+                return (state, it, NONFINITE_RESIDUAL, omega, v, raw, worst, worst_omega,
+                        flagged, last_update)
             if v > norm:
                 norm = v
         # [J E | dF/domega - J c / omega^2] on the first rows, and the border
@@ -1110,23 +1120,27 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
             for k in range(size + 1):
                 if not abs(A[r, k]) < np.inf:
                     finite = False
-        converged = norm <= tol and (it == 0 or last_update <= tol)
-        if (finite and (converged or it < max_iter) and flagged.shape[0] == 0
-                and _frobenius_condition(A) > singular):
+        converged = not hyperplane and norm <= tol and (it == 0 or last_update <= tol)
+        if (not hyperplane and finite and (converged or it < max_iter)
+                and flagged.shape[0] == 0 and _frobenius_condition(A) > singular):
             flagged = A.copy()
         if converged:
             if not finite:
-                return state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega, flagged
+                return (state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                        flagged, last_update)
             e = np.zeros(size + 1)
             e[size] = 1.0
             t, ok = _solve(A, e)
             if not ok:
-                return state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged
-            return state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged
+                return (state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged,
+                        last_update)
+            return (state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged,
+                    last_update)
         if it == max_iter:
             break
         if not finite:
-            return state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega, flagged
+            return (state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                        flagged, last_update)
         rhs = np.empty(size + 1)
         for r in range(rows):
             rhs[r] = -residual[r]
@@ -1135,18 +1149,24 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
             s += border[k] * (state[k] - predicted[k])
         rhs[size] = -s
         if not abs(s) < np.inf:
-            return state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega, flagged
+            return (state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                        flagged, last_update)
         update, ok = _solve(A, rhs)
         if not ok:
-            return state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged
+            return (state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged,
+                        last_update)
         last_update = 0.0
         for k in range(size + 1):
             v = abs(update[k])
             if not v < np.inf:
                 return (state, it, NONFINITE_UPDATE, omega, norm, raw, worst, worst_omega,
-                        flagged)
+                        flagged, last_update)
             if v > last_update:
                 last_update = v
         for k in range(size + 1):
             state[k] += update[k]
-    return state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged
+        if hyperplane and last_update <= tol:
+            return (state, it + 1, CONVERGED, omega, norm, raw, worst, worst_omega, flagged,
+                    last_update)
+    return (state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
+            last_update)

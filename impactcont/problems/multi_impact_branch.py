@@ -348,33 +348,37 @@ class MultiImpactBranchProblem:
                                           int(count))
 
     def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
-                  tol: float, max_iter: int) -> CorrectorResult | None:
+                  tol: float, max_iter: int, *, hyperplane: bool = False
+                  ) -> CorrectorResult | None:
         """The continuation core's corrector and tangent of one step, compiled (omega only).
 
         :func:`impactcont.kernel.shooting.palc_correct`: the core's optional one-call step
-        (:class:`~impactcont.core.problem.Problem`); None when the parameter is not omega
-        or the flow is not modal (the core then corrects with :meth:`linearize`).
+        (:class:`~impactcont.core.problem.Problem`); with `hyperplane`, the Newton of
+        :func:`~impactcont.core.corrector.solve_on_hyperplane` instead. None when the
+        parameter is not omega or the flow is not modal (the core then corrects with
+        :meth:`linearize`).
         """
         if self._base_flow is None:
             return None
         return self._palc_step(predicted, tangent, weights, tol, max_iter,
-                               np.eye(self.size), np.zeros(self.size), self.size)
+                               np.eye(self.size), np.zeros(self.size), self.size, hyperplane)
 
     def _palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
-                   tol: float, max_iter: int, E: np.ndarray, c: np.ndarray, rows: int
-                   ) -> CorrectorResult:
+                   tol: float, max_iter: int, E: np.ndarray, c: np.ndarray, rows: int,
+                   hyperplane: bool = False) -> CorrectorResult:
         """:meth:`palc_step` on the unknowns ``v`` with ``u = E v + c / omega`` and the
         first `rows` equations (a symmetric motion's half system)."""
         base = self._base_flow
         arrays = base.shooting_arrays()
         errors = self.osc.modes.eigenvalue_errors
         geo = _geometry(base, self.pattern)
-        (state, iterations, status, omega, norm, raw, worst, worst_omega,
-         flagged) = _kernel().palc_correct(
+        (state, iterations, status, omega, norm, raw, worst, worst_omega, flagged,
+         last) = _kernel().palc_correct(
             arrays[1], arrays[2], arrays[5], _errors(errors, base.n), arrays[6], arrays[7],
             base.static_arrays(), float(self.N), geo.pivots, geo.normals, geo.positions,
             geo.matrices, E, c, int(rows), _writable(predicted), _writable(tangent),
-            _writable(weights), float(tol), int(max_iter), SINGULAR_CONDITION)
+            _writable(weights), float(tol), int(max_iter), SINGULAR_CONDITION,
+            bool(hyperplane))
         if errors is not None and worst > _RESONANCE_REL_ERROR_WARN:
             # an iterate near a lightly damped mode: forced_coefficients warns in its words
             forced_coefficients(base.w, base.a, base.f, worst_omega, eigenvalue_errors=errors)
@@ -389,7 +393,7 @@ class MultiImpactBranchProblem:
                                status=_STATUSES[int(status)], lam=float(omega),
                                residual_norm=float(norm), tangent=raw,
                                ill_conditioned=flagged if flagged.size else None,
-                               message=message)
+                               message=message, last_step=float(last))
 
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:

@@ -215,14 +215,15 @@ class SymmetricBranchProblem:
         return _reflection(self.osc.n)[:, None] * A
 
     def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
-                  tol: float, max_iter: int) -> CorrectorResult | None:
+                  tol: float, max_iter: int, *, hyperplane: bool = False
+                  ) -> CorrectorResult | None:
         """The core's corrector and tangent of one step, compiled, on the half system
         (:meth:`MultiImpactBranchProblem.palc_step` with ``u = E v + e(omega)``)."""
         if self.full._base_flow is None:
             return None
         offset = -self.halves.offset_derivative(1.0)  # e(omega) = offset / omega
         return self.full._palc_step(predicted, tangent, weights, tol, max_iter,
-                                    self._E, offset, self.size)
+                                    self._E, offset, self.size, hyperplane)
 
     def orbit(self, v: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full symmetric N-p motion (states, G, multipliers, checks) at ``(v, lam)``."""
