@@ -60,3 +60,21 @@ def test_period_doubling_threshold_against_the_multipliers(N):
     assert float(np.min(np.abs(np.asarray(at.multipliers) + 1))) < 1e-9
     assert _orbit(g2 - 1e-4, N).stable
     assert not _orbit(g2 + 1e-4, N).stable
+
+
+def test_period_doubling_curve_in_gamma_and_restitution_is_holmes_closed_form():
+    """The PD point followed in two parameters (Gamma = F0, the table's restitution R_low):
+    every curve point on ``Gamma_2(R)``, and the fold of the same branch on
+    ``Gamma_1(R) = pi (1-R)/(1+R)`` (the free mass and the constant force on the curve
+    path, issue 21)."""
+    branch = ic.multi_impact_continuation(_orbit(1.3, 1), "F0", (1.0, 2.0))
+    labels = [str(v) for v in branch.special_label.values]
+    assert labels == ["SN", "PD"]
+    assert float(branch.special_F0.values[0]) == pytest.approx(math.pi / 3, abs=1e-8)
+    curve = ic.multi_impact_curve(branch, "PD", 0, parameter="R_low",
+                                  bounds={"F0": (1.0, 3.0), "R_low": (0.2, 0.8)},
+                                  max_points=40)
+    r = curve.R_low.values
+    gamma_2 = np.hypot(math.pi * (1 - r) / (1 + r), 2 * (1 + r * r) / (1 + r) ** 2)
+    assert curve.sizes["point"] >= 10 and r.min() < 0.25 and r.max() > 0.75
+    np.testing.assert_allclose(curve.F0.values, gamma_2, rtol=1e-8)
