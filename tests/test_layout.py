@@ -42,8 +42,6 @@ UNTESTED = {
     # the locator and the N-p special points: tests/core/test_locate.py,
     # tests/analysis/test_multi_branch.py, tests/integration/test_step_independence.py
     "detection/locator.py", "detection/multi_impact.py",
-    # exception and warning types: raised and matched all over the tests
-    "errors.py",
     # the kernel's flights, compilation helper and map sweep: against the dense path in
     # tests/kernel/test_closed_form.py, tests/kernel/test_shooting.py, tests/analysis/test_maps.py
     "kernel/flights.py", "kernel/jit.py", "kernel/sweep.py",
