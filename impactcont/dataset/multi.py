@@ -159,14 +159,10 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                                                                  Mapping):
         raise TypeError("impact_columns and special_impact_columns must be mappings of "
                         "variable name to array")
-    ds = branch_dataset(parameter=parameter, N=N, oscillator=oscillator, options=options,
-                        columns=columns, special_points=special_points,
-                        title=title if title is not None else
-                        f"Branch of periodic {N}-{p} impacting motions continued in "
-                        f"{parameter}")
     n = oscillator.n
-    npoints, nspecial = ds.sizes["point"], ds.sizes["special"]
-    variables = {}  # added in one merge (each ds[name] = ... is a merge of its own)
+    npoints = len(np.atleast_1d(np.asarray(columns.get(parameter, ()))))
+    nspecial = len(special_points)
+    variables = {}  # built in the dataset's one construction (an assign copies it)
     for what, cols, keys, dim, size in (
             ("impact column", impact_columns, tuple(IMPACT_VARIABLES), "point", npoints),
             ("special impact column", special_impact_columns, SPECIAL_IMPACT_VARIABLES,
@@ -185,11 +181,16 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
             if dim == "special":
                 attrs = {**attrs, "long_name": f"{spec.long_name} at special point"}
             variables[name] = xr.Variable((dim, "impact", *spec.extra_dims), arr, attrs)
-    ds = ds.assign(variables)
-    ds = ds.assign_coords(impact=("impact", np.arange(p, dtype=np.int64),
-                                  {"long_name": "impact index", "units": "1",
-                                   "description": "Impact k of the motion; impact 0 is the "
-                                   "one of delta and state."}))
+    impact = xr.Variable("impact", np.arange(p, dtype=np.int64),
+                         {"long_name": "impact index", "units": "1",
+                          "description": "Impact k of the motion; impact 0 is the one of "
+                          "delta and state."})
+    ds = branch_dataset(parameter=parameter, N=N, oscillator=oscillator, options=options,
+                        columns=columns, special_points=special_points,
+                        title=title if title is not None else
+                        f"Branch of periodic {N}-{p} impacting motions continued in "
+                        f"{parameter}", more_variables=variables,
+                        more_coords={"impact": impact})
     ds.attrs["impacts"] = int(p)
     pattern = UPPER * int(p) if pattern is None else pattern
     ds.attrs["pattern"] = check_pattern_attribute(pattern, int(p), oscillator.stops.two_sided,

@@ -580,7 +580,9 @@ def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
 
 def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, options: Any,
                    columns: Mapping[str, Any], special_points: Sequence[Mapping[str, Any]],
-                   title: str | None = None) -> xr.Dataset:
+                   title: str | None = None,
+                   more_variables: Mapping[str, xr.Variable] | None = None,
+                   more_coords: Mapping[str, Any] | None = None) -> xr.Dataset:
     """Assemble the dataset of one continued branch of periodic N-1 motions.
 
     Parameters
@@ -608,6 +610,10 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         :data:`SPECIAL_STATUSES`) and ``multipliers`` (shape ``(2n,)``).
     title : str, optional
         Dataset title; a description of the branch by default.
+    more_variables, more_coords : mapping, optional
+        Further variables (checked by the caller) and coordinates, added in the one
+        construction of the dataset (the N-p per-impact layout,
+        :func:`impactcont.dataset.multi.multi_impact_dataset`).
 
     Returns
     -------
@@ -664,7 +670,8 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         data_vars[special_variable(key)] = (("special", *spec.extra_dims), special[key],
                                             spec.attrs())
 
-    coords = point_coords(npoints, n)
+    data_vars.update(more_variables or {})
+    coords = {**point_coords(npoints, n), **(more_coords or {})}
     attrs = {
         "title": title if title is not None else
         f"Branch of periodic {N}-1 impacting motions continued in {parameter}",
