@@ -96,9 +96,7 @@ def layout_errors(tests: Path, package: Path, untested: set[str]) -> list[str]:
         top = rel.parts[0]
         if top in NOT_TESTS or (len(rel.parts) > 1 and top in FREE_FOLDERS):
             continue
-        if len(rel.parts) == 1 and (path.name in SHARED or path.name.startswith("test_new_")):
-            # test_new_*.py: new tests other helpers add while the layout is changed; the lead
-            # places them in their module's file (issue 20, item 5). Not checked for now.
+        if len(rel.parts) == 1 and path.name in SHARED:
             continue
         if path.name == "__init__.py":
             continue
@@ -142,7 +140,7 @@ def tree(tmp_path: Path) -> tuple[Path, Path]:
         (package / path).touch()
     for path in ("__init__.py", "conftest.py", "test_cli.py", "kernel/__init__.py",
                  "kernel/test_roots.py", "integration/__init__.py",
-                 "integration/test_anything.py", "test_new_feature.py"):
+                 "integration/test_anything.py"):
         (tests / path).parent.mkdir(parents=True, exist_ok=True)
         (tests / path).touch()
     return tests, package
