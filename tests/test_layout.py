@@ -33,8 +33,6 @@ NOT_TESTS = {"data", "__pycache__"}
 UNTESTED = {
     # exercised through the continuation driver (tests/core/test_driver.py)
     "core/point.py", "core/problem.py",
-    # the storage under the maps (tests/analysis/test_maps.py: memory limit, files, chunks)
-    "dataset/attributes.py", "dataset/chunk_cache.py", "dataset/map_storage.py",
     # datasets of curves, N-p branches and N-p maps: round trips in the tests of their
     # analysis modules (tests/analysis/test_curves.py, test_multi_branch.py,
     # test_multi_maps.py)
