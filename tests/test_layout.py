@@ -33,10 +33,6 @@ NOT_TESTS = {"data", "__pycache__"}
 UNTESTED = {
     # exercised through the continuation driver (tests/core/test_driver.py)
     "core/point.py", "core/problem.py",
-    # datasets of curves, N-p branches and N-p maps: round trips in the tests of their
-    # analysis modules (tests/analysis/test_curves.py, test_multi_branch.py,
-    # test_multi_maps.py)
-    "dataset/curves.py", "dataset/multi.py", "dataset/multi_maps.py",
     # the locator and the N-p special points: tests/core/test_locate.py,
     # tests/analysis/test_multi_branch.py, tests/integration/test_step_independence.py
     "detection/locator.py", "detection/multi_impact.py",
