@@ -12,6 +12,9 @@ import pytest
 
 from impactcont import ImpactOscillator
 
+# fixtures osc and branch of a made-up branch dataset (a module's own osc fixture wins)
+pytest_plugins = ["tests._made_up_branch"]
+
 
 @pytest.fixture
 def paper() -> ImpactOscillator:
