@@ -12,8 +12,10 @@ import pytest
 
 from impactcont import ImpactOscillator
 
-# fixtures osc and branch of a made-up branch dataset (a module's own osc fixture wins)
-pytest_plugins = ["tests._made_up_branch"]
+# shared fixtures: a made-up branch dataset (osc, branch; a module's own fixture of the
+# same name wins) and the paper's period-doubling cascade at b = 0 (paper_b0, branch_n1,
+# branch_22, branch_44)
+pytest_plugins = ["tests._made_up_branch", "tests._multi_impact_cases"]
 
 
 @pytest.fixture

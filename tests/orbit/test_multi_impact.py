@@ -28,39 +28,9 @@ from impactcont.orbit.multi_impact import (
     stop_geometry,
 )
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from tests._multi_impact_cases import assert_reproduced_by_simulator, wrap
 
-
-@pytest.fixture(scope="module")
-def paper_b0():
-    return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
-                               b=0.0, omega=1.5, eta=0.1)
-
-
-@pytest.fixture(scope="module")
-def branch_n1(paper_b0):
-    return ic.continuation(paper_b0, N=1, parameter="omega", bounds=(1.4, 2.0),
-                           components="start")
-
-
-def wrap(a):
-    return np.remainder(np.asarray(a) + math.pi, 2 * math.pi) - math.pi
-
-
-def assert_reproduced_by_simulator(orbit, repeats, tol=1e-9):
-    """Simulate from impact 0 for `repeats` periods: same phases and velocities per impact."""
-    forcing_period = 2 * math.pi / orbit.oscillator.omega
-    extra = 0.5 * orbit.flight_times.min() / forcing_period  # past impact 0, before impact 1
-    res = ic.simulate(orbit.oscillator, orbit.state, orbit.delta, repeats * orbit.N + extra)
-    assert res.success
-    p = orbit.p
-    assert res.impact_times.size == repeats * p
-    k = np.arange(res.impact_times.size)
-    # impact j of the simulation is impact (j + 1) mod p of the motion
-    idx = (k + 1) % p
-    np.testing.assert_allclose(res.impact_velocities, orbit.impact_velocities[idx], rtol=0,
-                               atol=tol * max(1.0, orbit.impact_velocities.max()))
-    assert np.abs(wrap(res.impact_phases - orbit.phases[idx])).max() < tol
-    assert np.abs(res.impact_states[p - 1::p] - orbit.states[0]).max() < tol
+# the fixtures paper_b0 and branch_n1: tests/_multi_impact_cases.py
 
 
 # ---------------------------------------------------------------------------------------------
