@@ -1,0 +1,118 @@
+"""The locator of special points (:mod:`impactcont.detection.locator`).
+
+``locate_zero`` on analytic test functions whose zeros are known in closed form (the
+Dottie number ``cos s = s``, a simple root of a cubic, a double zero) to the tolerance it is
+given, and a pole reported as only bracketed; ``is_critical`` on hand-made multipliers; and
+``drop_grazing_at_zero_velocity`` on hand-made special points.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+
+import numpy as np
+import pytest
+
+from impactcont.detection.locator import (
+    STATUSES,
+    drop_grazing_at_zero_velocity,
+    is_critical,
+    locate_zero,
+)
+from impactcont.vocabulary import STATUSES as VOCABULARY_STATUSES
+
+DOTTIE = 0.7390851332151607  # the root of cos s = s (to 16 digits)
+
+
+@pytest.mark.parametrize("xtol", [1e-8, 1e-10, 1e-13])
+def test_a_simple_zero_is_located_within_the_tolerance(xtol):
+    calls = []
+
+    def g(s):
+        calls.append(s)
+        return math.cos(s) - s
+
+    s, status = locate_zero(g, 0.0, 1.0, xtol)
+    assert status == "located"
+    assert 0.0 <= s <= 1.0
+    assert abs(s - DOTTIE) <= xtol + 4 * np.finfo(float).eps * DOTTIE
+    assert len(calls) < 60  # Brent: superlinear, not bisection to the last bit
+
+
+def test_the_bracket_may_be_given_either_way_round_and_the_zero_lie_at_an_end():
+    s, status = locate_zero(lambda s: s ** 3 - 2.0, 2.0, 1.0, 1e-14)  # 2^(1/3)
+    assert status == "located"
+    assert s == pytest.approx(2.0 ** (1.0 / 3.0), abs=1e-13)
+    s, status = locate_zero(lambda s: s - 1.0, 0.0, 1.0, 1e-14)
+    assert (s, status) == (1.0, "located")
+
+
+def test_a_zero_of_odd_multiplicity_is_located():
+    """``(s - 1/3)^3``: flat at the zero, still a sign change; located within the
+    tolerance on the coordinate."""
+    s, status = locate_zero(lambda s: (s - 1.0 / 3.0) ** 3, 0.0, 1.0, 1e-12)
+    assert status == "located"
+    assert abs(s - 1.0 / 3.0) < 1e-5  # |g| below rounding within (eps)^(1/3) of the zero
+
+
+def test_a_pole_is_only_bracketed():
+    """``1 / (s - 0.3)`` changes sign through its pole: Brent converges on 0.3, where the
+    test is huge, not zero."""
+    s, status = locate_zero(lambda s: 1.0 / (s - 0.3), 0.0, 1.0, 1e-12)
+    assert status == "bracketed"
+    assert s == pytest.approx(0.3, abs=1e-9)
+
+
+def test_no_sign_change_is_an_error():
+    with pytest.raises(ValueError, match="different signs"):
+        locate_zero(lambda s: 1.0 + s * s, 0.0, 1.0, 1e-12)
+
+
+def test_the_statuses_are_the_vocabularys():
+    assert STATUSES is VOCABULARY_STATUSES
+    assert {"located", "bracketed"} <= set(STATUSES)
+
+
+@pytest.mark.parametrize(("label", "mu", "critical"), [
+    ("PD", [-1.0 + 1e-9, 0.3, 0.1j], True),
+    ("PD", [-1.0 + 1e-5, 0.3], False),  # det(G + I) through the pole of G, not -1
+    ("PD", [-0.5, 1.0], False),
+    ("NS", [np.exp(1j * 1.2) * (1 + 1e-5), np.exp(-1j * 1.2) * (1 + 1e-5), 0.2], True),
+    ("NS", [np.exp(1j * 1.2) * 1.01, np.exp(-1j * 1.2) * 1.01, 0.2], False),
+    ("NS", [2.0, 0.5, 0.1], False),  # a real reciprocal pair: a neutral saddle
+    ("NS", [1.0 + 1e-10, 0.3], False),  # on the circle but real: not a pair
+    ("SN", [0.1, 0.2], True),  # any other label: the zero is the point
+    ("GR", [], True),
+])
+def test_is_critical(label, mu, critical):
+    assert is_critical(label, np.array(mu, dtype=complex), 1e-7) is critical
+
+
+@dataclasses.dataclass
+class _Point:
+    label: str
+    value: float
+    precision: float
+    bracket: tuple[float, float]
+    status: str = "located"
+
+
+def test_a_grazing_at_a_zero_velocity_impact_is_reported_once_as_zv(caplog):
+    zv = _Point("ZV", 1.2345, 1e-14, (1.2, 1.3))
+    twin = _Point("GR", 1.2345 + 5e-9, 1e-8, (1.2, 1.3))  # its square-root precision
+    other_step = _Point("GR", 1.2345, 1e-8, (1.3, 1.4))
+    far = _Point("GR", 1.25, 1e-12, (1.2, 1.3))
+    pd = _Point("PD", 1.2345, 1e-14, (1.2, 1.3))
+    with caplog.at_level(logging.INFO, logger="impactcont.detection.locator"):
+        kept = drop_grazing_at_zero_velocity([pd, zv, twin, other_step, far], parameter="omega")
+    assert kept == [pd, zv, other_step, far]
+    assert "reported once, as ZV" in caplog.text and "omega=" in caplog.text
+
+
+def test_a_zv_only_bracketed_drops_nothing():
+    zv = _Point("ZV", 1.0, 1e-14, (0.9, 1.1), status="bracketed")
+    gr = _Point("GR", 1.0, 1e-8, (0.9, 1.1))
+    assert drop_grazing_at_zero_velocity([zv, gr]) == [zv, gr]
+    assert drop_grazing_at_zero_velocity([]) == []
