@@ -31,17 +31,6 @@ NOT_TESTS = {"data", "__pycache__"}
 # Modules without a test file of their own, and why. Remove a module from this list when
 # its test file is written (a stale entry fails the test below).
 UNTESTED = {
-    # exercised through the continuation driver (tests/core/test_driver.py)
-    "core/point.py", "core/problem.py",
-    # the locator and the N-p special points: tests/core/test_locate.py,
-    # tests/analysis/test_multi_branch.py, tests/integration/test_step_independence.py
-    "detection/locator.py", "detection/multi_impact.py",
-    # the kernel's flights, compilation helper and map sweep: against the dense path in
-    # tests/kernel/test_closed_form.py, tests/kernel/test_shooting.py, tests/analysis/test_maps.py
-    "kernel/flights.py", "kernel/jit.py", "kernel/sweep.py",
-    # the batched closed form and the dense reference: tests/analysis/test_maps.py and the
-    # dense witnesses of tests/kernel/test_closed_form.py and tests/orbit/test_robust.py
-    "orbit/batched.py", "orbit/dense.py",
     # figures of N-p branches, maps and labels: tests/integration/test_figures_layout.py
     "plots/impacts.py", "plots/labels.py", "plots/maps.py", "plots/multi_maps.py",
     # the problems the drivers continue: through their drivers (tests/analysis/*,
