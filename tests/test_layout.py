@@ -38,10 +38,6 @@ UNTESTED = {
     "problems/events.py", "problems/general_pieces.py", "problems/multi_impact_branch.py",
     "problems/multi_impact_curve.py", "problems/periodic_branch.py",
     "problems/symmetric_branch.py",
-    # scene entries, keys, files, sections and what they compute: through scenes
-    # (tests/scene/test_schema.py, test_run.py, tests/test_cli.py)
-    "scene/describe.py", "scene/entries.py", "scene/files.py", "scene/keys.py",
-    "scene/sections.py", "scene/tasks.py",
 }
 
 
