@@ -31,8 +31,6 @@ NOT_TESTS = {"data", "__pycache__"}
 # Modules without a test file of their own, and why. Remove a module from this list when
 # its test file is written (a stale entry fails the test below).
 UNTESTED = {
-    # figures of N-p branches, maps and labels: tests/integration/test_figures_layout.py
-    "plots/impacts.py", "plots/labels.py", "plots/maps.py", "plots/multi_maps.py",
     # the problems the drivers continue: through their drivers (tests/analysis/*,
     # tests/problems/test_codim1.py, tests/orbit/test_symmetry.py)
     "problems/events.py", "problems/general_pieces.py", "problems/multi_impact_branch.py",

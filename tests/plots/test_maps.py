@@ -1,0 +1,127 @@
+"""Two-parameter diagrams (:mod:`impactcont.plots.maps`): the region of every grid point
+follows the map's counts, the shading is those regions, each curve is drawn through its own
+(omega, b) points in its kind's colour, the legend names what is shown and the axes the two
+parameters; one panel per N; bad arguments refused by name."""
+
+from __future__ import annotations
+
+import matplotlib
+import numpy as np
+import pytest
+import xarray as xr
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import QuadMesh
+from matplotlib.colors import to_rgba
+from matplotlib.figure import Figure
+
+import impactcont as ic
+from impactcont.plots.maps import (
+    CURVE_STYLES,
+    REGIONS,
+    region_codes,
+    two_parameter_diagram,
+    two_parameter_figure,
+)
+
+matplotlib.use("Agg")
+
+PAPER = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                            b=0.0, omega=1.75, eta=0.1)
+OMEGA, B = np.linspace(1.6, 1.9, 7), np.linspace(-0.1, 0.1, 5)
+
+
+@pytest.fixture(scope="module")
+def grid() -> xr.Dataset:
+    return ic.stability_map(PAPER, [1, 2], OMEGA, B)
+
+
+@pytest.fixture(scope="module")
+def pd_curve() -> xr.Dataset:
+    branch = ic.continuation(PAPER, N=1, bounds=(1.6, 1.9), detect=("PD",))
+    return ic.curve(None, kind="PD", start=branch, special=0,
+                    bounds={"omega": [1.6, 1.9], "b": [-0.1, 0.1]}, max_points=30)
+
+
+def _axes():
+    fig = Figure(figsize=(5.0, 5.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig.add_subplot()
+
+
+def test_the_region_of_a_grid_point_follows_its_counts(grid) -> None:
+    for N in (1, 2):
+        code = region_codes(grid, N)
+        m = grid.sel(N=N)
+        expected = np.where(m["n_stable"] > 0, 3, np.where(m["n_physical"] > 0, 2,
+                                                           np.where(m["exists"], 1, 0)))
+        np.testing.assert_array_equal(code.values, expected)
+        assert code.dims == ("omega", "b") and code.name == "region"
+    assert set(np.unique(region_codes(grid, 1).values)) >= {3}
+    with pytest.raises(ValueError, match=r"N must be one of the map's \[1, 2\]; got 3"):
+        region_codes(grid, 3)
+
+
+def test_the_panel_shades_the_regions_and_draws_the_curve_through_its_points(grid,
+                                                                              pd_curve) -> None:
+    ax = two_parameter_diagram(grid, pd_curve, N=1, ax=_axes())
+    (mesh,) = [c for c in ax.collections if isinstance(c, QuadMesh)]
+    np.testing.assert_array_equal(np.asarray(mesh.get_array()).reshape(B.size, OMEGA.size),
+                                  region_codes(grid, 1).values.T)
+    red = to_rgba(CURVE_STYLES["PD"]["color"])
+    lines = [line for line in ax.get_lines() if to_rgba(line.get_color()) == red
+             and line.get_marker() in ("None", "")]
+    drawn = {(float(x), float(y)) for line in lines for x, y in line.get_xydata()}
+    assert drawn == {(float(x), float(y)) for x, y in zip(pd_curve["omega"].values,
+                                                          pd_curve["b"].values, strict=True)}
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    present = np.unique(region_codes(grid, 1).values)
+    assert [t for t in texts if t in {r[0] for r in REGIONS.values()}] == [
+        REGIONS[k][0] for k in sorted(present)]
+    assert "PD period doubling" in texts
+    assert ax.get_xlabel() == r"forcing frequency $\omega$"
+    assert ax.get_ylabel().startswith("gap $b$")
+    assert ax.get_title().startswith("Periodic 1-1 motions, ")
+    assert ax.get_xlim() == (1.6, 1.9) and ax.get_ylim() == (-0.1, 0.1)
+
+
+def test_a_curve_of_another_N_is_left_out(grid, pd_curve) -> None:
+    ax = two_parameter_diagram(grid, {"pd": pd_curve}, N=2, ax=_axes())
+    red = to_rgba(CURVE_STYLES["PD"]["color"])
+    assert not [line for line in ax.get_lines() if to_rgba(line.get_color()) == red]
+    assert ax.get_title().startswith("Periodic 2-1 motions")
+
+
+def test_curves_alone_are_drawn_without_a_map(pd_curve) -> None:
+    ax = two_parameter_diagram(curves=[pd_curve], ax=_axes(), legend=False, title="")
+    assert ax.get_legend() is None and ax.get_title() == ""
+    assert not [c for c in ax.collections if isinstance(c, QuadMesh)]
+    assert len(ax.get_lines()) >= 1
+
+
+def test_a_bad_diagram_is_named(grid, pd_curve) -> None:
+    with pytest.raises(ValueError, match=r"give map_ds or curves \(or both\); got neither"):
+        two_parameter_diagram(ax=_axes())
+    with pytest.raises(TypeError, match=r"curves must be a curve Dataset, .*; got int"):
+        two_parameter_diagram(grid, 3, ax=_axes())
+    other = pd_curve.assign_attrs(parameters="omega,R").assign(
+        R=pd_curve["b"] * 0 + 0.6, codim2_R=pd_curve["codim2_b"])
+    with pytest.raises(ValueError, match=r"two_parameter_diagram draws curves in \(omega, b\); "
+                                         r"got a curve in \(omega, R\)"):
+        two_parameter_diagram(grid, other, ax=_axes())
+
+
+def test_the_figure_has_one_panel_per_N_and_one_legend(grid, pd_curve) -> None:
+    fig = two_parameter_figure(grid, pd_curve, width=7.0)
+    try:
+        axes = fig.get_axes()
+        assert [ax.get_title() for ax in axes] == ["$N = 1$", "$N = 2$"]
+        assert len(fig.legends) == 1
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+    with pytest.raises(ValueError, match=r"ncols must be a positive integer; got 0"):
+        two_parameter_figure(grid, ncols=0)
+    with pytest.raises(ValueError, match=r"width must be a number of inches in \[2, 20\]; "
+                                         r"got 30"):
+        two_parameter_figure(grid, width=30)
