@@ -194,7 +194,12 @@ class _Tables:
         q = solved
 
         def column(get: Any) -> np.ndarray:
-            return np.ascontiguousarray(np.array([get(geo) for geo in geometries], dtype=float))
+            # read-only, as the stop geometries the shooting's Python callers pass: the
+            # sweep then calls the compiled shooting system with their argument types (a
+            # writable table compiled it a second time, about 2 s at the first map)
+            out = np.ascontiguousarray(np.array([get(geo) for geo in geometries], dtype=float))
+            out.flags.writeable = False
+            return out
 
         self.positions = column(lambda geo: geo.positions[:q])
         self.normals = column(lambda geo: geo.normals[:q])

@@ -311,6 +311,14 @@ def _is_diagonal(matrices):
     return True
 
 
+
+@_inner
+def _jacobian_wanted(x):
+    """True, as a value of run time (type ``bool``): a literal ``True`` from compiled code
+    would make numba compile :func:`shooting_system` a second time, for
+    ``Literal[bool](True)``, beside the ``bool`` its Python callers pass (about 2 s)."""
+    return x.size >= 0
+
 @_jit
 def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
                     pivots, normals, positions, matrices, x, want_jacobian):
@@ -495,7 +503,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
     """
     x = x0.copy()
     sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
-                         pivots, normals, positions, matrices, x, True)
+                         pivots, normals, positions, matrices, x, _jacobian_wanted(x))
     norm = _max_abs(sh[7])
     step_norm = np.inf
     it = 0
@@ -516,7 +524,8 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
         while True:
             trial = x + lam_step * step
             tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                                  period, pivots, normals, positions, matrices, trial, True)
+                                  period, pivots, normals, positions, matrices, trial,
+                                  _jacobian_wanted(trial))
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -955,7 +964,7 @@ def branch_linearization(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, o
         (p 2n, p 2n + 1).
     """
     sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
-                         pivots, normals, positions, matrices, x, True)
+                         pivots, normals, positions, matrices, x, _jacobian_wanted(x))
     col = frequency_column(general, u, gam, bet, dgam, dbet, Z, dZ, omega, period, matrices,
                            sh[1], sh[2], sh[0], sh[5], sh[6], sh[4])
     size = x.size

@@ -46,6 +46,7 @@ from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
     _clearances,
     _flight_jacobian,
+    _jacobian_wanted,
     _max_abs,
     _solve,
     _stop_clearance,
@@ -111,7 +112,7 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
     """
     x = x0.copy()
     sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric,
-                 pivots, normals, positions, matrices, x, True)
+                 pivots, normals, positions, matrices, x, _jacobian_wanted(x))
     norm = _max_abs(sh[7])
     step_norm = np.inf
     it = 0
@@ -132,7 +133,8 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
         while True:
             trial = x + lam_step * step
             tsh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N,
-                          symmetric, pivots, normals, positions, matrices, trial, True)
+                          symmetric, pivots, normals, positions, matrices, trial,
+                          _jacobian_wanted(trial))
             tnorm = _max_abs(tsh[7])
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
