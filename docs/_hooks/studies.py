@@ -72,8 +72,16 @@ def _page(study: Path, config, files: Files) -> str:
             # A page of the site: link to it from studies/<name>/index.md.
             page = Path(os.path.relpath(path, docs / "studies" / study.name)).as_posix()
             return f"{bang}[{label}]({page}{hash_}{fragment})"
-        if path.is_file() and path.is_relative_to(study.resolve()):
-            uri = f"studies/{study.name}/{path.relative_to(study.resolve()).as_posix()}"
+        studies = study.resolve().parent
+        if path.is_file() and path.is_relative_to(studies):
+            # a file of this study or of another one (studies/<other>/...): its copy on
+            # the site, a README as that study's page
+            rel = path.relative_to(studies)
+            if rel.name == "README.md" and len(rel.parts) == 2:
+                page = Path(os.path.relpath(studies / rel.parts[0] / "index.md",
+                                            study.resolve())).as_posix()
+                return f"{bang}[{label}]({page}{hash_}{fragment})"
+            uri = f"studies/{rel.as_posix()}"
             if files.get_file_from_path(uri) is None:
                 files.append(File.generated(config, uri, abs_src_path=str(path)))
             return match.group(0)
