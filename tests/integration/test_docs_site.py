@@ -85,3 +85,27 @@ def test_study_links_to_docs_pages_are_links(site):
                 assert f'href="{Path(url).as_posix()}/' in page, (readme, target)
                 checked += 1
     assert checked, "no study README links to a page of docs/"
+
+
+def test_study_links_to_other_studies_are_links(site):
+    """A study's README linking another study: to its page, or to the copy of its file."""
+    link = re.compile(r"(?<!!)\[[^\]]*\]\(([^)\s#]+)(#[^)\s]*)?\)")
+    checked = 0
+    studies = ROOT / "studies"
+    for readme in sorted(studies.glob("*/README.md")):
+        page = (site / "studies" / readme.parent.name / "index.html").read_text(
+            encoding="utf-8")
+        page = page.split("<article", 1)[1].split("</article>", 1)[0]  # not the nav
+        for target, _fragment in link.findall(readme.read_text(encoding="utf-8")):
+            path = (readme.parent / target).resolve()
+            if not (path.is_file() and path.is_relative_to(studies)) or \
+                    path.parent == readme.parent:
+                continue
+            other = path.relative_to(studies)
+            if other.name == "README.md":
+                assert f'href="../{other.parts[0]}/' in page, (readme, target)
+            else:
+                assert f'href="../{other.as_posix()}"' in page, (readme, target)
+                assert (site / "studies" / other).is_file(), (readme, target)
+            checked += 1
+    assert checked, "no study README links to another study"
