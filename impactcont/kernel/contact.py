@@ -473,7 +473,7 @@ def _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, wo
         x[k] = p + ks * free[0, k]
         v[k] = omega * (B * c - Gam * s) + ks * free[1, k]
         acc[k] = -om2 * p + ks * free[2, k]
-    m = 0
+    m = np.int64(0)  # not a literal 0: _candidate is then compiled once (int64)
     for k in range(1, nt):
         lo, hi = times[k - 1], times[k]
         v0, v1 = v[k - 1], v[k]
