@@ -31,11 +31,6 @@ NOT_TESTS = {"data", "__pycache__"}
 # Modules without a test file of their own, and why. Remove a module from this list when
 # its test file is written (a stale entry fails the test below).
 UNTESTED = {
-    # the problems the drivers continue: through their drivers (tests/analysis/*,
-    # tests/problems/test_codim1.py, tests/orbit/test_symmetry.py)
-    "problems/events.py", "problems/general_pieces.py", "problems/multi_impact_branch.py",
-    "problems/multi_impact_curve.py", "problems/periodic_branch.py",
-    "problems/symmetric_branch.py",
 }
 
 

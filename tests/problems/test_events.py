@@ -1,0 +1,107 @@
+"""The test functions of the special points (:mod:`impactcont.problems.events`): each changes
+sign across the special point the continuation located (on motions of the closed form just
+before and after it), the PD and NS products are free of the pole of G at ``h2 = 0`` (against
+determinants of ``G = A + x y^T / h2``), and their rounding estimate is far below their
+size away from the point."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.core.locate import MotionTest
+from impactcont.problems.events import PITCHFORK, event_function, event_noise, pole_free
+
+K = [[1.0, -1.0], [-1.0, 2.0]]
+
+
+def _paper(b: float, omega: float) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=b, omega=omega,
+                               eta=0.1)
+
+
+@pytest.fixture(scope="module")
+def specials() -> dict[str, tuple[float, float, float]]:
+    """``label -> (b, omega, delta)`` of special points located by the continuation."""
+    out = {}
+    for b, bounds, detect in ((0.5, (1.1, 1.3), ("NS", "PD", "ZV")), (0.6, (0.5, 3.0), ("GR",))):
+        branch = ic.continuation(_paper(b, 1.0), N=1, bounds=bounds, detect=detect)
+        for label, omega, delta in zip(branch["special_label"].values,
+                                       branch["special_omega"].values,
+                                       branch["special_delta"].values, strict=True):
+            out.setdefault(str(label), (b, float(omega), float(delta)))
+    return out
+
+
+def _nearest(b: float, omega: float, delta: float):
+    """The root of eq. (15) at (b, omega) whose phase is nearest ``delta``."""
+    orbits = ic.periodic_orbits(_paper(b, omega), 1)
+    return min(orbits, key=lambda o: abs(np.angle(np.exp(1j * (o.delta - delta)))))
+
+
+@pytest.mark.parametrize("label", ["PD", "NS", "ZV", "GR"])
+def test_the_test_function_changes_sign_at_the_located_point(specials, label) -> None:
+    b, omega, delta = specials[label]
+    before, after = (_nearest(b, omega + dw, delta) for dw in (-1e-4, 1e-4))
+    f0, f1 = event_function(label, before), event_function(label, after)
+    assert f0 * f1 < 0, (f0, f1)
+    for orbit, value in ((before, f0), (after, f1)):
+        noise = event_noise(label, orbit)
+        assert 0 < noise < 1e-6 * abs(value)  # the sign is certain this far from the point
+
+
+def test_the_test_functions_are_the_motions_own_numbers(specials) -> None:
+    b, omega, delta = specials["PD"]
+    orbit = _nearest(b, omega - 1e-3, delta)
+    assert event_function("GR", orbit) == orbit.gap_min
+    assert event_function("ZV", orbit) == orbit.impact_velocity
+    mu = orbit.multipliers
+    assert event_function("PD", orbit) == pytest.approx(
+        float(np.prod(mu + 1.0).real) * orbit.impact_velocity, rel=1e-12)
+    i, j = np.triu_indices(mu.size, 1)
+    assert event_function("NS", orbit) == pytest.approx(
+        float(np.prod(mu[i] * mu[j] - 1.0).real) * orbit.impact_velocity ** (mu.size - 1),
+        rel=1e-12)
+    with pytest.raises(ValueError, match=r"label must be one of PD, NS, GR, ZV here; got 'SN'"):
+        event_function("SN", orbit)
+
+
+def test_the_pd_and_ns_products_are_free_of_the_pole_at_h2_zero() -> None:
+    """``G = A + x y^T / h``: ``h det(G + I)`` is affine in h (the matrix determinant lemma),
+    ``det(A + I) h + y^T adj(A + I) x``; the products stay finite as h -> 0."""
+    rng = np.random.default_rng(3)
+    A, x, y = 0.3 * rng.standard_normal((4, 4)), rng.standard_normal(4), rng.standard_normal(4)
+    limit = float(y @ (np.linalg.det(A + np.eye(4)) * np.linalg.inv(A + np.eye(4))) @ x)
+    values = []
+    for h in (1e-2, 1e-4, 1e-6):
+        G = A + np.outer(x, y) / h
+        mu = np.linalg.eigvals(G)
+        pd = pole_free("PD", mu, np.array([h]))
+        assert pd == pytest.approx(h * np.linalg.det(G + np.eye(4)), rel=1e-6)
+        assert pd == pytest.approx(np.linalg.det(A + np.eye(4)) * h + limit, rel=1e-6)
+        values.append(pole_free("NS", mu, np.array([h])))
+    assert all(math.isfinite(v) for v in values)
+    assert values[-1] == pytest.approx(values[-2], rel=1e-2)  # converges as h -> 0
+    # an N-p motion: one factor h_k per impact
+    mu = np.array([0.5, -0.2, 0.1 + 0.3j, 0.1 - 0.3j])
+    assert pole_free("PD", mu, np.array([2.0, 3.0])) == pytest.approx(
+        6.0 * float(np.prod(mu + 1).real))
+
+
+def test_the_noise_of_non_finite_multipliers_is_infinite(specials) -> None:
+    b, omega, delta = specials["PD"]
+    orbit = _nearest(b, omega - 1e-3, delta)
+
+    class Broken:
+        multipliers = np.array([np.inf, 0.5, 0.1, 0.2])
+        impact_velocity = orbit.impact_velocity
+
+    assert event_noise("PD", Broken()) == math.inf
+    assert event_noise("SN", orbit) == 0.0
+
+
+def test_the_pitchfork_is_a_motion_test() -> None:
+    assert isinstance(PITCHFORK, MotionTest)

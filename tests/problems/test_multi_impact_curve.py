@@ -1,0 +1,118 @@
+"""Codim-1 curves of N-p motions (:mod:`impactcont.problems.multi_impact_curve`): at the
+special points the closed-form N-1 branch located, the curve's residual (the branch system
+and the test function) vanishes, the test function changes sign across the point, the exact
+blocks of the Jacobian and the parameter column agree with central differences, and bad
+curves are refused by name."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.errors import ParameterError
+from impactcont.problems.multi_impact_curve import (
+    MultiImpactCurveProblem,
+    signed_smallest_singular_value,
+)
+
+K = [[1.0, -1.0], [-1.0, 2.0]]
+
+
+def _paper(b: float, omega: float = 1.0) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=b, omega=omega,
+                               eta=0.1)
+
+
+@pytest.fixture(scope="module")
+def specials() -> dict[str, tuple[float, float, float]]:
+    """``label -> (b, omega, delta)`` located on closed-form N-1 branches."""
+    out = {}
+    for b, bounds, detect in ((0.5, (1.1, 1.3), ("SN", "NS", "PD", "ZV")),
+                              (0.6, (0.5, 3.0), ("GR",))):
+        branch = ic.continuation(_paper(b), N=1, bounds=bounds, detect=detect)
+        for label, omega, delta in zip(branch["special_label"].values,
+                                       branch["special_omega"].values,
+                                       branch["special_delta"].values, strict=True):
+            out.setdefault(str(label), (b, float(omega), float(delta)))
+    return out
+
+
+def _x(b: float, omega: float, delta: float) -> np.ndarray:
+    """``[u, omega]`` of the N-1 motion at (b, omega) with the phase nearest ``delta``."""
+    orbits = ic.periodic_orbits(_paper(b, omega), 1)
+    orbit = min(orbits, key=lambda o: abs(np.angle(np.exp(1j * (o.delta - delta)))))
+    return np.concatenate([[orbit.delta], orbit.state[1:], [omega]])
+
+
+def _problem(kind: str, b: float) -> MultiImpactCurveProblem:
+    return MultiImpactCurveProblem(_paper(b), 1, 1, "U", kind, ("omega", "b"), symmetric=False)
+
+
+@pytest.mark.filterwarnings("ignore::impactcont.LowImpactVelocityWarning")  # at ZV: h2 = 0
+@pytest.mark.parametrize("kind", ["PD", "NS", "ZV", "GR"])
+def test_the_residual_vanishes_at_the_special_point_and_the_test_changes_sign(
+        specials, kind) -> None:
+    b, omega, delta = specials[kind]
+    problem = _problem(kind, b)
+    x = _x(b, omega, delta)
+    assert problem.size == x.size == 5
+    residual = problem.residual(x, b)
+    assert np.max(np.abs(residual[:-1])) < 1e-11  # the motion
+    before, after = (problem.test(_x(b, omega + dw, delta), b) for dw in (-1e-4, 1e-4))
+    assert before * after < 0
+    assert abs(residual[-1]) < 1e-3 * min(abs(before), abs(after))
+
+
+def test_the_fold_test_changes_sign_across_the_fold(specials) -> None:
+    """SN: the branch folds in omega, so the motions on either side are the two roots at one
+    omega on the side where they exist; along the branch the phase moves through the fold's."""
+    b, omega, delta = specials["SN"]
+    problem = _problem("SN", b)
+    assert not ic.periodic_orbits(_paper(b, omega + 1e-4), 1)  # beyond the fold: none
+    orbits = ic.periodic_orbits(_paper(b, omega - 1e-4), 1)
+    near = sorted(orbits, key=lambda o: abs(np.angle(np.exp(1j * (o.delta - delta)))))[:2]
+    values = [problem.test(np.concatenate([[o.delta], o.state[1:], [omega - 1e-4]]), b)
+              for o in near]
+    assert values[0] * values[1] < 0
+    # sigma(dF/du) ~ sqrt(distance to the fold): 100 times smaller 1e4 times closer
+    closer = _x(b, omega - 1e-8, delta)
+    assert abs(problem.test(closer, b)) < 0.03 * min(map(abs, values))
+
+
+def test_the_exact_blocks_agree_with_central_differences(specials) -> None:
+    b, omega, delta = specials["PD"]
+    problem = _problem("PD", b)
+    x = _x(b, omega - 1e-3, delta)
+    J = problem.jacobian(x, b)
+    m = x.size - 1
+    for i in range(x.size):
+        e = np.zeros(x.size)
+        e[i] = 1e-6
+        fd = (problem.residual(x + e, b) - problem.residual(x - e, b)) / 2e-6
+        np.testing.assert_allclose(J[:m, i], fd[:m], rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(J[m, i], fd[m], rtol=1e-3, atol=1e-6)  # the g row: FD
+    fd = (problem.residual(x, b + 1e-6) - problem.residual(x, b - 1e-6)) / 2e-6
+    np.testing.assert_allclose(problem.dparam(x, b), fd, rtol=1e-3, atol=1e-6)
+    np.testing.assert_allclose(problem.dparam(x, b)[:m], fd[:m], rtol=1e-6, atol=1e-9)
+
+
+def test_the_signed_smallest_singular_value() -> None:
+    assert signed_smallest_singular_value(np.diag([2.0, -3.0])) == pytest.approx(-2.0)
+    assert signed_smallest_singular_value(np.eye(3)) == pytest.approx(1.0)
+    rotation = np.array([[0.0, -1.0], [1.0, 0.0]])
+    assert signed_smallest_singular_value(0.5 * rotation) == pytest.approx(0.5)
+    assert math.isnan(signed_smallest_singular_value(np.array([[np.inf, 0], [0, 1.0]])))
+
+
+@pytest.mark.parametrize(("kind", "parameters", "symmetric", "match"), [
+    ("XY", ("omega", "b"), False, r"kind must be one of .*; got 'XY'"),
+    ("BP", ("omega", "b"), False, r"kind='BP' is a curve of symmetric motions"),
+    ("PD", ("omega", "omega"), False, r"parameters must be two different parameters; got "
+                                      r"'omega' twice"),
+])
+def test_bad_curves_are_refused(kind, parameters, symmetric, match) -> None:
+    with pytest.raises(ParameterError, match=match):
+        MultiImpactCurveProblem(_paper(0.5), 1, 1, "U", kind, parameters, symmetric=symmetric)
