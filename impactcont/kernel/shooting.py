@@ -50,8 +50,8 @@ from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "forced_amplitudes", "frequency_column", "jacobian_product",
-           "motion_checks", "newton_solve", "omega_partials", "palc_correct",
-           "shooting_system"]
+           "jacobian_product_into", "motion_checks", "newton_solve", "omega_partials",
+           "palc_correct", "shooting_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -983,15 +983,29 @@ def jacobian_product(pivots, normals, matrices, omega, transitions, pcols, rates
     (eq. 25, as :func:`motion_checks` builds them): G itself for ``count = p``, the
     half-map's product for ``count = p / 2`` (:func:`impactcont.orbit.symmetry.half_map`).
     """
+    m = matrices.shape[1]
+    G = np.empty((m, m))
+    jacobian_product_into(pivots, normals, matrices, omega, transitions, pcols, rates, count,
+                          G, np.empty(count))
+    return G
+
+
+@_jit
+def jacobian_product_into(pivots, normals, matrices, omega, transitions, pcols, rates, count,
+                          G, h2):
+    """:func:`jacobian_product` into ``G`` (m, m), with ``h2[k]`` the velocity of the stop
+    coordinate at the end of flight k (the pole of its Jacobian, ``(count,)``)."""
     p = pivots.size
     m = matrices.shape[1]
-    G = np.eye(m)
     Gk = np.empty((m, m))
     tmp = np.empty((m, m))
+    for r in range(m):
+        for c in range(m):
+            G[r, c] = 1.0 if r == c else 0.0
     for k in range(count):
         nxt = (k + 1) % p
-        _flight_jacobian(transitions[k], pcols[k], rates[k], matrices[nxt], pivots[k],
-                         pivots[nxt], normals[k], normals[nxt], omega, Gk)
+        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], matrices[nxt], pivots[k],
+                                 pivots[nxt], normals[k], normals[nxt], omega, Gk)
         for r in range(m):
             for c in range(m):
                 s = 0.0
@@ -999,7 +1013,6 @@ def jacobian_product(pivots, normals, matrices, omega, transitions, pcols, rates
                     s += Gk[r, i] * G[i, c]
                 tmp[r, c] = s
         G[:, :] = tmp
-    return G
 
 
 #: ``palc_correct`` statuses besides :data:`CONVERGED` and :data:`FAILED` (no convergence)

@@ -45,11 +45,11 @@ from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
     _clearances,
-    _flight_jacobian,
     _jacobian_wanted,
     _max_abs,
     _solve,
     _stop_clearance,
+    jacobian_product_into,
     shooting_system,
     unknowns_scale,
 )
@@ -170,20 +170,9 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     m = full_matrices.shape[1]
     flights = taus.size  # h of a symmetric motion, else p
     h2 = np.empty(flights)
-    G = np.eye(m)
-    jac = np.empty((m, m))
-    tmp = np.empty((m, m))
-    for k in range(flights):
-        nxt = (k + 1) % p
-        h2[k] = _flight_jacobian(transitions[k], pcols[k], rates[k], full_matrices[nxt], pivots[k],
-                                 pivots[nxt], full_normals[k], full_normals[nxt], omega, jac)
-        for r in range(m):
-            for c in range(m):
-                s = 0.0
-                for i in range(m):
-                    s += jac[r, i] * G[i, c]
-                tmp[r, c] = s
-        G[:, :] = tmp
+    G = np.empty((m, m))
+    jacobian_product_into(pivots, full_normals, full_matrices, omega, transitions, pcols, rates,
+                          flights, G, h2)
     if symmetric:  # the half-map H = S G_{h-1} .. G_0: G = H^2
         for r in range(m - 1):
             for c in range(m):
