@@ -25,7 +25,7 @@ from impactcont.analysis.branch import check_continuation_arguments, continuatio
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
-from impactcont.model.stops import Stop, Stops, require_paper_stops
+from impactcont.model.stops import LOWER, UPPER, Stop, Stops, require_paper_stops
 from impactcont.orbit.robust import check_robust_arguments, robust_stability
 from impactcont.scene.keys import (
     ENTRY_NAME,
@@ -726,6 +726,26 @@ def _check_robust(osc: ImpactOscillator, where: Where, spec: RobustSpec) -> None
 _SIM = defaults_of(simulate)
 
 
+def _check_start_state(where: Where, osc: ImpactOscillator, state: tuple) -> None:
+    """Refuse a start state beyond any stop, each on its own stop coordinate.
+
+    Every stop (``U``, ``L``, each extra stop) is read through
+    :meth:`~impactcont.model.stops.Stops.stop`: the state's ``s = normal . x`` must lie on
+    the open side of the stop, ``sign (s - position) <= 0`` (eq. 3 on ``x_j``, on
+    ``x_j - x_k`` for a clearance between masses).
+    """
+    x = np.asarray(state[:osc.n], dtype=float)
+    for name in osc.stops.names:
+        view = osc.stops.stop(name, osc.M, osc.b, osc.R)
+        s = float(view.normal @ x)
+        if view.sign * (s - view.position) > 0:
+            coordinate = (osc.stops.coordinate if name in (UPPER, LOWER)
+                          else osc.stops.extra_stop(name).coordinate)
+            relation = "<=" if view.sign > 0 else ">="
+            raise where.error(f"{coordinate} = {s!r} is beyond stop {name!r} at "
+                              f"{view.position!r}", f"{coordinate} {relation} {view.position!r}")
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class SimulationSpec(EntrySpec):
     """``[[simulations]]``: the event-driven simulator from a periodic motion or a state."""
@@ -756,14 +776,7 @@ class SimulationSpec(EntrySpec):
             if len(self.state) != 2 * osc.n:
                 raise where.key("state").error(f"has length {len(self.state)}",
                                                f"an array of 2n = {2 * osc.n} real numbers")
-            j = osc.stops.mass  # the mass meeting the stops (1-based)
-            x = self.state[j - 1]
-            if x > osc.b:
-                raise where.key("state").error(f"x{j} = {x!r} is beyond the stop b = {osc.b!r}",
-                                               f"x{j} <= b")
-            if osc.stops.two_sided and x < -osc.stops.b_low:
-                raise where.key("state").error(f"x{j} = {x!r} is beyond the lower stop -b_low "
-                                               f"= {-osc.stops.b_low!r}", f"x{j} >= -b_low")
+            _check_start_state(where.key("state"), osc, self.state)
         else:
             if not osc.stops.paper:
                 raise where.key("start").error(

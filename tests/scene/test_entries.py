@@ -156,7 +156,7 @@ def test_the_continuation_keys_take_the_drivers_defaults(base) -> None:
     (e.SimulationSpec, {"periods": 3, "start": "state", "state": [0, 0, 0], "delta": 0},
      "branches[0].state: has length 3; allowed: an array of 2n = 4 real numbers"),
     (e.SimulationSpec, {"periods": 3, "start": "state", "state": [0.7, 0, 0, 0], "delta": 0},
-     "branches[0].state: x1 = 0.7 is beyond the stop b = 0.6; allowed: x1 <= b"),
+     "branches[0].state: x1 = 0.7 is beyond stop 'U' at 0.6; allowed: x1 <= 0.6"),
     (e.SimulationSpec, {"periods": 3, "state": [0, 0, 0, 0]},
      'branches[0].state: only used with start = "state"'),
     (e.SimulationSpec, {"periods": 0},
@@ -201,3 +201,32 @@ def test_refuse_changes_names_the_first_change(base) -> None:
                                          r"allowed: leave out the oscillator parameters"):
         e.refuse_changes(spec, AT, "takes the start's oscillator")
     e.refuse_changes(e.OrbitSpec.parse({}, AT, base, 0), AT, "unused")
+
+
+# -- [[simulations]] start = "state": every stop's own coordinate (issue 28, item 1.7) --------
+PAIR = {**OSC, "stop_mass": 2, "stop_relative_to": 1, "mirror_stop": True,
+        "extra_stops": [{"name": "A", "mass": 1, "gap": 2.0, "restitution": 0.5},
+                        {"name": "B", "mass": 2, "gap": 0.4, "restitution": 0.5,
+                         "side": -1}]}
+
+
+@pytest.mark.parametrize(("state", "message"), [
+    ([1.0, 1.7, 0, 0], "x2 - x1 = 0.7 is beyond stop 'U' at 0.6; allowed: x2 - x1 <= 0.6"),
+    ([1.0, 0.3, 0, 0], "x2 - x1 = -0.7 is beyond stop 'L' at -0.6; allowed: x2 - x1 >= -0.6"),
+    ([2.5, 2.5, 0, 0], "x1 = 2.5 is beyond stop 'A' at 2.0; allowed: x1 <= 2.0"),
+    ([-0.5, -0.45, 0, 0], "x2 = -0.45 is beyond stop 'B' at -0.4; allowed: x2 >= -0.4"),
+])
+def test_a_start_state_is_checked_on_each_stops_own_coordinate(state, message) -> None:
+    osc = e.OscillatorSpec.parse(PAIR, AT_OSC).build()
+    raw = {"periods": 3, "start": "state", "state": state, "delta": 0}
+    text = _refused(lambda r: e.SimulationSpec.parse(r, AT, osc, 0), raw)
+    assert text.startswith(f"s.toml: branches[0].state: {message}"), text
+
+
+def test_a_start_state_inside_a_clearance_between_masses_is_accepted() -> None:
+    # x2 = 5 is far above b = 0.6, but the clearance x2 - x1 = 0.1 is open
+    osc = e.OscillatorSpec.parse(PAIR, AT_OSC).build()
+    spec = e.SimulationSpec.parse({"periods": 3, "start": "state", "state": [1.5, 1.6, 0, 0],
+                                   "delta": 0}, AT, osc, 0)
+    assert spec.state == (1.5, 1.6, 0.0, 0.0)
+    ic.simulate(osc, np.array(spec.state), 0.0, 0.5)  # and the run takes it
