@@ -84,6 +84,10 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
+#: Why :func:`pitchfork_branch` refuses a branch of N-1 motions (also the scenes' ``--check``).
+NOT_SYMMETRIC = ("branch must be a branch of N-p motions (an N-1 motion is never symmetric: it "
+                 "has one impact per period)")
+
 _CORRECTOR_TOL = 1e-11
 _STEP_TOL = 1e-8
 _MAX_ITER = 30
@@ -746,8 +750,7 @@ def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
     if "impact" not in branch.dims:
-        raise ParameterError("branch must be a branch of N-p motions (an N-1 motion is never "
-                             "symmetric: it has one impact per period)")
+        raise ParameterError(NOT_SYMMETRIC)
     half, v, lam_bp = _symmetric_at(branch, which)
     parameter, full = half.parameter, half.full
     lo, hi = _dataset_bounds(branch, bounds)

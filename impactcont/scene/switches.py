@@ -31,7 +31,12 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.multi_branch import make_options, multi_impact_continuation
-from impactcont.analysis.switching import grazing_switch, period_doubling_switch, pitchfork_branch
+from impactcont.analysis.switching import (
+    NOT_SYMMETRIC,
+    grazing_switch,
+    period_doubling_switch,
+    pitchfork_branch,
+)
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -88,8 +93,8 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
                       "a grazing (GR) point or a symmetry-breaking pitchfork (BP) of the start",
                       "PD")
     which: int = declare(Integer(0), "which point of that kind on the start (branch order)", 0)
-    side: int = declare(Integer(choices=(1, -1)), "at BP: which motion of the asymmetric "
-                        "pair, +1 or -1 (mirror images)", 1)
+    side: int | None = declare(Integer(choices=(1, -1)), "at BP only: which motion of the "
+                               "asymmetric pair, +1 or -1 (mirror images; default +1)")
     bounds: tuple[float, float] | None = declare(
         Interval(), "range of the parameter (default: the start's)")
     epsilon: float | None = declare(
@@ -100,6 +105,11 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
     def check(self, where: Where, osc: ImpactOscillator) -> None:
         super().check(where, osc)
         refuse_changes(self, where, "a switch uses the oscillator of the branch it starts from")
+        if self.side is not None and self.at != "BP":
+            raise where.key("side").error(
+                f"{self.side:+d} is only used with at = \"BP\" (which motion of a pitchfork's "
+                f"mirror pair); at = \"{self.at}\" has one new branch",
+                'leave side out, or set at = "BP"')
 
     def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
                     ) -> None:
@@ -115,6 +125,11 @@ class SwitchSpec(continuation_entry(multi_impact_continuation, "SwitchEntry", _K
                 f"{self.start!r} is not a [[branches]] or [[multi_impact]] entry nor an earlier "
                 "[[switches]] entry",
                 ", ".join(branches + earlier) or "the name of a [[branches]] entry")
+        if self.at == "BP" and self.start in {e.name for e in sections.get("branches", ())}:
+            raise where.key("at").error(
+                f"\"BP\" from the [[branches]] entry {self.start!r}: {NOT_SYMMETRIC}",
+                "at = \"BP\" from a [[multi_impact]] or [[switches]] entry (N-p motions); "
+                "\"PD\" or \"GR\" from a [[branches]] entry")
         start = _origin(self, sections)  # the [[branches]] entry the chain starts from
         lo, hi = self.bounds if self.bounds is not None else start.bounds
         admissible = PARAMETER_RANGES[start.parameter]
@@ -157,7 +172,8 @@ class Switches:
         if entry.at == "PD":
             ds = period_doubling_switch(start, entry.which, **kwargs)
         elif entry.at == "BP":
-            ds = pitchfork_branch(start, entry.which, entry.side, **kwargs)
+            ds = pitchfork_branch(start, entry.which, 1 if entry.side is None else entry.side,
+                                  **kwargs)
         else:
             ds = grazing_switch(start, entry.which, **kwargs)
             if ds is None:

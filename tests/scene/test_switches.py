@@ -66,6 +66,10 @@ def test_switches_chain_into_a_cascade_as_the_api_does(tmp_path: Path) -> None:
     ('side = 0', "switches[0].side", "one of +1, -1"),
     ('ds = 0.5', "switches[0].ds", "ds_min <= ds <= ds_max"),
     ('both_directions = false', "switches[0].both_directions", "start, at, which"),
+    # issue 28: a side only picks a motion of a pitchfork's pair; BP needs an N-p branch
+    ('side = -1', "switches[0].side", 'leave side out, or set at = "BP"'),
+    ('at = "GR"\nside = 1', "switches[0].side", 'leave side out, or set at = "BP"'),
+    ('at = "BP"', "switches[0].at", "an N-1 motion is never symmetric"),
 ])
 def test_switch_errors_name_the_key(tmp_path: Path, change: str, key: str,
                                     allowed: str) -> None:
