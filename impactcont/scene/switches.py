@@ -229,6 +229,7 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
                                            ", ".join(simulations) or "a [[simulations]] entry")
         osc = simulations[self.start].oscillator  # the motion is found at its oscillator
         library_check(where.key("parameter"), check_parameter, osc, self.parameter)
+        library_check(where.key("parameter"), model_parameter, osc, self.parameter)  # m9, n=2
         library_check(where, make_options, self.bounds, keys=("bounds", *CONTINUATION_KEYS),
                       **self.continuation_options())
         # the stops bound the parameter (b > -b_low with a lower stop), as the run refuses

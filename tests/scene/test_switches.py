@@ -124,6 +124,7 @@ def test_a_simulated_attractor_becomes_a_branch(tmp_path: Path) -> None:
     ('start = "N1"', "multi_impact[0].start"),           # not a simulation
     ('bounds = [1.0, 1.5]', "multi_impact[0].bounds"),    # omega = 1.8 outside
     ('omega = 1.7', "multi_impact[0].omega"),
+    ('parameter = "m9"', "multi_impact[0].parameter"),  # past n = 2 (issue 28)
 ])
 def test_multi_impact_errors_name_the_key(tmp_path: Path, change: str, key: str) -> None:
     name = change.split(" =")[0]
