@@ -302,6 +302,13 @@ def _tables(value: Any, where: Where) -> list[Any]:
     return value
 
 
+def _entries_by_table(kind: PlotKind, parsed: Mapping[str, tuple[EntrySpec, ...]]) -> str:
+    """The entries a plot kind may draw, each under its own table:
+    ``"[[branches]]: a, b; [[multi_impact]]: c"``."""
+    return "; ".join(f"[[{s}]]: " + ", ".join(e.name for e in parsed[s])
+                     for s in kind.sections if parsed.get(s))
+
+
 def _check_plot(plot: PlotSpec, where: Where, kinds: Mapping[str, PlotKind],
                 parsed: Mapping[str, tuple[EntrySpec, ...]]) -> None:
     if plot.kind not in kinds:
@@ -319,11 +326,15 @@ def _check_plot(plot: PlotSpec, where: Where, kinds: Mapping[str, PlotKind],
         if name not in available:
             close = difflib.get_close_matches(name, list(available), n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
+            tables = [f"[[{s}]]" for s in kind.sections]
+            listed = tables[0] if len(tables) == 1 else \
+                f"{', '.join(tables[:-1])} or {tables[-1]}"
             raise where.key("data").item(i).error(
-                f"{name!r} is not a [[{kind.section}]] entry{hint}", ", ".join(available))
+                f"{name!r} is not an entry of {listed}{hint}", _entries_by_table(kind, parsed))
     if not kind.many and len(names) != 1:
         raise where.key("data").error(f"kind {plot.kind!r} draws exactly one entry; got "
-                                      f"{len(names)}", "one name of " + ", ".join(available))
+                                      f"{len(names)}",
+                                      "one name of " + _entries_by_table(kind, parsed))
     if kind.section == "branches":
         parameters = {_parameter(available[n], available) for n in names}
         if len(parameters) > 1:

@@ -305,3 +305,51 @@ def test_a_figure_too_large_to_draw_is_refused(tmp_path: Path) -> None:
                                              r"allowed: dpi <= 288 for it"):
         save_figure(fig, tmp_path / "big.png", 1200)
     assert not (tmp_path / "big.png").exists()
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 28: what a new user found
+# ---------------------------------------------------------------------------------------------
+_BRANCH_AND_MULTI = OSCILLATOR.replace("b = 0.6", "b = 0.0").replace("omega = 1.0", "omega = 1.8") \
+    + """
+[[simulations]]
+name = "s"
+periods = 50
+
+[[multi_impact]]
+name = "mi"
+start = "s"
+N = 1
+p = 1
+bounds = [1.6, 1.9]
+
+[[branches]]
+name = "br"
+bounds = [1.6, 1.9]
+"""
+
+
+def test_a_plot_lists_each_entry_under_its_own_table(tmp_path: Path) -> None:
+    err = scene_error(tmp_path, _BRANCH_AND_MULTI + '[[plots]]\nkind = "bifurcation_diagram"\n'
+                      'data = ["nope"]\n')
+    assert err.key == "plots[0].data[0]"
+    assert "'nope' is not an entry of [[branches]], [[switches]] or [[multi_impact]]" in str(err)
+    assert err.allowed == "[[branches]]: br; [[multi_impact]]: mi"
+
+
+def test_check_refuses_a_pitchfork_switch_from_an_n1_branch(tmp_path: Path) -> None:
+    err = scene_error(tmp_path, _BRANCH_AND_MULTI + '[[switches]]\nname = "w"\nstart = "br"\n'
+                      'at = "BP"\n')
+    assert err.key == "switches[0].at" and "an N-1 motion is never symmetric" in str(err)
+
+
+def test_a_side_at_a_period_doubling_switch_is_refused(tmp_path: Path) -> None:
+    err = scene_error(tmp_path, _BRANCH_AND_MULTI + '[[switches]]\nname = "w"\nstart = "br"\n'
+                      'side = -1\n')
+    assert err.key == "switches[0].side" and '-1 is only used with at = "BP"' in str(err)
+
+
+def test_a_bad_element_parameter_is_reported_at_parameter(tmp_path: Path) -> None:
+    text = _BRANCH_AND_MULTI.replace('p = 1\n', 'p = 1\nparameter = "m9"\n')
+    err = scene_error(tmp_path, text)
+    assert err.key == "multi_impact[0].parameter" and "'m9'" in str(err) and "m1..m2" in str(err)

@@ -169,7 +169,7 @@ def test_plot_references(tmp_path: Path) -> None:
     assert err.key == "plots[0].kind" and "did you mean 'bifurcation_diagram'?" in str(err)
     assert "multipliers" in err.allowed
     err = scene_error(tmp_path, base + '[[plots]]\nkind = "bifurcation_diagram"\ndata = ["b"]\n')
-    assert err.key == "plots[0].data[0]" and err.allowed == "a"
+    assert err.key == "plots[0].data[0]" and err.allowed == "[[branches]]: a"
     err = scene_error(tmp_path, base + '[[plots]]\nkind = "orbits"\n')
     assert err.key == "plots[0].data" and "[[orbits]]" in str(err)
     two = base + '[[branches]]\nname = "c"\nbounds = [1, 2]\n'
