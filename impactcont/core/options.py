@@ -85,9 +85,9 @@ class ContinuationOptions:
         continuation stops when the parameter reaches a bound; the last point
         then lies exactly on it. Required by the core; a driver takes it from
         its own ``bounds`` argument when left out.
-    ds : float, default ``min(0.01, ds_max)``
+    ds : float, default min(0.01, ds_max)
         Initial arclength step, ``ds_min <= ds <= ds_max``.
-    ds_min : float, default ``min(1e-6, ds)``
+    ds_min : float, default min(1e-6, ds)
         Smallest step; the continuation stops when the step would fall below it.
     ds_max : float, default 0.1
         Largest step.
