@@ -107,6 +107,11 @@ def flow_of(osc: ImpactOscillator) -> Flow:
     return flow
 
 
+def _empty_flow(cls: type) -> Flow:
+    """A flow of class `cls` with no attributes yet (:meth:`Flow.__reduce__`)."""
+    return object.__new__(cls)
+
+
 class Flow:
     """Exact flow of eq. (1) between impacts for one oscillator.
 
@@ -124,10 +129,27 @@ class Flow:
     interface, from the first-order complex modes.
     """
 
+    #: What a flow computes once from the rest on first use (the kernel's arrays, the last
+    #: matrices): neither pickled nor copied, rebuilt by the copy when it needs them.
+    _CACHES = ("_arrays", "_static_arrays", "_omega_arrays", "_last")
+
     def __new__(cls, osc: ImpactOscillator) -> Flow:
         if cls is Flow and isinstance(osc, ImpactOscillator) and osc.general:
             return super().__new__(GeneralFlow)
         return super().__new__(cls)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle (and ``copy.deepcopy``) a flow without calling ``__new__(osc)``.
+
+        An oscillator keeps its flow (:func:`flow_of`) and the flow its oscillator: the
+        default protocol called ``Flow.__new__(cls)`` without `osc` (``TypeError``), so no
+        oscillator or motion the shooting path had used could go to a process pool or
+        dask. The flow is rebuilt empty and given its attributes (the oscillator's
+        reference resolved by pickle's memo, cycle included), its caches left out.
+        """
+        state = {key: (None if key in self._CACHES else value)
+                 for key, value in self.__dict__.items()}
+        return _empty_flow, (type(self),), state
 
     def __init__(self, osc: ImpactOscillator) -> None:
         modes = osc.modes

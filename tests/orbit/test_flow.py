@@ -424,3 +424,55 @@ def test_a_free_ball_between_walls_simulates_against_solve_ivp():
         np.testing.assert_allclose(flow.state(tau, start, phase)[0], X_minus, rtol=0,
                                    atol=1e-8)
         start, phase, t0 = res.impact_states[k], res.impact_phases[k], res.impact_times[k]
+
+
+def _roundtrips(obj):
+    """`obj` pickled and unpickled, and deep-copied (the process pools' and dask's way)."""
+    import copy
+    import pickle
+
+    return pickle.loads(pickle.dumps(obj)), copy.deepcopy(obj)
+
+
+@pytest.mark.parametrize("general", [False, True])
+def test_an_oscillator_and_its_flow_pickle_after_the_shooting_path_used_them(general):
+    # issue 28: Flow.__new__ needed osc, so an oscillator whose flow flow_of had cached
+    # (every N-p solve) could be neither pickled nor deep-copied
+    from impactcont.orbit.flow import GeneralFlow, flow_of
+
+    params = {"C": [[0.3, -0.1], [-0.1, 0.1]]} if general else {"eta": 0.1}
+    osc = ImpactOscillator(M=M, K=K, F=[1.0, 0.0], R=0.6, b=0.6, omega=1.3,
+                           F_static=FS, **params)
+    flow = flow_of(osc)
+    flow.shooting_arrays(), flow.static_arrays(), flow.omega_arrays()
+    flow.matrices(0.7)
+    X0, t = np.array([0.1, -0.2, 0.3, 0.05]), np.array([0.0, 0.4, 2.5])
+    for copied in _roundtrips(osc):
+        again = flow_of(copied)
+        assert type(again) is (GeneralFlow if general else Flow)
+        assert again.osc is copied and again is not flow
+        np.testing.assert_array_equal(again.state(t, X0, 0.3), flow.state(t, X0, 0.3))
+        for mine, theirs in zip(again.shooting_arrays(), flow.shooting_arrays(), strict=True):
+            np.testing.assert_array_equal(mine, theirs)
+    for copied in _roundtrips(flow):
+        np.testing.assert_array_equal(copied.matrices(0.7)[0], flow.matrices(0.7)[0])
+
+
+def test_n1_and_np_motions_pickle_after_use_and_compute_the_same_numbers(paper):
+    # issue 28: every N-p task of a process pool or dask pickles its motion and oscillator
+    n1 = ic.periodic_orbits(paper, 1)[0]
+    mp = ic.multi_impact_orbit(paper, 1, 1, n1)  # the shooting path: paper's flow is cached
+    assert "_flow" in paper.__dict__
+    for orbit in (n1, mp):
+        for copied in _roundtrips(orbit):
+            assert type(copied) is type(orbit)
+            resolved = ic.multi_impact_orbit(copied.oscillator, 1, 1, copied)
+            np.testing.assert_allclose(resolved.unknowns, mp.unknowns, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(resolved.multipliers, mp.multipliers, rtol=0,
+                                       atol=1e-12)
+            assert resolved.physical == mp.physical and resolved.stable == mp.stable
+    n1_copy, mp_copy = _roundtrips(n1)[0], _roundtrips(mp)[0]
+    assert n1_copy.delta == n1.delta and n1_copy.physical == n1.physical
+    np.testing.assert_array_equal(n1_copy.G, n1.G)
+    np.testing.assert_array_equal(mp_copy.states, mp.states)
+    np.testing.assert_array_equal(mp_copy.G, mp.G)
