@@ -21,7 +21,8 @@ Exit codes
 1
     Failure during computation: an entry or plot of the scene failed (the
     other results are still written and the summary lists the failures), or
-    a file could not be written or drawn.
+    a file could not be written or drawn (one line naming the file and why:
+    "no space left on the device" of a full disk, ...).
 2
     Bad scene or usage: malformed or missing scene (the message names the
     file, the key and what is allowed), unknown option, a file that is not
@@ -324,6 +325,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         log.error("interrupted")
         return EXIT_INTERRUPTED
+    except OSError as exc:  # a file not written: impactcont's message names it and says why
+        log.error("%s", exc, exc_info=args.verbose >= 2)
+        return EXIT_FAILURE
     except Exception as exc:
         log.error("%s: %s", type(exc).__name__, exc, exc_info=args.verbose >= 2)
         return EXIT_FAILURE

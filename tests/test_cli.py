@@ -440,3 +440,46 @@ def test_save_names_the_path_the_user_gave(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="path must be a file, not a directory"):
         ic.save(ORBITS, tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def _statvfs(free_blocks: int) -> os.statvfs_result:
+    return os.statvfs_result((4096, 4096, 262144, free_blocks, free_blocks, 65536, 60000,
+                              60000, 0, 255))
+
+
+def test_a_disk_filling_up_during_a_run_is_one_clear_line(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The NetCDF library's "HDF error" on a full disk is said as such, naming the file."""
+    free = [1000]
+    monkeypatch.setattr(dataset_io.os, "statvfs", lambda path: _statvfs(free[0]))
+
+    def filling(self, target, *args, **kwargs):
+        Path(target).write_bytes(b"\x89HDF half a file")
+        free[0] = 0
+        raise RuntimeError("NetCDF: HDF error")
+
+    monkeypatch.setattr(xr.DataTree, "to_netcdf", filling)
+    out = tmp_path / "o"
+    assert main(["run", str(write(tmp_path, ORBITS_SCENE)), "--output", str(out)]) \
+        == EXIT_FAILURE
+    err = capsys.readouterr().err
+    assert (f"error: cannot write {str(out / 'orbits.nc')!r}: no space left on the device of "
+            f"directory {str(out)!r} (0 bytes free)") in err, err
+    assert "RuntimeError" not in err and "OSError" not in err and ".tmp" not in err, err
+    assert list(out.iterdir()) == []
+
+
+def test_a_full_disk_is_refused_before_computing(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        no_computing: None) -> None:
+    monkeypatch.setattr(dataset_io.os, "statvfs", lambda path: _statvfs(0))
+    scene = write(tmp_path, ORBITS_SCENE)
+    out = tmp_path / "o"
+    out.mkdir()
+    for extra in ([], ["--check"]):
+        assert main(["run", str(scene), "--output", str(out), *extra]) == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert (f"error: output directory {str(out)!r}: no space left on the device of "
+                f"directory {str(out)!r} (0 bytes free); free some space") in err, err
+    assert list(out.iterdir()) == []

@@ -25,7 +25,9 @@ impactcont reads back (:mod:`impactcont.dataset.attributes`), and with
 
 Every write goes to a temporary file in the target's directory, moved onto
 the target with :func:`os.replace`: a failed or interrupted write leaves the
-previous file untouched and no temporary file behind. Temporary files are
+previous file untouched and no temporary file behind, and a failed one raises an
+OSError naming the target and why (ENOSPC, "no space left on the device", when
+the disk is full: the NetCDF library says only "HDF error"). Temporary files are
 named ``.<target>.<host>-<pid>.<random>.tmp``; one left by a writer that was
 killed is removed by the next write to that directory once its process is
 gone. Ctrl-C ends a save promptly and never lands inside the NetCDF library
@@ -181,14 +183,112 @@ def _named(exc: OSError, message: str) -> OSError:
     return new
 
 
-def _probe(directory: Path, message: str) -> None:
-    """Create and remove a file in ``directory``; OSError with ``message`` if that fails."""
+# Errors of a device that has no room left for this user.
+_FULL_ERRNOS = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
+# A device with less than this free once a write failed is full: the failed write took the
+# rest (what remains is a partly used block, or what another process freed since).
+_FULL_BYTES = 2**20
+
+
+def _room(directory: Path) -> tuple[int, int | None] | None:
+    """``(bytes, inodes)`` this process may still use on the device of ``directory``
+    (:func:`os.statvfs`; ``inodes`` None where the file system does not count them), or
+    None where that is not known (no ``statvfs``, a file system of no stated size)."""
+    try:
+        st = os.statvfs(directory)
+    except (OSError, AttributeError):  # gone, or no statvfs (Windows)
+        return None
+    if st.f_blocks == 0:  # /proc, some FUSE file systems: no size at all
+        return None
+    root = hasattr(os, "geteuid") and os.geteuid() == 0  # root may use the reserved blocks
+    free = (st.f_bfree if root else st.f_bavail) * st.f_frsize
+    inodes = (st.f_ffree if root else st.f_favail) if st.f_files else None
+    return int(free), None if inodes is None else int(inodes)
+
+
+def _full(directory: Path, below: int = 1) -> str | None:
+    """Why the device of ``directory`` counts as full (``"0 bytes free"``, ``"no inode
+    free"``) when it has fewer than ``below`` bytes or no inode left; None if it does not
+    or cannot be told."""
+    room = _room(directory)
+    if room is None:
+        return None
+    free, inodes = room
+    if inodes == 0:
+        return "no inode (file entry) free"
+    if free < below:
+        return f"{free} bytes free"
+    return None
+
+
+def _full_text(directory: Path, reason: str, code: int | None) -> str:
+    what = ("disk quota exceeded" if code == getattr(errno, "EDQUOT", None)
+            else "no space left on the device")
+    return f"{what} of directory {str(directory)!r} ({reason})"
+
+
+def _no_room(message: str) -> OSError:
+    """An OSError of errno ENOSPC whose text is ``message`` alone."""
+    exc = OSError(message)
+    exc.errno = errno.ENOSPC
+    return exc
+
+
+def _check_room(directory: Path, message: str) -> None:
+    """OSError (ENOSPC) with ``message`` if the device of ``directory`` is full (no byte or
+    no inode free): refused before any work rather than after a failed write."""
+    reason = _full(directory)
+    if reason is not None:
+        raise _no_room(message.format(reason=_full_text(directory, reason, None)))
+
+
+def _probe(directory: Path, message: str, full: str) -> None:
+    """Create and remove a file in ``directory``, and check that its device has room; an
+    OSError with ``message`` if the file cannot be made, with ``full`` (ENOSPC) if the
+    device is full."""
     probe = temporary_path(directory / "impactcont-write-test")
     try:
         os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
         os.unlink(probe)
     except OSError as exc:
+        if exc.errno in _FULL_ERRNOS:
+            raise _named(exc, full.format(reason=_full_text(directory, exc.strerror or str(exc),
+                                                            exc.errno))) from None
         raise _named(exc, message.format(reason=exc.strerror or exc)) from None
+    _check_room(directory, full)
+
+
+def _write_error(exc: BaseException, shown: str, tmp: Path) -> OSError | None:
+    """The error to raise for ``exc``, raised while ``tmp`` was written for the target
+    ``shown``; None to raise ``exc`` as it is (not a failure to write: Ctrl-C, a bad value).
+
+    A write fails with an :class:`OSError` or a :class:`RuntimeError` of the NetCDF library
+    (``NetCDF: HDF error``, whatever the cause). Either is an OSError naming the target, not
+    the temporary file: errno ENOSPC, "no space left on the device", when the device is
+    full once it failed (checked before ``tmp`` is removed: a full disk can make the
+    library say "Permission denied"); otherwise the OSError's own type and errno, or EIO
+    with what the library said. Called before ``tmp`` is removed.
+    """
+    library = isinstance(exc, RuntimeError) and str(exc).startswith("NetCDF:")
+    if not (isinstance(exc, OSError) or library):
+        return None
+    directory = tmp.parent
+    code = exc.errno if isinstance(exc, OSError) else None
+    said = (exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc))
+    said = said.replace(str(tmp), shown)
+    reason = _full(directory, _FULL_BYTES)
+    if reason is not None or code in _FULL_ERRNOS:
+        room = reason if reason is not None else said
+        return _no_room(f"cannot write {shown!r}: {_full_text(directory, room, code)}; the "
+                        f"write failed with: {said}. Free some space or choose another path "
+                        f"(nothing was written: a previous file there is untouched)")
+    if library:
+        new = OSError(f"cannot write {shown!r} in directory {str(directory)!r}: the NetCDF "
+                      f"library failed ({said}); nothing was written (a previous file there "
+                      f"is untouched)")
+        new.errno = errno.EIO
+        return new
+    return _named(exc, f"cannot write {shown!r} in directory {str(directory)!r}: {said}")
 
 
 def check_output_file(path: str | os.PathLike) -> Path:
@@ -209,6 +309,9 @@ def check_output_file(path: str | os.PathLike) -> Path:
     FileNotFoundError, NotADirectoryError, PermissionError
         Its directory does not exist, is not a directory or is not writable;
         the message names ``path`` and says what to do.
+    OSError
+        errno ENOSPC: the device of its directory is full (no byte or no file
+        entry free).
     """
     target = _path(path)
     shown = str(path)
@@ -221,7 +324,8 @@ def check_output_file(path: str | os.PathLike) -> Path:
     if not parent.is_dir():
         raise NotADirectoryError(f"cannot write {shown!r}: {str(parent)!r} is not a directory")
     _probe(parent, f"cannot write {shown!r}: directory {str(parent)!r} is not writable "
-                   f"({{reason}}); choose another path or change its permissions")
+                   f"({{reason}}); choose another path or change its permissions",
+           f"cannot write {shown!r}: {{reason}}; free some space or choose another path")
     return target
 
 
@@ -246,8 +350,8 @@ def check_output_directory(directory: str | os.PathLike, *, create: bool = False
     NotADirectoryError
         ``directory`` (or a parent) exists and is a file.
     PermissionError, OSError
-        It cannot be created or written; the message names ``directory`` and
-        says what to do.
+        It cannot be created or written, or its device is full (errno ENOSPC);
+        the message names ``directory`` and says what to do.
     """
     d = Path(directory)
     shown = str(directory)
@@ -256,7 +360,8 @@ def check_output_directory(directory: str | os.PathLike, *, create: bool = False
                                  f"directory; choose a directory (it is created if missing)")
     if d.is_dir():
         _probe(d, f"output directory {shown!r} is not writable ({{reason}}); choose another "
-                  f"or change its permissions")
+                  f"or change its permissions",
+               f"output directory {shown!r}: {{reason}}; free some space or choose another")
         return d
     parent = next(p for p in d.absolute().parents if p.exists())
     if not parent.is_dir():
@@ -265,7 +370,8 @@ def check_output_directory(directory: str | os.PathLike, *, create: bool = False
     message = (f"output directory {shown!r} cannot be created in {str(parent)!r} "
                f"({{reason}}); choose another or change the permissions of {str(parent)!r}")
     if not create:
-        _probe(parent, message)
+        _probe(parent, message, f"output directory {shown!r} cannot be created: {{reason}}; "
+                                f"free some space or choose another")
         return d
     try:
         d.mkdir(parents=True, exist_ok=True)
@@ -280,7 +386,9 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
 
     The directory is checked first (:func:`check_output_file`) and cleared of
     stale temporary files. If the body raises (Ctrl-C included), ``path`` is
-    left as it was and the temporary file is removed.
+    left as it was and the temporary file is removed; an OSError (or an error of
+    the NetCDF library) is raised again as an OSError naming ``path``, not the
+    temporary file, and saying when the disk is full (errno ENOSPC).
 
     Yields
     ------
@@ -293,6 +401,11 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
     try:
         yield tmp
         os.replace(tmp, target)
+    except Exception as exc:
+        error = _write_error(exc, str(path), tmp)
+        if error is None:
+            raise
+        raise error from exc
     finally:
         tmp.unlink(missing_ok=True)
 
@@ -927,6 +1040,12 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
         directory.
     FileNotFoundError, NotADirectoryError, PermissionError
         The directory of ``path`` does not exist or is not writable.
+    OSError
+        The write failed; the message names ``path`` (never the temporary file) and
+        why: errno ENOSPC, "no space left on the device", when the disk is full
+        (before writing, or once the write failed), EIO with what the NetCDF library
+        said for another error of the library. ``path`` is untouched and no
+        temporary file is left.
     KeyboardInterrupt
         Ctrl-C: the target is untouched and the temporary file removed.
     """
@@ -943,12 +1062,12 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     try:
         _write(disk, tmp, kwargs, target)
         os.replace(tmp, target)
-    except OSError as exc:
+    except BaseException as exc:
+        error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
         tmp.unlink(missing_ok=True)
-        raise _named(exc, f"cannot write {str(path)!r}: {exc}") from exc
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        if error is None:
+            raise
+        raise error from exc
     logger.info("saved %s to %s", type(data).__name__, target)
     return target
 
@@ -1033,6 +1152,8 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
     TypeError, ValueError
         As :func:`save`; a data variable that is not a dask array, or whose encoding
         on disk is not a plain cast of its values (scale factors, ...).
+    OSError
+        As :func:`save`: the write failed (ENOSPC on a full disk), naming ``path``.
     """
     target = _path(path)
     if not isinstance(ds, xr.Dataset):
@@ -1048,12 +1169,12 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
     try:
         _write_blocks(data, tmp, blocks, _disk_encoding(encoding or {}, data), target)
         os.replace(tmp, target)
-    except OSError as exc:
+    except BaseException as exc:
+        error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
         tmp.unlink(missing_ok=True)
-        raise _named(exc, f"cannot write {str(path)!r}: {exc}") from exc
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        if error is None:
+            raise
+        raise error from exc
     logger.info("saved Dataset to %s block by block", target)
     return target
 

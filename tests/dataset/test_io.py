@@ -7,6 +7,8 @@ file the package writes loading back, and files that plain xarray / netCDF4 can 
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
 import signal
@@ -525,3 +527,181 @@ def test_ncdump_reads_the_files(every_section) -> None:
     values = subprocess.run([ncdump, "-g", "o1", "-v", "delta,multipliers_real", str(path)],
                             capture_output=True, text=True, check=True).stdout
     assert "delta = " in values and "multipliers_real =" in values
+
+
+# -- a full disk (issue 28): an OSError naming the target, no temporary, no half file -----------
+def _statvfs(free_blocks: int) -> os.statvfs_result:
+    """What os.statvfs says of a 1 GB device with `free_blocks` blocks of 4 kB free."""
+    return os.statvfs_result((4096, 4096, 262144, free_blocks, free_blocks, 65536, 60000,
+                              60000, 0, 255))
+
+
+@pytest.fixture
+def filling_disk(monkeypatch: pytest.MonkeyPatch):
+    """os.statvfs of dataset.io reports a device with room, until `fill()` fills it."""
+    state = {"free": 1000}
+
+    def statvfs(path):
+        return _statvfs(state["free"])
+
+    monkeypatch.setattr(dataset_io.os, "statvfs", statvfs)
+
+    def fill() -> None:
+        state["free"] = 0
+
+    return fill
+
+
+def _failing_write(monkeypatch, cls, error, fill=None):
+    """``cls.to_netcdf`` writes half a file, fills the disk (``fill``), then raises ``error``."""
+    def broken(self, target, *args, **kwargs):
+        with open(target, "wb") as f:
+            f.write(b"\x89HDF half a file")
+        if fill is not None:
+            fill()
+        raise error(target)
+
+    monkeypatch.setattr(cls, "to_netcdf", broken)
+
+
+def _netcdf_error(target):
+    return RuntimeError("NetCDF: HDF error")
+
+
+def _permission_error(target):  # what the NetCDF library says on a 100 % full tmpfs
+    return PermissionError(errno.EACCES, "Permission denied", str(target))
+
+
+@pytest.mark.parametrize("error", [_netcdf_error, _permission_error])
+@pytest.mark.parametrize("form", ["single", "groups", "lazy"])
+def test_a_disk_filling_up_during_a_save_is_no_space_left_naming_the_path(
+        branch, tmp_path, monkeypatch, filling_disk, form, error):
+    path = tmp_path / "branch.nc"
+    save(branch, path)
+    before = path.read_bytes()
+    obj = {"single": branch, "groups": {"a": branch}, "lazy": branch.chunk()}[form]
+    _failing_write(monkeypatch, xr.DataTree if form == "groups" else xr.Dataset, error,
+                   filling_disk)
+    with pytest.raises(OSError) as info:
+        save(obj, path)
+    exc = info.value
+    assert type(exc) is OSError and exc.errno == errno.ENOSPC, repr(exc)
+    text = str(exc)
+    assert f"cannot write {str(path)!r}" in text and "no space left" in text, text
+    assert str(tmp_path) in text and ".tmp" not in text, text
+    assert path.read_bytes() == before  # the previous file untouched, no half file
+    assert _leftovers(tmp_path) == []
+
+
+def test_a_netcdf_error_with_room_left_is_an_oserror_saying_what_failed(
+        branch, tmp_path, monkeypatch, filling_disk):
+    _failing_write(monkeypatch, xr.Dataset, _netcdf_error)
+    path = tmp_path / "b.nc"
+    with pytest.raises(OSError) as info:
+        save(branch, path)
+    exc, text = info.value, str(info.value)
+    assert exc.errno == errno.EIO and f"cannot write {str(path)!r}" in text, text
+    assert "NetCDF: HDF error" in text and "no space left" not in text, text
+    assert ".tmp" not in text
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_permission_error_with_room_left_still_says_permission_denied(
+        branch, tmp_path, monkeypatch, filling_disk):
+    _failing_write(monkeypatch, xr.Dataset, _permission_error)
+    path = tmp_path / "b.nc"
+    with pytest.raises(PermissionError) as info:
+        save(branch, path)
+    text = str(info.value)
+    assert info.value.errno == errno.EACCES
+    assert f"cannot write {str(path)!r}" in text and "ermission denied" in text, text
+    assert f"directory {str(tmp_path)!r}" in text and ".tmp" not in text, text
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_full_disk_is_refused_before_writing(branch, tmp_path, monkeypatch, filling_disk):
+    filling_disk()
+    written = []
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", lambda *a, **k: written.append(a))
+    path = tmp_path / "b.nc"
+    with pytest.raises(OSError) as info:
+        save(branch, path)
+    assert info.value.errno == errno.ENOSPC and written == []
+    assert f"cannot write {str(path)!r}" in str(info.value)
+    assert "no space left" in str(info.value)
+    with pytest.raises(OSError, match="no space left") as info:
+        dataset_io.check_output_directory(tmp_path)
+    assert info.value.errno == errno.ENOSPC and str(tmp_path) in str(info.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture
+def file_size_limit():
+    """Files of this process may not grow past 64 kB while the body runs: the NetCDF library
+    fails for real (EFBIG, "NetCDF: HDF error"), as on a full disk."""
+    resource = pytest.importorskip("resource")
+    if not hasattr(signal, "SIGXFSZ"):
+        pytest.skip("no SIGXFSZ here")
+    old = resource.getrlimit(resource.RLIMIT_FSIZE)
+    if old[1] != resource.RLIM_INFINITY and old[1] < 2**16:
+        pytest.skip("the file size limit is already below 64 kB")
+    previous = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+
+    @contextlib.contextmanager
+    def limited():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (2**16, old[1]))
+        try:
+            yield
+        finally:
+            resource.setrlimit(resource.RLIMIT_FSIZE, old)
+
+    try:
+        yield limited
+    finally:
+        signal.signal(signal.SIGXFSZ, previous)
+
+
+def _big_map():
+    values = np.random.default_rng(0).random((40, 1000))
+    return xr.Dataset({"x": (("a", "c"), values)}, attrs={"impactcont_dataset": "t"})
+
+
+@pytest.mark.parametrize("full", [False, True])
+def test_a_real_netcdf_failure_in_save_blocks_is_an_oserror_naming_the_path(
+        tmp_path, file_size_limit, filling_disk, full):
+    pytest.importorskip("dask")
+    import dask.array as da
+
+    big = _big_map()
+    layout = big.copy()
+    layout["x"] = (("a", "c"), da.empty((40, 1000), chunks=-1))
+
+    def blocks():
+        for i in range(40):
+            if i == 0 and full:  # the device fills once the blocks come
+                filling_disk()
+            yield {"a": i}, {"x": big["x"].values[i]}
+
+    path = tmp_path / "map.nc"
+    with file_size_limit(), pytest.raises(OSError) as info:
+        dataset_io.save_blocks(layout, path, blocks())
+    text = str(info.value)
+    assert f"cannot write {str(path)!r}" in text and ".tmp" not in text, text
+    assert info.value.errno == (errno.ENOSPC if full else errno.EIO), text
+    assert ("no space left" in text) == full, text
+    assert list(tmp_path.iterdir()) == []
+    with file_size_limit(), pytest.raises(OSError) as info:  # and a lazy save, for real
+        save(big.chunk({"a": 4}), path)
+    assert f"cannot write {str(path)!r}" in str(info.value)
+    assert info.value.errno == (errno.ENOSPC if full else errno.EIO)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_output_names_the_target_on_a_full_disk(tmp_path, filling_disk):
+    path = tmp_path / "summary.md"
+    with pytest.raises(OSError) as info, dataset_io.atomic_output(path) as tmp:
+        filling_disk()
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp))
+    text = str(info.value)
+    assert info.value.errno == errno.ENOSPC and f"cannot write {str(path)!r}" in text, text
+    assert ".tmp" not in text and list(tmp_path.iterdir()) == []
