@@ -308,9 +308,11 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
         for s in stops:
             grid = grids[s]
             x, v, _ = motions[s](grid[:1])
-            if start > 0 and below[s] and x[0] >= levels[s] and v[0] >= 0:
+            if below[s] and (start > 0 or s not in after) and x[0] >= levels[s] and v[0] >= 0:
                 # the previous window ended just short of this stop at this very time, moving
-                # into it: the impact sits on the boundary (the evaluations differ by rounding)
+                # into it: the impact sits on the boundary (the evaluations differ by rounding);
+                # at the start of the flight, a state short of the stop by less than the
+                # rounding of the evaluation, moving into it (no crossing from below to find)
                 tc: float | None = start
             else:
                 tc = first_upward_crossing(motions[s], levels[s], grid,

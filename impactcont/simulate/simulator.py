@@ -35,7 +35,7 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import UPPER
+from impactcont.model.stops import UPPER, StopView
 from impactcont.orbit.flow import Flow
 from impactcont.simulate.contact import next_contact
 from impactcont.threads import blas_limited
@@ -45,7 +45,11 @@ __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
 log = logging.getLogger(__name__)
 
 TWO_PI = 2.0 * math.pi
-_ON_STOP = 1e-12  # a state this close to the stop (relative), moving into it, impacts now
+_ON_STOP = 1e-12  # allowance of a given start state past a stop (relative to its position)
+# a stop coordinate within this many ulps of its size from its stop touches it (rounding of
+# the state); a speed towards it within this many ulps of the velocities' size is zero
+_ON_ULPS = 256
+_EPS = float(np.finfo(float).eps)
 # a bounce off a stop whose apex v^2 / (2 |x_j''|) lies within this many ulps of the stop
 # position cannot be resolved (the crossing test sees rounding, not the motion): complete
 # chatter, whatever chatter_velocity says
@@ -172,6 +176,55 @@ def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, normal: np.ndarr
     return bool(v * v < 2.0 * acc * floor)
 
 
+def _touching(X: np.ndarray, views: dict[str, StopView], last: str | None) -> list[str]:
+    """The stops the state touches: the one just hit (``last``, projected onto it) and every
+    stop whose coordinate is on it or past it within rounding (``_ON_ULPS`` of its size).
+
+    A coordinate short of its stop by more than rounding does not touch it, however slowly
+    it approaches: its contact is searched along the flight (a contact assumed at once
+    would come too early and too fast, issue 28).
+    """
+    n = X.size // 2
+    out = []
+    for name, view in views.items():
+        s = float(view.normal @ X[:n])
+        band = _ON_ULPS * _EPS * (abs(view.position) + float(np.abs(view.normal) @ np.abs(X[:n])))
+        if name == last or view.sign * (view.position - s) <= band:
+            out.append(name)
+    return out
+
+
+def _contact_now(flow: Flow, X: np.ndarray, phase: float, views: dict[str, StopView],
+                 last: str | None) -> tuple[tuple[float, np.ndarray, str] | None, bool]:
+    """An impact at once, or sticking, at a state that touches stops (:func:`_touching`).
+
+    Decided by the signs of the stop coordinate's speed and acceleration towards each stop
+    touched, not by its clearance: moving into a stop is an impact now; at rest on it (the
+    speed zero within ``_ON_ULPS`` of the velocities' size: a plastic impact, R = 0, leaves
+    it exactly zero) and pushed into it is sticking, the same for a stop fixed to the frame,
+    a clearance between two masses and every extra stop.
+
+    Returns
+    -------
+    hit, sticking
+        ``(0, X, name)`` for an impact now (else None), and whether the motion sticks.
+    """
+    n = flow.n
+    resting = []
+    for name in _touching(X, views, last):
+        view = views[name]
+        u = view.sign * float(view.normal @ X[n:])
+        if u > _ON_ULPS * _EPS * float(np.abs(view.normal) @ np.abs(X[n:])):
+            return (0.0, X.copy(), name), False
+        if u >= -_ON_ULPS * _EPS * float(np.abs(view.normal) @ np.abs(X[n:])):
+            resting.append(view)
+    if resting:
+        acc = flow.state_derivative(0.0, X, phase)[0][n:]
+        if any(view.sign * float(view.normal @ acc) > 0.0 for view in resting):
+            return None, True
+    return None, False
+
+
 def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     try:
         X = np.array(state, dtype=float).reshape(-1)
@@ -255,7 +308,6 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     sign = {s: views[s].sign for s in sides}
     normal = {s: views[s].normal for s in sides}
     jump = {s: views[s].jump for s in sides}  # v+ = D v, the law of the stop hit
-    on_stop = {s: _ON_STOP * max(1.0, abs(level[s])) for s in sides}
     t_end = periods * TWO_PI / osc.omega
     dt_sample = TWO_PI / osc.omega / int(samples_per_period)
     times, vels, phases, states, hits = [], [], [], [], []
@@ -265,25 +317,17 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     status = SimulationStatus.COMPLETED
     v_scale = 0.0
 
+    last: str | None = None  # the stop of the impact that starts this flight
     while True:
-        # on a stop (within rounding), not moving away from it: sign s >= sign c, sign s' >= 0
-        pos = {s: float(normal[s] @ X[:n]) for s in sides}
-        vel = {s: float(normal[s] @ X[n:]) for s in sides}
-        on = [s for s in sides if sign[s] * (pos[s] - level[s]) >= -on_stop[s]
-              and sign[s] * vel[s] >= 0]
-        into = [s for s in on if sign[s] * vel[s] > 0]
-        hit: tuple[float, np.ndarray, str] | None
-        if into:  # moving into a stop: impact now
-            hit = (0.0, X.copy(), into[0])
-        elif on and any(sign[s] * float(
-                normal[s] @ flow.state_derivative(0.0, X, phase)[0][n:]) > 0 for s in on):
-            status = SimulationStatus.STICKING  # at rest on the stop, pushed into it
+        hit, resting = _contact_now(flow, X, phase, views, last)
+        if resting:
+            status = SimulationStatus.STICKING  # at rest on a stop, pushed into it
             break
-        else:
-            # a start on the stop at rest that leaves it (R = 0 after every impact): x_j' = 0
-            # there only up to the rounding of the modal transform, which may show a
-            # crossing of the stop a few ulps after the start; it is not an impact
-            after = {s: _ON_STOP * TWO_PI / osc.omega for s in on}
+        if hit is None:
+            # a start on a stop that leaves it (moving away, or at rest pulled away): its
+            # velocity or position is exact only up to rounding, which may show a crossing
+            # of that stop a few ulps after the start; it is not an impact
+            after = {s: _ON_STOP * TWO_PI / osc.omega for s in _touching(X, views, last)}
             hit = next_contact(flow, X, phase, t_end - t_now, after=after)
         flight = hit[0] if hit is not None else t_end - t_now
         if trajectory:
@@ -303,6 +347,9 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         p = views[side].pivot  # s on the stop: x_p = c - sum_{i != p} n_i x_i (n_p = 1)
         X[p] = level[side] - float(np.delete(normal[side], p) @ np.delete(X_minus[:n], p))
         X[n:] = jump[side] @ X_minus[n:]
+        if views[side].restitution == 0.0:  # plastic: s' = 0 exactly, not up to rounding
+            X[n + p] = -float(np.delete(normal[side], p) @ np.delete(X[n:], p))
+        last = side
         times.append(t_now)
         vels.append(v)
         phases.append(phase)

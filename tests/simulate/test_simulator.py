@@ -9,6 +9,7 @@ import pytest
 import scipy.linalg
 from scipy.optimize import brentq
 
+import impactcont as ic
 from impactcont import Flow, ParameterError, SimulationStatus, periodic_orbits, simulate
 from impactcont.orbit.extrema import interior_maxima, sample_times
 
@@ -115,3 +116,91 @@ def test_plastic_impact_motion_is_followed(paper):
     np.testing.assert_allclose(np.diff(res.impact_times), orbit.period, rtol=1e-12)
     np.testing.assert_allclose(res.impact_velocities, orbit.impact_velocity, rtol=1e-10)
 
+
+
+def _impact_damper(**changes):
+    """The impact damper of issue 28: a free ball (mass 2) in a clearance |x2 - x1| <= 1."""
+    osc = ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0], R=0.8,
+                              b=1.0, omega=1.5, eta=0.05,
+                              stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+    return osc.replace(**changes)
+
+
+def _extra_plastic_stop():
+    """The ball held by extra stops on x2 - x1 (A plastic), mass 1 under a far frame stop."""
+    return ic.ImpactOscillator(
+        M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0], R=0.8, b=3.0, omega=1.5,
+        eta=0.05, stops=ic.Stops(extra=(
+            ic.Stop("A", mass=2, relative_to=1, gap=1.0, restitution=0.0),
+            ic.Stop("B", mass=2, relative_to=1, gap=1.0, side=-1, restitution=0.5))))
+
+
+@pytest.mark.parametrize("make", [
+    lambda: _impact_damper(R=0.0), lambda: _impact_damper(R=0.0, omega=0.7),
+    _extra_plastic_stop], ids=["damper", "damper-slow", "extra-stop"])
+def test_plastic_impact_on_a_clearance_sticks(make):
+    """Issue 28, 1.2: after a plastic impact on x2 - x1 = 1 the relative acceleration
+    ``-x1''`` pushes the ball into the wall: sticking at that impact, never through it (the
+    sticking test used to miss the relative coordinate: COMPLETED, x2 - x1 up to 29.5)."""
+    osc = make()
+    res = simulate(osc, np.array([0, 0, 0, 1.0]), 0.0, 30, trajectory=True)
+    assert res.status is SimulationStatus.STICKING
+    assert res.impact_times.size == 1 and res.final_time == res.impact_times[0]
+    assert np.max(res.X[:, 1] - res.X[:, 0]) <= 1.0 + 1e-12
+    X = res.final_state
+    assert X[3] - X[2] == 0.0  # the plastic impact leaves no relative velocity
+    x1_acc = Flow(osc).state_derivative(0.0, X, res.final_phase)[0][2]
+    assert -x1_acc > 0  # pushed into the wall: really sticking
+
+
+def test_plastic_impact_with_a_weak_spring_never_passes_the_wall():
+    """Issue 28, 1.2: a weak spring on the ball; x2 - x1 overshot to 1.78 before STICKING."""
+    osc = _impact_damper(R=0.0, K=np.diag([1.0, 0.01]))
+    res = simulate(osc, np.array([0, 0, 0, 1.0]), 0.0, 30, trajectory=True)
+    s = res.X[:, 1] - res.X[:, 0]
+    assert np.max(np.abs(s)) <= 1.0 + 1e-12
+    assert res.status is SimulationStatus.STICKING
+    assert res.final_time == res.impact_times[-1]
+
+
+def test_wedge_contact_after_an_impact_is_searched_not_assumed():
+    """Issue 28, 1.5: an A impact (on x1 - x2) leaves x1 9e-13 below U (x1 = b), moving up
+    at 7.07e-7 and slowing (x1'' = -0.1): the U contact is 1.41e-6 later at 5.66e-7, not at
+    the A instant at 7.07e-7 (the 1e-12 on-stop allowance took it for a contact). Witness:
+    the closed-form flow of the two uncoupled masses in 40-digit mpmath."""
+    mp = pytest.importorskip("mpmath")
+    mp.mp.dps = 40
+    k1, k2, f2, om, b, c, r_a = 0.1, 1.0, 0.01, 1.3, 1.0, 0.5, 0.5
+    osc = ic.ImpactOscillator(M=np.eye(2), K=np.diag([k1, k2]), F=[0.0, f2], R=0.9, b=b,
+                              omega=om, stops=ic.Stops(extra=(
+                                  ic.Stop("A", mass=1, relative_to=2, gap=c, restitution=r_a),)))
+    w1, w2, p = mp.sqrt(k1), mp.sqrt(k2), mp.mpf(f2) / (k2 - om**2)
+
+    def flow(x1, v1, x2, v2, d, t):  # x1'' = -k1 x1, x2'' = -k2 x2 + f2 cos(om t + d)
+        h, hv = x2 - p * mp.cos(d), v2 + p * om * mp.sin(d)
+        return (x1 * mp.cos(w1 * t) + v1 / w1 * mp.sin(w1 * t),
+                -x1 * w1 * mp.sin(w1 * t) + v1 * mp.cos(w1 * t),
+                h * mp.cos(w2 * t) + hv / w2 * mp.sin(w2 * t) + p * mp.cos(om * t + d),
+                -h * w2 * mp.sin(w2 * t) + hv * mp.cos(w2 * t) - p * om * mp.sin(om * t + d))
+
+    # the state just before the A impact, 0.7 after the start: x1 = b - 9e-13
+    u, x1 = mp.mpf(7.07e-7), b - mp.mpf(9e-13)
+    start = flow(x1, 0.3 + u, x1 - c, -0.1 + u, mp.mpf(0.3), mp.mpf(-0.7))
+    X0 = np.array([float(start[0]), float(start[2]), float(start[1]), float(start[3])])
+    d0 = 0.3 - om * 0.7
+    Y = [mp.mpf(X0[0]), mp.mpf(X0[2]), mp.mpf(X0[1]), mp.mpf(X0[3]), mp.mpf(d0)]
+    t_a = mp.findroot(lambda t: (lambda y: y[0] - y[2] - c)(flow(*Y, t)), mp.mpf(0.7))
+    y1, v1, y2, v2 = flow(*Y, t_a)
+    kick = (1 + r_a) * (v1 - v2) / 2  # the two-body law, equal masses
+    after = (y1, v1 - kick, y2, v2 + kick, Y[4] + om * t_a)
+    t_u = mp.findroot(lambda t: flow(*after, t)[0] - b, (mp.mpf(0), after[1] / k1),
+                      solver="anderson")
+    v_u = flow(*after, t_u)[1]
+    assert 1e-6 < t_u < 2e-6 and 0.7 < v_u / after[1] < 0.9  # the witness: a later, slower U
+
+    res = simulate(osc, X0, d0, 1.0, max_impacts=2)
+    assert res.impact_stops == "AU"
+    assert res.impact_times[0] == pytest.approx(float(t_a), abs=1e-12)
+    # the delay is fixed by a clearance of 9e-13 against rounding of ~1e-16 (time ~2e-10)
+    assert res.impact_times[1] - res.impact_times[0] == pytest.approx(float(t_u), rel=1e-3)
+    assert res.impact_velocities[1] == pytest.approx(float(v_u), rel=1e-3)
