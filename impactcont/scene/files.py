@@ -16,9 +16,11 @@ or with plain ``xarray.open_datatree(path)`` (``docs/outputs.md``).
 
 from __future__ import annotations
 
+import contextlib
 import datetime
+import logging
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -28,10 +30,97 @@ from impactcont.dataset import load, save
 from impactcont.dataset.io import SECTION_ATTRIBUTE
 from impactcont.dataset.schema import CONVENTIONS, validate_branch_dataset
 
-__all__ = ["KIND_ATTRIBUTE", "SceneOutput", "read_output", "write_output"]
+try:  # POSIX; elsewhere a run takes no lock (logged)
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["KIND_ATTRIBUTE", "LOCK_FILE", "OutputInUseError", "SceneOutput", "output_lock",
+           "read_output", "write_output"]
+
+log = logging.getLogger(__name__)
 
 #: Root attribute naming the section a file holds.
 KIND_ATTRIBUTE = SECTION_ATTRIBUTE
+
+#: The lock file a scene run holds in its output folder (removed when the run ends).
+LOCK_FILE = ".impactcont-run.lock"
+
+
+class OutputInUseError(BlockingIOError):
+    """Another scene run holds the output folder (:func:`output_lock`)."""
+
+
+def _holder(fd: int) -> str:
+    """The pid the holder of the lock file wrote into it, as text."""
+    try:
+        text = os.pread(fd, 64, 0).decode("ascii", "replace").strip()
+    except OSError:
+        text = ""
+    return f"pid {text}" if text.isdigit() else "pid unknown"
+
+
+@contextlib.contextmanager
+def output_lock(directory: str | os.PathLike) -> Iterator[Path]:
+    """Hold an exclusive lock on a scene run's output folder while the run writes into it.
+
+    Two runs into one folder would mix their files (a ``branches.nc`` of one beside the
+    ``summary.md`` of the other). The lock is ``fcntl.flock`` on :data:`LOCK_FILE` inside
+    the folder, taken without waiting; the file holds the run's pid and is removed when
+    the run ends (the operating system releases the lock of a killed run, and the next
+    run takes the file over).
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        The output folder (it must exist).
+
+    Yields
+    ------
+    pathlib.Path
+        The lock file.
+
+    Raises
+    ------
+    OutputInUseError
+        Another process holds the folder; the message names the folder and that run's pid.
+    """
+    path = Path(directory) / LOCK_FILE
+    if fcntl is None:  # pragma: no cover - Windows
+        log.debug("no fcntl: the output folder %s is not locked", directory)
+        yield path
+        return
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = _holder(fd)
+            os.close(fd)
+            raise OutputInUseError(
+                f"output folder {str(directory)!r} is in use by another scene run ({holder}, "
+                f"lock file {str(path)!r}): two runs into one folder would mix their files; "
+                "wait for that run to end, or give another output folder") from None
+        except BaseException:
+            os.close(fd)
+            raise
+        # the previous holder may have removed the file between our open and our lock:
+        # then we hold a lock on a file nobody else sees; take the one at the path again
+        try:
+            same = os.path.samestat(os.fstat(fd), os.stat(path))
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+        yield path
+    finally:
+        with contextlib.suppress(OSError):
+            path.unlink()  # before the unlock: a waiting run then sees the file gone
+        os.close(fd)  # releases the lock
 
 
 def _version() -> str:

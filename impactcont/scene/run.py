@@ -29,7 +29,7 @@ from typing import Any
 import xarray as xr
 
 from impactcont.dataset.io import atomic_output, check_output_directory
-from impactcont.scene.files import write_output
+from impactcont.scene.files import output_lock, write_output
 from impactcont.scene.plugins import plot_kinds, scene_sections
 from impactcont.scene.schema import Scene, load_scene
 from impactcont.scene.sections import RunContext
@@ -187,6 +187,9 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
     NotADirectoryError, PermissionError, OSError
         The output directory cannot be created or written (checked before
         anything is computed).
+    impactcont.scene.files.OutputInUseError
+        Another scene run writes into the same output directory (the run holds
+        :func:`~impactcont.scene.files.output_lock` on it until it ends).
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene, settings=settings, output=output)
@@ -195,6 +198,13 @@ def run_scene(scene: Scene | str | Path, *, settings: Sequence[str] = (),
                         "load_scene(path, settings=..., output=...)")
     t0 = time.perf_counter()
     out_dir = check_output_directory(scene.output_dir, create=True)  # before any computing
+    with output_lock(out_dir):  # one run per folder: two would mix their files
+        return _run(scene, out_dir, t0, progress=progress, fail_fast=fail_fast)
+
+
+def _run(scene: Scene, out_dir: Path, t0: float, *, progress: bool, fail_fast: bool
+         ) -> RunResult:
+    """The body of :func:`run_scene`, with the output folder held."""
     result = RunResult(scene=scene, output_dir=out_dir)
     sections = scene_sections()
     used = {key: entries for key, entries in scene.sections.items() if entries}

@@ -231,3 +231,49 @@ def test_a_robust_scene_file_keeps_its_1_based_forcing_entry(tmp_path: Path) -> 
     ds = read_output(tmp_path / "o" / "robust.nc").datasets["rb"]
     assert list(json.loads(ds.attrs["vary"])) == ["F[1]"]
     assert ds.attrs["element_indexing"] == "1-based"
+
+
+# -- one run per output folder (issue 28) -----------------------------------------------------
+_HOLD = """
+import sys
+import impactcont.scene.run as run
+write = run.write_output
+
+def held(*args, **kwargs):
+    print("running", flush=True)
+    sys.stdin.readline()  # until the test lets it go on
+    return write(*args, **kwargs)
+
+run.write_output = held
+print(run.run_scene(sys.argv[1], output=sys.argv[2]).ok, flush=True)
+"""
+
+
+def test_two_runs_into_one_folder_do_not_mix(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    from impactcont.scene.files import LOCK_FILE, OutputInUseError
+
+    scene, out = write(tmp_path, ORBITS_SCENE), tmp_path / "o"
+    other = subprocess.Popen([sys.executable, "-c", _HOLD, str(scene), str(out)],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                             cwd=Path(__file__).resolve().parents[2])
+    try:
+        assert other.stdout.readline() == "running\n"  # it holds the folder, mid-run
+        with pytest.raises(OutputInUseError) as info:
+            run_scene(scene, output=out)
+        text = str(info.value)
+        assert str(out) in text and f"pid {other.pid}" in text, text
+        assert not (out / "summary.md").exists()  # the refused run wrote nothing
+        other.stdin.write("\n")
+        other.stdin.flush()
+        assert other.stdout.readline() == "True\n"
+        assert other.wait(timeout=60) == 0
+    finally:
+        other.kill()
+        other.wait()
+    # released at exit: the folder is free again, and no lock file is left in it
+    assert run_scene(scene, output=out).ok
+    assert sorted(p.name for p in out.iterdir()) == ["orbits.nc", "summary.md"]
+    assert LOCK_FILE.startswith(".")
