@@ -49,9 +49,9 @@ from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
-__all__ = ["branch_linearization", "forced_amplitudes", "frequency_column", "jacobian_product",
-           "jacobian_product_into", "motion_checks", "newton_solve", "omega_partials",
-           "palc_correct", "shooting_system"]
+__all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
+           "jacobian_product", "jacobian_product_into", "motion_checks", "newton_solve",
+           "omega_partials", "palc_correct", "shooting_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -743,6 +743,140 @@ def _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, 
     top, t_top = stop_maximum(times, free, cw, sw, sign * Gam, sign * B, omega, theta, sign,
                               ww, aa, u0, dy, dv, pg, pd, p1, work, np.nan)
     return sign * position - top - sign * level, t_top, capped
+
+
+#: A stop's clearance at an impact state, ``sign (c - n . x)``, is judged against the
+#: rounding of its own evaluation, relative to the motion's size along that coordinate: the
+#: positions at a flight's end come from the flow (modal sums, each exact to a few ulps of
+#: its terms) and ``n . x`` adds one ulp per term, so a clearance above ``-64 eps (|c| + sum
+#: |n_i x_i|)`` cannot be told from 0 (the motion is at its grazing point) and one below it
+#: is a stop crossed. An absolute bound would be wrong at either end of the scale: it would
+#: hide a real crossing on a motion of size 1e-6 and call rounding a crossing at size 1e6.
+_END_ULPS = 64.0
+_EPS = 2.220446049250313e-16
+
+
+@_inner
+def _at_state(x, normal, sign, position):
+    """``(sign (position - normal . x), |position| + sum |normal_i x_i|)``: a stop's clearance
+    at the positions ``x`` (the first ``n`` entries of a state) and the size it is summed
+    from."""
+    s = 0.0
+    size = abs(position)
+    for i in range(normal.size):
+        t = normal[i] * x[i]
+        s += t
+        size += abs(t)
+    return sign * (position - s), size
+
+
+@_inner
+def _same_stop(normal, sign, own_normal, own_sign):
+    """The stop ``(normal, sign)`` is the one an impact with ``(own_normal, own_sign)``
+    hits: the same coordinate met from the same side (two such stops are refused by
+    :meth:`impactcont.model.stops.Stops.check`, so this names one stop)."""
+    same = sign == own_sign
+    for i in range(normal.size):
+        same = same and normal[i] == own_normal[i]
+    return same
+
+
+@_inner
+def _candidate(x, normal, sign, position, own_normal, own_sign):
+    """``(clearance, size, own)`` of one stop at the positions ``x`` (:func:`_at_state`) and
+    whether it is the stop the impact hits (:func:`_same_stop`; its clearance is then
+    not computed)."""
+    if _same_stop(normal, sign, own_normal, own_sign):
+        return 0.0, 0.0, True
+    e, size = _at_state(x, normal, sign, position)
+    return e, size, False
+
+
+@_inner
+def _state_clearance(x, own_normal, own_sign, normal, two_sided, b, b_low, extra_normals,
+                     extra_signs, extra_positions):
+    """Every stop's clearance at the state ``x`` of an impact on the stop ``(own_normal,
+    own_sign)``, but that stop's own (0 by construction): ``(clearance, stop, tol)``, the
+    smallest clearance, which stop has it (0: U, 1: L, ``2 + i``: extra stop i; -1 and
+    ``+inf`` when no other stop exists) and the rounding ``tol`` of that clearance
+    (:data:`_END_ULPS`): a clearance below ``-tol`` is a stop crossed at the impact.
+
+    The U and L of ``s = normal . x`` sit at ``s = b`` (met with ``s' > 0``) and ``s =
+    -b_low`` (met with ``s' < 0``); the opposite side of the impact's own coordinate is
+    checked as any other stop.
+    """
+    best = np.inf
+    which = -1
+    tol = 0.0
+    for i in range(extra_signs.size + 2):
+        if i == 0:
+            e, size, own = _candidate(x, normal, 1.0, b, own_normal, own_sign)
+        elif i == 1:
+            if not two_sided:
+                continue
+            e, size, own = _candidate(x, normal, -1.0, -b_low, own_normal, own_sign)
+        else:
+            e, size, own = _candidate(x, extra_normals[i - 2], extra_signs[i - 2],
+                                      extra_positions[i - 2], own_normal, own_sign)
+        if own:
+            continue
+        if which < 0 or e < best:
+            best = e
+            which = i
+            tol = _END_ULPS * _EPS * size
+    return best, which, tol
+
+
+@_jit
+def end_clearances(normal, two_sided, b, b_low, normals, signs, extra_normals, extra_signs,
+                   extra_positions, starts, arrivals):
+    """Every stop's clearance at both ends of every flight (the impact states).
+
+    The search of eq. (16) looks at the interior extrema of each stop coordinate; a
+    coordinate still moving towards a stop when the flight ends on another stop has
+    none there. Here flight k is checked at its start ``starts[k]`` (just after impact
+    k) against every stop but the one impact k hits, and at its end ``arrivals[k]``
+    (just before impact ``k + 1``) against every stop but the one impact ``k + 1`` hits.
+    Positions do not jump at an impact, so both ends see the same positions of an impact
+    state (up to the shooting residual); each is computed from its own flight, so that
+    the smallest clearance over a flight, interior extrema and ends, changes
+    continuously as an extremum leaves the flight through an end (the GR test function).
+
+    Parameters
+    ----------
+    normal, two_sided, b, b_low
+        The stop coordinate of U and L and their positions (``s = b``, ``s = -b_low``).
+    normals, signs : ndarray, shape (p, n), (p,)
+        The stop coordinate and side of each impact's stop (which is skipped there).
+    extra_normals, extra_signs, extra_positions : ndarray, shape (q, n), (q,), (q,)
+        The further stops.
+    starts, arrivals : ndarray, shape (p, 2n)
+        ``X_k`` just after impact k and ``X_k^-`` at the end of flight k.
+
+    Returns
+    -------
+    tuple
+        ``(gap, stop, tol)``, each shape (p, 2): column 0 the start of flight k, column 1
+        its end; ``stop`` 0 (U), 1 (L), ``2 + i`` (extra stop i) or -1 (no other stop,
+        gap ``+inf``); ``tol`` the rounding of each gap (:func:`_state_clearance`).
+    """
+    p = signs.size
+    gap = np.full((p, 2), np.inf)
+    stop = np.full((p, 2), -1, dtype=np.int64)
+    tol = np.zeros((p, 2))
+    for k in range(p):
+        nxt = (k + 1) % p
+        g, s, t = _state_clearance(starts[k], normals[k], signs[k], normal, two_sided, b,
+                                   b_low, extra_normals, extra_signs, extra_positions)
+        gap[k, 0] = g
+        stop[k, 0] = s
+        tol[k, 0] = t
+        g, s, t = _state_clearance(arrivals[k], normals[nxt], signs[nxt], normal, two_sided,
+                                   b, b_low, extra_normals, extra_signs, extra_positions)
+        gap[k, 1] = g
+        stop[k, 1] = s
+        tol[k, 1] = t
+    return gap, stop, tol
 
 
 @_jit

@@ -49,6 +49,7 @@ from impactcont.kernel.shooting import (
     _max_abs,
     _solve,
     _stop_clearance,
+    end_clearances,
     jacobian_product_into,
     shooting_system,
     unknowns_scale,
@@ -160,7 +161,9 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     The contact check (eq. 16) searches every flight against both stops U, L of the stop
     coordinate ``normal`` and against each further stop (``extra_normals`` (q, n),
     ``extra_signs``, ``extra_positions`` (q,)), as
-    :func:`impactcont.kernel.shooting.motion_checks` does; the gap is the smallest of all.
+    :func:`impactcont.kernel.shooting.motion_checks` does, and checks every stop at both
+    ends of every flight but the stop hit there (:func:`_end_gap`); the gap is the
+    smallest of all.
 
     Writes the grid point `point` (flat index) of the output arrays; returns
     ``(physical, capped)``.
@@ -231,6 +234,13 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
                 break
         if not gap > 0.0:  # NaN included
             physical = False
+        ends, crossed = _end_gap(normal, two_sided, b, b_low, full_normals, signs,
+                                 extra_normals, extra_signs, extra_positions, sh[2], sh[3],
+                                 flights, symmetric)
+        if gap == gap:  # a NaN gap (not searchable) stays NaN
+            gap = min(gap, ends)
+        if crossed:
+            physical = False
     else:
         gap = np.nan
         physical = False
@@ -251,6 +261,35 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
     elif admits:
         out_asym[point] = 0.0
     return physical, capped
+
+
+@_inner
+def _end_gap(normal, two_sided, b, b_low, full_normals, signs, extra_normals, extra_signs,
+             extra_positions, starts, arrivals, flights, symmetric):
+    """Every stop's clearance at both ends of every flight, as
+    :func:`impactcont.kernel.shooting.end_clearances` (the second half of a symmetric
+    motion the mirror image of the first): ``(smallest clearance, crossed)``, ``crossed``
+    when an end is past a stop by more than the rounding of its clearance."""
+    p = signs.size
+    m = starts.shape[1]
+    full_starts = np.empty((p, m))
+    full_arrivals = np.empty((p, m))
+    for k in range(p):
+        q = k % flights
+        sign = 1.0 if (k < flights or not symmetric) else -1.0
+        for c in range(m):
+            full_starts[k, c] = sign * starts[q, c]
+            full_arrivals[k, c] = sign * arrivals[q, c]
+    gap, _, tol = end_clearances(normal, two_sided, b, b_low, full_normals, signs,
+                                 extra_normals, extra_signs, extra_positions, full_starts,
+                                 full_arrivals)
+    smallest = np.inf
+    crossed = False
+    for k in range(p):
+        for end in range(2):
+            smallest = min(smallest, gap[k, end])
+            crossed = crossed or gap[k, end] < -tol[k, end]
+    return smallest, crossed
 
 
 @_inner

@@ -798,6 +798,9 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
                                                                         times_x[k, i - 1])
                 if gap < gaps[k]:
                     gaps[k], gap_times[k], nearest[k] = gap, when, s
+    interior = gaps.copy()  # the interior extrema's part (eq. 16): a crossing iff <= 0
+    if checks:
+        _end_checks(sh, geo, pattern, gaps, gap_times, nearest, reasons)
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
     velocities = h2[np.arange(-1, p - 1)] * geo.signs
     for k in range(p):
@@ -806,7 +809,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
                 pattern[k], f"stop {pattern[k]!r}")
             reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, "
                            f"{_coordinate(geo.normals[k])} does not arrive towards {side}")
-        if checks and not gaps[k] > 0:
+        if checks and not interior[k] > 0:
             who = (_coordinate(geo.normal) if nearest[k] in (UPPER, LOWER)
                    else f"{_coordinate(geo.extra_normals[geo.extra_names.index(nearest[k])])}"
                    f" (stop {nearest[k]!r})")
@@ -822,6 +825,50 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
         flight_gap_lower=gaps_low, condition_number=condition_number,
         error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "")
+
+
+def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,
+                gap_times: np.ndarray, nearest: list[str], reasons: list[str]) -> None:
+    """Every stop's clearance at both ends of every flight (the impact states), folded into
+    the per-flight gaps (`gaps`, `gap_times`, `nearest`, in place) and the reasons.
+
+    :func:`impactcont.kernel.shooting.end_clearances`: the start of flight k against every
+    stop but impact k's, its end against every stop but impact ``k + 1``'s. A clearance
+    smaller than the flight's interior one becomes its gap, at time 0 or ``tau_k``, so
+    that the GR test function ``min_k gap_min_k`` changes sign where a stop coordinate
+    reaches its stop exactly at another stop's impact. An impact state past a stop by
+    more than the rounding of its clearance (relative to the motion's size there,
+    :data:`impactcont.kernel.shooting._END_ULPS`) makes the motion not physical, once per
+    impact, naming the coordinate and the stop.
+    """
+    p = len(pattern)
+    end_gap, end_stop, end_tol = _kernel().end_clearances(
+        geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
+        geo.extra_signs, geo.extra_positions, sh.starts, sh.arrivals)
+    names = (UPPER, LOWER, *geo.extra_names)
+    crossed: dict[int, tuple[float, int, int, int]] = {}  # impact -> (gap, stop, flight, end)
+    for k in range(p):
+        if not float(sh.flight_times[k]) > 0:
+            continue
+        for end in (0, 1):
+            gap, stop = float(end_gap[k, end]), int(end_stop[k, end])
+            if stop < 0:
+                continue
+            if gap < gaps[k]:
+                gaps[k] = gap
+                gap_times[k] = 0.0 if end == 0 else float(sh.flight_times[k])
+                nearest[k] = names[stop]
+            impact = (k + end) % p
+            if gap < -float(end_tol[k, end]) and (impact not in crossed
+                                                  or gap < crossed[impact][0]):
+                crossed[impact] = (gap, stop, k, end)
+    for impact in sorted(crossed):
+        gap, stop, k, end = crossed[impact]
+        normal = geo.normal if stop < 2 else geo.extra_normals[stop - 2]
+        where = (f"the end of flight {k}: it meets stop {names[stop]!r} before stop "
+                 f"{pattern[impact]!r}" if end == 1 else f"the start of flight {k}")
+        reasons.append(f"impact {impact} (stop {pattern[impact]!r}): {_coordinate(normal)} is "
+                       f"past stop {names[stop]!r} (clearance {gap:.3g}) at {where}")
 
 
 def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
