@@ -66,6 +66,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import GAP, model_parameter
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.vocabulary import CURVE_KINDS, ELEMENT_FAMILIES, PARAMETERS
 
@@ -279,6 +280,136 @@ def _parameter(value: Any, ds: xr.Dataset, osc: Any) -> None:
         raise ValueError(f"attribute 'parameter' = {value!r} names no variable of the "
                          f"dataset; allowed: a parameter with its column, one of "
                          f"{[str(k) for k in ds.variables if k in PARAMETERS]}")
+    _finite_parameters(ds, value)
+
+
+def _finite_parameters(ds: xr.Dataset, parameter: str) -> None:
+    """The parameters that label the points of a branch (``omega``, ``b``, ``parameter``)
+    are finite at every point: a point without its parameter is no point of the branch
+    (``continuation_from`` and ``extend`` would start from it, or carry it on). Other
+    columns may hold NaN (a multiplier not computed, ``gap_min`` ``+inf``: docs/dataset.md).
+    """
+    for name in dict.fromkeys(("omega", "b", parameter)):
+        var = ds.variables.get(name)
+        if var is None or var.dims != ("point",) or var.dtype.kind != "f":
+            continue
+        values = np.asarray(var.values)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            what = "the continued parameter" if name == parameter else "a parameter"
+            raise ValueError(
+                f"variable {name!r} ({what}, a coordinate of the points) must be finite at "
+                f"every point; got {values[bad[0]]} at point {int(bad[0])} ({bad.size} "
+                f"point{'s' if bad.size > 1 else ''} not finite): the branch is corrupt; "
+                f"drop those points (ds.isel(point=...)) or compute the branch again")
+
+
+def _pattern(value: Any, ds: xr.Dataset, osc: ImpactOscillator | None) -> None:
+    pattern = check_pattern_attribute(value, impacts_attribute(ds),
+                                      None if osc is None else osc.stops.two_sided,
+                                      extra="" if osc is None else extra_stop_names(osc))
+    if osc is not None:
+        _pattern_of_states(pattern, ds, osc)
+
+
+# The state right after an impact is on its stop to rounding (the stop position is set,
+# not solved for); another stop is a finite distance away.
+_ON_STOP_RTOL = 1e-8
+
+
+def _stored_states(ds: xr.Dataset) -> tuple[str, np.ndarray] | None:
+    """The states right after each impact, ``(variable, array (point, impact, 2n))``: the
+    variable ``state_k`` of an N-p branch, ``state`` of an N-1 one; None if not stored so."""
+    var = ds.variables.get("state_k")
+    if var is not None and var.dims == ("point", "impact", "component"):
+        name = "state_k"
+    elif "impact" not in ds.dims and ds.variables.get("state") is not None \
+            and ds.variables["state"].dims == ("point", "component"):
+        name, var = "state", ds.variables["state"]
+    else:
+        return None
+    if var.dtype.kind not in "iuf":
+        return None
+    values = np.asarray(var.values, dtype=float)
+    return name, values if values.ndim == 3 else values[:, None, :]
+
+
+def _stop_positions(ds: xr.Dataset, osc: ImpactOscillator, letters: str, npoints: int
+                    ) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
+    """``{letter: (normal, position at each point, coordinate text)}`` of each stop, its
+    position moving with the continued parameter where that is a stop's position."""
+    rates: dict[str, float] = {}
+    lam = lam0 = None
+    parameter = ds.attrs.get("parameter")
+    var = ds.variables.get(parameter) if isinstance(parameter, str) else None
+    if var is not None and var.dims == ("point",):
+        try:
+            mp = model_parameter(osc, parameter)
+        except (ValueError, TypeError):
+            mp = None
+        if mp is not None and mp.data == GAP:
+            rates = {UPPER: mp.upper, LOWER: mp.lower, **dict(mp.extra)}
+            lam, lam0 = np.asarray(var.values, dtype=float), mp.value(osc)
+    out = {}
+    for letter in letters:
+        stop = osc.stops.stop(letter, osc.M, osc.b, osc.R)
+        position = np.full(npoints, stop.position)
+        if lam is not None and rates.get(letter, 0.0):
+            position = stop.position + rates[letter] * (lam - lam0)
+        text = (osc.stops.coordinate if letter in (UPPER, LOWER)
+                else osc.stops.extra_stop(letter).coordinate)
+        out[letter] = (stop.normal, position, text)
+    return out
+
+
+def _pattern_of_states(pattern: str, ds: xr.Dataset, osc: ImpactOscillator) -> None:
+    """The stop each stored impact state is on is the stop its letter of ``pattern`` names.
+
+    Raises
+    ------
+    ValueError
+        A state right after impact k is not on the stop ``pattern[k]`` (a pattern edited
+        from ``UL`` to ``LU`` would make ``continuation_from`` converge to another motion),
+        naming the attribute, its value and the pattern the states say.
+    """
+    stored = _stored_states(ds)
+    if stored is None:
+        return
+    name, states = stored
+    n = osc.n
+    if states.shape[1] != len(pattern) or states.shape[2] != 2 * n:
+        return  # a misshapen variable: the schema's to report
+    stops = _stop_positions(ds, osc, osc.stops.names, states.shape[0])
+
+    def distance(k: int, letter: str) -> np.ndarray:
+        normal, position, _ = stops[letter]
+        s = states[:, k, :n] @ normal
+        return np.abs(s - position) / (1.0 + np.abs(position) + np.abs(s))
+
+    said = []
+    first = None
+    for k, letter in enumerate(pattern):
+        d = distance(k, letter)
+        known = np.isfinite(d)
+        off = np.flatnonzero(known & (d > _ON_STOP_RTOL))
+        on = [other for other in osc.stops.names
+              if known.any() and np.all(distance(k, other)[known] <= _ON_STOP_RTOL)]
+        said.append(on[0] if on else "?")
+        if off.size and first is None:
+            first = (k, letter, int(off[0]))
+    if first is None:
+        return
+    k, letter, i = first
+    normal, position, text = stops[letter]
+    s = float(states[i, k, :n] @ normal)
+    data = "".join(said)
+    allowed = (f"{data!r} (another pattern would be another motion)" if "?" not in data
+               else "none ('?': a state on no stop of the oscillator; the file is corrupt)")
+    raise ValueError(
+        f"attribute 'pattern' = {pattern!r} contradicts the states stored (variable "
+        f"{name!r}): right after impact {k} the motion is at {text} = {s:.6g}, not on the "
+        f"stop {letter!r} ({text} = {float(position[i]):.6g}) (point {i}); the states say "
+        f"{data!r}; allowed: {allowed}")
 
 
 def _parameters(value: Any, ds: xr.Dataset, osc: Any) -> None:
@@ -456,9 +587,7 @@ _CHECKS: dict[str, Callable[[Any, xr.Dataset, Any], Any]] = {
     "kind": _curve_kind,
     "options": lambda v, ds, osc: _json_object("options", v),
     "impacts": lambda v, ds, osc: impacts_attribute(ds),
-    "pattern": lambda v, ds, osc: check_pattern_attribute(
-        v, impacts_attribute(ds), None if osc is None else osc.stops.two_sided,
-        extra="" if osc is None else extra_stop_names(osc)),
+    "pattern": lambda v, ds, osc: _pattern(v, ds, osc),
     "vary": _vary,
     "nominal": _nominal,
     "argmax": lambda v, ds, osc: _json_object("argmax", v),

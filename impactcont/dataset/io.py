@@ -1193,21 +1193,46 @@ def _normalise(ds: xr.Dataset) -> xr.Dataset:
     return normalise_dataset(ds)
 
 
-def open_lazy(path: str | os.PathLike, *,
+def _groups(path: Path) -> tuple[list[str], dict[str, Any], bool]:
+    """The groups of the file ``path`` holding variables (paths without the leading ``/``,
+    nested ones ``a/b``), its root attributes, and whether its root holds data other than
+    the index of a file of groups."""
+    import netCDF4
+
+    with chunk_cache(), netCDF4.Dataset(path, "r") as nc:
+        names: list[str] = []
+        todo = list(nc.groups.values())
+        while todo:
+            group = todo.pop(0)
+            if group.variables:
+                names.append(group.path.lstrip("/"))
+            todo[:0] = list(group.groups.values())
+        attrs = {key: nc.getncattr(key) for key in nc.ncattrs()}
+        root_data = bool(set(nc.variables) - set(_INDEX))
+    return names, attrs, root_data
+
+
+def open_lazy(path: str | os.PathLike, *, group: str | None = None,
               on_close: Callable[[], None] | None = None) -> xr.Dataset:
-    """Open a single-dataset file lazily (dask-backed; the file stays open).
+    """Open one dataset of a file lazily (dask-backed; the file stays open).
 
     For results larger than memory, such as big :func:`impactcont.stability_map`
     maps: values are read chunk by chunk when computed, without the NetCDF
     library's chunk cache (:mod:`impactcont.dataset.chunk_cache`: each chunk is
     read once). Needs dask (``pip install 'impactcont[dask]'``). The attributes
-    are checked as by :func:`load`; the schema is not (it would not change what
-    is read). ``close()`` on the dataset (or the end of a ``with`` block) closes
-    the file.
+    are checked as by :func:`load` (with the data they describe: a ``pattern``
+    against the stored states, the parameters finite); the schema is not (it would
+    not change what is read). ``close()`` on the dataset (or the end of a ``with``
+    block) closes the file.
 
     Parameters
     ----------
     path : str or os.PathLike
+    group : str, optional
+        The group to open in a file of groups (:func:`save` of a mapping, a scene's
+        ``<section>.nc``): its name, as listed by the file's ``group_name`` (a leading
+        ``/`` is allowed). Required for such a file, whose root holds only the index of
+        its groups; absent for a file of one dataset.
     on_close : callable, optional
         Called without arguments once the dataset's file is closed (e.g. to remove
         a temporary file).
@@ -1217,17 +1242,46 @@ def open_lazy(path: str | os.PathLike, *,
     FileNotFoundError
         ``path`` does not exist.
     ValueError
-        An attribute impactcont reads is wrong (see :func:`load`).
+        ``path`` is a file of groups and ``group`` is not one of them (the message
+        lists them), ``group`` is given for a file without groups, or an attribute
+        impactcont reads is wrong (see :func:`load`).
     """
     target = _path(path)
     if not target.is_file():
         raise FileNotFoundError(f"path {str(path)!r} does not exist or is not a file")
+    shown = f"file {str(path)!r}"
+    try:
+        names, root_attrs, root_data = _groups(target)
+    except (OSError, RuntimeError) as exc:
+        raise ValueError(f"cannot read {str(path)!r} as NetCDF-4: {exc}") from exc
+    if group is not None:
+        if not isinstance(group, str):
+            raise TypeError(f"group must be a str (a group of the file) or None; got "
+                            f"{type(group).__name__}")
+        name = group.strip("/")
+        if not names:
+            raise ValueError(f"{shown} has no groups (one dataset in its root group): open it "
+                             f"with open_lazy(path); got group={group!r}")
+        if name not in names:
+            raise ValueError(f"{shown} has no group {group!r}; allowed: one of {names}")
+        try:
+            check_file_attributes(root_attrs)
+        except ValueError as exc:
+            raise ValueError(f"{shown}, root group: {exc}") from exc
+        section = root_attrs.get(SECTION_ATTRIBUTE)
+        where = f"{shown}, group {'/' + name!r}"
+    elif names and not root_data:
+        raise ValueError(f"{shown} holds groups {names} (a file of several datasets), not one "
+                         f"dataset: open one lazily with open_lazy(path, group=NAME), or read "
+                         f"them all with impactcont.load(path)")
+    else:
+        name, section, where = None, None, shown
     with chunk_cache():
-        raw = xr.open_dataset(target, engine=ENGINE, auto_complex=True, chunks={})
+        raw = xr.open_dataset(target, group=name, engine=ENGINE, auto_complex=True, chunks={})
     try:
         # a copy: the dataset returned closes `raw` (the variables joined by _normalise
         # are new datasets, which would not close the file)
-        ds = _loaded(raw.copy(), None, False, f"file {str(path)!r}")
+        ds = _loaded(raw.copy(), section, False, where)
     except BaseException:
         raw.close()
         raise

@@ -115,7 +115,18 @@ def test_a_two_sided_branch_must_say_which_stop_each_impact_hit(branch) -> None:
     with pytest.raises(ValueError, match=r"attribute 'pattern' is missing: the oscillator has "
                                          r"a lower stop"):
         at.check_attributes(ds, "branch")
-    at.check_attributes(_with(ds, pattern="L"), "branch")  # the lower stop: allowed now
+    with pytest.raises(ValueError, match=r"'pattern' = 'L' contradicts the states stored "
+                                         r"\(variable 'state'\): right after impact 0 the "
+                                         r"motion is at x1 = \S+, not on the stop 'L' \(x1 = "
+                                         r"-0.5\) \(point 0\); the states say '\?'; "
+                                         r"allowed: none"):
+        at.check_attributes(_with(ds, pattern="L"), "branch")  # x1 = 0: on neither stop
+    state = ds["state"].values.copy()
+    state[:, 0] = -0.5  # x1 = -b_low: on the lower stop
+    on_lower = ds.assign(state=(ds["state"].dims, state, ds["state"].attrs))
+    at.check_attributes(_with(on_lower, pattern="L"), "branch")  # the lower stop: allowed now
+    with pytest.raises(ValueError, match=r"'pattern' = 'U' contradicts.*the states say 'L'"):
+        at.check_attributes(_with(on_lower, pattern="U"), "branch")
 
 
 # -- parameters ------------------------------------------------------------------------------

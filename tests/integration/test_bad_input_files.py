@@ -40,7 +40,8 @@ TWO_SIDED = OSC.replace(stops=Stops(b_low=0.5))
 
 def _np_branch(osc: ic.ImpactOscillator = OSC, N: int = 2, p: int = 2,
                pattern: str | None = None) -> xr.Dataset:
-    """A made-up but consistent N-p branch (flight times summing to 2 pi N / omega)."""
+    """A made-up but consistent N-p branch (flight times summing to 2 pi N / omega, each
+    state on the stop of its letter of the pattern)."""
     cols = _columns(npoints=10)
     period = 2 * np.pi * N / cols["omega"]
     impacts = {"delta_k": np.zeros((10, p)), "impact_velocity_k": np.ones((10, p)),
@@ -48,9 +49,10 @@ def _np_branch(osc: ic.ImpactOscillator = OSC, N: int = 2, p: int = 2,
                "gap_min_k": np.ones((10, p)), "state_k": np.zeros((10, p, 4))}
     special = {"delta_k": np.zeros((0, p)), "impact_velocity_k": np.zeros((0, p)),
                "flight_time_k": np.zeros((0, p)), "state_k": np.zeros((0, p, 4))}
-    return multi_impact_dataset(parameter="omega", N=N, p=p, oscillator=osc, options={},
-                                columns=cols, impact_columns=impacts, special_points=[],
-                                special_impact_columns=special, pattern=pattern)
+    return _consistent(multi_impact_dataset(
+        parameter="omega", N=N, p=p, oscillator=osc, options={}, columns=cols,
+        impact_columns=impacts, special_points=[], special_impact_columns=special,
+        pattern=pattern))
 
 
 def _tamper(path: Path, group: str | None, **attrs: Any) -> None:
@@ -405,3 +407,100 @@ def test_info_names_a_branch_file_whose_variable_was_dropped(multi_file: Path, c
     err = capsys.readouterr().err
     assert "multi_impact.nc" in err and "stable" in err
     assert "Traceback" not in err and "KeyError" not in err
+
+
+# -- issue 28 item 7: grouped files opened lazily, a pattern against its data, NaN parameters ---
+def _consistent(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` (of :func:`_np_branch`) with each stored state on the stop its letter names."""
+    osc = oscillator_from_dataset(ds)
+    state = ds["state_k"].values.copy()
+    for k, letter in enumerate(pattern_of(ds)):
+        stop = osc.stops.stop(letter, osc.M, osc.b, osc.R)
+        j = stop.pivot
+        state[:, k, j] = stop.position - (state[:, k, :osc.n] @ stop.normal - state[:, k, j])
+    return ds.assign(state_k=(ds["state_k"].dims, state, ds["state_k"].attrs))
+
+
+def test_open_lazy_of_a_file_of_groups_opens_the_group_asked_for(tmp_path: Path) -> None:
+    pytest.importorskip("dask")
+    a, b = _np_branch(), _np_branch(N=3, p=1)
+    path = ic.save({"a": a, "b": b}, tmp_path / "two.nc")
+    with pytest.raises(ValueError, match=r"two\.nc' holds groups \['a', 'b'\].*"
+                                         r"open_lazy\(path, group=NAME\)"):
+        dataset_io.open_lazy(path)
+    with dataset_io.open_lazy(path, group="b") as lazy:
+        assert lazy["state_k"].chunks is not None  # lazy, not read
+        xr.testing.assert_identical(lazy.load(), b)
+    with pytest.raises(ValueError, match=r"group 'c'.*allowed: one of \['a', 'b'\]"):
+        dataset_io.open_lazy(path, group="c")
+    one = ic.save(a, tmp_path / "one.nc")
+    with pytest.raises(ValueError, match=r"one\.nc' has no groups.*got group='a'"):
+        dataset_io.open_lazy(one, group="a")
+    scene = write_output(tmp_path / "multi_impact.nc", "multi_impact", {"m": a}, title="t")
+    with dataset_io.open_lazy(scene, group="/m") as lazy:
+        xr.testing.assert_identical(lazy.load(), a)
+    _tamper(scene, "m", pattern="XX")  # the attributes are checked as by load
+    with pytest.raises(ValueError, match=r"multi_impact\.nc', group '/m': attribute 'pattern'"):
+        dataset_io.open_lazy(scene, group="m")
+
+
+@pytest.mark.parametrize(("osc", "stored", "tampered"), [
+    (TWO_SIDED, "UL", "LU"),
+    (OSC.replace(b=1.0, stops=Stops(mass=2, relative_to=1, mirror=True)), "UL", "LU"),
+    (OSC.replace(stops=Stops(b_low=0.5)), "UU", "LU"),
+])
+def test_a_pattern_that_contradicts_the_stored_states_is_refused(
+        tmp_path: Path, osc: ic.ImpactOscillator, stored: str, tampered: str) -> None:
+    ds = _np_branch(osc, pattern=stored)
+    path = ic.save(ds, tmp_path / "b.nc")
+    xr.testing.assert_identical(ic.load(path), ds)
+    _tamper(path, None, pattern=tampered)
+    for validate in (True, False):
+        with pytest.raises(ValueError, match=rf"b\.nc': attribute 'pattern' = '{tampered}' "
+                                             rf"contradicts the states stored.*the states say "
+                                             rf"'{stored}'"):
+            ic.load(path, validate=validate)
+    with pytest.raises(ValueError, match=rf"'pattern' = '{tampered}' contradicts"):
+        ic.save(ds.assign_attrs(pattern=tampered), tmp_path / "c.nc")
+    assert not (tmp_path / "c.nc").exists()
+
+
+def test_a_pattern_is_checked_where_the_stops_move_with_the_parameter(tmp_path: Path) -> None:
+    ds = _np_branch(TWO_SIDED, pattern="UL")
+    b = np.linspace(0.1, 0.4, ds.sizes["point"])
+    ds = ds.assign_coords(b=("point", b, ds["b"].attrs)).assign_attrs(parameter="b")
+    state = ds["state_k"].values.copy()
+    state[:, 0, 0], state[:, 1, 0] = b, -0.5  # x1 = b on U, x1 = -b_low on L
+    ds = ds.assign(state_k=(ds["state_k"].dims, state, ds["state_k"].attrs))
+    path = ic.save(ds, tmp_path / "b.nc")
+    assert pattern_of(ic.load(path)) == "UL"
+    _tamper(path, None, pattern="LU")
+    with pytest.raises(ValueError, match=r"'LU' contradicts .* impact 0 .*"
+                                         r"the states say 'UL'"):
+        ic.load(path)
+
+
+@pytest.mark.parametrize("name", ["omega", "b"])
+def test_a_branch_file_with_a_nan_parameter_is_refused_naming_the_point(
+        tmp_path: Path, name: str) -> None:
+    path = ic.save(_np_branch(), tmp_path / "b.nc")
+    with netCDF4.Dataset(path, "a") as nc:
+        nc[name][3] = np.nan
+        nc[name][7] = np.nan
+    for validate in (True, False):
+        with pytest.raises(ValueError, match=rf"b\.nc': variable {name!r} .* must be finite "
+                                             rf"at every point; got nan at point 3 \(2 points "
+                                             rf"not finite\)"):
+            ic.load(path, validate=validate)
+    pytest.importorskip("dask")
+    with pytest.raises(ValueError, match=rf"variable {name!r} .* got nan at point 3"):
+        dataset_io.open_lazy(path)
+
+
+def test_nan_in_a_physical_quantity_of_a_branch_still_loads(tmp_path: Path) -> None:
+    ds = _np_branch()
+    for key in ("impact_velocity", "gap_min", "spectral_radius", "delta"):
+        values = ds[key].values.copy()
+        values[2] = np.nan
+        ds[key] = (ds[key].dims, values, ds[key].attrs)
+    xr.testing.assert_identical(ic.load(ic.save(ds, tmp_path / "b.nc")), ds)
