@@ -148,3 +148,39 @@ def test_no_required_dependency_called_optional(page):
         if {w.lower() for w in re.findall(r"[\w-]+", sentence)} & required:
             wrong.append(sentence.strip())
     assert not wrong, f"{_rel(page)} calls a required dependency optional: {wrong}"
+
+
+def _project() -> dict:
+    return tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+
+
+def test_citation_file_cites_the_package_and_the_paper():
+    yaml = pytest.importorskip("yaml")
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    assert cff["cff-version"] == "1.2.0"
+    assert cff["type"] == "software"
+    assert cff["title"].startswith("impactcont")
+    assert str(cff["version"]) == _project()["version"]
+    assert cff["license"] == _project()["license"]
+    papers = [ref for ref in cff["references"] if ref["type"] == "article"]
+    assert [a["family-names"] for a in papers[0]["authors"]] == ["Cao", "Shu"]
+    assert "robust stability" in papers[0]["title"].lower()
+    assert "Acta Mechanica Sinica" in papers[0]["journal"]
+
+
+def test_changelog_has_the_current_version_and_an_unreleased_section():
+    text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    headings = re.findall(r"^## \[([^\]]+)\](?: - (\d{4}-\d{2}-\d{2}))?\s*$", text, re.M)
+    assert headings[0] == ("Unreleased", "")
+    versions = [v for v, _date in headings[1:]]
+    assert versions and versions[0] == _project()["version"], versions
+    assert all(date for _v, date in headings[1:]), "a release without its date"
+    assert "keepachangelog.com" in text
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/index.md"])
+def test_citing_section_points_to_the_citation_file(page):
+    text = (ROOT / page).read_text(encoding="utf-8")
+    assert re.search(r"^## Citing\b", text, re.M), f"{page} has no Citing section"
+    section = text.split("## Citing", 1)[1].split("\n## ", 1)[0]
+    assert "CITATION.cff" in section and "Cao" in section and "Shu" in section
