@@ -24,6 +24,7 @@ one passes its reporter on, so nested work counts in one bar.
 
 from __future__ import annotations
 
+import inspect
 import logging
 import sys
 import time
@@ -32,7 +33,8 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Any
 
-__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Progress", "ProgressOption", "Reporter", "reporter"]
+__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Progress", "ProgressOption", "Reporter",
+           "check_progress", "reporter"]
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +79,39 @@ ProgressOption = bool | Callable[[Progress], Any] | None
 """What ``progress=`` accepts: None (a bar on a terminal), True, False or a callable."""
 
 
+def check_progress(progress: Any, argument: str = "progress") -> Any:
+    """The ``progress=`` option, checked before any work: None, a bool or a callable that
+    takes one :class:`Progress` record (its signature is read; one it cannot be read from,
+    a builtin's, is taken on trust).
+
+    Returns
+    -------
+    object
+        `progress`, unchanged.
+
+    Raises
+    ------
+    TypeError
+        Naming `argument`, the value and what is allowed.
+    """
+    if progress is None or isinstance(progress, bool):
+        return progress
+    if not callable(progress):
+        raise TypeError(f"{argument} must be None (a bar when stderr is a terminal), True, "
+                        f"False or a callable taking a Progress record; got {progress!r}")
+    try:
+        signature = inspect.signature(progress)
+    except (TypeError, ValueError):  # a builtin without a signature
+        return progress
+    try:
+        signature.bind(None)
+    except TypeError as exc:
+        raise TypeError(f"{argument} must be a callable taking one Progress record (called as "
+                        f"{argument}(record) at every step); got {progress!r} with signature "
+                        f"{signature} ({exc})") from None
+    return progress
+
+
 def _stderr_is_terminal() -> bool:
     isatty = getattr(sys.stderr, "isatty", None)
     try:
@@ -104,14 +139,13 @@ class Reporter:
     Raises
     ------
     TypeError
-        `progress` is not None, True, False or a callable.
+        `progress` is not None, True, False or a callable taking one record
+        (:func:`check_progress`).
     """
 
     def __init__(self, what: str, progress: ProgressOption = None, *, total: int | None = None,
                  parameter: str | None = None, unit: str = "points") -> None:
-        if not (progress is None or isinstance(progress, bool) or callable(progress)):
-            raise TypeError(f"progress must be None (a bar when stderr is a terminal), True, "
-                            f"False or a callable taking a Progress record; got {progress!r}")
+        check_progress(progress)
         self.what, self.total, self.parameter, self.unit = what, total, parameter, unit
         self.done = 0
         self.value: float | None = None

@@ -15,6 +15,7 @@ import enum
 import math
 import re
 from collections.abc import Iterator, Mapping
+from numbers import Real
 from typing import Any
 
 from impactcont.errors import ParameterError
@@ -33,6 +34,7 @@ __all__ = [
     "Label",
     "Parameter",
     "ParameterTable",
+    "check_bounds",
     "check_damping",
     "check_labels",
     "check_parameter",
@@ -374,3 +376,50 @@ def check_parameter(osc: Any, name: Any, argument: str = "parameter") -> str:
                              f"'gap[A]'); got {name!r}")
     check_damping(osc, name, argument)
     return name
+
+
+def check_bounds(parameter: str, bounds: Any, argument: str = "bounds") -> tuple[float, float]:
+    """`bounds` of a continuation in `parameter`: two finite numbers ``lo < hi`` in its range.
+
+    The one check of every driver's bounds (:func:`impactcont.continuation`,
+    :func:`impactcont.multi_impact_continuation`, the curves); the range that depends on
+    the rest of the oscillator (an element of K, M or C) is checked on top by
+    :meth:`impactcont.model.parameters.ModelParameter.check_bounds`.
+
+    Parameters
+    ----------
+    parameter : str
+        A name of :data:`PARAMETERS` (element names included).
+    bounds : object
+        What the caller gave.
+    argument : str
+        The argument's name in error messages.
+
+    Returns
+    -------
+    (float, float)
+
+    Raises
+    ------
+    ParameterError
+        Not two real numbers; not finite or ``lo >= hi``; outside the parameter's range
+        (:attr:`Parameter.allowed`). The message names `argument` and the value.
+    """
+    pair = None
+    if not isinstance(bounds, (str, bytes, Mapping)):
+        try:
+            pair = tuple(bounds)
+        except TypeError:
+            pair = None
+    if pair is None or len(pair) != 2 or not all(
+            isinstance(v, Real) and not isinstance(v, bool) for v in pair):
+        raise ParameterError(f"{argument} must be two numbers (lo, hi); got {bounds!r}")
+    lo, hi = (float(v) for v in pair)
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ParameterError(f"{argument} must be two finite numbers with lo < hi; got "
+                             f"{bounds!r}")
+    table = PARAMETERS[parameter]
+    if not (table.contains(lo) and table.contains(hi)):
+        raise ParameterError(f"{argument} for {parameter} must lie where {parameter} is "
+                             f"{table.allowed}; got {bounds!r}")
+    return lo, hi

@@ -10,7 +10,7 @@ import pytest
 import impactcont as ic
 import impactcont.progress as progress_module
 from impactcont.analysis.multi_curves import multi_impact_curve
-from impactcont.progress import Progress, Reporter
+from impactcont.progress import Progress, Reporter, check_progress
 
 
 @pytest.fixture(scope="module")
@@ -166,3 +166,21 @@ def test_bad_progress_is_refused(system, bad):
         ic.continuation(system, 1, "omega", (1.4, 2.0), components="start", progress=bad)
     with pytest.raises(TypeError, match="progress must be None"):
         ic.stability_map(system, 1, [1.0, 2.0], [0.0, 0.1], progress=bad)
+
+
+@pytest.mark.parametrize("callback", [lambda: None, lambda a, b: None])
+def test_a_callable_that_cannot_take_the_record_is_refused_by_name(callback) -> None:
+    with pytest.raises(TypeError, match=r"progress must be a callable taking one Progress "
+                                        r"record.*got <function") as info:
+        check_progress(callback)
+    assert "lambda" in str(info.value)
+    with pytest.raises(TypeError, match="progress must be a callable taking one Progress"):
+        Reporter("work", callback)
+
+
+def test_callables_that_take_the_record_pass() -> None:
+    def keyword_default(record, extra=1):
+        return None
+
+    for ok in (print, lambda *args: None, keyword_default, [].append, None, True, False):
+        assert check_progress(ok) is ok

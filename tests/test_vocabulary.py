@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -42,3 +44,17 @@ def test_parameter_ranges():
     assert not vocab.PARAMETERS["omega"].contains(0.0)
     assert vocab.PARAMETERS["R"].contains(1.0) and not vocab.PARAMETERS["R"].contains(1.1)
     assert vocab.PARAMETERS["b"].contains(-3.0)
+
+
+# -- bounds: one check for every driver (issue 28) -------------------------------------------
+@pytest.mark.parametrize(("bounds", "message"), [
+    ("0.5,3", "bounds must be two numbers (lo, hi); got '0.5,3'"),
+    ((0.5, 2.0, 3.0), "bounds must be two numbers (lo, hi); got (0.5, 2.0, 3.0)"),
+    ((2.0, 0.5), "bounds must be two finite numbers with lo < hi; got (2.0, 0.5)"),
+    ((0.5, math.nan), "bounds must be two finite numbers with lo < hi; got (0.5, nan)"),
+    ((-1.0, 2.0), "bounds for omega must lie where omega is finite and > 0; got (-1.0, 2.0)"),
+])
+def test_bounds_are_one_shared_check(bounds, message):
+    with pytest.raises(ic.ParameterError) as info:
+        vocab.check_bounds("omega", bounds)
+    assert str(info.value) == message

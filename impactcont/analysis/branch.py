@@ -49,14 +49,14 @@ from impactcont.detection.special_points import (
     locate_user_events,
     user_values,
 )
-from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import RESTITUTION, model_parameter
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.progress import ProgressOption, Reporter, reporter
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS, PARAMETERS, check_labels
+from impactcont.vocabulary import LABELS, check_bounds, check_labels
 
 __all__ = ["check_continuation_arguments", "continuation", "continuation_from", "extend"]
 
@@ -66,20 +66,6 @@ _DEFAULTS = {"newton_tol": 1e-12}
 """The closed form is exact to rounding: a tighter Newton tolerance than the other drivers'."""
 _EXISTENCE_SCAN = 400
 _SAME_ROOT = 0.05  # rad: a seed this close to a computed point of a component lies on it
-
-
-def _check_bounds(parameter: str, bounds: object) -> tuple[float, float]:
-    """``(lo, hi)`` inside the parameter's allowed range."""
-    try:
-        lo, hi = (float(v) for v in bounds)  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        raise ParameterError(f"bounds must be two numbers (lo, hi); got {bounds!r}") from None
-    table = PARAMETERS[parameter]
-    # order and finiteness: ContinuationOptions says what is allowed
-    if any(math.isfinite(v) and not table.contains(v) for v in (lo, hi)):
-        raise ParameterError(f"bounds for {parameter} must lie where {parameter} is "
-                             f"{table.allowed}; got {bounds!r}")
-    return lo, hi
 
 
 def _refuse_elastic(osc: ImpactOscillator, parameter: str, lo: float, hi: float) -> None:
@@ -163,7 +149,8 @@ def check_continuation_arguments(
     problem = PeriodicBranchProblem(osc, N, parameter)
     if options is not None and "bounds" in getattr(options, "given", ()):
         bounds = options.bounds
-    lo, hi = _check_bounds(parameter, bounds)
+    # the shared check, then both ends on the oscillator (an element of K keeps K PSD)
+    lo, hi = problem.param.check_bounds(osc, bounds)
     _refuse_elastic(osc, parameter, lo, hi)
     opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, **single)
     if components not in ("all", "start"):
@@ -290,12 +277,21 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     N = problem.N
     lam0 = _start_value(problem, (lo, hi), start)
     delta0 = _start_root(problem, lam0, root)
+    record = None
     with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
         runs = [_follow(problem, lam0, delta0, opts, detect, rep, functions)]
         if components == "all":
-            for lam, delta in _component_seeds(problem, (lo, hi)):
-                if not any(_passes(run, lam, delta) for run in runs):
-                    runs.append(_follow(problem, lam, delta, opts, detect, rep, functions))
+            try:
+                for lam, delta in _component_seeds(problem, (lo, hi)):
+                    if not any(_passes(run, lam, delta) for run in runs):
+                        runs.append(_follow(problem, lam, delta, opts, detect, rep, functions))
+            except (ImpactcontError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                # what is computed is kept: the branch ends here, the reason said
+                reason = (f"the search for further components in {parameter} failed "
+                          f"({type(exc).__name__}: {exc}); the branch holds the "
+                          f"{len(runs)} component(s) followed before it")
+                warnings.warn(reason, RuntimeWarning, stacklevel=3)
+                record = {"message": f"{runs[0].result.message}; {reason}"}
     started = [run for run in runs if run.samples]
     for run in runs:
         if not run.samples:  # its corrector failed at the seed: say so, keep the others
@@ -307,7 +303,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         raise NewtonConvergenceError(f"no component of the N={N} branch in {parameter} over "
                                      f"[{lo:.10g}, {hi:.10g}] could be started: "
                                      f"{runs[0].result.message}")
-    return _branch_dataset(problem, osc, opts, detect, started, functions=functions)
+    return _branch_dataset(problem, osc, opts, detect, started, record, functions=functions)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -521,6 +517,38 @@ def _start_row(branch: xr.Dataset, point: Any, label: Any, which: Any) -> tuple[
     return rows[int(which)], True
 
 
+#: The variables a restart reads at its point (those present: N-p branches have the last three).
+_RESTART_VARIABLES = ("omega", "b", "delta", "delta_k", "flight_time_k", "state_k")
+
+
+def _check_finite_row(branch: xr.Dataset, row: int, special: bool) -> None:
+    """Refuse a restart at a point whose values are not finite, naming the file and the point."""
+    parameter = str(branch.attrs["parameter"])
+    names = dict.fromkeys((*_RESTART_VARIABLES, parameter))
+    key = special_variable if special else (lambda name: name)
+    bad = {}
+    for name in names:
+        if key(name) in branch:
+            value = np.asarray(branch[key(name)].values[row], dtype=float)
+            if not np.all(np.isfinite(value)):
+                bad[name] = value
+    if not bad:
+        return
+    source = branch.encoding.get("source")
+    where = f" in {str(source)!r}" if source else ""
+    what = f"special point {row}" if special else f"point {row}"
+    shown = ", ".join(f"{name} = {value.tolist() if value.ndim else float(value)!r}"
+                      for name, value in bad.items())
+    good = [k for k in range(branch.sizes["special" if special else "point"])
+            if all(np.all(np.isfinite(np.asarray(branch[key(n)].values[k], dtype=float)))
+                   for n in bad)]
+    near = sorted(good, key=lambda k: (abs(k - row), k))[:2]
+    hint = f", e.g. {what.split()[0]} {' or '.join(map(str, sorted(near)))}" if near else ""
+    raise ParameterError(f"{what} of the branch{where} has non-finite values ({shown}): a "
+                         f"restart needs the motion there; allowed: a {what.rsplit(' ', 1)[0]} "
+                         f"whose values are all finite{hint}")
+
+
 def _problem_at(branch: xr.Dataset, row: int, special: bool) -> tuple[Any, np.ndarray, float]:
     """The branch's problem at a point (or special point) and the unknowns there."""
     if "impact" in branch.dims:
@@ -710,7 +738,8 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     along = _check_along(along)
     row, special = _start_row(branch, point, label, which)
     parameter = str(branch.attrs["parameter"])
-    lo, hi = _branch_bounds(branch) if bounds is None else _check_bounds(parameter, bounds)
+    _check_finite_row(branch, row, special)
+    lo, hi = _branch_bounds(branch) if bounds is None else check_bounds(parameter, bounds)
     record = {"restart": {"point": None if special else row, "label": label,
                           "which": which if special else None, "along": along}}
     return _restart(branch, row, special, along, (lo, hi), detect, options, single, progress,
@@ -770,7 +799,7 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     functions = _same_user_functions(branch, events, monitors)
     parameter = str(branch.attrs["parameter"])
     old = _branch_bounds(branch)
-    lo, hi = _check_bounds(parameter, bounds)
+    lo, hi = check_bounds(parameter, bounds)
     if not (lo <= old[0] and hi >= old[1] and (lo, hi) != old):
         raise ParameterError(f"bounds must contain the branch's bounds {list(old)} and reach "
                              f"past at least one of them; got {bounds!r}")

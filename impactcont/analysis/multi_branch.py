@@ -61,7 +61,7 @@ from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
-from impactcont.progress import ProgressOption, Reporter, reporter
+from impactcont.progress import ProgressOption, Reporter, check_progress, reporter
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, check_labels
 
@@ -455,16 +455,26 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     Raises
     ------
     ParameterError
-        Bad parameter, bounds not containing the start, unknown labels; bounds in ``b``
+        Bad parameter; bounds not two finite numbers ``lo < hi`` inside the parameter's
+        range and where the oscillator takes the parameter at both ends (checked before
+        computing: an element of K must keep K positive semi-definite,
+        :meth:`~impactcont.model.parameters.ModelParameter.check_bounds`), or not
+        containing the start; unknown labels; bounds in ``b``
         that reach ``-b_low`` (the upper stop would meet the lower one); bad `events` or
         `monitors`, or one of their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         Newton fails at the start.
     """
     orbit = _as_multi(start)
+    check_progress(progress)
     labels = check_labels(detect)
     functions = check_user_functions(events, monitors, reserved_names())
-    model_parameter(orbit.oscillator, parameter)
+    param = model_parameter(orbit.oscillator, parameter)
+    if options is not None and "bounds" in getattr(options, "given", ()):
+        bounds = options.bounds
+    # the drivers' one check (as continuation's): two finite numbers lo < hi in the
+    # parameter's range, and the oscillator at both ends (an element of K keeps K PSD)
+    bounds = param.check_bounds(orbit.oscillator, bounds)
     problem, u0 = branch_problem(orbit, parameter, symmetric)
     lam0 = problem.param.value(orbit.oscillator)
     opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,

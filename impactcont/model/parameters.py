@@ -43,6 +43,7 @@ from impactcont.vocabulary import (
     PARAMETERS,
     STOP_FAMILIES,
     Parameter,
+    check_bounds,
     check_damping,
     damping_kind,
     element_name,
@@ -50,7 +51,7 @@ from impactcont.vocabulary import (
 )
 
 __all__ = ["DAMPING", "FD_RELATIVE_STEP", "FORCING", "FREQUENCY", "GAP", "MASS", "RESTITUTION",
-           "STIFFNESS", "ModelParameter", "chain_elements", "model_parameter"]
+           "STIFFNESS", "ModelParameter", "chain_elements", "entry_range", "model_parameter"]
 
 #: The flight data a parameter changes.
 FREQUENCY = "forcing frequency"
@@ -102,6 +103,7 @@ class ModelParameter:
     lower: float = 0.0
     kernel: int | None = None
     extra: tuple[tuple[str, float], ...] = ()
+    entry: tuple[str, int, int] | None = None
 
     # -- the model ------------------------------------------------------------------------------
     def value(self, osc: ImpactOscillator) -> float:
@@ -109,8 +111,85 @@ class ModelParameter:
         return float(self.get(osc))
 
     def at(self, osc: ImpactOscillator, value: float) -> ImpactOscillator:
-        """`osc` with the parameter set to `value` (validated by the oscillator)."""
-        return self.put(osc, float(value))
+        """`osc` with the parameter set to `value` (validated by the oscillator).
+
+        Raises
+        ------
+        ParameterError
+            The oscillator refuses the value; the message ends with ``(at name = value)``.
+        """
+        try:
+            return self.put(osc, float(value))
+        except ParameterError as exc:
+            raise ParameterError(f"{exc} (at {self.name} = {float(value)!r})") from exc
+
+    def admits(self, osc: ImpactOscillator, value: float) -> bool:
+        """Whether the oscillator takes `value`: in the vocabulary's range and accepted by
+        :class:`~impactcont.model.oscillator.ImpactOscillator` (an element of K keeps K
+        positive semi-definite with its free modes held by stops, one of M keeps M
+        definite, a gap keeps the stops apart, ...)."""
+        if not self.info.contains(value):
+            return False
+        if self.data in (FREQUENCY, RESTITUTION) or (self.data == DAMPING and self.entry is None):
+            return True  # omega > 0, R in [0, 1], a damping coefficient or damper >= 0: all
+        try:
+            self.put(osc, float(value))
+        except ParameterError:
+            return False
+        return True
+
+    def check_bounds(self, osc: ImpactOscillator, bounds: Any, argument: str = "bounds"
+                     ) -> tuple[float, float]:
+        """`bounds` of a continuation from `osc`, checked before anything is computed.
+
+        :func:`~impactcont.vocabulary.check_bounds` (two finite numbers ``lo < hi`` in the
+        parameter's range), then the oscillator at both ends: the values the oscillator
+        takes form an interval, so both ends admitted means every value between is. The
+        constraints are convex in the parameter: K (or C) positive semi-definite and M
+        positive definite are convex cones, whose segment between two members stays in
+        them, with the free modes inside the segment a subspace of those at its ends
+        (``ker((1 - s) A + s B) = ker A ∩ ker B``), so held by the stops that hold them
+        there; the stops' order is linear in a gap. A forcing entry ``F[j]`` is also
+        tried at 0 (F = 0 is no forcing). For an entry of K, M or C the message gives the
+        range over which the matrix stays positive semi-definite (definite for M) with its
+        other entries fixed.
+
+        Returns
+        -------
+        (float, float)
+
+        Raises
+        ------
+        ParameterError
+            Naming `argument`, the value, the end the oscillator refuses and why.
+        """
+        lo, hi = check_bounds(self.name, bounds, argument)
+        ends = (lo, hi, 0.0) if self.data == FORCING and lo < 0.0 < hi else (lo, hi)
+        for value in ends:
+            if self.data == FREQUENCY:
+                break
+            try:
+                self.put(osc, value)
+            except ParameterError as exc:
+                allowed = self._range_text(osc)
+                raise ParameterError(
+                    f"{argument} {bounds!r} for {self.name}: at {self.name} = {value!r} the "
+                    f"oscillator is refused: {exc}; allowed: bounds inside {allowed}") from None
+        return lo, hi
+
+    def _range_text(self, osc: ImpactOscillator) -> str:
+        if self.entry is None:
+            return f"the values the oscillator takes ({self.name} {self.info.allowed})"
+        matrix, i, j = self.entry
+        definite = matrix == "M"
+        low, high = entry_range(getattr(osc, matrix), i, j, definite=definite)
+        if not low <= high:
+            return f"nothing: {matrix} has no value of {self.name} that makes it positive " \
+                   f"{'definite' if definite else 'semi-definite'}"
+        left, right = ("(", ")") if definite else ("[", "]")
+        return (f"{self.name} in {left}{low:.12g}, {high:.12g}"
+                f"{')' if math.isinf(high) else right}, where {matrix} stays positive "
+                f"{'definite' if definite else 'semi-definite'} with its other entries")
 
     def scale(self, osc: ImpactOscillator) -> float:
         """The size on which the parameter acts (its value, or its matrix or vector)."""
@@ -192,14 +271,15 @@ class ModelParameter:
         when they vary on the parameter's scale (measured in ``tests/model/test_parameters.py``).
         Data affine in the parameter (:attr:`affine`: the forcing amplitude) take
         ``h = scale / 2``: no truncation error, rounding only (exact). A side outside the
-        parameter's range (a mass at 0) is not evaluated: the difference is then one-sided
-        (error ``h |f''| / 2``).
+        parameter's range (:meth:`admits`: a mass at 0, an entry of K that would make it
+        indefinite) is not evaluated: the difference is then one-sided (error
+        ``h |f''| / 2``).
         """
         lam = float(lam)
         scale = self.scale(osc)
         h = _AFFINE_STEP * scale if self.affine else FD_RELATIVE_STEP * max(abs(lam), scale)
-        lo = lam - h if self.info.contains(lam - h) else lam
-        hi = lam + h if self.info.contains(lam + h) else lam
+        lo = lam - h if self.admits(osc, lam - h) else lam
+        hi = lam + h if self.admits(osc, lam + h) else lam
         return (np.asarray(f(hi)) - np.asarray(f(lo))) / (hi - lo)
 
 
@@ -273,6 +353,53 @@ def _stop_datum(name: str, family: str, stop: str, osc: ImpactOscillator,
         scale_of=_one, extra=((stop, 1.0),))
 
 
+def _pseudo_inverse(B: np.ndarray) -> tuple[np.ndarray, bool]:
+    """``B^+`` of a symmetric B, and whether B is positive semi-definite (to rounding)."""
+    if B.size == 0:
+        return B, True
+    w, V = np.linalg.eigh(B)
+    tol = 8.0 * B.shape[0] * np.finfo(float).eps * max(1.0, float(np.max(np.abs(w))))
+    inv = np.where(w > tol, 1.0 / np.where(w > tol, w, 1.0), 0.0)
+    return (V * inv) @ V.T, bool(w[0] >= -tol)
+
+
+def entry_range(A: np.ndarray, i: int, j: int, *, definite: bool = False) -> tuple[float, float]:
+    """The values of the entry ``A[i, j] = A[j, i]`` (0-based) that keep the symmetric `A`
+    positive semi-definite, its other entries fixed.
+
+    By the Schur complement on the other rows ``S`` (``B = A[S, S]`` positive
+    semi-definite, ``B^+`` its pseudo-inverse): a diagonal entry needs
+    ``A[i, i] >= b^T B^+ b`` (``b = A[S, i]``), the interval ``[b^T B^+ b, inf)``; an
+    off-diagonal one needs ``(A[i,i] - Q_ii)(A[j,j] - Q_jj) >= (A[i,j] - Q_ij)^2`` with
+    ``Q = P^T B^+ P`` (``P = A[S, (i, j)]``), the interval ``Q_ij -+ sqrt(...)``. With
+    `definite` (M) the same interval, its ends excluded. The interval is empty
+    (``low > high``) when no value of the entry makes `A` so. It serves messages; the
+    oscillator's own check decides (:meth:`ModelParameter.check_bounds`).
+
+    Returns
+    -------
+    (float, float)
+        ``(low, high)``; ``high = inf`` for a diagonal entry.
+    """
+    A = np.asarray(A, dtype=float)
+    idx = [k for k in range(A.shape[0]) if k not in (i, j)]
+    B = A[np.ix_(idx, idx)]
+    Binv, psd = _pseudo_inverse(B)
+    empty = (math.inf, -math.inf)
+    if not psd:
+        return empty
+    if i == j:
+        b = A[idx, i]
+        return float(b @ Binv @ b), math.inf
+    P = A[np.ix_(idx, [i, j])]
+    Q = P.T @ Binv @ P
+    di, dj = A[i, i] - Q[0, 0], A[j, j] - Q[1, 1]
+    if di < 0.0 or dj < 0.0:
+        return empty
+    r = math.sqrt(di * dj)
+    return float(Q[0, 1] - r), float(Q[0, 1] + r)
+
+
 def _pattern(n: int, j: int) -> np.ndarray:
     """The stiffness pattern of element j (1-based) of the chain of eq. (2): between masses
     j and j+1, the last one from mass n to the ground."""
@@ -342,7 +469,7 @@ def _element(name: str, family: str, indices: tuple[int, ...], osc: ImpactOscill
             return o.replace(**{matrix: A})
 
         return ModelParameter(name, info, data, get=lambda o: float(getattr(o, matrix)[i, j]),
-                              put=put_entry, scale_of=scale_of)
+                              put=put_entry, scale_of=scale_of, entry=(matrix, i, j))
     j = indices[0]
     if letter == "m":
         if np.count_nonzero(osc.M - np.diag(np.diag(osc.M))):

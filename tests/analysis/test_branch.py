@@ -357,3 +357,50 @@ def test_bad_arguments_are_refused(branch, switched):
         extend(branch, 4.0)
     with pytest.raises(ParameterError, match="not a branch dataset"):
         extend(branch.drop_vars("delta"), (0.4, 4.0))
+
+
+# -- issue 28: bounds of an element checked up front; a failure keeps what was computed ------
+def test_bounds_of_a_stiffness_entry_are_refused_before_computing(paper_system) -> None:
+    import time
+
+    t0 = time.perf_counter()
+    with pytest.raises(ParameterError) as info:
+        ic.continuation(paper_system, 1, "K[1,1]", (-1, 3))
+    assert time.perf_counter() - t0 < 1.0  # nothing computed (it took 6.6 s to fail)
+    text = str(info.value)
+    assert text.startswith("bounds (-1, 3) for K[1,1]: at K[1,1] = -1.0 the oscillator is "
+                           "refused: K must be positive semi-definite"), text
+    assert "allowed: bounds inside K[1,1] in [0.5, inf), where K stays positive " \
+           "semi-definite with its other entries" in text
+
+
+def test_a_failure_while_searching_components_keeps_the_branch(paper_system, monkeypatch
+                                                               ) -> None:
+    from impactcont.analysis import branch as module
+
+    def failing(problem, bounds):
+        raise ParameterError("K must be positive semi-definite (at K[1,1] = 0.1)")
+
+    monkeypatch.setattr(module, "_component_seeds", failing)
+    with pytest.warns(RuntimeWarning, match="the search for further components in omega "
+                                            "failed .*K must be positive"):
+        ds = ic.continuation(paper_system, 1, "omega", (1.5, 2.0))
+    assert ds.sizes["point"] > 3  # the component through the start is kept
+    message = json.loads(ds.attrs["options"])["message"]
+    assert "the branch holds the 1 component(s) followed before it" in message
+
+
+def test_a_restart_at_a_non_finite_point_names_the_file_and_the_point(
+        branch_b05, tmp_path) -> None:
+    broken = branch_b05.copy(deep=True)
+    broken["delta"].values[4] = np.nan
+    with pytest.raises(ParameterError, match=r"point 4 of the branch has non-finite values "
+                                             r"\(delta = nan\)"):
+        continuation_from(broken, point=4)
+    path = tmp_path / "broken.nc"
+    ic.save(broken, path)
+    loaded = ic.load(path)
+    with pytest.raises(ParameterError) as info:
+        continuation_from(loaded, point=4)
+    assert f"point 4 of the branch in {str(path)!r} has non-finite values" in str(info.value)
+    assert "allowed: a point whose values are all finite, e.g. point 3 or 5" in str(info.value)

@@ -78,3 +78,49 @@ def test_plots_accept_np_branches(branch_n1, branch_22):
     bifurcation_diagram([branch_n1, branch_22])
     with pytest.raises(ValueError, match="y must be one of"):
         impact_diagram(branch_22, y="state")
+
+
+# -- issue 28: the arguments are checked as continuation checks them, before computing --------
+@pytest.fixture(scope="module")
+def damper_ul():
+    """The UL motion of the impact damper of issue 28 (a free ball, K[2,2] = 0, in a cavity)."""
+    D = ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0], R=0.8,
+                            b=1.0, omega=1.5, eta=0.05,
+                            stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+    # the attractor of simulate(D, [0, 0, 0, 1], 0, 150), to 6 digits (Newton refines it)
+    guess = {"delta": -3.053639, "pattern": "UL", "flight_times": [2.094395, 2.094395],
+             "states": [[0.339684, 1.339684, 0.085287, -1.279304],
+                        [-0.339684, -1.339684, -0.085287, 1.279304]]}
+    return ic.multi_impact_orbit(D, 1, 2, guess)
+
+
+@pytest.mark.parametrize(("parameter", "bounds", "message"), [
+    ("omega", "0.5,3", "bounds must be two numbers (lo, hi); got '0.5,3'"),
+    ("omega", (0.5, 2.0, 3.0), "bounds must be two numbers (lo, hi); got (0.5, 2.0, 3.0)"),
+    ("omega", (3.0, 0.5), "bounds must be two finite numbers with lo < hi; got (3.0, 0.5)"),
+    ("R", (0.5, 1.5), "bounds for R must lie where R is in [0, 1]; got (0.5, 1.5)"),
+    ("m2", (-0.5, 1.0), "bounds for m2 must lie where m2 is finite and > 0; got (-0.5, 1.0)"),
+    ("K[2,2]", (-0.1, 0.1), "bounds (-0.1, 0.1) for K[2,2]: at K[2,2] = -0.1 the oscillator is "
+                            "refused: K must be positive semi-definite"),
+])
+def test_bad_bounds_are_refused_before_computing(damper_ul, parameter, bounds, message):
+    with pytest.raises(ic.ParameterError) as info:
+        multi_impact_continuation(damper_ul, parameter, bounds)
+    assert str(info.value).startswith(message), str(info.value)
+
+
+def test_a_progress_callable_without_the_record_is_refused_by_name(damper_ul):
+    with pytest.raises(TypeError, match="progress must be a callable taking one Progress"):
+        multi_impact_continuation(damper_ul, "omega", (1.4, 1.6), progress=lambda: None)
+
+
+def test_a_branch_in_a_stiffness_entry_reaches_the_edge_of_its_range(damper_ul):
+    # K[2,2] = 0 is the edge of K >= 0: the finite difference is one-sided there
+    ds = multi_impact_continuation(damper_ul, "K[2,2]", (0.0, 0.1), progress=False)
+    values = ds["K[2,2]"].values
+    assert values.min() == 0.0 and values.max() == 0.1
+    # from inside, the branch runs down to the edge (it stopped 6e-6 above it)
+    osc = damper_ul.oscillator.replace(K=np.diag([1.0, 0.05]))
+    start = ic.multi_impact_orbit(osc, 1, 2, damper_ul)
+    ds = multi_impact_continuation(start, "K[2,2]", (0.0, 0.1), progress=False)
+    assert ds["K[2,2]"].values.min() == 0.0 and ds["K[2,2]"].values.max() == 0.1

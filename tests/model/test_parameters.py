@@ -402,3 +402,53 @@ def test_parameters_that_do_not_apply_are_refused(name, osc_args, match):
     osc = ic.ImpactOscillator(**{**PAPER, "eta": 0.1, **osc_args})
     with pytest.raises(ic.ParameterError, match=match):
         model_parameter(osc, name)
+
+
+# -- bounds and the finite-difference step inside a parameter's admissible range (issue 28) --
+def _damper() -> ic.ImpactOscillator:
+    """The impact damper of issue 28: a free ball (K[2,2] = 0) in a cavity of mass 1."""
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0], R=0.8,
+                               b=1.0, omega=1.5, eta=0.05,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+def test_the_difference_is_one_sided_at_the_edge_of_a_matrix_entrys_range():
+    osc = _damper()
+    param = model_parameter(osc, "K[2,2]")
+    # K[2,2] < 0 makes K indefinite: the step below 0 is not taken; f is affine, so exact
+    slope = param.difference(lambda v: 3.0 * v + float(param.at(osc, v).K[1, 1]), 0.0, osc)
+    assert slope == pytest.approx(4.0, rel=1e-9)
+    # K[1,1] of the paper's K = [[t, -1], [-1, 2]] is PSD for t >= 1/2 only
+    paper = ic.ImpactOscillator(**PAPER, eta=0.1)
+    edge = model_parameter(paper, "K[1,1]")
+    at_edge = edge.at(paper, 0.5)
+    assert edge.difference(lambda v: v * v, 0.5, at_edge) == pytest.approx(1.0, rel=1e-4)
+
+
+def test_a_refused_value_names_the_parameter_and_the_value():
+    osc = _damper()
+    with pytest.raises(ic.ParameterError, match=r"K must be positive semi-definite.*\(at "
+                                                r"K\[2,2\] = -0\.001\)"):
+        model_parameter(osc, "K[2,2]").at(osc, -0.001)
+
+
+@pytest.mark.parametrize(("parameter", "bounds", "allowed"), [
+    ("K[1,1]", (-1.0, 3.0), "K[1,1] in [0.5, inf)"),     # K = [[t, -1], [-1, 2]]: t >= 1/2
+    ("K[1,2]", (-2.0, 0.0), "K[1,2] in [-1.41421356237, 1.41421356237]"),  # t^2 <= 2
+    ("M[1,2]", (0.0, 1.0), "M[1,2] in (-1, 1)"),          # M = [[1, t], [t, 1]] definite
+])
+def test_bounds_of_a_matrix_entry_are_checked_against_the_rest_of_the_matrix(
+        parameter, bounds, allowed):
+    osc = ic.ImpactOscillator(**PAPER, eta=0.1)
+    param = model_parameter(osc, parameter)
+    with pytest.raises(ic.ParameterError) as info:
+        param.check_bounds(osc, bounds)
+    text = str(info.value)
+    assert text.startswith(f"bounds {bounds!r} for {parameter}: ") and allowed in text, text
+
+
+def test_bounds_reaching_the_edge_of_the_range_are_accepted():
+    osc = ic.ImpactOscillator(**PAPER, eta=0.1)
+    assert model_parameter(osc, "K[1,1]").check_bounds(osc, (0.5, 3.0)) == (0.5, 3.0)
+    damper = _damper()  # K[2,2] = 0: a free ball, held by its cavity
+    assert model_parameter(damper, "K[2,2]").check_bounds(damper, (0.0, 0.1)) == (0.0, 0.1)
