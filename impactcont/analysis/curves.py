@@ -68,7 +68,7 @@ from impactcont.problems.codim1 import (
 )
 from impactcont.progress import ProgressOption, reporter
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import Label
+from impactcont.vocabulary import Label, check_bounds
 
 __all__ = ["check_curve_arguments", "crossing_steps", "curve", "curve_crossings"]
 
@@ -100,7 +100,8 @@ def _check_bounds(bounds: Any, parameters: tuple[str, str]) -> dict[str, tuple[f
             raise ParameterError(f"bounds must be {allowed}; got {bounds!r}") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise ParameterError(f"bounds[{name!r}] must be finite with lo < hi; got {pair!r}")
-        out[name] = (lo, hi)
+        # inside the parameter's range: the drivers' one check (vocabulary.check_bounds)
+        out[name] = check_bounds(name, (lo, hi), argument=f"bounds[{name!r}]")
     return out
 
 

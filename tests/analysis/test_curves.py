@@ -302,3 +302,11 @@ def test_a_file_with_the_former_resonance_names_reads_them_as_r1_r2(curves, tmp_
     old = ns.assign(codim2_label=ns.codim2_label.copy(data=former))
     back = ic.load(ic.save(old, tmp_path / "old.nc", validate=False))
     xr.testing.assert_identical(back, ns)
+
+
+def test_bounds_outside_a_parameters_range_are_refused_before_computing(paper):
+    """The drivers' one bounds check (issue 28): R lives in [0, 1]."""
+    with pytest.raises(ic.ParameterError, match=r"bounds\['R'\] for R must lie where R is in "
+                                                r"\[0, 1\]; got \(0\.5, 1\.5\)"):
+        curve(paper, 1, "PD", parameters=("omega", "R"), start={"omega": 1.0, "R": 0.6},
+              bounds={"omega": (0.5, 2.0), "R": (0.5, 1.5)})
