@@ -230,6 +230,9 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
         osc = simulations[self.start].oscillator  # the motion is found at its oscillator
         library_check(where.key("parameter"), check_parameter, osc, self.parameter)
         library_check(where.key("parameter"), model_parameter, osc, self.parameter)  # m9, n=2
+        # the drivers' bounds check on the oscillator (an entry of K keeps K PSD at both ends)
+        library_check(where, _check_model_bounds, osc, self.parameter, self.bounds,
+                      keys=("bounds",))
         library_check(where, make_options, self.bounds, keys=("bounds", *CONTINUATION_KEYS),
                       **self.continuation_options())
         # the stops bound the parameter (b > -b_low with a lower stop), as the run refuses
@@ -241,6 +244,13 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
             raise where.key("bounds").error(
                 f"{list(self.bounds)} does not contain {self.parameter} = {value!r} of "
                 f"simulation {self.start!r}", f"bounds around {self.parameter} = {value!r}")
+
+
+def _check_model_bounds(osc: ImpactOscillator, parameter: str, bounds: tuple[float, float]
+                        ) -> None:
+    """The check :func:`~impactcont.multi_impact_continuation` makes of bounds on the
+    oscillator (:meth:`~impactcont.model.parameters.ModelParameter.check_bounds`)."""
+    model_parameter(osc, parameter).check_bounds(osc, tuple(bounds))
 
 
 def _check_stop_limits(osc: ImpactOscillator, N: int, p: int, parameter: str,

@@ -353,3 +353,17 @@ def test_a_bad_element_parameter_is_reported_at_parameter(tmp_path: Path) -> Non
     text = _BRANCH_AND_MULTI.replace('p = 1\n', 'p = 1\nparameter = "m9"\n')
     err = scene_error(tmp_path, text)
     assert err.key == "multi_impact[0].parameter" and "'m9'" in str(err) and "m1..m2" in str(err)
+
+
+def test_bounds_of_a_stiffness_entry_are_checked_against_the_rest_of_k(tmp_path: Path) -> None:
+    # K = [[t, -1], [-1, 2]] is positive semi-definite for t >= 1/2 only
+    text = _BRANCH_AND_MULTI.replace('p = 1\nbounds = [1.6, 1.9]',
+                                     'p = 1\nparameter = "K[1,1]"\nbounds = [-1.0, 3.0]')
+    err = scene_error(tmp_path, text)
+    assert err.key == "multi_impact[0].bounds", err
+    assert "at K[1,1] = -1.0 the oscillator is refused" in str(err)
+    assert "K[1,1] in [0.5, inf)" in str(err)
+    text = _BRANCH_AND_MULTI.replace('name = "br"\nbounds = [1.6, 1.9]',
+                                     'name = "br"\nparameter = "K[1,1]"\nbounds = [-1.0, 3.0]')
+    err = scene_error(tmp_path, text)
+    assert err.key == "branches[0].bounds" and "K[1,1] in [0.5, inf)" in str(err)
