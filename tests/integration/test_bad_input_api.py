@@ -61,3 +61,40 @@ def test_critical_damping_is_refused_whatever_the_last_digits(K, C):
                                   b=0.1, omega=1.3)
         with pytest.raises(ic.ParameterError, match="defective or nearly so"):
             osc.first_order  # noqa: B018
+
+
+# -- issue 28: what a new user found ---------------------------------------------------------
+def _paper() -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                               b=0.6, omega=1.0, eta=0.1)
+
+
+@pytest.fixture(scope="module")
+def paper_np():
+    """The paper's N = 1 motion as an N-p motion (the path of multi_impact_continuation)."""
+    return ic.multi_impact_orbit(_paper(), 1, 1, ic.periodic_orbits(_paper(), 1)[0])
+
+
+@pytest.mark.parametrize(("parameter", "bounds", "match"), [
+    ("omega", "0.5,3", r"bounds must be two numbers \(lo, hi\); got '0\.5,3'"),
+    ("omega", (0.5, 2.0, 3.0), r"bounds must be two numbers \(lo, hi\); got \(0\.5, 2\.0, 3"),
+    ("R", (0.5, 1.5), r"bounds for R must lie where R is in \[0, 1\]"),
+    ("m2", (-0.5, 1.0), r"bounds for m2 must lie where m2 is finite and > 0"),
+    ("K[1,1]", (-1.0, 3.0), r"at K\[1,1\] = -1\.0 the oscillator is refused.*K\[1,1\] in "
+                            r"\[0\.5, inf\)"),
+])
+def test_both_continuations_refuse_the_same_bounds_before_computing(paper_np, parameter,
+                                                                    bounds, match):
+    with pytest.raises(ic.ParameterError, match=match):
+        ic.multi_impact_continuation(paper_np, parameter, bounds)
+    with pytest.raises(ic.ParameterError, match=match):
+        ic.continuation(_paper(), 1, parameter, bounds)
+
+
+def test_a_progress_callable_must_take_the_record(paper_np):
+    for call in (lambda p: ic.multi_impact_continuation(paper_np, "omega", (0.9, 1.1),
+                                                        progress=p),
+                 lambda p: ic.continuation(_paper(), 1, "omega", (0.9, 1.1), progress=p)):
+        with pytest.raises(TypeError, match=r"progress must be a callable taking one Progress "
+                                            r"record .*signature \(\)"):
+            call(lambda: None)
