@@ -179,7 +179,9 @@ def test_netcdf_round_trip_of_a_real_branch(branch_b05, tmp_path):
 def test_bad_options_raise(paper_system):
     with pytest.raises(ic.ParameterError, match="parameter must be one of"):
         ic.continuation(paper_system, parameter="gap", bounds=(0, 1))
-    with pytest.raises(ContinuationOptionError, match="bounds"):
+    # the drivers' one bounds check (issue 28): a ParameterError naming bounds and the value
+    with pytest.raises(ic.ParameterError, match=r"bounds must be two finite numbers with lo < "
+                                                r"hi; got \(6\.0, 0\.5\)"):
         ic.continuation(paper_system, bounds=(6.0, 0.5))
     with pytest.raises(ContinuationOptionError, match="ds_max"):
         ic.continuation(paper_system, bounds=(0.5, 6.0), ds_max=-1.0)
