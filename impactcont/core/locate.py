@@ -11,6 +11,7 @@ and locates the zero with :func:`locate_zero`.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -56,12 +57,29 @@ class Event:
         point ``k``. A step whose two ends are both within it of zero changes sign
         by rounding only (a degenerate branch on which the test is zero, e.g. a
         motion resting against the stop) and is not an event.
+    poles : callable, optional
+        ``poles(u, lam) -> sequence of float``: quantities whose zeros are poles of the
+        test (or where it was multiplied free of one, e.g. the impact velocities ``h2``
+        of a PD or NS test cleared of the pole of G). A sign change of the test across
+        such a zero is the pole's, not a zero: the step is split at every zero of a
+        pole quantity inside it, each part watched on its own (:func:`locate_events`).
+    poles_at : callable, optional
+        ``poles_at(k)``: the pole quantities at accepted point ``k`` when the driver
+        already has them (else ``poles`` is evaluated there).
+    noise_at : callable, optional
+        ``noise_at(u, lam) -> float``: the rounding error of the test at any point of
+        the branch (e.g. of multipliers that lose accuracy next to a pole). Next to a
+        pole the test's sign is taken only where it rises above this noise, and a located
+        zero's precision counts it (:func:`zero_precision`).
     """
 
     label: str
     test: Callable[[FloatArray, float], float] | None
     at_point: Callable[[int], float] | None = None
     noise: Callable[[int], float] | None = None
+    poles: Callable[[FloatArray, float], Any] | None = None
+    poles_at: Callable[[int], Any] | None = None
+    noise_at: Callable[[FloatArray, float], float] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,12 +101,16 @@ class MotionTest:
         e.g., a pole of the test); every zero when None.
     checks : bool
         The test needs the motion's interior-contact search (costly).
+    poles : callable, optional
+        ``poles(motion) -> sequence of float``: the quantities whose zeros are poles of
+        the test or were cleared from it (:attr:`Event.poles`).
     """
 
     test: Callable[[Any], float]
     noise: Callable[[Any], float] | None = None
     critical: Callable[[Any], bool] | None = None
     checks: bool = False
+    poles: Callable[[Any], Any] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -135,6 +157,9 @@ def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
     ----------
     g : callable
         The test function along the step (evaluations are best cached by the caller).
+        It may be ``+inf`` or ``-inf`` on part of the step (a test with no finite value
+        there, e.g. the clearance of a flight without an interior extremum): the bracket
+        is first halved until both its ends are finite.
     lo, hi : float
         The bracket, where `g` has opposite signs.
     xtol : float
@@ -145,21 +170,76 @@ def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
     s : float
         The zero, inside ``[lo, hi]``.
     status : {"located", "bracketed"}
-        ``located`` when ``|g(s)|`` is at most 1e-6 of the larger end value (plus
-        1e-12); else the test function jumps there (a pole) and the point is only
-        bracketed.
+        ``located`` when `g` vanishes at `s` (:func:`_vanishes`: ``|g(s)|`` is small
+        against both the ends of the bracket and `g` on both sides of `s` nearby); else
+        `g` changes sign through a pole or a jump there and the point is only bracketed.
 
     Raises
     ------
     ValueError
-        When `g` has the same sign at both ends.
+        When `g` has the same sign at both ends (or is not a number at one).
     """
     g0, g1 = g(lo), g(hi)
-    # Brent is slow on a double zero (superlinear steps keep failing): room to finish
-    s = brentq(g, lo, hi, xtol=xtol, rtol=4 * _EPS, maxiter=500)
-    scale = max(abs(g0), abs(g1))
-    status = "located" if abs(g(s)) <= 1e-6 * max(scale, 1e-300) + 1e-12 else "bracketed"
-    return s, status
+    if not _changes(g0, g1):
+        raise ValueError(f"g must have different signs at lo={lo!r} and hi={hi!r}; got "
+                         f"{g0!r} and {g1!r}")
+    a, b, ga, gb = lo, hi, g0, g1
+    while not (math.isfinite(ga) and math.isfinite(gb)) and abs(b - a) > xtol:
+        m = 0.5 * (a + b)
+        gm = g(m)
+        if math.isnan(gm):
+            raise ValueError(f"the test function is not a number at {m!r}")
+        if _changes(ga, gm):
+            b, gb = m, gm
+        else:
+            a, ga = m, gm
+    if math.isfinite(ga) and math.isfinite(gb):
+        # Brent is slow on a double zero (superlinear steps keep failing): room to finish
+        s = brentq(g, a, b, xtol=xtol, rtol=4 * _EPS, maxiter=500)
+    else:  # a jump from infinity: its finite side
+        s = a if math.isfinite(ga) else b
+    return s, "located" if _vanishes(g, s, lo, hi, (g0, g1)) else "bracketed"
+
+
+#: a located zero: |g| at most this fraction of its size at the bracket's ends ...
+_SMALL_AGAINST_ENDS = 1e-6
+#: ... and of its size on either side at _NEARBY of the bracket's width
+_SMALL_AGAINST_SIDES = 1e-3
+_NEARBY = 1e-3
+
+
+def _vanishes(g: Callable[[float], float], s: float, lo: float, hi: float,
+              ends: tuple[float, float]) -> bool:
+    """Whether the sign change of `g` at `s` is a zero, not a pole or a jump.
+
+    A zero: ``|g(s)|`` at most 1e-6 of the larger finite end value (plus 1e-12), and at
+    most 1e-3 of ``|g|`` on each side of `s` at a thousandth of the bracket's width (the
+    sides inside the bracket; an infinite side counts as large). Through a pole ``|g|``
+    grows towards `s`; across a jump it stays at the size of the jump on one side: both
+    fail the second test even when the jump starts next to zero. A simple zero passes
+    with ``|g(s)| / |g(s +- d)|`` about ``xtol / d``; a zero of odd order k about
+    ``(xtol / d)^k`` (or rounding over ``d^k``).
+    """
+    gs = g(s)
+    if gs == 0.0:
+        return True
+    if not math.isfinite(gs):
+        return False
+    scale = max((abs(v) for v in ends if math.isfinite(v)), default=math.inf)
+    if not abs(gs) <= _SMALL_AGAINST_ENDS * scale + 1e-12:
+        return False
+    left, right = min(lo, hi), max(lo, hi)
+    d = _NEARBY * (right - left)
+    for t in (max(s - d, left), min(s + d, right)):
+        if t == s:
+            continue
+        try:
+            side = abs(g(t))
+        except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
+            continue  # no branch point there: that side says nothing
+        if not abs(gs) <= _SMALL_AGAINST_SIDES * side:  # nan: not a zero
+            return False
+    return True
 
 
 def tangent_at(problem: Problem, u: FloatArray, lam: float, reference: FloatArray) -> FloatArray:
@@ -205,18 +285,12 @@ class _Chord:
         return float(tangent_at(self.problem, u, lam, self.chord)[-1])
 
 
-def _locate(g: Callable[[float], float], s_tol: float) -> tuple[float, str]:
-    cache: dict[float, float] = {}
-
-    def cached(s: float) -> float:
-        if s not in cache:
-            cache[s] = g(s)
-        return cache[s]
-
-    g0, g1 = cached(0.0), cached(1.0)
-    if not (math.isfinite(g0) and math.isfinite(g1)) or (g0 < 0) == (g1 < 0):
-        return 0.5, "bracketed"  # the re-evaluated ends disagree with the stream: keep bracket
-    return locate_zero(cached, 0.0, 1.0, s_tol)
+def _locate(g: Callable[[float], float], s_tol: float, lo: float = 0.0, hi: float = 1.0
+            ) -> tuple[float, str]:
+    g0, g1 = g(lo), g(hi)
+    if not _changes(g0, g1):
+        return 0.5 * (lo + hi), "bracketed"  # the re-evaluated ends disagree: keep bracket
+    return locate_zero(g, lo, hi, s_tol)
 
 
 def _middle(chord: _Chord) -> tuple[float, str, tuple[FloatArray, float]]:
@@ -228,7 +302,8 @@ def _middle(chord: _Chord) -> tuple[float, str, tuple[FloatArray, float]]:
 
 
 def zero_precision(g: Callable[[float], float], position: Callable[[float], Any], s: float,
-                   s_tol: float, lo: float = 0.0, hi: float = 1.0) -> float:
+                   s_tol: float, lo: float = 0.0, hi: float = 1.0,
+                   noise: Callable[[float], float] | None = None) -> float:
     """A bound on the error of a located zero ``s`` of `g`, measured in `position`.
 
     Two sources: Brent's tolerance `s_tol` on the coordinate, and the rounding noise of
@@ -238,6 +313,8 @@ def zero_precision(g: Callable[[float], float], position: Callable[[float], Any]
     ``|g|`` rises above the noise on both sides. A simple zero leaves that interval at
     the first try; a double zero (``g ~ (s - s0)^2``, e.g. a grazing at a zero-velocity
     impact) is known only to about the square root of the noise, and the bound says so.
+    Where the test's own rounding is known (`noise`, e.g. multipliers next to a pole of
+    G that lose ``1 / h2^2`` of their accuracy) the noise is the larger of the two.
 
     Parameters
     ----------
@@ -252,8 +329,16 @@ def zero_precision(g: Callable[[float], float], position: Callable[[float], Any]
         Brent's tolerance on ``s``.
     lo, hi : float
         The bracket searched.
+    noise : callable, optional
+        ``noise(t)``: the rounding error of ``g(t)``.
     """
-    noise = _NOISE_ULPS * _EPS * max(abs(g(lo)), abs(g(hi)))
+    floor = _NOISE_ULPS * _EPS * max((abs(v) for v in (g(lo), g(hi)) if math.isfinite(v)),
+                                     default=0.0)
+
+    def above_noise(t: float) -> bool:
+        value = abs(g(t))
+        return value > floor and (noise is None or value > noise(t))
+
     here = np.asarray(position(s), dtype=float)
 
     def distance(t: float) -> float:
@@ -267,7 +352,7 @@ def zero_precision(g: Callable[[float], float], position: Callable[[float], Any]
             t = min(max(s + side * h, lo), hi)
             try:
                 reach = max(reach, distance(t))
-                if t == end or abs(g(t)) > noise:
+                if t == end or above_noise(t):
                     break
             except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
                 # no branch point there (the corrector failed): as far as that end
@@ -278,7 +363,8 @@ def zero_precision(g: Callable[[float], float], position: Callable[[float], Any]
 
 
 def _changes(a: float, b: float) -> bool:
-    return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
+    """Opposite signs; ``+inf`` and ``-inf`` count by their sign, NaN as no sign."""
+    return not (math.isnan(a) or math.isnan(b)) and (a < 0) != (b < 0)
 
 
 def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequence[Event],
@@ -315,47 +401,161 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     found: list[EventPoint] = []
     for k in range(len(x) - 1):
         chord = _Chord(problem, x[k], x[k + 1], newton_tol)
+        if position is None:
+            where: Callable[[float], Any] = chord.lam
+        else:
+            def where(t: float, chord: _Chord = chord) -> Any:
+                return position(*chord.point(t))
         for event in events:
+            noise: Callable[[float], float] | None = None
             if event.test is None:
                 if (dlam[k] > 0) == (dlam[k + 1] > 0):
                     continue
-                g = chord.fold_test
+                g: Callable[[float], float] = chord.fold_test
+                parts = [(0.0, 1.0)]
             else:
-                value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
-                if not _changes(value(k), value(k + 1)):
-                    continue
-                if event.noise is not None and all(
-                        abs(value(j)) <= event.noise(j) for j in (k, k + 1)):
-                    log.debug("%s between points %d and %d: a sign change by rounding only",
-                              event.label, k, k + 1)
-                    continue
-
-                def g(s: float, test: Callable[..., float] = event.test,
-                      chord: _Chord = chord) -> float:
-                    return test(*chord.point(s))
-            failed = False
-            try:
-                s, status = _locate(g, s_tol)
-                uk, lamk = chord.point(s)
-            except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
-                failed = True  # kept as bracketed (never dropped), at the middle of the step
-                log.warning("%s between points %d and %d not located, kept as bracketed: %s",
-                            event.label, k, k + 1, exc)
-                s, status, (uk, lamk) = _middle(chord)
-            if position is None:
-                where: Callable[[float], Any] = chord.lam
-            else:
-                def where(t: float, chord: _Chord = chord) -> Any:
-                    return position(*chord.point(t))
-            if status == "located":
-                precision = zero_precision(g, where, s, s_tol)
-            else:  # somewhere on the step: as far as its farther end
-                here = np.asarray(where(s), dtype=float)
-                precision = max(float(np.max(np.abs(np.asarray(where(end), dtype=float)
-                                                    - here))) for end in (0.0, 1.0))
-            found.append(EventPoint(
-                label=event.label, u=np.array(uk, float), lam=float(lamk), step=k, s=float(s),
-                status=status, precision=float(precision),
-                bracket=(min(x[k, -1], x[k + 1, -1]), max(x[k, -1], x[k + 1, -1])),
-                arclength=(float(arclength[k]), float(arclength[k + 1])), failed=failed))
+                g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)))
+                if event.noise_at is not None:
+                    noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
+                parts = _watched_parts(event, x, k, chord, g, noise)
+            for lo, hi in parts:
+                found.append(_event_point(event.label, chord, g, noise, where, lo, hi, k, x,
+                                          arclength, s_tol))
     return found
+
+
+def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
+    cache: dict[float, float] = {}
+
+    def cached(s: float) -> float:
+        if s not in cache:
+            cache[s] = float(f(s))
+        return cache[s]
+    return cached
+
+
+def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
+                   g: Callable[[float], float], noise: Callable[[float], float] | None
+                   ) -> list[tuple[float, float]]:
+    """The parts ``[lo, hi]`` of step `k` (chord coordinates) where `event`'s test changes
+    sign: the whole step, or, across the zeros of the event's pole quantities inside
+    it, the parts between them (:func:`_beside_poles`)."""
+    value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
+    cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
+    if cuts:
+        return _beside_poles(event.label, g, noise, cuts, k)
+    if not _changes(value(k), value(k + 1)):
+        return []
+    if event.noise is not None and all(abs(value(j)) <= event.noise(j) for j in (k, k + 1)):
+        log.debug("%s between points %d and %d: a sign change by rounding only",
+                  event.label, k, k + 1)
+        return []
+    return [(0.0, 1.0)]
+
+
+def _pole_cuts(event: Event, x: FloatArray, k: int, chord: _Chord) -> list[float]:
+    """The chord coordinates of the zeros of the event's pole quantities on step `k`."""
+    assert event.poles is not None
+
+    def poles(j: int) -> np.ndarray:
+        if event.poles_at is not None:
+            return np.atleast_1d(np.asarray(event.poles_at(j), dtype=float))
+        return np.atleast_1d(np.asarray(event.poles(x[j, :-1], x[j, -1]), dtype=float))
+
+    left, right = poles(k), poles(k + 1)
+    cuts = []
+    for i in np.flatnonzero([_changes(a, b) for a, b in zip(left, right, strict=True)]):
+        def h(s: float, i: int = int(i)) -> float:
+            return float(np.atleast_1d(np.asarray(event.poles(*chord.point(s)), float))[i])
+        try:
+            cut = float(brentq(h, 0.0, 1.0, xtol=1e-14, rtol=4 * _EPS, maxiter=200))
+        except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            cut = float(left[i] / (left[i] - right[i]))  # where it crosses, linearly
+            log.debug("pole %d of %s between points %d and %d placed linearly at s=%.6g: %s",
+                      i, event.label, k, k + 1, cut, exc)
+        cuts.append(min(max(cut, 0.0), 1.0))
+    return sorted(set(cuts))
+
+
+#: the first distance (relative to a part's width) at which a test is read next to a pole
+_POLE_OFFSET = 1e-9
+
+
+def _beside_poles(label: str, g: Callable[[float], float],
+                  noise: Callable[[float], float] | None, cuts: list[float], k: int
+                  ) -> list[tuple[float, float]]:
+    """The parts of a step between the zeros `cuts` of the pole quantities where the test
+    changes sign.
+
+    Next to a pole the test's sign is read where it first rises above its noise (its
+    own, ``noise``, and ``_NOISE_ULPS`` eps times its size at the step's ends), at
+    distances from the pole growing by factors of 10 from ``1e-9`` of the part up to half
+    of it; a part without such a point says nothing. A sign change across a pole is the
+    pole's: not an event (logged). A zero of the test closer to a pole than where its
+    sign can be read cannot be told from the pole's and is not reported either.
+    """
+    floor = _NOISE_ULPS * _EPS * max(
+        (abs(v) for v in (g(0.0), g(1.0)) if math.isfinite(v)), default=0.0)
+
+    def readable(t: float) -> float | None:
+        try:
+            value = g(t)
+            level = max(floor, noise(t) if noise is not None else 0.0)
+        except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
+            return None
+        return value if abs(value) > level else None
+
+    def beside(cut: float, towards: float) -> float | None:
+        width = abs(towards - cut)
+        d = _POLE_OFFSET * width
+        while d <= 0.5 * width:
+            t = cut + math.copysign(d, towards - cut)
+            if readable(t) is not None:
+                return t
+            d *= 10.0
+        return None
+
+    edges = [0.0, *cuts, 1.0]
+    parts = []
+    for a, b in itertools.pairwise(edges):
+        if b <= a:
+            continue
+        lo = a if a == 0.0 else beside(a, b)
+        hi = b if b == 1.0 else beside(b, a)
+        if lo is None or hi is None or not lo < hi:
+            continue
+        if _changes(g(lo), g(hi)):
+            parts.append((lo, hi))
+    if not parts and _changes(g(0.0), g(1.0)):
+        log.info("%s changes sign between points %d and %d only through the pole of its test "
+                 "(at chord coordinate %s): not a special point", label, k, k + 1,
+                 ", ".join(f"{c:.6g}" for c in cuts))
+    return parts
+
+
+def _event_point(label: str, chord: _Chord, g: Callable[[float], float],
+                 noise: Callable[[float], float] | None, where: Callable[[float], Any],
+                 lo: float, hi: float, k: int, x: FloatArray, arclength: FloatArray,
+                 s_tol: float) -> EventPoint:
+    """The event's zero in the part ``[lo, hi]`` of step `k`, located or bracketed."""
+    failed = False
+    try:
+        s, status = _locate(g, s_tol, lo, hi)
+        uk, lamk = chord.point(s)
+    except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
+        failed = True  # kept as bracketed (never dropped), at the middle of the step
+        log.warning("%s between points %d and %d not located, kept as bracketed: %s",
+                    label, k, k + 1, exc)
+        s, status, (uk, lamk) = _middle(chord)
+        lo, hi = 0.0, 1.0
+    if status == "located":
+        precision = zero_precision(g, where, s, s_tol, lo, hi, noise=noise)
+    else:  # somewhere in the part: as far as its farther end
+        here = np.asarray(where(s), dtype=float)
+        precision = max(float(np.max(np.abs(np.asarray(where(end), dtype=float) - here)))
+                        for end in (lo, hi))
+    return EventPoint(
+        label=label, u=np.array(uk, float), lam=float(lamk), step=k, s=float(s),
+        status=status, precision=float(precision),
+        bracket=(min(x[k, -1], x[k + 1, -1]), max(x[k, -1], x[k + 1, -1])),
+        arclength=(float(arclength[k]), float(arclength[k + 1])), failed=failed)

@@ -14,8 +14,8 @@ is a bifurcation is decided from the multipliers there (:func:`is_critical`).
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
-from typing import TypeVar
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -26,7 +26,8 @@ log = logging.getLogger(__name__)
 
 _Point = TypeVar("_Point")
 
-__all__ = ["STATUSES", "drop_grazing_at_zero_velocity", "is_critical", "locate_zero"]
+__all__ = ["STATUSES", "drop_grazing_at_zero_velocity", "is_critical", "last_motions",
+           "locate_zero", "watched_labels"]
 
 
 def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
@@ -43,6 +44,16 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
         close = np.abs(np.abs(mu) - 1.0) < unit_tol ** 0.5
         return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
     return True
+
+
+def watched_labels(labels: Sequence[str]) -> list[str]:
+    """The labels a detector locates for `labels`: with GR also ZV, whose located points
+    tell which GR is the grazing of a zero-velocity impact (dropped as its twin,
+    :func:`drop_grazing_at_zero_velocity`, also when ZV is not asked for)."""
+    out = list(labels)
+    if "GR" in out and "ZV" not in out:
+        out.append("ZV")
+    return out
 
 
 def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "lam"
@@ -76,3 +87,19 @@ def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "la
                      "impact ZV at %.12g: reported once, as ZV", parameter, point.value,
                      point.precision, twin.value)
     return kept
+
+
+def last_motions(orbit: Callable[[Any, float], Any], size: int = 8
+                 ) -> Callable[[Any, float], Any]:
+    """`orbit` remembering its last few motions: the test, its poles and its noise at a
+    trial point of a locator share one (each a shot or a closed form)."""
+    cache: dict[tuple[bytes, float], Any] = {}
+
+    def at(u: Any, lam: float) -> Any:
+        key = (np.asarray(u, dtype=float).tobytes(), float(lam))
+        if key not in cache:
+            if len(cache) >= size:
+                cache.pop(next(iter(cache)))
+            cache[key] = orbit(u, lam)
+        return cache[key]
+    return at

@@ -54,8 +54,14 @@ from typing import Any
 import numpy as np
 
 from impactcont.core.locate import Event, MotionTest, locate_events, tangent_at
-from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
+from impactcont.detection.locator import (
+    drop_grazing_at_zero_velocity,
+    is_critical,
+    last_motions,
+    watched_labels,
+)
 from impactcont.detection.special_points import (
+    POLE_CLEARED,
     UserEvent,
     UserFunctions,
     event_function,
@@ -148,26 +154,42 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
 
     declared_tests: dict[str, MotionTest] = dict(getattr(problem, "motion_tests", {}))
 
+    orbits = {checks: last_motions(lambda u, lam, c=checks: problem.orbit(u, lam, checks=c))
+              for checks in (False, True)}
+
     def event(label: str) -> Event:
         if label == "SN":
             return Event(label, None)
         spec = declared_tests.get(label)
         if spec is not None:  # a special point the problem declares with its own test
-            return Event(label,
-                         lambda u, lam: spec.test(problem.orbit(u, lam, checks=spec.checks)),
+            at = orbits[spec.checks]
+            fields: dict[str, Any] = {}
+            if spec.poles is not None:
+                poles = spec.poles
+                fields = dict(poles=lambda u, lam: poles(at(u, lam)),
+                              poles_at=lambda k: poles(samples[k].orbit))
+            if spec.noise is not None:
+                fields["noise_at"] = lambda u, lam, n=spec.noise: n(at(u, lam))
+            return Event(label, lambda u, lam: spec.test(at(u, lam)),
                          lambda k: spec.test(samples[k].orbit),
-                         None if spec.noise is None else lambda k: spec.noise(samples[k].orbit))
-
-        def test(u: np.ndarray, lam: float) -> float:
-            # only GR needs the (costly) interior-contact search of every flight
-            return event_function(label, problem.orbit(u, lam, checks=label == "GR"))
-
-        return Event(label, test, lambda k: event_function(label, samples[k].orbit),
-                     lambda k: event_noise(label, samples[k].orbit))
+                         None if spec.noise is None else lambda k: spec.noise(samples[k].orbit),
+                         **fields)
+        # only GR needs the (costly) interior-contact search of every flight
+        at = orbits[label == "GR"]
+        if label in POLE_CLEARED:  # split at each impact's h2 = 0 (module notes)
+            fields = dict(poles=lambda u, lam: at(u, lam).impact_velocities,
+                          poles_at=lambda k: samples[k].orbit.impact_velocities,
+                          noise_at=lambda u, lam: event_noise(label, at(u, lam)))
+        else:
+            fields = {}
+        return Event(label, lambda u, lam: event_function(label, at(u, lam)),
+                     lambda k: event_function(label, samples[k].orbit),
+                     lambda k: event_noise(label, samples[k].orbit), **fields)
 
     found: list[MultiImpactSpecialPoint] = []
     for ep in locate_events(problem, [s.u for s in samples], [s.lam for s in samples],
-                            [s.tangent for s in samples], [event(lab) for lab in labels],
+                            [s.tangent for s in samples],
+                            [event(lab) for lab in watched_labels(labels)],
                             s_tol=_S_TOL, newton_tol=_NEWTON_TOL):
         orbit = problem.orbit(ep.u, ep.lam)
         spec = declared_tests.get(ep.label)
@@ -190,7 +212,8 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
             label=label, value=ep.lam, u=ep.u, point=nearest, bracket=ep.bracket,
             precision=ep.precision, status=ep.status, orbit=orbit)
         found.append(special)
-    found = drop_grazing_at_zero_velocity(found, parameter)
+    found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
+             if special.label != "ZV" or "ZV" in labels]  # ZV: only if asked
     for special in found:
         log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
                  parameter, special.value, special.orbit.N, special.orbit.p, special.status,

@@ -36,7 +36,12 @@ from typing import Any
 import numpy as np
 
 from impactcont.core.locate import Event, locate_events
-from impactcont.detection.locator import drop_grazing_at_zero_velocity, is_critical
+from impactcont.detection.locator import (
+    drop_grazing_at_zero_velocity,
+    is_critical,
+    last_motions,
+    watched_labels,
+)
 from impactcont.errors import ParameterError
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.events import event_function, event_noise, pole_free
@@ -52,6 +57,9 @@ log = logging.getLogger(__name__)
 _XTOL = 1e-13
 #: The labels with a test function on branches of N-1 motions (besides the fold, SN).
 N1_EVENTS = ("PD", "NS", "GR", "ZV")
+#: The tests multiplied free of the pole of G at a zero impact velocity (:func:`pole_free`):
+#: their poles are the impact velocities, where a step is split (module notes).
+POLE_CLEARED = ("PD", "NS")
 _UNIT_TOL = 1e-7
 
 
@@ -97,10 +105,6 @@ class SpecialPoint:
     precision: float
     status: str
     orbit: PeriodicOrbit
-
-
-def _changes(a: float, b: float) -> bool:
-    return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
 
 
 def _locate_fold(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
@@ -193,20 +197,28 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
         if "SN" in labels and (left.dlam > 0) != (right.dlam > 0):
             candidates.append((k, "SN", *_locate_fold(problem, left, right)))
 
+    orbit_at = last_motions(lambda u, lam: problem.orbit(u[0], lam))
+
     def event(label: str) -> Event:
-        return Event(label, lambda u, lam: event_function(label, problem.orbit(u[0], lam)),
+        fields: dict[str, Any] = {}
+        if label in POLE_CLEARED:  # the step is split at h2 = 0 (module notes)
+            fields = dict(poles=lambda u, lam: [orbit_at(u, lam).impact_velocity],
+                          poles_at=lambda k: [samples[k].orbit.impact_velocity],
+                          noise_at=lambda u, lam: event_noise(label, orbit_at(u, lam)))
+        return Event(label, lambda u, lam: event_function(label, orbit_at(u, lam)),
                      lambda k: event_function(label, samples[k].orbit),
-                     lambda k: event_noise(label, samples[k].orbit))
+                     lambda k: event_noise(label, samples[k].orbit), **fields)
 
     # the events the problem declares (the fold is located on eq. 14-15 above); the others,
     # e.g. BP (a symmetric motion has p even), cannot occur on an N-1 branch
     declared = getattr(problem, "events", N1_EVENTS)
-    events = [event(label) for label in labels if label in declared and label != "SN"]
+    watched = watched_labels(labels)
+    events = [event(label) for label in watched if label in declared and label != "SN"]
     for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
                             [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
         candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,
                            ep.failed))
-    order = {label: i for i, label in enumerate(labels)}
+    order = {label: i for i, label in enumerate(watched)}
     found: list[SpecialPoint] = []
     for k, label, delta, lam, precision, status, failed in sorted(
             candidates, key=lambda c: (c[0], order[c[1]])):
@@ -222,7 +234,8 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                                bracket=(left.lam, right.lam), precision=precision,
                                status=status, orbit=orbit)
         found.append(special)
-    found = drop_grazing_at_zero_velocity(found, problem.parameter)
+    found = [special for special in drop_grazing_at_zero_velocity(found, problem.parameter)
+             if special.label != "ZV" or "ZV" in labels]  # ZV: only if asked
     for special in found:
         log.info("%s at %s = %.12g (%s, precision %.1e)", special.label, problem.parameter,
                  special.value, special.status, special.precision)

@@ -20,12 +20,21 @@ import numpy as np
 from impactcont.core.locate import MotionTest
 from impactcont.orbit.symmetry import pitchfork_critical, pitchfork_noise, pitchfork_test
 
-__all__ = ["PITCHFORK", "event_function", "event_noise", "pole_free"]
+__all__ = ["PITCHFORK", "event_function", "event_noise", "half_speeds", "pole_free"]
 
 _EPS = float(np.finfo(float).eps)
 
-#: BP: ``det(H + I)`` of the half-map (pole-free), its rounding, and the criticality check.
-PITCHFORK = MotionTest(pitchfork_test, pitchfork_noise, pitchfork_critical)
+
+
+def half_speeds(orbit: Any) -> np.ndarray:
+    """The speeds that clear the BP test of its poles: those at the impacts ending the
+    first half's flights (:func:`~impactcont.orbit.symmetry.pitchfork_test`)."""
+    return np.asarray(orbit.impact_velocities, dtype=float)[1:orbit.p // 2 + 1]
+
+
+#: BP: ``det(H + I)`` of the half-map (pole-free), its rounding, the criticality check, and
+#: the speeds whose zeros are the poles it was cleared of (a step is split there).
+PITCHFORK = MotionTest(pitchfork_test, pitchfork_noise, pitchfork_critical, poles=half_speeds)
 
 
 def _bialternate(mu: np.ndarray) -> float:
