@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 import scipy.linalg
+import scipy.optimize
 
 from impactcont.errors import ParameterError
 from impactcont.model.first_order import FirstOrderBasis
@@ -275,6 +276,56 @@ def _free_modes(M: np.ndarray, K: np.ndarray, stops: Stops) -> np.ndarray:
     return U
 
 
+def _check_static_force(M: np.ndarray, U: np.ndarray, F_static: np.ndarray, stops: Stops,
+                        b: float, R: float) -> None:
+    """Refuse a constant force that drives a free motion away from every stop.
+
+    On the free modes ``U`` (M-normalised: ``q'' = U^T F_static`` plus damping) the stops
+    can take the constant force only if it lies in the cone of their reactions: ``U^T
+    F_static = sum_k lam_k sign_k U^T n_k`` with ``lam_k >= 0`` (stop k on ``s = n_k . x``,
+    met moving ``sign_k``). Otherwise the residual ``r`` of the non-negative least-squares
+    fit gives a free motion ``U r`` along which the force does work (``r . U^T F_static =
+    |r|^2 > 0``) and which approaches no stop (``sign_k n_k . U r <= 0`` for every k): the
+    masses drift away for ever, without impacts (Farkas' lemma).
+
+    Raises
+    ------
+    ParameterError
+        Naming the force, the escaping free motion, the stops and what is allowed.
+    """
+    if not U.shape[1] or not np.any(F_static):
+        return
+    f = U.T @ F_static
+    views = [stops.stop(name, M, b, R) for name in stops.names]
+    A = np.column_stack([v.sign * (U.T @ v.normal) for v in views])
+    size = np.abs(U).T @ np.column_stack([np.abs(v.normal) for v in views])
+    A[np.abs(A) <= TOUCH_RTOL * size] = 0.0  # a stop that touches a mode only in rounding
+    lam, _ = scipy.optimize.nnls(A, f)
+    r = f - A @ lam
+    if np.linalg.norm(r) <= TOUCH_RTOL * float(np.max(np.abs(U).T @ np.abs(F_static))):
+        return
+    shape = U @ r
+    shape = shape / np.max(np.abs(shape))
+    met = "; ".join(f"stop {v.name!r} on {_coordinate_text(v.normal)} = {v.position!r}, met "
+                    f"moving {'up' if v.sign > 0 else 'down'}" for v in views)
+    raise ParameterError(
+        f"F_static = {F_static.tolist()} pushes the free (rigid-body) mode "
+        f"u = {np.round(shape, 12).tolist()} away from every stop: the force does work along "
+        f"u (u . F_static = {float(shape @ F_static):.6g} > 0) and no stop is met moving "
+        f"along u ({met}), so the free masses would drift away for ever without an impact. "
+        f"Allowed: a constant force on a free mode that the stops take, pushing it into a "
+        f"stop that holds it (a ball under gravity on a floor: a lower stop), or a mode held "
+        f"on both sides (an upper and a lower stop, a clearance); change F_static, add a stop "
+        f"on the other side (stops b_low, mirror or an extra stop) or a spring")
+
+
+def _coordinate_text(normal: np.ndarray) -> str:
+    """``x2`` or ``x2 - x1`` for a stop normal."""
+    plus = [f"x{i + 1}" for i in np.flatnonzero(normal > 0)]
+    minus = [f"x{i + 1}" for i in np.flatnonzero(normal < 0)]
+    return " - ".join([" + ".join(plus), *minus]) if plus else "-" + " - ".join(minus)
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class ImpactOscillator:
     """A chain of masses, springs and dampers whose mass 1 strikes a rigid stop.
@@ -315,7 +366,9 @@ class ImpactOscillator:
         those of the upper stop). None: the paper's single stop on mass 1.
     F_static : array_like, shape (n,), optional
         A constant force (gravity, a preload, a mean torque); default zeros. On a free
-        mode it is allowed when a stop holds that mode (it takes the mean impulse).
+        mode it is allowed when the stops take it (the mean impulse): it pushes the mode
+        into a stop that holds it, or the mode is held on both sides; a force driving a
+        free motion away from every stop is refused (:func:`_check_static_force`).
 
     Notes
     -----
@@ -380,6 +433,7 @@ class ImpactOscillator:
         F_static = (np.zeros(n) if self.F_static is None
                     else _vector("F_static", self.F_static, n))
         object.__setattr__(self, "_free_modes", _free_modes(M, K, self.stops))
+        _check_static_force(M, self.free_modes, F_static, self.stops, b, R)
         general = self.C is not None
         if general:
             C = _damping(self.C, n)

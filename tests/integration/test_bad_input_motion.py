@@ -287,3 +287,54 @@ def test_newton_stalled_at_the_pitchfork_names_the_bifurcation(pitchfork):
                        rf"omega={re.escape(repr(omega))}, b=0.5, b_low=0.5") as info:
         multi_impact_orbit(flow.osc, 1, 2, _guess(guess), max_iter=2)
     assert "is the guess" not in str(info.value)
+
+
+# ------------------------------------------------------------------------------------------
+# Issue 28, 1.6: a constant force that pushes a free mode away from every stop holding it
+# ------------------------------------------------------------------------------------------
+# M = I2, K = diag(1, 0), one stop above the free mass 2 (Stops(mass=2)) and F_static =
+# [0, -1]: the force pulls mass 2 down, away from its only stop, for ever; simulate returned
+# COMPLETED with no impact and x2 = -7896. It is refused at construction, naming the mode and
+# the force. A force into the stop, or a mode held on both sides, is a machine.
+
+def _free_ball(F_static, **stops):
+    return ic.ImpactOscillator(M=np.eye(2), K=np.diag([1.0, 0.0]), F=[1.0, 0.0], R=0.8, b=1.0,
+                               omega=1.3, eta=0.05, F_static=F_static,
+                               stops=Stops(mass=2, **stops))
+
+
+def test_a_constant_force_pulling_a_free_mass_off_its_only_stop_is_refused():
+    with pytest.raises(ParameterError, match=re.escape(
+            "F_static = [0.0, -1.0] pushes the free (rigid-body) mode u = [0.0, -1.0] away from "
+            "every stop")) as err:
+        _free_ball([0.0, -1.0])
+    message = str(err.value)
+    assert "'U'" in message and "Allowed:" in message
+
+
+def test_a_constant_force_pushing_a_free_mass_into_its_stop_is_a_machine():
+    osc = _free_ball([0.0, 1.0])  # pressed into U (a ball under gravity on a ceiling... or
+    assert osc.free_modes.shape[1] == 1  # a floor met moving down, below)
+    _free_ball([0.0, -1.0], b_low=0.5)  # held on both sides: the lower stop takes it
+    _free_ball([0.3, -1.0], mirror=True)
+    # a ball under gravity on a floor: a lower extra stop below it takes the weight
+    ic.ImpactOscillator(M=np.eye(2), K=np.diag([1.0, 0.0]), F=[1.0, 0.0], R=0.8, b=1.0,
+                        omega=1.3, F_static=[0.0, -9.81],
+                        stops=Stops(extra=(ic.Stop("A", mass=2, gap=0.5, side=-1,
+                                                   restitution=0.7),)))
+
+
+def test_a_constant_force_on_two_free_modes_is_checked_along_every_escape():
+    """Two free masses 2 and 3, U on x2 and an extra stop A on x3 - x2 (x3 above x2 by at most
+    0.5): a force pushing both masses up is held (x2 by U, x3 by A over x2); one pulling mass
+    3 down is not (nothing holds x3 from below)."""
+    def two(F_static):
+        return ic.ImpactOscillator(
+            M=np.eye(3), K=np.diag([1.0, 0.0, 0.0]), F=[1.0, 0.0, 0.0], R=0.8, b=1.0,
+            omega=1.3, eta=0.05, F_static=F_static,
+            stops=Stops(mass=2, extra=(ic.Stop("A", mass=3, relative_to=2, gap=0.5,
+                                               restitution=0.5),)))
+    two([0.0, 0.2, 0.5])
+    with pytest.raises(ParameterError, match=r"pushes the free \(rigid-body\) mode u = "
+                                             r"\[0\.0, 0\.0, -1\.0\]"):
+        two([0.0, 0.2, -0.5])
