@@ -28,10 +28,13 @@ any        ``oscillator``: JSON of an :class:`~impactcont.ImpactOscillator`
            ``title``, ``impactcont_version``, ``history``: text
 branch     ``N``: integer >= 1, ``2 pi N / omega`` the period of the N-p
            motions stored (the sum of ``flight_time_k``); ``parameter``: a
-           continuable parameter with its column; ``options``: a JSON
+           continuable parameter with its column, which (and ``omega``,
+           ``b``) is finite at every point; ``options``: a JSON
            object; ``impacts``: p >= 1, the size of ``impact`` (required
            with that dimension); ``pattern``: p letters ``U``/``L``, ``L``
-           only with a lower stop (required with a lower stop)
+           only with a lower stop (required with a lower stop), and letter
+           k the stop the stored state right after impact k is on
+           (``state_k``, ``state`` of an N-1 branch)
 curve      ``kind``: SN, PD, NS, GR or ZV; ``N``; ``parameters``: two
            different parameters with their columns; ``options``
 map        ``options``

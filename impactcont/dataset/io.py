@@ -188,6 +188,8 @@ _FULL_ERRNOS = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
 # A device with less than this free once a write failed is full: the failed write took the
 # rest (what remains is a partly used block, or what another process freed since).
 _FULL_BYTES = 2**20
+# Attribute of an exception noting _full() as the write failed, before its file was emptied.
+_FULL_NOTE = "_impactcont_full"
 
 
 def _room(directory: Path) -> tuple[int, int | None] | None:
@@ -258,6 +260,52 @@ def _probe(directory: Path, message: str, full: str) -> None:
     _check_room(directory, full)
 
 
+def _descriptors_of(path: Path) -> list[int]:
+    """The file descriptors of this process open on the file ``path`` (none where the
+    system does not list them: ``/proc/self/fd`` on Linux, ``/dev/fd`` elsewhere)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return []
+    for listing in ("/proc/self/fd", "/dev/fd"):
+        try:
+            names = os.listdir(listing)
+        except OSError:
+            continue
+        found = []
+        for name in names:
+            try:
+                fd = int(name)
+                info = os.fstat(fd)
+            except (ValueError, OSError):
+                continue
+            if (info.st_dev, info.st_ino) == (st.st_dev, st.st_ino):
+                found.append(fd)
+        return found
+    return []
+
+
+def _release(tmp: Path) -> None:
+    """Free the disk space of the temporary file of a failed write still open here.
+
+    When closing a file fails (HDF5 cannot flush its last data to a full disk), the NetCDF
+    library keeps it open: removed, it would hold its disk space until the interpreter
+    exits. It is emptied (truncated to 0 bytes) first, which frees that space at once.
+    The library's descriptor stays open on the empty removed file (closed at exit): taken
+    from under it, the file's inode number could be given to a new file, which HDF5 would
+    then take for the one it holds open and refuse to create.
+    """
+    if not _descriptors_of(tmp):
+        return
+    try:
+        os.truncate(tmp, 0)
+    except OSError as exc:
+        logger.debug("cannot empty %s, which the NetCDF library keeps open: %s", tmp, exc)
+    else:
+        logger.debug("emptied %s, which the NetCDF library keeps open after a failed write",
+                     tmp)
+
+
 def _write_error(exc: BaseException, shown: str, tmp: Path) -> OSError | None:
     """The error to raise for ``exc``, raised while ``tmp`` was written for the target
     ``shown``; None to raise ``exc`` as it is (not a failure to write: Ctrl-C, a bad value).
@@ -276,7 +324,9 @@ def _write_error(exc: BaseException, shown: str, tmp: Path) -> OSError | None:
     code = exc.errno if isinstance(exc, OSError) else None
     said = (exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc))
     said = said.replace(str(tmp), shown)
-    reason = _full(directory, _FULL_BYTES)
+    # the room when the write failed, noted where the file had to be emptied to close
+    reason = getattr(exc, _FULL_NOTE) if hasattr(exc, _FULL_NOTE) else _full(directory,
+                                                                             _FULL_BYTES)
     if reason is not None or code in _FULL_ERRNOS:
         room = reason if reason is not None else said
         return _no_room(f"cannot write {shown!r}: {_full_text(directory, room, code)}; the "
@@ -1064,6 +1114,7 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
         os.replace(tmp, target)
     except BaseException as exc:
         error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
+        _release(tmp)
         tmp.unlink(missing_ok=True)
         if error is None:
             raise
@@ -1111,7 +1162,17 @@ def _write_blocks(ds: xr.Dataset, tmp: Path,
                                                                 copy=False)
     finally:
         with _sigint_held(target):
-            nc.close()
+            try:
+                nc.close()
+            except RuntimeError as exc:
+                # HDF5 could not flush to a full disk and keeps the file open: emptied
+                # (the write has failed anyway), the file closes with the room it freed;
+                # whether the disk was full is told by the room before that
+                setattr(exc, _FULL_NOTE, _full(tmp.parent, _FULL_BYTES))
+                _release(tmp)
+                with contextlib.suppress(RuntimeError):
+                    nc.close()
+                raise
 
 
 def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
@@ -1171,6 +1232,7 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
         os.replace(tmp, target)
     except BaseException as exc:
         error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
+        _release(tmp)
         tmp.unlink(missing_ok=True)
         if error is None:
             raise

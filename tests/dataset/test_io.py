@@ -661,6 +661,24 @@ def file_size_limit():
         signal.signal(signal.SIGXFSZ, previous)
 
 
+def _held_in(directory: Path) -> list[tuple[str, int]]:
+    """The files under `directory` this process holds open (removed ones included) that
+    take disk space: ``(path, bytes)``."""
+    fds = Path("/proc/self/fd")
+    if not fds.is_dir():
+        pytest.skip("no /proc/self/fd here to list the open files")
+    found = []
+    for fd in fds.iterdir():
+        try:
+            target = os.readlink(fd)
+            size = os.stat(fd).st_blocks * 512
+        except OSError:
+            continue
+        if target.startswith(str(directory)) and size:
+            found.append((target, size))
+    return found
+
+
 def _big_map():
     values = np.random.default_rng(0).random((40, 1000))
     return xr.Dataset({"x": (("a", "c"), values)}, attrs={"impactcont_dataset": "t"})
@@ -668,18 +686,25 @@ def _big_map():
 
 @pytest.mark.parametrize("full", [False, True])
 def test_a_real_netcdf_failure_in_save_blocks_is_an_oserror_naming_the_path(
-        tmp_path, file_size_limit, filling_disk, full):
+        tmp_path, monkeypatch, file_size_limit, full):
+    """The file size limit fails the NetCDF library for real; with `full`, os.statvfs says
+    the device is full while the temporary file holds its data, and has room once it no
+    longer does (as a disk the write filled up)."""
     pytest.importorskip("dask")
     import dask.array as da
 
+    def statvfs(path):
+        held = full and any(p.stat().st_size for p in tmp_path.iterdir()
+                            if p.name.endswith(".tmp"))
+        return _statvfs(0 if held else 1000)
+
+    monkeypatch.setattr(dataset_io.os, "statvfs", statvfs)
     big = _big_map()
     layout = big.copy()
     layout["x"] = (("a", "c"), da.empty((40, 1000), chunks=-1))
 
     def blocks():
         for i in range(40):
-            if i == 0 and full:  # the device fills once the blocks come
-                filling_disk()
             yield {"a": i}, {"x": big["x"].values[i]}
 
     path = tmp_path / "map.nc"
@@ -690,11 +715,13 @@ def test_a_real_netcdf_failure_in_save_blocks_is_an_oserror_naming_the_path(
     assert info.value.errno == (errno.ENOSPC if full else errno.EIO), text
     assert ("no space left" in text) == full, text
     assert list(tmp_path.iterdir()) == []
+    # the NetCDF library keeps open a file whose close failed: not its disk space
+    assert _held_in(tmp_path) == []
     with file_size_limit(), pytest.raises(OSError) as info:  # and a lazy save, for real
         save(big.chunk({"a": 4}), path)
     assert f"cannot write {str(path)!r}" in str(info.value)
     assert info.value.errno == (errno.ENOSPC if full else errno.EIO)
-    assert list(tmp_path.iterdir()) == []
+    assert list(tmp_path.iterdir()) == [] and _held_in(tmp_path) == []
 
 
 def test_atomic_output_names_the_target_on_a_full_disk(tmp_path, filling_disk):
