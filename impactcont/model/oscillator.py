@@ -345,6 +345,10 @@ class ImpactOscillator:
     F : array_like, shape (n,)
         Forcing amplitude vector. Complex entries give the masses their own phases:
         ``F_j = |F_j| e^{i phi_j}`` forces mass j with ``|F_j| cos(omega t + delta + phi_j)``.
+        ``F = 0`` (no harmonic forcing) is a machine too: :func:`~impactcont.simulate` follows
+        it from a state (a ball bouncing on a still table under ``F_static``); periodic
+        motions, which have the forcing's period, need ``F != 0``
+        (:func:`~impactcont.model.stops.require_forcing`).
     R : float
         Coefficient of restitution, ``0 <= R <= 1``.
     b : float
@@ -400,10 +404,6 @@ class ImpactOscillator:
             raise ParameterError(f"M and K must have the same shape; got {M.shape} and {K.shape}")
         n = M.shape[0]
         F = _forcing(self.F, n)
-        if not np.any(F):
-            raise ParameterError(f"F must have a nonzero entry: the forcing F cos(omega t) is "
-                                 f"what drives the impacting motions (eq. 1), and F = 0 gives "
-                                 f"no motion at all; got F = {F.tolist()}")
         R = _real("R", self.R, **_SCALAR_RULES["R"])
         b = _real("b", self.b, **_SCALAR_RULES["b"])
         omega = _real("omega", self.omega, **_SCALAR_RULES["omega"])
@@ -536,6 +536,9 @@ class ImpactOscillator:
             if "F" in changes:
                 raise ParameterError("give F or F0, not both: F0 scales the oscillator's F")
             value = _real("F0", changes.pop("F0"), **_rule("F0"))
+            if not self.F0:
+                raise ParameterError(f"F0={value!r} scales the oscillator's F, which is 0 (no "
+                                     "harmonic forcing) and has no shape to scale: give F")
             scale = value / self.F0
             changes["F"] = self.F / self.F0 * value  # exactly F0 = value for the largest |F_i|
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}

@@ -46,7 +46,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 
 __all__ = ["LOWER", "UPPER", "Stop", "StopView", "Stops", "check_pattern",
-           "require_paper_stops"]
+           "require_forcing", "require_paper_stops"]
 
 #: Relative allowance of the test ``normal . u_free != 0`` (a free mode touched by a stop).
 TOUCH_RTOL = 1e-10
@@ -678,6 +678,32 @@ def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
     return pattern
 
 
+def require_forcing(osc: Any, what: str) -> None:
+    """Refuse a machine without harmonic forcing (``F = 0``) on a path of periodic motions.
+
+    A periodic motion of this package has the forcing's period ``2 pi N / omega`` and is
+    fixed in time by the forcing phase ``delta``. Without a harmonic forcing the machine is
+    autonomous (``F_static`` is a constant force, conservative): with any loss (``R < 1`` or
+    damping) its impacting motions die out, and without loss every time shift of a motion is
+    another one, so no motion is isolated (the shooting Jacobian is singular). Such a
+    machine is followed by :func:`impactcont.simulate` from a state.
+
+    Raises
+    ------
+    ParameterError
+        Naming `what`, the forcing received and what is allowed.
+    """
+    F = getattr(osc, "F", None)
+    if F is not None and not np.any(F):
+        raise ParameterError(
+            f"{what}: F = {np.asarray(F).tolist()} (no harmonic forcing): periodic motions have "
+            "the forcing's period 2 pi N / omega and its phase delta, and an unforced machine "
+            "has no isolated one (with any loss, R < 1 or damping, its impacts die out; "
+            "without loss every time shift of a motion is another). Allowed: F with a "
+            "nonzero entry; an unforced machine (e.g. a ball bouncing on a still table under "
+            "F_static) is followed by impactcont.simulate from a state")
+
+
 def require_paper_stops(osc: Any, what: str) -> None:
     """Refuse a system other than the paper's form on the closed-form N-1 path.
 
@@ -692,6 +718,7 @@ def require_paper_stops(osc: Any, what: str) -> None:
     ParameterError
         Naming `what`, what the system has and the shooting path that handles it.
     """
+    require_forcing(osc, what)
     others = getattr(osc, "paper_form_violations", None)
     problems = others() if callable(others) else []
     if problems:

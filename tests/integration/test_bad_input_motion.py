@@ -338,3 +338,38 @@ def test_a_constant_force_on_two_free_modes_is_checked_along_every_escape():
     with pytest.raises(ParameterError, match=r"pushes the free \(rigid-body\) mode u = "
                                              r"\[0\.0, 0\.0, -1\.0\]"):
         two([0.0, 0.2, -0.5])
+
+
+# ------------------------------------------------------------------------------------------
+# Issue 28, 4: F = 0 was refused as "gives no motion at all", false with gravity or an
+# initial velocity. An unforced machine is simulated; the periodic-motion paths, which need
+# the forcing's period and phase, refuse it saying so.
+# ------------------------------------------------------------------------------------------
+
+def test_a_ball_bouncing_on_a_still_table_is_simulated():
+    """Gravity 1 (F_static), no forcing, a floor below the free ball (lower stop at 0, R
+    0.8): from x' = 2 the flights are 2 v / g with v = 2, 1.6, 1.28, ... (closed form)."""
+    ball = ic.ImpactOscillator(M=[[1.0]], K=[[0.0]], F=[0.0], F_static=[-1.0], R=0.8,
+                               b=100.0, omega=1.0, stops=Stops(b_low=0.0, R_low=0.8))
+    res = simulate(ball, [0.0, 2.0], 0.0, 3.0)
+    speeds = 2.0 * 0.8 ** np.arange(5)
+    np.testing.assert_allclose(res.impact_times[:5], np.cumsum(2.0 * speeds), rtol=1e-12)
+    np.testing.assert_allclose(res.impact_velocities[:5], speeds, rtol=1e-12)
+    assert set(res.impact_stops) == {"L"}
+
+
+def test_an_unforced_chain_is_simulated_from_a_state(paper):
+    osc = paper.replace(F=[0.0, 0.0], b=0.3)
+    res = simulate(osc, [0.0, 0.0, 1.0, 0.0], 0.0, 3.0)
+    assert res.impact_times.size >= 1 and res.impact_velocities[0] > 0
+    still = simulate(osc, np.zeros(4), 0.0, 3.0)  # at rest, unforced: stays at rest
+    assert still.impact_times.size == 0 and np.all(still.final_state == 0.0)
+
+
+def test_periodic_motions_of_an_unforced_machine_are_refused(paper):
+    osc = paper.replace(F=[0.0, 0.0])
+    with pytest.raises(ParameterError, match=re.escape(
+            "F = [0.0, 0.0] (no harmonic forcing): periodic motions have the forcing's period")):
+        ic.periodic_orbits(osc, 1)
+    with pytest.raises(ParameterError, match=r"F0=2\.0 scales the oscillator's F, which is 0"):
+        osc.replace(F0=2.0)
