@@ -264,7 +264,10 @@ def next_contact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
         Longest flight to search.
     after : dict, optional
         Per stop (``"U"``, ``"L"``, an extra stop's name), ignore a crossing completed by
-        this time (a flight that starts on that stop at rest and leaves it).
+        this time (a flight that starts on that stop and leaves it). Any other stop whose
+        coordinate is evaluated on or past it at the start, moving into it, is hit at once
+        (a state short of it only by the rounding of the evaluation: no crossing from below
+        is left to find).
 
     Returns
     -------
