@@ -63,7 +63,7 @@ from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.progress import ProgressOption, Reporter, check_progress, reporter
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS, check_labels
+from impactcont.vocabulary import LABELS, check_bounds, check_labels
 
 __all__ = ["multi_impact_continuation", "restart_problem"]
 
@@ -473,9 +473,12 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     if options is not None and "bounds" in getattr(options, "given", ()):
         bounds = options.bounds
     # the drivers' one check (as continuation's): two finite numbers lo < hi in the
-    # parameter's range, and the oscillator at both ends (an element of K keeps K PSD)
-    bounds = param.check_bounds(orbit.oscillator, bounds)
+    # parameter's range; then the stops' limits; then the oscillator at both ends (an
+    # element of K keeps K positive semi-definite)
+    bounds = check_bounds(parameter, bounds)
     problem, u0 = branch_problem(orbit, parameter, symmetric)
+    problem.check_bounds(bounds)
+    param.check_bounds(orbit.oscillator, bounds)
     lam0 = problem.param.value(orbit.oscillator)
     opts = make_options(bounds, options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                         newton_tol=newton_tol, max_points=max_points,

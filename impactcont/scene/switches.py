@@ -230,14 +230,14 @@ class MultiImpactSpec(continuation_entry(multi_impact_continuation, "MultiImpact
         osc = simulations[self.start].oscillator  # the motion is found at its oscillator
         library_check(where.key("parameter"), check_parameter, osc, self.parameter)
         library_check(where.key("parameter"), model_parameter, osc, self.parameter)  # m9, n=2
-        # the drivers' bounds check on the oscillator (an entry of K keeps K PSD at both ends)
-        library_check(where, _check_model_bounds, osc, self.parameter, self.bounds,
-                      keys=("bounds",))
         library_check(where, make_options, self.bounds, keys=("bounds", *CONTINUATION_KEYS),
                       **self.continuation_options())
         # the stops bound the parameter (b > -b_low with a lower stop), as the run refuses
         library_check(where.key("bounds"), _check_stop_limits, osc, self.N, self.p,
                       self.parameter, self.bounds)
+        # the drivers' bounds check on the oscillator (an entry of K keeps K PSD at both ends)
+        library_check(where, _check_model_bounds, osc, self.parameter, self.bounds,
+                      keys=("bounds",))
         value = model_parameter(osc, self.parameter).value(osc)  # an element, an extra stop's
         lo, hi = self.bounds
         if value is None or not lo <= value <= hi:

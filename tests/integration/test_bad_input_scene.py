@@ -367,3 +367,14 @@ def test_bounds_of_a_stiffness_entry_are_checked_against_the_rest_of_k(tmp_path:
                                      'name = "br"\nparameter = "K[1,1]"\nbounds = [-1.0, 3.0]')
     err = scene_error(tmp_path, text)
     assert err.key == "branches[0].bounds" and "K[1,1] in [0.5, inf)" in str(err)
+
+
+def test_a_start_state_is_checked_on_the_clearance_between_masses(tmp_path: Path) -> None:
+    pair = OSCILLATOR + "stop_mass = 2\nstop_relative_to = 1\nmirror_stop = true\n"
+    sim = '[[simulations]]\nstart = "state"\ndelta = 0.0\nperiods = 2\n'
+    # outside the clearance (x2 - x1 = 0.7 > b = 0.6): refused by --check, not by the run
+    err = scene_error(tmp_path, pair + sim + "state = [1.0, 1.7, 0.0, 0.0]\n")
+    assert err.key == "simulations[0].state" and "x2 - x1 = 0.7 is beyond stop 'U'" in str(err)
+    # inside it (x2 = 1.6 > b, but x2 - x1 = 0.1): accepted, and the run takes it
+    scene = load_scene(write(tmp_path, pair + sim + "state = [1.5, 1.6, 0.0, 0.0]\n"))
+    assert run_scene(scene).ok
