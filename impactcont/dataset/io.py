@@ -1160,19 +1160,36 @@ def _write_blocks(ds: xr.Dataset, tmp: Path,
                     else:
                         nc[cf_name(name)][where] = block.astype(nc[cf_name(name)].dtype,
                                                                 copy=False)
-    finally:
+    except BaseException as exc:
         with _sigint_held(target):
-            try:
-                nc.close()
-            except RuntimeError as exc:
-                # HDF5 could not flush to a full disk and keeps the file open: emptied
-                # (the write has failed anyway), the file closes with the room it freed;
-                # whether the disk was full is told by the room before that
-                setattr(exc, _FULL_NOTE, _full(tmp.parent, _FULL_BYTES))
-                _release(tmp)
-                with contextlib.suppress(RuntimeError):
-                    nc.close()
-                raise
+            _close_written(nc, tmp, exc)
+        raise
+    with _sigint_held(target):
+        _close_written(nc, tmp, None)
+
+
+def _close_written(nc: Any, tmp: Path, failed: BaseException | None) -> None:
+    """Close the netCDF4 file ``nc`` written to ``tmp``; ``failed``: the error that stopped
+    the write, which stays the one raised (the close's own error is raised only without it).
+
+    Where closing fails (HDF5 cannot flush its last data to a full disk, and the library
+    then keeps the file open), the file is emptied (:func:`_release`: the write has
+    failed anyway) and closed again with the room that freed. Whether the disk was full
+    is noted on the errors first (attribute ``_FULL_NOTE``, read by :func:`_write_error`):
+    emptied, the file no longer fills it.
+    """
+    try:
+        nc.close()
+    except RuntimeError as exc:
+        full = _full(tmp.parent, _FULL_BYTES)
+        for error in (exc, failed):
+            if error is not None:
+                setattr(error, _FULL_NOTE, full)
+        _release(tmp)
+        with contextlib.suppress(RuntimeError):
+            nc.close()
+        if failed is None:
+            raise
 
 
 def save_blocks(ds: xr.Dataset, path: str | os.PathLike,

@@ -732,3 +732,50 @@ def test_atomic_output_names_the_target_on_a_full_disk(tmp_path, filling_disk):
     text = str(info.value)
     assert info.value.errno == errno.ENOSPC and f"cannot write {str(path)!r}" in text, text
     assert ".tmp" not in text and list(tmp_path.iterdir()) == []
+
+
+def test_no_file_entry_left_is_no_space_not_a_permission_problem(branch, tmp_path, monkeypatch):
+    """A device out of inodes refuses to create the probe with ENOSPC: said as such."""
+    real_open = os.open
+
+    def no_inode(path, flags, *args):
+        if Path(path).parent == tmp_path and flags & os.O_CREAT:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real_open(path, flags, *args)
+
+    monkeypatch.setattr(dataset_io.os, "open", no_inode)
+    path = tmp_path / "b.nc"
+    with pytest.raises(OSError) as info:
+        save(branch, path)
+    text = str(info.value)
+    assert info.value.errno == errno.ENOSPC and type(info.value) is OSError
+    assert (f"cannot write {str(path)!r}: no space left on the device of directory "
+            f"{str(tmp_path)!r} (No space left on device)") in text, text
+    assert "permission" not in text and ".tmp" not in text, text
+
+
+class _FailingClose:
+    """A file whose first close fails as HDF5's does on a full disk."""
+
+    def __init__(self) -> None:
+        self.closes = 0
+
+    def close(self) -> None:
+        self.closes += 1
+        if self.closes == 1:
+            raise RuntimeError("NetCDF: HDF error")
+
+
+def test_a_failed_close_keeps_the_error_that_stopped_the_write(tmp_path, filling_disk):
+    tmp = tmp_path / ".x.nc.tmp"
+    tmp.write_bytes(b"\x89HDF data")
+    filling_disk()
+    stopped = KeyboardInterrupt()
+    nc = _FailingClose()
+    dataset_io._close_written(nc, tmp, stopped)  # the caller raises `stopped`, not this
+    assert nc.closes == 2 and tmp.read_bytes() == b"\x89HDF data"  # not open: not emptied
+    assert getattr(stopped, dataset_io._FULL_NOTE) == "0 bytes free"
+    nc = _FailingClose()
+    with pytest.raises(RuntimeError, match="HDF error") as info:
+        dataset_io._close_written(nc, tmp, None)
+    assert nc.closes == 2 and getattr(info.value, dataset_io._FULL_NOTE) == "0 bytes free"
