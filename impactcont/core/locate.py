@@ -149,8 +149,8 @@ class EventPoint:
     failed: bool = False
 
 
-def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
-                ) -> tuple[float, str]:
+def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float,
+                noise: Callable[[float], float] | None = None) -> tuple[float, str]:
     """The zero of `g` in ``[lo, hi]`` by Brent's method, and how well it is known.
 
     Parameters
@@ -164,6 +164,8 @@ def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
         The bracket, where `g` has opposite signs.
     xtol : float
         Absolute tolerance in the coordinate.
+    noise : callable, optional
+        ``noise(t)``: the rounding error of ``g(t)`` (a value within it is zero).
 
     Returns
     -------
@@ -198,7 +200,7 @@ def locate_zero(g: Callable[[float], float], lo: float, hi: float, xtol: float
         s = brentq(g, a, b, xtol=xtol, rtol=4 * _EPS, maxiter=500)
     else:  # a jump from infinity: its finite side
         s = a if math.isfinite(ga) else b
-    return s, "located" if _vanishes(g, s, lo, hi, (g0, g1)) else "bracketed"
+    return s, "located" if _vanishes(g, s, lo, hi, (g0, g1), noise) else "bracketed"
 
 
 #: a located zero: |g| at most this fraction of its size at the bracket's ends ...
@@ -209,16 +211,18 @@ _NEARBY = 1e-3
 
 
 def _vanishes(g: Callable[[float], float], s: float, lo: float, hi: float,
-              ends: tuple[float, float]) -> bool:
+              ends: tuple[float, float], noise: Callable[[float], float] | None = None
+              ) -> bool:
     """Whether the sign change of `g` at `s` is a zero, not a pole or a jump.
 
     A zero: ``|g(s)|`` at most 1e-6 of the larger finite end value (plus 1e-12), and at
     most 1e-3 of ``|g|`` on each side of `s` at a thousandth of the bracket's width (the
-    sides inside the bracket; an infinite side counts as large). Through a pole ``|g|``
-    grows towards `s`; across a jump it stays at the size of the jump on one side: both
-    fail the second test even when the jump starts next to zero. A simple zero passes
-    with ``|g(s)| / |g(s +- d)|`` about ``xtol / d``; a zero of odd order k about
-    ``(xtol / d)^k`` (or rounding over ``d^k``).
+    sides inside the bracket; an infinite side counts as large; a side within rounding of
+    zero, ``_NOISE_ULPS`` eps times the ends' size or `noise` there, is a flat zero).
+    Through a pole ``|g|`` grows towards `s`; across a jump it stays at the size of the
+    jump on one side: both fail the second test even when the jump starts next to zero.
+    A simple zero passes with ``|g(s)| / |g(s +- d)|`` about ``xtol / d``; a zero of odd
+    order k about ``(xtol / d)^k`` (or rounding over ``d^k``).
     """
     gs = g(s)
     if gs == 0.0:
@@ -228,6 +232,7 @@ def _vanishes(g: Callable[[float], float], s: float, lo: float, hi: float,
     scale = max((abs(v) for v in ends if math.isfinite(v)), default=math.inf)
     if not abs(gs) <= _SMALL_AGAINST_ENDS * scale + 1e-12:
         return False
+    rounding = _NOISE_ULPS * _EPS * scale  # a side within it: zero there too (a flat zero)
     left, right = min(lo, hi), max(lo, hi)
     d = _NEARBY * (right - left)
     for t in (max(s - d, left), min(s + d, right)):
@@ -235,9 +240,10 @@ def _vanishes(g: Callable[[float], float], s: float, lo: float, hi: float,
             continue
         try:
             side = abs(g(t))
+            level = max(rounding, noise(t) if noise is not None else 0.0)
         except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
             continue  # no branch point there: that side says nothing
-        if not abs(gs) <= _SMALL_AGAINST_SIDES * side:  # nan: not a zero
+        if not (abs(gs) <= _SMALL_AGAINST_SIDES * side or side <= level):  # nan: no
             return False
     return True
 
@@ -285,12 +291,12 @@ class _Chord:
         return float(tangent_at(self.problem, u, lam, self.chord)[-1])
 
 
-def _locate(g: Callable[[float], float], s_tol: float, lo: float = 0.0, hi: float = 1.0
-            ) -> tuple[float, str]:
+def _locate(g: Callable[[float], float], s_tol: float, lo: float = 0.0, hi: float = 1.0,
+            noise: Callable[[float], float] | None = None) -> tuple[float, str]:
     g0, g1 = g(lo), g(hi)
     if not _changes(g0, g1):
         return 0.5 * (lo + hi), "bracketed"  # the re-evaluated ends disagree: keep bracket
-    return locate_zero(g, lo, hi, s_tol)
+    return locate_zero(g, lo, hi, s_tol, noise)
 
 
 def _middle(chord: _Chord) -> tuple[float, str, tuple[FloatArray, float]]:
@@ -478,7 +484,9 @@ def _pole_cuts(event: Event, x: FloatArray, k: int, chord: _Chord) -> list[float
 
 
 #: the first distance (relative to a part's width) at which a test is read next to a pole
-_POLE_OFFSET = 1e-9
+_POLE_OFFSET = 1e-7
+#: next to a pole the test's sign is read where it is this many times its noise
+_POLE_MARGIN = 10.0
 
 
 def _beside_poles(label: str, g: Callable[[float], float],
@@ -487,10 +495,10 @@ def _beside_poles(label: str, g: Callable[[float], float],
     """The parts of a step between the zeros `cuts` of the pole quantities where the test
     changes sign.
 
-    Next to a pole the test's sign is read where it first rises above its noise (its
-    own, ``noise``, and ``_NOISE_ULPS`` eps times its size at the step's ends), at
-    distances from the pole growing by factors of 10 from ``1e-9`` of the part up to half
-    of it; a part without such a point says nothing. A sign change across a pole is the
+    Next to a pole the test's sign is read where it first rises well above its noise (ten
+    times its own, ``noise``, and ``_NOISE_ULPS`` eps times its size at the step's ends),
+    at distances from the pole growing by factors of 10 from ``1e-7`` of the part up to
+    half of it; a part without such a point says nothing. A sign change across a pole is the
     pole's: not an event (logged). A zero of the test closer to a pole than where its
     sign can be read cannot be told from the pole's and is not reported either.
     """
@@ -503,7 +511,7 @@ def _beside_poles(label: str, g: Callable[[float], float],
             level = max(floor, noise(t) if noise is not None else 0.0)
         except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
             return None
-        return value if abs(value) > level else None
+        return value if abs(value) > _POLE_MARGIN * level else None
 
     def beside(cut: float, towards: float) -> float | None:
         width = abs(towards - cut)
@@ -540,7 +548,7 @@ def _event_point(label: str, chord: _Chord, g: Callable[[float], float],
     """The event's zero in the part ``[lo, hi]`` of step `k`, located or bracketed."""
     failed = False
     try:
-        s, status = _locate(g, s_tol, lo, hi)
+        s, status = _locate(g, s_tol, lo, hi, noise)
         uk, lamk = chord.point(s)
     except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
         failed = True  # kept as bracketed (never dropped), at the middle of the step

@@ -176,12 +176,10 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
                          **fields)
         # only GR needs the (costly) interior-contact search of every flight
         at = orbits[label == "GR"]
+        fields = dict(noise_at=lambda u, lam: event_noise(label, at(u, lam)))
         if label in POLE_CLEARED:  # split at each impact's h2 = 0 (module notes)
-            fields = dict(poles=lambda u, lam: at(u, lam).impact_velocities,
-                          poles_at=lambda k: samples[k].orbit.impact_velocities,
-                          noise_at=lambda u, lam: event_noise(label, at(u, lam)))
-        else:
-            fields = {}
+            fields.update(poles=lambda u, lam: at(u, lam).impact_velocities,
+                          poles_at=lambda k: samples[k].orbit.impact_velocities)
         return Event(label, lambda u, lam: event_function(label, at(u, lam)),
                      lambda k: event_function(label, samples[k].orbit),
                      lambda k: event_noise(label, samples[k].orbit), **fields)

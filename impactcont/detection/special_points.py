@@ -200,11 +200,11 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     orbit_at = last_motions(lambda u, lam: problem.orbit(u[0], lam))
 
     def event(label: str) -> Event:
-        fields: dict[str, Any] = {}
+        fields: dict[str, Any] = dict(
+            noise_at=lambda u, lam: event_noise(label, orbit_at(u, lam)))
         if label in POLE_CLEARED:  # the step is split at h2 = 0 (module notes)
-            fields = dict(poles=lambda u, lam: [orbit_at(u, lam).impact_velocity],
-                          poles_at=lambda k: [samples[k].orbit.impact_velocity],
-                          noise_at=lambda u, lam: event_noise(label, orbit_at(u, lam)))
+            fields.update(poles=lambda u, lam: [orbit_at(u, lam).impact_velocity],
+                          poles_at=lambda k: [samples[k].orbit.impact_velocity])
         return Event(label, lambda u, lam: event_function(label, orbit_at(u, lam)),
                      lambda k: event_function(label, samples[k].orbit),
                      lambda k: event_noise(label, samples[k].orbit), **fields)
