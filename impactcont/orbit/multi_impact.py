@@ -140,8 +140,13 @@ class MultiImpactOrbit:
         ``b - x_j`` at its maxima and, with a lower stop, ``x_j + b_low`` at its
         minima; ``+inf`` when there is none. With stops on several coordinates
         (``stops.extra``) the smallest over every stop (each on its own coordinate).
+        Both ends of the flight count too: every stop's clearance at its start (but
+        the stop impact k hits) and at its end (but the stop impact k+1 hits), so that a
+        coordinate past a stop when the flight ends on another stop is seen, and the
+        smallest clearance changes sign continuously at such a grazing.
     flight_gap_min_times : ndarray, shape (p,)
-        Time of that extremum after impact k (NaN when there is none).
+        Time of that extremum after impact k (NaN when there is none; 0 or ``tau_k``
+        for an end of the flight).
     jacobians : ndarray, shape (p, 2n, 2n)
         ``G_k``, Jacobian of flight k and the impact ending it (eq. 25) in
         ``z = [dx2..dxn, dx1'..dxn', d theta]``.
@@ -150,8 +155,10 @@ class MultiImpactOrbit:
     multipliers : ndarray of complex, shape (2n,)
         Eigenvalues of ``G``, largest modulus first.
     physical : bool
-        Every flight time ``> 0``, every impact velocity ``> 0`` and every
-        ``flight_gap_min > 0`` (no contact inside any flight).
+        Every flight time ``> 0``, every impact velocity ``> 0``, every interior
+        clearance ``> 0`` (no contact inside any flight) and every stop's clearance at
+        every impact state ``>= 0`` to the rounding of its evaluation (relative to the
+        motion's size, :data:`impactcont.kernel.shooting._END_ULPS`).
     reason : str
         Why the motion is not physical ("" when it is).
     residual : float
@@ -220,7 +227,8 @@ class MultiImpactOrbit:
 
     @property
     def gap_min(self) -> float:
-        """Smallest interior gap over the p flights (the GR test function)."""
+        """Smallest clearance over the p flights, interior extrema and ends (the GR test
+        function)."""
         return float(np.min(self.flight_gap_min))
 
     @property

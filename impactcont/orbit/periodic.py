@@ -95,7 +95,12 @@ class PeriodicOrbit:
         Time of that maximum after the impact (NaN when there is none).
     physical : bool
         ``impact_velocity > 0`` (mass 1 arrives towards the stop and leaves it)
-        and ``gap_min > 0`` (no contact inside the period, eq. 16).
+        and ``gap_min > 0`` (no contact inside the period, eq. 16). The closed form
+        takes the paper's one stop only (:func:`~impactcont.model.stops.require_paper_stops`
+        refuses a lower stop, a clearance between masses and further stops), so the impact
+        state, ``x1 = b``, has no other stop to check; an N-1 motion of any other system is
+        the shooting path's (p = 1), which checks every stop at the impact
+        (:func:`impactcont.kernel.shooting.end_clearances`).
     reason : str
         Why the motion is not physical ("" when it is).
     """
