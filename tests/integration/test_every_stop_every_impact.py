@@ -166,6 +166,24 @@ def test_continuation_locates_the_end_of_flight_grazing(orbit):
     assert abs(w - w_ref) <= max(10 * precision, 1e-9)
 
 
+def test_gr_curve_follows_the_end_of_flight_grazing(orbit):
+    """The located GR followed in (omega, b) (the minimally augmented curve on gap_min):
+    at every curve point the independent flow puts x1 at b exactly when flight 0 ends
+    on A."""
+    ds = ic.multi_impact_continuation(orbit, "omega", (2.40, 2.41), direction=1)
+    cv = ic.multi_impact_curve(ds, "GR", 0, parameter="b",
+                               bounds={"omega": (2.38, 2.43), "b": (0.055, 0.06)},
+                               ds_max=0.002, max_points=20)
+    assert cv.sizes["point"] > 5 and np.ptp(cv["b"].values) > 2e-3
+    for i in range(0, cv.sizes["point"], 4):
+        om_, b = float(cv["omega"].values[i]), float(cv["b"].values[i])
+        X0 = cv["state_k"].values[i, 0]
+        end = _flight(om_, X0, float(cv["delta_k"].values[i, 0]),
+                      float(cv["flight_time_k"].values[i, 0]))
+        assert abs(b - end[0]) < 1e-9  # x1 at U ...
+        assert end[0] - end[1] == pytest.approx(GAP_A, abs=1e-9)  # ... at the A impact
+
+
 # -- the map --------------------------------------------------------------------------------
 def test_map_marks_the_motions_past_a_stop_at_an_impact(orbit):
     """The compiled map sweep checks the impact states too: the points below the grazing
