@@ -5,6 +5,9 @@ the section, files of ``impactcont.save`` too; a file that is not impactcont's i
 from __future__ import annotations
 
 import json
+import os
+import re
+from pathlib import Path
 
 import pytest
 import xarray as xr
@@ -78,3 +81,37 @@ def test_a_file_that_is_not_impactcont_s_is_refused(tmp_path) -> None:
         f.read_output(plain)
     with pytest.raises(FileNotFoundError):
         f.read_output(tmp_path / "missing.nc")
+
+
+_HOLD_LOCK = """
+import sys
+from impactcont.scene.files import output_lock
+with output_lock(sys.argv[1]):
+    print("held", flush=True)
+    sys.stdin.readline()
+"""
+
+
+def test_the_lock_of_a_killed_run_is_released_and_taken_over(tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+
+    from impactcont.scene.files import LOCK_FILE, OutputInUseError, output_lock
+
+    holder = subprocess.Popen([sys.executable, "-c", _HOLD_LOCK, str(tmp_path)],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                              cwd=Path(__file__).resolve().parents[2])
+    try:
+        assert holder.stdout.readline() == "held\n"
+        expected = f"output folder {str(tmp_path)!r} is in use by another scene run (pid " \
+            f"{holder.pid}, lock file"
+        with pytest.raises(OutputInUseError, match=re.escape(expected)), output_lock(tmp_path):
+            pass
+    finally:
+        holder.send_signal(signal.SIGKILL)
+        holder.wait()
+    assert (tmp_path / LOCK_FILE).exists()  # a killed run leaves its file, not its lock
+    with output_lock(tmp_path) as path:
+        assert path.read_text() == f"{os.getpid()}\n"
+    assert not path.exists()
