@@ -18,7 +18,10 @@ The work is split into tasks of ``(N, block of omega, block of b)`` (at most
 
 Tasks receive the oscillator as JSON and return plain arrays, so any executor
 that pickles works. A process pool that breaks (a worker killed) is replaced and
-the unfinished tasks are retried once, one at a time.
+the unfinished tasks are run again, one at a time (a task up to twice more), also when
+the worker died sending its result and the pool did not notice
+(:mod:`impactcont.analysis.pool`). The pool made for ``"process"`` is killed when the
+map fails or is interrupted, and its workers end when this process is killed.
 
 Memory: the map's arrays are made once and each task's block is copied in (or
 written to the file) as it finishes, with ``2 x workers`` tasks submitted at once;
@@ -47,6 +50,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.pool import dead_worker, kill_pool, process_pool
 from impactcont.dataset.curves import map_dataset
 from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.dataset.map_storage import open_temporary_map, temporary_map_file
@@ -75,6 +79,9 @@ _DISK_TASK_BYTES = 512
 # 15-25 MB, 35 MB on their first use in a process).
 _DISK_FIXED_BYTES = 32_000_000
 _TASK_SHARE = 0.25  # the tasks in flight of a map in memory: at most this share of it
+_POLL_SECONDS = 0.25  # how often the tasks in flight and the pool's workers are looked at
+_STUCK_SECONDS = 2.0  # a pool with a dead worker not marked broken after this is stuck
+_RETRIES = 2  # times a task that broke the pool while running alone is run again
 _DTYPES = {"physical": bool, "stable": bool, "critical_multiplier": complex}
 _ROOT_FIELDS = ("delta", "impact_velocity", "gap_min", "spectral_radius", "critical_multiplier",
                 "physical", "stable")
@@ -154,7 +161,7 @@ def _executor(executor: Any, max_workers: int | None) -> tuple[cf.Executor | Non
     if executor is None or executor == "serial":
         return None, False, "serial"
     if executor == "process":
-        return cf.ProcessPoolExecutor(max_workers=max_workers), True, "process"
+        return process_pool(max_workers), True, "process"
     if isinstance(executor, cf.Executor):
         return executor, False, type(executor).__name__
     get_executor = getattr(executor, "get_executor", None)  # a dask.distributed.Client
@@ -242,8 +249,8 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         of a parameter other than omega and b, or a map for a file without dask
         installed.
     concurrent.futures.process.BrokenProcessPool
-        A worker of the process pool died twice while computing the same task: the
-        message names the task (N and the omega and b ranges).
+        A worker of the process pool died each time the same task ran alone (three
+        times): the message names the task (N and the omega and b ranges).
     """
     if others:
         raise ParameterError(
@@ -301,8 +308,10 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                 ds = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
             else:
                 path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
-        finally:
-            runner.close()
+        except BaseException:
+            runner.close(kill=True)  # Ctrl-C or a failure: no worker left computing
+            raise
+        runner.close()
     elapsed = time.perf_counter() - start
     log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
              "computed" if in_memory else f"written to {out}", elapsed, len(tasks), runner.name)
@@ -376,9 +385,18 @@ class _Runner:
 
     A process pool that breaks (one of its worker processes died: killed, out of
     memory) is replaced by a new pool of the same size and the tasks that did not
-    finish are retried once there, one at a time: a task that breaks the pool again
-    is the one that kills its worker, and ends the map with
+    finish are run again there, one at a time: a task that breaks the pool while it
+    runs alone is the one that kills its worker; it is run again up to ``_RETRIES``
+    times (a worker may be killed from outside twice), then ends the map with
     :class:`~concurrent.futures.process.BrokenProcessPool` naming it.
+
+    A worker killed while it sends its result leaves the pool's manager thread waiting
+    forever for the rest (:mod:`impactcont.analysis.pool`): the futures are waited for
+    ``_POLL_SECONDS`` at a time, and a pool with a dead worker that is still not marked
+    broken ``_STUCK_SECONDS`` later is ended (:func:`~impactcont.analysis.pool.kill_pool`)
+    and treated as broken. The pools made here end with the map: shut down when it ends,
+    killed when it fails or is interrupted (Ctrl-C), and their workers end when this
+    process is killed (:func:`~impactcont.analysis.pool.process_pool`).
     """
 
     def __init__(self, osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
@@ -390,11 +408,17 @@ class _Runner:
         self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
         self._spectral_radius = spectral_radius
         self._renewals = 0
+        self._dead_since: dict[int, float] = {}  # id(pool): when a dead worker was seen
+        self._killed: list[Any] = []  # pools ended as stuck
         if isinstance(self.pool, cf.ProcessPoolExecutor):
             # the workers forked now, before the map's arrays exist: a worker forked later
             # would keep the pages it shares with this process as this process fills them
             # (copy on write), up to a second copy of the map
-            self.pool.submit(int).result()
+            try:
+                self.pool.submit(int).result()
+            except BaseException:
+                self.close(kill=True)
+                raise
 
     @property
     def workers(self) -> int:
@@ -431,10 +455,35 @@ class _Runner:
                             f"task {self.describe(task)}") from exc
         self._renewals += 1
         log.warning("a worker process of the pool died (%s: %s): the unfinished tasks are "
-                    "retried once in a new pool", type(exc).__name__, exc)
-        self.pool = cf.ProcessPoolExecutor(max_workers=getattr(pool, "_max_workers", None),
-                                           mp_context=getattr(pool, "_mp_context", None))
+                    "run again in a new pool, one at a time", type(exc).__name__, exc)
+        if any(p is pool for p in self._owned):
+            kill_pool(pool)  # its workers may wait on a lock the dead one held
+        self.pool = process_pool(getattr(pool, "_max_workers", None),
+                                 getattr(pool, "_mp_context", None))
         self._owned.append(self.pool)
+
+    def _end_stuck(self, running: dict[cf.Future, tuple[Any, Any, bool]]) -> None:
+        """End each pool of `running` whose dead worker it has not noticed for
+        ``_STUCK_SECONDS``, and fail its unfinished futures as broken."""
+        now = time.monotonic()
+        pools = {id(pool): pool for _, pool, _ in running.values()}
+        for key, pool in pools.items():
+            if not dead_worker(pool):
+                self._dead_since.pop(key, None)
+                continue
+            if now - self._dead_since.setdefault(key, now) < _STUCK_SECONDS:
+                continue
+            log.warning("a worker process of the pool died and the pool did not notice it "
+                        "in %.3g s (its manager thread is stuck on the dead worker's "
+                        "half-sent result): the pool is ended", _STUCK_SECONDS)
+            self._killed.append(pool)
+            kill_pool(pool)
+            broken = cf.process.BrokenProcessPool(
+                "a worker process died while sending its result; the pool was ended")
+            for future, (_, owner, _) in running.items():
+                if owner is pool and not future.done():
+                    with contextlib.suppress(cf.InvalidStateError):
+                        future.set_exception(broken)
 
     def results(self, tasks: list[tuple[int, slice, slice]]
                 ) -> Iterator[tuple[tuple[int, slice, slice], dict[str, np.ndarray]]]:
@@ -448,8 +497,10 @@ class _Runner:
                     self._done(task)
                     check()
             return
+        most = len(tasks) * (1 + _RETRIES)
         waiting = collections.deque(tasks)
         retry: collections.deque[tuple[int, slice, slice]] = collections.deque()
+        failures: collections.Counter[tuple[int, int, int]] = collections.Counter()
         running: dict[cf.Future, tuple[tuple[int, slice, slice], Any, bool]] = {}
         try:
             while waiting or retry or running:
@@ -464,19 +515,30 @@ class _Runner:
                         running[pool.submit(_map_task, *self._args(task))] = task, pool, alone
                     except cf.BrokenExecutor as exc:  # broken by a task that ran before
                         (retry if alone else waiting).appendleft(task)
-                        self._renew(pool, exc, task, len(tasks))
-                done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                        self._renew(pool, exc, task, most)
+                done, _ = cf.wait(running, timeout=_POLL_SECONDS,
+                                  return_when=cf.FIRST_COMPLETED)
+                if not done:
+                    self._end_stuck(running)
+                    continue
                 for future in done:
                     task, pool, alone = running.pop(future)
                     try:
                         res = future.result()
-                    except cf.BrokenExecutor as exc:
+                    except (cf.BrokenExecutor, cf.CancelledError) as exc:
+                        if isinstance(exc, cf.CancelledError) and not any(
+                                p is pool for p in self._killed):
+                            raise
+                        key = (task[0], task[1].start, task[2].start)
                         if alone:
-                            raise type(exc)(
-                                f"stability_map: a worker process died computing the task "
-                                f"{self.describe(task)}, and again when the task was retried "
-                                f"in a new process pool ({exc})") from exc
-                        self._renew(pool, exc, task, len(tasks))
+                            failures[key] += 1
+                            if failures[key] > _RETRIES:
+                                raise cf.process.BrokenProcessPool(
+                                    f"stability_map: a worker process died computing the "
+                                    f"task {self.describe(task)}, and again each of the "
+                                    f"{_RETRIES} times the task was run again alone in a "
+                                    f"new process pool ({exc})") from exc
+                        self._renew(pool, exc, task, most)
                         retry.append(task)
                         continue
                     yield task, res
@@ -491,11 +553,15 @@ class _Runner:
         _, osl, bsl = task
         self.reporter.advance((osl.stop - osl.start) * (bsl.stop - bsl.start))
 
-    def close(self) -> None:
-        """Shut down the pools created here."""
-        for pool in self._owned:
-            pool.shutdown(cancel_futures=True)
-        self._owned = []
+    def close(self, kill: bool = False) -> None:
+        """End the pools created here: shut down, or with `kill` (the map failed or was
+        interrupted) killed at once (:func:`~impactcont.analysis.pool.kill_pool`)."""
+        owned, self._owned = self._owned, []
+        for pool in owned:
+            if kill or any(p is pool for p in self._killed):
+                kill_pool(pool)
+            else:
+                pool.shutdown(cancel_futures=True)
 
 
 def _layout(shape: tuple[int, int, int], fields: tuple[str, ...]

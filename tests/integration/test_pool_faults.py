@@ -1,0 +1,180 @@
+"""A process-pool map under faults: a worker killed while the parent is stalled, Ctrl-C,
+and the parent killed (issue 28).
+
+Each case runs the map in a child interpreter with a hard timeout, so that a hang fails
+the test instead of hanging the suite. The parent is stalled as a busy scheduler does
+(SIGSTOP for 1.5 s): the workers finish their tasks meanwhile and block writing their
+results into the pool's pipe; the one that is writing (``/proc/<pid>/wchan``) is then
+killed, which leaves half a message in the pipe. Before the fix the pool's manager thread
+waited for the rest forever and the map never ended (2 of 4 runs in the issue, every run
+here); killing the parent left its workers running, adopted by init.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
+                                reason="needs /proc, SIGSTOP and SIGKILL (Linux)")
+
+ROOT = Path(__file__).resolve().parents[2]
+TIMEOUT = 150.0  # seconds for a whole child run: beyond it the child hung
+
+CHILD = textwrap.dedent("""
+    import multiprocessing as mp
+    import sys
+    import numpy as np
+    import impactcont as ic
+
+    mode, repeat = sys.argv[1], int(sys.argv[2])
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                              b=0.6, omega=1.0, eta=0.1)
+    # tasks of 1024 points: results of about 100 kB, more than a pipe holds
+    w, b = np.linspace(0.5, 6.0, 48 if mode != "parent" else 4000), np.linspace(-1, 1.5, 1024)
+    told = []
+
+    def progress(record):
+        if len(told) < 1:
+            told.append(1)
+            print("PIDS", *[c.pid for c in mp.active_children()], flush=True)
+
+    reference = ic.stability_map(osc, [1], w, b) if mode == "kill" else None
+    for _ in range(repeat):
+        told.clear()
+        try:
+            ds = ic.stability_map(osc, [1], w, b, executor="process", max_workers=2,
+                                  progress=progress)
+        except KeyboardInterrupt:
+            print("INTERRUPTED", *[c.pid for c in mp.active_children()], flush=True)
+            continue
+        for key in ("exists", "n_physical", "n_stable", "delta", "gap_min", "stable"):
+            assert np.array_equal(ds[key].values, reference[key].values, equal_nan=True), key
+        print("SAME", *[c.pid for c in mp.active_children()], flush=True)
+""")
+
+
+def _gone(pid: int) -> bool:
+    """Process `pid` has ended (absent, or a zombie nobody reaped)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+def _wchan(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/wchan").read_text()
+    except OSError:
+        return ""
+
+
+def _start(tmp_path: Path, mode: str, repeat: int) -> subprocess.Popen:
+    script = tmp_path / "child.py"
+    script.write_text(CHILD)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.Popen([sys.executable, str(script), mode, str(repeat)], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+
+
+def _line(child: subprocess.Popen, deadline: float) -> str:
+    """The child's next line of output (the test fails if it takes past `deadline`)."""
+    import selectors
+
+    with selectors.DefaultSelector() as sel:
+        sel.register(child.stdout, selectors.EVENT_READ)
+        if not sel.select(max(0.0, deadline - time.monotonic())):
+            raise TimeoutError("the child printed nothing before the deadline")
+    return child.stdout.readline()
+
+
+def _stall_and_kill_a_writer(child: subprocess.Popen, workers: list[int]) -> None:
+    """Stop the parent 1.5 s, kill the worker blocked writing its result, resume."""
+    os.kill(child.pid, signal.SIGSTOP)
+    try:
+        time.sleep(1.5)
+        victim = next((pid for pid in workers if "pipe_write" in _wchan(pid)), workers[0])
+        os.kill(victim, signal.SIGKILL)
+    finally:
+        os.kill(child.pid, signal.SIGCONT)
+
+
+def _end(child: subprocess.Popen, pids: list[int]) -> str:
+    """Kill the child and `pids` if they still run; the child's stderr (once read, kept)."""
+    for pid in [child.pid, *pids]:
+        if not _gone(pid):
+            os.kill(pid, signal.SIGKILL)
+    if not hasattr(child, "stderr_text"):
+        child.stderr_text = child.communicate()[1]
+    return child.stderr_text
+
+
+def test_a_worker_killed_while_the_parent_is_stalled_is_replaced_every_time(tmp_path):
+    repeat = 3
+    child = _start(tmp_path, "kill", repeat)
+    deadline = time.monotonic() + TIMEOUT
+    pids: list[int] = []
+    try:
+        for _ in range(repeat):
+            line = _line(child, deadline)
+            assert line.startswith("PIDS"), (line, child.stderr.read())
+            workers = [int(p) for p in line.split()[1:]]
+            pids += workers
+            _stall_and_kill_a_writer(child, workers)
+            line = _line(child, deadline)
+            # the same map as the serial one, and no worker left
+            assert line.split() == ["SAME"], line
+        assert child.wait(max(1.0, deadline - time.monotonic())) == 0
+    except (TimeoutError, subprocess.TimeoutExpired):
+        pytest.fail(f"the map hung after a worker was killed: {_end(child, pids)[-3000:]}")
+    finally:
+        stderr = _end(child, pids)
+    assert all(_gone(pid) for pid in pids)
+    assert stderr.count("did not notice it") >= 1, stderr  # the stuck pool was ended
+
+
+def test_ctrl_c_stops_a_stuck_map_and_kills_its_workers(tmp_path):
+    child = _start(tmp_path, "interrupt", 1)
+    deadline = time.monotonic() + TIMEOUT
+    workers: list[int] = []
+    try:
+        line = _line(child, deadline)
+        assert line.startswith("PIDS"), (line, child.stderr.read())
+        workers = [int(p) for p in line.split()[1:]]
+        _stall_and_kill_a_writer(child, workers)
+        time.sleep(0.3)  # the manager thread is now stuck on the half-sent result
+        os.kill(child.pid, signal.SIGINT)
+        line = _line(child, time.monotonic() + 20.0)
+        assert line.split() == ["INTERRUPTED"], line  # no worker left
+        assert child.wait(20.0) == 0  # and the interpreter's exit does not hang
+    except (TimeoutError, subprocess.TimeoutExpired):
+        pytest.fail(f"Ctrl-C did not stop the map: {_end(child, workers)[-3000:]}")
+    finally:
+        _end(child, workers)
+    assert all(_gone(pid) for pid in workers)
+
+
+def test_the_workers_end_when_the_parent_is_killed(tmp_path):
+    child = _start(tmp_path, "parent", 1)
+    workers: list[int] = []
+    try:
+        line = _line(child, time.monotonic() + TIMEOUT)
+        assert line.startswith("PIDS"), (line, child.stderr.read())
+        workers = [int(p) for p in line.split()[1:]]
+        assert workers and not any(_gone(pid) for pid in workers)
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait(10.0)
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline and not all(_gone(pid) for pid in workers):
+            time.sleep(0.05)
+        assert all(_gone(pid) for pid in workers), [p for p in workers if not _gone(p)]
+    finally:
+        _end(child, workers)
