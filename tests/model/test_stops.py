@@ -11,7 +11,7 @@ import pytest
 import impactcont as ic
 from impactcont.dataset import oscillator_from_dataset
 from impactcont.errors import ParameterError
-from impactcont.model.stops import Stop, Stops, check_pattern
+from impactcont.model.stops import Stop, Stops, check_pattern, require_forcing
 from impactcont.orbit.flow import Flow
 from tests.orbit.test_flow import _ivp
 
@@ -239,3 +239,12 @@ def test_extra_stops_in_a_scene(tmp_path):
     with pytest.raises(SceneError) as info:
         load_scene(path)
     assert "extra_stops" in info.value.key
+
+
+def test_require_forcing_refuses_only_an_unforced_machine(paper):
+    """F = 0 is a machine (simulated from a state), but has no periodic motion to find."""
+    require_forcing(paper, "a path")  # forced: nothing to say
+    require_forcing(paper.replace(F=[0.0, 1e-300]), "a path")  # any nonzero entry forces it
+    with pytest.raises(ParameterError, match=r"^a path: F = \[0.0, 0.0\] \(no harmonic "
+                                             r"forcing\).* Allowed: F with a nonzero entry"):
+        require_forcing(paper.replace(F=[0.0, 0.0]), "a path")
