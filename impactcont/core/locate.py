@@ -24,8 +24,8 @@ from scipy.optimize import brentq
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
 
-__all__ = ["Event", "EventPoint", "MotionTest", "locate_events", "locate_zero", "tangent_at",
-           "zero_precision"]
+__all__ = ["Event", "EventPoint", "MotionTest", "locate_events", "locate_zero",
+           "parts_beside_poles", "tangent_at", "zero_precision"]
 
 log = logging.getLogger(__name__)
 
@@ -449,7 +449,7 @@ def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
     value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
     cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
     if cuts:
-        return _beside_poles(event.label, g, noise, cuts, k)
+        return parts_beside_poles(event.label, g, noise, cuts, k)
     if not _changes(value(k), value(k + 1)):
         return []
     if event.noise is not None and all(abs(value(j)) <= event.noise(j) for j in (k, k + 1)):
@@ -489,9 +489,9 @@ _POLE_OFFSET = 1e-7
 _POLE_MARGIN = 10.0
 
 
-def _beside_poles(label: str, g: Callable[[float], float],
-                  noise: Callable[[float], float] | None, cuts: list[float], k: int
-                  ) -> list[tuple[float, float]]:
+def parts_beside_poles(label: str, g: Callable[[float], float],
+                       noise: Callable[[float], float] | None, cuts: list[float], k: int = -1
+                       ) -> list[tuple[float, float]]:
     """The parts of a step between the zeros `cuts` of the pole quantities where the test
     changes sign.
 
@@ -501,6 +501,22 @@ def _beside_poles(label: str, g: Callable[[float], float],
     half of it; a part without such a point says nothing. A sign change across a pole is the
     pole's: not an event (logged). A zero of the test closer to a pole than where its
     sign can be read cannot be told from the pole's and is not reported either.
+
+    Parameters
+    ----------
+    label : str
+        The event, for the log.
+    g, noise : callable
+        The test and its rounding error (or None) at a chord coordinate in ``[0, 1]``.
+    cuts : list of float
+        The poles' chord coordinates, ascending.
+    k : int
+        The step, for the log.
+
+    Returns
+    -------
+    list of (float, float)
+        The parts ``(lo, hi)`` with a sign change of `g` at their ends.
     """
     floor = _NOISE_ULPS * _EPS * max(
         (abs(v) for v in (g(0.0), g(1.0)) if math.isfinite(v)), default=0.0)
@@ -535,8 +551,8 @@ def _beside_poles(label: str, g: Callable[[float], float],
         if _changes(g(lo), g(hi)):
             parts.append((lo, hi))
     if not parts and _changes(g(0.0), g(1.0)):
-        log.info("%s changes sign between points %d and %d only through the pole of its test "
-                 "(at chord coordinate %s): not a special point", label, k, k + 1,
+        log.info("%s changes sign on step %d only through the pole of its test (at chord "
+                 "coordinate %s): not a special point", label, k,
                  ", ".join(f"{c:.6g}" for c in cuts))
     return parts
 

@@ -39,10 +39,10 @@ import math
 
 import numpy as np
 
-from impactcont.core.locate import zero_precision
+from impactcont.core.locate import parts_beside_poles, zero_precision
 from impactcont.core.stepper import NewtonConvergenceError
-from impactcont.detection.locator import locate_zero
-from impactcont.detection.special_points import pole_free
+from impactcont.detection.locator import locate_zero, twins
+from impactcont.detection.special_points import event_noise, pole_free
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.codim1 import CurveProblem
 
@@ -119,7 +119,9 @@ def test_values(problem: CurveProblem, x: np.ndarray, orbit: PeriodicOrbit) -> d
 
 
 def _changes(a: float, b: float) -> bool:
-    return math.isfinite(a) and math.isfinite(b) and (a < 0) != (b < 0)
+    """Opposite signs; ``+-inf`` by their sign (a GR test without an interior maximum is
+    +inf), NaN as no sign."""
+    return not (math.isnan(a) or math.isnan(b)) and (a < 0) != (b < 0)
 
 
 _CRITICAL = {"SN": 1.0, "PD": -1.0}
@@ -175,6 +177,7 @@ class _Step:
         self.problem, self.xa, self.xb = problem, xa, xb
         self.chord = xb - xa
         self._cache: dict[float, tuple[np.ndarray, dict[str, float]]] = {}
+        self._noise: dict[tuple[float, str], float] = {}
 
     def point(self, sv: float) -> tuple[np.ndarray, dict[str, float]]:
         if sv not in self._cache:
@@ -187,7 +190,14 @@ class _Step:
                 x = self.problem.solve(guess, lambda y, g=guess: float(chord @ (y - g)), chord)
             orbit = self.problem.orbit(x[:-1], x[-1])
             self._cache[sv] = (x, test_values(self.problem, x, orbit))
+            for test in ("PD", "NS"):  # their rounding, for the sides of a pole
+                self._noise[sv, test] = event_noise(test, orbit)
         return self._cache[sv]
+
+    def noise(self, sv: float, test: str) -> float:
+        """The rounding of the PD or NS test at ``sv`` (:func:`event_noise`)."""
+        self.point(sv)
+        return self._noise[sv, test]
 
     def value(self, sv: float, test: str) -> float:
         return self.point(sv)[1][test]
@@ -203,11 +213,6 @@ class _Step:
         return sroot, x, precision, status
 
 
-_POLE_GAP = 1e-5
-"""Half-width (in the chord coordinate) of the gap left around a zero-velocity impact
-when a step is split there."""
-
-
 def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[str, float]
                ) -> list[tuple[float, float]]:
     """The parts of a step on which `test` is watched for a sign change.
@@ -215,7 +220,10 @@ def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[
     At a zero-velocity impact inside the step (``h2 = 0``, the pole of G, eq. 25)
     the pole-free PD and NS tests may vanish too, without a bifurcation (when a
     multiplier tends to 0 as another tends to infinity): the step is split there so
-    that a PD or NS point in the same step is neither cancelled nor discarded.
+    that a PD or NS point in the same step is neither cancelled nor discarded, and the
+    test's sign is read beside it only where it rises above its rounding (the multipliers
+    lose ``1/h2^2`` of their accuracy there; :func:`~impactcont.core.locate.parts_beside_poles`).
+    A sign change across the pole is the pole's: no codim-2 point.
     """
     whole = [(0.0, 1.0)]
     if test not in ("PD", "NS") or "ZV" not in tests_a or not _changes(tests_a["ZV"],
@@ -226,7 +234,9 @@ def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[
         s_zv = step.locate("ZV")[0]
     except (ValueError, NewtonConvergenceError):
         return whole
-    return [(0.0, max(0.0, s_zv - _POLE_GAP)), (min(1.0, s_zv + _POLE_GAP), 1.0)]
+    return parts_beside_poles(f"{step.problem.kind}+{test}",
+                              lambda sv: step.value(sv, test),
+                              lambda sv: step.noise(sv, test), [s_zv])
 
 
 def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[PeriodicOrbit],
@@ -250,24 +260,55 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
     """
     found: list[Codim2Point] = []
     for k in range(len(xs) - 1):
-        step = _Step(problem, xs[k], xs[k + 1])
-        for test in TESTS[problem.kind]:
-            if test not in ("PD", "NS") and not _changes(tests[k][test], tests[k + 1][test]):
-                continue
-            if _ends_at_resonance(problem, test, xs[k], xs[k + 1]):
-                continue  # the multiplier +-1 of the R1/R2 end: that end itself
-            for lo, hi in _intervals(step, test, tests[k], tests[k + 1]):
-                if (lo, hi) == (0.0, 1.0):
-                    ga, gb = tests[k][test], tests[k + 1][test]
-                else:
-                    problem.accept(xs[k][:-1], xs[k][-1])
-                    ga, gb = step.value(lo, test), step.value(hi, test)
-                if not _changes(ga, gb):
-                    continue
-                point = _codim2_in(problem, step, test, k, lo, hi, ga, gb)
-                if point is not None:
-                    found.append(point)
+        found.extend(_without_grazing_twins(problem, _codim2_on_step(problem, xs, tests, k)))
     return found
+
+
+def _without_grazing_twins(problem: CurveProblem, points: list[Codim2Point]
+                           ) -> list[Codim2Point]:
+    """The codim-2 points of one step without each ``A+GR`` that is the grazing of a
+    located ``A+ZV`` there (a zero-velocity impact is a grazing contact: the GR test
+    touches zero at it, as on branches, :func:`~impactcont.detection.locator.
+    drop_grazing_at_zero_velocity`)."""
+    kind = problem.kind
+    zv = [z for z in points if z.label == f"{kind}+ZV" and z.status == "located"]
+    kept = []
+    for point in points:
+        twin = next((z for z in zv if point.label == f"{kind}+GR" and twins(
+            _plane_distance(problem, z.x, point.x), z.precision + point.precision,
+            z.x[[0, -1]])), None)
+        if twin is None:
+            kept.append(point)
+        else:
+            log.info("%s at %s is the grazing of the zero-velocity impact %s: reported once",
+                     point.label, point.x[[0, -1]], twin.label)
+    return kept
+
+
+def _codim2_on_step(problem: CurveProblem, xs: list[np.ndarray],
+                    tests: list[dict[str, float]], k: int) -> list[Codim2Point]:
+    """The codim-2 points between accepted points `k` and ``k + 1``."""
+    found: list[Codim2Point] = []
+    step = _Step(problem, xs[k], xs[k + 1])
+    for test in TESTS[problem.kind]:
+        if test not in ("PD", "NS") and not _changes(tests[k][test], tests[k + 1][test]):
+            continue
+        if _ends_at_resonance(problem, test, xs[k], xs[k + 1]):
+            continue  # the multiplier +-1 of the R1/R2 end: that end itself
+        for lo, hi in _intervals(step, test, tests[k], tests[k + 1]):
+            if (lo, hi) == (0.0, 1.0):
+                ga, gb = tests[k][test], tests[k + 1][test]
+            else:
+                problem.accept(xs[k][:-1], xs[k][-1])
+                ga, gb = step.value(lo, test), step.value(hi, test)
+            if not _changes(ga, gb):
+                continue
+            point = _codim2_in(problem, step, test, k, lo, hi, ga, gb)
+            if point is not None:
+                found.append(point)
+    return found
+
+
 
 
 def _ends_at_resonance(problem: CurveProblem, test: str, xa: np.ndarray, xb: np.ndarray

@@ -26,8 +26,8 @@ log = logging.getLogger(__name__)
 
 _Point = TypeVar("_Point")
 
-__all__ = ["STATUSES", "drop_grazing_at_zero_velocity", "is_critical", "last_motions",
-           "locate_zero", "watched_labels"]
+__all__ = ["STATUSES", "TWIN_TOL", "drop_grazing_at_zero_velocity", "is_critical",
+           "last_motions", "locate_zero", "twins", "watched_labels"]
 
 
 def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
@@ -56,6 +56,17 @@ def watched_labels(labels: Sequence[str]) -> list[str]:
     return out
 
 
+#: a GR this close (relative) to a ZV on the same step is its grazing: the square root of
+#: the GR test's rounding (a double zero) is 1e-8..1e-7
+TWIN_TOL = 1e-6
+
+
+def twins(distance: float, precisions: float, scale: Any) -> bool:
+    """Whether a GR `distance` from a located ZV (same step) is the ZV's grazing: within
+    the two points' `precisions` or :data:`TWIN_TOL` times the size of where they are."""
+    return distance <= max(precisions, TWIN_TOL * max(1.0, float(np.max(np.abs(scale)))))
+
+
 def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "lam"
                                   ) -> list[_Point]:
     """The special points without each GR that is the grazing of a ZV impact.
@@ -71,15 +82,17 @@ def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "la
     impact, found twice. It is reported once, as the ZV (its test ``h2`` is simple).
 
     A GR is dropped when a ZV was located on the same step within the two points'
-    precisions; every other point is kept, in order.
+    precisions (at least :data:`TWIN_TOL` relative: on the side where no flight has an
+    interior maximum the GR test is +inf, and the precision search sees only one side of
+    the double zero); every other point is kept, in order.
     """
     zv = [z for z in points if z.label == "ZV" and z.status == "located"]
     kept = []
     for point in points:
         twin = None
         if point.label == "GR":
-            twin = next((z for z in zv if z.bracket == point.bracket and abs(
-                z.value - point.value) <= z.precision + point.precision), None)
+            twin = next((z for z in zv if z.bracket == point.bracket and twins(
+                abs(z.value - point.value), z.precision + point.precision, z.value)), None)
         if twin is None:
             kept.append(point)
         else:

@@ -35,3 +35,38 @@ def test_every_codim2_label_has_its_standard_name_in_the_docs():
     rows = {line.split("|")[1].strip().strip("`") for line in docs.read_text().splitlines()
             if line.startswith("| `")}
     assert set(CODIM2_LABELS) <= rows, sorted(set(CODIM2_LABELS) - rows)
+
+
+class _LineCurve:
+    """A stand-in curve ``x = (p1, theta, p2)`` along a straight line, with a motion whose
+    ``gap_min`` is +inf (no interior maximum) above p1 = 0.42 and ``p1 - 0.3`` below."""
+
+    kind = "SN"
+    parameters = ("omega", "b")
+
+    def solve(self, guess, condition, chord):
+        return guess
+
+    def accept(self, u, lam):
+        pass
+
+    def orbit(self, u, lam):
+        from types import SimpleNamespace
+
+        p1 = float(u[0])
+        return SimpleNamespace(gap_min=np.inf if p1 > 0.42 else p1 - 0.3, impact_velocity=1.0,
+                               multipliers=np.array([1.0, 0.5, 0.2]))
+
+
+def test_a_grazing_test_from_plus_infinity_is_watched_on_curves():
+    """Issue 28, 1.4 on curves: a GR test that is +inf at one end of a step (no interior
+    maximum yet) and negative at the other changes sign; it was skipped as non-finite."""
+    from impactcont.detection.codim2 import detect_codim2, test_values
+
+    problem = _LineCurve()
+    xs = [np.array([p1, 0.0, 1.0]) for p1 in (0.2, 0.5)]
+    orbits = [problem.orbit(x[:-1], x[-1]) for x in xs]
+    tests = [test_values(problem, x, o) for x, o in zip(xs, orbits, strict=True)]
+    (point,) = detect_codim2(problem, xs, orbits, tests)
+    assert (point.label, point.status) == ("SN+GR", "located")
+    assert abs(point.x[0] - 0.3) <= point.precision < 1e-12
