@@ -169,12 +169,17 @@ class ModelParameter:
             if self.data == FREQUENCY:
                 break
             try:
-                self.put(osc, value)
+                moved = self.put(osc, value)
             except ParameterError as exc:
                 allowed = self._range_text(osc)
                 raise ParameterError(
                     f"{argument} {bounds!r} for {self.name}: at {self.name} = {value!r} the "
                     f"oscillator is refused: {exc}; allowed: bounds inside {allowed}") from None
+            if self.data == FORCING and not np.any(moved.F):  # builds, but no periodic motion
+                raise ParameterError(
+                    f"{argument} {bounds!r} for {self.name}: at {self.name} = {value!r} the "
+                    f"forcing vanishes (F = {np.asarray(moved.F).tolist()}), where no periodic "
+                    f"motion exists; allowed: bounds that keep {self.name} on one side of 0")
         return lo, hi
 
     def _range_text(self, osc: ImpactOscillator) -> str:

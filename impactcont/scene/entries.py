@@ -25,7 +25,14 @@ from impactcont.analysis.branch import check_continuation_arguments, continuatio
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
-from impactcont.model.stops import LOWER, UPPER, Stop, Stops, require_paper_stops
+from impactcont.model.stops import (
+    LOWER,
+    UPPER,
+    Stop,
+    Stops,
+    require_forcing,
+    require_paper_stops,
+)
 from impactcont.orbit.robust import check_robust_arguments, robust_stability
 from impactcont.scene.keys import (
     ENTRY_NAME,
@@ -204,6 +211,7 @@ def check_closed_form(osc: ImpactOscillator, where: Where, what: str) -> None:
     The check :func:`~impactcont.periodic_orbits`, :func:`~impactcont.continuation`,
     the robust stability, curves and maps make (``what`` names the computation).
     """
+    library_check(where, require_forcing, osc, what)  # its own "allowed", not the stops'
     library_check(where, require_paper_stops, osc, what, allowed=_CLOSED_FORM_ALLOWED)
 
 

@@ -452,3 +452,15 @@ def test_bounds_reaching_the_edge_of_the_range_are_accepted():
     assert model_parameter(osc, "K[1,1]").check_bounds(osc, (0.5, 3.0)) == (0.5, 3.0)
     damper = _damper()  # K[2,2] = 0: a free ball, held by its cavity
     assert model_parameter(damper, "K[2,2]").check_bounds(damper, (0.0, 0.1)) == (0.0, 0.1)
+
+
+@pytest.mark.parametrize("bounds", [(-1.0, 2.0), (0.0, 2.0), (-2.0, 0.0)])
+def test_bounds_of_a_forcing_entry_through_no_forcing_are_refused(bounds) -> None:
+    """F = 0 builds a machine (simulated from a state) but has no periodic motion: bounds of
+    F[j] that reach it are refused up front, naming the entry (issue 28)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.6,
+                              omega=1.0, eta=0.1)
+    with pytest.raises(ic.ParameterError, match=r"at F\[1\] = 0\.0 the forcing vanishes"):
+        model_parameter(osc, "F[1]").check_bounds(osc, bounds)
+    both = osc.replace(F=[1.0, 1.0])  # F[2] keeps the forcing
+    assert model_parameter(both, "F[1]").check_bounds(both, bounds) == bounds

@@ -248,6 +248,7 @@ def test_zero_forcing_is_refused_by_periodic_entries(tmp_path: Path) -> None:
     assert not np.any(ic.ImpactOscillator(**{**PAPER, "F": [0, 0]}).F)
     err = scene_error(tmp_path, ORBITS_SCENE.replace("F = [1.0, 0.0]", "F = [0.0, 0.0]"))
     assert err.key == "orbits[0]" and "F = [0.0, 0.0] (no harmonic forcing)" in str(err)
+    assert "stop_mass" not in str(err)  # not the closed form's stop layout: the forcing
 
 
 def test_machines_of_issue_21_in_a_scene(tmp_path: Path) -> None:
