@@ -53,7 +53,12 @@ import xarray as xr
 from impactcont.analysis.pool import dead_worker, kill_pool, process_pool
 from impactcont.dataset.curves import map_dataset
 from impactcont.dataset.io import open_lazy, save_blocks
-from impactcont.dataset.map_storage import open_temporary_map, temporary_map_file
+from impactcont.dataset.map_storage import (
+    open_temporary_map,
+    remove_stale_maps,
+    remove_temporary_map,
+    temporary_map_file,
+)
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.batched import batched_orbits
@@ -214,15 +219,19 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         the file). Without it, a map that does not fit in `memory_limit` goes to a
         temporary file the same way (with a warning naming it), removed when the
         returned dataset is closed (``close()`` or the end of a ``with`` block) or at
-        the latest when the interpreter exits. Needs the extra ``impactcont[dask]``.
+        the latest when the interpreter exits, and on SIGTERM; those of a process that
+        was killed go with the next map (:mod:`impactcont.dataset.map_storage`). Needs
+        the extra ``impactcont[dask]``.
     memory_limit : float
         Bytes the map may add to the memory of this process and its pool workers at
         its peak (default 1e9). A map is kept in memory when it fits with the tasks
         in flight (these take at most a quarter of the result: the peak is at most
         1.25 times the map); otherwise it goes to a file, with blocks small enough
-        that the tasks in flight and the NetCDF writes stay within `memory_limit`
-        (the NetCDF library and dask take about 20 MB whatever the limit). The
-        interpreters of pool workers are not counted.
+        that the tasks in flight and the NetCDF writes stay within `memory_limit`.
+        A map on disk takes at least about 33 MB (the NetCDF and HDF5 libraries about
+        32 MB on their first use, and the smallest tasks in flight: 35 MB with two
+        workers): a smaller limit is warned of (naming `memory_limit` and that floor)
+        and exceeded. The interpreters of pool workers are not counted.
     progress : None, bool or callable
         A progress bar on stderr over the grid points (``None``: when stderr is a
         terminal, after 2 s; ``True``: always; ``False``: never) or a callable
@@ -284,14 +293,17 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         raise ParameterError(f"memory_limit must be a number of bytes > 0; got {memory_limit!r}")
     shape = (len(Ns), w.size, bb.size)
     result = _result_bytes(shape, spectral_radius)
+    remove_stale_maps(once=True)  # the temporary maps of killed processes (map_storage)
+    temporary = False
     with reporter(progress, "stability map", total=math.prod(shape)) as rep:
         runner = _Runner(osc, Ns, w, bb, spectral_radius, executor, max_workers, rep)
         try:
             in_memory, points = _plan(result, float(memory_limit), runner.in_flight, out is None,
                                       w.size * bb.size)
-            temporary = out is None and not in_memory
             if not in_memory:
                 _require_dask()
+                _check_disk_floor(float(memory_limit), runner.in_flight)
+            temporary = out is None and not in_memory
             if temporary:
                 out = temporary_map_file()
                 log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB with its "
@@ -310,6 +322,8 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                 path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
         except BaseException:
             runner.close(kill=True)  # Ctrl-C or a failure: no worker left computing
+            if temporary and out is not None:
+                remove_temporary_map(out)
             raise
         runner.close()
     elapsed = time.perf_counter() - start
@@ -361,6 +375,24 @@ def _plan(result: int, memory_limit: float, in_flight: int, may_stay: bool,
             return True, points
     return False, _task_points(memory_limit - _DISK_FIXED_BYTES, in_flight, _DISK_TASK_BYTES,
                                grid)
+
+
+def _disk_floor(in_flight: int) -> float:
+    """The least `memory_limit` a map written to disk keeps to: the NetCDF and HDF5
+    libraries' own memory and `in_flight` tasks of the smallest size."""
+    return _DISK_FIXED_BYTES + in_flight * _MIN_TASK_POINTS * _DISK_TASK_BYTES
+
+
+def _check_disk_floor(memory_limit: float, in_flight: int) -> None:
+    """Warn when a map written to disk cannot keep to `memory_limit` (issue 28: a limit
+    below about 35 MB was exceeded without a word)."""
+    floor = _disk_floor(in_flight)
+    if memory_limit < floor:
+        log.warning("memory_limit = %.4g bytes is below %.4g bytes (%.3g MB), the least a map "
+                    "written to disk takes here (the NetCDF and HDF5 libraries about %.0f MB, "
+                    "and tasks in flight: %d of at least %d points): the map will take more "
+                    "than memory_limit, up to about %.3g MB", memory_limit, floor, floor / 1e6,
+                    _DISK_FIXED_BYTES / 1e6, in_flight, _MIN_TASK_POINTS, floor / 1e6)
 
 
 def _block_shape(points: int, nw: int, nb: int, omega_block: int | None) -> tuple[int, int]:

@@ -148,6 +148,24 @@ def test_a_map_larger_than_the_memory_limit_goes_to_a_file(paper, serial_map, ca
     assert not os.path.exists(path)  # a temporary map is removed when it is closed
 
 
+def test_a_memory_limit_below_what_a_map_on_disk_takes_is_warned_of(paper, tmp_path, caplog):
+    # issue 28: a limit below about 35 MB was exceeded without a word
+    pytest.importorskip("dask")
+    floor = maps._disk_floor(1)
+    assert 3.2e7 < floor < 3.5e7 and maps._disk_floor(5) < 3.5e7
+    with caplog.at_level("WARNING", logger="impactcont.analysis.maps"):
+        stability_map(paper, [1], OMEGA, GAP, memory_limit=1e4).close()
+    assert re.search(r"memory_limit = 1e\+04 bytes is below 3\.25\d*e\+07 bytes \(32\.5 MB\), "
+                     r"the least a map written to disk takes", caplog.text), caplog.text
+    assert "will take more than memory_limit" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="impactcont.analysis.maps"):
+        stability_map(paper, [1], OMEGA, GAP, out=tmp_path / "a.nc").close()  # 1e9
+        small = stability_map(paper, [1], OMEGA, GAP, memory_limit=1e6)  # fits in memory
+    assert not any(hasattr(v.data, "dask") for v in small.data_vars.values())
+    assert "is below" not in caplog.text
+
+
 def test_map_without_eigenvalues_has_the_same_stability(paper, serial_map):
     quick = stability_map(paper, [1, 2, 3], OMEGA, GAP, spectral_radius=False)
     assert "spectral_radius" not in quick and "critical_multiplier" not in quick

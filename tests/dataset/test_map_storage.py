@@ -32,9 +32,12 @@ def small_map() -> xr.Dataset:
 
 @pytest.fixture
 def tmpdir_(tmp_path, monkeypatch) -> Path:
-    """The temporary directory of this test only."""
+    """The temporary directory of this test only; the temporary maps it leaves are
+    removed after it (and SIGTERM's default action is back)."""
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    return tmp_path
+    yield tmp_path
+    for path in list(map_storage._temporary):
+        map_storage.remove_temporary_map(path)
 
 
 def test_a_temporary_map_file_is_a_fresh_hidden_name_in_the_temporary_directory(tmpdir_):
@@ -106,3 +109,87 @@ def test_a_map_over_its_memory_limit_goes_to_a_temporary_map(tmpdir_, small_map)
     big.close()
     assert not path.exists()
 
+
+
+# -- a process that ends without atexit (issue 28) ------------------------------------------
+_SIGTERMED = """
+import sys, time
+import numpy as np
+import impactcont as ic
+osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.5,
+                          omega=1.0, eta=0.1)
+ds = ic.stability_map(osc, [1], np.linspace(0.5, 6, 8), np.linspace(-1, 1.5, 8),
+                      memory_limit=1e3)
+print(ds.encoding["source"], flush=True)
+time.sleep(60)
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGTERM")
+def test_sigterm_removes_the_temporary_map_and_still_ends_the_process(tmp_path):
+    import signal
+
+    child = subprocess.Popen([sys.executable, "-c", _SIGTERMED], text=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             env={**os.environ, "TMPDIR": str(tmp_path)})
+    try:
+        path = Path(child.stdout.readline().strip())
+        assert path.parent == tmp_path and path.is_file()
+        child.send_signal(signal.SIGTERM)
+        assert child.wait(30) == -signal.SIGTERM  # ended by SIGTERM, as by default
+    finally:
+        child.kill()
+        child.communicate()
+    assert not path.exists()  # before: left until a later temporary map
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_is_watched_only_while_a_temporary_map_exists(tmpdir_, small_map):
+    import signal
+
+    if signal.getsignal(signal.SIGTERM) != signal.SIG_DFL:
+        pytest.skip("SIGTERM has a handler of its own here")
+    path = map_storage.temporary_map_file()
+    assert signal.getsignal(signal.SIGTERM) is map_storage._on_sigterm
+    ic.save(small_map, path)
+    map_storage.open_temporary_map(path).close()
+    assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL and not path.exists()
+    # a handler of the program's own is left alone
+    mine = signal.signal(signal.SIGTERM, lambda signum, frame: None)
+    try:
+        path = map_storage.temporary_map_file()
+        assert signal.getsignal(signal.SIGTERM) is not map_storage._on_sigterm
+        map_storage.remove_temporary_map(path)
+    finally:
+        signal.signal(signal.SIGTERM, mine)
+
+
+def test_a_failed_temporary_map_is_removed_and_forgotten(tmpdir_, small_map, monkeypatch):
+    import signal
+
+    from impactcont.analysis import maps
+
+    def fails(*args, **kwargs):
+        raise RuntimeError("a task failed")
+
+    monkeypatch.setattr(maps, "_map_task", fails)
+    with pytest.raises(RuntimeError, match="a task failed"):
+        ic.stability_map(PAPER, [1], np.linspace(0.5, 6, 8), np.linspace(-1, 1.5, 8),
+                         memory_limit=1e3)
+    assert list(tmpdir_.iterdir()) == [] and not map_storage._temporary
+    assert signal.getsignal(signal.SIGTERM) is not map_storage._on_sigterm
+
+
+def test_the_first_map_of_a_process_removes_the_temporary_maps_of_killed_ones(tmpdir_,
+                                                                             monkeypatch):
+    # before: only a later *temporary* map did; a process making maps in memory never did
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    stale = tmpdir_ / f".impactcont-map.nc.{dataset_io._HOST}-{int(gone.stdout)}.0123abcd.tmp"
+    stale.write_bytes(b"x")
+    monkeypatch.setattr(map_storage, "_swept", False)
+    ic.stability_map(PAPER, [1], np.linspace(0.9, 1.6, 3), np.linspace(0.4, 0.7, 3))
+    assert not stale.exists()
+    stale.write_bytes(b"x")  # once per process: the next map in memory looks no more
+    ic.stability_map(PAPER, [1], np.linspace(0.9, 1.6, 3), np.linspace(0.4, 0.7, 3))
+    assert stale.exists()
