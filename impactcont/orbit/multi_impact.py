@@ -806,7 +806,8 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
                                                                         times_x[k, i - 1])
                 if gap < gaps[k]:
                     gaps[k], gap_times[k], nearest[k] = gap, when, s
-    interior = gaps.copy()  # the interior extrema's part (eq. 16): a crossing iff <= 0
+    # the interior extrema's part (eq. 16), a crossing iff <= 0, kept for its reason
+    interior, interior_times, interior_stops = gaps.copy(), gap_times.copy(), list(nearest)
     if checks:
         _end_checks(sh, geo, pattern, gaps, gap_times, nearest, reasons)
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
@@ -818,11 +819,12 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
             reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, "
                            f"{_coordinate(geo.normals[k])} does not arrive towards {side}")
         if checks and not interior[k] > 0:
-            who = (_coordinate(geo.normal) if nearest[k] in (UPPER, LOWER)
-                   else f"{_coordinate(geo.extra_normals[geo.extra_names.index(nearest[k])])}"
-                   f" (stop {nearest[k]!r})")
+            s = interior_stops[k]
+            who = (_coordinate(geo.normal) if s in (UPPER, LOWER)
+                   else f"{_coordinate(geo.extra_normals[geo.extra_names.index(s)])}"
+                   f" (stop {s!r})")
             reasons.append(f"flight {k}: {who} reaches a stop inside the flight (gap_min="
-                           f"{gaps[k]:.3g} at t={gap_times[k]:.6g})")
+                           f"{interior[k]:.3g} at t={interior_times[k]:.6g})")
     phases = np.array([_wrap(float(t)) for t in sh.phases])
     states = sh.starts.copy()
     return MultiImpactOrbit(
