@@ -34,14 +34,15 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
     """Whether the multipliers at a zero of the PD or NS test make it a bifurcation.
 
     PD: a multiplier within `unit_tol` of -1 (``det(G + I)`` also changes sign
-    through the pole of G). NS: a complex pair within ``sqrt(unit_tol)`` of the unit
-    circle (a real reciprocal pair is a neutral saddle). Other labels: always.
+    through the pole of G). NS: a complex pair within `unit_tol` of the unit circle (a
+    real reciprocal pair is a neutral saddle; ``sqrt(unit_tol)``, 3e-4, let a pair at
+    ``|mu| - 1 = 1e-5`` next to a zero-velocity impact pass). Other labels: always.
     """
     mu = np.asarray(multipliers)
     if label == "PD":
         return bool(np.min(np.abs(mu + 1.0)) < unit_tol)
     if label == "NS":
-        close = np.abs(np.abs(mu) - 1.0) < unit_tol ** 0.5
+        close = np.abs(np.abs(mu) - 1.0) < unit_tol
         return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
     return True
 

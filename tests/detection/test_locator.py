@@ -79,7 +79,10 @@ def test_the_statuses_are_the_vocabularys():
     ("PD", [-1.0 + 1e-9, 0.3, 0.1j], True),
     ("PD", [-1.0 + 1e-5, 0.3], False),  # det(G + I) through the pole of G, not -1
     ("PD", [-0.5, 1.0], False),
-    ("NS", [np.exp(1j * 1.2) * (1 + 1e-5), np.exp(-1j * 1.2) * (1 + 1e-5), 0.2], True),
+    ("NS", [np.exp(1j * 1.2) * (1 + 1e-9), np.exp(-1j * 1.2) * (1 + 1e-9), 0.2], True),
+    # |mu| - 1 = 1e-5: the pair is off the circle (issue 28, 1.3: an 'NS' 2e-4 from a
+    # zero-velocity impact had this; sqrt(unit_tol) = 3e-4 let it pass)
+    ("NS", [np.exp(1j * 1.2) * (1 + 1e-5), np.exp(-1j * 1.2) * (1 + 1e-5), 0.2], False),
     ("NS", [np.exp(1j * 1.2) * 1.01, np.exp(-1j * 1.2) * 1.01, 0.2], False),
     ("NS", [2.0, 0.5, 0.1], False),  # a real reciprocal pair: a neutral saddle
     ("NS", [1.0 + 1e-10, 0.3], False),  # on the circle but real: not a pair
