@@ -423,7 +423,7 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
                 g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)))
                 if event.noise_at is not None:
                     noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
-                parts = _watched_parts(event, x, k, chord, g, noise)
+                parts = _watched_parts(event, x, k, chord, g, noise, arclength)
             for lo, hi in parts:
                 found.append(_event_point(event.label, chord, g, noise, where, lo, hi, k, x,
                                           arclength, s_tol))
@@ -441,22 +441,73 @@ def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
 
 
 def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
-                   g: Callable[[float], float], noise: Callable[[float], float] | None
-                   ) -> list[tuple[float, float]]:
+                   g: Callable[[float], float], noise: Callable[[float], float] | None,
+                   arclength: FloatArray) -> list[tuple[float, float]]:
     """The parts ``[lo, hi]`` of step `k` (chord coordinates) where `event`'s test changes
-    sign: the whole step, or, across the zeros of the event's pole quantities inside
-    it, the parts between them (:func:`_beside_poles`)."""
+    sign: the whole step; or, across the zeros of the event's pole quantities inside it,
+    the parts between them (:func:`parts_beside_poles`); or, where the test has the same
+    sign at both ends but dips through zero and back inside the step (:func:`_dip`), the
+    two halves of the step at the dip's bottom."""
     value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
     cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
     if cuts:
         return parts_beside_poles(event.label, g, noise, cuts, k)
-    if not _changes(value(k), value(k + 1)):
-        return []
     if event.noise is not None and all(abs(value(j)) <= event.noise(j) for j in (k, k + 1)):
-        log.debug("%s between points %d and %d: a sign change by rounding only",
-                  event.label, k, k + 1)
+        if _changes(value(k), value(k + 1)):
+            log.debug("%s between points %d and %d: a sign change by rounding only",
+                      event.label, k, k + 1)
         return []
-    return [(0.0, 1.0)]
+    if _changes(value(k), value(k + 1)):
+        return [(0.0, 1.0)]
+    bottom = _dip(value, arclength, k)
+    if bottom is None:
+        return []
+    try:
+        low = g(bottom)
+        level = noise(bottom) if noise is not None else 0.0
+    except (ValueError, ArithmeticError, RuntimeError, np.linalg.LinAlgError):
+        return []
+    if not _changes(value(k), low) or abs(low) <= level:
+        return []
+    log.info("%s dips through zero and back between points %d and %d: two sign changes",
+             event.label, k, k + 1)
+    return [(0.0, bottom), (bottom, 1.0)]
+
+
+def _dip(value: Callable[[int], float], arclength: FloatArray, k: int) -> float | None:
+    """Where the test may dip through zero and back inside step `k`: the chord coordinate
+    of the bottom of a parabola through the test at three consecutive points (step `k` and
+    the point before, or after) whose two zeros both lie inside the step; else None.
+
+    A test function sampled at the accepted points only shows a sign change when its zeros
+    are an odd number per step; a pair of them in one step (a clearance dipping through the
+    stop and back, a pair of multipliers crossing out and back) shows in the curvature of
+    the samples around it. Only a suspected dip costs an evaluation (at its bottom).
+    """
+    t0, t1 = float(arclength[k]), float(arclength[k + 1])
+    width = t1 - t0
+    if not width > 0.0:
+        return None
+    for triple in ((k - 1, k, k + 1), (k, k + 1, k + 2)):
+        if triple[0] < 0 or triple[-1] >= len(arclength):
+            continue
+        p, q, r = (float(arclength[j]) - t0 for j in triple)
+        yp, yq, yr = (float(value(j)) for j in triple)
+        if not (p < q < r and all(map(math.isfinite, (yp, yq, yr)))):
+            continue
+        # the parabola a t^2 + b t + c through the three samples (divided differences)
+        first = (yq - yp) / (q - p)
+        a = ((yr - yq) / (r - q) - first) / (r - p)
+        b = first - a * (p + q)
+        c = yp - first * p + a * p * q
+        discriminant = b * b - 4.0 * a * c
+        if a == 0.0 or not discriminant > 0.0:
+            continue
+        root = math.sqrt(discriminant)
+        lo, hi = sorted(((-b - root) / (2.0 * a), (-b + root) / (2.0 * a)))
+        if lo > 0.0 and hi < width:
+            return min(max(-b / (2.0 * a) / width, 0.0), 1.0)
+    return None
 
 
 def _pole_cuts(event: Event, x: FloatArray, k: int, chord: _Chord) -> list[float]:

@@ -202,3 +202,19 @@ def test_a_sign_change_in_the_noise_next_to_a_pole_is_no_event():
 
     assert _events(test, poles=lambda u, lam: [lam - 0.35],
                    noise_at=lambda u, lam: 1e-8) == []
+
+
+def test_two_zeros_inside_one_step_are_both_located():
+    """A test that dips through zero and back within one step has the same sign at its
+    two ends: the quadratic through it and its neighbours predicts the dip, the test is
+    read at the dip's bottom and both zeros are located (the same at any step)."""
+    found = _events(lambda lam: (lam - 0.3) * (lam - 0.32), lams=(0.1, 0.2, 0.4, 0.5))
+    assert [ep.status for ep in found] == ["located", "located"]
+    assert [ep.step for ep in found] == [1, 1]
+    for ep, zero in zip(found, (0.3, 0.32), strict=True):
+        assert abs(ep.lam - zero) <= ep.precision < 1e-12
+
+
+def test_a_dip_that_stays_above_zero_is_no_event():
+    found = _events(lambda lam: (lam - 0.31) ** 2 + 1e-4, lams=(0.1, 0.2, 0.4, 0.5))
+    assert found == []
