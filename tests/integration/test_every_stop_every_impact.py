@@ -246,6 +246,35 @@ def test_n1_motion_with_its_impact_state_past_an_extra_stop_is_not_physical():
     assert ic.multi_impact_orbit(_with_a(osc, s_impact + 1e-3), 1, 1, o).physical
 
 
+def test_a_one_impact_motion_on_an_extra_stop_past_u_is_not_physical():
+    """Found by a scan of random machines' attractors: the simulator settles on a 2-2 UA
+    motion; asked for p = 1 from it, the shooting converges to a 1-1 motion on A alone
+    whose x1 rises through b and peaks at the A impact (no interior maximum): x1 is past
+    U at its one impact state. Not physical (it was before), and the simulator from
+    inside its flight meets U before the A impact it claims; the 2-2 UA attractor is
+    physical."""
+    osc = ic.ImpactOscillator(
+        M=np.diag([1.1453207564562706, 1.1274569750313486]),
+        K=[[3.21689407610177, -2.5255641805516147], [-2.5255641805516147, 2.5255641805516147]],
+        C=[[0.126300889579772, -0.10630088957977202], [-0.10630088957977202, 0.126300889579772]],
+        F=[1.0, 0.0], R=0.31806886768997017, b=0.08308003500672473, omega=1.7947248150253279,
+        stops=ic.Stops(extra=(ic.Stop("A", mass=1, relative_to=2, gap=0.4285910209962266,
+                                      restitution=0.7152853022552419),)))
+    res = ic.simulate(osc, np.zeros(4), 0.0, 300.0)
+    assert res.impact_stops[-4:] in ("AUAU", "UAUA")
+    attractor = ic.multi_impact_orbit(osc, 2, 2, res)
+    assert attractor.physical and attractor.stable
+    one = ic.multi_impact_orbit(osc, 1, 1, res)
+    assert one.pattern == "A" and one.residual < 1e-12
+    assert one.states[0][0] > osc.b + 0.01
+    assert not one.physical
+    assert "impact 0 (stop 'A'): x1 is past stop 'U'" in one.reason
+    assert one.gap_min == pytest.approx(osc.b - one.states[0][0], rel=1e-9)
+    t, X = one.time_series(201)
+    sim = ic.simulate(osc, X[20], float(one.delta + osc.omega * t[20]), 1.0)
+    assert sim.impact_stops[0] == "U" and t[20] + sim.impact_times[0] < one.period - 0.01
+
+
 def test_the_rounding_of_an_impact_state_is_not_a_crossing():
     """A stop exactly at the impact value of its coordinate (the motion at its grazing
     point, up to rounding): the clearance is within the tolerance relative to the motion's
