@@ -39,9 +39,12 @@ orthogonal to the chord (``x = (u, lam)``), found by Newton; this works
 through folds as well. Brent's method on ``s`` then locates the zero of the
 test function; the special point keeps status ``"bracketed"`` when the test
 function does not vanish there (a jump, e.g. of ``gap_min`` when the highest
-interior maximum changes), or when the PD/NS checks fail (``det(G + I)``
-changes sign through the pole of G at a zero impact velocity; the NS product
-vanishes at a neutral saddle), in which case the point is dropped.
+interior maximum changes, or from ``+inf`` when a flight gains one), and is dropped
+when the PD/NS checks fail (the NS product vanishes at a neutral saddle). The PD, NS
+and BP tests were multiplied free of the poles of the ``G_k`` at a zero impact
+velocity: a step in which an impact velocity changes sign is split at its zero, and a
+sign change across it is the pole's, not a special point
+(:func:`~impactcont.core.locate.parts_beside_poles`).
 """
 
 from __future__ import annotations

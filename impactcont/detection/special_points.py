@@ -21,7 +21,14 @@ points), except ``SN``, located by Newton on the closed-form augmented system
 function also vanishes at a neutral saddle (two real multipliers with product
 1); such a point is checked and discarded. A located point whose test
 function does not vanish there (a jump, e.g. of ``gap_min`` when the highest
-interior maximum changes) keeps status ``"bracketed"``.
+interior maximum changes, or from ``+inf`` when a flight gains one) keeps status
+``"bracketed"``.
+
+PD and NS were multiplied free of the pole of G at ``h2 = 0``: their events declare the
+impact velocity as their pole quantity, and a step in which it changes sign is split at
+its zero (:func:`~impactcont.core.locate.parts_beside_poles`): a sign change across it
+is the pole's, not a special point (``docs/engine.md``, *Detection that does not depend
+on the step*).
 """
 
 from __future__ import annotations
