@@ -258,14 +258,19 @@ def tangent_at(problem: Problem, u: FloatArray, lam: float, reference: FloatArra
 class _Chord:
     """The branch between two accepted points, parametrised by the chord ``s in [0, 1]``."""
 
-    def __init__(self, problem: Problem, x0: FloatArray, x1: FloatArray, newton_tol: float):
+    def __init__(self, problem: Problem, x0: FloatArray, x1: FloatArray, newton_tol: float,
+                 before: Callable[[], None] | None = None):
         self.problem, self.x0, self.x1 = problem, x0, x1
         self.chord = x1 - x0
         self.newton_tol = newton_tol
         self._cache: dict[float, tuple[FloatArray, float]] = {}
+        self._before = before  # called once, before the step's first point
 
     def point(self, s: float) -> tuple[FloatArray, float]:
         """``(u, lam)`` of the branch on the hyperplane at chord coordinate ``s``."""
+        if self._before is not None:
+            before, self._before = self._before, None
+            before()
         if s in self._cache:
             return self._cache[s]
         if s == 0.0:
@@ -375,8 +380,8 @@ def _changes(a: float, b: float) -> bool:
 
 def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequence[Event],
                   *, s_tol: float = 1e-13, newton_tol: float = 1e-13,
-                  position: Callable[[FloatArray, float], Any] | None = None
-                  ) -> list[EventPoint]:
+                  position: Callable[[FloatArray, float], Any] | None = None,
+                  before_step: Callable[[int], None] | None = None) -> list[EventPoint]:
     """Every sign change of every event between consecutive accepted points, located.
 
     Parameters
@@ -392,6 +397,9 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
         ``position(u, lam)``: where a point is, e.g. both parameters of a curve (one of
         them an unknown); ``precision`` bounds the max-norm error of it. Default the
         parameter ``lam``.
+    before_step : callable, optional
+        ``before_step(k)``: called before the first point inside step ``k`` is computed,
+        on the steps searched only (a curve renews the borders of its augmented system).
 
     Returns
     -------
@@ -406,7 +414,8 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
     found: list[EventPoint] = []
     for k in range(len(x) - 1):
-        chord = _Chord(problem, x[k], x[k + 1], newton_tol)
+        chord = _Chord(problem, x[k], x[k + 1], newton_tol,
+                       None if before_step is None else lambda k=k: before_step(k))
         if position is None:
             where: Callable[[float], Any] = chord.lam
         else:

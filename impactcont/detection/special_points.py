@@ -458,7 +458,7 @@ def locate_user_events(problem: Any, u: Any, lam: Any, tangent: Any, functions: 
         ``lam``.
     accept : callable, optional
         ``accept(k)``: called before a step from point ``k`` is searched (a curve renews
-        the borders of its augmented system there).
+        the borders of its augmented system there), on the searched steps only.
     parameter : str, optional
         The continued parameter, named in error messages.
 
@@ -476,32 +476,26 @@ def locate_user_events(problem: Any, u: Any, lam: Any, tangent: Any, functions: 
     lam = np.asarray(lam, dtype=float)
     tangent = np.asarray(tangent, dtype=float)
     where = position if position is not None else (lambda _u, lam_: lam_)
+    events = [Event(name, _user_test(name, fn, orbit_at, parameter),
+                    lambda j, v=values[name]: float(v[j]))
+              for name, fn in functions.events.items()]
+    try:  # every step, also where a function dips through zero and back inside one
+        located = locate_events(problem, u, lam, tangent, events, s_tol=_XTOL,
+                                position=position, before_step=accept)
+    except _UserFunctionFailure as failure:
+        raise failure.error from failure.error.__cause__
     found: list[UserEvent] = []
-    for k in range(len(lam) - 1):
-        watched = [name for name in functions.events
-                   if (values[name][k] < 0) != (values[name][k + 1] < 0)]
-        if not watched:
-            continue
-        if accept is not None:
-            accept(k)
-        events = [Event(name, _user_test(name, functions.events[name], orbit_at, parameter),
-                        lambda j, v=values[name], k=k: float(v[k + j]))
-                  for name in watched]
-        try:
-            located = locate_events(problem, u[k:k + 2], lam[k:k + 2], tangent[k:k + 2], events,
-                                    s_tol=_XTOL, position=position)
-        except _UserFunctionFailure as failure:
-            raise failure.error from failure.error.__cause__
+    for ep in located:
+        k = ep.step
         ends = [np.asarray(where(u[j], lam[j]), dtype=float) for j in (k, k + 1)]
-        for ep in located:
-            here = np.asarray(where(ep.u, ep.lam), dtype=float)
-            nearest = k if (np.max(np.abs(here - ends[0])) <= np.max(np.abs(here - ends[1]))) \
-                else k + 1
-            orbit = orbit_at(ep.u, ep.lam)
-            event = UserEvent(ep.label, ep.u, ep.lam, nearest, ep.precision, ep.status, orbit)
-            log.info("event %s at %s (%s, precision %.1e)", event.name,
-                     _where(orbit, parameter), event.status, event.precision)
-            found.append(event)
+        here = np.asarray(where(ep.u, ep.lam), dtype=float)
+        nearest = k if (np.max(np.abs(here - ends[0])) <= np.max(np.abs(here - ends[1]))) \
+            else k + 1
+        orbit = orbit_at(ep.u, ep.lam)
+        event = UserEvent(ep.label, ep.u, ep.lam, nearest, ep.precision, ep.status, orbit)
+        log.info("event %s at %s (%s, precision %.1e)", event.name,
+                 _where(orbit, parameter), event.status, event.precision)
+        found.append(event)
     return found
 
 

@@ -325,3 +325,20 @@ def test_every_location_lies_in_its_bracket_folds_included():
     for k in np.flatnonzero(np.array(labels) == "SN"):
         assert value[k] in (branch.special_bracket_lo.values[k],
                             branch.special_bracket_hi.values[k])
+
+
+def test_a_user_event_with_two_zeros_inside_one_step_is_located_twice():
+    """Issue 28, 1.4 for user events: ``(omega - 1.415)(omega - 1.42)`` has the same sign
+    at the points 1.40715 and 1.43184 around both its zeros; it was watched only at sign
+    changes between two points, now also where it dips through zero inside a step."""
+    def dip(orbit):
+        omega = orbit.oscillator.omega
+        return (omega - 1.415) * (omega - 1.42)
+
+    branch = ic.continuation(paper(b=0.0, omega=1.5), 1, "omega", (1.4, 2.0),
+                             components="start", events={"dip": dip}, progress=False)
+    omega = branch.omega.values
+    assert not np.any((omega > 1.414) & (omega < 1.421))  # both zeros inside one step
+    located = branch.event_omega.values
+    assert branch.event_status.values.tolist() == ["located", "located"]
+    np.testing.assert_allclose(np.sort(located), [1.415, 1.42], atol=1e-12)
