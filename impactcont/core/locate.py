@@ -24,7 +24,7 @@ from scipy.optimize import brentq
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
 
-__all__ = ["Event", "EventPoint", "MotionTest", "locate_events", "locate_zero",
+__all__ = ["Event", "EventPoint", "MotionTest", "dip_bottom", "locate_events", "locate_zero",
            "parts_beside_poles", "tangent_at", "zero_precision"]
 
 log = logging.getLogger(__name__)
@@ -455,7 +455,7 @@ def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
     """The parts ``[lo, hi]`` of step `k` (chord coordinates) where `event`'s test changes
     sign: the whole step; or, across the zeros of the event's pole quantities inside it,
     the parts between them (:func:`parts_beside_poles`); or, where the test has the same
-    sign at both ends but dips through zero and back inside the step (:func:`_dip`), the
+    sign at both ends but dips through zero and back inside the step (:func:`dip_bottom`), the
     two halves of the step at the dip's bottom."""
     value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
     cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
@@ -468,7 +468,7 @@ def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
         return []
     if _changes(value(k), value(k + 1)):
         return [(0.0, 1.0)]
-    bottom = _dip(value, arclength, k)
+    bottom = dip_bottom(value, arclength, k)
     if bottom is None:
         return []
     try:
@@ -483,7 +483,7 @@ def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
     return [(0.0, bottom), (bottom, 1.0)]
 
 
-def _dip(value: Callable[[int], float], arclength: FloatArray, k: int) -> float | None:
+def dip_bottom(value: Callable[[int], float], arclength: FloatArray, k: int) -> float | None:
     """Where the test may dip through zero and back inside step `k`: the chord coordinate
     of the bottom of a parabola through the test at three consecutive points (step `k` and
     the point before, or after) whose two zeros both lie inside the step; else None.

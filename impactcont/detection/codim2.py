@@ -39,7 +39,7 @@ import math
 
 import numpy as np
 
-from impactcont.core.locate import parts_beside_poles, zero_precision
+from impactcont.core.locate import dip_bottom, parts_beside_poles, zero_precision
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.detection.locator import locate_zero, twins
 from impactcont.detection.special_points import event_noise, pole_free
@@ -259,8 +259,11 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
         In curve order.
     """
     found: list[Codim2Point] = []
+    arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(np.asarray(
+        xs, dtype=float), axis=0), axis=1))]) if len(xs) > 1 else np.zeros(len(xs))
     for k in range(len(xs) - 1):
-        found.extend(_without_grazing_twins(problem, _codim2_on_step(problem, xs, tests, k)))
+        found.extend(_without_grazing_twins(
+            problem, _codim2_on_step(problem, xs, tests, k, arclength)))
     return found
 
 
@@ -286,16 +289,18 @@ def _without_grazing_twins(problem: CurveProblem, points: list[Codim2Point]
 
 
 def _codim2_on_step(problem: CurveProblem, xs: list[np.ndarray],
-                    tests: list[dict[str, float]], k: int) -> list[Codim2Point]:
+                    tests: list[dict[str, float]], k: int, arclength: np.ndarray
+                    ) -> list[Codim2Point]:
     """The codim-2 points between accepted points `k` and ``k + 1``."""
     found: list[Codim2Point] = []
     step = _Step(problem, xs[k], xs[k + 1])
     for test in TESTS[problem.kind]:
-        if test not in ("PD", "NS") and not _changes(tests[k][test], tests[k + 1][test]):
-            continue
         if _ends_at_resonance(problem, test, xs[k], xs[k + 1]):
             continue  # the multiplier +-1 of the R1/R2 end: that end itself
-        for lo, hi in _intervals(step, test, tests[k], tests[k + 1]):
+        parts = _intervals(step, test, tests[k], tests[k + 1])
+        if parts == [(0.0, 1.0)] and not _changes(tests[k][test], tests[k + 1][test]):
+            parts = _dip_parts(step, test, tests, k, arclength)
+        for lo, hi in parts:
             if (lo, hi) == (0.0, 1.0):
                 ga, gb = tests[k][test], tests[k + 1][test]
             else:
@@ -309,6 +314,27 @@ def _codim2_on_step(problem: CurveProblem, xs: list[np.ndarray],
     return found
 
 
+
+
+def _dip_parts(step: _Step, test: str, tests: list[dict[str, float]], k: int,
+               arclength: np.ndarray) -> list[tuple[float, float]]:
+    """The two halves of step `k` when `test` dips through zero and back inside it
+    (:func:`~impactcont.core.locate.dip_bottom`: the parabola through the test at the step
+    and a neighbour has both its zeros inside the step, and the test at its bottom has the
+    other sign); else none."""
+    bottom = dip_bottom(lambda j: tests[j][test], arclength, k)
+    if bottom is None:
+        return []
+    step.problem.accept(step.xa[:-1], step.xa[-1])
+    try:
+        low = step.value(bottom, test)
+    except (ValueError, ArithmeticError, NewtonConvergenceError, np.linalg.LinAlgError):
+        return []
+    if not _changes(tests[k][test], low):
+        return []
+    log.info("the %s test dips through zero and back between curve points %d and %d",
+             test, k, k + 1)
+    return [(0.0, bottom), (bottom, 1.0)]
 
 
 def _ends_at_resonance(problem: CurveProblem, test: str, xa: np.ndarray, xb: np.ndarray

@@ -70,3 +70,26 @@ def test_a_grazing_test_from_plus_infinity_is_watched_on_curves():
     (point,) = detect_codim2(problem, xs, orbits, tests)
     assert (point.label, point.status) == ("SN+GR", "located")
     assert abs(point.x[0] - 0.3) <= point.precision < 1e-12
+
+
+class _DipCurve(_LineCurve):
+    """``gap_min = (p1 - 0.3)(p1 - 0.32)``: two grazings inside one step of the curve."""
+
+    def orbit(self, u, lam):
+        from types import SimpleNamespace
+
+        p1 = float(u[0])
+        return SimpleNamespace(gap_min=(p1 - 0.3) * (p1 - 0.32), impact_velocity=1.0,
+                               multipliers=np.array([1.0, 0.5, 0.2]))
+
+
+def test_two_grazings_inside_one_step_of_a_curve_are_both_located():
+    from impactcont.detection.codim2 import detect_codim2, test_values
+
+    problem = _DipCurve()
+    xs = [np.array([p1, 0.0, 1.0]) for p1 in (0.1, 0.2, 0.4, 0.5)]
+    orbits = [problem.orbit(x[:-1], x[-1]) for x in xs]
+    tests = [test_values(problem, x, o) for x, o in zip(xs, orbits, strict=True)]
+    found = detect_codim2(problem, xs, orbits, tests)
+    assert [(p.label, p.status) for p in found] == [("SN+GR", "located")] * 2
+    np.testing.assert_allclose(sorted(p.x[0] for p in found), [0.3, 0.32], atol=1e-12)
