@@ -105,3 +105,15 @@ def test_the_noise_of_non_finite_multipliers_is_infinite(specials) -> None:
 
 def test_the_pitchfork_is_a_motion_test() -> None:
     assert isinstance(PITCHFORK, MotionTest)
+
+
+def test_the_pitchfork_declares_the_speeds_that_clear_its_poles() -> None:
+    """``det(H + I)`` was multiplied by the speeds at the impacts ending the first half's
+    flights (``v_1 .. v_h``): those are its pole quantities, where a step is split
+    (issue 28, 1.3: a sign change through a pole is no special point)."""
+    from types import SimpleNamespace
+
+    orbit = SimpleNamespace(p=4, impact_velocities=np.array([1.0, 2.0, 3.0, 4.0]))
+    np.testing.assert_array_equal(PITCHFORK.poles(orbit), [2.0, 3.0])
+    orbit = SimpleNamespace(p=2, impact_velocities=np.array([0.5, -0.25]))
+    np.testing.assert_array_equal(PITCHFORK.poles(orbit), [-0.25])
