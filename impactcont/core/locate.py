@@ -413,6 +413,9 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     dlam = np.asarray(tangent, dtype=float)[:, -1]
     arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
     found: list[EventPoint] = []
+    # each event's test at the accepted points, evaluated once each (ends and neighbours)
+    values = {id(event): _memo(event.at_point or (
+        lambda j, t=event.test: t(x[j, :-1], x[j, -1]))) for event in events if event.test}
     for k in range(len(x) - 1):
         chord = _Chord(problem, x[k], x[k + 1], newton_tol,
                        None if before_step is None else lambda k=k: before_step(k))
@@ -432,11 +435,22 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
                 g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)))
                 if event.noise_at is not None:
                     noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
-                parts = _watched_parts(event, x, k, chord, g, noise, arclength)
+                parts = _watched_parts(event, values[id(event)], x, k, chord, g, noise,
+                                       arclength)
             for lo, hi in parts:
                 found.append(_event_point(event.label, chord, g, noise, where, lo, hi, k, x,
                                           arclength, s_tol))
     return found
+
+
+def _memo(f: Callable[[int], float]) -> Callable[[int], float]:
+    cache: dict[int, float] = {}
+
+    def memo(j: int) -> float:
+        if j not in cache:
+            cache[j] = f(j)
+        return cache[j]
+    return memo
 
 
 def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
@@ -449,27 +463,31 @@ def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
     return cached
 
 
-def _watched_parts(event: Event, x: FloatArray, k: int, chord: _Chord,
-                   g: Callable[[float], float], noise: Callable[[float], float] | None,
-                   arclength: FloatArray) -> list[tuple[float, float]]:
+def _watched_parts(event: Event, value: Callable[[int], float], x: FloatArray, k: int,
+                   chord: _Chord, g: Callable[[float], float],
+                   noise: Callable[[float], float] | None, arclength: FloatArray
+                   ) -> list[tuple[float, float]]:
     """The parts ``[lo, hi]`` of step `k` (chord coordinates) where `event`'s test changes
-    sign: the whole step; or, across the zeros of the event's pole quantities inside it,
-    the parts between them (:func:`parts_beside_poles`); or, where the test has the same
-    sign at both ends but dips through zero and back inside the step (:func:`dip_bottom`), the
-    two halves of the step at the dip's bottom."""
-    value = event.at_point or (lambda j, t=event.test: t(x[j, :-1], x[j, -1]))
+    sign (`value`: the test at accepted point ``j``): the whole step; or, across the zeros
+    of the event's pole quantities inside it, the parts between them
+    (:func:`parts_beside_poles`); or, where the test has the same sign at both ends but
+    dips through zero and back inside the step (:func:`dip_bottom`), the two halves of the
+    step at the dip's bottom."""
     cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
     if cuts:
         return parts_beside_poles(event.label, g, noise, cuts, k)
-    if event.noise is not None and all(abs(value(j)) <= event.noise(j) for j in (k, k + 1)):
-        if _changes(value(k), value(k + 1)):
-            log.debug("%s between points %d and %d: a sign change by rounding only",
-                      event.label, k, k + 1)
-        return []
+    def rounding_only() -> bool:  # both ends within the test's rounding of zero
+        return event.noise is not None and all(
+            abs(value(j)) <= event.noise(j) for j in (k, k + 1))
+
     if _changes(value(k), value(k + 1)):
-        return [(0.0, 1.0)]
+        if not rounding_only():
+            return [(0.0, 1.0)]
+        log.debug("%s between points %d and %d: a sign change by rounding only",
+                  event.label, k, k + 1)
+        return []
     bottom = dip_bottom(value, arclength, k)
-    if bottom is None:
+    if bottom is None or rounding_only():
         return []
     try:
         low = g(bottom)
