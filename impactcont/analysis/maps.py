@@ -447,10 +447,26 @@ class _Runner:
             # would keep the pages it shares with this process as this process fills them
             # (copy on write), up to a second copy of the map
             try:
-                self.pool.submit(int).result()
+                self._start_workers()
             except BaseException:
                 self.close(kill=True)
                 raise
+
+    def _start_workers(self) -> None:
+        """Start the pool's workers with a task of nothing, watched as the map's tasks are
+        (a pool that is broken or stuck already is replaced, up to 3 times)."""
+        while True:
+            pool = self.pool
+            try:
+                future = pool.submit(int)
+                while True:
+                    try:
+                        future.result(timeout=_POLL_SECONDS)
+                        return
+                    except cf.TimeoutError:
+                        self._end_stuck({future: (None, pool, False)})
+            except cf.BrokenExecutor as exc:
+                self._renew(pool, exc, None, 3)
 
     @property
     def workers(self) -> int:
@@ -476,15 +492,17 @@ class _Runner:
         return (f"N = {self._Ns[k]}, omega[{osl.start}:{osl.stop}] in [{w[0]:.6g}, "
                 f"{w[-1]:.6g}], b[{bsl.start}:{bsl.stop}] in [{bb[0]:.6g}, {bb[-1]:.6g}]")
 
-    def _renew(self, pool: Any, exc: BaseException, task: tuple[int, slice, slice],
+    def _renew(self, pool: Any, exc: BaseException, task: tuple[int, slice, slice] | None,
                most: int) -> None:
         """Replace the broken `pool` (if it is still the one in use) by a new one; `most`
         pools in all (a pool that breaks before running anything must not loop)."""
         if pool is not self.pool:
             return
         if not isinstance(pool, cf.ProcessPoolExecutor) or self._renewals >= most:
-            raise type(exc)(f"stability_map: the executor broke ({exc}) while computing the "
-                            f"task {self.describe(task)}") from exc
+            doing = ("starting its workers" if task is None
+                     else f"computing the task {self.describe(task)}")
+            raise type(exc)(f"stability_map: the executor broke ({exc}) while {doing}"
+                            ) from exc
         self._renewals += 1
         log.warning("a worker process of the pool died (%s: %s): the unfinished tasks are "
                     "run again in a new pool, one at a time", type(exc).__name__, exc)
@@ -587,13 +605,19 @@ class _Runner:
 
     def close(self, kill: bool = False) -> None:
         """End the pools created here: shut down, or with `kill` (the map failed or was
-        interrupted) killed at once (:func:`~impactcont.analysis.pool.kill_pool`)."""
+        interrupted) killed at once (:func:`~impactcont.analysis.pool.kill_pool`). With
+        `kill`, the caller's process pool too if a worker of it died unnoticed: it is
+        broken, and its stuck manager thread would hold the interpreter's exit."""
         owned, self._owned = self._owned, []
         for pool in owned:
             if kill or any(p is pool for p in self._killed):
                 kill_pool(pool)
             else:
                 pool.shutdown(cancel_futures=True)
+        if kill and not any(p is self.pool for p in owned) and dead_worker(self.pool):
+            log.warning("a worker process of the executor given died unnoticed: the pool "
+                        "is ended")
+            kill_pool(self.pool)
 
 
 def _layout(shape: tuple[int, int, int], fields: tuple[str, ...]

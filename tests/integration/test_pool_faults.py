@@ -46,12 +46,29 @@ CHILD = textwrap.dedent("""
             told.append(1)
             print("PIDS", *[c.pid for c in mp.active_children()], flush=True)
 
-    reference = ic.stability_map(osc, [1], w, b) if mode == "kill" else None
+    reference = ic.stability_map(osc, [1], w, b) if mode != "parent" else None
+    executor = "process"
+    if mode.startswith("caller"):
+        # the caller's pool, stuck as a worker killed sending its result leaves it: half a
+        # message in the result pipe (the manager thread waits for the rest), a dead worker
+        import concurrent.futures as cf
+        import os
+        import signal
+        import struct
+        import time
+
+        executor = cf.ProcessPoolExecutor(2)
+        executor.submit(int).result()
+        os.write(executor._result_queue._writer.fileno(), struct.pack("!i", 1 << 20) + bytes(9))
+        time.sleep(0.2)
+        workers = list(executor._processes)
+        os.kill(workers[0], signal.SIGKILL)
+        print("PIDS", *workers, flush=True)
     for _ in range(repeat):
         told.clear()
         try:
-            ds = ic.stability_map(osc, [1], w, b, executor="process", max_workers=2,
-                                  progress=progress)
+            ds = ic.stability_map(osc, [1], w, b, executor=executor, max_workers=None
+                                  if executor != "process" else 2, progress=progress)
         except KeyboardInterrupt:
             print("INTERRUPTED", *[c.pid for c in mp.active_children()], flush=True)
             continue
@@ -157,6 +174,39 @@ def test_ctrl_c_stops_a_stuck_map_and_kills_its_workers(tmp_path):
         assert child.wait(20.0) == 0  # and the interpreter's exit does not hang
     except (TimeoutError, subprocess.TimeoutExpired):
         pytest.fail(f"Ctrl-C did not stop the map: {_end(child, workers)[-3000:]}")
+    finally:
+        _end(child, workers)
+    assert all(_gone(pid) for pid in workers)
+
+
+def test_a_stuck_pool_of_the_caller_is_replaced_and_ctrl_c_ends_it(tmp_path):
+    # deterministic: the caller's pool is stuck before the map starts
+    child = _start(tmp_path, "caller", 1)
+    try:
+        line = _line(child, time.monotonic() + TIMEOUT)
+        assert line.startswith("PIDS"), (line, child.stderr.read())
+        workers = [int(p) for p in line.split()[1:]]
+        line = _line(child, time.monotonic() + 60.0)
+        if line.startswith("PIDS"):  # the progress of the map, on the new pool
+            line = _line(child, time.monotonic() + 60.0)
+        assert line.split() == ["SAME"], line
+        assert child.wait(20.0) == 0  # the stuck manager thread does not hold the exit
+    except (TimeoutError, subprocess.TimeoutExpired):
+        pytest.fail(f"the map hung on the caller's stuck pool: {_end(child, workers)[-3000:]}")
+    finally:
+        _end(child, workers)
+    assert all(_gone(pid) for pid in workers)
+    child = _start(tmp_path, "caller-interrupt", 1)
+    try:
+        line = _line(child, time.monotonic() + TIMEOUT)
+        workers = [int(p) for p in line.split()[1:]]
+        time.sleep(1.0)  # the map runs, its tasks never come back
+        os.kill(child.pid, signal.SIGINT)
+        line = _line(child, time.monotonic() + 20.0)
+        assert line.split() == ["INTERRUPTED"], line
+        assert child.wait(20.0) == 0
+    except (TimeoutError, subprocess.TimeoutExpired):
+        pytest.fail(f"Ctrl-C did not end the map: {_end(child, workers)[-3000:]}")
     finally:
         _end(child, workers)
     assert all(_gone(pid) for pid in workers)
