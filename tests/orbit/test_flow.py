@@ -476,3 +476,18 @@ def test_n1_and_np_motions_pickle_after_use_and_compute_the_same_numbers(paper):
     np.testing.assert_array_equal(n1_copy.G, n1.G)
     np.testing.assert_array_equal(mp_copy.states, mp.states)
     np.testing.assert_array_equal(mp_copy.G, mp.G)
+
+
+def test_an_np_motion_of_two_stops_pickles_and_is_solved_again_the_same():
+    # a 1-2 motion of a backlash (mirror stops): what a process pool or dask sends per task
+    osc = ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=0.5, omega=1.6,
+                           eta=0.1, stops=Stops(mirror=True))
+    orbit = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 150.0))
+    assert orbit.p == 2
+    for copied in _roundtrips(orbit):
+        np.testing.assert_array_equal(copied.states, orbit.states)
+        assert copied.pattern == orbit.pattern
+        again = ic.multi_impact_orbit(copied.oscillator, 1, 2, copied)
+        np.testing.assert_allclose(again.unknowns, orbit.unknowns, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(again.multipliers, orbit.multipliers, rtol=0, atol=1e-12)
+        assert (again.stable, again.physical) == (orbit.stable, orbit.physical)
