@@ -56,7 +56,7 @@ import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError, UnresolvedMotionWarning
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import LOWER, UPPER, check_pattern
+from impactcont.model.stops import LOWER, UPPER, check_pattern, require_forcing
 from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.periodic import (
     IllConditionedWarning,
@@ -934,6 +934,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     p = check_impacts(p)
     if not isinstance(osc, ImpactOscillator):
         raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
+    require_forcing(osc, "multi_impact_orbit")
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
         raise ParameterError(f"tol must be a real number > 0; got {tol!r}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:

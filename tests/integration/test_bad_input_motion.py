@@ -371,5 +371,9 @@ def test_periodic_motions_of_an_unforced_machine_are_refused(paper):
     with pytest.raises(ParameterError, match=re.escape(
             "F = [0.0, 0.0] (no harmonic forcing): periodic motions have the forcing's period")):
         ic.periodic_orbits(osc, 1)
+    guess = {"delta": 0.0, "flight_times": [2 * np.pi], "states": [[0.6, 0.0, 0.1, 0.0]]}
+    with pytest.raises(ParameterError, match=re.escape(  # not "singular Jacobian"
+            "multi_impact_orbit: F = [0.0, 0.0] (no harmonic forcing)")):
+        ic.multi_impact_orbit(osc, 1, 1, guess)
     with pytest.raises(ParameterError, match=r"F0=2\.0 scales the oscillator's F, which is 0"):
         osc.replace(F0=2.0)
