@@ -6,9 +6,9 @@ plot and :func:`impactcont.dataset.load` takes it unchanged) with:
 
 - the point columns read as follows: ``delta`` and ``state`` are those of
   impact 0, ``impact_velocity`` is the smallest impact velocity over the p
-  impacts and ``gap_min`` the smallest interior gap over the p flights (the
-  ZV and GR test functions), ``multipliers`` the eigenvalues of
-  ``G = G_{p-1} .. G_0``;
+  impacts and ``gap_min`` the smallest clearance over the p flights (interior
+  extrema and both ends, every stop; the ZV and GR test functions),
+  ``multipliers`` the eigenvalues of ``G = G_{p-1} .. G_0``;
 - a dimension ``impact`` (size p, integer coordinate ``0 .. p-1``) and the
   per-impact variables of :data:`IMPACT_VARIABLES` on ``(point, impact)``
   (``state_k`` on ``(point, impact, component)``), and the same at the
@@ -59,10 +59,12 @@ IMPACT_VARIABLES: dict[str, _Var] = {
     "flight_time_k": _Var("flight time after impact k", "1",
                           "Time tau_k from impact k to impact k+1; they sum to 2 pi N / omega."),
     "gap_min_k": _Var("minimum gap of flight k", "1",
-                      "Smallest clearance on the flight after impact k: b - x_j at the "
-                      "interior maxima of the impacting mass (x1 for the paper's stop) and, "
-                      "with a lower stop, x_j + b_low at its interior minima; +inf when "
-                      "there is none (eq. 16)."),
+                      "Smallest clearance on the flight after impact k to every stop, on "
+                      "its own coordinate: at the interior extrema of that coordinate (eq. "
+                      "16) and at both ends of the flight, the stop of the impact there "
+                      "excluded (a coordinate past another stop when the flight ends is "
+                      "crossed); negative: the flight crosses a stop; +inf when no stop "
+                      "is approached."),
     "state_k": _Var("state after impact k", "1",
                     "State [x1..xn, x1'..xn'] right after impact k (x_j at the stop hit; "
                     "x1 = b for the paper's stop).",
