@@ -15,7 +15,15 @@ from impactcont.core.driver import (
     iter_points,
 )
 from impactcont.core.events import Stop, StopRule
-from impactcont.core.locate import Event, EventPoint, MotionTest, locate_events, zero_precision
+from impactcont.core.locate import (
+    Event,
+    EventPoint,
+    MotionTest,
+    dip_bottom,
+    locate_events,
+    parts_beside_poles,
+    zero_precision,
+)
 from impactcont.core.options import ContinuationOptionError, ContinuationOptions
 from impactcont.core.point import ContinuationPoint
 from impactcont.core.problem import Problem, ProblemOutputError
@@ -48,9 +56,11 @@ __all__ = [
     "Stop",
     "StopRule",
     "continue_branch",
+    "dip_bottom",
     "follow",
     "iter_points",
     "locate_events",
+    "parts_beside_poles",
     "solve_on_hyperplane",
     "zero_precision",
 ]
