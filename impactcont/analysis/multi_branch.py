@@ -97,9 +97,17 @@ def make_options(bounds: Sequence[float], options: ContinuationOptions | None = 
 
 
 def _pd_sign_change(a: MultiImpactOrbit, b: MultiImpactOrbit) -> bool:
+    """Whether the PD test changes sign between two motions, not through a pole of G.
+
+    The pole-free PD test (:func:`~impactcont.problems.events.pole_free`) is cleared by the
+    impact velocities: one of them changing sign (a zero-velocity impact, the pole of G of
+    eq. 25) changes the test's sign without a multiplier through -1.
+    """
     fa, fb = event_function("PD", a), event_function("PD", b)
     near = min(np.min(np.abs(a.multipliers + 1)), np.min(np.abs(b.multipliers + 1)))
-    return bool(math.isfinite(fa) and math.isfinite(fb) and (fa < 0) != (fb < 0) and near < 0.5)
+    through_pole = bool(np.any((a.impact_velocities < 0) != (b.impact_velocities < 0)))
+    return bool(math.isfinite(fa) and math.isfinite(fb) and (fa < 0) != (fb < 0)
+                and near < 0.5 and not through_pole)
 
 
 _PARENT_TOL = 1e-9

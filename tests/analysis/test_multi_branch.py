@@ -124,3 +124,21 @@ def test_a_branch_in_a_stiffness_entry_reaches_the_edge_of_its_range(damper_ul):
     start = ic.multi_impact_orbit(osc, 1, 2, damper_ul)
     ds = multi_impact_continuation(start, "K[2,2]", (0.0, 0.1), progress=False)
     assert ds["K[2,2]"].values.min() == 0.0 and ds["K[2,2]"].values.max() == 0.1
+
+
+def test_stop_after_pd_is_not_triggered_through_the_pole_of_g() -> None:
+    """A zero-velocity impact between two points changes the sign of the pole-free PD test
+    (it is cleared by the impact velocities) with no multiplier through -1: the branch's
+    ``stop_after_pd`` rule must not count it as the period-doubling (issue 28, 1.3)."""
+    from types import SimpleNamespace
+
+    from impactcont.analysis.multi_branch import _pd_sign_change
+
+    def motion(mu, h):
+        return SimpleNamespace(multipliers=np.array(mu, dtype=complex),
+                               impact_velocities=np.array(h, dtype=float))
+
+    # the same multipliers on both sides (one 0.4 from -1), an impact velocity through 0
+    assert not _pd_sign_change(motion([-0.6, 0.2], [0.3, 1e-3]), motion([-0.6, 0.2], [0.3, -1e-3]))
+    # a multiplier through -1 with the velocities keeping their sign is a PD
+    assert _pd_sign_change(motion([-0.9, 0.2], [0.3, 0.2]), motion([-1.1, 0.2], [0.3, 0.2]))
