@@ -37,8 +37,10 @@ CHILD = textwrap.dedent("""
     mode, repeat = sys.argv[1], int(sys.argv[2])
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                               b=0.6, omega=1.0, eta=0.1)
-    # tasks of 1024 points: results of about 100 kB, more than a pipe holds
-    w, b = np.linspace(0.5, 6.0, 48 if mode != "parent" else 4000), np.linspace(-1, 1.5, 1024)
+    # tasks of 4 x 1024 points: 0.1 s at least, results of about 400 kB, more than a pipe
+    # holds (the workers are still computing when the parent is stopped, then block writing)
+    w, b = (np.linspace(0.5, 6.0, 4000 if mode.startswith("parent") else 48),
+            np.linspace(-1, 1.5, 1024))
     told = []
 
     def progress(record):
@@ -46,7 +48,8 @@ CHILD = textwrap.dedent("""
             told.append(1)
             print("PIDS", *[c.pid for c in mp.active_children()], flush=True)
 
-    reference = ic.stability_map(osc, [1], w, b) if mode != "parent" else None
+    reference = None if mode.startswith("parent") else ic.stability_map(osc, [1], w, b)
+    out = "map.nc" if mode == "parent-out" else None
     executor = "process"
     if mode.startswith("caller"):
         # the caller's pool, stuck as a worker killed sending its result leaves it: half a
@@ -68,7 +71,8 @@ CHILD = textwrap.dedent("""
         told.clear()
         try:
             ds = ic.stability_map(osc, [1], w, b, executor=executor, max_workers=None
-                                  if executor != "process" else 2, progress=progress)
+                                  if executor != "process" else 2, progress=progress,
+                                  out=out, omega_block=None if out else 4)
         except KeyboardInterrupt:
             print("INTERRUPTED", *[c.pid for c in mp.active_children()], flush=True)
             continue
@@ -113,15 +117,17 @@ def _line(child: subprocess.Popen, deadline: float) -> str:
     return child.stdout.readline()
 
 
-def _stall_and_kill_a_writer(child: subprocess.Popen, workers: list[int]) -> None:
-    """Stop the parent 1.5 s, kill the worker blocked writing its result, resume."""
+def _stall_and_kill_a_writer(child: subprocess.Popen, workers: list[int]) -> bool:
+    """Stop the parent 1.5 s, kill the worker blocked writing its result, resume; whether
+    there was one (else the first worker is killed)."""
     os.kill(child.pid, signal.SIGSTOP)
     try:
         time.sleep(1.5)
-        victim = next((pid for pid in workers if "pipe_write" in _wchan(pid)), workers[0])
-        os.kill(victim, signal.SIGKILL)
+        writer = next((pid for pid in workers if "pipe_write" in _wchan(pid)), None)
+        os.kill(writer or workers[0], signal.SIGKILL)
     finally:
         os.kill(child.pid, signal.SIGCONT)
+    return writer is not None
 
 
 def _end(child: subprocess.Popen, pids: list[int]) -> str:
@@ -139,13 +145,14 @@ def test_a_worker_killed_while_the_parent_is_stalled_is_replaced_every_time(tmp_
     child = _start(tmp_path, "kill", repeat)
     deadline = time.monotonic() + TIMEOUT
     pids: list[int] = []
+    writers = 0
     try:
         for _ in range(repeat):
             line = _line(child, deadline)
             assert line.startswith("PIDS"), (line, child.stderr.read())
             workers = [int(p) for p in line.split()[1:]]
             pids += workers
-            _stall_and_kill_a_writer(child, workers)
+            writers += _stall_and_kill_a_writer(child, workers)
             line = _line(child, deadline)
             # the same map as the serial one, and no worker left
             assert line.split() == ["SAME"], line
@@ -155,7 +162,10 @@ def test_a_worker_killed_while_the_parent_is_stalled_is_replaced_every_time(tmp_
     finally:
         stderr = _end(child, pids)
     assert all(_gone(pid) for pid in pids)
-    assert stderr.count("did not notice it") >= 1, stderr  # the stuck pool was ended
+    # a writer killed leaves the pool stuck (observed in 2 or 3 of 3 kills of a writer; the
+    # pool notices the others itself), and the stuck pool was ended and replaced
+    assert writers >= 1 and 1 <= stderr.count("did not notice it") <= writers, (writers,
+                                                                                stderr)
 
 
 def test_ctrl_c_stops_a_stuck_map_and_kills_its_workers(tmp_path):
@@ -212,8 +222,10 @@ def test_a_stuck_pool_of_the_caller_is_replaced_and_ctrl_c_ends_it(tmp_path):
     assert all(_gone(pid) for pid in workers)
 
 
-def test_the_workers_end_when_the_parent_is_killed(tmp_path):
-    child = _start(tmp_path, "parent", 1)
+@pytest.mark.parametrize("mode", ["parent", "parent-out"])
+def test_the_workers_end_when_the_parent_is_killed(tmp_path, mode):
+    # before: both workers alive 150 s later, adopted by init (the same with out=)
+    child = _start(tmp_path, mode, 1)
     workers: list[int] = []
     try:
         line = _line(child, time.monotonic() + TIMEOUT)
