@@ -72,7 +72,13 @@ def _watch_parent(parent: int) -> None:
     the worker's parent changed (a worker whose parent ended is adopted by another
     process) or, when the worker was not forked by `parent` itself (a fork server),
     whether `parent` still runs, and ends the worker with ``os._exit``.
+
+    Ctrl-C (SIGINT, sent by a terminal to the whole process group) is ignored: the
+    parent takes it and kills its workers (:func:`kill_pool`), instead of every worker
+    printing its own ``KeyboardInterrupt``.
     """
+    with contextlib.suppress(ValueError, OSError):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         with contextlib.suppress(Exception):  # no libc, a refused call: the thread does it
             libc = ctypes.CDLL(ctypes.util.find_library("c") or None, use_errno=True)

@@ -32,6 +32,10 @@ def _threads() -> list[str]:
     return [t.name for t in threading.enumerate()]
 
 
+def _sigint() -> object:
+    return signal.getsignal(signal.SIGINT)
+
+
 def _pdeathsig() -> int:
     libc = ctypes.CDLL(None, use_errno=True)
     value = ctypes.c_int(-1)
@@ -84,6 +88,7 @@ def test_kill_pool_ends_a_busy_healthy_pool_at_once():
 def test_the_workers_of_a_process_pool_watch_their_parent():
     with process_pool(1) as pool:
         assert "impactcont-parent-watch" in pool.submit(_threads).result()
+        assert pool.submit(_sigint).result() == signal.SIG_IGN  # Ctrl-C: the parent's
         if sys.platform.startswith("linux"):
             assert pool.submit(_pdeathsig).result() == signal.SIGKILL
 
@@ -110,5 +115,6 @@ def test_a_worker_ends_when_its_parent_changes(monkeypatch):
     exited = threading.Event()
     monkeypatch.setattr(os, "getppid", lambda: next(ppid))
     monkeypatch.setattr(os, "_exit", lambda code: exited.set())
+    monkeypatch.setattr(signal, "signal", lambda *args: None)  # this process keeps Ctrl-C
     pool_module._watch_parent(os.getpid())
     assert exited.wait(5.0)
