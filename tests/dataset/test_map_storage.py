@@ -125,15 +125,38 @@ time.sleep(60)
 """
 
 
+_SIGTERMED_WRITING = """
+import time
+import numpy as np
+import impactcont as ic
+osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.5,
+                          omega=1.0, eta=0.1)
+told = []
+def progress(record):
+    if not told:
+        told.append(1)
+        print("WRITING", flush=True)
+        time.sleep(30)
+ic.stability_map(osc, [1], np.linspace(0.5, 6, 64), np.linspace(-1, 1.5, 1024),
+                 memory_limit=1e3, progress=progress)
+"""
+
+
 @pytest.mark.skipif(os.name != "posix", reason="SIGTERM")
-def test_sigterm_removes_the_temporary_map_and_still_ends_the_process(tmp_path):
+@pytest.mark.parametrize("script", [_SIGTERMED, _SIGTERMED_WRITING], ids=["open", "writing"])
+def test_sigterm_removes_the_temporary_map_and_still_ends_the_process(tmp_path, script):
     import signal
 
-    child = subprocess.Popen([sys.executable, "-c", _SIGTERMED], text=True,
+    child = subprocess.Popen([sys.executable, "-c", script], text=True,
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              env={**os.environ, "TMPDIR": str(tmp_path)})
     try:
-        path = Path(child.stdout.readline().strip())
+        line = child.stdout.readline().strip()
+        if line == "WRITING":  # the map is being written: its file and save_blocks' temporary
+            assert len(list(tmp_path.iterdir())) == 1, list(tmp_path.iterdir())
+            path = next(tmp_path.iterdir())
+        else:
+            path = Path(line)
         assert path.parent == tmp_path and path.is_file()
         child.send_signal(signal.SIGTERM)
         assert child.wait(30) == -signal.SIGTERM  # ended by SIGTERM, as by default
