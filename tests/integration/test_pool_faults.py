@@ -162,10 +162,11 @@ def test_a_worker_killed_while_the_parent_is_stalled_is_replaced_every_time(tmp_
     finally:
         stderr = _end(child, pids)
     assert all(_gone(pid) for pid in pids)
-    # a writer killed leaves the pool stuck (observed in 2 or 3 of 3 kills of a writer; the
-    # pool notices the others itself), and the stuck pool was ended and replaced
-    assert writers >= 1 and 1 <= stderr.count("did not notice it") <= writers, (writers,
-                                                                                stderr)
+    # a writer was killed, and each pool that broke was replaced: a pool stuck on the half
+    # message (1 to 3 of 3 here) was ended by the map, the others noticed it themselves
+    # (the stuck pool is made for certain in the test of a caller's pool below)
+    assert writers >= 1, stderr
+    assert stderr.count("run again in a new pool") == repeat, stderr
 
 
 def test_ctrl_c_stops_a_stuck_map_and_kills_its_workers(tmp_path):
