@@ -14,7 +14,11 @@ docstring's text:
   ``~`` keeps only the last component as the shown text;
 * in a section that is not a numpydoc standard one, a block of
   ``term`` / indented description pairs, or of lines ``term  description``
-  (term in double backticks, two or more spaces), becomes a Markdown list.
+  (term in double backticks, two or more spaces), becomes a Markdown list;
+* math written for Sphinx, the role ``:math:`x^2``` and the directive
+  ``.. math::`` with its indented block, becomes ``\\(x^2\\)`` and a ``$$`` block,
+  which ``pymdownx.arithmatex`` (``mkdocs.yml``) hands to MathJax like the
+  equations of the pages.
 
 Registered under ``plugins.mkdocstrings.handlers.python.options.extensions``
 in ``mkdocs.yml`` (path relative to the repository root, where mkdocs runs).
@@ -28,6 +32,8 @@ import re
 import griffe
 
 ROLE = re.compile(r":(?:py:)?(func|class|meth|mod|data|attr|exc|obj|const):`(~?)([^`]+)`")
+MATH_ROLE = re.compile(r":math:`([^`]+)`")
+MATH_DIRECTIVE = re.compile(r"^(?P<indent>\s*)\.\. math::\s*(?P<first>.*)$")
 
 #: Numpydoc sections griffe parses itself; every other titled section is free text.
 STANDARD_SECTIONS = frozenset({
@@ -69,6 +75,31 @@ def rewrite_roles(text: str, obj: griffe.Object, collection) -> str:
                 f"<code>{html.escape(shown)}</code></autoref>")
 
     return ROLE.sub(replace, text)
+
+
+def rewrite_math(text: str) -> str:
+    """Sphinx math of ``text`` as arithmatex reads it: ``\\(...\\)`` inline, ``$$`` blocks."""
+    text = MATH_ROLE.sub(lambda m: f"\\({m[1]}\\)", text)
+    lines = text.split("\n")
+    out: list[str] = []
+    i = 0
+    while i < len(lines):
+        match = MATH_DIRECTIVE.match(lines[i])
+        if match is None:
+            out.append(lines[i])
+            i += 1
+            continue
+        indent = match["indent"]
+        body = [match["first"]] if match["first"].strip() else []
+        i += 1
+        while i < len(lines) and (not lines[i].strip()
+                                  or len(lines[i]) - len(lines[i].lstrip()) > len(indent)):
+            line = lines[i].strip()
+            if line and not re.match(r"^:\w+:", line):  # options such as :label: dropped
+                body.append(line)
+            i += 1
+        out.extend([f"{indent}$$", *(f"{indent}{line}" for line in body), f"{indent}$$", ""])
+    return "\n".join(out)
 
 
 def _as_list(block: list[str]) -> list[str] | None:
@@ -130,6 +161,6 @@ class SphinxDocstrings(griffe.Extension):
                 continue
             seen.add(id(obj))
             if obj.docstring is not None:
-                text = rewrite_sections(obj.docstring.value)
+                text = rewrite_math(rewrite_sections(obj.docstring.value))
                 obj.docstring.value = rewrite_roles(text, obj, collection)
             stack.extend(m for m in obj.members.values() if not m.is_alias)

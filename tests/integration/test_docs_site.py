@@ -109,3 +109,93 @@ def test_study_links_to_other_studies_are_links(site):
                 assert (site / "studies" / other).is_file(), (readme, target)
             checked += 1
     assert checked, "no study README links to another study"
+
+
+#: A highlighted code block of a page (fenced in Markdown, with or without a language).
+_HIGHLIGHT = re.compile(r'<div class="[^"]*\bhighlight\b[^"]*">\s*<pre>.*?</pre>\s*</div>', re.S)
+#: A code block: fenced or indented in Markdown.
+_PRE = re.compile(r"<pre[^>]*>(.*?)</pre>", re.S)
+#: ASCII math in a code block: a line ``lhs = rhs`` written with marks no code example or
+#: program output of these pages uses (primes, powers, sqrt, functions, indices), or
+#: ending with an equation number like ``(12)`` or ``(W3)``.
+_ASCII_MATH = re.compile(
+    r"^(?=.*\S\s*=\s*\S)(?:.*(?:''|\^|\bsqrt\(|\bexp\(|\bcos\(|\bsin\(|\bdet\(|\bRe\(|"
+    r"\bdiag\(|\bsum_|_\{)|.*\(\s*[A-Z]?\d+[a-z]?(?:,\s*[A-Z]?\d+[a-z]?)*\s*\)\s*$)", re.M)
+
+
+def _text(fragment: str) -> str:
+    import html
+    return html.unescape(re.sub(r"<[^>]+>", "", fragment))
+
+
+def test_no_rest_literal_reaches_the_html(site):
+    """A reST literal ``x`` of a docstring is shown as code, never with its backticks.
+
+    Fenced code blocks of the Markdown pages are left out: their text is shown as written.
+    """
+    raw = {}
+    for path, text in _pages(site).items():
+        body = _text(_HIGHLIGHT.sub("", text.split("<article", 1)[-1]))
+        if found := re.findall(r"``[^`\s][^`]*``", body):
+            raw[str(path.relative_to(site))] = found[:3]
+    assert not raw, f"reST double-backtick literals in {raw}"
+
+
+def test_equations_are_typeset(site):
+    """The theory pages' equations go through arithmatex (MathJax), none stays ASCII code."""
+    for page in ("theory", "equations", "two_sided", "multi_impact", "kernel", "machines"):
+        text = (site / page / "index.html").read_text(encoding="utf-8")
+        assert re.search(r'<(div|span) class="arithmatex">', text), page
+        assert "mathjax" in text.lower(), f"{page} loads no MathJax"
+    ascii_math, raw = {}, {}
+    for path, text in _pages(site).items():
+        article = text.split("<article", 1)[-1]
+        prose = re.sub(r"<(pre|code)[^>]*>.*?</\1>", "", article, flags=re.S)
+        prose = re.sub(r'<(span|div) class="arithmatex">.*?</\1>', "", prose, flags=re.S)
+        if "$$" in _text(prose):  # a block arithmatex did not take (say, badly indented)
+            raw[str(path.relative_to(site))] = _text(prose).count("$$")
+        if path.relative_to(site).parts[0] == "api":
+            continue  # docstrings: the modules' own text
+        for block in _PRE.findall(article):
+            if '<span class="' in block:
+                continue  # code of a language (Python, TOML, console), tokenised
+            if found := _ASCII_MATH.findall(_text(block)):
+                ascii_math.setdefault(str(path.relative_to(site)), []).extend(found)
+    assert not ascii_math, f"equations left as ASCII code blocks: {ascii_math}"
+    assert not raw, f"$$ shown as text, not typeset: {raw}"
+
+
+def test_continuation_api_page_opens_with_the_public_functions(site):
+    text = (site / "api" / "continuation" / "index.html").read_text(encoding="utf-8")
+    anchors = re.findall(r'id="(impactcont\.[\w.]+\.\w+)"', text)
+    callables = [a for a in anchors if a.rsplit(".", 1)[1][0].islower()
+                 and a not in {"impactcont.analysis.branch"}]
+    assert callables[:3] == [f"impactcont.analysis.branch.{name}" for name in
+                             ("continuation", "continuation_from", "extend")]
+    internals = [a for a in anchors if a.rsplit(".", 1)[1].startswith(("check_", "_"))
+                 or ".core.stepper" in a or ".core.corrector" in a or ".detection.locator" in a]
+    assert not internals, f"internals listed on the page: {internals}"
+
+
+def test_sphinx_math_of_docstrings_reaches_mathjax():
+    """``:math:`` and ``.. math::`` in a docstring become arithmatex math (as in mkdocs.yml)."""
+    import importlib.util
+
+    import markdown
+    import yaml
+
+    spec = importlib.util.spec_from_file_location(
+        "griffe_docstrings", ROOT / "docs" / "_hooks" / "griffe_docstrings.py")
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    docstring = ("Stable when :math:`\\rho(G) < 1`.\n\n.. math::\n   :label: g\n\n"
+                 "   G_0^T P G_0 - P = -I\n\nThe end.")
+    config = yaml.load((ROOT / "mkdocs.yml").read_text(encoding="utf-8"), Loader=yaml.BaseLoader)
+    arithmatex = [e for e in config["markdown_extensions"]
+                  if isinstance(e, dict) and "pymdownx.arithmatex" in e]
+    assert arithmatex, "mkdocs.yml loads no pymdownx.arithmatex"
+    out = markdown.markdown(hook.rewrite_math(docstring), extensions=["pymdownx.arithmatex"],
+                            extension_configs=arithmatex[0])
+    assert '<span class="arithmatex">\\(\\rho(G) &lt; 1\\)</span>' in out
+    assert re.search(r'<div class="arithmatex">\\\[\s*G_0\^T P G_0 - P = -I\s*\\\]</div>', out)
+    assert ":label:" not in out and ":math:" not in out and "The end." in out
