@@ -11,6 +11,7 @@ and locates the zero with :func:`locate_zero`.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import logging
 import math
@@ -414,7 +415,7 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
     found: list[EventPoint] = []
     # each event's test at the accepted points, evaluated once each (ends and neighbours)
-    values = {id(event): _memo(event.at_point or (
+    values = {id(event): functools.cache(event.at_point or (
         lambda j, t=event.test: t(x[j, :-1], x[j, -1]))) for event in events if event.test}
     for k in range(len(x) - 1):
         chord = _Chord(problem, x[k], x[k + 1], newton_tol,
@@ -443,24 +444,9 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     return found
 
 
-def _memo(f: Callable[[int], float]) -> Callable[[int], float]:
-    cache: dict[int, float] = {}
-
-    def memo(j: int) -> float:
-        if j not in cache:
-            cache[j] = f(j)
-        return cache[j]
-    return memo
-
-
 def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
-    cache: dict[float, float] = {}
-
-    def cached(s: float) -> float:
-        if s not in cache:
-            cache[s] = float(f(s))
-        return cache[s]
-    return cached
+    """`f` evaluated once per chord coordinate (its value as a float)."""
+    return functools.cache(lambda s: float(f(s)))
 
 
 def _watched_parts(event: Event, value: Callable[[int], float], x: FloatArray, k: int,
@@ -476,6 +462,7 @@ def _watched_parts(event: Event, value: Callable[[int], float], x: FloatArray, k
     cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
     if cuts:
         return parts_beside_poles(event.label, g, noise, cuts, k)
+
     def rounding_only() -> bool:  # both ends within the test's rounding of zero
         return event.noise is not None and all(
             abs(value(j)) <= event.noise(j) for j in (k, k + 1))

@@ -164,10 +164,10 @@ class ModelParameter:
             Naming `argument`, the value, the end the oscillator refuses and why.
         """
         lo, hi = check_bounds(self.name, bounds, argument)
+        if self.data == FREQUENCY:  # omega > 0 is all the oscillator asks
+            return lo, hi
         ends = (lo, hi, 0.0) if self.data == FORCING and lo < 0.0 < hi else (lo, hi)
         for value in ends:
-            if self.data == FREQUENCY:
-                break
             try:
                 moved = self.put(osc, value)
             except ParameterError as exc:
