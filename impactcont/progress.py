@@ -20,21 +20,32 @@ points and the parameter value are shown); maps and robust stability have one.
 Drivers open a :class:`Reporter` with :func:`reporter` and call :meth:`Reporter.advance`
 (or pass :meth:`Reporter.point` as the core's ``on_point``); a driver that runs another
 one passes its reporter on, so nested work counts in one bar.
+
+While a bar is shown, the records of the package's loggers go above it
+(:func:`logging_through_bar`): a warning logged mid-run gets a line of its own and the bar
+is drawn again below it.
+
+Ctrl-C (:class:`KeyboardInterrupt`) during a call run in :func:`interruptible` is taken
+once: the code that computes catches it, asks :func:`take_interrupt`, and the call returns
+what it has computed, marked as interrupted. A second Ctrl-C aborts the call as usual.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import inspect
 import logging
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from types import TracebackType
 from typing import Any
 
-__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Progress", "ProgressOption", "Reporter",
-           "check_progress", "reporter"]
+__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Interruption", "Progress", "ProgressOption",
+           "Reporter", "check_progress", "interrupted", "interruptible", "logging_through_bar",
+           "reporter", "take_interrupt"]
 
 log = logging.getLogger(__name__)
 
@@ -154,8 +165,11 @@ class Reporter:
         self._next_log = self.start + LOG_INTERVAL
         self._callback = progress if callable(progress) else None
         self._bar: Any = None
+        self._logging = contextlib.ExitStack()
         if progress is True or (progress is None and _stderr_is_terminal()):
             self._bar = self._open_bar(delay=0.0 if progress is True else BAR_DELAY)
+            if self._bar is not None:
+                self._logging.enter_context(logging_through_bar())
 
     def _open_bar(self, delay: float) -> Any:
         try:
@@ -209,10 +223,11 @@ class Reporter:
         return f"{self.what}: {count}{where}, {elapsed:.0f} s"
 
     def close(self) -> None:
-        """Close the bar (idempotent)."""
+        """Close the bar and give the log handlers their streams back (idempotent)."""
         if self._bar is not None:
             self._bar.close()
             self._bar = None
+        self._logging.close()
 
     def __enter__(self) -> Reporter:
         return self
@@ -260,3 +275,188 @@ def reporter(progress: ProgressOption | Reporter, what: str, *, total: int | Non
     if isinstance(progress, Reporter):
         return _Shared(progress)
     return Reporter(what, progress, total=total, parameter=parameter, unit=unit)
+
+
+# -- log records above the bar ------------------------------------------------------------------
+class _AboveBar:
+    """A console stream whose writes go through ``tqdm.write``: above the bars, which are
+    drawn again below the text."""
+
+    def __init__(self, stream: Any) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        from tqdm import tqdm
+        tqdm.write(text, file=self.stream, end="")
+        return len(text)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def __getattr__(self, name: str) -> Any:  # isatty, encoding, fileno, ...
+        return getattr(self.stream, name)
+
+
+def _console(stream: Any) -> bool:
+    return any(stream is s and s is not None
+               for s in (sys.stderr, sys.stdout, sys.__stderr__, sys.__stdout__))
+
+
+def _package_loggers() -> list[logging.Logger]:
+    """The loggers whose handlers see the package's records: ``impactcont`` and those below
+    it that exist, then the ancestors a record propagates to (the root last)."""
+    loggers = [logging.getLogger("impactcont")]
+    loggers += [logger for name, logger in list(logging.Logger.manager.loggerDict.items())
+                if name.startswith("impactcont.") and isinstance(logger, logging.Logger)]
+    parent = loggers[0].parent
+    while parent is not None:
+        loggers.append(parent)
+        parent = parent.parent
+    return loggers
+
+
+@contextlib.contextmanager
+def logging_through_bar() -> Iterator[None]:
+    """While it is entered, the package's log records are written above the tqdm bars.
+
+    The console handlers (a :class:`logging.StreamHandler` on stderr or stdout) of the
+    ``impactcont`` loggers and of the loggers their records propagate to (the root
+    logger's, as :func:`logging.basicConfig` sets it up) write through ``tqdm.write``,
+    so a message logged mid-run is a line of its own and the bar is drawn again below it;
+    without any handler, Python's last-resort handler (warnings and errors on stderr)
+    does the same. Their levels, formatters and filters are kept, no handler is added,
+    and every stream is given back when the context exits. A
+    :class:`~impactcont.progress.Reporter` enters it while its bar is shown; a driver
+    drawing a bar of its own can enter it around its work.
+
+    Without tqdm it does nothing.
+    """
+    try:
+        import tqdm  # noqa: F401
+    except ImportError:
+        yield
+        return
+    swapped: list[tuple[logging.StreamHandler, Any]] = []
+    last_resort = logging.lastResort
+    try:
+        for logger in _package_loggers():
+            for handler in logger.handlers:
+                if (isinstance(handler, logging.StreamHandler)
+                        and not isinstance(handler, logging.FileHandler)
+                        and _console(handler.stream)):
+                    swapped.append((handler, handler.stream))
+                    handler.stream = _AboveBar(handler.stream)
+        if last_resort is not None and not isinstance(last_resort, _LastResortAboveBar):
+            logging.lastResort = _LastResortAboveBar(last_resort.level)
+        yield
+    finally:
+        logging.lastResort = last_resort
+        for handler, stream in reversed(swapped):
+            handler.stream = stream
+
+
+class _LastResortAboveBar(logging.StreamHandler):
+    """Python's last-resort handler (used when no handler is configured), above the bar."""
+
+    def __init__(self, level: int) -> None:
+        super().__init__()
+        self.setLevel(level)
+
+    @property  # type: ignore[override]
+    def stream(self) -> Any:
+        return _AboveBar(sys.stderr)
+
+    @stream.setter
+    def stream(self, value: Any) -> None:  # set by StreamHandler.__init__: stderr is read
+        pass
+
+
+# -- Ctrl-C during a call ---------------------------------------------------------------------
+class Interruption:
+    """The interrupt state of one library call (see :func:`interruptible`).
+
+    Attributes
+    ----------
+    what : str
+        The call, in words (``"continuation in omega"``).
+    where : str or None
+        Where the first Ctrl-C was taken (``"continuation"``, ``"location"``, ...);
+        None while the call has not been interrupted.
+    """
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self.where: str | None = None
+
+    @property
+    def interrupted(self) -> bool:
+        """Whether Ctrl-C has been taken during the call."""
+        return self.where is not None
+
+
+_CALL: contextvars.ContextVar[Interruption | None] = contextvars.ContextVar(
+    "impactcont_interruption", default=None)
+
+
+@contextlib.contextmanager
+def interruptible(what: str) -> Iterator[Interruption]:
+    """Run a library call whose first Ctrl-C returns the work done so far.
+
+    Entered by the drivers (continuation, curves, branch switching): inside it, the code
+    that computes catches :class:`KeyboardInterrupt` and calls :func:`take_interrupt`; the
+    first interrupt is taken (the call finishes with what it has and returns it, marked
+    as interrupted), a second one aborts as usual. A driver called by another one joins
+    its caller's call: one interrupt for the whole.
+
+    Parameters
+    ----------
+    what : str
+        The call, in words, for the log.
+
+    Yields
+    ------
+    Interruption
+        The state of the call (the caller's, for a nested driver).
+    """
+    outer = _CALL.get()
+    if outer is not None:
+        yield outer
+        return
+    state = Interruption(what)
+    token = _CALL.set(state)
+    try:
+        yield state
+    finally:
+        _CALL.reset(token)
+
+
+def take_interrupt(where: str, message: str, *args: Any) -> bool:
+    """In an ``except KeyboardInterrupt`` handler: whether the interrupt is taken.
+
+    Parameters
+    ----------
+    where : str
+        The phase interrupted (``"continuation"``, ``"location"``), kept in the state.
+    message, *args
+        What is kept, logged at WARNING on the ``impactcont.progress`` logger with
+        ``"<what>: "`` before it and the hint that Ctrl-C again aborts after it.
+
+    Returns
+    -------
+    bool
+        True for the first interrupt inside :func:`interruptible`: the caller keeps what
+        it computed and goes on to return it. False outside any call or for a second
+        interrupt: the caller re-raises it.
+    """
+    state = _CALL.get()
+    if state is None or state.interrupted:
+        return False
+    state.where = where
+    log.warning("%s: " + message + "; Ctrl-C again to abort", state.what, *args)
+    return True
+
+
+def interrupted(where: str | None = None) -> bool:
+    """Whether the current call has been interrupted (in phase `where`, when given)."""
+    state = _CALL.get()
+    return state is not None and state.interrupted and (where is None or state.where == where)

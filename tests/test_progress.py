@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import logging
+import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -184,3 +187,65 @@ def test_callables_that_take_the_record_pass() -> None:
 
     for ok in (print, lambda *args: None, keyword_default, [].append, None, True, False):
         assert check_progress(ok) is ok
+
+
+# -- log records above the bar --------------------------------------------------------------------
+def _glued(err: str, message: str) -> list[str]:
+    """The pieces of `err` (split at line ends and carriage returns) that hold `message`
+    with other text: a message glued to a bar line."""
+    return [piece for piece in re.split(r"[\r\n]", err) if message in piece and piece != message]
+
+
+def test_a_record_logged_under_a_bar_gets_a_line_of_its_own(capsys):
+    handler = logging.StreamHandler(sys.stderr)  # the user's console handler
+    handler.setFormatter(logging.Formatter("%(levelname)s %(message)s"))
+    package = logging.getLogger("impactcont")
+    package.addHandler(handler)
+    try:
+        with Reporter("continuation in omega", True, parameter="omega") as rep:
+            rep.advance(3, 1.5)
+            logging.getLogger("impactcont.analysis.maps").warning("written to a temporary file")
+            rep.advance(1, 1.6)
+        assert handler.stream is sys.stderr  # given back when the bar closes
+        logging.getLogger("impactcont.analysis.maps").warning("after the bar")
+    finally:
+        package.removeHandler(handler)
+    err = capsys.readouterr().err
+    assert "continuation in omega: " in err
+    assert "\nWARNING written to a temporary file\n" in err.replace("\r", "\n")
+    assert _glued(err, "WARNING written to a temporary file") == []
+    assert err.endswith("WARNING after the bar\n")
+
+
+def test_a_warning_logged_during_a_continuation_does_not_break_its_bar(system, capsys):
+    handler = logging.StreamHandler(sys.stderr)
+    package = logging.getLogger("impactcont")
+    package.addHandler(handler)
+
+    def noisy(orbit):  # a user monitor that logs, evaluated while the bar is shown
+        logging.getLogger("impactcont.user").warning("monitor says hello")
+        return 0.0
+
+    try:
+        ic.continuation(system, 1, "omega", (1.4, 2.0), components="start", progress=True,
+                        monitors={"noisy": noisy})
+    finally:
+        package.removeHandler(handler)
+    err = capsys.readouterr().err
+    assert "continuation in omega" in err and "monitor says hello" in err
+    assert _glued(err, "monitor says hello") == []
+
+
+def test_without_a_handler_the_last_resort_writes_above_the_bar():
+    script = ("import logging\n"
+              "from impactcont.progress import Reporter\n"
+              "with Reporter('work', True) as rep:\n"
+              "    rep.advance(2)\n"
+              "    logging.getLogger('impactcont.x').warning('last resort speaks')\n"
+              "    rep.advance(1)\n"
+              "assert type(logging.lastResort).__name__ == '_StderrHandler'\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "last resort speaks" in done.stderr
+    assert _glued(done.stderr, "last resort speaks") == []
