@@ -1,0 +1,324 @@
+"""Series against a parameter, and figures of several panels at a journal's width.
+
+The studies compare the package with a witness (a closed form, a simulator, a
+reference computed in 50 digits): values, or their differences, against a
+parameter. :func:`series_plot` draws such series on one Axes with the
+conventions every figure of impactcont keeps:
+
+- a line (a closed form, a reference) is drawn over the markers (a witness, the
+  package's points), and the markers are hollow by default, so neither hides
+  the other;
+- on a logarithmic axis an exact zero (a difference that is 0 in floating
+  point) is drawn in its own row under the axes, labelled ``exact 0``, never at
+  an invented floor value;
+- every line style, marker and colour drawn is named in the legend.
+
+:func:`panel_figure` lays out several panels at a given width (one column
+below 5 in, two columns above: a 2 x 2 grid for four panels), and
+:func:`figure_legend` puts one legend for all of them under the panels,
+off every data area.
+
+Like the other plots of :mod:`impactcont.plots` the functions take arrays, draw
+on a :class:`matplotlib.figure.Figure` (no pyplot) and never show it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.legend import Legend
+from matplotlib.lines import Line2D
+from matplotlib.ticker import NullFormatter, NullLocator
+
+from impactcont.plots.branches import legend_fontsize
+
+__all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "panel_figure",
+           "series_plot"]
+
+logger = logging.getLogger(__name__)
+
+#: Widest figure, in inches: a journal's double column (Elsevier 190 mm, AIP 7 in).
+MAX_WIDTH = 7.2
+#: Narrowest figure, in inches (below a single column of 3.5 in text no longer fits).
+MIN_WIDTH = 2.0
+#: Label of the row of exact zeros under a logarithmic axis.
+ZERO_LABEL = "exact 0"
+_NONE = ("", "none", "None", " ")
+_ZERO_ROW = 0.13  # height of the row of exact zeros, as a fraction of the axes
+_LINE_ZORDER, _MARKER_ZORDER = 3.0, 2.0
+
+
+@dataclass(frozen=True)
+class Series:
+    """One series of :func:`series_plot`: ``y`` against ``x``, its legend label and style.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Values of equal length; NaN values are not drawn (a gap in a line).
+    label : str
+        The legend entry (mathtext for symbols). Series sharing a label share
+        one legend entry and must share their style.
+    color : str
+        A matplotlib colour.
+    linestyle : str
+        ``"-"``, ``"--"``, ``":"``, ``"-."`` or ``"none"`` (markers only).
+    marker : str or None
+        A matplotlib marker, or None for a line only.
+    filled : bool
+        Filled markers; hollow by default, so a line through them stays visible.
+    markersize, linewidth : float
+        In points.
+    """
+
+    x: Any
+    y: Any
+    label: str
+    color: str = "k"
+    linestyle: str = "-"
+    marker: str | None = None
+    filled: bool = False
+    markersize: float = 4.0
+    linewidth: float = 1.2
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        x = np.asarray(self.x, dtype=float).ravel()
+        y = np.asarray(self.y, dtype=float).ravel()
+        if x.shape != y.shape:
+            raise ValueError(f"Series {self.label!r}: x and y must have equal lengths; got "
+                             f"{x.size} and {y.size}")
+        if not isinstance(self.label, str) or not self.label.strip():
+            raise ValueError(f"Series label must be a non-empty string; got {self.label!r}")
+        if self.linestyle in _NONE and self.marker in (None, *_NONE):
+            raise ValueError(f"Series {self.label!r} draws nothing: linestyle "
+                             f"{self.linestyle!r} and marker {self.marker!r}")
+        object.__setattr__(self, "x", x)
+        object.__setattr__(self, "y", y)
+
+    @property
+    def is_line(self) -> bool:
+        """Whether the series is drawn as a line (with or without markers)."""
+        return self.linestyle not in _NONE
+
+    def style(self) -> dict[str, Any]:
+        """Keyword arguments of :meth:`matplotlib.axes.Axes.plot` for this series."""
+        marker = self.marker if self.marker not in (None, *_NONE) else "none"
+        return {"color": self.color, "linestyle": "none" if not self.is_line else
+                self.linestyle, "linewidth": self.linewidth, "marker": marker,
+                "markersize": self.markersize, "markeredgecolor": self.color,
+                "markerfacecolor": self.color if self.filled else "white",
+                "markeredgewidth": 1.0, **self.extra}
+
+    def handle(self) -> Line2D:
+        """Its legend entry."""
+        return Line2D([], [], label=self.label, **self.style())
+
+
+def _check_width(width: float) -> float:
+    if not isinstance(width, (int, float)) or isinstance(width, bool) \
+            or not MIN_WIDTH <= float(width) <= MAX_WIDTH:
+        raise ValueError(f"width must be a number of inches in [{MIN_WIDTH}, {MAX_WIDTH}] "
+                         f"(a journal's single to double column); got {width!r}")
+    return float(width)
+
+
+def panel_figure(n: int, width: float, *, ncols: int | None = None,
+                 aspect: float | None = None, extra_height: float = 0.9
+                 ) -> tuple[Figure, list[Axes]]:
+    """A figure of ``n`` panels ``width`` inches wide, in a constrained layout.
+
+    Parameters
+    ----------
+    n : int
+        Number of panels, 1 to 8.
+    width : float
+        Figure width in inches, in [:data:`MIN_WIDTH`, :data:`MAX_WIDTH`]: 3.5 for a
+        journal's single column, 7 for its double column.
+    ncols : int, optional
+        Columns of panels; by default 1 below 5 in and 2 (``min(n, 2)``) above,
+        so four panels make a 2 x 2 grid.
+    aspect : float, optional
+        Height of each panel over its width; by default 0.72, or 0.55 for three
+        or more panels in one column (a figure no taller than a page).
+    extra_height : float
+        Inches added to the height for a figure legend, titles and labels.
+
+    Returns
+    -------
+    (matplotlib.figure.Figure, list of matplotlib.axes.Axes)
+        The figure (Agg-compatible, no pyplot) and its ``n`` axes, row by row.
+
+    Raises
+    ------
+    ValueError
+        ``n``, ``width``, ``ncols`` or ``aspect`` out of range.
+    """
+    width = _check_width(width)
+    if not isinstance(n, (int, np.integer)) or not 1 <= n <= 8:
+        raise ValueError(f"n must be an integer number of panels in [1, 8]; got {n!r}")
+    if ncols is None:
+        ncols = 1 if width < 5.0 else min(int(n), 2)
+    if not isinstance(ncols, (int, np.integer)) or not 1 <= ncols <= min(int(n), 3):
+        raise ValueError(f"ncols must be an integer in [1, {min(int(n), 3)}]; got {ncols!r}")
+    if aspect is None:
+        aspect = 0.55 if ncols == 1 and n >= 3 else 0.72
+    if not 0.2 <= aspect <= 2.0:
+        raise ValueError(f"aspect must be in [0.2, 2]; got {aspect!r}")
+    nrows = math.ceil(n / ncols)
+    height = nrows * aspect * width / ncols + extra_height
+    fig = Figure(figsize=(width, height), layout="constrained")
+    grid = fig.add_gridspec(nrows, ncols)
+    axes = [fig.add_subplot(grid[i // ncols, i % ncols]) for i in range(int(n))]
+    return fig, axes
+
+
+def _zero_row(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]]) -> Axes:
+    """The row of exact zeros under the data of ``ax`` (a child axes sharing its x)."""
+    row = ax.inset_axes((0.0, 0.0, 1.0, _ZERO_ROW), sharex=ax)
+    row.set_facecolor("white")
+    row.set_zorder(ax.get_zorder() + 1)
+    for series, x in zeros:
+        row.plot(x, np.zeros(x.size), zorder=_MARKER_ZORDER,
+                 **{**series.style(), "linestyle": "none"})
+    row.set_ylim(-1.0, 1.0)
+    row.set_yticks([0.0], [ZERO_LABEL], fontsize="x-small")
+    row.yaxis.set_minor_locator(NullLocator())
+    row.tick_params(axis="x", which="both", bottom=False, labelbottom=False)
+    row.tick_params(axis="y", length=0, pad=2)
+    return row
+
+
+def series_plot(ax: Axes, series: Iterable[Series], *, xlabel: str, ylabel: str,
+                xscale: str = "linear", yscale: str = "linear", title: str | None = None,
+                legend: bool = False) -> Axes:
+    """Draw ``series`` on ``ax``: lines over hollow markers, exact zeros apart on a log axis.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    series : iterable of Series
+        Drawn in order; lines (closed forms, references) on top of markers.
+    xlabel, ylabel : str
+        Axis labels, with the quantity's symbol in mathtext (``r"$\\omega$"``).
+    xscale, yscale : {"linear", "log"}
+        On a ``"log"`` y axis an exact zero is drawn in a row of its own under the
+        data, labelled :data:`ZERO_LABEL`; a negative value is an error.
+    title : str, optional
+        Axes title.
+    legend : bool
+        Draw the legend inside the axes at its best place (a single panel with
+        room); by default none: use :func:`figure_legend` for the figure.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        ``ax``; its row of exact zeros, if one was drawn, is its child axes.
+
+    Raises
+    ------
+    ValueError
+        A scale other than linear or log, a non-positive x on a log x axis, a
+        negative y on a log y axis, or one label given two styles.
+    """
+    series = list(series)
+    for name, scale in (("xscale", xscale), ("yscale", yscale)):
+        if scale not in ("linear", "log"):
+            raise ValueError(f"{name} must be 'linear' or 'log'; got {scale!r}")
+    styles: dict[str, dict[str, Any]] = {}
+    for s in series:
+        if styles.setdefault(s.label, s.style()) != s.style():
+            raise ValueError(f"series labelled {s.label!r} are given two styles; one label, "
+                             f"one style")
+        if xscale == "log" and np.any(s.x[np.isfinite(s.x)] <= 0):
+            raise ValueError(f"series {s.label!r}: x must be > 0 on a log x axis; got "
+                             f"{float(np.nanmin(s.x))!r}")
+        if yscale == "log" and np.any(s.y[np.isfinite(s.y)] < 0):
+            raise ValueError(f"series {s.label!r}: y must be >= 0 on a log y axis; got "
+                             f"{float(np.nanmin(s.y))!r}")
+    ax.set_xscale(xscale)
+    ax.set_yscale(yscale)
+    zeros: list[tuple[Series, np.ndarray]] = []
+    positive: list[np.ndarray] = []
+    for s in series:
+        y = s.y
+        if yscale == "log":
+            zero = y == 0.0
+            if zero.any():
+                zeros.append((s, s.x[zero]))
+            y = np.where(zero, np.nan, y)
+            positive.append(y[np.isfinite(y)])
+        ax.plot(s.x, y, zorder=_LINE_ZORDER if s.is_line else _MARKER_ZORDER, label=s.label,
+                **s.style())
+    if zeros:
+        values = np.concatenate(positive) if positive else np.empty(0)
+        lo, hi = (float(values.min()), float(values.max())) if values.size else (1e-16, 1.0)
+        lo_exp = math.floor(math.log10(lo))
+        hi_exp = max(math.ceil(math.log10(hi)), lo_exp + 1)
+        # the row takes the bottom _ZERO_ROW of the axes, a margin above it: no data there
+        span = (hi_exp - lo_exp) / (1.0 - _ZERO_ROW - 0.05)
+        ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ticks = [t for t in ax.get_yticks() if 10.0 ** lo_exp <= t <= 10.0 ** hi_exp]
+        ax.set_yticks(ticks)
+        ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
+        _zero_row(ax, zeros)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title, fontsize="medium")
+    if legend:
+        ax.legend(handles=[s.handle() for s in _unique(series)],
+                  fontsize=legend_fontsize(ax.figure), loc="best")
+    logger.debug("series plot: %d series, %d with exact zeros", len(series), len(zeros))
+    return ax
+
+
+def _unique(series: Iterable[Series]) -> list[Series]:
+    return list({s.label: s for s in reversed(list(series))}.values())[::-1]
+
+
+def figure_legend(fig: Figure, handles: Sequence[Any] | None = None) -> Legend:
+    """One legend for all panels of ``fig``, under them and off every data area.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure with the constrained layout (it makes room for the legend).
+    handles : sequence of artists, optional
+        The entries; by default every labelled artist of the figure's axes, one
+        per label.
+
+    Returns
+    -------
+    matplotlib.legend.Legend
+    """
+    if handles is None:
+        found: dict[str, Any] = {}
+        for ax in fig.axes:
+            for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
+                found.setdefault(label, h)
+        handles = list(found.values())
+    handles = list(handles)
+    if not handles:
+        raise ValueError("figure_legend: no labelled artist to put in the legend")
+    fontsize = legend_fontsize(fig)
+    legend = None
+    room = fig.bbox.width - 8.0
+    for ncols in range(min(len(handles), 4), 0, -1):
+        if legend is not None:
+            legend.remove()
+        legend = fig.legend(handles=handles, loc="outside lower center", ncols=ncols,
+                            fontsize=fontsize, frameon=False, handlelength=2.0,
+                            columnspacing=1.0, handletextpad=0.5)
+        fig.draw_without_rendering()
+        if legend.get_window_extent().width <= room:
+            break
+    return legend
