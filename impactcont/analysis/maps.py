@@ -63,7 +63,13 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.periodic import _check_N
-from impactcont.progress import ProgressOption, Reporter, reporter
+from impactcont.progress import (
+    ProgressOption,
+    Reporter,
+    interruptible,
+    reporter,
+    take_interrupt,
+)
 from impactcont.threads import blas_limited
 
 __all__ = ["stability_map"]
@@ -85,6 +91,7 @@ _DISK_TASK_BYTES = 512
 _DISK_FIXED_BYTES = 32_000_000
 _TASK_SHARE = 0.25  # the tasks in flight of a map in memory: at most this share of it
 _POLL_SECONDS = 0.25  # how often the tasks in flight and the pool's workers are looked at
+_CLUSTER_SECONDS = 2.0  # how often the threads of a dask cluster's workers are read again
 _STUCK_SECONDS = 2.0  # a pool with a dead worker not marked broken after this is stuck
 _RETRIES = 2  # times a task that broke the pool while running alone is run again
 _DTYPES = {"physical": bool, "stable": bool, "critical_multiplier": complex}
@@ -97,47 +104,27 @@ def _map_task(osc_json: str, N: int, omega: np.ndarray, b: np.ndarray,
               spectral_radius: bool = True) -> dict[str, np.ndarray]:
     """One task: every motion for one N and a block of omega values (picklable, top level)."""
     osc = _oscillator(osc_json)
-    try:
+    with compiled_interrupts():
         out = batched_orbits(osc, N, omega, b, spectral_radius=spectral_radius)
+    return {k: out[k] for k in ("amplitude_squared", "exists", *_ROOT_FIELDS)}
+
+
+@contextlib.contextmanager
+def compiled_interrupts() -> Iterator[None]:
+    """Ctrl-C during a compiled call raised as the KeyboardInterrupt it is.
+
+    numba reports a KeyboardInterrupt pending in a compiled call as a SystemError
+    ("returned a result with an exception set", chained once per nested call).
+    """
+    try:
+        yield
     except SystemError as exc:
-        # Ctrl-C during a compiled call: numba reports the pending KeyboardInterrupt as
-        # "returned a result with an exception set" (chained once per nested call)
         cause: BaseException | None = exc
         while isinstance(cause, SystemError):
             cause = cause.__cause__
         if isinstance(cause, KeyboardInterrupt):
             raise KeyboardInterrupt from None
         raise
-    return {k: out[k] for k in ("amplitude_squared", "exists", *_ROOT_FIELDS)}
-
-
-@contextlib.contextmanager
-def _interrupt_between_tasks() -> Iterator[Any]:
-    """Ctrl-C (SIGINT) taken between the tasks of a serial map, not inside one.
-
-    A KeyboardInterrupt raised inside a compiled kernel (numba's helpers check for
-    signals) can leave it in an undefined state: the process crashed with SIGSEGV
-    instead of stopping. While the tasks run in this (main) thread, SIGINT only marks
-    the interrupt, and the yielded ``check()`` raises it between tasks (and at the
-    end). A handler other than Python's default is left as it is.
-    """
-    if (threading.current_thread() is not threading.main_thread()
-            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
-        yield lambda: None
-        return
-    pending: list[int] = []
-
-    def check() -> None:
-        if pending:
-            pending.clear()
-            raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: pending.append(signum))
-    try:
-        yield check
-        check()
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 @functools.lru_cache(maxsize=4)
@@ -159,21 +146,6 @@ def _grid(name: str, values: Any) -> np.ndarray:
     if a.size > 1 and not np.all(np.diff(a) > 0):
         raise ParameterError(f"{name} must be strictly increasing; got {values!r}")
     return a
-
-
-def _executor(executor: Any, max_workers: int | None) -> tuple[cf.Executor | None, bool, str]:
-    """The executor to use, whether it is owned here, and its name for the record."""
-    if executor is None or executor == "serial":
-        return None, False, "serial"
-    if executor == "process":
-        return process_pool(max_workers), True, "process"
-    if isinstance(executor, cf.Executor):
-        return executor, False, type(executor).__name__
-    get_executor = getattr(executor, "get_executor", None)  # a dask.distributed.Client
-    if callable(get_executor) and type(executor).__name__ == "Client":
-        return get_executor(), False, "dask.distributed"
-    raise ParameterError(f"executor must be None, 'serial', 'process', a concurrent.futures."
-                         f"Executor or a dask.distributed.Client; got {executor!r}")
 
 
 @blas_limited
@@ -295,8 +267,11 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     result = _result_bytes(shape, spectral_radius)
     remove_stale_maps(once=True)  # the temporary maps of killed processes (map_storage)
     temporary = False
-    with reporter(progress, "stability map", total=math.prod(shape)) as rep:
-        runner = _Runner(osc, Ns, w, bb, spectral_radius, executor, max_workers, rep)
+    computed: np.ndarray | None = None
+    job = _StabilityJob(osc, Ns, w, bb, spectral_radius)
+    with interruptible("stability_map"), reporter(progress, "stability map",
+                                                  total=math.prod(shape)) as rep:
+        runner = MapRunner(job, executor, max_workers, rep)
         try:
             in_memory, points = _plan(result, float(memory_limit), runner.in_flight, out is None,
                                       w.size * bb.size)
@@ -317,7 +292,7 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                        "b_block": bs, "spectral_radius": spectral_radius}
             start = time.perf_counter()
             if in_memory:
-                ds = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
+                ds, computed = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
             else:
                 path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
         except BaseException:
@@ -325,10 +300,14 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
             if temporary and out is not None:
                 remove_temporary_map(out)
             raise
-        runner.close()
+        runner.close(kill=computed is not None)
     elapsed = time.perf_counter() - start
-    log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
-             "computed" if in_memory else f"written to {out}", elapsed, len(tasks), runner.name)
+    if in_memory and computed is not None:
+        _mark_interrupted(ds, computed)
+    else:
+        log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
+                 "computed" if in_memory else f"written to {out}", elapsed, len(tasks),
+                 runner.name)
     if in_memory:
         options["elapsed_seconds"] = round(elapsed, 3)
         ds.attrs["options"] = json.dumps(options, sort_keys=True)
@@ -412,7 +391,178 @@ def _require_dask() -> None:
                              "needs dask: pip install 'impactcont[dask]'") from None
 
 
-class _Runner:
+class MapJob:
+    """The tasks of one map, as :class:`MapRunner` runs them (a base for every map).
+
+    A task is any value the job knows; the job says which picklable top-level function
+    computes it and with what arguments (:meth:`call`), how many grid points it covers
+    (:meth:`points`, for the progress) and what it is in words (:meth:`describe`, for
+    the errors).
+    """
+
+    #: The map's function, in messages.
+    what = "map"
+
+    def call(self, task: Any) -> tuple[Any, tuple[Any, ...]]:
+        """The function computing `task` and its arguments."""
+        raise NotImplementedError
+
+    def points(self, task: Any) -> int:
+        """Grid points of `task`."""
+        raise NotImplementedError
+
+    def describe(self, task: Any) -> str:
+        """`task` in words."""
+        return repr(task)
+
+
+class _StabilityJob(MapJob):
+    """The tasks of :func:`stability_map`: ``(N index, omega slice, b slice)``."""
+
+    what = "stability_map"
+
+    def __init__(self, osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
+                 spectral_radius: bool) -> None:
+        self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
+        self._spectral_radius = spectral_radius
+
+    def call(self, task: tuple[int, slice, slice]) -> tuple[Any, tuple[Any, ...]]:
+        k, osl, bsl = task
+        # _map_task looked up now: tests replace it
+        return _map_task, (self._text, self._Ns[k], self._w[osl], self._bb[bsl],
+                           self._spectral_radius)
+
+    def points(self, task: tuple[int, slice, slice]) -> int:
+        _, osl, bsl = task
+        return (osl.stop - osl.start) * (bsl.stop - bsl.start)
+
+    def describe(self, task: tuple[int, slice, slice]) -> str:
+        """`task` in words: its N and its omega and b ranges."""
+        k, osl, bsl = task
+        w, bb = self._w[osl], self._bb[bsl]
+        return (f"N = {self._Ns[k]}, omega[{osl.start}:{osl.stop}] in [{w[0]:.6g}, "
+                f"{w[-1]:.6g}], b[{bsl.start}:{bsl.stop}] in [{bb[0]:.6g}, {bb[-1]:.6g}]")
+
+
+@contextlib.contextmanager
+def _taking_interrupts(runner: MapRunner) -> Iterator[Any]:
+    """Ctrl-C (SIGINT) taken between the tasks of a map, not inside one; a second aborts.
+
+    A KeyboardInterrupt raised inside a compiled kernel (numba's helpers check for
+    signals) can leave it in an undefined state: the process crashed with SIGSEGV
+    instead of stopping. While the tasks run (in this thread, or on an executor while
+    this thread waits for them), a first SIGINT only marks the interrupt, and the
+    yielded ``check()`` raises it between tasks (and at the end, and at least every
+    ``_POLL_SECONDS`` while an executor computes): the map then keeps what it has
+    computed. A second SIGINT before that raises KeyboardInterrupt at once, with
+    ``runner.aborted`` set: the map is abandoned. Outside the main thread, or with a
+    handler other than Python's default installed, nothing is changed.
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield lambda: None
+        return
+    pending: list[int] = []
+
+    def check() -> None:
+        if pending:
+            pending.clear()
+            raise KeyboardInterrupt
+
+    def take(signum: int, frame: Any) -> None:
+        if pending:  # the second Ctrl-C: the user does not want to wait
+            runner.aborted = True
+            signal.signal(signal.SIGINT, previous)
+            raise KeyboardInterrupt
+        pending.append(signum)
+
+    previous = signal.signal(signal.SIGINT, take)
+    try:
+        yield check
+        check()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _dask_client(executor: Any) -> Any:
+    """The dask.distributed Client of `executor` (a Client or its executor), else None."""
+    if type(executor).__name__ == "Client" and callable(getattr(executor, "get_executor", None)):
+        return executor
+    if type(executor).__name__ == "ClientExecutor":
+        return getattr(executor, "_client", None)
+    return None
+
+
+def _scheduler_address(executor: Any) -> bool:
+    """Whether `executor` is the address of a dask scheduler (``tcp://host:8786``)."""
+    return isinstance(executor, str) and executor.startswith(SCHEDULER_PROTOCOLS)
+
+
+#: The address prefixes of a dask scheduler accepted as ``executor=``.
+SCHEDULER_PROTOCOLS = ("tcp://", "tls://", "ucx://", "ws://", "wss://", "inproc://")
+
+
+def check_executor(executor: Any, argument: str = "executor") -> None:
+    """Refuse an `executor` no map accepts (before any work), naming `argument`.
+
+    Accepted: None, ``"serial"``, ``"process"``, the address of a dask scheduler
+    (``"tcp://host:8786"``; any of :data:`SCHEDULER_PROTOCOLS`), a
+    :class:`concurrent.futures.Executor` or a ``dask.distributed.Client``.
+
+    Raises
+    ------
+    ParameterError
+        Anything else.
+    """
+    if (executor is None or executor in ("serial", "process") or _scheduler_address(executor)
+            or isinstance(executor, cf.Executor) or _dask_client(executor) is not None):
+        return
+    if isinstance(executor, str) and "://" not in executor and ":" in executor:
+        hint = f" (a scheduler address needs its protocol: 'tcp://{executor}')"
+    else:
+        hint = ""
+    raise ParameterError(f"{argument} must be None, 'serial', 'process', a dask scheduler "
+                         f"address ('tcp://host:8786'), a concurrent.futures.Executor or a "
+                         f"dask.distributed.Client; got {executor!r}{hint}")
+
+
+def _executor(executor: Any, max_workers: int | None
+              ) -> tuple[cf.Executor | None, list[Any], str, Any]:
+    """The executor to use, what is owned here (to end with the map), its name for the
+    record and its dask client (None if not on dask)."""
+    check_executor(executor)
+    if executor is None or executor == "serial":
+        return None, [], "serial", None
+    if executor == "process":
+        pool = process_pool(max_workers)
+        return pool, [pool], "process", None
+    if _scheduler_address(executor):
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise ParameterError(f"executor={executor!r} (a dask scheduler) needs dask."
+                                 f"distributed: pip install 'impactcont[dask]'") from None
+        try:
+            client = Client(executor, timeout="10s", set_as_default=False)
+        except OSError as exc:
+            raise ParameterError(f"executor={executor!r}: no dask scheduler answers at this "
+                                 f"address ({exc})") from None
+        return client.get_executor(), [client], "dask.distributed", client
+    client = _dask_client(executor)
+    if client is not None and not isinstance(executor, cf.Executor):
+        return client.get_executor(), [], "dask.distributed", client
+    return executor, [], type(executor).__name__, client
+
+
+def _dask_threads(client: Any) -> int:
+    """Threads of the workers of a dask cluster now (0 if they cannot be read)."""
+    try:
+        return int(sum(client.nthreads().values()))
+    except Exception:  # a closed client, a scheduler gone: the caller falls back
+        return 0
+
+
+class MapRunner:
     """The tasks of one map: in this process or on an executor, as they finish.
 
     A process pool that breaks (one of its worker processes died: killed, out of
@@ -429,19 +579,27 @@ class _Runner:
     and treated as broken. The pools made here end with the map: shut down when it ends,
     killed when it fails or is interrupted (Ctrl-C), and their workers end when this
     process is killed (:func:`~impactcont.analysis.pool.process_pool`).
+
+    On a dask cluster the tasks running at once are the threads of its workers
+    (``Client.nthreads``, read again every ``_CLUSTER_SECONDS``: workers that join are
+    used), not the processors of this machine.
+
+    Ctrl-C: the first stops the map between tasks (:func:`_taking_interrupts`): the
+    results raise KeyboardInterrupt with ``aborted`` False, and the map keeps what it
+    has; a second before that raises it with ``aborted`` True.
     """
 
-    def __init__(self, osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
-                 spectral_radius: bool, executor: Any, max_workers: int | None,
+    def __init__(self, job: MapJob, executor: Any, max_workers: int | None,
                  reporter: Reporter) -> None:
-        self.reporter = reporter
-        self.pool, owned, self.name = _executor(executor, max_workers)
-        self._owned = [self.pool] if owned else []
-        self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
-        self._spectral_radius = spectral_radius
+        self.job, self.reporter = job, reporter
+        self.pool, self._owned, self.name, self._client = _executor(executor, max_workers)
         self._renewals = 0
         self._dead_since: dict[int, float] = {}  # id(pool): when a dead worker was seen
         self._killed: list[Any] = []  # pools ended as stuck
+        self._threads = (0, -math.inf)  # a dask cluster's threads, and when they were read
+        self.aborted = False  # a second Ctrl-C: the map is abandoned
+        self.limit: int | None = None  # tasks submitted at once at most (memory), if set
+        self.done = 0  # points of the tasks finished
         if isinstance(self.pool, cf.ProcessPoolExecutor):
             # the workers forked now, before the map's arrays exist: a worker forked later
             # would keep the pages it shares with this process as this process fills them
@@ -470,30 +628,41 @@ class _Runner:
 
     @property
     def workers(self) -> int:
-        """Tasks running at once."""
+        """Tasks running at once: 1 in this process, the pool's workers, the threads of a
+        dask cluster's workers, else the processors of this machine."""
         if self.pool is None:
             return 1
-        return int(getattr(self.pool, "_max_workers", None) or os.cpu_count() or 1)
+        size = getattr(self.pool, "_max_workers", None)
+        if size:
+            return int(size)
+        if self._client is not None:
+            threads, when = self._threads
+            now = time.monotonic()
+            if now - when >= _CLUSTER_SECONDS:
+                threads = _dask_threads(self._client)
+                self._threads = threads, now
+            if threads:
+                return threads
+        return int(os.cpu_count() or 1)
+
+    @property
+    def submitted(self) -> int:
+        """Tasks submitted to the executor at once: ``2 x workers`` (each worker has the
+        next at hand), at most :attr:`limit`."""
+        most = 2 * self.workers
+        return most if self.limit is None else max(1, min(most, self.limit))
 
     @property
     def in_flight(self) -> int:
-        """Tasks in memory at once at most: submitted (``2 x workers``), and the result
-        being copied into the map or written."""
-        return 1 if self.pool is None else 2 * self.workers + 1
+        """Tasks in memory at once at most: submitted, and the result being copied into
+        the map or written."""
+        return 1 if self.pool is None else self.submitted + 1
 
-    def _args(self, task: tuple[int, slice, slice]) -> tuple[Any, ...]:
-        k, osl, bsl = task
-        return self._text, self._Ns[k], self._w[osl], self._bb[bsl], self._spectral_radius
+    def describe(self, task: Any) -> str:
+        """`task` in words (:meth:`MapJob.describe`)."""
+        return self.job.describe(task)
 
-    def describe(self, task: tuple[int, slice, slice]) -> str:
-        """`task` in words: its N and its omega and b ranges."""
-        k, osl, bsl = task
-        w, bb = self._w[osl], self._bb[bsl]
-        return (f"N = {self._Ns[k]}, omega[{osl.start}:{osl.stop}] in [{w[0]:.6g}, "
-                f"{w[-1]:.6g}], b[{bsl.start}:{bsl.stop}] in [{bb[0]:.6g}, {bb[-1]:.6g}]")
-
-    def _renew(self, pool: Any, exc: BaseException, task: tuple[int, slice, slice] | None,
-               most: int) -> None:
+    def _renew(self, pool: Any, exc: BaseException, task: Any, most: int) -> None:
         """Replace the broken `pool` (if it is still the one in use) by a new one; `most`
         pools in all (a pool that breaks before running anything must not loop)."""
         if pool is not self.pool:
@@ -501,7 +670,7 @@ class _Runner:
         if not isinstance(pool, cf.ProcessPoolExecutor) or self._renewals >= most:
             doing = ("starting its workers" if task is None
                      else f"computing the task {self.describe(task)}")
-            raise type(exc)(f"stability_map: the executor broke ({exc}) while {doing}"
+            raise type(exc)(f"{self.job.what}: the executor broke ({exc}) while {doing}"
                             ) from exc
         self._renewals += 1
         log.warning("a worker process of the pool died (%s: %s): the unfinished tasks are "
@@ -535,82 +704,101 @@ class _Runner:
                     with contextlib.suppress(cf.InvalidStateError):
                         future.set_exception(broken)
 
-    def results(self, tasks: list[tuple[int, slice, slice]]
-                ) -> Iterator[tuple[tuple[int, slice, slice], dict[str, np.ndarray]]]:
-        """Every task with its result, as they finish (``2 x workers`` submitted at once)."""
-        if self.pool is None:
-            with _interrupt_between_tasks() as check:
+    def results(self, tasks: Sequence[Any]) -> Iterator[tuple[Any, Any]]:
+        """Every task with its result, as they finish (``2 x workers`` submitted at once).
+
+        Raises
+        ------
+        KeyboardInterrupt
+            Ctrl-C (:func:`_taking_interrupts`): the tasks not finished are cancelled;
+            ``aborted`` says whether it was the second.
+        """
+        with _taking_interrupts(self) as check:
+            if self.pool is None:
                 for task in tasks:
-                    result = _map_task(*self._args(task))
+                    function, args = self.job.call(task)
+                    result = function(*args)
                     check()
                     yield task, result
                     self._done(task)
                     check()
-            return
+                return
+            yield from self._pooled(tasks, check)
+
+    def _pooled(self, tasks: Sequence[Any], check: Any) -> Iterator[tuple[Any, Any]]:
+        """:meth:`results` on the executor; `check` raises a pending Ctrl-C."""
         most = len(tasks) * (1 + _RETRIES)
-        waiting = collections.deque(tasks)
-        retry: collections.deque[tuple[int, slice, slice]] = collections.deque()
-        failures: collections.Counter[tuple[int, int, int]] = collections.Counter()
-        running: dict[cf.Future, tuple[tuple[int, slice, slice], Any, bool]] = {}
+        waiting = collections.deque(range(len(tasks)))
+        retry: collections.deque[int] = collections.deque()
+        failures: collections.Counter[int] = collections.Counter()
+        running: dict[cf.Future, tuple[int, Any, bool]] = {}
         try:
             while waiting or retry or running:
                 # after a break, the unfinished tasks one by one: a task that breaks the
                 # new pool is then the one that kills its worker
                 while (retry and not running) or (not retry and waiting
-                                                  and len(running) < 2 * self.workers):
+                                                  and len(running) < self.submitted):
                     alone = bool(retry)
-                    task = retry.popleft() if alone else waiting.popleft()
+                    index = retry.popleft() if alone else waiting.popleft()
                     pool = self.pool
+                    function, args = self.job.call(tasks[index])
                     try:
-                        running[pool.submit(_map_task, *self._args(task))] = task, pool, alone
+                        running[pool.submit(function, *args)] = index, pool, alone
                     except cf.BrokenExecutor as exc:  # broken by a task that ran before
-                        (retry if alone else waiting).appendleft(task)
-                        self._renew(pool, exc, task, most)
+                        (retry if alone else waiting).appendleft(index)
+                        self._renew(pool, exc, tasks[index], most)
                 done, _ = cf.wait(running, timeout=_POLL_SECONDS,
                                   return_when=cf.FIRST_COMPLETED)
+                check()
                 if not done:
                     self._end_stuck(running)
                     continue
                 for future in done:
-                    task, pool, alone = running.pop(future)
+                    index, pool, alone = running.pop(future)
+                    task = tasks[index]
                     try:
                         res = future.result()
                     except (cf.BrokenExecutor, cf.CancelledError) as exc:
                         if isinstance(exc, cf.CancelledError) and not any(
                                 p is pool for p in self._killed):
                             raise
-                        key = (task[0], task[1].start, task[2].start)
                         if alone:
-                            failures[key] += 1
-                            if failures[key] > _RETRIES:
+                            failures[index] += 1
+                            if failures[index] > _RETRIES:
                                 raise cf.process.BrokenProcessPool(
-                                    f"stability_map: a worker process died computing the "
+                                    f"{self.job.what}: a worker process died computing the "
                                     f"task {self.describe(task)}, and again each of the "
                                     f"{_RETRIES} times the task was run again alone in a "
                                     f"new process pool ({exc})") from exc
                         self._renew(pool, exc, task, most)
-                        retry.append(task)
+                        retry.append(index)
                         continue
                     yield task, res
                     del res
                     self._done(task)
+                    check()
         finally:
             for future in running:
                 future.cancel()
 
-    def _done(self, task: tuple[int, slice, slice]) -> None:
-        """Count the points of a task whose block is in the map."""
-        _, osl, bsl = task
-        self.reporter.advance((osl.stop - osl.start) * (bsl.stop - bsl.start))
+    def _done(self, task: Any) -> None:
+        """Count the points of a task whose results are in the map."""
+        points = self.job.points(task)
+        self.done += points
+        self.reporter.advance(points)
 
     def close(self, kill: bool = False) -> None:
-        """End the pools created here: shut down, or with `kill` (the map failed or was
-        interrupted) killed at once (:func:`~impactcont.analysis.pool.kill_pool`). With
-        `kill`, the caller's process pool too if a worker of it died unnoticed: it is
-        broken, and its stuck manager thread would hold the interpreter's exit."""
+        """End the pools (and the dask client) created here: shut down, or with `kill`
+        (the map failed or was interrupted) killed at once
+        (:func:`~impactcont.analysis.pool.kill_pool`). With `kill`, the caller's process
+        pool too if a worker of it died unnoticed: it is broken, and its stuck manager
+        thread would hold the interpreter's exit."""
         owned, self._owned = self._owned, []
         for pool in owned:
-            if kill or any(p is pool for p in self._killed):
+            if not isinstance(pool, cf.Executor):  # a dask client made here
+                with contextlib.suppress(Exception):
+                    pool.close()
+            elif kill or any(p is pool for p in self._killed):
                 kill_pool(pool)
             else:
                 pool.shutdown(cancel_futures=True)
@@ -618,6 +806,21 @@ class _Runner:
             log.warning("a worker process of the executor given died unnoticed: the pool "
                         "is ended")
             kill_pool(self.pool)
+
+
+def keep_interrupted(runner: MapRunner, total: int) -> bool:
+    """In an ``except KeyboardInterrupt`` of a map: whether the map keeps what it computed.
+
+    True for the first Ctrl-C of the call (:func:`~impactcont.progress.take_interrupt`,
+    which logs a WARNING of how many of the `total` points were done); False for a second
+    (``runner.aborted``, or the enclosing call interrupted already): the caller re-raises.
+    """
+    if runner.aborted:
+        return False
+    done = runner.done
+    return take_interrupt("map", "%d of %d points computed (%.0f %%); the others are NaN, "
+                          "not found, False in the variable 'computed'", done, total,
+                          100.0 * done / total if total else 0.0)
 
 
 def _layout(shape: tuple[int, int, int], fields: tuple[str, ...]
@@ -628,7 +831,7 @@ def _layout(shape: tuple[int, int, int], fields: tuple[str, ...]
             **{k: ((*shape, 2), _DTYPES.get(k, float)) for k in fields}}
 
 
-def _blocks(runner: _Runner, tasks: list[tuple[int, slice, slice]], fields: tuple[str, ...]
+def _blocks(runner: MapRunner, tasks: list[tuple[int, slice, slice]], fields: tuple[str, ...]
             ) -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
     """Each task's block of the map as it finishes: its region of (N, omega, b) and values."""
     for (k, osl, bsl), res in runner.results(tasks):
@@ -641,11 +844,15 @@ def _blocks(runner: _Runner, tasks: list[tuple[int, slice, slice]], fields: tupl
         yield {"N": k, "omega": osl, "b": bsl}, values
 
 
-def _map_in_memory(runner: _Runner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
+def _map_in_memory(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
                    bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
-                   options: dict[str, Any]) -> xr.Dataset:
+                   options: dict[str, Any]) -> tuple[xr.Dataset, np.ndarray | None]:
     """The map in memory: its arrays allocated once, each task's block copied in as it
-    finishes (no list of results, no assembled copies)."""
+    finishes (no list of results, no assembled copies).
+
+    Returns the map and, if it was interrupted by a first Ctrl-C, the (N, omega, b)
+    points computed (else None); a second Ctrl-C raises KeyboardInterrupt.
+    """
     layout = _layout((len(Ns), w.size, bb.size), _fields(options["spectral_radius"]))
     # placeholders of no memory: map_dataset makes the arrays, which the blocks fill
     placeholders = {k: np.broadcast_to(np.zeros((), dtype), shape)
@@ -653,10 +860,34 @@ def _map_in_memory(runner: _Runner, osc: ImpactOscillator, Ns: list[int], w: np.
     ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=placeholders,
                      options=options)
     arrays = {k: _writable(ds.variables[k]) for k in layout}
-    for region, values in _blocks(runner, tasks, _fields(options["spectral_radius"])):
-        for key, block in values.items():
-            arrays[key][tuple(region[d] for d in ds[key].dims if d in region)] = block
-    return ds
+    computed = np.zeros((len(Ns), w.size, bb.size), dtype=bool)
+    try:
+        for region, values in _blocks(runner, tasks, _fields(options["spectral_radius"])):
+            for key, block in values.items():
+                arrays[key][tuple(region[d] for d in ds[key].dims if d in region)] = block
+            computed[region["N"], region["omega"], region["b"]] = True
+    except KeyboardInterrupt:
+        if not keep_interrupted(runner, computed.size):
+            raise
+        return ds, computed
+    return ds, None
+
+
+def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray) -> None:
+    """Mark an interrupted map: the points not computed NaN (False, 0 where no NaN
+    exists), the variable ``computed`` and the attribute ``interrupted`` (issue 31)."""
+    for var in ds.data_vars.values():
+        if var.dims == ("N", "omega"):
+            where = ~computed[:, :, 0]  # the block of b = 0 writes amplitude_squared
+        else:
+            where = np.broadcast_to((~computed).reshape(computed.shape + (1,) * (var.ndim - 3)),
+                                    var.shape)
+        var.data[where] = np.nan if var.dtype.kind in "fc" else 0
+    ds["computed"] = (("N", "omega", "b"), computed,
+                      {"long_name": "point computed before the map was interrupted",
+                       "units": "1"})
+    ds.attrs["interrupted"] = 1
+    ds.attrs["points_computed"] = int(np.count_nonzero(computed))
 
 
 def _writable(var: xr.Variable) -> np.ndarray:
@@ -668,7 +899,7 @@ def _writable(var: xr.Variable) -> np.ndarray:
     return data
 
 
-def _map_to_file(runner: _Runner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
+def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
                  bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
                  options: dict[str, Any], out: Any, block: tuple[int, int]) -> Path:
     """The map written to a chunked, compressed NetCDF-4 file, each task's block (one chunk

@@ -38,6 +38,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.maps import (
+    MapJob,
+    MapRunner,
+    check_executor,
+    compiled_interrupts,
+    keep_interrupted,
+)
 from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.multi_maps import (
     multi_impact_map_dataset,
@@ -56,6 +63,7 @@ from impactcont.orbit.symmetry import (
     admits_symmetric_motions,
     symmetry_defect,
 )
+from impactcont.progress import ProgressOption, interruptible, reporter
 from impactcont.threads import blas_limited
 
 __all__ = ["multi_impact_map", "multi_impact_map_orbit"]
@@ -63,6 +71,9 @@ __all__ = ["multi_impact_map", "multi_impact_map_orbit"]
 log = logging.getLogger(__name__)
 
 _SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
+#: Grid points of a task at least: a map of up to this many points is one sweep from its
+#: seed; a larger one is cut into bands of whole rows of its first parameter.
+_TASK_POINTS = 4096
 
 
 def _as_multi(start: Any) -> MultiImpactOrbit:
@@ -290,14 +301,7 @@ class _Setting:
         names = tables.parameters
         p, m = len(self.pattern), 2 * self.osc.n
         npts = axes[names[0]].size * axes[names[1]].size
-        out = {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
-               "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
-               "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
-               "critical_multiplier": np.full(npts, np.nan, complex),
-               "gap_min": np.full(npts, np.nan),
-               "impact_velocity_k": np.full((npts, p), np.nan),
-               "flight_time_k": np.full((npts, p), np.nan),
-               "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
+        out = _empty_outputs(npts, p, m)
         unknowns = np.full((npts, x_seed.size), np.nan)
         stats = _kernel().sweep_stops(
             tables.general, *tables.flow_arrays, *tables.static_arrays, tables.omegas,
@@ -321,6 +325,84 @@ class _Setting:
         tables = _Tables(self.osc, params, axes, self.pattern, len(x0) // (2 * self.osc.n))
         out, unknowns, _ = self.sweep(tables, axes, (0, 0), x0, False)
         return unknowns[0] if out["found"][0] else None
+
+
+class _BandJob(MapJob):
+    """The tasks of :func:`multi_impact_map`: bands of whole rows of the first parameter.
+
+    A task ``(rows, seed row, unknowns)`` sweeps the rows ``rows`` of the grid (every
+    value of the second parameter) from the seed row's point on the seed's column, solved
+    from the unknowns given (:func:`_band_task`).
+    """
+
+    what = "multi_impact_map"
+
+    def __init__(self, setting: _Setting, params: tuple[ModelParameter, ModelParameter],
+                 axes: dict[str, np.ndarray], column: int, checks: bool) -> None:
+        self.setting, self.names = setting, tuple(param.name for param in params)
+        self.axes, self.column, self.checks = axes, column, checks
+
+    def call(self, task: tuple[slice, int, np.ndarray]) -> tuple[Any, tuple[Any, ...]]:
+        rows, row, x_seed = task
+        first, second = self.names
+        band = {first: self.axes[first][rows], second: self.axes[second]}
+        return _band_task, (self.setting, self.names, band, (row - rows.start, self.column),
+                            x_seed, self.checks)
+
+    def points(self, task: tuple[slice, int, np.ndarray]) -> int:
+        rows = task[0]
+        return (rows.stop - rows.start) * self.axes[self.names[1]].size
+
+    def describe(self, task: tuple[slice, int, np.ndarray]) -> str:
+        rows = task[0]
+        first = self.axes[self.names[0]][rows]
+        return (f"{self.names[0]}[{rows.start}:{rows.stop}] in [{first[0]:.6g}, "
+                f"{first[-1]:.6g}]")
+
+
+def _band_task(setting: _Setting, names: tuple[str, str], band: dict[str, np.ndarray],
+               seed: tuple[int, int], x_seed: np.ndarray, checks: bool
+               ) -> tuple[dict[str, np.ndarray], tuple[int, int, int, bool], int]:
+    """One task of :func:`multi_impact_map` (picklable, top level): the sweep of a band
+    of the grid from its seed; its outputs, ``(solved, attempts, newton_iterations,
+    capped)`` and the flows built."""
+    osc = setting.osc
+    params = (model_parameter(osc, names[0], "parameters"),
+              model_parameter(osc, names[1], "parameters"))
+    p = len(setting.pattern)
+    with compiled_interrupts():
+        tables = _Tables(osc, params, band, setting.pattern, p // 2 if setting.half else p)
+        out, _, stats = setting.sweep(tables, band, seed, x_seed, checks)
+    return out, stats, len(tables.flows)
+
+
+def _bands(setting: _Setting, params: tuple[ModelParameter, ModelParameter],
+           axes: dict[str, np.ndarray], seed: tuple[int, int], x_seed: np.ndarray,
+           rows: int) -> list[tuple[slice, int, np.ndarray]]:
+    """The tasks of a map: bands of `rows` rows of the first parameter, each seeded on the
+    seed's column (the spine: swept here first, from the seed) at the row nearest the
+    seed that the spine found; a band with none has no task (nothing of it is found).
+    A map of one band is the one sweep from the seed."""
+    first, second = params[0].name, params[1].name
+    n0 = axes[first].size
+    if rows >= n0:
+        return [(slice(0, n0), seed[0], x_seed)]
+    spine_axes = {first: axes[first], second: axes[second][seed[1]:seed[1] + 1]}
+    p = len(setting.pattern)
+    tables = _Tables(setting.osc, params, spine_axes, setting.pattern,
+                     p // 2 if setting.half else p)
+    out, unknowns, _ = setting.sweep(tables, spine_axes, (seed[0], 0), x_seed, False)
+    tasks = []
+    for start in range(0, n0, rows):
+        band = slice(start, min(start + rows, n0))
+        if band.start <= seed[0] < band.stop:
+            tasks.append((band, seed[0], x_seed))
+            continue
+        found = [r for r in range(band.start, band.stop) if out["found"][r]]
+        if found:
+            row = min(found, key=lambda r: abs(r - seed[0]))
+            tasks.append((band, row, unknowns[row].copy()))
+    return tasks
 
 
 def _seed(orbit: MultiImpactOrbit, setting: _Setting,
@@ -356,7 +438,9 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
                      grid: Mapping[str, Any] | None = None, *, symmetric: bool | None = None,
                      checks: bool = True, tol: float = 1e-11, max_iter: int = 12,
                      max_change: float = 0.5, max_attempts: int = 4,
-                     title: str | None = None) -> xr.Dataset:
+                     title: str | None = None, executor: Any = None,
+                     max_workers: int | None = None, rows_per_task: int | None = None,
+                     memory_limit: float = 1e9, progress: ProgressOption = None) -> xr.Dataset:
     """Stability map of the N-p motion family of `start` over a grid of two parameters.
 
     Any system of the shooting path: stops on any mass or between two masses, stops on
@@ -413,6 +497,33 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     max_attempts : int
         Newton attempts per grid point at most (one from each solved neighbour).
     title : str, optional
+    executor : None, "serial", "process", scheduler address, Executor or dask Client
+        Where the tasks run, as for :func:`impactcont.stability_map`: in this process,
+        a process pool made here (``max_workers`` processes), a dask cluster
+        (``"tcp://host:8786"``, or a ``dask.distributed.Client``: as many tasks at once
+        as its workers have threads) or any :class:`concurrent.futures.Executor`.
+    max_workers : int, optional
+        Processes of the ``"process"`` pool.
+    rows_per_task : int, optional
+        Rows of ``parameters[0]`` per task (default: enough for 4096 grid points). A
+        map of one task is the one sweep from the seed. A larger one first sweeps the
+        seed's column of ``parameters[1]`` (the spine), then each band of rows from its
+        spine point nearest the seed, as tasks: a band is followed within itself, so a
+        part of the family that the band reaches only through another band is not
+        found (and a band whose spine point was not found has none). The map depends
+        on `rows_per_task`, never on the executor.
+    memory_limit : float
+        Bytes the map and its tasks in flight may take (default 1e9): fewer tasks are
+        submitted at once when theirs would not fit, and a map that does not fit at
+        all is refused before any work.
+    progress : None, bool or callable
+        A progress bar over the grid points, a callback, a log line a minute (as for
+        :func:`impactcont.stability_map`).
+
+    Ctrl-C during the map (a first one) stops it between tasks and returns what was
+    computed: the points of the tasks not finished are not found (NaN), False in the
+    variable ``computed``, the attribute ``interrupted`` is 1, and a WARNING says how
+    many points were done; a second Ctrl-C abandons the map (KeyboardInterrupt).
 
     Returns
     -------
@@ -449,17 +560,61 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     pattern = orbit.pattern or "U" * p
     admits = bool(admits_symmetric_motions(osc, N, p, pattern)
                   and all(param.keeps_symmetry for param in params))
-    setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
-    t0 = time.perf_counter()
-    tables = _Tables(osc, params, axes, pattern, p // 2 if half else p)
-    x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
-    (s0, s1), x_seed = _seed(orbit, setting, params, axes, x_start)
-    t_setup = time.perf_counter() - t0
+    check_executor(executor)
+    if max_workers is not None:
+        _positive_int("max_workers", max_workers)
+    if rows_per_task is not None:
+        rows_per_task = _positive_int("rows_per_task", rows_per_task)
+    memory_limit = _positive_number("memory_limit", memory_limit)
     shape = (axes[names[0]].size, axes[names[1]].size)
     npts = shape[0] * shape[1]
+    rows = rows_per_task or max(1, -(-_TASK_POINTS // shape[1]))
+    point_bytes = _point_bytes(osc.n, p, half)
+    if npts * point_bytes > memory_limit:
+        raise ParameterError(
+            f"memory_limit = {memory_limit:.4g} bytes: the map of {shape[0]} x {shape[1]} "
+            f"points takes {npts * point_bytes:.4g} bytes ({point_bytes} per point); give a "
+            f"larger memory_limit or a coarser grid")
+    setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
+    t0 = time.perf_counter()
+    x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
+    (s0, s1), x_seed = _seed(orbit, setting, params, axes, x_start)
+    tasks = _bands(setting, params, axes, (s0, s1), x_seed, rows)
+    t_setup = time.perf_counter() - t0
+    job = _BandJob(setting, params, axes, s1, bool(checks))
+    out = _empty_outputs(npts, p, 2 * osc.n)
+    computed = np.zeros(shape[0], dtype=bool)
+    solved = attempts = iterations = flows = 0
+    capped = interrupted = False
     t1 = time.perf_counter()
-    out, _, (solved, attempts, iterations, capped) = setting.sweep(tables, axes, (s0, s1),
-                                                                    x_seed, checks)
+    with interruptible("multi_impact_map"), reporter(progress, "multi_impact_map",
+                                                     total=npts) as rep:
+        runner = MapRunner(job, executor, max_workers, rep)
+        unseeded = npts - sum(job.points(task) for task in tasks)  # nothing found there
+        runner.done += unseeded
+        rep.advance(unseeded)
+        task_bytes = rows * shape[1] * 2 * point_bytes  # its outputs, sent and copied in
+        runner.limit = max(1, int((memory_limit - npts * point_bytes) // task_bytes))
+        try:
+            for (band, _, _), (values, stats, nflows) in runner.results(tasks):
+                where = slice(band.start * shape[1], band.stop * shape[1])
+                for key, a in values.items():
+                    out[key][where] = a
+                computed[band] = True
+                solved, attempts = solved + stats[0], attempts + stats[1]
+                iterations, capped = iterations + stats[2], capped or bool(stats[3])
+                flows += nflows
+        except KeyboardInterrupt:
+            runner.close(kill=True)
+            if not keep_interrupted(runner, npts):
+                raise
+            interrupted = True
+        except BaseException:
+            runner.close(kill=True)
+            raise
+        runner.close()
+    computed[[r for r in range(shape[0]) if not any(t[0].start <= r < t[0].stop
+                                                     for t in tasks)]] = True
     t_sweep = time.perf_counter() - t1
     if capped:
         log.warning("a contact-search grid was capped at 2000000 cells on some flight of the "
@@ -482,14 +637,41 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
             "start": {param.name: param.value(osc) for param in params}}
     options = {"tol": tol, "max_iter": max_iter, "max_change": max_change,
                "max_attempts": max_attempts, "checks": bool(checks), "attempts": int(attempts),
-               "newton_iterations": int(iterations), "flows": len(tables.flows),
-               "setup_seconds": round(t_setup, 4), "sweep_seconds": round(t_sweep, 4)}
+               "newton_iterations": int(iterations), "flows": flows,
+               "setup_seconds": round(t_setup, 4), "sweep_seconds": round(t_sweep, 4),
+               "executor": runner.name, "tasks": len(tasks), "rows_per_task": rows}
     log.info("N=%d p=%d map over %s x %s: %d of %d points found (%d Newton attempts) in "
              "%.3g s (%.3g points/s; setup %.3g s)", N, p, names[0], names[1], solved, npts,
              attempts, t_sweep, npts / t_sweep if t_sweep > 0 else math.inf, t_setup)
-    return multi_impact_map_dataset(oscillator=osc, N=N, pattern=pattern, parameters=names,
-                                    grid=axes, values=values, symmetric=half, seed=seed,
-                                    options=options, title=title)
+    ds = multi_impact_map_dataset(oscillator=osc, N=N, pattern=pattern, parameters=names,
+                                  grid=axes, values=values, symmetric=half, seed=seed,
+                                  options=options, title=title)
+    if interrupted:
+        ds["computed"] = (names, np.broadcast_to(computed[:, None], shape).copy(),
+                          {"long_name": "point computed before the map was interrupted",
+                           "units": "1"})
+        ds.attrs["interrupted"] = 1
+        ds.attrs["points_computed"] = int(np.count_nonzero(ds["computed"].values))
+    return ds
+
+
+def _point_bytes(n: int, p: int, half: bool) -> int:
+    """Bytes of a map's outputs per grid point (:func:`_empty_outputs`, the contact flag)
+    and of its unknowns in a task."""
+    unknowns = (p // 2 if half else p) * (2 * n) + 1
+    return 8 * (6 + 2 * p + 2 * p * n + unknowns) + 8
+
+
+def _empty_outputs(npts: int, p: int, m: int) -> dict[str, np.ndarray]:
+    """The outputs of a map of `npts` points as not found (NaN, False, -1)."""
+    return {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
+            "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
+            "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
+            "critical_multiplier": np.full(npts, np.nan, complex),
+            "gap_min": np.full(npts, np.nan),
+            "impact_velocity_k": np.full((npts, p), np.nan),
+            "flight_time_k": np.full((npts, p), np.nan),
+            "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
 
 
 def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
