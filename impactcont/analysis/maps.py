@@ -718,8 +718,7 @@ class MapRunner:
                 for task in tasks:
                     function, args = self.job.call(task)
                     result = function(*args)
-                    check()
-                    yield task, result
+                    yield task, result  # a task finished is kept, Ctrl-C or not
                     self._done(task)
                     check()
                 return
