@@ -351,18 +351,23 @@ def _polished_velocity(osc: ImpactOscillator, scalars: np.ndarray, delta: float,
 
 
 def _repolish(osc: ImpactOscillator, modal: np.ndarray, scalars: np.ndarray, delta: float,
-              sigma: float) -> tuple:
-    """State, velocity scale, gap, its time, G and multipliers of the modal motion at phase
-    delta with the impact velocity ``sigma`` (a polished one; the dense multipliers of G
-    at any n: the secular ones recompute ``h2`` in the kernel's form)."""
-    from impactcont.kernel import closed_form, contact, stability
+              sigma: float) -> tuple[np.ndarray, float, float, float]:
+    """State, velocity scale, gap and its time of the modal motion at phase delta with the
+    impact velocity ``sigma`` (a polished one).
+
+    G and the multipliers are not computed here: the orbit builds them on first access
+    (:attr:`PeriodicOrbit.G`, :attr:`PeriodicOrbit.multipliers`) with ``sigma`` as the pole
+    of eq. (25), as on the unpolished path. Computing them here cost a dense eigenvalue
+    solve of G, O(n^3), inside every :func:`periodic_orbits` call that polished a root
+    (issue 29: 14-27 s at n = 1600-2000 for a chain, against milliseconds without).
+    """
+    from impactcont.kernel import closed_form, contact
 
     arrays = modal_arrays(osc)
     state, scale = closed_form.physical_state(modal, arrays.u, osc.omega, osc.R, delta, sigma)
     best, gap_t = contact.other_maximum(arrays.w, arrays.a, arrays.u0, modal, scalars,
                                         osc.omega, osc.R, delta, sigma, math.nan)
-    G = modal_jacobian(osc, modal, delta, sigma)[0]
-    return state, float(scale), osc.b - float(best), float(gap_t), G, stability.multipliers(G)
+    return state, float(scale), osc.b - float(best), float(gap_t)
 
 
 def _warn_capped(capped: bool, T: float) -> None:
@@ -412,9 +417,7 @@ def orbit_at_phase(osc: ImpactOscillator, N: int, delta: float, *, root: int = 0
         better, _ = _polished_velocity(osc, sc, float(delta), float(sigma))
         if better is not None:
             sigma = better
-            state, _, gap, gap_t, G, mu = _repolish(osc, modal, sc, float(delta), better)
-            return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
-                               float(gap), float(gap_t), state, G, mu)
+            state, _, gap, gap_t = _repolish(osc, modal, sc, float(delta), better)
     return _make_orbit(osc, N, modal, float(sc[0]), float(delta), root, float(sigma),
                        float(gap), float(gap_t), state)
 
@@ -497,9 +500,9 @@ def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:
         if abs(sk) < limit:
             better, h2_error = _polished_velocity(osc, sc, float(delta[k]), sk)
             if better is not None:
-                state, scale, gk, tk, G, mu = _repolish(osc, modal, sc, float(delta[k]), better)
+                state, scale, gk, tk = _repolish(osc, modal, sc, float(delta[k]), better)
                 orbit = _make_orbit(osc, N, modal, float(sc[0]), float(delta[k]), (1, -1)[k],
-                                    better, gk, tk, state, G, mu)
+                                    better, gk, tk, state)
                 _warn_low_impact_velocity(orbit, scale, h2_error)
                 out.append(orbit)
                 continue
