@@ -1,30 +1,20 @@
 """Layout of every figure kind at a journal's single-column (3.5 in) and double (7 in) width.
 
-Each figure is drawn with the Agg renderer and checked from the artists it drew:
-no text outside the figure, no two texts overlapping, no text on a special-point
-marker, no marker cut by the frame of its axes, no leader line across a curve,
-every line or marker style that carries meaning (line style, colour, marker
-shape) shown in a legend, and titles that name the system and the motion.
+Each figure is drawn with the Agg renderer and checked from the artists it drew by
+the checks of ``tests/_layout_checks.py`` (no text outside the figure, no two texts
+overlapping, no text on a special-point marker, no marker cut by the frame of its
+axes, no leader line across a curve, every style that carries meaning in a legend
+and only those, titles without internal names, at most 7.2 in wide).
 """
 
 from __future__ import annotations
 
-import contextlib
-import itertools
-import re
-from collections.abc import Iterator
 from pathlib import Path
 
 import matplotlib
 import numpy as np
 import pytest
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.collections import PathCollection
-from matplotlib.colors import to_hex
 from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
-from matplotlib.markers import MarkerStyle
-from matplotlib.text import Annotation, Text
 
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
@@ -37,6 +27,7 @@ from impactcont.plots.maps import two_parameter_diagram, two_parameter_figure
 from impactcont.plots.multi_maps import multi_impact_map_diagram
 from impactcont.scene import figures
 from impactcont.scene.run import run_scene
+from tests._layout_checks import check_layout, color, marker_artists, marker_key, render
 
 matplotlib.use("Agg")
 
@@ -154,207 +145,17 @@ class _Options:
         self.__dict__.update({"title": None, "y": None, "yscale": None, **kw})
 
 
-# -- what was drawn ---------------------------------------------------------------------------
-@contextlib.contextmanager
-def _recording() -> Iterator[list[Text]]:
-    """Record every Text that draws itself (tick labels of ticks in view only, etc.)."""
-    drawn: list[Text] = []
-    original = Text.draw
-
-    def draw(self, renderer):
-        if self.get_visible() and self.get_text().strip():
-            drawn.append(self)
-        return original(self, renderer)
-
-    Text.draw = draw
-    try:
-        yield drawn
-    finally:
-        Text.draw = original
-
-
-def _render(fig: Figure) -> tuple[list[Text], object]:
-    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
-    with _recording() as drawn:
-        canvas.draw()
-    return drawn, canvas.get_renderer()
-
-
-def _boxes(texts: list[Text], renderer) -> np.ndarray:
-    return np.array([t.get_window_extent(renderer).extents for t in texts]).reshape(-1, 4)
-
-
-def _marker_key(marker) -> tuple:
-    m = MarkerStyle(marker)
-    return tuple(np.round(m.get_path().transformed(m.get_transform()).vertices, 3).ravel())
-
-
-def _color(c) -> str:
-    return to_hex(c, keep_alpha=False)
-
-
-def _axes_of(fig: Figure) -> list:
-    """Every visible Axes, insets included."""
-    out = []
-    for ax in fig.axes:
-        out += [ax, *[c for c in ax.child_axes if c.get_visible()]]
-    return [ax for ax in dict.fromkeys(out) if ax.get_visible() and ax.axison]
-
-
-def _marker_artists(ax) -> list[tuple[np.ndarray, tuple, str, float]]:
-    """``(display xy, marker key, edge colour, radius px)`` of every marker drawn on ``ax``."""
-    out = []
-    dpi = ax.figure.dpi
-    for line in ax.get_lines():
-        if not line.get_visible() or line.get_marker() in (None, "", "None", " ", "none"):
-            continue
-        xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
-        r = line.get_markersize() / 2 * dpi / 72
-        for p in xy[np.all(np.isfinite(xy), axis=1)]:
-            out.append((p, _marker_key(line.get_marker()), _color(line.get_markeredgecolor()), r))
-    for coll in ax.collections:
-        if not isinstance(coll, PathCollection) or not coll.get_visible() \
-                or coll.get_array() is not None or not len(coll.get_offsets()):
-            continue
-        key = tuple(np.round(coll.get_paths()[0].vertices, 3).ravel())
-        xy = coll.get_offset_transform().transform(np.asarray(coll.get_offsets()))
-        r = np.sqrt(coll.get_sizes()[0]) / 2 * dpi / 72
-        edges = coll.get_edgecolors()
-        for i, p in enumerate(xy):
-            out.append((p, key, _color(edges[i % len(edges)]), r))
-    return out
-
-
-def _legend_styles(fig: Figure) -> tuple[set, set, set]:
-    """Line styles ``(dashes, width, alpha)``, marker keys and colours of every legend."""
-    legends = [*fig.legends, *[ax.get_legend() for ax in fig.axes if ax.get_legend()]]
-    styles, markers, colours = set(), set(), set()
-    for legend in legends:
-        for h in legend.legend_handles:
-            if isinstance(h, Line2D):
-                if h.get_linestyle() not in ("None", "none", " ", ""):
-                    styles.add(_line_style(h))
-                    colours.add(_color(h.get_color()))
-                if h.get_marker() not in (None, "", "None", " ", "none"):
-                    markers.add(_marker_key(h.get_marker()))
-                    colours.add(_color(h.get_markeredgecolor()))
-            elif isinstance(h, PathCollection):
-                markers.add(tuple(np.round(h.get_paths()[0].vertices, 3).ravel()))
-                colours.update(_color(c) for c in h.get_edgecolors())
-            elif hasattr(h, "get_facecolor"):
-                colours.add(_color(h.get_facecolor()))
-    return styles, markers, colours
-
-
-def _line_style(line: Line2D) -> tuple:
-    _, dashes = line._unscaled_dash_pattern
-    return (tuple(np.round(dashes, 2)) if dashes else None, round(line.get_linewidth(), 2),
-            round(line.get_alpha() if line.get_alpha() is not None else 1.0, 2))
-
-
-def _segments_cross(p0, p1, q0, q1) -> np.ndarray:
-    """Whether segment p0-p1 crosses each segment q0[i]-q1[i] (display coordinates)."""
-    def orient(a, b, c):
-        return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
-                       - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
-    return ((orient(p0, p1, q0) * orient(p0, p1, q1) < 0)
-            & (orient(q0, q1, p0) * orient(q0, q1, p1) < 0))
-
-
-# -- the checks -------------------------------------------------------------------------------
-def layout_problems(fig: Figure) -> list[str]:
-    """Everything a referee would object to in the layout of ``fig``, as sentences."""
-    texts, renderer = _render(fig)
-    problems = []
-    frame = fig.bbox.extents
-    boxes = _boxes(texts, renderer)
-    for t, (x0, y0, x1, y1) in zip(texts, boxes, strict=True):
-        if x0 < frame[0] - 1 or y0 < frame[1] - 1 or x1 > frame[2] + 1 or y1 > frame[3] + 1:
-            problems.append(f"text {t.get_text()!r} outside the figure")
-    for (i, a), (j, b) in itertools.combinations(enumerate(boxes), 2):
-        w = min(a[2], b[2]) - max(a[0], b[0])
-        h = min(a[3], b[3]) - max(a[1], b[1])
-        if w > 1 and h > 1:
-            problems.append(f"texts {texts[i].get_text()!r} and {texts[j].get_text()!r} "
-                            f"overlap")
-    special_keys = {_marker_key(m) for m in SPECIAL_MARKERS.values()}
-    styles, legend_markers, legend_colours = _legend_styles(fig)
-    for ax in _axes_of(fig):
-        box = ax.bbox.extents
-        markers = _marker_artists(ax)
-        for p, key, colour, r in markers:
-            inside = box[0] + r <= p[0] <= box[2] - r and box[1] + r <= p[1] <= box[3] - r
-            outside = (p[0] < box[0] - r or p[0] > box[2] + r or p[1] < box[1] - r
-                       or p[1] > box[3] + r)
-            if not inside and not outside:
-                problems.append(f"a marker at {p.round(1)} is cut by the frame")
-            if not outside and (key not in legend_markers or colour not in legend_colours):
-                problems.append(f"a marker of colour {colour} at {p.round(1)} has no legend "
-                                f"entry")
-        specials = [(p, r) for p, key, _, r in markers if key in special_keys]
-        for t, tb in zip(texts, boxes, strict=True):
-            if t.axes is not ax:
-                continue
-            for p, _r in specials:
-                own = isinstance(t, Annotation) and np.allclose(
-                    ax.transData.transform(t.xy), p, atol=1.0)
-                if not own and tb[0] < p[0] < tb[2] and tb[1] < p[1] < tb[3]:
-                    problems.append(f"text {t.get_text()!r} covers a marker")
-        curves = [ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
-                  for line in ax.get_lines() if line.get_visible()
-                  and line.get_linestyle() not in ("None", "none", " ", "")]
-        for line in ax.get_lines():
-            if not line.get_visible() or line.get_linestyle() in ("None", "none", " ", "") \
-                    or not len(line.get_xydata()):
-                continue
-            if _line_style(line) not in styles or _color(line.get_color()) not in legend_colours:
-                problems.append(f"a {line.get_linestyle()} line of colour "
-                                f"{_color(line.get_color())} has no legend entry")
-        for t in texts:
-            if t.axes is not ax or not isinstance(t, Annotation) or t.arrow_patch is None:
-                continue
-            tb = t.get_window_extent(renderer).extents
-            p = ax.transData.transform(t.xy)
-            start = np.clip(p, tb[:2], tb[2:])
-            end = start + (p - start) * max(0.0, 1 - 6.0 / max(np.hypot(*(p - start)), 1e-9))
-            for xy in curves:
-                ok = np.all(np.isfinite(xy), axis=1)
-                seg = ok[:-1] & ok[1:]
-                if np.any(_segments_cross(start, end, xy[:-1][seg], xy[1:][seg])):
-                    problems.append(f"the leader line of {t.get_text()!r} crosses a curve")
-                    break
-    return problems
+def _render(fig: Figure):
+    d = render(fig)
+    return d.texts, d.renderer
 
 
 def _assert_clean(fig: Figure) -> None:
-    problems = layout_problems(fig)
-    assert not problems, "\n".join(dict.fromkeys(problems))
-
-
-def journal_problems(fig: Figure) -> list[str]:
-    """Axis labels in symbols, not identifiers; no legend over the data of an axes."""
-    _render(fig)
-    problems = []
-    axes = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
-    for ax in axes:
-        for label in (ax.get_xlabel(), ax.get_ylabel()):
-            plain = re.sub(r"\$[^$]*\$", "", label)
-            if "$" not in label or "_" in plain or re.search(
-                    r"\b(omega|eta|alpha|beta|delta|b|R)\b", plain):
-                problems.append(f"axis label {label!r} is not in symbols (mathtext)")
-    legends = [*fig.legends, *[ax.get_legend() for ax in fig.axes if ax.get_legend()]]
-    for legend, ax in itertools.product(legends, _axes_of(fig)):
-        a, b = legend.get_window_extent().extents, ax.bbox.extents
-        w = min(a[2], b[2]) - max(a[0], b[0])
-        h = min(a[3], b[3]) - max(a[1], b[1])
-        if w > 1 and h > 1:
-            problems.append(f"a legend covers {w * h:.0f} px^2 of the data area of an axes")
-    return problems
+    check_layout(fig)
 
 
 def _assert_journal(fig: Figure) -> None:
-    problems = layout_problems(fig) + journal_problems(fig)
-    assert not problems, "\n".join(dict.fromkeys(problems))
+    check_layout(fig, journal=True)
 
 
 def _figure(width: float, height: float | None = None) -> Figure:
@@ -413,11 +214,11 @@ def test_special_markers_take_their_branch_colour(data):
     fig = _figure(7.0)
     ax = bifurcation_diagram(data["branches"], ax=fig.add_subplot())
     _render(fig)
-    branch_colours = {_color(line.get_color()) for line in ax.get_lines()
+    branch_colours = {color(line.getcolor()) for line in ax.get_lines()
                       if line.get_linestyle() == "-"}
-    special_keys = {_marker_key(m) for m in SPECIAL_MARKERS.values()}
-    edges = {c for _, key, c, _ in _marker_artists(ax) if key in special_keys}
-    assert edges and edges <= branch_colours | {_color("0.6")}
+    special_keys = {marker_key(m) for m in SPECIAL_MARKERS.values()}
+    edges = {c for _, key, c, _ in marker_artists(ax) if key in special_keys}
+    assert edges and edges <= branch_colours | {color("0.6")}
     assert len(edges & branch_colours) == 3
 
 
@@ -427,7 +228,7 @@ def test_pitchfork_keeps_its_marker_and_legend(data):
     fig = _figure(7.0)
     ax = bifurcation_diagram(ds, ax=fig.add_subplot())
     _render(fig)
-    assert _marker_key("P") in {key for _, key, _, _ in _marker_artists(ax)}
+    assert marker_key("P") in {key for _, key, _, _ in marker_artists(ax)}
     assert "BP symmetry-breaking pitchfork" in _all_text(fig)
     _assert_clean(fig)
 
@@ -565,11 +366,11 @@ def test_impact_diagram_markers_take_their_branch_colour(cascade):
     fig = _figure(7.0)
     ax = impact_diagram(cascade, ax=fig.add_subplot())
     _render(fig)
-    branch_colours = {_color(line.get_color()) for line in ax.get_lines()
+    branch_colours = {color(line.getcolor()) for line in ax.get_lines()
                       if line.get_linestyle() == "-"}
-    special_keys = {_marker_key(m) for m in SPECIAL_MARKERS.values()}
-    edges = {c for _, key, c, _ in _marker_artists(ax) if key in special_keys}
-    assert edges and edges <= branch_colours | {_color("0.6")}
+    special_keys = {marker_key(m) for m in SPECIAL_MARKERS.values()}
+    edges = {c for _, key, c, _ in marker_artists(ax) if key in special_keys}
+    assert edges and edges <= branch_colours | {color("0.6")}
     assert len(edges & branch_colours) == 2  # the PD of N1, the PD and ZV of the 2-2 branch
 
 

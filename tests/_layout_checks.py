@@ -1,0 +1,443 @@
+"""Layout checks of a figure, from the artists it drew (shared by the figure tests).
+
+A figure is drawn once with the Agg renderer and checked for what a referee
+objects to: text outside the figure, two texts overlapping, text on a
+special-point marker, a marker cut by the frame of its axes, a leader line
+across a curve, a line or marker style that carries meaning (line style,
+colour, marker shape) and has no legend entry, a legend entry for nothing drawn
+in view, a title with an internal name (``fig3_N1``, ``root -1``) or without
+the system and the motion it shows, a figure wider than a journal page
+(:data:`MAX_WIDTH`).
+
+Each check returns a list of sentences, one per problem (empty: the figure is
+clean); :func:`layout_problems` runs them all and :func:`check_layout` asserts
+there is none. Use::
+
+    from tests._layout_checks import check_layout
+
+    check_layout(fig)                                     # the layout only
+    check_layout(fig, system=["R = 0.6"], motion=["1-1"])  # and what the titles say
+    check_layout(fig, journal=True)                       # and journal conventions
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import re
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PathCollection
+from matplotlib.colors import to_hex
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.markers import MarkerStyle
+from matplotlib.text import Annotation, Text
+
+from impactcont.plots import SPECIAL_MARKERS
+
+__all__ = ["MAX_WIDTH", "Drawn", "axes_of", "check_layout", "check_titles", "color",
+           "journal_problems", "layout_problems", "leaders_across_curves",
+           "leaders_crossing_each_other", "legend_entries_not_drawn", "line_style",
+           "marker_artists", "marker_key", "markers_cut_by_frame", "overlapping_texts",
+           "render", "styles_without_legend", "texts_on_markers", "texts_outside_figure",
+           "title_problems", "too_wide"]
+
+#: Widest figure a journal page takes, in inches (a double column is 7 to 7.2 in).
+MAX_WIDTH = 7.2
+
+_NO_LINE = ("None", "none", " ", "")
+_NO_MARKER = (None, "", "None", " ", "none")
+_DARK = {"#000000", "#333333"}  # legend colours that stand for a style in any colour
+
+
+@dataclass
+class Drawn:
+    """What one draw of a figure put on the page (display coordinates, pixels)."""
+
+    fig: Figure
+    texts: list[Text]
+    boxes: np.ndarray
+    renderer: object
+
+
+# -- what was drawn ---------------------------------------------------------------------------
+@contextlib.contextmanager
+def _recording() -> Iterator[list[Text]]:
+    """Record every Text that draws itself (tick labels of ticks in view only, etc.)."""
+    drawn: list[Text] = []
+    original = Text.draw
+
+    def draw(self, renderer):
+        if self.get_visible() and self.get_text().strip():
+            drawn.append(self)
+        return original(self, renderer)
+
+    Text.draw = draw
+    try:
+        yield drawn
+    finally:
+        Text.draw = original
+
+
+def render(fig: Figure) -> Drawn:
+    """Draw ``fig`` with Agg and record the texts drawn and their boxes."""
+    if isinstance(fig, Drawn):
+        return fig
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    with _recording() as texts:
+        canvas.draw()
+    renderer = canvas.get_renderer()
+    boxes = np.array([t.get_window_extent(renderer).extents for t in texts]).reshape(-1, 4)
+    return Drawn(fig, texts, boxes, renderer)
+
+
+def marker_key(marker) -> tuple:
+    """The shape of a marker (its path's vertices), to compare markers."""
+    m = MarkerStyle(marker)
+    return tuple(np.round(m.get_path().transformed(m.get_transform()).vertices, 3).ravel())
+
+
+def color(c) -> str:
+    """``#rrggbb`` of a colour (alpha dropped)."""
+    return to_hex(c, keep_alpha=False)
+
+
+def axes_of(fig: Figure) -> list:
+    """Every visible Axes, insets included."""
+    out = []
+    for ax in fig.axes:
+        out += [ax, *[c for c in ax.child_axes if c.get_visible()]]
+    return [ax for ax in dict.fromkeys(out) if ax.get_visible() and ax.axison]
+
+
+def marker_artists(ax) -> list[tuple[np.ndarray, tuple, str, float]]:
+    """``(display xy, marker key, edge colour, radius px)`` of every marker drawn on ``ax``."""
+    out = []
+    dpi = ax.figure.dpi
+    for line in ax.get_lines():
+        if not line.get_visible() or line.get_marker() in _NO_MARKER:
+            continue
+        xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+        r = line.get_markersize() / 2 * dpi / 72
+        for p in xy[np.all(np.isfinite(xy), axis=1)]:
+            out.append((p, marker_key(line.get_marker()), color(line.get_markeredgecolor()), r))
+    for coll in ax.collections:
+        if not isinstance(coll, PathCollection) or not coll.get_visible() \
+                or coll.get_array() is not None or not len(coll.get_offsets()):
+            continue
+        key = tuple(np.round(coll.get_paths()[0].vertices, 3).ravel())
+        xy = coll.get_offset_transform().transform(np.asarray(coll.get_offsets()))
+        r = np.sqrt(coll.get_sizes()[0]) / 2 * dpi / 72
+        edges = coll.get_edgecolors()
+        for i, p in enumerate(xy):
+            out.append((p, key, color(edges[i % len(edges)]) if len(edges) else "none", r))
+    return out
+
+
+def _legends(fig: Figure) -> list:
+    return [*fig.legends, *[ax.get_legend() for ax in axes_of(fig) if ax.get_legend()]]
+
+
+def line_style(line: Line2D) -> tuple:
+    """``(dashes, width, alpha)`` of a line, to compare line styles."""
+    _, dashes = line._unscaled_dash_pattern
+    return (tuple(np.round(dashes, 2)) if dashes else None, round(line.get_linewidth(), 2),
+            round(line.get_alpha() if line.get_alpha() is not None else 1.0, 2))
+
+
+def _legend_styles(fig: Figure) -> tuple[set, set, set]:
+    """Line styles ``(dashes, width, alpha)``, marker keys and colours of every legend."""
+    styles, markers, colours = set(), set(), set()
+    for legend in _legends(fig):
+        for h in legend.legend_handles:
+            if isinstance(h, Line2D):
+                if h.get_linestyle() not in _NO_LINE:
+                    styles.add(line_style(h))
+                    colours.add(color(h.get_color()))
+                if h.get_marker() not in _NO_MARKER:
+                    markers.add(marker_key(h.get_marker()))
+                    colours.add(color(h.get_markeredgecolor()))
+            elif isinstance(h, PathCollection):
+                markers.add(tuple(np.round(h.get_paths()[0].vertices, 3).ravel()))
+                colours.update(color(c) for c in h.get_edgecolors())
+            elif hasattr(h, "get_facecolor"):
+                colours.add(color(h.get_facecolor()))
+    return styles, markers, colours
+
+
+def _segments_cross(p0, p1, q0, q1) -> np.ndarray:
+    """Whether segment p0-p1 crosses each segment q0[i]-q1[i] (display coordinates)."""
+    def orient(a, b, c):
+        return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+                       - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+    return ((orient(p0, p1, q0) * orient(p0, p1, q1) < 0)
+            & (orient(q0, q1, p0) * orient(q0, q1, p1) < 0))
+
+
+def _in_view(ax, xy: np.ndarray, pad: float = 0.0) -> np.ndarray:
+    """Which display points ``xy`` lie inside the frame of ``ax`` (``pad`` px inside)."""
+    box = ax.bbox.extents
+    return ((xy[:, 0] >= box[0] + pad) & (xy[:, 0] <= box[2] - pad)
+            & (xy[:, 1] >= box[1] + pad) & (xy[:, 1] <= box[3] - pad))
+
+
+# -- the checks -------------------------------------------------------------------------------
+def too_wide(fig: Figure, max_width: float = MAX_WIDTH) -> list[str]:
+    """The figure is wider than ``max_width`` inches (a journal's page)."""
+    width = float(fig.get_size_inches()[0])
+    return ([f"the figure is {width:.2f} in wide, more than {max_width} in"]
+            if width > max_width + 1e-9 else [])
+
+
+def texts_outside_figure(fig: Figure | Drawn) -> list[str]:
+    """A text drawn (partly) outside the figure."""
+    d = render(fig)
+    frame = d.fig.bbox.extents
+    return [f"text {t.get_text()!r} outside the figure"
+            for t, (x0, y0, x1, y1) in zip(d.texts, d.boxes, strict=True)
+            if x0 < frame[0] - 1 or y0 < frame[1] - 1 or x1 > frame[2] + 1 or y1 > frame[3] + 1]
+
+
+def overlapping_texts(fig: Figure | Drawn) -> list[str]:
+    """Two texts whose boxes overlap by more than a pixel each way."""
+    d = render(fig)
+    out = []
+    for (i, a), (j, b) in itertools.combinations(enumerate(d.boxes), 2):
+        w = min(a[2], b[2]) - max(a[0], b[0])
+        h = min(a[3], b[3]) - max(a[1], b[1])
+        if w > 1 and h > 1:
+            out.append(f"texts {d.texts[i].get_text()!r} and {d.texts[j].get_text()!r} "
+                       f"overlap")
+    return out
+
+
+def texts_on_markers(fig: Figure | Drawn) -> list[str]:
+    """A text over the centre of a special-point marker it does not name."""
+    d = render(fig)
+    special_keys = {marker_key(m) for m in SPECIAL_MARKERS.values()}
+    out = []
+    for ax in axes_of(d.fig):
+        specials = [p for p, key, _, _ in marker_artists(ax) if key in special_keys]
+        for t, tb in zip(d.texts, d.boxes, strict=True):
+            if t.axes is not ax:
+                continue
+            for p in specials:
+                own = isinstance(t, Annotation) and np.allclose(
+                    ax.transData.transform(t.xy), p, atol=1.0)
+                if not own and tb[0] < p[0] < tb[2] and tb[1] < p[1] < tb[3]:
+                    out.append(f"text {t.get_text()!r} covers a marker")
+    return out
+
+
+def markers_cut_by_frame(fig: Figure | Drawn) -> list[str]:
+    """A marker neither wholly inside nor wholly outside the frame of its axes."""
+    d = render(fig)
+    out = []
+    for ax in axes_of(d.fig):
+        box = ax.bbox.extents
+        for p, _key, _colour, r in marker_artists(ax):
+            inside = box[0] + r <= p[0] <= box[2] - r and box[1] + r <= p[1] <= box[3] - r
+            outside = (p[0] < box[0] - r or p[0] > box[2] + r or p[1] < box[1] - r
+                       or p[1] > box[3] + r)
+            if not inside and not outside:
+                out.append(f"a marker at {p.round(1)} is cut by the frame")
+    return out
+
+
+def styles_without_legend(fig: Figure | Drawn) -> list[str]:
+    """A marker in view or a line whose style or colour no legend shows."""
+    d = render(fig)
+    styles, legend_markers, legend_colours = _legend_styles(d.fig)
+    out = []
+    for ax in axes_of(d.fig):
+        box = ax.bbox.extents
+        for p, key, colour, r in marker_artists(ax):
+            outside = (p[0] < box[0] - r or p[0] > box[2] + r or p[1] < box[1] - r
+                       or p[1] > box[3] + r)
+            if not outside and (key not in legend_markers or colour not in legend_colours):
+                out.append(f"a marker of colour {colour} at {p.round(1)} has no legend entry")
+        for line in ax.get_lines():
+            if not line.get_visible() or line.get_linestyle() in _NO_LINE \
+                    or not len(line.get_xydata()):
+                continue
+            if line_style(line) not in styles or color(line.get_color()) not in legend_colours:
+                out.append(f"a {line.get_linestyle()} line of colour "
+                           f"{color(line.get_color())} has no legend entry")
+    return out
+
+
+def legend_entries_not_drawn(fig: Figure | Drawn) -> list[str]:
+    """A legend entry (line or marker) that nothing in view on any axes looks like.
+
+    A legend lists what the reader can see. A line entry in a dark neutral colour
+    (black to ``0.2``) stands for its line style in any colour and needs a line
+    of that style (dashes, width, alpha) with a vertex in view; a line entry in
+    another colour stands for that colour and needs a line of it in view. A
+    marker entry with a black edge stands for its shape in any colour (special
+    points are drawn in their branch's colour); another marker entry needs a
+    marker of its shape and edge colour in view. Patches (shaded regions) are not
+    checked.
+    """
+    d = render(fig)
+    styles, colours, markers = set(), set(), {}
+    for ax in axes_of(d.fig):
+        for line in ax.get_lines():
+            if not line.get_visible() or line.get_linestyle() in _NO_LINE:
+                continue
+            xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+            if np.any(_in_view(ax, xy[np.all(np.isfinite(xy), axis=1)])):
+                styles.add(line_style(line))
+                colours.add(color(line.get_color()))
+        for p, key, colour, _r in marker_artists(ax):
+            if _in_view(ax, p[None, :])[0]:
+                markers.setdefault(key, set()).add(colour)
+    out = []
+    for legend in _legends(d.fig):
+        for h, text in zip(legend.legend_handles, legend.get_texts(), strict=False):
+            if not isinstance(h, Line2D):
+                continue
+            name = text.get_text()
+            if h.get_linestyle() not in _NO_LINE and h.get_marker() in _NO_MARKER:
+                c = color(h.get_color())
+                seen = line_style(h) in styles if c in _DARK else c in colours
+                if not seen:
+                    out.append(f"legend entry {name!r}: no such line in view")
+            if h.get_marker() not in _NO_MARKER and h.get_linestyle() in _NO_LINE:
+                seen = markers.get(marker_key(h.get_marker()), set())
+                c = color(h.get_markeredgecolor())
+                if not seen or (c != "#000000" and c not in seen):
+                    out.append(f"legend entry {name!r}: no such marker in view")
+    return out
+
+
+def leaders_across_curves(fig: Figure | Drawn) -> list[str]:
+    """The leader line of a label crossing a drawn curve (its last 6 px excepted)."""
+    d = render(fig)
+    out = []
+    for ax in axes_of(d.fig):
+        curves = [ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+                  for line in ax.get_lines() if line.get_visible()
+                  and line.get_linestyle() not in _NO_LINE]
+        for t in d.texts:
+            if t.axes is not ax or not isinstance(t, Annotation) or t.arrow_patch is None:
+                continue
+            tb = t.get_window_extent(d.renderer).extents
+            p = ax.transData.transform(t.xy)
+            start = np.clip(p, tb[:2], tb[2:])
+            end = start + (p - start) * max(0.0, 1 - 6.0 / max(np.hypot(*(p - start)), 1e-9))
+            for xy in curves:
+                ok = np.all(np.isfinite(xy), axis=1)
+                seg = ok[:-1] & ok[1:]
+                if np.any(_segments_cross(start, end, xy[:-1][seg], xy[1:][seg])):
+                    out.append(f"the leader line of {t.get_text()!r} crosses a curve")
+                    break
+    return out
+
+
+def leaders_crossing_each_other(fig: Figure | Drawn) -> list[str]:
+    """Two leader lines of one axes crossing each other."""
+    d = render(fig)
+    out = []
+    for ax in axes_of(d.fig):
+        leaders = []
+        for t in d.texts:
+            if t.axes is ax and isinstance(t, Annotation) and t.arrow_patch is not None:
+                tb = t.get_window_extent(d.renderer).extents
+                p = ax.transData.transform(t.xy)
+                leaders.append((t.get_text(), np.clip(p, tb[:2], tb[2:]), p))
+        for (na, a0, a1), (nb, b0, b1) in itertools.combinations(leaders, 2):
+            if _segments_cross(a0, a1, b0[None, :], b1[None, :])[0]:
+                out.append(f"the leader lines of {na!r} and {nb!r} cross")
+    return out
+
+
+def _titles(fig: Figure) -> list[str]:
+    out = [fig._suptitle.get_text()] if fig._suptitle is not None else []
+    for ax in axes_of(fig):
+        out += [ax.title.get_text(), ax._left_title.get_text(), ax._right_title.get_text()]
+    return [t for t in out if t.strip()]
+
+
+def title_problems(fig: Figure, *, system: Iterable[str] = (),
+                   motion: Iterable[str] = ()) -> list[str]:
+    """Titles that use internal names, or do not name the system and the motion.
+
+    An internal name is an identifier with an underscore outside mathtext
+    (``fig3_N1``, ``b0p5_N2``) or a raw root index (``root -1``). ``system`` and
+    ``motion`` are texts the titles (suptitle and axes titles together) must
+    contain, e.g. ``["R = 0.6"]`` and ``["1-1"]``.
+    """
+    titles = _titles(fig)
+    out = []
+    for title in titles:
+        plain = re.sub(r"(?<!\\)\$.*?(?<!\\)\$", "", title)
+        if re.search(r"\w_\w", plain) or re.search(r"\broot\s*-?\d", plain):
+            out.append(f"title {title!r} uses an internal name")
+    joined = " | ".join(titles)
+    for word in [*system, *motion]:
+        if word not in joined:
+            out.append(f"no title names {word!r} (titles: {joined!r})")
+    return out
+
+
+def journal_problems(fig: Figure | Drawn) -> list[str]:
+    """Axis labels in symbols, not identifiers; no legend over the data of an axes."""
+    d = render(fig)
+    problems = []
+    axes = [ax for ax in d.fig.axes if ax.get_visible() and ax.axison]
+    for ax in axes:
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            plain = re.sub(r"\$[^$]*\$", "", label)
+            if "$" not in label or "_" in plain or re.search(
+                    r"\b(omega|eta|alpha|beta|delta|b|R)\b", plain):
+                problems.append(f"axis label {label!r} is not in symbols (mathtext)")
+    for legend, ax in itertools.product(_legends(d.fig), axes_of(d.fig)):
+        a, b = legend.get_window_extent().extents, ax.bbox.extents
+        w = min(a[2], b[2]) - max(a[0], b[0])
+        h = min(a[3], b[3]) - max(a[1], b[1])
+        if w > 1 and h > 1:
+            problems.append(f"a legend covers {w * h:.0f} px^2 of the data area of an axes")
+    return problems
+
+
+def layout_problems(fig: Figure, *, max_width: float = MAX_WIDTH) -> list[str]:
+    """Everything a referee would object to in the layout of ``fig``, as sentences.
+
+    Runs :func:`too_wide`, :func:`texts_outside_figure`, :func:`overlapping_texts`,
+    :func:`texts_on_markers`, :func:`markers_cut_by_frame`,
+    :func:`styles_without_legend`, :func:`legend_entries_not_drawn`,
+    :func:`leaders_across_curves`, :func:`leaders_crossing_each_other` and
+    :func:`title_problems` (internal names only) on one drawing of the figure.
+    """
+    d = render(fig)
+    out = too_wide(d.fig, max_width)
+    for check in (texts_outside_figure, overlapping_texts, texts_on_markers,
+                  markers_cut_by_frame, styles_without_legend, legend_entries_not_drawn,
+                  leaders_across_curves, leaders_crossing_each_other):
+        out += check(d)
+    return out + title_problems(d.fig)
+
+
+def check_titles(fig: Figure, *, system: Iterable[str] = (), motion: Iterable[str] = ()) -> None:
+    """Assert :func:`title_problems` finds nothing."""
+    problems = title_problems(fig, system=system, motion=motion)
+    assert not problems, "\n".join(dict.fromkeys(problems))
+
+
+def check_layout(fig: Figure, *, system: Iterable[str] = (), motion: Iterable[str] = (),
+                 journal: bool = False, max_width: float = MAX_WIDTH) -> None:
+    """Assert the figure has none of the problems of :func:`layout_problems`.
+
+    With ``system``/``motion``, the titles must also contain those texts; with
+    ``journal``, the checks of :func:`journal_problems` run too.
+    """
+    problems = layout_problems(fig, max_width=max_width)
+    if system or motion:
+        problems += title_problems(fig, system=system, motion=motion)
+    if journal:
+        problems += journal_problems(fig)
+    assert not problems, "\n".join(dict.fromkeys(problems))
