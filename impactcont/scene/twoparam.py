@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import logging
+import re
 import time
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -23,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.curves import check_curve_arguments, curve
-from impactcont.analysis.maps import stability_map
+from impactcont.analysis.maps import SCHEDULER_PROTOCOLS, stability_map
 from impactcont.dataset.attributes import split_parameters
 from impactcont.errors import ImpactcontError
 from impactcont.model.oscillator import ImpactOscillator
@@ -259,6 +260,39 @@ class Curves:
 CURVES = Curves()
 
 
+#: Where a map of a scene runs: this process, a process pool, a dask cluster.
+MAP_EXECUTORS = ("serial", "process", "dask")
+#: A dask scheduler's address: ``protocol://host:port``.
+SCHEDULER = re.compile("^(" + "|".join(map(re.escape, SCHEDULER_PROTOCOLS))
+                       + r")(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+)(:\d{1,5})?$")
+SCHEDULER_ALLOWED = ("a dask scheduler address, protocol://host:port (protocol one of "
+                     + ", ".join(p[:-3] for p in SCHEDULER_PROTOCOLS) + "), e.g. "
+                     "\"tcp://10.0.0.5:8786\"")
+
+
+def check_map_executor(entry: Any, where: Where) -> None:
+    """``executor``, ``max_workers`` and ``scheduler`` of a map entry agree: a scheduler
+    exactly with ``executor = "dask"``, and no processes for a dask cluster."""
+    if entry.executor == "dask" and entry.scheduler is None:
+        raise where.key("scheduler").error(
+            'executor = "dask" needs the address of the dask scheduler', SCHEDULER_ALLOWED)
+    if entry.executor != "dask" and entry.scheduler is not None:
+        raise where.key("scheduler").error(
+            f"a scheduler is used by executor = \"dask\" only; executor is "
+            f"{json.dumps(entry.executor)}", 'executor = "dask", or no scheduler')
+    if entry.executor == "dask" and entry.max_workers is not None:
+        raise where.key("max_workers").error(
+            'max_workers sets the processes of executor = "process"; on a dask cluster its '
+            "workers decide (as many tasks at once as they have threads)",
+            'executor = "process", or no max_workers')
+
+
+def map_executor(entry: Any) -> str:
+    """The ``executor=`` of the map function for a map entry: the scheduler's address
+    for ``"dask"`` (the map connects to it and disconnects at its end)."""
+    return entry.scheduler if entry.executor == "dask" else entry.executor
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class MapSpec(EntrySpec):
     """``[[maps]]``: existence, physicality and stability of N-1 motions on an (omega, b) grid."""
@@ -272,9 +306,12 @@ class MapSpec(EntrySpec):
     b_range: tuple[float, float] = declare(Interval(), "[lo, hi] of the b grid",
                                            required=True)
     b_points: int = declare(Integer(2, 100_000), "points of the b grid", 101)
-    executor: str = declare(String(("serial", "process")),
-                            "run in this process or in a process pool", "serial")
+    executor: str = declare(String(MAP_EXECUTORS),
+                            "run in this process, in a process pool or on a dask cluster",
+                            "serial")
     max_workers: int | None = declare(Integer(1, 1024), "processes of the pool")
+    scheduler: str | None = declare(String(pattern=SCHEDULER, pattern_text=SCHEDULER_ALLOWED),
+                                    "address of the dask scheduler (executor \"dask\")")
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
         for key in ("omega", "b"):
@@ -285,6 +322,7 @@ class MapSpec(EntrySpec):
             raise where.key("omega_points").error(
                 "the grid is too large", "at most 5e7 points over N x omega x b")
         check_closed_form(osc, where, "the N-1 stability map")
+        check_map_executor(self, where)
 
 
 class Maps:
@@ -295,7 +333,7 @@ class Maps:
         ds = stability_map(entry.oscillator, N=list(entry.N),
                            omega=np.linspace(*entry.omega_range, entry.omega_points),
                            b=np.linspace(*entry.b_range, entry.b_points),
-                           executor=entry.executor, max_workers=entry.max_workers)
+                           executor=map_executor(entry), max_workers=entry.max_workers)
         ds.attrs["name"] = entry.name
         log.info("map %s: N = %s on %d x %d points (%.1f s)", entry.name, list(entry.N),
                  entry.omega_points, entry.b_points, time.perf_counter() - t0)

@@ -68,3 +68,39 @@ def test_curve_from_a_branch_and_a_map(tmp_path: Path) -> None:
         assert main(["info", str(tmp_path / "o" / f"{name}.nc")]) == EXIT_OK
         assert main(["plot", str(tmp_path / "o" / f"{name}.nc"), "--dpi", "40"]) == EXIT_OK
         assert (tmp_path / "o" / f"{name}.png").is_file()
+
+
+MAP = '[[maps]]\nname = "m"\nN = 1\nomega_range = [0.9, 1.6]\nomega_points = 8\n' \
+      "b_range = [0.45, 0.7]\nb_points = 6\n"
+
+
+def test_map_executor_validation(tmp_path: Path) -> None:
+    err = error(tmp_path, MAP + 'executor = "threads"\n')
+    assert err.key == "maps[0].executor" and '"dask"' in err.allowed
+    err = error(tmp_path, MAP + 'executor = "dask"\n')
+    assert err.key == "maps[0].scheduler" and "needs the address" in str(err)
+    assert "tcp://10.0.0.5:8786" in err.allowed
+    err = error(tmp_path, MAP + 'executor = "dask"\nscheduler = "10.0.0.5:8786"\n')
+    assert err.key == "maps[0].scheduler" and "protocol://host:port" in err.allowed
+    err = error(tmp_path, MAP + 'scheduler = "tcp://10.0.0.5:8786"\n')
+    assert err.key == "maps[0].scheduler" and 'executor is "serial"' in str(err)
+    err = error(tmp_path, MAP + 'executor = "dask"\nscheduler = "tcp://h:8786"\n'
+                'max_workers = 2\n')
+    assert err.key == "maps[0].max_workers" and "workers decide" in str(err)
+    for address in ("tcp://10.0.0.5:8786", "tls://scheduler.example.org:8786",
+                    "tcp://[::1]:8786", "tcp://localhost"):
+        text = OSCILLATOR + MAP + f'executor = "dask"\nscheduler = "{address}"\n'
+        load_scene(write(tmp_path, text))
+
+
+def test_a_scene_map_on_a_dask_scheduler(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  protocol="tcp://", dashboard_address=None) as cluster:
+        address = cluster.scheduler_address
+        text = OSCILLATOR + MAP + f'executor = "dask"\nscheduler = "{address}"\n'
+        result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+        assert result.ok, result.failures
+        ds = read_output(tmp_path / "o" / "maps.nc").datasets["m"]
+        assert '"executor": "dask.distributed"' in ds.attrs["options"]
+        assert ds.sizes["omega"] == 8 and bool(ds["exists"].any())
