@@ -12,9 +12,17 @@ The work is split into tasks of ``(N, block of omega, block of b)`` (at most
 - ``executor=None`` or ``"serial"``: in this process;
 - ``"process"``: a :class:`~concurrent.futures.ProcessPoolExecutor` created and
   shut down here (``max_workers`` processes);
+- the address of a dask scheduler (``"tcp://host:8786"``): a
+  ``dask.distributed.Client`` connected here and closed with the map (optional extra
+  ``impactcont[dask]``);
 - any :class:`~concurrent.futures.Executor` instance (owned by the caller), e.g.
   ``dask.distributed.Client(...).get_executor()``; a ``dask.distributed.Client``
-  itself is accepted too (optional extra ``impactcont[dask]``).
+  itself is accepted too. On a dask cluster as many tasks run at once as its workers
+  have threads (read again as workers join), not as this machine has processors.
+
+Every map runs its tasks through :class:`MapRunner` (the tasks of a :class:`MapJob`):
+:func:`impactcont.multi_impact_map` too, with the same executors, progress and memory
+bound.
 
 Tasks receive the oscillator as JSON and return plain arrays, so any executor
 that pickles works. A process pool that breaks (a worker killed) is replaced and
@@ -28,6 +36,14 @@ written to the file) as it finishes, with ``2 x workers`` tasks submitted at onc
 `memory_limit` bounds the peak, and a map that does not fit in it goes to a
 temporary file, returned lazily and removed when closed
 (:mod:`impactcont.dataset.map_storage`). ``docs/two_parameter.md`` has the measurements.
+
+Ctrl-C (issue 31): the first one stops a map between tasks, ends the pool made for it and
+returns the map computed so far: the points of the tasks not finished are NaN (False, 0
+for flags and counts), False in the variable ``computed``, the attribute
+``interrupted`` is 1 and ``points_computed`` counts the others; a WARNING says how many
+of how many points were done. A second Ctrl-C aborts (KeyboardInterrupt). A map written
+to a file (``out=``, or larger than `memory_limit`) is abandoned at the first Ctrl-C, its
+file removed.
 """
 
 from __future__ import annotations
@@ -173,8 +189,10 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         Forcing periods per impact.
     omega, b : 1-D array_like
         Strictly increasing grids of the forcing frequency (``> 0``) and the gap.
-    executor : None, "serial", "process", Executor or dask.distributed.Client
-        Where the tasks run (see the module docstring).
+    executor : None, "serial", "process", scheduler address, Executor or dask Client
+        Where the tasks run (see the module docstring): ``"tcp://host:8786"`` connects
+        to that dask scheduler for the map; its workers need impactcont (the same
+        version) and its dependencies installed.
     max_workers : int, optional
         Processes of the ``"process"`` pool.
     omega_block : int, optional
@@ -221,7 +239,9 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         ``n_physical``, ``n_stable`` on ``(N, omega, b)``; ``delta``,
         ``impact_velocity``, ``gap_min``, ``spectral_radius``,
         ``critical_multiplier``, ``physical``, ``stable`` per root;
-        ``amplitude_squared`` on ``(N, omega)``.
+        ``amplitude_squared`` on ``(N, omega)``. Interrupted by Ctrl-C (a map in
+        memory): what was computed, with ``computed`` on ``(N, omega, b)`` and the
+        attributes ``interrupted`` and ``points_computed`` (module docstring).
 
     Raises
     ------

@@ -264,7 +264,7 @@ CURVES = Curves()
 MAP_EXECUTORS = ("serial", "process", "dask")
 #: A dask scheduler's address: ``protocol://host:port``.
 SCHEDULER = re.compile("^(" + "|".join(map(re.escape, SCHEDULER_PROTOCOLS))
-                       + r")(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+)(:\d{1,5})?$")
+                       + r")(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+)(:\d{1,5})?(/[^\s/]+)*$")
 SCHEDULER_ALLOWED = ("a dask scheduler address, protocol://host:port (protocol one of "
                      + ", ".join(p[:-3] for p in SCHEDULER_PROTOCOLS) + "), e.g. "
                      "\"tcp://10.0.0.5:8786\"")
