@@ -1,11 +1,13 @@
 """Event-driven simulation with the exact flow: the independent witness.
 
-Between impacts the state is given by the exact flow of eq. (9) (no
-time-stepping error). Impacts are located as the first upward crossing of
-``x1 = b`` by the bracketing of :mod:`impactcont.orbit.extrema`, which cuts
-each flight at the critical points of ``x1`` and so cannot miss a short
-excursion past the stop inside a sampling cell; each impact time is polished
-by Brent's method to a few ulps. The impact law is eq. (4).
+Between impacts the state is the exact flow of eq. (1), computed by the simulator itself
+from the oscillator's matrices (:mod:`impactcont.simulate.flight`: the forced system as
+one autonomous linear system, ``Y(t) = expm(A t) Y(0)``; no time-stepping error, and
+nothing of the orbit code it witnesses). Impacts are located as the first upward crossing
+of a stop by the bracketing of :mod:`impactcont.simulate.search`, which cuts each flight
+at the turning points of the stop coordinate and so cannot miss a short excursion past
+the stop inside a sampling cell; each impact time is polished to a few ulps. The impact
+law is eq. (4).
 
 With a stop on another mass or a lower stop (``osc.stops``, see
 :mod:`impactcont.model.stops`) the impacting mass ``j`` is followed to the first
@@ -28,8 +30,8 @@ between two masses), and an impact applies the velocity jump ``v+ = D v`` of
 the two-body law, momentum conserved and ``s'`` reversed times R, at a pair). Stops on
 several coordinates (``osc.stops.extra``: e.g. one above mass 1 and one above mass 2) are
 all followed: the first crossing among every stop's coordinate is the impact, with the law
-of the stop hit (:meth:`~impactcont.model.stops.Stops.stop`). Free masses
-and a constant force ``F_static`` come with the exact flow (:class:`Flow`).
+of the stop hit (:meth:`~impactcont.model.stops.Stops.stop`). Free masses, any damping
+matrix, a complex F and a constant force ``F_static`` are all in the one system matrix.
 """
 
 from __future__ import annotations
@@ -39,14 +41,15 @@ import enum
 import logging
 import math
 import numbers
+from typing import Any
 
 import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER, StopView
-from impactcont.orbit.flow import Flow
 from impactcont.simulate.contact import next_contact
+from impactcont.simulate.flight import Flight, flight_of
 from impactcont.threads import blas_limited
 
 __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
@@ -130,13 +133,15 @@ def _wrap(phase: float) -> float:
     return math.remainder(phase, TWO_PI)
 
 
-def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
+def next_impact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
                 after: float = -math.inf) -> tuple[float, np.ndarray] | None:
     """First impact within ``t_max`` of a flight starting at state X and phase.
 
     Parameters
     ----------
-    flow : Flow
+    flight : Flight, ImpactOscillator or object with an ``osc`` attribute
+        The flight (:func:`~impactcont.simulate.flight.flight_of`: of an oscillator, or of
+        the oscillator a :class:`impactcont.Flow` carries; only the oscillator is read).
     X : ndarray, shape (2n,)
         State at the start of the flight (``x1 <= b``).
     phase : float
@@ -165,23 +170,24 @@ def next_impact(flow: Flow, X: np.ndarray, phase: float, t_max: float, *,
     search is :func:`impactcont.simulate.contact.next_contact`'s: its cost follows
     the motion's time scales, not ``t_max``.
     """
-    stops = flow.osc.stops
+    fl = flight_of(flight)
+    stops = fl.osc.stops
     if len(stops.names) > 1:
         raise ParameterError(f"next_impact follows one stop; the oscillator has "
                              f"{len(stops.names)} ({list(stops.names)}, stops={stops!r}): use "
                              "impactcont.simulate.contact.next_contact, which also returns the "
                              "stop hit (its name)")
-    hit = next_contact(flow, X, phase, t_max, after={UPPER: after})
+    hit = next_contact(fl, X, phase, t_max, after={UPPER: after})
     return None if hit is None else (hit[0], hit[1])
 
 
-def _unresolved_bounce(flow: Flow, X: np.ndarray, phase: float, normal: np.ndarray,
+def _unresolved_bounce(flight: Flight, X: np.ndarray, phase: float, normal: np.ndarray,
                        level: float, v: float) -> bool:
     """The bounce after an impact at speed ``v`` rises less than ``_BOUNCE_ULPS`` ulps."""
     floor = _BOUNCE_ULPS * np.finfo(float).eps * max(1.0, abs(level))
     if v * v > 1e10 * floor:  # cheap exit: |x_j''| would have to exceed 5e9
         return False
-    acc = abs(float(normal @ flow.state_derivative(0.0, X, phase)[0][flow.n:]))
+    acc = abs(float(normal @ flight.rate(X, phase)[flight.n:]))
     return bool(v * v < 2.0 * acc * floor)
 
 
@@ -203,7 +209,7 @@ def _touching(X: np.ndarray, views: dict[str, StopView], last: str | None) -> li
     return out
 
 
-def _contact_now(flow: Flow, X: np.ndarray, phase: float, views: dict[str, StopView],
+def _contact_now(flight: Flight, X: np.ndarray, phase: float, views: dict[str, StopView],
                  last: str | None) -> tuple[tuple[float, np.ndarray, str] | None, bool]:
     """An impact at once, or sticking, at a state that touches stops (:func:`_touching`).
 
@@ -218,7 +224,7 @@ def _contact_now(flow: Flow, X: np.ndarray, phase: float, views: dict[str, StopV
     hit, sticking
         ``(0, X, name)`` for an impact now (else None), and whether the motion sticks.
     """
-    n = flow.n
+    n = flight.n
     resting = []
     for name in _touching(X, views, last):
         view = views[name]
@@ -228,7 +234,7 @@ def _contact_now(flow: Flow, X: np.ndarray, phase: float, views: dict[str, StopV
         if u >= -_ON_ULPS * _EPS * float(np.abs(view.normal) @ np.abs(X[n:])):
             resting.append(view)
     if resting:
-        acc = flow.state_derivative(0.0, X, phase)[0][n:]
+        acc = flight.rate(X, phase)[n:]
         if any(view.sign * float(view.normal @ acc) > 0.0 for view in resting):
             return None, True
     return None, False
@@ -309,7 +315,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     periods, delta = float(periods), float(delta)
     if int(samples_per_period) < 2:
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
-    flow = Flow(osc)
+    flight = Flight(osc)
     n = osc.n
     sides = list(osc.stops.names)
     views = {s: osc.stops.stop(s, osc.M, osc.b, osc.R) for s in sides}
@@ -328,7 +334,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
 
     last: str | None = None  # the stop of the impact that starts this flight
     while True:
-        hit, resting = _contact_now(flow, X, phase, views, last)
+        hit, resting = _contact_now(flight, X, phase, views, last)
         if resting:
             status = SimulationStatus.STICKING  # at rest on a stop, pushed into it
             break
@@ -337,15 +343,15 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             # velocity or position is exact only up to rounding, which may show a crossing
             # of that stop a few ulps after the start; it is not an impact
             after = {s: _ON_STOP * TWO_PI / osc.omega for s in _touching(X, views, last)}
-            hit = next_contact(flow, X, phase, t_end - t_now, after=after)
-        flight = hit[0] if hit is not None else t_end - t_now
+            hit = next_contact(flight, X, phase, t_end - t_now, after=after)
+        duration = hit[0] if hit is not None else t_end - t_now
         if trajectory:
-            tau = np.arange(0.0, flight, dt_sample)
-            t_chunks.append(t_now + np.append(tau, flight))
-            X_chunks.append(flow.state(np.append(tau, flight), X, phase))
+            tau = np.arange(0.0, duration, dt_sample)
+            t_chunks.append(t_now + np.append(tau, duration))
+            X_chunks.append(flight.samples(np.append(tau, duration), X, phase))
         if hit is None:
-            X = flow.state(flight, X, phase)[0]
-            phase = _wrap(phase + osc.omega * flight)
+            X = flight.state(duration, X, phase)[0]
+            phase = _wrap(phase + osc.omega * duration)
             t_now = t_end
             break
         tc, X_minus, side = hit
@@ -366,7 +372,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         hits.append(side)
         v_scale = max(v_scale, v)
         if v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(
-                flow, X, phase, normal[side], level[side], v):
+                flight, X, phase, normal[side], level[side], v):
             status = SimulationStatus.CHATTER
             break
         if len(times) >= max_impacts:

@@ -1,0 +1,366 @@
+"""The simulator's own flight: eq. (1) between impacts as one autonomous linear system.
+
+The witness reads the oscillator's matrices and nothing of the orbit code: no modal basis,
+no first-order basis, no closed-form forced response. With the forcing phase
+``theta = omega t + delta`` carried as two states ``c = cos theta``, ``s = sin theta`` and
+the constant force as a third state equal to 1, eq. (1)
+
+    M x'' + C x' + K x = Re(F e^{i theta}) + F_static = Re(F) c - Im(F) s + F_static
+
+between impacts is the autonomous system ``Y' = A Y`` of order ``N = 2n + 3`` on
+``Y = [x; x'; c; s; 1]``:
+
+    x'  = x'
+    x'' = M^-1 (Re(F) c - Im(F) s + F_static - K x - C x')
+    c'  = -omega s,   s' = omega c,   1' = 0
+
+so the exact flow from ``Y(0)`` is ``Y(t) = expm(A t) Y(0)``: one matrix exponential
+(:func:`scipy.linalg.expm`, scaling and squaring with a Pade approximant) gives the state at
+any time with no truncation, for any damping matrix C, free masses, a constant force and a
+complex F alike, and with no case analysis (undamped, critical, over-damped, resonance
+with a free mode: all the same matrix). Its derivatives are exact too:
+``Y^(j)(t) = A^j Y(t)``.
+
+Locating an impact evaluates a stop coordinate at many times (a grid and Newton
+iterates). Where ``A = W diag(lambda) W^-1`` with a well-conditioned ``W``
+(:attr:`Flight.fast`) a stop coordinate ``y = r . Y`` is
+``Re(sum_k c_k e^{lambda_k t})``, ``c_k = (r W)_k (W^-1 Y(0))_k``: O(N) per time
+(:class:`StopMotion`). Where ``A`` is defective or nearly so (an undamped free mass, a
+free mass drifting under a constant force, a critically damped mode, a forcing close to
+a lightly damped resonance) every evaluation is a matrix exponential instead. The
+impact time found on the fast path is polished by Newton's method on the matrix
+exponential itself (:meth:`StopMotion.polish`), and the state at an impact is always
+``expm(A t) Y(0)``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from impactcont.model.oscillator import ImpactOscillator
+
+__all__ = ["Flight", "StopMotion", "flight_of"]
+
+_EPS = float(np.finfo(float).eps)
+#: Largest condition number of the eigenvectors W of A for the fast path: the values of a
+#: stop coordinate are then exact to about cond(W) ulps of the motion's size.
+_COND_LIMIT = 1e8
+#: Size of the work arrays of one vectorised evaluation (entries of times x N, or of the
+#: stacked N x N matrices of the matrix exponential).
+_CHUNK = 1 << 20
+#: Newton steps of the polish of an impact time on the matrix exponential.
+_POLISH_STEPS = 3
+
+
+def _combine(columns: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``columns @ weights`` (`weights` of shape (N, m)), summed term by term in a fixed
+    order: the value at one time does not depend on how many times are evaluated with it
+    (a matrix product's rounding follows its shape, and the search compares the value at a
+    window's end with the same value at the next window's start)."""
+    out = columns[..., 0, None] * weights[0]
+    for k in range(1, weights.shape[0]):
+        out = out + columns[..., k, None] * weights[k]
+    return out
+
+
+def flight_of(source: Any) -> Flight:
+    """The simulator's :class:`Flight` of `source`.
+
+    Parameters
+    ----------
+    source : Flight, ImpactOscillator or object with an ``osc`` attribute
+        A flight (returned as it is), an oscillator, or anything that carries one as
+        ``source.osc`` (e.g. :class:`impactcont.Flow`: only its oscillator is read, never
+        its evaluation of the flow).
+
+    Returns
+    -------
+    Flight
+
+    Raises
+    ------
+    TypeError
+        `source` is none of these.
+    """
+    if isinstance(source, Flight):
+        return source
+    osc = source if isinstance(source, ImpactOscillator) else getattr(source, "osc", None)
+    if not isinstance(osc, ImpactOscillator):
+        raise TypeError(f"expected an ImpactOscillator, a simulate.flight.Flight or an object "
+                        f"carrying an oscillator as .osc (e.g. impactcont.Flow); got "
+                        f"{type(source).__name__}")
+    return Flight(osc)
+
+
+def _system_matrix(osc: ImpactOscillator) -> np.ndarray:
+    """``A`` of ``Y' = A Y`` on ``Y = [x; x'; cos theta; sin theta; 1]``, (2n+3, 2n+3)."""
+    n, omega = osc.n, float(osc.omega)
+    forcing = np.asarray(osc.F)
+    inputs = np.column_stack([forcing.real, -forcing.imag if np.iscomplexobj(forcing)
+                              else np.zeros(n), np.asarray(osc.F_static, dtype=float)])
+    solved = np.linalg.solve(osc.M, np.hstack([osc.K, osc.C, inputs]))
+    A = np.zeros((2 * n + 3, 2 * n + 3))
+    A[:n, n:2 * n] = np.eye(n)
+    A[n:2 * n, :n] = -solved[:, :n]
+    A[n:2 * n, n:2 * n] = -solved[:, n:2 * n]
+    A[n:2 * n, 2 * n:] = solved[:, 2 * n:]
+    A[2 * n, 2 * n + 1] = -omega
+    A[2 * n + 1, 2 * n] = omega
+    return A
+
+
+class Flight:
+    """The exact flow of eq. (1) between impacts, ``Y(t) = expm(A t) Y(0)``.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        Read for ``M, C, K, F, F_static, omega`` and its stops, nothing else.
+
+    Attributes
+    ----------
+    osc : ImpactOscillator
+    n : int
+        Degrees of freedom.
+    omega : float
+        Forcing frequency.
+    A : ndarray, shape (2n+3, 2n+3)
+        The system matrix (module docstring).
+    eigenvalues : ndarray, complex, shape (2n+3,)
+        Eigenvalues of A (the oscillator's, ``+-i omega`` and 0): the time scales.
+    fast : bool
+        A is diagonalised by eigenvectors of condition number at most ``_COND_LIMIT``: stop
+        coordinates are evaluated from the eigenvalues, O(N) per time. Otherwise every
+        evaluation is a matrix exponential.
+    condition : float
+        Condition number of the eigenvectors (``inf`` when A is defective in rounding).
+    """
+
+    def __init__(self, osc: ImpactOscillator) -> None:
+        if not isinstance(osc, ImpactOscillator):
+            raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
+        self.osc = osc
+        self.n = osc.n
+        self.omega = float(osc.omega)
+        self.A = _system_matrix(osc)
+        lam, W = scipy.linalg.eig(self.A)
+        self.eigenvalues = lam
+        condition = math.inf
+        W_inv = None
+        if np.all(np.isfinite(lam)) and np.all(np.isfinite(W)):
+            with np.errstate(all="ignore"):
+                condition = float(np.linalg.cond(W))
+            if math.isfinite(condition) and condition <= _COND_LIMIT:
+                W_inv = np.linalg.inv(W)
+        self.condition = condition
+        self.fast = W_inv is not None
+        self.W, self.W_inv = W, W_inv
+        self._kinds = self._mode_kinds() if self.fast else None
+        self._scales: dict[bytes, tuple[float, float]] = {}
+
+    # -- states -------------------------------------------------------------------------------
+    def start(self, X: np.ndarray, phase: float) -> np.ndarray:
+        """``Y(0) = [X; cos phase; sin phase; 1]`` of a state ``X = [x; x']`` and a phase."""
+        return np.concatenate([np.asarray(X, dtype=float).reshape(2 * self.n),
+                               [math.cos(phase), math.sin(phase), 1.0]])
+
+    def propagate(self, t: Any, Y0: np.ndarray) -> np.ndarray:
+        """``expm(A t) Y0`` at each time of `t`, shape (nt, N): the exact flow.
+
+        Evaluated in chunks of stacked matrices (at most ``_CHUNK`` entries of work array).
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        N = self.A.shape[0]
+        step = max(1, _CHUNK // (N * N))
+        out = np.empty((t.size, N))
+        for k in range(0, t.size, step):
+            part = t[k:k + step]
+            out[k:k + step] = _combine(scipy.linalg.expm(part[:, None, None] * self.A),
+                                       Y0[:, None])[..., 0]
+        return out
+
+    def state(self, t: Any, X: np.ndarray, phase: float) -> np.ndarray:
+        """The state ``[x; x']`` at times `t` after a start at state X and phase, (nt, 2n),
+        by the matrix exponential."""
+        return self.propagate(t, self.start(X, phase))[:, :2 * self.n]
+
+    def samples(self, t: Any, X: np.ndarray, phase: float) -> np.ndarray:
+        """The state ``[x; x']`` at many times `t` (a trajectory), (nt, 2n): from the
+        eigenvalues on the fast path (to about :attr:`condition` ulps), else as :meth:`state`."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        Y0 = self.start(X, phase)
+        if not self.fast:
+            return self.propagate(t, Y0)[:, :2 * self.n]
+        table = (self.W_inv @ Y0)[:, None] * self.W[:2 * self.n].T  # (N, 2n)
+        return self.modal_sum(t, table)
+
+    def modal_sum(self, t: np.ndarray, table: np.ndarray) -> np.ndarray:
+        """``Re(sum_k e^{lambda_k t} table[k])`` at each time of `t`, shape (nt, m), on the
+        fast path (`table` of shape (N, m))."""
+        step = max(1, _CHUNK // (self.A.shape[0] * table.shape[1]))
+        out = np.empty((t.size, table.shape[1]))
+        for k in range(0, t.size, step):
+            rotations = np.exp(np.multiply.outer(t[k:k + step], self.eigenvalues))
+            out[k:k + step] = _combine(rotations, table).real
+        return out
+
+    def rate(self, X: np.ndarray, phase: float) -> np.ndarray:
+        """``X' = [x'; x'']`` at a state X and phase (eq. 1), shape (2n,)."""
+        return (self.A @ self.start(X, phase))[:2 * self.n]
+
+    # -- time scales --------------------------------------------------------------------------
+    def time_scales(self, normal: np.ndarray) -> tuple[float, float]:
+        """Fastest oscillation frequency and fastest decay rate seen by ``s = normal . x``.
+
+        On the fast path the modes seen are those of weight ``(r W)_k`` above rounding
+        (``r = [normal; 0]``); otherwise every eigenvalue of A counts.
+
+        Returns
+        -------
+        rate, decay : float
+            ``max(omega, max |Im lambda_k|)`` and ``max(0, max -Re lambda_k)`` over the
+            modes seen.
+        """
+        normal = np.asarray(normal, dtype=float)
+        key = normal.tobytes()
+        known = self._scales.get(key)
+        if known is None:
+            lam = self.eigenvalues
+            if self.fast:
+                weight = np.abs(normal @ self.W[:self.n])
+                lam = lam[weight > 4.0 * _EPS * max(float(weight.max(initial=0.0)), _EPS)]
+            known = self._scales[key] = (
+                float(max(self.omega, np.abs(lam.imag).max(initial=0.0))),
+                float(max(0.0, (-lam.real).max(initial=0.0))))
+        return known
+
+    def motion(self, X: np.ndarray, phase: float, normal: np.ndarray,
+               sign: float = 1.0) -> StopMotion:
+        """The evaluator of ``y = sign * normal . x`` along the flight from X at `phase`."""
+        return StopMotion(self, self.start(X, phase), normal, sign)
+
+    # -- the modes of the envelope ------------------------------------------------------------
+    def _mode_kinds(self) -> np.ndarray:
+        """Each eigenvalue's part in the motion: 1 forced (the pair ``+-i omega``, whose
+        eigenvectors carry the forcing states c, s), 0 constant (``lambda = 0``), -1 free.
+
+        A is block upper-triangular (the forcing states evolve on their own), so the
+        eigenvectors of the oscillator's own modes vanish on ``c, s`` and those of the
+        forcing pair do not: the pair is the two eigenvectors of largest weight there.
+        """
+        n, N = self.n, self.A.shape[0]
+        kinds = -np.ones(N, dtype=np.int64)
+        share = np.linalg.norm(self.W[2 * n:2 * n + 2], axis=0) / np.linalg.norm(self.W, axis=0)
+        kinds[np.argsort(share)[-2:]] = 1
+        size = max(float(np.abs(self.eigenvalues).max()), self.omega)
+        zero = np.abs(self.eigenvalues) <= 64.0 * _EPS * self.condition * size
+        kinds[zero & (kinds < 0)] = 0
+        return kinds
+
+
+class StopMotion:
+    """``y = sign * normal . x`` and its first three derivatives along one flight.
+
+    Parameters
+    ----------
+    flight : Flight
+    Y0 : ndarray, shape (N,)
+        The augmented state at the start (:meth:`Flight.start`).
+    normal : array_like, shape (n,)
+        The stop coordinate ``s = normal . x``.
+    sign : float
+        ``+1`` for a stop met moving up, ``-1`` for one met moving down.
+
+    Notes
+    -----
+    Fast path: ``y^(j)(t) = Re(sum_k lambda_k^j c_k e^{lambda_k t})``. Otherwise
+    ``y^(j)(t) = (r A^j) expm(A t) Y0`` with ``r = [sign normal; 0]``.
+    """
+
+    def __init__(self, flight: Flight, Y0: np.ndarray, normal: Any, sign: float = 1.0) -> None:
+        n, N = flight.n, flight.A.shape[0]
+        r = np.zeros(N)
+        r[:n] = float(sign) * np.asarray(normal, dtype=float)
+        self.flight = flight
+        self.Y0 = Y0
+        self.row = r
+        rows = [r]
+        for _ in range(3):
+            rows.append(rows[-1] @ flight.A)
+        self.rows = np.array(rows)  # r A^j, j = 0..3: the exact derivatives
+        if flight.fast:
+            self.weights = (r @ flight.W) * (flight.W_inv @ Y0)
+            self.table = self.weights[:, None] * flight.eigenvalues[:, None] ** np.arange(4)
+
+    def __call__(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``y, y', y''`` at times `t` (each shape (nt,))."""
+        return self.derivatives(t)[:3]
+
+    def derivatives(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``y, y', y'', y'''`` at times `t` (each shape (nt,))."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        fl = self.flight
+        if fl.fast:
+            values = fl.modal_sum(t, self.table)
+        else:
+            values = _combine(fl.propagate(t, self.Y0), self.rows.T)
+        return values[:, 0], values[:, 1], values[:, 2], values[:, 3]
+
+    def polish(self, t: float, level: float, lo: float, hi: float) -> float:
+        """The crossing ``y = level`` near `t` in ``[lo, hi]``, by Newton's method on the
+        matrix exponential (exact values): a step leaving the bracket is not taken.
+
+        On the slow path the evaluations already are the matrix exponential: `t` returns.
+        """
+        if not self.flight.fast or not lo < hi:
+            return t
+        A = self.flight.A
+        for _ in range(_POLISH_STEPS):
+            Y = self.flight.propagate(t, self.Y0)[0]
+            g, slope = float(self.row @ Y) - level, float(self.row @ (A @ Y))
+            if g == 0.0 or slope == 0.0:
+                break
+            new = t - g / slope
+            if not (math.isfinite(new) and lo <= new <= hi):
+                break
+            done = abs(new - t) <= 4.0 * _EPS * max(abs(t), 1.0)
+            t = new
+            if done:
+                break
+        return t
+
+    def envelope(self, t0: float, horizon: float) -> tuple[complex, float, float, float] | None:
+        """Forced amplitude, a bound on the free part on ``[t0, horizon]`` and two sizes.
+
+        ``y(t) = Re(z e^{i omega t}) + offset + y_free(t)`` with
+        ``|y_free(t)| <= sum_k |c_k| e^{Re(lambda_k) t}``, the largest over the stretch:
+        at ``t0`` for a decaying mode, at `horizon` for one whose computed real part is
+        positive (an undamped mode, in rounding).
+
+        Returns
+        -------
+        (z, free, start, offset) or None
+            ``z`` the complex amplitude of the forced part at ``t = 0``, ``free`` the bound,
+            ``start`` the sum of every ``|c_k|`` (the size of the motion), ``offset`` the
+            constant part (a constant force). None off the fast path.
+        """
+        fl = self.flight
+        if not fl.fast:
+            return None
+        kinds, lam, c = fl._kinds, fl.eigenvalues, self.weights
+        pair = np.flatnonzero(kinds == 1)
+        z = complex(np.sum(np.where(lam[pair].imag > 0, c[pair], np.conj(c[pair]))))
+        free = kinds < 0
+        rates = lam[free].real
+        with np.errstate(over="ignore"):
+            bound = float(np.sum(np.abs(c[free]) * np.exp(rates * np.where(rates > 0.0, horizon,
+                                                                             t0))))
+        if not math.isfinite(bound):
+            return None
+        offset = float(np.sum(c[kinds == 0]).real)
+        return z, bound, float(np.sum(np.abs(c))), offset
+

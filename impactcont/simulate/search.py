@@ -1,0 +1,202 @@
+"""Reliable location of the turning points and stop crossings of a stop coordinate.
+
+Sampling alone can miss a short excursion past a stop. The stretch searched is cut into
+cells short against the fastest motion the coordinate ``y`` sees (:func:`search_grid`:
+1/16 of its shortest damped period, refined geometrically near the start for a fast
+over-damped decay). Within a cell ``y''`` changes sign at most once, so the roots of
+``y''`` (located in the cells where it changes sign) cut the stretch into pieces on
+which ``y'`` is monotone: each holds at most one root of ``y'``, a turning point of
+``y`` (:func:`turning_points`). Between consecutive turning points ``y`` is monotone and
+crosses a stop level at most once (:func:`first_crossing`). Every root is polished to a
+few ulps by Newton's method kept inside its bracket (:func:`newton_in_brackets`). A
+crossing is missed only if ``y''`` changes sign twice inside one cell, i.e. only for a
+component faster than the grid was built for.
+
+The evaluator is the simulator's own (:class:`impactcont.simulate.flight.StopMotion`).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from impactcont.errors import UnresolvedMotionWarning
+from impactcont.simulate.flight import Flight, StopMotion
+
+__all__ = ["first_crossing", "newton_in_brackets", "search_grid", "turning_points"]
+
+_CELLS_PER_PERIOD = 16
+_MAX_CELLS = 2_000_000
+_ABS_TOL = 1e-15
+_REL_TOL = 4.0 * float(np.finfo(float).eps)
+_MAX_STEPS = 200
+
+
+def search_grid(flight: Flight, t0: float, t1: float, normal: Any) -> np.ndarray:
+    """Times on ``[t0, t1]``, both ends included, with at most one root of ``y''`` per cell.
+
+    Parameters
+    ----------
+    flight : Flight
+    t0, t1 : float
+        The stretch, ``t1 > t0``.
+    normal : array_like, shape (n,)
+        The stop coordinate ``y = normal . x`` searched: the cells follow the time scales
+        of the modes it sees (:meth:`Flight.time_scales`).
+
+    Returns
+    -------
+    ndarray
+        Sorted times.
+
+    Warns
+    -----
+    UnresolvedMotionWarning
+        When the grid would need more than ``_MAX_CELLS`` cells (it is capped there).
+    """
+    rate, decay = flight.time_scales(normal)
+    span = t1 - t0
+    cells = max(math.ceil(span * _CELLS_PER_PERIOD * rate / (2.0 * math.pi)), 8)
+    if cells > _MAX_CELLS:
+        warnings.warn(f"contact search grid capped at {_MAX_CELLS} cells for a stretch of "
+                      f"{span:.3g} (the fastest damped frequency {rate:.3g} asks for {cells}): "
+                      "a short excursion past a stop (eq. 16) may be missed; damping the "
+                      "fastest modes or a shorter period avoids this",
+                      UnresolvedMotionWarning, stacklevel=2)
+        cells = _MAX_CELLS
+    grid = np.linspace(t0, t1, cells + 1)
+    width = span / cells
+    if decay > 0.0 and 1.0 / (_CELLS_PER_PERIOD * decay) < width:
+        # a decay faster than a cell right after the start: halve the first cell until the
+        # smallest piece resolves it
+        halvings = math.ceil(math.log2(width * _CELLS_PER_PERIOD * decay))
+        grid = np.union1d(grid, t0 + width * 0.5 ** np.arange(1, halvings + 1))
+    return grid
+
+
+def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                       lo: np.ndarray, hi: np.ndarray, at_lo: np.ndarray) -> np.ndarray:
+    """One root of ``g`` in each bracket, all brackets iterated at once.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(t) -> (g(t), g'(t))`` for an array of times.
+    lo, hi : ndarray
+        Brackets, ``lo < hi``, with ``g`` of opposite signs (``< 0`` against ``>= 0``) at
+        their ends.
+    at_lo : ndarray
+        ``g(lo)`` (its sign is what is read).
+
+    Returns
+    -------
+    ndarray
+        The roots, to a few ulps: each iteration keeps the part of the bracket where the
+        sign changes and takes the Newton step from the last iterate when it stays inside
+        that part, else its midpoint (so the bracket shrinks every iteration and the
+        convergence near a simple root is quadratic).
+    """
+    left = np.array(lo, dtype=float)
+    right = np.array(hi, dtype=float)
+    negative_left = np.asarray(at_lo, dtype=float) < 0
+    t = 0.5 * (left + right)
+    todo = np.arange(t.size)
+    for _ in range(_MAX_STEPS):
+        if todo.size == 0:
+            break
+        here = t[todo]
+        g, slope = fun(here)
+        same = (g < 0) == negative_left[todo]  # the sign change is right of `here`
+        left[todo] = np.where(same, here, left[todo])
+        right[todo] = np.where(same, right[todo], here)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = g / slope
+        tol = _ABS_TOL + _REL_TOL * np.abs(here)
+        small = np.abs(step) <= tol  # converged: judged before the safeguard
+        done = (g == 0) | small | (right[todo] - left[todo] <= tol)
+        guess = here - step
+        kept = np.isfinite(guess) & (guess >= left[todo]) & (guess <= right[todo])
+        guess = np.where(kept | (done & small), guess, 0.5 * (left[todo] + right[todo]))
+        t[todo] = np.where(g == 0, here, guess)
+        todo = todo[~done]
+    return t
+
+
+def _sign_changes(values: np.ndarray) -> np.ndarray:
+    """Indices i where ``values[i]`` and ``values[i + 1]`` lie on either side of 0."""
+    below = values < 0
+    return np.flatnonzero(below[:-1] != below[1:])
+
+
+def _derivative_roots(motion: StopMotion, order: int, times: np.ndarray,
+                      values: np.ndarray) -> np.ndarray:
+    """Roots of ``y^(order)`` in the cells of `times` where `values` (``y^(order)`` there)
+    changes sign, polished with ``y^(order + 1)`` as the slope."""
+    cells = _sign_changes(values)
+
+    def fun(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        d = motion.derivatives(s)
+        return d[order], d[order + 1]
+
+    return newton_in_brackets(fun, times[cells], times[cells + 1], values[cells])
+
+
+def turning_points(motion: StopMotion, grid: np.ndarray) -> np.ndarray:
+    """Every root of ``y'`` strictly inside the grid's span, sorted.
+
+    Parameters
+    ----------
+    motion : StopMotion
+        The coordinate searched and its derivatives.
+    grid : ndarray
+        From :func:`search_grid`.
+
+    Returns
+    -------
+    ndarray
+        Times where ``y'`` vanishes.
+    """
+    inflections = _derivative_roots(motion, 2, grid, motion.derivatives(grid)[2])
+    pieces = np.union1d(grid, inflections)  # y' monotone on each piece
+    roots = _derivative_roots(motion, 1, pieces, motion.derivatives(pieces)[1])
+    return np.unique(roots[(roots > grid[0]) & (roots < grid[-1])])
+
+
+def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
+                   after: float = -math.inf) -> tuple[float, float, float] | None:
+    """The first time in ``(grid[0], grid[-1]]`` where ``y`` reaches `level` from below.
+
+    Parameters
+    ----------
+    motion : StopMotion
+    level : float
+        The stop's level in ``y``.
+    grid : ndarray
+        From :func:`search_grid`.
+    after : float
+        A crossing whose bracket ends by this time is ignored (the rounding-size
+        excursion of a flight that starts on a stop and leaves it).
+
+    Returns
+    -------
+    (float, float, float) or None
+        The crossing time (a few ulps) and its bracket ``(lo, hi)``, on which ``y`` is
+        monotone; None when ``y < level`` throughout.
+    """
+    pieces = np.union1d(grid, turning_points(motion, grid))  # y monotone on each piece
+    gap = motion(pieces)[0] - level
+    up = np.flatnonzero((gap[:-1] < 0) & (gap[1:] >= 0) & (pieces[1:] > after))
+    if up.size == 0:
+        return None
+    i = int(up[0])
+
+    def fun(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        y, slope, _ = motion(s)
+        return y - level, slope
+
+    root = newton_in_brackets(fun, pieces[i:i + 1], pieces[i + 1:i + 2], gap[i:i + 1])
+    return float(root[0]), float(pieces[i]), float(pieces[i + 1])
