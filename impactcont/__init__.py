@@ -25,7 +25,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(("continuation", "continuation_from", "extend"), "impactcont.analysis.branch"),
     **dict.fromkeys(("ContinuationOptions", "ContinuationStatus"), "impactcont.core"),
     **dict.fromkeys(("curve", "curve_crossings"), "impactcont.analysis.curves"),
-    **dict.fromkeys(("load", "save"), "impactcont.dataset"),
+    **dict.fromkeys(("load", "point_table", "save"), "impactcont.dataset"),
     "open_lazy": "impactcont.dataset.io",
     **dict.fromkeys(("IllConditionedWarning", "ImpactcontError", "LowImpactVelocityWarning",
                      "NearFoldWarning", "NearResonanceWarning", "NoPeriodicMotionError",
@@ -151,7 +151,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
         special_orbit,
     )
     from impactcont.core import ContinuationOptions, ContinuationStatus
-    from impactcont.dataset import load, save
+    from impactcont.dataset import load, point_table, save
     from impactcont.dataset.io import open_lazy
     from impactcont.errors import (
         IllConditionedWarning,
@@ -245,6 +245,7 @@ __all__ = [
     "period_doubling_switch",
     "periodic_orbits",
     "pitchfork_switch",
+    "point_table",
     "primitive_orbit",
     "robust_bound",
     "robust_stability",

@@ -24,6 +24,7 @@ from impactcont.core.events import (
     Stop,
     StopRule,
     StopRuleFactory,
+    parameter_name,
 )
 from impactcont.core.locate import Event, EventPoint, locate_events
 from impactcont.core.options import ContinuationOptions
@@ -102,6 +103,7 @@ class BranchRun:
         if self.direction not in (1, -1):
             raise ParameterError(f"direction = {direction!r} is invalid; it must be +1 or -1")
         self.stop = stop
+        self.name = parameter_name(problem)  # of lam, in the stop reasons
         self.status: ContinuationStatus | None = None
         self.message = "not run yet"
         self._started = False
@@ -149,7 +151,7 @@ class BranchRun:
             if previous.index + 1 >= self.options.max_points:
                 self._finish(
                     ContinuationStatus.MAX_POINTS_REACHED,
-                    f"{self.options.max_points} points, last at lam = {previous.lam:.10g}",
+                    f"{self.options.max_points} points, last at {self.name} = {previous.lam:.10g}",
                 )
                 return
             try:
@@ -158,7 +160,8 @@ class BranchRun:
                 self._finish(ContinuationStatus.STEP_BELOW_MINIMUM, str(error))
                 return
             except BoundReachedError as error:  # the start lies on a bound, no step past it
-                self._finish(ContinuationStatus.BOUNDS_REACHED, f"lam = {error.bound:.10g}")
+                self._finish(ContinuationStatus.BOUNDS_REACHED,
+                             f"{self.name} = {error.bound:.10g}")
                 return
             bound = self._crossed_bound(current.lam)
             if bound is not None:
@@ -171,7 +174,7 @@ class BranchRun:
             if self._closes_loop(stepper, start, previous, current, farthest_from_start):
                 self._finish(
                     ContinuationStatus.CLOSED_LOOP,
-                    f"branch returned to the start lam = {start.lam:.10g} "
+                    f"branch returned to the start {self.name} = {start.lam:.10g} "
                     f"after {current.index + 1} points",
                 )
                 return
@@ -197,7 +200,7 @@ class BranchRun:
         bound: float,
     ) -> Iterator[ContinuationPoint]:
         """Yield the point exactly on `bound` (if new) and finish the run."""
-        detail = f"lam = {bound:.10g}"
+        detail = f"{self.name} = {bound:.10g}"
         landed: ContinuationPoint | None = None
         if current.lam == bound:
             landed = current
@@ -207,8 +210,8 @@ class BranchRun:
             except NewtonConvergenceError as error:
                 logger.warning("could not land on the bound lam = %.10g: %s", bound, error)
                 detail = (
-                    f"lam = {bound:.10g} crossed, but the point on it was not found ({error}); "
-                    f"last point at lam = {previous.lam:.10g}"
+                    f"{self.name} = {bound:.10g} crossed, but the point on it was not found "
+                    f"({error}); last point at {self.name} = {previous.lam:.10g}"
                 )
         if landed is not None:
             yield from self._emit(previous, landed)

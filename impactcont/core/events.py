@@ -16,7 +16,7 @@ from typing import Protocol
 
 from impactcont.core.point import ContinuationPoint
 
-__all__ = ["ContinuationStatus", "Stop", "StopRule", "StopRuleFactory"]
+__all__ = ["ContinuationStatus", "Stop", "StopRule", "StopRuleFactory", "parameter_name"]
 
 
 class ContinuationStatus(enum.Enum):
@@ -30,6 +30,24 @@ class ContinuationStatus(enum.Enum):
     REACHED_PARENT = "reached the motion the branch was born from"
     STOPPED_AFTER_EVENT = "stopped after an event"
     CURVE_END = "the curve ends"
+
+
+def parameter_name(problem: object) -> str:
+    """The name of the continued parameter in the stop reasons of ``problem``'s runs.
+
+    A problem may name its ``lam`` with a text attribute ``parameter`` (``"omega"``, ``"b"``,
+    ``"k2"``: the branch problems do), or ``parameters = (p1, p2)`` with ``lam = p2`` (the
+    codim-1 curve problems); the reasons then say ``parameter bound reached: omega = 6``
+    rather than the core's own ``lam = 6``, which stays for a problem of neither.
+    """
+    name = getattr(problem, "parameter", None)
+    if isinstance(name, str) and name:
+        return name
+    names = getattr(problem, "parameters", None)
+    if isinstance(names, tuple) and len(names) == 2 and isinstance(names[1], str) \
+            and names[1]:
+        return names[1]
+    return "lam"
 
 
 @dataclass(frozen=True, eq=False)

@@ -77,7 +77,8 @@ _STATUS_DTYPE = np.dtype(f"<U{max(map(len, CODIM2_STATUSES))}")
 CURVE_VARIABLES: dict[str, _Var] = {
     "omega": PARAMETERS["omega"],
     "b": PARAMETERS["b"],
-    "delta": _Var("impact phase", "rad", "Forcing phase delta at the impact (eq. 15)."),
+    "delta": _Var("impact phase", "rad", "Forcing phase delta at the impact (eq. 15), "
+                  "wrapped to [-pi, pi]."),
     "root": _Var("root of eq. (15)", "1",
                  "+1 or -1: sign in front of the square root of eq. (15), -sign(dr/d delta); "
                  "0 on a saddle-node curve (double root).", kind="i"),
@@ -116,7 +117,8 @@ _CODIM2_FIELDS: dict[str, _Var] = {
     "label": _Var("codim-2 label", "1",
                   "A+B: the curve (kind A) meets a curve of kind B; R1/R2: 1:1 / 1:2 "
                   "resonance (a double multiplier +1 / -1), on any curve.", kind="U"),
-    "delta": _Var("impact phase at codim-2 point", "rad", "Forcing phase at the impact."),
+    "delta": _Var("impact phase at codim-2 point", "rad", "Forcing phase at the impact, "
+                  "wrapped to [-pi, pi]."),
     "point": _Var("nearest point", "1", "Index on point of the nearest accepted point.",
                   kind="i"),
     "precision": _Var("location precision", "1",
@@ -140,7 +142,8 @@ MAP_VARIABLES: dict[str, tuple[_Var, tuple[str, ...]]] = {
     "n_stable": (_Var("stable physical motions", "1",
                       "Number of physical and asymptotically stable roots of eq. (15).",
                       kind="i"), ("N", "omega", "b")),
-    "delta": (_Var("impact phase", "rad", "Forcing phase at the impact (eq. 15)."),
+    "delta": (_Var("impact phase", "rad", "Forcing phase at the impact (eq. 15), "
+                   "in (-pi, pi]."),
               ("N", "omega", "b", "root")),
     "impact_velocity": (_Var("impact velocity", "1", "x1'(T-), h2 of eq. (22)."),
                         ("N", "omega", "b", "root")),

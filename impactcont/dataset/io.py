@@ -91,6 +91,8 @@ ENGINE = "netcdf4"
 #: Root attribute of a scene output naming its section (``"orbits"``, ``"branches"``, ...).
 SECTION_ATTRIBUTE = "impactcont_kind"
 
+# Kinds of dataset whose omega and b are scalar coordinates (data variables in older files).
+_SCALAR_PARAMETER_KINDS = ("orbits", "robust", "simulation")
 # Kinds of dataset validated against a schema by validate_dataset.
 _SCHEMA_KINDS = ("branch", "curve", "map", "multi_impact_map")
 _PART, _OF = "impactcont_complex_part", "impactcont_complex_variable"
@@ -622,6 +624,11 @@ _FILE_ATTRIBUTES = "impactcont_file_attributes"  # dataset attributes only the f
 _FLAG_MEANING = re.compile(r"^[0-9A-Za-z_\-.+@]+$")  # one word of flag_meanings (CF 3.5)
 _TEXT_KINDS = "USO"
 _MEMORY_NAME = "impactcont_name"  # the name in memory of a variable stored under a CF name
+_LABEL_OF = "impactcont_label_of"  # on <dim>_label: the text coordinate it spells out
+_FILE_COORDINATE = "impactcont_file_coordinate"  # a data variable made a coordinate on disk
+#: Data variables of text labels stored as CF auxiliary coordinates (labels, CF 6.1) of
+#: their dimension, so that a plain reader selects by them (``special_label == "PD"``).
+LABEL_VARIABLES = ("special_label", "codim2_label")
 _CF_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")  # CF 2.3: letters, digits, underscores
 _KIND_WORDS = {"branch": "branches of periodic impacting motions",
                "curve": "codimension-1 curves", "map": "stability maps",
@@ -636,7 +643,10 @@ def _cf_variable(name: Any, var: xr.Variable, coordinate: bool) -> xr.Variable:
     data = var.data
     if coordinate:
         encoding["_FillValue"] = None  # CF 2.5.1: no missing values in a coordinate
-    labels = var.values.tolist() if coordinate and var.dtype.kind in _TEXT_KINDS else None
+    # a text dimension coordinate becomes a numeric index (CF 1.3: coordinate variables are
+    # numbers); a text auxiliary coordinate (labels, CF 6.1) stays text
+    labels = (var.values.tolist() if coordinate and var.dims == (name,)
+              and var.dtype.kind in _TEXT_KINDS else None)
     if labels is not None and (not labels or len(set(labels)) != len(labels)
                                or not all(isinstance(x, str) and _FLAG_MEANING.match(x)
                                           for x in labels)):
@@ -709,12 +719,20 @@ def _cf_attribute(value: Any) -> Any:
 def _to_cf(ds: xr.Dataset) -> xr.Dataset:
     """The CF form of one dataset (a file's root dataset or a group) on disk."""
     out = ds.set_coords(parameter_names(ds))  # the points of a branch or curve are labelled
+    labels = [k for k in LABEL_VARIABLES if k in out.data_vars and out[k].ndim == 1
+              and out[k].dtype.kind in _TEXT_KINDS]
+    if labels:  # auxiliary coordinates on disk, data variables again in memory
+        out = out.assign({k: out[k].variable.copy(deep=False) for k in labels})
+        for k in labels:
+            out[k].attrs[_FILE_COORDINATE] = "label"
+        out = out.set_coords(labels)
     changed = {name: _cf_variable(name, var, name in out.coords)
                for name, var in out.variables.items()}
     out = out.assign_coords({k: v for k, v in changed.items()
                              if k in out.coords and v is not out.variables[k]})
     out = out.assign({k: v for k, v in changed.items()
                       if k not in out.coords and v is not out.variables[k]})
+    out = out.assign_coords(_label_coordinates(ds, out))
     provenance = provenance_attributes("written")
     added = [key for key in provenance if key not in ds.attrs]
     attrs = {k: _cf_attribute(v) for k, v in ds.attrs.items()}
@@ -731,6 +749,35 @@ def _to_cf(ds: xr.Dataset) -> xr.Dataset:
         out = out.assign({k: v for k, v in marked.items() if k not in out.coords})
         out = out.rename(renames)
     return out
+
+
+def _label_coordinates(ds: xr.Dataset, out: xr.Dataset) -> dict[str, xr.Variable]:
+    """The text labels of each text dimension coordinate stored as integer flags: one
+    string auxiliary coordinate ``<dim>_label`` per such dimension (CF 6.1, labels), so
+    that a plain reader sees ``x1, v1`` beside the index ``0 .. k-1`` (``component_label``).
+
+    Raises
+    ------
+    ValueError
+        The dataset already has a variable of that name.
+    """
+    added = {}
+    for name, var in out.coords.items():
+        if name not in out.dims or _MEMORY_DTYPE not in var.attrs \
+                or var.attrs[_MEMORY_DTYPE] != "str":
+            continue
+        key = f"{name}_label"
+        if key in ds.variables:
+            raise ValueError(f"cannot store the labels of coordinate {name!r} as {key!r}: the "
+                             f"dataset already has a variable {key!r}")
+        what = ds[name].attrs.get("long_name", str(name))
+        added[key] = xr.Variable(
+            (name,), np.asarray(ds[name].values).astype(str),
+            {"long_name": f"{what} (label)",
+             "description": f"The label of each entry of {name} (the index {name} is "
+                            f"0 .. {ds.sizes[name] - 1}, its flag_meanings the same labels).",
+             _LABEL_OF: str(name)})
+    return added
 
 
 def _memory_names(ds: xr.Dataset) -> xr.Dataset:
@@ -774,9 +821,14 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
         A mark of the CF form contradicts the variable it is on.
     """
     ds = _memory_names(ds)
+    ds = _without_label_coordinates(ds)
     # the points of a branch or curve are labelled by its parameters, in memory as on disk
     # (files written before that hold them as data variables)
     ds = ds.set_coords([k for k in parameter_names(ds) if k in ds.data_vars])
+    # so are the orbits, robust and simulation results (older files: scalar data variables)
+    if dataset_tag(ds) in _SCALAR_PARAMETER_KINDS:
+        ds = ds.set_coords([k for k in ("omega", "b") if k in ds.data_vars
+                            and ds[k].ndim == 0])
     for name, var in list(ds.variables.items()):
         if not {_MEMORY_DTYPE, _MEMORY_UNITS, _FILE_ATTRIBUTES} & set(var.attrs):
             continue
@@ -805,6 +857,48 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
         else:
             ds[name] = new
     ds.attrs = _without_file_attributes(ds.attrs)
+    return ds
+
+
+def _without_label_coordinates(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` without what the file alone has: the ``<dim>_label`` text coordinates
+    (:func:`_label_coordinates`; the index's ``flag_meanings`` give the labels back) and,
+    as data variables again, the labels stored as auxiliary coordinates
+    (:data:`LABEL_VARIABLES`).
+
+    Raises
+    ------
+    ValueError
+        A ``<dim>_label`` contradicts the ``flag_meanings`` of its index.
+    """
+    drop = []
+    for name, var in ds.variables.items():
+        of = var.attrs.get(_LABEL_OF)
+        if of is None:
+            continue
+        index = ds.variables.get(of)
+        words = str(index.attrs.get("flag_meanings", "")).split() if index is not None else []
+        if var.dims != (of,) or (len(words) == var.size  # else the index's own check says
+                                 and np.asarray(var.values).astype(str).tolist() != words):
+            raise ValueError(f"variable {name!r} (attribute {_LABEL_OF} = {of!r}) must be the "
+                             f"labels of {of!r}, its flag_meanings {words}; got "
+                             f"{np.asarray(var.values).tolist()} on dims {var.dims}")
+        drop.append(name)
+    ds = ds.drop_vars(drop)
+    back = [k for k, v in ds.coords.items() if v.attrs.get(_FILE_COORDINATE) == "label"]
+    if back:
+        ds = ds.reset_coords(back)
+        for k in back:
+            ds[k].attrs = {a: v for a, v in ds[k].attrs.items() if a != _FILE_COORDINATE}
+    gone = {*map(str, drop), *back}
+    for var in ds.variables.values():  # as read, each names them in its encoding
+        named = var.encoding.get("coordinates")
+        if isinstance(named, str) and gone & set(named.split()):
+            kept = [k for k in named.split() if k not in gone]
+            if kept:
+                var.encoding["coordinates"] = " ".join(kept)
+            else:
+                del var.encoding["coordinates"]
     return ds
 
 

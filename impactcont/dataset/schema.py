@@ -57,11 +57,13 @@ from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
 __all__ = [
     "ALLOWED_PARAMETERS",
     "CONVENTIONS",
+    "DELTA_ALONG_BRANCH",
     "PARAMETERS",
     "POINT_VARIABLES",
     "REFERENCES",
     "SPECIAL_LABELS",
     "SPECIAL_STATUSES",
+    "WRAPPED_DELTA",
     "add_user_functions",
     "branch_dataset",
     "check_user_variables",
@@ -145,12 +147,20 @@ PARAMETERS: Mapping[str, _Var] = _ParameterVariables()
 ALLOWED_PARAMETERS = (f"one of {list(_PARAMETER_TABLE)} or an element name "
                       f"{list(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]')")
 
+#: What ``delta`` of an N-1 branch holds: the continuation's unknown, continuous along
+#: the branch, so that a branch through both roots of eq. (15) or once round the circle
+#: stays one smooth curve (an N-p branch stores its phases wrapped, ``WRAPPED_DELTA``).
+DELTA_ALONG_BRANCH = ("Forcing phase delta at the impact (eq. 15), continuous along each "
+                      "connected component of the branch: not wrapped into one turn, it may "
+                      "take any value (delta + 2 pi k is the same motion).")
+#: What ``delta`` holds where it is wrapped (an N-p branch, the orbits of one point).
+WRAPPED_DELTA = "Forcing phase delta at the impact, wrapped to (-pi, pi] (eq. 15)."
+
 #: Variables on the ``point`` dimension, in the order they are stored.
 POINT_VARIABLES: dict[str, _Var] = {
     "omega": PARAMETERS["omega"],
     "b": PARAMETERS["b"],
-    "delta": _Var("impact phase", "rad",
-                  "Forcing phase delta at the impact, in (-pi, pi] (eq. 15)."),
+    "delta": _Var("impact phase", "rad", DELTA_ALONG_BRANCH),
     "impact_velocity": _Var("impact velocity", "1",
                             "Velocity x1'(T-) of mass 1 just before the impact (h2 of eq. 22)."),
     "gap_min": _Var("minimum gap", "1",
@@ -186,7 +196,8 @@ _SPECIAL_FIELDS: dict[str, _Var] = {
                   "SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "
                   "ZV zero-velocity impact.", kind="U"),
     "delta": _Var("impact phase at special point", "rad",
-                  "Forcing phase delta at the impact at the special point."),
+                  "Forcing phase delta at the impact at the special point, continued as "
+                  "the branch's delta (not wrapped on an N-1 branch)."),
     "point": _Var("nearest point", "1",
                   "Index on the point dimension of the accepted point nearest to the "
                   "special point.", kind="i"),
@@ -365,7 +376,8 @@ def point_table(ds: xr.Dataset, dim: str = "point") -> Any:
     point and one column per value there: each variable on ``dim`` alone, and
     one column per entry of the further dimensions of the others
     (``state_x1``, ..., ``multipliers_0``, ...; ``state_k_1_v2`` for impact 1 of
-    an N-p branch). The parameters (:func:`parameter_names`: ``omega``, ``b``,
+    an N-p branch; the labels ``component_label`` of a file opened with plain xarray
+    name its columns as well). The parameters (:func:`parameter_names`: ``omega``, ``b``,
     the continued parameter) come first. ``dim="special"`` gives the special
     points.
 
@@ -407,13 +419,22 @@ def point_table(ds: xr.Dataset, dim: str = "point") -> Any:
         if var.ndim == 1:
             columns[str(name)] = values
             continue
-        labels = [ds[d].values if d in ds.coords else np.arange(ds.sizes[d])
-                  for d in var.dims[1:]]
+        labels = [_entry_labels(ds, d) for d in var.dims[1:]]
         flat = values.reshape(values.shape[0], -1)
         for j, where in enumerate(np.ndindex(*values.shape[1:])):
             suffix = "_".join(str(labels[axis][i]) for axis, i in enumerate(where))
             columns[f"{name}_{suffix}"] = flat[:, j]
     return pd.DataFrame(columns, index=index)
+
+
+def _entry_labels(ds: xr.Dataset, dim: Any) -> np.ndarray:
+    """The names of the entries of ``dim`` in column names: its text labels ``<dim>_label``
+    where the dataset has them (a file opened with plain xarray: ``component_label``
+    ``x1, v1`` beside the index ``0, 1``), else its coordinate, else ``0 .. k-1``."""
+    label = f"{dim}_label"
+    if label in ds.coords and ds[label].dims == (dim,):
+        return np.asarray(ds[label].values)
+    return np.asarray(ds[dim].values) if dim in ds.coords else np.arange(ds.sizes[dim])
 
 
 def special_variable(key: str) -> str:

@@ -298,7 +298,9 @@ def summary_markdown(result: RunResult) -> str:
             lines += ["SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "
                       "ZV zero-velocity impact; `located` points are refined to `precision` "
                       "in the continued parameter; `physical` tells whether the nearest "
-                      "accepted point of the branch is a physical motion.", ""]
+                      "accepted point of the branch is a physical motion (eq. 16), and the "
+                      "last column why not. rho(G) of a ZV point is unbounded: G (eq. 25) "
+                      "divides by the impact velocity, which is 0 there.", ""]
             lines += special_points_table(result.special_points)
         else:
             lines.append("No special point was found on the branches.")

@@ -13,14 +13,14 @@ Layouts (every variable has ``long_name``, ``units`` and ``description``;
 the attribute ``impactcont_dataset`` says which layout a dataset has):
 
 * orbits (``"orbits"``): dims ``orbit``, ``multiplier``, ``component``,
-  ``g_row``/``g_col`` (the coordinates of ``z`` of eq. 19), and the scalars
-  ``omega``, ``b``, ``amplitude_squared``;
+  ``g_row``/``g_col`` (the coordinates of ``z`` of eq. 19), the scalar
+  ``amplitude_squared`` and the scalar coordinates ``omega``, ``b``;
 * branches: the branch schema of ``docs/dataset.md``;
 * robust (``"robust"``): ``G0``, ``P``, ``theta``, ``Gamma`` on
-  ``(g_row, g_col)`` and the scalars ``epsilon``, ``epsilon0``, ``robust``,
-  ``omega``, ``b`` (of the nominal point);
+  ``(g_row, g_col)``, the scalars ``epsilon``, ``epsilon0``, ``robust`` and the
+  scalar coordinates ``omega``, ``b`` (of the nominal point);
 * simulations (``"simulation"``): dims ``impact``, ``component`` and, with a
-  trajectory, ``sample``; the scalars ``omega``, ``b``.
+  trajectory, ``sample``; the scalar coordinates ``omega``, ``b``.
 """
 
 from __future__ import annotations
@@ -73,7 +73,8 @@ def _var(dims: tuple[str, ...], data: Any, long_name: str, description: str,
 
 
 def _parameters(osc: ImpactOscillator) -> dict[str, xr.Variable]:
-    """``omega`` and ``b`` as scalar variables: readable without parsing the JSON."""
+    """``omega`` and ``b`` as scalar coordinates (as on the points of a branch): readable
+    without parsing the JSON, and carried by every variable."""
     return {"omega": _var((), osc.omega, "forcing frequency",
                           "Nondimensional forcing frequency omega of eq. (1)."),
             "b": _var((), osc.b, "gap", "Position b of the stop met by mass 1 (eq. 3).")}
@@ -141,10 +142,11 @@ class Orbits:
                              "-", "-", str(note).replace("|", "/")])
                 continue
             for k in range(ds.sizes["orbit"]):
+                physical = bool(ds["physical"][k])
                 rows.append([name, ds.attrs["N"], where, amplitude, f"{int(ds['root'][k]):+d}",
                              float(ds["delta"][k]), float(ds["impact_velocity"][k]),
                              float(ds["gap_min"][k]), float(ds["spectral_radius"][k]),
-                             bool(ds["stable"][k]), bool(ds["physical"][k]),
+                             bool(ds["stable"][k]) if physical else NOT_PHYSICAL, physical,
                              str(ds["reason"].values[k]) or "-"])
         return markdown_table(["entry", "N", "at", "c^2+s^2", "root", "delta", "impact velocity",
                        "gap_min",
@@ -152,6 +154,11 @@ class Orbits:
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         return []
+
+
+#: The stability shown for a motion that is not physical: rho(G) < 1 of a root of eq. (15)
+#: that is no motion of the oscillator says nothing about the oscillator.
+NOT_PHYSICAL = "- (not physical)"
 
 
 def _no_motion_note(roots: list[PeriodicOrbit], amplitude: float, osc: ImpactOscillator,
@@ -207,11 +214,10 @@ def orbits_dataset(orbits: list[PeriodicOrbit], osc: ImpactOscillator, N: int) -
         "G": _var(("orbit", "g_row", "g_col"),
                   np.array([o.G for o in orbits], dtype=float).reshape(k, 2 * n, 2 * n),
                   "impact-map Jacobian", "G of eq. (25) in z = [dx2..dxn, dv1..dvn, ddelta]."),
-        **_parameters(osc),
         "amplitude_squared": _var((), amplitude_squared(osc, N), "c^2 + s^2",
                                   "c^2 + s^2 of eq. (14): N-1 motions exist iff it is >= b^2."),
     }
-    return xr.Dataset(data, coords=_coords(n),
+    return xr.Dataset(data, coords={**_coords(n), **_parameters(osc)},
                       attrs={"title": f"Periodic N-1 motions, N = {N}", "N": N,
                              "impactcont_dataset": "orbits", "oscillator": osc.to_json()})
 
@@ -265,6 +271,7 @@ class Branches:
             for k in range(ds.sizes["special"]):
                 mult = np.asarray(ds[special_variable("multipliers")].values[k])
                 nearest = int(ds[special_variable("point")].values[k])
+                inside = 0 <= nearest < physical.size
                 out.append({
                     "branch": name, "N": int(ds.attrs["N"]), "parameter": p,
                     "label": str(ds[special_variable("label")].values[k]),
@@ -275,10 +282,10 @@ class Branches:
                     "status": str(ds[special_variable("status")].values[k]),
                     "precision": float(ds[special_variable("precision")].values[k]),
                     "rho": float(np.max(np.abs(mult))) if mult.size else math.nan,
-                    "physical": bool(physical[nearest]) if 0 <= nearest < physical.size
-                    else False,
+                    "physical": bool(physical[nearest]) if inside else False,
+                    "why": _not_physical_reason(ds, nearest) if inside else "",
                 })
-        return out
+        return _mirrors_noted(out)
 
 
 BRANCHES = Branches()
@@ -309,13 +316,64 @@ def _out_of_reach(entry: BranchSpec, samples: int = 400) -> str | None:
             f"{-reach:.6g} and {reach:.6g}")
 
 
+def _not_physical_reason(ds: xr.Dataset, k: int) -> str:
+    """Why point ``k`` of a branch is not a physical motion (eq. 16), from its numbers; empty
+    when it is one."""
+    if bool(ds["physical"].values[k]):
+        return ""
+    velocity, gap = float(ds["impact_velocity"].values[k]), float(ds["gap_min"].values[k])
+    why = []
+    if not velocity > 0:
+        why.append(f"impact velocity {velocity:.3g} <= 0: mass 1 does not arrive towards the "
+                   f"stop")
+    if not gap > 0:
+        why.append(f"x1 passes the stop inside the period (gap_min = {gap:.3g})")
+    return "; ".join(why) or "not physical"
+
+
+def _mirrors_noted(points: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``points`` with each point of a branch at b = 0 that mirrors an earlier one noted.
+
+    At b = 0 the motion mirrored through the stop (``x -> -x``, ``delta -> delta + pi``)
+    solves eq. (15) too, so a branch through both roots meets each bifurcation twice, at
+    the same parameter value; the mirrored copy arrives from the far side of the stop.
+    """
+    for j, q in enumerate(points):
+        if q["b"] != 0.0:
+            continue
+        for p in points[:j]:
+            if (p["branch"], p["label"]) != (q["branch"], q["label"]) or p["b"] != 0.0:
+                continue
+            precision = np.nan_to_num([p["precision"], q["precision"]], nan=0.0)
+            close = abs(p["value"] - q["value"]) <= max(1e-8, 100 * float(precision.max()))
+            if close and abs(math.remainder(q["delta"] - p["delta"] - math.pi,
+                                            2 * math.pi)) < 1e-6:
+                mirror = (f"the mirror image (x -> -x, delta + pi) of the {p['label']} at "
+                          f"delta = {_fmt(p['delta'])}: at b = 0 both roots of eq. (15) are "
+                          f"one branch")
+                q["why"] = f"{q['why']}; {mirror}" if q["why"] else mirror
+                break
+    return points
+
+
+#: What rho(G) of a zero-velocity impact is shown as: G (eq. 25) divides by the impact
+#: velocity, so the number computed next to v = 0 only says how close it came.
+ZV_RADIUS = "unbounded (pole of G at v = 0)"
+
+
 def special_points_table(points: list[dict[str, Any]]) -> list[str]:
-    """Markdown table of special points (rows from :meth:`Branches.special_points`)."""
+    """Markdown table of special points (rows from :meth:`Branches.special_points`).
+
+    ``rho(G)`` of a ZV point (a zero-velocity impact, where G of eq. 25 has a pole) is
+    :data:`ZV_RADIUS`; the last column says why a point that is not physical is not (its
+    numbers, and the point it mirrors on a branch at b = 0).
+    """
     rows = [[p["branch"], p["N"], p["label"], f"{p['parameter']} = {_fmt(p['value'], 8)}",
-             p["omega"], p["b"], p["delta"], p["rho"], p["physical"], p["status"],
-             p["precision"]] for p in points]
+             p["omega"], p["b"], p["delta"], ZV_RADIUS if p["label"] == "ZV" else p["rho"],
+             p["physical"], p["status"], p["precision"],
+             str(p.get("why") or "-").replace("|", "/")] for p in points]
     return markdown_table(["branch", "N", "label", "at", "omega", "b", "delta", "rho(G)",
-                   "physical", "status", "precision"], rows)
+                           "physical", "status", "precision", "why not physical"], rows)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -348,14 +406,15 @@ class Robust:
                            "G0 Schur stable and epsilon < epsilon0 (Theorem 3.2)."),
             "spectral_radius": _var((), rs.orbit.spectral_radius, "spectral radius of G0",
                                     "rho(G0)."),
-            "delta": _var((), rs.orbit.delta, "impact phase at q0", "Eq. (15).", "rad"),
+            "delta": _var((), rs.orbit.delta, "impact phase at q0",
+                          "Forcing phase at the impact at q0, in (-pi, pi] (eq. 15).", "rad"),
             "state": _var(("component",), rs.orbit.state, "state after impact at q0",
                           "X(0) of eq. (13) at the nominal point."),
             "multipliers": _var(("multiplier",), rs.orbit.multipliers, "multipliers of G0",
                                 "Eigenvalues of G0, largest modulus first."),
-            **_parameters(rs.orbit.oscillator),
         }
-        ds = xr.Dataset(data, coords=_coords(n), attrs={
+        coords = {**_coords(n), **_parameters(rs.orbit.oscillator)}
+        ds = xr.Dataset(data, coords=coords, attrs={
             "title": f"Robust stability of the N={entry.N} motion", "name": entry.name,
             "impactcont_dataset": "robust",
             "N": entry.N, "root": rs.root, "samples": rs.samples,
@@ -426,13 +485,13 @@ class Simulations:
                                   "State right after each impact."),
             "start_state": _var(("component",), state, "start state",
                                 "State at t = 0 (perturbation included)."),
-            **_parameters(osc),
         }
         if entry.trajectory and res.t is not None:
             data["t"] = _var(("sample",), res.t, "time", "Trajectory sample times.")
             data["X"] = _var(("sample", "component"), res.X, "state",
                              "Sampled state (both sides of each impact).")
-        ds = xr.Dataset(data, coords={"component": state_component_names(n)}, attrs={
+        ds = xr.Dataset(data, coords={"component": state_component_names(n),
+                                      **_parameters(osc)}, attrs={
             "title": f"Simulation {entry.name}", "name": entry.name,
             "impactcont_dataset": "simulation", "start": start,
             "start_delta": delta, "periods": entry.periods, "perturbation": entry.perturbation,

@@ -243,7 +243,7 @@ def test_ns_curve_goes_round_the_bottom_of_the_island(ns_curve, island_bottom):
     ns, curve = ns_curve
     # both directions end on b = 1, at the two NS points of the branch (not a stall)
     message = json.loads(curve.attrs["options"])["message"]
-    assert message.count("parameter bound reached: lam = 1") == 2, message
+    assert message.count("parameter bound reached: b = 1") == 2, message
     b, omega = curve["b"].values, curve["omega"].values
     assert abs(b[0] - 1.0) < 1e-12 and abs(b[-1] - 1.0) < 1e-12
     assert sorted([omega[0], omega[-1]]) == pytest.approx(ns, abs=1e-7)

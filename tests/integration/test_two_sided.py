@@ -320,7 +320,7 @@ def test_branch_in_R_low_lands_on_the_bound_one(unequal):
                                    both_directions=False)
     record = json.loads(ds.attrs["options"])
     assert record["status"] == ["BOUNDS_REACHED"]
-    assert record["message"] == "parameter bound reached: lam = 1"
+    assert record["message"] == "parameter bound reached: R_low = 1"
     last = ds.sizes["point"] - 1
     assert ds["R_low"].values[last] == 1.0
     assert ic.dataset.oscillator_from_dataset(ds, last).stops.R_low == 1.0
