@@ -41,11 +41,11 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from types import TracebackType
-from typing import Any
+from typing import Any, TypeVar
 
-__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Interruption", "Progress", "ProgressOption",
-           "Reporter", "check_progress", "interrupted", "interruptible", "logging_through_bar",
-           "reporter", "take_interrupt"]
+__all__ = ["BAR_DELAY", "LOG_INTERVAL", "Interruption", "NothingComputed", "Progress",
+           "ProgressOption", "Reporter", "check_progress", "interrupted", "interruptible",
+           "logging_through_bar", "reporter", "take_interrupt", "until_interrupted"]
 
 log = logging.getLogger(__name__)
 
@@ -372,6 +372,14 @@ class _LastResortAboveBar(logging.StreamHandler):
 
 
 # -- Ctrl-C during a call ---------------------------------------------------------------------
+class NothingComputed(KeyboardInterrupt):
+    """Ctrl-C taken before a driver's first point: nothing to return, the call is aborted.
+
+    A driver that runs others (a cascade, an extension) catches it and returns what the
+    ones before computed.
+    """
+
+
 class Interruption:
     """The interrupt state of one library call (see :func:`interruptible`).
 
@@ -460,3 +468,36 @@ def interrupted(where: str | None = None) -> bool:
     """Whether the current call has been interrupted (in phase `where`, when given)."""
     state = _CALL.get()
     return state is not None and state.interrupted and (where is None or state.where == where)
+
+
+_T = TypeVar("_T")
+
+
+def until_interrupted(work: Callable[[], _T], default: _T, where: str, message: str,
+                      *args: Any) -> _T:
+    """``work()``, or `default` when the first Ctrl-C of the call is taken during it.
+
+    For a phase of a driver's work whose partial result is not kept (the location of the
+    special points of one branch, say): the call goes on with `default` after the first
+    interrupt, and skips the phase (returns `default` at once) once an interrupt has
+    been taken in the same phase `where` before. A second interrupt is raised.
+
+    Parameters
+    ----------
+    work : callable
+        The phase, without arguments.
+    default : object
+        Its result when interrupted or skipped.
+    where : str
+        The phase's name (``"location"``).
+    message, *args
+        What is dropped, for the log (see :func:`take_interrupt`).
+    """
+    if interrupted(where):
+        return default
+    try:
+        return work()
+    except KeyboardInterrupt:
+        if not take_interrupt(where, message, *args):
+            raise
+        return default

@@ -54,7 +54,16 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import RESTITUTION, model_parameter
 from impactcont.orbit.periodic import _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
-from impactcont.progress import ProgressOption, Reporter, reporter
+from impactcont.progress import (
+    NothingComputed,
+    ProgressOption,
+    Reporter,
+    interrupted,
+    interruptible,
+    reporter,
+    take_interrupt,
+    until_interrupted,
+)
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, check_bounds, check_labels
 
@@ -268,6 +277,17 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         Bad `events` or `monitors` (a name that is not an identifier or is a built-in
         variable or label; not callable), or one of their functions raised, returned a
         value that is not a real number or not finite: the message names it.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the
+    component being followed stops at its last accepted point, the special points of the
+    points kept are located, and the components not yet followed (and the other direction)
+    are left out. The dataset's ``options`` attribute then records ``"interrupted": true``
+    and the stop reason ``"interrupted by the user (KeyboardInterrupt) after K points,
+    ..."`` (status ``INTERRUPTED``), also logged at WARNING. Ctrl-C while the special points
+    are located keeps those already located and drops the one in progress (the log says so).
+    A second Ctrl-C, or one before the first point, aborts with :class:`KeyboardInterrupt`.
     """
     problem, detect, (lo, hi), opts = check_continuation_arguments(
         osc, N, parameter, bounds, detect=detect, components=components, options=options,
@@ -277,14 +297,17 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     N = problem.N
     lam0 = _start_value(problem, (lo, hi), start)
     delta0 = _start_root(problem, lam0, root)
-    record = None
-    with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
+    record: dict[str, Any] | None = None
+    with (interruptible(f"continuation in {parameter}") as call,
+          reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep):
         runs = [_follow(problem, lam0, delta0, opts, detect, rep, functions)]
-        if components == "all":
+        if components == "all" and not interrupted():
             try:
                 for lam, delta in _component_seeds(problem, (lo, hi)):
                     if not any(_passes(run, lam, delta) for run in runs):
                         runs.append(_follow(problem, lam, delta, opts, detect, rep, functions))
+                    if interrupted():
+                        break
             except (ImpactcontError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
                 # what is computed is kept: the branch ends here, the reason said
                 reason = (f"the search for further components in {parameter} failed "
@@ -292,9 +315,25 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                           f"{len(runs)} component(s) followed before it")
                 warnings.warn(reason, RuntimeWarning, stacklevel=3)
                 record = {"message": f"{runs[0].result.message}; {reason}"}
+            except KeyboardInterrupt:
+                if not take_interrupt("continuation", "interrupted by the user "
+                                      "(KeyboardInterrupt) in the search for further "
+                                      "components; the %d component(s) followed are kept",
+                                      len(runs)):
+                    raise
+        if interrupted():
+            record = {**(record or {}), "interrupted": True}
+            if not runs[0].result.interrupted:  # the first component's reason says it
+                record["message"] = (
+                    f"{record.get('message', runs[0].result.message)}; interrupted by the "
+                    f"user (KeyboardInterrupt): the branch holds the {len(runs)} "
+                    "component(s) computed before it")
     started = [run for run in runs if run.samples]
+    if not started and call.interrupted:
+        raise NothingComputed(f"continuation in {parameter} interrupted before its first "
+                              "point")
     for run in runs:
-        if not run.samples:  # its corrector failed at the seed: say so, keep the others
+        if not run.samples and not run.result.interrupted:  # its corrector failed at the seed
             warnings.warn(f"the N={N} component through {parameter}={run.start:.10g} "
                           f"(delta={run.start_delta:.10g}) could not be started: "
                           f"{run.result.message}; it is not in the branch", RuntimeWarning,
@@ -334,14 +373,22 @@ def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
     samples = [BranchSample(delta=float(u[0]), lam=float(lam), dlam=float(t[-1]),
                             orbit=problem.orbit(float(u[0]), float(lam)))
                for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
-    specials = detect_special_points(problem, samples, detect)
+    where = f"the N={problem.N} component through {problem.parameter}={lam0:.10g}"
+    specials = until_interrupted(
+        lambda: detect_special_points(problem, samples, detect), [], "location",
+        "interrupted by the user (KeyboardInterrupt) while locating the special points of "
+        "%s: they are dropped, those of the components before it kept", where)
     if not functions:
         return _Run(lam0, delta0, result, samples, specials)
     values = user_values(functions, [s.orbit for s in samples], problem.parameter)
-    events = locate_user_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
-                                [[0.0, s.dlam] for s in samples], functions, values,
-                                lambda u, lam: problem.orbit(float(u[0]), float(lam)),
-                                parameter=problem.parameter)
+    events = until_interrupted(
+        lambda: locate_user_events(problem, [[s.delta] for s in samples],
+                                   [s.lam for s in samples], [[0.0, s.dlam] for s in samples],
+                                   functions, values,
+                                   lambda u, lam: problem.orbit(float(u[0]), float(lam)),
+                                   parameter=problem.parameter),
+        [], "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
+        "events of %s: they are dropped", where)
     return _Run(lam0, delta0, result, samples, specials, values, events)
 
 
@@ -650,8 +697,14 @@ def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
         options=base, direction=direction, both_directions=along is None, **single)
     if step is not None and not user_ds:
         opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
-    with reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep:
+    with (interruptible(f"continuation in {parameter}"),
+          reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep):
         run = _follow(problem, lam0, float(u0[0]), opts, detect, rep, functions)
+        if interrupted():
+            record = {**record, "interrupted": True}
+    if not run.samples and run.result.interrupted:
+        raise NothingComputed(f"continuation in {parameter} interrupted before its first "
+                              "point")
     if not run.samples:
         raise NewtonConvergenceError(f"the restart at {parameter}={lam0:.10g} could not be "
                                      f"started: {run.result.message}")
@@ -732,6 +785,17 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
         Not a branch dataset; neither or both of `point` and `label`; a point index out
         of range; no such special point; bad `along`, `bounds` (not containing the
         restart point), `detect` or options; bad `events` or `monitors`.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the branch
+    being followed stops at its last accepted point, the special points of the points kept
+    are located, and the other direction is not followed. The dataset's ``options``
+    attribute then records ``"interrupted": true`` and the stop reason ``"interrupted by the
+    user (KeyboardInterrupt) after K points, ..."`` (status ``INTERRUPTED``), also logged at
+    WARNING. Ctrl-C while the special points are located keeps those already located and
+    drops the one in progress (the log says so). A second Ctrl-C, or one before the first
+    point, aborts with :class:`KeyboardInterrupt`.
     """
     _check_branch(branch)
     functions = check_user_functions(events, monitors, reserved_names())
@@ -794,6 +858,13 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
         Not a branch dataset; `bounds` not two numbers that contain the branch's bounds
         and reach past them; bad `detect` or options; `events` or `monitors` with other
         names than the branch's.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the part being computed at its last accepted
+    point (see :func:`continuation`); the branch is returned joined with the parts
+    computed, the ends not yet continued are left as they are, and its ``options``
+    record ``"interrupted": true``. A second Ctrl-C aborts.
     """
     _check_branch(branch)
     functions = _same_user_functions(branch, events, monitors)
@@ -806,26 +877,34 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     lam = np.asarray(branch[parameter].values, dtype=float)
     parts: dict[tuple[int, int], xr.Dataset] = {}
     extended = []
-    with reporter(progress, f"extension in {parameter}", parameter=parameter) as rep:
+    with (interruptible(f"extension in {parameter}"),
+          reporter(progress, f"extension in {parameter}", parameter=parameter) as rep):
         for rows in _components(branch):
             for end, along in ((int(rows[-1]), 1), (int(rows[0]), -1)):
-                if rows.size == 1 and along == -1:
+                if (rows.size == 1 and along == -1) or interrupted():
                     break
                 if not ((lam[end] == old[1] and hi > old[1])
                         or (lam[end] == old[0] and lo < old[0])):
                     continue
-                part = _restart(branch, end, False, along, (lo, hi), detect, options, single,
-                                rep, {"restart": {"point": end, "along": along}}, functions)
+                try:
+                    part = _restart(branch, end, False, along, (lo, hi), detect, options,
+                                    single, rep, {"restart": {"point": end, "along": along}},
+                                    functions)
+                except NothingComputed:  # Ctrl-C before its first point: the rest is kept
+                    break
                 parts[(int(rows[0]), along)] = part
                 info = _record(part)
                 extended.append({"from_point": end, parameter: float(lam[end]),
                                  "along": along, "points": part.sizes["point"] - 1,
                                  "status": info.get("status"), "message": info.get("message")})
+        was_interrupted = interrupted()
     if not parts:
         log.info("extend: no end of the branch lies on a bound it moves past: unchanged")
     joined = _join(branch, parts)
     record = _record(branch)
     record["bounds"] = [lo, hi]
+    if was_interrupted:
+        record["interrupted"] = True
     record["extended"] = record.get("extended", []) + extended
     joined.attrs["options"] = json.dumps(record, sort_keys=True)
     return joined

@@ -17,6 +17,7 @@ with the grid of a map).
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
 import math
 import warnings
@@ -66,7 +67,14 @@ from impactcont.problems.codim1 import (
     check_parameters,
     curve_problem,
 )
-from impactcont.progress import ProgressOption, reporter
+from impactcont.progress import (
+    Interruption,
+    NothingComputed,
+    ProgressOption,
+    interruptible,
+    reporter,
+    until_interrupted,
+)
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import Label, check_bounds
 
@@ -150,6 +158,8 @@ def _start_by_continuation(osc: ImpactOscillator, N: int, kind: str, special: in
                            ) -> tuple[ImpactOscillator, int, float]:
     p1 = parameters[0]
     branch = continuation(osc, N, p1, bounds[p1], detect=[kind], progress=False)
+    if json.loads(branch.attrs.get("options", "{}")).get("interrupted"):
+        raise NothingComputed(f"{kind} curve interrupted while its start was searched")
     rows = [k for k, (lab, st) in enumerate(zip(branch["special_label"].values,
                                                 branch["special_status"].values, strict=True))
             if lab == kind and st == "located"]
@@ -510,6 +520,17 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         No start point could be found.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the
+    curve stops at its last accepted point (the other direction is not followed) and the
+    codim-2 points of the points kept are located (Ctrl-C during that drops them; the
+    curve's ends found are kept). ``end_status`` and the ``options`` attribute then say
+    ``"interrupted by the user (KeyboardInterrupt) after K points, ..."``, the options
+    record ``"interrupted": true``, and the log has a WARNING. A second Ctrl-C, or one
+    before the first point (or while the start is searched), aborts with
+    :class:`KeyboardInterrupt`.
     """
     kind, parameters, box, N, opts = check_curve_arguments(
         osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
@@ -542,20 +563,44 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     log.info("%s curve, N=%d, from %s=%.10g, %s=%.10g", kind, N, p1, p1v, p2, p2v)
 
     ends: list[tuple[str, np.ndarray, float, str]] = []
-    with reporter(progress, f"{kind} curve in ({p1}, {p2})", parameter=p2) as rep:
+    what = f"{kind} curve in ({p1}, {p2})"
+    with interruptible(what) as call, reporter(progress, what, parameter=p2) as rep:
         result = follow(problem, u0, p2v, opts, rep.point,
                         stop=lambda direction: _CurveWatch(problem, box[p1], ends))
-    if result.status is ContinuationStatus.NEWTON_FAILED_AT_START:
-        raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "
-                                    f"({result.message})")
-    xs = [np.append(u, lam) for u, lam in zip(result.u, result.lam, strict=True)]
-    status = result.message
-    log.info("%s curve: %d points (%s)", kind, len(xs), status)
+        if result.interrupted and len(result) == 0:
+            raise NothingComputed(f"{what} interrupted before its first point")
+        if result.status is ContinuationStatus.NEWTON_FAILED_AT_START:
+            raise NoPeriodicMotionError(f"{kind} curve: Newton failed at the start "
+                                        f"({result.message})")
+        xs = [np.append(u, lam) for u, lam in zip(result.u, result.lam, strict=True)]
+        status = result.message
+        log.info("%s curve: %d points (%s)", kind, len(xs), status)
 
-    columns, orbits, tests = _point_columns(problem, xs)
-    found: list[Codim2Point] = []
-    if detect_codim2_points:
-        found = detect_codim2(problem, xs, orbits, tests)
+        columns, orbits, tests = _point_columns(problem, xs)
+        found: list[Codim2Point] = []
+        if detect_codim2_points:
+            found = until_interrupted(
+                lambda: detect_codim2(problem, xs, orbits, tests), [], "location",
+                "interrupted by the user (KeyboardInterrupt) while locating the codim-2 "
+                "points of the curve: they are dropped (its ends are kept)")
+        ds = _curve_dataset(problem, kind, N, parameters, box, opts, start_osc, (p1v, p2v),
+                            delta0, columns, orbits, xs, found, ends, status, call)
+        ds = _with_user_functions(ds, problem, result, orbits, functions)
+        record = json.loads(ds.attrs["options"])
+        if call.interrupted and not record.get("interrupted"):  # while its events were located
+            ds.attrs["options"] = json.dumps({**record, "interrupted": True}, sort_keys=True)
+        return ds
+
+
+def _curve_dataset(problem: CurveProblem, kind: str, N: int, parameters: tuple[str, str],
+                   box: dict[str, tuple[float, float]], opts: ContinuationOptions,
+                   start_osc: ImpactOscillator, start: tuple[float, float], delta0: float,
+                   columns: dict[str, Any], orbits: list[PeriodicOrbit], xs: list[np.ndarray],
+                   found: list[Codim2Point], ends: list[tuple[str, np.ndarray, float, str]],
+                   status: str, call: Interruption) -> xr.Dataset:
+    """The curve's dataset: its points, its codim-2 points and ends, how it stopped."""
+    p1, p2 = parameters
+    p1v, p2v = start
     for label, xe, precision, end_status in ends:
         k = int(np.argmin([np.linalg.norm(xe - x) for x in xs]))
         orbit = problem.orbit(xe[:-1], xe[-1]) if end_status == "located" else orbits[k]
@@ -566,10 +611,11 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
                      "parameters": list(parameters), "bounds": {k: list(v) for k, v in box.items()},
                      "start": {p1: p1v, p2: p2v, "delta": delta0}}
     option_record["bounds_continued"] = list(opts.bounds)
-    ds = curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
-                       options=option_record, columns=columns, codim2_points=records,
-                       end_status=status)
-    return _with_user_functions(ds, problem, result, orbits, functions)
+    if call.interrupted:
+        option_record["interrupted"] = True
+    return curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
+                         options=option_record, columns=columns, codim2_points=records,
+                         end_status=status)
 
 
 def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
@@ -584,10 +630,12 @@ def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
         return ds
     p2 = problem.parameters[1]
     values = user_values(functions, orbits, p2)
-    found = locate_user_events(
+    found = until_interrupted(lambda: locate_user_events(
         problem, result.u, result.lam, result.tangent, functions, values,
         lambda u, lam: problem.orbit(u, float(lam)), position=lambda u, lam: (u[0], lam),
-        accept=lambda k: problem.accept(result.u[k], result.lam[k]), parameter=p2)
+        accept=lambda k: problem.accept(result.u[k], result.lam[k]), parameter=p2), [],
+        "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
+        "events of the curve: they are dropped (the user's functions at the points are kept)")
     names = parameter_names(ds)
     return add_user_functions(ds, monitors=values, events=list(functions.events),
                               event_points=[user_event_record(ev, names) for ev in found])

@@ -53,6 +53,7 @@ from impactcont.detection.special_points import (
     UserFunctions,
     check_user_functions,
     event_function,
+    user_values,
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.parameters import model_parameter
@@ -61,7 +62,16 @@ from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
-from impactcont.progress import ProgressOption, Reporter, check_progress, reporter
+from impactcont.progress import (
+    NothingComputed,
+    ProgressOption,
+    Reporter,
+    check_progress,
+    interrupted,
+    interruptible,
+    reporter,
+    until_interrupted,
+)
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, check_bounds, check_labels
 
@@ -224,7 +234,11 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
     options, limit = _within_limits(problem, options)
     result = follow(problem, u0, lam0, options, None if progress is None else progress.point,
                     stop=watch)
-    forward = watches[options.direction].orbits
+    # Ctrl-C can end a run between a watch's orbit and the core's taking of the point
+    forward = watches[options.direction].orbits[:len(result) - result.start_index]
+    if not forward and result.interrupted:
+        raise NothingComputed(f"continuation of {problem.N}-{problem.p} motions interrupted "
+                              "before its first point")
     if not forward:
         raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
     message = result.message
@@ -234,7 +248,7 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                     f"end of its range: {problem.limit_reason()}")
     orbits = forward
     if -options.direction in watches:
-        orbits = watches[-options.direction].orbits[:0:-1] + forward
+        orbits = watches[-options.direction].orbits[result.start_index:0:-1] + forward
     samples = [MultiImpactSample(u=u, lam=float(lam), tangent=t, orbit=o)
                for u, lam, t, o in zip(result.u, result.lam, result.tangent, orbits, strict=True)]
     return samples, [st.name for st in result.statuses], message
@@ -313,6 +327,23 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
                               event_points=[user_event_record(ev, names) for ev in user_events])
 
 
+def user_events_until_interrupted(problem: Any, samples: Sequence[MultiImpactSample],
+                 functions: UserFunctions | None, **position: Any
+                 ) -> tuple[dict[str, np.ndarray], list[UserEvent]]:
+    """The user's functions at every sample and their located events (none when Ctrl-C
+    is taken while they are located: the values are kept)."""
+    found = until_interrupted(
+        lambda: locate_multi_impact_events(problem, samples, functions, **position), None,
+        "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
+        "events: they are dropped (the user's functions at the points are kept)")
+    if found is not None:
+        return found
+    if not functions:
+        return {}, []
+    return user_values(functions, [s.orbit for s in samples],
+                       getattr(problem, "parameter", None)), []
+
+
 def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
            options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
            stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
@@ -327,12 +358,17 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
     """
     labels = check_labels(detect)
     problem.check_bounds(options.bounds)
-    with reporter(progress, f"continuation of {problem.N}-{problem.p} motions in "
-                  f"{problem.parameter}", parameter=problem.parameter) as rep:
+    what = f"continuation of {problem.N}-{problem.p} motions in {problem.parameter}"
+    with interruptible(what), reporter(progress, what, parameter=problem.parameter) as rep:
         samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                                   stop_after_pd=stop_after_pd, progress=rep)
-    specials = detect_multi_impact_points(problem, samples, labels)
-    values, user_events = locate_multi_impact_events(problem, samples, functions)
+        specials = until_interrupted(
+            lambda: detect_multi_impact_points(problem, samples, labels), [], "location",
+            "interrupted by the user (KeyboardInterrupt) while locating the special points of "
+            "the %d-%d branch: they are dropped", problem.N, problem.p)
+        values, user_events = user_events_until_interrupted(problem, samples, functions)
+        if interrupted():
+            record = {**(record or {}), "interrupted": True}
     log.info("N=%d p=%d branch in %s: %d points, %d special (%s)", problem.N, problem.p,
              problem.parameter, len(samples), len(specials), message)
     option_record = {**dataclasses.asdict(options), "N": problem.N, "p": problem.p,
@@ -472,6 +508,17 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
         `monitors`, or one of their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         Newton fails at the start.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the branch
+    being followed stops at its last accepted point, the special points of the points kept
+    are located, and the other direction is not followed. The dataset's ``options``
+    attribute then records ``"interrupted": true`` and the stop reason ``"interrupted by the
+    user (KeyboardInterrupt) after K points, ..."`` (status ``INTERRUPTED``), also logged at
+    WARNING. Ctrl-C while the special points are located keeps those already located and
+    drops the one in progress (the log says so). A second Ctrl-C, or one before the first
+    point, aborts with :class:`KeyboardInterrupt`.
     """
     orbit = _as_multi(start)
     check_progress(progress)

@@ -26,7 +26,11 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.curves import crossing_steps
-from impactcont.analysis.multi_branch import MultiImpactSample, branch_to_dataset
+from impactcont.analysis.multi_branch import (
+    MultiImpactSample,
+    branch_to_dataset,
+    user_events_until_interrupted,
+)
 from impactcont.analysis.switching import special_orbit
 from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
@@ -34,14 +38,19 @@ from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keyw
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.records import reserved_names
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
-from impactcont.detection.multi_impact import locate_multi_impact_events
 from impactcont.detection.special_points import check_user_functions
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import initial_unknowns
 from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
-from impactcont.progress import ProgressOption, reporter
+from impactcont.progress import (
+    NothingComputed,
+    ProgressOption,
+    interrupted,
+    interruptible,
+    reporter,
+)
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
 
@@ -147,6 +156,14 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         `monitors`, or one of their functions failed (named; a non-callable: TypeError).
     NoPeriodicMotionError
         The start could not be put on the curve.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the curve at its last accepted point (the
+    other direction is not followed) and returns it: its ``options`` attribute records
+    ``"interrupted": true`` and the stop reason ``"interrupted by the user
+    (KeyboardInterrupt) after K points, ..."``, also logged at WARNING. A second Ctrl-C,
+    or one before the first point, aborts with :class:`KeyboardInterrupt`.
     """
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
@@ -195,27 +212,33 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         watches[direction] = _Box(problem, box[p1])
         return watches[direction]
 
-    with reporter(progress, f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})",
-                  parameter=parameter) as rep:
+    what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
+    with interruptible(what), reporter(progress, what, parameter=parameter) as rep:
         result = follow(problem, x0, lam0, opts, rep.point, stop=watch)
-    orbits = watches[opts.direction].orbits
-    if -opts.direction in watches:
-        orbits = watches[-opts.direction].orbits[:0:-1] + orbits
-    if not orbits:
-        raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
-    samples = [MultiImpactSample(u=x, lam=float(lam), tangent=t, orbit=o)
-               for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
-                                       strict=True)]
-    log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
-             parameter, len(samples), result.message)
-    # the user's events: located in both parameters (p1 is the last unknown)
-    values, user_events = locate_multi_impact_events(
-        problem, samples, functions, position=lambda x, lam: (x[-1], lam))
+        # Ctrl-C can end a run between a watch's orbit and the core's taking of the point
+        orbits = watches[opts.direction].orbits[:len(result) - result.start_index]
+        if -opts.direction in watches:
+            orbits = watches[-opts.direction].orbits[result.start_index:0:-1] + orbits
+        if not orbits and result.interrupted:
+            raise NothingComputed(f"{what} interrupted before its first point")
+        if not orbits:
+            raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
+        samples = [MultiImpactSample(u=x, lam=float(lam), tangent=t, orbit=o)
+                   for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
+                                           strict=True)]
+        log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
+                 parameter, len(samples), result.message)
+        # the user's events: located in both parameters (p1 is the last unknown)
+        values, user_events = user_events_until_interrupted(
+            problem, samples, functions, position=lambda x, lam: (x[-1], lam))
+        was_interrupted = interrupted()
     record = {"kind": kind, "parameters": [p1, parameter], "start": start_p1,
               "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
               "status": [st.name for st in result.statuses], "message": result.message,
               **{key: value for key, value in dataclasses.asdict(opts).items()
                  if key != "bounds"}}
+    if was_interrupted:
+        record["interrupted"] = True
     info = {"curve_kind": kind, "parameters": f"{p1},{parameter}",
             "born_at_value": start_p1}
     view = _CurveView(problem, parameter, osc)

@@ -66,7 +66,14 @@ from impactcont.orbit.stop_geometry import stop_geometry
 from impactcont.orbit.symmetry import symmetry_defect
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
-from impactcont.progress import ProgressOption, Reporter, reporter
+from impactcont.progress import (
+    NothingComputed,
+    ProgressOption,
+    Reporter,
+    interruptible,
+    reporter,
+    take_interrupt,
+)
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
 
@@ -320,6 +327,13 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
         No such PD point, bad ``epsilon`` or bounds.
     NoPeriodicMotionError
         The switched point could not be computed.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
+    its points computed so far, marked as interrupted, as
+    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    Notes); a second one aborts.
     """
     epsilon = _check_epsilon(epsilon)
     orbit = special_orbit(branch, "PD", which)
@@ -359,6 +373,9 @@ class Cascade:
         for a smooth period-doubling cascade).
     message : str
         Why the cascade stopped.
+    interrupted : bool
+        Whether Ctrl-C stopped it (the branches are those computed before; the last may
+        be interrupted itself, see its ``options`` attribute).
     """
 
     branches: list[xr.Dataset]
@@ -367,6 +384,7 @@ class Cascade:
     pd_physical: np.ndarray
     ratios: np.ndarray
     message: str
+    interrupted: bool = False
 
 
 def _first_pd(ds: xr.Dataset, after: float | None, sign: int) -> int | None:
@@ -427,6 +445,14 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     Returns
     -------
     Cascade
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) stops the cascade: the branches computed before
+    are returned, the last one with its points computed so far (marked as in
+    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation`);
+    ``Cascade.interrupted`` is True and ``message`` says after how many doublings. A
+    second Ctrl-C aborts.
     """
     if isinstance(max_doublings, bool) or not isinstance(max_doublings, (int, np.integer)) \
             or max_doublings < 1:
@@ -447,8 +473,8 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     base_ds = float(more.pop("ds", given.get("ds", DRIVER_DEFAULTS["ds"])))
     if "max_points" not in given:
         more.setdefault("max_points", 300)  # a child branch that finds no PD is not followed far
-    with reporter(progress, f"period-doubling cascade in {parameter}",
-                  parameter=parameter) as rep:
+    what = f"period-doubling cascade in {parameter}"
+    with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
         for level in range(max_doublings):
             spacing = abs(pd_values[-1] - pd_values[-2]) if len(pd_values) > 1 else None
             child_bounds = (lo, hi)
@@ -470,7 +496,24 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
             except (NoPeriodicMotionError, np.linalg.LinAlgError) as exc:
                 message = f"switching at the PD {parameter}={pd_values[-1]:.12g} failed: {exc}"
                 break
+            except NothingComputed:  # Ctrl-C taken before the new branch's first point
+                message = (f"interrupted by the user (KeyboardInterrupt) after {level} "
+                           "doubling(s)")
+                break
+            except KeyboardInterrupt:
+                if not take_interrupt("continuation", "interrupted by the user "
+                                      "(KeyboardInterrupt) while switching at the PD "
+                                      "%s=%.12g; the %d branch(es) before are kept", parameter,
+                                      pd_values[-1], len(branches)):
+                    raise
+                message = (f"interrupted by the user (KeyboardInterrupt) after {level} "
+                           "doubling(s)")
+                break
             branches.append(child)
+            if call.interrupted:
+                message = (f"interrupted by the user (KeyboardInterrupt) after {level + 1} "
+                           "doubling(s)")
+                break
             sign = 1 if float(child[parameter].values[-1]) >= pd_values[-1] else -1
             j = _first_pd(child, pd_values[-1], sign)
             if j is None:
@@ -493,7 +536,7 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     ratios = gaps[:-1] / gaps[1:] if gaps.size >= 2 else np.empty(0)
     return Cascade(branches=branches, pd_values=pd, pd_precision=np.array(pd_precision),
                    pd_physical=np.array(pd_physical, dtype=bool), ratios=ratios,
-                   message=message)
+                   message=message, interrupted=call.interrupted)
 
 
 # ------------------------------------------------------------------------------------------
@@ -575,6 +618,13 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
         the new impact has a positive velocity (attributes ``born_at = "GR"``,
         ``born_at_value``, ``new_impact``); None when the N-(p+1) system has no
         solution branch through the grazing point (Newton fails there).
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
+    its points computed so far, marked as interrupted, as
+    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    Notes); a second one aborts.
     """
     epsilon = _check_epsilon(epsilon)
     orbit = special_orbit(branch, "GR", which)
@@ -744,6 +794,13 @@ def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
     NoPeriodicMotionError
         The symmetric motion at the BP or the switched point could not be computed, or
         Newton fell back onto the symmetric branch.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
+    its points computed so far, marked as interrupted, as
+    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    Notes); a second one aborts.
     """
     epsilon = _check_epsilon(epsilon)
     side = _check_side(side)
@@ -797,6 +854,13 @@ def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
         The asymmetric N-p branches through ``+epsilon e`` and ``-epsilon e``, mirror
         images of each other (:func:`impactcont.orbit.symmetry.mirror_image` maps a
         motion of one onto a motion of the other), each followed away from the BP.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
+    its points computed so far, marked as interrupted, as
+    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    Notes); a second one aborts.
     """
     kwargs = {"bounds": bounds, "epsilon": epsilon, "detect": detect, "options": options,
               **more}

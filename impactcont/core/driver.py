@@ -7,6 +7,10 @@ and yields every accepted point, for callers that watch the stream of points.
 The problem may provide an ``accept(u, lam)`` hook: the core calls it with the
 start guess before each direction and with every accepted point, before the
 next step (problems with borders or reference vectors renew them there).
+
+Ctrl-C during :func:`follow`, inside a call of :func:`impactcont.progress.interruptible`
+(every driver of impactcont runs in one), ends the run with the points accepted so far
+and the status ``INTERRUPTED``; the other direction is not computed.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from impactcont.core.stepper import (
     StepSizeBelowMinimumError,
 )
 from impactcont.errors import ParameterError
+from impactcont.progress import interrupted, take_interrupt
 
 __all__ = [
     "BranchRun",
@@ -117,6 +122,13 @@ class BranchRun:
     def _finish(self, status: ContinuationStatus, detail: str) -> None:
         self.status = status
         self.message = f"{status.value}: {detail}"
+        logger.info("continuation (direction %+d) stopped, %s", self.direction, self.message)
+
+    def interrupt(self, points: Sequence[ContinuationPoint]) -> None:
+        """Finish the run as interrupted by the user after `points` (those accepted)."""
+        self.status = ContinuationStatus.INTERRUPTED
+        last = f", last at {self.name} = {points[-1].lam:.10g}" if points else ""
+        self.message = f"{self.status.value} after {len(points)} points{last}"
         logger.info("continuation (direction %+d) stopped, %s", self.direction, self.message)
 
     def _emit(self, previous: ContinuationPoint | None, current: ContinuationPoint
@@ -343,6 +355,11 @@ class ContinuationResult:
             return (self.status,)
         return (self.status, self.backward_status)
 
+    @property
+    def interrupted(self) -> bool:
+        """Whether Ctrl-C ended a direction (the points are those computed before it)."""
+        return ContinuationStatus.INTERRUPTED in self.statuses
+
     def __len__(self) -> int:
         return int(self.lam.shape[0])
 
@@ -397,6 +414,18 @@ def follow(
     ParameterError
         If `u0` is not a non-empty 1-D finite array or `lam0` is outside
         ``options.bounds``.
+    KeyboardInterrupt
+        Ctrl-C outside :func:`impactcont.progress.interruptible`, or a second one.
+
+    Notes
+    -----
+    The first Ctrl-C (:class:`KeyboardInterrupt`, from the terminal or raised by the
+    problem, a stop rule or `on_point`) inside :func:`impactcont.progress.interruptible`
+    ends the running direction: the points accepted before it are kept, its status is
+    ``ContinuationStatus.INTERRUPTED`` (message ``"interrupted by the user
+    (KeyboardInterrupt) after K points, last at ..."``, logged at WARNING), the other
+    direction is not computed, and the `events` are located on the points kept (a second
+    Ctrl-C aborts that).
     """
     def run(direction: int) -> BranchRun:
         return BranchRun(problem, u0, lam0, options, direction,
@@ -424,6 +453,7 @@ continue_branch = follow
 _STATUSES_SKIPPING_BACKWARD = {
     ContinuationStatus.CLOSED_LOOP: "the branch is a closed loop",
     ContinuationStatus.NEWTON_FAILED_AT_START: "Newton failed at the shared start point",
+    ContinuationStatus.INTERRUPTED: "interrupted by the user",
 }
 """Forward statuses after which the backward run is not computed, with the reason."""
 
@@ -438,11 +468,22 @@ class _CollectedRun:
 
 
 def _collect(run: BranchRun, on_point: Callable[[ContinuationPoint], None] | None) -> _CollectedRun:
-    points = []
-    for point in run:
-        points.append(point)
-        if on_point is not None:
-            on_point(point)
+    """The points of `run`; Ctrl-C ends it with those accepted before (see :func:`follow`)."""
+    points: list[ContinuationPoint] = []
+    try:
+        for point in run:
+            points.append(point)
+            if on_point is not None:
+                on_point(point)
+            if interrupted():  # Ctrl-C taken elsewhere in the call (a stop rule's location)
+                run.interrupt(points)
+                break
+    except KeyboardInterrupt:
+        if not take_interrupt("continuation", "interrupted by the user (KeyboardInterrupt) "
+                              "after %d points (direction %+d); the points computed are "
+                              "kept", len(points), run.direction):
+            raise
+        run.interrupt(points)
     if run.status is None:
         raise RuntimeError("continuation run ended without a status")
     return _CollectedRun(points, run.status, run.message)

@@ -30,6 +30,7 @@ class ContinuationStatus(enum.Enum):
     REACHED_PARENT = "reached the motion the branch was born from"
     STOPPED_AFTER_EVENT = "stopped after an event"
     CURVE_END = "the curve ends"
+    INTERRUPTED = "interrupted by the user (KeyboardInterrupt)"
 
 
 def parameter_name(problem: object) -> str:

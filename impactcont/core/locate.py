@@ -24,6 +24,7 @@ from scipy.optimize import brentq
 
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
+from impactcont.progress import interrupted, take_interrupt
 
 __all__ = ["Event", "EventPoint", "MotionTest", "dip_bottom", "locate_events", "locate_zero",
            "parts_beside_poles", "tangent_at", "zero_precision"]
@@ -417,31 +418,51 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     # each event's test at the accepted points, evaluated once each (ends and neighbours)
     values = {id(event): functools.cache(event.at_point or (
         lambda j, t=event.test: t(x[j, :-1], x[j, -1]))) for event in events if event.test}
-    for k in range(len(x) - 1):
-        chord = _Chord(problem, x[k], x[k + 1], newton_tol,
-                       None if before_step is None else lambda k=k: before_step(k))
-        if position is None:
-            where: Callable[[float], Any] = chord.lam
-        else:
-            def where(t: float, chord: _Chord = chord) -> Any:
-                return position(*chord.point(t))
-        for event in events:
-            noise: Callable[[float], float] | None = None
-            if event.test is None:
-                if (dlam[k] > 0) == (dlam[k + 1] > 0):
-                    continue
-                g: Callable[[float], float] = chord.fold_test
-                parts = [(0.0, 1.0)]
-            else:
-                g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)))
-                if event.noise_at is not None:
-                    noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
-                parts = _watched_parts(event, values[id(event)], x, k, chord, g, noise,
-                                       arclength)
-            for lo, hi in parts:
-                found.append(_event_point(event.label, chord, g, noise, where, lo, hi, k, x,
-                                          arclength, s_tol))
+    k = 0
+    try:
+        for k in range(len(x) - 1):
+            if interrupted("location"):  # Ctrl-C taken in an earlier location of the call
+                break
+            _locate_step(problem, x, dlam, arclength, k, events, values, found, s_tol,
+                         newton_tol, position, before_step)
+    except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those located are kept
+        if not (found and take_interrupt(
+                "location", "interrupted by the user (KeyboardInterrupt) while locating "
+                "between points %d and %d: that one is dropped, the %d located before are "
+                "kept", k, k + 1, len(found))):
+            raise
     return found
+
+
+def _locate_step(problem: Problem, x: FloatArray, dlam: FloatArray, arclength: FloatArray,
+                 k: int, events: Sequence[Event], values: dict[int, Callable[[int], float]],
+                 found: list[EventPoint], s_tol: float, newton_tol: float,
+                 position: Callable[[FloatArray, float], Any] | None,
+                 before_step: Callable[[int], None] | None) -> None:
+    """The events of :func:`locate_events` in step ``k``, appended to `found`."""
+    chord = _Chord(problem, x[k], x[k + 1], newton_tol,
+                   None if before_step is None else lambda k=k: before_step(k))
+    if position is None:
+        where: Callable[[float], Any] = chord.lam
+    else:
+        def where(t: float, chord: _Chord = chord) -> Any:
+            return position(*chord.point(t))
+    for event in events:
+        noise: Callable[[float], float] | None = None
+        if event.test is None:
+            if (dlam[k] > 0) == (dlam[k + 1] > 0):
+                continue
+            g: Callable[[float], float] = chord.fold_test
+            parts = [(0.0, 1.0)]
+        else:
+            g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)))
+            if event.noise_at is not None:
+                noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
+            parts = _watched_parts(event, values[id(event)], x, k, chord, g, noise,
+                                   arclength)
+        for lo, hi in parts:
+            found.append(_event_point(event.label, chord, g, noise, where, lo, hi, k, x,
+                                      arclength, s_tol))
 
 
 def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
