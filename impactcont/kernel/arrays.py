@@ -179,3 +179,426 @@ class FirstOrderArrays(NamedTuple):
         """``(lambda, V[0], w_p, a_p, k_p, j_p)``: the arguments of the contact search."""
         return (self.search_lam, self.search_v0, self.search_w_p, self.search_a_p,
                 self.search_k_p, self.search_j_p)
+
+
+# -- the N-p shooting path (kernel/shooting.py, kernel/sweep.py) ------------------------------
+# Every structure below is what one compiled argument of the shooting path holds, by name.
+# Python builds them (orbit/flow.py, orbit/multi_impact.py, the map's tables) and hands a
+# compiled entry point their plain tuple (``tuple(structure)``: numba types an exact tuple in
+# its C dispatcher, a named one through its Python ``typeof``, several microseconds for
+# twenty arrays); the entry point names it again (``ShootingFlow(*flow)``) and everything
+# compiled below it reads fields by name. Results come back as named records the same way.
+
+
+class ShootingFlow(NamedTuple):
+    """The flow of eq. (9) between impacts as the shooting kernel takes it, omega aside.
+
+    Both flows of :mod:`impactcont.orbit.flow` fill one structure (fixed field types, so
+    that every entry point compiles once): the modal flow (proportional damping) its
+    modal arrays, the first-order flow (any C) its complex modes; the other's fields are
+    empty. Built once per flow by :meth:`impactcont.orbit.flow.Flow.shooting_arrays`.
+    """
+
+    general: bool
+    """True for the first-order flow (any C, complex F), False for the modal flow."""
+    w: np.ndarray
+    """Natural frequencies ``omega_i`` (modal), shape (n,)."""
+    a: np.ndarray
+    """Decay rates ``a_i`` (eq. 6; modal), shape (n,)."""
+    f: np.ndarray
+    """Modal forces ``u^T F`` (eq. 7; modal), shape (n,)."""
+    u: np.ndarray
+    """Mass-normalised modes (modal), shape (n, n)."""
+    ui: np.ndarray
+    """``u^-1 = u^T M`` (modal), shape (n, n)."""
+    lam: np.ndarray
+    """Eigenvalues of the first-order system (first order), complex, shape (2n,)."""
+    V: np.ndarray
+    """Its eigenvectors (first order), complex, shape (2n, 2n)."""
+    Vi: np.ndarray
+    """``V^-1`` (first order), complex, shape (2n, 2n)."""
+    pw: np.ndarray
+    """Frequencies of the scalar pairs the contact search sums (the modes, modal)."""
+    pa: np.ndarray
+    """Decay rates of the scalar pairs."""
+    pk: np.ndarray
+    """First eigenvalue index of each pair (int64)."""
+    pj: np.ndarray
+    """Second eigenvalue index of each pair (int64)."""
+    g: np.ndarray
+    """Modal constant force ``u^T F_static`` (modal; empty for the first-order flow)."""
+    free: np.ndarray
+    """The free modes, ``w_i = 0`` (bool; modal)."""
+    xs: np.ndarray
+    """Constant part ``X_s`` of the static response (first order), shape (2n,)."""
+    xd: np.ndarray
+    """Drift ``d`` of the damped free modes per unit time (first order), shape (2n,)."""
+
+
+class Forcing(NamedTuple):
+    """The harmonic forcing at one omega: the steady response of eq. (7)."""
+
+    omega: float
+    """Forcing frequency."""
+    gamma: np.ndarray
+    """Steady modal amplitudes ``gamma_i`` (modal; empty for the first-order flow)."""
+    beta: np.ndarray
+    """Steady modal amplitudes ``beta_i`` (modal)."""
+    Z: np.ndarray
+    """Complex steady state amplitude, ``X_p = Re(Z e^{i omega t})`` (first order), (2n,)."""
+
+
+class ForcingDerivatives(NamedTuple):
+    """``d/d omega`` of :class:`Forcing`'s amplitudes (the other flow's fields empty)."""
+
+    dgamma: np.ndarray
+    """``d gamma_i / d omega`` (modal)."""
+    dbeta: np.ndarray
+    """``d beta_i / d omega`` (modal)."""
+    dZ: np.ndarray  # noqa: N815 - the paper's Z, differentiated
+    """``dZ / d omega`` (first order)."""
+
+
+class ImpactSequence(NamedTuple):
+    """The p impacts of a motion, each on its own stop
+    (:class:`impactcont.orbit.stop_geometry.StopGeometry`)."""
+
+    pivots: np.ndarray
+    """0-based index ``j_k`` of the position eliminated on impact k's section (int64)."""
+    normals: np.ndarray
+    """Normal ``n_k`` of the stop coordinate of each impact, shape (p, n)."""
+    signs: np.ndarray
+    """``+1``/``-1``: impact k meets its stop moving up/down its coordinate, shape (p,)."""
+    positions: np.ndarray
+    """Stop position ``c_k`` of each impact, shape (p,)."""
+    matrices: np.ndarray
+    """Impact matrix ``D_k`` (eq. 4) of each impact, shape (p, 2n, 2n)."""
+
+
+class ContactStops(NamedTuple):
+    """Every stop a flight is checked against (eq. 16): U and L on the stop coordinate
+    ``s = normal . x`` and the further stops, each on its own coordinate."""
+
+    normal: np.ndarray
+    """Normal of the stop coordinate of U and L, shape (n,)."""
+    two_sided: bool
+    """A lower stop L is present."""
+    b: float
+    """Position of U: ``s = b``."""
+    b_low: float
+    """``-`` position of L: ``s = -b_low``."""
+    extra_normals: np.ndarray
+    """Normals of the further stops, shape (q, n)."""
+    extra_signs: np.ndarray
+    """Their sides (``+1``/``-1``), shape (q,)."""
+    extra_positions: np.ndarray
+    """Their positions ``c`` (``s = c``), shape (q,)."""
+
+
+class ShotFlights(NamedTuple):
+    """The shooting system at one set of unknowns (:func:`~impactcont.kernel.shooting.
+    shooting_system`): the fields of :class:`impactcont.orbit.multi_impact.Shooting`."""
+
+    phases: np.ndarray
+    """``theta_k``, shape (p,)."""
+    flight_times: np.ndarray
+    """``tau_k``, shape (p,)."""
+    starts: np.ndarray
+    """``X_k`` after impact k, shape (p, 2n)."""
+    arrivals: np.ndarray
+    """``X_k^-`` at the end of flight k, shape (p, 2n)."""
+    arrival_rates: np.ndarray
+    """``X'(tau_k^-)``, shape (p, 2n)."""
+    transitions: np.ndarray
+    """``Phi(tau_k)``, shape (p, 2n, 2n)."""
+    phase_columns: np.ndarray
+    """``dX_k^-/d theta_k``, shape (p, 2n)."""
+    residual: np.ndarray
+    """``[r_0, .., r_{p-1}]``, shape (2np,)."""
+    jacobian: np.ndarray
+    """``dr/du``, shape (2np, 2np), or (0, 0) when not asked for."""
+
+
+class NewtonResult(NamedTuple):
+    """What :func:`~impactcont.kernel.shooting.newton_solve` returns."""
+
+    x: np.ndarray
+    """The last iterate."""
+    status: int
+    """``CONVERGED`` (0) or ``FAILED`` (1)."""
+    iterations: int
+    residual_norm: float
+    """Max-norm of the residual at ``x``."""
+    step_norm: float
+    """Max-norm of the last update."""
+    shot: ShotFlights
+    """The shooting system at ``x``, with its Jacobian."""
+
+
+class MotionChecks(NamedTuple):
+    """What :func:`~impactcont.kernel.shooting.motion_checks` returns."""
+
+    jacobians: np.ndarray
+    """``G_k`` of eq. (25), shape (p, 2n, 2n)."""
+    h2: np.ndarray
+    """Arrival velocity of the stop coordinate at the end of each flight, shape (p,)."""
+    G: np.ndarray
+    """``G_{p-1} .. G_0``, shape (2n, 2n)."""
+    multipliers: np.ndarray
+    """Eigenvalues of G, largest modulus first (complex)."""
+    gap_upper: np.ndarray
+    time_upper: np.ndarray
+    gap_lower: np.ndarray
+    time_lower: np.ndarray
+    gap_extra: np.ndarray
+    """Shape (p, q): each further stop."""
+    time_extra: np.ndarray
+    capped: bool
+    """A search grid was capped."""
+
+
+class ForcedAmplitudes(NamedTuple):
+    """What :func:`~impactcont.kernel.shooting.forced_amplitudes` returns."""
+
+    gamma: np.ndarray
+    beta: np.ndarray
+    dgamma: np.ndarray
+    dbeta: np.ndarray
+    worst: float
+    """Largest relative error bound of the amplitudes from the eigenvalue errors."""
+    resonant: bool
+    """An undamped forced mode at ``omega_i = omega``."""
+
+
+class Embedding(NamedTuple):
+    """The unknowns a corrector solves for: ``u = E v + c / omega``, the first `rows`
+    equations (the identity, zero and all rows for an N-p motion; the half-motion's
+    embedding for a symmetric one, :class:`impactcont.orbit.symmetry.HalfUnknowns`)."""
+
+    E: np.ndarray
+    c: np.ndarray
+    rows: int
+
+
+class CorrectorStep(NamedTuple):
+    """One pseudo-arclength step: the predicted point ``[v, omega]``, the tangent and the
+    weights of the arclength condition."""
+
+    predicted: np.ndarray
+    tangent: np.ndarray
+    weights: np.ndarray
+
+
+class CorrectorSettings(NamedTuple):
+    """How :func:`~impactcont.kernel.shooting.palc_correct` iterates."""
+
+    tol: float
+    max_iter: int
+    singular: float
+    """Frobenius condition bound above which a bordered matrix is flagged."""
+    hyperplane: bool
+    """Newton on the hyperplane only (no residual test, no tangent)."""
+
+
+class PalcResult(NamedTuple):
+    """What :func:`~impactcont.kernel.shooting.palc_correct` returns."""
+
+    state: np.ndarray
+    iterations: int
+    status: int
+    omega: float
+    residual_norm: float
+    tangent: np.ndarray
+    worst: float
+    worst_omega: float
+    flagged: np.ndarray
+    last_update: float
+
+
+class StopSeries(NamedTuple):
+    """A stop coordinate ``s = n . x`` along one flight, as the contact search of eq. (16)
+    sums it (:func:`impactcont.kernel.contact.stop_maximum`): a forced part, free modes
+    (or the first-order flow's scalar pairs), a constant level and a polynomial part."""
+
+    w: np.ndarray
+    """Frequencies of the free terms."""
+    a: np.ndarray
+    """Their decay rates."""
+    weights: np.ndarray
+    """Their weights in ``s`` (``n^T U``; ones for the scalar pairs)."""
+    gamma: float
+    """Forced part ``gamma cos(omega t + theta) + beta sin(omega t + theta)`` of ``s``."""
+    beta: float
+    dy: np.ndarray
+    """Free deviation of each term: displacement."""
+    dv: np.ndarray
+    """... and velocity."""
+    level: float
+    """The constant the constant force adds to ``s``."""
+    pg: np.ndarray
+    """Weighted static force of each free mode it pushes (modal flow)."""
+    pd: np.ndarray
+    """Decay rate of each such mode."""
+    p1: float
+    """Drift of ``s`` per unit time (first-order flow)."""
+
+
+class BranchLinearization(NamedTuple):
+    """What :func:`~impactcont.kernel.shooting.branch_linearization` returns."""
+
+    shot: ShotFlights
+    """The shooting system with its Jacobian."""
+    extended: np.ndarray
+    """``[dr/dx | dr/d omega]``, shape (2np, 2np + 1)."""
+
+
+# -- the map sweep (kernel/sweep.py) ----------------------------------------------------------
+class FlowTables(NamedTuple):
+    """The flows of a map's grid, stacked: each field of :class:`ShootingFlow` (but
+    ``general``, one for all) and of :class:`Forcing` with a first axis of flows, and the
+    flow of each grid point (:func:`stack_flows`)."""
+
+    general: bool
+    w: np.ndarray
+    a: np.ndarray
+    f: np.ndarray
+    u: np.ndarray
+    ui: np.ndarray
+    lam: np.ndarray
+    V: np.ndarray
+    Vi: np.ndarray
+    pw: np.ndarray
+    pa: np.ndarray
+    pk: np.ndarray
+    pj: np.ndarray
+    g: np.ndarray
+    free: np.ndarray
+    xs: np.ndarray
+    xd: np.ndarray
+    omega: np.ndarray
+    gamma: np.ndarray
+    beta: np.ndarray
+    Z: np.ndarray
+    index: np.ndarray
+    """The flow (row) of each grid point, int64, shape (n0, n1)."""
+
+
+def stack_flows(flows: list[tuple[ShootingFlow, Forcing]], index: np.ndarray) -> FlowTables:
+    """:class:`FlowTables` of `flows` (each a flow and its forcing) and the grid's `index`.
+
+    Raises
+    ------
+    ValueError
+        When a field's shape differs between two flows (the first-order modes change their
+        structure across the grid), naming the field.
+    """
+    if not flows:
+        raise ValueError("stack_flows: flows must hold at least one (flow, forcing) pair")
+    columns = {}
+    for name in ShootingFlow._fields[1:] + Forcing._fields:
+        values = [getattr(flow if name in ShootingFlow._fields else forcing, name)
+                  for flow, forcing in flows]
+        if len({np.shape(v) for v in values}) != 1:
+            raise ValueError(f"stack_flows: field {name!r} has shapes "
+                             f"{sorted({np.shape(v) for v in values})} across the flows; "
+                             "every flow of a map must have the same")
+        columns[name] = np.ascontiguousarray(np.stack(values))
+    return FlowTables(general=bool(flows[0][0].general), **columns,
+                      index=np.ascontiguousarray(index, dtype=np.int64))
+
+
+class GeometryTables(NamedTuple):
+    """The stop geometries of a map's grid, stacked on a first axis of geometries
+    (read-only arrays: the types the shooting's Python callers pass)."""
+
+    positions: np.ndarray
+    """``c_k`` of the q impacts solved (h of a symmetric motion, else p), (ng, q)."""
+    normals: np.ndarray
+    """Their normals, (ng, q, n)."""
+    matrices: np.ndarray
+    """Their impact matrices, (ng, q, 2n, 2n)."""
+    full_normals: np.ndarray
+    """The normals of all p impacts, (ng, p, n)."""
+    full_positions: np.ndarray
+    """The stop positions of all p impacts, (ng, p)."""
+    full_matrices: np.ndarray
+    """The impact matrices of all p impacts, (ng, p, 2n, 2n)."""
+    contact_normals: np.ndarray
+    """The stop coordinate of U and L, (ng, n)."""
+    b_upper: np.ndarray
+    """``b``, (ng,)."""
+    b_lower: np.ndarray
+    """``b_low``, (ng,)."""
+    extra_normals: np.ndarray
+    """The further stops' normals, (ng, q', n)."""
+    extra_signs: np.ndarray
+    extra_positions: np.ndarray
+    index: np.ndarray
+    """The geometry (row) of each grid point, int64, shape (n0, n1)."""
+
+
+class SweepMotion(NamedTuple):
+    """The motion a map solves at every grid point."""
+
+    N: int
+    symmetric: bool
+    """Solve the half system of a symmetric motion."""
+    admits: bool
+    """The motion admits the symmetry: store its asymmetry."""
+    pivots: np.ndarray
+    """0-based index of the position eliminated on each impact's section, int64, (p,)."""
+    signs: np.ndarray
+    """``+1``/``-1``: impact k is met moving up/down its stop coordinate, (p,)."""
+    two_sided: bool
+    """A lower stop is present."""
+
+
+class SweepGrid(NamedTuple):
+    """The grid's two axes and the seed grid point with its unknowns."""
+
+    coord0: np.ndarray
+    coord1: np.ndarray
+    seed0: int
+    seed1: int
+    x_seed: np.ndarray
+
+
+class SweepSettings(NamedTuple):
+    """Newton's settings per grid point and the checks."""
+
+    tol: float
+    max_iter: int
+    max_change: float
+    """A solution farther than this (max-norm) from its predictor is refused."""
+    checks: bool
+    """Search contacts (eq. 16)."""
+    max_attempts: int
+    """Newton attempts per grid point at most (one per solved neighbour)."""
+
+
+class SweepOutputs(NamedTuple):
+    """The map's outputs, flat over the grid (first axis ``n0 * n1``), filled in place."""
+
+    unknowns: np.ndarray
+    found: np.ndarray
+    iterations: np.ndarray
+    delta: np.ndarray
+    stable: np.ndarray
+    physical: np.ndarray
+    rho: np.ndarray
+    mu: np.ndarray
+    gap: np.ndarray
+    velocity: np.ndarray
+    tau: np.ndarray
+    state: np.ndarray
+    asym: np.ndarray
+
+
+class SweepStats(NamedTuple):
+    """What :func:`~impactcont.kernel.sweep.sweep_stops` returns."""
+
+    solved: int
+    attempts: int
+    newton_iterations: int
+    capped: bool
+    """A contact-search grid was capped."""

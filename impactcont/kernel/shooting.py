@@ -12,10 +12,16 @@ of :mod:`impactcont.orbit.flow`, each diagonal in its own modal coordinates:
 - first order (any C, complex F): ``Phi = Re(V diag(exp(lambda t)) V^-1)`` and the
   forcing block ``P(t) - Phi P(0)`` from the complex steady amplitude ``Z``.
 
-``general`` selects the flow; the arrays of the other are passed empty, so that each
-entry point compiles once. The flow's arrays come from
-:meth:`impactcont.orbit.flow.Flow.shooting_arrays` (in this order: ``w, a, gamma,
-beta, f, u, u^-1, lambda, V, V^-1, Z`` and the scalar pairs ``w_p, a_p``, ``k_p, j_p``).
+``flow.general`` selects the flow; the arrays of the other are passed empty, so that each
+entry point compiles once. Arguments are the named structures of
+:mod:`impactcont.kernel.arrays`: the flow (:class:`~impactcont.kernel.arrays.ShootingFlow`,
+:meth:`impactcont.orbit.flow.Flow.shooting_arrays`), the forcing at omega
+(:class:`~impactcont.kernel.arrays.Forcing`), the motion's impacts
+(:class:`~impactcont.kernel.arrays.ImpactSequence`), the stops of the contact check
+(:class:`~impactcont.kernel.arrays.ContactStops`) and the shot flights
+(:class:`~impactcont.kernel.arrays.ShotFlights`); results are named records of the same
+module. An entry point takes each structure as its plain tuple (typed in numba's C
+dispatcher) and names it again on entry; compiled code passes the named structures.
 
 The interior-contact check of eq. (16) against both stops is the compiled kernel's
 search (:func:`impactcont.kernel.contact.stop_maximum` on its grid): for the modal flow
@@ -37,6 +43,23 @@ import math
 
 import numpy as np
 
+from impactcont.kernel.arrays import (
+    BranchLinearization,
+    ContactStops,
+    CorrectorSettings,
+    CorrectorStep,
+    Embedding,
+    ForcedAmplitudes,
+    Forcing,
+    ForcingDerivatives,
+    ImpactSequence,
+    MotionChecks,
+    NewtonResult,
+    PalcResult,
+    ShootingFlow,
+    ShotFlights,
+    StopSeries,
+)
 from impactcont.kernel.contact import (
     WORK_ROWS,
     drift_on_grid,
@@ -50,7 +73,7 @@ from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
-           "jacobian_product", "jacobian_product_into", "motion_checks", "newton_solve",
+           "jacobian_product", "motion_checks", "newton_solve",
            "omega_partials", "palc_correct", "shooting_system"]
 
 
@@ -81,11 +104,13 @@ def _static_mode(w, a, g, free, t):
 
 
 @_inner
-def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta, tr, arr,
-                  pcol, rate):
+def _flight_modal(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
     """Flight of the modal flow: ``Phi``, ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place
-    (the constant force ``g_static`` included: ``X(t) = Phi (X0 - P(0)) + P(t)`` with the
+    (the constant force ``flow.g`` included: ``X(t) = Phi (X0 - P(0)) + P(t)`` with the
     particular solution ``P`` of the forcing and of the constant force)."""
+    w, a, f, u, ui = flow.w, flow.a, flow.f, flow.u, flow.ui
+    g_static, free = flow.g, flow.free
+    gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
     n = w.size
     W = np.empty((4, n))
     for i in range(n):
@@ -170,10 +195,12 @@ def _flight_modal(w, a, gam, bet, f, u, ui, g_static, free, omega, t, X0, theta,
 
 
 @_inner
-def _flight_general(lam, V, Vi, Z, xs, xd, omega, t, X0, theta, tr, arr, pcol, rate):
+def _flight_general(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
     """Flight of the first-order flow: as :func:`_flight_modal` (``GeneralFlow.matrices``);
-    the constant force adds ``X_s - Phi X_s + d t`` (``xs``, ``xd``: its offset and drift,
-    empty without one)."""
+    the constant force adds ``X_s - Phi X_s + d t`` (``flow.xs``, ``flow.xd``: its offset
+    and drift, empty without one)."""
+    lam, V, Vi, xs, xd = flow.lam, flow.V, flow.Vi, flow.xs, flow.xd
+    Z, omega = forcing.Z, forcing.omega
     m = lam.size
     e = np.exp(lam * t)
     for r in range(m):
@@ -231,15 +258,12 @@ def _flight_general(lam, V, Vi, Z, xs, xd, omega, t, X0, theta, tr, arr, pcol, r
 
 
 @_inner
-def _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, t, X0, theta, tr,
-            arr, pcol, rate):
-    """One flight of either flow; ``st = (g, free, X_s, d)``: the constant force
-    (:meth:`impactcont.orbit.flow.Flow.static_arrays`)."""
-    if general:
-        _flight_general(lam, V, Vi, Z, st[2], st[3], omega, t, X0, theta, tr, arr, pcol, rate)
+def _flight(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
+    """One flight of either flow (``flow.general``), the constant force included."""
+    if flow.general:
+        _flight_general(flow, forcing, t, X0, theta, tr, arr, pcol, rate)
     else:
-        _flight_modal(w, a, gam, bet, f, u, ui, st[0], st[1], omega, t, X0, theta, tr, arr,
-                      pcol, rate)
+        _flight_modal(flow, forcing, t, X0, theta, tr, arr, pcol, rate)
 
 
 # -- the shooting system ------------------------------------------------------------------------
@@ -320,24 +344,40 @@ def _jacobian_wanted(x):
     return x.size >= 0
 
 @_jit
-def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
-                    pivots, normals, positions, matrices, x, want_jacobian):
+def shooting_system(flow, forcing, impacts, period, x, want_jacobian):
     """Residual (and exact Jacobian) of the N-p shooting system at the unknowns ``x``.
 
-    Parameters are the flow's arrays (module docstring), ``omega``, the motion's
-    ``period = 2 pi N / omega``, the 0-based index ``j_k`` of the position eliminated on
-    the section of each impact (``pivots`` (p,), the mass of the stop hit), the normal
-    ``n_k`` (``normals`` (p, n)), stop position ``c_k`` (``positions`` (p,)) and impact
-    matrix ``D_k`` (``matrices`` (p, 2n, 2n)) of each impact, the unknowns ``x`` (2np,)
-    and whether to build the Jacobian (else it is returned with shape (0, 0)).
+    Parameters
+    ----------
+    flow, forcing, impacts : tuple
+        :class:`~impactcont.kernel.arrays.ShootingFlow`,
+        :class:`~impactcont.kernel.arrays.Forcing` and
+        :class:`~impactcont.kernel.arrays.ImpactSequence` as plain tuples: the flow, the
+        forcing at omega and, for each impact, the 0-based index ``j_k`` of the position
+        eliminated on its section (the mass of the stop hit), the normal ``n_k``, stop
+        position ``c_k`` and impact matrix ``D_k``.
+    period : float
+        The motion's ``2 pi N / omega``.
+    x : ndarray, shape (2np,)
+        The unknowns.
+    want_jacobian : bool
+        Build the Jacobian (else it has shape (0, 0)).
 
     Returns
     -------
-    tuple
-        ``(phases, flight_times, starts, arrivals, arrival_rates, transitions,
-        phase_columns, residual, jacobian)``, the fields of
-        :class:`impactcont.orbit.multi_impact.Shooting` in that order.
+    ShotFlights
+        The fields of :class:`impactcont.orbit.multi_impact.Shooting`.
     """
+    return _shooting_system(ShootingFlow(*flow), Forcing(*forcing), ImpactSequence(*impacts),
+                            period, x, want_jacobian)
+
+
+@_inner
+def _shooting_system(flow, forcing, impacts, period, x, want_jacobian):
+    """:func:`shooting_system` on the named structures (what compiled callers call)."""
+    pivots, normals = impacts.pivots, impacts.normals
+    positions, matrices = impacts.positions, impacts.matrices
+    omega = forcing.omega
     p = positions.size
     m = matrices.shape[1]
     n = m // 2
@@ -361,8 +401,8 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
     pcols = np.empty((p, m))
     residual = np.empty(p * m)
     for k in range(p):
-        _flight(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, taus[k], starts[k],
-                phases[k], transitions[k], arrivals[k], pcols[k], rates[k])
+        _flight(flow, forcing, taus[k], starts[k], phases[k], transitions[k], arrivals[k],
+                pcols[k], rates[k])
         nxt = (k + 1) % p
         for r in range(m):
             if diagonal:
@@ -373,8 +413,8 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
                     s += matrices[nxt, r, c] * arrivals[k, c]
             residual[k * m + r] = s - starts[nxt, r]
     if not want_jacobian:
-        return (phases, taus, starts, arrivals, rates, transitions, pcols, residual,
-                np.zeros((0, 0)))
+        return ShotFlights(phases, taus, starts, arrivals, rates, transitions, pcols, residual,
+                           np.zeros((0, 0)))
     J = np.zeros((p * m, p * m))
     row_dphi = np.empty(m)  # row r of D_{k+1} Phi_k
     zcol = p  # first column of z_0
@@ -429,7 +469,7 @@ def shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
                     if c != jn and normals[nxt, c] != 0.0:
                         J[row, ncol + (c if c < jn else c - 1)] += (normals[nxt, c]
                                                                     / normals[nxt, jn])
-    return phases, taus, starts, arrivals, rates, transitions, pcols, residual, J
+    return ShotFlights(phases, taus, starts, arrivals, rates, transitions, pcols, residual, J)
 
 
 @_jit
@@ -487,50 +527,50 @@ def _solve(A, rhs):
 
 
 @_jit
-def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period, pivots,
-                 normals, positions, matrices, x0, tol, max_iter):
+def newton_solve(flow, forcing, impacts, period, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
     The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
-    stopping rules), compiled.
+    stopping rules), compiled; `flow`, `forcing`, `impacts` and `period` as
+    :func:`shooting_system` takes them.
 
     Returns
     -------
-    tuple
-        ``(x, status, iterations, residual_norm, last_step_norm, shooting)``:
-        ``status`` is :data:`CONVERGED` or :data:`FAILED`, ``shooting`` the tuple of
+    NewtonResult
+        ``status`` :data:`CONVERGED` or :data:`FAILED`, ``shot`` the
         :func:`shooting_system` at ``x`` (with its Jacobian).
     """
+    flow = ShootingFlow(*flow)
+    forcing = Forcing(*forcing)
+    impacts = ImpactSequence(*impacts)
     x = x0.copy()
-    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
-                         pivots, normals, positions, matrices, x, _jacobian_wanted(x))
-    norm = _max_abs(sh[7])
+    sh = _shooting_system(flow, forcing, impacts, period, x, _jacobian_wanted(x))
+    norm = _max_abs(sh.residual)
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
         scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
-            return x, CONVERGED, it, norm, step_norm, sh
+            return NewtonResult(x, CONVERGED, it, norm, step_norm, sh)
         if it == max_iter:
             break
-        J = sh[8]
+        J = sh.jacobian
         if not np.all(np.isfinite(J)):
             break
-        step, ok = _solve(J, -sh[7])
+        step, ok = _solve(J, -sh.residual)
         if not ok:
             break
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                                  period, pivots, normals, positions, matrices, trial,
-                                  _jacobian_wanted(trial))
-            tnorm = _max_abs(tsh[7])
+            tsh = _shooting_system(flow, forcing, impacts, period, trial,
+                                   _jacobian_wanted(trial))
+            tnorm = _max_abs(tsh.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
                 # within tol and the update does not lower the residual: at its rounding floor
-                return x, CONVERGED, it, norm, step_norm, sh
+                return NewtonResult(x, CONVERGED, it, norm, step_norm, sh)
             if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
                 break
             lam_step *= 0.5
@@ -538,7 +578,7 @@ def newton_solve(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, pe
         x = trial
         sh = tsh
         norm = tnorm
-    return x, FAILED, it, norm, step_norm, sh
+    return NewtonResult(x, FAILED, it, norm, step_norm, sh)
 
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
@@ -600,9 +640,8 @@ def _flight_jacobian(tr, pcol, rate, D, j, j_end, n_start, n_end, omega, G):
 
 
 @_inner
-def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
-                   normal, X0, theta):
-    """``(w, a, weights, Gamma, B, dy, dv, level, pg, pd, p1)`` of ``s = n . x`` along a
+def _search_inputs(flow, forcing, normal, X0, theta):
+    """:class:`~impactcont.kernel.arrays.StopSeries` of ``s = n . x`` along a
     flight for the kernel's search: the forced part ``Gamma cos + B sin`` of the phase, the
     free deviation (modal weights ``n^T U``; for the first-order flow ``n^T`` of the
     position rows of ``V`` and ``Z``), the constant ``level`` the constant force adds to
@@ -610,15 +649,18 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
     ``pg, pd``, the weighted static force ``(n^T U)_i g_i`` and decay ``a_i`` of each free
     mode it pushes (modal flow), ``p1 = n . d`` the drift per unit time (first-order
     flow)."""
+    omega = forcing.omega
     c0 = math.cos(theta)
     s0 = math.sin(theta)
     level = 0.0
-    if general:
+    if flow.general:
+        lam, V, Vi, Z = flow.lam, flow.V, flow.Vi, forcing.Z
+        pk, pj = flow.pk, flow.pj
         m = lam.size
         n = m // 2
         rot = complex(c0, s0)
-        xs = st[2]
-        xd = st[3]
+        xs = flow.xs
+        xd = flow.xd
         dev = np.empty(m)
         for c in range(m):
             dev[c] = X0[c] - (Z[c] * rot).real
@@ -641,7 +683,7 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
             for r in range(n):
                 vn += normal[r] * V[r, k]
             coef[k] = vn * s
-        npair = pw.size
+        npair = flow.pw.size
         dy = np.empty(npair)
         dv = np.empty(npair)
         for i in range(npair):
@@ -654,11 +696,13 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
             else:  # two real eigenvalues
                 dy[i] = (coef[k] + coef[q]).real
                 dv[i] = (coef[k] * lam[k] + coef[q] * lam[q]).real
-        return (pw, pa, np.ones(npair), zn.real, -zn.imag, dy, dv, level, np.zeros(0),
-                np.zeros(0), drift)
+        return StopSeries(flow.pw, flow.pa, np.ones(npair), zn.real, -zn.imag, dy, dv, level,
+                          np.zeros(0), np.zeros(0), drift)
+    w, a, u, ui = flow.w, flow.a, flow.u, flow.ui
+    gam, bet = forcing.gamma, forcing.beta
     n = w.size
-    g_static = st[0]
-    free = st[1]
+    g_static = flow.g
+    free = flow.free
     u0 = np.zeros(n)
     for r in range(n):
         if normal[r] != 0.0:
@@ -696,53 +740,64 @@ def _search_inputs(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z
             pg[k] = u0[i] * g_static[i]
             pd[k] = a[i]
             k += 1
-    return w, a, u0, Gam, B, dy, dv, level, pg, pd, 0.0
+    return StopSeries(w, a, u0, Gam, B, dy, dv, level, pg, pd, 0.0)
 
 
 @_inner
-def _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
-                normal, two_sided, b, b_low, X0, theta, tau):
-    """Eq. (16) on one flight against both stops of ``s = n . x``: ``(gap_upper,
-    time_upper, gap_lower, time_lower, capped)`` (a gap ``+inf`` and its time NaN where
-    there is no extremum). The constant force's level and polynomial part (a free mode
-    it pushes) are in the searched coordinate, so every flight is checked."""
-    ww, aa, u0, Gam, B, dy, dv, level, pg, pd, p1 = _search_inputs(
-        general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, normal, X0,
-        theta)
-    times, capped = time_grid(ww, aa, u0, omega, tau)
-    free = drift_on_grid(times, pg, pd, p1, free_on_grid(times, ww, aa, u0, dy, dv))
+def _search_grid(series, omega, tau):
+    """The search grid of :func:`impactcont.kernel.contact.stop_maximum` on a flight of
+    duration `tau`: ``(times, capped, free, cw, sw, work)``, the free part of `series` and
+    the forcing's cosine and sine on it, and the search's workspace."""
+    times, capped = time_grid(series.w, series.a, series.weights, omega, tau)
+    free = drift_on_grid(times, series.pg, series.pd, series.p1,
+                         free_on_grid(times, series.w, series.a, series.weights, series.dy,
+                                      series.dv))
     cw = np.cos(omega * times)
     sw = np.sin(omega * times)
     work = np.empty((WORK_ROWS, 2 * times.size))
-    top, t_top = stop_maximum(times, free, cw, sw, Gam, B, omega, theta, 1.0, ww, aa, u0, dy,
-                              dv, pg, pd, p1, work, np.nan)
+    return times, capped, free, cw, sw, work
+
+
+@_inner
+def _series_maximum(series, omega, theta, sign, times, free, cw, sw, work):
+    """``(top, time)``: the highest maximum of ``sign s`` on the grid of
+    :func:`_search_grid` (the constant level left out)."""
+    return stop_maximum(times, free, cw, sw, sign * series.gamma, sign * series.beta, omega,
+                        theta, sign, series.w, series.a, series.weights, series.dy, series.dv,
+                        series.pg, series.pd, series.p1, work, np.nan)
+
+
+@_inner
+def _clearances(flow, forcing, stops, X0, theta, tau):
+    """Eq. (16) on one flight against both stops U, L of ``s = stops.normal . x``:
+    ``(gap_upper, time_upper, gap_lower, time_lower, capped)`` (a gap ``+inf`` and its time
+    NaN where there is no extremum). The constant force's level and polynomial part (a free
+    mode it pushes) are in the searched coordinate, so every flight is checked."""
+    omega = forcing.omega
+    series = _search_inputs(flow, forcing, stops.normal, X0, theta)
+    times, capped, free, cw, sw, work = _search_grid(series, omega, tau)
+    top, t_top = _series_maximum(series, omega, theta, 1.0, times, free, cw, sw, work)
     gap_l = np.inf
     t_l = np.nan
-    if two_sided:  # the highest maximum of -s is the lowest minimum of s
-        low, t_low = stop_maximum(times, free, cw, sw, -Gam, -B, omega, theta, -1.0, ww, aa,
-                                  u0, dy, dv, pg, pd, p1, work, np.nan)
-        gap_l = b_low - low + level
+    if stops.two_sided:  # the highest maximum of -s is the lowest minimum of s
+        low, t_low = _series_maximum(series, omega, theta, -1.0, times, free, cw, sw, work)
+        gap_l = stops.b_low - low + series.level
         t_l = t_low
-    return b - top - level, t_top, gap_l, t_l, capped
+    return stops.b - top - series.level, t_top, gap_l, t_l, capped
 
 
 @_inner
-def _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
-                    normal, sign, position, X0, theta, tau):
-    """Eq. (16) on one flight against one stop met with ``sign s' > 0`` at ``s = position``
-    (``s = n . x``): ``(gap, time, capped)``, ``gap = sign (position - s)`` at the extremum
-    of ``s`` nearest the stop (``+inf`` and time NaN where there is none)."""
-    ww, aa, u0, Gam, B, dy, dv, level, pg, pd, p1 = _search_inputs(
-        general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega, normal, X0,
-        theta)
-    times, capped = time_grid(ww, aa, u0, omega, tau)
-    free = drift_on_grid(times, pg, pd, p1, free_on_grid(times, ww, aa, u0, dy, dv))
-    cw = np.cos(omega * times)
-    sw = np.sin(omega * times)
-    work = np.empty((WORK_ROWS, 2 * times.size))
-    top, t_top = stop_maximum(times, free, cw, sw, sign * Gam, sign * B, omega, theta, sign,
-                              ww, aa, u0, dy, dv, pg, pd, p1, work, np.nan)
-    return sign * position - top - sign * level, t_top, capped
+def _stop_clearance(flow, forcing, stops, i, X0, theta, tau):
+    """Eq. (16) on one flight against the further stop `i` of `stops`, met with ``sign s' >
+    0`` at ``s = position`` (``s = n . x``): ``(gap, time, capped)``, ``gap = sign
+    (position - s)`` at the extremum of ``s`` nearest the stop (``+inf`` and time NaN where
+    there is none)."""
+    omega = forcing.omega
+    sign = stops.extra_signs[i]
+    series = _search_inputs(flow, forcing, stops.extra_normals[i], X0, theta)
+    times, capped, free, cw, sw, work = _search_grid(series, omega, tau)
+    top, t_top = _series_maximum(series, omega, theta, sign, times, free, cw, sw, work)
+    return sign * stops.extra_positions[i] - top - sign * series.level, t_top, capped
 
 
 #: A stop's clearance at an impact state, ``sign (c - n . x)``, is judged against the
@@ -880,27 +935,39 @@ def end_clearances(normal, two_sided, b, b_low, normals, signs, extra_normals, e
 
 
 @_jit
-def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z, st, omega,
-                  pivots, normal, two_sided, b, b_low, normals, matrices, phases, taus, starts,
-                  transitions, pcols, rates, checks, extra_normals, extra_signs,
-                  extra_positions):
+def motion_checks(flow, forcing, impacts, stops, shot, checks):
     """Per-flight ``G_k``, their product G, its multipliers and the contact check (eq. 16).
 
-    ``normal``: the stop coordinate of the contact check (both stops U, L); ``normals``,
-    ``matrices``, ``pivots``: those of each impact (:func:`shooting_system`);
-    ``extra_normals`` (q, n), ``extra_signs``, ``extra_positions`` (q,): the further stops
-    (on other coordinates), each flight checked against every one of them as well.
+    Parameters
+    ----------
+    flow, forcing, impacts : tuple
+        As :func:`shooting_system` takes them.
+    stops : tuple
+        :class:`~impactcont.kernel.arrays.ContactStops`: the stop coordinate of U and L
+        and the further stops (on other coordinates), each flight checked against every one.
+    shot : tuple
+        :class:`~impactcont.kernel.arrays.ShotFlights` at the solution (its Jacobian
+        unused, shape (0, 0) allowed).
+    checks : bool
+        Search the flights for contact.
 
     Returns
     -------
-    tuple
-        ``(jacobians (p, 2n, 2n), h2 (p,), G, multipliers (largest modulus first; NaN
-        when G is not finite), gap_upper, time_upper, gap_lower, time_lower (each
-        (p,)), gap_extra, time_extra (each (p, q)), capped)``: the gaps are those of
-        :func:`impactcont.simulate.contact.flight_clearances` (NaN when ``checks`` is
+    MotionChecks
+        Multipliers largest modulus first (NaN when G is not finite); the gaps are those
+        of :func:`impactcont.simulate.contact.flight_clearances` (NaN when ``checks`` is
         False, ``+inf`` when the flight time is not positive), ``capped`` whether a
         search grid was capped.
     """
+    flow = ShootingFlow(*flow)
+    forcing = Forcing(*forcing)
+    impacts = ImpactSequence(*impacts)
+    stops = ContactStops(*stops)
+    shot = ShotFlights(*shot)
+    omega = forcing.omega
+    pivots, normals, matrices = impacts.pivots, impacts.normals, impacts.matrices
+    phases, taus, starts = shot.phases, shot.flight_times, shot.starts
+    transitions, pcols, rates = shot.transitions, shot.phase_columns, shot.arrival_rates
     p = taus.size
     m = matrices.shape[1]
     jacs = np.empty((p, m, m))
@@ -923,7 +990,7 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
     t_u = np.full(p, np.nan)
     gap_l = np.full(p, np.nan)
     t_l = np.full(p, np.nan)
-    q = extra_signs.size
+    q = stops.extra_signs.size
     gap_x = np.full((p, q), np.nan)
     t_x = np.full((p, q), np.nan)
     capped = False
@@ -936,27 +1003,36 @@ def motion_checks(general, w, a, gam, bet, u, ui, pw, pa, pk, pj, lam, V, Vi, Z,
                     gap_x[k, i] = np.inf
                 continue
             for i in range(q):
-                gx, tx, cap = _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                              lam, V, Vi, Z, st, omega, extra_normals[i],
-                                              extra_signs[i], extra_positions[i], starts[k],
-                                              phases[k], taus[k])
+                gx, tx, cap = _stop_clearance(flow, forcing, stops, i, starts[k], phases[k],
+                                              taus[k])
                 gap_x[k, i] = gx
                 t_x[k, i] = tx
                 capped = capped or cap
-            gu, tu, gl, tl, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                              lam, V, Vi, Z, st, omega, normal, two_sided, b,
-                                              b_low, starts[k], phases[k], taus[k])
+            gu, tu, gl, tl, cap = _clearances(flow, forcing, stops, starts[k], phases[k],
+                                              taus[k])
             gap_u[k] = gu
             t_u[k] = tu
             gap_l[k] = gl
             t_l[k] = tl
             capped = capped or cap
-    return jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, gap_x, t_x, capped
+    return MotionChecks(jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, gap_x, t_x, capped)
 
 
 @_jit
-def omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts, phases,
-                   transitions):
+def omega_partials(flow, forcing, derivatives, shot):
+    """``dX_k^-/d omega`` of every flight at fixed flight time, start and start phase.
+
+    `flow`, `forcing`: as :func:`shooting_system` takes them; `derivatives`: the plain
+    tuple of :class:`~impactcont.kernel.arrays.ForcingDerivatives`; `shot`: of
+    :class:`~impactcont.kernel.arrays.ShotFlights` (its flight times, starts, phases and
+    transitions are read). The formula is :func:`_omega_partials`'.
+    """
+    return _omega_partials(ShootingFlow(*flow), Forcing(*forcing),
+                           ForcingDerivatives(*derivatives), ShotFlights(*shot))
+
+
+@_inner
+def _omega_partials(flow, forcing, derivatives, shot):
     """``dX_k^-/d omega`` of every flight at fixed flight time, start and start phase.
 
     Only the steady forced state ``X_p(t) = Re(Z e^{i(omega t + theta)})`` depends on
@@ -968,12 +1044,16 @@ def omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts,
     -------
     ndarray, shape (p, 2n)
     """
+    u, gam, bet, Z, omega = flow.u, forcing.gamma, forcing.beta, forcing.Z, forcing.omega
+    dgam, dbet, dZ = derivatives.dgamma, derivatives.dbeta, derivatives.dZ
+    taus, starts, phases = shot.flight_times, shot.starts, shot.phases
+    transitions = shot.transitions
     p = taus.size
     m = starts.shape[1]
     n = m // 2
     Zp = np.empty(m, dtype=np.complex128)
     dZp = np.empty(m, dtype=np.complex128)
-    if general:
+    if flow.general:
         Zp[:] = Z
         dZp[:] = dZ
     else:
@@ -1004,8 +1084,19 @@ def omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts,
 
 
 @_jit
-def frequency_column(general, u, gam, bet, dgam, dbet, Z, dZ, omega, period, matrices, taus,
-                     starts, phases, transitions, pcols, rates):
+def frequency_column(flow, forcing, derivatives, impacts, period, shot):
+    """``dr/d omega`` of the shooting residual at fixed unknowns, shape (p 2n,).
+
+    Arguments as :func:`omega_partials` and :func:`shooting_system` take them (plain
+    tuples); the formula is :func:`_frequency_column`'.
+    """
+    return _frequency_column(ShootingFlow(*flow), Forcing(*forcing),
+                             ForcingDerivatives(*derivatives), ImpactSequence(*impacts), period,
+                             ShotFlights(*shot))
+
+
+@_inner
+def _frequency_column(flow, forcing, derivatives, impacts, period, shot):
     """``dr/d omega`` of the shooting residual at fixed unknowns, shape (p 2n,).
 
     The forced part of eq. (9) at fixed flight times (:func:`omega_partials`), the phases
@@ -1015,10 +1106,11 @@ def frequency_column(general, u, gam, bet, dgam, dbet, Z, dZ, omega, period, mat
     that ends flight k (``MultiImpactBranchProblem.dparam`` of
     :mod:`impactcont.problems.multi_impact_branch`).
     """
+    omega, matrices = forcing.omega, impacts.matrices
+    taus, pcols, rates = shot.flight_times, shot.phase_columns, shot.arrival_rates
     p = taus.size
-    m = starts.shape[1]
-    explicit = omega_partials(general, u, gam, bet, dgam, dbet, Z, dZ, omega, taus, starts,
-                              phases, transitions)
+    m = shot.starts.shape[1]
+    explicit = _omega_partials(flow, forcing, derivatives, shot)
     out = np.zeros(p * m)
     elapsed = 0.0
     for k in range(p):
@@ -1048,8 +1140,7 @@ def forced_amplitudes(w, a, f, errors, omega):
 
     Returns
     -------
-    tuple
-        ``(gamma, beta, dgamma, dbeta, worst, resonant)``.
+    ForcedAmplitudes
     """
     n = w.size
     gam = np.empty(n)
@@ -1078,57 +1169,66 @@ def forced_amplitudes(w, a, f, errors, omega):
             rel = (4.0 * errors[i] + 4.0 * eps * w[i] * w[i]) * abs(detune) / delta
             if rel > worst or rel != rel:
                 worst = rel
-    return gam, bet, dgam, dbet, worst, resonant
+    return ForcedAmplitudes(gam, bet, dgam, dbet, worst, resonant)
 
 
 @_jit
-def branch_linearization(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
-                         pivots, normals, positions, matrices, x, dgam, dbet, dZ):
+def branch_linearization(flow, forcing, derivatives, impacts, period, x):
     """The shooting system at ``x`` and its linearization in ``[x, omega]``, one call.
 
     :func:`shooting_system` (with the Jacobian) and :func:`frequency_column`: a corrector
     step of the continuation in omega needs the residual, ``dr/dx`` and ``dr/d omega``
     at one point (``MultiImpactBranchProblem.linearize`` of
-    :mod:`impactcont.problems.multi_impact_branch`).
+    :mod:`impactcont.problems.multi_impact_branch`). Arguments as those functions take them.
 
     Returns
     -------
-    tuple
-        The tuple of :func:`shooting_system` with the Jacobian, and ``[dr/dx | dr/d omega]``
-        (p 2n, p 2n + 1).
+    BranchLinearization
     """
-    sh = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, period,
-                         pivots, normals, positions, matrices, x, _jacobian_wanted(x))
-    col = frequency_column(general, u, gam, bet, dgam, dbet, Z, dZ, omega, period, matrices,
-                           sh[1], sh[2], sh[0], sh[5], sh[6], sh[4])
+    return _branch_linearization(ShootingFlow(*flow), Forcing(*forcing),
+                                 ForcingDerivatives(*derivatives), ImpactSequence(*impacts),
+                                 period, x)
+
+
+@_inner
+def _branch_linearization(flow, forcing, derivatives, impacts, period, x):
+    """:func:`branch_linearization` on the named structures."""
+    sh = _shooting_system(flow, forcing, impacts, period, x, _jacobian_wanted(x))
+    col = _frequency_column(flow, forcing, derivatives, impacts, period, sh)
     size = x.size
     extended = np.empty((size, size + 1))
-    J = sh[8]
+    J = sh.jacobian
     for r in range(size):
         for c in range(size):
             extended[r, c] = J[r, c]
         extended[r, size] = col[r]
-    return sh, extended
+    return BranchLinearization(sh, extended)
 
 
 @_jit
-def jacobian_product(pivots, normals, matrices, omega, transitions, pcols, rates, count):
+def jacobian_product(impacts, omega, shot, count):
     """``G_{count-1} .. G_1 G_0``, the product of the first `count` flights' Jacobians
     (eq. 25, as :func:`motion_checks` builds them): G itself for ``count = p``, the
     half-map's product for ``count = p / 2`` (:func:`impactcont.orbit.symmetry.half_map`).
+
+    `impacts` and `shot`: the plain tuples of
+    :class:`~impactcont.kernel.arrays.ImpactSequence` (all p impacts) and
+    :class:`~impactcont.kernel.arrays.ShotFlights` (its transitions, phase columns and
+    arrival rates are read).
     """
-    m = matrices.shape[1]
+    impacts = ImpactSequence(*impacts)
+    m = impacts.matrices.shape[1]
     G = np.empty((m, m))
-    jacobian_product_into(pivots, normals, matrices, omega, transitions, pcols, rates, count,
-                          G, np.empty(count))
+    _jacobian_product_into(impacts, omega, ShotFlights(*shot), count, G, np.empty(count))
     return G
 
 
-@_jit
-def jacobian_product_into(pivots, normals, matrices, omega, transitions, pcols, rates, count,
-                          G, h2):
+@_inner
+def _jacobian_product_into(impacts, omega, shot, count, G, h2):
     """:func:`jacobian_product` into ``G`` (m, m), with ``h2[k]`` the velocity of the stop
     coordinate at the end of flight k (the pole of its Jacobian, ``(count,)``)."""
+    pivots, normals, matrices = impacts.pivots, impacts.normals, impacts.matrices
+    transitions, pcols, rates = shot.transitions, shot.phase_columns, shot.arrival_rates
     p = pivots.size
     m = matrices.shape[1]
     Gk = np.empty((m, m))
@@ -1180,9 +1280,16 @@ def _frobenius_condition(A):
 
 
 @_jit
-def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matrices, E, c,
-                 rows, predicted, tangent, weights, tol, max_iter, singular, hyperplane):
+def palc_correct(flow, errors, impacts, N, embedding, step, settings):
     """The pseudo-arclength corrector of an N-p branch in omega (modal flow), compiled.
+
+    `flow` and `impacts` as :func:`shooting_system` takes them, `errors` the rounding
+    errors of ``omega_i^2`` (:func:`forced_amplitudes`), `N` the motion's forcing periods;
+    `embedding` (``E, c, rows``), `step` (``predicted, tangent, weights``) and `settings`
+    (``tol, max_iter, singular, hyperplane``) the plain tuples of
+    :class:`~impactcont.kernel.arrays.Embedding`,
+    :class:`~impactcont.kernel.arrays.CorrectorStep` and
+    :class:`~impactcont.kernel.arrays.CorrectorSettings`.
 
     Newton on ``[F(v, omega); <W t, x - x_pred>] = 0`` from ``x = x_pred`` with the
     arithmetic and tests of ``PalcStepper._correct_on_hyperplane`` (converged when
@@ -1202,7 +1309,7 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
 
     Returns
     -------
-    tuple
+    PalcResult
         ``(state, iterations, status, omega, residual_norm, tangent, worst, worst_omega,
         flagged, last_update)``: the last iterate, the updates taken, :data:`CONVERGED`,
         :data:`FAILED` or a refusal (:data:`REFUSED`, ...), the last omega evaluated, the
@@ -1212,11 +1319,15 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
         when none: the caller checks its 2-norm condition number), and the last update's
         max-norm.
     """
+    flow = ShootingFlow(*flow)
+    impacts = ImpactSequence(*impacts)
+    E, c, rows = Embedding(*embedding)
+    predicted, tangent, weights = CorrectorStep(*step)
+    tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
+    w, a, f = flow.w, flow.a, flow.f
     size = predicted.size - 1
     full = E.shape[0]
     empty_c = np.zeros(0, dtype=np.complex128)
-    empty_cc = np.zeros((0, 0), dtype=np.complex128)
-    general = empty_c.size > 0  # False (the modal flow) as a run-time bool: one signature
     state = predicted.copy()
     last_update = np.inf
     worst = 0.0
@@ -1229,12 +1340,12 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
     for it in range(max_iter + 1):
         omega = state[size]
         if not (omega > 0.0 and omega < np.inf):
-            return (state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
-                    last_update)
+            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
+                              last_update)
         gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
         if resonant:
-            return (state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
-                    last_update)
+            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
+                              last_update)
         if bound > worst or bound != bound:
             worst = bound
             worst_omega = omega
@@ -1245,16 +1356,16 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
                 s += E[r, k] * state[k]
             x[r] = s
         period = 2.0 * math.pi * N / omega
-        sh, ext = branch_linearization(general, w, a, gam, bet, f, u, ui, empty_c, empty_cc,
-                                       empty_cc, empty_c, st, omega, period, pivots, normals,
-                                       positions, matrices, x, dgam, dbet, empty_c)
-        residual = sh[7]
+        sh, ext = _branch_linearization(flow, Forcing(omega, gam, bet, empty_c),
+                                        ForcingDerivatives(dgam, dbet, empty_c), impacts,
+                                        period, x)
+        residual = sh.residual
         norm = 0.0
         for r in range(rows):
             v = abs(residual[r])
             if not v < np.inf:
-                return (state, it, NONFINITE_RESIDUAL, omega, v, raw, worst, worst_omega,
-                        flagged, last_update)
+                return PalcResult(state, it, NONFINITE_RESIDUAL, omega, v, raw, worst,
+                                  worst_omega, flagged, last_update)
             if v > norm:
                 norm = v
         # [J E | dF/domega - J c / omega^2] on the first rows, and the border
@@ -1282,21 +1393,21 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
             flagged = A.copy()
         if converged:
             if not finite:
-                return (state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                        flagged, last_update)
+                return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst,
+                                  worst_omega, flagged, last_update)
             e = np.zeros(size + 1)
             e[size] = 1.0
             t, ok = _solve(A, e)
             if not ok:
-                return (state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged,
-                        last_update)
-            return (state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged,
-                    last_update)
+                return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
+                                  flagged, last_update)
+            return PalcResult(state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged,
+                              last_update)
         if it == max_iter:
             break
         if not finite:
-            return (state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                        flagged, last_update)
+            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
         rhs = np.empty(size + 1)
         for r in range(rows):
             rhs[r] = -residual[r]
@@ -1305,24 +1416,24 @@ def palc_correct(w, a, f, errors, u, ui, st, N, pivots, normals, positions, matr
             s += border[k] * (state[k] - predicted[k])
         rhs[size] = -s
         if not abs(s) < np.inf:
-            return (state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                        flagged, last_update)
+            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
         update, ok = _solve(A, rhs)
         if not ok:
-            return (state, it, SINGULAR, omega, norm, raw, worst, worst_omega, flagged,
-                        last_update)
+            return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
         last_update = 0.0
         for k in range(size + 1):
             v = abs(update[k])
             if not v < np.inf:
-                return (state, it, NONFINITE_UPDATE, omega, norm, raw, worst, worst_omega,
-                        flagged, last_update)
+                return PalcResult(state, it, NONFINITE_UPDATE, omega, norm, raw, worst,
+                                  worst_omega, flagged, last_update)
             if v > last_update:
                 last_update = v
         for k in range(size + 1):
             state[k] += update[k]
         if hyperplane and last_update <= tol:
-            return (state, it + 1, CONVERGED, omega, norm, raw, worst, worst_omega, flagged,
-                    last_update)
-    return (state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
-            last_update)
+            return PalcResult(state, it + 1, CONVERGED, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
+    return PalcResult(state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
+                      last_update)

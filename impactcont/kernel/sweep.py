@@ -11,11 +11,13 @@ point that is solved puts its unsolved neighbours in a first-in first-out queue;
 whose Newton fails stays unsolved and seeds nothing (it is tried again, at most once per
 neighbour, when another neighbour is solved).
 
-The flows are stacked by value of the parameters that change them (``flow_index``
-gives each grid point its row of the tables of
-:meth:`impactcont.orbit.flow.Flow.shooting_arrays`), the stop geometry by value of
-the parameters that move the stops (``geometry_index``). Flights, Newton steps, G
-and the contact search are those of :mod:`impactcont.kernel.shooting`.
+The flows are stacked by value of the parameters that change them
+(:class:`~impactcont.kernel.arrays.FlowTables`: each grid point's row of the tables of
+:meth:`impactcont.orbit.flow.Flow.shooting_arrays` and ``forcing_arrays``), the stop
+geometry by value of the parameters that move the stops
+(:class:`~impactcont.kernel.arrays.GeometryTables`). Flights, Newton steps, G and the
+contact search are those of :mod:`impactcont.kernel.shooting`, on the named structures
+of :mod:`impactcont.kernel.arrays`.
 
 The half system of a symmetric motion (``p = 2h``; ``X_{k+h} = -X_k``,
 ``tau_{k+h} = tau_k``) is the shooting system of its first ``h`` flights over half
@@ -30,8 +32,7 @@ masses) with a full impact matrix on the velocities
 (:class:`impactcont.orbit.stop_geometry.StopGeometry`); the impacts of one motion may hit
 stops of different coordinates (``Stops(extra=...)``), each section solved for the
 position of its stop's own mass (``pivots``, one per impact). One compiled entry point,
-:func:`sweep_stops` (compiled once; a single point is a 1 x 1 grid), with the constant
-force's arrays (:meth:`impactcont.orbit.flow.Flow.static_arrays`) stacked like the flows'.
+:func:`sweep_stops` (compiled once; a single point is a 1 x 1 grid).
 Importing :mod:`impactcont` does not import this module.
 """
 
@@ -41,17 +42,30 @@ import math
 
 import numpy as np
 
+from impactcont.kernel.arrays import (
+    ContactStops,
+    FlowTables,
+    Forcing,
+    GeometryTables,
+    ImpactSequence,
+    ShootingFlow,
+    SweepGrid,
+    SweepMotion,
+    SweepOutputs,
+    SweepSettings,
+    SweepStats,
+)
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
     _clearances,
+    _jacobian_product_into,
     _jacobian_wanted,
     _max_abs,
+    _shooting_system,
     _solve,
     _stop_clearance,
     end_clearances,
-    jacobian_product_into,
-    shooting_system,
     unknowns_scale,
 )
 from impactcont.kernel.stability import multipliers
@@ -63,35 +77,32 @@ __all__ = ["sweep_stops"]
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 
-@_jit
-def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric, pivots,
-            normals, positions, matrices, x, want_jacobian):
+@_inner
+def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
     """The shooting system (full, or the half of a symmetric motion) at ``x``.
 
-    `normals`, `positions` and `matrices` hold the impacts of the system solved (the
-    first h of a symmetric motion), `pivots` the position eliminated on each impact's
-    section (the stop's own mass; one for all in a symmetric motion). Returns the tuple
-    of :func:`shooting_system`.
+    `impacts` holds the impacts of the system solved (the first h of a symmetric motion),
+    `pivot` the position eliminated on the sections of a symmetric motion (one for all).
+    Returns the :class:`~impactcont.kernel.arrays.ShotFlights` of
+    :func:`impactcont.kernel.shooting.shooting_system`.
     """
-    q = positions.size
+    omega = forcing.omega
     if not symmetric:
-        return shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                               2.0 * math.pi * N / omega, pivots[:q], normals, positions,
-                               matrices, x, want_jacobian)
-    j = pivots[0]
-    out = shooting_system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega,
-                          math.pi * N / omega, pivots[:q], normals, positions, matrices, x,
-                          want_jacobian)
-    h = q
-    m = matrices.shape[1]
+        return _shooting_system(flow, forcing, impacts, 2.0 * math.pi * N / omega, x,
+                                want_jacobian)
+    j = pivot
+    normals = impacts.normals
+    out = _shooting_system(flow, forcing, impacts, math.pi * N / omega, x, want_jacobian)
+    h = impacts.positions.size
+    m = impacts.matrices.shape[1]
     n = m // 2
-    starts = out[2]
-    residual = out[7]
+    starts = out.starts
+    residual = out.residual
     last = (h - 1) * m
     for r in range(m):  # - X_0 -> + X_0 = - X_h
         residual[last + r] += 2.0 * starts[0, r]
     if want_jacobian:
-        J = out[8]
+        J = out.jacobian
         for r in range(m):  # dX_0/dz_0: unit columns, and x_j from the section
             if r != j:
                 J[last + r, h + (r if r < j else r - 1)] += 2.0
@@ -103,18 +114,19 @@ def _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
     return out
 
 
-@_jit
-def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric,
-            pivots, normals, positions, matrices, x0, tol, max_iter):
+@_inner
+def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
     """Newton with backtracking from ``x0``: the iteration and stopping rules of
-    :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system`.
+    :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system` (``settings.tol``,
+    ``settings.max_iter``).
 
-    Returns ``(x, converged, iterations, shooting)``.
+    Returns ``(x, converged, iterations, shot)``.
     """
+    tol = settings.tol
+    max_iter = settings.max_iter
     x = x0.copy()
-    sh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symmetric,
-                 pivots, normals, positions, matrices, x, _jacobian_wanted(x))
-    norm = _max_abs(sh[7])
+    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, _jacobian_wanted(x))
+    norm = _max_abs(sh.residual)
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
@@ -124,19 +136,18 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
             return x, True, it, sh
         if it == max_iter:
             break
-        J = sh[8]
+        J = sh.jacobian
         if not np.all(np.isfinite(J)):
             break
-        step, ok = _solve(J, -sh[7])
+        step, ok = _solve(J, -sh.residual)
         if not ok:
             break
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = _system(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N,
-                          symmetric, pivots, normals, positions, matrices, trial,
+            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial,
                           _jacobian_wanted(trial))
-            tnorm = _max_abs(tsh[7])
+            tnorm = _max_abs(tsh.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
                 return x, True, it, sh
@@ -150,32 +161,33 @@ def _newton(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, st, omega, N, symm
     return x, False, it, sh
 
 
-@_jit
-def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, st, omega, N,
-              symmetric, admits, pivots, normal, two_sided, b, b_low, extra_normals,
-              extra_signs, extra_positions, full_normals, full_matrices, signs, sh, checks,
-              point, out_rho, out_mu, out_gap, out_velocity, out_tau,
-              out_state, out_asym):
+@_inner
+def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
     """Stability, velocities, flight times, states and the contact check of a solution.
 
+    `motion` is the :class:`~impactcont.kernel.arrays.SweepMotion`, `full` the
+    :class:`~impactcont.kernel.arrays.ImpactSequence` of all p impacts (G of every
+    flight), `sh` the shot flights at the solution (the first h of a symmetric motion).
     The contact check (eq. 16) searches every flight against both stops U, L of the stop
-    coordinate ``normal`` and against each further stop (``extra_normals`` (q, n),
-    ``extra_signs``, ``extra_positions`` (q,)), as
+    coordinate ``stops.normal`` and against each further stop of `stops`, as
     :func:`impactcont.kernel.shooting.motion_checks` does, and checks every stop at both
     ends of every flight but the stop hit there (:func:`_end_gap`); the gap is the
     smallest of all.
 
-    Writes the grid point `point` (flat index) of the output arrays; returns
-    ``(physical, capped)``.
+    Writes the grid point `point` (flat index) of `outputs`; returns ``(physical, capped)``.
     """
-    phases, taus, starts, transitions, pcols, rates = sh[0], sh[1], sh[2], sh[5], sh[6], sh[4]
+    symmetric, admits, signs = motion.symmetric, motion.admits, motion.signs
+    omega = forcing.omega
+    phases, taus, starts = sh.phases, sh.flight_times, sh.starts
+    out_rho, out_mu, out_gap = outputs.rho, outputs.mu, outputs.gap
+    out_velocity, out_tau = outputs.velocity, outputs.tau
+    out_state, out_asym = outputs.state, outputs.asym
     p = signs.size
-    m = full_matrices.shape[1]
+    m = full.matrices.shape[1]
     flights = taus.size  # h of a symmetric motion, else p
     h2 = np.empty(flights)
     G = np.empty((m, m))
-    jacobian_product_into(pivots, full_normals, full_matrices, omega, transitions, pcols, rates,
-                          flights, G, h2)
+    _jacobian_product_into(full, omega, sh, flights, G, h2)
     if symmetric:  # the half-map H = S G_{h-1} .. G_0: G = H^2
         for r in range(m - 1):
             for c in range(m):
@@ -211,20 +223,16 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
         for k in range(flights):
             if not taus[k] > 0.0:
                 continue
-            gu, _, gl, _, cap = _clearances(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                            lam, V, Vi, Z, st, omega, normal, two_sided, b,
-                                            b_low, starts[k], phases[k], taus[k])
+            gu, _, gl, _, cap = _clearances(flow, forcing, stops, starts[k], phases[k], taus[k])
             if not (gu == gu and gl == gl):  # not searchable: a constant force on a free mode
                 gap = np.nan
                 break
             # a mirrored flight's clearance to one stop is the other's of its image
             gap = min(gap, gu, gl)
             capped = capped or cap
-            for i in range(extra_signs.size):  # every further stop, each on its coordinate
-                gx, _, cap = _stop_clearance(general, w, a, gam, bet, u, ui, pw, pa, pk, pj,
-                                             lam, V, Vi, Z, st, omega, extra_normals[i],
-                                             extra_signs[i], extra_positions[i], starts[k],
-                                             phases[k], taus[k])
+            for i in range(stops.extra_signs.size):  # each further stop, on its coordinate
+                gx, _, cap = _stop_clearance(flow, forcing, stops, i, starts[k], phases[k],
+                                             taus[k])
                 if gx != gx:  # NaN: not searchable
                     gap = np.nan
                     break
@@ -234,9 +242,7 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
                 break
         if not gap > 0.0:  # NaN included
             physical = False
-        ends, crossed = _end_gap(normal, two_sided, b, b_low, full_normals, signs,
-                                 extra_normals, extra_signs, extra_positions, sh[2], sh[3],
-                                 flights, symmetric)
+        ends, crossed = _end_gap(stops, full, sh.starts, sh.arrivals, flights, symmetric)
         if gap == gap:  # a NaN gap (not searchable) stays NaN
             gap = min(gap, ends)
         if crossed:
@@ -264,13 +270,12 @@ def _evaluate(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, 
 
 
 @_inner
-def _end_gap(normal, two_sided, b, b_low, full_normals, signs, extra_normals, extra_signs,
-             extra_positions, starts, arrivals, flights, symmetric):
+def _end_gap(stops, full, starts, arrivals, flights, symmetric):
     """Every stop's clearance at both ends of every flight, as
     :func:`impactcont.kernel.shooting.end_clearances` (the second half of a symmetric
     motion the mirror image of the first): ``(smallest clearance, crossed)``, ``crossed``
     when an end is past a stop by more than the rounding of its clearance."""
-    p = signs.size
+    p = full.signs.size
     m = starts.shape[1]
     full_starts = np.empty((p, m))
     full_arrivals = np.empty((p, m))
@@ -280,8 +285,9 @@ def _end_gap(normal, two_sided, b, b_low, full_normals, signs, extra_normals, ex
         for c in range(m):
             full_starts[k, c] = sign * starts[q, c]
             full_arrivals[k, c] = sign * arrivals[q, c]
-    gap, _, tol = end_clearances(normal, two_sided, b, b_low, full_normals, signs,
-                                 extra_normals, extra_signs, extra_positions, full_starts,
+    gap, _, tol = end_clearances(stops.normal, stops.two_sided, stops.b, stops.b_low,
+                                 full.normals, full.signs, stops.extra_normals,
+                                 stops.extra_signs, stops.extra_positions, full_starts,
                                  full_arrivals)
     smallest = np.inf
     crossed = False
@@ -300,67 +306,74 @@ def _push(queue, tail, size, point, parent):
 
 
 @_jit
-def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj, sg, sfree,
-                sxs, sxd, omegas,
-                flow_index, positions, normals, matrices, full_normals, full_matrices,
-                contact_normals, b_upper, b_lower, extra_normals, extra_signs, extra_positions,
-                geometry_index, coord0, coord1, signs, N, symmetric, admits, pivots, two_sided,
-                seed0, seed1, x_seed, tol, max_iter, max_change, checks, max_attempts, unknowns,
-                found, iterations, delta, stable, physical, rho, mu, gap, velocity, tau, state,
-                asym):
+def sweep_stops(flows, geometries, motion, grid, settings, outputs):
     """Solve every grid point reachable from the seed through solved neighbours.
 
     Parameters
     ----------
-    general, w .. Z, pw .. pj
-        The flows' arrays (:meth:`impactcont.orbit.flow.Flow.shooting_arrays`), each
-        stacked on a first axis of flows.
-    sg, sfree, sxs, sxd
-        The flows' constant-force arrays (:meth:`impactcont.orbit.flow.Flow.static_arrays`),
-        stacked likewise (second axis of size 0: no constant force).
-    omegas : ndarray, shape (nf,)
-        Forcing frequency of each flow.
-    flow_index, geometry_index : ndarray of int64, shape (n0, n1)
-        The flow and the stop geometry of each grid point.
-    positions, normals, matrices : ndarray, shape (ng, q), (ng, q, n), (ng, q, 2n, 2n)
-        Stop position, normal of the stop coordinate and impact matrix of the q impacts
-        solved (h of a symmetric motion, else p), per geometry
-        (:class:`impactcont.orbit.stop_geometry.StopGeometry`).
-    full_normals, full_matrices : ndarray, shape (ng, p, n), (ng, p, 2n, 2n)
-        The same for all p impacts (G of every flight).
-    contact_normals, b_upper, b_lower : ndarray, shape (ng, n), (ng,), (ng,)
-        The stop coordinate, ``b`` and ``b_low`` of each geometry (the contact check).
-    extra_normals, extra_signs, extra_positions : ndarray, shape (ng, q, n), (ng, q), (ng, q)
-        The further stops (``Stops(extra=...)``) of each geometry, each checked on every
-        flight (q = 0: none).
-    coord0, coord1 : ndarray
-        The grid's two axes (the secant predictor).
-    signs : ndarray, shape (p,)
-        ``+1``/``-1``: impact k is met moving up/down its stop coordinate.
-    N : int
-    symmetric, admits, two_sided, checks : bool
-        Solve the half system; store the asymmetry; a lower stop; search contacts.
-    pivots : ndarray of int64, shape (p,)
-        0-based index of the position eliminated on each impact's section (the own mass
-        of the stop it hits; one for all in a symmetric motion).
-    seed0, seed1 : int
-        The seed grid point, solved from ``x_seed`` (any distance).
-    x_seed : ndarray
-    tol, max_iter
-        Newton's tolerance and iterations per grid point.
-    max_change : float
-        A solution farther than this (max-norm) from its predictor is refused.
-    max_attempts : int
-        Newton attempts per grid point at most (one per solved neighbour).
-    unknowns, found .. asym
-        Outputs, flat over the grid (``n0 * n1`` first axis), filled in place.
+    flows : tuple
+        :class:`~impactcont.kernel.arrays.FlowTables` (a plain tuple): the flows'
+        arrays (:meth:`impactcont.orbit.flow.Flow.shooting_arrays`, ``forcing_arrays``),
+        each stacked on a first axis of flows, and the flow of each grid point.
+    geometries : tuple
+        :class:`~impactcont.kernel.arrays.GeometryTables`: the stop geometries
+        (:class:`impactcont.orbit.stop_geometry.StopGeometry`) likewise.
+    motion : tuple
+        :class:`~impactcont.kernel.arrays.SweepMotion`: ``N``, the half system of a
+        symmetric motion, the pivots and sides of the impacts, a lower stop.
+    grid : tuple
+        :class:`~impactcont.kernel.arrays.SweepGrid`: the two axes (the secant predictor)
+        and the seed grid point, solved from its unknowns (any distance).
+    settings : tuple
+        :class:`~impactcont.kernel.arrays.SweepSettings`: Newton's tolerance and
+        iterations per grid point, the largest change from the predictor, the contact
+        search, the attempts per grid point.
+    outputs : tuple
+        :class:`~impactcont.kernel.arrays.SweepOutputs`, flat over the grid (``n0 * n1``
+        first axis), filled in place.
 
     Returns
     -------
-    tuple
-        ``(solved, attempts, newton_iterations, capped)``: points solved, Newton
-        attempts, Newton iterations in all, and whether a contact-search grid was capped.
+    SweepStats
+        Points solved, Newton attempts, Newton iterations in all, and whether a
+        contact-search grid was capped.
     """
+    return _sweep(FlowTables(*flows), GeometryTables(*geometries), SweepMotion(*motion),
+                  SweepGrid(*grid), SweepSettings(*settings), SweepOutputs(*outputs))
+
+
+@_inner
+def _flow_at(tables, i):
+    """Flow `i` of the stacked `tables`: its :class:`~impactcont.kernel.arrays.ShootingFlow`
+    and :class:`~impactcont.kernel.arrays.Forcing`."""
+    flow = ShootingFlow(tables.general, tables.w[i], tables.a[i], tables.f[i], tables.u[i],
+                        tables.ui[i], tables.lam[i], tables.V[i], tables.Vi[i], tables.pw[i],
+                        tables.pa[i], tables.pk[i], tables.pj[i], tables.g[i], tables.free[i],
+                        tables.xs[i], tables.xd[i])
+    return flow, Forcing(tables.omega[i], tables.gamma[i], tables.beta[i], tables.Z[i])
+
+
+@_inner
+def _geometry_at(tables, i, motion):
+    """Geometry `i` of the stacked `tables`: the impacts solved (the first q), all p
+    impacts and the stops of the contact check."""
+    q = tables.positions.shape[1]
+    solved = ImpactSequence(motion.pivots[:q], tables.normals[i], motion.signs[:q],
+                            tables.positions[i], tables.matrices[i])
+    full = ImpactSequence(motion.pivots, tables.full_normals[i], motion.signs,
+                          tables.full_positions[i], tables.full_matrices[i])
+    stops = ContactStops(tables.contact_normals[i], motion.two_sided, tables.b_upper[i],
+                         tables.b_lower[i], tables.extra_normals[i], tables.extra_signs[i],
+                         tables.extra_positions[i])
+    return solved, full, stops
+
+
+@_inner
+def _sweep(flows, geometries, motion, grid, settings, outputs):
+    """:func:`sweep_stops` on the named structures."""
+    coord0, coord1, x_seed = grid.coord0, grid.coord1, grid.x_seed
+    max_attempts, max_change = settings.max_attempts, settings.max_change
+    unknowns, found = outputs.unknowns, outputs.found
     n0 = coord0.size
     n1 = coord1.size
     npts = n0 * n1
@@ -368,7 +381,7 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
     queue = np.empty((size, 2), dtype=np.int64)
     tried = np.zeros(npts, dtype=np.int8)
     head = 0
-    tail = _push(queue, 0, size, seed0 * n1 + seed1, -1)
+    tail = _push(queue, 0, size, grid.seed0 * n1 + grid.seed1, -1)
     solved = 0
     attempts = 0
     total_iterations = 0
@@ -396,14 +409,11 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
                 else:
                     ratio = (coord1[i1] - coord1[p1]) / (coord1[p1] - coord1[g1])
                 x0 += ratio * (unknowns[parent] - unknowns[g0 * n1 + g1])
-        fi = flow_index[i0, i1]
-        gi = geometry_index[i0, i1]
-        omega = omegas[fi]
+        flow, forcing = _flow_at(flows, flows.index[i0, i1])
+        solved_impacts, full, stops = _geometry_at(geometries, geometries.index[i0, i1], motion)
         attempts += 1
-        st = (sg[fi], sfree[fi], sxs[fi], sxd[fi])
-        x, ok, it, sh = _newton(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi],
-                                ui[fi], lam[fi], V[fi], Vi[fi], Z[fi], st, omega, N, symmetric,
-                                pivots, normals[gi], positions[gi], matrices[gi], x0, tol, max_iter)
+        x, ok, it, sh = _newton(flow, forcing, solved_impacts, motion.N, motion.symmetric,
+                                motion.pivots[0], x0, settings)
         total_iterations += it
         if ok and parent >= 0:
             change = 0.0
@@ -415,18 +425,12 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
         found[point] = True
         solved += 1
         unknowns[point, :] = x
-        iterations[point] = it
-        delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
-        phys, cap = _evaluate(general, w[fi], a[fi], gam[fi], bet[fi], f[fi], u[fi], ui[fi],
-                              lam[fi], V[fi], Vi[fi], Z[fi], pw[fi], pa[fi], pk[fi], pj[fi],
-                              st, omega, N, symmetric, admits, pivots, contact_normals[gi],
-                              two_sided, b_upper[gi], b_lower[gi], extra_normals[gi],
-                              extra_signs[gi], extra_positions[gi], full_normals[gi],
-                              full_matrices[gi],
-                              signs, sh, checks, point, rho, mu, gap, velocity, tau, state,
-                              asym)
-        physical[point] = phys
-        stable[point] = rho[point] < 1.0
+        outputs.iterations[point] = it
+        outputs.delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
+        phys, cap = _evaluate(flow, forcing, motion, full, stops, sh, settings.checks, point,
+                              outputs)
+        outputs.physical[point] = phys
+        outputs.stable[point] = outputs.rho[point] < 1.0
         capped = capped or cap
         for s in _STEPS:
             k0 = i0 + s[0]
@@ -435,4 +439,4 @@ def sweep_stops(general, w, a, gam, bet, f, u, ui, lam, V, Vi, Z, pw, pa, pk, pj
                 q = k0 * n1 + k1
                 if not found[q] and tried[q] < max_attempts:
                     tail = _push(queue, tail, size, q, point)
-    return solved, attempts, total_iterations, capped
+    return SweepStats(solved, attempts, total_iterations, capped)

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from impactcont.errors import ParameterError
+from impactcont.kernel.arrays import Forcing, ForcingDerivatives, ShootingFlow
 from impactcont.model.modal import forced_coefficients, free_transfer, static_response
 from impactcont.model.oscillator import ImpactOscillator
 
@@ -131,7 +132,7 @@ class Flow:
 
     #: What a flow computes once from the rest on first use (the kernel's arrays, the last
     #: matrices): neither pickled nor copied, rebuilt by the copy when it needs them.
-    _CACHES = ("_arrays", "_static_arrays", "_omega_arrays", "_last")
+    _CACHES = ("_arrays", "_forcing", "_static_arrays", "_omega_arrays", "_last")
 
     def __new__(cls, osc: ImpactOscillator) -> Flow:
         if cls is Flow and isinstance(osc, ImpactOscillator) and osc.general:
@@ -166,35 +167,44 @@ class Flow:
         self.free = np.asarray(modes.free, dtype=bool)
         self.g = self.u.T @ osc.F_static  # modal static force (u^T M u = I)
         self.static_offset = static_response(self.w, self.a, self.g, self.free, 0.0)[0]
-        self._arrays: tuple[Any, ...] | None = None
+        self._arrays: ShootingFlow | None = None
+        self._forcing: Forcing | None = None
         self._static_arrays: tuple[np.ndarray, ...] | None = None
-        self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._omega_arrays: ForcingDerivatives | None = None
 
-    def shooting_arrays(self) -> tuple[Any, ...]:
-        """The flow's inputs of :mod:`impactcont.kernel.shooting` (built once).
+    def shooting_arrays(self) -> ShootingFlow:
+        """The flow's input of :mod:`impactcont.kernel.shooting` (built once).
 
-        ``(general, w, a, gamma, beta, f, u, u^-1, lambda, V, V^-1, Z, w_p, a_p, k_p,
-        j_p)``: the modal arrays, empty first-order arrays and the scalar pairs (here
-        the modes themselves), each contiguous with a fixed dtype so that the kernel
-        compiles once for both flows.
+        The modal arrays, the constant force (:meth:`static_arrays`), empty first-order
+        arrays and the scalar pairs of the contact search (here the modes themselves),
+        each contiguous with a fixed dtype so that the kernel compiles once for both flows.
+        The forcing at omega is :meth:`forcing_arrays`.
         """
         if self._arrays is None:
             n = self.n
-            real = (self.w, self.a, self.gamma, self.beta, self.f)
-            w, a, g, b, f = (_kernel_array(x, float) for x in real)
-            self._arrays = (False, w, a, g, b, f, _kernel_array(self.u, float),
-                            _kernel_array(self.u_inv, float),
-                            np.zeros(0, complex), np.zeros((0, 0), complex),
-                            np.zeros((0, 0), complex), np.zeros(0, complex), w, a,
-                            np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64))
+            w, a, f = (_kernel_array(x, float) for x in (self.w, self.a, self.f))
+            g, free, xs, xd = self.static_arrays()
+            self._arrays = ShootingFlow(
+                general=False, w=w, a=a, f=f, u=_kernel_array(self.u, float),
+                ui=_kernel_array(self.u_inv, float), lam=np.zeros(0, complex),
+                V=np.zeros((0, 0), complex), Vi=np.zeros((0, 0), complex), pw=w, pa=a,
+                pk=np.arange(n, dtype=np.int64), pj=np.arange(n, dtype=np.int64), g=g,
+                free=free, xs=xs, xd=xd)
         return self._arrays
 
-    def static_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The constant force and the free modes, for :mod:`impactcont.kernel.shooting`
-        (built once, as :meth:`shooting_arrays`: every Newton call passes them).
+    def forcing_arrays(self) -> Forcing:
+        """The forcing at omega as :mod:`impactcont.kernel.shooting` takes it (built once):
+        the steady modal amplitudes ``gamma, beta`` of eq. (7) (``Z`` empty)."""
+        if self._forcing is None:
+            self._forcing = Forcing(omega=float(self.omega),
+                                    gamma=_kernel_array(self.gamma, float),
+                                    beta=_kernel_array(self.beta, float),
+                                    Z=np.zeros(0, complex))
+        return self._forcing
 
-        Kept apart from :meth:`shooting_arrays` (whose 16 entries callers pass on by
-        position) so that adding them changes no existing call.
+    def static_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The constant force and the free modes (built once; the last four fields of
+        :meth:`shooting_arrays`, by these names).
 
         Returns
         -------
@@ -206,10 +216,10 @@ class Flow:
             ``Q + W(t) (Y(0) - Q) + S(t)``, :func:`~impactcont.model.modal.static_response`:
             held ``Q = [g/w^2, 0]``, ``S = 0``; free ``Q = 0``,
             ``S = [g t^2 phi(2at)/2, g t psi(2at)]``.
-        offset : ndarray, float, shape (2n,)
+        xs : ndarray, float, shape (2n,)
             First-order flow: the constant part ``X_s`` of the static response (empty for
             the modal flow), ``X(t) = X_p(t) + X_s + Phi(t) (X(0) - X_p(0) - X_s) + d t``.
-        drift : ndarray, float, shape (2n,)
+        xd : ndarray, float, shape (2n,)
             First-order flow: ``d``, the drift of the damped free modes per unit time
             (zero without one; empty for the modal flow).
         """
@@ -219,7 +229,7 @@ class Flow:
                                    np.zeros(0))
         return self._static_arrays
 
-    def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def omega_arrays(self) -> ForcingDerivatives:
         """``d gamma / d omega``, ``d beta / d omega`` (modal flow; empty for the first-order
         flow) and ``dZ / d omega`` (first-order flow; empty for the modal flow), the inputs
         of :func:`impactcont.kernel.shooting.omega_partials` (built once)."""
@@ -227,8 +237,9 @@ class Flow:
             om = self.omega
             den = (self.w - om) * (self.w + om) + 2j * self.a * om
             dA = (self.gamma - 1j * self.beta) * (2.0 * om - 2j * self.a) / den
-            self._omega_arrays = (_kernel_array(dA.real, float), _kernel_array(-dA.imag, float),
-                                  np.zeros(0, complex))
+            self._omega_arrays = ForcingDerivatives(dgamma=_kernel_array(dA.real, float),
+                                                    dbeta=_kernel_array(-dA.imag, float),
+                                                    dZ=np.zeros(0, complex))
         return self._omega_arrays
 
     def time_scales(self, row: int | None = None, *, normal: Any = None
@@ -476,26 +487,36 @@ class GeneralFlow(Flow):
         self.Z = basis.forced_amplitude(osc.F, osc.omega)
         self.static_offset, self.drift = self._static(osc)
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
-        self._arrays: tuple[Any, ...] | None = None
+        self._arrays: ShootingFlow | None = None
+        self._forcing: Forcing | None = None
         self._static_arrays: tuple[np.ndarray, ...] | None = None
-        self._omega_arrays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._omega_arrays: ForcingDerivatives | None = None
 
-    def shooting_arrays(self) -> tuple[Any, ...]:
-        """The flow's inputs of :mod:`impactcont.kernel.shooting` (built once).
-
-        ``(general, w, a, gamma, beta, f, u, u^-1, lambda, V, V^-1, Z, w_p, a_p, k_p,
-        j_p)``: empty modal arrays, the first-order arrays and the scalar pairs of
-        :attr:`FirstOrderBasis.scalar_pairs` (the contact search's modes).
+    def shooting_arrays(self) -> ShootingFlow:
+        """The flow's input of :mod:`impactcont.kernel.shooting` (built once,
+        :meth:`Flow.shooting_arrays`): empty modal arrays, the first-order arrays, the
+        scalar pairs of :attr:`FirstOrderBasis.scalar_pairs` (the contact search's modes)
+        and the constant force's ``X_s``, ``d``.
         """
         if self._arrays is None:
             none, empty = np.zeros(0), np.zeros((0, 0))
             pw, pa, pk, pj = self.basis.scalar_pairs
-            cplx = (self.lam, self.V, self.V_inv, self.Z)
-            lam, V, Vi, Z = (_kernel_array(x, complex) for x in cplx)
-            self._arrays = (True, none, none, none, none, none, empty, empty, lam, V, Vi, Z,
-                            _kernel_array(pw, float), _kernel_array(pa, float),
-                            _kernel_array(pk, np.int64), _kernel_array(pj, np.int64))
+            lam, V, Vi = (_kernel_array(x, complex) for x in (self.lam, self.V, self.V_inv))
+            g, free, xs, xd = self.static_arrays()
+            self._arrays = ShootingFlow(
+                general=True, w=none, a=none, f=none, u=empty, ui=empty, lam=lam, V=V, Vi=Vi,
+                pw=_kernel_array(pw, float), pa=_kernel_array(pa, float),
+                pk=_kernel_array(pk, np.int64), pj=_kernel_array(pj, np.int64), g=g,
+                free=free, xs=xs, xd=xd)
         return self._arrays
+
+    def forcing_arrays(self) -> Forcing:
+        """The forcing at omega (:meth:`Flow.forcing_arrays`): the complex steady amplitude
+        ``Z`` (``gamma, beta`` empty)."""
+        if self._forcing is None:
+            self._forcing = Forcing(omega=float(self.omega), gamma=np.zeros(0),
+                                    beta=np.zeros(0), Z=_kernel_array(self.Z, complex))
+        return self._forcing
 
     def _static(self, osc: ImpactOscillator) -> tuple[np.ndarray, np.ndarray]:
         """``X_s`` and ``d`` of the constant force: ``X' = A X + b``, ``b = [0; M^-1 F_s]``,
@@ -529,12 +550,12 @@ class GeneralFlow(Flow):
         return (self.static_offset - self.basis.transition(t) @ self.static_offset
                 + self.drift * t)
 
-    def omega_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def omega_arrays(self) -> ForcingDerivatives:
         """Empty modal derivatives and ``dZ / d omega`` (:meth:`Flow.omega_arrays`)."""
         if self._omega_arrays is None:
             dZ = self.basis.forced_amplitude_derivative(self.Z, self.omega)
-            self._omega_arrays = (np.zeros(0), np.zeros(0),
-                                  _kernel_array(dZ, complex))
+            self._omega_arrays = ForcingDerivatives(dgamma=np.zeros(0), dbeta=np.zeros(0),
+                                                    dZ=_kernel_array(dZ, complex))
         return self._omega_arrays
 
     def time_scales(self, row: int | None = None, *, normal: Any = None

@@ -49,12 +49,14 @@ import dataclasses
 import logging
 import math
 import warnings
+import weakref
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError, UnresolvedMotionWarning
+from impactcont.kernel.arrays import ContactStops, ImpactSequence, ShotFlights
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, check_pattern, require_forcing
 from impactcont.orbit.flow import Flow, flow_of
@@ -388,10 +390,9 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
     if x.shape != (2 * osc.n * p,):
         raise ParameterError(f"u must have shape ({2 * osc.n * p},) = (2 n p,) for n={osc.n}, "
                              f"p={p}; got shape {x.shape}")
-    arrays = flow.shooting_arrays()
-    out = _kernel().shooting_system(*arrays[:12], flow.static_arrays(), osc.omega,
-                                    TWO_PI * N / osc.omega, geo.pivots, geo.normals,
-                                    geo.positions, geo.matrices, _writable(x), jacobian)
+    out = _kernel().shooting_system(tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+                                    tuple(impact_sequence(geo)), TWO_PI * N / osc.omega,
+                                    _writable(x), jacobian)
     return _as_shooting(out, jacobian)
 
 
@@ -416,6 +417,42 @@ def _section_unknowns(states: np.ndarray, pivots: np.ndarray) -> np.ndarray:
     return np.concatenate([np.delete(X, j) for X, j in zip(states, pivots, strict=True)])
 
 
+def impact_sequence(geo: StopGeometry) -> ImpactSequence:
+    """The impacts of `geo` as the shooting kernel takes them (built once per geometry)."""
+    seq = _SEQUENCES.get(geo)
+    if seq is None:
+        seq = _SEQUENCES[geo] = ImpactSequence(pivots=geo.pivots, normals=geo.normals,
+                                               signs=geo.signs, positions=geo.positions,
+                                               matrices=geo.matrices)
+    return seq
+
+
+def contact_stops(geo: StopGeometry) -> ContactStops:
+    """The stops of the contact check of eq. (16) in `geo`, as the kernel takes them."""
+    return ContactStops(normal=geo.normal, two_sided=geo.two_sided, b=geo.b, b_low=geo.b_low,
+                        extra_normals=geo.extra_normals, extra_signs=geo.extra_signs,
+                        extra_positions=geo.extra_positions)
+
+
+#: :func:`impact_sequence` of each live stop geometry.
+_SEQUENCES: weakref.WeakKeyDictionary[StopGeometry, ImpactSequence] = \
+    weakref.WeakKeyDictionary()
+
+#: The Jacobian field of a :class:`ShotFlights` that has none (its type fixed: one compile).
+_NO_JACOBIAN = np.zeros((0, 0))
+
+
+def shot_flights(sh: Shooting) -> ShotFlights:
+    """`sh` as the kernel takes it: contiguous writable float arrays, the Jacobian (0, 0)
+    when it has none."""
+    return ShotFlights(
+        phases=_writable(sh.phases), flight_times=_writable(sh.flight_times),
+        starts=_writable(sh.starts), arrivals=_writable(sh.arrivals),
+        arrival_rates=_writable(sh.arrival_rates), transitions=_writable(sh.transitions),
+        phase_columns=_writable(sh.phase_columns), residual=_writable(sh.residual),
+        jacobian=_NO_JACOBIAN if sh.jacobian is None else _writable(sh.jacobian))
+
+
 def _geometry(flow: Flow, pattern: str) -> StopGeometry:
     """:func:`stop_geometry` of the flow's oscillator, kept on the flow per pattern."""
     cache = flow.__dict__.setdefault("_stop_geometry", {})
@@ -437,12 +474,12 @@ def _coordinate(normal: np.ndarray) -> str:
     return " ".join(terms)
 
 
-def _as_shooting(out: tuple[np.ndarray, ...], jacobian: bool) -> Shooting:
-    """:class:`Shooting` from the tuple of :func:`shooting_kernel.shooting_system`."""
-    phases, taus, starts, arrivals, rates, transitions, pcols, residual, J = out
-    return Shooting(phases=phases, flight_times=taus, starts=starts, arrivals=arrivals,
-                    arrival_rates=rates, transitions=transitions, phase_columns=pcols,
-                    residual=residual, jacobian=J if jacobian else None)
+def _as_shooting(out: ShotFlights, jacobian: bool) -> Shooting:
+    """:class:`Shooting` from :func:`shooting_kernel.shooting_system`'s record."""
+    return Shooting(phases=out.phases, flight_times=out.flight_times, starts=out.starts,
+                    arrivals=out.arrivals, arrival_rates=out.arrival_rates,
+                    transitions=out.transitions, phase_columns=out.phase_columns,
+                    residual=out.residual, jacobian=out.jacobian if jacobian else None)
 
 
 def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.ndarray,
@@ -531,11 +568,8 @@ def omega_partials(flow: Flow, sh: Shooting) -> np.ndarray:
     ndarray, shape (p, 2n)
         ``dX_k^-/d omega`` at fixed ``tau_k``, ``X_k`` and ``theta_k``.
     """
-    arrays = flow.shooting_arrays()
-    dgam, dbet, dZ = flow.omega_arrays()
-    return _kernel().omega_partials(
-        arrays[0], arrays[6], arrays[3], arrays[4], dgam, dbet, arrays[11], dZ, flow.omega,
-        *(_writable(a) for a in (sh.flight_times, sh.starts, sh.phases, sh.transitions)))
+    return _kernel().omega_partials(tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+                                    tuple(flow.omega_arrays()), tuple(shot_flights(sh)))
 
 
 # ------------------------------------------------------------------------------------------
@@ -714,12 +748,12 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
     if x0.shape != (2 * osc.n * p,):
         raise ParameterError(f"u0 must have shape ({2 * osc.n * p},) = (2 n p,) for "
                              f"n={osc.n}, p={p}; got shape {x0.shape}")
-    arrays = flow.shooting_arrays()
-    u, status, it, norm, step_norm, out = _kernel().newton_solve(
-        *arrays[:12], flow.static_arrays(), osc.omega, TWO_PI * N / osc.omega, geo.pivots,
-        geo.normals, geo.positions, geo.matrices, x0, float(tol), int(max_iter))
-    sh = _as_shooting(out, True)
-    if status == 0:
+    solved = _kernel().newton_solve(
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+        tuple(impact_sequence(geo)), TWO_PI * N / osc.omega, x0, float(tol), int(max_iter))
+    u, it, norm, step_norm = solved.x, solved.iterations, solved.residual_norm, solved.step_norm
+    sh = _as_shooting(solved.shot, True)
+    if solved.status == 0:
         return u, sh, int(it)
     scale = unknowns_scale(u)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
@@ -777,17 +811,13 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     validated), with the accuracy of the solution when known."""
     osc = flow.osc
     geo = _geometry(flow, pattern)
-    arrays = flow.shooting_arrays()
-    (jacs, h2, G, multipliers, gaps, gap_times, gaps_low, times_low, gaps_x, times_x,
-     capped) = _kernel().motion_checks(
-            *arrays[:5], *arrays[6:8], *arrays[12:16], *arrays[8:12], flow.static_arrays(),
-            osc.omega, geo.pivots,
-            geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.matrices,
-            *(_writable(a) for a in (
-                sh.phases, sh.flight_times, sh.starts, sh.transitions, sh.phase_columns,
-                sh.arrival_rates)), checks, geo.extra_normals, geo.extra_signs,
-            geo.extra_positions)
-    if capped:
+    checked = _kernel().motion_checks(
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
+        tuple(contact_stops(geo)), tuple(shot_flights(sh)), checks)
+    gaps, gap_times = checked.gap_upper, checked.time_upper
+    gaps_low, times_low = checked.gap_lower, checked.time_lower
+    gaps_x, times_x = checked.gap_extra, checked.time_extra
+    if checked.capped:
         warnings.warn(f"{_coordinate(geo.normal)} search grid capped at 2000000 cells on a "
                       f"flight of the N={N}, p={p} motion: a short excursion past a stop "
                       "(eq. 16) may be missed",
@@ -811,7 +841,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     if checks:
         _end_checks(sh, geo, pattern, gaps, gap_times, nearest, reasons)
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
-    velocities = h2[np.arange(-1, p - 1)] * geo.signs
+    velocities = checked.h2[np.arange(-1, p - 1)] * geo.signs
     for k in range(p):
         if not velocities[k] > 0:
             side = {UPPER: "the upper stop", LOWER: "the lower stop"}.get(
@@ -830,7 +860,8 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     return MultiImpactOrbit(
         oscillator=osc, N=N, p=p, phases=phases, flight_times=sh.flight_times.copy(),
         states=states, impact_velocities=velocities, flight_gap_min=gaps,
-        flight_gap_min_times=gap_times, jacobians=jacs, G=G, multipliers=multipliers,
+        flight_gap_min_times=gap_times, jacobians=checked.jacobians, G=checked.G,
+        multipliers=checked.multipliers,
         physical=not reasons, reason="; ".join(reasons),
         residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
         flight_gap_lower=gaps_low, condition_number=condition_number,

@@ -34,6 +34,7 @@ import numpy as np
 
 from impactcont.core.stepper import SINGULAR_CONDITION, CorrectorResult
 from impactcont.errors import ParameterError
+from impactcont.kernel.arrays import Forcing, ForcingDerivatives
 from impactcont.model.modal import _RESONANCE_REL_ERROR_WARN, forced_coefficients
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import (
@@ -53,8 +54,10 @@ from impactcont.orbit.multi_impact import (
     _kernel,
     _writable,
     check_impacts,
+    impact_sequence,
     orbit_from_unknowns,
     shooting,
+    shot_flights,
 )
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.stop_geometry import StopGeometry
@@ -201,14 +204,12 @@ class MultiImpactBranchProblem:
             else:  # omega: the residual, the Jacobian and dF/domega in one compiled call
                 flow = self.flow_at(lam)
                 geo = _geometry(flow, self.pattern)
-                arrays = flow.shooting_arrays()
-                dgam, dbet, dZ = flow.omega_arrays()
-                out, extended = _kernel().branch_linearization(
-                    *arrays[:12], flow.static_arrays(), flow.omega,
-                    2.0 * math.pi * self.N / flow.omega, geo.pivots, geo.normals,
-                    geo.positions, geo.matrices, _writable(u), dgam, dbet, dZ)
-                sh = _as_shooting(out, True)
-                self._extended[key] = extended
+                linear = _kernel().branch_linearization(
+                    tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+                    tuple(flow.omega_arrays()), tuple(impact_sequence(geo)),
+                    2.0 * math.pi * self.N / flow.omega, _writable(u))
+                sh = _as_shooting(linear.shot, True)
+                self._extended[key] = linear.extended
             self._shots[key] = sh
         return sh
 
@@ -320,13 +321,10 @@ class MultiImpactBranchProblem:
         ``tau_{p-1} = 2 pi N / omega - (tau_0 + .. + tau_{p-2})``, each through ``D_{k+1}``.
         """
         flow = self.flow_at(lam)
-        arrays = flow.shooting_arrays()
-        dgam, dbet, dZ = flow.omega_arrays()
         return _kernel().frequency_column(
-            arrays[0], arrays[6], arrays[3], arrays[4], dgam, dbet, arrays[11], dZ,
-            flow.omega, 2.0 * math.pi * self.N / flow.omega, geo.matrices,
-            *(_writable(a) for a in (sh.flight_times, sh.starts, sh.phases, sh.transitions,
-                                     sh.phase_columns, sh.arrival_rates)))
+            tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+            tuple(flow.omega_arrays()), tuple(impact_sequence(geo)),
+            2.0 * math.pi * self.N / flow.omega, tuple(shot_flights(sh)))
 
     def _difference_quotient(self, u: np.ndarray, lam: float) -> np.ndarray:
         """The parameter's one finite-difference fallback applied to the residual."""
@@ -343,9 +341,8 @@ class MultiImpactBranchProblem:
         sh = self._shoot(u, lam)
         flow = self.flow_at(lam)
         geo = _geometry(flow, self.pattern)
-        return _kernel().jacobian_product(geo.pivots, geo.normals, geo.matrices, flow.omega,
-                                          sh.transitions, sh.phase_columns, sh.arrival_rates,
-                                          int(count))
+        return _kernel().jacobian_product(tuple(impact_sequence(geo)), float(flow.omega),
+                                          tuple(shot_flights(sh)), int(count))
 
     def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
                   tol: float, max_iter: int, *, hyperplane: bool = False
@@ -369,31 +366,28 @@ class MultiImpactBranchProblem:
         """:meth:`palc_step` on the unknowns ``v`` with ``u = E v + c / omega`` and the
         first `rows` equations (a symmetric motion's half system)."""
         base = self._base_flow
-        arrays = base.shooting_arrays()
         errors = self.osc.modes.eigenvalue_errors
         geo = _geometry(base, self.pattern)
-        (state, iterations, status, omega, norm, raw, worst, worst_omega, flagged,
-         last) = _kernel().palc_correct(
-            arrays[1], arrays[2], arrays[5], _errors(errors, base.n), arrays[6], arrays[7],
-            base.static_arrays(), float(self.N), geo.pivots, geo.normals, geo.positions,
-            geo.matrices, E, c, int(rows), _writable(predicted), _writable(tangent),
-            _writable(weights), float(tol), int(max_iter), SINGULAR_CONDITION,
-            bool(hyperplane))
-        if errors is not None and worst > _RESONANCE_REL_ERROR_WARN:
+        out = _kernel().palc_correct(
+            tuple(base.shooting_arrays()), _errors(errors, base.n), tuple(impact_sequence(geo)),
+            float(self.N), (E, c, int(rows)),
+            (_writable(predicted), _writable(tangent), _writable(weights)),
+            (float(tol), int(max_iter), SINGULAR_CONDITION, bool(hyperplane)))
+        if errors is not None and out.worst > _RESONANCE_REL_ERROR_WARN:
             # an iterate near a lightly damped mode: forced_coefficients warns in its words
-            forced_coefficients(base.w, base.a, base.f, worst_omega, eigenvalue_errors=errors)
+            forced_coefficients(base.w, base.a, base.f, out.worst_omega, eigenvalue_errors=errors)
         message = ""
-        if status == _REFUSED:
+        if out.status == _REFUSED:
             try:  # the oscillator's own refusal (omega <= 0, an undamped resonance)
-                self.flow_at(omega)
-                message = f"omega = {omega!r} refused"
+                self.flow_at(out.omega)
+                message = f"omega = {out.omega!r} refused"
             except ParameterError as error:
                 message = str(error)
-        return CorrectorResult(state=state, iterations=int(iterations),
-                               status=_STATUSES[int(status)], lam=float(omega),
-                               residual_norm=float(norm), tangent=raw,
-                               ill_conditioned=flagged if flagged.size else None,
-                               message=message, last_step=float(last))
+        return CorrectorResult(state=out.state, iterations=int(out.iterations),
+                               status=_STATUSES[int(out.status)], lam=float(out.omega),
+                               residual_norm=float(out.residual_norm), tangent=out.tangent,
+                               ill_conditioned=out.flagged if out.flagged.size else None,
+                               message=message, last_step=float(out.last_update))
 
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
@@ -424,15 +418,17 @@ def _at_frequency(base: Flow, osc: ImpactOscillator, *, same_stops: bool = True)
     flow.osc, flow.omega = osc, omega
     arrays = base.shooting_arrays()
     errors = osc.modes.eigenvalue_errors
-    gam, bet, dgam, dbet, worst, resonant = _kernel().forced_amplitudes(
-        arrays[1], arrays[2], arrays[5], _errors(errors, base.n), omega)
-    if resonant or not worst <= _RESONANCE_REL_ERROR_WARN:
+    amplitudes = _kernel().forced_amplitudes(arrays.w, arrays.a, arrays.f,
+                                             _errors(errors, base.n), omega)
+    gam, bet = amplitudes.gamma, amplitudes.beta
+    if amplitudes.resonant or not amplitudes.worst <= _RESONANCE_REL_ERROR_WARN:
         # refused or warned about: forced_coefficients says so in its own words
         gam, bet = (np.array(c, dtype=float) for c in forced_coefficients(
             base.w, base.a, base.f, omega, eigenvalue_errors=errors))
     flow.gamma, flow.beta = gam, bet
-    flow._arrays = (*arrays[:3], gam, bet, *arrays[5:])
-    flow._omega_arrays = (dgam, dbet, arrays[11])
+    flow._forcing = Forcing(omega=float(omega), gamma=gam, beta=bet, Z=base.forcing_arrays().Z)
+    flow._omega_arrays = ForcingDerivatives(dgamma=amplitudes.dgamma, dbeta=amplitudes.dbeta,
+                                            dZ=base.omega_arrays().dZ)
     return flow
 
 
