@@ -133,8 +133,9 @@ class PeriodicOrbit:
         """Eigenvalues of G, largest modulus first, shape (2n,) complex.
 
         From ``n >= secular.SECULAR_MIN`` degrees of freedom by the O(n)-per-root
-        secular function of :mod:`impactcont.orbit.secular` (G is not formed); the
-        dense eigenvalues of G where its accuracy guard refuses, and for small systems.
+        secular function of :mod:`impactcont.orbit.secular` (G is not formed; the
+        impact velocity as its pole, a polished one included); the dense eigenvalues of G
+        where its accuracy guard refuses, and for small systems.
         """
         from impactcont.kernel import stability
         from impactcont.orbit import secular

@@ -45,12 +45,16 @@ in modal coordinates, ``h2 = sum_i u_1i v_i`` (``v = z'(T^-)``), and its zero ro
 velocities nearly vanish at the impact and ``h2`` is a small difference of their terms
 (issue 19: 6e-10 relative for a 16-mass chain at ``omega = 1e4 omega_1``, R = 0.8, and
 the multipliers with it), a loss no later test sees (the power sums are of the same
-pieces). The secular path is refused (``ok`` False: the caller takes the eigenvalues of
-G with the motion's own velocity as its pole,
-:func:`impactcont.orbit.periodic.modal_jacobian`) where the rounding bound of that sum
-(:func:`velocity_row_error`) exceeds :data:`impactcont.orbit.dense.VELOCITY_POLISH` of the
-motion's velocity ``sigma``. Chains up to n = 200 at ordinary frequencies stay below
-1.1e-13 (relative).
+pieces). Where the rounding bound of that sum (:func:`velocity_row_error`) exceeds
+:data:`impactcont.orbit.dense.VELOCITY_POLISH` of the motion's velocity ``sigma``, the
+pole is ``sigma`` itself, as in the dense G (:func:`impactcont.orbit.periodic.
+modal_jacobian`), and the mass-1 entry of the velocity column is corrected to it,
+``v += (sigma - sum_i u_1i v_i) u^-1 e_1``, the sum exact (:func:`exact_dot`): the zero
+row of ``M`` then holds to rounding and the multipliers are those of that G (chains of
+40-100 masses at ``omega = 30 ... 1000``: within 5e-13 of LAPACK's eigenvalues of G,
+relative to the largest, where the modal sum as the pole was up to 2.4e-9 off). Until
+issue 29 this case fell back to the dense eigenvalues of G. Chains up to n = 200 at
+ordinary frequencies stay below 1.1e-13 (relative) with the modal sum.
 
 Plain numpy, nothing compiled (a system's first large orbit costs no compile wave): each
 Aberth-Ehrlich sweep corrects all roots not yet done at once (Jacobi order), the modal
@@ -60,13 +64,14 @@ modes by modes x 12, and the Aberth repulsion as one roots x roots array.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 
 from impactcont.orbit.dense import VELOCITY_POLISH
 
-__all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "jacobian_pieces", "power_sums",
+__all__ = ["DEAD", "POWER_SUM_TOL", "SECULAR_MIN", "exact_dot", "jacobian_pieces", "power_sums",
            "power_sums_agree", "secular_coefficients", "secular_multipliers",
            "velocity_row_error"]
 
@@ -126,8 +131,11 @@ def jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma):
     return e_y, e_v, v_pre, acc
 
 
-def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
+def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc, h2=None):
     """The modal pieces of ``S(mu)``: ``(coef, kind, t, p, lam, const, zeros, h2, xn)``.
+
+    ``h2``: the pole, by default the velocity of mass 1 in modal form
+    ``sum_i u_1i v_i`` (given by :func:`secular_multipliers` where that sum cancels).
 
     ``coef[k, 0, i] mu + coef[k, 1, i]`` over ``d_i(mu) = mu^2 - t_i mu + p_i`` is mode
     i's share of ``row^T (mu - W_i)^-1 column``: rows ``v`` (velocity of mass 1, even
@@ -142,7 +150,7 @@ def secular_coefficients(modal, u0, ui0, omega, R, e_y, e_v, v_pre, acc):
     make a near-multiple root at 0 that no root finder resolves from values.
     """
     kappa = 1.0 + R
-    h2 = float(np.sum(u0 * v_pre))
+    h2 = float(np.sum(u0 * v_pre)) if h2 is None else float(h2)
     xn = float(np.sum(u0 * acc))
     w11, w12, w21, w22 = modal[2], modal[3], modal[4], modal[5]
     t = w11 + w22
@@ -422,20 +430,49 @@ def velocity_row_error(modal, u0, ui0, omega, R, delta, sigma) -> float:
     return float(_EPS * np.sum(np.abs(u0) * (forced + np.abs(kappa * sigma * (modal[7] + ui0)))))
 
 
+def exact_dot(x: np.ndarray, y: np.ndarray) -> float:
+    """``sum_i x_i y_i`` of float arrays rounded once: each product split exactly into
+    its rounded value and its rounding error (Dekker's two-product, Veltkamp's
+    splitting; no overflow for the modal sizes here), all of them summed exactly
+    (:func:`math.fsum`). O(n)."""
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    split = 134217729.0  # 2^27 + 1
+    cx, cy = split * x, split * y
+    xh, yh = cx - (cx - x), cy - (cy - y)
+    xl, yl = x - xh, y - yh
+    prod = x * y
+    err = ((xh * yh - prod) + xh * yl + xl * yh) + xl * yl
+    return math.fsum(np.concatenate((prod, err)).tolist())
+
+
 def secular_multipliers(modal, w, a, f, u0, ui0, omega, R, delta, sigma):
     """The multipliers of G (eq. 25) from the secular function, largest modulus first.
 
-    Returns ``(multipliers, ok)``: ``ok`` is False when the velocity of mass 1 in modal
-    form cancels (the guard of the module: the multipliers are then NaN), the iteration
-    did not converge or the power sums disagree with ``tr G``, ``tr G^2`` (then use the
-    dense path).
+    Returns ``(multipliers, ok)``: ``ok`` is False when the iteration did not converge or
+    the power sums disagree with ``tr G``, ``tr G^2`` (then use the dense path).
+
+    Where the velocity of mass 1 in modal form, ``sum_i u_1i v_i``, cancels (its rounding
+    bound :func:`velocity_row_error` above :data:`~impactcont.orbit.dense.VELOCITY_POLISH`
+    of ``sigma``, the guard of the module) the motion's own velocity ``sigma`` is the pole,
+    as in the dense G (:func:`impactcont.orbit.periodic.modal_jacobian`), and the velocity
+    column of ``Q`` is corrected in its mass-1 entry only, ``v += (sigma - sum_i u_1i v_i)
+    u^-1 e_1`` with the sum exact (:func:`exact_dot`), so that ``e_x1^T Q = [0, 1]`` holds
+    to rounding and ``M`` keeps its zero row: the multipliers are those of that G. Before
+    (issue 29) this case fell back to the dense eigenvalues of G, O(n^3): 30-80 s for a
+    2000-mass chain whose velocity was polished, against about 1 s here.
     """
+    pieces = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
+    pole = None
     if not velocity_row_error(modal, u0, ui0, omega, R, delta, sigma) <= (
             VELOCITY_POLISH * abs(sigma)):
-        return np.full(2 * u0.size, np.nan + 0.0j), False
-    pieces = jacobian_pieces(modal, w, a, f, ui0, omega, R, delta, sigma)
+        if not (math.isfinite(sigma) and sigma != 0.0):
+            return np.full(2 * u0.size, np.nan + 0.0j), False
+        e_y, e_v, v_pre, acc = pieces
+        pieces = (e_y, e_v, v_pre + (sigma - exact_dot(u0, v_pre)) * ui0, acc)
+        pole = float(sigma)
     coef, kind, t, p, lam, const, zeros, h2, xn = secular_coefficients(
-        modal, u0, ui0, omega, R, *pieces)
+        modal, u0, ui0, omega, R, *pieces, h2=pole)
     z = _starts(kind, t, p, zeros)
     ok = aberth(_regroup(coef, kind, t, p, lam, const, zeros, omega, R, h2, xn), z)
     z = _pair_conjugates(z)
