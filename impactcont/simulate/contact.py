@@ -241,9 +241,7 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
 
     Every stop of the oscillator (:attr:`Stops.names`: ``U``, ``L`` and the extra stops,
     each on its own coordinate ``s = normal . x``) is searched on its own grid (the time
-    scales of its own coordinate) over the same windows; the earliest crossing wins. Its
-    time is polished on the matrix exponential (:meth:`StopMotion.polish`) and the state
-    there is ``expm(A t) Y(0)``.
+    scales of its own coordinate) over the same windows; the earliest crossing wins.
 
     Parameters
     ----------
@@ -300,7 +298,7 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
             continue
         stop_time = min(start + window, t_max)
         grids = {s: search_grid(fl, start, stop_time, normals[s]) for s in stops}
-        best: tuple[float, str, float, float] | None = None
+        best: tuple[float, str] | None = None
         for s in stops:
             grid = grids[s]
             y, v, _ = motions[s](grid[:1])
@@ -309,16 +307,15 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
                 # into it: the impact sits on the boundary (the evaluations differ by rounding);
                 # at the start of the flight, a state short of the stop by less than the
                 # rounding of the evaluation, moving into it (no crossing from below to find)
-                hit: tuple[float, float, float] | None = (start, start, start)
+                tc: float | None = start
             else:
-                hit = first_crossing(motions[s], levels[s], grid, after=after.get(s, -math.inf))
-            if hit is not None and (best is None or hit[0] < best[0]):
-                best = (hit[0], s, hit[1], hit[2])
+                tc = first_crossing(motions[s], levels[s], grid, after=after.get(s, -math.inf))
+            if tc is not None and (best is None or tc < best[0]):
+                best = (tc, s)
         if best is not None:
-            tc, s, lo, hi = best
-            tc = motions[s].polish(tc, levels[s], lo, hi)
-            return tc, fl.state(tc, X, phase)[0], s
+            return best[0], motions[best[1]].state(best[0]), best[1]
         for s in stops:
             below[s] = bool(motions[s](grids[s][-1:])[0][0] < levels[s])
+            motions[s].anchor(stop_time)
         start, window = stop_time, min(2.0 * window, longest)
     return None

@@ -17,20 +17,21 @@ between impacts is the autonomous system ``Y' = A Y`` of order ``N = 2n + 3`` on
 so the exact flow from ``Y(0)`` is ``Y(t) = expm(A t) Y(0)``: one matrix exponential
 (:func:`scipy.linalg.expm`, scaling and squaring with a Pade approximant) gives the state at
 any time with no truncation, for any damping matrix C, free masses, a constant force and a
-complex F alike, and with no case analysis (undamped, critical, over-damped, resonance
-with a free mode: all the same matrix). Its derivatives are exact too:
+complex F alike, and with no case analysis (undamped, critical, over-damped, a free mode
+drifting under a constant force: all the same matrix). Its derivatives are exact too:
 ``Y^(j)(t) = A^j Y(t)``.
 
 Locating an impact evaluates a stop coordinate at many times (a grid and Newton
 iterates). Where ``A = W diag(lambda) W^-1`` with a well-conditioned ``W``
 (:attr:`Flight.fast`) a stop coordinate ``y = r . Y`` is
 ``Re(sum_k c_k e^{lambda_k t})``, ``c_k = (r W)_k (W^-1 Y(0))_k``: O(N) per time
-(:class:`StopMotion`). Where ``A`` is defective or nearly so (an undamped free mass, a
-free mass drifting under a constant force, a critically damped mode, a forcing close to
-a lightly damped resonance) every evaluation is a matrix exponential instead. The
-impact time found on the fast path is polished by Newton's method on the matrix
-exponential itself (:meth:`StopMotion.polish`), and the state at an impact is always
-``expm(A t) Y(0)``.
+(:class:`StopMotion`), to about ``cond(W)`` ulps at any t (the forcing's eigenvalues
+``+-i omega`` and 0 are set exactly). Where ``A`` is defective or nearly so (an undamped
+free mass, a free mass drifting under a constant force, a critically damped mode) every
+evaluation is a matrix exponential from an anchor a bounded time before it: scaling and
+squaring loses about ``log2 |A t|`` bits and the rotation of the forcing states would
+drift over a long flight, so a long advance is taken in steps of ``|A| dt <=
+_STEP_NORM``, ``c, s`` set to their exact values after each (:meth:`Flight.advance`).
 """
 
 from __future__ import annotations
@@ -48,12 +49,12 @@ __all__ = ["Flight", "StopMotion", "flight_of"]
 _EPS = float(np.finfo(float).eps)
 #: Largest condition number of the eigenvectors W of A for the fast path: the values of a
 #: stop coordinate are then exact to about cond(W) ulps of the motion's size.
-_COND_LIMIT = 1e8
+_COND_LIMIT = 1e4
 #: Size of the work arrays of one vectorised evaluation (entries of times x N, or of the
 #: stacked N x N matrices of the matrix exponential).
 _CHUNK = 1 << 20
-#: Newton steps of the polish of an impact time on the matrix exponential.
-_POLISH_STEPS = 3
+#: Longest step ``|A| dt`` of one matrix exponential on the slow path.
+_STEP_NORM = 256.0
 
 
 def _combine(columns: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -130,6 +131,8 @@ class Flight:
         Forcing frequency.
     A : ndarray, shape (2n+3, 2n+3)
         The system matrix (module docstring).
+    norm : float
+        Its 1-norm (the steps of the slow path).
     eigenvalues : ndarray, complex, shape (2n+3,)
         Eigenvalues of A (the oscillator's, ``+-i omega`` and 0): the time scales.
     fast : bool
@@ -147,6 +150,7 @@ class Flight:
         self.n = osc.n
         self.omega = float(osc.omega)
         self.A = _system_matrix(osc)
+        self.norm = float(np.linalg.norm(self.A, 1))
         lam, W = scipy.linalg.eig(self.A)
         self.eigenvalues = lam
         condition = math.inf
@@ -159,7 +163,20 @@ class Flight:
         self.condition = condition
         self.fast = W_inv is not None
         self.W, self.W_inv = W, W_inv
-        self._kinds = self._mode_kinds() if self.fast else None
+        self._kinds: np.ndarray | None = None
+        if self.fast:
+            # the forcing's eigenvalues are known exactly (the rotation c' = -omega s,
+            # s' = omega c and the constant 1' = 0): the computed ones carry an error of
+            # about eps |A|, a phase error growing with t (relative 1e-7 at omega = 1e-8)
+            kinds = self._mode_kinds()
+            signs = np.sign(lam[kinds == 1].imag)
+            if sorted(signs) == [-1.0, 1.0]:
+                lam = lam.copy()
+                lam[kinds == 1] = 1j * self.omega * signs
+                lam[kinds == 0] = 0.0
+                self.eigenvalues, self._kinds = lam, kinds
+            else:  # the forcing pair not told apart from the oscillator's modes
+                self.fast, self.W_inv = False, None
         self._scales: dict[bytes, tuple[float, float]] = {}
 
     # -- states -------------------------------------------------------------------------------
@@ -171,7 +188,9 @@ class Flight:
     def propagate(self, t: Any, Y0: np.ndarray) -> np.ndarray:
         """``expm(A t) Y0`` at each time of `t`, shape (nt, N): the exact flow.
 
-        Evaluated in chunks of stacked matrices (at most ``_CHUNK`` entries of work array).
+        Evaluated in chunks of stacked matrices (at most ``_CHUNK`` entries of work array);
+        each matrix exponential is computed on its own, so a value does not depend on the
+        times evaluated with it.
         """
         t = np.atleast_1d(np.asarray(t, dtype=float))
         N = self.A.shape[0]
@@ -183,20 +202,21 @@ class Flight:
                                        Y0[:, None])[..., 0]
         return out
 
-    def state(self, t: Any, X: np.ndarray, phase: float) -> np.ndarray:
-        """The state ``[x; x']`` at times `t` after a start at state X and phase, (nt, 2n),
-        by the matrix exponential."""
-        return self.propagate(t, self.start(X, phase))[:, :2 * self.n]
-
-    def samples(self, t: Any, X: np.ndarray, phase: float) -> np.ndarray:
-        """The state ``[x; x']`` at many times `t` (a trajectory), (nt, 2n): from the
-        eigenvalues on the fast path (to about :attr:`condition` ulps), else as :meth:`state`."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        Y0 = self.start(X, phase)
-        if not self.fast:
-            return self.propagate(t, Y0)[:, :2 * self.n]
-        table = (self.W_inv @ Y0)[:, None] * self.W[:2 * self.n].T  # (N, 2n)
-        return self.modal_sum(t, table)
+    def advance(self, Y: np.ndarray, dt: float, theta: float) -> np.ndarray:
+        """``Y`` a time `dt` later, from forcing phase `theta`: matrix exponentials of steps
+        ``|A| h <= _STEP_NORM``, the forcing states set to ``cos, sin`` of the exact phase
+        after each."""
+        if dt == 0.0:
+            return Y.copy()
+        steps = max(1, math.ceil(self.norm * abs(dt) / _STEP_NORM))
+        h = dt / steps
+        E = scipy.linalg.expm(h * self.A)
+        m = 2 * self.n
+        for j in range(1, steps + 1):
+            Y = _combine(E, Y[:, None])[:, 0]
+            Y[m:m + 2] = (math.cos(theta + self.omega * j * h),
+                          math.sin(theta + self.omega * j * h))
+        return Y
 
     def modal_sum(self, t: np.ndarray, table: np.ndarray) -> np.ndarray:
         """``Re(sum_k e^{lambda_k t} table[k])`` at each time of `t`, shape (nt, m), on the
@@ -207,6 +227,31 @@ class Flight:
             rotations = np.exp(np.multiply.outer(t[k:k + step], self.eigenvalues))
             out[k:k + step] = _combine(rotations, table).real
         return out
+
+    def samples(self, t: Any, X: np.ndarray, phase: float) -> np.ndarray:
+        """The state ``[x; x']`` at sorted times `t` after a start at state X and phase,
+        shape (nt, 2n): from the eigenvalues on the fast path, else by matrix exponentials
+        from anchors (:meth:`advance`) at most ``_STEP_NORM / |A|`` before each time."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        Y = self.start(X, phase)
+        m = 2 * self.n
+        if self.fast:
+            return self.modal_sum(t, (self.W_inv @ Y)[:, None] * self.W[:m].T)
+        out = np.empty((t.size, m))
+        span = _STEP_NORM / max(self.norm, _EPS)
+        origin, i = 0.0, 0
+        while i < t.size:
+            if t[i] - origin > span:
+                Y = self.advance(Y, t[i] - origin, phase + self.omega * origin)
+                origin = float(t[i])
+            j = max(i + 1, int(np.searchsorted(t, origin + span, side="right")))
+            out[i:j] = self.propagate(t[i:j] - origin, Y)[:, :m]
+            i = j
+        return out
+
+    def state(self, t: float, X: np.ndarray, phase: float) -> np.ndarray:
+        """The state ``[x; x']`` at time `t` after a start at state X and phase, (2n,)."""
+        return self.samples(np.array([float(t)]), X, phase)[0]
 
     def rate(self, X: np.ndarray, phase: float) -> np.ndarray:
         """``X' = [x'; x'']`` at a state X and phase (eq. 1), shape (2n,)."""
@@ -241,7 +286,7 @@ class Flight:
     def motion(self, X: np.ndarray, phase: float, normal: np.ndarray,
                sign: float = 1.0) -> StopMotion:
         """The evaluator of ``y = sign * normal . x`` along the flight from X at `phase`."""
-        return StopMotion(self, self.start(X, phase), normal, sign)
+        return StopMotion(self, X, phase, normal, sign)
 
     # -- the modes of the envelope ------------------------------------------------------------
     def _mode_kinds(self) -> np.ndarray:
@@ -268,8 +313,10 @@ class StopMotion:
     Parameters
     ----------
     flight : Flight
-    Y0 : ndarray, shape (N,)
-        The augmented state at the start (:meth:`Flight.start`).
+    X : ndarray, shape (2n,)
+        The state at the start of the flight.
+    phase : float
+        The forcing phase there.
     normal : array_like, shape (n,)
         The stop coordinate ``s = normal . x``.
     sign : float
@@ -278,22 +325,26 @@ class StopMotion:
     Notes
     -----
     Fast path: ``y^(j)(t) = Re(sum_k lambda_k^j c_k e^{lambda_k t})``. Otherwise
-    ``y^(j)(t) = (r A^j) expm(A t) Y0`` with ``r = [sign normal; 0]``.
+    ``y^(j)(t) = (r A^j) expm(A (t - t_a)) Y(t_a)`` with ``r = [sign normal; 0]``, from an
+    anchor ``t_a`` that the search moves along the flight (:meth:`anchor`).
     """
 
-    def __init__(self, flight: Flight, Y0: np.ndarray, normal: Any, sign: float = 1.0) -> None:
+    def __init__(self, flight: Flight, X: np.ndarray, phase: float, normal: Any,
+                 sign: float = 1.0) -> None:
         n, N = flight.n, flight.A.shape[0]
+        Y0 = flight.start(X, phase)
         r = np.zeros(N)
         r[:n] = float(sign) * np.asarray(normal, dtype=float)
         self.flight = flight
-        self.Y0 = Y0
-        self.row = r
+        self.phase = float(phase)
         rows = [r]
         for _ in range(3):
             rows.append(rows[-1] @ flight.A)
         self.rows = np.array(rows)  # r A^j, j = 0..3: the exact derivatives
+        self.origin, self.Y_origin = 0.0, Y0  # the anchor of the slow path
         if flight.fast:
-            self.weights = (r @ flight.W) * (flight.W_inv @ Y0)
+            self.modal = flight.W_inv @ Y0
+            self.weights = (r @ flight.W) * self.modal
             self.table = self.weights[:, None] * flight.eigenvalues[:, None] ** np.arange(4)
 
     def __call__(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -307,31 +358,24 @@ class StopMotion:
         if fl.fast:
             values = fl.modal_sum(t, self.table)
         else:
-            values = _combine(fl.propagate(t, self.Y0), self.rows.T)
+            values = _combine(fl.propagate(t - self.origin, self.Y_origin), self.rows.T)
         return values[:, 0], values[:, 1], values[:, 2], values[:, 3]
 
-    def polish(self, t: float, level: float, lo: float, hi: float) -> float:
-        """The crossing ``y = level`` near `t` in ``[lo, hi]``, by Newton's method on the
-        matrix exponential (exact values): a step leaving the bracket is not taken.
+    def anchor(self, t: float) -> None:
+        """Evaluate from time `t` on (the slow path; the fast path needs no anchor)."""
+        if not self.flight.fast and t != self.origin:
+            self.Y_origin = self.flight.advance(self.Y_origin, t - self.origin,
+                                                self.phase + self.flight.omega * self.origin)
+            self.origin = float(t)
 
-        On the slow path the evaluations already are the matrix exponential: `t` returns.
-        """
-        if not self.flight.fast or not lo < hi:
-            return t
-        A = self.flight.A
-        for _ in range(_POLISH_STEPS):
-            Y = self.flight.propagate(t, self.Y0)[0]
-            g, slope = float(self.row @ Y) - level, float(self.row @ (A @ Y))
-            if g == 0.0 or slope == 0.0:
-                break
-            new = t - g / slope
-            if not (math.isfinite(new) and lo <= new <= hi):
-                break
-            done = abs(new - t) <= 4.0 * _EPS * max(abs(t), 1.0)
-            t = new
-            if done:
-                break
-        return t
+    def state(self, t: float) -> np.ndarray:
+        """The state ``[x; x']`` at time `t` (not before the anchor), shape (2n,)."""
+        fl = self.flight
+        m = 2 * fl.n
+        if fl.fast:
+            return fl.modal_sum(np.array([float(t)]), self.modal[:, None] * fl.W[:m].T)[0]
+        theta = self.phase + fl.omega * self.origin
+        return fl.advance(self.Y_origin, float(t) - self.origin, theta)[:m]
 
     def envelope(self, t0: float, horizon: float) -> tuple[complex, float, float, float] | None:
         """Forced amplitude, a bound on the free part on ``[t0, horizon]`` and two sizes.
@@ -349,7 +393,7 @@ class StopMotion:
             constant part (a constant force). None off the fast path.
         """
         fl = self.flight
-        if not fl.fast:
+        if fl._kinds is None:
             return None
         kinds, lam, c = fl._kinds, fl.eigenvalues, self.weights
         pair = np.flatnonzero(kinds == 1)
@@ -363,4 +407,3 @@ class StopMotion:
             return None
         offset = float(np.sum(c[kinds == 0]).real)
         return z, bound, float(np.sum(np.abs(c))), offset
-

@@ -167,7 +167,7 @@ def turning_points(motion: StopMotion, grid: np.ndarray) -> np.ndarray:
 
 
 def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
-                   after: float = -math.inf) -> tuple[float, float, float] | None:
+                   after: float = -math.inf) -> float | None:
     """The first time in ``(grid[0], grid[-1]]`` where ``y`` reaches `level` from below.
 
     Parameters
@@ -183,9 +183,8 @@ def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
 
     Returns
     -------
-    (float, float, float) or None
-        The crossing time (a few ulps) and its bracket ``(lo, hi)``, on which ``y`` is
-        monotone; None when ``y < level`` throughout.
+    float or None
+        The crossing time, to a few ulps; None when ``y < level`` throughout.
     """
     pieces = np.union1d(grid, turning_points(motion, grid))  # y monotone on each piece
     gap = motion(pieces)[0] - level
@@ -198,5 +197,4 @@ def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
         y, slope, _ = motion(s)
         return y - level, slope
 
-    root = newton_in_brackets(fun, pieces[i:i + 1], pieces[i + 1:i + 2], gap[i:i + 1])
-    return float(root[0]), float(pieces[i]), float(pieces[i + 1])
+    return float(newton_in_brackets(fun, pieces[i:i + 1], pieces[i + 1:i + 2], gap[i:i + 1])[0])

@@ -66,6 +66,9 @@ _EPS = float(np.finfo(float).eps)
 # position cannot be resolved (the crossing test sees rounding, not the motion): complete
 # chatter, whatever chatter_velocity says
 _BOUNCE_ULPS = 1e3
+# an impact within this many ulps of the end of the span simulated belongs to it (a periodic
+# motion simulated for whole periods meets its last impact at the end, up to rounding)
+_END_ULPS = 1024
 
 
 class SimulationStatus(enum.Enum):
@@ -287,7 +290,9 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     delta : float
         Forcing phase at ``t = 0`` (the forcing is ``F cos(omega t + delta)``).
     periods : float
-        Duration in forcing periods ``2 pi / omega``.
+        Duration in forcing periods ``2 pi / omega``. An impact at the end of that span up
+        to rounding (``_END_ULPS`` ulps of it: a periodic motion simulated for whole periods)
+        is the last one recorded, and the simulation ends there.
     trajectory : bool
         Also return sampled states ``t, X`` (both sides of each impact).
     samples_per_period : int
@@ -343,16 +348,17 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             # velocity or position is exact only up to rounding, which may show a crossing
             # of that stop a few ulps after the start; it is not an impact
             after = {s: _ON_STOP * TWO_PI / osc.omega for s in _touching(X, views, last)}
-            hit = next_contact(flight, X, phase, t_end - t_now, after=after)
-        duration = hit[0] if hit is not None else t_end - t_now
+            hit = next_contact(flight, X, phase, t_end - t_now + _END_ULPS * _EPS * t_end,
+                               after=after)
+        duration = hit[0] if hit is not None else max(t_end - t_now, 0.0)
         if trajectory:
             tau = np.arange(0.0, duration, dt_sample)
             t_chunks.append(t_now + np.append(tau, duration))
             X_chunks.append(flight.samples(np.append(tau, duration), X, phase))
         if hit is None:
-            X = flight.state(duration, X, phase)[0]
+            X = flight.state(duration, X, phase)
             phase = _wrap(phase + osc.omega * duration)
-            t_now = t_end
+            t_now = max(t_now, t_end)
             break
         tc, X_minus, side = hit
         v = sign[side] * float(normal[side] @ X_minus[n:])  # speed towards the stop hit
@@ -377,6 +383,11 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             break
         if len(times) >= max_impacts:
             status = SimulationStatus.MAX_IMPACTS
+            break
+        if t_now >= t_end:  # an impact at the end of the span, up to rounding: the last
+            if trajectory:
+                t_chunks.append(np.array([t_now]))
+                X_chunks.append(X[None, :].copy())
             break
     if status is not SimulationStatus.COMPLETED:
         last = (f"; last impact on stop {hits[-1]!r} at speed {vels[-1]:.3g}" if hits else "")

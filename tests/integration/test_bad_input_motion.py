@@ -18,10 +18,10 @@ from impactcont import Flow, SimulationStatus, simulate
 from impactcont.analysis.multi_branch import make_options, multi_impact_continuation, trace_branch
 from impactcont.errors import IllConditionedWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.stops import Stops
-from impactcont.orbit.flow import Mass1Motion
 from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns, shooting
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.simulate import next_impact
+from impactcont.simulate.flight import StopMotion
 from tests.orbit.test_general import _augmented
 
 # ------------------------------------------------------------------------------------------
@@ -43,9 +43,10 @@ class _OverBudgetError(Exception):
 
 @pytest.fixture
 def evaluations(monkeypatch):
-    """Count the times at which any flight's motion is evaluated; stop past the budget."""
+    """Count the times at which the simulator evaluates a flight (its own evaluator, issue
+    29); stop past the budget; a test that evaluated nothing counted nothing: an error."""
     count = {"times": 0}
-    original = Mass1Motion.derivatives
+    original = StopMotion.derivatives
 
     def counted(self, t):
         count["times"] += np.size(t)
@@ -53,8 +54,9 @@ def evaluations(monkeypatch):
             raise _OverBudgetError(f"more than {_BUDGET} evaluated times")
         return original(self, t)
 
-    monkeypatch.setattr(Mass1Motion, "derivatives", counted)
-    return count
+    monkeypatch.setattr(StopMotion, "derivatives", counted)
+    yield count
+    assert count["times"] > 0, "the simulator's evaluations were not counted"
 
 
 def _slow(**params):
