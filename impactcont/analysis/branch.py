@@ -288,6 +288,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     ..."`` (status ``INTERRUPTED``), also logged at WARNING. Ctrl-C while the special points
     are located keeps those already located and drops the one in progress (the log says so).
     A second Ctrl-C, or one before the first point, aborts with :class:`KeyboardInterrupt`.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     problem, detect, (lo, hi), opts = check_continuation_arguments(
         osc, N, parameter, bounds, detect=detect, components=components, options=options,
@@ -485,6 +486,8 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
     option_record.update(record or {})
     ds = branch_dataset(parameter=parameter, N=N, oscillator=osc, options=option_record,
                         columns=columns, special_points=special_points)
+    if option_record.get("interrupted"):  # Ctrl-C: as an interrupted map says it
+        ds.attrs["interrupted"] = 1
     if not functions:
         return ds
     names = parameter_names(ds)
@@ -796,6 +799,7 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     WARNING. Ctrl-C while the special points are located keeps those already located and
     drops the one in progress (the log says so). A second Ctrl-C, or one before the first
     point, aborts with :class:`KeyboardInterrupt`.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     _check_branch(branch)
     functions = check_user_functions(events, monitors, reserved_names())
@@ -865,6 +869,7 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     point (see :func:`continuation`); the branch is returned joined with the parts
     computed, the ends not yet continued are left as they are, and its ``options``
     record ``"interrupted": true``. A second Ctrl-C aborts.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     _check_branch(branch)
     functions = _same_user_functions(branch, events, monitors)
@@ -905,6 +910,7 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     record["bounds"] = [lo, hi]
     if was_interrupted:
         record["interrupted"] = True
+        joined.attrs["interrupted"] = 1
     record["extended"] = record.get("extended", []) + extended
     joined.attrs["options"] = json.dumps(record, sort_keys=True)
     return joined

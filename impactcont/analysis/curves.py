@@ -531,6 +531,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     record ``"interrupted": true``, and the log has a WARNING. A second Ctrl-C, or one
     before the first point (or while the start is searched), aborts with
     :class:`KeyboardInterrupt`.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     kind, parameters, box, N, opts = check_curve_arguments(
         osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
@@ -586,9 +587,10 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         ds = _curve_dataset(problem, kind, N, parameters, box, opts, start_osc, (p1v, p2v),
                             delta0, columns, orbits, xs, found, ends, status, call)
         ds = _with_user_functions(ds, problem, result, orbits, functions)
-        record = json.loads(ds.attrs["options"])
-        if call.interrupted and not record.get("interrupted"):  # while its events were located
-            ds.attrs["options"] = json.dumps({**record, "interrupted": True}, sort_keys=True)
+        if call.interrupted:  # as an interrupted map says it (also when in its events)
+            record = {**json.loads(ds.attrs["options"]), "interrupted": True}
+            ds.attrs["options"] = json.dumps(record, sort_keys=True)
+            ds.attrs["interrupted"] = 1
         return ds
 
 

@@ -320,6 +320,8 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
                               impact_columns=impact_columns, special_points=special_points,
                               special_impact_columns=special_impact_columns, title=title,
                               extra_attrs=extra_attrs, pattern=problem.pattern)
+    if options.get("interrupted"):  # Ctrl-C: as an interrupted map says it
+        ds.attrs["interrupted"] = 1
     if not functions:
         return ds
     names = parameter_names(ds)
@@ -519,6 +521,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     WARNING. Ctrl-C while the special points are located keeps those already located and
     drops the one in progress (the log says so). A second Ctrl-C, or one before the first
     point, aborts with :class:`KeyboardInterrupt`.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     orbit = _as_multi(start)
     check_progress(progress)

@@ -164,6 +164,7 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     ``"interrupted": true`` and the stop reason ``"interrupted by the user
     (KeyboardInterrupt) after K points, ..."``, also logged at WARNING. A second Ctrl-C,
     or one before the first point, aborts with :class:`KeyboardInterrupt`.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")

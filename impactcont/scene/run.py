@@ -29,6 +29,7 @@ from typing import Any
 import xarray as xr
 
 from impactcont.dataset.io import atomic_output, check_output_directory
+from impactcont.progress import interruptible
 from impactcont.scene.files import output_lock, write_output
 from impactcont.scene.plugins import plot_kinds, scene_sections
 from impactcont.scene.schema import Scene, load_scene
@@ -213,7 +214,9 @@ def _run(scene: Scene, out_dir: Path, t0: float, *, progress: bool, fail_fast: b
     scene_file = str(scene.source) if scene.source else ""
     log.info("scene %r: %d task(s), output in %s", scene.title, total, out_dir)
 
-    with limit_blas_threads(), _Progress(total, progress) as bar:
+    stopped = None  # Ctrl-C taken by an entry's driver, which returned what it computed
+    with (limit_blas_threads(), interruptible(f"scene {scene.title!r}") as call,
+          _Progress(total, progress) as bar):
         for key, entries in used.items():
             section = sections[key]
             datasets: dict[str, xr.Dataset] = {}
@@ -229,6 +232,10 @@ def _run(scene: Scene, out_dir: Path, t0: float, *, progress: bool, fail_fast: b
                         log.error("%s %s failed: %s", key, entry.name, _error_text(exc),
                                   exc_info=log.isEnabledFor(logging.DEBUG))
                         result.failures.append(TaskFailure(key, entry.name, _error_text(exc)))
+                if call.interrupted or (entry.name in datasets
+                                        and datasets[entry.name].attrs.get("interrupted")):
+                    stopped = f"{key} {entry.name}"
+                    break
             if datasets:
                 path = write_output(out_dir / f"{key}.nc", key, datasets,
                                     title=f"{section.title} of scene {scene.title!r}",
@@ -240,6 +247,9 @@ def _run(scene: Scene, out_dir: Path, t0: float, *, progress: bool, fail_fast: b
                     result.special_points += points
                 elif points:
                     result.other_points[key] = points
+            if stopped is not None:  # the files written are kept, the rest is not computed
+                raise KeyboardInterrupt(f"scene interrupted by the user in {stopped}; the "
+                                        f"files written are kept: {result.files}")
 
         kinds = plot_kinds()
         for plot in scene.plots:

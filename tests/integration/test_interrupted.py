@@ -25,6 +25,7 @@ import impactcont.core.locate as locate_module
 from impactcont.analysis.branch import extend
 from impactcont.analysis.multi_curves import multi_impact_curve
 from impactcont.problems import PeriodicBranchProblem
+from tests._scene_data import OSCILLATOR
 
 INTERRUPTED = "interrupted by the user (KeyboardInterrupt)"
 
@@ -62,9 +63,12 @@ def warnings_logged(caplog) -> list[str]:
             if r.name == "impactcont.progress" and r.levelno == logging.WARNING]
 
 
-def test_continuation_returns_the_points_before_ctrl_c(system, caplog):
+def test_continuation_returns_the_points_before_ctrl_c(system, caplog, tmp_path):
     ds = ic.continuation(system, 1, "omega", (0.5, 3.0), progress=CtrlC(12))
     assert ds.sizes["point"] == 12
+    assert ds.attrs["interrupted"] == 1  # as an interrupted map's
+    ic.save(ds, tmp_path / "interrupted.nc")
+    assert ic.load(tmp_path / "interrupted.nc").attrs["interrupted"] == 1
     record = options(ds)
     assert record["interrupted"] is True
     assert record["status"] == ["INTERRUPTED", "INTERRUPTED"]  # the backward run skipped
@@ -111,12 +115,12 @@ def test_ctrl_c_while_locating_keeps_the_special_points_located(system, monkeypa
 
     monkeypatch.setattr(locate_module, "_event_point", interrupted_location)
     ds = ic.continuation(system, 1, "omega", (0.5, 3.0), components="start", progress=False)
-    assert "PD" in labels
+    assert "PD" in labels and "interrupted" not in full.attrs
     assert ds.sizes["point"] == full.sizes["point"]  # the branch was computed
     assert list(ds["special_label"].values) == ["GR"]  # the PD being located is dropped
     assert float(ds["special_omega"][0]) == pytest.approx(float(full["special_omega"][0]),
                                                           abs=1e-12)
-    assert options(ds)["interrupted"] is True
+    assert options(ds)["interrupted"] is True and ds.attrs["interrupted"] == 1
     assert [m for m in warnings_logged(caplog) if "that one is dropped" in m]
 
 
@@ -161,7 +165,7 @@ def test_other_components_are_not_followed_after_ctrl_c(system):
 def test_extension_keeps_the_branch_and_the_part_computed(branch):
     ds = extend(branch, (1.4, 2.5), progress=CtrlC(4))
     assert ds.sizes["point"] == branch.sizes["point"] + 3  # the join point is the branch's
-    assert options(ds)["interrupted"] is True
+    assert options(ds)["interrupted"] is True and ds.attrs["interrupted"] == 1
 
 
 def test_curve_returns_its_points_before_ctrl_c(system, branch, caplog):
@@ -169,7 +173,7 @@ def test_curve_returns_its_points_before_ctrl_c(system, branch, caplog):
                      bounds={"omega": (1.4, 2.0), "b": (-0.1, 0.1)}, progress=CtrlC(5))
     assert curve.sizes["point"] == 5
     assert curve.attrs["end_status"].startswith(f"forward: {INTERRUPTED} after 5 points")
-    assert options(curve)["interrupted"] is True
+    assert options(curve)["interrupted"] is True and curve.attrs["interrupted"] == 1
     assert [m for m in warnings_logged(caplog) if m.startswith("PD curve in (omega, b): ")]
 
 
@@ -177,7 +181,7 @@ def test_multi_impact_drivers_return_their_points_before_ctrl_c(branch):
     start = ic.special_orbit(branch, "PD")
     np_branch = ic.multi_impact_continuation(start, "omega", (1.6, 1.8), progress=CtrlC(4))
     assert np_branch.sizes["point"] == 4
-    assert options(np_branch)["interrupted"] is True
+    assert options(np_branch)["interrupted"] is True and np_branch.attrs["interrupted"] == 1
     assert "INTERRUPTED" in options(np_branch)["status"]
     switched = ic.period_doubling_switch(branch, bounds=(1.6, 2.0), progress=CtrlC(6))
     assert switched.sizes["point"] == 6 and options(switched)["interrupted"] is True
@@ -187,6 +191,7 @@ def test_multi_impact_drivers_return_their_points_before_ctrl_c(branch):
                                bounds={"omega": (1.6, 1.8), "b": (-0.05, 0.05)},
                                progress=CtrlC(3))
     assert curve.sizes["point"] == 3 and options(curve)["interrupted"] is True
+    assert curve.attrs["interrupted"] == 1 and "interrupted" not in whole.attrs
 
 
 def test_cascade_keeps_the_branches_before_ctrl_c(branch):
@@ -238,3 +243,37 @@ def test_sigint_to_a_continuation_returns_its_points(tmp_path):
     words = out.split()
     assert words[0] == "points" and int(words[1]) >= 1 and words[2] == "True", out
     assert f"{INTERRUPTED} after" in err and "Traceback" not in err
+
+
+def test_user_functions_of_an_interrupted_branch(system):
+    ds = ic.continuation(system, 1, "omega", (0.5, 3.0), components="start",
+                         monitors={"speed": lambda orbit: orbit.impact_velocity},
+                         events={"slow": lambda orbit: orbit.impact_velocity - 1.0},
+                         progress=CtrlC(20))
+    assert ds.sizes["point"] == 20 and ds.attrs["interrupted"] == 1
+    np.testing.assert_allclose(ds["monitor_speed"].values, ds["impact_velocity"].values)
+
+
+def test_a_scene_stops_after_the_entry_interrupted(tmp_path, monkeypatch):
+    from impactcont.scene import run_scene
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text(f'title = "two branches"\n{OSCILLATOR}\n'
+                     '[[branches]]\nname = "first"\nbounds = [0.5, 3.0]\n\n'
+                     '[[branches]]\nname = "second"\nbounds = [0.5, 3.0]\n')
+    residual = PeriodicBranchProblem.residual
+    calls = []
+
+    def interrupted_residual(self, u, lam):
+        calls.append(lam)
+        if len(calls) == 60:
+            raise KeyboardInterrupt
+        return residual(self, u, lam)
+
+    monkeypatch.setattr(PeriodicBranchProblem, "residual", interrupted_residual)
+    with pytest.raises(KeyboardInterrupt, match="scene interrupted by the user in branches "
+                                                "first"):
+        run_scene(scene, output=tmp_path / "out")
+    kept = ic.load(tmp_path / "out" / "branches.nc")
+    assert set(kept) == {"first"}  # the second entry is not computed
+    assert kept["first"].attrs["interrupted"] == 1
