@@ -36,6 +36,7 @@ import contextlib
 import contextvars
 import inspect
 import logging
+import math
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -278,16 +279,27 @@ def reporter(progress: ProgressOption | Reporter, what: str, *, total: int | Non
 
 
 # -- log records above the bar ------------------------------------------------------------------
+def _bar_shown() -> bool:
+    """Whether a tqdm bar is on the screen (one delayed and not drawn yet is not)."""
+    from tqdm import tqdm
+    return any(not bar.disable and getattr(bar, "last_print_t", -math.inf)
+               >= getattr(bar, "start_t", math.inf) + getattr(bar, "delay", 0.0)
+               for bar in list(getattr(tqdm, "_instances", ())))
+
+
 class _AboveBar:
-    """A console stream whose writes go through ``tqdm.write``: above the bars, which are
-    drawn again below the text."""
+    """A console stream whose writes go through ``tqdm.write`` while a bar is shown: above
+    the bars, which are drawn again below the text."""
 
     def __init__(self, stream: Any) -> None:
         self.stream = stream
 
     def write(self, text: str) -> int:
         from tqdm import tqdm
-        tqdm.write(text, file=self.stream, end="")
+        if _bar_shown():
+            tqdm.write(text, file=self.stream, end="")
+        else:  # tqdm.write would draw a delayed bar before its time
+            self.stream.write(text)
         return len(text)
 
     def flush(self) -> None:

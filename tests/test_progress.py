@@ -249,3 +249,18 @@ def test_without_a_handler_the_last_resort_writes_above_the_bar():
     assert done.returncode == 0, done.stderr
     assert "last resort speaks" in done.stderr
     assert _glued(done.stderr, "last resort speaks") == []
+
+
+def test_a_record_before_a_delayed_bar_shows_does_not_draw_it(monkeypatch, capsys):
+    monkeypatch.setattr(progress_module, "_stderr_is_terminal", lambda: True)
+    handler = logging.StreamHandler(sys.stderr)
+    package = logging.getLogger("impactcont")
+    package.addHandler(handler)
+    try:
+        with Reporter("work", None) as rep:  # the bar would show after BAR_DELAY s
+            rep.advance(1)
+            logging.getLogger("impactcont.x").warning("early message")
+            rep.advance(1)
+    finally:
+        package.removeHandler(handler)
+    assert capsys.readouterr().err == "early message\n"  # no bar drawn, no stray \r
