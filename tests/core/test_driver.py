@@ -418,3 +418,69 @@ def test_start_on_a_bound_the_problem_refuses_past_ends_there():
                               "backward: parameter bound reached: lam = -1")
     assert result.lam[0] == -1.0 and result.lam[-1] == 1.0
     assert result.start_index == len(result) - 1
+
+
+# -- Ctrl-C ---------------------------------------------------------------------------------------
+def _interrupting(at: int) -> object:
+    """An on_point that raises KeyboardInterrupt at its `at`-th call."""
+    calls: list[int] = []
+
+    def on_point(point: ContinuationPoint) -> None:
+        calls.append(point.index)
+        if len(calls) == at:
+            raise KeyboardInterrupt
+
+    return on_point
+
+
+def test_ctrl_c_in_the_forward_run_keeps_its_points_and_skips_the_backward_one() -> None:
+    from impactcont.progress import interruptible
+
+    options = ContinuationOptions(bounds=(-5.0, 5.0), ds=0.1, ds_max=0.1, both_directions=True)
+    on_point = _interrupting(7)
+    with interruptible("a line") as call:
+        result = continue_branch(Line(), [0.0], 0.0, options, on_point)
+    assert call.interrupted and result.interrupted
+    assert result.statuses == (ContinuationStatus.INTERRUPTED, ContinuationStatus.INTERRUPTED)
+    assert len(result) == 7 and result.start_index == 0  # the point it was raised at kept
+    assert np.all(np.diff(result.lam) > 0)
+    assert "after 7 points, last at lam = " in result.message
+    assert "backward: skipped, interrupted by the user" in result.message
+
+
+def test_ctrl_c_in_the_backward_run_joins_both_parts() -> None:
+    from impactcont.progress import interruptible
+
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.1, ds_max=0.1, both_directions=True)
+    forward = continue_branch(Line(), [0.0], 0.0, options)
+    n_forward = len(forward) - forward.start_index
+    on_point = _interrupting(n_forward + 4)  # the backward start and 3 more
+    with interruptible("a line"):
+        result = continue_branch(Line(), [0.0], 0.0, options, on_point)
+    assert result.statuses == (ContinuationStatus.BOUNDS_REACHED,
+                               ContinuationStatus.INTERRUPTED)
+    assert result.start_index == 3 and len(result) == n_forward + 3
+    assert np.all(np.diff(result.lam) > 0)
+
+
+def test_ctrl_c_outside_a_driver_call_or_a_second_one_is_raised() -> None:
+    from impactcont.progress import interruptible, take_interrupt
+
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.1)
+    with pytest.raises(KeyboardInterrupt):
+        continue_branch(Line(), [0.0], 0.0, options, _interrupting(3))
+    with interruptible("a line") as call:
+        assert take_interrupt("elsewhere", "a first Ctrl-C")  # taken before the run
+        assert call.where == "elsewhere"
+        with pytest.raises(KeyboardInterrupt):  # the second
+            continue_branch(Line(), [0.0], 0.0, options, _interrupting(1))
+
+
+def test_a_run_started_after_ctrl_c_was_taken_stops_at_its_first_point() -> None:
+    from impactcont.progress import interruptible, take_interrupt
+
+    options = ContinuationOptions(bounds=(-1.0, 1.0), ds=0.1)
+    with interruptible("a line"):
+        assert take_interrupt("location", "a first Ctrl-C")
+        result = continue_branch(Line(), [0.0], 0.0, options)
+    assert len(result) == 1 and result.interrupted
