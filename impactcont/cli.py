@@ -3,7 +3,7 @@
 ::
 
     impactcont run SCENE.toml [--output DIR] [--set KEY=VALUE ...] [--check]
-    impactcont plot FILE.nc [-o PNG] [--kind KIND] [--y VARIABLE]
+    impactcont plot FILE.nc [-o PNG] [--kind KIND] [--y VARIABLE] [--width INCHES]
     impactcont info FILE.nc
     impactcont list-problems
 
@@ -154,11 +154,66 @@ def _read_error(exc: Exception) -> _UsageError:
     return _UsageError(str(exc))
 
 
+class _Registry(Sequence[str]):
+    """The names a registry of the plotting code holds, read when first needed.
+
+    ``choices`` of an option: the registry (and matplotlib) is imported only when
+    ``plot`` parses its options or prints its help, not for every command.
+    """
+
+    def __init__(self, load: Callable[[], Sequence[str]]) -> None:
+        self._load = load
+        self._names: tuple[str, ...] | None = None
+
+    def _all(self) -> tuple[str, ...]:
+        if self._names is None:
+            self._names = tuple(self._load())
+        return self._names
+
+    def __getitem__(self, i):  # type: ignore[override]
+        return self._all()[i]
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._all()
+
+
+def _plot_kind_names() -> list[str]:
+    """The plot kinds of the scene sections (built-in and plugins)."""
+    from impactcont.scene.plugins import plot_kinds
+
+    return sorted(plot_kinds())
+
+
+def _y_variables() -> tuple[str, ...]:
+    """The variables a bifurcation diagram draws on its vertical axis."""
+    from impactcont.plots.branches import Y_VARIABLES
+
+    return Y_VARIABLES
+
+
+def _plot_width(text: str) -> float:
+    """``--width``: inches within :data:`impactcont.scene.figures.WIDTH_RANGE`."""
+    from impactcont.errors import ParameterError
+    from impactcont.scene.figures import check_width
+
+    try:
+        return check_width(float(text), "--width")
+    except ValueError as exc:
+        if isinstance(exc, ParameterError):
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        raise argparse.ArgumentTypeError(
+            f"--width must be a number of inches; got {text!r}") from None
+
+
 def _cmd_plot(args: argparse.Namespace) -> int:
     from impactcont.scene.figures import plot_file
 
     try:
-        written = plot_file(args.file, args.output, kind=args.kind, y=args.y, dpi=args.dpi)
+        written = plot_file(args.file, args.output, kind=args.kind, y=args.y, dpi=args.dpi,
+                            width=args.width)
     except (FileNotFoundError, NotADirectoryError, PermissionError, ValueError) as exc:
         raise _read_error(exc) from None
     if not args.quiet:
@@ -244,10 +299,17 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("file", metavar="FILE.nc")
     plot.add_argument("-o", "--output", metavar="PNG",
                       help="PNG to write (default: FILE.png beside the file)")
-    plot.add_argument("--kind", help="plot kind (default: the usual one for the file)")
-    plot.add_argument("--y", help="bifurcation diagram: variable on the vertical axis")
+    plot.add_argument("--kind", choices=_Registry(_plot_kind_names), metavar="KIND",
+                      help="plot kind, one of %(choices)s (default: the usual one for the "
+                           "file)")
+    plot.add_argument("--y", choices=_Registry(_y_variables), metavar="VARIABLE",
+                      help="bifurcation diagram: variable on the vertical axis, one of "
+                           "%(choices)s (default impact_velocity)")
     plot.add_argument("--dpi", type=int, default=150,
                       help="resolution in dots per inch, 10 to 1200 (default 150)")
+    plot.add_argument("--width", type=_plot_width, default=7.0, metavar="INCHES",
+                      help="figure width in inches, 2 to 7.2 (3.5: a journal's column; "
+                           "default 7)")
     plot.set_defaults(func=_cmd_plot)
 
     info = sub.add_parser("info", parents=[common], help="describe a NetCDF file",

@@ -248,10 +248,28 @@ def markers_cut_by_frame(fig: Figure | Drawn) -> list[str]:
     return out
 
 
+def _coloured_marker_entries(fig: Figure) -> dict[str, set]:
+    """Edge colour -> marker shapes of the legend's marker entries not drawn in black."""
+    out: dict[str, set] = {}
+    for legend in _legends(fig):
+        for h in legend.legend_handles:
+            if isinstance(h, Line2D) and h.get_marker() not in _NO_MARKER:
+                c = color(h.get_markeredgecolor())
+                if c != "#000000":
+                    out.setdefault(c, set()).add(marker_key(h.get_marker()))
+    return out
+
+
 def styles_without_legend(fig: Figure | Drawn) -> list[str]:
-    """A marker in view or a line whose style or colour no legend shows."""
+    """A marker in view or a line whose style or colour no legend shows.
+
+    A marker needs a legend entry of its shape and one of its colour; a marker of
+    a colour that has marker entries of its own (e.g. grey: on a non-physical
+    motion) needs an entry of that colour and its shape.
+    """
     d = render(fig)
     styles, legend_markers, legend_colours = _legend_styles(d.fig)
+    coloured = _coloured_marker_entries(d.fig)
     out = []
     for ax in axes_of(d.fig):
         box = ax.bbox.extents
@@ -260,6 +278,9 @@ def styles_without_legend(fig: Figure | Drawn) -> list[str]:
                        or p[1] > box[3] + r)
             if not outside and (key not in legend_markers or colour not in legend_colours):
                 out.append(f"a marker of colour {colour} at {p.round(1)} has no legend entry")
+            elif not outside and colour in coloured and key not in coloured[colour]:
+                out.append(f"a marker of colour {colour} at {p.round(1)} has another shape "
+                           f"than the legend entries of that colour")
         for line in ax.get_lines():
             if not line.get_visible() or line.get_linestyle() in _NO_LINE \
                     or not len(line.get_xydata()):

@@ -66,7 +66,7 @@ def schematic(ax) -> None:
     ax.set_ylim(-1.4, 0.9)
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.set_title("mass 1 between two stops (dotted: x1 = 0)", fontsize=9)
+    ax.set_title("Mass 1 between two stops (dotted: $x_1 = 0$)", fontsize=9)
 
 
 def portrait(ax) -> None:
@@ -78,26 +78,30 @@ def portrait(ax) -> None:
         log.info("%s: %r", what, orbit)
         _, X = orbit.time_series(400)
         ax.plot(X[:, 0], X[:, 2], style, lw=1.2,
-                label=f"{what}, b = b_low = {b}, omega = {omega}\n"
-                      f"v = {orbit.impact_velocities[0]:.3f}, {orbit.impact_velocities[1]:.3f}")
+                label=rf"{what}, $b = b_{{low}} = {b}$, $\omega = {omega}$; impact velocities "
+                      f"{orbit.impact_velocities[0]:.3f}, {orbit.impact_velocities[1]:.3f}")
         for k in range(orbit.p):
             ax.plot(X[(k + 1) * 400 - 1, 0], X[(k + 1) * 400 - 1, 2], "k.", ms=5)
             ax.plot(orbit.states[k, 0], orbit.states[k, 2], "ko", mfc="none", ms=5)
         for x in (b, -b):
             ax.axvline(x, color=style[:2], lw=0.8, ls="--")
     ax.set_xlabel("$x_1$")
-    ax.set_ylabel("$x_1'$")
-    ax.legend(fontsize=7, loc="upper left")
-    ax.set_title("1-2 motions: one impact on each stop per period\n"
-                 "(dots: before impact, circles: after)", fontsize=9)
+    ax.set_ylabel(r"$\dot{x}_1$")
+    ax.plot([], [], "k.", ms=5, label="state before an impact")
+    ax.plot([], [], "ko", mfc="none", ms=5, label="state after an impact")
+    ax.plot([], [], "k--", lw=0.8, label=r"stops $x_1 = \pm b$")
+    ax.figure.legend(*ax.get_legend_handles_labels(), fontsize=8, loc="outside lower center",
+                     ncols=1, frameon=False)
+    ax.set_title("Period-1 motions with 2 impacts, one on each stop", fontsize=9)
 
 
 def main() -> None:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2), width_ratios=[1.1, 1])
+    # a journal's page: 7 in wide (figures are at most 7.2 in), the model above its motions
+    fig = plt.figure(figsize=(7.0, 7.6), layout="constrained")
+    a, b = fig.subplots(2, 1, height_ratios=[1.0, 1.6])
     schematic(a)
     portrait(b)
-    fig.tight_layout()
     fig.savefig(OUT, dpi=110)
     log.info("wrote %s", OUT)
 

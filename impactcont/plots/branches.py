@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import logging
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -24,11 +25,17 @@ from impactcont.dataset.schema import (
     special_variable,
     validate_branch_dataset,
 )
-from impactcont.plots.labels import coincident_groups, place_labels
+from impactcont.plots.labels import (
+    coincident_groups,
+    marker_boxes,
+    merged_labels,
+    place_labels,
+)
 from impactcont.vocabulary import LABEL_MARKERS, LABEL_NAMES
 
-__all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "SEGMENT_STYLES", "SPECIAL_MARKERS",
-           "SPECIAL_NAMES", "axis_label", "bifurcation_diagram", "diagram_legend",
+__all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "NONPHYSICAL_MARKER", "SEGMENT_STYLES",
+           "SPECIAL_MARKERS",
+           "SPECIAL_NAMES", "Y_VARIABLES", "axis_label", "bifurcation_diagram", "diagram_legend",
            "differing_parameters",
            "fit_text", "fixed_parameters", "label_specials", "legend_below", "legend_fontsize",
            "motion_text", "multipliers_plot", "parameter_text", "stability_segments",
@@ -54,6 +61,11 @@ SPECIAL_NAMES: dict[str, str] = dict(LABEL_NAMES)
 _SYMBOLS = {"omega": r"$\omega$", "b": "$b$", "R": "$R$", "eta": r"$\eta$",
             "alpha": r"$\alpha$", "beta": r"$\beta$", "delta": r"$\delta$",
             "impact_velocity": r"$\dot{x}_1(T^-)$", "spectral_radius": r"$\rho(G)$"}
+#: The branch variables a bifurcation diagram draws on its vertical axis by name (the
+#: ``y`` of :func:`bifurcation_diagram`, of a scene's ``[[plots]]`` and of
+#: ``impactcont plot --y``); any other real variable on ``point`` is drawn too.
+Y_VARIABLES: tuple[str, ...] = ("impact_velocity", "delta", "gap_min", "spectral_radius",
+                                "arclength", "omega", "b")
 _OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0}
 
 _KINDS = tuple(SEGMENT_STYLES)
@@ -206,7 +218,11 @@ def _borders_physical(ds: xr.Dataset, physical: np.ndarray, k: int) -> bool:
 LEGEND_PLACES = ("below", "right", "inside", None)
 #: Grey of the special points of non-physical motions (small, unlabelled).
 NONPHYSICAL_GREY = "0.6"
+#: Marker of the special points of non-physical motions, whatever their kind: the legend
+#: has one entry for them (their kind is no event of the machine).
+NONPHYSICAL_MARKER = "o"
 _MARKER_SIZE = 6.0  # points
+_STACK = 9.0  # points: special points of one kind whose markers touch (a stack) share a label
 _MATH = {"omega": r"\omega", "eta": r"\eta", "alpha": r"\alpha", "beta": r"\beta",
          "b_low": r"b_{low}", "R_low": r"R_{low}"}
 
@@ -229,20 +245,24 @@ def _stops(ds: xr.Dataset) -> dict[str, Any]:
     return out
 
 
-def motion_text(datasets: Sequence[xr.Dataset]) -> str:
-    """What motions ``datasets`` hold: ``Periodic 1-2 motions, impacts LU``, ``N-1``, ...
+def motion_text(datasets: Sequence[xr.Dataset], *, adjective: str = "") -> str:
+    """What motions ``datasets`` hold, in words: ``Period-2 motions with 1 impact``.
 
-    N impacts-per-N-periods ``N-p`` (``p`` the attribute ``impacts``, 1 for an
-    N-1 branch) and, between two stops, the sequence of stops hit (``U``
-    upper, ``L`` lower).
+    An N-p motion repeats after N forcing periods with p impacts in them (``p`` the
+    attribute ``impacts``, 1 for an N-1 branch); when N or p differ between the
+    datasets they are written as symbols (``Period-$N$ motions with $p$ impacts``),
+    never as ``N-1``, which reads as a subtraction. Between two stops, the sequence
+    of stops hit follows (``U`` upper, ``L`` lower). ``adjective`` goes before
+    ``motions`` (``symmetric``).
     """
     Ns = sorted({int(ds.attrs["N"]) for ds in datasets})
     ps = sorted({int(ds.attrs.get("impacts", 1)) for ds in datasets})
     patterns = sorted({str(ds.attrs["pattern"]) for ds in datasets
                        if "pattern" in ds.attrs and "b_low" in _stops(ds)})
-    n = str(Ns[0]) if len(Ns) == 1 else "N"
-    p = str(ps[0]) if len(ps) == 1 else "p"
-    text = f"Periodic {n}-{p} motions"
+    n = str(Ns[0]) if len(Ns) == 1 else "$N$"
+    impacts = ("1 impact" if ps == [1] else f"{ps[0]} impacts" if len(ps) == 1
+               else "$p$ impacts")
+    text = f"Period-{n} {adjective + ' ' if adjective else ''}motions with {impacts}"
     if len(patterns) == 1:
         text += f", impacts {patterns[0]} (L: lower stop)"
     return text
@@ -273,7 +293,8 @@ def _y_label(ds: xr.Dataset, y: str) -> str:
 
 
 def fit_text(text_artist: Any, width: float | None = None) -> None:
-    """Break ``text_artist`` at ``, `` into lines that fit ``width`` display units.
+    """Break ``text_artist`` at ``, `` (and, in a part too long alone, at spaces outside
+    mathtext) into lines that fit ``width`` display units.
 
     By default the width that keeps the text, centred where it is, inside its
     figure. Call it on a laid-out figure.
@@ -287,15 +308,26 @@ def fit_text(text_artist: Any, width: float | None = None) -> None:
         width = 2.0 * min(centre, text_artist.figure.bbox.width - centre) - 4.0
     if text_artist.get_window_extent().width <= width:
         return
-    lines = [""]
-    for part in text.split(", "):
-        trial = f"{lines[-1]}, {part}" if lines[-1] else part
-        text_artist.set_text(trial)
-        if lines[-1] and text_artist.get_window_extent().width > width:
-            lines[-1] += ","
-            lines.append(part)
+    def wrap(parts: list[str], sep: str) -> list[str]:
+        lines = [""]
+        for part in parts:
+            trial = f"{lines[-1]}{sep}{part}" if lines[-1] else part
+            text_artist.set_text(trial)
+            if lines[-1] and text_artist.get_window_extent().width > width:
+                lines[-1] += sep.rstrip()
+                lines.append(part)
+            else:
+                lines[-1] = trial
+        return lines
+
+    lines = []
+    for line in wrap(text.split(", "), ", "):
+        text_artist.set_text(line)
+        if text_artist.get_window_extent().width > width:  # too long alone: break at spaces
+            words = re.split(r" (?=(?:[^$]*\$[^$]*\$)*[^$]*$)", line)  # not inside $...$
+            lines += wrap(words, " ")
         else:
-            lines[-1] = trial
+            lines.append(line)
     text_artist.set_text("\n".join(lines))
 
 
@@ -328,10 +360,10 @@ def diagram_legend(ax: Axes, kinds_seen: Any, labels_seen: Any, grey: bool,
                        markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
                 for label in SPECIAL_LABELS if label in labels_seen]
     if grey:
-        handles.append(Line2D([], [], linestyle="none", marker="o",
+        handles.append(Line2D([], [], linestyle="none", marker=NONPHYSICAL_MARKER,
                               markersize=0.7 * _MARKER_SIZE, markerfacecolor="white",
                               markeredgecolor=NONPHYSICAL_GREY,
-                              label="grey: on non-physical motion"))
+                              label="point on non-physical motion"))
     handles += list(branch_handles)
     if where == "below":
         legend_below(ax, handles)
@@ -455,14 +487,23 @@ def _zoom(ax: Axes, points: np.ndarray) -> Axes | None:
 
 def _label_points(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
                   fontsize: Any = "small", avoid: Sequence[Any] = ()) -> None:
-    """One label per place: points closer than a marker share a label (``SN, GR``)."""
+    """One label per cluster: a stack of points of one kind within a label's size is named
+    once with its count (``PD ×10``), points of several kinds at one place share a label
+    (``SN, GR``)."""
     if not specials:
         return
-    xy = [(px, py) for px, py, _ in specials]
     ax.figure.draw_without_rendering()
-    groups = coincident_groups(ax, xy, chain=False)
-    texts = [", ".join(dict.fromkeys(specials[i][2] for i in g)) for g in groups]
-    place_labels(ax, [xy[g[0]] for g in groups], texts, fontsize=fontsize, avoid=avoid)
+    where: list[tuple[float, float]] = []
+    texts: list[str] = []
+    for label in dict.fromkeys(lab for _, _, lab in specials):
+        own = [(px, py) for px, py, lab in specials if lab == label]
+        w, t = merged_labels(ax, own, [label] * len(own), distance=_STACK)
+        where += w
+        texts += t
+    # one place (markers overlapping, 8 points): one label for every kind there
+    where, texts = merged_labels(ax, where, texts, distance=8.0, chain=False)
+    # every marker is an obstacle: a merged label names one point of its stack
+    place_labels(ax, where, texts, fontsize=fontsize, avoid=[*avoid, *marker_boxes(ax)])
 
 
 def _zoom_group(ax: Axes, xy: np.ndarray, inset_size: tuple[float, float] = (0.4, 0.42),
@@ -499,6 +540,8 @@ def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
     ax.figure.draw_without_rendering()
     crowd = (_zoom_group(ax, np.array([(px, py) for px, py, _ in labelled]))
              if zoom and labelled else np.empty(0, dtype=int))
+    if len({labelled[i][2] for i in crowd}) == 1:  # a stack of one kind: one label says it
+        crowd = np.empty(0, dtype=int)
     inset = _zoom(ax, np.array([labelled[i][:2] for i in crowd])) if crowd.size else None
     avoid = []
     if inset is not None:
@@ -525,7 +568,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     in the colour of their branch, and optionally a text label placed clear of
     the others and of the curves (points closer than a marker share one label,
     ``SN, GR``); those of non-physical motions (not even at the edge of a
-    physical one) are small, grey (:data:`NONPHYSICAL_GREY`) and unlabelled.
+    physical one) are small grey circles (:data:`NONPHYSICAL_GREY`,
+    :data:`NONPHYSICAL_MARKER`), one legend entry for all kinds, unlabelled.
     Three or more special points crowded within a label's size get a zoomed
     inset, placed where it hides the fewest curves, with their labels.
 
@@ -543,7 +587,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         Write each special point's label next to its marker.
     title : str, optional
         Axes title; by default the motions and the system drawn
-        (``Periodic N-1 motions, b = 0.5, R = 0.6, eta = 0.1``), ``""`` for none.
+        (``Period-$N$ motions with 1 impact, b = 0.5, R = 0.6, eta = 0.1``), ``""`` for none.
     physical_range : bool, optional
         Fit the vertical range to the physical motions (default), clipping
         non-physical ones at the frame; False fits everything drawn.
@@ -576,7 +620,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     specials: list[tuple[float, float, str, str, bool]] = []  # x, y, label, colour, shown
     seen: list[np.ndarray] = []  # y of the physical motions
     counts = {int(ds.attrs["N"]) for _, ds in branches}
-    for b, (name, ds) in enumerate(branches):
+    for b, (_name, ds) in enumerate(branches):
         yname = _y_variable(ds, y)
         parameter = ds.attrs["parameter"]
         x = np.asarray(ds[parameter].values, dtype=float)
@@ -594,8 +638,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
                              if differing else [])])
         unique = len(counts) == len(branches) and not differing
         branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
-                                     label=f"{name} ({about})" if name and not unique
-                                     else about))
+                                     label=about if unique else f"branch {b + 1} ({about})"))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
         for k, label in enumerate(labels):
             px, py = _special_xy(ds, x, yv, yname, k)
@@ -614,12 +657,13 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
                    if lab == label and keep == shown]
             if not shown and lo is not None:  # never cut by the frame: inside or not drawn
                 pts = [q for q in pts if lo + 0.5 * pad <= q[1] <= hi - 0.5 * pad]
-            for px, py, c in pts:
-                ax.plot([px], [py], linestyle="none", marker=SPECIAL_MARKERS[label],
+            for px, py, c in pts:  # off physical motions: one small grey circle, any kind
+                ax.plot([px], [py], linestyle="none",
+                        marker=SPECIAL_MARKERS[label] if shown else NONPHYSICAL_MARKER,
                         markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
                         markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
                         markeredgecolor=c if shown else NONPHYSICAL_GREY, zorder=3)
-            labels_seen.update([label] if pts else [])
+            labels_seen.update([label] if pts and shown else [])
             grey |= bool(pts) and not shown
     first = branches[0][1]
     ax.set_xlabel(axis_label(first, first.attrs["parameter"]))

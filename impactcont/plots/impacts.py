@@ -24,6 +24,7 @@ from impactcont.dataset.schema import SPECIAL_LABELS, special_variable
 from impactcont.plots.branches import (
     LEGEND_PLACES,
     NONPHYSICAL_GREY,
+    NONPHYSICAL_MARKER,
     SEGMENT_STYLES,
     SPECIAL_MARKERS,
     _borders_physical,
@@ -131,7 +132,7 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
         One matplotlib colour per branch (cycled); default ``C0 .. C9``.
     title : str, optional
         Axes title; by default the motions and the system drawn
-        (``Periodic N-p motions, $b = 0$, $R = 0.6$, ...``), ``""`` for none.
+        (``Period-$N$ motions with $p$ impacts, $b = 0$, $R = 0.6$, ...``), ``""`` for none.
     physical_range : bool
         Fit the vertical range to the physical motions (default), clipping
         non-physical ones at the frame; False fits everything drawn.
@@ -170,11 +171,13 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
         x = np.asarray(ds[parameter].values, dtype=float)
         values = _per_impact(ds, y)
         color = colors[b % len(colors)] if colors else f"C{b % 10}"
+        drawn = False
         for kind, sl in stability_segments(ds):
             if kind == "non-physical" and not nonphysical:
                 continue
             ax.plot(x[sl], values[sl], color=color, **SEGMENT_STYLES[kind])
             kinds_seen.add(kind)
+            drawn = True
         physical = np.asarray(ds["physical"].values, dtype=bool)
         seen.append(values[physical].ravel())
         about = ", ".join([f"{int(ds.attrs['N'])}-{values.shape[1]}",
@@ -182,7 +185,8 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
                              if differing else [])])
         text = f"{name} ({about})" if name and names and about not in name else \
             name if name and names else about
-        branch_handles.append(Line2D([], [], color=color, linewidth=1.6, label=text))
+        if drawn:  # a legend names what is drawn: not a branch without physical motions
+            branch_handles.append(Line2D([], [], color=color, linewidth=1.6, label=text))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
         xs = np.asarray(ds[special_variable(parameter)].values, dtype=float)
         for k, label in enumerate(labels):
@@ -207,11 +211,12 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
                 pts = [m for m in pts if lo + 0.5 * pad <= m[1] <= hi - 0.5 * pad]
             for color in dict.fromkeys(m[3] for m in pts):
                 own = np.array([m[:2] for m in pts if m[3] == color])
-                ax.plot(own[:, 0], own[:, 1], linestyle="none", marker=SPECIAL_MARKERS[label],
+                ax.plot(own[:, 0], own[:, 1], linestyle="none",
+                        marker=SPECIAL_MARKERS[label] if shown else NONPHYSICAL_MARKER,
                         markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
                         markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
                         markeredgecolor=color if shown else NONPHYSICAL_GREY, zorder=3)
-            if pts and label not in labels_seen:
+            if pts and shown and label not in labels_seen:
                 labels_seen.append(label)
             grey |= bool(pts) and not shown
     first = branches[0][1]

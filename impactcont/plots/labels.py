@@ -4,7 +4,9 @@ Special points crowd together (NS, ZV and SN within 0.003 in omega on the
 paper's b = 0.5 branch): a label written at a fixed offset from each marker
 covers its neighbours. :func:`place_labels` puts each label at the nearest
 free place around its point, on rings of growing radius, with a thin leader
-line when it had to move away. Positions are computed in points on the laid-out
+line when it had to move away; a leader crosses no curve, no other leader and
+no other label where a place allows it. :func:`merged_labels` gives a stack
+of points one label (``PD ×10``). Positions are computed in points on the laid-out
 figure, so the result holds for the size the figure is saved at.
 """
 
@@ -18,7 +20,7 @@ from matplotlib.axes import Axes
 from matplotlib.font_manager import FontProperties
 from matplotlib.text import Annotation
 
-__all__ = ["coincident_groups", "marker_boxes", "place_labels"]
+__all__ = ["coincident_groups", "marker_boxes", "merged_labels", "place_labels"]
 
 _RINGS = (4.0, 12.0, 22.0, 34.0, 48.0, 64.0)  # distance of a label from its point, in points
 _MARKER = 4.0  # half-size of a marker, in points
@@ -70,6 +72,17 @@ def _leader_crossings(p: np.ndarray, box: np.ndarray, segments: np.ndarray) -> i
     cross = ((orient(a, b, q0) * orient(a, b, q1) < 0) & (orient(q0, q1, a) * orient(q0, q1, b)
                                                           < 0))
     return int(np.count_nonzero(cross))
+
+
+def _leader_crossings_box(box: np.ndarray, leaders: Sequence[np.ndarray]) -> int:
+    """How many of the ``leaders`` (segments, points) pass through ``box``."""
+    count = 0
+    for a, b in leaders:
+        t = np.linspace(0.0, 1.0, 24)[:, None]
+        line = a + t * (b - a)
+        count += int(np.any((line[:, 0] > box[0]) & (line[:, 0] < box[2])
+                            & (line[:, 1] > box[1]) & (line[:, 1] < box[3])))
+    return count
 
 
 def _curve_segments(ax: Axes, to_points: Any) -> np.ndarray:
@@ -130,6 +143,46 @@ def coincident_groups(ax: Axes, xy: Sequence[tuple[float, float]], *,
     return list(out.values())
 
 
+def merged_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[str], *,
+                  distance: float = 3.0 * _MARKER, chain: bool = True
+                  ) -> tuple[list[tuple[float, float]], list[str]]:
+    """One label per cluster of points drawn near each other: ``PD ×10``, ``SN, GR``.
+
+    Points chained within ``distance`` points on the page (markers touching, e.g.
+    ten period doublings stacked at one frequency, or a fold and a grazing at one
+    place) are one cluster: its label names each text once, with how many points
+    carry it (``PD ×10, GR``), and points at the cluster's middle point. With
+    ``chain=False`` a cluster is the points within ``distance`` of its first one
+    (one place; see :func:`coincident_groups`). Call it on a laid-out figure; pass
+    the result to :func:`place_labels`.
+
+    Returns
+    -------
+    (list of (float, float), list of str)
+        The point each label names and its text.
+    """
+    if len(xy) != len(texts):
+        raise ValueError(f"xy and texts must have the same length; got {len(xy)} and "
+                         f"{len(texts)}")
+    if not len(xy):
+        return [], []
+    groups = coincident_groups(ax, xy, distance=distance, chain=chain)
+    pts = ax.transData.transform(np.asarray(xy, dtype=float))
+    where, out = [], []
+    for g in sorted(groups, key=lambda g: min(pts[i, 0] for i in g)):
+        counts: dict[str, int] = {}
+        for i in g:
+            for part in str(texts[i]).split(", "):
+                name, _, n = part.partition(" \N{MULTIPLICATION SIGN}")
+                counts[name] = counts.get(name, 0) + (int(n) if n.isdigit() else 1)
+        centre = pts[g].mean(axis=0)
+        middle = g[int(np.argmin(np.hypot(*(pts[g] - centre).T)))]
+        where.append(tuple(np.asarray(xy[middle], dtype=float)))
+        out.append(", ".join(f"{t} \N{MULTIPLICATION SIGN}{n}" if n > 1 else t
+                             for t, n in counts.items()))
+    return where, out
+
+
 def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[str], *,
                  fontsize: Any = "small", avoid: Sequence[Any] = (),
                  **text_kw: Any) -> list[Annotation]:
@@ -182,6 +235,7 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     legend = ax.get_legend()
     if legend is not None and legend.get_visible():
         placed.append(np.asarray(legend.get_window_extent().extents) * scale)
+    leaders: list[np.ndarray] = []  # (2, 2): the leader lines drawn, in points
     out = []
     for k in np.argsort(pts[:, 0], kind="stable"):
         px, py = pts[k]
@@ -195,12 +249,17 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
             crossed = np.count_nonzero((curves[:, 0] > box[0]) & (curves[:, 0] < box[2])
                                        & (curves[:, 1] > box[1]) & (curves[:, 1] < box[3]))
             leader = _leader_crossings(pts[k], box, segments) if ring > 0 else 0
+            tangle = (_leader_crossings(pts[k], box, np.array(leaders).reshape(-1, 2, 2))
+                      + _leader_crossings_box(box, leaders)) if ring > 0 else 0
             score = (100.0 * hard + 50.0 * h * outside + 20.0 * crossed + 30.0 * ring
-                     + 400.0 * leader)
+                     + 400.0 * (leader + tangle))
             if best is None or score < best[0]:
                 best = (score, dx, dy, ring)
         _, dx, dy, ring = best  # type: ignore[misc]
-        placed.append(np.array([px + dx, py + dy, px + dx + w, py + dy + h]))
+        box = np.array([px + dx, py + dy, px + dx + w, py + dy + h])
+        placed.append(box)
+        if ring > 0:
+            leaders.append(np.array([np.clip(pts[k], box[:2], box[2:]), pts[k]]))
         arrow = ({"arrowstyle": "-", "color": "0.45", "linewidth": 0.6, "shrinkA": 0,
                   "shrinkB": _MARKER} if ring > 0 else None)
         label = ax.annotate(texts[k], xy[k], xytext=(dx, dy), textcoords="offset points",

@@ -32,10 +32,11 @@ from impactcont.plots.branches import (
     legend_fontsize,
     system_text,
 )
-from impactcont.plots.labels import marker_boxes, place_labels
+from impactcont.plots.labels import marker_boxes, merged_labels, place_labels
 
-__all__ = ["CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES", "REGIONS", "region_codes",
-           "two_parameter_diagram", "two_parameter_figure"]
+__all__ = ["CODIM2_NAMES", "CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES", "REGIONS",
+           "codim2_legend", "codim2_name", "region_codes", "two_parameter_diagram",
+           "two_parameter_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -69,9 +70,49 @@ CODIM2_STYLES: dict[str, dict[str, Any]] = {
                                              "markeredgewidth": 0.6},
 }
 
+#: The standard abbreviation of each smooth codim-2 point of a limit cycle (MatCont's
+#: names, the Poincare map being the impact map G here) by the label the curves record,
+#: and what it stands for. ``A+B`` and ``B+A`` are one point found from either curve;
+#: ``SN+SN`` and ``PD+PD`` are the labels of files written before ``R1`` and ``R2``.
+#: The points where a curve meets the grazing (GR) or zero-velocity (ZV) boundary are
+#: bifurcations of non-smooth systems without a standard name: they keep their label
+#: (``PD+GR``: the PD curve meets the GR curve); see ``docs/two_parameter.md``.
+CODIM2_NAMES: dict[str, tuple[str, str]] = {
+    "SN+PD": ("LPPD", "fold-flip"), "PD+SN": ("LPPD", "fold-flip"),
+    "SN+NS": ("LPNS", "fold-Neimark-Sacker"), "NS+SN": ("LPNS", "fold-Neimark-Sacker"),
+    "PD+NS": ("PDNS", "flip-Neimark-Sacker"), "NS+PD": ("PDNS", "flip-Neimark-Sacker"),
+    "NS+NS": ("NSNS", "double Neimark-Sacker"),
+    "R1": ("R1", "1:1 resonance"), "SN+SN": ("R1", "1:1 resonance"),
+    "R2": ("R2", "1:2 resonance"), "PD+PD": ("R2", "1:2 resonance"),
+    "R3": ("R3", "1:3 resonance"), "R4": ("R4", "1:4 resonance"),
+    "CP": ("CP", "cusp"), "CPC": ("CPC", "cusp of cycles"),
+    "GPD": ("GPD", "generalized period doubling"), "CH": ("CH", "Chenciner"),
+}
+
+
+def codim2_name(label: str) -> str:
+    """What a figure writes for a codim-2 point: its standard abbreviation
+    (:data:`CODIM2_NAMES`: ``PD+SN`` -> ``LPPD``) or, for a non-smooth point without
+    one, its label (``PD+GR``)."""
+    return CODIM2_NAMES.get(str(label), (str(label), ""))[0]
+
+
+def codim2_legend(labels: Iterable[str]) -> str:
+    """The legend text of the codim-2 marks drawn with these labels, one line each: the
+    standard names spelled out, and what ``A+B`` means for the non-smooth points
+    without one."""
+    names = dict.fromkeys(CODIM2_NAMES[lab] for lab in labels if lab in CODIM2_NAMES)
+    parts = [f"{abbr} {words}" for abbr, words in names]
+    if any(lab not in CODIM2_NAMES for lab in labels):
+        parts.append("A+B: curves A, B meet (no standard name)")
+    return "\n".join(parts)
+
+
+_STAR = 5.0  # half-size of a codim-2 star, in points
+
 #: Region codes of :func:`region_codes`, with their legend text and shade.
 REGIONS: dict[int, tuple[str, str]] = {
-    0: ("no N-1 motion", "#ffffff"),
+    0: ("no such motion", "#ffffff"),
     1: ("motions exist, none physical", "#e4e4e4"),
     2: ("physical, unstable", "#f6d7a7"),
     3: ("stable physical motion", "#8fc4e8"),
@@ -193,15 +234,19 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
             ax.plot(xy[:, 0], xy[:, 1], linestyle="none", zorder=4 if shown else 3,
                     **CODIM2_STYLES[style])
     # only where the motion is physical: the others crowd the panel
-    labels += [(xx, yy, lab, "black") for (xx, yy), (lab, s) in codim2.items() if s]
+    labels += [(xx, yy, codim2_name(lab), "black") for (xx, yy), (lab, s) in codim2.items()
+               if s]
     handles += [Line2D([], [], color=CURVE_STYLES[kind]["color"],
                        label=f"{kind} {SPECIAL_NAMES[kind]}",
                        **CURVE_PARTS[part_names[0]]) for kind in kinds_seen]
     handles += [Line2D([], [], color="0.2", label=name, **CURVE_PARTS[name])
                 for name in part_names if name in parts_seen]
-    handles += [Line2D([], [], linestyle="none", label=style, **CODIM2_STYLES[style])
-                for style, shown in zip(CODIM2_STYLES, (True, False), strict=True)
-                if any(s == shown for _, s in codim2.values())]
+    for style, shown in zip(CODIM2_STYLES, (True, False), strict=True):
+        seen = [lab for lab, s in codim2.values() if s == shown]
+        if seen:
+            names = codim2_legend(seen) if shown else ""
+            handles.append(Line2D([], [], linestyle="none", **CODIM2_STYLES[style],
+                                  label=f"{style}:\n{names}" if names else style))
     src = map_ds if map_ds is not None else next(iter(curve_list))
     ax.set_xlabel(axis_label(src, "omega"))
     ax.set_ylabel(axis_label(src, "b"))
@@ -212,14 +257,21 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
 
 
 def _label(ax: Axes, labels: Sequence[tuple[float, float, str, str]]) -> None:
-    """Place the labels of a laid-out panel clear of each other and of the codim-2 marks."""
+    """Place the labels of a laid-out panel clear of each other and of the codim-2 marks.
+
+    Codim-2 points (black labels) whose stars touch get one label, one leader
+    (:func:`~impactcont.plots.labels.merged_labels`).
+    """
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     inside = [lab for lab in labels if x0 <= lab[0] <= x1 and y0 <= lab[1] <= y1]
     avoid = marker_boxes(ax)
     for color in dict.fromkeys(lab[3] for lab in inside):
         own = [lab for lab in inside if lab[3] == color]
-        place_labels(ax, [lab[:2] for lab in own], [lab[2] for lab in own], fontsize="x-small",
-                     avoid=avoid, color=color,
+        xy, texts = [lab[:2] for lab in own], [lab[2] for lab in own]
+        if color == "black":
+            ax.figure.draw_without_rendering()
+            xy, texts = merged_labels(ax, xy, texts, distance=2.0 * _STAR)
+        place_labels(ax, xy, texts, fontsize="x-small", avoid=avoid, color=color,
                      fontweight="bold" if color != "black" else "normal")
 
 
@@ -260,7 +312,7 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
         Draw the legend (under the axes).
     title : str, optional
         Axes title; by default the motions and the system
-        (``Periodic 2-1 motions, $R = 0.6$, $\\eta = 0.1$``), ``""`` for none.
+        (``Period-2 motions with 1 impact, $R = 0.6$, $\\eta = 0.1$``), ``""`` for none.
 
     Returns
     -------
@@ -287,7 +339,7 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
         legend_below(ax, handles)
     if title is None:
         where = _system(map_ds, curve_list)
-        title = f"Periodic {N}-1 motions" + (f", {where}" if where else "")
+        title = f"Period-{N} motions with 1 impact" + (f", {where}" if where else "")
     if title:
         ax.set_title(title, fontsize="medium")
         ax.figure.draw_without_rendering()
@@ -351,7 +403,8 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
         legend.remove()
     if title is None:
         where = _system(map_ds, curve_list)
-        title = r"Periodic N-1 motions in $(\omega, b)$" + (f", {where}" if where else "")
+        title = (r"Period-$N$ motions with 1 impact in $(\omega, b)$"
+                 + (f", {where}" if where else ""))
     if title:
         fit_text(fig.suptitle(title, fontsize="medium"))
     fig.draw_without_rendering()

@@ -74,7 +74,7 @@ def multi_map_regions(ds: xr.Dataset) -> xr.DataArray:
 
 
 def multi_map_title(ds: xr.Dataset) -> str:
-    """The motion and the system of a map: ``Periodic symmetric 1-2 motions, impacts LU ...``.
+    """The motion and the system of a map: ``Period-1 symmetric motions with 2 impacts, ...``.
 
     The parameters held fixed (those not on the map's axes) in mathtext, and
     the stops: a mirrored lower stop moves with ``b``.
@@ -87,9 +87,7 @@ def multi_map_title(ds: xr.Dataset) -> str:
               if isinstance(osc.get(k), (int, float)) and k not in axes}
     if not mirror:
         values.update({k: stops[k] for k in ("b_low", "R_low") if k in stops})
-    text = motion_text([ds])
-    if ds.attrs.get("symmetric"):
-        text = text.replace("Periodic ", "Periodic symmetric ", 1)
+    text = motion_text([ds], adjective="symmetric" if ds.attrs.get("symmetric") else "")
     where = parameter_text(values, ("b", "b_low", "R", "R_low", "omega", "eta", "alpha",
                                     "beta", "F0"))
     parts = [text, *([where] if where else [])]

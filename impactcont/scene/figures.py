@@ -27,7 +27,8 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow
 from impactcont.scene.keys import DPI_RANGE
 
-__all__ = ["DEFAULT_KINDS", "MAX_PIXELS", "check_dpi", "draw_bifurcation", "draw_curves",
+__all__ = ["DEFAULT_KINDS", "MAX_PIXELS", "WIDTH", "WIDTH_RANGE", "check_dpi", "check_width",
+           "draw_bifurcation", "draw_curves",
            "draw_map", "draw_multipliers", "draw_orbits", "draw_robust", "draw_simulations",
            "plot_file", "save_figure"]
 
@@ -60,14 +61,29 @@ def _option(plot: Any, name: str, default: Any) -> Any:
 
 #: Default width of the figures, in inches: a journal's double column (3.5 in: single).
 WIDTH = 7.0
+#: The widths a figure may have, in inches: a journal's page is at most 7.2 in wide.
+WIDTH_RANGE = (2.0, 7.2)
+
+
+def check_width(width: Any, name: str = "width") -> float:
+    """``width`` (inches) as a float, refused outside :data:`WIDTH_RANGE`.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``name``, the value and the allowed range.
+    """
+    lo, hi = WIDTH_RANGE
+    if isinstance(width, bool) or not isinstance(width, (int, float, np.integer, np.floating)) \
+            or not lo <= width <= hi:
+        raise ParameterError(f"{name} must be a number of inches in [{lo:g}, {hi:g}] (3.5: a "
+                             f"journal's column, 7: its page); got {width!r}")
+    return float(width)
 
 
 def _width(plot: Any) -> float:
     """The figure width in inches (``plot.width``, default :data:`WIDTH`)."""
-    width = _option(plot, "width", WIDTH)
-    if isinstance(width, bool) or not isinstance(width, (int, float)) or not 2.0 <= width <= 20:
-        raise ParameterError(f"width must be a number of inches in [2, 20]; got {width!r}")
-    return float(width)
+    return check_width(_option(plot, "width", WIDTH))
 
 
 def _finish(fig: Figure, plot: Any, default_title: str) -> Figure:
@@ -134,7 +150,7 @@ def draw_multipliers(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
     from impactcont.plots import multipliers_plot
     from impactcont.plots.branches import motion_text, system_text
 
-    name, ds = next(iter(datasets.items()))
+    ds = next(iter(datasets.values()))
     width = _width(plot)
     narrow = width < 5.0  # one panel above the other
     fig = Figure(figsize=(width, 1.7 * width + 1.2 if narrow else 0.5 * width + 1.4),
@@ -142,7 +158,8 @@ def draw_multipliers(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
     axes = fig.subplots(2 if narrow else 1, 1 if narrow else 2).ravel()
     multipliers_plot(ds, ax=tuple(axes), yscale=_option(plot, "yscale", "auto"))
     where = system_text([ds], skip=[ds.attrs["parameter"]])
-    return _finish(fig, plot, f"Multipliers along {name}: {motion_text([ds])[9:]}, {where}")
+    motion = motion_text([ds])
+    return _finish(fig, plot, f"Multipliers along the {motion[0].lower()}{motion[1:]}, {where}")
 
 
 def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Dataset, int | None]]:
@@ -175,12 +192,13 @@ def _empty(fig: Figure, text: str) -> Figure:
     return fig
 
 
-def _no_orbit(fig: Any, name: str, ds: xr.Dataset) -> None:
+def _no_orbit(fig: Any, ds: xr.Dataset) -> None:
     """An entry that kept no orbit: say why across its row."""
-    from impactcont.plots.branches import fit_text
+    from impactcont.plots.branches import fit_text, motion_text
 
     note = ds.attrs.get("note") or f"no motion kept (which = {ds.attrs.get('which')})"
-    text = fig.text(0.5, 0.5, f"{name}: {note}", ha="center", va="center", fontsize="small")
+    motion = motion_text([ds]).replace(" motions ", " motion ", 1)
+    text = fig.text(0.5, 0.5, f"{motion}: {note}", ha="center", va="center", fontsize="small")
     fit_text(text)
 
 
@@ -196,6 +214,16 @@ def _style_legend(fig: Figure, kinds: set[str], j: int, fontsize: str) -> None:
                        label=f"stop $x_{j} = b$")]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles),
                fontsize=fontsize, frameon=False, handlelength=1.8, columnspacing=1.0)
+
+
+def _orbit_text(ds: xr.Dataset, k: int) -> str:
+    """``Period-1 motion with 1 impact, the − root of eq. (15)``: orbit ``k`` in words."""
+    from impactcont.plots.branches import motion_text
+
+    text = motion_text([ds]).replace(" motions ", " motion ", 1)
+    if "root" in ds and ds.sizes.get("orbit", 0) > 1:
+        text += f", the {'−' if int(ds['root'][k]) < 0 else '+'} root of eq. (15)"
+    return text
 
 
 def _verdict(ds: xr.Dataset, k: int) -> str:
@@ -231,9 +259,9 @@ def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     subfigs = np.atleast_1d(fig.subfigures(len(rows), 1, squeeze=False)[:, 0])
     kinds = set()
     j = 1
-    for sub, (name, ds, k) in zip(subfigs, rows, strict=True):
+    for sub, (_name, ds, k) in zip(subfigs, rows, strict=True):
         if k is None:
-            _no_orbit(sub, name, ds)
+            _no_orbit(sub, ds)
             continue
         ax_t, ax_p = sub.subplots(1, 2)
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
@@ -258,9 +286,8 @@ def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         for ax in (ax_t, ax_p):
             ax.xaxis.set_major_locator(MaxNLocator(ticks))
             ax.yaxis.set_major_locator(MaxNLocator(ticks))
-        title = sub.suptitle(f"{name}: $N = {int(ds.attrs['N'])}$, root {int(ds['root'][k]):+d}, "
-                             rf"$\omega = {osc.omega:g}$, $b = {osc.b:g}$, {_verdict(ds, k)}",
-                             fontsize="medium")
+        title = sub.suptitle(f"{_orbit_text(ds, k)}, $\\omega = {osc.omega:g}$, "
+                             f"$b = {osc.b:g}$: {_verdict(ds, k)}", fontsize="medium")
         fit_text(title)
     if kinds:
         _style_legend(fig, kinds, j, legend_fontsize(fig))
@@ -283,7 +310,7 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
     trajectories = False
     j = 1
     ticks = 3 if width < 5.0 else 6
-    for sub, (name, ds) in zip(subfigs, items, strict=True):
+    for sub, (_name, ds) in zip(subfigs, items, strict=True):
         ax_l, ax_r = sub.subplots(1, 2)
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
         n, i = osc.n, osc.stops.index
@@ -311,7 +338,7 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
         for ax in (ax_l, ax_r):
             ax.xaxis.set_major_locator(MaxNLocator(ticks))
             ax.yaxis.set_major_locator(MaxNLocator(ticks))
-        title = sub.suptitle(rf"{name}: $\omega = {osc.omega:g}$, $b = {osc.b:g}$, "
+        title = sub.suptitle(rf"Simulation at $\omega = {osc.omega:g}$, $b = {osc.b:g}$, "
                              f"{ds.sizes['impact']} impacts, {ds.attrs.get('status', '')}",
                              fontsize="medium")
         fit_text(title)
@@ -354,7 +381,9 @@ def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
     for ax in axes[len(items):]:
         ax.set_visible(False)
-    for ax, (name, ds) in zip(axes, items, strict=False):
+    from impactcont.plots.branches import motion_text
+
+    for ax, (_name, ds) in zip(axes, items, strict=False):
         gamma = np.asarray(ds["Gamma"].values, dtype=float)
         im = ax.imshow(gamma, cmap="viridis", vmin=0.0, vmax=1.0)
         labels = [_component_symbol(str(v)) for v in ds["g_row"].values]
@@ -364,12 +393,15 @@ def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         ax.set_ylabel("component $i$ of the impact state")
         if len(labels) <= 6:
             for (i, j), v in np.ndenumerate(gamma):
-                ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize="x-small",
+                # 8 pt on a page-wide figure, 7 pt on a column (the journal's least)
+                ax.text(j, i, f"{v:.2f}", ha="center", va="center",
+                        fontsize=8.0 if width / cols >= 5.0 else 7.0,
                         color="white" if v < 0.6 else "black")
         vary = ", ".join(f"${k}$ in [{lo:g}, {hi:g}]"
                          for k, (lo, hi) in json.loads(ds.attrs.get("vary", "{}")).items())
         verdict = "robustly stable" if bool(ds["robust"]) else "not established"
-        text = ax.set_title(f"{name}: N = {int(ds.attrs['N'])}, {vary}, "
+        motion = motion_text([ds]).replace(" motions ", " motion ", 1)
+        text = ax.set_title(f"{motion}, {vary}, "
                             rf"$\epsilon = {float(ds['epsilon']):.4g}$, "
                             rf"$\epsilon_0 = {float(ds['epsilon0']):.4g}$: {verdict}",
                             fontsize="small")
@@ -426,10 +458,11 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 
 
 def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Number of stable physical N-1 motions on the (omega, b) grid, one panel per N."""
+    """Number of stable physical N-1 motions (period N, one impact) on the (omega, b) grid,
+    one panel per N."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    name, ds = next(iter(datasets.items()))
+    ds = next(iter(datasets.values()))
     Ns = [int(N) for N in np.asarray(ds["N"].values)]
     cols = min(len(Ns), 2)
     rows = -(-len(Ns) // cols)
@@ -454,9 +487,10 @@ def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         ax.set_axis_off()
     if mesh is not None:
         fig.colorbar(mesh, ax=list(axes[:len(Ns)]), ticks=[0, 1, 2],
-                     label="stable physical motions")
+                     label="stable motions")
     return _finish(fig, plot,
-                   f"{name}: stable physical N-1 motions, grey line: existence boundary")
+                   "Stable physical period-$N$ motions with 1 impact, dark line: existence "
+                   "boundary")
 
 
 #: The plot kind ``impactcont plot`` draws by default for each kind of file.
@@ -472,7 +506,8 @@ class _Options:
 
 
 def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, *,
-              kind: str | None = None, y: str | None = None, dpi: int = 150) -> list[Path]:
+              kind: str | None = None, y: str | None = None, dpi: int = 150,
+              width: float = WIDTH) -> list[Path]:
     """Draw the contents of a NetCDF file written by a scene run (or :func:`impactcont.save`).
 
     Parameters
@@ -490,6 +525,8 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
         Variable on the vertical axis of a bifurcation diagram.
     dpi : int
         Resolution.
+    width : float
+        Figure width in inches, in :data:`WIDTH_RANGE` (3.5: a journal's column).
 
     Returns
     -------
@@ -501,7 +538,8 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     ValueError
         The file is not an impactcont file, or ``kind`` does not read it.
     ParameterError
-        ``dpi`` outside [10, 1200], or a figure that would exceed :data:`MAX_PIXELS`.
+        ``dpi`` outside [10, 1200], ``width`` outside :data:`WIDTH_RANGE`, or a figure
+        that would exceed :data:`MAX_PIXELS`.
     FileNotFoundError, NotADirectoryError, PermissionError
         The file does not exist, or the figure cannot be written where asked
         (checked before drawing; the message names the path).
@@ -510,6 +548,7 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     from impactcont.scene.plugins import plot_kinds
 
     dpi = check_dpi(dpi)
+    width = check_width(width)
     out = read_output(path)
     kinds = {k: v for k, v in plot_kinds().items() if out.kind in v.sections}
     if not kinds:
@@ -535,7 +574,7 @@ def plot_file(path: str | os.PathLike, output: str | os.PathLike | None = None, 
     for suffix, datasets in groups:
         png = target if len(groups) == 1 else target.with_name(
             f"{target.stem}_{suffix}{target.suffix}")
-        fig = draw(datasets, _Options(y=y, title=None, yscale=None))
+        fig = draw(datasets, _Options(y=y, title=None, yscale=None, width=width))
         written.append(save_figure(fig, png, dpi))
         log.info("wrote %s", png)
     return written

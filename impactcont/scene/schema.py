@@ -82,7 +82,9 @@ __all__ = [
 # Plots and output
 # ---------------------------------------------------------------------------------------------
 def _point_variables() -> tuple[str, ...]:
-    return ("impact_velocity", "delta", "gap_min", "spectral_radius", "arclength", "omega", "b")
+    from impactcont.plots.branches import Y_VARIABLES
+
+    return Y_VARIABLES
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

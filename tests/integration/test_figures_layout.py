@@ -9,6 +9,7 @@ and only those, titles without internal names, at most 7.2 in wide).
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import matplotlib
@@ -27,7 +28,14 @@ from impactcont.plots.maps import two_parameter_diagram, two_parameter_figure
 from impactcont.plots.multi_maps import multi_impact_map_diagram
 from impactcont.scene import figures
 from impactcont.scene.run import run_scene
-from tests._layout_checks import check_layout, color, marker_artists, marker_key, render
+from tests._layout_checks import (
+    check_layout,
+    check_titles,
+    color,
+    marker_artists,
+    marker_key,
+    render,
+)
 
 matplotlib.use("Agg")
 
@@ -214,7 +222,7 @@ def test_special_markers_take_their_branch_colour(data):
     fig = _figure(7.0)
     ax = bifurcation_diagram(data["branches"], ax=fig.add_subplot())
     _render(fig)
-    branch_colours = {color(line.getcolor()) for line in ax.get_lines()
+    branch_colours = {color(line.get_color()) for line in ax.get_lines()
                       if line.get_linestyle() == "-"}
     special_keys = {marker_key(m) for m in SPECIAL_MARKERS.values()}
     edges = {c for _, key, c, _ in marker_artists(ax) if key in special_keys}
@@ -295,16 +303,88 @@ def test_two_sided_branch_names_pattern_stops_and_speed(two_sided, width):
     fig = figures.draw_bifurcation({"sym": two_sided}, _Options(width=width))
     _assert_clean(fig)
     text = _all_text(fig)
-    assert "1-2" in text and "LU" in text and "b_{low}" in text
-    assert "1-1" not in text
+    assert "Period-1 motions with 2 impacts" in text and "LU" in text and "b_{low}" in text
+    assert "with 1 impact" not in text
     ax = fig.axes[0]
     assert "speed" in ax.get_ylabel() and "towards" in ax.get_ylabel()
 
 
 def test_titles_name_system_and_motion(data):
+    """In words a reader understands: ``Period-$N$ motions with 1 impact``, never ``N-1``
+    (read as N minus 1) nor an entry's name."""
     fig = figures.draw_bifurcation(data["branches"], _Options(width=7.0))
-    text = _all_text(fig)
-    assert "b = 0.5" in text and "R = 0.6" in text
+    check_titles(fig, system=["$b = 0.5$", "$R = 0.6$"],
+                 motion=["Period-$N$ motions with 1 impact"])
+    assert "N-1" not in _all_text(fig)
+    fig = figures.draw_orbits(data["orbits"], _Options(width=7.0))
+    check_titles(fig, motion=["Period-1 motion with 1 impact", "Period-3 motion with 1 impact",
+                              "root of eq. (15)"])
+    assert "fig3_N1" not in _all_text(fig) and "root -1" not in _all_text(fig)
+    fig = figures.draw_multipliers({"b0p5_N1": data["branches"]["b0p5_N1"]},
+                                   _Options(width=7.0))
+    check_titles(fig, motion=["period-1 motions with 1 impact"])
+
+
+def test_special_points_of_non_physical_motions_have_one_style(data):
+    """The legend's grey circle is the only grey mark: no grey squares or triangles."""
+    from impactcont.plots.branches import NONPHYSICAL_GREY, NONPHYSICAL_MARKER
+
+    fig = figures.draw_bifurcation(data["branches"], _Options(width=7.0))
+    render(fig)
+    grey = [key for ax in fig.axes for _, key, c, _ in marker_artists(ax)
+            if c == color(NONPHYSICAL_GREY)]
+    assert grey and set(grey) == {marker_key(NONPHYSICAL_MARKER)}
+    check_layout(fig)
+
+
+@pytest.mark.parametrize(("width", "least"), [(3.5, 7.0), (7.0, 8.0)])
+def test_robust_numbers_are_legible(data, width, least):
+    """The Gamma values in the cells: >= 7 pt on a column, >= 8 pt on a page."""
+    fig = figures.draw_robust(data["robust"], _Options(width=width))
+    cells = [t for t in fig.axes[0].texts if re.fullmatch(r"\d\.\d\d", t.get_text())]
+    assert cells and min(t.get_fontsize() for t in cells) >= least
+
+
+@pytest.mark.parametrize("width", [1.0, 7.5, 20.0, float("nan")])
+def test_figures_refuse_a_width_wider_than_a_page(data, width):
+    from impactcont.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"width must be a number of inches in \[2, 7\.2\]"):
+        figures.draw_robust(data["robust"], _Options(width=width))
+
+
+def test_cli_plot_width_and_choices(data, tmp_path, capsys):
+    """``impactcont plot --width`` sizes the figure, refuses what a page cannot take by
+    name, value and range; ``--help`` lists the plot kinds and variables of the registries."""
+    from matplotlib.image import imread
+
+    from impactcont.cli import main
+    from impactcont.dataset.io import save
+    from impactcont.plots.branches import Y_VARIABLES
+    from impactcont.scene.plugins import plot_kinds
+
+    nc = save({"b0p5_N1": data["branches"]["b0p5_N1"]}, tmp_path / "b.nc")
+    png = tmp_path / "b.png"
+    assert main(["plot", str(nc), "-o", str(png), "--dpi", "40", "--width", "3.5",
+                 "--y", "delta"]) == 0
+    assert imread(png).shape[1] == 140  # 3.5 in at 40 dpi
+    for bad, says in (("9", "in [2, 7.2] (3.5: a journal's column, 7: its page); got 9.0"),
+                      ("0", "in [2, 7.2] (3.5: a journal's column, 7: its page); got 0.0"),
+                      ("nan", "in [2, 7.2] (3.5: a journal's column, 7: its page); got nan"),
+                      ("wide", "; got 'wide'")):
+        with pytest.raises(SystemExit) as exc:
+            main(["plot", str(nc), "--width", bad])
+        assert exc.value.code == 2
+        assert f"argument --width: --width must be a number of inches{says}" \
+            in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["plot", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert all(k in out for k in plot_kinds()) and ", ".join(Y_VARIABLES) in out
+    assert "2 to 7.2" in out and f"{figures.WIDTH_RANGE[1]:g}" == "7.2"
+    with pytest.raises(SystemExit):
+        main(["plot", str(nc), "--y", "nonsense"])
+    assert "invalid choice: 'nonsense'" in capsys.readouterr().err
 
 
 def test_scene_figures_are_written_at_their_width(data, tmp_path):
@@ -366,7 +446,7 @@ def test_impact_diagram_markers_take_their_branch_colour(cascade):
     fig = _figure(7.0)
     ax = impact_diagram(cascade, ax=fig.add_subplot())
     _render(fig)
-    branch_colours = {color(line.getcolor()) for line in ax.get_lines()
+    branch_colours = {color(line.get_color()) for line in ax.get_lines()
                       if line.get_linestyle() == "-"}
     special_keys = {marker_key(m) for m in SPECIAL_MARKERS.values()}
     edges = {c for _, key, c, _ in marker_artists(ax) if key in special_keys}
@@ -379,7 +459,7 @@ def test_impact_diagram_of_two_sided_motion_names_pattern_stops_and_speed(two_si
     fig = _figure(width, 0.75 * width + 1.0)
     ax = impact_diagram({"sym": two_sided}, ax=fig.add_subplot())
     _assert_journal(fig)
-    assert "1-2" in ax.get_title() and "LU" in ax.get_title() and "b_{low}" in ax.get_title()
+    check_titles(fig, system=["b_{low}"], motion=["Period-1 motions with 2 impacts", "LU"])
     assert "speed" in ax.get_ylabel() and "towards" in ax.get_ylabel()
 
 
@@ -389,7 +469,7 @@ def test_two_parameter_diagram_is_clean_and_named(data, width):
     ax = two_parameter_diagram(data["maps"]["map"], data["curves"], N=2, ax=fig.add_subplot())
     _assert_journal(fig)
     title = ax.get_title()
-    assert "2-1" in title and "R = 0.6" in title and "b = " not in title
+    assert "Period-2 motions with 1 impact" in title and "R = 0.6" in title and "b = " not in title
 
 
 @pytest.mark.parametrize("width", WIDTHS)
@@ -407,7 +487,7 @@ def test_multi_impact_map_diagram_is_clean_and_named(np_map, width):
     ax = multi_impact_map_diagram(np_map, ax=fig.add_subplot())
     _assert_journal(fig)
     title = ax.get_title()
-    assert "1-2" in title and "LU" in title and "R = 0.6" in title and "mirror" in title
+    assert "with 2 impacts" in title and "LU" in title and "R = 0.6" in title and "mirror" in title
 
 
 def test_multi_impact_map_default_figure_is_clean(np_map):
@@ -418,3 +498,91 @@ def test_multi_impact_map_default_figure_is_clean(np_map):
         _assert_journal(ax.figure)
     finally:
         plt.close(ax.figure)
+
+
+# -- clusters of special points (issue 31: cascades, grazing_boundary, vi_nes_plane) ------------
+def _cascade_branches() -> dict:
+    """Ten branches with a period doubling each at one frequency, stacked a marker apart
+    (the cascades study: PD squares piled at omega = 1.817)."""
+    from impactcont.dataset import branch_dataset
+    from tests._made_up_branch import _columns, _special
+
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1, -1], [-1, 2]], F=[1, 0], R=0.6, b=0.0,
+                              omega=1.0, eta=0.1)
+    out = {}
+    for k in range(10):
+        cols = _columns()
+        cols["impact_velocity"] = cols["impact_velocity"] + 0.006 * k
+        out[f"n{k}"] = branch_dataset(parameter="omega", N=2 ** k, oscillator=osc, options={},
+                                      columns=cols, special_points=[_special("PD", 30, cols)])
+    return out
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_a_stack_of_period_doublings_gets_one_label(width):
+    fig = _figure(width, 0.75 * width + 1.6)
+    ax = bifurcation_diagram(_cascade_branches(), ax=fig.add_subplot())
+    check_layout(fig)
+    texts = [t.get_text() for a in (ax, *ax.child_axes) for t in a.texts]
+    assert texts.count("PD \N{MULTIPLICATION SIGN}10") == 1, texts
+    assert not [t for t in texts if t == "PD"]
+
+
+def _codim2_cluster(curve):
+    """The PD curve with five codim-2 points within 1e-3 of each other on it (the N = 1
+    panel of the grazing_boundary study: PD+PD (now R2), PD+NS, SN+SN, SN+ZV, PD+ZV near
+    omega = 1.2)."""
+    k = int(curve["codim2_point"].values[0])
+    c = curve.isel(codim2=[0] * 5)
+    labels = np.array(["R2", "PD+NS", "PD+SN", "PD+ZV", "PD+GR"])
+    c["codim2_label"] = ("codim2", labels.astype(curve["codim2_label"].dtype))
+    c["codim2_point"] = ("codim2", np.full(5, k))
+    c["codim2_omega"] = ("codim2", float(curve["omega"][k]) + 1e-3 * np.arange(5))
+    c["codim2_b"] = ("codim2", float(curve["b"][k]) + 5e-4 * np.arange(5))
+    c["physical"][:] = True
+    return c
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_coincident_codim2_points_get_one_label_with_standard_names(data, width):
+    fig = _figure(width, 0.75 * width + 1.6)
+    curves = {"pd": _codim2_cluster(data["curves"]["pd"])}
+    ax = two_parameter_diagram(data["maps"]["map"], curves, N=2, ax=fig.add_subplot())
+    check_layout(fig, journal=True)
+    texts = [t.get_text() for t in ax.texts]
+    names = [t for t in texts if "PDNS" in t]
+    assert names == ["R2, PDNS, LPPD, PD+ZV, PD+GR"], texts
+    legend = " ".join(t.get_text() for t in ax.figure.legends[0].get_texts()) \
+        if ax.figure.legends else " ".join(t.get_text() for t in ax.get_legend().get_texts())
+    assert "LPPD fold-flip" in legend and "R2 1:2 resonance" in legend
+    assert "no standard name" in legend
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_two_grazings_side_by_side_get_one_label(width):
+    """vi_nes_plane: two GR points a marker and a half apart read ``GR GR``."""
+    from matplotlib.lines import Line2D
+
+    from impactcont.plots.branches import label_specials
+
+    fig = _figure(width)
+    ax = fig.add_subplot()
+    x = np.linspace(0.0, 1.0, 50)
+    ax.plot(x, x ** 2, color="C0", linewidth=1.6)
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    fig.draw_without_rendering()
+    # 10 points apart on the page: two markers side by side, not one place
+    dx = float((ax.transData.inverted().transform([[10 * fig.dpi / 72, 0]])
+                - ax.transData.inverted().transform([[0, 0]]))[0, 0])
+    pts = [(0.5, 0.4), (0.5 + dx, 0.4)]
+    for px, py in pts:
+        ax.plot([px], [py], linestyle="none", marker=SPECIAL_MARKERS["GR"], markersize=6,
+                markerfacecolor="white", markeredgecolor="C0")
+    ax.legend(handles=[Line2D([], [], color="C0", linewidth=1.6, label="branch"),
+                       Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS["GR"],
+                              markeredgecolor="black", markerfacecolor="white",
+                              label="GR grazing")], loc="upper left")
+    label_specials(ax, [(px, py, "GR") for px, py in pts])
+    check_layout(fig)
+    assert [t.get_text() for t in ax.texts] == ["GR \N{MULTIPLICATION SIGN}2"]

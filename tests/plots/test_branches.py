@@ -20,7 +20,7 @@ from impactcont.plots import (
     multipliers_plot,
     stability_segments,
 )
-from impactcont.plots.branches import NONPHYSICAL_GREY
+from impactcont.plots.branches import NONPHYSICAL_GREY, NONPHYSICAL_MARKER
 
 matplotlib.use("Agg")
 
@@ -101,7 +101,7 @@ def test_bifurcation_diagram_renders(branch, tmp_path):
     assert legend.get_window_extent().y1 <= ax.get_window_extent().y0, "legend over the axes"
     assert ax.get_xlabel() == r"forcing frequency $\omega$"
     assert ax.get_ylabel() == r"impact velocity $\dot{x}_1(T^-)$"  # no "(impact_velocity)"
-    assert ax.get_title() == r"Periodic 1-1 motions, $b = 0$, $R = 0.6$, $\eta = 0.1$"
+    assert ax.get_title() == r"Period-1 motions with 1 impact, $b = 0$, $R = 0.6$, $\eta = 0.1$"
     out = tmp_path / "diagram.png"
     ax.figure.savefig(out)
     assert out.stat().st_size > 0
@@ -274,15 +274,19 @@ def test_special_points_of_non_physical_motions_are_grey_and_unlabelled(osc):
                         special_points=[_special("PD", 40, cols), _special("NS", 20, cols)])
     ax = bifurcation_diagram(ds)
     assert [t.get_text() for t in ax.texts] == ["NS"]
-    markers = {lab: ln for lab, _, ln in _markers(ax)}
-    assert sorted(markers) == ["NS", "PD"]
-    assert markers["NS"].get_markeredgecolor() == "C0"  # physical: the branch's colour
-    assert markers["PD"].get_markeredgecolor() == NONPHYSICAL_GREY  # inside the dotted run
-    assert markers["PD"].get_markersize() < markers["NS"].get_markersize()
+    lines = [ln for ln in ax.get_lines() if _is_marker(ln)]
+    ns = [ln for ln in lines if ln.get_marker() == SPECIAL_MARKERS["NS"]]
+    grey = [ln for ln in lines if ln.get_markeredgecolor() == NONPHYSICAL_GREY]
+    assert len(ns) == 1 and ns[0].get_markeredgecolor() == "C0"  # physical: branch colour
+    # the PD inside the dotted run: a small grey circle, like every non-physical point
+    assert len(grey) == 1 and grey[0].get_marker() == NONPHYSICAL_MARKER
+    assert grey[0].get_markersize() < ns[0].get_markersize()
     legend = {t.get_text(): h for t, h in zip(ax.get_legend().get_texts(),
                                               ax.get_legend().legend_handles, strict=True)}
-    assert legend["grey: on non-physical motion"].get_markeredgecolor() == NONPHYSICAL_GREY
-    assert "PD period doubling" in legend
+    entry = legend["point on non-physical motion"]
+    assert entry.get_markeredgecolor() == NONPHYSICAL_GREY
+    assert entry.get_marker() == NONPHYSICAL_MARKER
+    assert "PD period doubling" not in legend  # no PD square is drawn
     plt.close(ax.figure)
 
 
@@ -324,7 +328,7 @@ def test_scene_diagram_has_one_panel_per_system(branch, osc):
     assert [ax.get_xlabel() for ax in axes] == ["", r"forcing frequency $\omega$"]
     single = draw_bifurcation({"b0": branch, "again": branch.assign(omega=branch["omega"] + 1)})
     (ax,) = single.get_axes()
-    assert ax.get_title() == r"Periodic 1-1 motions, $b = 0$, $R = 0.6$, $\eta = 0.1$"
+    assert ax.get_title() == r"Period-1 motions with 1 impact, $b = 0$, $R = 0.6$, $\eta = 0.1$"
     assert [t.get_text() for t in ax.get_legend().get_texts()][-2:] == ["b0 (N = 1)",
                                                                         "again (N = 1)"]
 

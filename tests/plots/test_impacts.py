@@ -71,7 +71,8 @@ def test_the_legend_and_axes_name_the_branches_the_parameter_and_the_quantity(n1
     assert ax.get_ylabel() == impact_label(n1, "impact_velocity_k") == \
         r"impact velocity $\dot{x}_1(T_k^-)$"
     # the system held fixed: b, R, eta of the oscillator (omega is on the axis)
-    assert ax.get_title() == r"Periodic N-p motions, $b = 0$, $R = 0.6$, $\eta = 0.1$"
+    assert ax.get_title() == (r"Period-$N$ motions with $p$ impacts, $b = 0$, $R = 0.6$, "
+                              r"$\eta = 0.1$")
 
 
 def _marks(ax, label: str) -> np.ndarray:
@@ -118,3 +119,15 @@ def test_branches_in_different_parameters_are_refused(n1) -> None:
     in_b = ic.continuation(PAPER, N=1, parameter="b", bounds=(-0.1, 0.1), detect=())
     with pytest.raises(ValueError, match="parameter"):
         impact_diagram([n1, in_b], ax=_axes())
+
+
+def test_the_legend_names_only_the_branches_drawn(n1, two) -> None:
+    """Without non-physical parts, a branch with no physical motion draws nothing: no
+    legend entry (the cascades study listed five branches nobody could see)."""
+    hidden = two.copy(deep=True)
+    hidden["physical"][:] = False
+    ax = impact_diagram({"n1": n1, "two": two, "hidden": hidden}, ax=_axes(),
+                        nonphysical=False)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "n1 (1-1)" in texts and "two (2-2)" in texts
+    assert not [t for t in texts if t.startswith("hidden")]

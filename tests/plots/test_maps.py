@@ -80,7 +80,7 @@ def test_the_panel_shades_the_regions_and_draws_the_curve_through_its_points(gri
     assert "PD period doubling" in texts
     assert ax.get_xlabel() == r"forcing frequency $\omega$"
     assert ax.get_ylabel().startswith("gap $b$")
-    assert ax.get_title().startswith("Periodic 1-1 motions, ")
+    assert ax.get_title().startswith("Period-1 motions with 1 impact, ")
     assert ax.get_xlim() == (1.6, 1.9) and ax.get_ylim() == (-0.1, 0.1)
 
 
@@ -88,7 +88,7 @@ def test_a_curve_of_another_N_is_left_out(grid, pd_curve) -> None:
     ax = two_parameter_diagram(grid, {"pd": pd_curve}, N=2, ax=_axes())
     red = to_rgba(CURVE_STYLES["PD"]["color"])
     assert not [line for line in ax.get_lines() if to_rgba(line.get_color()) == red]
-    assert ax.get_title().startswith("Periodic 2-1 motions")
+    assert ax.get_title().startswith("Period-2 motions with 1 impact")
 
 
 def test_curves_alone_are_drawn_without_a_map(pd_curve) -> None:

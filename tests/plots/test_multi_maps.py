@@ -91,7 +91,7 @@ def test_without_boundaries_legend_and_title(family) -> None:
 
 
 def test_the_title_names_the_motion_the_fixed_parameters_and_the_stops(family) -> None:
-    assert multi_map_title(family) == r"Periodic 1-1 motions, $R = 0.6$, $\eta = 0.1$"
+    assert multi_map_title(family) == r"Period-1 motions with 1 impact, $R = 0.6$, $\eta = 0.1$"
     mirrored = PAPER.replace(b=0.5, stops=Stops(mirror=True))
     shape, p = (2, 3), 2
     values = {"found": np.ones(shape, bool), "newton_iterations": np.full(shape, 3),
@@ -106,8 +106,9 @@ def test_the_title_names_the_motion_the_fixed_parameters_and_the_stops(family) -
                                   values=values, symmetric=True, seed={"omega": 1.0},
                                   options={})
     # R is on an axis; the mirrored lower stop moves with b (no b_low of its own)
-    assert multi_map_title(ds) == (r"Periodic symmetric 1-2 motions, impacts UL (L: lower "
-                                   r"stop), $b = 0.5$, $\eta = 0.1$, mirror stops $x_1 = \pm b$")
+    assert multi_map_title(ds) == (r"Period-1 symmetric motions with 2 impacts, impacts UL "
+                                   r"(L: lower stop), $b = 0.5$, $\eta = 0.1$, "
+                                   r"mirror stops $x_1 = \pm b$")
     ax = multi_impact_map_diagram(ds, ax=_axes())
     assert not [line for line in ax.get_lines() if line.get_marker() == "*"]  # seed: omega only
     assert ax.get_ylabel().startswith("coefficient of restitution $R$")
