@@ -586,3 +586,17 @@ def test_two_grazings_side_by_side_get_one_label(width):
     label_specials(ax, [(px, py, "GR") for px, py in pts])
     check_layout(fig)
     assert [t.get_text() for t in ax.texts] == ["GR \N{MULTIPLICATION SIGN}2"]
+
+
+@pytest.mark.parametrize("folder", ["studies/main_job/figures", "docs/figures"])
+def test_committed_figures_fit_a_page(folder):
+    """The figures the package's docs and main job show are at most 7.2 in wide."""
+    from PIL import Image
+
+    root = Path(__file__).resolve().parents[2]
+    pngs = sorted((root / folder).glob("*.png"))
+    assert pngs
+    for png in pngs:
+        with Image.open(png) as im:
+            width = im.size[0] / im.info["dpi"][0]
+        assert width <= 7.2 + 0.01, f"{png.name} is {width:.2f} in wide"
