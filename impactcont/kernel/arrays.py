@@ -18,6 +18,20 @@ neither numba nor anything of impactcont's.
 :class:`FirstOrderArrays` names the fields of the first-order basis of any damping
 matrix C (:attr:`impactcont.model.first_order.FirstOrderBasis.kernel_arrays`), the
 inputs of :mod:`impactcont.kernel.general`.
+
+The N-p shooting path (:mod:`impactcont.kernel.shooting`) and the map sweep
+(:mod:`impactcont.kernel.sweep`) take the same kind of structures, a few per call: the flow
+between impacts (:class:`ShootingFlow`), the forcing at omega (:class:`Forcing`, its omega
+derivatives :class:`ForcingDerivatives`), the motion's impacts (:class:`ImpactSequence`),
+the stops of the contact check (:class:`ContactStops`) and the shot flights
+(:class:`ShotFlights`); a map stacks flows and stop geometries (:class:`FlowTables`,
+:func:`stack_flows`, :class:`GeometryTables`) and names its motion, grid, settings and
+outputs (:class:`SweepMotion`, :class:`SweepGrid`, :class:`SweepSettings`,
+:class:`SweepOutputs`). Results are named records (:class:`NewtonResult`,
+:class:`MotionChecks`, :class:`PalcResult`, :class:`BranchLinearization`,
+:class:`ForcedAmplitudes`, :class:`SweepStats`). Each is a module-level
+:class:`typing.NamedTuple`, so the compiled functions that take or return one are cached
+on disk (numba pickles its class by name).
 """
 
 from __future__ import annotations
@@ -26,7 +40,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["FirstOrderArrays", "ModalArrays", "modal_arrays"]
+__all__ = ["BranchLinearization", "ContactStops", "CorrectorSettings", "CorrectorStep",
+           "Embedding", "FirstOrderArrays", "FlowTables", "ForcedAmplitudes", "Forcing",
+           "ForcingDerivatives", "GeometryTables", "ImpactSequence", "ModalArrays",
+           "MotionChecks", "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights",
+           "StopSeries", "SweepGrid", "SweepMotion", "SweepOutputs", "SweepSettings",
+           "SweepStats", "modal_arrays", "stack_flows"]
 
 
 class ModalArrays(NamedTuple):
@@ -296,8 +315,9 @@ class ContactStops(NamedTuple):
 
 
 class ShotFlights(NamedTuple):
-    """The shooting system at one set of unknowns (:func:`~impactcont.kernel.shooting.
-    shooting_system`): the fields of :class:`impactcont.orbit.multi_impact.Shooting`."""
+    """The shooting system at one set of unknowns
+    (:func:`impactcont.kernel.shooting.shooting_system`): the fields of
+    :class:`impactcont.orbit.multi_impact.Shooting`."""
 
     phases: np.ndarray
     """``theta_k``, shape (p,)."""

@@ -177,3 +177,22 @@ def test_the_entry_points_return_named_records(motion):
     assert isinstance(checked, kernel_arrays.MotionChecks)
     np.testing.assert_array_equal(checked.G, motion.G)
     np.testing.assert_array_equal(checked.multipliers, motion.multipliers)
+
+
+def test_stack_flows_names_the_field_whose_shape_differs():
+    from impactcont.orbit.flow import Flow
+
+    K = [[1.0, -1.0], [-1.0, 2.0]]
+    modal = Flow(ic.ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=0.0,
+                                     omega=1.5, eta=0.1))
+    general = Flow(ic.ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=0.0,
+                                       omega=1.5, C=[[0.2, -0.2], [-0.2, 0.2]]))
+    pairs = [(f.shooting_arrays(), f.forcing_arrays()) for f in (modal, modal)]
+    tables = kernel_arrays.stack_flows(pairs, np.zeros((1, 2), dtype=np.int64))
+    assert tables.w.shape == (2, 2) and tables.omega.tolist() == [1.5, 1.5]
+    assert tables.general is False and tables.index.dtype == np.int64
+    mixed = [(f.shooting_arrays(), f.forcing_arrays()) for f in (modal, general)]
+    with pytest.raises(ValueError, match="field 'w' has shapes"):
+        kernel_arrays.stack_flows(mixed, np.zeros((1, 2), dtype=np.int64))
+    with pytest.raises(ValueError, match="at least one"):
+        kernel_arrays.stack_flows([], np.zeros((1, 1), dtype=np.int64))
