@@ -58,6 +58,17 @@ from impactcont.dataset.multi_maps import (
     validate_multi_impact_map_dataset,
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.kernel.arrays import (
+    FlowTables,
+    Forcing,
+    GeometryTables,
+    ShootingFlow,
+    SweepGrid,
+    SweepMotion,
+    SweepOutputs,
+    SweepSettings,
+    stack_flows,
+)
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import MASS, ModelParameter, model_parameter
 from impactcont.orbit.flow import Flow
@@ -198,10 +209,8 @@ class _Tables:
         self.flows = [Flow(_replaced(osc, by_name, values)) for values in flow_values]
         geometries = [stop_geometry(_replaced(osc, by_name, values), pattern)
                       for values in geometry_values]
-        self.flow_arrays = _stack([flow.shooting_arrays()[1:] for flow in self.flows])
-        self.static_arrays = _stack([flow.static_arrays() for flow in self.flows])
-        self.omegas = np.array([flow.omega for flow in self.flows], dtype=float)
-        self.general = bool(self.flows[0].shooting_arrays()[0])
+        self.flow_tables = _stack([(flow.shooting_arrays(), flow.forcing_arrays())
+                                   for flow in self.flows], self.flow_index)
         # the stop coordinates, the pivot of each impact (the own mass of the stop it hits),
         # the sides and the lower stop's presence are the stops' structure, which no
         # parameter changes
@@ -223,6 +232,7 @@ class _Tables:
         self.normals = column(lambda geo: geo.normals[:q])
         self.matrices = column(lambda geo: geo.matrices[:q])
         self.full_normals = column(lambda geo: geo.normals)
+        self.full_positions = column(lambda geo: geo.positions)
         self.full_matrices = column(lambda geo: geo.matrices)
         self.contact_normals = column(lambda geo: geo.normal)
         self.b_upper = column(lambda geo: geo.b)
@@ -261,15 +271,15 @@ def _combinations(parameters: tuple[str, str], grid: dict[str, np.ndarray], axes
             for v1 in grid[parameters[1]]], index
 
 
-def _stack(arrays: list[tuple[Any, ...]]) -> tuple[np.ndarray, ...]:
-    """Each of the flows' arrays stacked on a new first axis (one row per flow)."""
-    columns = list(zip(*arrays, strict=True))
-    for column in columns:
-        if len({a.shape for a in column}) != 1:
-            raise ParameterError("the flows of the grid have modal arrays of different shapes "
-                                 "(the first-order modes change their structure across the "
-                                 "grid); map a smaller range of the damping parameter")
-    return tuple(np.ascontiguousarray(np.stack(column)) for column in columns)
+def _stack(flows: list[tuple[ShootingFlow, Forcing]], index: np.ndarray) -> FlowTables:
+    """The flows' arrays stacked on a new first axis (one row per flow)."""
+    try:
+        return stack_flows(flows, index)
+    except ValueError as exc:
+        raise ParameterError(f"the flows of the grid have modal arrays of different shapes "
+                             f"(the first-order modes change their structure across the "
+                             f"grid: {exc}); map a smaller range of the damping parameter"
+                             ) from None
 
 
 def _nearest(grid: dict[str, np.ndarray], parameters: tuple[str, str],
@@ -310,18 +320,29 @@ class _Setting:
         npts = axes[names[0]].size * axes[names[1]].size
         out = _empty_outputs(npts, p, m)
         unknowns = np.full((npts, x_seed.size), np.nan)
-        stats = _kernel().sweep_stops(
-            tables.general, *tables.flow_arrays, *tables.static_arrays, tables.omegas,
-            tables.flow_index, tables.positions, tables.normals, tables.matrices,
-            tables.full_normals, tables.full_matrices, tables.contact_normals, tables.b_upper,
-            tables.b_lower, tables.extra_normals, tables.extra_signs, tables.extra_positions,
-            tables.geometry_index, axes[names[0]], axes[names[1]], tables.signs,
-            self.N, self.half, self.admits, tables.pivots, tables.two_sided, seed[0], seed[1],
-            np.ascontiguousarray(x_seed, dtype=float), self.tol, self.max_iter,
-            self.max_change, bool(checks), self.max_attempts, unknowns, out["found"],
-            out["newton_iterations"], out["delta"], out["stable"], out["physical"],
-            out["spectral_radius"], out["critical_multiplier"], out["gap_min"],
-            out["impact_velocity_k"], out["flight_time_k"], out["state_k"], out["asymmetry"])
+        geometries = GeometryTables(
+            positions=tables.positions, normals=tables.normals, matrices=tables.matrices,
+            full_normals=tables.full_normals, full_positions=tables.full_positions,
+            full_matrices=tables.full_matrices, contact_normals=tables.contact_normals,
+            b_upper=tables.b_upper, b_lower=tables.b_lower, extra_normals=tables.extra_normals,
+            extra_signs=tables.extra_signs, extra_positions=tables.extra_positions,
+            index=tables.geometry_index)
+        motion = SweepMotion(N=self.N, symmetric=self.half, admits=self.admits,
+                             pivots=tables.pivots, signs=tables.signs,
+                             two_sided=tables.two_sided)
+        grid = SweepGrid(coord0=axes[names[0]], coord1=axes[names[1]], seed0=seed[0],
+                         seed1=seed[1], x_seed=np.ascontiguousarray(x_seed, dtype=float))
+        settings = SweepSettings(tol=self.tol, max_iter=self.max_iter,
+                                 max_change=self.max_change, checks=bool(checks),
+                                 max_attempts=self.max_attempts)
+        outputs = SweepOutputs(
+            unknowns=unknowns, found=out["found"], iterations=out["newton_iterations"],
+            delta=out["delta"], stable=out["stable"], physical=out["physical"],
+            rho=out["spectral_radius"], mu=out["critical_multiplier"], gap=out["gap_min"],
+            velocity=out["impact_velocity_k"], tau=out["flight_time_k"], state=out["state_k"],
+            asym=out["asymmetry"])
+        stats = _kernel().sweep_stops(tuple(tables.flow_tables), tuple(geometries), tuple(motion),
+                                      tuple(grid), tuple(settings), tuple(outputs))
         return out, unknowns, stats
 
     def solve_at(self, params: tuple[ModelParameter, ModelParameter], values: dict[str, float],
