@@ -20,7 +20,11 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import minimize_scalar
 
-from impactcont.analysis.multi_branch import restart_problem, run_branch
+from impactcont.analysis.multi_branch import (
+    multi_impact_continuation,
+    restart_problem,
+    run_branch,
+)
 from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
@@ -52,7 +56,8 @@ from impactcont.detection.special_points import (
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import RESTITUTION, model_parameter
-from impactcont.orbit.periodic import _check_N, periodic_orbits
+from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.progress import (
     NothingComputed,
@@ -199,6 +204,41 @@ def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) ->
     return chosen[0].delta
 
 
+def _motion_branch(motion: PeriodicOrbit | MultiImpactOrbit, N: int, parameter: str,
+                   bounds: Sequence[float], *, start: float | None, root: int | None,
+                   components: str, **keywords: Any) -> xr.Dataset:
+    """The branch through a computed motion (:func:`continuation` given a motion).
+
+    An N-1 motion of the paper's system in a parameter of eq. (14) is followed on the
+    closed form (the exact, fast path: its component through the motion's root); any
+    other motion or parameter by :func:`impactcont.multi_impact_continuation`.
+    """
+    motion_N = int(motion.N)
+    for name, value, allowed in (("N", N, (1, motion_N)), ("start", start, (None,)),
+                                 ("root", root, (None,)),
+                                 ("components", components, ("all", "start"))):
+        if value not in allowed:
+            raise ParameterError(
+                f"{name} must be left out when continuation starts from a motion (the "
+                f"motion fixes it: N = {motion_N}, its own parameter value and root, the "
+                f"component through it); got {name}={value!r}")
+    osc = motion.oscillator
+    if isinstance(motion, PeriodicOrbit) and osc.stops.paper:
+        try:
+            problem = PeriodicBranchProblem(osc, motion_N, parameter)
+        except ParameterError:
+            problem = None  # a parameter the closed form does not continue: shooting
+        if problem is not None:
+            lo, hi = problem.param.check_bounds(osc, bounds)
+            value = problem.param.value(osc)
+            if not lo <= value <= hi:
+                raise ParameterError(f"the motion's {parameter} = {value!r} lies outside "
+                                     f"bounds {(lo, hi)}")
+            return continuation(osc, motion_N, parameter, (lo, hi), start=value,
+                                root=motion.root, components="start", **keywords)
+    return multi_impact_continuation(motion, parameter, bounds, **keywords)
+
+
 @blas_limited
 @option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
@@ -215,13 +255,19 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
 
     Parameters
     ----------
-    osc : ImpactOscillator
-        The oscillator (other parameters fixed at its values).
+    osc : ImpactOscillator, PeriodicOrbit or MultiImpactOrbit
+        The oscillator (other parameters fixed at its values); or a computed motion, whose
+        branch is followed from it: an N-1 motion of the paper's system on the closed form
+        (the component through its root), any other motion, or a parameter the closed form
+        does not continue, by :func:`impactcont.multi_impact_continuation` (its keywords
+        ``direction`` and ``symmetric`` then apply). `N`, `start`, `root` and
+        `components` are the motion's and must be left out.
     N : int
         One impact every N forcing periods.
     parameter : str
         ``"omega"``, ``"b"``, ``"R"``, ``"eta"``, ``"alpha"``, ``"beta"`` or ``"F0"`` (the forcing
-        amplitude, the largest |F_i|: F is scaled, its shape kept).
+        amplitude, the largest |F_i|: F is scaled, its shape kept); from a motion, any
+        parameter :func:`impactcont.multi_impact_continuation` takes.
     bounds : (float, float)
         Range of the parameter.
     start : float, optional
@@ -290,6 +336,12 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     A second Ctrl-C, or one before the first point, aborts with :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
+    if isinstance(osc, (PeriodicOrbit, MultiImpactOrbit)):
+        return _motion_branch(osc, N, parameter, bounds, start=start, root=root,
+                              components=components, detect=detect, options=options, ds=ds,
+                              ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol,
+                              max_points=max_points, both_directions=both_directions,
+                              progress=progress, events=events, monitors=monitors, **more)
     problem, detect, (lo, hi), opts = check_continuation_arguments(
         osc, N, parameter, bounds, detect=detect, components=components, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,

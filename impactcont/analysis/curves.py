@@ -441,6 +441,43 @@ def check_curve_arguments(
     return kind, parameters, box, N, opts
 
 
+def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: str,
+                  branch: xr.Dataset, *, special: int | None, parameters: Sequence[str],
+                  bounds: Any, root: int | None, detect_codim2_points: bool,
+                  **keywords: Any) -> xr.Dataset:
+    """The curve from a branch of N-p motions (:func:`curve` given such a branch).
+
+    Forwards to :func:`impactcont.multi_impact_curve` with ``which = special`` and
+    ``parameter = p2``; ``p1`` must be the branch's parameter.
+    """
+    from impactcont.analysis.multi_curves import multi_impact_curve
+
+    p1 = str(branch.attrs.get("parameter"))
+    given = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
+    if len(given) != 2 or given[0] != p1:
+        raise ParameterError(f"parameters must be (p1, p2) with p1 the branch's parameter "
+                             f"{p1!r}; got {parameters!r}")
+    for name, value, allowed in (("osc", osc, (None,)), ("root", root, (None,))):
+        if value not in allowed:
+            raise ParameterError(f"{name} must be left out when the curve starts from a "
+                                 f"branch of N-p motions (the branch fixes it); got "
+                                 f"{name}={value!r}")
+    if N not in (None, 1, int(branch.attrs["N"])):
+        raise ParameterError(f"N must be left out or the branch's N = "
+                             f"{int(branch.attrs['N'])}; got N={N!r}")
+    if bounds is not None and not isinstance(bounds, Mapping):
+        try:
+            bounds = dict(zip(given, bounds, strict=True))
+        except (TypeError, ValueError):
+            raise ParameterError(f"bounds must be a mapping {{p1: (lo, hi), p2: (lo, hi)}} or "
+                                 f"two pairs; got {bounds!r}") from None
+    if detect_codim2_points:
+        log.warning("codim-2 points are not located on curves of N-p motions in this "
+                    "version; the curve's ends and its special points along it are")
+    return multi_impact_curve(branch, kind, 0 if special is None else special,
+                              parameter=given[1], bounds=bounds, **keywords)
+
+
 @blas_limited
 @option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
 def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
@@ -533,6 +570,13 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
+    if isinstance(start, xr.Dataset) and "impact" in start.dims:
+        return _motion_curve(osc, N, kind, start, special=special, parameters=parameters,
+                             bounds=bounds, root=root,
+                             detect_codim2_points=detect_codim2_points, options=options,
+                             ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol,
+                             max_points=max_points, both_directions=both_directions,
+                             progress=progress, events=events, monitors=monitors, **more)
     kind, parameters, box, N, opts = check_curve_arguments(
         osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
