@@ -413,10 +413,16 @@ def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 
 
 def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Codim-1 curves in their parameter plane; dotted where no stable motion changes."""
+    """Codim-1 curves in their parameter plane; dotted where no stable motion changes.
+
+    Codim-2 points are named by their standard abbreviations where one exists
+    (:data:`~impactcont.plots.maps.CODIM2_NAMES`: LPPD, PDNS, R2, ...), by their
+    label ``A+B`` otherwise (non-smooth points, which have none; the legend says so).
+    """
     from matplotlib.lines import Line2D
 
     from impactcont.plots.branches import axis_label, legend_below
+    from impactcont.plots.maps import codim2_legend, codim2_name
 
     width = _width(plot)
     fig = Figure(figsize=(width, 0.6 * width + 1.2), layout="constrained")
@@ -424,7 +430,7 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     p1 = p2 = ""
     codim2: list[tuple[float, float, str]] = []
     handles = []
-    for k, (name, ds) in enumerate(datasets.items()):
+    for k, (_name, ds) in enumerate(datasets.items()):
         p1, p2 = split_parameters(str(ds.attrs["parameters"]))
         x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
         observable = np.asarray(ds["stable_side"].values, dtype=bool)
@@ -433,17 +439,20 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         ax.plot(np.where(observable, x, np.nan), np.where(observable, y, np.nan),
                 color=color, linewidth=1.8)
         handles.append(Line2D([], [], color=color, linewidth=1.8,
-                              label=f"{name} ({ds.attrs['kind']}, N = {int(ds.attrs['N'])})"))
+                              label=f"{ds.attrs['kind']} curve, period-{int(ds.attrs['N'])} "
+                                    f"motions"))
         for c in range(ds.sizes.get("codim2", 0)):
             cx, cy = float(ds[f"codim2_{p1}"].values[c]), float(ds[f"codim2_{p2}"].values[c])
             ax.plot(cx, cy, "o", markerfacecolor="white", markeredgecolor="black", zorder=3)
             codim2.append((cx, cy, str(ds["codim2_label"].values[c])))
+    names = codim2_legend([lab for _, _, lab in codim2])
+    codim2 = [(cx, cy, codim2_name(lab)) for cx, cy, lab in codim2]
     handles[:0] = [Line2D([], [], color="0.2", linewidth=1.8, label="a stable motion changes"),
                    Line2D([], [], color="0.2", linewidth=0.8, linestyle=":",
                           label="no stable motion changes")]
     if codim2:
         handles.append(Line2D([], [], linestyle="none", marker="o", markerfacecolor="white",
-                              markeredgecolor="black", label="codim-2 point"))
+                              markeredgecolor="black", label=f"codim-2 point:\n{names}"))
     if p1:
         first = next(iter(datasets.values()))
         ax.set_xlabel(axis_label(first, p1))
@@ -453,7 +462,7 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     if codim2:
         from impactcont.plots.branches import label_specials
 
-        label_specials(ax, codim2)
+        label_specials(ax, codim2, zoom=False)  # one place, one label: no inset
     return fig
 
 

@@ -600,3 +600,16 @@ def test_committed_figures_fit_a_page(folder):
         with Image.open(png) as im:
             width = im.size[0] / im.info["dpi"][0]
         assert width <= 7.2 + 0.01, f"{png.name} is {width:.2f} in wide"
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_scene_curves_name_codim2_points_as_the_field_does(data, width):
+    """A scene's curves figure: LPPD, PDNS, R2 for the smooth points, ``PD+GR`` (with the
+    legend saying it has no standard name) for a non-smooth one; no entry names."""
+    fig = figures.draw_curves({"pd": _codim2_cluster(data["curves"]["pd"])},
+                              _Options(width=width))
+    check_layout(fig)
+    text = _all_text(fig)
+    assert "R2, PDNS, LPPD, PD+ZV, PD+GR" in text and "PD+SN" not in text
+    assert "LPPD fold-flip" in text and "no standard name" in text
+    assert "PD curve, period-2 motions" in text and "pd (" not in text
