@@ -37,10 +37,10 @@ from matplotlib.legend import Legend
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter, NullLocator
 
-from impactcont.plots.branches import legend_fontsize
+from impactcont.plots.branches import fit_text, legend_fontsize
 
-__all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "panel_figure",
-           "series_plot"]
+__all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "fit_labels",
+           "panel_figure", "series_plot"]
 
 logger = logging.getLogger(__name__)
 
@@ -154,7 +154,9 @@ def panel_figure(n: int, width: float, *, ncols: int | None = None,
     Returns
     -------
     (matplotlib.figure.Figure, list of matplotlib.axes.Axes)
-        The figure (Agg-compatible, no pyplot) and its ``n`` axes, row by row.
+        The figure (Agg-compatible, no pyplot) and its ``n`` axes, row by row;
+        a last panel alone in its row spans the row (three panels at 7 in: two
+        side by side over one as wide as the figure).
 
     Raises
     ------
@@ -176,7 +178,9 @@ def panel_figure(n: int, width: float, *, ncols: int | None = None,
     height = nrows * aspect * width / ncols + extra_height
     fig = Figure(figsize=(width, height), layout="constrained")
     grid = fig.add_gridspec(nrows, ncols)
-    axes = [fig.add_subplot(grid[i // ncols, i % ncols]) for i in range(int(n))]
+    axes = [fig.add_subplot(grid[i // ncols, i % ncols]) for i in range(int(n) - 1)]
+    last = int(n) - 1  # an odd panel out spans the last row
+    axes.append(fig.add_subplot(grid[last // ncols, last % ncols:]))
     return fig, axes
 
 
@@ -261,7 +265,7 @@ def series_plot(ax: Axes, series: Iterable[Series], *, xlabel: str, ylabel: str,
         values = np.concatenate(positive) if positive else np.empty(0)
         lo, hi = (float(values.min()), float(values.max())) if values.size else (1e-16, 1.0)
         lo_exp = math.floor(math.log10(lo))
-        hi_exp = max(math.ceil(math.log10(hi)), lo_exp + 1)
+        hi_exp = max(math.ceil(math.log10(hi) + 0.15), lo_exp + 1)  # no marker on the top
         # the row takes the bottom _ZERO_ROW of the axes, a margin above it: no data there
         span = (hi_exp - lo_exp) / (1.0 - _ZERO_ROW - 0.05)
         ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
@@ -322,3 +326,27 @@ def figure_legend(fig: Figure, handles: Sequence[Any] | None = None) -> Legend:
         if legend.get_window_extent().width <= room:
             break
     return legend
+
+
+def fit_labels(fig: Figure) -> None:
+    """Break the titles and vertical axis labels of ``fig`` that do not fit into lines.
+
+    The suptitle is broken at ``", "`` to the figure's width, each axes title to its
+    axes' width (:func:`impactcont.plots.branches.fit_text`), and a vertical axis
+    label taller than its axes at the space nearest its middle. Call it last, on a
+    figure with the constrained layout, before saving.
+    """
+    fig.draw_without_rendering()
+    if fig._suptitle is not None:
+        fit_text(fig._suptitle, fig.bbox.width - 8.0)
+    for ax in fig.axes:
+        if ax.get_title():
+            fit_text(ax.title, ax.bbox.width)
+        label = ax.yaxis.label
+        text = label.get_text()
+        if text and "\n" not in text and label.get_window_extent().height > ax.bbox.height:
+            spaces = [i for i, c in enumerate(text) if c == " " and text[:i].count("$") % 2 == 0]
+            if spaces:
+                cut = min(spaces, key=lambda i: abs(i - len(text) / 2))
+                label.set_text(text[:cut] + "\n" + text[cut + 1:])
+    fig.draw_without_rendering()

@@ -47,18 +47,22 @@ import time
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 import impactcont as ic
 from impactcont.analysis.multi_curves import multi_impact_curve_crossings
-from impactcont.plots.branches import legend_below
+from impactcont.plots.branches import SPECIAL_NAMES, fit_text, legend_below
 from impactcont.plots.multi_maps import multi_impact_map_diagram
+from impactcont.plots.series import (
+    Series,
+    figure_legend,
+    fit_labels,
+    panel_figure,
+    series_plot,
+)
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -73,6 +77,7 @@ PLANE = {"omega": (0.5, 3.5), "b": (0.1, 3.0)}
 PLANE_GRID = (151, 59)  # omega x b, for the closed form's and the package's maps
 MAP_MAX_CHANGE = 2.0  # multi_impact_map's max_change (default 0.5: README, stability map)
 CURVE_POINTS = 600  # enough for each curve of the study's box (the NS curve: 260)
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 SIMULATED = ((1.5, 2.0), (2.5, 2.0), (1.0, 1.0), (2.0, 4.0))  # (r, d) for the simulator
 
 
@@ -435,61 +440,74 @@ def curve_vs_closed_form(groups: dict[str, xr.Dataset]) -> list[dict[str, Any]]:
     return out
 
 
-def draw(rows: list[dict[str, Any]], path: Path) -> None:
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+R_LABEL = r"$r = \omega/\omega_n$"
+
+
+def agreement_figure(rows: list[dict[str, Any]], width: float = 7.0) -> Figure:
+    """Left: the symmetric two-impact motion's amplitude, the closed form's lines (solid:
+    stable, dotted: unstable) over the package's motions (hollow circles), the primary
+    without the particle dashed. Right: package - closed form on a log axis, exact zeros in
+    their own row. Side by side from 5 in, stacked below."""
+    fig, (left, right) = panel_figure(2, width, extra_height=1.3)
+    series = []
     for d, color in zip(CLEARANCES, ("C0", "C1", "C2"), strict=True):
-        for root in (0, 1):
-            om = np.linspace(OMEGAS[0], OMEGAS[-1], 400)
-            amp = np.full(om.size, np.nan)
-            stab = np.zeros(om.size, bool)
-            for i, r in enumerate(om):
-                ms = sorted(symmetric_motions(float(r), d, MU, E, ZETA), key=lambda m: m.delta)
-                ms = [m for m in ms if m.physical]
-                if len(ms) > root:
-                    amp[i], stab[i] = ms[root].amplitude, ms[root].stable
-            axes[0].plot(om, np.where(stab, amp, np.nan), "-", color=color,
-                         label=f"closed form, d = {d:g}" if root == 0 else None)
-            axes[0].plot(om, np.where(~stab, amp, np.nan), ":", color=color)
+        om = np.linspace(OMEGAS[0], OMEGAS[-1], 400)
+        amp = np.full((2, om.size), np.nan)
+        stab = np.zeros((2, om.size), bool)
+        for i, r in enumerate(om):
+            ms = sorted(symmetric_motions(float(r), d, MU, E, ZETA), key=lambda m: m.delta)
+            for root, m in enumerate([m for m in ms if m.physical][:2]):
+                amp[root, i], stab[root, i] = m.amplitude, m.stable
         pts = [r for r in rows if r["d"] == d and r["physical_pkg"]]
-        axes[0].plot([r["omega"] for r in pts],
-                     [r["amplitude_cf"] * (1 + r["amplitude"]) for r in pts], "o", ms=3,
-                     mfc="none", color=color)
+        series.append(Series([r["omega"] for r in pts],
+                             [r["amplitude_cf"] * (1 + r["amplitude"]) for r in pts],
+                             f"$d = {d:g}$: package", color=color, linestyle="none",
+                             marker="o", markersize=4))
+        for root in (0, 1):
+            series.append(Series(om, np.where(stab[root], amp[root], np.nan),
+                                 f"$d = {d:g}$: closed form, stable", color=color))
+            series.append(Series(om, np.where(~stab[root], amp[root], np.nan),
+                                 f"$d = {d:g}$: closed form, unstable", color=color,
+                                 linestyle=":"))
     om = np.linspace(0.3, OMEGAS[-1], 400)
-    lin = 1.0 / np.abs(1 - om ** 2 + 2j * ZETA * om)
-    axes[0].plot(om, lin, "k--", lw=0.8, label="without the particle")
-    axes[0].set_ylim(0, 4)
-    axes[0].set_xlabel("r = omega / w_n")
-    axes[0].set_ylabel("amplitude of the primary, max |x1| (units F/k)")
-    axes[0].legend(fontsize=7)
-    axes[0].set_title("Symmetric two-impact motion (solid: stable, dotted: unstable;\n"
-                      "circles: the package's multi_impact_orbit)", fontsize=9)
-    worst = [max(r[k] for r in rows) for k in ("phase", "state", "amplitude", "multipliers")]
-    axes[1].semilogy([r["omega"] for r in rows], [max(r["phase"], r["state"], 1e-17)
-                                                  for r in rows], ".", ms=3,
-                     label=f"phase, state (max {max(worst[:2]):.1e})")
-    axes[1].semilogy([r["omega"] for r in rows], [max(r["multipliers"], 1e-17) for r in rows],
-                     "x", ms=3, label=f"multipliers (max {worst[3]:.1e})")
-    axes[1].semilogy([r["omega"] for r in rows], [max(r["amplitude"], 1e-17) for r in rows],
-                     "+", ms=3, label=f"amplitude (max {worst[2]:.1e}; sampled)")
-    axes[1].set_xlabel("r = omega / w_n")
-    axes[1].set_ylabel("relative difference, package vs closed form")
-    axes[1].legend(fontsize=7)
-    axes[1].set_title(f"Agreement (mu = {MU}, e = {E}, zeta = {ZETA}; d = 1, 2, 4)",
-                      fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    series.append(Series(om, 1.0 / np.abs(1 - om ** 2 + 2j * ZETA * om),
+                         "without the particle", color="k", linestyle="--", linewidth=0.8))
+    series_plot(left, series, xlabel=R_LABEL,
+                ylabel=r"primary's amplitude $\max|x_1|$ [$F/k$]",
+                title="Symmetric two-impact motion")
+    left.set_ylim(0, 4)
+    worst = {k: max(r[k] for r in rows) for k in ("phase", "state", "amplitude", "multipliers")}
+    om = [r["omega"] for r in rows]
+    series_plot(right, [
+        Series(om, [max(r["phase"], r["state"]) for r in rows],
+               f"phase, state (max {max(worst['phase'], worst['state']):.1e})", color="C4",
+               linestyle="none", marker="o", markersize=3),
+        Series(om, [r["multipliers"] for r in rows],
+               f"multipliers (max {worst['multipliers']:.1e})", color="C5", linestyle="none",
+               marker="x", markersize=4),
+        Series(om, [r["amplitude"] for r in rows],
+               f"amplitude, sampled (max {worst['amplitude']:.1e})", color="C6",
+               linestyle="none", marker="+", markersize=5)],
+        xlabel=R_LABEL, ylabel=r"relative difference $|\Delta|$", yscale="log",
+        title="Package against closed form")
+    figure_legend(fig)
+    fig.suptitle(rf"Impact damper, $\mu = {MU:g}$, $e = {E:g}$, $\zeta = {ZETA:g}$, "
+                 r"cavity $d = 1, 2, 4$", fontsize="medium")
+    fit_labels(fig)
+    return fig
 
 
-def draw_plane(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
-               info: dict[str, Any], path: Path) -> None:
+def plane_figure(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
+                 info: dict[str, Any], width: float = 7.0) -> Figure:
     """The package's map (its regions and boundaries, ``multi_impact_map_diagram``), the
     closed form's boundary of stable physical motion and the package's curves on top."""
-    fig, ax = plt.subplots(figsize=(7.0, 6.4), layout="constrained")
+    fig, (ax,) = panel_figure(1, width, aspect=0.75, extra_height=1.8)
     handles: list[Any] = []
     if "map" in groups:
         multi_impact_map_diagram(groups["map"], ax=ax, title="")
         handles = list(ax.get_legend().legend_handles)
+        for h, text in zip(handles, ax.get_legend().get_texts(), strict=True):
+            h.set_label(text.get_text())
         ax.get_legend().remove()
     else:  # no map: the closed form's region shaded
         ax.contourf(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5, 1.5],
@@ -503,7 +521,8 @@ def draw_plane(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
         ax.contour(cf["omega"], cf["b"], found.T.astype(float), levels=[0.5],
                    colors=["0.3"], linewidths=1.0, linestyles=[":"], zorder=3)
         handles.append(Line2D([], [], color="0.3", lw=1.0, ls=":",
-                              label="edge of the map with the default max_change 0.5"))
+                              label="edge of the map with the default step limit "
+                              "(4 times smaller)"))
     styles = {"NS": "C3", "BP": "C2", "SN": "C4", "GR": "C1"}
     seen = set()
     for name, ds in groups.items():
@@ -514,21 +533,43 @@ def draw_plane(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
                 zorder=4)
         if kind not in seen:
             handles.append(Line2D([], [], color=styles[kind], lw=1.4,
-                                  label=f"package: {kind} curve (multi_impact_curve)"))
+                                  label=f"{kind} curve ({SPECIAL_NAMES[kind]})"))
         seen.add(kind)
     ax.set_xlim(*PLANE["omega"])
     ax.set_ylim(*PLANE["b"])
-    ax.set_xlabel("r = omega / w_n")
-    ax.set_ylabel("b = d/2 (half the cavity, units F/k)")
+    ax.set_xlabel(R_LABEL)
+    ax.set_ylabel(r"half the cavity $b = d/2$ [$F/k$]")
     legend_below(ax, handles)
     agree = info.get("map_vs_closed_form")
     note = "" if agree is None else (
-        f"\nmulti_impact_map (max_change {agree['max_change']:g}) and the closed form "
-        f"agree at {agree['region_agrees'][0]} of {agree['region_agrees'][1]} cells")
-    ax.set_title(f"Symmetric two-impact motion in (omega, b), mu = {MU}, e = {E}, "
-                 f"zeta = {ZETA}{note}", fontsize=8)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        f", map and closed form agree at {agree['region_agrees'][0]} of "
+        f"{agree['region_agrees'][1]} cells")
+    ax.set_title(rf"Impact damper in $(\omega, b)$, $\mu = {MU:g}$, $e = {E:g}$, "
+                 rf"$\zeta = {ZETA:g}$: symmetric two-impact motion{note}",
+                 fontsize="medium")
+    fig.draw_without_rendering()
+    fit_text(ax.title)
+    return fig
+
+
+def draw_figures(output: Path, width: float = 7.0) -> list[Path]:
+    """Draw ``impact_damper.png`` and ``impact_damper_plane.png`` from the stored
+    ``rows.json``, ``closed_form_plane.npz``, ``branches.nc`` and ``impact_damper.json``."""
+    rows = json.loads((output / "rows.json").read_text())
+    with np.load(output / "closed_form_plane.npz") as stored:
+        cf = {k: stored[k] for k in stored.files}
+    groups = {}
+    if (output / "branches.nc").exists():
+        tree = ic.load(output / "branches.nc")
+        groups = {name: node.to_dataset() for name, node in tree.children.items()}
+    info = json.loads((output / "impact_damper.json").read_text())["beyond"]
+    paths = []
+    for name, fig in (("impact_damper.png", agreement_figure(rows, width)),
+                      ("impact_damper_plane.png", plane_figure(cf, groups, info, width))):
+        fig.savefig(output / name, dpi=DPI)
+        paths.append(output / name)
+        log.info("wrote %s", output / name)
+    return paths
 
 
 def main(output: Path) -> dict[str, Any]:
@@ -555,8 +596,8 @@ def main(output: Path) -> dict[str, Any]:
         log.info("map vs closed form: %s", {k: v for k, v in
                                             more["map_vs_closed_form"].items()
                                             if k != "disagreements"})
-    draw(agree["rows"], output / "impact_damper.png")
-    draw_plane(cf, groups, more, output / "impact_damper_plane.png")
+    (output / "rows.json").write_text(json.dumps(agree["rows"], indent=1, default=str))
+    np.savez(output / "closed_form_plane.npz", **cf)
     if groups:
         ic.save(groups, output / "branches.nc")
     summary = {"parameters": {"mu": MU, "e": E, "zeta": ZETA, "d": CLEARANCES,
@@ -565,6 +606,7 @@ def main(output: Path) -> dict[str, Any]:
                "boundary_vs_curves": crossings, "timings": timings,
                "total_s": time.perf_counter() - t_start}
     (output / "impact_damper.json").write_text(json.dumps(summary, indent=2, default=str))
+    draw_figures(output)
     return summary
 
 
@@ -573,11 +615,17 @@ if __name__ == "__main__":
     parser.add_argument("--output", type=Path, default=HERE / "output")
     parser.add_argument("--copy-figures", action="store_true",
                         help="copy the figures into figures/ (tracked)")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figures from the files of a finished run in "
+                        "the output directory (seconds)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    result = main(args.output)
+    if args.figures_only:
+        draw_figures(args.output)
+    else:
+        result = main(args.output)
+        log.info("done in %.1f s", result["total_s"])
     if args.copy_figures:
         (HERE / "figures").mkdir(exist_ok=True)
         for name in ("impact_damper.png", "impact_damper_plane.png"):
             shutil.copy(args.output / name, HERE / "figures" / name)
-    log.info("done in %.1f s", result["total_s"])

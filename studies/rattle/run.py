@@ -54,14 +54,15 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 import impactcont as ic
+from impactcont.plots.branches import legend_below
+from impactcont.plots.impacts import impact_diagram
+from impactcont.plots.series import Series, panel_figure, series_plot
 
 log = logging.getLogger("rattle")
 
@@ -71,6 +72,7 @@ FAR = 1000.0                 # the model's upper stop, far above any bounce
 GAP = 8.0                    # the ceiling of the two-flank (gear rattle) version
 TABLE = {1: (1.10, 1.30, 1.50), 2: (2.15, 2.25, 2.35)}   # Gamma of the agreement table
 SIM_PERIODS = 60             # motion periods the simulator runs on a stable motion
+DPI = 150                    # of the PNG (7 in wide: 1050 pixels)
 
 
 # ----------------------------------------------------------------------------- closed form
@@ -421,67 +423,96 @@ def two_flank() -> tuple[xr.Dataset | None, dict[str, Any]]:
 
 # ----------------------------------------------------------------------------- figure
 
-def draw(branches: dict[int, xr.Dataset], cas: Any, two: xr.Dataset | None, path: Path) -> None:
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
-    ax = axes[0]
+GAMMA = r"$\Gamma = A\omega^2/g$"
+
+
+def _closed_form_panel(ax: Axes, branches: dict[int, xr.Dataset]) -> list[Any]:
+    """Impact phase against Gamma: the closed form's lines over the package's points."""
+    series = []
     for N, br in branches.items():
         g = np.linspace(gamma_1(N), gamma_2(N) + 0.3, 400)
-        for root, style in ((1, "-"), (-1, "--")):
-            d = [closed_form(x, N, root)["delta"] for x in g]
-            ax.plot(g, np.mod(d, 2 * np.pi), style, color=f"C{N - 1}", lw=1,
-                    label=f"closed form N = {N}" + (" (saddle)" if root < 0 else ""))
+        for root, style, name in ((1, "-", ""), (-1, "--", ", saddle")):
+            d = np.mod([closed_form(x, N, root)["delta"] for x in g], 2 * np.pi)
+            series.append(Series(g, d, f"closed form, $N = {N}${name}", color=f"C{N - 1}",
+                                 linestyle=style, linewidth=1.0))
+        series.append(Series([gamma_2(N)] * 2, [0.0, 2 * np.pi],
+                             rf"$\Gamma_2$ of $N = {N}$ (closed form)", color=f"C{N - 1}",
+                             linestyle=":", linewidth=0.8))
         st = br["stable"].values
-        ax.plot(br["F0"].values[st], np.mod(br["delta"].values[st], 2 * np.pi), "o",
-                ms=2.5, color="k")
-        ax.plot(br["F0"].values[~st], np.mod(br["delta"].values[~st], 2 * np.pi), "o",
-                ms=2.5, mfc="none", color="k")
-        ax.axvline(gamma_2(N), color=f"C{N - 1}", ls=":", lw=0.8)
-    ax.set_xlabel("Gamma = A omega^2 / g")
-    ax.set_ylabel("impact phase delta (mod 2 pi)")
-    ax.set_title("Period-N one-impact motions: closed form (lines) and package (dots: stable, "
-                 "open: unstable)", fontsize=8)
-    ax.legend(fontsize=7)
-    ax = axes[1]
-    for k, br in enumerate(cas.branches):
-        v = br["impact_velocity_k"].values if "impact_velocity_k" in br else \
-            br["impact_velocity"].values[:, None]
-        g = br["F0"].values
-        st = br["stable"].values
-        for j in range(v.shape[1]):
-            ax.plot(g[st], v[st, j], ".", ms=2, color=f"C{k}")
-            ax.plot(g[~st], v[~st, j], ".", ms=0.6, color=f"C{k}", alpha=0.4)
-    for x in cas.pd_values:
-        ax.axvline(x, color="0.6", lw=0.5, ls=":")
-    ax.set_xlim(gamma_2(1) - 0.15, cas.pd_values[-1] + 0.03)
-    ax.set_xlabel("Gamma")
-    ax.set_ylabel("impact velocity")
-    ax.set_title("Period-doubling cascade of the N = 1 motion (bold: stable)", fontsize=8)
-    ax = axes[2]
+        gam, delta = br["F0"].values, np.mod(br["delta"].values, 2 * np.pi)
+        series.append(Series(gam[st], delta[st], "package, stable", linestyle="none",
+                             marker="o", filled=True, markersize=2.5))
+        series.append(Series(gam[~st], delta[~st], "package, unstable", linestyle="none",
+                             marker="o", markersize=3.0))
+    series_plot(ax, series, xlabel=GAMMA, ylabel=r"impact phase $\delta$ (mod $2\pi$)",
+                title="Period-$N$ one-impact motions")
+    ax.set_ylim(0.0, 2 * np.pi)
+    return [s.handle() for s in {s.label: s for s in series}.values()]
+
+
+def _harvest(ax: Axes) -> list[Any]:
+    """The handles of the legend ``impact_diagram`` drew inside ``ax``, the legend removed."""
+    legend = ax.get_legend()
+    handles = list(legend.legend_handles)
+    for h, text in zip(handles, legend.get_texts(), strict=True):
+        h.set_label(text.get_text())
+    legend.remove()
+    return handles
+
+
+def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float = 7.0
+           ) -> Figure:
+    """The study's figure from its stored branches (``branches.nc``) and cascade PDs.
+
+    Top left: the period-N motions in closed form (lines) and from the package (dots);
+    top right: the period-doubling cascade of the N = 1 motion (every impact of each
+    branch, :func:`impactcont.plots.impacts.impact_diagram`); bottom: the two-flank motion,
+    a motion with a flight through a stop drawn as not physical.
+
+    Parameters
+    ----------
+    groups : dict of str to xarray.Dataset
+        ``N1_gamma``, ``N2_gamma``, ``cascade_<k>`` and (if found) ``two_flank``.
+    pd_values : list of float
+        Gamma of the cascade's period doublings (``rattle.json``).
+    width : float
+        Inches, at most :data:`impactcont.plots.series.MAX_WIDTH`.
+    """
+    two = groups.get("two_flank")
+    fig, axes = panel_figure(3 if two is not None else 2, width, extra_height=1.6)
+    branches = {N: groups[f"N{N}_gamma"] for N in TABLE}
+    legend_below(axes[0], _closed_form_panel(axes[0], branches), span="axes")
+    cascade = [groups["N1_gamma"], *(groups[k] for k in sorted(
+        (k for k in groups if k.startswith("cascade_")), key=lambda k: int(k.split("_")[1])))]
+    ax = impact_diagram(cascade, ax=axes[1], specials=("PD",), nonphysical=False,
+                        names=False, legend="inside", title="Period-doubling cascade of $N = 1$",
+                        zoom=False)
+    ax.set_xlim(gamma_2(1) - 0.15, pd_values[-1] + 0.03)
+    ax.set_xlabel(GAMMA)
+    ax.set_ylabel(r"impact velocity $\dot{y}(T_k^-)$")
+    legend_below(ax, _harvest(ax), span="axes")
     if two is not None:
-        v = two["impact_velocity_k"].values
-        g = two["F0"].values
-        st = two["stable"].values & two["flights_inside"].values
-        for j, name in enumerate(("lower flank", "upper flank")):
-            inside = two["flights_inside"].values
-            ax.plot(np.where(inside, g, np.nan), v[:, j], "-", color=f"C{j}", lw=1.2,
-                    label=f"{name} (flights inside the clearance)")
-            ax.plot(np.where(inside, np.nan, g), v[:, j], ":", color=f"C{j}", lw=0.8)
-            ax.plot(g[st], v[st, j], "o", ms=2, color=f"C{j}")
-        top, span = np.nanmax(v), np.nanmax(v) - np.nanmin(v)
-        specials = sorted(zip(two["special_F0"].values, two["special_label"].values,
-                              strict=True))
-        for k, (x, lab) in enumerate(specials):  # staggered: neighbours lie close in Gamma
-            ax.axvline(x, color="0.5", lw=0.6, ls="--")
-            ax.text(x, top - 0.07 * span * (k % 4), f" {lab}", fontsize=7, va="top",
-                    ha="left")
-        ax.legend(fontsize=7)
-    ax.set_xlabel("Gamma")
-    ax.set_ylabel("impact velocity")
-    ax.set_title(f"Two flanks (clearance {GAP}): one impact per flank per period\n"
-                 "solid: flights inside the clearance; dots: also stable", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        ax = impact_diagram(two.assign(physical=two["physical"] & two["flights_inside"]),
+                            ax=axes[2], label_special=True, names=False, legend="inside",
+                            title=f"Two flanks (clearance {GAP:g}): one impact on each per "
+                            "period; not physical: a flight crosses a stop")
+        ax.set_xlabel(GAMMA)
+        ax.set_ylabel(r"impact speed $|\dot{y}(T_k^-)|$")
+        legend_below(ax, _harvest(ax), span="axes")
+    fig.suptitle(f"Bouncing ball and gear rattle, $R = {R:g}$", fontsize="medium")
+    return fig
+
+
+def draw_figures(output: Path, width: float = 7.0) -> Path:
+    """Draw ``rattle.png`` from the stored ``branches.nc`` and ``rattle.json`` of ``output``."""
+    tree = ic.load(output / "branches.nc")
+    groups = {name: node.to_dataset() for name, node in tree.children.items()}
+    summary = json.loads((output / "rattle.json").read_text())
+    fig = figure(groups, summary["cascade"]["pd_values"], width)
+    path = output / "rattle.png"
+    fig.savefig(path, dpi=DPI)
+    log.info("wrote %s", path)
+    return path
 
 
 def main(output: Path) -> dict[str, Any]:
@@ -511,10 +542,10 @@ def main(output: Path) -> dict[str, Any]:
     two, summary["two_flank"] = two_flank()
     if two is not None:
         groups["two_flank"] = two
-    draw(branches, cas, two, output / "rattle.png")
     ic.save(groups, output / "branches.nc")
     summary["total_s"] = time.perf_counter() - t_start
     (output / "rattle.json").write_text(json.dumps(summary, indent=2, default=str))
+    draw_figures(output)
     return summary
 
 
@@ -523,10 +554,16 @@ if __name__ == "__main__":
     parser.add_argument("--output", type=Path, default=HERE / "output")
     parser.add_argument("--copy-figures", action="store_true",
                         help="copy the figure into figures/ (tracked)")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figure from the output's branches.nc and "
+                        "rattle.json (seconds)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    result = main(args.output)
+    if args.figures_only:
+        draw_figures(args.output)
+    else:
+        result = main(args.output)
+        log.info("done in %.1f s", result["total_s"])
     if args.copy_figures:
         (HERE / "figures").mkdir(exist_ok=True)
         shutil.copy(args.output / "rattle.png", HERE / "figures" / "rattle.png")
-    log.info("done in %.1f s", result["total_s"])

@@ -44,14 +44,22 @@ import time
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 import impactcont as ic
+from impactcont.plots import SPECIAL_MARKERS
+from impactcont.plots.branches import SPECIAL_NAMES, fit_text, label_specials, legend_below
+from impactcont.plots.multi_maps import multi_impact_map_diagram
+from impactcont.plots.series import (
+    Series,
+    figure_legend,
+    fit_labels,
+    panel_figure,
+    series_plot,
+)
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -68,6 +76,7 @@ VARIANTS: dict[str, dict[str, float]] = {
 OMEGAS = np.linspace(0.7, 1.3, 49)
 PLANE = {"omega": (0.7, 1.3), "b": (1.0, 10.0)}
 MAP_GRID = (61, 37)
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 SIMULATED = (("symmetric", 1.2), ("restitution", 1.2), ("vertical", 1.2), ("symmetric", 1.0),
              ("vertical", 0.9))
 
@@ -324,68 +333,113 @@ def beyond(groups: dict[str, xr.Dataset]) -> dict[str, Any]:
     return info
 
 
-def draw(rows: list[dict[str, Any]], path: Path) -> None:
-    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
-    colours = {"symmetric": "C0", "restitution": "C1", "vertical": "C2"}
+#: Each machine in the figures: its name and what differs from the symmetric one.
+VARIANT_TITLES = {"symmetric": rf"symmetric: $R = R_{{low}} = {R:g}$, $g = 0$",
+                  "restitution": r"softer lower wall: $R_{low} = 0.3$",
+                  "vertical": r"vertical cavity: $g = 0.5$"}
+OMEGA_LABEL = r"$\omega/\omega_n$"
+
+
+def agreement_figure(rows: list[dict[str, Any]], width: float = 7.0) -> Figure:
+    """The closed form against the package (``rows.json``): a 2 x 2 grid (one column below
+    5 in). Three panels of amplitudes, one per machine (closed form's physical UL motions
+    filled: stable, hollow: unstable; the package's stable motions +; the primary alone
+    dashed), and the differences package - closed form on a log axis (exact zeros in their
+    own row)."""
+    fig, axes = panel_figure(4, width, extra_height=1.1)
     r0 = np.linspace(*PLANE["omega"], 400)
     bare = 1 / np.abs(1 - r0 ** 2 + 2j * ZETA * r0)
+    ylabel = r"amplitude $\max|x_1 - x_{1,s}|$ [$F/k$]"  # about the static position
     for ax, variant in zip(axes[:3], VARIANTS, strict=True):
-        ax.plot(r0, bare, "k--", lw=0.7, label="primary alone")
         rr = [r for r in rows if r["variant"] == variant and r["physical_cf"]]
-        st = [r for r in rr if r["stable_cf"]]
-        un = [r for r in rr if not r["stable_cf"]]
-        ax.plot([r["omega"] for r in un], [r["amplitude_cf"] for r in un], "o", ms=5,
-                mfc="none", color=colours[variant], label="closed form, unstable")
-        ax.plot([r["omega"] for r in st], [r["amplitude_cf"] for r in st], "o", ms=5,
-                color=colours[variant], label="closed form, stable")
-        ax.plot([r["omega"] for r in rr if r["stable_pkg"]],
-                [r["amplitude_cf"] for r in rr if r["stable_pkg"]], "k+", ms=7,
-                label="package: stable")
+
+        def pick(cond: Any, rr: list[dict[str, Any]] = rr) -> tuple[list[float], list[float]]:
+            sel = [r for r in rr if cond(r)]
+            return [r["omega"] for r in sel], [r["amplitude_cf"] for r in sel]
+
+        series_plot(ax, [
+            Series(r0, bare, "primary alone (no ball)", color="k", linestyle="--",
+                   linewidth=0.8),
+            Series(*pick(lambda r: not r["stable_cf"]), "closed form, unstable", color="0.45",
+                   linestyle="none", marker="o", markersize=5),
+            Series(*pick(lambda r: r["stable_cf"]), "closed form, stable", color="0.45",
+                   linestyle="none", marker="o", filled=True, markersize=5),
+            Series(*pick(lambda r: r["stable_pkg"]), "package, stable", color="k",
+                   linestyle="none", marker="+", markersize=7)],
+            xlabel=OMEGA_LABEL, ylabel=ylabel, title=VARIANT_TITLES[variant])
         ax.set_ylim(0, 30)
-        ax.set_xlabel("omega / w_n")
-        ax.set_title(f"{variant}: {VARIANTS[variant] or 'R = R_low = 0.6, g = 0'}", fontsize=9)
-    axes[0].set_ylabel("max |x1| (about the static position), F/k")
-    axes[0].legend(fontsize=7)
-    ax = axes[3]
-    for variant in VARIANTS:
-        rr = [r for r in rows if r["variant"] == variant]
-        ax.semilogy([r["omega"] for r in rr],
-                    [max(r["phase"], r["state"], r["flight_times"], 1e-17) for r in rr],
-                    ".", color=colours[variant], label=variant)
-    ax.set_xlabel("omega / w_n")
-    ax.set_title("package vs closed form: max(phase, states, flight times)", fontsize=9)
-    ax.legend(fontsize=7)
-    fig.suptitle(f"VI-NES, mu = {MU}, zeta = {ZETA}, b = b_low = {B}: UL motions "
-                 "(all roots; physical ones drawn)", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    series = [Series([r["omega"] for r in rows if r["variant"] == v],
+                     [max(r["phase"], r["state"], r["flight_times"]) for r in rows
+                      if r["variant"] == v], f"difference, {v}", color=f"C{i}",
+                     linestyle="none", marker="os^"[i], markersize=3.5)
+              for i, v in enumerate(VARIANTS)]
+    series_plot(axes[3], series, xlabel=OMEGA_LABEL, yscale="log",
+                ylabel=r"$\max |\Delta|$ of phase, states, flights",
+                title="Package against closed form, every root")
+    figure_legend(fig)
+    fig.suptitle(rf"Vibro-impact NES, $\mu = {MU:g}$, $\zeta = {ZETA:g}$, "
+                 rf"$b = b_{{low}} = {B:g}$: motions with one impact on each wall",
+                 fontsize="medium")
+    fit_labels(fig)
+    return fig
 
 
-def draw_plane(groups: dict[str, xr.Dataset], path: Path) -> None:
-    fig, ax = plt.subplots(figsize=(7, 5))
+def plane_figure(groups: dict[str, xr.Dataset], width: float = 7.0) -> Figure:
+    """The symmetric machine in (omega, b): the package's map of the UL motion (regions and
+    boundaries, :func:`impactcont.plots.multi_maps.multi_impact_map_diagram`), the BP curves
+    on top and the special points of the branch in omega at ``b = B``, labelled."""
+    fig, (ax,) = panel_figure(1, width, aspect=0.62, extra_height=1.6)
+    handles: list[Any] = []
     if "map" in groups:
-        mp = groups["map"]
-        ok = (mp["found"] & mp["stable"] & mp["physical"]).values.T
-        ax.pcolormesh(mp["omega"].values, mp["b"].values, ok, cmap="Greens", alpha=0.5,
-                      shading="nearest")
-    for k, name in enumerate(n for n in groups if n.startswith("curve_BP")):
-        cv = groups[name]
-        ax.plot(cv["omega"].values, cv["b"].values, "r-",
-                label="BP curves (multi_impact_curve)" if k == 0 else None)
+        multi_impact_map_diagram(groups["map"], ax=ax, title="")
+        handles = list(ax.get_legend().legend_handles)
+        for h, text in zip(handles, ax.get_legend().get_texts(), strict=True):
+            h.set_label(text.get_text())
+        ax.get_legend().remove()
+    curves = [groups[n] for n in groups if n.startswith("curve_BP")]
+    for cv in curves:
+        ax.plot(cv["omega"].values, cv["b"].values, "-", color="C3", lw=1.6, zorder=3)
+    if curves:
+        handles.append(Line2D([], [], color="C3", lw=1.6, label="BP curves (continued)"))
+    marks = []
     if "branch_omega" in groups:
-        for s in specials(groups["branch_omega"], "omega"):
-            ax.plot(s["omega"], B, "kx")
-            ax.annotate(s["label"], (s["omega"], B), textcoords="offset points", xytext=(3, 3),
-                        fontsize=8)
-    ax.set_xlabel("omega / w_n")
-    ax.set_ylabel("b = b_low (half cavity, F/k)")
-    ax.set_title("Symmetric VI-NES: stable physical UL motion (green, multi_impact_map)",
-                 fontsize=9)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        marks = [(s["omega"], B, s["label"]) for s in specials(groups["branch_omega"], "omega")]
+        for label in dict.fromkeys(m[2] for m in marks):
+            xy = np.array([m[:2] for m in marks if m[2] == label])
+            style = {"linestyle": "none", "marker": SPECIAL_MARKERS[label], "markersize": 6,
+                     "markerfacecolor": "white", "markeredgecolor": "k"}
+            ax.plot(xy[:, 0], xy[:, 1], zorder=4, **style)
+            handles.append(Line2D([], [], label=f"{label} {SPECIAL_NAMES[label]} "
+                                  rf"(branch at $b = {B:g}$)", **style))
+    ax.set_xlim(*PLANE["omega"])
+    ax.set_ylim(*PLANE["b"])
+    ax.set_xlabel(OMEGA_LABEL)
+    ax.set_ylabel(r"half cavity $b = b_{low}$ [$F/k$]")
+    ax.set_title(rf"Symmetric vibro-impact NES, $\mu = {MU:g}$, $\zeta = {ZETA:g}$, "
+                 rf"$R = {R:g}$: motions with one impact on each wall", fontsize="medium")
+    legend_below(ax, handles)
+    fig.draw_without_rendering()
+    fit_text(ax.title)
+    if marks:
+        label_specials(ax, marks)
+    return fig
+
+
+def draw_figures(output: Path, width: float = 7.0) -> list[Path]:
+    """Draw ``vi_nes.png`` and ``vi_nes_plane.png`` from the stored ``rows.json`` and
+    ``branches.nc`` of ``output``."""
+    rows = json.loads((output / "rows.json").read_text())
+    groups = {}
+    if (output / "branches.nc").exists():
+        tree = ic.load(output / "branches.nc")
+        groups = {name: node.to_dataset() for name, node in tree.children.items()}
+    paths = []
+    for name, fig in (("vi_nes.png", agreement_figure(rows, width)),
+                      ("vi_nes_plane.png", plane_figure(groups, width))):
+        fig.savefig(output / name, dpi=DPI)
+        paths.append(output / name)
+        log.info("wrote %s", output / name)
+    return paths
 
 
 def main(output: Path) -> dict[str, Any]:
@@ -404,8 +458,6 @@ def main(output: Path) -> dict[str, Any]:
     t0 = time.perf_counter()
     more = beyond(groups)
     timings["beyond_s"] = time.perf_counter() - t0
-    draw(agree["rows"], output / "vi_nes.png")
-    draw_plane(groups, output / "vi_nes_plane.png")
     if groups:
         ic.save(groups, output / "branches.nc")
     summary = {"parameters": {"mu": MU, "zeta": ZETA, "R": R, "b": B, "variants": VARIANTS,
@@ -414,6 +466,7 @@ def main(output: Path) -> dict[str, Any]:
                "beyond": more, "timings": timings, "total_s": time.perf_counter() - t_start}
     (output / "vi_nes.json").write_text(json.dumps(summary, indent=2, default=str))
     (output / "rows.json").write_text(json.dumps(agree["rows"], indent=1, default=str))
+    draw_figures(output)
     return summary
 
 
@@ -422,11 +475,17 @@ if __name__ == "__main__":
     parser.add_argument("--output", type=Path, default=HERE / "output")
     parser.add_argument("--copy-figures", action="store_true",
                         help="copy the figures into figures/ (tracked)")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figures from the output's rows.json and "
+                        "branches.nc (seconds)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    result = main(args.output)
+    if args.figures_only:
+        draw_figures(args.output)
+    else:
+        result = main(args.output)
+        log.info("done in %.1f s", result["total_s"])
     if args.copy_figures:
         (HERE / "figures").mkdir(exist_ok=True)
         for name in ("vi_nes.png", "vi_nes_plane.png"):
             shutil.copy(args.output / name, HERE / "figures" / name)
-    log.info("done in %.1f s", result["total_s"])
