@@ -168,23 +168,12 @@ def turning_points(motion: StopMotion, grid: np.ndarray) -> np.ndarray:
 
 def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
                    after: float = -math.inf) -> float | None:
-    """The first time in ``(grid[0], grid[-1]]`` where ``y`` reaches `level` from below.
+    """When ``y`` first reaches `level` from below in ``(grid[0], grid[-1]]``, to a few ulps
+    (None when ``y < level`` throughout): the first piece between the grid's times and the
+    turning points of ``y`` whose left end is below `level` and whose right end is not.
 
-    Parameters
-    ----------
-    motion : StopMotion
-    level : float
-        The stop's level in ``y``.
-    grid : ndarray
-        From :func:`search_grid`.
-    after : float
-        A crossing whose bracket ends by this time is ignored (the rounding-size
-        excursion of a flight that starts on a stop and leaves it).
-
-    Returns
-    -------
-    float or None
-        The crossing time, to a few ulps; None when ``y < level`` throughout.
+    A crossing whose piece ends by `after` is ignored: the rounding-size excursion of a
+    flight that starts on a stop and leaves it. `grid` comes from :func:`search_grid`.
     """
     pieces = np.union1d(grid, turning_points(motion, grid))  # y monotone on each piece
     gap = motion(pieces)[0] - level
