@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import functools
 import os
 import signal
@@ -103,6 +104,11 @@ def test_multi_impact_map_gives_the_same_map_on_every_executor(start, banded):
     pooled = multi_impact_map(start, ("omega", "b"), grid=GRID, rows_per_task=8,
                               executor="process", max_workers=2)
     xr.testing.assert_identical(pooled.drop_attrs(), banded.drop_attrs())
+    with cf.ThreadPoolExecutor(2) as pool:  # the compiled sweep releases the GIL
+        threaded = multi_impact_map(start, ("omega", "b"), grid=GRID, rows_per_task=8,
+                                    executor=pool)
+    xr.testing.assert_identical(threaded.drop_attrs(), banded.drop_attrs())
+    assert '"executor": "ThreadPoolExecutor"' in threaded.attrs["options"]
     seen = []
     one = multi_impact_map(start, ("omega", "b"), grid=GRID, progress=seen.append)
     assert '"tasks": 1' in one.attrs["options"] and seen[-1].done == seen[-1].total == 451
