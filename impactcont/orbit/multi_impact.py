@@ -417,21 +417,32 @@ def _section_unknowns(states: np.ndarray, pivots: np.ndarray) -> np.ndarray:
     return np.concatenate([np.delete(X, j) for X, j in zip(states, pivots, strict=True)])
 
 
+def _readonly(a: np.ndarray) -> np.ndarray:
+    """A read-only view of `a`: the kernel's argument type for the stop geometry whatever
+    the geometry's own flags (a geometry unpickled in a process pool has writable arrays,
+    which numba would compile the shooting path for a second time)."""
+    view = a.view()
+    view.flags.writeable = False
+    return view
+
+
 def impact_sequence(geo: StopGeometry) -> ImpactSequence:
     """The impacts of `geo` as the shooting kernel takes them (built once per geometry)."""
     seq = _SEQUENCES.get(geo)
     if seq is None:
-        seq = _SEQUENCES[geo] = ImpactSequence(pivots=geo.pivots, normals=geo.normals,
-                                               signs=geo.signs, positions=geo.positions,
-                                               matrices=geo.matrices)
+        seq = _SEQUENCES[geo] = ImpactSequence(
+            pivots=_readonly(geo.pivots), normals=_readonly(geo.normals),
+            signs=_readonly(geo.signs), positions=_readonly(geo.positions),
+            matrices=_readonly(geo.matrices))
     return seq
 
 
 def contact_stops(geo: StopGeometry) -> ContactStops:
     """The stops of the contact check of eq. (16) in `geo`, as the kernel takes them."""
-    return ContactStops(normal=geo.normal, two_sided=geo.two_sided, b=geo.b, b_low=geo.b_low,
-                        extra_normals=geo.extra_normals, extra_signs=geo.extra_signs,
-                        extra_positions=geo.extra_positions)
+    return ContactStops(normal=_readonly(geo.normal), two_sided=geo.two_sided, b=geo.b,
+                        b_low=geo.b_low, extra_normals=_readonly(geo.extra_normals),
+                        extra_signs=_readonly(geo.extra_signs),
+                        extra_positions=_readonly(geo.extra_positions))
 
 
 #: :func:`impact_sequence` of each live stop geometry.
