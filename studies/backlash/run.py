@@ -46,17 +46,19 @@ import time
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 import impactcont as ic
 from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.analysis.switching import pitchfork_branch
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
+from impactcont.plots.branches import legend_below
+from impactcont.plots.impacts import impact_diagram
+from impactcont.plots.series import figure_legend, fit_labels, panel_figure
 
 log = logging.getLogger("backlash")
 
@@ -301,46 +303,73 @@ def agreement(b: float, sw: dict[str, Any], branches: list[dict[str, Any]]) -> d
 # ------------------------------------------------------------------------------------------
 # Figure
 # ------------------------------------------------------------------------------------------
-STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C3"}
+STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C1"}
+KIND_NAMES = {"symmetric": "symmetric", "asymmetric": "asymmetric",
+              "mirror": "asymmetric, mirror image"}
+OMEGA_LABEL = r"$\omega$"
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 
 
-def draw(ax, b: float, sw: dict[str, Any], branches: list[dict[str, Any]],
-         forks: list[float]) -> None:
-    labelled: set[str] = set()
-    for br in branches:
-        ds = br["ds"]
-        om = ds["omega"].values
-        sign = np.array([1.0 if c == "U" else -1.0 for c in ds.attrs["pattern"]])
-        vel = ds["impact_velocity_k"].values * sign
-        phys, stab = ds["physical"].values, ds["stable"].values
-        for k in range(vel.shape[1]):
-            for mask, ls in ((phys & stab, "-"), (phys & ~stab, ":")):
-                y = np.where(mask, vel[:, k], np.nan)
-                label = None
-                if k == 0 and ls == "-" and br["kind"] not in labelled:
-                    label = "asymmetric (mirror pair)" if br["kind"] != "symmetric" else (
-                        "symmetric")
-                    labelled.update({br["kind"], "mirror"} if br["kind"] != "symmetric"
-                                    else {"symmetric"})
-                ax.plot(om, y, ls, color=STYLE[br["kind"]], lw=1.3 if ls == "-" else 1.0,
-                        label=label)
-    for i, row in enumerate(sw["rows"]):  # the sweep on top: each recorded impact
-        v = np.array(row["velocities"], float)
-        sign = np.array([1.0 if c == "U" else -1.0 for c in row["stops"]])
-        ax.plot(np.full(v.size, row["omega"]), sign * v, ".", color="k", ms=1.5,
-                label="simulated sweep" if i == 0 else None)
-    for w in forks:
-        ax.axvline(w, color="k", lw=0.6, ls="--")
-    ax.axhline(0.0, color="k", lw=0.5)
-    ax.set_title(f"b = b_low = {b}", fontsize=9)
-    ax.set_xlabel("omega")
+def _harvest(ax: Any) -> list[Any]:
+    """The handles of the legend a package plot drew on ``ax``, the legend removed."""
+    legend = ax.get_legend()
+    handles = list(legend.legend_handles)
+    for h, text in zip(handles, legend.get_texts(), strict=True):
+        h.set_label(text.get_text())
+    legend.remove()
+    return handles
+
+
+def draw(ax: Any, branches: dict[str, xr.Dataset], sweep: xr.Dataset, title: str
+         ) -> list[Any]:
+    """One system: its branches (``impact_diagram``: every impact, the speed towards the
+    stop hit, special points marked) with the simulated sweep's impacts on top; returns the
+    legend handles. ``branches`` maps ``<i>_<kind>`` to a branch."""
+    names = {}
+    for key, ds in branches.items():
+        kind = key.split("_", 1)[1]
+        name = KIND_NAMES[kind]
+        n = sum(v[0] == kind for v in names.values())
+        names[name if n == 0 else f"{name} {n + 1}"] = (kind, ds)
+    impact_diagram({k: v[1] for k, v in names.items()}, ax=ax, legend="inside",
+                   colors=[STYLE[v[0]] for v in names.values()], title=title, zoom=False)
+    handles = _harvest(ax)
+    speed = np.abs(sweep["speed"].values)
+    om = np.broadcast_to(sweep["omega"].values[:, None], speed.shape)
+    ok = np.isfinite(speed)
+    dots = {"linestyle": "none", "marker": ".", "markersize": 2.0, "color": "k"}
+    ax.plot(om[ok], speed[ok], zorder=1.5, **dots)
+    handles.append(Line2D([], [], label="simulated sweep, every impact", **dots))
     ax.set_xlim(*OMEGA)
+    ax.set_xlabel(OMEGA_LABEL)
+    return handles
 
 
-def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: str,
+def diagrams_figure(groups: dict[str, xr.Dataset], sweeps: dict[str, xr.Dataset],
+                    width: float = 7.0) -> Figure:
+    """``backlash.png``: one panel per system (each clearance, the joint damper case), a
+    2 x 2 grid at a double column, one column below 5 in; one legend under them."""
+    keys = list(sweeps)
+    fig, axes = panel_figure(len(keys), width, extra_height=1.6)
+    handles: dict[str, Any] = {}
+    for ax, key in zip(axes, keys, strict=True):
+        b = float(sweeps[key].attrs["b"])
+        own = {name[len(key) + 1:]: ds for name, ds in groups.items()
+               if name.startswith(key + "_") and name[len(key) + 1:].split("_")[0].isdigit()}
+        title = rf"$b = b_{{low}} = {b:g}$" + (", joint damper only" if "joint" in key else "")
+        for h in draw(ax, own, sweeps[key], title):
+            handles.setdefault(h.get_label(), h)
+    figure_legend(fig, list(handles.values()))
+    fig.suptitle(r"Backlash on mass 1 of the paper's 2-DOF chain, $R = 0.6$: motions with "
+                 "one impact on each stop", fontsize="medium")
+    fit_labels(fig)
+    return fig
+
+
+def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, key: str,
          groups: dict[str, xr.Dataset]) -> tuple[dict[str, Any], xr.Dataset]:
-    """One system: sweep, branches, pitchforks, agreement, its panel; returns its summary
-    and its sweep (the branches go into `groups` under `key`)."""
+    """One system: sweep, branches, pitchforks, agreement; returns its summary and its
+    sweep (the branches go into `groups` under `key`)."""
     t0 = time.perf_counter()
     sw = sweep(b, omegas, damping)
     t_sweep = time.perf_counter() - t0
@@ -374,15 +403,18 @@ def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, ax, key: 
             "stable_physical_omega": [float(om[ok].min()), float(om[ok].max())]
             if ok.any() else None, "special_points": specials})
         groups[f"{key}_{i}_{br['kind']}"] = ds
+    width = max(1, max(len(r["velocities"]) for r in sw["rows"]))
+    speed = np.full((len(sw["rows"]), width), np.nan)
+    for i, r in enumerate(sw["rows"]):
+        speed[i, :len(r["velocities"])] = r["velocities"]
     sweep_ds = xr.Dataset({
         "omega": ("row", omegas),
         "one_two": ("row", [r["one_two"] for r in sw["rows"]]),
         "impacts_recorded": ("row", [len(r["velocities"]) for r in sw["rows"]]),
-        "pattern_tail": ("row", [r["stops"][-8:] for r in sw["rows"]])},
+        "pattern_tail": ("row", [r["stops"][-8:] for r in sw["rows"]]),
+        "speed": (("row", "impact"), speed, {"long_name": "impact speed of each recorded "
+                                             "impact (NaN: fewer impacts)", "units": "1"})},
         attrs={"b": b, "damping": json.dumps(damping or PAPER_DAMPING)})
-    draw(ax, b, sw, branches, forks)
-    if damping is not None:
-        ax.set_title(f"b = b_low = {b}, joint damper only (C non-proportional)", fontsize=9)
     log.info("%s: pitchforks %s, agreement %s", key, forks, agree)
     return info, sweep_ds
 
@@ -527,47 +559,85 @@ def _nearest_symmetric(curve: xr.Dataset, b: float, omega: float) -> dict[str, A
             "states": curve["state_k"].values[i], "pattern": curve.attrs["pattern"]}
 
 
-def draw_plane(ax, info: dict[str, Any], summary: dict[str, Any]) -> None:
-    styles = {"BP": ("k", "-", "BP: symmetry-breaking pitchfork"),
-              "GR symmetric": ("C0", "--", "GR of the symmetric motion"),
-              "GR asymmetric": ("C3", "--", "GR of the asymmetric pair")}
-    regions = {}
-    for name, m in info["maps"].items():
+def plane_figure(groups: dict[str, xr.Dataset], summary: dict[str, Any], width: float = 7.0
+                 ) -> Figure:
+    """``backlash_plane.png``: where the symmetric and the asymmetric motions are stable
+    and physical (the maps, shaded), the BP and GR curves, the pitchforks located in omega
+    and the simulator either side of the BP curve."""
+    fig, (ax,) = panel_figure(1, width, aspect=0.6, extra_height=1.7)
+    styles = {"BP": ("k", "-", "BP curve (symmetry-breaking pitchfork)"),
+              "GR_symmetric": ("C0", "--", "GR curve of the symmetric motion"),
+              "GR_asymmetric": ("C3", "--", "GR curves of the asymmetric pair")}
+    handles: list[Any] = []
+    maps = {n[len("plane_map_"):]: ds for n, ds in groups.items() if n.startswith("plane_map_")}
+    regions: dict[str, Any] = {}
+    for name, m in maps.items():
         kind = "asymmetric" if name.startswith("asymmetric") else "symmetric"
         ok = m["stable"] & m["physical"] & m["found"]
         if kind == "asymmetric":  # past a BP the grid sweep reaches the symmetric motions
             ok = ok & (m["asymmetry"] > ASYMMETRIC)
         regions[kind] = ok if kind not in regions else regions[kind] | ok
     for kind, color in (("symmetric", "C0"), ("asymmetric", "C3")):
-        m = info["maps"]["symmetric"]
+        if kind not in regions:
+            continue
+        m = maps["symmetric"]
         ax.contourf(m["omega"].values, m["b"].values, regions[kind].values.T.astype(float),
                     levels=[0.5, 1.5], colors=[color], alpha=0.18)
-        ax.plot([], [], "s", color=color, alpha=0.35, ms=7,
-                label=f"map: {kind} motion stable and physical")
-    seen = set()
-    for name, ds in info["datasets"].items():
-        key = "GR asymmetric" if name.startswith("GR asymmetric") else name
+        handles.append(Patch(facecolor=color, alpha=0.35,
+                             label=f"{kind} motion stable and physical (map)"))
+    for name, ds in groups.items():
+        if not name.startswith("plane_") or name.startswith("plane_map_"):
+            continue
+        key = "GR_asymmetric" if name.startswith("plane_GR_asymmetric") else name[6:]
         color, ls, label = styles[key]
-        ax.plot(ds["omega"].values, ds["b"].values, ls, color=color, lw=1.2,
-                label=None if key in seen else label)
-        seen.add(key)
-    for b, forks in ((float(b), v["pitchforks"]) for b, v in summary["clearances"].items()):
-        ax.plot(forks, [b] * len(forks), "o", color="k", ms=4, mfc="none",
-                label="BP located in omega" if b == float(min(summary["clearances"])) else None)
-    for w in info["simulated"]:
+        ax.plot(ds["omega"].values, ds["b"].values, ls, color=color, lw=1.4, zorder=3)
+        if label not in [h.get_label() for h in handles]:
+            handles.append(Line2D([], [], color=color, ls=ls, lw=1.4, label=label))
+    bp = {"linestyle": "none", "marker": "o", "markersize": 5, "markerfacecolor": "white",
+          "markeredgecolor": "k"}
+    for b, info in summary["clearances"].items():
+        ax.plot(info["pitchforks"], [float(b)] * len(info["pitchforks"]), zorder=4, **bp)
+    handles.append(Line2D([], [], label="BP located on a branch in $\\omega$", **bp))
+    sim = {True: {"marker": "s", "label": "simulated: stays symmetric"},
+           False: {"marker": "x", "label": "simulated: leaves the symmetric motion"}}
+    seen = set()
+    for w in summary.get("plane", {}).get("simulated", []):
         for side in w.get("sides", []):
-            sym = side["simulated_one_two"] and side["simulated_asymmetry"] < 1e-6
-            ax.plot(side["omega"], w["b"], "s" if sym else "x", color="C2", ms=4,
-                    label=None)
-    ax.plot([], [], "s", color="C2", ms=4, label="simulated: stays symmetric")
-    ax.plot([], [], "x", color="C2", ms=4, label="simulated: leaves the symmetric motion")
-    ax.set_xlabel("omega")
-    ax.set_ylabel("b = b_low (clearance on each side)")
+            sym = bool(side["simulated_one_two"] and side["simulated_asymmetry"] < 1e-6)
+            style = {"linestyle": "none", "marker": sim[sym]["marker"], "markersize": 4,
+                     "color": "C2", "markerfacecolor": "white"}
+            ax.plot(side["omega"], w["b"], zorder=4, **style)
+            if sym not in seen:
+                handles.append(Line2D([], [], label=sim[sym]["label"], **style))
+                seen.add(sym)
+    ax.set_xlabel(OMEGA_LABEL)
+    ax.set_ylabel(r"clearance on each side $b = b_{low}$")
     ax.set_xlim(*PLANE["omega"])
     ax.set_ylim(*PLANE["b"])
-    ax.legend(fontsize=7, loc="upper right")
-    ax.set_title("Backlash 1-2 motions in (omega, b): pitchfork (BP) and grazing (GR) "
-                 "curves", fontsize=9)
+    legend_below(ax, handles)
+    ax.set_title(r"Backlash, $R = 0.6$, $\eta = 0.1$: motions with one impact on each stop "
+                 r"in $(\omega, b)$", fontsize="medium")
+    fit_labels(fig)
+    return fig
+
+
+def draw_figures(output: Path, width: float = 7.0) -> list[Path]:
+    """Draw ``backlash.png`` (and ``backlash_plane.png`` after a full run) from the stored
+    ``branches.nc``, ``sweeps.nc`` and ``backlash.json`` of ``output``."""
+    tree = ic.load(output / "branches.nc")
+    groups = {name: node.to_dataset() for name, node in tree.children.items()}
+    stree = ic.load(output / "sweeps.nc", validate=False)
+    sweeps = {name: node.to_dataset() for name, node in stree.children.items()}
+    summary = json.loads((output / "backlash.json").read_text())
+    figures = {"backlash.png": diagrams_figure(groups, sweeps, width)}
+    if any(name.startswith("plane_map_") for name in groups):
+        figures["backlash_plane.png"] = plane_figure(groups, summary, width)
+    paths = []
+    for name, fig in figures.items():
+        fig.savefig(output / name, dpi=DPI)
+        paths.append(output / name)
+        log.info("wrote %s", output / name)
+    return paths
 
 
 def main(output: Path, quick: bool = False) -> dict[str, Any]:
@@ -578,34 +648,24 @@ def main(output: Path, quick: bool = False) -> dict[str, Any]:
     cases = [(b, None, f"b{b}") for b in clearances]
     cases.append((JOINT_CLEARANCE, JOINT_DAMPER, f"b{JOINT_CLEARANCE}_joint_damper"))
     summary: dict[str, Any] = {"clearances": {}, "joint_damper": {}, "quick": quick}
-    fig, axes = plt.subplots(1, len(cases), figsize=(5.2 * len(cases), 4.4), squeeze=False)
     groups: dict[str, xr.Dataset] = {}
     sweeps = {}
-    for ax, (b, damping, key) in zip(axes[0], cases, strict=True):
-        info, sweep_ds = case(b, damping, omegas, ax, key, groups)
+    for b, damping, key in cases:
+        info, sweep_ds = case(b, damping, omegas, key, groups)
         if damping is None:
             summary["clearances"][str(b)] = info
         else:
             summary["joint_damper"][str(b)] = info
         sweeps[key] = sweep_ds
-    axes[0][0].set_ylabel("impact velocity (lower stop: negative)")
-    axes[0][0].legend(fontsize=7, loc="lower left")
-    fig.suptitle("Backlash on mass 1 of the paper's 2-DOF chain: 1-2 motions (solid: stable, "
-                 "dotted: unstable; dots: simulated sweep; dashed: pitchforks)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(output / "backlash.png", dpi=110)
     if not quick:
         info = plane(summary, groups)
-        fig2, ax2 = plt.subplots(figsize=(6.5, 4.8))
-        draw_plane(ax2, info, summary)
-        fig2.tight_layout()
-        fig2.savefig(output / "backlash_plane.png", dpi=110)
         summary["plane"] = {k: v for k, v in info.items()
                             if k not in ("datasets", "maps", "symmetric")}
     ic.save(groups, output / "branches.nc")
     ic.save(sweeps, output / "sweeps.nc", validate=False)
     summary["total_s"] = time.perf_counter() - t_start
     (output / "backlash.json").write_text(json.dumps(summary, indent=2))
+    draw_figures(output)
     return summary
 
 
@@ -615,12 +675,18 @@ if __name__ == "__main__":
     parser.add_argument("--quick", action="store_true", help="one clearance, 21 omegas")
     parser.add_argument("--copy-figures", action="store_true",
                         help="copy the figure into figures/ (tracked)")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figures from the output's branches.nc, "
+                        "sweeps.nc and backlash.json (seconds)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    result = main(args.output, quick=args.quick)
+    if args.figures_only:
+        draw_figures(args.output)
+    else:
+        result = main(args.output, quick=args.quick)
+        log.info("done in %.1f s", result["total_s"])
     if args.copy_figures:
         (HERE / "figures").mkdir(exist_ok=True)
         for name in ("backlash.png", "backlash_plane.png"):
             if (args.output / name).exists():
                 shutil.copy(args.output / name, HERE / "figures" / name)
-    log.info("done in %.1f s", result["total_s"])

@@ -42,16 +42,15 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 import impactcont as ic
 from impactcont.plots import SEGMENT_STYLES, SPECIAL_MARKERS, bifurcation_diagram
+from impactcont.plots.branches import NONPHYSICAL_GREY, SPECIAL_NAMES
+from impactcont.plots.series import MAX_WIDTH, figure_legend, fit_labels
 
 log = logging.getLogger("bifurcation_diagram")
 
@@ -971,6 +970,7 @@ def compare(bf: xr.Dataset, workers: int) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------------
 N_COLORS = {1: "tab:blue", 2: "tab:orange", 3: "tab:green", 4: "tab:red"}
 #: Zoom panels (omega range, impact-velocity range) where special points crowd.
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 ZOOMS = {0.5: ((1.205, 1.265), (-0.005, 0.2))}
 SWEEP_STYLES = {"up": {"marker": "o", "s": 12, "facecolors": "none", "edgecolors": "0.45",
                        "linewidths": 0.6},
@@ -999,9 +999,11 @@ def _draw_gap(ax: Any, b: float, branches: dict[str, xr.Dataset],
         if not group:
             continue
         before = len(ax.lines)
-        bifurcation_diagram(group, y="impact_velocity", ax=ax)
+        bifurcation_diagram(group, y="impact_velocity", ax=ax, legend=None, title="")
         for line in ax.lines[before:]:
             line.set_color(N_COLORS[N])
+            if line.get_markeredgecolor() != NONPHYSICAL_GREY:  # special points: colour of N
+                line.set_markeredgecolor(N_COLORS[N])
     if bf is not None:
         sel = bf.sel(gap=b)
         for sweep_name, style in SWEEP_STYLES.items():
@@ -1014,51 +1016,77 @@ def _draw_gap(ax: Any, b: float, branches: dict[str, xr.Dataset],
     return vmax, labels
 
 
-def plot_gap(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tuple[str, float]],
-             bf: xr.Dataset | None, path: Path) -> None:
+def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tuple[str, float]],
+               bf: xr.Dataset | None, width: float = 7.0) -> Figure:
     """Branches of one gap (colour per N) with the brute-force points, special points labelled.
 
     Only the special points of the table (physical parts) are marked; a zoom panel is
-    added where they crowd (:data:`ZOOMS`).
+    added under the diagram where they crowd (:data:`ZOOMS`); one legend under both.
     """
+    if not 2.0 <= width <= MAX_WIDTH:
+        raise ValueError(f"width must be in [2, {MAX_WIDTH}] inches; got {width!r}")
     zoom = ZOOMS.get(b)
+    fig = Figure(figsize=(width, 0.62 * width + 1.4 + (0.4 * width if zoom else 0.0)),
+                 layout="constrained")
     if zoom is None:
-        fig, ax = plt.subplots(figsize=(10, 6), layout="constrained")
-        axes = [ax]
+        axes = [fig.add_subplot()]
     else:
-        fig, axes = plt.subplots(1, 2, figsize=(15, 6), layout="constrained",
-                                 width_ratios=(2, 1))
-        ax = axes[0]
+        grid = fig.add_gridspec(2, 1, height_ratios=(1.6, 1.0))
+        axes = [fig.add_subplot(grid[0]), fig.add_subplot(grid[1])]
+    ax = axes[0]
     vmax, labels = _draw_gap(ax, b, branches, checked_keys, bf)
     ax.set_ylim(-0.05 * vmax, 1.1 * vmax)
     ax.set_xlim(*OMEGA_RANGE)
-    ax.set_title(f"b = {b:g}: periodic N-1 motions (closed form, continued) and simulated "
-                 "omega sweeps")
-    handles = [Line2D([], [], color=N_COLORS[N], label=f"N = {N}") for N in N_VALUES]
+    ax.set_title(rf"$b = {b:g}$, $R = 0.6$, $\eta = 0.1$: periodic motions with one impact "
+                 r"in $N$ periods, continued, and simulated sweeps in $\omega$",
+                 fontsize="medium")
+    handles = [Line2D([], [], color=N_COLORS[N], label=f"$N = {N}$") for N in N_VALUES]
     handles += [Line2D([], [], color="0.3", label=kind, **style)
                 for kind, style in SEGMENT_STYLES.items()]
     handles += [Line2D([], [], linestyle="none", marker=m, markerfacecolor="white",
-                       markeredgecolor="black", label=lab)
+                       markeredgecolor="black", label=f"{lab} {SPECIAL_NAMES[lab]}")
                 for lab, m in SPECIAL_MARKERS.items() if lab in labels]
     if bf is not None:
         handles += [Line2D([], [], linestyle="none", marker="o", markerfacecolor="none",
-                           markeredgecolor="0.45", label="simulated, omega swept up"),
+                           markeredgecolor="0.45", label=r"simulated, $\omega$ swept up"),
                     Line2D([], [], linestyle="none", marker="x", color="0.1",
-                           label="simulated, omega swept down")]
-    ax.legend(handles=handles, fontsize="small", ncol=2, loc="upper right")
+                           label=r"simulated, $\omega$ swept down")]
     if zoom is not None:
         zax = axes[1]
         _draw_gap(zax, b, branches, checked_keys, bf)
         zax.set_xlim(*zoom[0])
         zax.set_ylim(*zoom[1])
-        zax.set_title(f"zoom: {zoom[0][0]:g} <= omega <= {zoom[0][1]:g}")
-        if zax.get_legend() is not None:
-            zax.get_legend().remove()
+        zax.set_title(rf"zoom: ${zoom[0][0]:g} \leq \omega \leq {zoom[0][1]:g}$",
+                      fontsize="medium")
         ax.indicate_inset((zoom[0][0], zoom[1][0], zoom[0][1] - zoom[0][0],
                            zoom[1][1] - zoom[1][0]), edgecolor="0.4")
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    figure_legend(fig, handles)
+    fit_labels(fig)
+    return fig
+
+
+def plot_gap(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tuple[str, float]],
+             bf: xr.Dataset | None, path: Path, width: float = 7.0) -> None:
+    """Write :func:`gap_figure` to ``path``."""
+    gap_figure(b, branches, checked_keys, bf, width).savefig(path, dpi=DPI)
     log.info("wrote %s", path)
+
+
+def draw_figures(out: Path, width: float = 7.0) -> list[Path]:
+    """Redraw the figures from the stored ``branches.nc``, ``special_points.json`` and
+    ``brute_force.nc`` (if the sweeps were run) of ``out``."""
+    tree = ic.load(out / "branches.nc")
+    branches = {name: node.to_dataset() for name, node in tree.children.items()}
+    checked = json.loads((out / "special_points.json").read_text())["checked"]
+    keys = {(c["branch"], c["omega"]) for c in checked}
+    bf = xr.load_dataset(out / "brute_force.nc") if (out / "brute_force.nc").exists() else None
+    gaps = sorted({float(ds["b"].values[0]) for ds in branches.values()})
+    paths = []
+    for b in gaps:
+        path = out / f"bifurcation_{gap_tag(b)}.png"
+        plot_gap(b, branches, keys, bf, path, width)
+        paths.append(path)
+    return paths
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1182,6 +1210,9 @@ def _parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--workers", type=int, default=WORKERS, help="worker processes")
     parser.add_argument("--copy-figures", action="store_true",
                         help=f"also copy the PNGs to {FIGURES_DIR}")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the PNGs from the files of a finished run in the "
+                        "output directory (seconds)")
     return parser.parse_args(argv)
 
 
@@ -1189,8 +1220,11 @@ if __name__ == "__main__":
     args = _parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s")
     logging.captureWarnings(True)
-    main(args.output, brute_force=not args.no_brute_force, n_omega=args.n_omega,
-         quick=args.quick, workers=args.workers)
+    if args.figures_only:
+        draw_figures(Path(args.output))
+    else:
+        main(args.output, brute_force=not args.no_brute_force, n_omega=args.n_omega,
+             quick=args.quick, workers=args.workers)
     if args.copy_figures:
         FIGURES_DIR.mkdir(exist_ok=True)
         for b in GAPS:

@@ -53,6 +53,7 @@ log = logging.getLogger("grazing_boundary")
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUTPUT = HERE / "output"
 FIGURES_DIR = HERE / "figures"
+DPI = 150  # of the PNG (7 in wide: 1050 pixels)
 
 OMEGA_RANGE = (0.5, 6.0)
 B_RANGE = (-1.0, 2.0)
@@ -390,6 +391,22 @@ def closed_form_checks(osc: ic.ImpactOscillator, curves: list[xr.Dataset]) -> di
 
 
 # -- main ---------------------------------------------------------------------------------------
+def draw_figures(out: Path, width: float = 7.0) -> Path:
+    """Draw ``grazing_boundary.png`` (one panel per N, ``two_parameter_figure``) ``width``
+    inches wide from the stored ``map.nc`` and ``curves.nc`` of ``out``."""
+    m = ic.load(out / "map.nc")
+    tree = ic.load(out / "curves.nc")
+    curves = [node.to_dataset() for node in tree.children.values()]
+    fig = two_parameter_figure(m, curves, width=width)
+    path = out / "grazing_boundary.png"
+    fig.savefig(path, dpi=DPI)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    log.info("wrote %s", path)
+    return path
+
+
 def main(output_dir: str | os.PathLike = DEFAULT_OUTPUT, quick: bool = False,
          copy_figures: bool = False) -> dict[str, Any]:
     """Run the study; write its files into ``output_dir``; return the summary."""
@@ -431,11 +448,7 @@ def main(output_dir: str | os.PathLike = DEFAULT_OUTPUT, quick: bool = False,
     names = {f"N{c.attrs['N']}_{c.attrs['kind']}_{k}": c for k, c in enumerate(curves)}
     ic.save(names, out / "curves.nc")
     ic.save(m, out / "map.nc")
-    fig = two_parameter_figure(m, curves)
-    fig.savefig(out / "grazing_boundary.png", dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
+    draw_figures(out)
     summary_curves = [{"name": name, "kind": c.attrs["kind"], "N": int(c.attrs["N"]),
                        "points": c.sizes["point"], "end": c.attrs["end_status"],
                        "physical_points": int(c.physical.sum()),
@@ -471,6 +484,15 @@ if __name__ == "__main__":
     parser.add_argument("--output", default=str(DEFAULT_OUTPUT))
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--copy-figures", action="store_true")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figure from the output's map.nc and curves.nc")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
-    main(args.output, quick=args.quick, copy_figures=args.copy_figures)
+    if args.figures_only:
+        draw_figures(Path(args.output))
+        if args.copy_figures:
+            FIGURES_DIR.mkdir(exist_ok=True)
+            shutil.copy(Path(args.output) / "grazing_boundary.png",
+                        FIGURES_DIR / "grazing_boundary.png")
+    else:
+        main(args.output, quick=args.quick, copy_figures=args.copy_figures)

@@ -35,19 +35,19 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 import impactcont as ic
+from impactcont.plots.series import MAX_WIDTH, figure_legend, fit_labels
 
 log = logging.getLogger("paper_example")
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUTPUT = HERE / "output"
 FIGURES_DIR = HERE / "figures"
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 
 # ---------------------------------------------------------------------------------------------
 # The paper's numbers (section 4; EQUATIONS.md section 6)
@@ -414,26 +414,26 @@ def omega_scan(b: float, Ns: range, omegas: np.ndarray) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------------
 # Plots
 # ---------------------------------------------------------------------------------------------
-def plot_motion_row(ax_t: plt.Axes, ax_p: plt.Axes, curves: list[dict[str, Any]], b: float,
+def plot_motion_row(ax_t: Axes, ax_p: Axes, curves: list[dict[str, Any]], b: float,
                     title: str) -> None:
     """One row of figure 3/4: x1(t) on the left, phase portrait x1' vs x1 on the right.
 
     Each curve is a dict with ``t``, ``X`` (state samples), ``label`` and matplotlib
-    style keywords under ``style``.
+    style keywords under ``style``. The stop is a dashed black line; the legend is the
+    figure's (:func:`impactcont.plots.series.figure_legend`).
     """
     for c in curves:
         ax_t.plot(c["t"], c["X"][:, 0], label=c["label"], **c["style"])
         n = c["X"].shape[1] // 2
         ax_p.plot(c["X"][:, 0], c["X"][:, n], label=c["label"], **c["style"])
-    for ax, horizontal in ((ax_t, True), (ax_p, False)):
-        line = ax.axhline if horizontal else ax.axvline
-        line(b, color="k", ls="--", lw=0.9, label=f"stop x1 = b = {b:g}")
-    ax_t.set_title(title, fontsize=9)
-    ax_t.set_xlabel("t")
-    ax_t.set_ylabel("x1")
-    ax_p.set_xlabel("x1")
-    ax_p.set_ylabel("x1'")
-    ax_p.legend(fontsize=7, loc="best")
+    stop = r"stop $x_1 = b$"
+    ax_t.axhline(b, color="k", ls="--", lw=0.9, label=stop)
+    ax_p.axvline(b, color="k", ls="--", lw=0.9, label=stop)
+    ax_t.set_title(title, fontsize="medium", loc="left")
+    ax_t.set_xlabel("time $t$")
+    ax_t.set_ylabel("$x_1$")
+    ax_p.set_xlabel("$x_1$")
+    ax_p.set_ylabel(r"$\dot{x}_1$")
 
 
 def motion_curves(osc: ic.ImpactOscillator, orbits: list[tuple[ic.PeriodicOrbit, str, dict]],
@@ -450,26 +450,32 @@ def motion_curves(osc: ic.ImpactOscillator, orbits: list[tuple[ic.PeriodicOrbit,
         res = ic.simulate(osc, steady["state"], steady["phase"], span_periods,
                              trajectory=True)
         curves.append({"t": res.t, "X": res.X,
-                       "label": f"simulated steady state from rest ({steady['pattern']['label']})",
+                       "label": "simulated steady state from rest",
                        "style": {"color": "tab:red", "lw": 1.0, "ls": "-"}})
     return curves
 
 
 def make_figure(rows: list[tuple[list[dict[str, Any]], float, str]], path: Path,
-                suptitle: str) -> None:
-    """Figure with one row per parameter point (see :func:`plot_motion_row`)."""
-    fig, axes = plt.subplots(len(rows), 2, figsize=(11, 3.3 * len(rows)),
-                             gridspec_kw={"width_ratios": [1.6, 1]})
-    for (curves, b, title), (ax_t, ax_p) in zip(rows, np.atleast_2d(axes), strict=True):
-        plot_motion_row(ax_t, ax_p, curves, b, title)
-    fig.suptitle(suptitle, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+                suptitle: str, width: float = 7.0) -> Figure:
+    """Figure with one row per parameter point (see :func:`plot_motion_row`), ``width``
+    inches wide, one legend under the rows; written to ``path`` and returned."""
+    if not 2.0 <= width <= MAX_WIDTH:
+        raise ValueError(f"width must be in [2, {MAX_WIDTH}] inches; got {width!r}")
+    fig = Figure(figsize=(width, 0.36 * width * len(rows) + 1.4), layout="constrained")
+    grid = fig.add_gridspec(len(rows), 2, width_ratios=(1.6, 1.0))
+    for i, (curves, b, title) in enumerate(rows):
+        plot_motion_row(fig.add_subplot(grid[i, 0]), fig.add_subplot(grid[i, 1]), curves, b,
+                        title)
+    figure_legend(fig)
+    fig.suptitle(suptitle, fontsize="medium")
+    fit_labels(fig)
+    fig.savefig(path, dpi=DPI)
     log.info("wrote %s", path)
+    return fig
 
 
 CLOSED_STYLE = {"color": "tab:blue", "lw": 3.0, "alpha": 0.45}
+OTHER_N_STYLE = {"color": "tab:green", "lw": 3.0, "alpha": 0.45}  # a closed form of another N
 NONPHYS_STYLE = {"color": "0.4", "lw": 0.9, "ls": ":"}
 
 
@@ -524,12 +530,13 @@ def _figure3_rows(steadies: dict[tuple[float, float], dict[str, Any]]) -> list[t
         for M in sorted({N, P}):
             for o in ic.periodic_orbits(osc, M):
                 if o.physical:
-                    tag = "stable" if o.stable else "UNSTABLE"
-                    orbits.append((o, f"closed form N={M} ({tag}, physical)", CLOSED_STYLE))
+                    tag = "stable" if o.stable else "unstable"
+                    orbits.append((o, f"closed form $N = {M}$, {tag}",
+                                   CLOSED_STYLE if M == N else OTHER_N_STYLE))
                 elif M == N and o.impact_velocity > 0:
-                    orbits.append((o, f"closed form N={M} root (non-physical: gap_min="
-                                      f"{o.gap_min:.3f})", NONPHYS_STYLE))
-        title = (f"omega = {omega:g}, b = 0: paper claims stable {N}-1; simulator from rest: "
+                    orbits.append((o, f"closed form $N = {M}$, not physical (crosses the stop)",
+                                   NONPHYS_STYLE))
+        title = (rf"$\omega = {omega:g}$: paper: stable, $N = {N}$; simulated from rest: "
                  f"{steady.get('pattern', {}).get('label', '?')}")
         rows.append((motion_curves(osc, orbits, steady, max(2 * N, 2 * P)), 0.0, title))
     return rows
@@ -541,10 +548,10 @@ def _figure4_rows(steadies: dict[tuple[float, float], dict[str, Any]]) -> list[t
         osc = paper_oscillator(b=b, omega=1.0)
         steady = steadies[(1.0, b)]
         orbit = physical_orbit(osc, 1)
-        orbits = [] if orbit is None else [(orbit, "closed form N=1 ("
-                                            + ("stable" if orbit.stable else "UNSTABLE")
-                                            + ", physical)", CLOSED_STYLE)]
-        title = (f"omega = 1, b = {b:g}: paper: stable 1-1; simulator from rest: "
+        orbits = [] if orbit is None else [(orbit, "closed form $N = 1$, "
+                                            + ("stable" if orbit.stable else "unstable"),
+                                            CLOSED_STYLE)]
+        title = (f"$b = {b:g}$: paper: stable, $N = 1$; simulated from rest: "
                  f"{steady.get('pattern', {}).get('label', '?')}")
         rows.append((motion_curves(osc, orbits, steady, 3), b, title))
     return rows
@@ -647,10 +654,11 @@ def main(output_dir: str | Path = DEFAULT_OUTPUT, *, quick: bool = False,
         checks["omega_scan_b0"] = results["scan"]
 
     # ---- figures ---------------------------------------------------------------------------
+    system = r"$R = 0.6$, $\eta = 0.1$"
     make_figure(_figure3_rows(steadies), out / "figure3.png",
-                "Figure 3 (b = 0): closed form (thick blue) vs simulated steady state (red)")
+                f"Cao and Shu's figure 3: periodic motions at $b = 0$, {system}")
     make_figure(_figure4_rows(steadies), out / "figure4.png",
-                "Figure 4 (omega = 1): closed form (thick blue) vs simulated steady state (red)")
+                rf"Cao and Shu's figure 4: periodic motions at $\omega = 1$, {system}")
 
     elapsed = time.perf_counter() - t_start
     checks["elapsed_seconds"] = elapsed
