@@ -75,7 +75,11 @@ CHILD = textwrap.dedent("""
             ds = ic.stability_map(osc, [1], w, b, executor=executor, max_workers=None
                                   if executor != "process" else 2, progress=progress,
                                   out=out, omega_block=None if out else 4)
-        except KeyboardInterrupt:
+            # a map in memory keeps what it computed at the first Ctrl-C (issue 31)
+            interrupted = bool(ds.attrs.get("interrupted"))
+        except KeyboardInterrupt:  # a map to a file is abandoned
+            interrupted = True
+        if interrupted:
             # the workers killed, reaped within seconds (a busy machine delays the last)
             import time
             end = time.monotonic() + 10.0
