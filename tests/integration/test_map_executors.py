@@ -176,8 +176,18 @@ def _signals(count: int, real, *args):
     return real(*args)
 
 
+@pytest.fixture
+def python_sigint():
+    """Python's own SIGINT handler, also in a runner started in the background by a shell
+    without job control (SIGINT ignored there)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 @pytest.mark.parametrize("count", [1, 2])
-def test_one_ctrl_c_keeps_the_map_and_a_second_aborts(paper, monkeypatch, count):
+def test_one_ctrl_c_keeps_the_map_and_a_second_aborts(paper, monkeypatch, python_sigint,
+                                                      count):
     _signals.calls = 0
     monkeypatch.setattr(maps, "_map_task", functools.partial(_signals, count, maps._map_task))
     if count == 2:
@@ -190,7 +200,11 @@ def test_one_ctrl_c_keeps_the_map_and_a_second_aborts(paper, monkeypatch, count)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+# A runner started in the background by a shell without job control ignores SIGINT, and
+# its children inherit that: the child puts Python's own handler back first.
 _CHILD = textwrap.dedent("""
+    import signal
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import logging, multiprocessing, time, numpy as np, impactcont as ic
     from impactcont.analysis import maps
     logging.basicConfig(level=logging.WARNING, format="%(message)s")
