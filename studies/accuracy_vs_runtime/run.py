@@ -47,15 +47,19 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import mpmath
 import numpy as np
+from matplotlib.figure import Figure
 from scipy.optimize import brentq
 
 import impactcont as ic
+from impactcont.plots.series import (
+    Series,
+    figure_legend,
+    fit_labels,
+    panel_figure,
+    series_plot,
+)
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -508,58 +512,83 @@ def write_table(results: dict[str, Any], path: Path) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-STYLE = {"closed form": ("*", 12), "shooting": ("o", 6), "brute force": ("s", 6)}
+STYLE = {"closed form": ("*", 8), "shooting": ("o", 4), "brute force": ("s", 4)}
 COLORS = {"impactcont": "k", "impactcont + brentq": "k", "impactcont.continuation": "0.5",
           "RK45": "tab:blue", "DOP853": "tab:orange", "Radau": "tab:green",
           "impactcont.simulate": "tab:red", "solve_ivp DOP853 1e-10": "tab:purple",
           "simulate + bisection": "tab:red"}
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
+TIME_LABEL = "run time $t$ [s]"
 
 
-def _plot_rows(ax, rows: list[dict[str, Any]], key: str) -> None:
+def _series(rows: list[dict[str, Any]], key: str) -> list[Series]:
+    """One line per (family, method): error against run time; an error of exactly 0 goes
+    to the axis' ``exact 0`` row (never to an invented floor)."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in rows:
         if not math.isnan(r[key]):
             groups.setdefault((r["family"], r["method"]), []).append(r)
+    out = []
     for (family, method), rs in groups.items():
         rs = sorted(rs, key=lambda r: r["time"])
         marker, size = STYLE[family]
-        err = [max(r[key], 1e-17) for r in rs]
-        ax.loglog([r["time"] for r in rs], err, marker=marker, ms=size, ls="-",
-                  color=COLORS.get(method, "0.3"), label=f"{family}: {method}")
-    ax.axhline(1e-12, color="0.7", lw=0.8, ls=":")
+        out.append(Series([r["time"] for r in rs], [r[key] for r in rs],
+                          f"{family}: {method}", color=COLORS.get(method, "0.3"),
+                          marker=marker, markersize=size, linewidth=1.0))
+    return out
+
+
+def _panel(ax: Any, rows: list[dict[str, Any]], key: str, ylabel: str, title: str) -> None:
+    series = _series(rows, key)
+    times = [t for s in series for t in s.x]
+    if times:  # the 1e-12 mark the table counts as "converged"
+        series.append(Series([min(times), max(times)], [1e-12, 1e-12],
+                             "relative error $10^{-12}$", color="0.6", linestyle=":",
+                             linewidth=0.8))
+    series_plot(ax, series, xlabel=TIME_LABEL, ylabel=ylabel, xscale="log", yscale="log",
+                title=title)
     ax.grid(True, which="major", alpha=0.3)
 
 
-def plot(results: dict[str, Any], out: Path) -> list[Path]:
+def orbit_figure(results: dict[str, Any], width: float = 7.0) -> Figure:
+    """Error against run time of one periodic motion: a row per n (orbit, multipliers)."""
     blocks = results["orbits"]
-    fig, axes = plt.subplots(2, len(blocks), figsize=(4.6 * len(blocks), 7.5), squeeze=False)
+    fig, axes = panel_figure(2 * len(blocks), width, ncols=2, aspect=0.62, extra_height=1.6)
     for j, block in enumerate(blocks):
-        for i, (key, name) in enumerate((("orbit_error", "orbit (state, phase)"),
-                                         ("multiplier_error", "multipliers"))):
-            ax = axes[i, j]
-            _plot_rows(ax, block["rows"], key)
-            ax.set_title(f"n = {block['n']}: {name}")
-            ax.set_xlabel("run time [s]")
-            ax.set_ylabel("relative error vs 50-digit reference")
-    axes[0, 0].legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
-    p1 = out / "work_precision_orbit.png"
-    fig.savefig(p1, dpi=110)
-    plt.close(fig)
+        _panel(axes[2 * j], block["rows"], "orbit_error", r"relative error $\epsilon$",
+               f"$n = {block['n']}$: orbit (state, phase)")
+        _panel(axes[2 * j + 1], block["rows"], "multiplier_error",
+               r"relative error $\epsilon$", f"$n = {block['n']}$: multipliers")
+    figure_legend(fig)
+    fig.suptitle("Work and precision of one periodic motion (truth: 50 digits)",
+                 fontsize="medium")
+    fit_labels(fig)
+    return fig
+
+
+def location_figure(results: dict[str, Any], width: float = 7.0) -> Figure:
+    """Error against run time of locating a PD and a GR point in omega: a 2 x 2 grid."""
     panels = [(b["n"], label, pt) for b in results["locations"]
               for label, pt in b["points"].items()]
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 4.2), squeeze=False)
-    for ax, (n, label, pt) in zip(axes[0], panels, strict=True):
-        _plot_rows(ax, pt["rows"], "error")
-        ax.set_title(f"n = {n}: locate {label} in omega")
-        ax.set_xlabel("run time [s]")
-        ax.set_ylabel("relative error of omega")
-    axes[0, 0].legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
-    p2 = out / "work_precision_location.png"
-    fig.savefig(p2, dpi=110)
-    plt.close(fig)
-    return [p1, p2]
+    fig, axes = panel_figure(len(panels), width, extra_height=1.6)
+    for ax, (n, label, pt) in zip(axes, panels, strict=True):
+        _panel(ax, pt["rows"], "error", r"relative error of $\omega$",
+               rf"$n = {n}$: locate {label} in $\omega$")
+    figure_legend(fig)
+    fig.suptitle("Work and precision of locating a special point (truth: 50 digits)",
+                 fontsize="medium")
+    fit_labels(fig)
+    return fig
+
+
+def plot(results: dict[str, Any], out: Path, width: float = 7.0) -> list[Path]:
+    """Write ``work_precision_orbit.png`` and ``work_precision_location.png`` into ``out``."""
+    paths = []
+    for name, make in (("work_precision_orbit.png", orbit_figure),
+                       ("work_precision_location.png", location_figure)):
+        make(results, width).savefig(out / name, dpi=DPI)
+        paths.append(out / name)
+    return paths
 
 
 def rerun_orbit(output_dir: str | Path, n: int) -> dict[str, Any]:
@@ -613,9 +642,18 @@ if __name__ == "__main__":
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--rerun-orbit", type=int, default=None, metavar="N_DOF",
                         help="redo only the orbit study of this n into existing results")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figures from the output's results.json and "
+                        "copy them to figures/")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
-    if args.rerun_orbit is not None:
+    if args.figures_only:
+        out = Path(args.output)
+        for p in plot(json.loads((out / "results.json").read_text()), out):
+            if out.resolve() != FIGURES_DIR.resolve():
+                FIGURES_DIR.mkdir(exist_ok=True)
+                shutil.copy(p, FIGURES_DIR / p.name)
+    elif args.rerun_orbit is not None:
         rerun_orbit(args.output, args.rerun_orbit)
     else:
         main(args.output, quick=args.quick)

@@ -44,12 +44,10 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
@@ -62,6 +60,7 @@ from impactcont.analysis.switching import (
 from impactcont.dataset.multi import impacts_of
 from impactcont.orbit.multi_impact import multi_impact_orbit, primitive_orbit
 from impactcont.plots.impacts import impact_diagram
+from impactcont.plots.series import MAX_WIDTH, figure_legend, fit_labels
 
 log = logging.getLogger("cascades")
 
@@ -69,16 +68,17 @@ HERE = Path(__file__).resolve().parent
 DEFAULT_OUTPUT = HERE / "output"
 FIGURES_DIR = HERE / "figures"
 WORKERS = 2
+DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 
 SYSTEMS: dict[str, dict[str, Any]] = {
     "paper2dof": {
-        "title": "paper's 2-DOF system, b = 0",
+        "title": r"paper's 2-DOF system, $b = 0$, $R = 0.6$, $\eta = 0.1$",
         "build": {"M": np.eye(2), "K": [[1.0, -1.0], [-1.0, 2.0]], "F": [1.0, 0.0],
                   "R": 0.6, "b": 0.0, "eta": 0.1},
         "range": (1.55, 1.95), "zoom": (1.795, 1.825), "doublings": 7,
     },
     "chain3dof": {
-        "title": "3-DOF chain (unit masses and springs), b = 0",
+        "title": r"3-DOF chain (unit masses and springs), $b = 0$, $R = 0.6$, $\eta = 0.1$",
         "build": {"masses": [1.0, 1.0, 1.0], "springs": [1.0, 1.0, 1.0],
                   "F": [1.0, 0.0, 0.0], "R": 0.6, "b": 0.0, "eta": 0.1},
         "range": (1.15, 1.45), "zoom": (1.325, 1.342), "doublings": 6,
@@ -439,42 +439,52 @@ def branches_from_simulation(name: str, records: list[dict[str, Any]],
 # figure and tables
 # ---------------------------------------------------------------------------------------------
 def draw(name: str, branches: dict[str, xr.Dataset], up: list[dict[str, Any]],
-         down: list[dict[str, Any]], zoom_up: list[dict[str, Any]], path: Path) -> None:
-    """Branches (physical parts) and the simulator's impacts, full range and zoom."""
-    fig, axes = plt.subplots(1, 2, figsize=(14, 5.5), layout="constrained")
+         down: list[dict[str, Any]], zoom_up: list[dict[str, Any]], path: Path,
+         width: float = 7.0) -> None:
+    """Branches (physical parts) and the simulator's impacts, full range over the zoom on
+    the cascade (its box marked), ``width`` inches wide, one legend under both."""
+    if not 2.0 <= width <= MAX_WIDTH:
+        raise ValueError(f"width must be in [2, {MAX_WIDTH}] inches; got {width!r}")
+    fig = Figure(figsize=(width, 1.15 * width + 1.2), layout="constrained")
+    axes = fig.subplots(2, 1)
     lo, hi = SYSTEMS[name]["zoom"]
     palette = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
                "tab:pink", "tab:gray", "tab:olive", "tab:cyan", "navy", "magenta", "lime",
                "teal", "maroon", "gold"]
-    handles: list[Any] = []
+    handles: dict[str, Any] = {}
     for ax, zoom in zip(axes, (False, True), strict=True):
         impact_diagram(branches, ax=ax, specials=("PD", "GR", "SN"), nonphysical=False,
-                       colors=palette)
+                       colors=palette, legend="inside", zoom=False)
         legend = ax.get_legend()
-        handles = list(legend.legend_handles)
+        for h, text in zip(legend.legend_handles, legend.get_texts(), strict=True):
+            h.set_label(text.get_text())
+            handles.setdefault(text.get_text(), h)
         legend.remove()
         for recs, style, label in ((up + zoom_up, {"color": "black", "marker": "."},
-                                    "simulator, omega up"),
+                                    r"simulator, $\omega$ up"),
                                    (down, {"color": "0.55", "marker": "+"},
-                                    "simulator, omega down")):
+                                    r"simulator, $\omega$ down")):
             if not recs:
                 continue
             x = np.concatenate([np.full(len(r["velocities"]), r["omega"]) for r in recs])
             y = np.concatenate([r["velocities"] for r in recs])
             ax.scatter(x, y, s=7, linewidths=0.6, alpha=0.7, zorder=4, **style)
-            handles.append(plt.Line2D([], [], linestyle="none", label=label, **style))
+            handles.setdefault(label, Line2D([], [], linestyle="none", label=label, **style))
         if zoom:
             ax.set_xlim(lo, hi)
             ax.set_ylim(bottom=-0.03)
-            ax.set_title("zoom on the cascade")
+            ax.set_title(rf"zoom on the cascade, ${lo:g} \leq \omega \leq {hi:g}$",
+                         fontsize="medium")
         else:
             ax.set_xlim(*SYSTEMS[name]["range"])
             ax.set_ylim(bottom=-0.03)
-            ax.set_title(SYSTEMS[name]["title"])
-        ax.set_ylabel("impact velocity of every impact")
-    fig.legend(handles=handles, loc="outside right center", fontsize="small")
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+            ax.set_title(SYSTEMS[name]["title"], fontsize="medium")
+        ax.set_ylabel(r"impact velocity $\dot{x}_1(T_k^-)$ of every impact")
+    y0, y1 = axes[1].get_ylim()
+    axes[0].indicate_inset((lo, y0, hi - lo, y1 - y0), edgecolor="0.35")
+    figure_legend(fig, list(handles.values()))
+    fit_labels(fig)
+    fig.savefig(path, dpi=DPI)
     log.info("wrote %s", path)
 
 

@@ -216,49 +216,61 @@ def main() -> dict[str, Any]:
     return out
 
 
-def figure(out: dict[str, Any], path: Path) -> None:
+def figure(out: dict[str, Any], path: Path, width: float = 7.0) -> None:
     """Left: ``xi`` against omega, the source's formula (its root of (W2): solid; the
-    other: dashed) and the exact symmetric roots (filled: stable and physical). Right: the
-    difference along the source's limit against ``s`` (slope 1: first order)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    other: dashed) over the exact symmetric roots (filled: stable and physical). Right: the
+    difference along the source's limit against ``s`` (slope 1: first order). Side by side
+    from 5 in, stacked below; one legend under both."""
     import matplotlib.ticker
 
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4))
+    from impactcont.plots.series import (
+        Series,
+        figure_legend,
+        fit_labels,
+        panel_figure,
+        series_plot,
+    )
+
+    fig, (ax, bx) = panel_figure(2, width, extra_height=1.3)
+    series = []
     dense = np.linspace(OMEGAS[0], OMEGAS[-1], 201)
     for sign, style, label in ((1, "-", "source (W1-W7)"),
                                (-1, "--", "source, other root of (W2)")):
-        pts = [(r, m.xi) for r in dense for m in sf.motions(float(r), MU, ZETA, B, R,
-                                                            sign=sign)]
-        ax.plot(*np.array(pts).T, style, color="C0", lw=1, label=label)
+        pts = np.array([(r, m.xi) for r in dense for m in sf.motions(float(r), MU, ZETA, B, R,
+                                                                     sign=sign)])
+        series.append(Series(*pts.T, label, color="C0", linestyle=style, linewidth=1.0))
+    good, bad = [], []
     for r in OMEGAS:
         p = cf.VINES(r=r, mu=MU, zeta=ZETA, b=B, b_low=B, R=R, R_low=R)
         for m in cf.ul_motions(p, scan=60):
             if abs(m.t1 - 0.5 * p.T) < 1e-9 * p.T:
-                good = m.physical and m.stable
-                ax.plot(r, _exact(m)["xi"], "o", ms=4, color="k",
-                        mfc="k" if good else "none")
-    ax.plot([], [], "o", color="k", ms=4, label="exact closed form (filled: stable)")
-    ax.set_xlabel("omega / w_n")
-    ax.set_ylabel("xi = |fundamental of x1| / b")
-    ax.set_title(f"symmetric VI-NES, mu = {MU}, zeta = {ZETA}, b = {B}, R = {R}", fontsize=9)
-    ax.legend(fontsize=8)
+                (good if m.physical and m.stable else bad).append((r, _exact(m)["xi"]))
+    for pts, label, filled in ((bad, "exact closed form", False),
+                               (good, "exact closed form, stable and physical", True)):
+        if pts:
+            series.append(Series(*np.array(pts).T, label, color="k", linestyle="none",
+                                 marker="o", markersize=4, filled=filled))
+    series_plot(ax, series, xlabel=r"$\omega/\omega_n$",
+                ylabel=r"$\xi = |Q_1| / b$ (fundamental of $x_1$)",
+                title="Symmetric motions")
+    limit = []
     for i, r0 in enumerate(LIMIT_R0):
         rows = [x for x in out["limit"] if x["r0"] == r0]
-        bx.loglog([x["s"] for x in rows], [max(x["xi"], x["theta"]) for x in rows], "o-",
-                  ms=3, color=f"C{i}", label=f"r0 = {r0}")
+        limit.append(Series([x["s"] for x in rows], [max(x["xi"], x["theta"]) for x in rows],
+                            f"$r_0 = {r0:g}$", color=f"C{i + 1}", marker="o", markersize=3))
     s_ = np.array(LIMIT_S)
-    bx.loglog(s_, 0.02 * s_, "k:", label="slope 1")
+    limit.append(Series(s_, 0.02 * s_, "slope 1", color="k", linestyle=":"))
+    series_plot(bx, limit, xlabel=r"$s$ ($\mu = 0.05 s$, $b = 5/s$, $\omega = 1 + (r_0 - 1) s$)",
+                ylabel=r"max relative difference of $\xi$, $\theta$", xscale="log",
+                yscale="log", title="Along the source's limit")
     bx.set_xticks(s_, [f"{x:g}" for x in s_])
     bx.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    bx.set_xlabel("s  (mu = 0.05 s, zeta = 0.02 s, b = 5/s, omega = 1 + (r0 - 1) s)")
-    bx.set_ylabel("max relative difference (xi, theta)")
-    bx.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    figure_legend(fig)
+    fig.suptitle(rf"Symmetric vibro-impact NES, $\mu = {MU:g}$, $\zeta = {ZETA:g}$, "
+                 rf"$b = {B:g}$, $R = {R:g}$: the source's formula against the exact motions",
+                 fontsize="medium")
+    fit_labels(fig)
+    fig.savefig(path, dpi=150)
 
 
 if __name__ == "__main__":
@@ -268,9 +280,14 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--copy-figures", action="store_true",
                         help="also refresh figures/source_compare.png (tracked)")
+    parser.add_argument("--figures-only", action="store_true",
+                        help="only redraw the figure from output/source_compare.json")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    result = main()
+    if args.figures_only:
+        result = json.loads((HERE / "output" / "source_compare.json").read_text())
+    else:
+        result = main()
     LOG.info(json.dumps(result["summary"], indent=1))
     png = HERE / "output" / "source_compare.png"
     figure(result, png)
