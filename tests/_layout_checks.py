@@ -377,7 +377,12 @@ def leaders_crossing_each_other(fig: Figure | Drawn) -> list[str]:
 
 
 def _titles(fig: Figure) -> list[str]:
-    out = [fig._suptitle.get_text()] if fig._suptitle is not None else []
+    """The suptitles of the figure and its subfigures and the titles of its axes."""
+    out, figs = [], [fig]
+    while figs:
+        f = figs.pop()
+        out += [f._suptitle.get_text()] if f._suptitle is not None else []
+        figs += list(getattr(f, "subfigs", []))
     for ax in axes_of(fig):
         out += [ax.title.get_text(), ax._left_title.get_text(), ax._right_title.get_text()]
     return [t for t in out if t.strip()]

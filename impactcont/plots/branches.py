@@ -222,7 +222,7 @@ NONPHYSICAL_GREY = "0.6"
 #: has one entry for them (their kind is no event of the machine).
 NONPHYSICAL_MARKER = "o"
 _MARKER_SIZE = 6.0  # points
-_STACK = 9.0  # points: special points of one kind whose markers touch (a stack) share a label
+_STACK = 10.0  # points: special points of one kind whose markers (6 pt) nearly touch share a label
 _MATH = {"omega": r"\omega", "eta": r"\eta", "alpha": r"\alpha", "beta": r"\beta",
          "b_low": r"b_{low}", "R_low": r"R_{low}"}
 
@@ -620,7 +620,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     specials: list[tuple[float, float, str, str, bool]] = []  # x, y, label, colour, shown
     seen: list[np.ndarray] = []  # y of the physical motions
     counts = {int(ds.attrs["N"]) for _, ds in branches}
-    for b, (_name, ds) in enumerate(branches):
+    for b, (name, ds) in enumerate(branches):
         yname = _y_variable(ds, y)
         parameter = ds.attrs["parameter"]
         x = np.asarray(ds[parameter].values, dtype=float)
@@ -638,7 +638,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
                              if differing else [])])
         unique = len(counts) == len(branches) and not differing
         branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
-                                     label=about if unique else f"branch {b + 1} ({about})"))
+                                     label=f"{name} ({about})" if name and not unique
+                                     else about))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
         for k, label in enumerate(labels):
             px, py = _special_xy(ds, x, yv, yname, k)

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 import impactcont as ic
 from impactcont.model.stops import Stops
 from impactcont.plots import SPECIAL_MARKERS
+from impactcont.plots.branches import NONPHYSICAL_GREY, NONPHYSICAL_MARKER
 from impactcont.plots.impacts import IMPACT_QUANTITIES, impact_diagram, impact_label
 
 matplotlib.use("Agg")
@@ -88,7 +89,13 @@ def test_the_period_doublings_are_marked_where_they_were_found(n1) -> None:
     expected = np.column_stack([n1["special_omega"].values[pd],
                                 n1["special_impact_velocity"].values[pd]])
     every = impact_diagram(n1, ax=_axes(), specials=("PD",), physical_range=False)
-    np.testing.assert_array_equal(_marks(every, "PD"), np.unique(expected, axis=0))
+    # the non-physical root's: a small grey circle, like every point of a non-physical motion
+    grey = np.concatenate([line.get_xydata() for line in every.get_lines()
+                           if line.get_marker() == NONPHYSICAL_MARKER
+                           and line.get_markeredgecolor() == NONPHYSICAL_GREY])
+    np.testing.assert_array_equal(np.unique(np.vstack([_marks(every, "PD"), grey]), axis=0),
+                                  np.unique(expected, axis=0))
+    np.testing.assert_array_equal(_marks(every, "PD"), expected[expected[:, 1] > 0])
     physical = impact_diagram(n1, ax=_axes(), specials=("PD",))
     np.testing.assert_array_equal(_marks(physical, "PD"), expected[expected[:, 1] > 0])
     none = impact_diagram(n1, ax=_axes(), specials=())
