@@ -78,7 +78,7 @@ def flight_clearances(flight: Any, X0: np.ndarray, delta: float, tau: float, *,
 
     Parameters
     ----------
-    flight : Flight, ImpactOscillator or object with an ``osc`` attribute
+    flight : Flight, ImpactOscillator or an object carrying one
         The flight (:func:`~impactcont.simulate.flight.flight_of`: of an oscillator, or of
         the oscillator a :class:`impactcont.Flow` carries).
     X0 : ndarray, shape (2n,)
@@ -140,7 +140,7 @@ def search_window(flight: Any, index: int | None = None, *, normal: Any = None
 
     Parameters
     ----------
-    flight : Flight, ImpactOscillator or object with an ``osc`` attribute
+    flight : Flight, ImpactOscillator or an object carrying one
         :func:`~impactcont.simulate.flight.flight_of`.
     index : int, optional
         0-based index of a mass (mass 1 by default); not with `normal`.
@@ -245,7 +245,7 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
 
     Parameters
     ----------
-    flight : Flight, ImpactOscillator or object with an ``osc`` attribute
+    flight : Flight, ImpactOscillator or an object carrying one
         :func:`~impactcont.simulate.flight.flight_of`.
     X : ndarray, shape (2n,)
         State at the start (on the allowed side of every stop).

@@ -73,7 +73,7 @@ def flight_of(source: Any) -> Flight:
 
     Parameters
     ----------
-    source : Flight, ImpactOscillator or object with an ``osc`` attribute
+    source : Flight, ImpactOscillator or an object carrying one
         A flight (returned as it is), an oscillator, or anything that carries one as
         ``source.osc`` (e.g. :class:`impactcont.Flow`: only its oscillator is read, never
         its evaluation of the flow).

@@ -142,7 +142,7 @@ def next_impact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
 
     Parameters
     ----------
-    flight : Flight, ImpactOscillator or object with an ``osc`` attribute
+    flight : Flight, ImpactOscillator or an object carrying one
         The flight (:func:`~impactcont.simulate.flight.flight_of`: of an oscillator, or of
         the oscillator a :class:`impactcont.Flow` carries; only the oscillator is read).
     X : ndarray, shape (2n,)
