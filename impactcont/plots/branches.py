@@ -25,6 +25,7 @@ from impactcont.dataset.schema import (
     special_variable,
     validate_branch_dataset,
 )
+from impactcont.errors import ParameterError
 from impactcont.plots.labels import (
     coincident_groups,
     marker_boxes,
@@ -34,9 +35,8 @@ from impactcont.plots.labels import (
 from impactcont.vocabulary import LABEL_MARKERS, LABEL_NAMES
 
 __all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "NONPHYSICAL_MARKER", "SEGMENT_STYLES",
-           "SPECIAL_MARKERS",
-           "SPECIAL_NAMES", "Y_VARIABLES", "axis_label", "bifurcation_diagram", "diagram_legend",
-           "differing_parameters",
+           "SPECIAL_MARKERS", "SPECIAL_NAMES", "WIDTH_RANGE", "Y_VARIABLES", "axis_label",
+           "bifurcation_diagram", "check_width", "diagram_legend", "differing_parameters",
            "fit_text", "fixed_parameters", "label_specials", "legend_below", "legend_fontsize",
            "motion_text", "multipliers_plot", "parameter_text", "stability_segments",
            "system_text"]
@@ -61,6 +61,27 @@ SPECIAL_NAMES: dict[str, str] = dict(LABEL_NAMES)
 _SYMBOLS = {"omega": r"$\omega$", "b": "$b$", "R": "$R$", "eta": r"$\eta$",
             "alpha": r"$\alpha$", "beta": r"$\beta$", "delta": r"$\delta$",
             "impact_velocity": r"$\dot{x}_1(T^-)$", "spectral_radius": r"$\rho(G)$"}
+#: The widths a figure may have, in inches: a journal's column is 3.5 in, its page at most
+#: 7.2 in (every figure of impactcont is drawn at most that wide).
+WIDTH_RANGE = (2.0, 7.2)
+
+
+def check_width(width: Any, name: str = "width") -> float:
+    """``width`` (inches) as a float, refused outside :data:`WIDTH_RANGE`.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``name``, the value and the allowed range.
+    """
+    lo, hi = WIDTH_RANGE
+    if isinstance(width, bool) or not isinstance(width, (int, float, np.integer, np.floating)) \
+            or not lo <= width <= hi:
+        raise ParameterError(f"{name} must be a number of inches in [{lo:g}, {hi:g}] (3.5: a "
+                             f"journal's column, 7: its page); got {width!r}")
+    return float(width)
+
+
 #: The branch variables a bifurcation diagram draws on its vertical axis by name (the
 #: ``y`` of :func:`bifurcation_diagram`, of a scene's ``[[plots]]`` and of
 #: ``impactcont plot --y``); any other real variable on ``point`` is drawn too.

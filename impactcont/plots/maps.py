@@ -27,6 +27,7 @@ from impactcont.dataset.curves import (
 from impactcont.plots.branches import (
     SPECIAL_NAMES,
     axis_label,
+    check_width,
     fit_text,
     legend_below,
     legend_fontsize,
@@ -360,7 +361,7 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
     ncols : int
         Panels per row (one below 5 in: a single column).
     width : float
-        Figure width in inches, in [2, 20] (3.5: a journal's single column, 7: double).
+        Figure width in inches, in [2, 7.2] (3.5: a journal's column, 7: its page).
     title : str, optional
         Figure title; by default the motions and the system, ``""`` for none.
 
@@ -374,9 +375,7 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
     validate_map_dataset(map_ds)
     if isinstance(ncols, bool) or not isinstance(ncols, (int, np.integer)) or ncols < 1:
         raise ValueError(f"ncols must be a positive integer; got {ncols!r}")
-    if isinstance(width, bool) or not isinstance(width, (int, float)) \
-            or not 2.0 <= width <= 20.0:
-        raise ValueError(f"width must be a number of inches in [2, 20]; got {width!r}")
+    width = check_width(width)
     curve_list = _curves(curves)
     Ns = [int(k) for k in map_ds["N"].values]
     cols = 1 if width < 5.0 else min(ncols, len(Ns))

@@ -25,6 +25,7 @@ from impactcont.dataset.io import atomic_output, check_output_file
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow
+from impactcont.plots.branches import WIDTH_RANGE, check_width
 from impactcont.scene.keys import DPI_RANGE
 
 __all__ = ["DEFAULT_KINDS", "MAX_PIXELS", "WIDTH", "WIDTH_RANGE", "check_dpi", "check_width",
@@ -61,26 +62,6 @@ def _option(plot: Any, name: str, default: Any) -> Any:
 
 #: Default width of the figures, in inches: a journal's double column (3.5 in: single).
 WIDTH = 7.0
-#: The widths a figure may have, in inches: a journal's page is at most 7.2 in wide.
-WIDTH_RANGE = (2.0, 7.2)
-
-
-def check_width(width: Any, name: str = "width") -> float:
-    """``width`` (inches) as a float, refused outside :data:`WIDTH_RANGE`.
-
-    Raises
-    ------
-    ParameterError
-        Naming ``name``, the value and the allowed range.
-    """
-    lo, hi = WIDTH_RANGE
-    if isinstance(width, bool) or not isinstance(width, (int, float, np.integer, np.floating)) \
-            or not lo <= width <= hi:
-        raise ParameterError(f"{name} must be a number of inches in [{lo:g}, {hi:g}] (3.5: a "
-                             f"journal's column, 7: its page); got {width!r}")
-    return float(width)
-
-
 def _width(plot: Any) -> float:
     """The figure width in inches (``plot.width``, default :data:`WIDTH`)."""
     return check_width(_option(plot, "width", WIDTH))

@@ -102,7 +102,7 @@ class PlotSpec:
                   "the vertical axis", "impact_velocity")
     yscale: str = declare(String(("auto", "linear", "log")), "multipliers: scale of the moduli "
                        "(auto: logarithmic when a spike would flatten the rest)", "auto")
-    width: float = declare(Real(2, 20), "figure width in inches (3.5: a journal's single "
+    width: float = declare(Real(2, 7.2), "figure width in inches (3.5: a journal's single "
                         "column, 7: double)", 7.0)
     title: str | None = declare(String(), "figure title")
     file: str | None = declare(String(pattern=re.compile(r"^[^/\\]+\.png$"),

@@ -406,8 +406,11 @@ def test_scene_plot_width_and_automatic_yscale(data, tmp_path):
     (tmp_path / "b.toml").write_text(head)
     assert load_scene(tmp_path / "b.toml").plots[0].width == 7.0
     (tmp_path / "c.toml").write_text(head + "width = 1.0\n")
-    with pytest.raises(SceneError, match=r"plots\[0\]\.width.*\[2, 20\]"):
+    with pytest.raises(SceneError, match=r"plots\[0\]\.width.*\[2, 7\.2\]"):
         load_scene(tmp_path / "c.toml")
+    (tmp_path / "d.toml").write_text(head + "width = 8.0\n")  # wider than a journal's page
+    with pytest.raises(SceneError, match=r"plots\[0\]\.width.*\[2, 7\.2\]"):
+        load_scene(tmp_path / "d.toml")
 
 
 # -- impact diagrams, two-parameter diagrams and N-p maps ----------------------------------------
