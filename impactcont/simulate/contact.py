@@ -50,6 +50,8 @@ _WINDOW_PERIODS = 64
 # rounding allowance of the envelope test, in ulps of the size of the motion (times the
 # condition number of the eigenvectors the envelope is read from)
 _ENVELOPE_ULPS = 1e3
+# how far a search window reaches, in its own lengths
+_WINDOW_REACH = 1.0 + 2.0**-20
 
 
 def _highest_top(motion: StopMotion, grid: np.ndarray) -> tuple[float, float] | None:
@@ -296,7 +298,10 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
             start, window = free, first
             below = dict.fromkeys(stops, True)
             continue
-        stop_time = min(start + window, t_max)
+        # a window reaches a little past its length: the next impact of a motion of the
+        # forcing's period comes one period after the last, at a window's end up to rounding,
+        # and is found in this window rather than at the start of the next
+        stop_time = min(start + window * _WINDOW_REACH, t_max)
         grids = {s: search_grid(fl, start, stop_time, normals[s]) for s in stops}
         best: tuple[float, str] | None = None
         for s in stops:
