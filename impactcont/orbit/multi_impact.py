@@ -438,16 +438,21 @@ def impact_sequence(geo: StopGeometry) -> ImpactSequence:
 
 
 def contact_stops(geo: StopGeometry) -> ContactStops:
-    """The stops of the contact check of eq. (16) in `geo`, as the kernel takes them."""
-    return ContactStops(normal=_readonly(geo.normal), two_sided=geo.two_sided, b=geo.b,
-                        b_low=geo.b_low, extra_normals=_readonly(geo.extra_normals),
-                        extra_signs=_readonly(geo.extra_signs),
-                        extra_positions=_readonly(geo.extra_positions))
+    """The stops of the contact check of eq. (16) in `geo`, as the kernel takes them (built
+    once per geometry)."""
+    stops = _STOPS.get(geo)
+    if stops is None:
+        stops = _STOPS[geo] = ContactStops(
+            normal=_readonly(geo.normal), two_sided=geo.two_sided, b=geo.b, b_low=geo.b_low,
+            extra_normals=_readonly(geo.extra_normals), extra_signs=_readonly(geo.extra_signs),
+            extra_positions=_readonly(geo.extra_positions))
+    return stops
 
 
-#: :func:`impact_sequence` of each live stop geometry.
+#: :func:`impact_sequence` and :func:`contact_stops` of each live stop geometry.
 _SEQUENCES: weakref.WeakKeyDictionary[StopGeometry, ImpactSequence] = \
     weakref.WeakKeyDictionary()
+_STOPS: weakref.WeakKeyDictionary[StopGeometry, ContactStops] = weakref.WeakKeyDictionary()
 
 #: The Jacobian field of a :class:`ShotFlights` that has none (its type fixed: one compile).
 _NO_JACOBIAN = np.zeros((0, 0))
