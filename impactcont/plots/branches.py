@@ -521,8 +521,8 @@ def _label_points(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
         w, t = merged_labels(ax, own, [label] * len(own), distance=_STACK)
         where += w
         texts += t
-    # one place (markers nearly touching): one label for every kind there
-    where, texts = merged_labels(ax, where, texts, distance=_STACK, chain=False)
+    # one place (markers overlapping, 8 points): one label for every kind there
+    where, texts = merged_labels(ax, where, texts, distance=8.0, chain=False)
     # every marker is an obstacle: a merged label names one point of its stack
     place_labels(ax, where, texts, fontsize=fontsize, avoid=[*avoid, *marker_boxes(ax)])
 

@@ -74,6 +74,21 @@ def _leader_crossings(p: np.ndarray, box: np.ndarray, segments: np.ndarray) -> i
     return int(np.count_nonzero(cross))
 
 
+def _crossings(a: np.ndarray, b: np.ndarray, segments: Sequence[np.ndarray]) -> int:
+    """How many of ``segments`` ((2, 2) each) the segment ``a``-``b`` crosses (points)."""
+    if not len(segments):
+        return 0
+    q = np.asarray(segments, dtype=float)
+    q0, q1 = q[:, 0], q[:, 1]
+
+    def orient(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
+        return np.sign((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
+                       - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
+
+    return int(np.count_nonzero((orient(a, b, q0) * orient(a, b, q1) < 0)
+                                & (orient(q0, q1, a) * orient(q0, q1, b) < 0)))
+
+
 def _leader_crossings_box(box: np.ndarray, leaders: Sequence[np.ndarray]) -> int:
     """How many of the ``leaders`` (segments, points) pass through ``box``."""
     count = 0
@@ -153,8 +168,8 @@ def merged_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[s
     place) are one cluster: its label names each text once, with how many points
     carry it (``PD ×10, GR``), and points at the cluster's middle point. With
     ``chain=False`` a cluster is the points within ``distance`` of its first one
-    (one place; see :func:`coincident_groups`). Call it on a laid-out figure; pass
-    the result to :func:`place_labels`.
+    (one place; see :func:`coincident_groups`), and the label points at that one.
+    Call it on a laid-out figure; pass the result to :func:`place_labels`.
 
     Returns
     -------
@@ -175,8 +190,8 @@ def merged_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[s
             for part in str(texts[i]).split(", "):
                 name, _, n = part.partition(" \N{MULTIPLICATION SIGN}")
                 counts[name] = counts.get(name, 0) + (int(n) if n.isdigit() else 1)
-        centre = pts[g].mean(axis=0)
-        middle = g[int(np.argmin(np.hypot(*(pts[g] - centre).T)))]
+        centre = pts[g].mean(axis=0)  # a chain: its middle point; one place: its first
+        middle = g[int(np.argmin(np.hypot(*(pts[g] - centre).T)))] if chain else g[0]
         where.append(tuple(np.asarray(xy[middle], dtype=float)))
         out.append(", ".join(f"{t} \N{MULTIPLICATION SIGN}{n}" if n > 1 else t
                              for t, n in counts.items()))
@@ -249,7 +264,7 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
             crossed = np.count_nonzero((curves[:, 0] > box[0]) & (curves[:, 0] < box[2])
                                        & (curves[:, 1] > box[1]) & (curves[:, 1] < box[3]))
             leader = _leader_crossings(pts[k], box, segments) if ring > 0 else 0
-            tangle = (_leader_crossings(pts[k], box, np.array(leaders).reshape(-1, 2, 2))
+            tangle = (_crossings(np.clip(pts[k], box[:2], box[2:]), pts[k], leaders)
                       + _leader_crossings_box(box, leaders)) if ring > 0 else 0
             score = (100.0 * hard + 50.0 * h * outside + 20.0 * crossed + 30.0 * ring
                      + 400.0 * (leader + tangle))

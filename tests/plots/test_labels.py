@@ -109,3 +109,41 @@ def test_marker_boxes_are_the_markers_as_drawn() -> None:
         assert box.width == pytest.approx(8 * 144.0 / 72.0)  # 8 points at 144 dpi
         assert (box.x0 + box.x1) / 2 == pytest.approx(cx)
         assert (box.y0 + box.y1) / 2 == pytest.approx(cy)
+
+
+def test_a_stack_is_named_once_with_its_count() -> None:
+    """Ten points 5 pt apart in a column (a cascade's period doublings) and a point of
+    another kind touching the stack: one label, ``PD ×10, GR``, at the stack's middle;
+    a point far away keeps its own."""
+    from impactcont.plots.labels import merged_labels
+
+    ax = _axes()
+    pt = 1.0 / _points_per_unit(ax)  # one point of the page, in data units (square axes)
+    xy = [(5.0, 2.0 + 5 * k * pt) for k in range(10)] + [(5.0 + 5 * pt, 2.0), (9.0, 9.0)]
+    texts = ["PD"] * 10 + ["GR", "PD"]
+    where, out = merged_labels(ax, xy, texts)
+    assert out == ["PD \N{MULTIPLICATION SIGN}10, GR", "PD"]
+    assert where[0] in (xy[4], xy[5]) and where[1] == xy[11]
+    # counts add up when merged labels merge again
+    again = merged_labels(ax, [xy[0], xy[1]], ["PD \N{MULTIPLICATION SIGN}3", "PD, GR"])
+    assert again[1] == ["PD \N{MULTIPLICATION SIGN}4, GR"]
+    # one place (chain=False): the label points at the first point of the place
+    where, out = merged_labels(ax, xy[:3], ["SN", "GR", "SN"], distance=8.0, chain=False)
+    assert out == ["SN, GR", "SN"] and where[0] == xy[0]  # the third is 10 pt from the first
+    with pytest.raises(ValueError, match="xy and texts must have the same length; got 2 and 1"):
+        merged_labels(ax, xy[:2], ["PD"])
+
+
+def test_leaders_do_not_cross() -> None:
+    """Six points scattered within a few markers, long labels: each label moves away on a
+    leader, and no two leaders cross (a crossing costs as much as crossing a curve)."""
+    from tests._layout_checks import leaders_crossing_each_other
+
+    ax = _axes()
+    pt = 1.0 / _points_per_unit(ax)
+    xy = [tuple(v) for v in 5.0 + np.random.default_rng(1).normal(0.0, 6 * pt, size=(6, 2))]
+    ax.plot(*np.array(xy).T, linestyle="none", marker="o", markersize=6)
+    labels = place_labels(ax, xy, [f"LABEL{k}" for k in range(6)], fontsize="x-small",
+                          avoid=marker_boxes(ax))
+    assert sum(t.arrow_patch is not None for t in labels) >= 2
+    assert not leaders_crossing_each_other(ax.figure)
