@@ -62,7 +62,7 @@ from matplotlib.figure import Figure
 import impactcont as ic
 from impactcont.plots.branches import legend_below
 from impactcont.plots.impacts import impact_diagram
-from impactcont.plots.series import Series, panel_figure, series_plot
+from impactcont.plots.series import Series, fit_labels, panel_figure, series_plot
 
 log = logging.getLogger("rattle")
 
@@ -495,11 +495,12 @@ def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float =
         ax = impact_diagram(two.assign(physical=two["physical"] & two["flights_inside"]),
                             ax=axes[2], label_special=True, names=False, legend="inside",
                             title=f"Two flanks (clearance {GAP:g}): one impact on each per "
-                            "period; not physical: a flight crosses a stop")
+                            "period, not physical where a flight crosses a stop")
         ax.set_xlabel(GAMMA)
         ax.set_ylabel(r"impact speed $|\dot{y}(T_k^-)|$")
         legend_below(ax, _harvest(ax), span="axes")
     fig.suptitle(f"Bouncing ball and gear rattle, $R = {R:g}$", fontsize="medium")
+    fit_labels(fig)
     return fig
 
 
