@@ -184,9 +184,18 @@ def panel_figure(n: int, width: float, *, ncols: int | None = None,
     return fig, axes
 
 
-def _zero_row(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]]) -> Axes:
+def _zero_row_height(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]]) -> float:
+    """The row's height, a fraction of the axes: :data:`_ZERO_ROW`, or more on a short
+    axes, so that its markers and its label fit (at most 0.3)."""
+    ax.figure.draw_without_rendering()
+    height = ax.bbox.height * 72.0 / ax.figure.dpi  # points
+    need = max(s.markersize for s, _ in zeros) + 10.0  # a marker and its margins, points
+    return float(min(0.3, max(_ZERO_ROW, 1.3 * need / max(height, 1.0))))
+
+
+def _zero_row(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]], height: float) -> Axes:
     """The row of exact zeros under the data of ``ax`` (a child axes sharing its x)."""
-    row = ax.inset_axes((0.0, 0.0, 1.0, _ZERO_ROW), sharex=ax)
+    row = ax.inset_axes((0.0, 0.0, 1.0, height), sharex=ax)
     row.set_facecolor("white")
     row.set_zorder(ax.get_zorder() + 1)
     for series, x in zeros:
@@ -266,14 +275,15 @@ def series_plot(ax: Axes, series: Iterable[Series], *, xlabel: str, ylabel: str,
         lo, hi = (float(values.min()), float(values.max())) if values.size else (1e-16, 1.0)
         lo_exp = math.floor(math.log10(lo))
         hi_exp = max(math.ceil(math.log10(hi) + 0.15), lo_exp + 1)  # no marker on the top
-        # the row takes the bottom _ZERO_ROW of the axes, a margin above it: no data there
-        span = (hi_exp - lo_exp) / (1.0 - _ZERO_ROW - 0.05)
+        # the row takes the bottom of the axes, a margin above it: no data there
+        height = _zero_row_height(ax, zeros)
+        span = (hi_exp - lo_exp) / (1.0 - height - 0.08)
         ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
         ax.yaxis.set_minor_formatter(NullFormatter())
         ticks = [t for t in ax.get_yticks() if 10.0 ** lo_exp <= t <= 10.0 ** hi_exp]
         ax.set_yticks(ticks)
         ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
-        _zero_row(ax, zeros)
+        _zero_row(ax, zeros, height)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if title:

@@ -553,7 +553,9 @@ def _panel(ax: Any, rows: list[dict[str, Any]], key: str, ylabel: str, title: st
 def orbit_figure(results: dict[str, Any], width: float = 7.0) -> Figure:
     """Error against run time of one periodic motion: a row per n (orbit, multipliers)."""
     blocks = results["orbits"]
-    fig, axes = panel_figure(2 * len(blocks), width, ncols=2, aspect=0.62, extra_height=1.6)
+    one_column = width < 5.0  # six panels in one column: flatter, to stay within a page
+    fig, axes = panel_figure(2 * len(blocks), width, ncols=1 if one_column else 2,
+                             aspect=0.36 if one_column else 0.62, extra_height=1.6)
     for j, block in enumerate(blocks):
         _panel(axes[2 * j], block["rows"], "orbit_error", r"relative error $\epsilon$",
                f"$n = {block['n']}$: orbit (state, phase)")

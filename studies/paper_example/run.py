@@ -475,7 +475,7 @@ def make_figure(rows: list[tuple[list[dict[str, Any]], float, str]], path: Path,
 
 
 CLOSED_STYLE = {"color": "tab:blue", "lw": 3.0, "alpha": 0.45}
-OTHER_N_STYLE = {"color": "tab:green", "lw": 3.0, "alpha": 0.45}  # a closed form of another N
+N_COLORS = {1: "tab:blue", 2: "tab:green", 3: "tab:purple", 4: "tab:brown", 5: "tab:olive"}
 NONPHYS_STYLE = {"color": "0.4", "lw": 0.9, "ls": ":"}
 
 
@@ -532,7 +532,7 @@ def _figure3_rows(steadies: dict[tuple[float, float], dict[str, Any]]) -> list[t
                 if o.physical:
                     tag = "stable" if o.stable else "unstable"
                     orbits.append((o, f"closed form $N = {M}$, {tag}",
-                                   CLOSED_STYLE if M == N else OTHER_N_STYLE))
+                                   {**CLOSED_STYLE, "color": N_COLORS[M]}))
                 elif M == N and o.impact_velocity > 0:
                     orbits.append((o, f"closed form $N = {M}$, not physical (crosses the stop)",
                                    NONPHYS_STYLE))

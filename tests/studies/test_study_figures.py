@@ -208,3 +208,36 @@ def test_impact_damper_agreement_figure_is_clean(width):
     check_layout(fig, journal=True)
     text = " ".join(t.get_text() for t in render(fig).texts)
     assert r"$\mu = 0.2$" in text and "1e-17" not in text
+
+
+def _work_precision_rows(seed: int) -> list[dict]:
+    """Rows shaped like ``results.json`` of accuracy_vs_runtime: error against run time."""
+    rng = np.random.default_rng(seed)
+    rows = [{"family": "closed form", "method": "impactcont", "time": 2e-4, "orbit_error": 0.0,
+             "multiplier_error": 3e-16, "error": 0.0}]
+    for method in ("RK45", "DOP853"):
+        for k, tol in enumerate((1e-4, 1e-8, 1e-12)):
+            err = tol * 10 ** rng.uniform(-1, 1)
+            rows.append({"family": "shooting", "method": method, "time": 0.01 * (k + 1),
+                         "orbit_error": err, "multiplier_error": 10 * err, "error": err})
+    rows.append({"family": "brute force", "method": "impactcont.simulate", "time": 0.5,
+                 "orbit_error": 1e-9, "multiplier_error": float("nan"), "error": 1e-7})
+    return rows
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_work_precision_figures_are_clean(width):
+    module = _study("accuracy_vs_runtime")
+    results = {"orbits": [{"n": n, "rows": _work_precision_rows(n)} for n in (2, 10, 50)],
+               "locations": [{"n": n, "points": {lab: {"rows": _work_precision_rows(n + k)}
+                                                 for k, lab in enumerate(("PD", "GR"))}}
+                             for n in (2, 10)]}
+    figures = [module.location_figure(results, width)]
+    if width >= 5.0:  # six panels: a double-column figure (in one column they are too low)
+        figures.append(module.orbit_figure(results, width))
+    for fig in figures:
+        assert fig.get_size_inches()[0] == pytest.approx(width)
+        assert fig.get_size_inches()[1] <= 9.5
+        check_layout(fig, journal=True)
+        text = " ".join(t.get_text() for t in render(fig).texts)
+        assert ZERO_LABEL in text  # the closed form's exact orbit, not a point at 1e-17
