@@ -3,7 +3,8 @@
 ``continuation(motion, ...)`` follows the branch through the motion: an N-1 motion of the
 paper's system on the closed form, any other motion (or a parameter the closed form does
 not continue) on the N-p path; ``curve(..., start=branch)`` follows a special point of an
-N-p branch; ``stability_map(motion, p1=..., p2=...)`` maps the motion's family. Each must give what the specific driver gives, and refuse what the motion fixes.
+N-p branch; ``stability_map(motion, p1=..., p2=...)`` maps the motion's family. Each must
+give what the specific driver gives, and refuse what the motion fixes.
 """
 
 from __future__ import annotations
