@@ -843,15 +843,8 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
 
     Notes
     -----
-    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the branch
-    being followed stops at its last accepted point, the special points of the points kept
-    are located, and the other direction is not followed. The dataset's ``options``
-    attribute then records ``"interrupted": true`` and the stop reason ``"interrupted by the
-    user (KeyboardInterrupt) after K points, ..."`` (status ``INTERRUPTED``), also logged at
-    WARNING. Ctrl-C while the special points are located keeps those already located and
-    drops the one in progress (the log says so). A second Ctrl-C, or one before the first
-    point, aborts with :class:`KeyboardInterrupt`.
-    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed, as in
+    :func:`continuation` (see its Notes): the other direction is not followed.
     """
     _check_branch(branch)
     functions = check_user_functions(events, monitors, reserved_names())
