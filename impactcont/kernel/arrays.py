@@ -40,12 +40,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["BranchLinearization", "ContactStops", "CorrectorSettings", "CorrectorStep",
-           "Embedding", "FirstOrderArrays", "FlowTables", "ForcedAmplitudes", "Forcing",
-           "ForcingDerivatives", "GeometryTables", "ImpactSequence", "ModalArrays",
-           "MotionChecks", "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights",
-           "StopSeries", "SweepGrid", "SweepMotion", "SweepOutputs", "SweepSettings",
-           "SweepStats", "modal_arrays", "stack_flows"]
+__all__ = ["BranchLinearization", "CheckedFlights", "ContactStops", "CorrectorSettings",
+           "CorrectorStep", "Embedding", "FirstOrderArrays", "FirstOrderFlight", "FlightArrays",
+           "FlightFlow", "FlowTables", "ForcedAmplitudes", "Forcing", "ForcingDerivatives",
+           "GeometryTables", "ImpactSequence", "ModalArrays", "ModalFlight", "MotionChecks",
+           "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights", "StopSeries", "SweepGrid",
+           "SweepMotion", "SweepOutputs", "SweepSettings", "SweepStats", "modal_arrays",
+           "stack_flows"]
 
 
 class ModalArrays(NamedTuple):
@@ -254,6 +255,67 @@ class ShootingFlow(NamedTuple):
     """Drift ``d`` of the damped free modes per unit time (first order), shape (2n,)."""
 
 
+    def flight_arrays(self) -> FlightArrays:
+        """The fields one flight reads (:class:`FlightArrays`): the flow without the contact
+        search's scalar pairs, what :func:`~impactcont.kernel.shooting.shooting_system` and
+        :func:`~impactcont.kernel.shooting.newton_solve` take."""
+        return FlightArrays(self.general, self.w, self.a, self.f, self.u, self.ui, self.g,
+                            self.free, self.lam, self.V, self.Vi, self.xs, self.xd)
+
+
+class FlightArrays(NamedTuple):
+    """The fields of :class:`ShootingFlow` one flight reads (the scalar pairs of the contact
+    search left out), flat: the argument of the shooting entry points
+    (:meth:`ShootingFlow.flight_arrays`), named on entry as :class:`FlightFlow`."""
+
+    general: bool
+    w: np.ndarray
+    a: np.ndarray
+    f: np.ndarray
+    u: np.ndarray
+    ui: np.ndarray
+    g: np.ndarray
+    free: np.ndarray
+    lam: np.ndarray
+    V: np.ndarray
+    Vi: np.ndarray
+    xs: np.ndarray
+    xd: np.ndarray
+
+
+class ModalFlight(NamedTuple):
+    """What a flight of the modal flow reads (:class:`ShootingFlow`'s fields of the same
+    names): the modal form of eq. (5)-(7) and the constant force."""
+
+    w: np.ndarray
+    a: np.ndarray
+    f: np.ndarray
+    u: np.ndarray
+    ui: np.ndarray
+    g: np.ndarray
+    free: np.ndarray
+
+
+class FirstOrderFlight(NamedTuple):
+    """What a flight of the first-order flow reads (:class:`ShootingFlow`'s fields of the
+    same names): its complex modes and the constant force's offset and drift."""
+
+    lam: np.ndarray
+    V: np.ndarray
+    Vi: np.ndarray
+    xs: np.ndarray
+    xd: np.ndarray
+
+
+class FlightFlow(NamedTuple):
+    """The flow as the compiled flights take it: ``general`` selects the part read, so that
+    each flight function is compiled for its own small structure."""
+
+    general: bool
+    modal: ModalFlight
+    first_order: FirstOrderFlight
+
+
 class Forcing(NamedTuple):
     """The harmonic forcing at one omega: the steady response of eq. (7)."""
 
@@ -338,6 +400,23 @@ class ShotFlights(NamedTuple):
     jacobian: np.ndarray
     """``dr/du``, shape (2np, 2np), or (0, 0) when not asked for."""
 
+    def checked(self) -> CheckedFlights:
+        """The fields :func:`~impactcont.kernel.shooting.motion_checks` reads."""
+        return CheckedFlights(self.phases, self.flight_times, self.starts, self.transitions,
+                              self.phase_columns, self.arrival_rates)
+
+
+class CheckedFlights(NamedTuple):
+    """The fields of :class:`ShotFlights` :func:`~impactcont.kernel.shooting.motion_checks`
+    reads (:meth:`ShotFlights.checked`)."""
+
+    phases: np.ndarray
+    flight_times: np.ndarray
+    starts: np.ndarray
+    transitions: np.ndarray
+    phase_columns: np.ndarray
+    arrival_rates: np.ndarray
+
 
 class NewtonResult(NamedTuple):
     """What :func:`~impactcont.kernel.shooting.newton_solve` returns."""
@@ -353,6 +432,14 @@ class NewtonResult(NamedTuple):
     """Max-norm of the last update."""
     shot: ShotFlights
     """The shooting system at ``x``, with its Jacobian."""
+
+    @classmethod
+    def from_kernel(cls, raw: tuple) -> NewtonResult:
+        """The record of :func:`~impactcont.kernel.shooting.newton_solve`'s plain tuple (a
+        compiled function returns plain tuples: numba boxes a named one through a Python
+        call of its class, about 0.7 us per record)."""
+        x, status, iterations, residual_norm, step_norm, shot = raw
+        return cls(x, status, iterations, residual_norm, step_norm, ShotFlights._make(shot))
 
 
 class MotionChecks(NamedTuple):

@@ -45,16 +45,19 @@ import numpy as np
 
 from impactcont.kernel.arrays import (
     BranchLinearization,
+    CheckedFlights,
     ContactStops,
     CorrectorSettings,
     CorrectorStep,
     Embedding,
+    FirstOrderFlight,
+    FlightArrays,
+    FlightFlow,
     ForcedAmplitudes,
     Forcing,
     ForcingDerivatives,
     ImpactSequence,
-    MotionChecks,
-    NewtonResult,
+    ModalFlight,
     PalcResult,
     ShootingFlow,
     ShotFlights,
@@ -104,12 +107,13 @@ def _static_mode(w, a, g, free, t):
 
 
 @_inner
-def _flight_modal(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
-    """Flight of the modal flow: ``Phi``, ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place
-    (the constant force ``flow.g`` included: ``X(t) = Phi (X0 - P(0)) + P(t)`` with the
-    particular solution ``P`` of the forcing and of the constant force)."""
-    w, a, f, u, ui = flow.w, flow.a, flow.f, flow.u, flow.ui
-    g_static, free = flow.g, flow.free
+def _flight_modal(modal, forcing, t, X0, theta, tr, arr, pcol, rate):
+    """Flight of the modal flow (:class:`~impactcont.kernel.arrays.ModalFlight`): ``Phi``,
+    ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place (the constant force ``modal.g``
+    included: ``X(t) = Phi (X0 - P(0)) + P(t)`` with the particular solution ``P`` of the
+    forcing and of the constant force)."""
+    w, a, f, u, ui = modal.w, modal.a, modal.f, modal.u, modal.ui
+    g_static, free = modal.g, modal.free
     gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
     n = w.size
     W = np.empty((4, n))
@@ -195,11 +199,13 @@ def _flight_modal(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
 
 
 @_inner
-def _flight_general(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
-    """Flight of the first-order flow: as :func:`_flight_modal` (``GeneralFlow.matrices``);
-    the constant force adds ``X_s - Phi X_s + d t`` (``flow.xs``, ``flow.xd``: its offset
-    and drift, empty without one)."""
-    lam, V, Vi, xs, xd = flow.lam, flow.V, flow.Vi, flow.xs, flow.xd
+def _flight_general(first_order, forcing, t, X0, theta, tr, arr, pcol, rate):
+    """Flight of the first-order flow (:class:`~impactcont.kernel.arrays.FirstOrderFlight`):
+    as :func:`_flight_modal` (``GeneralFlow.matrices``); the constant force adds ``X_s - Phi
+    X_s + d t`` (``first_order.xs``, ``first_order.xd``: its offset and drift, empty without
+    one)."""
+    lam, V, Vi = first_order.lam, first_order.V, first_order.Vi
+    xs, xd = first_order.xs, first_order.xd
     Z, omega = forcing.Z, forcing.omega
     m = lam.size
     e = np.exp(lam * t)
@@ -258,12 +264,33 @@ def _flight_general(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
 
 
 @_inner
-def _flight(flow, forcing, t, X0, theta, tr, arr, pcol, rate):
-    """One flight of either flow (``flow.general``), the constant force included."""
-    if flow.general:
-        _flight_general(flow, forcing, t, X0, theta, tr, arr, pcol, rate)
+def _flight(flight, forcing, t, X0, theta, tr, arr, pcol, rate):
+    """One flight of either flow (``flight.general``, a
+    :class:`~impactcont.kernel.arrays.FlightFlow`), the constant force included."""
+    if flight.general:
+        _flight_general(flight.first_order, forcing, t, X0, theta, tr, arr, pcol, rate)
     else:
-        _flight_modal(flow, forcing, t, X0, theta, tr, arr, pcol, rate)
+        _flight_modal(flight.modal, forcing, t, X0, theta, tr, arr, pcol, rate)
+
+
+@_inner
+def _flights(flow):
+    """:class:`~impactcont.kernel.arrays.FlightFlow` of a structure with the flow's fields
+    (:class:`~impactcont.kernel.arrays.ShootingFlow` or
+    :class:`~impactcont.kernel.arrays.FlightArrays`): each flight function then takes the
+    part it reads, and compiles for that alone."""
+    return FlightFlow(flow.general,
+                      ModalFlight(flow.w, flow.a, flow.f, flow.u, flow.ui, flow.g, flow.free),
+                      FirstOrderFlight(flow.lam, flow.V, flow.Vi, flow.xs, flow.xd))
+
+
+@_inner
+def _shot_tuple(shot):
+    """`shot` (:class:`~impactcont.kernel.arrays.ShotFlights`) as the plain tuple an entry
+    point returns (Python names it with ``ShotFlights._make``: numba boxes a named tuple
+    through a Python call of its class, about 0.7 us)."""
+    return (shot.phases, shot.flight_times, shot.starts, shot.arrivals, shot.arrival_rates,
+            shot.transitions, shot.phase_columns, shot.residual, shot.jacobian)
 
 
 # -- the shooting system ------------------------------------------------------------------------
@@ -344,13 +371,14 @@ def _jacobian_wanted(x):
     return x.size >= 0
 
 @_jit
-def shooting_system(flow, forcing, impacts, period, x, want_jacobian):
+def shooting_system(flight, forcing, impacts, period, x, want_jacobian):
     """Residual (and exact Jacobian) of the N-p shooting system at the unknowns ``x``.
 
     Parameters
     ----------
-    flow, forcing, impacts : tuple
-        :class:`~impactcont.kernel.arrays.ShootingFlow`,
+    flight, forcing, impacts : tuple
+        :class:`~impactcont.kernel.arrays.FlightArrays`
+        (:meth:`~impactcont.kernel.arrays.ShootingFlow.flight_arrays`),
         :class:`~impactcont.kernel.arrays.Forcing` and
         :class:`~impactcont.kernel.arrays.ImpactSequence` as plain tuples: the flow, the
         forcing at omega and, for each impact, the 0-based index ``j_k`` of the position
@@ -365,16 +393,18 @@ def shooting_system(flow, forcing, impacts, period, x, want_jacobian):
 
     Returns
     -------
-    ShotFlights
-        The fields of :class:`impactcont.orbit.multi_impact.Shooting`.
+    tuple
+        The fields of :class:`~impactcont.kernel.arrays.ShotFlights` (``ShotFlights._make``
+        names them), those of :class:`impactcont.orbit.multi_impact.Shooting`.
     """
-    return _shooting_system(ShootingFlow(*flow), Forcing(*forcing), ImpactSequence(*impacts),
-                            period, x, want_jacobian)
+    return _shot_tuple(_shooting_system(_flights(FlightArrays(*flight)), Forcing(*forcing),
+                                        ImpactSequence(*impacts), period, x, want_jacobian))
 
 
 @_inner
-def _shooting_system(flow, forcing, impacts, period, x, want_jacobian):
-    """:func:`shooting_system` on the named structures (what compiled callers call)."""
+def _shooting_system(flight, forcing, impacts, period, x, want_jacobian):
+    """:func:`shooting_system` on the named structures (what compiled callers call; `flight`
+    a :class:`~impactcont.kernel.arrays.FlightFlow`, :func:`_flights`)."""
     pivots, normals = impacts.pivots, impacts.normals
     positions, matrices = impacts.positions, impacts.matrices
     omega = forcing.omega
@@ -401,7 +431,7 @@ def _shooting_system(flow, forcing, impacts, period, x, want_jacobian):
     pcols = np.empty((p, m))
     residual = np.empty(p * m)
     for k in range(p):
-        _flight(flow, forcing, taus[k], starts[k], phases[k], transitions[k], arrivals[k],
+        _flight(flight, forcing, taus[k], starts[k], phases[k], transitions[k], arrivals[k],
                 pcols[k], rates[k])
         nxt = (k + 1) % p
         for r in range(m):
@@ -527,24 +557,25 @@ def _solve(A, rhs):
 
 
 @_jit
-def newton_solve(flow, forcing, impacts, period, x0, tol, max_iter):
+def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
     The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
-    stopping rules), compiled; `flow`, `forcing`, `impacts` and `period` as
+    stopping rules), compiled; `flight`, `forcing`, `impacts` and `period` as
     :func:`shooting_system` takes them.
 
     Returns
     -------
-    NewtonResult
-        ``status`` :data:`CONVERGED` or :data:`FAILED`, ``shot`` the
-        :func:`shooting_system` at ``x`` (with its Jacobian).
+    tuple
+        The fields of :class:`~impactcont.kernel.arrays.NewtonResult`
+        (``NewtonResult.from_kernel`` names them): ``status`` :data:`CONVERGED` or
+        :data:`FAILED`, ``shot`` the :func:`shooting_system` at ``x`` (with its Jacobian).
     """
-    flow = ShootingFlow(*flow)
+    flight = _flights(FlightArrays(*flight))
     forcing = Forcing(*forcing)
     impacts = ImpactSequence(*impacts)
     x = x0.copy()
-    sh = _shooting_system(flow, forcing, impacts, period, x, _jacobian_wanted(x))
+    sh = _shooting_system(flight, forcing, impacts, period, x, _jacobian_wanted(x))
     norm = _max_abs(sh.residual)
     step_norm = np.inf
     it = 0
@@ -552,7 +583,7 @@ def newton_solve(flow, forcing, impacts, period, x0, tol, max_iter):
         scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
-            return NewtonResult(x, CONVERGED, it, norm, step_norm, sh)
+            return (x, CONVERGED, it, norm, step_norm, _shot_tuple(sh))
         if it == max_iter:
             break
         J = sh.jacobian
@@ -564,13 +595,13 @@ def newton_solve(flow, forcing, impacts, period, x0, tol, max_iter):
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = _shooting_system(flow, forcing, impacts, period, trial,
+            tsh = _shooting_system(flight, forcing, impacts, period, trial,
                                    _jacobian_wanted(trial))
             tnorm = _max_abs(tsh.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
                 # within tol and the update does not lower the residual: at its rounding floor
-                return NewtonResult(x, CONVERGED, it, norm, step_norm, sh)
+                return (x, CONVERGED, it, norm, step_norm, _shot_tuple(sh))
             if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
                 break
             lam_step *= 0.5
@@ -578,7 +609,7 @@ def newton_solve(flow, forcing, impacts, period, x0, tol, max_iter):
         x = trial
         sh = tsh
         norm = tnorm
-    return NewtonResult(x, FAILED, it, norm, step_norm, sh)
+    return (x, FAILED, it, norm, step_norm, _shot_tuple(sh))
 
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
@@ -946,15 +977,17 @@ def motion_checks(flow, forcing, impacts, stops, shot, checks):
         :class:`~impactcont.kernel.arrays.ContactStops`: the stop coordinate of U and L
         and the further stops (on other coordinates), each flight checked against every one.
     shot : tuple
-        :class:`~impactcont.kernel.arrays.ShotFlights` at the solution (its Jacobian
-        unused, shape (0, 0) allowed).
+        :class:`~impactcont.kernel.arrays.CheckedFlights` at the solution
+        (:meth:`~impactcont.kernel.arrays.ShotFlights.checked`).
     checks : bool
         Search the flights for contact.
 
     Returns
     -------
-    MotionChecks
-        Multipliers largest modulus first (NaN when G is not finite); the gaps are those
+    tuple
+        The fields of :class:`~impactcont.kernel.arrays.MotionChecks`
+        (``MotionChecks._make`` names them). Multipliers largest modulus first (NaN when
+        G is not finite); the gaps are those
         of :func:`impactcont.simulate.contact.flight_clearances` (NaN when ``checks`` is
         False, ``+inf`` when the flight time is not positive), ``capped`` whether a
         search grid was capped.
@@ -963,7 +996,7 @@ def motion_checks(flow, forcing, impacts, stops, shot, checks):
     forcing = Forcing(*forcing)
     impacts = ImpactSequence(*impacts)
     stops = ContactStops(*stops)
-    shot = ShotFlights(*shot)
+    shot = CheckedFlights(*shot)
     omega = forcing.omega
     pivots, normals, matrices = impacts.pivots, impacts.normals, impacts.matrices
     phases, taus, starts = shot.phases, shot.flight_times, shot.starts
@@ -1015,7 +1048,7 @@ def motion_checks(flow, forcing, impacts, stops, shot, checks):
             gap_l[k] = gl
             t_l[k] = tl
             capped = capped or cap
-    return MotionChecks(jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, gap_x, t_x, capped)
+    return jacs, h2, G, mu, gap_u, t_u, gap_l, t_l, gap_x, t_x, capped
 
 
 @_jit
@@ -1193,7 +1226,7 @@ def branch_linearization(flow, forcing, derivatives, impacts, period, x):
 @_inner
 def _branch_linearization(flow, forcing, derivatives, impacts, period, x):
     """:func:`branch_linearization` on the named structures."""
-    sh = _shooting_system(flow, forcing, impacts, period, x, _jacobian_wanted(x))
+    sh = _shooting_system(_flights(flow), forcing, impacts, period, x, _jacobian_wanted(x))
     col = _frequency_column(flow, forcing, derivatives, impacts, period, sh)
     size = x.size
     extended = np.empty((size, size + 1))

@@ -59,6 +59,7 @@ from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
     _clearances,
+    _flights,
     _jacobian_product_into,
     _jacobian_wanted,
     _max_abs,
@@ -88,11 +89,12 @@ def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
     """
     omega = forcing.omega
     if not symmetric:
-        return _shooting_system(flow, forcing, impacts, 2.0 * math.pi * N / omega, x,
-                                want_jacobian)
+        return _shooting_system(_flights(flow), forcing, impacts, 2.0 * math.pi * N / omega,
+                                x, want_jacobian)
     j = pivot
     normals = impacts.normals
-    out = _shooting_system(flow, forcing, impacts, math.pi * N / omega, x, want_jacobian)
+    out = _shooting_system(_flights(flow), forcing, impacts, math.pi * N / omega, x,
+                           want_jacobian)
     h = impacts.positions.size
     m = impacts.matrices.shape[1]
     n = m // 2

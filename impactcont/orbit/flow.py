@@ -132,7 +132,8 @@ class Flow:
 
     #: What a flow computes once from the rest on first use (the kernel's arrays, the last
     #: matrices): neither pickled nor copied, rebuilt by the copy when it needs them.
-    _CACHES = ("_arrays", "_forcing", "_static_arrays", "_omega_arrays", "_last")
+    _CACHES = ("_arrays", "_flight_arrays", "_forcing", "_static_arrays", "_omega_arrays",
+               "_last")
 
     def __new__(cls, osc: ImpactOscillator) -> Flow:
         if cls is Flow and isinstance(osc, ImpactOscillator) and osc.general:
@@ -191,6 +192,16 @@ class Flow:
                 pk=np.arange(n, dtype=np.int64), pj=np.arange(n, dtype=np.int64), g=g,
                 free=free, xs=xs, xd=xd)
         return self._arrays
+
+    def flight_arrays(self) -> tuple[Any, ...]:
+        """:meth:`ShootingFlow.flight_arrays <impactcont.kernel.arrays.ShootingFlow.flight_arrays>`
+        of :meth:`shooting_arrays` as the plain tuple the shooting entry points take (built
+        once: :func:`~impactcont.orbit.multi_impact.newton` passes it on every call)."""
+        cached = self.__dict__.get("_flight_arrays")
+        if cached is None:
+            cached = tuple(self.shooting_arrays().flight_arrays())
+            self._flight_arrays = cached
+        return cached
 
     def forcing_arrays(self) -> Forcing:
         """The forcing at omega as :mod:`impactcont.kernel.shooting` takes it (built once):

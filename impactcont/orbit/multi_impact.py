@@ -56,7 +56,14 @@ from typing import Any
 import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError, UnresolvedMotionWarning
-from impactcont.kernel.arrays import ContactStops, ImpactSequence, ShotFlights
+from impactcont.kernel.arrays import (
+    CheckedFlights,
+    ContactStops,
+    ImpactSequence,
+    MotionChecks,
+    NewtonResult,
+    ShotFlights,
+)
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, check_pattern, require_forcing
 from impactcont.orbit.flow import Flow, flow_of
@@ -390,10 +397,10 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
     if x.shape != (2 * osc.n * p,):
         raise ParameterError(f"u must have shape ({2 * osc.n * p},) = (2 n p,) for n={osc.n}, "
                              f"p={p}; got shape {x.shape}")
-    out = _kernel().shooting_system(tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+    out = _kernel().shooting_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
                                     tuple(impact_sequence(geo)), TWO_PI * N / osc.omega,
                                     _writable(x), jacobian)
-    return _as_shooting(out, jacobian)
+    return _as_shooting(ShotFlights._make(out), jacobian)
 
 
 def _kernel() -> Any:
@@ -467,6 +474,15 @@ def shot_flights(sh: Shooting) -> ShotFlights:
         arrival_rates=_writable(sh.arrival_rates), transitions=_writable(sh.transitions),
         phase_columns=_writable(sh.phase_columns), residual=_writable(sh.residual),
         jacobian=_NO_JACOBIAN if sh.jacobian is None else _writable(sh.jacobian))
+
+
+def checked_flights(sh: Shooting) -> CheckedFlights:
+    """The fields of `sh` :func:`~impactcont.kernel.shooting.motion_checks` reads, as
+    :func:`shot_flights` makes them."""
+    return CheckedFlights(
+        phases=_writable(sh.phases), flight_times=_writable(sh.flight_times),
+        starts=_writable(sh.starts), transitions=_writable(sh.transitions),
+        phase_columns=_writable(sh.phase_columns), arrival_rates=_writable(sh.arrival_rates))
 
 
 def _geometry(flow: Flow, pattern: str) -> StopGeometry:
@@ -764,9 +780,9 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
     if x0.shape != (2 * osc.n * p,):
         raise ParameterError(f"u0 must have shape ({2 * osc.n * p},) = (2 n p,) for "
                              f"n={osc.n}, p={p}; got shape {x0.shape}")
-    solved = _kernel().newton_solve(
-        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
-        tuple(impact_sequence(geo)), TWO_PI * N / osc.omega, x0, float(tol), int(max_iter))
+    solved = NewtonResult.from_kernel(_kernel().newton_solve(
+        flow.flight_arrays(), tuple(flow.forcing_arrays()),
+        tuple(impact_sequence(geo)), TWO_PI * N / osc.omega, x0, float(tol), int(max_iter)))
     u, it, norm, step_norm = solved.x, solved.iterations, solved.residual_norm, solved.step_norm
     sh = _as_shooting(solved.shot, True)
     if solved.status == 0:
@@ -827,9 +843,9 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     validated), with the accuracy of the solution when known."""
     osc = flow.osc
     geo = _geometry(flow, pattern)
-    checked = _kernel().motion_checks(
+    checked = MotionChecks._make(_kernel().motion_checks(
         tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
-        tuple(contact_stops(geo)), tuple(shot_flights(sh)), checks)
+        tuple(contact_stops(geo)), tuple(checked_flights(sh)), checks))
     gaps, gap_times = checked.gap_upper, checked.time_upper
     gaps_low, times_low = checked.gap_lower, checked.time_lower
     gaps_x, times_x = checked.gap_extra, checked.time_extra
