@@ -347,6 +347,8 @@ def agreement_figure(rows: list[dict[str, Any]], width: float = 7.0) -> Figure:
     dashed), and the differences package - closed form on a log axis (exact zeros in their
     own row)."""
     fig, axes = panel_figure(4, width, extra_height=1.1)
+    rows = [{**r, **{k: str(r.get(k)) == "True"  # rows.json holds numpy's booleans as text
+                     for k in ("physical_cf", "stable_cf", "stable_pkg")}} for r in rows]
     r0 = np.linspace(*PLANE["omega"], 400)
     bare = 1 / np.abs(1 - r0 ** 2 + 2j * ZETA * r0)
     ylabel = r"amplitude $\max|x_1 - x_{1,s}|$ [$F/k$]"  # about the static position
