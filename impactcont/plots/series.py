@@ -35,7 +35,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 from matplotlib.lines import Line2D
-from matplotlib.ticker import NullFormatter, NullLocator
+from matplotlib.ticker import LogFormatterSciNotation, NullFormatter, NullLocator
 
 from impactcont.plots.branches import fit_text, legend_fontsize
 
@@ -184,6 +184,17 @@ def panel_figure(n: int, width: float, *, ncols: int | None = None,
     return fig, axes
 
 
+class _AboveFloor(LogFormatterSciNotation):
+    """Log tick labels from ``floor`` up; none below it (beside the row of exact zeros)."""
+
+    def __init__(self, floor: float) -> None:
+        super().__init__()
+        self.floor = floor
+
+    def __call__(self, x: float, pos: int | None = None) -> str:
+        return super().__call__(x, pos) if x >= self.floor * (1 - 1e-9) else ""
+
+
 def _zero_row_height(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]]) -> float:
     """The row's height, a fraction of the axes: :data:`_ZERO_ROW`, or more on a short
     axes, so that its markers and its label fit (at most 0.3)."""
@@ -280,9 +291,7 @@ def series_plot(ax: Axes, series: Iterable[Series], *, xlabel: str, ylabel: str,
         span = (hi_exp - lo_exp) / (1.0 - height - 0.08)
         ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
         ax.yaxis.set_minor_formatter(NullFormatter())
-        ticks = [t for t in ax.get_yticks() if 10.0 ** lo_exp <= t <= 10.0 ** hi_exp]
-        ax.set_yticks(ticks)
-        ax.set_ylim(10.0 ** (hi_exp - span), 10.0 ** hi_exp)
+        ax.yaxis.set_major_formatter(_AboveFloor(10.0 ** lo_exp))  # none beside the row
         _zero_row(ax, zeros, height)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
