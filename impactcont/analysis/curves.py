@@ -28,6 +28,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.branch import continuation
+from impactcont.analysis.multi_curves import multi_impact_curve
 from impactcont.core import (
     ContinuationOptions,
     ContinuationPoint,
@@ -35,6 +36,7 @@ from impactcont.core import (
     Stop,
     follow,
 )
+from impactcont.core.locate import crossing_steps
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset.attributes import split_parameters
@@ -450,8 +452,6 @@ def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: str,
     Forwards to :func:`impactcont.multi_impact_curve` with ``which = special`` and
     ``parameter = p2``; ``p1`` must be the branch's parameter.
     """
-    from impactcont.analysis.multi_curves import multi_impact_curve
-
     p1 = str(branch.attrs.get("parameter"))
     given = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
     if len(given) != 2 or given[0] != p1:
@@ -685,21 +685,6 @@ def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
     names = parameter_names(ds)
     return add_user_functions(ds, monitors=values, events=list(functions.events),
                               event_points=[user_event_record(ev, names) for ev in found])
-
-
-def crossing_steps(values: np.ndarray, value: float) -> list[tuple[int, float]]:
-    """The steps ``k -> k + 1`` of a polyline that cross ``value``, with the fraction
-    ``t`` of the step where the chord does.
-
-    A crossing exactly at a point is reported once (on the step that ends there), and a
-    step along ``value`` (both ends equal) is none.
-    """
-    kept: list[int] = []
-    for k in np.flatnonzero((values[:-1] - value) * (values[1:] - value) <= 0):
-        if values[k] == values[k + 1] or (kept and kept[-1] == k - 1 and values[k] == value):
-            continue
-        kept.append(int(k))
-    return [(k, float((value - values[k]) / (values[k + 1] - values[k]))) for k in kept]
 
 
 def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[str, float]]:

@@ -164,38 +164,8 @@ def _grid(name: str, values: Any) -> np.ndarray:
     return a
 
 
-_ALL_N = (1, 2, 3, 4)
-
-
-def _motion_map(motion: Any, N: Any, omega: Any, b: Any, others: dict[str, Any], *,
-                omega_block: int | None, spectral_radius: bool, out: Any,
-                **keywords: Any) -> xr.Dataset:
-    """The map of a motion's family (:func:`stability_map` given a motion).
-
-    The two non-empty grids among `omega`, `b` and `others` are the map's parameters;
-    :func:`impactcont.multi_impact_map` computes it.
-    """
-    from impactcont.analysis.multi_maps import multi_impact_map
-
-    if not (N is _ALL_N or (isinstance(N, (int, np.integer)) and N == motion.N)):
-        raise ParameterError(f"N must be left out when stability_map starts from a motion "
-                             f"(it maps the motion's own family, N = {motion.N}); got N={N!r}")
-    for name, value, default in (("omega_block", omega_block, None),
-                                 ("spectral_radius", spectral_radius, True), ("out", out, None)):
-        if value is not default:
-            raise ParameterError(f"{name} does not apply to the map of a motion's family "
-                                 f"(impactcont.multi_impact_map); got {name}={value!r}")
-    grid = {name: values for name, values in (("omega", omega), ("b", b), *others.items())
-            if np.size(values) > 0}
-    if len(grid) != 2:
-        raise ParameterError(f"the map of a motion takes grids of exactly two parameters "
-                             f"(omega=, b= or any parameter by name, e.g. R=[...]); got "
-                             f"{sorted(grid) or 'none'}")
-    return multi_impact_map(motion, tuple(grid), grid, **keywords)
-
-
 @blas_limited
-def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = _ALL_N,
+def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                   omega: Sequence[float] | np.ndarray = (),
                   b: Sequence[float] | np.ndarray = (), *, executor: Any = None,
                   max_workers: int | None = None, omega_block: int | None = None,
@@ -213,11 +183,8 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = _ALL_N,
 
     Parameters
     ----------
-    osc : ImpactOscillator, PeriodicOrbit or MultiImpactOrbit
-        The oscillator; its own ``omega`` and ``b`` are ignored. Or a computed motion:
-        then the map is of its family (:func:`impactcont.multi_impact_map`) over the two
-        grids given, ``omega``, ``b`` or any parameter by name (``R=[...]``,
-        ``k2=[...]``); `N`, `omega_block`, `spectral_radius` and `out` do not apply.
+    osc : ImpactOscillator
+        The oscillator; its own ``omega`` and ``b`` are ignored.
     N : int or sequence of int
         Forcing periods per impact.
     omega, b : 1-D array_like
@@ -262,9 +229,8 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = _ALL_N,
         finishes (:mod:`impactcont.progress`). A map longer than a minute logs a line
         a minute.
     **others
-        With an oscillator, none accepted: a grid of another parameter is refused
-        (ParameterError naming it and :func:`impactcont.multi_impact_map`). With a
-        motion, the grid of any parameter by name.
+        None accepted: a grid of another parameter is refused (ParameterError naming
+        it and :func:`impactcont.multi_impact_map`).
 
     Returns
     -------
@@ -287,12 +253,6 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = _ALL_N,
         A worker of the process pool died each time the same task ran alone (three
         times): the message names the task (N and the omega and b ranges).
     """
-    if not isinstance(osc, ImpactOscillator) and hasattr(osc, "oscillator") \
-            and hasattr(osc, "N"):
-        return _motion_map(osc, N, omega, b, others, omega_block=omega_block,
-                           spectral_radius=spectral_radius, out=out, executor=executor,
-                           max_workers=max_workers, memory_limit=memory_limit,
-                           progress=progress)
     if others:
         raise ParameterError(
             f"stability_map maps the (omega, b) plane only (the batched closed form of eq. 13-15 "

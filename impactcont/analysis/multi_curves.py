@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.analysis.curves import crossing_steps
 from impactcont.analysis.multi_branch import (
     MultiImpactSample,
     branch_to_dataset,
@@ -34,6 +33,7 @@ from impactcont.analysis.multi_branch import (
 from impactcont.analysis.switching import special_orbit
 from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
+from impactcont.core.locate import crossing_steps
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.records import reserved_names

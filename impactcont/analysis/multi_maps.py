@@ -548,11 +548,6 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         A progress bar over the grid points, a callback, a log line a minute (as for
         :func:`impactcont.stability_map`).
 
-    Ctrl-C during the map (a first one) stops it between tasks and returns what was
-    computed: the points of the tasks not finished are not found (NaN), False in the
-    variable ``computed``, the attribute ``interrupted`` is 1, and a WARNING says how
-    many points were done; a second Ctrl-C abandons the map (KeyboardInterrupt).
-
     Returns
     -------
     xarray.Dataset
@@ -571,6 +566,13 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         cannot be built (named in the message).
     NoPeriodicMotionError
         The start cannot be followed to its nearest grid point.
+
+    Notes
+    -----
+    Ctrl-C during the map (a first one) stops it between tasks and returns what was
+    computed: the points of the tasks not finished are not found (NaN), False in the
+    variable ``computed``, the attribute ``interrupted`` is 1, and a WARNING says how
+    many points were done; a second Ctrl-C abandons the map (KeyboardInterrupt).
     """
     orbit = _as_multi(start)
     osc = orbit.oscillator

@@ -26,7 +26,8 @@ from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.problem import FloatArray, Problem
 from impactcont.progress import interrupted, take_interrupt
 
-__all__ = ["Event", "EventPoint", "MotionTest", "dip_bottom", "locate_events", "locate_zero",
+__all__ = ["Event", "EventPoint", "MotionTest", "crossing_steps", "dip_bottom", "locate_events",
+           "locate_zero",
            "parts_beside_poles", "tangent_at", "zero_precision"]
 
 log = logging.getLogger(__name__)
@@ -669,3 +670,18 @@ def _event_point(label: str, chord: _Chord, g: Callable[[float], float],
         status=status, precision=float(precision),
         bracket=(min(x[k, -1], x[k + 1, -1]), max(x[k, -1], x[k + 1, -1])),
         arclength=(float(arclength[k]), float(arclength[k + 1])), failed=failed)
+
+
+def crossing_steps(values: np.ndarray, value: float) -> list[tuple[int, float]]:
+    """The steps ``k -> k + 1`` of a polyline that cross ``value``, with the fraction
+    ``t`` of the step where the chord does.
+
+    A crossing exactly at a point is reported once (on the step that ends there), and a
+    step along ``value`` (both ends equal) is none.
+    """
+    kept: list[int] = []
+    for k in np.flatnonzero((values[:-1] - value) * (values[1:] - value) <= 0):
+        if values[k] == values[k + 1] or (kept and kept[-1] == k - 1 and values[k] == value):
+            continue
+        kept.append(int(k))
+    return [(k, float((value - values[k]) / (values[k + 1] - values[k]))) for k in kept]

@@ -502,7 +502,7 @@ def test_plain_xarray_sees_an_index_and_plain_numbers(every_section) -> None:
                     np.testing.assert_array_equal(np.abs(real + 1j * imag), np.abs(ds[key]))
 
 
-def test_orbit_groups_carry_omega_and_b_as_variables(every_section) -> None:
+def test_orbit_groups_carry_omega_and_b_as_scalar_coordinates(every_section) -> None:
     path = every_section.output_dir / "orbits.nc"
     with netCDF4.Dataset(path) as nc:
         group = nc.groups["o1"]
@@ -513,7 +513,8 @@ def test_orbit_groups_carry_omega_and_b_as_variables(every_section) -> None:
         assert group["omega"].getncattr("long_name") == "forcing frequency"
     for section, name in (("robust", "rb"), ("simulations", "sim")):
         with xr.open_dataset(every_section.output_dir / f"{section}.nc", group=name) as ds:
-            assert {"omega", "b"} <= set(ds.data_vars)
+            assert {"omega", "b"} <= set(ds.coords)
+            assert ds["omega"].ndim == 0 and ds["b"].ndim == 0
 
 
 def test_ncdump_reads_the_files(every_section) -> None:

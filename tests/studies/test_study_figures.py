@@ -6,8 +6,7 @@ branches computed in a second), and passes the layout checks of the package's ow
 figures (:mod:`tests._layout_checks`): no text outside the figure or over another, no
 marker cut by a frame, every style in a legend, no legend over data, axis labels in
 symbols, no width beyond a double column. :mod:`impactcont.plots.series`, which they
-draw with, is checked on its own too: lines over hollow markers, exact zeros in a row of
-their own on a log axis (never at an invented floor), clear errors.
+draw with, is checked on its own in ``tests/plots/test_series.py``.
 """
 
 from __future__ import annotations
@@ -20,15 +19,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from matplotlib.figure import Figure
 
 from impactcont.plots.series import (
     MAX_WIDTH,
     ZERO_LABEL,
-    Series,
-    figure_legend,
-    panel_figure,
-    series_plot,
 )
 from tests._layout_checks import check_layout, render
 
@@ -50,110 +44,6 @@ def _study(name: str):
         sys.modules.update(saved)
     return module
 
-
-# -- impactcont.plots.series -------------------------------------------------------------------
-def _differences(x: np.ndarray, seed: int) -> np.ndarray:
-    """Differences of a witness comparison: rounding-sized, every fifth one exactly 0."""
-    rng = np.random.default_rng(seed)
-    d = 10.0 ** rng.uniform(-16, -13, x.size)
-    d[::5] = 0.0
-    return d
-
-
-def _four_panels(width: float) -> Figure:
-    fig, axes = panel_figure(4, width)
-    x = np.linspace(0.7, 1.3, 25)
-    for i, ax in enumerate(axes[:3]):
-        dense = np.linspace(0.7, 1.3, 200)
-        series_plot(ax, [
-            Series(dense, 1.0 / np.abs(1 - dense ** 2 + 0.04j * dense), "closed form",
-                   color="k"),
-            Series(x, 1.0 / np.abs(1 - x ** 2 + 0.04j * x), "package", color="C0",
-                   linestyle="none", marker="o")],
-            xlabel=r"$\omega/\omega_n$", ylabel=r"amplitude $\max|x_1|$",
-            title=f"machine {i + 1}")
-    series_plot(axes[3], [Series(x, _differences(x, k), f"difference {k}", color=f"C{k}",
-                                 linestyle="none", marker="os^"[k]) for k in range(3)],
-                xlabel=r"$\omega/\omega_n$", ylabel=r"$|\Delta|$", yscale="log",
-                title="package against closed form")
-    figure_legend(fig)
-    return fig
-
-
-@pytest.mark.parametrize("width", WIDTHS)
-def test_four_panels_of_series_are_clean(width):
-    fig = _four_panels(width)
-    assert fig.get_size_inches()[0] == pytest.approx(width)
-    assert fig.get_size_inches()[1] <= 9.5  # a page
-    check_layout(fig, journal=True)
-
-
-def test_four_panels_make_a_grid_at_a_double_column():
-    fig, axes = panel_figure(4, 7.0)
-    render(fig)
-    x0 = sorted({round(ax.get_position().x0, 3) for ax in axes})
-    y0 = sorted({round(ax.get_position().y0, 3) for ax in axes})
-    assert len(x0) == 2 and len(y0) == 2
-    fig, axes = panel_figure(3, 7.0)  # the odd panel out spans the last row
-    render(fig)
-    assert axes[2].get_position().width > 1.8 * axes[0].get_position().width
-
-
-def test_exact_zeros_get_their_own_row_not_a_floor():
-    fig, (ax,) = panel_figure(1, 3.5)
-    x = np.linspace(0.0, 1.0, 10)
-    y = np.array([0.0, 1e-15, 2e-14, 0.0, 3e-16, 1e-13, 0.0, 5e-15, 7e-16, 1e-14])
-    series_plot(ax, [Series(x, y, "difference", linestyle="none", marker="o")],
-                xlabel="$x$", ylabel=r"$|\Delta|$", yscale="log")
-    figure_legend(fig)
-    render(fig)
-    drawn = np.concatenate([line.get_ydata() for line in ax.get_lines()])
-    drawn = drawn[np.isfinite(drawn)]
-    assert drawn.size == 7 and np.all(drawn >= 3e-16)  # no zero lifted to a fake value
-    rows = [c for c in ax.child_axes if c.get_visible()]
-    assert len(rows) == 1
-    (row,) = rows
-    assert [t.get_text() for t in row.get_yticklabels()] == [ZERO_LABEL]
-    zx = np.concatenate([line.get_xdata() for line in row.get_lines()])
-    assert np.allclose(np.sort(zx), x[[0, 3, 6]])
-    assert ax.get_ylim()[0] < 3e-16  # the row lies under every drawn value
-    check_layout(fig, journal=True)
-
-
-def test_no_zero_row_without_exact_zeros():
-    _fig, (ax,) = panel_figure(1, 3.5)
-    series_plot(ax, [Series([1, 2], [1e-3, 1e-5], "error", marker="o")], xlabel="$t$",
-                ylabel=r"$\epsilon$", xscale="log", yscale="log")
-    assert not ax.child_axes
-
-
-def test_lines_are_drawn_over_markers():
-    _fig, (ax,) = panel_figure(1, 3.5)
-    series_plot(ax, [Series([0, 1], [0, 1], "line"),
-                     Series([0, 1], [0, 1], "points", linestyle="none", marker="o")],
-                xlabel="$x$", ylabel="$y$")
-    line, points = ax.get_lines()
-    assert line.get_zorder() > points.get_zorder()
-    assert points.get_markerfacecolor() == "white"  # hollow: the line shows through
-
-
-@pytest.mark.parametrize(("call", "match"), [
-    (lambda: panel_figure(4, 20.8), r"width must be .*\[2\.0, 7\.2\].*20\.8"),
-    (lambda: panel_figure(0, 7.0), r"n must be .*got 0"),
-    (lambda: panel_figure(2, 7.0, ncols=3), r"ncols must be .*got 3"),
-    (lambda: Series([1, 2], [1], "a"), r"'a': x and y must have equal lengths"),
-    (lambda: Series([1], [1], "a", linestyle="none"), r"draws nothing"),
-    (lambda: series_plot(panel_figure(1, 3.5)[1][0], [Series([1], [-1e-3], "d")],
-                         xlabel="$x$", ylabel="$y$", yscale="log"), r"'d': y must be >= 0"),
-    (lambda: series_plot(panel_figure(1, 3.5)[1][0], [Series([1], [1], "d")],
-                         xlabel="$x$", ylabel="$y$", yscale="symlog"), r"yscale must be"),
-    (lambda: series_plot(panel_figure(1, 3.5)[1][0],
-                         [Series([1], [1], "d"), Series([1], [1], "d", color="r")],
-                         xlabel="$x$", ylabel="$y$"), r"'d' are given two styles"),
-])
-def test_bad_input_is_refused_with_its_name(call, match):
-    with pytest.raises(ValueError, match=match):
-        call()
 
 
 # -- the studies' figures ----------------------------------------------------------------------

@@ -3,8 +3,8 @@
 ``continuation(motion, ...)`` follows the branch through the motion: an N-1 motion of the
 paper's system on the closed form, any other motion (or a parameter the closed form does
 not continue) on the N-p path; ``curve(..., start=branch)`` follows a special point of an
-N-p branch; ``stability_map(motion, p1=..., p2=...)`` maps the motion's family. Each must
-give what the specific driver gives, and refuse what the motion fixes.
+N-p branch. Each must give what the specific driver gives, and refuse what the motion
+fixes.
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ import pytest
 import impactcont as ic
 from impactcont.analysis.multi_branch import multi_impact_continuation
 from impactcont.analysis.multi_curves import multi_impact_curve
-from impactcont.analysis.multi_maps import multi_impact_map
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 
 BOUNDS = (0.9, 1.7)
@@ -97,26 +96,3 @@ def test_a_curve_from_an_np_branch_refuses_another_first_parameter(np_branch):
         ic.curve(None, None, "PD", start=np_branch, parameters=("b", "omega"),
                  progress=False)
 
-
-def test_a_map_of_a_motion_is_the_map_of_its_family(motion):
-    omega, b = np.linspace(1.1, 1.3, 5), np.linspace(0.05, 0.15, 4)
-    mapped = ic.stability_map(motion, omega=omega, b=b, progress=False)
-    direct = multi_impact_map(motion, ("omega", "b"), {"omega": omega, "b": b},
-                              progress=False)
-    for name in direct.data_vars:
-        np.testing.assert_array_equal(mapped[name].values, direct[name].values)
-
-
-def test_a_map_of_a_motion_over_named_parameters(motion):
-    mapped = ic.stability_map(motion, omega=np.linspace(1.1, 1.3, 3),
-                              R=np.linspace(0.5, 0.7, 3), progress=False)
-    assert set(mapped.dims) >= {"omega", "R"}
-
-
-@pytest.mark.parametrize("keywords", [{"N": 2}, {"out": "x.nc"}, {"spectral_radius": False},
-                                      {"omega_block": 4}, {"R": [0.5, 0.6]}])
-def test_a_map_of_a_motion_refuses_what_does_not_apply(motion, keywords):
-    grids = {"omega": [1.1, 1.2], "b": [0.05, 0.1]}
-    with pytest.raises(ic.ParameterError, match=next(iter(keywords)) if "R" not in keywords
-                       else "exactly two"):
-        ic.stability_map(motion, **grids, **keywords, progress=False)

@@ -1,0 +1,40 @@
+"""The simulator's own root search (:mod:`impactcont.simulate.search`).
+
+``newton_in_brackets`` finds one root in each bracket, all brackets at once, to a few ulps,
+whatever the brackets' sizes, and keeps to its bracket where the Newton step would leave it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impactcont.simulate.search import newton_in_brackets
+
+
+def _cosine(level: float):
+    def fun(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.cos(t) - level, -np.sin(t)
+    return fun
+
+
+def test_each_bracket_gives_its_own_root_to_a_few_ulps():
+    level = 0.3
+    root = math.acos(level)  # roots of cos t = 0.3: +-root + 2 pi k
+    lo = np.array([0.0, 2 * math.pi - 2.0, 2 * math.pi + 0.5, root - 1e-9])
+    hi = np.array([1.5, 2 * math.pi - 0.5, 2 * math.pi + 2.0, root + 1e-9])
+    exact = np.array([root, 2 * math.pi - root, 2 * math.pi + root, root])
+    fun = _cosine(level)
+    found = newton_in_brackets(fun, lo, hi, fun(lo)[0])
+    assert np.all(np.abs(found - exact) <= 8 * np.spacing(exact)), found - exact
+
+
+def test_a_root_at_a_flat_place_stays_in_its_bracket():
+    """cos t - 1 + 1e-12 has two close roots around 0 where the slope nearly vanishes: a
+    Newton step from the middle would leave the bracket; the result stays inside it."""
+    fun = _cosine(1.0 - 1e-12)
+    lo, hi = np.array([1e-9]), np.array([3.0])
+    found = newton_in_brackets(fun, lo, hi, fun(lo)[0])
+    assert lo[0] <= found[0] <= hi[0]
+    assert abs(math.cos(found[0]) - (1.0 - 1e-12)) <= 4e-16
