@@ -245,9 +245,10 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
     for style, shown in zip(CODIM2_STYLES, (True, False), strict=True):
         seen = [lab for lab, s in codim2.values() if s == shown]
         if seen:
-            names = codim2_legend(seen) if shown else ""
-            handles.append(Line2D([], [], linestyle="none", **CODIM2_STYLES[style],
-                                  label=f"{style}:\n{names}" if names else style))
+            handle = Line2D([], [], linestyle="none", **CODIM2_STYLES[style],
+                            label=_codim2_label(style, seen, shown))
+            handle.codim2_seen = (style, shown, seen)  # panels' marks merge in _merge
+            handles.append(handle)
     src = map_ds if map_ds is not None else next(iter(curve_list))
     ax.set_xlabel(axis_label(src, "omega"))
     ax.set_ylabel(axis_label(src, "b"))
@@ -276,9 +277,28 @@ def _label(ax: Axes, labels: Sequence[tuple[float, float, str, str]]) -> None:
                      fontweight="bold" if color != "black" else "normal")
 
 
+def _codim2_label(style: str, seen: Sequence[str], shown: bool) -> str:
+    names = codim2_legend(seen) if shown else ""
+    return f"{style}:\n{names}" if names else style
+
+
 def _merge(handles: Iterable[Any]) -> list[Any]:
-    """One handle per label, in order."""
-    return list({h.get_label(): h for h in handles}.values())
+    """One handle per label, in order; the codim-2 marks of several panels are one handle
+    per style, its text naming the points of every panel."""
+    merged: dict[Any, Any] = {}
+    codim2: dict[str, tuple[bool, list[str]]] = {}
+    for h in handles:
+        mark = getattr(h, "codim2_seen", None)
+        if mark is None:
+            merged[h.get_label()] = h
+            continue
+        style, shown, seen = mark
+        merged.setdefault(("codim2", style), h)
+        known = codim2.setdefault(style, (shown, []))[1]
+        known += [lab for lab in seen if lab not in known]
+    for style, (shown, seen) in codim2.items():
+        merged[("codim2", style)].set_label(_codim2_label(style, seen, shown))
+    return list(merged.values())
 
 
 def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, *,

@@ -127,3 +127,24 @@ def test_the_figure_has_one_panel_per_N_and_one_legend(grid, pd_curve) -> None:
                                              rf"\(3\.5: a journal's column, 7: its page\); "
                                              rf"got {wide}"):
             two_parameter_figure(grid, width=wide)
+
+
+def test_codim2_marks_of_several_panels_are_one_legend_entry():
+    """Each panel of a multi-N figure names its own codim-2 points; the figure's legend
+    has one star per style naming those of every panel (it listed the star once per
+    panel, each with other text)."""
+    from matplotlib.lines import Line2D
+
+    from impactcont.plots.maps import CODIM2_STYLES, _codim2_label, _merge
+
+    style = next(iter(CODIM2_STYLES))
+    handles = []
+    for seen in (["PD+SN"], ["PD+NS", "PD+SN"], ["PD+GR"]):
+        h = Line2D([], [], label=_codim2_label(style, seen, True))
+        h.codim2_seen = (style, True, seen)
+        handles.append(h)
+    merged = _merge([Line2D([], [], label="PD"), *handles])
+    stars = [h for h in merged if getattr(h, "codim2_seen", None)]
+    assert len(stars) == 1
+    assert stars[0].get_label() == _codim2_label(style, ["PD+SN", "PD+NS", "PD+GR"], True)
+    assert len(merged) == 2
