@@ -31,18 +31,17 @@ def test_there_are_committed_figures():
 
 #: Drawn by the new figure code but not redrawn yet: a timing study whose figures come from
 #: a full run on a quiet machine (``studies/accuracy_vs_runtime/run.py``; its README says
-#: so), and the backlash study's (a full run, about 7 minutes alone). Strict: a redrawn
-#: figure that fits must leave this list.
+#: so). Strict: a redrawn figure that fits must leave this list.
 NOT_REDRAWN = {"studies/accuracy_vs_runtime/figures/work_precision_location.png",
-               "studies/accuracy_vs_runtime/figures/work_precision_orbit.png",
-               "studies/backlash/figures/backlash.png"}
+               "studies/accuracy_vs_runtime/figures/work_precision_orbit.png"}
 
 
 def _marked(path: Path):
     name = str(path.relative_to(ROOT))
     if name in NOT_REDRAWN:
         return pytest.param(path, id=name, marks=pytest.mark.xfail(
-            strict=True, reason="not redrawn yet: needs a full run of its study"))
+            strict=True, reason="not redrawn yet: needs a full run of a timing study on a "
+                                "quiet machine"))
     return pytest.param(path, id=name)
 
 
