@@ -40,7 +40,7 @@ from matplotlib.ticker import LogFormatterSciNotation, NullFormatter, NullLocato
 from impactcont.plots.branches import fit_text, legend_fontsize
 
 __all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "fit_labels",
-           "panel_figure", "series_plot"]
+           "panel_figure", "series_plot", "take_legend"]
 
 logger = logging.getLogger(__name__)
 
@@ -306,6 +306,17 @@ def series_plot(ax: Axes, series: Iterable[Series], *, xlabel: str, ylabel: str,
 
 def _unique(series: Iterable[Series]) -> list[Series]:
     return list({s.label: s for s in reversed(list(series))}.values())[::-1]
+
+
+def take_legend(ax: Axes) -> list[Any]:
+    """The handles of the legend a package plot drew on ``ax``, each labelled with its text,
+    and the legend removed (for one legend of several panels, :func:`figure_legend`)."""
+    legend = ax.get_legend()
+    handles = list(legend.legend_handles)
+    for h, text in zip(handles, legend.get_texts(), strict=True):
+        h.set_label(text.get_text())
+    legend.remove()
+    return handles
 
 
 def figure_legend(fig: Figure, handles: Sequence[Any] | None = None) -> Legend:

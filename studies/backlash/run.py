@@ -58,7 +58,7 @@ from impactcont.analysis.switching import pitchfork_branch
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 from impactcont.plots.branches import legend_below
 from impactcont.plots.impacts import impact_diagram
-from impactcont.plots.series import figure_legend, fit_labels, panel_figure
+from impactcont.plots.series import figure_legend, fit_labels, panel_figure, take_legend
 
 log = logging.getLogger("backlash")
 
@@ -310,16 +310,6 @@ OMEGA_LABEL = r"$\omega$"
 DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 
 
-def _harvest(ax: Any) -> list[Any]:
-    """The handles of the legend a package plot drew on ``ax``, the legend removed."""
-    legend = ax.get_legend()
-    handles = list(legend.legend_handles)
-    for h, text in zip(handles, legend.get_texts(), strict=True):
-        h.set_label(text.get_text())
-    legend.remove()
-    return handles
-
-
 def draw(ax: Any, branches: dict[str, xr.Dataset], sweep: xr.Dataset, title: str
          ) -> list[Any]:
     """One system: its branches (``impact_diagram``: every impact, the speed towards the
@@ -333,7 +323,7 @@ def draw(ax: Any, branches: dict[str, xr.Dataset], sweep: xr.Dataset, title: str
         names[name if n == 0 else f"{name} {n + 1}"] = (kind, ds)
     impact_diagram({k: v[1] for k, v in names.items()}, ax=ax, legend="inside",
                    colors=[STYLE[v[0]] for v in names.values()], title=title, zoom=False)
-    handles = _harvest(ax)
+    handles = take_legend(ax)
     speed = np.abs(sweep["speed"].values)
     om = np.broadcast_to(sweep["omega"].values[:, None], speed.shape)
     ok = np.isfinite(speed)

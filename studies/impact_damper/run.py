@@ -62,6 +62,7 @@ from impactcont.plots.series import (
     fit_labels,
     panel_figure,
     series_plot,
+    take_legend,
 )
 
 HERE = Path(__file__).resolve().parent
@@ -505,10 +506,7 @@ def plane_figure(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
     handles: list[Any] = []
     if "map" in groups:
         multi_impact_map_diagram(groups["map"], ax=ax, title="")
-        handles = list(ax.get_legend().legend_handles)
-        for h, text in zip(handles, ax.get_legend().get_texts(), strict=True):
-            h.set_label(text.get_text())
-        ax.get_legend().remove()
+        handles = take_legend(ax)
     else:  # no map: the closed form's region shaded
         ax.contourf(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5, 1.5],
                     colors=["C0"], alpha=0.2)

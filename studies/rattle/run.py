@@ -62,7 +62,7 @@ from matplotlib.figure import Figure
 import impactcont as ic
 from impactcont.plots.branches import legend_below
 from impactcont.plots.impacts import impact_diagram
-from impactcont.plots.series import Series, fit_labels, panel_figure, series_plot
+from impactcont.plots.series import Series, fit_labels, panel_figure, series_plot, take_legend
 
 log = logging.getLogger("rattle")
 
@@ -450,16 +450,6 @@ def _closed_form_panel(ax: Axes, branches: dict[int, xr.Dataset]) -> list[Any]:
     return [s.handle() for s in {s.label: s for s in series}.values()]
 
 
-def _harvest(ax: Axes) -> list[Any]:
-    """The handles of the legend ``impact_diagram`` drew inside ``ax``, the legend removed."""
-    legend = ax.get_legend()
-    handles = list(legend.legend_handles)
-    for h, text in zip(handles, legend.get_texts(), strict=True):
-        h.set_label(text.get_text())
-    legend.remove()
-    return handles
-
-
 def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float = 7.0
            ) -> Figure:
     """The study's figure from its stored branches (``branches.nc``) and cascade PDs.
@@ -490,7 +480,7 @@ def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float =
     ax.set_xlim(gamma_2(1) - 0.15, pd_values[-1] + 0.03)
     ax.set_xlabel(GAMMA)
     ax.set_ylabel(r"impact velocity $\dot{y}(T_k^-)$")
-    legend_below(ax, _harvest(ax), span="axes")
+    legend_below(ax, take_legend(ax), span="axes")
     if two is not None:
         ax = impact_diagram(two.assign(physical=two["physical"] & two["flights_inside"]),
                             ax=axes[2], label_special=True, names=False, legend="inside",
@@ -498,7 +488,7 @@ def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float =
                             "period, not physical where a flight crosses a stop")
         ax.set_xlabel(GAMMA)
         ax.set_ylabel(r"impact speed $|\dot{y}(T_k^-)|$")
-        legend_below(ax, _harvest(ax), span="axes")
+        legend_below(ax, take_legend(ax), span="axes")
     fig.suptitle(f"Bouncing ball and gear rattle, $R = {R:g}$", fontsize="medium")
     fit_labels(fig)
     return fig

@@ -59,6 +59,7 @@ from impactcont.plots.series import (
     fit_labels,
     panel_figure,
     series_plot,
+    take_legend,
 )
 
 HERE = Path(__file__).resolve().parent
@@ -394,10 +395,7 @@ def plane_figure(groups: dict[str, xr.Dataset], width: float = 7.0) -> Figure:
     handles: list[Any] = []
     if "map" in groups:
         multi_impact_map_diagram(groups["map"], ax=ax, title="")
-        handles = list(ax.get_legend().legend_handles)
-        for h, text in zip(handles, ax.get_legend().get_texts(), strict=True):
-            h.set_label(text.get_text())
-        ax.get_legend().remove()
+        handles = take_legend(ax)
     curves = [groups[n] for n in groups if n.startswith("curve_BP")]
     for cv in curves:
         ax.plot(cv["omega"].values, cv["b"].values, "-", color="C3", lw=1.6, zorder=3)
