@@ -23,7 +23,7 @@ jump to the other member of the pair. Where the family is found it is exact (the
 shooting solution to ``tol``), and its stability and physicality are those of
 :func:`impactcont.multi_impact_orbit` at that point.
 
-The sweeps run as the tasks of :class:`~impactcont.analysis.maps.MapRunner`, with the
+The sweeps run as the tasks of :class:`~impactcont.analysis.map_runner.MapRunner`, with the
 executors, progress bar, memory bound and Ctrl-C of :func:`impactcont.stability_map`: a
 map of up to 65536 points is one sweep from its seed; a larger one (or one given
 ``rows_per_task``) sweeps the seed's column first, then bands of rows of the first
@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.analysis.maps import (
+from impactcont.analysis.map_runner import (
     MapJob,
     MapRunner,
     check_executor,

@@ -24,7 +24,8 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.curves import check_curve_arguments, curve
-from impactcont.analysis.maps import SCHEDULER_PROTOCOLS, stability_map
+from impactcont.analysis.map_runner import SCHEDULER_PROTOCOLS
+from impactcont.analysis.maps import stability_map
 from impactcont.dataset.attributes import split_parameters
 from impactcont.errors import ImpactcontError
 from impactcont.model.oscillator import ImpactOscillator
