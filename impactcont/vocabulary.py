@@ -45,23 +45,42 @@ __all__ = [
 
 
 class Label(str, enum.Enum):
-    """A special point of a branch (a codim-1 point of the two-parameter plane).
+    """A kind of special point of a branch (a codim-1 point of the two-parameter plane).
 
-    The members are strings (``Label.PD == "PD"``), so comparisons with the
-    labels stored in datasets keep working.
+    Each kind is an object carrying what every module says of it: its ``marker`` in
+    figures (a matplotlib marker code), its ``words`` (legends), its ``codimension`` (1:
+    one condition on a branch) and whether it has ``curves`` (two-parameter continuation,
+    :data:`CURVE_KINDS`). How a problem detects it (its test function, rounding noise and
+    criticality) is declared by the problem (:mod:`impactcont.problems.events`).
+
+    Notes
+    -----
+    The members are strings (``Label.PD == "PD"``), so comparisons with the labels
+    stored in datasets keep working.
     """
 
-    SN = "SN"
+    marker: str
+    words: str
+    codimension: int
+    curves: bool
+
+    def __new__(cls, value: str, marker: str, words: str, curves: bool = True) -> Label:
+        kind = str.__new__(cls, value)
+        kind._value_ = value
+        kind.marker, kind.words, kind.codimension, kind.curves = marker, words, 1, curves
+        return kind
+
+    SN = ("SN", "o", "saddle-node")
     """Saddle-node (fold): a multiplier crosses +1 (eq. 25)."""
-    PD = "PD"
+    PD = ("PD", "s", "period doubling")
     """Period-doubling (flip): a multiplier crosses -1."""
-    NS = "NS"
+    NS = ("NS", "D", "Neimark-Sacker")
     """Neimark-Sacker: a pair of complex multipliers crosses the unit circle."""
-    GR = "GR"
+    GR = ("GR", "^", "grazing")
     """Grazing: mass 1 touches the stop between impacts (eq. 16 with equality)."""
-    ZV = "ZV"
+    ZV = ("ZV", "v", "zero-velocity impact")
     """Zero-velocity impact: the impact velocity h2 of eq. (22) vanishes."""
-    BP = "BP"
+    BP = ("BP", "P", "symmetry-breaking pitchfork", False)
     """Symmetry-breaking pitchfork of a symmetric motion of a symmetric two-sided system:
     a multiplier of its half-map crosses -1 (G gets +1 without a fold) and a pair of
     asymmetric motions, mirror images, branches off (:mod:`impactcont.orbit.symmetry`)."""
@@ -69,24 +88,25 @@ class Label(str, enum.Enum):
     def __str__(self) -> str:
         return str(self.value)
 
+    def __repr__(self) -> str:  # as the label's string: messages list kinds as the user types them
+        return repr(self.value)
+
     __format__ = str.__format__
 
 
 #: The special-point labels as plain strings, in their canonical order.
 LABELS: tuple[str, ...] = tuple(label.value for label in Label)
 
-#: The marker of each label in figures (matplotlib marker codes).
-LABEL_MARKERS: dict[str, str] = {"SN": "o", "PD": "s", "NS": "D", "GR": "^", "ZV": "v",
-                                 "BP": "P"}
+#: The marker of each label in figures (matplotlib marker codes): :attr:`Label.marker`.
+LABEL_MARKERS: dict[str, str] = {label.value: label.marker for label in Label}
 
-#: What each label stands for, in words (legends).
-LABEL_NAMES: dict[str, str] = {"SN": "saddle-node", "PD": "period doubling",
-                               "NS": "Neimark-Sacker", "GR": "grazing",
-                               "ZV": "zero-velocity impact", "BP": "symmetry-breaking pitchfork"}
+#: What each label stands for, in words (legends): :attr:`Label.words`.
+LABEL_NAMES: dict[str, str] = {label.value: label.words for label in Label}
 
 #: The kinds of codimension-one curves (two-parameter continuation of a special point):
-#: every label but ``BP``, which exists only on symmetric N-p motions (no curves yet).
-CURVE_KINDS: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+#: the labels with :attr:`Label.curves`, every one but ``BP``, which exists only on
+#: symmetric N-p motions (no curves yet). The members are the kinds themselves.
+CURVE_KINDS: tuple[Label, ...] = tuple(label for label in Label if label.curves)
 
 #: Codimension-two points, one name per point: ``A+B`` is where a curve of kind A meets
 #: the curve of kind B (its test function vanishes on the curve A); ``R1`` and ``R2``

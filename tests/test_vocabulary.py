@@ -25,6 +25,19 @@ def test_labels_are_strings_and_the_old_names_are_the_same_tuple():
     assert set(PARAMETERS) == set(vocab.CONTINUABLE_PARAMETERS)
 
 
+def test_each_kind_carries_its_marker_words_codimension_and_curves():
+    """Issue 29, 2: a kind is an object; the old dicts are views of its attributes."""
+    assert vocab.Label.PD.marker == "s" and vocab.Label.NS.words == "Neimark-Sacker"
+    assert {label.codimension for label in vocab.Label} == {1}
+    assert {label.value: label.marker for label in vocab.Label} == vocab.LABEL_MARKERS
+    assert vocab.LABEL_NAMES["BP"] == vocab.Label.BP.words == "symmetry-breaking pitchfork"
+    assert tuple(label for label in vocab.Label if label.curves) == vocab.CURVE_KINDS
+    assert vocab.CURVE_KINDS[1] is vocab.Label.PD and not vocab.Label.BP.curves
+    # a kind reads as its label in messages, is found by it and hashes as it
+    assert repr(vocab.Label.GR) == "'GR'" and vocab.Label("ZV") is vocab.Label.ZV
+    assert {"SN": 1}[vocab.Label.SN] == 1
+
+
 def test_damping_rule_is_one_function():
     eta = ic.ImpactOscillator(M=np.eye(1), K=[[1.0]], F=[1.0], R=0.5, b=0.1, omega=1.5, eta=0.1)
     rayleigh = eta.replace(eta=None, alpha=0.1, beta=0.0)
