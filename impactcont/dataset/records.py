@@ -58,9 +58,10 @@ def special_record(special: Any, parameter: str, *, point: int,
 
     Parameters
     ----------
-    special : SpecialPoint or MultiImpactSpecialPoint
-        With ``label``, ``value`` (of the continued parameter), ``delta``,
-        ``precision``, ``status`` and ``orbit`` (the motion at the point).
+    special : SpecialPoint
+        The one record (:mod:`impactcont.detection.points`), with ``label``,
+        ``value`` (of the continued parameter), ``delta``, ``precision``, ``status``
+        and ``orbit`` (the motion at the point).
     parameter : str
         The continued parameter.
     point : int
@@ -112,8 +113,9 @@ def user_event_record(event: Any, parameters: Sequence[str]) -> dict[str, Any]:
 
     Parameters
     ----------
-    event : UserEvent
-        With ``name``, ``point``, ``precision``, ``status`` and ``orbit`` (the motion there).
+    event : SpecialPoint
+        A user event's zero (the one record), with ``name``, ``point``, ``precision``,
+        ``status`` and ``orbit`` (the motion there).
     parameters : sequence of str
         The parameters stored (``omega``, ``b`` and the continued one(s)): their values
         are the motion's oscillator's.

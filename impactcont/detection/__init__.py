@@ -1,8 +1,11 @@
-"""Detection and location of special points on branches."""
+"""Detection and location of special points on branches.
 
+Every detector returns the one record :class:`SpecialPoint` (:mod:`impactcont.detection.points`).
+"""
+
+from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import (
     BranchSample,
-    SpecialPoint,
     detect_special_points,
     event_function,
 )

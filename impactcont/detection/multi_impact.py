@@ -63,6 +63,7 @@ from impactcont.detection.locator import (
     last_motions,
     watched_labels,
 )
+from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import (
     POLE_CLEARED,
     UserEvent,
@@ -112,28 +113,10 @@ class MultiImpactSample:
         return float(self.tangent[-1])
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class MultiImpactSpecialPoint:
-    """A located special point of an N-p branch.
-
-    The fields of :class:`impactcont.detection.SpecialPoint`, with the unknowns
-    ``u`` (shape ``(m,)``) of the shooting system in place of the phase ``delta``
-    (the phase of the first impact is ``u[0]``) and a :class:`MultiImpactOrbit`.
-    """
-
-    label: str
-    value: float
-    u: np.ndarray
-    point: int
-    bracket: tuple[float, float]
-    precision: float
-    status: str
-    orbit: MultiImpactOrbit
-
-    @property
-    def delta(self) -> float:
-        """Forcing phase at impact 0."""
-        return self.orbit.delta
+#: A special point of an N-p branch: the one special-point record, with the shooting
+#: unknowns ``u`` (the phase of the first impact is ``u[0]``, ``delta`` the motion's) and a
+#: :class:`MultiImpactOrbit` (:class:`~impactcont.detection.points.SpecialPoint`).
+MultiImpactSpecialPoint = SpecialPoint
 
 
 def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample],
@@ -209,9 +192,9 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
             label = "BP"
         left, right = samples[ep.step], samples[ep.step + 1]
         nearest = ep.step if abs(ep.lam - left.lam) <= abs(ep.lam - right.lam) else ep.step + 1
-        special = MultiImpactSpecialPoint(
-            label=label, value=ep.lam, u=ep.u, point=nearest, bracket=ep.bracket,
-            precision=ep.precision, status=ep.status, orbit=orbit)
+        special = SpecialPoint(label=label, value=ep.lam, u=ep.u, point=nearest,
+                               bracket=ep.bracket, precision=ep.precision, status=ep.status,
+                               orbit=orbit)
         found.append(special)
     found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
              if special.label != "ZV" or "ZV" in labels]  # ZV: only if asked

@@ -49,6 +49,7 @@ from impactcont.detection.locator import (
     last_motions,
     watched_labels,
 )
+from impactcont.detection.points import SpecialPoint
 from impactcont.errors import ParameterError
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.events import event_function, event_noise, pole_free
@@ -77,40 +78,6 @@ class BranchSample:
     delta: float
     lam: float
     dlam: float
-    orbit: PeriodicOrbit
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class SpecialPoint:
-    """A located special point of a branch.
-
-    Attributes
-    ----------
-    label : str
-        One of :data:`LABELS`.
-    value : float
-        The parameter at the special point.
-    delta : float
-        Impact phase there.
-    point : int
-        Index of the nearest accepted branch point.
-    bracket : tuple of float
-        Parameter values of the two accepted points that bracket it.
-    precision : float
-        Bound on the error of `value` in the parameter.
-    status : str
-        ``"located"`` or ``"bracketed"`` (location failed; `value` is the best estimate).
-    orbit : PeriodicOrbit
-        The motion at the special point.
-    """
-
-    label: str
-    value: float
-    delta: float
-    point: int
-    bracket: tuple[float, float]
-    precision: float
-    status: str
     orbit: PeriodicOrbit
 
 
@@ -399,36 +366,9 @@ def user_values(functions: UserFunctions, orbits: Sequence[Any],
             for name, fn in functions.functions.items()}
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class UserEvent:
-    """A located zero of a user event's function on a branch or curve.
-
-    Attributes
-    ----------
-    name : str
-        The event's name.
-    u : ndarray
-        The problem's unknowns there.
-    lam : float
-        The continued parameter there.
-    point : int
-        Index of the nearest accepted point.
-    precision : float
-        Bound on the error of the location (max-norm of the parameters of a curve).
-    status : str
-        ``"located"`` or ``"bracketed"`` (the function jumps there, or the location
-        failed; the point is then the best estimate in the step).
-    orbit : PeriodicOrbit or MultiImpactOrbit
-        The motion there.
-    """
-
-    name: str
-    u: np.ndarray
-    lam: float
-    point: int
-    precision: float
-    status: str
-    orbit: Any
+#: A located zero of a user event's function: the one special-point record, its ``name``
+#: the event's (:class:`~impactcont.detection.points.SpecialPoint`).
+UserEvent = SpecialPoint
 
 
 def locate_user_events(problem: Any, u: Any, lam: Any, tangent: Any, functions: UserFunctions,
@@ -492,7 +432,9 @@ def locate_user_events(problem: Any, u: Any, lam: Any, tangent: Any, functions: 
         nearest = k if (np.max(np.abs(here - ends[0])) <= np.max(np.abs(here - ends[1]))) \
             else k + 1
         orbit = orbit_at(ep.u, ep.lam)
-        event = UserEvent(ep.label, ep.u, ep.lam, nearest, ep.precision, ep.status, orbit)
+        event = SpecialPoint(label=ep.label, value=ep.lam, u=ep.u, point=nearest,
+                             bracket=ep.bracket, precision=ep.precision, status=ep.status,
+                             orbit=orbit)
         log.info("event %s at %s (%s, precision %.1e)", event.name,
                  _where(orbit, parameter), event.status, event.precision)
         found.append(event)
