@@ -438,9 +438,11 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
 
     The directory is checked first (:func:`check_output_file`) and cleared of
     stale temporary files. If the body raises (Ctrl-C included), ``path`` is
-    left as it was and the temporary file is removed; an OSError (or an error of
-    the NetCDF library) is raised again as an OSError naming ``path``, not the
-    temporary file, and saying when the disk is full (errno ENOSPC).
+    left as it was and the temporary file is removed (emptied first where the
+    NetCDF library still holds it open: :func:`_release`); an OSError (or an
+    error of the NetCDF library) is raised again as an OSError naming ``path``,
+    not the temporary file, and saying when the disk is full (errno ENOSPC).
+    :func:`save`, :func:`save_blocks` and the scene outputs all write through it.
 
     Yields
     ------
@@ -453,8 +455,9 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
     try:
         yield tmp
         os.replace(tmp, target)
-    except Exception as exc:
-        error = _write_error(exc, str(path), tmp)
+    except BaseException as exc:
+        error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
+        _release(tmp)
         if error is None:
             raise
         raise error from exc
@@ -1195,24 +1198,12 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
     """
     target = _path(path)
     data = _tree(obj, validate)
-    check_output_file(target)
-    remove_stale_temporaries(target.parent)
-    kwargs = {}
-    if encoding:
-        kwargs["encoding"] = _disk_encoding(encoding, data) if isinstance(
-            data, xr.Dataset) else dict(encoding)
-    disk = _for_disk(data)
-    tmp = temporary_path(target)
-    try:
-        _write(disk, tmp, kwargs, target)
-        os.replace(tmp, target)
-    except BaseException as exc:
-        error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
-        _release(tmp)
-        tmp.unlink(missing_ok=True)
-        if error is None:
-            raise
-        raise error from exc
+    with atomic_output(path) as tmp:
+        kwargs = {}
+        if encoding:
+            kwargs["encoding"] = _disk_encoding(encoding, data) if isinstance(
+                data, xr.Dataset) else dict(encoding)
+        _write(_for_disk(data), tmp, kwargs, target)
     logger.info("saved %s to %s", type(data).__name__, target)
     return target
 
@@ -1335,19 +1326,8 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
         raise ValueError(f"the data variables of ds must be dask arrays (placeholders, never "
                          f"computed); got other arrays in {eager}")
     data = _tree(ds, False)
-    check_output_file(target)
-    remove_stale_temporaries(target.parent)
-    tmp = temporary_path(target)
-    try:
+    with atomic_output(path) as tmp:
         _write_blocks(data, tmp, blocks, _disk_encoding(encoding or {}, data), target)
-        os.replace(tmp, target)
-    except BaseException as exc:
-        error = _write_error(exc, str(path), tmp)  # before tmp goes: is the disk full?
-        _release(tmp)
-        tmp.unlink(missing_ok=True)
-        if error is None:
-            raise
-        raise error from exc
     logger.info("saved Dataset to %s block by block", target)
     return target
 
