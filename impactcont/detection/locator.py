@@ -19,15 +19,17 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from impactcont.core.locate import locate_zero
-from impactcont.vocabulary import STATUSES
+from impactcont.core.locate import Event, MotionTest, locate_zero
+from impactcont.problems.events import MULTIPLIER_CRITERIA
+from impactcont.vocabulary import STATUSES, Label
 
 log = logging.getLogger(__name__)
 
 _Point = TypeVar("_Point")
 
-__all__ = ["STATUSES", "TWIN_TOL", "drop_grazing_at_zero_velocity", "is_critical",
-           "last_motions", "locate_zero", "twins", "watched_labels"]
+__all__ = ["COMPANIONS", "STATUSES", "TWIN_TOL", "drop_grazing_at_zero_velocity",
+           "is_critical", "kind_event", "last_motions", "locate_zero", "twins",
+           "watched_labels"]
 
 
 def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
@@ -37,24 +39,53 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
     through the pole of G). NS: a complex pair within `unit_tol` of the unit circle (a
     real reciprocal pair is a neutral saddle; ``sqrt(unit_tol)``, 3e-4, let a pair at
     ``|mu| - 1 = 1e-5`` next to a zero-velocity impact pass). Other labels: always.
+    The criteria are the kinds' (:data:`~impactcont.problems.events.MULTIPLIER_CRITERIA`).
     """
-    mu = np.asarray(multipliers)
-    if label == "PD":
-        return bool(np.min(np.abs(mu + 1.0)) < unit_tol)
-    if label == "NS":
-        close = np.abs(np.abs(mu) - 1.0) < unit_tol
-        return bool(np.any(close & (np.abs(mu.imag) > 1e-8)))
-    return True
+    criterion = MULTIPLIER_CRITERIA.get(label)
+    return True if criterion is None else criterion(multipliers, unit_tol)
+
+
+#: The kinds a detector also watches when one is asked for: ZV with GR, whose located
+#: points tell which GR is the grazing of a zero-velocity impact (dropped as its twin,
+#: :func:`drop_grazing_at_zero_velocity`, also when ZV is not asked for).
+COMPANIONS: dict[str, tuple[Label, ...]] = {Label.GR: (Label.ZV,)}
 
 
 def watched_labels(labels: Sequence[str]) -> list[str]:
-    """The labels a detector locates for `labels`: with GR also ZV, whose located points
-    tell which GR is the grazing of a zero-velocity impact (dropped as its twin,
-    :func:`drop_grazing_at_zero_velocity`, also when ZV is not asked for)."""
+    """The labels a detector locates for `labels`: each with its :data:`COMPANIONS`."""
     out = list(labels)
-    if "GR" in out and "ZV" not in out:
-        out.append("ZV")
+    for label in labels:
+        out.extend(extra for extra in COMPANIONS.get(label, ()) if extra not in out)
     return out
+
+
+def kind_event(label: str, test: MotionTest, at: Callable[[Any, float], Any],
+               sample_orbit: Callable[[int], Any]) -> Event:
+    """The event of a kind declared with its `test` (a function of the motion).
+
+    Parameters
+    ----------
+    label : str
+        The kind.
+    test : MotionTest
+        Its test, rounding and poles as functions of the motion.
+    at : callable
+        ``at(u, lam)``: the motion at a point of the branch (one with the
+        interior-contact search when ``test.checks``).
+    sample_orbit : callable
+        ``sample_orbit(k)``: the motion at accepted point ``k``.
+    """
+    fields: dict[str, Any] = {}
+    if test.poles is not None:
+        poles = test.poles
+        fields = dict(poles=lambda u, lam: poles(at(u, lam)),
+                      poles_at=lambda k: poles(sample_orbit(k)))
+    if test.noise is not None:
+        fields["noise_at"] = lambda u, lam, n=test.noise: n(at(u, lam))
+    return Event(label, lambda u, lam: test.test(at(u, lam)),
+                 lambda k: test.test(sample_orbit(k)),
+                 None if test.noise is None else lambda k: test.noise(sample_orbit(k)),
+                 **fields)
 
 
 #: a GR this close (relative) to a ZV on the same step is its grazing: the square root of
@@ -87,11 +118,11 @@ def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "la
     interior maximum the GR test is +inf, and the precision search sees only one side of
     the double zero); every other point is kept, in order.
     """
-    zv = [z for z in points if z.label == "ZV" and z.status == "located"]
+    zv = [z for z in points if z.label == Label.ZV and z.status == "located"]
     kept = []
     for point in points:
         twin = None
-        if point.label == "GR":
+        if point.label == Label.GR:
             twin = next((z for z in zv if z.bracket == point.bracket and twins(
                 abs(z.value - point.value), z.precision + point.precision, z.value)), None)
         if twin is None:

@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -59,23 +59,21 @@ import numpy as np
 from impactcont.core.locate import Event, MotionTest, locate_events, tangent_at
 from impactcont.detection.locator import (
     drop_grazing_at_zero_velocity,
-    is_critical,
+    kind_event,
     last_motions,
     watched_labels,
 )
 from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import (
-    POLE_CLEARED,
     UserEvent,
     UserFunctions,
-    event_function,
-    event_noise,
     locate_user_events,
     user_values,
 )
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import half_map, symmetry_defect
-from impactcont.vocabulary import LABELS, check_labels
+from impactcont.problems.events import BRANCH_TESTS
+from impactcont.vocabulary import LABELS, Label, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
            "locate_multi_impact_events", "tangent_at"]
@@ -83,7 +81,6 @@ __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_
 log = logging.getLogger(__name__)
 
 _S_TOL = 1e-13
-_UNIT_TOL = 1e-7
 _NEWTON_TOL = 1e-13
 
 
@@ -132,72 +129,53 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
     :class:`MultiImpactSpecialPoint` in branch order; GR and ZV use the minimum
     over the flights and impacts.
     """
-    labels = check_labels(labels, "labels")
+    asked = [Label(label) for label in check_labels(labels, "labels")]
     parameter = getattr(problem, "parameter", "lam")
-    # the events the problem declares (BP only on a branch of symmetric motions)
-    declared = getattr(problem, "events", ("SN", "PD", "NS", "GR", "ZV"))
-    labels = [label for label in labels if label in declared]
-
-    declared_tests: dict[str, MotionTest] = dict(getattr(problem, "motion_tests", {}))
+    # the kinds the problem declares (BP only on a branch of symmetric motions), each but
+    # the fold with its test of the motion
+    declared = getattr(problem, "events", (Label.SN, *BRANCH_TESTS))
+    tests: Mapping[str, MotionTest] = getattr(problem, "motion_tests", BRANCH_TESTS)
+    asked = [label for label in asked if label in declared]
+    watched = watched_labels(asked)
 
     orbits = {checks: last_motions(lambda u, lam, c=checks: problem.orbit(u, lam, checks=c))
               for checks in (False, True)}
 
-    def event(label: str) -> Event:
-        if label == "SN":
+    def event(label: Label) -> Event:
+        test = tests.get(label)
+        if test is None:  # the fold: the parameter component of the tangent changes sign
             return Event(label, None)
-        spec = declared_tests.get(label)
-        if spec is not None:  # a special point the problem declares with its own test
-            at = orbits[spec.checks]
-            fields: dict[str, Any] = {}
-            if spec.poles is not None:
-                poles = spec.poles
-                fields = dict(poles=lambda u, lam: poles(at(u, lam)),
-                              poles_at=lambda k: poles(samples[k].orbit))
-            if spec.noise is not None:
-                fields["noise_at"] = lambda u, lam, n=spec.noise: n(at(u, lam))
-            return Event(label, lambda u, lam: spec.test(at(u, lam)),
-                         lambda k: spec.test(samples[k].orbit),
-                         None if spec.noise is None else lambda k: spec.noise(samples[k].orbit),
-                         **fields)
-        # only GR needs the (costly) interior-contact search of every flight
-        at = orbits[label == "GR"]
-        fields = dict(noise_at=lambda u, lam: event_noise(label, at(u, lam)))
-        if label in POLE_CLEARED:  # split at each impact's h2 = 0 (module notes)
-            fields.update(poles=lambda u, lam: at(u, lam).impact_velocities,
-                          poles_at=lambda k: samples[k].orbit.impact_velocities)
-        return Event(label, lambda u, lam: event_function(label, at(u, lam)),
-                     lambda k: event_function(label, samples[k].orbit),
-                     lambda k: event_noise(label, samples[k].orbit), **fields)
+        # only some tests (GR) need the (costly) interior-contact search of every flight
+        return kind_event(label, test, orbits[test.checks], lambda k: samples[k].orbit)
 
     found: list[MultiImpactSpecialPoint] = []
     for ep in locate_events(problem, [s.u for s in samples], [s.lam for s in samples],
                             [s.tangent for s in samples],
-                            [event(lab) for lab in watched_labels(labels)],
+                            [event(label) for label in watched],
                             s_tol=_S_TOL, newton_tol=_NEWTON_TOL):
         orbit = problem.orbit(ep.u, ep.lam)
-        spec = declared_tests.get(ep.label)
-        critical = (is_critical(ep.label, orbit.multipliers, _UNIT_TOL) if spec is None
-                    else spec.critical is None or spec.critical(orbit))
-        if not ep.failed and not critical:
+        test = tests.get(ep.label)
+        if not ep.failed and test is not None and test.critical is not None \
+                and not test.critical(orbit):
             log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
                       "(a neutral saddle, or the pole of G at h2 = 0)", ep.label, parameter,
                       ep.lam)
             continue
         label = ep.label
-        if label == "SN" and any(_meets_symmetric_branch(o) for o in (
+        if label == Label.SN and any(_meets_symmetric_branch(o) for o in (
                 orbit, samples[ep.step].orbit, samples[ep.step + 1].orbit)):
             log.debug("the fold at %s=%.12g is where the branch meets the symmetric branch: BP",
                       parameter, ep.lam)
-            label = "BP"
+            label = Label.BP
         left, right = samples[ep.step], samples[ep.step + 1]
         nearest = ep.step if abs(ep.lam - left.lam) <= abs(ep.lam - right.lam) else ep.step + 1
         special = SpecialPoint(label=label, value=ep.lam, u=ep.u, point=nearest,
                                bracket=ep.bracket, precision=ep.precision, status=ep.status,
                                orbit=orbit)
         found.append(special)
+    # a companion watched but not asked (ZV for GR) only tells which GR to drop
     found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
-             if special.label != "ZV" or "ZV" in labels]  # ZV: only if asked
+             if special.label in asked or special.label not in watched]
     for special in found:
         log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
                  parameter, special.value, special.orbit.N, special.orbit.p, special.status,

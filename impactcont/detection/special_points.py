@@ -42,19 +42,19 @@ from typing import Any
 
 import numpy as np
 
-from impactcont.core.locate import Event, locate_events
+from impactcont.core.locate import Event, MotionTest, locate_events
 from impactcont.detection.locator import (
     drop_grazing_at_zero_velocity,
-    is_critical,
+    kind_event,
     last_motions,
     watched_labels,
 )
 from impactcont.detection.points import SpecialPoint
 from impactcont.errors import ParameterError
 from impactcont.orbit.periodic import PeriodicOrbit
-from impactcont.problems.events import event_function, event_noise, pole_free
+from impactcont.problems.events import BRANCH_TESTS, event_function, event_noise, pole_free
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
-from impactcont.vocabulary import CODIM2_LABELS, LABELS, check_labels
+from impactcont.vocabulary import CODIM2_LABELS, LABELS, Label, check_labels
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "UserEvent", "UserFunctions",
            "check_user_functions", "detect_special_points", "event_function", "event_noise",
@@ -63,12 +63,6 @@ __all__ = ["LABELS", "BranchSample", "SpecialPoint", "UserEvent", "UserFunctions
 log = logging.getLogger(__name__)
 
 _XTOL = 1e-13
-#: The labels with a test function on branches of N-1 motions (besides the fold, SN).
-N1_EVENTS = ("PD", "NS", "GR", "ZV")
-#: The tests multiplied free of the pole of G at a zero impact velocity (:func:`pole_free`):
-#: their poles are the impact velocities, where a step is split (module notes).
-POLE_CLEARED = ("PD", "NS")
-_UNIT_TOL = 1e-7
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -164,30 +158,21 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     list of SpecialPoint
         In branch order.
     """
-    check_labels(labels, "labels")
+    asked = [Label(label) for label in check_labels(labels, "labels")]
+    # the kinds the problem declares, with their tests; the others, e.g. BP (a symmetric
+    # motion has p even), cannot occur on an N-1 branch
+    declared = getattr(problem, "events", (Label.SN, *BRANCH_TESTS))
+    tests: Mapping[str, MotionTest] = getattr(problem, "motion_tests", BRANCH_TESTS)
+    watched = [label for label in watched_labels(asked) if label in declared]
     candidates: list[tuple[int, str, float, float, float, str, bool]] = []
     for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
         left, right = samples[k], samples[k + 1]
-        if "SN" in labels and (left.dlam > 0) != (right.dlam > 0):
-            candidates.append((k, "SN", *_locate_fold(problem, left, right)))
+        if Label.SN in watched and (left.dlam > 0) != (right.dlam > 0):
+            candidates.append((k, Label.SN, *_locate_fold(problem, left, right)))
 
     orbit_at = last_motions(lambda u, lam: problem.orbit(u[0], lam))
-
-    def event(label: str) -> Event:
-        fields: dict[str, Any] = dict(
-            noise_at=lambda u, lam: event_noise(label, orbit_at(u, lam)))
-        if label in POLE_CLEARED:  # the step is split at h2 = 0 (module notes)
-            fields.update(poles=lambda u, lam: [orbit_at(u, lam).impact_velocity],
-                          poles_at=lambda k: [samples[k].orbit.impact_velocity])
-        return Event(label, lambda u, lam: event_function(label, orbit_at(u, lam)),
-                     lambda k: event_function(label, samples[k].orbit),
-                     lambda k: event_noise(label, samples[k].orbit), **fields)
-
-    # the events the problem declares (the fold is located on eq. 14-15 above); the others,
-    # e.g. BP (a symmetric motion has p even), cannot occur on an N-1 branch
-    declared = getattr(problem, "events", N1_EVENTS)
-    watched = watched_labels(labels)
-    events = [event(label) for label in watched if label in declared and label != "SN"]
+    events = [kind_event(label, tests[label], orbit_at, lambda k: samples[k].orbit)
+              for label in watched if label in tests]
     for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
                             [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
         candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,
@@ -198,7 +183,9 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
             candidates, key=lambda c: (c[0], order[c[1]])):
         left, right = samples[k], samples[k + 1]
         orbit = problem.orbit(delta, lam)
-        if not failed and not is_critical(label, orbit.multipliers, _UNIT_TOL):
+        test = tests.get(label)
+        if not failed and test is not None and test.critical is not None \
+                and not test.critical(orbit):
             log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
                       "(a neutral saddle, or the pole of G at h2 = 0)", label,
                       problem.parameter, lam)
@@ -208,8 +195,9 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                                bracket=(left.lam, right.lam), precision=precision,
                                status=status, orbit=orbit)
         found.append(special)
+    # a companion watched but not asked (ZV for GR) only tells which GR to drop
     found = [special for special in drop_grazing_at_zero_velocity(found, problem.parameter)
-             if special.label != "ZV" or "ZV" in labels]  # ZV: only if asked
+             if special.label in asked or special.label not in watched]
     for special in found:
         log.info("%s at %s = %.12g (%s, precision %.1e)", special.label, problem.parameter,
                  special.value, special.status, special.precision)

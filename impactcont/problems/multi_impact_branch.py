@@ -29,9 +29,12 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Mapping
+from typing import ClassVar
 
 import numpy as np
 
+from impactcont.core.locate import MotionTest
 from impactcont.core.stepper import SINGULAR_CONDITION, CorrectorResult
 from impactcont.errors import ParameterError
 from impactcont.kernel.arrays import Forcing, ForcingDerivatives
@@ -61,6 +64,8 @@ from impactcont.orbit.multi_impact import (
 )
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.stop_geometry import StopGeometry
+from impactcont.problems.events import BRANCH_TESTS
+from impactcont.vocabulary import Label
 
 __all__ = ["MultiImpactBranchProblem"]
 
@@ -85,8 +90,11 @@ class MultiImpactBranchProblem:
     residual, Jacobian and orbit of one point are computed from one shot.
     """
 
-    #: The special points located on its branches (a symmetric motion's problem adds BP).
-    events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+    #: The kinds of special points located on its branches (a symmetric motion's problem
+    #: adds BP): the folds, and those with a test of the motion.
+    events: tuple[Label, ...] = (Label.SN, *BRANCH_TESTS)
+    #: The test of each kind but the fold, as functions of the motion.
+    motion_tests: ClassVar[Mapping[str, MotionTest]] = BRANCH_TESTS
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str | None = None) -> None:

@@ -17,16 +17,20 @@ from __future__ import annotations
 
 import cmath
 import math
+from collections.abc import Mapping
+from typing import ClassVar
 
 import numpy as np
 
+from impactcont.core.locate import MotionTest
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FORCING, GAP, model_parameter
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
 from impactcont.orbit.periodic import PeriodicOrbit, modal_arrays, orbit_at_phase
-from impactcont.vocabulary import CONTINUABLE_PARAMETERS
+from impactcont.problems.events import BRANCH_TESTS
+from impactcont.vocabulary import CONTINUABLE_PARAMETERS, Label
 
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem", "residual_scale", "root_phase",
            "scaled_derivative"]
@@ -115,8 +119,11 @@ class PeriodicBranchProblem:
     by :func:`residual_scale`, and differentiated with it.
     """
 
-    #: The special points located on its branches (SN by the closed-form fold system).
-    events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV")
+    #: The kinds of special points located on its branches (SN by the closed-form fold
+    #: system of eq. 14-15, the others by their tests).
+    events: tuple[Label, ...] = (Label.SN, *BRANCH_TESTS)
+    #: The test of each kind but the fold, as functions of the motion.
+    motion_tests: ClassVar[Mapping[str, MotionTest]] = BRANCH_TESTS
 
     periods = (2.0 * math.pi,)
     """The unknown ``delta`` is a phase: a branch that returns to its start modulo 2 pi is

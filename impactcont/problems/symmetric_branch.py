@@ -37,8 +37,9 @@ from impactcont.model.parameters import FREQUENCY, ModelParameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import HalfUnknowns, _reflection, admits_symmetric_motions
-from impactcont.problems.events import PITCHFORK
+from impactcont.problems.events import BRANCH_TESTS, PITCHFORK
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.vocabulary import Label
 
 __all__ = ["SymmetricBranchProblem"]
 
@@ -73,10 +74,11 @@ class SymmetricBranchProblem:
     """
 
     symmetric = True
-    #: The special points located on its branches: those of any N-p motion and BP.
-    events: tuple[str, ...] = ("SN", "PD", "NS", "GR", "ZV", "BP")
-    #: The test of its own special point, BP (the others are the detector's built-ins).
-    motion_tests: ClassVar[Mapping[str, MotionTest]] = MappingProxyType({"BP": PITCHFORK})
+    #: The kinds of special points located on its branches: those of any N-p motion and BP.
+    events: tuple[Label, ...] = (*MultiImpactBranchProblem.events, Label.BP)
+    #: The tests of its kinds: those of any N-p motion and its own, BP.
+    motion_tests: ClassVar[Mapping[str, MotionTest]] = MappingProxyType(
+        {**BRANCH_TESTS, Label.BP: PITCHFORK})
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str) -> None:
