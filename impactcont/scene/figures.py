@@ -166,6 +166,27 @@ def _orbit_rows(datasets: Mapping[str, xr.Dataset]) -> list[tuple[str, xr.Datase
     return rows[:_MAX_ROWS]
 
 
+def _entry_rows(count: int, plot: Any, extra: float) -> tuple[Figure, np.ndarray, float]:
+    """A figure of ``count`` rows of subfigures (one an entry, two panels side by side).
+
+    Each row is ``0.3 width + 0.75`` inches high and ``extra`` inches more hold the
+    title and the legend (the width is :func:`_width`'s). Without rows the figure is
+    one row high and has no subfigure, for :func:`_empty`.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    subfigs : ndarray of SubFigure, shape (count,)
+    width : float
+    """
+    width = _width(plot)
+    fig = Figure(figsize=(width, (0.3 * width + 0.75) * max(count, 1) + extra),
+                 layout="constrained")
+    subfigs = (np.atleast_1d(fig.subfigures(count, 1, squeeze=False)[:, 0]) if count
+               else np.empty(0, dtype=object))
+    return fig, subfigs, width
+
+
 def _empty(fig: Figure, text: str) -> Figure:
     ax = fig.add_subplot()
     ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, wrap=True)
@@ -232,12 +253,9 @@ def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     from impactcont.plots.branches import fit_text, legend_fontsize
 
     rows = _orbit_rows(datasets)
-    width = _width(plot)
-    fig = Figure(figsize=(width, (0.3 * width + 0.75) * max(len(rows), 1) + 0.9),
-                 layout="constrained")
+    fig, subfigs, width = _entry_rows(len(rows), plot, 0.9)
     if not rows:
         return _finish(_empty(fig, "no periodic orbit in these entries"), plot, "Orbits")
-    subfigs = np.atleast_1d(fig.subfigures(len(rows), 1, squeeze=False)[:, 0])
     kinds = set()
     j = 1
     for sub, (_name, ds, k) in zip(subfigs, rows, strict=True):
@@ -282,12 +300,9 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
     from impactcont.plots.branches import fit_text, legend_fontsize
 
     items = list(datasets.items())[:_MAX_ROWS]
-    width = _width(plot)
-    fig = Figure(figsize=(width, (0.3 * width + 0.75) * max(len(items), 1) + 0.8),
-                 layout="constrained")
+    fig, subfigs, width = _entry_rows(len(items), plot, 0.8)
     if not items:
         return _finish(_empty(fig, "no simulation"), plot, "Simulations")
-    subfigs = np.atleast_1d(fig.subfigures(len(items), 1, squeeze=False)[:, 0])
     trajectories = False
     j = 1
     ticks = 3 if width < 5.0 else 6
