@@ -48,12 +48,7 @@ from impactcont.dataset.schema import (
     parameter_names,
     validate_branch_dataset,
 )
-from impactcont.detection.codim2 import (
-    Codim2Point,
-    detect_codim2,
-    grazing_other_gap,
-    test_values,
-)
+from impactcont.detection.codim2 import Codim2Point, codim2_record, detect_codim2, test_values
 from impactcont.detection.special_points import (
     UserFunctions,
     check_user_functions,
@@ -329,7 +324,7 @@ def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
             rest = np.delete(mu, crit)
         else:
             rest = mu
-        gap = grazing_other_gap(problem, o, float(x[2])) if kind == "GR" else o.gap_min
+        gap = problem.grazing_test(x, o)
         physical = bool(o.impact_velocity > 0 and gap > 0)
         fold = problem.fold_function(x[:-1], x[-1])
         cols["delta"].append(math.remainder(float(x[1]), 2 * math.pi))
@@ -355,17 +350,6 @@ def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
     steps = np.hypot(np.diff(values[p1]), np.diff(values[p2]))
     out["arclength"] = np.concatenate([[0.0], np.cumsum(steps)])
     return out, orbits, tests
-
-
-def _codim2_record(problem: CurveProblem, cp: Codim2Point) -> dict[str, Any]:
-    osc = problem.oscillator_at(cp.x[0], cp.x[-1])
-    rec: dict[str, Any] = {"label": cp.label, "delta": math.remainder(float(cp.x[1]), 2 * math.pi),
-                           "point": cp.point, "precision": cp.precision, "status": cp.status,
-                           "multipliers": (np.full(2 * osc.n, np.nan + 0j) if problem.kind == "ZV"
-                                           else cp.orbit.multipliers)}
-    for name in dict.fromkeys(["omega", "b", *problem.parameters]):
-        rec[name] = float(getattr(osc, name))
-    return rec
 
 
 def check_curve_arguments(
@@ -471,11 +455,9 @@ def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: str,
         except (TypeError, ValueError):
             raise ParameterError(f"bounds must be a mapping {{p1: (lo, hi), p2: (lo, hi)}} or "
                                  f"two pairs; got {bounds!r}") from None
-    if detect_codim2_points:
-        log.warning("codim-2 points are not located on curves of N-p motions in this "
-                    "version; the curve's ends and its special points along it are")
     return multi_impact_curve(branch, kind, 0 if special is None else special,
-                              parameter=given[1], bounds=bounds, **keywords)
+                              parameter=given[1], bounds=bounds,
+                              detect_codim2_points=detect_codim2_points, **keywords)
 
 
 @blas_limited
@@ -652,7 +634,7 @@ def _curve_dataset(problem: CurveProblem, kind: str, N: int, parameters: tuple[s
         orbit = problem.orbit(xe[:-1], xe[-1]) if end_status == "located" else orbits[k]
         found.append(Codim2Point(label, xe, orbit, k, precision, end_status))
     found.sort(key=lambda cp: cp.point)
-    records = [_codim2_record(problem, cp) for cp in found if cp.label in CODIM2_LABELS]
+    records = [codim2_record(problem, cp) for cp in found if cp.label in CODIM2_LABELS]
     option_record = {**dataclasses.asdict(opts), "kind": kind, "N": N,
                      "parameters": list(parameters), "bounds": {k: list(v) for k, v in box.items()},
                      "start": {p1: p1v, p2: p2v, "delta": delta0}}

@@ -9,8 +9,10 @@ pseudo-arclength core -> a dataset of the motion at every curve point.
 The dataset is an N-p branch dataset (:mod:`impactcont.dataset.multi`) continued in
 ``p2`` that also holds the column of ``p1`` (so it loads, plots and re-solves as a
 branch does), with the attributes ``curve_kind`` (the label followed), ``parameters =
-"p1,p2"`` and ``born_at_value`` (``p1`` at the start). Codim-2 points on these curves
-are not located (the N-1 curves of :func:`impactcont.curve` locate them).
+"p1,p2"`` and ``born_at_value`` (``p1`` at the start), and the codim-2 points located
+on the curve (:mod:`impactcont.detection.codim2`, the same location as on the N-1 curves
+of :func:`impactcont.curve`) on the dimension ``codim2`` with the variables ``codim2_*`` of
+an N-1 curve dataset (:func:`impactcont.dataset.curves.codim2_data`).
 """
 
 from __future__ import annotations
@@ -35,9 +37,11 @@ from impactcont.core import ContinuationPoint, ContinuationStatus, Stop, follow
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.locate import crossing_steps
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.dataset.curves import CODIM2_LABELS, codim2_data
 from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.records import reserved_names
 from impactcont.dataset.schema import oscillator_from_dataset, special_variable
+from impactcont.detection.codim2 import Codim2Point, codim2_record, detect_codim2, test_values
 from impactcont.detection.special_points import check_user_functions
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -50,6 +54,7 @@ from impactcont.progress import (
     interrupted,
     interruptible,
     reporter,
+    until_interrupted,
 )
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS
@@ -111,7 +116,8 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
                        newton_tol: float | None = None, max_points: int | None = None,
                        both_directions: bool | None = None, progress: ProgressOption = None,
                        events: dict[str, Any] | None = None,
-                       monitors: dict[str, Any] | None = None, **more: Any) -> xr.Dataset:
+                       monitors: dict[str, Any] | None = None,
+                       detect_codim2_points: bool = True, **more: Any) -> xr.Dataset:
     """Follow a special point of an N-p branch in two parameters.
 
     Parameters
@@ -142,12 +148,16 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         the :class:`~impactcont.MultiImpactOrbit` at a curve point; an event's zeros on
         the curve are located on the dimension ``event`` (``event_precision`` bounds the
         error in both parameters).
+    detect_codim2_points : bool
+        Locate the codim-2 points on the curve (:mod:`impactcont.detection.codim2`).
 
     Returns
     -------
     xarray.Dataset
         The curve as an N-p branch dataset in ``p2`` with the column of ``p1`` and the
-        attributes ``curve_kind``, ``parameters`` (``"p1,p2"``), ``born_at_value``.
+        attributes ``curve_kind``, ``parameters`` (``"p1,p2"``), ``born_at_value``; its
+        codim-2 points on the dimension ``codim2`` (variables ``codim2_*``, as on a curve
+        of :func:`impactcont.curve`).
 
     Raises
     ------
@@ -162,8 +172,9 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     Ctrl-C (:class:`KeyboardInterrupt`) ends the curve at its last accepted point (the
     other direction is not followed) and returns it: its ``options`` attribute records
     ``"interrupted": true`` and the stop reason ``"interrupted by the user
-    (KeyboardInterrupt) after K points, ..."``, also logged at WARNING. A second Ctrl-C,
-    or one before the first point, aborts with :class:`KeyboardInterrupt`.
+    (KeyboardInterrupt) after K points, ..."``, also logged at WARNING. Ctrl-C while the
+    codim-2 points are located keeps those located before it (the location stops there).
+    A second Ctrl-C, or one before the first point, aborts with :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
     if not isinstance(branch, xr.Dataset):
@@ -229,6 +240,9 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
                                            strict=True)]
         log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
                  parameter, len(samples), result.message)
+        found: list[Codim2Point] = []
+        if detect_codim2_points:
+            _locate_codim2(problem, samples, found)
         # the user's events: located in both parameters (p1 is the last unknown)
         values, user_events = user_events_until_interrupted(
             problem, samples, functions, position=lambda x, lam: (x[-1], lam))
@@ -243,10 +257,28 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     info = {"curve_kind": kind, "parameters": f"{p1},{parameter}",
             "born_at_value": start_p1}
     view = _CurveView(problem, parameter, osc)
-    return branch_to_dataset(view, samples, [], record,
-                             title=f"{kind} curve of periodic {N}-{p} impacting motions in "
-                             f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,),
-                             functions=functions, values=values, user_events=user_events)
+    ds = branch_to_dataset(view, samples, [], record,
+                           title=f"{kind} curve of periodic {N}-{p} impacting motions in "
+                           f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,),
+                           functions=functions, values=values, user_events=user_events)
+    records = [codim2_record(problem, cp) for cp in sorted(found, key=lambda cp: cp.point)
+               if cp.label in CODIM2_LABELS]
+    return ds.assign(codim2_data(records, problem.parameters, osc.n))
+
+
+def _locate_codim2(problem: MultiImpactCurveProblem, samples: Sequence[MultiImpactSample],
+                   found: list[Codim2Point]) -> None:
+    """The codim-2 points of the curve's samples, appended to `found` as they are located
+    (:func:`~impactcont.detection.codim2.detect_codim2`); Ctrl-C keeps those located."""
+    xs = [np.append(sample.u, sample.lam) for sample in samples]
+    orbits = [sample.orbit for sample in samples]
+    tests = [test_values(problem, x, orbit) for x, orbit in zip(xs, orbits, strict=True)]
+    until_interrupted(
+        lambda: detect_codim2(problem, xs, orbits, tests, found), None, "location",
+        "interrupted by the user (KeyboardInterrupt) while locating the codim-2 points of "
+        "the curve: those located before are kept")
+    log.info("%s curve: %d codim-2 points", problem.kind, len(found))
+
 
 
 def _problem_of(ds: xr.Dataset) -> MultiImpactCurveProblem:

@@ -52,9 +52,12 @@ __all__ = [
     "CODIM2_STATUSES",
     "CURVE_VARIABLES",
     "MAP_VARIABLES",
+    "codim2_data",
     "codim2_variable",
     "curve_dataset",
     "map_dataset",
+    "map_parameters",
+    "map_variables",
     "normalise_dataset",
     "validate_curve_dataset",
     "validate_dataset",
@@ -168,6 +171,26 @@ _MAP_ATTRS = ("title", "impactcont_dataset", "oscillator", "options", "impactcon
               "Conventions", "history")
 
 
+def map_variables(parameters: Sequence[str] = ("omega", "b")
+                  ) -> dict[str, tuple[_Var, tuple[str, ...]]]:
+    """:data:`MAP_VARIABLES` of a map over the grid of `parameters` (default ``omega, b``).
+
+    The grid dims are named after the parameters: ``omega`` becomes ``parameters[0]``,
+    ``b`` becomes ``parameters[1]``. ``amplitude_squared`` (eq. 13-14) depends on every
+    parameter but ``b``: on ``(N, parameters[0])`` when ``parameters[1]`` is ``b``, else
+    on the whole grid ``(N, parameters[0], parameters[1])``.
+    """
+    first, second = parameters
+    rename = {"omega": first, "b": second}
+    out = {}
+    for key, (spec, dims) in MAP_VARIABLES.items():
+        dims = tuple(rename.get(d, d) for d in dims)
+        if key == "amplitude_squared" and second != "b":
+            dims = ("N", first, second)
+        out[key] = (spec, dims)
+    return out
+
+
 def codim2_variable(key: str) -> str:
     """Name of the dataset variable of codim-2 field ``key`` (``codim2_<key>``)."""
     return f"codim2_{key}"
@@ -197,6 +220,66 @@ def _array(key: str, value: Any, spec: _Var, shape: tuple[int, ...]) -> np.ndarr
         raise ValueError(f"column {key!r} must have shape {shape}; got shape {a.shape}")
     dtype = {"f": np.float64, "b": bool, "c": np.complex128, "i": np.int64}[spec.kind]
     return a.astype(dtype)
+
+
+def codim2_data(codim2_points: Sequence[Mapping[str, Any]], parameters: Sequence[str],
+                n: int) -> dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, Any]]]:
+    """The variables ``codim2_*`` on the dimension ``codim2`` of a curve's codim-2 points.
+
+    The same on every curve: of N-1 motions (:func:`curve_dataset`) and of N-p motions
+    (:func:`impactcont.multi_impact_curve`, whose dataset is a branch dataset).
+
+    Parameters
+    ----------
+    codim2_points : sequence of dict
+        Keys ``label``, ``omega``, ``b`` (and the curve's parameters), ``delta``,
+        ``point``, ``precision``, ``status``, ``multipliers`` (``2n`` each).
+    parameters : (str, str)
+        The curve's parameters.
+    n : int
+        Degrees of freedom.
+
+    Returns
+    -------
+    dict
+        ``name: (dims, values, attrs)``, ready for :class:`xarray.Dataset`.
+
+    Raises
+    ------
+    TypeError, ValueError
+        A point that is not a mapping, has other keys, a label not in
+        :data:`CODIM2_LABELS` or a status not in :data:`CODIM2_STATUSES`.
+    """
+    fields = _codim2_fields(parameters)
+    count = len(codim2_points)
+    data_vars: dict[str, tuple[tuple[str, ...], np.ndarray, dict[str, Any]]] = {}
+    for key, spec in fields.items():
+        values = []
+        for i, cp in enumerate(codim2_points):
+            if not isinstance(cp, Mapping):
+                raise TypeError(f"codim2_points[{i}] must be a dict; got {cp!r}")
+            if set(cp) != set(fields):
+                raise ValueError(f"codim2_points[{i}] must have keys {sorted(fields)}; got "
+                                 f"{sorted(cp)}")
+            values.append(cp[key])
+        if key == "label":
+            bad = [v for v in values if v not in CODIM2_LABELS]
+            if bad:
+                raise ValueError(f"codim2 labels must be in {CODIM2_LABELS}; got {bad}")
+            arr = np.array(values, dtype=_LABEL_DTYPE).reshape(count)
+        elif key == "status":
+            bad = [v for v in values if v not in CODIM2_STATUSES]
+            if bad:  # a longer text would be cut to the dtype's width
+                raise ValueError(f"codim2 statuses must be in {CODIM2_STATUSES}; got {bad}")
+            arr = np.array(values, dtype=_STATUS_DTYPE).reshape(count)
+        elif spec.kind == "c":
+            arr = np.array(values, dtype=np.complex128).reshape(count, 2 * n)
+        elif spec.kind == "i":
+            arr = np.array(values, dtype=np.int64).reshape(count)
+        else:
+            arr = np.array(values, dtype=np.float64).reshape(count)
+        data_vars[codim2_variable(key)] = (("codim2", *spec.extra_dims), arr, spec.attrs())
+    return data_vars
 
 
 def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: ImpactOscillator,
@@ -252,34 +335,7 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
         shape = (npoints,) + (2 * n,) * len(spec.extra_dims)
         data_vars[key] = (("point", *spec.extra_dims), _array(key, columns[key], spec, shape),
                           spec.attrs())
-    fields = _codim2_fields(parameters)
-    count = len(codim2_points)
-    for key, spec in fields.items():
-        values = []
-        for i, cp in enumerate(codim2_points):
-            if not isinstance(cp, Mapping):
-                raise TypeError(f"codim2_points[{i}] must be a dict; got {cp!r}")
-            if set(cp) != set(fields):
-                raise ValueError(f"codim2_points[{i}] must have keys {sorted(fields)}; got "
-                                 f"{sorted(cp)}")
-            values.append(cp[key])
-        if key == "label":
-            bad = [v for v in values if v not in CODIM2_LABELS]
-            if bad:
-                raise ValueError(f"codim2 labels must be in {CODIM2_LABELS}; got {bad}")
-            arr = np.array(values, dtype=_LABEL_DTYPE).reshape(count)
-        elif key == "status":
-            bad = [v for v in values if v not in CODIM2_STATUSES]
-            if bad:  # a longer text would be cut to the dtype's width
-                raise ValueError(f"codim2 statuses must be in {CODIM2_STATUSES}; got {bad}")
-            arr = np.array(values, dtype=_STATUS_DTYPE).reshape(count)
-        elif spec.kind == "c":
-            arr = np.array(values, dtype=np.complex128).reshape(count, 2 * n)
-        elif spec.kind == "i":
-            arr = np.array(values, dtype=np.int64).reshape(count)
-        else:
-            arr = np.array(values, dtype=np.float64).reshape(count)
-        data_vars[codim2_variable(key)] = (("codim2", *spec.extra_dims), arr, spec.attrs())
+    data_vars.update(codim2_data(codim2_points, parameters, n))
     coords = point_coords(npoints, n)
     attrs = {
         "title": title or f"{kind} curve of periodic {N}-1 motions in "
@@ -301,19 +357,24 @@ _OPTIONAL_MAP_VARIABLES = ("spectral_radius", "critical_multiplier")
 
 def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.ndarray,
                 b: np.ndarray, values: Mapping[str, np.ndarray], options: Any,
-                title: str | None = None) -> xr.Dataset:
+                title: str | None = None,
+                parameters: tuple[str, str] = ("omega", "b")) -> xr.Dataset:
     """Assemble a map of existence, physicality and stability on ``(N, omega, b)``.
 
     Parameters
     ----------
     oscillator : ImpactOscillator
     N, omega, b : sequences
-        The grid.
+        The grid: ``omega`` the values of ``parameters[0]``, ``b`` those of
+        ``parameters[1]``.
     values : mapping
-        One array per entry of :data:`MAP_VARIABLES` with the dims listed there.
+        One array per entry of :func:`map_variables` with the dims listed there.
     options : dict
         How the map was computed (executor, chunks), stored as JSON.
     title : str, optional
+    parameters : (str, str)
+        The grid's parameters, its dims after ``N`` (default ``omega, b``; any other pair
+        is stored in the attribute ``parameters``).
 
     Returns
     -------
@@ -321,15 +382,16 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     """
     if not isinstance(oscillator, ImpactOscillator):
         raise TypeError(f"oscillator must be an ImpactOscillator; got {oscillator!r}")
+    first, second = parameters
     N = [_N(k) for k in N]
     omega, b = (np.asarray(x, dtype=float) for x in (omega, b))
     if omega.ndim != 1 or b.ndim != 1:
         raise ValueError(f"omega and b must be 1-D grids; got shapes {omega.shape} and {b.shape}")
     if not isinstance(options, Mapping):
         raise TypeError(f"options must be a mapping; got {options!r}")
-    sizes = {"N": len(N), "omega": len(omega), "b": len(b), "root": 2}
+    sizes = {"N": len(N), first: len(omega), second: len(b), "root": 2}
     data_vars = {}
-    for key, (spec, dims) in MAP_VARIABLES.items():
+    for key, (spec, dims) in map_variables(parameters).items():
         if key in _OPTIONAL_MAP_VARIABLES and key not in values:
             continue  # a map computed without eigenvalues
         if key not in values:
@@ -339,8 +401,8 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     coords = {
         "N": ("N", np.asarray(N, dtype=np.int64),
               {"long_name": "forcing periods per impact", "units": "1"}),
-        "omega": ("omega", np.asarray(omega, dtype=float), PARAMETERS["omega"].attrs()),
-        "b": ("b", np.asarray(b, dtype=float), PARAMETERS["b"].attrs()),
+        first: (first, np.asarray(omega, dtype=float), PARAMETERS[first].attrs()),
+        second: (second, np.asarray(b, dtype=float), PARAMETERS[second].attrs()),
         "root": ("root", np.array([1, -1], dtype=np.int64),
                  {"long_name": "root of eq. (15)", "units": "1",
                   "description": "Sign in front of the square root of eq. (15)."}),
@@ -348,6 +410,8 @@ def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.nda
     attrs = {"title": title or "Existence, physicality and stability of N-1 motions",
              "impactcont_dataset": "map", "oscillator": oscillator.to_json(),
              "options": json.dumps(dict(options), sort_keys=True), **provenance_attributes()}
+    if (first, second) != ("omega", "b"):
+        attrs["parameters"] = f"{first},{second}"
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
@@ -393,6 +457,22 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
     return ds
 
 
+def map_parameters(ds: xr.Dataset) -> tuple[str, str]:
+    """The two parameters of a map's grid: its attribute ``parameters``, else ``omega, b``.
+
+    Raises
+    ------
+    ValueError
+        The attribute names other than two parameters of the vocabulary.
+    """
+    text = ds.attrs.get("parameters", "omega,b")
+    names = split_parameters(text) if isinstance(text, str) else []
+    if len(names) != 2 or names[0] == names[1] or not all(n in PARAMETERS for n in names):
+        raise ValueError(f"attribute 'parameters' of a map must name two different parameters "
+                         f"of {sorted(PARAMETERS)} (comma-joined); got {text!r}")
+    return names[0], names[1]
+
+
 def validate_map_dataset(ds: Any) -> xr.Dataset:
     """Check that ``ds`` has the layout of :func:`map_dataset`; return it.
 
@@ -406,7 +486,8 @@ def validate_map_dataset(ds: Any) -> xr.Dataset:
         Naming the missing or malformed attribute or variable.
     """
     _check_kind(ds, "map", _MAP_ATTRS)
-    check_variables(ds, {k: (dims, s.kind) for k, (s, dims) in MAP_VARIABLES.items()
+    parameters = map_parameters(ds)
+    check_variables(ds, {k: (dims, s.kind) for k, (s, dims) in map_variables(parameters).items()
                          if k not in _OPTIONAL_MAP_VARIABLES or k in ds.variables}, "map")
     check_attributes(ds, "map")
     return ds

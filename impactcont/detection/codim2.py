@@ -24,6 +24,19 @@ tests are skipped on ZV curves, where ``G`` has its pole (eq. 25). As on
 branches, a PD sign change without a multiplier at -1 (through the pole) and an
 NS sign change at a neutral saddle are discarded.
 
+The location is written once for both curve problems, the N-1 closed form
+(:class:`~impactcont.problems.codim1.CurveProblem`) and the shooting of any N-p motion
+(:class:`~impactcont.problems.multi_impact_curve.MultiImpactCurveProblem`), against what
+both provide (:class:`Codim2Problem`): the tests watched on the curve and their values at
+a point, where a point lies in the plane of the two parameters, a Newton solve of the
+curve on a hyperplane, the motion at a point. On curves of N-p motions the ZV test is
+the smallest impact velocity and the GR test the smallest clearance over the p impacts
+and flights, the SN test the signed smallest singular value of the branch problem's
+Jacobian (:func:`~impactcont.problems.multi_impact_curve.signed_smallest_singular_value`),
+and the PD and NS tests are made free of the poles of every impact
+(:func:`~impactcont.problems.events.pole_free`); the GR test is not watched on a GR curve
+of N-p motions (its second-lowest clearance is not searched yet).
+
 Curve ends, found while continuing (:func:`impactcont.analysis.curves.curve`) rather than
 here: an NS curve ends at ``theta -> 0`` (``R1``, 1:1 resonance) or
 ``theta -> pi`` (``R2``, 1:2), the points that SN and PD curves meet as a double
@@ -36,30 +49,70 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+from typing import Any, Protocol
 
 import numpy as np
 
 from impactcont.core.locate import dip_bottom, parts_beside_poles, zero_precision
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.detection.locator import locate_zero, twins
-from impactcont.detection.special_points import event_noise, pole_free
-from impactcont.orbit.periodic import PeriodicOrbit
-from impactcont.problems.codim1 import CurveProblem
+from impactcont.detection.special_points import event_noise
+from impactcont.vocabulary import Label
 
-__all__ = ["TESTS", "Codim2Point", "detect_codim2", "grazing_other_gap", "test_values"]
+__all__ = ["TESTS", "Codim2Point", "Codim2Problem", "codim2_record", "detect_codim2",
+           "grazing_other_gap", "test_values"]
 
 log = logging.getLogger(__name__)
 
-#: The test functions watched on each kind of curve.
-TESTS: dict[str, tuple[str, ...]] = {
-    "SN": ("ZV", "GR", "PD", "NS"),
-    "PD": ("ZV", "GR", "SN", "NS"),
-    "NS": ("ZV", "GR", "SN", "PD"),
-    "GR": ("ZV", "GR", "SN", "PD", "NS"),
-    "ZV": ("SN",),
+#: The test functions watched on each kind of curve (of N-1 motions; a problem declares
+#: its own in :attr:`Codim2Problem.codim2_tests`).
+TESTS: dict[Label, tuple[Label, ...]] = {
+    Label.SN: (Label.ZV, Label.GR, Label.PD, Label.NS),
+    Label.PD: (Label.ZV, Label.GR, Label.SN, Label.NS),
+    Label.NS: (Label.ZV, Label.GR, Label.SN, Label.PD),
+    Label.GR: (Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS),
+    Label.ZV: (Label.SN,),
 }
 
+
+class Codim2Problem(Protocol):
+    """What a curve problem provides for its codim-2 points to be located.
+
+    A curve point is ``x = [u, lam]``: the problem's unknowns ``u`` (which hold the first
+    parameter ``p1``) and the second parameter ``lam = p2``.
+    """
+
+    kind: Label
+    """The kind of the curve."""
+    parameters: tuple[str, str]
+    """``(p1, p2)``."""
+    codim2_tests: tuple[Label, ...]
+    """The other kinds whose test functions are watched along the curve."""
+    last_step: float
+    """The last Newton step of :meth:`on_hyperplane` (a bound on its error)."""
+
+    def codim2_test(self, test: Label, x: np.ndarray, orbit: Any) -> float:
+        """The test function of `test` at the curve point `x` with motion `orbit`."""
+
+    def plane(self, x: np.ndarray) -> tuple[float, float]:
+        """``(p1, p2)`` of a curve point."""
+
+    def on_hyperplane(self, guess: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """The curve point on the hyperplane through `guess` normal to `normal`
+        (raises :class:`~impactcont.core.stepper.NewtonConvergenceError`)."""
+
+    def orbit(self, u: np.ndarray, lam: float) -> Any:
+        """The motion at the point ``[u, lam]`` (multipliers, impact velocity, ...)."""
+
+    def accept(self, u: np.ndarray, lam: float) -> None:
+        """Renew the borders of the augmented system at an accepted point."""
+
+    def end_resonance(self, x: np.ndarray) -> Label | None:
+        """``R1``/``R2`` when `x` is a strong-resonance end of the curve (theta = 0, pi of
+        an N-1 NS curve), else None."""
+
 _UNIT_TOL = 1e-6
+_POLE_FREE = (Label.PD, Label.NS)  # tests made free of G's pole at h2 = 0 (eq. 25)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -72,7 +125,7 @@ class Codim2Point:
         ``"A+B"`` (curve kind A meets kind B), ``"R1"`` or ``"R2"``.
     x : ndarray
         ``[u, lam]`` of the curve problem at the point.
-    orbit : PeriodicOrbit
+    orbit : PeriodicOrbit or MultiImpactOrbit
     point : int
         Index of the nearest accepted curve point.
     precision : float
@@ -83,39 +136,22 @@ class Codim2Point:
 
     label: str
     x: np.ndarray
-    orbit: PeriodicOrbit
+    orbit: Any
     point: int
     precision: float
     status: str
 
 
-def grazing_other_gap(problem: CurveProblem, orbit: PeriodicOrbit, tangency_time: float) -> float:
-    """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*``
-    (the exact search of the curve's pieces, with the tangency excluded; inf when there
-    is none)."""
-    pc = problem._pieces(*_params(problem, orbit))
-    return float(pc.b - pc.other_maximum(orbit.delta, float(tangency_time)))
+def grazing_other_gap(problem: Any, orbit: Any, tangency_time: float) -> float:
+    """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*`` on
+    an N-1 curve (:meth:`~impactcont.problems.codim1.CurveProblem.other_gap`)."""
+    return problem.other_gap(orbit, tangency_time)
 
 
-def _params(problem: CurveProblem, orbit: PeriodicOrbit) -> tuple[float, float]:
-    p1, p2 = problem.parameters
-    return getattr(orbit.oscillator, p1), getattr(orbit.oscillator, p2)
-
-
-def test_values(problem: CurveProblem, x: np.ndarray, orbit: PeriodicOrbit) -> dict[str, float]:
-    """The test functions of :data:`TESTS` for the problem's kind at a curve point."""
-    out: dict[str, float] = {}
-    for test in TESTS[problem.kind]:
-        if test == "ZV":
-            out[test] = orbit.impact_velocity
-        elif test == "GR":
-            out[test] = (grazing_other_gap(problem, orbit, float(x[2])) if problem.kind == "GR"
-                         else orbit.gap_min)
-        elif test == "SN":
-            out[test] = problem.fold_function(x[:-1], x[-1])
-        else:  # PD, NS: free of the pole of G at h2 = 0
-            out[test] = pole_free(test, orbit.multipliers, np.array([orbit.impact_velocity]))
-    return out
+def test_values(problem: Codim2Problem, x: np.ndarray, orbit: Any) -> dict[Label, float]:
+    """The test functions the problem watches (:attr:`Codim2Problem.codim2_tests`) at a
+    curve point."""
+    return {test: problem.codim2_test(test, x, orbit) for test in problem.codim2_tests}
 
 
 def _changes(a: float, b: float) -> bool:
@@ -124,16 +160,16 @@ def _changes(a: float, b: float) -> bool:
     return not (math.isnan(a) or math.isnan(b)) and (a < 0) != (b < 0)
 
 
-_CRITICAL = {"SN": 1.0, "PD": -1.0}
+_CRITICAL = {Label.SN: 1.0, Label.PD: -1.0}
 """The multiplier that stays on the unit circle along an SN or a PD curve."""
 
-_RESONANCE = {"SN": "R1", "PD": "R2"}
+_RESONANCE = {Label.SN: "R1", Label.PD: "R2"}
 """The strong resonance where a second multiplier reaches the curve's critical value:
 a double +1 (1:1, ``R1``) on an SN curve, a double -1 (1:2, ``R2``) on a PD curve; the
 same names as the ends of an NS curve there."""
 
 
-def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
+def _name(kind: str, test: str, orbit: Any) -> str | None:
     """What a zero of `test` on a curve of `kind` is, or ``None`` when it is none.
 
     The PD test vanishes only with a multiplier at -1. The NS test (the
@@ -148,22 +184,34 @@ def _name(kind: str, test: str, orbit: PeriodicOrbit) -> str | None:
     distance, before the imaginary part is looked at.
     """
     mu = orbit.multipliers
-    if test == "PD":
+    if test in _CRITICAL and kind == Label.NS and _double(mu, _CRITICAL[test]):
+        # the pair of an NS curve of N-p motions (which does not end there) meets at +-1
+        return _RESONANCE[test]
+    if test == Label.PD:
         return f"{kind}+PD" if np.min(np.abs(mu + 1.0)) < _UNIT_TOL else None
-    if test != "NS":
+    if test != Label.NS:
         return f"{kind}+{test}"
     critical = _CRITICAL.get(kind)
     if critical is not None:
-        rest = np.delete(mu, np.argmin(np.abs(mu - critical)))
-        if rest.size and np.min(np.abs(rest - critical)) < _UNIT_TOL ** 0.5:
+        if _double(mu, critical):
             return _RESONANCE[kind]
-        mu = rest
+        mu = np.delete(mu, np.argmin(np.abs(mu - critical)))
     close = np.abs(np.abs(mu) - 1.0) < _UNIT_TOL
     return f"{kind}+NS" if np.any(close & (np.abs(mu.imag) > 1e-8)) else None
 
 
-def _plane_distance(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray) -> float:
-    return float(math.hypot(xa[0] - xb[0], xa[-1] - xb[-1]))
+def _double(mu: np.ndarray, critical: float) -> bool:
+    """Two multipliers at `critical` (+1 or -1): the Jordan block of a strong resonance,
+    whose copies split by the square root of rounding (possibly into a complex pair)."""
+    mu = np.asarray(mu)
+    if mu.size < 2 or not np.all(np.isfinite(mu)):
+        return False
+    return bool(np.sort(np.abs(mu - critical))[1] < _UNIT_TOL ** 0.5)
+
+
+def _plane_distance(problem: Codim2Problem, xa: np.ndarray, xb: np.ndarray) -> float:
+    (a1, a2), (b1, b2) = problem.plane(xa), problem.plane(xb)
+    return float(math.hypot(a1 - b1, a2 - b2))
 
 
 class _Step:
@@ -173,7 +221,7 @@ class _Step:
     chord through ``xa + s (xb - xa)``; its test values are cached.
     """
 
-    def __init__(self, problem: CurveProblem, xa: np.ndarray, xb: np.ndarray) -> None:
+    def __init__(self, problem: Codim2Problem, xa: np.ndarray, xb: np.ndarray) -> None:
         self.problem, self.xa, self.xb = problem, xa, xb
         self.chord = xb - xa
         self._cache: dict[float, tuple[np.ndarray, dict[str, float]]] = {}
@@ -186,11 +234,10 @@ class _Step:
             elif sv == 1.0:
                 x = self.xb
             else:
-                guess, chord = self.xa + sv * self.chord, self.chord
-                x = self.problem.solve(guess, lambda y, g=guess: float(chord @ (y - g)), chord)
+                x = self.problem.on_hyperplane(self.xa + sv * self.chord, self.chord)
             orbit = self.problem.orbit(x[:-1], x[-1])
             self._cache[sv] = (x, test_values(self.problem, x, orbit))
-            for test in ("PD", "NS"):  # their rounding, for the sides of a pole
+            for test in (Label.PD, Label.NS):  # their rounding, for the sides of a pole
                 self._noise[sv, test] = event_noise(test, orbit)
         return self._cache[sv]
 
@@ -208,8 +255,11 @@ class _Step:
         sroot, status = locate_zero(lambda sv: self.value(sv, test), lo, hi, 1e-13)
         x = self.point(sroot)[0]
         precision = zero_precision(lambda sv: self.value(sv, test),
-                                   lambda sv: self.point(sv)[0][[0, -1]], sroot, 1e-13,
-                                   lo, hi)
+                                   lambda sv: np.array(self.problem.plane(self.point(sv)[0])),
+                                   sroot, 1e-13, lo, hi)
+        newton = self.problem.last_step  # the error of the point on the curve itself
+        if math.isfinite(newton):
+            precision = max(precision, newton)
         return sroot, x, precision, status
 
 
@@ -226,12 +276,12 @@ def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[
     A sign change across the pole is the pole's: no codim-2 point.
     """
     whole = [(0.0, 1.0)]
-    if test not in ("PD", "NS") or "ZV" not in tests_a or not _changes(tests_a["ZV"],
-                                                                         tests_b["ZV"]):
+    if test not in _POLE_FREE or Label.ZV not in tests_a or not _changes(tests_a[Label.ZV],
+                                                                          tests_b[Label.ZV]):
         return whole
     step.problem.accept(step.xa[:-1], step.xa[-1])
     try:
-        s_zv = step.locate("ZV")[0]
+        s_zv = step.locate(Label.ZV)[0]
     except (ValueError, NewtonConvergenceError):
         return whole
     return parts_beside_poles(f"{step.problem.kind}+{test}",
@@ -239,26 +289,31 @@ def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[
                               lambda sv: step.noise(sv, test), [s_zv])
 
 
-def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[PeriodicOrbit],
-                  tests: list[dict[str, float]]) -> list[Codim2Point]:
+def detect_codim2(problem: Codim2Problem, xs: list[np.ndarray], orbits: list[Any],
+                  tests: list[dict[Label, float]], found: list[Codim2Point] | None = None
+                  ) -> list[Codim2Point]:
     """Locate the codim-2 points between consecutive accepted points of a curve.
 
     Parameters
     ----------
-    problem : CurveProblem
+    problem : Codim2Problem
+        The curve's problem (N-1 or N-p).
     xs : list of ndarray
         ``[u, lam]`` of the accepted points, in curve order.
-    orbits : list of PeriodicOrbit
+    orbits : list of PeriodicOrbit or MultiImpactOrbit
         The motion at each point.
     tests : list of dict
         :func:`test_values` at each point.
+    found : list, optional
+        Where the points are appended as they are located (the same list is returned):
+        a caller interrupted during the location keeps those located before.
 
     Returns
     -------
     list of Codim2Point
         In curve order.
     """
-    found: list[Codim2Point] = []
+    found = [] if found is None else found
     arclength = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(np.asarray(
         xs, dtype=float), axis=0), axis=1))]) if len(xs) > 1 else np.zeros(len(xs))
     for k in range(len(xs) - 1):
@@ -267,7 +322,7 @@ def detect_codim2(problem: CurveProblem, xs: list[np.ndarray], orbits: list[Peri
     return found
 
 
-def _without_grazing_twins(problem: CurveProblem, points: list[Codim2Point]
+def _without_grazing_twins(problem: Codim2Problem, points: list[Codim2Point]
                            ) -> list[Codim2Point]:
     """The codim-2 points of one step without each ``A+GR`` that is the grazing of a
     located ``A+ZV`` there (a zero-velocity impact is a grazing contact: the GR test
@@ -279,22 +334,22 @@ def _without_grazing_twins(problem: CurveProblem, points: list[Codim2Point]
     for point in points:
         twin = next((z for z in zv if point.label == f"{kind}+GR" and twins(
             _plane_distance(problem, z.x, point.x), z.precision + point.precision,
-            z.x[[0, -1]])), None)
+            np.array(problem.plane(z.x)))), None)
         if twin is None:
             kept.append(point)
         else:
             log.info("%s at %s is the grazing of the zero-velocity impact %s: reported once",
-                     point.label, point.x[[0, -1]], twin.label)
+                     point.label, problem.plane(point.x), twin.label)
     return kept
 
 
-def _codim2_on_step(problem: CurveProblem, xs: list[np.ndarray],
-                    tests: list[dict[str, float]], k: int, arclength: np.ndarray
+def _codim2_on_step(problem: Codim2Problem, xs: list[np.ndarray],
+                    tests: list[dict[Label, float]], k: int, arclength: np.ndarray
                     ) -> list[Codim2Point]:
     """The codim-2 points between accepted points `k` and ``k + 1``."""
     found: list[Codim2Point] = []
     step = _Step(problem, xs[k], xs[k + 1])
-    for test in TESTS[problem.kind]:
+    for test in problem.codim2_tests:
         if _ends_at_resonance(problem, test, xs[k], xs[k + 1]):
             continue  # the multiplier +-1 of the R1/R2 end: that end itself
         parts = _intervals(step, test, tests[k], tests[k + 1])
@@ -316,7 +371,7 @@ def _codim2_on_step(problem: CurveProblem, xs: list[np.ndarray],
 
 
 
-def _dip_parts(step: _Step, test: str, tests: list[dict[str, float]], k: int,
+def _dip_parts(step: _Step, test: str, tests: list[dict[Label, float]], k: int,
                arclength: np.ndarray) -> list[tuple[float, float]]:
     """The two halves of step `k` when `test` dips through zero and back inside it
     (:func:`~impactcont.core.locate.dip_bottom`: the parabola through the test at the step
@@ -337,17 +392,16 @@ def _dip_parts(step: _Step, test: str, tests: list[dict[str, float]], k: int,
     return [(0.0, bottom), (bottom, 1.0)]
 
 
-def _ends_at_resonance(problem: CurveProblem, test: str, xa: np.ndarray, xb: np.ndarray
+def _ends_at_resonance(problem: Codim2Problem, test: str, xa: np.ndarray, xb: np.ndarray
                        ) -> bool:
-    """Whether `test` (SN: a multiplier +1, PD: -1) of an NS curve's step vanishes at an
-    end of the step that is the curve's 1:1 (``theta = 0``) or 1:2 (``theta = pi``) end."""
-    if problem.kind != "NS" or test not in ("SN", "PD"):
-        return False
-    target = 0.0 if test == "SN" else math.pi
-    return any(float(x[2]) == target for x in (xa, xb))
+    """Whether `test` (SN: a multiplier +1, PD: -1) vanishes at an end of the step that
+    is the curve's own 1:1 or 1:2 end (:meth:`Codim2Problem.end_resonance`)."""
+    resonance = _RESONANCE.get(test)
+    return resonance is not None and any(problem.end_resonance(x) == resonance
+                                         for x in (xa, xb))
 
 
-def _codim2_in(problem: CurveProblem, step: _Step, test: str, k: int, lo: float, hi: float,
+def _codim2_in(problem: Codim2Problem, step: _Step, test: str, k: int, lo: float, hi: float,
                ga: float, gb: float) -> Codim2Point | None:
     """The codim-2 point where `test` changes sign in ``[lo, hi]`` of step `k`, or None."""
     xs = (step.xa, step.xb)
@@ -359,7 +413,8 @@ def _codim2_in(problem: CurveProblem, step: _Step, test: str, k: int, lo: float,
         # keep the bracket, placed by linear interpolation of the test values
         log.info("%s+%s between curve points %d and %d kept as bracketed: %s",
                  problem.kind, test, k, k + 1, exc)
-        sv = lo + ga / (ga - gb) * (hi - lo)
+        fraction = ga / (ga - gb) if math.isfinite(ga) and math.isfinite(gb) else 0.5
+        sv = lo + fraction * (hi - lo)  # the middle when a test is infinite (no maximum)
         x = step.xa + sv * step.chord
         precision = _plane_distance(problem, *xs)
         status = "bracketed"
@@ -371,6 +426,26 @@ def _codim2_in(problem: CurveProblem, step: _Step, test: str, k: int, lo: float,
         return None
     nearest = k if (_plane_distance(problem, x, xs[0])
                     <= _plane_distance(problem, x, xs[1])) else k + 1
+    p1, p2 = problem.plane(x)
     log.info("%s on the %s curve at %s=%.10g, %s=%.10g (%s)", label, problem.kind,
-             problem.parameters[0], x[0], problem.parameters[1], x[-1], status)
+             problem.parameters[0], p1, problem.parameters[1], p2, status)
     return Codim2Point(label, x, orbit, nearest, precision, status)
+
+
+def codim2_record(problem: Any, point: Codim2Point) -> dict[str, Any]:
+    """The fields of a codim-2 point as the dataset stores them
+    (:func:`impactcont.dataset.curves.codim2_data`): label, the values of ``omega``, ``b``
+    and the curve's parameters, the impact phase wrapped to ``[-pi, pi]``, the nearest
+    point, the precision, the status, the multipliers (NaN on a ZV curve: G has its
+    pole there, eq. 25)."""
+    osc = problem.oscillator_of(point.x)
+    multipliers = np.asarray(point.orbit.multipliers)
+    if not problem.multipliers_defined:
+        multipliers = np.full(2 * osc.n, np.nan + 0j)
+    record: dict[str, Any] = {
+        "label": point.label, "delta": math.remainder(problem.phase(point), 2 * math.pi),
+        "point": point.point, "precision": point.precision, "status": point.status,
+        "multipliers": multipliers}
+    for name in dict.fromkeys(["omega", "b", *problem.parameters]):
+        record[name] = problem.parameter_value(osc, name)
+    return record

@@ -103,6 +103,7 @@ from impactcont.orbit.periodic import (
     orbit_at_phase,
     physical_transition,
 )
+from impactcont.problems.events import pole_free
 from impactcont.problems.general_pieces import (
     STEPPED_PARAMETERS,
     GeneralPieces,
@@ -114,6 +115,7 @@ from impactcont.vocabulary import (
     CONTINUABLE_PARAMETERS,
     CURVE_KINDS,
     PARAMETERS,
+    Label,
     check_parameter,
 )
 
@@ -362,8 +364,13 @@ class CurveProblem:
     auxiliary data in :meth:`accept`.
     """
 
-    kind: str = ""
+    kind: Label
     extra_names: tuple[str, ...] = ()
+    codim2_tests: tuple[Label, ...] = ()
+    """The other kinds whose test functions are watched along the curve (the table of
+    :mod:`impactcont.detection.codim2`)."""
+    multipliers_defined: bool = True
+    """False on a ZV curve: G has its pole at ``h2 = 0`` (eq. 25)."""
 
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
@@ -435,6 +442,53 @@ class CurveProblem:
         pc = self._pieces(u[0], lam)
         c, s = pc.S0
         return float(-c * math.sin(u[1]) + s * math.cos(u[1]))
+
+    def other_gap(self, orbit: PeriodicOrbit, tangency_time: float) -> float:
+        """``b`` minus the highest interior maximum of x1 other than the tangency at
+        ``t*`` (the exact search of the pieces, with the tangency excluded; inf when there
+        is none)."""
+        pc = self._pieces(*self.plane_of(orbit))
+        return float(pc.b - pc.other_maximum(orbit.delta, float(tangency_time)))
+
+    def plane_of(self, orbit: PeriodicOrbit) -> tuple[float, float]:
+        """``(p1, p2)`` of a motion of the curve."""
+        return tuple(float(getattr(orbit.oscillator, name)) for name in self.parameters)
+
+    # -- what the location of codim-2 points needs (detection.codim2.Codim2Problem) ------------
+    def grazing_test(self, x: np.ndarray, orbit: PeriodicOrbit) -> float:
+        """The GR test at a curve point: ``gap_min`` (eq. 16)."""
+        return orbit.gap_min
+
+    def codim2_test(self, test: Label, x: np.ndarray, orbit: PeriodicOrbit) -> float:
+        """The test function of `test` at the curve point ``x = [u, lam]``: the impact
+        velocity (ZV), :meth:`grazing_test` (GR), :meth:`fold_function` (SN), the pole-free
+        PD and NS products (:func:`~impactcont.problems.events.pole_free`)."""
+        return _CODIM2_TESTS[test](self, x, orbit)
+
+    def plane(self, x: np.ndarray) -> tuple[float, float]:
+        """``(p1, p2)`` of a curve point ``x = [u, lam]``."""
+        return float(x[0]), float(x[-1])
+
+    def on_hyperplane(self, guess: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """The curve point on the hyperplane through `guess` normal to `normal`
+        (:meth:`solve`)."""
+        return self.solve(guess, lambda y: float(normal @ (y - guess)), normal)
+
+    def end_resonance(self, x: np.ndarray) -> Label | None:
+        """The strong resonance that ends the curve at `x` (an NS curve's), else None."""
+        return None
+
+    def oscillator_of(self, x: np.ndarray) -> ImpactOscillator:
+        """The oscillator at a curve point."""
+        return self.oscillator_at(x[0], x[-1])
+
+    def phase(self, point: object) -> float:
+        """The impact phase of a codim-2 point (its ``x[1]``)."""
+        return float(point.x[1])
+
+    def parameter_value(self, osc: ImpactOscillator, name: str) -> float:
+        """The value of parameter `name` on `osc`."""
+        return float(getattr(osc, name))
 
     # -- the Problem protocol -------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
@@ -639,7 +693,8 @@ class FoldCurve(CurveProblem):
     Its closed form is ``b^2 = c^2 + s^2``; at it ``G`` has a multiplier +1.
     """
 
-    kind = "SN"
+    kind = Label.SN
+    codim2_tests = (Label.ZV, Label.GR, Label.PD, Label.NS)
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         c, s = pc.S0  # over the scale of eq. (14), as r
@@ -657,7 +712,8 @@ class PeriodDoublingCurve(CurveProblem):
     singular value) are renewed at every accepted point.
     """
 
-    kind = "PD"
+    kind = Label.PD
+    codim2_tests = (Label.ZV, Label.GR, Label.SN, Label.NS)
 
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
@@ -684,7 +740,8 @@ class NeimarkSackerCurve(CurveProblem):
     Unknowns ``u = [p1, delta, theta, Re v (2n), Im v (2n)]``.
     """
 
-    kind = "NS"
+    kind = Label.NS
+    codim2_tests = (Label.ZV, Label.GR, Label.SN, Label.PD)
 
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
@@ -736,6 +793,11 @@ class NeimarkSackerCurve(CurveProblem):
         k = upper[np.argmin(np.abs(np.abs(mu[upper]) - 1.0))]
         v = vecs[:, k] / np.linalg.norm(vecs[:, k])
         return np.concatenate([[float(np.angle(mu[k]))], v.real, v.imag])
+
+    def end_resonance(self, x: np.ndarray) -> Label | None:
+        """``R1`` at ``theta = 0``, ``R2`` at ``theta = pi``: where the curve ends
+        (:meth:`resonance_end` puts its last point there exactly)."""
+        return _ENDS.get(float(x[2]))
 
     def eigenvector(self, u: np.ndarray) -> np.ndarray:
         """The complex critical eigenvector ``v`` of a point."""
@@ -818,8 +880,14 @@ class GrazingCurve(CurveProblem):
     Unknowns ``u = [p1, delta, t*]``; the tangency time is an unknown.
     """
 
-    kind = "GR"
+    kind = Label.GR
     extra_names = ("tangency_time",)
+    codim2_tests = (Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS)
+
+    def grazing_test(self, x: np.ndarray, orbit: PeriodicOrbit) -> float:
+        """The GR test on a grazing curve: the gap at the highest interior maximum other
+        than the tangency (a double grazing where it vanishes)."""
+        return self.other_gap(orbit, float(x[2]))
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         x1, v1 = pc.mass1(delta, extras[0])
@@ -844,15 +912,31 @@ class ZeroVelocityCurve(CurveProblem):
     response whose amplitude of ``x1`` is ``|b|``, the same for every N.
     """
 
-    kind = "ZV"
+    kind = Label.ZV
+    codim2_tests = (Label.SN,)
+    multipliers_defined = False
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         return np.array([pc.impact_velocity(delta)])
 
 
-_KINDS: dict[str, type[CurveProblem]] = {
-    "SN": FoldCurve, "PD": PeriodDoublingCurve, "NS": NeimarkSackerCurve,
-    "GR": GrazingCurve, "ZV": ZeroVelocityCurve,
+_ENDS = {0.0: "R1", math.pi: "R2"}
+"""The strong resonances where an NS curve ends, by its angle theta."""
+
+#: The test function of each kind at a point of a curve of another kind.
+_CODIM2_TESTS: dict[Label, Callable[[CurveProblem, np.ndarray, PeriodicOrbit], float]] = {
+    Label.ZV: lambda problem, x, orbit: orbit.impact_velocity,
+    Label.GR: lambda problem, x, orbit: problem.grazing_test(x, orbit),
+    Label.SN: lambda problem, x, orbit: problem.fold_function(x[:-1], x[-1]),
+    Label.PD: lambda problem, x, orbit: pole_free(Label.PD, orbit.multipliers,
+                                                  np.array([orbit.impact_velocity])),
+    Label.NS: lambda problem, x, orbit: pole_free(Label.NS, orbit.multipliers,
+                                                  np.array([orbit.impact_velocity])),
+}
+
+_KINDS: dict[Label, type[CurveProblem]] = {
+    Label.SN: FoldCurve, Label.PD: PeriodDoublingCurve, Label.NS: NeimarkSackerCurve,
+    Label.GR: GrazingCurve, Label.ZV: ZeroVelocityCurve,
 }
 
 

@@ -35,30 +35,56 @@ Newton corrections, so that the tangent follows the curve round a fold in ``p2``
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
+from impactcont.core.corrector import solve_on_hyperplane
+from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, GAP, RESTITUTION, model_parameter
-from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.multi_impact import MultiImpactOrbit, _geometry
 from impactcont.orbit.symmetry import half_map
 from impactcont.problems.events import event_function
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
-from impactcont.vocabulary import LABELS
+from impactcont.vocabulary import LABELS, Label
 
 __all__ = ["MultiImpactCurveProblem", "signed_smallest_singular_value"]
 
 _FD_STEP = 1.5e-8  # about sqrt(eps): forward differences
 _CACHE_SIZE = 32
 _REUSE = 1e-3
+_HYPERPLANE_TOL = 1e-11  # Newton on a hyperplane (codim-2 points, crossings, the start)
 #: Flight data whose parameters have exact derivatives from any branch problem's shot
 #: and leave the modal basis as it is.
 _EXACT = (FREQUENCY, GAP, RESTITUTION)
 
 BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
+
+
+def _approach_sign(problem: MultiImpactBranchProblem, u: np.ndarray, lam: float) -> float:
+    """The sign of the product of the p impact velocities ``h2_k`` at the shot of `u`.
+
+    G (eq. 25) has a pole ``a_k b_k^T / h2_k`` at each: ``det(G + I)`` changes sign
+    through a zero-velocity impact without a multiplier at -1, while ``s_min(G + I)``
+    stays finite and continuous there (a rank-one term growing without bound leaves the
+    smallest singular value to the complement). ``sign(prod h2_k) sigma(G + I)`` is then
+    continuous through it and vanishes only at a period doubling, as the pole-free
+    products of :func:`~impactcont.problems.events.pole_free`: a PD curve passes a
+    zero-velocity impact (the codim-2 point PD+ZV) as an N-1 curve does.
+    """
+    sh = problem._shoot(u, lam)
+    geo = _geometry(problem.flow_at(lam), problem.pattern)
+    n = geo.normals.shape[1]
+    # the impact ending flight k - 1 begins flight k: its velocity towards the stop
+    arrivals = sh.arrivals[np.arange(-1, problem.p - 1), n:]
+    speeds = np.einsum("ki,ki->k", arrivals, geo.normals) * geo.signs
+    return float(np.sign(np.prod(speeds))) or 1.0
 
 
 def signed_smallest_singular_value(matrix: np.ndarray) -> float:
@@ -107,7 +133,8 @@ class MultiImpactCurveProblem:
                                  "twice")
         self.params = tuple(model_parameter(osc, name) for name in (p1, p2))
         self.osc, self.N, self.p, self.pattern = osc, N, p, pattern
-        self.kind, self.parameters, self.symmetric = kind, (p1, p2), symmetric
+        self.kind, self.parameters, self.symmetric = Label(kind), (p1, p2), symmetric
+        self.last_step = math.nan
         self._problems: dict[tuple[str, float, float | None], BranchProblem] = {}
         self._first: dict[str, BranchProblem] = {}  # the first problem in each parameter
         self._tests: dict[tuple[bytes, float], float] = {}
@@ -173,9 +200,10 @@ class MultiImpactCurveProblem:
         if kind == "PD":
             base = self.branch_problem(lam)
             full = base.full if self.symmetric else base
-            G = full.jacobian_product(base.full_unknowns(u, p1) if self.symmetric else u, p1,
-                                      self.p)
-            return signed_smallest_singular_value(G + np.eye(G.shape[0]))
+            v = base.full_unknowns(u, p1) if self.symmetric else u
+            G = full.jacobian_product(v, p1, self.p)
+            return _approach_sign(full, v, p1) * signed_smallest_singular_value(
+                G + np.eye(G.shape[0]))
         orbit = self.orbit(x, lam, checks=kind == "GR")
         return self.test_of(orbit)
 
@@ -183,7 +211,8 @@ class MultiImpactCurveProblem:
         """The test function at a motion (all kinds but SN, which needs the problem)."""
         kind = self.kind
         if kind == "PD":
-            return signed_smallest_singular_value(orbit.G + np.eye(orbit.G.shape[0]))
+            sign = float(np.sign(np.prod(orbit.impact_velocities)))
+            return sign * signed_smallest_singular_value(orbit.G + np.eye(orbit.G.shape[0]))
         if kind == "BP":
             H = half_map(orbit)
             return signed_smallest_singular_value(H + np.eye(H.shape[0]))
@@ -218,6 +247,73 @@ class MultiImpactCurveProblem:
         value = grad, (self.test(x, lam + h) - g0) / h
         self._gradient = (y, value)
         return value
+
+    # -- what the location of codim-2 points needs (detection.codim2.Codim2Problem) ------------
+    @property
+    def codim2_tests(self) -> tuple[Label, ...]:
+        """The other kinds whose test functions are watched along the curve."""
+        return _KINDS[self.kind].codim2_tests
+
+    @property
+    def multipliers_defined(self) -> bool:
+        """False on a ZV curve: G has its pole at a zero impact velocity (eq. 25)."""
+        return _KINDS[self.kind].multipliers_defined
+
+    def codim2_test(self, test: Label, x: np.ndarray, orbit: MultiImpactOrbit) -> float:
+        """The test function of `test` at the curve point ``x = [u, p1, p2]``: the smallest
+        impact velocity (ZV) and clearance (GR) over the p impacts and flights, the signed
+        smallest singular value of the branch problem's Jacobian in ``u`` (SN: the branch
+        in ``p1`` folds), the PD and NS products free of the poles of every impact
+        (:func:`~impactcont.problems.events.event_function`)."""
+        return _CODIM2_TESTS[test](self, x, orbit)
+
+    def fold_test(self, x: np.ndarray) -> float:
+        """``sigma(dF/du)`` at the curve point ``x = [u, p1, p2]`` (zero at a fold in p1)."""
+        return signed_smallest_singular_value(
+            self.branch_problem(float(x[-1])).jacobian(x[:-2], float(x[-2])))
+
+    def plane(self, x: np.ndarray) -> tuple[float, float]:
+        """``(p1, p2)`` of a curve point ``x = [u, p1, p2]``."""
+        return float(x[-2]), float(x[-1])
+
+    def on_hyperplane(self, guess: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """The curve point on the hyperplane through `guess` normal to `normal` (Newton,
+        step tolerance 1e-11; its last step in :attr:`last_step`).
+
+        Raises
+        ------
+        NewtonConvergenceError
+            Newton did not converge.
+        """
+        try:
+            found = solve_on_hyperplane(self, np.asarray(guess, dtype=float),
+                                        np.asarray(normal, dtype=float), tol=_HYPERPLANE_TOL,
+                                        max_iter=30)
+        except (ParameterError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            # an iterate outside the parameters' range, or a shot that failed
+            raise NewtonConvergenceError(f"no curve point on the hyperplane: {exc}") from exc
+        if not found.converged or not np.all(np.isfinite(found.x)):
+            raise NewtonConvergenceError(f"no curve point on the hyperplane (last Newton step "
+                                         f"{found.last_step:.3g})")
+        self.last_step = float(found.last_step)
+        return found.x
+
+    def end_resonance(self, x: np.ndarray) -> Label | None:
+        """None: a curve of N-p motions has no end of its own at a strong resonance (an NS
+        curve goes on as a neutral saddle; its R1/R2 are the zeros of its SN/PD tests)."""
+        return None
+
+    def oscillator_of(self, x: np.ndarray) -> ImpactOscillator:
+        """The oscillator at a curve point."""
+        return self.branch_problem(float(x[-1])).oscillator_at(float(x[-2]))
+
+    def phase(self, point: Any) -> float:
+        """The impact phase of a codim-2 point: its motion's first phase."""
+        return float(point.orbit.delta)
+
+    def parameter_value(self, osc: ImpactOscillator, name: str) -> float:
+        """The value of parameter `name` on `osc` (by its model parameter)."""
+        return model_parameter(osc, name).value(osc)
 
     # -- the Problem protocol ------------------------------------------------------------------
     def accept(self, x: np.ndarray, lam: float) -> None:
@@ -254,3 +350,34 @@ class MultiImpactCurveProblem:
         u, p1 = x[:-1], float(x[-1])
         column = self._second_column(self.branch_problem(lam), u, p1, lam)
         return np.append(column, self._test_gradient(x, lam)[1])
+
+
+@dataclasses.dataclass(frozen=True)
+class _Kind:
+    """What a kind of curve of N-p motions watches and stores."""
+
+    codim2_tests: tuple[Label, ...]
+    multipliers_defined: bool = True
+
+
+#: The test functions watched on each kind of curve (those of the N-1 curves,
+#: :data:`impactcont.detection.codim2.TESTS`, but the GR test on a GR curve, whose
+#: second-lowest clearance is not searched; none on a BP curve, whose codim-2 points have
+#: no label yet).
+_KINDS: dict[Label, _Kind] = {
+    Label.SN: _Kind((Label.ZV, Label.GR, Label.PD, Label.NS)),
+    Label.PD: _Kind((Label.ZV, Label.GR, Label.SN, Label.NS)),
+    Label.NS: _Kind((Label.ZV, Label.GR, Label.SN, Label.PD)),
+    Label.GR: _Kind((Label.ZV, Label.SN, Label.PD, Label.NS)),
+    Label.ZV: _Kind((Label.SN,), multipliers_defined=False),
+    Label.BP: _Kind(()),
+}
+
+#: The test function of each kind at a point of a curve of another kind.
+_CODIM2_TESTS: dict[Label, Callable[[MultiImpactCurveProblem, np.ndarray, Any], float]] = {
+    Label.ZV: lambda problem, x, orbit: orbit.impact_velocity,
+    Label.GR: lambda problem, x, orbit: orbit.gap_min,
+    Label.SN: lambda problem, x, orbit: problem.fold_test(x),
+    Label.PD: lambda problem, x, orbit: float(event_function(Label.PD, orbit)),
+    Label.NS: lambda problem, x, orbit: float(event_function(Label.NS, orbit)),
+}

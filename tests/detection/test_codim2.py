@@ -43,9 +43,22 @@ class _LineCurve:
 
     kind = "SN"
     parameters = ("omega", "b")
+    codim2_tests = ("ZV", "GR", "PD", "NS")
+    last_step = 0.0
 
-    def solve(self, guess, condition, chord):
+    def codim2_test(self, test, x, orbit):
+        from impactcont.problems.events import event_function
+
+        return event_function(test, orbit)
+
+    def plane(self, x):
+        return float(x[0]), float(x[-1])
+
+    def on_hyperplane(self, guess, normal):
         return guess
+
+    def end_resonance(self, x):
+        return None
 
     def accept(self, u, lam):
         pass
