@@ -36,7 +36,7 @@ import datetime
 import json
 import logging
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -50,8 +50,8 @@ from impactcont.dataset.attributes import (
     split_parameters,
 )
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import model_parameter
-from impactcont.vocabulary import ELEMENT_FAMILIES, LABELS, STATUSES
+from impactcont.model.parameters import ParameterView, model_parameter
+from impactcont.vocabulary import ELEMENT_FAMILIES, LABELS, STATUSES, Parameter
 from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
 
 __all__ = [
@@ -116,33 +116,16 @@ class _Var:
                 "description": self.description}
 
 
-class _ParameterVariables(Mapping[str, _Var]):
-    """The metadata of every parameter's column, looked up in the vocabulary's table.
-
-    A lookup resolves what :data:`impactcont.vocabulary.PARAMETERS` resolves: the named
-    parameters and the element names (``k2``, ``M[1,2]``, ``F[2]``, ...); iterating gives
-    the named parameters only (the elements are patterns).
-    """
-
-    def __getitem__(self, name: str) -> _Var:
-        p = _PARAMETER_TABLE[name]
-        return _Var(p.long_name, p.unit, p.description)
-
-    def __contains__(self, name: object) -> bool:
-        return name in _PARAMETER_TABLE
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(_PARAMETER_TABLE)
-
-    def __len__(self) -> int:
-        return len(_PARAMETER_TABLE)
+def _column(p: Parameter) -> _Var:
+    """The metadata of a parameter's column, from its vocabulary record."""
+    return _Var(p.long_name, p.unit, p.description)
 
 
 #: Parameters a branch may be continued in, with their metadata: the named parameters
 #: and the element names (1-based: ``m<j>``, ``k<j>``, ``c<j>``, ``M[i,j]``, ``K[i,j]``,
 #: ``C[i,j]``, ``F[j]``). ``omega`` and ``b`` are always stored; another continued
 #: parameter adds its own column.
-PARAMETERS: Mapping[str, _Var] = _ParameterVariables()
+PARAMETERS: Mapping[str, _Var] = ParameterView(_column)
 #: The names :data:`PARAMETERS` resolves, for error messages.
 ALLOWED_PARAMETERS = (f"one of {list(_PARAMETER_TABLE)} or an element name "
                       f"{list(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]')")

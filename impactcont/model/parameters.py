@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
@@ -51,7 +51,8 @@ from impactcont.vocabulary import (
 )
 
 __all__ = ["DAMPING", "FD_RELATIVE_STEP", "FORCING", "FREQUENCY", "GAP", "MASS", "RESTITUTION",
-           "STIFFNESS", "ModelParameter", "chain_elements", "entry_range", "model_parameter"]
+           "STIFFNESS", "ModelParameter", "ParameterView", "chain_elements", "entry_range",
+           "model_parameter"]
 
 #: The flight data a parameter changes.
 FREQUENCY = "forcing frequency"
@@ -66,6 +67,49 @@ FORCING = "forcing amplitude"
 #: central difference's truncation ``h^2 |f'''| / 6`` against rounding ``eps |f| / h``.
 FD_RELATIVE_STEP = float(np.finfo(float).eps) ** (1.0 / 3.0)
 _AFFINE_STEP = 0.5  # of the scale: a data affine in the parameter has no truncation error
+
+
+_T = TypeVar("_T")
+
+
+class ParameterView(Mapping[str, _T], Generic[_T]):
+    """What each parameter's vocabulary record gives through ``make``: a read-only mapping.
+
+    A lookup resolves every name :data:`impactcont.vocabulary.PARAMETERS` resolves (the
+    named parameters, the elements ``k2``, ``M[1,2]``, ``F[2]``, an extra stop's
+    ``gap[A]``, ``R[A]``) and returns ``make(record)``; iterating gives ``names``.
+
+    Parameters
+    ----------
+    make : callable
+        ``make(record) -> value`` of a :class:`~impactcont.vocabulary.Parameter`.
+    names : iterable of str, optional
+        The names iterating gives; default: the vocabulary's named parameters (the
+        elements are patterns, never listed).
+
+    Notes
+    -----
+    The schema's column metadata (:data:`impactcont.dataset.schema.PARAMETERS`) and the
+    scene's admissible values (:data:`impactcont.scene.entries.PARAMETER_RANGES`) are
+    such views.
+    """
+
+    def __init__(self, make: Callable[[Parameter], _T], names: Iterable[str] | None = None
+                 ) -> None:
+        self._make = make
+        self._names = PARAMETERS if names is None else tuple(names)
+
+    def __getitem__(self, name: str) -> _T:
+        return self._make(PARAMETERS[name])
+
+    def __contains__(self, name: object) -> bool:
+        return name in PARAMETERS
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -16,7 +16,7 @@ import dataclasses
 import inspect
 import math
 import re
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -25,6 +25,7 @@ from impactcont.analysis.branch import check_continuation_arguments, continuatio
 from impactcont.detection import LABELS
 from impactcont.errors import ImpactcontError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator, chain_stiffness
+from impactcont.model.parameters import ParameterView
 from impactcont.model.stops import (
     LOWER,
     UPPER,
@@ -107,30 +108,12 @@ def _admissible(info: Parameter) -> Real:
                 None if info.high == math.inf else info.high, low_open=info.low_open)
 
 
-class _ParameterRanges(Mapping[str, Real]):
-    """Admissible values of each parameter, from its vocabulary record.
-
-    A lookup resolves every name :data:`impactcont.vocabulary.PARAMETERS` resolves (the
-    stops' own ``b_low``, ``R_low``, ``gap`` and the elements ``k2``, ``M[1,2]``,
-    ``F[2]``, ...); iterating gives the scalar parameters of an ``[oscillator]`` table
-    (``omega``, ``b``, ``R``, ``eta``, ``alpha``, ``beta``, ``F0``).
-    """
-
-    def __getitem__(self, name: str) -> Real:
-        return _admissible(PARAMETERS[name])
-
-    def __contains__(self, name: object) -> bool:
-        return name in PARAMETERS
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(_SCALARS)
-
-    def __len__(self) -> int:
-        return len(_SCALARS)
-
-
-#: Admissible values of each parameter (:class:`_ParameterRanges`).
-PARAMETER_RANGES: Mapping[str, Real] = _ParameterRanges()
+#: Admissible values of each parameter, from its vocabulary record: a lookup resolves every
+#: name :data:`impactcont.vocabulary.PARAMETERS` resolves (the stops' own ``b_low``,
+#: ``R_low``, ``gap`` and the elements ``k2``, ``M[1,2]``, ``F[2]``, ...); iterating gives
+#: the scalar parameters of an ``[oscillator]`` table (``omega``, ``b``, ``R``, ``eta``,
+#: ``alpha``, ``beta``, ``F0``).
+PARAMETER_RANGES: Mapping[str, Real] = ParameterView(_admissible, _SCALARS)
 #: The value type of a continued parameter's name (``parameter = "k2"``).
 PARAMETER_NAME = ParameterName()
 

@@ -464,3 +464,18 @@ def test_bounds_of_a_forcing_entry_through_no_forcing_are_refused(bounds) -> Non
         model_parameter(osc, "F[1]").check_bounds(osc, bounds)
     both = osc.replace(F=[1.0, 1.0])  # F[2] keeps the forcing
     assert model_parameter(both, "F[1]").check_bounds(both, bounds) == bounds
+
+
+def test_parameter_view_resolves_every_vocabulary_name_and_lists_the_given_ones():
+    from impactcont.model.parameters import ParameterView
+    from impactcont.vocabulary import PARAMETERS
+
+    units = ParameterView(lambda p: p.unit)
+    assert list(units) == list(PARAMETERS) and len(units) == len(PARAMETERS)
+    assert units["k2"] == PARAMETERS["k2"].unit and units["gap[A]"] == PARAMETERS["gap[A]"].unit
+    assert "M[1,2]" in units and "nonsense" not in units and 3 not in units
+    with pytest.raises(KeyError):
+        units["nonsense"]
+    names = ParameterView(lambda p: p.name, ("omega", "b"))
+    assert list(names) == ["omega", "b"] and len(names) == 2
+    assert names["F[2]"] == "F[2]"  # a lookup is not limited to the names listed
