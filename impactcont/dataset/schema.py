@@ -916,10 +916,13 @@ def oscillator_from_dataset(ds: xr.Dataset, point: int | None = None) -> ImpactO
 
     Raises
     ------
+    TypeError
+        ``ds`` is not an xarray.Dataset.
     ValueError
         The ``oscillator`` attribute is missing or is not an oscillator's JSON
-        (:func:`~impactcont.dataset.attributes.oscillator_attribute`), or
-        ``point`` is out of range.
+        (:func:`~impactcont.dataset.attributes.oscillator_attribute`); ``point``
+        is not an integer index of the branch; with ``point``, the dataset has no
+        column (on ``point``) of omega, b or the continued parameter.
     ParameterError
         The stored oscillator has no such parameter (an element past its masses).
     """
