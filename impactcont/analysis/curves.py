@@ -544,10 +544,11 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
     -----
     Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the
     curve stops at its last accepted point (the other direction is not followed) and the
-    codim-2 points of the points kept are located (Ctrl-C during that drops them; the
-    curve's ends found are kept). ``end_status`` and the ``options`` attribute then say
-    ``"interrupted by the user (KeyboardInterrupt) after K points, ..."``, the options
-    record ``"interrupted": true``, and the log has a WARNING. A second Ctrl-C, or one
+    codim-2 points of the points kept are located (Ctrl-C during that keeps those located
+    before it and the curve's ends found). ``end_status`` and the ``options`` attribute then
+    say ``"interrupted by the user (KeyboardInterrupt) after K points, ..."``, the options
+    record ``"interrupted": true`` and where (``"interrupted_while": "continuation"`` or
+    ``"location"``), and the log has a WARNING. A second Ctrl-C, or one
     before the first point (or while the start is searched), aborts with
     :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
@@ -604,12 +605,12 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         log.info("%s curve: %d points (%s)", kind, len(xs), status)
 
         columns, orbits, tests = _point_columns(problem, xs)
-        found: list[Codim2Point] = []
+        found: list[Codim2Point] = []  # filled as they are located: Ctrl-C keeps them
         if detect_codim2_points:
-            found = until_interrupted(
-                lambda: detect_codim2(problem, xs, orbits, tests), [], "location",
+            until_interrupted(
+                lambda: detect_codim2(problem, xs, orbits, tests, found), None, "location",
                 "interrupted by the user (KeyboardInterrupt) while locating the codim-2 "
-                "points of the curve: they are dropped (its ends are kept)")
+                "points of the curve: those located before are kept (and its ends)")
         ds = _curve_dataset(problem, kind, N, parameters, box, opts, start_osc, (p1v, p2v),
                             delta0, columns, orbits, xs, found, ends, status, call)
         ds = _with_user_functions(ds, problem, result, orbits, functions)
@@ -641,6 +642,7 @@ def _curve_dataset(problem: CurveProblem, kind: str, N: int, parameters: tuple[s
     option_record["bounds_continued"] = list(opts.bounds)
     if call.interrupted:
         option_record["interrupted"] = True
+        option_record["interrupted_while"] = call.where
     return curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
                          options=option_record, columns=columns, codim2_points=records,
                          end_status=status)

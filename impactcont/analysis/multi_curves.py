@@ -225,7 +225,7 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         return watches[direction]
 
     what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
-    with interruptible(what), reporter(progress, what, parameter=parameter) as rep:
+    with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
         result = follow(problem, x0, lam0, opts, rep.point, stop=watch)
         # Ctrl-C can end a run between a watch's orbit and the core's taking of the point
         orbits = watches[opts.direction].orbits[:len(result) - result.start_index]
@@ -246,7 +246,7 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
         # the user's events: located in both parameters (p1 is the last unknown)
         values, user_events = user_events_until_interrupted(
             problem, samples, functions, position=lambda x, lam: (x[-1], lam))
-        was_interrupted = interrupted()
+        was_interrupted, phase = interrupted(), call.where
     record = {"kind": kind, "parameters": [p1, parameter], "start": start_p1,
               "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
               "status": [st.name for st in result.statuses], "message": result.message,
@@ -254,6 +254,7 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
                  if key != "bounds"}}
     if was_interrupted:
         record["interrupted"] = True
+        record["interrupted_while"] = phase
     info = {"curve_kind": kind, "parameters": f"{p1},{parameter}",
             "born_at_value": start_p1}
     view = _CurveView(problem, parameter, osc)
