@@ -1315,8 +1315,13 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
     TypeError, ValueError
         As :func:`save`; a data variable that is not a dask array, or whose encoding
         on disk is not a plain cast of its values (scale factors, ...).
+    FileNotFoundError, NotADirectoryError, PermissionError
+        As :func:`save`: the directory of ``path`` does not exist or is not writable.
     OSError
         As :func:`save`: the write failed (ENOSPC on a full disk), naming ``path``.
+    KeyboardInterrupt
+        Ctrl-C, acting between blocks: the target is untouched and the temporary
+        file removed.
     """
     target = _path(path)
     if not isinstance(ds, xr.Dataset):
