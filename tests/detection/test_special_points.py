@@ -342,3 +342,33 @@ def test_a_user_event_with_two_zeros_inside_one_step_is_located_twice():
     located = branch.event_omega.values
     assert branch.event_status.values.tolist() == ["located", "located"]
     np.testing.assert_allclose(np.sort(located), [1.415, 1.42], atol=1e-12)
+
+
+def test_the_n1_detector_locates_the_kinds_its_problem_declares(n1_branch):
+    """Issue 29, 2: the detector knows no kind by name; a problem that declares ZV with its
+    own test (the impact velocity at V_LEVEL) gets it located where the user event is."""
+    from types import MappingProxyType
+
+    from impactcont.core import ContinuationOptions, continue_branch
+    from impactcont.core.locate import MotionTest
+    from impactcont.detection import BranchSample, detect_special_points
+    from impactcont.problems import PeriodicBranchProblem
+    from impactcont.problems.events import BRANCH_TESTS
+    from impactcont.vocabulary import Label
+
+    class Declared(PeriodicBranchProblem):
+        motion_tests = MappingProxyType({**BRANCH_TESTS, Label.ZV: MotionTest(velocity_event)})
+
+    osc = paper(b=0.0, omega=1.5)
+    problem = Declared(osc, 1, "omega")
+    delta0 = float(n1_branch["delta"].values[0])
+    result = continue_branch(problem, np.array([delta0]), float(n1_branch["omega"].values[0]),
+                             ContinuationOptions(bounds=(1.4, 2.0)))
+    samples = [BranchSample(float(u[0]), float(lam), float(t[-1]), problem.orbit(u[0], lam))
+               for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
+    found = detect_special_points(problem, samples, ["ZV"])
+    expected = np.sort(n1_branch["event_omega"].values[rows(n1_branch, "v07")])
+    assert expected.size >= 1
+    assert [point.kind for point in found] == [Label.ZV] * expected.size
+    np.testing.assert_allclose([point.value for point in found], expected, atol=1e-9)
+    assert all(abs(point.orbit.impact_velocity - V_LEVEL) < 1e-9 for point in found)

@@ -117,3 +117,31 @@ def test_the_pitchfork_declares_the_speeds_that_clear_its_poles() -> None:
     np.testing.assert_array_equal(PITCHFORK.poles(orbit), [2.0, 3.0])
     orbit = SimpleNamespace(p=2, impact_velocities=np.array([0.5, -0.25]))
     np.testing.assert_array_equal(PITCHFORK.poles(orbit), [-0.25])
+
+
+def test_each_kind_is_an_object_declared_with_its_test_noise_and_criticality(specials) -> None:
+    """Issue 29, 2: PD, NS, GR and ZV are MotionTest objects as BP; the functions by label
+    are views of them, and a label without a test is refused, not read as NS."""
+    from impactcont.problems.events import BRANCH_TESTS, NEIMARK_SACKER, PERIOD_DOUBLING
+    from impactcont.problems.periodic_branch import PeriodicBranchProblem
+    from impactcont.problems.symmetric_branch import SymmetricBranchProblem
+    from impactcont.vocabulary import Label
+
+    assert list(BRANCH_TESTS) == [Label.PD, Label.NS, Label.GR, Label.ZV]
+    assert all(isinstance(test, MotionTest) for test in BRANCH_TESTS.values())
+    assert BRANCH_TESTS[Label.GR].checks and not BRANCH_TESTS[Label.ZV].checks
+    b, omega, delta = specials["PD"]
+    orbit = _nearest(b, omega - 1e-3, delta)
+    for label, test in BRANCH_TESTS.items():
+        assert event_function(label, orbit) == test.test(orbit)
+        assert event_noise(label, orbit) == test.noise(orbit)
+    # the criticality of a zero is the kind's: a multiplier at -1, a complex pair on |mu| = 1
+    at_pd = type("Motion", (), {"multipliers": np.array([-1.0 + 1e-9, 0.3, 0.1, 0.2])})()
+    at_saddle = type("Motion", (), {"multipliers": np.array([2.0, 0.5, 0.1, 0.2])})()
+    assert PERIOD_DOUBLING.critical(at_pd) and not NEIMARK_SACKER.critical(at_pd)
+    assert not NEIMARK_SACKER.critical(at_saddle)
+    # the problems declare their kinds, the fold SN with no test of a motion
+    assert PeriodicBranchProblem.events == (Label.SN, *BRANCH_TESTS)
+    assert SymmetricBranchProblem.motion_tests[Label.BP] is PITCHFORK
+    with pytest.raises(ValueError, match="label must be PD or NS here; got 'GR'"):
+        pole_free("GR", orbit.multipliers, np.array([orbit.impact_velocity]))
