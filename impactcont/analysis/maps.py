@@ -54,7 +54,7 @@ import logging
 import math
 import os
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -80,6 +80,7 @@ from impactcont.dataset.map_storage import (
 )
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.periodic import _check_N
 from impactcont.progress import ProgressOption, interruptible, reporter
@@ -126,40 +127,72 @@ def _grid(name: str, values: Any) -> np.ndarray:
     return a
 
 
-@blas_limited
-def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
-                  omega: Sequence[float] | np.ndarray = (),
-                  b: Sequence[float] | np.ndarray = (), *, executor: Any = None,
-                  max_workers: int | None = None, omega_block: int | None = None,
-                  spectral_radius: bool = True, out: str | os.PathLike | None = None,
-                  memory_limit: float = 1e9, progress: ProgressOption = None,
-                  **others: Any) -> xr.Dataset:
-    """Existence, physicality and stability of every N-1 motion on an (N, omega, b) grid.
+#: The default N of :func:`stability_map` (a motion as the start takes none).
+_ALL_N = (1, 2, 3, 4)
+#: The options of :func:`impactcont.multi_impact_map` that :func:`stability_map` passes on
+#: with a motion as its start.
+_MOTION_OPTIONS = ("symmetric", "checks", "tol", "max_iter", "max_change", "max_attempts",
+                   "title", "rows_per_task")
+# Grid points per task at most where the closed form is evaluated per point (a map over two
+# parameters other than omega and b: about 0.5 ms a point) or per line of the batched
+# parameter (one of them omega or b): a task of some tenths of a second.
+_POINT_TASK = 256
+_LINE_TASK = 8192
 
-    The map is of the (omega, b) plane by design: the batched closed form builds ``S``
-    of eq. (13) once per ``omega`` and solves eq. (15) for every ``b`` at once (``b``
-    only shifts its right-hand side). A map over another pair of parameters (``R``,
-    ``F0``, ``b_low``, an element such as ``k2`` or ``M[1,2]``) is
-    :func:`impactcont.multi_impact_map` of a motion of the family; another keyword
-    (``k2=[...]``) is refused and says so.
+
+@blas_limited
+def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
+                  parameters: Sequence[str] | None = None, grid: Mapping[str, Any] | None = None,
+                  executor: Any = None, max_workers: int | None = None,
+                  omega_block: int | None = None, spectral_radius: bool = True,
+                  out: str | os.PathLike | None = None, memory_limit: float = 1e9,
+                  progress: ProgressOption = None, **others: Any) -> xr.Dataset:
+    """Existence, physicality and stability of motions over a grid of two parameters.
+
+    Given an oscillator: every N-1 motion (every root of eq. 15) at every point of an
+    ``(N, omega, b)`` grid, or of ``(N, p1, p2)`` for ``parameters=(p1, p2)``, by the
+    closed form (exact, no continuation: every motion that exists is in the map). On
+    the (omega, b) plane the batched closed form builds ``S`` of eq. (13) once per
+    ``omega`` and solves eq. (15) for every ``b`` at once (``b`` only shifts its
+    right-hand side); over another pair with ``omega`` or ``b`` in it, it is batched
+    along that one for each value of the other; over a pair with neither (``R``,
+    ``F0``, an element such as ``k2`` or ``M[1,2]``), it is evaluated at each point on
+    the oscillator with both parameters replaced
+    (:meth:`~impactcont.model.parameters.ModelParameter.at`).
+
+    Given a motion (an N-p motion of :func:`impactcont.multi_impact_orbit` or
+    :func:`impactcont.special_orbit`, or an N-1 motion of :func:`impactcont.periodic_orbits`):
+    the map of its family over ``parameters`` and ``grid``, followed from it
+    (:func:`impactcont.multi_impact_map`, the same dataset).
 
     Parameters
     ----------
-    osc : ImpactOscillator
-        The oscillator; its own ``omega`` and ``b`` are ignored.
+    osc : ImpactOscillator, MultiImpactOrbit or PeriodicOrbit
+        The oscillator (its own values of the grid's parameters are ignored), or a motion
+        whose family is mapped.
     N : int or sequence of int
-        Forcing periods per impact.
+        Forcing periods per impact (an oscillator only).
     omega, b : 1-D array_like
-        Strictly increasing grids of the forcing frequency (``> 0``) and the gap.
+        Strictly increasing grids of the forcing frequency (``> 0``) and the gap (an
+        oscillator only, without `parameters`).
+    parameters : (str, str), optional
+        Two different continuable parameters, the grid's axes in this order (``omega``,
+        ``b``, ``R``, ``eta``, ``alpha``, ``beta``, ``F0`` or an element: ``k2``,
+        ``M[1,2]``, ``F[2]``, ...; :func:`impactcont.model.parameters.model_parameter`
+        says which apply). Default ``("omega", "b")``.
+    grid : mapping, optional
+        ``{parameter: strictly increasing 1-D values}`` for both `parameters`.
     executor : None, "serial", "process", scheduler address, Executor or dask Client
-        Where the tasks run (see the module docstring): ``"tcp://host:8786"`` connects
-        to that dask scheduler for the map; its workers need impactcont (the same
-        version) and its dependencies installed.
+        Where the tasks run (:mod:`impactcont.analysis.map_runner`):
+        ``"tcp://host:8786"`` connects to that dask scheduler for the map; its workers
+        need impactcont (the same version) and its dependencies installed.
     max_workers : int, optional
         Processes of the ``"process"`` pool.
     omega_block : int, optional
-        Omega values per task; default: up to 32, fewer for long b grids. Tasks hold
-        at most 131072 points (a long b grid is split too) and fewer when the memory
+        Values of the first parameter per task; default: up to 32, fewer for long grids
+        of the second. Tasks hold at most 131072 points (a long grid of the second
+        parameter is split too; 8192 where the closed form is batched along one
+        parameter only, 256 where it is evaluated per point) and fewer when the memory
         asks for it; results do not depend on the blocks or the executor.
     spectral_radius : bool
         Store ``spectral_radius`` and ``critical_multiplier`` (LAPACK eigenvalues of
@@ -191,38 +224,46 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         finishes (:mod:`impactcont.progress`). A map longer than a minute logs a line
         a minute.
     **others
-        None accepted: a grid of another parameter is refused (ParameterError naming
-        it and :func:`impactcont.multi_impact_map`).
+        With a motion: the options of :func:`impactcont.multi_impact_map`
+        (``symmetric``, ``checks``, ``tol``, ``max_iter``, ``max_change``,
+        ``max_attempts``, ``title``, ``rows_per_task``). With an oscillator none: a grid
+        given as a keyword (``k2=[...]``) is refused, naming `parameters` and `grid`.
 
     Returns
     -------
     xarray.Dataset
-        Dims ``N``, ``omega``, ``b``, ``root`` (``+1, -1``, eq. 15): ``exists``,
-        ``n_physical``, ``n_stable`` on ``(N, omega, b)``; ``delta``,
-        ``impact_velocity``, ``gap_min``, ``spectral_radius``,
-        ``critical_multiplier``, ``physical``, ``stable`` per root;
-        ``amplitude_squared`` on ``(N, omega)``. Interrupted by Ctrl-C (a map in
-        memory): what was computed, with ``computed`` on ``(N, omega, b)`` and the
-        attributes ``interrupted`` and ``points_computed`` (module docstring).
+        Of an oscillator: dims ``N``, the two parameters (``omega``, ``b`` by default)
+        and ``root`` (``+1, -1``, eq. 15): ``exists``, ``n_physical``, ``n_stable`` on
+        ``(N, p1, p2)``; ``delta``, ``impact_velocity``, ``gap_min``,
+        ``spectral_radius``, ``critical_multiplier``, ``physical``, ``stable`` per root;
+        ``amplitude_squared`` on ``(N, p1)`` when ``p2`` is ``b``, else on ``(N, p1,
+        p2)``; the attribute ``parameters`` names a pair other than (omega, b)
+        (:func:`impactcont.dataset.curves.map_variables`). Interrupted by Ctrl-C: what
+        was computed, with ``computed`` on ``(N, p1, p2)`` and the attributes
+        ``interrupted`` and ``points_computed`` (module docstring). Of a motion: the
+        dataset of :func:`impactcont.multi_impact_map`.
 
     Raises
     ------
     ParameterError
-        A bad grid, N, executor, block or memory limit (named in the message), a grid
-        of a parameter other than omega and b, or a map for a file without dask
-        installed.
+        A bad grid, N, parameter, executor, block or memory limit (named in the
+        message), an argument that does not apply to what is mapped (`N`, `omega`, `b`,
+        `omega_block`, `spectral_radius`, `out` with a motion; a grid keyword with an
+        oscillator), or a map for a file without dask installed.
     concurrent.futures.process.BrokenProcessPool
         A worker of the process pool died each time the same task ran alone (three
-        times): the message names the task (N and the omega and b ranges).
+        times): the message names the task (N and the ranges of both parameters).
     """
+    if not isinstance(osc, ImpactOscillator):
+        return _motion_map(osc, N, omega, b, parameters, grid, executor=executor,
+                           max_workers=max_workers, omega_block=omega_block,
+                           spectral_radius=spectral_radius, out=out,
+                           memory_limit=memory_limit, progress=progress, others=others)
     if others:
         raise ParameterError(
-            f"stability_map maps the (omega, b) plane only (the batched closed form of eq. 13-15 "
-            f"takes a grid of omega and b); got {sorted(others)}: for a map over other "
-            f"parameters use impactcont.multi_impact_map(start, (p1, p2), grid={{p1: ..., "
-            f"p2: ...}}) from a motion of the family")
-    if not isinstance(osc, ImpactOscillator):
-        raise ParameterError(f"osc must be an ImpactOscillator; got {osc!r}")
+            f"stability_map takes the grid of a parameter as parameters=(p1, p2), grid={{p1: "
+            f"..., p2: ...}}; got the keyword(s) {sorted(others)}")
+    names, w, bb = _plane(osc, omega, b, parameters, grid)
     Ns = [N] if isinstance(N, (int, np.integer)) and not isinstance(N, bool) else list(N)
     if not Ns:
         raise ParameterError(f"N must be an integer >= 1 or a non-empty sequence of them; "
@@ -230,10 +271,6 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     Ns = [_check_N(k) for k in Ns]
     if len(set(Ns)) != len(Ns):
         raise ParameterError(f"N must not repeat values; got {N!r}")
-    w = _grid("omega", omega)
-    if np.any(w <= 0):
-        raise ParameterError(f"omega must be > 0; got {omega!r}")
-    bb = _grid("b", b)
     if not isinstance(spectral_radius, bool):
         raise ParameterError(f"spectral_radius must be True or False; got {spectral_radius!r}")
     if max_workers is not None and (isinstance(max_workers, bool)
@@ -246,11 +283,11 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
             and memory_limit > 0):
         raise ParameterError(f"memory_limit must be a number of bytes > 0; got {memory_limit!r}")
     shape = (len(Ns), w.size, bb.size)
-    result = _result_bytes(shape, spectral_radius)
+    result = _result_bytes(shape, spectral_radius, names)
     remove_stale_maps(once=True)  # the temporary maps of killed processes (map_storage)
     temporary = False
     computed: np.ndarray | None = None
-    job = _StabilityJob(osc, Ns, w, bb, spectral_radius)
+    job = _StabilityJob(osc, Ns, w, bb, spectral_radius, names)
     with interruptible("stability_map"), reporter(progress, "stability map",
                                                   total=math.prod(shape)) as rep:
         runner = MapRunner(job, executor, max_workers, rep)
@@ -266,6 +303,8 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                 log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB with its "
                             "tasks: it is written to %s (removed when the returned dataset is "
                             "closed) and returned lazily", result / 1e9, memory_limit / 1e9, out)
+            if names != ("omega", "b"):
+                points = min(points, _LINE_TASK if {"omega", "b"} & set(names) else _POINT_TASK)
             ob, bs = _block_shape(points, w.size, bb.size, omega_block)
             tasks = [(k, slice(i, min(i + ob, w.size)), slice(j, min(j + bs, bb.size)))
                      for k in range(len(Ns)) for i in range(0, w.size, ob)
@@ -274,9 +313,10 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
                        "b_block": bs, "spectral_radius": spectral_radius}
             start = time.perf_counter()
             if in_memory:
-                ds, computed = _map_in_memory(runner, osc, Ns, w, bb, tasks, options)
+                ds, computed = _map_in_memory(runner, osc, Ns, w, bb, tasks, options, names)
             else:
-                path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs))
+                path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs),
+                                    names)
         except BaseException:
             runner.close(kill=True)  # Ctrl-C or a failure: no worker left computing
             if temporary and out is not None:
@@ -285,7 +325,7 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
         runner.close(kill=computed is not None)
     elapsed = time.perf_counter() - start
     if in_memory and computed is not None:
-        _mark_interrupted(ds, computed)
+        _mark_interrupted(ds, computed, names)
     else:
         log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
                  "computed" if in_memory else f"written to {out}", elapsed, len(tasks),
@@ -299,16 +339,171 @@ def stability_map(osc: ImpactOscillator, N: int | Sequence[int] = (1, 2, 3, 4),
     return open_temporary_map(path) if temporary else open_lazy(path)
 
 
+def _given(value: Any) -> bool:
+    """Whether an optional grid argument (default ``()``) was given."""
+    return not (isinstance(value, tuple) and value == ())
+
+
+def _plane(osc: ImpactOscillator, omega: Any, b: Any, parameters: Any, grid: Any
+           ) -> tuple[tuple[str, str], np.ndarray, np.ndarray]:
+    """The map's two parameters and their grids, from ``omega=, b=`` or ``parameters=,
+    grid=`` (refused clearly)."""
+    if parameters is None:
+        if grid is not None:
+            raise ParameterError(f"grid needs parameters=(p1, p2), the order of its axes; got "
+                                 f"grid={grid!r} without parameters")
+        label = {"omega": "omega", "b": "b"}
+        return ("omega", "b"), *_axes(osc, {"omega": omega, "b": b}, label)
+    for name, value in (("omega", omega), ("b", b)):
+        if _given(value):
+            raise ParameterError(f"{name}: with parameters={parameters!r} give the grid of "
+                                 f"every parameter in grid=; got {name}={value!r} as well")
+    if isinstance(parameters, str) or not isinstance(parameters, Sequence) or len(
+            parameters) != 2:
+        raise ParameterError(f"parameters must be two parameter names, e.g. ('k2', 'b'); "
+                             f"got {parameters!r}")
+    params = [model_parameter(osc, name, "parameters") for name in parameters]
+    if params[0].name == params[1].name:
+        raise ParameterError(f"parameters must be two different parameters; got "
+                             f"{parameters!r}")
+    if not isinstance(grid, Mapping) or set(grid) != set(parameters):
+        raise ParameterError(f"grid must map each of the parameters {list(parameters)} to a "
+                             f"1-D array of values; got {grid!r}")
+    names = (params[0].name, params[1].name)
+    return names, *_axes(osc, {name: grid[name] for name in names},
+                         {name: f"grid[{name!r}]" for name in names})
+
+
+def _axes(osc: ImpactOscillator, grid: dict[str, Any], label: dict[str, str]
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """The grids of the two parameters (the keys of `grid`, in order), checked: strictly
+    increasing, omega > 0, every value one the oscillator takes; `label` names each in
+    messages."""
+    axes = {name: _grid(label[name], values) for name, values in grid.items()}
+    if "omega" in axes and np.any(axes["omega"] <= 0):
+        raise ParameterError(f"{label['omega']} must be > 0; got {grid['omega']!r}")
+    for name in grid:
+        if name in ("omega", "b"):
+            continue
+        param = model_parameter(osc, name, "parameters")
+        bad = [float(v) for v in axes[name] if not param.admits(osc, float(v))]
+        if bad:
+            raise ParameterError(f"{label[name]}: the oscillator cannot take {name} = {bad[0]!r} "
+                                 f"({len(bad)} of the values; {param.info.long_name})")
+    first, second = axes.values()
+    return first, second
+
+
+def _motion_map(start: Any, N: Any, omega: Any, b: Any, parameters: Any, grid: Any, *,
+                others: dict[str, Any], **options: Any) -> xr.Dataset:
+    """:func:`stability_map` of a motion: :func:`impactcont.multi_impact_map` of its family,
+    the parameters and grid given as keywords or in the places of N and omega."""
+    from impactcont.analysis.multi_maps import multi_impact_map
+    from impactcont.orbit.multi_impact import MultiImpactOrbit
+    from impactcont.orbit.periodic import PeriodicOrbit
+
+    if not isinstance(start, (MultiImpactOrbit, PeriodicOrbit)):
+        raise ParameterError(f"osc must be an ImpactOscillator, or a motion whose family is "
+                             f"mapped (a MultiImpactOrbit of multi_impact_orbit or special_orbit, "
+                             f"a PeriodicOrbit of periodic_orbits); got {type(start).__name__}")
+    # stability_map(motion, (p1, p2), {p1: ..., p2: ...}) as multi_impact_map takes them
+    if parameters is None and not isinstance(N, (int, np.integer)) and N is not _ALL_N \
+            and isinstance(N, Sequence) and len(N) == 2 and all(isinstance(x, str) for x in N):
+        parameters, N = N, _ALL_N
+    if grid is None and isinstance(omega, Mapping):
+        grid, omega = omega, ()
+    for name, value, unset in (("N", N, N is _ALL_N), ("omega", omega, not _given(omega)),
+                               ("b", b, not _given(b))):
+        if not unset:
+            raise ParameterError(f"{name}: a map of a motion's family takes parameters=(p1, "
+                                 f"p2) and grid={{p1: ..., p2: ...}}, and its N from the motion; "
+                                 f"got {name}={value!r}")
+    for name, default in (("omega_block", None), ("spectral_radius", True), ("out", None)):
+        if options[name] is not default:
+            raise ParameterError(f"{name}: a map of a motion's family does not take it (the map "
+                                 f"of an oscillator's N-1 motions does); got "
+                                 f"{name}={options[name]!r}")
+    unknown = sorted(set(others) - set(_MOTION_OPTIONS))
+    if unknown:
+        raise ParameterError(f"stability_map of a motion takes the options {list(_MOTION_OPTIONS)}"
+                             f" of multi_impact_map; got {unknown}")
+    if grid is None:
+        raise ParameterError("grid: a map of a motion's family needs grid={p1: ..., p2: ...} "
+                             "for its parameters")
+    return multi_impact_map(start, ("omega", "b") if parameters is None else parameters, grid,
+                            executor=options["executor"], max_workers=options["max_workers"],
+                            memory_limit=options["memory_limit"],
+                            progress=options["progress"], **others)
+
+
+@blas_limited
+def _plane_task(osc_json: str, N: int, names: tuple[str, str], first: np.ndarray,
+                second: np.ndarray, spectral_radius: bool = True) -> dict[str, np.ndarray]:
+    """One task of a map over a pair other than (omega, b): every N-1 motion for one N on a
+    block ``first x second`` of the grid (picklable, top level).
+
+    The closed form is batched along ``omega`` or ``b`` where one of the two parameters is
+    one of them (for each value of the other), else evaluated at each point on the
+    oscillator with both parameters replaced.
+    """
+    osc = _oscillator(osc_json)
+    params = [model_parameter(osc, name, "parameters") for name in names]
+    values = (first, second)
+    shape = (first.size, second.size)
+    keys = ("exists", *_ROOT_FIELDS)
+    out: dict[str, np.ndarray] = {}
+    amplitude = np.empty(shape)
+
+    def put(where: tuple[Any, ...], res: dict[str, np.ndarray], size: int) -> None:
+        for key in keys:
+            a = res[key].reshape((size, *res[key].shape[2:]))
+            if key not in out:
+                out[key] = np.empty((*shape, *a.shape[1:]), a.dtype)
+            out[key][where] = a if any(isinstance(k, slice) for k in where) else a[0]
+        r2 = res["amplitude_squared"]  # on omega
+        amplitude[where] = r2[0] if r2.size == 1 else r2
+
+    batched = [k for k, name in enumerate(names) if name in ("omega", "b")]
+    with compiled_interrupts():
+        if len(batched) == 2:  # (b, omega): the (omega, b) map's evaluation, transposed
+            res = batched_orbits(osc, N, second, first, spectral_radius=spectral_radius)
+            for key in keys:
+                out[key] = np.ascontiguousarray(np.swapaxes(res[key], 0, 1))
+            amplitude[:] = res["amplitude_squared"][None, :]
+        elif batched:
+            j = batched[0]
+            i = 1 - j
+            for m, x in enumerate(values[i]):
+                o = params[i].at(osc, float(x))
+                w = values[j] if names[j] == "omega" else np.array([o.omega])
+                bb = values[j] if names[j] == "b" else np.array([o.b])
+                res = batched_orbits(o, N, w, bb, spectral_radius=spectral_radius)
+                put((m, slice(None)) if i == 0 else (slice(None), m), res, values[j].size)
+        else:
+            for m, x in enumerate(first):
+                row = params[0].at(osc, float(x))
+                for n, y in enumerate(second):
+                    o = params[1].at(row, float(y))
+                    res = batched_orbits(o, N, np.array([o.omega]), np.array([o.b]),
+                                         spectral_radius=spectral_radius)
+                    put((m, n), res, 1)
+    out["amplitude_squared"] = amplitude[:, 0] if names[1] == "b" else amplitude
+    return out
+
+
 def _fields(spectral_radius: bool) -> tuple[str, ...]:
     return tuple(k for k in _ROOT_FIELDS
                  if spectral_radius or k not in ("spectral_radius", "critical_multiplier"))
 
 
-def _result_bytes(shape: tuple[int, int, int], spectral_radius: bool) -> int:
-    """Bytes of the map's variables on the grid ``shape`` (N, omega, b)."""
+def _result_bytes(shape: tuple[int, int, int], spectral_radius: bool,
+                  names: tuple[str, str] = ("omega", "b")) -> int:
+    """Bytes of the map's variables on the grid ``shape`` (N, first, second parameter)."""
     per_point = 1 + 2 * 8  # exists, n_physical, n_stable
     per_point += 2 * sum(np.dtype(_DTYPES.get(k, float)).itemsize
                          for k in _fields(spectral_radius))
+    if names[1] != "b":
+        per_point += 8  # amplitude_squared on the whole grid
     return per_point * math.prod(shape) + 8 * (shape[0] * shape[1] + sum(shape) + 2)
 
 
@@ -330,73 +525,84 @@ class _StabilityJob(MapJob):
     what = "stability_map"
 
     def __init__(self, osc: ImpactOscillator, Ns: list[int], w: np.ndarray, bb: np.ndarray,
-                 spectral_radius: bool) -> None:
+                 spectral_radius: bool, names: tuple[str, str] = ("omega", "b")) -> None:
         self._text, self._Ns, self._w, self._bb = osc.to_json(), Ns, w, bb
-        self._spectral_radius = spectral_radius
+        self._spectral_radius, self._names = spectral_radius, names
 
     def call(self, task: tuple[int, slice, slice]) -> tuple[Any, tuple[Any, ...]]:
         k, osl, bsl = task
-        # _map_task looked up now: tests replace it
-        return _map_task, (self._text, self._Ns[k], self._w[osl], self._bb[bsl],
-                           self._spectral_radius)
+        # the tasks looked up now: tests replace them
+        if self._names == ("omega", "b"):
+            return _map_task, (self._text, self._Ns[k], self._w[osl], self._bb[bsl],
+                               self._spectral_radius)
+        return _plane_task, (self._text, self._Ns[k], self._names, self._w[osl],
+                             self._bb[bsl], self._spectral_radius)
 
     def points(self, task: tuple[int, slice, slice]) -> int:
         _, osl, bsl = task
         return (osl.stop - osl.start) * (bsl.stop - bsl.start)
 
     def describe(self, task: tuple[int, slice, slice]) -> str:
-        """`task` in words: its N and its omega and b ranges."""
+        """`task` in words: its N and the ranges of the two parameters."""
         k, osl, bsl = task
         w, bb = self._w[osl], self._bb[bsl]
-        return (f"N = {self._Ns[k]}, omega[{osl.start}:{osl.stop}] in [{w[0]:.6g}, "
-                f"{w[-1]:.6g}], b[{bsl.start}:{bsl.stop}] in [{bb[0]:.6g}, {bb[-1]:.6g}]")
+        first, second = self._names
+        return (f"N = {self._Ns[k]}, {first}[{osl.start}:{osl.stop}] in [{w[0]:.6g}, "
+                f"{w[-1]:.6g}], {second}[{bsl.start}:{bsl.stop}] in [{bb[0]:.6g}, "
+                f"{bb[-1]:.6g}]")
 
 
 
 
-def _layout(shape: tuple[int, int, int], fields: tuple[str, ...]
+def _layout(shape: tuple[int, int, int], fields: tuple[str, ...], names: tuple[str, str]
             ) -> dict[str, tuple[tuple[int, ...], Any]]:
-    """Shape and dtype of every variable of a map on the grid ``shape`` (N, omega, b)."""
-    return {"amplitude_squared": (shape[:2], float), "exists": (shape, bool),
+    """Shape and dtype of every variable of a map on the grid ``shape`` (N, first, second
+    parameter; :func:`~impactcont.dataset.curves.map_variables`)."""
+    amplitude = shape[:2] if names[1] == "b" else shape
+    return {"amplitude_squared": (amplitude, float), "exists": (shape, bool),
             "n_physical": (shape, np.int64), "n_stable": (shape, np.int64),
             **{k: ((*shape, 2), _DTYPES.get(k, float)) for k in fields}}
 
 
-def _blocks(runner: MapRunner, tasks: list[tuple[int, slice, slice]], fields: tuple[str, ...]
+def _blocks(runner: MapRunner, tasks: list[tuple[int, slice, slice]], fields: tuple[str, ...],
+            names: tuple[str, str]
             ) -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
-    """Each task's block of the map as it finishes: its region of (N, omega, b) and values."""
+    """Each task's block of the map as it finishes: its region of (N, first, second
+    parameter) and values."""
     for (k, osl, bsl), res in runner.results(tasks):
         values = {key: res[key] for key in ("exists", *fields)}
         values["n_physical"] = res["physical"].sum(axis=-1)
         values["n_stable"] = (res["physical"] & res["stable"]).sum(axis=-1)
-        if bsl.start == 0:  # the same for every block of b
+        if bsl.start == 0 or names[1] != "b":  # on (N, omega): the same for every block of b
             values["amplitude_squared"] = res["amplitude_squared"]
         del res
-        yield {"N": k, "omega": osl, "b": bsl}, values
+        yield {"N": k, names[0]: osl, names[1]: bsl}, values
 
 
 def _map_in_memory(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
                    bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
-                   options: dict[str, Any]) -> tuple[xr.Dataset, np.ndarray | None]:
+                   options: dict[str, Any], names: tuple[str, str]
+                   ) -> tuple[xr.Dataset, np.ndarray | None]:
     """The map in memory: its arrays allocated once, each task's block copied in as it
     finishes (no list of results, no assembled copies).
 
-    Returns the map and, if it was interrupted by a first Ctrl-C, the (N, omega, b)
-    points computed (else None); a second Ctrl-C raises KeyboardInterrupt.
+    Returns the map and, if it was interrupted by a first Ctrl-C, the (N, first, second
+    parameter) points computed (else None); a second Ctrl-C raises KeyboardInterrupt.
     """
-    layout = _layout((len(Ns), w.size, bb.size), _fields(options["spectral_radius"]))
+    fields = _fields(options["spectral_radius"])
+    layout = _layout((len(Ns), w.size, bb.size), fields, names)
     # placeholders of no memory: map_dataset makes the arrays, which the blocks fill
     placeholders = {k: np.broadcast_to(np.zeros((), dtype), shape)
                     for k, (shape, dtype) in layout.items()}
     ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=placeholders,
-                     options=options)
+                     options=options, parameters=names)
     arrays = {k: _writable(ds.variables[k]) for k in layout}
     computed = np.zeros((len(Ns), w.size, bb.size), dtype=bool)
     try:
-        for region, values in _blocks(runner, tasks, _fields(options["spectral_radius"])):
+        for region, values in _blocks(runner, tasks, fields, names):
             for key, block in values.items():
                 arrays[key][tuple(region[d] for d in ds[key].dims if d in region)] = block
-            computed[region["N"], region["omega"], region["b"]] = True
+            computed[region["N"], region[names[0]], region[names[1]]] = True
     except KeyboardInterrupt:
         if not keep_interrupted(runner, computed.size):
             raise
@@ -404,17 +610,17 @@ def _map_in_memory(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: n
     return ds, None
 
 
-def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray) -> None:
+def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, str]) -> None:
     """Mark an interrupted map: the points not computed NaN (False, 0 where no NaN
     exists), the variable ``computed`` and the attribute ``interrupted`` (issue 31)."""
     for var in ds.data_vars.values():
-        if var.dims == ("N", "omega"):
+        if var.dims == ("N", names[0]):
             where = ~computed[:, :, 0]  # the block of b = 0 writes amplitude_squared
         else:
             where = np.broadcast_to((~computed).reshape(computed.shape + (1,) * (var.ndim - 3)),
                                     var.shape)
         var.data[where] = np.nan if var.dtype.kind in "fc" else 0
-    ds["computed"] = (("N", "omega", "b"), computed,
+    ds["computed"] = (("N", *names), computed,
                       {"long_name": "point computed before the map was interrupted",
                        "units": "1"})
     ds.attrs["interrupted"] = 1
@@ -432,20 +638,21 @@ def _writable(var: xr.Variable) -> np.ndarray:
 
 def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
                  bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
-                 options: dict[str, Any], out: Any, block: tuple[int, int]) -> Path:
+                 options: dict[str, Any], out: Any, block: tuple[int, int],
+                 names: tuple[str, str]) -> Path:
     """The map written to a chunked, compressed NetCDF-4 file, each task's block (one chunk
     of every variable) as it finishes; nothing else of the map is held in memory."""
     import dask.array as da
 
-    layout = _layout((len(Ns), w.size, bb.size), _fields(options["spectral_radius"]))
+    fields = _fields(options["spectral_radius"])
+    layout = _layout((len(Ns), w.size, bb.size), fields, names)
     # placeholders of the right shape, never computed: the blocks are the values
     placeholders = {k: da.empty(shape, dtype=dtype, chunks=-1)
                     for k, (shape, dtype) in layout.items()}
     ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=placeholders,
-                     options=options)
-    chunk = {"N": 1, "omega": block[0], "b": block[1], "root": 2}
+                     options=options, parameters=names)
+    chunk = {"N": 1, names[0]: block[0], names[1]: block[1], "root": 2}
     encoding = {key: {"zlib": True, "complevel": 1,
                       "chunksizes": tuple(min(chunk[d], ds.sizes[d]) for d in ds[key].dims)}
                 for key in ds.data_vars}
-    return save_blocks(ds, out, _blocks(runner, tasks, _fields(options["spectral_radius"])),
-                       encoding=encoding)
+    return save_blocks(ds, out, _blocks(runner, tasks, fields, names), encoding=encoding)

@@ -21,10 +21,12 @@ from matplotlib.patches import Patch
 from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.curves import (
     codim2_variable,
+    map_parameters,
     validate_curve_dataset,
     validate_map_dataset,
 )
 from impactcont.plots.branches import (
+    _SYMBOLS,
     SPECIAL_NAMES,
     axis_label,
     check_width,
@@ -121,11 +123,11 @@ REGIONS: dict[int, tuple[str, str]] = {
 
 
 def region_codes(map_ds: xr.Dataset, N: int) -> xr.DataArray:
-    """Region of every (omega, b) grid point for one N.
+    """Region of every grid point for one N.
 
     Returns
     -------
-    xarray.DataArray of int, dims (omega, b)
+    xarray.DataArray of int, dims the map's two parameters ((omega, b) by default)
         0: no motion (``c^2 + s^2 < b^2``); 1: motions exist, none physical;
         2: a physical motion, none stable; 3: a stable physical motion.
     """
@@ -169,20 +171,36 @@ def _segments(mask: np.ndarray) -> list[slice]:
     return out
 
 
-def _system(map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]) -> str:
-    """The parameters held fixed on the (omega, b) plane, in mathtext (``$R = 0.6$, ...``)."""
+def _system(map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset],
+            plane: tuple[str, str] = ("omega", "b")) -> str:
+    """The parameters held fixed on the `plane`, in mathtext (``$R = 0.6$, ...``)."""
     datasets = ([map_ds] if map_ds is not None else []) + list(curve_list)
-    return system_text(datasets, skip={"omega", "b"})
+    return system_text(datasets, skip=set(plane))
+
+
+def _plane(map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]) -> tuple[str, str]:
+    """The two parameters drawn, x then y: the map's (its attribute ``parameters``, else
+    omega and b), else the first curve's (omega across, b up when they are omega and b)."""
+    if map_ds is not None:
+        return map_parameters(map_ds)
+    px, py = split_parameters(str(curve_list[0].attrs["parameters"]))
+    return ("omega", "b") if {px, py} == {"omega", "b"} else (px, py)
+
+
+def _plane_symbols(plane: tuple[str, str]) -> str:
+    """``$(\\omega, b)$``: the plane in mathtext (a name without a symbol as it is)."""
+    return "(" + ", ".join(_SYMBOLS.get(name, name) for name in plane) + ")"
 
 
 def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset], N: int,
            label_curves: bool) -> tuple[list[Any], list[tuple[float, float, str, str]]]:
     """Draw one N on ``ax``: its legend handles, and its labels ``(x, y, text, colour)``."""
     handles: list[Any] = []
+    first, second = _plane(map_ds, curve_list)
     if map_ds is not None:
-        code = region_codes(map_ds, N)
+        code = region_codes(map_ds, N).transpose(first, second)
         cmap = ListedColormap([REGIONS[k][1] for k in sorted(REGIONS)])
-        ax.pcolormesh(map_ds["omega"].values, map_ds["b"].values, code.values.T, cmap=cmap,
+        ax.pcolormesh(map_ds[first].values, map_ds[second].values, code.values.T, cmap=cmap,
                       vmin=-0.5, vmax=len(REGIONS) - 0.5, shading="nearest", rasterized=True)
         present = set(np.unique(code.values).tolist())
         handles += [Patch(facecolor=REGIONS[k][1], edgecolor="0.6", label=REGIONS[k][0])
@@ -197,10 +215,11 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
         if kind != "ZV" and int(c.attrs["N"]) != N:
             continue
         px, py = split_parameters(str(c.attrs["parameters"]))
-        if {px, py} != {"omega", "b"}:
-            raise ValueError(f"two_parameter_diagram draws curves in (omega, b); got a curve in "
-                             f"({px}, {py})")
-        x, y = c["omega"].values, c["b"].values
+        if {px, py} != {first, second}:
+            raise ValueError(f"two_parameter_diagram draws curves in ({first}, {second}); got a "
+                             f"curve in ({px}, {py}) (the plane is the map's, or the first "
+                             f"curve's)")
+        x, y = c[first].values, c[second].values
         color = CURVE_STYLES[kind]["color"]
         physical = c["physical"].values.astype(bool)
         strong = c["stable_side"].values.astype(bool) & physical
@@ -222,7 +241,7 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
                 labels.append((float(x[k]), float(y[k]), kind, color))
         names = c[codim2_variable("label")].values
         if names.size:
-            cx, cy = c[codim2_variable("omega")].values, c[codim2_variable("b")].values
+            cx, cy = c[codim2_variable(first)].values, c[codim2_variable(second)].values
             on = physical[c[codim2_variable("point")].values]
             for lab, xx, yy, shown in zip(names, cx, cy, on, strict=True):
                 # the same point found from both curves (PD+SN and SN+PD): one mark, one label
@@ -250,11 +269,11 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
             handle.codim2_seen = (style, shown, seen)  # panels' marks merge in _merge
             handles.append(handle)
     src = map_ds if map_ds is not None else next(iter(curve_list))
-    ax.set_xlabel(axis_label(src, "omega"))
-    ax.set_ylabel(axis_label(src, "b"))
+    ax.set_xlabel(axis_label(src, first))
+    ax.set_ylabel(axis_label(src, second))
     if map_ds is not None:
-        ax.set_xlim(float(map_ds["omega"].min()), float(map_ds["omega"].max()))
-        ax.set_ylim(float(map_ds["b"].min()), float(map_ds["b"].max()))
+        ax.set_xlim(float(map_ds[first].min()), float(map_ds[first].max()))
+        ax.set_ylim(float(map_ds[second].min()), float(map_ds[second].max()))
     return handles, labels
 
 
@@ -320,8 +339,9 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
     map_ds : xarray.Dataset, optional
         A map; its regions for ``N`` are shaded (:func:`region_codes`).
     curves : Dataset, sequence, mapping or DataTree of curve datasets, optional
-        Curves in (omega, b); those with another ``N`` are skipped, except ZV
-        curves, which do not depend on N.
+        Curves in the map's plane ((omega, b), or the two parameters of a map over
+        another pair; without a map, the first curve's); those with another ``N`` are
+        skipped, except ZV curves, which do not depend on N.
     N : int, optional
         Which N; default the map's first (or the first curve's).
     ax : matplotlib.axes.Axes, optional
@@ -343,7 +363,7 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
     ------
     ValueError
         Neither a map nor a curve, ``N`` not in the map, or a curve in other
-        parameters than (omega, b).
+        parameters than the map's (or the first curve's).
     """
     curve_list = _curves(curves)
     if map_ds is None and not curve_list:
@@ -359,7 +379,7 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
     if legend:
         legend_below(ax, handles)
     if title is None:
-        where = _system(map_ds, curve_list)
+        where = _system(map_ds, curve_list, _plane(map_ds, curve_list))
         title = f"Period-{N} motions with 1 impact" + (f", {where}" if where else "")
     if title:
         ax.set_title(title, fontsize="medium")
@@ -421,8 +441,9 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
             break
         legend.remove()
     if title is None:
-        where = _system(map_ds, curve_list)
-        title = (r"Period-$N$ motions with 1 impact in $(\omega, b)$"
+        plane = _plane(map_ds, curve_list)
+        where = _system(map_ds, curve_list, plane)
+        title = (f"Period-$N$ motions with 1 impact in {_plane_symbols(plane)}"
                  + (f", {where}" if where else ""))
     if title:
         fit_text(fig.suptitle(title, fontsize="medium"))

@@ -463,30 +463,35 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 
 
 def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Number of stable physical N-1 motions (period N, one impact) on the (omega, b) grid,
-    one panel per N."""
+    """Number of stable physical N-1 motions (period N, one impact) on the grid of the map's
+    two parameters ((omega, b), or those of its attribute ``parameters``), one panel per N."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
+    from impactcont.dataset.curves import map_parameters
+    from impactcont.plots.branches import axis_label
+
     ds = next(iter(datasets.values()))
+    first, second = map_parameters(ds)
     Ns = [int(N) for N in np.asarray(ds["N"].values)]
     cols = min(len(Ns), 2)
     rows = -(-len(Ns) // cols)
     width = _width(plot)
     fig = Figure(figsize=(width, rows * (0.75 * width / cols + 0.3) + 0.5), layout="constrained")
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
-    w, b = np.asarray(ds["omega"].values), np.asarray(ds["b"].values)
+    w, b = np.asarray(ds[first].values), np.asarray(ds[second].values)
     cmap = ListedColormap(["0.92", "tab:blue", "tab:orange"])
     norm = BoundaryNorm([-0.5, 0.5, 1.5, 2.5], cmap.N)
     mesh = None
     for ax, N in zip(axes, Ns, strict=False):
-        n_stable = np.asarray(ds["n_stable"].sel(N=N).values, dtype=float)
-        exists = np.asarray(ds["exists"].sel(N=N).values, dtype=bool)
+        n_stable = np.asarray(ds["n_stable"].sel(N=N).transpose(first, second).values,
+                              dtype=float)
+        exists = np.asarray(ds["exists"].sel(N=N).transpose(first, second).values, dtype=bool)
         mesh = ax.pcolormesh(w, b, n_stable.T, cmap=cmap, norm=norm, shading="nearest")
         ax.contour(w, b, exists.T.astype(float), levels=[0.5], colors="0.3",
                    linewidths=0.8)
         ax.set_title(f"$N = {N}$", fontsize="medium")
-        ax.set_xlabel(r"forcing frequency $\omega$")
-        ax.set_ylabel("gap $b$")
+        ax.set_xlabel(axis_label(ds, first))
+        ax.set_ylabel(axis_label(ds, second))
         ax.xaxis.set_major_locator(MaxNLocator(3 if width / cols < 3.0 else 6))
     for ax in axes[len(Ns):]:
         ax.set_axis_off()

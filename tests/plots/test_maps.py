@@ -148,3 +148,25 @@ def test_codim2_marks_of_several_panels_are_one_legend_entry():
     assert len(stars) == 1
     assert stars[0].get_label() == _codim2_label(style, ["PD+SN", "PD+NS", "PD+GR"], True)
     assert len(merged) == 2
+
+
+def test_a_map_over_other_parameters_is_drawn_in_its_own_plane() -> None:
+    osc = PAPER.replace(omega=1.2, b=0.3)
+    k2, R = np.linspace(0.6, 2.0, 5), np.linspace(0.3, 0.9, 4)
+    ds = ic.stability_map(osc, [1], parameters=("k2", "R"), grid={"k2": k2, "R": R})
+    ax = two_parameter_diagram(ds, ax=_axes())
+    (mesh,) = [c for c in ax.collections if isinstance(c, QuadMesh)]
+    np.testing.assert_array_equal(np.asarray(mesh.get_array()).reshape(R.size, k2.size),
+                                  region_codes(ds, 1).values.T)
+    # the axes are named from the parameter table, the title leaves them out of the system
+    assert ax.get_xlabel() == "spring k2"
+    assert ax.get_ylabel() == r"coefficient of restitution $R$"
+    assert ax.get_xlim() == (0.6, 2.0) and ax.get_ylim() == (0.3, 0.9)
+    assert "R =" not in ax.get_title() and r"\omega = 1.2" in ax.get_title()
+    fig = two_parameter_figure(ds, width=3.5)
+    try:
+        assert r"in (k2, $R$)" in fig._suptitle.get_text()
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
