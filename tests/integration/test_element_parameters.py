@@ -239,11 +239,13 @@ def test_a_scene_refuses_an_element_the_oscillator_lacks(tmp_path):
 # ------------------------------------------------------------------------------------------
 # Maps over two parameters
 # ------------------------------------------------------------------------------------------
-def test_the_closed_form_map_is_of_omega_and_b_and_says_so():
+def test_the_closed_form_map_takes_an_element_as_parameters_not_as_a_keyword():
     osc = ic.ImpactOscillator(**PAPER, eta=0.1)
-    with pytest.raises(ic.ParameterError, match=r"\(omega, b\) plane only.*\['k2'\].*"
-                                                r"multi_impact_map"):
+    with pytest.raises(ic.ParameterError, match=r"parameters=\(p1, p2\), grid=.*\['k2'\]"):
         ic.stability_map(osc, 1, omega=[1.0, 1.1], b=[0.5, 0.6], k2=[0.9, 1.0])
+    ds = ic.stability_map(osc, 1, parameters=("k2", "b"), grid={"k2": [0.9, 1.0],
+                                                                "b": [0.5, 0.6]})
+    assert ds["exists"].dims == ("N", "k2", "b")  # tests/integration/test_map_planes.py
 
 
 @pytest.mark.parametrize(("parameters", "grid", "fresh"), [
