@@ -73,6 +73,7 @@ from impactcont.detection.special_points import (
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.symmetry import half_map, symmetry_defect
 from impactcont.problems.events import BRANCH_TESTS
+from impactcont.progress import take_interrupt
 from impactcont.vocabulary import LABELS, Label, check_labels
 
 __all__ = ["MultiImpactSample", "MultiImpactSpecialPoint", "detect_multi_impact_points",
@@ -149,10 +150,34 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
         return kind_event(label, test, orbits[test.checks], lambda k: samples[k].orbit)
 
     found: list[MultiImpactSpecialPoint] = []
-    for ep in locate_events(problem, [s.u for s in samples], [s.lam for s in samples],
-                            [s.tangent for s in samples],
-                            [event(label) for label in watched],
-                            s_tol=_S_TOL, newton_tol=_NEWTON_TOL):
+    located = locate_events(problem, [s.u for s in samples], [s.lam for s in samples],
+                            [s.tangent for s in samples], [event(label) for label in watched],
+                            s_tol=_S_TOL, newton_tol=_NEWTON_TOL)
+    try:
+        _classify(problem, samples, located, tests, found)
+    except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those built are kept
+        if not (found and take_interrupt(
+                "location", "interrupted by the user (KeyboardInterrupt) while computing the "
+                "motions at the special points: the %d before are kept", len(found))):
+            raise
+    # a companion watched but not asked (ZV for GR) only tells which GR to drop
+    found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
+             if special.label in asked or special.label not in watched]
+    for special in found:
+        log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
+                 parameter, special.value, special.orbit.N, special.orbit.p, special.status,
+                 special.precision)
+        if on_found is not None:
+            on_found(special)
+    return found
+
+
+def _classify(problem: Any, samples: Sequence[MultiImpactSample], located: Sequence[Any],
+              tests: Mapping[str, MotionTest], found: list[SpecialPoint]) -> None:
+    """The records of the `located` zeros that are special points, appended to `found`:
+    the motion there, the kind's criticality, a fold that is a BP."""
+    parameter = getattr(problem, "parameter", "lam")
+    for ep in located:
         orbit = problem.orbit(ep.u, ep.lam)
         test = tests.get(ep.label)
         if not ep.failed and test is not None and test.critical is not None \
@@ -173,16 +198,6 @@ def detect_multi_impact_points(problem: Any, samples: Sequence[MultiImpactSample
                                bracket=ep.bracket, precision=ep.precision, status=ep.status,
                                orbit=orbit)
         found.append(special)
-    # a companion watched but not asked (ZV for GR) only tells which GR to drop
-    found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
-             if special.label in asked or special.label not in watched]
-    for special in found:
-        log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
-                 parameter, special.value, special.orbit.N, special.orbit.p, special.status,
-                 special.precision)
-        if on_found is not None:
-            on_found(special)
-    return found
 
 
 _MEETS_TOL = 1e-2

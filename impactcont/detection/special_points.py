@@ -54,6 +54,7 @@ from impactcont.errors import ParameterError
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.events import BRANCH_TESTS, event_function, event_noise, pole_free
 from impactcont.problems.periodic_branch import PeriodicBranchProblem
+from impactcont.progress import take_interrupt
 from impactcont.vocabulary import CODIM2_LABELS, LABELS, Label, check_labels
 
 __all__ = ["LABELS", "BranchSample", "SpecialPoint", "UserEvent", "UserFunctions",
@@ -157,6 +158,13 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     -------
     list of SpecialPoint
         In branch order.
+
+    Notes
+    -----
+    The first Ctrl-C of a driver's call (:func:`impactcont.progress.interruptible`) during
+    the location keeps the points located before it: the one being located is dropped,
+    the rest of the branch is not searched, and the call is marked interrupted. With
+    nothing located yet, or a second Ctrl-C, the interrupt is raised.
     """
     asked = [Label(label) for label in check_labels(labels, "labels")]
     # the kinds the problem declares, with their tests; the others, e.g. BP (a symmetric
@@ -165,18 +173,27 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
     tests: Mapping[str, MotionTest] = getattr(problem, "motion_tests", BRANCH_TESTS)
     watched = [label for label in watched_labels(asked) if label in declared]
     candidates: list[tuple[int, str, float, float, float, str, bool]] = []
-    for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
-        left, right = samples[k], samples[k + 1]
-        if Label.SN in watched and (left.dlam > 0) != (right.dlam > 0):
-            candidates.append((k, Label.SN, *_locate_fold(problem, left, right)))
-
     orbit_at = last_motions(lambda u, lam: problem.orbit(u[0], lam))
     events = [kind_event(label, tests[label], orbit_at, lambda k: samples[k].orbit)
               for label in watched if label in tests]
-    for ep in locate_events(problem, [[s.delta] for s in samples], [s.lam for s in samples],
-                            [[0.0, s.dlam] for s in samples], events, s_tol=_XTOL):
-        candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision, ep.status,
-                           ep.failed))
+    k = 0
+    try:
+        for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
+            left, right = samples[k], samples[k + 1]
+            if Label.SN in watched and (left.dlam > 0) != (right.dlam > 0):
+                candidates.append((k, Label.SN, *_locate_fold(problem, left, right)))
+        k = -1  # the other kinds, step by step (the core keeps those it located)
+        for ep in locate_events(problem, [[s.delta] for s in samples],
+                                [s.lam for s in samples], [[0.0, s.dlam] for s in samples],
+                                events, s_tol=_XTOL):
+            candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision,
+                               ep.status, ep.failed))
+    except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those located are kept
+        where = "" if k < 0 else f" the fold between points {k} and {k + 1}"
+        if not (candidates and take_interrupt(
+                "location", "interrupted by the user (KeyboardInterrupt) while locating%s: "
+                "the %d special points located before are kept", where, len(candidates))):
+            raise
     order = {label: i for i, label in enumerate(watched)}
     found: list[SpecialPoint] = []
     for k, label, delta, lam, precision, status, failed in sorted(

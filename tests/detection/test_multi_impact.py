@@ -156,3 +156,36 @@ def test_a_user_event_is_located_on_the_branch(branch):
         assert abs(math.remainder(event.orbit.delta - closed.delta, 2 * math.pi)) < 1e-9
     assert abs(math.remainder(events[0].orbit.delta - events[1].orbit.delta, 2 * math.pi)) > 0.1
     assert locate_multi_impact_events(problem, samples, None) == ({}, [])
+
+
+def test_ctrl_c_while_computing_the_motions_keeps_the_points_before(branch, points):
+    """Issue 31: the first Ctrl-C of a call while the motion at the second special point is
+    computed keeps the first; outside a driver's call it is raised."""
+    from impactcont.progress import interrupted, interruptible
+
+    problem, samples = branch
+
+    class Interrupted:
+        """The problem, whose motion at a located point (no checks asked) raises once the
+        first has been computed."""
+
+        def __init__(self) -> None:
+            self.calls = 0
+
+        def __getattr__(self, name):
+            return getattr(problem, name)
+
+        def orbit(self, u, lam, **kw):
+            if not kw:
+                self.calls += 1
+                if self.calls == 2:
+                    raise KeyboardInterrupt
+            return problem.orbit(u, lam, **kw)
+
+    with interruptible("test"):
+        kept = detect_multi_impact_points(Interrupted(), samples)
+        assert interrupted("location")
+    assert [p.label for p in kept] == [points[0].label]
+    assert kept[0].value == points[0].value and kept[0].status == points[0].status
+    with pytest.raises(KeyboardInterrupt):
+        detect_multi_impact_points(Interrupted(), samples)

@@ -372,3 +372,31 @@ def test_the_n1_detector_locates_the_kinds_its_problem_declares(n1_branch):
     assert [point.kind for point in found] == [Label.ZV] * expected.size
     np.testing.assert_allclose([point.value for point in found], expected, atol=1e-9)
     assert all(abs(point.orbit.impact_velocity - V_LEVEL) < 1e-9 for point in found)
+
+
+def test_ctrl_c_while_locating_the_second_fold_keeps_the_first(monkeypatch):
+    """Issue 31: Ctrl-C while the second saddle-node of a branch is located returned the
+    branch without any special point; it keeps the fold located before, marked interrupted."""
+    import json
+
+    import impactcont.detection.special_points as special_points
+
+    osc = paper(b=0.0, omega=1.1)  # the branch in b: SN at b = +-0.782, one component
+    full = ic.continuation(osc, 1, "b", (-2.0, 2.0), detect=["SN"], progress=False)
+    folds = full["special_b"].values
+    assert list(full["special_label"].values) == ["SN", "SN"]
+    locate_fold, calls = special_points._locate_fold, []
+
+    def interrupted_fold(*args):
+        calls.append(args)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return locate_fold(*args)
+
+    monkeypatch.setattr(special_points, "_locate_fold", interrupted_fold)
+    ds = ic.continuation(osc, 1, "b", (-2.0, 2.0), detect=["SN"], progress=False)
+    assert ds.sizes["point"] == full.sizes["point"]  # the branch was computed
+    assert list(ds["special_label"].values) == ["SN"]
+    assert np.min(np.abs(folds - float(ds["special_b"][0]))) < 1e-12
+    assert json.loads(ds.attrs["options"])["interrupted"] is True
+    assert ds.attrs["interrupted"] == 1
