@@ -1,13 +1,19 @@
-"""Maps of the (omega, b) plane: existence, physicality and stability of N-1 motions on a grid.
+"""Maps of existence, physicality and stability of motions over two parameters.
 
 ``stability_map(osc, N=[1, 2, 3, 4], omega=..., b=...)`` evaluates every root of
 eq. (15) at every grid point with the batched closed form of
 :mod:`impactcont.orbit.batched` (stacked numpy over ``omega x b x root``; ``S``
 of eq. 13 once per ``omega``) and returns an :class:`xarray.Dataset` with dims
-``(N, omega, b, root)`` (schema: :mod:`impactcont.dataset.curves`).
+``(N, omega, b, root)`` (schema: :mod:`impactcont.dataset.curves`). With
+``parameters=(p1, p2), grid={p1: ..., p2: ...}`` the same over any two parameters of the
+oscillator (dims ``(N, p1, p2, root)``): batched along omega or b when one of them is in
+the pair, else the closed form at each point on the oscillator with both parameters set.
+Given a motion instead of an oscillator, the map of its family
+(:func:`impactcont.multi_impact_map`, :mod:`impactcont.analysis.multi_maps`).
 
-The work is split into tasks of ``(N, block of omega, block of b)`` (at most
-131072 points) run through a standard :class:`concurrent.futures.Executor`:
+The work is split into tasks of ``(N, block of p1, block of p2)`` (at most 131072
+points) run by :class:`~impactcont.analysis.map_runner.MapRunner` through a standard
+:class:`concurrent.futures.Executor`:
 
 - ``executor=None`` or ``"serial"``: in this process;
 - ``"process"``: a :class:`~concurrent.futures.ProcessPoolExecutor` created and
@@ -41,11 +47,12 @@ Ctrl-C (issue 31): the first one stops a map between tasks, ends the pool made f
 returns the map computed so far: the points of the tasks not finished are NaN (False, 0
 for flags and counts), False in the variable ``computed``, the attribute
 ``interrupted`` is 1 and ``points_computed`` counts the others; a WARNING says how many
-of how many points were done. A second Ctrl-C aborts (KeyboardInterrupt). A map written
-to a file (``out=``, or larger than `memory_limit`) is abandoned at the first Ctrl-C, its
-file removed.
+of how many points were done. A map written to a file (``out=``, or larger than
+`memory_limit`) is kept the same way: the file is finished with the tasks not done
+written as not computed, ``computed`` and the attributes added, and only then moved onto
+its name (a file is never left half written), and returned opened lazily. A second Ctrl-C
+aborts (KeyboardInterrupt), a file being written removed.
 """
-
 from __future__ import annotations
 
 import functools
@@ -240,7 +247,8 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
         p2)``; the attribute ``parameters`` names a pair other than (omega, b)
         (:func:`impactcont.dataset.curves.map_variables`). Interrupted by Ctrl-C: what
         was computed, with ``computed`` on ``(N, p1, p2)`` and the attributes
-        ``interrupted`` and ``points_computed`` (module docstring). Of a motion: the
+        ``interrupted`` and ``points_computed`` (module docstring), in memory or in the
+        file (`out`, or a temporary one) alike. Of a motion: the
         dataset of :func:`impactcont.multi_impact_map`.
 
     Raises
@@ -315,8 +323,8 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
             if in_memory:
                 ds, computed = _map_in_memory(runner, osc, Ns, w, bb, tasks, options, names)
             else:
-                path = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out, (ob, bs),
-                                    names)
+                path, computed = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out,
+                                              (ob, bs), names)
         except BaseException:
             runner.close(kill=True)  # Ctrl-C or a failure: no worker left computing
             if temporary and out is not None:
@@ -326,6 +334,9 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
     elapsed = time.perf_counter() - start
     if in_memory and computed is not None:
         _mark_interrupted(ds, computed, names)
+    elif computed is not None:
+        log.warning("the interrupted map is kept in %s (interrupted = 1, the variable "
+                    "'computed')", out)
     else:
         log.info("map of %d x %d x %d points %s in %.2f s (%d tasks, executor %s)", *shape,
                  "computed" if in_memory else f"written to {out}", elapsed, len(tasks),
@@ -620,6 +631,12 @@ def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, st
             where = np.broadcast_to((~computed).reshape(computed.shape + (1,) * (var.ndim - 3)),
                                     var.shape)
         var.data[where] = np.nan if var.dtype.kind in "fc" else 0
+    _computed(ds, computed, names)
+
+
+def _computed(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, str]) -> None:
+    """Add the variable ``computed`` and the attributes ``interrupted`` and
+    ``points_computed`` of an interrupted map to `ds`."""
     ds["computed"] = (("N", *names), computed,
                       {"long_name": "point computed before the map was interrupted",
                        "units": "1"})
@@ -639,9 +656,17 @@ def _writable(var: xr.Variable) -> np.ndarray:
 def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
                  bb: np.ndarray, tasks: list[tuple[int, slice, slice]],
                  options: dict[str, Any], out: Any, block: tuple[int, int],
-                 names: tuple[str, str]) -> Path:
+                 names: tuple[str, str]) -> tuple[Path, np.ndarray | None]:
     """The map written to a chunked, compressed NetCDF-4 file, each task's block (one chunk
-    of every variable) as it finishes; nothing else of the map is held in memory."""
+    of every variable) as it finishes; nothing else of the map is held in memory.
+
+    Returns the file and, if a first Ctrl-C interrupted the map, the (N, first, second
+    parameter) points computed (else None): the file is then whole, as the in-memory map
+    is marked (:func:`_mark_interrupted`): the blocks of the tasks not finished written
+    NaN (False, 0), and the variable ``computed`` and the attributes ``interrupted`` and
+    ``points_computed`` added before the file is moved onto `out`. A second Ctrl-C
+    abandons the map (KeyboardInterrupt), its file removed.
+    """
     import dask.array as da
 
     fields = _fields(options["spectral_radius"])
@@ -655,4 +680,45 @@ def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.
     encoding = {key: {"zlib": True, "complevel": 1,
                       "chunksizes": tuple(min(chunk[d], ds.sizes[d]) for d in ds[key].dims)}
                 for key in ds.data_vars}
-    return save_blocks(ds, out, _blocks(runner, tasks, fields, names), encoding=encoding)
+    computed = np.zeros((len(Ns), w.size, bb.size), dtype=bool)
+    interrupted: list[bool] = []
+
+    def blocks() -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+        try:
+            for region, values in _blocks(runner, tasks, fields, names):
+                yield region, values
+                computed[region["N"], region[names[0]], region[names[1]]] = True
+        except KeyboardInterrupt:
+            if not keep_interrupted(runner, computed.size):
+                raise
+            interrupted.append(True)
+            for k, osl, bsl in tasks:  # the tasks not finished: not computed
+                if not computed[k, osl, bsl].any():
+                    yield _not_computed((k, osl, bsl), layout, names)
+
+    def finish() -> xr.Dataset | None:
+        if not interrupted:
+            return None
+        marked = xr.Dataset(attrs={})
+        _computed(marked, computed, names)
+        return marked
+
+    path = save_blocks(ds, out, blocks(), encoding=encoding, finish=finish)
+    return path, (computed if interrupted else None)
+
+
+def _not_computed(task: tuple[int, slice, slice], layout: dict[str, tuple[tuple[int, ...], Any]],
+                  names: tuple[str, str]) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The block of a task not computed (an interrupted map): NaN, False or 0, as
+    :func:`_mark_interrupted` marks it in memory."""
+    k, osl, bsl = task
+    region = {"N": k, names[0]: osl, names[1]: bsl}
+    sizes = {names[0]: osl.stop - osl.start, names[1]: bsl.stop - bsl.start}
+    values = {}
+    for key, (shape, dtype) in layout.items():
+        if key == "amplitude_squared" and len(shape) == 2 and bsl.start != 0:
+            continue  # on (N, first): the block of b = 0 writes it
+        dims = (names[0], names[1], "root")[:len(shape) - 1]
+        fill = np.nan if np.dtype(dtype).kind in "fc" else 0
+        values[key] = np.full(tuple(sizes.get(d, 2) for d in dims), fill, dtype=dtype)
+    return region, values

@@ -1279,7 +1279,8 @@ def _close_written(nc: Any, tmp: Path, failed: BaseException | None) -> None:
 
 def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
                 blocks: Iterable[tuple[Mapping[str, Any], Mapping[str, Any]]], *,
-                encoding: Mapping[str, Any] | None = None) -> Path:
+                encoding: Mapping[str, Any] | None = None,
+                finish: Callable[[], xr.Dataset | None] | None = None) -> Path:
     """Write a dataset larger than memory block by block, atomically (as :func:`save`).
 
     The file is laid out as :func:`save` would write `ds` (same attributes, CF form,
@@ -1304,6 +1305,11 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
         fill value).
     encoding : mapping, optional
         Per-variable NetCDF encoding (chunk sizes, compression), as in :func:`save`.
+    finish : callable, optional
+        Called after the last block: None, or a small dataset in memory whose data
+        variables (on dims of `ds`, no coordinates) and attributes are added to the file
+        before it is moved onto `path` (an interrupted map's ``computed`` and
+        ``interrupted``: the file is whole either way).
 
     Returns
     -------
@@ -1333,6 +1339,13 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
     data = _tree(ds, False)
     with atomic_output(path) as tmp:
         _write_blocks(data, tmp, blocks, _disk_encoding(encoding or {}, data), target)
+        extra = finish() if finish is not None else None
+        if extra is not None:
+            with _sigint_held(target):
+                xr.Dataset({k: _cf_variable(k, v.variable, False) for k, v in
+                            extra.data_vars.items()},
+                           attrs={k: _cf_attribute(v) for k, v in extra.attrs.items()}
+                           ).to_netcdf(tmp, mode="a", format="NETCDF4")
     logger.info("saved Dataset to %s block by block", target)
     return target
 

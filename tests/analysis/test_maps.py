@@ -366,3 +366,75 @@ def test_a_map_written_block_by_block_loads_with_its_schema_checked(paper, tmp_p
         assert hasattr(lazy.n_stable.data, "dask")
     loaded = ic.load(tmp_path / "map.nc")  # validate=True: the schema of a map
     xr.testing.assert_identical(loaded.drop_attrs(), serial.drop_attrs())
+
+
+# -- Ctrl-C on a map written to a file (issue 31) -------------------------------------------
+def _interrupted_after(k: int, real, *args):
+    """The task; the k-th call raises KeyboardInterrupt (as Ctrl-C in a serial map)."""
+    _interrupted_after.calls += 1
+    if _interrupted_after.calls == k:
+        raise KeyboardInterrupt
+    return real(*args)
+
+
+def _check_kept(lazy: xr.Dataset, full: xr.Dataset, points: int) -> None:
+    """`lazy`, an interrupted map read from its file, is `full` where computed and not
+    computed elsewhere, marked as the in-memory map is."""
+    assert hasattr(lazy.n_stable.data, "dask")
+    ds = lazy.load()
+    assert ds.attrs["interrupted"] == 1 and ds.attrs["points_computed"] == points
+    computed = ds["computed"]
+    assert computed.dtype == bool and computed.dims == ("N", "omega", "b")
+    assert int(computed.sum()) == points
+    xr.testing.assert_identical(ds.drop_vars("computed").where(computed).drop_attrs(),
+                                full.where(computed).drop_attrs())
+    assert np.isnan(ds["delta"].where(~computed)).all()
+    assert not ds["exists"].where(~computed, False).any()
+    assert int(ds["n_physical"].where(~computed, 0).sum()) == 0
+
+
+def test_ctrl_c_keeps_a_map_written_to_a_file_whole_and_marked(paper, serial_map, monkeypatch,
+                                                               tmp_path, caplog):
+    pytest.importorskip("dask")
+    _interrupted_after.calls = 0
+    monkeypatch.setattr(maps, "_map_task",
+                        functools.partial(_interrupted_after, 4, maps._map_task))
+    target = tmp_path / "map.nc"
+    with caplog.at_level("WARNING"):
+        lazy = stability_map(paper, [1, 2, 3], OMEGA, GAP, omega_block=5, out=target)
+    assert "195 of 897 points computed" in caplog.text  # 3 tasks of 5 x 13
+    assert f"the interrupted map is kept in {target}" in caplog.text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["map.nc"]  # no temporary left
+    _check_kept(lazy, serial_map, 3 * 5 * 13)
+    lazy.close()
+    loaded = ic.load(target)  # the schema of a map, with its variable 'computed'
+    assert loaded.attrs["interrupted"] == 1 and int(loaded["computed"].sum()) == 195
+    plain = xr.open_dataset(target)  # any reader sees the same marks
+    assert plain.attrs["interrupted"] == 1 and int(plain["computed"].sum()) == 195
+    plain.close()
+
+
+def test_ctrl_c_keeps_a_map_too_large_for_memory_in_its_temporary_file(paper, serial_map,
+                                                                       monkeypatch):
+    pytest.importorskip("dask")
+    _interrupted_after.calls = 0
+    monkeypatch.setattr(maps, "_map_task",
+                        functools.partial(_interrupted_after, 3, maps._map_task))
+    lazy = stability_map(paper, [1, 2, 3], OMEGA, GAP, omega_block=5, memory_limit=1e4)
+    path = Path(lazy.encoding["source"])
+    assert path.is_file()
+    _check_kept(lazy, serial_map, 2 * 5 * 13)
+    lazy.close()
+    assert not path.exists()  # a temporary map goes when closed, interrupted or not
+
+
+def test_a_second_ctrl_c_abandons_a_map_written_to_a_file(paper, monkeypatch, tmp_path):
+    pytest.importorskip("dask")
+    _interrupted_after.calls = 0
+    monkeypatch.setattr(maps, "_map_task",
+                        functools.partial(_interrupted_after, 2, maps._map_task))
+    # as after a second Ctrl-C (runner.aborted): the map is not kept
+    monkeypatch.setattr(maps, "keep_interrupted", lambda runner, total: False)
+    with pytest.raises(KeyboardInterrupt):
+        stability_map(paper, [1, 2], OMEGA, GAP, omega_block=5, out=tmp_path / "map.nc")
+    assert not list(tmp_path.iterdir())  # nothing kept, no temporary left
