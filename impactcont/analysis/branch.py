@@ -45,9 +45,8 @@ from impactcont.dataset.schema import (
     special_variable,
     validate_branch_dataset,
 )
-from impactcont.detection import BranchSample, detect_special_points
+from impactcont.detection import BranchSample, SpecialPoint, detect_special_points
 from impactcont.detection.special_points import (
-    UserEvent,
     UserFunctions,
     check_user_functions,
     locate_user_events,
@@ -407,9 +406,9 @@ class _Run:
     start_delta: float
     result: Any
     samples: list[BranchSample]
-    specials: list[Any]
+    specials: list[SpecialPoint]
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
-    events: list[UserEvent] = dataclasses.field(default_factory=list)
+    events: list[SpecialPoint] = dataclasses.field(default_factory=list)
 
 
 def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
@@ -509,7 +508,7 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
     orbits = [s.orbit for run in runs for s in run.samples]
     arclength, component, lam = [], [], []
     special_points = []
-    user_events: list[UserEvent] = []
+    user_events: list[SpecialPoint] = []
     offset = 0
     for index, run in enumerate(runs):
         user_events += [dataclasses.replace(ev, point=ev.point + offset) for ev in run.events]

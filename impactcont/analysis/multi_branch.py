@@ -44,15 +44,13 @@ from impactcont.dataset.schema import (
 )
 from impactcont.detection.multi_impact import (
     MultiImpactSample,
-    MultiImpactSpecialPoint,
     detect_multi_impact_points,
     locate_multi_impact_events,
 )
+from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import (
-    UserEvent,
     UserFunctions,
     check_user_functions,
-    event_function,
     user_values,
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
@@ -60,6 +58,7 @@ from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
+from impactcont.problems.events import PERIOD_DOUBLING
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.progress import (
@@ -109,11 +108,11 @@ def make_options(bounds: Sequence[float], options: ContinuationOptions | None = 
 def _pd_sign_change(a: MultiImpactOrbit, b: MultiImpactOrbit) -> bool:
     """Whether the PD test changes sign between two motions, not through a pole of G.
 
-    The pole-free PD test (:func:`~impactcont.problems.events.pole_free`) is cleared by the
+    The pole-free PD test (:data:`~impactcont.problems.events.PERIOD_DOUBLING`) is cleared by the
     impact velocities: one of them changing sign (a zero-velocity impact, the pole of G of
     eq. 25) changes the test's sign without a multiplier through -1.
     """
-    fa, fb = event_function("PD", a), event_function("PD", b)
+    fa, fb = PERIOD_DOUBLING.test(a), PERIOD_DOUBLING.test(b)
     near = min(np.min(np.abs(a.multipliers + 1)), np.min(np.abs(b.multipliers + 1)))
     through_pole = bool(np.any((a.impact_velocities < 0) != (b.impact_velocities < 0)))
     return bool(math.isfinite(fa) and math.isfinite(fb) and (fa < 0) != (fb < 0)
@@ -275,13 +274,13 @@ def _within_limits(problem: BranchProblem, options: ContinuationOptions
 
 
 def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSample],
-                      specials: Sequence[MultiImpactSpecialPoint], options: Mapping[str, Any],
+                      specials: Sequence[SpecialPoint], options: Mapping[str, Any],
                       *, title: str | None = None,
                       extra_attrs: Mapping[str, Any] | None = None,
                       extra_columns: Sequence[str] = (),
                       functions: UserFunctions | None = None,
                       values: Mapping[str, np.ndarray] | None = None,
-                      user_events: Sequence[UserEvent] = ()) -> xr.Dataset:
+                      user_events: Sequence[SpecialPoint] = ()) -> xr.Dataset:
     """The N-p branch dataset of :mod:`impactcont.dataset.multi` from samples and special points.
 
     `extra_columns` are further oscillator parameters stored per point (the first
@@ -331,7 +330,7 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
 
 def user_events_until_interrupted(problem: Any, samples: Sequence[MultiImpactSample],
                  functions: UserFunctions | None, **position: Any
-                 ) -> tuple[dict[str, np.ndarray], list[UserEvent]]:
+                 ) -> tuple[dict[str, np.ndarray], list[SpecialPoint]]:
     """The user's functions at every sample and their located events (none when Ctrl-C
     is taken while they are located: the values are kept)."""
     found = until_interrupted(

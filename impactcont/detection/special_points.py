@@ -100,7 +100,7 @@ def _locate_fold(problem: PeriodicBranchProblem, left: BranchSample, right: Bran
                   "change of d%s/ds on the branch", problem.parameter, left.lam, right.lam,
                   exc, problem.parameter)
     (ep,) = locate_events(problem, [[left.delta], [right.delta]], [left.lam, right.lam],
-                          [[0.0, left.dlam], [0.0, right.dlam]], [Event("SN", None)],
+                          [[0.0, left.dlam], [0.0, right.dlam]], [Event(Label.SN, None)],
                           s_tol=_XTOL)
     return float(ep.u[0]), ep.lam, ep.precision, ep.status, ep.failed
 
