@@ -10,8 +10,9 @@ all this class.
 Notes
 -----
 A codimension-two point of a curve (two parameters; label ``"A+B"``, ``R1``, ``R2``) fits
-the same record: ``codimension=2``, ``u`` the curve problem's unknowns (one of them the
-first parameter), ``value`` the second parameter and ``x = [u, value]``.
+the same record (:meth:`SpecialPoint.on_curve`): ``codimension=2``, ``u`` the curve
+problem's unknowns (one of them the first parameter), ``value`` the second parameter and
+``x = [u, value]``.
 """
 
 from __future__ import annotations
@@ -84,6 +85,30 @@ class SpecialPoint:
             kind = self.kind
             object.__setattr__(self, "codimension",
                                kind.codimension if isinstance(kind, Label) else 1)
+
+    @classmethod
+    def on_curve(cls, label: str, x: np.ndarray, orbit: Any, point: int, precision: float,
+                 status: str) -> SpecialPoint:
+        """A codimension-two point of a curve from ``x = [u, lam]`` of the curve problem.
+
+        Parameters
+        ----------
+        label : str
+            ``"A+B"`` (a curve of kind A meets kind B), ``"R1"`` or ``"R2"``.
+        x : ndarray
+            ``[u, lam]`` of the curve problem there (``x`` of the record is the same).
+        orbit : object
+            The motion there.
+        point : int
+            Index of the nearest accepted curve point.
+        precision : float
+            Bound on the error in the plane of the two parameters (max-norm).
+        status : str
+            ``"located"`` or ``"bracketed"``.
+        """
+        x = np.asarray(x, dtype=float)
+        return cls(label=label, value=float(x[-1]), u=x[:-1], point=point,
+                   precision=precision, status=status, orbit=orbit, codimension=2)
 
     @property
     def kind(self) -> Label | str:

@@ -32,10 +32,11 @@ def test_an_n1_point_given_its_phase_and_an_n_p_point_given_its_unknowns():
     event = UserEvent(label="v07", value=1.7, u=np.array([0.3]), point=1, precision=1e-13,
                       status="located", orbit=ORBIT)
     assert event.name == "v07" and event.kind == "v07" and event.lam == 1.7
-    # a codim-2 point of a curve: two parameters, x = [u, value]
-    codim2 = SpecialPoint(label="PD+NS", value=0.1, u=np.array([0.3, 1.8]), point=2,
-                          precision=1e-10, status="located", orbit=ORBIT, codimension=2)
-    assert codim2.codimension == 2 and codim2.x.tolist() == [0.3, 1.8, 0.1]
+    # a codim-2 point of a curve: two parameters, x = [u, value] as the curve gives it
+    x = np.array([0.3, 1.8, 0.1])
+    codim2 = SpecialPoint.on_curve("PD+NS", x, ORBIT, 2, 1e-10, "located")
+    assert codim2.codimension == 2 and codim2.value == 0.1 and codim2.u.tolist() == [0.3, 1.8]
+    assert np.array_equal(codim2.x, x) and codim2.kind == "PD+NS" and codim2.bracket is None
 
 
 def test_bad_records_are_refused():
