@@ -119,3 +119,26 @@ def test_a_zv_only_bracketed_drops_nothing():
     gr = _Point("GR", 1.0, 1e-8, (0.9, 1.1))
     assert drop_grazing_at_zero_velocity([zv, gr]) == [zv, gr]
     assert drop_grazing_at_zero_velocity([]) == []
+
+
+def test_a_kind_event_is_built_from_the_declared_test_of_the_motion():
+    """Issue 29, 2: the detectors build each kind's event from its declared MotionTest
+    (test, noise and poles as functions of the motion), and watch ZV with GR."""
+    from types import SimpleNamespace
+
+    from impactcont.core.locate import MotionTest
+    from impactcont.detection.locator import kind_event, watched_labels
+    from impactcont.vocabulary import Label
+
+    motions = [SimpleNamespace(h=-1.0, g=2.0), SimpleNamespace(h=0.5, g=-3.0)]
+    test = MotionTest(lambda m: m.g, lambda m: 1e-3 * abs(m.g), poles=lambda m: [m.h])
+    event = kind_event(Label.PD, test, lambda u, lam: motions[int(lam)], motions.__getitem__)
+    assert event.label is Label.PD
+    assert event.test(None, 1.0) == -3.0 and event.at_point(0) == 2.0
+    assert event.noise(1) == 3e-3 and event.noise_at(None, 0.0) == 2e-3
+    assert event.poles(None, 0.0) == [-1.0] and event.poles_at(1) == [0.5]
+    bare = kind_event(Label.ZV, MotionTest(lambda m: m.h), lambda u, lam: motions[0],
+                      motions.__getitem__)
+    assert bare.noise is None and bare.noise_at is None and bare.poles is None
+    assert watched_labels([Label.GR, Label.PD]) == [Label.GR, Label.PD, Label.ZV]
+    assert watched_labels(["ZV", "GR"]) == ["ZV", "GR"]
