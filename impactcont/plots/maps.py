@@ -1,12 +1,16 @@
-"""Two-parameter diagrams: map regions shaded per N, continued curves drawn on top.
+"""Two-parameter diagrams: map regions shaded, continued curves drawn on top.
 
-The functions read map datasets (:func:`impactcont.analysis.maps.stability_map`) and
-curve datasets (:func:`impactcont.analysis.curves.curve`); they never compute orbits and
-never call ``plt.show``.
+Every map :func:`impactcont.stability_map` returns is drawn here: the N-1 map of an
+oscillator (:func:`two_parameter_diagram`, :func:`two_parameter_figure`: regions per N,
+the curves of :func:`impactcont.analysis.curves.curve` on top) and the map of one N-p
+motion family (:func:`multi_impact_map_diagram`, which :func:`two_parameter_diagram` draws
+too: regions of the family, their boundaries and the seed). The functions read the
+datasets only; they never compute orbits and never call ``plt.show``.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -18,28 +22,33 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.attributes import dataset_tag, split_parameters
 from impactcont.dataset.curves import (
     codim2_variable,
     map_parameters,
     validate_curve_dataset,
     validate_map_dataset,
 )
+from impactcont.dataset.multi_maps import validate_multi_impact_map_dataset
 from impactcont.plots.branches import (
     _SYMBOLS,
     SPECIAL_NAMES,
+    _stops,
     axis_label,
     check_width,
     fit_text,
     legend_below,
     legend_fontsize,
+    motion_text,
+    parameter_text,
     system_text,
 )
 from impactcont.plots.labels import marker_boxes, merged_labels, place_labels
 
-__all__ = ["CODIM2_NAMES", "CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES", "REGIONS",
-           "codim2_legend", "codim2_name", "region_codes", "two_parameter_diagram",
-           "two_parameter_figure"]
+__all__ = ["CODIM2_NAMES", "CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES",
+           "MULTI_MAP_BOUNDARIES", "MULTI_MAP_REGIONS", "REGIONS", "codim2_legend",
+           "codim2_name", "multi_impact_map_diagram", "multi_map_regions", "multi_map_title",
+           "region_codes", "two_parameter_diagram", "two_parameter_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -337,7 +346,11 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
     Parameters
     ----------
     map_ds : xarray.Dataset, optional
-        A map; its regions for ``N`` are shaded (:func:`region_codes`).
+        A map; its regions for ``N`` are shaded (:func:`region_codes`). The map of an
+        N-p motion family (:func:`impactcont.multi_impact_map`, or
+        :func:`impactcont.stability_map` of a motion) is drawn by
+        :func:`multi_impact_map_diagram` (`N`, `label_curves` and `label_codim2` do not
+        apply; no curves).
     curves : Dataset, sequence, mapping or DataTree of curve datasets, optional
         Curves in the map's plane ((omega, b), or the two parameters of a map over
         another pair; without a map, the first curve's); those with another ``N`` are
@@ -365,6 +378,11 @@ def two_parameter_diagram(map_ds: xr.Dataset | None = None, curves: Any = None, 
         Neither a map nor a curve, ``N`` not in the map, or a curve in other
         parameters than the map's (or the first curve's).
     """
+    if map_ds is not None and dataset_tag(map_ds) == "multi_impact_map":
+        if curves is not None:
+            raise ValueError("two_parameter_diagram draws the curves of N-1 motions over an N-1 "
+                             "map; got curves with the map of an N-p motion family")
+        return multi_impact_map_diagram(map_ds, ax=ax, legend=legend, title=title)
     curve_list = _curves(curves)
     if map_ds is None and not curve_list:
         raise ValueError("give map_ds or curves (or both); got neither")
@@ -451,3 +469,146 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
     for ax, own in zip(axes.flat, labels, strict=False):
         _label(ax, own)
     return fig
+
+
+# -- the map of one N-p motion family ---------------------------------------------------------
+#: Region codes of :func:`multi_map_regions`, with their legend text and shade.
+MULTI_MAP_REGIONS: dict[int, tuple[str, str]] = {
+    0: ("not found (family not reached)", "#ffffff"),
+    1: ("found, not physical", "#e4e4e4"),
+    2: ("physical, unstable", "#f6d7a7"),
+    3: ("stable physical motion", "#8fc4e8"),
+    4: ("found, interior contact not checked", "#d8c6e6"),
+}
+
+#: Colour and line style of the boundary of each region, and its legend text.
+MULTI_MAP_BOUNDARIES: dict[str, tuple[str, str, str]] = {
+    "found": ("black", "-", "found region"),
+    "physical": ("tab:red", "--", "physical region"),
+    "stable_physical": ("navy", "-", "stable physical region"),
+}
+_SEED = {"marker": "*", "markersize": 10.0, "color": "gold", "markeredgecolor": "black",
+         "linestyle": "none"}
+
+
+def multi_map_regions(ds: xr.Dataset) -> xr.DataArray:
+    """Region of every grid point of a :func:`~impactcont.analysis.multi_maps.multi_impact_map`.
+
+    Returns
+    -------
+    xarray.DataArray of int, dims (parameter 0, parameter 1)
+        0: not found; 1: found, not physical; 2: physical, unstable; 3: stable and
+        physical; 4: found, but its interior contact was not searched
+        (``contact_checked`` False: ``checks=False``, or a constant force pushing a free
+        mode), so whether it is physical is not known (it is never reported physical).
+    """
+    validate_multi_impact_map_dataset(ds)
+    found, physical, stable, checked = (ds[k].astype(bool) for k in (
+        "found", "physical", "stable", "contact_checked"))
+    code = xr.where(physical & stable, 3, xr.where(physical, 2, xr.where(
+        found & ~checked, 4, xr.where(found, 1, 0))))
+    return code.rename("region")
+
+
+def multi_map_title(ds: xr.Dataset) -> str:
+    """The motion and the system of a map: ``Period-1 symmetric motions with 2 impacts, ...``.
+
+    The parameters held fixed (those not on the map's axes) in mathtext, and
+    the stops: a mirrored lower stop moves with ``b``.
+    """
+    axes = set(split_parameters(str(ds.attrs["parameters"])))
+    osc = json.loads(ds.attrs["oscillator"])
+    stops = _stops(ds)
+    mirror = bool((osc.get("stops") or {}).get("mirror"))
+    values = {k: float(osc[k]) for k in ("b", "R", "omega", "eta", "alpha", "beta", "F0")
+              if isinstance(osc.get(k), (int, float)) and k not in axes}
+    if not mirror:
+        values.update({k: stops[k] for k in ("b_low", "R_low") if k in stops})
+    text = motion_text([ds], adjective="symmetric" if ds.attrs.get("symmetric") else "")
+    where = parameter_text(values, ("b", "b_low", "R", "R_low", "omega", "eta", "alpha",
+                                    "beta", "F0"))
+    parts = [text, *([where] if where else [])]
+    if mirror:
+        parts.append(rf"mirror stops $x_{stops['mass']} = \pm b$")
+    return ", ".join(parts)
+
+
+def _boundary(x: np.ndarray, y: np.ndarray, flag: np.ndarray) -> list[np.ndarray]:
+    """The 0.5 contour of ``flag`` (dims x, y) as polylines ``(m, 2)`` in (x, y)."""
+    from contourpy import contour_generator
+
+    lines = contour_generator(x, y, flag.T.astype(float), line_type="Separate").lines(0.5)
+    return [np.asarray(line, dtype=float) for line in lines]
+
+
+def multi_impact_map_diagram(ds: xr.Dataset, *, ax: Axes | None = None,
+                             boundaries: bool = True, legend: bool = True,
+                             title: str | None = None) -> Axes:
+    """One panel: the map's regions shaded, their boundaries and the seed on top.
+
+    Every shade, boundary and the seed are named in the legend under the axes
+    (:data:`MULTI_MAP_REGIONS`, :data:`MULTI_MAP_BOUNDARIES`); the axes are
+    named in symbols and the title names the motion, the system and the stops
+    (:func:`multi_map_title`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A map of :func:`impactcont.analysis.multi_maps.multi_impact_map`.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; a new pyplot figure by default. With ``legend`` its
+        figure should use the constrained layout (the default figure does).
+    boundaries : bool
+        Draw the boundaries of the found, physical and stable physical regions (the
+        0.5 contour of each flag on the grid: within half a grid cell of where the
+        flag changes).
+    legend : bool
+        Draw the legend (under the axes).
+    title : str, optional
+        Axes title; by default :func:`multi_map_title`, ``""`` for none.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    code = multi_map_regions(ds)
+    px, py = split_parameters(str(ds.attrs["parameters"]))
+    x, y = ds[px].values, ds[py].values
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(5.0, 5.6), layout="constrained")
+    cmap = ListedColormap([MULTI_MAP_REGIONS[k][1] for k in sorted(MULTI_MAP_REGIONS)])
+    ax.pcolormesh(x, y, code.values.T, cmap=cmap, vmin=-0.5,
+                  vmax=len(MULTI_MAP_REGIONS) - 0.5, shading="nearest", rasterized=True)
+    present = set(np.unique(code.values).tolist())
+    handles: list[Any] = [Patch(facecolor=MULTI_MAP_REGIONS[k][1], edgecolor="0.6",
+                                label=MULTI_MAP_REGIONS[k][0])
+                          for k in sorted(MULTI_MAP_REGIONS) if k in present]
+    if boundaries and x.size > 1 and y.size > 1:
+        flags = {"found": ds["found"].values, "physical": ds["physical"].values,
+                 "stable_physical": ds["physical"].values & ds["stable"].values}
+        for order, (key, flag) in enumerate(flags.items()):
+            if flag.all() or not flag.any():
+                continue
+            color, style, text = MULTI_MAP_BOUNDARIES[key]
+            for line in _boundary(x, y, np.asarray(flag, dtype=bool)):  # where they coincide,
+                ax.plot(line[:, 0], line[:, 1], color=color, linestyle=style,  # found on top
+                        linewidth=1.2, zorder=2.3 - 0.1 * order)
+            handles.append(Line2D([], [], color=color, linestyle=style, linewidth=1.2,
+                                  label=f"boundary of the {text}"))
+    seed = json.loads(ds.attrs["seed"])
+    if px in seed and py in seed:
+        ax.plot(seed[px], seed[py], zorder=4, **_SEED)
+        handles.append(Line2D([], [], label="seed", **_SEED))
+    ax.set_xlabel(axis_label(ds, px))
+    ax.set_ylabel(axis_label(ds, py))
+    if legend:
+        legend_below(ax, handles)
+    title = multi_map_title(ds) if title is None else title
+    if title:
+        ax.set_title(title, fontsize="medium")
+        ax.figure.draw_without_rendering()
+        fit_text(ax.title)
+    logger.debug("multi-impact map diagram over (%s, %s)", px, py)
+    return ax

@@ -1,9 +1,16 @@
 """Two-parameter diagrams (:mod:`impactcont.plots.maps`): the region of every grid point
 follows the map's counts, the shading is those regions, each curve is drawn through its own
 (omega, b) points in its kind's colour, the legend names what is shown and the axes the two
-parameters; one panel per N; bad arguments refused by name."""
+parameters; one panel per N; bad arguments refused by name.
+
+Maps of one N-p family: the region of every grid point follows its flags, the shading is
+those regions, the boundaries separate found from not found, the seed is marked where it
+was, the title names the motion, the system and the stops, the axes the two parameters;
+:func:`two_parameter_diagram` draws them as :func:`multi_impact_map_diagram` does."""
 
 from __future__ import annotations
+
+import json
 
 import matplotlib
 import numpy as np
@@ -15,9 +22,16 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 
 import impactcont as ic
+from impactcont.dataset.multi_maps import multi_impact_map_dataset
+from impactcont.model.stops import Stops
 from impactcont.plots.maps import (
     CURVE_STYLES,
+    MULTI_MAP_BOUNDARIES,
+    MULTI_MAP_REGIONS,
     REGIONS,
+    multi_impact_map_diagram,
+    multi_map_regions,
+    multi_map_title,
     region_codes,
     two_parameter_diagram,
     two_parameter_figure,
@@ -170,3 +184,104 @@ def test_a_map_over_other_parameters_is_drawn_in_its_own_plane() -> None:
         import matplotlib.pyplot as plt
 
         plt.close(fig)
+
+
+# -- the map of one N-p motion family -------------------------------------------------------
+FAMILY_PAPER = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                                   R=0.6, b=0.6, omega=1.0, eta=0.1)
+FAMILY_OMEGA, FAMILY_B = np.linspace(0.6, 1.6, 6), np.linspace(0.0, 1.2, 5)
+
+
+@pytest.fixture(scope="module")
+def family() -> xr.Dataset:
+    """The 1-1 family of the paper's system from its physical closed-form motion."""
+    physical = next(o for o in ic.periodic_orbits(FAMILY_PAPER, 1) if o.physical)
+    return ic.multi_impact_map(physical, ("omega", "b"),
+                               grid={"omega": FAMILY_OMEGA, "b": FAMILY_B})
+
+
+def _family_axes():
+    fig = Figure(figsize=(5.0, 5.6), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig.add_subplot()
+
+
+def test_the_region_of_a_grid_point_follows_its_flags(family) -> None:
+    code = multi_map_regions(family).values
+    found, physical, stable, checked = (family[k].values.astype(bool) for k in (
+        "found", "physical", "stable", "contact_checked"))
+    np.testing.assert_array_equal(code == 3, physical & stable)
+    np.testing.assert_array_equal(code == 2, physical & ~stable)
+    np.testing.assert_array_equal(code == 0, ~found)
+    np.testing.assert_array_equal(code == 4, found & ~checked & ~physical)
+    assert {0, 1}.issubset(set(np.unique(code)))  # the family ends inside the grid
+    unchecked = family.assign(contact_checked=family["contact_checked"] & False,
+                              physical=family["physical"] & False)
+    assert set(np.unique(multi_map_regions(unchecked).values)) == {0, 4}
+
+
+def test_the_panel_shades_the_regions_marks_the_seed_and_names_its_axes(family) -> None:
+    ax = multi_impact_map_diagram(family, ax=_family_axes())
+    (mesh,) = [c for c in ax.collections if isinstance(c, QuadMesh)]
+    np.testing.assert_array_equal(
+        np.asarray(mesh.get_array()).reshape(FAMILY_B.size, FAMILY_OMEGA.size),
+        multi_map_regions(family).values.T)
+    seed = json.loads(family.attrs["seed"])
+    (star,) = [line for line in ax.get_lines() if line.get_marker() == "*"]
+    np.testing.assert_array_equal(star.get_xydata(), [[seed["omega"], seed["b"]]])
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    present = np.unique(multi_map_regions(family).values)
+    assert texts[:len(present)] == [MULTI_MAP_REGIONS[k][0] for k in sorted(present)]
+    assert "boundary of the found region" in texts and texts[-1] == "seed"
+    black = [line for line in ax.get_lines()
+             if line.get_color() == MULTI_MAP_BOUNDARIES["found"][0]]
+    assert black  # the found region's boundary lies between found and not-found points
+    for line in black:
+        xy = line.get_xydata()
+        assert np.all((xy[:, 0] >= FAMILY_OMEGA[0]) & (xy[:, 0] <= FAMILY_OMEGA[-1]))
+    assert ax.get_xlabel() == r"forcing frequency $\omega$"
+    assert ax.get_ylabel().startswith("gap $b$")
+    assert ax.get_title() == multi_map_title(family)
+
+
+def test_without_boundaries_legend_and_title(family) -> None:
+    ax = multi_impact_map_diagram(family, ax=_family_axes(), boundaries=False, legend=False,
+                                  title="")
+    assert ax.get_legend() is None and ax.get_title() == ""
+    assert [line.get_marker() for line in ax.get_lines()] == ["*"]
+
+
+def test_the_title_names_the_motion_the_fixed_parameters_and_the_stops(family) -> None:
+    assert multi_map_title(family) == r"Period-1 motions with 1 impact, $R = 0.6$, $\eta = 0.1$"
+    mirrored = FAMILY_PAPER.replace(b=0.5, stops=Stops(mirror=True))
+    shape, p = (2, 3), 2
+    values = {"found": np.ones(shape, bool), "newton_iterations": np.full(shape, 3),
+              "stable": np.ones(shape, bool), "physical": np.ones(shape, bool),
+              "contact_checked": np.ones(shape, bool), "spectral_radius": np.full(shape, 0.5),
+              "critical_multiplier": np.full(shape, 0.5 + 0j), "delta": np.zeros(shape),
+              "gap_min": np.ones(shape), "impact_velocity_k": np.ones((*shape, p)),
+              "flight_time_k": np.full((*shape, p), np.pi), "state_k": np.zeros((*shape, p, 4))}
+    ds = multi_impact_map_dataset(oscillator=mirrored, N=1, pattern="UL",
+                                  parameters=("omega", "R"),
+                                  grid={"omega": [1.0, 1.2], "R": [0.5, 0.6, 0.7]},
+                                  values=values, symmetric=True, seed={"omega": 1.0},
+                                  options={})
+    # R is on an axis; the mirrored lower stop moves with b (no b_low of its own)
+    assert multi_map_title(ds) == (r"Period-1 symmetric motions with 2 impacts, impacts UL "
+                                   r"(L: lower stop), $b = 0.5$, $\eta = 0.1$, "
+                                   r"mirror stops $x_1 = \pm b$")
+    ax = multi_impact_map_diagram(ds, ax=_family_axes())
+    assert not [line for line in ax.get_lines() if line.get_marker() == "*"]  # seed: omega only
+    assert ax.get_ylabel().startswith("coefficient of restitution $R$")
+
+
+def test_two_parameter_diagram_draws_the_map_of_a_family_as_its_own_diagram(family) -> None:
+    ax = two_parameter_diagram(family, ax=_family_axes())
+    (mesh,) = [c for c in ax.collections if isinstance(c, QuadMesh)]
+    np.testing.assert_array_equal(
+        np.asarray(mesh.get_array()).reshape(FAMILY_B.size, FAMILY_OMEGA.size),
+        multi_map_regions(family).values.T)
+    assert ax.get_title() == multi_map_title(family)
+    assert ax.get_legend() is not None
+    with pytest.raises(ValueError, match="got curves with the map of an N-p motion family"):
+        two_parameter_diagram(family, [], ax=_family_axes())
