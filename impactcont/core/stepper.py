@@ -307,12 +307,32 @@ class PalcStepper:
                         return landed
                     reason += f"; {why_not}"
             else:
-                if angle <= self.options.max_angle:
+                correction = self._correction(previous, point, self.ds)
+                if angle <= self.options.max_angle and correction is None:
                     self.ds = self._adapted_step(self.ds, point.newton_iterations, angle)
                     self._current = point
                     return point
-                reason = f"tangent turned by {angle:.3g} rad > max_angle"
+                reason = (f"tangent turned by {angle:.3g} rad > max_angle"
+                          if correction is None else correction)
             self._shrink_after_rejection(previous, reason)
+
+    def _correction(self, previous: ContinuationPoint, point: ContinuationPoint, ds: float
+                    ) -> str | None:
+        """Why `point` is too far from its predictor ``previous + ds * tangent``; None if not.
+
+        An arc of length ``ds`` whose tangent turns by ``theta`` ends ``ds tan(theta / 2)``
+        from the predictor; with ``theta <= max_angle`` a corrected point (scaled norm)
+        farther than ``ds * max_angle`` (twice that, with room for Newton's error) was
+        not reached along the branch: the corrector jumped to another part of it, or
+        over a bend, and with it over the special points in between.
+        """
+        predicted = previous.state + ds * previous.tangent
+        correction = self.scaled_norm(point.state - predicted)
+        limit = ds * self.options.max_angle
+        if correction <= limit:
+            return None
+        return (f"the corrector moved the point {correction:.3g} from its predictor, more "
+                f"than ds * max_angle = {limit:.3g} (a jump along the branch)")
 
     def _bound_passed(self, previous: ContinuationPoint, ds: float) -> float | None:
         """The bound of ``lam`` that a failed step of size `ds` went past, ``None`` if none.
@@ -341,7 +361,10 @@ class PalcStepper:
         (:meth:`land_on_parameter`), so the problem is never evaluated past
         the bound. The landed point is accepted by the test of a step: the
         tangent turns by at most ``max_angle``; the shortened step is at most
-        ``ds_max``.
+        ``ds_max``; and the corrector moved it at most ``ds * max_angle`` (scaled)
+        from its predictor, as far as an arc of length ``ds`` turning by
+        ``max_angle`` strays from its tangent (a landing corrected farther jumped
+        over a bend of the branch).
 
         Returns
         -------
@@ -380,6 +403,10 @@ class PalcStepper:
             self._current = previous
             return None, (f"the point on the bound lam = {bound:.10g} turns the tangent by "
                           f"{angle:.3g} rad > max_angle")
+        too_far = self._correction(previous, point, ds)
+        if too_far is not None:
+            self._current = previous
+            return None, f"the point on the bound lam = {bound:.10g}: {too_far}"
         logger.debug("step past the bound lam = %.10g refused; landed on it from lam = %.10g",
                      bound, previous.lam)
         return point, ""
