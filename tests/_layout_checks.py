@@ -2,12 +2,12 @@
 
 A figure is drawn once with the Agg renderer and checked for what a referee
 objects to: text outside the figure, two texts overlapping, text on a
-special-point marker, a marker cut by the frame of its axes, a leader line
-across a curve, a line or marker style that carries meaning (line style,
-colour, marker shape) and has no legend entry, a legend entry for nothing drawn
-in view, a title with an internal name (``fig3_N1``, ``root -1``) or without
-the system and the motion it shows, a figure wider than a journal page
-(:data:`MAX_WIDTH`).
+special-point marker, two point labels side by side (read as one), a marker cut
+by the frame of its axes, a leader line across a curve, a line or marker style
+that carries meaning (line style, colour, marker shape) and has no legend entry,
+two legend entries drawn alike, a legend entry for nothing drawn in view, a
+title with an internal name (``fig3_N1``, ``root -1``) or without the system and
+the motion it shows, a figure wider than a journal page (:data:`MAX_WIDTH`).
 
 Each check returns a list of sentences, one per problem (empty: the figure is
 clean); :func:`layout_problems` runs them all and :func:`check_layout` asserts
@@ -40,11 +40,11 @@ from matplotlib.text import Annotation, Text
 from impactcont.plots import SPECIAL_MARKERS
 
 __all__ = ["MAX_WIDTH", "Drawn", "axes_of", "check_layout", "check_titles", "color",
-           "journal_problems", "layout_problems", "leaders_across_curves",
-           "leaders_crossing_each_other", "legend_entries_not_drawn", "line_style",
-           "marker_artists", "marker_key", "markers_cut_by_frame", "overlapping_texts",
-           "render", "styles_without_legend", "texts_on_markers", "texts_outside_figure",
-           "title_problems", "too_wide"]
+           "journal_problems", "labels_side_by_side", "layout_problems", "leaders_across_curves",
+           "leaders_crossing_each_other", "legend_entries_alike", "legend_entries_not_drawn",
+           "line_style", "marker_artists", "marker_key", "markers_cut_by_frame",
+           "overlapping_texts", "render", "styles_without_legend", "texts_on_markers",
+           "texts_outside_figure", "title_problems", "too_wide"]
 
 #: Widest figure a journal page takes, in inches (a double column is 7 to 7.2 in).
 MAX_WIDTH = 7.2
@@ -215,6 +215,31 @@ def overlapping_texts(fig: Figure | Drawn) -> list[str]:
     return out
 
 
+def labels_side_by_side(fig: Figure | Drawn) -> list[str]:
+    """Two point labels of one axes on one line, less than two ems apart: they read as one.
+
+    Labels of special points placed next to each other (``SN GR``, a few points
+    apart) read as the name of one point; they share a label (``SN, GR``) or stand
+    apart. Two :class:`~matplotlib.text.Annotation` labels of the same axes are side by
+    side when their boxes overlap vertically by half the lower one and the gap between
+    them is less than the font size of the smaller one.
+    """
+    d = render(fig)
+    labels = [(t, Text.get_window_extent(t, d.renderer).extents)  # the text, not its leader
+              for t in d.texts if isinstance(t, Annotation) and t.axes is not None]
+    out = []
+    for (ta, a), (tb, b) in itertools.combinations(labels, 2):
+        if ta.axes is not tb.axes:
+            continue
+        rise = min(a[3], b[3]) - max(a[1], b[1])
+        gap = max(a[0], b[0]) - min(a[2], b[2])
+        em = min(ta.get_fontsize(), tb.get_fontsize()) * d.fig.dpi / 72.0
+        if rise > 0.5 * min(a[3] - a[1], b[3] - b[1]) and -1.0 <= gap < 2.0 * em:
+            out.append(f"labels {ta.get_text()!r} and {tb.get_text()!r} side by side "
+                       f"({gap * 72.0 / d.fig.dpi:.1f} pt apart) read as one")
+    return out
+
+
 def texts_on_markers(fig: Figure | Drawn) -> list[str]:
     """A text over the centre of a special-point marker it does not name."""
     d = render(fig)
@@ -335,6 +360,41 @@ def legend_entries_not_drawn(fig: Figure | Drawn) -> list[str]:
     return out
 
 
+def _handle_style(h) -> tuple:
+    """What a legend handle looks like: line style, colours, marker (its label aside)."""
+    if isinstance(h, Line2D):
+        line = line_style(h) if h.get_linestyle() not in _NO_LINE else None
+        marker = marker_key(h.get_marker()) if h.get_marker() not in _NO_MARKER else None
+        return ("line", line, color(h.get_color()) if line else None, marker,
+                color(h.get_markeredgecolor()) if marker else None,
+                color(h.get_markerfacecolor()) if marker else None,
+                round(h.get_markersize(), 1) if marker else None)
+    if isinstance(h, PathCollection):
+        return ("markers", tuple(np.round(h.get_paths()[0].vertices, 3).ravel()),
+                tuple(color(c) for c in h.get_edgecolors()),
+                tuple(color(c) for c in h.get_facecolors()))
+    if hasattr(h, "get_facecolor"):
+        return ("patch", color(h.get_facecolor()), round(float(h.get_alpha() or 1.0), 2),
+                color(h.get_edgecolor()) if hasattr(h, "get_edgecolor") else None)
+    return ("other", id(h))
+
+
+def legend_entries_alike(fig: Figure | Drawn) -> list[str]:
+    """Two entries of one legend with handles drawn alike: the reader cannot tell which
+    of the two a mark of that style is (``asymmetric`` and ``asymmetric 2`` in one red)."""
+    d = render(fig)
+    out = []
+    for legend in _legends(d.fig):
+        seen: dict[tuple, str] = {}
+        for h, text in zip(legend.legend_handles, legend.get_texts(), strict=False):
+            key = _handle_style(h)
+            if key in seen:
+                out.append(f"legend entries {seen[key]!r} and {text.get_text()!r} look alike")
+            else:
+                seen[key] = text.get_text()
+    return out
+
+
 def leaders_across_curves(fig: Figure | Drawn) -> list[str]:
     """The leader line of a label crossing a drawn curve (its last 6 px excepted)."""
     d = render(fig)
@@ -434,15 +494,18 @@ def layout_problems(fig: Figure, *, max_width: float = MAX_WIDTH) -> list[str]:
     """Everything a referee would object to in the layout of ``fig``, as sentences.
 
     Runs :func:`too_wide`, :func:`texts_outside_figure`, :func:`overlapping_texts`,
+    :func:`labels_side_by_side`,
     :func:`texts_on_markers`, :func:`markers_cut_by_frame`,
     :func:`styles_without_legend`, :func:`legend_entries_not_drawn`,
+    :func:`legend_entries_alike`,
     :func:`leaders_across_curves`, :func:`leaders_crossing_each_other` and
     :func:`title_problems` (internal names only) on one drawing of the figure.
     """
     d = render(fig)
     out = too_wide(d.fig, max_width)
-    for check in (texts_outside_figure, overlapping_texts, texts_on_markers,
+    for check in (texts_outside_figure, overlapping_texts, labels_side_by_side, texts_on_markers,
                   markers_cut_by_frame, styles_without_legend, legend_entries_not_drawn,
+                  legend_entries_alike,
                   leaders_across_curves, leaders_crossing_each_other):
         out += check(d)
     return out + title_problems(d.fig)

@@ -342,10 +342,11 @@ def fit_text(text_artist: Any, width: float | None = None) -> None:
         return lines
 
     lines = []
-    for line in wrap(text.split(", "), ", "):
+    outside_math = r"(?=(?:[^$]*\$[^$]*\$)*[^$]*$)"  # followed by whole $...$ pairs only
+    for line in wrap(re.split(", " + outside_math, text), ", "):
         text_artist.set_text(line)
         if text_artist.get_window_extent().width > width:  # too long alone: break at spaces
-            words = re.split(r" (?=(?:[^$]*\$[^$]*\$)*[^$]*$)", line)  # not inside $...$
+            words = re.split(" " + outside_math, line)  # not inside $...$
             lines += wrap(words, " ")
         else:
             lines.append(line)

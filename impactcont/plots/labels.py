@@ -5,9 +5,11 @@ paper's b = 0.5 branch): a label written at a fixed offset from each marker
 covers its neighbours. :func:`place_labels` puts each label at the nearest
 free place around its point, on rings of growing radius, with a thin leader
 line when it had to move away; a leader crosses no curve, no other leader and
-no other label where a place allows it. :func:`merged_labels` gives a stack
-of points one label (``PD ×10``). Positions are computed in points on the laid-out
-figure, so the result holds for the size the figure is saved at.
+no other label where a place allows it, and no label stands beside another
+on one line closer than two ems (``SN GR`` would read as one name).
+:func:`merged_labels` gives a stack of points one label (``PD ×10``). Positions
+are computed in points on the laid-out figure, so the result holds for the size
+the figure is saved at.
 """
 
 from __future__ import annotations
@@ -18,12 +20,14 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.font_manager import FontProperties
-from matplotlib.text import Annotation
+from matplotlib.text import Annotation, Text
 
 __all__ = ["coincident_groups", "marker_boxes", "merged_labels", "place_labels"]
 
 _RINGS = (4.0, 12.0, 22.0, 34.0, 48.0, 64.0)  # distance of a label from its point, in points
 _MARKER = 4.0  # half-size of a marker, in points
+#: Least gap between two labels on one line, in ems of their font: closer, they read as one.
+_SIDE_GAP = 2.0
 
 
 def _candidates(w: float, h: float) -> list[tuple[float, float, int]]:
@@ -43,6 +47,19 @@ def _overlap(box: np.ndarray, boxes: np.ndarray) -> float:
     w = np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0])
     h = np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1])
     return float(np.sum(np.clip(w, 0, None) * np.clip(h, 0, None)))
+
+
+def _side_room(labels: Sequence[np.ndarray], size: float) -> np.ndarray:
+    """The boxes of ``labels`` (points) widened by :data:`_SIDE_GAP` ems on each side.
+
+    Two labels on one line closer than that read as one (``SN GR`` for a saddle-node
+    and a grazing a few points apart): another label may stand above or below a
+    label, not beside it.
+    """
+    if not len(labels):
+        return np.empty((0, 4))
+    boxes = np.array(labels, dtype=float).reshape(-1, 4)
+    return boxes + np.array([-1.0, 0.0, 1.0, 0.0]) * _SIDE_GAP * size
 
 
 def _curve_points(ax: Axes, to_points: Any) -> np.ndarray:
@@ -244,9 +261,12 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     segments = _curve_segments(ax, to_points)
     markers = np.hstack([pts - _MARKER, pts + _MARKER])
     # texts already there (an earlier call on these axes) are obstacles too
-    placed: list[np.ndarray] = [np.asarray(t.get_window_extent().extents) * scale
-                                for t in ax.texts if t.get_visible() and t.get_text()]
-    placed += [np.asarray(b.extents) * scale for b in avoid]
+    earlier = [t for t in ax.texts if t.get_visible() and t.get_text()]
+    named: list[np.ndarray] = [np.asarray(Text.get_window_extent(t).extents) * scale
+                               for t in earlier]  # the texts
+    reach: list[np.ndarray] = [np.asarray(t.get_window_extent().extents) * scale
+                               for t in earlier]  # with their leaders (an Annotation's extent)
+    placed: list[np.ndarray] = [np.asarray(b.extents) * scale for b in avoid]
     legend = ax.get_legend()
     if legend is not None and legend.get_visible():
         placed.append(np.asarray(legend.get_window_extent().extents) * scale)
@@ -258,7 +278,13 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
         best: tuple[float, float, float, int] | None = None
         for dx, dy, ring in _candidates(w, h):
             box = np.array([px + dx, py + dy, px + dx + w, py + dy + h])
-            hard = _overlap(box, np.array(placed).reshape(-1, 4)) + _overlap(box, markers)
+            labels = np.array(named).reshape(-1, 4)
+            # the label with its leader (the box up to the point) never over another's
+            extent = (np.array([min(box[0], px), min(box[1], py), max(box[2], px),
+                                max(box[3], py)]) if ring > 0 else box)
+            hard = (_overlap(box, np.array(placed).reshape(-1, 4)) + _overlap(box, markers)
+                    + _overlap(extent, np.array(reach).reshape(-1, 4)))
+            beside = _overlap(box, _side_room(labels, size)) - _overlap(box, labels)
             outside = (max(frame[0] - box[0], 0) + max(box[2] - frame[2], 0)
                        + max(frame[1] - box[1], 0) + max(box[3] - frame[3], 0))
             crossed = np.count_nonzero((curves[:, 0] > box[0]) & (curves[:, 0] < box[2])
@@ -266,13 +292,15 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
             leader = _leader_crossings(pts[k], box, segments) if ring > 0 else 0
             tangle = (_crossings(np.clip(pts[k], box[:2], box[2:]), pts[k], leaders)
                       + _leader_crossings_box(box, leaders)) if ring > 0 else 0
-            score = (100.0 * hard + 50.0 * h * outside + 20.0 * crossed + 30.0 * ring
-                     + 400.0 * (leader + tangle))
+            score = (100.0 * hard + 10.0 * beside + 50.0 * h * outside + 20.0 * crossed
+                     + 30.0 * ring + 400.0 * (leader + tangle))
             if best is None or score < best[0]:
                 best = (score, dx, dy, ring)
         _, dx, dy, ring = best  # type: ignore[misc]
         box = np.array([px + dx, py + dy, px + dx + w, py + dy + h])
-        placed.append(box)
+        named.append(box)
+        reach.append(np.array([min(box[0], px), min(box[1], py), max(box[2], px),
+                               max(box[3], py)]) if ring > 0 else box)
         if ring > 0:
             leaders.append(np.array([np.clip(pts[k], box[:2], box[2:]), pts[k]]))
         arrow = ({"arrowstyle": "-", "color": "0.45", "linewidth": 0.6, "shrinkA": 0,

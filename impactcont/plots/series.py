@@ -40,7 +40,7 @@ from matplotlib.ticker import LogFormatterSciNotation, NullFormatter, NullLocato
 from impactcont.plots.branches import fit_text, legend_fontsize
 
 __all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "fit_labels",
-           "panel_figure", "series_plot", "take_legend"]
+           "one_per_style", "panel_figure", "series_plot", "take_legend"]
 
 logger = logging.getLogger(__name__)
 
@@ -317,6 +317,37 @@ def take_legend(ax: Axes) -> list[Any]:
         h.set_label(text.get_text())
     legend.remove()
     return handles
+
+
+def _style_key(handle: Any) -> tuple:
+    """What a legend handle looks like (line, colours, marker), its label aside."""
+    from matplotlib.colors import to_hex
+
+    if isinstance(handle, Line2D):
+        line = handle.get_linestyle() not in ("None", "none", " ", "")
+        marker = handle.get_marker() not in (None, "", "None", " ", "none")
+        return ("line", handle.get_linestyle() if line else None,
+                round(handle.get_linewidth(), 2) if line else None,
+                to_hex(handle.get_color()) if line else None,
+                str(handle.get_marker()) if marker else None,
+                to_hex(handle.get_markeredgecolor()) if marker else None,
+                to_hex(handle.get_markerfacecolor()) if marker else None,
+                round(handle.get_markersize(), 1) if marker else None, handle.get_alpha())
+    if hasattr(handle, "get_facecolor"):
+        return ("patch", to_hex(handle.get_facecolor(), keep_alpha=True), handle.get_alpha())
+    return ("other", id(handle))
+
+
+def one_per_style(handles: Sequence[Any]) -> list[Any]:
+    """The first of the legend ``handles`` of each look (line, colours, marker).
+
+    Two entries drawn alike (``asymmetric`` and ``asymmetric 2``, one red line each)
+    cannot be told apart on the plot: the first names the style.
+    """
+    out: dict[tuple, Any] = {}
+    for h in handles:
+        out.setdefault(_style_key(h), h)
+    return list(out.values())
 
 
 def figure_legend(fig: Figure, handles: Sequence[Any] | None = None) -> Legend:

@@ -58,7 +58,13 @@ from impactcont.analysis.switching import pitchfork_branch
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 from impactcont.plots.branches import legend_below
 from impactcont.plots.impacts import impact_diagram
-from impactcont.plots.series import figure_legend, fit_labels, panel_figure, take_legend
+from impactcont.plots.series import (
+    figure_legend,
+    fit_labels,
+    one_per_style,
+    panel_figure,
+    take_legend,
+)
 
 log = logging.getLogger("backlash")
 
@@ -96,17 +102,18 @@ def one_two(res: ic.SimulationResult, omega: float) -> bool:
             and abs(t[-1] - t[-3] - T) < 1e-6 * T)
 
 
-def sweep(b: float, omegas: np.ndarray, damping: dict[str, Any] | None = None
-          ) -> dict[str, Any]:
-    """Omega swept up; per omega the recorded impacts (velocity, stop) and the 1-2 verdict."""
+def sweep(b: float, omegas: np.ndarray, damping: dict[str, Any] | None = None, *,
+          transient: float = TRANSIENT, record: float = RECORD) -> dict[str, Any]:
+    """Omega swept up; per omega the recorded impacts (velocity, stop) and the 1-2 verdict
+    (``transient`` forcing periods discarded, ``record`` recorded)."""
     state, phase = np.zeros(4), 0.0
     rows: list[dict[str, Any]] = []
     for om in omegas:
         osc = system(b, float(om), damping)
-        res = ic.simulate(osc, state, phase, TRANSIENT)
+        res = ic.simulate(osc, state, phase, transient)
         if not res.success:  # sticking or chatter: start again from rest
-            res = ic.simulate(osc, np.zeros(4), 0.0, TRANSIENT)
-        rec = ic.simulate(osc, res.final_state, res.final_phase, RECORD) if res.success else res
+            res = ic.simulate(osc, np.zeros(4), 0.0, transient)
+        rec = ic.simulate(osc, res.final_state, res.final_phase, record) if res.success else res
         state, phase = (rec.final_state, rec.final_phase) if rec.success else (np.zeros(4), 0.0)
         rows.append({"omega": float(om), "velocities": rec.impact_velocities.tolist(),
                      "stops": rec.impact_stops, "status": rec.status.name,
@@ -303,9 +310,11 @@ def agreement(b: float, sw: dict[str, Any], branches: list[dict[str, Any]]) -> d
 # ------------------------------------------------------------------------------------------
 # Figure
 # ------------------------------------------------------------------------------------------
-STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C1"}
-KIND_NAMES = {"symmetric": "symmetric", "asymmetric": "asymmetric",
-              "mirror": "asymmetric, mirror image"}
+STYLE = {"symmetric": "C0", "asymmetric": "C3", "mirror": "C3"}
+#: One name and one colour per kind of motion: the two asymmetric motions of a pair are
+#: mirror images, with the same impact speeds (the stops swapped), so their curves coincide.
+KIND_NAMES = {"symmetric": "symmetric", "asymmetric": "asymmetric pair (mirror images)",
+              "mirror": "asymmetric pair (mirror images)"}
 OMEGA_LABEL = r"$\omega$"
 DPI = 150  # of the PNGs (7 in wide: 1050 pixels)
 
@@ -319,20 +328,42 @@ def draw(ax: Any, branches: dict[str, xr.Dataset], sweep: xr.Dataset, title: str
     for key, ds in branches.items():
         kind = key.split("_", 1)[1]
         name = KIND_NAMES[kind]
-        n = sum(v[0] == kind for v in names.values())
-        names[name if n == 0 else f"{name} {n + 1}"] = (kind, ds)
+        n = sum(k == name or k.startswith(f"{name} ") for k in names)
+        names[name if n == 0 else f"{name} {n + 1}"] = (kind, ds)  # unique keys; one entry
+        # per style in the legend (one_per_style): the first branch of a kind names it
     impact_diagram({k: v[1] for k, v in names.items()}, ax=ax, legend="inside",
                    colors=[STYLE[v[0]] for v in names.values()], title=title, zoom=False)
-    handles = take_legend(ax)
-    speed = np.abs(sweep["speed"].values)
-    om = np.broadcast_to(sweep["omega"].values[:, None], speed.shape)
-    ok = np.isfinite(speed)
-    dots = {"linestyle": "none", "marker": ".", "markersize": 2.0, "color": "k"}
-    ax.plot(om[ok], speed[ok], zorder=1.5, **dots)
-    handles.append(Line2D([], [], label="simulated sweep, every impact", **dots))
-    ax.set_xlim(*OMEGA)
+    handles = one_per_style(take_legend(ax))
+    ax.set_ylabel(r"impact speed $|\dot{x}_1(T_k^-)|$")  # the stop hit: in the suptitle
+    margin = 0.02 * (OMEGA[1] - OMEGA[0])  # the sweep's first and last omega off the frame
+    ax.set_xlim(OMEGA[0] - margin, OMEGA[1] + margin)
+    handles.append(Line2D([], [], label="simulated sweep, every impact", **SWEEP_DOTS))
     ax.set_xlabel(OMEGA_LABEL)
     return handles
+
+
+SWEEP_DOTS = {"linestyle": "none", "marker": ".", "markersize": 2.0, "color": "k"}
+
+
+def draw_sweep(ax: Any, sweep: xr.Dataset) -> None:
+    """The simulated sweep's impacts (their speeds) on ``ax``, once its layout is final: a
+    dot the frame would cut in half is left out."""
+    speed = np.abs(sweep["speed"].values)
+    om = np.broadcast_to(sweep["omega"].values[:, None], speed.shape)
+    ok = np.isfinite(speed) & _inside(ax, om, speed, SWEEP_DOTS["markersize"])
+    ax.plot(om[ok], speed[ok], zorder=1.5, **SWEEP_DOTS)
+
+
+def _inside(ax: Any, x: np.ndarray, y: np.ndarray, size: float) -> np.ndarray:
+    """Which points a marker of ``size`` points drawn at ``(x, y)`` shows whole inside the
+    frame of ``ax`` (the others are left out, never cut in half by the frame)."""
+    ax.figure.draw_without_rendering()
+    r = size / 2 * ax.figure.dpi / 72.0
+    xy = ax.transData.transform(np.column_stack([np.ravel(x), np.ravel(y)]))
+    box = ax.bbox.extents
+    inside = ((xy[:, 0] >= box[0] + r) & (xy[:, 0] <= box[2] - r)
+              & (xy[:, 1] >= box[1] + r) & (xy[:, 1] <= box[3] - r))
+    return inside.reshape(np.shape(x))
 
 
 def diagrams_figure(groups: dict[str, xr.Dataset], sweeps: dict[str, xr.Dataset],
@@ -349,10 +380,13 @@ def diagrams_figure(groups: dict[str, xr.Dataset], sweeps: dict[str, xr.Dataset]
         title = rf"$b = b_{{low}} = {b:g}$" + (", joint damper only" if "joint" in key else "")
         for h in draw(ax, own, sweeps[key], title):
             handles.setdefault(h.get_label(), h)
-    figure_legend(fig, list(handles.values()))
+    figure_legend(fig, one_per_style(list(handles.values())))
     fig.suptitle(r"Backlash on mass 1 of the paper's 2-DOF chain, $R = 0.6$: motions with "
-                 "one impact on each stop", fontsize="medium")
+                 "one impact on each stop, impact speeds towards the stop hit",
+                 fontsize="medium")
     fit_labels(fig)
+    for ax, key in zip(axes, keys, strict=True):  # the layout is final: no dot cut in half
+        draw_sweep(ax, sweeps[key])
     return fig
 
 
@@ -393,20 +427,25 @@ def case(b: float, damping: dict[str, Any] | None, omegas: np.ndarray, key: str,
             "stable_physical_omega": [float(om[ok].min()), float(om[ok].max())]
             if ok.any() else None, "special_points": specials})
         groups[f"{key}_{i}_{br['kind']}"] = ds
+    log.info("%s: pitchforks %s, agreement %s", key, forks, agree)
+    return info, sweep_dataset(sw)
+
+
+def sweep_dataset(sw: dict[str, Any]) -> xr.Dataset:
+    """The dataset ``sweeps.nc`` stores of one :func:`sweep`: per omega the speed of every
+    recorded impact (NaN past the last), the 1-2 verdict and the last stops hit."""
     width = max(1, max(len(r["velocities"]) for r in sw["rows"]))
     speed = np.full((len(sw["rows"]), width), np.nan)
     for i, r in enumerate(sw["rows"]):
         speed[i, :len(r["velocities"])] = r["velocities"]
-    sweep_ds = xr.Dataset({
-        "omega": ("row", omegas),
+    return xr.Dataset({
+        "omega": ("row", [r["omega"] for r in sw["rows"]]),
         "one_two": ("row", [r["one_two"] for r in sw["rows"]]),
         "impacts_recorded": ("row", [len(r["velocities"]) for r in sw["rows"]]),
         "pattern_tail": ("row", [r["stops"][-8:] for r in sw["rows"]]),
         "speed": (("row", "impact"), speed, {"long_name": "impact speed of each recorded "
                                              "impact (NaN: fewer impacts)", "units": "1"})},
-        attrs={"b": b, "damping": json.dumps(damping or PAPER_DAMPING)})
-    log.info("%s: pitchforks %s, agreement %s", key, forks, agree)
-    return info, sweep_ds
+        attrs={"b": sw["b"], "damping": json.dumps(sw["damping"] or PAPER_DAMPING)})
 
 
 # ------------------------------------------------------------------------------------------

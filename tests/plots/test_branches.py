@@ -378,3 +378,21 @@ def test_multipliers_plot_note_says_what_is_not_drawn(branch):
         assert np.all(np.abs(drawn) <= r * (1 + 5e-3))
         assert drawn.size == np.count_nonzero(np.abs(mult) <= r * (1 + 5e-3))
     plt.close(ax_abs.figure)
+
+
+def test_fit_text_never_breaks_inside_mathtext():
+    """A title broken to fit its figure keeps ``$(\\omega, b)$`` and ``$\\eta = 0.1$`` whole
+    (a break inside ``$...$`` leaves an unclosed mathtext, drawn as raw text or refused)."""
+    from matplotlib.figure import Figure
+
+    from impactcont.plots.branches import fit_text
+
+    fig = Figure(figsize=(3.5, 3.0))
+    title = fig.suptitle(r"Backlash, $R = 0.6$, $\eta = 0.1$: motions with one impact on "
+                         r"each stop in $(\omega, b)$", fontsize="medium")
+    fig.draw_without_rendering()
+    fit_text(title)
+    lines = title.get_text().split("\n")
+    assert len(lines) > 1
+    assert all(line.count("$") % 2 == 0 for line in lines), lines
+    assert r"$(\omega, b)$" in title.get_text()

@@ -17,6 +17,7 @@ from impactcont.plots.series import (
     ZERO_LABEL,
     Series,
     figure_legend,
+    one_per_style,
     panel_figure,
     series_plot,
 )
@@ -129,3 +130,20 @@ def test_lines_are_drawn_over_markers():
 def test_bad_input_is_refused_with_its_name(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_one_legend_entry_per_style():
+    """Entries drawn alike (``asymmetric``, ``asymmetric 2``: one red line each) keep the
+    first; a marker, another colour or another line style is another entry."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    red = [Line2D([], [], color="C3", linewidth=1.6, label=f"asymmetric {k}") for k in (1, 2)]
+    others = [Line2D([], [], color="C0", linewidth=1.6, label="symmetric"),
+              Line2D([], [], color="C3", linewidth=1.6, linestyle="--", label="unstable"),
+              Line2D([], [], color="C3", linestyle="none", marker="o", label="SN"),
+              Patch(facecolor="C3", alpha=0.3, label="region"),
+              Patch(facecolor="C3", alpha=0.3, label="same region")]
+    kept = one_per_style([*red, *others])
+    assert [h.get_label() for h in kept] == ["asymmetric 1", "symmetric", "unstable", "SN",
+                                             "region"]
