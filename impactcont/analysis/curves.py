@@ -57,11 +57,12 @@ from impactcont.detection.special_points import (
 )
 from impactcont.errors import LowImpactVelocityWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
-    CURVE_KINDS,
     CurveProblem,
     check_parameters,
+    curve_kind,
     curve_problem,
 )
 from impactcont.progress import (
@@ -86,7 +87,8 @@ of G), and a point next to one is found or not depending on the steps there."""
 
 
 # -- arguments ----------------------------------------------------------------------------------
-def _check_bounds(bounds: Any, parameters: tuple[str, str]) -> dict[str, tuple[float, float]]:
+def _check_bounds(bounds: Any, parameters: tuple[str, str], osc: ImpactOscillator
+                  ) -> dict[str, tuple[float, float]]:
     allowed = (f"a mapping {{{parameters[0]!r}: (lo, hi), {parameters[1]!r}: (lo, hi)}} or a "
                "pair of (lo, hi) pairs in the order of parameters, finite with lo < hi")
     if isinstance(bounds, Mapping):
@@ -105,20 +107,38 @@ def _check_bounds(bounds: Any, parameters: tuple[str, str]) -> dict[str, tuple[f
             raise ParameterError(f"bounds must be {allowed}; got {bounds!r}") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise ParameterError(f"bounds[{name!r}] must be finite with lo < hi; got {pair!r}")
-        # inside the parameter's range: the drivers' one check (vocabulary.check_bounds)
+        # inside the parameter's range: the drivers' one check (vocabulary.check_bounds),
+        # and the oscillator at both ends (an element keeps K, M positive definite)
         out[name] = check_bounds(name, (lo, hi), argument=f"bounds[{name!r}]")
+        model_parameter(osc, name).check_bounds(osc, out[name], argument=f"bounds[{name!r}]")
     return out
 
 
 def _same_system(a: ImpactOscillator, b: ImpactOscillator, free: set[str]) -> bool:
+    """Whether `a` and `b` are the same system but for the parameters `free` (each set on
+    `a` to its value on `b` by its model parameter: an element moves its matrix)."""
+    for name in free:
+        param = model_parameter(a, name)
+        a = param.at(a, param.value(b))
     da, db = a.to_dict(), b.to_dict()
-    keys = (set(da) | set(db)) - free
     return all(np.allclose(da.get(k, np.nan), db.get(k, np.nan), rtol=1e-12, atol=0.0,
-                           equal_nan=True) for k in keys)
+                           equal_nan=True) for k in set(da) | set(db))
 
 
-def _start_from_branch(ds: xr.Dataset, kind: str, special: int | None, osc: ImpactOscillator | None,
-                       N: int | None, parameters: tuple[str, str]
+def _set(osc: ImpactOscillator, values: Mapping[str, float]) -> ImpactOscillator:
+    """`osc` with each parameter set to its value (by its model parameter)."""
+    for name, value in values.items():
+        osc = model_parameter(osc, name).at(osc, float(value))
+    return osc
+
+
+def _value(osc: ImpactOscillator, name: str) -> float:
+    """The value of parameter `name` on `osc` (by its model parameter)."""
+    return model_parameter(osc, name).value(osc)
+
+
+def _start_from_branch(ds: xr.Dataset, kind: Label, special: int | None,
+                       osc: ImpactOscillator | None, N: int | None, parameters: tuple[str, str]
                        ) -> tuple[ImpactOscillator, int, float]:
     validate_branch_dataset(ds)
     labels = np.asarray(ds["special_label"].values).tolist()
@@ -142,7 +162,7 @@ def _start_from_branch(ds: xr.Dataset, kind: str, special: int | None, osc: Impa
     row = ds.isel(special=int(special))
     base = oscillator_from_dataset(ds)
     names = dict.fromkeys(["omega", "b", ds.attrs["parameter"]])
-    start_osc = base.replace(**{k: float(row[f"special_{k}"]) for k in names})
+    start_osc = _set(base, {k: float(row[f"special_{k}"]) for k in names})
     if osc is not None and not _same_system(osc, start_osc, {"omega", "b", *names, *parameters}):
         raise ParameterError("osc differs from the oscillator of the branch dataset given as "
                              f"start (other than omega, b and the parameters): {osc!r} vs "
@@ -150,7 +170,7 @@ def _start_from_branch(ds: xr.Dataset, kind: str, special: int | None, osc: Impa
     return start_osc, ds_N, float(row["special_delta"])
 
 
-def _start_by_continuation(osc: ImpactOscillator, N: int, kind: str, special: int | None,
+def _start_by_continuation(osc: ImpactOscillator, N: int, kind: Label, special: int | None,
                            parameters: tuple[str, str], bounds: dict[str, tuple[float, float]]
                            ) -> tuple[ImpactOscillator, int, float]:
     p1 = parameters[0]
@@ -163,7 +183,7 @@ def _start_by_continuation(osc: ImpactOscillator, N: int, kind: str, special: in
     if not rows:
         raise NoPeriodicMotionError(
             f"no located {kind} point on the N={N} branch in {p1} in {bounds[p1]} at "
-            f"{parameters[1]}={getattr(osc, parameters[1])!r}; give start explicitly")
+            f"{parameters[1]}={_value(osc, parameters[1])!r}; give start explicitly")
     k = rows[0] if special is None else rows[int(special)]
     return _start_from_branch(branch, kind, k, None, N, parameters)
 
@@ -177,16 +197,15 @@ def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
     if unknown or p1 not in values or p2 not in values:
         raise ParameterError(f"start must give {p1!r} and {p2!r} (and optionally 'delta'); got "
                              f"keys {sorted(values)}")
-    start_osc = osc.replace(**{p1: float(values[p1]), p2: float(values[p2])})
+    start_osc = _set(osc, {p1: values[p1], p2: values[p2]})
     if "delta" in values:
         return start_osc, float(values["delta"])
-    pc = problem._pieces(getattr(start_osc, p1), getattr(start_osc, p2))
-    c, s = pc.S0
-    if problem.kind == "SN":  # the double root of eq. (15): (cos, sin) along sign(b) (c, s)
-        sign = 1.0 if start_osc.b >= 0 else -1.0
-        return start_osc, math.atan2(sign * s, sign * c)
+    p1v, p2v = _value(start_osc, p1), _value(start_osc, p2)
+    phase = problem.start_phase(start_osc)
+    if phase is not None:  # known in closed form (the double root of an SN curve)
+        return start_osc, phase
     with warnings.catch_warnings():
-        if problem.kind == "ZV":  # the start is a zero-velocity impact: G's pole is expected
+        if not problem.multipliers_defined:  # a zero-velocity impact: G's pole is expected
             warnings.simplefilter("ignore", LowImpactVelocityWarning)  # only delta is used
         orbits = periodic_orbits(start_osc, N)
     if not orbits:
@@ -199,34 +218,15 @@ def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
 
     def condition(orbit: PeriodicOrbit) -> float:
         try:
-            u = problem.initial_unknowns(getattr(start_osc, p1), getattr(start_osc, p2),
-                                         orbit.delta)
+            u = problem.initial_unknowns(p1v, p2v, orbit.delta)
         except ParameterError:
             return math.inf
-        return float(np.max(np.abs(problem.residual(u, getattr(start_osc, p2)))))
+        return float(np.max(np.abs(problem.residual(u, p2v))))
 
     return start_osc, min(orbits, key=condition).delta
 
 
 # -- continuation -------------------------------------------------------------------------------
-def _terminal_event(problem: CurveProblem, xa: np.ndarray, xb: np.ndarray
-                    ) -> tuple[str, Any] | None:
-    """A curve end between two points: (label, condition) or None."""
-    if problem.kind == "GR":
-        for xv in (xb,):
-            T = problem.period(xv[:-1], xv[-1])
-            if xv[2] <= 0.0:
-                return "GR+ZV", lambda y: float(y[2])
-            if xv[2] >= T:
-                return "GR+ZV", lambda y: float(y[2] - problem.period(y[:-1], y[-1]))
-    if problem.kind == "NS":
-        sa, sb = math.sin(xa[2]), math.sin(xb[2])
-        if (sa < 0) != (sb < 0) or sb == 0.0:
-            label = "R1" if math.cos(xb[2]) > 0 else "R2"
-            return label, lambda y: math.sin(float(y[2]))
-    return None
-
-
 class _CurveWatch:
     """The stop rule of one direction of a curve: its ends and the bounds of ``p1``.
 
@@ -248,7 +248,7 @@ class _CurveWatch:
             return None
         problem, xa, x = self.problem, previous.state, current.state
         p1, p2 = problem.parameters
-        event = _terminal_event(problem, xa, x)
+        event = problem.terminal_event(xa, x)
         if event is not None:
             label, condition = event
             ga, gb = condition(xa), condition(x)
@@ -301,46 +301,32 @@ def _on_curve(point: ContinuationPoint, x: np.ndarray) -> ContinuationPoint:
 
 def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
                    ) -> tuple[dict[str, np.ndarray], list[PeriodicOrbit], list[dict[str, float]]]:
-    kind = problem.kind
     orbits = [problem.orbit(x[:-1], x[-1]) for x in xs]
     n2 = 2 * problem.osc.n
     tests = [test_values(problem, x, o) for x, o in zip(xs, orbits, strict=True)]
     cols: dict[str, list[Any]] = {k: [] for k in (
         "delta", "root", "impact_velocity", "gap_min", "spectral_radius", "multipliers", "state",
         "physical", "stable_side", "residual", "tangency_time", "angle")}
+    defined = problem.multipliers_defined  # not on a ZV curve: G has its pole (eq. 25)
     for x, o in zip(xs, orbits, strict=True):
-        mu = o.multipliers
-        if kind == "ZV":  # G has its pole at h2 = 0 (eq. 25): multipliers undefined
-            mu = np.full(n2, np.nan + 0j)
-            rest = mu
-        elif kind == "SN":
-            rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-        elif kind == "PD":
-            rest = np.delete(mu, np.argmin(np.abs(mu + 1.0)))
-        elif kind == "NS":
-            theta = x[2]
-            crit = [np.argmin(np.abs(mu - np.exp(1j * theta))),
-                    np.argmin(np.abs(mu - np.exp(-1j * theta)))]
-            rest = np.delete(mu, crit)
-        else:
-            rest = mu
+        mu = o.multipliers if defined else np.full(n2, np.nan + 0j)
+        rest = problem.other_multipliers(mu, x)
         gap = problem.grazing_test(x, o)
         physical = bool(o.impact_velocity > 0 and gap > 0)
-        fold = problem.fold_function(x[:-1], x[-1])
         cols["delta"].append(math.remainder(float(x[1]), 2 * math.pi))
-        cols["root"].append(0 if kind == "SN" else int(-np.sign(fold)))
+        cols["root"].append(problem.root(x))
         cols["impact_velocity"].append(o.impact_velocity)
         cols["gap_min"].append(gap)
-        cols["spectral_radius"].append(float(np.max(np.abs(mu))) if kind != "ZV" else np.nan)
+        cols["spectral_radius"].append(float(np.max(np.abs(mu))) if defined else np.nan)
         cols["multipliers"].append(mu)
         cols["state"].append(o.state)
         cols["physical"].append(physical)
-        cols["stable_side"].append(bool(physical and rest.size and np.all(np.abs(rest) < 1.0))
-                                   if kind != "ZV" else False)
+        cols["stable_side"].append(bool(defined and physical and rest.size
+                                        and np.all(np.abs(rest) < 1.0)))
         problem.accept(x[:-1], x[-1])  # borders / reference vector of this very point
         cols["residual"].append(float(np.max(np.abs(problem.residual(x[:-1], x[-1])))))
-        cols["tangency_time"].append(float(x[2]) if kind == "GR" else np.nan)
-        cols["angle"].append(float(x[2]) if kind == "NS" else np.nan)
+        for name, value in problem.angles(x).items():
+            cols[name].append(value)
     out = {k: np.array(v) for k, v in cols.items()}
     p1, p2 = problem.parameters
     values = {p1: np.array([x[0] for x in xs]), p2: np.array([x[-1] for x in xs])}
@@ -353,12 +339,12 @@ def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
 
 
 def check_curve_arguments(
-        osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
+        osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "PD", *,
         start: xr.Dataset | Mapping[str, float] | None = None,
         parameters: Sequence[str] = ("omega", "b"),
         bounds: Mapping[str, Sequence[float]] | Sequence[Sequence[float]] | None = None,
         options: ContinuationOptions | None = None, **single: Any
-        ) -> tuple[str, tuple[str, str], dict[str, tuple[float, float]], int | None,
+        ) -> tuple[Label, tuple[str, str], dict[str, tuple[float, float]], int | None,
                    ContinuationOptions]:
     """The checks :func:`curve` makes of its arguments before it computes.
 
@@ -388,7 +374,8 @@ def check_curve_arguments(
 
     Returns
     -------
-    kind : str
+    kind : Label
+        The kind as its Label (a string given is converted).
     parameters : (str, str)
     box : dict of str to (float, float)
         The bounds of `p1` and `p2`.
@@ -405,9 +392,7 @@ def check_curve_arguments(
         finite intervals ``lo < hi`` for exactly those parameters; `N` not an integer
         >= 1; or a bad option (:class:`ContinuationOptionError`, named).
     """
-    kind = kind.value if isinstance(kind, Label) else kind
-    if kind not in CURVE_KINDS:
-        raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
+    kind = curve_kind(kind)
     if osc is None and not isinstance(start, xr.Dataset):
         raise ParameterError("osc may be None only when start is a branch dataset; got "
                              f"start={type(start).__name__}")
@@ -418,7 +403,8 @@ def check_curve_arguments(
                                   else parameters)
     if bounds is None:
         raise ParameterError(f"bounds must be given for both parameters {parameters}; got None")
-    box = _check_bounds(bounds, parameters)
+    box = _check_bounds(bounds, parameters,
+                        osc if osc is not None else oscillator_from_dataset(start))
     if N is not None:
         N = _check_N(N)
     p2 = parameters[1]
@@ -462,7 +448,7 @@ def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: str,
 
 @blas_limited
 @option_keywords({**DRIVER_DEFAULTS, **_DEFAULTS})
-def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
+def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "PD", *,
           start: xr.Dataset | Mapping[str, float] | None = None, special: int | None = None,
           parameters: Sequence[str] = ("omega", "b"),
           bounds: Mapping[str, Sequence[float]] | Sequence[Sequence[float]] | None = None,
@@ -580,7 +566,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         raise ParameterError(f"start must be a branch Dataset, a mapping of values or None; "
                              f"got {type(start).__name__}")
     p1, p2 = parameters
-    p1v, p2v = float(getattr(start_osc, p1)), float(getattr(start_osc, p2))
+    p1v, p2v = _value(start_osc, p1), _value(start_osc, p2)
     for name, value in ((p1, p1v), (p2, p2v)):
         lo, hi = box[name]
         if not lo <= value <= hi:
@@ -621,7 +607,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: str = "PD", *,
         return ds
 
 
-def _curve_dataset(problem: CurveProblem, kind: str, N: int, parameters: tuple[str, str],
+def _curve_dataset(problem: CurveProblem, kind: Label, N: int, parameters: tuple[str, str],
                    box: dict[str, tuple[float, float]], opts: ContinuationOptions,
                    start_osc: ImpactOscillator, start: tuple[float, float], delta0: float,
                    columns: dict[str, Any], orbits: list[PeriodicOrbit], xs: list[np.ndarray],
@@ -636,14 +622,14 @@ def _curve_dataset(problem: CurveProblem, kind: str, N: int, parameters: tuple[s
         found.append(Codim2Point(label, xe, orbit, k, precision, end_status))
     found.sort(key=lambda cp: cp.point)
     records = [codim2_record(problem, cp) for cp in found if cp.label in CODIM2_LABELS]
-    option_record = {**dataclasses.asdict(opts), "kind": kind, "N": N,
+    option_record = {**dataclasses.asdict(opts), "kind": str(kind), "N": N,
                      "parameters": list(parameters), "bounds": {k: list(v) for k, v in box.items()},
                      "start": {p1: p1v, p2: p2v, "delta": delta0}}
     option_record["bounds_continued"] = list(opts.bounds)
     if call.interrupted:
         option_record["interrupted"] = True
         option_record["interrupted_while"] = call.where
-    return curve_dataset(kind=kind, N=N, parameters=parameters, oscillator=start_osc,
+    return curve_dataset(kind=str(kind), N=N, parameters=parameters, oscillator=start_osc,
                          options=option_record, columns=columns, codim2_points=records,
                          end_status=status)
 
@@ -712,9 +698,7 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
                                                       - ds[name].values[k]))
                for name in parameters}
         delta = float(ds["delta"].values[k])
-        extras = None
-        if kind == "GR":
-            extras = np.array([float(ds["tangency_time"].values[k])])
+        extras = problem.stored_extras(ds, k)
         u = problem.initial_unknowns(row[parameters[0]], row[parameters[1]], delta, extras)
         x = np.append(u, row[parameters[1]])
         gradient = np.zeros(x.size)
@@ -722,11 +706,10 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
         x = problem.solve(x, lambda y, j=(0 if index == 0 else -1): float(y[j] - value),
                           gradient)
         osc = problem.oscillator_at(x[0], x[-1])
-        crossing = {name: float(getattr(osc, name))
+        crossing = {name: problem.parameter_value(osc, name)
                     for name in dict.fromkeys(["omega", "b", *parameters])}
         crossing["delta"] = math.remainder(float(x[1]), 2 * math.pi)
-        crossing["root"] = 0 if kind == "SN" else int(-np.sign(problem.fold_function(x[:-1],
-                                                                                    x[-1])))
+        crossing["root"] = problem.root(x)
         crossing["point"] = int(k)
         out.append(crossing)
     return out

@@ -94,6 +94,7 @@ from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.model.modal import decay_rate_derivative
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import FD_RELATIVE_STEP, model_parameter
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.dense import pole_free_pd_matrix
 from impactcont.orbit.periodic import (
@@ -114,9 +115,11 @@ from impactcont.problems.periodic_branch import residual_scale, root_phase, scal
 from impactcont.vocabulary import (
     CONTINUABLE_PARAMETERS,
     CURVE_KINDS,
+    ELEMENT_FAMILIES,
     PARAMETERS,
     Label,
     check_parameter,
+    stop_parameter_name,
 )
 
 __all__ = [
@@ -127,6 +130,7 @@ __all__ = [
     "NeimarkSackerCurve",
     "PeriodDoublingCurve",
     "ZeroVelocityCurve",
+    "curve_kind",
     "curve_problem",
 ]
 
@@ -137,6 +141,7 @@ _STEP = 1e-30  # complex step, relative to max(1, |x_j|): derivatives exact to r
 _CHORD = 1e-4  # relative distance within which a Jacobian is reused (chord Newton)
 _CACHE_SIZE = 48
 _FD_STEP = 1e-6  # relative difference step of the first-order path's parameter columns
+_OTHER_STOPS = ("b_low", "R_low", "gap")  # parameters of stops the closed form has not
 
 
 
@@ -314,30 +319,51 @@ class _Pieces:
         return x, v
 
 
-#: The parameters of the N-1 curves: the paper's stop and the model's named scalars (the
-#: elements and the lower stop's parameters are continued on the branches only).
+#: The named parameters of the N-1 curves: the paper's stop and the model's named scalars
+#: (the lower stop's and the clearance's would leave the paper's one stop). The elements of
+#: the model (``k2``, ``M[1,2]``, ``F[2]``, ...; :data:`~impactcont.vocabulary.ELEMENT_FAMILIES`)
+#: are curve parameters too, by their :class:`~impactcont.model.parameters.ModelParameter`.
 CURVE_PARAMETERS: tuple[str, ...] = tuple(
-    name for name in CONTINUABLE_PARAMETERS if name not in ("b_low", "R_low", "gap"))
+    name for name in CONTINUABLE_PARAMETERS if name not in _OTHER_STOPS)
+
+#: Parameters that are exact by a complex step of the closed form's pieces (:meth:`_Pieces.
+#: stepped`); the others (the elements) take the central difference of their model
+#: parameter (:meth:`~impactcont.model.parameters.ModelParameter.difference`).
+_STEPPED = ("omega", "R", "b", "F0", "eta", "alpha", "beta")
 
 
 def check_parameters(osc: ImpactOscillator, parameters: object) -> tuple[str, str]:
     """Validate a pair of distinct parameter names of the N-1 curves for `osc`.
 
+    The names are :data:`CURVE_PARAMETERS` of the oscillator's damping model, or elements
+    of the model (``k2``, ``M[1,2]``, ``K[1,2]``, ``F[2]``, ...).
+
     Raises
     ------
     ParameterError
-        Naming the argument ``parameters`` and the value received.
+        Naming the argument ``parameters``, the value received and what is allowed: a
+        parameter of another stop than the paper's (``b_low``, ``R_low``, ``gap``, an
+        extra stop's ``gap[S]``, ``R[S]``), an unknown name, one the oscillator does not
+        have (``eta`` with a damping matrix, ``k3`` with two masses), the same name twice.
     """
+    allowed = (f"a pair of names from {CURVE_PARAMETERS} or elements of the model "
+               f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]')")
     if isinstance(parameters, str) or not isinstance(parameters, (tuple, list)) \
             or len(parameters) != 2:
-        raise ParameterError(f"parameters must be a pair of names from {CURVE_PARAMETERS}; "
-                             f"got {parameters!r}")
+        raise ParameterError(f"parameters must be {allowed}; got {parameters!r}")
     p1, p2 = parameters
     for name in (p1, p2):
-        if name not in CURVE_PARAMETERS:
-            raise ParameterError(f"parameters must be a pair of names from "
-                                 f"{CURVE_PARAMETERS}; got {parameters!r}")
-        check_parameter(osc, name, "parameters")
+        if not isinstance(name, str) or name not in PARAMETERS:
+            raise ParameterError(f"parameters must be {allowed}; got {parameters!r}: "
+                                 f"{name!r} is no parameter")
+        check_parameter(osc, name, "parameters")  # of the oscillator's damping model
+        if name in _OTHER_STOPS or stop_parameter_name(name) is not None:
+            raise ParameterError(
+                f"parameters must be {allowed}; got {parameters!r}: {name!r} is a parameter "
+                "of a stop other than the paper's one stop on mass 1, which the closed form "
+                "of the N-1 curves does not have (curves of such systems: "
+                "impactcont.multi_impact_curve)")
+        model_parameter(osc, name, "parameters")  # an element the oscillator has
     if p1 == p2:
         raise ParameterError(f"parameters must be two different names; got {parameters!r}")
     return str(p1), str(p2)
@@ -355,7 +381,10 @@ class CurveProblem:
     parameters : (str, str)
         ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter
         ``lam``. Any two of ``omega, b, R, eta, alpha, beta, F0`` (of the
-        oscillator's damping model: not ``eta, alpha, beta`` with a damping matrix C).
+        oscillator's damping model: not ``eta, alpha, beta`` with a damping matrix C) and
+        the elements of the model (``k2``, ``M[1,2]``, ``F[2]``, ...: set by their
+        :class:`~impactcont.model.parameters.ModelParameter`, their Jacobian column a
+        central difference).
 
     Notes
     -----
@@ -371,6 +400,8 @@ class CurveProblem:
     :mod:`impactcont.detection.codim2`)."""
     multipliers_defined: bool = True
     """False on a ZV curve: G has its pole at ``h2 = 0`` (eq. 25)."""
+    fold_condition: bool = False
+    """The second equation is the fold condition ``dr/d delta = 0`` (an SN curve)."""
 
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
@@ -383,6 +414,8 @@ class CurveProblem:
         self.osc = osc
         self.N = _check_N(N)
         self.parameters = check_parameters(osc, parameters)
+        #: The two parameters as model parameters (how each is set on the oscillator).
+        self.params = tuple(model_parameter(osc, name) for name in self.parameters)
         self._cache: collections.OrderedDict[tuple[float, float], _Pieces | GeneralPieces] = \
             collections.OrderedDict()
         self._jac_cache: tuple[np.ndarray, np.ndarray, bool] | None = None
@@ -409,7 +442,8 @@ class CurveProblem:
         if hit is not None:
             self._cache.move_to_end(key)
             return hit
-        osc = self.osc.replace(**{self.parameters[0]: key[0], self.parameters[1]: key[1]})
+        first, second = self.params
+        osc = second.at(first.at(self.osc, key[0]), key[1])
         pieces = GeneralPieces.at(osc, self.N) if self._general else _Pieces.at(osc, self.N)
         self._cache[key] = pieces
         if len(self._cache) > _CACHE_SIZE:
@@ -452,7 +486,34 @@ class CurveProblem:
 
     def plane_of(self, orbit: PeriodicOrbit) -> tuple[float, float]:
         """``(p1, p2)`` of a motion of the curve."""
-        return tuple(float(getattr(orbit.oscillator, name)) for name in self.parameters)
+        return tuple(param.value(orbit.oscillator) for param in self.params)
+
+    # -- what differs between the kinds (the curve driver asks the problem) --------------------
+    def start_phase(self, osc: ImpactOscillator) -> float | None:
+        """The impact phase of a start on the curve known in closed form, else None (the
+        motions of eq. 15 are then searched)."""
+        return None
+
+    def root(self, x: np.ndarray) -> int:
+        """The root of eq. (15) at a curve point: ``-sign(dr/d delta)``."""
+        return int(-np.sign(self.fold_function(x[:-1], x[-1])))
+
+    def other_multipliers(self, mu: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """The multipliers but the critical one(s) of the curve (all on a GR curve)."""
+        return mu
+
+    def angles(self, x: np.ndarray) -> dict[str, float]:
+        """The columns ``tangency_time`` (GR) and ``angle`` (NS) at a point, NaN otherwise."""
+        return {"tangency_time": math.nan, "angle": math.nan}
+
+    def stored_extras(self, ds: object, k: int) -> np.ndarray | None:
+        """The extra unknowns a curve dataset stores at point `k` (None: from the motion)."""
+        return None
+
+    def terminal_event(self, xa: np.ndarray, xb: np.ndarray
+                       ) -> tuple[str, Callable[[np.ndarray], float]] | None:
+        """A curve end between two accepted points: (label, condition) or None."""
+        return None
 
     # -- what the location of codim-2 points needs (detection.codim2.Codim2Problem) ------------
     def grazing_test(self, x: np.ndarray, orbit: PeriodicOrbit) -> float:
@@ -487,8 +548,8 @@ class CurveProblem:
         return float(point.x[1])
 
     def parameter_value(self, osc: ImpactOscillator, name: str) -> float:
-        """The value of parameter `name` on `osc`."""
-        return float(getattr(osc, name))
+        """The value of parameter `name` on `osc` (by its model parameter: an element too)."""
+        return model_parameter(osc, name).value(osc)
 
     # -- the Problem protocol -------------------------------------------------------------------
     def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
@@ -540,6 +601,9 @@ class CurveProblem:
         J = np.empty((m, m + 1))
         p1, p2 = self.parameters
         for j, name in ((0, p1), (m, p2)):
+            if name not in _STEPPED:  # an element of the model
+                J[:, j] = self._element_column(x, j)
+                continue
             if self._general and name not in STEPPED_PARAMETERS:
                 J[:, j] = self._parameter_column(pc, x, j, name)
                 continue
@@ -559,6 +623,31 @@ class CurveProblem:
                 J[:, 2 + k] = self._residual(still, delta, stepped).imag / h
         self._jac_cache = (x, J, pc.impact_form)
         return J
+
+    def _element_column(self, x: np.ndarray, j: int) -> np.ndarray:
+        """``dF/d p`` of an element parameter (column `j` of ``x = [u, lam]``): a central
+        difference, the one finite difference of the N-1 curves in an element.
+
+        The step is that of :meth:`~impactcont.model.parameters.ModelParameter.difference`,
+        ``eps^(1/3) max(|p|, scale)``, one-sided where the oscillator refuses a side
+        (:meth:`~impactcont.model.parameters.ModelParameter.admits`), but also for a forcing
+        entry ``F[j]``: the residual is not affine in it (eq. 14 is divided by its scale,
+        the PD and NS conditions are not linear in the state), so the model parameter's
+        exact step for affine data (half the scale) would be off by its curvature. The
+        points solve the residual exactly; the difference steers Newton and the tangent.
+        """
+        param = self.params[0 if j == 0 else 1]
+        osc = self._pieces(x[0], x[-1]).osc
+        value = float(x[j])
+        h = FD_RELATIVE_STEP * max(abs(value), param.scale(osc))
+        ends = []
+        for side in (value - h, value + h):
+            y = x.copy()
+            y[j] = side if param.admits(osc, side) else value
+            ends.append(y)
+        down, up = ends
+        return (self.residual(up[:-1], up[-1]) - self.residual(down[:-1], down[-1])) \
+            / (up[j] - down[j])
 
     def _parameter_column(self, pc: GeneralPieces, x: np.ndarray, j: int, name: str
                           ) -> np.ndarray:
@@ -582,7 +671,7 @@ class CurveProblem:
             c, s = pc.S0
             column[0] = scaled_derivative(c * cd + s * sd - pc.b, dc * cd + ds * sd, c, s, dc,
                                           ds)
-            if self.kind == "SN":
+            if self.fold_condition:
                 column[1] = scaled_derivative(-c * sd + s * cd, -dc * sd + ds * cd, c, s, dc,
                                               ds)
         return column
@@ -695,6 +784,21 @@ class FoldCurve(CurveProblem):
 
     kind = Label.SN
     codim2_tests = (Label.ZV, Label.GR, Label.PD, Label.NS)
+    fold_condition = True
+
+    def start_phase(self, osc: ImpactOscillator) -> float:
+        """The double root of eq. (15): ``(cos, sin)`` along ``sign(b) (c, s)``."""
+        c, s = self._pieces(*(param.value(osc) for param in self.params)).S0
+        sign = 1.0 if osc.b >= 0 else -1.0
+        return math.atan2(sign * s, sign * c)
+
+    def root(self, x: np.ndarray) -> int:
+        """0: the double root."""
+        return 0
+
+    def other_multipliers(self, mu: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Without the multiplier nearest +1."""
+        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         c, s = pc.S0  # over the scale of eq. (14), as r
@@ -714,6 +818,10 @@ class PeriodDoublingCurve(CurveProblem):
 
     kind = Label.PD
     codim2_tests = (Label.ZV, Label.GR, Label.SN, Label.NS)
+
+    def other_multipliers(self, mu: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Without the multiplier nearest -1."""
+        return np.delete(mu, np.argmin(np.abs(mu + 1.0)))
 
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
@@ -742,6 +850,25 @@ class NeimarkSackerCurve(CurveProblem):
 
     kind = Label.NS
     codim2_tests = (Label.ZV, Label.GR, Label.SN, Label.PD)
+
+    def other_multipliers(self, mu: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Without the pair nearest ``exp(+-i theta)``."""
+        theta = x[2]
+        return np.delete(mu, [np.argmin(np.abs(mu - np.exp(1j * theta))),
+                              np.argmin(np.abs(mu - np.exp(-1j * theta)))])
+
+    def angles(self, x: np.ndarray) -> dict[str, float]:
+        """``angle``: theta."""
+        return {"tangency_time": math.nan, "angle": float(x[2])}
+
+    def terminal_event(self, xa: np.ndarray, xb: np.ndarray
+                       ) -> tuple[str, Callable[[np.ndarray], float]] | None:
+        """``R1``/``R2`` where ``sin(theta)`` changes sign (theta through 0 or pi)."""
+        sa, sb = math.sin(xa[2]), math.sin(xb[2])
+        if (sa < 0) != (sb < 0) or sb == 0.0:
+            label = "R1" if math.cos(xb[2]) > 0 else "R2"
+            return label, lambda y: math.sin(float(y[2]))
+        return None
 
     def __init__(self, osc: ImpactOscillator, N: int, parameters: tuple[str, str] = ("omega", "b")
                  ) -> None:
@@ -889,6 +1016,23 @@ class GrazingCurve(CurveProblem):
         than the tangency (a double grazing where it vanishes)."""
         return self.other_gap(orbit, float(x[2]))
 
+    def angles(self, x: np.ndarray) -> dict[str, float]:
+        """``tangency_time``: t*."""
+        return {"tangency_time": float(x[2]), "angle": math.nan}
+
+    def stored_extras(self, ds: object, k: int) -> np.ndarray:
+        """The tangency time stored at point `k`."""
+        return np.array([float(ds["tangency_time"].values[k])])
+
+    def terminal_event(self, xa: np.ndarray, xb: np.ndarray
+                       ) -> tuple[str, Callable[[np.ndarray], float]] | None:
+        """``GR+ZV`` where the tangency time reaches the impact (``t* -> 0`` or ``T``)."""
+        if xb[2] <= 0.0:
+            return "GR+ZV", lambda y: float(y[2])
+        if xb[2] >= self.period(xb[:-1], xb[-1]):
+            return "GR+ZV", lambda y: float(y[2] - self.period(y[:-1], y[-1]))
+        return None
+
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         x1, v1 = pc.mass1(delta, extras[0])
         return np.array([x1 - pc.b, v1])
@@ -940,9 +1084,21 @@ _KINDS: dict[Label, type[CurveProblem]] = {
 }
 
 
-def curve_problem(kind: str, osc: ImpactOscillator, N: int,
+def curve_kind(kind: object, argument: str = "kind") -> Label:
+    """`kind` (a :class:`~impactcont.vocabulary.Label` or its string) as the Label of a kind
+    of N-1 curve (one of :data:`CURVE_KINDS`).
+
+    Raises
+    ------
+    ParameterError
+        Naming `argument`, the value and the kinds allowed.
+    """
+    if not isinstance(kind, str) or kind not in _KINDS:
+        raise ParameterError(f"{argument} must be one of {CURVE_KINDS}; got {kind!r}")
+    return Label(kind)
+
+
+def curve_problem(kind: Label | str, osc: ImpactOscillator, N: int,
                   parameters: tuple[str, str] = ("omega", "b")) -> CurveProblem:
     """The problem of a codim-1 curve of the given kind (one of :data:`CURVE_KINDS`)."""
-    if kind not in _KINDS:
-        raise ParameterError(f"kind must be one of {CURVE_KINDS}; got {kind!r}")
-    return _KINDS[kind](osc, N, parameters)
+    return _KINDS[curve_kind(kind)](osc, N, parameters)

@@ -4,6 +4,7 @@ the grid map and the simulator."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -243,6 +244,54 @@ def test_curve_in_another_parameter_pair(paper):
         (cr,) = curve_crossings(c, "R", R)
         found = _one_parameter_points(osc.replace(R=R), "PD", 0.3, cr["omega"], cr["root"])
         assert np.min(np.abs(found - cr["omega"])) < 1e-8
+
+
+@pytest.mark.parametrize("element, bounds", [("k2", (0.8, 1.3)), ("M[1,2]", (-0.2, 0.2)),
+                                             ("F[2]", (-0.2, 0.2))])
+def test_a_pd_curve_in_an_element_has_a_multiplier_minus_one_at_its_points(paper, element,
+                                                                          bounds):
+    """Issue 29, item 5: N-1 curves in an element of the model (its ModelParameter). The
+    witness: the closed form's motion with the element replaced (``periodic_orbits``) has
+    a multiplier -1 at the curve's points; the curve's file stores the element."""
+    from impactcont.model.parameters import model_parameter
+
+    osc = paper.replace(b=0.0, omega=1.75)
+    c = curve(osc, 1, "PD", parameters=("omega", element),
+              bounds={"omega": (1.4, 2.2), element: bounds}, detect_codim2_points=False,
+              progress=False)
+    assert c.attrs["parameters"] == f"omega,{element}" and c[element].dims == ("point",)
+    assert c[element].values.min() == pytest.approx(bounds[0])
+    assert c[element].values.max() == pytest.approx(bounds[1])
+    param = model_parameter(osc, element)
+    for k in range(0, c.sizes["point"], 3):
+        at = param.at(osc, float(c[element].values[k])).replace(omega=float(c.omega.values[k]))
+        delta = float(c.delta.values[k])
+        near = min(ic.periodic_orbits(at, 1),
+                   key=lambda o: abs(math.remainder(o.delta - delta, 2 * math.pi)))
+        assert np.min(np.abs(np.asarray(near.multipliers) + 1.0)) < 1e-9
+
+
+def test_a_curve_starts_from_a_branch_in_an_element(paper):
+    osc = paper.replace(b=0.0, omega=1.75)
+    branch = ic.continuation(osc, 1, "k2", (0.5, 2.0), detect=["PD"], progress=False)
+    c = curve(None, None, "PD", start=branch, parameters=("k2", "omega"),
+              bounds={"k2": (0.5, 2.0), "omega": (1.7, 1.8)}, detect_codim2_points=False,
+              progress=False)
+    first = int(np.flatnonzero(branch.special_label.values == "PD")[0])
+    (cross,) = curve_crossings(c, "omega", 1.75)
+    assert cross["k2"] == pytest.approx(float(branch.special_k2.values[first]), abs=1e-9)
+
+
+def test_parameters_the_n1_curves_do_not_have_are_refused(paper):
+    box = {"omega": (1.0, 2.0)}
+    for name, why in (("gap[A]", "stop other than the paper's one stop"),
+                      ("b_low", "stop other than the paper's one stop"),
+                      ("k3", "past the oscillator's n=2 masses"),
+                      ("foo", "'foo' is no parameter")):
+        with pytest.raises(ic.ParameterError, match=r"parameters.*" + re.escape(why)):
+            curve(paper, 1, "PD", parameters=("omega", name), bounds={**box, name: (0, 1)})
+    with pytest.raises(ic.ParameterError, match=r"bounds\['k2'\]"):
+        curve(paper, 1, "PD", parameters=("omega", "k2"), bounds={**box, "k2": (-3.0, 1.0)})
 
 
 def test_netcdf_round_trip_of_curves_and_maps(paper, curves, tmp_path):

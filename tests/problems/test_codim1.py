@@ -61,8 +61,9 @@ def _point(problem, osc, kind):
         extras = np.concatenate([[0.8], rng.standard_normal(4 * osc.n)])
     else:
         extras = None
-    u = problem.initial_unknowns(getattr(osc, p1), getattr(osc, p2), orbit.delta, extras)
-    return np.append(u, getattr(osc, p2))
+    v1, v2 = problem.parameter_value(osc, p1), problem.parameter_value(osc, p2)
+    u = problem.initial_unknowns(v1, v2, orbit.delta, extras)
+    return np.append(u, v2)
 
 
 def _jacobian_error(osc, kind, pair):
@@ -85,6 +86,43 @@ def test_jacobian_is_exact_paper(kind, pair):
 @pytest.mark.parametrize("pair", [("omega", "alpha"), ("beta", "omega"), ("omega", "b")])
 def test_jacobian_is_exact_rayleigh_chain(kind, pair):
     assert _jacobian_error(_chain3(), kind, pair) < 1e-7
+
+
+@pytest.mark.parametrize("kind", ["SN", "PD", "NS", "GR", "ZV"])
+@pytest.mark.parametrize("pair", [("omega", "k2"), ("M[1,2]", "b"), ("F[2]", "omega")])
+def test_jacobian_in_an_element_is_its_central_difference(kind, pair):
+    """Issue 29, item 5: an element of the model as a curve parameter; its column is a
+    central difference of step eps^(1/3) scale (error about 1e-10 of the row)."""
+    assert _jacobian_error(_paper(), kind, pair) < 1e-7
+
+
+def test_kinds_are_labels_and_strings_are_accepted():
+    """Issue 29, item 2: the kinds of curves are the Label members; a string names one."""
+    from impactcont.vocabulary import Label
+
+    assert codim1.curve_kind("PD") is Label.PD and codim1.curve_kind(Label.NS) is Label.NS
+    for kind in codim1.CURVE_KINDS:
+        problem = codim1.curve_problem(kind, _paper(), 1)
+        assert problem.kind is Label(kind)
+        assert problem.kind is codim1.curve_problem(Label(kind), _paper(), 1).kind
+    for bad in ("BP", "pd", None, 3):
+        with pytest.raises(ic.ParameterError, match=r"kind must be one of \('SN'"):
+            codim1.curve_kind(bad)
+
+
+def test_no_curve_module_compares_kinds_as_strings():
+    """Issue 29, item 2: no ``kind == "PD"`` (or ``!=``, ``in ("SN", ...)``) left in the
+    curve stack: the kinds are Label members, their behaviour the problems' methods and
+    Label-keyed tables."""
+    import re
+    from pathlib import Path
+
+    root = Path(codim1.__file__).parents[1]
+    pattern = re.compile(r"""(==|!=|\bin)\s*\(?\s*["'](SN|PD|NS|GR|ZV|BP)["']""")
+    for module in ("analysis/curves.py", "analysis/multi_curves.py", "problems/codim1.py",
+                   "problems/multi_impact_curve.py", "detection/codim2.py"):
+        text = (root / module).read_text()
+        assert not pattern.findall(text), (module, pattern.findall(text))
 
 
 @pytest.mark.parametrize("kind", ["SN", "PD", "GR", "ZV"])
