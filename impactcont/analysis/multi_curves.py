@@ -57,7 +57,7 @@ from impactcont.progress import (
     until_interrupted,
 )
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS
+from impactcont.vocabulary import LABELS, Label
 
 __all__ = ["multi_impact_curve", "multi_impact_curve_crossings"]
 
@@ -125,7 +125,7 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     branch : xarray.Dataset
         An N-p branch (:func:`impactcont.multi_impact_continuation`, a switched branch)
         continued in ``p1``, with a special point of `kind`.
-    kind : str
+    kind : Label or str
         ``SN, PD, NS, GR, ZV`` or ``BP`` (BP: a branch of symmetric motions).
     which : int
         Which point of that kind on the branch (branch order).
@@ -180,8 +180,9 @@ def multi_impact_curve(branch: xr.Dataset, kind: str = "PD", which: int = 0, *,
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
     functions = check_user_functions(events, monitors, reserved_names())
-    if kind not in LABELS:
+    if not isinstance(kind, str) or kind not in LABELS:
         raise ParameterError(f"kind must be one of {LABELS}; got {kind!r}")
+    kind = str(Label(kind))  # a Label or its string: stored as the string
     p1 = str(branch.attrs["parameter"])
     parameters = (p1, parameter)
     if bounds is None:

@@ -122,11 +122,12 @@ class MultiImpactCurveProblem:
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, pattern: str, kind: str,
                  parameters: tuple[str, str], *, symmetric: bool) -> None:
-        if kind not in LABELS:
+        if not isinstance(kind, str) or kind not in LABELS:
             raise ParameterError(f"kind must be one of {LABELS}; got {kind!r}")
-        if kind == "BP" and not symmetric:
-            raise ParameterError("kind='BP' is a curve of symmetric motions: the branch must "
-                                 "be a branch of symmetric motions (symmetric=True)")
+        if _KINDS[Label(kind)].symmetric_only and not symmetric:
+            raise ParameterError(f"kind={str(kind)!r} is a curve of symmetric motions: the "
+                                 "branch must be a branch of symmetric motions "
+                                 "(symmetric=True)")
         p1, p2 = parameters
         if p1 == p2:
             raise ParameterError(f"parameters must be two different parameters; got {p1!r} "
@@ -190,33 +191,32 @@ class MultiImpactCurveProblem:
         return value
 
     def _test(self, x: np.ndarray, lam: float) -> float:
-        u, p1 = x[:-1], float(x[-1])
-        kind = self.kind
-        if kind == "SN":
-            return signed_smallest_singular_value(self.branch_problem(lam).jacobian(u, p1))
-        if kind == "BP":  # as test_of, from the shot (no multipliers, no orbit)
-            H = self.branch_problem(lam).half_map(u, p1)
-            return signed_smallest_singular_value(H + np.eye(H.shape[0]))
-        if kind == "PD":
-            base = self.branch_problem(lam)
-            full = base.full if self.symmetric else base
-            v = base.full_unknowns(u, p1) if self.symmetric else u
-            G = full.jacobian_product(v, p1, self.p)
-            return _approach_sign(full, v, p1) * signed_smallest_singular_value(
-                G + np.eye(G.shape[0]))
-        orbit = self.orbit(x, lam, checks=kind == "GR")
-        return self.test_of(orbit)
+        kind = _KINDS[self.kind]
+        if kind.from_shot is not None:  # from the shot: no multipliers, no orbit
+            return kind.from_shot(self, x[:-1], float(x[-1]), lam)
+        return self.test_of(self.orbit(x, lam, checks=kind.contact_checks))
+
+    def _fold_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
+        """SN: ``sigma(dF/du)`` of the branch problem."""
+        return signed_smallest_singular_value(self.branch_problem(lam).jacobian(u, p1))
+
+    def _flip_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
+        """PD: ``sign(prod h2_k) sigma(G + I)`` (:func:`_approach_sign`)."""
+        base = self.branch_problem(lam)
+        full = base.full if self.symmetric else base
+        v = base.full_unknowns(u, p1) if self.symmetric else u
+        G = full.jacobian_product(v, p1, self.p)
+        return _approach_sign(full, v, p1) * signed_smallest_singular_value(
+            G + np.eye(G.shape[0]))
+
+    def _pitchfork_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
+        """BP: ``sigma(H + I)`` of the half-map."""
+        H = self.branch_problem(lam).half_map(u, p1)
+        return signed_smallest_singular_value(H + np.eye(H.shape[0]))
 
     def test_of(self, orbit: MultiImpactOrbit) -> float:
         """The test function at a motion (all kinds but SN, which needs the problem)."""
-        kind = self.kind
-        if kind == "PD":
-            sign = float(np.sign(np.prod(orbit.impact_velocities)))
-            return sign * signed_smallest_singular_value(orbit.G + np.eye(orbit.G.shape[0]))
-        if kind == "BP":
-            H = half_map(orbit)
-            return signed_smallest_singular_value(H + np.eye(H.shape[0]))
-        return float(event_function(kind, orbit))
+        return _KINDS[self.kind].of_orbit(orbit)
 
     def _test_gradient(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
         """``dg/dx`` and ``dg/dlam`` by forward differences.
@@ -269,8 +269,7 @@ class MultiImpactCurveProblem:
 
     def fold_test(self, x: np.ndarray) -> float:
         """``sigma(dF/du)`` at the curve point ``x = [u, p1, p2]`` (zero at a fold in p1)."""
-        return signed_smallest_singular_value(
-            self.branch_problem(float(x[-1])).jacobian(x[:-2], float(x[-2])))
+        return self._fold_of_shot(x[:-2], float(x[-2]), float(x[-1]))
 
     def plane(self, x: np.ndarray) -> tuple[float, float]:
         """``(p1, p2)`` of a curve point ``x = [u, p1, p2]``."""
@@ -352,25 +351,70 @@ class MultiImpactCurveProblem:
         return np.append(column, self._test_gradient(x, lam)[1])
 
 
+def _flip_of_orbit(orbit: MultiImpactOrbit) -> float:
+    """PD at a motion: ``sign(prod h2_k) sigma(G + I)``."""
+    sign = float(np.sign(np.prod(orbit.impact_velocities))) or 1.0
+    return sign * signed_smallest_singular_value(orbit.G + np.eye(orbit.G.shape[0]))
+
+
+def _pitchfork_of_orbit(orbit: MultiImpactOrbit) -> float:
+    """BP at a motion: ``sigma(H + I)`` of its half-map."""
+    H = half_map(orbit)
+    return signed_smallest_singular_value(H + np.eye(H.shape[0]))
+
+
+def _no_orbit_test(orbit: MultiImpactOrbit) -> float:
+    raise ParameterError("the SN test of a curve needs the branch problem, not a motion")
+
+
 @dataclasses.dataclass(frozen=True)
 class _Kind:
-    """What a kind of curve of N-p motions watches and stores."""
+    """What a kind of curve of N-p motions is: its test function and what it watches.
 
+    Attributes
+    ----------
+    of_orbit : callable
+        The curve's test function at a motion.
+    from_shot : callable or None
+        The same from the shot (a method of the problem: ``(problem, u, p1, lam)``),
+        without the motion's multipliers and contact checks; None: from the motion.
+    codim2_tests : tuple of Label
+        The other kinds' test functions watched along the curve.
+    multipliers_defined : bool
+        False on a ZV curve (G has its pole there, eq. 25).
+    contact_checks : bool
+        The test needs the interior-contact search of the motion (GR).
+    symmetric_only : bool
+        A curve of symmetric motions only (BP).
+    """
+
+    of_orbit: Callable[[MultiImpactOrbit], float]
+    from_shot: Callable[..., float] | None
     codim2_tests: tuple[Label, ...]
     multipliers_defined: bool = True
+    contact_checks: bool = False
+    symmetric_only: bool = False
 
 
-#: The test functions watched on each kind of curve (those of the N-1 curves,
-#: :data:`impactcont.detection.codim2.TESTS`, but the GR test on a GR curve, whose
+def _event(label: Label) -> Callable[[MultiImpactOrbit], float]:
+    return lambda orbit: float(event_function(label, orbit))
+
+
+#: Each kind of curve of N-p motions. The codim-2 tests are those of the N-1 curves
+#: (:data:`impactcont.detection.codim2.TESTS`) but the GR test on a GR curve, whose
 #: second-lowest clearance is not searched; none on a BP curve, whose codim-2 points have
-#: no label yet).
+#: no label yet.
 _KINDS: dict[Label, _Kind] = {
-    Label.SN: _Kind((Label.ZV, Label.GR, Label.PD, Label.NS)),
-    Label.PD: _Kind((Label.ZV, Label.GR, Label.SN, Label.NS)),
-    Label.NS: _Kind((Label.ZV, Label.GR, Label.SN, Label.PD)),
-    Label.GR: _Kind((Label.ZV, Label.SN, Label.PD, Label.NS)),
-    Label.ZV: _Kind((Label.SN,), multipliers_defined=False),
-    Label.BP: _Kind(()),
+    Label.SN: _Kind(_no_orbit_test, MultiImpactCurveProblem._fold_of_shot,
+                    (Label.ZV, Label.GR, Label.PD, Label.NS)),
+    Label.PD: _Kind(_flip_of_orbit, MultiImpactCurveProblem._flip_of_shot,
+                    (Label.ZV, Label.GR, Label.SN, Label.NS)),
+    Label.NS: _Kind(_event(Label.NS), None, (Label.ZV, Label.GR, Label.SN, Label.PD)),
+    Label.GR: _Kind(_event(Label.GR), None, (Label.ZV, Label.SN, Label.PD, Label.NS),
+                    contact_checks=True),
+    Label.ZV: _Kind(_event(Label.ZV), None, (Label.SN,), multipliers_defined=False),
+    Label.BP: _Kind(_pitchfork_of_orbit, MultiImpactCurveProblem._pitchfork_of_shot, (),
+                    symmetric_only=True),
 }
 
 #: The test function of each kind at a point of a curve of another kind.

@@ -116,3 +116,21 @@ def test_the_signed_smallest_singular_value() -> None:
 def test_bad_curves_are_refused(kind, parameters, symmetric, match) -> None:
     with pytest.raises(ParameterError, match=match):
         MultiImpactCurveProblem(_paper(0.5), 1, 1, "U", kind, parameters, symmetric=symmetric)
+
+
+def test_the_kind_of_a_curve_is_its_label():
+    """Issue 29, item 2: a kind given as a Label or its string is the Label member; what
+    the kind needs (its test, the tests it watches) comes from a Label-keyed table."""
+    from impactcont.vocabulary import Label
+
+    osc = _paper(0.0, 1.75)
+    for kind in ("SN", "PD", "NS", "GR", "ZV"):
+        by_name = MultiImpactCurveProblem(osc, 1, 1, "U", kind, ("omega", "b"),
+                                          symmetric=False)
+        by_label = MultiImpactCurveProblem(osc, 1, 1, "U", Label(kind), ("omega", "b"),
+                                           symmetric=False)
+        assert by_name.kind is by_label.kind is Label(kind)
+        assert Label(kind) not in by_name.codim2_tests
+        assert all(isinstance(test, Label) for test in by_name.codim2_tests)
+    with pytest.raises(ParameterError, match="kind must be one of"):
+        MultiImpactCurveProblem(osc, 1, 1, "U", "XX", ("omega", "b"), symmetric=False)
