@@ -256,7 +256,7 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
     ParameterError
         A bad grid, N, parameter, executor, block or memory limit (named in the
         message), an argument that does not apply to what is mapped (`N`, `omega`, `b`,
-        `omega_block`, `spectral_radius`, `out` with a motion; a grid keyword with an
+        `omega_block`, `spectral_radius` with a motion; a grid keyword with an
         oscillator), or a map for a file without dask installed.
     concurrent.futures.process.BrokenProcessPool
         A worker of the process pool died each time the same task ran alone (three
@@ -429,7 +429,7 @@ def _motion_map(start: Any, N: Any, omega: Any, b: Any, parameters: Any, grid: A
             raise ParameterError(f"{name}: a map of a motion's family takes parameters=(p1, "
                                  f"p2) and grid={{p1: ..., p2: ...}}, and its N from the motion; "
                                  f"got {name}={value!r}")
-    for name, default in (("omega_block", None), ("spectral_radius", True), ("out", None)):
+    for name, default in (("omega_block", None), ("spectral_radius", True)):
         if options[name] is not default:
             raise ParameterError(f"{name}: a map of a motion's family does not take it (the map "
                                  f"of an oscillator's N-1 motions does); got "
@@ -444,7 +444,7 @@ def _motion_map(start: Any, N: Any, omega: Any, b: Any, parameters: Any, grid: A
     return multi_impact_map(start, ("omega", "b") if parameters is None else parameters, grid,
                             executor=options["executor"], max_workers=options["max_workers"],
                             memory_limit=options["memory_limit"],
-                            progress=options["progress"], **others)
+                            progress=options["progress"], out=options["out"], **others)
 
 
 @blas_limited

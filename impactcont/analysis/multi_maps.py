@@ -38,25 +38,38 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import time
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from impactcont.analysis.map_runner import (
+    _DISK_FIXED_BYTES,
     MapJob,
     MapRunner,
+    _check_disk_floor,
+    _require_dask,
     check_executor,
     compiled_interrupts,
     keep_interrupted,
 )
 from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.io import open_lazy, save_blocks
+from impactcont.dataset.map_storage import (
+    open_temporary_map,
+    remove_stale_maps,
+    remove_temporary_map,
+    temporary_map_file,
+)
 from impactcont.dataset.multi_maps import (
     multi_impact_map_dataset,
     validate_multi_impact_map_dataset,
 )
+from impactcont.dataset.schema import _options_json
 from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.kernel.arrays import (
     FlowTables,
@@ -468,7 +481,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
                      max_change: float = 0.5, max_attempts: int = 4,
                      title: str | None = None, executor: Any = None,
                      max_workers: int | None = None, rows_per_task: int | None = None,
-                     memory_limit: float = 1e9, progress: ProgressOption = None) -> xr.Dataset:
+                     memory_limit: float = 1e9, progress: ProgressOption = None,
+                     out: str | os.PathLike | None = None) -> xr.Dataset:
     """Stability map of the N-p motion family of `start` over a grid of two parameters.
 
     Any system of the shooting path: stops on any mass or between two masses, stops on
@@ -542,11 +556,16 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         on `rows_per_task`, never on the executor.
     memory_limit : float
         Bytes the map and its tasks in flight may take (default 1e9): fewer tasks are
-        submitted at once when theirs would not fit, and a map that does not fit at
-        all is refused before any work.
+        submitted at once when theirs would not fit, and a map that does not fit goes to a
+        temporary file (with a warning naming it), returned lazily and removed when
+        closed, as :func:`impactcont.stability_map` does
+        (:mod:`impactcont.dataset.map_storage`).
     progress : None, bool or callable
         A progress bar over the grid points, a callback, a log line a minute (as for
         :func:`impactcont.stability_map`).
+    out : str or os.PathLike, optional
+        Write the map to this NetCDF-4 file (chunked by task, compressed) band by band
+        as the tasks finish, and return it opened lazily (needs ``impactcont[dask]``).
 
     Returns
     -------
@@ -563,7 +582,7 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     ------
     TypeError, ParameterError
         A bad start, parameter, grid, option, or a grid value where the oscillator
-        cannot be built (named in the message).
+        cannot be built (named in the message); a map for a file without dask.
     NoPeriodicMotionError
         The start cannot be followed to its nearest grid point.
 
@@ -572,7 +591,9 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     Ctrl-C during the map (a first one) stops it between tasks and returns what was
     computed: the points of the tasks not finished are not found (NaN), False in the
     variable ``computed``, the attribute ``interrupted`` is 1, and a WARNING says how
-    many points were done; a second Ctrl-C abandons the map (KeyboardInterrupt).
+    many points were done; a map written to a file is kept the same way, the file whole
+    (written under a temporary name, then renamed). A second Ctrl-C abandons the map
+    (KeyboardInterrupt), a file being written removed.
     """
     orbit = _as_multi(start)
     osc = orbit.oscillator
@@ -600,11 +621,9 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     npts = shape[0] * shape[1]
     rows = rows_per_task or max(1, -(-_TASK_POINTS // shape[1]))
     point_bytes = _point_bytes(osc.n, p, half)
-    if npts * point_bytes > memory_limit:
-        raise ParameterError(
-            f"memory_limit = {memory_limit:.4g} bytes: the map of {shape[0]} x {shape[1]} "
-            f"points takes {npts * point_bytes:.4g} bytes ({point_bytes} per point); give a "
-            f"larger memory_limit or a coarser grid")
+    in_memory = out is None and npts * point_bytes <= memory_limit
+    if not in_memory:
+        _require_dask()
     setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
     t0 = time.perf_counter()
     x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
@@ -612,10 +631,27 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     tasks = _bands(setting, params, axes, (s0, s1), x_seed, rows)
     t_setup = time.perf_counter() - t0
     job = _BandJob(setting, params, axes, s1, bool(checks))
-    computed = np.zeros(shape[0], dtype=bool)
-    solved = attempts = iterations = flows = 0
-    capped = interrupted = False
+    seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1]),
+            "index": [int(s0), int(s1)],
+            "start": {param.name: param.value(osc) for param in params}}
+    dataset = {"oscillator": osc, "N": N, "pattern": pattern, "parameters": names,
+               "grid": axes, "symmetric": half, "seed": seed, "title": title}
+    stats = _Stats()
+    runner: MapRunner | None = None
+
+    def options() -> dict[str, Any]:
+        """How the map was computed, with the sweeps' counts so far."""
+        t_sweep = time.perf_counter() - t1
+        return {"tol": tol, "max_iter": max_iter, "max_change": max_change,
+                "max_attempts": max_attempts, "checks": bool(checks),
+                "attempts": int(stats.attempts), "newton_iterations": int(stats.iterations),
+                "flows": stats.flows, "setup_seconds": round(t_setup, 4),
+                "sweep_seconds": round(t_sweep, 4), "executor": runner.name,
+                "tasks": len(tasks), "rows_per_task": rows}
+
     t1 = time.perf_counter()
+    remove_stale_maps(once=True)  # the temporary maps of killed processes (map_storage)
+    temporary = False
     with interruptible("multi_impact_map"), reporter(progress, "multi_impact_map",
                                                      total=npts) as rep:
         # the pool's workers forked before the map's arrays exist (MapRunner)
@@ -624,67 +660,193 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         runner.done += unseeded
         rep.advance(unseeded)
         task_bytes = rows * shape[1] * 2 * point_bytes  # its outputs, sent and copied in
-        runner.limit = max(1, int((memory_limit - npts * point_bytes) // task_bytes))
-        out: dict[str, np.ndarray] | None = None
         try:
-            out = _empty_outputs(npts, p, 2 * osc.n)
-            for (band, _, _), (values, stats, nflows) in runner.results(tasks):
-                where = slice(band.start * shape[1], band.stop * shape[1])
-                for key, a in values.items():
-                    out[key][where] = a
-                computed[band] = True
-                solved, attempts = solved + stats[0], attempts + stats[1]
-                iterations, capped = iterations + stats[2], capped or bool(stats[3])
-                flows += nflows
-        except KeyboardInterrupt:
-            runner.close(kill=True)
-            if out is None or not keep_interrupted(runner, npts):
-                raise
-            interrupted = True
+            if in_memory:
+                runner.limit = max(1, int((memory_limit - npts * point_bytes) // task_bytes))
+                values, computed = _family_in_memory(runner, tasks, shape, p, 2 * osc.n,
+                                                     stats)
+            else:
+                _check_disk_floor(memory_limit, runner.in_flight)
+                runner.limit = max(1, int((memory_limit - _DISK_FIXED_BYTES) // task_bytes))
+                temporary = out is None
+                if temporary:
+                    out = temporary_map_file()
+                    log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB: it is "
+                                "written to %s (removed when the returned dataset is closed) "
+                                "and returned lazily", npts * point_bytes / 1e9,
+                                memory_limit / 1e9, out)
+                path, computed = _family_to_file(runner, tasks, shape, admits, dataset, stats,
+                                                 rows, out, options)
         except BaseException:
-            runner.close(kill=True)
+            runner.close(kill=True)  # Ctrl-C or a failure: no worker left computing
+            if temporary and out is not None:
+                remove_temporary_map(out)
             raise
-        runner.close()
-    computed[[r for r in range(shape[0]) if not any(t[0].start <= r < t[0].stop
-                                                     for t in tasks)]] = True
+        runner.close(kill=computed is not None)
+
     t_sweep = time.perf_counter() - t1
-    if capped:
+    if stats.capped:
         log.warning("a contact-search grid was capped at 2000000 cells on some flight of the "
                     "map: a short excursion past a stop (eq. 16) may be missed there")
-    if not admits:
-        del out["asymmetry"]
-    # the sweep leaves gap_min NaN at a found point exactly where the contact search did
-    # not run (checks=False) or cannot represent a flight (a constant force pushing a free
-    # mode that the stop coordinate sees, a polynomial in time): never physical there
-    out["contact_checked"] = out["found"] & ~np.isnan(out["gap_min"])
-    unchecked = int(np.count_nonzero(out["found"] & ~out["contact_checked"]))
-    if checks and unchecked:
+    if checks and stats.unchecked:
         log.warning("%d of %d found points: interior contact not checked (the constant force "
                     "F_static moves %s by a polynomial in time through a free mode, which the "
                     "contact search does not represent); they are not physical "
-                    "(contact_checked False)", unchecked, solved, osc.stops.coordinate)
-    values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
-    seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1]),
-            "index": [int(s0), int(s1)],
-            "start": {param.name: param.value(osc) for param in params}}
-    options = {"tol": tol, "max_iter": max_iter, "max_change": max_change,
-               "max_attempts": max_attempts, "checks": bool(checks), "attempts": int(attempts),
-               "newton_iterations": int(iterations), "flows": flows,
-               "setup_seconds": round(t_setup, 4), "sweep_seconds": round(t_sweep, 4),
-               "executor": runner.name, "tasks": len(tasks), "rows_per_task": rows}
+                    "(contact_checked False)", stats.unchecked, stats.solved,
+                    osc.stops.coordinate)
     log.info("N=%d p=%d map over %s x %s: %d of %d points found (%d Newton attempts) in "
-             "%.3g s (%.3g points/s; setup %.3g s)", N, p, names[0], names[1], solved, npts,
-             attempts, t_sweep, npts / t_sweep if t_sweep > 0 else math.inf, t_setup)
-    ds = multi_impact_map_dataset(oscillator=osc, N=N, pattern=pattern, parameters=names,
-                                  grid=axes, values=values, symmetric=half, seed=seed,
-                                  options=options, title=title)
-    if interrupted:
-        ds["computed"] = (names, np.broadcast_to(computed[:, None], shape).copy(),
-                          {"long_name": "point computed before the map was interrupted",
-                           "units": "1"})
-        ds.attrs["interrupted"] = 1
-        ds.attrs["points_computed"] = int(np.count_nonzero(ds["computed"].values))
+             "%.3g s (%.3g points/s; setup %.3g s)", N, p, names[0], names[1], stats.solved,
+             npts, stats.attempts, t_sweep, npts / t_sweep if t_sweep > 0 else math.inf,
+             t_setup)
+    if not in_memory:
+        if computed is not None:
+            log.warning("the interrupted map is kept in %s (interrupted = 1, the variable "
+                        "'computed')", out)
+        # opened once the workers are gone (a forked worker holds the file's HDF5 lock)
+        return open_temporary_map(path) if temporary else open_lazy(path)
+    if not admits:
+        del values["asymmetry"]
+    ds = multi_impact_map_dataset(values=values, options=options(), **dataset)
+    if computed is not None:
+        _mark_computed(ds, computed, names)
     return ds
+
+
+class _Stats:
+    """What the sweeps of a map found, summed over its tasks as they finish."""
+
+    def __init__(self) -> None:
+        self.solved = self.attempts = self.iterations = self.flows = self.unchecked = 0
+        self.capped = False
+
+    def add(self, values: dict[str, np.ndarray], stats: tuple[int, int, int, bool],
+            flows: int) -> None:
+        """Count a finished band; its outputs get ``contact_checked``."""
+        self.solved, self.attempts = self.solved + stats[0], self.attempts + stats[1]
+        self.iterations, self.capped = self.iterations + stats[2], self.capped or bool(stats[3])
+        self.flows += flows
+        _contact_checked(values)
+        self.unchecked += int(np.count_nonzero(values["found"] & ~values["contact_checked"]))
+
+
+def _contact_checked(values: dict[str, np.ndarray]) -> None:
+    """``contact_checked`` of a band's outputs.
+
+    The sweep leaves ``gap_min`` NaN at a found point exactly where the contact search did
+    not run (``checks=False``) or cannot represent a flight (a constant force pushing a
+    free mode that the stop coordinate sees, a polynomial in time): never physical there.
+    """
+    values["contact_checked"] = values["found"] & ~np.isnan(values["gap_min"])
+
+
+def _family_in_memory(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]],
+                      shape: tuple[int, int], p: int, m: int, stats: _Stats
+                      ) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
+    """The map's outputs in memory, each band copied in as it finishes; and the rows
+    computed if a first Ctrl-C interrupted it (else None)."""
+    npts = shape[0] * shape[1]
+    out = _empty_outputs(npts, p, m)
+    _contact_checked(out)
+    computed = np.zeros(shape[0], dtype=bool)
+    interrupted = False
+    try:
+        for (band, _, _), (values, counts, nflows) in runner.results(tasks):
+            stats.add(values, counts, nflows)
+            where = slice(band.start * shape[1], band.stop * shape[1])
+            for key, a in values.items():
+                out[key][where] = a
+            computed[band] = True
+    except KeyboardInterrupt:
+        if not keep_interrupted(runner, npts):
+            raise
+        interrupted = True
+    computed[_rows_without_task(tasks, shape[0])] = True
+    values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
+    return values, (np.broadcast_to(computed[:, None], shape).copy() if interrupted else None)
+
+
+def _rows_without_task(tasks: list[tuple[slice, int, np.ndarray]], rows: int) -> list[int]:
+    """The rows of no band: their spine point was not found, so nothing of them is."""
+    return [r for r in range(rows) if not any(t[0].start <= r < t[0].stop for t in tasks)]
+
+
+def _mark_computed(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, str]) -> None:
+    """The variable ``computed`` and the attributes ``interrupted``, ``points_computed`` of an
+    interrupted map (issue 31)."""
+    ds["computed"] = (names, computed,
+                      {"long_name": "point computed before the map was interrupted",
+                       "units": "1"})
+    ds.attrs["interrupted"] = 1
+    ds.attrs["points_computed"] = int(np.count_nonzero(computed))
+
+
+def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]],
+                    shape: tuple[int, int], admits: bool, dataset: dict[str, Any],
+                    stats: _Stats, rows: int, out: Any, options: Any
+                    ) -> tuple[Path, np.ndarray | None]:
+    """The map written to a chunked, compressed NetCDF-4 file band by band as the bands
+    finish (:func:`~impactcont.dataset.io.save_blocks`); nothing else of it in memory.
+
+    The rows of no band and, after a first Ctrl-C, those of the bands not finished are
+    written as not found; the attribute ``options`` (with the sweeps' counts) and, if
+    interrupted, ``computed``, ``interrupted`` and ``points_computed`` are set before the
+    file is moved onto `out` (never half written). Returns the file and the points computed
+    if interrupted (else None).
+    """
+    import dask.array as da
+
+    n0, n1 = shape
+    names = dataset["parameters"]
+    osc, p = dataset["oscillator"], len(dataset["pattern"])
+    empty = _empty_outputs(1, p, 2 * osc.n)
+    _contact_checked(empty)
+    if not admits:
+        del empty["asymmetry"]
+    placeholders = {key: da.empty((n0, n1, *a.shape[1:]), dtype=a.dtype, chunks=-1)
+                    for key, a in empty.items()}
+    ds = multi_impact_map_dataset(values=placeholders, options={}, **dataset)
+    encoding = {key: {"zlib": True, "complevel": 1,
+                      "chunksizes": (min(rows, n0), n1, *ds[key].shape[2:])}
+                for key in ds.data_vars}
+    computed = np.zeros(n0, dtype=bool)
+    interrupted: list[bool] = []
+
+    def block(band: slice, values: dict[str, np.ndarray]
+              ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        count = band.stop - band.start
+        return ({names[0]: band, names[1]: slice(0, n1)},
+                {key: values[key].reshape((count, n1, *values[key].shape[1:]))
+                 for key in empty})
+
+    def not_found(band: slice) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        count = (band.stop - band.start) * n1
+        return block(band, {key: np.repeat(a, count, axis=0) for key, a in empty.items()})
+
+    def blocks() -> Any:
+        try:
+            for (band, _, _), (values, counts, nflows) in runner.results(tasks):
+                stats.add(values, counts, nflows)
+                yield block(band, values)
+                computed[band] = True
+        except KeyboardInterrupt:
+            if not keep_interrupted(runner, n0 * n1):
+                raise
+            interrupted.append(True)
+            for band, _, _ in tasks:
+                if not computed[band].any():
+                    yield not_found(band)
+        for r in _rows_without_task(tasks, n0):
+            yield not_found(slice(r, r + 1))
+            computed[r] = True
+
+    def finish() -> xr.Dataset:
+        marked = xr.Dataset(attrs={"options": _options_json(options())})
+        if interrupted:
+            _mark_computed(marked, np.broadcast_to(computed[:, None], shape).copy(), names)
+        return marked
+
+    path = save_blocks(ds, out, blocks(), encoding=encoding, finish=finish)
+    return path, (np.broadcast_to(computed[:, None], shape).copy() if interrupted else None)
 
 
 def _point_bytes(n: int, p: int, half: bool) -> int:

@@ -157,7 +157,8 @@ def multi_impact_map_dataset(*, oscillator: ImpactOscillator, N: int, pattern: s
                              f"{[k for k in MULTI_MAP_VARIABLES if k not in _OPTIONAL]}")
         dims = _dims(parameters, spec)
         shape = tuple(sizes[d] for d in dims)
-        array = np.asarray(values[key])
+        # a dask array (a map written to a file) stays lazy: shape and dtype only
+        array = values[key] if hasattr(values[key], "dask") else np.asarray(values[key])
         if array.shape != shape:
             raise ValueError(f"values[{key!r}] must have shape {shape} (dims {dims}); got "
                              f"{array.shape}")

@@ -22,8 +22,10 @@ map without it over the shifted stops agree pointwise.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -546,3 +548,76 @@ def test_free_mass_under_a_constant_force_map_says_what_it_checked():
     for point in sample(ds, [{"omega": 1.5, "F0": 0.9}, {"omega": 1.7, "F0": 1.1}]):
         orbit = resolved(ds, ball(float(point["omega"]), float(point["F0"])), point)
         assert_same_motion(ds, point, orbit)
+
+
+# -- a map written to a file: out=, or larger than memory_limit; Ctrl-C kept (issue 31) -----
+_PAPER_FAMILY = {"omega": np.linspace(1.0, 1.4, 9), "b": np.linspace(0.1, 0.5, 7)}
+
+
+@pytest.fixture(scope="module")
+def closed_form_start():
+    osc = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.3, omega=1.2,
+                              eta=0.1)
+    return next(o for o in ic.periodic_orbits(osc, 1) if o.physical and o.stable)
+
+
+@pytest.fixture(scope="module")
+def family_in_memory(closed_form_start):
+    return multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2)
+
+
+def test_a_map_written_to_a_file_equals_the_map_in_memory(closed_form_start, family_in_memory,
+                                                         tmp_path, caplog):
+    pytest.importorskip("dask")
+    lazy = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2,
+                            out=tmp_path / "family.nc")
+    assert hasattr(lazy["found"].data, "dask")  # nothing read yet
+    xr.testing.assert_identical(lazy.load().drop_attrs(), family_in_memory.drop_attrs())
+    assert json.loads(lazy.attrs["options"])["tasks"] == 5  # the sweeps' counts, at the end
+    lazy.close()
+    xr.testing.assert_identical(ic.load(tmp_path / "family.nc").drop_attrs(),
+                                family_in_memory.drop_attrs())
+    # larger than memory_limit: a temporary file (it was refused before any work)
+    with caplog.at_level("WARNING"):
+        lazy = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY,
+                                rows_per_task=2, memory_limit=1e3)
+    path = Path(lazy.encoding["source"])
+    assert f"it is written to {path}" in caplog.text and path.is_file()
+    xr.testing.assert_identical(lazy.load().drop_attrs(), family_in_memory.drop_attrs())
+    lazy.close()
+    assert not path.exists()
+
+
+def _interrupted_after(k: int, real, *args):
+    _interrupted_after.calls += 1
+    if _interrupted_after.calls == k:
+        raise KeyboardInterrupt
+    return real(*args)
+
+
+def test_ctrl_c_keeps_a_map_written_to_a_file_as_the_map_in_memory(closed_form_start,
+                                                                  family_in_memory,
+                                                                  monkeypatch, tmp_path):
+    pytest.importorskip("dask")
+    from impactcont.analysis import multi_maps
+
+    real = multi_maps._band_task
+    monkeypatch.setattr(multi_maps, "_band_task",
+                        functools.partial(_interrupted_after, 3, real))
+    _interrupted_after.calls = 0
+    in_memory = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY,
+                                 rows_per_task=2)
+    _interrupted_after.calls = 0
+    target = tmp_path / "family.nc"
+    lazy = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2,
+                            out=target)
+    assert [p.name for p in tmp_path.iterdir()] == ["family.nc"]  # no temporary left
+    kept = lazy.load()
+    lazy.close()
+    assert kept.attrs["interrupted"] == 1 and kept.attrs["points_computed"] == 2 * 2 * 7
+    xr.testing.assert_identical(kept.drop_attrs(), in_memory.drop_attrs())
+    computed = kept["computed"]
+    xr.testing.assert_identical(kept.drop_vars("computed").where(computed).drop_attrs(),
+                                family_in_memory.where(computed).drop_attrs())
+    assert not kept["found"].where(~computed, False).any()
+    assert ic.load(target).attrs["interrupted"] == 1
