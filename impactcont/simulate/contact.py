@@ -237,7 +237,8 @@ def contact_free_until(motion: StopMotion, level: float, t0: float,
 
 
 def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
-                 after: dict[str, float] | None = None
+                 after: dict[str, float] | None = None, stops: Any = None,
+                 releases: dict[str, np.ndarray] | None = None
                  ) -> tuple[float, np.ndarray, str] | None:
     """First impact on any stop within ``t_max`` of a flight from state X.
 
@@ -248,7 +249,8 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
     Parameters
     ----------
     flight : Flight, ImpactOscillator or an object carrying one
-        :func:`~impactcont.simulate.flight.flight_of`.
+        :func:`~impactcont.simulate.flight.flight_of`; a constrained flight
+        (:class:`impactcont.simulate.sticking.HeldFlight`) along a sticking phase.
     X : ndarray, shape (2n,)
         State at the start (on the allowed side of every stop).
     phase : float
@@ -261,12 +263,20 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
         coordinate is evaluated on or past it at the start, moving into it, is hit at once
         (a state short of it only by the rounding of the evaluation: no crossing from below
         is left to find).
+    stops : iterable of str, optional
+        The stops searched (all by default; a sticking phase leaves out the stops it holds).
+    releases : dict, optional
+        Further events ``name -> row``: the first time the linear function ``row . Y`` of
+        the flight's internal state (:meth:`Flight.row`) reaches 0 from below (the contact
+        force of a held stop falling to zero, :mod:`impactcont.simulate.sticking`),
+        searched with the stops; the event is returned under its name.
 
     Returns
     -------
     (float, ndarray, str) or None
         Flight time to the impact, the state just before it and the stop hit
-        (its name); None when no stop is reached within ``t_max``.
+        (its name, or the name of a release); None when no stop is reached within
+        ``t_max``.
 
     Notes
     -----
@@ -280,31 +290,57 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
     fl = flight_of(flight)
     osc = fl.osc
     after = after or {}
-    views = {s: osc.stops.stop(s, osc.M, osc.b, osc.R) for s in osc.stops.names}
-    stops = list(views)
-    normals = {s: views[s].normal for s in stops}
-    motions = {s: fl.motion(X, phase, normals[s], views[s].sign) for s in stops}
-    levels = {s: views[s].sign * views[s].position for s in stops}
-    below = dict.fromkeys(stops, True)
-    windows = [search_window(fl, normal=normals[s]) for s in stops]
+    names = osc.stops.names if stops is None else list(stops)
+    views = {s: osc.stops.stop(s, osc.M, osc.b, osc.R) for s in names}
+    targets = {}  # name -> (motion, level, the row whose time scales grid its search)
+    for s, view in views.items():
+        motion = fl.motion(X, phase, view.normal, view.sign)
+        targets[s] = (motion, view.sign * view.position, motion.row)
+    for name, row in (releases or {}).items():
+        motion = fl.motion(X, phase, None, row=row)
+        targets[name] = (motion, 0.0, motion.row)
+    if not targets:
+        return None
+    return _first_event(fl, targets, t_max, after)
+
+
+def _windows(fl: Any, row: np.ndarray) -> tuple[float, float]:
+    """:func:`search_window` of any linear function ``row . Y`` of the internal state."""
+    rate, _ = fl.row_scales(row)
+    forcing, fast = TWO_PI / fl.omega, TWO_PI / rate
+    return min(forcing, _FIRST_WINDOW_PERIODS * fast), min(forcing, _WINDOW_PERIODS * fast)
+
+
+def _first_event(fl: Any, targets: dict[str, tuple[StopMotion, float, np.ndarray]],
+                 t_max: float, after: dict[str, float]
+                 ) -> tuple[float, np.ndarray, str] | None:
+    """The earliest first crossing of its level from below among `targets` (each a
+    motion, a level and the row its grid follows), within ``t_max``; see
+    :func:`next_contact`."""
+    names = list(targets)
+    motions = {s: targets[s][0] for s in names}
+    levels = {s: targets[s][1] for s in names}
+    rows = {s: targets[s][2] for s in names}
+    below = dict.fromkeys(names, True)
+    windows = [_windows(fl, rows[s]) for s in names]
     first, longest = min(w[0] for w in windows), min(w[1] for w in windows)
     window = first
     start = 0.0
     while start < t_max:
-        free = min(contact_free_until(motions[s], levels[s], start, t_max) for s in stops)
+        free = min(contact_free_until(motions[s], levels[s], start, t_max) for s in names)
         if free >= start + window:  # no contact with any stop before `free`: skip there
             if free >= t_max:
                 return None
             start, window = free, first
-            below = dict.fromkeys(stops, True)
+            below = dict.fromkeys(names, True)
             continue
         # a window reaches a little past its length: the next impact of a motion of the
         # forcing's period comes one period after the last, at a window's end up to rounding,
         # and is found in this window rather than at the start of the next
         stop_time = min(start + window * _WINDOW_REACH, t_max)
-        grids = {s: search_grid(fl, start, stop_time, normals[s]) for s in stops}
+        grids = {s: search_grid(fl, start, stop_time, None, row=rows[s]) for s in names}
         best: tuple[float, str] | None = None
-        for s in stops:
+        for s in names:
             grid = grids[s]
             y, v, _ = motions[s](grid[:1])
             if below[s] and (start > 0 or s not in after) and y[0] >= levels[s] and v[0] >= 0:
@@ -319,7 +355,7 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
                 best = (tc, s)
         if best is not None:
             return best[0], motions[best[1]].state(best[0]), best[1]
-        for s in stops:
+        for s in names:
             below[s] = bool(motions[s](grids[s][-1:])[0][0] < levels[s])
             motions[s].anchor(stop_time)
         start, window = stop_time, min(2.0 * window, longest)

@@ -146,10 +146,20 @@ class Flight:
     def __init__(self, osc: ImpactOscillator) -> None:
         if not isinstance(osc, ImpactOscillator):
             raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
+        self._build(osc, _system_matrix(osc), None, None)
+
+    def _build(self, osc: ImpactOscillator, A: np.ndarray, lift: np.ndarray | None,
+               restrict: np.ndarray | None) -> None:
+        """Set up the flow of ``Y' = A Y`` (`A` of order ``2 r + 3``, the forcing states
+        last), read in the oscillator's coordinates through ``lift`` (``[x; x'; c; s; 1] =
+        lift @ Y``) and started through ``restrict`` (``Y = restrict @ [x; x'; c; s; 1]``);
+        both None for the free flight (``r = n``, the identity)."""
         self.osc = osc
         self.n = osc.n
         self.omega = float(osc.omega)
-        self.A = _system_matrix(osc)
+        self.A = A
+        self.inner = (A.shape[0] - 3) // 2  # r: degrees of freedom of the internal state
+        self.lift, self.restrict = lift, restrict
         self.norm = float(np.linalg.norm(self.A, 1))
         lam, W = scipy.linalg.eig(self.A)
         self.eigenvalues = lam
@@ -163,6 +173,8 @@ class Flight:
         self.condition = condition
         self.fast = W_inv is not None
         self.W, self.W_inv = W, W_inv
+        # the eigenvectors read in the oscillator's coordinates [x; x'; c; s; 1]
+        self.W_out = W if lift is None else lift @ W
         self._kinds: np.ndarray | None = None
         if self.fast:
             # the forcing's eigenvalues are known exactly (the rotation c' = -omega s,
@@ -181,9 +193,21 @@ class Flight:
 
     # -- states -------------------------------------------------------------------------------
     def start(self, X: np.ndarray, phase: float) -> np.ndarray:
-        """``Y(0) = [X; cos phase; sin phase; 1]`` of a state ``X = [x; x']`` and a phase."""
-        return np.concatenate([np.asarray(X, dtype=float).reshape(2 * self.n),
-                               [math.cos(phase), math.sin(phase), 1.0]])
+        """``Y(0) = [X; cos phase; sin phase; 1]`` of a state ``X = [x; x']`` and a phase
+        (restricted to the internal state of a constrained flight)."""
+        Y = np.concatenate([np.asarray(X, dtype=float).reshape(2 * self.n),
+                            [math.cos(phase), math.sin(phase), 1.0]])
+        return Y if self.restrict is None else self.restrict @ Y
+
+    def outer(self, Y: np.ndarray) -> np.ndarray:
+        """Internal states ``Y`` (rows, shape (nt, N)) as ``[x; x']``, shape (nt, 2n)."""
+        m = 2 * self.n
+        return Y[..., :m] if self.lift is None else Y @ self.lift[:m].T
+
+    def row(self, coefficients: np.ndarray) -> np.ndarray:
+        """The internal row of a linear function ``coefficients . [x; x'; c; s; 1]``."""
+        r = np.asarray(coefficients, dtype=float)
+        return r if self.lift is None else r @ self.lift
 
     def propagate(self, t: Any, Y0: np.ndarray) -> np.ndarray:
         """``expm(A t) Y0`` at each time of `t`, shape (nt, N): the exact flow.
@@ -211,7 +235,7 @@ class Flight:
         steps = max(1, math.ceil(self.norm * abs(dt) / _STEP_NORM))
         h = dt / steps
         E = scipy.linalg.expm(h * self.A)
-        m = 2 * self.n
+        m = 2 * self.inner
         for j in range(1, steps + 1):
             Y = _combine(E, Y[:, None])[:, 0]
             Y[m:m + 2] = (math.cos(theta + self.omega * j * h),
@@ -232,12 +256,19 @@ class Flight:
         """The state ``[x; x']`` at sorted times `t` after a start at state X and phase,
         shape (nt, 2n): from the eigenvalues on the fast path, else by matrix exponentials
         from anchors (:meth:`advance`) at most ``_STEP_NORM / |A|`` before each time."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        Y = self.start(X, phase)
         m = 2 * self.n
+        rows = np.eye(self.A.shape[0])[:m] if self.lift is None else self.lift[:m]
+        return self.evaluate(t, X, phase, rows)
+
+    def evaluate(self, t: Any, X: np.ndarray, phase: float, rows: np.ndarray) -> np.ndarray:
+        """Linear functions ``rows @ Y`` of the internal state at sorted times `t` after a
+        start at state X and phase, shape (nt, len(rows)) (:meth:`samples`)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        rows = np.atleast_2d(np.asarray(rows, dtype=float))
+        Y = self.start(X, phase)
         if self.fast:
-            return self.modal_sum(t, (self.W_inv @ Y)[:, None] * self.W[:m].T)
-        out = np.empty((t.size, m))
+            return self.modal_sum(t, (self.W_inv @ Y)[:, None] * (rows @ self.W).T)
+        out = np.empty((t.size, rows.shape[0]))
         span = _STEP_NORM / max(self.norm, _EPS)
         origin, i = 0.0, 0
         while i < t.size:
@@ -245,7 +276,7 @@ class Flight:
                 Y = self.advance(Y, t[i] - origin, phase + self.omega * origin)
                 origin = float(t[i])
             j = max(i + 1, int(np.searchsorted(t, origin + span, side="right")))
-            out[i:j] = self.propagate(t[i:j] - origin, Y)[:, :m]
+            out[i:j] = self.propagate(t[i:j] - origin, Y) @ rows.T
             i = j
         return out
 
@@ -255,7 +286,7 @@ class Flight:
 
     def rate(self, X: np.ndarray, phase: float) -> np.ndarray:
         """``X' = [x'; x'']`` at a state X and phase (eq. 1), shape (2n,)."""
-        return (self.A @ self.start(X, phase))[:2 * self.n]
+        return self.outer(self.A @ self.start(X, phase))
 
     # -- time scales --------------------------------------------------------------------------
     def time_scales(self, normal: np.ndarray) -> tuple[float, float]:
@@ -271,22 +302,30 @@ class Flight:
             modes seen.
         """
         normal = np.asarray(normal, dtype=float)
-        key = normal.tobytes()
+        full = np.zeros(2 * self.n + 3)
+        full[:self.n] = normal
+        return self.row_scales(self.row(full))
+
+    def row_scales(self, row: np.ndarray) -> tuple[float, float]:
+        """:meth:`time_scales` of any linear function ``row . Y`` of the internal state."""
+        row = np.asarray(row, dtype=float)
+        key = row.tobytes()
         known = self._scales.get(key)
         if known is None:
             lam = self.eigenvalues
             if self.fast:
-                weight = np.abs(normal @ self.W[:self.n])
+                weight = np.abs(row @ self.W)
                 lam = lam[weight > 4.0 * _EPS * max(float(weight.max(initial=0.0)), _EPS)]
             known = self._scales[key] = (
                 float(max(self.omega, np.abs(lam.imag).max(initial=0.0))),
                 float(max(0.0, (-lam.real).max(initial=0.0))))
         return known
 
-    def motion(self, X: np.ndarray, phase: float, normal: np.ndarray,
-               sign: float = 1.0) -> StopMotion:
-        """The evaluator of ``y = sign * normal . x`` along the flight from X at `phase`."""
-        return StopMotion(self, X, phase, normal, sign)
+    def motion(self, X: np.ndarray, phase: float, normal: np.ndarray | None,
+               sign: float = 1.0, *, row: np.ndarray | None = None) -> StopMotion:
+        """The evaluator of ``y = sign * normal . x`` (or of ``row . Y``, a linear function
+        of the internal state, e.g. a contact force) along the flight from X at `phase`."""
+        return StopMotion(self, X, phase, normal, sign, row=row)
 
     # -- the modes of the envelope ------------------------------------------------------------
     def _mode_kinds(self) -> np.ndarray:
@@ -297,9 +336,10 @@ class Flight:
         eigenvectors of the oscillator's own modes vanish on ``c, s`` and those of the
         forcing pair do not: the pair is the two eigenvectors of largest weight there.
         """
-        n, N = self.n, self.A.shape[0]
+        N = self.A.shape[0]
         kinds = -np.ones(N, dtype=np.int64)
-        share = np.linalg.norm(self.W[2 * n:2 * n + 2], axis=0) / np.linalg.norm(self.W, axis=0)
+        m = 2 * self.inner
+        share = np.linalg.norm(self.W[m:m + 2], axis=0) / np.linalg.norm(self.W, axis=0)
         kinds[np.argsort(share)[-2:]] = 1
         size = max(float(np.abs(self.eigenvalues).max()), self.omega)
         zero = np.abs(self.eigenvalues) <= 64.0 * _EPS * self.condition * size
@@ -321,6 +361,9 @@ class StopMotion:
         The stop coordinate ``s = normal . x``.
     sign : float
         ``+1`` for a stop met moving up, ``-1`` for one met moving down.
+    row : ndarray, optional
+        Instead of `normal`: ``y = row . Y`` for a row over the flight's internal state
+        (:meth:`Flight.row`; a contact force along a sticking phase).
 
     Notes
     -----
@@ -330,11 +373,16 @@ class StopMotion:
     """
 
     def __init__(self, flight: Flight, X: np.ndarray, phase: float, normal: Any,
-                 sign: float = 1.0) -> None:
-        n, N = flight.n, flight.A.shape[0]
+                 sign: float = 1.0, *, row: np.ndarray | None = None) -> None:
+        n = flight.n
         Y0 = flight.start(X, phase)
-        r = np.zeros(N)
-        r[:n] = float(sign) * np.asarray(normal, dtype=float)
+        if row is None:
+            full = np.zeros(2 * n + 3)
+            full[:n] = float(sign) * np.asarray(normal, dtype=float)
+            r = flight.row(full)
+        else:
+            r = np.asarray(row, dtype=float)
+        self.row = r
         self.flight = flight
         self.phase = float(phase)
         rows = [r]
@@ -373,9 +421,9 @@ class StopMotion:
         fl = self.flight
         m = 2 * fl.n
         if fl.fast:
-            return fl.modal_sum(np.array([float(t)]), self.modal[:, None] * fl.W[:m].T)[0]
+            return fl.modal_sum(np.array([float(t)]), self.modal[:, None] * fl.W_out[:m].T)[0]
         theta = self.phase + fl.omega * self.origin
-        return fl.advance(self.Y_origin, float(t) - self.origin, theta)[:m]
+        return fl.outer(fl.advance(self.Y_origin, float(t) - self.origin, theta))
 
     def envelope(self, t0: float, horizon: float) -> tuple[complex, float, float, float] | None:
         """Forced amplitude, a bound on the free part on ``[t0, horizon]`` and two sizes.

@@ -36,7 +36,8 @@ _REL_TOL = 4.0 * float(np.finfo(float).eps)
 _MAX_STEPS = 200
 
 
-def search_grid(flight: Flight, t0: float, t1: float, normal: Any) -> np.ndarray:
+def search_grid(flight: Flight, t0: float, t1: float, normal: Any, *,
+                row: np.ndarray | None = None) -> np.ndarray:
     """Times on ``[t0, t1]``, both ends included, with at most one root of ``y''`` per cell.
 
     Parameters
@@ -47,6 +48,9 @@ def search_grid(flight: Flight, t0: float, t1: float, normal: Any) -> np.ndarray
     normal : array_like, shape (n,)
         The stop coordinate ``y = normal . x`` searched: the cells follow the time scales
         of the modes it sees (:meth:`Flight.time_scales`).
+    row : ndarray, optional
+        Instead of `normal`: a linear function ``row . Y`` of the flight's internal state
+        (a contact force, :meth:`Flight.row_scales`).
 
     Returns
     -------
@@ -58,7 +62,7 @@ def search_grid(flight: Flight, t0: float, t1: float, normal: Any) -> np.ndarray
     UnresolvedMotionWarning
         When the grid would need more than ``_MAX_CELLS`` cells (it is capped there).
     """
-    rate, decay = flight.time_scales(normal)
+    rate, decay = flight.time_scales(normal) if row is None else flight.row_scales(row)
     span = t1 - t0
     cells = max(math.ceil(span * _CELLS_PER_PERIOD * rate / (2.0 * math.pi)), 8)
     if cells > _MAX_CELLS:

@@ -50,6 +50,13 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER, StopView
 from impactcont.simulate.contact import next_contact
 from impactcont.simulate.flight import Flight, flight_of
+from impactcont.simulate.sticking import (
+    HeldFlight,
+    StickingPhase,
+    holding,
+    impact_with_held,
+    release_name,
+)
 from impactcont.threads import blas_limited
 
 __all__ = ["SimulationResult", "SimulationStatus", "next_impact", "simulate"]
@@ -66,6 +73,10 @@ _EPS = float(np.finfo(float).eps)
 # position cannot be resolved (the crossing test sees rounding, not the motion): complete
 # chatter, whatever chatter_velocity says
 _BOUNCE_ULPS = 1e3
+# the ends a simulation may be asked to stop at (stop_at=)
+_STOP_AT = {"sticking": "STICKING"}
+# separation time after a release capped at this fraction of the fastest period
+_RELEASE_SPAN = 1e-4
 # an impact within this many ulps of the end of the span simulated belongs to it (a periodic
 # motion simulated for whole periods meets its last impact at the end, up to rounding)
 _END_ULPS = 1024
@@ -75,9 +86,8 @@ class SimulationStatus(enum.Enum):
     """Why a simulation stopped; the value is the message."""
 
     COMPLETED = "reached the requested number of forcing periods"
-    STICKING = ("the impacting mass sticks to a stop (zero velocity after impact and "
-                "acceleration towards the stop); sticking phases are outside the model of "
-                "eq. (1)-(4)")
+    STICKING = ("a stop coordinate came to rest on its stop, pushed into it (a sticking "
+                "phase starts), and stop_at asked to stop there")
     CHATTER = ("accumulating impacts (complete chatter): the impact velocity fell below the "
                "chatter threshold, or the next bounce would rise too little above the stop to "
                "be resolved; stopped rather than resolve infinitely many impacts")
@@ -107,6 +117,10 @@ class SimulationResult:
     impact_stops : str
         The stop of each impact, ``"U"`` (upper, ``x_j = b``), ``"L"`` (lower,
         ``x_j = -b_low``) or an extra stop's name; all ``"U"`` for the paper's single stop.
+    sticking : tuple of StickingPhase
+        The sticking phases, in time order (:class:`impactcont.simulate.sticking.
+        StickingPhase`: start, end, the stops held, their contact forces); each holds one
+        set of stops, so a phase in which a second stop comes to hold is two phases.
     """
 
     impact_times: np.ndarray
@@ -120,6 +134,7 @@ class SimulationResult:
     t: np.ndarray | None = None
     X: np.ndarray | None = None
     impact_stops: str = ""
+    sticking: tuple[StickingPhase, ...] = ()
 
     @property
     def message(self) -> str:
@@ -212,35 +227,35 @@ def _touching(X: np.ndarray, views: dict[str, StopView], last: str | None) -> li
     return out
 
 
-def _contact_now(flight: Flight, X: np.ndarray, phase: float, views: dict[str, StopView],
-                 last: str | None) -> tuple[tuple[float, np.ndarray, str] | None, bool]:
-    """An impact at once, or sticking, at a state that touches stops (:func:`_touching`).
+def _contact_now(flight: Flight, X: np.ndarray, views: dict[str, StopView],
+                 last: str | None, skip: Any = ()
+                 ) -> tuple[tuple[float, np.ndarray, str] | None, list[str]]:
+    """An impact at once, or the stops a state rests on (:func:`_touching`).
 
-    Decided by the signs of the stop coordinate's speed and acceleration towards each stop
-    touched, not by its clearance: moving into a stop is an impact now; at rest on it (the
-    speed zero within ``_ON_ULPS`` of the velocities' size: a plastic impact, R = 0, leaves
-    it exactly zero) and pushed into it is sticking, the same for a stop fixed to the frame,
-    a clearance between two masses and every extra stop.
+    Decided by the sign of the stop coordinate's speed towards each stop touched, not by its
+    clearance: moving into a stop is an impact now; at rest on it (the speed zero within
+    ``_ON_ULPS`` of the velocities' size: a plastic impact, R = 0, leaves it exactly zero)
+    it is a candidate for sticking (:func:`impactcont.simulate.sticking.holding` decides,
+    from the contact forces), the same for a stop fixed to the frame, a clearance between
+    two masses and every extra stop. Stops in `skip` (just released) are left out.
 
     Returns
     -------
-    hit, sticking
-        ``(0, X, name)`` for an impact now (else None), and whether the motion sticks.
+    hit, resting
+        ``(0, X, name)`` for an impact now (else None), and the stops the state rests on.
     """
     n = flight.n
     resting = []
     for name in _touching(X, views, last):
+        if name in skip:
+            continue
         view = views[name]
         u = view.sign * float(view.normal @ X[n:])
         if u > _ON_ULPS * _EPS * float(np.abs(view.normal) @ np.abs(X[n:])):
-            return (0.0, X.copy(), name), False
+            return (0.0, X.copy(), name), []
         if u >= -_ON_ULPS * _EPS * float(np.abs(view.normal) @ np.abs(X[n:])):
-            resting.append(view)
-    if resting:
-        acc = flight.rate(X, phase)[n:]
-        if any(view.sign * float(view.normal @ acc) > 0.0 for view in resting):
-            return None, True
-    return None, False
+            resting.append(name)
+    return None, resting
 
 
 def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
@@ -275,11 +290,43 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     return X
 
 
+def _check_stop_at(stop_at: object) -> frozenset[str]:
+    if isinstance(stop_at, str):
+        stop_at = (stop_at,)
+    try:
+        asked = list(stop_at)  # type: ignore[call-overload]
+    except TypeError:
+        asked = None
+    if asked is None or not all(isinstance(a, str) and a in _STOP_AT for a in asked):
+        raise ParameterError(f"stop_at must be a tuple of the ends {sorted(_STOP_AT)} (empty: "
+                             f"simulate through them); got {stop_at!r}")
+    return frozenset(asked)
+
+
+def _separation_time(flight: Flight, X: np.ndarray, phase: float, view: StopView) -> float:
+    """How long after a release at X the stop coordinate stays within rounding of its stop.
+
+    At a release the contact force, hence the free acceleration of ``s``, is zero: ``s``
+    leaves the stop as ``s''' t^3 / 6``, and an evaluation of ``s`` is exact only up to
+    ``_ON_ULPS`` ulps of its size. A crossing of that stop before this time is rounding, not
+    an impact (:func:`next_contact`'s ``after``)."""
+    n = flight.n
+    motion = flight.motion(X, phase, view.normal, view.sign)
+    jerk = abs(float(motion.derivatives(np.zeros(1))[3][0]))
+    band = _ON_ULPS * _EPS * (abs(view.position) + float(np.abs(view.normal) @ np.abs(X[:n])))
+    rate, _ = flight.time_scales(view.normal)
+    cap = _RELEASE_SPAN * TWO_PI / rate
+    if jerk == 0.0:
+        return cap
+    return min(cap, (6.0 * band / jerk) ** (1.0 / 3.0))
+
+
 @blas_limited
 def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: float, *,
              trajectory: bool = False, samples_per_period: int = 200,
-             max_impacts: int = 1_000_000, chatter_velocity: float = 1e-9) -> SimulationResult:
-    """Integrate the impact oscillator exactly from a given state.
+             max_impacts: int = 1_000_000, chatter_velocity: float = 1e-9,
+             stop_at: tuple[str, ...] = ()) -> SimulationResult:
+    """Integrate the impact oscillator exactly from a given state, through sticking phases.
 
     Parameters
     ----------
@@ -296,7 +343,8 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     trajectory : bool
         Also return sampled states ``t, X`` (both sides of each impact).
     samples_per_period : int
-        Trajectory samples per forcing period.
+        Trajectory samples per forcing period (and contact-force samples of the sticking
+        phases).
     max_impacts : int
         Stop after this many impacts.
     chatter_velocity : float
@@ -305,10 +353,26 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         value, if none yet), or when the bounce after an impact would rise less
         than 1000 ulps of the stop position above it (``v^2 / (2 |x_j''|)``: below
         that the motion cannot be told from rounding).
+    stop_at : tuple of str
+        Ends to stop at rather than simulate through: ``("sticking",)`` stops with status
+        STICKING where a sticking phase would start. Empty (the default): sticking phases
+        are simulated (:mod:`impactcont.simulate.sticking`) and recorded in
+        ``result.sticking``.
 
     Returns
     -------
     SimulationResult
+
+    Notes
+    -----
+    A stop coordinate at rest on its stop (after a plastic impact, R = 0, or an impact at
+    zero speed, or at the start) and pressed into it (the contact force, the Lagrange
+    multiplier of the constraint, compressive) sticks: the motion continues as the exact
+    flow of the system with that coordinate held
+    (:class:`~impactcont.simulate.sticking.HeldFlight`) until the contact force falls to
+    zero (the release, located to a few ulps on that flow) or another stop is hit (an
+    impact while held: :func:`~impactcont.simulate.sticking.impact_with_held`). Several
+    stops may be held at once (:func:`~impactcont.simulate.sticking.holding`).
     """
     X = _check_state(osc, state)
     if isinstance(periods, bool) or not isinstance(periods, numbers.Real) or not (
@@ -320,6 +384,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     periods, delta = float(periods), float(delta)
     if int(samples_per_period) < 2:
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
+    ends = _check_stop_at(stop_at)
     flight = Flight(osc)
     n = osc.n
     sides = list(osc.stops.names)
@@ -328,48 +393,118 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     sign = {s: views[s].sign for s in sides}
     normal = {s: views[s].normal for s in sides}
     jump = {s: views[s].jump for s in sides}  # v+ = D v, the law of the stop hit
-    t_end = periods * TWO_PI / osc.omega
-    dt_sample = TWO_PI / osc.omega / int(samples_per_period)
+    period = TWO_PI / osc.omega
+    t_end = periods * period
+    dt_sample = period / int(samples_per_period)
     times, vels, phases, states, hits = [], [], [], [], []
     t_chunks: list[np.ndarray] = []
     X_chunks: list[np.ndarray] = []
     t_now, phase = 0.0, _wrap(float(delta))
     status = SimulationStatus.COMPLETED
     v_scale = 0.0
+    flights: dict[tuple[str, ...], Flight] = {(): flight}
 
+    def flight_for(held: tuple[str, ...]) -> Flight:
+        if held not in flights:
+            flights[held] = HeldFlight(osc, held)
+        return flights[held]
+
+    sticks: list[StickingPhase] = []
+    stick: tuple[float, np.ndarray, float] | None = None  # start, state, phase of the phase
+
+    def close(held: tuple[str, ...], ended_by: str) -> None:
+        if not held or stick is None:
+            return
+        t0, X0, p0 = stick
+        hf = flight_for(held)
+        span = t_now - t0
+        if span <= 0.0:  # the held set changed at once (a second stop comes to hold)
+            return
+        tau = np.append(np.arange(0.0, span, dt_sample), span)
+        assert isinstance(hf, HeldFlight)
+        sticks.append(StickingPhase(
+            start=t0, end=t_now, stops="".join(held), times=t0 + tau,
+            forces=hf.pressing(tau, X0, p0), ended_by=ended_by, start_state=X0,
+            start_phase=p0, _force=lambda t, hf=hf, X0=X0, p0=p0: hf.pressing(t, X0, p0)))
+
+    held: tuple[str, ...] = ()
+    released: dict[str, float] = {}  # stops just released -> their separation time
     last: str | None = None  # the stop of the impact that starts this flight
+    switches = 0  # changes of the held set at one instant (a guard against a loop)
     while True:
-        hit, resting = _contact_now(flight, X, phase, views, last)
-        if resting:
-            status = SimulationStatus.STICKING  # at rest on a stop, pushed into it
-            break
+        fl = flight_for(held)
+        free_views = {s: views[s] for s in sides if s not in held}
+        hit, resting = _contact_now(fl, X, free_views, last, released)
+        if hit is None:
+            candidates = list(held) + [s for s in resting if s not in held]
+            chosen = set(holding(osc, X, phase, candidates)) if candidates else set()
+            if chosen != set(held):
+                if chosen - set(held) and "sticking" in ends:
+                    status = SimulationStatus.STICKING
+                    break
+                switches += 1
+                if switches > 4 * len(sides) + 4:
+                    raise RuntimeError(f"the held stops keep changing at t={t_now!r} "
+                                       f"(state {X.tolist()}): a contact-force law that "
+                                       "cannot decide; please report this case")
+                close(held, "release" if chosen < set(held) else "stick")
+                held = tuple(s for s in sides if s in chosen)
+                stick = (t_now, X.copy(), phase) if held else None
+                last = None
+                continue
+        switches = 0
         if hit is None:
             # a start on a stop that leaves it (moving away, or at rest pulled away): its
             # velocity or position is exact only up to rounding, which may show a crossing
             # of that stop a few ulps after the start; it is not an impact
-            after = {s: _ON_STOP * TWO_PI / osc.omega for s in _touching(X, views, last)}
-            hit = next_contact(flight, X, phase, t_end - t_now + _END_ULPS * _EPS * t_end,
-                               after=after)
+            after = {s: _ON_STOP * period for s in _touching(X, free_views, last)}
+            # at rest on a stop that does not hold (its contact force zero within rounding,
+            # or pulling away), or just released: it may leave with zero acceleration
+            for s in resting:
+                if s not in held:
+                    released.setdefault(s, _separation_time(fl, X, phase, views[s]))
+            for s, t_sep in released.items():
+                after[s] = max(after.get(s, 0.0), t_sep)
+            hit = next_contact(fl, X, phase, t_end - t_now + _END_ULPS * _EPS * t_end,
+                               after=after, stops=list(free_views),
+                               releases=fl.release_rows if held else None)
+        released = {}
         duration = hit[0] if hit is not None else max(t_end - t_now, 0.0)
         if trajectory:
             tau = np.arange(0.0, duration, dt_sample)
             t_chunks.append(t_now + np.append(tau, duration))
-            X_chunks.append(flight.samples(np.append(tau, duration), X, phase))
+            X_chunks.append(fl.samples(np.append(tau, duration), X, phase))
         if hit is None:
-            X = flight.state(duration, X, phase)
+            X = fl.state(duration, X, phase)
             phase = _wrap(phase + osc.omega * duration)
             t_now = max(t_now, t_end)
+            close(held, "end")
             break
         tc, X_minus, side = hit
-        v = sign[side] * float(normal[side] @ X_minus[n:])  # speed towards the stop hit
         t_now += tc
         phase = _wrap(phase + osc.omega * tc)
+        if side not in views:  # a release: the contact force of a held stop reached zero
+            stop = next(s for s in held if release_name(s) == side)
+            close(held, "release")
+            X = X_minus.copy()
+            held = tuple(s for s in held if s != stop)
+            stick = (t_now, X.copy(), phase) if held else None
+            released = {stop: _separation_time(flight_for(held), X, phase, views[stop])}
+            last = None
+            continue
+        v = sign[side] * float(normal[side] @ X_minus[n:])  # speed towards the stop hit
         X = X_minus.copy()
         p = views[side].pivot  # s on the stop: x_p = c - sum_{i != p} n_i x_i (n_p = 1)
         X[p] = level[side] - float(np.delete(normal[side], p) @ np.delete(X_minus[:n], p))
-        X[n:] = jump[side] @ X_minus[n:]
-        if views[side].restitution == 0.0:  # plastic: s' = 0 exactly, not up to rounding
-            X[n + p] = -float(np.delete(normal[side], p) @ np.delete(X[n:], p))
+        if held:  # an impact while stops are held: those whose impulses press them stay
+            close(held, "impact")
+            X[n:], kept = impact_with_held(osc, X_minus[n:], side, held)
+            held = tuple(s for s in sides if s in kept)
+            stick = (t_now, X.copy(), phase) if held else None
+        else:
+            X[n:] = jump[side] @ X_minus[n:]
+            if views[side].restitution == 0.0:  # plastic: s' = 0 exactly, not up to rounding
+                X[n + p] = -float(np.delete(normal[side], p) @ np.delete(X[n:], p))
         last = side
         times.append(t_now)
         vels.append(v)
@@ -377,17 +512,21 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         states.append(X.copy())
         hits.append(side)
         v_scale = max(v_scale, v)
-        if v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(
-                flight, X, phase, normal[side], level[side], v):
+        if views[side].restitution > 0.0 and (
+                v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(
+                    fl, X, phase, normal[side], level[side], v)):
             status = SimulationStatus.CHATTER
+            close(held, "chatter")
             break
         if len(times) >= max_impacts:
             status = SimulationStatus.MAX_IMPACTS
+            close(held, "end")
             break
         if t_now >= t_end:  # an impact at the end of the span, up to rounding: the last
             if trajectory:
                 t_chunks.append(np.array([t_now]))
                 X_chunks.append(X[None, :].copy())
+            close(held, "end")
             break
     if status is not SimulationStatus.COMPLETED:
         last = (f"; last impact on stop {hits[-1]!r} at speed {vels[-1]:.3g}" if hits else "")
@@ -402,5 +541,5 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         final_time=t_now, final_state=X, final_phase=phase, status=status,
         t=np.concatenate(t_chunks) if trajectory else None,
         X=np.vstack(X_chunks) if trajectory else None,
-        impact_stops="".join(hits),
+        impact_stops="".join(hits), sticking=tuple(sticks),
     )

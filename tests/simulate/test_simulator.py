@@ -79,11 +79,17 @@ def test_trajectory_stays_behind_the_stop(paper):
 
 
 def test_sticking_with_zero_restitution_is_reported(paper):
+    """Asked to (stop_at), the run stops where the plastic impact starts a sticking phase;
+    by default it goes through it (the phase recorded, the stop never passed)."""
     osc = paper.replace(R=0.0, b=0.0, omega=0.5)
-    res = simulate(osc, [-0.5, 0.0, 0.0, 0.0], 0.0, 20.0)
+    res = simulate(osc, [-0.5, 0.0, 0.0, 0.0], 0.0, 20.0, stop_at=("sticking",))
     assert res.status is SimulationStatus.STICKING
-    assert "sticks" in res.message
+    assert "sticking" in res.message
     assert res.impact_velocities[-1] > 0
+    through = simulate(osc, [-0.5, 0.0, 0.0, 0.0], 0.0, 20.0, trajectory=True)
+    assert through.success and through.sticking
+    assert through.sticking[0].start == res.final_time
+    assert through.X[:, 0].max() <= 1e-13
 
 
 def test_start_on_the_stop(paper):
@@ -91,8 +97,10 @@ def test_start_on_the_stop(paper):
     res = simulate(paper.replace(b=0.0), [0.0, 0.0, 0.5, 0.0], 0.0, 1.0)
     assert res.impact_times[0] == 0.0
     assert res.impact_velocities[0] == 0.5
-    res = simulate(paper.replace(b=0.0), [0.0, 0.0, 0.0, 0.0], 0.0, 1.0)
+    res = simulate(paper.replace(b=0.0), [0.0, 0.0, 0.0, 0.0], 0.0, 1.0, stop_at="sticking")
     assert res.status is SimulationStatus.STICKING
+    res = simulate(paper.replace(b=0.0), [0.0, 0.0, 0.0, 0.0], 0.0, 1.0)
+    assert res.success and res.sticking[0].start == 0.0
 
 
 def test_bad_inputs(paper):
@@ -143,7 +151,8 @@ def test_plastic_impact_on_a_clearance_sticks(make):
     ``-x1''`` pushes the ball into the wall: sticking at that impact, never through it (the
     sticking test used to miss the relative coordinate: COMPLETED, x2 - x1 up to 29.5)."""
     osc = make()
-    res = simulate(osc, np.array([0, 0, 0, 1.0]), 0.0, 30, trajectory=True)
+    res = simulate(osc, np.array([0, 0, 0, 1.0]), 0.0, 30, trajectory=True,
+                   stop_at=("sticking",))
     assert res.status is SimulationStatus.STICKING
     assert res.impact_times.size == 1 and res.final_time == res.impact_times[0]
     assert np.max(res.X[:, 1] - res.X[:, 0]) <= 1.0 + 1e-12
@@ -156,7 +165,8 @@ def test_plastic_impact_on_a_clearance_sticks(make):
 def test_plastic_impact_with_a_weak_spring_never_passes_the_wall():
     """Issue 28, 1.2: a weak spring on the ball; x2 - x1 overshot to 1.78 before STICKING."""
     osc = _impact_damper(R=0.0, K=np.diag([1.0, 0.01]))
-    res = simulate(osc, np.array([0, 0, 0, 1.0]), 0.0, 30, trajectory=True)
+    res = simulate(osc, np.array([0, 0, 0, 1.0]), 0.0, 30, trajectory=True,
+                   stop_at=("sticking",))
     s = res.X[:, 1] - res.X[:, 0]
     assert np.max(np.abs(s)) <= 1.0 + 1e-12
     assert res.status is SimulationStatus.STICKING
