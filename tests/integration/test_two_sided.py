@@ -418,8 +418,11 @@ def one_dof(**kw):
 
 def test_sticking_at_the_lower_stop():
     # at rest on x = -b_low with x'' = F cos(pi) + b_low = -0.5 < 0: pushed into the stop
-    res = ic.simulate(one_dof(), [-0.5, 0.0], math.pi, 1.0)
+    res = ic.simulate(one_dof(), [-0.5, 0.0], math.pi, 1.0, stop_at=("sticking",))
     assert res.status is SimulationStatus.STICKING
+    # not asked to stop: held on the stop from t = 0 (issue 30)
+    res = ic.simulate(one_dof(), [-0.5, 0.0], math.pi, 1.0)
+    assert res.sticking[0].stops == "L" and res.sticking[0].start == 0.0
     # at rest there with the force pulling away (x'' = 1.5): it leaves the stop, and its
     # first impact is on the upper stop, after a flight across the clearance
     res = ic.simulate(one_dof(), [-0.5, 0.0], 0.0, 0.2)
