@@ -74,7 +74,11 @@ def test_a_codim2_point_of_a_2_2_motion_holds_both_critical_multipliers(branch_2
              "states": cv.state_k.values[nearest]}
     orbit = multi_impact_orbit(osc, 2, 2, guess)
     mu = np.linalg.eigvals(orbit.G)
-    assert np.min(np.abs(mu + 1.0)) < 1e-7 and np.min(np.abs(mu - 1.0)) < 1e-7, mu
+    # at a fold the motion moves as the square root of the distance to it: a point known
+    # to 1e-13 gives the multipliers to about 1e-7 (measured 2e-8 and 9e-8); the others
+    # are far from +-1
+    assert np.sum(np.abs(mu + 1.0) < 1e-5) == 1 and np.sum(np.abs(mu - 1.0) < 1e-5) == 1, mu
+    assert np.sort(np.minimum(np.abs(mu + 1.0), np.abs(mu - 1.0)))[2] > 0.1, mu
     # the multipliers stored with the point are the motion's
     stored = point.codim2_multipliers.values
-    assert np.min(np.abs(stored + 1.0)) < 1e-7 and np.min(np.abs(stored - 1.0)) < 1e-7
+    assert np.min(np.abs(stored + 1.0)) < 1e-5 and np.min(np.abs(stored - 1.0)) < 1e-5
