@@ -32,7 +32,8 @@ def _points(ds) -> list[tuple[str, float, float, float, str]]:
                     ds.codim2_status.values.tolist(), strict=True))
 
 
-def test_codim2_points_of_an_n1_motion_by_shooting_are_those_of_the_closed_form(system):
+def test_codim2_points_of_an_n1_motion_by_shooting_are_those_of_the_closed_form(system,
+                                                                             tmp_path):
     closed = ic.curve(None, None, "PD", start=ic.continuation(system, 1, "omega", (1.6, 1.9),
                                                               detect=("PD",)), bounds=BOX)
     physical = next(q for q in ic.periodic_orbits(system, 1) if q.physical)
@@ -50,9 +51,13 @@ def test_codim2_points_of_an_n1_motion_by_shooting_are_those_of_the_closed_form(
         # both located within their stated precisions (in the plane of the parameters)
         assert max(abs(omega - twin[1]), abs(b - twin[2])) <= precision + twin[3], label
     assert max(p[3] for p in found) < 1e-9
-    # the variables of an N-1 curve's codim-2 points, on the same dimension
-    assert {k for k in closed.data_vars if k.startswith("codim2_")} <= set(
-        by_shooting.data_vars)
+    # the variables of an N-1 curve's codim-2 points, on the same dimension, kept by a file
+    names = [k for k in closed.data_vars if k.startswith("codim2_")]
+    assert set(names) <= set(by_shooting.data_vars)
+    back = ic.load(ic.save(by_shooting, tmp_path / "curve.nc"))
+    for name in names:
+        assert back[name].dims == by_shooting[name].dims == closed[name].dims
+        np.testing.assert_array_equal(back[name].values, by_shooting[name].values)
 
 
 def test_a_codim2_point_of_a_2_2_motion_holds_both_critical_multipliers(branch_22):
