@@ -273,9 +273,9 @@ def test_a_pd_curve_in_an_element_has_a_multiplier_minus_one_at_its_points(paper
 
 def test_a_curve_starts_from_a_branch_in_an_element(paper):
     osc = paper.replace(b=0.0, omega=1.75)
-    branch = ic.continuation(osc, 1, "k2", (0.5, 2.0), detect=["PD"], progress=False)
+    branch = ic.continuation(osc, 1, "k2", (0.9, 1.3), detect=["PD"], progress=False)
     c = curve(None, None, "PD", start=branch, parameters=("k2", "omega"),
-              bounds={"k2": (0.5, 2.0), "omega": (1.7, 1.8)}, detect_codim2_points=False,
+              bounds={"k2": (0.9, 1.3), "omega": (1.7, 1.8)}, detect_codim2_points=False,
               progress=False)
     first = int(np.flatnonzero(branch.special_label.values == "PD")[0])
     (cross,) = curve_crossings(c, "omega", 1.75)
