@@ -484,8 +484,11 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
         Which special point (see ``start``).
     parameters : (str, str)
         ``(p1, p2)``, any two of ``omega, b, R, eta, alpha, beta, F0`` (with a
-        damping matrix C: ``omega, b, R, F0``). ``p2`` is the continuation parameter
-        of the core; ``p1`` is an unknown.
+        damping matrix C: ``omega, b, R, F0``) and the elements of the model (``k2``,
+        ``M[1,2]``, ``K[1,2]``, ``F[2]``, ...; set by their
+        :class:`~impactcont.model.parameters.ModelParameter`). ``p2`` is the continuation
+        parameter of the core; ``p1`` is an unknown. From a branch of N-p motions ``p1`` is
+        the branch's parameter (any parameter of :func:`impactcont.multi_impact_curve`).
     bounds : mapping or pair of pairs
         The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
     root : {+1, -1}, optional
@@ -516,7 +519,8 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     xarray.Dataset
         Dimensions ``point``, ``multiplier``, ``component``, ``codim2`` (and ``event``
         with `events`); schema in :mod:`impactcont.dataset.curves` and
-        ``docs/two_parameter.md``.
+        ``docs/two_parameter.md``. From a branch of N-p motions: the N-p curve dataset of
+        :func:`impactcont.multi_impact_curve`, with its codim-2 points on ``codim2`` too.
 
     Raises
     ------

@@ -26,6 +26,22 @@ def test_a_strong_resonance_has_one_name_on_every_curve(kind, multipliers, label
     assert not {"SN+SN", "PD+PD"} & set(CODIM2_LABELS)
 
 
+@pytest.mark.parametrize("test, multipliers, label", [
+    ("SN", [1.0, 1.0 + 1e-5, 0.3], "R1"),     # the pair of the NS curve met at +1
+    ("PD", [-1.0, -1.0 - 1e-5, 0.2], "R2"),   # ... at -1
+    ("SN", [1.0, 0.5, 0.2], "NS+SN"),          # one multiplier +1: a fold on the NS curve
+])
+def test_an_ns_curve_that_goes_on_through_a_strong_resonance_names_it(test, multipliers,
+                                                                       label):
+    """An NS curve of N-p motions does not end at R1/R2 (its bialternate test goes on as a
+    neutral saddle): there its SN or PD test vanishes with a double +1 or -1."""
+    from types import SimpleNamespace
+
+    from impactcont.detection.codim2 import _name
+
+    assert _name("NS", test, SimpleNamespace(multipliers=np.array(multipliers))) == label
+
+
 def test_every_codim2_label_has_its_standard_name_in_the_docs():
     from pathlib import Path
 
