@@ -10,6 +10,7 @@ parameter set by hand, not through :mod:`impactcont.model.parameters`); the same
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -185,3 +186,18 @@ def test_a_motion_refuses_the_arguments_of_the_oscillator_map(n1_motion, kwargs,
         ic.stability_map(n1_motion, parameters=("omega", "b"))
     with pytest.raises(ic.ParameterError, match="osc must be an ImpactOscillator, or a motion"):
         ic.stability_map("paper", 1, OMEGA, GAP)
+
+
+def test_impactcont_plot_draws_a_map_over_other_parameters(tmp_path):
+    from impactcont.scene.figures import draw_map, plot_file
+
+    ds = ic.stability_map(paper(omega=1.2), [1, 2], parameters=("k2", "R"),
+                          grid={"k2": [0.6, 1.0, 1.4, 1.8], "R": [0.3, 0.6, 0.9]})
+    ic.save(ds, tmp_path / "k2_R.nc")
+    written = plot_file(tmp_path / "k2_R.nc", tmp_path / "k2_R.png")
+    assert [Path(p).read_bytes()[:8] for p in written] == [b"\x89PNG\r\n\x1a\n"]
+    fig = draw_map({"maps": ds})
+    panel = fig.axes[0]
+    assert panel.get_xlabel() == "spring k2"
+    assert panel.get_ylabel() == "coefficient of restitution $R$"
+    assert panel.get_xlim()[0] < 0.6 < 1.8 < panel.get_xlim()[1]
