@@ -54,9 +54,9 @@ class SpecialPoint:
         :class:`~impactcont.orbit.multi_impact.MultiImpactOrbit`).
     bracket : (float, float) or None
         The continued parameter at the two accepted points around it, when known.
-    delta : float
-        Forcing phase at the (first) impact; default ``u[0]`` when `u` is given as
-        ``[delta]`` by an N-1 detector, else the motion's ``delta``.
+    delta : float or None
+        Forcing phase at the (first) impact: given by an N-1 detector (`u` is then
+        ``[delta]``), else the motion's ``delta`` (None for a motion without one).
     codimension : int
         1 on a branch (default: the kind's own for a Label), 2 for a point of a curve.
     """
@@ -79,7 +79,7 @@ class SpecialPoint:
             raise ValueError("a special point needs its unknowns u or its phase delta")
         if self.u is None:
             object.__setattr__(self, "u", np.array([float(self.delta)]))
-        if self.delta is None:
+        if self.delta is None and getattr(self.orbit, "delta", None) is not None:
             object.__setattr__(self, "delta", float(self.orbit.delta))
         if self.codimension is None:
             kind = self.kind

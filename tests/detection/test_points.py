@@ -37,6 +37,8 @@ def test_an_n1_point_given_its_phase_and_an_n_p_point_given_its_unknowns():
     codim2 = SpecialPoint.on_curve("PD+NS", x, ORBIT, 2, 1e-10, "located")
     assert codim2.codimension == 2 and codim2.value == 0.1 and codim2.u.tolist() == [0.3, 1.8]
     assert np.array_equal(codim2.x, x) and codim2.kind == "PD+NS" and codim2.bracket is None
+    bare = SpecialPoint.on_curve("R1", x, types.SimpleNamespace(), 0, 1e-10, "bracketed")
+    assert bare.delta is None  # a motion without a phase
 
 
 def test_bad_records_are_refused():
