@@ -46,7 +46,6 @@ impact (``t* -> 0`` or ``T``, label ``GR+ZV``).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from typing import Any, Protocol
@@ -56,6 +55,7 @@ import numpy as np
 from impactcont.core.locate import dip_bottom, parts_beside_poles, zero_precision
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.detection.locator import locate_zero, twins
+from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import event_noise
 from impactcont.vocabulary import Label
 
@@ -115,31 +115,10 @@ _UNIT_TOL = 1e-6
 _POLE_FREE = (Label.PD, Label.NS)  # tests made free of G's pole at h2 = 0 (eq. 25)
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class Codim2Point:
-    """A codim-2 point on a curve.
-
-    Attributes
-    ----------
-    label : str
-        ``"A+B"`` (curve kind A meets kind B), ``"R1"`` or ``"R2"``.
-    x : ndarray
-        ``[u, lam]`` of the curve problem at the point.
-    orbit : PeriodicOrbit or MultiImpactOrbit
-    point : int
-        Index of the nearest accepted curve point.
-    precision : float
-        Bound on the error in the plane of the two parameters.
-    status : str
-        ``"located"`` or ``"bracketed"``.
-    """
-
-    label: str
-    x: np.ndarray
-    orbit: Any
-    point: int
-    precision: float
-    status: str
+#: A codim-2 point of a curve: the one special-point record (codimension 2) built from
+#: ``(label, x, orbit, point, precision, status)``, ``x = [u, lam]`` of the curve problem
+#: (:meth:`~impactcont.detection.points.SpecialPoint.on_curve`).
+Codim2Point = SpecialPoint.on_curve
 
 
 def grazing_other_gap(problem: Any, orbit: Any, tangency_time: float) -> float:
@@ -290,8 +269,8 @@ def _intervals(step: _Step, test: str, tests_a: dict[str, float], tests_b: dict[
 
 
 def detect_codim2(problem: Codim2Problem, xs: list[np.ndarray], orbits: list[Any],
-                  tests: list[dict[Label, float]], found: list[Codim2Point] | None = None
-                  ) -> list[Codim2Point]:
+                  tests: list[dict[Label, float]], found: list[SpecialPoint] | None = None
+                  ) -> list[SpecialPoint]:
     """Locate the codim-2 points between consecutive accepted points of a curve.
 
     Parameters
@@ -322,8 +301,8 @@ def detect_codim2(problem: Codim2Problem, xs: list[np.ndarray], orbits: list[Any
     return found
 
 
-def _without_grazing_twins(problem: Codim2Problem, points: list[Codim2Point]
-                           ) -> list[Codim2Point]:
+def _without_grazing_twins(problem: Codim2Problem, points: list[SpecialPoint]
+                           ) -> list[SpecialPoint]:
     """The codim-2 points of one step without each ``A+GR`` that is the grazing of a
     located ``A+ZV`` there (a zero-velocity impact is a grazing contact: the GR test
     touches zero at it, as on branches, :func:`~impactcont.detection.locator.
@@ -345,9 +324,9 @@ def _without_grazing_twins(problem: Codim2Problem, points: list[Codim2Point]
 
 def _codim2_on_step(problem: Codim2Problem, xs: list[np.ndarray],
                     tests: list[dict[Label, float]], k: int, arclength: np.ndarray
-                    ) -> list[Codim2Point]:
+                    ) -> list[SpecialPoint]:
     """The codim-2 points between accepted points `k` and ``k + 1``."""
-    found: list[Codim2Point] = []
+    found: list[SpecialPoint] = []
     step = _Step(problem, xs[k], xs[k + 1])
     for test in problem.codim2_tests:
         if _ends_at_resonance(problem, test, xs[k], xs[k + 1]):
@@ -402,7 +381,7 @@ def _ends_at_resonance(problem: Codim2Problem, test: str, xa: np.ndarray, xb: np
 
 
 def _codim2_in(problem: Codim2Problem, step: _Step, test: str, k: int, lo: float, hi: float,
-               ga: float, gb: float) -> Codim2Point | None:
+               ga: float, gb: float) -> SpecialPoint | None:
     """The codim-2 point where `test` changes sign in ``[lo, hi]`` of step `k`, or None."""
     xs = (step.xa, step.xb)
     problem.accept(step.xa[:-1], step.xa[-1])
@@ -429,10 +408,10 @@ def _codim2_in(problem: Codim2Problem, step: _Step, test: str, k: int, lo: float
     p1, p2 = problem.plane(x)
     log.info("%s on the %s curve at %s=%.10g, %s=%.10g (%s)", label, problem.kind,
              problem.parameters[0], p1, problem.parameters[1], p2, status)
-    return Codim2Point(label, x, orbit, nearest, precision, status)
+    return SpecialPoint.on_curve(label, x, orbit, nearest, precision, status)
 
 
-def codim2_record(problem: Any, point: Codim2Point) -> dict[str, Any]:
+def codim2_record(problem: Any, point: SpecialPoint) -> dict[str, Any]:
     """The fields of a codim-2 point as the dataset stores them
     (:func:`impactcont.dataset.curves.codim2_data`): label, the values of ``omega``, ``b``
     and the curve's parameters, the impact phase wrapped to ``[-pi, pi]``, the nearest
