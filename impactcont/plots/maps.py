@@ -412,6 +412,10 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
                          width: float = 7.0, title: str | None = None) -> Any:
     """One :func:`two_parameter_diagram` panel per N of the map, one legend; returns the Figure.
 
+    The map of an N-p motion family (:func:`impactcont.multi_impact_map`, or
+    :func:`impactcont.stability_map` of a motion) has one panel,
+    :func:`multi_impact_map_diagram`, `width` wide.
+
     Parameters
     ----------
     map_ds : xarray.Dataset
@@ -430,10 +434,14 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
     """
     import matplotlib.pyplot as plt
 
-    validate_map_dataset(map_ds)
     if isinstance(ncols, bool) or not isinstance(ncols, (int, np.integer)) or ncols < 1:
         raise ValueError(f"ncols must be a positive integer; got {ncols!r}")
     width = check_width(width)
+    if isinstance(map_ds, xr.Dataset) and dataset_tag(map_ds) == "multi_impact_map":
+        fig, ax = plt.subplots(figsize=(width, 0.8 * width + 1.6), layout="constrained")
+        two_parameter_diagram(map_ds, curves, ax=ax, title=title)
+        return fig
+    validate_map_dataset(map_ds)
     curve_list = _curves(curves)
     Ns = [int(k) for k in map_ds["N"].values]
     cols = 1 if width < 5.0 else min(ncols, len(Ns))

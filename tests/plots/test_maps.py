@@ -285,3 +285,12 @@ def test_two_parameter_diagram_draws_the_map_of_a_family_as_its_own_diagram(fami
     assert ax.get_legend() is not None
     with pytest.raises(ValueError, match="got curves with the map of an N-p motion family"):
         two_parameter_diagram(family, [], ax=_family_axes())
+    fig = two_parameter_figure(family, width=3.5)
+    try:
+        (ax,) = fig.get_axes()
+        assert ax.get_title().replace("\n", " ") == multi_map_title(family)  # wrapped to fit
+        assert fig.get_size_inches()[0] == 3.5
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
