@@ -437,9 +437,10 @@ def locate_user_events(problem: Any, u: Any, lam: Any, tangent: Any, functions: 
         nearest = k if (np.max(np.abs(here - ends[0])) <= np.max(np.abs(here - ends[1]))) \
             else k + 1
         orbit = orbit_at(ep.u, ep.lam)
+        # on a curve (two parameters) an event's zero is a point of codimension two
         event = SpecialPoint(label=ep.label, value=ep.lam, u=ep.u, point=nearest,
                              bracket=ep.bracket, precision=ep.precision, status=ep.status,
-                             orbit=orbit)
+                             orbit=orbit, codimension=1 if position is None else 2)
         log.info("event %s at %s (%s, precision %.1e)", event.name,
                  _where(orbit, parameter), event.status, event.precision)
         found.append(event)

@@ -400,3 +400,38 @@ def test_ctrl_c_while_locating_the_second_fold_keeps_the_first(monkeypatch):
     assert np.min(np.abs(folds - float(ds["special_b"][0]))) < 1e-12
     assert json.loads(ds.attrs["options"])["interrupted"] is True
     assert ds.attrs["interrupted"] == 1
+
+
+def test_a_user_event_is_the_one_record_codimension_two_on_a_curve():
+    """Issue 29, 2: a user event's zero is a SpecialPoint; on a curve (a position in two
+    parameters) it is a point of codimension two."""
+    from impactcont.core import ContinuationOptions, continue_branch
+    from impactcont.detection import SpecialPoint
+    from impactcont.detection.special_points import (
+        check_user_functions,
+        locate_user_events,
+        user_values,
+    )
+    from impactcont.problems import PeriodicBranchProblem
+
+    osc = paper(b=0.0, omega=1.5)
+    problem = PeriodicBranchProblem(osc, 1, "omega")
+    delta0 = next(o for o in ic.periodic_orbits(osc, 1) if o.physical).delta
+    result = continue_branch(problem, np.array([delta0]), 1.5,
+                             ContinuationOptions(bounds=(1.4, 2.0)))
+    functions = check_user_functions({"v07": velocity_event})
+    orbits = [problem.orbit(u[0], lam) for u, lam in zip(result.u, result.lam, strict=True)]
+    values = user_values(functions, orbits)
+    tangent = [[0.0, t[-1]] for t in result.tangent]
+
+    def at(u, lam):
+        return problem.orbit(u[0], lam)
+
+    on_branch = locate_user_events(problem, result.u, result.lam, tangent, functions, values, at)
+    on_plane = locate_user_events(problem, result.u, result.lam, tangent, functions, values, at,
+                                  position=lambda u, lam: (lam, 0.0))
+    assert on_branch and all(isinstance(e, SpecialPoint) for e in on_branch + on_plane)
+    assert {e.codimension for e in on_branch} == {1}
+    assert {e.codimension for e in on_plane} == {2}
+    assert [e.name for e in on_branch] == ["v07"] * len(on_branch)
+    assert all(abs(e.orbit.impact_velocity - V_LEVEL) < 1e-9 for e in on_branch)
