@@ -48,6 +48,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER, StopView
+from impactcont.simulate.chatter import ChatterPoint, accumulation
 from impactcont.simulate.contact import next_contact
 from impactcont.simulate.flight import Flight, flight_of
 from impactcont.simulate.sticking import (
@@ -74,7 +75,7 @@ _EPS = float(np.finfo(float).eps)
 # chatter, whatever chatter_velocity says
 _BOUNCE_ULPS = 1e3
 # the ends a simulation may be asked to stop at (stop_at=)
-_STOP_AT = {"sticking": "STICKING"}
+_STOP_AT = {"sticking": "STICKING", "chatter": "CHATTER"}
 # separation time after a release capped at this fraction of the fastest period
 _RELEASE_SPAN = 1e-4
 # an impact within this many ulps of the end of the span simulated belongs to it (a periodic
@@ -88,9 +89,10 @@ class SimulationStatus(enum.Enum):
     COMPLETED = "reached the requested number of forcing periods"
     STICKING = ("a stop coordinate came to rest on its stop, pushed into it (a sticking "
                 "phase starts), and stop_at asked to stop there")
-    CHATTER = ("accumulating impacts (complete chatter): the impact velocity fell below the "
-               "chatter threshold, or the next bounce would rise too little above the stop to "
-               "be resolved; stopped rather than resolve infinitely many impacts")
+    CHATTER = ("accumulating impacts (complete chatter), and stop_at asked to stop there: "
+               "the accumulation point would be taken, the impact velocity fell below "
+               "chatter_velocity, or the next bounce would rise too little above the stop to "
+               "be resolved")
     MAX_IMPACTS = "reached max_impacts"
 
 
@@ -121,6 +123,9 @@ class SimulationResult:
         The sticking phases, in time order (:class:`impactcont.simulate.sticking.
         StickingPhase`: start, end, the stops held, their contact forces); each holds one
         set of stops, so a phase in which a second stop comes to hold is two phases.
+    chatter : tuple of ChatterPoint
+        The accumulation points of complete chatter (:mod:`impactcont.simulate.chatter`):
+        where the impacts on a stop accumulate and a sticking phase starts, in time order.
     """
 
     impact_times: np.ndarray
@@ -135,6 +140,7 @@ class SimulationResult:
     X: np.ndarray | None = None
     impact_stops: str = ""
     sticking: tuple[StickingPhase, ...] = ()
+    chatter: tuple[ChatterPoint, ...] = ()
 
     @property
     def message(self) -> str:
@@ -325,7 +331,8 @@ def _separation_time(flight: Flight, X: np.ndarray, phase: float, view: StopView
 def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: float, *,
              trajectory: bool = False, samples_per_period: int = 200,
              max_impacts: int = 1_000_000, chatter_velocity: float = 1e-9,
-             stop_at: tuple[str, ...] = ()) -> SimulationResult:
+             stop_at: tuple[str, ...] = (), chatter_tolerance: float = 1e-6
+             ) -> SimulationResult:
     """Integrate the impact oscillator exactly from a given state, through sticking phases.
 
     Parameters
@@ -348,16 +355,23 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     max_impacts : int
         Stop after this many impacts.
     chatter_velocity : float
-        Stop with status CHATTER when an impact velocity falls below this
-        fraction of the largest impact velocity seen (or below it in absolute
-        value, if none yet), or when the bounce after an impact would rise less
-        than 1000 ulps of the stop position above it (``v^2 / (2 |x_j''|)``: below
+        With ``"chatter"`` in `stop_at` only: also stop with status CHATTER when an impact
+        velocity falls below this fraction of the largest impact velocity seen (or below
+        it in absolute value, if none yet), or when the bounce after an impact would rise
+        less than 1000 ulps of the stop position above it (``v^2 / (2 |x_j''|)``: below
         that the motion cannot be told from rounding).
     stop_at : tuple of str
-        Ends to stop at rather than simulate through: ``("sticking",)`` stops with status
-        STICKING where a sticking phase would start. Empty (the default): sticking phases
-        are simulated (:mod:`impactcont.simulate.sticking`) and recorded in
-        ``result.sticking``.
+        Ends to stop at rather than simulate through: ``"sticking"`` stops with status
+        STICKING where a sticking phase would start, ``"chatter"`` with status CHATTER
+        where complete chatter would be jumped to its accumulation point. Empty (the
+        default): both are simulated (:mod:`impactcont.simulate.sticking`,
+        :mod:`impactcont.simulate.chatter`) and recorded in ``result.sticking`` and
+        ``result.chatter``.
+    chatter_tolerance : float
+        In ``(0, 1)``: how far the local quadratic model of a chatter must hold for its
+        accumulation point to be taken, ``|a'| (t_inf - t_k) <= chatter_tolerance * a``
+        (:func:`~impactcont.simulate.chatter.accumulation`); smaller resolves more
+        impacts before the jump, whose error is ``O(v_k^2)`` in the last impact speed.
 
     Returns
     -------
@@ -385,6 +399,11 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     if int(samples_per_period) < 2:
         raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
     ends = _check_stop_at(stop_at)
+    if isinstance(chatter_tolerance, bool) or not isinstance(chatter_tolerance, numbers.Real) \
+            or not 0.0 < chatter_tolerance < 1.0:
+        raise ParameterError(f"chatter_tolerance must be a number in (0, 1) (the relative "
+                             f"change of the acceleration allowed over an accumulation); got "
+                             f"{chatter_tolerance!r}")
     flight = Flight(osc)
     n = osc.n
     sides = list(osc.stops.names)
@@ -410,6 +429,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         return flights[held]
 
     sticks: list[StickingPhase] = []
+    chatter: list[ChatterPoint] = []
     stick: tuple[float, np.ndarray, float] | None = None  # start, state, phase of the phase
 
     def close(held: tuple[str, ...], ended_by: str) -> None:
@@ -512,12 +532,38 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         states.append(X.copy())
         hits.append(side)
         v_scale = max(v_scale, v)
-        if views[side].restitution > 0.0 and (
-                v < chatter_velocity * max(v_scale, 1.0) or _unresolved_bounce(
-                    fl, X, phase, normal[side], level[side], v)):
-            status = SimulationStatus.CHATTER
-            close(held, "chatter")
-            break
+        if views[side].restitution > 0.0:
+            fl = flight_for(held)
+            if "chatter" in ends and (v < chatter_velocity * max(v_scale, 1.0)
+                                      or _unresolved_bounce(fl, X, phase, normal[side],
+                                                            level[side], v)):
+                status = SimulationStatus.CHATTER
+                close(held, "chatter")
+                break
+            both = tuple(s for s in sides if s in held or s == side)
+            point = accumulation(fl, lambda both=both: flight_for(both), X, phase,
+                                 views[side], [s for s in sides if s not in both],
+                                 t_end - t_now, chatter_tolerance)
+            if point is not None:
+                if "chatter" in ends:
+                    status = SimulationStatus.CHATTER
+                    close(held, "chatter")
+                    break
+                dt, X_stick, acc, resolved = point
+                hf = flight_for(both)
+                if trajectory:
+                    tau = np.append(np.arange(0.0, dt, dt_sample), dt)
+                    t_chunks.append(t_now + tau)
+                    X_chunks.append(hf.samples(tau, X_stick, phase))
+                close(held, "chatter")
+                X = hf.state(dt, X_stick, phase)
+                t_now += dt
+                phase = _wrap(phase + osc.omega * dt)
+                chatter.append(ChatterPoint(
+                    time=t_now, stop=side, last_impact=times[-1], last_velocity=v,
+                    acceleration=acc, restitution=views[side].restitution,
+                    resolved=resolved))
+                stick = (t_now, X.copy(), phase) if held else None
         if len(times) >= max_impacts:
             status = SimulationStatus.MAX_IMPACTS
             close(held, "end")
@@ -541,5 +587,5 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         final_time=t_now, final_state=X, final_phase=phase, status=status,
         t=np.concatenate(t_chunks) if trajectory else None,
         X=np.vstack(X_chunks) if trajectory else None,
-        impact_stops="".join(hits), sticking=tuple(sticks),
+        impact_stops="".join(hits), sticking=tuple(sticks), chatter=tuple(chatter),
     )
