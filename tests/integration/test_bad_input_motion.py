@@ -75,13 +75,13 @@ def _first_crossing_expm(osc, X0, delta, t_lo, t_hi):
 def test_slow_forcing_chatter_ends_in_bounded_cost(evaluations, caplog):
     """The issue's call: constant force beyond the stop, chatter at t = 4.39; it hung."""
     osc = _slow()
-    res = simulate(osc, np.zeros(4), 0.0, 1.0)
+    res = simulate(osc, np.zeros(4), 0.0, 1.0, stop_at=("chatter",))
     assert evaluations["times"] < _BUDGET
     assert res.status is SimulationStatus.CHATTER
     assert "accumulating impacts" in res.message
     assert "simulation stopped at t=4.385" in caplog.text and "impacts" in caplog.text
     # the same motion on a horizon of 628 time units (one window of the old search)
-    short = simulate(osc, np.zeros(4), 0.0, 1e-6)
+    short = simulate(osc, np.zeros(4), 0.0, 1e-6, stop_at=("chatter",))
     assert short.status is SimulationStatus.CHATTER
     k = 10  # chatter amplifies rounding impact after impact: compare the first ones
     np.testing.assert_allclose(res.impact_times[:k], short.impact_times[:k], rtol=1e-9)
@@ -98,7 +98,7 @@ def test_slow_forcing_quasi_static_approach(evaluations):
     forcing period (with an UnresolvedMotionWarning)."""
     osc = _slow(b=1.5)
     delta = -0.5 * math.pi  # F cos(omega t + delta) starts at zero
-    res = simulate(osc, np.zeros(4), delta, 1.0)
+    res = simulate(osc, np.zeros(4), delta, 1.0, stop_at=("chatter",))
     assert evaluations["times"] < _BUDGET
     assert res.status is SimulationStatus.CHATTER  # pressed onto the stop ever harder
     # the start's transient has decayed (exp(-0.038 t)): x1 is the forced response

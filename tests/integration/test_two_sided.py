@@ -430,7 +430,7 @@ def test_sticking_at_the_lower_stop():
 
 
 def test_chatter_at_the_lower_stop():
-    res = ic.simulate(one_dof(), [-0.5, 0.05], math.pi, 1.0)
+    res = ic.simulate(one_dof(), [-0.5, 0.05], math.pi, 1.0, stop_at=("chatter",))
     assert res.status is SimulationStatus.CHATTER
     assert set(res.impact_stops) == {"L"}
     v = res.impact_velocities
