@@ -142,6 +142,43 @@ class SimulationResult:
     sticking: tuple[StickingPhase, ...] = ()
     chatter: tuple[ChatterPoint, ...] = ()
 
+    def sticking_arrays(self) -> dict[str, np.ndarray]:
+        """The sticking phases and the chatter accumulation points as flat arrays (one
+        entry per phase, per force sample, per accumulation point), as a dataset stores
+        them.
+
+        Returns
+        -------
+        dict
+            ``sticking_start``, ``sticking_end`` (float), ``sticking_stops``,
+            ``sticking_ended_by`` (str), one per phase; ``force_time``, ``force``
+            (the pressing force, ``>= 0``), ``force_phase`` (the index of its phase),
+            ``force_stop`` (the stop it presses), one per sample of each held stop;
+            ``chatter_time`` (the accumulation point), ``chatter_stop``,
+            ``chatter_last_impact``, ``chatter_last_velocity``, one per point.
+        """
+        phases = self.sticking
+        samples = [(k, p.stops[j], p.times, p.forces[:, j]) for k, p in enumerate(phases)
+                   for j in range(len(p.stops))]
+        return {
+            "sticking_start": np.array([p.start for p in phases], dtype=float),
+            "sticking_end": np.array([p.end for p in phases], dtype=float),
+            "sticking_stops": np.array([p.stops for p in phases], dtype=str),
+            "sticking_ended_by": np.array([p.ended_by for p in phases], dtype=str),
+            "force_time": np.concatenate([s[2] for s in samples] or [np.zeros(0)]),
+            "force": np.concatenate([s[3] for s in samples] or [np.zeros(0)]),
+            "force_phase": np.concatenate([np.full(s[2].size, s[0]) for s in samples]
+                                          or [np.zeros(0, dtype=int)]).astype(np.int64),
+            "force_stop": np.concatenate([np.full(s[2].size, s[1]) for s in samples]
+                                         or [np.zeros(0, dtype=str)]).astype(str),
+            "chatter_time": np.array([c.time for c in self.chatter], dtype=float),
+            "chatter_stop": np.array([c.stop for c in self.chatter], dtype=str),
+            "chatter_last_impact": np.array([c.last_impact for c in self.chatter],
+                                            dtype=float),
+            "chatter_last_velocity": np.array([c.last_velocity for c in self.chatter],
+                                              dtype=float),
+        }
+
     @property
     def message(self) -> str:
         """Human-readable reason for stopping."""

@@ -230,3 +230,82 @@ def test_whole_periods_of_a_periodic_motion_end_with_its_impact(paper, omega, b)
         np.testing.assert_allclose(res.impact_times, orbit.period * np.arange(1, k + 1),
                                    rtol=0, atol=1e-9)
         assert res.final_time == pytest.approx(k * orbit.period, rel=1e-12)
+
+
+def _docs_machines_examples():
+    """The first two examples of docs/machines.md: a clearance between two masses, and the
+    impact damper from rest (it used to end in CHATTER after about one forcing period)."""
+    pair = ic.ImpactOscillator(M=np.diag([1.0, 0.4]), K=[[1.5, -0.5], [-0.5, 0.5]], F=[1, 0],
+                               R=0.7, b=0.2, omega=1.2, eta=0.03,
+                               stops=ic.Stops(mass=2, relative_to=1, b_low=0.25, R_low=0.5))
+    damper = ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0],
+                                 R=0.6, b=0.3, omega=0.9, eta=0.02,
+                                 stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+    return [(pair, 3.0, 0.25), (damper, 2.0, 0.3)]
+
+
+@pytest.mark.parametrize("case", [0, 1], ids=["clearance-pair", "impact-damper"])
+def test_docs_machines_examples_run_through_chatter(case):
+    """Witness (d) of issue 30: both run to the end, through complete chatter and the
+    sticking phases after it, the relative coordinate never past its stops."""
+    osc, periods, low = _docs_machines_examples()[case]
+    res = simulate(osc, np.zeros(4), 0.0, periods, trajectory=True, chatter_tolerance=1e-3)
+    assert res.success and res.chatter and res.sticking
+    s = res.X[:, 1] - res.X[:, 0]
+    assert s.max() <= osc.b + 1e-14 and s.min() >= -low - 1e-14
+    assert [p.start for p in res.sticking[:len(res.chatter)]] == [c.time for c in res.chatter]
+    events = res.sticking_arrays()
+    assert events["sticking_start"].size == len(res.sticking)
+    assert np.all(events["force"] >= -1e-12) and events["chatter_time"].size == len(res.chatter)
+
+
+def _random_machines(count=30, seed=3):
+    """Impact dampers (a free ball in a clearance), balls under gravity on a table on a
+    spring, free chains of three masses held by a two-sided stop on mass 1: n = 2-3,
+    R = 0.3-0.9, omega = 0.3-3, started with random velocities."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(count):
+        R, eta = float(rng.uniform(0.3, 0.9)), float(rng.uniform(0.02, 0.1))
+        omega = float(rng.uniform(0.3, 3.0))
+        if i % 3 == 0:
+            m, gap = float(rng.uniform(0.05, 0.5)), float(rng.uniform(0.1, 0.5))
+            osc = ic.ImpactOscillator(M=np.diag([1.0, m]), K=np.diag([1.0, 0.0]), F=[1, 0],
+                                      R=R, b=gap, omega=omega, eta=eta,
+                                      stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+            X0 = np.array([0.0, 0.0, 0.0, float(rng.uniform(-1, 1))])
+        elif i % 3 == 1:
+            m, g = float(rng.uniform(0.05, 0.5)), float(rng.uniform(0.2, 1.0))
+            osc = ic.ImpactOscillator(M=np.diag([1.0, m]), K=np.diag([1.0, 0.0]),
+                                      F=[float(rng.uniform(0.5, 2)), 0], R=R, b=50.0,
+                                      omega=omega, eta=eta, F_static=[0.0, -g * m],
+                                      stops=ic.Stops(mass=2, relative_to=1, b_low=0.0,
+                                                     R_low=R))
+            X0 = np.array([0.0, 0.0, 0.0, float(rng.uniform(0.2, 1.0))])
+        else:
+            k = rng.uniform(0.5, 2.0, 2)
+            K = [[k[0], -k[0], 0], [-k[0], k[0] + k[1], -k[1]], [0, -k[1], k[1]]]
+            osc = ic.ImpactOscillator(M=np.diag(rng.uniform(0.5, 1.5, 3)), K=K,
+                                      F=[0, 0, 1.0], R=R, b=float(rng.uniform(0.1, 0.5)),
+                                      omega=omega, eta=eta, stops=ic.Stops(mirror=True))
+            X0 = np.concatenate([np.zeros(3), rng.uniform(-1, 1, 3)])
+        out.append((osc, X0))
+    return out
+
+
+def test_random_machines_never_end_in_chatter_or_sticking():
+    """Witness (e) of issue 30: 30 random machines of the kinds that ended in CHATTER about
+    half the time, one forcing period each: every run reaches its end, every stop
+    coordinate stays on its side of every stop (within rounding), and the sweep meets
+    complete chatter and sticking."""
+    chatter = sticking = 0
+    for osc, X0 in _random_machines():
+        res = simulate(osc, X0, 0.0, 1.0, trajectory=True, chatter_tolerance=1e-2)
+        assert res.success, (osc, res.status)
+        for name in osc.stops.names:
+            view = osc.stops.stop(name, osc.M, osc.b, osc.R)
+            s = res.X[:, :osc.n] @ view.normal
+            assert np.all(view.sign * (s - view.position) <= 1e-13 * (1 + np.abs(s))), name
+        chatter += len(res.chatter)
+        sticking += len(res.sticking)
+    assert chatter >= 5 and sticking >= 8
