@@ -486,6 +486,39 @@ class Simulations:
             "start_state": _var(("component",), state, "start state",
                                 "State at t = 0 (perturbation included)."),
         }
+        events = res.sticking_arrays()  # sticking phases and chatter points (issue 30)
+        data.update({
+            "sticking_start": _var(("sticking",), events["sticking_start"],
+                                   "sticking start", "Time a sticking phase starts."),
+            "sticking_end": _var(("sticking",), events["sticking_end"], "sticking end",
+                                 "Time it ends (a release, an impact on another stop, "
+                                 "another stop holding, or the end of the run)."),
+            "sticking_stops": _var(("sticking",), events["sticking_stops"], "stops held",
+                                   "The stops held in the phase (their names)."),
+            "sticking_ended_by": _var(("sticking",), events["sticking_ended_by"], "ended by",
+                                      "release, impact, stick, chatter or end."),
+            "force_time": _var(("force_sample",), events["force_time"], "force sample time",
+                               "Times of the contact-force samples of the sticking phases."),
+            "contact_force": _var(("force_sample",), events["force"], "contact force",
+                                  "Pressing force of a held stop (>= 0; zero at a release)."),
+            "force_phase": _var(("force_sample",), events["force_phase"], "sticking phase",
+                                "Index of the sticking phase of each force sample."),
+            "force_stop": _var(("force_sample",), events["force_stop"], "stop pressed",
+                               "The held stop each force sample belongs to."),
+            "chatter_time": _var(("chatter",), events["chatter_time"], "accumulation time",
+                                 "Accumulation point of a complete chatter (a sticking "
+                                 "phase starts there)."),
+            "chatter_stop": _var(("chatter",), events["chatter_stop"], "chatter stop",
+                                 "The stop chattered on."),
+            "chatter_last_impact": _var(("chatter",), events["chatter_last_impact"],
+                                        "last impact resolved",
+                                        "Time of the last impact resolved before the "
+                                        "accumulation point."),
+            "chatter_last_velocity": _var(("chatter",), events["chatter_last_velocity"],
+                                          "last impact velocity",
+                                          "Its impact velocity (the jump's error is of "
+                                          "its square)."),
+        })
         if entry.trajectory and res.t is not None:
             data["t"] = _var(("sample",), res.t, "time", "Trajectory sample times.")
             data["X"] = _var(("sample", "component"), res.X, "state",

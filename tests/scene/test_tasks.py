@@ -176,6 +176,26 @@ def test_a_simulation_from_a_state_is_the_simulators(base) -> None:
     assert "X" not in ds and ds.attrs["start"] == "state"
 
 
+def test_a_simulation_stores_its_sticking_phases_and_chatter(base, tmp_path) -> None:
+    """Issue 30: at rest on the stop b = 0 and pushed into it (x1'' = cos(delta) > 0), the
+    run is held from t = 0; its sticking phases, contact forces and chatter points are
+    variables of the dataset, as the simulator returns them, and survive a netCDF file."""
+    entry = _entry(e.SimulationSpec, base, start="state", state=[0.0, 0.0, 0.0, 0.0],
+                   delta=0.0, periods=3.0, b=0.0)
+    ds = t.SIMULATIONS.compute(entry)
+    res = ic.simulate(base.replace(b=0.0), np.zeros(4), 0.0, 3.0)
+    assert ds.sizes["sticking"] == len(res.sticking) >= 1
+    assert float(ds["sticking_start"][0]) == 0.0 and str(ds["sticking_stops"].values[0]) == "U"
+    np.testing.assert_array_equal(ds["sticking_end"], [p.end for p in res.sticking])
+    first = ds["force_phase"].values == 0
+    np.testing.assert_array_equal(ds["contact_force"].values[first], res.sticking[0].forces[:, 0])
+    np.testing.assert_array_equal(ds["chatter_time"], [c.time for c in res.chatter])
+    check_attributes(ds, "simulation", in_section=True)
+    ds.to_netcdf(tmp_path / "sim.nc")
+    with xr.open_dataset(tmp_path / "sim.nc") as back:
+        assert list(back["sticking_ended_by"].values) == [p.ended_by for p in res.sticking]
+
+
 def test_no_motion_to_start_from_is_named(base) -> None:
     entry = _entry(e.SimulationSpec, base, name="s", periods=2, b=3.0)
     with pytest.raises(ic.NoPeriodicMotionError, match=r"simulation s: no N=1 motion at "
