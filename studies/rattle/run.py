@@ -235,16 +235,16 @@ def _row(orb: ic.MultiImpactOrbit, cf: dict[str, Any], gamma: float, N: int,
 
 # ----------------------------------------------------------------------------- 2. branches
 
-def branch_in_gamma(N: int) -> tuple[xr.Dataset, dict[str, Any]]:
+def branch_in_gamma(N: int, ds_max: float = 0.02) -> tuple[xr.Dataset, dict[str, Any]]:
     """The period-N branch in Gamma (``F0``) through the stable motion at mid-window,
     compared point by point with the closed form (the root chosen by the sign of
-    cos delta), its SN and PD against Gamma_1 and Gamma_2."""
+    cos delta), its SN and PD against Gamma_1 and Gamma_2 (steps at most ``ds_max``)."""
     g1, g2 = gamma_1(N), gamma_2(N)
     orb = solve(0.5 * (g1 + g2), N, 0.0)
     bounds = (0.95 * g1, g2 + 0.3)
     t0 = time.perf_counter()
-    br = _quiet(ic.multi_impact_continuation, orb, "F0", bounds, ds=0.01, ds_max=0.02,
-                progress=False)
+    br = _quiet(ic.multi_impact_continuation, orb, "F0", bounds, ds=min(0.01, ds_max),
+                ds_max=ds_max, progress=False)
     elapsed = time.perf_counter() - t0
     worst = {"delta": 0.0, "velocity": 0.0, "multipliers": 0.0}
     stable_wrong = 0
@@ -321,9 +321,12 @@ def omega_branch() -> tuple[xr.Dataset, dict[str, Any]]:
 
 # ----------------------------------------------------------------------------- 3. the cascade
 
-def cascade(branch: xr.Dataset) -> tuple[Any, dict[str, Any]]:
+def cascade(branch: xr.Dataset, max_doublings: int = 5) -> tuple[Any, dict[str, Any]]:
+    """The period-doubling cascade from the first PD of ``branch`` (at most
+    ``max_doublings``), the simulator at each PD motion after the first."""
     t0 = time.perf_counter()
-    cas = _quiet(ic.period_doubling_cascade, branch, 0, max_doublings=5, progress=False)
+    cas = _quiet(ic.period_doubling_cascade, branch, 0, max_doublings=max_doublings,
+                 progress=False)
     elapsed = time.perf_counter() - t0
     sims = []
     for k, br in enumerate(cas.branches[:-1]):
@@ -345,12 +348,13 @@ def cascade(branch: xr.Dataset) -> tuple[Any, dict[str, Any]]:
 
 # ----------------------------------------------------------------------------- 4. two flanks
 
-def two_flank() -> tuple[xr.Dataset | None, dict[str, Any]]:
+def two_flank(ds_max: float = 0.05) -> tuple[xr.Dataset | None, dict[str, Any]]:
     """The free gear in a backlash ``0 <= x1 <= GAP``: the motion with one impact on each
     flank per period (pattern ``"LU"``), found by Newton from a grid of guesses at
     Gamma = 4 (a simulation from rest ends in chatter on the lower flank) and kept only
     if its closed-form flights stay inside the clearance; continued in Gamma, each branch
-    point checked by :func:`flight_margin`, a few points witnessed by the simulator."""
+    point checked by :func:`flight_margin`, a few points witnessed by the simulator
+    (continuation steps at most ``ds_max``)."""
     gamma0 = 4.0
     osc = ball(gamma0, ceiling=GAP)
     found, rejected = None, 0
@@ -380,8 +384,8 @@ def two_flank() -> tuple[xr.Dataset | None, dict[str, Any]]:
     if found is None:
         return None, {"found": False, "rejected_crossing_a_stop": rejected}
     t0 = time.perf_counter()
-    br = _quiet(ic.multi_impact_continuation, found, "F0", (1.0, 10.0), ds=0.02,
-                ds_max=0.05, progress=False)
+    br = _quiet(ic.multi_impact_continuation, found, "F0", (1.0, 10.0), ds=min(0.02, ds_max),
+                ds_max=ds_max, progress=False)
     elapsed = time.perf_counter() - t0
     gam = br["F0"].values
     margin = np.array([flight_margin(float(gam[i]), GAP, br["state_k"][i].values,
@@ -469,7 +473,9 @@ def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float =
         Inches, at most :data:`impactcont.plots.series.MAX_WIDTH`.
     """
     two = groups.get("two_flank")
-    fig, axes = panel_figure(3 if two is not None else 2, width, extra_height=1.6)
+    # one column: a legend under each panel, the panels kept high enough for their labels
+    fig, axes = panel_figure(3 if two is not None else 2, width,
+                             extra_height=1.6 if width >= 5.0 else 3.4)
     branches = {N: groups[f"N{N}_gamma"] for N in TABLE}
     legend_below(axes[0], _closed_form_panel(axes[0], branches), span="axes")
     cascade = [groups["N1_gamma"], *(groups[k] for k in sorted(
@@ -484,8 +490,8 @@ def figure(groups: dict[str, xr.Dataset], pd_values: list[float], width: float =
     if two is not None:
         ax = impact_diagram(two.assign(physical=two["physical"] & two["flights_inside"]),
                             ax=axes[2], label_special=True, names=False, legend="inside",
-                            title=f"Two flanks (clearance {GAP:g}): one impact on each per "
-                            "period, not physical where a flight crosses a stop")
+                            title=f"Two flanks (clearance {GAP:g}), one impact on each per "
+                            "period")  # not physical: a flight crosses a stop (README)
         ax.set_xlabel(GAMMA)
         ax.set_ylabel(r"impact speed $|\dot{y}(T_k^-)|$")
         legend_below(ax, take_legend(ax), span="axes")
