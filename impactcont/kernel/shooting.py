@@ -24,7 +24,7 @@ module. An entry point takes each structure as its plain tuple (typed in numba's
 dispatcher) and names it again on entry; compiled code passes the named structures.
 
 The interior-contact check of eq. (16) against both stops is the compiled kernel's
-search (:func:`impactcont.kernel.contact.stop_maximum` on its grid): for the modal flow
+search (:func:`impactcont.kernel.contact.highest_maximum` on its grid): for the modal flow
 with the weights ``n^T U`` of the stop coordinate, for the first-order flow on the
 scalar pairs of :attr:`impactcont.model.first_order.FirstOrderBasis.scalar_pairs`
 with unit weights (as :mod:`impactcont.orbit.general`). A constant force adds a constant
@@ -33,8 +33,11 @@ polynomial in time (:func:`impactcont.kernel.contact.drift_x1`), both exact in t
 The lower stop is the same search on ``-s`` (forced, free and polynomial parts negated).
 
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
-:func:`motion_checks` and :func:`omega_partials`. Importing :mod:`impactcont` does not
-import this module.
+:func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
+:func:`branch_linearization` and :func:`palc_correct`. An entry point that compiled code
+calls too is called there with the plain tuples Python passes, so one compiled function
+serves both (no entry point wraps an inner twin: numba compiles a wrapper's callee code
+again into it). Importing :mod:`impactcont` does not import this module.
 """
 
 from __future__ import annotations
@@ -59,15 +62,16 @@ from impactcont.kernel.arrays import (
     ImpactSequence,
     ModalFlight,
     PalcResult,
+    SearchedCoordinate,
     ShootingFlow,
     ShotFlights,
     StopSeries,
 )
 from impactcont.kernel.contact import (
-    WORK_ROWS,
+    _search_grid,
     drift_on_grid,
     free_on_grid,
-    stop_maximum,
+    highest_maximum,
     time_grid,
 )
 from impactcont.kernel.flights import mode_transfer, transfer_into
@@ -775,27 +779,35 @@ def _search_inputs(flow, forcing, normal, X0, theta):
 
 
 @_inner
-def _search_grid(series, omega, tau):
-    """The search grid of :func:`impactcont.kernel.contact.stop_maximum` on a flight of
-    duration `tau`: ``(times, capped, free, cw, sw, work)``, the free part of `series` and
-    the forcing's cosine and sine on it, and the search's workspace."""
+def _stop_coordinate(series, omega, theta, sign):
+    """``sign s`` of `series` (:class:`~impactcont.kernel.arrays.StopSeries`, the constant
+    level left out) as the contact search's
+    :class:`~impactcont.kernel.arrays.SearchedCoordinate`: forced part and weight of the
+    free part multiplied by `sign`."""
+    return SearchedCoordinate(sign * series.gamma, sign * series.beta, omega, theta, sign,
+                              series.w, series.a, series.weights, series.dy, series.dv,
+                              series.pg, series.pd, series.p1)
+
+
+@_inner
+def _series_extrema(series, omega, theta, tau, sign, both):
+    """``(top, time, low, time_low, capped)``: the highest maximum of ``sign s`` on a flight
+    of duration `tau` (:func:`impactcont.kernel.contact.highest_maximum`, the constant level
+    left out) and, with `both`, that of ``-sign s`` on the same grid (``-inf`` and NaN
+    without); ``capped`` as :func:`impactcont.kernel.contact.time_grid` says. The grid,
+    the free part of `series` and the forcing's cosine and sine on it are built once."""
     times, capped = time_grid(series.w, series.a, series.weights, omega, tau)
     free = drift_on_grid(times, series.pg, series.pd, series.p1,
                          free_on_grid(times, series.w, series.a, series.weights, series.dy,
                                       series.dv))
-    cw = np.cos(omega * times)
-    sw = np.sin(omega * times)
-    work = np.empty((WORK_ROWS, 2 * times.size))
-    return times, capped, free, cw, sw, work
-
-
-@_inner
-def _series_maximum(series, omega, theta, sign, times, free, cw, sw, work):
-    """``(top, time)``: the highest maximum of ``sign s`` on the grid of
-    :func:`_search_grid` (the constant level left out)."""
-    return stop_maximum(times, free, cw, sw, sign * series.gamma, sign * series.beta, omega,
-                        theta, sign, series.w, series.a, series.weights, series.dy, series.dv,
-                        series.pg, series.pd, series.p1, work, np.nan)
+    grid = _search_grid(times, free, omega)
+    top, t_top = highest_maximum(grid, _stop_coordinate(series, omega, theta, sign), np.nan)
+    low = -np.inf
+    t_low = np.nan
+    if both:
+        low, t_low = highest_maximum(grid, _stop_coordinate(series, omega, theta, -sign),
+                                     np.nan)
+    return top, t_top, low, t_low, capped
 
 
 @_inner
@@ -806,12 +818,12 @@ def _clearances(flow, forcing, stops, X0, theta, tau):
     mode it pushes) are in the searched coordinate, so every flight is checked."""
     omega = forcing.omega
     series = _search_inputs(flow, forcing, stops.normal, X0, theta)
-    times, capped, free, cw, sw, work = _search_grid(series, omega, tau)
-    top, t_top = _series_maximum(series, omega, theta, 1.0, times, free, cw, sw, work)
+    # the highest maximum of -s is the lowest minimum of s
+    top, t_top, low, t_low, capped = _series_extrema(series, omega, theta, tau, 1.0,
+                                                     stops.two_sided)
     gap_l = np.inf
     t_l = np.nan
-    if stops.two_sided:  # the highest maximum of -s is the lowest minimum of s
-        low, t_low = _series_maximum(series, omega, theta, -1.0, times, free, cw, sw, work)
+    if stops.two_sided:
         gap_l = stops.b_low - low + series.level
         t_l = t_low
     return stops.b - top - series.level, t_top, gap_l, t_l, capped
@@ -826,8 +838,7 @@ def _stop_clearance(flow, forcing, stops, i, X0, theta, tau):
     omega = forcing.omega
     sign = stops.extra_signs[i]
     series = _search_inputs(flow, forcing, stops.extra_normals[i], X0, theta)
-    times, capped, free, cw, sw, work = _search_grid(series, omega, tau)
-    top, t_top = _series_maximum(series, omega, theta, sign, times, free, cw, sw, work)
+    top, t_top, _, _, capped = _series_extrema(series, omega, theta, tau, sign, False)
     return sign * stops.extra_positions[i] - top - sign * series.level, t_top, capped
 
 
@@ -1058,15 +1069,9 @@ def omega_partials(flow, forcing, derivatives, shot):
     `flow`, `forcing`: as :func:`shooting_system` takes them; `derivatives`: the plain
     tuple of :class:`~impactcont.kernel.arrays.ForcingDerivatives`; `shot`: of
     :class:`~impactcont.kernel.arrays.ShotFlights` (its flight times, starts, phases and
-    transitions are read). The formula is :func:`_omega_partials`'.
-    """
-    return _omega_partials(ShootingFlow(*flow), Forcing(*forcing),
-                           ForcingDerivatives(*derivatives), ShotFlights(*shot))
-
-
-@_inner
-def _omega_partials(flow, forcing, derivatives, shot):
-    """``dX_k^-/d omega`` of every flight at fixed flight time, start and start phase.
+    transitions are read). One compiled function for Python and compiled callers
+    (:func:`frequency_column` passes its plain tuples on): an entry point beside an inner
+    function of the same body would compile that body twice.
 
     Only the steady forced state ``X_p(t) = Re(Z e^{i(omega t + theta)})`` depends on
     omega: ``dX/d omega = D(t) - Phi(t) D(0)``, ``D(t) = Re((dZ + i t Z) e^{i(omega t +
@@ -1077,16 +1082,20 @@ def _omega_partials(flow, forcing, derivatives, shot):
     -------
     ndarray, shape (p, 2n)
     """
-    u, gam, bet, Z, omega = flow.u, forcing.gamma, forcing.beta, forcing.Z, forcing.omega
-    dgam, dbet, dZ = derivatives.dgamma, derivatives.dbeta, derivatives.dZ
-    taus, starts, phases = shot.flight_times, shot.starts, shot.phases
-    transitions = shot.transitions
+    named = ShootingFlow(*flow)
+    forced, partials, flights = (Forcing(*forcing), ForcingDerivatives(*derivatives),
+                                 ShotFlights(*shot))
+    general, u = named.general, named.u
+    gam, bet, Z, omega = forced.gamma, forced.beta, forced.Z, forced.omega
+    dgam, dbet, dZ = partials.dgamma, partials.dbeta, partials.dZ
+    taus, starts, phases = flights.flight_times, flights.starts, flights.phases
+    transitions = flights.transitions
     p = taus.size
     m = starts.shape[1]
     n = m // 2
     Zp = np.empty(m, dtype=np.complex128)
     dZp = np.empty(m, dtype=np.complex128)
-    if flow.general:
+    if general:
         Zp[:] = Z
         dZp[:] = dZ
     else:
@@ -1121,16 +1130,8 @@ def frequency_column(flow, forcing, derivatives, impacts, period, shot):
     """``dr/d omega`` of the shooting residual at fixed unknowns, shape (p 2n,).
 
     Arguments as :func:`omega_partials` and :func:`shooting_system` take them (plain
-    tuples); the formula is :func:`_frequency_column`'.
-    """
-    return _frequency_column(ShootingFlow(*flow), Forcing(*forcing),
-                             ForcingDerivatives(*derivatives), ImpactSequence(*impacts), period,
-                             ShotFlights(*shot))
-
-
-@_inner
-def _frequency_column(flow, forcing, derivatives, impacts, period, shot):
-    """``dr/d omega`` of the shooting residual at fixed unknowns, shape (p 2n,).
+    tuples; :func:`branch_linearization` passes its own on, so one compiled function
+    serves both).
 
     The forced part of eq. (9) at fixed flight times (:func:`omega_partials`), the phases
     ``theta_k = delta + omega (tau_0 + .. + tau_{k-1})`` (``pcols``, ``dX^-/dtheta``) and
@@ -1139,11 +1140,12 @@ def _frequency_column(flow, forcing, derivatives, impacts, period, shot):
     that ends flight k (``MultiImpactBranchProblem.dparam`` of
     :mod:`impactcont.problems.multi_impact_branch`).
     """
-    omega, matrices = forcing.omega, impacts.matrices
-    taus, pcols, rates = shot.flight_times, shot.phase_columns, shot.arrival_rates
+    omega, matrices = Forcing(*forcing).omega, ImpactSequence(*impacts).matrices
+    flights = ShotFlights(*shot)
+    taus, pcols, rates = flights.flight_times, flights.phase_columns, flights.arrival_rates
     p = taus.size
-    m = shot.starts.shape[1]
-    explicit = _omega_partials(flow, forcing, derivatives, shot)
+    m = flights.starts.shape[1]
+    explicit = omega_partials(flow, forcing, derivatives, shot)
     out = np.zeros(p * m)
     elapsed = 0.0
     for k in range(p):
@@ -1217,17 +1219,16 @@ def branch_linearization(flow, forcing, derivatives, impacts, period, x):
     Returns
     -------
     BranchLinearization
+
+    Notes
+    -----
+    :func:`palc_correct` calls this entry point with plain tuples of the types Python
+    passes, so it is compiled once for both (an inner twin on the named structures was a
+    second compile of the same body, about 2 s of a cold first N-p branch).
     """
-    return _branch_linearization(ShootingFlow(*flow), Forcing(*forcing),
-                                 ForcingDerivatives(*derivatives), ImpactSequence(*impacts),
-                                 period, x)
-
-
-@_inner
-def _branch_linearization(flow, forcing, derivatives, impacts, period, x):
-    """:func:`branch_linearization` on the named structures."""
-    sh = _shooting_system(_flights(flow), forcing, impacts, period, x, _jacobian_wanted(x))
-    col = _frequency_column(flow, forcing, derivatives, impacts, period, sh)
+    sh = _shooting_system(_flights(ShootingFlow(*flow)), Forcing(*forcing),
+                          ImpactSequence(*impacts), period, x, _jacobian_wanted(x))
+    col = frequency_column(flow, forcing, derivatives, impacts, period, _shot_tuple(sh))
     size = x.size
     extended = np.empty((size, size + 1))
     J = sh.jacobian
@@ -1352,12 +1353,11 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
         when none: the caller checks its 2-norm condition number), and the last update's
         max-norm.
     """
-    flow = ShootingFlow(*flow)
-    impacts = ImpactSequence(*impacts)
+    modal = ShootingFlow(*flow)
     E, c, rows = Embedding(*embedding)
     predicted, tangent, weights = CorrectorStep(*step)
     tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
-    w, a, f = flow.w, flow.a, flow.f
+    w, a, f = modal.w, modal.a, modal.f
     size = predicted.size - 1
     full = E.shape[0]
     empty_c = np.zeros(0, dtype=np.complex128)
@@ -1389,9 +1389,8 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
                 s += E[r, k] * state[k]
             x[r] = s
         period = 2.0 * math.pi * N / omega
-        sh, ext = _branch_linearization(flow, Forcing(omega, gam, bet, empty_c),
-                                        ForcingDerivatives(dgam, dbet, empty_c), impacts,
-                                        period, x)
+        sh, ext = branch_linearization(flow, (omega, gam, bet, empty_c),
+                                       (dgam, dbet, empty_c), impacts, period, x)
         residual = sh.residual
         norm = 0.0
         for r in range(rows):
