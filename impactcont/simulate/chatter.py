@@ -36,7 +36,7 @@ conserved), run for ``t_inf - t_k``. Its error against the motion resolved impac
 is ``O(v_k^2)`` (Nordmark & Piiroinen 2009, sec. 3): each bounce departs from the held flow
 by ``O(u_j^2)`` in position and the bounces' speeds sum to ``O(v_k)`` times ``O(v_k)`` of
 flight, while the error of (C1) is ``O(|a'| v_k^2 / a^3)``. Tested by comparing with the
-resolved chatter (:mod:`tests.simulate.test_chatter`).
+resolved chatter (tests/simulate/test_chatter.py).
 """
 
 from __future__ import annotations

@@ -482,7 +482,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         sticks.append(StickingPhase(
             start=t0, end=t_now, stops="".join(held), times=t0 + tau,
             forces=hf.pressing(tau, X0, p0), ended_by=ended_by, start_state=X0,
-            start_phase=p0, _force=lambda t, hf=hf, X0=X0, p0=p0: hf.pressing(t, X0, p0)))
+            start_phase=p0, _flight=hf))
 
     held: tuple[str, ...] = ()
     released: dict[str, float] = {}  # stops just released -> their separation time

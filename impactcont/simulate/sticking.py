@@ -51,7 +51,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.linalg
@@ -108,8 +108,7 @@ class StickingPhase:
     ended_by: str
     start_state: np.ndarray
     start_phase: float
-    _force: Callable[[np.ndarray], np.ndarray] | None = dataclasses.field(default=None,
-                                                                         repr=False)
+    _flight: HeldFlight | None = dataclasses.field(default=None, repr=False)
 
     @property
     def duration(self) -> float:
@@ -119,13 +118,13 @@ class StickingPhase:
     def contact_force(self, t: object) -> np.ndarray:
         """The pressing forces at times `t` (absolute, within the phase), shape (nt, m):
         the exact flow of the reduced system, evaluated anew."""
-        if self._force is None:
+        if self._flight is None:
             raise ValueError("this sticking phase carries only its samples (times, forces)")
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if np.any((t < self.start) | (t > self.end)):
             raise ValueError(f"t must lie in the phase [{self.start!r}, {self.end!r}]; got "
                              f"{t.min()!r} .. {t.max()!r}")
-        return self._force(t - self.start)
+        return self._flight.pressing(t - self.start, self.start_state, self.start_phase)
 
 
 def _force_terms(osc: ImpactOscillator) -> np.ndarray:

@@ -193,3 +193,16 @@ def test_impact_with_held_keeps_the_pressed_stop():
     coupled = _two_stops().replace(M=[[1.0, 0.4], [0.4, 1.0]])
     v, kept = impact_with_held(coupled, np.array([0.5, 0.0]), "U", ["A"])
     assert v[1] <= 0.0
+
+
+def test_a_result_with_sticking_phases_pickles():
+    """A result travels between processes (parallel sweeps): its phases keep their exact
+    contact force."""
+    import pickle
+
+    res = simulate(_preloaded(), [0.0, 0.0], 0.0, 1.0)
+    back = pickle.loads(pickle.dumps(res))
+    phase = back.sticking[0]
+    assert phase.contact_force([phase.start])[0, 0] == pytest.approx(4.0, rel=1e-15)
+    with pytest.raises(ValueError, match="t must lie in the phase"):
+        phase.contact_force([phase.end + 1.0])
