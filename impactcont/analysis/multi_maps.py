@@ -816,11 +816,13 @@ def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]
         count = band.stop - band.start
         return ({names[0]: band, names[1]: slice(0, n1)},
                 {key: values[key].reshape((count, n1, *values[key].shape[1:]))
-                 for key in empty})
+                 for key in empty if key in values})
 
     def not_found(band: slice) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-        count = (band.stop - band.start) * n1
-        return block(band, {key: np.repeat(a, count, axis=0) for key, a in empty.items()})
+        # the floating-point variables are left unwritten: they read as their fill, NaN
+        region, values = block(band, {key: np.repeat(a, (band.stop - band.start) * n1, axis=0)
+                                      for key, a in empty.items() if a.dtype.kind not in "fc"})
+        return region, values
 
     def blocks() -> Any:
         try:
