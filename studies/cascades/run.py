@@ -441,6 +441,15 @@ def branches_from_simulation(name: str, records: list[dict[str, Any]],
 def draw(name: str, branches: dict[str, xr.Dataset], up: list[dict[str, Any]],
          down: list[dict[str, Any]], zoom_up: list[dict[str, Any]], path: Path,
          width: float = 7.0) -> None:
+    """Save :func:`figure` to ``path``."""
+    fig = figure(name, branches, up, down, zoom_up, width)
+    fig.savefig(path, dpi=DPI)
+    log.info("wrote %s", path)
+
+
+def figure(name: str, branches: dict[str, xr.Dataset], up: list[dict[str, Any]],
+           down: list[dict[str, Any]], zoom_up: list[dict[str, Any]], width: float = 7.0
+           ) -> Figure:
     """Branches (physical parts) and the simulator's impacts, full range over the zoom on
     the cascade (its box marked), ``width`` inches wide, one legend under both."""
     if not 2.0 <= width <= MAX_WIDTH:
@@ -452,6 +461,7 @@ def draw(name: str, branches: dict[str, xr.Dataset], up: list[dict[str, Any]],
                "tab:pink", "tab:gray", "tab:olive", "tab:cyan", "navy", "magenta", "lime",
                "teal", "maroon", "gold"]
     handles: dict[str, Any] = {}
+    dots: list[tuple[Any, np.ndarray, np.ndarray, dict[str, Any]]] = []
     for ax, zoom in zip(axes, (False, True), strict=True):
         impact_diagram(branches, ax=ax, specials=("PD", "GR", "SN"), nonphysical=False,
                        colors=palette, legend="inside", zoom=False)
@@ -468,24 +478,65 @@ def draw(name: str, branches: dict[str, xr.Dataset], up: list[dict[str, Any]],
                 continue
             x = np.concatenate([np.full(len(r["velocities"]), r["omega"]) for r in recs])
             y = np.concatenate([r["velocities"] for r in recs])
-            ax.scatter(x, y, s=7, linewidths=0.6, alpha=0.7, zorder=4, **style)
+            dots.append((ax, x, y, style))  # drawn once the layout is final
             handles.setdefault(label, Line2D([], [], linestyle="none", label=label, **style))
         if zoom:
             ax.set_xlim(lo, hi)
             ax.set_ylim(bottom=-0.03)
-            ax.set_title(rf"zoom on the cascade, ${lo:g} \leq \omega \leq {hi:g}$",
-                         fontsize="medium")
+            ax.set_title(rf"zoom, ${lo:g} \leq \omega \leq {hi:g}$", fontsize="medium")
         else:
-            ax.set_xlim(*SYSTEMS[name]["range"])
+            start, end = SYSTEMS[name]["range"]
+            margin = 0.015 * (end - start)  # the sweeps' first and last omega off the frame
+            ax.set_xlim(start - margin, end + margin)
             ax.set_ylim(bottom=-0.03)
             ax.set_title(SYSTEMS[name]["title"], fontsize="medium")
         ax.set_ylabel(r"impact velocity $\dot{x}_1(T_k^-)$ of every impact")
-    y0, y1 = axes[1].get_ylim()
-    axes[0].indicate_inset((lo, y0, hi - lo, y1 - y0), edgecolor="0.35")
     figure_legend(fig, list(handles.values()))
     fit_labels(fig)
-    fig.savefig(path, dpi=DPI)
-    log.info("wrote %s", path)
+    for ax in axes:
+        _frame_markers(ax)
+    (x0, x1), (y0, y1) = axes[1].get_xlim(), axes[1].get_ylim()
+    axes[0].indicate_inset((x0, y0, x1 - x0, y1 - y0), edgecolor="0.35")
+    for ax, x, y, style in dots:  # the layout is final: a dot the frame would cut is left out
+        inside = _inside(ax, x, y, math.sqrt(7.0))
+        ax.scatter(x[inside], y[inside], s=7, linewidths=0.6, alpha=0.7, zorder=4, **style)
+    return fig
+
+
+def _inside(ax: Any, x: np.ndarray, y: np.ndarray, size: float) -> np.ndarray:
+    """Which points a marker of ``size`` points drawn at ``(x, y)`` shows whole inside the
+    frame of ``ax``."""
+    ax.figure.draw_without_rendering()
+    r = size / 2 * ax.figure.dpi / 72.0
+    xy = ax.transData.transform(np.column_stack([x, y]))
+    box = ax.bbox.extents
+    return ((xy[:, 0] >= box[0] + r) & (xy[:, 0] <= box[2] - r)
+            & (xy[:, 1] >= box[1] + r) & (xy[:, 1] <= box[3] - r))
+
+
+def _frame_markers(ax: Any) -> None:
+    """Widen the limits of ``ax`` until no special-point marker is cut by its frame (one
+    at the zoom's edge is drawn whole)."""
+    for _ in range(4):
+        ax.figure.draw_without_rendering()
+        box = ax.bbox.extents
+        grow = np.zeros(4)  # pixels to add left, bottom, right, top
+        for line in ax.get_lines():
+            if line.get_marker() in (None, "", "None", " ", "none"):
+                continue
+            r = line.get_markersize() / 2 * ax.figure.dpi / 72.0 + 1.0
+            xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+            for px, py in xy[np.all(np.isfinite(xy), axis=1)]:
+                if box[0] - r < px < box[2] + r and box[1] - r < py < box[3] + r:
+                    grow = np.maximum(grow, [box[0] + r - px, box[1] + r - py,
+                                             px + r - box[2], py + r - box[3]])
+        if not np.any(grow > 0):
+            return
+        to_data = ax.transData.inverted()
+        (x0, y0), (x1, y1) = to_data.transform([(box[0] - grow[0], box[1] - grow[1]),
+                                                (box[2] + grow[2], box[3] + grow[3])])
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
 
 
 def pd_markdown(results: dict[str, dict[str, Any]]) -> str:

@@ -48,7 +48,7 @@ def _four_panels(width: float) -> Figure:
                    linestyle="none", marker="o")],
             xlabel=r"$\omega/\omega_n$", ylabel=r"amplitude $\max|x_1|$",
             title=f"machine {i + 1}")
-    series_plot(axes[3], [Series(x, _differences(x, k), f"difference {k}", color=f"C{k}",
+    series_plot(axes[3], [Series(x, _differences(x, k), f"difference {k}", color=f"C{k + 1}",
                                  linestyle="none", marker="os^"[k]) for k in range(3)],
                 xlabel=r"$\omega/\omega_n$", ylabel=r"$|\Delta|$", yscale="log",
                 title="package against closed form")
