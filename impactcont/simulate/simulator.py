@@ -592,7 +592,8 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
                     tau = np.append(np.arange(0.0, dt, dt_sample), dt)
                     t_chunks.append(t_now + tau)
                     X_chunks.append(hf.samples(tau, X_stick, phase))
-                close(held, "chatter")
+                # a phase of other held stops goes on through the accumulation (it ends
+                # where this stop comes to hold as well)
                 X = hf.state(dt, X_stick, phase)
                 t_now += dt
                 phase = _wrap(phase + osc.omega * dt)
@@ -600,7 +601,6 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
                     time=t_now, stop=side, last_impact=times[-1], last_velocity=v,
                     acceleration=acc, restitution=views[side].restitution,
                     resolved=resolved))
-                stick = (t_now, X.copy(), phase) if held else None
         if len(times) >= max_impacts:
             status = SimulationStatus.MAX_IMPACTS
             close(held, "end")

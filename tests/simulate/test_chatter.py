@@ -149,3 +149,23 @@ def test_incomplete_chatter_is_resolved_impact_by_impact():
     assert jump(1.2 * u_c) is None
     assert jump(0.8 * u_c) is not None
     assert jump(0.1 * u_c)[0] == pytest.approx(0.1 * t_rel, rel=1e-12)
+
+
+def test_chatter_while_another_stop_is_held():
+    """Mass 2 held on its stop A (plastic) while mass 1 chatters on U (R = 0.5): each U
+    impact is the impulse law with A kept, the accumulation point on U starts a phase
+    holding both, and the A phases follow each other without a gap until then."""
+    osc = ic.ImpactOscillator(
+        M=np.eye(2), K=[[2, -1], [-1, 2]], F=[3.0, 0], F_static=[1.0, 0.5], R=0.5, b=0.0,
+        omega=0.7, eta=0.05,
+        stops=Stops(extra=(ic.Stop("A", mass=2, gap=0.0, restitution=0.0),)))
+    res = simulate(osc, np.zeros(4), math.pi, 1.2, trajectory=True)
+    assert res.success and res.chatter and res.chatter[0].stop == "U"
+    phases = res.sticking
+    both = next(k for k, p in enumerate(phases) if p.stops == "UA")
+    assert phases[both].start == res.chatter[0].time
+    first_u = res.impact_times[res.impact_stops.index("U")]
+    run = [p for p in phases[:both] if p.start >= first_u - 1e-12]
+    assert run and all(p.stops == "A" for p in run)
+    assert all(a.end == b.start for a, b in zip(run, [*run[1:], phases[both]], strict=True))
+    assert res.X[:, 0].max() <= 1e-14 and res.X[:, 1].max() <= 1e-14
