@@ -33,10 +33,11 @@ an accumulation whatever (i) says.
 **The state after the jump** is the held flow from the impact's state with the stop
 coordinate's speed removed (the plastic law, ``R = 0``, of the stop: the momentum of a pair
 conserved), run for ``t_inf - t_k``. Its error against the motion resolved impact by impact
-is ``O(v_k^2)`` (Nordmark & Piiroinen 2009, sec. 3): each bounce departs from the held flow
-by ``O(u_j^2)`` in position and the bounces' speeds sum to ``O(v_k)`` times ``O(v_k)`` of
-flight, while the error of (C1) is ``O(|a'| v_k^2 / a^3)``. Tested by comparing with the
-resolved chatter (tests/simulate/test_chatter.py).
+is ``O(v_k^2)`` in the last impact speed ``v_k``: the bounces still to come rise
+``O(v_k^2)`` above the stop and last ``O(v_k)`` in all, and (C1) neglects the change of
+``a`` over them, ``O(|a'| v_k^2 / a^3)``. Measured (tests/simulate/test_chatter.py,
+studies/chatter_sticking): in the study's case the accumulation time is off by about
+``v_k^2 / 2`` and the motion after the sticking phase by far less.
 """
 
 from __future__ import annotations

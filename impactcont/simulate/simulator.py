@@ -12,16 +12,19 @@ law is eq. (4).
 With a stop on another mass or a lower stop (``osc.stops``, see
 :mod:`impactcont.model.stops`) the impacting mass ``j`` is followed to the first
 contact with either stop (:func:`impactcont.simulate.contact.next_contact`) and
-the restitution of the stop hit applies; sticking is detected at every stop.
+the restitution of the stop hit applies.
 
 Contact at the start of a flight (after an impact, or at the given state) is decided by the
-signs of each stop coordinate's speed and acceleration towards the stops it touches within
-rounding (:func:`_contact_now`): moving into one is an impact now, at rest on one and pushed
-into it is sticking (STICKING), the same for a stop fixed to the frame, a clearance between
-two masses and every extra stop. A plastic impact (restitution 0) leaves the stop
-coordinate's speed exactly zero. A coordinate short of its stop by more than rounding is
-searched along the flight however slowly it approaches, so the next contact is not taken
-too early (issue 28: no result crosses a stop).
+signs of each stop coordinate's speed towards the stops it touches within rounding
+(:func:`_contact_now`): moving into one is an impact now; at rest on one, the contact forces
+decide which stops hold (:func:`impactcont.simulate.sticking.holding`), and the motion
+continues as a sticking phase (:mod:`impactcont.simulate.sticking`), the same for a stop
+fixed to the frame, a clearance between two masses and every extra stop. Impacts that
+accumulate on a stop (complete chatter) are summed to their accumulation point, where a
+sticking phase starts (:mod:`impactcont.simulate.chatter`). A plastic impact (restitution
+0) leaves the stop coordinate's speed exactly zero. A coordinate short of its stop by more
+than rounding is searched along the flight however slowly it approaches, so the next
+contact is not taken too early (issue 28: no result crosses a stop).
 
 In general the stops act on the stop coordinate ``s = normal . x``
 (:meth:`~impactcont.model.stops.Stops.normal`: ``x_j``, or ``x_j - x_k`` for a clearance
