@@ -38,8 +38,10 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 import impactcont as ic
+from impactcont.plots.branches import fit_text
 from impactcont.plots.series import MAX_WIDTH, figure_legend, fit_labels
 
 log = logging.getLogger("paper_example")
@@ -415,7 +417,7 @@ def omega_scan(b: float, Ns: range, omegas: np.ndarray) -> dict[str, Any]:
 # Plots
 # ---------------------------------------------------------------------------------------------
 def plot_motion_row(ax_t: Axes, ax_p: Axes, curves: list[dict[str, Any]], b: float,
-                    title: str) -> None:
+                    title: str | None) -> None:
     """One row of figure 3/4: x1(t) on the left, phase portrait x1' vs x1 on the right.
 
     Each curve is a dict with ``t``, ``X`` (state samples), ``label`` and matplotlib
@@ -429,7 +431,8 @@ def plot_motion_row(ax_t: Axes, ax_p: Axes, curves: list[dict[str, Any]], b: flo
     stop = r"stop $x_1 = b$"
     ax_t.axhline(b, color="k", ls="--", lw=0.9, label=stop)
     ax_p.axvline(b, color="k", ls="--", lw=0.9, label=stop)
-    ax_t.set_title(title, fontsize="medium", loc="left")
+    if title:
+        ax_t.set_title(title, fontsize="medium")
     ax_t.set_xlabel("time $t$")
     ax_t.set_ylabel("$x_1$")
     ax_p.set_xlabel("$x_1$")
@@ -457,20 +460,36 @@ def motion_curves(osc: ic.ImpactOscillator, orbits: list[tuple[ic.PeriodicOrbit,
 
 def make_figure(rows: list[tuple[list[dict[str, Any]], float, str]], path: Path,
                 suptitle: str, width: float = 7.0) -> Figure:
+    """:func:`motion_figure` written to ``path`` and returned."""
+    fig = motion_figure(rows, suptitle, width)
+    fig.savefig(path, dpi=DPI)
+    log.info("wrote %s", path)
+    return fig
+
+
+def motion_figure(rows: list[tuple[list[dict[str, Any]], float, str]], suptitle: str,
+                  width: float = 7.0) -> Figure:
     """Figure with one row per parameter point (see :func:`plot_motion_row`), ``width``
-    inches wide, one legend under the rows; written to ``path`` and returned."""
+    inches wide, one legend under the rows."""
     if not 2.0 <= width <= MAX_WIDTH:
         raise ValueError(f"width must be in [2, {MAX_WIDTH}] inches; got {width!r}")
-    fig = Figure(figsize=(width, 0.36 * width * len(rows) + 1.4), layout="constrained")
-    grid = fig.add_gridspec(len(rows), 2, width_ratios=(1.6, 1.0))
-    for i, (curves, b, title) in enumerate(rows):
-        plot_motion_row(fig.add_subplot(grid[i, 0]), fig.add_subplot(grid[i, 1]), curves, b,
-                        title)
+    narrow = width < 5.0  # one column: taller rows, fewer ticks
+    row = 0.36 * width if not narrow else 0.5 * width
+    fig = Figure(figsize=(width, row * len(rows) + 1.4), layout="constrained")
+    subs = np.atleast_1d(fig.subfigures(len(rows), 1))
+    for sub, (curves, b, title) in zip(subs, rows, strict=True):
+        ax_t, ax_p = sub.subplots(1, 2, width_ratios=(1.6, 1.0) if not narrow else (1.2, 1.0))
+        plot_motion_row(ax_t, ax_p, curves, b, None)
+        sub.suptitle(title, fontsize="medium")  # over the row: as wide as the figure
+        if narrow:
+            for axis, n in ((ax_t.xaxis, 3), (ax_t.yaxis, 3), (ax_p.xaxis, 2), (ax_p.yaxis, 3)):
+                axis.set_major_locator(MaxNLocator(n))
     figure_legend(fig)
     fig.suptitle(suptitle, fontsize="medium")
     fit_labels(fig)
-    fig.savefig(path, dpi=DPI)
-    log.info("wrote %s", path)
+    for sub in subs:
+        fit_text(sub._suptitle, fig.bbox.width - 8.0)
+    fig.draw_without_rendering()
     return fig
 
 
@@ -536,7 +555,7 @@ def _figure3_rows(steadies: dict[tuple[float, float], dict[str, Any]]) -> list[t
                 elif M == N and o.impact_velocity > 0:
                     orbits.append((o, f"closed form $N = {M}$, not physical (crosses the stop)",
                                    NONPHYS_STYLE))
-        title = (rf"$\omega = {omega:g}$: paper: stable, $N = {N}$; simulated from rest: "
+        title = (rf"$\omega = {omega:g}$, paper: stable $N = {N}$, simulated from rest: "
                  f"{steady.get('pattern', {}).get('label', '?')}")
         rows.append((motion_curves(osc, orbits, steady, max(2 * N, 2 * P)), 0.0, title))
     return rows
@@ -551,7 +570,7 @@ def _figure4_rows(steadies: dict[tuple[float, float], dict[str, Any]]) -> list[t
         orbits = [] if orbit is None else [(orbit, "closed form $N = 1$, "
                                             + ("stable" if orbit.stable else "unstable"),
                                             CLOSED_STYLE)]
-        title = (f"$b = {b:g}$: paper: stable, $N = 1$; simulated from rest: "
+        title = (f"$b = {b:g}$, paper: stable $N = 1$, simulated from rest: "
                  f"{steady.get('pattern', {}).get('label', '?')}")
         rows.append((motion_curves(osc, orbits, steady, 3), b, title))
     return rows
