@@ -12,23 +12,11 @@ Given a motion instead of an oscillator, the map of its family
 (:func:`impactcont.multi_impact_map`, :mod:`impactcont.analysis.multi_maps`).
 
 The work is split into tasks of ``(N, block of p1, block of p2)`` (at most 131072
-points) run by :class:`~impactcont.analysis.map_runner.MapRunner` through a standard
-:class:`concurrent.futures.Executor`:
-
-- ``executor=None`` or ``"serial"``: in this process;
-- ``"process"``: a :class:`~concurrent.futures.ProcessPoolExecutor` created and
-  shut down here (``max_workers`` processes);
-- the address of a dask scheduler (``"tcp://host:8786"``): a
-  ``dask.distributed.Client`` connected here and closed with the map (optional extra
-  ``impactcont[dask]``);
-- any :class:`~concurrent.futures.Executor` instance (owned by the caller), e.g.
-  ``dask.distributed.Client(...).get_executor()``; a ``dask.distributed.Client``
-  itself is accepted too. On a dask cluster as many tasks run at once as its workers
-  have threads (read again as workers join), not as this machine has processors.
-
-Every map runs its tasks through :class:`~impactcont.analysis.map_runner.MapRunner` (the
-tasks of a :class:`~impactcont.analysis.map_runner.MapJob`): :func:`impactcont.multi_impact_map`
-too, with the same executors, progress and memory bound.
+points) run by :class:`~impactcont.analysis.map_runner.MapRunner` (the tasks of a
+:class:`~impactcont.analysis.map_runner.MapJob`) on the executor named by ``executor``
+(``None``/``"serial"``, ``"process"``, a dask scheduler address, an Executor or a dask
+Client: :mod:`impactcont.analysis.map_runner` says what each does), as for
+:func:`impactcont.multi_impact_map`, with the same progress and memory bound.
 
 Tasks receive the oscillator as JSON and return plain arrays, so any executor
 that pickles works. A process pool that breaks (a worker killed) is replaced and
