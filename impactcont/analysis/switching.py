@@ -278,6 +278,37 @@ def _check_epsilon(epsilon: object) -> float:
     return float(epsilon)
 
 
+def _switch_start(branch: xr.Dataset, label: str, which: int,
+                  bounds: Sequence[float] | None, epsilon: object
+                  ) -> tuple[float, MultiImpactOrbit, str, float, float]:
+    """What a switch at a special point of `branch` starts from.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        The parent branch.
+    label : str
+        The special point's label (``"PD"``, ``"GR"``).
+    which : int
+        Which point of that label (index among them, branch order).
+    bounds : (float, float) or None
+        Parameter range; None: the bounds recorded in ``branch``.
+    epsilon : float
+        The switch's step, checked to lie in (0, 1).
+
+    Returns
+    -------
+    (float, MultiImpactOrbit, str, float, float)
+        ``epsilon``, the orbit at the special point, the continuation parameter's name
+        and the bounds ``lo, hi``.
+    """
+    epsilon = _check_epsilon(epsilon)
+    orbit = special_orbit(branch, label, which)
+    parameter = branch.attrs["parameter"]
+    lo, hi = _dataset_bounds(branch, bounds)
+    return epsilon, orbit, parameter, lo, hi
+
+
 @blas_limited
 def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
                            bounds: Sequence[float] | None = None, epsilon: float = 1e-3,
@@ -335,10 +366,7 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
     :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
     Notes); a second one aborts.
     """
-    epsilon = _check_epsilon(epsilon)
-    orbit = special_orbit(branch, "PD", which)
-    parameter = branch.attrs["parameter"]
-    lo, hi = _dataset_bounds(branch, bounds)
+    epsilon, orbit, parameter, lo, hi = _switch_start(branch, "PD", which, bounds, epsilon)
     problem, u1, lam1, direction, info = _pd_start(orbit, parameter, epsilon)
     opts = make_options((lo, hi), options, direction=direction, both_directions=False, **more)
     if not lo <= lam1 <= hi:
@@ -626,10 +654,7 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
     Notes); a second one aborts.
     """
-    epsilon = _check_epsilon(epsilon)
-    orbit = special_orbit(branch, "GR", which)
-    parameter = branch.attrs["parameter"]
-    lo, hi = _dataset_bounds(branch, bounds)
+    epsilon, orbit, parameter, lo, hi = _switch_start(branch, "GR", which, bounds, epsilon)
     guess, new = grazing_split(orbit)
     osc = orbit.oscillator
     lam_g = model_parameter(osc, parameter).value(osc)
