@@ -28,7 +28,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.branch import continuation
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.multi_curves import check_crossing_line, multi_impact_curve
 from impactcont.core import (
     ContinuationOptions,
     ContinuationPoint,
@@ -685,12 +685,7 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
     """
     validate_curve_dataset(ds)
     parameters = tuple(split_parameters(str(ds.attrs["parameters"])))
-    if parameter not in parameters:
-        raise ParameterError(f"parameter must be one of the curve's parameters {parameters}; "
-                             f"got {parameter!r}")
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
-            or not math.isfinite(value):
-        raise ParameterError(f"value must be a finite real number; got {value!r}")
+    check_crossing_line(parameters, parameter, value)
     kind = str(ds.attrs["kind"])
     base = ImpactOscillator.from_json(ds.attrs["oscillator"])
     problem = curve_problem(kind, base, int(ds.attrs["N"]), parameters)

@@ -296,6 +296,31 @@ def _problem_of(ds: xr.Dataset) -> MultiImpactCurveProblem:
                                    symmetric=bool(record.get("symmetric", False)))
 
 
+def check_crossing_line(parameters: Sequence[str], parameter: object, value: object) -> None:
+    """Check the line ``parameter = value`` a curve's crossings are asked of.
+
+    Parameters
+    ----------
+    parameters : sequence of str
+        The curve's two parameters.
+    parameter : str
+        The parameter held fixed on the line; one of `parameters`.
+    value : float
+        Its value on the line; a finite real number.
+
+    Raises
+    ------
+    ParameterError
+        `parameter` is not one of `parameters`, or `value` is not a finite real number.
+    """
+    if parameter not in parameters:
+        raise ParameterError(f"parameter must be one of the curve's parameters "
+                             f"{parameters}; got {parameter!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+            or not math.isfinite(value):
+        raise ParameterError(f"value must be a finite real number; got {value!r}")
+
+
 def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
                                  ) -> list[dict[str, float]]:
     """Exact points where a curve of :func:`multi_impact_curve` crosses ``parameter = value``.
@@ -325,12 +350,7 @@ def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
         Newton fails at a crossing.
     """
     problem = _problem_of(ds)
-    if parameter not in problem.parameters:
-        raise ParameterError(f"parameter must be one of the curve's parameters "
-                             f"{problem.parameters}; got {parameter!r}")
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
-            or not math.isfinite(value):
-        raise ParameterError(f"value must be a finite real number; got {value!r}")
+    check_crossing_line(problem.parameters, parameter, value)
     symmetric = problem.symmetric
     values = np.asarray(ds[parameter].values, dtype=float)
     out: list[dict[str, float]] = []
