@@ -82,13 +82,30 @@ BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
 log = logging.getLogger(__name__)
 
 
-def _as_multi(orbit: Any) -> MultiImpactOrbit:
-    if isinstance(orbit, MultiImpactOrbit):
-        return orbit
-    if isinstance(orbit, PeriodicOrbit):
-        return multi_impact_orbit(orbit.oscillator, orbit.N, 1, orbit)
-    raise TypeError(f"start must be a MultiImpactOrbit or a PeriodicOrbit; got "
-                    f"{type(orbit).__name__}")
+def as_multi_impact_orbit(start: Any) -> MultiImpactOrbit:
+    """The N-p motion a continuation or a map starts from.
+
+    Parameters
+    ----------
+    start : MultiImpactOrbit or PeriodicOrbit
+        The motion; an N-1 :class:`~impactcont.orbit.periodic.PeriodicOrbit` is taken
+        as the N-1 multi-impact motion it is.
+
+    Returns
+    -------
+    MultiImpactOrbit
+
+    Raises
+    ------
+    TypeError
+        `start` is neither.
+    """
+    if isinstance(start, MultiImpactOrbit):
+        return start
+    if isinstance(start, PeriodicOrbit):
+        return multi_impact_orbit(start.oscillator, start.N, 1, start)
+    raise TypeError(f"start must be a MultiImpactOrbit (multi_impact_orbit, special_orbit) or a "
+                    f"PeriodicOrbit (periodic_orbits); got {type(start).__name__}")
 
 
 _DEFAULTS = {"newton_tol": 1e-11}
@@ -522,7 +539,7 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     point, aborts with :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
-    orbit = _as_multi(start)
+    orbit = as_multi_impact_orbit(start)
     check_progress(progress)
     labels = check_labels(detect)
     functions = check_user_functions(events, monitors, reserved_names())

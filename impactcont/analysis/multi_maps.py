@@ -57,6 +57,7 @@ from impactcont.analysis.map_runner import (
     compiled_interrupts,
     keep_interrupted,
 )
+from impactcont.analysis.multi_branch import as_multi_impact_orbit
 from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.dataset.map_storage import (
@@ -105,15 +106,6 @@ _SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
 #: Grid points of a task at least: a map of up to this many points is one sweep from its
 #: seed; a larger one is cut into bands of whole rows of its first parameter.
 _TASK_POINTS = 1 << 16
-
-
-def _as_multi(start: Any) -> MultiImpactOrbit:
-    if isinstance(start, MultiImpactOrbit):
-        return start
-    if isinstance(start, PeriodicOrbit):
-        return multi_impact_orbit(start.oscillator, start.N, 1, start)
-    raise TypeError(f"start must be a MultiImpactOrbit (multi_impact_orbit, special_orbit) or a "
-                    f"PeriodicOrbit (periodic_orbits); got {type(start).__name__}")
 
 
 def _check_parameters(osc: ImpactOscillator, parameters: Any
@@ -595,7 +587,7 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     (written under a temporary name, then renamed). A second Ctrl-C abandons the map
     (KeyboardInterrupt), a file being written removed.
     """
-    orbit = _as_multi(start)
+    orbit = as_multi_impact_orbit(start)
     osc = orbit.oscillator
     params = _check_parameters(osc, parameters)
     names = (params[0].name, params[1].name)
