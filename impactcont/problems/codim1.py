@@ -878,12 +878,17 @@ class NeimarkSackerCurve(CurveProblem):
                             *(f"im_v{i + 1}" for i in range(m)))
         self._ref = np.eye(m, dtype=complex)[0]
 
-    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
-        # in real arithmetic on (Re v, Im v), so that a complex step differentiates it
+    def _unpack(self, pc: _Pieces, delta: float, extras: np.ndarray
+                ) -> tuple[np.generic, np.ndarray, np.ndarray, np.ndarray]:
+        """``theta``, ``Re v``, ``Im v`` (from `extras`) and the map's Jacobian ``G``."""
         m = 2 * self.osc.n
-        theta = extras[0]
         vr, vi = extras[1:1 + m], extras[1 + m:1 + 2 * m]
         G, _ = pc.jacobian(delta)
+        return extras[0], vr, vi, G
+
+    def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
+        # in real arithmetic on (Re v, Im v), so that a complex step differentiates it
+        theta, vr, vi, G = self._unpack(pc, delta, extras)
         ct, st = np.cos(theta), np.sin(theta)
         rr, ri = self._ref.real, self._ref.imag
         return np.concatenate([G @ vr - (ct * vr - st * vi), G @ vi - (st * vr + ct * vi),
@@ -892,9 +897,7 @@ class NeimarkSackerCurve(CurveProblem):
     def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         """``d/d(theta, Re v, Im v)`` of ``[r, G v - e^{i theta} v, <v_ref, v> - 1]``."""
         m = 2 * self.osc.n
-        theta = extras[0]
-        vr, vi = extras[1:1 + m], extras[1 + m:1 + 2 * m]
-        G, _ = pc.jacobian(delta)
+        theta, vr, vi, G = self._unpack(pc, delta, extras)
         ct, st = math.cos(theta), math.sin(theta)
         eye = np.eye(m)
         J = np.zeros((1 + 2 * m + 2, 1 + 2 * m))
