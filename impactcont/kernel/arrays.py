@@ -40,12 +40,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Bracket", "BranchLinearization", "CheckedFlights", "ContactStops", "CorrectorSettings",
+__all__ = ["BranchLinearization", "CheckedFlights", "ContactStops", "CorrectorSettings",
            "CorrectorStep", "Embedding", "FirstOrderArrays", "FirstOrderFlight", "FlightArrays",
            "FlightFlow", "FlowTables", "ForcedAmplitudes", "Forcing", "ForcingDerivatives",
            "GeometryTables", "ImpactSequence", "ModalArrays", "ModalFlight", "MotionChecks",
-           "NewtonResult", "PalcResult", "SearchGrid", "SearchedCoordinate", "ShootingFlow",
-           "ShotFlights", "StopSeries", "SweepGrid",
+           "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights", "StopSeries", "SweepGrid",
            "SweepMotion", "SweepOutputs", "SweepSettings", "SweepStats", "modal_arrays",
            "stack_flows"]
 
@@ -525,7 +524,7 @@ class PalcResult(NamedTuple):
 
 class StopSeries(NamedTuple):
     """A stop coordinate ``s = n . x`` along one flight, as the contact search of eq. (16)
-    sums it (:func:`impactcont.kernel.contact.highest_maximum`): a forced part, free modes
+    sums it (:func:`impactcont.kernel.contact.stop_maximum`): a forced part, free modes
     (or the first-order flow's scalar pairs), a constant level and a polynomial part."""
 
     w: np.ndarray
@@ -549,74 +548,6 @@ class StopSeries(NamedTuple):
     """Decay rate of each such mode."""
     p1: float
     """Drift of ``s`` per unit time (first-order flow)."""
-
-
-class SearchGrid(NamedTuple):
-    """The table of the contact search of eq. (16) on one flight
-    (:func:`impactcont.kernel.contact.highest_maximum`), shared by every root and gap at
-    one frequency."""
-
-    times: np.ndarray
-    """The grid on ``[0, T]`` (:func:`impactcont.kernel.contact.time_grid`), shape (nt,)."""
-    free: np.ndarray
-    """The free part of the searched coordinate and its first four derivatives on it,
-    shape (5, nt) (:func:`impactcont.kernel.contact.free_on_grid`, with the polynomial part
-    of :func:`impactcont.kernel.contact.drift_on_grid` where there is one)."""
-    cw: np.ndarray
-    """``cos(omega times)``."""
-    sw: np.ndarray
-    """``sin(omega times)``."""
-    work: np.ndarray
-    """The search's scratch, shape ``(WORK_ROWS, 2 nt)``, overwritten by each search."""
-
-
-class SearchedCoordinate(NamedTuple):
-    """The coordinate the contact search of eq. (16) maximises along one flight:
-    ``s(t) = gamma cos(omega t + delta) + beta sin(omega t + delta) + ks (sum_i weights_i
-    y_i(t) + p(t))`` (x1 of the N-1 motion: weights ``u0``, no polynomial part)."""
-
-    gamma: float
-    """Forced part: the cosine's coefficient."""
-    beta: float
-    """... and the sine's."""
-    omega: float
-    """The forcing frequency."""
-    delta: float
-    """The forcing phase at the flight's start."""
-    ks: float
-    """Weight of the free part (``kappa sigma`` for x1, the sign for a stop coordinate)."""
-    w: np.ndarray
-    """Frequencies of the free terms."""
-    a: np.ndarray
-    """Their decay rates."""
-    weights: np.ndarray
-    """Their weights in ``s``."""
-    dy: np.ndarray
-    """Free deviation of each term at the start: displacement."""
-    dv: np.ndarray
-    """... and velocity."""
-    pg: np.ndarray
-    """Polynomial part (:func:`impactcont.kernel.contact.drift_x1`): the weighted static
-    force of each free mode a constant force pushes (empty: none)."""
-    pa: np.ndarray
-    """Decay rate of each such mode."""
-    p1: float
-    """Linear drift of ``s`` per unit time (first-order flow)."""
-
-
-class Bracket(NamedTuple):
-    """An interval of the contact search holding one root of a derivative ``g`` of the
-    searched coordinate, with ``g`` and its next two derivatives at both ends (NaN where
-    unknown) (:func:`impactcont.kernel.contact._polish`)."""
-
-    lo: float
-    hi: float
-    g_lo: float
-    g_hi: float
-    dg_lo: float
-    dg_hi: float
-    ddg_lo: float
-    ddg_hi: float
 
 
 class BranchLinearization(NamedTuple):

@@ -55,7 +55,7 @@ import math
 
 import numpy as np
 
-from impactcont.kernel.contact import _x1_coordinate, flight_tables, highest_maximum
+from impactcont.kernel.contact import flight_tables, x1_maximum
 from impactcont.kernel.flights import _re, _transition_into, forced, mode_period, transition
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
@@ -470,7 +470,7 @@ def block_map(arrays, R, N, omegas, bs, want_rho):
         modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, om, N)
         r2[iw] = sc[5] * sc[5] + sc[6] * sc[6]
         conds[iw] = sc[7]
-        grid, _, dy, dv = flight_tables(w, a, u0, modal, om, sc[0])
+        times, _, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, om, sc[0])
         _transition_into(modal, u, ui, tr)
         for ib in range(nb):
             count, dl, sg, _, _ = orbit_roots(sc, bs[ib], om, R)
@@ -480,8 +480,8 @@ def block_map(arrays, R, N, omegas, bs, want_rho):
                 delta[iw, ib, idx] = dl[k]
                 vel[iw, ib, idx] = sg[k]
                 ks = (1.0 + R) * sg[k]
-                best, best_t = highest_maximum(
-                    grid, _x1_coordinate(sc[1], sc[2], om, dl[k], ks, w, a, u0, dy, dv), np.nan)
+                best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], om, dl[k], ks,
+                                          w, a, u0, dy, dv, work, np.nan)
                 gap[iw, ib, idx] = bs[ib] - best
                 gap_t[iw, ib, idx] = best_t
                 _assemble_into(tr, modal, w, a, f, u, ui0, om, R, dl[k], sg[k], pieces,
@@ -516,8 +516,7 @@ def point_orbits(arrays, R, omega, N, b):
 
     Returns ``(modal, scalars, count, delta, sigma, fold_error, gap_min, gap_min_time,
     capped, states, velocity_scales, jacobians, multipliers)`` (see :func:`omega_setup`,
-    :func:`orbit_roots`, :func:`~impactcont.kernel.contact.highest_maximum`,
-    :func:`physical_state`); ``jacobians``
+    :func:`orbit_roots`, :func:`x1_maximum`, :func:`physical_state`); ``jacobians``
     and ``multipliers`` hold G of each root and its eigenvalues when
     ``2n <= EAGER_JACOBIAN`` (cheaper here than later calls), empty arrays otherwise.
     ``arrays``: the oscillator's modal arrays, :meth:`impactcont.kernel.arrays.
@@ -552,11 +551,11 @@ def point_orbits(arrays, R, omega, N, b):
                 for col in range(m):
                     jacobians[k, r, col] = G[r, col]
     if count > 0:
-        grid, capped, dy, dv = flight_tables(w, a, u0, modal, omega, sc[0])
+        times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega,
+                                                                  sc[0])
         for k in range(count):
-            best, best_t = highest_maximum(
-                grid, _x1_coordinate(sc[1], sc[2], omega, dl[k], (1.0 + R) * sg[k], w, a, u0,
-                                     dy, dv), np.nan)
+            best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, dl[k],
+                                      (1.0 + R) * sg[k], w, a, u0, dy, dv, work, np.nan)
             gap[k] = b - best
             gap_t[k] = best_t
     return (modal, sc, count, dl, sg, fold_error, gap, gap_t, capped, states, scales,
@@ -572,8 +571,7 @@ def phase_orbit(arrays, R, omega, N, b, delta):
     modal, sc = omega_setup(w, a, f, u0, ui0, eig_err, R, omega, N)
     sigma = phase_sigma(sc, omega, R, b, delta)
     state, _ = physical_state(modal, u, omega, R, delta, sigma)
-    grid, capped, dy, dv = flight_tables(w, a, u0, modal, omega, sc[0])
-    best, best_t = highest_maximum(
-        grid, _x1_coordinate(sc[1], sc[2], omega, delta, (1.0 + R) * sigma, w, a, u0, dy, dv),
-        np.nan)
+    times, capped, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, sc[0])
+    best, best_t = x1_maximum(times, free, cw, sw, sc[1], sc[2], omega, delta,
+                              (1.0 + R) * sigma, w, a, u0, dy, dv, work, np.nan)
     return modal, sc, sigma, b - best, best_t, capped, state

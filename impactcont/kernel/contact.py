@@ -5,7 +5,7 @@ impacting mass is ``x1(t) = x1p(t + delta / omega) + kappa sigma K(t)``: a harmo
 forced part and a free part ``K(t)`` that depends on the frequency only. The free
 part is tabulated once per frequency on a grid of at least 16 cells per fastest
 period seen by the mass (:func:`time_grid`, :func:`free_on_grid`, the semigroup
-recurrence of eq. 9); every root and gap then reuses it. :func:`highest_maximum` brackets
+recurrence of eq. 9); every root and gap then reuses it. :func:`x1_maximum` brackets
 the maxima cell by cell, bounds each by the tangents of a concave piece and polishes
 in decreasing order of the bound (safeguarded Newton from a quintic Hermite start),
 so the motion crosses the stop between impacts iff the maximum exceeds b (eq. 16).
@@ -13,7 +13,7 @@ so the motion crosses the stop between impacts iff the maximum exceeds b (eq. 16
 A constant force that pushes a free mode the stop coordinate sees adds a polynomial in
 time to the free part (:func:`drift_x1`: ``g t^2 / 2`` undamped, the drift
 ``g t^2 phi(2at) / 2`` damped, a linear drift ``d t`` on the first-order flow):
-:func:`drift_on_grid` adds it to the tabulated free part and :func:`highest_maximum` to every
+:func:`drift_on_grid` adds it to the tabulated free part and :func:`stop_maximum` to every
 evaluation of the polish, so the grid's values, slopes and curvatures, the tangent bounds
 and the Newton steps all see the whole coordinate.
 """
@@ -24,13 +24,13 @@ import math
 
 import numpy as np
 
-from impactcont.kernel.arrays import Bracket, SearchedCoordinate, SearchGrid
-from impactcont.kernel.flights import _re, mode_transfer
+from impactcont.kernel.flights import mode_transfer
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 
 __all__ = ["WORK_ROWS", "drift_on_grid", "drift_x1", "flight_tables", "free_on_grid",
-           "free_x1", "highest_maximum", "other_maximum", "time_grid", "x1_derivatives"]
+           "free_x1", "other_maximum", "stop_maximum", "time_grid", "x1_derivatives",
+           "x1_maximum"]
 
 
 _EPS = 2.220446049250313e-16
@@ -243,36 +243,23 @@ def x1_derivatives(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv):
     ``Gam, B``: the forced motion of mass 1 (``scalars[1:3]`` of :func:`omega_setup`);
     ``ks = kappa sigma``; ``dy, dv``: ``modal[6], modal[7]``.
     """
-    d = _x1_derivs(t, _x1_coordinate(Gam, B, omega, delta, ks, w, a, u0, dy, dv))
+    d = _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv, None)
     return d[0], d[1], d[2], d[3]
 
 
-@_inner
-def _x1_coordinate(Gam, B, omega, delta, ks, w, a, u0, dy, dv):
-    """x1 of the N-1 motion as the searched coordinate of :func:`highest_maximum`:
-    :class:`~impactcont.kernel.arrays.SearchedCoordinate` with no polynomial part (empty
-    ``pg, pa``, ``p1 = 0``, which :func:`_x1_derivs` skips at run time). One type for x1
-    and for a stop coordinate with a drift: the search is compiled once for both."""
-    return SearchedCoordinate(Gam, B, omega, delta, ks, w, a, u0, dy, dv, np.empty(0),
-                              np.empty(0), 0.0)
-
-
 @_jit
-def _x1_derivs(t, coord):
-    """The searched coordinate (`coord`, a
-    :class:`~impactcont.kernel.arrays.SearchedCoordinate`) and its first four derivatives
-    at time t; the polynomial part of :func:`drift_x1` is added to the free part (per unit
-    ``ks``) unless it is empty."""
-    Gam, B, omega, delta, ks = coord.gamma, coord.beta, coord.omega, coord.delta, coord.ks
+def _x1_derivs(t, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift=None):
+    """x1 and its first four derivatives; ``drift``: None, or ``(pg, pa, p1)`` of
+    :func:`drift_x1`, added to the free part (per unit ``ks``). A None is a type: numba
+    compiles the branch away, so the searches without a drift run the code they ran
+    before it existed."""
     th = omega * t + delta
     c, s = np.cos(th), np.sin(th)
     p = Gam * c + B * s
     dp = omega * (B * c - Gam * s)
-    f0, f1, f2, f3, f4 = free_x1(t, coord.w, coord.a, coord.weights, coord.dy, coord.dv)
-    if coord.pg.size > 0 or coord.p1 != 0.0:
-        # real time: a complex t comes only from the complex step of x1 of the N-1 motion
-        # (problems/codim1.py through x1_derivatives), which has no polynomial part
-        q0, q1, q2, q3, q4 = drift_x1(_re(t), coord.pg, coord.pa, coord.p1)
+    f0, f1, f2, f3, f4 = free_x1(t, w, a, u0, dy, dv)
+    if drift is not None:
+        q0, q1, q2, q3, q4 = drift_x1(t, drift[0], drift[1], drift[2])
         f0 += q0
         f1 += q1
         f2 += q2
@@ -290,12 +277,10 @@ _ORDER_ACC = np.int64(2)
 
 
 @_jit
-def _polish(order, bracket, coord):
-    """Root of the ``order``-th derivative of `coord` in ``[lo, hi]`` by safeguarded Newton.
+def _polish(order, lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi, Gam, B, omega, delta, ks,
+            w, a, u0, dy, dv, drift=None):
+    """Root of the ``order``-th derivative of x1 in [lo, hi] by safeguarded Newton.
 
-    `bracket` (:class:`~impactcont.kernel.arrays.Bracket`): the interval and the
-    ``order``-th derivative's values ``g``, slopes ``dg`` and curvatures ``ddg`` at its
-    ends; `coord`: the :class:`~impactcont.kernel.arrays.SearchedCoordinate`.
     Returns the root and x1 with its first three derivatives there. The start is the
     root of the quintic Hermite interpolant of the ``order``-th derivative from its
     values ``g``, slopes ``dg`` and curvatures ``ddg`` at the ends (cubic when a
@@ -306,11 +291,11 @@ def _polish(order, bracket, coord):
     the last: the values at the root then follow from the Taylor series at the last
     evaluation (exact to rounding, no further evaluation).
     """
-    left, right = bracket.lo, bracket.hi
-    ga = bracket.g_lo
-    x = _hermite_root(bracket)
+    left, right = lo, hi
+    ga = g_lo
+    x = _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi)
     for _ in range(_MAX_ITER):
-        d = _x1_derivs(x, coord)
+        d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
         g = d[order]
         dg = d[order + 1]
         if (g < 0.0) == (ga < 0.0):
@@ -328,12 +313,12 @@ def _polish(order, bracket, coord):
             return _taylor(xn, -step, d)  # the Newton step is the last
         if right - left <= tol:
             if np.isfinite(xn):
-                d = _x1_derivs(xn, coord)
+                d = _x1_derivs(xn, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
             return (xn if np.isfinite(xn) else x), d[0], d[1], d[2], d[3]
         if not (np.isfinite(xn) and left <= xn <= right):
             xn = 0.5 * (left + right)
         x = xn
-    d = _x1_derivs(x, coord)
+    d = _x1_derivs(x, Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
     return x, d[0], d[1], d[2], d[3]
 
 
@@ -347,16 +332,13 @@ def _taylor(t, h, d):
 
 
 @_inner
-def _hermite_root(bracket):
-    """Root in (lo, hi) of the Hermite interpolant of g (g of opposite signs at the ends),
-    from the :class:`~impactcont.kernel.arrays.Bracket`.
+def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi):
+    """Root in (lo, hi) of the Hermite interpolant of g (g of opposite signs at the ends).
 
     The cubic one from the values and slopes at the ends, by three Newton steps from the
     secant point, then, when the second derivatives ``ddg`` are finite, the quintic one
     by two Newton steps from there; the secant point (or the midpoint) when a slope is
     not finite; a step that leaves the interval ends the iteration."""
-    lo, hi, g_lo, g_hi = bracket.lo, bracket.hi, bracket.g_lo, bracket.g_hi
-    dg_lo, dg_hi, ddg_lo, ddg_hi = bracket.dg_lo, bracket.dg_hi, bracket.ddg_lo, bracket.ddg_hi
     h = hi - lo
     x = g_lo / (g_lo - g_hi) if g_lo != g_hi else 0.5
     if not 0.0 < x < 1.0:
@@ -410,17 +392,39 @@ def _hermite_root(bracket):
 
 
 @_jit
-def highest_maximum(grid, coord, exclude):
-    """Highest interior local maximum of a coordinate on ``(0, T)``: ``(value, time)``.
+def x1_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude):
+    """Highest interior local maximum of ``x1`` on ``(0, T)``: ``(value, time)``.
 
-    `grid` (:class:`~impactcont.kernel.arrays.SearchGrid`, :func:`_search_grid`): the
-    times, the free part on them (:func:`free_on_grid`, with :func:`drift_on_grid` where
-    there is a polynomial part), cos and sin of ``omega times`` and the scratch ``work``
-    of shape ``(WORK_ROWS, 2 nt)`` (reused across calls); `coord`
-    (:class:`~impactcont.kernel.arrays.SearchedCoordinate`): ``s = gamma cos(omega t +
-    delta) + beta sin(omega t + delta) + ks (sum_i weights_i y_i(t) + p(t))``, the free
-    part the modal sum of :func:`free_x1`, ``p`` the polynomial part of :func:`drift_x1`
-    (none for x1 of the N-1 motion, :func:`_x1_coordinate`).
+    ``x1 = Gam cos(omega t + delta) + B sin(omega t + delta) + ks * free(t)``, the free
+    part the modal sum ``sum u0_i y_i(t)`` of :func:`free_x1` (tabulated in ``free``);
+    :func:`stop_maximum` with no polynomial part (the search of eq. 16, see there).
+    """
+    return _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work,
+                    exclude, None)
+
+
+@_jit
+def stop_maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, pg, pa, p1,
+                 work, exclude):
+    """Highest interior local maximum of a stop coordinate on ``(0, T)``: ``(value, time)``.
+
+    As :func:`x1_maximum` with the polynomial part of :func:`drift_x1` (``pg, pa, p1``, a
+    free mode pushed by a constant force) in the free part: ``s = Gam cos + B sin + ks
+    (modal free part + p(t))``; ``free`` must hold it (:func:`drift_on_grid` after
+    :func:`free_on_grid`).
+    """
+    return _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work,
+                    exclude, (pg, pa, p1))
+
+
+@_inner
+def _maximum(times, free, cw, sw, Gam, B, omega, delta, ks, w, a, u0, dy, dv, work, exclude,
+             drift):
+    """The search of :func:`x1_maximum` and :func:`stop_maximum` (``drift``: None, or the
+    polynomial part ``(pg, pa, p1)``).
+
+    ``free``: :func:`free_on_grid` at ``times``; ``cw, sw``: cos and sin of
+    ``omega times``; ``work``: scratch of shape ``(WORK_ROWS, 2 nt)`` (reused across calls).
     Each grid cell holds at most one root of ``x1''`` (the grid is built so), hence
     at most two roots of ``x1'``:
 
@@ -446,8 +450,6 @@ def highest_maximum(grid, coord, exclude):
     coordinate sees, which :func:`time_grid` already refines for (its ``a + sqrt(a^2 -
     w^2) = 2a``); ``p'''`` is 0 or of one sign.
     """
-    times, free, cw, sw, work = grid.times, grid.free, grid.cw, grid.sw, grid.work
-    Gam, B, omega, delta, ks = coord.gamma, coord.beta, coord.omega, coord.delta, coord.ks
     cd, sd = math.cos(delta), math.sin(delta)
     nt = times.size
     T = times[nt - 1]
@@ -478,10 +480,9 @@ def highest_maximum(grid, coord, exclude):
         a0, a1 = acc[k - 1], acc[k]
         if (a0 < 0.0) == (a1 < 0.0) or (v0 < 0.0) != (v1 < 0.0):
             if v0 >= 0.0 and v1 < 0.0:  # one root of x1', a maximum
-                m = _candidate(work, m,
-                               Bracket(lo, hi, v0, v1, a0, a1,
-                                       _jerk(omega, ks, v0, free[1, k - 1], free[3, k - 1]),
-                                       _jerk(omega, ks, v1, free[1, k], free[3, k])),
+                m = _candidate(work, m, lo, hi, v0, v1, a0, a1,
+                               _jerk(omega, ks, v0, free[1, k - 1], free[3, k - 1]),
+                               _jerk(omega, ks, v1, free[1, k], free[3, k]),
                                _concave_bound(lo, hi, x[k - 1], x[k], v0, v1))
             continue
         # x1'' changes sign, x1' has one sign at both ends: zero or two roots; none when
@@ -490,15 +491,15 @@ def highest_maximum(grid, coord, exclude):
             continue
         j0 = _jerk(omega, ks, v0, free[1, k - 1], free[3, k - 1])
         j1 = _jerk(omega, ks, v1, free[1, k], free[3, k])
-        tm, xm, vm, am, jm = _polish(
-            _ORDER_ACC, Bracket(lo, hi, a0, a1, j0, j1,
-                                _snap(omega, ks, x[k - 1], free[0, k - 1], free[4, k - 1]),
-                                _snap(omega, ks, x[k], free[0, k], free[4, k])), coord)
+        tm, xm, vm, am, jm = _polish(_ORDER_ACC, lo, hi, a0, a1, j0, j1,
+                                     _snap(omega, ks, x[k - 1], free[0, k - 1], free[4, k - 1]),
+                                     _snap(omega, ks, x[k], free[0, k], free[4, k]),
+                                     Gam, B, omega, delta, ks, w, a, u0, dy, dv, drift)
         if v0 >= 0.0 and vm < 0.0:  # falls through 0 before the inflection
-            m = _candidate(work, m, Bracket(lo, tm, v0, vm, a0, am, j0, jm),
+            m = _candidate(work, m, lo, tm, v0, vm, a0, am, j0, jm,
                            _concave_bound(lo, tm, x[k - 1], xm, v0, vm))
         elif vm >= 0.0 and v1 < 0.0:  # rises above 0, then falls through it
-            m = _candidate(work, m, Bracket(tm, hi, vm, v1, am, a1, jm, j1),
+            m = _candidate(work, m, tm, hi, vm, v1, am, a1, jm, j1,
                            _concave_bound(tm, hi, xm, x[k], vm, v1))
     best = -np.inf
     best_t = np.nan
@@ -510,9 +511,9 @@ def highest_maximum(grid, coord, exclude):
         if not c_ub[j] > best:
             break
         c_ub[j] = -np.inf  # done
-        best, best_t = _take(best, best_t,
-                             Bracket(c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j],
-                                     work[10, j], work[11, j]), T, coord, exclude)
+        best, best_t = _take(best, best_t, c_lo[j], c_hi[j], c_v[j], c_vh[j], c_a[j], c_ah[j],
+                             work[10, j], work[11, j], T, Gam, B, omega, delta, ks, w, a, u0,
+                             dy, dv, exclude, drift)
     return best, best_t
 
 
@@ -539,28 +540,27 @@ def _concave_bound(p, q, xp, xq, vp, vq):
 
 
 @_inner
-def _candidate(work, m, bracket, bound):
+def _candidate(work, m, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, bound):
     """Record the piece ``[lo, hi]`` where x1' falls through 0 (a maximum) as candidate ``m``
-    in the rows 3-11 of ``work`` with the upper bound of x1 on it; `bracket`
-    (:class:`~impactcont.kernel.arrays.Bracket`) holds x1' (``v``), x1'' (``a``) and the
-    third derivative (``j``, NaN where unknown) at the ends; returns ``m + 1``."""
-    work[3, m] = bracket.lo
-    work[4, m] = bracket.hi
-    work[5, m] = bracket.g_lo
+    in the rows 3-11 of ``work`` with the upper bound of x1 on it (``j``: its third
+    derivative at the ends, NaN where unknown); returns ``m + 1``."""
+    work[3, m] = lo
+    work[4, m] = hi
+    work[5, m] = v_lo
     work[6, m] = bound
-    work[7, m] = bracket.g_hi
-    work[8, m] = bracket.dg_lo
-    work[9, m] = bracket.dg_hi
-    work[10, m] = bracket.ddg_lo
-    work[11, m] = bracket.ddg_hi
+    work[7, m] = v_hi
+    work[8, m] = a_lo
+    work[9, m] = a_hi
+    work[10, m] = j_lo
+    work[11, m] = j_hi
     return m + 1
 
 
 @_inner
-def _take(best, best_t, bracket, T, coord, exclude):
-    """Polish the candidate maximum in `bracket` (of x1', :func:`_candidate`) and keep it as
-    ``(best, best_t)`` if higher and neither an impact nor the excluded time."""
-    r, xr, _, acc, _ = _polish(_ORDER_VEL, bracket, coord)
+def _take(best, best_t, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, T, Gam, B, omega, delta, ks,
+          w, a, u0, dy, dv, exclude, drift):
+    r, xr, _, acc, _ = _polish(_ORDER_VEL, lo, hi, v_lo, v_hi, a_lo, a_hi, j_lo, j_hi, Gam, B,
+                            omega, delta, ks, w, a, u0, dy, dv, drift)
     if r <= _END_TOL * T or r >= (1.0 - _END_TOL) * T:
         # the impact itself, not an interior contact (with R = 0, x1' = 0 at t = 0 and
         # its rounding would otherwise place a "maximum" a few ulps after the impact)
@@ -572,38 +572,31 @@ def _take(best, best_t, bracket, T, coord, exclude):
     return best, best_t
 
 
-WORK_ROWS = 12  # rows of the scratch of highest_maximum (its grid values and candidates)
+WORK_ROWS = 12  # rows of the scratch of x1_maximum (its grid values and candidates)
 _EXCLUDE_TOL = 1e-7  # relative to T: a maximum this close to ``exclude`` is the same one
-
-
-@_inner
-def _search_grid(times, free, omega):
-    """:class:`~impactcont.kernel.arrays.SearchGrid` of `times` and the free part `free` on
-    them (:func:`free_on_grid`): with cos and sin of ``omega times`` and the scratch of
-    :func:`highest_maximum`."""
-    return SearchGrid(times, free, np.cos(omega * times), np.sin(omega * times),
-                      np.empty((WORK_ROWS, 2 * times.size)))
 
 
 @_jit
 def flight_tables(w, a, u0, modal, omega, T):
     """Per-frequency tables of the interior-contact check, shared by every gap and root.
 
-    Returns ``(grid, capped, dy, dv)``: the :class:`~impactcont.kernel.arrays.SearchGrid`
-    of :func:`_search_grid` on the times of :func:`time_grid` (``capped`` as it says) with
-    the free response of :func:`free_on_grid`, and the free modal deviation per unit
-    ``kappa sigma``.
+    Returns ``(times, capped, free, cw, sw, dy, dv, work)``: the grid of
+    :func:`time_grid`, the free response of :func:`free_on_grid` on it, cos and sin of
+    ``omega t``, the free modal deviation per unit ``kappa sigma`` and the scratch of
+    :func:`x1_maximum`.
     """
     times, capped = time_grid(w, a, u0, omega, T)
     dy = modal[6].copy()
     dv = modal[7].copy()
-    return _search_grid(times, free_on_grid(times, w, a, u0, dy, dv), omega), capped, dy, dv
+    free = free_on_grid(times, w, a, u0, dy, dv)
+    return (times, capped, free, np.cos(omega * times), np.sin(omega * times), dy, dv,
+            np.empty((WORK_ROWS, 2 * times.size)))
 
 
 @_jit
 def other_maximum(w, a, u0, modal, scalars, omega, R, delta, sigma, exclude):
     """Highest interior maximum of ``x1`` other than the one at time ``exclude``:
-    ``(value, time)``, ``(-inf, nan)`` when there is none (:func:`highest_maximum`)."""
-    grid, _, dy, dv = flight_tables(w, a, u0, modal, omega, scalars[0])
-    return highest_maximum(grid, _x1_coordinate(scalars[1], scalars[2], omega, delta,
-                                               (1.0 + R) * sigma, w, a, u0, dy, dv), exclude)
+    ``(value, time)``, ``(-inf, nan)`` when there is none (:func:`x1_maximum`)."""
+    times, _, free, cw, sw, dy, dv, work = flight_tables(w, a, u0, modal, omega, scalars[0])
+    return x1_maximum(times, free, cw, sw, scalars[1], scalars[2], omega, delta,
+                      (1.0 + R) * sigma, w, a, u0, dy, dv, work, exclude)

@@ -19,7 +19,7 @@ argument types (each compiled once, when this module is first imported):
 - :func:`orbit_values`: per impact phase (a root of eq. 15) the impact velocity from the
   better of its two exact forms, the state ``X(0)``, G of eq. (25), its eigenvalues and
   the interior-contact check of eq. (16) (the search of
-  :func:`impactcont.kernel.contact.highest_maximum` on the scalar pairs of modes, its tables
+  :func:`impactcont.kernel.contact.x1_maximum` on the scalar pairs of modes, its tables
   built once per call for every phase).
 
 Complex ``expm1`` and complex division are written out as numpy computes them
@@ -35,13 +35,7 @@ import math
 import numba as nb
 import numpy as np
 
-from impactcont.kernel.contact import (
-    _search_grid,
-    _x1_coordinate,
-    free_on_grid,
-    highest_maximum,
-    time_grid,
-)
+from impactcont.kernel.contact import WORK_ROWS, free_on_grid, time_grid, x1_maximum
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.jit import typed_entry
@@ -543,7 +537,10 @@ def orbit_values(pieces, y_modal, V0, lam, pw, pa, pk, pj, omega, R, T, g, Delta
     dy, dv = _pair_coefficients(coef, lam, pk, pj)
     ones = np.ones(n)
     times, capped = time_grid(pw, pa, ones, omega, T)
-    grid = _search_grid(times, free_on_grid(times, pw, pa, ones, dy, dv), omega)
+    free = free_on_grid(times, pw, pa, ones, dy, dv)
+    cw = np.cos(omega * times)
+    sw = np.sin(omega * times)
+    work = np.empty((WORK_ROWS, 2 * times.size))
     for i in range(count):
         delta = deltas[i]
         cd, sd = math.cos(delta), math.sin(delta)
@@ -560,8 +557,7 @@ def orbit_values(pieces, y_modal, V0, lam, pw, pa, pk, pj, omega, R, T, g, Delta
         for r in range(n):
             scale = max(scale, abs(states[i, n + r]), omega * abs(states[i, r]))
         values[2, i] = scale
-        best, values[4, i] = highest_maximum(
-            grid, _x1_coordinate(Gam, B, omega, delta, kappa * sigma, pw, pa, ones, dy, dv),
-            np.nan)
+        best, values[4, i] = x1_maximum(times, free, cw, sw, Gam, B, omega, delta,
+                                        kappa * sigma, pw, pa, ones, dy, dv, work, np.nan)
         values[3, i] = b[i] - best
     return values, states, G, mu, capped

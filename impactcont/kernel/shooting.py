@@ -24,7 +24,7 @@ module. An entry point takes each structure as its plain tuple (typed in numba's
 dispatcher) and names it again on entry; compiled code passes the named structures.
 
 The interior-contact check of eq. (16) against both stops is the compiled kernel's
-search (:func:`impactcont.kernel.contact.highest_maximum` on its grid): for the modal flow
+search (:func:`impactcont.kernel.contact.stop_maximum` on its grid): for the modal flow
 with the weights ``n^T U`` of the stop coordinate, for the first-order flow on the
 scalar pairs of :attr:`impactcont.model.first_order.FirstOrderBasis.scalar_pairs`
 with unit weights (as :mod:`impactcont.orbit.general`). A constant force adds a constant
@@ -62,16 +62,15 @@ from impactcont.kernel.arrays import (
     ImpactSequence,
     ModalFlight,
     PalcResult,
-    SearchedCoordinate,
     ShootingFlow,
     ShotFlights,
     StopSeries,
 )
 from impactcont.kernel.contact import (
-    _search_grid,
+    WORK_ROWS,
     drift_on_grid,
     free_on_grid,
-    highest_maximum,
+    stop_maximum,
     time_grid,
 )
 from impactcont.kernel.flights import mode_transfer, transfer_into
@@ -779,20 +778,9 @@ def _search_inputs(flow, forcing, normal, X0, theta):
 
 
 @_inner
-def _stop_coordinate(series, omega, theta, sign):
-    """``sign s`` of `series` (:class:`~impactcont.kernel.arrays.StopSeries`, the constant
-    level left out) as the contact search's
-    :class:`~impactcont.kernel.arrays.SearchedCoordinate`: forced part and weight of the
-    free part multiplied by `sign`."""
-    return SearchedCoordinate(sign * series.gamma, sign * series.beta, omega, theta, sign,
-                              series.w, series.a, series.weights, series.dy, series.dv,
-                              series.pg, series.pd, series.p1)
-
-
-@_inner
 def _series_extrema(series, omega, theta, tau, sign, both):
     """``(top, time, low, time_low, capped)``: the highest maximum of ``sign s`` on a flight
-    of duration `tau` (:func:`impactcont.kernel.contact.highest_maximum`, the constant level
+    of duration `tau` (:func:`impactcont.kernel.contact.stop_maximum`, the constant level
     left out) and, with `both`, that of ``-sign s`` on the same grid (``-inf`` and NaN
     without); ``capped`` as :func:`impactcont.kernel.contact.time_grid` says. The grid,
     the free part of `series` and the forcing's cosine and sine on it are built once."""
@@ -800,13 +788,19 @@ def _series_extrema(series, omega, theta, tau, sign, both):
     free = drift_on_grid(times, series.pg, series.pd, series.p1,
                          free_on_grid(times, series.w, series.a, series.weights, series.dy,
                                       series.dv))
-    grid = _search_grid(times, free, omega)
-    top, t_top = highest_maximum(grid, _stop_coordinate(series, omega, theta, sign), np.nan)
+    cw = np.cos(omega * times)
+    sw = np.sin(omega * times)
+    work = np.empty((WORK_ROWS, 2 * times.size))
+    top, t_top = stop_maximum(times, free, cw, sw, sign * series.gamma, sign * series.beta,
+                              omega, theta, sign, series.w, series.a, series.weights, series.dy,
+                              series.dv, series.pg, series.pd, series.p1, work, np.nan)
     low = -np.inf
     t_low = np.nan
     if both:
-        low, t_low = highest_maximum(grid, _stop_coordinate(series, omega, theta, -sign),
-                                     np.nan)
+        low, t_low = stop_maximum(times, free, cw, sw, -sign * series.gamma,
+                                  -sign * series.beta, omega, theta, -sign, series.w, series.a,
+                                  series.weights, series.dy, series.dv, series.pg, series.pd,
+                                  series.p1, work, np.nan)
     return top, t_top, low, t_low, capped
 
 

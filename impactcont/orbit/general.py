@@ -24,7 +24,7 @@ the kernel's rank-one form (:class:`PeriodicForm`):
   from ``D Phi(T)``, ``D (I - Phi(T)) P(0)`` and ``X'(T^-) = P'(0) e_d + kappa sigma
   A (y + e)``; its eigenvalues as the kernel's (:func:`impactcont.kernel.stability.
   multipliers`: QR of the balanced Hessenberg form for small G, LAPACK otherwise);
-- eq. (16) by the kernel's search (:func:`impactcont.kernel.contact.highest_maximum`) on the
+- eq. (16) by the kernel's search (:func:`impactcont.kernel.contact.x1_maximum`) on the
   scalar pairs of modes (:attr:`FirstOrderBasis.scalar_pairs`);
 - the condition estimate of eq. (12) is the kernel's, summed over the scalar pairs of
   modes, so both paths warn alike.
@@ -49,7 +49,7 @@ import weakref
 import numpy as np
 
 from impactcont.errors import ParameterError, UnresolvedMotionWarning
-from impactcont.kernel.arrays import FirstOrderArrays, SearchedCoordinate, SearchGrid
+from impactcont.kernel.arrays import FirstOrderArrays
 from impactcont.model.first_order import FirstOrderBasis, coth_remainder
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.dense import (
@@ -459,14 +459,11 @@ def _search(flow: GeneralFlow, times: np.ndarray, free: np.ndarray, dy: np.ndarr
     from impactcont.kernel import contact
 
     w, a, _, _ = flow.basis.scalar_pairs
-    omega = float(flow.omega)
-    grid = SearchGrid(times=times, free=free, cw=np.cos(omega * times),
-                      sw=np.sin(omega * times), work=np.empty((contact.WORK_ROWS, 2 * times.size)))
-    coord = SearchedCoordinate(gamma=float(flow.Z[0].real), beta=float(-flow.Z[0].imag),
-                               omega=omega, delta=float(delta), ks=1.0, w=w, a=a,
-                               weights=np.ones_like(w), dy=dy, dv=dv, pg=np.empty(0),
-                               pa=np.empty(0), p1=0.0)
-    best, best_t = contact.highest_maximum(grid, coord, float(exclude))
+    work = np.empty((contact.WORK_ROWS, 2 * times.size))
+    best, best_t = contact.x1_maximum(times, free, np.cos(flow.omega * times),
+                                      np.sin(flow.omega * times), float(flow.Z[0].real),
+                                      float(-flow.Z[0].imag), flow.omega, float(delta), 1.0,
+                                      w, a, np.ones_like(w), dy, dv, work, float(exclude))
     return float(best), float(best_t)
 
 
@@ -491,7 +488,7 @@ def x1_maximum(flow: GeneralFlow, state: np.ndarray, delta: float, T: float,
     The free part of ``x1`` is a sum over the scalar pairs of
     :attr:`FirstOrderBasis.scalar_pairs`, each ``W11 y(0) + W12 y'(0)`` with the exact
     modal transfer, and the forced part is ``Re(Z_1 e^{i theta})``: the compiled
-    kernel's search (:func:`impactcont.kernel.contact.highest_maximum`, with its grid, bounds
+    kernel's search (:func:`impactcont.kernel.contact.x1_maximum`, with its grid, bounds
     and polish) runs on them unchanged, with unit weights.
     """
     return _x1_maximum_of(flow, flow.V[0] * flow.modal_deviation(state, delta), delta, T,

@@ -22,14 +22,10 @@ from impactcont.kernel import arrays as kernel_arrays
 ROOT = Path(ic.__file__).parent
 
 #: The modules of the N-p path: the compiled shooting, its flights, the sweep, and the
-#: Python that builds their inputs and reads their results. (The N-1 closed form,
-#: ``kernel/closed_form.py``, still takes its arrays one by one: its entry points are called
-#: from ``problems/codim1.py`` and ``problems/periodic_branch.py`` as they are.)
+#: Python that builds their inputs and reads their results. (The N-1 closed form and the
+#: contact search, ``kernel/closed_form.py`` and ``kernel/contact.py``, still take their
+#: arrays one by one.)
 KERNEL = ("kernel/shooting.py", "kernel/sweep.py", "kernel/flights.py", "kernel/arrays.py")
-#: The contact search of eq. (16), shared by every motion: its grid and the coordinate it
-#: searches are records (``SearchGrid``, ``SearchedCoordinate``, ``Bracket``); its results
-#: (a value and its derivatives) are short tuples read by order.
-CONTACT = ("kernel/contact.py",)
 CALLERS = ("orbit/multi_impact.py", "orbit/flow.py", "orbit/symmetry.py",
            "problems/multi_impact_branch.py", "problems/multi_impact_curve.py",
            "problems/symmetric_branch.py", "detection/multi_impact.py",
@@ -118,7 +114,7 @@ def positional_reads(source: str, producers: set[str]) -> list[str]:
 
 def test_no_compiled_function_of_the_np_path_takes_more_than_twelve_arguments():
     long = [f"{relative}:{fn.name} ({len(fn.args.args)})"
-            for relative in KERNEL + CALLERS + CONTACT for fn in _functions(relative)
+            for relative in KERNEL + CALLERS for fn in _functions(relative)
             if _compiled(fn) and len(fn.args.args) > MAX_PARAMETERS]
     assert long == []
 
@@ -187,31 +183,6 @@ def test_the_entry_points_results_are_named_by_their_records(motion):
         tuple(checked_flights(shooting(flow, 1, 1, solved.x))), True))
     np.testing.assert_array_equal(checked.G, motion.G)
     np.testing.assert_array_equal(checked.multipliers, motion.multipliers)
-
-
-def test_the_contact_search_takes_records_from_python_and_compiled_code():
-    """``highest_maximum`` on a :class:`SearchGrid` and a :class:`SearchedCoordinate` built in
-    Python finds the interior maximum the N-1 kernel found for the same motion (its
-    ``gap_min``, the stop minus that maximum)."""
-    from impactcont.kernel import closed_form, contact
-    from impactcont.orbit.periodic import modal_arrays
-
-    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
-                              b=0.5, omega=1.5, eta=0.1)
-    orbit = next(o for o in ic.periodic_orbits(osc, 2) if o.physical)
-    assert np.isfinite(orbit.gap_min)  # the flight has an interior maximum
-    arrays = modal_arrays(osc)
-    modal, sc = closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
-                                        arrays.eig_err, osc.R, osc.omega, 2)
-    grid, _, dy, dv = contact.flight_tables(arrays.w, arrays.a, arrays.u0, modal, osc.omega,
-                                            float(sc[0]))
-    assert isinstance(grid, kernel_arrays.SearchGrid)
-    coord = kernel_arrays.SearchedCoordinate(
-        gamma=float(sc[1]), beta=float(sc[2]), omega=osc.omega, delta=float(orbit.delta),
-        ks=(1.0 + osc.R) * float(orbit.impact_velocity), w=arrays.w, a=arrays.a,
-        weights=arrays.u0, dy=dy, dv=dv, pg=np.empty(0), pa=np.empty(0), p1=0.0)
-    top, _ = contact.highest_maximum(grid, coord, np.nan)
-    assert osc.b - top == pytest.approx(orbit.gap_min, rel=1e-12, abs=1e-14)
 
 
 def test_stack_flows_names_the_field_whose_shape_differs():

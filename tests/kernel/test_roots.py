@@ -9,7 +9,6 @@ import pytest
 
 import impactcont as ic
 from impactcont.kernel import closed_form, contact, roots
-from impactcont.kernel.arrays import Bracket, SearchedCoordinate
 from impactcont.orbit import periodic
 
 
@@ -28,14 +27,11 @@ def test_polish_roots_and_taylor_values_are_exact(omega, b, N):
     modal, sc = closed_form.omega_setup(w, a, f, u0, ui0, eig_err, osc.R, omega, N)
     count, dl, sg, _, _ = roots.orbit_roots(sc, b, omega, osc.R)
     assert count > 0
-    grid, _, dy, dv = contact.flight_tables(w, a, u0, modal, omega, sc[0])
-    times = grid.times
+    times, _, _, _, _, dy, dv, _ = contact.flight_tables(w, a, u0, modal, omega, sc[0])
     checked = 0
     for k in range(count):
         ks = (1.0 + osc.R) * sg[k]
         args = (sc[1], sc[2], omega, dl[k], ks, w, a, u0, dy, dv)
-        coord = SearchedCoordinate(float(sc[1]), float(sc[2]), omega, float(dl[k]), float(ks),
-                                   w, a, u0, dy, dv, np.empty(0), np.empty(0), 0.0)
 
         def d(t, args=args):
             return contact.x1_derivatives(t, *args)
@@ -45,11 +41,11 @@ def test_polish_roots_and_taylor_values_are_exact(omega, b, N):
             for j in np.flatnonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0):
                 lo, hi = times[j], times[j + 1]
                 e_lo, e_hi = d(lo), d(hi)
-                snap = [contact._x1_derivs(t, coord)[4] for t in (lo, hi)]
+                snap = [contact._x1_derivs(t, *args)[4] for t in (lo, hi)]
                 ddg = (e_lo[3], e_hi[3]) if order == 1 else tuple(snap)
                 r, x, v, acc, jerk = contact._polish(
-                    np.int64(order), Bracket(lo, hi, e_lo[order], e_hi[order], e_lo[order + 1],
-                                             e_hi[order + 1], ddg[0], ddg[1]), coord)
+                    np.int64(order), lo, hi, e_lo[order], e_hi[order], e_lo[order + 1],
+                    e_hi[order + 1], ddg[0], ddg[1], *args)
                 ref = brentq(lambda t, o=order: d(t)[o], lo, hi, xtol=1e-15, rtol=1e-15)
                 assert abs(r - ref) <= 1e-13 * max(1.0, ref)
                 direct = d(r)
