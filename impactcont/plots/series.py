@@ -40,7 +40,8 @@ from matplotlib.ticker import LogFormatterSciNotation, NullFormatter, NullLocato
 from impactcont.plots.branches import fit_text, legend_fontsize
 
 __all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "fit_labels",
-           "one_per_style", "panel_figure", "series_plot", "take_legend"]
+           "inside_frame", "markers_whole", "one_per_style", "panel_figure", "series_plot",
+           "take_legend"]
 
 logger = logging.getLogger(__name__)
 
@@ -317,6 +318,45 @@ def take_legend(ax: Axes) -> list[Any]:
         h.set_label(text.get_text())
     legend.remove()
     return handles
+
+
+def inside_frame(ax: Axes, x: Any, y: Any, size: float) -> np.ndarray:
+    """Which points ``(x, y)`` a marker of ``size`` points shows whole inside the frame of
+    ``ax``, on its laid-out figure: draw only those, never one the frame cuts in half."""
+    ax.figure.draw_without_rendering()
+    r = size / 2 * ax.figure.dpi / 72.0
+    xy = ax.transData.transform(np.column_stack([np.ravel(x), np.ravel(y)]))
+    box = ax.bbox.extents
+    inside = ((xy[:, 0] >= box[0] + r) & (xy[:, 0] <= box[2] - r)
+              & (xy[:, 1] >= box[1] + r) & (xy[:, 1] <= box[3] - r))
+    return inside.reshape(np.shape(x))
+
+
+def markers_whole(ax: Axes) -> None:
+    """Widen the limits of ``ax`` until no marker of its lines is cut by the frame.
+
+    A special point at the edge of a zoom is drawn whole (the limits grow by at most a
+    marker's size on each side). Call it on a laid-out figure, last.
+    """
+    for _ in range(4):
+        ax.figure.draw_without_rendering()
+        box = ax.bbox.extents
+        grow = np.zeros(4)  # pixels to add left, bottom, right, top
+        for line in ax.get_lines():
+            if not line.get_visible() or line.get_marker() in (None, "", "None", " ", "none"):
+                continue
+            r = line.get_markersize() / 2 * ax.figure.dpi / 72.0 + 1.0
+            xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+            for px, py in xy[np.all(np.isfinite(xy), axis=1)]:
+                if box[0] - r < px < box[2] + r and box[1] - r < py < box[3] + r:
+                    grow = np.maximum(grow, [box[0] + r - px, box[1] + r - py,
+                                             px + r - box[2], py + r - box[3]])
+        if not np.any(grow > 0):
+            return
+        (x0, y0), (x1, y1) = ax.transData.inverted().transform(
+            [(box[0] - grow[0], box[1] - grow[1]), (box[2] + grow[2], box[3] + grow[3])])
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
 
 
 def _style_key(handle: Any) -> tuple:

@@ -46,11 +46,18 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.markers import MarkerStyle
 
 import impactcont as ic
 from impactcont.plots import SEGMENT_STYLES, SPECIAL_MARKERS, bifurcation_diagram
-from impactcont.plots.branches import NONPHYSICAL_GREY, SPECIAL_NAMES
-from impactcont.plots.series import MAX_WIDTH, figure_legend, fit_labels
+from impactcont.plots.branches import NONPHYSICAL_GREY, SPECIAL_NAMES, label_specials
+from impactcont.plots.series import (
+    MAX_WIDTH,
+    figure_legend,
+    fit_labels,
+    inside_frame,
+    markers_whole,
+)
 
 log = logging.getLogger("bifurcation_diagram")
 
@@ -999,21 +1006,48 @@ def _draw_gap(ax: Any, b: float, branches: dict[str, xr.Dataset],
         if not group:
             continue
         before = len(ax.lines)
-        bifurcation_diagram(group, y="impact_velocity", ax=ax, legend=None, title="")
+        bifurcation_diagram(group, y="impact_velocity", ax=ax, legend=None, title="",
+                            label_special=False)  # labelled together, once laid out
         for line in ax.lines[before:]:
             line.set_color(N_COLORS[N])
             if line.get_markeredgecolor() != NONPHYSICAL_GREY:  # special points: colour of N
                 line.set_markeredgecolor(N_COLORS[N])
     if bf is not None:
         sel = bf.sel(gap=b)
-        for sweep_name, style in SWEEP_STYLES.items():
+        for sweep_name in SWEEP_STYLES:
             v = sel["impact_velocity"].sel(sweep=sweep_name).values
-            w = np.broadcast_to(sel["omega"].values[:, None], v.shape)
             ok = np.isfinite(v)
-            ax.scatter(w[ok], v[ok], zorder=1, **style)
             if ok.any():
                 vmax = max(vmax, float(np.percentile(v[ok], 99)))
     return vmax, labels
+
+
+def _sweeps(ax: Any, b: float, bf: xr.Dataset) -> None:
+    """The brute-force sweeps' impacts on ``ax``, once laid out: a point the frame would
+    cut in half is left out."""
+    sel = bf.sel(gap=b)
+    for sweep_name, style in SWEEP_STYLES.items():
+        v = sel["impact_velocity"].sel(sweep=sweep_name).values
+        w = np.broadcast_to(sel["omega"].values[:, None], v.shape)
+        ok = np.isfinite(v) & inside_frame(ax, w, v, math.sqrt(style["s"]))
+        ax.scatter(w[ok], v[ok], zorder=1, **style)
+
+
+def _label_all(ax: Any) -> None:
+    """One labelling of every special point drawn on ``ax`` (all N together: labels of one
+    N placed before the next N was drawn covered its points)."""
+    names = {str(MarkerStyle(m).get_marker()): lab for lab, m in SPECIAL_MARKERS.items()}
+    points = []
+    for line in ax.get_lines():
+        lab = names.get(str(line.get_marker()))
+        if lab is None or line.get_markeredgecolor() == NONPHYSICAL_GREY \
+                or line.get_linestyle() not in ("None", "none", " ", ""):
+            continue
+        x0, x1 = sorted(ax.get_xlim())
+        y0, y1 = sorted(ax.get_ylim())
+        points += [(float(x), float(y), lab) for x, y in line.get_xydata()
+                   if x0 <= x <= x1 and y0 <= y <= y1]
+    label_specials(ax, points, zoom=False)
 
 
 def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tuple[str, float]],
@@ -1036,12 +1070,13 @@ def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tupl
     ax = axes[0]
     vmax, labels = _draw_gap(ax, b, branches, checked_keys, bf)
     ax.set_ylim(-0.05 * vmax, 1.1 * vmax)
-    ax.set_xlim(*OMEGA_RANGE)
+    margin = 0.015 * (OMEGA_RANGE[1] - OMEGA_RANGE[0])  # the sweeps' ends off the frame
+    ax.set_xlim(OMEGA_RANGE[0] - margin, OMEGA_RANGE[1] + margin)
     ax.set_title(rf"$b = {b:g}$, $R = 0.6$, $\eta = 0.1$: periodic motions with one impact "
                  r"in $N$ periods, continued, and simulated sweeps in $\omega$",
                  fontsize="medium")
     handles = [Line2D([], [], color=N_COLORS[N], label=f"$N = {N}$") for N in N_VALUES]
-    handles += [Line2D([], [], color="0.3", label=kind, **style)
+    handles += [Line2D([], [], color="0.2", label=kind, **style)  # a style in any colour
                 for kind, style in SEGMENT_STYLES.items()]
     handles += [Line2D([], [], linestyle="none", marker=m, markerfacecolor="white",
                        markeredgecolor="black", label=f"{lab} {SPECIAL_NAMES[lab]}")
@@ -1058,10 +1093,16 @@ def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tupl
         zax.set_ylim(*zoom[1])
         zax.set_title(rf"zoom: ${zoom[0][0]:g} \leq \omega \leq {zoom[0][1]:g}$",
                       fontsize="medium")
-        ax.indicate_inset((zoom[0][0], zoom[1][0], zoom[0][1] - zoom[0][0],
-                           zoom[1][1] - zoom[1][0]), edgecolor="0.4")
     figure_legend(fig, handles)
     fit_labels(fig)
+    for a in axes:  # the layout is final
+        markers_whole(a)
+        if bf is not None:
+            _sweeps(a, b, bf)
+        _label_all(a)
+    if zoom is not None:
+        (x0, x1), (y0, y1) = axes[1].get_xlim(), axes[1].get_ylim()
+        ax.indicate_inset((x0, y0, x1 - x0, y1 - y0), edgecolor="0.4")
     return fig
 
 

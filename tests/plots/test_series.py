@@ -147,3 +147,32 @@ def test_one_legend_entry_per_style():
     kept = one_per_style([*red, *others])
     assert [h.get_label() for h in kept] == ["asymmetric 1", "symmetric", "unstable", "SN",
                                              "region"]
+
+
+def test_markers_whole_widens_the_limits_until_no_marker_is_cut():
+    """A special point at the edge of a zoom is drawn whole, not cut by the frame."""
+    from impactcont.plots.series import markers_whole
+    from tests._layout_checks import markers_cut_by_frame
+
+    fig = Figure(figsize=(3.5, 2.5), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot([0.0, 1.0, 0.5], [0.5, 0.5, 1.0], linestyle="none", marker="s", markersize=6)
+    ax.set_xlim(0.0, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    assert markers_cut_by_frame(fig)  # three squares on the frame
+    markers_whole(ax)
+    assert markers_cut_by_frame(fig) == []
+    x0, x1 = ax.get_xlim()
+    assert -0.1 < x0 < 0.0 and 1.0 < x1 < 1.1  # by about a marker, not more
+
+
+def test_inside_frame_leaves_out_the_points_the_frame_would_cut():
+    from impactcont.plots.series import inside_frame
+
+    fig = Figure(figsize=(3.5, 2.5), layout="constrained")
+    ax = fig.add_subplot()
+    ax.set_xlim(0.0, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    x = np.array([0.0, 0.5, 1.0, 0.5, 2.0])
+    y = np.array([0.5, 0.5, 0.5, 1.0, 0.5])
+    assert inside_frame(ax, x, y, 4.0).tolist() == [False, True, False, False, False]
