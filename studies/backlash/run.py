@@ -61,6 +61,7 @@ from impactcont.plots.impacts import impact_diagram
 from impactcont.plots.series import (
     figure_legend,
     fit_labels,
+    inside_frame,
     one_per_style,
     panel_figure,
     take_legend,
@@ -350,20 +351,8 @@ def draw_sweep(ax: Any, sweep: xr.Dataset) -> None:
     dot the frame would cut in half is left out."""
     speed = np.abs(sweep["speed"].values)
     om = np.broadcast_to(sweep["omega"].values[:, None], speed.shape)
-    ok = np.isfinite(speed) & _inside(ax, om, speed, SWEEP_DOTS["markersize"])
+    ok = np.isfinite(speed) & inside_frame(ax, om, speed, SWEEP_DOTS["markersize"])
     ax.plot(om[ok], speed[ok], zorder=1.5, **SWEEP_DOTS)
-
-
-def _inside(ax: Any, x: np.ndarray, y: np.ndarray, size: float) -> np.ndarray:
-    """Which points a marker of ``size`` points drawn at ``(x, y)`` shows whole inside the
-    frame of ``ax`` (the others are left out, never cut in half by the frame)."""
-    ax.figure.draw_without_rendering()
-    r = size / 2 * ax.figure.dpi / 72.0
-    xy = ax.transData.transform(np.column_stack([np.ravel(x), np.ravel(y)]))
-    box = ax.bbox.extents
-    inside = ((xy[:, 0] >= box[0] + r) & (xy[:, 0] <= box[2] - r)
-              & (xy[:, 1] >= box[1] + r) & (xy[:, 1] <= box[3] - r))
-    return inside.reshape(np.shape(x))
 
 
 def diagrams_figure(groups: dict[str, xr.Dataset], sweeps: dict[str, xr.Dataset],

@@ -60,7 +60,13 @@ from impactcont.analysis.switching import (
 from impactcont.dataset.multi import impacts_of
 from impactcont.orbit.multi_impact import multi_impact_orbit, primitive_orbit
 from impactcont.plots.impacts import impact_diagram
-from impactcont.plots.series import MAX_WIDTH, figure_legend, fit_labels
+from impactcont.plots.series import (
+    MAX_WIDTH,
+    figure_legend,
+    fit_labels,
+    inside_frame,
+    markers_whole,
+)
 
 log = logging.getLogger("cascades")
 
@@ -494,49 +500,13 @@ def figure(name: str, branches: dict[str, xr.Dataset], up: list[dict[str, Any]],
     figure_legend(fig, list(handles.values()))
     fit_labels(fig)
     for ax in axes:
-        _frame_markers(ax)
+        markers_whole(ax)
     (x0, x1), (y0, y1) = axes[1].get_xlim(), axes[1].get_ylim()
     axes[0].indicate_inset((x0, y0, x1 - x0, y1 - y0), edgecolor="0.35")
     for ax, x, y, style in dots:  # the layout is final: a dot the frame would cut is left out
-        inside = _inside(ax, x, y, math.sqrt(7.0))
+        inside = inside_frame(ax, x, y, math.sqrt(7.0))
         ax.scatter(x[inside], y[inside], s=7, linewidths=0.6, alpha=0.7, zorder=4, **style)
     return fig
-
-
-def _inside(ax: Any, x: np.ndarray, y: np.ndarray, size: float) -> np.ndarray:
-    """Which points a marker of ``size`` points drawn at ``(x, y)`` shows whole inside the
-    frame of ``ax``."""
-    ax.figure.draw_without_rendering()
-    r = size / 2 * ax.figure.dpi / 72.0
-    xy = ax.transData.transform(np.column_stack([x, y]))
-    box = ax.bbox.extents
-    return ((xy[:, 0] >= box[0] + r) & (xy[:, 0] <= box[2] - r)
-            & (xy[:, 1] >= box[1] + r) & (xy[:, 1] <= box[3] - r))
-
-
-def _frame_markers(ax: Any) -> None:
-    """Widen the limits of ``ax`` until no special-point marker is cut by its frame (one
-    at the zoom's edge is drawn whole)."""
-    for _ in range(4):
-        ax.figure.draw_without_rendering()
-        box = ax.bbox.extents
-        grow = np.zeros(4)  # pixels to add left, bottom, right, top
-        for line in ax.get_lines():
-            if line.get_marker() in (None, "", "None", " ", "none"):
-                continue
-            r = line.get_markersize() / 2 * ax.figure.dpi / 72.0 + 1.0
-            xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
-            for px, py in xy[np.all(np.isfinite(xy), axis=1)]:
-                if box[0] - r < px < box[2] + r and box[1] - r < py < box[3] + r:
-                    grow = np.maximum(grow, [box[0] + r - px, box[1] + r - py,
-                                             px + r - box[2], py + r - box[3]])
-        if not np.any(grow > 0):
-            return
-        to_data = ax.transData.inverted()
-        (x0, y0), (x1, y1) = to_data.transform([(box[0] - grow[0], box[1] - grow[1]),
-                                                (box[2] + grow[2], box[3] + grow[3])])
-        ax.set_xlim(x0, x1)
-        ax.set_ylim(y0, y1)
 
 
 def pd_markdown(results: dict[str, dict[str, Any]]) -> str:
