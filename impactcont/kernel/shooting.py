@@ -832,7 +832,8 @@ def _stop_clearance(flow, forcing, stops, i, X0, theta, tau):
     omega = forcing.omega
     sign = stops.extra_signs[i]
     series = _search_inputs(flow, forcing, stops.extra_normals[i], X0, theta)
-    top, t_top, _, _, capped = _series_extrema(series, omega, theta, tau, sign, False)
+    # a run-time False (i >= 0): a literal False would compile _series_extrema a second time
+    top, t_top, _, _, capped = _series_extrema(series, omega, theta, tau, sign, i < 0)
     return sign * stops.extra_positions[i] - top - sign * series.level, t_top, capped
 
 
