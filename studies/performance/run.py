@@ -53,7 +53,6 @@ from typing import Any
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numba
 import numpy as np
 import scipy
@@ -351,30 +350,48 @@ def cost_vs_n(sizes: tuple[int, ...], repeat: int) -> list[dict[str, Any]]:
     return rows
 
 
-def plot(rows: list[dict[str, Any]], path: Path) -> None:
-    n = np.array([r["n"] for r in rows])
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    for key, label in (("orbits", "periodic_orbits (both roots)"),
-                       ("orbits_G", "+ G"),
-                       ("orbits_G_multipliers", "+ multipliers, spectral radius"),
-                       ("per_orbit_G_multipliers", "the same per orbit (call / roots)"),
-                       ("orbits_G_dense_multipliers", "+ G, multipliers by LAPACK from G"),
-                       ("dense_eigvals_2n", "one np.linalg.eigvals, random 2n x 2n"),
-                       ("secular_alone", "one orbit's multipliers, secular (numpy)"),
-                       ("G_and_lapack_alone", "one orbit's multipliers, G + LAPACK")):
-        ax.loglog(n, [1e3 * r[key] for r in rows], marker="o", label=label,
-                  ls={"dense_eigvals_2n": "--", "per_orbit_G_multipliers": ":",
-                      "secular_alone": "-.", "G_and_lapack_alone": "-."}.get(key, "-"))
-    ax.plot([200], [50.0], "k*", ms=10, label="target at n = 200 (50 ms per orbit)")
-    ax.set_xlabel("degrees of freedom n")
-    ax.set_ylabel("time per call [ms] (best of repeats)")
-    ax.set_title("One N = 1 call for a chain, both roots (1 BLAS thread)")
+def cost_figure(rows: list[dict[str, Any]], width: float = 7.0) -> Any:
+    """``cost_vs_n.png``: the time of one N = 1 call for a chain of ``n`` masses (both
+    roots) and of its parts, against one dense ``eigvals`` of a 2n x 2n matrix; the
+    target at n = 200 as a star. ``width`` in inches (3.5: one journal column, 7: two);
+    one legend under the axes, off the data."""
+    from impactcont.plots.series import (
+        Series,
+        figure_legend,
+        fit_labels,
+        panel_figure,
+        series_plot,
+    )
+
+    n = np.array([r["n"] for r in rows], dtype=float)
+    fig, (ax,) = panel_figure(1, width, extra_height=2.2 if width < 5.0 else 1.4)
+    series = []
+    for i, (key, label, ls) in enumerate((
+            ("orbits", "periodic_orbits (both roots)", "-"),
+            ("orbits_G", "+ $G$", "-"),
+            ("orbits_G_multipliers", "+ multipliers, spectral radius", "-"),
+            ("per_orbit_G_multipliers", "the same per orbit (call / roots)", ":"),
+            ("orbits_G_dense_multipliers", "+ $G$, multipliers by LAPACK from $G$", "-"),
+            ("dense_eigvals_2n", "one eigvals of a random $2n \\times 2n$ matrix", "--"),
+            ("secular_alone", "one orbit's multipliers, secular function", "-."),
+            ("G_and_lapack_alone", "one orbit's multipliers, $G$ + LAPACK", "-."))):
+        series.append(Series(n, [1e3 * r[key] for r in rows], label, color=f"C{i}",
+                             linestyle=ls, marker="o", markersize=3))
+    series.append(Series([200.0], [50.0], "target at $n = 200$ (50 ms per orbit)",
+                         color="k", linestyle="none", marker="*", markersize=8, filled=True))
+    series_plot(ax, series, xlabel="degrees of freedom $n$",
+                ylabel="time per call $t$ [ms] (best of repeats)", xscale="log",
+                yscale="log", title="One $N = 1$ call for a chain, both roots, 1 BLAS thread")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    figure_legend(fig)
+    fit_labels(fig)
+    return fig
+
+
+def plot(rows: list[dict[str, Any]], path: Path) -> None:
+    fig = cost_figure(rows)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 # -- 7. BLAS threads -------------------------------------------------------------------------------
