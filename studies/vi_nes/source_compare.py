@@ -216,11 +216,15 @@ def main() -> dict[str, Any]:
     return out
 
 
-def figure(out: dict[str, Any], path: Path, width: float = 7.0) -> None:
+def figure(out: dict[str, Any], path: Path | None = None, width: float = 7.0,
+           omegas: tuple[float, ...] = OMEGAS, points: int = 201) -> Any:
     """Left: ``xi`` against omega, the source's formula (its root of (W2): solid; the
     other: dashed) over the exact symmetric roots (filled: stable and physical). Right: the
     difference along the source's limit against ``s`` (slope 1: first order). Side by side
-    from 5 in, stacked below; one legend under both."""
+    from 5 in, stacked below; one legend under both. Saved to ``path`` if given; returns
+    the figure. ``omegas``: where the left panel's exact motions are computed (the study's
+    grid by default), ``points``: of the source's curves between the first and the last of
+    them; the right panel draws the ``r0`` and ``s`` of ``out["limit"]``."""
     import matplotlib.ticker
 
     from impactcont.plots.series import (
@@ -233,14 +237,14 @@ def figure(out: dict[str, Any], path: Path, width: float = 7.0) -> None:
 
     fig, (ax, bx) = panel_figure(2, width, extra_height=1.3)
     series = []
-    dense = np.linspace(OMEGAS[0], OMEGAS[-1], 201)
+    dense = np.linspace(omegas[0], omegas[-1], points)
     for sign, style, label in ((1, "-", "source (W1-W7)"),
                                (-1, "--", "source, other root of (W2)")):
         pts = np.array([(r, m.xi) for r in dense for m in sf.motions(float(r), MU, ZETA, B, R,
                                                                      sign=sign)])
         series.append(Series(*pts.T, label, color="C0", linestyle=style, linewidth=1.0))
     good, bad = [], []
-    for r in OMEGAS:
+    for r in omegas:
         p = cf.VINES(r=r, mu=MU, zeta=ZETA, b=B, b_low=B, R=R, R_low=R)
         for m in cf.ul_motions(p, scan=60):
             if abs(m.t1 - 0.5 * p.T) < 1e-9 * p.T:
@@ -254,15 +258,16 @@ def figure(out: dict[str, Any], path: Path, width: float = 7.0) -> None:
                 ylabel=r"$\xi = |Q_1| / b$ (fundamental of $x_1$)",
                 title="Symmetric motions")
     limit = []
-    for i, r0 in enumerate(LIMIT_R0):
+    for i, r0 in enumerate(sorted({x["r0"] for x in out["limit"]})):
         rows = [x for x in out["limit"] if x["r0"] == r0]
         limit.append(Series([x["s"] for x in rows], [max(x["xi"], x["theta"]) for x in rows],
                             f"$r_0 = {r0:g}$", color=f"C{i + 1}", marker="o", markersize=3))
-    s_ = np.array(LIMIT_S)
+    s_ = np.array(sorted({x["s"] for x in out["limit"]}, reverse=True))
     limit.append(Series(s_, 0.02 * s_, "slope 1", color="k", linestyle=":"))
-    series_plot(bx, limit, xlabel=r"$s$ ($\mu = 0.05 s$, $b = 5/s$, $\omega = 1 + (r_0 - 1) s$)",
-                ylabel=r"max relative difference of $\xi$, $\theta$", xscale="log",
-                yscale="log", title="Along the source's limit")
+    series_plot(bx, limit, xlabel=r"$s$", ylabel=r"max relative difference of $\xi$, $\theta$",
+                xscale="log", yscale="log",
+                title=r"Along the source's limit: $\mu = 0.05 s$, $b = 5/s$, "
+                      r"$\omega = 1 + (r_0 - 1) s$")
     bx.set_xticks(s_, [f"{x:g}" for x in s_])
     bx.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     figure_legend(fig)
@@ -270,7 +275,9 @@ def figure(out: dict[str, Any], path: Path, width: float = 7.0) -> None:
                  rf"$b = {B:g}$, $R = {R:g}$: the source's formula against the exact motions",
                  fontsize="medium")
     fit_labels(fig)
-    fig.savefig(path, dpi=150)
+    if path is not None:
+        fig.savefig(path, dpi=150)
+    return fig
 
 
 if __name__ == "__main__":
