@@ -498,6 +498,17 @@ def agreement_figure(rows: list[dict[str, Any]], width: float = 7.0) -> Figure:
     return fig
 
 
+def _level_lines(ax: Any, omega: np.ndarray, b: np.ndarray, flag: np.ndarray,
+                 **style: Any) -> None:
+    """The boundary of the cells where ``flag`` (shape (omega, b)) holds, drawn as lines
+    (``Line2D``, as the legend's entry for it; ``ax.contour`` draws a collection)."""
+    import contourpy
+
+    lines = contourpy.contour_generator(omega, b, flag.T.astype(float)).lines(0.5)
+    for xy in lines:
+        ax.plot(xy[:, 0], xy[:, 1], **style)
+
+
 def plane_figure(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
                  info: dict[str, Any], width: float = 7.0) -> Figure:
     """The package's map (its regions and boundaries, ``multi_impact_map_diagram``), the
@@ -510,14 +521,13 @@ def plane_figure(cf: dict[str, np.ndarray], groups: dict[str, xr.Dataset],
     else:  # no map: the closed form's region shaded
         ax.contourf(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5, 1.5],
                     colors=["C0"], alpha=0.2)
-    ax.contour(cf["omega"], cf["b"], cf["stable"].T.astype(float), levels=[0.5],
-               colors=["k"], linewidths=1.6, linestyles=[(0, (2, 2))], zorder=3)
+    _level_lines(ax, cf["omega"], cf["b"], cf["stable"], color="k", lw=1.6,
+                 ls=(0, (2, 2)), zorder=3)
     handles.append(Line2D([], [], color="k", lw=1.6, ls=(0, (2, 2)),
                           label="closed form: boundary of stable physical motion"))
     if "map_default" in groups:
         found = groups["map_default"]["found"].values
-        ax.contour(cf["omega"], cf["b"], found.T.astype(float), levels=[0.5],
-                   colors=["0.3"], linewidths=1.0, linestyles=[":"], zorder=3)
+        _level_lines(ax, cf["omega"], cf["b"], found, color="0.3", lw=1.0, ls=":", zorder=3)
         handles.append(Line2D([], [], color="0.3", lw=1.0, ls=":",
                               label="edge of the map with the default step limit "
                               "(4 times smaller)"))
