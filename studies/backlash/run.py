@@ -596,8 +596,8 @@ def plane_figure(groups: dict[str, xr.Dataset], summary: dict[str, Any], width: 
             ok = ok & (m["asymmetry"] > ASYMMETRIC)
         regions[kind] = ok if kind not in regions else regions[kind] | ok
     for kind, color in (("symmetric", "C0"), ("asymmetric", "C3")):
-        if kind not in regions:
-            continue
+        if kind not in regions or not bool(regions[kind].any()):
+            continue  # no legend entry for a region not drawn
         m = maps["symmetric"]
         ax.contourf(m["omega"].values, m["b"].values, regions[kind].values.T.astype(float),
                     levels=[0.5, 1.5], colors=[color], alpha=0.18)
