@@ -114,12 +114,14 @@ def axes_of(fig: Figure) -> list:
     return [ax for ax in dict.fromkeys(out) if ax.get_visible() and ax.axison]
 
 
-def marker_artists(ax) -> list[tuple[np.ndarray, tuple, str, float]]:
-    """``(display xy, marker key, edge colour, radius px)`` of every marker drawn on ``ax``."""
+def marker_artists(ax, *, clipped: bool = False) -> list[tuple[np.ndarray, tuple, str, float]]:
+    """``(display xy, marker key, edge colour, radius px)`` of every marker drawn on ``ax``
+    (``clipped``: only of the artists the frame clips)."""
     out = []
     dpi = ax.figure.dpi
     for line in ax.get_lines():
-        if not line.get_visible() or line.get_marker() in _NO_MARKER:
+        if not line.get_visible() or line.get_marker() in _NO_MARKER \
+                or (clipped and not line.get_clip_on()):
             continue
         xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
         r = line.get_markersize() / 2 * dpi / 72
@@ -127,7 +129,8 @@ def marker_artists(ax) -> list[tuple[np.ndarray, tuple, str, float]]:
             out.append((p, marker_key(line.get_marker()), color(line.get_markeredgecolor()), r))
     for coll in ax.collections:
         if not isinstance(coll, PathCollection) or not coll.get_visible() \
-                or coll.get_array() is not None or not len(coll.get_offsets()):
+                or coll.get_array() is not None or not len(coll.get_offsets()) \
+                or (clipped and not coll.get_clip_on()):
             continue
         key = tuple(np.round(coll.get_paths()[0].vertices, 3).ravel())
         xy = coll.get_offset_transform().transform(np.asarray(coll.get_offsets()))
@@ -259,12 +262,16 @@ def texts_on_markers(fig: Figure | Drawn) -> list[str]:
 
 
 def markers_cut_by_frame(fig: Figure | Drawn) -> list[str]:
-    """A marker neither wholly inside nor wholly outside the frame of its axes."""
+    """A marker neither wholly inside nor wholly outside the frame of its axes.
+
+    A marker drawn unclipped (``clip_on=False``, a point on the edge of a map drawn over
+    the frame) is whole wherever it is.
+    """
     d = render(fig)
     out = []
     for ax in axes_of(d.fig):
         box = ax.bbox.extents
-        for p, _key, _colour, r in marker_artists(ax):
+        for p, _key, _colour, r in marker_artists(ax, clipped=True):
             inside = box[0] + r <= p[0] <= box[2] - r and box[1] + r <= p[1] <= box[3] - r
             outside = (p[0] < box[0] - r or p[0] > box[2] + r or p[1] < box[1] - r
                        or p[1] > box[3] + r)

@@ -217,6 +217,7 @@ def merged_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[s
 
 def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[str], *,
                  fontsize: Any = "small", avoid: Sequence[Any] = (),
+                 styles: Sequence[dict[str, Any]] | None = None,
                  **text_kw: Any) -> list[Annotation]:
     """Annotate the data points ``xy`` with ``texts`` so that no two labels overlap.
 
@@ -235,6 +236,9 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     avoid : sequence of matplotlib.transforms.Bbox, optional
         Further regions, in display coordinates, that no label may cover
         (e.g. an inset).
+    styles : sequence of dict, optional
+        One dict of text keywords per label (e.g. its colour and weight), over
+        ``text_kw``: labels of several kinds placed together, clear of each other.
     **text_kw
         Passed on to :meth:`matplotlib.axes.Axes.annotate`.
 
@@ -245,8 +249,12 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     if len(xy) != len(texts):
         raise ValueError(f"xy and texts must have the same length; got {len(xy)} and "
                          f"{len(texts)}")
+    if styles is not None and len(styles) != len(texts):
+        raise ValueError(f"styles must have one dict per label ({len(texts)}); got "
+                         f"{len(styles)}")
     if not len(xy):
         return []
+    kws = [{**text_kw, **(styles[k] if styles is not None else {})} for k in range(len(texts))]
     fig = ax.figure
     fig.draw_without_rendering()
     scale = 72.0 / fig.dpi
@@ -272,9 +280,15 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
         placed.append(np.asarray(legend.get_window_extent().extents) * scale)
     leaders: list[np.ndarray] = []  # (2, 2): the leader lines drawn, in points
     out = []
-    for k in np.argsort(pts[:, 0], kind="stable"):
+    # the longest labels first (a merged label of a cluster needs the most room), then
+    # from left to right
+    for k in np.lexsort((pts[:, 0], [-len(str(t)) for t in texts])):
         px, py = pts[k]
-        w, h = 0.62 * size * len(texts[k]) + 2.0, 1.2 * size
+        probe = Text(0.0, 0.0, texts[k], fontsize=fontsize,
+                     fontweight=kws[k].get("fontweight", "normal"))
+        probe.set_figure(fig)
+        drawn = probe.get_window_extent()  # the text as drawn (weight, mathtext)
+        w, h = drawn.width * scale + 2.0, max(drawn.height * scale, 1.2 * size)
         best: tuple[float, float, float, int] | None = None
         for dx, dy, ring in _candidates(w, h):
             box = np.array([px + dx, py + dy, px + dx + w, py + dy + h])
@@ -292,7 +306,10 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
             leader = _leader_crossings(pts[k], box, segments) if ring > 0 else 0
             tangle = (_crossings(np.clip(pts[k], box[:2], box[2:]), pts[k], leaders)
                       + _leader_crossings_box(box, leaders)) if ring > 0 else 0
-            score = (100.0 * hard + 10.0 * beside + 50.0 * h * outside + 20.0 * crossed
+            # any overlap with a label or marker, any label beside another, outweighs the
+            # curves under the box: a big label (three lines) covers many curve vertices
+            score = (100.0 * hard + 5000.0 * (hard > 1.0) + 10.0 * beside
+                     + 5000.0 * (beside > 1.0) + 50.0 * h * outside + 20.0 * crossed
                      + 30.0 * ring + 400.0 * (leader + tangle))
             if best is None or score < best[0]:
                 best = (score, dx, dy, ring)
@@ -307,7 +324,7 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
                   "shrinkB": _MARKER} if ring > 0 else None)
         label = ax.annotate(texts[k], xy[k], xytext=(dx, dy), textcoords="offset points",
                             ha="left", va="bottom", fontsize=fontsize, arrowprops=arrow,
-                            **text_kw)
+                            **kws[k])
         label.set_in_layout(False)  # placed inside the frame; never let it move the axes
         out.append(label)
     return out

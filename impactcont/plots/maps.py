@@ -257,11 +257,6 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
                 key = (round(float(xx), 6), round(float(yy), 6))
                 if key not in codim2 or shown:
                     codim2[key] = (str(lab), bool(shown))
-    for style, shown in zip(CODIM2_STYLES, (True, False), strict=True):
-        xy = np.array([k for k, (_, s) in codim2.items() if s == shown]).reshape(-1, 2)
-        if xy.size:
-            ax.plot(xy[:, 0], xy[:, 1], linestyle="none", zorder=4 if shown else 3,
-                    **CODIM2_STYLES[style])
     # only where the motion is physical: the others crowd the panel
     labels += [(xx, yy, codim2_name(lab), "black") for (xx, yy), (lab, s) in codim2.items()
                if s]
@@ -283,6 +278,15 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
     if map_ds is not None:
         ax.set_xlim(float(map_ds[first].min()), float(map_ds[first].max()))
         ax.set_ylim(float(map_ds[second].min()), float(map_ds[second].max()))
+    # a star in the frame is drawn whole, over the frame if it is at the edge (the map's
+    # range is the frame: widened, it would show no map); one outside is not drawn
+    (x0, x1), (y0, y1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+    for style, shown in zip(CODIM2_STYLES, (True, False), strict=True):
+        xy = np.array([k for k, (_, s) in codim2.items() if s == shown]).reshape(-1, 2)
+        xy = xy[(xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)]
+        if xy.size:
+            ax.plot(xy[:, 0], xy[:, 1], linestyle="none", zorder=4 if shown else 3,
+                    clip_on=False, **CODIM2_STYLES[style])
     return handles, labels
 
 
@@ -290,19 +294,33 @@ def _label(ax: Axes, labels: Sequence[tuple[float, float, str, str]]) -> None:
     """Place the labels of a laid-out panel clear of each other and of the codim-2 marks.
 
     Codim-2 points (black labels) whose stars touch get one label, one leader
-    (:func:`~impactcont.plots.labels.merged_labels`).
+    (:func:`~impactcont.plots.labels.merged_labels`). The curves' labels and the codim-2
+    labels are placed in one call, so that none stands over or beside another.
     """
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     inside = [lab for lab in labels if x0 <= lab[0] <= x1 and y0 <= lab[1] <= y1]
-    avoid = marker_boxes(ax)
+    xy: list[tuple[float, float]] = []
+    texts: list[str] = []
+    styles: list[dict[str, Any]] = []
     for color in dict.fromkeys(lab[3] for lab in inside):
         own = [lab for lab in inside if lab[3] == color]
-        xy, texts = [lab[:2] for lab in own], [lab[2] for lab in own]
+        where, names = [lab[:2] for lab in own], [lab[2] for lab in own]
         if color == "black":
             ax.figure.draw_without_rendering()
-            xy, texts = merged_labels(ax, xy, texts, distance=2.0 * _STAR)
-        place_labels(ax, xy, texts, fontsize="x-small", avoid=avoid, color=color,
-                     fontweight="bold" if color != "black" else "normal")
+            where, names = merged_labels(ax, where, names, distance=2.0 * _STAR)
+            names = [_lines(name) for name in names]
+        xy += where
+        texts += names
+        styles += [{"color": color, "fontweight": "bold" if color != "black" else "normal"}
+                   ] * len(names)
+    place_labels(ax, xy, texts, fontsize="x-small", avoid=marker_boxes(ax), styles=styles)
+
+
+def _lines(text: str, per_line: int = 2) -> str:
+    """A merged label (``SN+ZV, R1, PDNS, R2``) in lines of ``per_line`` names: one line
+    of five names runs out of a crowded panel or over its neighbours' labels."""
+    parts = text.split(", ")
+    return ",\n".join(", ".join(parts[i:i + per_line]) for i in range(0, len(parts), per_line))
 
 
 def _codim2_label(style: str, seen: Sequence[str], shown: bool) -> str:
@@ -474,6 +492,13 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
     if title:
         fit_text(fig.suptitle(title, fontsize="medium"))
     fig.draw_without_rendering()
+    # the legend of one column is long: the figure grows so that the panels keep their
+    # height (squashed under it, the labels of a crowded panel find no room)
+    panel = 0.8 * width / cols - 0.6  # inches a panel's frame is given
+    short = panel - min(ax.get_window_extent().height for ax in axes.flat[:len(Ns)]) / fig.dpi
+    if short > 0.05:
+        fig.set_size_inches(width, fig.get_size_inches()[1] + rows * short)
+        fig.draw_without_rendering()
     for ax, own in zip(axes.flat, labels, strict=False):
         _label(ax, own)
     return fig
