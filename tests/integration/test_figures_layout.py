@@ -550,7 +550,7 @@ def test_coincident_codim2_points_get_one_label_with_standard_names(data, width)
     ax = two_parameter_diagram(data["maps"]["map"], curves, N=2, ax=fig.add_subplot())
     check_layout(fig, journal=True)
     texts = [t.get_text() for t in ax.texts]
-    names = [t for t in texts if "PDNS" in t]
+    names = [t.replace("\n", " ") for t in texts if "PDNS" in t]  # in lines of two names
     assert names == ["R2, PDNS, LPPD, PD+ZV, PD+GR"], texts
     legend = " ".join(t.get_text() for t in ax.figure.legends[0].get_texts()) \
         if ax.figure.legends else " ".join(t.get_text() for t in ax.get_legend().get_texts())
