@@ -48,6 +48,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MultipleLocator
 
 import impactcont as ic
 from impactcont.plots import SPECIAL_MARKERS
@@ -391,7 +392,8 @@ def plane_figure(groups: dict[str, xr.Dataset], width: float = 7.0) -> Figure:
     """The symmetric machine in (omega, b): the package's map of the UL motion (regions and
     boundaries, :func:`impactcont.plots.multi_maps.multi_impact_map_diagram`), the BP curves
     on top and the special points of the branch in omega at ``b = B``, labelled."""
-    fig, (ax,) = panel_figure(1, width, aspect=0.62, extra_height=1.6)
+    # one column: the legend below takes one line per entry (about 10)
+    fig, (ax,) = panel_figure(1, width, aspect=0.62, extra_height=1.6 if width >= 5.0 else 3.0)
     handles: list[Any] = []
     if "map" in groups:
         multi_impact_map_diagram(groups["map"], ax=ax, title="")
@@ -413,6 +415,9 @@ def plane_figure(groups: dict[str, xr.Dataset], width: float = 7.0) -> Figure:
                                   rf"(branch at $b = {B:g}$)", **style))
     ax.set_xlim(*PLANE["omega"])
     ax.set_ylim(*PLANE["b"])
+    # fixed ticks: the layout makes room for the tick at the right edge (an automatic
+    # locator added it after the layout had widened the axes: cut at 3.5 in)
+    ax.xaxis.set_major_locator(MultipleLocator(0.1))
     ax.set_xlabel(OMEGA_LABEL)
     ax.set_ylabel(r"half cavity $b = b_{low}$ [$F/k$]")
     ax.set_title(rf"Symmetric vibro-impact NES, $\mu = {MU:g}$, $\zeta = {ZETA:g}$, "

@@ -65,8 +65,8 @@ def plane_groups():
     p = study.params("symmetric", 1.2)
     m = next(m for m in study.ul_motions(p) if m.physical and m.stable)
     seed = ic.multi_impact_orbit(study.system(p, mirror=True), 1, 2, study.guess(m))
-    br = ic.multi_impact_continuation(seed, "omega", study.PLANE["omega"], ds_max=0.05,
-                                      max_points=200)
+    br = ic.multi_impact_continuation(seed, "omega", study.PLANE["omega"], ds_max=0.01,
+                                      max_points=3000)  # the study's: its BP, GR, GR, BP
     groups = {"branch_omega": br}
     labels = br["special_label"].values.tolist()
     assert labels.count("BP") >= 1, labels
