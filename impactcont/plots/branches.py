@@ -553,10 +553,11 @@ def _zoom_group(ax: Axes, xy: np.ndarray, inset_size: tuple[float, float] = (0.4
 
 
 def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
-                   zoom: bool = True) -> Axes | None:
+                   zoom: bool = True, fontsize: Any = "small") -> Axes | None:
     """Label the special points ``(x, y, label)`` of ``ax``; crowded ones in a zoomed inset.
 
     Call it last, once everything else is drawn. Returns the inset, if one was drawn.
+    ``fontsize`` is that of the labels on ``ax`` (the inset's are ``x-small``).
     """
     labelled = list(specials)
     ax.figure.draw_without_rendering()
@@ -571,7 +572,7 @@ def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
         ax.figure.draw_without_rendering()
         avoid = [inset.get_tightbbox()]
         labelled = [s for i, s in enumerate(labelled) if i not in set(crowd.tolist())]
-    _label_points(ax, labelled, avoid=avoid)
+    _label_points(ax, labelled, avoid=avoid, fontsize=fontsize)
     return inset
 
 

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.collections import PathCollection
 from matplotlib.font_manager import FontProperties
 from matplotlib.text import Annotation, Text
 
@@ -331,7 +332,8 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
 
 
 def marker_boxes(ax: Axes) -> list[Any]:
-    """Display-coordinate boxes of the markers drawn by the lines of ``ax`` (obstacles).
+    """Display-coordinate boxes of the markers drawn by the lines and scatter plots of ``ax``
+    (obstacles).
 
     Pass them as ``avoid`` to :func:`place_labels` so that a label does not
     cover a mark it does not name. Call it on a laid-out figure.
@@ -344,6 +346,14 @@ def marker_boxes(ax: Axes) -> list[Any]:
             continue
         r = line.get_markersize() / 2 * ax.figure.dpi / 72.0
         xy = ax.transData.transform(np.asarray(line.get_xydata(), dtype=float))
+        out += [Bbox.from_extents(px - r, py - r, px + r, py + r)
+                for px, py in xy[np.all(np.isfinite(xy), axis=1)]]
+    for coll in ax.collections:  # scatter plots (e.g. simulated points) too
+        if not isinstance(coll, PathCollection) or not coll.get_visible() \
+                or not len(coll.get_offsets()) or not len(coll.get_sizes()):
+            continue
+        r = np.sqrt(np.max(coll.get_sizes())) / 2 * ax.figure.dpi / 72.0
+        xy = coll.get_offset_transform().transform(np.asarray(coll.get_offsets(), dtype=float))
         out += [Bbox.from_extents(px - r, py - r, px + r, py + r)
                 for px, py in xy[np.all(np.isfinite(xy), axis=1)]]
     return out

@@ -1033,9 +1033,15 @@ def _sweeps(ax: Any, b: float, bf: xr.Dataset) -> None:
         ax.scatter(w[ok], v[ok], zorder=1, **style)
 
 
-def _label_all(ax: Any) -> None:
+def _label_all(ax: Any, named_in: tuple[tuple[float, float], tuple[float, float]] | None = None
+               ) -> None:
     """One labelling of every special point drawn on ``ax`` (all N together: labels of one
-    N placed before the next N was drawn covered its points)."""
+    N placed before the next N was drawn covered its points).
+
+    ``named_in`` (``(omega range, v range)`` of the zoom panel): the points in it are named
+    there, not on ``ax``, where they crowd into a few points and their merged label
+    covered the markers around.
+    """
     names = {str(MarkerStyle(m).get_marker()): lab for lab, m in SPECIAL_MARKERS.items()}
     points = []
     for line in ax.get_lines():
@@ -1046,8 +1052,12 @@ def _label_all(ax: Any) -> None:
         x0, x1 = sorted(ax.get_xlim())
         y0, y1 = sorted(ax.get_ylim())
         points += [(float(x), float(y), lab) for x, y in line.get_xydata()
-                   if x0 <= x <= x1 and y0 <= y <= y1]
-    label_specials(ax, points, zoom=False)
+                   if x0 <= x <= x1 and y0 <= y <= y1 and not (
+                       named_in is not None and named_in[0][0] <= x <= named_in[0][1]
+                       and named_in[1][0] <= y <= named_in[1][1])]
+    # at one column, "small" labels crowd the diagram's clusters
+    label_specials(ax, points, zoom=False,
+                   fontsize="x-small" if ax.figure.get_figwidth() < 5.0 else "small")
 
 
 def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tuple[str, float]],
@@ -1095,11 +1105,20 @@ def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tupl
                       fontsize="medium")
     figure_legend(fig, handles)
     fit_labels(fig)
+    # at one column the title and the legend take several lines: the figure grows so that
+    # the diagram keeps its height (squashed, its labels found no room)
+    fig.draw_without_rendering()
+    short = 0.6 * width - ax.get_window_extent().height / fig.dpi
+    if short > 0.05:
+        fig.set_size_inches(width, fig.get_size_inches()[1] + short * (1.0 if zoom is None
+                                                                        else 1.6))
     for a in axes:  # the layout is final
         markers_whole(a)
         if bf is not None:
             _sweeps(a, b, bf)
-        _label_all(a)
+    for a in axes:  # the zoom's limits are final
+        _label_all(a, None if a is not ax or zoom is None else
+                   (axes[1].get_xlim(), axes[1].get_ylim()))
     if zoom is not None:
         (x0, x1), (y0, y1) = axes[1].get_xlim(), axes[1].get_ylim()
         ax.indicate_inset((x0, y0, x1 - x0, y1 - y0), edgecolor="0.4")
