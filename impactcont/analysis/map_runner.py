@@ -44,7 +44,7 @@ import time
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from impactcont.analysis.pool import dead_worker, kill_pool, process_pool
+from impactcont.analysis.pool import dead_worker, kill_pool, manager_ended, process_pool
 from impactcont.errors import ParameterError
 from impactcont.progress import Reporter, take_interrupt
 
@@ -406,11 +406,12 @@ class MapRunner:
 
     def _end_stuck(self, running: dict[cf.Future, tuple[Any, Any, bool]]) -> None:
         """End each pool of `running` whose dead worker it has not noticed for
-        ``_STUCK_SECONDS``, and fail its unfinished futures as broken."""
+        ``_STUCK_SECONDS`` (or whose manager thread has ended: nothing would complete its
+        futures), and fail its unfinished futures as broken."""
         now = time.monotonic()
         pools = {id(pool): pool for _, pool, _ in running.values()}
         for key, pool in pools.items():
-            if not dead_worker(pool):
+            if not (dead_worker(pool) or manager_ended(pool)):
                 self._dead_since.pop(key, None)
                 continue
             if now - self._dead_since.setdefault(key, now) < _STUCK_SECONDS:

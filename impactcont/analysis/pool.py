@@ -40,7 +40,7 @@ import threading
 import time
 from typing import Any
 
-__all__ = ["PARENT_POLL_SECONDS", "dead_worker", "kill_pool", "process_pool"]
+__all__ = ["PARENT_POLL_SECONDS", "dead_worker", "kill_pool", "manager_ended", "process_pool"]
 
 log = logging.getLogger(__name__)
 
@@ -136,6 +136,20 @@ def dead_worker(pool: Any) -> bool:
         with contextlib.suppress(ValueError, AttributeError):  # closed process objects
             sentinels.append(process.sentinel)
     return bool(sentinels) and bool(multiprocessing.connection.wait(sentinels, timeout=0))
+
+
+def manager_ended(pool: Any) -> bool:
+    """Whether the manager thread of `pool` has ended while the pool is not marked broken.
+
+    Only that thread completes the futures of a process pool: a pool with futures
+    submitted and no manager thread alive never completes them (seen once in CI, a
+    caller's fork pool after one of its workers was killed, at load 4 on 2 cores: the
+    map waited on it for good).
+    """
+    if not isinstance(pool, cf.ProcessPoolExecutor) or getattr(pool, "_broken", False):
+        return False
+    thread = getattr(pool, "_executor_manager_thread", None)
+    return thread is not None and not thread.is_alive()
 
 
 def _unstick(pool: Any, timeout: float) -> bool:

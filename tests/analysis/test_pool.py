@@ -118,3 +118,22 @@ def test_a_worker_ends_when_its_parent_changes(monkeypatch):
     monkeypatch.setattr(signal, "signal", lambda *args: None)  # this process keeps Ctrl-C
     pool_module._watch_parent(os.getpid())
     assert exited.wait(5.0)
+
+
+def test_a_pool_whose_manager_thread_ended_is_told():
+    """Only the manager thread completes a process pool's futures: with it ended (and the
+    pool not marked broken) nothing ever would, and a map must not wait on such a pool."""
+    import concurrent.futures as cf
+
+    from impactcont.analysis.pool import manager_ended
+
+    pool = cf.ProcessPoolExecutor(1)
+    assert not manager_ended(pool)  # no thread before the first task
+    assert pool.submit(int).result(timeout=60) == 0
+    assert not manager_ended(pool)  # running
+    thread = pool._executor_manager_thread
+    pool.shutdown(wait=True)  # ends the thread and forgets it
+    assert not manager_ended(pool)
+    pool._executor_manager_thread = thread  # the state seen in the hung map: ended, kept
+    assert manager_ended(pool)
+    assert not manager_ended(object())
