@@ -11,11 +11,8 @@ draw with, is checked on its own in ``tests/plots/test_series.py``.
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import re
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,25 +22,8 @@ from impactcont.plots.series import (
     ZERO_LABEL,
 )
 from tests._layout_checks import check_layout, render
-
-ROOT = Path(__file__).resolve().parents[2]
-WIDTHS = (3.5, 7.0)
-
-
-def _study(name: str):
-    """Import ``studies/<name>/run.py`` (its own ``closed_form`` module, not another's)."""
-    here = ROOT / "studies" / name
-    spec = importlib.util.spec_from_file_location(f"{name}_run_for_figures", here / "run.py")
-    module = importlib.util.module_from_spec(spec)
-    saved = {k: sys.modules.pop(k) for k in ("closed_form",) if k in sys.modules}
-    sys.modules[spec.name] = module  # dataclasses look the module up by name
-    try:
-        spec.loader.exec_module(module)
-    finally:
-        sys.modules.pop("closed_form", None)
-        sys.modules.update(saved)
-    return module
-
+from tests.studies._figure_study import WIDTHS
+from tests.studies._figure_study import study_module as _study
 
 
 # -- the studies' figures ----------------------------------------------------------------------
