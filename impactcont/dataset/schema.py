@@ -46,6 +46,7 @@ from impactcont.dataset.attributes import (
     ROBUST_INDEXING,
     ROBUST_INDEXING_ATTRIBUTE,
     check_attributes,
+    dataset_tag,
     oscillator_attribute,
     split_parameters,
 )
@@ -66,6 +67,7 @@ __all__ = [
     "WRAPPED_DELTA",
     "add_user_functions",
     "branch_dataset",
+    "check_dataset_kind",
     "check_user_variables",
     "event_variable",
     "monitor_variable",
@@ -77,6 +79,7 @@ __all__ = [
     "split_parameters",
     "state_component_names",
     "validate_branch_dataset",
+    "variable_array",
     "with_parameter_coords",
 ]
 
@@ -235,6 +238,42 @@ def check_variables(ds: xr.Dataset, expected: Mapping[str, tuple[tuple[str, ...]
         if var.dtype.kind != kind and not (kind == "f" and var.dtype.kind in "iu"):
             raise ValueError(f"variable {key!r} must have dtype kind {kind!r}; "
                              f"got dtype {var.dtype}")
+
+
+def check_dataset_kind(ds: Any, kind: str, attrs: Sequence[str]) -> None:
+    """Check that `ds` is a Dataset of layout `kind` (its ``impactcont_dataset``) with the
+    attributes `attrs`.
+
+    Raises
+    ------
+    TypeError
+        `ds` is not an :class:`xarray.Dataset`.
+    ValueError
+        Naming the missing attributes, or the layout is another.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"expected an xarray.Dataset of a {kind}; got {type(ds).__name__}")
+    missing = [a for a in attrs if a not in ds.attrs]
+    if missing or dataset_tag(ds) != kind:
+        raise ValueError(f"not a {kind} dataset: missing attribute(s) {missing} or "
+                         f"impactcont_dataset != {kind!r}")
+
+
+def variable_array(key: str, value: Any, spec: _Var, shape: tuple[int, ...]) -> Any:
+    """`value` as the array of the variable `key` of `spec` on a grid of `shape`.
+
+    A dask array (a map larger than memory) stays lazy: its shape and dtype only.
+
+    Raises
+    ------
+    ValueError
+        `value` has another shape (named with both shapes).
+    """
+    a = value if hasattr(value, "dask") else np.asarray(value)
+    if a.shape != shape:
+        raise ValueError(f"column {key!r} must have shape {shape}; got shape {a.shape}")
+    dtype = {"f": np.float64, "b": bool, "c": np.complex128, "i": np.int64}[spec.kind]
+    return a.astype(dtype)
 
 
 def point_coords(npoints: int, n: int) -> dict[str, Any]:
