@@ -1,10 +1,11 @@
-"""The schema of two-parameter datasets: codim-1 curves and (N, omega, b) maps.
+"""The schema of codim-1 curves, and the validation of every continuation dataset.
 
 The one place that knows how a continued curve (:func:`impactcont.analysis.curves.curve`)
-and a grid map (:func:`impactcont.analysis.maps.stability_map`) are laid out in an
-:class:`xarray.Dataset`. Both carry the attribute ``impactcont_dataset``
-(``"curve"`` or ``"map"``); a branch dataset has none. :func:`validate_dataset`
-dispatches on it, so :func:`impactcont.dataset.save` / ``load`` handle all three.
+is laid out in an :class:`xarray.Dataset`; maps are laid out by
+:mod:`impactcont.dataset.maps` (its names are re-exported here for the callers of
+before). Curves and maps carry the attribute ``impactcont_dataset`` (``"curve"``,
+``"map"``, ``"multi_impact_map"``); a branch dataset has none. :func:`validate_dataset`
+dispatches on it, so :func:`impactcont.dataset.save` / ``load`` handle them all.
 Layout documented in ``docs/two_parameter.md``.
 
 Curve dimensions
@@ -13,15 +14,10 @@ Curve dimensions
 ``multiplier``  the ``2n`` eigenvalues of ``G`` (eq. 25);
 ``component``   the ``2n`` state components ``x1..xn, v1..vn``;
 ``codim2``      codimension-two points found on the curve (may be empty).
-
-Map dimensions
---------------
-``N``, ``omega``, ``b`` (the grid) and ``root`` (``+1, -1``: the sign of eq. 15).
 """
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -30,6 +26,15 @@ import numpy as np
 import xarray as xr
 
 from impactcont.dataset.attributes import check_attributes, dataset_tag, split_parameters
+from impactcont.dataset.maps import (
+    MAP_KINDS,
+    MAP_VARIABLES,
+    map_dataset,
+    map_parameters,
+    map_variables,
+    validate_map,
+    validate_map_dataset,
+)
 from impactcont.dataset.multi import validate_multi_impact_dataset
 from impactcont.dataset.schema import (
     _N,
@@ -37,10 +42,12 @@ from impactcont.dataset.schema import (
     _options_json,
     _parameter_name,
     _Var,
+    check_dataset_kind,
     check_user_variables,
     check_variables,
     point_coords,
     provenance_attributes,
+    variable_array,
     with_parameter_coords,
 )
 from impactcont.model.oscillator import ImpactOscillator
@@ -133,62 +140,8 @@ _CODIM2_FIELDS: dict[str, _Var] = {
                         kind="c", extra_dims=("multiplier",)),
 }
 
-#: Variables of a map, with their dimensions.
-MAP_VARIABLES: dict[str, tuple[_Var, tuple[str, ...]]] = {
-    "amplitude_squared": (_Var("c^2 + s^2", "1",
-                               "c^2 + s^2 of eq. (14): N-1 motions exist iff it is >= b^2."),
-                          ("N", "omega")),
-    "exists": (_Var("motion exists", "1", "c^2 + s^2 >= b^2 (eq. 15).", kind="b"),
-               ("N", "omega", "b")),
-    "n_physical": (_Var("physical motions", "1", "Number of physical roots of eq. (15).",
-                        kind="i"), ("N", "omega", "b")),
-    "n_stable": (_Var("stable physical motions", "1",
-                      "Number of physical and asymptotically stable roots of eq. (15).",
-                      kind="i"), ("N", "omega", "b")),
-    "delta": (_Var("impact phase", "rad", "Forcing phase at the impact (eq. 15), "
-                   "in (-pi, pi]."),
-              ("N", "omega", "b", "root")),
-    "impact_velocity": (_Var("impact velocity", "1", "x1'(T-), h2 of eq. (22)."),
-                        ("N", "omega", "b", "root")),
-    "gap_min": (_Var("minimum gap", "1",
-                     "Smallest b - x1 at interior maxima of x1 (eq. 16); +inf if none."),
-                ("N", "omega", "b", "root")),
-    "spectral_radius": (_Var("spectral radius", "1", "rho(G) (eq. 25)."),
-                        ("N", "omega", "b", "root")),
-    "critical_multiplier": (_Var("critical multiplier", "1",
-                                 "The multiplier of largest modulus (real and negative: PD "
-                                 "side; complex: NS side; real positive: SN side).", kind="c"),
-                            ("N", "omega", "b", "root")),
-    "physical": (_Var("physically realisable", "1", "impact_velocity > 0 and gap_min > 0.",
-                      kind="b"), ("N", "omega", "b", "root")),
-    "stable": (_Var("asymptotically stable", "1", "spectral_radius < 1 (Theorem 3.1).",
-                    kind="b"), ("N", "omega", "b", "root")),
-}
-
 _CURVE_ATTRS = ("title", "impactcont_dataset", "kind", "N", "parameters", "oscillator",
                 "options", "end_status", "impactcont_version", "Conventions", "history")
-_MAP_ATTRS = ("title", "impactcont_dataset", "oscillator", "options", "impactcont_version",
-              "Conventions", "history")
-
-
-def map_variables(parameters: Sequence[str] = ("omega", "b")
-                  ) -> dict[str, tuple[_Var, tuple[str, ...]]]:
-    """:data:`MAP_VARIABLES` of a map over the grid of `parameters` (default ``omega, b``).
-
-    The grid dims are named after the parameters: ``omega`` becomes ``parameters[0]``,
-    ``b`` becomes ``parameters[1]``. ``amplitude_squared`` (eq. 13-14) depends on every
-    parameter but ``b``: on ``(N, parameters[0])`` when ``parameters[1]`` is ``b``, else
-    on the whole grid ``(N, parameters[0], parameters[1])``.
-    """
-    first, second = parameters
-    rename = {"omega": first, "b": second}
-    out = {}
-    for key, (spec, dims) in MAP_VARIABLES.items():
-        dims = tuple(rename.get(d, d) for d in dims)
-        if key == "amplitude_squared" and second != "b":
-            dims = ("N", first, second)
-        out[key] = (spec, dims)
-    return out
 
 
 def codim2_variable(key: str) -> str:
@@ -211,15 +164,6 @@ def _codim2_fields(parameters: Sequence[str]) -> dict[str, _Var]:
     return fields
 
 
-
-
-def _array(key: str, value: Any, spec: _Var, shape: tuple[int, ...]) -> np.ndarray:
-    # a dask array (a map larger than memory) stays lazy: shape and dtype only
-    a = value if hasattr(value, "dask") else np.asarray(value)
-    if a.shape != shape:
-        raise ValueError(f"column {key!r} must have shape {shape}; got shape {a.shape}")
-    dtype = {"f": np.float64, "b": bool, "c": np.complex128, "i": np.int64}[spec.kind]
-    return a.astype(dtype)
 
 
 def codim2_data(codim2_points: Sequence[Mapping[str, Any]], parameters: Sequence[str],
@@ -333,8 +277,8 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
     data_vars: dict[str, Any] = {}
     for key, spec in specs.items():
         shape = (npoints,) + (2 * n,) * len(spec.extra_dims)
-        data_vars[key] = (("point", *spec.extra_dims), _array(key, columns[key], spec, shape),
-                          spec.attrs())
+        data_vars[key] = (("point", *spec.extra_dims),
+                          variable_array(key, columns[key], spec, shape), spec.attrs())
     data_vars.update(codim2_data(codim2_points, parameters, n))
     coords = point_coords(npoints, n)
     attrs = {
@@ -352,79 +296,6 @@ def curve_dataset(*, kind: str, N: int, parameters: Sequence[str], oscillator: I
     return with_parameter_coords(xr.Dataset(data_vars, coords=coords, attrs=attrs))
 
 
-_OPTIONAL_MAP_VARIABLES = ("spectral_radius", "critical_multiplier")
-
-
-def map_dataset(*, oscillator: ImpactOscillator, N: Sequence[int], omega: np.ndarray,
-                b: np.ndarray, values: Mapping[str, np.ndarray], options: Any,
-                title: str | None = None,
-                parameters: tuple[str, str] = ("omega", "b")) -> xr.Dataset:
-    """Assemble a map of existence, physicality and stability on ``(N, omega, b)``.
-
-    Parameters
-    ----------
-    oscillator : ImpactOscillator
-    N, omega, b : sequences
-        The grid: ``omega`` the values of ``parameters[0]``, ``b`` those of
-        ``parameters[1]``.
-    values : mapping
-        One array per entry of :func:`map_variables` with the dims listed there.
-    options : dict
-        How the map was computed (executor, chunks), stored as JSON.
-    title : str, optional
-    parameters : (str, str)
-        The grid's parameters, its dims after ``N`` (default ``omega, b``; any other pair
-        is stored in the attribute ``parameters``).
-
-    Returns
-    -------
-    xarray.Dataset
-    """
-    if not isinstance(oscillator, ImpactOscillator):
-        raise TypeError(f"oscillator must be an ImpactOscillator; got {oscillator!r}")
-    first, second = parameters
-    N = [_N(k) for k in N]
-    omega, b = (np.asarray(x, dtype=float) for x in (omega, b))
-    if omega.ndim != 1 or b.ndim != 1:
-        raise ValueError(f"omega and b must be 1-D grids; got shapes {omega.shape} and {b.shape}")
-    if not isinstance(options, Mapping):
-        raise TypeError(f"options must be a mapping; got {options!r}")
-    sizes = {"N": len(N), first: len(omega), second: len(b), "root": 2}
-    data_vars = {}
-    for key, (spec, dims) in map_variables(parameters).items():
-        if key in _OPTIONAL_MAP_VARIABLES and key not in values:
-            continue  # a map computed without eigenvalues
-        if key not in values:
-            raise ValueError(f"values is missing {key!r}; required {list(MAP_VARIABLES)}")
-        shape = tuple(sizes[d] for d in dims)
-        data_vars[key] = (dims, _array(key, values[key], spec, shape), spec.attrs())
-    coords = {
-        "N": ("N", np.asarray(N, dtype=np.int64),
-              {"long_name": "forcing periods per impact", "units": "1"}),
-        first: (first, np.asarray(omega, dtype=float), PARAMETERS[first].attrs()),
-        second: (second, np.asarray(b, dtype=float), PARAMETERS[second].attrs()),
-        "root": ("root", np.array([1, -1], dtype=np.int64),
-                 {"long_name": "root of eq. (15)", "units": "1",
-                  "description": "Sign in front of the square root of eq. (15)."}),
-    }
-    attrs = {"title": title or "Existence, physicality and stability of N-1 motions",
-             "impactcont_dataset": "map", "oscillator": oscillator.to_json(),
-             "options": json.dumps(dict(options), sort_keys=True), **provenance_attributes()}
-    if (first, second) != ("omega", "b"):
-        attrs["parameters"] = f"{first},{second}"
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
-
-
-def _check_kind(ds: Any, kind: str, attrs: Sequence[str]) -> None:
-    """`ds` is a Dataset with the attributes of a dataset of `kind` (``impactcont_dataset``)."""
-    if not isinstance(ds, xr.Dataset):
-        raise TypeError(f"expected an xarray.Dataset of a {kind}; got {type(ds).__name__}")
-    missing = [a for a in attrs if a not in ds.attrs]
-    if missing or dataset_tag(ds) != kind:
-        raise ValueError(f"not a {kind} dataset: missing attribute(s) {missing} or "
-                         f"impactcont_dataset != {kind!r}")
-
-
 def validate_curve_dataset(ds: Any) -> xr.Dataset:
     """Check that ``ds`` has the layout of :func:`curve_dataset`; return it.
 
@@ -433,7 +304,7 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
     TypeError, ValueError
         Naming the missing or malformed attribute or variable.
     """
-    _check_kind(ds, "curve", _CURVE_ATTRS)
+    check_dataset_kind(ds, "curve", _CURVE_ATTRS)
     kind = ds.attrs["kind"]
     if not isinstance(kind, str) or kind not in CURVE_KINDS:
         raise ValueError(f"attribute 'kind' must be one of {CURVE_KINDS}; got {kind!r}")
@@ -457,54 +328,14 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
     return ds
 
 
-def map_parameters(ds: xr.Dataset) -> tuple[str, str]:
-    """The two parameters of a map's grid: its attribute ``parameters``, else ``omega, b``.
-
-    Raises
-    ------
-    ValueError
-        The attribute names other than two parameters of the vocabulary.
-    """
-    text = ds.attrs.get("parameters", "omega,b")
-    names = split_parameters(text) if isinstance(text, str) else []
-    if len(names) != 2 or names[0] == names[1] or not all(n in PARAMETERS for n in names):
-        raise ValueError(f"attribute 'parameters' of a map must name two different parameters "
-                         f"of {sorted(PARAMETERS)} (comma-joined); got {text!r}")
-    return names[0], names[1]
-
-
-def validate_map_dataset(ds: Any) -> xr.Dataset:
-    """Check that ``ds`` has the layout of :func:`map_dataset`; return it.
-
-    ``spectral_radius`` and ``critical_multiplier`` are optional (a map computed
-    with ``spectral_radius=False`` has neither); the other variables of
-    :data:`MAP_VARIABLES` are required.
-
-    Raises
-    ------
-    TypeError, ValueError
-        Naming the missing or malformed attribute or variable.
-    """
-    _check_kind(ds, "map", _MAP_ATTRS)
-    parameters = map_parameters(ds)
-    check_variables(ds, {k: (dims, s.kind) for k, (s, dims) in map_variables(parameters).items()
-                         if k not in _OPTIONAL_MAP_VARIABLES or k in ds.variables}, "map")
-    check_attributes(ds, "map")
-    return ds
-
-
 def validate_dataset(ds: Any) -> xr.Dataset:
-    """Validate a branch (N-1 or N-p), curve, map or N-p map dataset by its
-    ``impactcont_dataset``."""
+    """Validate a branch (N-1 or N-p), curve or map (either layout of
+    :mod:`impactcont.dataset.maps`) dataset by its ``impactcont_dataset``."""
     kind = dataset_tag(ds) if isinstance(ds, xr.Dataset) else None
     if kind == "curve":
         return validate_curve_dataset(ds)
-    if kind == "map":
-        return validate_map_dataset(ds)
-    if kind == "multi_impact_map":
-        from impactcont.dataset.multi_maps import validate_multi_impact_map_dataset
-
-        return validate_multi_impact_map_dataset(ds)
+    if kind in MAP_KINDS:
+        return validate_map(ds)
     return validate_multi_impact_dataset(ds)
 
 

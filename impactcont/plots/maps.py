@@ -23,13 +23,12 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from impactcont.dataset.attributes import dataset_tag, split_parameters
-from impactcont.dataset.curves import (
-    codim2_variable,
+from impactcont.dataset.curves import codim2_variable, validate_curve_dataset
+from impactcont.dataset.maps import (
     map_parameters,
-    validate_curve_dataset,
     validate_map_dataset,
+    validate_multi_impact_map_dataset,
 )
-from impactcont.dataset.multi_maps import validate_multi_impact_map_dataset
 from impactcont.plots.branches import (
     _SYMBOLS,
     SPECIAL_NAMES,

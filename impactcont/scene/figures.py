@@ -467,7 +467,7 @@ def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     two parameters ((omega, b), or those of its attribute ``parameters``), one panel per N."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    from impactcont.dataset.curves import map_parameters
+    from impactcont.dataset.maps import map_parameters
     from impactcont.plots.branches import axis_label
 
     ds = next(iter(datasets.values()))
