@@ -3,11 +3,12 @@
 A figure is drawn once with the Agg renderer and checked for what a referee
 objects to: text outside the figure, two texts overlapping, text on a
 special-point marker, two point labels side by side (read as one), a marker cut
-by the frame of its axes, a leader line across a curve, a line or marker style
-that carries meaning (line style, colour, marker shape) and has no legend entry,
-two legend entries drawn alike, a legend entry for nothing drawn in view, a
-title with an internal name (``fig3_N1``, ``root -1``) or without the system and
-the motion it shows, a figure wider than a journal page (:data:`MAX_WIDTH`).
+by the frame of its axes, a marker hidden under a marker of another kind, a
+leader line across a curve, a line or marker style that carries meaning (line
+style, colour, marker shape) and has no legend entry, two legend entries drawn
+alike, a legend entry for nothing drawn in view, a title with an internal name
+(``fig3_N1``, ``root -1``) or without the system and the motion it shows, a
+figure wider than a journal page (:data:`MAX_WIDTH`).
 
 Each check returns a list of sentences, one per problem (empty: the figure is
 clean); :func:`layout_problems` runs them all and :func:`check_layout` asserts
@@ -29,6 +30,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib import colors as mcolors
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PathCollection
 from matplotlib.colors import to_hex
@@ -43,6 +45,7 @@ __all__ = ["MAX_WIDTH", "Drawn", "axes_of", "check_layout", "check_titles", "col
            "journal_problems", "labels_side_by_side", "layout_problems", "leaders_across_curves",
            "leaders_crossing_each_other", "legend_entries_alike", "legend_entries_not_drawn",
            "line_style", "marker_artists", "marker_key", "markers_cut_by_frame",
+           "markers_hiding_markers",
            "overlapping_texts", "render", "styles_without_legend", "texts_on_markers",
            "texts_outside_figure", "title_problems", "too_wide"]
 
@@ -280,6 +283,96 @@ def markers_cut_by_frame(fig: Figure | Drawn) -> list[str]:
     return out
 
 
+def _marker_paths(ax) -> list[tuple[int, object, np.ndarray, object, tuple, float, bool]]:
+    """Every marker drawn on ``ax`` in drawing order: ``(order, artist, display centre,
+    outline path in display coordinates, style, diameter px, filled)``.
+
+    The style is the marker's shape, size, edge and face colour; ``filled``: its face
+    is painted (it hides what lies under it).
+    """
+    from matplotlib.transforms import Affine2D
+
+    dpi = ax.figure.dpi
+    artists = sorted(((a.get_zorder(), i, a) for i, a in enumerate(ax.get_children())
+                      if a.get_visible() and (isinstance(a, PathCollection) or (
+                          isinstance(a, Line2D) and a.get_marker() not in _NO_MARKER))),
+                     key=lambda t: (t[0], t[1]))
+    out = []
+    for order, (_, _, a) in enumerate(artists):
+        if isinstance(a, Line2D):
+            m = MarkerStyle(a.get_marker(), a.get_fillstyle())
+            size = a.get_markersize() * dpi / 72.0
+            path = m.get_path().transformed(m.get_transform() + Affine2D().scale(size))
+            face = a.get_markerfacecolor()
+            filled = (m.is_filled() and m.get_fillstyle() == "full"
+                      and not (isinstance(face, str) and face.lower() == "none")
+                      and mcolors.to_rgba(face, a.get_alpha())[3] > 0.5)
+            style = (marker_key(a.get_marker()), round(size, 1), color(a.get_markeredgecolor()),
+                     color(face) if filled else "none")
+            xy = ax.transData.transform(np.asarray(a.get_xydata(), dtype=float))
+            for p in xy[np.all(np.isfinite(xy), axis=1)]:
+                out.append((order, a, p, path.transformed(Affine2D().translate(*p)), style,
+                            size, filled))
+            continue
+        offsets = np.asarray(a.get_offsets(), dtype=float)
+        if not len(offsets) or not len(a.get_paths()):
+            continue
+        xy = a.get_offset_transform().transform(offsets)
+        transforms = a.get_transforms()
+        faces, edges = a.get_facecolors(), a.get_edgecolors()
+        for i, p in enumerate(xy):
+            if not np.all(np.isfinite(p)):
+                continue
+            base = a.get_paths()[i % len(a.get_paths())]
+            t = Affine2D(transforms[i % len(transforms)]) if len(transforms) else Affine2D()
+            path = base.transformed(t)
+            size = float(np.ptp(path.vertices, axis=0).max()) if len(path.vertices) else 0.0
+            face = faces[i % len(faces)] if len(faces) else None
+            filled = face is not None and face[3] > 0.5
+            style = (tuple(np.round(base.vertices, 3).ravel()), round(size, 1),
+                     color(edges[i % len(edges)]) if len(edges) else "none",
+                     color(face) if filled else "none")
+            out.append((order, a, p, path.transformed(Affine2D().translate(*p)), style, size,
+                        filled))
+    return out
+
+
+def markers_hiding_markers(fig: Figure | Drawn, closeness: float = 1.0 / 3.0) -> list[str]:
+    """A marker drawn over a marker of another kind that lies wholly under it.
+
+    The reader cannot see the covered one (a PD marker over a GR marker of the same
+    point, a special point over a simulated point). Two markers of different style
+    (shape, size, edge or face colour) of different artists count when their centres
+    are closer than ``closeness`` times the smaller marker's size, the later-drawn one
+    has a painted face, and the earlier one's outline lies wholly inside it. Points that
+    coincide are drawn as one combined marker (or of sizes that leave both in view).
+    """
+    from scipy.spatial import cKDTree
+
+    d = render(fig)
+    out = []
+    for ax in axes_of(d.fig):
+        marks = _marker_paths(ax)
+        if len(marks) < 2:
+            continue
+        centres = np.array([m[2] for m in marks])
+        reach = closeness * max(m[5] for m in marks)
+        for i, j in sorted(cKDTree(centres).query_pairs(reach)):
+            under, over = (marks[i], marks[j]) if marks[i][0] < marks[j][0] else (
+                marks[j], marks[i])
+            if under[0] == over[0] or under[4] == over[4] or not over[6]:
+                continue
+            if np.hypot(*(under[2] - over[2])) >= closeness * min(under[5], over[5]):
+                continue
+            # shrunk a little about its centre: an outline on the other's is under it
+            inner = (under[3].vertices - under[2]) * 0.97 + under[2]
+            if np.all(over[3].contains_points(inner)):
+                x, y = ax.transData.inverted().transform(under[2])
+                out.append(f"a marker at ({x:.4g}, {y:.4g}) is hidden under a marker of "
+                           f"another kind")
+    return out
+
+
 def _coloured_marker_entries(fig: Figure) -> dict[str, set]:
     """Edge colour -> marker shapes of the legend's marker entries not drawn in black."""
     out: dict[str, set] = {}
@@ -503,7 +596,7 @@ def layout_problems(fig: Figure, *, max_width: float = MAX_WIDTH) -> list[str]:
     Runs :func:`too_wide`, :func:`texts_outside_figure`, :func:`overlapping_texts`,
     :func:`labels_side_by_side`,
     :func:`texts_on_markers`, :func:`markers_cut_by_frame`,
-    :func:`styles_without_legend`, :func:`legend_entries_not_drawn`,
+    :func:`markers_hiding_markers`, :func:`styles_without_legend`, :func:`legend_entries_not_drawn`,
     :func:`legend_entries_alike`,
     :func:`leaders_across_curves`, :func:`leaders_crossing_each_other` and
     :func:`title_problems` (internal names only) on one drawing of the figure.
@@ -511,7 +604,8 @@ def layout_problems(fig: Figure, *, max_width: float = MAX_WIDTH) -> list[str]:
     d = render(fig)
     out = too_wide(d.fig, max_width)
     for check in (texts_outside_figure, overlapping_texts, labels_side_by_side, texts_on_markers,
-                  markers_cut_by_frame, styles_without_legend, legend_entries_not_drawn,
+                  markers_cut_by_frame, markers_hiding_markers, styles_without_legend,
+                  legend_entries_not_drawn,
                   legend_entries_alike,
                   leaders_across_curves, leaders_crossing_each_other):
         out += check(d)
