@@ -47,7 +47,7 @@ from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import initial_unknowns
-from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
+from impactcont.problems.codim1 import MultiImpactCurveProblem
 from impactcont.progress import (
     NothingComputed,
     ProgressOption,

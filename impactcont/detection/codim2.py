@@ -25,14 +25,14 @@ branches, a PD sign change without a multiplier at -1 (through the pole) and an
 NS sign change at a neutral saddle are discarded.
 
 The location is written once for both curve problems, the N-1 closed form
-(:class:`~impactcont.problems.codim1.CurveProblem`) and the shooting of any N-p motion
-(:class:`~impactcont.problems.multi_impact_curve.MultiImpactCurveProblem`), against what
+(:class:`~impactcont.problems.closed_form_curve.CurveProblem`) and the shooting of any N-p motion
+(:class:`~impactcont.problems.codim1.ShootingCurve`), against what
 both provide (:class:`Codim2Problem`): the tests watched on the curve and their values at
 a point, where a point lies in the plane of the two parameters, a Newton solve of the
 curve on a hyperplane, the motion at a point. On curves of N-p motions the ZV test is
 the smallest impact velocity and the GR test the smallest clearance over the p impacts
 and flights, the SN test the signed smallest singular value of the branch problem's
-Jacobian (:func:`~impactcont.problems.multi_impact_curve.signed_smallest_singular_value`),
+Jacobian (:func:`~impactcont.problems.codim1.signed_smallest_singular_value`),
 and the PD and NS tests are made free of the poles of every impact
 (:func:`~impactcont.problems.events.pole_free`); the GR test is not watched on a GR curve
 of N-p motions (its second-lowest clearance is not searched yet).
@@ -123,7 +123,7 @@ Codim2Point = SpecialPoint.on_curve
 
 def grazing_other_gap(problem: Any, orbit: Any, tangency_time: float) -> float:
     """``b`` minus the highest interior maximum of x1 other than the tangency at ``t*`` on
-    an N-1 curve (:meth:`~impactcont.problems.codim1.CurveProblem.other_gap`)."""
+    an N-1 curve (:meth:`~impactcont.problems.closed_form_curve.CurveProblem.other_gap`)."""
     return problem.other_gap(orbit, tangency_time)
 
 

@@ -1,7 +1,7 @@
 """The pieces of the codim-1 curve systems on the first-order path (any C, complex F).
 
 :class:`GeneralPieces` has the interface of the modal pieces of
-:mod:`impactcont.problems.codim1` (``S0``, ``T``, ``b``, ``impact_velocity``,
+:mod:`impactcont.problems.closed_form_curve` (``S0``, ``T``, ``b``, ``impact_velocity``,
 ``jacobian``, ``split``, ``pd_condition``, ``pole_free_pd_matrix``, ``mass1``,
 ``other_maximum``, ``stepped``), built from eq. (12)-(14) in the impact's rank-one form
 (:class:`impactcont.orbit.general.PeriodicForm`, on the exact flow
@@ -102,7 +102,7 @@ def impact_condition_form(Gam: float, B: float, g: float, Delta: float, omega: f
 def bordered_condition(E: np.ndarray, left: np.ndarray, right: np.ndarray) -> float | complex:
     """``g``: the last component of ``[[E, left], [right^T, 0]] [q; g] = [0; 1]`` (the
     pole-free period-doubling condition of
-    :class:`~impactcont.problems.codim1.PeriodDoublingCurve`; NaN when singular)."""
+    :class:`~impactcont.problems.closed_form_curve.PeriodDoublingCurve`; NaN when singular)."""
     k = E.shape[0] + 1
     A = np.zeros((k, k), dtype=E.dtype)
     A[:-1, :-1] = E

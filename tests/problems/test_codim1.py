@@ -1,175 +1,182 @@
-"""The curve problems' Jacobians are exact (complex steps, no finite differences), checked
-against fourth-order finite differences in every continuable parameter, every curve kind and
-damping class; the grazing curve's second-maximum test against the dense extrema search."""
+"""The one codim-1 curve problem (:mod:`impactcont.problems.codim1`): a motion's branch
+problem plus one test function, with the closed form (N-1) or shooting as its evaluator.
+
+Shooting (:class:`~impactcont.problems.codim1.ShootingCurve`): at the special points the
+closed-form N-1 branch located, the curve's residual (the branch system and the test
+function) vanishes, the test function changes sign across the point, the exact blocks of
+the Jacobian and the parameter column agree with central differences, and bad curves are
+refused by name. :func:`~impactcont.problems.codim1.curve_problem` builds either evaluator,
+and both evaluators' curve points are the same curve."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.kernel import closed_form, contact
-from impactcont.orbit.extrema import interior_maxima, sample_times
-from impactcont.orbit.flow import Flow
-from impactcont.orbit.periodic import modal_arrays, periodic_orbits
-from impactcont.problems import codim1
+from impactcont.errors import ParameterError
+from impactcont.problems.closed_form_curve import CurveProblem
+from impactcont.problems.codim1 import (
+    MultiImpactCurveProblem,
+    ShootingCurve,
+    curve_problem,
+    signed_smallest_singular_value,
+)
 
-PAIRS = [("omega", "b"), ("b", "omega"), ("omega", "R"), ("R", "b"), ("omega", "F0"),
-         ("F0", "omega")]
-
-
-def _paper(**kw):
-    base = dict(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.5, 0.0], R=0.6, b=0.45,
-                omega=1.25, eta=0.1)
-    base.update(kw)
-    return ic.ImpactOscillator(**base)
+K = [[1.0, -1.0], [-1.0, 2.0]]
 
 
-def _chain3(**kw):
-    # one over-damped, one nearly critical and one light mode (Rayleigh damping)
-    K = ic.chain_stiffness([1.0, 2.0, 30.0])
-    base = dict(M=np.diag([1.0, 0.5, 0.2]), K=K, F=[1.0, 0.3, 0.0], R=0.7, b=0.2,
-                omega=1.1, alpha=0.05, beta=0.08)
-    base.update(kw)
-    return ic.ImpactOscillator(**base)
+def _paper(b: float, omega: float = 1.0) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=b, omega=omega,
+                               eta=0.1)
 
 
-def _fd4(problem, x, h):
-    """Fourth-order central differences of the residual in x = [u, lam]."""
+@pytest.fixture(scope="module")
+def specials() -> dict[str, tuple[float, float, float]]:
+    """``label -> (b, omega, delta)`` located on closed-form N-1 branches."""
+    out = {}
+    for b, bounds, detect in ((0.5, (1.1, 1.3), ("SN", "NS", "PD", "ZV")),
+                              (0.6, (0.5, 3.0), ("GR",))):
+        branch = ic.continuation(_paper(b), N=1, bounds=bounds, detect=detect)
+        for label, omega, delta in zip(branch["special_label"].values,
+                                       branch["special_omega"].values,
+                                       branch["special_delta"].values, strict=True):
+            out.setdefault(str(label), (b, float(omega), float(delta)))
+    return out
+
+
+def _x(b: float, omega: float, delta: float) -> np.ndarray:
+    """``[u, omega]`` of the N-1 motion at (b, omega) with the phase nearest ``delta``."""
+    orbits = ic.periodic_orbits(_paper(b, omega), 1)
+    orbit = min(orbits, key=lambda o: abs(np.angle(np.exp(1j * (o.delta - delta)))))
+    return np.concatenate([[orbit.delta], orbit.state[1:], [omega]])
+
+
+def _problem(kind: str, b: float) -> MultiImpactCurveProblem:
+    return MultiImpactCurveProblem(_paper(b), 1, 1, "U", kind, ("omega", "b"), symmetric=False)
+
+
+@pytest.mark.filterwarnings("ignore::impactcont.LowImpactVelocityWarning")  # at ZV: h2 = 0
+@pytest.mark.parametrize("kind", ["PD", "NS", "ZV", "GR"])
+def test_the_residual_vanishes_at_the_special_point_and_the_test_changes_sign(
+        specials, kind) -> None:
+    b, omega, delta = specials[kind]
+    problem = _problem(kind, b)
+    x = _x(b, omega, delta)
+    assert problem.size == x.size == 5
+    residual = problem.residual(x, b)
+    assert np.max(np.abs(residual[:-1])) < 1e-11  # the motion
+    before, after = (problem.test(_x(b, omega + dw, delta), b) for dw in (-1e-4, 1e-4))
+    assert before * after < 0
+    assert abs(residual[-1]) < 1e-3 * min(abs(before), abs(after))
+
+
+def test_the_fold_test_changes_sign_across_the_fold(specials) -> None:
+    """SN: the branch folds in omega, so the motions on either side are the two roots at one
+    omega on the side where they exist; along the branch the phase moves through the fold's."""
+    b, omega, delta = specials["SN"]
+    problem = _problem("SN", b)
+    assert not ic.periodic_orbits(_paper(b, omega + 1e-4), 1)  # beyond the fold: none
+    orbits = ic.periodic_orbits(_paper(b, omega - 1e-4), 1)
+    near = sorted(orbits, key=lambda o: abs(np.angle(np.exp(1j * (o.delta - delta)))))[:2]
+    values = [problem.test(np.concatenate([[o.delta], o.state[1:], [omega - 1e-4]]), b)
+              for o in near]
+    assert values[0] * values[1] < 0
+    # sigma(dF/du) ~ sqrt(distance to the fold): 100 times smaller 1e4 times closer
+    closer = _x(b, omega - 1e-8, delta)
+    assert abs(problem.test(closer, b)) < 0.03 * min(map(abs, values))
+
+
+def test_the_exact_blocks_agree_with_central_differences(specials) -> None:
+    b, omega, delta = specials["PD"]
+    problem = _problem("PD", b)
+    x = _x(b, omega - 1e-3, delta)
+    J = problem.jacobian(x, b)
     m = x.size - 1
-    J = np.empty((m, m + 1))
-    for j in range(m + 1):
-        step = h * max(1.0, abs(x[j]))
-        f = []
-        for k in (2, 1, -1, -2):
-            y = x.copy()
-            y[j] += k * step
-            f.append(problem.residual(y[:-1], y[-1]))
-        J[:, j] = (8.0 * (f[1] - f[2]) - (f[0] - f[3])) / (12.0 * step)
-    return J
+    for i in range(x.size):
+        e = np.zeros(x.size)
+        e[i] = 1e-6
+        fd = (problem.residual(x + e, b) - problem.residual(x - e, b)) / 2e-6
+        np.testing.assert_allclose(J[:m, i], fd[:m], rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(J[m, i], fd[m], rtol=1e-3, atol=1e-6)  # the g row: FD
+    fd = (problem.residual(x, b + 1e-6) - problem.residual(x, b - 1e-6)) / 2e-6
+    np.testing.assert_allclose(problem.dparam(x, b), fd, rtol=1e-3, atol=1e-6)
+    np.testing.assert_allclose(problem.dparam(x, b)[:m], fd[:m], rtol=1e-6, atol=1e-9)
 
 
-def _point(problem, osc, kind):
-    """Unknowns at the first N = 1 motion of `osc` (not on the curve: the Jacobian is
-    defined everywhere)."""
-    p1, p2 = problem.parameters
-    orbit = periodic_orbits(osc, 1)[0]
-    if kind == "GR":
-        extras = np.array([0.37 * orbit.period])
-    elif kind == "NS":
-        rng = np.random.default_rng(3)
-        extras = np.concatenate([[0.8], rng.standard_normal(4 * osc.n)])
-    else:
-        extras = None
-    v1, v2 = problem.parameter_value(osc, p1), problem.parameter_value(osc, p2)
-    u = problem.initial_unknowns(v1, v2, orbit.delta, extras)
-    return np.append(u, v2)
+def test_the_signed_smallest_singular_value() -> None:
+    assert signed_smallest_singular_value(np.diag([2.0, -3.0])) == pytest.approx(-2.0)
+    assert signed_smallest_singular_value(np.eye(3)) == pytest.approx(1.0)
+    rotation = np.array([[0.0, -1.0], [1.0, 0.0]])
+    assert signed_smallest_singular_value(0.5 * rotation) == pytest.approx(0.5)
+    assert math.isnan(signed_smallest_singular_value(np.array([[np.inf, 0], [0, 1.0]])))
 
 
-def _jacobian_error(osc, kind, pair):
-    """Largest row-relative difference between the problem's Jacobian and _fd4's."""
-    problem = codim1.curve_problem(kind, osc, 1, pair)
-    x = _point(problem, osc, kind)
-    J = problem.full_jacobian(x)
-    ref = _fd4(problem, x, 2e-4)
-    scale = np.max(np.abs(J), axis=1, keepdims=True)
-    return np.max(np.abs(J - ref) / np.maximum(scale, 1e-300))
+@pytest.mark.parametrize(("kind", "parameters", "symmetric", "match"), [
+    ("XY", ("omega", "b"), False, r"kind must be one of .*; got 'XY'"),
+    ("BP", ("omega", "b"), False, r"kind='BP' is a curve of symmetric motions"),
+    ("PD", ("omega", "omega"), False, r"parameters must be two different parameters; got "
+                                      r"'omega' twice"),
+])
+def test_bad_curves_are_refused(kind, parameters, symmetric, match) -> None:
+    with pytest.raises(ParameterError, match=match):
+        MultiImpactCurveProblem(_paper(0.5), 1, 1, "U", kind, parameters, symmetric=symmetric)
 
 
-@pytest.mark.parametrize("kind", ["SN", "PD", "NS", "GR", "ZV"])
-@pytest.mark.parametrize("pair", [*PAIRS, ("omega", "eta"), ("eta", "b")])
-def test_jacobian_is_exact_paper(kind, pair):
-    assert _jacobian_error(_paper(), kind, pair) < 1e-8
-
-
-@pytest.mark.parametrize("kind", ["SN", "PD", "NS", "GR", "ZV"])
-@pytest.mark.parametrize("pair", [("omega", "alpha"), ("beta", "omega"), ("omega", "b")])
-def test_jacobian_is_exact_rayleigh_chain(kind, pair):
-    assert _jacobian_error(_chain3(), kind, pair) < 1e-7
-
-
-@pytest.mark.parametrize("kind", ["SN", "PD", "NS", "GR", "ZV"])
-@pytest.mark.parametrize("pair", [("omega", "k2"), ("M[1,2]", "b"), ("F[2]", "omega")])
-def test_jacobian_in_an_element_is_its_central_difference(kind, pair):
-    """Issue 29, item 5: an element of the model as a curve parameter; its column is a
-    central difference of step eps^(1/3) scale (error about 1e-10 of the row)."""
-    assert _jacobian_error(_paper(), kind, pair) < 1e-7
-
-
-def test_kinds_are_labels_and_strings_are_accepted():
-    """Issue 29, item 2: the kinds of curves are the Label members; a string names one."""
+def test_the_kind_of_a_curve_is_its_label():
+    """Issue 29, item 2: a kind given as a Label or its string is the Label member; what
+    the kind needs (its test, the tests it watches) comes from a Label-keyed table."""
     from impactcont.vocabulary import Label
 
-    assert codim1.curve_kind("PD") is Label.PD and codim1.curve_kind(Label.NS) is Label.NS
-    for kind in codim1.CURVE_KINDS:
-        problem = codim1.curve_problem(kind, _paper(), 1)
-        assert problem.kind is Label(kind)
-        assert problem.kind is codim1.curve_problem(Label(kind), _paper(), 1).kind
-    for bad in ("BP", "pd", None, 3):
-        with pytest.raises(ic.ParameterError, match=r"kind must be one of \('SN'"):
-            codim1.curve_kind(bad)
+    osc = _paper(0.0, 1.75)
+    for kind in ("SN", "PD", "NS", "GR", "ZV"):
+        by_name = MultiImpactCurveProblem(osc, 1, 1, "U", kind, ("omega", "b"),
+                                          symmetric=False)
+        by_label = MultiImpactCurveProblem(osc, 1, 1, "U", Label(kind), ("omega", "b"),
+                                           symmetric=False)
+        assert by_name.kind is by_label.kind is Label(kind)
+        assert Label(kind) not in by_name.codim2_tests
+        assert all(isinstance(test, Label) for test in by_name.codim2_tests)
+    with pytest.raises(ParameterError, match="kind must be one of"):
+        MultiImpactCurveProblem(osc, 1, 1, "U", "XX", ("omega", "b"), symmetric=False)
 
 
-def test_no_curve_module_compares_kinds_as_strings():
-    """Issue 29, item 2: no ``kind == "PD"`` (or ``!=``, ``in ("SN", ...)``) left in the
-    curve stack: the kinds are Label members, their behaviour the problems' methods and
-    Label-keyed tables."""
-    import re
-    from pathlib import Path
-
-    root = Path(codim1.__file__).parents[1]
-    pattern = re.compile(r"""(==|!=|\bin)\s*\(?\s*["'](SN|PD|NS|GR|ZV|BP)["']""")
-    for module in ("analysis/curves.py", "analysis/multi_curves.py", "problems/codim1.py",
-                   "problems/multi_impact_curve.py", "detection/codim2.py"):
-        text = (root / module).read_text()
-        assert not pattern.findall(text), (module, pattern.findall(text))
-
-
-@pytest.mark.parametrize("kind", ["SN", "PD", "GR", "ZV"])
-def test_jacobian_at_the_elastic_bound(kind):
-    """At R = 1 a central difference would leave the parameter's range; a complex step
-    does not. Checked against second-order one-sided differences."""
-    osc = _paper(R=1.0)
-    problem = codim1.curve_problem(kind, osc, 1, ("omega", "R"))
-    x = _point(problem, osc, kind)
-    J = problem.full_jacobian(x)
-    h = 1e-5
-    f = [problem.residual(x[:-1], 1.0 - k * h) for k in (0, 1, 2)]
-    one_sided = (3.0 * f[0] - 4.0 * f[1] + f[2]) / (2.0 * h)
-    assert np.max(np.abs(J[:, -1] - one_sided)) < 1e-7 * max(1.0, np.max(np.abs(J[:, -1])))
+def test_curve_problem_builds_the_closed_form_or_shooting():
+    """One entry: ``p`` None is the closed form of an N-1 motion, ``p`` given shooting;
+    the earlier name of the shooting problem is the same class."""
+    osc = _paper(0.0, 1.75)
+    assert isinstance(curve_problem("PD", osc, 1, ("omega", "b")), CurveProblem)
+    shooting = curve_problem("PD", osc, 1, ("omega", "b"), p=1, pattern="U")
+    assert isinstance(shooting, ShootingCurve) and MultiImpactCurveProblem is ShootingCurve
+    with pytest.raises(ParameterError, match=r"kind must be one of \('SN', 'PD', 'NS', "
+                                             r"'GR', 'ZV'\) for a curve of N-1|kind must be one"):
+        curve_problem("BP", osc, 1)
+    with pytest.raises(ParameterError, match=r"give p too; got pattern='U'"):
+        curve_problem("PD", osc, 1, pattern="U")
 
 
-def test_curve_newton_uses_no_residual_differences(monkeypatch):
-    """The Jacobian never evaluates the real residual (no finite differences)."""
-    osc = _paper()
-    problem = codim1.curve_problem("PD", osc, 1, ("omega", "b"))
-    x = _point(problem, osc, "PD")
-    calls = []
-    original = problem.residual
-    monkeypatch.setattr(problem, "residual", lambda *a: calls.append(a) or original(*a))
-    problem.full_jacobian(x)
-    assert calls == []
-
-
-@pytest.mark.parametrize("omega, b", [(0.4, 0.3), (0.6, 0.5), (0.8, 0.0)])
-def test_other_maximum_against_the_dense_search(omega, b):
-    """The kernel's search with one maximum excluded equals the dense search's runner-up."""
-    osc = _paper(omega=omega, b=b)
-    for orbit in periodic_orbits(osc, 2):
-        flow = Flow(osc)
-        times, peaks = interior_maxima(flow.mass1(orbit.state, orbit.delta),
-                                       sample_times(flow, 0.0, orbit.period))
-        assert len(peaks) >= 2
-        order = np.argsort(peaks)[::-1]
-        arrays = modal_arrays(osc)
-        w, a, eig_err, u0, ui0 = arrays.w, arrays.a, arrays.eig_err, arrays.u0, arrays.ui0
-        modal, sc = closed_form.omega_setup(w, a, arrays.f, u0, ui0, eig_err,
-                                       osc.R, osc.omega, 2)
-        top, t_top = contact.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R, orbit.delta,
-                                          orbit.impact_velocity, np.nan)
-        assert top == pytest.approx(peaks[order[0]], abs=1e-12)
-        assert t_top == pytest.approx(times[order[0]], abs=1e-8)
-        second, t_second = contact.other_maximum(w, a, u0, modal, sc, osc.omega, osc.R,
-                                                orbit.delta, orbit.impact_velocity, t_top)
-        assert second == pytest.approx(peaks[order[1]], abs=1e-12)
-        assert t_second == pytest.approx(times[order[1]], abs=1e-8)
+@pytest.mark.filterwarnings("ignore::impactcont.LowImpactVelocityWarning")  # at ZV: h2 = 0
+@pytest.mark.parametrize("kind", ["PD", "NS", "ZV"])
+def test_both_evaluators_solve_the_same_curve(specials, kind):
+    """One curve problem, two evaluators: from a start 1e-4 off the special point in omega, the
+    closed form and shooting, each by its own Newton on the hyperplane ``b = b0`` (the same
+    call, :meth:`on_hyperplane`), land on the same point of the curve (the closed form is
+    the oracle; both solve to the Newton tolerance 1e-11)."""
+    b, omega, delta = specials[kind]
+    osc = _paper(b, omega)
+    closed = curve_problem(kind, osc, 1, ("omega", "b"))
+    shooting = curve_problem(kind, osc, 1, ("omega", "b"), p=1, pattern="U")
+    off = _x(b, omega, delta)
+    off[-1] += 1e-4  # the motion at omega, the unknown omega moved
+    starts = (np.append(closed.initial_unknowns(omega + 1e-4, b, delta), b), np.append(off, b))
+    found = []
+    for problem, x0 in zip((closed, shooting), starts, strict=True):
+        normal = np.zeros(x0.size)
+        normal[-1] = 1.0
+        x = problem.on_hyperplane(x0, normal)
+        assert problem.plane(x)[1] == pytest.approx(b, abs=1e-14)
+        found.append(problem.plane(x)[0])
+    assert abs(found[0] - omega) < 1e-6  # the same special point
+    assert abs(found[0] - found[1]) < 1e-8
