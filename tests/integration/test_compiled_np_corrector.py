@@ -28,7 +28,7 @@ from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import multi_impact_orbit, shooting
 from impactcont.orbit.symmetry import half_map
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
-from impactcont.problems.multi_impact_curve import MultiImpactCurveProblem
+from impactcont.problems.codim1 import MultiImpactCurveProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
