@@ -162,6 +162,38 @@ class PeriodicOrbit:
         """Asymptotically stable by Theorem 3.1: ``rho(G) < 1``."""
         return self.spectral_radius < 1.0
 
+    # -- the per-impact view shared with MultiImpactOrbit (p = 1; the motion protocol of
+    # -- impactcont.problems.motion, read by the one branch driver, detector and builder) ---
+    p = 1
+    """Impacts per motion: one."""
+    pattern = "U"
+    """The stop of each impact: the paper's one stop, ``"U"``, as an N-p motion's on it."""
+
+    @property
+    def phases(self) -> np.ndarray:
+        """``[delta]``: the forcing phase at the one impact, shape (1,)."""
+        return np.array([self.delta])
+
+    @property
+    def flight_times(self) -> np.ndarray:
+        """``[T]``: the one flight lasts the period, shape (1,)."""
+        return np.array([self.period])
+
+    @property
+    def states(self) -> np.ndarray:
+        """``[X(0)]``: the state right after the one impact, shape (1, 2n)."""
+        return self.state[None, :]
+
+    @property
+    def impact_velocities(self) -> np.ndarray:
+        """``[h2]``: the velocity just before the one impact, shape (1,)."""
+        return np.array([self.impact_velocity])
+
+    @property
+    def flight_gap_min(self) -> np.ndarray:
+        """``[gap_min]``: the clearance of the one flight (eq. 16), shape (1,)."""
+        return np.array([self.gap_min])
+
     def time_series(self, num: int = 400, periods: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Exact state over ``periods`` repetitions of the motion (for plots).
 
