@@ -422,8 +422,7 @@ def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
         warnings.warn(f"the N={problem.N} component through {problem.parameter}={lam0:.10g} "
                       f"stopped at max_points={opts.max_points}: the rest of it is not in the "
                       "branch; raise max_points or ds_max", RuntimeWarning, stacklevel=4)
-    samples = [BranchSample(delta=float(u[0]), lam=float(lam), dlam=float(t[-1]),
-                            orbit=problem.orbit(float(u[0]), float(lam)))
+    samples = [BranchSample(u=u, lam=float(lam), tangent=t, orbit=problem.orbit(u, float(lam)))
                for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
     where = f"the N={problem.N} component through {problem.parameter}={lam0:.10g}"
     specials = until_interrupted(
@@ -434,10 +433,9 @@ def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
         return _Run(lam0, delta0, result, samples, specials)
     values = user_values(functions, [s.orbit for s in samples], problem.parameter)
     events = until_interrupted(
-        lambda: locate_user_events(problem, [[s.delta] for s in samples],
-                                   [s.lam for s in samples], [[0.0, s.dlam] for s in samples],
-                                   functions, values,
-                                   lambda u, lam: problem.orbit(float(u[0]), float(lam)),
+        lambda: locate_user_events(problem, [s.u for s in samples],
+                                   [s.lam for s in samples], [s.tangent for s in samples],
+                                   functions, values, problem.orbit,
                                    parameter=problem.parameter),
         [], "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
         "events of %s: they are dropped", where)

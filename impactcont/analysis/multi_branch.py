@@ -42,15 +42,13 @@ from impactcont.dataset.schema import (
     parameter_names,
     special_variable,
 )
-from impactcont.detection.multi_impact import (
-    MultiImpactSample,
-    detect_multi_impact_points,
-    locate_multi_impact_events,
-)
 from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import (
+    BranchSample,
     UserFunctions,
     check_user_functions,
+    detect_special_points,
+    locate_sample_events,
     user_values,
 )
 from impactcont.errors import NoPeriodicMotionError, ParameterError
@@ -75,6 +73,9 @@ from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, check_bounds, check_labels
 
 __all__ = ["multi_impact_continuation", "restart_problem"]
+
+#: The sample of an N-p branch: the one sample of every motion (a name kept for its users).
+MultiImpactSample = BranchSample
 
 #: The problem of an N-p branch: any N-p motion, or a symmetric one by its half.
 BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
@@ -214,7 +215,7 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                  options: ContinuationOptions, *, stop_after_pd: int | None = None,
                  on_point: Callable[[MultiImpactOrbit], None] | None = None,
                  progress: Reporter | None = None,
-                 ) -> tuple[list[MultiImpactSample], list[str], str]:
+                 ) -> tuple[list[BranchSample], list[str], str]:
     """Follow a branch (one or both directions) and return its samples in branch order.
 
     Parameters
@@ -235,7 +236,7 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
 
     Returns
     -------
-    samples : list of MultiImpactSample
+    samples : list of BranchSample
     statuses : list of str
         Why each direction stopped (names of
         :class:`~impactcont.core.ContinuationStatus`).
@@ -265,7 +266,7 @@ def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
     orbits = forward
     if -options.direction in watches:
         orbits = watches[-options.direction].orbits[result.start_index:0:-1] + forward
-    samples = [MultiImpactSample(u=u, lam=float(lam), tangent=t, orbit=o)
+    samples = [BranchSample(u=u, lam=float(lam), tangent=t, orbit=o)
                for u, lam, t, o in zip(result.u, result.lam, result.tangent, orbits, strict=True)]
     return samples, [st.name for st in result.statuses], message
 
@@ -290,7 +291,7 @@ def _within_limits(problem: BranchProblem, options: ContinuationOptions
     return dataclasses.replace(options, bounds=(clipped, hi)), clipped
 
 
-def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSample],
+def branch_to_dataset(problem: BranchProblem, samples: Sequence[BranchSample],
                       specials: Sequence[SpecialPoint], options: Mapping[str, Any],
                       *, title: str | None = None,
                       extra_attrs: Mapping[str, Any] | None = None,
@@ -345,13 +346,13 @@ def branch_to_dataset(problem: BranchProblem, samples: Sequence[MultiImpactSampl
                               event_points=[user_event_record(ev, names) for ev in user_events])
 
 
-def user_events_until_interrupted(problem: Any, samples: Sequence[MultiImpactSample],
+def user_events_until_interrupted(problem: Any, samples: Sequence[BranchSample],
                  functions: UserFunctions | None, **position: Any
                  ) -> tuple[dict[str, np.ndarray], list[SpecialPoint]]:
     """The user's functions at every sample and their located events (none when Ctrl-C
     is taken while they are located: the values are kept)."""
     found = until_interrupted(
-        lambda: locate_multi_impact_events(problem, samples, functions, **position), None,
+        lambda: locate_sample_events(problem, samples, functions, **position), None,
         "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
         "events: they are dropped (the user's functions at the points are kept)")
     if found is not None:
@@ -381,7 +382,7 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
         samples, statuses, message = trace_branch(problem, u0, lam0, options,
                                                   stop_after_pd=stop_after_pd, progress=rep)
         specials = until_interrupted(
-            lambda: detect_multi_impact_points(problem, samples, labels), [], "location",
+            lambda: detect_special_points(problem, samples, labels), [], "location",
             "interrupted by the user (KeyboardInterrupt) while locating the special points of "
             "the %d-%d branch: they are dropped", problem.N, problem.p)
         values, user_events = user_events_until_interrupted(problem, samples, functions)

@@ -51,15 +51,13 @@ from impactcont.detection.locator import (
 )
 from impactcont.detection.points import SpecialPoint
 from impactcont.errors import ParameterError
-from impactcont.orbit.periodic import PeriodicOrbit
 from impactcont.problems.events import BRANCH_TESTS, event_function, event_noise, pole_free
-from impactcont.problems.periodic_branch import PeriodicBranchProblem
 from impactcont.progress import take_interrupt
 from impactcont.vocabulary import CODIM2_LABELS, LABELS, Label, check_labels
 
-__all__ = ["LABELS", "BranchSample", "SpecialPoint", "UserEvent", "UserFunctions",
-           "check_user_functions", "detect_special_points", "event_function", "event_noise",
-           "locate_user_events", "pole_free", "user_values"]
+__all__ = ["LABELS", "BranchSample", "MultiImpactSample", "SpecialPoint", "UserEvent",
+           "UserFunctions", "check_user_functions", "detect_special_points", "event_function",
+           "event_noise", "locate_sample_events", "locate_user_events", "pole_free", "user_values"]
 
 log = logging.getLogger(__name__)
 
@@ -68,89 +66,60 @@ _XTOL = 1e-13
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class BranchSample:
-    """An accepted branch point as detection sees it."""
+    """An accepted branch point as detection sees it: the one sample of every motion.
 
-    delta: float
-    lam: float
-    dlam: float
-    orbit: PeriodicOrbit
-
-
-def _locate_fold(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
-                 ) -> tuple[float, float, float, str, bool]:
-    """The fold between two points: Newton on ``r = dr/d delta = 0`` (eq. 14-15).
-
-    Newton starts at the middle of the step and is held to a box around it (the
-    step's phases and parameters widened by the step's own size on each side): at
-    a fold both bracketing points lie on one side of it in the parameter, close to
-    it on a step the continuation accepted. When Newton leaves the box, would leave
-    the parameter's domain (e.g. ``omega <= 0``) or does not converge, the fold is
-    located as a sign change of the tangent's parameter component on the branch
-    between the two points (:func:`~impactcont.core.locate_events`), which never
-    leaves the step; a failure there keeps the point as bracketed.
-
-    Returns
-    -------
-    delta, lam, precision, status, failed
+    Attributes
+    ----------
+    u : ndarray, shape (m,)
+        Unknowns of the problem (``[delta]`` on the closed form's N-1 branch, the
+        shooting unknowns of an N-p motion).
+    lam : float
+        Parameter value.
+    tangent : ndarray, shape (m + 1,)
+        Unit tangent along the branch order.
+    orbit : Motion
+        The motion there (:class:`~impactcont.problems.motion.Motion`).
     """
-    try:
-        return (*_fold_newton(problem, left, right), False)
-    except (ParameterError, np.linalg.LinAlgError, _LeftTheStepError) as exc:
-        log.debug("fold Newton between %s=%.12g and %.12g gave up (%s); locating the sign "
-                  "change of d%s/ds on the branch", problem.parameter, left.lam, right.lam,
-                  exc, problem.parameter)
-    (ep,) = locate_events(problem, [[left.delta], [right.delta]], [left.lam, right.lam],
-                          [[0.0, left.dlam], [0.0, right.dlam]], [Event(Label.SN, None)],
-                          s_tol=_XTOL)
-    return float(ep.u[0]), ep.lam, ep.precision, ep.status, ep.failed
+
+    u: np.ndarray
+    lam: float
+    tangent: np.ndarray
+    orbit: Any
+
+    @property
+    def delta(self) -> float:
+        """The first unknown: the forcing phase at impact 0."""
+        return float(self.u[0])
+
+    @property
+    def dlam(self) -> float:
+        """Parameter component of the tangent."""
+        return float(self.tangent[-1])
 
 
-class _LeftTheStepError(ArithmeticError):
-    """Newton on the fold system left the box around the step."""
+#: The sample of an N-p branch: the one sample type.
+MultiImpactSample = BranchSample
 
 
-def _fold_newton(problem: PeriodicBranchProblem, left: BranchSample, right: BranchSample
-                 ) -> tuple[float, float, float, str]:
-    lo = np.array([min(left.delta, right.delta), min(left.lam, right.lam)])
-    hi = np.array([max(left.delta, right.delta), max(left.lam, right.lam)])
-    width = hi - lo
-    box_lo, box_hi = lo - width, hi + width
-    x = 0.5 * (lo + hi)
-    step = np.full(2, np.inf)
-    for _ in range(50):
-        F = problem.fold_residual(x[0], x[1])
-        step = np.linalg.solve(problem.fold_jacobian(x[0], x[1]), F)
-        x = x - step
-        if not (np.all(np.isfinite(x)) and np.all(box_lo <= x) and np.all(x <= box_hi)):
-            raise _LeftTheStepError(f"Newton reached (delta, {problem.parameter}) = "
-                               f"({x[0]:.6g}, {x[1]:.6g})")
-        if abs(step[1]) < 1e-15 * max(1.0, abs(x[1])) and abs(step[0]) < 1e-14:
-            break
-    else:
-        raise _LeftTheStepError("Newton did not converge in 50 steps")
-    # at a fold lam is extremal, so both bracketing points lie on one side of it in lam;
-    # delta runs monotonically through the fold and must be bracketed
-    slack = 1e-9 * max(width[0], 1e-12)
-    inside = lo[0] - slack <= x[0] <= hi[0] + slack
-    # Newton on r = r_delta = 0 converges quadratically; the last step bounds the error,
-    # the finite-difference parameter derivative only slows it down
-    precision = max(abs(step[1]) * 10, 4 * np.finfo(float).eps * abs(x[1]))
-    return float(x[0]), float(x[1]), precision, "located" if inside else "bracketed"
-
-
-def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[BranchSample],
+def detect_special_points(problem: Any, samples: Sequence[BranchSample],
                           labels: Sequence[str] = LABELS,
                           on_found: Callable[[SpecialPoint], None] | None = None,
                           ) -> list[SpecialPoint]:
-    """Detect and locate special points between consecutive accepted points.
+    """Detect and locate special points between consecutive accepted points, any motion.
 
     Parameters
     ----------
-    problem : PeriodicBranchProblem
+    problem : BranchProblem
+        The branch problem (:class:`~impactcont.problems.motion.BranchProblem`): its
+        ``events`` (the kinds it declares) and ``motion_tests`` (their tests), its
+        ``orbit(u, lam, checks=...)``; the optional hooks ``locate_fold`` (the closed
+        form's exact fold), ``fold_kind`` (a fold that is a pitchfork) and
+        ``separate_checks`` (:mod:`impactcont.problems.motion`).
     samples : sequence of BranchSample
         The accepted points in branch order.
     labels : sequence of str
-        Which special points to look for (subset of :data:`LABELS`).
+        Which special points to look for (subset of :data:`LABELS`); GR and ZV use the
+        minimum over the flights and impacts.
     on_found : callable, optional
         Called with each special point as it is located.
 
@@ -161,33 +130,44 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
 
     Notes
     -----
-    The first Ctrl-C of a driver's call (:func:`impactcont.progress.interruptible`) during
-    the location keeps the points located before it: the one being located is dropped,
-    the rest of the branch is not searched, and the call is marked interrupted. With
-    nothing located yet, or a second Ctrl-C, the interrupt is raised.
+    A kind the problem does not declare (BP on a branch of motions that are not followed
+    as symmetric ones) is not searched. The first Ctrl-C of a driver's call
+    (:func:`impactcont.progress.interruptible`) during the location keeps the points
+    located before it: the one being located is dropped, the rest of the branch is not
+    searched, and the call is marked interrupted. With nothing located yet, or a second
+    Ctrl-C, the interrupt is raised.
     """
     asked = [Label(label) for label in check_labels(labels, "labels")]
-    # the kinds the problem declares, with their tests; the others, e.g. BP (a symmetric
-    # motion has p even), cannot occur on an N-1 branch
+    parameter = getattr(problem, "parameter", "lam")
     declared = getattr(problem, "events", (Label.SN, *BRANCH_TESTS))
     tests: Mapping[str, MotionTest] = getattr(problem, "motion_tests", BRANCH_TESTS)
     watched = [label for label in watched_labels(asked) if label in declared]
-    candidates: list[tuple[int, str, float, float, float, str, bool]] = []
-    orbit_at = last_motions(lambda u, lam: problem.orbit(u[0], lam))
-    events = [kind_event(label, tests[label], orbit_at, lambda k: samples[k].orbit)
-              for label in watched if label in tests]
+    locate_fold = getattr(problem, "locate_fold", None)
+    # only some tests (GR) need the (costly) interior-contact search of every flight
+    if getattr(problem, "separate_checks", True):
+        orbits = {checks: last_motions(lambda u, lam, c=checks: problem.orbit(u, lam, checks=c))
+                  for checks in (False, True)}
+    else:  # the closed form checks at no cost: one motion per trial point
+        orbits = dict.fromkeys((False, True), last_motions(problem.orbit))
+    events = [Event(label, None) if tests.get(label) is None  # the fold: d lam / ds
+              else kind_event(label, tests[label], orbits[tests[label].checks],
+                              lambda k: samples[k].orbit)
+              for label in watched
+              if not (label == Label.SN and locate_fold is not None)]
+    candidates: list[tuple[int, Label, np.ndarray, float, float, str, bool]] = []
     k = 0
     try:
-        for k in range(len(samples) - 1):  # folds: the closed-form fold system of eq. (14-15)
-            left, right = samples[k], samples[k + 1]
-            if Label.SN in watched and (left.dlam > 0) != (right.dlam > 0):
-                candidates.append((k, Label.SN, *_locate_fold(problem, left, right)))
+        if locate_fold is not None and Label.SN in watched:  # the evaluator's exact folds
+            for k in range(len(samples) - 1):
+                left, right = samples[k], samples[k + 1]
+                if (left.dlam > 0) != (right.dlam > 0):
+                    candidates.append((k, Label.SN, *locate_fold(left, right)))
         k = -1  # the other kinds, step by step (the core keeps those it located)
-        for ep in locate_events(problem, [[s.delta] for s in samples],
-                                [s.lam for s in samples], [[0.0, s.dlam] for s in samples],
-                                events, s_tol=_XTOL):
-            candidates.append((ep.step, ep.label, float(ep.u[0]), ep.lam, ep.precision,
-                               ep.status, ep.failed))
+        for ep in locate_events(problem, [s.u for s in samples], [s.lam for s in samples],
+                                [s.tangent for s in samples], events, s_tol=_XTOL,
+                                newton_tol=_XTOL):
+            candidates.append((ep.step, Label(ep.label), np.asarray(ep.u, dtype=float),
+                               ep.lam, ep.precision, ep.status, ep.failed))
     except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those located are kept
         where = "" if k < 0 else f" the fold between points {k} and {k + 1}"
         if not (candidates and take_interrupt(
@@ -195,32 +175,52 @@ def detect_special_points(problem: PeriodicBranchProblem, samples: Sequence[Bran
                 "the %d special points located before are kept", where, len(candidates))):
             raise
     order = {label: i for i, label in enumerate(watched)}
+    candidates.sort(key=lambda c: (c[0], order[c[1]]))
     found: list[SpecialPoint] = []
-    for k, label, delta, lam, precision, status, failed in sorted(
-            candidates, key=lambda c: (c[0], order[c[1]])):
-        left, right = samples[k], samples[k + 1]
-        orbit = problem.orbit(delta, lam)
+    try:
+        _classify(problem, samples, candidates, tests, found)
+    except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those built are kept
+        if not (found and take_interrupt(
+                "location", "interrupted by the user (KeyboardInterrupt) while computing the "
+                "motions at the special points: the %d before are kept", len(found))):
+            raise
+    # a companion watched but not asked (ZV for GR) only tells which GR to drop
+    found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
+             if special.label in asked or special.label not in watched]
+    for special in found:
+        log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
+                 parameter, special.value, special.orbit.N, special.orbit.p, special.status,
+                 special.precision)
+        if on_found is not None:
+            on_found(special)
+    return found
+
+
+def _classify(problem: Any, samples: Sequence[BranchSample],
+              candidates: Sequence[tuple[int, Label, np.ndarray, float, float, str, bool]],
+              tests: Mapping[str, MotionTest], found: list[SpecialPoint]) -> None:
+    """The records of the located zeros that are special points, appended to `found`: the
+    motion there, the kind's criticality, the kind of a fold (the problem's ``fold_kind``:
+    a fold of a general N-p branch where it meets the symmetric one is the BP it is)."""
+    parameter = getattr(problem, "parameter", "lam")
+    fold_kind = getattr(problem, "fold_kind", None)
+    for step, label, u, lam, precision, status, failed in candidates:
+        orbit = problem.orbit(u, lam)
         test = tests.get(label)
         if not failed and test is not None and test.critical is not None \
                 and not test.critical(orbit):
             log.debug("the %s test vanishes near %s=%.12g without a critical multiplier "
-                      "(a neutral saddle, or the pole of G at h2 = 0)", label,
-                      problem.parameter, lam)
+                      "(a neutral saddle, or the pole of G at h2 = 0)", label, parameter, lam)
             continue
-        nearest = k if abs(lam - left.lam) <= abs(lam - right.lam) else k + 1
-        special = SpecialPoint(label=label, value=lam, delta=delta, point=nearest,
-                               bracket=(left.lam, right.lam), precision=precision,
-                               status=status, orbit=orbit)
-        found.append(special)
-    # a companion watched but not asked (ZV for GR) only tells which GR to drop
-    found = [special for special in drop_grazing_at_zero_velocity(found, problem.parameter)
-             if special.label in asked or special.label not in watched]
-    for special in found:
-        log.info("%s at %s = %.12g (%s, precision %.1e)", special.label, problem.parameter,
-                 special.value, special.status, special.precision)
-        if on_found is not None:
-            on_found(special)
-    return found
+        left, right = samples[step], samples[step + 1]
+        if label == Label.SN and fold_kind is not None:
+            label = fold_kind(orbit, left.orbit, right.orbit)
+        nearest = step if abs(lam - left.lam) <= abs(lam - right.lam) else step + 1
+        # the closed form's one unknown is the phase; a shooting motion's delta is its own
+        found.append(SpecialPoint(label=label, value=lam, u=u, point=nearest,
+                                  bracket=(min(left.lam, right.lam), max(left.lam, right.lam)),
+                                  precision=precision, status=status, orbit=orbit,
+                                  delta=float(u[0]) if u.size == 1 else None))
 
 
 # -- user-defined events and monitors ----------------------------------------------------------
@@ -456,3 +456,32 @@ def _user_test(name: str, fn: Callable[[Any], float], orbit_at: Callable[[Any, f
         except (ParameterError, TypeError) as exc:  # past the locator's own error handling
             raise _UserFunctionFailure(exc) from exc
     return test
+
+
+def locate_sample_events(problem: Any, samples: Sequence[BranchSample],
+                         functions: UserFunctions | None, *,
+                         position: Callable[[np.ndarray, float], Any] | None = None
+                         ) -> tuple[dict[str, np.ndarray], list[UserEvent]]:
+    """The user's functions at every sample and the zeros of its events, located.
+
+    :func:`locate_user_events` on a branch (or a curve: `position` gives both parameters
+    of a point) of any motion: the functions receive the motion at a point
+    (``problem.orbit(u, lam)``, with its contact checks; the full motion on a branch of
+    symmetric motions followed by their half).
+
+    Returns
+    -------
+    values : dict of str to ndarray
+        Each function at every sample (empty without `functions`).
+    events : list of UserEvent
+        In branch order.
+    """
+    if not functions:
+        return {}, []
+    parameter = getattr(problem, "parameter", None)
+    values = user_values(functions, [s.orbit for s in samples], parameter)
+    events = locate_user_events(problem, [s.u for s in samples], [s.lam for s in samples],
+                                [s.tangent for s in samples], functions, values,
+                                lambda u, lam: problem.orbit(u, lam), position=position,
+                                parameter=parameter)
+    return values, events

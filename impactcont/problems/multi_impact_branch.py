@@ -64,6 +64,7 @@ from impactcont.orbit.multi_impact import (
 )
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.stop_geometry import StopGeometry
+from impactcont.orbit.symmetry import half_map, symmetry_defect
 from impactcont.problems.events import BRANCH_TESTS
 from impactcont.vocabulary import Label
 
@@ -95,6 +96,11 @@ class MultiImpactBranchProblem:
     events: tuple[Label, ...] = (Label.SN, *BRANCH_TESTS)
     #: The test of each kind but the fold, as functions of the motion.
     motion_tests: ClassVar[Mapping[str, MotionTest]] = BRANCH_TESTS
+    #: The interior-contact search of every flight is costly: only the tests that need it
+    #: (GR) ask the motion with its checks (:mod:`impactcont.problems.motion`).
+    separate_checks = True
+    #: Its datasets carry the ``impact`` dimension (:mod:`impactcont.dataset.multi`).
+    impact_dimension = True
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, parameter: str,
                  pattern: str | None = None) -> None:
@@ -398,6 +404,13 @@ class MultiImpactBranchProblem:
                                message=message, last_step=float(out.last_update))
 
     # -- what the branch carries ----------------------------------------------------------------
+    @staticmethod
+    def fold_kind(orbit: MultiImpactOrbit, left: MultiImpactOrbit, right: MultiImpactOrbit
+                  ) -> Label:
+        """The kind of a located fold (:func:`fold_kind`: BP where the branch meets the
+        branch of symmetric motions)."""
+        return fold_kind(orbit, left, right)
+
     def orbit(self, u: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full N-p motion (states, G, multipliers, checks) at a branch point.
 
@@ -406,6 +419,33 @@ class MultiImpactBranchProblem:
         """
         return orbit_from_unknowns(self.flow_at(lam), self.N, self.p, np.asarray(u, float),
                                    self._shoot(u, lam), checks=checks, pattern=self.pattern)
+
+
+#: A fold is a pitchfork when the motion is symmetric to this and its half-map has a
+#: multiplier within it of -1 (:func:`fold_kind`).
+_MEETS_TOL = 1e-2
+
+
+def fold_kind(orbit: MultiImpactOrbit, left: MultiImpactOrbit, right: MultiImpactOrbit
+              ) -> Label:
+    """The kind of a fold of an N-p branch: BP where it meets a branch of symmetric motions.
+
+    An asymmetric branch (followed as a general N-p motion) meets the symmetric one at a
+    pitchfork, where its parameter turns (``lam - lam_BP`` grows like the square of the
+    asymmetry): that fold is the BP it is when the motion there, or at one of the two
+    accepted points around it, is nearly symmetric (asymmetry at most 1e-2,
+    :func:`~impactcont.orbit.symmetry.symmetry_defect`: it grows like the square root of
+    the distance to the BP, and the fold next to a BP is often only bracketed: the full
+    system is singular there) with a multiplier of the half-map ``H`` within 1e-2 of -1.
+    Otherwise SN.
+    """
+    for motion in (orbit, left, right):
+        if symmetry_defect(motion) <= _MEETS_TOL:
+            H = half_map(motion)
+            if np.all(np.isfinite(H)) and np.min(np.abs(np.linalg.eigvals(H) + 1.0)) \
+                    <= _MEETS_TOL:
+                return Label.BP
+    return Label.SN
 
 
 def _at_frequency(base: Flow, osc: ImpactOscillator, *, same_stops: bool = True) -> Flow:

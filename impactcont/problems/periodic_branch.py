@@ -16,13 +16,14 @@ depend on the corrector's tolerance.
 from __future__ import annotations
 
 import cmath
+import logging
 import math
 from collections.abc import Mapping
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
-from impactcont.core.locate import MotionTest
+from impactcont.core.locate import Event, MotionTest, locate_events
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FORCING, GAP, model_parameter
@@ -35,6 +36,9 @@ from impactcont.vocabulary import CONTINUABLE_PARAMETERS, Label
 __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem", "residual_scale", "root_phase",
            "scaled_derivative"]
 
+log = logging.getLogger(__name__)
+
+_FOLD_XTOL = 1e-13  # the chord coordinate of the fold's fallback location (the detector's)
 _ROOT_STEP = 1e-6  # rad: the largest correction root_phase makes (far above any tolerance)
 _UNSCALED = 64.0  # |c, s| up to which eq. (14) is not scaled (residual_scale)
 
@@ -91,6 +95,10 @@ def root_phase(c: float, s: float, b: float, delta: float) -> float:
     return delta - step if abs(step) <= _ROOT_STEP else delta
 
 
+class _LeftTheStepError(ArithmeticError):
+    """Newton on the fold system left the box around the step."""
+
+
 class PeriodicBranchProblem:
     """Eq. (14) as ``F(u, lam) = 0`` with ``u = [delta]`` and ``lam`` a model parameter.
 
@@ -124,6 +132,14 @@ class PeriodicBranchProblem:
     events: tuple[Label, ...] = (Label.SN, *BRANCH_TESTS)
     #: The test of each kind but the fold, as functions of the motion.
     motion_tests: ClassVar[Mapping[str, MotionTest]] = BRANCH_TESTS
+
+    #: Impacts per motion, and their stops (the paper's one stop).
+    p = 1
+    pattern = "U"
+    #: The closed form checks contact at no extra cost: one motion per trial point.
+    separate_checks = False
+    #: Its datasets keep the paper's N-1 schema (no ``impact`` dimension; read as p = 1).
+    impact_dimension = False
 
     periods = (2.0 * math.pi,)
     """The unknown ``delta`` is a phase: a branch that returns to its start modulo 2 pi is
@@ -292,13 +308,89 @@ class PeriodicBranchProblem:
         return np.array([scaled_derivative(c * cd + s * sd - b, dc * cd + ds * sd - db, c, s,
                                            dc, ds)])
 
+    # -- where the parameter may go (the branch problem's interface) ---------------------------
+    def parameter_limits(self) -> tuple[float, float]:
+        """Open interval of the parameter where the stop exists: unlimited (the paper's one
+        stop; a parameter's own range is checked by the oscillator)."""
+        return -math.inf, math.inf
+
+    def limit_reason(self) -> str:
+        """Why the parameter cannot reach :meth:`parameter_limits`: "" (unlimited)."""
+        return ""
+
+    def check_bounds(self, bounds: tuple[float, float]) -> None:
+        """Bounds are limited by the parameter's own range only (checked by the driver)."""
+
     # -- what the branch carries ----------------------------------------------------------------
-    def orbit(self, delta: float, lam: float) -> PeriodicOrbit:
+    def orbit(self, u: np.ndarray | float, lam: float, *, checks: bool = True
+              ) -> PeriodicOrbit:
         """The full periodic motion (state, G, multipliers, checks) at a branch point: that
-        of the root of eq. (14) nearest its phase (:func:`root_phase`)."""
+        of the root of eq. (14) nearest its phase (:func:`root_phase`).
+
+        `u` is the unknowns ``[delta]`` (or the phase ``delta``); the closed form's contact
+        check costs nothing extra, so `checks` is accepted and always made
+        (:attr:`separate_checks`).
+        """
+        delta = float(u) if np.ndim(u) == 0 else float(u[0])
         lam = float(lam)
         c, s, b, _ = self._cache.get(lam) or self._setup(lam)
         return orbit_at_phase(self.oscillator_at(lam), self.N, root_phase(c, s, b, delta))
+
+    def locate_fold(self, left: Any, right: Any) -> tuple[np.ndarray, float, float, str, bool]:
+        """The fold between two accepted points (samples with ``u``, ``lam``, ``dlam``):
+        Newton on ``r = dr/d delta = 0`` (eq. 14-15), the closed form's exact fold.
+
+        Newton starts at the middle of the step and is held to a box around it (the
+        step's phases and parameters widened by the step's own size on each side): at
+        a fold both bracketing points lie on one side of it in the parameter, close to
+        it on a step the continuation accepted. When Newton leaves the box, would leave
+        the parameter's domain (e.g. ``omega <= 0``) or does not converge, the fold is
+        located as a sign change of the tangent's parameter component on the branch
+        between the two points (:func:`~impactcont.core.locate_events`), which never
+        leaves the step; a failure there keeps the point as bracketed.
+
+        Returns
+        -------
+        u, lam, precision, status, failed
+        """
+        try:
+            delta, lam, precision, status = self._fold_newton(left, right)
+            return np.array([delta]), lam, precision, status, False
+        except (ParameterError, np.linalg.LinAlgError, _LeftTheStepError) as exc:
+            log.debug("fold Newton between %s=%.12g and %.12g gave up (%s); locating the sign "
+                      "change of d%s/ds on the branch", self.parameter, left.lam, right.lam,
+                      exc, self.parameter)
+        (ep,) = locate_events(self, [[left.delta], [right.delta]], [left.lam, right.lam],
+                              [[0.0, left.dlam], [0.0, right.dlam]], [Event(Label.SN, None)],
+                              s_tol=_FOLD_XTOL)
+        return np.asarray(ep.u, dtype=float), ep.lam, ep.precision, ep.status, ep.failed
+
+    def _fold_newton(self, left: Any, right: Any) -> tuple[float, float, float, str]:
+        lo = np.array([min(left.delta, right.delta), min(left.lam, right.lam)])
+        hi = np.array([max(left.delta, right.delta), max(left.lam, right.lam)])
+        width = hi - lo
+        box_lo, box_hi = lo - width, hi + width
+        x = 0.5 * (lo + hi)
+        step = np.full(2, np.inf)
+        for _ in range(50):
+            F = self.fold_residual(x[0], x[1])
+            step = np.linalg.solve(self.fold_jacobian(x[0], x[1]), F)
+            x = x - step
+            if not (np.all(np.isfinite(x)) and np.all(box_lo <= x) and np.all(x <= box_hi)):
+                raise _LeftTheStepError(f"Newton reached (delta, {self.parameter}) = "
+                                        f"({x[0]:.6g}, {x[1]:.6g})")
+            if abs(step[1]) < 1e-15 * max(1.0, abs(x[1])) and abs(step[0]) < 1e-14:
+                break
+        else:
+            raise _LeftTheStepError("Newton did not converge in 50 steps")
+        # at a fold lam is extremal, so both bracketing points lie on one side of it in lam;
+        # delta runs monotonically through the fold and must be bracketed
+        slack = 1e-9 * max(width[0], 1e-12)
+        inside = lo[0] - slack <= x[0] <= hi[0] + slack
+        # Newton on r = r_delta = 0 converges quadratically; the last step bounds the error,
+        # the finite-difference parameter derivative only slows it down
+        precision = max(abs(step[1]) * 10, 4 * np.finfo(float).eps * abs(x[1]))
+        return float(x[0]), float(x[1]), precision, "located" if inside else "bracketed"
 
     def fold_residual(self, delta: float, lam: float) -> np.ndarray:
         """``[r, dr/d delta]``: both vanish at a fold (saddle-node) of the branch."""

@@ -74,6 +74,10 @@ class SymmetricBranchProblem:
     """
 
     symmetric = True
+    separate_checks = True
+    impact_dimension = True
+    #: The kind of a located fold, as on any N-p branch.
+    fold_kind = staticmethod(MultiImpactBranchProblem.fold_kind)
     #: The kinds of special points located on its branches: those of any N-p motion and BP.
     events: tuple[Label, ...] = (*MultiImpactBranchProblem.events, Label.BP)
     #: The tests of its kinds: those of any N-p motion and its own, BP.

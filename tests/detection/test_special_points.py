@@ -364,7 +364,7 @@ def test_the_n1_detector_locates_the_kinds_its_problem_declares(n1_branch):
     delta0 = float(n1_branch["delta"].values[0])
     result = continue_branch(problem, np.array([delta0]), float(n1_branch["omega"].values[0]),
                              ContinuationOptions(bounds=(1.4, 2.0)))
-    samples = [BranchSample(float(u[0]), float(lam), float(t[-1]), problem.orbit(u[0], lam))
+    samples = [BranchSample(u, float(lam), t, problem.orbit(u, lam))
                for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
     found = detect_special_points(problem, samples, ["ZV"])
     expected = np.sort(n1_branch["event_omega"].values[rows(n1_branch, "v07")])
@@ -379,21 +379,21 @@ def test_ctrl_c_while_locating_the_second_fold_keeps_the_first(monkeypatch):
     branch without any special point; it keeps the fold located before, marked interrupted."""
     import json
 
-    import impactcont.detection.special_points as special_points
+    from impactcont.problems import PeriodicBranchProblem
 
     osc = paper(b=0.0, omega=1.1)  # the branch in b: SN at b = +-0.782, one component
     full = ic.continuation(osc, 1, "b", (-2.0, 2.0), detect=["SN"], progress=False)
     folds = full["special_b"].values
     assert list(full["special_label"].values) == ["SN", "SN"]
-    locate_fold, calls = special_points._locate_fold, []
+    locate_fold, calls = PeriodicBranchProblem.locate_fold, []
 
-    def interrupted_fold(*args):
+    def interrupted_fold(self, *args):  # the closed form's fold hook
         calls.append(args)
         if len(calls) == 2:
             raise KeyboardInterrupt
-        return locate_fold(*args)
+        return locate_fold(self, *args)
 
-    monkeypatch.setattr(special_points, "_locate_fold", interrupted_fold)
+    monkeypatch.setattr(PeriodicBranchProblem, "locate_fold", interrupted_fold)
     ds = ic.continuation(osc, 1, "b", (-2.0, 2.0), detect=["SN"], progress=False)
     assert ds.sizes["point"] == full.sizes["point"]  # the branch was computed
     assert list(ds["special_label"].values) == ["SN"]
