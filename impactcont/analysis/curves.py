@@ -1,17 +1,23 @@
-"""Two-parameter continuation of codim-1 curves: SN, PD, NS, GR and ZV boundaries.
+"""Two-parameter continuation of codim-1 curves of every motion: SN, PD, NS, GR, ZV and BP.
 
-``curve(osc, N, kind, start=..., parameters=("omega", "b"), bounds=...)`` =
-pick a start (a special point of a branch dataset, explicit values, or one
-found by a one-parameter continuation) -> follow the augmented system of
-:mod:`impactcont.problems.codim1` with the pseudo-arclength core in both
-directions until the box ``bounds`` or a curve end -> evaluate the motion at
-every point -> detect and locate the codim-2 points
-(:mod:`impactcont.detection.codim2`) -> an :class:`xarray.Dataset` in the
-schema of :mod:`impactcont.dataset.curves`.
+``curve(osc, N, kind, start=..., parameters=(p1, p2), bounds=...)`` = pick a start (a
+special point of a branch dataset, N-1 or N-p; a motion; explicit values; or one found
+by a one-parameter continuation) -> the curve problem of :mod:`impactcont.problems.codim1`
+(the motion's branch problem plus the kind's test function; the closed form evaluates it
+where the motion is N-1, shooting for every N-p motion) -> follow it with the
+pseudo-arclength core in both directions until the box ``bounds`` or a curve end ->
+evaluate the motion at every point -> detect and locate the codim-2 points
+(:mod:`impactcont.detection.codim2`, one location for both evaluators) -> an
+:class:`xarray.Dataset`: the curve schema of :mod:`impactcont.dataset.curves` for the
+closed form, an N-p branch dataset in ``p2`` with the column of ``p1`` for shooting
+(attributes ``curve_kind``, ``parameters = "p1,p2"``, ``born_at_value``; its codim-2
+points on the dimension ``codim2`` with the variables of an N-1 curve dataset).
 
 :func:`curve_crossings` solves a curve exactly where it crosses a line
 ``parameter = value`` (used to compare with one-parameter special points and
-with the grid of a map).
+with the grid of a map). :func:`multi_impact_curve` and
+:func:`multi_impact_curve_crossings` are the earlier names of the curve of an N-p branch
+and of its crossings.
 """
 
 from __future__ import annotations
@@ -28,7 +34,12 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.branch import continuation
-from impactcont.analysis.multi_curves import check_crossing_line, multi_impact_curve
+from impactcont.analysis.multi_branch import (
+    MultiImpactSample,
+    branch_to_dataset,
+    user_events_until_interrupted,
+)
+from impactcont.analysis.switching import special_orbit
 from impactcont.core import (
     ContinuationOptions,
     ContinuationPoint,
@@ -36,16 +47,24 @@ from impactcont.core import (
     Stop,
     follow,
 )
+from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.locate import crossing_steps
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset.attributes import split_parameters
-from impactcont.dataset.curves import CODIM2_LABELS, curve_dataset, validate_curve_dataset
+from impactcont.dataset.curves import (
+    CODIM2_LABELS,
+    codim2_data,
+    curve_dataset,
+    validate_curve_dataset,
+)
+from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.dataset.records import reserved_names, user_event_record
 from impactcont.dataset.schema import (
     add_user_functions,
     oscillator_from_dataset,
     parameter_names,
+    special_variable,
     validate_branch_dataset,
 )
 from impactcont.detection.codim2 import Codim2Point, codim2_record, detect_codim2, test_values
@@ -58,9 +77,11 @@ from impactcont.detection.special_points import (
 from impactcont.errors import LowImpactVelocityWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
+from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
     CurveProblem,
+    ShootingCurve,
     check_parameters,
     curve_kind,
     curve_problem,
@@ -69,21 +90,26 @@ from impactcont.progress import (
     Interruption,
     NothingComputed,
     ProgressOption,
+    interrupted,
     interruptible,
     reporter,
     until_interrupted,
 )
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import Label, check_bounds
+from impactcont.vocabulary import CURVE_KINDS, Label, check_bounds
 
-__all__ = ["check_curve_arguments", "crossing_steps", "curve", "curve_crossings"]
+__all__ = ["check_curve_arguments", "crossing_steps", "curve", "curve_crossings",
+           "multi_impact_curve", "multi_impact_curve_crossings"]
 
 log = logging.getLogger(__name__)
 
 _DEFAULTS = {"newton_tol": 1e-11, "ds": 0.01}
-"""The augmented systems use difference Jacobians: a looser tolerance than the closed form.
-The first step stays 0.01: the PD system is singular at a zero-velocity impact (the pole
-of G), and a point next to one is found or not depending on the steps there."""
+"""The closed form's augmented systems: a looser tolerance than its branches. The first
+step stays 0.01: the PD system is singular at a zero-velocity impact (the pole of G), and
+a point next to one is found or not depending on the steps there."""
+_SHOOTING_DEFAULTS = {"newton_tol": 1e-10, "ds": 0.01, "both_directions": True}
+"""Shooting: the row of the test function is a forward difference (problems.codim1)."""
+_START_TOL = 1e-11  # Newton on the hyperplane p2 = start (shooting's start and crossings)
 
 
 # -- arguments ----------------------------------------------------------------------------------
@@ -338,6 +364,21 @@ def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
     return out, orbits, tests
 
 
+def _from_orbit(osc: ImpactOscillator | None, N: int | None, orbit: PeriodicOrbit,
+                parameters: Sequence[str]) -> tuple[ImpactOscillator, int, dict[str, float]]:
+    """An N-1 motion given as start: its oscillator, its N and its values of the two
+    parameters and phase, as explicit start values."""
+    if osc is not None and not _same_system(osc, orbit.oscillator, set(parameters)):
+        raise ParameterError(f"osc differs from the oscillator of the motion given as start "
+                             f"(other than the parameters): {osc!r} vs {orbit.oscillator!r}")
+    if N is not None and _check_N(N) != orbit.N:
+        raise ParameterError(f"N={N!r} differs from the motion's N={orbit.N}")
+    parameters = check_parameters(orbit.oscillator, tuple(parameters)
+                                  if not isinstance(parameters, str) else parameters)
+    values = {name: _value(orbit.oscillator, name) for name in parameters}
+    return orbit.oscillator, orbit.N, {**values, "delta": float(orbit.delta)}
+
+
 def check_curve_arguments(
         osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "PD", *,
         start: xr.Dataset | Mapping[str, float] | None = None,
@@ -413,37 +454,191 @@ def check_curve_arguments(
     return kind, parameters, box, N, opts
 
 
-def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: str,
-                  branch: xr.Dataset, *, special: int | None, parameters: Sequence[str],
-                  bounds: Any, root: int | None, detect_codim2_points: bool,
+def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: Label | str,
+                  start: xr.Dataset | MultiImpactOrbit, *, special: int | None,
+                  parameters: Sequence[str], bounds: Any, root: int | None,
                   **keywords: Any) -> xr.Dataset:
-    """The curve from a branch of N-p motions (:func:`curve` given such a branch).
+    """The curve from a branch of N-p motions or an N-p motion (:func:`curve` given one).
 
-    Forwards to :func:`impactcont.multi_impact_curve` with ``which = special`` and
-    ``parameter = p2``; ``p1`` must be the branch's parameter.
+    From a branch, ``p1`` must be the branch's parameter; the motion fixes the oscillator,
+    N and the root, which must be left out.
     """
-    p1 = str(branch.attrs.get("parameter"))
     given = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
-    if len(given) != 2 or given[0] != p1:
-        raise ParameterError(f"parameters must be (p1, p2) with p1 the branch's parameter "
-                             f"{p1!r}; got {parameters!r}")
-    for name, value, allowed in (("osc", osc, (None,)), ("root", root, (None,))):
-        if value not in allowed:
-            raise ParameterError(f"{name} must be left out when the curve starts from a "
-                                 f"branch of N-p motions (the branch fixes it); got "
-                                 f"{name}={value!r}")
-    if N not in (None, 1, int(branch.attrs["N"])):
-        raise ParameterError(f"N must be left out or the branch's N = "
-                             f"{int(branch.attrs['N'])}; got N={N!r}")
-    if bounds is not None and not isinstance(bounds, Mapping):
-        try:
-            bounds = dict(zip(given, bounds, strict=True))
-        except (TypeError, ValueError):
-            raise ParameterError(f"bounds must be a mapping {{p1: (lo, hi), p2: (lo, hi)}} or "
-                                 f"two pairs; got {bounds!r}") from None
-    return multi_impact_curve(branch, kind, 0 if special is None else special,
-                              parameter=given[1], bounds=bounds,
-                              detect_codim2_points=detect_codim2_points, **keywords)
+    if isinstance(start, xr.Dataset):
+        p1 = str(start.attrs.get("parameter"))
+        if len(given) != 2 or given[0] != p1:
+            raise ParameterError(f"parameters must be (p1, p2) with p1 the branch's parameter "
+                                 f"{p1!r}; got {parameters!r}")
+        motion_N = int(start.attrs["N"])
+    else:
+        if len(given) != 2:
+            raise ParameterError(f"parameters must be two names (p1, p2); got {parameters!r}")
+        motion_N = start.N
+    for name, value in (("osc", osc), ("root", root)):
+        if value is not None:
+            raise ParameterError(f"{name} must be left out when the curve starts from an N-p "
+                                 f"branch or motion (it fixes it); got {name}={value!r}")
+    if N not in (None, 1, motion_N):
+        raise ParameterError(f"N must be left out or the motion's N = {motion_N}; got N={N!r}")
+    return _shooting_curve(kind, start, 0 if special is None else special, given, bounds,
+                           **keywords)
+
+
+def _check_motion_parameters(osc: ImpactOscillator, parameters: tuple[str, ...]
+                             ) -> tuple[str, str]:
+    """``(p1, p2)`` of a curve followed by shooting: two different parameters of `osc`."""
+    p1, p2 = parameters
+    if p1 == p2:
+        raise ParameterError(f"parameters must be two different parameters; got {p1!r} twice")
+    for name in (p1, p2):
+        model_parameter(osc, name, "parameters")
+    return str(p1), str(p2)
+
+
+class _Box:
+    """Ends a direction of a shooting curve where ``p1`` leaves its bounds (``p1`` is an
+    unknown: the core sees only the bounds of ``p2``); keeps the motion of every accepted
+    point."""
+
+    def __init__(self, problem: ShootingCurve, p1_bounds: tuple[float, float]) -> None:
+        self.problem, self.p1_bounds = problem, p1_bounds
+        self.orbits: list[Any] = []
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        p1 = float(current.u[-1])
+        lo, hi = self.p1_bounds
+        if not lo <= p1 <= hi:
+            return Stop(ContinuationStatus.BOUNDS_REACHED,
+                        f"{self.problem.parameters[0]} = {p1:.10g} left its bounds "
+                        f"({lo:g}, {hi:g})", keep=False)
+        self.orbits.append(self.problem.orbit(current.u, current.lam))
+        return None
+
+
+def _shooting_start(kind: Label, start: xr.Dataset | MultiImpactOrbit, which: int
+                    ) -> tuple[MultiImpactOrbit, bool]:
+    """The motion a shooting curve starts from and whether it is followed by its half."""
+    if isinstance(start, MultiImpactOrbit):
+        return start, False
+    symmetric = bool(json.loads(start.attrs.get("options", "{}")).get("symmetric", False))
+    orbit = special_orbit(start, kind, which)
+    k = [i for i, lab in enumerate(start[special_variable("label")].values.tolist())
+         if lab == kind][which]
+    if start[special_variable("status")].values[k] != "located":
+        log.warning("the %s point %d of the branch is only bracketed: the curve starts from "
+                    "the motion re-solved there", kind, which)
+    return orbit, symmetric
+
+
+def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, which: int,
+                    parameters: tuple[str, ...], bounds: Any, *, options: Any = None,
+                    progress: ProgressOption = None, events: dict[str, Any] | None = None,
+                    monitors: dict[str, Any] | None = None, detect_codim2_points: bool = True,
+                    **single: Any) -> xr.Dataset:
+    """A curve followed by shooting (:class:`~impactcont.problems.codim1.ShootingCurve`),
+    from a special point of an N-p branch dataset or from a motion (see :func:`curve`)."""
+    functions = check_user_functions(events, monitors, reserved_names())
+    kind = curve_kind(kind, kinds=(*CURVE_KINDS, Label.BP))
+    base_osc = start.oscillator if isinstance(start, MultiImpactOrbit) \
+        else oscillator_from_dataset(start)
+    p1, parameter = parameters = _check_motion_parameters(base_osc, parameters)
+    if bounds is None:
+        raise ParameterError(f"bounds must be given: the box {{{p1!r}: (lo, hi), "
+                             f"{parameter!r}: (lo, hi)}} of the curve")
+    box = _check_bounds(bounds, parameters, base_osc)
+    orbit, symmetric = _shooting_start(kind, start, which)
+    osc = orbit.oscillator
+    N, p, pattern = orbit.N, orbit.p, orbit.pattern
+    problem = curve_problem(kind, osc, N, parameters, p=p, pattern=pattern, symmetric=symmetric)
+    lam0 = _value(osc, parameter)
+    if not box[parameter][0] <= lam0 <= box[parameter][1]:
+        raise ParameterError(f"bounds[{parameter!r}] = {box[parameter]} must contain the "
+                             f"start {parameter}={lam0!r}")
+    start_p1 = _value(osc, p1)
+    base = problem.branch_problem(lam0)
+    u0 = base.half_unknowns(orbit.unknowns) if symmetric else orbit.unknowns
+    # on the curve at fixed p2 (the special point is located to its precision only)
+    target = np.append(np.append(u0, start_p1), lam0)
+    normal = np.zeros(target.size)
+    normal[-1] = 1.0
+    found = solve_on_hyperplane(problem, target, normal, tol=_START_TOL, max_iter=30)
+    if not found.converged:
+        raise NoPeriodicMotionError(f"the {kind} point at {p1}={start_p1!r} could not be put "
+                                    f"on the augmented system (last step {found.last_step:.3g})")
+    x0 = found.x[:-1]
+    opts = driver_options(options, box[parameter], defaults=_SHOOTING_DEFAULTS, **single)
+    watches: dict[int, _Box] = {}
+
+    def watch(direction: int) -> _Box:
+        watches[direction] = _Box(problem, box[p1])
+        return watches[direction]
+
+    what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
+    with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
+        result = follow(problem, x0, lam0, opts, rep.point, stop=watch)
+        # Ctrl-C can end a run between a watch's orbit and the core's taking of the point
+        orbits = watches[opts.direction].orbits[:len(result) - result.start_index]
+        if -opts.direction in watches:
+            orbits = watches[-opts.direction].orbits[result.start_index:0:-1] + orbits
+        if not orbits and result.interrupted:
+            raise NothingComputed(f"{what} interrupted before its first point")
+        if not orbits:
+            raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
+        samples = [MultiImpactSample(u=x, lam=float(lam), tangent=t, orbit=o)
+                   for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
+                                           strict=True)]
+        log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
+                 parameter, len(samples), result.message)
+        found_points: list[Codim2Point] = []
+        if detect_codim2_points:
+            xs = [np.append(sample.u, sample.lam) for sample in samples]
+            _locate_codim2(problem, xs, [sample.orbit for sample in samples], None,
+                           found_points)
+        # the user's events: located in both parameters (p1 is the last unknown)
+        values, user_events = user_events_until_interrupted(
+            problem, samples, functions, position=lambda x, lam: (x[-1], lam))
+        was_interrupted, phase = interrupted(), call.where
+    record = {"kind": str(kind), "parameters": [p1, parameter], "start": start_p1,
+              "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
+              "status": [st.name for st in result.statuses], "message": result.message,
+              **{key: value for key, value in dataclasses.asdict(opts).items()
+                 if key != "bounds"}}
+    if was_interrupted:
+        record["interrupted"] = True
+        record["interrupted_while"] = phase
+    info = {"curve_kind": str(kind), "parameters": f"{p1},{parameter}",
+            "born_at_value": start_p1}
+    ds = branch_to_dataset(_CurveView(problem, parameter, osc), samples, [], record,
+                           title=f"{kind} curve of periodic {N}-{p} impacting motions in "
+                           f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,),
+                           functions=functions, values=values, user_events=user_events)
+    records = [codim2_record(problem, cp) for cp in sorted(found_points, key=lambda cp: cp.point)
+               if cp.label in CODIM2_LABELS]
+    return ds.assign(codim2_data(records, problem.parameters, osc.n))
+
+
+class _CurveView:
+    """What :func:`~impactcont.analysis.multi_branch.branch_to_dataset` reads of a shooting
+    curve problem: the N-p branch it is written as (in ``p2``)."""
+
+    def __init__(self, problem: ShootingCurve, parameter: str, osc: Any) -> None:
+        self.parameter, self.osc = parameter, osc
+        self.N, self.p, self.pattern = problem.N, problem.p, problem.pattern
+
+
+def _locate_codim2(problem: Any, xs: list[np.ndarray], orbits: list[Any],
+                   tests: list[dict[str, float]] | None, found: list[Codim2Point]) -> None:
+    """The codim-2 points of a curve (either evaluator), appended to `found` as they are
+    located (:func:`~impactcont.detection.codim2.detect_codim2`; `tests` the test values at
+    the points, computed when None); Ctrl-C keeps those located before it."""
+    if tests is None:
+        tests = [test_values(problem, x, orbit) for x, orbit in zip(xs, orbits, strict=True)]
+    until_interrupted(
+        lambda: detect_codim2(problem, xs, orbits, tests, found), None, "location",
+        "interrupted by the user (KeyboardInterrupt) while locating the codim-2 points of "
+        "the curve: those located before are kept (and its ends)")
+    log.info("%s curve: %d codim-2 points", problem.kind, len(found))
 
 
 @blas_limited
@@ -459,24 +654,27 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
           both_directions: bool | None = None, progress: ProgressOption = None,
           events: dict[str, Any] | None = None, monitors: dict[str, Any] | None = None,
           **more: Any) -> xr.Dataset:
-    """Continue a codim-1 curve of N-1 motions in two parameters.
+    """Continue a codim-1 curve of any motion in two parameters.
 
     Parameters
     ----------
     osc : ImpactOscillator or None
-        The oscillator (other parameters fixed at its values); ``None`` only
-        with a branch dataset as ``start``, whose oscillator is then used.
+        The oscillator (other parameters fixed at its values); ``None`` with a branch
+        dataset or a motion as ``start``, whose oscillator is then used.
     N : int or None
         One impact every N forcing periods; ``None`` takes it from a branch
-        dataset given as ``start``.
+        dataset or a motion given as ``start``.
     kind : Label or str
         Saddle-node, period-doubling, Neimark-Sacker, grazing or
-        zero-velocity-impact curve (augmented systems in
-        :mod:`impactcont.problems.codim1`).
-    start : xarray.Dataset, mapping or None
-        A branch dataset from :func:`impactcont.continuation` (its first
-        located special point of this kind, or the one at index ``special``);
-        or explicit values ``{p1: .., p2: .., "delta": ..}`` (``delta``
+        zero-velocity-impact curve; symmetry-breaking pitchfork (BP) from a branch of
+        symmetric N-p motions (the problems of :mod:`impactcont.problems.codim1`).
+    start : xarray.Dataset, motion, mapping or None
+        A branch dataset from :func:`impactcont.continuation` or of N-p motions
+        (:func:`impactcont.multi_impact_continuation`, a switched branch): its first
+        located special point of this kind, or the one at index ``special``; a motion at
+        a special point: a :class:`~impactcont.PeriodicOrbit` (closed form) or a
+        :class:`~impactcont.MultiImpactOrbit` (shooting; put on the curve by Newton at
+        fixed ``p2``); or explicit values ``{p1: .., p2: .., "delta": ..}`` (``delta``
         optional), corrected by Newton at fixed ``p2``; or None: the first
         located point of this kind on the one-parameter branch in ``p1`` at the
         oscillator's value of ``p2`` (``special`` then counts those points).
@@ -488,7 +686,8 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
         ``M[1,2]``, ``K[1,2]``, ``F[2]``, ...; set by their
         :class:`~impactcont.model.parameters.ModelParameter`). ``p2`` is the continuation
         parameter of the core; ``p1`` is an unknown. From a branch of N-p motions ``p1`` is
-        the branch's parameter (any parameter of :func:`impactcont.multi_impact_curve`).
+        the branch's parameter; an N-p motion takes any two parameters of its oscillator
+        (the stops' too: ``b_low``, ``gap``, ...).
     bounds : mapping or pair of pairs
         The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
     root : {+1, -1}, optional
@@ -498,7 +697,8 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     options : ContinuationOptions, optional
         Options left out take the drivers' defaults
         (:data:`impactcont.core.options.DRIVER_DEFAULTS`), but Newton tolerance 1e-11
-        and first step 0.01; ``bounds`` is the box's range of ``p2``.
+        and first step 0.01 (shooting: Newton tolerance 1e-10, both directions);
+        ``bounds`` is the box's range of ``p2``.
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
         Single options, over `options` (``ds`` and ``ds_min`` adapt to a ``ds_max``
         given alone).
@@ -519,8 +719,10 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     xarray.Dataset
         Dimensions ``point``, ``multiplier``, ``component``, ``codim2`` (and ``event``
         with `events`); schema in :mod:`impactcont.dataset.curves` and
-        ``docs/two_parameter.md``. From a branch of N-p motions: the N-p curve dataset of
-        :func:`impactcont.multi_impact_curve`, with its codim-2 points on ``codim2`` too.
+        ``docs/two_parameter.md``. Followed by shooting (from an N-p branch or motion): an
+        N-p branch dataset in ``p2`` (:mod:`impactcont.dataset.multi`) with the column of
+        ``p1`` and the attributes ``curve_kind``, ``parameters`` (``"p1,p2"``) and
+        ``born_at_value``, its codim-2 points on ``codim2`` as on the closed form's.
 
     Raises
     ------
@@ -543,13 +745,16 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
-    if isinstance(start, xr.Dataset) and "impact" in start.dims:
+    if (isinstance(start, xr.Dataset) and "impact" in start.dims) \
+            or isinstance(start, MultiImpactOrbit):
         return _motion_curve(osc, N, kind, start, special=special, parameters=parameters,
                              bounds=bounds, root=root,
                              detect_codim2_points=detect_codim2_points, options=options,
                              ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol,
                              max_points=max_points, both_directions=both_directions,
                              progress=progress, events=events, monitors=monitors, **more)
+    if isinstance(start, PeriodicOrbit):  # its values and phase, on its oscillator
+        osc, N, start = _from_orbit(osc, N, start, parameters)
     kind, parameters, box, N, opts = check_curve_arguments(
         osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
@@ -567,8 +772,9 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
         start_osc, delta0 = _start_from_values(osc, N, curve_problem(kind, osc, N, parameters),
                                                start, root)
     else:
-        raise ParameterError(f"start must be a branch Dataset, a mapping of values or None; "
-                             f"got {type(start).__name__}")
+        raise ParameterError(f"start must be a branch Dataset, a motion (PeriodicOrbit or "
+                             f"MultiImpactOrbit), a mapping of values or None; got "
+                             f"{type(start).__name__}")
     p1, p2 = parameters
     p1v, p2v = _value(start_osc, p1), _value(start_osc, p2)
     for name, value in ((p1, p1v), (p2, p2v)):
@@ -597,10 +803,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
         columns, orbits, tests = _point_columns(problem, xs)
         found: list[Codim2Point] = []  # filled as they are located: Ctrl-C keeps them
         if detect_codim2_points:
-            until_interrupted(
-                lambda: detect_codim2(problem, xs, orbits, tests, found), None, "location",
-                "interrupted by the user (KeyboardInterrupt) while locating the codim-2 "
-                "points of the curve: those located before are kept (and its ends)")
+            _locate_codim2(problem, xs, orbits, tests, found)
         ds = _curve_dataset(problem, kind, N, parameters, box, opts, start_osc, (p1v, p2v),
                             delta0, columns, orbits, xs, found, ends, status, call)
         ds = _with_user_functions(ds, problem, result, orbits, functions)
@@ -661,6 +864,31 @@ def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
                               event_points=[user_event_record(ev, names) for ev in found])
 
 
+def check_crossing_line(parameters: Sequence[str], parameter: object, value: object) -> None:
+    """Check the line ``parameter = value`` a curve's crossings are asked of.
+
+    Parameters
+    ----------
+    parameters : sequence of str
+        The curve's two parameters.
+    parameter : str
+        The parameter held fixed on the line; one of `parameters`.
+    value : float
+        Its value on the line; a finite real number.
+
+    Raises
+    ------
+    ParameterError
+        `parameter` is not one of `parameters`, or `value` is not a finite real number.
+    """
+    if parameter not in parameters:
+        raise ParameterError(f"parameter must be one of the curve's parameters "
+                             f"{parameters}; got {parameter!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+            or not math.isfinite(value):
+        raise ParameterError(f"value must be a finite real number; got {value!r}")
+
+
 def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[str, float]]:
     """Exact points where a continued curve crosses the line ``parameter = value``.
 
@@ -671,7 +899,7 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
     Parameters
     ----------
     ds : xarray.Dataset
-        A curve dataset from :func:`curve`.
+        A curve dataset from :func:`curve` (either evaluator).
     parameter : str
         One of the curve's two parameters.
     value : float
@@ -680,9 +908,19 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
     -------
     list of dict
         Per crossing, in curve order: the values of ``omega``, ``b`` (and the
-        curve's parameters), ``delta``, ``root`` (of eq. 15; 0 on an SN curve)
-        and ``point`` (index of the first of the two bracketing points).
+        curve's parameters) and ``point`` (index of the first of the two bracketing
+        points); on a curve of the closed form also ``delta`` and ``root`` (of eq. 15; 0
+        on an SN curve).
+
+    Raises
+    ------
+    ParameterError
+        Not a curve dataset, a parameter that is not the curve's, a bad value.
+    NoPeriodicMotionError
+        Newton fails at a crossing of a curve followed by shooting.
     """
+    if isinstance(ds, xr.Dataset) and "curve_kind" in ds.attrs:
+        return _shooting_crossings(ds, parameter, value)
     validate_curve_dataset(ds)
     parameters = tuple(split_parameters(str(ds.attrs["parameters"])))
     check_crossing_line(parameters, parameter, value)
@@ -712,3 +950,131 @@ def curve_crossings(ds: xr.Dataset, parameter: str, value: float) -> list[dict[s
         crossing["point"] = int(k)
         out.append(crossing)
     return out
+
+
+def _shooting_problem(ds: xr.Dataset) -> ShootingCurve:
+    """The problem a curve dataset followed by shooting was followed on."""
+    if not isinstance(ds, xr.Dataset) or "curve_kind" not in ds.attrs:
+        raise ParameterError("ds must be a curve dataset of multi_impact_curve (attribute "
+                             "'curve_kind')")
+    record = json.loads(ds.attrs["options"])
+    p1, p2 = str(ds.attrs["parameters"]).split(",")
+    osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+    return curve_problem(str(ds.attrs["curve_kind"]), osc, int(ds.attrs["N"]), (p1, p2),
+                         p=impacts_of(ds), pattern=pattern_of(ds),
+                         symmetric=bool(record.get("symmetric", False)))
+
+
+def _shooting_crossings(ds: xr.Dataset, parameter: str, value: float
+                        ) -> list[dict[str, float]]:
+    """:func:`curve_crossings` of a curve followed by shooting."""
+    problem = _shooting_problem(ds)
+    check_crossing_line(problem.parameters, parameter, value)
+    symmetric = problem.symmetric
+    values = np.asarray(ds[parameter].values, dtype=float)
+    out: list[dict[str, float]] = []
+    for k, t in crossing_steps(values, value):
+        xs = []
+        for i in (k, k + 1):  # the stored motions as unknowns of the curve problem
+            lam = float(ds[problem.parameters[1]].values[i])
+            osc = oscillator_from_dataset(ds, int(i))
+            u = initial_unknowns({"delta": float(ds["delta_k"].values[i, 0]),
+                                  "flight_times": ds["flight_time_k"].values[i],
+                                  "states": ds["state_k"].values[i],
+                                  "pattern": pattern_of(ds)}, osc, problem.N, problem.p)
+            base = problem.branch_problem(lam)
+            v = base.half_unknowns(u) if symmetric else u
+            xs.append(np.concatenate([v, [_value(osc, problem.parameters[0])], [lam]]))
+        target = xs[0] + t * (xs[1] - xs[0])
+        normal = np.zeros(target.size)
+        column = problem.parameters.index(parameter) - 2  # (.., p1, p2): -2 or -1
+        normal[column] = 1.0
+        target[column] = value
+        found = solve_on_hyperplane(problem, target, normal, tol=_START_TOL, max_iter=30)
+        if not found.converged:
+            raise NoPeriodicMotionError(f"the crossing of {parameter} = {value!r} between "
+                                        f"points {k} and {k + 1} was not found (last Newton "
+                                        f"step {found.last_step:.3g})")
+        x, lam = found.x[:-1], float(found.x[-1])
+        osc = problem.branch_problem(lam).oscillator_at(float(x[-1]))
+        crossing = {name: float(getattr(osc, name) or 0.0)
+                    for name in dict.fromkeys(["omega", "b", *problem.parameters])}
+        crossing["point"] = int(k)
+        out.append(crossing)
+    return out
+
+
+@blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_SHOOTING_DEFAULTS})
+def multi_impact_curve(branch: xr.Dataset, kind: Label | str = "PD", which: int = 0, *,
+                       parameter: str = "b",
+                       bounds: Mapping[str, Sequence[float]] | None = None,
+                       options: Any = None, ds: float | None = None,
+                       ds_min: float | None = None, ds_max: float | None = None,
+                       newton_tol: float | None = None, max_points: int | None = None,
+                       both_directions: bool | None = None, progress: ProgressOption = None,
+                       events: dict[str, Any] | None = None,
+                       monitors: dict[str, Any] | None = None,
+                       detect_codim2_points: bool = True, **more: Any) -> xr.Dataset:
+    """Follow a special point of an N-p branch in two parameters (the earlier name).
+
+    The same as ``curve(None, None, kind, start=branch, special=which,
+    parameters=(branch's parameter, parameter), bounds=bounds, ...)``
+    (:func:`curve`): the curve followed by shooting.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        A branch of N-p motions with a special point of `kind`.
+    kind : Label or str
+        ``SN, PD, NS, GR, ZV`` or ``BP`` (BP: a branch of symmetric motions).
+    which : int
+        Which point of that kind on the branch (branch order).
+    parameter : str
+        ``p2``, the second parameter (``b`` or ``R`` of a symmetric motion need mirrored
+        stops, ``Stops(mirror=True)``).
+    bounds : mapping
+        The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
+    options, ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
+        Continuation options (the drivers' defaults for those left out; Newton tolerance
+        1e-10, first step 0.01, both directions).
+    progress, events, monitors, detect_codim2_points
+        As for :func:`curve`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The curve as an N-p branch dataset in ``p2`` (see :func:`curve`).
+
+    Raises
+    ------
+    TypeError
+        `branch` is not a dataset.
+    ParameterError
+        A bad argument (named in the message), no such special point.
+    NoPeriodicMotionError
+        The start could not be put on the curve.
+    """
+    if not isinstance(branch, xr.Dataset):
+        raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
+    return _shooting_curve(kind, branch, which, (str(branch.attrs["parameter"]), parameter),
+                           bounds, options=options, progress=progress, events=events,
+                           monitors=monitors, detect_codim2_points=detect_codim2_points,
+                           ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol,
+                           max_points=max_points, both_directions=both_directions, **more)
+
+
+def multi_impact_curve_crossings(ds: xr.Dataset, parameter: str, value: float
+                                 ) -> list[dict[str, float]]:
+    """Exact points where a curve of N-p motions crosses ``parameter = value`` (the earlier
+    name of :func:`curve_crossings` for a curve followed by shooting).
+
+    Raises
+    ------
+    ParameterError
+        Not a curve dataset followed by shooting, a parameter that is not the curve's, a
+        bad value.
+    NoPeriodicMotionError
+        Newton fails at a crossing.
+    """
+    return _shooting_crossings(ds, parameter, value)

@@ -359,3 +359,33 @@ def test_bounds_outside_a_parameters_range_are_refused_before_computing(paper):
                                                 r"\[0, 1\]; got \(0\.5, 1\.5\)"):
         curve(paper, 1, "PD", parameters=("omega", "R"), start={"omega": 1.0, "R": 0.6},
               bounds={"omega": (0.5, 2.0), "R": (0.5, 1.5)})
+
+
+def test_one_entry_starts_a_curve_from_a_motion_and_crosses_either_evaluator(paper, branches):
+    """Issue 29, item 1: ``curve`` takes a motion as its start, the closed form's N-1 motion
+    (a PeriodicOrbit) or the same motion as a 1-1 motion to be shot (a MultiImpactOrbit),
+    and ``curve_crossings`` reads both evaluators' datasets: the three PD curves cross
+    b = 0.05 and -0.05 at the same omega (Newton tolerances 1e-11 and 1e-10)."""
+    box = {"omega": (1.0, 3.0), "b": (-0.06, 0.06)}
+    branch = branches[0.0]
+    k = next(i for i, lab in enumerate(branch.special_label.values) if lab == "PD")
+    omega, delta = float(branch.special_omega[k]), float(branch.special_delta[k])
+    orbit = min(ic.periodic_orbits(paper.replace(b=0.0, omega=omega), 1),
+                key=lambda o: abs(math.remainder(o.delta - delta, 2 * math.pi)))
+    from_branch = curve(None, None, "PD", start=branch, bounds=box)
+    from_orbit = curve(None, None, "PD", start=orbit, bounds=box)
+    assert from_orbit.attrs["kind"] == "PD" and from_orbit.attrs["N"] == 1
+    motion = ic.multi_impact_orbit(orbit.oscillator, 1, 1, orbit)
+    shot = curve(None, None, "PD", start=motion, parameters=("omega", "b"), bounds=box,
+                 detect_codim2_points=False)
+    assert shot.attrs["curve_kind"] == "PD" and shot.attrs["parameters"] == "omega,b"
+    for b in (-0.05, 0.05):
+        omegas = [[c["omega"] for c in curve_crossings(ds, "b", b)]
+                  for ds in (from_branch, from_orbit, shot)]
+        assert all(len(w) == 1 for w in omegas), omegas
+        np.testing.assert_allclose(np.ravel(omegas), omegas[0][0], rtol=0, atol=1e-9)
+    with pytest.raises(ic.ParameterError, match=r"root must be left out when the curve "
+                                                r"starts from an N-p branch or motion"):
+        curve(None, None, "PD", start=motion, root=1, bounds=box)
+    with pytest.raises(ic.ParameterError, match=r"N=2 differs from the motion's N=1"):
+        curve(None, 2, "PD", start=orbit, bounds=box)
