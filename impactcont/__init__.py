@@ -37,7 +37,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(("Stop", "Stops"), "impactcont.model.stops"),
     "multi_impact_continuation": "impactcont.analysis.multi_branch",
     **dict.fromkeys(("multi_impact_curve", "multi_impact_curve_crossings"),
-                    "impactcont.analysis.multi_curves"),
+                    "impactcont.analysis.curves"),
     **dict.fromkeys(("multi_impact_map", "multi_impact_map_orbit"),
                     "impactcont.analysis.multi_maps"),
     "Flow": "impactcont.orbit.flow",
@@ -137,10 +137,14 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
     from impactcont import core  # noqa: F401
     from impactcont.analysis.branch import continuation, continuation_from, extend
-    from impactcont.analysis.curves import curve, curve_crossings
+    from impactcont.analysis.curves import (
+        curve,
+        curve_crossings,
+        multi_impact_curve,
+        multi_impact_curve_crossings,
+    )
     from impactcont.analysis.maps import stability_map
     from impactcont.analysis.multi_branch import multi_impact_continuation
-    from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
     from impactcont.analysis.multi_maps import multi_impact_map, multi_impact_map_orbit
     from impactcont.analysis.switching import (
         Cascade,
