@@ -13,6 +13,10 @@ conventions every figure of impactcont keeps:
   an invented floor value;
 - every line style, marker and colour drawn is named in the legend.
 
+:func:`time_history` draws a simulated motion with its sticking phases: the held
+intervals shaded, the contact force of each held stop on a panel of its own, the
+accumulation points of complete chatter marked.
+
 :func:`panel_figure` lays out several panels at a given width (one column
 below 5 in, two columns above: a 2 x 2 grid for four panels), and
 :func:`figure_legend` puts one legend for all of them under the panels,
@@ -39,9 +43,9 @@ from matplotlib.ticker import LogFormatterSciNotation, NullFormatter, NullLocato
 
 from impactcont.plots.branches import fit_text, legend_fontsize
 
-__all__ = ["MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend", "fit_labels",
-           "inside_frame", "markers_whole", "one_per_style", "panel_figure", "series_plot",
-           "take_legend"]
+__all__ = ["HELD_COLOR", "MAX_WIDTH", "MIN_WIDTH", "ZERO_LABEL", "Series", "figure_legend",
+           "fit_labels", "inside_frame", "markers_whole", "one_per_style", "panel_figure",
+           "series_plot", "take_legend", "time_history"]
 
 logger = logging.getLogger(__name__)
 
@@ -54,6 +58,9 @@ ZERO_LABEL = "exact 0"
 _NONE = ("", "none", "None", " ")
 _ZERO_ROW = 0.13  # height of the row of exact zeros, as a fraction of the axes
 _LINE_ZORDER, _MARKER_ZORDER = 3.0, 2.0
+#: Shade of the intervals a stop holds (sticking phases) in :func:`time_history`.
+HELD_COLOR = "0.86"
+_FORCE_COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#8c564b", "#e377c2")
 
 
 @dataclass(frozen=True)
@@ -451,3 +458,100 @@ def fit_labels(fig: Figure) -> None:
                 cut = min(spaces, key=lambda i: abs(i - len(text) / 2))
                 label.set_text(text[:cut] + "\n" + text[cut + 1:])
     fig.draw_without_rendering()
+
+
+def time_history(ax_motion: Axes, ax_force: Axes, series: Iterable[Series],
+                 events: dict[str, Any], *, time_scale: float = 1.0,
+                 xlabel: str = "$t$", ylabel: str = "$s$",
+                 force_label: str = "pressing force $p$",
+                 force_entry: str = "force on stop {stop}") -> list[Any]:
+    """A simulated motion with its sticking phases and complete chatter.
+
+    Parameters
+    ----------
+    ax_motion : matplotlib.axes.Axes
+        The motion's panel: `series` (stop coordinates, positions) against time, the
+        intervals in which a stop holds shaded (:data:`HELD_COLOR`), and the accumulation
+        points of complete chatter marked on the first series (black down triangles).
+    ax_force : matplotlib.axes.Axes
+        The contact force's panel, under the motion and sharing its time axis: the
+        pressing force of each held stop (``>= 0``; a line per stop, in a colour of its
+        own), zero outside the held intervals (not drawn there), the same shading.
+    series : iterable of Series
+        The motion's curves (times already scaled as the events will be).
+    events : dict
+        The flat arrays of :meth:`impactcont.simulate.simulator.SimulationResult.
+        sticking_arrays` (or the same variables of a scene's ``simulations.nc``):
+        ``sticking_start``, ``sticking_end``, ``force_time``, ``force``,
+        ``force_phase``, ``force_stop`` and ``chatter_time``.
+    time_scale : float
+        Factor applied to every time of `events` (``omega / (2 pi)``: forcing periods).
+    xlabel, ylabel, force_label : str
+        Axis labels (mathtext for symbols).
+    force_entry : str
+        The legend entry of a stop's force, ``{stop}`` replaced by the stop's name.
+
+    Returns
+    -------
+    list
+        The legend entries (the series, the shading, each stop's force, the
+        accumulation points when there are any), for :func:`figure_legend`.
+
+    Raises
+    ------
+    ValueError
+        An array of `events` missing, or sticking starts and ends of different lengths.
+    """
+    need = ("sticking_start", "sticking_end", "force_time", "force", "force_phase",
+            "force_stop", "chatter_time")
+    missing = [k for k in need if k not in events]
+    if missing:
+        raise ValueError(f"events lacks {missing}: pass SimulationResult.sticking_arrays() "
+                         f"(or a scene's simulations.nc variables); got keys {sorted(events)}")
+    series = list(series)
+    starts = np.asarray(events["sticking_start"], dtype=float) * time_scale
+    ends = np.asarray(events["sticking_end"], dtype=float) * time_scale
+    if starts.shape != ends.shape:
+        raise ValueError(f"sticking_start and sticking_end must have one entry per phase; got "
+                         f"{starts.size} and {ends.size}")
+    series_plot(ax_motion, series, xlabel=xlabel, ylabel=ylabel)
+    ax_motion.xaxis.label.set_visible(False)  # the force panel under it shows the time axis
+    ax_motion.tick_params(labelbottom=False)
+    handles: list[Any] = [s.handle() for s in _unique(series)]
+    if starts.size:
+        for ax in (ax_motion, ax_force):
+            for a, b in zip(starts, ends, strict=True):
+                ax.axvspan(a, b, color=HELD_COLOR, lw=0, zorder=0.5)
+        from matplotlib.patches import Patch
+
+        handles.append(Patch(color=HELD_COLOR, label="held (sticking)"))
+    t_f = np.asarray(events["force_time"], dtype=float) * time_scale
+    force = np.asarray(events["force"], dtype=float)
+    phase = np.asarray(events["force_phase"])
+    stop = np.asarray(events["force_stop"]).astype(str)
+    for k, name in enumerate(dict.fromkeys(stop.tolist())):
+        color = _FORCE_COLORS[k % len(_FORCE_COLORS)]
+        here = stop == name
+        # one curve per stop, a gap (NaN) between its phases
+        pieces = [np.append(t_f[here & (phase == j)], np.nan) for j in np.unique(phase[here])]
+        values = [np.append(force[here & (phase == j)], np.nan) for j in np.unique(phase[here])]
+        line = Series(np.concatenate(pieces), np.concatenate(values),
+                      force_entry.format(stop=name), color=color, linestyle="-")
+        ax_force.plot(line.x, line.y, zorder=_LINE_ZORDER, label=line.label, **line.style())
+        handles.append(line.handle())
+    ax_force.set_xlabel(xlabel)
+    ax_force.set_ylabel(force_label)
+    ax_force.sharex(ax_motion)
+    chatter = np.asarray(events["chatter_time"], dtype=float) * time_scale
+    if chatter.size and series:
+        first = series[0]
+        order = np.argsort(first.x)
+        y = np.interp(chatter, first.x[order], first.y[order])
+        mark = Series(chatter, y, "accumulation point", color="black", linestyle="none",
+                      marker="v", filled=True, markersize=5.0)
+        ax_motion.plot(mark.x, mark.y, zorder=_LINE_ZORDER + 1, label=mark.label,
+                       **mark.style())
+        handles.append(mark.handle())
+    logger.debug("time history: %d sticking phases, %d accumulation points", starts.size,
+                 chatter.size)
+    return handles

@@ -176,3 +176,56 @@ def test_inside_frame_leaves_out_the_points_the_frame_would_cut():
     x = np.array([0.0, 0.5, 1.0, 0.5, 2.0])
     y = np.array([0.5, 0.5, 0.5, 1.0, 0.5])
     assert inside_frame(ax, x, y, 4.0).tolist() == [False, True, False, False, False]
+
+
+# -- time_history -------------------------------------------------------------------------------
+def _simulated_events():
+    """A motion with two sticking phases on two stops, force samples and one accumulation
+    point, laid out as SimulationResult.sticking_arrays() gives them."""
+    t = np.linspace(0.0, 4.0, 401)
+    return t, np.sin(np.pi * t / 2), {
+        "sticking_start": np.array([0.5, 2.5]), "sticking_end": np.array([1.2, 3.1]),
+        "force_time": np.array([0.5, 0.85, 1.2, 2.5, 2.8, 3.1]),
+        "force": np.array([0.2, 0.1, 0.0, 0.3, 0.15, 0.0]),
+        "force_phase": np.array([0, 0, 0, 1, 1, 1]),
+        "force_stop": np.array(["U", "U", "U", "L", "L", "L"]),
+        "chatter_time": np.array([2.5])}
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_time_history_shades_the_held_intervals_and_draws_the_forces(width):
+    """The held intervals shaded on both panels, one force curve per stop (a gap between its
+    phases), the accumulation point on the motion's curve, every style in the legend."""
+    from matplotlib.patches import Rectangle
+
+    from impactcont.plots.series import HELD_COLOR, time_history
+
+    t, y, events = _simulated_events()
+    fig, (top, bottom) = panel_figure(2, width, ncols=1, aspect=0.35)
+    handles = time_history(top, bottom, [Series(0.5 * t, y, "$s$", linestyle="-")], events,
+                           time_scale=0.5, xlabel="$t\\,\\omega / 2\\pi$", ylabel="$s$")
+    figure_legend(fig, handles)
+    check_layout(fig, journal=True)
+    for ax in (top, bottom):
+        spans = [p for p in ax.patches if isinstance(p, Rectangle)]
+        assert sorted((p.get_x(), p.get_x() + p.get_width()) for p in spans) == [
+            pytest.approx((0.25, 0.6)), pytest.approx((1.25, 1.55))]
+        assert all(np.allclose(p.get_facecolor()[:3], [float(HELD_COLOR)] * 3) for p in spans)
+    forces = {line.get_label(): line for line in bottom.get_lines()}
+    assert sorted(forces) == ["force on stop L", "force on stop U"]
+    u = forces["force on stop U"].get_xydata()
+    assert np.allclose(u[:3], [[0.25, 0.2], [0.425, 0.1], [0.6, 0.0]]) and np.isnan(u[3]).all()
+    mark = [line for line in top.get_lines() if line.get_label() == "accumulation point"]
+    assert np.allclose(mark[0].get_xydata(), [[1.25, np.sin(np.pi * 2.5 / 2)]], atol=1e-3)
+    assert [h.get_label() for h in handles] == ["$s$", "held (sticking)", "force on stop U",
+                                                "force on stop L", "accumulation point"]
+
+
+def test_time_history_names_what_its_events_lack():
+    from impactcont.plots.series import time_history
+
+    t, y, events = _simulated_events()
+    del events["force_stop"]
+    _fig, (top, bottom) = panel_figure(2, 3.5, ncols=1)
+    with pytest.raises(ValueError, match=r"events lacks \['force_stop'\]"):
+        time_history(top, bottom, [Series(t, y, "$s$", linestyle="-")], events)
