@@ -9,8 +9,10 @@ of :mod:`impactcont.orbit.flow`, each diagonal in its own modal coordinates:
   (:func:`impactcont.kernel.flights.mode_transfer`, every damping class without
   cancellation), ``Phi = U W U^-1`` and the forcing block of eq. (9) from the steady
   modal amplitudes ``gamma_i, beta_i``;
-- first order (any C, complex F): ``Phi = Re(V diag(exp(lambda t)) V^-1)`` and the
-  forcing block ``P(t) - Phi P(0)`` from the complex steady amplitude ``Z``.
+- first order (any C, complex F): ``Phi = Re(V diag(exp(lambda t)) V^-1) + t N`` (``N``
+  the polynomial part of the free modes C leaves undamped, found in the basis by
+  :func:`_nilpotent`; zero without one) and the forcing block ``P(t) - Phi P(0)`` from the
+  complex steady amplitude ``Z``.
 
 ``flow.general`` selects the flow; the arrays of the other are passed empty, so that each
 entry point compiles once. Arguments are the named structures of
@@ -202,11 +204,50 @@ def _flight_modal(modal, forcing, t, X0, theta, tr, arr, pcol, rate):
 
 
 @_inner
+def _generalized(lam, V, k):
+    """Whether column k of the first-order basis is the generalized eigenvector ``[0; u] /
+    |u|`` of an undamped free mode (eigenvalue 0, zero position part:
+    :attr:`impactcont.model.first_order.FirstOrderBasis.generalized`)."""
+    if lam[k] != 0.0:
+        return False
+    n = V.shape[0] // 2
+    position = False
+    for r in range(n):
+        if V[r, k] != 0.0:
+            position = True
+            break
+    return not position
+
+
+@_inner
+def _nilpotent(lam, V, Vi, N):
+    """Fill ``N = sum_k [V_{n:,k}; 0] Re(V^-1_{k,:})`` over the generalized vectors k
+    (:func:`_generalized`): the polynomial part of ``Phi(t) = Re(V diag(e^{lambda t}) V^-1)
+    + t N`` (:attr:`impactcont.model.first_order.FirstOrderBasis.nilpotent`, the drift of
+    the undamped free modes). Returns whether there is one (N is left untouched without)."""
+    m = lam.size
+    n = m // 2
+    found = False
+    for k in range(m):
+        if not _generalized(lam, V, k):
+            continue
+        if not found:
+            N[:, :] = 0.0
+            found = True
+        for r in range(n):
+            vr = V[n + r, k].real
+            for c in range(m):
+                N[r, c] += vr * Vi[k, c].real
+    return found
+
+
+@_inner
 def _flight_general(first_order, forcing, t, X0, theta, tr, arr, pcol, rate):
     """Flight of the first-order flow (:class:`~impactcont.kernel.arrays.FirstOrderFlight`):
     as :func:`_flight_modal` (``GeneralFlow.matrices``); the constant force adds ``X_s - Phi
     X_s + d t`` (``first_order.xs``, ``first_order.xd``: its offset and drift, empty without
-    one)."""
+    one). Undamped free modes add the polynomial part: ``t N`` to ``Phi`` (:func:`_nilpotent`)
+    and ``N d t^2 / 2`` to the constant force's part (``GeneralFlow.accel``)."""
     lam, V, Vi = first_order.lam, first_order.V, first_order.Vi
     xs, xd = first_order.xs, first_order.xd
     Z, omega = forcing.Z, forcing.omega
@@ -218,6 +259,12 @@ def _flight_general(first_order, forcing, t, X0, theta, tr, arr, pcol, rate):
             for k in range(m):
                 s += V[r, k] * e[k] * Vi[k, c]
             tr[r, c] = s.real
+    N = np.empty((m, m))
+    chains = _nilpotent(lam, V, Vi, N)
+    if chains:
+        for r in range(m):
+            for c in range(m):
+                tr[r, c] += t * N[r, c]
     c0 = math.cos(theta)
     s0 = math.sin(theta)
     rot_t = complex(math.cos(omega * t), math.sin(omega * t))
@@ -238,9 +285,14 @@ def _flight_general(first_order, forcing, t, X0, theta, tr, arr, pcol, rate):
         arr[r] = s + ec * c0 + es * s0
         pcol[r] = -ec * s0 + es * c0
     static = xs.size > 0
+    accel = np.zeros(m)  # N d: the t^2 / 2 coefficient on the undamped free modes
+    if static and chains:
+        for r in range(m):
+            for c in range(m):
+                accel[r] += N[r, c] * xd[c]
     if static:
         for r in range(m):
-            s = xs[r] + xd[r] * t
+            s = xs[r] + xd[r] * t + 0.5 * t * t * accel[r]
             for c in range(m):
                 s -= tr[r, c] * xs[c]
             arr[r] += s
@@ -263,7 +315,10 @@ def _flight_general(first_order, forcing, t, X0, theta, tr, arr, pcol, rate):
             s += V[r, k] * zeta[k]
         rate[r] = (1j * omega * Z[r] * rot).real + s.real
         if static:
-            rate[r] += xd[r]
+            rate[r] += xd[r] + t * accel[r]
+        if chains:  # d/dt of t N dev
+            for c in range(m):
+                rate[r] += N[r, c] * dev[c]
 
 
 @_inner
@@ -699,13 +754,20 @@ def _search_inputs(flow, forcing, normal, X0, theta):
         for c in range(m):
             dev[c] = X0[c] - (Z[c] * rot).real
         drift = 0.0
+        N = np.empty((m, m))
+        chains = _nilpotent(lam, V, Vi, N)
+        quadratic = 0.0  # n . N d: an undamped free mode's g t^2 / 2
         if xs.size > 0:
             for c in range(m):
                 dev[c] -= xs[c]
             for r in range(n):
                 level += normal[r] * xs[r]
                 drift += normal[r] * xd[r]
+                if chains:
+                    for c in range(m):
+                        quadratic += normal[r] * N[r, c] * xd[c]
         coef = np.empty(m, dtype=np.complex128)  # (n^T V)_k zeta_k
+        zeta = np.empty(m, dtype=np.complex128)
         zn = 0j
         for r in range(n):
             zn += normal[r] * Z[r]
@@ -717,21 +779,31 @@ def _search_inputs(flow, forcing, normal, X0, theta):
             for r in range(n):
                 vn += normal[r] * V[r, k]
             coef[k] = vn * s
+            zeta[k] = s
         npair = flow.pw.size
         dy = np.empty(npair)
         dv = np.empty(npair)
         for i in range(npair):
             k = pk[i]
             q = pj[i]
-            if lam[k].imag != 0.0:  # a conjugate pair: Re((c_k + conj c_q) e^{lam_k t})
+            if chains and _generalized(lam, V, q):  # a Jordan chain: y0 + v0 t (w = a = 0)
+                dy[i] = (coef[k] + coef[q]).real
+                vq = 0j  # n . (the velocity part of [0; u] moved up) zeta_q: the t term
+                for r in range(n):
+                    vq += normal[r] * V[n + r, q]
+                dv[i] = (vq * zeta[q]).real
+            elif lam[k].imag != 0.0:  # a conjugate pair: Re((c_k + conj c_q) e^{lam_k t})
                 total = coef[k] + np.conj(coef[q])
                 dy[i] = total.real
                 dv[i] = (total * lam[k]).real
             else:  # two real eigenvalues
                 dy[i] = (coef[k] + coef[q]).real
                 dv[i] = (coef[k] * lam[k] + coef[q] * lam[q]).real
+        pg = np.zeros(1 if quadratic != 0.0 else 0)
+        if quadratic != 0.0:
+            pg[0] = quadratic
         return StopSeries(flow.pw, flow.pa, np.ones(npair), zn.real, -zn.imag, dy, dv, level,
-                          np.zeros(0), np.zeros(0), drift)
+                          pg, np.zeros(pg.size), drift)
     w, a, u, ui = flow.w, flow.a, flow.u, flow.ui
     gam, bet = forcing.gamma, forcing.beta
     n = w.size

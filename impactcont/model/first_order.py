@@ -19,7 +19,11 @@ physical coordinates; complex ``F`` carries per-mass phases, see
 
 Over-damped modes are real eigenvalues, ``exp(lambda t)`` with ``lambda < 0``: no
 overflow and no cancellation. Repeated eigenvalues with independent eigenvectors
-(a symmetric structure) are diagonalised like any others. A defective eigenvalue (an
+(a symmetric structure) are diagonalised like any others. A free (rigid-body) mode ``u``
+of K that C leaves undamped (``C u = 0``: the usual impact damper, a dashpot on the primary
+and none on the free ball) makes the eigenvalue 0 defective; it decouples exactly and is
+carried as its Jordan chain ``[u; 0], [0; u]``, the flow gaining the polynomial part ``t N``
+(:attr:`FirstOrderBasis.nilpotent`): ``q(t) = q0 + v0 t``. Any other defective eigenvalue (an
 exactly critically damped mode) has no eigenvector basis, and near one (nearly critical
 damping) the basis is ill-conditioned: the error of ``Phi`` is about
 ``eps * cond(V)``. The 2-norm condition number of the column-normalised ``V`` of the
@@ -164,28 +168,105 @@ def _check_resonance(omega: float, cond: float) -> None:
             NearResonanceWarning, stacklevel=4)
 
 
-def _check_free_damped(U_free: np.ndarray, C: np.ndarray) -> None:
-    """Refuse a free mode of K that C does not damp (a defective double zero eigenvalue).
+def _split_free(U_free: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The free modes of K that C leaves undamped, and those it damps (M-orthonormal).
 
-    A free mode ``u`` (``K u = 0``) with ``u^T C u > 0`` gives A the simple eigenvalue 0
-    (the position drifts freely) and the real ``-u^T C u`` (its velocity decays): A stays
-    diagonalisable. Undamped (``C u = 0``), the eigenvalue 0 is double with one
-    eigenvector (the motion ``x = u (y0 + v0 t)``): no eigenvector basis exists.
+    C is symmetric positive semi-definite, so a free mode ``u`` (``K u = 0``) with ``u^T C
+    u = 0`` has ``C u = 0``: the eigenvectors of ``U^T C U`` (``U`` the M-orthonormal free
+    modes) of eigenvalue ``<= 1e-12`` times the componentwise scale ``|U|^T |C| |U|`` span
+    the undamped ones (their motion ``x = u (q0 + v0 t)`` is exact, a Jordan block of A at
+    0), the others the damped ones (A's simple eigenvalue 0 and the real ``-u^T C u``).
+
+    Returns
+    -------
+    undamped, damped : ndarray, shape (n, m_u), (n, m_d)
     """
     if not U_free.shape[1]:
-        return
+        return U_free, U_free
     Cf = U_free.T @ C @ U_free
     scale = np.abs(U_free).T @ np.abs(C) @ np.abs(U_free)
-    eig = np.linalg.eigvalsh(0.5 * (Cf + Cf.T))
-    if np.all(eig > 1e-12 * max(float(np.max(np.abs(scale))), np.finfo(float).tiny)):
-        return
-    raise ParameterError(
-        f"K must be positive definite relative to M on the first-order path (any C, complex "
-        f"F) unless C damps every free mode: the free mode(s) "
-        f"{np.round(U_free.T, 12).tolist()} of K are undamped by C={C.tolist()} (u^T C u "
-        f"eigenvalues {eig.tolist()}), so the first-order matrix A has a defective double "
-        f"eigenvalue 0. Use the modal path (proportional damping eta or alpha/beta with a "
-        f"real F), whose flow of an undamped free mode is exact, or add a damper on that mode")
+    eig, Q = np.linalg.eigh(0.5 * (Cf + Cf.T))
+    still = eig <= 1e-12 * max(float(np.max(np.abs(scale))), np.finfo(float).tiny)
+    return U_free @ Q[:, still], U_free @ Q[:, ~still]
+
+
+def _first_order_matrix(M: np.ndarray, K: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """``A = [[0, I], [-M^-1 K, -M^-1 C]]`` (2n, 2n)."""
+    n = M.shape[0]
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = -np.linalg.solve(M, K)
+    A[n:, n:] = -np.linalg.solve(M, C)
+    return A
+
+
+def _eigen(A: np.ndarray, U_free: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eigenvalues, unit eigenvectors and the zero mask of ``A`` whose free modes
+    ``U_free`` are all damped (a diagonalisable A), in a reproducible order."""
+    n2 = A.shape[0]
+    lam, V = scipy.linalg.eig(A)  # balanced dgeev: conjugate pairs exact
+    zero = np.zeros(n2, dtype=bool)
+    if U_free.shape[1]:
+        # the free modes' eigenvalues are 0 up to rounding: exactly 0, with the exact
+        # eigenvectors [u_free; 0] (a basis of the free subspace)
+        nearest = np.argsort(np.abs(lam))[:U_free.shape[1]]
+        zero[nearest] = True
+        lam = np.where(zero, 0.0, lam)
+        V = V.copy()
+        V[:, nearest] = np.vstack([U_free, np.zeros_like(U_free)])
+    # reproducible order: slowest decay first, then by frequency (conjugates adjacent)
+    order = np.lexsort((-lam.imag, np.abs(lam.imag), -lam.real))
+    lam, V, zero = lam[order], V[:, order], zero[order]
+    return lam, V / np.linalg.norm(V, axis=0), zero
+
+
+def _with_chains(M: np.ndarray, K: np.ndarray, C: np.ndarray, undamped: np.ndarray,
+                 rest: np.ndarray, damped: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``lambda, V, V^-1``, the zero and the generalized masks of A with undamped free modes.
+
+    With ``Q = [U | P]`` M-orthonormal (``U`` the undamped free modes, ``P`` the rest:
+    the damped free modes and the held modes of K) and ``x = U q + P y``, ``C U = 0`` and
+    ``K U = 0`` decouple eq. (1) exactly: ``q'' = U^T f(t)`` and ``y'' + P^T C P y' + P^T
+    K P y = P^T f(t)``. Each undamped mode ``u`` is the Jordan chain ``A [0; u] = [u; 0]``,
+    ``A [u; 0] = 0`` (columns ``[u; 0]``, then ``[0; u]``, both of eigenvalue 0); the rest
+    are the eigenvectors ``[P y; lambda P y]`` of the reduced system, lifted. ``V^-1`` is
+    exact by the same blocks: ``[U^T M, 0]``, ``[0, U^T M]`` and ``V_r^-1 [P^T M, P^T M]``.
+    """
+    n = M.shape[0]
+    mu, r = undamped.shape[1], rest.shape[1]
+    chain = np.zeros((2 * n, 2 * mu))
+    chain[:n, 0::2] = undamped
+    chain[n:, 1::2] = undamped
+    chain_inv = np.zeros((2 * mu, 2 * n))
+    chain_inv[0::2, :n] = undamped.T @ M
+    chain_inv[1::2, n:] = undamped.T @ M
+    lam = np.zeros(2 * mu, dtype=complex)
+    zero = np.ones(2 * mu, dtype=bool)
+    generalized = np.tile([False, True], mu)
+    V, V_inv = chain.astype(complex), chain_inv.astype(complex)
+    if r:
+        Kr = rest.T @ K @ rest
+        Cr = rest.T @ C @ rest
+        Ir = np.eye(r)
+        held = np.ones(r, dtype=bool)
+        held[:damped.shape[1]] = False  # rest = [damped | held]: the damped free come first
+        Kr[~held, :] = 0.0  # K P e_i = 0 for a (damped) free mode: exactly, not rounding
+        Kr[:, ~held] = 0.0
+        U_r = Ir[:, ~held]
+        lam_r, V_r, zero_r = _eigen(_first_order_matrix(Ir, 0.5 * (Kr + Kr.T),
+                                                        0.5 * (Cr + Cr.T)), U_r)
+        lift = np.zeros((2 * n, 2 * r))
+        lift[:n, :r] = rest
+        lift[n:, r:] = rest
+        V_r_inv = np.linalg.inv(V_r)
+        V = np.hstack([V, lift @ V_r])
+        V_inv = np.vstack([V_inv, V_r_inv @ lift.T @ np.kron(np.eye(2), M)])
+        lam = np.concatenate([lam, lam_r])
+        zero = np.concatenate([zero, zero_r])
+        generalized = np.concatenate([generalized, np.zeros(2 * r, dtype=bool)])
+    norms = np.linalg.norm(V, axis=0)
+    return lam, V / norms, V_inv * norms[:, None], zero, generalized
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -208,9 +289,28 @@ class FirstOrderBasis:
         the units of each coordinate): the flow carries a relative error of about
         ``eps * condition``.
     zero : ndarray of bool, shape (2n,)
-        The eigenvalues that are exactly 0: one per free (rigid-body) mode of K, which
-        C damps (its partner is the real ``-u^T C u`` rate of that mode); their
-        eigenvectors are ``[u_free; 0]``.
+        The eigenvalues that are exactly 0: one per free (rigid-body) mode of K that C
+        damps (its partner is the real ``-u^T C u`` rate of that mode; eigenvector
+        ``[u; 0]``) and two per free mode C leaves undamped (``C u = 0``): the Jordan
+        chain ``[u; 0]``, ``[0; u]`` of :attr:`generalized`.
+    generalized : ndarray of bool, shape (2n,)
+        The generalized eigenvectors ``[0; u] / |u|`` of the undamped free modes (``A [0;
+        u] = [u; 0]``: eigenvalue 0 and a zero position part, the mark by which the compiled
+        flights find them); the column before each is its eigenvector ``[u; 0] / |u|``.
+
+    Notes
+    -----
+    With undamped free modes A is defective (a double eigenvalue 0 with one eigenvector
+    per mode) and ``V`` holds its Jordan chains: ``A V = V (diag(lambda) + J)`` with ``J``
+    the ones above the diagonal from each eigenvector's chain to its generalized vector, so
+
+        Phi(t) = e^{A t} = Re(V diag(e^{lambda t}) V^-1) + t N,   N = V J V^-1   (eq. 9)
+
+    exactly: the polynomial part ``t N`` (:attr:`nilpotent`, ``N = [[0, U U^T M], [0,
+    0]]``, ``N^2 = 0``) is the free drift ``q(t) = q0 + v0 t`` of each undamped free
+    mode ``x = U q``, which decouples from the rest (``K U = 0``, ``C U = 0``). The rest
+    is the eigenvector flow of the M-orthogonal complement (which may hold damped free
+    modes), with ``V^-1`` exact by the same blocks.
     """
 
     M: np.ndarray
@@ -222,17 +322,19 @@ class FirstOrderBasis:
     V_inv: np.ndarray
     condition: float
     zero: np.ndarray | None = None
+    generalized: np.ndarray | None = None
 
     @classmethod
     def from_matrices(cls, M: np.ndarray, K: np.ndarray, C: np.ndarray) -> FirstOrderBasis:
         """Eigen-decompose the first-order matrix A, checking its conditioning.
 
+        A free mode of K that C leaves undamped is carried exactly as a Jordan chain
+        (:attr:`generalized`, :attr:`nilpotent`).
+
         Raises
         ------
         ParameterError
-            If K has a free mode that C does not damp (a double, defective zero
-            eigenvalue: the modal path of proportional damping handles it exactly),
-            or if the eigenvector matrix is singular or its condition number exceeds
+            If the eigenvector matrix is singular or its condition number exceeds
             :data:`COND_REFUSE` (a defective or nearly defective eigenvalue, e.g. a
             critically damped mode).
 
@@ -244,26 +346,15 @@ class FirstOrderBasis:
         n = M.shape[0]
         stiffness, modes = scipy.linalg.eigh(K, M)
         _, free = classify_modes(stiffness, modes, K)
-        U_free = modes[:, free]
-        _check_free_damped(U_free, C)
-        A = np.zeros((2 * n, 2 * n))
-        A[:n, n:] = np.eye(n)
-        A[n:, :n] = -np.linalg.solve(M, K)
-        A[n:, n:] = -np.linalg.solve(M, C)
-        lam, V = scipy.linalg.eig(A)  # balanced dgeev: conjugate pairs exact
-        zero = np.zeros(2 * n, dtype=bool)
-        if U_free.shape[1]:
-            # the free modes' eigenvalues are 0 up to rounding: exactly 0, with the exact
-            # eigenvectors [u_free; 0] (a basis of the free subspace)
-            nearest = np.argsort(np.abs(lam))[:U_free.shape[1]]
-            zero[nearest] = True
-            lam = np.where(zero, 0.0, lam)
-            V = V.copy()
-            V[:, nearest] = np.vstack([U_free, np.zeros_like(U_free)])
-        # reproducible order: slowest decay first, then by frequency (conjugates adjacent)
-        order = np.lexsort((-lam.imag, np.abs(lam.imag), -lam.real))
-        lam, V, zero = lam[order], V[:, order], zero[order]
-        V = V / np.linalg.norm(V, axis=0)
+        undamped, damped = _split_free(modes[:, free], C)
+        A = _first_order_matrix(M, K, C)
+        if undamped.shape[1]:
+            lam, V, V_inv, zero, generalized = _with_chains(
+                M, K, C, undamped, np.hstack([damped, modes[:, ~free]]), damped)
+        else:
+            lam, V, zero = _eigen(A, damped)
+            V_inv = None
+            generalized = np.zeros(2 * n, dtype=bool)
         # the condition of the eigenvectors of the balanced A (D^-1 A D, D a diagonal of
         # powers of two): invariant to the units of each coordinate (X -> D X)
         _, (scale, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
@@ -297,11 +388,12 @@ class FirstOrderBasis:
                 f"(> {COND_WARN:.0e}; {closest}): the flow may carry a relative error of about "
                 f"{cond * _EPS:.1g} (nearly critical damping)", IllConditionedWarning,
                 stacklevel=3)
-        V_inv = np.linalg.inv(V)
-        for x in (A, lam, V, V_inv, zero):
+        if V_inv is None:
+            V_inv = np.linalg.inv(V)
+        for x in (A, lam, V, V_inv, zero, generalized):
             x.setflags(write=False)
         return cls(M=M, K=K, C=C, A=A, eigenvalues=lam, V=V, V_inv=V_inv, condition=cond,
-                   zero=zero)
+                   zero=zero, generalized=generalized)
 
     @functools.cached_property
     def impact_column(self) -> np.ndarray:
@@ -322,8 +414,10 @@ class FirstOrderBasis:
     def scalar_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The modes grouped in n pairs, each the two roots of one real scalar equation
         ``y'' + 2 a y' + w^2 y = 0`` (``w^2 = lambda_k lambda_j``, ``2 a = -(lambda_k +
-        lambda_j)``): a complex conjugate pair, or two real (over-damped) eigenvalues,
-        adjacent in value. A real combination ``Re(c_k e^{lambda_k t} + c_j e^{lambda_j t})``
+        lambda_j)``): a complex conjugate pair, two real (over-damped) eigenvalues,
+        adjacent in value, or the Jordan chain of an undamped free mode (``w = a = 0``,
+        first: ``k`` its eigenvector, ``j`` its generalized vector, ``y'(0)`` the
+        coefficient of ``t``). A real combination ``Re(c_k e^{lambda_k t} + c_j e^{lambda_j t})``
         of a pair is then ``W11(t) y(0) + W12(t) y'(0)`` with the exact, cancellation-free
         modal transfer of eq. (9), so the proportional kernel's interior-contact search
         (eq. 16) serves any C.
@@ -338,8 +432,13 @@ class FirstOrderBasis:
         lam = self.eigenvalues
         upper = [int(i) for i in np.flatnonzero(lam.imag > 0)]
         lower = [int(i) for i in np.flatnonzero(lam.imag < 0)]
-        real = sorted((int(i) for i in np.flatnonzero(lam.imag == 0)), key=lambda i: lam[i].real)
-        ks, js = [], []
+        # an undamped free mode's chain is one pair: y = y0 + v0 t (w = a = 0)
+        gen = (np.flatnonzero(self.generalized) if self.generalized is not None
+               else np.zeros(0, dtype=np.int64))
+        chained = set(gen.tolist()) | set((gen - 1).tolist())
+        real = sorted((int(i) for i in np.flatnonzero(lam.imag == 0) if int(i) not in chained),
+                      key=lambda i: lam[i].real)
+        ks, js = [int(i) - 1 for i in gen], [int(i) for i in gen]
         for k in upper:  # the exact conjugate (LAPACK), else the nearest one
             j = min(lower, key=lambda i: abs(lam[i] - lam[k].conjugate()))
             lower.remove(j)
@@ -353,9 +452,35 @@ class FirstOrderBasis:
         a = -0.5 * (lam[k_idx] + lam[j_idx]).real
         return w, a, k_idx, j_idx
 
+    @functools.cached_property
+    def nilpotent(self) -> np.ndarray:
+        """``N = V J V^-1`` (2n, 2n), the polynomial part of ``Phi(t) = Re(V diag(e^{lambda
+        t}) V^-1) + t N``: ``sum_k [V_{n:,k}; 0] Re(V^-1_{k,:})`` over the generalized
+        vectors ``k`` (:attr:`generalized`; their eigenvector ``[u; 0]`` is the velocity part
+        of ``[0; u]`` moved up), ``[[0, U U^T M], [0, 0]]``; zero without undamped free modes.
+        """
+        n2 = self.V.shape[0]
+        n = n2 // 2
+        N = np.zeros((n2, n2))
+        if self.generalized is not None:
+            for k in np.flatnonzero(self.generalized):
+                N[:n] += np.outer(self.V[n:, k].real, self.V_inv[k].real)
+        N.setflags(write=False)
+        return N
+
+    @property
+    def polynomial(self) -> bool:
+        """Whether an undamped free mode gives the flow a polynomial part (:attr:`nilpotent`)."""
+        return self.generalized is not None and bool(np.any(self.generalized))
+
     def transition(self, t: float) -> np.ndarray:
-        """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, the free flow over time t (2n, 2n)."""
-        return ((self.V * np.exp(self.eigenvalues * float(t))) @ self.V_inv).real
+        """``Phi(t) = Re(V diag(exp(lambda t)) V^-1) + t N``, the free flow over time t
+        (2n, 2n); ``N`` (:attr:`nilpotent`) is zero without undamped free modes."""
+        t = float(t)
+        out = ((self.V * np.exp(self.eigenvalues * t)) @ self.V_inv).real
+        if self.polynomial:
+            out += t * self.nilpotent
+        return out
 
     @functools.cached_property
     def kernel_arrays(self) -> FirstOrderArrays:

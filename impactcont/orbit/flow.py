@@ -484,6 +484,11 @@ class GeneralFlow(Flow):
         X(t) = X_p(t) + Re(V diag(exp(lambda t)) V^-1 (X(0) - X_p(0)))         (eq. 9)
 
     in closed form (no integration). Same interface as :class:`Flow`.
+
+    A free mode that C leaves undamped adds the polynomial part ``t N (X(0) - X_p(0) -
+    X_s)`` (:attr:`FirstOrderBasis.nilpotent <impactcont.model.first_order.FirstOrderBasis.
+    nilpotent>`: its drift ``q0 + v0 t``), and a constant force on it ``N d t^2 / 2`` (its
+    ``g t^2 / 2``, :attr:`accel`).
     """
 
     def __init__(self, osc: ImpactOscillator) -> None:
@@ -497,6 +502,9 @@ class GeneralFlow(Flow):
         self.V_inv = basis.V_inv
         self.Z = basis.forced_amplitude(osc.F, osc.omega)
         self.static_offset, self.drift = self._static(osc)
+        self.nilpotent = basis.nilpotent
+        self.polynomial = basis.polynomial
+        self.accel = self.nilpotent @ self.drift  # the t^2 / 2 coefficient of the constant force
         self._last: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None  # matrices(T)
         self._arrays: ShootingFlow | None = None
         self._forcing: Forcing | None = None
@@ -532,8 +540,10 @@ class GeneralFlow(Flow):
     def _static(self, osc: ImpactOscillator) -> tuple[np.ndarray, np.ndarray]:
         """``X_s`` and ``d`` of the constant force: ``X' = A X + b``, ``b = [0; M^-1 F_s]``,
         ``h = V^-1 b``; ``X_s = Re(sum_{lambda_k != 0} -V_k h_k / lambda_k)`` (constant) and
-        ``d = Re(sum_{lambda_k = 0} V_k h_k)`` (the damped free modes' drift per unit time;
-        ``A d = 0`` and ``A X_s + b = d``, so ``X_s + d t`` is a particular solution)."""
+        ``d = Re(sum_{lambda_k = 0} V_k h_k)`` (the free modes' drift per unit time; ``A X_s
+        + b = d`` and ``A d = N d``, ``A N d = 0`` (:attr:`FirstOrderBasis.nilpotent`, zero
+        without an undamped free mode), so ``X_s + d t + N d t^2 / 2`` is a particular
+        solution: an undamped free mode's ``g t^2 / 2``)."""
         n = self.n
         if not np.any(osc.F_static):
             return np.zeros(2 * n), np.zeros(2 * n)
@@ -556,10 +566,11 @@ class GeneralFlow(Flow):
         return self._static_arrays
 
     def static_term(self, t: float) -> np.ndarray:
-        """The constant force's part of ``X(t)`` from ``X(0) = 0``: ``X_s - Phi(t) X_s + d t``."""
+        """The constant force's part of ``X(t)`` from ``X(0) = 0``: ``X_s - Phi(t) X_s + d t
+        + N d t^2 / 2``."""
         t = float(np.asarray(t).reshape(-1)[0])
         return (self.static_offset - self.basis.transition(t) @ self.static_offset
-                + self.drift * t)
+                + self.drift * t + self.accel * (0.5 * t * t))
 
     def omega_arrays(self) -> ForcingDerivatives:
         """Empty modal derivatives and ``dZ / d omega`` (:meth:`Flow.omega_arrays`)."""
@@ -584,18 +595,26 @@ class GeneralFlow(Flow):
         theta = self.omega * np.atleast_1d(np.asarray(t, dtype=float))[:, None] + delta
         return (self.Z * np.exp(1j * theta)).real
 
+    def _deviation(self, X0: np.ndarray, delta: float) -> np.ndarray:
+        """``X(0) - X_p(0) - X_s``, the free part's start (2n,)."""
+        return (np.asarray(X0, dtype=float) - self.forced_state(0.0, delta)[0]
+                - self.static_offset)
+
     def modal_deviation(self, X0: np.ndarray, delta: float) -> np.ndarray:
         """Complex modal coordinates ``V^-1 (X(0) - X_p(0) - X_s)`` of the free part, (2n,)."""
-        return self.V_inv @ (np.asarray(X0, dtype=float) - self.forced_state(0.0, delta)[0]
-                             - self.static_offset)
+        return self.V_inv @ self._deviation(X0, delta)
 
     def state(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
         """State ``X(t) = [x; x'](t)`` of eq. (9), shape (nt, 2n)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         zeta = self.modal_deviation(X0, delta)
         free = (np.exp(t[:, None] * self.lam) * zeta) @ self.V.T
-        return (self.forced_state(t, delta) + free.real + self.static_offset
-                + t[:, None] * self.drift)
+        out = (self.forced_state(t, delta) + free.real + self.static_offset
+               + t[:, None] * self.drift)
+        if self.polynomial:  # t N (X(0) - X_p(0) - X_s) + N d t^2 / 2
+            out += t[:, None] * (self.nilpotent @ self._deviation(X0, delta))
+            out += (0.5 * t * t)[:, None] * self.accel
+        return out
 
     def state_derivative(self, t: np.ndarray, X0: np.ndarray, delta: float) -> np.ndarray:
         """Time derivative ``X'(t) = [x'; x''](t)``, shape (nt, 2n)."""
@@ -603,10 +622,13 @@ class GeneralFlow(Flow):
         zeta = self.modal_deviation(X0, delta)
         free = (np.exp(t[:, None] * self.lam) * (self.lam * zeta)) @ self.V.T
         theta = self.omega * t[:, None] + delta
-        return (1j * self.omega * self.Z * np.exp(1j * theta)).real + free.real + self.drift
+        out = (1j * self.omega * self.Z * np.exp(1j * theta)).real + free.real + self.drift
+        if self.polynomial:
+            out += self.nilpotent @ self._deviation(X0, delta) + t[:, None] * self.accel
+        return out
 
     def transition_matrix(self, t: float) -> np.ndarray:
-        """``Phi(t) = Re(V diag(exp(lambda t)) V^-1)``, shape (2n, 2n)."""
+        """``Phi(t) = Re(V diag(exp(lambda t)) V^-1) + t N``, shape (2n, 2n)."""
         return self.matrices(t)[0]
 
     def matrices(self, t: float, static: bool = False) -> tuple[np.ndarray, ...]:
@@ -666,6 +688,9 @@ class GeneralMass1Motion(Mass1Motion):
     """``x1(t)`` and its derivatives along one flight of a :class:`GeneralFlow`, O(n) per time:
 
         x1^(j) = Re((i omega)^j Z_1 e^{i theta}) + Re(sum_k lambda_k^j V_1k zeta_k e^{lambda_k t})
+
+    plus the constant force's ``X_s + d t`` and the polynomial part of undamped free modes,
+    ``(r N dev) t + (r N d) t^2 / 2`` (:class:`GeneralFlow`).
     """
 
     def __init__(self, flow: GeneralFlow, X0: np.ndarray, delta: float, index: int = 0,
@@ -682,6 +707,10 @@ class GeneralMass1Motion(Mass1Motion):
         self.z = complex(r @ flow.Z)
         self.offset = float(r @ flow.static_offset)  # the constant force's constant part
         self.rate = float(r @ flow.drift)  # and its drift per unit time
+        # undamped free modes: the drift t r N dev and the constant force's r N d t^2 / 2
+        self.linear = (float(r @ (flow.nilpotent @ flow._deviation(X0, delta)))
+                       if flow.polynomial else 0.0)
+        self.quadratic = float(r @ flow.accel) if flow.polynomial else 0.0
 
     def _derivatives(self, t: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -694,4 +723,8 @@ class GeneralMass1Motion(Mass1Motion):
             out.append((forced * iw**j).real + (e @ fl.lam**j).real)
         out[0] = out[0] + self.offset + self.rate * t
         out[1] = out[1] + self.rate
+        if self.linear or self.quadratic:
+            out[0] = out[0] + (self.linear + 0.5 * self.quadratic * t) * t
+            out[1] = out[1] + self.linear + self.quadratic * t
+            out[2] = out[2] + self.quadratic
         return tuple(out)  # type: ignore[return-value]

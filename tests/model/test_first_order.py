@@ -121,3 +121,67 @@ def test_modes_follow_the_forcing_and_stay_for_the_rest():
         new = osc.replace(**change)
         np.testing.assert_allclose(new.modes.modal_forces, ModalBasis.from_matrices(
             new.M, new.K, *new.rayleigh, new.F).modal_forces, rtol=1e-13, atol=1e-15)
+
+
+# -- free modes that C leaves undamped (issue 30, item 5) ----------------------------------------
+def _mp_expm(A: np.ndarray, t: float) -> np.ndarray:
+    """exp(A t) to 40 digits (mpmath's Pade/scaling, independent of the basis)."""
+    import mpmath
+
+    with mpmath.workdps(40):
+        out = mpmath.expm(mpmath.matrix(A.tolist()) * t)
+        return np.array(out.tolist(), dtype=float)
+
+
+# undamped free (masses 2, 3), damped free (mass 4), held non-proportional (mass 1 on a spring)
+_M4 = np.diag([1.0, 0.3, 0.5, 0.7])
+_K4 = np.diag([2.0, 0.0, 0.0, 0.0])
+_C4 = np.diag([0.1, 0.0, 0.0, 0.05])
+_CHAIN = (np.diag([1.0, 0.5, 0.2]), np.array([[2.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 0.0, 0.0]]),
+          np.diag([0.1, 0.0, 0.0]))  # a two-mass primary, a dashpot on mass 1, a free ball
+
+
+@pytest.mark.parametrize("matrices", [(_M4, _K4, _C4), _CHAIN], ids=["two-undamped-one-damped",
+                                                                     "ball-on-a-chain"])
+def test_undamped_free_modes_are_jordan_chains_and_the_flow_is_exact(matrices):
+    """A free mode C leaves undamped (C u = 0) was refused ('unless C damps every free
+    mode'); now its Jordan chain [u; 0], [0; u] carries it: A V = V (diag(lambda) + J),
+    V^-1 V = I, N = [[0, U U^T M], [0, 0]] with N^2 = 0, and Phi(t) = exp(A t) to rounding
+    against 40 digits (the polynomial part grows linearly: t up to 200)."""
+    M, K, C = matrices
+    basis = FirstOrderBasis.from_matrices(M, K, C)
+    n = M.shape[0]
+    gen = np.flatnonzero(basis.generalized)
+    undamped = [i for i in range(n) if K[i, i] == 0.0 and C[i, i] == 0.0]
+    assert gen.size == len(undamped)
+    lam, V, Vi = basis.eigenvalues, basis.V, basis.V_inv
+    J = np.diag(lam)
+    J[gen - 1, gen] = 1.0  # the eigenvector [u; 0] is the column before [0; u]
+    np.testing.assert_allclose(basis.A @ V, V @ J, rtol=0, atol=1e-14 * np.abs(basis.A).max())
+    np.testing.assert_allclose(Vi @ V, np.eye(2 * n), rtol=0, atol=1e-14)
+    U = np.eye(n)[:, undamped] / np.sqrt(np.diag(M)[undamped])
+    N = np.zeros((2 * n, 2 * n))
+    N[:n, n:] = U @ U.T @ M
+    np.testing.assert_allclose(basis.nilpotent, N, rtol=0, atol=1e-15)
+    assert not np.any(basis.nilpotent @ basis.nilpotent)
+    for t in (0.0, 0.37, 4.1, 200.0):
+        ref = _mp_expm(basis.A, t)
+        np.testing.assert_allclose(basis.transition(t), ref, rtol=0,
+                                   atol=1e-14 * max(1.0, np.abs(ref).max()))
+    # the contact search's pairs: each chain one pair y0 + v0 t (w = a = 0)
+    w, a, k, j = basis.scalar_pairs
+    assert sorted(j[: gen.size].tolist()) == gen.tolist()
+    assert np.all(w[: gen.size] == 0.0) and np.all(a[: gen.size] == 0.0)
+    assert sorted(np.concatenate([k, j]).tolist()) == list(range(2 * n))
+
+
+def test_undamped_free_mode_builds_and_bad_damping_is_still_refused():
+    """The impact damper's usual layout (a dashpot on the primary, none on the ball) builds
+    on the first-order path; a C that is not positive semi-definite is still refused at
+    construction, naming C and what is allowed."""
+    base = dict(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0], R=0.6, b=0.3,
+                omega=0.9, stops=ic.Stops(mass=2, relative_to=1, mirror=True))
+    osc = ic.ImpactOscillator(**base, C=[[0.04, 0.0], [0.0, 0.0]])
+    assert osc.general and osc.first_order.polynomial
+    with pytest.raises(ic.ParameterError, match=r"C must be positive semi-definite"):
+        ic.ImpactOscillator(**base, C=[[-0.04, 0.0], [0.0, -0.01]])

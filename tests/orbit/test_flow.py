@@ -359,11 +359,13 @@ def test_chain_with_a_zero_spring_has_a_free_mode_with_zero_frequency():
 
 
 @pytest.mark.parametrize("damping", [{"eta": 0.05}, {"alpha": 0.3, "beta": 0.02},
-                                     {"C": [[0.1, 0.0], [0.0, 0.05]]}])
+                                     {"C": [[0.1, 0.0], [0.0, 0.05]]},
+                                     {"C": [[0.1, 0.0], [0.0, 0.0]]}])
 @pytest.mark.parametrize("static", [None, [0.1, -0.05]])
 def test_free_mode_flow_matches_solve_ivp(damping, static):
-    """Undamped free mode (eta: g t^2/2), damped by alpha (drift g t/(2a)) and by a damping
-    matrix (the first-order basis with an exact zero eigenvalue)."""
+    """Undamped free mode (eta: g t^2/2), damped by alpha (drift g t/(2a)), by a damping
+    matrix (the first-order basis with an exact zero eigenvalue) and left undamped by a
+    damping matrix (the first-order basis's Jordan chain, its polynomial part)."""
     osc = ic.ImpactOscillator(M=M2, K=K2, F=[1.0, 0.3], R=0.5, b=0.3, omega=1.3,
                               stops=PAIR, F_static=static, **damping)
     flow = Flow(osc)
@@ -391,11 +393,40 @@ def test_a_free_mode_nothing_holds_is_refused():
                             omega=1.3, stops=PAIR)
 
 
-def test_undamped_free_mode_on_the_first_order_path_is_refused_naming_the_modal_path():
-    osc = ic.ImpactOscillator(M=M2, K=K2, F=[1.0, 0.0], R=0.5, b=0.1, omega=1.3, stops=PAIR,
-                              C=[[0.1, 0.0], [0.0, 0.0]])
-    with pytest.raises(ParameterError, match=r"undamped by C.*modal path"):
-        osc.first_order  # noqa: B018
+@pytest.mark.parametrize("static", [None, [0.0, -0.05]])
+def test_undamped_free_mode_first_order_flow_equals_the_modal_flow(static):
+    """A damping matrix that leaves the free mode undamped (was refused: 'unless C damps
+    every free mode'): the first-order flow with its polynomial part (the Jordan chain of
+    the free mode, a constant force's g t^2 / 2 on it) is the modal flow of the same
+    proportional C (beta K, given as eta on the modal path) to rounding: state, its time
+    derivative, the matrices of eq. (9) with the constant force and a stop coordinate."""
+    base = dict(M=M2, K=K2, F=[1.0, 0.3], R=0.5, b=0.3, omega=1.3, stops=PAIR,
+                F_static=static)
+    modal = ic.ImpactOscillator(**base, alpha=0.0, beta=0.04)
+    general = ic.ImpactOscillator(**base, C=modal.C)
+    fm, fg = Flow(modal), Flow(general)
+    assert type(fg).__name__ == "GeneralFlow" and fm.free.tolist() == [True, False]
+    X0 = np.array([0.1, -0.2, 0.3, 0.05])
+    t = np.array([0.0, 0.4, 3.0, 40.0])  # long enough for the drift to dominate
+    ref = fm.state(t, X0, 0.7)
+    tol = 1e-13 * np.abs(ref).max()
+    np.testing.assert_allclose(fg.state(t, X0, 0.7), ref, rtol=0, atol=tol)
+    np.testing.assert_allclose(fg.state_derivative(t, X0, 0.7), fm.state_derivative(t, X0, 0.7),
+                               rtol=0, atol=tol)
+    for a, b in zip(fg.matrices(40.0, static=True), fm.matrices(40.0, static=True), strict=True):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-13 * max(1.0, np.abs(b).max()))
+    s = fg.motion(X0, 0.7, 1, -1.0, general.stops.normal(2)).derivatives(t)
+    r = fm.motion(X0, 0.7, 1, -1.0, modal.stops.normal(2)).derivatives(t)
+    for a, b in zip(s, r, strict=True):
+        np.testing.assert_allclose(a, b, rtol=0, atol=tol)
+    # the time derivative and the omega partial are derivatives (central differences)
+    h = 1e-5
+    fd = (fg.state(t + h, X0, 0.7) - fg.state(t - h, X0, 0.7)) / (2 * h)
+    np.testing.assert_allclose(fg.state_derivative(t, X0, 0.7), fd, rtol=0,
+                               atol=1e-8 * np.abs(ref).max())
+    shifted = [Flow(general.replace(omega=general.omega + d)) for d in (h, -h)]
+    fd = (shifted[0].state(3.0, X0, 0.7)[0] - shifted[1].state(3.0, X0, 0.7)[0]) / (2 * h)
+    np.testing.assert_allclose(fg.omega_partial(3.0, X0, 0.7), fd, rtol=0, atol=1e-7)
 
 
 def test_closed_form_paths_refuse_free_masses():
