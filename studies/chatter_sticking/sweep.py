@@ -15,14 +15,16 @@ Each run is tabulated by how it ended (its status), its impacts, sticking phases
 accumulation points, and the largest excursion of every stop coordinate past every stop along
 the whole trajectory: the trajectory sampled densely between the events (``samples_per_period``
 samples a forcing period, both sides of each impact) and the state at every impact, at the
-start of every sticking phase and at every accumulation point. A run is capped in wall time
-(``--cap`` seconds, reported as its own status ``WALL_CAP``, with the forcing periods it
-reached) and in impacts (``max_impacts``, status ``MAX_IMPACTS``).
+start of every sticking phase and at every accumulation point. A run is capped in processor
+time (``--cap`` seconds of this process's CPU time, so that the cap means the same on a
+loaded machine; reported as its own status ``CPU_CAP``, with the forcing periods it reached)
+and in impacts (``max_impacts``, status ``MAX_IMPACTS``). Each run is written as a line of
+JSON to ``--log`` as it ends; ``--table-from`` tabulates such a file.
 
 Run (from a clean clone, as the README's table was made)::
 
-    python studies/chatter_sticking/sweep.py [--systems 480] [--periods 20]
-        [--bf-periods 200] [--cap 60]
+    python studies/chatter_sticking/sweep.py [--systems 480] [--periods 5]
+        [--bf-periods 20] [--cap 30] [--log runs.jsonl]
 """
 
 from __future__ import annotations
@@ -30,11 +32,13 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
+import json
 import logging
 import math
 import signal
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import numpy as np
 import scipy.linalg
@@ -51,8 +55,8 @@ VIOLATION_ULPS = 1024
 _EPS = float(np.finfo(float).eps)
 
 
-class WallCapError(Exception):
-    """A run reached its wall-time cap."""
+class CapError(Exception):
+    """A run reached its processor-time cap."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,7 +72,7 @@ class Run:
     violation: float  # the largest excursion past a stop (<= 0: none), over every stop
     allowed: float  # rounding of the stop coordinates (VIOLATION_ULPS ulps of their size)
     periods: float  # forcing periods simulated (less than asked at a cap)
-    seconds: float
+    seconds: float  # wall time
 
     @property
     def violates(self) -> bool:
@@ -207,25 +211,25 @@ def excursion(osc: ic.ImpactOscillator, res: ic.SimulationResult) -> tuple[float
 
 
 def _alarm(signum: int, frame: object) -> None:
-    raise WallCapError
+    raise CapError
 
 
 def run(kind: str, label: str, osc: ic.ImpactOscillator, X0: np.ndarray, delta: float,
         periods: float, cap: float, *, samples_per_period: int = 400,
         max_impacts: int = 200_000) -> Run:
-    """Simulate one machine (through chatter and sticking: ``stop_at`` empty) under a wall
-    cap of `cap` seconds, in slices of at most 10 forcing periods (so a capped run still
-    reports the periods it reached)."""
+    """Simulate one machine (through chatter and sticking: ``stop_at`` empty) under a cap of
+    `cap` seconds of processor time, in slices of at most 5 forcing periods (so a capped run
+    still reports the periods it reached)."""
     start = time.perf_counter()
-    previous = signal.signal(signal.SIGALRM, _alarm)
-    signal.setitimer(signal.ITIMER_REAL, cap)
+    previous = signal.signal(signal.SIGVTALRM, _alarm)
+    signal.setitimer(signal.ITIMER_VIRTUAL, cap)
     X, phase, done = np.asarray(X0, float), float(delta), 0.0
     impacts = sticking = chatter = 0
     worst, allowed = -math.inf, 0.0
     status = "COMPLETED"
     try:
         while done < periods * (1 - 1e-12):
-            span = min(10.0, periods - done)
+            span = min(5.0, periods - done)
             res = ic.simulate(osc, X, phase, span, trajectory=True,
                               samples_per_period=samples_per_period,
                               max_impacts=max(1, max_impacts - impacts))
@@ -240,14 +244,14 @@ def run(kind: str, label: str, osc: ic.ImpactOscillator, X0: np.ndarray, delta: 
             if not res.success:
                 status = res.status.name
                 break
-    except WallCapError:
-        status = "WALL_CAP"
+    except CapError:
+        status = "CPU_CAP"
     except Exception as exc:  # a finding: reported with its type, the sweep goes on
         log.error("%s %s: %s: %s", kind, label, type(exc).__name__, exc)
         status = f"ERROR ({type(exc).__name__})"
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, previous)
+        signal.setitimer(signal.ITIMER_VIRTUAL, 0.0)
+        signal.signal(signal.SIGVTALRM, previous)
     return Run(kind, label, status, impacts, sticking, chatter, worst, allowed, done,
                time.perf_counter() - start)
 
@@ -328,31 +332,56 @@ def main(argv: list[str] | None = None) -> None:
     """Run both sweeps and print their tables (markdown) and findings."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--systems", type=int, default=480)
-    parser.add_argument("--periods", type=float, default=20.0,
+    parser.add_argument("--periods", type=float, default=5.0,
                         help="forcing periods of each random machine")
-    parser.add_argument("--bf-periods", type=float, default=200.0,
+    parser.add_argument("--bf-periods", type=float, default=20.0,
                         help="forcing periods of each brute-force run")
-    parser.add_argument("--cap", type=float, default=60.0, help="wall seconds per run")
+    parser.add_argument("--cap", type=float, default=30.0,
+                        help="processor seconds per run")
     parser.add_argument("--seed", type=int, default=30)
     parser.add_argument("--skip-random", action="store_true")
     parser.add_argument("--skip-brute-force", action="store_true")
+    parser.add_argument("--log", type=Path, default=None,
+                        help="write each run as a line of JSON to this file as it ends")
+    parser.add_argument("--table-from", type=Path, default=None,
+                        help="only tabulate the runs of such a file")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR, format="%(message)s")
+    if args.table_from is not None:
+        runs = [Run(**json.loads(line)) for line in args.table_from.read_text().splitlines()]
+        for sweep in ("random", "brute force"):
+            part = [r for r in runs if (r.kind in CLASSES) == (sweep == "random")]
+            if part:
+                print(f"\n## {sweep}: {len(part)} runs\n")
+                print("\n".join([*table(part), "", *findings(part)]))
+        return
     start = time.perf_counter()
+    log_file = args.log.open("a") if args.log else None
+
+    def logged(runs: Iterator[Run]) -> list[Run]:
+        out = []
+        for r in runs:
+            out.append(r)
+            if log_file:
+                log_file.write(json.dumps(dataclasses.asdict(r)) + "\n")
+                log_file.flush()
+        return out
+
     if not args.skip_random:
-        runs = list(random_sweep(args.systems, args.periods, args.cap, args.seed))
+        runs = logged(random_sweep(args.systems, args.periods, args.cap, args.seed))
         print(f"\n## (a) {args.systems} random machines, {args.periods:g} forcing periods "
-              f"from a generic state (seed {args.seed}, cap {args.cap:g} s a run)\n")
+              f"from a generic state (seed {args.seed}, cap {args.cap:g} CPU s a run)\n")
         print("\n".join(table(runs)))
         print("\n".join(["", *findings(runs)]))
     if not args.skip_brute_force:
         omegas = np.round(np.linspace(0.2, 4.0, 39), 10)
-        runs = list(brute_force(args.bf_periods, args.cap, omegas))
+        runs = logged(brute_force(args.bf_periods, args.cap, omegas))
         print(f"\n## (b) brute force from rest, 39 omega in [0.2, 4], {args.bf_periods:g} "
-              f"forcing periods (cap {args.cap:g} s a run)\n")
+              f"forcing periods (cap {args.cap:g} CPU s a run)\n")
         print("\n".join(table(runs)))
         print("\n".join(["", *findings(runs)]))
-    print(f"\n(total {time.perf_counter() - start:.0f} s wall)")
+    print(f"\n(total {time.perf_counter() - start:.0f} s wall, "
+          f"{time.process_time():.0f} s CPU)")
 
 
 if __name__ == "__main__":
