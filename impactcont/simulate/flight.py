@@ -26,8 +26,22 @@ iterates). Where ``A = W diag(lambda) W^-1`` with a well-conditioned ``W``
 (:attr:`Flight.fast`) a stop coordinate ``y = r . Y`` is
 ``Re(sum_k c_k e^{lambda_k t})``, ``c_k = (r W)_k (W^-1 Y(0))_k``: O(N) per time
 (:class:`StopMotion`), to about ``cond(W)`` ulps at any t (the forcing's eigenvalues
-``+-i omega`` and 0 are set exactly). Where ``A`` is defective or nearly so (an undamped
-free mass, a free mass drifting under a constant force, a critically damped mode) every
+``+-i omega`` and 0 are set exactly).
+
+An undamped free mass makes A defective: a free mode ``u`` of the stiffness and damping
+blocks (``B_K u = 0``, ``B_C u = 0`` of ``x'' = B_K x + B_C x' + B_F [c; s; 1]``) has the
+double eigenvalue 0 with one eigenvector, and a constant force on it a third (``g t^2 /
+2``). Such modes split off exactly (:func:`_split_free`): with the left null rows ``U~``
+(``U~ B_K = 0``, ``U~ B_C = 0``, ``U~ U = I``) and ``P`` spanning ``U~ x = 0``, ``x = U q + P
+y`` gives ``q'' = U~ B_F [c; s; 1]`` and a reduced system in ``y`` alone, diagonalised as
+above. Then ``A = S + N`` (``S = W diag(lambda) W^-1``, ``N`` nilpotent, ``S N = N S = 0``)
+and the flow is ``e^{A t} = W diag(e^{lambda t}) W^-1 + t N + N^2 t^2 / 2``: in the modal
+coordinates ``zeta = W^-1 Y``, ``zeta_q(t) = zeta_q + t zeta_q' + t^2 H zeta / 2`` and
+``zeta_q'(t) = zeta_q' + t H zeta`` (``H zeta`` the constant force on q), the polynomial part
+of a stop coordinate O(1) per time beside the O(N) sum (:attr:`Flight.chains`).
+
+Where ``A`` is otherwise defective or nearly so (a damped free mass drifting under a
+constant force, a critically damped mode) every
 evaluation is a matrix exponential from an anchor a bounded time before it: scaling and
 squaring loses about ``log2 |A t|`` bits and the rotation of the forcing states would
 drift over a long flight, so a long advance is taken in steps of ``|A| dt <=
@@ -114,6 +128,145 @@ def _system_matrix(osc: ImpactOscillator) -> np.ndarray:
     return A
 
 
+def _eigen(A: np.ndarray, inner: int, omega: float
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, float, np.ndarray | None]:
+    """Eigenvalues, eigenvectors ``W``, ``W^-1`` (None off the fast path), the condition
+    number of W and the kinds of the modes (:func:`_mode_kinds`; None off the fast path)
+    of ``A`` on ``[x; x'; c; s; 1]`` with ``inner`` degrees of freedom."""
+    lam, W = scipy.linalg.eig(A)
+    condition = math.inf
+    W_inv = None
+    if np.all(np.isfinite(lam)) and np.all(np.isfinite(W)):
+        with np.errstate(all="ignore"):
+            condition = float(np.linalg.cond(W))
+        if math.isfinite(condition) and condition <= _COND_LIMIT:
+            W_inv = np.linalg.inv(W)
+    if W_inv is None:
+        return lam, W, None, condition, None
+    # the forcing's eigenvalues are known exactly (the rotation c' = -omega s,
+    # s' = omega c and the constant 1' = 0): the computed ones carry an error of
+    # about eps |A|, a phase error growing with t (relative 1e-7 at omega = 1e-8)
+    kinds = _mode_kinds(lam, W, inner, condition, omega)
+    signs = np.sign(lam[kinds == 1].imag)
+    if sorted(signs) != [-1.0, 1.0]:  # the forcing pair not told apart from the modes
+        return lam, W, None, condition, None
+    lam = lam.copy()
+    lam[kinds == 1] = 1j * omega * signs
+    lam[kinds == 0] = 0.0
+    return lam, W, W_inv, condition, kinds
+
+
+def _mode_kinds(lam: np.ndarray, W: np.ndarray, inner: int, condition: float,
+                omega: float) -> np.ndarray:
+    """Each eigenvalue's part in the motion: 1 forced (the pair ``+-i omega``, whose
+    eigenvectors carry the forcing states c, s), 0 constant (``lambda = 0``), -1 free.
+
+    A is block upper-triangular (the forcing states evolve on their own), so the
+    eigenvectors of the oscillator's own modes vanish on ``c, s`` and those of the
+    forcing pair do not: the pair is the two eigenvectors of largest weight there.
+    """
+    N = W.shape[0]
+    kinds = -np.ones(N, dtype=np.int64)
+    m = 2 * inner
+    share = np.linalg.norm(W[m:m + 2], axis=0) / np.linalg.norm(W, axis=0)
+    kinds[np.argsort(share)[-2:]] = 1
+    size = max(float(np.abs(lam).max()), omega)
+    zero = np.abs(lam) <= 64.0 * _EPS * condition * size
+    kinds[zero & (kinds < 0)] = 0
+    return kinds
+
+
+def _null_rows(B: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (rows) of the left null space of ``B`` (rows r with ``r B = 0``
+    to rounding: singular values below ``64 eps`` of the largest times the size)."""
+    if not B.size:
+        return np.eye(B.shape[0])
+    u, sv, _ = np.linalg.svd(B)
+    tol = 64.0 * _EPS * max(B.shape) * max(float(sv[0]) if sv.size else 0.0, _EPS)
+    rank = int(np.sum(sv > tol))
+    return u[:, rank:].T
+
+
+def _split_free(A: np.ndarray, inner: int, omega: float) -> dict[str, Any] | None:
+    """The fast path of an ``A`` made defective by undamped free modes (module docstring).
+
+    Returns
+    -------
+    dict or None
+        ``eigenvalues, W, W_inv, condition`` of ``S`` and ``chains = (iq, iv, H)``: the
+        columns ``e_q``, ``e_q'`` of the free modes in W and the matrix ``H`` (m, N) of
+        the constant force on them (``zeta_q'(t) = zeta_q' + t H zeta``); None when there is
+        no undamped free mode or the reduced system is itself defective.
+    """
+    r = inner
+    B_K, B_C, B_F = A[r:2 * r, :r], A[r:2 * r, r:2 * r], A[r:2 * r, 2 * r:]
+    left = _null_rows(np.hstack([B_K, B_C]))  # U~ (m, r): U~ B_K = 0, U~ B_C = 0
+    right = _null_rows(np.vstack([B_K, B_C]).T).T  # U (r, m): B_K U = 0, B_C U = 0
+    m = left.shape[0]
+    if m == 0 or right.shape[1] != m:
+        return None
+    gram = left @ right
+    if np.linalg.cond(gram) > 1.0 / math.sqrt(_EPS):
+        return None
+    left = np.linalg.solve(gram, left)  # U~ U = I
+    P = _null_rows(left.T).T  # (r, r - m): U~ P = 0
+    basis = np.hstack([right, P])
+    inverse = np.linalg.inv(basis)
+    P_left = inverse[m:]  # P~ (r - m, r): P~ U = 0, P~ P = I
+    k = r - m
+    A_r = np.zeros((2 * k + 3, 2 * k + 3))
+    A_r[:k, k:2 * k] = np.eye(k)
+    A_r[k:2 * k, :k] = P_left @ B_K @ P
+    A_r[k:2 * k, k:2 * k] = P_left @ B_C @ P
+    A_r[k:2 * k, 2 * k:] = P_left @ B_F
+    A_r[2 * k:, 2 * k:] = A[2 * r:, 2 * r:]
+    lam_r, W_r, W_r_inv, _, kinds = _eigen(A_r, k, omega)
+    if W_r_inv is None:
+        return None
+    drive = left @ B_F  # q'' = drive [c; s; 1]
+    h = drive @ W_r[2 * k:]  # (m, 2k + 3): the drive of each reduced mode
+    still = kinds == 0
+    N_r = 2 * k + 3
+    # W_Z on Z = [q; q'; y; y'; c; s; 1]: [[I, Q], [0, W_r]], Q the free modes' part of each
+    # reduced eigenvector (q = h / lambda^2, q' = h / lambda; none for lambda = 0: its
+    # drive is the chain's H)
+    Q = np.zeros((2 * m, N_r), dtype=complex)
+    moving = ~still
+    Q[:m, moving] = h[:, moving] / lam_r[moving] ** 2
+    Q[m:, moving] = h[:, moving] / lam_r[moving]
+    N = 2 * r + 3
+    W_Z = np.zeros((N, N), dtype=complex)
+    W_Z[:2 * m, :2 * m] = np.eye(2 * m)
+    W_Z[:2 * m, 2 * m:] = Q
+    W_Z[2 * m:, 2 * m:] = W_r
+    W_Z_inv = np.zeros((N, N), dtype=complex)
+    W_Z_inv[:2 * m, :2 * m] = np.eye(2 * m)
+    W_Z_inv[:2 * m, 2 * m:] = -Q @ W_r_inv
+    W_Z_inv[2 * m:, 2 * m:] = W_r_inv
+    # Y = L Z, Z = L^-1 Y
+    L = np.zeros((N, N))
+    L[:r, :m] = right
+    L[r:2 * r, m:2 * m] = right
+    L[:r, 2 * m:2 * m + k] = P
+    L[r:2 * r, 2 * m + k:2 * m + 2 * k] = P
+    L[2 * r:, 2 * r:] = np.eye(3)
+    L_inv = np.zeros((N, N))
+    L_inv[:m, :r] = left
+    L_inv[m:2 * m, r:2 * r] = left
+    L_inv[2 * m:2 * m + k, :r] = P_left
+    L_inv[2 * m + k:2 * m + 2 * k, r:2 * r] = P_left
+    L_inv[2 * r:, 2 * r:] = np.eye(3)
+    W = L @ W_Z
+    W_inv = W_Z_inv @ L_inv
+    H = np.zeros((m, N), dtype=complex)
+    H[:, 2 * m:] = np.where(still, h, 0.0)
+    with np.errstate(all="ignore"):
+        condition = float(np.linalg.cond(W))
+    return {"eigenvalues": np.concatenate([np.zeros(2 * m, dtype=complex), lam_r]), "W": W,
+            "W_inv": W_inv, "condition": condition,
+            "chains": (np.arange(m), np.arange(m, 2 * m), H)}
+
+
 class Flight:
     """The exact flow of eq. (1) between impacts, ``Y(t) = expm(A t) Y(0)``.
 
@@ -136,11 +289,16 @@ class Flight:
     eigenvalues : ndarray, complex, shape (2n+3,)
         Eigenvalues of A (the oscillator's, ``+-i omega`` and 0): the time scales.
     fast : bool
-        A is diagonalised by eigenvectors of condition number at most ``_COND_LIMIT``: stop
+        A is diagonalised by eigenvectors of condition number at most ``_COND_LIMIT`` (or
+        is so after its undamped free modes are split off, :attr:`chains`): stop
         coordinates are evaluated from the eigenvalues, O(N) per time. Otherwise every
         evaluation is a matrix exponential.
     condition : float
         Condition number of the eigenvectors (``inf`` when A is defective in rounding).
+    chains : tuple or None
+        The undamped free modes' polynomial part on the fast path (module docstring):
+        ``(iq, iv, H)``, the columns ``e_q``, ``e_q'`` of W and the constant force's ``H``;
+        None without one.
     """
 
     def __init__(self, osc: ImpactOscillator) -> None:
@@ -161,34 +319,20 @@ class Flight:
         self.inner = (A.shape[0] - 3) // 2  # r: degrees of freedom of the internal state
         self.lift, self.restrict = lift, restrict
         self.norm = float(np.linalg.norm(self.A, 1))
-        lam, W = scipy.linalg.eig(self.A)
+        lam, W, W_inv, condition, kinds = _eigen(A, self.inner, self.omega)
+        self.chains: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        if W_inv is None and self.inner:
+            split = _split_free(A, self.inner, self.omega)
+            if split is not None and split["condition"] <= _COND_LIMIT:
+                lam, W, W_inv = split["eigenvalues"], split["W"], split["W_inv"]
+                condition, self.chains = split["condition"], split["chains"]
         self.eigenvalues = lam
-        condition = math.inf
-        W_inv = None
-        if np.all(np.isfinite(lam)) and np.all(np.isfinite(W)):
-            with np.errstate(all="ignore"):
-                condition = float(np.linalg.cond(W))
-            if math.isfinite(condition) and condition <= _COND_LIMIT:
-                W_inv = np.linalg.inv(W)
         self.condition = condition
         self.fast = W_inv is not None
         self.W, self.W_inv = W, W_inv
         # the eigenvectors read in the oscillator's coordinates [x; x'; c; s; 1]
         self.W_out = W if lift is None else lift @ W
-        self._kinds: np.ndarray | None = None
-        if self.fast:
-            # the forcing's eigenvalues are known exactly (the rotation c' = -omega s,
-            # s' = omega c and the constant 1' = 0): the computed ones carry an error of
-            # about eps |A|, a phase error growing with t (relative 1e-7 at omega = 1e-8)
-            kinds = self._mode_kinds()
-            signs = np.sign(lam[kinds == 1].imag)
-            if sorted(signs) == [-1.0, 1.0]:
-                lam = lam.copy()
-                lam[kinds == 1] = 1j * self.omega * signs
-                lam[kinds == 0] = 0.0
-                self.eigenvalues, self._kinds = lam, kinds
-            else:  # the forcing pair not told apart from the oscillator's modes
-                self.fast, self.W_inv = False, None
+        self._kinds = kinds if self.chains is None else None  # (no envelope of a drift)
         self._scales: dict[bytes, tuple[float, float]] = {}
 
     # -- states -------------------------------------------------------------------------------
@@ -252,6 +396,20 @@ class Flight:
             out[k:k + step] = _combine(rotations, table).real
         return out
 
+    def polynomial(self, weights: np.ndarray, modal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The polynomial part ``p1 t + p2 t^2 / 2`` of linear functions of the state on the
+        fast path with :attr:`chains` (zeros without): `weights` (m, N) the functions' rows
+        times W, `modal` (N,) the start's ``W^-1 Y(0)``; ``p1 = w_q zeta_q' + w_q' H zeta``,
+        ``p2 = w_q H zeta`` (module docstring). Returns ``p1, p2``, each (m,)."""
+        if self.chains is None:
+            zeros = np.zeros(weights.shape[0])
+            return zeros, zeros
+        iq, iv, H = self.chains
+        drive = H @ modal  # the constant force on each free mode
+        p1 = (weights[:, iq] @ modal[iv] + weights[:, iv] @ drive).real
+        p2 = (weights[:, iq] @ drive).real
+        return p1, p2
+
     def samples(self, t: Any, X: np.ndarray, phase: float) -> np.ndarray:
         """The state ``[x; x']`` at sorted times `t` after a start at state X and phase,
         shape (nt, 2n): from the eigenvalues on the fast path, else by matrix exponentials
@@ -267,7 +425,12 @@ class Flight:
         rows = np.atleast_2d(np.asarray(rows, dtype=float))
         Y = self.start(X, phase)
         if self.fast:
-            return self.modal_sum(t, (self.W_inv @ Y)[:, None] * (rows @ self.W).T)
+            modal, weights = self.W_inv @ Y, rows @ self.W
+            out = self.modal_sum(t, modal[:, None] * weights.T)
+            if self.chains is not None:
+                p1, p2 = self.polynomial(weights, modal)
+                out += np.multiply.outer(t, p1) + np.multiply.outer(0.5 * t * t, p2)
+            return out
         out = np.empty((t.size, rows.shape[0]))
         span = _STEP_NORM / max(self.norm, _EPS)
         origin, i = 0.0, 0
@@ -329,22 +492,8 @@ class Flight:
 
     # -- the modes of the envelope ------------------------------------------------------------
     def _mode_kinds(self) -> np.ndarray:
-        """Each eigenvalue's part in the motion: 1 forced (the pair ``+-i omega``, whose
-        eigenvectors carry the forcing states c, s), 0 constant (``lambda = 0``), -1 free.
-
-        A is block upper-triangular (the forcing states evolve on their own), so the
-        eigenvectors of the oscillator's own modes vanish on ``c, s`` and those of the
-        forcing pair do not: the pair is the two eigenvectors of largest weight there.
-        """
-        N = self.A.shape[0]
-        kinds = -np.ones(N, dtype=np.int64)
-        m = 2 * self.inner
-        share = np.linalg.norm(self.W[m:m + 2], axis=0) / np.linalg.norm(self.W, axis=0)
-        kinds[np.argsort(share)[-2:]] = 1
-        size = max(float(np.abs(self.eigenvalues).max()), self.omega)
-        zero = np.abs(self.eigenvalues) <= 64.0 * _EPS * self.condition * size
-        kinds[zero & (kinds < 0)] = 0
-        return kinds
+        """:func:`_mode_kinds` of this flight's eigenvalues and eigenvectors."""
+        return _mode_kinds(self.eigenvalues, self.W, self.inner, self.condition, self.omega)
 
 
 class StopMotion:
@@ -390,10 +539,15 @@ class StopMotion:
             rows.append(rows[-1] @ flight.A)
         self.rows = np.array(rows)  # r A^j, j = 0..3: the exact derivatives
         self.origin, self.Y_origin = 0.0, Y0  # the anchor of the slow path
+        self.p1 = self.p2 = 0.0  # the polynomial part p1 t + p2 t^2 / 2 (Flight.chains)
         if flight.fast:
             self.modal = flight.W_inv @ Y0
-            self.weights = (r @ flight.W) * self.modal
+            row_w = r @ flight.W
+            self.weights = row_w * self.modal
             self.table = self.weights[:, None] * flight.eigenvalues[:, None] ** np.arange(4)
+            if flight.chains is not None:
+                p1, p2 = flight.polynomial(row_w[None, :], self.modal)
+                self.p1, self.p2 = float(p1[0]), float(p2[0])
 
     def __call__(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``y, y', y''`` at times `t` (each shape (nt,))."""
@@ -405,6 +559,10 @@ class StopMotion:
         fl = self.flight
         if fl.fast:
             values = fl.modal_sum(t, self.table)
+            if fl.chains is not None:
+                values[:, 0] += (self.p1 + 0.5 * self.p2 * t) * t
+                values[:, 1] += self.p1 + self.p2 * t
+                values[:, 2] += self.p2
         else:
             values = _combine(fl.propagate(t - self.origin, self.Y_origin), self.rows.T)
         return values[:, 0], values[:, 1], values[:, 2], values[:, 3]
@@ -421,7 +579,12 @@ class StopMotion:
         fl = self.flight
         m = 2 * fl.n
         if fl.fast:
-            return fl.modal_sum(np.array([float(t)]), self.modal[:, None] * fl.W_out[:m].T)[0]
+            t = float(t)
+            out = fl.modal_sum(np.array([t]), self.modal[:, None] * fl.W_out[:m].T)[0]
+            if fl.chains is not None:
+                p1, p2 = fl.polynomial(fl.W_out[:m], self.modal)
+                out += (p1 + 0.5 * p2 * t) * t
+            return out
         theta = self.phase + fl.omega * self.origin
         return fl.outer(fl.advance(self.Y_origin, float(t) - self.origin, theta))
 
