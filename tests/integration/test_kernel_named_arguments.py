@@ -27,7 +27,7 @@ ROOT = Path(ic.__file__).parent
 #: arrays one by one.)
 KERNEL = ("kernel/shooting.py", "kernel/sweep.py", "kernel/flights.py", "kernel/arrays.py")
 CALLERS = ("orbit/multi_impact.py", "orbit/flow.py", "orbit/symmetry.py",
-           "problems/multi_impact_branch.py", "problems/multi_impact_curve.py",
+           "problems/multi_impact_branch.py", "problems/codim1.py",
            "problems/symmetric_branch.py", "detection/multi_impact.py",
            "analysis/multi_maps.py")
 MAX_PARAMETERS = 12
