@@ -477,12 +477,26 @@ _N1_KINDS = tuple(kind for kind in CURVE_KINDS if kind is not Label.BP)
 def curve_kind(kind: object, argument: str = "kind", kinds: tuple[Label, ...] = _N1_KINDS
                ) -> Label:
     """`kind` (a :class:`~impactcont.vocabulary.Label` or its string) as the Label of a kind
-    of curve, one of `kinds` (by default those of N-1 motions: every curve kind but BP).
+    of curve.
+
+    Parameters
+    ----------
+    kind : Label or str
+        The kind given.
+    argument : str
+        The name of the argument in the messages.
+    kinds : tuple of Label
+        The kinds allowed; by default those of N-1 motions (every curve kind but BP,
+        which is a curve of symmetric motions only).
+
+    Returns
+    -------
+    Label
 
     Raises
     ------
     ParameterError
-        Naming `argument`, the value and the kinds allowed.
+        `kind` is not one of `kinds` (naming `argument`, the value and the kinds allowed).
     """
     if not isinstance(kind, str) or kind not in kinds:
         raise ParameterError(f"{argument} must be one of {tuple(map(str, kinds))}; got "
