@@ -256,14 +256,18 @@ def run(kind: str, label: str, osc: ic.ImpactOscillator, X0: np.ndarray, delta: 
                time.perf_counter() - start)
 
 
-def random_sweep(systems: int, periods: float, cap: float, seed: int = 30
-                 ) -> Iterator[Run]:
-    """Sweep (a): `systems` random machines, the classes in turn, `periods` periods each."""
+def random_sweep(systems: int, periods: float, cap: float, seed: int = 30,
+                 part: tuple[int, int] | None = None) -> Iterator[Run]:
+    """Sweep (a): `systems` random machines, the classes in turn, `periods` periods each;
+    only the machines ``part[0] <= i < part[1]`` if `part` is given (the same machines as
+    in the whole sweep: every machine is drawn, in order, from the one seeded generator)."""
     rng = np.random.default_rng(seed)
+    first, last = part if part is not None else (0, systems)
     for i in range(systems):
         kind = CLASSES[i % len(CLASSES)]
         osc, X0, delta = random_machine(kind, rng)
-        yield run(kind, f"#{i}", osc, X0, delta, periods, cap)
+        if first <= i < last:
+            yield run(kind, f"#{i}", osc, X0, delta, periods, cap)
 
 
 def paper_b01(omega: float) -> ic.ImpactOscillator:
@@ -339,6 +343,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--cap", type=float, default=30.0,
                         help="processor seconds per run")
     parser.add_argument("--seed", type=int, default=30)
+    parser.add_argument("--part", type=int, nargs=2, default=None, metavar=("FIRST", "STOP"),
+                        help="run only the random machines FIRST <= i < STOP (a sweep split "
+                             "over processes; --table-from joins their logs)")
     parser.add_argument("--skip-random", action="store_true")
     parser.add_argument("--skip-brute-force", action="store_true")
     parser.add_argument("--log", type=Path, default=None,
@@ -368,7 +375,8 @@ def main(argv: list[str] | None = None) -> None:
         return out
 
     if not args.skip_random:
-        runs = logged(random_sweep(args.systems, args.periods, args.cap, args.seed))
+        runs = logged(random_sweep(args.systems, args.periods, args.cap, args.seed,
+                                   args.part))
         print(f"\n## (a) {args.systems} random machines, {args.periods:g} forcing periods "
               f"from a generic state (seed {args.seed}, cap {args.cap:g} CPU s a run)\n")
         print("\n".join(table(runs)))
