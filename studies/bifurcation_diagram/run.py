@@ -1012,6 +1012,9 @@ def _draw_gap(ax: Any, b: float, branches: dict[str, xr.Dataset],
             line.set_color(N_COLORS[N])
             if line.get_markeredgecolor() != NONPHYSICAL_GREY:  # special points: colour of N
                 line.set_markeredgecolor(N_COLORS[N])
+            if line.get_linestyle() in ("None", "none", " ", ""):
+                # open: a special point drawn over the simulated points hides none of them
+                line.set_markerfacecolor("none")
     if bf is not None:
         sel = bf.sel(gap=b)
         for sweep_name in SWEEP_STYLES:
@@ -1029,43 +1032,86 @@ def _sweeps(ax: Any, b: float, bf: xr.Dataset) -> None:
     for sweep_name, style in SWEEP_STYLES.items():
         v = sel["impact_velocity"].sel(sweep=sweep_name).values
         w = np.broadcast_to(sel["omega"].values[:, None], v.shape)
+        # smaller at one column (area in proportion to the width): at 3.5 in, markers of
+        # the full size buried the special points in the windows between N-1 windows
+        style = {**style, "s": style["s"] * min(1.0, ax.figure.get_figwidth() / 7.0)}
         ok = np.isfinite(v) & inside_frame(ax, w, v, math.sqrt(style["s"]))
         ax.scatter(w[ok], v[ok], zorder=1, **style)
 
 
-def _label_all(ax: Any, named_in: tuple[tuple[float, float], tuple[float, float]] | None = None
-               ) -> None:
-    """One labelling of every special point drawn on ``ax`` (all N together: labels of one
-    N placed before the next N was drawn covered its points).
+def _nest_coincident(ax: Any, shrink: float = 0.7) -> None:
+    """Special points drawn at one place (closer than a third of a marker) become one
+    combined marker: each later one is drawn ``shrink`` times smaller inside the one
+    before, so that none hides another.
 
-    ``named_in`` (``(omega range, v range)`` of the zoom panel): the points in it are named
-    there, not on ``ax``, where they crowd into a few points and their merged label
-    covered the markers around.
+    At b = 0.5 the ZV points of N = 1 and N = 3 are one point (omega = 1.213462, v = 0,
+    see the README); drawn alike in size, the later marker hid the earlier. Call it on a
+    laid-out figure.
     """
+    ax.figure.draw_without_rendering()
+    names = {str(MarkerStyle(m).get_marker()) for m in SPECIAL_MARKERS.values()}
+    lines = [line for line in ax.get_lines() if str(line.get_marker()) in names
+             and line.get_linestyle() in ("None", "none", " ", "")]
+    placed: list[tuple[np.ndarray, float]] = []  # (display centre, marker size) drawn so far
+    for line in lines:
+        xy = np.asarray(line.get_xydata(), dtype=float)
+        keep = np.ones(len(xy), dtype=bool)
+        size = line.get_markersize()
+        for k, p in enumerate(ax.transData.transform(xy)):
+            if not np.all(np.isfinite(p)):
+                continue
+            near = [s for c, s in placed if np.hypot(*(p - c)) * 72.0 / ax.figure.dpi
+                    < min(s, size) / 3.0]
+            if near:  # inside the smallest marker already there
+                keep[k] = False
+                small = shrink * min(near)
+                ax.plot(*xy[k], linestyle="none", marker=line.get_marker(), markersize=small,
+                        color=line.get_color(), markeredgecolor=line.get_markeredgecolor(),
+                        markerfacecolor=line.get_markerfacecolor(),
+                        markeredgewidth=line.get_markeredgewidth() * shrink,
+                        zorder=line.get_zorder(), clip_on=line.get_clip_on())
+                placed.append((p, small))
+            else:
+                placed.append((p, size))
+        if not keep.all():
+            line.set_data(xy[keep, 0], xy[keep, 1])
+
+
+def _label_all(ax: Any) -> None:
+    """One labelling of every special point drawn on ``ax`` (all N together: labels of one
+    N placed before the next N was drawn covered its points)."""
     names = {str(MarkerStyle(m).get_marker()): lab for lab, m in SPECIAL_MARKERS.items()}
+    x0, x1 = sorted(ax.get_xlim())
+    y0, y1 = sorted(ax.get_ylim())
     points = []
     for line in ax.get_lines():
         lab = names.get(str(line.get_marker()))
         if lab is None or line.get_markeredgecolor() == NONPHYSICAL_GREY \
                 or line.get_linestyle() not in ("None", "none", " ", ""):
             continue
-        x0, x1 = sorted(ax.get_xlim())
-        y0, y1 = sorted(ax.get_ylim())
         points += [(float(x), float(y), lab) for x, y in line.get_xydata()
-                   if x0 <= x <= x1 and y0 <= y <= y1 and not (
-                       named_in is not None and named_in[0][0] <= x <= named_in[0][1]
-                       and named_in[1][0] <= y <= named_in[1][1])]
-    # at one column, "small" labels crowd the diagram's clusters
+                   if x0 <= x <= x1 and y0 <= y <= y1]
+    # at one column, "small" labels crowd the panel
     label_specials(ax, points, zoom=False,
                    fontsize="x-small" if ax.figure.get_figwidth() < 5.0 else "small")
 
 
 def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tuple[str, float]],
                bf: xr.Dataset | None, width: float = 7.0) -> Figure:
-    """Branches of one gap (colour per N) with the brute-force points, special points labelled.
+    """Branches of one gap (colour per N) with the brute-force points and special points.
 
-    Only the special points of the table (physical parts) are marked; a zoom panel is
-    added under the diagram where they crowd (:data:`ZOOMS`); one legend under both.
+    Only the special points of the table (physical parts) are marked, their kind by the
+    marker's shape and their N by its colour, both named in the legend; points at one
+    place are one combined marker (each inside the one before). A zoom panel is added
+    under the diagram where they crowd (:data:`ZOOMS`), and names them there; one legend
+    under both.
+
+    Notes
+    -----
+    The diagram itself carries no text labels: on a full run's sweeps (120 omega values,
+    every impact of 30 periods) the simulated points fill the windows between the N-1
+    windows where the grazings and period doublings lie, and a label there covered them
+    (98 simulated points under the GR labels at b = 0, 7 in).
     """
     if not 2.0 <= width <= MAX_WIDTH:
         raise ValueError(f"width must be in [2, {MAX_WIDTH}] inches; got {width!r}")
@@ -1088,7 +1134,7 @@ def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tupl
     handles = [Line2D([], [], color=N_COLORS[N], label=f"$N = {N}$") for N in N_VALUES]
     handles += [Line2D([], [], color="0.2", label=kind, **style)  # a style in any colour
                 for kind, style in SEGMENT_STYLES.items()]
-    handles += [Line2D([], [], linestyle="none", marker=m, markerfacecolor="white",
+    handles += [Line2D([], [], linestyle="none", marker=m, markerfacecolor="none",
                        markeredgecolor="black", label=f"{lab} {SPECIAL_NAMES[lab]}")
                 for lab, m in SPECIAL_MARKERS.items() if lab in labels]
     if bf is not None:
@@ -1114,11 +1160,11 @@ def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tupl
                                                                         else 1.6))
     for a in axes:  # the layout is final
         markers_whole(a)
+        _nest_coincident(a)
         if bf is not None:
             _sweeps(a, b, bf)
-    for a in axes:  # the zoom's limits are final
-        _label_all(a, None if a is not ax or zoom is None else
-                   (axes[1].get_xlim(), axes[1].get_ylim()))
+    if zoom is not None:  # the zoom's limits are final
+        _label_all(axes[1])
     if zoom is not None:
         (x0, x1), (y0, y1) = axes[1].get_xlim(), axes[1].get_ylim()
         ax.indicate_inset((x0, y0, x1 - x0, y1 - y0), edgecolor="0.4")
