@@ -294,12 +294,19 @@ BRUTE_FORCE: dict[str, Callable[[float], ic.ImpactOscillator]] = {
     "preloaded oscillator": preloaded}
 
 
-def brute_force(periods: float, cap: float, omegas: np.ndarray) -> Iterator[Run]:
-    """Sweep (b): each system of :data:`BRUTE_FORCE` from rest at every omega."""
+def brute_force(periods: float, cap: float, omegas: np.ndarray,
+                part: tuple[int, int] | None = None) -> Iterator[Run]:
+    """Sweep (b): each system of :data:`BRUTE_FORCE` from rest at every omega; only the
+    runs ``part[0] <= i < part[1]`` of that order if `part` is given."""
+    first, last = part if part is not None else (0, len(BRUTE_FORCE) * omegas.size)
+    i = 0
     for name, make in BRUTE_FORCE.items():
         for omega in omegas:
-            osc = make(float(omega))
-            yield run(name, f"omega={omega:.1f}", osc, np.zeros(2 * osc.n), 0.0, periods, cap)
+            if first <= i < last:
+                osc = make(float(omega))
+                yield run(name, f"omega={omega:.1f}", osc, np.zeros(2 * osc.n), 0.0, periods,
+                          cap)
+            i += 1
 
 
 def table(runs: list[Run]) -> list[str]:
@@ -346,6 +353,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--part", type=int, nargs=2, default=None, metavar=("FIRST", "STOP"),
                         help="run only the random machines FIRST <= i < STOP (a sweep split "
                              "over processes; --table-from joins their logs)")
+    parser.add_argument("--bf-part", type=int, nargs=2, default=None, metavar=("FIRST", "STOP"),
+                        help="run only the brute-force runs FIRST <= i < STOP (of the 3 x 39)")
     parser.add_argument("--skip-random", action="store_true")
     parser.add_argument("--skip-brute-force", action="store_true")
     parser.add_argument("--log", type=Path, default=None,
@@ -383,7 +392,7 @@ def main(argv: list[str] | None = None) -> None:
         print("\n".join(["", *findings(runs)]))
     if not args.skip_brute_force:
         omegas = np.round(np.linspace(0.2, 4.0, 39), 10)
-        runs = logged(brute_force(args.bf_periods, args.cap, omegas))
+        runs = logged(brute_force(args.bf_periods, args.cap, omegas, args.bf_part))
         print(f"\n## (b) brute force from rest, 39 omega in [0.2, 4], {args.bf_periods:g} "
               f"forcing periods (cap {args.cap:g} CPU s a run)\n")
         print("\n".join(table(runs)))
