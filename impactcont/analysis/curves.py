@@ -254,15 +254,17 @@ def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
 
 # -- continuation -------------------------------------------------------------------------------
 class _CurveWatch:
-    """The stop rule of one direction of a curve: its ends and the bounds of ``p1``.
+    """The stop rule of one direction of a curve (either evaluator): its ends and the
+    bounds of ``p1``.
 
     A curve ends at a codim-2 point (GR+ZV on a grazing curve, R1/R2 on a
-    Neimark-Sacker curve), recorded in ``ends`` as ``(label, x, precision,
-    status)``; the located end replaces the last point. ``p1`` is an unknown,
-    so the core does not see its bounds: the point on the bound ends the curve.
+    Neimark-Sacker curve of the closed form), recorded in ``ends`` as ``(label, x,
+    precision, status)``; the located end replaces the last point. ``p1`` is an unknown,
+    so the core does not see its bounds: the point on the bound (Newton on the
+    hyperplane ``p1 = bound``) ends the curve.
     """
 
-    def __init__(self, problem: CurveProblem, p1_bounds: tuple[float, float],
+    def __init__(self, problem: CurveProblem | ShootingCurve, p1_bounds: tuple[float, float],
                  ends: list[tuple[str, np.ndarray, float, str]]) -> None:
         self.problem = problem
         self.p1_bounds = p1_bounds
@@ -307,12 +309,14 @@ class _CurveWatch:
             return Stop(ContinuationStatus.CURVE_END, f"at {label}: {p1}={xe[0]:.10g}, "
                         f"{p2}={xe[-1]:.10g}", point=_on_curve(current, xe))
         lo, hi = self.p1_bounds
-        if lo <= x[0] <= hi:
+        i = problem.p1_index  # where p1 is in x
+        if lo <= x[i] <= hi:
             return None
-        bound = lo if x[0] < lo else hi
+        bound = lo if x[i] < lo else hi
+        guess = xa + (bound - xa[i]) / (x[i] - xa[i]) * (x - xa)
+        guess[i] = bound
         try:
-            xe = problem.solve(xa + (bound - xa[0]) / (x[0] - xa[0]) * (x - xa),
-                               lambda y, v=bound: float(y[0] - v), np.eye(x.size)[0])
+            xe = problem.on_hyperplane(guess, np.eye(x.size)[i])
         except NewtonConvergenceError as exc:
             return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} bound {bound:.10g} crossed, "
                         f"point on it not found ({exc})", keep=False)
@@ -495,27 +499,6 @@ def _check_motion_parameters(osc: ImpactOscillator, parameters: tuple[str, ...]
     return str(p1), str(p2)
 
 
-class _Box:
-    """Ends a direction of a shooting curve where ``p1`` leaves its bounds (``p1`` is an
-    unknown: the core sees only the bounds of ``p2``); keeps the motion of every accepted
-    point."""
-
-    def __init__(self, problem: ShootingCurve, p1_bounds: tuple[float, float]) -> None:
-        self.problem, self.p1_bounds = problem, p1_bounds
-        self.orbits: list[Any] = []
-
-    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
-                 ) -> Stop | None:
-        p1 = float(current.u[-1])
-        lo, hi = self.p1_bounds
-        if not lo <= p1 <= hi:
-            return Stop(ContinuationStatus.BOUNDS_REACHED,
-                        f"{self.problem.parameters[0]} = {p1:.10g} left its bounds "
-                        f"({lo:g}, {hi:g})", keep=False)
-        self.orbits.append(self.problem.orbit(current.u, current.lam))
-        return None
-
-
 def _shooting_start(kind: Label, start: xr.Dataset | MultiImpactOrbit, which: int
                     ) -> tuple[MultiImpactOrbit, bool]:
     """The motion a shooting curve starts from and whether it is followed by its half."""
@@ -568,23 +551,16 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
                                     f"on the augmented system (last step {found.last_step:.3g})")
     x0 = found.x[:-1]
     opts = driver_options(options, box[parameter], defaults=_SHOOTING_DEFAULTS, **single)
-    watches: dict[int, _Box] = {}
-
-    def watch(direction: int) -> _Box:
-        watches[direction] = _Box(problem, box[p1])
-        return watches[direction]
-
     what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
     with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
-        result = follow(problem, x0, lam0, opts, rep.point, stop=watch)
-        # Ctrl-C can end a run between a watch's orbit and the core's taking of the point
-        orbits = watches[opts.direction].orbits[:len(result) - result.start_index]
-        if -opts.direction in watches:
-            orbits = watches[-opts.direction].orbits[result.start_index:0:-1] + orbits
-        if not orbits and result.interrupted:
+        result = follow(problem, x0, lam0, opts, rep.point,
+                        stop=lambda direction: _CurveWatch(problem, box[p1], []))
+        if len(result) == 0 and result.interrupted:
             raise NothingComputed(f"{what} interrupted before its first point")
-        if not orbits:
+        if len(result) == 0:
             raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
+        orbits = [problem.orbit(u, float(lam)) for u, lam in zip(result.u, result.lam,
+                                                                 strict=True)]
         samples = [MultiImpactSample(u=x, lam=float(lam), tangent=t, orbit=o)
                    for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
                                            strict=True)]

@@ -396,6 +396,8 @@ class CurveProblem:
     """
 
     kind: Label
+    p1_index: int = 0
+    """Where ``p1`` is in a curve point ``x = [p1, delta, extras, p2]``."""
     extra_names: tuple[str, ...] = ()
     codim2_tests: tuple[Label, ...] = ()
     """The other kinds whose test functions are watched along the curve (the table of

@@ -337,6 +337,14 @@ class ShootingCurve:
         self.last_step = float(found.last_step)
         return found.x
 
+    #: Where ``p1`` is in a curve point ``x = [u, p1, p2]``.
+    p1_index = -2
+
+    def terminal_event(self, xa: np.ndarray, xb: np.ndarray) -> None:
+        """None: a curve followed by shooting has no end of its own between two points
+        (its codim-2 points are located after it, :mod:`impactcont.detection.codim2`)."""
+        return None
+
     def end_resonance(self, x: np.ndarray) -> Label | None:
         """None: a curve of N-p motions has no end of its own at a strong resonance (an NS
         curve goes on as a neutral saddle; its R1/R2 are the zeros of its SN/PD tests)."""

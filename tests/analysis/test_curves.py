@@ -389,3 +389,23 @@ def test_one_entry_starts_a_curve_from_a_motion_and_crosses_either_evaluator(pap
         curve(None, None, "PD", start=motion, root=1, bounds=box)
     with pytest.raises(ic.ParameterError, match=r"N=2 differs from the motion's N=1"):
         curve(None, 2, "PD", start=orbit, bounds=box)
+
+
+def test_a_curve_by_shooting_ends_on_the_bound_of_its_first_parameter(paper, branches):
+    """One stop rule for both evaluators: where the curve leaves the box through a bound of
+    ``p1`` (an unknown, unseen by the core) its last point is solved on that bound, by the
+    closed form and by shooting alike (before, shooting stopped at the last point inside)."""
+    branch = branches[0.0]
+    k = next(i for i, lab in enumerate(branch.special_label.values) if lab == "PD")
+    omega = float(branch.special_omega[k])
+    box = {"omega": (omega - 0.02, omega + 0.02), "b": (-0.3, 0.3)}
+    closed = curve(None, None, "PD", start=branch, bounds=box, detect_codim2_points=False)
+    start = ic.analysis.switching.special_orbit(branch, "PD", 0)
+    shot = curve(None, None, "PD", start=start, parameters=("omega", "b"), bounds=box,
+                 detect_codim2_points=False)
+    for ds in (closed, shot):
+        ends = ds["omega"].values[[0, -1]]
+        assert np.min(np.abs(ends[:, None] - np.array(box["omega"])[None, :]), axis=1) \
+            .max() < 1e-12, ends
+    np.testing.assert_allclose(np.sort(shot["b"].values[[0, -1]]),
+                               np.sort(closed["b"].values[[0, -1]]), rtol=0, atol=1e-9)
