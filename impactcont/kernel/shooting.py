@@ -220,25 +220,29 @@ def _generalized(lam, V, k):
 
 
 @_inner
-def _nilpotent(lam, V, Vi, N):
-    """Fill ``N = sum_k [V_{n:,k}; 0] Re(V^-1_{k,:})`` over the generalized vectors k
+def _nilpotent(lam, V, Vi):
+    """``N = sum_k [V_{n:,k}; 0] Re(V^-1_{k,:})`` over the generalized vectors k
     (:func:`_generalized`): the polynomial part of ``Phi(t) = Re(V diag(e^{lambda t}) V^-1)
     + t N`` (:attr:`impactcont.model.first_order.FirstOrderBasis.nilpotent`, the drift of
-    the undamped free modes). Returns whether there is one (N is left untouched without)."""
+    the undamped free modes), shape (2n, 2n); shape (0, 0) without one (nothing allocated
+    beyond it: the flights of every other C pay one scan of the zero eigenvalues)."""
     m = lam.size
     n = m // 2
-    found = False
+    count = 0
+    for k in range(m):
+        if _generalized(lam, V, k):
+            count += 1
+    if count == 0:
+        return np.zeros((0, 0))
+    N = np.zeros((m, m))
     for k in range(m):
         if not _generalized(lam, V, k):
             continue
-        if not found:
-            N[:, :] = 0.0
-            found = True
         for r in range(n):
             vr = V[n + r, k].real
             for c in range(m):
                 N[r, c] += vr * Vi[k, c].real
-    return found
+    return N
 
 
 @_inner
@@ -259,8 +263,8 @@ def _flight_general(first_order, forcing, t, X0, theta, tr, arr, pcol, rate):
             for k in range(m):
                 s += V[r, k] * e[k] * Vi[k, c]
             tr[r, c] = s.real
-    N = np.empty((m, m))
-    chains = _nilpotent(lam, V, Vi, N)
+    N = _nilpotent(lam, V, Vi)
+    chains = N.shape[0] > 0
     if chains:
         for r in range(m):
             for c in range(m):
@@ -754,8 +758,8 @@ def _search_inputs(flow, forcing, normal, X0, theta):
         for c in range(m):
             dev[c] = X0[c] - (Z[c] * rot).real
         drift = 0.0
-        N = np.empty((m, m))
-        chains = _nilpotent(lam, V, Vi, N)
+        N = _nilpotent(lam, V, Vi)
+        chains = N.shape[0] > 0
         quadratic = 0.0  # n . N d: an undamped free mode's g t^2 / 2
         if xs.size > 0:
             for c in range(m):
