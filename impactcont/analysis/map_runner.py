@@ -26,8 +26,12 @@ in flight or goes to a file, and how many grid points a task holds; :func:`_chec
 warns of a `memory_limit` below what writing to disk takes.
 
 Ctrl-C (issue 31): :func:`_taking_interrupts` takes the first between tasks (the map keeps
-what it computed, :func:`keep_interrupted`), a second aborts; :func:`compiled_interrupts`
-turns numba's report of a Ctrl-C in compiled code back into a KeyboardInterrupt.
+what it computed, :func:`keep_interrupted`, marked by :func:`mark_computed`), a second
+aborts; :func:`compiled_interrupts` turns numba's report of a Ctrl-C in compiled code back
+into a KeyboardInterrupt.
+
+The options every map takes are checked here once (:func:`check_run_options`,
+:func:`positive_int`, :func:`positive_number`).
 """
 
 from __future__ import annotations
@@ -44,12 +48,26 @@ import time
 from collections.abc import Iterator, Sequence
 from typing import Any
 
+import numpy as np
+
 from impactcont.analysis.pool import dead_worker, kill_pool, manager_ended, process_pool
+from impactcont.dataset.map_storage import remove_temporary_map
 from impactcont.errors import ParameterError
 from impactcont.progress import Reporter, take_interrupt
 
-__all__ = ["SCHEDULER_PROTOCOLS", "MapJob", "MapRunner", "check_executor", "compiled_interrupts",
-           "keep_interrupted"]
+__all__ = [
+    "SCHEDULER_PROTOCOLS",
+    "MapJob",
+    "MapRunner",
+    "abandon",
+    "check_executor",
+    "check_run_options",
+    "compiled_interrupts",
+    "keep_interrupted",
+    "mark_computed",
+    "positive_int",
+    "positive_number",
+]
 
 log = logging.getLogger(__name__)
 
@@ -544,3 +562,68 @@ def keep_interrupted(runner: MapRunner, total: int) -> bool:
     return take_interrupt("map", "%d of %d points computed (%.0f %%); the others are NaN, "
                           "not found, False in the variable 'computed'", done, total,
                           100.0 * done / total if total else 0.0)
+
+
+def positive_int(name: str, value: Any, *, optional: bool = False) -> int | None:
+    """`value` as an integer >= 1 (None kept if `optional`), refused naming `name`.
+
+    Raises
+    ------
+    ParameterError
+        Not an integer >= 1 (a bool is none), naming the argument and the value.
+    """
+    if optional and value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ParameterError(f"{name} must be an integer >= 1{' or None' if optional else ''}; "
+                             f"got {value!r}")
+    return int(value)
+
+
+def positive_number(name: str, value: Any) -> float:
+    """`value` as a finite number > 0, refused naming `name`.
+
+    Raises
+    ------
+    ParameterError
+        Not a finite number > 0 (a bool is none), naming the argument and the value.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not (value > 0 and math.isfinite(value)):
+        raise ParameterError(f"{name} must be a finite number > 0; got {value!r}")
+    return float(value)
+
+
+def check_run_options(executor: Any, max_workers: Any, memory_limit: Any
+                      ) -> tuple[int | None, float]:
+    """The run options of every map, checked: where it runs, the pool's processes, and the
+    bytes it may take (:class:`MapRunner`, :func:`_plan`); returns ``(max_workers,
+    memory_limit)``.
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument, its value and what is allowed.
+    """
+    check_executor(executor)
+    return (positive_int("max_workers", max_workers, optional=True),
+            positive_number("memory_limit", memory_limit))
+
+
+def mark_computed(ds: Any, computed: np.ndarray, dims: Sequence[str]) -> None:
+    """Mark a map interrupted by a first Ctrl-C (issue 31): the variable ``computed`` on
+    `dims` (True where a task finished) and the attributes ``interrupted`` (1) and
+    ``points_computed``."""
+    ds["computed"] = (tuple(dims), computed,
+                      {"long_name": "point computed before the map was interrupted",
+                       "units": "1"})
+    ds.attrs["interrupted"] = 1
+    ds.attrs["points_computed"] = int(np.count_nonzero(computed))
+
+
+def abandon(runner: MapRunner, temporary: Any = None) -> None:
+    """A map that failed or was abandoned (a second Ctrl-C): no worker left computing (the
+    pool made for it killed), and its temporary file, if it had one, removed."""
+    runner.close(kill=True)
+    if temporary is not None:
+        remove_temporary_map(temporary)

@@ -1,15 +1,20 @@
-"""Maps of existence, physicality and stability of motions over two parameters.
+"""Stability maps over two parameters: the one entry of every map and its fast evaluator.
 
 ``stability_map(osc, N=[1, 2, 3, 4], omega=..., b=...)`` evaluates every root of
 eq. (15) at every grid point with the batched closed form of
 :mod:`impactcont.orbit.batched` (stacked numpy over ``omega x b x root``; ``S``
 of eq. 13 once per ``omega``) and returns an :class:`xarray.Dataset` with dims
-``(N, omega, b, root)`` (schema: :mod:`impactcont.dataset.curves`). With
+``(N, omega, b, root)`` (schema: :mod:`impactcont.dataset.maps`). With
 ``parameters=(p1, p2), grid={p1: ..., p2: ...}`` the same over any two parameters of the
 oscillator (dims ``(N, p1, p2, root)``): batched along omega or b when one of them is in
 the pair, else the closed form at each point on the oscillator with both parameters set.
-Given a motion instead of an oscillator, the map of its family
-(:func:`impactcont.multi_impact_map`, :mod:`impactcont.analysis.multi_maps`).
+Given a motion instead of an oscillator, the map of its family over any two parameters,
+followed from it by shooting (:func:`~impactcont.analysis.family_maps.family_map`, the
+general evaluator; :func:`multi_impact_map` is that map's former name). Both take their
+parameters and grid through the one check here (:func:`map_plane`), the run options through
+:func:`~impactcont.analysis.map_runner.check_run_options`, run as the tasks of a
+:class:`~impactcont.analysis.map_runner.MapJob` on the same runner, and lay their
+datasets out in :mod:`impactcont.dataset.maps`.
 
 The work is split into tasks of ``(N, block of p1, block of p2)`` (at most 131072
 points) run by :class:`~impactcont.analysis.map_runner.MapRunner` (the tasks of a
@@ -56,32 +61,38 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.family_maps import family_map, multi_impact_map_orbit
 from impactcont.analysis.map_runner import (
     MapJob,
     MapRunner,
     _check_disk_floor,
     _plan,
     _require_dask,
+    abandon,
+    check_run_options,
     compiled_interrupts,
     keep_interrupted,
+    mark_computed,
+    positive_int,
 )
-from impactcont.dataset.curves import map_dataset
+from impactcont.analysis.multi_branch import as_multi_impact_orbit
 from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.dataset.map_storage import (
     open_temporary_map,
     remove_stale_maps,
-    remove_temporary_map,
     temporary_map_file,
 )
+from impactcont.dataset.maps import map_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import model_parameter
+from impactcont.model.parameters import ModelParameter, model_parameter
 from impactcont.orbit.batched import batched_orbits
-from impactcont.orbit.periodic import _check_N
+from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.periodic import PeriodicOrbit, _check_N
 from impactcont.progress import ProgressOption, interruptible, reporter
 from impactcont.threads import blas_limited
 
-__all__ = ["stability_map"]
+__all__ = ["map_plane", "multi_impact_map", "multi_impact_map_orbit", "stability_map"]
 
 log = logging.getLogger(__name__)
 
@@ -233,7 +244,7 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
         ``spectral_radius``, ``critical_multiplier``, ``physical``, ``stable`` per root;
         ``amplitude_squared`` on ``(N, p1)`` when ``p2`` is ``b``, else on ``(N, p1,
         p2)``; the attribute ``parameters`` names a pair other than (omega, b)
-        (:func:`impactcont.dataset.curves.map_variables`). Interrupted by Ctrl-C: what
+        (:func:`impactcont.dataset.maps.map_variables`). Interrupted by Ctrl-C: what
         was computed, with ``computed`` on ``(N, p1, p2)`` and the attributes
         ``interrupted`` and ``points_computed`` (module docstring), in memory or in the
         file (`out`, or a temporary one) alike. Of a motion: the
@@ -259,7 +270,9 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
         raise ParameterError(
             f"stability_map takes the grid of a parameter as parameters=(p1, p2), grid={{p1: "
             f"..., p2: ...}}; got the keyword(s) {sorted(others)}")
-    names, w, bb = _plane(osc, omega, b, parameters, grid)
+    params, axes = map_plane(osc, parameters, grid, omega=omega, b=b)
+    names = (params[0].name, params[1].name)
+    w, bb = axes[names[0]], axes[names[1]]
     Ns = [N] if isinstance(N, (int, np.integer)) and not isinstance(N, bool) else list(N)
     if not Ns:
         raise ParameterError(f"N must be an integer >= 1 or a non-empty sequence of them; "
@@ -269,15 +282,8 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
         raise ParameterError(f"N must not repeat values; got {N!r}")
     if not isinstance(spectral_radius, bool):
         raise ParameterError(f"spectral_radius must be True or False; got {spectral_radius!r}")
-    if max_workers is not None and (isinstance(max_workers, bool)
-                                    or not isinstance(max_workers, int) or max_workers < 1):
-        raise ParameterError(f"max_workers must be an integer >= 1 or None; got {max_workers!r}")
-    if omega_block is not None and (isinstance(omega_block, bool)
-                                    or not isinstance(omega_block, int) or omega_block < 1):
-        raise ParameterError(f"omega_block must be an integer >= 1 or None; got {omega_block!r}")
-    if not (isinstance(memory_limit, (int, float)) and not isinstance(memory_limit, bool)
-            and memory_limit > 0):
-        raise ParameterError(f"memory_limit must be a number of bytes > 0; got {memory_limit!r}")
+    max_workers, memory_limit = check_run_options(executor, max_workers, memory_limit)
+    omega_block = positive_int("omega_block", omega_block, optional=True)
     shape = (len(Ns), w.size, bb.size)
     result = _result_bytes(shape, spectral_radius, names)
     remove_stale_maps(once=True)  # the temporary maps of killed processes (map_storage)
@@ -313,10 +319,8 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
             else:
                 path, computed = _map_to_file(runner, osc, Ns, w, bb, tasks, options, out,
                                               (ob, bs), names)
-        except BaseException:
-            runner.close(kill=True)  # Ctrl-C or a failure: no worker left computing
-            if temporary and out is not None:
-                remove_temporary_map(out)
+        except BaseException:  # a failure, or a second Ctrl-C
+            abandon(runner, out if temporary else None)
             raise
         runner.close(kill=computed is not None)
     elapsed = time.perf_counter() - start
@@ -343,25 +347,53 @@ def _given(value: Any) -> bool:
     return not (isinstance(value, tuple) and value == ())
 
 
-def _plane(osc: ImpactOscillator, omega: Any, b: Any, parameters: Any, grid: Any
-           ) -> tuple[tuple[str, str], np.ndarray, np.ndarray]:
-    """The map's two parameters and their grids, from ``omega=, b=`` or ``parameters=,
-    grid=`` (refused clearly)."""
+def map_plane(osc: ImpactOscillator, parameters: Any, grid: Any, *, omega: Any = (), b: Any = ()
+           ) -> tuple[tuple[ModelParameter, ModelParameter], dict[str, np.ndarray]]:
+    """The two parameters of any map and their grids, checked once for every map.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        The oscillator mapped (of the motion, for a family's map).
+    parameters : (str, str) or None
+        The two parameters in grid order; None: ``("omega", "b")`` from `omega` and `b`
+        (the N-1 map of an oscillator only).
+    grid : mapping or None
+        ``{parameter: strictly increasing 1-D values}`` for both.
+    omega, b : array_like, optional
+        The (omega, b) grids without `parameters`.
+
+    Returns
+    -------
+    params : (ModelParameter, ModelParameter)
+        The parameters as objects of `osc`.
+    axes : dict
+        ``{name: grid}`` of both, checked: finite and strictly increasing, omega > 0, every
+        value of a parameter other than omega and b one the oscillator takes.
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument, the value and what is allowed.
+    """
     if parameters is None:
         if grid is not None:
             raise ParameterError(f"grid needs parameters=(p1, p2), the order of its axes; got "
                                  f"grid={grid!r} without parameters")
+        parameters, grid = ("omega", "b"), {"omega": omega, "b": b}
         label = {"omega": "omega", "b": "b"}
-        return ("omega", "b"), *_axes(osc, {"omega": omega, "b": b}, label)
-    for name, value in (("omega", omega), ("b", b)):
-        if _given(value):
-            raise ParameterError(f"{name}: with parameters={parameters!r} give the grid of "
-                                 f"every parameter in grid=; got {name}={value!r} as well")
+    else:
+        for name, value in (("omega", omega), ("b", b)):
+            if _given(value):
+                raise ParameterError(f"{name}: with parameters={parameters!r} give the grid of "
+                                     f"every parameter in grid=; got {name}={value!r} as well")
+        label = None
     if isinstance(parameters, str) or not isinstance(parameters, Sequence) or len(
             parameters) != 2:
         raise ParameterError(f"parameters must be two parameter names, e.g. ('k2', 'b'); "
                              f"got {parameters!r}")
-    params = [model_parameter(osc, name, "parameters") for name in parameters]
+    params = (model_parameter(osc, parameters[0], "parameters"),
+              model_parameter(osc, parameters[1], "parameters"))
     if params[0].name == params[1].name:
         raise ParameterError(f"parameters must be two different parameters; got "
                              f"{parameters!r}")
@@ -369,38 +401,33 @@ def _plane(osc: ImpactOscillator, omega: Any, b: Any, parameters: Any, grid: Any
         raise ParameterError(f"grid must map each of the parameters {list(parameters)} to a "
                              f"1-D array of values; got {grid!r}")
     names = (params[0].name, params[1].name)
-    return names, *_axes(osc, {name: grid[name] for name in names},
-                         {name: f"grid[{name!r}]" for name in names})
+    label = label or {name: f"grid[{name!r}]" for name in names}
+    return params, _axes(osc, params, {name: grid[name] for name in names}, label)
 
 
-def _axes(osc: ImpactOscillator, grid: dict[str, Any], label: dict[str, str]
-          ) -> tuple[np.ndarray, np.ndarray]:
+def _axes(osc: ImpactOscillator, params: tuple[ModelParameter, ModelParameter],
+          grid: dict[str, Any], label: dict[str, str]) -> dict[str, np.ndarray]:
     """The grids of the two parameters (the keys of `grid`, in order), checked: strictly
     increasing, omega > 0, every value one the oscillator takes; `label` names each in
     messages."""
     axes = {name: _grid(label[name], values) for name, values in grid.items()}
     if "omega" in axes and np.any(axes["omega"] <= 0):
         raise ParameterError(f"{label['omega']} must be > 0; got {grid['omega']!r}")
-    for name in grid:
+    for param in params:
+        name = param.name
         if name in ("omega", "b"):
             continue
-        param = model_parameter(osc, name, "parameters")
         bad = [float(v) for v in axes[name] if not param.admits(osc, float(v))]
         if bad:
             raise ParameterError(f"{label[name]}: the oscillator cannot take {name} = {bad[0]!r} "
                                  f"({len(bad)} of the values; {param.info.long_name})")
-    first, second = axes.values()
-    return first, second
+    return axes
 
 
 def _motion_map(start: Any, N: Any, omega: Any, b: Any, parameters: Any, grid: Any, *,
                 others: dict[str, Any], **options: Any) -> xr.Dataset:
-    """:func:`stability_map` of a motion: :func:`impactcont.multi_impact_map` of its family,
+    """:func:`stability_map` of a motion: the map of its family (:func:`multi_impact_map`),
     the parameters and grid given as keywords or in the places of N and omega."""
-    from impactcont.analysis.multi_maps import multi_impact_map
-    from impactcont.orbit.multi_impact import MultiImpactOrbit
-    from impactcont.orbit.periodic import PeriodicOrbit
-
     if not isinstance(start, (MultiImpactOrbit, PeriodicOrbit)):
         raise ParameterError(f"osc must be an ImpactOscillator, or a motion whose family is "
                              f"mapped (a MultiImpactOrbit of multi_impact_orbit or special_orbit, "
@@ -433,6 +460,142 @@ def _motion_map(start: Any, N: Any, omega: Any, b: Any, parameters: Any, grid: A
                             executor=options["executor"], max_workers=options["max_workers"],
                             memory_limit=options["memory_limit"],
                             progress=options["progress"], out=options["out"], **others)
+
+
+@blas_limited
+def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
+                     parameters: Sequence[str] = ("omega", "b"),
+                     grid: Mapping[str, Any] | None = None, *, symmetric: bool | None = None,
+                     checks: bool = True, tol: float = 1e-11, max_iter: int = 12,
+                     max_change: float = 0.5, max_attempts: int = 4,
+                     title: str | None = None, executor: Any = None,
+                     max_workers: int | None = None, rows_per_task: int | None = None,
+                     memory_limit: float = 1e9, progress: ProgressOption = None,
+                     out: str | os.PathLike | None = None) -> xr.Dataset:
+    """Stability map of the motion family of `start` over a grid of two parameters.
+
+    :func:`stability_map` of a motion under the name it had when only N-p motions had
+    it: the same map, the same checks (this module), the same sweep
+    (:func:`impactcont.analysis.family_maps.family_map`).
+
+    Any system of the shooting path: stops on any mass or between two masses, stops on
+    several coordinates (``Stops(extra=...)``: each impact's section ``n_k . x = c_k``
+    solved for its own stop's mass, every flight checked against every stop), free masses
+    and a constant force ``F_static``; each point is the motion
+    :func:`impactcont.multi_impact_orbit` finds there.
+
+    Every grid point is solved by Newton from a neighbour that was solved, starting
+    at the grid point nearest the start (reached from it by Newton in a few steps):
+    natural-parameter continuation over the grid, breadth first, with a secant
+    predictor through two solved points in line. A point whose Newton fails (or
+    converges farther than `max_change` from its predictor) is "not found" and seeds
+    no other point. The map is **one family followed from its seed**, not every
+    motion that exists: motions reached only around a fold, other motions of the
+    same pattern (an asymmetric pair born at a pitchfork, the other member of a
+    saddle-node pair) and parts of the family cut off from the seed are not in it,
+    and a grid line crossing a fold may continue on the other member of the pair
+    (``docs/multi_maps.md``).
+
+    Parameters
+    ----------
+    start : MultiImpactOrbit or PeriodicOrbit
+        A motion of the family: :func:`impactcont.multi_impact_orbit` (from a
+        simulation), :func:`impactcont.special_orbit` (a branch point), or an N-1
+        motion of :func:`impactcont.periodic_orbits` (solved as a 1-impact motion).
+        Its oscillator is the map's; its values of the two parameters place the seed.
+    parameters : (str, str)
+        Two different continuable parameters of the oscillator, the grid's axes in this
+        order: ``omega``, ``b``, ``R``, ``eta``, ``alpha``, ``beta``, ``F0``, ``b_low``,
+        ``R_low``, ``gap`` or an element (``k2``, ``m1``, ``c1``, ``M[1,2]``, ``K[1,2]``,
+        ``C[1,2]``, ``F[2]``; :func:`impactcont.model.parameters.model_parameter` says
+        which apply).
+    grid : mapping
+        ``{parameter: strictly increasing 1-D values}`` for both parameters.
+    symmetric : bool, optional
+        Solve a symmetric motion of a symmetric two-sided system on its half system
+        (regular through the symmetry-breaking pitchforks). ``None`` (default): when
+        the start is symmetric and both parameters keep the system symmetric
+        (:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`: not ``b``,
+        ``R``, ``b_low`` or ``R_low`` unless ``Stops(mirror=True)``), as
+        :func:`impactcont.multi_impact_continuation` decides.
+    checks : bool
+        Search every flight for contact with a stop (eq. 16). Without it ``gap_min``
+        is NaN, ``contact_checked`` False and no point is physical (as where the search
+        cannot represent a flight: a constant force pushing a free mode).
+    tol : float
+        Newton tolerance (residual and last update, relative to ``max(1, |u|)``).
+    max_iter : int
+        Newton iterations per attempt.
+    max_change : float
+        Largest max-norm distance between a solution and its predictor: a solution
+        farther away is taken for another motion and refused.
+    max_attempts : int
+        Newton attempts per grid point at most (one from each solved neighbour).
+    title : str, optional
+    executor : None, "serial", "process", scheduler address, Executor or dask Client
+        Where the tasks run, as for :func:`impactcont.stability_map`: in this process,
+        a process pool made here (``max_workers`` processes), a dask cluster
+        (``"tcp://host:8786"``, or a ``dask.distributed.Client``: as many tasks at once
+        as its workers have threads) or any :class:`concurrent.futures.Executor`.
+    max_workers : int, optional
+        Processes of the ``"process"`` pool.
+    rows_per_task : int, optional
+        Rows of ``parameters[0]`` per task (default: enough for 65536 grid points). A
+        map of one task is the one sweep from the seed. A larger one first sweeps the
+        seed's column of ``parameters[1]`` (the spine), then each band of rows from its
+        spine point nearest the seed, as tasks: a band is followed within itself, so a
+        part of the family that the band reaches only through another band is not
+        found (and a band whose spine point was not found has none). The map depends
+        on `rows_per_task`, never on the executor.
+    memory_limit : float
+        Bytes the map and its tasks in flight may take (default 1e9): fewer tasks are
+        submitted at once when theirs would not fit, and a map that does not fit goes to a
+        temporary file (with a warning naming it), returned lazily and removed when
+        closed, as :func:`impactcont.stability_map` does
+        (:mod:`impactcont.dataset.map_storage`).
+    progress : None, bool or callable
+        A progress bar over the grid points, a callback, a log line a minute (as for
+        :func:`impactcont.stability_map`).
+    out : str or os.PathLike, optional
+        Write the map to this NetCDF-4 file (chunked by task, compressed) band by band
+        as the tasks finish, and return it opened lazily (needs ``impactcont[dask]``).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(parameters[0], parameters[1])`` with their grids as coordinates,
+        ``impact`` and ``component``: ``found``, ``newton_iterations``, ``stable``,
+        ``physical``, ``contact_checked``, ``spectral_radius``, ``critical_multiplier``, ``delta``,
+        ``gap_min``, ``impact_velocity_k``, ``flight_time_k``, ``state_k`` and, in a
+        system that admits symmetric motions of the pattern, ``asymmetry``
+        (:mod:`impactcont.dataset.maps`). Values are NaN where not found.
+        Round-trips through :func:`impactcont.save` / :func:`impactcont.load`.
+
+    Raises
+    ------
+    TypeError, ParameterError
+        A bad start, parameter, grid, option, or a grid value where the oscillator
+        cannot be built (named in the message); a map for a file without dask.
+    NoPeriodicMotionError
+        The start cannot be followed to its nearest grid point.
+
+    Notes
+    -----
+    Ctrl-C during the map (a first one) stops it between tasks and returns what was
+    computed: the points of the tasks not finished are not found (NaN), False in the
+    variable ``computed``, the attribute ``interrupted`` is 1, and a WARNING says how
+    many points were done; a map written to a file is kept the same way, the file whole
+    (written under a temporary name, then renamed). A second Ctrl-C abandons the map
+    (KeyboardInterrupt), a file being written removed.
+    """
+    orbit = as_multi_impact_orbit(start)
+    params, axes = map_plane(orbit.oscillator, parameters, grid)
+    max_workers, memory_limit = check_run_options(executor, max_workers, memory_limit)
+    return family_map(orbit, params, axes, symmetric=symmetric, checks=checks, tol=tol,
+                      max_iter=max_iter, max_change=max_change, max_attempts=max_attempts,
+                      title=title, executor=executor, max_workers=max_workers,
+                      rows_per_task=rows_per_task, memory_limit=memory_limit,
+                      progress=progress, out=out)
 
 
 @blas_limited
@@ -556,7 +719,7 @@ class _StabilityJob(MapJob):
 def _layout(shape: tuple[int, int, int], fields: tuple[str, ...], names: tuple[str, str]
             ) -> dict[str, tuple[tuple[int, ...], Any]]:
     """Shape and dtype of every variable of a map on the grid ``shape`` (N, first, second
-    parameter; :func:`~impactcont.dataset.curves.map_variables`)."""
+    parameter; :func:`~impactcont.dataset.maps.map_variables`)."""
     amplitude = shape[:2] if names[1] == "b" else shape
     return {"amplitude_squared": (amplitude, float), "exists": (shape, bool),
             "n_physical": (shape, np.int64), "n_stable": (shape, np.int64),
@@ -619,17 +782,7 @@ def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, st
             where = np.broadcast_to((~computed).reshape(computed.shape + (1,) * (var.ndim - 3)),
                                     var.shape)
         var.data[where] = np.nan if var.dtype.kind in "fc" else 0
-    _computed(ds, computed, names)
-
-
-def _computed(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, str]) -> None:
-    """Add the variable ``computed`` and the attributes ``interrupted`` and
-    ``points_computed`` of an interrupted map to `ds`."""
-    ds["computed"] = (("N", *names), computed,
-                      {"long_name": "point computed before the map was interrupted",
-                       "units": "1"})
-    ds.attrs["interrupted"] = 1
-    ds.attrs["points_computed"] = int(np.count_nonzero(computed))
+    mark_computed(ds, computed, ("N", *names))
 
 
 def _writable(var: xr.Variable) -> np.ndarray:
@@ -689,7 +842,7 @@ def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.
         if not interrupted:
             return None
         marked = xr.Dataset(attrs={})
-        _computed(marked, computed, names)
+        mark_computed(marked, computed, ("N", *names))
         return marked
 
     path = save_blocks(ds, out, blocks(), encoding=encoding, finish=finish)

@@ -438,3 +438,29 @@ def test_a_second_ctrl_c_abandons_a_map_written_to_a_file(paper, monkeypatch, tm
     with pytest.raises(KeyboardInterrupt):
         stability_map(paper, [1, 2], OMEGA, GAP, omega_block=5, out=tmp_path / "map.nc")
     assert not list(tmp_path.iterdir())  # nothing kept, no temporary left
+
+
+# -- one entry, one set of checks for every map (issue 29, item 1) --------------------------
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"max_workers": 0}, r"max_workers must be an integer >= 1 or None; got 0"),
+    ({"memory_limit": math.inf}, r"memory_limit must be a finite number > 0; got inf"),
+    ({"memory_limit": True}, r"memory_limit must be a finite number > 0; got True"),
+    ({"executor": "localhost:8786"}, r"executor"),
+    ({"parameters": ("k2", "k2"), "grid": {"k2": [1.0, 2.0]}},
+     r"parameters must be two different parameters; got \('k2', 'k2'\)"),
+    ({"parameters": ("k2", "b"), "grid": {"k2": [1.0, -3.0], "b": [0.5]}},
+     r"grid\['k2'\] must be strictly increasing"),
+    ({"parameters": ("k2", "b"), "grid": {"k2": [-3.0, -2.0], "b": [0.5]}},
+     r"grid\['k2'\]: the oscillator cannot take k2 = -3.0 \(2 of the values"),
+])
+def test_the_map_of_an_oscillator_and_of_a_motion_refuse_alike(paper, kwargs, match):
+    """The N-1 map of an oscillator and the family map of a motion take their parameters,
+    grids and run options through one check: the same refusal, naming the argument."""
+    motion = next(o for o in ic.periodic_orbits(paper, 1) if o.physical)
+    kwargs = {"parameters": ("omega", "b"), "grid": {"omega": [1.0, 1.1], "b": [0.5]},
+              **kwargs}
+    for start in (paper, motion):
+        with pytest.raises(ic.ParameterError, match=match):
+            stability_map(start, **kwargs)
+    with pytest.raises(ic.ParameterError, match=match):
+        maps.multi_impact_map(motion, **kwargs)

@@ -27,9 +27,8 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.analysis import maps, multi_maps
-from impactcont.analysis.maps import stability_map
-from impactcont.analysis.multi_maps import multi_impact_map
+from impactcont.analysis import family_maps, maps
+from impactcont.analysis.maps import multi_impact_map, stability_map
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
 
@@ -154,8 +153,8 @@ def test_ctrl_c_during_a_stability_map_returns_the_points_computed(paper, monkey
 def test_ctrl_c_during_a_multi_impact_map_returns_the_points_computed(start, banded,
                                                                       monkeypatch, caplog):
     _interrupted_after.calls = 0
-    monkeypatch.setattr(multi_maps, "_band_task",
-                        functools.partial(_interrupted_after, 3, multi_maps._band_task))
+    monkeypatch.setattr(family_maps, "_band_task",
+                        functools.partial(_interrupted_after, 3, family_maps._band_task))
     with caplog.at_level("WARNING"):
         ds = multi_impact_map(start, ("omega", "b"), grid=GRID, rows_per_task=8)
     computed = ds["computed"]

@@ -1,0 +1,765 @@
+"""The general evaluator of a stability map: one motion family followed from a seed by shooting.
+
+:func:`impactcont.stability_map` of a motion (``stability_map(start, parameters=("omega",
+"b"), grid={"omega": ..., "b": ...})``, or its alias :func:`impactcont.multi_impact_map`)
+checks its arguments in :mod:`impactcont.analysis.maps` and runs :func:`family_map` here,
+which solves the motion of `start` (an N-p motion of :func:`impactcont.multi_impact_orbit`,
+from a simulation or a branch point, or an N-1 motion of the closed form) at every grid
+point it can reach: Newton on the shooting system of
+:mod:`impactcont.orbit.multi_impact` at each grid point, started from a solved
+neighbour (natural-parameter continuation on the grid, a secant predictor through
+two solved points in line), in one compiled sweep (:mod:`impactcont.kernel.sweep`).
+A symmetric motion of a symmetric system is solved on its half system closed by the
+reflection, as :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`
+does, which stays regular through the symmetry-breaking pitchforks where the full
+shooting Jacobian is singular.
+
+What such a map is: **one family followed from its seed**, not every motion that
+exists. A grid point is "found" when Newton from a solved neighbour converges (to a
+solution within ``max_change`` of the predictor). Motions of the family that are
+reached only around a fold of the parameters, other motions with the same pattern
+(the asymmetric pair born at a pitchfork, the other member of a saddle-node pair),
+motions with another pattern, and parts of the family cut off from the seed by a
+region where Newton fails are not in the map; a grid line that crosses a fold may
+jump to the other member of the pair. Where the family is found it is exact (the
+shooting solution to ``tol``), and its stability and physicality are those of
+:func:`impactcont.multi_impact_orbit` at that point.
+
+The sweeps run as the tasks of :class:`~impactcont.analysis.map_runner.MapRunner`, with the
+executors, progress bar, memory bound and Ctrl-C of :func:`impactcont.stability_map`: a
+map of up to 65536 points is one sweep from its seed; a larger one (or one given
+``rows_per_task``) sweeps the seed's column first, then bands of rows of the first
+parameter, each from its point on that column nearest the seed, as tasks that run at
+once. The bands depend on the grid and ``rows_per_task`` only, never on the executor.
+
+The closed form's evaluator of every N-1 motion (every root of eq. 15 at every grid
+point) is the fast one, in :mod:`impactcont.analysis.maps`; both run their tasks on
+:class:`~impactcont.analysis.map_runner.MapRunner`. Schema:
+:mod:`impactcont.dataset.maps`; plots: :mod:`impactcont.plots.maps`; ``docs/multi_maps.md``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from impactcont.analysis.map_runner import (
+    _DISK_FIXED_BYTES,
+    MapJob,
+    MapRunner,
+    _check_disk_floor,
+    _require_dask,
+    abandon,
+    compiled_interrupts,
+    keep_interrupted,
+    mark_computed,
+    positive_int,
+    positive_number,
+)
+from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.io import open_lazy, save_blocks
+from impactcont.dataset.map_storage import (
+    open_temporary_map,
+    remove_stale_maps,
+    temporary_map_file,
+)
+from impactcont.dataset.maps import (
+    multi_impact_map_dataset,
+    validate_multi_impact_map_dataset,
+)
+from impactcont.dataset.schema import _options_json
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.kernel.arrays import (
+    FlowTables,
+    Forcing,
+    GeometryTables,
+    ShootingFlow,
+    SweepGrid,
+    SweepMotion,
+    SweepOutputs,
+    SweepSettings,
+    stack_flows,
+)
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import MASS, ModelParameter, model_parameter
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
+from impactcont.orbit.stop_geometry import stop_geometry
+from impactcont.orbit.symmetry import (
+    SYMMETRY_TOL,
+    HalfUnknowns,
+    admits_symmetric_motions,
+    symmetry_defect,
+)
+from impactcont.progress import ProgressOption, interruptible, reporter
+from impactcont.threads import blas_limited
+
+__all__ = ["family_map", "multi_impact_map_orbit"]
+
+log = logging.getLogger(__name__)
+
+_SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
+#: Grid points of a task at least: a map of up to this many points is one sweep from its
+#: seed; a larger one is cut into bands of whole rows of its first parameter.
+_TASK_POINTS = 1 << 16
+
+
+def _decide_symmetric(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
+                      symmetric: Any) -> bool:
+    """Whether to solve on the half system (as ``multi_branch.branch_problem`` decides)."""
+    osc = orbit.oscillator
+    pattern = orbit.pattern or "U" * orbit.p
+    parameters = [param.name for param in params]
+    keeps = all(param.keeps_symmetry for param in params)
+    admits = admits_symmetric_motions(osc, orbit.N, orbit.p, pattern)
+    if symmetric is None:
+        return bool(keeps and admits and symmetry_defect(orbit) <= SYMMETRY_TOL)
+    if not isinstance(symmetric, (bool, np.bool_)):
+        raise ParameterError(f"symmetric must be True, False or None (decide from the motion); "
+                             f"got {symmetric!r}")
+    if symmetric:
+        if not keeps:
+            raise ParameterError(f"symmetric=True: parameters {parameters} move one stop "
+                                 "only and break the symmetry; mirror the stops "
+                                 "(Stops(mirror=True)), continue 'gap', or give "
+                                 "symmetric=False")
+        if not admits:
+            raise ParameterError(f"symmetric=True: the N={orbit.N}, p={orbit.p} motions with "
+                                 f"pattern {pattern!r} of {osc!r} cannot be symmetric (N odd, p "
+                                 "even, the pattern's second half the mirror of its first, "
+                                 "b_low == b, R_low == R)")
+        defect = symmetry_defect(orbit)
+        if not defect <= SYMMETRY_TOL:
+            raise ParameterError(f"symmetric=True: the start is not symmetric (symmetry_defect "
+                                 f"{defect:.3g} > {SYMMETRY_TOL:g}); give symmetric=False or a "
+                                 "symmetric motion")
+    return bool(symmetric)
+
+
+class _Tables:
+    """The flows and stop geometries of a grid, stacked for the compiled sweep.
+
+    A flow (:meth:`~impactcont.orbit.flow.Flow.shooting_arrays` and the constant force's
+    :meth:`~impactcont.orbit.flow.Flow.static_arrays`) is built once per value of the
+    parameters that change it (all but those that move a stop:
+    :attr:`~impactcont.model.parameters.ModelParameter.moves_stops`), a stop geometry
+    (:func:`~impactcont.orbit.stop_geometry.stop_geometry`: normals, positions, impact
+    matrices) once per value of those that move a stop (``b``, ``R``, ``b_low``,
+    ``R_low``, ``gap``) or change the masses (the two-body impact law of a clearance
+    between masses, :meth:`~impactcont.model.stops.Stops.impact_matrix`, depends on M).
+    """
+
+    def __init__(self, osc: ImpactOscillator, params: tuple[ModelParameter, ...],
+                 grid: dict[str, np.ndarray], pattern: str, solved: int) -> None:
+        parameters = tuple(param.name for param in params)
+        self.osc, self.parameters, self.pattern, self.solved = osc, parameters, pattern, solved
+        shape = tuple(grid[name].size for name in parameters)
+        flow_axes = [k for k, param in enumerate(params) if not param.moves_stops]
+        stop_axes = [k for k, param in enumerate(params)
+                     if param.moves_stops or param.data == MASS]
+        flow_values, self.flow_index = _combinations(parameters, grid, flow_axes, shape)
+        geometry_values, self.geometry_index = _combinations(parameters, grid, stop_axes, shape)
+        by_name = {param.name: param for param in params}
+        self.flows = [Flow(_replaced(osc, by_name, values)) for values in flow_values]
+        geometries = [stop_geometry(_replaced(osc, by_name, values), pattern)
+                      for values in geometry_values]
+        self.flow_tables = _stack([(flow.shooting_arrays(), flow.forcing_arrays())
+                                   for flow in self.flows], self.flow_index)
+        # the stop coordinates, the pivot of each impact (the own mass of the stop it hits),
+        # the sides and the lower stop's presence are the stops' structure, which no
+        # parameter changes
+        first = geometries[0]
+        self.pivots = np.ascontiguousarray(first.pivots, dtype=np.int64)
+        self.signs = np.ascontiguousarray(first.signs, dtype=float)
+        self.two_sided = first.two_sided
+        q = solved
+
+        def column(get: Any) -> np.ndarray:
+            # read-only, as the stop geometries the shooting's Python callers pass: the
+            # sweep then calls the compiled shooting system with their argument types (a
+            # writable table compiled it a second time, about 2 s at the first map)
+            out = np.ascontiguousarray(np.array([get(geo) for geo in geometries], dtype=float))
+            out.flags.writeable = False
+            return out
+
+        self.positions = column(lambda geo: geo.positions[:q])
+        self.normals = column(lambda geo: geo.normals[:q])
+        self.matrices = column(lambda geo: geo.matrices[:q])
+        self.full_normals = column(lambda geo: geo.normals)
+        self.full_positions = column(lambda geo: geo.positions)
+        self.full_matrices = column(lambda geo: geo.matrices)
+        self.contact_normals = column(lambda geo: geo.normal)
+        self.b_upper = column(lambda geo: geo.b)
+        self.b_lower = column(lambda geo: geo.b_low)
+        self.extra_normals = column(lambda geo: geo.extra_normals)
+        self.extra_signs = column(lambda geo: geo.extra_signs)
+        self.extra_positions = column(lambda geo: geo.extra_positions)
+
+
+def _replaced(osc: ImpactOscillator, params: Mapping[str, ModelParameter],
+              values: dict[str, float]) -> ImpactOscillator:
+    """`osc` with each parameter of `values` set as its object sets it."""
+    if not values:
+        return osc
+    try:
+        for name, value in values.items():
+            osc = params[name].at(osc, value)
+        return osc
+    except ParameterError as exc:
+        raise ParameterError(f"grid: the oscillator at {values} cannot be built: {exc}") from None
+
+
+def _combinations(parameters: tuple[str, str], grid: dict[str, np.ndarray], axes: list[int],
+                  shape: tuple[int, int]) -> tuple[list[dict[str, float]], np.ndarray]:
+    """The distinct values of the parameters on `axes` and the index of each grid point."""
+    index = np.zeros(shape, dtype=np.int64)
+    if not axes:
+        return [{}], index
+    if len(axes) == 1:
+        k = axes[0]
+        name = parameters[k]
+        index += np.arange(shape[k]).reshape((-1, 1) if k == 0 else (1, -1))
+        return [{name: float(v)} for v in grid[name]], index
+    index[:] = np.arange(shape[0] * shape[1]).reshape(shape)
+    return [{parameters[0]: float(v0), parameters[1]: float(v1)} for v0 in grid[parameters[0]]
+            for v1 in grid[parameters[1]]], index
+
+
+def _stack(flows: list[tuple[ShootingFlow, Forcing]], index: np.ndarray) -> FlowTables:
+    """The flows' arrays stacked on a new first axis (one row per flow)."""
+    try:
+        return stack_flows(flows, index)
+    except ValueError as exc:
+        raise ParameterError(f"the flows of the grid have modal arrays of different shapes "
+                             f"(the first-order modes change their structure across the "
+                             f"grid: {exc}); map a smaller range of the damping parameter"
+                             ) from None
+
+
+def _nearest(grid: dict[str, np.ndarray], parameters: tuple[str, str],
+             values: tuple[float, float]) -> tuple[int, int]:
+    """The grid point nearest `values`, distances in units of each axis's range."""
+    out = []
+    for name, value in zip(parameters, values, strict=True):
+        axis = grid[name]
+        out.append(int(np.argmin(np.abs(axis - value))))
+    return out[0], out[1]
+
+
+def _kernel() -> Any:
+    from impactcont.kernel import sweep as map_kernel
+
+    return map_kernel
+
+
+class _Setting:
+    """What every sweep of one map shares: the motion solved and how."""
+
+    def __init__(self, osc: ImpactOscillator, N: int, pattern: str, half: bool, admits: bool,
+                 tol: float, max_iter: int, max_change: float, max_attempts: int) -> None:
+        self.osc, self.N, self.pattern, self.half, self.admits = osc, N, pattern, half, admits
+        self.tol, self.max_iter, self.max_change = tol, max_iter, max_change
+        self.max_attempts = max_attempts
+
+    def sweep(self, tables: _Tables, axes: dict[str, np.ndarray], seed: tuple[int, int],
+              x_seed: np.ndarray, checks: bool
+              ) -> tuple[dict[str, np.ndarray], np.ndarray, tuple[int, int, int, bool]]:
+        """:func:`impactcont.kernel.sweep.sweep_stops` over the grid `axes` from `seed`.
+
+        Returns the flat outputs, the unknowns of every point and ``(solved, attempts,
+        newton_iterations, capped)``.
+        """
+        names = tables.parameters
+        p, m = len(self.pattern), 2 * self.osc.n
+        npts = axes[names[0]].size * axes[names[1]].size
+        out = _empty_outputs(npts, p, m)
+        unknowns = np.full((npts, x_seed.size), np.nan)
+        geometries = GeometryTables(
+            positions=tables.positions, normals=tables.normals, matrices=tables.matrices,
+            full_normals=tables.full_normals, full_positions=tables.full_positions,
+            full_matrices=tables.full_matrices, contact_normals=tables.contact_normals,
+            b_upper=tables.b_upper, b_lower=tables.b_lower, extra_normals=tables.extra_normals,
+            extra_signs=tables.extra_signs, extra_positions=tables.extra_positions,
+            index=tables.geometry_index)
+        motion = SweepMotion(N=self.N, symmetric=self.half, admits=self.admits,
+                             pivots=tables.pivots, signs=tables.signs,
+                             two_sided=tables.two_sided)
+        grid = SweepGrid(coord0=axes[names[0]], coord1=axes[names[1]], seed0=seed[0],
+                         seed1=seed[1], x_seed=np.ascontiguousarray(x_seed, dtype=float))
+        settings = SweepSettings(tol=self.tol, max_iter=self.max_iter,
+                                 max_change=self.max_change, checks=bool(checks),
+                                 max_attempts=self.max_attempts)
+        outputs = SweepOutputs(
+            unknowns=unknowns, found=out["found"], iterations=out["newton_iterations"],
+            delta=out["delta"], stable=out["stable"], physical=out["physical"],
+            rho=out["spectral_radius"], mu=out["critical_multiplier"], gap=out["gap_min"],
+            velocity=out["impact_velocity_k"], tau=out["flight_time_k"], state=out["state_k"],
+            asym=out["asymmetry"])
+        stats = _kernel().sweep_stops(tuple(tables.flow_tables), tuple(geometries), tuple(motion),
+                                      tuple(grid), tuple(settings), tuple(outputs))
+        return out, unknowns, stats
+
+    def solve_at(self, params: tuple[ModelParameter, ModelParameter], values: dict[str, float],
+                 x0: np.ndarray) -> np.ndarray | None:
+        """Newton at one point of the two parameters (off the grid: the seed's way to its
+        grid point); None when it does not converge."""
+        axes = {name: np.array([value]) for name, value in values.items()}
+        tables = _Tables(self.osc, params, axes, self.pattern, len(x0) // (2 * self.osc.n))
+        out, unknowns, _ = self.sweep(tables, axes, (0, 0), x0, False)
+        return unknowns[0] if out["found"][0] else None
+
+
+class _BandJob(MapJob):
+    """The tasks of :func:`multi_impact_map`: bands of whole rows of the first parameter.
+
+    A task ``(rows, seed row, unknowns)`` sweeps the rows ``rows`` of the grid (every
+    value of the second parameter) from the seed row's point on the seed's column, solved
+    from the unknowns given (:func:`_band_task`).
+    """
+
+    what = "multi_impact_map"
+
+    def __init__(self, setting: _Setting, params: tuple[ModelParameter, ModelParameter],
+                 axes: dict[str, np.ndarray], column: int, checks: bool) -> None:
+        self.setting, self.names = setting, tuple(param.name for param in params)
+        self.axes, self.column, self.checks = axes, column, checks
+
+    def call(self, task: tuple[slice, int, np.ndarray]) -> tuple[Any, tuple[Any, ...]]:
+        rows, row, x_seed = task
+        first, second = self.names
+        band = {first: self.axes[first][rows], second: self.axes[second]}
+        return _band_task, (self.setting, self.names, band, (row - rows.start, self.column),
+                            x_seed, self.checks)
+
+    def points(self, task: tuple[slice, int, np.ndarray]) -> int:
+        rows = task[0]
+        return (rows.stop - rows.start) * self.axes[self.names[1]].size
+
+    def describe(self, task: tuple[slice, int, np.ndarray]) -> str:
+        rows = task[0]
+        first = self.axes[self.names[0]][rows]
+        return (f"{self.names[0]}[{rows.start}:{rows.stop}] in [{first[0]:.6g}, "
+                f"{first[-1]:.6g}]")
+
+
+def _band_task(setting: _Setting, names: tuple[str, str], band: dict[str, np.ndarray],
+               seed: tuple[int, int], x_seed: np.ndarray, checks: bool
+               ) -> tuple[dict[str, np.ndarray], tuple[int, int, int, bool], int]:
+    """One task of :func:`multi_impact_map` (picklable, top level): the sweep of a band
+    of the grid from its seed; its outputs, ``(solved, attempts, newton_iterations,
+    capped)`` and the flows built."""
+    osc = setting.osc
+    params = (model_parameter(osc, names[0], "parameters"),
+              model_parameter(osc, names[1], "parameters"))
+    p = len(setting.pattern)
+    with compiled_interrupts():
+        tables = _Tables(osc, params, band, setting.pattern, p // 2 if setting.half else p)
+        out, _, stats = setting.sweep(tables, band, seed, x_seed, checks)
+    return out, stats, len(tables.flows)
+
+
+def _bands(setting: _Setting, params: tuple[ModelParameter, ModelParameter],
+           axes: dict[str, np.ndarray], seed: tuple[int, int], x_seed: np.ndarray,
+           rows: int) -> list[tuple[slice, int, np.ndarray]]:
+    """The tasks of a map: bands of `rows` rows of the first parameter, each seeded on the
+    seed's column (the spine: swept here first, from the seed) at the row nearest the
+    seed that the spine found; a band with none has no task (nothing of it is found).
+    A map of one band is the one sweep from the seed."""
+    first, second = params[0].name, params[1].name
+    n0 = axes[first].size
+    if rows >= n0:
+        return [(slice(0, n0), seed[0], x_seed)]
+    spine_axes = {first: axes[first], second: axes[second][seed[1]:seed[1] + 1]}
+    p = len(setting.pattern)
+    tables = _Tables(setting.osc, params, spine_axes, setting.pattern,
+                     p // 2 if setting.half else p)
+    out, unknowns, _ = setting.sweep(tables, spine_axes, (seed[0], 0), x_seed, False)
+    tasks = []
+    for start in range(0, n0, rows):
+        band = slice(start, min(start + rows, n0))
+        if band.start <= seed[0] < band.stop:
+            tasks.append((band, seed[0], x_seed))
+            continue
+        found = [r for r in range(band.start, band.stop) if out["found"][r]]
+        if found:
+            row = min(found, key=lambda r: abs(r - seed[0]))
+            tasks.append((band, row, unknowns[row].copy()))
+    return tasks
+
+
+def _seed(orbit: MultiImpactOrbit, setting: _Setting,
+          params: tuple[ModelParameter, ModelParameter], grid: dict[str, np.ndarray],
+          x_start: np.ndarray) -> tuple[tuple[int, int], np.ndarray]:
+    """The seed grid point (nearest the start) and its unknowns, reached from the start in
+    up to 32 equal steps of both parameters."""
+    osc = orbit.oscillator
+    parameters = tuple(param.name for param in params)
+    start = tuple(param.value(osc) for param in params)
+    i0, i1 = _nearest(grid, parameters, start)
+    target = (float(grid[parameters[0]][i0]), float(grid[parameters[1]][i1]))
+    for steps in _SEED_SUBSTEPS:
+        x: np.ndarray | None = x_start
+        for s in range(1, steps + 1):
+            values = {name: a + (b - a) * s / steps
+                      for name, a, b in zip(parameters, start, target, strict=True)}
+            x = setting.solve_at(params, values, x)
+            if x is None:
+                break
+        if x is not None:
+            return (i0, i1), x
+    raise NoPeriodicMotionError(
+        f"the start motion (N={orbit.N}, p={orbit.p}, pattern {orbit.pattern!r} at "
+        f"{dict(zip(parameters, start, strict=True))}) could not be followed to the nearest grid "
+        f"point {dict(zip(parameters, target, strict=True))} by Newton in up to "
+        f"{_SEED_SUBSTEPS[-1]} steps; start from a motion at or next to a grid point")
+
+
+@blas_limited
+def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
+               axes: dict[str, np.ndarray], *, symmetric: bool | None = None,
+               checks: bool = True, tol: float = 1e-11, max_iter: int = 12,
+               max_change: float = 0.5, max_attempts: int = 4, title: str | None = None,
+               executor: Any = None, max_workers: int | None = None,
+               rows_per_task: int | None = None, memory_limit: float = 1e9,
+               progress: ProgressOption = None, out: str | os.PathLike | None = None
+               ) -> xr.Dataset:
+    """The map of the motion family of `orbit` over the grid `axes` of `params`.
+
+    What :func:`impactcont.stability_map` of a motion runs once it has checked the
+    parameters, the grid and the run options (:mod:`impactcont.analysis.maps`,
+    :func:`~impactcont.analysis.map_runner.check_run_options`); the options of the
+    family's sweep are checked here. Every grid point is solved by Newton from a
+    neighbour that was solved, starting at the grid point nearest the start (reached
+    from it by Newton in a few steps): natural-parameter continuation over the grid,
+    breadth first, with a secant predictor through two solved points in line; the map
+    is one family followed from its seed (``docs/multi_maps.md``).
+
+    Parameters
+    ----------
+    orbit : MultiImpactOrbit
+        The start (an N-1 motion already as a 1-impact motion).
+    params : (ModelParameter, ModelParameter)
+        The two parameters of the oscillator of `orbit`, in grid order.
+    axes : dict
+        ``{name: strictly increasing 1-D grid}`` of both.
+    symmetric, checks, tol, max_iter, max_change, max_attempts
+        The sweep's options, as for :func:`impactcont.multi_impact_map` (checked here).
+    title, executor, max_workers, rows_per_task
+        As for :func:`impactcont.multi_impact_map`.
+    memory_limit, progress, out
+        As for :func:`impactcont.multi_impact_map`.
+
+    Returns
+    -------
+    xarray.Dataset
+        A map of the ``multi_impact_map`` layout (:mod:`impactcont.dataset.maps`).
+
+    Raises
+    ------
+    ParameterError
+        A bad option of the sweep, or a grid value where the oscillator cannot be built.
+    NoPeriodicMotionError
+        The start cannot be followed to its nearest grid point.
+    """
+    osc = orbit.oscillator
+    names = (params[0].name, params[1].name)
+    tol = positive_number("tol", tol)
+    max_change = positive_number("max_change", max_change)
+    max_iter = positive_int("max_iter", max_iter)
+    max_attempts = positive_int("max_attempts", max_attempts)
+    if not isinstance(checks, (bool, np.bool_)):
+        raise ParameterError(f"checks must be True or False; got {checks!r}")
+    half = _decide_symmetric(orbit, params, symmetric)
+    N, p = orbit.N, orbit.p
+    pattern = orbit.pattern or "U" * p
+    admits = bool(admits_symmetric_motions(osc, N, p, pattern)
+                  and all(param.keeps_symmetry for param in params))
+    if rows_per_task is not None:
+        rows_per_task = positive_int("rows_per_task", rows_per_task)
+    shape = (axes[names[0]].size, axes[names[1]].size)
+    npts = shape[0] * shape[1]
+    rows = rows_per_task or max(1, -(-_TASK_POINTS // shape[1]))
+    point_bytes = _point_bytes(osc.n, p, half)
+    in_memory = out is None and npts * point_bytes <= memory_limit
+    if not in_memory:
+        _require_dask()
+    setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
+    t0 = time.perf_counter()
+    x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
+    (s0, s1), x_seed = _seed(orbit, setting, params, axes, x_start)
+    tasks = _bands(setting, params, axes, (s0, s1), x_seed, rows)
+    t_setup = time.perf_counter() - t0
+    job = _BandJob(setting, params, axes, s1, bool(checks))
+    seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1]),
+            "index": [int(s0), int(s1)],
+            "start": {param.name: param.value(osc) for param in params}}
+    dataset = {"oscillator": osc, "N": N, "pattern": pattern, "parameters": names,
+               "grid": axes, "symmetric": half, "seed": seed, "title": title}
+    stats = _Stats()
+    runner: MapRunner | None = None
+
+    def options() -> dict[str, Any]:
+        """How the map was computed, with the sweeps' counts so far."""
+        t_sweep = time.perf_counter() - t1
+        return {"tol": tol, "max_iter": max_iter, "max_change": max_change,
+                "max_attempts": max_attempts, "checks": bool(checks),
+                "attempts": int(stats.attempts), "newton_iterations": int(stats.iterations),
+                "flows": stats.flows, "setup_seconds": round(t_setup, 4),
+                "sweep_seconds": round(t_sweep, 4), "executor": runner.name,
+                "tasks": len(tasks), "rows_per_task": rows}
+
+    t1 = time.perf_counter()
+    remove_stale_maps(once=True)  # the temporary maps of killed processes (map_storage)
+    temporary = False
+    with interruptible("multi_impact_map"), reporter(progress, "multi_impact_map",
+                                                     total=npts) as rep:
+        # the pool's workers forked before the map's arrays exist (MapRunner)
+        runner = MapRunner(job, executor, max_workers, rep)
+        unseeded = npts - sum(job.points(task) for task in tasks)  # nothing found there
+        runner.done += unseeded
+        rep.advance(unseeded)
+        task_bytes = rows * shape[1] * 2 * point_bytes  # its outputs, sent and copied in
+        try:
+            if in_memory:
+                runner.limit = max(1, int((memory_limit - npts * point_bytes) // task_bytes))
+                values, computed = _family_in_memory(runner, tasks, shape, p, 2 * osc.n,
+                                                     stats)
+            else:
+                _check_disk_floor(memory_limit, runner.in_flight)
+                runner.limit = max(1, int((memory_limit - _DISK_FIXED_BYTES) // task_bytes))
+                temporary = out is None
+                if temporary:
+                    out = temporary_map_file()
+                    log.warning("the map takes %.3g GB, more than memory_limit = %.3g GB: it is "
+                                "written to %s (removed when the returned dataset is closed) "
+                                "and returned lazily", npts * point_bytes / 1e9,
+                                memory_limit / 1e9, out)
+                path, computed = _family_to_file(runner, tasks, shape, admits, dataset, stats,
+                                                 rows, out, options)
+        except BaseException:  # a failure, or a second Ctrl-C
+            abandon(runner, out if temporary else None)
+            raise
+        runner.close(kill=computed is not None)
+
+    t_sweep = time.perf_counter() - t1
+    if stats.capped:
+        log.warning("a contact-search grid was capped at 2000000 cells on some flight of the "
+                    "map: a short excursion past a stop (eq. 16) may be missed there")
+    if checks and stats.unchecked:
+        log.warning("%d of %d found points: interior contact not checked (the constant force "
+                    "F_static moves %s by a polynomial in time through a free mode, which the "
+                    "contact search does not represent); they are not physical "
+                    "(contact_checked False)", stats.unchecked, stats.solved,
+                    osc.stops.coordinate)
+    log.info("N=%d p=%d map over %s x %s: %d of %d points found (%d Newton attempts) in "
+             "%.3g s (%.3g points/s; setup %.3g s)", N, p, names[0], names[1], stats.solved,
+             npts, stats.attempts, t_sweep, npts / t_sweep if t_sweep > 0 else math.inf,
+             t_setup)
+    if not in_memory:
+        if computed is not None:
+            log.warning("the interrupted map is kept in %s (interrupted = 1, the variable "
+                        "'computed')", out)
+        # opened once the workers are gone (a forked worker holds the file's HDF5 lock)
+        return open_temporary_map(path) if temporary else open_lazy(path)
+    if not admits:
+        del values["asymmetry"]
+    ds = multi_impact_map_dataset(values=values, options=options(), **dataset)
+    if computed is not None:
+        mark_computed(ds, computed, names)
+    return ds
+
+
+class _Stats:
+    """What the sweeps of a map found, summed over its tasks as they finish."""
+
+    def __init__(self) -> None:
+        self.solved = self.attempts = self.iterations = self.flows = self.unchecked = 0
+        self.capped = False
+
+    def add(self, values: dict[str, np.ndarray], stats: tuple[int, int, int, bool],
+            flows: int) -> None:
+        """Count a finished band; its outputs get ``contact_checked``."""
+        self.solved, self.attempts = self.solved + stats[0], self.attempts + stats[1]
+        self.iterations, self.capped = self.iterations + stats[2], self.capped or bool(stats[3])
+        self.flows += flows
+        _contact_checked(values)
+        self.unchecked += int(np.count_nonzero(values["found"] & ~values["contact_checked"]))
+
+
+def _contact_checked(values: dict[str, np.ndarray]) -> None:
+    """``contact_checked`` of a band's outputs.
+
+    The sweep leaves ``gap_min`` NaN at a found point exactly where the contact search did
+    not run (``checks=False``) or cannot represent a flight (a constant force pushing a
+    free mode that the stop coordinate sees, a polynomial in time): never physical there.
+    """
+    values["contact_checked"] = values["found"] & ~np.isnan(values["gap_min"])
+
+
+def _family_in_memory(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]],
+                      shape: tuple[int, int], p: int, m: int, stats: _Stats
+                      ) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
+    """The map's outputs in memory, each band copied in as it finishes; and the rows
+    computed if a first Ctrl-C interrupted it (else None)."""
+    npts = shape[0] * shape[1]
+    out = _empty_outputs(npts, p, m)
+    _contact_checked(out)
+    computed = np.zeros(shape[0], dtype=bool)
+    interrupted = False
+    try:
+        for (band, _, _), (values, counts, nflows) in runner.results(tasks):
+            stats.add(values, counts, nflows)
+            where = slice(band.start * shape[1], band.stop * shape[1])
+            for key, a in values.items():
+                out[key][where] = a
+            computed[band] = True
+    except KeyboardInterrupt:
+        if not keep_interrupted(runner, npts):
+            raise
+        interrupted = True
+    computed[_rows_without_task(tasks, shape[0])] = True
+    values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
+    return values, (np.broadcast_to(computed[:, None], shape).copy() if interrupted else None)
+
+
+def _rows_without_task(tasks: list[tuple[slice, int, np.ndarray]], rows: int) -> list[int]:
+    """The rows of no band: their spine point was not found, so nothing of them is."""
+    return [r for r in range(rows) if not any(t[0].start <= r < t[0].stop for t in tasks)]
+
+
+def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]],
+                    shape: tuple[int, int], admits: bool, dataset: dict[str, Any],
+                    stats: _Stats, rows: int, out: Any, options: Any
+                    ) -> tuple[Path, np.ndarray | None]:
+    """The map written to a chunked, compressed NetCDF-4 file band by band as the bands
+    finish (:func:`~impactcont.dataset.io.save_blocks`); nothing else of it in memory.
+
+    The rows of no band and, after a first Ctrl-C, those of the bands not finished are
+    written as not found; the attribute ``options`` (with the sweeps' counts) and, if
+    interrupted, ``computed``, ``interrupted`` and ``points_computed`` are set before the
+    file is moved onto `out` (never half written). Returns the file and the points computed
+    if interrupted (else None).
+    """
+    import dask.array as da
+
+    n0, n1 = shape
+    names = dataset["parameters"]
+    osc, p = dataset["oscillator"], len(dataset["pattern"])
+    empty = _empty_outputs(1, p, 2 * osc.n)
+    _contact_checked(empty)
+    if not admits:
+        del empty["asymmetry"]
+    placeholders = {key: da.empty((n0, n1, *a.shape[1:]), dtype=a.dtype, chunks=-1)
+                    for key, a in empty.items()}
+    ds = multi_impact_map_dataset(values=placeholders, options={}, **dataset)
+    encoding = {key: {"zlib": True, "complevel": 1,
+                      "chunksizes": (min(rows, n0), n1, *ds[key].shape[2:])}
+                for key in ds.data_vars}
+    computed = np.zeros(n0, dtype=bool)
+    interrupted: list[bool] = []
+
+    def block(band: slice, values: dict[str, np.ndarray]
+              ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        count = band.stop - band.start
+        return ({names[0]: band, names[1]: slice(0, n1)},
+                {key: values[key].reshape((count, n1, *values[key].shape[1:]))
+                 for key in empty if key in values})
+
+    def not_found(band: slice) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        # the floating-point variables are left unwritten: they read as their fill, NaN
+        region, values = block(band, {key: np.repeat(a, (band.stop - band.start) * n1, axis=0)
+                                      for key, a in empty.items() if a.dtype.kind not in "fc"})
+        return region, values
+
+    def blocks() -> Any:
+        try:
+            for (band, _, _), (values, counts, nflows) in runner.results(tasks):
+                stats.add(values, counts, nflows)
+                yield block(band, values)
+                computed[band] = True
+        except KeyboardInterrupt:
+            if not keep_interrupted(runner, n0 * n1):
+                raise
+            interrupted.append(True)
+            for band, _, _ in tasks:
+                if not computed[band].any():
+                    yield not_found(band)
+        for r in _rows_without_task(tasks, n0):
+            yield not_found(slice(r, r + 1))
+            computed[r] = True
+
+    def finish() -> xr.Dataset:
+        marked = xr.Dataset(attrs={"options": _options_json(options())})
+        if interrupted:
+            mark_computed(marked, np.broadcast_to(computed[:, None], shape).copy(), names)
+        return marked
+
+    path = save_blocks(ds, out, blocks(), encoding=encoding, finish=finish)
+    return path, (np.broadcast_to(computed[:, None], shape).copy() if interrupted else None)
+
+
+def _point_bytes(n: int, p: int, half: bool) -> int:
+    """Bytes of a map's outputs per grid point (:func:`_empty_outputs`, the contact flag)
+    and of its unknowns in a task."""
+    unknowns = (p // 2 if half else p) * (2 * n) + 1
+    return 8 * (6 + 2 * p + 2 * p * n + unknowns) + 8
+
+
+def _empty_outputs(npts: int, p: int, m: int) -> dict[str, np.ndarray]:
+    """The outputs of a map of `npts` points as not found (NaN, False, -1)."""
+    return {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
+            "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
+            "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
+            "critical_multiplier": np.full(npts, np.nan, complex),
+            "gap_min": np.full(npts, np.nan),
+            "impact_velocity_k": np.full((npts, p), np.nan),
+            "flight_time_k": np.full((npts, p), np.nan),
+            "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
+
+
+def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
+    """The motion of a map at one grid point, re-solved by Newton from what the map stored.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A map of :func:`multi_impact_map`.
+    **values : float
+        The grid point: a value of each of the map's two parameters (the nearest grid
+        value is taken).
+
+    Returns
+    -------
+    MultiImpactOrbit
+        With its G, multipliers and checks (:func:`impactcont.multi_impact_orbit`).
+
+    Raises
+    ------
+    ParameterError
+        Not the map's two parameters, or no motion found at that grid point.
+    """
+    validate_multi_impact_map_dataset(ds)
+    names = tuple(split_parameters(ds.attrs["parameters"]))
+    if set(values) != set(names):
+        raise ParameterError(f"give a value of each of the map's parameters {list(names)}; got "
+                             f"{sorted(values)}")
+    index = {name: int(np.argmin(np.abs(ds[name].values - float(values[name]))))
+             for name in names}
+    point = ds.isel(index)
+    where = {name: float(point[name]) for name in names}
+    if not bool(point["found"]):
+        raise ParameterError(f"no motion of the map's family was found at {where}")
+    osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
+    for name, value in where.items():
+        osc = model_parameter(osc, name, "parameters").at(osc, value)
+    guess = {"delta": float(point["delta"]), "flight_times": point["flight_time_k"].values,
+             "states": point["state_k"].values, "pattern": ds.attrs["pattern"]}
+    return multi_impact_orbit(osc, int(ds.attrs["N"]), int(ds.attrs["impacts"]), guess)
