@@ -79,6 +79,7 @@ __all__ = [
     "ROBUST_INDEXING_ATTRIBUTE",
     "SECTION_ATTRIBUTES",
     "SECTION_KINDS",
+    "SECTION_OTHER_KINDS",
     "check_attributes",
     "check_file_attributes",
     "check_pattern_attribute",
@@ -96,6 +97,9 @@ log = logging.getLogger(__name__)
 SECTION_KINDS: dict[str, str] = {
     "orbits": "orbits", "branches": "branch", "switches": "branch", "multi_impact": "branch",
     "robust": "robust", "simulations": "simulation", "curves": "curve", "maps": "map"}
+#: ``section -> the other kinds its files may hold``: a ``[[maps]]`` entry maps every N-1
+#: motion (``"map"``) or one motion family (``"multi_impact_map"``, ``start`` given).
+SECTION_OTHER_KINDS: dict[str, tuple[str, ...]] = {"maps": ("multi_impact_map",)}
 
 # Attributes every kind may carry, shown as text by ``impactcont info``.
 _TEXT = ("title", "impactcont_version", "history")
@@ -649,9 +653,11 @@ def dataset_kind(ds: xr.Dataset, section: Any = None) -> str | None:
         if expected == "branch" and tag is not None:
             raise ValueError(f"attribute 'impactcont_dataset' must be absent (a branch) in a "
                              f"file of section {section!r}; got {_shown(tag)}")
+        if tag in SECTION_OTHER_KINDS.get(section, ()):
+            return tag
         if expected != "branch" and tag != expected:
-            raise _refused("impactcont_dataset", tag,
-                           f"{expected!r} in a file of section {section!r}")
+            kinds = " or ".join(repr(k) for k in (expected, *SECTION_OTHER_KINDS.get(section, ())))
+            raise _refused("impactcont_dataset", tag, f"{kinds} in a file of section {section!r}")
         return expected
     if tag is None:
         return "branch" if "parameter" in ds.attrs else None
