@@ -464,13 +464,23 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 
 def draw_map(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     """Number of stable physical N-1 motions (period N, one impact) on the grid of the map's
-    two parameters ((omega, b), or those of its attribute ``parameters``), one panel per N."""
+    two parameters ((omega, b), or those of its attribute ``parameters``), one panel per N;
+    the map of one motion family: its regions (found, physical, stable physical) and seed
+    (:func:`impactcont.plots.maps.multi_impact_map_diagram`)."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    from impactcont.dataset.maps import map_parameters
+    from impactcont.dataset.maps import MULTI_MAP_KIND, map_parameters
     from impactcont.plots.branches import axis_label
 
     ds = next(iter(datasets.values()))
+    if ds.attrs.get("impactcont_dataset") == MULTI_MAP_KIND:
+        from impactcont.plots.maps import multi_impact_map_diagram
+
+        width = _width(plot)
+        fig = Figure(figsize=(width, 0.8 * width + 1.0), layout="constrained")
+        multi_impact_map_diagram(ds, ax=fig.add_subplot(), title="")
+        return _finish(fig, plot, f"The N={int(ds.attrs['N'])}, p={int(ds.attrs['impacts'])} "
+                                  f"motion family ({ds.attrs['pattern']})")
     first, second = map_parameters(ds)
     Ns = [int(N) for N in np.asarray(ds["N"].values)]
     cols = min(len(Ns), 2)

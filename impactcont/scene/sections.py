@@ -110,7 +110,8 @@ CURVES = _section("curves", twoparam.CurveSpec, f"{_TWO}:CURVES", "Two-parameter
      {"check": twoparam.check_curves_plot}),))
 MAPS = _section("maps", twoparam.MapSpec, f"{_TWO}:MAPS", "Stability maps", (
     ("map", False, "draw_map",
-     "number of stable physical motions on the (omega, b) grid, one panel per N"),))
+     "number of stable physical N-1 motions on the grid of the two parameters, one panel "
+     "per N; the regions of a motion family's map"),))
 SWITCHES = _section("switches", switches.SwitchSpec, f"{_SWITCH}:SWITCHES",
                     "Branches switched at special points", (
     ("switch_multipliers", False, "draw_multipliers",

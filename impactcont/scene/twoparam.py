@@ -4,9 +4,12 @@
 parameters with :func:`impactcont.analysis.curves.curve`, started from a special point
 of a computed ``[[branches]]`` entry, from explicit values, or from a
 one-parameter continuation; ``[[maps]]`` evaluates the existence,
-physicality and stability of every N-1 motion on an ``(omega, b)`` grid with
-:func:`impactcont.analysis.maps.stability_map`. Both datasets follow
-:mod:`impactcont.dataset.curves` (``docs/two_parameter.md``). The sections are
+physicality and stability of motions over a grid of any two parameters with
+:func:`impactcont.analysis.maps.stability_map`: every N-1 motion of the entry's
+oscillator (closed form), or the N-p family through the motion a ``[[simulations]]``
+entry settled on (``start``, ``N``, ``p``, as ``[[multi_impact]]`` takes it). The
+datasets follow :mod:`impactcont.dataset.curves` and :mod:`impactcont.dataset.maps`
+(``docs/two_parameter.md``, ``docs/scenes.md``). The sections are
 registered by :mod:`impactcont.scene.sections`.
 """
 
@@ -25,10 +28,12 @@ import xarray as xr
 
 from impactcont.analysis.curves import check_curve_arguments, curve
 from impactcont.analysis.map_runner import SCHEDULER_PROTOCOLS
-from impactcont.analysis.maps import stability_map
+from impactcont.analysis.maps import map_plane, stability_map
 from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.maps import MULTI_MAP_KIND, map_parameters
 from impactcont.errors import ImpactcontError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.problems.codim1 import curve_problem
 from impactcont.scene.entries import (
     CONTINUATION_KEYS,
@@ -54,6 +59,7 @@ from impactcont.scene.keys import (
     declare,
     show,
 )
+from impactcont.scene.switches import simulation_seed
 from impactcont.scene.tasks import markdown_table
 from impactcont.vocabulary import CURVE_KINDS
 
@@ -294,67 +300,202 @@ def map_executor(entry: Any) -> str:
     return entry.scheduler if entry.executor == "dask" else entry.executor
 
 
+class _Points(ValueType):
+    allowed = "an array [n1, n2] of grid points of the two parameters, each 2 .. 100000"
+
+    def check(self, value: Any, where: Where) -> tuple[int, int]:
+        if not isinstance(value, list) or len(value) != 2:
+            raise self.fail(value, where, "not two numbers of points")
+        return (Integer(2, 100_000).check(value[0], where.key("0")),
+                Integer(2, 100_000).check(value[1], where.key("1")))
+
+
+#: The keys of the (omega, b) spelling of a map's grid, and what replaces them in any plane.
+_OMEGA_B_KEYS = ("omega_range", "omega_points", "b_range", "b_points")
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class MapSpec(EntrySpec):
-    """``[[maps]]``: existence, physicality and stability of N-1 motions on an (omega, b) grid."""
+    """``[[maps]]``: existence, physicality and stability of motions over a grid of two
+    parameters: every N-1 motion (closed form), or the N-p family through a simulated
+    motion (``start``, ``p``)."""
 
     section: ClassVar[str] = "maps"
 
-    N: tuple[int, ...] = declare(_NList(), "forcing periods per impact", (1, 2, 3, 4))
-    omega_range: tuple[float, float] = declare(Interval(PARAMETER_RANGES["omega"]),
-                                               "[lo, hi] of the omega grid", required=True)
-    omega_points: int = declare(Integer(2, 100_000), "points of the omega grid", 101)
-    b_range: tuple[float, float] = declare(Interval(), "[lo, hi] of the b grid",
-                                           required=True)
-    b_points: int = declare(Integer(2, 100_000), "points of the b grid", 101)
+    N: tuple[int, ...] = declare(_NList(), "forcing periods per impact (one N with start)",
+                                 (1, 2, 3, 4))
+    parameters: tuple[str, str] = declare(_ParameterPair(), "the two parameters [p1, p2] "
+                                          "(elements too: \"k2\", \"gap[A]\", ...)",
+                                          ("omega", "b"))
+    ranges: Mapping[str, tuple[float, float]] | None = declare(
+        _Bounds(), "the box of the two parameters {p1 = [lo, hi], p2 = [lo, hi]}")
+    points: tuple[int, int] | None = declare(_Points(), "grid points [n1, n2] of the two "
+                                             "parameters (default 101 each)")
+    omega_range: tuple[float, float] | None = declare(
+        Interval(PARAMETER_RANGES["omega"]), "[lo, hi] of the omega grid (the (omega, b) "
+        "plane; or ranges)")
+    omega_points: int | None = declare(Integer(2, 100_000), "points of the omega grid (101)")
+    b_range: tuple[float, float] | None = declare(Interval(), "[lo, hi] of the b grid (the "
+                                                  "(omega, b) plane; or ranges)")
+    b_points: int | None = declare(Integer(2, 100_000), "points of the b grid (101)")
+    start: str | None = declare(ENTRY_NAME, "a [[simulations]] entry whose last p + 1 impacts "
+                                "seed the N-p motion whose family is mapped")
+    p: int | None = declare(Integer(1, 1000), "impacts per motion (with start)")
     executor: str = declare(String(MAP_EXECUTORS),
                             "run in this process, in a process pool or on a dask cluster",
                             "serial")
     max_workers: int | None = declare(Integer(1, 1024), "processes of the pool")
     scheduler: str | None = declare(String(pattern=SCHEDULER, pattern_text=SCHEDULER_ALLOWED),
                                     "address of the dask scheduler (executor \"dask\")")
+    memory_limit: float = declare(Real(0, low_open=True), "bytes the map may take before it "
+                                  "goes to a temporary file", 1e9)
+
+    def grid(self) -> dict[str, np.ndarray]:
+        """``{parameter: grid}`` of the entry, in the order of ``parameters``."""
+        first, second = self.parameters
+        if self.ranges is not None:
+            n1, n2 = self.points or (101, 101)
+            return {first: np.linspace(*self.ranges[first], n1),
+                    second: np.linspace(*self.ranges[second], n2)}
+        return {"omega": np.linspace(*self.omega_range, self.omega_points or 101),
+                "b": np.linspace(*self.b_range, self.b_points or 101)}
 
     def check(self, where: Where, osc: ImpactOscillator) -> None:
-        for key in ("omega", "b"):
-            if getattr(self, key) is not None:
-                raise where.key(key).error(f"a map spans {key}_range; {key} is not used",
-                                           f"{key}_range and {key}_points")
-        if len(self.N) * self.omega_points * self.b_points > 50_000_000:
-            raise where.key("omega_points").error(
-                "the grid is too large", "at most 5e7 points over N x omega x b")
-        check_closed_form(osc, where, "the N-1 stability map")
+        for key in self.parameters:
+            if key in self.changes:
+                raise where.key(key).error(f"a map spans {key}; the entry's {key} is not used",
+                                           "the grid of the map's parameters: ranges, or "
+                                           f"{key}_range and {key}_points" if key in ("omega", "b")
+                                           else "ranges and points")
+        self._check_grid_keys(where)
+        if self.start is None:
+            for key in ("p",):
+                if getattr(self, key) is not None:
+                    raise where.key(key).error(f"{key} is the impacts of the motion of start",
+                                               "start = a [[simulations]] entry, with p")
+            check_closed_form(osc, where, "the N-1 stability map")
+            library_check(where.key("ranges"), map_plane, osc, self.parameters, self.grid())
+        else:
+            if self.p is None:
+                raise where.key("p").error("a map from a simulated motion needs its impacts",
+                                           "p = the impacts of the motion in N periods")
+            if len(self.N) != 1:
+                raise where.key("N").error(f"{list(self.N)}: the family of one motion has one N",
+                                           "one integer N, the forcing periods of the motion")
+        n1, n2 = (g.size for g in self.grid().values())
+        if len(self.N) * n1 * n2 > 50_000_000:
+            raise where.key("points" if self.ranges is not None else "omega_points").error(
+                "the grid is too large", "at most 5e7 points over N x p1 x p2")
         check_map_executor(self, where)
+
+    def _check_grid_keys(self, where: Where) -> None:
+        """The grid is given once: ``ranges`` (and ``points``) for any pair, or the (omega, b)
+        keys for the (omega, b) plane."""
+        given = [key for key in _OMEGA_B_KEYS if getattr(self, key) is not None]
+        if self.ranges is not None:
+            if given:
+                raise where.key(given[0]).error(
+                    "the grid is given by ranges; this key is the (omega, b) spelling",
+                    "ranges and points, without omega_range, omega_points, b_range, b_points")
+            if set(self.ranges) != set(self.parameters):
+                raise where.key("ranges").error(
+                    f"gives {sorted(self.ranges)} for parameters {list(self.parameters)}",
+                    f"exactly the two parameters {list(self.parameters)}")
+            return
+        if self.parameters != ("omega", "b"):
+            raise where.key(given[0] if given else "ranges").error(
+                f"a map over {list(self.parameters)} needs the grid of both",
+                "ranges = {" + ", ".join(f"{json.dumps(n) if not n.isidentifier() else n} = "
+                                         "[lo, hi]" for n in self.parameters)
+                + "} and points = [n1, n2]")
+        if self.points is not None:
+            raise where.key("points").error("points go with ranges",
+                                            "omega_points and b_points, or ranges and points")
+        for key in ("omega_range", "b_range"):
+            if getattr(self, key) is None:
+                raise where.key(key).error("a map of the (omega, b) plane needs the range of both",
+                                           f"{key} = [lo, hi], or ranges")
+
+    def check_scene(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]]
+                    ) -> None:
+        if self.start is None:
+            return
+        simulations = {e.name: e for e in sections.get("simulations", ())}
+        if self.start not in simulations:
+            raise where.key("start").error(f"{self.start!r} is not a [[simulations]] entry",
+                                           ", ".join(simulations) or "a [[simulations]] entry")
+        refuse_changes(self, where, "the motion is found at the oscillator of the simulation "
+                       "it starts from")
+        osc = simulations[self.start].oscillator
+        library_check(where.key("ranges"), map_plane, osc, self.parameters, self.grid())
 
 
 class Maps:
-    """``[[maps]]``: :func:`impactcont.analysis.maps.stability_map`."""
+    """``[[maps]]``: :func:`impactcont.analysis.maps.stability_map` of the entry's oscillator
+    (every N-1 motion) or of the motion its simulation settled on (that motion's family)."""
 
     def compute(self, entry: MapSpec, context: Any = None) -> xr.Dataset:
         t0 = time.perf_counter()
-        ds = stability_map(entry.oscillator, N=list(entry.N),
-                           omega=np.linspace(*entry.omega_range, entry.omega_points),
-                           b=np.linspace(*entry.b_range, entry.b_points),
-                           executor=map_executor(entry), max_workers=entry.max_workers)
+        grid = entry.grid()
+        run = {"executor": map_executor(entry), "max_workers": entry.max_workers,
+               "memory_limit": entry.memory_limit}
+        if entry.start is None:
+            ds = stability_map(entry.oscillator, N=list(entry.N), parameters=entry.parameters,
+                               grid=grid, **run)
+            what = f"N = {list(entry.N)}"
+        else:
+            sim = context.datasets.get("simulations", {}).get(entry.start) \
+                if context is not None else None
+            if sim is None:
+                raise ImpactcontError(f"map {entry.name}: its start {entry.start!r} was not "
+                                      f"computed (it failed)")
+            osc = ImpactOscillator.from_json(sim.attrs["oscillator"])
+            seed = _MotionOf(name=entry.name, start=entry.start, N=entry.N[0], p=entry.p)
+            motion = multi_impact_orbit(osc, seed.N, seed.p, simulation_seed(sim, seed, osc))
+            ds = stability_map(motion, parameters=entry.parameters, grid=grid, **run)
+            ds.attrs["start"] = entry.start
+            what = f"the {seed.N}-{seed.p} family of simulation {entry.start}"
         ds.attrs["name"] = entry.name
-        log.info("map %s: N = %s on %d x %d points (%.1f s)", entry.name, list(entry.N),
-                 entry.omega_points, entry.b_points, time.perf_counter() - t0)
+        log.info("map %s: %s over %s on %d x %d points (%.1f s)", entry.name, what,
+                 "/".join(entry.parameters), *(g.size for g in grid.values()),
+                 time.perf_counter() - t0)
         return ds
 
     def describe(self, datasets: Mapping[str, xr.Dataset]) -> list[str]:
         rows = []
         for name, ds in datasets.items():
-            w, b = np.asarray(ds["omega"].values), np.asarray(ds["b"].values)
+            first, second = map_parameters(ds)
+            x, y = np.asarray(ds[first].values), np.asarray(ds[second].values)
+            grid = [f"{first} in [{x.min():.6g}, {x.max():.6g}] x {x.size}",
+                    f"{second} in [{y.min():.6g}, {y.max():.6g}] x {y.size}"]
+            if ds.attrs.get("impactcont_dataset") == MULTI_MAP_KIND:
+                found = np.asarray(ds["found"].values, dtype=bool)
+                stable = found & np.asarray(ds["stable"].values & ds["physical"].values,
+                                            dtype=bool)
+                rows.append([name, f"{int(ds.attrs['N'])}-{int(ds.attrs['impacts'])} family "
+                             f"({ds.attrs['pattern']})", *grid,
+                             f"{100 * found.mean():.1f}%", f"{100 * stable.mean():.1f}%"])
+                continue
             for N in np.asarray(ds["N"].values):
                 stable = np.asarray(ds["n_stable"].sel(N=N).values) > 0
                 exists = np.asarray(ds["exists"].sel(N=N).values, dtype=bool)
-                rows.append([name, int(N), f"[{w.min():.6g}, {w.max():.6g}] x {w.size}",
-                             f"[{b.min():.6g}, {b.max():.6g}] x {b.size}",
+                rows.append([name, f"N = {int(N)}, every N-1 motion", *grid,
                              f"{100 * exists.mean():.1f}%", f"{100 * stable.mean():.1f}%"])
-        return markdown_table(["map", "N", "omega grid", "b grid", "motion exists",
-                       "stable physical motion"], rows)
+        return markdown_table(["map", "motions", "first parameter", "second parameter",
+                               "motion exists (found)", "stable physical motion"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         return []
+
+
+@dataclasses.dataclass(frozen=True)
+class _MotionOf:
+    """What :func:`~impactcont.scene.switches.simulation_seed` reads of an entry."""
+
+    name: str
+    start: str
+    N: int
+    p: int
 
 
 MAPS = Maps()

@@ -104,3 +104,115 @@ def test_a_scene_map_on_a_dask_scheduler(tmp_path: Path) -> None:
         ds = read_output(tmp_path / "o" / "maps.nc").datasets["m"]
         assert '"executor": "dask.distributed"' in ds.attrs["options"]
         assert ds.sizes["omega"] == 8 and bool(ds["exists"].any())
+
+
+# -- maps over any two parameters, of any motion (issue 29, item 5) --------------------------
+PLANE = ('[[maps]]\nname = "k2b"\nN = 1\nparameters = ["k2", "b"]\n'
+         "ranges = { k2 = [1.5, 2.5], b = [0.4, 0.7] }\npoints = [5, 4]\n")
+
+
+@pytest.mark.parametrize(("text", "key", "words"), [
+    (PLANE.replace("ranges = { k2 = [1.5, 2.5], b = [0.4, 0.7] }", "ranges = { k2 = [1.5, 2.5] }"),
+     "maps[0].ranges", "exactly the two parameters ['k2', 'b']"),
+    (PLANE.replace("ranges = { k2 = [1.5, 2.5], b = [0.4, 0.7] }\npoints = [5, 4]\n",
+                   "omega_range = [0.9, 1.6]\nb_range = [0.4, 0.7]\n"),
+     "maps[0].omega_range", "ranges = {k2 = [lo, hi], b = [lo, hi]}"),
+    (PLANE + "omega_range = [0.9, 1.6]\n", "maps[0].omega_range", "without omega_range"),
+    (PLANE.replace("[1.5, 2.5]", "[-1.5, 2.5]"), "maps[0].ranges.k2", "> 0"),
+    (PLANE.replace('"k2"', '"M[1,2]"').replace("k2 = [1.5, 2.5]", '"M[1,2]" = [0.5, 1.5]'),
+     "maps[0].ranges", "M[1,2]"),
+    (PLANE.replace("points = [5, 4]", "points = [5]"), "maps[0].points", "[n1, n2]"),
+    (PLANE + "p = 2\n", "maps[0].p", "start = a [[simulations]] entry"),
+    (PLANE + "memory_limit = 0\n", "maps[0].memory_limit", "> 0"),
+    (PLANE + "k2 = 2.0\n", "maps[0].k2", None),
+    (MAP + "points = [5, 4]\n", "maps[0].points", "ranges and points"),
+    (PLANE.replace("N = 1", 'N = [1, 2]\nstart = "nope"\np = 1'), "maps[0].N", "one integer N"),
+    (PLANE.replace("N = 1", 'N = 1\nstart = "nope"\np = 1'), "maps[0].start",
+     "a [[simulations]] entry"),
+])
+def test_map_plane_and_motion_validation(tmp_path: Path, text: str, key: str, words) -> None:
+    """Each key of a map over any two parameters, or of a motion's family, is refused by
+    name with what is allowed."""
+    err = error(tmp_path, text)
+    assert err.key == key, (err.key, str(err))
+    if words is not None:
+        assert words in (err.allowed or "") or words in str(err), (str(err), err.allowed)
+
+
+def test_a_scene_maps_an_element_and_the_gap(tmp_path: Path) -> None:
+    """A [[maps]] entry over (k2, b): the closed form's map of stability_map over that pair."""
+    import numpy as np
+    import xarray as xr
+
+    import impactcont as ic
+
+    text = OSCILLATOR + PLANE + '[[plots]]\nname = "mp"\nkind = "map"\n'
+    result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+    assert result.ok, result.failures
+    ds = read_output(tmp_path / "o" / "maps.nc").datasets["k2b"]
+    osc = load_scene(write(tmp_path, text)).sections["maps"][0].oscillator
+    direct = ic.stability_map(osc, 1, parameters=("k2", "b"),
+                              grid={"k2": np.linspace(1.5, 2.5, 5), "b": np.linspace(0.4, 0.7, 4)})
+    assert ds.attrs["parameters"] == "k2,b" and dict(ds.sizes) == dict(direct.sizes)
+    for key in ("exists", "n_stable", "stable", "physical"):
+        xr.testing.assert_equal(ds[key], direct[key])
+    assert (tmp_path / "o" / "mp.png").is_file()
+    assert "k2 in [1.5, 2.5] x 5" in (tmp_path / "o" / "summary.md").read_text()
+
+
+FAMILY = """
+[[simulations]]
+name = "settled"
+omega = 1.8
+periods = 200
+perturbation = 1e-3
+
+[[maps]]
+name = "family"
+start = "settled"
+N = 2
+p = 2
+parameters = ["omega", "b"]
+ranges = { omega = [1.76, 1.8], b = [-0.02, 0.02] }
+points = [3, 3]
+executor = "process"
+max_workers = 2
+
+[[plots]]
+name = "fam"
+kind = "map"
+"""
+
+
+def test_a_scene_maps_the_family_of_a_simulated_motion(tmp_path: Path) -> None:
+    """A [[maps]] entry with start = a simulation, N and p: the map of the N-p family through
+    the motion it settled on (the motion [[multi_impact]] starts its branch from), run on a
+    process pool, the same as stability_map of that motion in this process."""
+    import numpy as np
+    import xarray as xr
+
+    import impactcont as ic
+    from impactcont.scene.switches import simulation_seed
+    from impactcont.scene.twoparam import _MotionOf
+
+    # the system of tests/scene/test_switches.py, whose simulation settles on a 2-2 motion
+    system = OSCILLATOR.replace("b = 0.6", "b = 0.0").replace("omega = 1.0", "omega = 1.75")
+    result = run_scene(write(tmp_path, system + FAMILY), output=tmp_path / "o")
+    assert result.ok, result.failures
+    ds = read_output(tmp_path / "o" / "maps.nc").datasets["family"]
+    assert ds.attrs["impactcont_dataset"] == "multi_impact_map" and ds.attrs["start"] == "settled"
+    assert (int(ds.attrs["N"]), int(ds.attrs["impacts"])) == (2, 2) and bool(ds["found"].all())
+    assert '"executor": "process"' in ds.attrs["options"]
+    sim = read_output(tmp_path / "o" / "simulations.nc").datasets["settled"]
+    osc = ic.ImpactOscillator.from_json(sim.attrs["oscillator"])
+    motion = ic.multi_impact_orbit(osc, 2, 2, simulation_seed(sim, _MotionOf("family", "settled",
+                                                                           2, 2), osc))
+    direct = ic.stability_map(motion, parameters=("omega", "b"),
+                              grid={"omega": np.linspace(1.76, 1.8, 3),
+                                    "b": np.linspace(-0.02, 0.02, 3)})
+    for key in ("found", "stable", "physical", "newton_iterations"):
+        xr.testing.assert_equal(ds[key], direct[key])
+    np.testing.assert_allclose(ds["state_k"].values, direct["state_k"].values, rtol=0,
+                               atol=1e-9)
+    assert (tmp_path / "o" / "fam.png").is_file()
+    assert "2-2 family" in (tmp_path / "o" / "summary.md").read_text()
