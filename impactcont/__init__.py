@@ -39,7 +39,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(("multi_impact_curve", "multi_impact_curve_crossings"),
                     "impactcont.analysis.curves"),
     **dict.fromkeys(("multi_impact_map", "multi_impact_map_orbit"),
-                    "impactcont.analysis.multi_maps"),
+                    "impactcont.analysis.maps"),
     "Flow": "impactcont.orbit.flow",
     **dict.fromkeys(("displacement_extrema", "max_displacement", "min_displacement"),
                     "impactcont.orbit.extrema"),
@@ -143,9 +143,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
         multi_impact_curve,
         multi_impact_curve_crossings,
     )
-    from impactcont.analysis.maps import stability_map
+    from impactcont.analysis.maps import multi_impact_map, multi_impact_map_orbit, stability_map
     from impactcont.analysis.multi_branch import multi_impact_continuation
-    from impactcont.analysis.multi_maps import multi_impact_map, multi_impact_map_orbit
     from impactcont.analysis.switching import (
         Cascade,
         grazing_switch,
