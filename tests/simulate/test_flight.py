@@ -100,3 +100,21 @@ def test_the_split_flight_is_the_matrix_exponential(params):
     fd = (motion.derivatives(t + h)[0] - motion.derivatives(t - h)[0]) / (2 * h)
     np.testing.assert_allclose(fd, s[1], rtol=0, atol=1e-8 * size.max())
 
+
+
+def test_both_evaluations_find_the_same_impacts_of_an_undamped_free_ball(monkeypatch):
+    """The split flight (polynomial part) and the matrix exponential at every evaluation
+    find the same impacts of the ball of a two-mass primary with a dashpot on mass 1 over
+    six forcing periods from a state near its periodic motion: the same stops, times to
+    1e-11, velocities to 1e-10."""
+    osc = ImpactOscillator(**{**_DAMPER, "F": [1.0, 0.0, 0.0], "b": 1.0, "R": 0.8,
+                              "omega": 2.0})
+    X0 = np.array([0.4409, 0.165, -0.835, -0.1653, -0.2599, 1.0632])  # s = x3 - x2 = -1
+    assert flight_module.Flight(osc).chains is not None
+    fast = simulate(osc, X0, 3.1359, 6.0)
+    _slow_path(monkeypatch)
+    assert not flight_module.Flight(osc).fast
+    slow = simulate(osc, X0, 3.1359, 6.0)
+    assert fast.impact_stops == slow.impact_stops and fast.impact_times.size >= 10
+    np.testing.assert_allclose(fast.impact_times, slow.impact_times, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(fast.impact_velocities, slow.impact_velocities, rtol=1e-10)
