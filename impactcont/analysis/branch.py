@@ -1,9 +1,23 @@
-"""One-parameter branches of periodic N-1 motions: continuation, detection, dataset.
+"""One-parameter branches of periodic motions: the one driver (continuation, detection,
+dataset) of every motion.
 
-``continuation(osc, N, parameter, bounds)`` = pick a start root of eq. (15)
--> follow eq. (14) with the pseudo-arclength core -> evaluate every accepted
-point (state, G, multipliers, checks) -> detect and locate the special points
--> an :class:`xarray.Dataset` in the schema of :mod:`impactcont.dataset`.
+``continuation(start, parameter, bounds)`` = the branch problem over the motion
+(:mod:`impactcont.problems.motion`) and its seed -> follow it with the pseudo-arclength
+core (:func:`trace_branch`) -> the motion at every accepted point -> detect and locate
+the kinds the problem declares (:func:`~impactcont.detection.special_points.detect_special_points`)
+and the user's events -> one dataset (:func:`branch_to_dataset`).
+
+The problem is the N-1 closed form (:class:`~impactcont.problems.PeriodicBranchProblem`,
+eq. 14: the exact, fast evaluator) for an oscillator and N, or an N-1 motion of the
+paper's system; the shooting system of any other motion
+(:class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`, or
+:class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem` for a symmetric
+one). The closed form's own steps are its hooks, not a second driver: the existence scan
+and both roots of eq. (15) seed every connected component
+(``start_value``, ``start_root``, ``component_seeds``), its folds are located exactly
+(``locate_fold``), and its datasets keep the paper's N-1 schema; a shooting branch's
+dataset has the ``impact`` dimension (:mod:`impactcont.dataset.multi`), its stop rule
+ends a period-doubled branch where it returns to its parent.
 """
 
 from __future__ import annotations
@@ -13,22 +27,23 @@ import json
 import logging
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy.optimize import minimize_scalar
 
-from impactcont.analysis.multi_branch import (
-    multi_impact_continuation,
-    restart_problem,
-    run_branch,
+from impactcont.core import (
+    ContinuationOptions,
+    ContinuationPoint,
+    ContinuationStatus,
+    Stop,
+    follow,
 )
-from impactcont.core import ContinuationOptions, ContinuationStatus, continue_branch
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
 from impactcont.dataset import branch_dataset
+from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
 from impactcont.dataset.records import (
     orbit_columns,
     reserved_names,
@@ -45,23 +60,30 @@ from impactcont.dataset.schema import (
     special_variable,
     validate_branch_dataset,
 )
-from impactcont.detection import BranchSample, SpecialPoint, detect_special_points
+from impactcont.detection.points import SpecialPoint
 from impactcont.detection.special_points import (
+    BranchSample,
     UserFunctions,
     check_user_functions,
-    locate_user_events,
+    detect_special_points,
+    locate_sample_events,
     user_values,
 )
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import RESTITUTION, model_parameter
-from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
+from impactcont.model.parameters import model_parameter
+from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
+from impactcont.orbit.periodic import PeriodicOrbit, _check_N
+from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems import PeriodicBranchProblem
+from impactcont.problems.events import PERIOD_DOUBLING
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.progress import (
     NothingComputed,
     ProgressOption,
     Reporter,
+    check_progress,
     interrupted,
     interruptible,
     reporter,
@@ -71,38 +93,21 @@ from impactcont.progress import (
 from impactcont.threads import blas_limited
 from impactcont.vocabulary import LABELS, check_bounds, check_labels
 
-__all__ = ["check_continuation_arguments", "continuation", "continuation_from", "extend"]
+__all__ = ["as_multi_impact_orbit", "branch_problem", "branch_to_dataset",
+           "check_continuation_arguments", "continuation", "continuation_from", "extend",
+           "make_options", "multi_impact_continuation", "restart_problem", "run_branch",
+           "trace_branch"]
 
 log = logging.getLogger(__name__)
 
+#: The problem of a branch: the N-1 closed form, any N-p motion, a symmetric one by its half.
+BranchProblem = PeriodicBranchProblem | MultiImpactBranchProblem | SymmetricBranchProblem
+
 _DEFAULTS = {"newton_tol": 1e-12}
 """The closed form is exact to rounding: a tighter Newton tolerance than the other drivers'."""
-_EXISTENCE_SCAN = 400
+_SHOOTING_DEFAULTS = {"newton_tol": 1e-11}
+"""The shooting residual of a long motion is accurate to about 1e-12."""
 _SAME_ROOT = 0.05  # rad: a seed this close to a computed point of a component lies on it
-
-
-def _refuse_elastic(osc: ImpactOscillator, parameter: str, lo: float, hi: float) -> None:
-    """Refuse a range that reaches elastic impacts without damping (R = 1, C = 0).
-
-    There eq. (12) is singular and eq. (14) is replaced by ``x1p'(delta) = 0``
-    (``docs/kernel.md``): the branch equation changes, so a branch cannot be followed
-    into that case; :func:`impactcont.periodic_orbits` solves it point by point.
-    """
-    if osc.general_damping:  # only whether the damping vanishes matters here
-        alpha, beta = (1.0 if np.any(osc.C) else 0.0), 0.0
-    else:
-        alpha, beta = osc.rayleigh
-    undamped = {"eta": lo == 0.0, "alpha": lo == 0.0 and beta == 0.0,
-                "beta": lo == 0.0 and alpha == 0.0}.get(parameter, alpha == 0.0 and beta == 0.0)
-    param = model_parameter(osc, parameter)
-    # a parameter that is the stop's restitution (eq. 4) reaches R = 1 at hi >= 1
-    elastic = hi >= 1.0 if param.data == RESTITUTION and param.upper else osc.R == 1.0
-    if undamped and elastic:
-        raise ParameterError(
-            f"continuation in {parameter} over [{lo!r}, {hi!r}] reaches elastic impacts without "
-            "damping (R = 1, no damping), where eq. (12) is singular and the motions obey "
-            "another equation; use periodic_orbits at each value there, add damping or keep "
-            "R below 1")
 
 
 def check_continuation_arguments(
@@ -164,43 +169,504 @@ def check_continuation_arguments(
         bounds = options.bounds
     # the shared check, then both ends on the oscillator (an element of K keeps K PSD)
     lo, hi = problem.param.check_bounds(osc, bounds)
-    _refuse_elastic(osc, parameter, lo, hi)
+    problem.check_bounds((lo, hi))  # the closed form's own limit: elastic without damping
     opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, **single)
     if components not in ("all", "start"):
         raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
     return problem, detect, (lo, hi), opts
 
 
-def _start_value(problem: PeriodicBranchProblem, bounds: tuple[float, float],
-                 start: float | None) -> float:
-    lo, hi = bounds
-    if start is not None:
-        if not lo <= start <= hi:
-            raise ParameterError(f"start must lie within bounds {bounds}; got {start!r}")
-        return float(start)
-    current = problem.param.value(problem.osc)
-    candidates = [current] if lo <= current <= hi else []
-    candidates += list(np.linspace(lo, hi, _EXISTENCE_SCAN))
-    for lam in candidates:
-        c, s, b = problem.amplitude(float(lam))
-        if c * c + s * s >= b * b:
-            return float(lam)
-    raise NoPeriodicMotionError(
-        f"no N={problem.N} motion anywhere in {problem.parameter} in {bounds} "
-        f"(c^2 + s^2 < b^2 at all {_EXISTENCE_SCAN} values scanned)")
+def as_multi_impact_orbit(start: Any) -> MultiImpactOrbit:
+    """The N-p motion a continuation or a map starts from.
+
+    Parameters
+    ----------
+    start : MultiImpactOrbit or PeriodicOrbit
+        The motion; an N-1 :class:`~impactcont.orbit.periodic.PeriodicOrbit` is taken
+        as the N-1 multi-impact motion it is.
+
+    Returns
+    -------
+    MultiImpactOrbit
+
+    Raises
+    ------
+    TypeError
+        `start` is neither.
+    """
+    if isinstance(start, MultiImpactOrbit):
+        return start
+    if isinstance(start, PeriodicOrbit):
+        return multi_impact_orbit(start.oscillator, start.N, 1, start)
+    raise TypeError(f"start must be a MultiImpactOrbit (multi_impact_orbit, special_orbit) or a "
+                    f"PeriodicOrbit (periodic_orbits); got {type(start).__name__}")
 
 
-def _start_root(problem: PeriodicBranchProblem, lam: float, root: int | None) -> float:
-    orbits = periodic_orbits(problem.oscillator_at(lam), problem.N)
-    if not orbits:
-        raise NoPeriodicMotionError(f"no N={problem.N} motion at {problem.parameter}={lam!r}")
-    if root is not None:
-        if root not in (1, -1):
-            raise ParameterError(f"root must be +1, -1 or None; got {root!r}")
-        chosen = [o for o in orbits if o.root == root] or orbits
+def make_options(bounds: Sequence[float], options: ContinuationOptions | None = None,
+                 **keywords: Any) -> ContinuationOptions:
+    """The options of an N-p branch: the drivers' defaults < `options` < `keywords`.
+
+    See :func:`impactcont.core.options.driver_options`; ``None`` keywords are not given.
+    """
+    lo, hi = (float(v) for v in bounds)
+    return driver_options(options, (lo, hi), defaults=_SHOOTING_DEFAULTS, **keywords)
+
+
+def _pd_sign_change(a: MultiImpactOrbit, b: MultiImpactOrbit) -> bool:
+    """Whether the PD test changes sign between two motions, not through a pole of G.
+
+    The pole-free PD test (:data:`~impactcont.problems.events.PERIOD_DOUBLING`) is cleared by the
+    impact velocities: one of them changing sign (a zero-velocity impact, the pole of G of
+    eq. 25) changes the test's sign without a multiplier through -1.
+    """
+    fa, fb = PERIOD_DOUBLING.test(a), PERIOD_DOUBLING.test(b)
+    near = min(np.min(np.abs(a.multipliers + 1)), np.min(np.abs(b.multipliers + 1)))
+    through_pole = bool(np.any((a.impact_velocities < 0) != (b.impact_velocities < 0)))
+    return bool(math.isfinite(fa) and math.isfinite(fb) and (fa < 0) != (fb < 0)
+                and near < 0.5 and not through_pole)
+
+
+_PARENT_TOL = 1e-9
+
+
+def _asymmetry(orbit: MultiImpactOrbit) -> np.ndarray | None:
+    """How far an N-p motion (N, p even) is from its N/2-p/2 half repeated twice.
+
+    ``[X_k - X_{k+p/2}, tau_k - tau_{k+p/2}, theta_k - theta_{k+p/2}]`` for
+    ``k < p/2``; zero exactly on the repeated half-motion. Across the
+    period-doubling of the half-motion the branch of N-p motions comes back as
+    its own mirror image (halves swapped), so this vector changes sign there.
+    None when N or p is odd, or when the halves hit different stops (pattern
+    ``"UL"``: no repeated half-motion can be met on the branch).
+    """
+    if orbit.p % 2 or orbit.N % 2:
+        return None
+    h = orbit.p // 2
+    pattern = orbit.pattern or ""
+    if pattern[:h] != pattern[h:]:
+        return None
+    dphase = np.remainder(orbit.phases[:h] - orbit.phases[h:] + math.pi, 2 * math.pi) - math.pi
+    return np.concatenate([(orbit.states[:h] - orbit.states[h:]).ravel(),
+                           orbit.flight_times[:h] - orbit.flight_times[h:], dphase])
+
+
+class _Watch:
+    """The stop rule of one direction of a branch; keeps the orbit of every kept point.
+
+    Stops when the branch returns to the motion it was born from (the N/2-p/2
+    motion repeated twice, or its mirror image: that point is left out) and,
+    with `stop_after_pd`, that many points after the first sign change of the
+    PD test function. A problem whose motions are evaluated after the run
+    (``motion_in_step = False``, the closed form) keeps None for each point unless a
+    rule or `on_point` needs the motion.
+    """
+
+    def __init__(self, problem: BranchProblem, stop_after_pd: int | None,
+                 on_point: Callable[[Any], None] | None) -> None:
+        self.problem = problem
+        self.stop_after_pd = stop_after_pd
+        self.on_point = on_point
+        self.orbits: list[Any] = []
+        self.reference: np.ndarray | None = None
+        self.remaining: int | None = None
+        self.eager = (getattr(problem, "motion_in_step", True) or stop_after_pd is not None
+                      or on_point is not None or (problem.N % 2 == 0 and problem.p % 2 == 0))
+
+    def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
+                 ) -> Stop | None:
+        problem = self.problem
+        if not self.eager:
+            self.orbits.append(None)  # evaluated once the branch is traced (_trace)
+            return None
+        orbit = problem.orbit(current.u, current.lam)
+        asym = _asymmetry(orbit)
+        if asym is not None:
+            small = np.max(np.abs(asym)) <= _PARENT_TOL * max(1.0, float(np.max(np.abs(
+                orbit.states))))
+            if self.reference is None and not self.orbits and not small:
+                self.reference = asym
+            elif self.reference is not None and (float(asym @ self.reference) <= 0.0 or small):
+                return Stop(ContinuationStatus.REACHED_PARENT,
+                            f"the period-doubling of the {problem.N // 2}-{problem.p // 2} "
+                            f"motion it was born from, near {problem.parameter}="
+                            f"{current.lam:.10g} (the point there is the parent repeated twice "
+                            "or its mirror image, and is left out)", keep=False)
+        self.orbits.append(orbit)
+        if self.on_point is not None:
+            self.on_point(orbit)
+        if self.remaining is not None:
+            self.remaining -= 1
+            if self.remaining <= 0:
+                return Stop(ContinuationStatus.STOPPED_AFTER_EVENT,
+                            f"{self.stop_after_pd} point(s) after the first period-doubling")
+        elif self.stop_after_pd is not None and len(self.orbits) > 1 and _pd_sign_change(
+                self.orbits[-2], self.orbits[-1]):
+            self.remaining = self.stop_after_pd
+            if self.remaining <= 0:
+                return Stop(ContinuationStatus.STOPPED_AFTER_EVENT, "at the first period-doubling")
+        return None
+
+
+def _trace(problem: BranchProblem, u0: np.ndarray, lam0: float, options: ContinuationOptions,
+           *, stop_after_pd: int | None = None, on_point: Callable[[Any], None] | None = None,
+           progress: Reporter | None = None) -> tuple[list[BranchSample], Any, str]:
+    """Follow a branch (one or both directions): its samples in branch order, the core's
+    result and the stop message (empty samples when the start could not be corrected)."""
+    watches: dict[int, _Watch] = {}
+
+    def watch(direction: int) -> _Watch:
+        watches[direction] = _Watch(problem, stop_after_pd, on_point)
+        return watches[direction]
+
+    options, limit = _within_limits(problem, options)
+    result = follow(problem, u0, lam0, options, None if progress is None else progress.point,
+                    stop=watch)
+    # Ctrl-C can end a run between a watch's orbit and the core's taking of the point
+    forward = watches[options.direction].orbits[:len(result) - result.start_index]
+    message = result.message
+    if not forward:
+        return [], result, message
+    if limit is not None and any(problem.param.value(o.oscillator) == limit
+                                 for w in watches.values() for o in w.orbits[-1:]):
+        message += (f"; the branch ends at {problem.parameter} = {limit!r}, ds_min from the "
+                    f"end of its range: {problem.limit_reason()}")
+    orbits = forward
+    if -options.direction in watches:
+        orbits = watches[-options.direction].orbits[result.start_index:0:-1] + forward
+    samples = [BranchSample(u=u, lam=float(lam), tangent=t,
+                            orbit=problem.orbit(u, float(lam)) if o is None else o)
+               for u, lam, t, o in zip(result.u, result.lam, result.tangent, orbits, strict=True)]
+    return samples, result, message
+
+
+def trace_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
+                 options: ContinuationOptions, *, stop_after_pd: int | None = None,
+                 on_point: Callable[[Any], None] | None = None,
+                 progress: Reporter | None = None,
+                 ) -> tuple[list[BranchSample], list[str], str]:
+    """Follow a branch (one or both directions) and return its samples in branch order.
+
+    Parameters
+    ----------
+    problem : BranchProblem
+        Any branch problem (:mod:`impactcont.problems.motion`).
+    u0 : ndarray
+        Unknowns at the start (corrected at fixed ``lam0``).
+    lam0 : float
+        The parameter at the start.
+    options : ContinuationOptions
+        ``direction`` and ``both_directions`` are honoured.
+    stop_after_pd : int, optional
+        Stop a direction this many points after the first sign change of the
+        PD test function (saves following a cascade branch to the bound).
+    on_point : callable, optional
+        Called with the motion of every accepted point.
+    progress : Reporter, optional
+        Counts every accepted point (:mod:`impactcont.progress`).
+
+    Returns
+    -------
+    samples : list of BranchSample
+        The accepted points in branch order.
+    statuses : list of str
+        Why each direction stopped (names of
+        :class:`~impactcont.core.ContinuationStatus`).
+    message : str
+        The stop reasons in words.
+
+    Raises
+    ------
+    NothingComputed
+        Ctrl-C before the first point.
+    NoPeriodicMotionError
+        Newton fails at the start.
+    """
+    samples, result, message = _trace(problem, u0, lam0, options,
+                                      stop_after_pd=stop_after_pd, on_point=on_point,
+                                      progress=progress)
+    _require_start(problem, samples, result)
+    return samples, [st.name for st in result.statuses], message
+
+
+def _require_start(problem: BranchProblem, samples: Sequence[BranchSample], result: Any
+                   ) -> None:
+    """Raise when a branch has no point: interrupted before it, or Newton failed there."""
+    if samples:
+        return
+    if result.interrupted:
+        raise NothingComputed(f"continuation of {problem.N}-{problem.p} motions interrupted "
+                              "before its first point")
+    raise NoPeriodicMotionError(f"N={problem.N}, p={problem.p}: {result.message}")
+
+
+def _within_limits(problem: BranchProblem, options: ContinuationOptions
+                   ) -> tuple[ContinuationOptions, float | None]:
+    """`options` with the bounds kept ``ds_min`` inside the problem's parameter limits.
+
+    :func:`run_branch` refuses bounds beyond the limits; a direct caller of
+    :func:`trace_branch` gets a branch that ends on the clipped bound (the limit
+    itself, e.g. closed stops, has no motion) instead of steps refused until ds_min.
+    Returns the options and the clipped bound (None when nothing was clipped).
+    """
+    lower, _ = problem.parameter_limits()  # the stops limit b from below only
+    lo, hi = options.bounds
+    if lo > lower:
+        return options, None
+    clipped = lower + options.ds_min * max(1.0, abs(lower))
+    if not clipped < hi:
+        raise ParameterError(f"bounds {options.bounds} of parameter {problem.parameter!r} "
+                             f"leave no range: {problem.limit_reason()}")
+    return dataclasses.replace(options, bounds=(clipped, hi)), clipped
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Run:
+    """One connected component (an N-p branch is one): where it started, the core's result
+    and stop message, its samples, special points, the user's functions at its points
+    (``values``) and located events."""
+
+    start: float
+    start_delta: float
+    result: Any
+    message: str
+    samples: list[BranchSample]
+    specials: list[SpecialPoint]
+    values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    events: list[SpecialPoint] = dataclasses.field(default_factory=list)
+
+
+def _follow(problem: BranchProblem, u0: np.ndarray, lam0: float, opts: ContinuationOptions,
+            detect: Sequence[str], rep: Reporter | None = None,
+            functions: UserFunctions | None = None, *, stop_after_pd: int | None = None,
+            required: bool = False, warn_max_points: bool = False) -> _Run:
+    """Trace, detect, locate the user's events: one component of a branch, any motion.
+
+    With `required`, a branch without a point raises (:func:`trace_branch`); otherwise its
+    run has no samples (the N-1 driver warns and keeps the other components). With
+    `warn_max_points`, a component that stops at ``max_points`` warns (the closed form's
+    components; a switch limits its branch on purpose).
+    """
+    u0 = np.asarray(u0, dtype=float)
+    samples, result, message = _trace(problem, u0, lam0, opts, stop_after_pd=stop_after_pd,
+                                      progress=rep)
+    if required:
+        _require_start(problem, samples, result)
+    where = (f"the {problem.N}-{problem.p} component through {problem.parameter}="
+             f"{float(lam0):.10g}")
+    log.info("%s: %d points (%s)", where, len(samples), message)
+    if warn_max_points and ContinuationStatus.MAX_POINTS_REACHED in result.statuses:
+        warnings.warn(f"{where} stopped at max_points={opts.max_points}: the rest of it is "
+                      "not in the branch; raise max_points or ds_max", RuntimeWarning,
+                      stacklevel=4)
+    specials = until_interrupted(
+        lambda: detect_special_points(problem, samples, detect), [], "location",
+        "interrupted by the user (KeyboardInterrupt) while locating the special points of "
+        "%s: they are dropped", where)
+    values, events = user_events_until_interrupted(problem, samples, functions)
+    return _Run(float(lam0), float(u0[0]), result, message, samples, specials, values, events)
+
+
+def user_events_until_interrupted(problem: Any, samples: Sequence[BranchSample],
+                                  functions: UserFunctions | None, **position: Any
+                                  ) -> tuple[dict[str, np.ndarray], list[SpecialPoint]]:
+    """The user's functions at every sample and their located events (none when Ctrl-C
+    is taken while they are located: the values are kept)."""
+    found = until_interrupted(
+        lambda: locate_sample_events(problem, samples, functions, **position), None,
+        "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
+        "events: they are dropped (the user's functions at the points are kept)")
+    if found is not None:
+        return found
+    if not functions:
+        return {}, []
+    return user_values(functions, [s.orbit for s in samples],
+                       getattr(problem, "parameter", None)), []
+
+
+def _dataset(problem: Any, runs: Sequence[_Run], options: Mapping[str, Any], *,
+             title: str | None = None, extra_attrs: Mapping[str, Any] | None = None,
+             extra_columns: Sequence[str] = (),
+             functions: UserFunctions | None = None) -> xr.Dataset:
+    """The one dataset builder of a branch: every run (connected component) of any motion.
+
+    The closed form's branches (a problem with ``component_seeds``) number their
+    components (``connected_component``); a problem with ``impact_dimension`` adds the
+    ``impact`` dimension (:mod:`impactcont.dataset.multi`; the p = 1 case of an N-1
+    branch keeps the paper's schema, read as p = 1). `extra_columns` are further
+    oscillator parameters stored per point (the first parameter of a two-parameter curve).
+    """
+    parameter = problem.parameter
+    samples = [s for run in runs for s in run.samples]
+    orbits = [s.orbit for s in samples]
+    arclength, component, special_points, specials = [], [], [], []
+    user_events: list[SpecialPoint] = []
+    offset = 0
+    for index, run in enumerate(runs):
+        x = np.array([np.append(s.u, s.lam) for s in run.samples])
+        steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1)) if len(x) > 1 else []
+        arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
+        component.append(np.full(len(run.samples), index))
+        special_points += [special_record(sp, parameter, point=sp.point + offset,
+                                          bracket=sp.bracket) for sp in run.specials]
+        specials += run.specials
+        user_events += [dataclasses.replace(ev, point=ev.point + offset) for ev in run.events]
+        offset += len(run.samples)
+    columns = {**orbit_columns(orbits, parameter, [s.lam for s in samples]),
+               "arclength": np.concatenate(arclength)}
+    if hasattr(problem, "component_seeds"):
+        columns["connected_component"] = np.concatenate(component)
+    for name in extra_columns:
+        columns.setdefault(name, np.array([model_parameter(o.oscillator, name).value(
+            o.oscillator) for o in orbits]))  # an element, an extra stop's gap: by its object
+    if getattr(problem, "impact_dimension", True):
+        ds = _impact_dataset(problem, orbits, specials, options, columns, special_points,
+                             title, extra_attrs)
     else:
-        chosen = sorted(orbits, key=lambda o: (not o.physical, not o.stable))
-    return chosen[0].delta
+        ds = branch_dataset(parameter=parameter, N=problem.N, oscillator=problem.osc,
+                            options=dict(options), columns=columns,
+                            special_points=special_points, title=title)
+        ds.attrs.update(extra_attrs or {})
+    if options.get("interrupted"):  # Ctrl-C: as an interrupted map says it
+        ds.attrs["interrupted"] = 1
+    if not functions:
+        return ds
+    names = parameter_names(ds)
+    return add_user_functions(
+        ds, monitors={name: np.concatenate([run.values[name] for run in runs])
+                      for name in functions.functions},
+        events=list(functions.events),
+        event_points=[user_event_record(ev, names) for ev in user_events])
+
+
+def _impact_dataset(problem: Any, orbits: Sequence[Any], specials: Sequence[SpecialPoint],
+                    options: Mapping[str, Any], columns: dict[str, Any],
+                    special_points: list[dict[str, Any]], title: str | None,
+                    extra_attrs: Mapping[str, Any] | None) -> xr.Dataset:
+    """The branch schema with the ``impact`` dimension: the per-impact view of the motions
+    (:class:`~impactcont.problems.motion.Motion`) at the points and special points."""
+    n, p = problem.osc.n, problem.p
+    impact_columns = {
+        "delta_k": np.array([o.phases for o in orbits]),
+        "impact_velocity_k": np.array([o.impact_velocities for o in orbits]),
+        "flight_time_k": np.array([o.flight_times for o in orbits]),
+        "gap_min_k": np.array([o.flight_gap_min for o in orbits]),
+        "state_k": np.array([o.states for o in orbits]),
+    }
+    special_impact_columns = {
+        "delta_k": np.array([sp.orbit.phases for sp in specials]).reshape(-1, p),
+        "impact_velocity_k": np.array([sp.orbit.impact_velocities for sp in specials]
+                                      ).reshape(-1, p),
+        "flight_time_k": np.array([sp.orbit.flight_times for sp in specials]).reshape(-1, p),
+        "state_k": np.array([sp.orbit.states for sp in specials]).reshape(-1, p, 2 * n),
+    }
+    return multi_impact_dataset(parameter=problem.parameter, N=problem.N, p=p,
+                                oscillator=problem.osc, options=dict(options), columns=columns,
+                                impact_columns=impact_columns, special_points=special_points,
+                                special_impact_columns=special_impact_columns, title=title,
+                                extra_attrs=extra_attrs, pattern=problem.pattern)
+
+
+def branch_to_dataset(problem: Any, samples: Sequence[BranchSample],
+                      specials: Sequence[SpecialPoint], options: Mapping[str, Any],
+                      *, title: str | None = None,
+                      extra_attrs: Mapping[str, Any] | None = None,
+                      extra_columns: Sequence[str] = (),
+                      functions: UserFunctions | None = None,
+                      values: Mapping[str, np.ndarray] | None = None,
+                      user_events: Sequence[SpecialPoint] = ()) -> xr.Dataset:
+    """The dataset of one run of samples and special points (the one builder).
+
+    `extra_columns` are further oscillator parameters stored per point (the first
+    parameter of a two-parameter curve). With `functions` (the user's events and
+    monitors), `values` (each function at every sample) and `user_events` (the located
+    zeros) are stored (:func:`~impactcont.dataset.schema.add_user_functions`).
+    """
+    run = _Run(math.nan, math.nan, None, "", list(samples), list(specials),
+               dict(values or {}), list(user_events))
+    return _dataset(problem, [run], options, title=title, extra_attrs=extra_attrs,
+                    extra_columns=extra_columns, functions=functions)
+
+
+def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
+               options: ContinuationOptions, *, detect: Sequence[str] = LABELS,
+               stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
+               extra_attrs: Mapping[str, Any] | None = None,
+               progress: ProgressOption | Reporter = None,
+               functions: UserFunctions | None = None) -> xr.Dataset:
+    """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``.
+
+    `progress` is a driver's ``progress=`` option or the reporter of an enclosing call
+    (:func:`impactcont.progress.reporter`); `functions` the user's events and monitors
+    (:func:`~impactcont.detection.special_points.check_user_functions`).
+    """
+    labels = check_labels(detect)
+    problem.check_bounds(options.bounds)
+    what = f"continuation of {problem.N}-{problem.p} motions in {problem.parameter}"
+    with interruptible(what), reporter(progress, what, parameter=problem.parameter) as rep:
+        run = _follow(problem, u0, lam0, options, labels, rep, functions,
+                      stop_after_pd=stop_after_pd, required=True)
+        if interrupted():
+            record = {**(record or {}), "interrupted": True}
+    statuses = [st.name for st in run.result.statuses]
+    log.info("N=%d p=%d branch in %s: %d points, %d special (%s)", problem.N, problem.p,
+             problem.parameter, len(run.samples), len(run.specials), run.message)
+    option_record = {**dataclasses.asdict(options), "N": problem.N, "p": problem.p,
+                     "parameter": problem.parameter, "start": float(lam0),
+                     "start_delta": float(u0[0]), "detect": labels, "status": statuses,
+                     "message": run.message, **(record or {})}
+    option_record["bounds"] = list(options.bounds)
+    return _dataset(problem, [run], option_record, extra_attrs=extra_attrs,
+                    functions=functions)
+
+
+def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | None = None
+                   ) -> tuple[BranchProblem, np.ndarray]:
+    """The branch problem through an N-p motion, and the motion's unknowns in it.
+
+    Parameters
+    ----------
+    orbit : MultiImpactOrbit
+    parameter : str
+    symmetric : bool, optional
+        Follow the motion as a symmetric one (its half closed by the reflection,
+        :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`: regular
+        through the symmetry-breaking pitchfork, which is detected as ``BP``) or as a
+        general N-p motion. ``None``: symmetric when the motion is symmetric
+        (:func:`~impactcont.orbit.symmetry.symmetry_defect` at most 1e-8) and
+        `parameter` keeps the system symmetric (not ``b`` or ``R``, unless the stops are
+        mirrored: ``Stops(mirror=True)``).
+
+    Raises
+    ------
+    ParameterError
+        ``symmetric=True`` for a motion that is not symmetric or a parameter that breaks
+        the symmetry.
+    """
+    pattern = orbit.pattern or None
+    if symmetric is None:
+        symmetric = (model_parameter(orbit.oscillator, parameter).keeps_symmetry
+                     and admits_symmetric_motions(orbit.oscillator, orbit.N, orbit.p,
+                                                  orbit.pattern or "")
+                     and symmetry_defect(orbit) <= _SYMMETRY_TOL)
+    elif not isinstance(symmetric, (bool, np.bool_)):
+        raise ParameterError(f"symmetric must be True, False or None (decide from the motion); "
+                             f"got {symmetric!r}")
+    if not symmetric:
+        problem = MultiImpactBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
+                                           pattern=pattern)
+        return problem, orbit.unknowns
+    sym = SymmetricBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
+                                 pattern=orbit.pattern)
+    defect = symmetry_defect(orbit)
+    if not defect <= _SYMMETRY_TOL:
+        raise ParameterError(f"symmetric=True: the N={orbit.N}, p={orbit.p} motion is not "
+                             f"symmetric (X_(k+p/2) + X_k, tau_(k+p/2) - tau_k up to {defect:.3g} "
+                             f"relative, allowed {_SYMMETRY_TOL:g}); give symmetric=False or a "
+                             "symmetric motion")
+    return sym, sym.half_unknowns(orbit.unknowns)
+
+
+_SYMMETRY_TOL = 1e-8
 
 
 def _motion_branch(motion: PeriodicOrbit | MultiImpactOrbit, N: int, parameter: str,
@@ -210,7 +676,7 @@ def _motion_branch(motion: PeriodicOrbit | MultiImpactOrbit, N: int, parameter: 
 
     An N-1 motion of the paper's system in a parameter of eq. (14) is followed on the
     closed form (the exact, fast path: its component through the motion's root); any
-    other motion or parameter by :func:`impactcont.multi_impact_continuation`.
+    other motion or parameter on the shooting system (:func:`_shooting_branch`).
     """
     motion_N = int(motion.N)
     for name, value, allowed in (("N", N, (1, motion_N)), ("start", start, (None,)),
@@ -235,7 +701,7 @@ def _motion_branch(motion: PeriodicOrbit | MultiImpactOrbit, N: int, parameter: 
                                      f"bounds {(lo, hi)}")
             return continuation(osc, motion_N, parameter, (lo, hi), start=value,
                                 root=motion.root, components="start", **keywords)
-    return multi_impact_continuation(motion, parameter, bounds, **keywords)
+    return _shooting_branch(motion, parameter, bounds, **keywords)
 
 
 @blas_limited
@@ -250,7 +716,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                  progress: ProgressOption = None,
                  events: dict[str, Any] | None = None, monitors: dict[str, Any] | None = None,
                  **more: Any) -> xr.Dataset:
-    """Continue the branch of periodic N-1 motions in one parameter and find its special points.
+    """Continue a branch of periodic motions in one parameter and find its special points.
 
     Parameters
     ----------
@@ -347,17 +813,18 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         both_directions=both_directions, **more)
     functions = check_user_functions(events, monitors, reserved_names())
     N = problem.N
-    lam0 = _start_value(problem, (lo, hi), start)
-    delta0 = _start_root(problem, lam0, root)
+    lam0 = problem.start_value((lo, hi), start)  # the closed form's seeds: eq. (15)
+    u0 = problem.start_root(lam0, root)
     record: dict[str, Any] | None = None
     with (interruptible(f"continuation in {parameter}") as call,
           reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep):
-        runs = [_follow(problem, lam0, delta0, opts, detect, rep, functions)]
+        runs = [_follow(problem, u0, lam0, opts, detect, rep, functions, warn_max_points=True)]
         if components == "all" and not interrupted():
             try:
-                for lam, delta in _component_seeds(problem, (lo, hi)):
-                    if not any(_passes(run, lam, delta) for run in runs):
-                        runs.append(_follow(problem, lam, delta, opts, detect, rep, functions))
+                for lam, u in problem.component_seeds((lo, hi)):
+                    if not any(_passes(run, lam, float(u[0])) for run in runs):
+                        runs.append(_follow(problem, u, lam, opts, detect, rep, functions,
+                                            warn_max_points=True))
                     if interrupted():
                         break
             except (ImpactcontError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -394,91 +861,7 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         raise NewtonConvergenceError(f"no component of the N={N} branch in {parameter} over "
                                      f"[{lo:.10g}, {hi:.10g}] could be started: "
                                      f"{runs[0].result.message}")
-    return _branch_dataset(problem, osc, opts, detect, started, record, functions=functions)
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class _Run:
-    """One connected component: its continuation result, samples, special points and the
-    user's functions at its points (``values``) and located events."""
-
-    start: float
-    start_delta: float
-    result: Any
-    samples: list[BranchSample]
-    specials: list[SpecialPoint]
-    values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
-    events: list[SpecialPoint] = dataclasses.field(default_factory=list)
-
-
-def _follow(problem: PeriodicBranchProblem, lam0: float, delta0: float,
-            opts: ContinuationOptions, detect: Sequence[str], rep: Reporter | None = None,
-            functions: UserFunctions | None = None) -> _Run:
-    result = continue_branch(problem, np.array([delta0]), lam0, opts,
-                             None if rep is None else rep.point)
-    log.info("N=%d branch in %s from %s=%.10g: %d points (%s)", problem.N, problem.parameter,
-             problem.parameter, lam0, len(result), result.message)
-    if ContinuationStatus.MAX_POINTS_REACHED in result.statuses:
-        warnings.warn(f"the N={problem.N} component through {problem.parameter}={lam0:.10g} "
-                      f"stopped at max_points={opts.max_points}: the rest of it is not in the "
-                      "branch; raise max_points or ds_max", RuntimeWarning, stacklevel=4)
-    samples = [BranchSample(u=u, lam=float(lam), tangent=t, orbit=problem.orbit(u, float(lam)))
-               for u, lam, t in zip(result.u, result.lam, result.tangent, strict=True)]
-    where = f"the N={problem.N} component through {problem.parameter}={lam0:.10g}"
-    specials = until_interrupted(
-        lambda: detect_special_points(problem, samples, detect), [], "location",
-        "interrupted by the user (KeyboardInterrupt) while locating the special points of "
-        "%s: they are dropped, those of the components before it kept", where)
-    if not functions:
-        return _Run(lam0, delta0, result, samples, specials)
-    values = user_values(functions, [s.orbit for s in samples], problem.parameter)
-    events = until_interrupted(
-        lambda: locate_user_events(problem, [s.u for s in samples],
-                                   [s.lam for s in samples], [s.tangent for s in samples],
-                                   functions, values, problem.orbit,
-                                   parameter=problem.parameter),
-        [], "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
-        "events of %s: they are dropped", where)
-    return _Run(lam0, delta0, result, samples, specials, values, events)
-
-
-def _component_seeds(problem: PeriodicBranchProblem, bounds: tuple[float, float]
-                     ) -> list[tuple[float, float]]:
-    """Both roots of eq. (15) at the best-separated scan value of every existence interval.
-
-    Motions exist where ``c^2 + s^2 >= b^2`` (eq. 15); each maximal interval of scan
-    values where they do holds one or two connected components of the solution set
-    (the roots join at the folds that end the interval, or run to the bounds apart).
-    Between scan values the discriminant is maximised wherever it has a local maximum
-    below 0, so an interval narrower than the scan step is found too.
-    """
-    def discriminant(lam: float) -> float:
-        c, s, b = problem.amplitude(lam)
-        return c * c + s * s - b * b
-
-    lams = list(np.linspace(bounds[0], bounds[1], _EXISTENCE_SCAN))
-    disc = [discriminant(float(lam)) for lam in lams]
-    # a component narrower than the scan step shows as a local maximum of the
-    # discriminant below 0 between scan values: maximise it there and keep it if >= 0
-    for k in range(len(lams) - 2, 0, -1):
-        if disc[k] < 0 and disc[k] >= disc[k - 1] and disc[k] >= disc[k + 1]:
-            best = minimize_scalar(lambda x: -discriminant(x), bounds=(lams[k - 1], lams[k + 1]),
-                                   method="bounded", options={"xatol": 1e-12})
-            if -best.fun >= 0:
-                log.info("narrow component found at %s=%.12g", problem.parameter, best.x)
-                lams.insert(k + 1, float(best.x))
-                disc.insert(k + 1, -float(best.fun))
-    seeds = []
-    exists = np.asarray(disc) >= 0
-    edges = np.flatnonzero(np.diff(np.r_[0, exists.astype(int), 0]))
-    for first, last in zip(edges[::2], edges[1::2], strict=True):
-        k = first + int(np.argmax(disc[first:last]))
-        c, s, b = problem.amplitude(float(lams[k]))
-        r2, root = c * c + s * s, math.sqrt(max(disc[k], 0.0))
-        for sign in (1.0, -1.0):
-            seeds.append((float(lams[k]), math.atan2((b * s + sign * c * root) / r2,
-                                                     (b * c - sign * s * root) / r2)))
-    return seeds
+    return _components_dataset(problem, opts, detect, started, record, functions=functions)
 
 
 def _passes(run: _Run, lam: float, delta: float) -> bool:
@@ -497,32 +880,13 @@ def _passes(run: _Run, lam: float, delta: float) -> bool:
     return False
 
 
-def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
-                    opts: ContinuationOptions, detect: Sequence[str], runs: list[_Run],
-                    record: dict[str, Any] | None = None, *,
-                    functions: UserFunctions | None = None) -> xr.Dataset:
+def _components_dataset(problem: PeriodicBranchProblem, opts: ContinuationOptions,
+                        detect: Sequence[str], runs: list[_Run],
+                        record: dict[str, Any] | None = None, *,
+                        functions: UserFunctions | None = None) -> xr.Dataset:
     """One dataset of every component (the variable ``connected_component`` tells them apart)."""
-    parameter, N = problem.parameter, problem.N
-    orbits = [s.orbit for run in runs for s in run.samples]
-    arclength, component, lam = [], [], []
-    special_points = []
-    user_events: list[SpecialPoint] = []
-    offset = 0
-    for index, run in enumerate(runs):
-        user_events += [dataclasses.replace(ev, point=ev.point + offset) for ev in run.events]
-        res = run.result
-        steps = np.sqrt(np.diff(res.u[:, 0]) ** 2 + np.diff(res.lam) ** 2)
-        arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
-        component.append(np.full(len(run.samples), index))
-        lam.append(np.asarray(res.lam, dtype=float))
-        special_points += [special_record(sp, parameter, point=sp.point + offset,
-                                          bracket=sp.bracket) for sp in run.specials]
-        offset += len(run.samples)
-    columns = {**orbit_columns(orbits, parameter, np.concatenate(lam)),
-               "arclength": np.concatenate(arclength),
-               "connected_component": np.concatenate(component)}
     first = runs[0]
-    option_record = {**dataclasses.asdict(opts), "N": N, "parameter": parameter,
+    option_record = {**dataclasses.asdict(opts), "N": problem.N, "parameter": problem.parameter,
                      "start": first.start, "start_delta": first.start_delta,
                      "detect": list(detect),
                      "status": [st.name for st in first.result.statuses],
@@ -533,18 +897,187 @@ def _branch_dataset(problem: PeriodicBranchProblem, osc: ImpactOscillator,
                                      "message": run.result.message} for run in runs]}
     option_record["bounds"] = list(opts.bounds)
     option_record.update(record or {})
-    ds = branch_dataset(parameter=parameter, N=N, oscillator=osc, options=option_record,
-                        columns=columns, special_points=special_points)
-    if option_record.get("interrupted"):  # Ctrl-C: as an interrupted map says it
-        ds.attrs["interrupted"] = 1
-    if not functions:
-        return ds
-    names = parameter_names(ds)
-    return add_user_functions(
-        ds, monitors={name: np.concatenate([run.values[name] for run in runs])
-                      for name in functions.functions},
-        events=list(functions.events),
-        event_points=[user_event_record(ev, names) for ev in user_events])
+    return _dataset(problem, runs, option_record, functions=functions)
+
+
+def _shooting_branch(start: MultiImpactOrbit | PeriodicOrbit, parameter: str,
+                     bounds: Sequence[float], *, detect: Sequence[str] = LABELS,
+                     options: ContinuationOptions | None = None, symmetric: bool | None = None,
+                     progress: ProgressOption = None, events: dict[str, Any] | None = None,
+                     monitors: dict[str, Any] | None = None, **single: Any) -> xr.Dataset:
+    """The branch of any motion on the shooting system; the arguments are those of
+    :func:`multi_impact_continuation` (`single`: the single options)."""
+    orbit = as_multi_impact_orbit(start)
+    check_progress(progress)
+    labels = check_labels(detect)
+    functions = check_user_functions(events, monitors, reserved_names())
+    param = model_parameter(orbit.oscillator, parameter)
+    if options is not None and "bounds" in getattr(options, "given", ()):
+        bounds = options.bounds
+    # the drivers' one check (as continuation's): two finite numbers lo < hi in the
+    # parameter's range; then the stops' limits; then the oscillator at both ends (an
+    # element of K keeps K positive semi-definite)
+    bounds = check_bounds(parameter, bounds)
+    problem, u0 = branch_problem(orbit, parameter, symmetric)
+    problem.check_bounds(bounds)
+    param.check_bounds(orbit.oscillator, bounds)
+    lam0 = problem.param.value(orbit.oscillator)
+    opts = make_options(bounds, options, **single)  # ds, ds_max, direction, ...
+    problem.check_bounds(opts.bounds)
+    if not opts.lam_min <= lam0 <= opts.lam_max:
+        raise ParameterError(f"bounds {opts.bounds} must contain the start {parameter}="
+                             f"{lam0!r} of the orbit")
+    return run_branch(problem, u0, lam0, opts, detect=labels,
+                      record={"symmetric": isinstance(problem, SymmetricBranchProblem)},
+                      progress=progress, functions=functions)
+
+
+
+
+@blas_limited
+@option_keywords({**DRIVER_DEFAULTS, **_SHOOTING_DEFAULTS, "direction": 1})
+def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter: str = "omega",
+                              bounds: Sequence[float] = (0.5, 6.0), *,
+                              detect: Sequence[str] = LABELS,
+                              options: ContinuationOptions | None = None,
+                              ds: float | None = None, ds_min: float | None = None,
+                              ds_max: float | None = None, newton_tol: float | None = None,
+                              max_points: int | None = None,
+                              both_directions: bool | None = None, direction: int | None = None,
+                              symmetric: bool | None = None, progress: ProgressOption = None,
+                              events: dict[str, Any] | None = None,
+                              monitors: dict[str, Any] | None = None,
+                              **more: Any) -> xr.Dataset:
+    """Continue the branch of periodic N-p motions through a given motion, on the shooting
+    system: :func:`continuation` of the motion (an alias kept for its users).
+
+    Parameters
+    ----------
+    start : MultiImpactOrbit or PeriodicOrbit
+        A motion on the branch (e.g. from :func:`impactcont.orbit.multi_impact.multi_impact_orbit`);
+        its oscillator's value of `parameter` is the start.
+    parameter : str
+        Any continuable parameter of the oscillator
+        (:func:`~impactcont.model.parameters.model_parameter`): ``"omega"``, ``"b"``,
+        ``"R"``, ``"b_low"``, ``"R_low"``, ``"gap"``, ``"F0"``, a damping parameter or an
+        element (``"m2"``, ``"K[1,1]"``, ``"F[2]"``), on any stops (a clearance between
+        masses, free masses, a constant force). Motions whose interior contact cannot be
+        checked (a constant force pushing a free mode) are reported not physical, said
+        once in a log warning and in the branch's message.
+    bounds : (float, float)
+        Range of the parameter; must contain the start.
+    detect : sequence of str
+        Special points to detect, subset of :data:`impactcont.vocabulary.LABELS`; GR and
+        ZV use the minimum over the flights and impacts.
+    options : ContinuationOptions, optional
+        Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
+        Newton tolerance 1e-11 by default).
+    ds, ds_min, ds_max, newton_tol, max_points, both_directions, direction, **more
+        Single options, over `options`.
+    symmetric : bool, optional
+        Follow a symmetric motion of a symmetric two-sided system (``b_low == b``,
+        ``R_low == R``; N odd, the pattern's second half the mirror of its first) as
+        such: its half-motion closed by the reflection, regular through the
+        symmetry-breaking pitchforks, which are located and labelled ``BP``
+        (:func:`impactcont.analysis.switching.pitchfork_switch` follows the asymmetric pair born
+        there). ``None`` (default): when the start is symmetric and `parameter` keeps
+        the system symmetric (not ``b`` or ``R``, unless ``Stops(mirror=True)``).
+        ``False``: as any N-p motion (its shooting Jacobian is singular at a pitchfork;
+        no BP).
+    progress : None, bool or callable
+        A progress bar on stderr (``None``: when stderr is a terminal, after 2 s;
+        ``True``: always; ``False``: never) or a callable receiving a
+        :class:`~impactcont.progress.Progress` record at every point
+        (:mod:`impactcont.progress`). A call longer than a minute logs a line a minute.
+    events, monitors : mapping of str to callable, optional
+        User events and monitors, as for :func:`impactcont.continuation`; their
+        functions receive the :class:`~impactcont.MultiImpactOrbit` at a point (the
+        full motion on a branch of symmetric motions followed by its half).
+
+    Returns
+    -------
+    xarray.Dataset
+        The branch with an ``impact`` dimension (``docs/multi_impact.md``);
+        valid for :func:`impactcont.save`, :func:`impactcont.load` and the plots.
+
+    Raises
+    ------
+    ParameterError
+        Bad parameter; bounds not two finite numbers ``lo < hi`` inside the parameter's
+        range and where the oscillator takes the parameter at both ends (checked before
+        computing: an element of K must keep K positive semi-definite,
+        :meth:`~impactcont.model.parameters.ModelParameter.check_bounds`), or not
+        containing the start; unknown labels; bounds in ``b``
+        that reach ``-b_low`` (the upper stop would meet the lower one); bad `events` or
+        `monitors`, or one of their functions failed (named; a non-callable: TypeError).
+    NoPeriodicMotionError
+        Newton fails at the start.
+
+    Notes
+    -----
+    Ctrl-C (:class:`KeyboardInterrupt`) ends the call with what it has computed: the branch
+    being followed stops at its last accepted point, the special points of the points kept
+    are located, and the other direction is not followed. The dataset's ``options``
+    attribute then records ``"interrupted": true`` and the stop reason ``"interrupted by the
+    user (KeyboardInterrupt) after K points, ..."`` (status ``INTERRUPTED``), also logged at
+    WARNING. Ctrl-C while the special points are located keeps those already located and
+    drops the one in progress (the log says so). A second Ctrl-C, or one before the first
+    point, aborts with :class:`KeyboardInterrupt`.
+    The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
+    """
+    return continuation(as_multi_impact_orbit(start), parameter=parameter, bounds=bounds,
+                        detect=detect, options=options, ds=ds, ds_min=ds_min, ds_max=ds_max,
+                        newton_tol=newton_tol, max_points=max_points,
+                        both_directions=both_directions, direction=direction,
+                        symmetric=symmetric, progress=progress, events=events,
+                        monitors=monitors, **more)
+
+
+def restart_problem(branch: xr.Dataset, row: int, *, special: bool = False
+                    ) -> tuple[BranchProblem, np.ndarray, float]:
+    """The problem of an N-p branch dataset and the unknowns of one of its motions.
+
+    What a restart of the branch (:func:`impactcont.analysis.branch.continuation_from`,
+    :func:`impactcont.analysis.branch.extend`) continues from: the problem the branch was
+    followed on (its half system when the options record ``symmetric``) at the
+    oscillator of the motion.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        An N-p branch dataset of :func:`multi_impact_continuation` or a switch.
+    row : int
+        Index of the point (or of the special point with `special`).
+    special : bool
+        Read the special point `row` (``special_state_k``, ...) instead of a point.
+
+    Returns
+    -------
+    problem : MultiImpactBranchProblem or SymmetricBranchProblem
+    u : ndarray
+        The motion's unknowns in `problem` (corrected by the continuation's first
+        Newton solve).
+    lam : float
+        Its value of the continued parameter.
+    """
+    parameter = str(branch.attrs["parameter"])
+    N, p, pattern = int(branch.attrs["N"]), impacts_of(branch), pattern_of(branch)
+
+    def at(name: str) -> Any:
+        return branch[special_variable(name) if special else name].values[row]
+
+    base = oscillator_from_dataset(branch)
+    osc = base.replace(omega=float(at("omega")), b=float(at("b")))
+    if parameter not in ("omega", "b"):
+        osc = model_parameter(base, parameter).at(osc, float(at(parameter)))
+    u = initial_unknowns({"delta": float(at("delta_k")[0]), "flight_times": at("flight_time_k"),
+                          "states": at("state_k"), "pattern": pattern}, osc, N, p)
+    symmetric = bool(json.loads(branch.attrs.get("options", "{}")).get("symmetric", False))
+    lam = model_parameter(osc, parameter).value(osc)
+    if symmetric:
+        problem: BranchProblem = SymmetricBranchProblem(osc, N, p, parameter, pattern=pattern)
+        return problem, problem.half_unknowns(u), lam
+    return MultiImpactBranchProblem(osc, N, p, parameter, pattern=pattern or None), u, lam
 
 
 # -- restart and extension ----------------------------------------------------------------------
@@ -751,7 +1284,7 @@ def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
         opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
     with (interruptible(f"continuation in {parameter}"),
           reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep):
-        run = _follow(problem, lam0, float(u0[0]), opts, detect, rep, functions)
+        run = _follow(problem, u0, lam0, opts, detect, rep, functions, warn_max_points=True)
         if interrupted():
             record = {**record, "interrupted": True}
     if not run.samples and run.result.interrupted:
@@ -760,8 +1293,7 @@ def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
     if not run.samples:
         raise NewtonConvergenceError(f"the restart at {parameter}={lam0:.10g} could not be "
                                      f"started: {run.result.message}")
-    return _branch_dataset(problem, problem.osc, opts, detect, [run], record,
-                           functions=functions)
+    return _components_dataset(problem, opts, detect, [run], record, functions=functions)
 
 
 def _check_along(along: Any) -> int | None:
@@ -782,7 +1314,7 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     """Restart the continuation of a branch from one of its points or special points.
 
     Works on an N-1 branch (:func:`continuation`) and an N-p branch
-    (:func:`~impactcont.analysis.multi_branch.multi_impact_continuation`, a switch), computed
+    (:func:`~impactcont.analysis.branch.multi_impact_continuation`, a switch), computed
     now or loaded from its file (:func:`impactcont.load`). The motion there is
     corrected by Newton on the problem the branch was followed on (the half system of
     a symmetric N-p branch) and followed with the branch's recorded options (those

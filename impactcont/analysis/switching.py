@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.analysis.multi_branch import make_options, run_branch
+from impactcont.analysis.branch import make_options, run_branch
 from impactcont.core import ContinuationOptions
 from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.options import DRIVER_DEFAULTS
@@ -122,7 +122,7 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
     ----------
     branch : xarray.Dataset
         A branch dataset of :func:`impactcont.continuation` or of
-        :func:`impactcont.analysis.multi_branch.multi_impact_continuation`.
+        :func:`impactcont.analysis.branch.multi_impact_continuation`.
     label : str
         ``"PD"``, ``"GR"``, ...
     which : int
@@ -363,7 +363,7 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
     -----
     Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
     its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
     Notes); a second one aborts.
     """
     epsilon, orbit, parameter, lo, hi = _switch_start(branch, "PD", which, bounds, epsilon)
@@ -478,7 +478,7 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     -----
     Ctrl-C (:class:`KeyboardInterrupt`) stops the cascade: the branches computed before
     are returned, the last one with its points computed so far (marked as in
-    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation`);
+    :func:`~impactcont.analysis.branch.multi_impact_continuation`);
     ``Cascade.interrupted`` is True and ``message`` says after how many doublings. A
     second Ctrl-C aborts.
     """
@@ -651,7 +651,7 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
     -----
     Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
     its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
     Notes); a second one aborts.
     """
     epsilon, orbit, parameter, lo, hi = _switch_start(branch, "GR", which, bounds, epsilon)
@@ -786,7 +786,7 @@ def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
     ----------
     branch : xarray.Dataset
         A branch of symmetric motions with a BP point
-        (:func:`impactcont.analysis.multi_branch.multi_impact_continuation` of a symmetric motion).
+        (:func:`impactcont.analysis.branch.multi_impact_continuation` of a symmetric motion).
     which : int
         Which BP point (index among the BP points, branch order).
     side : {1, -1}
@@ -824,7 +824,7 @@ def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
     -----
     Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
     its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
     Notes); a second one aborts.
     """
     epsilon = _check_epsilon(epsilon)
@@ -884,7 +884,7 @@ def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
     -----
     Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
     its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.multi_branch.multi_impact_continuation` does (see its
+    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
     Notes); a second one aborts.
     """
     kwargs = {"bounds": bounds, "epsilon": epsilon, "detect": detect, "options": options,

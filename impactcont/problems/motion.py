@@ -63,6 +63,9 @@ Optional hooks (an evaluator's own exact shortcuts; the driver uses them when pr
   the N-1 existence scan of eq. (15) (both roots, every connected component);
 - ``separate_checks``: False when ``orbit``'s contact checks cost nothing extra (the
   closed form), so the detector keeps one motion per trial point;
+- ``motion_in_step``: False when the motion at an accepted point is better evaluated
+  after the branch is traced (the closed form: nothing of the corrector's to reuse) than
+  as the point is accepted (a shooting problem reuses the corrector's cached shot);
 - ``impact_dimension``: True when the branch's dataset has the ``impact`` dimension
   (:mod:`impactcont.dataset.multi`); the closed form's N-1 branches keep the schema of
   the paper (read as p = 1).

@@ -22,14 +22,20 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from impactcont.core.locate import Event, MotionTest, locate_events
-from impactcont.errors import ParameterError
+from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import FORCING, GAP, model_parameter
+from impactcont.model.parameters import FORCING, GAP, RESTITUTION, model_parameter
 from impactcont.model.stops import require_paper_stops
 from impactcont.orbit import general
-from impactcont.orbit.periodic import PeriodicOrbit, modal_arrays, orbit_at_phase
+from impactcont.orbit.periodic import (
+    PeriodicOrbit,
+    modal_arrays,
+    orbit_at_phase,
+    periodic_orbits,
+)
 from impactcont.problems.events import BRANCH_TESTS
 from impactcont.vocabulary import CONTINUABLE_PARAMETERS, Label
 
@@ -38,6 +44,8 @@ __all__ = ["CONTINUABLE_PARAMETERS", "PeriodicBranchProblem", "residual_scale", 
 
 log = logging.getLogger(__name__)
 
+#: Parameter values scanned for the existence of motions (eq. 15) along a branch's bounds.
+EXISTENCE_SCAN = 400
 _FOLD_XTOL = 1e-13  # the chord coordinate of the fold's fallback location (the detector's)
 _ROOT_STEP = 1e-6  # rad: the largest correction root_phase makes (far above any tolerance)
 _UNSCALED = 64.0  # |c, s| up to which eq. (14) is not scaled (residual_scale)
@@ -140,6 +148,10 @@ class PeriodicBranchProblem:
     separate_checks = False
     #: Its datasets keep the paper's N-1 schema (no ``impact`` dimension; read as p = 1).
     impact_dimension = False
+    #: The motion at a point is evaluated once the branch is traced: nothing of the
+    #: corrector's is reused (a shooting problem's cached shot is), and no compiled motion
+    #: evaluation runs while the core may take a Ctrl-C.
+    motion_in_step = False
 
     periods = (2.0 * math.pi,)
     """The unknown ``delta`` is a phase: a branch that returns to its start modulo 2 pi is
@@ -319,7 +331,127 @@ class PeriodicBranchProblem:
         return ""
 
     def check_bounds(self, bounds: tuple[float, float]) -> None:
-        """Bounds are limited by the parameter's own range only (checked by the driver)."""
+        """Refuse a range that reaches elastic impacts without damping (R = 1, C = 0).
+
+        There eq. (12) is singular and eq. (14) is replaced by ``x1p'(delta) = 0``
+        (``docs/kernel.md``): the branch equation changes, so a branch cannot be followed
+        into that case; :func:`impactcont.periodic_orbits` solves it point by point. The
+        parameter's own range is checked by the driver
+        (:meth:`~impactcont.model.parameters.ModelParameter.check_bounds`).
+
+        Raises
+        ------
+        ParameterError
+            Naming the parameter, the bounds and what to do instead.
+        """
+        lo, hi = (float(v) for v in bounds)
+        osc, parameter = self.osc, self.parameter
+        if osc.general_damping:  # only whether the damping vanishes matters here
+            alpha, beta = (1.0 if np.any(osc.C) else 0.0), 0.0
+        else:
+            alpha, beta = osc.rayleigh
+        undamped = {"eta": lo == 0.0, "alpha": lo == 0.0 and beta == 0.0,
+                    "beta": lo == 0.0 and alpha == 0.0}.get(parameter,
+                                                            alpha == 0.0 and beta == 0.0)
+        # a parameter that is the stop's restitution (eq. 4) reaches R = 1 at hi >= 1
+        elastic = (hi >= 1.0 if self.param.data == RESTITUTION and self.param.upper
+                   else osc.R == 1.0)
+        if undamped and elastic:
+            raise ParameterError(
+                f"continuation in {parameter} over [{lo!r}, {hi!r}] reaches elastic impacts "
+                "without damping (R = 1, no damping), where eq. (12) is singular and the "
+                "motions obey another equation; use periodic_orbits at each value there, add "
+                "damping or keep R below 1")
+
+    # -- the seeds of its branches: the roots of eq. (15) ---------------------------------------
+    def start_value(self, bounds: tuple[float, float], start: float | None) -> float:
+        """The parameter value a branch starts from: `start`, else the oscillator's value
+        inside `bounds`, else the first of :data:`EXISTENCE_SCAN` values of `bounds` where
+        eq. (15) has a root (``c^2 + s^2 >= b^2``).
+
+        Raises
+        ------
+        ParameterError
+            `start` outside `bounds`.
+        NoPeriodicMotionError
+            No motion anywhere in `bounds`.
+        """
+        lo, hi = bounds
+        if start is not None:
+            if not lo <= start <= hi:
+                raise ParameterError(f"start must lie within bounds {bounds}; got {start!r}")
+            return float(start)
+        current = self.param.value(self.osc)
+        candidates = [current] if lo <= current <= hi else []
+        candidates += list(np.linspace(lo, hi, EXISTENCE_SCAN))
+        for lam in candidates:
+            c, s, b = self.amplitude(float(lam))
+            if c * c + s * s >= b * b:
+                return float(lam)
+        raise NoPeriodicMotionError(
+            f"no N={self.N} motion anywhere in {self.parameter} in {bounds} "
+            f"(c^2 + s^2 < b^2 at all {EXISTENCE_SCAN} values scanned)")
+
+    def start_root(self, lam: float, root: int | None) -> np.ndarray:
+        """The unknowns ``[delta]`` of the motion at `lam` a branch starts on: the root
+        ``+1``/``-1`` of eq. (15), default the physical (then stable) one.
+
+        Raises
+        ------
+        ParameterError
+            `root` not +1, -1 or None.
+        NoPeriodicMotionError
+            No motion at `lam`.
+        """
+        orbits = periodic_orbits(self.oscillator_at(lam), self.N)
+        if not orbits:
+            raise NoPeriodicMotionError(f"no N={self.N} motion at {self.parameter}={lam!r}")
+        if root is not None:
+            if root not in (1, -1):
+                raise ParameterError(f"root must be +1, -1 or None; got {root!r}")
+            chosen = [o for o in orbits if o.root == root] or orbits
+        else:
+            chosen = sorted(orbits, key=lambda o: (not o.physical, not o.stable))
+        return np.array([chosen[0].delta])
+
+    def component_seeds(self, bounds: tuple[float, float]) -> list[tuple[float, np.ndarray]]:
+        """Both roots of eq. (15) at the best-separated scan value of every existence
+        interval, as ``(lam, [delta])``.
+
+        Motions exist where ``c^2 + s^2 >= b^2`` (eq. 15); each maximal interval of scan
+        values where they do holds one or two connected components of the solution set
+        (the roots join at the folds that end the interval, or run to the bounds apart).
+        Between scan values the discriminant is maximised wherever it has a local maximum
+        below 0, so an interval narrower than the scan step is found too.
+        """
+        def discriminant(lam: float) -> float:
+            c, s, b = self.amplitude(lam)
+            return c * c + s * s - b * b
+
+        lams = list(np.linspace(bounds[0], bounds[1], EXISTENCE_SCAN))
+        disc = [discriminant(float(lam)) for lam in lams]
+        # a component narrower than the scan step shows as a local maximum of the
+        # discriminant below 0 between scan values: maximise it there and keep it if >= 0
+        for k in range(len(lams) - 2, 0, -1):
+            if disc[k] < 0 and disc[k] >= disc[k - 1] and disc[k] >= disc[k + 1]:
+                best = minimize_scalar(lambda x: -discriminant(x),
+                                       bounds=(lams[k - 1], lams[k + 1]), method="bounded",
+                                       options={"xatol": 1e-12})
+                if -best.fun >= 0:
+                    log.info("narrow component found at %s=%.12g", self.parameter, best.x)
+                    lams.insert(k + 1, float(best.x))
+                    disc.insert(k + 1, -float(best.fun))
+        seeds = []
+        exists = np.asarray(disc) >= 0
+        edges = np.flatnonzero(np.diff(np.r_[0, exists.astype(int), 0]))
+        for first, last in zip(edges[::2], edges[1::2], strict=True):
+            k = first + int(np.argmax(disc[first:last]))
+            c, s, b = self.amplitude(float(lams[k]))
+            r2, root = c * c + s * s, math.sqrt(max(disc[k], 0.0))
+            for sign in (1.0, -1.0):
+                seeds.append((float(lams[k]), np.array([math.atan2(
+                    (b * s + sign * c * root) / r2, (b * c - sign * s * root) / r2)])))
+        return seeds
 
     # -- what the branch carries ----------------------------------------------------------------
     def orbit(self, u: np.ndarray | float, lam: float, *, checks: bool = True

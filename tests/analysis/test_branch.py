@@ -198,15 +198,16 @@ def test_a_component_that_cannot_start_is_reported_not_fatal(monkeypatch):
     root): the branch keeps the components that started and warns about the one that did
     not (it crashed with an IndexError in the event search before). The undamped chain's
     own second seed failed until eq. (14) was scaled by |c, s| (issue 19); it starts now."""
-    import impactcont.analysis.branch as branch_module
     from impactcont.orbit.periodic import amplitude_squared, orbit_at_phase
+    from impactcont.problems import PeriodicBranchProblem
 
     osc = ic.ImpactOscillator(M=np.eye(2), K=[[2.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                               b=0.5, omega=1.0, eta=0.0)
     assert amplitude_squared(osc.replace(omega=1.45), 1) < osc.b ** 2  # no motion there
-    seeds = branch_module._component_seeds
-    monkeypatch.setattr(branch_module, "_component_seeds",
-                        lambda problem, bounds: [*seeds(problem, bounds), (1.45, 0.0)])
+    seeds = PeriodicBranchProblem.component_seeds  # the closed form's hook: eq. (15)
+    monkeypatch.setattr(PeriodicBranchProblem, "component_seeds",
+                        lambda problem, bounds: [*seeds(problem, bounds),
+                                                 (1.45, np.array([0.0]))])
     with pytest.warns(RuntimeWarning, match="could not be started"):
         branch = ic.continuation(osc, 1, "omega", (0.5, 1.5))
     assert branch.sizes["point"] > 100
@@ -378,12 +379,12 @@ def test_bounds_of_a_stiffness_entry_are_refused_before_computing(paper_system) 
 
 def test_a_failure_while_searching_components_keeps_the_branch(paper_system, monkeypatch
                                                                ) -> None:
-    from impactcont.analysis import branch as module
+    from impactcont.problems import PeriodicBranchProblem
 
     def failing(problem, bounds):
         raise ParameterError("K must be positive semi-definite (at K[1,1] = 0.1)")
 
-    monkeypatch.setattr(module, "_component_seeds", failing)
+    monkeypatch.setattr(PeriodicBranchProblem, "component_seeds", failing)
     with pytest.warns(RuntimeWarning, match="the search for further components in omega "
                                             "failed .*K must be positive"):
         ds = ic.continuation(paper_system, 1, "omega", (1.5, 2.0))
@@ -406,3 +407,25 @@ def test_a_restart_at_a_non_finite_point_names_the_file_and_the_point(
         continuation_from(loaded, point=4)
     assert f"point 4 of the branch in {str(path)!r} has non-finite values" in str(info.value)
     assert "allowed: a point whose values are all finite, e.g. point 3 or 5" in str(info.value)
+
+
+def test_one_driver_runs_the_closed_form_problem(paper_system):
+    """Issue 29: the driver of every motion (trace_branch, run_branch) follows the N-1
+    closed form as it follows a shooting problem: the same points and special points as
+    continuation's component through the start, in the paper's N-1 schema."""
+    from impactcont.analysis.branch import check_continuation_arguments, run_branch, trace_branch
+
+    osc = paper_system.replace(b=0.5, omega=1.0)
+    want = ic.continuation(osc, 1, "omega", (0.5, 3.0), components="start", progress=False)
+    problem, _, _, opts = check_continuation_arguments(osc, 1, "omega", (0.5, 3.0))
+    u0 = problem.start_root(1.0, None)
+    samples, statuses, _ = trace_branch(problem, u0, 1.0, opts)
+    assert len(samples) == want.sizes["point"] and len(statuses) == 2
+    assert isinstance(samples[0].orbit, ic.PeriodicOrbit)
+    np.testing.assert_array_equal([s.lam for s in samples], want["omega"].values)
+    got = run_branch(problem, u0, 1.0, opts)
+    assert "impact" not in got.dims and "connected_component" in got
+    for name in ("omega", "delta", "impact_velocity", "special_label", "special_omega",
+                 "special_precision", "special_status"):
+        np.testing.assert_array_equal(got[name].values, want[name].values, err_msg=name)
+
