@@ -1,7 +1,10 @@
-"""Special points on a branch of periodic motions: detected, then located.
+"""Special points on a branch of periodic motions, any motion: detected, then located.
 
-Each label has a test function of a branch point that changes sign at the
-special point:
+The one detector of every branch problem (:mod:`impactcont.problems.motion`: the N-1
+closed form and the shooting system of any N-p motion). Each kind the problem declares
+has a test function of the motion (:mod:`impactcont.problems.events`) that changes sign
+at the special point; GR and ZV use the minimum over the p flights and impacts, PD and
+NS the multipliers of ``G = G_{p-1} .. G_0``:
 
 ========  ==========================================  =================================
 label     test function                               meaning
@@ -9,20 +12,25 @@ label     test function                               meaning
 ``SN``    ``d lam / ds`` (tangent)                    fold: saddle-node, a multiplier +1
 ``PD``    ``h2 prod_i (mu_i + 1)`` = h2 det(G + I)    a real multiplier through -1
 ``NS``    ``h2^(m-1) prod_{i<j} (mu_i mu_j - 1)``     a complex pair through ``|mu| = 1``
-``GR``    ``gap_min``                                 x1 touches b inside the period
+``GR``    ``gap_min``                                 a stop touched inside a flight
 ``ZV``    ``impact_velocity``                         impact at zero velocity
+``BP``    ``det(H + I)``, ``H = S G_{h-1} .. G_0``    symmetry-breaking pitchfork
 ========  ==========================================  =================================
 
 A sign change between two accepted points brackets a special point; it is
 then located as an event of the core (:func:`impactcont.core.locate_events`:
 Brent's method on the branch parametrised by the chord between the two
-points), except ``SN``, located by Newton on the closed-form augmented system
-``r = dr/d delta = 0``. A point whose location fails is kept as ``bracketed``. The NS test
-function also vanishes at a neutral saddle (two real multipliers with product
-1); such a point is checked and discarded. A located point whose test
-function does not vanish there (a jump, e.g. of ``gap_min`` when the highest
-interior maximum changes, or from ``+inf`` when a flight gains one) keeps status
-``"bracketed"``.
+points). The problem's hooks add what its evaluator knows exactly: the closed form
+locates ``SN`` by Newton on its augmented system ``r = dr/d delta = 0``
+(``locate_fold``); a fold of a general N-p branch where it meets the branch of symmetric
+motions is the ``BP`` it is (``fold_kind``). BP is declared only by a branch of
+symmetric motions followed by their half
+(:class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`). A point whose
+location fails is kept as ``bracketed``. The NS test function also vanishes at a
+neutral saddle (two real multipliers with product 1); such a point is checked and
+discarded. A located point whose test function does not vanish there (a jump, e.g. of
+``gap_min`` when the highest interior maximum changes, or from ``+inf`` when a flight
+gains one) keeps status ``"bracketed"``.
 
 PD and NS were multiplied free of the pole of G at ``h2 = 0``: their events declare the
 impact velocity as their pole quantity, and a step in which it changes sign is split at

@@ -1,4 +1,4 @@
-"""Branches of N-p motions (:mod:`impactcont.analysis.multi_branch`): the N-1 branch
+"""Branches of N-p motions (the one driver, :mod:`impactcont.analysis.branch`): the N-1 branch
 through the shooting problem matches the closed form's, the physical stable motions of
 switched branches are reproduced by the simulator, their special points are located,
 and the branches survive NetCDF and plots."""
@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.switching import special_orbit
 from impactcont.dataset.multi import impacts_of, validate_multi_impact_dataset
 from tests._multi_impact_cases import assert_reproduced_by_simulator, orbit_at_point
@@ -132,7 +132,7 @@ def test_stop_after_pd_is_not_triggered_through_the_pole_of_g() -> None:
     ``stop_after_pd`` rule must not count it as the period-doubling (issue 28, 1.3)."""
     from types import SimpleNamespace
 
-    from impactcont.analysis.multi_branch import _pd_sign_change
+    from impactcont.analysis.branch import _pd_sign_change
 
     def motion(mu, h):
         return SimpleNamespace(multipliers=np.array(mu, dtype=complex),

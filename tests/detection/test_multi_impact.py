@@ -1,4 +1,4 @@
-"""Special points of N-p branches (:mod:`impactcont.detection.multi_impact`).
+"""Special points of N-p branches (the one detector, :mod:`impactcont.detection.special_points`).
 
 A small branch: the paper's N-1 motion followed in omega on the shooting path (p = 1,
 :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem` continued by
@@ -20,13 +20,13 @@ from scipy.optimize import brentq
 
 import impactcont as ic
 from impactcont.core import ContinuationOptions, follow
-from impactcont.detection.multi_impact import (
-    MultiImpactSample,
-    MultiImpactSpecialPoint,
-    detect_multi_impact_points,
-    locate_multi_impact_events,
-)
+from impactcont.detection.points import SpecialPoint as MultiImpactSpecialPoint
+from impactcont.detection.special_points import BranchSample as MultiImpactSample
 from impactcont.detection.special_points import check_user_functions
+from impactcont.detection.special_points import detect_special_points as detect_multi_impact_points
+from impactcont.detection.special_points import (
+    locate_sample_events as locate_multi_impact_events,
+)
 from impactcont.errors import LowImpactVelocityWarning, ParameterError
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
