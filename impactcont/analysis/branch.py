@@ -502,8 +502,10 @@ def _dataset(problem: Any, runs: Sequence[_Run], options: Mapping[str, Any], *,
     user_events: list[SpecialPoint] = []
     offset = 0
     for index, run in enumerate(runs):
-        x = np.array([np.append(s.u, s.lam) for s in run.samples])
-        steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1)) if len(x) > 1 else []
+        steps: Any = []
+        if len(run.samples) > 1:
+            x = np.column_stack([[s.u for s in run.samples], [s.lam for s in run.samples]])
+            steps = np.sqrt(np.sum(np.diff(x, axis=0) ** 2, axis=1))
         arclength.append(np.concatenate([[0.0], np.cumsum(steps)]))
         component.append(np.full(len(run.samples), index))
         special_points += [special_record(sp, parameter, point=sp.point + offset,
