@@ -482,8 +482,9 @@ def time_history(ax_motion: Axes, ax_force: Axes, series: Iterable[Series],
     events : dict
         The flat arrays of :meth:`impactcont.simulate.simulator.SimulationResult.
         sticking_arrays` (or the same variables of a scene's ``simulations.nc``):
-        ``sticking_start``, ``sticking_end``, ``force_time``, ``force``,
-        ``force_phase``, ``force_stop`` and ``chatter_time``.
+        ``sticking_start``, ``sticking_end``, ``force_time``, ``force`` (a dataset's
+        ``contact_force``), ``force_phase``, ``force_stop`` and ``chatter_time``; any mapping
+        of arrays (an :class:`xarray.Dataset` too).
     time_scale : float
         Factor applied to every time of `events` (``omega / (2 pi)``: forcing periods).
     xlabel, ylabel, force_label : str
@@ -502,12 +503,17 @@ def time_history(ax_motion: Axes, ax_force: Axes, series: Iterable[Series],
     ValueError
         An array of `events` missing, or sticking starts and ends of different lengths.
     """
+    if "force" not in events and "contact_force" in events:  # a scene's simulations.nc
+        events = {k: events[k] for k in ("sticking_start", "sticking_end", "force_time",
+                                         "force_phase", "force_stop", "chatter_time")
+                  if k in events} | {"force": events["contact_force"]}
     need = ("sticking_start", "sticking_end", "force_time", "force", "force_phase",
             "force_stop", "chatter_time")
     missing = [k for k in need if k not in events]
     if missing:
         raise ValueError(f"events lacks {missing}: pass SimulationResult.sticking_arrays() "
-                         f"(or a scene's simulations.nc variables); got keys {sorted(events)}")
+                         f"(or a scene's simulations.nc variables); got keys "
+                         f"{sorted(map(str, events))}")
     series = list(series)
     starts = np.asarray(events["sticking_start"], dtype=float) * time_scale
     ends = np.asarray(events["sticking_end"], dtype=float) * time_scale

@@ -229,3 +229,17 @@ def test_time_history_names_what_its_events_lack():
     _fig, (top, bottom) = panel_figure(2, 3.5, ncols=1)
     with pytest.raises(ValueError, match=r"events lacks \['force_stop'\]"):
         time_history(top, bottom, [Series(t, y, "$s$", linestyle="-")], events)
+
+
+def test_time_history_takes_a_scene_datasets_contact_force():
+    """A scene's simulations.nc stores the force as ``contact_force``: drawn the same."""
+    from impactcont.plots.series import time_history
+
+    t, y, events = _simulated_events()
+    events["contact_force"] = events.pop("force")
+    fig, (top, bottom) = panel_figure(2, 3.5, ncols=1)
+    time_history(top, bottom, [Series(0.5 * t, y, "$s$", linestyle="-")], events,
+                 time_scale=0.5)
+    u = next(line for line in bottom.get_lines() if line.get_label() == "force on stop U")
+    assert np.allclose(u.get_xydata()[:3], [[0.25, 0.2], [0.425, 0.1], [0.6, 0.0]])
+    assert fig.axes == [top, bottom]
