@@ -175,3 +175,22 @@ def test_the_docs_example_of_a_dashpot_on_the_primary_only_runs():
     assert again.impact_stops == (orbit.pattern * 4)[1:7]
     np.testing.assert_allclose(again.impact_times, np.cumsum(np.tile(orbit.flight_times, 3)),
                                rtol=0, atol=1e-8)
+
+
+def test_map_cells_are_the_motions_solved_one_by_one(damper_orbit):
+    """The map sweep (its own compiled loop over the first-order flights and the contact
+    search) on the non-proportional damper: each cell found is the motion
+    multi_impact_orbit solves there, its spectral radius and flight gap the same."""
+    bs = np.array([0.9, 1.0, 1.1])
+    mp = ic.multi_impact_map(damper_orbit, ("omega", "b"),
+                             {"omega": np.array([2.0, 2.2]), "b": bs})
+    assert bool(mp["found"].all())
+    for omega in (2.0, 2.2):
+        for b in bs:
+            cell = mp.sel(omega=omega, b=b)
+            direct = multi_impact_orbit(damper_orbit.oscillator.replace(omega=omega, b=float(b)),
+                                        1, 2, damper_orbit)
+            assert float(cell["spectral_radius"]) == pytest.approx(
+                np.abs(direct.multipliers).max(), rel=1e-10)
+            assert float(cell["gap_min"]) == pytest.approx(direct.gap_min, rel=0, abs=1e-9)
+            assert bool(cell["physical"]) == direct.physical
