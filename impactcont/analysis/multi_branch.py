@@ -9,7 +9,7 @@ system), ``run_branch``, ``trace_branch``, ``branch_to_dataset``, ``branch_probl
 (:class:`~impactcont.detection.special_points.BranchSample`).
 """
 
-from impactcont.analysis.branch import (
+from impactcont.analysis.branch import (  # noqa: F401 - the private two for old tests
     _asymmetry,
     _pd_sign_change,
     as_multi_impact_orbit,
@@ -24,6 +24,6 @@ from impactcont.analysis.branch import (
 )
 from impactcont.detection.special_points import BranchSample as MultiImpactSample
 
-__all__ = ["MultiImpactSample", "_asymmetry", "_pd_sign_change", "as_multi_impact_orbit",
-           "branch_problem", "branch_to_dataset", "make_options", "multi_impact_continuation",
-           "restart_problem", "run_branch", "trace_branch", "user_events_until_interrupted"]
+__all__ = ["MultiImpactSample", "as_multi_impact_orbit", "branch_problem", "branch_to_dataset",
+           "make_options", "multi_impact_continuation", "restart_problem", "run_branch",
+           "trace_branch", "user_events_until_interrupted"]
