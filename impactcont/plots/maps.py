@@ -524,7 +524,7 @@ _SEED = {"marker": "*", "markersize": 10.0, "color": "gold", "markeredgecolor": 
 
 
 def multi_map_regions(ds: xr.Dataset) -> xr.DataArray:
-    """Region of every grid point of a :func:`~impactcont.analysis.multi_maps.multi_impact_map`.
+    """Region of every grid point of a :func:`~impactcont.analysis.maps.multi_impact_map`.
 
     Returns
     -------
@@ -586,7 +586,7 @@ def multi_impact_map_diagram(ds: xr.Dataset, *, ax: Axes | None = None,
     Parameters
     ----------
     ds : xarray.Dataset
-        A map of :func:`impactcont.analysis.multi_maps.multi_impact_map`.
+        A map of :func:`impactcont.analysis.maps.multi_impact_map`.
     ax : matplotlib.axes.Axes, optional
         Where to draw; a new pyplot figure by default. With ``legend`` its
         figure should use the constrained layout (the default figure does).

@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.analysis.multi_maps import multi_impact_map
+from impactcont.analysis.maps import multi_impact_map
 from impactcont.dataset import maps as dmm
 from impactcont.model.stops import Stops
 

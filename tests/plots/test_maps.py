@@ -22,7 +22,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 
 import impactcont as ic
-from impactcont.dataset.multi_maps import multi_impact_map_dataset
+from impactcont.dataset.maps import multi_impact_map_dataset
 from impactcont.model.stops import Stops
 from impactcont.plots.maps import (
     CURVE_STYLES,
