@@ -34,11 +34,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.branch import continuation
-from impactcont.analysis.multi_branch import (
-    MultiImpactSample,
-    branch_to_dataset,
-    user_events_until_interrupted,
-)
+from impactcont.analysis.multi_branch import branch_to_dataset, user_events_until_interrupted
 from impactcont.analysis.switching import special_orbit
 from impactcont.core import (
     ContinuationOptions,
@@ -69,6 +65,7 @@ from impactcont.dataset.schema import (
 )
 from impactcont.detection.codim2 import Codim2Point, codim2_record, detect_codim2, test_values
 from impactcont.detection.special_points import (
+    BranchSample,
     UserFunctions,
     check_user_functions,
     locate_user_events,
@@ -561,7 +558,7 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
             raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
         orbits = [problem.orbit(u, float(lam)) for u, lam in zip(result.u, result.lam,
                                                                  strict=True)]
-        samples = [MultiImpactSample(u=x, lam=float(lam), tangent=t, orbit=o)
+        samples = [BranchSample(u=x, lam=float(lam), tangent=t, orbit=o)
                    for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
                                            strict=True)]
         log.info("%s curve of the %d-%d motion in (%s, %s): %d points (%s)", kind, N, p, p1,
