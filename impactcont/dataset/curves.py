@@ -2,10 +2,10 @@
 
 The one place that knows how a continued curve (:func:`impactcont.analysis.curves.curve`)
 is laid out in an :class:`xarray.Dataset`; maps are laid out by
-:mod:`impactcont.dataset.maps` (its names are re-exported here for the callers of
-before). Curves and maps carry the attribute ``impactcont_dataset`` (``"curve"``,
-``"map"``, ``"multi_impact_map"``); a branch dataset has none. :func:`validate_dataset`
-dispatches on it, so :func:`impactcont.dataset.save` / ``load`` handle them all.
+:mod:`impactcont.dataset.maps`. Curves and maps carry the attribute
+``impactcont_dataset`` (``"curve"``, ``"map"``, ``"multi_impact_map"``); a branch dataset
+has none. :func:`validate_dataset` dispatches on it, so :func:`impactcont.dataset.save` /
+``load`` handle them all.
 Layout documented in ``docs/two_parameter.md``.
 
 Curve dimensions
@@ -26,15 +26,7 @@ import numpy as np
 import xarray as xr
 
 from impactcont.dataset.attributes import check_attributes, dataset_tag, split_parameters
-from impactcont.dataset.maps import (
-    MAP_KINDS,
-    MAP_VARIABLES,
-    map_dataset,
-    map_parameters,
-    map_variables,
-    validate_map,
-    validate_map_dataset,
-)
+from impactcont.dataset.maps import MAP_KINDS, validate_map
 from impactcont.dataset.multi import validate_multi_impact_dataset
 from impactcont.dataset.schema import (
     _N,
@@ -58,17 +50,12 @@ __all__ = [
     "CODIM2_LABELS",
     "CODIM2_STATUSES",
     "CURVE_VARIABLES",
-    "MAP_VARIABLES",
     "codim2_data",
     "codim2_variable",
     "curve_dataset",
-    "map_dataset",
-    "map_parameters",
-    "map_variables",
     "normalise_dataset",
     "validate_curve_dataset",
     "validate_dataset",
-    "validate_map_dataset",
 ]
 
 logger = logging.getLogger(__name__)

@@ -1,6 +1,6 @@
 """Compiled stability maps of N-p motions: Newton from solved neighbours over a grid.
 
-The numba side of :func:`impactcont.analysis.multi_maps.multi_impact_map`. One call sweeps a
+The numba side of :func:`impactcont.analysis.maps.multi_impact_map`. One call sweeps a
 whole grid of two parameters: every grid point is solved by Newton on the shooting
 system of :mod:`impactcont.orbit.multi_impact` (or on the half system of a symmetric
 motion, :mod:`impactcont.orbit.symmetry`), started from a solved neighbour (a secant

@@ -53,7 +53,7 @@ from matplotlib.ticker import MultipleLocator
 import impactcont as ic
 from impactcont.plots import SPECIAL_MARKERS
 from impactcont.plots.branches import SPECIAL_NAMES, fit_text, label_specials, legend_below
-from impactcont.plots.multi_maps import multi_impact_map_diagram
+from impactcont.plots.maps import multi_impact_map_diagram
 from impactcont.plots.series import (
     Series,
     figure_legend,
@@ -390,7 +390,7 @@ def agreement_figure(rows: list[dict[str, Any]], width: float = 7.0) -> Figure:
 
 def plane_figure(groups: dict[str, xr.Dataset], width: float = 7.0) -> Figure:
     """The symmetric machine in (omega, b): the package's map of the UL motion (regions and
-    boundaries, :func:`impactcont.plots.multi_maps.multi_impact_map_diagram`), the BP curves
+    boundaries, :func:`impactcont.plots.maps.multi_impact_map_diagram`), the BP curves
     on top and the special points of the branch in omega at ``b = B``, labelled."""
     # one column: the legend below takes one line per entry (about 10)
     fig, (ax,) = panel_figure(1, width, aspect=0.62, extra_height=1.6 if width >= 5.0 else 3.0)

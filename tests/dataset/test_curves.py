@@ -13,6 +13,7 @@ import xarray as xr
 
 import impactcont as ic
 from impactcont.dataset import curves as dc
+from impactcont.dataset import maps as dm
 
 PAPER = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                             b=0.0, omega=1.75, eta=0.1)
@@ -77,9 +78,9 @@ def test_a_curve_holds_its_columns_and_its_codim2_points(pd_curve) -> None:
 
 
 def test_every_variable_carries_its_cf_name_and_units(pd_curve, n1_map) -> None:
-    for ds in (_build(pd_curve), dc.map_dataset(
+    for ds in (_build(pd_curve), dm.map_dataset(
             oscillator=PAPER, N=[1, 2], omega=n1_map["omega"].values, b=n1_map["b"].values,
-            values={k: n1_map[k].values for k in dc.MAP_VARIABLES}, options={})):
+            values={k: n1_map[k].values for k in dm.MAP_VARIABLES}, options={})):
         assert ds.attrs["Conventions"].startswith("CF-")
         for name, var in ds.variables.items():
             if var.dtype.kind in "fcib" and name not in ("multiplier",):
@@ -188,17 +189,17 @@ def test_codim2_labels_of_older_files_get_their_name(pd_curve) -> None:
 def _map(n1_map: xr.Dataset, **changes) -> xr.Dataset:
     args = {"oscillator": PAPER, "N": n1_map["N"].values.tolist(),
             "omega": n1_map["omega"].values, "b": n1_map["b"].values,
-            "values": {k: n1_map[k].values for k in dc.MAP_VARIABLES},
+            "values": {k: n1_map[k].values for k in dm.MAP_VARIABLES},
             "options": {"executor": "serial"}}
     args.update(changes)
-    return dc.map_dataset(**args)
+    return dm.map_dataset(**args)
 
 
 def test_a_map_holds_its_values_on_its_grid_and_loads_back(n1_map, tmp_path) -> None:
     ds = _map(n1_map)
     assert dict(ds.sizes) == {"N": 2, "omega": 5, "b": 4, "root": 2}
     assert ds["root"].values.tolist() == [1, -1]
-    for name, (_, dims) in dc.MAP_VARIABLES.items():
+    for name, (_, dims) in dm.MAP_VARIABLES.items():
         assert ds[name].dims == dims
         np.testing.assert_array_equal(ds[name].values, n1_map[name].values)
     assert ds.attrs["impactcont_dataset"] == "map"
@@ -208,7 +209,7 @@ def test_a_map_holds_its_values_on_its_grid_and_loads_back(n1_map, tmp_path) -> 
 
 
 def test_a_map_without_eigenvalues_has_no_spectral_radius(n1_map, tmp_path) -> None:
-    values = {k: n1_map[k].values for k in dc.MAP_VARIABLES
+    values = {k: n1_map[k].values for k in dm.MAP_VARIABLES
               if k not in ("spectral_radius", "critical_multiplier")}
     ds = _map(n1_map, values=values)
     assert "spectral_radius" not in ds and "critical_multiplier" not in ds
@@ -216,11 +217,11 @@ def test_a_map_without_eigenvalues_has_no_spectral_radius(n1_map, tmp_path) -> N
 
 
 def test_a_bad_map_is_named(n1_map) -> None:
-    values = {k: n1_map[k].values for k in dc.MAP_VARIABLES if k != "gap_min"}
+    values = {k: n1_map[k].values for k in dm.MAP_VARIABLES if k != "gap_min"}
     with pytest.raises(ValueError, match=r"values is missing 'gap_min'; required "
                                          r"\['amplitude_squared'"):
         _map(n1_map, values=values)
-    values = {**{k: n1_map[k].values for k in dc.MAP_VARIABLES},
+    values = {**{k: n1_map[k].values for k in dm.MAP_VARIABLES},
               "exists": n1_map["exists"].values[:1]}
     with pytest.raises(ValueError, match=r"column 'exists' must have shape \(2, 5, 4\); got "
                                          r"shape \(1, 5, 4\)"):
@@ -233,4 +234,4 @@ def test_a_bad_map_is_named(n1_map) -> None:
         _map(n1_map, oscillator=None)
     with pytest.raises(ValueError, match=r"variable 'exists' must have dims \('N', 'omega', "
                                          r"'b'\); got \('N', 'omega'\)"):
-        dc.validate_map_dataset(_map(n1_map).isel(b=0, drop=True))
+        dm.validate_map_dataset(_map(n1_map).isel(b=0, drop=True))

@@ -27,8 +27,8 @@ from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import multi_impact_orbit, shooting
 from impactcont.orbit.symmetry import half_map
-from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.codim1 import MultiImpactCurveProblem
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.maps import multi_impact_map, multi_impact_map_orbit
 from impactcont.analysis.multi_branch import multi_impact_continuation
-from impactcont.analysis.multi_maps import multi_impact_map, multi_impact_map_orbit
 from impactcont.dataset import oscillator_from_dataset
 from impactcont.dataset.io import cf_name
 from impactcont.model.parameters import model_parameter
@@ -286,7 +286,7 @@ def test_a_map_in_a_stop_of_its_own_round_trips_and_gives_its_points_back(backla
 def test_a_map_over_two_elements_is_stored_under_cf_names_and_read_back(backlash_motion,
                                                                         tmp_path):
     """The grid's dimensions are element names: on disk CF names (M_1_2, F_2), on load the
-    user's. (validate=False: the schema check of N-p maps, dataset/multi_maps.py, does not
+    user's. (validate=False: the schema check of N-p maps, dataset/maps.py, does not
     resolve element names yet.)"""
     pytest.importorskip("compliance_checker")
     grid = {"M[1,2]": [-0.04, 0.0, 0.04], "F[2]": [-0.1, 0.0, 0.1]}

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.analysis.multi_maps import multi_impact_map_orbit
+from impactcont.analysis.maps import multi_impact_map_orbit
 
 M = np.eye(2)
 K = np.array([[2.0, -1.0], [-1.0, 1.0]])  # a chain: wall - k - m1 - k - m2

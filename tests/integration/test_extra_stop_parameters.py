@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 import impactcont as ic
-from impactcont.analysis.multi_maps import multi_impact_map_orbit
+from impactcont.analysis.maps import multi_impact_map_orbit
 from impactcont.analysis.switching import special_orbit
 from impactcont.dataset import oscillator_from_dataset
 from impactcont.errors import ParameterError

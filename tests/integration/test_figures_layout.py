@@ -18,14 +18,17 @@ import pytest
 from matplotlib.figure import Figure
 
 import impactcont as ic
+from impactcont.analysis.maps import multi_impact_map
 from impactcont.analysis.multi_branch import multi_impact_continuation
-from impactcont.analysis.multi_maps import multi_impact_map
 from impactcont.model.stops import Stops
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.plots import SPECIAL_MARKERS, bifurcation_diagram, multipliers_plot
 from impactcont.plots.impacts import impact_diagram
-from impactcont.plots.maps import two_parameter_diagram, two_parameter_figure
-from impactcont.plots.multi_maps import multi_impact_map_diagram
+from impactcont.plots.maps import (
+    multi_impact_map_diagram,
+    two_parameter_diagram,
+    two_parameter_figure,
+)
 from impactcont.scene import figures
 from impactcont.scene.run import run_scene
 from tests._layout_checks import (

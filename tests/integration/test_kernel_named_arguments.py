@@ -29,7 +29,7 @@ KERNEL = ("kernel/shooting.py", "kernel/sweep.py", "kernel/flights.py", "kernel/
 CALLERS = ("orbit/multi_impact.py", "orbit/flow.py", "orbit/symmetry.py",
            "problems/multi_impact_branch.py", "problems/codim1.py",
            "problems/symmetric_branch.py", "detection/multi_impact.py",
-           "analysis/multi_maps.py")
+           "analysis/family_maps.py")
 MAX_PARAMETERS = 12
 #: The flow's methods whose results are the kernel's inputs.
 FLOW_ARRAYS = {"shooting_arrays", "static_arrays", "omega_arrays", "forcing_arrays",

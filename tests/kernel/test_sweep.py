@@ -1,5 +1,5 @@
 """The compiled map sweep (:func:`impactcont.kernel.sweep.sweep_stops`, driven by
-:func:`impactcont.analysis.multi_maps.multi_impact_map`) cell by cell.
+:func:`impactcont.analysis.maps.multi_impact_map`) cell by cell.
 
 Independent witness: :func:`impactcont.multi_impact_orbit` (Newton on the full shooting
 system in Python, its own G and contact check) on an oscillator built afresh at the cell's
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.analysis.multi_maps import multi_impact_map
+from impactcont.analysis.maps import multi_impact_map
 from impactcont.model.stops import Stops
 
 K2 = [[1.0, -1.0], [-1.0, 2.0]]
