@@ -57,6 +57,7 @@ MIN_WIDTH = 2.0
 ZERO_LABEL = "exact 0"
 _NONE = ("", "none", "None", " ")
 _ZERO_ROW = 0.13  # height of the row of exact zeros, as a fraction of the axes
+_ZERO_LINE = 1.15  # spacing of the series' lines of markers in that row, in marker sizes
 _LINE_ZORDER, _MARKER_ZORDER = 3.0, 2.0
 #: Shade of the intervals a stop holds (sticking phases) in :func:`time_history`.
 HELD_COLOR = "0.86"
@@ -208,7 +209,8 @@ def _zero_row_height(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]]) -> fl
     axes, so that its markers and its label fit (at most 0.3)."""
     ax.figure.draw_without_rendering()
     height = ax.bbox.height * 72.0 / ax.figure.dpi  # points
-    need = max(s.markersize for s, _ in zeros) + 10.0  # a marker and its margins, points
+    # a line of markers per series (their zeros may share an x) and margins, points
+    need = _ZERO_LINE * len(zeros) * max(s.markersize for s, _ in zeros) + 10.0
     return float(min(0.3, max(_ZERO_ROW, 1.3 * need / max(height, 1.0))))
 
 
@@ -217,9 +219,14 @@ def _zero_row(ax: Axes, zeros: Sequence[tuple[Series, np.ndarray]], height: floa
     row = ax.inset_axes((0.0, 0.0, 1.0, height), sharex=ax)
     row.set_facecolor("white")
     row.set_zorder(ax.get_zorder() + 1)
-    for series, x in zeros:
-        row.plot(x, np.zeros(x.size), zorder=_MARKER_ZORDER,
-                 **{**series.style(), "linestyle": "none"})
+    # each series on a line of its own inside the row, so that exact zeros of several
+    # series at one x are all seen (one marker drawn over another would hide it)
+    ax.figure.draw_without_rendering()
+    points = max(ax.bbox.height * height * 72.0 / ax.figure.dpi, 1.0)  # the row's height
+    step = 2.0 * _ZERO_LINE * max(s.markersize for s, _ in zeros) / points  # data units
+    for k, (series, x) in enumerate(zeros):
+        row.plot(x, np.full(x.size, (k - (len(zeros) - 1) / 2.0) * step),
+                 zorder=_MARKER_ZORDER, **{**series.style(), "linestyle": "none"})
     row.set_ylim(-1.0, 1.0)
     row.set_yticks([0.0], [ZERO_LABEL], fontsize="x-small")
     row.yaxis.set_minor_locator(NullLocator())
