@@ -352,7 +352,9 @@ def markers_hiding_markers(fig: Figure | Drawn, closeness: float = 1.0 / 3.0) ->
     d = render(fig)
     out = []
     for ax in axes_of(d.fig):
-        marks = _marker_paths(ax)
+        box = ax.bbox.extents
+        marks = [m for m in _marker_paths(ax)  # in view (a log axis puts zeros far off)
+                 if box[0] <= m[2][0] <= box[2] and box[1] <= m[2][1] <= box[3]]
         if len(marks) < 2:
             continue
         centres = np.array([m[2] for m in marks])

@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
+from matplotlib.markers import MarkerStyle
 
 from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.schema import (
@@ -38,7 +39,8 @@ __all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "NONPHYSICAL_MARKER", "SEGMENT_S
            "SPECIAL_MARKERS", "SPECIAL_NAMES", "WIDTH_RANGE", "Y_VARIABLES", "axis_label",
            "bifurcation_diagram", "check_width", "diagram_legend", "differing_parameters",
            "fit_text", "fixed_parameters", "label_specials", "legend_below", "legend_fontsize",
-           "motion_text", "multipliers_plot", "parameter_text", "stability_segments",
+           "motion_text", "multipliers_plot", "nest_coincident_markers", "parameter_text",
+           "stability_segments",
            "system_text"]
 
 logger = logging.getLogger(__name__)
@@ -552,6 +554,49 @@ def _zoom_group(ax: Axes, xy: np.ndarray, inset_size: tuple[float, float] = (0.4
     return np.empty(0, dtype=int)
 
 
+def nest_coincident_markers(ax: Axes, shrink: float = 0.7) -> None:
+    """Draw special-point markers at one place as one combined marker.
+
+    Markers of special points (and the grey circles of those off physical motions)
+    closer on the page than a third of the smaller one are one place: drawn alike in
+    size, the later one hid the earlier (the ZV points of N = 1 and N = 3 of the paper's
+    system at b = 0.5, omega = 1.213462, v = 0). Each later one is drawn ``shrink`` times
+    smaller than the smallest marker already there, inside it, so that every one stays
+    in view. Lays the figure out; call it once the markers are drawn.
+    """
+    if not 0.0 < shrink < 1.0:
+        raise ValueError(f"shrink must be in (0, 1); got {shrink!r}")
+    ax.figure.draw_without_rendering()
+    names = {str(MarkerStyle(m).get_marker())
+             for m in (*SPECIAL_MARKERS.values(), NONPHYSICAL_MARKER)}
+    scale = 72.0 / ax.figure.dpi
+    placed: list[tuple[np.ndarray, float]] = []  # (centre in points, marker size) so far
+    for line in list(ax.get_lines()):
+        if str(line.get_marker()) not in names \
+                or line.get_linestyle() not in ("None", "none", " ", ""):
+            continue
+        xy = np.asarray(line.get_xydata(), dtype=float)
+        keep = np.ones(len(xy), dtype=bool)
+        size = line.get_markersize()
+        for k, p in enumerate(ax.transData.transform(xy) * scale):
+            if not np.all(np.isfinite(p)):
+                continue
+            near = [s for c, s in placed if np.hypot(*(p - c)) < min(s, size) / 3.0]
+            if not near or size <= shrink * min(near) + 1e-9:  # alone, or inside already
+                placed.append((p, size))
+                continue
+            keep[k] = False
+            small = shrink * min(near)
+            ax.plot(*xy[k], linestyle="none", marker=line.get_marker(), markersize=small,
+                    markeredgecolor=line.get_markeredgecolor(),
+                    markerfacecolor=line.get_markerfacecolor(),
+                    markeredgewidth=line.get_markeredgewidth() * shrink,
+                    zorder=line.get_zorder(), clip_on=line.get_clip_on())
+            placed.append((p, small))
+        if not keep.all():
+            line.set_data(xy[keep, 0], xy[keep, 1])
+
+
 def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
                    zoom: bool = True, fontsize: Any = "small") -> Axes | None:
     """Label the special points ``(x, y, label)`` of ``ax``; crowded ones in a zoomed inset.
@@ -560,7 +605,7 @@ def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
     ``fontsize`` is that of the labels on ``ax`` (the inset's are ``x-small``).
     """
     labelled = list(specials)
-    ax.figure.draw_without_rendering()
+    nest_coincident_markers(ax)  # lays the figure out
     crowd = (_zoom_group(ax, np.array([(px, py) for px, py, _ in labelled]))
              if zoom and labelled else np.empty(0, dtype=int))
     if len({labelled[i][2] for i in crowd}) == 1:  # a stack of one kind: one label says it
@@ -689,6 +734,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
                         markeredgecolor=c if shown else NONPHYSICAL_GREY, zorder=3)
             labels_seen.update([label] if pts and shown else [])
             grey |= bool(pts) and not shown
+    if not (label_special and kept):  # label_specials nests them otherwise
+        nest_coincident_markers(ax)
     first = branches[0][1]
     ax.set_xlabel(axis_label(first, first.attrs["parameter"]))
     ax.set_ylabel(_y_label(first, y))

@@ -50,7 +50,12 @@ from matplotlib.markers import MarkerStyle
 
 import impactcont as ic
 from impactcont.plots import SEGMENT_STYLES, SPECIAL_MARKERS, bifurcation_diagram
-from impactcont.plots.branches import NONPHYSICAL_GREY, SPECIAL_NAMES, label_specials
+from impactcont.plots.branches import (
+    NONPHYSICAL_GREY,
+    SPECIAL_NAMES,
+    label_specials,
+    nest_coincident_markers,
+)
 from impactcont.plots.series import (
     MAX_WIDTH,
     figure_legend,
@@ -1039,44 +1044,6 @@ def _sweeps(ax: Any, b: float, bf: xr.Dataset) -> None:
         ax.scatter(w[ok], v[ok], zorder=1, **style)
 
 
-def _nest_coincident(ax: Any, shrink: float = 0.7) -> None:
-    """Special points drawn at one place (closer than a third of a marker) become one
-    combined marker: each later one is drawn ``shrink`` times smaller inside the one
-    before, so that none hides another.
-
-    At b = 0.5 the ZV points of N = 1 and N = 3 are one point (omega = 1.213462, v = 0,
-    see the README); drawn alike in size, the later marker hid the earlier. Call it on a
-    laid-out figure.
-    """
-    ax.figure.draw_without_rendering()
-    names = {str(MarkerStyle(m).get_marker()) for m in SPECIAL_MARKERS.values()}
-    lines = [line for line in ax.get_lines() if str(line.get_marker()) in names
-             and line.get_linestyle() in ("None", "none", " ", "")]
-    placed: list[tuple[np.ndarray, float]] = []  # (display centre, marker size) drawn so far
-    for line in lines:
-        xy = np.asarray(line.get_xydata(), dtype=float)
-        keep = np.ones(len(xy), dtype=bool)
-        size = line.get_markersize()
-        for k, p in enumerate(ax.transData.transform(xy)):
-            if not np.all(np.isfinite(p)):
-                continue
-            near = [s for c, s in placed if np.hypot(*(p - c)) * 72.0 / ax.figure.dpi
-                    < min(s, size) / 3.0]
-            if near:  # inside the smallest marker already there
-                keep[k] = False
-                small = shrink * min(near)
-                ax.plot(*xy[k], linestyle="none", marker=line.get_marker(), markersize=small,
-                        color=line.get_color(), markeredgecolor=line.get_markeredgecolor(),
-                        markerfacecolor=line.get_markerfacecolor(),
-                        markeredgewidth=line.get_markeredgewidth() * shrink,
-                        zorder=line.get_zorder(), clip_on=line.get_clip_on())
-                placed.append((p, small))
-            else:
-                placed.append((p, size))
-        if not keep.all():
-            line.set_data(xy[keep, 0], xy[keep, 1])
-
-
 def _label_all(ax: Any) -> None:
     """One labelling of every special point drawn on ``ax`` (all N together: labels of one
     N placed before the next N was drawn covered its points)."""
@@ -1160,7 +1127,7 @@ def gap_figure(b: float, branches: dict[str, xr.Dataset], checked_keys: set[tupl
                                                                         else 1.6))
     for a in axes:  # the layout is final
         markers_whole(a)
-        _nest_coincident(a)
+        nest_coincident_markers(a)
         if bf is not None:
             _sweeps(a, b, bf)
     if zoom is not None:  # the zoom's limits are final

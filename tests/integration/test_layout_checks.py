@@ -38,7 +38,7 @@ def test_a_simulated_point_under_a_special_marker_is_hidden():
 
 @pytest.mark.parametrize("case", ["triangle over square", "open square", "apart",
                                   "same kind twice", "one artist", "coinciding, smaller on top",
-                                  "cross under a circle's edge"])
+                                  "cross under a circle's edge", "out of view"])
 def test_markers_left_in_view_are_not_hidden(case):
     fig, ax = _axes()
     first = {"linestyle": "none", "marker": "^", "markersize": 6, "color": "tab:green",
@@ -64,6 +64,8 @@ def test_markers_left_in_view_are_not_hidden(case):
         second = {"linestyle": "none", "marker": "o", "markersize": 6, "color": "tab:blue",
                   "markerfacecolor": "white"}
         x2 = [1.012]  # about a point off: an arm of the cross reaches out of the circle
+    elif case == "out of view":  # both beyond the limits: nothing to see
+        ax.set_xlim(0.0, 0.5)
     if first is not None:
         ax.plot([1.0], [1.0], **first)
     ax.plot(x2, [1.0] * len(x2), **second)

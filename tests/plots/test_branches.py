@@ -396,3 +396,31 @@ def test_fit_text_never_breaks_inside_mathtext():
     assert len(lines) > 1
     assert all(line.count("$") % 2 == 0 for line in lines), lines
     assert r"$(\omega, b)$" in title.get_text()
+
+
+def test_special_points_at_one_place_become_one_combined_marker():
+    """Two ZV points of different N at one place (the paper's b = 0.5, omega = 1.213462,
+    v = 0): drawn alike, the later hid the earlier; nested, both are in view."""
+    from matplotlib.figure import Figure
+
+    from impactcont.plots.branches import nest_coincident_markers
+    from tests._layout_checks import markers_hiding_markers
+
+    fig = Figure(figsize=(3.5, 2.5))
+    ax = fig.add_subplot()
+    for colour in ("tab:blue", "tab:green"):
+        ax.plot([1.213462, 1.5], [0.0, 0.5 if colour == "tab:blue" else 0.3],
+                linestyle="none", marker="v", markersize=6.0, markerfacecolor="white",
+                markeredgecolor=colour)
+    ax.set_xlim(1.0, 2.0)
+    ax.set_ylim(-0.1, 1.0)
+    assert len(markers_hiding_markers(fig)) == 1
+    nest_coincident_markers(ax)
+    assert markers_hiding_markers(fig) == []
+    sizes = sorted(line.get_markersize() for line in ax.get_lines()
+                   for x, _ in line.get_xydata() if x == pytest.approx(1.213462))
+    assert sizes == pytest.approx([4.2, 6.0])
+    nest_coincident_markers(ax)  # once nested, they stay as they are
+    assert len([x for line in ax.get_lines() for x, _ in line.get_xydata()]) == 4
+    with pytest.raises(ValueError, match="shrink must be in"):
+        nest_coincident_markers(ax, shrink=1.5)
