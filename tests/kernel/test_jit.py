@@ -2,14 +2,22 @@
 
 The options are read from the dispatchers (``targetoptions``, the cache object); an
 ``inner`` function is never called from Python here (it has no CPython wrapper: the call
-would crash the interpreter), only through an ``entry`` that calls it.
+would crash the interpreter), only through an ``entry`` that calls it. The on-disk cache is
+checked against the sources of the whole kernel directory: numba inlines one module's
+compiled helpers into another's machine code.
 """
 
 from __future__ import annotations
 
 import importlib
 import math
+import os
+import pickle
 import pkgutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import numba as nb
 import numpy as np
@@ -19,7 +27,7 @@ from numba.core.registry import CPUDispatcher
 
 import impactcont.kernel
 import impactcont.orbit
-from impactcont.kernel import jit
+from impactcont.kernel import jit, shooting
 
 
 @jit.inner
@@ -101,3 +109,78 @@ def test_only_private_names_lack_the_cpython_wrapper():
 @pytest.mark.parametrize("value", [np.float64(2.0), 2])
 def test_entry_accepts_what_numba_types(value):
     assert _calls_inner(value) == 5.0
+
+_CALLER = """\
+from kern.helper import _value
+from impactcont.kernel.jit import entry
+
+@entry
+def value(x):
+    return _value(x)
+"""
+
+_HELPER = """\
+from impactcont.kernel.jit import inner
+
+@inner
+def _value(x):
+    return x + {0}
+"""
+
+
+def _run(root: Path) -> float:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(root), *sys.path])}
+    env.pop("NUMBA_CACHE_DIR", None)
+    code = "from kern.caller import value; print(value(1.0))"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True, timeout=300)
+    return float(out.stdout.split()[-1])
+
+
+def test_an_edit_of_a_helper_module_compiles_its_callers_again(tmp_path):
+    package = tmp_path / "kern"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "caller.py").write_text(_CALLER)
+    (package / "helper.py").write_text(_HELPER.format("1.0"))
+    assert _run(tmp_path) == 2.0
+    assert list((package / "__pycache__").glob("caller.value-*.nbi"))  # cached on disk
+    (package / "helper.py").write_text(textwrap.dedent(_HELPER.format("10.0")))
+    assert _run(tmp_path) == 11.0  # numba's own stamp (caller.py unchanged) loads 2.0
+
+
+def test_an_index_with_types_an_earlier_source_had_is_obsolete(tmp_path):
+    """An index pickled with a class since removed from the kernel raised AttributeError."""
+    package = tmp_path / "kern"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "caller.py").write_text(_CALLER)
+    (package / "helper.py").write_text(_HELPER.format("1.0"))
+    assert _run(tmp_path) == 2.0
+    for index in (package / "__pycache__").glob("*.nbi"):
+        with open(index, "rb") as f:
+            version = pickle.load(f)
+        with open(index, "wb") as f:
+            pickle.dump(version, f)
+            f.write(b"ckern.helper\nRemovedRecord\n.")  # a class the source no longer has
+    assert _run(tmp_path) == 2.0
+
+
+def test_the_stamp_covers_every_module_of_the_directory(tmp_path):
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "b.py").write_text("y = 1\n")
+    first = jit.source_stamp(tmp_path)
+    assert jit.source_stamp(tmp_path) == first
+    (tmp_path / "b.py").write_text("y = 2\n")
+    assert jit.source_stamp(tmp_path) != first
+    (tmp_path / "c.py").write_text("")
+    assert len({first, jit.source_stamp(tmp_path)}) == 2
+
+
+def test_kernel_functions_are_cached_against_the_kernel_directory():
+    kernel = Path(shooting.__file__).parent
+    for name in ("newton_solve", "palc_correct"):
+        locator = getattr(shooting, name)._cache._impl.locator
+        assert locator.get_source_stamp() == jit.source_stamp(kernel), name
+
+
