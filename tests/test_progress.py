@@ -12,7 +12,7 @@ import pytest
 
 import impactcont as ic
 import impactcont.progress as progress_module
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.curves import multi_impact_curve
 from impactcont.progress import Progress, Reporter, check_progress
 
 

@@ -53,7 +53,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 import impactcont as ic
-from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
+from impactcont.analysis.curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.analysis.switching import pitchfork_branch
 from impactcont.orbit.symmetry import mirror_image, symmetry_defect
 from impactcont.plots.branches import legend_below

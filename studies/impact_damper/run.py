@@ -53,7 +53,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 import impactcont as ic
-from impactcont.analysis.multi_curves import multi_impact_curve_crossings
+from impactcont.analysis.curves import multi_impact_curve_crossings
 from impactcont.plots.branches import SPECIAL_NAMES, fit_text, legend_below
 from impactcont.plots.maps import multi_impact_map_diagram
 from impactcont.plots.series import (

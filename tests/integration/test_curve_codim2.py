@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.curves import multi_impact_curve
 from impactcont.orbit.multi_impact import multi_impact_orbit
 
 BOX = {"omega": (0.6, 2.0), "b": (0.0, 0.6)}

@@ -11,7 +11,7 @@ import pytest
 
 import impactcont as ic
 import impactcont.detection.codim2 as codim2_module
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.curves import multi_impact_curve
 
 BOX = {"omega": (0.6, 2.0), "b": (0.0, 0.6)}
 

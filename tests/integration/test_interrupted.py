@@ -23,7 +23,7 @@ import impactcont as ic
 import impactcont.analysis.branch as branch_module
 import impactcont.core.locate as locate_module
 from impactcont.analysis.branch import extend
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.curves import multi_impact_curve
 from impactcont.problems import PeriodicBranchProblem
 from tests._scene_data import OSCILLATOR
 

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.curves import multi_impact_curve
 from impactcont.analysis.multi_branch import multi_impact_continuation
-from impactcont.analysis.multi_curves import multi_impact_curve
 from impactcont.analysis.switching import grazing_split, grazing_switch, special_orbit
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow

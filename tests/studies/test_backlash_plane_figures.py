@@ -15,7 +15,7 @@ from matplotlib.colors import to_rgb
 from matplotlib.patches import Patch
 
 import impactcont as ic
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.curves import multi_impact_curve
 from impactcont.analysis.switching import pitchfork_branch
 from tests._layout_checks import check_layout
 from tests.studies._figure_study import WIDTHS, study_module

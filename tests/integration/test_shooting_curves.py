@@ -1,4 +1,5 @@
-"""Two-parameter curves of N-p motions (``multi_impact_curve``).
+"""Two-parameter curves of N-p motions followed by shooting (``ic.curve`` from an N-p branch or
+motion; ``multi_impact_curve`` is its earlier name).
 
 Witnesses: the closed-form N-1 curves (the same motion followed by shooting as a 1-1
 motion must give the same PD curve), the one-parameter pitchforks located in omega on
@@ -33,7 +34,7 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 import impactcont as ic
-from impactcont.analysis.multi_curves import multi_impact_curve, multi_impact_curve_crossings
+from impactcont.analysis.curves import multi_impact_curve, multi_impact_curve_crossings
 from impactcont.errors import ParameterError
 from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops
