@@ -294,24 +294,46 @@ def draw_orbits(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
 
 
 def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
-    """Simulated trajectories ($x_j(t)$, phase portrait) or, without one, the impacts."""
+    """Simulated trajectories ($x_j(t)$, phase portrait) or, without one, the impacts.
+
+    A trajectory with sticking phases is drawn as its time history instead
+    (:func:`impactcont.plots.series.time_history`): the held intervals shaded, the
+    contact force under the motion, the accumulation points of complete chatter marked.
+    """
     from matplotlib.lines import Line2D
 
     from impactcont.plots.branches import fit_text, legend_fontsize
+    from impactcont.plots.series import Series, time_history
 
     items = list(datasets.items())[:_MAX_ROWS]
-    fig, subfigs, width = _entry_rows(len(items), plot, 0.8)
+    stacked = sum("X" in ds and ds.sizes.get("sticking", 0) > 0 for _, ds in items)
+    fig, subfigs, width = _entry_rows(len(items), plot, 0.8 + 1.0 * stacked)
     if not items:
         return _finish(_empty(fig, "no simulation"), plot, "Simulations")
     trajectories = False
+    held: dict[str, Any] = {}  # the legend entries of the rows with sticking phases
     j = 1
     ticks = 3 if width < 5.0 else 6
     for sub, (_name, ds) in zip(subfigs, items, strict=True):
-        ax_l, ax_r = sub.subplots(1, 2)
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
         n, i = osc.n, osc.stops.index
         j = i + 1
-        if "X" in ds:
+        if "X" in ds and ds.sizes.get("sticking", 0):
+            # held on a stop: the motion over its sticking phases and the contact force
+            # under it (the phase portrait would draw a held interval as one point)
+            trajectories = True
+            ax_l, ax_r = sub.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+            motion = Series(np.asarray(ds["t"].values), np.asarray(ds["X"].values)[:, i],
+                            "simulated trajectory", color="C0", linestyle="-",
+                            linewidth=0.8)
+            entries = time_history(ax_l, ax_r, [motion], ds, xlabel="time $t$",
+                                   ylabel=f"$x_{j}$", force_label="$p$",
+                                   force_entry="contact force $p$ on stop {stop}")
+            ax_l.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+            ax_l.margins(y=0.12)  # the accumulation points sit on the stop
+            held |= {h.get_label(): h for h in entries[1:]}
+        elif "X" in ds:
+            ax_l, ax_r = sub.subplots(1, 2)
             trajectories = True
             t = np.asarray(ds["t"].values)
             X = np.asarray(ds["X"].values)
@@ -324,6 +346,7 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
             ax_r.set_xlabel(f"$x_{j}$")
             ax_r.set_ylabel(rf"$\dot{{x}}_{j}$")
         else:
+            ax_l, ax_r = sub.subplots(1, 2)
             k = np.arange(ds.sizes["impact"])
             ax_l.plot(k, ds["impact_phases"].values, ".", color="C0", markersize=3)
             ax_l.set_xlabel("impact number")
@@ -342,7 +365,9 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
                Line2D([], [], color="0.3", linewidth=0.8, linestyle=":",
                       label=f"stop $x_{j} = b$")] if trajectories else \
         [Line2D([], [], color="C0", linestyle="none", marker=".", label="impact")]
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles),
+    handles += list(held.values())
+    fig.legend(handles=handles, loc="outside lower center",
+               ncols=min(len(handles), 2 if width < 5.0 else 3),
                fontsize=legend_fontsize(fig), frameon=False)
     return _finish(fig, plot, "Simulations")
 

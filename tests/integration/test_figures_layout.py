@@ -616,3 +616,25 @@ def test_scene_curves_name_codim2_points_as_the_field_does(data, width):
     assert "R2, PDNS, LPPD, PD+ZV, PD+GR" in text and "PD+SN" not in text
     assert "LPPD fold-flip" in text and "no standard name" in text
     assert "PD curve, period-2 motions" in text and "pd (" not in text
+
+
+@pytest.fixture(scope="module")
+def held_simulation(tmp_path_factory):
+    """The chatter-and-sticking study's scene: the preloaded oscillator held on its stop,
+    released and chattering back (4 periods, about 2 s)."""
+    scene = Path(__file__).resolve().parents[2] / "studies" / "chatter_sticking" / "scene.toml"
+    out = tmp_path_factory.mktemp("held")
+    return run_scene(scene, output=out).datasets["simulations"]
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_a_simulation_with_sticking_is_drawn_as_its_time_history(held_simulation, width):
+    """Held intervals shaded on the motion and on the contact force under it; the phase
+    portrait (which drew a held interval as one point) is not drawn for it."""
+    fig = figures.draw_simulations(held_simulation, _Options(width=width))
+    _assert_clean(fig)
+    motion, force = fig.axes[:2]
+    assert force.get_ylabel() == "$p$"
+    assert len(motion.patches) == next(iter(held_simulation.values())).sizes["sticking"] > 0
+    labels = {t.get_text() for leg in fig.legends for t in leg.get_texts()}
+    assert {"held (sticking)", "simulated trajectory", "accumulation point"} <= labels
