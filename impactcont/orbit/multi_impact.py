@@ -390,17 +390,31 @@ def shooting(flow: Flow, N: int, p: int, u: np.ndarray, *, jacobian: bool = True
     -------
     Shooting
     """
+    _, geo, x = _system_input(flow, p, pattern, u, "u")
+    out = _kernel().shooting_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
+                                    tuple(impact_sequence(geo)), TWO_PI * N / flow.osc.omega,
+                                    x, jacobian)
+    return _as_shooting(ShotFlights._make(out), jacobian)
+
+
+def _system_input(flow: Flow, p: int, pattern: str | None, u: Any, argument: str
+                  ) -> tuple[str, StopGeometry, np.ndarray]:
+    """The checked impact pattern, its stop geometry and the unknowns `u` as the kernel
+    takes them (:func:`_writable`), for :func:`shooting` and :func:`newton`.
+
+    Raises
+    ------
+    ParameterError
+        `pattern` as :func:`~impactcont.orbit.stop_geometry.check_pattern` refuses it, or
+        `u` not of shape (2np,) (the message names `argument`).
+    """
     osc = flow.osc
     pattern = check_pattern(pattern, p, osc.stops)
-    geo = _geometry(flow, pattern)
     x = np.asarray(u, dtype=float)
     if x.shape != (2 * osc.n * p,):
-        raise ParameterError(f"u must have shape ({2 * osc.n * p},) = (2 n p,) for n={osc.n}, "
-                             f"p={p}; got shape {x.shape}")
-    out = _kernel().shooting_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
-                                    tuple(impact_sequence(geo)), TWO_PI * N / osc.omega,
-                                    _writable(x), jacobian)
-    return _as_shooting(ShotFlights._make(out), jacobian)
+        raise ParameterError(f"{argument} must have shape ({2 * osc.n * p},) = (2 n p,) for "
+                             f"n={osc.n}, p={p}; got shape {x.shape}")
+    return pattern, _geometry(flow, pattern), _writable(x)
 
 
 def _kernel() -> Any:
@@ -774,12 +788,7 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         near a solution) or the guess is not near a motion with this impact pattern.
     """
     osc = flow.osc
-    pattern = check_pattern(pattern, p, osc.stops)
-    geo = _geometry(flow, pattern)
-    x0 = np.array(u0, dtype=float)
-    if x0.shape != (2 * osc.n * p,):
-        raise ParameterError(f"u0 must have shape ({2 * osc.n * p},) = (2 n p,) for "
-                             f"n={osc.n}, p={p}; got shape {x0.shape}")
+    pattern, geo, x0 = _system_input(flow, p, pattern, u0, "u0")
     solved = NewtonResult.from_kernel(_kernel().newton_solve(
         flow.flight_arrays(), tuple(flow.forcing_arrays()),
         tuple(impact_sequence(geo)), TWO_PI * N / osc.omega, x0, float(tol), int(max_iter)))
