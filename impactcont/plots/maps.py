@@ -278,13 +278,14 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
         ax.set_xlim(float(map_ds[first].min()), float(map_ds[first].max()))
         ax.set_ylim(float(map_ds[second].min()), float(map_ds[second].max()))
     # a star in the frame is drawn whole, over the frame if it is at the edge (the map's
-    # range is the frame: widened, it would show no map); one outside is not drawn
+    # range is the frame: widened, it would show no map); one outside is not drawn; the
+    # small grey stars over the gold ones (under one, a grey star was hidden)
     (x0, x1), (y0, y1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
     for style, shown in zip(CODIM2_STYLES, (True, False), strict=True):
         xy = np.array([k for k, (_, s) in codim2.items() if s == shown]).reshape(-1, 2)
         xy = xy[(xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)]
         if xy.size:
-            ax.plot(xy[:, 0], xy[:, 1], linestyle="none", zorder=4 if shown else 3,
+            ax.plot(xy[:, 0], xy[:, 1], linestyle="none", zorder=4 if shown else 5,
                     clip_on=False, **CODIM2_STYLES[style])
     return handles, labels
 
