@@ -847,7 +847,8 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
             r = _special_xy(ds, x, rho, "spectral_radius", k)[1]
             on_rho.append((float(sx[k]), r, label))
             ax_abs.plot([sx[k]], [r], linestyle="none", marker=SPECIAL_MARKERS[label],
-                        markersize=_MARKER_SIZE, markerfacecolor="white",
+                        # open, as on the right: the modulus under it stays in view
+                        markersize=_MARKER_SIZE, markerfacecolor="none",
                         markeredgecolor="black", markeredgewidth=1.0, zorder=3)
     # near a ZV point G has a pole (multipliers ~ 1/h2): frame the bulk, say what is cut
     ax_c.set_xlim(-reach, reach)
@@ -861,7 +862,7 @@ def multipliers_plot(ds: xr.Dataset, *, ax: Sequence[Axes] | None = None,
     handles = [Line2D([], [], color="black", linewidth=1.0, label="spectral radius"),
                Line2D([], [], label=r"$|\mu| = 1$", **circle)]
     handles += [Line2D([], [], linestyle="none", marker=SPECIAL_MARKERS[label],
-                       markersize=_MARKER_SIZE, markerfacecolor="white",
+                       markersize=_MARKER_SIZE, markerfacecolor="none",
                        markeredgecolor="black", label=f"{label} {SPECIAL_NAMES[label]}")
                 for label in seen]
     legend_below(ax_abs, handles, span="axes")
