@@ -35,7 +35,7 @@ _EXPORTS: dict[str, str] = {
     "ModalBasis": "impactcont.model.modal",
     **dict.fromkeys(("ImpactOscillator", "chain_stiffness"), "impactcont.model.oscillator"),
     **dict.fromkeys(("Stop", "Stops"), "impactcont.model.stops"),
-    "multi_impact_continuation": "impactcont.analysis.multi_branch",
+    "multi_impact_continuation": "impactcont.analysis.branch",
     **dict.fromkeys(("multi_impact_curve", "multi_impact_curve_crossings"),
                     "impactcont.analysis.curves"),
     **dict.fromkeys(("multi_impact_map", "multi_impact_map_orbit"),
@@ -136,7 +136,12 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
     from impactcont import core  # noqa: F401
-    from impactcont.analysis.branch import continuation, continuation_from, extend
+    from impactcont.analysis.branch import (
+        continuation,
+        continuation_from,
+        extend,
+        multi_impact_continuation,
+    )
     from impactcont.analysis.curves import (
         curve,
         curve_crossings,
@@ -144,7 +149,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the names __getattr__ gives
         multi_impact_curve_crossings,
     )
     from impactcont.analysis.maps import multi_impact_map, multi_impact_map_orbit, stability_map
-    from impactcont.analysis.multi_branch import multi_impact_continuation
     from impactcont.analysis.switching import (
         Cascade,
         grazing_switch,

@@ -33,8 +33,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from impactcont.analysis.branch import continuation
-from impactcont.analysis.multi_branch import branch_to_dataset, user_events_until_interrupted
+from impactcont.analysis.branch import (
+    branch_to_dataset,
+    continuation,
+    user_events_until_interrupted,
+)
 from impactcont.analysis.switching import special_orbit
 from impactcont.core import (
     ContinuationOptions,
@@ -592,7 +595,7 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
 
 
 class _CurveView:
-    """What :func:`~impactcont.analysis.multi_branch.branch_to_dataset` reads of a shooting
+    """What :func:`~impactcont.analysis.branch.branch_to_dataset` reads of a shooting
     curve problem: the N-p branch it is written as (in ``p2``)."""
 
     def __init__(self, problem: ShootingCurve, parameter: str, osc: Any) -> None:

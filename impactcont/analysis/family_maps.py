@@ -114,7 +114,7 @@ _TASK_POINTS = 1 << 16
 
 def _decide_symmetric(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
                       symmetric: Any) -> bool:
-    """Whether to solve on the half system (as ``multi_branch.branch_problem`` decides)."""
+    """Whether to solve on the half system (as ``branch.branch_problem`` decides)."""
     osc = orbit.oscillator
     pattern = orbit.pattern or "U" * orbit.p
     parameters = [param.name for param in params]

@@ -61,6 +61,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from impactcont.analysis.branch import as_multi_impact_orbit
 from impactcont.analysis.family_maps import family_map, multi_impact_map_orbit
 from impactcont.analysis.map_runner import (
     MapJob,
@@ -75,7 +76,6 @@ from impactcont.analysis.map_runner import (
     mark_computed,
     positive_int,
 )
-from impactcont.analysis.multi_branch import as_multi_impact_orbit
 from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.dataset.map_storage import (
     open_temporary_map,

@@ -2,7 +2,7 @@
 
 Every detector returns these: the special points of N-1 and N-p branches
 (:func:`~impactcont.detection.special_points.detect_special_points`,
-:func:`~impactcont.detection.multi_impact.detect_multi_impact_points`) and the zeros of
+:func:`~impactcont.detection.special_points.detect_special_points`) and the zeros of
 the user's event functions (:func:`~impactcont.detection.special_points.locate_user_events`).
 The former names :class:`SpecialPoint`, ``MultiImpactSpecialPoint`` and ``UserEvent`` are
 all this class.

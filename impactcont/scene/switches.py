@@ -30,7 +30,7 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
-from impactcont.analysis.multi_branch import make_options, multi_impact_continuation
+from impactcont.analysis.branch import make_options, multi_impact_continuation
 from impactcont.analysis.switching import (
     NOT_SYMMETRIC,
     grazing_switch,

@@ -50,7 +50,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.switching import (
     grazing_switch,
     period_doubling_cascade,

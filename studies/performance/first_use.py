@@ -101,7 +101,7 @@ _done()
 """
 
 NP = PRELUDE + """
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
 osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                           b=0.0, omega=1.5, eta=0.1)

@@ -58,7 +58,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import branch_problem, make_options, multi_impact_continuation
+from impactcont.analysis.branch import branch_problem, make_options, multi_impact_continuation
 from impactcont.analysis.switching import period_doubling_switch
 from impactcont.core import follow
 from impactcont.orbit.multi_impact import multi_impact_orbit
@@ -73,7 +73,7 @@ COLD = """
 import json, time
 import numpy as np
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.orbit.multi_impact import multi_impact_orbit
 osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
                           b=0.0, omega=1.5, eta=0.1)

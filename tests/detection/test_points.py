@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from impactcont.detection import SpecialPoint
-from impactcont.detection.multi_impact import MultiImpactSpecialPoint
 from impactcont.detection.points import SpecialPoint as Record
 from impactcont.detection.special_points import UserEvent
 from impactcont.vocabulary import Label
@@ -17,7 +16,7 @@ ORBIT = types.SimpleNamespace(delta=0.25)
 
 
 def test_the_former_record_types_are_the_one_record():
-    assert SpecialPoint is MultiImpactSpecialPoint is UserEvent is Record
+    assert SpecialPoint is UserEvent is Record
 
 
 def test_an_n1_point_given_its_phase_and_an_n_p_point_given_its_unknowns():

@@ -17,7 +17,7 @@ import pytest
 
 import impactcont as ic
 from impactcont.analysis.branch import continuation_from
-from impactcont.analysis.multi_curves import multi_impact_curve
+from impactcont.analysis.curves import multi_impact_curve
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
 from impactcont.orbit.extrema import max_displacement, min_displacement

@@ -21,12 +21,8 @@ import impactcont as ic
 from impactcont.cli import EXIT_USAGE, main
 from impactcont.dataset import branch_dataset, oscillator_from_dataset, validate_branch_dataset
 from impactcont.dataset import io as dataset_io
-from impactcont.dataset.curves import (
-    CURVE_VARIABLES,
-    curve_dataset,
-    map_dataset,
-    validate_curve_dataset,
-)
+from impactcont.dataset.curves import CURVE_VARIABLES, curve_dataset, validate_curve_dataset
+from impactcont.dataset.maps import map_dataset
 from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
 from impactcont.model.stops import Stops
 from impactcont.scene.files import write_output

@@ -15,7 +15,7 @@ from scipy.optimize import brentq, fsolve
 
 import impactcont as ic
 from impactcont import Flow, SimulationStatus, simulate
-from impactcont.analysis.multi_branch import make_options, multi_impact_continuation, trace_branch
+from impactcont.analysis.branch import make_options, multi_impact_continuation, trace_branch
 from impactcont.errors import IllConditionedWarning, NoPeriodicMotionError, ParameterError
 from impactcont.model.stops import Stops
 from impactcont.orbit.multi_impact import multi_impact_orbit, orbit_from_unknowns, shooting

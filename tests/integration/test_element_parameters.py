@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.maps import multi_impact_map, multi_impact_map_orbit
-from impactcont.analysis.multi_branch import multi_impact_continuation
 from impactcont.dataset import oscillator_from_dataset
 from impactcont.dataset.io import cf_name
 from impactcont.model.parameters import model_parameter

@@ -18,8 +18,8 @@ import pytest
 from matplotlib.figure import Figure
 
 import impactcont as ic
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.maps import multi_impact_map
-from impactcont.analysis.multi_branch import multi_impact_continuation
 from impactcont.model.stops import Stops
 from impactcont.orbit.multi_impact import multi_impact_orbit
 from impactcont.plots import SPECIAL_MARKERS, bifurcation_diagram, multipliers_plot

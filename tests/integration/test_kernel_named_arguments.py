@@ -28,7 +28,7 @@ ROOT = Path(ic.__file__).parent
 KERNEL = ("kernel/shooting.py", "kernel/sweep.py", "kernel/flights.py", "kernel/arrays.py")
 CALLERS = ("orbit/multi_impact.py", "orbit/flow.py", "orbit/symmetry.py",
            "problems/multi_impact_branch.py", "problems/codim1.py",
-           "problems/symmetric_branch.py", "detection/multi_impact.py",
+           "problems/symmetric_branch.py",
            "analysis/family_maps.py")
 MAX_PARAMETERS = 12
 #: The flow's methods whose results are the kernel's inputs.

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.curves import multi_impact_curve
-from impactcont.analysis.multi_branch import multi_impact_continuation
 from impactcont.analysis.switching import grazing_split, grazing_switch, special_orbit
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow
@@ -364,7 +364,7 @@ def test_a_pushed_free_mode_is_checked(caplog):
     res = ic.simulate(osc, orbit.states[0], float(orbit.phases[0]), 1.5)
     assert res.impact_stops[0] == "L"
     assert res.impact_times[0] == pytest.approx(T, rel=0, abs=1e-8)
-    with caplog.at_level(logging.WARNING, logger="impactcont.analysis.multi_branch"):
+    with caplog.at_level(logging.WARNING, logger="impactcont.analysis.branch"):
         ds = multi_impact_continuation(orbit, "omega", (1.2, 1.4), progress=False,
                                        max_points=6)
     assert ds["physical"].values.all()

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.curves import multi_impact_curve
-from impactcont.analysis.multi_branch import multi_impact_continuation
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
 
 BOUNDS = (0.9, 1.7)

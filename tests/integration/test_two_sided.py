@@ -18,7 +18,7 @@ import pytest
 import scipy.optimize
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.switching import grazing_switch, special_orbit
 from impactcont.dataset.multi import pattern_of, validate_multi_impact_dataset
 from impactcont.errors import ParameterError
@@ -648,7 +648,7 @@ def test_asymmetry_ignores_halves_on_different_stops():
     sits at +-pi, whose sign flips by rounding and would end the branch spuriously."""
     from types import SimpleNamespace
 
-    from impactcont.analysis.multi_branch import _asymmetry
+    from impactcont.analysis.branch import _asymmetry
 
     def orbit(pattern, dphase):
         return SimpleNamespace(N=2, p=2, pattern=pattern, phases=np.array([0.0, dphase]),

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.core import ContinuationOptions, follow
 from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops

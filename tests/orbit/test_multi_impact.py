@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.switching import grazing_switch, period_doubling_switch
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import Flow, flow_of

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.analysis.multi_branch import multi_impact_continuation
+from impactcont.analysis.branch import multi_impact_continuation
 from impactcont.analysis.switching import pitchfork_switch
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
