@@ -605,13 +605,11 @@ def _system(flight, forcing, impacts, period, symmetric, pivot, x, want_jacobian
     holds the first h impacts and `pivot` the position eliminated on every section of the
     motion (one for all). Returns the :class:`~impactcont.kernel.arrays.ShotFlights`.
     """
-    # one call site of _shooting_system (each call site is more code for numba to compile)
-    out = _shooting_system(flight, forcing, impacts, 0.5 * period if symmetric else period, x,
-                           want_jacobian)
     if not symmetric:
-        return out
+        return _shooting_system(flight, forcing, impacts, period, x, want_jacobian)
     j = pivot
     normals = impacts.normals
+    out = _shooting_system(flight, forcing, impacts, 0.5 * period, x, want_jacobian)
     h = impacts.positions.size
     m = impacts.matrices.shape[1]
     n = m // 2
@@ -696,12 +694,11 @@ def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
         (``NewtonResult.from_kernel`` names them): ``status`` :data:`CONVERGED` or
         :data:`FAILED`, ``shot`` the :func:`shooting_system` at ``x`` (with its Jacobian).
     """
-    # ``symmetric`` (False) and the pivot (unread) as values of run time: literals would
-    # compile _newton apart from the map sweep's call (as _jacobian_wanted explains)
-    impacts = ImpactSequence(*impacts)
+    # ``symmetric`` False as a value of run time (a literal would compile _newton apart
+    # from the map sweep's call, as _jacobian_wanted explains)
     x, converged, it, norm, step_norm, sh = _newton(
-        _flights(FlightArrays(*flight)), Forcing(*forcing), impacts, period, x0.size < 0,
-        impacts.pivots[0], x0, tol, max_iter)
+        _flights(FlightArrays(*flight)), Forcing(*forcing), ImpactSequence(*impacts), period,
+        x0.size < 0, 0, x0, tol, max_iter)
     return (x, CONVERGED if converged else FAILED, it, norm, step_norm, _shot_tuple(sh))
 
 
