@@ -62,7 +62,6 @@ from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.roots import orbit_roots, phase_sigma
 from impactcont.kernel.stability import (
     _charpoly_in_place,
-    _gauss_solve_in_place,
     _schur_stable_in_place,
     multipliers,
     multipliers_of,
@@ -362,8 +361,34 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
         A[m + 1, r] = right[r]
     rhs = np.zeros(k, dtype=G_reg.dtype)
     rhs[k - 1] = 1.0
-    _gauss_solve_in_place(A, rhs)
-    return rhs[k - 1]
+    return _solve_small(A, rhs)[k - 1]
+
+
+@_inner
+def _solve_small(A, x):
+    """Solve ``A y = x`` in place (both overwritten) by Gaussian elimination with partial
+    pivoting; returns ``x`` holding ``y`` (inf or NaN when A is singular)."""
+    k = x.size
+    for j in range(k):
+        p = j
+        for r in range(j + 1, k):
+            if abs(A[r, j]) > abs(A[p, j]):
+                p = r
+        if p != j:
+            for col in range(k):
+                A[j, col], A[p, col] = A[p, col], A[j, col]
+            x[j], x[p] = x[p], x[j]
+        for r in range(j + 1, k):
+            factor = A[r, j] / A[j, j]
+            for col in range(j + 1, k):
+                A[r, col] -= factor * A[j, col]
+            x[r] -= factor * x[j]
+    for j in range(k - 1, -1, -1):
+        acc = x[j]
+        for col in range(j + 1, k):
+            acc -= A[j, col] * x[col]
+        x[j] = acc / A[j, j]
+    return x
 
 
 @_inner

@@ -78,7 +78,7 @@ from impactcont.kernel.contact import (
 from impactcont.kernel.flights import mode_transfer, transfer_into
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
-from impactcont.kernel.stability import _gauss_solve_in_place, multipliers
+from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
            "jacobian_product", "motion_checks", "newton_solve",
@@ -586,12 +586,36 @@ def _max_abs(v):
 
 @_jit
 def _solve(A, rhs):
-    """``A^-1 rhs`` by Gaussian elimination with partial pivoting
-    (:func:`~impactcont.kernel.stability._gauss_solve_in_place` on copies); ``ok`` False
-    when a pivot is exactly zero (a singular matrix, as LAPACK's ``getrf`` reports it)."""
+    """``A^-1 rhs`` by Gaussian elimination with partial pivoting; ``ok`` False when a
+    pivot is exactly zero (a singular matrix, as LAPACK's ``getrf`` reports it)."""
+    size = rhs.size
+    M = A.copy()
     x = rhs.copy()
-    ok = _gauss_solve_in_place(A.copy(), x)
-    return x, ok
+    for c in range(size):
+        piv = c
+        big = abs(M[c, c])
+        for r in range(c + 1, size):
+            if abs(M[r, c]) > big:
+                big = abs(M[r, c])
+                piv = r
+        if big == 0.0:
+            return x, False
+        if piv != c:
+            for k in range(size):
+                M[c, k], M[piv, k] = M[piv, k], M[c, k]
+            x[c], x[piv] = x[piv], x[c]
+        for r in range(c + 1, size):
+            factor = M[r, c] / M[c, c]
+            if factor != 0.0:
+                for k in range(c + 1, size):
+                    M[r, k] -= factor * M[c, k]
+                x[r] -= factor * x[c]
+    for c in range(size - 1, -1, -1):
+        s = x[c]
+        for k in range(c + 1, size):
+            s -= M[c, k] * x[k]
+        x[c] = s / M[c, c]
+    return x, True
 
 
 @_inner

@@ -306,44 +306,6 @@ def _hqr(a, out):
 SMALL_EIG = 16  # matrices up to this size get the in-kernel QR; larger ones LAPACK
 
 
-@_inner
-def _gauss_solve_in_place(A, x):
-    """Solve ``A y = x`` in place (both overwritten, ``x`` then holds ``y``) by Gaussian
-    elimination with partial pivoting, as LAPACK's ``getrf``/``getrs``: the one dense
-    solve of the N-1 closed form's PD condition and of the shooting path's Newton steps.
-
-    Returns False when a pivot is exactly zero (a singular matrix, as ``getrf`` reports
-    it; ``x`` then holds inf or NaN), else True.
-    """
-    size = x.size
-    ok = True
-    for c in range(size):
-        piv = c
-        big = abs(A[c, c])
-        for r in range(c + 1, size):
-            if abs(A[r, c]) > big:
-                big = abs(A[r, c])
-                piv = r
-        if big == 0.0:
-            ok = False
-        if piv != c:
-            for k in range(size):
-                A[c, k], A[piv, k] = A[piv, k], A[c, k]
-            x[c], x[piv] = x[piv], x[c]
-        for r in range(c + 1, size):
-            factor = A[r, c] / A[c, c]
-            if factor != 0.0:
-                for k in range(c + 1, size):
-                    A[r, k] -= factor * A[c, k]
-                x[r] -= factor * x[c]
-    for c in range(size - 1, -1, -1):
-        s = x[c]
-        for k in range(c + 1, size):
-            s -= A[c, k] * x[k]
-        x[c] = s / A[c, c]
-    return ok
-
-
 @_jit
 def multipliers_of(G):
     """Eigenvalues of G: balanced Hessenberg QR for small G, LAPACK ``dgeev`` otherwise.
