@@ -618,55 +618,26 @@ def _solve(A, rhs):
     return x, True
 
 
-@_inner
-def _system(flight, forcing, impacts, period, symmetric, pivot, x, want_jacobian):
-    """The shooting system at ``x``: :func:`_shooting_system` over `period`, or the half
-    system of a symmetric motion (``symmetric``: its first h flights over half the period).
+@_jit
+def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
+    """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
-    The half system (``p = 2h``, ``X_{k+h} = -X_k``) is closed by the reflection: its last
-    block is ``D_h X_{h-1}^- + X_0`` instead of ``D_0 X_{h-1}^- - X_0``, as
-    :class:`impactcont.problems.symmetric_branch.SymmetricBranchProblem`; `impacts` then
-    holds the first h impacts and `pivot` the position eliminated on every section of the
-    motion (one for all). Returns the :class:`~impactcont.kernel.arrays.ShotFlights`.
+    The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
+    stopping rules), compiled; `flight`, `forcing`, `impacts` and `period` as
+    :func:`shooting_system` takes them.
+
+    Returns
+    -------
+    tuple
+        The fields of :class:`~impactcont.kernel.arrays.NewtonResult`
+        (``NewtonResult.from_kernel`` names them): ``status`` :data:`CONVERGED` or
+        :data:`FAILED`, ``shot`` the :func:`shooting_system` at ``x`` (with its Jacobian).
     """
-    if not symmetric:
-        return _shooting_system(flight, forcing, impacts, period, x, want_jacobian)
-    j = pivot
-    normals = impacts.normals
-    out = _shooting_system(flight, forcing, impacts, 0.5 * period, x, want_jacobian)
-    h = impacts.positions.size
-    m = impacts.matrices.shape[1]
-    n = m // 2
-    starts = out.starts
-    residual = out.residual
-    last = (h - 1) * m
-    for r in range(m):  # - X_0 -> + X_0 = - X_h
-        residual[last + r] += 2.0 * starts[0, r]
-    if want_jacobian:
-        J = out.jacobian
-        for r in range(m):  # dX_0/dz_0: unit columns, and x_j from the section
-            if r != j:
-                J[last + r, h + (r if r < j else r - 1)] += 2.0
-            else:
-                for c in range(n):
-                    if c != j:
-                        J[last + r, h + (c if c < j else c - 1)] -= (
-                            2.0 * normals[0, c] / normals[0, j])
-    return out
-
-
-@_inner
-def _newton(flight, forcing, impacts, period, symmetric, pivot, x0, tol, max_iter):
-    """Newton's method with backtracking on :func:`_system` from ``x0``: the one Newton
-    loop of the shooting path (:func:`newton_solve` and the map sweep of
-    :mod:`impactcont.kernel.sweep`); the stopping rules are those documented by
-    :func:`impactcont.orbit.multi_impact.newton`.
-
-    Returns ``(x, converged, iterations, norm, step_norm, shot)``, `shot` the
-    :class:`~impactcont.kernel.arrays.ShotFlights` at ``x`` (with its Jacobian).
-    """
+    flight = _flights(FlightArrays(*flight))
+    forcing = Forcing(*forcing)
+    impacts = ImpactSequence(*impacts)
     x = x0.copy()
-    sh = _system(flight, forcing, impacts, period, symmetric, pivot, x, _jacobian_wanted(x))
+    sh = _shooting_system(flight, forcing, impacts, period, x, _jacobian_wanted(x))
     norm = _max_abs(sh.residual)
     step_norm = np.inf
     it = 0
@@ -674,7 +645,7 @@ def _newton(flight, forcing, impacts, period, symmetric, pivot, x0, tol, max_ite
         scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
-            return x, True, it, norm, step_norm, sh
+            return (x, CONVERGED, it, norm, step_norm, _shot_tuple(sh))
         if it == max_iter:
             break
         J = sh.jacobian
@@ -686,13 +657,13 @@ def _newton(flight, forcing, impacts, period, symmetric, pivot, x0, tol, max_ite
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = _system(flight, forcing, impacts, period, symmetric, pivot, trial,
-                          _jacobian_wanted(trial))
+            tsh = _shooting_system(flight, forcing, impacts, period, trial,
+                                   _jacobian_wanted(trial))
             tnorm = _max_abs(tsh.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
                 # within tol and the update does not lower the residual: at its rounding floor
-                return x, True, it, norm, step_norm, sh
+                return (x, CONVERGED, it, norm, step_norm, _shot_tuple(sh))
             if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
                 break
             lam_step *= 0.5
@@ -700,30 +671,7 @@ def _newton(flight, forcing, impacts, period, symmetric, pivot, x0, tol, max_ite
         x = trial
         sh = tsh
         norm = tnorm
-    return x, False, it, norm, step_norm, sh
-
-
-@_jit
-def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
-    """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
-
-    The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
-    stopping rules), compiled (:func:`_newton` on the full system); `flight`, `forcing`,
-    `impacts` and `period` as :func:`shooting_system` takes them.
-
-    Returns
-    -------
-    tuple
-        The fields of :class:`~impactcont.kernel.arrays.NewtonResult`
-        (``NewtonResult.from_kernel`` names them): ``status`` :data:`CONVERGED` or
-        :data:`FAILED`, ``shot`` the :func:`shooting_system` at ``x`` (with its Jacobian).
-    """
-    # ``symmetric`` False as a value of run time (a literal would compile _newton apart
-    # from the map sweep's call, as _jacobian_wanted explains)
-    x, converged, it, norm, step_norm, sh = _newton(
-        _flights(FlightArrays(*flight)), Forcing(*forcing), ImpactSequence(*impacts), period,
-        x0.size < 0, 0, x0, tol, max_iter)
-    return (x, CONVERGED if converged else FAILED, it, norm, step_norm, _shot_tuple(sh))
+    return (x, FAILED, it, norm, step_norm, _shot_tuple(sh))
 
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------

@@ -16,8 +16,8 @@ The flows are stacked by value of the parameters that change them
 :meth:`impactcont.orbit.flow.Flow.shooting_arrays` and ``forcing_arrays``), the stop
 geometry by value of the parameters that move the stops
 (:class:`~impactcont.kernel.arrays.GeometryTables`). Flights, Newton steps, G and the
-contact search are those of :mod:`impactcont.kernel.shooting` (its one Newton loop,
-``_newton``, full or half system), on the named structures of :mod:`impactcont.kernel.arrays`.
+contact search are those of :mod:`impactcont.kernel.shooting`, on the named structures
+of :mod:`impactcont.kernel.arrays`.
 
 The half system of a symmetric motion (``p = 2h``; ``X_{k+h} = -X_k``,
 ``tau_{k+h} = tau_k``) is the shooting system of its first ``h`` flights over half
@@ -61,9 +61,13 @@ from impactcont.kernel.shooting import (
     _clearances,
     _flights,
     _jacobian_product_into,
-    _newton,
+    _jacobian_wanted,
+    _max_abs,
+    _shooting_system,
+    _solve,
     _stop_clearance,
     end_clearances,
+    unknowns_scale,
 )
 from impactcont.kernel.stability import multipliers
 
@@ -72,6 +76,91 @@ __all__ = ["sweep_stops"]
 
 #: The four neighbours of a grid point.
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
+
+
+@_inner
+def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
+    """The shooting system (full, or the half of a symmetric motion) at ``x``.
+
+    `impacts` holds the impacts of the system solved (the first h of a symmetric motion),
+    `pivot` the position eliminated on the sections of a symmetric motion (one for all).
+    Returns the :class:`~impactcont.kernel.arrays.ShotFlights` of
+    :func:`impactcont.kernel.shooting.shooting_system`.
+    """
+    omega = forcing.omega
+    if not symmetric:
+        return _shooting_system(_flights(flow), forcing, impacts, 2.0 * math.pi * N / omega,
+                                x, want_jacobian)
+    j = pivot
+    normals = impacts.normals
+    out = _shooting_system(_flights(flow), forcing, impacts, math.pi * N / omega, x,
+                           want_jacobian)
+    h = impacts.positions.size
+    m = impacts.matrices.shape[1]
+    n = m // 2
+    starts = out.starts
+    residual = out.residual
+    last = (h - 1) * m
+    for r in range(m):  # - X_0 -> + X_0 = - X_h
+        residual[last + r] += 2.0 * starts[0, r]
+    if want_jacobian:
+        J = out.jacobian
+        for r in range(m):  # dX_0/dz_0: unit columns, and x_j from the section
+            if r != j:
+                J[last + r, h + (r if r < j else r - 1)] += 2.0
+            else:
+                for c in range(n):
+                    if c != j:
+                        J[last + r, h + (c if c < j else c - 1)] -= (
+                            2.0 * normals[0, c] / normals[0, j])
+    return out
+
+
+@_inner
+def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
+    """Newton with backtracking from ``x0``: the iteration and stopping rules of
+    :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system` (``settings.tol``,
+    ``settings.max_iter``).
+
+    Returns ``(x, converged, iterations, shot)``.
+    """
+    tol = settings.tol
+    max_iter = settings.max_iter
+    x = x0.copy()
+    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, _jacobian_wanted(x))
+    norm = _max_abs(sh.residual)
+    step_norm = np.inf
+    it = 0
+    for it in range(max_iter + 1):
+        scale = unknowns_scale(x)
+        small = norm <= tol * scale
+        if small and (step_norm <= tol * scale or it == max_iter):
+            return x, True, it, sh
+        if it == max_iter:
+            break
+        J = sh.jacobian
+        if not np.all(np.isfinite(J)):
+            break
+        step, ok = _solve(J, -sh.residual)
+        if not ok:
+            break
+        lam_step = 1.0
+        while True:
+            trial = x + lam_step * step
+            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial,
+                          _jacobian_wanted(trial))
+            tnorm = _max_abs(tsh.residual)
+            finite = np.isfinite(tnorm)
+            if small and not (finite and tnorm < norm):
+                return x, True, it, sh
+            if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
+                break
+            lam_step *= 0.5
+        step_norm = lam_step * _max_abs(step)
+        x = trial
+        sh = tsh
+        norm = tnorm
+    return x, False, it, sh
 
 
 @_inner
@@ -325,10 +414,8 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
         flow, forcing = _flow_at(flows, flows.index[i0, i1])
         solved_impacts, full, stops = _geometry_at(geometries, geometries.index[i0, i1], motion)
         attempts += 1
-        x, ok, it, _, _, sh = _newton(_flights(flow), forcing, solved_impacts,
-                                      2.0 * math.pi * motion.N / forcing.omega,
-                                      motion.symmetric, motion.pivots[0], x0, settings.tol,
-                                      settings.max_iter)
+        x, ok, it, sh = _newton(flow, forcing, solved_impacts, motion.N, motion.symmetric,
+                                motion.pivots[0], x0, settings)
         total_iterations += it
         if ok and parent >= 0:
             change = 0.0
