@@ -521,8 +521,13 @@ def main() -> dict[str, Any]:
     parser.add_argument("--quick", action="store_true", help="small sizes, fewer repeats")
     parser.add_argument("--cost-vs-n", action="store_true",
                         help="only the cost against n (6.): output/cost_vs_n/ and the figure")
+    parser.add_argument("--figure-from-readme", action="store_true",
+                        help="only redraw figures/cost_vs_n.png from the README's cost table")
     args = parser.parse_args()
     global BUDGET
+    if args.figure_from_readme:
+        plot(rows_from_readme(), HERE / "figures" / "cost_vs_n.png")
+        return {}
     if args.cost_vs_n:
         return cost_vs_n_only()
     size, sizes, repeat, BUDGET = ((40, (2, 5, 10, 20), 3, 0.02) if args.quick else
@@ -580,6 +585,32 @@ def main() -> dict[str, Any]:
 
 
 COST_SIZES = (2, 5, 10, 16, 20, 24, 32, 38, 48, 64, 100, 200)
+
+
+#: The columns of the README's cost table (`cost_table`), in order: times in ms there.
+COST_COLUMNS = ("n", "orbits", "orbits_G", "orbits_G_multipliers", "per_orbit_G_multipliers",
+                "orbits_G_dense_multipliers", "dense_eigvals_2n", "numpy_eigvals_of_G",
+                "secular_alone", "G_and_lapack_alone")
+
+
+def rows_from_readme(path: Path = HERE / "README.md") -> list[dict[str, Any]]:
+    """The rows of the cost table the README shows (its "Cost against n" section), in the
+    units of :func:`cost_vs_n` (seconds), to redraw ``cost_vs_n.png`` from the published
+    numbers without timing again (``--figure-from-readme``)."""
+    lines = path.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines)
+                 if line.startswith("| n | `periodic_orbits` (ms, both roots)"))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        row: dict[str, Any] = {"n": int(cells[0])}
+        row |= {k: 1e-3 * float(v) for k, v in zip(COST_COLUMNS[1:], cells[1:], strict=False)}
+        rows.append(row)
+    if not rows:
+        raise ValueError(f"{path}: the cost table has no rows")
+    return rows
 
 
 def cost_vs_n_only() -> dict[str, Any]:

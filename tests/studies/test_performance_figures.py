@@ -30,3 +30,13 @@ def test_cost_figure_is_clean(study, rows, width):
     fig = study.cost_figure(rows, width)
     assert fig.get_size_inches()[0] == pytest.approx(width)
     check_layout(fig, journal=True)
+
+
+def test_the_published_cost_table_redraws_the_committed_figure(study):
+    """``--figure-from-readme`` reads every row of the README's cost table (n = 2 ... 200, in
+    seconds as ``cost_vs_n`` gives them) and the figure drawn from them is clean."""
+    rows = study.rows_from_readme()
+    assert [r["n"] for r in rows][:2] == [2, 5] and rows[-1]["n"] == 200
+    assert rows[0]["orbits"] == pytest.approx(0.0195e-3)
+    assert all(set(study.COST_COLUMNS) <= set(r) for r in rows)
+    check_layout(study.cost_figure(rows, 7.0), journal=True)
