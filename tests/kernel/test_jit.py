@@ -16,7 +16,6 @@ import pickle
 import pkgutil
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numba as nb
@@ -137,26 +136,28 @@ def _run(root: Path) -> float:
     return float(out.stdout.split()[-1])
 
 
-def test_an_edit_of_a_helper_module_compiles_its_callers_again(tmp_path):
-    package = tmp_path / "kern"
+def _cached_package(root: Path) -> Path:
+    """The package ``kern`` (a caller and its helper) under `root`, run once: compiled and
+    cached on disk with the helper adding 1."""
+    package = root / "kern"
     package.mkdir()
     (package / "__init__.py").write_text("")
     (package / "caller.py").write_text(_CALLER)
     (package / "helper.py").write_text(_HELPER.format("1.0"))
-    assert _run(tmp_path) == 2.0
+    assert _run(root) == 2.0
+    return package
+
+
+def test_an_edit_of_a_helper_module_compiles_its_callers_again(tmp_path):
+    package = _cached_package(tmp_path)
     assert list((package / "__pycache__").glob("caller.value-*.nbi"))  # cached on disk
-    (package / "helper.py").write_text(textwrap.dedent(_HELPER.format("10.0")))
+    (package / "helper.py").write_text(_HELPER.format("10.0"))
     assert _run(tmp_path) == 11.0  # numba's own stamp (caller.py unchanged) loads 2.0
 
 
 def test_an_index_with_types_an_earlier_source_had_is_obsolete(tmp_path):
     """An index pickled with a class since removed from the kernel raised AttributeError."""
-    package = tmp_path / "kern"
-    package.mkdir()
-    (package / "__init__.py").write_text("")
-    (package / "caller.py").write_text(_CALLER)
-    (package / "helper.py").write_text(_HELPER.format("1.0"))
-    assert _run(tmp_path) == 2.0
+    package = _cached_package(tmp_path)
     for index in (package / "__pycache__").glob("*.nbi"):
         with open(index, "rb") as f:
             version = pickle.load(f)
