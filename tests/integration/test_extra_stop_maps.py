@@ -1,9 +1,9 @@
-"""Maps of motions whose impacts are on stops of several coordinates (issue 21): the
-compiled sweep solves each impact's section for its own stop's mass and checks every
-flight against every stop (U above mass 1, A above mass 2 of a two-mass chain, the layout of Wagg's
-two-degree-of-freedom impact oscillator, illustrative numbers). Witnesses: ``multi_impact_orbit`` at every
-cell (the shooting path, which already took several stops) and the event-driven
-simulator on cells of each class (stable, unstable, not physical)."""
+"""Maps of motions whose impacts are on stops of several coordinates (issue 21): the compiled
+sweep solves each impact's section for its own stop's mass and checks every flight against
+every stop (U above mass 1, A above mass 2 of a two-mass chain, the layout of Wagg's
+two-degree-of-freedom impact oscillator, illustrative numbers). Witnesses:
+``multi_impact_orbit`` at every cell (the shooting path, which already took several stops)
+and the event-driven simulator on cells of each class (stable, unstable, not physical)."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Stops on several masses at once (issue 21, item 2): a stop above mass 1 (``U``) and one
-above mass 2 (``A``) of a two-mass chain (the layout of Wagg's two-degree-of-freedom impact oscillator
-with constraints on two masses; illustrative numbers). The model's validation, the simulator against solve_ivp
-and each stop's own impact law."""
+above mass 2 (``A``) of a two-mass chain (the layout of Wagg's two-degree-of-freedom impact
+oscillator with constraints on two masses; illustrative numbers). The model's validation,
+the simulator against solve_ivp and each stop's own impact law."""
 
 from __future__ import annotations
 
