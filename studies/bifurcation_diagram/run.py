@@ -377,14 +377,59 @@ def compute_branches(gaps: Sequence[float], workers: int, scan: int
 # Special points: table and independent checks
 # ---------------------------------------------------------------------------------------------
 def _bracket_partner(ds: xr.Dataset, k: int) -> int:
-    """Index of the other accepted point bracketing special point ``k``."""
+    """Index of the other accepted point of the pair that brackets special point ``k``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One branch (the schema of :func:`impactcont.continuation`).
+    k : int
+        Index of the special point on the ``special`` dimension.
+
+    Returns
+    -------
+    int
+        The neighbour ``q`` (``p - 1`` or ``p + 1``) of the special point's nearest
+        accepted point ``p``.
+
+    Raises
+    ------
+    ValueError
+        If neither neighbour of ``p`` spans the stored bracket.
+
+    Notes
+    -----
+    The detection brackets a special point between two consecutive accepted points and
+    stores as its bracket the range of omega the branch covers between them, which also
+    holds the located omega (``impactcont.dataset.records.special_record``). At a fold
+    (SN), and at a point between the last accepted point before a fold and the fold, the
+    located omega lies beyond both points and is an end of the bracket. So the partner is
+    the neighbour ``q`` with ``min``/``max`` of (omega_p, omega_q, omega*) equal to the
+    bracket. When both neighbours fit (the branch turns twice within the step), the one
+    whose segment to ``p`` passes nearer the located (omega, delta) is taken.
+    """
     p = int(ds["special_point"].values[k])
-    om = ds["omega"].values
-    lo, hi = ds["special_bracket_lo"].values[k], ds["special_bracket_hi"].values[k]
-    for q in (p - 1, p + 1):
-        if 0 <= q < om.size and {float(om[p]), float(om[q])} == {float(lo), float(hi)}:
-            return q
-    return p
+    om, de = ds["omega"].values, ds["delta"].values
+    lo, hi = float(ds["special_bracket_lo"].values[k]), float(ds["special_bracket_hi"].values[k])
+    omega, delta = float(ds["special_omega"].values[k]), float(ds["special_delta"].values[k])
+
+    def same(a: float, b: float) -> bool:
+        return math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-14)
+
+    def detour(q: int) -> float:
+        """How much longer the way p -> special point -> q is than p -> q."""
+        d = [complex(om[i] - omega, float(_wrap(de[i] - delta))) for i in (p, q)]
+        return abs(d[0]) + abs(d[1]) - abs(complex(om[q] - om[p], float(_wrap(de[q] - de[p]))))
+
+    fits = [q for q in (p - 1, p + 1) if 0 <= q < om.size
+            and same(min(om[p], om[q], omega), lo) and same(max(om[p], om[q], omega), hi)]
+    if not fits:
+        raise ValueError(
+            f"special point {k} ({ds['special_label'].values[k]} at omega={omega:.12g}) of "
+            f"the branch: no neighbour of its point {p} (omega={om[p]:.12g}) spans its "
+            f"bracket [{lo:.12g}, {hi:.12g}] with it; a bracket must be the omega range of "
+            "two consecutive points and the location")
+    return min(fits, key=detour)
 
 
 def special_records(branches: dict[str, xr.Dataset]) -> list[dict[str, Any]]:
@@ -397,7 +442,7 @@ def special_records(branches: dict[str, xr.Dataset]) -> list[dict[str, Any]]:
         for k in range(ds.sizes["special"]):
             p = int(ds["special_point"].values[k])
             q = _bracket_partner(ds, k)
-            n_phys = int(physical[p]) + int(physical[q]) if q != p else 2 * int(physical[p])
+            n_phys = int(physical[p]) + int(physical[q])
             omega = float(ds["special_omega"].values[k])
             others = np.delete(ds["special_omega"].values, k)
             d_next = float(np.min(np.abs(others - omega))) if others.size else math.inf

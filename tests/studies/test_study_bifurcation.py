@@ -104,3 +104,77 @@ def test_brute_force_dataset(outputs):
     assert timing["continuation"]["branches"] == len(summary["branches"])
     assert timing["brute_force"]["seconds"] > 0
     assert math.isfinite(timing["total_seconds"])
+
+
+def test_special_points_at_the_end_of_a_physical_part_are_boundary(study):
+    """The N = 3 branch at b = 0.5 is physical from its ZV (1.2134624) to its GR (1.2160683);
+    its fold (SN, 1.2160739) lies just beyond. GR and SN are bracketed by the last physical
+    point before the fold and the first non-physical one after it: the stored bracket ends at
+    the located omega (the schema's bracket holds the location), not at an accepted point's
+    omega. Both points are on the boundary of the physical part, so they are checked."""
+    osc = study.paper_oscillator(0.5, 1.215)
+    ds = ic.continuation(osc, 3, "omega", (1.20, 1.23))
+    records = {r["label"]: r for r in study.special_records({"b0p5_N3_a": ds})}
+    assert set(records) == {"ZV", "GR", "SN"}
+    physical = ds["physical"].values
+    for label in ("GR", "SN"):
+        r = records[label]
+        assert r["bracket"][1] == r["omega"]            # the bracket ends at the location
+        p, q = r["point"], r["partner"]
+        assert abs(p - q) == 1, (label, p, q)
+        assert {bool(physical[p]), bool(physical[q])} == {True, False}, label
+        assert r["part"] == "boundary", label
+    assert records["ZV"]["part"] == "boundary"
+
+
+def _synthetic_branch(omega, delta, physical, special):
+    """A branch dataset with just what special_records reads: points and special points
+    given as (label, omega, delta, point, bracket_lo, bracket_hi)."""
+    n = len(omega)
+    k = len(special)
+    col = list(zip(*special, strict=True))
+    return xr.Dataset(
+        {"omega": ("point", np.asarray(omega, float)),
+         "delta": ("point", np.asarray(delta, float)),
+         "physical": ("point", np.asarray(physical, bool)),
+         "impact_velocity": ("point", np.ones(n)),
+         "special_label": ("special", np.array(col[0], dtype="U2")),
+         "special_omega": ("special", np.asarray(col[1], float)),
+         "special_delta": ("special", np.asarray(col[2], float)),
+         "special_point": ("special", np.asarray(col[3], int)),
+         "special_bracket_lo": ("special", np.asarray(col[4], float)),
+         "special_bracket_hi": ("special", np.asarray(col[5], float)),
+         "special_b": ("special", np.full(k, 0.5)),
+         "special_precision": ("special", np.full(k, 1e-14)),
+         "special_status": ("special", np.full(k, "located", dtype="U9")),
+         "special_multipliers": (("special", "multiplier"), np.ones((k, 4), complex))},
+        attrs={"N": 3})
+
+
+def test_bracket_partner_follows_the_stored_bracket(study):
+    """Synthetic brackets: a plain pair, a location beyond both points (between the last
+    point and a fold), a fold; two folds in one step (both neighbours span the bracket) is
+    decided by where the located (omega, delta) lies; a bracket no neighbour spans is an
+    error that names it."""
+    omega = [1.00, 1.10, 1.20, 1.15, 1.05]
+    delta = [0.0, 0.1, 0.2, 0.3, 0.4]
+    physical = [True, True, True, False, False]
+    ds = _synthetic_branch(omega, delta, physical, [
+        ("PD", 1.05, 0.05, 0, 1.00, 1.10),          # between points 0 and 1
+        ("GR", 1.22, 0.22, 2, 1.15, 1.22),          # after point 2, before the fold
+        ("SN", 1.23, 0.25, 2, 1.15, 1.23),          # the fold between points 2 and 3
+        ("NS", 1.08, 0.38, 4, 1.05, 1.15),          # between points 3 and 4, nearer 4
+    ])
+    assert [study._bracket_partner(ds, k) for k in range(4)] == [1, 3, 3, 3]
+    parts = {r["label"]: r["part"] for r in study.special_records({"x": ds})}
+    assert parts == {"PD": "physical", "GR": "boundary", "SN": "boundary",
+                     "NS": "non-physical"}
+    # point 2 at a minimum, both neighbours above it, the location beyond both
+    twice = _synthetic_branch([1.10, 1.00, 1.05], [0.0, 0.1, 0.2], [True, True, False],
+                              [("GR", 1.12, 0.18, 1, 1.00, 1.12),
+                               ("GR", 1.12, 0.02, 1, 1.00, 1.12)])
+    assert study._bracket_partner(twice, 0) == 2
+    assert study._bracket_partner(twice, 1) == 0
+    bad = _synthetic_branch(omega, delta, physical, [("GR", 1.22, 0.22, 2, 1.30, 1.40)])
+    with pytest.raises(ValueError, match=r"special point 0 \(GR at omega=1.22\).*bracket"):
+        study._bracket_partner(bad, 0)
