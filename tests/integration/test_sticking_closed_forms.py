@@ -1,0 +1,152 @@
+"""Periodic motions with sticking phases: closed forms (mpmath, 30 digits) as witnesses.
+
+Three machines whose motion with a plastic impact (``R = 0``) and a sticking phase is known
+in closed form from the equation of motion alone (``studies/sticking_motions/closed_form.py``,
+which imports nothing from the package, issue 30 items 4 and 6):
+
+(a) a preloaded one-mass oscillator held on its stop ``b = 0``, released where
+    ``F cos(theta) + F_static`` falls to zero, flying, landing plastically, held again;
+(b) Luck & Mehta's completely inelastic ball on a vibrating table (Phys. Rev. E 48, 3988,
+    1993), locked, released at ``cos(theta_r) = 1 / Gamma``, landing;
+(c) the impact damper of ``docs/machines.md`` with a plastic ball riding each wall in turn
+    (the motion a fixed point of the closed-form return map, solved at 30 digits).
+
+Held against the event-driven simulator (``ic.simulate``, which shares no code with the
+shooting path) run to its steady state: every landing and release time to 1e-9. The
+simulator locates a release and an impact to a few ulps of the time on its exact flow, so
+its distance from the closed form is what the transient leaves (the largest multiplier to
+the power of the periods run: about 1e-13 here) plus rounding, and 1e-9 is the issue's bar.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.model.stops import Stops
+
+STUDY = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions"
+#: Largest landing/release time difference allowed against the simulator (issue 30).
+TIME_TOL = 1e-9
+
+
+@pytest.fixture(scope="module")
+def cf():
+    spec = importlib.util.spec_from_file_location("sticking_closed_form",
+                                                  STUDY / "closed_form.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look the module up by name
+    try:
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.modules.pop(spec.name, None)
+
+
+def preloaded(omega: float) -> ic.ImpactOscillator:
+    """Case (a): one mass pushed into its stop b = 0 by F_static = 1, forced 3 cos."""
+    return ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.0, b=0.0,
+                               omega=omega, eta=0.05)
+
+
+def ball(gamma: float) -> ic.ImpactOscillator:
+    """Case (b) in the table's frame: y'' = -1 + Gamma cos(theta) over the stop y = 0."""
+    return ic.ImpactOscillator(M=[[1.0]], K=[[0.0]], F=[gamma], F_static=[-1.0], R=0.0,
+                               b=1e3, omega=1.0, eta=0.0, stops=Stops(b_low=0.0, R_low=0.0))
+
+
+def damper(omega: float) -> ic.ImpactOscillator:
+    """Case (c): primary 1 on spring 1 (eta 0.3), plastic ball 0.2 in |x2 - x1| <= 0.3."""
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
+                               R=0.0, b=0.3, omega=omega, eta=0.3,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+def riding_start(osc: ic.ImpactOscillator) -> np.ndarray:
+    """The ball on the upper wall, the pair on the held system's forced response at
+    phase 0 (a start that is not the periodic motion: the simulator converges to it)."""
+    m, c, omega = osc.M[1, 1], osc.C[0, 0], osc.omega
+    amplitude = 1.0 / (1.0 - (1.0 + m) * omega**2 + 1j * c * omega)
+    x1, v1 = amplitude.real, (1j * omega * amplitude).real
+    return np.array([x1, x1 + osc.b, v1, v1])
+
+
+def time_apart(t: float, phase: float, omega: float, delta: float) -> float:
+    """How far time `t` of a run started at phase `delta` is from the closed form's
+    `phase` (mod one forcing period), in time."""
+    return abs(math.remainder(delta + omega * t - phase, 2 * math.pi)) / omega
+
+
+def check_against_run(motion, res, omega: float, delta: float, *, last: int) -> None:
+    """The last `last` sticking phases of `res` against the closed form `motion`: each
+    starts at a landing of the closed form on the same stop and ends at its release, with
+    the closed form's stick time; the flight after it lasts the closed form's flight."""
+    phases = [p for p in res.sticking if p.ended_by == "release"][-last:]
+    assert len(phases) == last
+    for held, after in zip(phases, [*phases[1:], None], strict=True):
+        k = motion.pattern.index(held.stops.lower())
+        assert time_apart(held.start, float(motion.phases[k]), omega, delta) < TIME_TOL
+        assert time_apart(held.end, float(motion.release_phases[k]), omega, delta) < TIME_TOL
+        assert held.duration == pytest.approx(float(motion.stick_times[k]), abs=TIME_TOL)
+        # the landing: the stop's pressing force right after the plastic impact
+        assert held.forces[0, 0] == pytest.approx(float(motion.landing_pressing[k]),
+                                                  rel=1e-9)
+        assert held.start_state == pytest.approx(motion.floats("landing_states")[k],
+                                                 abs=1e-9)
+        if after is not None:
+            assert after.start - held.end == pytest.approx(float(motion.flight_times[k]),
+                                                           abs=TIME_TOL)
+
+
+@pytest.mark.parametrize("omega", [0.7, 2.0])
+def test_preloaded_oscillator_closed_form_is_the_simulated_steady_motion(cf, omega):
+    """(a) From rest on the stop at phase 0 the first release already starts the periodic
+    motion (the release phase arccos(-1/3) forgets the history): three periods of held,
+    released, landing at the closed form's phase with its speed, held again."""
+    motion = cf.preloaded_motion(omega)
+    assert float(motion.release_phases[0]) == pytest.approx(math.acos(-1.0 / 3.0), abs=1e-15)
+    assert float(motion.period) == pytest.approx(2 * math.pi / omega, rel=1e-15)
+    res = ic.simulate(preloaded(omega), [0.0, 0.0], 0.0, 4.0)
+    assert not res.chatter  # plastic: every landing sticks at once
+    check_against_run(motion, res, omega, 0.0, last=3)
+    speeds = res.impact_velocities[-3:]
+    assert speeds == pytest.approx([float(motion.impact_velocities[0])] * 3, rel=1e-9)
+
+
+@pytest.mark.parametrize("gamma", [1.2, 2.0, 3.0])
+def test_locked_ball_closed_form_is_the_simulated_steady_motion(cf, gamma):
+    """(b) Luck & Mehta's ball with R = 0 locks on every landing: released at
+    theta_r = -arccos(1/Gamma), landing at the first return of the parabola relative to the
+    table, within one period for Gamma up to 3 (at 3.3 the flight outlasts the period)."""
+    motion = cf.locked_ball_motion(gamma)
+    assert float(motion.release_phases[0]) == pytest.approx(-math.acos(1.0 / gamma),
+                                                            abs=1e-15)
+    res = ic.simulate(ball(gamma), [0.0, 0.0], -0.5 * math.pi, 5.0)
+    check_against_run(motion, res, 1.0, -0.5 * math.pi, last=3)
+    with pytest.raises(ValueError, match="no return to the stop"):
+        cf.locked_ball_motion(3.3)
+
+
+def test_riding_damper_closed_form_is_the_simulated_steady_motion(cf):
+    """(c) The plastic ball rides the upper wall, is released where the primary's
+    acceleration changes sign, crosses the clearance, lands on the lower wall, rides it,
+    ...: the simulator from the held forced response converges to the closed form's fixed
+    point (multipliers 0.016 and 1.4e-4 besides the stick's zeros: the error shrinks 64
+    times a period, 12 periods leave ~1e-13)."""
+    omega = 0.2
+    motion = cf.riding_damper_motion(omega)
+    assert motion.pattern == "lu"
+    assert float(motion.period) == pytest.approx(2 * math.pi / omega, rel=1e-15)
+    # the symmetric motion: half a period apart, the mirror image
+    assert math.remainder(float(motion.phases[1] - motion.phases[0]) - math.pi,
+                          2 * math.pi) == pytest.approx(0.0, abs=1e-20)
+    osc = damper(omega)
+    res = ic.simulate(osc, riding_start(osc), 0.0, 12.0)
+    assert not res.chatter
+    check_against_run(motion, res, omega, 0.0, last=4)
