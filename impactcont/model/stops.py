@@ -639,7 +639,7 @@ class Stops:
         return cls(**data)
 
 
-def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
+def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False) -> str:
     """An impact sequence of an N-p motion: ``p`` stop names (``U``/``L``, extra stops).
 
     Parameters
@@ -650,16 +650,42 @@ def check_pattern(pattern: Any, p: int, stops: Stops) -> str:
     p : int
         Impacts per motion.
     stops : Stops
+    sticking : bool
+        Accept sticking phases: a lowercase letter (``"u"``, ``"l"``, ``"a"`` for the extra
+        stop ``"A"``) is an impact on that stop, plastic, followed by a sticking phase on it
+        until the release (:func:`impactcont.orbit.multi_impact.multi_impact_orbit`). A
+        letter that is itself a stop's name stays that stop's impact.
 
     Raises
     ------
     ParameterError
-        Wrong length, a letter that names no stop, or ``L`` without a lower stop.
+        Wrong length, a letter that names no stop, ``L`` without a lower stop, or a
+        sticking phase where `sticking` is False (a path that does not solve them yet).
+
+    Notes
+    -----
+    Whether a sticking stop is plastic (restitution 0: motions entered through complete
+    chatter are not solved by shooting yet) is checked where the restitutions are known,
+    :func:`impactcont.orbit.multi_impact.sticking_pattern`.
     """
     if pattern is None:
         return UPPER * p
     if not isinstance(pattern, str):
         raise TypeError(f"pattern must be a string of {p} letters U/L; got {pattern!r}")
+    names = UPPER + (LOWER if stops.two_sided else "") + "".join(
+        e.name for e in getattr(stops, "extra", ()))
+    held = "".join(c for c in pattern if c not in names and c.upper() in names)
+    if held:
+        if not sticking:
+            raise ParameterError(
+                f"pattern={pattern!r}: the lowercase letter(s) {held!r} ask for sticking phases "
+                "(a plastic impact held on its stop until the release), which "
+                "multi_impact_orbit solves; continuation, curves and maps of motions with "
+                "sticking phases are not supported yet (give the impacts' stops in capitals, "
+                "e.g. " + repr("".join(c if c in names else c.upper() for c in pattern)) + ")")
+        impacts = "".join(c if c in names else c.upper() for c in pattern)
+        check_pattern(impacts, p, stops)
+        return pattern
     extra = "".join(e.name for e in getattr(stops, "extra", ()))
     if extra and len(pattern) == p and not set(pattern) - set(UPPER + LOWER + extra):
         if LOWER in pattern and not stops.two_sided:

@@ -67,6 +67,7 @@ from impactcont.kernel.arrays import (
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, check_pattern, require_forcing
 from impactcont.orbit.flow import Flow, flow_of
+from impactcont.orbit.held_flow import held_flow
 from impactcont.orbit.periodic import (
     IllConditionedWarning,
     PeriodicOrbit,
@@ -190,6 +191,19 @@ class MultiImpactOrbit:
         The stop nearest each flight (whose clearance is ``flight_gap_min``): ``"U"``,
         ``"L"`` or an extra stop's name, length p ("" when contact was not checked); the
         stop a grazing point grazes.
+    stick_times : ndarray, shape (p,)
+        Duration of the sticking phase after impact k (a lowercase letter of `pattern`:
+        the impact is plastic and the stop holds its coordinate until the release), 0.0
+        where there is none. ``flight_times[k]`` is then the flight after the release, and
+        ``sum(stick_times) + sum(flight_times)`` is the period.
+    release_states : ndarray, shape (p, 2n)
+        The state at the release that ends the sticking phase after impact k (NaN rows
+        where there is none).
+    pressing_min : ndarray, shape (p,)
+        The smallest pressing force inside the sticking phase after impact k, over its
+        start and the interior minima (the release at its end, where it is 0, not
+        counted; :meth:`impactcont.orbit.held_flow.HeldFlow.pressing_minimum`); ``> 0``
+        physical; NaN where there is none.
     """
 
     oscillator: ImpactOscillator
@@ -212,6 +226,19 @@ class MultiImpactOrbit:
     condition_number: float = math.nan
     error_estimate: float = math.nan
     flight_gap_stops: str = ""
+    stick_times: np.ndarray | None = None
+    release_states: np.ndarray | None = None
+    pressing_min: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        """A motion without sticking phases reports none (zeros and NaN)."""
+        if self.stick_times is None:
+            object.__setattr__(self, "stick_times", np.zeros(self.p))
+        if self.release_states is None:
+            object.__setattr__(self, "release_states",
+                               np.full((self.p, np.shape(self.states)[1]), np.nan))
+        if self.pressing_min is None:
+            object.__setattr__(self, "pressing_min", np.full(self.p, np.nan))
 
     # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
     @property
@@ -252,9 +279,13 @@ class MultiImpactOrbit:
 
     @property
     def unknowns(self) -> np.ndarray:
-        """The shooting unknowns ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``, (2np,)."""
-        pivots = stop_geometry(self.oscillator, self.pattern or UPPER * self.p).pivots
+        """The shooting unknowns ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``, (2np,);
+        with sticking phases ``[delta, tau_0..tau_{p-2}, s_k.., z_0..z_{p-1}]`` (the stick
+        times in the order of their impacts, :func:`sticky_shooting`)."""
+        impacts, sticks = sticking_pattern(self.oscillator, self.pattern or UPPER * self.p)
+        pivots = stop_geometry(self.oscillator, impacts).pivots
         return np.concatenate([[self.delta], self.flight_times[:-1],
+                               np.asarray(self.stick_times)[sticks],
                                _section_unknowns(self.states, pivots)])
 
     @property
@@ -283,10 +314,21 @@ class MultiImpactOrbit:
             raise ParameterError(f"num must be an integer >= 2; got {num!r}")
         flow = Flow(self.oscillator)
         ts, Xs, start = [], [], 0.0
+        impacts = sticking_pattern(self.oscillator, self.pattern or UPPER * self.p)[0]
+        omega = self.oscillator.omega
         for k in range(self.p):
+            X0, theta = self.states[k], self.phases[k]
+            stick = float(self.stick_times[k])
+            if stick > 0.0:  # held on the stop, then the flight from the release
+                held = held_flow(self.oscillator, impacts[k])
+                s = np.linspace(0.0, stick, num)
+                ts.append(start + s)
+                Xs.append(held.state(s, X0, theta))
+                start += stick
+                X0, theta = self.release_states[k], theta + omega * stick
             tau = np.linspace(0.0, self.flight_times[k], num)
             ts.append(start + tau)
-            Xs.append(flow.state(tau, self.states[k], self.phases[k]))
+            Xs.append(flow.state(tau, X0, theta))
             start += self.flight_times[k]
         return np.concatenate(ts), np.vstack(Xs)
 
@@ -627,10 +669,13 @@ orbit code does not import the simulator, its independent witness)."""
 
 
 def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
-                  ) -> tuple[float, np.ndarray, np.ndarray, str | None]:
-    """``(delta, flight_times (p,), states (p, 2n), pattern)`` from any kind of guess.
+                  ) -> tuple[float, np.ndarray, np.ndarray, str | None, np.ndarray]:
+    """``(delta, flight_times (p,), states (p, 2n), pattern, stick_times (p,))`` from any
+    kind of guess.
 
-    ``pattern`` is the guess's own impact sequence (None for a mapping without one).
+    ``pattern`` is the guess's own impact sequence (None for a mapping without one),
+    lowercase where a sticking phase follows the impact; ``stick_times`` their durations
+    (0 where none), ``flight_times`` then the flights from the releases.
     """
     n = osc.n
     if isinstance(guess, (MultiImpactOrbit, PeriodicOrbit)):
@@ -638,17 +683,20 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
         if isinstance(guess, MultiImpactOrbit):
             taus, states, delta = guess.flight_times, guess.states, guess.delta
             gpat = guess.pattern or UPPER * gp
+            sticks = np.array(guess.stick_times, float)
         else:
             taus, states, delta = np.array([guess.period]), guess.state[None, :], guess.delta
             gpat = UPPER
+            sticks = np.zeros(1)
         if guess.oscillator.n != n:
             raise ParameterError(f"guess has n={guess.oscillator.n} degrees of freedom; the "
                                  f"oscillator has n={n}")
         if gp == p and guess.N == N:
-            return delta, np.array(taus, float), np.array(states, float), gpat
+            return delta, np.array(taus, float), np.array(states, float), gpat, sticks
         reps, rem = divmod(p, gp)
         if rem == 0 and reps * guess.N == N:  # the guess repeated: e.g. a doubled N-1 orbit
-            return (delta, np.tile(taus, reps), np.tile(states, (reps, 1)), gpat * reps)
+            return (delta, np.tile(taus, reps), np.tile(states, (reps, 1)), gpat * reps,
+                    np.tile(sticks, reps))
         raise ParameterError(f"guess is an {guess.N}-{gp} motion; it can seed an N-p motion "
                              f"with p a multiple k*{gp} and N = k*{guess.N}; got N={N}, p={p}")
     if all(hasattr(guess, name) for name in _SIMULATION_FIELDS):  # a SimulationResult
@@ -656,22 +704,34 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
         if k < p + 1:
             raise ParameterError(f"guess: the simulation has {k} impacts; at least p+1={p + 1} "
                                  "are needed to seed an N-p motion")
-        times = guess.impact_times[-(p + 1):]
+        times = np.array(guess.impact_times[-(p + 1):], float)
         spat = guess.impact_stops[-(p + 1):-1] if guess.impact_stops else UPPER * p
-        return (float(guess.impact_phases[-(p + 1)]), np.diff(times),
-                np.array(guess.impact_states[-(p + 1):-1], float), spat)
+        taus, sticks, letters = np.diff(times), np.zeros(p), list(spat)
+        for phase in getattr(guess, "sticking", ()):  # a sticking phase from an impact
+            for i in range(p):
+                if (phase.ended_by == "release" and phase.stops == spat[i]
+                        and abs(phase.start - times[i]) <= 1e-9 * max(1.0, abs(times[i]))
+                        and phase.end <= times[i + 1]):
+                    sticks[i] = phase.end - phase.start
+                    taus[i] = times[i + 1] - phase.end
+                    letters[i] = spat[i].lower()
+        return (float(guess.impact_phases[-(p + 1)]), taus,
+                np.array(guess.impact_states[-(p + 1):-1], float), "".join(letters), sticks)
     if isinstance(guess, Mapping):
         try:
             delta = float(guess["delta"])
             taus = np.array(guess["flight_times"], dtype=float).reshape(-1)
             states = np.array(guess["states"], dtype=float)
+            sticks = np.array(guess.get("stick_times", np.zeros(p)), dtype=float).reshape(-1)
         except KeyError as exc:
             raise ParameterError(f"guess mapping needs keys 'delta', 'flight_times', 'states'; "
                                  f"missing {exc}") from None
-        if taus.shape != (p,) or states.shape != (p, 2 * n):
+        if taus.shape != (p,) or states.shape != (p, 2 * n) or sticks.shape != (p,):
             raise ParameterError(f"guess: flight_times must have shape ({p},) and states "
-                                 f"({p}, {2 * n}); got {taus.shape} and {states.shape}")
-        return delta, taus, states, guess.get("pattern")
+                                 f"({p}, {2 * n}) (stick_times, if given, ({p},)); got "
+                                 f"{taus.shape} and {states.shape} (stick_times "
+                                 f"{sticks.shape})")
+        return delta, taus, states, guess.get("pattern"), sticks
     raise TypeError(f"guess must be a MultiImpactOrbit, a PeriodicOrbit, a SimulationResult or "
                     f"a mapping with 'delta', 'flight_times', 'states'; got "
                     f"{type(guess).__name__}")
@@ -688,12 +748,14 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
     N = _check_N(N)
     p = check_impacts(p)
     if pattern is not None:
-        pattern = check_pattern(pattern, p, osc.stops)
-    delta, taus, states, gpat = _guess_arrays(guess, osc, N, p)
-    if not (math.isfinite(delta) and np.all(np.isfinite(taus)) and np.all(np.isfinite(states))):
-        raise ParameterError("guess must hold finite phases, flight times and states")
+        pattern = check_pattern(pattern, p, osc.stops, sticking=True)
+    delta, taus, states, gpat, sticks = _guess_arrays(guess, osc, N, p)
+    if not (math.isfinite(delta) and np.all(np.isfinite(taus)) and np.all(np.isfinite(states))
+            and np.all(np.isfinite(sticks))):
+        raise ParameterError("guess must hold finite phases, flight times, stick times and "
+                             "states")
     if gpat is not None:
-        gpat = check_pattern(gpat, p, osc.stops)
+        gpat = check_pattern(gpat, p, osc.stops, sticking=True)
         if pattern is not None and gpat != pattern:
             raise ParameterError(f"pattern={pattern!r} differs from the guess's impact sequence "
                                  f"{gpat!r}; give pattern={gpat!r}, or a guess with the "
@@ -701,8 +763,10 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
         pattern = gpat
     if pattern is None:
         pattern = UPPER * p
-    pivots = stop_geometry(osc, pattern).pivots
-    return np.concatenate([[delta], taus[:-1], _section_unknowns(states, pivots)]), pattern
+    impacts, held = sticking_pattern(osc, pattern)
+    pivots = stop_geometry(osc, impacts).pivots
+    return np.concatenate([[delta], taus[:-1], sticks[held],
+                           _section_unknowns(states, pivots)]), pattern
 
 
 def unknowns_scale(u: np.ndarray) -> float:
@@ -846,10 +910,15 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
 
 
 def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
-           condition_number: float = math.nan, error_estimate: float = math.nan
-           ) -> MultiImpactOrbit:
+           condition_number: float = math.nan, error_estimate: float = math.nan,
+           sticks: _Sticks | None = None) -> MultiImpactOrbit:
     """:func:`orbit_from_unknowns` from the shooting system at the solution (`pattern`
-    validated), with the accuracy of the solution when known."""
+    validated), with the accuracy of the solution when known.
+
+    With `sticks` (a motion with sticking phases, `pattern` its impacts' stops) `sh` holds
+    the flights from the releases: their contact checks and impact velocities are read from
+    it, and the impacts' states and phases, G and the sticking phases' checks from
+    `sticks`."""
     osc = flow.osc
     geo = _geometry(flow, pattern)
     checked = MotionChecks._make(_kernel().motion_checks(
@@ -896,17 +965,32 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
                    f" (stop {s!r})")
             reasons.append(f"flight {k}: {who} reaches a stop inside the flight (gap_min="
                            f"{interior[k]:.3g} at t={interior_times[k]:.6g})")
-    phases = np.array([_wrap(float(t)) for t in sh.phases])
-    states = sh.starts.copy()
+    if sticks is not None:  # the times from the releases
+        gap_times = gap_times + sticks.shift
+    if sticks is None:
+        phases = np.array([_wrap(float(t)) for t in sh.phases])
+        states = sh.starts.copy()
+        return MultiImpactOrbit(
+            oscillator=osc, N=N, p=p, phases=phases, flight_times=sh.flight_times.copy(),
+            states=states, impact_velocities=velocities, flight_gap_min=gaps,
+            flight_gap_min_times=gap_times, jacobians=checked.jacobians, G=checked.G,
+            multipliers=checked.multipliers,
+            physical=not reasons, reason="; ".join(reasons),
+            residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
+            flight_gap_lower=gaps_low, condition_number=condition_number,
+            error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "")
+    reasons.extend(sticks.reasons)
     return MultiImpactOrbit(
-        oscillator=osc, N=N, p=p, phases=phases, flight_times=sh.flight_times.copy(),
-        states=states, impact_velocities=velocities, flight_gap_min=gaps,
-        flight_gap_min_times=gap_times, jacobians=checked.jacobians, G=checked.G,
-        multipliers=checked.multipliers,
+        oscillator=osc, N=N, p=p, phases=np.array([_wrap(float(t)) for t in sticks.phases]),
+        flight_times=sticks.flight_times.copy(), states=sticks.states.copy(),
+        impact_velocities=velocities, flight_gap_min=gaps, flight_gap_min_times=gap_times,
+        jacobians=sticks.jacobians, G=sticks.G, multipliers=sticks.multipliers,
         physical=not reasons, reason="; ".join(reasons),
-        residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
+        residual=float(np.max(np.abs(sh.residual))), pattern=sticks.pattern,
         flight_gap_lower=gaps_low, condition_number=condition_number,
-        error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "")
+        error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "",
+        stick_times=sticks.stick_times.copy(), release_states=sticks.release_states,
+        pressing_min=sticks.pressing_min)
 
 
 def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,
@@ -951,6 +1035,447 @@ def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,
                  f"{pattern[impact]!r}" if end == 1 else f"the start of flight {k}")
         reasons.append(f"impact {impact} (stop {pattern[impact]!r}): {_coordinate(normal)} is "
                        f"past stop {names[stop]!r} (clearance {gap:.3g}) at {where}")
+
+
+# ------------------------------------------------------------------------------------------
+# Motions with sticking phases
+# ------------------------------------------------------------------------------------------
+def sticking_pattern(osc: ImpactOscillator, pattern: str) -> tuple[str, np.ndarray]:
+    """The impacts of a pattern with sticking phases and where the sticks are.
+
+    A lowercase letter (``"u"``, ``"l"``, ``"a"`` for the extra stop ``"A"``) is an impact
+    on that stop followed by a sticking phase on it until the release
+    (:func:`~impactcont.model.stops.check_pattern` with ``sticking=True``).
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+    pattern : str
+        A checked pattern.
+
+    Returns
+    -------
+    impacts : str
+        The stop of each impact (capitals for U, L and the extra stops named so).
+    sticks : ndarray of bool, shape (p,)
+        A sticking phase follows impact k.
+
+    Raises
+    ------
+    ParameterError
+        A sticking phase on a stop whose restitution is not 0: such a motion enters its
+        sticking phase through complete chatter, which shooting does not solve yet.
+    """
+    names = osc.stops.names
+    sticks = np.array([c not in names and c.upper() in names for c in pattern], dtype=bool)
+    impacts = "".join(c.upper() if stick else c for c, stick in zip(pattern, sticks,
+                                                                      strict=True))
+    for name in sorted({impacts[k] for k in np.flatnonzero(sticks)}):
+        r = float(osc.stops.stop(name, osc.M, osc.b, osc.R).restitution)
+        if r != 0.0:
+            raise ParameterError(
+                f"pattern={pattern!r}: a sticking phase on stop {name!r}, whose restitution is "
+                f"{r!r}; shooting solves sticking phases entered by a plastic impact "
+                "(restitution 0) only: motions whose sticking is entered through complete "
+                f"chatter (restitution > 0) are not supported by shooting yet (give stop "
+                f"{name!r} restitution 0, or simulate the motion: ic.simulate)")
+    return impacts, sticks
+
+
+#: Where the contact search of a flight from a release starts, in periods of the fastest
+#: motion its stop coordinate sees (:func:`_sticky_orbit`).
+RELEASE_SHIFT = 1e-4
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class StickyShooting:
+    """The shooting system of a motion with sticking phases evaluated at one ``u``.
+
+    Segment k is impact k, the sticking phase after it (where there is one) and the flight
+    from its release to impact ``k + 1``. Arrays per segment k.
+
+    Attributes
+    ----------
+    phases : ndarray, shape (p,)
+        ``theta_k`` at impact k (not wrapped).
+    stick_times, flight_times : ndarray, shape (p,)
+        ``s_k`` (0 without a stick) and ``tau_k``.
+    starts : ndarray, shape (p, 2n)
+        ``X_k``, the state after impact k, on its stop's section.
+    releases, release_phases : ndarray, shape (p, 2n), (p,)
+        The state and phase where the flight starts (the release; ``X_k``, ``theta_k``
+        without a stick).
+    held_transitions, held_phase_columns, held_rates : ndarray
+        ``dX_r/dX_k`` (p, 2n, 2n), ``dX_r/dtheta_k`` and ``dX_r/ds_k`` (p, 2n) of the held
+        flow (identity and zeros without a stick).
+    arrivals, arrival_rates, transitions, phase_columns : ndarray
+        The flight from the release: ``X_k^-``, ``X'(tau_k^-)``, ``Phi`` and ``dX^-/dtheta``.
+    residual : ndarray, shape (2np + q,)
+        ``[r_0, .., r_{p-1}, p_k..]``: ``r_k = D_{k+1} X_k^- - X_{k+1}`` and the pressing
+        force at each release (q sticks).
+    jacobian : ndarray or None
+        ``dr/du``, exact.
+    """
+
+    phases: np.ndarray
+    stick_times: np.ndarray
+    flight_times: np.ndarray
+    starts: np.ndarray
+    releases: np.ndarray
+    release_phases: np.ndarray
+    held_transitions: np.ndarray
+    held_phase_columns: np.ndarray
+    held_rates: np.ndarray
+    arrivals: np.ndarray
+    arrival_rates: np.ndarray
+    transitions: np.ndarray
+    phase_columns: np.ndarray
+    residual: np.ndarray
+    jacobian: np.ndarray | None
+
+    def flights(self) -> Shooting:
+        """The flights from the releases as a :class:`Shooting` (their contact checks)."""
+        return Shooting(phases=self.release_phases, flight_times=self.flight_times,
+                        starts=self.releases, arrivals=self.arrivals,
+                        arrival_rates=self.arrival_rates, transitions=self.transitions,
+                        phase_columns=self.phase_columns, residual=self.residual,
+                        jacobian=None)
+
+
+def _section_lift(geo: StopGeometry, k: int, m: int) -> np.ndarray:
+    """``dX_k/dz_k`` (m, m-1): the unit columns and the pivot's row ``-n_i / n_j`` from the
+    section ``n_k . x = c_k``."""
+    j = int(geo.pivots[k])
+    n = m // 2
+    rest = [c for c in range(m) if c != j]
+    L = np.eye(m)[:, rest]
+    row = np.zeros(m)
+    row[:n] = -np.asarray(geo.normals[k]) / geo.normals[k, j]
+    L[j, :] = row[rest]
+    return L
+
+
+def _python_flight(flow: Flow, t: float, X0: np.ndarray, theta: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(X(t), X'(t), Phi(t), dX(t)/dtheta)`` of one flight of `flow` (either kind)."""
+    transition, forcing = flow.matrices(t)[:2]
+    X = flow.state(t, X0, theta)[0]
+    rate = flow.state_derivative(t, X0, theta)[0]
+    return X, rate, np.array(transition), forcing @ np.array([-math.sin(theta), math.cos(theta)])
+
+
+def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
+                    jacobian: bool = True) -> StickyShooting:
+    """Residual (and exact Jacobian) of the shooting system of a motion with sticking phases.
+
+    The unknowns are ``u = [delta, tau_0..tau_{p-2}, s_k.., z_0..z_{p-1}]``: the phase of
+    impact 0, the flight times but the last (fixed by the period ``2 pi N / omega`` minus
+    every other flight and stick time), the stick times ``s_k`` of the q sticking phases
+    in the order of their impacts, and each post-impact state on its stop's section. The
+    residual is ``r_k = D_{k+1} X_k^- - X_{k+1}`` of each segment (impact k, the sticking
+    phase on its stop for ``s_k`` with the held flow of
+    :mod:`impactcont.orbit.held_flow`, then the flight from the release) and, for each
+    sticking phase, the pressing force at its end: the release row, ``p(X_r, theta_r) =
+    0``. ``2 n p + q`` equations for ``2 n p + q`` unknowns.
+
+    Parameters
+    ----------
+    flow : Flow
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact
+        (:func:`sticking_pattern`).
+    u : ndarray, shape (2np + q,)
+    jacobian : bool
+
+    Returns
+    -------
+    StickyShooting
+    """
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    geo = _geometry(flow, impacts)
+    p, m = len(pattern), 2 * osc.n
+    n = osc.n
+    q = int(np.count_nonzero(sticks))
+    u = np.asarray(u, dtype=float)
+    if u.shape != (m * p + q,):
+        raise ParameterError(f"u must have shape ({m * p + q},) = (2 n p + q,) for n={n}, "
+                             f"p={p} and q={q} sticking phases; got shape {u.shape}")
+    omega = osc.omega
+    period = TWO_PI * N / omega
+    size = m * p + q
+    rank = np.cumsum(sticks) - 1  # the stick's index among the sticks
+    z0 = p + q
+    # d(unknown-dependent quantity)/du as rows
+    d_theta = np.zeros((p, size))
+    d_tau = np.zeros((p, size))
+    d_stick = np.zeros((p, size))
+    taus = np.empty(p)
+    stimes = np.zeros(p)
+    for k in range(p):
+        if sticks[k]:
+            stimes[k] = u[p + rank[k]]
+            d_stick[k, p + rank[k]] = 1.0
+    taus[:-1] = u[1:p]
+    taus[-1] = period - np.sum(u[1:p]) - np.sum(stimes)
+    for k in range(p - 1):
+        d_tau[k, 1 + k] = 1.0
+    d_tau[p - 1, 1:p + q] = -1.0
+    phases = np.empty(p)
+    theta = float(u[0])
+    row = np.zeros(size)
+    row[0] = 1.0
+    for k in range(p):
+        phases[k] = theta
+        d_theta[k] = row
+        theta += omega * (stimes[k] + taus[k])
+        row = row + omega * (d_stick[k] + d_tau[k])
+    starts = np.empty((p, m))
+    lifts = []
+    for k in range(p):
+        j = int(geo.pivots[k])
+        rest = [c for c in range(m) if c != j]
+        col = z0 + k * (m - 1)
+        starts[k, rest] = u[col:col + m - 1]
+        others = sum(geo.normals[k, c] * starts[k, c] for c in range(n) if c != j)
+        starts[k, j] = (geo.positions[k] - others) / geo.normals[k, j]
+        lifts.append(_section_lift(geo, k, m))
+    releases = starts.copy()
+    release_phases = phases.copy()
+    h_tr = np.broadcast_to(np.eye(m), (p, m, m)).copy()
+    h_col = np.zeros((p, m))
+    h_rate = np.zeros((p, m))
+    arrivals = np.empty((p, m))
+    rates = np.empty((p, m))
+    transitions = np.empty((p, m, m))
+    pcols = np.empty((p, m))
+    residual = np.empty(size)
+    J = np.zeros((size, size)) if jacobian else None
+    for k in range(p):
+        nxt = (k + 1) % p
+        if sticks[k]:
+            held = held_flow(osc, impacts[k])
+            releases[k], h_tr[k], h_col[k], h_rate[k] = held.segment(stimes[k], starts[k],
+                                                                     phases[k])
+            release_phases[k] = phases[k] + omega * stimes[k]
+        X, rate, tr, pcol = _python_flight(flow, taus[k], releases[k], release_phases[k])
+        arrivals[k], rates[k], transitions[k], pcols[k] = X, rate, tr, pcol
+        D = geo.matrices[nxt]
+        residual[k * m:(k + 1) * m] = D @ X - starts[nxt]
+        if sticks[k]:
+            residual[p * m + rank[k]] = held.pressing(releases[k], release_phases[k])
+        if J is None:
+            continue
+        # dX_r/du from dX_k/du, d theta_k/du and ds_k/du
+        dXk = np.zeros((m, size))
+        dXk[:, z0 + k * (m - 1):z0 + (k + 1) * (m - 1)] = lifts[k]
+        dXr = h_tr[k] @ dXk + np.outer(h_col[k], d_theta[k]) + np.outer(h_rate[k], d_stick[k])
+        dthr = d_theta[k] + omega * d_stick[k]
+        dXm = tr @ dXr + np.outer(pcol, dthr) + np.outer(rate, d_tau[k])
+        dXn = np.zeros((m, size))
+        dXn[:, z0 + nxt * (m - 1):z0 + (nxt + 1) * (m - 1)] = lifts[nxt]
+        J[k * m:(k + 1) * m] = D @ dXm - dXn
+        if sticks[k]:
+            grad, gth = held.pressing_gradient(release_phases[k])
+            J[p * m + rank[k]] = grad @ dXr + gth * dthr
+    return StickyShooting(phases=phases, stick_times=stimes, flight_times=taus, starts=starts,
+                          releases=releases, release_phases=release_phases,
+                          held_transitions=h_tr, held_phase_columns=h_col, held_rates=h_rate,
+                          arrivals=arrivals, arrival_rates=rates, transitions=transitions,
+                          phase_columns=pcols, residual=residual, jacobian=J)
+
+
+def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
+                  max_iter: int = 40) -> tuple[np.ndarray, StickyShooting, int]:
+    """:func:`newton` on :func:`sticky_shooting`: the same iteration, stopping rules and
+    messages (the compiled :func:`impactcont.kernel.shooting.newton_solve` in Python).
+
+    Raises
+    ------
+    NoPeriodicMotionError
+        No convergence, or a singular Jacobian.
+    """
+    x = np.array(u0, dtype=float)
+    sh = sticky_shooting(flow, N, pattern, x)
+    norm = float(np.max(np.abs(sh.residual)))
+    step_norm = math.inf
+    it = 0
+    for it in range(max_iter + 1):
+        scale = unknowns_scale(x)
+        small = norm <= tol * scale
+        if small and (step_norm <= tol * scale or it == max_iter):
+            return x, sh, it
+        if it == max_iter or not np.all(np.isfinite(sh.jacobian)):
+            break
+        try:
+            step = np.linalg.solve(sh.jacobian, -sh.residual)
+        except np.linalg.LinAlgError:
+            break
+        lam = 1.0
+        while True:
+            trial = x + lam * step
+            tsh = sticky_shooting(flow, N, pattern, trial)
+            tnorm = float(np.max(np.abs(tsh.residual)))
+            finite = math.isfinite(tnorm)
+            if small and not (finite and tnorm < norm):
+                return x, sh, it
+            if finite and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
+                break
+            lam *= 0.5
+        step_norm = lam * float(np.max(np.abs(step)))
+        x, sh, norm = trial, tsh, tnorm
+    cond, error = shooting_accuracy(sh.jacobian, sh.residual, x)
+    p = len(pattern)
+    if norm <= _NEAR_SOLUTION * unknowns_scale(x) and not cond * _EPS <= _ERROR_WARN:
+        raise NoPeriodicMotionError(
+            f"{_bifurcation(N, p, flow.osc, cond, error)}; Newton stopped at residual "
+            f"{norm:.3g} (last update {step_norm:.3g}) after {it} iterations")
+    raise NoPeriodicMotionError(
+        f"N={N}, p={p}: Newton did not converge in {it} iterations (residual {norm:.3g}, "
+        f"last update {step_norm:.3g}) at {_parameters(flow.osc)} with the pattern "
+        f"{pattern!r} of sticking phases (is the guess a motion whose impacts on the "
+        "lowercase stops are each followed by a sticking phase ended by a release? a "
+        "simulation's sticking phases show the one it settled on)")
+
+
+def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """``G_k`` of each segment (impact k's section to impact ``k + 1``'s, in ``[z,
+    theta]``) and their product G, for a motion with sticking phases.
+
+    A sticking phase ends where the pressing force vanishes, so its duration moves by
+    ``ds = -(dp/dX dX_r + dp/dtheta dtheta_r) / (dp/dt)`` (the release row's saltation),
+    and the flight from the release ends on the next section as in eq. (25); the stick
+    collapses the directions it holds (``G`` has exact zero multipliers).
+
+    Returns
+    -------
+    jacobians : ndarray, shape (p, 2n, 2n)
+    G : ndarray, shape (2n, 2n)
+    """
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    geo = _geometry(flow, impacts)
+    p, m, n = len(pattern), 2 * osc.n, osc.n
+    omega = osc.omega
+    jacs = np.empty((p, m, m))
+    G = np.eye(m)
+    for k in range(p):
+        nxt = (k + 1) % p
+        cols = np.zeros((m, m))  # dX_r / d[z_k, theta_k]
+        cols[:, :m - 1] = sh.held_transitions[k] @ _section_lift(geo, k, m)
+        cols[:, m - 1] = sh.held_phase_columns[k]
+        th = np.zeros(m)
+        th[m - 1] = 1.0
+        if sticks[k]:
+            held = held_flow(osc, impacts[k])
+            grad, gth = held.pressing_gradient(sh.release_phases[k])
+            ds = -(grad @ cols + gth * th) / (grad @ sh.held_rates[k] + omega * gth)
+            cols = cols + np.outer(sh.held_rates[k], ds)
+            th = th + omega * ds
+        B = sh.transitions[k] @ cols + np.outer(sh.phase_columns[k], th)
+        normal = geo.normals[nxt]
+        h2 = float(normal @ sh.arrival_rates[k, :n])
+        dtau = -(normal @ B[:n]) / h2
+        DB = geo.matrices[nxt] @ (B + np.outer(sh.arrival_rates[k], dtau))
+        jn = int(geo.pivots[nxt])
+        jacs[k, :m - 1] = np.delete(DB, jn, axis=0)
+        jacs[k, m - 1] = th + omega * dtau
+        G = jacs[k] @ G
+    return jacs, G
+
+
+@dataclasses.dataclass(frozen=True)
+class _Sticks:
+    """What :func:`_orbit` reports of a motion with sticking phases beside its flights."""
+
+    pattern: str
+    phases: np.ndarray
+    states: np.ndarray
+    stick_times: np.ndarray
+    flight_times: np.ndarray
+    shift: np.ndarray
+    release_states: np.ndarray
+    pressing_min: np.ndarray
+    jacobians: np.ndarray
+    G: np.ndarray
+    multipliers: np.ndarray
+    reasons: tuple[str, ...]
+
+
+def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> _Sticks:
+    """The sticking phases' part of a motion: G, its multipliers and the physical checks
+    of each sticking phase (its onset, its pressing force inside, its release); `shift`
+    the start of each flight's contact search after its release."""
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    p, m = len(pattern), 2 * osc.n
+    jacs, G = sticky_jacobians(flow, pattern, sh)
+    mu = np.linalg.eigvals(G) if np.all(np.isfinite(G)) else np.full(m, np.nan + 0j)
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    releases = np.full((p, m), np.nan)
+    pressing = np.full(p, np.nan)
+    reasons = []
+    for k in np.flatnonzero(sticks):
+        held = held_flow(osc, impacts[k])
+        stop, s = impacts[k], float(sh.stick_times[k])
+        releases[k] = sh.releases[k]
+        onset = float(held.pressing(sh.starts[k], sh.phases[k]))
+        if not s > 0.0:
+            reasons.append(f"sticking phase {k} (stop {stop!r}) has duration {s:.3g} <= 0")
+            continue
+        if not onset > 0.0:
+            reasons.append(f"impact {k}: sticking onset: the pressing force on stop {stop!r} "
+                           f"after the plastic impact is {onset:.3g} <= 0 (the arrival "
+                           "acceleration does not point into the stop)")
+        low, when = held.pressing_minimum(s, sh.starts[k], float(sh.phases[k]))
+        pressing[k] = low
+        if onset > 0.0 and not low > 0.0:
+            reasons.append(f"sticking phase {k}: release grazing: the pressing force on stop "
+                           f"{stop!r} falls to {low:.3g} <= 0 at t={when:.6g} inside the "
+                           "sticking phase")
+        rate = held.pressing_rate(sh.held_rates[k], float(sh.release_phases[k]))
+        if not rate < 0.0:
+            reasons.append(f"sticking phase {k}: at the release the pressing force on stop "
+                           f"{stop!r} does not fall through zero (dp/dt = {rate:.3g} >= 0): "
+                           "the stop coordinate does not leave the stop")
+    return _Sticks(pattern=pattern, phases=sh.phases, states=sh.starts,
+                   stick_times=sh.stick_times, flight_times=sh.flight_times, shift=shift,
+                   release_states=releases, pressing_min=pressing, jacobians=jacs, G=G,
+                   multipliers=mu, reasons=tuple(reasons))
+
+
+def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
+                  max_iter: int) -> MultiImpactOrbit:
+    """:func:`multi_impact_orbit` of a pattern with sticking phases."""
+    osc = flow.osc
+    p = len(pattern)
+    u, sh, iterations = sticky_newton(flow, N, pattern, u0, tol=tol, max_iter=max_iter)
+    cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
+    if not error <= _ERROR_WARN * unknowns_scale(u):
+        warnings.warn(f"{_bifurcation(N, p, osc, cond, error)} (residual "
+                      f"{float(np.max(np.abs(sh.residual))):.3g})", IllConditionedWarning,
+                      stacklevel=3)
+    log.debug("N=%d p=%d %s motion with sticking phases in %d Newton iterations", N, p,
+              pattern, iterations)
+    impacts, held = sticking_pattern(osc, pattern)
+    # the contact search of each flight from a release starts RELEASE_SHIFT of the fastest
+    # period after it: there s = c, s' = 0 and s'' = 0 (the pressing force is 0), so the
+    # start itself is a (degenerate) maximum of the coordinate at the stop; past it the
+    # coordinate leaves as the cube of the time (the release row's transversality) and a
+    # later return is found as on any flight
+    shift = np.zeros(p)
+    starts, phases = sh.releases.copy(), sh.release_phases.copy()
+    for k in np.flatnonzero(held):
+        rate = flow.time_scales(normal=_geometry(flow, impacts).normals[k])[0]
+        shift[k] = min(0.5 * float(sh.flight_times[k]), RELEASE_SHIFT * TWO_PI / rate)
+        starts[k] = flow.state(shift[k], sh.releases[k], sh.release_phases[k])[0]
+        phases[k] += osc.omega * shift[k]
+    flights = dataclasses.replace(sh.flights(), starts=starts, phases=phases,
+                                  flight_times=sh.flight_times - shift)
+    return _orbit(flow, N, p, flights, True, impacts, cond, error,
+                  sticks=_sticks(flow, pattern, sh, shift))
 
 
 def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
@@ -1013,6 +1538,8 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
         raise ParameterError(f"max_iter must be an integer >= 1; got {max_iter!r}")
     flow = flow_of(osc)
     u0, pattern = _seed(guess, osc, N, p, pattern)
+    if pattern != pattern.upper() and np.any(sticking_pattern(osc, pattern)[1]):
+        return _sticky_orbit(flow, N, pattern, u0, tol, max_iter)
     u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter, pattern=pattern)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
     scale = unknowns_scale(u)
@@ -1064,9 +1591,11 @@ def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpac
         if (pattern == pattern[q:] + pattern[:q]
                 and np.max(np.abs(orbit.states - orbit.states[shifted])) <= tol
                 and np.max(np.abs(orbit.flight_times - orbit.flight_times[shifted])) <= tol
+                and np.max(np.abs(orbit.stick_times - orbit.stick_times[shifted])) <= tol
                 and np.max(np.abs(dphase)) <= tol):
             guess = {"delta": orbit.delta, "flight_times": orbit.flight_times[:q],
-                     "states": orbit.states[:q], "pattern": pattern[:q]}
+                     "states": orbit.states[:q], "pattern": pattern[:q],
+                     "stick_times": orbit.stick_times[:q]}
             short = multi_impact_orbit(orbit.oscillator, orbit.N // k, q, guess)
             return primitive_orbit(short, tol=tol)
     return orbit

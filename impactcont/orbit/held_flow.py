@@ -1,0 +1,287 @@
+"""The exact flow of a stop coordinate held on its stop: the sticking segment of a motion.
+
+A sticking phase holds one stop coordinate ``s = n . x`` at its stop ``s = c`` (after a
+plastic impact, which leaves ``s' = 0``). With the contact force ``n lambda`` the motion
+obeys
+
+    M x'' + C x' + K x = Re(F e^{i theta}) + F_static + n lambda,    n . x = c,   n . x' = 0
+
+(the sticking law of ``docs/chatter_sticking.md``). Writing ``x = x_c + P y`` with
+``n . x_c = c`` and the columns of ``P`` (n x (n-1)) spanning ``n . x = 0``, the held
+motion is the oscillator of ``n - 1`` masses
+
+    P^T M P y'' + P^T C P y' + P^T K P y = Re(P^T F e^{i theta}) + P^T (F_static - K x_c),
+
+whose exact flow is the flight flow of :mod:`impactcont.orbit.flow` (its first-order form,
+any C). ``P`` keeps ``P^T M P`` diagonal for both stop kinds: a stop fixed to the frame
+(``n = e_j``) drops coordinate j; a clearance (``n = e_j - e_k``) keeps ``e_i`` for ``i != j,
+k`` and ``e_j + e_k`` (the two masses moving together). One mass held (``n = 1``) leaves an
+empty system: the state stays ``[c; 0]`` and only the force moves.
+
+``n . x'' = 0`` gives the contact force
+
+    lambda = n^T M^-1 (C x' + K x - Re(F e^{i theta}) - F_static) / (n^T M^-1 n),
+
+and the **pressing force** ``p = -sign lambda`` (``sign = +1`` at a stop met moving up,
+which pushes its coordinate down) is positive while the stop holds; the sticking phase
+ends at the **release**, where ``p`` falls to zero. The periodic motions that contain such
+segments are solved by :func:`impactcont.orbit.multi_impact.multi_impact_orbit` (a
+lowercase stop letter in the pattern); the simulator's own sticking model
+(:mod:`impactcont.simulate.sticking`) is their independent witness and shares no code
+with this module.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import weakref
+
+import numpy as np
+
+from impactcont.errors import ParameterError
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.flow import Flow, flow_of
+
+__all__ = ["HeldFlow", "held_flow", "held_frame"]
+
+
+def held_frame(normal: np.ndarray) -> np.ndarray:
+    """The columns ``P`` (n x (n-1)) spanning ``normal . x = 0``.
+
+    ``normal = e_j``: every ``e_i``, ``i != j``; ``normal = e_j - e_k``: ``e_i`` for ``i !=
+    j, k`` and ``e_j + e_k`` (``P^T M P`` stays diagonal for a diagonal M); any other
+    normal: an orthonormal basis of its null space.
+
+    Parameters
+    ----------
+    normal : array_like, shape (n,)
+
+    Returns
+    -------
+    ndarray, shape (n, n-1)
+    """
+    normal = np.asarray(normal, dtype=float)
+    n = normal.size
+    nonzero = np.flatnonzero(normal)
+    if nonzero.size == 1:
+        return np.eye(n)[:, [i for i in range(n) if i != nonzero[0]]]
+    if nonzero.size == 2 and normal[nonzero[0]] == -normal[nonzero[1]]:
+        j, k = nonzero
+        cols = [np.eye(n)[:, i] for i in range(n) if i not in (j, k)]
+        pair = np.zeros(n)
+        pair[j] = pair[k] = 1.0
+        return np.column_stack([*cols, pair])
+    _, _, vt = np.linalg.svd(normal[None, :])
+    return vt[1:].T.copy()
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class HeldFlow:
+    """The exact flow of `oscillator` with the stop coordinate ``normal . x`` held at
+    ``position``, and the pressing force along it.
+
+    Attributes
+    ----------
+    oscillator : ImpactOscillator
+    normal : ndarray, shape (n,)
+    position : float
+        ``c``: the stop at ``s = c``.
+    sign : float
+        ``+1`` for a stop met moving up, ``-1`` moving down.
+    frame : ndarray, shape (n, n-1)
+        ``P`` (:func:`held_frame`).
+    offset : ndarray, shape (n,)
+        ``x_c = c n / |n|^2``, a point of the stop.
+    reduced : Flow or None
+        The flow of the held system of ``n - 1`` masses (None for ``n = 1``).
+    """
+
+    oscillator: ImpactOscillator
+    normal: np.ndarray
+    position: float
+    sign: float
+    frame: np.ndarray
+    offset: np.ndarray
+    reduced: Flow | None
+
+    @property
+    def n(self) -> int:
+        """Degrees of freedom of the oscillator."""
+        return self.oscillator.n
+
+    def _lift(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``L = diag(P, P)`` (2n, 2n-2), its left inverse ``diag(P^+, P^+)`` and ``X_c =
+        [x_c; 0]``."""
+        cached = self.__dict__.get("_lifted")
+        if cached is None:
+            P = self.frame
+            Pi = np.linalg.pinv(P) if P.size else np.zeros((0, self.n))
+            n, r = P.shape
+            L = np.zeros((2 * n, 2 * r))
+            L[:n, :r] = P
+            L[n:, r:] = P
+            Li = np.zeros((2 * r, 2 * n))
+            Li[:r, :n] = Pi
+            Li[r:, n:] = Pi
+            Xc = np.concatenate([self.offset, np.zeros(n)])
+            cached = (L, Li, Xc)
+            object.__setattr__(self, "_lifted", cached)
+        return cached
+
+    def state(self, t: np.ndarray, X0: np.ndarray, theta: float) -> np.ndarray:
+        """The held state at times `t` (after the start), from ``X0`` at phase `theta`,
+        shape (nt, 2n): ``X_c + L Y(t)``, ``Y(0) = L^+ (X0 - X_c)`` (the start's normal
+        position and velocity are the stop's: ``c`` and 0)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        L, Li, Xc = self._lift()
+        if self.reduced is None:
+            return np.broadcast_to(Xc, (t.size, Xc.size)).copy()
+        Y = self.reduced.state(t, Li @ (np.asarray(X0, dtype=float) - Xc), theta)
+        return Xc + Y @ L.T
+
+    def segment(self, t: float, X0: np.ndarray, theta: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The state after `t` held and its exact derivatives.
+
+        Returns
+        -------
+        X : ndarray, shape (2n,)
+            ``X(t)``.
+        dX0 : ndarray, shape (2n, 2n)
+            ``dX(t)/dX0 = L Phi_r(t) L^+`` (``Phi_r`` the held system's transition).
+        dtheta : ndarray, shape (2n,)
+            ``dX(t)/dtheta`` (the start phase).
+        rate : ndarray, shape (2n,)
+            ``dX(t)/dt``.
+        """
+        L, Li, Xc = self._lift()
+        m = Xc.size
+        if self.reduced is None:
+            return Xc.copy(), np.zeros((m, m)), np.zeros(m), np.zeros(m)
+        Y0 = Li @ (np.asarray(X0, dtype=float) - Xc)
+        transition, forcing = self.reduced.matrices(t)[:2]
+        Y = self.reduced.state(t, Y0, theta)[0]
+        Yr = self.reduced.state_derivative(t, Y0, theta)[0]
+        column = forcing @ np.array([-math.sin(theta), math.cos(theta)])
+        return Xc + L @ Y, L @ transition @ Li, L @ column, L @ Yr
+
+    def _force_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """``(n^T M^-1 K, n^T M^-1 C, n^T M^-1 F, n^T M^-1 F_static)`` over ``n^T M^-1 n``."""
+        cached = self.__dict__.get("_rows")
+        if cached is None:
+            osc = self.oscillator
+            w = np.linalg.solve(osc.M, self.normal)  # M symmetric: n^T M^-1 = (M^-1 n)^T
+            d = float(w @ self.normal)
+            cached = (w @ osc.K / d, w @ osc.C / d, (w @ np.asarray(osc.F, dtype=complex)) / d,
+                      float(w @ osc.F_static) / d)
+            object.__setattr__(self, "_rows", cached)
+        return cached
+
+    def pressing(self, X: np.ndarray, theta: np.ndarray | float) -> np.ndarray | float:
+        """The pressing force ``p = -sign lambda`` at the held state(s) `X` (2n,) or
+        (nt, 2n) and phase(s) `theta`."""
+        k, c, f, g = self._force_rows()
+        X = np.asarray(X, dtype=float)
+        n = self.n
+        lam = (X[..., :n] @ k + X[..., n:] @ c - (f * np.exp(1j * np.asarray(theta))).real - g)
+        return -self.sign * lam
+
+    def pressing_gradient(self, theta: float) -> tuple[np.ndarray, float]:
+        """``dp/dX`` (2n,) and ``dp/dtheta`` at phase `theta` (``p`` is linear in ``X``)."""
+        k, c, f, _ = self._force_rows()
+        grad = -self.sign * np.concatenate([k, c])
+        dtheta = self.sign * float((1j * f * np.exp(1j * theta)).real)
+        return grad, dtheta
+
+    def pressing_rate(self, rate: np.ndarray, theta: float) -> float:
+        """``dp/dt`` along the held flow where ``X' = rate``, at phase `theta`."""
+        grad, dtheta = self.pressing_gradient(theta)
+        return float(grad @ rate + self.oscillator.omega * dtheta)
+
+    def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float
+                         ) -> tuple[float, float]:
+        """The smallest pressing force inside a sticking phase of `duration` from ``X0`` at
+        phase `theta`: over its start and the interior minima of ``p(t)`` (the release at
+        the end, where ``p = 0``, not counted), and its time.
+
+        The pressing force is sampled on a grid of 32 points per period of the fastest
+        motion the held system and the forcing have, and each interior minimum of the
+        samples is refined by a bounded scalar minimisation (scipy) between its
+        neighbours.
+
+        Returns
+        -------
+        value, time : float
+            ``(p(0), 0)`` when ``p`` has no interior minimum.
+        """
+        omega = self.oscillator.omega
+        best, when = float(self.pressing(np.asarray(X0, dtype=float)[None, :],
+                                         np.array([theta]))[0]), 0.0
+        if not duration > 0.0:
+            return best, when
+        rate = omega
+        if self.reduced is not None:  # a first-order flow: its eigenvalues lambda
+            rate = max(rate, float(np.max(np.abs(self.reduced.lam), initial=0.0)))
+        count = int(min(2_000_000, max(64, math.ceil(32.0 * duration * rate / (2 * math.pi)))))
+        t = np.linspace(0.0, duration, count + 1)
+
+        def force(times: np.ndarray) -> np.ndarray:
+            times = np.atleast_1d(times)
+            return np.asarray(self.pressing(self.state(times, X0, theta), omega * times + theta))
+
+        values = force(t)
+        from scipy.optimize import minimize_scalar
+
+        inner = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
+        for i in inner:
+            lo, hi = t[i - 1], t[min(i + 1, count)]
+            res = minimize_scalar(lambda s: float(force(np.array([s]))[0]), bounds=(lo, hi),
+                                  method="bounded", options={"xatol": 1e-14 * max(1.0, hi)})
+            value = min(float(res.fun), float(values[i]))
+            if value < best:
+                best, when = value, float(res.x if res.fun <= values[i] else t[i])
+        return best, when
+
+
+def held_flow(osc: ImpactOscillator, name: str) -> HeldFlow:
+    """The :class:`HeldFlow` of the stop `name` (``"U"``, ``"L"`` or an extra stop's) of
+    `osc`, built once per oscillator and stop.
+
+    Raises
+    ------
+    ParameterError
+        When the held system of ``n - 1`` masses is not a machine of the package (a free
+        motion of it that its stop does not touch).
+    """
+    known = _HELD.setdefault(osc, {})
+    flow = known.get(name)
+    if flow is None:
+        flow = known[name] = _held_flow(osc, name)
+    return flow
+
+
+#: :func:`held_flow` of each live oscillator, by stop name.
+_HELD: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, HeldFlow]] = \
+    weakref.WeakKeyDictionary()
+
+
+def _held_flow(osc: ImpactOscillator, name: str) -> HeldFlow:
+    view = osc.stops.stop(name, osc.M, osc.b, osc.R)
+    normal = np.asarray(view.normal, dtype=float)
+    P = held_frame(normal)
+    offset = float(view.position) * normal / float(normal @ normal)
+    reduced = None
+    if osc.n > 1:
+        try:
+            held = ImpactOscillator(
+                M=P.T @ osc.M @ P, K=P.T @ osc.K @ P, C=P.T @ osc.C @ P,
+                F=P.T @ np.asarray(osc.F, dtype=complex), R=1.0, b=1.0, omega=osc.omega,
+                F_static=P.T @ (osc.F_static - osc.K @ offset))
+        except ParameterError as exc:
+            raise ParameterError(f"the system held on stop {name!r} (its n - 1 = {osc.n - 1} "
+                                 f"masses, the stop coordinate fixed) is not a machine the "
+                                 f"flow can take: {exc}") from None
+        reduced = flow_of(held)
+    return HeldFlow(oscillator=osc, normal=normal, position=float(view.position),
+                    sign=float(view.sign), frame=P, offset=offset, reduced=reduced)
