@@ -111,12 +111,22 @@ class HeldFlow:
         return self.oscillator.n
 
     def _lift(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``L = diag(P, P)`` (2n, 2n-2), its left inverse ``diag(P^+, P^+)`` and ``X_c =
-        [x_c; 0]``."""
+        """``L = diag(P, P)`` (2n, 2n-2), its M-weighted left inverse ``diag(P^+, P^+)``,
+        ``P^+ = (P^T M P)^-1 P^T M``, and ``X_c = [x_c; 0]``.
+
+        Notes
+        -----
+        ``P P^+`` is the plastic impact's matrix (``D`` at R = 0, the M-orthogonal
+        projection on ``n . v = 0``): a start state whose stop coordinate still moves
+        (``s' != 0``, a direction of G) is held with the velocity a plastic impact leaves,
+        momentum conserved.
+        """
         cached = self.__dict__.get("_lifted")
         if cached is None:
             P = self.frame
-            Pi = np.linalg.pinv(P) if P.size else np.zeros((0, self.n))
+            M = self.oscillator.M
+            Pi = (np.linalg.solve(P.T @ M @ P, P.T @ M) if P.size
+                  else np.zeros((0, self.n)))
             n, r = P.shape
             L = np.zeros((2 * n, 2 * r))
             L[:n, :r] = P
@@ -132,7 +142,8 @@ class HeldFlow:
     def state(self, t: np.ndarray, X0: np.ndarray, theta: float) -> np.ndarray:
         """The held state at times `t` (after the start), from ``X0`` at phase `theta`,
         shape (nt, 2n): ``X_c + L Y(t)``, ``Y(0) = L^+ (X0 - X_c)`` (the start's normal
-        position and velocity are the stop's: ``c`` and 0)."""
+        position is the stop's, ``c``, and its normal velocity is removed as a plastic
+        impact does)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         L, Li, Xc = self._lift()
         if self.reduced is None:
