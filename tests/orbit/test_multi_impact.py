@@ -337,3 +337,45 @@ def test_free_mass_under_a_constant_force_jacobian_and_flight():
     ref = solve_ivp(rhs, (0.0, tau), sh.starts[0], rtol=1e-11, atol=1e-12).y[:, -1]
     np.testing.assert_allclose(sh.arrivals[0], ref, rtol=0, atol=1e-8)
     np.testing.assert_allclose(sh.arrival_rates[0], rhs(tau, ref), rtol=0, atol=1e-8)
+
+
+# -- motions with sticking phases (issue 30, item 4) -------------------------------------------
+def _sticky_damper():
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0], R=0.0,
+                               b=0.3, omega=0.5, eta=0.02,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+@pytest.mark.parametrize("pattern", ["ul", "uL", "u"])
+def test_the_sticky_jacobian_is_exact(pattern):
+    """The Jacobian of the shooting system with sticking phases (the release rows, the
+    held flights, the phases and the period's last flight) against central differences."""
+    from impactcont.orbit.multi_impact import sticky_shooting
+
+    osc = _sticky_damper()
+    flow = flow_of(osc)
+    p = len(pattern)
+    q = sum(c.islower() for c in pattern)
+    rng = np.random.default_rng(3)
+    u = np.concatenate([[0.4], np.full(p - 1, 2.5), np.full(q, 1.7),
+                        rng.normal(scale=0.2, size=p * 3)])
+    J = sticky_shooting(flow, 1, pattern, u).jacobian
+    h = 1e-6
+    fd = np.empty_like(J)
+    for c in range(u.size):
+        e = np.zeros(u.size)
+        e[c] = h
+        fd[:, c] = (sticky_shooting(flow, 1, pattern, u + e, jacobian=False).residual
+                    - sticky_shooting(flow, 1, pattern, u - e, jacobian=False).residual) / (2 * h)
+    np.testing.assert_allclose(J, fd, atol=1e-7 * max(1.0, np.max(np.abs(fd))))
+
+
+def test_sticking_patterns_outside_multi_impact_orbit_are_refused():
+    from impactcont.orbit.multi_impact import shooting
+
+    osc = _sticky_damper()
+    with pytest.raises(ic.ParameterError, match=r"letter\(s\) 'u'.*multi_impact_orbit"):
+        shooting(flow_of(osc), 1, 2, np.zeros(8), pattern="uL")
+    with pytest.raises(ic.ParameterError, match="pattern must be"):
+        ic.multi_impact_orbit(osc, 1, 2, {"delta": 0.0, "flight_times": [1.0, 1.0],
+                                           "states": np.zeros((2, 4))}, pattern="ux")

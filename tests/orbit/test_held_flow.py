@@ -1,0 +1,76 @@
+"""The held flow: the exact motion with a stop coordinate held, and its pressing force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.model.stops import Stops
+from impactcont.orbit.held_flow import held_flow, held_frame
+
+
+def test_the_frame_keeps_the_mass_matrix_diagonal():
+    np.testing.assert_array_equal(held_frame([0.0, 1.0, 0.0]), [[1, 0], [0, 0], [0, 1]])
+    P = held_frame([-1.0, 1.0, 0.0])  # a clearance x2 - x1: x3 and the pair together
+    np.testing.assert_array_equal(P, [[0, 1], [0, 1], [1, 0]])
+    M = np.diag([1.0, 0.2, 3.0])
+    reduced = P.T @ M @ P
+    assert reduced[0, 1] == 0.0 and reduced[1, 1] == pytest.approx(1.2)
+
+
+def _damper() -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0], R=0.0,
+                               b=0.3, omega=0.5, eta=0.02,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+def test_the_held_pair_moves_as_one_mass_and_its_force_is_the_ball_s():
+    """A ball (mass 0.2) held on the upper wall of its primary (mass 1, spring 1, dashpot
+    0.04): the pair is one mass 1.2 on the spring, and the wall presses the ball with
+    ``-m2 x2''`` (the ball's only force is the wall's)."""
+    osc = _damper()
+    held = held_flow(osc, "U")
+    X0 = np.array([0.1, 0.4, 0.05, 0.05])  # x2 - x1 = 0.3, at rest relative to the wall
+    t = np.linspace(0.0, 3.0, 7)
+    X = held.state(t, X0, 0.2)
+    np.testing.assert_allclose(X[:, 1] - X[:, 0], 0.3, atol=1e-15)
+    np.testing.assert_allclose(X[:, 3] - X[:, 2], 0.0, atol=1e-15)
+    # the pair's own equation: 1.2 x'' + 0.04 x' + x = cos(0.5 t + 0.2)
+    rate = np.array([held.segment(s, X0, 0.2)[3] for s in t])
+    np.testing.assert_allclose(1.2 * rate[:, 2] + 0.04 * X[:, 2] + X[:, 0],
+                               np.cos(0.5 * t + 0.2), atol=1e-12)
+    pressing = held.pressing(X, 0.5 * t + 0.2)
+    np.testing.assert_allclose(pressing, -0.2 * rate[:, 3], atol=1e-12)
+
+
+def test_the_segment_derivatives_are_those_of_the_state():
+    osc = _damper()
+    held = held_flow(osc, "L")
+    X0 = np.array([0.1, -0.2, 0.05, 0.05])
+    X, dX0, dth, rate = held.segment(1.3, X0, 0.7)
+    np.testing.assert_allclose(X, held.state(1.3, X0, 0.7)[0], rtol=1e-14)
+    h = 1e-6
+    np.testing.assert_allclose(rate, (held.state(1.3 + h, X0, 0.7)[0]
+                                      - held.state(1.3 - h, X0, 0.7)[0]) / (2 * h), atol=1e-8)
+    np.testing.assert_allclose(dth, (held.state(1.3, X0, 0.7 + h)[0]
+                                     - held.state(1.3, X0, 0.7 - h)[0]) / (2 * h), atol=1e-8)
+    e = np.array([1.0, 1.0, 0.0, 0.0]) * h  # along the held section
+    np.testing.assert_allclose(dX0 @ (e / h), (held.state(1.3, X0 + e, 0.7)[0]
+                                               - held.state(1.3, X0 - e, 0.7)[0]) / (2 * h),
+                               atol=1e-8)
+
+
+def test_one_mass_held_stays_and_its_force_follows_the_forcing():
+    osc = ic.ImpactOscillator(M=[[2.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.0, b=0.5,
+                              omega=0.7, eta=0.1)
+    held = held_flow(osc, "U")
+    X = held.state(np.array([0.0, 1.0]), [0.5, 0.0], 0.3)
+    np.testing.assert_array_equal(X, [[0.5, 0.0], [0.5, 0.0]])
+    # the stop presses down with F cos + F_static - K c
+    assert held.pressing(X[0], 0.3) == pytest.approx(3.0 * np.cos(0.3) + 1.0 - 0.5, rel=1e-15)
+    low, when = held.pressing_minimum(6.0, X[0], 0.3)  # the interior minimum at phase pi
+    assert low == pytest.approx(-3.0 + 1.0 - 0.5, abs=1e-12)
+    assert 0.7 * when + 0.3 == pytest.approx(np.pi, abs=1e-6)
+    # without an interior minimum: the start
+    assert held.pressing_minimum(2.0, X[0], 0.3) == (held.pressing(X[0], 0.3), 0.0)
