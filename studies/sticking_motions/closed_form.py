@@ -61,8 +61,8 @@ from collections.abc import Callable
 import mpmath
 
 __all__ = ["DPS", "Damper", "StickyMotion", "first_root", "locked_ball_motion",
-           "preloaded_motion", "response", "riding_damper_motion", "riding_release_map",
-           "wrap"]
+           "preloaded_motion", "pressing_minimum", "response", "riding_damper_motion",
+           "riding_release_map", "wrap"]
 
 #: Working precision of every closed form (decimal digits).
 DPS = 30
@@ -205,6 +205,23 @@ def first_root(g: Callable, span, *, cells: int = 100, guard: Callable | None = 
     raise ValueError(f"no {what} within {mpmath.nstr(span, 6)} time units")
 
 
+def pressing_minimum(p: Callable, duration, *, cells: int = 200) -> mpmath.mpf:
+    """The smallest pressing force of a sticking phase: over its start and the interior
+    minima of ``p`` on ``(0, duration)`` (the release at the end, where ``p = 0``, not
+    counted), each minimum bracketed on `cells` cells and refined as a zero of ``p'``
+    (``mpmath.diff``)."""
+    duration = mp.mpf(duration)
+    t = [duration * i / cells for i in range(cells + 1)]
+    values = [p(x) for x in t]
+    best = values[0]
+    for i in range(1, cells):
+        if values[i - 1] > values[i] <= values[i + 1]:
+            tmin = mp.findroot(lambda x: mp.diff(p, x), (t[i - 1], t[i + 1]),
+                               solver="anderson")
+            best = min(best, p(tmin))
+    return best
+
+
 @dataclasses.dataclass(frozen=True)
 class StickyMotion:
     """A periodic motion with sticking phases, per impact ``k = 0 .. p - 1``.
@@ -230,6 +247,9 @@ class StickyMotion:
         Speed of the stop coordinate towards the stop just before impact k (``> 0``).
     landing_pressing : list
         The pressing force right after impact k (``> 0``: the stop holds).
+    pressing_min : list
+        The smallest pressing force of the stick after impact k, over its start and its
+        interior minima (:func:`pressing_minimum`; ``> 0``: no release grazing inside).
     multipliers : list
         The motion's Floquet multipliers (2n of them; zeros for the collapsed directions).
     """
@@ -244,6 +264,7 @@ class StickyMotion:
     landing_states: list
     impact_velocities: list
     landing_pressing: list
+    pressing_min: list
     multipliers: list
 
     @property
@@ -300,7 +321,11 @@ def preloaded_motion(omega, *, F=3, F_static=1, eta="0.05") -> StickyMotion:
     tau = first_root(lambda t: flight(t)[0], period)
     _, v_land, _ = flight(tau)
     theta_l = theta_r + omega * tau
-    p_land = F * mp.cos(theta_l) + Fs
+
+    def pressing(t):
+        return F * mp.cos(theta_l + omega * t) + Fs
+
+    p_land = pressing(0)
     if p_land <= 0:
         raise ValueError(f"lands at theta = {mpmath.nstr(wrap(theta_l), 8)} where the stop "
                          f"does not press (p = {mpmath.nstr(p_land, 6)}): no sticky 1-1 motion")
@@ -309,7 +334,9 @@ def preloaded_motion(omega, *, F=3, F_static=1, eta="0.05") -> StickyMotion:
                         stick_times=[period - tau], release_phases=[wrap(theta_r)],
                         flight_times=[tau], release_states=[[zero, zero]],
                         landing_states=[[zero, zero]], impact_velocities=[v_land],
-                        landing_pressing=[p_land], multipliers=[zero, zero])
+                        landing_pressing=[p_land],
+                        pressing_min=[pressing_minimum(pressing, period - tau)],
+                        multipliers=[zero, zero])
 
 
 @_at_dps
@@ -352,7 +379,11 @@ def locked_ball_motion(Gamma, *, g=1, omega=1) -> StickyMotion:
     tau = first_root(lambda t: -flight(t)[0], period)
     _, v_land, _ = flight(tau)
     theta_l = theta_r + omega * tau
-    p_land = g - A * omega**2 * mp.cos(theta_l)
+
+    def pressing(t):
+        return g - A * omega**2 * mp.cos(theta_l + omega * t)
+
+    p_land = pressing(0)
     if p_land <= 0:
         raise ValueError(f"lands at theta = {mpmath.nstr(wrap(theta_l), 8)} where the table "
                          f"does not press (p = {mpmath.nstr(p_land, 6)})")
@@ -361,7 +392,9 @@ def locked_ball_motion(Gamma, *, g=1, omega=1) -> StickyMotion:
                         stick_times=[period - tau], release_phases=[wrap(theta_r)],
                         flight_times=[tau], release_states=[[zero, zero]],
                         landing_states=[[zero, zero]], impact_velocities=[-v_land],
-                        landing_pressing=[p_land], multipliers=[zero, zero])
+                        landing_pressing=[p_land],
+                        pressing_min=[pressing_minimum(pressing, period - tau)],
+                        multipliers=[zero, zero])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -376,8 +409,9 @@ class Damper:
 
     def ride(self, wall: int, theta0, x1, v1):
         """The ball held on wall ``wall`` (``+1`` upper, ``-1`` lower) from the primary's
-        ``(x1, v1)`` at phase `theta0`: ``(tau_stick, theta_release, x1, v1, p0)`` with
-        ``p0`` the pressing force at the start (``p = -wall m x1''``)."""
+        ``(x1, v1)`` at phase `theta0`: ``(tau_stick, theta_release, x1, v1, p)`` with
+        ``p`` the pressing force along the ride (``p = -wall m x1''``), a function of the
+        time since the landing."""
         held = response(1 + self.m, self.c, 1, 1, 0, self.omega, theta0, x1, v1)
         p0 = -wall * self.m * held(0)[2]
         if p0 <= 0:
@@ -386,7 +420,7 @@ class Damper:
         tau = first_root(lambda t: wall * self.m * held(t)[2], 2 * mp.pi / self.omega,
                          what="release")
         x, v, _ = held(tau)
-        return tau, theta0 + self.omega * tau, x, v, p0
+        return tau, theta0 + self.omega * tau, x, v, lambda t: -wall * self.m * held(t)[2]
 
     def fly(self, wall: int, theta0, x1, v1):
         """The ball released from wall `wall` with the primary at ``(x1, v1)`` (``x1'' = 0``)
@@ -443,8 +477,11 @@ def riding_release_map(damper: Damper, theta, v1, *, record: list | None = None)
         v = damper.land(x1, w1, w2)
         landing = {"phase": theta, "wall": wall, "impact_velocity": wall * (w2 - w1),
                    "landing_state": [x1, x1 + wall * damper.b, v, v]}
-        tau_s, theta, x1, v1, p0 = damper.ride(wall, theta, x1, v)
-        landing.update(pressing=p0, stick_time=tau_s, release_phase=theta,
+        tau_s, theta, x1, v1, pressing = damper.ride(wall, theta, x1, v)
+        if record is not None:
+            landing.update(pressing=pressing(0),
+                           pressing_min=pressing_minimum(pressing, tau_s))
+        landing.update(stick_time=tau_s, release_phase=theta,
                        release_state=[x1, x1 + wall * damper.b, v1, v1])
         if record is not None:
             record.append(landing)
@@ -546,4 +583,5 @@ def riding_damper_motion(omega, *, m="0.2", b="0.3", eta="0.3", guess=None,
         release_states=[r["release_state"] for r in record],
         landing_states=[r["landing_state"] for r in record],
         impact_velocities=[r["impact_velocity"] for r in record],
-        landing_pressing=[r["pressing"] for r in record], multipliers=multipliers)
+        landing_pressing=[r["pressing"] for r in record],
+        pressing_min=[r["pressing_min"] for r in record], multipliers=multipliers)

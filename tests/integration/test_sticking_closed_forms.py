@@ -16,10 +16,24 @@ shooting path) run to its steady state: every landing and release time to 1e-9. 
 simulator locates a release and an impact to a few ulps of the time on its exact flow, so
 its distance from the closed form is what the transient leaves (the largest multiplier to
 the power of the periods run: about 1e-13 here) plus rounding, and 1e-9 is the issue's bar.
+The multipliers of (c) against the simulator's own finite differences of its period map
+(central, step 1e-6: truncation 1e-12, rounding 1e-10).
+
+Then against the shooting path, ``multi_impact_orbit`` with a lowercase (sticking) pattern
+seeded from the simulation: phases, stick and flight times, release and landing states,
+impact speeds and the smallest pressing force to 1e-10. Newton solves the shooting system to
+its rounding, and the solution's own error estimate (``|J^-1 r| + cond eps |u|``, condition
+numbers 3 to 2e3 here) is below 1e-11, so 1e-10 is what the method guarantees with a margin;
+the closed form is exact to 30 digits. The multipliers: (a) and (b) are exactly zero (the
+release phase forgets everything: n = 1, both directions collapse), (c) the two nonzero ones
+equal the eigenvalues of the closed-form return map's Jacobian (central differences at 30
+digits, error ~1e-20) to 1e-10, the two the ride collapses below 1e-12 (rounding of the
+saltation product, not structural zeros).
 """
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 import sys
@@ -47,6 +61,12 @@ def cf():
         yield module
     finally:
         sys.modules.pop(spec.name, None)
+
+
+@pytest.fixture(scope="module")
+def riding(cf):
+    """Case (c)'s closed form by omega, computed once per module (about 1 s each)."""
+    return functools.cache(cf.riding_damper_motion)
 
 
 def preloaded(omega: float) -> ic.ImpactOscillator:
@@ -133,14 +153,14 @@ def test_locked_ball_closed_form_is_the_simulated_steady_motion(cf, gamma):
         cf.locked_ball_motion(3.3)
 
 
-def test_riding_damper_closed_form_is_the_simulated_steady_motion(cf):
+def test_riding_damper_closed_form_is_the_simulated_steady_motion(riding):
     """(c) The plastic ball rides the upper wall, is released where the primary's
     acceleration changes sign, crosses the clearance, lands on the lower wall, rides it,
     ...: the simulator from the held forced response converges to the closed form's fixed
     point (multipliers 0.016 and 1.4e-4 besides the stick's zeros: the error shrinks 64
     times a period, 12 periods leave ~1e-13)."""
     omega = 0.2
-    motion = cf.riding_damper_motion(omega)
+    motion = riding(omega)
     assert motion.pattern == "lu"
     assert float(motion.period) == pytest.approx(2 * math.pi / omega, rel=1e-15)
     # the symmetric motion: half a period apart, the mirror image
@@ -150,3 +170,82 @@ def test_riding_damper_closed_form_is_the_simulated_steady_motion(cf):
     res = ic.simulate(osc, riding_start(osc), 0.0, 12.0)
     assert not res.chatter
     check_against_run(motion, res, omega, 0.0, last=4)
+
+
+def test_riding_damper_multipliers_are_the_simulators_finite_differences(riding):
+    """(c) at omega = 0.5 (a complex pair): on the section in the middle of the ride on the
+    upper wall the state is (x1, x1'); one period of the simulator from the closed form's
+    state returns to it (to rounding), and its central differences give the 2 x 2 Jacobian
+    whose eigenvalues are the closed form's nonzero multipliers."""
+    omega, h = 0.5, 1e-6
+    motion = riding(omega)
+    osc, k = damper(omega), motion.pattern.index("u")
+    half = float(motion.stick_times[k]) / 2
+    theta0 = float(motion.phases[k]) + omega * half
+    landing = np.asarray(motion.floats("landing_states")[k])
+    x0 = ic.simulate(osc, landing, float(motion.phases[k]), half * omega / (2 * math.pi))
+    base = x0.final_state[[0, 2]]
+
+    def period_map(y):
+        state = np.array([y[0], y[0] + osc.b, y[1], y[1]])
+        return ic.simulate(osc, state, theta0, 1.0).final_state[[0, 2]]
+
+    assert period_map(base) == pytest.approx(base, abs=1e-14)
+    J = np.column_stack([(period_map(base + e) - period_map(base - e)) / (2 * h)
+                         for e in np.eye(2) * h])
+    simulated = sorted(np.linalg.eigvals(J), key=lambda z: z.imag)
+    exact = sorted((complex(z) for z in motion.multipliers[:2]), key=lambda z: z.imag)
+    assert abs(exact[0].imag) > 0.03  # a complex pair
+    assert simulated == pytest.approx(exact, abs=1e-8)
+
+
+def check_shooting(motion, orbit) -> None:
+    """`orbit` (``multi_impact_orbit``) against the closed form, impact by impact."""
+    assert orbit.pattern == motion.pattern and orbit.physical, orbit.reason
+    assert orbit.error_estimate < 1e-11
+    phases = np.array(motion.floats("phases"))
+    assert np.abs(np.remainder(orbit.phases - phases + np.pi, 2 * np.pi) - np.pi).max() < 1e-10
+    for name, mine in (("stick_times", "stick_times"), ("flight_times", "flight_times"),
+                       ("release_states", "release_states"), ("states", "landing_states"),
+                       ("impact_velocities", "impact_velocities"),
+                       ("pressing_min", "pressing_min")):
+        assert getattr(orbit, name) == pytest.approx(np.array(motion.floats(mine)), abs=1e-10,
+                                                     rel=0), name
+
+
+@pytest.mark.parametrize("omega", [0.7, 2.0])
+def test_preloaded_oscillator_shooting_is_the_closed_form(cf, omega):
+    """(a) multi_impact_orbit(pattern="u") from the simulation: the closed form, and both
+    multipliers exactly zero."""
+    motion = cf.preloaded_motion(omega)
+    res = ic.simulate(preloaded(omega), [0.0, 0.0], 0.0, 3.0)
+    orbit = ic.multi_impact_orbit(preloaded(omega), 1, 1, res, pattern="u")
+    check_shooting(motion, orbit)
+    assert np.all(orbit.multipliers == 0)
+
+
+@pytest.mark.parametrize("gamma", [1.2, 3.0])
+def test_locked_ball_shooting_is_the_closed_form(cf, gamma):
+    """(b) multi_impact_orbit(pattern="l") from the simulation: the closed form, and both
+    multipliers exactly zero (Luck & Mehta's locked motion forgets its history)."""
+    motion = cf.locked_ball_motion(gamma)
+    res = ic.simulate(ball(gamma), [0.0, 0.0], -0.5 * math.pi, 3.0)
+    orbit = ic.multi_impact_orbit(ball(gamma), 1, 1, res, pattern="l")
+    check_shooting(motion, orbit)
+    assert np.all(orbit.multipliers == 0)
+
+
+@pytest.mark.parametrize("omega", [0.2, 0.5])
+def test_riding_damper_shooting_is_the_closed_form(riding, omega):
+    """(c) multi_impact_orbit(pattern="lu") from the simulation: the closed form, the two
+    nonzero multipliers those of the closed-form return map (real at 0.2, a complex pair at
+    0.5), the other two the ride's collapsed directions."""
+    motion = riding(omega)
+    osc = damper(omega)
+    res = ic.simulate(osc, riding_start(osc), 0.0, 12.0)
+    orbit = ic.multi_impact_orbit(osc, 1, 2, res, pattern="lu")
+    check_shooting(motion, orbit)
+    mu = sorted(orbit.multipliers, key=lambda z: (-abs(z), z.imag))
+    exact = sorted((complex(z) for z in motion.multipliers), key=lambda z: (-abs(z), z.imag))
+    assert mu[:2] == pytest.approx(exact[:2], abs=1e-10)
+    assert np.abs(mu[2:]).max() < 1e-12
