@@ -379,3 +379,20 @@ def test_sticking_patterns_outside_multi_impact_orbit_are_refused():
     with pytest.raises(ic.ParameterError, match="pattern must be"):
         ic.multi_impact_orbit(osc, 1, 2, {"delta": 0.0, "flight_times": [1.0, 1.0],
                                            "states": np.zeros((2, 4))}, pattern="ux")
+
+
+def test_a_sticking_motion_against_the_physics_is_flagged_with_its_reasons():
+    """The preloaded oscillator's sticky 1-1 system has a second solution: landing at a
+    phase where the pressing force is negative (no sticking onset) and released where the
+    force rises through zero (the coordinate would not leave). It is returned flagged."""
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.0, b=0.0,
+                              omega=0.7, eta=0.1)
+    period = 2 * math.pi / 0.7
+    stick = ((-math.acos(-1 / 3) - 2.07) % (2 * math.pi)) / 0.7
+    orbit = ic.multi_impact_orbit(osc, 1, 1, {"delta": 2.07, "flight_times": [period - stick],
+                                              "states": [[0.0, 0.0]], "stick_times": [stick],
+                                              "pattern": "u"})
+    assert orbit.residual < 1e-12 and not orbit.physical
+    assert "sticking onset" in orbit.reason and "does not fall through zero" in orbit.reason
+    assert orbit.pressing_min[0] == pytest.approx(-3.0 + 1.0, abs=1e-9)  # F cos(pi) + F_static
+    assert math.cos(orbit.phases[0] + 0.7 * orbit.stick_times[0]) == pytest.approx(-1 / 3)
