@@ -35,6 +35,14 @@ orthogonal to the symmetric tangent. Displaced by ``+epsilon e`` and by
 ``-epsilon e`` and corrected on the hyperplane orthogonal to ``e``, Newton lands on
 the two asymmetric motions, mirror images of each other; each is followed away from
 the BP.
+
+Ctrl-C
+------
+Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of a new branch (every switch
+here) returns its points computed so far, marked as interrupted, as
+:func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its Notes); a
+second one aborts. A cascade keeps the branches computed before
+(:func:`period_doubling_cascade`).
 """
 
 from __future__ import annotations
@@ -361,10 +369,7 @@ def period_doubling_switch(branch: xr.Dataset, which: int = 0, *,
 
     Notes
     -----
-    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
-    its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
-    Notes); a second one aborts.
+    Ctrl-C returns the new branch as far as it was computed (module docstring, Ctrl-C).
     """
     epsilon, orbit, parameter, lo, hi = _switch_start(branch, "PD", which, bounds, epsilon)
     problem, u1, lam1, direction, info = _pd_start(orbit, parameter, epsilon)
@@ -649,10 +654,7 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
 
     Notes
     -----
-    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
-    its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
-    Notes); a second one aborts.
+    Ctrl-C returns the new branch as far as it was computed (module docstring, Ctrl-C).
     """
     epsilon, orbit, parameter, lo, hi = _switch_start(branch, "GR", which, bounds, epsilon)
     guess, new = grazing_split(orbit)
@@ -822,10 +824,7 @@ def pitchfork_branch(branch: xr.Dataset, which: int = 0, side: int = 1, *,
 
     Notes
     -----
-    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
-    its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
-    Notes); a second one aborts.
+    Ctrl-C returns the new branch as far as it was computed (module docstring, Ctrl-C).
     """
     epsilon = _check_epsilon(epsilon)
     side = _check_side(side)
@@ -882,10 +881,7 @@ def pitchfork_switch(branch: xr.Dataset, which: int = 0, *,
 
     Notes
     -----
-    Ctrl-C (:class:`KeyboardInterrupt`) during the continuation of the new branch returns
-    its points computed so far, marked as interrupted, as
-    :func:`~impactcont.analysis.branch.multi_impact_continuation` does (see its
-    Notes); a second one aborts.
+    Ctrl-C returns the new branch as far as it was computed (module docstring, Ctrl-C).
     """
     kwargs = {"bounds": bounds, "epsilon": epsilon, "detect": detect, "options": options,
               **more}
