@@ -4,9 +4,10 @@
 "b"), grid={"omega": ..., "b": ...})``, or its alias :func:`impactcont.multi_impact_map`)
 checks its arguments in :mod:`impactcont.analysis.maps` and runs :func:`family_map` here,
 which solves the motion of `start` (an N-p motion of :func:`impactcont.multi_impact_orbit`,
-from a simulation or a branch point, or an N-1 motion of the closed form) at every grid
-point it can reach: Newton on the shooting system of
-:mod:`impactcont.orbit.multi_impact` at each grid point, started from a solved
+from a simulation or a branch point, or an N-1 motion of the closed form given
+``evaluator="shooting"``: :func:`impactcont.multi_impact_map` maps an N-1 motion's family
+by the closed form otherwise) at every grid point it can reach: Newton on the shooting
+system of :mod:`impactcont.orbit.multi_impact` at each grid point, started from a solved
 neighbour (natural-parameter continuation on the grid, a secant predictor through
 two solved points in line), in one compiled sweep (:mod:`impactcont.kernel.sweep`).
 A symmetric motion of a symmetric system is solved on its half system closed by the
@@ -102,7 +103,7 @@ from impactcont.orbit.symmetry import (
 from impactcont.progress import ProgressOption, interruptible, reporter
 from impactcont.threads import blas_limited
 
-__all__ = ["family_map", "multi_impact_map_orbit"]
+__all__ = ["check_sweep_options", "family_map", "multi_impact_map_orbit"]
 
 log = logging.getLogger(__name__)
 
@@ -422,6 +423,28 @@ def _seed(orbit: MultiImpactOrbit, setting: _Setting,
         f"{_SEED_SUBSTEPS[-1]} steps; start from a motion at or next to a grid point")
 
 
+def check_sweep_options(*, checks: Any, tol: Any, max_iter: Any, max_change: Any,
+                        max_attempts: Any) -> tuple[float, int, float, int]:
+    """The options of a family's sweep checked, whichever evaluator maps the family.
+
+    Returns
+    -------
+    tol, max_iter, max_change, max_attempts
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, its value and what is allowed.
+    """
+    tol = positive_number("tol", tol)
+    max_change = positive_number("max_change", max_change)
+    max_iter = positive_int("max_iter", max_iter)
+    max_attempts = positive_int("max_attempts", max_attempts)
+    if not isinstance(checks, (bool, np.bool_)):
+        raise ParameterError(f"checks must be True or False; got {checks!r}")
+    return tol, max_iter, max_change, max_attempts
+
+
 @blas_limited
 def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
                axes: dict[str, np.ndarray], *, symmetric: bool | None = None,
@@ -471,12 +494,9 @@ def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParam
     """
     osc = orbit.oscillator
     names = (params[0].name, params[1].name)
-    tol = positive_number("tol", tol)
-    max_change = positive_number("max_change", max_change)
-    max_iter = positive_int("max_iter", max_iter)
-    max_attempts = positive_int("max_attempts", max_attempts)
-    if not isinstance(checks, (bool, np.bool_)):
-        raise ParameterError(f"checks must be True or False; got {checks!r}")
+    tol, max_iter, max_change, max_attempts = check_sweep_options(
+        checks=checks, tol=tol, max_iter=max_iter, max_change=max_change,
+        max_attempts=max_attempts)
     half = _decide_symmetric(orbit, params, symmetric)
     N, p = orbit.N, orbit.p
     pattern = orbit.pattern or "U" * p
@@ -509,8 +529,8 @@ def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParam
     def options() -> dict[str, Any]:
         """How the map was computed, with the sweeps' counts so far."""
         t_sweep = time.perf_counter() - t1
-        return {"tol": tol, "max_iter": max_iter, "max_change": max_change,
-                "max_attempts": max_attempts, "checks": bool(checks),
+        return {"evaluator": "shooting", "tol": tol, "max_iter": max_iter,
+                "max_change": max_change, "max_attempts": max_attempts, "checks": bool(checks),
                 "attempts": int(stats.attempts), "newton_iterations": int(stats.iterations),
                 "flows": stats.flows, "setup_seconds": round(t_setup, 4),
                 "sweep_seconds": round(t_sweep, 4), "executor": runner.name,

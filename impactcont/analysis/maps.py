@@ -10,7 +10,9 @@ oscillator (dims ``(N, p1, p2, root)``): batched along omega or b when one of th
 the pair, else the closed form at each point on the oscillator with both parameters set.
 Given a motion instead of an oscillator, the map of its family over any two parameters,
 followed from it by shooting (:func:`~impactcont.analysis.family_maps.family_map`, the
-general evaluator; :func:`multi_impact_map` is that map's former name). Both take their
+general evaluator; :func:`multi_impact_map` is that map's former name), or, for an N-1
+motion of :func:`impactcont.periodic_orbits`, the closed form's map kept for its root of
+eq. (15) (:func:`multi_impact_map`, Notes). Both take their
 parameters and grid through the one check here (:func:`map_plane`), the run options through
 :func:`~impactcont.analysis.map_runner.check_run_options`, run as the tasks of a
 :class:`~impactcont.analysis.map_runner.MapJob` on the same runner, and lay their
@@ -62,7 +64,13 @@ import numpy as np
 import xarray as xr
 
 from impactcont.analysis.branch import as_multi_impact_orbit
-from impactcont.analysis.family_maps import family_map, multi_impact_map_orbit
+from impactcont.analysis.family_maps import (
+    _decide_symmetric,
+    _nearest,
+    check_sweep_options,
+    family_map,
+    multi_impact_map_orbit,
+)
 from impactcont.analysis.map_runner import (
     MapJob,
     MapRunner,
@@ -82,13 +90,13 @@ from impactcont.dataset.map_storage import (
     remove_stale_maps,
     temporary_map_file,
 )
-from impactcont.dataset.maps import map_dataset
+from impactcont.dataset.maps import map_dataset, multi_impact_map_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import ModelParameter, model_parameter
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.multi_impact import MultiImpactOrbit
-from impactcont.orbit.periodic import PeriodicOrbit, _check_N
+from impactcont.orbit.periodic import PeriodicOrbit, _check_N, impact_states, periodic_orbits
 from impactcont.progress import ProgressOption, interruptible, reporter
 from impactcont.threads import blas_limited
 
@@ -138,7 +146,7 @@ _ALL_N = (1, 2, 3, 4)
 #: The options of :func:`impactcont.multi_impact_map` that :func:`stability_map` passes on
 #: with a motion as its start.
 _MOTION_OPTIONS = ("symmetric", "checks", "tol", "max_iter", "max_change", "max_attempts",
-                   "title", "rows_per_task")
+                   "title", "rows_per_task", "evaluator")
 # Grid points per task at most where the closed form is evaluated per point (a map over two
 # parameters other than omega and b: about 0.5 ms a point) or per line of the batched
 # parameter (one of them omega or b): a task of some tenths of a second.
@@ -169,7 +177,8 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
     Given a motion (an N-p motion of :func:`impactcont.multi_impact_orbit` or
     :func:`impactcont.special_orbit`, or an N-1 motion of :func:`impactcont.periodic_orbits`):
     the map of its family over ``parameters`` and ``grid``, followed from it
-    (:func:`impactcont.multi_impact_map`, the same dataset).
+    (:func:`impactcont.multi_impact_map`, the same dataset; an N-1 motion's family by the
+    closed form).
 
     Parameters
     ----------
@@ -232,8 +241,9 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
     **others
         With a motion: the options of :func:`impactcont.multi_impact_map`
         (``symmetric``, ``checks``, ``tol``, ``max_iter``, ``max_change``,
-        ``max_attempts``, ``title``, ``rows_per_task``). With an oscillator none: a grid
-        given as a keyword (``k2=[...]``) is refused, naming `parameters` and `grid`.
+        ``max_attempts``, ``title``, ``rows_per_task``, ``evaluator``). With an oscillator
+        none: a grid given as a keyword (``k2=[...]``) is refused, naming `parameters` and
+        `grid`.
 
     Returns
     -------
@@ -471,7 +481,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
                      title: str | None = None, executor: Any = None,
                      max_workers: int | None = None, rows_per_task: int | None = None,
                      memory_limit: float = 1e9, progress: ProgressOption = None,
-                     out: str | os.PathLike | None = None) -> xr.Dataset:
+                     out: str | os.PathLike | None = None,
+                     evaluator: str | None = None) -> xr.Dataset:
     """Stability map of the motion family of `start` over a grid of two parameters.
 
     :func:`stability_map` of a motion under the name it had when only N-p motions had
@@ -501,7 +512,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     start : MultiImpactOrbit or PeriodicOrbit
         A motion of the family: :func:`impactcont.multi_impact_orbit` (from a
         simulation), :func:`impactcont.special_orbit` (a branch point), or an N-1
-        motion of :func:`impactcont.periodic_orbits` (solved as a 1-impact motion).
+        motion of :func:`impactcont.periodic_orbits` (mapped by the closed form, or
+        solved as a 1-impact motion: `evaluator`).
         Its oscillator is the map's; its values of the two parameters place the seed.
     parameters : (str, str)
         Two different continuable parameters of the oscillator, the grid's axes in this
@@ -559,6 +571,13 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     out : str or os.PathLike, optional
         Write the map to this NetCDF-4 file (chunked by task, compressed) band by band
         as the tasks finish, and return it opened lazily (needs ``impactcont[dask]``).
+    evaluator : None, "closed_form" or "shooting"
+        How the family is evaluated. ``None`` (default): by the closed form where `start`
+        is an N-1 motion of :func:`impactcont.periodic_orbits` (a
+        :class:`~impactcont.orbit.periodic.PeriodicOrbit`), `checks` is True, `out` is
+        not given and the map fits in `memory_limit` (notes), else by shooting.
+        ``"closed_form"`` refuses, saying why, where the closed form does not apply;
+        ``"shooting"`` always shoots (a PeriodicOrbit as the 1-impact motion it is).
 
     Returns
     -------
@@ -587,15 +606,207 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     many points were done; a map written to a file is kept the same way, the file whole
     (written under a temporary name, then renamed). A second Ctrl-C abandons the map
     (KeyboardInterrupt), a file being written removed.
+
+    The family of an N-1 motion of the closed form is mapped by the closed form (eq.
+    12-16, 25): the closed form's map of every root on the grid (:func:`stability_map`
+    of the oscillator), kept for the start's root of eq. (15) on the grid points
+    connected to the seed through grid neighbours where that root exists (the points a
+    sweep from the seed reaches). Each point is then exact (no Newton:
+    ``newton_iterations`` 0), the root never changes at a fold (the shooting sweep may
+    continue on the other member of the pair there) and no shooting kernel is
+    compiled; the options of the sweep (`tol`, `max_iter`, `max_change`,
+    `max_attempts`, `rows_per_task`) are checked and not used. The attribute
+    ``options`` names the evaluator (``"evaluator": "closed_form"``) and an INFO record
+    says which ran (and, for an N-1 motion mapped by shooting, why).
     """
-    orbit = as_multi_impact_orbit(start)
-    params, axes = map_plane(orbit.oscillator, parameters, grid)
+    if not isinstance(start, (MultiImpactOrbit, PeriodicOrbit)):
+        as_multi_impact_orbit(start)  # refuses it, naming what is taken
+    if evaluator not in _EVALUATORS:
+        raise ParameterError(f"evaluator must be one of {list(_EVALUATORS)} (None: the closed "
+                             f"form where it applies); got {evaluator!r}")
+    params, axes = map_plane(start.oscillator, parameters, grid)
     max_workers, memory_limit = check_run_options(executor, max_workers, memory_limit)
+    check_sweep_options(checks=checks, tol=tol, max_iter=max_iter, max_change=max_change,
+                        max_attempts=max_attempts)
+    if isinstance(start, PeriodicOrbit):
+        _decide_symmetric(start, params, symmetric)  # an N-1 motion: refuses symmetric=True
+    reason = ("evaluator='shooting'" if evaluator == "shooting" else
+              _not_closed_form(start, params, axes, checks, out, memory_limit))
+    if not reason:
+        ds, reason = _closed_form_family(start, params, axes, title=title, executor=executor,
+                                         max_workers=max_workers, memory_limit=memory_limit,
+                                         progress=progress)
+        if ds is not None:
+            return ds
+    if evaluator == "closed_form":
+        raise ParameterError(f"evaluator='closed_form': the family cannot be mapped by the "
+                             f"closed form here: {reason}; give evaluator=None or 'shooting'")
+    if isinstance(start, PeriodicOrbit):
+        log.info("the family of the N-1 motion is mapped by shooting: %s", reason)
+    orbit = as_multi_impact_orbit(start)
     return family_map(orbit, params, axes, symmetric=symmetric, checks=checks, tol=tol,
                       max_iter=max_iter, max_change=max_change, max_attempts=max_attempts,
                       title=title, executor=executor, max_workers=max_workers,
                       rows_per_task=rows_per_task, memory_limit=memory_limit,
                       progress=progress, out=out)
+
+
+#: How :func:`multi_impact_map` evaluates a family: None, the closed form where it applies.
+_EVALUATORS = (None, "closed_form", "shooting")
+
+
+def _not_closed_form(start: Any, params: tuple[ModelParameter, ModelParameter],
+                     axes: dict[str, np.ndarray], checks: Any, out: Any,
+                     memory_limit: float) -> str:
+    """Why the family of `start` is not mapped by the closed form ("" where it is)."""
+    if not isinstance(start, PeriodicOrbit):
+        return (f"the start is a {type(start).__name__}, not an N-1 motion of the closed "
+                "form (periodic_orbits)")
+    if not checks:
+        return "checks=False (the closed form always searches every flight for contact)"
+    if out is not None:
+        return "out= is given (the closed form's family map is made in memory)"
+    names = (params[0].name, params[1].name)
+    shape = (axes[names[0]].size, axes[names[1]].size)
+    need = (_result_bytes((1, *shape), True, names)
+            + math.prod(shape) * _family_point_bytes(start.oscillator.n))
+    if need > memory_limit:
+        return (f"the map and the closed form's map of every root take {need / 1e9:.3g} GB, "
+                f"more than memory_limit = {memory_limit / 1e9:.3g} GB")
+    return ""
+
+
+def _family_point_bytes(n: int) -> int:
+    """Bytes per grid point of a map of one N-1 family (:data:`MULTI_MAP_VARIABLES`, p = 1)."""
+    return 1 + 4 + 8 + 1 + 1 + 1 + 8 + 16 + 8 + 8 + 8 + 8 * 2 * n
+
+
+def _closed_form_family(start: PeriodicOrbit, params: tuple[ModelParameter, ModelParameter],
+                        axes: dict[str, np.ndarray], *, title: str | None, executor: Any,
+                        max_workers: int | None, memory_limit: float,
+                        progress: ProgressOption) -> tuple[xr.Dataset | None, str]:
+    """The map of the family of an N-1 motion by the closed form: its root of eq. (15).
+
+    The closed form's map of every root (:func:`stability_map` of the oscillator, same
+    executor, progress and memory bound) restricted to the root of `start` (the sign in
+    front of the square root of eq. 15, which changes only at the fold ``c^2 + s^2 =
+    b^2``, where the root ends), on the grid points connected to the seed (the point
+    nearest the start) through grid neighbours where it exists: the points the shooting
+    sweep reaches from its seed through solved neighbours
+    (:func:`~impactcont.analysis.family_maps.family_map`), each exact rather than
+    Newton's. The states after the impact come from :func:`impactcont.orbit.periodic.
+    impact_states`, ``newton_iterations`` is 0 at every point found (no Newton).
+
+    Returns
+    -------
+    ds : xarray.Dataset or None
+        The map (the ``multi_impact_map`` layout, ``options`` naming ``"evaluator":
+        "closed_form"``), or None where the start's root does not exist at the seed.
+    reason : str
+        Why it is None ("" otherwise).
+    """
+    from scipy import ndimage
+
+    osc, N = start.oscillator, start.N
+    names = (params[0].name, params[1].name)
+    start_values = {param.name: param.value(osc) for param in params}
+    s0, s1 = _nearest(axes, names, (start_values[names[0]], start_values[names[1]]))
+    at_seed = {names[0]: float(axes[names[0]][s0]), names[1]: float(axes[names[1]][s1])}
+    seed_osc = osc
+    for param in params:
+        seed_osc = param.at(seed_osc, at_seed[param.name])
+    if start.root not in [o.root for o in periodic_orbits(seed_osc, N)]:
+        return None, (f"the root {start.root:+d} of eq. (15) does not exist at the grid point "
+                      f"nearest the start, {at_seed}")
+    t0 = time.perf_counter()
+    every = stability_map(osc, [N], parameters=names, grid=axes, executor=executor,
+                          max_workers=max_workers, memory_limit=memory_limit,
+                          progress=progress)
+    computed = every["computed"].values[0] if "computed" in every.variables else None
+    root = 0 if start.root == 1 else 1
+    one = {key: every[key].values[0, ..., root]
+           for key in ("delta", "impact_velocity", "gap_min", "spectral_radius",
+                       "critical_multiplier", "physical", "stable")}
+    options = {"evaluator": "closed_form", **json.loads(every.attrs["options"])}
+    every.close()  # a map that went to a temporary file: read, then removed
+    exists = ~np.isnan(one["delta"])
+    if computed is not None:
+        exists &= computed
+    labels, _ = ndimage.label(exists)  # grid neighbours: the sweep's four
+    found = labels == labels[s0, s1] if labels[s0, s1] else np.zeros_like(exists)
+    values = _family_values(osc, N, params, axes, found, one)
+    options["elapsed_seconds"] = round(time.perf_counter() - t0, 4)
+    seed = {**at_seed, "index": [int(s0), int(s1)], "start": start_values}
+    ds = multi_impact_map_dataset(oscillator=osc, N=N, pattern=start.pattern,
+                                  parameters=names, grid=axes, values=values, symmetric=False,
+                                  seed=seed, options=options, title=title)
+    if computed is not None:
+        mark_computed(ds, computed, names)
+    log.info("N=%d family of root %+d of eq. (15) over %s x %s by the closed form: %d of %d "
+             "points found in %.3g s", N, start.root, names[0], names[1],
+             int(found.sum()), found.size, options["elapsed_seconds"])
+    return ds, ""
+
+
+def _family_values(osc: ImpactOscillator, N: int,
+                   params: tuple[ModelParameter, ModelParameter], axes: dict[str, np.ndarray],
+                   found: np.ndarray, one: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The variables of a family map (:data:`~impactcont.dataset.maps.MULTI_MAP_VARIABLES`)
+    from the closed form's values `one` of one root on the grid, kept where `found`."""
+    names = (params[0].name, params[1].name)
+    shape = found.shape
+
+    def kept(a: np.ndarray, fill: Any) -> np.ndarray:
+        return np.where(found, a, fill)
+
+    if "omega" in names:
+        w = axes["omega"][:, None] if names[0] == "omega" else axes["omega"][None, :]
+    else:
+        w = np.array([[osc.omega]])
+    period = np.broadcast_to(2.0 * np.pi * N / w, shape)
+    gap = kept(one["gap_min"], np.nan)
+    return {"found": found, "newton_iterations": kept(0, -1).astype(np.int32),
+            "delta": kept(one["delta"], np.nan), "stable": found & one["stable"],
+            "physical": found & one["physical"], "contact_checked": found & ~np.isnan(gap),
+            "spectral_radius": kept(one["spectral_radius"], np.nan),
+            "critical_multiplier": kept(one["critical_multiplier"], complex(np.nan, np.nan)),
+            "gap_min": gap, "impact_velocity_k": kept(one["impact_velocity"], np.nan)[..., None],
+            "flight_time_k": kept(period, np.nan)[..., None],
+            "state_k": _family_states(osc, N, params, axes, found, one)[:, :, None, :]}
+
+
+def _family_states(osc: ImpactOscillator, N: int,
+                   params: tuple[ModelParameter, ModelParameter], axes: dict[str, np.ndarray],
+                   found: np.ndarray, one: dict[str, np.ndarray]) -> np.ndarray:
+    """The state after the impact at every point found (NaN elsewhere), shape (n0, n1, 2n):
+    :func:`~impactcont.orbit.periodic.impact_states` once per oscillator, i.e. per value of
+    the parameter other than ``b`` (``b`` enters the closed form through the phase only,
+    eq. 14-15), or per point where neither is ``b``."""
+    names = (params[0].name, params[1].name)
+    states = np.full((*found.shape, 2 * osc.n), np.nan)
+    if "b" in names:
+        k = 1 - names.index("b")  # the axis of the parameter that changes the oscillator
+        lines = [(m, (m, slice(None)) if k == 0 else (slice(None), m))
+                 for m in range(found.shape[k])]
+    else:
+        lines = [((i, j), (i, j)) for i, j in zip(*np.nonzero(found), strict=True)]
+    for m, where in lines:
+        hit = found[where]
+        if not np.any(hit):
+            continue
+        if "b" in names:
+            o = params[k].at(osc, float(axes[names[k]][m]))
+        else:
+            o = params[1].at(params[0].at(osc, float(axes[names[0]][m[0]])),
+                             float(axes[names[1]][m[1]]))
+        delta = np.atleast_1d(one["delta"][where])[np.atleast_1d(hit)]
+        sigma = np.atleast_1d(one["impact_velocity"][where])[np.atleast_1d(hit)]
+        block = states[where]  # a view: a line of the grid, or one point's state
+        if block.ndim == 1:
+            block[:] = impact_states(o, N, delta, sigma)[0]
+        else:
+            block[hit] = impact_states(o, N, delta, sigma)
+    return states
 
 
 @blas_limited

@@ -102,12 +102,15 @@ MULTI_MAP_KIND = "multi_impact_map"
 #: Variables of the map: metadata and dims after the two grid dims.
 MULTI_MAP_VARIABLES: dict[str, _Var] = {
     "found": _Var("motion found", "1",
-                  "Newton converged at this grid point from a solved neighbour: the family "
-                  "followed from the seed reaches it. False: not reached (no motion of the "
-                  "family there, or Newton failed); every other value is then NaN.", kind="b"),
+                  "Newton converged at this grid point from a solved neighbour (the closed "
+                  "form of an N-1 family: its root of eq. 15 exists there and at grid "
+                  "neighbours back to the seed): the family followed from the seed reaches "
+                  "it. False: not reached (no motion of the family there, or Newton failed); "
+                  "every other value is then NaN.", kind="b"),
     "newton_iterations": _Var("Newton iterations", "1",
-                              "Iterations of the Newton solve that found the motion; -1 where "
-                              "it was not found.", kind="i"),
+                              "Iterations of the Newton solve that found the motion (0 where "
+                              "the closed form gave it); -1 where it was not found.",
+                              kind="i"),
     "stable": _Var("asymptotically stable", "1",
                    "rho(G) < 1 (Theorem 3.1 on G = G_{p-1} .. G_0); False where not found.",
                    kind="b"),

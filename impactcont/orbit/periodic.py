@@ -40,6 +40,7 @@ __all__ = [
     "IllConditionedWarning",  # defined in impactcont.errors, re-exported here
     "PeriodicOrbit",
     "impact_map_jacobian",
+    "impact_states",
     "modal_arrays",
     "modal_jacobian",
     "orbit_at_phase",
@@ -465,6 +466,63 @@ def _check_phase(osc: ImpactOscillator, c: float, s: float, delta: float) -> Non
             f"c cos(delta) + s sin(delta) - b = {residual:.3g} (allowed: below "
             f"{_PHASE_TOL * scale:.1g}); the phases of the periodic motions are those of "
             "periodic_orbits(osc, N)")
+
+
+def impact_states(osc: ImpactOscillator, N: int, delta: np.ndarray, sigma: np.ndarray
+                  ) -> np.ndarray:
+    """The states right after the impact of N-1 motions at one frequency, many at once.
+
+    ``X(0) = [x; x']`` of eq. (13) of the motions with impact phases `delta` (roots of
+    eq. 15 at the oscillator's ``omega``) and impact velocities `sigma` (``h2`` of eq. 22,
+    as :func:`impactcont.orbit.batched.batched_orbits` gives them): on the modal path the
+    modal state of :func:`impactcont.kernel.closed_form.orbit_states` mapped by ``u``,
+    with ``x1' = -R sigma`` set exactly (eq. 4), as
+    :func:`~impactcont.kernel.closed_form.physical_state` builds one motion's, in numpy
+    over all of them; on the first-order path (:attr:`ImpactOscillator.general`) the
+    compiled evaluation of :func:`impactcont.orbit.general.orbit_values`.
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+        Its ``omega`` is the motions'; its ``b`` is not used.
+    N : int
+        One impact every N forcing periods.
+    delta, sigma : ndarray, shape (k,)
+        Impact phases and impact velocities.
+
+    Returns
+    -------
+    ndarray, shape (k, 2n)
+    """
+    from impactcont.kernel import closed_form
+
+    N = _check_N(N)
+    _check_oscillator(osc)
+    delta = np.ascontiguousarray(delta, dtype=float)
+    sigma = np.asarray(sigma, dtype=float)
+    if delta.ndim != 1 or sigma.shape != delta.shape:
+        raise ParameterError(f"delta and sigma must be 1-D arrays of the same length; got "
+                             f"shapes {delta.shape} and {sigma.shape}")
+    n = osc.n
+    if delta.size == 0:
+        return np.empty((0, 2 * n))
+    if osc.general:
+        # the first-order path takes the impact velocity from the phase and the gap: the
+        # gap of each motion is x1 at its phase, c cos(delta) + s sin(delta) (eq. 14)
+        form = general.periodic_form(osc, N, warn=False)
+        b = form.c * np.cos(delta) + form.s * np.sin(delta)
+        return general._compiled_values(form, delta, np.ascontiguousarray(b))[1]
+    arrays = modal_arrays(osc)
+    modal, _ = closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
+                                       arrays.eig_err, osc.R, osc.omega, N)
+    cd, sd = np.cos(delta)[:, None], np.sin(delta)[:, None]
+    ks = ((1.0 + osc.R) * sigma)[:, None]
+    gm, bt = modal[0], modal[1]
+    y = gm * cd + bt * sd + ks * modal[6]
+    v = osc.omega * (bt * cd - gm * sd) + ks * modal[7]
+    X = np.concatenate([y @ arrays.u.T, v @ arrays.u.T], axis=1)
+    X[:, n] = -osc.R * sigma
+    return X
 
 
 def periodic_orbits(osc: ImpactOscillator, N: int) -> list[PeriodicOrbit]:

@@ -177,7 +177,8 @@ def test_closed_form_seed_covers_the_existence_region_of_its_root():
                               omega=1.0)
     physical = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
     W, Bs = np.linspace(0.6, 1.6, 21), np.linspace(0.0, 1.2, 13)
-    ds = multi_impact_map(physical, ("omega", "b"), grid={"omega": W, "b": Bs})
+    ds = multi_impact_map(physical, ("omega", "b"), grid={"omega": W, "b": Bs},
+                          evaluator="shooting")
     assert "asymmetry" not in ds  # one stop: no symmetric motions
     closed = ic.stability_map(osc, 1, W, Bs).sel(N=1)
     found = ds["found"].values
@@ -200,7 +201,8 @@ def test_not_found_points_are_nan_and_seed_nothing():
                               omega=1.0)
     physical = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
     ds = multi_impact_map(physical, ("b", "omega"),
-                          grid={"b": np.linspace(0.0, 1.2, 7), "omega": [0.9, 1.0, 1.1]})
+                          grid={"b": np.linspace(0.0, 1.2, 7), "omega": [0.9, 1.0, 1.1]},
+                          evaluator="shooting")
     assert ds["found"].dims == ("b", "omega")
     lost = ~ds["found"].values
     assert lost.any()
@@ -557,6 +559,8 @@ _PAPER_FAMILY = {"omega": np.linspace(1.0, 1.4, 9), "b": np.linspace(0.1, 0.5, 7
 
 @pytest.fixture(scope="module")
 def closed_form_start():
+    """An N-1 motion of the closed form, mapped by shooting (evaluator="shooting") in the
+    tests of the sweep's files and interrupts."""
     osc = ic.ImpactOscillator(M=np.eye(2), K=K2, F=[1.0, 0.0], R=0.6, b=0.3, omega=1.2,
                               eta=0.1)
     return next(o for o in ic.periodic_orbits(osc, 1) if o.physical and o.stable)
@@ -564,14 +568,15 @@ def closed_form_start():
 
 @pytest.fixture(scope="module")
 def family_in_memory(closed_form_start):
-    return multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2)
+    return multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2,
+                            evaluator="shooting")
 
 
 def test_a_map_written_to_a_file_equals_the_map_in_memory(closed_form_start, family_in_memory,
                                                          tmp_path, caplog):
     pytest.importorskip("dask")
     lazy = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2,
-                            out=tmp_path / "family.nc")
+                            out=tmp_path / "family.nc", evaluator="shooting")
     assert hasattr(lazy["found"].data, "dask")  # nothing read yet
     xr.testing.assert_identical(lazy.load().drop_attrs(), family_in_memory.drop_attrs())
     assert json.loads(lazy.attrs["options"])["tasks"] == 5  # the sweeps' counts, at the end
@@ -581,7 +586,7 @@ def test_a_map_written_to_a_file_equals_the_map_in_memory(closed_form_start, fam
     # larger than memory_limit: a temporary file (it was refused before any work)
     with caplog.at_level("WARNING"):
         lazy = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY,
-                                rows_per_task=2, memory_limit=1e3)
+                                rows_per_task=2, memory_limit=1e3, evaluator="shooting")
     path = Path(lazy.encoding["source"])
     assert f"it is written to {path}" in caplog.text and path.is_file()
     xr.testing.assert_identical(lazy.load().drop_attrs(), family_in_memory.drop_attrs())
@@ -607,11 +612,11 @@ def test_ctrl_c_keeps_a_map_written_to_a_file_as_the_map_in_memory(closed_form_s
                         functools.partial(_interrupted_after, 3, real))
     _interrupted_after.calls = 0
     in_memory = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY,
-                                 rows_per_task=2)
+                                 rows_per_task=2, evaluator="shooting")
     _interrupted_after.calls = 0
     target = tmp_path / "family.nc"
     lazy = multi_impact_map(closed_form_start, ("omega", "b"), _PAPER_FAMILY, rows_per_task=2,
-                            out=target)
+                            out=target, evaluator="shooting")
     assert [p.name for p in tmp_path.iterdir()] == ["family.nc"]  # no temporary left
     kept = lazy.load()
     lazy.close()

@@ -464,3 +464,71 @@ def test_the_map_of_an_oscillator_and_of_a_motion_refuse_alike(paper, kwargs, ma
             stability_map(start, **kwargs)
     with pytest.raises(ic.ParameterError, match=match):
         maps.multi_impact_map(motion, **kwargs)
+
+
+# -- the family of an N-1 motion: by the closed form, not by shooting (issue 29) -------------
+@pytest.mark.parametrize(("parameters", "grid"), [
+    (("omega", "b"), {"omega": np.linspace(0.9, 1.3, 9), "b": np.linspace(0.1, 0.9, 5)}),
+    (("R", "omega"), {"R": [0.5, 0.6, 0.7], "omega": [1.0, 1.03, 1.06]}),
+    (("eta", "R"), {"eta": [0.08, 0.1, 0.12], "R": [0.55, 0.6, 0.65]}),
+])
+def test_the_family_of_an_n1_motion_is_mapped_by_the_closed_form(paper, parameters, grid,
+                                                                  caplog):
+    """A map whose start is an N-1 motion of periodic_orbits is the closed form's map of its
+    root of eq. (15) (the options and an INFO record say so), and equals the shooting map
+    of the same family where both found it. Tolerance: shooting's Newton stops at tol =
+    1e-11 relative to max(1, |u|), so its motion is that close to the exact one times the
+    conditioning of the shooting system (1e-14 apart here); the closed form is exact to
+    rounding. The spectral radius comes from two different G (eq. 25 in z, and shooting's
+    in the state), equal analytically: rtol 1e-7, as their other comparisons."""
+    motion = next(o for o in ic.periodic_orbits(paper, 1) if o.physical)
+    with caplog.at_level("INFO", logger="impactcont.analysis.maps"):
+        closed = stability_map(motion, parameters=parameters, grid=grid)
+    assert json.loads(closed.attrs["options"])["evaluator"] == "closed_form"
+    assert f"family of root {motion.root:+d} of eq. (15) over {parameters[0]} x " \
+           f"{parameters[1]} by the closed form" in caplog.text
+    shot = maps.multi_impact_map(motion, parameters, grid, evaluator="shooting")
+    assert json.loads(shot.attrs["options"])["evaluator"] == "shooting"
+    assert closed.attrs["impactcont_dataset"] == shot.attrs["impactcont_dataset"]
+    assert list(closed.data_vars) == list(shot.data_vars)
+    for key in ("N", "impacts", "pattern", "parameters", "symmetric", "seed"):
+        assert closed.attrs[key] == shot.attrs[key], key
+    found = closed["found"].values
+    np.testing.assert_array_equal(found, shot["found"].values)
+    assert found.sum() >= 9
+    assert np.all(closed["newton_iterations"].values[found] == 0)
+    assert np.all(shot["newton_iterations"].values[found] >= 0)
+    phase = np.angle(np.exp(1j * (closed["delta"].values - shot["delta"].values)))
+    np.testing.assert_allclose(phase[found], 0.0, rtol=0, atol=1e-9)
+    for key in ("impact_velocity_k", "flight_time_k", "state_k", "gap_min"):
+        np.testing.assert_allclose(closed[key].values[found], shot[key].values[found], rtol=0,
+                                   atol=1e-9, err_msg=key)
+    np.testing.assert_allclose(closed["spectral_radius"].values[found],
+                               shot["spectral_radius"].values[found], rtol=1e-7)
+    clear = found & (np.abs(closed["spectral_radius"].values - 1.0) > 1e-6)
+    np.testing.assert_array_equal(closed["stable"].values[clear], shot["stable"].values[clear])
+    for key in ("physical", "contact_checked"):
+        np.testing.assert_array_equal(closed[key].values, shot[key].values, err_msg=key)
+    for ds in (closed, shot):
+        assert np.all(np.isnan(ds["state_k"].values[~found]))
+
+
+def test_an_n1_family_map_says_why_the_closed_form_does_not_apply(paper):
+    """evaluator='closed_form' where the closed form cannot map the family is refused, naming
+    why; an unknown evaluator is refused, naming those allowed."""
+    motion = next(o for o in ic.periodic_orbits(paper, 1) if o.physical)
+    grid = {"omega": [1.0, 1.1], "b": [0.5]}
+    with pytest.raises(ic.ParameterError, match=r"evaluator='closed_form': the family cannot be "
+                                                r"mapped by the closed form here: checks=False"):
+        maps.multi_impact_map(motion, ("omega", "b"), grid, checks=False,
+                              evaluator="closed_form")
+    with pytest.raises(ic.ParameterError, match=r"out= is given"):
+        stability_map(motion, parameters=("omega", "b"), grid=grid, out="map.nc",
+                      evaluator="closed_form")
+    with pytest.raises(ic.ParameterError, match=r"the root [+-]1 of eq. \(15\) does not exist "
+                                                r"at the grid point nearest the start"):
+        maps.multi_impact_map(motion, ("omega", "b"), {"omega": [1.0], "b": [5.0]},
+                              evaluator="closed_form")
+    with pytest.raises(ic.ParameterError, match=r"evaluator must be one of \[None, "
+                                                r"'closed_form', 'shooting'\].*got 'newton'"):
+        maps.multi_impact_map(motion, ("omega", "b"), grid, evaluator="newton")

@@ -327,3 +327,35 @@ def test_continuation_into_the_elastic_undamped_case_is_refused(parameter, bound
 def test_continuation_with_restitution_below_one_is_not_refused():
     osc = _one_mass(2.8, 0.05).replace(R=0.7)
     assert ic.continuation(osc, 1, "R", (0.5, 0.9)).sizes["point"] > 1
+
+
+@pytest.mark.parametrize("damping", ["modal", "general"])
+def test_impact_states_are_the_states_of_periodic_orbits(damping):
+    """impact_states, the states after the impact of many N-1 motions at once (the family
+    map of an N-1 motion by the closed form), equals each motion's own state (eq. 13) on the
+    modal path (proportional damping) and on the first-order path (a general damping
+    matrix), for both roots at several frequencies, to rounding."""
+    from impactcont.orbit.periodic import impact_states
+
+    C = {"modal": None, "general": [[0.3, -0.1], [-0.1, 0.05]]}[damping]
+    damped = {"eta": 0.1} if C is None else {"C": C}
+    base = ic.ImpactOscillator(M=np.eye(2), K=[[2.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0], R=0.6,
+                               b=0.3, omega=1.0, **damped)
+    assert base.general == (damping == "general")
+    checked = 0
+    for omega in (0.8, 1.2, 2.5):
+        osc = base.replace(omega=omega)
+        for N in (1, 2):
+            orbits = periodic_orbits(osc, N)
+            if not orbits:
+                continue
+            X = impact_states(osc, N, np.array([o.delta for o in orbits]),
+                              np.array([o.impact_velocity for o in orbits]))
+            assert X.shape == (len(orbits), 4)
+            for x, o in zip(X, orbits, strict=True):
+                np.testing.assert_allclose(x, o.state, rtol=0, atol=1e-12)
+                checked += 1
+    assert checked >= 6
+    with pytest.raises(ParameterError, match=r"delta and sigma must be 1-D arrays of the same "
+                                             r"length; got shapes \(2,\) and \(1,\)"):
+        impact_states(base, 1, np.zeros(2), np.zeros(1))
