@@ -80,7 +80,7 @@ def test_one_sided_cells_over_a_flow_and_a_geometry_axis(paper):
     osc = paper.replace(omega=0.9, b=0.6)
     seed = next(o for o in ic.periodic_orbits(osc, 1) if o.physical and o.stable)
     grid = {"omega": [0.85, 0.9, 0.95], "R": [0.5, 0.6, 0.7]}
-    ds = multi_impact_map(seed, ("omega", "R"), grid=grid)
+    ds = multi_impact_map(seed, ("omega", "R"), grid=grid, evaluator="shooting")
     assert bool(ds["found"].all())
     for omega in grid["omega"]:
         for R in grid["R"]:
