@@ -96,7 +96,7 @@ from impactcont.vocabulary import LABELS, check_bounds, check_labels
 __all__ = ["as_multi_impact_orbit", "branch_problem", "branch_to_dataset",
            "check_continuation_arguments", "continuation", "continuation_from", "extend",
            "make_options", "multi_impact_continuation", "restart_problem", "run_branch",
-           "trace_branch"]
+           "trace_branch", "with_user_functions"]
 
 log = logging.getLogger(__name__)
 
@@ -532,12 +532,20 @@ def _dataset(problem: Any, runs: Sequence[_Run], options: Mapping[str, Any], *,
         ds.attrs["interrupted"] = 1
     if not functions:
         return ds
+    return with_user_functions(ds, functions, {
+        name: np.concatenate([run.values[name] for run in runs])
+        for name in functions.functions}, user_events)
+
+
+def with_user_functions(ds: xr.Dataset, functions: UserFunctions,
+                        values: Mapping[str, np.ndarray], found: Sequence[SpecialPoint]
+                        ) -> xr.Dataset:
+    """`ds` with the user's functions: each at every point (`values`) and the located zeros
+    of its events (`found`), by :func:`~impactcont.dataset.schema.add_user_functions` (a
+    branch of any motion, a curve of either evaluator)."""
     names = parameter_names(ds)
-    return add_user_functions(
-        ds, monitors={name: np.concatenate([run.values[name] for run in runs])
-                      for name in functions.functions},
-        events=list(functions.events),
-        event_points=[user_event_record(ev, names) for ev in user_events])
+    return add_user_functions(ds, monitors=values, events=list(functions.events),
+                              event_points=[user_event_record(ev, names) for ev in found])
 
 
 def _impact_dataset(problem: Any, orbits: Sequence[Any], specials: Sequence[SpecialPoint],

@@ -37,6 +37,7 @@ from impactcont.analysis.branch import (
     branch_to_dataset,
     continuation,
     user_events_until_interrupted,
+    with_user_functions,
 )
 from impactcont.analysis.switching import special_orbit
 from impactcont.core import (
@@ -58,11 +59,9 @@ from impactcont.dataset.curves import (
     validate_curve_dataset,
 )
 from impactcont.dataset.multi import impacts_of, pattern_of
-from impactcont.dataset.records import reserved_names, user_event_record
+from impactcont.dataset.records import reserved_names
 from impactcont.dataset.schema import (
-    add_user_functions,
     oscillator_from_dataset,
-    parameter_names,
     special_variable,
     validate_branch_dataset,
 )
@@ -74,7 +73,12 @@ from impactcont.detection.special_points import (
     locate_user_events,
     user_values,
 )
-from impactcont.errors import LowImpactVelocityWarning, NoPeriodicMotionError, ParameterError
+from impactcont.errors import (
+    ImpactcontError,
+    LowImpactVelocityWarning,
+    NoPeriodicMotionError,
+    ParameterError,
+)
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns
@@ -261,17 +265,24 @@ class _CurveWatch:
     Neimark-Sacker curve of the closed form), recorded in ``ends`` as ``(label, x,
     precision, status)``; the located end replaces the last point. ``p1`` is an unknown,
     so the core does not see its bounds: the point on the bound (Newton on the
-    hyperplane ``p1 = bound``) ends the curve.
+    hyperplane ``p1 = bound``) ends the curve. With `orbits` (a curve followed by
+    shooting), the motion at every point it sees is kept there by :func:`_orbit_key`: its
+    branch problem and shot are at hand (the core has just taken the tangent there), so
+    the motions of the dataset cost no new problem and no new shot after the run.
     """
 
     def __init__(self, problem: CurveProblem | ShootingCurve, p1_bounds: tuple[float, float],
-                 ends: list[tuple[str, np.ndarray, float, str]]) -> None:
+                 ends: list[tuple[str, np.ndarray, float, str]],
+                 orbits: dict[tuple[bytes, float], Any] | None = None) -> None:
         self.problem = problem
         self.p1_bounds = p1_bounds
         self.ends = ends
+        self.orbits = orbits
 
     def __call__(self, previous: ContinuationPoint | None, current: ContinuationPoint
                  ) -> Stop | None:
+        if self.orbits is not None:
+            _keep_orbit(self.problem, current, self.orbits)
         if previous is None:
             return None
         problem, xa, x = self.problem, previous.state, current.state
@@ -322,6 +333,25 @@ class _CurveWatch:
                         f"point on it not found ({exc})", keep=False)
         return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} = {bound:.10g}",
                     point=_on_curve(current, xe))
+
+
+def _orbit_key(x: np.ndarray, lam: float) -> tuple[bytes, float]:
+    """Where :class:`_CurveWatch` keeps the motion at the curve point ``(x, lam)``."""
+    return np.asarray(x, dtype=float).tobytes(), float(lam)
+
+
+def _keep_orbit(problem: ShootingCurve, point: ContinuationPoint,
+                orbits: dict[tuple[bytes, float], Any]) -> None:
+    """The motion at an accepted curve point, into `orbits` (:class:`_CurveWatch`).
+
+    A motion that cannot be evaluated is left out: it is asked for again after the run,
+    where its error is raised if the point is kept.
+    """
+    try:
+        orbit = problem.orbit(point.u, point.lam)
+    except (ImpactcontError, ArithmeticError, np.linalg.LinAlgError):
+        return
+    orbits[_orbit_key(point.u, point.lam)] = orbit
 
 
 def _on_curve(point: ContinuationPoint, x: np.ndarray) -> ContinuationPoint:
@@ -553,14 +583,17 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
     opts = driver_options(options, box[parameter], defaults=_SHOOTING_DEFAULTS, **single)
     what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
     with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
+        kept: dict[tuple[bytes, float], MultiImpactOrbit] = {}
         result = follow(problem, x0, lam0, opts, rep.point,
-                        stop=lambda direction: _CurveWatch(problem, box[p1], []))
+                        stop=lambda direction: _CurveWatch(problem, box[p1], [], kept))
         if len(result) == 0 and result.interrupted:
             raise NothingComputed(f"{what} interrupted before its first point")
         if len(result) == 0:
             raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
-        orbits = [problem.orbit(u, float(lam)) for u, lam in zip(result.u, result.lam,
-                                                                 strict=True)]
+        orbits = []
+        for u, lam in zip(result.u, result.lam, strict=True):
+            orbit = kept.get(_orbit_key(u, lam))
+            orbits.append(problem.orbit(u, float(lam)) if orbit is None else orbit)
         samples = [BranchSample(u=x, lam=float(lam), tangent=t, orbit=o)
                    for x, lam, t, o in zip(result.u, result.lam, result.tangent, orbits,
                                            strict=True)]
@@ -835,9 +868,7 @@ def _with_user_functions(ds: xr.Dataset, problem: CurveProblem, result: Any,
         accept=lambda k: problem.accept(result.u[k], result.lam[k]), parameter=p2), [],
         "location", "interrupted by the user (KeyboardInterrupt) while locating the user "
         "events of the curve: they are dropped (the user's functions at the points are kept)")
-    names = parameter_names(ds)
-    return add_user_functions(ds, monitors=values, events=list(functions.events),
-                              event_points=[user_event_record(ev, names) for ev in found])
+    return with_user_functions(ds, functions, values, found)
 
 
 def check_crossing_line(parameters: Sequence[str], parameter: object, value: object) -> None:

@@ -567,18 +567,17 @@ def check_robust_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tup
                            *, nominal: Mapping[str, float] | None = None,
                            root: int | None = None, samples: int = 33
                            ) -> tuple[int, int, dict[str, tuple[float, float]], dict[str, float]]:
-    """The checks :func:`robust_stability` makes of its arguments before it computes.
+    """Validate the arguments of :func:`robust_stability` (same names) before any work.
 
-    :func:`robust_stability` calls it first; a scene's validation (``impactcont run
-    --check``) calls it on an entry's arguments, so both refuse the same input with the
-    same message. The arguments are those of :func:`robust_stability`.
+    One check for two callers, :func:`robust_stability` and ``impactcont run --check`` on a
+    scene's entry: an input is refused with the same message by both.
 
     Parameters
     ----------
     osc : ImpactOscillator
         The system.
     N : int
-        One impact every N forcing periods.
+        Forcing periods of the N-1 motion.
     vary : dict of str to (float, float)
         The box ``Q``.
     nominal : dict of str to float, optional

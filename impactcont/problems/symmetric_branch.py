@@ -48,6 +48,13 @@ __all__ = ["SymmetricBranchProblem"]
 #: parameter (:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`).
 SYMMETRY_BREAKING = ("b", "R", "b_low", "R_low")
 
+
+def _of_full(name: str, doc: str) -> property:
+    """A read-only attribute of :class:`SymmetricBranchProblem`: that of its full problem."""
+    return property(lambda self: getattr(self.full, name),
+                    doc=f"{doc} That of the full problem (:attr:`SymmetricBranchProblem.full`).")
+
+
 class SymmetricBranchProblem:
     """Symmetric N-p motions as ``F(v, lam) = 0`` for the continuation core.
 
@@ -101,32 +108,16 @@ class SymmetricBranchProblem:
         self.halves = HalfUnknowns(osc.n, self.full.p, self.full.N)
         self._E = self.halves.embedding
         self.size = self.halves.size
+        self._S = _reflection(osc.n)[:, None]  # S of the half-map, in the section coordinates
+        self._last_full: tuple[tuple[bytes, float], np.ndarray] | None = None
 
     # -- what the full problem says -------------------------------------------------------------
-    @property
-    def osc(self) -> ImpactOscillator:
-        return self.full.osc
-
-    @property
-    def N(self) -> int:
-        return self.full.N
-
-    @property
-    def p(self) -> int:
-        return self.full.p
-
-    @property
-    def pattern(self) -> str:
-        return self.full.pattern
-
-    @property
-    def parameter(self) -> str:
-        return self.full.parameter
-
-    @property
-    def param(self) -> ModelParameter:
-        """The continued parameter as an object (that of the full problem)."""
-        return self.full.param
+    osc = _of_full("osc", "The oscillator.")
+    N = _of_full("N", "Forcing periods of the full motion.")
+    p = _of_full("p", "Impacts of the full motion.")
+    pattern = _of_full("pattern", "The stop of each impact of the full motion.")
+    parameter = _of_full("parameter", "The continued parameter's name.")
+    param = _of_full("param", "The continued parameter as an object.")
 
     def parameter_limits(self) -> tuple[float, float]:
         """As :meth:`MultiImpactBranchProblem.parameter_limits`."""
@@ -150,11 +141,20 @@ class SymmetricBranchProblem:
 
     # -- the map between the unknowns -------------------------------------------------------------
     def full_unknowns(self, v: np.ndarray, lam: float) -> np.ndarray:
-        """The full shooting unknowns of the symmetric motion `v` at ``lam``."""
+        """The full shooting unknowns of the symmetric motion `v` at ``lam``.
+
+        Notes
+        -----
+        The last one is kept (a copy is returned): the residual, the Jacobian,
+        ``dF/dlam`` and the test functions of one iterate ask for the same ``u``.
+        """
         v = np.asarray(v, dtype=float)
         if v.shape != (self.size,):
             raise ParameterError(f"v must have shape ({self.size},) = (2 n p/2,); got {v.shape}")
-        return self.halves.full(v, self.oscillator_at(lam).omega)
+        key = (v.tobytes(), float(lam))
+        if self._last_full is None or self._last_full[0] != key:
+            self._last_full = key, self.halves.full(v, self.oscillator_at(lam).omega)
+        return self._last_full[1].copy()
 
     def half_unknowns(self, u: np.ndarray) -> np.ndarray:
         """The half unknowns of the full unknowns `u` of a symmetric motion."""
@@ -186,6 +186,7 @@ class SymmetricBranchProblem:
         symmetric, as the parameters of a curve of symmetric motions keep it)."""
         new = copy.copy(self)
         new.full = self.full.moved(osc)
+        new._last_full = None
         return new
 
     def derivative(self, v: np.ndarray, lam: float, param: ModelParameter) -> np.ndarray:
@@ -218,7 +219,7 @@ class SymmetricBranchProblem:
         """``H = S G_{h-1} .. G_0`` of the symmetric motion `v` at ``lam``
         (:func:`~impactcont.orbit.symmetry.half_map`, from one compiled call on the shot)."""
         A = self.full.jacobian_product(self.full_unknowns(v, lam), lam, self.p // 2)
-        return _reflection(self.osc.n)[:, None] * A
+        return self._S * A
 
     def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
                   tol: float, max_iter: int, *, hyperplane: bool = False

@@ -409,3 +409,46 @@ def test_a_curve_by_shooting_ends_on_the_bound_of_its_first_parameter(paper, bra
             .max() < 1e-12, ends
     np.testing.assert_allclose(np.sort(shot["b"].values[[0, -1]]),
                                np.sort(closed["b"].values[[0, -1]]), rtol=0, atol=1e-9)
+
+
+def test_a_shooting_curve_keeps_the_motion_of_each_point_from_its_run(branches, monkeypatch):
+    """Issue 29 (the cost of a curve point): the motion at each point of a curve followed by
+    shooting is evaluated when the core accepts the point, from the branch problem and the
+    shot its step left at hand; no branch problem is built again after the run (before:
+    one per point, with its flow, stop geometry and shot). The dataset is the one built
+    from the motions evaluated afresh after the run, to the bit (the same operations)."""
+    import impactcont.analysis.curves as curves_module
+    from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+
+    branch = branches[0.0]
+    start = ic.analysis.switching.special_orbit(branch, "PD", 0)
+    omega = float(start.oscillator.omega)
+    box = {"omega": (omega - 0.5, omega + 0.5), "b": (-0.03, 0.03)}
+    built_after_run = []
+    follow, moved = curves_module.follow, MultiImpactBranchProblem.moved
+
+    def follow_then_mark(*args, **kwargs):
+        result = follow(*args, **kwargs)
+        built_after_run.append(0)
+        return result
+
+    def counted(self, osc):
+        if built_after_run:
+            built_after_run[-1] += 1
+        return moved(self, osc)
+
+    monkeypatch.setattr(curves_module, "follow", follow_then_mark)
+    monkeypatch.setattr(MultiImpactBranchProblem, "moved", counted)
+
+    def shot() -> xr.Dataset:
+        ds = curve(None, None, "PD", start=start, parameters=("omega", "b"), bounds=box,
+                   detect_codim2_points=False)
+        ds.attrs.pop("history")
+        return ds
+
+    kept = shot()
+    assert kept.sizes["point"] >= 5 and built_after_run == [0]
+    monkeypatch.setattr(curves_module, "_keep_orbit", lambda *args: None)
+    afresh = shot()
+    assert built_after_run[-1] > 0  # the count sees the problems built after a run
+    xr.testing.assert_identical(kept, afresh)
