@@ -45,7 +45,7 @@ import logging
 import math
 import os
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -60,10 +60,11 @@ from impactcont.analysis.map_runner import (
     _require_dask,
     abandon,
     compiled_interrupts,
-    keep_interrupted,
+    fill_blocks,
     mark_computed,
     positive_int,
     positive_number,
+    written_blocks,
 )
 from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.io import open_lazy, save_blocks
@@ -550,8 +551,7 @@ def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParam
         try:
             if in_memory:
                 runner.limit = max(1, int((memory_limit - npts * point_bytes) // task_bytes))
-                values, computed = _family_in_memory(runner, tasks, shape, p, 2 * osc.n,
-                                                     stats)
+                ds, computed = _family_in_memory(runner, tasks, shape, admits, dataset, stats)
             else:
                 _check_disk_floor(memory_limit, runner.in_flight)
                 runner.limit = max(1, int((memory_limit - _DISK_FIXED_BYTES) // task_bytes))
@@ -589,9 +589,7 @@ def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParam
                         "'computed')", out)
         # opened once the workers are gone (a forked worker holds the file's HDF5 lock)
         return open_temporary_map(path) if temporary else open_lazy(path)
-    if not admits:
-        del values["asymmetry"]
-    ds = multi_impact_map_dataset(values=values, options=options(), **dataset)
+    ds.attrs["options"] = _options_json(options())
     if computed is not None:
         mark_computed(ds, computed, names)
     return ds
@@ -625,29 +623,38 @@ def _contact_checked(values: dict[str, np.ndarray]) -> None:
 
 
 def _family_in_memory(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]],
-                      shape: tuple[int, int], p: int, m: int, stats: _Stats
-                      ) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
-    """The map's outputs in memory, each band copied in as it finishes; and the rows
-    computed if a first Ctrl-C interrupted it (else None)."""
-    npts = shape[0] * shape[1]
-    out = _empty_outputs(npts, p, m)
-    _contact_checked(out)
-    computed = np.zeros(shape[0], dtype=bool)
-    interrupted = False
-    try:
-        for (band, _, _), (values, counts, nflows) in runner.results(tasks):
-            stats.add(values, counts, nflows)
-            where = slice(band.start * shape[1], band.stop * shape[1])
-            for key, a in values.items():
-                out[key][where] = a
-            computed[band] = True
-    except KeyboardInterrupt:
-        if not keep_interrupted(runner, npts):
-            raise
-        interrupted = True
+                      shape: tuple[int, int], admits: bool, dataset: dict[str, Any],
+                      stats: _Stats) -> tuple[xr.Dataset, np.ndarray | None]:
+    """The map in memory: its dataset built once with every point not found, each band
+    copied in as it finishes (:func:`~impactcont.analysis.map_runner.fill_blocks`, as every
+    map); and the points computed if a first Ctrl-C interrupted it (else None). Its
+    attribute ``options`` is set by the caller, with the sweeps' counts."""
+    osc, p = dataset["oscillator"], len(dataset["pattern"])
+    values = _empty_outputs(shape, p, 2 * osc.n)
+    _contact_checked(values)
+    if not admits:
+        del values["asymmetry"]
+    ds = multi_impact_map_dataset(values=values, options={}, **dataset)
+    computed = np.zeros(shape, dtype=bool)
+    interrupted = fill_blocks(runner, ds, _band_blocks(runner, tasks, shape, stats, values,
+                                                       dataset["parameters"]),
+                              computed, dataset["parameters"])
     computed[_rows_without_task(tasks, shape[0])] = True
-    values = {key: a.reshape(shape + a.shape[1:]) for key, a in out.items()}
-    return values, (np.broadcast_to(computed[:, None], shape).copy() if interrupted else None)
+    return ds, (computed if interrupted else None)
+
+
+def _band_blocks(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]],
+                 shape: tuple[int, int], stats: _Stats, keys: Any, names: tuple[str, str]
+                 ) -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+    """Each band of the map as it finishes, counted in `stats`: its region (whole rows of
+    the first parameter) and the values of the variables `keys`, shaped on the grid."""
+    n1 = shape[1]
+    for (band, _, _), (values, counts, nflows) in runner.results(tasks):
+        stats.add(values, counts, nflows)
+        count = band.stop - band.start
+        yield ({names[0]: band, names[1]: slice(0, n1)},
+               {key: values[key].reshape((count, n1, *values[key].shape[1:]))
+                for key in keys if key in values})
 
 
 def _rows_without_task(tasks: list[tuple[slice, int, np.ndarray]], rows: int) -> list[int]:
@@ -683,35 +690,25 @@ def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]
     encoding = {key: {"zlib": True, "complevel": 1,
                       "chunksizes": (min(rows, n0), n1, *ds[key].shape[2:])}
                 for key in ds.data_vars}
-    computed = np.zeros(n0, dtype=bool)
+    computed = np.zeros(shape, dtype=bool)
     interrupted: list[bool] = []
-
-    def block(band: slice, values: dict[str, np.ndarray]
-              ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-        count = band.stop - band.start
-        return ({names[0]: band, names[1]: slice(0, n1)},
-                {key: values[key].reshape((count, n1, *values[key].shape[1:]))
-                 for key in empty if key in values})
 
     def not_found(band: slice) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         # the floating-point variables are left unwritten: they read as their fill, NaN
-        region, values = block(band, {key: np.repeat(a, (band.stop - band.start) * n1, axis=0)
-                                      for key, a in empty.items() if a.dtype.kind not in "fc"})
-        return region, values
+        count = band.stop - band.start
+        return ({names[0]: band, names[1]: slice(0, n1)},
+                {key: np.repeat(a, count * n1, axis=0).reshape((count, n1, *a.shape[1:]))
+                 for key, a in empty.items() if a.dtype.kind not in "fc"})
 
-    def blocks() -> Any:
-        try:
-            for (band, _, _), (values, counts, nflows) in runner.results(tasks):
-                stats.add(values, counts, nflows)
-                yield block(band, values)
-                computed[band] = True
-        except KeyboardInterrupt:
-            if not keep_interrupted(runner, n0 * n1):
-                raise
-            interrupted.append(True)
-            for band, _, _ in tasks:
-                if not computed[band].any():
-                    yield not_found(band)
+    def not_computed() -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+        for band, _, _ in tasks:  # the bands not finished
+            if not computed[band].any():
+                yield not_found(band)
+
+    def blocks() -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+        yield from written_blocks(runner, _band_blocks(runner, tasks, shape, stats, empty,
+                                                       names),
+                                  computed, names, not_computed, interrupted)
         for r in _rows_without_task(tasks, n0):
             yield not_found(slice(r, r + 1))
             computed[r] = True
@@ -719,11 +716,11 @@ def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]
     def finish() -> xr.Dataset:
         marked = xr.Dataset(attrs={"options": _options_json(options())})
         if interrupted:
-            mark_computed(marked, np.broadcast_to(computed[:, None], shape).copy(), names)
+            mark_computed(marked, computed.copy(), names)
         return marked
 
     path = save_blocks(ds, out, blocks(), encoding=encoding, finish=finish)
-    return path, (np.broadcast_to(computed[:, None], shape).copy() if interrupted else None)
+    return path, (computed.copy() if interrupted else None)
 
 
 def _point_bytes(n: int, p: int, half: bool) -> int:
@@ -733,16 +730,18 @@ def _point_bytes(n: int, p: int, half: bool) -> int:
     return 8 * (6 + 2 * p + 2 * p * n + unknowns) + 8
 
 
-def _empty_outputs(npts: int, p: int, m: int) -> dict[str, np.ndarray]:
-    """The outputs of a map of `npts` points as not found (NaN, False, -1)."""
-    return {"found": np.zeros(npts, bool), "newton_iterations": np.full(npts, -1, np.int32),
-            "delta": np.full(npts, np.nan), "stable": np.zeros(npts, bool),
-            "physical": np.zeros(npts, bool), "spectral_radius": np.full(npts, np.nan),
-            "critical_multiplier": np.full(npts, np.nan, complex),
-            "gap_min": np.full(npts, np.nan),
-            "impact_velocity_k": np.full((npts, p), np.nan),
-            "flight_time_k": np.full((npts, p), np.nan),
-            "state_k": np.full((npts, p, m), np.nan), "asymmetry": np.full(npts, np.nan)}
+def _empty_outputs(npts: int | tuple[int, ...], p: int, m: int) -> dict[str, np.ndarray]:
+    """The outputs of a map of `npts` points (a count, or the grid's shape) as not found
+    (NaN, False, -1)."""
+    n = (npts,) if isinstance(npts, (int, np.integer)) else tuple(npts)
+    return {"found": np.zeros(n, bool), "newton_iterations": np.full(n, -1, np.int32),
+            "delta": np.full(n, np.nan), "stable": np.zeros(n, bool),
+            "physical": np.zeros(n, bool), "spectral_radius": np.full(n, np.nan),
+            "critical_multiplier": np.full(n, np.nan, complex),
+            "gap_min": np.full(n, np.nan),
+            "impact_velocity_k": np.full((*n, p), np.nan),
+            "flight_time_k": np.full((*n, p), np.nan),
+            "state_k": np.full((*n, p, m), np.nan), "asymmetry": np.full(n, np.nan)}
 
 
 def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:

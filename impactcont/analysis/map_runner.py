@@ -45,7 +45,7 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -63,10 +63,12 @@ __all__ = [
     "check_executor",
     "check_run_options",
     "compiled_interrupts",
+    "fill_blocks",
     "keep_interrupted",
     "mark_computed",
     "positive_int",
     "positive_number",
+    "written_blocks",
 ]
 
 log = logging.getLogger(__name__)
@@ -562,6 +564,79 @@ def keep_interrupted(runner: MapRunner, total: int) -> bool:
     return take_interrupt("map", "%d of %d points computed (%.0f %%); the others are NaN, "
                           "not found, False in the variable 'computed'", done, total,
                           100.0 * done / total if total else 0.0)
+
+
+def fill_blocks(runner: MapRunner, ds: Any, blocks: Iterable[tuple[dict[str, Any], dict[str, Any]]],
+                computed: np.ndarray, dims: Sequence[str]) -> bool:
+    """Copy each block of a map into the arrays of `ds` as it finishes: every map in memory.
+
+    The map's dataset is built once (:mod:`impactcont.dataset.maps`) and its arrays filled
+    in place, with no list of results and no assembled copies.
+
+    Parameters
+    ----------
+    runner : MapRunner
+        The map's runner (for a Ctrl-C: :func:`keep_interrupted`).
+    ds : xarray.Dataset
+        The map; a variable whose array cannot be written (a placeholder of no memory) gets
+        a new one, which the blocks fill.
+    blocks : iterable
+        ``(region, values)`` per finished task: ``region`` maps each of `dims` to an index
+        or a slice, ``values`` a variable of `ds` to its block (the region of its dims).
+    computed : ndarray of bool
+        On `dims`: each block's region is set True.
+    dims : sequence of str
+        The dims of `computed`, those the regions index.
+
+    Returns
+    -------
+    bool
+        Whether a first Ctrl-C interrupted the map (what was computed is kept); a second
+        re-raises KeyboardInterrupt.
+    """
+    arrays = {key: _writable(ds.variables[key]) for key in ds.data_vars}
+    try:
+        for region, values in blocks:
+            for key, block in values.items():
+                arrays[key][tuple(region[d] for d in ds[key].dims if d in region)] = block
+            computed[tuple(region[d] for d in dims)] = True
+    except KeyboardInterrupt:
+        if not keep_interrupted(runner, computed.size):
+            raise
+        return True
+    return False
+
+
+def _writable(var: Any) -> np.ndarray:
+    """The numpy array of `var`, which the map fills in place (a new one if it cannot be)."""
+    data = var.data
+    if not (isinstance(data, np.ndarray) and data.flags.writeable and data.flags.owndata):
+        data = np.empty(var.shape, var.dtype)
+        var.data = data
+    return data
+
+
+def written_blocks(runner: MapRunner, blocks: Iterable[tuple[dict[str, Any], dict[str, Any]]],
+                   computed: np.ndarray, dims: Sequence[str],
+                   not_computed: Callable[[], Iterable[tuple[dict[str, Any], dict[str, Any]]]],
+                   interrupted: list[bool]
+                   ) -> Iterator[tuple[dict[str, Any], dict[str, Any]]]:
+    """The blocks of a map written to a file (:func:`~impactcont.dataset.io.save_blocks`) as
+    they finish, each marked in `computed` (on `dims`) once written: every map on disk.
+
+    After a first Ctrl-C (:func:`keep_interrupted`) `interrupted` gets True and the blocks
+    of `not_computed()` follow (the tasks not finished, written as not computed), so that
+    the file is whole; a second re-raises KeyboardInterrupt.
+    """
+    try:
+        for region, values in blocks:
+            yield region, values
+            computed[tuple(region[d] for d in dims)] = True
+    except KeyboardInterrupt:
+        if not keep_interrupted(runner, computed.size):
+            raise
+        interrupted.append(True)
+        yield from not_computed()
 
 
 def positive_int(name: str, value: Any, *, optional: bool = False) -> int | None:

@@ -80,9 +80,10 @@ from impactcont.analysis.map_runner import (
     abandon,
     check_run_options,
     compiled_interrupts,
-    keep_interrupted,
+    fill_blocks,
     mark_computed,
     positive_int,
+    written_blocks,
 )
 from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.dataset.map_storage import (
@@ -964,23 +965,15 @@ def _map_in_memory(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: n
     """
     fields = _fields(options["spectral_radius"])
     layout = _layout((len(Ns), w.size, bb.size), fields, names)
-    # placeholders of no memory: map_dataset makes the arrays, which the blocks fill
+    # placeholders of no memory: fill_blocks makes the arrays, which the blocks fill
     placeholders = {k: np.broadcast_to(np.zeros((), dtype), shape)
                     for k, (shape, dtype) in layout.items()}
     ds = map_dataset(oscillator=osc, N=Ns, omega=w, b=bb, values=placeholders,
                      options=options, parameters=names)
-    arrays = {k: _writable(ds.variables[k]) for k in layout}
     computed = np.zeros((len(Ns), w.size, bb.size), dtype=bool)
-    try:
-        for region, values in _blocks(runner, tasks, fields, names):
-            for key, block in values.items():
-                arrays[key][tuple(region[d] for d in ds[key].dims if d in region)] = block
-            computed[region["N"], region[names[0]], region[names[1]]] = True
-    except KeyboardInterrupt:
-        if not keep_interrupted(runner, computed.size):
-            raise
-        return ds, computed
-    return ds, None
+    interrupted = fill_blocks(runner, ds, _blocks(runner, tasks, fields, names), computed,
+                              ("N", *names))
+    return ds, (computed if interrupted else None)
 
 
 def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, str]) -> None:
@@ -994,15 +987,6 @@ def _mark_interrupted(ds: xr.Dataset, computed: np.ndarray, names: tuple[str, st
                                     var.shape)
         var.data[where] = np.nan if var.dtype.kind in "fc" else 0
     mark_computed(ds, computed, ("N", *names))
-
-
-def _writable(var: xr.Variable) -> np.ndarray:
-    """The numpy array of `var`, which the map fills in place (a new one if it cannot be)."""
-    data = var.data
-    if not (isinstance(data, np.ndarray) and data.flags.writeable and data.flags.owndata):
-        data = np.empty(var.shape, var.dtype)
-        var.data = data
-    return data
 
 
 def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.ndarray,
@@ -1036,18 +1020,13 @@ def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.
     computed = np.zeros((len(Ns), w.size, bb.size), dtype=bool)
     interrupted: list[bool] = []
 
-    def blocks() -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
-        try:
-            for region, values in _blocks(runner, tasks, fields, names):
-                yield region, values
-                computed[region["N"], region[names[0]], region[names[1]]] = True
-        except KeyboardInterrupt:
-            if not keep_interrupted(runner, computed.size):
-                raise
-            interrupted.append(True)
-            for k, osl, bsl in tasks:  # the tasks not finished: not computed
-                if not computed[k, osl, bsl].any():
-                    yield _not_computed((k, osl, bsl), layout, names)
+    def not_computed() -> Iterator[tuple[dict[str, Any], dict[str, np.ndarray]]]:
+        for k, osl, bsl in tasks:  # the tasks not finished
+            if not computed[k, osl, bsl].any():
+                yield _not_computed((k, osl, bsl), layout, names)
+
+    blocks = written_blocks(runner, _blocks(runner, tasks, fields, names), computed,
+                            ("N", *names), not_computed, interrupted)
 
     def finish() -> xr.Dataset | None:
         if not interrupted:
@@ -1056,7 +1035,7 @@ def _map_to_file(runner: MapRunner, osc: ImpactOscillator, Ns: list[int], w: np.
         mark_computed(marked, computed, ("N", *names))
         return marked
 
-    path = save_blocks(ds, out, blocks(), encoding=encoding, finish=finish)
+    path = save_blocks(ds, out, blocks, encoding=encoding, finish=finish)
     return path, (computed if interrupted else None)
 
 

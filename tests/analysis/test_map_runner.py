@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 
+import numpy as np
 import pytest
 
 from impactcont.analysis import map_runner
@@ -102,3 +103,69 @@ def test_the_least_memory_of_a_map_on_disk():
     # issue 28: a limit below about 35 MB was exceeded without a word
     floor = map_runner._disk_floor(1)
     assert 3.2e7 < floor < 3.5e7 and map_runner._disk_floor(5) < 3.5e7
+
+
+def _square_blocks(runner, tasks):
+    """Each task's result as a block of a map on (x, y): row x of ``square`` and one point
+    of ``flag``."""
+    for task, value in runner.results(tasks):
+        yield {"x": slice(task, task + 1)}, {"square": np.full((1, 3), float(value)),
+                                             "flag": np.array([True])}
+
+
+def test_fill_blocks_fills_every_map_in_memory_and_keeps_an_interrupted_one():
+    """fill_blocks, the in-memory assembly of every map: each block copied into the
+    dataset's arrays (a placeholder of no memory replaced), its region marked computed; a
+    first Ctrl-C keeps the blocks finished (True), a second re-raises."""
+    import xarray as xr
+
+    from impactcont.analysis.map_runner import fill_blocks
+
+    def empty():
+        return xr.Dataset({"square": (("x", "y"), np.broadcast_to(np.zeros(()), (6, 3))),
+                           "flag": (("x",), np.zeros(6, bool))})
+
+    with interruptible("test"), reporter(False, "test", total=21) as rep:
+        ds, computed = empty(), np.zeros(6, bool)
+        runner = MapRunner(_Squares(), None, None, rep)
+        assert not fill_blocks(runner, ds, _square_blocks(runner, range(6)), computed, ("x",))
+        np.testing.assert_array_equal(ds["square"].values,
+                                      np.repeat(np.arange(6.0)[:, None] ** 2, 3, axis=1))
+        assert ds["flag"].values.all() and computed.all()
+        ds, computed = empty(), np.zeros(6, bool)
+        runner = MapRunner(_Squares(lambda x: _interrupting(3, x)), None, None, rep)
+        assert fill_blocks(runner, ds, _square_blocks(runner, range(6)), computed, ("x",))
+        np.testing.assert_array_equal(computed, [True, True, True, False, False, False])
+        np.testing.assert_array_equal(ds["flag"].values, computed)
+        runner.aborted = True  # a second Ctrl-C
+        with pytest.raises(KeyboardInterrupt):
+            fill_blocks(runner, empty(), _square_blocks(runner, range(6)), np.zeros(6, bool),
+                        ("x",))
+
+
+def test_written_blocks_end_an_interrupted_map_with_its_blocks_not_computed():
+    """written_blocks, the blocks of every map written to a file: each marked computed once
+    handed on; after a first Ctrl-C the blocks of what was not computed follow (the file is
+    whole) and the interruption is recorded; a second re-raises."""
+    from impactcont.analysis.map_runner import written_blocks
+
+    def rest(computed):
+        def not_computed():
+            for k in np.flatnonzero(~computed):
+                yield {"x": slice(k, k + 1)}, {"flag": np.array([False])}
+        return not_computed
+
+    with interruptible("test"), reporter(False, "test", total=21) as rep:
+        runner = MapRunner(_Squares(lambda x: _interrupting(4, x)), None, None, rep)
+        computed, interrupted = np.zeros(6, bool), []
+        got = list(written_blocks(runner, _square_blocks(runner, range(6)), computed, ("x",),
+                                  rest(computed), interrupted))
+        assert interrupted == [True]
+        assert [region["x"].start for region, _ in got] == [0, 1, 2, 3, 4, 5]
+        assert [bool(values["flag"][0]) for _, values in got] == [True] * 4 + [False] * 2
+        np.testing.assert_array_equal(computed, [True] * 4 + [False] * 2)
+        runner = MapRunner(_Squares(lambda x: _interrupting(1, x)), None, None, rep)
+        runner.aborted = True
+        with pytest.raises(KeyboardInterrupt):
+            list(written_blocks(runner, _square_blocks(runner, range(6)), np.zeros(6, bool),
+                                ("x",), rest(np.zeros(6, bool)), []))

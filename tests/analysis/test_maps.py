@@ -433,8 +433,11 @@ def test_a_second_ctrl_c_abandons_a_map_written_to_a_file(paper, monkeypatch, tm
     _interrupted_after.calls = 0
     monkeypatch.setattr(maps, "_map_task",
                         functools.partial(_interrupted_after, 2, maps._map_task))
-    # as after a second Ctrl-C (runner.aborted): the map is not kept
-    monkeypatch.setattr(maps, "keep_interrupted", lambda runner, total: False)
+    # as after a second Ctrl-C (runner.aborted): the map is not kept (the blocks of every map
+    # written to a file come through map_runner.written_blocks)
+    from impactcont.analysis import map_runner
+
+    monkeypatch.setattr(map_runner, "keep_interrupted", lambda runner, total: False)
     with pytest.raises(KeyboardInterrupt):
         stability_map(paper, [1, 2], OMEGA, GAP, omega_block=5, out=tmp_path / "map.nc")
     assert not list(tmp_path.iterdir())  # nothing kept, no temporary left
