@@ -43,10 +43,10 @@ import numpy as np
 __all__ = ["BranchLinearization", "CheckedFlights", "ContactStops", "CorrectorSettings",
            "CorrectorStep", "Embedding", "FirstOrderArrays", "FirstOrderFlight", "FlightArrays",
            "FlightFlow", "FlowTables", "ForcedAmplitudes", "Forcing", "ForcingDerivatives",
-           "GeometryTables", "ImpactSequence", "ModalArrays", "ModalFlight", "MotionChecks",
-           "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights", "StopSeries", "SweepGrid",
-           "SweepMotion", "SweepOutputs", "SweepSettings", "SweepStats", "modal_arrays",
-           "stack_flows"]
+           "GeometryTables", "HeldSegments", "ImpactSequence", "ModalArrays", "ModalFlight",
+           "MotionChecks", "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights",
+           "StickyFlights", "StopSeries", "SweepGrid", "SweepMotion", "SweepOutputs",
+           "SweepSettings", "SweepStats", "modal_arrays", "stack_flows"]
 
 
 class ModalArrays(NamedTuple):
@@ -354,6 +354,72 @@ class ImpactSequence(NamedTuple):
     """Stop position ``c_k`` of each impact, shape (p,)."""
     matrices: np.ndarray
     """Impact matrix ``D_k`` (eq. 4) of each impact, shape (p, 2n, 2n)."""
+
+
+class HeldSegments(NamedTuple):
+    """The sticking phases of a motion (:mod:`impactcont.orbit.held_flow`), one row per
+    impact k (zeros where no stick follows it); ``r = 2n - 2`` the held system's states.
+
+    The held state is ``X = X_c + L Y`` with ``Y`` the first-order flow of the held system
+    of n - 1 masses (``lam, V, Vi, xs, xd`` and its forcing ``Z`` as
+    :class:`FirstOrderFlight` and :class:`Forcing` name them) from ``Y(0) = L^+ (X_k -
+    X_c)``; the pressing force is ``p = grad . X + Re(force e^{i theta}) + level``.
+    """
+
+    sticks: np.ndarray
+    """A sticking phase follows impact k (bool, (p,))."""
+    lifts: np.ndarray
+    """``L = diag(P, P)``, (p, 2n, r)."""
+    inverses: np.ndarray
+    """``L^+``, the M-weighted left inverse, (p, r, 2n)."""
+    offsets: np.ndarray
+    """``X_c = [x_c; 0]``, (p, 2n)."""
+    lam: np.ndarray
+    """The held system's first-order eigenvalues, (p, r) complex."""
+    V: np.ndarray
+    """Its eigenvectors, (p, r, r) complex."""
+    Vi: np.ndarray
+    """``V^-1``, (p, r, r) complex."""
+    xs: np.ndarray
+    """The constant force's offset ``X_s`` of the held system, (p, r)."""
+    xd: np.ndarray
+    """Its drift ``d`` per unit time, (p, r)."""
+    Z: np.ndarray
+    """The held system's complex steady amplitude at omega, (p, r) complex."""
+    grads: np.ndarray
+    """``dp/dX``, (p, 2n)."""
+    forces: np.ndarray
+    """The forcing's part of the pressing force, ``p = .. + Re(force e^{i theta})``, (p,)
+    complex."""
+    levels: np.ndarray
+    """The constant force's part of the pressing force, (p,)."""
+    shifts: np.ndarray
+    """Where the contact search of the flight from the release starts after it (at most half
+    the flight), (p,): there ``s = c``, ``s' = 0`` and ``s'' = 0``."""
+
+
+class StickyFlights(NamedTuple):
+    """:func:`impactcont.kernel.shooting.sticky_system`'s result, named: the fields of
+    :class:`impactcont.orbit.multi_impact.StickyShooting`."""
+
+    phases: np.ndarray
+    stick_times: np.ndarray
+    flight_times: np.ndarray
+    starts: np.ndarray
+    releases: np.ndarray
+    release_phases: np.ndarray
+    held_transitions: np.ndarray
+    held_phase_columns: np.ndarray
+    held_rates: np.ndarray
+    arrivals: np.ndarray
+    arrival_rates: np.ndarray
+    transitions: np.ndarray
+    phase_columns: np.ndarray
+    residual: np.ndarray
+    jacobian: np.ndarray
+    search_shifts: np.ndarray
+    search_starts: np.ndarray
+    search_phases: np.ndarray
 
 
 class ContactStops(NamedTuple):

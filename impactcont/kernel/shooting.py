@@ -36,7 +36,8 @@ The lower stop is the same search on ``-s`` (forced, free and polynomial parts n
 
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
 :func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
-:func:`branch_linearization` and :func:`palc_correct`. An entry point that compiled code
+:func:`branch_linearization`, :func:`palc_correct` and, for motions with sticking phases
+only, :func:`sticky_system`. An entry point that compiled code
 calls too is called there with the plain tuples Python passes, so one compiled function
 serves both (no entry point wraps an inner twin: numba compiles a wrapper's callee code
 again into it). Importing :mod:`impactcont` does not import this module.
@@ -61,6 +62,7 @@ from impactcont.kernel.arrays import (
     ForcedAmplitudes,
     Forcing,
     ForcingDerivatives,
+    HeldSegments,
     ImpactSequence,
     ModalFlight,
     PalcResult,
@@ -82,7 +84,7 @@ from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
            "jacobian_product", "motion_checks", "newton_solve",
-           "omega_partials", "palc_correct", "shooting_system"]
+           "omega_partials", "palc_correct", "shooting_system", "sticky_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -562,6 +564,246 @@ def _shooting_system(flight, forcing, impacts, period, x, want_jacobian):
                         J[row, ncol + (c if c < jn else c - 1)] += (normals[nxt, c]
                                                                     / normals[nxt, jn])
     return ShotFlights(phases, taus, starts, arrivals, rates, transitions, pcols, residual, J)
+
+
+# -- motions with sticking phases ---------------------------------------------------------------
+@_inner
+def _held_segment(held, k, omega, t, X0, theta, X, dX0, dtheta, rate):
+    """The sticking phase after impact k (:class:`~impactcont.kernel.arrays.HeldSegments`)
+    held for `t` from ``X0`` at phase `theta`: ``X(t)``, ``dX/dX0 = L Phi_r L^+``,
+    ``dX/dtheta`` and ``dX/dt`` in place (the held system's first-order flight,
+    :func:`_flight_general`, lifted by ``X = X_c + L Y``)."""
+    L, Li, Xc = held.lifts[k], held.inverses[k], held.offsets[k]
+    m = Xc.size
+    r = Li.shape[0]
+    for i in range(m):
+        X[i] = Xc[i]
+        dtheta[i] = 0.0
+        rate[i] = 0.0
+        for c in range(m):
+            dX0[i, c] = 0.0
+    if r == 0:  # one mass held: the state stays
+        return
+    Y0 = np.zeros(r)
+    for i in range(r):
+        s = 0.0
+        for c in range(m):
+            s += Li[i, c] * (X0[c] - Xc[c])
+        Y0[i] = s
+    tr = np.empty((r, r))
+    Y = np.empty(r)
+    pcol = np.empty(r)
+    yr = np.empty(r)
+    empty = np.zeros(0)
+    _flight_general(FirstOrderFlight(held.lam[k], held.V[k], held.Vi[k], held.xs[k],
+                                     held.xd[k]),
+                    Forcing(omega, empty, empty, held.Z[k]), t, Y0, theta, tr, Y, pcol, yr)
+    TLi = np.empty((r, m))  # Phi_r L^+
+    for i in range(r):
+        for c in range(m):
+            s = 0.0
+            for q in range(r):
+                s += tr[i, q] * Li[q, c]
+            TLi[i, c] = s
+    for i in range(m):
+        for q in range(r):
+            lq = L[i, q]
+            if lq != 0.0:
+                X[i] += lq * Y[q]
+                dtheta[i] += lq * pcol[q]
+                rate[i] += lq * yr[q]
+                for c in range(m):
+                    dX0[i, c] += lq * TLi[q, c]
+
+
+@_inner
+def _pressing(held, k, X, theta):
+    """The pressing force of the stop held after impact k at ``X``, phase `theta`, and
+    ``dp/dtheta``."""
+    g = held.grads[k]
+    s = held.levels[k]
+    for i in range(g.size):
+        s += g[i] * X[i]
+    e = complex(math.cos(theta), math.sin(theta)) * held.forces[k]
+    return s + e.real, (1j * e).real
+
+
+@_jit
+def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
+    """Residual (and exact Jacobian) of the shooting system of a motion with sticking
+    phases (:func:`impactcont.orbit.multi_impact.sticky_shooting` documents it).
+
+    `flight`, `forcing`, `impacts` as :func:`shooting_system` takes them, `held` the plain
+    tuple of :class:`~impactcont.kernel.arrays.HeldSegments`. Compiled only where a motion
+    with sticking phases is solved (no other entry point calls it).
+
+    Returns
+    -------
+    tuple
+        The fields of :class:`~impactcont.kernel.arrays.StickyFlights`
+        (``StickyFlights._make`` names them).
+    """
+    flow = _flights(FlightArrays(*flight))
+    forcing = Forcing(*forcing)
+    impacts = ImpactSequence(*impacts)
+    held = HeldSegments(*held)
+    pivots, normals = impacts.pivots, impacts.normals
+    positions, matrices = impacts.positions, impacts.matrices
+    sticks = held.sticks
+    omega = forcing.omega
+    p = positions.size
+    m = matrices.shape[1]
+    n = m // 2
+    q = 0
+    rank = np.zeros(p, dtype=np.int64)
+    for k in range(p):
+        if sticks[k]:
+            rank[k] = q
+            q += 1
+    size = m * p + q
+    z0 = p + q
+    stimes = np.zeros(p)
+    taus = np.empty(p)
+    elapsed = 0.0
+    for k in range(p):
+        if sticks[k]:
+            stimes[k] = x[p + rank[k]]
+            elapsed += stimes[k]
+        if k < p - 1:
+            taus[k] = x[1 + k]
+            elapsed += taus[k]
+    taus[p - 1] = period - elapsed
+    phases = np.empty(p)
+    theta = x[0]
+    for k in range(p):
+        phases[k] = theta
+        theta += omega * (stimes[k] + taus[k])
+    starts = np.empty((p, m))
+    for k in range(p):
+        j = pivots[k]
+        col = z0 + k * (m - 1)
+        for c in range(m):
+            if c != j:
+                starts[k, c] = x[col]
+                col += 1
+        s = positions[k]
+        for c in range(n):
+            if c != j:
+                s -= normals[k, c] * starts[k, c]
+        starts[k, j] = s / normals[k, j]
+    releases = starts.copy()
+    release_phases = phases.copy()
+    h_tr = np.zeros((p, m, m))
+    h_col = np.zeros((p, m))
+    h_rate = np.zeros((p, m))
+    arrivals = np.empty((p, m))
+    rates = np.empty((p, m))
+    transitions = np.empty((p, m, m))
+    pcols = np.empty((p, m))
+    residual = np.empty(size)
+    for k in range(p):
+        nxt = (k + 1) % p
+        if sticks[k]:
+            _held_segment(held, k, omega, stimes[k], starts[k], phases[k], releases[k],
+                          h_tr[k], h_col[k], h_rate[k])
+            release_phases[k] = phases[k] + omega * stimes[k]
+            force, _ = _pressing(held, k, releases[k], release_phases[k])
+            residual[p * m + rank[k]] = force
+        else:
+            for i in range(m):
+                h_tr[k, i, i] = 1.0
+        _flight(flow, forcing, taus[k], releases[k], release_phases[k], transitions[k],
+                arrivals[k], pcols[k], rates[k])
+        for r in range(m):
+            s = 0.0
+            for c in range(m):
+                s += matrices[nxt, r, c] * arrivals[k, c]
+            residual[k * m + r] = s - starts[nxt, r]
+    # the contact search of a flight from a release starts held.shifts[k] after it
+    search_shifts = np.zeros(p)
+    search_starts = releases.copy()
+    search_phases = release_phases.copy()
+    work_tr = np.empty((m, m))
+    work_col = np.empty(m)
+    work_rate = np.empty(m)
+    for k in range(p):
+        if sticks[k]:
+            shift = min(held.shifts[k], 0.5 * taus[k])
+            if shift > 0.0:
+                search_shifts[k] = shift
+                search_phases[k] += omega * shift
+                _flight(flow, forcing, shift, releases[k], release_phases[k], work_tr,
+                        search_starts[k], work_col, work_rate)
+    J = np.zeros((0, 0))
+    if want_jacobian:
+        J = np.zeros((size, size))
+        d_theta = np.zeros(size)  # d theta_k / du, built along the segments
+        d_theta[0] = 1.0
+        dXr = np.empty((m, size))
+        dXm = np.empty((m, size))
+        for k in range(p):
+            nxt = (k + 1) % p
+            d_tau = np.zeros(size)
+            if k < p - 1:
+                d_tau[1 + k] = 1.0
+            else:
+                for c in range(1, z0):
+                    d_tau[c] = -1.0
+            d_stick = np.zeros(size)
+            if sticks[k]:
+                d_stick[p + rank[k]] = 1.0
+            # dX_r/du: the held flow of dX_k/du (the section's lift of z_k), theta_k, s_k
+            j = pivots[k]
+            col0 = z0 + k * (m - 1)
+            for i in range(m):
+                for c in range(size):
+                    dXr[i, c] = h_col[k, i] * d_theta[c] + h_rate[k, i] * d_stick[c]
+                col = col0
+                for c in range(m):
+                    if c == j:
+                        continue
+                    v = h_tr[k, i, c]
+                    if c < n and normals[k, c] != 0.0:
+                        v -= h_tr[k, i, j] * normals[k, c] / normals[k, j]
+                    dXr[i, col] += v
+                    col += 1
+            # dX^-/du = Phi dX_r + dX^-/dtheta (d theta_k + omega ds_k) + X' dtau_k
+            for i in range(m):
+                for c in range(size):
+                    s = pcols[k, i] * (d_theta[c] + omega * d_stick[c]) + rates[k, i] * d_tau[c]
+                    for a in range(m):
+                        s += transitions[k, i, a] * dXr[a, c]
+                    dXm[i, c] = s
+            jn = pivots[nxt]
+            ncol = z0 + nxt * (m - 1)
+            for r in range(m):
+                row = k * m + r
+                for c in range(size):
+                    s = 0.0
+                    for a in range(m):
+                        s += matrices[nxt, r, a] * dXm[a, c]
+                    J[row, c] = s
+                if r != jn:  # - dX_{k+1}/dz_{k+1}
+                    J[row, ncol + (r if r < jn else r - 1)] -= 1.0
+                else:
+                    for c in range(n):
+                        if c != jn and normals[nxt, c] != 0.0:
+                            J[row, ncol + (c if c < jn else c - 1)] += (normals[nxt, c]
+                                                                        / normals[nxt, jn])
+            if sticks[k]:
+                row = p * m + rank[k]
+                _, gth = _pressing(held, k, releases[k], release_phases[k])
+                g = held.grads[k]
+                for c in range(size):
+                    s = gth * (d_theta[c] + omega * d_stick[c])
+                    for a in range(m):
+                        s += g[a] * dXr[a, c]
+                    J[row, c] = s
+            for c in range(size):
+                d_theta[c] += omega * (d_stick[c] + d_tau[c])
+    return (phases, stimes, taus, starts, releases, release_phases, h_tr, h_col, h_rate,
+            arrivals, rates, transitions, pcols, residual, J, search_shifts, search_starts,
+            search_phases)
 
 
 @_jit

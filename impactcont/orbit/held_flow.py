@@ -177,6 +177,31 @@ class HeldFlow:
         column = forcing @ np.array([-math.sin(theta), math.cos(theta)])
         return Xc + L @ Y, L @ transition @ Li, L @ column, L @ Yr
 
+    def kernel_rows(self) -> tuple[np.ndarray, ...]:
+        """This stop's row of :class:`~impactcont.kernel.arrays.HeldSegments` (``sticks``
+        left out): ``L``, ``L^+``, ``X_c``, the held system's ``lam, V, V^-1, X_s, d`` and
+        ``Z``, and the pressing force's ``grad``, ``force`` and ``level``
+        (``p = grad . X + Re(force e^{i theta}) + level``); the held system's arrays empty
+        (``r = 0``) for one mass held."""
+        cached = self.__dict__.get("_kernel_rows")
+        if cached is None:
+            L, Li, Xc = self._lift()
+            r = L.shape[1]
+            if self.reduced is None:
+                flow = (np.zeros(0, complex), np.zeros((0, 0), complex),
+                        np.zeros((0, 0), complex), np.zeros(0), np.zeros(0),
+                        np.zeros(0, complex))
+            else:
+                red = self.reduced
+                xs = red.static_offset if np.size(red.static_offset) else np.zeros(r)
+                xd = red.drift if np.size(red.drift) else np.zeros(r)
+                flow = (red.lam, red.V, red.V_inv, xs, xd, red.Z)
+            k, c, f, g = self._force_rows()
+            grad = -self.sign * np.concatenate([k, c])
+            cached = (L, Li, Xc, *flow, grad, self.sign * complex(f), self.sign * g)
+            object.__setattr__(self, "_kernel_rows", cached)
+        return cached
+
     def _force_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """``(n^T M^-1 K, n^T M^-1 C, n^T M^-1 F, n^T M^-1 F_static)`` over ``n^T M^-1 n``."""
         cached = self.__dict__.get("_rows")

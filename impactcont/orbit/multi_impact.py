@@ -59,10 +59,12 @@ from impactcont.errors import NoPeriodicMotionError, ParameterError, UnresolvedM
 from impactcont.kernel.arrays import (
     CheckedFlights,
     ContactStops,
+    HeldSegments,
     ImpactSequence,
     MotionChecks,
     NewtonResult,
     ShotFlights,
+    StickyFlights,
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, check_pattern, require_forcing
@@ -1066,8 +1068,22 @@ def sticking_pattern(osc: ImpactOscillator, pattern: str) -> tuple[str, np.ndarr
         A sticking phase on a stop whose restitution is not 0: such a motion enters its
         sticking phase through complete chatter, which shooting does not solve yet.
     """
+    known = _STICKING.setdefault(osc, {})
+    found = known.get(pattern)
+    if found is None:
+        found = known[pattern] = _sticking_pattern(osc, pattern)
+    return found
+
+
+#: :func:`sticking_pattern` of each live oscillator, by pattern.
+_STICKING: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, tuple[str, np.ndarray]]] = \
+    weakref.WeakKeyDictionary()
+
+
+def _sticking_pattern(osc: ImpactOscillator, pattern: str) -> tuple[str, np.ndarray]:
     names = osc.stops.names
     sticks = np.array([c not in names and c.upper() in names for c in pattern], dtype=bool)
+    sticks.flags.writeable = False
     impacts = "".join(c.upper() if stick else c for c, stick in zip(pattern, sticks,
                                                                       strict=True))
     for name in sorted({impacts[k] for k in np.flatnonzero(sticks)}):
@@ -1115,6 +1131,9 @@ class StickyShooting:
         force at each release (q sticks).
     jacobian : ndarray or None
         ``dr/du``, exact.
+    search_shifts, search_starts, search_phases : ndarray, shape (p,), (p, 2n), (p,)
+        Where the contact search of each flight from a release starts (0, the release
+        state and phase without a stick; :data:`RELEASE_SHIFT`).
     """
 
     phases: np.ndarray
@@ -1132,6 +1151,9 @@ class StickyShooting:
     phase_columns: np.ndarray
     residual: np.ndarray
     jacobian: np.ndarray | None
+    search_shifts: np.ndarray
+    search_starts: np.ndarray
+    search_phases: np.ndarray
 
     def flights(self) -> Shooting:
         """The flights from the releases as a :class:`Shooting` (their contact checks)."""
@@ -1194,96 +1216,52 @@ def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
     """
     osc = flow.osc
     impacts, sticks = sticking_pattern(osc, pattern)
-    geo = _geometry(flow, impacts)
     p, m = len(pattern), 2 * osc.n
-    n = osc.n
     q = int(np.count_nonzero(sticks))
-    u = np.asarray(u, dtype=float)
-    if u.shape != (m * p + q,):
-        raise ParameterError(f"u must have shape ({m * p + q},) = (2 n p + q,) for n={n}, "
-                             f"p={p} and q={q} sticking phases; got shape {u.shape}")
-    omega = osc.omega
-    period = TWO_PI * N / omega
-    size = m * p + q
-    rank = np.cumsum(sticks) - 1  # the stick's index among the sticks
-    z0 = p + q
-    # d(unknown-dependent quantity)/du as rows
-    d_theta = np.zeros((p, size))
-    d_tau = np.zeros((p, size))
-    d_stick = np.zeros((p, size))
-    taus = np.empty(p)
-    stimes = np.zeros(p)
-    for k in range(p):
-        if sticks[k]:
-            stimes[k] = u[p + rank[k]]
-            d_stick[k, p + rank[k]] = 1.0
-    taus[:-1] = u[1:p]
-    taus[-1] = period - np.sum(u[1:p]) - np.sum(stimes)
-    for k in range(p - 1):
-        d_tau[k, 1 + k] = 1.0
-    d_tau[p - 1, 1:p + q] = -1.0
-    phases = np.empty(p)
-    theta = float(u[0])
-    row = np.zeros(size)
-    row[0] = 1.0
-    for k in range(p):
-        phases[k] = theta
-        d_theta[k] = row
-        theta += omega * (stimes[k] + taus[k])
-        row = row + omega * (d_stick[k] + d_tau[k])
-    starts = np.empty((p, m))
-    lifts = []
-    for k in range(p):
-        j = int(geo.pivots[k])
-        rest = [c for c in range(m) if c != j]
-        col = z0 + k * (m - 1)
-        starts[k, rest] = u[col:col + m - 1]
-        others = sum(geo.normals[k, c] * starts[k, c] for c in range(n) if c != j)
-        starts[k, j] = (geo.positions[k] - others) / geo.normals[k, j]
-        lifts.append(_section_lift(geo, k, m))
-    releases = starts.copy()
-    release_phases = phases.copy()
-    h_tr = np.broadcast_to(np.eye(m), (p, m, m)).copy()
-    h_col = np.zeros((p, m))
-    h_rate = np.zeros((p, m))
-    arrivals = np.empty((p, m))
-    rates = np.empty((p, m))
-    transitions = np.empty((p, m, m))
-    pcols = np.empty((p, m))
-    residual = np.empty(size)
-    J = np.zeros((size, size)) if jacobian else None
-    for k in range(p):
-        nxt = (k + 1) % p
-        if sticks[k]:
-            held = held_flow(osc, impacts[k])
-            releases[k], h_tr[k], h_col[k], h_rate[k] = held.segment(stimes[k], starts[k],
-                                                                     phases[k])
-            release_phases[k] = phases[k] + omega * stimes[k]
-        X, rate, tr, pcol = _python_flight(flow, taus[k], releases[k], release_phases[k])
-        arrivals[k], rates[k], transitions[k], pcols[k] = X, rate, tr, pcol
-        D = geo.matrices[nxt]
-        residual[k * m:(k + 1) * m] = D @ X - starts[nxt]
-        if sticks[k]:
-            residual[p * m + rank[k]] = held.pressing(releases[k], release_phases[k])
-        if J is None:
-            continue
-        # dX_r/du from dX_k/du, d theta_k/du and ds_k/du
-        dXk = np.zeros((m, size))
-        dXk[:, z0 + k * (m - 1):z0 + (k + 1) * (m - 1)] = lifts[k]
-        dXr = h_tr[k] @ dXk + np.outer(h_col[k], d_theta[k]) + np.outer(h_rate[k], d_stick[k])
-        dthr = d_theta[k] + omega * d_stick[k]
-        dXm = tr @ dXr + np.outer(pcol, dthr) + np.outer(rate, d_tau[k])
-        dXn = np.zeros((m, size))
-        dXn[:, z0 + nxt * (m - 1):z0 + (nxt + 1) * (m - 1)] = lifts[nxt]
-        J[k * m:(k + 1) * m] = D @ dXm - dXn
-        if sticks[k]:
-            grad, gth = held.pressing_gradient(release_phases[k])
-            J[p * m + rank[k]] = grad @ dXr + gth * dthr
-    return StickyShooting(phases=phases, stick_times=stimes, flight_times=taus, starts=starts,
-                          releases=releases, release_phases=release_phases,
-                          held_transitions=h_tr, held_phase_columns=h_col, held_rates=h_rate,
-                          arrivals=arrivals, arrival_rates=rates, transitions=transitions,
-                          phase_columns=pcols, residual=residual, jacobian=J)
+    x = np.asarray(u, dtype=float)
+    if x.shape != (m * p + q,):
+        raise ParameterError(f"u must have shape ({m * p + q},) = (2 n p + q,) for n={osc.n}, "
+                             f"p={p} and q={q} sticking phases; got shape {x.shape}")
+    out = _kernel().sticky_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
+                                  tuple(impact_sequence(_geometry(flow, impacts))),
+                                  held_segments(flow, pattern), TWO_PI * N / osc.omega,
+                                  _writable(x), bool(jacobian))
+    named = StickyFlights._make(out)
+    return StickyShooting(**named._replace(jacobian=named.jacobian if jacobian else None)
+                          ._asdict())
+
+
+def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
+    """The sticking phases of `pattern` as the kernel takes them: the plain tuple of
+    :class:`~impactcont.kernel.arrays.HeldSegments` (rows of
+    :meth:`~impactcont.orbit.held_flow.HeldFlow.kernel_rows`, zeros where no stick follows
+    an impact), built once per flow and pattern."""
+    cache = flow.__dict__.setdefault("_held_segments", {})
+    held = cache.get(pattern)
+    if held is None:
+        osc = flow.osc
+        impacts, sticks = sticking_pattern(osc, pattern)
+        p, m = len(pattern), 2 * osc.n
+        r = m - 2
+        rows = [held_flow(osc, impacts[k]).kernel_rows() if sticks[k] else None
+                for k in range(p)]
+        shapes = ((m, r), (r, m), (m,), (r,), (r, r), (r, r), (r,), (r,), (r,), (m,), (), (),
+                  ())
+        kinds = (float, float, float, complex, complex, complex, float, float, complex, float,
+                 complex, float, float)
+        geo = _geometry(flow, impacts)
+        rows = [None if row is None else
+                (*row, RELEASE_SHIFT * TWO_PI / flow.time_scales(normal=geo.normals[k])[0])
+                for k, row in enumerate(rows)]
+        fields = []
+        for i, (shape, kind) in enumerate(zip(shapes, kinds, strict=True)):
+            table = np.zeros((p, *shape), dtype=kind)
+            for k in range(p):
+                if rows[k] is not None:
+                    table[k] = rows[k][i]
+            fields.append(table)
+        held = cache[pattern] = HeldSegments(np.array(sticks, dtype=np.bool_), *fields)
+    return tuple(held)
 
 
 def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
@@ -1459,21 +1437,15 @@ def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
                       stacklevel=3)
     log.debug("N=%d p=%d %s motion with sticking phases in %d Newton iterations", N, p,
               pattern, iterations)
-    impacts, held = sticking_pattern(osc, pattern)
+    impacts = sticking_pattern(osc, pattern)[0]
     # the contact search of each flight from a release starts RELEASE_SHIFT of the fastest
-    # period after it: there s = c, s' = 0 and s'' = 0 (the pressing force is 0), so the
-    # start itself is a (degenerate) maximum of the coordinate at the stop; past it the
-    # coordinate leaves as the cube of the time (the release row's transversality) and a
-    # later return is found as on any flight
-    shift = np.zeros(p)
-    starts, phases = sh.releases.copy(), sh.release_phases.copy()
-    for k in np.flatnonzero(held):
-        rate = flow.time_scales(normal=_geometry(flow, impacts).normals[k])[0]
-        shift[k] = min(0.5 * float(sh.flight_times[k]), RELEASE_SHIFT * TWO_PI / rate)
-        starts[k] = flow.state(shift[k], sh.releases[k], sh.release_phases[k])[0]
-        phases[k] += osc.omega * shift[k]
-    flights = dataclasses.replace(sh.flights(), starts=starts, phases=phases,
-                                  flight_times=sh.flight_times - shift)
+    # period after it (held_segments): there s = c, s' = 0 and s'' = 0 (the pressing force
+    # is 0), so the start itself is a (degenerate) maximum of the coordinate at the stop;
+    # past it the coordinate leaves as the cube of the time (the release row's
+    # transversality) and a later return is found as on any flight
+    shift = sh.search_shifts
+    flights = dataclasses.replace(sh.flights(), starts=sh.search_starts,
+                                  phases=sh.search_phases, flight_times=sh.flight_times - shift)
     return _orbit(flow, N, p, flights, True, impacts, cond, error,
                   sticks=_sticks(flow, pattern, sh, shift))
 
