@@ -60,9 +60,21 @@ from collections.abc import Callable
 
 import mpmath
 
-__all__ = ["DPS", "Damper", "StickyMotion", "first_root", "locked_ball_motion",
-           "preloaded_motion", "pressing_minimum", "response", "riding_damper_motion",
-           "riding_release_map", "wrap"]
+__all__ = [
+    "DPS",
+    "Damper",
+    "StickyMotion",
+    "first_root",
+    "locked_ball_motion",
+    "preloaded_motion",
+    "pressing_minimum",
+    "release_guess",
+    "response",
+    "riding_damper_motion",
+    "riding_end",
+    "riding_release_map",
+    "wrap",
+]
 
 #: Working precision of every closed form (decimal digits).
 DPS = 30
@@ -174,14 +186,15 @@ def first_root(g: Callable, span, *, cells: int = 100, guard: Callable | None = 
     Parameters
     ----------
     g : callable
-        ``tau -> mpf``, negative right after ``tau = 0``.
+        ``tau -> mpf``, negative right after ``tau = 0`` (at ``tau = 0`` negative too, or
+        zero: then the first cell is left out).
     span : number
         The end of the search.
     cells : int
         Cells of the scan.
     guard : callable, optional
-        ``tau -> mpf`` that must stay negative on the scan up to the bracket (a flight that
-        would meet another stop first).
+        ``tau -> mpf`` that must stay negative on the scan (after ``tau = 0``) up to the
+        bracket (a flight that would meet another stop first).
     what : str
         What the zero is, for the error message.
 
@@ -191,13 +204,15 @@ def first_root(g: Callable, span, *, cells: int = 100, guard: Callable | None = 
         No such sign change in ``(0, span]``, or `guard` non-negative before it.
     """
     span = mp.mpf(span)
-    grid = [span * i / cells for i in range(1, cells + 1)]
-    prev = None
+    grid = [span * i / cells for i in range(cells + 1)]
+    prev = g(grid[0])
+    if not prev < 0:  # zero at the start (a flight from a release): bracket from the next
+        grid, prev = grid[1:], None
     for a, b in itertools.pairwise(grid):
         ga = g(a) if prev is None else prev
         gb = g(b)
         prev = gb
-        if guard is not None and guard(a) >= 0:
+        if guard is not None and a > 0 and guard(a) >= 0:
             raise ValueError(f"another stop is met at tau ~ {mpmath.nstr(a, 6)} before "
                              f"{what}")
         if ga < 0 <= gb:
@@ -271,6 +286,19 @@ class StickyMotion:
     def period(self) -> mpmath.mpf:
         """``sum(stick_times) + sum(flight_times)``."""
         return mp.fsum(self.stick_times) + mp.fsum(self.flight_times)
+
+    def rotated(self, pattern: str) -> StickyMotion:
+        """The same motion with its impacts numbered from another one, so that its pattern
+        reads `pattern` (a rotation of :attr:`pattern`)."""
+        p = len(self.pattern)
+        for k in range(p):
+            if self.pattern[k:] + self.pattern[:k] == pattern:
+                return dataclasses.replace(self, pattern=pattern, **{
+                    name: getattr(self, name)[k:] + getattr(self, name)[:k]
+                    for name in ("phases", "stick_times", "release_phases", "flight_times",
+                                 "release_states", "landing_states", "impact_velocities",
+                                 "landing_pressing", "pressing_min")})
+        raise ValueError(f"pattern must be a rotation of {self.pattern!r}; got {pattern!r}")
 
     def floats(self, name: str) -> list:
         """Attribute `name` as (nested) Python floats."""
@@ -585,3 +613,74 @@ def riding_damper_motion(omega, *, m="0.2", b="0.3", eta="0.3", guess=None,
         impact_velocities=[r["impact_velocity"] for r in record],
         landing_pressing=[r["pressing"] for r in record],
         pressing_min=[r["pressing_min"] for r in record], multipliers=multipliers)
+
+
+def release_guess(motion: StickyMotion) -> tuple:
+    """``(theta, x1')`` at the release from the upper wall of a riding motion: the `guess`
+    of :func:`riding_damper_motion` at a nearby omega."""
+    k = motion.pattern.index("u")
+    return motion.release_phases[k], motion.release_states[k][2]
+
+
+@_at_dps
+def riding_end(motion: StickyMotion, *, m="0.2", b="0.3", eta="0.3",
+               iterations: int = 30) -> tuple:
+    """Where the symmetric riding motion of case (c) ends in omega: the ball lands where
+    the wall no longer presses it, the stick shrinks to nothing (``p = 0`` at the landing,
+    a release grazing at the start of the stick).
+
+    Parameters
+    ----------
+    motion : StickyMotion
+        The riding motion near the end (of the machine `m`, `b`, `eta`): the guess.
+    m, b, eta : number
+        The machine, as in :func:`riding_damper_motion`.
+    iterations : int
+        Newton iterations allowed.
+
+    Returns
+    -------
+    tuple of mpf
+        ``(omega*, theta, x1')``: the frequency and the release from the upper wall there.
+
+    Raises
+    ------
+    ValueError
+        Newton does not converge.
+
+    Notes
+    -----
+    At the end the landing is itself a release (``x1'' = 0`` with the ball held or not:
+    ``cos(theta) - c x1' - x1 = 0`` both ways), and the motion, symmetric
+    (``X(t + T/2) = -X(t)``), is the flight from a release on the upper wall at
+    ``(theta, x1')`` to the lower wall, landing half a period later on the mirror image:
+    ``theta_l = theta + pi``, ``x1_l = -x1``, ``v = -x1'`` after the plastic impact (the
+    condition ``x1'' = 0`` at the landing then holds by itself). Three equations in
+    ``(theta, x1', omega)``, Newton with central differences (step ``1e-12``).
+    """
+    m, b, c = mp.mpf(m), mp.mpf(b), 2 * mp.mpf(eta)
+    k = motion.pattern.index("u")
+    x = mp.matrix([motion.release_phases[k], motion.release_states[k][2], motion.omega])
+
+    def residual(u):
+        d = Damper(u[2], m, b, c)
+        x1 = d.release_x1(u[0], u[1])
+        _, theta_l, x1_l, w1, w2 = d.fly(1, u[0], x1, u[1])
+        return mp.matrix([theta_l - u[0] - mp.pi, x1_l + x1, d.land(x1_l, w1, w2) + u[1]])
+
+    h = mp.mpf("1e-12")
+    for _ in range(iterations):
+        r = residual(x)
+        J = mp.matrix(3, 3)
+        for j in range(3):
+            e = mp.matrix(3, 1)
+            e[j] = h
+            column = (residual(x + e) - residual(x - e)) / (2 * h)
+            for i in range(3):
+                J[i, j] = column[i]
+        step = mp.lu_solve(J, -r)
+        x += step
+        if mp.norm(step, mp.inf) < mp.mpf(10) ** (5 - DPS):
+            return x[2], x[0], x[1]
+    raise ValueError(f"Newton did not converge to the end of the riding motion from omega = "
+                     f"{mpmath.nstr(motion.omega, 8)}")

@@ -24,11 +24,11 @@ seeded from the simulation: phases, stick and flight times, release and landing 
 impact speeds and the smallest pressing force to 1e-10. Newton solves the shooting system to
 its rounding, and the solution's own error estimate (``|J^-1 r| + cond eps |u|``, condition
 numbers 3 to 2e3 here) is below 1e-11, so 1e-10 is what the method guarantees with a margin;
-the closed form is exact to 30 digits. The multipliers: (a) and (b) are exactly zero (the
-release phase forgets everything: n = 1, both directions collapse), (c) the two nonzero ones
-equal the eigenvalues of the closed-form return map's Jacobian (central differences at 30
-digits, error ~1e-20) to 1e-10, the two the ride collapses below 1e-12 (rounding of the
-saltation product, not structural zeros).
+the closed form is exact to 30 digits. The multipliers: (a) and (b) are zero (the release
+phase forgets everything: n = 1, both directions collapse; to rounding, 1e-14), (c) the two
+nonzero ones equal the eigenvalues of the closed-form return map's Jacobian (central
+differences at 30 digits, error ~1e-20) to 1e-10, the two the ride collapses below 1e-12
+(rounding of the saltation product, not structural zeros).
 """
 
 from __future__ import annotations
@@ -216,23 +216,24 @@ def check_shooting(motion, orbit) -> None:
 @pytest.mark.parametrize("omega", [0.7, 2.0])
 def test_preloaded_oscillator_shooting_is_the_closed_form(cf, omega):
     """(a) multi_impact_orbit(pattern="u") from the simulation: the closed form, and both
-    multipliers exactly zero."""
+    multipliers zero (to rounding: G is a product through the stick's collapse, and seeds
+    from 4 periods or more leave 1.5e-31 on its diagonal)."""
     motion = cf.preloaded_motion(omega)
     res = ic.simulate(preloaded(omega), [0.0, 0.0], 0.0, 3.0)
     orbit = ic.multi_impact_orbit(preloaded(omega), 1, 1, res, pattern="u")
     check_shooting(motion, orbit)
-    assert np.all(orbit.multipliers == 0)
+    assert np.abs(orbit.multipliers).max() < 1e-14
 
 
 @pytest.mark.parametrize("gamma", [1.2, 3.0])
 def test_locked_ball_shooting_is_the_closed_form(cf, gamma):
     """(b) multi_impact_orbit(pattern="l") from the simulation: the closed form, and both
-    multipliers exactly zero (Luck & Mehta's locked motion forgets its history)."""
+    multipliers zero to rounding (Luck & Mehta's locked motion forgets its history)."""
     motion = cf.locked_ball_motion(gamma)
     res = ic.simulate(ball(gamma), [0.0, 0.0], -0.5 * math.pi, 3.0)
     orbit = ic.multi_impact_orbit(ball(gamma), 1, 1, res, pattern="l")
     check_shooting(motion, orbit)
-    assert np.all(orbit.multipliers == 0)
+    assert np.abs(orbit.multipliers).max() < 1e-14
 
 
 @pytest.mark.parametrize("omega", [0.2, 0.5])
