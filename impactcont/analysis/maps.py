@@ -85,7 +85,7 @@ from impactcont.analysis.map_runner import (
     positive_int,
     written_blocks,
 )
-from impactcont.dataset.io import open_lazy, save_blocks
+from impactcont.dataset.io import open_lazy, save, save_blocks
 from impactcont.dataset.map_storage import (
     open_temporary_map,
     remove_stale_maps,
@@ -575,8 +575,9 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     evaluator : None, "closed_form" or "shooting"
         How the family is evaluated. ``None`` (default): by the closed form where `start`
         is an N-1 motion of :func:`impactcont.periodic_orbits` (a
-        :class:`~impactcont.orbit.periodic.PeriodicOrbit`), `checks` is True, `out` is
-        not given and the map fits in `memory_limit` (notes), else by shooting.
+        :class:`~impactcont.orbit.periodic.PeriodicOrbit`), `checks` is True and the map
+        fits in `memory_limit` (notes; with `out` it is made in memory, then written),
+        else by shooting.
         ``"closed_form"`` refuses, saying why, where the closed form does not apply;
         ``"shooting"`` always shoots (a PeriodicOrbit as the 1-impact motion it is).
 
@@ -616,9 +617,11 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     ``newton_iterations`` 0), the root never changes at a fold (the shooting sweep may
     continue on the other member of the pair there) and no shooting kernel is
     compiled; the options of the sweep (`tol`, `max_iter`, `max_change`,
-    `max_attempts`, `rows_per_task`) are checked and not used. The attribute
-    ``options`` names the evaluator (``"evaluator": "closed_form"``) and an INFO record
-    says which ran (and, for an N-1 motion mapped by shooting, why).
+    `max_attempts`, `rows_per_task`) are checked and not used. A map for a file
+    (`out`) is made in memory (it fits in `memory_limit`, or shooting maps it) and
+    written at once. The attribute ``options`` names the evaluator (``"evaluator":
+    "closed_form"``) and an INFO record says which ran (and, for an N-1 motion mapped
+    by shooting, why).
     """
     if not isinstance(start, (MultiImpactOrbit, PeriodicOrbit)):
         as_multi_impact_orbit(start)  # refuses it, naming what is taken
@@ -632,13 +635,16 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     if isinstance(start, PeriodicOrbit):
         _decide_symmetric(start, params, symmetric)  # an N-1 motion: refuses symmetric=True
     reason = ("evaluator='shooting'" if evaluator == "shooting" else
-              _not_closed_form(start, params, axes, checks, out, memory_limit))
+              _not_closed_form(start, params, axes, checks, memory_limit))
     if not reason:
+        if out is not None:
+            _require_dask()  # the file is returned opened lazily
         ds, reason = _closed_form_family(start, params, axes, title=title, executor=executor,
                                          max_workers=max_workers, memory_limit=memory_limit,
                                          progress=progress)
         if ds is not None:
-            return ds
+            # a map for a file: made in memory (it fits), then written at once, atomically
+            return ds if out is None else open_lazy(save(ds, out))
     if evaluator == "closed_form":
         raise ParameterError(f"evaluator='closed_form': the family cannot be mapped by the "
                              f"closed form here: {reason}; give evaluator=None or 'shooting'")
@@ -657,16 +663,13 @@ _EVALUATORS = (None, "closed_form", "shooting")
 
 
 def _not_closed_form(start: Any, params: tuple[ModelParameter, ModelParameter],
-                     axes: dict[str, np.ndarray], checks: Any, out: Any,
-                     memory_limit: float) -> str:
+                     axes: dict[str, np.ndarray], checks: Any, memory_limit: float) -> str:
     """Why the family of `start` is not mapped by the closed form ("" where it is)."""
     if not isinstance(start, PeriodicOrbit):
         return (f"the start is a {type(start).__name__}, not an N-1 motion of the closed "
                 "form (periodic_orbits)")
     if not checks:
         return "checks=False (the closed form always searches every flight for contact)"
-    if out is not None:
-        return "out= is given (the closed form's family map is made in memory)"
     names = (params[0].name, params[1].name)
     shape = (axes[names[0]].size, axes[names[1]].size)
     need = (_result_bytes((1, *shape), True, names)

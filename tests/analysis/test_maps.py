@@ -525,8 +525,10 @@ def test_an_n1_family_map_says_why_the_closed_form_does_not_apply(paper):
                                                 r"mapped by the closed form here: checks=False"):
         maps.multi_impact_map(motion, ("omega", "b"), grid, checks=False,
                               evaluator="closed_form")
-    with pytest.raises(ic.ParameterError, match=r"out= is given"):
-        stability_map(motion, parameters=("omega", "b"), grid=grid, out="map.nc",
+    with pytest.raises(ic.ParameterError, match=r"take .* GB, more than memory_limit = "
+                                                r"1e-05 GB"):
+        stability_map(motion, parameters=("omega", "b"), memory_limit=1e4,
+                      grid={"omega": np.linspace(1.0, 1.1, 20), "b": np.linspace(0.4, 0.6, 20)},
                       evaluator="closed_form")
     with pytest.raises(ic.ParameterError, match=r"the root [+-]1 of eq. \(15\) does not exist "
                                                 r"at the grid point nearest the start"):

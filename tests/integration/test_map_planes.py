@@ -164,11 +164,10 @@ def test_a_map_of_a_motion_is_the_map_of_its_family(n1_motion, tmp_path):
     assert bool(by_keyword["found"].all())
     # the family's points are the closed form's motion of the same root there
     pytest.importorskip("dask")
-    # out= passed on; a map to a file is the sweep's (the closed form's is made in memory)
-    shot = ic.multi_impact_map(n1_motion, ("omega", "b"), GRID, evaluator="shooting")
     with ic.stability_map(n1_motion, parameters=("omega", "b"), grid=GRID,
-                          out=tmp_path / "family.nc") as lazy:
-        xr.testing.assert_identical(lazy.load().drop_attrs(), shot.drop_attrs())
+                          out=tmp_path / "family.nc") as lazy:  # out= passed on
+        xr.testing.assert_identical(lazy.load().drop_attrs(), family.drop_attrs())
+        assert '"evaluator": "closed_form"' in lazy.attrs["options"]  # as in memory
     plane = ic.stability_map(n1_motion.oscillator, 1, GRID["omega"], GRID["b"])
     delta = plane["delta"].sel(N=1, root=n1_motion.root).values
     np.testing.assert_allclose(np.cos(by_keyword["delta"].values), np.cos(delta), atol=1e-9)
