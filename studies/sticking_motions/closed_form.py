@@ -623,7 +623,7 @@ def release_guess(motion: StickyMotion) -> tuple:
 
 
 @_at_dps
-def riding_end(motion: StickyMotion, *, m="0.2", b="0.3", eta="0.3",
+def riding_end(guess: StickyMotion | tuple, *, m="0.2", b="0.3", eta="0.3",
                iterations: int = 30) -> tuple:
     """Where the symmetric riding motion of case (c) ends in omega: the ball lands where
     the wall no longer presses it, the stick shrinks to nothing (``p = 0`` at the landing,
@@ -631,8 +631,9 @@ def riding_end(motion: StickyMotion, *, m="0.2", b="0.3", eta="0.3",
 
     Parameters
     ----------
-    motion : StickyMotion
-        The riding motion near the end (of the machine `m`, `b`, `eta`): the guess.
+    guess : StickyMotion or tuple
+        The riding motion near the end (of the machine `m`, `b`, `eta`), or
+        ``(theta, x1', omega)`` at a release from the upper wall near the end.
     m, b, eta : number
         The machine, as in :func:`riding_damper_motion`.
     iterations : int
@@ -659,8 +660,9 @@ def riding_end(motion: StickyMotion, *, m="0.2", b="0.3", eta="0.3",
     ``(theta, x1', omega)``, Newton with central differences (step ``1e-12``).
     """
     m, b, c = mp.mpf(m), mp.mpf(b), 2 * mp.mpf(eta)
-    k = motion.pattern.index("u")
-    x = mp.matrix([motion.release_phases[k], motion.release_states[k][2], motion.omega])
+    if isinstance(guess, StickyMotion):
+        guess = (*release_guess(guess), guess.omega)
+    x = mp.matrix([mp.mpf(v) for v in guess])
 
     def residual(u):
         d = Damper(u[2], m, b, c)
@@ -683,4 +685,4 @@ def riding_end(motion: StickyMotion, *, m="0.2", b="0.3", eta="0.3",
         if mp.norm(step, mp.inf) < mp.mpf(10) ** (5 - DPS):
             return x[2], x[0], x[1]
     raise ValueError(f"Newton did not converge to the end of the riding motion from omega = "
-                     f"{mpmath.nstr(motion.omega, 8)}")
+                     f"{mpmath.nstr(mp.mpf(guess[2]), 8)}")

@@ -250,3 +250,35 @@ def test_riding_damper_shooting_is_the_closed_form(riding, omega):
     exact = sorted((complex(z) for z in motion.multipliers), key=lambda z: (-abs(z), z.imag))
     assert mu[:2] == pytest.approx(exact[:2], abs=1e-10)
     assert np.abs(mu[2:]).max() < 1e-12
+
+
+def test_riding_damper_ends_where_the_shooting_stick_time_vanishes(cf):
+    """(c) in omega: the ride shrinks to nothing where the ball lands as the wall stops
+    pressing it; the closed form of that end (the landing is a release: three equations in
+    theta, x1', omega, solved from the shooting's release near it) is omega* = 2.39342...
+    The shooting, followed from omega = 2.3, keeps a positive stick time and a physical
+    motion 1e-7 below omega* and has a negative one, flagged non-physical, 1e-7 above it
+    (the stick time's slope there is about -0.6 per unit of omega: +-6e-8, far above the
+    rounding)."""
+    osc = damper(2.3)
+    orbit = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, riding_start(osc), 0.0, 16.0))
+
+    def follow(orbit, omega):
+        scale = orbit.oscillator.omega / omega
+        return ic.multi_impact_orbit(damper(omega), 1, 2, {
+            "delta": orbit.delta, "flight_times": orbit.flight_times * scale,
+            "stick_times": orbit.stick_times * scale, "states": orbit.states,
+            "pattern": orbit.pattern})
+
+    orbit = follow(orbit, 2.39)
+    k = orbit.pattern.index("u")
+    release = orbit.release_states[k]
+    theta_r = orbit.phases[k] + orbit.oscillator.omega * orbit.stick_times[k]
+    omega_end = float(cf.riding_end((theta_r, release[2], 2.39))[0])
+    assert 2.39 < omega_end < 2.4
+    below = follow(orbit, omega_end - 1e-7)
+    above = follow(below, omega_end + 1e-7)
+    assert below.pattern.islower() and above.pattern.islower()
+    assert below.physical and np.all(below.stick_times > 0)
+    assert not above.physical and np.all(above.stick_times < 0)
+    assert "duration" in above.reason
