@@ -51,6 +51,7 @@ Newton corrections, so that the tangent follows the curve round a fold in ``p2``
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from typing import Any
@@ -130,7 +131,7 @@ def _approach_sign(problem: MultiImpactBranchProblem, u: np.ndarray, lam: float)
 
 def signed_smallest_singular_value(matrix: np.ndarray) -> float:
     """``sign(det A) s_min(A)``: a smooth test for the singularity of ``A`` (NaN if not finite)."""
-    if not np.all(np.isfinite(matrix)):
+    if not np.isfinite(matrix).all():
         return math.nan
     s = np.linalg.svd(matrix, compute_uv=False)
     sign, _ = np.linalg.slogdet(matrix)
@@ -247,12 +248,12 @@ class ShootingCurve:
         v = base.full_unknowns(u, p1) if self.symmetric else u
         G = full.jacobian_product(v, p1, self.p)
         return _approach_sign(full, v, p1) * signed_smallest_singular_value(
-            G + np.eye(G.shape[0]))
+            G + _identity(G.shape[0]))
 
     def _pitchfork_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
         """BP: ``sigma(H + I)`` of the half-map."""
         H = self.branch_problem(lam).half_map(u, p1)
-        return signed_smallest_singular_value(H + np.eye(H.shape[0]))
+        return signed_smallest_singular_value(H + _identity(H.shape[0]))
 
     def test_of(self, orbit: MultiImpactOrbit) -> float:
         """The test function at a motion (all kinds but SN, which needs the problem)."""
@@ -370,16 +371,21 @@ class ShootingCurve:
     def residual(self, x: np.ndarray, lam: float) -> np.ndarray:
         """``[F(u, p1; p2), g(u, p1; p2)]``, shape (m + 1,)."""
         x = np.asarray(x, dtype=float)
-        base = self.branch_problem(lam)
-        return np.append(base.residual(x[:-1], float(x[-1])), self.test(x, lam))
+        out = np.empty(x.size)
+        out[:-1] = self.branch_problem(lam).residual(x[:-1], float(x[-1]))
+        out[-1] = self.test(x, lam)
+        return out
 
     def jacobian(self, x: np.ndarray, lam: float) -> np.ndarray:
         """``d[F, g]/d[u, p1]``: the branch problem's exact blocks and the row of ``g``."""
         x = np.asarray(x, dtype=float)
         u, p1 = x[:-1], float(x[-1])
         base = self.branch_problem(lam)
-        top = np.column_stack([base.jacobian(u, p1), base.dparam(u, p1)])
-        return np.vstack([top, self._test_gradient(x, lam)[0]])
+        out = np.empty((x.size, x.size))
+        out[:-1, :-1] = base.jacobian(u, p1)
+        out[:-1, -1] = base.dparam(u, p1)
+        out[-1] = self._test_gradient(x, lam)[0]
+        return out
 
     def _second_column(self, base: BranchProblem, u: np.ndarray, p1: float, lam: float
                        ) -> np.ndarray:
@@ -395,8 +401,18 @@ class ShootingCurve:
         """``d[F, g]/dp2``: the branch problem in ``p2`` (exact for omega, b, R) and ``dg/dp2``."""
         x = np.asarray(x, dtype=float)
         u, p1 = x[:-1], float(x[-1])
-        column = self._second_column(self.branch_problem(lam), u, p1, lam)
-        return np.append(column, self._test_gradient(x, lam)[1])
+        out = np.empty(x.size)
+        out[:-1] = self._second_column(self.branch_problem(lam), u, p1, lam)
+        out[-1] = self._test_gradient(x, lam)[1]
+        return out
+
+
+@functools.cache
+def _identity(size: int) -> np.ndarray:
+    """The identity of `size` (read-only, made once): ``I`` of the tests ``sigma(A + I)``."""
+    eye = np.eye(size)
+    eye.flags.writeable = False
+    return eye
 
 
 def _flip_of_orbit(orbit: MultiImpactOrbit) -> float:
