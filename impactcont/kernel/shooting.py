@@ -37,7 +37,7 @@ The lower stop is the same search on ``-s`` (forced, free and polynomial parts n
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
 :func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
 :func:`branch_linearization`, :func:`palc_correct` and, for motions with sticking phases
-only, :func:`sticky_system`. An entry point that compiled code
+only, :func:`sticky_system` and :func:`sticky_newton_solve`. An entry point that compiled code
 calls too is called there with the plain tuples Python passes, so one compiled function
 serves both (no entry point wraps an inner twin: numba compiles a wrapper's callee code
 again into it). Importing :mod:`impactcont` does not import this module.
@@ -68,6 +68,7 @@ from impactcont.kernel.arrays import (
     PalcResult,
     ShootingFlow,
     ShotFlights,
+    StickyFlights,
     StopSeries,
 )
 from impactcont.kernel.contact import (
@@ -84,7 +85,8 @@ from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
            "jacobian_product", "motion_checks", "newton_solve",
-           "omega_partials", "palc_correct", "shooting_system", "sticky_system"]
+           "omega_partials", "palc_correct", "shooting_system", "sticky_newton_solve",
+           "sticky_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -915,6 +917,62 @@ def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
         norm = tnorm
     return (x, FAILED, it, norm, step_norm, _shot_tuple(sh))
 
+
+@_jit
+def sticky_newton_solve(flight, forcing, impacts, held, period, x0, tol, max_iter):
+    """:func:`newton_solve` on :func:`sticky_system`: the same iteration and stopping rules
+    for a motion with sticking phases (`held` the plain tuple of
+    :class:`~impactcont.kernel.arrays.HeldSegments`).
+
+    Returns
+    -------
+    tuple
+        ``(x, status, iterations, residual_norm, step_norm, shot)`` as :func:`newton_solve`,
+        ``shot`` the plain tuple of :class:`~impactcont.kernel.arrays.StickyFlights` at
+        ``x`` (with its Jacobian).
+
+    Notes
+    -----
+    A loop of its own beside :func:`newton_solve` (whose compiled form motions without
+    sticking phases keep unchanged: one loop over both systems was tried for the flights
+    alone and reverted).
+    """
+    x = x0.copy()
+    out = sticky_system(flight, forcing, impacts, held, period, x, _jacobian_wanted(x))
+    norm = _max_abs(StickyFlights(*out).residual)
+    step_norm = np.inf
+    it = 0
+    for it in range(max_iter + 1):
+        scale = unknowns_scale(x)
+        small = norm <= tol * scale
+        if small and (step_norm <= tol * scale or it == max_iter):
+            return (x, CONVERGED, it, norm, step_norm, out)
+        if it == max_iter:
+            break
+        sh = StickyFlights(*out)
+        J = sh.jacobian
+        if not np.all(np.isfinite(J)):
+            break
+        step, ok = _solve(J, -sh.residual)
+        if not ok:
+            break
+        lam_step = 1.0
+        while True:
+            trial = x + lam_step * step
+            tout = sticky_system(flight, forcing, impacts, held, period, trial,
+                                 _jacobian_wanted(trial))
+            tnorm = _max_abs(StickyFlights(*tout).residual)
+            finite = np.isfinite(tnorm)
+            if small and not (finite and tnorm < norm):
+                return (x, CONVERGED, it, norm, step_norm, out)
+            if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
+                break
+            lam_step *= 0.5
+        step_norm = lam_step * _max_abs(step)
+        x = trial
+        out = tout
+        norm = tnorm
+    return (x, FAILED, it, norm, step_norm, out)
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
 @_inner

@@ -1215,13 +1215,8 @@ def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
     StickyShooting
     """
     osc = flow.osc
-    impacts, sticks = sticking_pattern(osc, pattern)
-    p, m = len(pattern), 2 * osc.n
-    q = int(np.count_nonzero(sticks))
-    x = np.asarray(u, dtype=float)
-    if x.shape != (m * p + q,):
-        raise ParameterError(f"u must have shape ({m * p + q},) = (2 n p + q,) for n={osc.n}, "
-                             f"p={p} and q={q} sticking phases; got shape {x.shape}")
+    impacts = sticking_pattern(osc, pattern)[0]
+    x = _sticky_unknowns(osc, pattern, u, "u")
     out = _kernel().sticky_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
                                   tuple(impact_sequence(_geometry(flow, impacts))),
                                   held_segments(flow, pattern), TWO_PI * N / osc.omega,
@@ -1229,6 +1224,20 @@ def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
     named = StickyFlights._make(out)
     return StickyShooting(**named._replace(jacobian=named.jacobian if jacobian else None)
                           ._asdict())
+
+
+def _sticky_unknowns(osc: ImpactOscillator, pattern: str, u: Any, argument: str
+                     ) -> np.ndarray:
+    """`u` as the kernel takes it, checked to have the shape ``(2 n p + q,)`` of `pattern`
+    (the message names `argument`)."""
+    p, m = len(pattern), 2 * osc.n
+    q = int(np.count_nonzero(sticking_pattern(osc, pattern)[1]))
+    x = np.asarray(u, dtype=float)
+    if x.shape != (m * p + q,):
+        raise ParameterError(f"{argument} must have shape ({m * p + q},) = (2 n p + q,) for "
+                             f"n={osc.n}, p={p} and q={q} sticking phases; got shape "
+                             f"{x.shape}")
+    return _writable(x)
 
 
 def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
@@ -1267,42 +1276,23 @@ def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
 def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
                   max_iter: int = 40) -> tuple[np.ndarray, StickyShooting, int]:
     """:func:`newton` on :func:`sticky_shooting`: the same iteration, stopping rules and
-    messages (the compiled :func:`impactcont.kernel.shooting.newton_solve` in Python).
+    messages (compiled: :func:`impactcont.kernel.shooting.sticky_newton_solve`).
 
     Raises
     ------
     NoPeriodicMotionError
         No convergence, or a singular Jacobian.
     """
-    x = np.array(u0, dtype=float)
-    sh = sticky_shooting(flow, N, pattern, x)
-    norm = float(np.max(np.abs(sh.residual)))
-    step_norm = math.inf
-    it = 0
-    for it in range(max_iter + 1):
-        scale = unknowns_scale(x)
-        small = norm <= tol * scale
-        if small and (step_norm <= tol * scale or it == max_iter):
-            return x, sh, it
-        if it == max_iter or not np.all(np.isfinite(sh.jacobian)):
-            break
-        try:
-            step = np.linalg.solve(sh.jacobian, -sh.residual)
-        except np.linalg.LinAlgError:
-            break
-        lam = 1.0
-        while True:
-            trial = x + lam * step
-            tsh = sticky_shooting(flow, N, pattern, trial)
-            tnorm = float(np.max(np.abs(tsh.residual)))
-            finite = math.isfinite(tnorm)
-            if small and not (finite and tnorm < norm):
-                return x, sh, it
-            if finite and (tnorm < norm or tnorm <= tol * scale or lam < 1e-3):
-                break
-            lam *= 0.5
-        step_norm = lam * float(np.max(np.abs(step)))
-        x, sh, norm = trial, tsh, tnorm
+    osc = flow.osc
+    impacts = sticking_pattern(osc, pattern)[0]
+    x0 = _sticky_unknowns(osc, pattern, u0, "u0")
+    x, status, it, norm, step_norm, out = _kernel().sticky_newton_solve(
+        flow.flight_arrays(), tuple(flow.forcing_arrays()),
+        tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
+        TWO_PI * N / osc.omega, x0, float(tol), int(max_iter))
+    sh = StickyShooting(**StickyFlights._make(out)._asdict())
+    if status == 0:
+        return x, sh, int(it)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, x)
     p = len(pattern)
     if norm <= _NEAR_SOLUTION * unknowns_scale(x) and not cond * _EPS <= _ERROR_WARN:
