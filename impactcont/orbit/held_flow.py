@@ -220,7 +220,9 @@ class HeldFlow:
         k, c, f, g = self._force_rows()
         X = np.asarray(X, dtype=float)
         n = self.n
-        lam = (X[..., :n] @ k + X[..., n:] @ c - (f * np.exp(1j * np.asarray(theta))).real - g)
+        theta = np.asarray(theta, dtype=float)
+        lam = (X[..., :n] @ k + X[..., n:] @ c - f.real * np.cos(theta)
+               + f.imag * np.sin(theta) - g)
         return -self.sign * lam
 
     def pressing_gradient(self, theta: float) -> tuple[np.ndarray, float]:
@@ -252,10 +254,8 @@ class HeldFlow:
             ``(p(0), 0)`` when ``p`` has no interior minimum.
         """
         omega = self.oscillator.omega
-        best, when = float(self.pressing(np.asarray(X0, dtype=float)[None, :],
-                                         np.array([theta]))[0]), 0.0
         if not duration > 0.0:
-            return best, when
+            return float(self.pressing(np.asarray(X0, dtype=float), theta)), 0.0
         rate = omega
         if self.reduced is not None:  # a first-order flow: its eigenvalues lambda
             rate = max(rate, float(np.max(np.abs(self.reduced.lam), initial=0.0)))
@@ -267,6 +267,7 @@ class HeldFlow:
             return np.asarray(self.pressing(self.state(times, X0, theta), omega * times + theta))
 
         values = force(t)
+        best, when = float(values[0]), 0.0
         from scipy.optimize import minimize_scalar
 
         inner = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
