@@ -158,7 +158,8 @@ class MultiImpactOrbit:
         smallest clearance changes sign continuously at such a grazing.
     flight_gap_min_times : ndarray, shape (p,)
         Time of that extremum after impact k (NaN when there is none; 0 or ``tau_k``
-        for an end of the flight).
+        for an end of the flight); after the release where a sticking phase follows
+        impact k.
     jacobians : ndarray, shape (p, 2n, 2n)
         ``G_k``, Jacobian of flight k and the impact ending it (eq. 25) in
         ``z = [dx2..dxn, dx1'..dxn', d theta]``.
@@ -307,10 +308,11 @@ class MultiImpactOrbit:
 
         Returns
         -------
-        t : ndarray, shape (p*num,)
-            Time since impact 0.
-        X : ndarray, shape (p*num, 2n)
-            State; each flight starts at its post-impact state.
+        t : ndarray, shape ((p + q)*num,)
+            Time since impact 0 (q sticking phases, each sampled as a flight is).
+        X : ndarray, shape ((p + q)*num, 2n)
+            State; each flight starts at its post-impact state (at the release after a
+            sticking phase).
         """
         if isinstance(num, bool) or not isinstance(num, (int, np.integer)) or num < 2:
             raise ParameterError(f"num must be an integer >= 2; got {num!r}")
