@@ -312,24 +312,29 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
         return _finish(_empty(fig, "no simulation"), plot, "Simulations")
     trajectories = False
     held: dict[str, Any] = {}  # the legend entries of the rows with sticking phases
-    j = 1
+    symbol = "x_1"
     ticks = 3 if width < 5.0 else 6
     for sub, (_name, ds) in zip(subfigs, items, strict=True):
         osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
-        n, i = osc.n, osc.stops.index
-        j = i + 1
+        n = osc.n
+        # the stop coordinate s = n . x (x_j, or x_j - x_k for a clearance between masses)
+        normal = osc.stops.normal(n)
+        symbol = _coordinate_symbol(osc.stops.coordinate)
+        walls = [osc.b] + ([-osc.stops.b_low] if osc.stops.two_sided else [])
         if "X" in ds and ds.sizes.get("sticking", 0):
             # held on a stop: the motion over its sticking phases and the contact force
             # under it (the phase portrait would draw a held interval as one point)
             trajectories = True
             ax_l, ax_r = sub.subplots(2, 1, sharex=True, height_ratios=(3, 2))
-            motion = Series(np.asarray(ds["t"].values), np.asarray(ds["X"].values)[:, i],
+            motion = Series(np.asarray(ds["t"].values),
+                            np.asarray(ds["X"].values)[:, :n] @ normal,
                             "simulated trajectory", color="C0", linestyle="-",
                             linewidth=0.8)
             entries = time_history(ax_l, ax_r, [motion], ds, xlabel="time $t$",
-                                   ylabel=f"$x_{j}$", force_label="$p$",
+                                   ylabel=f"${symbol}$", force_label="$p$",
                                    force_entry="contact force $p$ on stop {stop}")
-            ax_l.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+            for wall in walls:
+                ax_l.axhline(wall, color="0.3", linewidth=0.8, linestyle=":")
             ax_l.margins(y=0.12)  # the accumulation points sit on the stop
             held |= {h.get_label(): h for h in entries[1:]}
         elif "X" in ds:
@@ -337,14 +342,16 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
             trajectories = True
             t = np.asarray(ds["t"].values)
             X = np.asarray(ds["X"].values)
-            ax_l.plot(t, X[:, i], color="C0", linewidth=0.8)
-            ax_l.axhline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
+            s, s_dot = X[:, :n] @ normal, X[:, n:] @ normal
+            ax_l.plot(t, s, color="C0", linewidth=0.8)
             ax_l.set_xlabel("time $t$")
-            ax_l.set_ylabel(f"$x_{j}$")
-            ax_r.plot(X[:, i], X[:, n + i], color="C0", linewidth=0.8)
-            ax_r.axvline(osc.b, color="0.3", linewidth=0.8, linestyle=":")
-            ax_r.set_xlabel(f"$x_{j}$")
-            ax_r.set_ylabel(rf"$\dot{{x}}_{j}$")
+            ax_l.set_ylabel(f"${symbol}$")
+            ax_r.plot(s, s_dot, color="C0", linewidth=0.8)
+            for wall in walls:
+                ax_l.axhline(wall, color="0.3", linewidth=0.8, linestyle=":")
+                ax_r.axvline(wall, color="0.3", linewidth=0.8, linestyle=":")
+            ax_r.set_xlabel(f"${symbol}$")
+            ax_r.set_ylabel(f"${_coordinate_symbol(osc.stops.coordinate, dot=True)}$")
         else:
             ax_l, ax_r = sub.subplots(1, 2)
             k = np.arange(ds.sizes["impact"])
@@ -361,15 +368,25 @@ def draw_simulations(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Fi
                              f"{ds.sizes['impact']} impacts, {ds.attrs.get('status', '')}",
                              fontsize="medium")
         fit_text(title)
-    handles = [Line2D([], [], color="C0", linewidth=0.8, label="simulated trajectory"),
-               Line2D([], [], color="0.3", linewidth=0.8, linestyle=":",
-                      label=f"stop $x_{j} = b$")] if trajectories else \
-        [Line2D([], [], color="C0", linestyle="none", marker=".", label="impact")]
+    if trajectories:
+        stop = "stops" if len(walls) > 1 else f"stop ${symbol} = b$"
+        handles = [Line2D([], [], color="C0", linewidth=0.8, label="simulated trajectory"),
+                   Line2D([], [], color="0.3", linewidth=0.8, linestyle=":", label=stop)]
+    else:
+        handles = [Line2D([], [], color="C0", linestyle="none", marker=".", label="impact")]
     handles += list(held.values())
     fig.legend(handles=handles, loc="outside lower center",
                ncols=min(len(handles), 2 if width < 5.0 else 3),
                fontsize=legend_fontsize(fig), frameon=False)
     return _finish(fig, plot, "Simulations")
+
+
+def _coordinate_symbol(coordinate: str, *, dot: bool = False) -> str:
+    r"""Mathtext (without dollars) of a stop coordinate's text (``Stops.coordinate``):
+    ``"x2 - x1"`` -> ``x_2 - x_1``, its velocity (`dot`) ``\dot{x}_2 - \dot{x}_1``."""
+    import re
+
+    return re.sub(r"x(\d+)", r"\\dot{x}_\1" if dot else r"x_\1", coordinate)
 
 
 def _component_symbol(name: str) -> str:

@@ -638,3 +638,30 @@ def test_a_simulation_with_sticking_is_drawn_as_its_time_history(held_simulation
     assert len(motion.patches) == next(iter(held_simulation.values())).sizes["sticking"] > 0
     labels = {t.get_text() for leg in fig.legends for t in leg.get_texts()}
     assert {"held (sticking)", "simulated trajectory", "accumulation point"} <= labels
+
+
+@pytest.fixture(scope="module")
+def riding_simulation(tmp_path_factory):
+    """The sticking-motions study's scene: the plastic ball of an impact damper riding each
+    wall of its clearance ``|x2 - x1| <= 0.3`` (a stop between two masses, two walls)."""
+    scene = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions" / "scene.toml"
+    out = tmp_path_factory.mktemp("riding")
+    return run_scene(scene, output=out).datasets["simulations"]
+
+
+def test_a_simulation_draws_its_stop_coordinate_and_both_walls(riding_simulation):
+    """For a clearance between masses the motion drawn is the stop coordinate ``x2 - x1``
+    with both walls, not ``x2`` against ``x2 = b`` (it drew the ball's own coordinate)."""
+    fig = figures.draw_simulations(riding_simulation, _Options(width=7.0))
+    _assert_clean(fig)
+    motion = fig.axes[0]
+    assert motion.get_ylabel() == "$x_2 - x_1$"
+    ds = next(iter(riding_simulation.values()))
+    X = np.asarray(ds["X"].values)
+    line = motion.get_lines()[0]
+    np.testing.assert_array_equal(line.get_ydata(), X[:, 1] - X[:, 0])
+    walls = sorted(float(h.get_ydata()[0]) for h in motion.get_lines()[1:]
+                   if h.get_linestyle() == ":")
+    assert walls == [-0.3, 0.3]
+    labels = {t.get_text() for leg in fig.legends for t in leg.get_texts()}
+    assert "stops" in labels
