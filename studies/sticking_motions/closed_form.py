@@ -65,6 +65,7 @@ __all__ = [
     "Damper",
     "StickyMotion",
     "first_root",
+    "locked_ball_limit",
     "locked_ball_motion",
     "preloaded_motion",
     "pressing_minimum",
@@ -423,6 +424,22 @@ def locked_ball_motion(Gamma, *, g=1, omega=1) -> StickyMotion:
                         landing_pressing=[p_land],
                         pressing_min=[pressing_minimum(pressing, period - tau)],
                         multipliers=[zero, zero])
+
+
+@_at_dps
+def locked_ball_limit() -> mpmath.mpf:
+    """Case (b): the largest ``Gamma`` with the locked motion of one table period,
+    ``sqrt(1 + pi^2)``.
+
+    Notes
+    -----
+    There the flight lasts the whole period and the ball lands at its own release phase
+    (the stick shrinks to nothing): ``y(2 pi / omega) = 0`` in :func:`locked_ball_motion`'s
+    flight, ``-2 pi^2 g / omega^2 - 2 pi A sin(theta_r) = 0``, with ``cos(theta_r) = 1/Gamma``
+    and ``sin(theta_r) < 0``: ``Gamma^2 - 1 = pi^2``. Derived here from the flight; whatever
+    ``g`` and ``omega``.
+    """
+    return mp.sqrt(1 + mp.pi**2)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -282,3 +282,18 @@ def test_riding_damper_ends_where_the_shooting_stick_time_vanishes(cf):
     assert below.physical and np.all(below.stick_times > 0)
     assert not above.physical and np.all(above.stick_times < 0)
     assert "duration" in above.reason
+
+
+def test_locked_ball_motion_ends_at_its_closed_form_limit(cf):
+    """(b) The locked motion of one table period exists up to Gamma_1 = sqrt(1 + pi^2),
+    where the flight fills the period (derived in closed_form.locked_ball_limit): just
+    below, the stick is short (it vanishes linearly) and the shooting finds it; just above,
+    no landing within the period."""
+    limit = float(cf.locked_ball_limit())
+    assert limit == pytest.approx(math.sqrt(1 + math.pi**2), rel=1e-15)
+    near = cf.locked_ball_motion(limit - 1e-4)
+    assert 0 < float(near.stick_times[0]) < 1e-3
+    res = ic.simulate(ball(limit - 1e-4), [0.0, 0.0], -0.5 * math.pi, 4.0)
+    check_shooting(near, ic.multi_impact_orbit(ball(limit - 1e-4), 1, 1, res, pattern="l"))
+    with pytest.raises(ValueError, match="no return to the stop"):
+        cf.locked_ball_motion(limit + 1e-6)
