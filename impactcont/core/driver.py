@@ -90,6 +90,15 @@ class BranchRun:
     stop : StopRule, optional
         The driver's rule, shown every accepted point (the start with
         ``previous=None``) before it is yielded.
+    start : ContinuationPoint, optional
+        The corrected start of the run from the same guess in the other direction
+        (its :attr:`start`): taken with its tangent reversed instead of correcting the
+        guess again (:meth:`~impactcont.core.stepper.PalcStepper.init_reversed`).
+
+    Attributes
+    ----------
+    start : ContinuationPoint or None
+        The corrected start point, once the run has it.
     """
 
     def __init__(
@@ -100,6 +109,7 @@ class BranchRun:
         options: ContinuationOptions,
         direction: int | None = None,
         stop: StopRule | None = None,
+        start: ContinuationPoint | None = None,
     ) -> None:
         self.u0, self.lam0 = _validated_start(u0, lam0, options)
         self.problem = problem
@@ -112,6 +122,8 @@ class BranchRun:
         self.status: ContinuationStatus | None = None
         self.message = "not run yet"
         self._started = False
+        self._reversed = start
+        self.start: ContinuationPoint | None = None
 
     def __iter__(self) -> Iterator[ContinuationPoint]:
         if self._started:
@@ -148,11 +160,15 @@ class BranchRun:
     def _run(self) -> Iterator[ContinuationPoint]:
         _accept(self.problem, self.u0, self.lam0)
         stepper = PalcStepper(self.problem, self.options, self.direction)
-        try:
-            start = stepper.init(self.u0, self.lam0)
-        except NewtonConvergenceError as error:
-            self._finish(ContinuationStatus.NEWTON_FAILED_AT_START, str(error))
-            return
+        if self._reversed is not None:
+            start = stepper.init_reversed(self._reversed)
+        else:
+            try:
+                start = stepper.init(self.u0, self.lam0)
+            except NewtonConvergenceError as error:
+                self._finish(ContinuationStatus.NEWTON_FAILED_AT_START, str(error))
+                return
+        self.start = start
         yield from self._emit(None, start)
         if self.status is not None:
             return
@@ -427,19 +443,21 @@ def follow(
     direction is not computed, and the `events` are located on the points kept (a second
     Ctrl-C aborts that).
     """
-    def run(direction: int) -> BranchRun:
+    def run(direction: int, start: ContinuationPoint | None = None) -> BranchRun:
         return BranchRun(problem, u0, lam0, options, direction,
-                         None if stop is None else stop(direction))
+                         None if stop is None else stop(direction), start)
 
-    forward = _collect(run(options.direction), on_point)
+    first = run(options.direction)
+    forward = _collect(first, on_point)
     if not options.both_directions:
         result = _result_one_direction(forward)
     elif forward.status in _STATUSES_SKIPPING_BACKWARD:
         result = _result_one_direction(
             forward, forward.status, f"skipped, {_STATUSES_SKIPPING_BACKWARD[forward.status]}"
         )
-    else:
-        result = _result_both_directions(forward, _collect(run(-options.direction), on_point))
+    else:  # from the start the forward run corrected, not corrected again
+        result = _result_both_directions(
+            forward, _collect(run(-options.direction, first.start), on_point))
     if events and len(result) > 1:
         found = locate_events(problem, result.u, result.lam, result.tangent, events)
         result = dataclasses.replace(result, events=tuple(found))

@@ -231,6 +231,35 @@ class PalcStepper:
         logger.debug("start point corrected at lam = %.10g in %d iterations", lam0, iterations)
         return self._current
 
+    def init_reversed(self, start: ContinuationPoint) -> ContinuationPoint:
+        """Start from the corrected start of the run in the other direction.
+
+        What :meth:`init` computes from the same guess, without computing it again: the
+        point of `start` with its tangent reversed (:meth:`init` orients the same null
+        vector by the run direction, so the two tangents are exact opposites, at a fold
+        too), index 0 and this stepper's direction.
+
+        Parameters
+        ----------
+        start : ContinuationPoint
+            The point :meth:`init` returned to the stepper of the other direction.
+
+        Returns
+        -------
+        ContinuationPoint
+            The start point of this run (also :attr:`current`).
+        """
+        if start.direction != -self.direction:
+            raise ValueError(f"init_reversed: the start of a run in direction "
+                             f"{start.direction:+d}; this one runs in {self.direction:+d}")
+        self._weights = np.append(np.full(start.u.shape[0], 1.0 / start.u.shape[0]),
+                                  self.options.theta)
+        self._current = ContinuationPoint(
+            u=start.u.copy(), lam=start.lam, tangent=-start.tangent, ds=0.0,
+            newton_iterations=start.newton_iterations, index=0, direction=self.direction,
+            monitors=dict(start.monitors))
+        return self._current
+
     def _initial_tangent(self, u: FloatArray, lam: float) -> FloatArray:
         """Null vector of ``[J | dF/dlam]`` oriented by the run direction."""
         extended = np.column_stack([self._jacobian(u, lam), self._dparam(u, lam)])

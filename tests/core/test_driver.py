@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import logging
 import math
@@ -484,3 +485,55 @@ def test_a_run_started_after_ctrl_c_was_taken_stops_at_its_first_point() -> None
         assert take_interrupt("location", "a first Ctrl-C")
         result = continue_branch(Line(), [0.0], 0.0, options)
     assert len(result) == 1 and result.interrupted
+
+
+class _CountedTiltedCircle(TiltedCircle):
+    """:class:`TiltedCircle` counting its residuals at the start's parameter."""
+
+    def __init__(self, lam0: float) -> None:
+        self.lam0, self.at_start = lam0, 0
+
+    def residual(self, u: np.ndarray, lam: float) -> np.ndarray:
+        self.at_start += lam == self.lam0
+        return super().residual(u, lam)
+
+
+@pytest.mark.parametrize(("problem", "u0", "lam0"), [
+    (TiltedCircle, [0.3, 0.9], 0.3), (Parabola, [0.0], 0.0), (Cubic, [-1.1], -0.231)])
+def test_the_backward_run_starts_from_the_start_the_forward_run_corrected(problem, u0, lam0
+                                                                        ) -> None:
+    """Issue 29 (the fixed costs of a short branch): with both directions the start guess
+    is corrected once; the backward run takes that point with its tangent reversed (what a
+    second correction of the same guess gives, at a fold too: Parabola starts on one). The
+    joined branch is the one of two runs each correcting the guess, to the bit (the same
+    operations); a problem counting its residuals at the start sees one correction."""
+    options = ContinuationOptions(bounds=(-0.5, 0.5), ds=0.05, both_directions=True)
+    joined = continue_branch(problem(), u0, lam0, options)
+    assert joined.backward_status is ContinuationStatus.BOUNDS_REACHED
+    runs = [list(iter_points(problem(), u0, lam0, options, direction))
+            for direction in (options.direction, -options.direction)]
+    backward = [dataclasses.replace(p, tangent=-p.tangent) for p in reversed(runs[1][1:])]
+    separate = backward + runs[0]
+    assert joined.start_index == len(backward)
+    np.testing.assert_array_equal(joined.u, [p.u for p in separate])
+    np.testing.assert_array_equal(joined.lam, [p.lam for p in separate])
+    np.testing.assert_array_equal(joined.tangent, [p.tangent for p in separate])
+    assert runs[1][0].direction == -1 and np.array_equal(runs[1][0].tangent,
+                                                          -runs[0][0].tangent)
+    counted = _CountedTiltedCircle(0.3)
+    start = list(iter_points(counted, [0.3, 0.9], 0.3, options))[:1]
+    corrections = counted.at_start
+    assert start and corrections >= 1
+    counted.at_start = 0
+    continue_branch(counted, [0.3, 0.9], 0.3, options)
+    assert counted.at_start == corrections  # the backward run evaluates nothing there
+
+
+def test_a_reversed_start_must_come_from_the_other_direction() -> None:
+    stepper = PalcStepper(Cubic(), ContinuationOptions(bounds=(-1.0, 1.0)), 1)
+    start = stepper.init(np.array([-1.2]), -0.528)
+    with pytest.raises(ValueError, match=r"the start of a run in direction \+1; this one runs "
+                                         r"in \+1"):
+        PalcStepper(Cubic(), ContinuationOptions(bounds=(-1.0, 1.0)), 1).init_reversed(start)
+    again = PalcStepper(Cubic(), ContinuationOptions(bounds=(-1.0, 1.0)), -1)
+    assert np.array_equal(again.init_reversed(start).tangent, -start.tangent)
