@@ -258,14 +258,18 @@ class _Watch:
     with `stop_after_pd`, that many points after the first sign change of the
     PD test function. A problem whose motions are evaluated after the run
     (``motion_in_step = False``, the closed form) keeps None for each point unless a
-    rule or `on_point` needs the motion.
+    rule or `on_point` needs the motion. `starts` holds the motion at the start of a
+    branch by :func:`_start_key`, shared by the watches of both directions (the backward
+    run starts from the very point the forward run corrected).
     """
 
     def __init__(self, problem: BranchProblem, stop_after_pd: int | None,
-                 on_point: Callable[[Any], None] | None) -> None:
+                 on_point: Callable[[Any], None] | None,
+                 starts: dict[tuple[bytes, float], Any] | None = None) -> None:
         self.problem = problem
         self.stop_after_pd = stop_after_pd
         self.on_point = on_point
+        self.starts = {} if starts is None else starts
         self.orbits: list[Any] = []
         self.reference: np.ndarray | None = None
         self.remaining: int | None = None
@@ -278,7 +282,13 @@ class _Watch:
         if not self.eager:
             self.orbits.append(None)  # evaluated once the branch is traced (_trace)
             return None
-        orbit = problem.orbit(current.u, current.lam)
+        if previous is None:  # the start: its motion once for both directions
+            key = _start_key(current)
+            orbit = self.starts.get(key)
+            if orbit is None:
+                orbit = self.starts[key] = problem.orbit(current.u, current.lam)
+        else:
+            orbit = problem.orbit(current.u, current.lam)
         asym = _asymmetry(orbit)
         if asym is not None:
             small = np.max(np.abs(asym)) <= _PARENT_TOL * max(1.0, float(np.max(np.abs(
@@ -307,15 +317,21 @@ class _Watch:
         return None
 
 
+def _start_key(point: ContinuationPoint) -> tuple[bytes, float]:
+    """Where :class:`_Watch` keeps the motion at the start `point`."""
+    return np.asarray(point.u, dtype=float).tobytes(), float(point.lam)
+
+
 def _trace(problem: BranchProblem, u0: np.ndarray, lam0: float, options: ContinuationOptions,
            *, stop_after_pd: int | None = None, on_point: Callable[[Any], None] | None = None,
            progress: Reporter | None = None) -> tuple[list[BranchSample], Any, str]:
     """Follow a branch (one or both directions): its samples in branch order, the core's
     result and the stop message (empty samples when the start could not be corrected)."""
     watches: dict[int, _Watch] = {}
+    starts: dict[tuple[bytes, float], Any] = {}
 
     def watch(direction: int) -> _Watch:
-        watches[direction] = _Watch(problem, stop_after_pd, on_point)
+        watches[direction] = _Watch(problem, stop_after_pd, on_point, starts)
         return watches[direction]
 
     options, limit = _within_limits(problem, options)

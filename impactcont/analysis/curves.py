@@ -345,13 +345,16 @@ def _keep_orbit(problem: ShootingCurve, point: ContinuationPoint,
     """The motion at an accepted curve point, into `orbits` (:class:`_CurveWatch`).
 
     A motion that cannot be evaluated is left out: it is asked for again after the run,
-    where its error is raised if the point is kept.
+    where its error is raised if the point is kept. The start, seen by both directions, is
+    evaluated once.
     """
+    key = _orbit_key(point.u, point.lam)
+    if key in orbits:
+        return
     try:
-        orbit = problem.orbit(point.u, point.lam)
+        orbits[key] = problem.orbit(point.u, point.lam)
     except (ImpactcontError, ArithmeticError, np.linalg.LinAlgError):
         return
-    orbits[_orbit_key(point.u, point.lam)] = orbit
 
 
 def _on_curve(point: ContinuationPoint, x: np.ndarray) -> ContinuationPoint:

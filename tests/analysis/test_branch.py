@@ -429,3 +429,27 @@ def test_one_driver_runs_the_closed_form_problem(paper_system):
                  "special_precision", "special_status"):
         np.testing.assert_array_equal(got[name].values, want[name].values, err_msg=name)
 
+
+
+def test_the_motion_at_the_start_of_a_branch_is_evaluated_once(paper_system, monkeypatch):
+    """Issue 29 (the fixed costs of a short branch): the watches of both directions share
+    the motion at the start (the backward run starts from the very point the forward run
+    corrected); before, each evaluated it, with its contact checks."""
+    from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+
+    osc = paper_system.replace(omega=1.5)
+    physical = next(o for o in ic.periodic_orbits(osc, 1) if o.physical)
+    start = ic.multi_impact_orbit(osc, 1, 1, physical)
+    seen = []
+    orbit = MultiImpactBranchProblem.orbit
+
+    def counted(self, u, lam, **kwargs):
+        seen.append(float(lam))
+        return orbit(self, u, lam, **kwargs)
+
+    monkeypatch.setattr(MultiImpactBranchProblem, "orbit", counted)
+    ds = ic.multi_impact_continuation(start, "omega", (1.45, 1.55), detect=(),
+                                      both_directions=True)
+    assert ds.sizes["point"] >= 3 and np.any(ds.omega.values < 1.5) and np.any(
+        ds.omega.values > 1.5)
+    assert seen.count(1.5) == 1, seen
