@@ -567,6 +567,26 @@ class StopMotion:
             values = _combine(fl.propagate(t - self.origin, self.Y_origin), self.rows.T)
         return values[:, 0], values[:, 1], values[:, 2], values[:, 3]
 
+    def size(self) -> float:
+        """The size of the terms ``y`` is summed from at the start (or anchor): an
+        evaluation of ``y`` is exact only up to a few ulps of it.
+
+        Returns
+        -------
+        float
+            ``sum_k |c_k|`` over the modal terms on the fast path (with the polynomial
+            part's coefficients), and never less than ``|r| . |Y|`` (the row's terms over
+            the internal state, the forcing states included): ``y`` is a sum of these
+            terms, so its rounding scales with them, not with ``|y|``. At a stop at
+            ``s = 0`` with the stop coordinate on it (``b = 0``), ``|y|`` and the stop's
+            position are both zero while the state and the forcing are not.
+        """
+        terms = float(np.abs(self.row) @ np.abs(self.Y_origin))
+        if self.flight.fast:
+            terms = max(terms, float(np.sum(np.abs(self.weights)))
+                        + abs(self.p1) + abs(self.p2))
+        return terms
+
     def anchor(self, t: float) -> None:
         """Evaluate from time `t` on (the slow path; the fast path needs no anchor)."""
         if not self.flight.fast and t != self.origin:

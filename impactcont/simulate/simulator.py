@@ -22,7 +22,11 @@ continues as a sticking phase (:mod:`impactcont.simulate.sticking`), the same fo
 fixed to the frame, a clearance between two masses and every extra stop. Impacts that
 accumulate on a stop (complete chatter) are summed to their accumulation point, where a
 sticking phase starts (:mod:`impactcont.simulate.chatter`). A plastic impact (restitution
-0) leaves the stop coordinate's speed exactly zero. A coordinate short of its stop by more
+0) leaves the stop coordinate's speed exactly zero. A crossing met without speed towards the
+stop (``<= 0``: rounding, e.g. of a coordinate leaving a stop at ``b = 0`` after a release)
+is a touch at zero speed, not an impact: the speed is made exactly zero by the stop's
+plastic law and the contact forces decide, a sticking phase or a grazing; every recorded
+impact has a speed ``> 0`` towards its stop. A coordinate short of its stop by more
 than rounding is searched along the flight however slowly it approaches, so the next
 contact is not taken too early (issue 28: no result crosses a stop).
 
@@ -51,7 +55,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER, StopView
-from impactcont.simulate.chatter import ChatterPoint, accumulation
+from impactcont.simulate.chatter import ChatterPoint, accumulation, plastic_projection
 from impactcont.simulate.contact import next_contact
 from impactcont.simulate.flight import Flight, flight_of
 from impactcont.simulate.sticking import (
@@ -353,13 +357,14 @@ def _separation_time(flight: Flight, X: np.ndarray, phase: float, view: StopView
     """How long after a release at X the stop coordinate stays within rounding of its stop.
 
     At a release the contact force, hence the free acceleration of ``s``, is zero: ``s``
-    leaves the stop as ``s''' t^3 / 6``, and an evaluation of ``s`` is exact only up to
-    ``_ON_ULPS`` ulps of its size. A crossing of that stop before this time is rounding, not
-    an impact (:func:`next_contact`'s ``after``)."""
-    n = flight.n
+    leaves the stop as ``s''' t^3 / 6``, and an evaluation of ``s`` along the flight is
+    exact only up to ``_ON_ULPS`` ulps of the terms it is summed from
+    (:meth:`~impactcont.simulate.flight.StopMotion.size`: the whole state and the forcing
+    states, not ``s`` alone, which is zero on a stop at ``b = 0``). A crossing of that stop
+    before this time is rounding, not an impact (:func:`next_contact`'s ``after``)."""
     motion = flight.motion(X, phase, view.normal, view.sign)
     jerk = abs(float(motion.derivatives(np.zeros(1))[3][0]))
-    band = _ON_ULPS * _EPS * (abs(view.position) + float(np.abs(view.normal) @ np.abs(X[:n])))
+    band = _ON_ULPS * _EPS * (abs(view.position) + motion.size())
     rate, _ = flight.time_scales(view.normal)
     cap = _RELEASE_SPAN * TWO_PI / rate
     if jerk == 0.0:
@@ -427,6 +432,15 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     zero (the release, located to a few ulps on that flow) or another stop is hit (an
     impact while held: :func:`~impactcont.simulate.sticking.impact_with_held`). Several
     stops may be held at once (:func:`~impactcont.simulate.sticking.holding`).
+
+    A stop met without speed towards it (the speed at the crossing ``<= 0``, which only
+    rounding gives) is touched at zero speed, not hit: no impact is recorded, the stop
+    coordinate's speed is set to zero by the stop's plastic law (a change of rounding size)
+    and the contact forces decide as above: a sticking phase starts if they press it into
+    the stop, otherwise the motion goes on past a grazing (logged at level INFO). After a
+    release the stop coordinate leaves as ``s''' t^3 / 6``; crossings while it is within
+    rounding of the stop (``_ON_ULPS`` ulps of the terms ``s`` is summed from, the whole
+    state and the forcing) are rounding and are not searched.
     """
     X = _check_state(osc, state)
     if isinstance(periods, bool) or not isinstance(periods, numbers.Real) or not (
@@ -491,6 +505,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     released: dict[str, float] = {}  # stops just released -> their separation time
     last: str | None = None  # the stop of the impact that starts this flight
     switches = 0  # changes of the held set at one instant (a guard against a loop)
+    touches = 0  # touches at zero speed at one instant (the same guard)
     while True:
         fl = flight_for(held)
         free_views = {s: views[s] for s in sides if s not in held}
@@ -556,6 +571,22 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         X = X_minus.copy()
         p = views[side].pivot  # s on the stop: x_p = c - sum_{i != p} n_i x_i (n_p = 1)
         X[p] = level[side] - float(np.delete(normal[side], p) @ np.delete(X_minus[:n], p))
+        if v <= 0.0:
+            # an upward crossing met without speed towards the stop: a touch at zero speed
+            # (its speed is rounding), not an impact. The speed is made exactly zero by the
+            # stop's plastic law and the contact forces decide at the top of the loop: a
+            # sticking phase starts if they press it into the stop, else the flight goes on
+            # past a grazing (:func:`_contact_now`, :func:`holding`)
+            log.info("t=%.17g: stop %r touched at zero speed (%.3g towards it): not an "
+                     "impact; a sticking phase or a grazing", t_now, side, v)
+            X[n:] = plastic_projection(views[side], X_minus[n:])
+            touches = touches + 1 if tc == 0.0 else 1  # touches at one instant in a row
+            if touches > 4 * len(sides) + 4:
+                raise RuntimeError(f"stop {side!r} touched at zero speed again and again at "
+                                   f"t={t_now!r} (state {X.tolist()}); please report this "
+                                   "case")
+            last = None
+            continue
         if held:  # an impact while stops are held: those whose impulses press them stay
             close(held, "impact")
             X[n:], kept = impact_with_held(osc, X_minus[n:], side, held)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import math
 
 import numpy as np
@@ -309,3 +310,61 @@ def test_random_machines_never_end_in_chatter_or_sticking():
         chatter += len(res.chatter)
         sticking += len(res.sticking)
     assert chatter >= 5 and sticking >= 8
+
+
+def _paper_held_at_b0():
+    """The paper's system at b = 0 held on its stop (``x1 = 0``, ``x1' = 0``) where a
+    complete chatter of the brute-force sweep of studies/bifurcation_diagram accumulates
+    (omega = 3.042, the sweep up); the pressing force falls to zero 0.224 later and mass 1
+    leaves the stop. Returns the oscillator, the state and the forcing phase."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                              R=0.6, b=0.0, omega=3.0420168067226894, eta=0.1)
+    return osc, np.array([0.0, 0.14380297159688704, 0.0, -0.058024667562366156]), \
+        0.9916597756110617
+
+
+def test_separation_time_after_a_release_on_a_stop_at_zero():
+    """At b = 0 the stop coordinate and the stop position are both zero at a release; the
+    rounding of s along the flight is that of the terms it is summed from (the state and the
+    forcing), so the coordinate is within rounding of the stop for a time > 0 (it was 0)."""
+    simulator = importlib.import_module("impactcont.simulate.simulator")
+    osc, X, phase = _paper_held_at_b0()
+    t_release = simulate(osc, X, phase, 0.5).sticking[0].duration
+    flight = simulator.Flight(osc)
+    X_r = simulator.HeldFlight(osc, ("U",)).state(t_release, X, phase)
+    phase_r = phase + osc.omega * t_release
+    view = osc.stops.stop("U", osc.M, osc.b, osc.R)
+    motion = flight.motion(X_r, phase_r, view.normal, view.sign)
+    _, ds, acc, jerk = (float(d[0]) for d in motion.derivatives(np.zeros(1)))
+    assert X_r[0] == 0.0 and ds == 0.0 and abs(acc) < 1e-12 and jerk < -1.0  # it leaves
+    t_sep = simulator._separation_time(flight, X_r, phase_r, view)
+    # |s| stays below 256 ulps of the state's size (about 0.2) for (6 * 1e-14 / 3)^(1/3)
+    assert 1e-5 < t_sep < 1e-4, t_sep
+
+
+def test_release_on_a_stop_at_zero_is_not_an_impact():
+    """Issue 30 (H6): after that release the brute-force sweep recorded two impacts at
+    once, at speeds -1.1e-16 and 6.7e-17 (a crossing of the stop by rounding); mass 1
+    leaves the stop and meets it again only after more than half a period."""
+    osc, X, phase = _paper_held_at_b0()
+    res = simulate(osc, X, phase, 0.5, trajectory=True)
+    assert res.success
+    assert res.impact_velocities.size == 0, res.impact_velocities
+    assert [p.ended_by for p in res.sticking] == ["release"]
+    assert res.final_state[0] < -0.1 and np.all(res.X[:, 0] <= 0.0)
+
+
+def test_a_crossing_met_at_zero_speed_is_a_touch_not_an_impact(monkeypatch):
+    """Should rounding still show an upward crossing where the coordinate has no speed
+    towards the stop (here: the separation time after a release taken as 0, as before the
+    fix above), it is a touch at zero speed: not an impact; the contact forces decide
+    (here they pull away: a grazing) and the motion goes on as without the crossing."""
+    simulator = importlib.import_module("impactcont.simulate.simulator")
+    osc, X, phase = _paper_held_at_b0()
+    reference = simulate(osc, X, phase, 0.5)
+    monkeypatch.setattr(simulator, "_separation_time", lambda *args: 0.0)
+    res = simulate(osc, X, phase, 0.5)
+    assert res.success
+    assert res.impact_velocities.size == 0, res.impact_velocities
+    assert [p.ended_by for p in res.sticking] == ["release"]
+    np.testing.assert_allclose(res.final_state, reference.final_state, rtol=0, atol=1e-12)
