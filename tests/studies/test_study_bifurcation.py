@@ -106,6 +106,19 @@ def test_brute_force_dataset(outputs):
     assert math.isfinite(timing["total_seconds"])
 
 
+def test_brute_force_sweep_through_chatter_at_b0_records_only_arriving_impacts(study):
+    """The full run's sweep up at b = 0 (120 omegas) passes omega = 3.042 and 3.088 through
+    complete chatter and sticking phases; it stored an impact at speed -5.55e-17 there (a
+    crossing of the stop by rounding right after a release, issue 30). Two of its omegas
+    with the quick transient reproduce it (about 2 s): every impact arrives towards the
+    stop."""
+    omegas = np.linspace(*study.OMEGA_RANGE, study.N_OMEGA)[[55, 56]]
+    sweep = study.sweep(0.0, "up", omegas, study.TRANSIENT_QUICK, study.RECORD_QUICK)
+    for omega, row in sweep["rows"].items():
+        assert row["status"] == "COMPLETED", omega
+        assert row["v"].size > 0 and np.all(row["v"] > 0), (omega, row["v"].min())
+
+
 def test_special_points_at_the_end_of_a_physical_part_are_boundary(study):
     """The N = 3 branch at b = 0.5 is physical from its ZV (1.2134624) to its GR (1.2160683);
     its fold (SN, 1.2160739) lies just beyond. GR and SN are bracketed by the last physical
