@@ -230,7 +230,8 @@ def impacts_attribute(ds: xr.Dataset) -> int:
 
 
 def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
-                            name: str = "pattern", extra: str = "") -> str:
+                            name: str = "pattern", extra: str = "", *,
+                            sticking: bool = False) -> str:
     """The impact pattern of an N-p branch: ``p`` letters, the stop of each impact.
 
     Parameters
@@ -245,6 +246,10 @@ def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
         The attribute, for the message.
     extra : str
         The names of the oscillator's extra stops (:class:`~impactcont.model.stops.Stop`).
+    sticking : bool
+        Accept a stop's letter in lowercase too (that stop's plastic impact followed by a
+        sticking phase: a branch of motions with sticking phases,
+        :func:`~impactcont.orbit.multi_impact.sticking_pattern`).
 
     Returns
     -------
@@ -263,8 +268,12 @@ def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
         stops += "".join(f", {s!r}" for s in extra) + " (extra stops)"
     allowed = (f"{p} letter{'s' if p != 1 else ''} (one per impact) from {stops}"
                + ("" if two_sided is not False else ": the oscillator has no lower stop"))
-    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - set(letters) - set(
-            extra):
+    names = set(letters) | set(extra)
+    if sticking:
+        names |= {c.lower() for c in names}
+        if isinstance(pattern, str) and pattern != pattern.upper():
+            allowed += " (lowercase where a sticking phase follows the impact)"
+    if not isinstance(pattern, str) or len(pattern) != p or set(pattern) - names:
         raise _refused(name, pattern, allowed)
     return pattern
 
@@ -314,9 +323,11 @@ def _finite_parameters(ds: xr.Dataset, parameter: str) -> None:
 def _pattern(value: Any, ds: xr.Dataset, osc: ImpactOscillator | None) -> None:
     pattern = check_pattern_attribute(value, impacts_attribute(ds),
                                       None if osc is None else osc.stops.two_sided,
-                                      extra="" if osc is None else extra_stop_names(osc))
-    if osc is not None:
-        _pattern_of_states(pattern, ds, osc)
+                                      extra="" if osc is None else extra_stop_names(osc),
+                                      sticking=True)
+    if osc is not None:  # a sticking phase's impact is on its stop's capital
+        _pattern_of_states("".join(c if c in osc.stops.names else c.upper()
+                                   for c in pattern), ds, osc)
 
 
 # The state right after an impact is on its stop to rounding (the stop position is set,
@@ -550,8 +561,10 @@ def _periods(value: Any, ds: xr.Dataset, osc: Any) -> None:
 def _stored_periods(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray] | None:
     """``(period, omega)`` of the motions stored in ``ds``, where its variables give both.
 
-    The period of an N-p branch is the sum of its flight times; an orbits dataset
-    stores it. None where the dataset has neither (an N-1 branch, a map, ...).
+    The period of an N-p branch is the sum of its flight times (and stick times, on a
+    branch of motions with sticking phases: none known without ``stick_time_k``); an
+    orbits dataset stores it. None where the dataset has neither (an N-1 branch, a map,
+    ...).
     """
     def values(name: str, dims: tuple[str, ...]) -> np.ndarray | None:
         var = ds.variables.get(name)
@@ -562,6 +575,12 @@ def _stored_periods(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray] | None:
     omega = values("omega", ("point",))
     taus = values("flight_time_k", ("point", "impact"))
     if omega is not None and taus is not None:
+        sticks = values("stick_time_k", ("point", "impact"))
+        if sticks is not None:
+            return taus.sum(axis=1) + sticks.sum(axis=1), omega
+        pattern = ds.attrs.get("pattern")
+        if isinstance(pattern, str) and pattern != pattern.upper():
+            return None  # sticking phases whose durations are not stored
         return taus.sum(axis=1), omega
     omega, period = values("omega", ()), values("period", ("orbit",))
     if omega is not None and period is not None:
