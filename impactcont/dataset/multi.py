@@ -15,7 +15,13 @@ plot and :func:`impactcont.dataset.load` takes it unchanged) with:
   special points (``special_<name>`` on ``(special, impact)``);
 - the attribute ``impacts = p``, and ``pattern`` (p letters ``U``/``L``: the stop
   of each impact, see :mod:`impactcont.model.stops`; all ``U`` for the paper's
-  single stop, and read so when absent).
+  single stop, and read so when absent; a lowercase letter: a plastic impact followed
+  by a sticking phase on that stop, :func:`~impactcont.orbit.multi_impact.sticking_pattern`);
+- on a branch of motions with sticking phases, the variables of
+  :data:`STICKING_VARIABLES` on ``(point, impact)`` (``stick_time_k``, ``pressing_min_k``,
+  ``release_state_k`` on ``(point, impact, component)``; 0 and NaN after an impact that no
+  sticking phase follows) and ``special_stick_time_k`` at the special points
+  (:func:`sticking_columns` makes them from the motions).
 
 A dataset without the ``impact`` dimension (an N-1 branch of
 :func:`impactcont.continuation`) is read as ``p = 1``.
@@ -45,8 +51,8 @@ from impactcont.dataset.schema import (
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER
 
-__all__ = ["IMPACT_VARIABLES", "impacts_of", "multi_impact_dataset", "pattern_of",
-           "validate_multi_impact_dataset"]
+__all__ = ["IMPACT_VARIABLES", "STICKING_VARIABLES", "impacts_of", "multi_impact_dataset",
+           "pattern_of", "sticking_columns", "validate_multi_impact_dataset"]
 
 #: Per-impact variables (dims ``(point, impact)``, ``state_k`` adds ``component``).
 IMPACT_VARIABLES: dict[str, _Var] = {
@@ -73,6 +79,63 @@ IMPACT_VARIABLES: dict[str, _Var] = {
 
 #: Per-impact variables also stored at the special points (``special_<name>``).
 SPECIAL_IMPACT_VARIABLES = ("delta_k", "impact_velocity_k", "flight_time_k", "state_k")
+
+#: Per-impact variables of a branch of motions with sticking phases (dims ``(point,
+#: impact)``, ``release_state_k`` adds ``component``): present together or not at all.
+STICKING_VARIABLES: dict[str, _Var] = {
+    "stick_time_k": _Var("stick time after impact k", "1",
+                         "Duration s_k of the sticking phase after impact k (0 where no "
+                         "sticking phase follows it): the stick time plus the flight time "
+                         "is the time from impact k to impact k+1."),
+    "pressing_min_k": _Var("smallest pressing force of sticking phase k", "1",
+                           "Smallest force with which the stop presses the held coordinate "
+                           "inside the sticking phase after impact k, its start included and "
+                           "the release (where it is 0) excluded; > 0 on a physical motion, "
+                           "through 0 at release grazing; NaN where no sticking phase "
+                           "follows impact k."),
+    "release_state_k": _Var("state at the release after impact k", "1",
+                            "State [x1..xn, x1'..xn'] at the release that ends the sticking "
+                            "phase after impact k (NaN where no sticking phase follows it).",
+                            extra_dims=("component",)),
+}
+
+#: The sticking variables also stored at the special points (``special_<name>``).
+SPECIAL_STICKING_VARIABLES = ("stick_time_k",)
+
+
+def sticking_columns(orbits: Sequence[Any], p: int, *, special: bool = False
+                     ) -> dict[str, np.ndarray]:
+    """The :data:`STICKING_VARIABLES` of a branch's motions, as ``impact_columns`` of
+    :func:`multi_impact_dataset` take them (with `special`, those of
+    :data:`SPECIAL_STICKING_VARIABLES`, for ``special_impact_columns``).
+
+    Parameters
+    ----------
+    orbits : sequence of MultiImpactOrbit
+        The motions at the points (or at the special points).
+    p : int
+        Impacts per motion.
+    special : bool
+
+    Returns
+    -------
+    dict of str to ndarray
+        Empty when no motion has a sticking phase (the schema of a branch without them is
+        unchanged).
+    """
+    # a sticking phase has its release state (NaN rows elsewhere), whatever its duration
+    if not any(np.any(np.isfinite(np.asarray(getattr(o, "release_states", np.nan),
+                                             dtype=float))) for o in orbits):
+        return {}
+    names = SPECIAL_STICKING_VARIABLES if special else tuple(STICKING_VARIABLES)
+    sources = {"stick_time_k": "stick_times", "pressing_min_k": "pressing_min",
+               "release_state_k": "release_states"}
+    out = {}
+    for name in names:
+        rows = [np.asarray(getattr(o, sources[name]), dtype=float) for o in orbits]
+        width = (p, *rows[0].shape[1:]) if rows else (p,)
+        out[name] = np.array(rows, dtype=float).reshape(-1, *width)
+    return out
 
 
 def impacts_of(ds: xr.Dataset) -> int:
@@ -102,7 +165,8 @@ def pattern_of(ds: xr.Dataset) -> str:
         extra = extra_stop_names(oscillator_attribute(ds))
     except ValueError:
         extra = ""
-    return check_pattern_attribute(ds.attrs["pattern"], p, _two_sided(ds), extra=extra)
+    return check_pattern_attribute(ds.attrs["pattern"], p, _two_sided(ds), extra=extra,
+                                   sticking=True)
 
 
 def _impact_array(key: str, value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
@@ -133,17 +197,20 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
         Impacts per motion (``>= 1``).
     impact_columns : mapping of str to array_like
         Every key of :data:`IMPACT_VARIABLES`, shape ``(npoints, p)``
-        (``state_k``: ``(npoints, p, 2n)``).
+        (``state_k``: ``(npoints, p, 2n)``), and on a branch of motions with sticking
+        phases every key of :data:`STICKING_VARIABLES` (:func:`sticking_columns`).
     special_impact_columns : mapping of str to array_like
         Every key of :data:`SPECIAL_IMPACT_VARIABLES`, shape ``(nspecial, p)``
-        (``state_k``: ``(nspecial, p, 2n)``).
+        (``state_k``: ``(nspecial, p, 2n)``), and with the sticking variables those of
+        :data:`SPECIAL_STICKING_VARIABLES`.
     title : str, optional
         Dataset title.
     extra_attrs : mapping, optional
         Further dataset attributes (str, int or float values), e.g. where a
         switched branch was born.
     pattern : str, optional
-        The stop of each impact (p letters ``U``/``L``); all ``U`` by default.
+        The stop of each impact (p letters ``U``/``L``, lowercase where a sticking phase
+        follows the impact); all ``U`` by default.
 
     Returns
     -------
@@ -165,17 +232,23 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
     npoints = len(np.atleast_1d(np.asarray(columns.get(parameter, ()))))
     nspecial = len(special_points)
     variables = {}  # built in the dataset's one construction (an assign copies it)
+    sticking = any(key in impact_columns for key in STICKING_VARIABLES)
+    keys_of = (tuple(IMPACT_VARIABLES) + (tuple(STICKING_VARIABLES) if sticking else ()),
+               SPECIAL_IMPACT_VARIABLES + (SPECIAL_STICKING_VARIABLES if sticking else ()))
+    specs = {**IMPACT_VARIABLES, **STICKING_VARIABLES}
     for what, cols, keys, dim, size in (
-            ("impact column", impact_columns, tuple(IMPACT_VARIABLES), "point", npoints),
-            ("special impact column", special_impact_columns, SPECIAL_IMPACT_VARIABLES,
-             "special", nspecial)):
+            ("impact column", impact_columns, keys_of[0], "point", npoints),
+            ("special impact column", special_impact_columns, keys_of[1], "special",
+             nspecial)):
         missing = [k for k in keys if k not in cols]
         unknown = sorted(set(cols) - set(keys))
         if missing or unknown:
             raise ValueError(f"{what}s: missing {missing}, unknown {unknown}; required: "
-                             f"{list(keys)}")
+                             f"{list(keys)}" + (f" (the sticking variables "
+                                                f"{list(STICKING_VARIABLES)} go together)"
+                                                if sticking else ""))
         for key in keys:
-            spec = IMPACT_VARIABLES[key]
+            spec = specs[key]
             shape = (size, p) + (2 * n,) * len(spec.extra_dims)
             arr = _impact_array(key, cols[key], shape, what)
             name = key if dim == "point" else special_variable(key)
@@ -201,7 +274,8 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
         "Forcing phase theta_0 at impact 0 at the special point, wrapped to (-pi, pi].")
     pattern = UPPER * int(p) if pattern is None else pattern
     ds.attrs["pattern"] = check_pattern_attribute(pattern, int(p), oscillator.stops.two_sided,
-                                                  extra=extra_stop_names(oscillator))
+                                                  extra=extra_stop_names(oscillator),
+                                                  sticking=True)
     for key, value in (extra_attrs or {}).items():
         if not isinstance(value, (str, int, float, np.integer, np.floating)) \
                 or isinstance(value, bool):
@@ -241,5 +315,11 @@ def validate_multi_impact_dataset(ds: Any) -> xr.Dataset:
         if key in SPECIAL_IMPACT_VARIABLES:
             expected[special_variable(key)] = (("special", "impact", *spec.extra_dims),
                                                spec.kind)
+    if any(key in ds.variables for key in STICKING_VARIABLES):
+        for key, spec in STICKING_VARIABLES.items():
+            expected[key] = (("point", "impact", *spec.extra_dims), spec.kind)
+            if key in SPECIAL_STICKING_VARIABLES:
+                expected[special_variable(key)] = (("special", "impact", *spec.extra_dims),
+                                                   spec.kind)
     check_variables(ds, expected, "N-p branch")
     return ds

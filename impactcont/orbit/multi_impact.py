@@ -1429,7 +1429,16 @@ def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
                       stacklevel=3)
     log.debug("N=%d p=%d %s motion with sticking phases in %d Newton iterations", N, p,
               pattern, iterations)
-    impacts = sticking_pattern(osc, pattern)[0]
+    return _sticky_motion(flow, N, pattern, sh, True, cond, error)
+
+
+def _sticky_motion(flow: Flow, N: int, pattern: str, sh: StickyShooting, checks: bool,
+                   condition_number: float = math.nan, error_estimate: float = math.nan
+                   ) -> MultiImpactOrbit:
+    """The motion with sticking phases of the shot `sh` (at a solution): its flights'
+    checks (with `checks`, the interior-contact search), G and the sticking phases' checks.
+    """
+    impacts = sticking_pattern(flow.osc, pattern)[0]
     # the contact search of each flight from a release starts RELEASE_SHIFT of the fastest
     # period after it (held_segments): there s = c, s' = 0 and s'' = 0 (the pressing force
     # is 0), so the start itself is a (degenerate) maximum of the coordinate at the stop;
@@ -1438,8 +1447,43 @@ def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
     shift = sh.search_shifts
     flights = dataclasses.replace(sh.flights(), starts=sh.search_starts,
                                   phases=sh.search_phases, flight_times=sh.flight_times - shift)
-    return _orbit(flow, N, p, flights, True, impacts, cond, error,
-                  sticks=_sticks(flow, pattern, sh, shift))
+    return _orbit(flow, N, len(pattern), flights, checks, impacts, condition_number,
+                  error_estimate, sticks=_sticks(flow, pattern, sh, shift))
+
+
+def sticky_orbit_from_unknowns(flow: Flow, N: int, pattern: str, u: np.ndarray,
+                               sh: StickyShooting | None = None, *, checks: bool = True
+                               ) -> MultiImpactOrbit:
+    """:func:`orbit_from_unknowns` of a motion with sticking phases: the motion at the
+    solution ``u`` of :func:`sticky_shooting` (a point of its branch), with G, the
+    stick times, release states and pressing minima, and every check.
+
+    Parameters
+    ----------
+    flow : Flow
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact
+        (:func:`sticking_pattern`).
+    u : ndarray, shape (2np + q,)
+        A (converged) solution of :func:`sticky_shooting`.
+    sh : StickyShooting, optional
+        :func:`sticky_shooting` at ``u`` if already computed (with its Jacobian, for the
+        motion's error estimate).
+    checks : bool
+        Search every flight for interior contact (eq. 16); without it ``flight_gap_min``
+        is NaN and the motion is reported not physical with that reason.
+
+    Returns
+    -------
+    MultiImpactOrbit
+    """
+    if sh is None:
+        sh = sticky_shooting(flow, N, pattern, u)
+    x = _sticky_unknowns(flow.osc, pattern, u, "u")
+    cond, error = (shooting_accuracy(sh.jacobian, sh.residual, x) if sh.jacobian is not None
+                   else (math.nan, math.nan))
+    return _sticky_motion(flow, N, pattern, sh, checks, cond, error)
 
 
 def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,

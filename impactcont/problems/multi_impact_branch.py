@@ -23,6 +23,20 @@ at ``-b`` with ``R`` moves with them), ``b_low`` and ``R_low`` the lower one, ``
 The upper stop must stay above the lower one: the problem is defined only where the
 clearance ``b + b_low`` between the stops is open
 (:meth:`MultiImpactBranchProblem.parameter_limits`).
+
+A pattern with lowercase letters (a plastic impact followed by a sticking phase until the
+release, :func:`~impactcont.orbit.multi_impact.sticking_pattern`) is the system of
+:func:`~impactcont.orbit.multi_impact.sticky_shooting` instead: ``2 n p + q`` unknowns (the
+q stick times after the flight times), the release rows ``p(X_r, theta_r) = 0`` after the
+impact rows, ``dF/du`` exact (the held flow's and the flights'), and ``dF/dlam`` the
+parameter's central difference for every parameter (the held system's forcing moves with
+omega; :meth:`~impactcont.model.parameters.ModelParameter.difference`, about 1e-11
+relative, which steers the predictor and Newton only: the points solve ``F = 0`` to the
+Newton tolerance). The corrector is the core's (no compiled step). Its motions report the
+stick times, release states and pressing minima; its branches end where a stick time
+reaches 0 (the landing becomes a release: the end of a ride), where the pressing force
+touches 0 inside a stick (release grazing) and where it is 0 at the landing (the onset of
+sticking), each a sign change of a test of the motion (:data:`STICKING_TESTS`).
 """
 
 from __future__ import annotations
@@ -52,6 +66,7 @@ from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
+    StickyShooting,
     _as_shooting,
     _geometry,
     _kernel,
@@ -61,6 +76,10 @@ from impactcont.orbit.multi_impact import (
     orbit_from_unknowns,
     shooting,
     shot_flights,
+    sticking_pattern,
+    sticky_jacobians,
+    sticky_orbit_from_unknowns,
+    sticky_shooting,
 )
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.stop_geometry import StopGeometry
@@ -110,9 +129,16 @@ class MultiImpactBranchProblem:
         self.osc = osc
         self.N = _check_N(N)
         self.p = check_impacts(p)
-        self.pattern = check_pattern(pattern, self.p, osc.stops)
+        self.pattern = check_pattern(pattern, self.p, osc.stops, sticking=True)
         self.parameter = parameter
-        self.size = 2 * osc.n * self.p
+        #: The stop of each impact (the pattern in capitals) and whether a sticking phase
+        #: follows it (:func:`~impactcont.orbit.multi_impact.sticking_pattern`).
+        self.impacts, self.sticks = sticking_pattern(osc, self.pattern)
+        self.sticky = bool(np.any(self.sticks))
+        if self.sticky:
+            _check_sticking_parameter(self.param, osc, self.pattern, self.impacts,
+                                      self.sticks)
+        self.size = 2 * osc.n * self.p + int(np.count_nonzero(self.sticks))
         self._flows: dict[float, Flow] = {}
         # omega leaves the modal basis, the stops and the constant force as they are: the
         # flow at another omega is the start's with new forced amplitudes (eq. 7)
@@ -120,8 +146,8 @@ class MultiImpactBranchProblem:
                            and type(flow_of(osc)) is Flow and np.isrealobj(flow_of(osc).f)
                            else None)
         if self._base_flow is not None:  # made here so that every flow shares it
-            _geometry(self._base_flow, self.pattern)
-        self._shots: dict[tuple[bytes, float], Shooting] = {}
+            _geometry(self._base_flow, self.impacts)
+        self._shots: dict[tuple[bytes, float], Shooting | StickyShooting] = {}
         self._extended: dict[tuple[bytes, float], np.ndarray] = {}  # [J | dF/domega]
 
     # -- where the parameter may go -----------------------------------------------------------
@@ -183,7 +209,7 @@ class MultiImpactBranchProblem:
         new._flows, new._shots, new._extended = {}, {}, {}
         if self._base_flow is not None:
             new._base_flow = _at_frequency(self._base_flow, osc, same_stops=False)
-            _geometry(new._base_flow, self.pattern)
+            _geometry(new._base_flow, self.impacts)
         return new
 
     # -- the oscillator along the branch ------------------------------------------------------
@@ -203,17 +229,22 @@ class MultiImpactBranchProblem:
         """The oscillator with ``parameter = lam``."""
         return self.flow_at(lam).osc
 
-    def _shoot(self, u: np.ndarray, lam: float) -> Shooting:
+    def _shoot(self, u: np.ndarray, lam: float) -> Shooting | StickyShooting:
         u = np.asarray(u, dtype=float)
         if u.shape != (self.size,):
-            raise ParameterError(f"u must have shape ({self.size},) = (2 n p,); got {u.shape}")
+            q = self.size - 2 * self.osc.n * self.p
+            raise ParameterError(f"u must have shape ({self.size},) = (2 n p"
+                                 + (f" + q,) with q = {q} sticking phases" if q else ",)")
+                                 + f"; got {u.shape}")
         key = (u.tobytes(), float(lam))
         sh = self._shots.get(key)
         if sh is None:
             if len(self._shots) > _CACHE_SIZE:
                 self._shots.clear()
                 self._extended.clear()
-            if self._base_flow is None:
+            if self.sticky:  # the held flows and the release rows (no compiled step)
+                sh = sticky_shooting(self.flow_at(lam), self.N, self.pattern, u)
+            elif self._base_flow is None:
                 sh = shooting(self.flow_at(lam), self.N, self.p, u, pattern=self.pattern)
             else:  # omega: the residual, the Jacobian and dF/domega in one compiled call
                 flow = self.flow_at(lam)
@@ -261,8 +292,9 @@ class MultiImpactBranchProblem:
         parameter's finite-difference fallback otherwise (exact for the forcing amplitude).
         """
         data = self.param.data
-        if data not in (FREQUENCY, GAP, RESTITUTION):
-            # the fallback; exact for the forcing amplitude (the residual is affine in F)
+        if self.sticky or data not in (FREQUENCY, GAP, RESTITUTION):
+            # the fallback; exact for the forcing amplitude (the residual is affine in F;
+            # with sticking phases the release rows' pressing force too)
             return self._difference_quotient(u, lam)
         if self._base_flow is not None:  # dF/domega comes with the shooting system
             self._shoot(u, lam)
@@ -281,6 +313,10 @@ class MultiImpactBranchProblem:
             the problem continued in it).
         """
         data = param.data
+        if self.sticky:
+            raise ParameterError(f"derivative: the pattern {self.pattern!r} has sticking "
+                                 "phases, whose curves in two parameters are not solved yet; "
+                                 "continue the motion in one parameter (continuation)")
         if data not in (FREQUENCY, GAP, RESTITUTION):
             raise ParameterError(f"derivative: parameter {param.name!r} changes the "
                                  f"{data}; only the frequency and the stops have it here")
@@ -354,6 +390,12 @@ class MultiImpactBranchProblem:
         """
         sh = self._shoot(u, lam)
         flow = self.flow_at(lam)
+        if self.sticky:
+            jacobians = sticky_jacobians(flow, self.pattern, sh)[0]
+            G = np.eye(2 * self.osc.n)
+            for k in range(int(count)):
+                G = jacobians[k] @ G
+            return G
         geo = _geometry(flow, self.pattern)
         return _kernel().jacobian_product(tuple(impact_sequence(geo)), float(flow.omega),
                                           tuple(shot_flights(sh)), int(count))
@@ -369,7 +411,7 @@ class MultiImpactBranchProblem:
         parameter is not omega or the flow is not modal (the core then corrects with
         :meth:`linearize`).
         """
-        if self._base_flow is None:
+        if self._base_flow is None or self.sticky:
             return None
         return self._palc_step(predicted, tangent, weights, tol, max_iter,
                                np.eye(self.size), np.zeros(self.size), self.size, hyperplane)
@@ -415,8 +457,13 @@ class MultiImpactBranchProblem:
         """The full N-p motion (states, G, multipliers, checks) at a branch point.
 
         ``checks=False`` skips the interior-contact search (see
-        :func:`~impactcont.orbit.multi_impact.orbit_from_unknowns`).
+        :func:`~impactcont.orbit.multi_impact.orbit_from_unknowns`; with sticking phases
+        :func:`~impactcont.orbit.multi_impact.sticky_orbit_from_unknowns`).
         """
+        if self.sticky:
+            return sticky_orbit_from_unknowns(self.flow_at(lam), self.N, self.pattern,
+                                              np.asarray(u, float), self._shoot(u, lam),
+                                              checks=checks)
         return orbit_from_unknowns(self.flow_at(lam), self.N, self.p, np.asarray(u, float),
                                    self._shoot(u, lam), checks=checks, pattern=self.pattern)
 
@@ -460,6 +507,7 @@ def _at_frequency(base: Flow, osc: ImpactOscillator, *, same_stops: bool = True)
     """
     flow = object.__new__(Flow)
     flow.__dict__.update(base.__dict__)
+    flow.__dict__.pop("_held_segments", None)  # the held systems' forcing moves with omega
     if not same_stops:
         flow.__dict__.pop("_stop_geometry", None)
     omega = osc.omega
@@ -478,6 +526,31 @@ def _at_frequency(base: Flow, osc: ImpactOscillator, *, same_stops: bool = True)
     flow._omega_arrays = ForcingDerivatives(dgamma=amplitudes.dgamma, dbeta=amplitudes.dbeta,
                                             dZ=base.omega_arrays().dZ)
     return flow
+
+
+def _check_sticking_parameter(param: ModelParameter, osc: ImpactOscillator, pattern: str,
+                              impacts: str, sticks: np.ndarray) -> None:
+    """Refuse a parameter that changes the restitution of a stop the motion sticks on:
+    shooting solves sticking phases entered by a plastic impact (``R = 0``) only, so the
+    held system exists at the start value alone.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter, the stops and what may be continued instead.
+    """
+    if param.data != RESTITUTION:
+        return
+    rates = param.stop_rates(impacts)
+    held = sorted({impacts[k] for k in np.flatnonzero(sticks) if rates[k] != 0.0})
+    if held:
+        raise ParameterError(
+            f"parameter {param.name!r} changes the restitution of stop(s) {held} (now "
+            f"{[float(osc.stops.stop(s, osc.M, osc.b, osc.R).restitution) for s in held]!r})"
+            ", on which the motion sticks "
+            f"(pattern {pattern!r}): "
+            "a sticking phase is entered by a plastic impact, restitution 0, only; continue "
+            "in the restitution of a stop without sticking phases, or in another parameter")
 
 
 def _errors(errors: np.ndarray | None, n: int) -> np.ndarray:

@@ -142,5 +142,7 @@ def test_bad_sticking_patterns_are_refused_with_the_reason():
     with pytest.raises(ic.ParameterError, match=r"stop 'U'.*restitution is 0\.5.*chatter"):
         ic.multi_impact_orbit(osc.replace(R=0.5), 1, 1, res, pattern="u")
     orbit = ic.multi_impact_orbit(osc, 1, 1, res)
-    with pytest.raises(ic.ParameterError, match=r"sticking phases.*not supported yet"):
-        ic.continuation(orbit, parameter="omega", bounds=(0.6, 0.8))
+    # a branch in R would leave the plastic impact that enters the sticking phase
+    with pytest.raises(ic.ParameterError, match=r"parameter 'R' changes the restitution of "
+                       r"stop\(s\) \['U'\] \(now \[0\.0\]\), on which the motion sticks"):
+        ic.continuation(orbit, parameter="R", bounds=(0.0, 0.5))
