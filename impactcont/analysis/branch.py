@@ -43,7 +43,12 @@ from impactcont.core import (
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
 from impactcont.dataset import branch_dataset
-from impactcont.dataset.multi import impacts_of, multi_impact_dataset, pattern_of
+from impactcont.dataset.multi import (
+    impacts_of,
+    multi_impact_dataset,
+    pattern_of,
+    sticking_columns,
+)
 from impactcont.dataset.records import (
     orbit_columns,
     reserved_names,
@@ -585,6 +590,12 @@ def _impact_dataset(problem: Any, orbits: Sequence[Any], specials: Sequence[Spec
         "flight_time_k": np.array([sp.orbit.flight_times for sp in specials]).reshape(-1, p),
         "state_k": np.array([sp.orbit.states for sp in specials]).reshape(-1, p, 2 * n),
     }
+    # a branch of motions with sticking phases: their stick times, pressing minima, releases
+    sticking = sticking_columns(orbits, p)
+    if sticking:
+        impact_columns.update(sticking)
+        special_impact_columns.update(sticking_columns([sp.orbit for sp in specials], p,
+                                                       special=True, sticky=True))
     return multi_impact_dataset(parameter=problem.parameter, N=problem.N, p=p,
                                 oscillator=problem.osc, options=dict(options), columns=columns,
                                 impact_columns=impact_columns, special_points=special_points,

@@ -103,8 +103,8 @@ STICKING_VARIABLES: dict[str, _Var] = {
 SPECIAL_STICKING_VARIABLES = ("stick_time_k",)
 
 
-def sticking_columns(orbits: Sequence[Any], p: int, *, special: bool = False
-                     ) -> dict[str, np.ndarray]:
+def sticking_columns(orbits: Sequence[Any], p: int, *, special: bool = False,
+                     sticky: bool | None = None) -> dict[str, np.ndarray]:
     """The :data:`STICKING_VARIABLES` of a branch's motions, as ``impact_columns`` of
     :func:`multi_impact_dataset` take them (with `special`, those of
     :data:`SPECIAL_STICKING_VARIABLES`, for ``special_impact_columns``).
@@ -116,6 +116,10 @@ def sticking_columns(orbits: Sequence[Any], p: int, *, special: bool = False
     p : int
         Impacts per motion.
     special : bool
+    sticky : bool, optional
+        Whether the branch's motions have sticking phases; None: whether one of `orbits`
+        has one (True: the columns even for no motion, e.g. a branch without special
+        points).
 
     Returns
     -------
@@ -124,8 +128,10 @@ def sticking_columns(orbits: Sequence[Any], p: int, *, special: bool = False
         unchanged).
     """
     # a sticking phase has its release state (NaN rows elsewhere), whatever its duration
-    if not any(np.any(np.isfinite(np.asarray(getattr(o, "release_states", np.nan),
-                                             dtype=float))) for o in orbits):
+    if sticky is None:
+        sticky = any(np.any(np.isfinite(np.asarray(getattr(o, "release_states", np.nan),
+                                                   dtype=float))) for o in orbits)
+    if not sticky:
         return {}
     names = SPECIAL_STICKING_VARIABLES if special else tuple(STICKING_VARIABLES)
     sources = {"stick_time_k": "stick_times", "pressing_min_k": "pressing_min",
@@ -134,7 +140,7 @@ def sticking_columns(orbits: Sequence[Any], p: int, *, special: bool = False
     for name in names:
         rows = [np.asarray(getattr(o, sources[name]), dtype=float) for o in orbits]
         width = (p, *rows[0].shape[1:]) if rows else (p,)
-        out[name] = np.array(rows, dtype=float).reshape(-1, *width)
+        out[name] = np.array(rows, dtype=float).reshape(len(rows), *width)
     return out
 
 

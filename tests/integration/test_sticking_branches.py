@@ -121,7 +121,23 @@ def test_the_branch_saves_and_loads_with_its_pattern(tmp_path):
     ic.save(ds, path)
     back = ic.load(path)
     assert back.attrs["pattern"] == "lu"
-    assert np.array_equal(back.flight_time_k.values, ds.flight_time_k.values)
+    for name in ("flight_time_k", "stick_time_k", "pressing_min_k", "release_state_k"):
+        assert np.array_equal(back[name].values, ds[name].values, equal_nan=True), name
+
+
+def test_the_branch_stores_the_stick_times_and_pressing_minima(cf):
+    """stick_time_k, pressing_min_k and release_state_k per point: each period is the two
+    rides and the two flights, and at omega near 1.2 they are the closed form's."""
+    ds = branch()
+    omega = ds.omega.values
+    period = ds.stick_time_k.values.sum(axis=1) + ds.flight_time_k.values.sum(axis=1)
+    assert period == pytest.approx(2 * np.pi / omega, rel=1e-13)
+    i = int(np.argmin(np.abs(omega - 1.2)))
+    motion = cf.riding_damper_motion(float(omega[i]))
+    for name, theirs in (("stick_time_k", "stick_times"), ("pressing_min_k", "pressing_min"),
+                         ("release_state_k", "release_states")):
+        assert ds[name].values[i] == pytest.approx(np.array(motion.floats(theirs)),
+                                                   abs=1e-9), name
 
 
 def test_a_parameter_that_unmakes_the_plastic_stop_is_refused():
