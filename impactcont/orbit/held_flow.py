@@ -43,7 +43,7 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.flow import Flow, flow_of
 
-__all__ = ["HeldFlow", "held_flow", "held_frame"]
+__all__ = ["HeldFlow", "held_flow", "held_flow_at", "held_frame"]
 
 
 def held_frame(normal: np.ndarray) -> np.ndarray:
@@ -295,6 +295,38 @@ def held_flow(osc: ImpactOscillator, name: str) -> HeldFlow:
     flow = known.get(name)
     if flow is None:
         flow = known[name] = _held_flow(osc, name)
+    return flow
+
+
+def held_flow_at(base: HeldFlow, osc: ImpactOscillator, name: str, reduced: Flow | None
+                 ) -> HeldFlow:
+    """The :class:`HeldFlow` of stop `name` of `osc`, an oscillator that differs from
+    ``base.oscillator`` in omega only, with `reduced` the held system's flow at that omega:
+    the frame, the stop and its offset shared (none depends on omega), and kept for
+    :func:`held_flow` of `osc` (a branch in omega builds each held system's flow at a new
+    omega from the start's, without its modes again).
+
+    Raises
+    ------
+    ParameterError
+        `osc` is not `base`'s oscillator at another omega (its matrices, forcing or stops
+        differ), or `reduced` is not at `osc`'s omega.
+    """
+    old = base.oscillator
+    if osc.n != old.n or not (np.array_equal(osc.M, old.M) and np.array_equal(osc.K, old.K)
+                              and np.array_equal(osc.C, old.C)
+                              and np.array_equal(osc.F, old.F)
+                              and np.array_equal(osc.F_static, old.F_static) and osc.b == old.b
+                              and osc.R == old.R and osc.stops == old.stops):
+        raise ParameterError("held_flow_at: osc must be the held flow's oscillator at another "
+                             f"omega only; got {osc!r} for {old!r}")
+    if (reduced is None) != (base.reduced is None) or (
+            reduced is not None and reduced.omega != osc.omega):
+        raise ParameterError(f"held_flow_at: reduced must be the held system's flow at omega="
+                             f"{osc.omega!r}" + (" (None: one mass held)" if base.reduced is None
+                                                 else ""))
+    flow = dataclasses.replace(base, oscillator=osc, reduced=reduced)
+    _HELD.setdefault(osc, {})[name] = flow
     return flow
 
 

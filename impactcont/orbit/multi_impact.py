@@ -206,7 +206,11 @@ class MultiImpactOrbit:
         The smallest pressing force inside the sticking phase after impact k, over its
         start and the interior minima (the release at its end, where it is 0, not
         counted; :meth:`impactcont.orbit.held_flow.HeldFlow.pressing_minimum`); ``> 0``
-        physical; NaN where there is none.
+        physical; NaN where there is none (or where the stick time is not positive).
+    landing_pressing : ndarray, shape (p,)
+        The pressing force right after the plastic impact k that starts a sticking phase
+        (the onset test: ``> 0`` where the arrival acceleration points into the stop);
+        NaN where no sticking phase follows impact k.
     """
 
     oscillator: ImpactOscillator
@@ -232,6 +236,7 @@ class MultiImpactOrbit:
     stick_times: np.ndarray | None = None
     release_states: np.ndarray | None = None
     pressing_min: np.ndarray | None = None
+    landing_pressing: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         """A motion without sticking phases reports none (zeros and NaN)."""
@@ -242,6 +247,8 @@ class MultiImpactOrbit:
                                np.full((self.p, np.shape(self.states)[1]), np.nan))
         if self.pressing_min is None:
             object.__setattr__(self, "pressing_min", np.full(self.p, np.nan))
+        if self.landing_pressing is None:
+            object.__setattr__(self, "landing_pressing", np.full(self.p, np.nan))
 
     # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
     @property
@@ -994,7 +1001,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         flight_gap_lower=gaps_low, condition_number=condition_number,
         error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "",
         stick_times=sticks.stick_times.copy(), release_states=sticks.release_states,
-        pressing_min=sticks.pressing_min)
+        pressing_min=sticks.pressing_min, landing_pressing=sticks.landing_pressing)
 
 
 def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,
@@ -1368,6 +1375,7 @@ class _Sticks:
     shift: np.ndarray
     release_states: np.ndarray
     pressing_min: np.ndarray
+    landing_pressing: np.ndarray
     jacobians: np.ndarray
     G: np.ndarray
     multipliers: np.ndarray
@@ -1386,12 +1394,13 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> 
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
     releases = np.full((p, m), np.nan)
     pressing = np.full(p, np.nan)
+    landing = np.full(p, np.nan)
     reasons = []
     for k in np.flatnonzero(sticks):
         held = held_flow(osc, impacts[k])
         stop, s = impacts[k], float(sh.stick_times[k])
         releases[k] = sh.releases[k]
-        onset = float(held.pressing(sh.starts[k], sh.phases[k]))
+        onset = landing[k] = float(held.pressing(sh.starts[k], sh.phases[k]))
         if not s > 0.0:
             reasons.append(f"sticking phase {k} (stop {stop!r}) has duration {s:.3g} <= 0")
             continue
@@ -1412,7 +1421,8 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> 
                            "the stop coordinate does not leave the stop")
     return _Sticks(pattern=pattern, phases=sh.phases, states=sh.starts,
                    stick_times=sh.stick_times, flight_times=sh.flight_times, shift=shift,
-                   release_states=releases, pressing_min=pressing, jacobians=jacs, G=G,
+                   release_states=releases, pressing_min=pressing, landing_pressing=landing,
+                   jacobians=jacs, G=G,
                    multipliers=mu, reasons=tuple(reasons))
 
 

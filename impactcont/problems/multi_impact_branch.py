@@ -43,8 +43,9 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Mapping
-from typing import ClassVar
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -62,7 +63,8 @@ from impactcont.model.parameters import (
     model_parameter,
 )
 from impactcont.model.stops import check_pattern
-from impactcont.orbit.flow import Flow, flow_of
+from impactcont.orbit.flow import Flow, GeneralFlow, flow_of
+from impactcont.orbit.held_flow import held_flow, held_flow_at
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
@@ -87,9 +89,13 @@ from impactcont.orbit.symmetry import half_map, symmetry_defect
 from impactcont.problems.events import BRANCH_TESTS
 from impactcont.vocabulary import Label
 
-__all__ = ["MultiImpactBranchProblem"]
+__all__ = ["STICKING_EVENTS", "STICKING_TESTS", "MultiImpactBranchProblem",
+           "release_grazing_test", "stick_end_test", "sticking_onset_test"]
 
 _CACHE_SIZE = 64
+_EPS = float(np.finfo(float).eps)
+#: rounding of the sticking tests, in eps times the size of what they are summed from
+_NOISE_ULPS = 64.0
 _REFUSED = 2
 #: :func:`impactcont.kernel.shooting.palc_correct`'s statuses in the core's words
 _STATUSES = ("converged", "not converged", "refused", "non-finite residual",
@@ -138,6 +144,8 @@ class MultiImpactBranchProblem:
         if self.sticky:
             _check_sticking_parameter(self.param, osc, self.pattern, self.impacts,
                                       self.sticks)
+            #: the kinds of points that end a branch of motions with sticking phases
+            self.motion_tests = MappingProxyType({**BRANCH_TESTS, **STICKING_TESTS})
         self.size = 2 * osc.n * self.p + int(np.count_nonzero(self.sticks))
         self._flows: dict[float, Flow] = {}
         # omega leaves the modal basis, the stops and the constant force as they are: the
@@ -223,7 +231,20 @@ class MultiImpactBranchProblem:
             osc = self.param.at(self.osc, lam)
             flow = self._flows[lam] = (Flow(osc) if self._base_flow is None
                                        else _at_frequency(self._base_flow, osc))
+            if self.sticky and self._base_flow is not None:
+                self._held_at_frequency(osc)
         return flow
+
+    def _held_at_frequency(self, osc: ImpactOscillator) -> None:
+        """The held systems' flows of the sticking stops at `osc` (the start's at another
+        omega) from the start's: their modes kept, the forced amplitudes new
+        (:func:`~impactcont.orbit.held_flow.held_flow_at`)."""
+        for name in sorted({self.impacts[k] for k in np.flatnonzero(self.sticks)}):
+            base = held_flow(self.osc, name)
+            reduced = base.reduced
+            if reduced is not None:
+                reduced = _flow_at_frequency(reduced, reduced.osc.replace(omega=osc.omega))
+            held_flow_at(base, osc, name, reduced)
 
     def oscillator_at(self, lam: float) -> ImpactOscillator:
         """The oscillator with ``parameter = lam``."""
@@ -553,8 +574,111 @@ def _check_sticking_parameter(param: ModelParameter, osc: ImpactOscillator, patt
             "in the restitution of a stop without sticking phases, or in another parameter")
 
 
+def _flow_at_frequency(base: Flow, osc: ImpactOscillator) -> Flow:
+    """The flow of `osc`, ``base.osc`` at another omega, of either kind: the modal flow by
+    :func:`_at_frequency`, the first-order one with its basis, constant force and kernel
+    arrays kept and the steady amplitude ``Z`` new (eq. 9), else built anew."""
+    if type(base) is Flow and np.isrealobj(base.f):
+        return _at_frequency(base, osc)
+    if type(base) is not GeneralFlow:
+        return flow_of(osc)
+    flow = object.__new__(GeneralFlow)
+    flow.__dict__.update(base.__dict__)
+    flow.osc, flow.omega = osc, osc.omega
+    flow.Z = base.basis.forced_amplitude(osc.F, osc.omega)
+    flow._last = flow._forcing = flow._omega_arrays = None
+    return flow
+
+
 def _errors(errors: np.ndarray | None, n: int) -> np.ndarray:
     """The eigenvalue errors as the kernel's float array (zeros when unknown)."""
     if errors is None:
         return np.zeros(n)
     return _writable(np.asarray(errors, dtype=float))
+
+
+# -- the points that end a branch of motions with sticking phases -----------------------------
+def _sticks_of(orbit: Any) -> np.ndarray:
+    """The impacts of `orbit` followed by a sticking phase (their release states are set)."""
+    return np.flatnonzero(np.all(np.isfinite(np.asarray(orbit.release_states)), axis=1))
+
+
+def _smallest(values: np.ndarray, orbit: Any) -> float:
+    """The smallest of `values` over the sticking phases of `orbit` (NaN when it has none
+    or one of them is NaN: a stick of duration <= 0 has no pressing minimum)."""
+    held = _sticks_of(orbit)
+    return float(np.min(np.asarray(values, dtype=float)[held])) if held.size else math.nan
+
+
+def stick_end_test(orbit: Any) -> float:
+    """The end of a ride: the shortest stick time ``min_k s_k`` of the motion.
+
+    Zero where a sticking phase shrinks to nothing: the plastic impact lands where the
+    stop stops pressing its coordinate (the landing is itself a release); past it the
+    shooting continues with a negative stick time, a motion flagged not physical. NaN
+    for a motion without sticking phases.
+    """
+    return _smallest(orbit.stick_times, orbit)
+
+
+def release_grazing_test(orbit: Any) -> float:
+    """Release grazing: the smallest pressing force inside the sticking phases,
+    ``min_k pressing_min_k`` (their starts included, the releases excluded).
+
+    Zero where the pressing force touches zero inside a stick (the release would come
+    earlier: another motion). A stick of duration <= 0 counts its landing's pressing force
+    (the limit of its minimum as the stick shrinks to its start), so the test is finite
+    along the whole branch; it vanishes at the end of a ride too (the landing there is a
+    release).
+    """
+    low = np.asarray(orbit.pressing_min, dtype=float)
+    return _smallest(np.where(np.isnan(low), orbit.landing_pressing, low), orbit)
+
+
+def sticking_onset_test(orbit: Any) -> float:
+    """The onset of sticking: the smallest pressing force right after the plastic impacts
+    that start the sticking phases, ``min_k p(X_k, theta_k)``.
+
+    Zero where an impact lands with the acceleration tangent to its stop: on one side the
+    stop holds the coordinate, on the other the mass leaves at once.
+    """
+    return _smallest(orbit.landing_pressing, orbit)
+
+
+def _time_noise(orbit: Any) -> float:
+    """Rounding of a stick time: eps times the period (the last flight time closes it)."""
+    return _NOISE_ULPS * _EPS * 2.0 * math.pi * orbit.N / orbit.oscillator.omega
+
+
+def _force_noise(orbit: Any) -> float:
+    """Rounding of a pressing force: eps times the forces it is summed from (the forcing,
+    the constant force and the spring and damper forces at the impacts' states)."""
+    osc = orbit.oscillator
+    states = np.asarray(orbit.states, dtype=float)
+    n = osc.n
+    size = max(float(np.max(np.abs(np.asarray(osc.F)), initial=0.0)),
+               float(np.max(np.abs(np.asarray(osc.F_static)), initial=0.0)),
+               float(np.max(np.abs(states[:, :n] @ np.asarray(osc.K).T), initial=0.0)),
+               float(np.max(np.abs(states[:, n:] @ np.asarray(osc.C).T), initial=0.0)))
+    return _NOISE_ULPS * _EPS * size
+
+
+#: The tests of the points that end a branch of motions with sticking phases, as
+#: :class:`~impactcont.core.locate.MotionTest` by the name of their kind: ``SE`` the end of
+#: a ride (a stick time through 0), ``RG`` release grazing (the pressing force touching 0
+#: inside a stick), ``SO`` the onset of sticking (the pressing force at a landing through
+#: 0). A sticky problem declares them in its ``motion_tests``; the detectors locate the
+#: kinds of :data:`impactcont.vocabulary.LABELS` only, so until these are labels there
+#: they are located as user events (:data:`STICKING_EVENTS`).
+STICKING_TESTS: Mapping[str, MotionTest] = MappingProxyType({
+    "SE": MotionTest(stick_end_test, _time_noise),
+    "RG": MotionTest(release_grazing_test, _force_noise),
+    "SO": MotionTest(sticking_onset_test, _force_noise),
+})
+
+#: The same tests as ``events=`` of :func:`impactcont.continuation` (located by the same
+#: locator, stored as the branch's user events): ``{"stick_end": .., "release_grazing": ..,
+#: "sticking_onset": ..}``.
+STICKING_EVENTS: Mapping[str, Callable[[Any], float]] = MappingProxyType({
+    "stick_end": stick_end_test, "release_grazing": release_grazing_test,
+    "sticking_onset": sticking_onset_test})

@@ -20,7 +20,12 @@ import pytest
 import impactcont as ic
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.problems.multi_impact_branch import (
+    STICKING_EVENTS,
+    STICKING_TESTS,
+    MultiImpactBranchProblem,
+    release_grazing_test,
+)
 
 STUDY = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions"
 
@@ -66,9 +71,10 @@ def riding(omega: float = 0.2):
 
 @functools.cache
 def branch():
-    """The riding motion followed in omega from 0.2 past the end of its ride."""
+    """The riding motion followed in omega from 0.2 past the end of its ride, the
+    sticking tests as events."""
     return ic.continuation(riding(), parameter="omega", bounds=(0.19, 2.45), ds_max=0.1,
-                           both_directions=False)
+                           both_directions=False, events=STICKING_EVENTS)
 
 
 def test_the_branch_in_omega_is_the_closed_form_and_the_solve_alone(cf):
@@ -149,3 +155,79 @@ def test_a_parameter_that_unmakes_the_plastic_stop_is_refused():
     for parameter in ("b", "eta"):
         problem = MultiImpactBranchProblem(damper(1.0), 1, 2, parameter, pattern="lu")
         assert problem.size == 2 * 2 * 2 + 2
+
+
+def test_the_ride_ends_at_the_closed_forms_omega():
+    """(a) The stick time through 0, located on the branch: omega* = 2.393422959745478 of
+    the closed form (landing = release) within the locator's precision. The landing's
+    pressing force and the smallest one inside the stick vanish there too (the landing is
+    a release: one point, three tests)."""
+    ds = branch()
+    names = list(ds.event_name.values)
+    assert sorted(names) == ["release_grazing", "stick_end", "sticking_onset"]
+    for name in names:
+        k = names.index(name)
+        assert ds.event_status.values[k] == "located"
+        precision = float(ds.event_precision.values[k])
+        assert precision < 1e-12
+        assert abs(float(ds.event_omega.values[k]) - RIDING_END) <= max(2 * precision,
+                                                                          1e-13), name
+    end = names.index("stick_end")
+    monitor = ds.monitor_stick_end.values
+    i = int(ds.event_point.values[end])
+    assert abs(monitor[i]) < 0.05  # the nearest point's shortest stick
+    assert np.all(monitor[ds.omega.values < RIDING_END] > 0)
+    assert np.all(monitor[ds.omega.values > RIDING_END] < 0)
+
+
+def test_release_grazing_where_the_pressing_force_touches_zero_inside_a_ride(cf):
+    """(b) Below omega = 0.1 the wall's pressing force dips inside each ride: it touches
+    0 at a release grazing, located on the branch (from the closed form's motion at
+    omega = 0.055) as the zero of release_grazing_test, the stick time still long; the
+    closed form there has its smallest pressing force 0 (to 1e-9, against 3e-5 at 0.055
+    and 1e-2 at omega = 0.2)."""
+    motion = cf.riding_damper_motion(0.055)
+    start = ic.multi_impact_orbit(damper(0.055), 1, 2, {
+        "delta": float(motion.floats("phases")[0]),
+        "flight_times": np.array(motion.floats("flight_times")),
+        "stick_times": np.array(motion.floats("stick_times")),
+        "states": np.array(motion.floats("landing_states")), "pattern": motion.pattern})
+    assert start.physical, start.reason
+    ds = ic.continuation(start, parameter="omega", bounds=(0.05, 0.056), ds=0.5, ds_max=2.0,
+                         events={"release_grazing": release_grazing_test})
+    assert list(ds.event_name.values) == ["release_grazing"]
+    omega = float(ds.event_omega.values[0])
+    assert 0.05 < omega < 0.055 and ds.event_status.values[0] == "located"
+    i = int(ds.event_point.values[0])
+    assert np.all(ds.stick_time_k.values[i] > 20)
+    assert not ds.physical.values[ds.omega.values < omega].any()
+    assert ds.physical.values[ds.omega.values > omega].all()
+    there = cf.riding_damper_motion(omega)
+    assert np.abs(np.array(there.floats("pressing_min"), dtype=float)).max() < 1e-9
+    problem = MultiImpactBranchProblem(damper(0.2), 1, 2, "omega", pattern="lu")
+    assert set(problem.motion_tests) >= set(STICKING_TESTS)
+
+
+def test_neimark_sacker_on_a_branch_with_sticking_phases():
+    """The lightly damped impact damper (eta = 0.02) riding each wall: a complex pair of
+    the sticky G crosses the unit circle near omega = 0.295, detected and located as NS
+    on the branch; multi_impact_orbit solved alone there has that pair on the circle."""
+    osc = damper(0.5).replace(eta=0.02)
+    start = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.array([0.0, 0.3, 0.0,
+                                                                          0.0]), 0.0, 60.0))
+    assert start.pattern == "ul" and start.physical
+    ds = ic.continuation(start, parameter="omega", bounds=(0.28, 0.5), ds_max=0.05,
+                         both_directions=False, direction=-1)
+    labels = list(ds.special_label.values)
+    assert "NS" in labels
+    k = labels.index("NS")
+    at = float(ds.special_omega.values[k])
+    assert 0.29 < at < 0.30 and ds.special_status.values[k] == "located"
+    i = int(ds.special_point.values[k])
+    seed = {"delta": float(ds.delta_k.values[i, 0]), "flight_times": ds.flight_time_k.values[i],
+            "stick_times": ds.stick_time_k.values[i], "states": ds.state_k.values[i],
+            "pattern": "ul"}
+    alone = ic.multi_impact_orbit(osc.replace(omega=at), 1, 2, seed)
+    mu = np.sort(np.abs(alone.multipliers))[::-1]
+    assert mu[:2] == pytest.approx([1.0, 1.0], abs=1e-7)
+    assert np.abs(alone.multipliers[0].imag) > 0.1 and mu[2:].max() < 1e-12

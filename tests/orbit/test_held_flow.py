@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 import impactcont as ic
+from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
-from impactcont.orbit.held_flow import held_flow, held_frame
+from impactcont.orbit.held_flow import held_flow, held_flow_at, held_frame
 
 
 def test_the_frame_keeps_the_mass_matrix_diagonal():
@@ -74,3 +75,28 @@ def test_one_mass_held_stays_and_its_force_follows_the_forcing():
     assert 0.7 * when + 0.3 == pytest.approx(np.pi, abs=1e-6)
     # without an interior minimum: the start
     assert held.pressing_minimum(2.0, X[0], 0.3) == (held.pressing(X[0], 0.3), 0.0)
+
+
+def test_the_held_flow_at_another_omega_is_the_one_built_there():
+    """held_flow_at (a branch in omega: the start's held flow with the reduced flow at the
+    new omega) gives the kernel rows, states and pressing forces of held_flow built afresh
+    at that omega (the same arithmetic but the forced amplitudes: 1e-13 relative), and is
+    what held_flow returns for that oscillator afterwards; another machine is refused."""
+    from impactcont.problems.multi_impact_branch import _flow_at_frequency
+
+    osc = _damper()
+    base = held_flow(osc, "U")
+    moved = osc.replace(omega=1.37)
+    fresh = held_flow(osc.replace(omega=1.37), "U")  # another object: built afresh
+    reduced = _flow_at_frequency(base.reduced, base.reduced.osc.replace(omega=1.37))
+    made = held_flow_at(base, moved, "U", reduced)
+    assert held_flow(moved, "U") is made
+    for mine, theirs in zip(made.kernel_rows(), fresh.kernel_rows(), strict=True):
+        assert np.asarray(mine) == pytest.approx(np.asarray(theirs), rel=1e-13, abs=1e-13)
+    X0 = np.array([0.1, 0.1 + osc.b, 0.2, 0.2])
+    t = np.linspace(0.0, 3.0, 7)
+    assert made.state(t, X0, 0.4) == pytest.approx(fresh.state(t, X0, 0.4), rel=1e-13,
+                                                   abs=1e-13)
+    with pytest.raises(ParameterError, match="osc must be the held flow's oscillator at "
+                                             "another omega only"):
+        held_flow_at(base, osc.replace(b=0.4, omega=1.37), "U", reduced)
