@@ -19,6 +19,7 @@ import pytest
 
 import impactcont as ic
 from impactcont.errors import ParameterError
+from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops
 from impactcont.problems.multi_impact_branch import (
     STICKING_EVENTS,
@@ -231,3 +232,30 @@ def test_neimark_sacker_on_a_branch_with_sticking_phases():
     mu = np.sort(np.abs(alone.multipliers))[::-1]
     assert mu[:2] == pytest.approx([1.0, 1.0], abs=1e-7)
     assert np.abs(alone.multipliers[0].imag) > 0.1 and mu[2:].max() < 1e-12
+
+
+@functools.cache
+def riding_at(omega: float):
+    osc = damper(omega)
+    return ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, riding_start(osc), 0.0, 16.0))
+
+
+@pytest.mark.parametrize(("parameter", "bounds"), [("b", (0.27, 0.33)), ("eta", (0.27, 0.33)),
+                                                   ("m2", (0.19, 0.21))])
+def test_the_riding_motion_in_other_parameters_is_the_solve_alone(parameter, bounds):
+    """The walls' position (both move: mirrored stops), the damping and the ball's mass:
+    each branch's points are multi_impact_orbit solved alone at their parameter, seeded by
+    the branch's start (1e-10)."""
+    start = riding_at(1.2)
+    ds = ic.continuation(start, parameter=parameter, bounds=bounds)
+    values = ds[parameter].values
+    assert values.min() == pytest.approx(bounds[0]) and values.max() == pytest.approx(bounds[1])
+    assert ds.physical.values.all()
+    param = model_parameter(start.oscillator, parameter)
+    for i in (0, len(values) - 1):
+        alone = ic.multi_impact_orbit(param.at(start.oscillator, float(values[i])), 1, 2,
+                                      start)
+        assert alone.pattern == ds.attrs["pattern"] and alone.physical, alone.reason
+        for name, mine in (("flight_time_k", alone.flight_times),
+                           ("stick_time_k", alone.stick_times), ("state_k", alone.states)):
+            assert ds[name].values[i] == pytest.approx(mine, abs=1e-10), name
