@@ -37,6 +37,7 @@ from impactcont.plots.series import (
     panel_figure,
     time_history,
 )
+from impactcont.problems.multi_impact_branch import STICKING_EVENTS
 
 HERE = Path(__file__).resolve().parent
 FIGURES = HERE / "figures"
@@ -456,6 +457,72 @@ def cost_rows(rounds: int = 5, calls: int = 20) -> list[str]:
     return rows
 
 
+def package_branch(bounds=(0.2, 2.6)):
+    """Case (c) continued in omega by the package (``ic.continuation`` of the motion
+    solved from the simulation at ``bounds[0]``, with the tests of the points that end a
+    sticky branch as events: the end of a ride, release grazing, the onset of sticking):
+    the branch dataset and its wall time."""
+    res = simulated("c", bounds[0], 16.0)[2]
+    orbit = shooting("c", bounds[0], res)
+    start = time.perf_counter()
+    ds = ic.continuation(orbit, parameter="omega", bounds=bounds, events=STICKING_EVENTS)
+    return ds, time.perf_counter() - start
+
+
+def branch_rows(ds, every: int = 10) -> list[str]:
+    """Points of the package's branch against the closed form at their omega (every
+    `every`-th physical point and the last physical one; the closed form seeded by the
+    point's release from the upper wall, solved to 30 digits on its own)."""
+    pattern = ds.attrs["pattern"]
+    k = pattern.index("u")
+    physical = np.flatnonzero(ds.physical.values)
+    picks = sorted({*physical[::every].tolist(), int(physical[-1])})
+    rows = ["| point | omega | stick time (closed form) | phases | stick, flight times | "
+            "release states | largest multiplier |", "|---|---|---|---|---|---|---|"]
+    for i in picks:
+        omega = float(ds.omega[i])
+        theta_r = float(ds.delta_k[i, k]) + omega * float(ds.stick_time_k[i, k])
+        motion = cf.riding_damper_motion(
+            omega, m=BALL_MASS, b=GAP, eta=DAMPER_ETA,
+            guess=(theta_r, float(ds.release_state_k[i, k, 2])), iterations=0)
+        motion = motion.rotated(pattern)
+        phases = np.array(motion.floats("phases"))
+        d_phase = np.abs(np.remainder(ds.delta_k[i].values - phases + np.pi, 2 * np.pi)
+                         - np.pi).max()
+        d_times = max(np.abs(ds.stick_time_k[i].values
+                             - np.array(motion.floats("stick_times"))).max(),
+                      np.abs(ds.flight_time_k[i].values
+                             - np.array(motion.floats("flight_times"))).max())
+        d_release = np.abs(ds.release_state_k[i].values
+                           - np.array(motion.floats("release_states"))).max()
+        d_mu = abs(float(ds.spectral_radius[i]) - abs(complex(motion.multipliers[0])))
+        rows.append(f"| {i} | {omega:.6f} | {float(motion.stick_times[0]):.9f} | "
+                    f"{d_phase:.1e} | {d_times:.1e} | {d_release:.1e} | {d_mu:.1e} |")
+    return rows
+
+
+def branch_end_rows(ds, omega_end: float) -> list[str]:
+    """Where the package's branch stops being physical, against the closed form's end."""
+    physical = ds.physical.values
+    flip = int(np.flatnonzero(np.diff(physical.astype(int)))[0])
+    a, b = float(ds.omega[flip]), float(ds.omega[flip + 1])
+    sa, sb = float(ds.stick_time_k[flip, 0]), float(ds.stick_time_k[flip + 1, 0])
+    estimate = a - sa * (b - a) / (sb - sa)
+    specials = [str(v) for v in ds.special_label.values] if "special_label" in ds else []
+    events = []
+    if "event_name" in ds:
+        events = [f"| event {name} ({status}, precision {precision:.1e}) | {omega:.15f} |"
+                  for name, omega, precision, status in zip(
+                      ds.event_name.values, ds.event_omega.values,
+                      ds.event_precision.values, ds.event_status.values, strict=True)]
+    return ["| | omega |", "|---|---|", *events,
+            f"| last physical point (stick time {sa:.3g}) | {a:.9f} |",
+            f"| first non-physical point (stick time {sb:.3g}) | {b:.9f} |",
+            f"| zero of the stick time, linear between them | {estimate:.9f} |",
+            f"| closed form's end | {omega_end:.9f} |",
+            f"| special points the branch reports | {', '.join(specials) or 'none'} |"]
+
+
 def riding_figure(omega: float = 0.2, width: float = WIDTH) -> Figure:
     """One period of case (c): the simulator from the closed form's landing on a wall, the
     ball in the clearance ``s = x2 - x1`` and the primary ``x1``, each ride shaded, the
@@ -515,10 +582,12 @@ def draw_figures(width: float = WIDTH, points: list[dict] | None = None) -> None
 
 if __name__ == "__main__":
     logging.basicConfig(level=logging.INFO, format="%(message)s")
+    logging.getLogger("impactcont").setLevel(logging.WARNING)
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--figures-only", action="store_true")
     parser.add_argument("--cost", action="store_true",
-                        help="only the cost table (sticking against plain Newton solves)")
+                        help="only the cost table of a Newton solve (sticking against plain; "
+                             "a branch point's: branch_cost.py)")
     args = parser.parse_args()
     points = None
     if args.cost:
@@ -541,4 +610,9 @@ if __name__ == "__main__":
         points = omega_sweep()
         log.info("\n## (c) in omega\n\n%s", "\n".join(sweep_rows(points)))
         log.info("\n## (c) where it ends\n\n%s", "\n".join(end_rows(points)))
+        ds, seconds = package_branch()
+        log.info("\n## (c) continued by the package (%d points, %.1f s)\n\n%s\n\n%s",
+                 ds.sizes["point"], seconds, "\n".join(branch_rows(ds)),
+                 "\n".join(branch_end_rows(ds, float(cf.riding_end(
+                     points[-1]["motion"], m=BALL_MASS, b=GAP, eta=DAMPER_ETA)[0]))))
     draw_figures(points=points)
