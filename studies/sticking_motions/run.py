@@ -311,9 +311,8 @@ def _next_orbit(orbit, omega: float) -> ic.MultiImpactOrbit:
 
 def omega_sweep(omegas=SWEEP_OMEGAS) -> list[dict]:
     """Case (c) followed in omega, point by point, by the closed form and by the shooting
-    path (a natural-parameter continuation written here: the package's
-    ``multi_impact_continuation`` refuses sticking patterns so far); the differences at
-    every point.
+    path solved alone at every omega (a natural-parameter sweep; the package's own branch
+    is :func:`package_branch`); the differences at every point.
 
     Each closed form is seeded by the last (its velocity scaled by the ratio of the
     frequencies, then two periods of its map), each shooting by the last motion
