@@ -37,10 +37,11 @@ The lower stop is the same search on ``-s`` (forced, free and polynomial parts n
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
 :func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
 :func:`branch_linearization`, :func:`palc_correct` and, for motions with sticking phases
-only, :func:`sticky_system` and :func:`sticky_newton_solve`. An entry point that compiled code
-calls too is called there with the plain tuples Python passes, so one compiled function
-serves both (no entry point wraps an inner twin: numba compiles a wrapper's callee code
-again into it). Importing :mod:`impactcont` does not import this module.
+only, :func:`sticky_system`, :func:`sticky_newton_solve` and :func:`sticky_frequency_column`.
+An entry point that compiled code calls too is called there with the plain tuples Python
+passes, so one compiled function serves both (no entry point wraps an inner twin: numba
+compiles a wrapper's callee code again into it). Importing :mod:`impactcont` does not
+import this module.
 """
 
 from __future__ import annotations
@@ -85,8 +86,8 @@ from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
            "jacobian_product", "motion_checks", "newton_solve",
-           "omega_partials", "palc_correct", "shooting_system", "sticky_newton_solve",
-           "sticky_system"]
+           "omega_partials", "palc_correct", "shooting_system", "sticky_frequency_column",
+           "sticky_newton_solve", "sticky_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -806,6 +807,107 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     return (phases, stimes, taus, starts, releases, release_phases, h_tr, h_col, h_rate,
             arrivals, rates, transitions, pcols, residual, J, search_shifts, search_starts,
             search_phases)
+
+
+@_jit
+def sticky_frequency_column(flow, forcing, derivatives, impacts, held, held_dZ, period, shot):
+    """``dr/d omega`` of the shooting system of a motion with sticking phases at fixed
+    unknowns, shape (2np + q,): :func:`frequency_column` with the sticking phases.
+
+    `flow`, `forcing`, `derivatives`, `impacts` as :func:`frequency_column` takes them,
+    `held` as :func:`sticky_system`, `held_dZ` ``dZ/d omega`` of each held system's
+    steady amplitude (``(p, 2n - 2)`` complex, zeros where no stick follows an impact;
+    :meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` of the held system), `period`
+    the motion's ``2 pi N / omega`` and `shot` the plain tuple
+    :func:`sticky_system` returns at the unknowns (the Jacobian is not read). Compiled
+    only where a motion with sticking phases is continued in omega.
+
+    Notes
+    -----
+    At fixed unknowns omega moves four things (:func:`sticky_system`): the phases
+    ``theta_k = delta + omega sum_{i<k} (s_i + tau_i)`` (``d theta_k / d omega =
+    sum_{i<k} (s_i + tau_i)``) and the release phases ``theta_k + omega s_k``; the last
+    flight time ``tau_{p-1} = period - sum`` (``-period / omega``); the steady forced
+    state of each flight (:func:`omega_partials`, from the release); and that of each held
+    system, ``Y_p = Re(Z_r e^{i(omega t + theta)})``, so that at fixed ``t``, ``Y(0)`` and
+    ``theta`` the held state moves by ``L (Re((dZ_r + i t Z_r) e^{i(omega s_k + theta_k)})
+    - Phi_r(s_k) Re(dZ_r e^{i theta_k}))`` (``L Phi_r = (L Phi_r L^+) L``, the held
+    transition the shot carries). The release row ``p = grad . X_r + Re(force e^{i
+    theta_r}) + level`` moves with ``X_r`` and ``theta_r`` (its force and level do not
+    depend on omega). Each flight's change reaches row k through ``D_{k+1}``.
+    """
+    named = HeldSegments(*held)
+    sticks, lifts, Zr = named.sticks, named.lifts, named.Z
+    omega = Forcing(*forcing).omega
+    matrices = ImpactSequence(*impacts).matrices
+    sf = StickyFlights(*shot)
+    stimes, taus, rphases = sf.stick_times, sf.flight_times, sf.release_phases
+    h_tr, h_col, pcols, rates = (sf.held_transitions, sf.held_phase_columns, sf.phase_columns,
+                                 sf.arrival_rates)
+    transitions = sf.transitions
+    p = taus.size
+    m = matrices.shape[1]
+    r = lifts.shape[2]
+    explicit = omega_partials(flow, forcing, derivatives,
+                              (rphases, taus, sf.releases, sf.arrivals, rates, transitions,
+                               pcols, sf.residual, np.zeros((0, 0))))
+    q = 0
+    for k in range(p):
+        if sticks[k]:
+            q += 1
+    out = np.zeros(m * p + q)
+    d_release = np.zeros(m)  # dX_r / d omega
+    moved = np.zeros(m)
+    d0 = np.empty(m)
+    dt = np.empty(m)
+    elapsed = 0.0  # d theta_k / d omega
+    row = m * p
+    for k in range(p):
+        nxt = (k + 1) % p
+        d_phase = elapsed + stimes[k]  # d theta_r / d omega
+        for i in range(m):
+            d_release[i] = 0.0
+        if sticks[k]:
+            s = stimes[k]
+            theta = rphases[k] - omega * s
+            rot_0 = complex(math.cos(theta), math.sin(theta))
+            rot_t = complex(math.cos(rphases[k]), math.sin(rphases[k]))
+            for i in range(m):  # L Re(dZ e^{i theta}) and L Re((dZ + i s Z) e^{i theta_r})
+                a = 0.0
+                b = 0.0
+                for c in range(r):
+                    lc = lifts[k, i, c]
+                    if lc != 0.0:
+                        a += lc * (held_dZ[k, c] * rot_0).real
+                        b += lc * ((held_dZ[k, c] + 1j * s * Zr[k, c]) * rot_t).real
+                d0[i] = a
+                dt[i] = b
+            for i in range(m):
+                v = dt[i] + h_col[k, i] * elapsed
+                for c in range(m):
+                    v -= h_tr[k, i, c] * d0[c]
+                d_release[i] = v
+            g = named.grads[k]
+            e = complex(math.cos(rphases[k]), math.sin(rphases[k])) * named.forces[k]
+            v = (1j * e).real * d_phase
+            for i in range(m):
+                v += g[i] * d_release[i]
+            out[row] = v
+            row += 1
+        for i in range(m):
+            v = explicit[k, i] + pcols[k, i] * d_phase
+            if k == p - 1:
+                v -= rates[k, i] * period / omega
+            for c in range(m):
+                v += transitions[k, i, c] * d_release[c]
+            moved[i] = v
+        for i in range(m):
+            v = 0.0
+            for c in range(m):
+                v += matrices[nxt, i, c] * moved[c]
+            out[k * m + i] = v
+        elapsed += stimes[k] + taus[k]
+    return out
 
 
 @_jit

@@ -1316,6 +1316,59 @@ def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: floa
         "simulation's sticking phases show the one it settled on)")
 
 
+def held_omega_derivatives(flow: Flow, pattern: str) -> np.ndarray:
+    """``dZ/d omega`` of the steady amplitude of each held system of `pattern` at the flow's
+    omega, shape (p, 2n - 2) complex (zeros where no stick follows an impact, or one mass
+    held): the held systems' part of :func:`sticky_omega_column`
+    (:meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` of each held flow)."""
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    r = 2 * osc.n - 2
+    out = np.zeros((len(pattern), r), dtype=complex)
+    for k in np.flatnonzero(sticks):
+        reduced = held_flow(osc, impacts[k]).reduced
+        if reduced is not None:
+            out[k] = reduced.omega_arrays().dZ
+    return out
+
+
+def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
+                        sh: StickyShooting | None = None) -> np.ndarray:
+    """``dr/d omega`` of :func:`sticky_shooting` at fixed unknowns ``u``, exact (compiled:
+    :func:`impactcont.kernel.shooting.sticky_frequency_column`).
+
+    The phases, the period's last flight time, the steady forced state of each flight and
+    of each held system (its amplitude ``Z_r(omega)``) and, through them, the release rows;
+    the column of the continuation in omega (``MultiImpactBranchProblem.dparam``).
+
+    Parameters
+    ----------
+    flow : Flow
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact.
+    u : ndarray, shape (2np + q,)
+    sh : StickyShooting, optional
+        :func:`sticky_shooting` at ``u`` if already computed (its Jacobian is not read).
+
+    Returns
+    -------
+    ndarray, shape (2np + q,)
+    """
+    osc = flow.osc
+    impacts = sticking_pattern(osc, pattern)[0]
+    x = _sticky_unknowns(osc, pattern, u, "u")
+    if sh is None:
+        sh = sticky_shooting(flow, N, pattern, x, jacobian=False)
+    shot = tuple(np.zeros((0, 0)) if name == "jacobian" else getattr(sh, name)
+                 for name in StickyFlights._fields)
+    return _kernel().sticky_frequency_column(
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+        tuple(flow.omega_arrays()), tuple(impact_sequence(_geometry(flow, impacts))),
+        held_segments(flow, pattern), held_omega_derivatives(flow, pattern),
+        TWO_PI * N / osc.omega, shot)
+
+
 def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
                      ) -> tuple[np.ndarray, np.ndarray]:
     """``G_k`` of each segment (impact k's section to impact ``k + 1``'s, in ``[z,

@@ -370,6 +370,51 @@ def test_the_sticky_jacobian_is_exact(pattern):
     np.testing.assert_allclose(J, fd, atol=1e-7 * max(1.0, np.max(np.abs(fd))))
 
 
+def _sticky_machines(kind, omega):
+    """Motions with sticking phases of every held system: the damper (the pair held on a
+    wall; a modal flow, and a general one with the dashpot on the primary only), one mass
+    preloaded on its stop (nothing left to move) and two masses, the first held on a frame
+    stop under a constant force."""
+    if kind == "damper":
+        return _sticky_damper().replace(omega=omega)
+    if kind == "damper, C on the primary":
+        return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1, 0],
+                                   C=[[0.3, 0.0], [0.0, 0.0]], R=0.0, b=0.3, omega=omega,
+                                   stops=Stops(mass=2, relative_to=1, mirror=True))
+    if kind == "preloaded":
+        return ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.0,
+                                   b=0.0, omega=omega, eta=0.1)
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.5]), K=[[2.0, -1.0], [-1.0, 1.0]],
+                               F=[1.0, 0.3], F_static=[0.2, 0.1], R=0.0, b=0.1, omega=omega,
+                               eta=0.05)
+
+
+@pytest.mark.parametrize(("kind", "pattern"), [("damper", "ul"), ("damper", "uL"),
+                                               ("damper, C on the primary", "ul"),
+                                               ("preloaded", "u"), ("frame stop", "uU")])
+def test_the_sticky_omega_column_is_exact(kind, pattern):
+    """``dr/d omega`` of the shooting system with sticking phases (the phases, the last
+    flight, the flights' and the held systems' forced states, the release rows) against
+    central differences of the residual in omega at fixed unknowns, each omega's
+    oscillator and held systems built afresh."""
+    from impactcont.orbit.multi_impact import sticky_omega_column, sticky_shooting
+
+    omega, h = 0.5, 1e-6
+    osc = _sticky_machines(kind, omega)
+    p, n = len(pattern), osc.n
+    q = sum(c.islower() for c in pattern)
+    rng = np.random.default_rng(3)
+    u = np.concatenate([[0.4], np.full(p - 1, 2.5), np.full(q, 1.7),
+                        rng.normal(scale=0.2, size=p * (2 * n - 1))])
+    column = sticky_omega_column(flow_of(osc), 1, pattern, u)
+    fd = (sticky_shooting(flow_of(_sticky_machines(kind, omega + h)), 1, pattern, u,
+                          jacobian=False).residual
+          - sticky_shooting(flow_of(_sticky_machines(kind, omega - h)), 1, pattern, u,
+                            jacobian=False).residual) / (2 * h)
+    assert np.max(np.abs(fd[2 * n * p:])) > 0.1  # the release rows move with omega
+    np.testing.assert_allclose(column, fd, rtol=0, atol=1e-7 * max(1.0, np.max(np.abs(fd))))
+
+
 def test_sticking_patterns_outside_multi_impact_orbit_are_refused():
     from impactcont.orbit.multi_impact import shooting
 
