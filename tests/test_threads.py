@@ -42,6 +42,38 @@ def test_blas_threads_are_limited_inside_the_library_and_restored(
         assert blas_threads() == {2}
 
 
+def test_the_blas_libraries_are_scanned_again_only_after_an_import(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The scan of the loaded libraries (about 1 ms) is done once, not at every entry: again
+    only when a module has been imported since (a new BLAS comes with a new extension
+    module). Before, every entry scanned."""
+    import sys
+    import types
+
+    import threadpoolctl
+
+    import impactcont.threads as threads
+
+    scans = []
+
+    class Counting(threadpoolctl.ThreadpoolController):
+        def __init__(self) -> None:
+            scans.append(1)
+            super().__init__()
+
+    monkeypatch.setattr(threadpoolctl, "ThreadpoolController", Counting)
+    monkeypatch.setattr(threads, "_controller", None)
+    for _ in range(3):
+        with threads.limit_blas_threads():
+            pass
+    assert len(scans) == 1
+    monkeypatch.setitem(sys.modules, "_impactcont_new_extension", types.ModuleType("x"))
+    with threads.limit_blas_threads():
+        pass
+    assert len(scans) == 2
+    monkeypatch.setattr(threads, "_controller", None)  # not the counting one for the others
+
+
 def test_a_scene_runs_with_one_blas_thread(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
                                            ) -> None:
     from threadpoolctl import threadpool_info, threadpool_limits
