@@ -302,7 +302,8 @@ def held_flow_at(base: HeldFlow, osc: ImpactOscillator, name: str, reduced: Flow
                  ) -> HeldFlow:
     """The :class:`HeldFlow` of stop `name` of `osc`, an oscillator that differs from
     ``base.oscillator`` in omega only, with `reduced` the held system's flow at that omega:
-    the frame, the stop and its offset shared (none depends on omega), and kept for
+    the frame, the stop, its offset, the lift ``L, L^+`` and the pressing force's rows
+    shared (none depends on omega), and kept for
     :func:`held_flow` of `osc` (a branch in omega builds each held system's flow at a new
     omega from the start's, without its modes again).
 
@@ -326,6 +327,9 @@ def held_flow_at(base: HeldFlow, osc: ImpactOscillator, name: str, reduced: Flow
                              f"{osc.omega!r}" + (" (None: one mass held)" if base.reduced is None
                                                  else ""))
     flow = dataclasses.replace(base, oscillator=osc, reduced=reduced)
+    for cache in ("_lifted", "_rows"):  # the lift and the force rows: free of omega
+        if cache in base.__dict__:
+            object.__setattr__(flow, cache, base.__dict__[cache])
     _HELD.setdefault(osc, {})[name] = flow
     return flow
 

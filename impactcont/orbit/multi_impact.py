@@ -1080,13 +1080,26 @@ def sticking_pattern(osc: ImpactOscillator, pattern: str) -> tuple[str, np.ndarr
     known = _STICKING.setdefault(osc, {})
     found = known.get(pattern)
     if found is None:
-        found = known[pattern] = _sticking_pattern(osc, pattern)
+        # what it reads (the stops, the masses, b and R) does not change with omega: a
+        # branch in omega finds the start's at each new oscillator
+        key = (pattern, osc.stops, np.asarray(osc.b, dtype=float).tobytes(),
+               np.asarray(osc.R, dtype=float).tobytes(), np.asarray(osc.M, dtype=float).tobytes())
+        found = _STICKING_BY_STOPS.get(key)
+        if found is None:
+            found = _sticking_pattern(osc, pattern)
+            if len(_STICKING_BY_STOPS) >= _STICKING_KEPT:
+                _STICKING_BY_STOPS.clear()
+            _STICKING_BY_STOPS[key] = found
+        known[pattern] = found
     return found
 
 
 #: :func:`sticking_pattern` of each live oscillator, by pattern.
 _STICKING: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, tuple[str, np.ndarray]]] = \
     weakref.WeakKeyDictionary()
+#: ... and by what it reads (the pattern, the stops, b, R and M), at most this many.
+_STICKING_KEPT = 64
+_STICKING_BY_STOPS: dict[tuple[Any, ...], tuple[str, np.ndarray]] = {}
 
 
 def _sticking_pattern(osc: ImpactOscillator, pattern: str) -> tuple[str, np.ndarray]:

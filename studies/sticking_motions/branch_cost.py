@@ -8,18 +8,30 @@ interleaved, the best of 5 rounds after a warm-up run of each::
 
     python studies/sticking_motions/branch_cost.py
 
-Prints one line per detection setting: ms per point of each and their ratio.
+Prints one line per detection setting: ms per point of each and their ratio. With
+``--exact`` a third branch is timed in the same rounds: the sticky one with ``dF/domega``
+the exact column :func:`impactcont.orbit.multi_impact.sticky_omega_column` instead of
+the parameter's central difference (patched into
+``MultiImpactBranchProblem.dparam`` for that run only, until the problem calls it)::
+
+    python studies/sticking_motions/branch_cost.py --exact
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 import time
+from collections.abc import Iterator
 
 import numpy as np
 
 import impactcont as ic
+from impactcont.model.parameters import FREQUENCY
 from impactcont.model.stops import Stops
+from impactcont.orbit.multi_impact import sticky_omega_column
+from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 
 def damper(omega: float, R: float) -> ic.ImpactOscillator:
@@ -60,22 +72,50 @@ def per_point(start: ic.MultiImpactOrbit, detect) -> tuple[float, int]:
     return (time.perf_counter() - begin) / points, points
 
 
-def main(rounds: int = 5) -> None:
+_PACKAGE_DPARAM = MultiImpactBranchProblem.dparam
+
+
+def _exact_dparam(self: MultiImpactBranchProblem, u: np.ndarray, lam: float) -> np.ndarray:
+    """``dparam`` with the exact omega column of a sticky motion."""
+    if self.sticky and self.param.data == FREQUENCY:
+        return sticky_omega_column(self.flow_at(lam), self.N, self.pattern, u,
+                                   self._shoot(u, lam))
+    return _PACKAGE_DPARAM(self, u, lam)
+
+
+@contextlib.contextmanager
+def exact_column(on: bool) -> Iterator[None]:
+    """The sticky branch's ``dF/domega`` exact (`on`) or the package's, for one run."""
+    if on:
+        MultiImpactBranchProblem.dparam = _exact_dparam
+    try:
+        yield
+    finally:
+        MultiImpactBranchProblem.dparam = _PACKAGE_DPARAM
+
+
+def main(rounds: int = 5, exact: bool = False) -> None:
     motions = starts()
-    for name, start in motions.items():
+    runs = [(name, start, False) for name, start in motions.items()]
+    if exact:
+        runs.insert(1, ("sticky, exact dF/domega", motions["sticky 'lu' (R 0)"], True))
+    for name, start, patched in runs:
         assert start.physical, (name, start.reason)
-        per_point(start, ())  # warm: the compiled kernels
+        with exact_column(patched):
+            per_point(start, ())  # warm: the compiled kernels
     for detect, label in (((), "no detection"), (ic.detection.LABELS, "default detection")):
-        best = {}
+        best: dict[str, tuple[float, int]] = {}
         for _ in range(rounds):
-            for name, start in motions.items():
-                cost, points = per_point(start, detect)
+            for name, start, patched in runs:
+                with exact_column(patched):
+                    cost, points = per_point(start, detect)
                 best[name] = min(best.get(name, (np.inf, 0)), (cost, points))
-        (sticky, ns), (plain, npl) = best.values()
-        print(f"{label}: sticky {sticky * 1e3:.2f} ms/point ({ns} points), plain "
-              f"{plain * 1e3:.2f} ms/point ({npl} points), ratio {sticky / plain:.1f}")
+        plain = best["plain 'UL' (R 0.6)"][0]
+        print(f"{label}: " + ", ".join(
+            f"{name} {cost * 1e3:.2f} ms/point ({points} points, ratio {cost / plain:.1f})"
+            for name, (cost, points) in best.items()))
     print(f"load {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":
-    main()
+    main(exact="--exact" in sys.argv[1:])
