@@ -51,7 +51,11 @@ class Label(str, enum.Enum):
     figures (a matplotlib marker code), its ``words`` (legends), its ``codimension`` (1:
     one condition on a branch) and whether it has ``curves`` (two-parameter continuation,
     :data:`CURVE_KINDS`). How a problem detects it (its test function, rounding noise and
-    criticality) is declared by the problem (:mod:`impactcont.problems.events`).
+    criticality) is declared by the problem (:mod:`impactcont.problems.events`; the
+    points that bound a sticking phase, ``SE``, ``RG`` and ``SO``, by a branch problem of
+    motions with sticking phases, :data:`impactcont.problems.multi_impact_branch.STICKING_TESTS`).
+    A problem that does not declare a kind never reports it: ``detect=`` may name every
+    kind on every branch.
 
     Notes
     -----
@@ -84,6 +88,23 @@ class Label(str, enum.Enum):
     """Symmetry-breaking pitchfork of a symmetric motion of a symmetric two-sided system:
     a multiplier of its half-map crosses -1 (G gets +1 without a fold) and a pair of
     asymmetric motions, mirror images, branches off (:mod:`impactcont.orbit.symmetry`)."""
+    SE = ("SE", "X", "end of a sticking phase", False)
+    """End of a sticking phase (the end of a ride): a stick time of a motion with sticking
+    phases passes through 0, the plastic impact landing where the stop stops pressing its
+    coordinate, so that the landing is itself a release; beyond it the motion would stick
+    for a negative time (not physical). Only branches of motions with sticking phases have
+    it (:func:`impactcont.problems.multi_impact_branch.stick_end_test`)."""
+    RG = ("RG", "p", "release grazing", False)
+    """Release grazing: the pressing force of a stop on the coordinate it holds touches 0
+    inside a sticking phase (a release that almost happens early; beyond it the mass
+    leaves there: another motion). Branches of motions with sticking phases only
+    (:func:`impactcont.problems.multi_impact_branch.release_grazing_test`)."""
+    SO = ("SO", "h", "sticking onset", False)
+    """Sticking onset: the pressing force right after a plastic impact that starts a
+    sticking phase passes through 0 (the acceleration tangent to the stop at the
+    landing: on one side the stop holds the coordinate, on the other the mass leaves at
+    once). Branches of motions with sticking phases only
+    (:func:`impactcont.problems.multi_impact_branch.sticking_onset_test`)."""
 
     def __str__(self) -> str:
         return str(self.value)
@@ -105,7 +126,9 @@ LABEL_NAMES: dict[str, str] = {label.value: label.words for label in Label}
 
 #: The kinds of codimension-one curves (two-parameter continuation of a special point):
 #: the labels with :attr:`Label.curves`, every one but ``BP``, which exists only on
-#: symmetric N-p motions (no curves yet). The members are the kinds themselves.
+#: symmetric N-p motions, and ``SE``, ``RG``, ``SO``, which bound the motions with sticking
+#: phases (no curves of either yet: curves of motions with sticking phases are not
+#: solved). The members are the kinds themselves.
 CURVE_KINDS: tuple[Label, ...] = tuple(label for label in Label if label.curves)
 
 #: Codimension-two points, one name per point: ``A+B`` is where a curve of kind A meets

@@ -27,8 +27,8 @@ log = logging.getLogger(__name__)
 
 _Point = TypeVar("_Point")
 
-__all__ = ["COMPANIONS", "STATUSES", "TWIN_TOL", "drop_grazing_at_zero_velocity",
-           "is_critical", "kind_event", "last_motions", "locate_zero", "twins",
+__all__ = ["COMPANIONS", "STATUSES", "TWIN_OF", "TWIN_TOL", "drop_grazing_at_zero_velocity",
+           "drop_twins", "is_critical", "kind_event", "last_motions", "locate_zero", "twins",
            "watched_labels"]
 
 
@@ -45,10 +45,16 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
     return True if criterion is None else criterion(multipliers, unit_tol)
 
 
-#: The kinds a detector also watches when one is asked for: ZV with GR, whose located
-#: points tell which GR is the grazing of a zero-velocity impact (dropped as its twin,
-#: :func:`drop_grazing_at_zero_velocity`, also when ZV is not asked for).
-COMPANIONS: dict[str, tuple[Label, ...]] = {Label.GR: (Label.ZV,)}
+#: The point a kind's zero is when both are located on one step (:func:`drop_twins`): a
+#: GR at a ZV is the grazing of the zero-velocity impact; an RG or an SO at an SE is the
+#: end of a sticking phase (the landing is the release there, so the pressing force at
+#: the landing and the smallest one inside the stick vanish with the stick time).
+TWIN_OF: dict[str, Label] = {Label.GR: Label.ZV, Label.RG: Label.SE, Label.SO: Label.SE}
+
+#: The kinds a detector also watches when one is asked for: ZV with GR, SE with RG and
+#: SO, whose located points tell which point is the other's twin (dropped,
+#: :func:`drop_twins`, also when ZV or SE is not asked for).
+COMPANIONS: dict[str, tuple[Label, ...]] = {kind: (twin,) for kind, twin in TWIN_OF.items()}
 
 
 def watched_labels(labels: Sequence[str]) -> list[str]:
@@ -88,50 +94,64 @@ def kind_event(label: str, test: MotionTest, at: Callable[[Any, float], Any],
                  **fields)
 
 
-#: a GR this close (relative) to a ZV on the same step is its grazing: the square root of
-#: the GR test's rounding (a double zero) is 1e-8..1e-7
+#: a GR this close (relative) to a ZV on the same step is its grazing (an RG or SO to an
+#: SE, its end of a sticking phase): the square root of the GR test's rounding (a double
+#: zero) is 1e-8..1e-7
 TWIN_TOL = 1e-6
 
 
 def twins(distance: float, precisions: float, scale: Any) -> bool:
-    """Whether a GR `distance` from a located ZV (same step) is the ZV's grazing: within
-    the two points' `precisions` or :data:`TWIN_TOL` times the size of where they are."""
+    """Whether a point `distance` from its located twin (same step; a GR from a ZV) is
+    that point: within the two points' `precisions` or :data:`TWIN_TOL` times the size of
+    where they are."""
     return distance <= max(precisions, TWIN_TOL * max(1.0, float(np.max(np.abs(scale)))))
 
 
-def drop_grazing_at_zero_velocity(points: Sequence[_Point], parameter: str = "lam"
-                                  ) -> list[_Point]:
-    """The special points without each GR that is the grazing of a ZV impact.
+def drop_twins(points: Sequence[_Point], parameter: str = "lam") -> list[_Point]:
+    """The special points without each one that is the twin of another (:data:`TWIN_OF`).
 
-    An impact whose velocity ``h2`` passes through zero is itself a grazing contact:
-    on the side ``h2 < 0`` the free flight reaches its maximum ``x = b + h2^2 / (2 |a|)``
-    just before the impact (``a`` the acceleration there), so the GR test function
-    (the smallest clearance inside the flights) is ``-h2^2 / (2 |a|)`` near the ZV
-    point and touches zero quadratically there. When the clearance on the other side
-    is finite and positive (another flight's maximum, N-p motions) the GR test changes
-    sign at the ZV point and is located there, but only to about the square root of
-    its rounding noise (1e-9..1e-7 instead of 1e-14): one codim-1 point, the grazing
-    impact, found twice. It is reported once, as the ZV (its test ``h2`` is simple).
+    GR at ZV: an impact whose velocity ``h2`` passes through zero is itself a grazing
+    contact: on the side ``h2 < 0`` the free flight reaches its maximum
+    ``x = b + h2^2 / (2 |a|)`` just before the impact (``a`` the acceleration there), so
+    the GR test function (the smallest clearance inside the flights) is
+    ``-h2^2 / (2 |a|)`` near the ZV point and touches zero quadratically there. When the
+    clearance on the other side is finite and positive (another flight's maximum, N-p
+    motions) the GR test changes sign at the ZV point and is located there, but only to
+    about the square root of its rounding noise (1e-9..1e-7 instead of 1e-14): one
+    codim-1 point, the grazing impact, found twice. It is reported once, as the ZV (its
+    test ``h2`` is simple).
 
-    A GR is dropped when a ZV was located on the same step within the two points'
+    RG and SO at SE: where a stick time passes through 0 (SE) the plastic impact lands
+    at the release, so the pressing force at the landing (SO's test) and the smallest
+    inside the stick (RG's, which counts the landing's for a stick of no duration)
+    vanish at the same point: one point, the end of the sticking phase, reported once,
+    as the SE.
+
+    A point is dropped when its twin was located on the same step within the two points'
     precisions (at least :data:`TWIN_TOL` relative: on the side where no flight has an
     interior maximum the GR test is +inf, and the precision search sees only one side of
     the double zero); every other point is kept, in order.
     """
-    zv = [z for z in points if z.label == Label.ZV and z.status == "located"]
+    located = [z for z in points if z.label in TWIN_OF.values() and z.status == "located"]
     kept = []
     for point in points:
         twin = None
-        if point.label == Label.GR:
-            twin = next((z for z in zv if z.bracket == point.bracket and twins(
-                abs(z.value - point.value), z.precision + point.precision, z.value)), None)
+        if point.label in TWIN_OF:
+            twin = next((z for z in located if z.label == TWIN_OF[point.label]
+                         and z.bracket == point.bracket and twins(
+                             abs(z.value - point.value), z.precision + point.precision,
+                             z.value)), None)
         if twin is None:
             kept.append(point)
         else:
-            log.info("GR at %s=%.12g (precision %.1e) is the grazing of the zero-velocity "
-                     "impact ZV at %.12g: reported once, as ZV", parameter, point.value,
-                     point.precision, twin.value)
+            log.info("%s at %s=%.12g (precision %.1e) is the %s at %.12g: reported once, as "
+                     "%s", point.label, parameter, point.value, point.precision, twin.label,
+                     twin.value, twin.label)
     return kept
+
+
+#: The name of :func:`drop_twins` when GR at ZV was its only pair.
+drop_grazing_at_zero_velocity = drop_twins
 
 
 def last_motions(orbit: Callable[[Any, float], Any], size: int = 8

@@ -15,7 +15,14 @@ label     test function                               meaning
 ``GR``    ``gap_min``                                 a stop touched inside a flight
 ``ZV``    ``impact_velocity``                         impact at zero velocity
 ``BP``    ``det(H + I)``, ``H = S G_{h-1} .. G_0``    symmetry-breaking pitchfork
+``SE``    ``min_k s_k`` (stick times)                 end of a sticking phase
+``RG``    smallest pressing force inside the sticks   release grazing
+``SO``    smallest pressing force at the landings     sticking onset
 ========  ==========================================  =================================
+
+SE, RG and SO are declared by a branch of motions with sticking phases only
+(:data:`~impactcont.problems.multi_impact_branch.STICKING_TESTS`); an RG or SO located at
+an SE is that SE (:func:`~impactcont.detection.locator.drop_twins`).
 
 A sign change between two accepted points brackets a special point; it is
 then located as an event of the core (:func:`impactcont.core.locate_events`:
@@ -45,6 +52,7 @@ import dataclasses
 import logging
 import math
 import re
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
@@ -52,7 +60,7 @@ import numpy as np
 
 from impactcont.core.locate import Event, MotionTest, locate_events
 from impactcont.detection.locator import (
-    drop_grazing_at_zero_velocity,
+    drop_twins,
     kind_event,
     last_motions,
     watched_labels,
@@ -65,7 +73,8 @@ from impactcont.vocabulary import CODIM2_LABELS, LABELS, Label, check_labels
 
 __all__ = ["LABELS", "BranchSample", "MultiImpactSample", "SpecialPoint", "UserEvent",
            "UserFunctions", "check_user_functions", "detect_special_points", "event_function",
-           "event_noise", "locate_sample_events", "locate_user_events", "pole_free", "user_values"]
+           "event_noise", "locate_sample_events", "locate_user_events", "pole_free", "user_values",
+           "without_detected_events"]
 
 log = logging.getLogger(__name__)
 
@@ -192,8 +201,9 @@ def detect_special_points(problem: Any, samples: Sequence[BranchSample],
                 "location", "interrupted by the user (KeyboardInterrupt) while computing the "
                 "motions at the special points: the %d before are kept", len(found))):
             raise
-    # a companion watched but not asked (ZV for GR) only tells which GR to drop
-    found = [special for special in drop_grazing_at_zero_velocity(found, parameter)
+    # a companion watched but not asked (ZV for GR, SE for RG and SO) only tells which
+    # points to drop as its twins
+    found = [special for special in drop_twins(found, parameter)
              if special.label in asked or special.label not in watched]
     for special in found:
         log.info("%s at %s = %.12g (N=%d, p=%d, %s, precision %.1e)", special.label,
@@ -322,6 +332,53 @@ def check_user_functions(events: Any = None, monitors: Any = None,
         raise ParameterError(f"events and monitors share the name(s) {both}: an event is "
                              "stored as a monitor too; give each name once")
     return checked
+
+
+def without_detected_events(functions: UserFunctions | None, problem: Any,
+                            labels: Sequence[str]) -> UserFunctions | None:
+    """`functions` without the events that are the test of a kind `problem` detects.
+
+    An event whose function is the very test function of a kind the problem declares
+    (its ``motion_tests``) and `labels` asks for (e.g.
+    :data:`~impactcont.problems.multi_impact_branch.STICKING_EVENTS` on a branch of
+    motions with sticking phases: ``SE``, ``RG``, ``SO``) would locate each of those
+    points twice, as a special point and as a user event: it is kept as a monitor (its
+    values at every point are stored) and its zeros are the special points. A
+    ``DeprecationWarning`` names the events and the labels.
+
+    Parameters
+    ----------
+    functions : UserFunctions or None
+        The user's checked events and monitors (:func:`check_user_functions`).
+    problem : BranchProblem
+        The branch problem (its ``motion_tests``).
+    labels : sequence of str
+        The kinds detected on the branch (the driver's ``detect``).
+
+    Returns
+    -------
+    UserFunctions or None
+        `functions` itself when no event duplicates a detected kind.
+    """
+    if not functions:
+        return functions
+    tests: Mapping[str, MotionTest] = getattr(problem, "motion_tests", BRANCH_TESTS)
+    asked = {str(label) for label in labels}
+    by_test = {id(test.test): str(label) for label, test in tests.items()
+               if str(label) in asked}
+    dropped = {name: by_test[id(fn)] for name, fn in functions.events.items()
+               if id(fn) in by_test}
+    if not dropped:
+        return functions
+    warnings.warn(
+        f"events {sorted(dropped)} are the tests of the special points "
+        f"{sorted(set(dropped.values()))} ({dropped}), which this branch locates itself "
+        "(the dataset's special points): they are kept as monitors only; passing them as "
+        "events (STICKING_EVENTS) is deprecated, leave events= out", DeprecationWarning,
+        stacklevel=2)
+    events = {name: fn for name, fn in functions.events.items() if name not in dropped}
+    monitors = {**{name: functions.events[name] for name in dropped}, **functions.monitors}
+    return UserFunctions(events, monitors)
 
 
 class _UserFunctionFailure(Exception):  # noqa: N818 - carries the error to raise

@@ -36,7 +36,9 @@ Newton tolerance). The corrector is the core's (no compiled step). Its motions r
 stick times, release states and pressing minima; its branches end where a stick time
 reaches 0 (the landing becomes a release: the end of a ride), where the pressing force
 touches 0 inside a stick (release grazing) and where it is 0 at the landing (the onset of
-sticking), each a sign change of a test of the motion (:data:`STICKING_TESTS`).
+sticking), each a sign change of a test of the motion (:data:`STICKING_TESTS`): the special
+points ``SE``, ``RG`` and ``SO`` (:class:`~impactcont.vocabulary.Label`), which such a
+problem declares besides those of every branch, so they are located by default.
 """
 
 from __future__ import annotations
@@ -144,7 +146,9 @@ class MultiImpactBranchProblem:
         if self.sticky:
             _check_sticking_parameter(self.param, osc, self.pattern, self.impacts,
                                       self.sticks)
-            #: the kinds of points that end a branch of motions with sticking phases
+            #: the kinds of points that end a branch of motions with sticking phases,
+            #: located by default as the branch's special points
+            self.events = (*self.events, *STICKING_TESTS)
             self.motion_tests = MappingProxyType({**BRANCH_TESTS, **STICKING_TESTS})
         self.size = 2 * osc.n * self.p + int(np.count_nonzero(self.sticks))
         self._flows: dict[float, Flow] = {}
@@ -664,21 +668,26 @@ def _force_noise(orbit: Any) -> float:
 
 
 #: The tests of the points that end a branch of motions with sticking phases, as
-#: :class:`~impactcont.core.locate.MotionTest` by the name of their kind: ``SE`` the end of
-#: a ride (a stick time through 0), ``RG`` release grazing (the pressing force touching 0
-#: inside a stick), ``SO`` the onset of sticking (the pressing force at a landing through
-#: 0). A sticky problem declares them in its ``motion_tests``; the detectors locate the
-#: kinds of :data:`impactcont.vocabulary.LABELS` only, so until these are labels there
-#: they are located as user events (:data:`STICKING_EVENTS`).
-STICKING_TESTS: Mapping[str, MotionTest] = MappingProxyType({
-    "SE": MotionTest(stick_end_test, _time_noise),
-    "RG": MotionTest(release_grazing_test, _force_noise),
-    "SO": MotionTest(sticking_onset_test, _force_noise),
+#: :class:`~impactcont.core.locate.MotionTest` by their kind
+#: (:class:`~impactcont.vocabulary.Label`): ``SE`` the end of a sticking phase (a stick
+#: time through 0), ``RG`` release grazing (the pressing force touching 0 inside a stick),
+#: ``SO`` the onset of sticking (the pressing force at a landing through 0). A sticky
+#: problem declares them (its ``events`` and ``motion_tests``), so they are detected and
+#: located on its branches by default, as their other special points; none is critical
+#: beyond its zero (no multiplier check).
+STICKING_TESTS: Mapping[Label, MotionTest] = MappingProxyType({
+    Label.SE: MotionTest(stick_end_test, _time_noise),
+    Label.RG: MotionTest(release_grazing_test, _force_noise),
+    Label.SO: MotionTest(sticking_onset_test, _force_noise),
 })
 
-#: The same tests as ``events=`` of :func:`impactcont.continuation` (located by the same
-#: locator, stored as the branch's user events): ``{"stick_end": .., "release_grazing": ..,
-#: "sticking_onset": ..}``.
+#: The same tests as user functions: ``{"stick_end": .., "release_grazing": ..,
+#: "sticking_onset": ..}``. Deprecated as ``events=`` of :func:`impactcont.continuation`:
+#: a sticky branch locates these points as its special points ``SE``, ``RG`` and ``SO``;
+#: passed as events where those kinds are detected, they are dropped with a
+#: ``DeprecationWarning`` (:func:`impactcont.detection.special_points.check_user_functions`),
+#: so that no point is reported twice. As ``monitors=`` they give the tests' values at
+#: every point.
 STICKING_EVENTS: Mapping[str, Callable[[Any], float]] = MappingProxyType({
     "stick_end": stick_end_test, "release_grazing": release_grazing_test,
     "sticking_onset": sticking_onset_test})

@@ -16,12 +16,16 @@ import numpy as np
 import pytest
 
 from impactcont.detection.locator import (
+    COMPANIONS,
     STATUSES,
     drop_grazing_at_zero_velocity,
+    drop_twins,
     is_critical,
     locate_zero,
+    watched_labels,
 )
 from impactcont.vocabulary import STATUSES as VOCABULARY_STATUSES
+from impactcont.vocabulary import Label
 
 DOTTIE = 0.7390851332151607  # the root of cos s = s (to 16 digits)
 
@@ -112,6 +116,21 @@ def test_a_grazing_at_a_zero_velocity_impact_is_reported_once_as_zv(caplog):
         kept = drop_grazing_at_zero_velocity([pd, zv, twin, other_step, far], parameter="omega")
     assert kept == [pd, zv, other_step, far]
     assert "reported once, as ZV" in caplog.text and "omega=" in caplog.text
+
+
+def test_release_grazing_and_sticking_onset_at_the_end_of_a_sticking_phase_are_the_se(caplog):
+    """Where a stick time passes through 0 the landing is the release: the RG and SO tests
+    vanish there too; one point, reported once, as SE (an RG elsewhere is kept)."""
+    se = _Point("SE", 2.3934, 1e-13, (2.3, 2.4))
+    rg = _Point("RG", 2.3934 + 1e-13, 1e-13, (2.3, 2.4))
+    so = _Point("SO", 2.3934, 1e-13, (2.3, 2.4))
+    lone = _Point("RG", 0.052, 1e-14, (0.05, 0.06))
+    with caplog.at_level(logging.INFO, logger="impactcont.detection.locator"):
+        kept = drop_twins([lone, se, rg, so], parameter="omega")
+    assert kept == [lone, se]
+    assert caplog.text.count("reported once, as SE") == 2
+    assert COMPANIONS[Label.RG] == COMPANIONS[Label.SO] == (Label.SE,)
+    assert watched_labels(["RG"]) == ["RG", "SE"]
 
 
 def test_a_zv_only_bracketed_drops_nothing():

@@ -72,10 +72,10 @@ def riding(omega: float = 0.2):
 
 @functools.cache
 def branch():
-    """The riding motion followed in omega from 0.2 past the end of its ride, the
-    sticking tests as events."""
+    """The riding motion followed in omega from 0.2 past the end of its ride (its special
+    points by default: SE, RG and SO among them)."""
     return ic.continuation(riding(), parameter="omega", bounds=(0.19, 2.45), ds_max=0.1,
-                           both_directions=False, events=STICKING_EVENTS)
+                           both_directions=False)
 
 
 def test_the_branch_in_omega_is_the_closed_form_and_the_solve_alone(cf):
@@ -159,32 +159,51 @@ def test_a_parameter_that_unmakes_the_plastic_stop_is_refused():
 
 
 def test_the_ride_ends_at_the_closed_forms_omega():
-    """(a) The stick time through 0, located on the branch: omega* = 2.393422959745478 of
-    the closed form (landing = release) within the locator's precision. The landing's
-    pressing force and the smallest one inside the stick vanish there too (the landing is
-    a release: one point, three tests)."""
+    """(a) The stick time through 0, located on the branch as its special point SE without
+    events=: omega* = 2.393422959745478 of the closed form (landing = release) within the
+    locator's precision. The landing's pressing force and the smallest one inside the
+    stick vanish there too (the landing is a release: one point, three tests), reported
+    once, as SE."""
     ds = branch()
-    names = list(ds.event_name.values)
+    labels = list(ds.special_label.values)
+    assert labels == ["SE"]
+    assert ds.special_status.values[0] == "located"
+    precision = float(ds.special_precision.values[0])
+    assert precision < 1e-11
+    assert abs(float(ds.special_omega.values[0]) - RIDING_END) <= max(2 * precision, 1e-13)
+    shortest = ds.stick_time_k.values.min(axis=1)
+    i = int(ds.special_point.values[0])
+    assert abs(shortest[i]) < 0.05  # the nearest point's shortest stick
+    assert np.all(shortest[ds.omega.values < RIDING_END] > 0)
+    assert np.all(shortest[ds.omega.values > RIDING_END] < 0)
+    assert float(ds.special_stick_time_k.values[0].min()) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_the_sticking_events_are_not_located_twice():
+    """STICKING_EVENTS passed as events= on a branch that detects SE, RG and SO: kept as
+    monitors (their values at every point) with a DeprecationWarning, the point reported
+    once, as the special point SE; with detect=[] they are still the user's events."""
+    start = riding_at(2.3)
+    with pytest.warns(DeprecationWarning, match=r"events \['release_grazing', 'stick_end', "
+                      r"'sticking_onset'\] are the tests of the special points"):
+        ds = ic.continuation(start, parameter="omega", bounds=(2.29, 2.45),
+                             both_directions=False, events=STICKING_EVENTS)
+    assert list(ds.special_label.values) == ["SE"]
+    assert "event_name" not in ds or ds.sizes.get("event", 0) == 0
+    assert np.array_equal(ds.monitor_stick_end.values, ds.stick_time_k.values.min(axis=1))
+    only = ic.continuation(start, parameter="omega", bounds=(2.29, 2.45),
+                           both_directions=False, events=STICKING_EVENTS, detect=[])
+    assert only.sizes.get("special", 0) == 0
+    names = list(only.event_name.values)
     assert sorted(names) == ["release_grazing", "stick_end", "sticking_onset"]
-    for name in names:
-        k = names.index(name)
-        assert ds.event_status.values[k] == "located"
-        precision = float(ds.event_precision.values[k])
-        assert precision < 1e-12
-        assert abs(float(ds.event_omega.values[k]) - RIDING_END) <= max(2 * precision,
-                                                                          1e-13), name
-    end = names.index("stick_end")
-    monitor = ds.monitor_stick_end.values
-    i = int(ds.event_point.values[end])
-    assert abs(monitor[i]) < 0.05  # the nearest point's shortest stick
-    assert np.all(monitor[ds.omega.values < RIDING_END] > 0)
-    assert np.all(monitor[ds.omega.values > RIDING_END] < 0)
+    assert abs(float(only.event_omega.values[names.index("stick_end")]) - RIDING_END) < 1e-11
 
 
 def test_release_grazing_where_the_pressing_force_touches_zero_inside_a_ride(cf):
     """(b) Below omega = 0.1 the wall's pressing force dips inside each ride: it touches
     0 at a release grazing, located on the branch (from the closed form's motion at
-    omega = 0.055) as the zero of release_grazing_test, the stick time still long; the
+    omega = 0.055) as its special point RG without events= (the zero of
+    release_grazing_test), the stick time still long; the
     closed form there has its smallest pressing force 0 (to 1e-9, against 3e-5 at 0.055
     and 1e-2 at omega = 0.2)."""
     motion = cf.riding_damper_motion(0.055)
@@ -194,12 +213,13 @@ def test_release_grazing_where_the_pressing_force_touches_zero_inside_a_ride(cf)
         "stick_times": np.array(motion.floats("stick_times")),
         "states": np.array(motion.floats("landing_states")), "pattern": motion.pattern})
     assert start.physical, start.reason
-    ds = ic.continuation(start, parameter="omega", bounds=(0.05, 0.056), ds=0.5, ds_max=2.0,
-                         events={"release_grazing": release_grazing_test})
-    assert list(ds.event_name.values) == ["release_grazing"]
-    omega = float(ds.event_omega.values[0])
-    assert 0.05 < omega < 0.055 and ds.event_status.values[0] == "located"
-    i = int(ds.event_point.values[0])
+    ds = ic.continuation(start, parameter="omega", bounds=(0.05, 0.056), ds=0.5, ds_max=2.0)
+    assert list(ds.special_label.values) == ["RG"]
+    omega = float(ds.special_omega.values[0])
+    assert 0.05 < omega < 0.055 and ds.special_status.values[0] == "located"
+    assert release_grazing_test(ic.multi_impact_orbit(damper(omega), 1, 2, start)) \
+        == pytest.approx(0.0, abs=1e-9)
+    i = int(ds.special_point.values[0])
     assert np.all(ds.stick_time_k.values[i] > 20)
     assert not ds.physical.values[ds.omega.values < omega].any()
     assert ds.physical.values[ds.omega.values > omega].all()
