@@ -73,6 +73,7 @@ from impactcont.detection.special_points import (
     detect_special_points,
     locate_sample_events,
     user_values,
+    without_detected_events,
 )
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -637,6 +638,7 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
     (:func:`~impactcont.detection.special_points.check_user_functions`).
     """
     labels = check_labels(detect)
+    functions = without_detected_events(functions, problem, labels)  # no point twice
     problem.check_bounds(options.bounds)
     what = f"continuation of {problem.N}-{problem.p} motions in {problem.parameter}"
     with interruptible(what), reporter(progress, what, parameter=problem.parameter) as rep:
