@@ -25,7 +25,7 @@ import dataclasses
 import logging
 import time
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 import xarray as xr
@@ -275,8 +275,10 @@ def _impacts_in_periods(times: np.ndarray, period: float, N: int) -> tuple[int, 
 
 
 def simulation_seed(sim: xr.Dataset, entry: MultiImpactSpec, osc: ImpactOscillator
-                    ) -> dict[str, Any]:
-    """The Newton guess of an entry's N-p motion: the last p + 1 impacts of its simulation.
+                    ) -> _SimulatedImpacts:
+    """The Newton guess of an entry's N-p motion: the last p + 1 impacts of its simulation
+    and its sticking phases (a motion whose plastic impacts start sticking phases is one
+    with sticking phases, its pattern's letters lowercase there).
 
     They seed an N-p motion only if the simulation shows one: p impacts in its last N
     forcing periods, the impact N periods before the last (to within :data:`SETTLED`
@@ -321,12 +323,39 @@ def simulation_seed(sim: xr.Dataset, entry: MultiImpactSpec, osc: ImpactOscillat
     if q != p:
         raise ParameterError(f"{what}: simulation {entry.start!r} shows {shown}, not p = {p}; "
                              f"allowed: p = {q} with N = {N}")
-    guess = {"delta": float(sim["impact_phases"].values[-(p + 1)]),
-             "flight_times": np.diff(times[-(p + 1):]),
-             "states": np.asarray(sim["impact_states"].values)[-(p + 1):-1]}
-    if stops:
-        guess["pattern"] = stops[-(p + 1):-1]
-    return guess
+    return _SimulatedImpacts(
+        impact_times=times[-(p + 1):],
+        impact_phases=np.asarray(sim["impact_phases"].values, dtype=float)[-(p + 1):],
+        impact_states=np.asarray(sim["impact_states"].values, dtype=float)[-(p + 1):],
+        impact_stops=stops[-(p + 1):],
+        sticking=tuple(_HeldPhase(float(start), float(end), str(held), str(ended))
+                       for start, end, held, ended in zip(
+                           *(np.asarray(sim[name].values) if name in sim else ()
+                             for name in ("sticking_start", "sticking_end", "sticking_stops",
+                                          "sticking_ended_by")), strict=True)))
+
+
+class _HeldPhase(NamedTuple):
+    """A sticking phase of a simulation file, as :func:`~impactcont.multi_impact_orbit`
+    reads one of :attr:`impactcont.simulate.SimulationResult.sticking`."""
+
+    start: float
+    end: float
+    stops: str
+    ended_by: str
+
+
+class _SimulatedImpacts(NamedTuple):
+    """The last p + 1 impacts of a simulation file and its sticking phases: a guess that
+    :func:`~impactcont.multi_impact_orbit` reads as it reads a
+    :class:`~impactcont.simulate.SimulationResult` (a sticking phase that follows an impact
+    makes that impact's letter lowercase: a motion with sticking phases)."""
+
+    impact_times: np.ndarray
+    impact_phases: np.ndarray
+    impact_states: np.ndarray
+    impact_stops: str
+    sticking: tuple[_HeldPhase, ...]
 
 
 class MultiImpact:

@@ -196,3 +196,35 @@ def test_mirror_stop_key(tmp_path: Path) -> None:
         load_scene(write(tmp_path, text.replace("mirror_stop = true", "mirror_stop = true\n"
                                                 "b_low = 0.4")))
     assert info.value.key == "oscillator.mirror_stop"
+
+
+def test_a_multi_impact_entry_seeded_by_a_sticky_simulation_continues_the_sticky_motion(
+        tmp_path: Path) -> None:
+    """The riding damper of studies/sticking_motions (a plastic ball riding each wall): the
+    entry's seed carries the simulation's sticking phases, so the motion continued is the
+    one with sticking phases (pattern "lu"/"ul", stick times > 0), the motion
+    ``multi_impact_orbit`` finds from the run itself. Before, the seed dropped the sticking
+    phases and Newton went to the plain "LU" motion, not physical over most of the range."""
+    study = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions" / "scene.toml"
+    text = study.read_text().split("[[plots]]")[0] + """
+[[multi_impact]]
+name = "ride"
+start = "riding"
+N = 1
+p = 2
+parameter = "omega"
+bounds = [0.18, 0.22]
+"""
+    result = run_scene(write(tmp_path, text), output=tmp_path / "o")
+    assert result.ok, result.failures
+    ds = result.datasets["multi_impact"]["ride"]
+    assert ds.attrs["pattern"] in ("lu", "ul")
+    assert float(ds["stick_time_k"].min()) > 0
+    osc = ic.ImpactOscillator.from_json(result.datasets["simulations"]["riding"]
+                                        .attrs["oscillator"])
+    X0 = [1.033991380508828, 1.333991380508828, 0.026067009592659535, 0.026067009592659535]
+    alone = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, X0, 0.0, 12 * 2 * np.pi / 0.2))
+    assert alone.pattern == ds.attrs["pattern"]
+    at = ds.sel(point=int(np.argmin(np.abs(ds["omega"].values - 0.2))))
+    assert float(at["omega"]) == pytest.approx(0.2, abs=1e-12)
+    np.testing.assert_allclose(at["stick_time_k"].values, alone.stick_times, rtol=1e-9)
