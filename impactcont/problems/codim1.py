@@ -523,8 +523,12 @@ def curve_kind(kind: object, argument: str = "kind", kinds: tuple[Label, ...] = 
         `kind` is not one of `kinds` (naming `argument`, the value and the kinds allowed).
     """
     if not isinstance(kind, str) or kind not in kinds:
+        label = Label.__members__.get(kind) if isinstance(kind, str) else None
+        why = (f" ({label}, {label.words}, has no two-parameter curves: it bounds motions "
+               "with sticking phases, whose curves are not solved)"
+               if label in (Label.SE, Label.RG, Label.SO) else "")
         raise ParameterError(f"{argument} must be one of {tuple(map(str, kinds))}; got "
-                             f"{kind!r}")
+                             f"{kind!r}{why}")
     return Label(kind)
 
 

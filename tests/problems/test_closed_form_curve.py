@@ -110,6 +110,11 @@ def test_kinds_are_labels_and_strings_are_accepted():
     for bad in ("BP", "pd", None, 3):
         with pytest.raises(ic.ParameterError, match=r"kind must be one of \('SN'"):
             codim1.curve_kind(bad)
+    # the points that bound a sticking phase are kinds without curves, and say so
+    for bad in ("SE", "RG", "SO"):
+        with pytest.raises(ic.ParameterError, match=rf"got '{bad}' \({bad}, .*has no "
+                           "two-parameter curves"):
+            codim1.curve_kind(bad)
 
 
 def test_no_curve_module_compares_kinds_as_strings():
