@@ -35,6 +35,7 @@ from impactcont.scene.plugins import plot_kinds, scene_sections
 from impactcont.scene.schema import Scene, load_scene
 from impactcont.scene.sections import RunContext
 from impactcont.threads import limit_blas_threads
+from impactcont.vocabulary import Label
 
 __all__ = ["RunResult", "TaskFailure", "run_scene"]
 
@@ -288,6 +289,11 @@ def _run(scene: Scene, out_dir: Path, t0: float, *, progress: bool, fail_fast: b
     return result
 
 
+#: The kinds the summary's sentence on special points names in any case; the others
+#: (BP, SE, RG, SO) are named, in their words, where a branch has one.
+_NAMED = (Label.SN, Label.PD, Label.NS, Label.GR, Label.ZV)
+
+
 def summary_markdown(result: RunResult) -> str:
     """The ``summary.md`` of a run: special points first, then one table per section."""
     from impactcont import __version__
@@ -305,8 +311,12 @@ def summary_markdown(result: RunResult) -> str:
     if any(scene.entries(k) for k in ("branches", "switches", "multi_impact")):
         lines += ["## Special points", ""]
         if result.special_points:
+            more = "".join(f", {kind} {kind.words}" for kind in Label
+                           if kind not in _NAMED and any(str(p["label"]) == kind
+                                                         for p in result.special_points))
             lines += ["SN saddle-node, PD period-doubling, NS Neimark-Sacker, GR grazing, "
-                      "ZV zero-velocity impact; `located` points are refined to `precision` "
+                      f"ZV zero-velocity impact{more}; `located` points are refined to "
+                      "`precision` "
                       "in the continued parameter; `physical` tells whether the nearest "
                       "accepted point of the branch is a physical motion (eq. 16), and the "
                       "last column why not. rho(G) of a ZV point is unbounded: G (eq. 25) "

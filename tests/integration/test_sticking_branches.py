@@ -279,3 +279,27 @@ def test_the_riding_motion_in_other_parameters_is_the_solve_alone(parameter, bou
         for name, mine in (("flight_time_k", alone.flight_times),
                            ("stick_time_k", alone.stick_times), ("state_k", alone.states)):
             assert ds[name].values[i] == pytest.approx(mine, abs=1e-10), name
+
+
+def test_the_end_of_a_ride_is_drawn_with_its_marker_and_named_in_the_legend():
+    """The SE of a branch near the end of the ride (from omega 2.3): located without
+    events=, drawn in the bifurcation diagram with its own marker (X) and named in the
+    legend in its words."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    from impactcont.plots import bifurcation_diagram
+
+    ds = ic.continuation(riding_at(2.3), parameter="omega", bounds=(2.29, 2.45),
+                         both_directions=False)
+    assert list(ds.special_label.values) == ["SE"]
+    ax = bifurcation_diagram(ds)
+    try:
+        markers = [line.get_marker() for line in ax.get_lines()]
+        assert markers.count("X") == 1
+        legend = [text.get_text() for text in ax.get_legend().get_texts()]
+        assert "SE end of a sticking phase" in legend
+    finally:
+        plt.close(ax.figure)

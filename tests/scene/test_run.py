@@ -277,3 +277,16 @@ def test_two_runs_into_one_folder_do_not_mix(tmp_path: Path) -> None:
     assert run_scene(scene, output=out).ok
     assert sorted(p.name for p in out.iterdir()) == ["orbits.nc", "summary.md"]
     assert LOCK_FILE.startswith(".")
+
+
+def test_the_summary_names_in_words_the_kinds_beyond_the_five_it_always_names(small_run) -> None:
+    """A branch's SE (the end of a sticking phase) is named in the summary's sentence on
+    special points in its words (Label.words); a run without one reads as before."""
+    from impactcont.scene.run import summary_markdown
+
+    assert small_run.special_points
+    row = {**small_run.special_points[0], "label": "SE"}
+    text = summary_markdown(dataclasses.replace(
+        small_run, special_points=[*small_run.special_points, row]))
+    assert "ZV zero-velocity impact, SE end of a sticking phase; `located`" in text
+    assert "ZV zero-velocity impact; `located`" in summary_markdown(small_run)
