@@ -43,9 +43,9 @@ import numpy as np
 __all__ = ["BranchLinearization", "CheckedFlights", "ContactStops", "CorrectorSettings",
            "CorrectorStep", "Embedding", "FirstOrderArrays", "FirstOrderFlight", "FlightArrays",
            "FlightFlow", "FlowTables", "ForcedAmplitudes", "Forcing", "ForcingDerivatives",
-           "GeometryTables", "HeldSegments", "ImpactSequence", "ModalArrays", "ModalFlight",
-           "MotionChecks", "NewtonResult", "PalcResult", "ShootingFlow", "ShotFlights",
-           "StickyFlights", "StopSeries", "SweepGrid", "SweepMotion", "SweepOutputs",
+           "GeometryTables", "HeldForcing", "HeldSegments", "ImpactSequence", "ModalArrays",
+           "ModalFlight", "MotionChecks", "NewtonResult", "PalcResult", "ShootingFlow",
+           "ShotFlights", "StickyFlights", "StopSeries", "SweepGrid", "SweepMotion", "SweepOutputs",
            "SweepSettings", "SweepStats", "modal_arrays", "stack_flows"]
 
 
@@ -396,6 +396,22 @@ class HeldSegments(NamedTuple):
     shifts: np.ndarray
     """Where the contact search of the flight from the release starts after it (at most half
     the flight), (p,): there ``s = c``, ``s' = 0`` and ``s'' = 0``."""
+
+
+class HeldForcing(NamedTuple):
+    """The held systems of a motion's sticking phases as their forced amplitudes need them at
+    any omega (:func:`~impactcont.kernel.shooting.sticky_palc_correct`): ``(K_r - omega^2
+    M_r + i omega C_r) y_hat = F_r`` (:func:`impactcont.kernel.general.forced_response`),
+    one row per impact k (zeros where no stick follows it); ``n - 1`` masses held."""
+
+    M: np.ndarray
+    """``P^T M P``, (p, n-1, n-1)."""
+    K: np.ndarray
+    """``P^T K P``, (p, n-1, n-1)."""
+    C: np.ndarray
+    """``P^T C P``, (p, n-1, n-1)."""
+    F: np.ndarray
+    """``P^T F``, (p, n-1) complex."""
 
 
 class StickyFlights(NamedTuple):

@@ -37,7 +37,8 @@ The lower stop is the same search on ``-s`` (forced, free and polynomial parts n
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
 :func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
 :func:`branch_linearization`, :func:`palc_correct` and, for motions with sticking phases
-only, :func:`sticky_system`, :func:`sticky_newton_solve` and :func:`sticky_frequency_column`.
+only, :func:`sticky_system`, :func:`sticky_newton_solve` and :func:`sticky_frequency_column`
+(their corrector is :func:`impactcont.kernel.sticky.sticky_palc_correct`).
 An entry point that compiled code calls too is called there with the plain tuples Python
 passes, so one compiled function serves both (no entry point wraps an inner twin: numba
 compiles a wrapper's callee code again into it). Importing :mod:`impactcont` does not

@@ -1382,6 +1382,95 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
         TWO_PI * N / osc.omega, shot)
 
 
+def held_forcing(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
+    """The held systems of `pattern` as their forced amplitudes need them at any omega: the
+    plain tuple of :class:`~impactcont.kernel.arrays.HeldForcing` (each held system's
+    ``M_r, K_r, C_r`` and ``F_r``, zeros where no stick follows an impact or one mass is
+    held), built once per flow and pattern."""
+    cache = flow.__dict__.setdefault("_held_segments", {})
+    key = (pattern, "forcing")
+    found = cache.get(key)
+    if found is None:
+        osc = flow.osc
+        impacts, sticks = sticking_pattern(osc, pattern)
+        p, n = len(pattern), osc.n - 1
+        M, K, C = (np.zeros((p, n, n)) for _ in range(3))
+        F = np.zeros((p, n), dtype=complex)
+        for k in np.flatnonzero(sticks):
+            reduced = held_flow(osc, impacts[k]).reduced
+            if reduced is not None:
+                arrays = reduced.basis.kernel_arrays
+                M[k], K[k], C[k] = arrays.M, arrays.K, arrays.C
+                F[k] = reduced.osc.F
+        found = cache[key] = (M, K, C, F)
+    return found
+
+
+def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
+                     tangent: np.ndarray, weights: np.ndarray, tol: float, max_iter: int,
+                     singular: float, *, hyperplane: bool = False) -> Any:
+    """One corrector step of a branch in omega of a motion with sticking phases, compiled
+    (:func:`impactcont.kernel.sticky.sticky_palc_correct`).
+
+    The continuation core's pseudo-arclength Newton and tangent on ``[u, omega]``
+    (``MultiImpactBranchProblem.palc_step``, as
+    :func:`impactcont.kernel.shooting.palc_correct` is for motions without sticking
+    phases), each iterate's flights, held systems, residual, exact Jacobian and
+    :func:`sticky_omega_column` at its own omega, in one compiled call.
+
+    Parameters
+    ----------
+    flow : Flow
+        The modal flow of the branch's start (any omega: only its modes, the stops and
+        the held systems' modes are read).
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact.
+    predicted, tangent, weights : ndarray, shape (2np + q + 1,)
+        The predicted point ``[u, omega]``, the tangent and the arclength weights.
+    tol : float
+    max_iter : int
+    singular : float
+        The Frobenius condition bound above which a bordered matrix is returned flagged.
+    hyperplane : bool
+        The Newton of :func:`impactcont.core.corrector.solve_on_hyperplane` instead.
+
+    Returns
+    -------
+    PalcResult
+        As :func:`impactcont.kernel.shooting.palc_correct` returns it.
+
+    Raises
+    ------
+    ParameterError
+        `flow` is not modal (a first-order flow's forced amplitudes are not recomputed in
+        compiled code), or the arrays do not have the pattern's size.
+    """
+    from impactcont.kernel import sticky
+
+    osc = flow.osc
+    if type(flow) is not Flow or not np.isrealobj(flow.f):
+        raise ParameterError(f"sticky_palc_step: flow must be a modal flow (proportional "
+                             f"damping, real F); got {type(flow).__name__} of {osc!r}")
+    size = _sticky_unknowns(osc, pattern, np.asarray(predicted, dtype=float)[:-1],
+                            "predicted[:-1]").size + 1
+    for name, value in (("tangent", tangent), ("weights", weights)):
+        if np.shape(value) != (size,):
+            raise ParameterError(f"{name} must have shape ({size},) like predicted; got "
+                                 f"{np.shape(value)}")
+    impacts = sticking_pattern(osc, pattern)[0]
+    errors = osc.modes.eigenvalue_errors
+    errors = np.zeros(osc.n) if errors is None else np.asarray(errors, dtype=float)
+    return sticky.sticky_palc_correct(
+        tuple(flow.shooting_arrays()), _writable(errors),
+        tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
+        held_forcing(flow, pattern), float(N),
+        (_writable(np.asarray(predicted, dtype=float)),
+         _writable(np.asarray(tangent, dtype=float)),
+         _writable(np.asarray(weights, dtype=float))),
+        (float(tol), int(max_iter), float(singular), bool(hyperplane)))
+
+
 def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
                      ) -> tuple[np.ndarray, np.ndarray]:
     """``G_k`` of each segment (impact k's section to impact ``k + 1``'s, in ``[z,

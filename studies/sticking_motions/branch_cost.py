@@ -28,9 +28,11 @@ from collections.abc import Iterator
 import numpy as np
 
 import impactcont as ic
+from impactcont.core.stepper import SINGULAR_CONDITION, CorrectorResult
 from impactcont.model.parameters import FREQUENCY
 from impactcont.model.stops import Stops
-from impactcont.orbit.multi_impact import sticky_omega_column
+from impactcont.orbit.multi_impact import sticky_omega_column, sticky_palc_step
+from impactcont.problems import multi_impact_branch
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 
@@ -73,6 +75,7 @@ def per_point(start: ic.MultiImpactOrbit, detect) -> tuple[float, int]:
 
 
 _PACKAGE_DPARAM = MultiImpactBranchProblem.dparam
+_PACKAGE_PALC_STEP = MultiImpactBranchProblem.palc_step
 
 
 def _exact_dparam(self: MultiImpactBranchProblem, u: np.ndarray, lam: float) -> np.ndarray:
@@ -83,22 +86,53 @@ def _exact_dparam(self: MultiImpactBranchProblem, u: np.ndarray, lam: float) -> 
     return _PACKAGE_DPARAM(self, u, lam)
 
 
+def _compiled_palc_step(self: MultiImpactBranchProblem, predicted: np.ndarray,
+                        tangent: np.ndarray, weights: np.ndarray, tol: float, max_iter: int,
+                        *, hyperplane: bool = False) -> CorrectorResult | None:
+    """``palc_step`` with the compiled corrector of a sticky motion in omega
+    (:func:`impactcont.orbit.multi_impact.sticky_palc_step`; the package's otherwise)."""
+    if not (self.sticky and self._base_flow is not None):
+        return _PACKAGE_PALC_STEP(self, predicted, tangent, weights, tol, max_iter,
+                                  hyperplane=hyperplane)
+    out = sticky_palc_step(self._base_flow, self.N, self.pattern, predicted, tangent,
+                           weights, tol, max_iter, SINGULAR_CONDITION, hyperplane=hyperplane)
+    message = ""
+    if out.status == multi_impact_branch._REFUSED:
+        try:  # the oscillator's (or a held system's) own refusal
+            self.flow_at(out.omega)
+            message = f"omega = {out.omega!r} refused"
+        except ic.ParameterError as error:
+            message = str(error)
+    return CorrectorResult(state=out.state, iterations=int(out.iterations),
+                           status=multi_impact_branch._STATUSES[int(out.status)],
+                           lam=float(out.omega), residual_norm=float(out.residual_norm),
+                           tangent=out.tangent,
+                           ill_conditioned=out.flagged if out.flagged.size else None,
+                           message=message, last_step=float(out.last_update))
+
+
 @contextlib.contextmanager
-def exact_column(on: bool) -> Iterator[None]:
-    """The sticky branch's ``dF/domega`` exact (`on`) or the package's, for one run."""
-    if on:
+def exact_column(mode: str) -> Iterator[None]:
+    """The sticky branch's ``dF/domega`` exact (``"column"``), with the compiled corrector
+    too (``"compiled"``), or the package's (``""``), for one run."""
+    if mode:
         MultiImpactBranchProblem.dparam = _exact_dparam
+    if mode == "compiled":
+        MultiImpactBranchProblem.palc_step = _compiled_palc_step
     try:
         yield
     finally:
         MultiImpactBranchProblem.dparam = _PACKAGE_DPARAM
+        MultiImpactBranchProblem.palc_step = _PACKAGE_PALC_STEP
 
 
 def main(rounds: int = 5, exact: bool = False) -> None:
     motions = starts()
-    runs = [(name, start, False) for name, start in motions.items()]
+    runs = [(name, start, "") for name, start in motions.items()]
     if exact:
-        runs.insert(1, ("sticky, exact dF/domega", motions["sticky 'lu' (R 0)"], True))
+        sticky = motions["sticky 'lu' (R 0)"]
+        runs[1:1] = [("sticky, exact dF/domega", sticky, "column"),
+                     ("sticky, exact + compiled corrector", sticky, "compiled")]
     for name, start, patched in runs:
         assert start.physical, (name, start.reason)
         with exact_column(patched):

@@ -1,0 +1,205 @@
+"""The compiled corrector of a branch of motions with sticking phases in omega.
+
+:func:`sticky_palc_correct` is :func:`impactcont.kernel.shooting.palc_correct` on the
+shooting system of a motion with sticking phases
+(:func:`~impactcont.kernel.shooting.sticky_system`, its omega column
+:func:`~impactcont.kernel.shooting.sticky_frequency_column`), with the held systems'
+forced amplitudes at each iterate's omega
+(:func:`impactcont.kernel.general.forced_response`). A module of its own so that the
+shooting path of motions without sticking phases neither imports
+:mod:`impactcont.kernel.general` (its entry points are compiled on import) nor compiles
+this one: only a sticky branch in omega imports it
+(:func:`impactcont.orbit.multi_impact.sticky_palc_step`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impactcont.kernel.arrays import (
+    CorrectorSettings,
+    CorrectorStep,
+    HeldForcing,
+    HeldSegments,
+    PalcResult,
+    ShootingFlow,
+)
+from impactcont.kernel.general import forced_response, forced_response_derivative
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.shooting import (
+    CONVERGED,
+    FAILED,
+    NONFINITE_RESIDUAL,
+    NONFINITE_SYSTEM,
+    NONFINITE_UPDATE,
+    REFUSED,
+    SINGULAR,
+    _frobenius_condition,
+    _jacobian_wanted,
+    _solve,
+    forced_amplitudes,
+    sticky_frequency_column,
+    sticky_system,
+)
+
+__all__ = ["sticky_palc_correct"]
+
+#: A held system's dynamic stiffness is singular (an undamped resonance) where the condition
+#: number of its equilibrated form reaches ``1 / eps`` (``first_order._check_resonance``).
+_EPS = float(np.finfo(np.float64).eps)
+
+
+@_jit
+def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, settings):
+    """The pseudo-arclength corrector of a branch in omega of a motion with sticking phases
+    (modal flow), compiled: :func:`palc_correct` on :func:`sticky_system`.
+
+    `flow`, `errors`, `impacts`, `N`, `step` and `settings` as :func:`palc_correct` takes
+    them (the full system: no embedding), `held` the plain tuple of
+    :class:`~impactcont.kernel.arrays.HeldSegments` at any omega (its forced amplitudes
+    ``Z`` are replaced) and `held_forcing` that of
+    :class:`~impactcont.kernel.arrays.HeldForcing`. Compiled only where a motion with
+    sticking phases is continued in omega (no other entry point calls it).
+
+    At each iterate's omega: the flights' amplitudes of eq. (7) (:func:`forced_amplitudes`),
+    each held system's ``Z_r`` and ``dZ_r/d omega``
+    (:func:`impactcont.kernel.general.forced_response` and
+    :func:`~impactcont.kernel.general.forced_response_derivative`, what
+    :meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` computes), the residual and exact
+    Jacobian (:func:`sticky_system`) and ``dr/d omega`` (:func:`sticky_frequency_column`);
+    then the bordered Newton step, its tests and the tangent of :func:`palc_correct`.
+
+    Returns
+    -------
+    PalcResult
+        As :func:`palc_correct`; :data:`REFUSED` also where a held system is at an undamped
+        resonance (its dynamic stiffness singular: the caller's held flow says so in its
+        words).
+    """
+    modal = ShootingFlow(*flow)
+    named = HeldSegments(*held)
+    hf = HeldForcing(*held_forcing)
+    predicted, tangent, weights = CorrectorStep(*step)
+    tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
+    w, a, f = modal.w, modal.a, modal.f
+    flight = (modal.general, modal.w, modal.a, modal.f, modal.u, modal.ui, modal.g,
+              modal.free, modal.lam, modal.V, modal.Vi, modal.xs, modal.xd)
+    sticks = named.sticks
+    p = sticks.size
+    r = named.Z.shape[1]
+    size = predicted.size - 1
+    empty_c = np.zeros(0, dtype=np.complex128)
+    state = predicted.copy()
+    last_update = np.inf
+    worst = 0.0
+    worst_omega = np.nan
+    flagged = np.zeros((0, 0))
+    border = weights * tangent
+    raw = np.zeros(size + 1)
+    omega = state[size]
+    norm = np.nan
+    for it in range(max_iter + 1):
+        omega = state[size]
+        if not (omega > 0.0 and omega < np.inf):
+            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
+                              last_update)
+        gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
+        if resonant:
+            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
+                              last_update)
+        if bound > worst or bound != bound:
+            worst = bound
+            worst_omega = omega
+        Z = np.zeros((p, r), dtype=np.complex128)
+        dZ = np.zeros((p, r), dtype=np.complex128)
+        for k in range(p):
+            if sticks[k] and r > 0:
+                Zk, cond = forced_response(hf.K[k], hf.M[k], hf.C[k], hf.F[k], omega)
+                if not (cond < np.inf and cond * _EPS < 1.0):
+                    return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega,
+                                      flagged, last_update)
+                Z[k] = Zk
+                dZ[k] = forced_response_derivative(hf.K[k], hf.M[k], hf.C[k], Zk, omega)
+        now = (named.sticks, named.lifts, named.inverses, named.offsets, named.lam, named.V,
+               named.Vi, named.xs, named.xd, Z, named.grads, named.forces, named.levels,
+               named.shifts)
+        forcing = (omega, gam, bet, empty_c)
+        period = 2.0 * math.pi * N / omega
+        x = state[:size].copy()
+        sh = sticky_system(flight, forcing, impacts, now, period, x, _jacobian_wanted(x))
+        col = sticky_frequency_column(flow, forcing, (dgam, dbet, empty_c), impacts, now, dZ,
+                                      period, sh)
+        residual = sh[13]
+        J = sh[14]
+        norm = 0.0
+        for row in range(size):
+            v = abs(residual[row])
+            if not v < np.inf:
+                return PalcResult(state, it, NONFINITE_RESIDUAL, omega, v, raw, worst,
+                                  worst_omega, flagged, last_update)
+            if v > norm:
+                norm = v
+        A = np.empty((size + 1, size + 1))  # [J | dF/domega] and the border
+        for row in range(size):
+            for k in range(size):
+                A[row, k] = J[row, k]
+            A[row, size] = col[row]
+        for k in range(size + 1):
+            A[size, k] = border[k]
+        finite = True
+        for row in range(size + 1):
+            for k in range(size + 1):
+                if not abs(A[row, k]) < np.inf:
+                    finite = False
+        converged = not hyperplane and norm <= tol and (it == 0 or last_update <= tol)
+        if (not hyperplane and finite and (converged or it < max_iter)
+                and flagged.shape[0] == 0 and _frobenius_condition(A) > singular):
+            flagged = A.copy()
+        if converged:
+            if not finite:
+                return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst,
+                                  worst_omega, flagged, last_update)
+            e = np.zeros(size + 1)
+            e[size] = 1.0
+            t, ok = _solve(A, e)
+            if not ok:
+                return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
+                                  flagged, last_update)
+            return PalcResult(state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged,
+                              last_update)
+        if it == max_iter:
+            break
+        if not finite:
+            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
+        rhs = np.empty(size + 1)
+        for row in range(size):
+            rhs[row] = -residual[row]
+        s = 0.0
+        for k in range(size + 1):
+            s += border[k] * (state[k] - predicted[k])
+        rhs[size] = -s
+        if not abs(s) < np.inf:
+            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
+        update, ok = _solve(A, rhs)
+        if not ok:
+            return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
+        last_update = 0.0
+        for k in range(size + 1):
+            v = abs(update[k])
+            if not v < np.inf:
+                return PalcResult(state, it, NONFINITE_UPDATE, omega, norm, raw, worst,
+                                  worst_omega, flagged, last_update)
+            if v > last_update:
+                last_update = v
+        for k in range(size + 1):
+            state[k] += update[k]
+        if hyperplane and last_update <= tol:
+            return PalcResult(state, it + 1, CONVERGED, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
+    return PalcResult(state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
+                      last_update)

@@ -1,0 +1,115 @@
+"""The compiled corrector of a branch in omega of a motion with sticking phases
+(:mod:`impactcont.kernel.sticky`): the step of the continuation core from a predicted point,
+against the same bordered Newton in numpy on the residual and omega column of each omega's
+oscillator built afresh."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.kernel.shooting import CONVERGED, REFUSED
+from impactcont.model.stops import Stops
+from impactcont.orbit.flow import flow_of
+from impactcont.orbit.multi_impact import (
+    sticky_omega_column,
+    sticky_palc_step,
+    sticky_shooting,
+)
+
+
+def _damper(omega: float, **damping) -> ic.ImpactOscillator:
+    """The impact damper of studies/sticking_motions (case c): the ball rides each wall."""
+    damping = damping or {"eta": 0.3}
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
+                               R=0.0, b=0.3, omega=omega,
+                               stops=Stops(mass=2, relative_to=1, mirror=True), **damping)
+
+
+@pytest.fixture(scope="module")
+def riding():
+    """The ball riding each wall ("lu") at omega 1.2, from its simulated steady state."""
+    osc = _damper(1.2)
+    m, c, omega = osc.M[1, 1], osc.C[0, 0], osc.omega
+    amplitude = 1.0 / (1.0 - (1.0 + m) * omega**2 + 1j * c * omega)
+    x1, v1 = amplitude.real, (1j * omega * amplitude).real
+    start = np.array([x1, x1 + osc.b, v1, v1])
+    orbit = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, start, 0.0, 16.0))
+    assert orbit.pattern == "lu" and orbit.physical
+    return orbit
+
+
+def _linearized(omega: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The residual and ``[J | dr/domega]`` from the oscillator at `omega` built afresh."""
+    flow = flow_of(_damper(omega))
+    sh = sticky_shooting(flow, 1, "lu", u)
+    return sh.residual, np.column_stack([sh.jacobian, sticky_omega_column(flow, 1, "lu", u,
+                                                                          sh)])
+
+
+def _numpy_corrector(predicted, tangent, weights, tol, max_iter):
+    """The bordered Newton of the continuation core (``palc_correct``'s arithmetic) in
+    numpy, each iterate's flow and held systems built afresh."""
+    state = predicted.copy()
+    border = weights * tangent
+    for _ in range(max_iter):
+        residual, extended = _linearized(state[-1], state[:-1])
+        A = np.vstack([extended, border])
+        rhs = -np.concatenate([residual, [border @ (state - predicted)]])
+        update = np.linalg.solve(A, rhs)
+        state += update
+        if np.max(np.abs(update)) <= tol:
+            return state
+    raise AssertionError("the numpy corrector did not converge")
+
+
+def test_the_compiled_step_is_the_bordered_newton_of_the_core(riding):
+    """From a point predicted 0.05 along the tangent of the riding motion's branch: the
+    compiled step converges to the point of the numpy Newton (1e-10), on the arclength
+    hyperplane, with the residual of the oscillator at its omega under 1e-10, and returns
+    the tangent there (``[J | dr/domega] t = 0``, ``W t0 . t = 1``)."""
+    u0 = riding.unknowns
+    residual, extended = _linearized(1.2, u0)
+    assert np.max(np.abs(residual)) < 1e-10
+    tangent = np.linalg.svd(extended)[2][-1]
+    tangent *= np.sign(tangent[-1])
+    weights = np.ones(tangent.size)
+    predicted = np.concatenate([u0, [1.2]]) + 0.05 * tangent
+    out = sticky_palc_step(flow_of(riding.oscillator), 1, "lu", predicted, tangent, weights,
+                           1e-12, 10, 1e12)
+    assert out.status == CONVERGED and 1 <= out.iterations <= 6
+    assert out.omega == out.state[-1] and abs(out.omega - 1.2) > 0.005
+    reference = _numpy_corrector(predicted, tangent, weights, 1e-13, 10)
+    np.testing.assert_allclose(out.state, reference, rtol=0, atol=1e-10)
+    residual, extended = _linearized(out.omega, out.state[:-1])
+    assert np.max(np.abs(residual)) < 1e-10
+    assert abs((weights * tangent) @ (out.state - predicted)) < 1e-12
+    t = out.tangent
+    assert np.max(np.abs(extended @ t)) < 1e-9 * np.max(np.abs(t))
+    assert (weights * tangent) @ t == pytest.approx(1.0, abs=1e-12)
+
+
+def test_the_compiled_step_refuses_what_it_cannot_do(riding):
+    """An iterate at omega <= 0 is REFUSED; hyperplane mode stops on the update alone; a
+    first-order flow (dashpot on the primary only) is refused naming the flow, and
+    arrays of another size naming them."""
+    u0 = np.concatenate([riding.unknowns, [1.2]])
+    flow = flow_of(riding.oscillator)
+    e = np.zeros(u0.size)
+    e[-1] = 1.0
+    off = u0.copy()
+    off[-1] = -0.5
+    out = sticky_palc_step(flow, 1, "lu", off, e, np.ones(u0.size), 1e-12, 5, 1e12)
+    assert out.status == REFUSED and out.omega == -0.5
+    moved = u0.copy()
+    moved[-1] = 1.21
+    out = sticky_palc_step(flow, 1, "lu", moved, e, np.ones(u0.size), 1e-12, 10, 1e12,
+                           hyperplane=True)
+    assert out.status == CONVERGED and out.state[-1] == 1.21
+    assert np.max(np.abs(_linearized(1.21, out.state[:-1])[0])) < 1e-10
+    general = flow_of(_damper(1.2, C=[[0.3, 0.0], [0.0, 0.0]]))
+    with pytest.raises(ic.ParameterError, match="flow must be a modal flow"):
+        sticky_palc_step(general, 1, "lu", u0, e, np.ones(u0.size), 1e-12, 5, 1e12)
+    with pytest.raises(ic.ParameterError, match=r"tangent must have shape \(11,\)"):
+        sticky_palc_step(flow, 1, "lu", u0, e[:-1], np.ones(u0.size), 1e-12, 5, 1e12)
