@@ -684,10 +684,10 @@ STICKING_TESTS: Mapping[Label, MotionTest] = MappingProxyType({
 #: The same tests as user functions: ``{"stick_end": .., "release_grazing": ..,
 #: "sticking_onset": ..}``. Deprecated as ``events=`` of :func:`impactcont.continuation`:
 #: a sticky branch locates these points as its special points ``SE``, ``RG`` and ``SO``;
-#: passed as events where those kinds are detected, they are dropped with a
-#: ``DeprecationWarning`` (:func:`impactcont.detection.special_points.check_user_functions`),
-#: so that no point is reported twice. As ``monitors=`` they give the tests' values at
-#: every point.
+#: passed as events where those kinds are detected, they are kept as monitors only, with
+#: a ``DeprecationWarning``
+#: (:func:`~impactcont.detection.special_points.without_detected_events`), so that no
+#: point is reported twice. As ``monitors=`` they give the tests' values at every point.
 STICKING_EVENTS: Mapping[str, Callable[[Any], float]] = MappingProxyType({
     "stick_end": stick_end_test, "release_grazing": release_grazing_test,
     "sticking_onset": sticking_onset_test})
