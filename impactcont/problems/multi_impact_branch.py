@@ -28,11 +28,13 @@ A pattern with lowercase letters (a plastic impact followed by a sticking phase 
 release, :func:`~impactcont.orbit.multi_impact.sticking_pattern`) is the system of
 :func:`~impactcont.orbit.multi_impact.sticky_shooting` instead: ``2 n p + q`` unknowns (the
 q stick times after the flight times), the release rows ``p(X_r, theta_r) = 0`` after the
-impact rows, ``dF/du`` exact (the held flow's and the flights'), and ``dF/dlam`` the
-parameter's central difference for every parameter (the held system's forcing moves with
-omega; :meth:`~impactcont.model.parameters.ModelParameter.difference`, about 1e-11
-relative, which steers the predictor and Newton only: the points solve ``F = 0`` to the
-Newton tolerance). The corrector is the core's (no compiled step). Its motions report the
+impact rows, ``dF/du`` exact (the held flow's and the flights'), ``dF/domega`` exact
+(:func:`~impactcont.orbit.multi_impact.sticky_omega_column`: the flights' and the held
+systems' forcing, the phases and the period) and, for the other parameters, the
+parameter's central difference (:meth:`~impactcont.model.parameters.ModelParameter.
+difference`, about 1e-11 relative, which steers the predictor and Newton only: the points
+solve ``F = 0`` to the Newton tolerance). In omega the corrector step is compiled
+(:func:`~impactcont.orbit.multi_impact.sticky_palc_step`). Its motions report the
 stick times, release states and pressing minima; its branches end where a stick time
 reaches 0 (the landing becomes a release: the end of a ride), where the pressing force
 touches 0 inside a stick (release grazing) and where it is 0 at the landing (the onset of
@@ -82,7 +84,9 @@ from impactcont.orbit.multi_impact import (
     shot_flights,
     sticking_pattern,
     sticky_jacobians,
+    sticky_omega_column,
     sticky_orbit_from_unknowns,
+    sticky_palc_step,
     sticky_shooting,
 )
 from impactcont.orbit.periodic import _check_N
@@ -317,6 +321,9 @@ class MultiImpactBranchProblem:
         parameter's finite-difference fallback otherwise (exact for the forcing amplitude).
         """
         data = self.param.data
+        if self.sticky and data == FREQUENCY:  # exact: the flights' and held systems' forcing
+            return sticky_omega_column(self.flow_at(lam), self.N, self.pattern, u,
+                                       self._shoot(u, lam))
         if self.sticky or data not in (FREQUENCY, GAP, RESTITUTION):
             # the fallback; exact for the forcing amplitude (the residual is affine in F;
             # with sticking phases the release rows' pressing force too)
@@ -430,14 +437,19 @@ class MultiImpactBranchProblem:
                   ) -> CorrectorResult | None:
         """The continuation core's corrector and tangent of one step, compiled (omega only).
 
-        :func:`impactcont.kernel.shooting.palc_correct`: the core's optional one-call step
-        (:class:`~impactcont.core.problem.Problem`); with `hyperplane`, the Newton of
+        :func:`impactcont.kernel.shooting.palc_correct` (with sticking phases
+        :func:`impactcont.kernel.sticky.sticky_palc_correct`): the core's optional one-call
+        step (:class:`~impactcont.core.problem.Problem`); with `hyperplane`, the Newton of
         :func:`~impactcont.core.corrector.solve_on_hyperplane` instead. None when the
         parameter is not omega or the flow is not modal (the core then corrects with
         :meth:`linearize`).
         """
-        if self._base_flow is None or self.sticky:
+        if self._base_flow is None:
             return None
+        if self.sticky:  # kernel.sticky.sticky_palc_correct
+            return self._corrector_result(sticky_palc_step(
+                self._base_flow, self.N, self.pattern, predicted, tangent, weights, tol,
+                max_iter, SINGULAR_CONDITION, hyperplane=hyperplane))
         return self._palc_step(predicted, tangent, weights, tol, max_iter,
                                np.eye(self.size), np.zeros(self.size), self.size, hyperplane)
 
@@ -457,6 +469,12 @@ class MultiImpactBranchProblem:
         if errors is not None and out.worst > _RESONANCE_REL_ERROR_WARN:
             # an iterate near a lightly damped mode: forced_coefficients warns in its words
             forced_coefficients(base.w, base.a, base.f, out.worst_omega, eigenvalue_errors=errors)
+        return self._corrector_result(out)
+
+    def _corrector_result(self, out: Any) -> CorrectorResult:
+        """The core's :class:`~impactcont.core.stepper.CorrectorResult` of a compiled step
+        (a :class:`~impactcont.kernel.arrays.PalcResult`), with the oscillator's own words
+        where it refused the omega reached."""
         message = ""
         if out.status == _REFUSED:
             try:  # the oscillator's own refusal (omega <= 0, an undamped resonance)

@@ -9,20 +9,19 @@ interleaved, the best of 5 rounds after a warm-up run of each::
     python studies/sticking_motions/branch_cost.py
 
 Prints one line per detection setting: ms per point of each and its ratio to the plain
-one. With ``--exact`` two more runs of the sticky branch are timed in the same rounds:
-with ``dF/domega`` the exact column
-:func:`impactcont.orbit.multi_impact.sticky_omega_column` instead of the parameter's
-central difference (``MultiImpactBranchProblem.dparam``), and with that column and the
-compiled corrector :func:`impactcont.orbit.multi_impact.sticky_palc_step`
-(``MultiImpactBranchProblem.palc_step``), each patched in for its run only, until the
-problem calls them::
+one. The sticky branch's ``dF/domega`` is exact
+(:func:`impactcont.orbit.multi_impact.sticky_omega_column`) and its corrector step
+compiled (:func:`impactcont.orbit.multi_impact.sticky_palc_step`). With ``--before`` the
+route before these is timed in the same rounds too: ``dF/domega`` the parameter's central
+difference and the continuation core's corrector (patched in for its run only)::
 
-    python studies/sticking_motions/branch_cost.py --exact
+    python studies/sticking_motions/branch_cost.py --before
 
-Measured (two runs, load 1.7-1.8): no detection, sticky 6.33-6.60 ms per point (9.0-9.5x
-plain), exact column 3.51-3.67 (5.0-5.3x), and compiled corrector 1.75-1.77 (2.5x), plain
-0.70; default detection 6.51-6.57 (6.4-6.8x), 3.67-3.70 (3.6-3.8x), 1.96-2.01 (2.0-2.1x),
-plain 0.96-1.02.
+Measured with both routes patched in before they were wired (two runs, load 1.7-1.8): no
+detection, central difference and core corrector 6.33-6.60 ms per point (9.0-9.5x plain),
+exact column 3.51-3.67 (5.0-5.3x), exact column and compiled corrector 1.75-1.77 (2.5x),
+plain 0.70; default detection 6.51-6.57 (6.4-6.8x), 3.67-3.70 (3.6-3.8x), 1.96-2.01
+(2.0-2.1x), plain 0.96-1.02.
 """
 
 from __future__ import annotations
@@ -36,11 +35,7 @@ from collections.abc import Iterator
 import numpy as np
 
 import impactcont as ic
-from impactcont.core.stepper import SINGULAR_CONDITION, CorrectorResult
-from impactcont.model.parameters import FREQUENCY
 from impactcont.model.stops import Stops
-from impactcont.orbit.multi_impact import sticky_omega_column, sticky_palc_step
-from impactcont.problems import multi_impact_branch
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 
 
@@ -86,47 +81,28 @@ _PACKAGE_DPARAM = MultiImpactBranchProblem.dparam
 _PACKAGE_PALC_STEP = MultiImpactBranchProblem.palc_step
 
 
-def _exact_dparam(self: MultiImpactBranchProblem, u: np.ndarray, lam: float) -> np.ndarray:
-    """``dparam`` with the exact omega column of a sticky motion."""
-    if self.sticky and self.param.data == FREQUENCY:
-        return sticky_omega_column(self.flow_at(lam), self.N, self.pattern, u,
-                                   self._shoot(u, lam))
+def _difference_dparam(self: MultiImpactBranchProblem, u: np.ndarray, lam: float
+                       ) -> np.ndarray:
+    """``dparam`` of a sticky motion as before the exact column: the parameter's central
+    difference."""
+    if self.sticky:
+        return self._difference_quotient(u, lam)
     return _PACKAGE_DPARAM(self, u, lam)
 
 
-def _compiled_palc_step(self: MultiImpactBranchProblem, predicted: np.ndarray,
-                        tangent: np.ndarray, weights: np.ndarray, tol: float, max_iter: int,
-                        *, hyperplane: bool = False) -> CorrectorResult | None:
-    """``palc_step`` with the compiled corrector of a sticky motion in omega
-    (:func:`impactcont.orbit.multi_impact.sticky_palc_step`; the package's otherwise)."""
-    if not (self.sticky and self._base_flow is not None):
-        return _PACKAGE_PALC_STEP(self, predicted, tangent, weights, tol, max_iter,
-                                  hyperplane=hyperplane)
-    out = sticky_palc_step(self._base_flow, self.N, self.pattern, predicted, tangent,
-                           weights, tol, max_iter, SINGULAR_CONDITION, hyperplane=hyperplane)
-    message = ""
-    if out.status == multi_impact_branch._REFUSED:
-        try:  # the oscillator's (or a held system's) own refusal
-            self.flow_at(out.omega)
-            message = f"omega = {out.omega!r} refused"
-        except ic.ParameterError as error:
-            message = str(error)
-    return CorrectorResult(state=out.state, iterations=int(out.iterations),
-                           status=multi_impact_branch._STATUSES[int(out.status)],
-                           lam=float(out.omega), residual_norm=float(out.residual_norm),
-                           tangent=out.tangent,
-                           ill_conditioned=out.flagged if out.flagged.size else None,
-                           message=message, last_step=float(out.last_update))
+def _core_palc_step(self: MultiImpactBranchProblem, *args, **kwargs) -> object:
+    """``palc_step`` of a sticky motion as before the compiled corrector: none (the
+    continuation core corrects with ``linearize``)."""
+    return None if self.sticky else _PACKAGE_PALC_STEP(self, *args, **kwargs)
 
 
 @contextlib.contextmanager
-def exact_column(mode: str) -> Iterator[None]:
-    """The sticky branch's ``dF/domega`` exact (``"column"``), with the compiled corrector
-    too (``"compiled"``), or the package's (``""``), for one run."""
-    if mode:
-        MultiImpactBranchProblem.dparam = _exact_dparam
-    if mode == "compiled":
-        MultiImpactBranchProblem.palc_step = _compiled_palc_step
+def route(before: bool) -> Iterator[None]:
+    """The package's route, or (`before`) the one before the exact omega column and the
+    compiled corrector, for one run."""
+    if before:
+        MultiImpactBranchProblem.dparam = _difference_dparam
+        MultiImpactBranchProblem.palc_step = _core_palc_step
     try:
         yield
     finally:
@@ -134,22 +110,21 @@ def exact_column(mode: str) -> Iterator[None]:
         MultiImpactBranchProblem.palc_step = _PACKAGE_PALC_STEP
 
 
-def main(rounds: int = 5, exact: bool = False) -> None:
+def main(rounds: int = 5, before: bool = False) -> None:
     motions = starts()
-    runs = [(name, start, "") for name, start in motions.items()]
-    if exact:
-        sticky = motions["sticky 'lu' (R 0)"]
-        runs[1:1] = [("sticky, exact dF/domega", sticky, "column"),
-                     ("sticky, exact + compiled corrector", sticky, "compiled")]
+    runs = [(name, start, False) for name, start in motions.items()]
+    if before:
+        runs[1:1] = [("sticky, central difference and core corrector",
+                      motions["sticky 'lu' (R 0)"], True)]
     for name, start, patched in runs:
         assert start.physical, (name, start.reason)
-        with exact_column(patched):
+        with route(patched):
             per_point(start, ())  # warm: the compiled kernels
     for detect, label in (((), "no detection"), (ic.detection.LABELS, "default detection")):
         best: dict[str, tuple[float, int]] = {}
         for _ in range(rounds):
             for name, start, patched in runs:
-                with exact_column(patched):
+                with route(patched):
                     cost, points = per_point(start, detect)
                 best[name] = min(best.get(name, (np.inf, 0)), (cost, points))
         plain = best["plain 'UL' (R 0.6)"][0]
@@ -160,4 +135,4 @@ def main(rounds: int = 5, exact: bool = False) -> None:
 
 
 if __name__ == "__main__":
-    main(exact="--exact" in sys.argv[1:])
+    main(before="--before" in sys.argv[1:])
