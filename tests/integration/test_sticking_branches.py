@@ -227,6 +227,8 @@ def test_release_grazing_where_the_pressing_force_touches_zero_inside_a_ride(cf)
     assert np.abs(np.array(there.floats("pressing_min"), dtype=float)).max() < 1e-9
     problem = MultiImpactBranchProblem(damper(0.2), 1, 2, "omega", pattern="lu")
     assert set(problem.motion_tests) >= set(STICKING_TESTS)
+    assert set(problem.events) >= set(STICKING_TESTS)  # declared: located by default
+    assert not set(MultiImpactBranchProblem.events) & set(STICKING_TESTS)  # plain branches
 
 
 def test_neimark_sacker_on_a_branch_with_sticking_phases():
@@ -282,8 +284,8 @@ def test_the_riding_motion_in_other_parameters_is_the_solve_alone(parameter, bou
 
 
 def test_the_end_of_a_ride_is_drawn_with_its_marker_and_named_in_the_legend():
-    """The SE of a branch near the end of the ride (from omega 2.3): located without
-    events=, drawn in the bifurcation diagram with its own marker (X) and named in the
+    """The SE of a branch near the end of the ride (from omega 2.3): located as detect=
+    asks, drawn in the bifurcation diagram with its own marker (X) and named in the
     legend in its words."""
     import matplotlib
 
@@ -293,7 +295,7 @@ def test_the_end_of_a_ride_is_drawn_with_its_marker_and_named_in_the_legend():
     from impactcont.plots import bifurcation_diagram
 
     ds = ic.continuation(riding_at(2.3), parameter="omega", bounds=(2.29, 2.45),
-                         both_directions=False)
+                         both_directions=False, detect=["SE"])
     assert list(ds.special_label.values) == ["SE"]
     ax = bifurcation_diagram(ds)
     try:
