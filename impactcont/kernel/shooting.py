@@ -363,14 +363,15 @@ def _shot_tuple(shot):
 
 # -- the shooting system ------------------------------------------------------------------------
 @_inner
-def _section_starts(x, p, m, pivots, normals, positions):
-    """``X_k`` from the unknowns: ``z_k`` in every component but ``x_j`` (``j = pivots[k]``,
-    the stop's own mass), and ``x_j`` from the section ``n_k . x = c_k`` of impact k."""
+def _section_starts(x, first, p, m, pivots, normals, positions):
+    """``X_k`` from the unknowns: ``z_k`` (from ``x[first]`` on, ``m - 1`` each) in every
+    component but ``x_j`` (``j = pivots[k]``, the stop's own mass), and ``x_j`` from the
+    section ``n_k . x = c_k`` of impact k."""
     n = m // 2
     starts = np.empty((p, m))
     for k in range(p):
         j = pivots[k]
-        col = p + k * (m - 1)
+        col = first + k * (m - 1)
         for c in range(m):
             if c != j:
                 starts[k, c] = x[col]
@@ -485,7 +486,7 @@ def _shooting_system(flight, forcing, impacts, period, x, want_jacobian):
         taus[k] = x[1 + k]
         elapsed += x[1 + k]
     taus[p - 1] = period - elapsed
-    starts = _section_starts(x, p, m, pivots, normals, positions)
+    starts = _section_starts(x, p, p, m, pivots, normals, positions)
     diagonal = _is_diagonal(matrices)
     phases = np.empty(p)
     phases[0] = x[0]
@@ -682,19 +683,7 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     for k in range(p):
         phases[k] = theta
         theta += omega * (stimes[k] + taus[k])
-    starts = np.empty((p, m))
-    for k in range(p):
-        j = pivots[k]
-        col = z0 + k * (m - 1)
-        for c in range(m):
-            if c != j:
-                starts[k, c] = x[col]
-                col += 1
-        s = positions[k]
-        for c in range(n):
-            if c != j:
-                s -= normals[k, c] * starts[k, c]
-        starts[k, j] = s / normals[k, j]
+    starts = _section_starts(x, z0, p, m, pivots, normals, positions)
     releases = starts.copy()
     release_phases = phases.copy()
     h_tr = np.zeros((p, m, m))
