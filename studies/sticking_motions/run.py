@@ -37,7 +37,6 @@ from impactcont.plots.series import (
     panel_figure,
     time_history,
 )
-from impactcont.problems.multi_impact_branch import STICKING_EVENTS
 
 HERE = Path(__file__).resolve().parent
 FIGURES = HERE / "figures"
@@ -458,13 +457,13 @@ def cost_rows(rounds: int = 5, calls: int = 20) -> list[str]:
 
 def package_branch(bounds=(0.2, 2.6)):
     """Case (c) continued in omega by the package (``ic.continuation`` of the motion
-    solved from the simulation at ``bounds[0]``, with the tests of the points that end a
-    sticky branch as events: the end of a ride, release grazing, the onset of sticking):
-    the branch dataset and its wall time."""
+    solved from the simulation at ``bounds[0]``; a sticky branch detects the points that
+    end it, SE the end of a ride, RG release grazing and SO the onset of sticking, as
+    special points): the branch dataset and its wall time."""
     res = simulated("c", bounds[0], 16.0)[2]
     orbit = shooting("c", bounds[0], res)
     start = time.perf_counter()
-    ds = ic.continuation(orbit, parameter="omega", bounds=bounds, events=STICKING_EVENTS)
+    ds = ic.continuation(orbit, parameter="omega", bounds=bounds)
     return ds, time.perf_counter() - start
 
 
@@ -508,13 +507,13 @@ def branch_end_rows(ds, omega_end: float) -> list[str]:
     sa, sb = float(ds.stick_time_k[flip, 0]), float(ds.stick_time_k[flip + 1, 0])
     estimate = a - sa * (b - a) / (sb - sa)
     specials = [str(v) for v in ds.special_label.values] if "special_label" in ds else []
-    events = []
-    if "event_name" in ds:
-        events = [f"| event {name} ({status}, precision {precision:.1e}) | {omega:.15f} |"
-                  for name, omega, precision, status in zip(
-                      ds.event_name.values, ds.event_omega.values,
-                      ds.event_precision.values, ds.event_status.values, strict=True)]
-    return ["| | omega |", "|---|---|", *events,
+    located = []
+    if specials:
+        located = [f"| special point {label} ({status}, precision {precision:.1e}) | "
+                   f"{omega:.15f} |" for label, omega, precision, status in zip(
+                       ds.special_label.values, ds.special_omega.values,
+                       ds.special_precision.values, ds.special_status.values, strict=True)]
+    return ["| | omega |", "|---|---|", *located,
             f"| last physical point (stick time {sa:.3g}) | {a:.9f} |",
             f"| first non-physical point (stick time {sb:.3g}) | {b:.9f} |",
             f"| zero of the stick time, linear between them | {estimate:.9f} |",
