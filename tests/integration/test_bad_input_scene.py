@@ -231,10 +231,11 @@ def test_the_seed_takes_the_impacts_of_n_periods() -> None:
     times = [k + d for k in range(10) for d in (0.0, 0.38)]
     osc = oscillator(1.3)
     sim = simulation(times, "UL" * 10, osc)
-    seed = simulation_seed(sim, entry(1, 2), osc)
-    assert seed["pattern"] == "LU"  # the stops of the impacts that start the two flights
-    assert np.allclose(seed["flight_times"] * 1.3 / (2 * math.pi), [0.62, 0.38])
-    assert simulation_seed(sim, entry(2, 4), osc)["pattern"] == "LULU"  # the motion twice
+    seed = simulation_seed(sim, entry(1, 2), osc)  # the last p + 1 impacts, no sticking
+    assert seed.impact_stops[:-1] == "LU"  # the stops of the impacts that start the flights
+    assert np.allclose(np.diff(seed.impact_times) * 1.3 / (2 * math.pi), [0.62, 0.38])
+    assert seed.sticking == ()
+    assert simulation_seed(sim, entry(2, 4), osc).impact_stops[:-1] == "LULU"  # twice
     for N, p, shown in ((1, 1, "2 impact(s)"), (1, 3, "2 impact(s)"), (2, 3, "4 impact(s)")):
         with pytest.raises(ParameterError, match=rf"shows {re.escape(shown)} in its last "
                                                  rf"N = {N} forcing period\(s\) \(stops "
