@@ -313,8 +313,8 @@ def brute_force(periods: float, cap: float, omegas: np.ndarray,
 def table(runs: list[Run]) -> list[str]:
     """The sweep's table by class: ends, events, the largest excursion past a stop."""
     rows = ["| class | runs | ended | impacts | sticking phases | chatter points | "
-            "largest excursion past a stop | past by more than rounding | wall (s) |",
-            "|---|---|---|---|---|---|---|---|---|"]
+            "largest excursion past a stop | past by more than rounding | wall (s) | CPU (s) |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
     kinds = list(dict.fromkeys(r.kind for r in runs))
     for kind in [*kinds, "all"]:
         sel = [r for r in runs if kind in ("all", r.kind)]
@@ -325,7 +325,27 @@ def table(runs: list[Run]) -> list[str]:
             f"| {kind} | {len(sel)} | {ended} | {sum(r.impacts for r in sel)} | "
             f"{sum(r.sticking for r in sel)} | {sum(r.chatter for r in sel)} | "
             f"{_excursion(worst)} | {sum(r.violates for r in sel)} | "
-            f"{sum(r.seconds for r in sel):.0f} |")
+            f"{sum(r.seconds for r in sel):.0f} | {sum(r.cpu for r in sel):.0f} |")
+    return rows
+
+
+def throughput(runs: list[Run]) -> list[str]:
+    """Processor time by class: per 200 forcing periods (median and largest, with the slowest
+    run's impacts a period and accumulation points) and per thousand impacts."""
+    rows = ["| class | CPU s / 200 periods, median | largest (run) | its impacts a period | "
+            "its chatter points | CPU s / 1000 impacts, median |", "|---|---|---|---|---|---|"]
+    for kind in dict.fromkeys(r.kind for r in runs):
+        sel = [r for r in runs if r.kind == kind and math.isfinite(r.cpu) and r.periods > 0]
+        if not sel:
+            continue
+        per = [200.0 * r.cpu / r.periods for r in sel]
+        k = int(np.argmax(per))
+        slow = sel[k]
+        per_impact = [1000.0 * r.cpu / r.impacts for r in sel if r.impacts]
+        rows.append(
+            f"| {kind} | {float(np.median(per)):.2g} | {per[k]:.3g} ({slow.label}, "
+            f"{slow.status}) | {slow.impacts / slow.periods:.3g} | {slow.chatter} | "
+            f"{float(np.median(per_impact)) if per_impact else math.nan:.2g} |")
     return rows
 
 
@@ -370,7 +390,8 @@ def main(argv: list[str] | None = None) -> None:
             part = [r for r in runs if (r.kind in CLASSES) == (sweep == "random")]
             if part:
                 print(f"\n## {sweep}: {len(part)} runs\n")
-                print("\n".join([*table(part), "", *findings(part)]))
+                print("\n".join([*table(part), "", *throughput(part), "",
+                                  *findings(part)]))
         return
     start = time.perf_counter()
     log_file = args.log.open("a") if args.log else None
