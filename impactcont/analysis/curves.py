@@ -81,9 +81,10 @@ from impactcont.errors import (
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
-from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns
+from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
+    SHOOTING_KINDS,
     CurveProblem,
     ShootingCurve,
     check_parameters,
@@ -100,7 +101,7 @@ from impactcont.progress import (
     until_interrupted,
 )
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import CURVE_KINDS, Label, check_bounds
+from impactcont.vocabulary import Label, check_bounds
 
 __all__ = ["check_curve_arguments", "crossing_steps", "curve", "curve_crossings",
            "multi_impact_curve", "multi_impact_curve_crossings"]
@@ -287,6 +288,9 @@ class _CurveWatch:
             return None
         problem, xa, x = self.problem, previous.state, current.state
         p1, p2 = problem.parameters
+        unphysical = self._physical_end(previous, current)
+        if unphysical is not None:
+            return unphysical
         event = problem.terminal_event(xa, x)
         if event is not None:
             label, condition = event
@@ -333,6 +337,32 @@ class _CurveWatch:
                         f"point on it not found ({exc})", keep=False)
         return Stop(ContinuationStatus.BOUNDS_REACHED, f"{p1} = {bound:.10g}",
                     point=_on_curve(current, xe))
+
+
+    def _physical_end(self, previous: ContinuationPoint, current: ContinuationPoint
+                      ) -> Stop | None:
+        """The end of a curve of motions with sticking phases where its motion stops being
+        physical between two accepted points
+        (:meth:`~impactcont.problems.codim1.ShootingCurve.physical_end`): the point past it
+        is kept, so that the crossing is located as the curve's codim-2 point."""
+        check = getattr(self.problem, "physical_end", None)
+        if check is None or self.orbits is None:
+            return None
+        orbits = [self.orbits.get(_orbit_key(point.u, point.lam))
+                  for point in (previous, current)]
+        if any(orbit is None for orbit in orbits):
+            return None
+        xa, xb = previous.state, current.state
+        try:
+            why = check(xa, orbits[0], xb, orbits[1])
+        except (ImpactcontError, ArithmeticError, np.linalg.LinAlgError):
+            return None
+        if why is None:
+            return None
+        p1, p2 = self.problem.parameters
+        return Stop(ContinuationStatus.CURVE_END,
+                    f"the motion stops being physical between {p1}={xa[-2]:.10g}, "
+                    f"{p2}={xa[-1]:.10g} and {p1}={xb[-2]:.10g}, {p2}={xb[-1]:.10g}: {why}")
 
 
 def _orbit_key(x: np.ndarray, lam: float) -> tuple[bytes, float]:
@@ -538,13 +568,34 @@ def _shooting_start(kind: Label, start: xr.Dataset | MultiImpactOrbit, which: in
     if isinstance(start, MultiImpactOrbit):
         return start, False
     symmetric = bool(json.loads(start.attrs.get("options", "{}")).get("symmetric", False))
-    orbit = special_orbit(start, kind, which)
     k = [i for i, lab in enumerate(start[special_variable("label")].values.tolist())
          if lab == kind][which]
+    orbit = _sticky_special_orbit(start, k) if special_variable("stick_time_k") in start \
+        else special_orbit(start, kind, which)
     if start[special_variable("status")].values[k] != "located":
         log.warning("the %s point %d of the branch is only bracketed: the curve starts from "
                     "the motion re-solved there", kind, which)
     return orbit, symmetric
+
+
+def _sticky_special_orbit(branch: xr.Dataset, k: int) -> MultiImpactOrbit:
+    """The motion with sticking phases at special point `k` of its branch, re-solved by
+    Newton from the point's stored phases, flight and stick times and states (the stick
+    times are unknowns of its shooting system: an RG or SO point has sticks of positive
+    length)."""
+    parameter = branch.attrs["parameter"]
+    values = {name: float(branch[special_variable(name)].values[k])
+              for name in dict.fromkeys(["omega", "b", parameter])}
+    osc = oscillator_from_dataset(branch).replace(omega=values.pop("omega"), b=values.pop("b"))
+    for name, value in values.items():  # as its object sets it (an element, an extra stop)
+        osc = model_parameter(osc, name).at(osc, value)
+    sticks = np.nan_to_num(np.asarray(branch[special_variable("stick_time_k")].values[k],
+                                      dtype=float))
+    guess = {"delta": float(branch[special_variable("delta_k")].values[k, 0]),
+             "flight_times": branch[special_variable("flight_time_k")].values[k],
+             "states": branch[special_variable("state_k")].values[k],
+             "pattern": pattern_of(branch), "stick_times": sticks}
+    return multi_impact_orbit(osc, int(branch.attrs["N"]), impacts_of(branch), guess)
 
 
 def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, which: int,
@@ -555,7 +606,7 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
     """A curve followed by shooting (:class:`~impactcont.problems.codim1.ShootingCurve`),
     from a special point of an N-p branch dataset or from a motion (see :func:`curve`)."""
     functions = check_user_functions(events, monitors, reserved_names())
-    kind = curve_kind(kind, kinds=(*CURVE_KINDS, Label.BP))
+    kind = curve_kind(kind, kinds=SHOOTING_KINDS)
     base_osc = start.oscillator if isinstance(start, MultiImpactOrbit) \
         else oscillator_from_dataset(start)
     p1, parameter = parameters = _check_motion_parameters(base_osc, parameters)

@@ -35,7 +35,28 @@ kind      g (shooting)                                              vanishes whe
 ``NS``    ``prod_{i<j} (mu_i mu_j - 1)``, pole-free                 a pair crosses |mu|=1
 ``GR``    ``min_k gap_min_k``                                        a stop is grazed
 ``ZV``    ``min_k impact_velocity_k``                                an impact at rest
+``SE``    ``s_k``, the stick time of one sticking phase k            a stick shrinks to 0
+``RG``    ``p_k(t*)``, the pressing force at one interior minimum    it touches 0 inside
+          ``t*`` of stick k (``p_k'(t*) = 0``, solved afresh)          the stick
+``SO``    ``p_k(0)``, the pressing force at the landing of stick k   the landing presses 0
 ========  ========================================================  ===================
+
+The last three are the kinds that bound periodic motions with sticking phases (a
+pattern with lowercase letters, :class:`~impactcont.problems.multi_impact_branch.
+MultiImpactBranchProblem`); they have curves of such motions only. Each follows one
+sticking phase k, chosen at the start (the shortest stick, the stick with the smallest
+interior minimum of its pressing force, the smallest landing pressing force): a minimum
+over the sticks would have corners where two sticks change places, and on a curve of the
+symmetric riding motion every stick has the same value. ``g`` is then smooth along the
+curve: ``s_k`` is an unknown (its row is exact, no difference); ``p_k(0)`` is affine in
+the landing state; at an interior minimum ``t*`` (a regular zero of ``p_k'``, found by
+secant steps from the last accepted point's ``t*``) ``p_k(t*)`` is smooth with the
+derivative of ``p_k`` at fixed ``t*`` (``p_k'(t*) = 0``), and its error is of the order
+of the square of ``t*``'s (1e-13 relative), not that of a sampled minimum. The RG curve
+ends where that minimum leaves the sticking phase (``t*`` reaches its landing or its
+release) or stops being a minimum (``p_k'' = 0``). The kinds of every motion (SN, PD,
+NS, GR, ZV) are followed on motions with sticking phases as on the others; their
+derivative in ``p2`` is then the problem in ``p2``'s (:meth:`ShootingCurve.dparam`).
 
 ``sigma(A)`` is the signed smallest singular value ``sign(det A) s_min(A)``: it
 changes sign with ``det A`` and, unlike the determinant, keeps the size of the
@@ -63,6 +84,7 @@ from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, GAP, RESTITUTION, model_parameter
+from impactcont.orbit.held_flow import held_flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, _geometry
 from impactcont.orbit.symmetry import half_map
 from impactcont.problems.closed_form_curve import (
@@ -77,13 +99,20 @@ from impactcont.problems.closed_form_curve import (
     closed_form_curve,
 )
 from impactcont.problems.events import event_function
-from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
+from impactcont.problems.multi_impact_branch import (
+    MultiImpactBranchProblem,
+    release_grazing_test,
+    stick_end_test,
+    sticking_onset_test,
+)
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 from impactcont.vocabulary import CURVE_KINDS, Label
 
 __all__ = [
     "CURVE_KINDS",
     "CURVE_PARAMETERS",
+    "SHOOTING_KINDS",
+    "STICKING_CURVE_KINDS",
     "CurveProblem",
     "FoldCurve",
     "GrazingCurve",
@@ -105,6 +134,11 @@ _HYPERPLANE_TOL = 1e-11  # Newton on a hyperplane (codim-2 points, crossings, th
 #: Flight data whose parameters have exact derivatives from any branch problem's shot
 #: and leave the modal basis as it is.
 _EXACT = (FREQUENCY, GAP, RESTITUTION)
+#: The interior minimum of a pressing force (RG): secant steps until this relative step,
+#: at most this many; ``p_k''`` by this relative central difference of ``p_k'``.
+_MINIMUM_TOL = 1e-13
+_MINIMUM_ITER = 40
+_CURVATURE_STEP = 1e-5
 
 BranchProblem = MultiImpactBranchProblem | SymmetricBranchProblem
 
@@ -121,7 +155,8 @@ def _approach_sign(problem: MultiImpactBranchProblem, u: np.ndarray, lam: float)
     zero-velocity impact (the codim-2 point PD+ZV) as an N-1 curve does.
     """
     sh = problem._shoot(u, lam)
-    geo = _geometry(problem.flow_at(lam), problem.pattern)
+    # with sticking phases the stops are the pattern's letters in capitals
+    geo = _geometry(problem.flow_at(lam), getattr(problem, "impacts", problem.pattern))
     n = geo.normals.shape[1]
     # the impact ending flight k - 1 begins flight k: its velocity towards the stop
     arrivals = sh.arrivals[np.arange(-1, problem.p - 1), n:]
@@ -150,7 +185,7 @@ class ShootingCurve:
     pattern : str
         The stop of each impact.
     kind : str
-        One of ``SN, PD, NS, GR, ZV, BP`` (see the module notes).
+        One of ``SN, PD, NS, GR, ZV, BP, SE, RG, SO`` (see the module notes).
     parameters : (str, str)
         ``(p1, p2)``: ``p1`` is an unknown, ``p2`` the continuation parameter.
     symmetric : bool
@@ -159,7 +194,9 @@ class ShootingCurve:
     Raises
     ------
     ParameterError
-        An unknown kind, equal or unknown parameters, BP without ``symmetric``.
+        An unknown kind, equal or unknown parameters, BP without ``symmetric``; SE, RG or
+        SO of a motion without sticking phases; a motion with sticking phases followed by
+        its half.
     """
 
     def __init__(self, osc: ImpactOscillator, N: int, p: int, pattern: str, kind: str,
@@ -175,6 +212,21 @@ class ShootingCurve:
                                  "twice")
         self.params = tuple(model_parameter(osc, name) for name in (p1, p2))
         self.osc, self.N, self.p, self.pattern = osc, N, p, pattern
+        #: The motion has sticking phases (a pattern with lowercase letters).
+        self.sticky = bool(pattern) and any(c.islower() for c in str(pattern))
+        if _KINDS[kind].sticky_only and not self.sticky:
+            raise ParameterError(
+                f"kind={str(kind)!r} ({Label(kind).words}) bounds motions with sticking "
+                f"phases: the motion must have some (a pattern with lowercase letters); got "
+                f"pattern={pattern!r}")
+        if self.sticky and symmetric:
+            raise ParameterError(f"symmetric=True: a motion with sticking phases (pattern "
+                                 f"{pattern!r}) is followed whole, not by its half")
+        #: The sticking phase a curve of SE, RG or SO follows (its impact), and the time of
+        #: the interior minimum of its pressing force at the last accepted point (RG).
+        self.followed_stick: int | None = None
+        self._minimum_time = math.nan
+        self._minima: dict[tuple[bytes, float], float] = {}
         self.kind, self.parameters, self.symmetric = Label(kind), (p1, p2), symmetric
         self.last_step = math.nan
         self._problems: dict[tuple[str, float, float | None], BranchProblem] = {}
@@ -183,7 +235,9 @@ class ShootingCurve:
         # both parameters move only omega and the stops: every problem has the same modes
         self._same_modes = all(par.data in _EXACT for par in self.params)
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
-        self.size = self._base(self.params[1].value(osc), p1).size + 1
+        first = self._base(self.params[1].value(osc), p1)
+        self.size = first.size + 1
+        self._sticks = np.flatnonzero(getattr(first, "sticks", np.zeros(0, bool)))
 
     # -- the branch problems ----------------------------------------------------------------------
     def _base(self, lam: float, parameter: str, p1: float | None = None) -> BranchProblem:
@@ -255,8 +309,125 @@ class ShootingCurve:
         H = self.branch_problem(lam).half_map(u, p1)
         return signed_smallest_singular_value(H + _identity(H.shape[0]))
 
+    # -- the kinds that bound motions with sticking phases --------------------------------------
+    def _stick_column(self, k: int) -> int:
+        """Where the stick time ``s_k`` of impact `k` is in ``x = [u, p1]``: after the phase
+        and the p - 1 flight times, in the order of the sticking phases
+        (:func:`~impactcont.orbit.multi_impact.sticky_shooting`)."""
+        return self.p + int(np.flatnonzero(self._sticks == k)[0])
+
+    def _follow(self, u: np.ndarray, p1: float, lam: float) -> int:
+        """The sticking phase this curve follows, chosen at its first evaluation (the start):
+        the shortest stick (SE), the smallest landing pressing force (SO), the smallest
+        interior minimum of the pressing force (RG, with its time).
+
+        Raises
+        ------
+        ParameterError
+            RG at a motion whose pressing forces have no interior minimum.
+        """
+        if self.followed_stick is not None:
+            return self.followed_stick
+        base = self.branch_problem(lam)
+        sh = base._shoot(u, p1)
+        held = np.flatnonzero(base.sticks)
+        if self.kind == Label.SE:
+            k = int(held[np.argmin(sh.stick_times[held])])
+        elif self.kind == Label.SO:
+            osc = base.oscillator_at(p1)
+            k = int(held[np.argmin([held_flow(osc, base.impacts[j]).pressing(
+                sh.starts[j], sh.phases[j]) for j in held])])
+        else:
+            osc = base.oscillator_at(p1)
+            minima = {int(j): held_flow(osc, base.impacts[j]).pressing_minimum(
+                float(sh.stick_times[j]), sh.starts[j], float(sh.phases[j])) for j in held}
+            inner = {j: value for j, value in minima.items() if value[1] > 0.0}
+            if not inner:
+                raise ParameterError(
+                    "kind='RG': the pressing force of no sticking phase of the motion at the "
+                    f"start has an interior minimum (pattern {self.pattern!r}, stick times "
+                    f"{sh.stick_times[held].tolist()}): the start is not a release grazing")
+            k = min(inner, key=lambda j: inner[j][0])
+            self._minimum_time = float(inner[k][1])
+        self.followed_stick = k
+        return k
+
+    def _stick_end_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
+        """SE: the stick time ``s_k`` of the followed sticking phase."""
+        k = self._follow(u, p1, lam)
+        return float(self.branch_problem(lam)._shoot(u, p1).stick_times[k])
+
+    def _stick_end_row(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
+        """SE: ``dg/dx = e_{s_k}`` and ``dg/dp2 = 0`` (``s_k`` is an unknown)."""
+        self._follow(x[:-1], float(x[-1]), lam)
+        row = np.zeros(x.size)
+        row[self._stick_column(self.followed_stick)] = 1.0
+        return row, 0.0
+
+    def _sticking_onset_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
+        """SO: the pressing force ``p_k(0)`` at the landing of the followed sticking phase."""
+        k = self._follow(u, p1, lam)
+        base = self.branch_problem(lam)
+        sh = base._shoot(u, p1)
+        held = held_flow(base.oscillator_at(p1), base.impacts[k])
+        return float(held.pressing(sh.starts[k], sh.phases[k]))
+
+    def _release_grazing_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
+        """RG: the pressing force ``p_k(t*)`` at the followed interior minimum of stick k.
+
+        ``t*`` solves ``p_k'(t) = 0`` (:meth:`~impactcont.orbit.held_flow.HeldFlow.segment`'s
+        exact rate, :meth:`~impactcont.orbit.held_flow.HeldFlow.pressing_rate`) by secant
+        steps from the last accepted point's; NaN where it leaves ``(0, s_k)`` or is not a
+        minimum (the curve ends there, :meth:`physical_end`).
+        """
+        k = self._follow(u, p1, lam)
+        base = self.branch_problem(lam)
+        sh = base._shoot(u, p1)
+        osc = base.oscillator_at(p1)
+        held = held_flow(osc, base.impacts[k])
+        X0, theta, duration = sh.starts[k], float(sh.phases[k]), float(sh.stick_times[k])
+
+        def rate(t: float) -> float:
+            return held.pressing_rate(held.segment(t, X0, theta)[3], osc.omega * t + theta)
+
+        t = self._minimum_time
+        key = (np.append(u, p1).tobytes(), float(lam))
+        if not 0.0 < t < duration:
+            self._minima[key] = math.nan
+            return math.nan
+        scale = max(t, 1e-3 * duration)
+        t_prev, r_prev = t * (1.0 + 1e-4), rate(t * (1.0 + 1e-4))
+        r = rate(t)
+        for _ in range(_MINIMUM_ITER):
+            if r == r_prev:
+                break
+            step = -r * (t - t_prev) / (r - r_prev)
+            t_prev, r_prev = t, r
+            t += step
+            if not 0.0 < t < duration:
+                break
+            r = rate(t)
+            if abs(step) <= _MINIMUM_TOL * scale:
+                break
+        h = _CURVATURE_STEP * scale
+        if not (t - h > 0.0 and t + h < duration) or not rate(t + h) > rate(t - h):
+            self._minima[key] = math.nan  # the minimum left the stick, or is none
+            return math.nan
+        if len(self._minima) > _CACHE_SIZE:
+            self._minima.clear()
+        self._minima[key] = t
+        return float(held.pressing(held.segment(t, X0, theta)[0], osc.omega * t + theta))
+
+    def minimum_time(self, x: np.ndarray, lam: float) -> float:
+        """RG: the time ``t*`` of the followed interior minimum of the pressing force after
+        its stick's landing at the curve point ``(x, lam)`` (NaN where there is none)."""
+        x = np.asarray(x, dtype=float)
+        self.test(x, lam)
+        return self._minima.get((x.tobytes(), float(lam)), math.nan)
+
     def test_of(self, orbit: MultiImpactOrbit) -> float:
-        """The test function at a motion (all kinds but SN, which needs the problem)."""
+        """The test function at a motion (all kinds but SN, which needs the problem; SE, RG
+        and SO at a motion are those of its branch, over every sticking phase)."""
         return _KINDS[self.kind].of_orbit(orbit)
 
     def _test_gradient(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
@@ -273,6 +444,9 @@ class ShootingCurve:
         off it, the step shrank and never left the old point's neighbourhood; an
         NS curve of the impact damper crawled at steps of 1e-6 near its fold in ``b``.
         """
+        exact = _KINDS[self.kind].exact_row
+        if exact is not None:
+            return exact(self, x, lam)
         y = np.append(x, lam)
         if self._gradient is not None and np.max(np.abs(y - self._gradient[0])) <= \
                 _REUSE * max(1.0, float(np.max(np.abs(y)))):
@@ -292,8 +466,37 @@ class ShootingCurve:
     # -- what the location of codim-2 points needs (detection.codim2.Codim2Problem) ------------
     @property
     def codim2_tests(self) -> tuple[Label, ...]:
-        """The other kinds whose test functions are watched along the curve."""
-        return _KINDS[self.kind].codim2_tests
+        """The other kinds whose test functions are watched along the curve (on a motion
+        with sticking phases a curve of SN, PD, NS or GR also watches SE, RG and SO)."""
+        tests = _KINDS[self.kind].codim2_tests
+        if self.sticky and not _KINDS[self.kind].sticky_only:
+            tests = (*tests, *STICKING_CURVE_KINDS)
+        return tests
+
+    def physical_end(self, xa: np.ndarray, orbit_a: Any, xb: np.ndarray, orbit_b: Any
+                     ) -> str | None:
+        """Why the curve leaves the physical motions between two accepted points
+        ``[u, p1, p2]`` (a motion with sticking phases), or None.
+
+        A test that bounds the physical motions (a stick time, a pressing force, a
+        clearance, an impact velocity: SE, RG, SO, GR, ZV among :attr:`codim2_tests`)
+        changes sign, or the followed interior minimum of an RG curve is lost. The
+        crossing itself is located afterwards as the curve's codim-2 point.
+        """
+        if not self.sticky:
+            return None
+        if self.kind == Label.RG and not math.isfinite(self.minimum_time(xb[:-1], xb[-1])):
+            return ("the interior minimum of the pressing force of sticking phase "
+                    f"{self.followed_stick} followed by the curve leaves the sticking phase "
+                    "(it reaches the landing or the release) or stops being a minimum")
+        for test in self.codim2_tests:
+            if test not in _BOUNDS_PHYSICAL:
+                continue
+            ga = self.codim2_test(test, xa, orbit_a)
+            gb = self.codim2_test(test, xb, orbit_b)
+            if math.isfinite(ga) and math.isfinite(gb) and (ga > 0.0) != (gb > 0.0):
+                return f"the {test.words} test ({test}) changes sign: {ga:.3g} -> {gb:.3g}"
+        return None
 
     @property
     def multipliers_defined(self) -> bool:
@@ -365,8 +568,13 @@ class ShootingCurve:
 
     # -- the Problem protocol ------------------------------------------------------------------
     def accept(self, x: np.ndarray, lam: float) -> None:
-        """At an accepted point (the core's hook): the next step takes a fresh ``g`` row."""
+        """At an accepted point (the core's hook): the next step takes a fresh ``g`` row (and
+        an RG curve's interior minimum is sought from this point's)."""
         self._gradient = None
+        if self.kind == Label.RG:
+            t = self.minimum_time(x, lam)
+            if math.isfinite(t):
+                self._minimum_time = t
 
     def residual(self, x: np.ndarray, lam: float) -> np.ndarray:
         """``[F(u, p1; p2), g(u, p1; p2)]``, shape (m + 1,)."""
@@ -391,10 +599,12 @@ class ShootingCurve:
                        ) -> np.ndarray:
         """``dF/dp2`` at ``(u, p1; p2 = lam)`` (:meth:`dparam` without the test row)."""
         second = self.params[1]
-        if second.data in _EXACT and (second.keeps_symmetry or not self.symmetric):
+        if second.data in _EXACT and not self.sticky and (second.keeps_symmetry
+                                                          or not self.symmetric):
             # from the shot of the problem in p1 (a p2 that breaks the symmetry of a
             # symmetric curve is refused by the problem in p2, below)
             return base.derivative(u, p1, second)
+        # with sticking phases the problem in p2: exact in omega, else its central difference
         return self._base(lam, self.parameters[1], p1).dparam(u, float(lam))
 
     def dparam(self, x: np.ndarray, lam: float) -> np.ndarray:
@@ -450,6 +660,11 @@ class _Kind:
         The test needs the interior-contact search of the motion (GR).
     symmetric_only : bool
         A curve of symmetric motions only (BP).
+    sticky_only : bool
+        A curve of motions with sticking phases only (SE, RG, SO).
+    exact_row : callable or None
+        ``(problem, x, lam) -> (dg/dx, dg/dp2)`` exactly (SE: ``g`` is an unknown); None:
+        forward differences (:meth:`ShootingCurve._test_gradient`).
     """
 
     of_orbit: Callable[[MultiImpactOrbit], float]
@@ -458,6 +673,8 @@ class _Kind:
     multipliers_defined: bool = True
     contact_checks: bool = False
     symmetric_only: bool = False
+    sticky_only: bool = False
+    exact_row: Callable[..., tuple[np.ndarray, float]] | None = None
 
 
 def _event(label: Label) -> Callable[[MultiImpactOrbit], float]:
@@ -467,7 +684,10 @@ def _event(label: Label) -> Callable[[MultiImpactOrbit], float]:
 #: Each kind of curve of N-p motions. The codim-2 tests are those of the N-1 curves
 #: (:data:`impactcont.detection.codim2.TESTS`) but the GR test on a GR curve, whose
 #: second-lowest clearance is not searched; none on a BP curve, whose codim-2 points have
-#: no label yet.
+#: no label yet. On a motion with sticking phases SN, PD, NS and GR curves watch SE, RG
+#: and SO too (:attr:`ShootingCurve.codim2_tests`). An SE curve does not watch RG and SO:
+#: there the landing is the release, both vanish along the whole curve; an SO curve does
+#: not watch RG, which counts the landing's pressing force (zero along it).
 _KINDS: dict[Label, _Kind] = {
     Label.SN: _Kind(_no_orbit_test, ShootingCurve._fold_of_shot,
                     (Label.ZV, Label.GR, Label.PD, Label.NS)),
@@ -479,7 +699,23 @@ _KINDS: dict[Label, _Kind] = {
     Label.ZV: _Kind(_event(Label.ZV), None, (Label.SN,), multipliers_defined=False),
     Label.BP: _Kind(_pitchfork_of_orbit, ShootingCurve._pitchfork_of_shot, (),
                     symmetric_only=True),
+    Label.SE: _Kind(stick_end_test, ShootingCurve._stick_end_of_shot,
+                    (Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS), sticky_only=True,
+                    exact_row=ShootingCurve._stick_end_row),
+    Label.RG: _Kind(release_grazing_test, ShootingCurve._release_grazing_of_shot,
+                    (Label.SE, Label.SO, Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS),
+                    sticky_only=True),
+    Label.SO: _Kind(sticking_onset_test, ShootingCurve._sticking_onset_of_shot,
+                    (Label.SE, Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS),
+                    sticky_only=True),
 }
+
+#: The kinds of curves that bound periodic motions with sticking phases.
+STICKING_CURVE_KINDS: tuple[Label, ...] = (Label.SE, Label.RG, Label.SO)
+
+#: The codim-2 tests whose sign change takes a motion with sticking phases out of the
+#: physical motions (:meth:`ShootingCurve.physical_end`).
+_BOUNDS_PHYSICAL = (Label.SE, Label.RG, Label.SO, Label.GR, Label.ZV)
 
 #: The test function of each kind at a point of a curve of another kind.
 _CODIM2_TESTS: dict[Label, Callable[[ShootingCurve, np.ndarray, Any], float]] = {
@@ -488,14 +724,21 @@ _CODIM2_TESTS: dict[Label, Callable[[ShootingCurve, np.ndarray, Any], float]] = 
     Label.SN: lambda problem, x, orbit: problem.fold_test(x),
     Label.PD: lambda problem, x, orbit: float(event_function(Label.PD, orbit)),
     Label.NS: lambda problem, x, orbit: float(event_function(Label.NS, orbit)),
+    Label.SE: lambda problem, x, orbit: stick_end_test(orbit),
+    Label.RG: lambda problem, x, orbit: release_grazing_test(orbit),
+    Label.SO: lambda problem, x, orbit: sticking_onset_test(orbit),
 }
 
 
 #: The earlier name of :class:`ShootingCurve` (``impactcont.problems.multi_impact_curve``).
 MultiImpactCurveProblem = ShootingCurve
 
-#: The kinds of N-1 curves in closed form (BP is a curve of symmetric motions only).
-_N1_KINDS = tuple(kind for kind in CURVE_KINDS if kind is not Label.BP)
+#: The kinds of N-1 curves in closed form (BP is a curve of symmetric motions only; SE,
+#: RG and SO of motions with sticking phases only).
+_N1_KINDS = tuple(kind for kind in CURVE_KINDS
+                  if kind is not Label.BP and kind not in STICKING_CURVE_KINDS)
+#: The kinds of curves followed by shooting.
+SHOOTING_KINDS: tuple[Label, ...] = tuple(_KINDS)
 
 
 def curve_kind(kind: object, argument: str = "kind", kinds: tuple[Label, ...] = _N1_KINDS
@@ -524,9 +767,10 @@ def curve_kind(kind: object, argument: str = "kind", kinds: tuple[Label, ...] = 
     """
     if not isinstance(kind, str) or kind not in kinds:
         label = Label.__members__.get(kind) if isinstance(kind, str) else None
-        why = (f" ({label}, {label.words}, has no two-parameter curves: it bounds motions "
-               "with sticking phases, whose curves are not solved)"
-               if label in (Label.SE, Label.RG, Label.SO) else "")
+        why = (f" ({label}, {label.words}, has curves of motions with sticking phases only: "
+               "start from a special point of a branch of such motions, a pattern with "
+               "lowercase letters)"
+               if label in STICKING_CURVE_KINDS and label not in kinds else "")
         raise ParameterError(f"{argument} must be one of {tuple(map(str, kinds))}; got "
                              f"{kind!r}{why}")
     return Label(kind)
