@@ -100,9 +100,16 @@ def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]
     -------
     ndarray
         The roots, to a few ulps: each iteration keeps the part of the bracket where the
-        sign changes and takes the Newton step from the last iterate when it stays inside
-        that part, else its midpoint (so the bracket shrinks every iteration and the
+        sign changes and takes the Newton step from the last iterate when it lands strictly
+        inside that part, else its midpoint (so the bracket shrinks every iteration and the
         convergence near a simple root is quadratic).
+
+    Notes
+    -----
+    Near a root ``g`` is known only to rounding: its sign may flip between neighbouring
+    iterates while the Newton step between them stays above the tolerance. A step landing
+    on an end of the bracket (a previous iterate) would then cycle between the two ends
+    without shrinking the bracket; it is replaced by the midpoint.
     """
     left = np.array(lo, dtype=float)
     right = np.array(hi, dtype=float)
@@ -117,13 +124,14 @@ def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]
         same = (g < 0) == negative_left[todo]  # the sign change is right of `here`
         left[todo] = np.where(same, here, left[todo])
         right[todo] = np.where(same, right[todo], here)
+        width = right[todo] - left[todo]
         with np.errstate(divide="ignore", invalid="ignore"):
             step = g / slope
         tol = _ABS_TOL + _REL_TOL * np.abs(here)
         small = np.abs(step) <= tol  # converged: judged before the safeguard
-        done = (g == 0) | small | (right[todo] - left[todo] <= tol)
+        done = (g == 0) | small | (width <= tol)
         guess = here - step
-        kept = np.isfinite(guess) & (guess >= left[todo]) & (guess <= right[todo])
+        kept = np.isfinite(guess) & (guess > left[todo]) & (guess < right[todo])
         guess = np.where(kept | (done & small), guess, 0.5 * (left[todo] + right[todo]))
         t[todo] = np.where(g == 0, here, guess)
         todo = todo[~done]
