@@ -49,11 +49,13 @@ class Label(str, enum.Enum):
 
     Each kind is an object carrying what every module says of it: its ``marker`` in
     figures (a matplotlib marker code), its ``words`` (legends), its ``codimension`` (1:
-    one condition on a branch) and whether it has ``curves`` (two-parameter continuation,
-    :data:`CURVE_KINDS`). How a problem detects it (its test function, rounding noise and
-    criticality) is declared by the problem (:mod:`impactcont.problems.events`; the
-    points that bound a sticking phase, ``SE``, ``RG`` and ``SO``, by a branch problem of
-    motions with sticking phases, :data:`impactcont.problems.multi_impact_branch.STICKING_TESTS`).
+    one condition on a branch) and whether it has ``curves`` of every motion (two-parameter
+    continuation, :data:`CURVE_KINDS`; BP, SE, RG and SO have curves of their motions
+    only: :data:`impactcont.problems.codim1.SHOOTING_KINDS`). How a problem detects it
+    (its test function, rounding noise and criticality) is declared by the problem
+    (:mod:`impactcont.problems.events`; the points that bound a sticking phase, ``SE``,
+    ``RG`` and ``SO``, by a branch problem of motions with sticking phases,
+    :data:`impactcont.problems.multi_impact_branch.STICKING_TESTS`).
     A problem that does not declare a kind never reports it: ``detect=`` may name every
     kind on every branch.
 
@@ -124,11 +126,15 @@ LABEL_MARKERS: dict[str, str] = {label.value: label.marker for label in Label}
 #: What each label stands for, in words (legends): :attr:`Label.words`.
 LABEL_NAMES: dict[str, str] = {label.value: label.words for label in Label}
 
-#: The kinds of codimension-one curves (two-parameter continuation of a special point):
-#: the labels with :attr:`Label.curves`, every one but ``BP``, which exists only on
-#: symmetric N-p motions, and ``SE``, ``RG``, ``SO``, which bound the motions with sticking
-#: phases (no curves of either yet: curves of motions with sticking phases are not
-#: solved). The members are the kinds themselves.
+#: The kinds of codimension-one curves of every motion (two-parameter continuation of a
+#: special point): the labels with :attr:`Label.curves`, every one but ``BP``, which exists
+#: only on symmetric N-p motions, and ``SE``, ``RG``, ``SO``, which bound the motions with
+#: sticking phases. Those four have curves too, of their motions only, followed by
+#: shooting (:data:`impactcont.problems.codim1.SHOOTING_KINDS`, whose table declares each
+#: curve kind's test function and the codim-2 tests it watches); ``curves=False`` keeps
+#: them out of the kinds a curve of any motion (an N-1 curve in closed form, a scene's
+#: ``[[curves]]``, a curve dataset's ``kind``) may have. The members are the kinds
+#: themselves.
 CURVE_KINDS: tuple[Label, ...] = tuple(label for label in Label if label.curves)
 
 #: Codimension-two points, one name per point: ``A+B`` is where a curve of kind A meets
@@ -145,6 +151,14 @@ CODIM2_LABELS: tuple[str, ...] = (
     "NS+ZV", "NS+GR", "NS+SN", "NS+PD", "R1", "R2",
     "GR+ZV", "GR+GR", "GR+SN", "GR+PD", "GR+NS",
     "ZV+SN",
+    # curves of motions with sticking phases (SE: a stick time 0; RG: a pressing force
+    # touching 0 inside a stick; SO: the pressing force 0 at a landing), and the curves of
+    # every motion followed on such motions meeting them
+    "SE+ZV", "SE+GR", "SE+SN", "SE+PD", "SE+NS",
+    "RG+SE", "RG+SO", "RG+ZV", "RG+GR", "RG+SN", "RG+PD", "RG+NS",
+    "SO+SE", "SO+ZV", "SO+GR", "SO+SN", "SO+PD", "SO+NS",
+    "SN+SE", "SN+RG", "SN+SO", "PD+SE", "PD+RG", "PD+SO",
+    "NS+SE", "NS+RG", "NS+SO", "GR+SE", "GR+RG", "GR+SO",
 )
 
 #: How well a special point is known: ``located`` (refined to its precision) or

@@ -17,11 +17,13 @@ def test_labels_are_strings_and_the_old_names_are_the_same_tuple():
     assert vocab.Label.PD == "PD" and f"{vocab.Label.PD}" == "PD" and str(vocab.Label.NS) == "NS"
     assert LABELS == SPECIAL_LABELS == vocab.LABELS == ("SN", "PD", "NS", "GR", "ZV", "BP",
                                                         "SE", "RG", "SO")
-    # every label but BP (symmetric N-p motions only) and the points that bound a sticking
-    # phase (SE, RG, SO: curves of sticky motions are not solved) has its codim-1 curve
+    # every label has its codim-1 curve; BP (symmetric N-p motions) and the points that
+    # bound a sticking phase (SE, RG, SO) of their motions only: not among the kinds of
+    # curves of every motion, but among those followed by shooting
     assert vocab.CURVE_KINDS == ("SN", "PD", "NS", "GR", "ZV")
-    from impactcont.problems.codim1 import CURVE_KINDS
+    from impactcont.problems.codim1 import CURVE_KINDS, SHOOTING_KINDS
     assert CURVE_KINDS == vocab.CURVE_KINDS
+    assert set(SHOOTING_KINDS) == set(LABELS)
     # every label has its marker and its words, defined with it (figures read them)
     assert set(vocab.LABEL_MARKERS) == set(vocab.LABEL_NAMES) == set(LABELS)
     assert set(PARAMETERS) == set(vocab.CONTINUABLE_PARAMETERS)
@@ -35,11 +37,14 @@ def test_each_kind_carries_its_marker_words_codimension_and_curves():
     assert vocab.LABEL_NAMES["BP"] == vocab.Label.BP.words == "symmetry-breaking pitchfork"
     assert tuple(label for label in vocab.Label if label.curves) == vocab.CURVE_KINDS
     assert vocab.CURVE_KINDS[1] is vocab.Label.PD and not vocab.Label.BP.curves
-    # the points that bound a sticking phase: their own markers, words, no curves
+    # the points that bound a sticking phase: their own markers, words, no curves of every
+    # motion (curves of motions with sticking phases only); their codim-2 points named
     sticking = (vocab.Label.SE, vocab.Label.RG, vocab.Label.SO)
     assert [kind.words for kind in sticking] == ["end of a sticking phase", "release grazing",
                                                  "sticking onset"]
     assert not any(kind.curves for kind in sticking)
+    assert {"SE+PD", "RG+SO", "SO+SE", "PD+SE", "GR+RG"} <= set(vocab.CODIM2_LABELS)
+    assert len(set(vocab.CODIM2_LABELS)) == len(vocab.CODIM2_LABELS)
     markers = list(vocab.LABEL_MARKERS.values())
     assert len(set(markers)) == len(markers)  # no two kinds drawn alike
     # a kind reads as its label in messages, is found by it and hashes as it
