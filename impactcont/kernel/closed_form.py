@@ -56,7 +56,14 @@ import math
 import numpy as np
 
 from impactcont.kernel.contact import flight_tables, x1_maximum
-from impactcont.kernel.flights import _re, _transition_into, forced, mode_period, transition
+from impactcont.kernel.flights import (
+    _physical_into,
+    _re,
+    _transition_into,
+    forced,
+    mode_period,
+    transition,
+)
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.roots import orbit_roots, phase_sigma
@@ -230,14 +237,7 @@ def physical_state(modal, u, omega, R, delta, sigma):
     y, v = orbit_states(modal, omega, R, delta, sigma)
     X = np.empty(2 * n)
     scale = 0.0
-    for r in range(n):
-        sx = 0.0
-        sv = 0.0
-        for i in range(n):
-            sx += u[r, i] * y[i]
-            sv += u[r, i] * v[i]
-        X[r] = sx
-        X[n + r] = sv
+    _physical_into(u, y, v, X)
     X[n] = -R * sigma
     for r in range(n):
         scale = max(scale, abs(X[n + r]), omega * abs(X[r]))
@@ -400,20 +400,8 @@ def _impact_vectors(modal, w, a, f, u, ui0, omega, R, delta, sigma, pieces, dedx
     _jacobian_pieces_into(modal, w, a, f, ui0, omega, R, delta, sigma, pieces)
     dE = dedx[0]
     dX = dedx[1]
-    for r in range(n):
-        sy = 0.0
-        sv = 0.0
-        xv = 0.0
-        xa = 0.0
-        for i in range(n):
-            sy += u[r, i] * pieces[0, i]
-            sv += u[r, i] * pieces[1, i]
-            xv += u[r, i] * pieces[2, i]
-            xa += u[r, i] * pieces[3, i]
-        dE[r] = sy
-        dE[n + r] = sv
-        dX[r] = xv
-        dX[n + r] = xa
+    _physical_into(u, pieces[0], pieces[1], dE)
+    _physical_into(u, pieces[2], pieces[3], dX)
     # the impact law (eq. 4) scales the velocity row of mass 1 by -R
     dE[n] *= -R
     dX[n] *= -R

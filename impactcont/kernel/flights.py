@@ -177,6 +177,31 @@ def _transition_into(modal, u, ui, tr):
     transfer_into(modal, 2, u, ui, tr)
 
 
+@_inner
+def _physical_into(u, y, v, X):
+    """The physical state ``X = [u y; u v]`` (2n,) of the modal displacements ``y`` and
+    velocities ``v`` (n,), into ``X``, by plain loops (``x = U y`` of eq. 9's modal form).
+
+    Parameters
+    ----------
+    u : ndarray, shape (n, n)
+        The mass-normalised mode shapes ``U``, one per column.
+    y, v : ndarray, shape (n,)
+        Modal displacements and velocities.
+    X : ndarray, shape (2n,)
+        Overwritten with ``[U y; U v]``.
+    """
+    n = u.shape[0]
+    for r in range(n):
+        sx = 0.0
+        sv = 0.0
+        for i in range(n):
+            sx += u[r, i] * y[i]
+            sv += u[r, i] * v[i]
+        X[r] = sx
+        X[n + r] = sv
+
+
 @_jit
 def transfer_into(W, first, u, ui, tr):
     """``U W U^-1`` into ``tr`` (2n, 2n): the modal transfers ``W11, W12, W21, W22`` of
