@@ -41,6 +41,7 @@ point) is the fast one, in :mod:`impactcont.analysis.maps`; both run their tasks
 
 from __future__ import annotations
 
+import collections
 import logging
 import math
 import os
@@ -66,7 +67,7 @@ from impactcont.analysis.map_runner import (
     positive_number,
     written_blocks,
 )
-from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.attributes import extra_stop_names, split_parameters
 from impactcont.dataset.io import open_lazy, save_blocks
 from impactcont.dataset.map_storage import (
     open_temporary_map,
@@ -74,7 +75,9 @@ from impactcont.dataset.map_storage import (
     temporary_map_file,
 )
 from impactcont.dataset.maps import (
+    MAP_REASONS,
     multi_impact_map_dataset,
+    sticky_pattern,
     validate_multi_impact_map_dataset,
 )
 from impactcont.dataset.schema import _options_json
@@ -101,6 +104,11 @@ from impactcont.orbit.symmetry import (
     admits_symmetric_motions,
     symmetry_defect,
 )
+from impactcont.problems.multi_impact_branch import (
+    MultiImpactBranchProblem,
+    release_grazing_test,
+    stick_end_test,
+)
 from impactcont.progress import ProgressOption, interruptible, reporter
 from impactcont.threads import blas_limited
 
@@ -112,6 +120,10 @@ _SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
 #: Grid points of a task at least: a map of up to this many points is one sweep from its
 #: seed; a larger one is cut into bands of whole rows of its first parameter.
 _TASK_POINTS = 1 << 16
+#: The same for a motion with sticking phases, swept in Python over the compiled Newton of
+#: its branch problem (about 3-5 ms a point): tasks of some seconds, which a pool runs at
+#: once.
+_STICKY_TASK_POINTS = 1 << 11
 
 
 def _decide_symmetric(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
@@ -309,6 +321,18 @@ class _Setting:
                                       tuple(grid), tuple(settings), tuple(outputs))
         return out, unknowns, stats
 
+    def solve_grid(self, params: tuple[ModelParameter, ModelParameter],
+                   axes: dict[str, np.ndarray], seed: tuple[int, int], x_seed: np.ndarray,
+                   checks: bool, evaluate: bool = True
+                   ) -> tuple[dict[str, np.ndarray], np.ndarray, tuple[int, int, int, bool], int]:
+        """:meth:`sweep` over the grid `axes` with its flows and stop geometries built:
+        the flat outputs, the unknowns, the counts and the flows built (`evaluate` is for
+        the sticky sweep's sake: the compiled sweep always evaluates)."""
+        p = len(self.pattern)
+        tables = _Tables(self.osc, params, axes, self.pattern, p // 2 if self.half else p)
+        out, unknowns, stats = self.sweep(tables, axes, seed, x_seed, checks)
+        return out, unknowns, stats, len(tables.flows)
+
     def solve_at(self, params: tuple[ModelParameter, ModelParameter], values: dict[str, float],
                  x0: np.ndarray) -> np.ndarray | None:
         """Newton at one point of the two parameters (off the grid: the seed's way to its
@@ -317,6 +341,249 @@ class _Setting:
         tables = _Tables(self.osc, params, axes, self.pattern, len(x0) // (2 * self.osc.n))
         out, unknowns, _ = self.sweep(tables, axes, (0, 0), x0, False)
         return unknowns[0] if out["found"][0] else None
+
+
+# -- motions with sticking phases ------------------------------------------------------------
+#: What a Newton solve or a motion's evaluation at a grid point may raise where the motion
+#: of the family does not exist there (the point is then not found).
+_SOLVE_ERRORS = (ParameterError, np.linalg.LinAlgError, FloatingPointError, ValueError,
+                 ZeroDivisionError)
+
+
+def _wrap(phase: np.ndarray) -> np.ndarray:
+    """Phases wrapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(phase, dtype=float), 2.0 * np.pi)
+
+
+class _StickySetting:
+    """What every sweep of the map of a motion with sticking phases shares, and the sweep.
+
+    Each grid point is solved by Newton on the shooting system of
+    :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem` (its
+    pattern's sticking phases, release rows and stick times) at fixed parameters: one
+    problem per value of one parameter, continued in the other (``omega`` when it is one of
+    the two: the problem's compiled Newton,
+    :meth:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem.palc_step` on
+    the hyperplane of that omega; else its residual and Jacobian), and evaluated by the
+    problem's :meth:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem.orbit`.
+    The sweep is the compiled sweep's (:func:`impactcont.kernel.sweep.sweep_stops`) in
+    Python: breadth first from the seed, a secant predictor through two solved points in
+    line, `max_attempts` per point, a solution farther than `max_change` from its predictor
+    refused.
+    """
+
+    sticky = True
+    half = False
+
+    def __init__(self, orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
+                 symmetric: Any, tol: float, max_iter: int, max_change: float,
+                 max_attempts: int) -> None:
+        osc = orbit.oscillator
+        self.osc, self.N, self.p = osc, orbit.N, orbit.p
+        self.pattern = orbit.pattern
+        self.tol, self.max_iter, self.max_change = tol, max_iter, max_change
+        self.max_attempts = max_attempts
+        names = (params[0].name, params[1].name)
+        if symmetric is not None and not isinstance(symmetric, (bool, np.bool_)):
+            raise ParameterError(f"symmetric must be True, False or None (decide from the "
+                                 f"motion); got {symmetric!r}")
+        if symmetric:
+            raise ParameterError(f"symmetric=True: the motion has sticking phases (pattern "
+                                 f"{self.pattern!r}), which are solved on the full system "
+                                 "only; give symmetric=None or False")
+        #: the parameter each problem is continued in (omega when mapped: the compiled
+        #: Newton) and the one whose values make the problems
+        self.continued = names.index("omega") if "omega" in names else 1
+        # the problems in both parameters: refuses one that unmakes a plastic stop (R)
+        for name in names:
+            MultiImpactBranchProblem(osc, self.N, self.p, name, self.pattern)
+
+    def problem(self, params: tuple[ModelParameter, ModelParameter], values: tuple[float, float],
+                problems: dict[float, MultiImpactBranchProblem]) -> MultiImpactBranchProblem:
+        """The branch problem at the value of the parameter that is not continued (built
+        once per value in `problems`)."""
+        k = 1 - self.continued
+        value = float(values[k])
+        found = problems.get(value)
+        if found is None:
+            param = params[k]
+            osc = _replaced(self.osc, {param.name: param}, {param.name: value})
+            found = problems[value] = MultiImpactBranchProblem(
+                osc, self.N, self.p, params[self.continued].name, self.pattern)
+        return found
+
+    def newton(self, problem: MultiImpactBranchProblem, lam: float, x0: np.ndarray
+               ) -> tuple[np.ndarray | None, int]:
+        """Newton on the problem's system at ``lam`` from `x0`: the solution (None where it
+        does not converge) and the iterations."""
+        try:
+            scale = max(1.0, float(np.max(np.abs(x0))), abs(lam))
+            target = np.append(x0, lam)
+            normal = np.zeros(target.size)
+            normal[-1] = 1.0
+            step = problem.palc_step(target, normal, np.ones(target.size), self.tol * scale,
+                                     self.max_iter, hyperplane=True)
+            if step is not None:  # omega: the compiled Newton on the hyperplane lam = const
+                ok = step.status == "converged" and np.all(np.isfinite(step.state))
+                return (np.array(step.state[:-1]) if ok else None), int(step.iterations)
+            return self._newton(problem, lam, x0)
+        except _SOLVE_ERRORS:
+            return None, self.max_iter
+
+    def _newton(self, problem: MultiImpactBranchProblem, lam: float, x0: np.ndarray
+                ) -> tuple[np.ndarray | None, int]:
+        """Newton on the residual and Jacobian of `problem` at ``lam`` (a parameter without
+        the compiled step): converged when the residual and the last step are at most
+        ``tol * max(1, |x|)``."""
+        x = np.array(x0, dtype=float)
+        last = math.inf
+        for it in range(self.max_iter + 1):
+            residual = problem.residual(x, lam)
+            norm = float(np.max(np.abs(residual)))
+            scale = max(1.0, float(np.max(np.abs(x))))
+            if not math.isfinite(norm):
+                return None, it
+            if norm <= self.tol * scale and last <= self.tol * scale:
+                return x, it
+            if it == self.max_iter:
+                break
+            step = np.linalg.solve(problem.jacobian(x, lam), -residual)
+            x = x + step
+            last = float(np.max(np.abs(step)))
+        return None, self.max_iter
+
+    def solve_at(self, params: tuple[ModelParameter, ModelParameter], values: dict[str, float],
+                 x0: np.ndarray) -> np.ndarray | None:
+        """Newton at one point of the two parameters (off the grid: the seed's way to its
+        grid point); None when it does not converge."""
+        pair = (float(values[params[0].name]), float(values[params[1].name]))
+        try:
+            problem = self.problem(params, pair, {})
+        except _SOLVE_ERRORS:
+            return None
+        return self.newton(problem, pair[self.continued], x0)[0]
+
+    def solve_grid(self, params: tuple[ModelParameter, ModelParameter],
+                   axes: dict[str, np.ndarray], seed: tuple[int, int], x_seed: np.ndarray,
+                   checks: bool, evaluate: bool = True
+                   ) -> tuple[dict[str, np.ndarray], np.ndarray, tuple[int, int, int, bool], int]:
+        """Every grid point of `axes` reachable from `seed` (solved from `x_seed`) through
+        solved neighbours, and, with `evaluate`, each motion found evaluated
+        (:meth:`evaluate`).
+
+        Returns the flat outputs (:func:`_empty_outputs` with its sticky variables), the
+        unknowns of every point, ``(solved, attempts, newton_iterations, False)`` and the
+        problems built.
+        """
+        c0, c1 = axes[params[0].name], axes[params[1].name]
+        n0, n1 = c0.size, c1.size
+        npts = n0 * n1
+        out = _empty_outputs(npts, self.p, 2 * self.osc.n, sticky=True)
+        found, unknowns = out["found"], np.full((npts, x_seed.size), np.nan)
+        tried = np.zeros(npts, dtype=np.int64)
+        problems: dict[float, MultiImpactBranchProblem] = {}
+        queue = collections.deque([(seed[0] * n1 + seed[1], -1)])
+        attempts = iterations = 0
+        while queue:
+            point, parent = queue.popleft()
+            if found[point] or tried[point] >= self.max_attempts:
+                continue
+            tried[point] += 1
+            i0, i1 = divmod(point, n1)
+            x0 = np.array(x_seed if parent < 0 else unknowns[parent], dtype=float)
+            if parent >= 0:  # the secant through the parent and the point beyond it
+                p0, p1 = divmod(parent, n1)
+                g0, g1 = 2 * p0 - i0, 2 * p1 - i1
+                if 0 <= g0 < n0 and 0 <= g1 < n1 and found[g0 * n1 + g1]:
+                    ratio = ((c0[i0] - c0[p0]) / (c0[p0] - c0[g0]) if g0 != p0
+                             else (c1[i1] - c1[p1]) / (c1[p1] - c1[g1]))
+                    x0 += ratio * (unknowns[parent] - unknowns[g0 * n1 + g1])
+            values = (float(c0[i0]), float(c1[i1]))
+            attempts += 1
+            try:
+                problem = self.problem(params, values, problems)
+            except _SOLVE_ERRORS:
+                continue
+            x, it = self.newton(problem, values[self.continued], x0)
+            iterations += it
+            if x is None or (parent >= 0 and float(np.max(np.abs(x - x0))) > self.max_change):
+                continue
+            found[point] = True
+            unknowns[point] = x
+            out["newton_iterations"][point] = it
+            for d0, d1 in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                k0, k1 = i0 + d0, i1 + d1
+                if 0 <= k0 < n0 and 0 <= k1 < n1:
+                    q = k0 * n1 + k1
+                    if not found[q] and tried[q] < self.max_attempts:
+                        queue.append((q, point))
+        if evaluate:
+            for point in np.flatnonzero(found):
+                i0, i1 = divmod(int(point), n1)
+                values = (float(c0[i0]), float(c1[i1]))
+                problem = self.problem(params, values, problems)
+                if not self.evaluate(problem, values[self.continued], unknowns[point], checks,
+                                     out, int(point)):
+                    found[point] = False
+                    unknowns[point] = np.nan
+                    out["newton_iterations"][point] = -1
+        solved = int(np.count_nonzero(found))
+        return out, unknowns, (solved, attempts, iterations, False), len(problems)
+
+    @staticmethod
+    def evaluate(problem: MultiImpactBranchProblem, lam: float, u: np.ndarray, checks: bool,
+                 out: dict[str, np.ndarray], point: int) -> bool:
+        """Write the motion of unknowns `u` (its G, checks and sticking phases: the
+        problem's :meth:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem.
+        orbit`) into `out` at `point`; False where it cannot be evaluated."""
+        try:
+            orbit = problem.orbit(u, lam, checks=checks)
+        except _SOLVE_ERRORS:
+            return False
+        mu = np.asarray(orbit.multipliers)
+        held = problem.sticks
+        stick = np.where(held, np.asarray(orbit.stick_times, dtype=float), np.nan)
+        out["delta"][point] = math.atan2(math.sin(u[0]), math.cos(u[0]))
+        out["spectral_radius"][point] = orbit.spectral_radius
+        out["critical_multiplier"][point] = mu[int(np.argmax(np.abs(mu)))]
+        out["stable"][point] = orbit.stable
+        out["physical"][point] = orbit.physical
+        out["gap_min"][point] = orbit.gap_min if checks else math.nan
+        out["impact_velocity_k"][point] = orbit.impact_velocities
+        out["flight_time_k"][point] = orbit.flight_times
+        out["state_k"][point] = orbit.states
+        out["stick_time_k"][point] = stick
+        omega = problem.oscillator_at(lam).omega
+        out["release_phase_k"][point] = np.where(held, _wrap(orbit.phases + omega * stick),
+                                                 np.nan)
+        out["pressing_min_k"][point] = np.where(held, orbit.pressing_min, np.nan)
+        out["landing_pressing_k"][point] = np.where(held, orbit.landing_pressing, np.nan)
+        out["stick_time_min"][point] = stick_end_test(orbit)
+        out["pressing_min"][point] = release_grazing_test(orbit)
+        out["reason"][point] = 0 if orbit.physical else _reasons(orbit, held, checks)
+        return True
+
+
+def _reasons(orbit: MultiImpactOrbit, held: np.ndarray, checks: bool) -> int:
+    """Why the motion `orbit` (with the sticking phases `held`) is not physical, as the bits
+    of :data:`~impactcont.dataset.maps.MAP_REASONS`: its checks, from its numbers."""
+    bits = 0
+    for k in np.flatnonzero(held):  # in the order the motion checks each sticking phase
+        if not orbit.stick_times[k] > 0.0:
+            bits |= MAP_REASONS["stick_ended"]
+        elif not orbit.landing_pressing[k] > 0.0:
+            bits |= MAP_REASONS["sticking_onset"]
+        elif not orbit.pressing_min[k] > 0.0:
+            bits |= MAP_REASONS["release_grazing"]
+    if not np.all(np.asarray(orbit.flight_times) > 0.0):
+        bits |= MAP_REASONS["flight_time"]
+    if not np.all(np.asarray(orbit.impact_velocities) > 0.0):
+        bits |= MAP_REASONS["impact_velocity"]
+    if not checks:
+        bits |= MAP_REASONS["contact_not_checked"]
+    elif not orbit.gap_min > 0.0:
+        bits |= MAP_REASONS["interior_contact"]
+    return bits or MAP_REASONS["other"]
 
 
 class _BandJob(MapJob):
@@ -361,11 +628,9 @@ def _band_task(setting: _Setting, names: tuple[str, str], band: dict[str, np.nda
     osc = setting.osc
     params = (model_parameter(osc, names[0], "parameters"),
               model_parameter(osc, names[1], "parameters"))
-    p = len(setting.pattern)
     with compiled_interrupts():
-        tables = _Tables(osc, params, band, setting.pattern, p // 2 if setting.half else p)
-        out, _, stats = setting.sweep(tables, band, seed, x_seed, checks)
-    return out, stats, len(tables.flows)
+        out, _, stats, flows = setting.solve_grid(params, band, seed, x_seed, checks)
+    return out, stats, flows
 
 
 def _bands(setting: _Setting, params: tuple[ModelParameter, ModelParameter],
@@ -380,10 +645,8 @@ def _bands(setting: _Setting, params: tuple[ModelParameter, ModelParameter],
     if rows >= n0:
         return [(slice(0, n0), seed[0], x_seed)]
     spine_axes = {first: axes[first], second: axes[second][seed[1]:seed[1] + 1]}
-    p = len(setting.pattern)
-    tables = _Tables(setting.osc, params, spine_axes, setting.pattern,
-                     p // 2 if setting.half else p)
-    out, unknowns, _ = setting.sweep(tables, spine_axes, (seed[0], 0), x_seed, False)
+    out, unknowns, _, _ = setting.solve_grid(params, spine_axes, (seed[0], 0), x_seed, False,
+                                             evaluate=False)
     tasks = []
     for start in range(0, n0, rows):
         band = slice(start, min(start + rows, n0))
@@ -498,21 +761,29 @@ def family_map(orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParam
     tol, max_iter, max_change, max_attempts = check_sweep_options(
         checks=checks, tol=tol, max_iter=max_iter, max_change=max_change,
         max_attempts=max_attempts)
-    half = _decide_symmetric(orbit, params, symmetric)
     N, p = orbit.N, orbit.p
     pattern = orbit.pattern or "U" * p
-    admits = bool(admits_symmetric_motions(osc, N, p, pattern)
-                  and all(param.keeps_symmetry for param in params))
+    sticky = sticky_pattern(pattern, extra_stop_names(osc))
+    if sticky:  # solved through the branch problem of its pattern (_StickySetting)
+        setting: _Setting | _StickySetting = _StickySetting(
+            orbit, params, symmetric, tol, max_iter, max_change, max_attempts)
+        half = admits = False
+    else:
+        half = _decide_symmetric(orbit, params, symmetric)
+        admits = bool(admits_symmetric_motions(osc, N, p, pattern)
+                      and all(param.keeps_symmetry for param in params))
+        setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change,
+                           max_attempts)
     if rows_per_task is not None:
         rows_per_task = positive_int("rows_per_task", rows_per_task)
     shape = (axes[names[0]].size, axes[names[1]].size)
     npts = shape[0] * shape[1]
-    rows = rows_per_task or max(1, -(-_TASK_POINTS // shape[1]))
-    point_bytes = _point_bytes(osc.n, p, half)
+    rows = rows_per_task or max(1, -(-(_STICKY_TASK_POINTS if sticky else _TASK_POINTS)
+                                      // shape[1]))
+    point_bytes = _point_bytes(osc.n, p, half, sticky)
     in_memory = out is None and npts * point_bytes <= memory_limit
     if not in_memory:
         _require_dask()
-    setting = _Setting(osc, N, pattern, half, admits, tol, max_iter, max_change, max_attempts)
     t0 = time.perf_counter()
     x_start = HalfUnknowns(osc.n, p, N).half(orbit.unknowns) if half else orbit.unknowns
     (s0, s1), x_seed = _seed(orbit, setting, params, axes, x_start)
@@ -630,10 +901,10 @@ def _family_in_memory(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarra
     map); and the points computed if a first Ctrl-C interrupted it (else None). Its
     attribute ``options`` is set by the caller, with the sweeps' counts."""
     osc, p = dataset["oscillator"], len(dataset["pattern"])
-    values = _empty_outputs(shape, p, 2 * osc.n)
+    values = _empty_outputs(shape, p, 2 * osc.n, _sticky(dataset))
     _contact_checked(values)
     if not admits:
-        del values["asymmetry"]
+        values.pop("asymmetry", None)
     ds = multi_impact_map_dataset(values=values, options={}, **dataset)
     computed = np.zeros(shape, dtype=bool)
     interrupted = fill_blocks(runner, ds, _band_blocks(runner, tasks, shape, stats, values,
@@ -680,10 +951,10 @@ def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]
     n0, n1 = shape
     names = dataset["parameters"]
     osc, p = dataset["oscillator"], len(dataset["pattern"])
-    empty = _empty_outputs(1, p, 2 * osc.n)
+    empty = _empty_outputs(1, p, 2 * osc.n, _sticky(dataset))
     _contact_checked(empty)
     if not admits:
-        del empty["asymmetry"]
+        empty.pop("asymmetry", None)
     placeholders = {key: da.empty((n0, n1, *a.shape[1:]), dtype=a.dtype, chunks=-1)
                     for key, a in empty.items()}
     ds = multi_impact_map_dataset(values=placeholders, options={}, **dataset)
@@ -723,17 +994,35 @@ def _family_to_file(runner: MapRunner, tasks: list[tuple[slice, int, np.ndarray]
     return path, (computed.copy() if interrupted else None)
 
 
-def _point_bytes(n: int, p: int, half: bool) -> int:
+def _sticky(dataset: dict[str, Any]) -> bool:
+    """Whether the map of `dataset` (the arguments of its dataset) is of a motion with
+    sticking phases."""
+    return sticky_pattern(dataset["pattern"], extra_stop_names(dataset["oscillator"]))
+
+
+def _point_bytes(n: int, p: int, half: bool, sticky: bool = False) -> int:
     """Bytes of a map's outputs per grid point (:func:`_empty_outputs`, the contact flag)
-    and of its unknowns in a task."""
+    and of its unknowns in a task (with sticking phases: their variables and stick
+    times too)."""
     unknowns = (p // 2 if half else p) * (2 * n) + 1
-    return 8 * (6 + 2 * p + 2 * p * n + unknowns) + 8
+    extra = 4 * p + 3 + p if sticky else 0
+    return 8 * (6 + 2 * p + 2 * p * n + unknowns + extra) + 8
 
 
-def _empty_outputs(npts: int | tuple[int, ...], p: int, m: int) -> dict[str, np.ndarray]:
+def _empty_outputs(npts: int | tuple[int, ...], p: int, m: int, sticky: bool = False
+                   ) -> dict[str, np.ndarray]:
     """The outputs of a map of `npts` points (a count, or the grid's shape) as not found
-    (NaN, False, -1)."""
+    (NaN, False, -1, reason 0); with `sticky` those of
+    :data:`~impactcont.dataset.maps.STICKY_MAP_VARIABLES` too (and no ``asymmetry``)."""
     n = (npts,) if isinstance(npts, (int, np.integer)) else tuple(npts)
+    if sticky:
+        out = _empty_outputs(npts, p, m)
+        del out["asymmetry"]
+        out.update({key: np.full((*n, p), np.nan) for key in (
+            "stick_time_k", "release_phase_k", "pressing_min_k", "landing_pressing_k")})
+        out.update({"stick_time_min": np.full(n, np.nan), "pressing_min": np.full(n, np.nan),
+                    "reason": np.zeros(n, np.int32)})
+        return out
     return {"found": np.zeros(n, bool), "newton_iterations": np.full(n, -1, np.int32),
             "delta": np.full(n, np.nan), "stable": np.zeros(n, bool),
             "physical": np.zeros(n, bool), "spectral_radius": np.full(n, np.nan),
@@ -781,4 +1070,6 @@ def multi_impact_map_orbit(ds: xr.Dataset, **values: float) -> MultiImpactOrbit:
         osc = model_parameter(osc, name, "parameters").at(osc, value)
     guess = {"delta": float(point["delta"]), "flight_times": point["flight_time_k"].values,
              "states": point["state_k"].values, "pattern": ds.attrs["pattern"]}
+    if "stick_time_k" in ds:  # a motion with sticking phases: 0 after an impact without
+        guess["stick_times"] = np.nan_to_num(point["stick_time_k"].values, nan=0.0)
     return multi_impact_orbit(osc, int(ds.attrs["N"]), int(ds.attrs["impacts"]), guess)

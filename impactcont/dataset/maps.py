@@ -15,7 +15,11 @@ by the attribute ``impactcont_dataset``:
     (impact index ``0 .. p-1``) and ``component`` (the ``2n`` state components
     ``x1..xn, v1..vn``); attributes ``N``, ``impacts`` (p), ``pattern``, ``symmetric``
     (1 when solved on the half system of symmetric motions), ``seed`` (JSON: the grid
-    point the family was started from) and ``options``.
+    point the family was started from) and ``options``. The map of a motion with
+    sticking phases (a lowercase letter in ``pattern``) carries the variables of
+    :data:`STICKY_MAP_VARIABLES` as well: each stick's duration and release phase, the
+    pressing forces, and ``reason``, why a found point is not physical (flags,
+    :data:`MAP_REASONS`).
 
 :func:`validate_map` checks either by its attribute, :func:`map_parameters` reads the
 two parameters of either. Layouts documented in ``docs/two_parameter.md`` and
@@ -52,13 +56,16 @@ from impactcont.model.oscillator import ImpactOscillator
 
 __all__ = [
     "MAP_KINDS",
+    "MAP_REASONS",
     "MAP_VARIABLES",
     "MULTI_MAP_KIND",
     "MULTI_MAP_VARIABLES",
+    "STICKY_MAP_VARIABLES",
     "map_dataset",
     "map_parameters",
     "map_variables",
     "multi_impact_map_dataset",
+    "sticky_pattern",
     "validate_map",
     "validate_map_dataset",
     "validate_multi_impact_map_dataset",
@@ -148,6 +155,74 @@ MULTI_MAP_VARIABLES: dict[str, _Var] = {
 }
 
 _OPTIONAL = ("asymmetry",)
+
+#: Why a found point of a map is not physical: the bits of the variable ``reason`` (CF
+#: ``flag_masks``/``flag_meanings``), several at once where several checks fail. The
+#: first three are the sides of the points that end a branch of motions with sticking
+#: phases (``SE``, ``RG``, ``SO``, :class:`~impactcont.vocabulary.Label`); ``other`` is a
+#: check the others do not name (a release where the pressing force does not fall
+#: through zero, a stop crossed at a section; the motion's ``reason`` says which).
+MAP_REASONS: dict[str, int] = {
+    "stick_ended": 1,          # a stick time <= 0: past the end of a ride (SE)
+    "release_grazing": 2,      # the pressing force <= 0 inside a stick (RG)
+    "sticking_onset": 4,       # the pressing force <= 0 right after a plastic impact (SO)
+    "flight_time": 8,          # a flight time <= 0
+    "impact_velocity": 16,     # an impact velocity <= 0 (not arriving towards its stop)
+    "interior_contact": 32,    # a stop reached inside a flight (gap_min <= 0, eq. 16)
+    "contact_not_checked": 64,  # the flights were not searched for contact
+    "other": 128,              # another check of the motion failed
+}
+
+#: Variables of the map of a motion with sticking phases (a lowercase letter in its
+#: pattern), beside :data:`MULTI_MAP_VARIABLES`: metadata and dims after the two grid dims.
+STICKY_MAP_VARIABLES: dict[str, _Var] = {
+    "stick_time_k": _Var("stick time", "1",
+                         "Duration of the sticking phase after impact k (from the plastic "
+                         "impact to the release; <= 0 past the end of a ride, SE); NaN for "
+                         "an impact without one and where not found.",
+                         extra_dims=("impact",)),
+    "release_phase_k": _Var("release phase", "rad",
+                            "Forcing phase at the release ending the sticking phase after "
+                            "impact k (its impact phase plus omega times its stick time), "
+                            "in (-pi, pi]; NaN for an impact without one and where not "
+                            "found.", extra_dims=("impact",)),
+    "pressing_min_k": _Var("smallest pressing force", "1",
+                           "Smallest force with which the stop presses its coordinate inside "
+                           "the sticking phase after impact k (its start included, the "
+                           "release excluded); NaN for an impact without one, a stick of "
+                           "duration <= 0 and where not found.", extra_dims=("impact",)),
+    "landing_pressing_k": _Var("pressing force at the landing", "1",
+                               "Pressing force right after the plastic impact k that starts "
+                               "a sticking phase (<= 0: the sticking onset, SO, is passed); "
+                               "NaN for an impact without one and where not found.",
+                               extra_dims=("impact",)),
+    "stick_time_min": _Var("smallest stick time", "1",
+                           "Shortest sticking phase of the motion (the test of SE: <= 0 "
+                           "past the end of a ride); NaN where not found."),
+    "pressing_min": _Var("smallest pressing force", "1",
+                         "Smallest pressing force over the sticking phases (the test of RG, "
+                         "release grazing: a stick of duration <= 0 counts its landing's); "
+                         "NaN where not found."),
+    "reason": _Var("why not physical", "1",
+                   "Why a found point is not physical, as bits (flag_masks, flag_meanings: "
+                   "stick_ended = a stick time <= 0, the SE side; release_grazing = the "
+                   "pressing force <= 0 inside a stick, the RG side; sticking_onset = the "
+                   "pressing force <= 0 at a landing, the SO side; flight_time, "
+                   "impact_velocity, interior_contact, contact_not_checked, other); 0 where "
+                   "physical or not found.", kind="i"),
+}
+
+
+def sticky_pattern(pattern: str, extra: str = "") -> bool:
+    """Whether the motion of `pattern` has sticking phases: a lowercase stop letter (not
+    the name of one of the `extra` stops)."""
+    return any(letter.islower() and letter not in extra for letter in str(pattern))
+
+
+def _reason_attrs() -> dict[str, Any]:
+    """The CF flag attributes of the variable ``reason``."""
+    return {"flag_masks": np.array(list(MAP_REASONS.values()), dtype=np.int32),
+            "flag_meanings": " ".join(MAP_REASONS)}
 _ATTRS = ("title", "impactcont_dataset", "oscillator", "N", "impacts", "pattern", "parameters",
           "symmetric", "seed", "options", "impactcont_version", "Conventions", "history")
 
@@ -264,14 +339,17 @@ def multi_impact_map_dataset(*, oscillator: ImpactOscillator, N: int, pattern: s
         The oscillator of the start (its values of the two parameters are not used).
     N : int
     pattern : str
-        The stop of each impact (``U``/``L``); its length is p.
+        The stop of each impact (``U``/``L``; lowercase: a plastic impact followed by a
+        sticking phase); its length is p.
     parameters : (str, str)
         The two parameters, in grid order.
     grid : mapping
         The 1-D grid of each parameter.
     values : mapping
-        One array per entry of :data:`MULTI_MAP_VARIABLES` (``asymmetry`` optional),
-        shaped as the grid followed by the variable's own dims.
+        One array per entry of :data:`MULTI_MAP_VARIABLES` (``asymmetry`` optional) and,
+        for a pattern with sticking phases (lowercase letters), of
+        :data:`STICKY_MAP_VARIABLES`, shaped as the grid followed by the variable's own
+        dims.
     symmetric : bool
         Solved on the half system of symmetric motions.
     seed : mapping
@@ -291,12 +369,13 @@ def multi_impact_map_dataset(*, oscillator: ImpactOscillator, N: int, pattern: s
     sizes = {parameters[0]: len(grid[parameters[0]]), parameters[1]: len(grid[parameters[1]]),
              "impact": p, "component": 2 * n}
     data_vars = {}
-    for key, spec in MULTI_MAP_VARIABLES.items():
+    variables = _family_variables(pattern, extra_stop_names(oscillator))
+    for key, spec in variables.items():
         if key not in values:
             if key in _OPTIONAL:
                 continue
             raise ValueError(f"values is missing {key!r}; required "
-                             f"{[k for k in MULTI_MAP_VARIABLES if k not in _OPTIONAL]}")
+                             f"{[k for k in variables if k not in _OPTIONAL]}")
         dims = _dims(parameters, spec)
         shape = tuple(sizes[d] for d in dims)
         # a dask array (a map written to a file) stays lazy: shape and dtype only
@@ -304,7 +383,8 @@ def multi_impact_map_dataset(*, oscillator: ImpactOscillator, N: int, pattern: s
         if array.shape != shape:
             raise ValueError(f"values[{key!r}] must have shape {shape} (dims {dims}); got "
                              f"{array.shape}")
-        data_vars[key] = (dims, array, spec.attrs())
+        data_vars[key] = (dims, array, {**spec.attrs(), **(
+            _reason_attrs() if key == "reason" else {})})
     coords = {name: _grid_coord(name, grid[name]) for name in parameters}
     coords["impact"] = ("impact", np.arange(p, dtype=np.int64),
                         {"long_name": "impact index", "units": "1"})
@@ -319,6 +399,15 @@ def multi_impact_map_dataset(*, oscillator: ImpactOscillator, N: int, pattern: s
              "seed": json.dumps(dict(seed), sort_keys=True),
              "options": _options_json(dict(options)), **provenance_attributes()}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _family_variables(pattern: str, extra: str) -> dict[str, _Var]:
+    """The variables of a family's map of `pattern` (`extra`: the names of the extra
+    stops): :data:`MULTI_MAP_VARIABLES`, and :data:`STICKY_MAP_VARIABLES` where it has
+    sticking phases."""
+    if sticky_pattern(pattern, extra):
+        return {**MULTI_MAP_VARIABLES, **STICKY_MAP_VARIABLES}
+    return dict(MULTI_MAP_VARIABLES)
 
 
 def map_parameters(ds: xr.Dataset) -> tuple[str, str]:
@@ -375,10 +464,10 @@ def validate_multi_impact_map_dataset(ds: Any) -> xr.Dataset:
         raise ValueError(f"attribute 'impacts' must be p >= 1, the size of dimension 'impact' "
                          f"({ds.sizes.get('impact')}); got {p!r}")
     osc = ImpactOscillator.from_json(ds.attrs["oscillator"])
-    check_pattern_attribute(ds.attrs["pattern"], int(p), osc.stops.two_sided,
-                            extra=extra_stop_names(osc))
+    pattern = check_pattern_attribute(ds.attrs["pattern"], int(p), osc.stops.two_sided,
+                                      extra=extra_stop_names(osc), sticking=True)
     check_variables(ds, {key: (_dims(parameters, spec), spec.kind)
-                         for key, spec in MULTI_MAP_VARIABLES.items()
+                         for key, spec in _family_variables(pattern, extra_stop_names(osc)).items()
                          if key not in _OPTIONAL or key in ds.variables}, MULTI_MAP_KIND)
     return ds
 
