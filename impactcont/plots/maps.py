@@ -25,6 +25,7 @@ from matplotlib.patches import Patch
 from impactcont.dataset.attributes import dataset_tag, split_parameters
 from impactcont.dataset.curves import codim2_variable, validate_curve_dataset
 from impactcont.dataset.maps import (
+    MAP_REASONS,
     map_parameters,
     validate_map_dataset,
     validate_multi_impact_map_dataset,
@@ -512,7 +513,14 @@ MULTI_MAP_REGIONS: dict[int, tuple[str, str]] = {
     2: ("physical, unstable", "#f6d7a7"),
     3: ("stable physical motion", "#8fc4e8"),
     4: ("found, interior contact not checked", "#d8c6e6"),
+    5: ("found, not physical: a stick ended (SE side)", "#c9c9c9"),
+    6: ("found, not physical: release grazing (RG side)", "#e8b9b9"),
+    7: ("found, not physical: sticking onset (SO side)", "#c7dfc0"),
 }
+#: The region of a found point that is not physical for a reason of a sticking phase (the
+#: bits of the map's ``reason``, :data:`~impactcont.dataset.maps.MAP_REASONS`), in the order
+#: a motion checks each sticking phase: its duration, its onset, then its pressing force.
+_STICKY_REGIONS = (("stick_ended", 5), ("sticking_onset", 7), ("release_grazing", 6))
 
 #: Colour and line style of the boundary of each region, and its legend text.
 MULTI_MAP_BOUNDARIES: dict[str, tuple[str, str, str]] = {
@@ -534,12 +542,21 @@ def multi_map_regions(ds: xr.Dataset) -> xr.DataArray:
         physical; 4: found, but its interior contact was not searched
         (``contact_checked`` False: ``checks=False``, or a constant force pushing a free
         mode), so whether it is physical is not known (it is never reported physical).
+        The map of a motion with sticking phases (its variable ``reason``) splits 1 by
+        the sticking phases' reasons: 5 a stick time <= 0 (past the end of a ride, SE),
+        6 release grazing (RG), 7 the sticking onset passed (SO); 1 the other reasons.
     """
     validate_multi_impact_map_dataset(ds)
     found, physical, stable, checked = (ds[k].astype(bool) for k in (
         "found", "physical", "stable", "contact_checked"))
+    unphysical = xr.where(found, 1, 0)
+    if "reason" in ds:
+        reason = ds["reason"].astype(np.int64)
+        for name, region in reversed(_STICKY_REGIONS):  # the first reason on top
+            unphysical = xr.where(found & ((reason & MAP_REASONS[name]) != 0), region,
+                                  unphysical)
     code = xr.where(physical & stable, 3, xr.where(physical, 2, xr.where(
-        found & ~checked, 4, xr.where(found, 1, 0))))
+        found & ~checked, 4, unphysical)))
     return code.rename("region")
 
 
