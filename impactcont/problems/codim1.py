@@ -326,30 +326,39 @@ class ShootingCurve:
         ParameterError
             RG at a motion whose pressing forces have no interior minimum.
         """
-        if self.followed_stick is not None:
-            return self.followed_stick
-        base = self.branch_problem(lam)
-        sh = base._shoot(u, p1)
+        if self.followed_stick is None:
+            base = self.branch_problem(lam)
+            self.followed_stick = _KINDS[self.kind].choose_stick(self, base, base._shoot(u, p1),
+                                                                 p1)
+        return self.followed_stick
+
+    def _shortest_stick(self, base: BranchProblem, sh: Any, p1: float) -> int:
+        """SE follows the shortest sticking phase."""
         held = np.flatnonzero(base.sticks)
-        if self.kind == Label.SE:
-            k = int(held[np.argmin(sh.stick_times[held])])
-        elif self.kind == Label.SO:
-            osc = base.oscillator_at(p1)
-            k = int(held[np.argmin([held_flow(osc, base.impacts[j]).pressing(
-                sh.starts[j], sh.phases[j]) for j in held])])
-        else:
-            osc = base.oscillator_at(p1)
-            minima = {int(j): held_flow(osc, base.impacts[j]).pressing_minimum(
-                float(sh.stick_times[j]), sh.starts[j], float(sh.phases[j])) for j in held}
-            inner = {j: value for j, value in minima.items() if value[1] > 0.0}
-            if not inner:
-                raise ParameterError(
-                    "kind='RG': the pressing force of no sticking phase of the motion at the "
-                    f"start has an interior minimum (pattern {self.pattern!r}, stick times "
-                    f"{sh.stick_times[held].tolist()}): the start is not a release grazing")
-            k = min(inner, key=lambda j: inner[j][0])
-            self._minimum_time = float(inner[k][1])
-        self.followed_stick = k
+        return int(held[np.argmin(sh.stick_times[held])])
+
+    def _least_landing(self, base: BranchProblem, sh: Any, p1: float) -> int:
+        """SO follows the sticking phase with the smallest pressing force at its landing."""
+        osc = base.oscillator_at(p1)
+        held = np.flatnonzero(base.sticks)
+        return int(held[np.argmin([held_flow(osc, base.impacts[j]).pressing(
+            sh.starts[j], sh.phases[j]) for j in held])])
+
+    def _least_minimum(self, base: BranchProblem, sh: Any, p1: float) -> int:
+        """RG follows the smallest interior minimum of a pressing force (and keeps its time)."""
+        osc = base.oscillator_at(p1)
+        held = np.flatnonzero(base.sticks)
+        minima = {int(j): held_flow(osc, base.impacts[j]).pressing_minimum(
+            float(sh.stick_times[j]), sh.starts[j], float(sh.phases[j])) for j in held}
+        inner = {j: value for j, value in minima.items() if value[1] > 0.0}
+        if not inner:
+            raise ParameterError(
+                f"kind={str(self.kind)!r}: the pressing force of no sticking phase of the "
+                f"motion at the start has an interior minimum (pattern {self.pattern!r}, "
+                f"stick times {sh.stick_times[held].tolist()}): the start is not a release "
+                "grazing")
+        k = min(inner, key=lambda j: inner[j][0])
+        self._minimum_time = float(inner[k][1])
         return k
 
     def _stick_end_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
@@ -485,7 +494,8 @@ class ShootingCurve:
         """
         if not self.sticky:
             return None
-        if self.kind == Label.RG and not math.isfinite(self.minimum_time(xb[:-1], xb[-1])):
+        if _KINDS[self.kind].follows_minimum and not math.isfinite(
+                self.minimum_time(xb[:-1], xb[-1])):
             return ("the interior minimum of the pressing force of sticking phase "
                     f"{self.followed_stick} followed by the curve leaves the sticking phase "
                     "(it reaches the landing or the release) or stops being a minimum")
@@ -571,7 +581,7 @@ class ShootingCurve:
         """At an accepted point (the core's hook): the next step takes a fresh ``g`` row (and
         an RG curve's interior minimum is sought from this point's)."""
         self._gradient = None
-        if self.kind == Label.RG:
+        if _KINDS[self.kind].follows_minimum:
             t = self.minimum_time(x, lam)
             if math.isfinite(t):
                 self._minimum_time = t
@@ -665,6 +675,11 @@ class _Kind:
     exact_row : callable or None
         ``(problem, x, lam) -> (dg/dx, dg/dp2)`` exactly (SE: ``g`` is an unknown); None:
         forward differences (:meth:`ShootingCurve._test_gradient`).
+    choose_stick : callable or None
+        ``(problem, branch problem, shot, p1) -> k``: the sticking phase the curve follows,
+        chosen at the start (SE, RG, SO).
+    follows_minimum : bool
+        The test follows an interior minimum of a pressing force from point to point (RG).
     """
 
     of_orbit: Callable[[MultiImpactOrbit], float]
@@ -675,6 +690,8 @@ class _Kind:
     symmetric_only: bool = False
     sticky_only: bool = False
     exact_row: Callable[..., tuple[np.ndarray, float]] | None = None
+    choose_stick: Callable[..., int] | None = None
+    follows_minimum: bool = False
 
 
 def _event(label: Label) -> Callable[[MultiImpactOrbit], float]:
@@ -701,13 +718,15 @@ _KINDS: dict[Label, _Kind] = {
                     symmetric_only=True),
     Label.SE: _Kind(stick_end_test, ShootingCurve._stick_end_of_shot,
                     (Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS), sticky_only=True,
-                    exact_row=ShootingCurve._stick_end_row),
+                    exact_row=ShootingCurve._stick_end_row,
+                    choose_stick=ShootingCurve._shortest_stick),
     Label.RG: _Kind(release_grazing_test, ShootingCurve._release_grazing_of_shot,
                     (Label.SE, Label.SO, Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS),
-                    sticky_only=True),
+                    sticky_only=True, choose_stick=ShootingCurve._least_minimum,
+                    follows_minimum=True),
     Label.SO: _Kind(sticking_onset_test, ShootingCurve._sticking_onset_of_shot,
                     (Label.SE, Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS),
-                    sticky_only=True),
+                    sticky_only=True, choose_stick=ShootingCurve._least_landing),
 }
 
 #: The kinds of curves that bound periodic motions with sticking phases.

@@ -110,10 +110,11 @@ def test_kinds_are_labels_and_strings_are_accepted():
     for bad in ("BP", "pd", None, 3):
         with pytest.raises(ic.ParameterError, match=r"kind must be one of \('SN'"):
             codim1.curve_kind(bad)
-    # the points that bound a sticking phase are kinds without curves, and say so
+    # the points that bound a sticking phase have no curves of N-1 motions, and say where
+    # theirs are (curves of motions with sticking phases, followed by shooting)
     for bad in ("SE", "RG", "SO"):
-        with pytest.raises(ic.ParameterError, match=rf"got '{bad}' \({bad}, .*has no "
-                           "two-parameter curves"):
+        with pytest.raises(ic.ParameterError, match=rf"got '{bad}' \({bad}, .*has curves of "
+                           "motions with sticking phases only"):
             codim1.curve_kind(bad)
 
 

@@ -180,3 +180,63 @@ def test_both_evaluators_solve_the_same_curve(specials, kind):
         found.append(problem.plane(x)[0])
     assert abs(found[0] - omega) < 1e-6  # the same special point
     assert abs(found[0] - found[1]) < 1e-8
+
+
+# -- the kinds that bound motions with sticking phases (SE, RG, SO) --------------------------
+def _riding_damper(omega: float) -> ic.ImpactOscillator:
+    """The impact damper of studies/sticking_motions whose plastic ball rides each wall."""
+    from impactcont.model.stops import Stops
+
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
+                               R=0.0, b=0.3, omega=omega, eta=0.3,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+@pytest.fixture(scope="module")
+def ride() -> ic.MultiImpactOrbit:
+    """The riding motion (pattern 'ul') at omega = 2.3, settled on by the simulator from the
+    held forced response."""
+    osc = _riding_damper(2.3)
+    x1 = 1.0 / (1.0 - 1.2 * 2.3**2 + 0.6j * 2.3)
+    v1 = (2.3j * x1).real
+    start = np.array([x1.real, x1.real + 0.3, v1, v1])
+    return ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, start, 0.0, 20.0))
+
+
+def test_the_sticking_tests_follow_one_stick(ride) -> None:
+    """SE: the followed stick time (an unknown: its row is e_k, equal to forward differences
+    of the test to 1e-7, and 0 in p2); SO: the followed landing's pressing force, the
+    motion's own to 1e-12; RG refused at a motion whose pressing forces have no interior
+    minimum (each ride's smallest pressing force is its landing's at omega = 2.3)."""
+    osc = ride.oscillator
+    x = np.append(ride.unknowns, osc.omega)
+    lam = osc.eta
+    se = ShootingCurve(osc, 1, 2, ride.pattern, "SE", ("omega", "eta"), symmetric=False)
+    assert se.test(x, lam) == pytest.approx(float(np.min(ride.stick_times)), rel=1e-12)
+    row, dlam = se._test_gradient(x, lam)
+    h = 1e-7
+    for i in (0, 1, 2, 3, 5, x.size - 1):
+        e = np.zeros(x.size)
+        e[i] = h
+        assert row[i] == pytest.approx((se.test(x + e, lam) - se.test(x, lam)) / h, abs=1e-7)
+    assert dlam == 0.0 and se.codim2_tests == ("ZV", "GR", "SN", "PD", "NS")
+    so = ShootingCurve(osc, 1, 2, ride.pattern, "SO", ("omega", "eta"), symmetric=False)
+    assert so.test(x, lam) == pytest.approx(float(np.min(ride.landing_pressing)), abs=1e-12)
+    rg = ShootingCurve(osc, 1, 2, ride.pattern, "RG", ("omega", "eta"), symmetric=False)
+    with pytest.raises(ParameterError, match="no sticking phase of the motion at the start "
+                                             "has an interior minimum"):
+        rg.test(x, lam)
+    # a PD curve of the motion watches the sticking kinds too
+    pd = ShootingCurve(osc, 1, 2, ride.pattern, "PD", ("omega", "eta"), symmetric=False)
+    assert set(pd.codim2_tests) >= {"SE", "RG", "SO"}
+
+
+def test_sticking_kinds_need_sticking_phases(ride) -> None:
+    """SE, RG, SO on a motion without sticking phases, and a motion with sticking phases
+    followed by its half, are refused by name."""
+    with pytest.raises(ParameterError, match=r"kind='SE' \(end of a sticking phase\) bounds "
+                                             "motions with sticking phases"):
+        ShootingCurve(_paper(0.5), 1, 1, "U", "SE", ("omega", "b"), symmetric=False)
+    with pytest.raises(ParameterError, match="symmetric=True: a motion with sticking phases"):
+        ShootingCurve(ride.oscillator, 1, 2, ride.pattern, "SE", ("omega", "eta"),
+                      symmetric=True)
