@@ -249,7 +249,7 @@ def check_pattern_attribute(pattern: Any, p: int, two_sided: bool | None = None,
     sticking : bool
         Accept a stop's letter in lowercase too (that stop's plastic impact followed by a
         sticking phase: a branch of motions with sticking phases,
-        :func:`~impactcont.orbit.multi_impact.sticking_pattern`).
+        :func:`~impactcont.model.stops.sticking_pattern`).
 
     Returns
     -------

@@ -16,7 +16,7 @@ plot and :func:`impactcont.dataset.load` takes it unchanged) with:
 - the attribute ``impacts = p``, and ``pattern`` (p letters ``U``/``L``: the stop
   of each impact, see :mod:`impactcont.model.stops`; all ``U`` for the paper's
   single stop, and read so when absent; a lowercase letter: a plastic impact followed
-  by a sticking phase on that stop, :func:`~impactcont.orbit.multi_impact.sticking_pattern`);
+  by a sticking phase on that stop, :func:`~impactcont.model.stops.sticking_pattern`);
 - on a branch of motions with sticking phases, the variables of
   :data:`STICKING_VARIABLES` on ``(point, impact)`` (``stick_time_k``, ``pressing_min_k``,
   ``release_state_k`` on ``(point, impact, component)``; 0 and NaN after an impact that no

@@ -416,7 +416,7 @@ class HeldForcing(NamedTuple):
 
 class StickyFlights(NamedTuple):
     """:func:`impactcont.kernel.shooting.sticky_system`'s result, named: the fields of
-    :class:`impactcont.orbit.multi_impact.StickyShooting`."""
+    :class:`impactcont.orbit.sticky.StickyShooting`."""
 
     phases: np.ndarray
     stick_times: np.ndarray

@@ -636,7 +636,7 @@ def _pressing(held, k, X, theta):
 @_jit
 def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     """Residual (and exact Jacobian) of the shooting system of a motion with sticking
-    phases (:func:`impactcont.orbit.multi_impact.sticky_shooting` documents it).
+    phases (:func:`impactcont.orbit.sticky.sticky_shooting` documents it).
 
     `flight`, `forcing`, `impacts` as :func:`shooting_system` takes them, `held` the plain
     tuple of :class:`~impactcont.kernel.arrays.HeldSegments`. Compiled only where a motion

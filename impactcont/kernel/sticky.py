@@ -9,7 +9,7 @@ forced amplitudes at each iterate's omega
 shooting path of motions without sticking phases neither imports
 :mod:`impactcont.kernel.general` (its entry points are compiled on import) nor compiles
 this one: only a sticky branch in omega imports it
-(:func:`impactcont.orbit.multi_impact.sticky_palc_step`).
+(:func:`impactcont.orbit.sticky.sticky_palc_step`).
 """
 
 from __future__ import annotations

@@ -38,6 +38,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import weakref
 from collections.abc import Mapping
 from typing import Any, NamedTuple
 
@@ -46,7 +47,7 @@ import numpy as np
 from impactcont.errors import ParameterError
 
 __all__ = ["LOWER", "UPPER", "Stop", "StopView", "Stops", "check_pattern",
-           "require_forcing", "require_paper_stops"]
+           "require_forcing", "require_paper_stops", "sticking_pattern"]
 
 #: Relative allowance of the test ``normal . u_free != 0`` (a free mode touched by a stop).
 TOUCH_RTOL = 1e-10
@@ -666,7 +667,7 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
     -----
     Whether a sticking stop is plastic (restitution 0: motions entered through complete
     chatter are not solved by shooting yet) is checked where the restitutions are known,
-    :func:`impactcont.orbit.multi_impact.sticking_pattern`.
+    :func:`sticking_pattern`.
     """
     if pattern is None:
         return UPPER * p
@@ -702,6 +703,75 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
         raise ParameterError(f"pattern={pattern!r} has impacts on the lower stop, but the "
                              "oscillator has none: give stops=Stops(b_low=...)")
     return pattern
+
+
+def sticking_pattern(osc: Any, pattern: str) -> tuple[str, np.ndarray]:
+    """The impacts of a pattern with sticking phases and where the sticks are.
+
+    A lowercase letter (``"u"``, ``"l"``, ``"a"`` for the extra stop ``"A"``) is an impact
+    on that stop followed by a sticking phase on it until the release
+    (:func:`check_pattern` with ``sticking=True``).
+
+    Parameters
+    ----------
+    osc : ImpactOscillator
+    pattern : str
+        A checked pattern (:func:`check_pattern` with ``sticking=True``).
+
+    Returns
+    -------
+    impacts : str
+        The stop of each impact (capitals for U, L and the extra stops named so).
+    sticks : ndarray of bool, shape (p,)
+        A sticking phase follows impact k.
+
+    Raises
+    ------
+    ParameterError
+        A sticking phase on a stop whose restitution is not 0: such a motion enters its
+        sticking phase through complete chatter, which shooting does not solve yet.
+    """
+    known = _STICKING.setdefault(osc, {})
+    found = known.get(pattern)
+    if found is None:
+        # what it reads (the stops, the masses, b and R) does not change with omega: a
+        # branch in omega finds the start's at each new oscillator
+        key = (pattern, osc.stops, np.asarray(osc.b, dtype=float).tobytes(),
+               np.asarray(osc.R, dtype=float).tobytes(), np.asarray(osc.M, dtype=float).tobytes())
+        found = _STICKING_BY_STOPS.get(key)
+        if found is None:
+            found = _sticking_pattern(osc, pattern)
+            if len(_STICKING_BY_STOPS) >= _STICKING_KEPT:
+                _STICKING_BY_STOPS.clear()
+            _STICKING_BY_STOPS[key] = found
+        known[pattern] = found
+    return found
+
+
+#: :func:`sticking_pattern` of each live oscillator, by pattern.
+_STICKING: weakref.WeakKeyDictionary[Any, dict[str, tuple[str, np.ndarray]]] = \
+    weakref.WeakKeyDictionary()
+#: ... and by what it reads (the pattern, the stops, b, R and M), at most this many.
+_STICKING_KEPT = 64
+_STICKING_BY_STOPS: dict[tuple[Any, ...], tuple[str, np.ndarray]] = {}
+
+
+def _sticking_pattern(osc: Any, pattern: str) -> tuple[str, np.ndarray]:
+    names = osc.stops.names
+    sticks = np.array([c not in names and c.upper() in names for c in pattern], dtype=bool)
+    sticks.flags.writeable = False
+    impacts = "".join(c.upper() if stick else c for c, stick in zip(pattern, sticks,
+                                                                      strict=True))
+    for name in sorted({impacts[k] for k in np.flatnonzero(sticks)}):
+        r = float(osc.stops.stop(name, osc.M, osc.b, osc.R).restitution)
+        if r != 0.0:
+            raise ParameterError(
+                f"pattern={pattern!r}: a sticking phase on stop {name!r}, whose restitution is "
+                f"{r!r}; shooting solves sticking phases entered by a plastic impact "
+                "(restitution 0) only: motions whose sticking is entered through complete "
+                f"chatter (restitution > 0) are not supported by shooting yet (give stop "
+                f"{name!r} restitution 0, or simulate the motion: ic.simulate)")
+    return impacts, sticks
 
 
 def require_forcing(osc: Any, what: str) -> None:

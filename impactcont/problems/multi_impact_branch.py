@@ -25,16 +25,16 @@ clearance ``b + b_low`` between the stops is open
 (:meth:`MultiImpactBranchProblem.parameter_limits`).
 
 A pattern with lowercase letters (a plastic impact followed by a sticking phase until the
-release, :func:`~impactcont.orbit.multi_impact.sticking_pattern`) is the system of
-:func:`~impactcont.orbit.multi_impact.sticky_shooting` instead: ``2 n p + q`` unknowns (the
+release, :func:`~impactcont.model.stops.sticking_pattern`) is the system of
+:func:`~impactcont.orbit.sticky.sticky_shooting` instead: ``2 n p + q`` unknowns (the
 q stick times after the flight times), the release rows ``p(X_r, theta_r) = 0`` after the
 impact rows, ``dF/du`` exact (the held flow's and the flights'), ``dF/domega`` exact
-(:func:`~impactcont.orbit.multi_impact.sticky_omega_column`: the flights' and the held
+(:func:`~impactcont.orbit.sticky.sticky_omega_column`: the flights' and the held
 systems' forcing, the phases and the period) and, for the other parameters, the
 parameter's central difference (:meth:`~impactcont.model.parameters.ModelParameter.
 difference`, about 1e-11 relative, which steers the predictor and Newton only: the points
 solve ``F = 0`` to the Newton tolerance). In omega the corrector step is compiled
-(:func:`~impactcont.orbit.multi_impact.sticky_palc_step`). Its motions report the
+(:func:`~impactcont.orbit.sticky.sticky_palc_step`). Its motions report the
 stick times, release states and pressing minima; its branches end where a stick time
 reaches 0 (the landing becomes a release: the end of a ride), where the pressing force
 touches 0 inside a stick (release grazing) and where it is 0 at the landing (the onset of
@@ -66,13 +66,12 @@ from impactcont.model.parameters import (
     ModelParameter,
     model_parameter,
 )
-from impactcont.model.stops import check_pattern
+from impactcont.model.stops import check_pattern, sticking_pattern
 from impactcont.orbit.flow import Flow, GeneralFlow, flow_of
 from impactcont.orbit.held_flow import held_flow, held_flow_at
 from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
-    StickyShooting,
     _as_shooting,
     _geometry,
     _kernel,
@@ -82,14 +81,16 @@ from impactcont.orbit.multi_impact import (
     orbit_from_unknowns,
     shooting,
     shot_flights,
-    sticking_pattern,
+)
+from impactcont.orbit.periodic import _check_N
+from impactcont.orbit.sticky import (
+    StickyShooting,
     sticky_jacobians,
     sticky_omega_column,
     sticky_orbit_from_unknowns,
     sticky_palc_step,
     sticky_shooting,
 )
-from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.stop_geometry import StopGeometry
 from impactcont.orbit.symmetry import half_map, symmetry_defect
 from impactcont.problems.events import BRANCH_TESTS
@@ -144,7 +145,7 @@ class MultiImpactBranchProblem:
         self.pattern = check_pattern(pattern, self.p, osc.stops, sticking=True)
         self.parameter = parameter
         #: The stop of each impact (the pattern in capitals) and whether a sticking phase
-        #: follows it (:func:`~impactcont.orbit.multi_impact.sticking_pattern`).
+        #: follows it (:func:`~impactcont.model.stops.sticking_pattern`).
         self.impacts, self.sticks = sticking_pattern(osc, self.pattern)
         self.sticky = bool(np.any(self.sticks))
         if self.sticky:
@@ -501,7 +502,7 @@ class MultiImpactBranchProblem:
 
         ``checks=False`` skips the interior-contact search (see
         :func:`~impactcont.orbit.multi_impact.orbit_from_unknowns`; with sticking phases
-        :func:`~impactcont.orbit.multi_impact.sticky_orbit_from_unknowns`).
+        :func:`~impactcont.orbit.sticky.sticky_orbit_from_unknowns`).
         """
         if self.sticky:
             return sticky_orbit_from_unknowns(self.flow_at(lam), self.N, self.pattern,

@@ -10,8 +10,8 @@ interleaved, the best of 5 rounds after a warm-up run of each::
 
 Prints one line per detection setting: ms per point of each and its ratio to the plain
 one. The sticky branch's ``dF/domega`` is exact
-(:func:`impactcont.orbit.multi_impact.sticky_omega_column`) and its corrector step
-compiled (:func:`impactcont.orbit.multi_impact.sticky_palc_step`). With ``--before`` the
+(:func:`impactcont.orbit.sticky.sticky_omega_column`) and its corrector step
+compiled (:func:`impactcont.orbit.sticky.sticky_palc_step`). With ``--before`` the
 route before these is timed in the same rounds too: ``dF/domega`` the parameter's central
 difference and the continuation core's corrector (patched in for its run only)::
 

@@ -12,7 +12,7 @@ import impactcont as ic
 from impactcont.kernel.shooting import CONVERGED, REFUSED
 from impactcont.model.stops import Stops
 from impactcont.orbit.flow import flow_of
-from impactcont.orbit.multi_impact import (
+from impactcont.orbit.sticky import (
     sticky_omega_column,
     sticky_palc_step,
     sticky_shooting,

@@ -350,7 +350,7 @@ def _sticky_damper():
 def test_the_sticky_jacobian_is_exact(pattern):
     """The Jacobian of the shooting system with sticking phases (the release rows, the
     held flights, the phases and the period's last flight) against central differences."""
-    from impactcont.orbit.multi_impact import sticky_shooting
+    from impactcont.orbit.sticky import sticky_shooting
 
     osc = _sticky_damper()
     flow = flow_of(osc)
@@ -397,7 +397,7 @@ def test_the_sticky_omega_column_is_exact(kind, pattern):
     flight, the flights' and the held systems' forced states, the release rows) against
     central differences of the residual in omega at fixed unknowns, each omega's
     oscillator and held systems built afresh."""
-    from impactcont.orbit.multi_impact import sticky_omega_column, sticky_shooting
+    from impactcont.orbit.sticky import sticky_omega_column, sticky_shooting
 
     omega, h = 0.5, 1e-6
     osc = _sticky_machines(kind, omega)

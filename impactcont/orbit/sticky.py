@@ -1,0 +1,605 @@
+"""Periodic motions with sticking phases, by shooting with the exact flow.
+
+A lowercase letter of a pattern (``"u"``, ``"l"``, ``"a"`` for the extra stop ``"A"``) is
+an impact on that stop followed by a sticking phase on it: the stop coordinate is held at
+the stop (the held system of :mod:`impactcont.orbit.held_flow`) until the pressing force
+falls to zero, the release, and the flight from the release ends at the next impact.
+Segment k of such a motion is impact k, the sticking phase after it (where there is one)
+and the flight from its release to impact ``k + 1``; the shooting system
+(:func:`sticky_shooting`) is that of :mod:`impactcont.orbit.multi_impact` with one more
+unknown (the stick time ``s_k``) and one more row (the pressing force at the release,
+``p(X_r, theta_r) = 0``) per sticking phase.
+:func:`impactcont.orbit.multi_impact.multi_impact_orbit` dispatches a pattern with sticking
+phases here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+
+from impactcont.errors import NoPeriodicMotionError, ParameterError
+from impactcont.kernel.arrays import HeldSegments, StickyFlights
+from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.stops import sticking_pattern
+from impactcont.orbit.flow import Flow
+from impactcont.orbit.held_flow import held_flow
+from impactcont.orbit.multi_impact import (
+    _EPS,
+    _ERROR_WARN,
+    _NEAR_SOLUTION,
+    STICKY_SOLVER,
+    TWO_PI,
+    MultiImpactOrbit,
+    Shooting,
+    _bifurcation,
+    _geometry,
+    _kernel,
+    _orbit,
+    _parameters,
+    _writable,
+    impact_sequence,
+    shooting_accuracy,
+    unknowns_scale,
+)
+from impactcont.orbit.periodic import IllConditionedWarning
+from impactcont.orbit.stop_geometry import StopGeometry
+
+__all__ = [
+    "RELEASE_SHIFT",
+    "StickyShooting",
+    "held_forcing",
+    "held_omega_derivatives",
+    "held_segments",
+    "sticky_jacobians",
+    "sticky_newton",
+    "sticky_omega_column",
+    "sticky_orbit_from_unknowns",
+    "sticky_palc_step",
+    "sticky_shooting",
+]
+
+log = logging.getLogger(__name__)
+
+
+#: Where the contact search of a flight from a release starts, in periods of the fastest
+#: motion its stop coordinate sees (:func:`_sticky_orbit`).
+RELEASE_SHIFT = 1e-4
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class StickyShooting:
+    """The shooting system of a motion with sticking phases evaluated at one ``u``.
+
+    Segment k is impact k, the sticking phase after it (where there is one) and the flight
+    from its release to impact ``k + 1``. Arrays per segment k.
+
+    Attributes
+    ----------
+    phases : ndarray, shape (p,)
+        ``theta_k`` at impact k (not wrapped).
+    stick_times, flight_times : ndarray, shape (p,)
+        ``s_k`` (0 without a stick) and ``tau_k``.
+    starts : ndarray, shape (p, 2n)
+        ``X_k``, the state after impact k, on its stop's section.
+    releases, release_phases : ndarray, shape (p, 2n), (p,)
+        The state and phase where the flight starts (the release; ``X_k``, ``theta_k``
+        without a stick).
+    held_transitions, held_phase_columns, held_rates : ndarray
+        ``dX_r/dX_k`` (p, 2n, 2n), ``dX_r/dtheta_k`` and ``dX_r/ds_k`` (p, 2n) of the held
+        flow (identity and zeros without a stick).
+    arrivals, arrival_rates, transitions, phase_columns : ndarray
+        The flight from the release: ``X_k^-``, ``X'(tau_k^-)``, ``Phi`` and ``dX^-/dtheta``.
+    residual : ndarray, shape (2np + q,)
+        ``[r_0, .., r_{p-1}, p_k..]``: ``r_k = D_{k+1} X_k^- - X_{k+1}`` and the pressing
+        force at each release (q sticks).
+    jacobian : ndarray or None
+        ``dr/du``, exact.
+    search_shifts, search_starts, search_phases : ndarray, shape (p,), (p, 2n), (p,)
+        Where the contact search of each flight from a release starts (0, the release
+        state and phase without a stick; :data:`RELEASE_SHIFT`).
+    """
+
+    phases: np.ndarray
+    stick_times: np.ndarray
+    flight_times: np.ndarray
+    starts: np.ndarray
+    releases: np.ndarray
+    release_phases: np.ndarray
+    held_transitions: np.ndarray
+    held_phase_columns: np.ndarray
+    held_rates: np.ndarray
+    arrivals: np.ndarray
+    arrival_rates: np.ndarray
+    transitions: np.ndarray
+    phase_columns: np.ndarray
+    residual: np.ndarray
+    jacobian: np.ndarray | None
+    search_shifts: np.ndarray
+    search_starts: np.ndarray
+    search_phases: np.ndarray
+
+    def flights(self) -> Shooting:
+        """The flights from the releases as a
+        :class:`~impactcont.orbit.multi_impact.Shooting` (their contact checks)."""
+        return Shooting(phases=self.release_phases, flight_times=self.flight_times,
+                        starts=self.releases, arrivals=self.arrivals,
+                        arrival_rates=self.arrival_rates, transitions=self.transitions,
+                        phase_columns=self.phase_columns, residual=self.residual,
+                        jacobian=None)
+
+
+def _section_lift(geo: StopGeometry, k: int, m: int) -> np.ndarray:
+    """``dX_k/dz_k`` (m, m-1): the unit columns and the pivot's row ``-n_i / n_j`` from the
+    section ``n_k . x = c_k``."""
+    j = int(geo.pivots[k])
+    n = m // 2
+    rest = [c for c in range(m) if c != j]
+    L = np.eye(m)[:, rest]
+    row = np.zeros(m)
+    row[:n] = -np.asarray(geo.normals[k]) / geo.normals[k, j]
+    L[j, :] = row[rest]
+    return L
+
+
+def _python_flight(flow: Flow, t: float, X0: np.ndarray, theta: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(X(t), X'(t), Phi(t), dX(t)/dtheta)`` of one flight of `flow` (either kind)."""
+    transition, forcing = flow.matrices(t)[:2]
+    X = flow.state(t, X0, theta)[0]
+    rate = flow.state_derivative(t, X0, theta)[0]
+    return X, rate, np.array(transition), forcing @ np.array([-math.sin(theta), math.cos(theta)])
+
+
+def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
+                    jacobian: bool = True) -> StickyShooting:
+    """Residual (and exact Jacobian) of the shooting system of a motion with sticking phases.
+
+    The unknowns are ``u = [delta, tau_0..tau_{p-2}, s_k.., z_0..z_{p-1}]``: the phase of
+    impact 0, the flight times but the last (fixed by the period ``2 pi N / omega`` minus
+    every other flight and stick time), the stick times ``s_k`` of the q sticking phases
+    in the order of their impacts, and each post-impact state on its stop's section. The
+    residual is ``r_k = D_{k+1} X_k^- - X_{k+1}`` of each segment (impact k, the sticking
+    phase on its stop for ``s_k`` with the held flow of
+    :mod:`impactcont.orbit.held_flow`, then the flight from the release) and, for each
+    sticking phase, the pressing force at its end: the release row, ``p(X_r, theta_r) =
+    0``. ``2 n p + q`` equations for ``2 n p + q`` unknowns.
+
+    Parameters
+    ----------
+    flow : Flow
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact
+        (:func:`~impactcont.model.stops.sticking_pattern`).
+    u : ndarray, shape (2np + q,)
+    jacobian : bool
+
+    Returns
+    -------
+    StickyShooting
+    """
+    osc = flow.osc
+    impacts = sticking_pattern(osc, pattern)[0]
+    x = _sticky_unknowns(osc, pattern, u, "u")
+    out = _kernel().sticky_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
+                                  tuple(impact_sequence(_geometry(flow, impacts))),
+                                  held_segments(flow, pattern), TWO_PI * N / osc.omega,
+                                  _writable(x), bool(jacobian))
+    named = StickyFlights._make(out)
+    return StickyShooting(**named._replace(jacobian=named.jacobian if jacobian else None)
+                          ._asdict())
+
+
+def _sticky_unknowns(osc: ImpactOscillator, pattern: str, u: Any, argument: str
+                     ) -> np.ndarray:
+    """`u` as the kernel takes it, checked to have the shape ``(2 n p + q,)`` of `pattern`
+    (the message names `argument`)."""
+    p, m = len(pattern), 2 * osc.n
+    q = int(np.count_nonzero(sticking_pattern(osc, pattern)[1]))
+    x = np.asarray(u, dtype=float)
+    if x.shape != (m * p + q,):
+        raise ParameterError(f"{argument} must have shape ({m * p + q},) = (2 n p + q,) for "
+                             f"n={osc.n}, p={p} and q={q} sticking phases; got shape "
+                             f"{x.shape}")
+    return _writable(x)
+
+
+def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
+    """The sticking phases of `pattern` as the kernel takes them: the plain tuple of
+    :class:`~impactcont.kernel.arrays.HeldSegments` (rows of
+    :meth:`~impactcont.orbit.held_flow.HeldFlow.kernel_rows`, zeros where no stick follows
+    an impact), built once per flow and pattern."""
+    cache = flow.__dict__.setdefault("_held_segments", {})
+    held = cache.get(pattern)
+    if held is None:
+        osc = flow.osc
+        impacts, sticks = sticking_pattern(osc, pattern)
+        p, m = len(pattern), 2 * osc.n
+        r = m - 2
+        rows = [held_flow(osc, impacts[k]).kernel_rows() if sticks[k] else None
+                for k in range(p)]
+        shapes = ((m, r), (r, m), (m,), (r,), (r, r), (r, r), (r,), (r,), (r,), (m,), (), (),
+                  ())
+        kinds = (float, float, float, complex, complex, complex, float, float, complex, float,
+                 complex, float, float)
+        geo = _geometry(flow, impacts)
+        rows = [None if row is None else
+                (*row, RELEASE_SHIFT * TWO_PI / flow.time_scales(normal=geo.normals[k])[0])
+                for k, row in enumerate(rows)]
+        fields = []
+        for i, (shape, kind) in enumerate(zip(shapes, kinds, strict=True)):
+            table = np.zeros((p, *shape), dtype=kind)
+            for k in range(p):
+                if rows[k] is not None:
+                    table[k] = rows[k][i]
+            fields.append(table)
+        held = cache[pattern] = HeldSegments(np.array(sticks, dtype=np.bool_), *fields)
+    return tuple(held)
+
+
+def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
+                  max_iter: int = 40) -> tuple[np.ndarray, StickyShooting, int]:
+    """:func:`~impactcont.orbit.multi_impact.newton` on :func:`sticky_shooting`: the same
+    iteration, stopping rules and messages (compiled:
+    :func:`impactcont.kernel.shooting.sticky_newton_solve`).
+
+    Raises
+    ------
+    NoPeriodicMotionError
+        No convergence, or a singular Jacobian.
+    """
+    osc = flow.osc
+    impacts = sticking_pattern(osc, pattern)[0]
+    x0 = _sticky_unknowns(osc, pattern, u0, "u0")
+    x, status, it, norm, step_norm, out = _kernel().sticky_newton_solve(
+        flow.flight_arrays(), tuple(flow.forcing_arrays()),
+        tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
+        TWO_PI * N / osc.omega, x0, float(tol), int(max_iter))
+    sh = StickyShooting(**StickyFlights._make(out)._asdict())
+    if status == 0:
+        return x, sh, int(it)
+    cond, error = shooting_accuracy(sh.jacobian, sh.residual, x)
+    p = len(pattern)
+    if norm <= _NEAR_SOLUTION * unknowns_scale(x) and not cond * _EPS <= _ERROR_WARN:
+        raise NoPeriodicMotionError(
+            f"{_bifurcation(N, p, flow.osc, cond, error)}; Newton stopped at residual "
+            f"{norm:.3g} (last update {step_norm:.3g}) after {it} iterations")
+    raise NoPeriodicMotionError(
+        f"N={N}, p={p}: Newton did not converge in {it} iterations (residual {norm:.3g}, "
+        f"last update {step_norm:.3g}) at {_parameters(flow.osc)} with the pattern "
+        f"{pattern!r} of sticking phases (is the guess a motion whose impacts on the "
+        "lowercase stops are each followed by a sticking phase ended by a release? a "
+        "simulation's sticking phases show the one it settled on)")
+
+
+def held_omega_derivatives(flow: Flow, pattern: str) -> np.ndarray:
+    """``dZ/d omega`` of the steady amplitude of each held system of `pattern` at the flow's
+    omega, shape (p, 2n - 2) complex (zeros where no stick follows an impact, or one mass
+    held): the held systems' part of :func:`sticky_omega_column`
+    (:meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` of each held flow)."""
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    r = 2 * osc.n - 2
+    out = np.zeros((len(pattern), r), dtype=complex)
+    for k in np.flatnonzero(sticks):
+        reduced = held_flow(osc, impacts[k]).reduced
+        if reduced is not None:
+            out[k] = reduced.omega_arrays().dZ
+    return out
+
+
+def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
+                        sh: StickyShooting | None = None) -> np.ndarray:
+    """``dr/d omega`` of :func:`sticky_shooting` at fixed unknowns ``u``, exact (compiled:
+    :func:`impactcont.kernel.shooting.sticky_frequency_column`).
+
+    The phases, the period's last flight time, the steady forced state of each flight and
+    of each held system (its amplitude ``Z_r(omega)``) and, through them, the release rows;
+    the column of the continuation in omega (``MultiImpactBranchProblem.dparam``).
+
+    Parameters
+    ----------
+    flow : Flow
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact.
+    u : ndarray, shape (2np + q,)
+    sh : StickyShooting, optional
+        :func:`sticky_shooting` at ``u`` if already computed (its Jacobian is not read).
+
+    Returns
+    -------
+    ndarray, shape (2np + q,)
+    """
+    osc = flow.osc
+    impacts = sticking_pattern(osc, pattern)[0]
+    x = _sticky_unknowns(osc, pattern, u, "u")
+    if sh is None:
+        sh = sticky_shooting(flow, N, pattern, x, jacobian=False)
+    shot = tuple(np.zeros((0, 0)) if name == "jacobian" else getattr(sh, name)
+                 for name in StickyFlights._fields)
+    return _kernel().sticky_frequency_column(
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+        tuple(flow.omega_arrays()), tuple(impact_sequence(_geometry(flow, impacts))),
+        held_segments(flow, pattern), held_omega_derivatives(flow, pattern),
+        TWO_PI * N / osc.omega, shot)
+
+
+def held_forcing(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
+    """The held systems of `pattern` as their forced amplitudes need them at any omega: the
+    plain tuple of :class:`~impactcont.kernel.arrays.HeldForcing` (each held system's
+    ``M_r, K_r, C_r`` and ``F_r``, zeros where no stick follows an impact or one mass is
+    held), built once per flow and pattern."""
+    cache = flow.__dict__.setdefault("_held_segments", {})
+    key = (pattern, "forcing")
+    found = cache.get(key)
+    if found is None:
+        osc = flow.osc
+        impacts, sticks = sticking_pattern(osc, pattern)
+        p, n = len(pattern), osc.n - 1
+        M, K, C = (np.zeros((p, n, n)) for _ in range(3))
+        F = np.zeros((p, n), dtype=complex)
+        for k in np.flatnonzero(sticks):
+            reduced = held_flow(osc, impacts[k]).reduced
+            if reduced is not None:
+                arrays = reduced.basis.kernel_arrays
+                M[k], K[k], C[k] = arrays.M, arrays.K, arrays.C
+                F[k] = reduced.osc.F
+        found = cache[key] = (M, K, C, F)
+    return found
+
+
+def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
+                     tangent: np.ndarray, weights: np.ndarray, tol: float, max_iter: int,
+                     singular: float, *, hyperplane: bool = False) -> Any:
+    """One corrector step of a branch in omega of a motion with sticking phases, compiled
+    (:func:`impactcont.kernel.sticky.sticky_palc_correct`).
+
+    The continuation core's pseudo-arclength Newton and tangent on ``[u, omega]``
+    (``MultiImpactBranchProblem.palc_step``, as
+    :func:`impactcont.kernel.shooting.palc_correct` is for motions without sticking
+    phases), each iterate's flights, held systems, residual, exact Jacobian and
+    :func:`sticky_omega_column` at its own omega, in one compiled call.
+
+    Parameters
+    ----------
+    flow : Flow
+        The modal flow of the branch's start (any omega: only its modes, the stops and
+        the held systems' modes are read).
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact.
+    predicted, tangent, weights : ndarray, shape (2np + q + 1,)
+        The predicted point ``[u, omega]``, the tangent and the arclength weights.
+    tol : float
+    max_iter : int
+    singular : float
+        The Frobenius condition bound above which a bordered matrix is returned flagged.
+    hyperplane : bool
+        The Newton of :func:`impactcont.core.corrector.solve_on_hyperplane` instead.
+
+    Returns
+    -------
+    PalcResult
+        As :func:`impactcont.kernel.shooting.palc_correct` returns it.
+
+    Raises
+    ------
+    ParameterError
+        `flow` is not modal (a first-order flow's forced amplitudes are not recomputed in
+        compiled code), or the arrays do not have the pattern's size.
+    """
+    from impactcont.kernel import sticky
+
+    osc = flow.osc
+    if type(flow) is not Flow or not np.isrealobj(flow.f):
+        raise ParameterError(f"sticky_palc_step: flow must be a modal flow (proportional "
+                             f"damping, real F); got {type(flow).__name__} of {osc!r}")
+    size = _sticky_unknowns(osc, pattern, np.asarray(predicted, dtype=float)[:-1],
+                            "predicted[:-1]").size + 1
+    for name, value in (("tangent", tangent), ("weights", weights)):
+        if np.shape(value) != (size,):
+            raise ParameterError(f"{name} must have shape ({size},) like predicted; got "
+                                 f"{np.shape(value)}")
+    impacts = sticking_pattern(osc, pattern)[0]
+    errors = osc.modes.eigenvalue_errors
+    errors = np.zeros(osc.n) if errors is None else np.asarray(errors, dtype=float)
+    return sticky.sticky_palc_correct(
+        tuple(flow.shooting_arrays()), _writable(errors),
+        tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
+        held_forcing(flow, pattern), float(N),
+        (_writable(np.asarray(predicted, dtype=float)),
+         _writable(np.asarray(tangent, dtype=float)),
+         _writable(np.asarray(weights, dtype=float))),
+        (float(tol), int(max_iter), float(singular), bool(hyperplane)))
+
+
+def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """``G_k`` of each segment (impact k's section to impact ``k + 1``'s, in ``[z,
+    theta]``) and their product G, for a motion with sticking phases.
+
+    A sticking phase ends where the pressing force vanishes, so its duration moves by
+    ``ds = -(dp/dX dX_r + dp/dtheta dtheta_r) / (dp/dt)`` (the release row's saltation),
+    and the flight from the release ends on the next section as in eq. (25); the stick
+    collapses the directions it holds (``G`` has exact zero multipliers).
+
+    Returns
+    -------
+    jacobians : ndarray, shape (p, 2n, 2n)
+    G : ndarray, shape (2n, 2n)
+    """
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    geo = _geometry(flow, impacts)
+    p, m, n = len(pattern), 2 * osc.n, osc.n
+    omega = osc.omega
+    jacs = np.empty((p, m, m))
+    G = np.eye(m)
+    for k in range(p):
+        nxt = (k + 1) % p
+        cols = np.zeros((m, m))  # dX_r / d[z_k, theta_k]
+        cols[:, :m - 1] = sh.held_transitions[k] @ _section_lift(geo, k, m)
+        cols[:, m - 1] = sh.held_phase_columns[k]
+        th = np.zeros(m)
+        th[m - 1] = 1.0
+        if sticks[k]:
+            held = held_flow(osc, impacts[k])
+            grad, gth = held.pressing_gradient(sh.release_phases[k])
+            ds = -(grad @ cols + gth * th) / (grad @ sh.held_rates[k] + omega * gth)
+            cols = cols + np.outer(sh.held_rates[k], ds)
+            th = th + omega * ds
+        B = sh.transitions[k] @ cols + np.outer(sh.phase_columns[k], th)
+        normal = geo.normals[nxt]
+        h2 = float(normal @ sh.arrival_rates[k, :n])
+        dtau = -(normal @ B[:n]) / h2
+        DB = geo.matrices[nxt] @ (B + np.outer(sh.arrival_rates[k], dtau))
+        jn = int(geo.pivots[nxt])
+        jacs[k, :m - 1] = np.delete(DB, jn, axis=0)
+        jacs[k, m - 1] = th + omega * dtau
+        G = jacs[k] @ G
+    return jacs, G
+
+
+@dataclasses.dataclass(frozen=True)
+class _Sticks:
+    """What :func:`~impactcont.orbit.multi_impact._orbit` reports of a motion with sticking
+    phases beside its flights."""
+
+    pattern: str
+    phases: np.ndarray
+    states: np.ndarray
+    stick_times: np.ndarray
+    flight_times: np.ndarray
+    shift: np.ndarray
+    release_states: np.ndarray
+    pressing_min: np.ndarray
+    landing_pressing: np.ndarray
+    jacobians: np.ndarray
+    G: np.ndarray
+    multipliers: np.ndarray
+    reasons: tuple[str, ...]
+
+
+def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> _Sticks:
+    """The sticking phases' part of a motion: G, its multipliers and the physical checks
+    of each sticking phase (its onset, its pressing force inside, its release); `shift`
+    the start of each flight's contact search after its release."""
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    p, m = len(pattern), 2 * osc.n
+    jacs, G = sticky_jacobians(flow, pattern, sh)
+    mu = np.linalg.eigvals(G) if np.all(np.isfinite(G)) else np.full(m, np.nan + 0j)
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    releases = np.full((p, m), np.nan)
+    pressing = np.full(p, np.nan)
+    landing = np.full(p, np.nan)
+    reasons = []
+    for k in np.flatnonzero(sticks):
+        held = held_flow(osc, impacts[k])
+        stop, s = impacts[k], float(sh.stick_times[k])
+        releases[k] = sh.releases[k]
+        onset = landing[k] = float(held.pressing(sh.starts[k], sh.phases[k]))
+        if not s > 0.0:
+            reasons.append(f"sticking phase {k} (stop {stop!r}) has duration {s:.3g} <= 0")
+            continue
+        if not onset > 0.0:
+            reasons.append(f"impact {k}: sticking onset: the pressing force on stop {stop!r} "
+                           f"after the plastic impact is {onset:.3g} <= 0 (the arrival "
+                           "acceleration does not point into the stop)")
+        low, when = held.pressing_minimum(s, sh.starts[k], float(sh.phases[k]))
+        pressing[k] = low
+        if onset > 0.0 and not low > 0.0:
+            reasons.append(f"sticking phase {k}: release grazing: the pressing force on stop "
+                           f"{stop!r} falls to {low:.3g} <= 0 at t={when:.6g} inside the "
+                           "sticking phase")
+        rate = held.pressing_rate(sh.held_rates[k], float(sh.release_phases[k]))
+        if not rate < 0.0:
+            reasons.append(f"sticking phase {k}: at the release the pressing force on stop "
+                           f"{stop!r} does not fall through zero (dp/dt = {rate:.3g} >= 0): "
+                           "the stop coordinate does not leave the stop")
+    return _Sticks(pattern=pattern, phases=sh.phases, states=sh.starts,
+                   stick_times=sh.stick_times, flight_times=sh.flight_times, shift=shift,
+                   release_states=releases, pressing_min=pressing, landing_pressing=landing,
+                   jacobians=jacs, G=G,
+                   multipliers=mu, reasons=tuple(reasons))
+
+
+def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
+                  max_iter: int) -> MultiImpactOrbit:
+    """:func:`~impactcont.orbit.multi_impact.multi_impact_orbit` of a pattern with sticking
+    phases."""
+    osc = flow.osc
+    p = len(pattern)
+    u, sh, iterations = sticky_newton(flow, N, pattern, u0, tol=tol, max_iter=max_iter)
+    cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
+    if not error <= _ERROR_WARN * unknowns_scale(u):
+        warnings.warn(f"{_bifurcation(N, p, osc, cond, error)} (residual "
+                      f"{float(np.max(np.abs(sh.residual))):.3g})", IllConditionedWarning,
+                      stacklevel=3)
+    log.debug("N=%d p=%d %s motion with sticking phases in %d Newton iterations", N, p,
+              pattern, iterations)
+    return _sticky_motion(flow, N, pattern, sh, True, cond, error)
+
+
+def _sticky_motion(flow: Flow, N: int, pattern: str, sh: StickyShooting, checks: bool,
+                   condition_number: float = math.nan, error_estimate: float = math.nan
+                   ) -> MultiImpactOrbit:
+    """The motion with sticking phases of the shot `sh` (at a solution): its flights'
+    checks (with `checks`, the interior-contact search), G and the sticking phases' checks.
+    """
+    impacts = sticking_pattern(flow.osc, pattern)[0]
+    # the contact search of each flight from a release starts RELEASE_SHIFT of the fastest
+    # period after it (held_segments): there s = c, s' = 0 and s'' = 0 (the pressing force
+    # is 0), so the start itself is a (degenerate) maximum of the coordinate at the stop;
+    # past it the coordinate leaves as the cube of the time (the release row's
+    # transversality) and a later return is found as on any flight
+    shift = sh.search_shifts
+    flights = dataclasses.replace(sh.flights(), starts=sh.search_starts,
+                                  phases=sh.search_phases, flight_times=sh.flight_times - shift)
+    return _orbit(flow, N, len(pattern), flights, checks, impacts, condition_number,
+                  error_estimate, sticks=_sticks(flow, pattern, sh, shift))
+
+
+def sticky_orbit_from_unknowns(flow: Flow, N: int, pattern: str, u: np.ndarray,
+                               sh: StickyShooting | None = None, *, checks: bool = True
+                               ) -> MultiImpactOrbit:
+    """:func:`~impactcont.orbit.multi_impact.orbit_from_unknowns` of a motion with sticking
+    phases: the motion at the solution ``u`` of :func:`sticky_shooting` (a point of its
+    branch), with G, the stick times, release states and pressing minima, and every check.
+
+    Parameters
+    ----------
+    flow : Flow
+    N : int
+    pattern : str
+        With lowercase letters where a sticking phase follows an impact
+        (:func:`~impactcont.model.stops.sticking_pattern`).
+    u : ndarray, shape (2np + q,)
+        A (converged) solution of :func:`sticky_shooting`.
+    sh : StickyShooting, optional
+        :func:`sticky_shooting` at ``u`` if already computed (with its Jacobian, for the
+        motion's error estimate).
+    checks : bool
+        Search every flight for interior contact (eq. 16); without it ``flight_gap_min``
+        is NaN and the motion is reported not physical with that reason.
+
+    Returns
+    -------
+    MultiImpactOrbit
+    """
+    if sh is None:
+        sh = sticky_shooting(flow, N, pattern, u)
+    x = _sticky_unknowns(flow.osc, pattern, u, "u")
+    cond, error = (shooting_accuracy(sh.jacobian, sh.residual, x) if sh.jacobian is not None
+                   else (math.nan, math.nan))
+    return _sticky_motion(flow, N, pattern, sh, checks, cond, error)
+
+
+STICKY_SOLVER[:] = [_sticky_orbit]
