@@ -16,6 +16,12 @@ test       function of the motion                                 on curves
 ``SN``     ``dr/d delta`` (eq. 14; zero at a fold)                 PD, NS, GR, ZV
 ``PD``     ``h2 det(G + I) = h2 prod (mu_i + 1)``                  SN, NS, GR
 ``NS``     ``h2^(m-1) prod_{i<j} (mu_i mu_j - 1)`` (bialternate)   SN, PD, GR
+``SE``     the shortest stick time (motions with sticking phases)  RG, SO; SN, PD, NS,
+                                                                  GR of such motions
+``RG``     the smallest pressing force inside the sticks           SN, PD, NS, GR of
+                                                                  such motions
+``SO``     the smallest pressing force at a landing                RG; SN, PD, NS, GR
+                                                                  of such motions
 =========  =====================================================  ===================
 
 The GR test is skipped on ZV curves: there the motion is the linear response
@@ -35,7 +41,11 @@ and flights, the SN test the signed smallest singular value of the branch proble
 Jacobian (:func:`~impactcont.problems.codim1.signed_smallest_singular_value`),
 and the PD and NS tests are made free of the poles of every impact
 (:func:`~impactcont.problems.events.pole_free`); the GR test is not watched on a GR curve
-of N-p motions (its second-lowest clearance is not searched yet).
+of N-p motions (its second-lowest clearance is not searched yet). On a motion with
+sticking phases the SE, RG and SO tests are those of its branch
+(:data:`~impactcont.problems.multi_impact_branch.STICKING_TESTS`, minima over its
+sticks); an SE curve watches neither RG nor SO (both vanish along it: the landing is the
+release) and an SO curve not RG (:data:`impactcont.problems.codim1.SHOOTING_KINDS`).
 
 Curve ends, found while continuing (:func:`impactcont.analysis.curves.curve`) rather than
 here: an NS curve ends at ``theta -> 0`` (``R1``, 1:1 resonance) or
