@@ -627,3 +627,84 @@ def test_ctrl_c_keeps_a_map_written_to_a_file_as_the_map_in_memory(closed_form_s
                                 family_in_memory.where(computed).drop_attrs())
     assert not kept["found"].where(~computed, False).any()
     assert ic.load(target).attrs["interrupted"] == 1
+
+
+# -- motions with sticking phases ----------------------------------------------------------
+def riding_damper(omega: float = 2.3, b: float = 0.3, eta: float = 0.3) -> ic.ImpactOscillator:
+    """The impact damper of studies/sticking_motions: primary 1 on spring 1, plastic ball
+    0.2 in |x2 - x1| <= b."""
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
+                               R=0.0, b=b, omega=omega, eta=eta,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+@pytest.fixture(scope="module")
+def riding_start():
+    """The ball riding each wall (pattern 'lu' or 'ul'), from its simulated steady state."""
+    osc = riding_damper()
+    amplitude = 1.0 / (1.0 - 1.2 * osc.omega**2 + 1j * osc.C[0, 0] * osc.omega)
+    x1, v1 = amplitude.real, (1j * osc.omega * amplitude).real
+    res = ic.simulate(osc, np.array([x1, x1 + osc.b, v1, v1]), 0.0, 16.0)
+    return ic.multi_impact_orbit(osc, 1, 2, res)
+
+
+def test_a_sticky_map_without_omega_is_newton_on_the_branch_problem(riding_start):
+    """A pair without omega, (b, eta): the problem's residual and Jacobian (no compiled
+    step). Each point is the motion multi_impact_orbit solves alone on the oscillator with
+    both values set (its own sticky Newton) to 1e-9, the stick times and the release
+    phases (the impact phase plus omega times the stick) included."""
+    grid = {"b": np.linspace(0.28, 0.32, 3), "eta": np.linspace(0.28, 0.32, 3)}
+    ds = multi_impact_map(riding_start, ("b", "eta"), grid=grid)
+    assert ds["found"].all() and ds["physical"].all() and ds.attrs["pattern"] == \
+        riding_start.pattern
+    assert (ds["newton_iterations"] > 0).all() and (ds["reason"] == 0).all()
+    for b, eta in ((0.28, 0.32), (0.32, 0.28)):
+        point = ds.sel(b=b, eta=eta)
+        alone = ic.multi_impact_orbit(riding_damper(b=b, eta=eta), 1, 2, riding_start)
+        assert alone.pattern == riding_start.pattern
+        assert point["stick_time_k"].values == pytest.approx(alone.stick_times, abs=1e-9)
+        assert point["flight_time_k"].values == pytest.approx(alone.flight_times, abs=1e-9)
+        assert point["state_k"].values == pytest.approx(alone.states, abs=1e-9)
+        release = alone.phases + 2.3 * alone.stick_times
+        assert np.abs(np.remainder(point["release_phase_k"].values - release + np.pi,
+                                   2 * np.pi) - np.pi).max() < 1e-9
+        assert float(point["spectral_radius"]) == pytest.approx(alone.spectral_radius,
+                                                                abs=1e-9)
+        assert float(point["stick_time_min"]) == pytest.approx(min(alone.stick_times),
+                                                               abs=1e-9)
+
+
+def test_a_sticky_map_reason_names_the_sticking_phase_and_the_plain_checks(riding_start):
+    """Past the end of the ride (omega beyond 2.3934 at b = 0.3) the reason is the stick
+    that ended, and nothing else: the found points that are not physical are exactly those
+    with a negative stick; without the contact search every found point is "not checked"
+    (never physical), the stick ended added where it did."""
+    grid = {"b": np.array([0.3]), "omega": np.linspace(2.36, 2.44, 5)}
+    ds = multi_impact_map(riding_start, ("b", "omega"), grid=grid)
+    ended = ds["stick_time_min"].values <= 0
+    assert ended.any() and not ended.all()
+    assert np.array_equal(ds["reason"].values, np.where(ended, 1, 0))
+    assert np.array_equal(ds["physical"].values, ~ended)
+    unchecked = multi_impact_map(riding_start, ("b", "omega"), grid=grid, checks=False)
+    assert not unchecked["physical"].any() and not unchecked["contact_checked"].any()
+    assert np.array_equal(unchecked["reason"].values, np.where(ended, 1 | 64, 64))
+
+
+def test_a_sticky_map_in_bands_is_the_one_sweep(riding_start):
+    """rows_per_task=1 (each row of b a task from the spine on the seed's column) finds what
+    the one sweep finds, to the Newton tolerance."""
+    grid = {"b": np.linspace(0.28, 0.32, 3), "omega": np.linspace(2.25, 2.35, 3)}
+    one = multi_impact_map(riding_start, ("b", "omega"), grid=grid)
+    bands = multi_impact_map(riding_start, ("b", "omega"), grid=grid, rows_per_task=1)
+    assert json.loads(bands.attrs["options"])["tasks"] == 3
+    assert np.array_equal(one["found"].values, bands["found"].values)
+    np.testing.assert_allclose(bands["stick_time_k"].values, one["stick_time_k"].values,
+                               atol=1e-9, rtol=0)
+
+
+def test_a_sticky_map_refuses_the_half_system_and_a_bad_symmetric(riding_start):
+    grid = {"b": np.array([0.3]), "omega": np.array([2.3])}
+    with pytest.raises(ParameterError, match="symmetric=True: the motion has sticking"):
+        multi_impact_map(riding_start, ("b", "omega"), grid=grid, symmetric=True)
+    with pytest.raises(ParameterError, match="symmetric must be True, False or None"):
+        multi_impact_map(riding_start, ("b", "omega"), grid=grid, symmetric="yes")
