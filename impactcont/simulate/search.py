@@ -34,6 +34,10 @@ _MAX_CELLS = 2_000_000
 _ABS_TOL = 1e-15
 _REL_TOL = 4.0 * float(np.finfo(float).eps)
 _MAX_STEPS = 200
+# an evaluation of a stop coordinate is exact to this many ulps of the terms it is summed
+# from (StopMotion.size): a crossing found where it is within that of its level is found
+_NOISE_ULPS = 4.0
+_EPS = float(np.finfo(float).eps)
 
 
 def search_grid(flight: Flight, t0: float, t1: float, normal: Any, *,
@@ -82,27 +86,41 @@ def search_grid(flight: Flight, t0: float, t1: float, normal: Any, *,
     return grid
 
 
-def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
-                       lo: np.ndarray, hi: np.ndarray, at_lo: np.ndarray) -> np.ndarray:
+def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, ...]],
+                       lo: np.ndarray, hi: np.ndarray, at_lo: np.ndarray,
+                       at_hi: np.ndarray | None = None, noise: float = 0.0) -> np.ndarray:
     """One root of ``g`` in each bracket, all brackets iterated at once.
 
     Parameters
     ----------
     fun : callable
-        ``fun(t) -> (g(t), g'(t))`` for an array of times.
+        ``fun(t) -> (g(t), g'(t))`` or ``(g(t), g'(t), g''(t))`` for an array of times.
+        With ``g''`` each step goes to the root of the quadratic Taylor model nearest the
+        iterate (where it has one), not the Newton step: a root near a turning point of
+        ``g`` (the small bounces of a chatter: ``g`` close to a parabola whose vertex lies
+        just below zero) is then reached in a few steps, where Newton's steps from the far
+        side only halve the distance.
     lo, hi : ndarray
         Brackets, ``lo < hi``, with ``g`` of opposite signs (``< 0`` against ``>= 0``) at
         their ends.
     at_lo : ndarray
         ``g(lo)`` (its sign is what is read).
+    at_hi : ndarray, optional
+        ``g(hi)``: the first iterate is then the false position (the secant's root) of
+        the bracket, when strictly inside it, rather than its midpoint.
+    noise : float
+        The rounding of ``g``'s evaluation (``>= 0``): an iterate where ``|g|`` is within it
+        is a root (a bracket narrower than ``noise / |g'|`` cannot be told from rounding;
+        bisecting it further costs evaluations and finds no better root).
 
     Returns
     -------
     ndarray
-        The roots, to a few ulps: each iteration keeps the part of the bracket where the
-        sign changes and takes the Newton step from the last iterate when it lands strictly
-        inside that part, else its midpoint (so the bracket shrinks every iteration and the
-        convergence near a simple root is quadratic).
+        The roots, to a few ulps (or to ``noise / |g'|``): each iteration keeps the part of
+        the bracket where the sign changes and takes the step from the last iterate when
+        it lands strictly inside that part, else its midpoint (so the bracket shrinks every
+        iteration and the convergence near a simple root is quadratic, cubic with
+        ``g''``).
 
     Notes
     -----
@@ -115,25 +133,36 @@ def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]
     right = np.array(hi, dtype=float)
     negative_left = np.asarray(at_lo, dtype=float) < 0
     t = 0.5 * (left + right)
+    if at_hi is not None:
+        g_lo = np.asarray(at_lo, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            secant = left - g_lo * (right - left) / (np.asarray(at_hi, dtype=float) - g_lo)
+        inside = np.isfinite(secant) & (secant > left) & (secant < right)
+        t = np.where(inside, secant, t)
     todo = np.arange(t.size)
     for _ in range(_MAX_STEPS):
         if todo.size == 0:
             break
         here = t[todo]
-        g, slope = fun(here)
+        values = fun(here)
+        g, slope = values[0], values[1]
         same = (g < 0) == negative_left[todo]  # the sign change is right of `here`
         left[todo] = np.where(same, here, left[todo])
         right[todo] = np.where(same, right[todo], here)
         width = right[todo] - left[todo]
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             step = g / slope
+            if len(values) > 2:  # the root of the quadratic model nearest the iterate
+                disc = slope * slope - 2.0 * g * values[2]
+                quadratic = 2.0 * g / (slope + np.copysign(np.sqrt(np.abs(disc)), slope))
+                step = np.where((disc >= 0) & np.isfinite(quadratic), quadratic, step)
         tol = _ABS_TOL + _REL_TOL * np.abs(here)
         small = np.abs(step) <= tol  # converged: judged before the safeguard
-        done = (g == 0) | small | (width <= tol)
+        done = (np.abs(g) <= noise) | small | (width <= tol)
         guess = here - step
         kept = np.isfinite(guess) & (guess > left[todo]) & (guess < right[todo])
         guess = np.where(kept | (done & small), guess, 0.5 * (left[todo] + right[todo]))
-        t[todo] = np.where(g == 0, here, guess)
+        t[todo] = np.where(np.abs(g) <= noise, here, guess)
         todo = todo[~done]
     return t
 
@@ -147,14 +176,16 @@ def _sign_changes(values: np.ndarray) -> np.ndarray:
 def _derivative_roots(motion: StopMotion, order: int, times: np.ndarray,
                       values: np.ndarray) -> np.ndarray:
     """Roots of ``y^(order)`` in the cells of `times` where `values` (``y^(order)`` there)
-    changes sign, polished with ``y^(order + 1)`` as the slope."""
+    changes sign, polished with ``y^(order + 1)`` as the slope (and ``y^(order + 2)`` as
+    the curvature, where the motion gives it)."""
     cells = _sign_changes(values)
 
-    def fun(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def fun(s: np.ndarray) -> tuple[np.ndarray, ...]:
         d = motion.derivatives(s)
-        return d[order], d[order + 1]
+        return tuple(d[order:order + 3])
 
-    return newton_in_brackets(fun, times[cells], times[cells + 1], values[cells])
+    return newton_in_brackets(fun, times[cells], times[cells + 1], values[cells],
+                              values[cells + 1])
 
 
 def turning_points(motion: StopMotion, grid: np.ndarray) -> np.ndarray:
@@ -194,8 +225,10 @@ def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
         return None
     i = int(up[0])
 
-    def fun(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        y, slope, _ = motion(s)
-        return y - level, slope
+    def fun(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        y, slope, curvature = motion(s)
+        return y - level, slope, curvature
 
-    return float(newton_in_brackets(fun, pieces[i:i + 1], pieces[i + 1:i + 2], gap[i:i + 1])[0])
+    noise = _NOISE_ULPS * _EPS * (motion.size() + abs(level))
+    return float(newton_in_brackets(fun, pieces[i:i + 1], pieces[i + 1:i + 2], gap[i:i + 1],
+                                    gap[i + 1:i + 2], noise)[0])

@@ -59,3 +59,48 @@ def test_a_root_known_only_to_rounding_does_not_cycle():
     # bisection alone would take log2(0.21 / 1e-15) < 48 evaluations
     assert len(calls) <= 60, len(calls)
     assert abs(found[0] - root) <= 2 * noise / slope + 8 * np.spacing(root)
+
+
+def _bounce(height: float):
+    """``g = t^2 / 2 - height`` counted: a small bounce of a chatter (a parabola whose vertex,
+    at t = 0, lies just below the stop), with its slope and curvature."""
+    calls = []
+
+    def fun(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        calls.append(t.size)
+        return 0.5 * t * t - height, t, np.ones_like(t)
+    return fun, calls
+
+
+def test_a_crossing_near_the_vertex_of_a_bounce_takes_a_few_steps():
+    """From the vertex of a bounce 1e-9 below the stop to the end of a window 0.4 later, the
+    crossing at sqrt(2e-9) is found to a few ulps in at most 4 evaluations with the
+    curvature and the value at the bracket's far end (Newton's steps from the far side
+    only halve the distance: 17 evaluations)."""
+    height = 1e-9
+    root = math.sqrt(2 * height)
+    fun, calls = _bounce(height)
+    lo, hi = np.array([0.0]), np.array([0.4])
+    found = newton_in_brackets(fun, lo, hi, fun(lo)[0], fun(hi)[0])
+    calls.clear()
+    found = newton_in_brackets(fun, lo, hi, fun(lo)[0], fun(hi)[0])
+    assert abs(found[0] - root) <= 8 * np.spacing(root)
+    assert len(calls) - 2 <= 4, len(calls)  # the two end values above are not the search's
+
+
+def test_a_root_within_rounding_of_g_ends_the_search():
+    """Where ``|g|`` is within its rounding (`noise`) the iterate is the root: the search
+    ends there, within ``noise / g'`` of the root, instead of bisecting rounding."""
+    slope, root, noise = 1e-4, 2.5614291772e-05, 4.4e-16
+    calls = []
+
+    def fun(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(t.size)
+        g = slope * (t - root)
+        flip = np.where(np.floor(t / 1e-13) % 2 == 0, 1.0, -1.0)  # rounding's sign
+        return np.where(np.abs(g) < noise, flip * noise / 2, g), np.full_like(t, slope)
+
+    lo, hi = np.array([1e-5]), np.array([0.4])
+    found = newton_in_brackets(fun, lo, hi, fun(lo)[0], fun(hi)[0], noise)
+    assert abs(found[0] - root) <= noise / slope
+    assert len(calls) - 2 <= 4, len(calls)
