@@ -10,6 +10,13 @@ by the closed form otherwise) at every grid point it can reach: Newton on the sh
 system of :mod:`impactcont.orbit.multi_impact` at each grid point, started from a solved
 neighbour (natural-parameter continuation on the grid, a secant predictor through
 two solved points in line), in one compiled sweep (:mod:`impactcont.kernel.sweep`).
+A motion with sticking phases (a lowercase letter in its pattern) is swept the same way
+in Python over the Newton of its pattern's branch problem
+(:class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`: compiled in
+omega) and evaluated by the problem's ``orbit`` (``_StickySetting``); its map says why a
+motion found is not physical (``reason``: a stick ended, release grazing, the sticking
+onset passed, or a plain check) and carries its sticks' times, releases and pressing
+forces (:data:`~impactcont.dataset.maps.STICKY_MAP_VARIABLES`).
 A symmetric motion of a symmetric system is solved on its half system closed by the
 reflection, as :class:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem`
 does, which stays regular through the symmetry-breaking pitchforks where the full

@@ -494,7 +494,13 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     several coordinates (``Stops(extra=...)``: each impact's section ``n_k . x = c_k``
     solved for its own stop's mass, every flight checked against every stop), free masses
     and a constant force ``F_static``; each point is the motion
-    :func:`impactcont.multi_impact_orbit` finds there.
+    :func:`impactcont.multi_impact_orbit` finds there. A motion with sticking phases (a
+    lowercase letter in its pattern: a plastic impact held on its stop until the release)
+    is followed through the branch problem of its pattern
+    (:class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`), past
+    the ends of its branches (a stick time through 0, release grazing, the sticking
+    onset), where its points are found and not physical with their reason
+    (``docs/multi_maps.md``).
 
     Every grid point is solved by Newton from a neighbour that was solved, starting
     at the grid point nearest the start (reached from it by Newton in a few steps):
@@ -526,7 +532,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         ``{parameter: strictly increasing 1-D values}`` for both parameters.
     symmetric : bool, optional
         Solve a symmetric motion of a symmetric two-sided system on its half system
-        (regular through the symmetry-breaking pitchforks). ``None`` (default): when
+        (regular through the symmetry-breaking pitchforks; refused for a motion with
+        sticking phases, always solved on the full system). ``None`` (default): when
         the start is symmetric and both parameters keep the system symmetric
         (:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`: not ``b``,
         ``R``, ``b_low`` or ``R_low`` unless ``Stops(mirror=True)``), as
@@ -553,7 +560,8 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
     max_workers : int, optional
         Processes of the ``"process"`` pool.
     rows_per_task : int, optional
-        Rows of ``parameters[0]`` per task (default: enough for 65536 grid points). A
+        Rows of ``parameters[0]`` per task (default: enough for 65536 grid points; 2048
+        for a motion with sticking phases, swept in Python at some ms a point). A
         map of one task is the one sweep from the seed. A larger one first sweeps the
         seed's column of ``parameters[1]`` (the spine), then each band of rows from its
         spine point nearest the seed, as tasks: a band is followed within itself, so a
@@ -589,7 +597,11 @@ def multi_impact_map(start: MultiImpactOrbit | PeriodicOrbit,
         ``physical``, ``contact_checked``, ``spectral_radius``, ``critical_multiplier``, ``delta``,
         ``gap_min``, ``impact_velocity_k``, ``flight_time_k``, ``state_k`` and, in a
         system that admits symmetric motions of the pattern, ``asymmetry``
-        (:mod:`impactcont.dataset.maps`). Values are NaN where not found.
+        (:mod:`impactcont.dataset.maps`); for a motion with sticking phases also
+        ``stick_time_k``, ``release_phase_k``, ``pressing_min_k``,
+        ``landing_pressing_k``, ``stick_time_min``, ``pressing_min`` and ``reason`` (why
+        a found point is not physical, as flag bits:
+        :data:`~impactcont.dataset.maps.MAP_REASONS`). Values are NaN where not found.
         Round-trips through :func:`impactcont.save` / :func:`impactcont.load`.
 
     Raises
