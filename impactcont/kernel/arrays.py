@@ -396,6 +396,13 @@ class HeldSegments(NamedTuple):
     shifts: np.ndarray
     """Where the contact search of the flight from the release starts after it (at most half
     the flight), (p,): there ``s = c``, ``s' = 0`` and ``s'' = 0``."""
+    restitutions: np.ndarray
+    """The restitution ``R`` of the stop held after impact k, (p,): ``R > 0`` enters the
+    sticking phase through complete chatter (:func:`impactcont.kernel.shooting.chatter_map`),
+    ``R = 0`` by the plastic impact k itself."""
+    chatter_impacts: np.ndarray
+    """How many impacts of the chatter after impact k are resolved before the jump to their
+    accumulation point (int, (p,); 0 where ``R = 0``)."""
 
 
 class HeldForcing(NamedTuple):
@@ -436,6 +443,10 @@ class StickyFlights(NamedTuple):
     search_shifts: np.ndarray
     search_starts: np.ndarray
     search_phases: np.ndarray
+    accumulations: np.ndarray
+    accumulation_phases: np.ndarray
+    chatter_times: np.ndarray
+    chatter_status: np.ndarray
 
 
 class ContactStops(NamedTuple):

@@ -633,6 +633,293 @@ def _pressing(held, k, X, theta):
     return s + e.real, (1j * e).real
 
 
+# -- complete chatter ---------------------------------------------------------------------------
+#: Newton iterations of one bounce's return time (:func:`chatter_map`).
+_BOUNCE_ITERATIONS = 60
+#: A bounce whose apex ``u^2 / (2 a)`` lies within this many ulps of the stop position is not
+#: resolved: the jump to the accumulation point is taken from it.
+_BOUNCE_ULPS = 1e3
+_CHATTER_EPS = 2.220446049250313e-16
+
+
+@_inner
+def _stop_speed(normal, sign, rate, n):
+    """``(u, a)``: the speed of the stop coordinate away from the stop and its acceleration
+    into it, from a state derivative ``rate``."""
+    u = 0.0
+    a = 0.0
+    for c in range(n):
+        u -= sign * normal[c] * rate[c]
+        a += sign * normal[c] * rate[n + c]
+    return u, a
+
+
+@_inner
+def _acceleration_gradient(flow, forcing, normal, sign, theta, grad):
+    """``grad[:m] = da/dX``, ``grad[m] = da/dtheta`` of the acceleration ``a`` of the stop
+    coordinate into the stop: the state derivative is affine in the state, ``X' = A X +
+    f(theta)``, so ``A e_c = X'(e_c) - X'(0)`` and ``f'(theta) = f(theta + pi/2) - (f(theta)
+    + f(theta + pi)) / 2`` (the constant force cancels), each from a flight of length 0."""
+    m = grad.size - 1
+    n = m // 2
+    tr = np.empty((m, m))
+    arr = np.empty(m)
+    pcol = np.empty(m)
+    base = np.empty(m)
+    rate = np.empty(m)
+    zero = np.zeros(m)
+    _flight(flow, forcing, 0.0, zero, theta, tr, arr, pcol, base)
+    a0 = _stop_speed(normal, sign, base, n)[1]
+    unit = np.zeros(m)
+    for c in range(m):
+        unit[c] = 1.0
+        _flight(flow, forcing, 0.0, unit, theta, tr, arr, pcol, rate)
+        grad[c] = _stop_speed(normal, sign, rate, n)[1] - a0
+        unit[c] = 0.0
+    _flight(flow, forcing, 0.0, zero, theta + 0.5 * math.pi, tr, arr, pcol, rate)
+    aq = _stop_speed(normal, sign, rate, n)[1]
+    _flight(flow, forcing, 0.0, zero, theta + math.pi, tr, arr, pcol, rate)
+    ah = _stop_speed(normal, sign, rate, n)[1]
+    grad[m] = aq - 0.5 * (a0 + ah)
+
+
+@_inner
+def _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate):
+    """``(g, g')`` at `t` of the flight from `Y`: the clearance ``sign (c - n . x)`` of the
+    stop (``>= 0`` free) and its rate."""
+    n = normal.size
+    _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
+    g = position
+    gd = 0.0
+    for c in range(n):
+        g -= normal[c] * arr[c]
+        gd -= normal[c] * rate[c]
+    return sign * g, sign * gd
+
+
+@_inner
+def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, period, tr, arr,
+                   pcol, rate):
+    """The first return to its stop of the flight from `Y` (on the stop, leaving it), or
+    ``-1.0``: the clearance bracketed from the parabola's `guess` (marching forward in
+    quarters of it, at most two forcing periods `period`, or halving it back while the
+    clearance is not positive), then safeguarded Newton (bisection where a Newton step
+    leaves the bracket) to a few ulps of the time."""
+    lo = guess
+    g, _ = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol, rate)
+    hi = -1.0
+    if g > 0.0:
+        step = 0.25 * guess
+        while lo < 2.0 * period:
+            t = lo + step
+            gt, _ = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
+            if not gt > 0.0:
+                hi = t
+                break
+            lo = t
+            step *= 1.5
+        if hi < 0.0:
+            return -1.0
+    else:
+        hi = lo
+        lo = 0.5 * hi
+        for _ in range(200):
+            g, _ = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol,
+                        rate)
+            if g > 0.0:
+                break
+            hi = lo
+            lo *= 0.5
+        if not g > 0.0:
+            return -1.0
+    t = 0.5 * (lo + hi)
+    for _ in range(_BOUNCE_ITERATIONS):
+        g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
+        if g > 0.0:
+            lo = t
+        else:
+            hi = t
+        new = t - g / gd if gd != 0.0 else 0.5 * (lo + hi)
+        if not lo < new < hi:
+            new = 0.5 * (lo + hi)
+        if abs(new - t) <= 8.0 * _CHATTER_EPS * t or hi - lo <= 8.0 * _CHATTER_EPS * hi:
+            return new
+        t = new
+    return -1.0
+
+
+@_inner
+def chatter_map(flow, forcing, held, k, D, pivot, normal, sign, position, X0, theta0, X, dX,
+                dtheta, dT):
+    """The chatter map of the stop held after impact k: the state ``X0`` right after the
+    landing impact (restitution ``R = held.restitutions[k] > 0``, on the stop's section,
+    leaving it) at phase `theta0` to the accumulation point of the chatter it starts.
+
+    The chatter's impacts are resolved one by one, ``held.chatter_impacts[k]`` of them
+    (fewer when a bounce's apex falls within :data:`_BOUNCE_ULPS` ulps of the stop): each
+    flight with this module's exact flight (:func:`_flight`), its return to the stop by
+    Newton from the parabola's ``2 u / a``, the impact law ``D``. From the last impact (the
+    stop coordinate leaving at ``u``, pressed at ``a > 0``) the rest of the chatter is
+    jumped over (Nordmark & Piiroinen 2009, eq. C1 of :mod:`impactcont.simulate.chatter`,
+    derived again here): it accumulates after ``2 u / (a (1 - R))``, and the state there is
+    the held flow from the state with the stop coordinate's speed removed by the stop's
+    plastic law, ``(D + R I) / (1 + R)``, run for that long: ``O(u^2)`` off the resolved
+    chatter.
+
+    Writes ``X`` (the state at the accumulation point), ``dX = dX/dX0``, ``dtheta =
+    dX/dtheta0`` and ``dT = [dT/dX0, dT/dtheta0]`` (``T`` the chatter's duration) by the chain
+    rule through every resolved flight (its transition, the return time's saltation) and
+    impact and through the jump (``u``, ``a`` and the held flow). Returns ``(status, T,
+    theta)``: ``status`` the impacts resolved (``>= 0``), ``-1`` where the acceleration of
+    the stop coordinate does not point into the stop at the jump (the chatter does not
+    accumulate: incomplete), ``-2`` where a bounce's return is not found within two forcing
+    periods; on a
+    failure the map is the plastic impact at ``X0`` (``T = 0``) and the status says so.
+    """
+    m = X0.size
+    n = m // 2
+    omega = forcing.omega
+    R = held.restitutions[k]
+    J = np.zeros((m + 1, m + 1))  # d[Y, th] / d[X0, theta0]
+    for c in range(m + 1):
+        J[c, c] = 1.0
+    Y = X0.copy()
+    th = theta0
+    T = 0.0
+    dTv = np.zeros(m + 1)
+    tr = np.empty((m, m))
+    arr = np.empty(m)
+    pcol = np.empty(m)
+    rate = np.empty(m)
+    B = np.empty((m, m + 1))
+    dt = np.empty(m + 1)
+    floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
+    status = 0
+    for _ in range(held.chatter_impacts[k]):
+        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
+        u, a = _stop_speed(normal, sign, rate, n)
+        if a > 0.0 and u * u < 2.0 * a * floor:
+            break
+        # the parabola's return time (an eighth of a period where the stop does not press)
+        guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
+        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess,
+                           2.0 * math.pi / omega, tr, arr, pcol, rate)
+        found = t > 0.0
+        if not found:
+            status = -2
+            break
+        _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
+        hd = 0.0
+        for c in range(n):
+            hd += normal[c] * rate[c]
+        if not sign * hd > 0.0:
+            status = -2
+            break
+        for i in range(m):
+            for c in range(m + 1):
+                s = pcol[i] * J[m, c]
+                for q in range(m):
+                    s += tr[i, q] * J[q, c]
+                B[i, c] = s
+        for c in range(m + 1):
+            s = 0.0
+            for r in range(n):
+                s += normal[r] * B[r, c]
+            dt[c] = -s / hd
+        for i in range(m):
+            for c in range(m + 1):
+                B[i, c] += rate[i] * dt[c]
+        for i in range(m):
+            for c in range(m + 1):
+                s = 0.0
+                for q in range(m):
+                    s += D[i, q] * B[q, c]
+                J[i, c] = s
+        for c in range(m + 1):
+            J[m, c] += omega * dt[c]
+            dTv[c] += dt[c]
+        _apply(D, arr, Y)
+        s = position
+        for c in range(n):
+            if c != pivot:
+                s -= normal[c] * Y[c]
+        Y[pivot] = s / normal[pivot]
+        th += omega * t
+        T += t
+        status += 1
+    dtj = 0.0
+    ddt = np.zeros(m + 1)
+    if status >= 0:
+        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
+        u, a = _stop_speed(normal, sign, rate, n)
+        if not a > 0.0:
+            status = -1
+        else:
+            dtj = 2.0 * u / (a * (1.0 - R))
+            grad = np.empty(m + 1)
+            _acceleration_gradient(flow, forcing, normal, sign, th, grad)
+            dyn = np.zeros(m + 1)  # d dtj / d[Y, th]
+            for c in range(m + 1):
+                dyn[c] = -dtj / a * grad[c]
+            for c in range(n):
+                dyn[n + c] -= 2.0 * sign * normal[c] / (a * (1.0 - R))
+            for c in range(m + 1):
+                s = 0.0
+                for q in range(m + 1):
+                    s += dyn[q] * J[q, c]
+                ddt[c] = s
+    if status < 0:  # the plastic impact at X0
+        for i in range(m):
+            Y[i] = X0[i]
+            for c in range(m + 1):
+                J[i, c] = 1.0 if i == c else 0.0
+        for c in range(m + 1):
+            J[m, c] = 1.0 if c == m else 0.0
+            dTv[c] = 0.0
+        th = theta0
+        T = 0.0
+    # the plastic law of the stop, (D + R I) / (1 + R), then s' = 0 exactly
+    Q = np.empty((m, m))
+    for i in range(m):
+        for c in range(m):
+            Q[i, c] = (D[i, c] + (R if i == c else 0.0)) / (1.0 + R)
+    for c in range(m):
+        s = 0.0
+        for r in range(n):
+            if r != pivot:
+                s -= normal[r] * Q[n + r, c]
+        Q[n + pivot, c] = s / normal[pivot]
+    Yp = np.empty(m)
+    for i in range(m):
+        s = 0.0
+        for c in range(m):
+            s += Q[i, c] * Y[c]
+        Yp[i] = s
+    htr = np.empty((m, m))
+    hcol = np.empty(m)
+    hrate = np.empty(m)
+    _held_segment(held, k, omega, dtj, Yp, th, X, htr, hcol, hrate)
+    QJ = np.empty((m, m + 1))
+    for i in range(m):
+        for c in range(m + 1):
+            s = 0.0
+            for q in range(m):
+                s += Q[i, q] * J[q, c]
+            QJ[i, c] = s
+    for i in range(m):
+        for c in range(m + 1):
+            s = hcol[i] * J[m, c] + hrate[i] * ddt[c]
+            for q in range(m):
+                s += htr[i, q] * QJ[q, c]
+            if c < m:
+                dX[i, c] = s
+            else:
+                dtheta[i] = s
+    for c in range(m + 1):
+        dT[c] = dTv[c] + ddt[c]
+    return status, T + dtj, th + omega * dtj
+
+
 @_jit
 def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     """Residual (and exact Jacobian) of the shooting system of a motion with sticking
@@ -694,9 +981,44 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     transitions = np.empty((p, m, m))
     pcols = np.empty((p, m))
     residual = np.empty(size)
+    accumulations = starts.copy()
+    accumulation_phases = phases.copy()
+    chatter_times = np.zeros(p)
+    chatter_status = np.zeros(p)
     for k in range(p):
         nxt = (k + 1) % p
-        if sticks[k]:
+        if sticks[k] and held.restitutions[k] > 0.0:
+            # entered through complete chatter: s_k runs from the landing impact k to the
+            # release, the held flow from the accumulation point (dX_r/dX_k and dX_r/dtheta_k
+            # through the chatter map and its duration)
+            cX = np.empty((m, m))
+            cth = np.empty(m)
+            cT = np.empty(m + 1)
+            status, Tc, th_inf = chatter_map(
+                flow, forcing, held, k, matrices[k], pivots[k], normals[k], impacts.signs[k],
+                positions[k], starts[k], phases[k], accumulations[k], cX, cth, cT)
+            chatter_status[k] = status
+            chatter_times[k] = Tc
+            accumulation_phases[k] = th_inf
+            Htr = np.empty((m, m))
+            Hcol = np.empty(m)
+            _held_segment(held, k, omega, stimes[k] - Tc, accumulations[k], th_inf,
+                          releases[k], Htr, Hcol, h_rate[k])
+            for i in range(m):
+                w = Hcol[i] * omega - h_rate[k, i]
+                s = Hcol[i] * (1.0 + omega * cT[m]) - h_rate[k, i] * cT[m]
+                for q in range(m):
+                    s += Htr[i, q] * cth[q]
+                h_col[k, i] = s
+                for c in range(m):
+                    s = w * cT[c]
+                    for q in range(m):
+                        s += Htr[i, q] * cX[q, c]
+                    h_tr[k, i, c] = s
+            release_phases[k] = phases[k] + omega * stimes[k]
+            force, _ = _pressing(held, k, releases[k], release_phases[k])
+            residual[p * m + rank[k]] = force
+        elif sticks[k]:
             _held_segment(held, k, omega, stimes[k], starts[k], phases[k], releases[k],
                           h_tr[k], h_col[k], h_rate[k])
             release_phases[k] = phases[k] + omega * stimes[k]
@@ -796,7 +1118,7 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
                 d_theta[c] += omega * (d_stick[c] + d_tau[c])
     return (phases, stimes, taus, starts, releases, release_phases, h_tr, h_col, h_rate,
             arrivals, rates, transitions, pcols, residual, J, search_shifts, search_starts,
-            search_phases)
+            search_phases, accumulations, accumulation_phases, chatter_times, chatter_status)
 
 
 @_jit

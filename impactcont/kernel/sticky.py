@@ -124,7 +124,7 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
                 dZ[k] = forced_response_derivative(hf.K[k], hf.M[k], hf.C[k], Zk, omega)
         now = (named.sticks, named.lifts, named.inverses, named.offsets, named.lam, named.V,
                named.Vi, named.xs, named.xd, Z, named.grads, named.forces, named.levels,
-               named.shifts)
+               named.shifts, named.restitutions, named.chatter_impacts)
         forcing = (omega, gam, bet, empty_c)
         period = 2.0 * math.pi * N / omega
         x = state[:size].copy()

@@ -653,8 +653,9 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
     stops : Stops
     sticking : bool
         Accept sticking phases: a lowercase letter (``"u"``, ``"l"``, ``"a"`` for the extra
-        stop ``"A"``) is an impact on that stop, plastic, followed by a sticking phase on it
-        until the release (:func:`impactcont.orbit.multi_impact.multi_impact_orbit`). A
+        stop ``"A"``) is an impact on that stop followed by a sticking phase on it (entered
+        by the impact itself when the stop is plastic, else through complete chatter) until
+        the release (:func:`impactcont.orbit.multi_impact.multi_impact_orbit`). A
         letter that is itself a stop's name stays that stop's impact.
 
     Raises
@@ -665,9 +666,9 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
 
     Notes
     -----
-    Whether a sticking stop is plastic (restitution 0: motions entered through complete
-    chatter are not solved by shooting yet) is checked where the restitutions are known,
-    :func:`sticking_pattern`.
+    Whether a sticking stop's restitution lets its impacts accumulate (``0 <= R < 1``;
+    ``R > 0`` enters the sticking phase through complete chatter) is checked where the
+    restitutions are known, :func:`sticking_pattern`.
     """
     if pattern is None:
         return UPPER * p
@@ -710,7 +711,9 @@ def sticking_pattern(osc: Any, pattern: str) -> tuple[str, np.ndarray]:
 
     A lowercase letter (``"u"``, ``"l"``, ``"a"`` for the extra stop ``"A"``) is an impact
     on that stop followed by a sticking phase on it until the release
-    (:func:`check_pattern` with ``sticking=True``).
+    (:func:`check_pattern` with ``sticking=True``): entered by the impact itself on a
+    plastic stop (restitution 0), through the complete chatter the impact starts on a stop
+    with ``0 < R < 1``.
 
     Parameters
     ----------
@@ -728,8 +731,10 @@ def sticking_pattern(osc: Any, pattern: str) -> tuple[str, np.ndarray]:
     Raises
     ------
     ParameterError
-        A sticking phase on a stop whose restitution is not 0: such a motion enters its
-        sticking phase through complete chatter, which shooting does not solve yet.
+        A sticking phase on a stop whose restitution is not in ``[0, 1)``: restitution 0
+        enters it by the plastic impact itself, ``0 < R < 1`` through complete chatter (the
+        chatter map of :func:`impactcont.kernel.shooting.chatter_map`); with ``R >= 1`` the
+        impacts do not accumulate.
     """
     known = _STICKING.setdefault(osc, {})
     found = known.get(pattern)
@@ -764,13 +769,13 @@ def _sticking_pattern(osc: Any, pattern: str) -> tuple[str, np.ndarray]:
                                                                       strict=True))
     for name in sorted({impacts[k] for k in np.flatnonzero(sticks)}):
         r = float(osc.stops.stop(name, osc.M, osc.b, osc.R).restitution)
-        if r != 0.0:
+        if not 0.0 <= r < 1.0:
             raise ParameterError(
                 f"pattern={pattern!r}: a sticking phase on stop {name!r}, whose restitution is "
-                f"{r!r}; shooting solves sticking phases entered by a plastic impact "
-                "(restitution 0) only: motions whose sticking is entered through complete "
-                f"chatter (restitution > 0) are not supported by shooting yet (give stop "
-                f"{name!r} restitution 0, or simulate the motion: ic.simulate)")
+                f"{r!r}; a sticking phase is entered by a plastic impact (restitution 0) or "
+                "through complete chatter (0 < restitution < 1: the impacts accumulate in a "
+                "finite time); with restitution >= 1 they do not accumulate (give stop "
+                f"{name!r} a restitution below 1, or simulate the motion: ic.simulate)")
     return impacts, sticks
 
 

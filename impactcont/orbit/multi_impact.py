@@ -720,19 +720,26 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
         if k < p + 1:
             raise ParameterError(f"guess: the simulation has {k} impacts; at least p+1={p + 1} "
                                  "are needed to seed an N-p motion")
-        times = np.array(guess.impact_times[-(p + 1):], float)
-        spat = guess.impact_stops[-(p + 1):-1] if guess.impact_stops else UPPER * p
+        kept, landings = _landings(guess)
+        if kept.size < p + 1:
+            raise ParameterError(f"guess: the simulation has {kept.size} impacts besides the "
+                                 f"chatter's; at least p+1={p + 1} are needed to seed an N-p "
+                                 "motion")
+        kept = kept[-(p + 1):]
+        all_times = np.asarray(guess.impact_times, dtype=float)
+        times = all_times[kept]
+        stops = guess.impact_stops or UPPER * k
+        spat = "".join(stops[i] for i in kept[:-1])
         taus, sticks, letters = np.diff(times), np.zeros(p), list(spat)
-        for phase in getattr(guess, "sticking", ()):  # a sticking phase from an impact
-            for i in range(p):
-                if (phase.ended_by == "release" and phase.stops == spat[i]
-                        and abs(phase.start - times[i]) <= 1e-9 * max(1.0, abs(times[i]))
-                        and phase.end <= times[i + 1]):
-                    sticks[i] = phase.end - phase.start
-                    taus[i] = times[i + 1] - phase.end
-                    letters[i] = spat[i].lower()
-        return (float(guess.impact_phases[-(p + 1)]), taus,
-                np.array(guess.impact_states[-(p + 1):-1], float), "".join(letters), sticks)
+        for i in range(p):
+            phase = landings.get(int(kept[i]))
+            if phase is not None and phase.end <= times[i + 1]:
+                sticks[i] = phase.end - times[i]
+                taus[i] = times[i + 1] - phase.end
+                letters[i] = spat[i].lower()
+        return (float(np.asarray(guess.impact_phases)[kept[0]]), taus,
+                np.array(np.asarray(guess.impact_states)[kept[:-1]], float), "".join(letters),
+                sticks)
     if isinstance(guess, Mapping):
         try:
             delta = float(guess["delta"])
@@ -751,6 +758,52 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
     raise TypeError(f"guess must be a MultiImpactOrbit, a PeriodicOrbit, a SimulationResult or "
                     f"a mapping with 'delta', 'flight_times', 'states'; got "
                     f"{type(guess).__name__}")
+
+
+def _landings(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
+    """The impacts of a simulation that are not inside a chatter, and the sticking phase
+    (ended by a release) that follows each landing impact.
+
+    A sticking phase starts at its landing impact (a plastic stop) or at the accumulation
+    point of the chatter the landing starts (restitution ``> 0``): the landing is then the
+    first of the impacts on that stop since the last impact on another stop or the last
+    release; the chatter's later impacts are part of the segment (the chatter map of
+    :func:`impactcont.kernel.shooting.chatter_map` resolves them) and are left out.
+    """
+    times = np.asarray(res.impact_times, dtype=float)
+    count = times.size
+    stops = res.impact_stops or UPPER * count
+    dropped = np.zeros(count, dtype=bool)
+    landings: dict[int, Any] = {}
+    chattering: set[str] = set()
+    ends = sorted(ph.end for ph in getattr(res, "sticking", ()))
+    for phase in getattr(res, "sticking", ()):
+        if phase.ended_by != "release":
+            continue
+        tol = 1e-9 * max(1.0, abs(phase.start))
+        last = int(np.searchsorted(times, phase.start + tol, side="right")) - 1
+        if last < 0 or stops[last] != phase.stops:
+            continue
+        before = [e for e in ends if e < times[last] - tol]
+        boundary = before[-1] if before else -math.inf
+        first = last
+        if phase.start - times[last] > tol:  # entered through chatter: back to its landing
+            while (first > 0 and stops[first - 1] == phase.stops
+                   and times[first - 1] > boundary):
+                first -= 1
+        dropped[first + 1:last + 1] = True
+        landings[first] = phase
+        if first < last:
+            chattering.add(phase.stops)
+    # a chatter still going on at the end of the run: its landing ends the last segment
+    last = count - 1
+    if last > 0 and stops[last] in chattering:
+        boundary = ends[-1] if ends else -math.inf
+        first = last
+        while first > 0 and stops[first - 1] == stops[last] and times[first - 1] > boundary:
+            first -= 1
+        dropped[first + 1:] = True
+    return np.flatnonzero(~dropped), landings
 
 
 def initial_unknowns(guess: Any, osc: ImpactOscillator, N: int, p: int) -> np.ndarray:

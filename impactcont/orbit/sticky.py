@@ -27,7 +27,7 @@ from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.kernel.arrays import HeldSegments, StickyFlights
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import sticking_pattern
-from impactcont.orbit.flow import Flow
+from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.held_flow import held_flow
 from impactcont.orbit.multi_impact import (
     _EPS,
@@ -51,8 +51,13 @@ from impactcont.orbit.periodic import IllConditionedWarning
 from impactcont.orbit.stop_geometry import StopGeometry
 
 __all__ = [
+    "CHATTER_SPEED",
+    "OMEGA_STEP",
     "RELEASE_SHIFT",
     "StickyShooting",
+    "chatter_entered",
+    "chatter_impacts",
+    "chatter_restitution",
     "held_forcing",
     "held_omega_derivatives",
     "held_segments",
@@ -103,6 +108,15 @@ class StickyShooting:
     search_shifts, search_starts, search_phases : ndarray, shape (p,), (p, 2n), (p,)
         Where the contact search of each flight from a release starts (0, the release
         state and phase without a stick; :data:`RELEASE_SHIFT`).
+    accumulations, accumulation_phases : ndarray, shape (p, 2n), (p,)
+        Where the held flow of each sticking phase starts: the accumulation point of the
+        chatter after impact k on a stop with restitution ``> 0``, else ``X_k``,
+        ``theta_k``.
+    chatter_times, chatter_status : ndarray, shape (p,)
+        The chatter's duration (0 without one; the held flow lasts ``s_k`` minus it) and
+        the chatter map's status (the impacts resolved, ``-1`` the chatter does not
+        accumulate, ``-2`` a bounce's return not found:
+        :func:`impactcont.kernel.shooting.chatter_map`).
     """
 
     phases: np.ndarray
@@ -123,6 +137,10 @@ class StickyShooting:
     search_shifts: np.ndarray
     search_starts: np.ndarray
     search_phases: np.ndarray
+    accumulations: np.ndarray
+    accumulation_phases: np.ndarray
+    chatter_times: np.ndarray
+    chatter_status: np.ndarray
 
     def flights(self) -> Shooting:
         """The flights from the releases as a
@@ -239,8 +257,42 @@ def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
                 if rows[k] is not None:
                     table[k] = rows[k][i]
             fields.append(table)
-        held = cache[pattern] = HeldSegments(np.array(sticks, dtype=np.bool_), *fields)
+        restitutions = np.array([chatter_restitution(osc, impacts[k]) if sticks[k] else 0.0
+                                 for k in range(p)])
+        counts = np.array([chatter_impacts(r) for r in restitutions], dtype=np.int64)
+        held = cache[pattern] = HeldSegments(np.array(sticks, dtype=np.bool_), *fields,
+                                             restitutions, counts)
     return tuple(held)
+
+
+#: The chatter after a landing impact is resolved impact by impact until its impact speed
+#: falls below this fraction of the landing's (``R^K <= CHATTER_SPEED``), then jumped over
+#: to its accumulation point (:func:`impactcont.kernel.shooting.chatter_map`): the jump's
+#: error is ``O(v_K^2)``, and the release forgets it (the held flow from the accumulation
+#: point, shifted along itself), measured in tests/integration/test_chatter_entered_motions.py.
+CHATTER_SPEED = 1e-5
+
+
+def chatter_restitution(osc: ImpactOscillator, stop: str) -> float:
+    """The restitution of `stop` (its name, a capital) on `osc`: ``> 0`` where a sticking
+    phase on it is entered through complete chatter."""
+    return float(osc.stops.stop(stop, osc.M, osc.b, osc.R).restitution)
+
+
+def chatter_impacts(restitution: float) -> int:
+    """How many impacts of a chatter on a stop of this restitution are resolved before the
+    jump: the smallest K with ``R^K <= CHATTER_SPEED`` (0 for a plastic stop). A fixed
+    count keeps the shooting residual smooth (no threshold switches inside a Newton solve)."""
+    if not restitution > 0.0:
+        return 0
+    return max(1, math.ceil(math.log(CHATTER_SPEED) / math.log(restitution)))
+
+
+def chatter_entered(osc: ImpactOscillator, pattern: str) -> bool:
+    """A sticking phase of `pattern` is entered through complete chatter (its stop's
+    restitution is ``> 0``)."""
+    impacts, sticks = sticking_pattern(osc, pattern)
+    return any(chatter_restitution(osc, impacts[k]) > 0.0 for k in np.flatnonzero(sticks))
 
 
 def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
@@ -297,7 +349,10 @@ def held_omega_derivatives(flow: Flow, pattern: str) -> np.ndarray:
 def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
                         sh: StickyShooting | None = None) -> np.ndarray:
     """``dr/d omega`` of :func:`sticky_shooting` at fixed unknowns ``u``, exact (compiled:
-    :func:`impactcont.kernel.shooting.sticky_frequency_column`).
+    :func:`impactcont.kernel.shooting.sticky_frequency_column`); with a sticking phase
+    entered through complete chatter, central differences in omega of step
+    :data:`OMEGA_STEP` ``omega`` (the chatter map's dependence on omega is not written out:
+    error about ``h^2`` plus ``eps / h``, ``1e-10`` relative).
 
     The phases, the period's last flight time, the steady forced state of each flight and
     of each held system (its amplitude ``Z_r(omega)``) and, through them, the release rows;
@@ -320,6 +375,11 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
     osc = flow.osc
     impacts = sticking_pattern(osc, pattern)[0]
     x = _sticky_unknowns(osc, pattern, u, "u")
+    if chatter_entered(osc, pattern):  # central differences (the chatter map's omega)
+        h = OMEGA_STEP * osc.omega
+        up, down = (sticky_shooting(flow_of(osc.replace(omega=osc.omega + d)), N, pattern, x,
+                                    jacobian=False).residual for d in (h, -h))
+        return (up - down) / (2.0 * h)
     if sh is None:
         sh = sticky_shooting(flow, N, pattern, x, jacobian=False)
     shot = tuple(np.zeros((0, 0)) if name == "jacobian" else getattr(sh, name)
@@ -329,6 +389,11 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
         tuple(flow.omega_arrays()), tuple(impact_sequence(_geometry(flow, impacts))),
         held_segments(flow, pattern), held_omega_derivatives(flow, pattern),
         TWO_PI * N / osc.omega, shot)
+
+
+#: The relative step in omega of :func:`sticky_omega_column` for a motion whose sticking
+#: phases are entered through complete chatter.
+OMEGA_STEP = 1e-5
 
 
 def held_forcing(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
@@ -407,6 +472,11 @@ def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
         if np.shape(value) != (size,):
             raise ParameterError(f"{name} must have shape ({size},) like predicted; got "
                                  f"{np.shape(value)}")
+    if chatter_entered(osc, pattern):
+        raise ParameterError(f"sticky_palc_step: pattern={pattern!r} enters a sticking phase "
+                             "through complete chatter, which the compiled corrector does "
+                             "not solve (MultiImpactBranchProblem.palc_step returns None for "
+                             "it: the continuation core corrects)")
     impacts = sticking_pattern(osc, pattern)[0]
     errors = osc.modes.eigenvalue_errors
     errors = np.zeros(osc.n) if errors is None else np.asarray(errors, dtype=float)
@@ -505,15 +575,27 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> 
         held = held_flow(osc, impacts[k])
         stop, s = impacts[k], float(sh.stick_times[k])
         releases[k] = sh.releases[k]
-        onset = landing[k] = float(held.pressing(sh.starts[k], sh.phases[k]))
-        if not s > 0.0:
-            reasons.append(f"sticking phase {k} (stop {stop!r}) has duration {s:.3g} <= 0")
+        start, phase = sh.accumulations[k], float(sh.accumulation_phases[k])
+        onset = landing[k] = float(held.pressing(start, phase))
+        status, chatter = int(sh.chatter_status[k]), float(sh.chatter_times[k])
+        if status == -1:
+            reasons.append(f"impact {k}: incomplete chatter: the acceleration of the stop "
+                           f"coordinate does not point into stop {stop!r} during the chatter "
+                           "the impact starts (its impacts do not accumulate)")
+        elif status < 0:
+            reasons.append(f"impact {k}: the chatter on stop {stop!r} has a bounce whose "
+                           "return to the stop is not found")
+        if not s > chatter:
+            reasons.append(f"sticking phase {k} (stop {stop!r}) has duration {s - chatter:.3g} "
+                           f"<= 0 after its chatter ({chatter:.3g})")
             continue
         if not onset > 0.0:
+            where = ("at the chatter's accumulation point" if chatter > 0.0 else
+                     "after the plastic impact")
             reasons.append(f"impact {k}: sticking onset: the pressing force on stop {stop!r} "
-                           f"after the plastic impact is {onset:.3g} <= 0 (the arrival "
-                           "acceleration does not point into the stop)")
-        low, when = held.pressing_minimum(s, sh.starts[k], float(sh.phases[k]))
+                           f"{where} is {onset:.3g} <= 0 (the acceleration does not point "
+                           "into the stop)")
+        low, when = held.pressing_minimum(s - chatter, start, phase)
         pressing[k] = low
         if onset > 0.0 and not low > 0.0:
             reasons.append(f"sticking phase {k}: release grazing: the pressing force on stop "
