@@ -568,10 +568,13 @@ def _shooting_start(kind: Label, start: xr.Dataset | MultiImpactOrbit, which: in
     if isinstance(start, MultiImpactOrbit):
         return start, False
     symmetric = bool(json.loads(start.attrs.get("options", "{}")).get("symmetric", False))
-    k = [i for i, lab in enumerate(start[special_variable("label")].values.tolist())
-         if lab == kind][which]
-    orbit = _sticky_special_orbit(start, k) if special_variable("stick_time_k") in start \
-        else special_orbit(start, kind, which)
+    rows = [i for i, lab in enumerate(start[special_variable("label")].values.tolist())
+            if lab == kind]
+    if special_variable("stick_time_k") in start and 0 <= which < len(rows):
+        orbit = _sticky_special_orbit(start, rows[which])
+    else:  # (refuses an index out of range)
+        orbit = special_orbit(start, kind, which)
+    k = rows[which]
     if start[special_variable("status")].values[k] != "located":
         log.warning("the %s point %d of the branch is only bracketed: the curve starts from "
                     "the motion re-solved there", kind, which)
