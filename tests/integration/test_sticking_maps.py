@@ -227,3 +227,53 @@ def test_refusals_of_a_sticky_map():
     with pytest.raises(ParameterError, match="restitution"):
         ic.stability_map(riding(), parameters=("R", "omega"),
                          grid={"R": [0.0, 0.1], "omega": OMEGAS})
+
+
+SCENE = """title = "a map of the riding motion"
+[oscillator]
+M = [[1.0, 0.0], [0.0, 0.2]]
+K = [[1.0, 0.0], [0.0, 0.0]]
+F = [1.0, 0.0]
+R = 0.0
+eta = 0.3
+b = 0.3
+omega = 2.3
+stop_mass = 2
+stop_relative_to = 1
+mirror_stop = true
+
+[[simulations]]
+name = "riding"
+start = "state"
+state = [%r, %r, %r, %r]
+delta = 0.0
+periods = 16
+
+[[maps]]
+name = "ride_map"
+start = "riding"
+N = 1
+p = 2
+ranges = { b = [0.29, 0.3], omega = [2.2, 2.5] }
+points = [16, 2]  # in the order of the parameters: (omega, b)
+"""
+
+
+def test_a_scene_maps_the_family_of_a_simulation_that_settled_on_a_sticky_motion(tmp_path):
+    """[[maps]] with start = a simulation that settled on the riding motion: the scene's
+    map is stability_map's of that motion over the same grid (the sticky variables
+    included)."""
+    from impactcont.scene import read_output, run_scene
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE % tuple(float(v) for v in riding_start(damper(2.3))))
+    result = run_scene(scene, output=tmp_path / "out")
+    assert result.ok
+    ds = read_output(tmp_path / "out" / "maps.nc").datasets["ride_map"]
+    ds = ds.transpose("b", "omega", ...)  # the scene's order of the two parameters
+    mine = riding_map()
+    assert sorted(ds.attrs["pattern"]) == ["l", "u"]
+    assert np.array_equal(ds["found"].values, mine["found"].values)
+    assert np.array_equal(ds["reason"].values, mine["reason"].values)
+    np.testing.assert_allclose(np.sort(ds["stick_time_k"].values, axis=-1),
+                               np.sort(mine["stick_time_k"].values, axis=-1), atol=1e-9, rtol=0)
