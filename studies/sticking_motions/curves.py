@@ -15,7 +15,10 @@ later, where the lower wall presses the ball 0) in ``(theta, x1', omega)`` at th
 package's release phase and speed, which Newton moves to 30 digits).
 
 Run: ``python studies/sticking_motions/curves.py [eta|b|m2]`` (about half a minute: the
-branch to the end of the rides, the curve, one closed form a point).
+branch to the end of the rides, the curve, one closed form a point). With ``--cost`` it
+times a point of the SE curve against one of an SN curve of the same machine's plain
+motion (``"UL"`` at R = 0.6, whose branch has no PD; the SN test is the PD test's kind: a
+signed smallest singular value from the shot with a forward-difference row).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import importlib.util
 import json
 import logging
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -58,11 +62,11 @@ def closed_form() -> Any:
 
 def damper(omega: float, **more: Any) -> ic.ImpactOscillator:
     """Case (c): primary 1 on spring 1 (eta 0.3), plastic ball 0.2 in |x2 - x1| <= 0.3."""
-    values = {"eta": 0.3, "b": 0.3, **more}
+    values = {"eta": 0.3, "b": 0.3, "R": 0.0, **more}
     mass = values.pop("m", 0.2)
     return ic.ImpactOscillator(M=np.diag([1.0, mass]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
-                               R=0.0, omega=omega, stops=Stops(mass=2, relative_to=1,
-                                                               mirror=True), **values)
+                               omega=omega, stops=Stops(mass=2, relative_to=1, mirror=True),
+                               **values)
 
 
 def riding_start(osc: ic.ImpactOscillator) -> np.ndarray:
@@ -117,11 +121,55 @@ def compare(ds: Any, p2: str) -> list[tuple[float, float, float]]:
     return out
 
 
+def plain_branch() -> Any:
+    """The same machine's plain motion (``"UL"``, R = 0.6: no sticking phases) settled on
+    by the simulator at omega 2.5 (as ``branch_cost.py``), followed in omega to its fold (SN
+    at 4.3995; its branch in omega (0.8, 5) has GR, BP, SN and ZV, no PD)."""
+    osc = damper(2.5, R=0.6)
+    motion = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.array([0.0, 0.3, 0.0, 0.0]),
+                                                           0.0, 150.0), pattern="UL")
+    return ic.continuation(motion, parameter="omega", bounds=(2.4, 4.5), ds_max=0.05,
+                           detect=["SN"])
+
+
+def cost(rounds: int = 3) -> None:
+    """Prints the cost of a curve point: the SE curve of the riding motion against the SN
+    curve of the same machine's plain motion (each in (omega, eta), eta in (0.2, 0.4),
+    ``ds_max = 0.02``; the whole :func:`impactcont.curve` call over its points), without
+    and with the location of codim-2 points, the best of `rounds` after a warm-up run."""
+    curves = {"SE (sticky 'ul', R 0)": (ride_branch(), "SE"),
+              "SN (plain 'UL', R 0.6)": (plain_branch(), "SN")}
+
+    def run(branch: Any, kind: str, codim2: bool) -> tuple[float, int]:
+        begin = time.perf_counter()
+        ds = ic.curve(None, None, kind, start=branch, parameters=("omega", "eta"),
+                      bounds={"omega": (1.0, 5.0), "eta": BOXES["eta"]}, ds_max=0.02,
+                      detect_codim2_points=codim2)
+        return (time.perf_counter() - begin) / ds.sizes["point"], ds.sizes["point"]
+
+    for branch, kind in curves.values():
+        run(branch, kind, False)  # warm
+    for codim2 in (False, True):
+        best: dict[str, tuple[float, int]] = {}
+        for _ in range(rounds):
+            for name, (branch, kind) in curves.items():
+                best[name] = min(best.get(name, (math.inf, 0)), run(branch, kind, codim2))
+        plain = best["SN (plain 'UL', R 0.6)"][0]
+        print(("with" if codim2 else "without") + " codim-2 points: " + ", ".join(
+            f"{name} {seconds * 1e3:.1f} ms/point ({points} points, ratio "
+            f"{seconds / plain:.2f})" for name, (seconds, points) in best.items()))
+    print(f"load {os.getloadavg()[0]:.1f}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("p2", nargs="?", default="eta", choices=sorted(BOXES))
+    parser.add_argument("--cost", action="store_true", help="time a curve point instead")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
+    if args.cost:
+        cost()
+        return 0
     t0 = time.perf_counter()
     branch = ride_branch()
     t1 = time.perf_counter()

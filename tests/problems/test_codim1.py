@@ -240,3 +240,26 @@ def test_sticking_kinds_need_sticking_phases(ride) -> None:
     with pytest.raises(ParameterError, match="symmetric=True: a motion with sticking phases"):
         ShootingCurve(ride.oscillator, 1, 2, ride.pattern, "SE", ("omega", "eta"),
                       symmetric=True)
+
+
+def test_a_sticky_curve_ends_where_its_motion_stops_being_physical(ride) -> None:
+    """Between two accepted points whose flights' clearance (GR) or another bounding test
+    changes sign the curve of a motion with sticking phases ends, saying which; a test that
+    keeps its sign, or a NaN, does not end it; a curve of a plain motion never ends so."""
+    from types import SimpleNamespace
+
+    osc = ride.oscillator
+    se = ShootingCurve(osc, 1, 2, ride.pattern, "SE", ("omega", "eta"), symmetric=False)
+    x = np.append(np.append(ride.unknowns, osc.omega), osc.eta)
+    inside = SimpleNamespace(impact_velocity=0.4, gap_min=0.6)
+    assert se.physical_end(x, inside, x, SimpleNamespace(impact_velocity=0.3, gap_min=0.2)) \
+        is None
+    assert se.physical_end(x, inside, x, SimpleNamespace(impact_velocity=0.3,
+                                                         gap_min=math.nan)) is None
+    why = se.physical_end(x, inside, x, SimpleNamespace(impact_velocity=0.3, gap_min=-1e-9))
+    assert why is not None and "the grazing test (GR) changes sign: 0.6 -> -1e-09" in why
+    why = se.physical_end(x, inside, x, SimpleNamespace(impact_velocity=-0.1, gap_min=0.6))
+    assert why is not None and "(ZV) changes sign" in why
+    plain = ShootingCurve(_paper(0.5), 1, 1, "U", "PD", ("omega", "b"), symmetric=False)
+    assert plain.physical_end(x, inside, x, SimpleNamespace(impact_velocity=0.3,
+                                                            gap_min=-1.0)) is None
