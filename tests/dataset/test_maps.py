@@ -193,3 +193,54 @@ def test_a_map_over_an_element_is_one_of_either_layout(computed, tmp_path) -> No
     assert dmm.map_parameters(family) == ("b", "k2")
     for ds in (n1, family):
         xr.testing.assert_identical(ic.load(ic.save(ds, tmp_path / "m.nc")), ds)
+
+
+# -- a map of a motion with sticking phases ------------------------------------------------
+PRELOADED = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.0, b=0.0,
+                                omega=0.8, eta=0.05)
+
+
+def _sticky_values(shape: tuple[int, int], p: int = 1, n: int = 1) -> dict:
+    """Values of every variable of a sticky map: a point not physical where its stick
+    ended (reason 1), one not found."""
+    values = {"found": np.ones(shape, bool), "newton_iterations": np.full(shape, 3, np.int32),
+              "stable": np.ones(shape, bool), "physical": np.ones(shape, bool),
+              "contact_checked": np.ones(shape, bool), "spectral_radius": np.zeros(shape),
+              "critical_multiplier": np.zeros(shape, complex), "delta": np.ones(shape),
+              "gap_min": np.ones(shape), "impact_velocity_k": np.ones((*shape, p)),
+              "flight_time_k": np.ones((*shape, p)), "state_k": np.zeros((*shape, p, 2 * n)),
+              "stick_time_k": np.full((*shape, p), 0.5), "release_phase_k": np.ones((*shape, p)),
+              "pressing_min_k": np.ones((*shape, p)), "landing_pressing_k": np.ones((*shape, p)),
+              "stick_time_min": np.full(shape, 0.5), "pressing_min": np.ones(shape),
+              "reason": np.zeros(shape, np.int32)}
+    values["physical"][0, 0] = False
+    values["stick_time_min"][0, 0] = values["stick_time_k"][0, 0] = -0.1
+    values["reason"][0, 0] = dmm.MAP_REASONS["stick_ended"]
+    values["found"][-1, -1] = values["physical"][-1, -1] = values["stable"][-1, -1] = False
+    return values
+
+
+def test_a_sticky_map_holds_its_sticks_and_reasons_and_round_trips(tmp_path) -> None:
+    """A pattern with a lowercase letter takes the sticky variables (required: one missing
+    is refused by name), the reason with its CF flag attributes, and loads back identical;
+    the reasons are distinct bits named in the order of their masks."""
+    masks = list(dmm.MAP_REASONS.values())
+    assert masks == [1 << k for k in range(len(masks))]
+    values = _sticky_values((2, 3))
+    args = {"oscillator": PRELOADED, "N": 1, "pattern": "u", "parameters": ("omega", "F[1]"),
+            "grid": {"omega": [0.7, 0.8], "F[1]": [2.0, 3.0, 4.0]}, "values": values,
+            "symmetric": False, "seed": {"omega": 0.8}, "options": {}}
+    ds = dmm.multi_impact_map_dataset(**args)
+    for key, spec in dmm.STICKY_MAP_VARIABLES.items():
+        assert ds[key].dims == ("omega", "F[1]", *spec.extra_dims)
+        assert ds[key].attrs["units"] == spec.units
+    assert ds["reason"].attrs["flag_meanings"].split() == list(dmm.MAP_REASONS)
+    assert dmm.validate_multi_impact_map_dataset(ds) is ds
+    back = ic.load(ic.save(ds, tmp_path / "sticky.nc"))
+    xr.testing.assert_identical(back, ds)
+    assert dmm.sticky_pattern("u") and not dmm.sticky_pattern("UL")
+    with pytest.raises(ValueError, match="missing 'reason'"):
+        dmm.multi_impact_map_dataset(**{**args, "values": {
+            k: v for k, v in values.items() if k != "reason"}})
+    with pytest.raises(ValueError, match=r"missing variable\(s\) \['stick_time_min'\]"):
+        dmm.validate_multi_impact_map_dataset(ds.drop_vars("stick_time_min"))

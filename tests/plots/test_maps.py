@@ -294,3 +294,41 @@ def test_two_parameter_diagram_draws_the_map_of_a_family_as_its_own_diagram(fami
         import matplotlib.pyplot as plt
 
         plt.close(fig)
+
+
+def test_a_sticky_map_shades_each_sticking_reason_as_its_own_region() -> None:
+    """A map with the variable ``reason`` (a motion with sticking phases): a found point that
+    is not physical is shaded by its first sticking reason (stick ended 5, release grazing
+    6, sticking onset 7; SE before SO before RG), a plain reason as before (1); each shade
+    present is named in the legend."""
+    from impactcont.dataset.maps import MAP_REASONS
+
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.0, b=0.0,
+                              omega=0.8, eta=0.05)
+    shape, p = (2, 3), 1
+    reason = np.array([[0, MAP_REASONS["stick_ended"] | MAP_REASONS["release_grazing"],
+                        MAP_REASONS["release_grazing"]],
+                       [MAP_REASONS["sticking_onset"] | MAP_REASONS["release_grazing"],
+                        MAP_REASONS["impact_velocity"], 0]], dtype=np.int32)
+    physical = reason == 0
+    found = np.ones(shape, bool)
+    found[1, 2] = False
+    values = {"found": found, "newton_iterations": np.full(shape, 3),
+              "stable": found, "physical": physical & found,
+              "contact_checked": found, "spectral_radius": np.zeros(shape),
+              "critical_multiplier": np.zeros(shape, complex), "delta": np.zeros(shape),
+              "gap_min": np.ones(shape), "impact_velocity_k": np.ones((*shape, p)),
+              "flight_time_k": np.ones((*shape, p)), "state_k": np.zeros((*shape, p, 2)),
+              **{k: np.ones((*shape, p)) for k in ("stick_time_k", "release_phase_k",
+                                                   "pressing_min_k", "landing_pressing_k")},
+              "stick_time_min": np.ones(shape), "pressing_min": np.ones(shape),
+              "reason": reason}
+    ds = multi_impact_map_dataset(oscillator=osc, N=1, pattern="u", parameters=("omega", "F0"),
+                                  grid={"omega": [0.7, 0.8], "F0": [2.0, 3.0, 4.0]},
+                                  values=values, symmetric=False, seed={"omega": 0.8, "F0": 3.0},
+                                  options={})
+    np.testing.assert_array_equal(multi_map_regions(ds).values, [[3, 5, 6], [7, 1, 0]])
+    ax = multi_impact_map_diagram(ds, ax=_family_axes())
+    texts = [t.get_text() for t in (ax.get_legend() or ax.figure.legends[0]).get_texts()]
+    for code in (5, 6, 7, 1):
+        assert MULTI_MAP_REGIONS[code][0] in texts
