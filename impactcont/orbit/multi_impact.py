@@ -798,7 +798,8 @@ def _landings(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
     # a chatter still going on at the end of the run: its landing ends the last segment
     last = count - 1
     if last > 0 and stops[last] in chattering:
-        boundary = ends[-1] if ends else -math.inf
+        before = [e for e in ends if e < times[last]]
+        boundary = before[-1] if before else -math.inf
         first = last
         while first > 0 and stops[first - 1] == stops[last] and times[first - 1] > boundary:
             first -= 1
