@@ -708,3 +708,31 @@ def test_a_sticky_map_refuses_the_half_system_and_a_bad_symmetric(riding_start):
         multi_impact_map(riding_start, ("b", "omega"), grid=grid, symmetric=True)
     with pytest.raises(ParameterError, match="symmetric must be True, False or None"):
         multi_impact_map(riding_start, ("b", "omega"), grid=grid, symmetric="yes")
+
+
+def test_ctrl_c_and_a_file_keep_a_sticky_map_as_every_map(riding_start, monkeypatch, tmp_path):
+    """A sticky map written to a file (out=) equals the one in memory, its sticky
+    variables included; a Ctrl-C at its third band returns the two bands done, marked
+    (interrupted, computed), the rest not found, with its sticky variables NaN there."""
+    pytest.importorskip("dask")
+    from impactcont.analysis import family_maps
+
+    grid = {"b": np.linspace(0.28, 0.32, 4), "omega": np.linspace(2.25, 2.35, 3)}
+    in_memory = multi_impact_map(riding_start, ("b", "omega"), grid=grid, rows_per_task=1)
+    lazy = multi_impact_map(riding_start, ("b", "omega"), grid=grid, rows_per_task=1,
+                            out=tmp_path / "sticky.nc")
+    on_disk = lazy.load()
+    lazy.close()
+    xr.testing.assert_identical(on_disk.drop_attrs(), in_memory.drop_attrs())
+    real = family_maps._band_task
+    monkeypatch.setattr(family_maps, "_band_task",
+                        functools.partial(_interrupted_after, 3, real))
+    _interrupted_after.calls = 0
+    kept = multi_impact_map(riding_start, ("b", "omega"), grid=grid, rows_per_task=1)
+    assert kept.attrs["interrupted"] == 1 and kept.attrs["points_computed"] == 2 * 3
+    computed = kept["computed"].values
+    assert computed.sum() == 6
+    assert not kept["found"].values[~computed].any()
+    assert np.isnan(kept["stick_time_min"].values[~computed]).all()
+    np.testing.assert_array_equal(kept["stick_time_k"].values[computed],
+                                  in_memory["stick_time_k"].values[computed])
