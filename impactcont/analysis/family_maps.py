@@ -357,6 +357,11 @@ _SOLVE_ERRORS = (ParameterError, np.linalg.LinAlgError, FloatingPointError, Valu
                  ZeroDivisionError)
 
 
+#: Branch problems a sticky sweep keeps at once (one per value of the parameter that is not
+#: continued), the least recently used dropped.
+_PROBLEMS_KEPT = 64
+
+
 def _wrap(phase: np.ndarray) -> np.ndarray:
     """Phases wrapped to (-pi, pi]."""
     return np.pi - np.mod(np.pi - np.asarray(phase, dtype=float), 2.0 * np.pi)
@@ -381,6 +386,8 @@ class _StickySetting:
 
     sticky = True
     half = False
+    #: branch problems built by the last sweep
+    built = 0
 
     def __init__(self, orbit: MultiImpactOrbit, params: tuple[ModelParameter, ModelParameter],
                  symmetric: Any, tol: float, max_iter: int, max_change: float,
@@ -407,16 +414,21 @@ class _StickySetting:
 
     def problem(self, params: tuple[ModelParameter, ModelParameter], values: tuple[float, float],
                 problems: dict[float, MultiImpactBranchProblem]) -> MultiImpactBranchProblem:
-        """The branch problem at the value of the parameter that is not continued (built
-        once per value in `problems`)."""
+        """The branch problem at the value of the parameter that is not continued, kept in
+        `problems` (the last :data:`_PROBLEMS_KEPT` used: each holds its flows and shots;
+        one is built again in about a millisecond)."""
         k = 1 - self.continued
         value = float(values[k])
-        found = problems.get(value)
+        found = problems.pop(value, None)
         if found is None:
             param = params[k]
             osc = _replaced(self.osc, {param.name: param}, {param.name: value})
-            found = problems[value] = MultiImpactBranchProblem(
-                osc, self.N, self.p, params[self.continued].name, self.pattern)
+            found = MultiImpactBranchProblem(osc, self.N, self.p, params[self.continued].name,
+                                             self.pattern)
+            self.built += 1
+            if len(problems) >= _PROBLEMS_KEPT:
+                del problems[next(iter(problems))]  # the least recently used
+        problems[value] = found  # the most recently used last
         return found
 
     def newton(self, problem: MultiImpactBranchProblem, lam: float, x0: np.ndarray
@@ -489,6 +501,7 @@ class _StickySetting:
         found, unknowns = out["found"], np.full((npts, x_seed.size), np.nan)
         tried = np.zeros(npts, dtype=np.int64)
         problems: dict[float, MultiImpactBranchProblem] = {}
+        self.built = 0
         queue = collections.deque([(seed[0] * n1 + seed[1], -1)])
         attempts = iterations = 0
         while queue:
@@ -524,8 +537,11 @@ class _StickySetting:
                     q = k0 * n1 + k1
                     if not found[q] and tried[q] < self.max_attempts:
                         queue.append((q, point))
-        if evaluate:
-            for point in np.flatnonzero(found):
+        if evaluate:  # one problem after the other: the points by its parameter's value
+            points = np.flatnonzero(found)
+            if self.continued == 0:
+                points = points[np.argsort(points % n1, kind="stable")]
+            for point in points:
                 i0, i1 = divmod(int(point), n1)
                 values = (float(c0[i0]), float(c1[i1]))
                 problem = self.problem(params, values, problems)
@@ -535,7 +551,7 @@ class _StickySetting:
                     unknowns[point] = np.nan
                     out["newton_iterations"][point] = -1
         solved = int(np.count_nonzero(found))
-        return out, unknowns, (solved, attempts, iterations, False), len(problems)
+        return out, unknowns, (solved, attempts, iterations, False), self.built
 
     @staticmethod
     def evaluate(problem: MultiImpactBranchProblem, lam: float, u: np.ndarray, checks: bool,
