@@ -1042,10 +1042,12 @@ def _shooting_crossings(ds: xr.Dataset, parameter: str, value: float
         for i in (k, k + 1):  # the stored motions as unknowns of the curve problem
             lam = float(ds[problem.parameters[1]].values[i])
             osc = oscillator_from_dataset(ds, int(i))
-            u = initial_unknowns({"delta": float(ds["delta_k"].values[i, 0]),
-                                  "flight_times": ds["flight_time_k"].values[i],
-                                  "states": ds["state_k"].values[i],
-                                  "pattern": pattern_of(ds)}, osc, problem.N, problem.p)
+            stored = {"delta": float(ds["delta_k"].values[i, 0]),
+                      "flight_times": ds["flight_time_k"].values[i],
+                      "states": ds["state_k"].values[i], "pattern": pattern_of(ds)}
+            if "stick_time_k" in ds:  # a motion with sticking phases: its stick times
+                stored["stick_times"] = np.nan_to_num(ds["stick_time_k"].values[i])
+            u = initial_unknowns(stored, osc, problem.N, problem.p)
             base = problem.branch_problem(lam)
             v = base.half_unknowns(u) if symmetric else u
             xs.append(np.concatenate([v, [_value(osc, problem.parameters[0])], [lam]]))

@@ -84,6 +84,12 @@ def test_the_se_curve_is_the_closed_form_end_of_the_rides(study, se_curve):
     # the omega of the end falls as the damping grows (the rides end earlier)
     order = np.argsort(eta)
     assert np.all(np.diff(ds["omega"].values[order]) < 0)
+    # its crossing of eta = 0.31 solved on the curve (from the stored stick times) is the
+    # closed form's end there
+    (crossing,) = ic.curve_crossings(ds, "eta", 0.31)
+    k = crossing["point"]
+    end = study.riding_end_at("eta", 0.31, (*study.upper_release(ds, k), crossing["omega"]))
+    assert crossing["omega"] == pytest.approx(float(end), abs=1e-9)
 
 
 def test_the_se_curve_point_is_a_zero_of_the_branch_tests(study, se_curve):
@@ -183,3 +189,44 @@ def test_sticking_kinds_are_refused_on_motions_without_sticking_phases():
         with pytest.raises(ic.ParameterError, match="curves of motions with sticking phases"):
             ic.curve(osc, 1, kind, start={"omega": 1.0, "b": 0.6}, bounds={
                 "omega": (0.5, 2.0), "b": (0.1, 1.0)})
+
+
+@pytest.fixture(scope="module")
+def light_branch(study):
+    """The lightly damped riding damper (eta = 0.02) from its simulated steady state at
+    omega 0.5, followed down in omega: SO (with RG: the landing's pressing force is the
+    smallest) near 0.3245 and 0.3184, NS near 0.2952."""
+    osc = study.damper(0.5, eta=0.02)
+    start = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.array([0.0, 0.3, 0.0, 0.0]),
+                                                          0.0, 60.0))
+    assert start.pattern == "ul" and start.physical
+    return ic.continuation(start, parameter="omega", bounds=(0.28, 0.5), ds_max=0.05,
+                           both_directions=False, direction=-1)
+
+
+def test_an_ns_curve_of_a_motion_with_sticking_phases(study, light_branch):
+    """An NS curve of the sticky motion comes for free (the sticky G, its exact dF/du, the
+    column in eta from the problem in eta): from the branch's NS in (omega, eta), eta in
+    (0.018, 0.022), the motion solved alone at three of its points has its complex pair on
+    the unit circle to 1e-7 (the stick's multipliers 0 to 1e-12)."""
+    ds = ic.curve(None, None, "NS", start=light_branch, parameters=("omega", "eta"),
+                  bounds={"omega": (0.1, 1.0), "eta": (0.018, 0.022)}, ds_max=0.02)
+    message = json.loads(ds.attrs["options"])["message"]
+    assert message.count("parameter bound reached") == 2, message
+    for k in (0, ds.sizes["point"] // 2, ds.sizes["point"] - 1):
+        _, orbit = _motion(study, ds, k)
+        mu = np.sort(np.abs(orbit.multipliers))[::-1]
+        assert mu[:2] == pytest.approx([1.0, 1.0], abs=1e-7)
+        assert abs(orbit.multipliers[0].imag) > 0.1 and mu[2:].max() < 1e-12
+
+
+def test_an_so_curve_has_its_landing_pressing_zero(study, light_branch):
+    """The SO curve from the branch's first SO (eta 0.018 to 0.022): the motion solved alone
+    at three of its points lands with pressing force 0 (sticking_onset_test) to 1e-9."""
+    ds = ic.curve(None, None, "SO", start=light_branch, parameters=("omega", "eta"),
+                  bounds={"omega": (0.1, 1.0), "eta": (0.018, 0.022)}, ds_max=0.02)
+    message = json.loads(ds.attrs["options"])["message"]
+    assert "parameter bound reached" in message, message
+    for k in (0, ds.sizes["point"] // 2, ds.sizes["point"] - 1):
+        _, orbit = _motion(study, ds, k)
+        assert sticking_onset_test(orbit) == pytest.approx(0.0, abs=1e-9)
