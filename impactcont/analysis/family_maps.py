@@ -446,7 +446,8 @@ class _StickySetting:
                 ok = step.status == "converged" and np.all(np.isfinite(step.state))
                 return (np.array(step.state[:-1]) if ok else None), int(step.iterations)
             return self._newton(problem, lam, x0)
-        except _SOLVE_ERRORS:
+        except _SOLVE_ERRORS as error:
+            log.debug("Newton at %s = %r: %s", problem.parameter, lam, error)
             return None, self.max_iter
 
     def _newton(self, problem: MultiImpactBranchProblem, lam: float, x0: np.ndarray
@@ -561,7 +562,8 @@ class _StickySetting:
         orbit`) into `out` at `point`; False where it cannot be evaluated."""
         try:
             orbit = problem.orbit(u, lam, checks=checks)
-        except _SOLVE_ERRORS:
+        except _SOLVE_ERRORS as error:
+            log.debug("the motion at %s = %r not evaluated: %s", problem.parameter, lam, error)
             return False
         mu = np.asarray(orbit.multipliers)
         held = problem.sticks
