@@ -1,4 +1,5 @@
-"""Two-parameter continuation of codim-1 curves of every motion: SN, PD, NS, GR, ZV and BP.
+"""Two-parameter continuation of codim-1 curves of every motion: SN, PD, NS, GR, ZV, BP,
+and SE, RG, SO of motions with sticking phases.
 
 ``curve(osc, N, kind, start=..., parameters=(p1, p2), bounds=...)`` = pick a start (a
 special point of a branch dataset, N-1 or N-p; a motion; explicit values; or one found
@@ -733,7 +734,10 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     kind : Label or str
         Saddle-node, period-doubling, Neimark-Sacker, grazing or
         zero-velocity-impact curve; symmetry-breaking pitchfork (BP) from a branch of
-        symmetric N-p motions (the problems of :mod:`impactcont.problems.codim1`).
+        symmetric N-p motions; the end of a sticking phase (SE), release grazing (RG) or
+        sticking onset (SO) from a branch of motions with sticking phases, which end
+        where their motion stops being physical (the problems of
+        :mod:`impactcont.problems.codim1`).
     start : xarray.Dataset, motion, mapping or None
         A branch dataset from :func:`impactcont.continuation` or of N-p motions
         (:func:`impactcont.multi_impact_continuation`, a switched branch): its first

@@ -8,10 +8,12 @@ Witnesses: the riding damper's SE curve in (omega, eta) against the closed form'
 the rides at each eta (``studies/sticking_motions/curves.py``: mpmath at 30 digits, the
 package's values only as Newton's seed); points of its RG curve against the motion solved
 alone there (its smallest pressing force 0) and the simulator (on one side of the curve
-it rides the whole stick, on the other it releases early, where the pressing force dips).
+it rides the whole stick, on the other it releases early, where the pressing force dips);
+an NS curve and an SO curve of the lightly damped damper against the motion solved alone.
 
-About 40 s: the branch to the end of the rides (7 s), the SE curve (3 s), four closed forms;
-the branch at low omega (5 s) and the RG curve (10 s).
+About 50 s with the kernels compiled: the branch to the end of the rides (7 s), the SE
+curve (3 s), four closed forms; the branch at low omega (5 s) and the RG curve (15 s); the
+lightly damped branch (4 s), its NS and SO curves (8 s).
 """
 
 from __future__ import annotations
