@@ -596,8 +596,9 @@ def _check_sticking_parameter(param: ModelParameter, osc: ImpactOscillator, patt
             f"{[float(osc.stops.stop(s, osc.M, osc.b, osc.R).restitution) for s in held]!r})"
             ", on which the motion sticks "
             f"(pattern {pattern!r}): "
-            "a sticking phase is entered by a plastic impact, restitution 0, only; continue "
-            "in the restitution of a stop without sticking phases, or in another parameter")
+            "its restitution decides how a sticking phase is entered (by the plastic impact "
+            "at 0, through complete chatter above 0) and is not continued; continue in the "
+            "restitution of a stop without sticking phases, or in another parameter")
 
 
 def _flow_at_frequency(base: Flow, osc: ImpactOscillator) -> Flow:

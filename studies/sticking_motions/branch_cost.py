@@ -134,5 +134,54 @@ def main(rounds: int = 5, before: bool = False) -> None:
     print(f"load {os.getloadavg()[0]:.1f}")
 
 
+def chatter_starts() -> dict[str, ic.MultiImpactOrbit]:
+    """The damper's ball riding each wall entered through complete chatter (``"lu"``, R =
+    0.3, omega 0.2, studies/chatter_sticking) and the plain ``"UL"`` motion of
+    :func:`starts`, each from its simulated steady state."""
+    osc = damper(0.2, 0.3)
+    return {"chatter 'lu' (R 0.3)": ic.multi_impact_orbit(
+                osc, 1, 2, ic.simulate(osc, riding_start(osc), 0.0, 12.0)),
+            "plain 'UL' (R 0.6)": starts()["plain 'UL' (R 0.6)"]}
+
+
+def solve_cost(start: ic.MultiImpactOrbit, rounds: int) -> tuple[float, float]:
+    """Seconds of ``ic.multi_impact_orbit`` at omega + 0.005 seeded by `start` (a Newton
+    solve of a few iterations) and of one branch point (omega +- 0.05, ``ds_max =
+    0.005``, no detection): the best of `rounds`."""
+    osc = start.oscillator.replace(omega=start.oscillator.omega + 0.005)
+    solve = branch = np.inf
+    for _ in range(rounds):
+        begin = time.perf_counter()
+        ic.multi_impact_orbit(osc, start.N, start.p, start)
+        solve = min(solve, time.perf_counter() - begin)
+        omega = start.oscillator.omega
+        begin = time.perf_counter()
+        ds = ic.continuation(start, parameter="omega", bounds=(omega - 0.05, omega + 0.05),
+                             ds_max=0.005, detect=())
+        branch = min(branch, (time.perf_counter() - begin) / ds.sizes["point"])
+    return solve, branch
+
+
+def chatter(rounds: int = 5) -> None:
+    """``--chatter``: the Newton solve and the branch point of the chatter-entered riding
+    motion against the plain one (issue 30's target: within 3x)::
+
+        python studies/sticking_motions/branch_cost.py --chatter
+    """
+    motions = chatter_starts()
+    for name, start in motions.items():
+        assert start.physical, (name, start.reason)
+        solve_cost(start, 1)  # warm: the compiled kernels
+    costs = {name: solve_cost(start, rounds) for name, start in motions.items()}
+    plain = costs["plain 'UL' (R 0.6)"]
+    for name, (solve, branch) in costs.items():
+        print(f"{name}: solve {solve * 1e3:.2f} ms (ratio {solve / plain[0]:.1f}), branch "
+              f"point {branch * 1e3:.2f} ms (ratio {branch / plain[1]:.1f})")
+    print(f"load {os.getloadavg()[0]:.1f}")
+
+
 if __name__ == "__main__":
-    main(before="--before" in sys.argv[1:])
+    if "--chatter" in sys.argv[1:]:
+        chatter()
+    else:
+        main(before="--before" in sys.argv[1:])
