@@ -87,6 +87,7 @@ __all__ = [
     "check_impacts",
     "flight_jacobian",
     "initial_unknowns",
+    "landing_impacts",
     "multi_impact_orbit",
     "newton",
     "omega_partial",
@@ -720,7 +721,7 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
         if k < p + 1:
             raise ParameterError(f"guess: the simulation has {k} impacts; at least p+1={p + 1} "
                                  "are needed to seed an N-p motion")
-        kept, landings = _landings(guess)
+        kept, landings = landing_impacts(guess)
         if kept.size < p + 1:
             raise ParameterError(f"guess: the simulation has {kept.size} impacts besides the "
                                  f"chatter's; at least p+1={p + 1} are needed to seed an N-p "
@@ -760,9 +761,22 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
                     f"{type(guess).__name__}")
 
 
-def _landings(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
+def landing_impacts(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
     """The impacts of a simulation that are not inside a chatter, and the sticking phase
     (ended by a release) that follows each landing impact.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        Or any record with its ``impact_times``, ``impact_stops`` and ``sticking``.
+
+    Returns
+    -------
+    kept : ndarray of int
+        The indices of the impacts kept: every impact but a chatter's after its landing
+        (a chatter still going on at the end of the run included).
+    landings : dict
+        The sticking phase that follows each kept landing impact, by its index.
 
     A sticking phase starts at its landing impact (a plastic stop) or at the accumulation
     point of the chatter the landing starts (restitution ``> 0``): the landing is then the

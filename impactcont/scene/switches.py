@@ -41,7 +41,7 @@ from impactcont.dataset.multi import impacts_of, pattern_of
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
-from impactcont.orbit.multi_impact import multi_impact_orbit
+from impactcont.orbit.multi_impact import landing_impacts, multi_impact_orbit
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
 from impactcont.scene.entries import (
     CONTINUATION_KEYS,
@@ -278,7 +278,9 @@ def simulation_seed(sim: xr.Dataset, entry: MultiImpactSpec, osc: ImpactOscillat
                     ) -> _SimulatedImpacts:
     """The Newton guess of an entry's N-p motion: the last p + 1 impacts of its simulation
     and its sticking phases (a motion whose plastic impacts start sticking phases is one
-    with sticking phases, its pattern's letters lowercase there).
+    with sticking phases, its pattern's letters lowercase there). The impacts of a chatter
+    after its landing are left out (:func:`~impactcont.orbit.multi_impact.landing_impacts`):
+    a sticking phase entered through complete chatter belongs to its landing.
 
     They seed an N-p motion only if the simulation shows one: p impacts in its last N
     forcing periods, the impact N periods before the last (to within :data:`SETTLED`
@@ -295,6 +297,17 @@ def simulation_seed(sim: xr.Dataset, entry: MultiImpactSpec, osc: ImpactOscillat
     what = f"multi_impact {entry.name}: N = {N}, p = {p}"
     times = np.asarray(sim["impact_times"].values, dtype=float)
     stops = str(sim.attrs.get("impact_stops", ""))  # which stop each impact hit
+    sticking = tuple(_HeldPhase(float(start), float(end), str(held), str(ended))
+                     for start, end, held, ended in zip(
+                         *(np.asarray(sim[name].values) if name in sim else ()
+                           for name in ("sticking_start", "sticking_end", "sticking_stops",
+                                        "sticking_ended_by")), strict=True))
+    phases = np.asarray(sim["impact_phases"].values, dtype=float)
+    states = np.asarray(sim["impact_states"].values, dtype=float)
+    if sticking and times.size:  # a chatter's impacts after its landing are its segment's
+        kept = landing_impacts(_SimulatedImpacts(times, phases, states, stops, sticking))[0]
+        times, phases, states = times[kept], phases[kept], states[kept]
+        stops = "".join(stops[i] for i in kept) if stops else stops
     k = times.size
     if k < p + 1:
         raise NoPeriodicMotionError(f"{what}: simulation {entry.start!r} recorded {k} impacts; "
@@ -324,15 +337,8 @@ def simulation_seed(sim: xr.Dataset, entry: MultiImpactSpec, osc: ImpactOscillat
         raise ParameterError(f"{what}: simulation {entry.start!r} shows {shown}, not p = {p}; "
                              f"allowed: p = {q} with N = {N}")
     return _SimulatedImpacts(
-        impact_times=times[-(p + 1):],
-        impact_phases=np.asarray(sim["impact_phases"].values, dtype=float)[-(p + 1):],
-        impact_states=np.asarray(sim["impact_states"].values, dtype=float)[-(p + 1):],
-        impact_stops=stops[-(p + 1):],
-        sticking=tuple(_HeldPhase(float(start), float(end), str(held), str(ended))
-                       for start, end, held, ended in zip(
-                           *(np.asarray(sim[name].values) if name in sim else ()
-                             for name in ("sticking_start", "sticking_end", "sticking_stops",
-                                          "sticking_ended_by")), strict=True)))
+        impact_times=times[-(p + 1):], impact_phases=phases[-(p + 1):],
+        impact_states=states[-(p + 1):], impact_stops=stops[-(p + 1):], sticking=sticking)
 
 
 class _HeldPhase(NamedTuple):

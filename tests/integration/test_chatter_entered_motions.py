@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -218,3 +219,28 @@ def test_the_branch_is_the_solve_alone(parameter):
     for name, mine in (("flight_time_k", alone.flight_times),
                        ("stick_time_k", alone.stick_times), ("state_k", alone.states)):
         assert ds[name].values[i] == pytest.approx(mine, abs=1e-9), name
+
+
+def test_a_scene_seeds_the_chatter_entered_motion_from_its_simulation(tmp_path):
+    """``[[multi_impact]]`` from a ``[[simulations]]`` entry of the riding damper at R = 0.3:
+    the scene's seed folds each chatter's impacts into its landing, so the entry finds
+    the chatter-entered motion (pattern "lu"/"ul", stick times > 0) and continues it."""
+    from impactcont.scene import run_scene
+
+    study = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions" / "scene.toml"
+    text = study.read_text().split("[[plots]]")[0].replace("R = 0.0\n", "R = 0.3\n") + """
+[[multi_impact]]
+name = "ride"
+start = "riding"
+N = 1
+p = 2
+parameter = "omega"
+bounds = [0.2, 0.205]
+"""
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    result = run_scene(path, output=tmp_path / "o")
+    assert result.ok, result.failures
+    ds = result.datasets["multi_impact"]["ride"]
+    assert ds.attrs["pattern"] in ("lu", "ul") and float(ds["stick_time_k"].min()) > 0
+    assert ds.physical.values.all()
