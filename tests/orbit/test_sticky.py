@@ -1,0 +1,77 @@
+"""Motions with sticking phases (:mod:`impactcont.orbit.sticky`): how a sticking phase is
+entered (plastic impact or complete chatter) and how a simulation's chatter is folded into
+its landing (:func:`impactcont.orbit.multi_impact.landing_impacts`)."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import pytest
+
+import impactcont as ic
+from impactcont.model.stops import Stops, sticking_pattern
+from impactcont.orbit.multi_impact import landing_impacts
+from impactcont.orbit.sticky import (
+    CHATTER_SPEED,
+    chatter_entered,
+    chatter_impacts,
+    chatter_restitution,
+)
+
+
+def _damper(R: float) -> ic.ImpactOscillator:
+    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
+                               R=R, b=0.3, omega=0.2, eta=0.3,
+                               stops=Stops(mass=2, relative_to=1, mirror=True))
+
+
+@pytest.mark.parametrize("R", [0.1, 0.3, 0.5, 0.9])
+def test_the_chatter_is_resolved_until_its_speed_is_chatter_speed_of_the_landings(R):
+    K = chatter_impacts(R)
+    assert R**K <= CHATTER_SPEED < R ** (K - 1)
+    assert chatter_impacts(0.0) == 0
+
+
+def test_a_stick_on_a_stop_with_restitution_is_entered_through_chatter():
+    assert chatter_entered(_damper(0.3), "lu") and not chatter_entered(_damper(0.0), "lu")
+    assert not chatter_entered(_damper(0.3), "LU")
+    assert chatter_restitution(_damper(0.3), "L") == pytest.approx(0.3)
+    impacts, sticks = sticking_pattern(_damper(0.3), "lU")
+    assert impacts == "LU" and list(sticks) == [True, False]
+    with pytest.raises(ic.ParameterError, match=r"restitution >= 1 they do not accumulate"):
+        sticking_pattern(_damper(1.0), "lu")
+
+
+class _Phase(NamedTuple):
+    start: float
+    end: float
+    stops: str
+    ended_by: str
+
+
+class _Run(NamedTuple):
+    impact_times: np.ndarray
+    impact_stops: str
+    sticking: tuple[_Phase, ...]
+
+
+def test_a_chatters_impacts_are_folded_into_its_landing():
+    """L lands at 1 and chatters (1.5, 1.7) to its accumulation at 1.8, released at 3; U
+    lands at 4 plastically (the stick starts at the impact); L lands at 6 and chatters on
+    (6.5) to the end of the run: kept are the landings and the impact U at 0."""
+    run = _Run(np.array([0.0, 1.0, 1.5, 1.7, 4.0, 6.0, 6.5]), "ULLLULL",
+               (_Phase(1.8, 3.0, "L", "release"), _Phase(4.0, 5.0, "U", "release")))
+    kept, landings = landing_impacts(run)
+    assert list(kept) == [0, 1, 4, 5]
+    assert landings[1].start == 1.8 and landings[4].start == 4.0 and set(landings) == {1, 4}
+
+
+def test_a_plastic_run_keeps_every_impact():
+    """R = 0: sticking phases start at their impacts; impacts on one stop in a row (an
+    impact, a flight, a landing) stay separate."""
+    run = _Run(np.array([0.0, 1.0, 2.0, 3.0]), "UUUU", (_Phase(1.0, 1.5, "U", "release"),))
+    kept, landings = landing_impacts(run)
+    assert list(kept) == [0, 1, 2, 3] and set(landings) == {1}
+    assert math.isfinite(landings[1].end)
