@@ -8,7 +8,9 @@ over-damped decay). Within a cell ``y''`` changes sign at most once, so the root
 which ``y'`` is monotone: each holds at most one root of ``y'``, a turning point of
 ``y`` (:func:`turning_points`). Between consecutive turning points ``y`` is monotone and
 crosses a stop level at most once (:func:`first_crossing`). Every root is polished to a
-few ulps by Newton's method kept inside its bracket (:func:`newton_in_brackets`). A
+few ulps by Newton's method (with ``y''``: the quadratic Taylor step) kept inside its
+bracket (:func:`newton_in_brackets`), a crossing to a few ulps or to where ``y`` is within
+its own rounding of the level, whichever is wider. A
 crossing is missed only if ``y''`` changes sign twice inside one cell, i.e. only for a
 component faster than the grid was built for.
 
@@ -212,6 +214,7 @@ def turning_points(motion: StopMotion, grid: np.ndarray) -> np.ndarray:
 def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
                    after: float = -math.inf) -> float | None:
     """When ``y`` first reaches `level` from below in ``(grid[0], grid[-1]]``, to a few ulps
+    or to where ``y`` is within 4 ulps of its size (:meth:`StopMotion.size`) of `level`
     (None when ``y < level`` throughout): the first piece between the grid's times and the
     turning points of ``y`` whose left end is below `level` and whose right end is not.
 

@@ -6,7 +6,8 @@ one autonomous linear system, ``Y(t) = expm(A t) Y(0)``; no time-stepping error,
 nothing of the orbit code it witnesses). Impacts are located as the first upward crossing
 of a stop by the bracketing of :mod:`impactcont.simulate.search`, which cuts each flight
 at the turning points of the stop coordinate and so cannot miss a short excursion past
-the stop inside a sampling cell; each impact time is polished to a few ulps. The impact
+the stop inside a sampling cell; each impact time is polished to a few ulps (or to where
+the stop coordinate is within its rounding of the stop, for a slow crossing). The impact
 law is eq. (4).
 
 With a stop on another mass or a lower stop (``osc.stops``, see
