@@ -642,8 +642,14 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
     what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
     with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
         kept: dict[tuple[bytes, float], MultiImpactOrbit] = {}
-        result = follow(problem, x0, lam0, opts, rep.point,
-                        stop=lambda direction: _CurveWatch(problem, box[p1], [], kept))
+        losses: list[str] = []  # an RG curve's lost minimum as each direction ended
+
+        def watch(direction: int) -> _CurveWatch:
+            losses.append(getattr(problem, "lost_minimum", ""))
+            return _CurveWatch(problem, box[p1], [], kept)
+
+        result = follow(problem, x0, lam0, opts, rep.point, stop=watch)
+        losses.append(getattr(problem, "lost_minimum", ""))
         if len(result) == 0 and result.interrupted:
             raise NothingComputed(f"{what} interrupted before its first point")
         if len(result) == 0:
@@ -666,9 +672,14 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
         values, user_events = user_events_until_interrupted(
             problem, samples, functions, position=lambda x, lam: (x[-1], lam))
         was_interrupted, phase = interrupted(), call.where
+    message = result.message
+    lost = next((why for why in losses[1:] if why), "")
+    if lost and ContinuationStatus.STEP_BELOW_MINIMUM in result.statuses:
+        # an RG curve that could not go on: where its minimum was lost
+        message = f"{message} (the {kind} test is undefined beyond: {lost})"
     record = {"kind": str(kind), "parameters": [p1, parameter], "start": start_p1,
               "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
-              "status": [st.name for st in result.statuses], "message": result.message,
+              "status": [st.name for st in result.statuses], "message": message,
               **{key: value for key, value in dataclasses.asdict(opts).items()
                  if key != "bounds"}}
     if was_interrupted:

@@ -225,6 +225,9 @@ class ShootingCurve:
         #: The sticking phase a curve of SE, RG or SO follows (its impact), and the time of
         #: the interior minimum of its pressing force at the last accepted point (RG).
         self.followed_stick: int | None = None
+        #: RG: why the followed interior minimum was lost at a point tried since the last
+        #: accepted one ("" if it was not): the reason a curve that cannot go on ends.
+        self.lost_minimum = ""
         self._minimum_time = math.nan
         self._minima: dict[tuple[bytes, float], float] = {}
         self.kind, self.parameters, self.symmetric = Label(kind), (p1, p2), symmetric
@@ -403,6 +406,8 @@ class ShootingCurve:
         key = (np.append(u, p1).tobytes(), float(lam))
         if not 0.0 < t < duration:
             self._minima[key] = math.nan
+            self.lost_minimum = (f"the followed minimum of the pressing force (t* = {t:.6g}) "
+                                 f"lies outside sticking phase {k} (0, {duration:.6g})")
             return math.nan
         scale = max(t, 1e-3 * duration)
         t_prev, r_prev = t * (1.0 + 1e-4), rate(t * (1.0 + 1e-4))
@@ -421,6 +426,10 @@ class ShootingCurve:
         h = _CURVATURE_STEP * scale
         if not (t - h > 0.0 and t + h < duration) or not rate(t + h) > rate(t - h):
             self._minima[key] = math.nan  # the minimum left the stick, or is none
+            self.lost_minimum = (
+                f"the interior minimum of the pressing force of sticking phase {k} reaches its "
+                f"landing or its release (t* = {t:.6g} of {duration:.6g}) or stops being a "
+                "minimum")
             return math.nan
         if len(self._minima) > _CACHE_SIZE:
             self._minima.clear()
@@ -581,6 +590,7 @@ class ShootingCurve:
         """At an accepted point (the core's hook): the next step takes a fresh ``g`` row (and
         an RG curve's interior minimum is sought from this point's)."""
         self._gradient = None
+        self.lost_minimum = ""
         if _KINDS[self.kind].follows_minimum:
             t = self.minimum_time(x, lam)
             if math.isfinite(t):

@@ -263,3 +263,20 @@ def test_a_sticky_curve_ends_where_its_motion_stops_being_physical(ride) -> None
     plain = ShootingCurve(_paper(0.5), 1, 1, "U", "PD", ("omega", "b"), symmetric=False)
     assert plain.physical_end(x, inside, x, SimpleNamespace(impact_velocity=0.3,
                                                             gap_min=-1.0)) is None
+
+
+def test_an_rg_test_says_where_its_minimum_is_lost(ride) -> None:
+    """The RG test follows one interior minimum: where there is none in the stick (at
+    omega = 2.3 each ride's pressing force only falls) it is NaN and says why (the reason
+    an RG curve that cannot go on gives), until the next accepted point."""
+    osc = ride.oscillator
+    x = np.append(ride.unknowns, osc.omega)
+    rg = ShootingCurve(osc, 1, 2, ride.pattern, "RG", ("omega", "eta"), symmetric=False)
+    rg.followed_stick, rg._minimum_time = 0, 1e3  # as if followed from elsewhere
+    assert math.isnan(rg.test(x, osc.eta))
+    assert "lies outside sticking phase 0" in rg.lost_minimum
+    rg._minimum_time = 0.5 * float(ride.stick_times[0])
+    assert math.isnan(rg.test(x + 1e-12, osc.eta))
+    assert "reaches its landing or its release" in rg.lost_minimum
+    rg.accept(x, osc.eta)
+    assert rg.lost_minimum == ""
