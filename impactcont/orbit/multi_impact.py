@@ -779,7 +779,7 @@ def landing_impacts(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
         The sticking phase that follows each kept landing impact, by its index.
 
     A sticking phase starts at its landing impact (a plastic stop) or at the accumulation
-    point of the chatter the landing starts (restitution ``> 0``): the landing is then the
+    point of the chatter the landing starts (restitution above 0): the landing is then the
     first of the impacts on that stop since the last impact on another stop or the last
     release; the chatter's later impacts are part of the segment (the chatter map of
     :func:`impactcont.kernel.shooting.chatter_map` resolves them) and are left out.

@@ -110,7 +110,7 @@ class StickyShooting:
         state and phase without a stick; :data:`RELEASE_SHIFT`).
     accumulations, accumulation_phases : ndarray, shape (p, 2n), (p,)
         Where the held flow of each sticking phase starts: the accumulation point of the
-        chatter after impact k on a stop with restitution ``> 0``, else ``X_k``,
+        chatter after impact k on a stop with restitution above 0, else ``X_k``,
         ``theta_k``.
     chatter_times, chatter_status : ndarray, shape (p,)
         The chatter's duration (0 without one; the held flow lasts ``s_k`` minus it) and
@@ -274,7 +274,7 @@ CHATTER_SPEED = 1e-5
 
 
 def chatter_restitution(osc: ImpactOscillator, stop: str) -> float:
-    """The restitution of `stop` (its name, a capital) on `osc`: ``> 0`` where a sticking
+    """The restitution of `stop` (its name, a capital) on `osc`, above 0 where a sticking
     phase on it is entered through complete chatter."""
     return float(osc.stops.stop(stop, osc.M, osc.b, osc.R).restitution)
 
@@ -290,7 +290,7 @@ def chatter_impacts(restitution: float) -> int:
 
 def chatter_entered(osc: ImpactOscillator, pattern: str) -> bool:
     """A sticking phase of `pattern` is entered through complete chatter (its stop's
-    restitution is ``> 0``)."""
+    restitution is above 0)."""
     impacts, sticks = sticking_pattern(osc, pattern)
     return any(chatter_restitution(osc, impacts[k]) > 0.0 for k in np.flatnonzero(sticks))
 
