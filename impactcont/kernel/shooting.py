@@ -704,7 +704,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, period, 
     ``-1.0``: the clearance bracketed from the parabola's `guess` (marching forward in
     quarters of it, at most two forcing periods `period`, or halving it back while the
     clearance is not positive), then safeguarded Newton (bisection where a Newton step
-    leaves the bracket) to a few ulps of the time."""
+    leaves the bracket) to a few ulps of the time or of the clearance."""
     lo = guess
     g, _ = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol, rate)
     hi = -1.0
@@ -732,9 +732,16 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, period, 
             lo *= 0.5
         if not g > 0.0:
             return -1.0
+    # the clearance's rounding: a few ulps of the stop coordinate's terms
+    level = abs(position)
+    for c in range(normal.size):
+        level += abs(normal[c] * Y[c])
+    level *= 4.0 * _CHATTER_EPS
     t = 0.5 * (lo + hi)
     for _ in range(_BOUNCE_ITERATIONS):
         g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
+        if abs(g) <= level:  # at the stop to rounding: the time is as good as it gets
+            return t
         if g > 0.0:
             lo = t
         else:

@@ -156,13 +156,13 @@ def solve_cost(start: ic.MultiImpactOrbit, rounds: int) -> tuple[float, float]:
         solve = min(solve, time.perf_counter() - begin)
         omega = start.oscillator.omega
         begin = time.perf_counter()
-        ds = ic.continuation(start, parameter="omega", bounds=(omega - 0.05, omega + 0.05),
+        ds = ic.continuation(start, parameter="omega", bounds=(omega - 0.02, omega + 0.02),
                              ds_max=0.005, detect=())
         branch = min(branch, (time.perf_counter() - begin) / ds.sizes["point"])
     return solve, branch
 
 
-def chatter(rounds: int = 5) -> None:
+def chatter(rounds: int = 3) -> None:
     """``--chatter``: the Newton solve and the branch point of the chatter-entered riding
     motion against the plain one (issue 30's target: within 3x)::
 
