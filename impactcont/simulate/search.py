@@ -111,9 +111,11 @@ def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, ...]],
         ``g(hi)``: the first iterate is then the false position (the secant's root) of
         the bracket, when strictly inside it, rather than its midpoint.
     noise : float
-        The rounding of ``g``'s evaluation (``>= 0``): an iterate where ``|g|`` is within it
-        is a root (a bracket narrower than ``noise / |g'|`` cannot be told from rounding;
-        bisecting it further costs evaluations and finds no better root).
+        The rounding of ``g``'s evaluation (``>= 0``): an iterate on the side of ``lo``
+        (``g`` of the sign of ``g(lo)``) where ``|g|`` is within it is a root (a bracket
+        narrower than ``noise / |g'|`` cannot be told from rounding; bisecting it further
+        costs evaluations and finds no better root). Only on that side: the root of a
+        crossing of a stop level is never past the level.
 
     Returns
     -------
@@ -160,11 +162,14 @@ def newton_in_brackets(fun: Callable[[np.ndarray], tuple[np.ndarray, ...]],
                 step = np.where((disc >= 0) & np.isfinite(quadratic), quadratic, step)
         tol = _ABS_TOL + _REL_TOL * np.abs(here)
         small = np.abs(step) <= tol  # converged: judged before the safeguard
-        done = (np.abs(g) <= noise) | small | (width <= tol)
+        # within rounding of the root on the side of `lo` (before the sign change: a
+        # crossing's root is never past its level)
+        rounding = same & (np.abs(g) <= noise)
+        done = (g == 0) | rounding | small | (width <= tol)
         guess = here - step
         kept = np.isfinite(guess) & (guess > left[todo]) & (guess < right[todo])
         guess = np.where(kept | (done & small), guess, 0.5 * (left[todo] + right[todo]))
-        t[todo] = np.where(np.abs(g) <= noise, here, guess)
+        t[todo] = np.where((g == 0) | rounding, here, guess)
         todo = todo[~done]
     return t
 

@@ -104,3 +104,18 @@ def test_a_root_within_rounding_of_g_ends_the_search():
     found = newton_in_brackets(fun, lo, hi, fun(lo)[0], fun(hi)[0], noise)
     assert abs(found[0] - root) <= noise / slope
     assert len(calls) - 2 <= 4, len(calls)
+
+
+def test_a_root_within_rounding_is_taken_short_of_the_level_only():
+    """Newton's iterates approach the root of a convex g from above: each is past the level,
+    those within `noise` of it too. The rounding stop takes only an iterate short of the
+    level (a crossing's root is never past its stop); here the steps go on to a few ulps
+    (it used to stop at the first iterate within `noise`, 4e-8 past the root)."""
+    slope, root, noise = 1e-3, 0.25, 1e-10
+
+    def fun(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return slope * (t - root) + (t - root) ** 2, slope + 2 * (t - root)
+
+    found = newton_in_brackets(fun, np.array([root - 1e-3]), np.array([root + 0.4]),
+                               np.array([-1.0]), noise=noise)
+    assert found[0] - root <= 8 * np.spacing(root), found[0] - root
