@@ -24,8 +24,9 @@ pytest_plugins = ["tests._made_up_branch", "tests._multi_impact_cases"]
 def _sigint_kept(request: pytest.FixtureRequest):
     """Each test leaves Ctrl-C (SIGINT) as it found it, or is named in a warning and its
     change undone: a SIGINT left ignored in this process is inherited by every child a
-    later test starts, whose Ctrl-C then does nothing (two Ctrl-C tests of children failed
-    so in full clean-clone runs, not alone; which test leaves it is not found yet)."""
+    later test starts, whose Ctrl-C then does nothing. (The two Ctrl-C tests of children
+    that failed in full runs had inherited it from the shell that started pytest in the
+    background, not from a test: their children now reset it, :mod:`tests._ctrl_c`.)"""
     before = signal.getsignal(signal.SIGINT)
     yield
     after = signal.getsignal(signal.SIGINT)

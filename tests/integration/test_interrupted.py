@@ -25,6 +25,7 @@ import impactcont.core.locate as locate_module
 from impactcont.analysis.branch import extend
 from impactcont.analysis.curves import multi_impact_curve
 from impactcont.problems import PeriodicBranchProblem
+from tests._ctrl_c import terminal_sigint
 from tests._scene_data import OSCILLATOR
 
 INTERRUPTED = "interrupted by the user (KeyboardInterrupt)"
@@ -230,7 +231,7 @@ _CHILD = textwrap.dedent("""
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child is POSIX")
 def test_sigint_to_a_continuation_returns_its_points(tmp_path):
     child = subprocess.Popen([sys.executable, "-c", _CHILD], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True,
+                             stderr=subprocess.PIPE, text=True, preexec_fn=terminal_sigint,
                              env={**os.environ, "PYTHONUNBUFFERED": "1"})
     try:
         assert child.stdout.readline().strip() == "started"

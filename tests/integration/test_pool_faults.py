@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from tests._ctrl_c import terminal_sigint
+
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
                                 reason="needs /proc, SIGSTOP and SIGKILL (Linux)")
 
@@ -114,7 +116,7 @@ def _start(tmp_path: Path, mode: str, repeat: int) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.Popen([sys.executable, str(script), mode, str(repeat)], cwd=tmp_path,
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, preexec_fn=terminal_sigint)
 
 
 def _line(child: subprocess.Popen, deadline: float) -> str:
