@@ -337,8 +337,9 @@ def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi):
 
     The cubic one from the values and slopes at the ends, by three Newton steps from the
     secant point, then, when the second derivatives ``ddg`` are finite, the quintic one
-    by two Newton steps from there (:func:`_hermite_newton`); the secant point (or the
-    midpoint) when a slope is not finite."""
+    by two Newton steps from there; the secant point (or the midpoint) when a slope is
+    not finite; a step that leaves the interval, or a zero slope, ends the steps on
+    that interpolant."""
     h = hi - lo
     x = g_lo / (g_lo - g_hi) if g_lo != g_hi else 0.5
     if not 0.0 < x < 1.0:
@@ -347,70 +348,43 @@ def _hermite_root(lo, hi, g_lo, g_hi, dg_lo, dg_hi, ddg_lo, ddg_hi):
         return lo + h * x
     m0 = h * dg_lo
     m1 = h * dg_hi
-    x = _hermite_newton(x, 3, False, g_lo, g_hi, m0, m1, 0.0, 0.0)
-    if not (np.isfinite(ddg_lo) and np.isfinite(ddg_hi)):
-        return lo + h * x
-    return lo + h * _hermite_newton(x, 2, True, g_lo, g_hi, m0, m1,
-                                    h * h * ddg_lo, h * h * ddg_hi)
-
-
-@_inner
-def _hermite_newton(x, steps, quintic, g_lo, g_hi, m0, m1, c0, c1):
-    """Newton's method on a Hermite interpolant over ``[0, 1]``, from ``x`` in (0, 1).
-
-    Parameters
-    ----------
-    x : float
-        The start, in (0, 1).
-    steps : int
-        How many Newton steps at the most.
-    quintic : bool
-        The quintic interpolant of the values, slopes and curvatures at 0 and 1; else
-        the cubic one of the values and slopes (``c0``, ``c1`` unused).
-    g_lo, g_hi : float
-        The values at 0 and 1.
-    m0, m1 : float
-        The slopes at 0 and 1, in the unit variable (``h dg``).
-    c0, c1 : float
-        The curvatures at 0 and 1, in the unit variable (``h^2 ddg``).
-
-    Returns
-    -------
-    float
-        The last iterate in (0, 1): a zero slope, or a step that would leave (0, 1),
-        ends the iteration at the point before it.
-    """
-    for _ in range(steps):
-        x2 = x * x
-        x3 = x2 * x
-        if quintic:
-            # quintic Hermite basis on [0, 1]: values, slopes and curvatures at 0 and 1
-            x4 = x3 * x
-            x5 = x4 * x
-            p = ((1.0 - 10.0 * x3 + 15.0 * x4 - 6.0 * x5) * g_lo
-                 + (x - 6.0 * x3 + 8.0 * x4 - 3.0 * x5) * m0
-                 + 0.5 * (x2 - 3.0 * x3 + 3.0 * x4 - x5) * c0
-                 + 0.5 * (x3 - 2.0 * x4 + x5) * c1
-                 + (-4.0 * x3 + 7.0 * x4 - 3.0 * x5) * m1
-                 + (10.0 * x3 - 15.0 * x4 + 6.0 * x5) * g_hi)
-            dp = ((-30.0 * x2 + 60.0 * x3 - 30.0 * x4) * g_lo
-                  + (1.0 - 18.0 * x2 + 32.0 * x3 - 15.0 * x4) * m0
-                  + 0.5 * (2.0 * x - 9.0 * x2 + 12.0 * x3 - 5.0 * x4) * c0
-                  + 0.5 * (3.0 * x2 - 8.0 * x3 + 5.0 * x4) * c1
-                  + (-12.0 * x2 + 28.0 * x3 - 15.0 * x4) * m1
-                  + (30.0 * x2 - 60.0 * x3 + 30.0 * x4) * g_hi)
-        else:
-            p = ((2 * x3 - 3 * x2 + 1) * g_lo + (x3 - 2 * x2 + x) * m0
-                 + (-2 * x3 + 3 * x2) * g_hi + (x3 - x2) * m1)
-            dp = ((6 * x2 - 6 * x) * g_lo + (3 * x2 - 4 * x + 1) * m0
-                  + (-6 * x2 + 6 * x) * g_hi + (3 * x2 - 2 * x) * m1)
-        if dp == 0.0:
-            break
-        xn = x - p / dp
-        if not 0.0 < xn < 1.0:
-            break
-        x = xn
-    return x
+    c0 = h * h * ddg_lo
+    c1 = h * h * ddg_hi
+    # one Newton loop for both interpolants (written once, compiled once)
+    for stage in range(2 if np.isfinite(ddg_lo) and np.isfinite(ddg_hi) else 1):
+        quintic = stage == 1
+        for _ in range(2 if quintic else 3):
+            x2 = x * x
+            x3 = x2 * x
+            if quintic:
+                # quintic Hermite basis on [0, 1]: values, slopes and curvatures at 0 and 1
+                x4 = x3 * x
+                x5 = x4 * x
+                p = ((1.0 - 10.0 * x3 + 15.0 * x4 - 6.0 * x5) * g_lo
+                     + (x - 6.0 * x3 + 8.0 * x4 - 3.0 * x5) * m0
+                     + 0.5 * (x2 - 3.0 * x3 + 3.0 * x4 - x5) * c0
+                     + 0.5 * (x3 - 2.0 * x4 + x5) * c1
+                     + (-4.0 * x3 + 7.0 * x4 - 3.0 * x5) * m1
+                     + (10.0 * x3 - 15.0 * x4 + 6.0 * x5) * g_hi)
+                dp = ((-30.0 * x2 + 60.0 * x3 - 30.0 * x4) * g_lo
+                      + (1.0 - 18.0 * x2 + 32.0 * x3 - 15.0 * x4) * m0
+                      + 0.5 * (2.0 * x - 9.0 * x2 + 12.0 * x3 - 5.0 * x4) * c0
+                      + 0.5 * (3.0 * x2 - 8.0 * x3 + 5.0 * x4) * c1
+                      + (-12.0 * x2 + 28.0 * x3 - 15.0 * x4) * m1
+                      + (30.0 * x2 - 60.0 * x3 + 30.0 * x4) * g_hi)
+            else:
+                # cubic Hermite basis on [0, 1]: values and slopes at 0 and 1
+                p = ((2 * x3 - 3 * x2 + 1) * g_lo + (x3 - 2 * x2 + x) * m0
+                     + (-2 * x3 + 3 * x2) * g_hi + (x3 - x2) * m1)
+                dp = ((6 * x2 - 6 * x) * g_lo + (3 * x2 - 4 * x + 1) * m0
+                      + (-6 * x2 + 6 * x) * g_hi + (3 * x2 - 2 * x) * m1)
+            if dp == 0.0:
+                break
+            xn = x - p / dp
+            if not 0.0 < xn < 1.0:
+                break
+            x = xn
+    return lo + h * x
 
 
 @_jit
