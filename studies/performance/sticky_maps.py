@@ -16,10 +16,11 @@ and evaluates each motion found by the problem's ``orbit`` (its G, sticking phas
 contact search: most of its time, the third line, ``checks=False``, shows how much is the
 contact search); the plain map is one compiled sweep (``kernel.sweep.sweep_stops``).
 
-Measured 2026-12-07 (two cores shared with other jobs, load 8, so each figure within a
-factor of about 1.5): sticky 194 points/s (8.6 s for 41 x 41, all found), plain 15442
-points/s (0.11 s), the sticky map 79x the plain one; ``checks=False`` 154 points/s (no
-faster within the noise: the contact search is not what costs). A profile of the sticky
+Measured 2026-12-07 (two cores shared with other jobs, so each figure within a factor of
+about 1.5), two runs: at load 8, sticky 194 points/s (8.6 s for 41 x 41, all found),
+plain 15442 points/s (0.11 s), 79x; at load 5-6, sticky 243 points/s (6.9 s), plain
+30116 (0.06 s), 124x. ``checks=False``: 154 and 275 points/s (no faster within the
+noise: the contact search is not what costs). A profile of the sticky
 map (48 points, warm) puts about two thirds of its time in the problem's ``orbit`` (the
 sticking phases' checks and G, in Python) and a quarter in the compiled Newton and the
 flows at each omega: a compiled sticky sweep (Newton and evaluation in one kernel, as
