@@ -392,7 +392,8 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
 
 
 #: The relative step in omega of :func:`sticky_omega_column` for a motion whose sticking
-#: phases are entered through complete chatter.
+#: phases are entered through complete chatter (the compiled corrector's
+#: :data:`impactcont.kernel.sticky.OMEGA_STEP`).
 OMEGA_STEP = 1e-5
 
 
@@ -472,11 +473,6 @@ def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
         if np.shape(value) != (size,):
             raise ParameterError(f"{name} must have shape ({size},) like predicted; got "
                                  f"{np.shape(value)}")
-    if chatter_entered(osc, pattern):
-        raise ParameterError(f"sticky_palc_step: pattern={pattern!r} enters a sticking phase "
-                             "through complete chatter, which the compiled corrector does "
-                             "not solve (MultiImpactBranchProblem.palc_step returns None for "
-                             "it: the continuation core corrects)")
     impacts = sticking_pattern(osc, pattern)[0]
     errors = osc.modes.eigenvalue_errors
     errors = np.zeros(osc.n) if errors is None else np.asarray(errors, dtype=float)

@@ -85,7 +85,6 @@ from impactcont.orbit.multi_impact import (
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.sticky import (
     StickyShooting,
-    chatter_entered,
     sticky_jacobians,
     sticky_omega_column,
     sticky_orbit_from_unknowns,
@@ -448,8 +447,6 @@ class MultiImpactBranchProblem:
         """
         if self._base_flow is None:
             return None
-        if self.sticky and chatter_entered(self.osc, self.pattern):
-            return None  # the chatter map is not in the compiled corrector: the core corrects
         if self.sticky:  # kernel.sticky.sticky_palc_correct
             return self._corrector_result(sticky_palc_step(
                 self._base_flow, self.N, self.pattern, predicted, tangent, weights, tol,
