@@ -543,7 +543,13 @@ def test_free_mass_under_a_constant_force_map_says_what_it_checked():
     """Every found point's physical flag and contact check are those of multi_impact_orbit on
     a fresh oscillator: a point whose interior contact is not checked (a free mode pushed by
     F_static) is never physical, and says so (contact_checked False)."""
-    start = settled(ball(), 1, 1, [0.0, 0.1, 0.0, 0.5], 300.0, pattern="L")
+    # the run chatters onto the primary and rides it each period (its seed reads 'l'): the
+    # plain 1-1 motion is seeded by the last two impacts as they are
+    run = ic.simulate(ball(), np.array([0.0, 0.1, 0.0, 0.5]), 0.0, 300.0)
+    guess = {"delta": float(run.impact_phases[-2]), "states": run.impact_states[-2:-1],
+             "flight_times": np.diff(run.impact_times[-2:]), "pattern": "L"}
+    start = ic.multi_impact_orbit(ball(), 1, 1, guess, pattern="L")
+    assert start.physical and start.pattern == "L"
     ds = multi_impact_map(start, ("omega", "F0"), grid={"omega": np.linspace(1.5, 1.7, 3),
                                                         "F0": np.linspace(0.9, 1.1, 3)})
     assert bool(ds["found"].all())
