@@ -38,7 +38,8 @@ Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`
 :func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
 :func:`branch_linearization`, :func:`palc_correct` and, for motions with sticking phases
 only, :func:`sticky_system`, :func:`sticky_newton_solve` and :func:`sticky_frequency_column`
-(their corrector is :func:`impactcont.kernel.sticky.sticky_palc_correct`).
+(their corrector is :func:`impactcont.kernel.sticky.sticky_palc_correct`), and for those
+entered through complete chatter only, :func:`chatter_bounces`.
 An entry point that compiled code calls too is called there with the plain tuples Python
 passes, so one compiled function serves both (no entry point wraps an inner twin: numba
 compiles a wrapper's callee code again into it). Importing :mod:`impactcont` does not
@@ -85,8 +86,8 @@ from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
-__all__ = ["branch_linearization", "end_clearances", "forced_amplitudes", "frequency_column",
-           "jacobian_product", "motion_checks", "newton_solve",
+__all__ = ["branch_linearization", "chatter_bounces", "end_clearances", "forced_amplitudes",
+           "frequency_column", "jacobian_product", "motion_checks", "newton_solve",
            "omega_partials", "palc_correct", "shooting_system", "sticky_frequency_column",
            "sticky_newton_solve", "sticky_system"]
 
@@ -925,6 +926,79 @@ def chatter_map(flow, forcing, held, k, D, pivot, normal, sign, position, X0, th
     for c in range(m + 1):
         dT[c] = dTv[c] + ddt[c]
     return status, T + dtj, th + omega * dtj
+
+
+@_jit
+def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
+    """The bounces :func:`chatter_map` resolves after the landing impact k, replayed with
+    the same flights, returns and impacts (its Jacobian left out, so the bounces are
+    bitwise those of the shooting path): the state right after each resolved impact
+    (the landing's first, on the stop's section), its phase and the bounce's duration.
+    Compiled only where a chatter-entered motion is checked or drawn
+    (:func:`impactcont.orbit.sticky.chatter_bounces`); no other entry point calls it.
+
+    Returns
+    -------
+    starts : ndarray, shape (K, 2n)
+    phases, times : ndarray, shape (K,)
+    count : int
+        The bounces resolved (the first ``count`` rows; fewer than K where a bounce's apex
+        falls within :data:`_BOUNCE_ULPS` ulps of the stop), ``-2`` where a return is not
+        found (the rows before it are still the bounces resolved).
+    """
+    flow = _flights(FlightArrays(*flight))
+    forcing = Forcing(*forcing)
+    impacts = ImpactSequence(*impacts)
+    held = HeldSegments(*held)
+    D = impacts.matrices[k]
+    pivot = impacts.pivots[k]
+    normal = impacts.normals[k]
+    sign = impacts.signs[k]
+    position = impacts.positions[k]
+    omega = forcing.omega
+    m = X0.size
+    n = m // 2
+    K = held.chatter_impacts[k]
+    starts = np.zeros((K, m))
+    phases = np.zeros(K)
+    times = np.zeros(K)
+    tr = np.empty((m, m))
+    arr = np.empty(m)
+    pcol = np.empty(m)
+    rate = np.empty(m)
+    Y = X0.copy()
+    th = theta0
+    floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
+    count = 0
+    for _ in range(K):
+        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
+        u, a = _stop_speed(normal, sign, rate, n)
+        if a > 0.0 and u * u < 2.0 * a * floor:
+            break
+        guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
+        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess,
+                           2.0 * math.pi / omega, tr, arr, pcol, rate)
+        if not t > 0.0:
+            return starts, phases, times, -2
+        _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
+        hd = 0.0
+        for c in range(n):
+            hd += normal[c] * rate[c]
+        if not sign * hd > 0.0:
+            return starts, phases, times, -2
+        for c in range(m):
+            starts[count, c] = Y[c]
+        phases[count] = th
+        times[count] = t
+        _apply(D, arr, Y)
+        s = position
+        for c in range(n):
+            if c != pivot:
+                s -= normal[c] * Y[c]
+        Y[pivot] = s / normal[pivot]
+        th += omega * t
+        count += 1
+    return starts, phases, times, count
 
 
 @_jit

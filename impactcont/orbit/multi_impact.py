@@ -216,6 +216,10 @@ class MultiImpactOrbit:
         The pressing force right after the plastic impact k that starts a sticking phase
         (the onset test: ``> 0`` where the arrival acceleration points into the stop);
         NaN where no sticking phase follows impact k.
+    chatters : tuple of Chatter
+        The complete chatter before each sticking phase entered through one (a stop with
+        restitution above 0): its resolved bounces and its accumulation point
+        (:class:`impactcont.orbit.sticky.Chatter`); empty without one.
     """
 
     oscillator: ImpactOscillator
@@ -242,6 +246,7 @@ class MultiImpactOrbit:
     release_states: np.ndarray | None = None
     pressing_min: np.ndarray | None = None
     landing_pressing: np.ndarray | None = None
+    chatters: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
         """A motion without sticking phases reports none (zeros and NaN)."""
@@ -321,11 +326,15 @@ class MultiImpactOrbit:
 
         Returns
         -------
-        t : ndarray, shape ((p + q)*num,)
-            Time since impact 0 (q sticking phases, each sampled as a flight is).
-        X : ndarray, shape ((p + q)*num, 2n)
+        t : ndarray, shape ((p + q + c)*num,)
+            Time since impact 0 (q sticking phases and the c resolved bounces of their
+            chatters, each sampled as a flight is).
+        X : ndarray, shape ((p + q + c)*num, 2n)
             State; each flight starts at its post-impact state (at the release after a
-            sticking phase).
+            sticking phase). A sticking phase entered through complete chatter
+            (:attr:`chatters`) is drawn as its resolved bounces, each from its impact's
+            state, then held from the accumulation point to the release (the jumped rest
+            of the chatter, below the last bounce's apex, is not sampled).
         """
         if isinstance(num, bool) or not isinstance(num, (int, np.integer)) or num < 2:
             raise ParameterError(f"num must be an integer >= 2; got {num!r}")
@@ -333,14 +342,28 @@ class MultiImpactOrbit:
         ts, Xs, start = [], [], 0.0
         impacts = sticking_pattern(self.oscillator, self.pattern or UPPER * self.p)[0]
         omega = self.oscillator.omega
+        chatters = {c.impact: c for c in self.chatters}
         for k in range(self.p):
             X0, theta = self.states[k], self.phases[k]
             stick = float(self.stick_times[k])
             if stick > 0.0:  # held on the stop, then the flight from the release
                 held = held_flow(self.oscillator, impacts[k])
-                s = np.linspace(0.0, stick, num)
-                ts.append(start + s)
+                chatter = chatters.get(k)
+                held_start, hold = start, stick
+                if chatter is not None:  # the bounces, then held from the accumulation
+                    bounce = start
+                    for Y, th, t in zip(chatter.starts, chatter.phases, chatter.times,
+                                        strict=True):
+                        tau = np.linspace(0.0, t, num)
+                        ts.append(bounce + tau)
+                        Xs.append(flow.state(tau, Y, th))
+                        bounce += t
+                    X0, theta = chatter.accumulation, chatter.accumulation_phase
+                    held_start, hold = start + chatter.duration, stick - chatter.duration
+                s = np.linspace(0.0, hold, num)
+                ts.append(held_start + s)
                 Xs.append(held.state(s, X0, theta))
+                theta = float(self.phases[k])
                 start += stick
                 X0, theta = self.release_states[k], theta + omega * stick
             tau = np.linspace(0.0, self.flight_times[k], num)
@@ -1074,7 +1097,8 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         flight_gap_lower=gaps_low, condition_number=condition_number,
         error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "",
         stick_times=sticks.stick_times.copy(), release_states=sticks.release_states,
-        pressing_min=sticks.pressing_min, landing_pressing=sticks.landing_pressing)
+        pressing_min=sticks.pressing_min, landing_pressing=sticks.landing_pressing,
+        chatters=sticks.chatters)
 
 
 def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,

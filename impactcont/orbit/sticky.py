@@ -24,9 +24,9 @@ from typing import Any
 import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError
-from impactcont.kernel.arrays import HeldSegments, StickyFlights
+from impactcont.kernel.arrays import HeldSegments, MotionChecks, StickyFlights
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.stops import sticking_pattern
+from impactcont.model.stops import LOWER, UPPER, sticking_pattern
 from impactcont.orbit.flow import Flow, flow_of
 from impactcont.orbit.held_flow import held_flow
 from impactcont.orbit.multi_impact import (
@@ -38,11 +38,14 @@ from impactcont.orbit.multi_impact import (
     MultiImpactOrbit,
     Shooting,
     _bifurcation,
+    _coordinate,
     _geometry,
     _kernel,
     _orbit,
     _parameters,
     _writable,
+    checked_flights,
+    contact_stops,
     impact_sequence,
     shooting_accuracy,
     unknowns_scale,
@@ -54,7 +57,9 @@ __all__ = [
     "CHATTER_SPEED",
     "OMEGA_STEP",
     "RELEASE_SHIFT",
+    "Chatter",
     "StickyShooting",
+    "chatter_bounces",
     "chatter_entered",
     "chatter_impacts",
     "chatter_restitution",
@@ -293,6 +298,108 @@ def chatter_entered(osc: ImpactOscillator, pattern: str) -> bool:
     restitution is above 0)."""
     impacts, sticks = sticking_pattern(osc, pattern)
     return any(chatter_restitution(osc, impacts[k]) > 0.0 for k in np.flatnonzero(sticks))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Chatter:
+    """The complete chatter that enters the sticking phase after one impact: its resolved
+    bounces (the flights between its impacts) and its accumulation point.
+
+    Attributes
+    ----------
+    impact : int
+        k, the landing impact that starts the chatter.
+    stop : str
+        Its stop (a capital).
+    starts : ndarray, shape (c, 2n)
+        The state right after each resolved impact (the landing's first), on the stop's
+        section; bounce i is the flight from ``starts[i]`` at ``phases[i]`` for
+        ``times[i]``.
+    phases, times : ndarray, shape (c,)
+        Each bounce's forcing phase at its start (not wrapped) and its duration.
+    accumulation : ndarray, shape (2n,)
+        The state at the accumulation point, where the held flow starts.
+    accumulation_phase : float
+    duration : float
+        From the landing to the accumulation point: the resolved bounces and the jump over
+        the rest (:func:`impactcont.kernel.shooting.chatter_map`).
+    """
+
+    impact: int
+    stop: str
+    starts: np.ndarray
+    phases: np.ndarray
+    times: np.ndarray
+    accumulation: np.ndarray
+    accumulation_phase: float
+    duration: float
+
+
+def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatter, ...]:
+    """The chatters of the shot `sh` whose impacts accumulate, one per chatter-entered
+    sticking phase of `pattern`: the bounces :func:`impactcont.kernel.shooting.chatter_map`
+    resolved, replayed by :func:`impactcont.kernel.shooting.chatter_bounces` (the same
+    flights, returns and impacts: bitwise the shooting path's bounces), and the
+    accumulation point `sh` holds. A chatter whose map failed (``chatter_status < 0``) is
+    left out (the motion is not physical for it)."""
+    osc = flow.osc
+    impacts, sticks = sticking_pattern(osc, pattern)
+    found = []
+    for k in np.flatnonzero(sticks):
+        if not chatter_restitution(osc, impacts[k]) > 0.0 or sh.chatter_status[k] < 0:
+            continue
+        starts, phases, times, count = _kernel().chatter_bounces(
+            flow.flight_arrays(), tuple(flow.forcing_arrays()),
+            tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
+            int(k), _writable(np.asarray(sh.starts[k], dtype=float)), float(sh.phases[k]))
+        c = max(int(count), 0)
+        found.append(Chatter(impact=int(k), stop=impacts[k], starts=starts[:c].copy(),
+                             phases=phases[:c].copy(), times=times[:c].copy(),
+                             accumulation=np.array(sh.accumulations[k], dtype=float),
+                             accumulation_phase=float(sh.accumulation_phases[k]),
+                             duration=float(sh.chatter_times[k])))
+    return tuple(found)
+
+
+def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[tuple[float, float, str, str]]:
+    """The smallest clearance of every stop but the chatter's own over its resolved
+    bounces: ``(gap, t, stop, coordinate)`` per stop whose clearance is not positive (``t``
+    from the landing), by the contact search of every flight (eq. 16,
+    :func:`impactcont.kernel.shooting.motion_checks`: the interior extrema of each stop
+    coordinate, each bounce a flight from its impact on the stop). A bounce starts and
+    ends on the chatter's stop, so its ends are on the section and its own stop is not
+    searched; the jumped rest of the chatter stays below the last resolved apex."""
+    c = chatter.times.size
+    if c == 0:
+        return []
+    geo = _geometry(flow, chatter.stop * c)
+    m = chatter.starts.shape[1]
+    tr, cols, rates = np.empty((c, m, m)), np.empty((c, m)), np.empty((c, m))
+    for i in range(c):
+        _, rates[i], tr[i], cols[i] = _python_flight(flow, float(chatter.times[i]),
+                                                     chatter.starts[i], float(chatter.phases[i]))
+    bounces = Shooting(phases=chatter.phases, flight_times=chatter.times, starts=chatter.starts,
+                       arrivals=chatter.starts, arrival_rates=rates, transitions=tr,
+                       phase_columns=cols, residual=np.zeros(0), jacobian=None)
+    checked = MotionChecks._make(_kernel().motion_checks(
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
+        tuple(contact_stops(geo)), tuple(checked_flights(bounces)), True))
+    offsets = np.concatenate([[0.0], np.cumsum(chatter.times)[:-1]])
+    candidates = [(UPPER, checked.gap_upper, checked.time_upper, geo.normal)]
+    if geo.two_sided:
+        candidates.append((LOWER, checked.gap_lower, checked.time_lower, geo.normal))
+    for j, name in enumerate(geo.extra_names):
+        candidates.append((name, checked.gap_extra[:, j], checked.time_extra[:, j],
+                           geo.extra_normals[j]))
+    crossed = []
+    for name, gaps, times, normal in candidates:
+        if name == chatter.stop:
+            continue
+        i = int(np.argmin(gaps))
+        if not gaps[i] > 0.0:
+            crossed.append((float(gaps[i]), float(offsets[i] + times[i]), name,
+                            _coordinate(normal)))
+    return crossed
 
 
 def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
@@ -551,12 +658,15 @@ class _Sticks:
     G: np.ndarray
     multipliers: np.ndarray
     reasons: tuple[str, ...]
+    chatters: tuple[Chatter, ...] = ()
 
 
-def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> _Sticks:
+def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
+            checks: bool = True) -> _Sticks:
     """The sticking phases' part of a motion: G, its multipliers and the physical checks
-    of each sticking phase (its onset, its pressing force inside, its release); `shift`
-    the start of each flight's contact search after its release."""
+    of each sticking phase (its chatter's bounces clear of every other stop, with
+    `checks`; its onset, its pressing force inside, its release); `shift` the start of
+    each flight's contact search after its release."""
     osc = flow.osc
     impacts, sticks = sticking_pattern(osc, pattern)
     p, m = len(pattern), 2 * osc.n
@@ -567,8 +677,14 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> 
     pressing = np.full(p, np.nan)
     landing = np.full(p, np.nan)
     reasons = []
+    chatters = chatter_bounces(flow, pattern, sh)
+    crossings = {c.impact: _bounce_clearances(flow, c) for c in chatters} if checks else {}
     for k in np.flatnonzero(sticks):
         held = held_flow(osc, impacts[k])
+        for gap, when, other, coordinate in crossings.get(int(k), ()):
+            reasons.append(f"impact {k}: a bounce of the chatter on stop {impacts[k]!r} "
+                           f"reaches stop {other!r}: {coordinate} has clearance {gap:.3g} at "
+                           f"t={when:.6g} after the landing")
         stop, s = impacts[k], float(sh.stick_times[k])
         releases[k] = sh.releases[k]
         start, phase = sh.accumulations[k], float(sh.accumulation_phases[k])
@@ -606,7 +722,7 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray) -> 
                    stick_times=sh.stick_times, flight_times=sh.flight_times, shift=shift,
                    release_states=releases, pressing_min=pressing, landing_pressing=landing,
                    jacobians=jacs, G=G,
-                   multipliers=mu, reasons=tuple(reasons))
+                   multipliers=mu, reasons=tuple(reasons), chatters=chatters)
 
 
 def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
@@ -642,7 +758,7 @@ def _sticky_motion(flow: Flow, N: int, pattern: str, sh: StickyShooting, checks:
     flights = dataclasses.replace(sh.flights(), starts=sh.search_starts,
                                   phases=sh.search_phases, flight_times=sh.flight_times - shift)
     return _orbit(flow, N, len(pattern), flights, checks, impacts, condition_number,
-                  error_estimate, sticks=_sticks(flow, pattern, sh, shift))
+                  error_estimate, sticks=_sticks(flow, pattern, sh, shift, checks))
 
 
 def sticky_orbit_from_unknowns(flow: Flow, N: int, pattern: str, u: np.ndarray,
