@@ -275,8 +275,9 @@ def motion_text(datasets: Sequence[xr.Dataset], *, adjective: str = "") -> str:
     attribute ``impacts``, 1 for an N-1 branch); when N or p differ between the
     datasets they are written as symbols (``Period-$N$ motions with $p$ impacts``),
     never as ``N-1``, which reads as a subtraction. Between two stops, the sequence
-    of stops hit follows (``U`` upper, ``L`` lower). ``adjective`` goes before
-    ``motions`` (``symmetric``).
+    of stops hit follows (``U`` upper, ``L`` lower), and the stops the motion sticks on
+    (its pattern's lowercase letters). ``adjective`` goes before ``motions``
+    (``symmetric``).
     """
     Ns = sorted({int(ds.attrs["N"]) for ds in datasets})
     ps = sorted({int(ds.attrs.get("impacts", 1)) for ds in datasets})
@@ -287,7 +288,11 @@ def motion_text(datasets: Sequence[xr.Dataset], *, adjective: str = "") -> str:
                else "$p$ impacts")
     text = f"Period-{n} {adjective + ' ' if adjective else ''}motions with {impacts}"
     if len(patterns) == 1:
-        text += f", impacts {patterns[0]} (L: lower stop)"
+        pattern = patterns[0]
+        text += f", impacts {pattern.upper()} (L: lower stop)"
+        held = sorted({c.upper() for c in pattern if c.islower()})
+        if held:  # a lowercase letter: the impact starts a sticking phase on that stop
+            text += f", sticking on {' and '.join(held)}"
     return text
 
 

@@ -4,6 +4,7 @@ avoid each other, non-physical motions in grey, one panel per system (fast, synt
 
 from __future__ import annotations
 
+import json
 import re
 
 import matplotlib
@@ -424,3 +425,19 @@ def test_special_points_at_one_place_become_one_combined_marker():
     assert len([x for line in ax.get_lines() for x, _ in line.get_xydata()]) == 4
     with pytest.raises(ValueError, match="shrink must be in"):
         nest_coincident_markers(ax, shrink=1.5)
+
+
+def test_motion_text_names_the_stops_a_motion_sticks_on():
+    """A lowercase letter of a pattern is an impact followed by a sticking phase: the title
+    reads the impacts in capitals and says where the motion sticks."""
+    from impactcont.plots.branches import motion_text
+
+    def dataset(pattern: str) -> xr.Dataset:
+        stops = {"mass": 2, "relative_to": 1, "b_low": -0.3}
+        return xr.Dataset(attrs={"N": 1, "impacts": len(pattern), "pattern": pattern,
+                                 "oscillator": json.dumps({"stops": stops})})
+
+    assert motion_text([dataset("UL")]) == ("Period-1 motions with 2 impacts, impacts UL "
+                                            "(L: lower stop)")
+    assert motion_text([dataset("lu")]) == ("Period-1 motions with 2 impacts, impacts LU "
+                                            "(L: lower stop), sticking on L and U")
