@@ -941,6 +941,10 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
     -------
     starts : ndarray, shape (K, 2n)
     phases, times : ndarray, shape (K,)
+    arrivals, transitions, phase_columns, rates : ndarray
+        Each bounce's ``X^-`` (K, 2n), ``Phi`` (K, 2n, 2n), ``dX^-/dtheta`` and ``X'``
+        (K, 2n) at its end (as a flight's, for :func:`motion_checks` and
+        :func:`end_clearances`).
     count : int
         The bounces resolved (the first ``count`` rows; fewer than K where a bounce's apex
         falls within :data:`_BOUNCE_ULPS` ulps of the stop), ``-2`` where a return is not
@@ -962,6 +966,10 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
     starts = np.zeros((K, m))
     phases = np.zeros(K)
     times = np.zeros(K)
+    arrivals = np.zeros((K, m))
+    transitions = np.zeros((K, m, m))
+    pcols = np.zeros((K, m))
+    rates = np.zeros((K, m))
     tr = np.empty((m, m))
     arr = np.empty(m)
     pcol = np.empty(m)
@@ -979,15 +987,20 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
         t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess,
                            2.0 * math.pi / omega, tr, arr, pcol, rate)
         if not t > 0.0:
-            return starts, phases, times, -2
+            return starts, phases, times, arrivals, transitions, pcols, rates, -2
         _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
         hd = 0.0
         for c in range(n):
             hd += normal[c] * rate[c]
         if not sign * hd > 0.0:
-            return starts, phases, times, -2
+            return starts, phases, times, arrivals, transitions, pcols, rates, -2
         for c in range(m):
             starts[count, c] = Y[c]
+            arrivals[count, c] = arr[c]
+            pcols[count, c] = pcol[c]
+            rates[count, c] = rate[c]
+            for q in range(m):
+                transitions[count, c, q] = tr[c, q]
         phases[count] = th
         times[count] = t
         _apply(D, arr, Y)
@@ -998,7 +1011,7 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
         Y[pivot] = s / normal[pivot]
         th += omega * t
         count += 1
-    return starts, phases, times, count
+    return starts, phases, times, arrivals, transitions, pcols, rates, count
 
 
 @_jit

@@ -317,6 +317,9 @@ class Chatter:
         ``times[i]``.
     phases, times : ndarray, shape (c,)
         Each bounce's forcing phase at its start (not wrapped) and its duration.
+    arrivals, transitions, phase_columns, rates : ndarray
+        Each bounce's ``X^-`` (c, 2n), ``Phi`` (c, 2n, 2n), ``dX^-/dtheta`` and ``X'``
+        (c, 2n) at its end (the return to the stop), as a flight's.
     accumulation : ndarray, shape (2n,)
         The state at the accumulation point, where the held flow starts.
     accumulation_phase : float
@@ -330,6 +333,10 @@ class Chatter:
     starts: np.ndarray
     phases: np.ndarray
     times: np.ndarray
+    arrivals: np.ndarray
+    transitions: np.ndarray
+    phase_columns: np.ndarray
+    rates: np.ndarray
     accumulation: np.ndarray
     accumulation_phase: float
     duration: float
@@ -348,13 +355,15 @@ def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatt
     for k in np.flatnonzero(sticks):
         if not chatter_restitution(osc, impacts[k]) > 0.0 or sh.chatter_status[k] < 0:
             continue
-        starts, phases, times, count = _kernel().chatter_bounces(
+        starts, phases, times, arr, tr, cols, rates, count = _kernel().chatter_bounces(
             flow.flight_arrays(), tuple(flow.forcing_arrays()),
             tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
             int(k), _writable(np.asarray(sh.starts[k], dtype=float)), float(sh.phases[k]))
         c = max(int(count), 0)
         found.append(Chatter(impact=int(k), stop=impacts[k], starts=starts[:c].copy(),
                              phases=phases[:c].copy(), times=times[:c].copy(),
+                             arrivals=arr[:c].copy(), transitions=tr[:c].copy(),
+                             phase_columns=cols[:c].copy(), rates=rates[:c].copy(),
                              accumulation=np.array(sh.accumulations[k], dtype=float),
                              accumulation_phase=float(sh.accumulation_phases[k]),
                              duration=float(sh.chatter_times[k])))
@@ -362,44 +371,61 @@ def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatt
 
 
 def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[tuple[float, float, str, str]]:
-    """The smallest clearance of every stop but the chatter's own over its resolved
-    bounces: ``(gap, t, stop, coordinate)`` per stop whose clearance is not positive (``t``
-    from the landing), by the contact search of every flight (eq. 16,
-    :func:`impactcont.kernel.shooting.motion_checks`: the interior extrema of each stop
-    coordinate, each bounce a flight from its impact on the stop). A bounce starts and
-    ends on the chatter's stop, so its ends are on the section and its own stop is not
-    searched; the jumped rest of the chatter stays below the last resolved apex."""
+    """The stops a chatter's resolved bounces reach, each but the chatter's own: ``(gap,
+    t, stop, coordinate)`` per stop reached, its smallest clearance and when (``t`` from
+    the landing).
+
+    Each bounce is checked as every flight is (each a flight from an impact on the
+    chatter's stop to the next): the contact search of eq. (16) at the interior extrema
+    of every stop coordinate (:func:`impactcont.kernel.shooting.motion_checks`, exact to
+    its root search; a clearance ``<= 0`` there is a crossing) and every stop's
+    clearance at both ends (:func:`impactcont.kernel.shooting.end_clearances`, past the
+    stop by more than its rounding: a coordinate crossing monotonically inside a
+    bounce). The chatter's own stop is not searched (a bounce starts and ends on it and
+    its return is the chatter map's). The jumped rest of the chatter (after the last
+    resolved impact, its speed ``<= CHATTER_SPEED`` of the landing's) rises about
+    ``(CHATTER_SPEED / R)^2`` of the first bounce's apex (the apex goes as the square of
+    the speed) and is not checked.
+    """
     c = chatter.times.size
     if c == 0:
         return []
     geo = _geometry(flow, chatter.stop * c)
-    m = chatter.starts.shape[1]
-    tr, cols, rates = np.empty((c, m, m)), np.empty((c, m)), np.empty((c, m))
-    for i in range(c):
-        _, rates[i], tr[i], cols[i] = _python_flight(flow, float(chatter.times[i]),
-                                                     chatter.starts[i], float(chatter.phases[i]))
     bounces = Shooting(phases=chatter.phases, flight_times=chatter.times, starts=chatter.starts,
-                       arrivals=chatter.starts, arrival_rates=rates, transitions=tr,
-                       phase_columns=cols, residual=np.zeros(0), jacobian=None)
+                       arrivals=chatter.arrivals, arrival_rates=chatter.rates,
+                       transitions=chatter.transitions, phase_columns=chatter.phase_columns,
+                       residual=np.zeros(0), jacobian=None)
     checked = MotionChecks._make(_kernel().motion_checks(
         tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
         tuple(contact_stops(geo)), tuple(checked_flights(bounces)), True))
     offsets = np.concatenate([[0.0], np.cumsum(chatter.times)[:-1]])
-    candidates = [(UPPER, checked.gap_upper, checked.time_upper, geo.normal)]
+    names = (UPPER, LOWER, *geo.extra_names)
+    normals = (geo.normal, geo.normal, *geo.extra_normals)
+    found: dict[int, tuple[float, float]] = {}  # stop -> (gap, t)
+
+    def reached(stop: int, gap: float, when: float) -> None:
+        if names[stop] != chatter.stop and (stop not in found or gap < found[stop][0]):
+            found[stop] = (gap, when)
+
+    interior = [(0, checked.gap_upper, checked.time_upper)]
     if geo.two_sided:
-        candidates.append((LOWER, checked.gap_lower, checked.time_lower, geo.normal))
-    for j, name in enumerate(geo.extra_names):
-        candidates.append((name, checked.gap_extra[:, j], checked.time_extra[:, j],
-                           geo.extra_normals[j]))
-    crossed = []
-    for name, gaps, times, normal in candidates:
-        if name == chatter.stop:
-            continue
-        i = int(np.argmin(gaps))
-        if not gaps[i] > 0.0:
-            crossed.append((float(gaps[i]), float(offsets[i] + times[i]), name,
-                            _coordinate(normal)))
-    return crossed
+        interior.append((1, checked.gap_lower, checked.time_lower))
+    interior += [(2 + j, checked.gap_extra[:, j], checked.time_extra[:, j])
+                 for j in range(len(geo.extra_names))]
+    for stop, gaps, times in interior:
+        for i in np.flatnonzero(~(gaps > 0.0)):
+            reached(stop, float(gaps[i]), float(offsets[i] + times[i]))
+    end_gap, end_stop, end_tol = _kernel().end_clearances(
+        geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
+        geo.extra_signs, geo.extra_positions, _writable(chatter.starts),
+        _writable(chatter.arrivals))
+    for i in range(c):
+        for end in (0, 1):
+            if end_stop[i, end] >= 0 and end_gap[i, end] < -end_tol[i, end]:
+                reached(int(end_stop[i, end]), float(end_gap[i, end]),
+                        float(offsets[i] + end * chatter.times[i]))
+    return [(gap, when, names[stop], _coordinate(normals[stop]))
+            for stop, (gap, when) in sorted(found.items())]
 
 
 def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
