@@ -315,3 +315,25 @@ def test_the_time_series_draws_the_chatter_and_the_simulated_motion():
     rise = s[:num] + osc.b
     assert rise[0] == pytest.approx(0.0, abs=1e-12) and rise.max() > 0.02
     assert first.times.sum() < first.duration < orbit.stick_times[0]
+
+
+def test_the_motion_keeps_the_chatter_maps_bounces():
+    """MultiImpactOrbit.chatters: one per chatter-entered stick, its bounces those the
+    chatter map resolved (K of them, the first from the landing state, each next one from
+    the impact ending the last: same positions, phases advanced by the bounce), ending
+    before the accumulation point, which is the shooting's."""
+    osc, _, orbit = riding(0.2)
+    sh = sticky.sticky_shooting(flow_of(osc), 1, "lu", orbit.unknowns)
+    assert [c.impact for c in orbit.chatters] == [0, 1]
+    assert [c.stop for c in orbit.chatters] == ["L", "U"]
+    for c in orbit.chatters:
+        k = c.impact
+        assert c.times.size == sh.chatter_status[k] == sticky.chatter_impacts(0.3)
+        np.testing.assert_array_equal(c.starts[0], sh.starts[k])
+        np.testing.assert_array_equal(c.accumulation, sh.accumulations[k])
+        np.testing.assert_allclose(c.starts[1:, :2], c.arrivals[:-1, :2], atol=1e-15)
+        np.testing.assert_allclose(c.phases[1:], c.phases[:-1] + osc.omega * c.times[:-1],
+                                   rtol=1e-15)
+        assert np.all(np.diff(c.times) < 0) and 0 < c.duration - c.times.sum() < 1e-4
+    plain = sticky.chatter_bounces(flow_of(osc.replace(R=0.0)), "lu", sh)
+    assert plain == ()
