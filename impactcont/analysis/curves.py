@@ -82,7 +82,7 @@ from impactcont.errors import (
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
-from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
+from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
     SHOOTING_KINDS,
@@ -571,35 +571,12 @@ def _shooting_start(kind: Label, start: xr.Dataset | MultiImpactOrbit, which: in
     symmetric = bool(json.loads(start.attrs.get("options", "{}")).get("symmetric", False))
     rows = [i for i, lab in enumerate(start[special_variable("label")].values.tolist())
             if lab == kind]
-    if special_variable("stick_time_k") in start and 0 <= which < len(rows):
-        orbit = _sticky_special_orbit(start, rows[which])
-    else:  # (refuses an index out of range)
-        orbit = special_orbit(start, kind, which)
+    orbit = special_orbit(start, kind, which)  # (refuses an index out of range)
     k = rows[which]
     if start[special_variable("status")].values[k] != "located":
         log.warning("the %s point %d of the branch is only bracketed: the curve starts from "
                     "the motion re-solved there", kind, which)
     return orbit, symmetric
-
-
-def _sticky_special_orbit(branch: xr.Dataset, k: int) -> MultiImpactOrbit:
-    """The motion with sticking phases at special point `k` of its branch, re-solved by
-    Newton from the point's stored phases, flight and stick times and states (the stick
-    times are unknowns of its shooting system: an RG or SO point has sticks of positive
-    length)."""
-    parameter = branch.attrs["parameter"]
-    values = {name: float(branch[special_variable(name)].values[k])
-              for name in dict.fromkeys(["omega", "b", parameter])}
-    osc = oscillator_from_dataset(branch).replace(omega=values.pop("omega"), b=values.pop("b"))
-    for name, value in values.items():  # as its object sets it (an element, an extra stop)
-        osc = model_parameter(osc, name).at(osc, value)
-    sticks = np.nan_to_num(np.asarray(branch[special_variable("stick_time_k")].values[k],
-                                      dtype=float))
-    guess = {"delta": float(branch[special_variable("delta_k")].values[k, 0]),
-             "flight_times": branch[special_variable("flight_time_k")].values[k],
-             "states": branch[special_variable("state_k")].values[k],
-             "pattern": pattern_of(branch), "stick_times": sticks}
-    return multi_impact_orbit(osc, int(branch.attrs["N"]), impacts_of(branch), guess)
 
 
 def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, which: int,

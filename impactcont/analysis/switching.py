@@ -139,8 +139,10 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
     Returns
     -------
     MultiImpactOrbit
-        Re-solved by Newton at the special point's parameter value (a BP: the symmetric
-        motion solved on its half system, where the full one is singular).
+        Re-solved by Newton at the special point's parameter value from its stored
+        phases, flight times, states (and stick times, of a motion with sticking phases);
+        a BP: the symmetric motion solved on its half system, where the full one is
+        singular.
     """
     if not isinstance(branch, xr.Dataset):
         raise TypeError(f"branch must be a branch xarray.Dataset; got {type(branch).__name__}")
@@ -163,6 +165,11 @@ def special_orbit(branch: xr.Dataset, label: str = "PD", which: int = 0) -> Mult
                  "flight_times": branch[special_variable("flight_time_k")].values[k],
                  "states": branch[special_variable("state_k")].values[k],
                  "pattern": pattern_of(branch)}
+        if special_variable("stick_time_k") in branch:
+            # a motion with sticking phases: its stick times are unknowns of its shooting
+            # system (NaN where no stick follows an impact)
+            guess["stick_times"] = np.nan_to_num(np.asarray(
+                branch[special_variable("stick_time_k")].values[k], dtype=float))
     else:
         # a guess for the shooting Newton (a bracketed point may sit off eq. 14)
         guess = orbit_at_phase(osc, N, float(branch[special_variable("delta")].values[k]),

@@ -152,7 +152,9 @@ def test_two_free_balls_with_a_dashpot_on_the_primary():
                            Stop("B", mass=3, gap=0.5, restitution=0.8, side=-1,
                                 relative_to=1))))
     assert int(np.sum(osc.first_order.generalized)) == 2
-    res = ic.simulate(osc, np.array([0.0, 0.0, 0.0, 0.0, 1.0, -1.0]), 0.0, 60.0)
+    # its first ~100 periods are a chaotic transient (rounding decides where it goes):
+    # the seed is taken long after it, on the stable four-impact motion
+    res = ic.simulate(osc, np.array([0.0, 0.0, 0.0, 0.0, 1.0, -1.0]), 0.0, 300.0)
     orbit = multi_impact_orbit(osc, 1, 4, res)
     assert orbit.physical and orbit.stable and sorted(orbit.pattern) == ["A", "B", "L", "U"]
     _resimulated(orbit)
