@@ -337,3 +337,25 @@ def test_the_motion_keeps_the_chatter_maps_bounces():
         assert np.all(np.diff(c.times) < 0) and 0 < c.duration - c.times.sum() < 1e-4
     plain = sticky.chatter_bounces(flow_of(osc.replace(R=0.0)), "lu", sh)
     assert plain == ()
+
+
+def test_a_bounce_crossing_another_coordinates_stop_is_seen_at_its_end():
+    """A stop on the primary (x1 <= -1.01) that x1 crosses monotonically late in the first
+    bounce of the riding motion's lower chatter (x1 from -1.033 down to an interior minimum
+    -1.045, then up to -0.996 at the bounce's end: no interior maximum to search): the
+    shot at the motion's unknowns on that machine names the stop for the chatter (the
+    bounce's end clearance), and the simulator from the landing state hits it inside
+    the first bounce."""
+    osc, _, orbit = riding(0.2)
+    first = orbit.chatters[0]
+    x1 = flow_of(osc).state(np.linspace(0.0, first.times[0], 201), first.starts[0],
+                            first.phases[0])[:, 0]
+    assert x1[0] < -1.01 < x1[-1] and np.argmin(x1) not in (0, 200)
+    capped = ic.ImpactOscillator(M=osc.M, K=osc.K, F=[1.0, 0.0], R=0.3, b=0.3, omega=0.2,
+                                 eta=0.3, stops=Stops(mass=2, relative_to=1, mirror=True,
+                                                      extra=(ic.Stop("A", mass=1, gap=-1.01,
+                                                                     restitution=0.5),)))
+    shot = sticky.sticky_orbit_from_unknowns(flow_of(capped), 1, "lu", orbit.unknowns)
+    assert "impact 0: a bounce of the chatter on stop 'L' reaches stop 'A': x1" in shot.reason
+    run = ic.simulate(capped, first.starts[0], float(first.phases[0]), 0.1)
+    assert run.impact_stops[0] == "A" and 0 < run.impact_times[0] < first.times[0]
