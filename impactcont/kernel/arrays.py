@@ -398,7 +398,7 @@ class HeldSegments(NamedTuple):
     the flight), (p,): there ``s = c``, ``s' = 0`` and ``s'' = 0``."""
     restitutions: np.ndarray
     """The restitution ``R`` of the stop held after impact k, (p,): ``R > 0`` enters the
-    sticking phase through complete chatter (:func:`impactcont.kernel.shooting.chatter_map`),
+    sticking phase through complete chatter (:func:`impactcont.kernel.shooting._chatter_map`),
     ``R = 0`` by the plastic impact k itself."""
     chatter_impacts: np.ndarray
     """How many impacts of the chatter after impact k are resolved before the jump to their

@@ -635,7 +635,7 @@ def _pressing(held, k, X, theta):
 
 
 # -- complete chatter ---------------------------------------------------------------------------
-#: Newton iterations of one bounce's return time (:func:`chatter_map`).
+#: Newton iterations of one bounce's return time (:func:`_chatter_map`).
 _BOUNCE_ITERATIONS = 60
 #: A bounce whose apex ``u^2 / (2 a)`` lies within this many ulps of the stop position is not
 #: resolved: the jump to the accumulation point is taken from it.
@@ -670,17 +670,18 @@ def _acceleration_gradient(flow, forcing, normal, sign, theta, grad):
     rate = np.empty(m)
     zero = np.zeros(m)
     _flight(flow, forcing, 0.0, zero, theta, tr, arr, pcol, base)
-    a0 = _stop_speed(normal, sign, base, n)[1]
+    _, a0 = _stop_speed(normal, sign, base, n)
     unit = np.zeros(m)
     for c in range(m):
         unit[c] = 1.0
         _flight(flow, forcing, 0.0, unit, theta, tr, arr, pcol, rate)
-        grad[c] = _stop_speed(normal, sign, rate, n)[1] - a0
+        _, ac = _stop_speed(normal, sign, rate, n)
+        grad[c] = ac - a0
         unit[c] = 0.0
     _flight(flow, forcing, 0.0, zero, theta + 0.5 * math.pi, tr, arr, pcol, rate)
-    aq = _stop_speed(normal, sign, rate, n)[1]
+    _, aq = _stop_speed(normal, sign, rate, n)
     _flight(flow, forcing, 0.0, zero, theta + math.pi, tr, arr, pcol, rate)
-    ah = _stop_speed(normal, sign, rate, n)[1]
+    _, ah = _stop_speed(normal, sign, rate, n)
     grad[m] = aq - 0.5 * (a0 + ah)
 
 
@@ -699,13 +700,14 @@ def _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate):
 
 
 @_inner
-def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, period, tr, arr,
-                   pcol, rate):
+def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr, pcol,
+                   rate):
     """The first return to its stop of the flight from `Y` (on the stop, leaving it), or
     ``-1.0``: the clearance bracketed from the parabola's `guess` (marching forward in
-    quarters of it, at most two forcing periods `period`, or halving it back while the
-    clearance is not positive), then safeguarded Newton (bisection where a Newton step
-    leaves the bracket) to a few ulps of the time or of the clearance."""
+    quarters of it, at most two forcing periods, or halving it back while the clearance is
+    not positive), then safeguarded Newton (bisection where a Newton step leaves the
+    bracket) to a few ulps of the time or of the clearance."""
+    period = 2.0 * math.pi / forcing.omega
     lo = guess
     g, _ = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol, rate)
     hi = -1.0
@@ -757,8 +759,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, period, 
 
 
 @_inner
-def chatter_map(flow, forcing, held, k, D, pivot, normal, sign, position, X0, theta0, X, dX,
-                dtheta, dT):
+def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT):
     """The chatter map of the stop held after impact k: the state ``X0`` right after the
     landing impact (restitution ``R = held.restitutions[k] > 0``, on the stop's section,
     leaving it) at phase `theta0` to the accumulation point of the chatter it starts.
@@ -781,9 +782,15 @@ def chatter_map(flow, forcing, held, k, D, pivot, normal, sign, position, X0, th
     theta)``: ``status`` the impacts resolved (``>= 0``), ``-1`` where the acceleration of
     the stop coordinate does not point into the stop at the jump (the chatter does not
     accumulate: incomplete), ``-2`` where a bounce's return is not found within two forcing
-    periods; on a
-    failure the map is the plastic impact at ``X0`` (``T = 0``) and the status says so.
+    periods; on a failure the map is the plastic impact at ``X0`` (``T = 0``) and the status
+    says so. The stop and its impact law are impact k's of `impacts`
+    (:class:`~impactcont.kernel.arrays.ImpactSequence`).
     """
+    D = impacts.matrices[k]
+    pivot = impacts.pivots[k]
+    normal = impacts.normals[k]
+    sign = impacts.signs[k]
+    position = impacts.positions[k]
     m = X0.size
     n = m // 2
     omega = forcing.omega
@@ -810,8 +817,8 @@ def chatter_map(flow, forcing, held, k, D, pivot, normal, sign, position, X0, th
             break
         # the parabola's return time (an eighth of a period where the stop does not press)
         guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
-        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess,
-                           2.0 * math.pi / omega, tr, arr, pcol, rate)
+        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr,
+                           arr, pcol, rate)
         found = t > 0.0
         if not found:
             status = -2
@@ -930,7 +937,7 @@ def chatter_map(flow, forcing, held, k, D, pivot, normal, sign, position, X0, th
 
 @_jit
 def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
-    """The bounces :func:`chatter_map` resolves after the landing impact k, replayed with
+    """The bounces :func:`_chatter_map` resolves after the landing impact k, replayed with
     the same flights, returns and impacts (its Jacobian left out, so the bounces are
     bitwise those of the shooting path): the state right after each resolved impact
     (the landing's first, on the stop's section), its phase and the bounce's duration.
@@ -984,8 +991,8 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
         if a > 0.0 and u * u < 2.0 * a * floor:
             break
         guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
-        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess,
-                           2.0 * math.pi / omega, tr, arr, pcol, rate)
+        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr,
+                           arr, pcol, rate)
         if not t > 0.0:
             return starts, phases, times, arrivals, transitions, pcols, rates, -2
         _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
@@ -1088,9 +1095,8 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
             cX = np.empty((m, m))
             cth = np.empty(m)
             cT = np.empty(m + 1)
-            status, Tc, th_inf = chatter_map(
-                flow, forcing, held, k, matrices[k], pivots[k], normals[k], impacts.signs[k],
-                positions[k], starts[k], phases[k], accumulations[k], cX, cth, cT)
+            status, Tc, th_inf = _chatter_map(flow, forcing, impacts, held, k, starts[k],
+                                              phases[k], accumulations[k], cX, cth, cT)
             chatter_status[k] = status
             chatter_times[k] = Tc
             accumulation_phases[k] = th_inf

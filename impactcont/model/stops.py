@@ -733,7 +733,7 @@ def sticking_pattern(osc: Any, pattern: str) -> tuple[str, np.ndarray]:
     ParameterError
         A sticking phase on a stop whose restitution is not in ``[0, 1)``: restitution 0
         enters it by the plastic impact itself, ``0 < R < 1`` through complete chatter (the
-        chatter map of :func:`impactcont.kernel.shooting.chatter_map`); with ``R >= 1`` the
+        chatter map of :func:`impactcont.kernel.shooting._chatter_map`); with ``R >= 1`` the
         impacts do not accumulate.
     """
     known = _STICKING.setdefault(osc, {})

@@ -805,7 +805,7 @@ def landing_impacts(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
     point of the chatter the landing starts (restitution above 0): the landing is then the
     first of the impacts on that stop since the last impact on another stop or the last
     release; the chatter's later impacts are part of the segment (the chatter map of
-    :func:`impactcont.kernel.shooting.chatter_map` resolves them) and are left out.
+    :func:`impactcont.kernel.shooting._chatter_map` resolves them) and are left out.
     """
     times = np.asarray(res.impact_times, dtype=float)
     count = times.size

@@ -121,7 +121,7 @@ class StickyShooting:
         The chatter's duration (0 without one; the held flow lasts ``s_k`` minus it) and
         the chatter map's status (the impacts resolved, ``-1`` the chatter does not
         accumulate, ``-2`` a bounce's return not found:
-        :func:`impactcont.kernel.shooting.chatter_map`).
+        :func:`impactcont.kernel.shooting._chatter_map`).
     """
 
     phases: np.ndarray
@@ -272,7 +272,7 @@ def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
 
 #: The chatter after a landing impact is resolved impact by impact until its impact speed
 #: falls below this fraction of the landing's (``R^K <= CHATTER_SPEED``), then jumped over
-#: to its accumulation point (:func:`impactcont.kernel.shooting.chatter_map`): the jump's
+#: to its accumulation point (:func:`impactcont.kernel.shooting._chatter_map`): the jump's
 #: error is ``O(v_K^2)``, and the release forgets it (the held flow from the accumulation
 #: point, shifted along itself), measured in tests/integration/test_chatter_entered_motions.py.
 CHATTER_SPEED = 1e-5
@@ -325,7 +325,7 @@ class Chatter:
     accumulation_phase : float
     duration : float
         From the landing to the accumulation point: the resolved bounces and the jump over
-        the rest (:func:`impactcont.kernel.shooting.chatter_map`).
+        the rest (:func:`impactcont.kernel.shooting._chatter_map`).
     """
 
     impact: int
@@ -344,7 +344,7 @@ class Chatter:
 
 def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatter, ...]:
     """The chatters of the shot `sh` whose impacts accumulate, one per chatter-entered
-    sticking phase of `pattern`: the bounces :func:`impactcont.kernel.shooting.chatter_map`
+    sticking phase of `pattern`: the bounces :func:`impactcont.kernel.shooting._chatter_map`
     resolved, replayed by :func:`impactcont.kernel.shooting.chatter_bounces` (the same
     flights, returns and impacts: bitwise the shooting path's bounces), and the
     accumulation point `sh` holds. A chatter whose map failed (``chatter_status < 0``) is

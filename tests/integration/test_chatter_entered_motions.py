@@ -2,7 +2,7 @@
 
 A lowercase letter on a stop with restitution ``0 < R < 1``: the landing impact starts a
 chatter, resolved impact by impact by the shooting path's own flights and jumped over to
-its accumulation point (:func:`impactcont.kernel.shooting.chatter_map`), then the held
+its accumulation point (:func:`impactcont.kernel.shooting._chatter_map`), then the held
 phase and the release. Witnesses, none sharing code with the shooting path:
 
 - the closed form of a one-mass preloaded oscillator (F_static = 1 into its stop b = 0,
