@@ -165,7 +165,7 @@ _OPTIONAL = ("asymmetry",)
 MAP_REASONS: dict[str, int] = {
     "stick_ended": 1,          # a stick time <= 0: past the end of a ride (SE)
     "release_grazing": 2,      # the pressing force <= 0 inside a stick (RG)
-    "sticking_onset": 4,       # the pressing force <= 0 right after a plastic impact (SO)
+    "sticking_onset": 4,       # the pressing force <= 0 where the stick starts (SO)
     "flight_time": 8,          # a flight time <= 0
     "impact_velocity": 16,     # an impact velocity <= 0 (not arriving towards its stop)
     "interior_contact": 32,    # a stop reached inside a flight (gap_min <= 0, eq. 16)
@@ -177,9 +177,10 @@ MAP_REASONS: dict[str, int] = {
 #: pattern), beside :data:`MULTI_MAP_VARIABLES`: metadata and dims after the two grid dims.
 STICKY_MAP_VARIABLES: dict[str, _Var] = {
     "stick_time_k": _Var("stick time", "1",
-                         "Duration of the sticking phase after impact k (from the plastic "
-                         "impact to the release; <= 0 past the end of a ride, SE); NaN for "
-                         "an impact without one and where not found.",
+                         "Duration of the sticking phase after impact k (from the landing "
+                         "impact, plastic or the first of a complete chatter, to the "
+                         "release; <= 0 past the end of a ride, SE); NaN for an impact "
+                         "without one and where not found.",
                          extra_dims=("impact",)),
     "release_phase_k": _Var("release phase", "rad",
                             "Forcing phase at the release ending the sticking phase after "
@@ -192,8 +193,9 @@ STICKY_MAP_VARIABLES: dict[str, _Var] = {
                            "release excluded); NaN for an impact without one, a stick of "
                            "duration <= 0 and where not found.", extra_dims=("impact",)),
     "landing_pressing_k": _Var("pressing force at the landing", "1",
-                               "Pressing force right after the plastic impact k that starts "
-                               "a sticking phase (<= 0: the sticking onset, SO, is passed); "
+                               "Pressing force where the sticking phase after impact k starts "
+                               "(after its plastic impact, or at the accumulation point of "
+                               "its chatter; <= 0: the sticking onset, SO, is passed); "
                                "NaN for an impact without one and where not found.",
                                extra_dims=("impact",)),
     "stick_time_min": _Var("smallest stick time", "1",
