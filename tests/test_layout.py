@@ -25,7 +25,7 @@ FREE_FOLDERS = {"integration", "studies"}
 # and this file.
 SHARED = {"__init__.py", "conftest.py", "_scene_data.py", "_fake_plugins.py", "reference_mp.py",
           "_made_up_branch.py", "_multi_impact_cases.py", "_layout_checks.py", "_ctrl_c.py",
-          "test_layout.py"}
+          "_study_files.py", "test_layout.py"}
 # Folders that hold no tests: reference data (tests/data/) and caches.
 NOT_TESTS = {"data", "__pycache__"}
 

@@ -9,10 +9,7 @@ The branch in omega (from 0.2) costs about 3 s; each closed-form motion about 1 
 from __future__ import annotations
 
 import functools
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,8 +24,7 @@ from impactcont.problems.multi_impact_branch import (
     MultiImpactBranchProblem,
     release_grazing_test,
 )
-
-STUDY = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions"
+from tests._study_files import study_file
 
 #: Where the closed form puts the end of the ride in omega (the landing is a release;
 #: studies/sticking_motions/README.md, closed_form.riding_end).
@@ -37,15 +33,8 @@ RIDING_END = 2.393422959745478
 
 @pytest.fixture(scope="module")
 def cf():
-    spec = importlib.util.spec_from_file_location("sticking_closed_form_b",
-                                                  STUDY / "closed_form.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look the module up by name
-    try:
-        spec.loader.exec_module(module)
+    with study_file("sticking_motions", "closed_form.py") as module:
         yield module
-    finally:
-        sys.modules.pop(spec.name, None)
 
 
 def damper(omega: float, **more) -> ic.ImpactOscillator:

@@ -34,33 +34,23 @@ differences at 30 digits, error ~1e-20) to 1e-10, the two the ride collapses bel
 from __future__ import annotations
 
 import functools
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import impactcont as ic
 from impactcont.model.stops import Stops
+from tests._study_files import study_file
 
-STUDY = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions"
 #: Largest landing/release time difference allowed against the simulator (issue 30).
 TIME_TOL = 1e-9
 
 
 @pytest.fixture(scope="module")
 def cf():
-    spec = importlib.util.spec_from_file_location("sticking_closed_form",
-                                                  STUDY / "closed_form.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look the module up by name
-    try:
-        spec.loader.exec_module(module)
+    with study_file("sticking_motions", "closed_form.py") as module:
         yield module
-    finally:
-        sys.modules.pop(spec.name, None)
 
 
 @pytest.fixture(scope="module")

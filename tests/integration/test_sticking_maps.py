@@ -12,11 +12,8 @@ About 40 s: each closed-form motion of the damper about 1 s, each end of its rid
 from __future__ import annotations
 
 import functools
-import importlib.util
 import json
 import math
-import sys
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -28,8 +25,8 @@ from impactcont.dataset.maps import MAP_REASONS, STICKY_MAP_VARIABLES
 from impactcont.errors import ParameterError
 from impactcont.model.stops import Stops
 from impactcont.plots.maps import multi_impact_map_diagram, multi_map_regions
+from tests._study_files import study_file
 
-STUDY = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions"
 #: The damper's map: the gap b (rows) by omega (columns) across the end of the ride.
 GAPS = np.array([0.29, 0.3])
 OMEGAS = np.linspace(2.2, 2.5, 16)  # step 0.02
@@ -40,15 +37,8 @@ AMPLITUDES = np.linspace(1.5, 5.0, 6)
 
 @pytest.fixture(scope="module")
 def cf():
-    spec = importlib.util.spec_from_file_location("sticking_closed_form_m",
-                                                  STUDY / "closed_form.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look the module up by name
-    try:
-        spec.loader.exec_module(module)
+    with study_file("sticking_motions", "closed_form.py") as module:
         yield module
-    finally:
-        sys.modules.pop(spec.name, None)
 
 
 def damper(omega: float, b: float = 0.3) -> ic.ImpactOscillator:

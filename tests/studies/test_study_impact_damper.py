@@ -8,31 +8,21 @@ quadratic (the phase), the stability from the half-period map written out by han
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import impactcont as ic
+from tests._study_files import study_file
 
-HERE = Path(__file__).resolve().parents[2] / "studies" / "impact_damper"
 MU, E, ZETA = 0.2, 0.8, 0.05
 
 
 @pytest.fixture(scope="module")
 def cf():
-    spec = importlib.util.spec_from_file_location("impact_damper_closed_form",
-                                                  HERE / "closed_form.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look the module up by name
-    try:
-        spec.loader.exec_module(module)
+    with study_file("impact_damper", "closed_form.py") as module:
         yield module
-    finally:
-        sys.modules.pop(spec.name, None)
 
 
 def _package(m):
