@@ -39,12 +39,10 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
 from impactcont.vocabulary import (
     CONTINUABLE_PARAMETERS,
-    ELEMENT_FAMILIES,
     PARAMETERS,
-    STOP_FAMILIES,
     Parameter,
     check_bounds,
-    check_damping,
+    check_parameter,
     damping_kind,
     element_name,
     stop_parameter_name,
@@ -578,12 +576,7 @@ def model_parameter(osc: ImpactOscillator, name: Any, argument: str = "parameter
         the oscillator's extra stops. The message names `argument`, the value and what is
         allowed.
     """
-    if not isinstance(name, str) or name not in PARAMETERS:
-        raise ParameterError(f"{argument} must be one of {CONTINUABLE_PARAMETERS} or an element "
-                             f"{tuple(ELEMENT_FAMILIES)} (1-based, e.g. 'k2', 'M[1,2]', 'F[2]') "
-                             f"or an extra stop's {tuple(STOP_FAMILIES)} (e.g. 'gap[A]'); "
-                             f"got {name!r}")
-    check_damping(osc, name, argument)
+    check_parameter(osc, name, argument)  # known, and of the oscillator's damping
     stops = osc.stops
     if name in ("b_low", "R_low", "gap"):
         symmetric = stops.mirror or (stops.two_sided and stops.b_low == osc.b)
