@@ -41,6 +41,7 @@ import numpy as np
 
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.orbit.extrema import critical_points, sample_times
 from impactcont.orbit.flow import Flow, flow_of
 
 __all__ = ["HeldFlow", "held_flow", "held_flow_at", "held_frame"]
@@ -236,6 +237,51 @@ class HeldFlow:
         """``dp/dt`` along the held flow where ``X' = rate``, at phase `theta`."""
         grad, dtheta = self.pressing_gradient(theta)
         return float(grad @ rate + self.oscillator.omega * dtheta)
+
+    def coordinate_extrema(self, duration: float, X0: np.ndarray, theta: float,
+                           normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Another stop coordinate ``s = normal . x`` along a sticking phase of `duration`
+        from ``X0`` at phase `theta`: its values at both ends and at every turning point
+        inside (``s' = 0``), where its smallest clearance to any stop on it is.
+
+        ``s = normal . x_c + (P^T normal) . y`` is a coordinate of the held system, whose
+        flow is a flight's: its turning points are found as those of a flight's stop
+        coordinate in the contact search of eq. (16) (:func:`~impactcont.orbit.extrema.
+        sample_times`, :func:`~impactcont.orbit.extrema.critical_points`: the roots of
+        ``s''`` split ``s'`` into monotone pieces on a grid of 16 cells per fastest period
+        the coordinate sees, each root of ``s'`` polished by safeguarded Newton), not
+        sampled. A coordinate the hold fixes (``P^T normal = 0``: the held stop coordinate
+        itself) is constant.
+
+        Parameters
+        ----------
+        duration : float
+            The held flow's duration (``<= 0``: the start only).
+        X0 : ndarray, shape (2n,)
+            The state where the held flow starts.
+        theta : float
+            The forcing phase there.
+        normal : ndarray, shape (n,)
+            The stop coordinate.
+
+        Returns
+        -------
+        times, values : ndarray
+            Times after the start (``0`` and `duration` first) and ``s`` there.
+        """
+        normal = np.asarray(normal, dtype=float)
+        _, Li, Xc = self._lift()
+        level = float(normal @ Xc[:self.n])
+        times = np.array([0.0, duration]) if duration > 0.0 else np.zeros(1)
+        row = self.frame.T @ normal
+        if self.reduced is None or not np.any(row):
+            return times, np.full(times.size, level)
+        motion = self.reduced.motion(Li @ (np.asarray(X0, dtype=float) - Xc), theta,
+                                     normal=row)
+        if duration > 0.0:
+            grid = sample_times(self.reduced, 0.0, duration, normal=row)
+            times = np.concatenate([times, critical_points(motion, grid)])
+        return times, level + motion(times)[0]
 
     def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float
                          ) -> tuple[float, float]:

@@ -428,6 +428,59 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[tuple[float, float,
             for stop, (gap, when) in sorted(found.items())]
 
 
+#: A stop's clearance at an end of a sticking phase (its start, its release) is a crossing
+#: below ``-HELD_END_ULPS eps (|c| + sum |n_i x_i|)``, the rounding of its evaluation, as at
+#: a flight's ends (:data:`impactcont.kernel.shooting._END_ULPS`).
+HELD_END_ULPS = 64.0
+
+
+@dataclasses.dataclass(frozen=True)
+class _HeldGap:
+    """The smallest clearance of one other stop along one sticking phase."""
+
+    gap: float
+    time: float  # after the impact that starts the sticking phase
+    stop: str
+    coordinate: str
+    crossed: bool
+
+
+def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase: float,
+                     duration: float, release: np.ndarray, offset: float) -> list[_HeldGap]:
+    """Every stop's smallest clearance along the held flow of the sticking phase after
+    impact k (but the held stop's own), one :class:`_HeldGap` per stop.
+
+    The held flow runs `duration` from `start` at `phase` (the accumulation point of a
+    chatter, `offset` after the landing; else the plastic impact's state, `offset` 0) to
+    the release state `release`. Each stop coordinate is searched at both ends and at its
+    turning points inside (:meth:`~impactcont.orbit.held_flow.HeldFlow.coordinate_extrema`,
+    the contact search of eq. (16) on the held system's flow): a clearance ``<= 0`` at a
+    turning point, or below the rounding of its evaluation at an end (:data:`HELD_END_ULPS`),
+    is the stop crossed while the other is held.
+    """
+    geo = _geometry(flow, impacts)
+    held = held_flow(flow.osc, impacts[k])
+    n = flow.osc.n
+    stops = [(UPPER, geo.normal, 1.0, geo.b)]
+    if geo.two_sided:
+        stops.append((LOWER, geo.normal, -1.0, -geo.b_low))
+    stops += list(zip(geo.extra_names, geo.extra_normals, geo.extra_signs, geo.extra_positions,
+                      strict=True))
+    ends = np.vstack([start[:n], release[:n]])
+    found = []
+    for name, normal, sign, position in stops:
+        if name == impacts[k]:
+            continue
+        times, values = held.coordinate_extrema(duration, start, phase, normal)
+        gaps = sign * (position - values)
+        tol = HELD_END_ULPS * _EPS * (abs(position) + np.abs(ends * normal).sum(axis=1))
+        i = int(np.argmin(gaps))
+        crossed = bool(np.any(~(gaps[2:] > 0.0)) or np.any(gaps[:2] < -tol[:gaps[:2].size]))
+        found.append(_HeldGap(float(gaps[i]), offset + float(times[i]), name,
+                              _coordinate(np.asarray(normal)), crossed))
+    return found
+
+
 def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: float = 1e-12,
                   max_iter: int = 40) -> tuple[np.ndarray, StickyShooting, int]:
     """:func:`~impactcont.orbit.multi_impact.newton` on :func:`sticky_shooting`: the same
@@ -685,6 +738,7 @@ class _Sticks:
     multipliers: np.ndarray
     reasons: tuple[str, ...]
     chatters: tuple[Chatter, ...] = ()
+    held_gaps: tuple[tuple[_HeldGap, ...], ...] = ()
 
 
 def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
@@ -703,6 +757,7 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
     pressing = np.full(p, np.nan)
     landing = np.full(p, np.nan)
     reasons = []
+    held_gaps: list[tuple[_HeldGap, ...]] = [() for _ in range(p)]
     chatters = chatter_bounces(flow, pattern, sh)
     crossings = {c.impact: _bounce_clearances(flow, c) for c in chatters} if checks else {}
     for k in np.flatnonzero(sticks):
@@ -744,11 +799,18 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
             reasons.append(f"sticking phase {k}: at the release the pressing force on stop "
                            f"{stop!r} does not fall through zero (dp/dt = {rate:.3g} >= 0): "
                            "the stop coordinate does not leave the stop")
+        if checks:
+            held_gaps[k] = tuple(_held_clearances(flow, impacts, int(k), start, phase,
+                                                  s - chatter, sh.releases[k], chatter))
+            reasons.extend(
+                f"sticking phase {k} (stop {stop!r}): {g.coordinate} reaches stop {g.stop!r} "
+                f"while {stop!r} holds (clearance {g.gap:.3g} at t={g.time:.6g} after impact "
+                f"{k})" for g in held_gaps[k] if g.crossed)
     return _Sticks(pattern=pattern, phases=sh.phases, states=sh.starts,
                    stick_times=sh.stick_times, flight_times=sh.flight_times, shift=shift,
                    release_states=releases, pressing_min=pressing, landing_pressing=landing,
-                   jacobians=jacs, G=G,
-                   multipliers=mu, reasons=tuple(reasons), chatters=chatters)
+                   jacobians=jacs, G=G, multipliers=mu, reasons=tuple(reasons),
+                   chatters=chatters, held_gaps=tuple(held_gaps))
 
 
 def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
@@ -783,8 +845,33 @@ def _sticky_motion(flow: Flow, N: int, pattern: str, sh: StickyShooting, checks:
     shift = sh.search_shifts
     flights = dataclasses.replace(sh.flights(), starts=sh.search_starts,
                                   phases=sh.search_phases, flight_times=sh.flight_times - shift)
-    return _orbit(flow, N, len(pattern), flights, checks, impacts, condition_number,
-                  error_estimate, sticks=_sticks(flow, pattern, sh, shift, checks))
+    sticks = _sticks(flow, pattern, sh, shift, checks)
+    orbit = _orbit(flow, N, len(pattern), flights, checks, impacts, condition_number,
+                   error_estimate, sticks=sticks)
+    if not checks:
+        return orbit
+    return _with_held_gaps(orbit, sticks)
+
+
+def _with_held_gaps(orbit: MultiImpactOrbit, sticks: _Sticks) -> MultiImpactOrbit:
+    """`orbit` with each segment's smallest clearance over its sticking phase too: segment k
+    is impact k, the sticking phase after it and the flight from its release, so a held
+    phase's clearance smaller than its flight's becomes ``flight_gap_min[k]`` (the stop in
+    ``flight_gap_stops[k]``, the time in ``flight_gap_min_times[k]`` counted from the
+    release as the flight's are: negative, inside the sticking phase). The GR test
+    function ``gap_min`` then changes sign where another stop coordinate touches its stop
+    inside a sticking phase, as it does inside a flight."""
+    gaps = orbit.flight_gap_min.copy()
+    times = orbit.flight_gap_min_times.copy()
+    stops = list(orbit.flight_gap_stops)
+    for k, found in enumerate(sticks.held_gaps):
+        for g in found:
+            if g.gap < gaps[k]:
+                gaps[k] = g.gap
+                times[k] = g.time - float(sticks.stick_times[k])
+                stops[k] = g.stop
+    return dataclasses.replace(orbit, flight_gap_min=gaps, flight_gap_min_times=times,
+                               flight_gap_stops="".join(stops))
 
 
 def sticky_orbit_from_unknowns(flow: Flow, N: int, pattern: str, u: np.ndarray,
