@@ -5,7 +5,9 @@ the labels of the special points (:class:`Label`), the codimension-two labels, t
 continuable parameters with their allowed ranges, units and the damping each
 needs (:data:`PARAMETERS`), and the rule that ``eta`` (``C = 2 eta K``, the
 paper's damping) and the Rayleigh coefficients ``alpha, beta``
-(``C = alpha M + beta K``) exclude each other (:func:`check_damping`).
+(``C = alpha M + beta K``) exclude each other (:func:`check_damping`); and the one
+refusal of a number of periods, impacts or a mass's number that is not an integer
+``>= 1`` (:func:`check_positive_integer`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import enum
 import math
 import re
 from collections.abc import Iterator, Mapping
-from numbers import Real
+from numbers import Integral, Real
 from typing import Any
 
 from impactcont.errors import ParameterError
@@ -38,6 +40,7 @@ __all__ = [
     "check_damping",
     "check_labels",
     "check_parameter",
+    "check_positive_integer",
     "damping_kind",
     "element_name",
     "stop_parameter_name",
@@ -164,6 +167,30 @@ CODIM2_LABELS: tuple[str, ...] = (
 #: How well a special point is known: ``located`` (refined to its precision) or
 #: ``bracketed`` (only known to lie between two accepted points).
 STATUSES: tuple[str, ...] = ("located", "bracketed")
+
+
+def check_positive_integer(argument: str, value: Any, meaning: str = "") -> int:
+    """`value` as an int ``>= 1``: a number of forcing periods ``N``, of impacts ``p``, a
+    mass's number, ...
+
+    Parameters
+    ----------
+    argument : str
+        The argument's name in error messages.
+    value : object
+        What the caller gave: an integer (Python's or NumPy's; a bool is none).
+    meaning : str, optional
+        What the integer counts, said in the message (``"impact every N forcing periods"``).
+
+    Raises
+    ------
+    ParameterError
+        ``"<argument> must be an integer >= 1 (<meaning>); got <value>"``.
+    """
+    if isinstance(value, bool) or not isinstance(value, Integral) or value < 1:
+        raise ParameterError(f"{argument} must be an integer >= 1"
+                             f"{f' ({meaning})' if meaning else ''}; got {value!r}")
+    return int(value)
 
 
 def check_labels(detect: Any, argument: str = "detect") -> list[str]:

@@ -85,3 +85,23 @@ def test_bounds_are_one_shared_check(bounds, message):
     with pytest.raises(ic.ParameterError) as info:
         vocab.check_bounds("omega", bounds)
     assert str(info.value) == message
+
+
+# -- counts: one refusal of N, p, a mass's number ------------------------------------------------
+def test_positive_integer_takes_python_and_numpy_integers():
+    assert vocab.check_positive_integer("N", 3) == 3
+    value = vocab.check_positive_integer("N", np.int64(2))
+    assert value == 2 and type(value) is int
+
+
+@pytest.mark.parametrize("value", [0, -1, True, np.bool_(True), 1.0, "2", None, np.uint8(0)])
+def test_positive_integer_refuses_naming_argument_meaning_and_value(value):
+    with pytest.raises(ic.ParameterError) as info:
+        vocab.check_positive_integer("N", value, "impact every N forcing periods")
+    assert str(info.value) == (f"N must be an integer >= 1 (impact every N forcing periods); "
+                               f"got {value!r}")
+
+
+def test_positive_integer_without_meaning_says_none():
+    with pytest.raises(ic.ParameterError, match=r"^max_iter must be an integer >= 1; got 0$"):
+        vocab.check_positive_integer("max_iter", 0)

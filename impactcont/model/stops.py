@@ -45,6 +45,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from impactcont.errors import ParameterError
+from impactcont.vocabulary import check_positive_integer
 
 __all__ = ["LOWER", "UPPER", "Stop", "StopView", "Stops", "check_pattern",
            "require_forcing", "require_paper_stops", "sticking_pattern"]
@@ -66,12 +67,6 @@ def _finite(name: str, value: Any, *, low: float | None = None, high: float | No
     if not math.isfinite(x) or (low is not None and x < low) or (high is not None and x > high):
         raise ParameterError(f"{name} must be {allowed}; got {value!r}")
     return x
-
-
-def _mass_index(name: str, value: Any, allowed: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ParameterError(f"{name} must be an integer >= 1 ({allowed}); got {value!r}")
-    return int(value)
 
 
 def _normal_of(mass: int, relative_to: int | None, n: int) -> np.ndarray:
@@ -166,11 +161,12 @@ class Stop:
         if name in (UPPER, LOWER):
             raise ParameterError(f"Stop name {name!r} is taken: 'U' and 'L' are the "
                                  "oscillator's own upper and lower stops; give another letter")
-        object.__setattr__(self, "mass", _mass_index(
+        object.__setattr__(self, "mass", check_positive_integer(
             f"Stop {name!r} mass", self.mass, "1-based, the mass the stop acts on"))
         if self.relative_to is not None:
-            k = _mass_index(f"Stop {name!r} relative_to", self.relative_to,
-                            "the other mass of a stop between two masses, 1-based; or None")
+            k = check_positive_integer(
+                f"Stop {name!r} relative_to", self.relative_to,
+                "the other mass of a stop between two masses, 1-based; or None")
             if k == self.mass:
                 raise ParameterError(f"Stop {name!r}: relative_to={k!r} equals mass="
                                      f"{self.mass!r}: a stop between a mass and itself; give "
@@ -293,11 +289,9 @@ class Stops:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "extra", _as_extra(self.extra))
-        mass = self.mass
-        if isinstance(mass, bool) or not isinstance(mass, (int, np.integer)) or mass < 1:
-            raise ParameterError(f"stops.mass must be an integer >= 1 (the impacting mass, "
-                                 f"1-based as the paper's mass 1); got {mass!r}")
-        object.__setattr__(self, "mass", int(mass))
+        mass = check_positive_integer("stops.mass", self.mass,
+                                      "the impacting mass, 1-based as the paper's mass 1")
+        object.__setattr__(self, "mass", mass)
         k = self.relative_to
         if k is not None:
             if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:

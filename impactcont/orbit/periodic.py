@@ -35,6 +35,7 @@ from impactcont.orbit.dense import (
     warn_ill_conditioned,
 )
 from impactcont.orbit.flow import Flow
+from impactcont.vocabulary import check_positive_integer
 
 __all__ = [
     "IllConditionedWarning",  # defined in impactcont.errors, re-exported here
@@ -293,10 +294,7 @@ def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
 
 
 def _check_N(N: object) -> int:
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ParameterError(f"N must be an integer >= 1 (impact every N forcing periods); "
-                             f"got {N!r}")
-    return int(N)
+    return check_positive_integer("N", N, "impact every N forcing periods")
 
 
 def _check_oscillator(osc: object) -> ImpactOscillator:
