@@ -482,6 +482,7 @@ def check_bounds(parameter: str, bounds: Any, argument: str = "bounds") -> tuple
     Returns
     -------
     (float, float)
+        ``(lo, hi)``, both in the parameter's range.
 
     Raises
     ------

@@ -199,6 +199,7 @@ class ModelParameter:
         Returns
         -------
         (float, float)
+            ``(lo, hi)``: the oscillator takes both, so every value between.
 
         Raises
         ------

@@ -673,6 +673,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
     Returns
     -------
     matplotlib.axes.Axes
+        ``ax``, or the new figure's; the zoomed inset, if one was drawn, is its child
+        axes (``ax.child_axes``).
 
     Raises
     ------

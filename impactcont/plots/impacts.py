@@ -144,6 +144,8 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
     Returns
     -------
     matplotlib.axes.Axes
+        ``ax``, or the new figure's; the zoomed inset, if one was drawn, is its child
+        axes (``ax.child_axes``).
 
     Raises
     ------
