@@ -82,9 +82,11 @@ log = logging.getLogger(__name__)
 RELEASE_SHIFT = 1e-4
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class StickyShooting:
-    """The shooting system of a motion with sticking phases evaluated at one ``u``.
+class StickyShooting(StickyFlights):
+    """The shooting system of a motion with sticking phases evaluated at one ``u``: the
+    compiled :func:`impactcont.kernel.shooting.sticky_system`'s record
+    (:class:`~impactcont.kernel.arrays.StickyFlights`, whose fields it documents), with the
+    flights from the releases as a :class:`~impactcont.orbit.multi_impact.Shooting`.
 
     Segment k is impact k, the sticking phase after it (where there is one) and the flight
     from its release to impact ``k + 1``. Arrays per segment k.
@@ -109,7 +111,7 @@ class StickyShooting:
         ``[r_0, .., r_{p-1}, p_k..]``: ``r_k = D_{k+1} X_k^- - X_{k+1}`` and the pressing
         force at each release (q sticks).
     jacobian : ndarray or None
-        ``dr/du``, exact.
+        ``dr/du``, exact (None where not asked for).
     search_shifts, search_starts, search_phases : ndarray, shape (p,), (p, 2n), (p,)
         Where the contact search of each flight from a release starts (0, the release
         state and phase without a stick; :data:`RELEASE_SHIFT`).
@@ -124,28 +126,7 @@ class StickyShooting:
         :func:`impactcont.kernel.shooting._chatter_map`).
     """
 
-    phases: np.ndarray
-    stick_times: np.ndarray
-    flight_times: np.ndarray
-    starts: np.ndarray
-    releases: np.ndarray
-    release_phases: np.ndarray
-    held_transitions: np.ndarray
-    held_phase_columns: np.ndarray
-    held_rates: np.ndarray
-    arrivals: np.ndarray
-    arrival_rates: np.ndarray
-    transitions: np.ndarray
-    phase_columns: np.ndarray
-    residual: np.ndarray
-    jacobian: np.ndarray | None
-    search_shifts: np.ndarray
-    search_starts: np.ndarray
-    search_phases: np.ndarray
-    accumulations: np.ndarray
-    accumulation_phases: np.ndarray
-    chatter_times: np.ndarray
-    chatter_status: np.ndarray
+    __slots__ = ()
 
     def flights(self) -> Shooting:
         """The flights from the releases as a
@@ -210,13 +191,11 @@ def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
     osc = flow.osc
     impacts = sticking_pattern(osc, pattern)[0]
     x = _sticky_unknowns(osc, pattern, u, "u")
-    out = _kernel().sticky_system(flow.flight_arrays(), tuple(flow.forcing_arrays()),
-                                  tuple(impact_sequence(_geometry(flow, impacts))),
-                                  held_segments(flow, pattern), TWO_PI * N / osc.omega,
-                                  _writable(x), bool(jacobian))
-    named = StickyFlights._make(out)
-    return StickyShooting(**named._replace(jacobian=named.jacobian if jacobian else None)
-                          ._asdict())
+    sh = StickyShooting._make(_kernel().sticky_system(
+        flow.flight_arrays(), tuple(flow.forcing_arrays()),
+        tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
+        TWO_PI * N / osc.omega, _writable(x), bool(jacobian)))
+    return sh if jacobian else sh._replace(jacobian=None)
 
 
 def _sticky_unknowns(osc: ImpactOscillator, pattern: str, u: Any, argument: str
@@ -499,7 +478,7 @@ def sticky_newton(flow: Flow, N: int, pattern: str, u0: np.ndarray, *, tol: floa
         flow.flight_arrays(), tuple(flow.forcing_arrays()),
         tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
         TWO_PI * N / osc.omega, x0, float(tol), int(max_iter))
-    sh = StickyShooting(**StickyFlights._make(out)._asdict())
+    sh = StickyShooting._make(out)
     if status == 0:
         return x, sh, int(it)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, x)
@@ -546,11 +525,8 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
 
     Parameters
     ----------
-    flow : Flow
-    N : int
-    pattern : str
-        With lowercase letters where a sticking phase follows an impact.
-    u : ndarray, shape (2np + q,)
+    flow, N, pattern, u
+        As :func:`sticky_shooting` takes them.
     sh : StickyShooting, optional
         :func:`sticky_shooting` at ``u`` if already computed (its Jacobian is not read).
 
@@ -568,8 +544,7 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
         return (up - down) / (2.0 * h)
     if sh is None:
         sh = sticky_shooting(flow, N, pattern, x, jacobian=False)
-    shot = tuple(np.zeros((0, 0)) if name == "jacobian" else getattr(sh, name)
-                 for name in StickyFlights._fields)
+    shot = tuple(sh._replace(jacobian=np.zeros((0, 0))))  # the record's plain tuple
     return _kernel().sticky_frequency_column(
         tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
         tuple(flow.omega_arrays()), tuple(impact_sequence(_geometry(flow, impacts))),
@@ -883,11 +858,8 @@ def sticky_orbit_from_unknowns(flow: Flow, N: int, pattern: str, u: np.ndarray,
 
     Parameters
     ----------
-    flow : Flow
-    N : int
-    pattern : str
-        With lowercase letters where a sticking phase follows an impact
-        (:func:`~impactcont.model.stops.sticking_pattern`).
+    flow, N, pattern
+        As :func:`sticky_shooting` takes them.
     u : ndarray, shape (2np + q,)
         A (converged) solution of :func:`sticky_shooting`.
     sh : StickyShooting, optional
