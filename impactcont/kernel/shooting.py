@@ -2198,6 +2198,89 @@ def _frobenius_condition(A):
     return math.sqrt(a_sq) * math.sqrt(inv_sq)
 
 
+#: :func:`_bordered_newton`'s status where the corrector goes on to its next iterate.
+GOING = -1
+
+
+@_inner
+def _bordered_newton(A, residual, border, state, predicted, it, settings, last_update,
+                     flagged):
+    """Iterate `it` of the pseudo-arclength corrector from its bordered matrix: the tests,
+    the update and the tangent of :func:`palc_correct`, shared by
+    :func:`impactcont.kernel.sticky.sticky_palc_correct`.
+
+    `A` is ``[dF/dx | dF/domega]`` on its first ``m = A.shape[0] - 1`` rows (``m`` the
+    unknowns ``x`` but omega) and the border ``W t`` (`border`) on its last; `residual`
+    ``F`` (its first ``m`` entries read) at `state` ``[x, omega]``; `predicted` the
+    predicted point; `settings` the plain tuple of
+    :class:`~impactcont.kernel.arrays.CorrectorSettings`; `last_update` and `flagged` as
+    the previous iterate left them. A non-finite residual is :data:`NONFINITE_RESIDUAL`
+    (its norm the first non-finite entry); converged (not on the hyperplane) when ``max|F|
+    <= tol`` and, after an update, the last update's max-norm too, then the tangent
+    solves ``A t = e_m``; else the update of ``A d = [-F; -<W t, state - predicted>]`` is
+    added to `state` (in place).
+
+    Returns ``(status, iterations, residual_norm, tangent, last_update, flagged)``:
+    :data:`GOING` to go on (the other fields as they stand), or the fields of
+    :class:`~impactcont.kernel.arrays.PalcResult` (the tangent zeros unless converged).
+    """
+    tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
+    size = A.shape[0] - 1
+    norm = 0.0
+    for r in range(size):
+        v = abs(residual[r])
+        if not v < np.inf:
+            return (NONFINITE_RESIDUAL, it, v, np.zeros(size + 1), last_update, flagged)
+        if v > norm:
+            norm = v
+    finite = True
+    for r in range(size + 1):
+        for k in range(size + 1):
+            if not abs(A[r, k]) < np.inf:
+                finite = False
+    converged = not hyperplane and norm <= tol and (it == 0 or last_update <= tol)
+    if (not hyperplane and finite and (converged or it < max_iter)
+            and flagged.shape[0] == 0 and _frobenius_condition(A) > singular):
+        flagged = A.copy()
+    if converged:
+        if not finite:
+            return (NONFINITE_SYSTEM, it, norm, np.zeros(size + 1), last_update, flagged)
+        e = np.zeros(size + 1)
+        e[size] = 1.0
+        t, ok = _solve(A, e)
+        if not ok:
+            return (SINGULAR, it, norm, np.zeros(size + 1), last_update, flagged)
+        return (CONVERGED, it, norm, t, last_update, flagged)
+    if it == max_iter:
+        return (FAILED, max_iter, norm, np.zeros(size + 1), last_update, flagged)
+    if not finite:
+        return (NONFINITE_SYSTEM, it, norm, np.zeros(size + 1), last_update, flagged)
+    rhs = np.empty(size + 1)
+    for r in range(size):
+        rhs[r] = -residual[r]
+    s = 0.0
+    for k in range(size + 1):
+        s += border[k] * (state[k] - predicted[k])
+    rhs[size] = -s
+    if not abs(s) < np.inf:
+        return (NONFINITE_SYSTEM, it, norm, np.zeros(size + 1), last_update, flagged)
+    update, ok = _solve(A, rhs)
+    if not ok:
+        return (SINGULAR, it, norm, np.zeros(size + 1), last_update, flagged)
+    last_update = 0.0
+    for k in range(size + 1):
+        v = abs(update[k])
+        if not v < np.inf:
+            return (NONFINITE_UPDATE, it, norm, np.zeros(size + 1), last_update, flagged)
+        if v > last_update:
+            last_update = v
+    for k in range(size + 1):
+        state[k] += update[k]
+    if hyperplane and last_update <= tol:
+        return (CONVERGED, it + 1, norm, np.zeros(size + 1), last_update, flagged)
+    return (GOING, it, norm, update, last_update, flagged)
+
+
 @_jit
 def palc_correct(flow, errors, impacts, N, embedding, step, settings):
     """The pseudo-arclength corrector of an N-p branch in omega (modal flow), compiled.
@@ -2241,7 +2324,7 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
     modal = ShootingFlow(*flow)
     E, c, rows = Embedding(*embedding)
     predicted, tangent, weights = CorrectorStep(*step)
-    tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
+    max_iter = CorrectorSettings(*settings).max_iter
     w, a, f = modal.w, modal.a, modal.f
     size = predicted.size - 1
     full = E.shape[0]
@@ -2277,14 +2360,6 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
         sh, ext = branch_linearization(flow, (omega, gam, bet, empty_c),
                                        (dgam, dbet, empty_c), impacts, period, x)
         residual = sh.residual
-        norm = 0.0
-        for r in range(rows):
-            v = abs(residual[r])
-            if not v < np.inf:
-                return PalcResult(state, it, NONFINITE_RESIDUAL, omega, v, raw, worst,
-                                  worst_omega, flagged, last_update)
-            if v > norm:
-                norm = v
         # [J E | dF/domega - J c / omega^2] on the first rows, and the border
         A = np.empty((size + 1, size + 1))
         for r in range(rows):
@@ -2299,58 +2374,10 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
             A[r, size] = s
         for k in range(size + 1):
             A[size, k] = border[k]
-        finite = True
-        for r in range(size + 1):
-            for k in range(size + 1):
-                if not abs(A[r, k]) < np.inf:
-                    finite = False
-        converged = not hyperplane and norm <= tol and (it == 0 or last_update <= tol)
-        if (not hyperplane and finite and (converged or it < max_iter)
-                and flagged.shape[0] == 0 and _frobenius_condition(A) > singular):
-            flagged = A.copy()
-        if converged:
-            if not finite:
-                return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst,
-                                  worst_omega, flagged, last_update)
-            e = np.zeros(size + 1)
-            e[size] = 1.0
-            t, ok = _solve(A, e)
-            if not ok:
-                return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
-                                  flagged, last_update)
-            return PalcResult(state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged,
-                              last_update)
-        if it == max_iter:
-            break
-        if not finite:
-            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                              flagged, last_update)
-        rhs = np.empty(size + 1)
-        for r in range(rows):
-            rhs[r] = -residual[r]
-        s = 0.0
-        for k in range(size + 1):
-            s += border[k] * (state[k] - predicted[k])
-        rhs[size] = -s
-        if not abs(s) < np.inf:
-            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                              flagged, last_update)
-        update, ok = _solve(A, rhs)
-        if not ok:
-            return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
-                              flagged, last_update)
-        last_update = 0.0
-        for k in range(size + 1):
-            v = abs(update[k])
-            if not v < np.inf:
-                return PalcResult(state, it, NONFINITE_UPDATE, omega, norm, raw, worst,
-                                  worst_omega, flagged, last_update)
-            if v > last_update:
-                last_update = v
-        for k in range(size + 1):
-            state[k] += update[k]
-        if hyperplane and last_update <= tol:
-            return PalcResult(state, it + 1, CONVERGED, omega, norm, raw, worst, worst_omega,
+        status, done, norm, column, last_update, flagged = _bordered_newton(
+            A, residual, border, state, predicted, it, settings, last_update, flagged)
+        if status != GOING:
+            return PalcResult(state, done, status, omega, norm, column, worst, worst_omega,
                               flagged, last_update)
     return PalcResult(state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
                       last_update)

@@ -29,16 +29,11 @@ from impactcont.kernel.arrays import (
 from impactcont.kernel.general import forced_response, forced_response_derivative
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.shooting import (
-    CONVERGED,
     FAILED,
-    NONFINITE_RESIDUAL,
-    NONFINITE_SYSTEM,
-    NONFINITE_UPDATE,
+    GOING,
     REFUSED,
-    SINGULAR,
-    _frobenius_condition,
+    _bordered_newton,
     _jacobian_wanted,
-    _solve,
     forced_amplitudes,
     sticky_frequency_column,
     sticky_system,
@@ -87,7 +82,7 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
     named = HeldSegments(*held)
     hf = HeldForcing(*held_forcing)
     predicted, tangent, weights = CorrectorStep(*step)
-    tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
+    max_iter = CorrectorSettings(*settings).max_iter
     w, a, f = modal.w, modal.a, modal.f
     flight = (modal.general, modal.w, modal.a, modal.f, modal.u, modal.ui, modal.g,
               modal.free, modal.lam, modal.V, modal.Vi, modal.xs, modal.xd)
@@ -167,14 +162,6 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
                                           dZ, period, sh)
         residual = sh[13]
         J = sh[14]
-        norm = 0.0
-        for row in range(size):
-            v = abs(residual[row])
-            if not v < np.inf:
-                return PalcResult(state, it, NONFINITE_RESIDUAL, omega, v, raw, worst,
-                                  worst_omega, flagged, last_update)
-            if v > norm:
-                norm = v
         A = np.empty((size + 1, size + 1))  # [J | dF/domega] and the border
         for row in range(size):
             for k in range(size):
@@ -182,58 +169,10 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
             A[row, size] = col[row]
         for k in range(size + 1):
             A[size, k] = border[k]
-        finite = True
-        for row in range(size + 1):
-            for k in range(size + 1):
-                if not abs(A[row, k]) < np.inf:
-                    finite = False
-        converged = not hyperplane and norm <= tol and (it == 0 or last_update <= tol)
-        if (not hyperplane and finite and (converged or it < max_iter)
-                and flagged.shape[0] == 0 and _frobenius_condition(A) > singular):
-            flagged = A.copy()
-        if converged:
-            if not finite:
-                return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst,
-                                  worst_omega, flagged, last_update)
-            e = np.zeros(size + 1)
-            e[size] = 1.0
-            t, ok = _solve(A, e)
-            if not ok:
-                return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
-                                  flagged, last_update)
-            return PalcResult(state, it, CONVERGED, omega, norm, t, worst, worst_omega, flagged,
-                              last_update)
-        if it == max_iter:
-            break
-        if not finite:
-            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                              flagged, last_update)
-        rhs = np.empty(size + 1)
-        for row in range(size):
-            rhs[row] = -residual[row]
-        s = 0.0
-        for k in range(size + 1):
-            s += border[k] * (state[k] - predicted[k])
-        rhs[size] = -s
-        if not abs(s) < np.inf:
-            return PalcResult(state, it, NONFINITE_SYSTEM, omega, norm, raw, worst, worst_omega,
-                              flagged, last_update)
-        update, ok = _solve(A, rhs)
-        if not ok:
-            return PalcResult(state, it, SINGULAR, omega, norm, raw, worst, worst_omega,
-                              flagged, last_update)
-        last_update = 0.0
-        for k in range(size + 1):
-            v = abs(update[k])
-            if not v < np.inf:
-                return PalcResult(state, it, NONFINITE_UPDATE, omega, norm, raw, worst,
-                                  worst_omega, flagged, last_update)
-            if v > last_update:
-                last_update = v
-        for k in range(size + 1):
-            state[k] += update[k]
-        if hyperplane and last_update <= tol:
-            return PalcResult(state, it + 1, CONVERGED, omega, norm, raw, worst, worst_omega,
+        status, done, norm, column, last_update, flagged = _bordered_newton(
+            A, residual, border, state, predicted, it, settings, last_update, flagged)
+        if status != GOING:
+            return PalcResult(state, done, status, omega, norm, column, worst, worst_omega,
                               flagged, last_update)
     return PalcResult(state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
                       last_update)
