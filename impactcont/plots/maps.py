@@ -44,6 +44,7 @@ from impactcont.plots.branches import (
     system_text,
 )
 from impactcont.plots.labels import marker_boxes, merged_labels, place_labels
+from impactcont.vocabulary import check_positive_integer
 
 __all__ = ["CODIM2_NAMES", "CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES",
            "MULTI_MAP_BOUNDARIES", "MULTI_MAP_REGIONS", "REGIONS", "codim2_legend",
@@ -453,8 +454,7 @@ def two_parameter_figure(map_ds: xr.Dataset, curves: Any = None, *, ncols: int =
     """
     import matplotlib.pyplot as plt
 
-    if isinstance(ncols, bool) or not isinstance(ncols, (int, np.integer)) or ncols < 1:
-        raise ValueError(f"ncols must be a positive integer; got {ncols!r}")
+    ncols = check_positive_integer("ncols", ncols, "panels per row")
     width = check_width(width)
     if isinstance(map_ds, xr.Dataset) and dataset_tag(map_ds) == "multi_impact_map":
         fig, ax = plt.subplots(figsize=(width, 0.8 * width + 1.6), layout="constrained")

@@ -134,7 +134,8 @@ def test_the_figure_has_one_panel_per_N_and_one_legend(grid, pd_curve) -> None:
         import matplotlib.pyplot as plt
 
         plt.close(fig)
-    with pytest.raises(ValueError, match=r"ncols must be a positive integer; got 0"):
+    with pytest.raises(ValueError,
+                       match=r"ncols must be an integer >= 1 \(panels per row\); got 0"):
         two_parameter_figure(grid, ncols=0)
     for wide in (30, 7.5):  # wider than a journal's page
         with pytest.raises(ValueError, match=r"width must be a number of inches in \[2, 7\.2\] "
