@@ -28,7 +28,7 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER
 
-__all__ = ["StopGeometry", "stop_geometry", "stop_sign"]
+__all__ = ["StopGeometry", "moved_stop_geometry", "stop_geometry", "stop_sign"]
 
 
 def stop_sign(stop: str) -> float:
@@ -151,6 +151,40 @@ def stop_geometry(osc: ImpactOscillator, pattern: str) -> StopGeometry:
     if geometry is None:
         geometry = known[pattern] = _stop_geometry(osc, pattern)
     return geometry
+
+
+def moved_stop_geometry(geometry: StopGeometry, before: ImpactOscillator,
+                        osc: ImpactOscillator, pattern: str) -> StopGeometry:
+    """The :class:`StopGeometry` of `pattern` on `osc` from `geometry`, that of `before`.
+
+    Where `osc` differs from `before` at most in the positions of the stops U and L
+    (``b``, ``b_low``; a curve in ``b`` or ``gap``): the normals, pivots, signs and impact
+    matrices of `geometry` (they depend on the masses, the stop coordinate and the
+    restitutions only) with the new positions, as :func:`stop_geometry` would build them
+    (the same arrays, without the stop views, the impact matrices and the checks again).
+    Otherwise (another restitution, mass matrix or kind of stops, extra stops):
+    :func:`stop_geometry` of `osc`. Kept as :func:`stop_geometry` keeps its geometries.
+    """
+    old, new = before.stops, osc.stops
+    known = _GEOMETRIES.setdefault(osc, {})
+    if pattern in known:
+        return known[pattern]
+    same = (type(new) is type(old) and not new.extra and not old.extra
+            and (new.mass, new.relative_to, new.mirror, new.two_sided)
+            == (old.mass, old.relative_to, old.mirror, old.two_sided)
+            and osc.n == before.n and set(pattern) <= {UPPER, LOWER}
+            and (osc.M is before.M or np.array_equal(osc.M, before.M))
+            and all(new.restitution(s, osc.R) == old.restitution(s, before.R)
+                    for s in set(pattern)))
+    if not same:
+        return stop_geometry(osc, pattern)
+    positions = np.array([new.position(s, osc.b) for s in pattern], dtype=float)
+    positions.flags.writeable = False
+    moved = dataclasses.replace(
+        geometry, positions=positions, b=float(osc.b),
+        b_low=float(new.b_low) if new.two_sided else 0.0)
+    known[pattern] = moved
+    return moved
 
 
 #: :func:`stop_geometry` of each live oscillator, by pattern.

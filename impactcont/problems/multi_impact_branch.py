@@ -91,7 +91,7 @@ from impactcont.orbit.sticky import (
     sticky_palc_step,
     sticky_shooting,
 )
-from impactcont.orbit.stop_geometry import StopGeometry
+from impactcont.orbit.stop_geometry import StopGeometry, moved_stop_geometry
 from impactcont.orbit.symmetry import half_map, symmetry_defect
 from impactcont.problems.events import BRANCH_TESTS
 from impactcont.vocabulary import Label
@@ -225,8 +225,13 @@ class MultiImpactBranchProblem:
         new.osc = osc
         new._flows, new._shots, new._extended = {}, {}, {}
         if self._base_flow is not None:
-            new._base_flow = _at_frequency(self._base_flow, osc, same_stops=False)
-            _geometry(new._base_flow, self.impacts)
+            base = self._base_flow
+            new._base_flow = _at_frequency(base, osc, same_stops=False)
+            # the stops moved, their normals and impact matrices kept (unless R changed)
+            cache = new._base_flow.__dict__.setdefault("_stop_geometry", {})
+            for pattern in {self.impacts, self.pattern}:
+                cache[pattern] = moved_stop_geometry(_geometry(base, pattern), base.osc, osc,
+                                                     pattern)
         return new
 
     # -- the oscillator along the branch ------------------------------------------------------

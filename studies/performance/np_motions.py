@@ -151,6 +151,10 @@ def cold_compile(script: str = COLD) -> dict[str, float]:
 def main() -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--only", choices=("bp-symmetric",), default=None,
+                        help="bp-symmetric: only the BP curve point and the symmetric 1-2 "
+                        "branch with their references (the N = 1 PD curve and branch point), "
+                        "no cold compiles; prints per-point times")
     args = parser.parse_args()
     threadpool_limits(1)
     # the 2-2 motion of the period-doubled branch, and a guess at a nearby omega
@@ -240,6 +244,19 @@ def main() -> dict[str, Any]:
         "curve_bp": curve_bp,
         "curve_pd_n1": curve_pd_n1,
     }
+    if args.only == "bp-symmetric":
+        keep = ("branch_n1", "branch_12", "branch_12_no_detection", "curve_bp", "curve_pd_n1")
+        t = interleaved({k: work[k] for k in keep}, args.rounds)
+        out = {"per_point_ms": {"bp": 1e3 * t["curve_bp"] / points["bp"],
+                                "pd_n1": 1e3 * t["curve_pd_n1"] / points["pd_n1"],
+                                "12": 1e3 * t["branch_12"] / points["12"],
+                                "12_no_detection": 1e3 * t["branch_12_no_detection"]
+                                / points["12"],
+                                "n1": 1e3 * t["branch_n1"] / points["n1"]},
+               "points": points, "loadavg": os.getloadavg(), "impactcont": ic.__file__}
+        out["ratio_12_n1"] = out["per_point_ms"]["12"] / out["per_point_ms"]["n1"]
+        print(json.dumps(out))
+        return out
     t = interleaved(work, args.rounds)
     per_point = {k: t[f"branch_{k}"] / points[k]
                  for k in ("n1", "22", "12", "any_C", "proportional")}

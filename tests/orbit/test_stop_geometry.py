@@ -97,3 +97,26 @@ def test_pair_stops_are_serialised_and_refused_by_the_closed_form():
     assert "relative_to=1" in repr(osc)
     with pytest.raises(ParameterError, match="multi_impact_orbit"):
         ic.periodic_orbits(osc, 1)
+
+
+@pytest.mark.parametrize("stops, change", [
+    (Stops(mirror=True), {"b": 0.7}),                       # both stops move with b
+    (Stops(b_low=0.8), {"b": 0.6}),                         # the upper stop alone
+    (Stops(mass=2, relative_to=1, b_low=0.5), {"b": 0.3}),  # a clearance between masses
+    (Stops(mirror=True), {"R": 0.4}),                       # another restitution: rebuilt
+])
+def test_a_moved_geometry_is_the_one_built_afresh(stops, change):
+    from impactcont.orbit.stop_geometry import moved_stop_geometry, stop_geometry
+    before = ic.ImpactOscillator(M=np.diag([1.0, 2.0]), K=[[2.0, -1.0], [-1.0, 1.0]],
+                                 F=[1.0, 0.0], R=0.6, b=0.5, omega=1.2, eta=0.1, stops=stops)
+    osc = before.replace(**change)
+    pattern = "ULLU"
+    moved = moved_stop_geometry(stop_geometry(before, pattern), before, osc, pattern)
+    fresh = ic.orbit.stop_geometry._stop_geometry(osc, pattern)
+    for name in ("pivots", "normals", "signs", "positions", "matrices", "normal",
+                 "extra_normals", "extra_signs", "extra_positions"):
+        np.testing.assert_array_equal(getattr(moved, name), getattr(fresh, name), err_msg=name)
+        assert not getattr(moved, name).flags.writeable
+    assert (moved.b, moved.b_low, moved.two_sided, moved.extra_names) == \
+        (fresh.b, fresh.b_low, fresh.two_sided, fresh.extra_names)
+    assert stop_geometry(osc, pattern) is moved  # kept for the oscillator
