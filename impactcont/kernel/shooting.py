@@ -759,6 +759,112 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
 
 
 @_inner
+def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log):
+    """The chatter's bounces after the landing impact k resolved one by one, at most
+    `count`: from ``Y`` (right after the landing, on the stop's section, leaving it; updated
+    in place to the state after the last resolved impact) at phase `theta`, each flight
+    with :func:`_flight`, its return to the stop by :func:`_bounce_return` from the
+    parabola's ``2 u / a``, the impact law ``D`` of impact k of `impacts`; stopped where a
+    bounce's apex falls within :data:`_BOUNCE_ULPS` ulps of the stop.
+
+    The one loop of :func:`_chatter_map` (with its Jacobian) and :func:`chatter_bounces`
+    (with its log), so that the bounces the check replays are bitwise the shooting path's.
+    With `J` of shape ``(2n + 1, 2n + 1)`` (``d[Y, theta] / d[X0, theta0]`` so far) and `dT`
+    (``dT/d[X0, theta0]``), each bounce's chain rule (its transition, the return time's
+    saltation, the impact) is applied to both; with shape (0, 0) and (0,) it is skipped.
+    `log` is the plain tuple ``(starts, phases, times, arrivals, transitions,
+    phase_columns, rates)`` whose row ``i`` each resolved bounce ``i`` fills (the state
+    after its impact, its phase, its duration and, at its end, ``X^-``, ``Phi``,
+    ``dX^-/dtheta``, ``X'``), or empty arrays (no log).
+
+    Returns ``(status, theta, T)``: the impacts resolved (``-2`` where a return is not
+    found), the phase after the last and the time they took.
+    """
+    starts, phases, times, arrivals, transitions, pcols, rates = log
+    D = impacts.matrices[k]
+    pivot = impacts.pivots[k]
+    normal = impacts.normals[k]
+    sign = impacts.signs[k]
+    position = impacts.positions[k]
+    omega = forcing.omega
+    m = Y.size
+    n = m // 2
+    chain = J.shape[0] > 0
+    logged = starts.shape[0] > 0
+    tr = np.empty((m, m))
+    arr = np.empty(m)
+    pcol = np.empty(m)
+    rate = np.empty(m)
+    B = np.empty((m, J.shape[1]))
+    dt = np.empty(J.shape[1])
+    th = theta
+    T = 0.0
+    floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
+    status = 0
+    for _ in range(count):
+        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
+        u, a = _stop_speed(normal, sign, rate, n)
+        if a > 0.0 and u * u < 2.0 * a * floor:
+            break
+        # the parabola's return time (an eighth of a period where the stop does not press)
+        guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
+        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr,
+                           arr, pcol, rate)
+        if not t > 0.0:
+            return -2, th, T
+        _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
+        hd = 0.0
+        for c in range(n):
+            hd += normal[c] * rate[c]
+        if not sign * hd > 0.0:
+            return -2, th, T
+        if chain:
+            for i in range(m):
+                for c in range(m + 1):
+                    s = pcol[i] * J[m, c]
+                    for q in range(m):
+                        s += tr[i, q] * J[q, c]
+                    B[i, c] = s
+            for c in range(m + 1):
+                s = 0.0
+                for r in range(n):
+                    s += normal[r] * B[r, c]
+                dt[c] = -s / hd
+            for i in range(m):
+                for c in range(m + 1):
+                    B[i, c] += rate[i] * dt[c]
+            for i in range(m):
+                for c in range(m + 1):
+                    s = 0.0
+                    for q in range(m):
+                        s += D[i, q] * B[q, c]
+                    J[i, c] = s
+            for c in range(m + 1):
+                J[m, c] += omega * dt[c]
+                dT[c] += dt[c]
+        if logged:
+            for c in range(m):
+                starts[status, c] = Y[c]
+                arrivals[status, c] = arr[c]
+                pcols[status, c] = pcol[c]
+                rates[status, c] = rate[c]
+                for q in range(m):
+                    transitions[status, c, q] = tr[c, q]
+            phases[status] = th
+            times[status] = t
+        _apply(D, arr, Y)
+        s = position
+        for c in range(n):
+            if c != pivot:
+                s -= normal[c] * Y[c]
+        Y[pivot] = s / normal[pivot]
+        th += omega * t
+        T += t
+        status += 1
+    return status, th, T
+
+
+@_inner
 def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT):
     """The chatter map of the stop held after impact k: the state ``X0`` right after the
     landing impact (restitution ``R = held.restitutions[k] > 0``, on the stop's section,
@@ -790,7 +896,6 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     pivot = impacts.pivots[k]
     normal = impacts.normals[k]
     sign = impacts.signs[k]
-    position = impacts.positions[k]
     m = X0.size
     n = m // 2
     omega = forcing.omega
@@ -799,69 +904,15 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     for c in range(m + 1):
         J[c, c] = 1.0
     Y = X0.copy()
-    th = theta0
-    T = 0.0
     dTv = np.zeros(m + 1)
     tr = np.empty((m, m))
     arr = np.empty(m)
     pcol = np.empty(m)
     rate = np.empty(m)
-    B = np.empty((m, m + 1))
-    dt = np.empty(m + 1)
-    floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
-    status = 0
-    for _ in range(held.chatter_impacts[k]):
-        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
-        u, a = _stop_speed(normal, sign, rate, n)
-        if a > 0.0 and u * u < 2.0 * a * floor:
-            break
-        # the parabola's return time (an eighth of a period where the stop does not press)
-        guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
-        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr,
-                           arr, pcol, rate)
-        found = t > 0.0
-        if not found:
-            status = -2
-            break
-        _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
-        hd = 0.0
-        for c in range(n):
-            hd += normal[c] * rate[c]
-        if not sign * hd > 0.0:
-            status = -2
-            break
-        for i in range(m):
-            for c in range(m + 1):
-                s = pcol[i] * J[m, c]
-                for q in range(m):
-                    s += tr[i, q] * J[q, c]
-                B[i, c] = s
-        for c in range(m + 1):
-            s = 0.0
-            for r in range(n):
-                s += normal[r] * B[r, c]
-            dt[c] = -s / hd
-        for i in range(m):
-            for c in range(m + 1):
-                B[i, c] += rate[i] * dt[c]
-        for i in range(m):
-            for c in range(m + 1):
-                s = 0.0
-                for q in range(m):
-                    s += D[i, q] * B[q, c]
-                J[i, c] = s
-        for c in range(m + 1):
-            J[m, c] += omega * dt[c]
-            dTv[c] += dt[c]
-        _apply(D, arr, Y)
-        s = position
-        for c in range(n):
-            if c != pivot:
-                s -= normal[c] * Y[c]
-        Y[pivot] = s / normal[pivot]
-        th += omega * t
-        T += t
-        status += 1
+    no_log = (np.zeros((0, m)), np.zeros(0), np.zeros(0), np.zeros((0, m)),
+              np.zeros((0, m, m)), np.zeros((0, m)), np.zeros((0, m)))
+    status, th, T = _bounces(flow, forcing, impacts, k, held.chatter_impacts[k], Y, theta0,
+                             J, dTv, no_log)
     dtj = 0.0
     ddt = np.zeros(m + 1)
     if status >= 0:
@@ -961,63 +1012,13 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
     forcing = Forcing(*forcing)
     impacts = ImpactSequence(*impacts)
     held = HeldSegments(*held)
-    D = impacts.matrices[k]
-    pivot = impacts.pivots[k]
-    normal = impacts.normals[k]
-    sign = impacts.signs[k]
-    position = impacts.positions[k]
-    omega = forcing.omega
     m = X0.size
-    n = m // 2
     K = held.chatter_impacts[k]
-    starts = np.zeros((K, m))
-    phases = np.zeros(K)
-    times = np.zeros(K)
-    arrivals = np.zeros((K, m))
-    transitions = np.zeros((K, m, m))
-    pcols = np.zeros((K, m))
-    rates = np.zeros((K, m))
-    tr = np.empty((m, m))
-    arr = np.empty(m)
-    pcol = np.empty(m)
-    rate = np.empty(m)
-    Y = X0.copy()
-    th = theta0
-    floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
-    count = 0
-    for _ in range(K):
-        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
-        u, a = _stop_speed(normal, sign, rate, n)
-        if a > 0.0 and u * u < 2.0 * a * floor:
-            break
-        guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
-        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr,
-                           arr, pcol, rate)
-        if not t > 0.0:
-            return starts, phases, times, arrivals, transitions, pcols, rates, -2
-        _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
-        hd = 0.0
-        for c in range(n):
-            hd += normal[c] * rate[c]
-        if not sign * hd > 0.0:
-            return starts, phases, times, arrivals, transitions, pcols, rates, -2
-        for c in range(m):
-            starts[count, c] = Y[c]
-            arrivals[count, c] = arr[c]
-            pcols[count, c] = pcol[c]
-            rates[count, c] = rate[c]
-            for q in range(m):
-                transitions[count, c, q] = tr[c, q]
-        phases[count] = th
-        times[count] = t
-        _apply(D, arr, Y)
-        s = position
-        for c in range(n):
-            if c != pivot:
-                s -= normal[c] * Y[c]
-        Y[pivot] = s / normal[pivot]
-        th += omega * t
-        count += 1
+    log = (np.zeros((K, m)), np.zeros(K), np.zeros(K), np.zeros((K, m)), np.zeros((K, m, m)),
+           np.zeros((K, m)), np.zeros((K, m)))
+    count, _, _ = _bounces(flow, forcing, impacts, k, K, X0.copy(), theta0,
+                           np.zeros((0, 0)), np.zeros(0), log)
+    starts, phases, times, arrivals, transitions, pcols, rates = log
     return starts, phases, times, arrivals, transitions, pcols, rates, count
 
 
