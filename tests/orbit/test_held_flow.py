@@ -101,3 +101,34 @@ def test_the_held_flow_at_another_omega_is_the_one_built_there():
     with pytest.raises(ParameterError, match="osc must be the held flow's oscillator at "
                                              "another omega only"):
         held_flow_at(base, osc.replace(b=0.4, omega=1.37), "U", reduced)
+
+
+@pytest.mark.parametrize("damping", [{"eta": 0.05},
+                                     {"C": np.diag([0.1, 0.0, 0.02])}])
+def test_another_coordinate_along_the_held_flow_is_searched_at_its_turning_points(damping):
+    """A chain of three masses held on a stop of mass 2 (the held system: masses 1 and 3
+    through their springs to the held mass, a constant force on it): each other coordinate's
+    extrema (``x1``, ``x3 - x1``) over a stick of 7 time units are among the values
+    coordinate_extrema returns (ends and turning points, where ``s' = 0`` to rounding),
+    against 200,001 samples of the held state (whose sampling error at an extremum is
+    below 1e-9 here); the held coordinate itself is constant at its stop."""
+    K = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
+    osc = ic.ImpactOscillator(M=np.diag([1.0, 0.5, 2.0]), K=K, F=[1.0, 0.0, 0.3], R=0.0,
+                              b=0.2, omega=0.9, stops=Stops(mass=2),
+                              F_static=[0.0, 0.1, 0.0], **damping)
+    held = held_flow(osc, "U")
+    X0 = np.array([0.3, 0.2, -0.1, 0.4, 0.0, -0.2])
+    t = np.linspace(0.0, 7.0, 200_001)
+    sampled = held.state(t, X0, 0.4)[:, :3]
+    for normal in ([1.0, 0.0, 0.0], [-1.0, 0.0, 1.0]):
+        normal = np.array(normal)
+        times, values = held.coordinate_extrema(7.0, X0, 0.4, normal)
+        assert times[0] == 0.0 and times[1] == 7.0 and times.size > 2
+        s = sampled @ normal
+        assert s.min() - 1e-9 <= values.min() <= s.min() + 1e-14
+        assert s.max() - 1e-14 <= values.max() <= s.max() + 1e-9
+        speeds = [normal @ held.segment(time, X0, 0.4)[3][:3] for time in times[2:]]
+        assert np.abs(speeds).max() < 1e-13
+        assert values == pytest.approx(held.state(times, X0, 0.4)[:, :3] @ normal, abs=1e-13)
+    times, values = held.coordinate_extrema(7.0, X0, 0.4, np.array([0.0, 1.0, 0.0]))
+    assert list(times) == [0.0, 7.0] and list(values) == [0.2, 0.2]
