@@ -28,6 +28,7 @@ from impactcont.kernel.arrays import (
 )
 from impactcont.kernel.general import forced_response, forced_response_derivative
 from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
     FAILED,
     GOING,
@@ -118,14 +119,9 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
             worst_omega = omega
         Z = np.zeros((p, r), dtype=np.complex128)
         dZ = np.zeros((p, r), dtype=np.complex128)
-        for k in range(p):
-            if sticks[k] and r > 0:
-                Zk, cond = forced_response(hf.K[k], hf.M[k], hf.C[k], hf.F[k], omega)
-                if not (cond < np.inf and cond * _EPS < 1.0):
-                    return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega,
-                                      flagged, last_update)
-                Z[k] = Zk
-                dZ[k] = forced_response_derivative(hf.K[k], hf.M[k], hf.C[k], Zk, omega)
+        if not _held_response(hf, sticks, omega, Z, dZ):
+            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega,
+                              flagged, last_update)
         now = (named.sticks, named.lifts, named.inverses, named.offsets, named.lam, named.V,
                named.Vi, named.xs, named.xd, Z, named.grads, named.forces, named.levels,
                named.shifts, named.restitutions, named.chatter_impacts)
@@ -140,12 +136,8 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
                 om = omega + side * h
                 g2, b2, _, _, _, bad = forced_amplitudes(w, a, f, errors, om)
                 Z2 = np.zeros((p, r), dtype=np.complex128)
-                for k in range(p):
-                    if sticks[k] and r > 0:
-                        Z2[k], cond = forced_response(hf.K[k], hf.M[k], hf.C[k], hf.F[k], om)
-                        if not (cond < np.inf and cond * _EPS < 1.0):
-                            bad = True
-                if bad:
+                if bad or not _held_response(hf, sticks, om, Z2,
+                                             np.zeros((0, r), dtype=np.complex128)):
                     return PalcResult(state, it, REFUSED, omega, norm, raw, worst,
                                       worst_omega, flagged, last_update)
                 moved = (named.sticks, named.lifts, named.inverses, named.offsets, named.lam,
@@ -176,3 +168,23 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
                               flagged, last_update)
     return PalcResult(state, max_iter, FAILED, omega, norm, raw, worst, worst_omega, flagged,
                       last_update)
+
+
+@_inner
+def _held_response(hf, sticks, omega, Z, dZ):
+    """Each held system's forced amplitude ``Z_r`` at `omega` into ``Z[k]`` (every impact k
+    followed by a sticking phase, `sticks`) and, where `dZ` has rows, ``dZ_r/d omega`` into
+    ``dZ[k]`` (:func:`impactcont.kernel.general.forced_response` and
+    :func:`~impactcont.kernel.general.forced_response_derivative`; `hf` the
+    :class:`~impactcont.kernel.arrays.HeldForcing`). False at an undamped resonance of a
+    held system (the condition number of its dynamic stiffness reaches ``1 / eps``)."""
+    r = Z.shape[1]
+    for k in range(sticks.size):
+        if sticks[k] and r > 0:
+            Zk, cond = forced_response(hf.K[k], hf.M[k], hf.C[k], hf.F[k], omega)
+            if not (cond < np.inf and cond * _EPS < 1.0):
+                return False
+            Z[k] = Zk
+            if dZ.shape[0] > 0:
+                dZ[k] = forced_response_derivative(hf.K[k], hf.M[k], hf.C[k], Zk, omega)
+    return True
