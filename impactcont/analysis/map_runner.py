@@ -54,6 +54,7 @@ from impactcont.analysis.pool import dead_worker, kill_pool, manager_ended, proc
 from impactcont.dataset.map_storage import remove_temporary_map
 from impactcont.errors import ParameterError
 from impactcont.progress import Reporter, take_interrupt
+from impactcont.vocabulary import check_positive_integer
 
 __all__ = [
     "SCHEDULER_PROTOCOLS",
@@ -649,10 +650,7 @@ def positive_int(name: str, value: Any, *, optional: bool = False) -> int | None
     """
     if optional and value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ParameterError(f"{name} must be an integer >= 1{' or None' if optional else ''}; "
-                             f"got {value!r}")
-    return int(value)
+    return check_positive_integer(name, value, "or None" if optional else "")
 
 
 def positive_number(name: str, value: Any) -> float:

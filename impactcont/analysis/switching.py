@@ -83,7 +83,7 @@ from impactcont.progress import (
     take_interrupt,
 )
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS
+from impactcont.vocabulary import LABELS, check_positive_integer
 
 __all__ = [
     "Cascade",
@@ -494,9 +494,7 @@ def period_doubling_cascade(branch: xr.Dataset, which: int = 0, *, max_doublings
     ``Cascade.interrupted`` is True and ``message`` says after how many doublings. A
     second Ctrl-C aborts.
     """
-    if isinstance(max_doublings, bool) or not isinstance(max_doublings, (int, np.integer)) \
-            or max_doublings < 1:
-        raise ParameterError(f"max_doublings must be an integer >= 1; got {max_doublings!r}")
+    max_doublings = check_positive_integer("max_doublings", max_doublings)
     epsilon = _check_epsilon(epsilon)
     labels = list(dict.fromkeys([*detect, "PD"]))
     parameter = branch.attrs["parameter"]

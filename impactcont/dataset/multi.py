@@ -50,6 +50,7 @@ from impactcont.dataset.schema import (
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import UPPER
+from impactcont.vocabulary import check_positive_integer
 
 __all__ = ["IMPACT_VARIABLES", "STICKING_VARIABLES", "impacts_of", "multi_impact_dataset",
            "pattern_of", "sticking_columns", "validate_multi_impact_dataset"]
@@ -228,8 +229,7 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
     ValueError, TypeError
         As :func:`branch_dataset`, and for a missing or misshapen per-impact column.
     """
-    if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 1:
-        raise ValueError(f"p must be an integer >= 1 (impacts per motion); got {p!r}")
+    check_positive_integer("p", p, "impacts per motion")
     if not isinstance(impact_columns, Mapping) or not isinstance(special_impact_columns,
                                                                  Mapping):
         raise TypeError("impact_columns and special_impact_columns must be mappings of "

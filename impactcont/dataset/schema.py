@@ -52,7 +52,13 @@ from impactcont.dataset.attributes import (
 )
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import ParameterView, model_parameter
-from impactcont.vocabulary import ELEMENT_FAMILIES, LABELS, STATUSES, Parameter
+from impactcont.vocabulary import (
+    ELEMENT_FAMILIES,
+    LABELS,
+    STATUSES,
+    Parameter,
+    check_positive_integer,
+)
 from impactcont.vocabulary import PARAMETERS as _PARAMETER_TABLE
 
 __all__ = [
@@ -497,9 +503,7 @@ def _parameter_name(parameter: Any) -> str:
 
 
 def _N(N: Any) -> int:
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ValueError(f"N (forcing periods per impact) must be an integer >= 1; got {N!r}")
-    return int(N)
+    return check_positive_integer("N", N, "forcing periods per impact")
 
 
 def _json_default(value: Any) -> Any:

@@ -49,6 +49,7 @@ from impactcont.vocabulary import (
     CONTINUABLE_PARAMETERS,
     ELEMENT_FAMILIES,
     PARAMETERS,
+    check_positive_integer,
     damping_kind,
     element_name,
 )
@@ -626,10 +627,7 @@ def _check_arguments(osc: ImpactOscillator, N: int, vary: Mapping[str, tuple[flo
     motion)."""
     if not isinstance(osc, ImpactOscillator):
         raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ParameterError(f"N must be an integer >= 1 (impact every N forcing periods); "
-                             f"got {N!r}")
-    N = int(N)
+    N = check_positive_integer("N", N, "impact every N forcing periods")
     if root is not None and (isinstance(root, bool) or root not in (1, -1)):
         raise ParameterError(f"root must be None, +1 or -1 (sign in eq. 15); got {root!r}")
     if (isinstance(samples, bool) or not isinstance(samples, (int, np.integer))

@@ -445,7 +445,7 @@ def test_a_second_ctrl_c_abandons_a_map_written_to_a_file(paper, monkeypatch, tm
 
 # -- one entry, one set of checks for every map (issue 29, item 1) --------------------------
 @pytest.mark.parametrize(("kwargs", "match"), [
-    ({"max_workers": 0}, r"max_workers must be an integer >= 1 or None; got 0"),
+    ({"max_workers": 0}, r"max_workers must be an integer >= 1 \(or None\); got 0"),
     ({"memory_limit": math.inf}, r"memory_limit must be a finite number > 0; got inf"),
     ({"memory_limit": True}, r"memory_limit must be a finite number > 0; got True"),
     ({"executor": "localhost:8786"}, r"executor"),

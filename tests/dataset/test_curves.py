@@ -115,7 +115,7 @@ def test_a_curve_in_another_parameter_gets_its_column(pd_curve) -> None:
     ({"parameters": ("omega", "omega")}, ValueError,
      r"parameters must be two different parameters; got \['omega', 'omega'\]"),
     ({"oscillator": "paper"}, TypeError, r"oscillator must be an ImpactOscillator; got 'paper'"),
-    ({"N": 0}, ValueError, r"N \(forcing periods per impact\) must be an integer >= 1; got 0"),
+    ({"N": 0}, ValueError, r"N must be an integer >= 1 \(forcing periods per impact\); got 0"),
 ])
 def test_a_bad_argument_of_a_curve_is_named(pd_curve, changes, error, match) -> None:
     with pytest.raises(error, match=match):
