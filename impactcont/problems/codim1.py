@@ -65,7 +65,11 @@ minimally augmented system's bordered test). ``dF/du`` and ``dF/dp1``, ``dF/dp2`
 the branch problems' own (exact for omega, b, R); the row of ``g`` is a forward
 difference (relative step 1.5e-8, about the square root of eps), the one finite
 difference of the curve: it steers Newton and the tangent only, the points solve
-``g = 0`` exactly. It is taken afresh at every step and reused only within that step's
+``g = 0`` exactly. The BP row is exact in the unknowns and in a parameter that moves the
+stops (``d sigma = sign(det(H + I)) a^T dH b`` with the singular vectors of ``s_min`` and
+``dH`` from the shot, :meth:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem.
+half_map_derivative`: one evaluation instead of one shot per unknown), by forward
+differences in the others (omega, R). It is taken afresh at every step and reused only within that step's
 Newton corrections, so that the tangent follows the curve round a fold in ``p2``.
 """
 
@@ -154,7 +158,7 @@ def _approach_sign(problem: MultiImpactBranchProblem, u: np.ndarray, lam: float)
     products of :func:`~impactcont.problems.events.pole_free`: a PD curve passes a
     zero-velocity impact (the codim-2 point PD+ZV) as an N-1 curve does.
     """
-    sh = problem._shoot(u, lam)
+    sh = problem.shot(u, lam)
     # with sticking phases the stops are the pattern's letters in capitals
     geo = _geometry(problem.flow_at(lam), getattr(problem, "impacts", problem.pattern))
     n = geo.normals.shape[1]
@@ -240,6 +244,9 @@ class ShootingCurve:
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
         first = self._base(self.params[1].value(osc), p1)
         self.size = first.size + 1
+        #: BP: the test row from the shot (exact in the unknowns and the stops' positions),
+        #: where the problem in p1 has it (p1 = omega on a modal flow)
+        self._exact_pitchfork = bool(symmetric and first.full._base_flow is not None)
         self._sticks = np.flatnonzero(getattr(first, "sticks", np.zeros(0, bool)))
 
     # -- the branch problems ----------------------------------------------------------------------
@@ -331,7 +338,7 @@ class ShootingCurve:
         """
         if self.followed_stick is None:
             base = self.branch_problem(lam)
-            self.followed_stick = _KINDS[self.kind].choose_stick(self, base, base._shoot(u, p1),
+            self.followed_stick = _KINDS[self.kind].choose_stick(self, base, base.shot(u, p1),
                                                                  p1)
         return self.followed_stick
 
@@ -367,7 +374,7 @@ class ShootingCurve:
     def _stick_end_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
         """SE: the stick time ``s_k`` of the followed sticking phase."""
         k = self._follow(u, p1, lam)
-        return float(self.branch_problem(lam)._shoot(u, p1).stick_times[k])
+        return float(self.branch_problem(lam).shot(u, p1).stick_times[k])
 
     def _stick_end_row(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, float]:
         """SE: ``dg/dx = e_{s_k}`` and ``dg/dp2 = 0`` (``s_k`` is an unknown)."""
@@ -380,7 +387,7 @@ class ShootingCurve:
         """SO: the pressing force ``p_k(0)`` at the landing of the followed sticking phase."""
         k = self._follow(u, p1, lam)
         base = self.branch_problem(lam)
-        sh = base._shoot(u, p1)
+        sh = base.shot(u, p1)
         held = held_flow(base.oscillator_at(p1), base.impacts[k])
         return float(held.pressing(sh.starts[k], sh.phases[k]))
 
@@ -394,7 +401,7 @@ class ShootingCurve:
         """
         k = self._follow(u, p1, lam)
         base = self.branch_problem(lam)
-        sh = base._shoot(u, p1)
+        sh = base.shot(u, p1)
         osc = base.oscillator_at(p1)
         held = held_flow(osc, base.impacts[k])
         X0, theta, duration = sh.starts[k], float(sh.phases[k]), float(sh.stick_times[k])
@@ -470,16 +477,52 @@ class ShootingCurve:
                 _REUSE * max(1.0, float(np.max(np.abs(y)))):
             return self._gradient[1]
         g0 = self.test(x, lam)
-        grad = np.empty(x.size)
-        for i in range(x.size):
+        grad = np.full(x.size, np.nan)
+        second = math.nan
+        if self.kind is Label.BP and self._exact_pitchfork:
+            grad[:-1], moved = self._pitchfork_row(x, lam)
+            grad[-1], second = moved
+        for i in np.flatnonzero(np.isnan(grad)):
             h = _FD_STEP * max(1.0, abs(x[i]))
             e = np.zeros(x.size)
             e[i] = h
             grad[i] = (self.test(x + e, lam) - g0) / h
-        h = _FD_STEP * max(1.0, abs(lam))
-        value = grad, (self.test(x, lam + h) - g0) / h
+        if math.isnan(second):
+            h = _FD_STEP * max(1.0, abs(lam))
+            second = (self.test(x, lam + h) - g0) / h
+        value = grad, second
         self._gradient = (y, value)
         return value
+
+    def _pitchfork_row(self, x: np.ndarray, lam: float
+                       ) -> tuple[np.ndarray, tuple[float, float]]:
+        """BP: ``dg/du`` exactly, and ``dg/dp1``, ``dg/dp2`` for parameters that move the
+        stops (NaN for the others, left to forward differences).
+
+        ``g = sign(det(H + I)) s_min(H + I)``, so ``dg = sign(det(H + I)) a^T dH b`` with
+        ``a``, ``b`` the left and right singular vectors of ``s_min`` (where it is simple,
+        as on a regular curve) and ``dH`` exact from the shot
+        (:meth:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem.
+        half_map_derivative`).
+        """
+        base = self.branch_problem(lam)
+        u, p1 = x[:-1], float(x[-1])
+        size = u.size
+        stops = [i for i, par in enumerate(self.params) if par.data == GAP]
+        dv = np.zeros((size + len(stops), size))
+        dv[:size] = np.eye(size)
+        dc = np.zeros((size + len(stops), base.p))
+        for row, i in enumerate(stops):
+            dc[size + row] = self.params[i].stop_rates(base.pattern)
+        H, dH = base.half_map_derivative(u, p1, dv, dc)
+        A = H + _identity(H.shape[0])
+        left, _, right = np.linalg.svd(A)
+        sign, _ = np.linalg.slogdet(A)
+        dg = sign * np.einsum("i,dij,j->d", left[:, -1], dH, right[-1])
+        moved = [math.nan, math.nan]
+        for row, i in enumerate(stops):
+            moved[i] = float(dg[size + row])
+        return dg[:size], (moved[0], moved[1])
 
     # -- what the location of codim-2 points needs (detection.codim2.Codim2Problem) ------------
     @property

@@ -264,6 +264,22 @@ class MultiImpactBranchProblem:
         """The oscillator with ``parameter = lam``."""
         return self.flow_at(lam).osc
 
+    def shot(self, u: np.ndarray, lam: float) -> Shooting | StickyShooting:
+        """The shooting system at ``(u, lam)``: its flights (starts, phases, flight times,
+        arrivals, transitions, phase columns, arrival rates), residual and ``dF/du``.
+
+        What the residual, the Jacobian, the tests and the orbit of a point are computed
+        from (:func:`~impactcont.orbit.multi_impact.shooting`; with sticking phases
+        :func:`~impactcont.orbit.sticky.sticky_shooting`, with their stick times); kept for
+        the last few points and shared by them: read it, do not modify it.
+
+        Raises
+        ------
+        ParameterError
+            `u` does not have :attr:`size` entries.
+        """
+        return self._shoot(u, lam)
+
     def _shoot(self, u: np.ndarray, lam: float) -> Shooting | StickyShooting:
         u = np.asarray(u, dtype=float)
         if u.shape != (self.size,):

@@ -35,7 +35,7 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, ModelParameter
 from impactcont.orbit.flow import Flow
-from impactcont.orbit.multi_impact import MultiImpactOrbit
+from impactcont.orbit.multi_impact import MultiImpactOrbit, _geometry
 from impactcont.orbit.symmetry import HalfUnknowns, _reflection, admits_symmetric_motions
 from impactcont.problems.events import BRANCH_TESTS, PITCHFORK
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
@@ -47,6 +47,46 @@ __all__ = ["SymmetricBranchProblem"]
 #: or always (``b_low``, ``R_low``). Kept for the stability maps' check; a problem asks the
 #: parameter (:attr:`~impactcont.model.parameters.ModelParameter.keeps_symmetry`).
 SYMMETRY_BREAKING = ("b", "R", "b_low", "R_low")
+
+
+def _state_matrix(osc: ImpactOscillator) -> tuple[np.ndarray, np.ndarray]:
+    """``A = [[0, I], [-M^-1 K, -M^-1 C]]`` of the flight ``X' = A X + B f`` and ``M^-1``."""
+    n = osc.n
+    Minv = np.linalg.inv(np.asarray(osc.M, dtype=float))
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = -Minv @ np.asarray(osc.K, dtype=float)
+    A[n:, n:] = -Minv @ np.asarray(osc.C, dtype=float)
+    return A, Minv
+
+
+def _flight_jacobian(tr: np.ndarray, pcol: np.ndarray, rate: np.ndarray, D: np.ndarray,
+                     j: int, j_end: int, n_start: np.ndarray, n_end: np.ndarray,
+                     omega: float) -> np.ndarray:
+    """``G_k`` of eq. (25) for a stack of flights' data (leading axis), complex allowed: the
+    kernel's (:func:`impactcont.kernel.shooting.jacobian_product`) in numpy, for the
+    complex step of :meth:`SymmetricBranchProblem.half_map_derivative`.
+
+    ``tr`` (d, m, m), ``pcol`` and ``rate`` (d, m); the flight starts on ``n_start . x = c``
+    (coordinates without ``x_j``) and ends on ``n_end . x = c'`` (without ``x_{j_end}``).
+    """
+    m = D.shape[0]
+    n = m // 2
+    keep = np.arange(m) != j
+    B = np.empty(tr.shape, dtype=complex)
+    T = tr.copy()
+    T[..., :n] -= tr[..., :, j, None] * (n_start / n_start[j])[None, None, :]
+    B[..., :m - 1] = T[..., keep]
+    B[..., m - 1] = pcol
+    hrow = np.einsum("r,drc->dc", n_end, B[..., :n, :])
+    h2 = rate[..., :n] @ n_end
+    B -= rate[..., :, None] * hrow[..., None, :] / h2[:, None, None]
+    DB = D @ B
+    G = np.empty(tr.shape, dtype=complex)
+    G[..., :m - 1, :] = DB[..., np.arange(m) != j_end, :]
+    G[..., m - 1, :] = -omega * hrow / h2[:, None]
+    G[..., m - 1, m - 1] += 1.0
+    return G
 
 
 def _of_full(name: str, doc: str) -> property:
@@ -220,6 +260,98 @@ class SymmetricBranchProblem:
         (:func:`~impactcont.orbit.symmetry.half_map`, from one compiled call on the shot)."""
         A = self.full.jacobian_product(self.full_unknowns(v, lam), lam, self.p // 2)
         return self._S * A
+
+    def half_map_derivative(self, v: np.ndarray, lam: float, dv: np.ndarray,
+                            dc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``H`` (:meth:`half_map`) and its derivatives along `d` directions, exactly.
+
+        Parameters
+        ----------
+        v : ndarray, shape (size,)
+            The half unknowns.
+        lam : float
+            The continued parameter (its derivative is not one of these directions).
+        dv : ndarray, shape (d, size)
+            Each direction's change of the half unknowns.
+        dc : ndarray, shape (d, p)
+            Each direction's change of the stops' positions ``c_k`` at the p impacts (a
+            parameter's :meth:`~impactcont.model.parameters.ModelParameter.stop_rates`).
+
+        Returns
+        -------
+        H : ndarray, shape (2n, 2n)
+        dH : ndarray, shape (d, 2n, 2n)
+
+        Notes
+        -----
+        From the shot of the point alone: ``H = S G_{h-1} .. G_0`` (eq. 25) is a rational
+        function of each flight's transition ``Phi_k = e^{A tau_k}``, phase column
+        ``dX_k^-/dtheta_k`` and arrival rate ``X_k'^-`` (the impact matrices and normals stay),
+        and these move exactly with the flight's start ``X_k`` (from ``z_k`` and ``c_k`` on
+        the section), phase ``theta_k`` and time ``tau_k``:
+        ``dPhi = A Phi dtau``, ``d(dX^-/dtheta) = (A dX^-/dtheta + B f') dtau - X_f dtheta``
+        (the forced part ``X_f = X^- - Phi X_0`` of harmonic forcing ``Re(F e^{i phi})``,
+        whose second derivative in the phase is ``-X_f``) and
+        ``dX'^- = A dX^- + B f' (dtheta + omega dtau)``, ``f' = Re(i F e^{i phi})`` at the
+        arrival ``phi = theta + omega tau``. ``dH`` is the complex step of that rational
+        function along them (exact to rounding).
+
+        A symmetric system has no constant force (the reflection would not map it to
+        itself), so the forced part is harmonic.
+
+        Raises
+        ------
+        ParameterError
+            The problem is not in omega, or its flow is not modal.
+        """
+        full = self.full
+        osc = self.oscillator_at(lam)
+        if full._base_flow is None:
+            raise ParameterError(f"half_map_derivative: a problem in {self.parameter!r} on "
+                                 f"{osc!r}; it needs the modal flow of a problem in omega (no "
+                                 "damping matrix outside the paper's form): take differences "
+                                 "of half_map instead")
+        u = self.full_unknowns(v, lam)
+        sh = full.shot(u, lam)
+        flow = full.flow_at(lam)
+        geo = _geometry(flow, full.pattern)
+        n, p, h = osc.n, full.p, full.p // 2
+        m = 2 * n
+        omega = float(flow.omega)
+        dv = np.atleast_2d(np.asarray(dv, dtype=float))
+        dc = np.atleast_2d(np.asarray(dc, dtype=float))
+        du = dv @ self._E.T  # (d, 2np): the full unknowns' change (e(omega) stays)
+        A, Minv = _state_matrix(osc)
+        F = np.asarray(osc.F)
+        rate_of = np.zeros((h, m))  # B f'(phi) at each flight's arrival
+        eps = 1e-20
+        d = du.shape[0]
+        G = np.broadcast_to(np.eye(m, dtype=complex), (d, m, m)).copy()
+        tau_sum = np.zeros(d)
+        for k in range(h):
+            tr, pcol = sh.transitions[k], sh.phase_columns[k]
+            rate, X0 = sh.arrival_rates[k], sh.starts[k]
+            dtheta = du[:, 0] + omega * tau_sum
+            dtau = du[:, 1 + k]
+            tau_sum = tau_sum + dtau
+            j, normal = int(geo.pivots[k]), geo.normals[k]
+            dX0 = np.zeros((d, m))
+            dX0[:, np.arange(m) != j] = du[:, p + k * (m - 1):p + (k + 1) * (m - 1)]
+            dX0[:, j] = (dc[:, k] - dX0[:, :n] @ normal) / normal[j]
+            dXm = dX0 @ tr.T + dtheta[:, None] * pcol + dtau[:, None] * rate
+            phi = float(sh.phases[k]) + omega * float(sh.flight_times[k])
+            rate_of[k, n:] = Minv @ np.real(1j * F * np.exp(1j * phi))
+            forced = sh.arrivals[k] - tr @ X0
+            dtr = dtau[:, None, None] * (A @ tr)
+            dpcol = dtau[:, None] * (A @ pcol + rate_of[k]) - dtheta[:, None] * forced
+            drate = dXm @ A.T + (dtheta + omega * dtau)[:, None] * rate_of[k]
+            nxt = (k + 1) % p
+            Gk = _flight_jacobian(tr + 1j * eps * dtr, pcol + 1j * eps * dpcol,
+                                  rate + 1j * eps * drate, geo.matrices[nxt], j,
+                                  int(geo.pivots[nxt]), normal, geo.normals[nxt], omega)
+            G = Gk @ G
+        H = self._S * G
+        return H[0].real.copy() if d else self.half_map(v, lam), H.imag / eps
 
     def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
                   tol: float, max_iter: int, *, hyperplane: bool = False

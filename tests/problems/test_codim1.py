@@ -24,6 +24,7 @@ from impactcont.problems.codim1 import (
     curve_problem,
     signed_smallest_singular_value,
 )
+from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 
 K = [[1.0, -1.0], [-1.0, 2.0]]
 
@@ -280,3 +281,41 @@ def test_an_rg_test_says_where_its_minimum_is_lost(ride) -> None:
     assert "reaches its landing or its release" in rg.lost_minimum
     rg.accept(x, osc.eta)
     assert rg.lost_minimum == ""
+
+
+@pytest.mark.parametrize(("parameters", "stops"), [
+    (("omega", "b"), ic.Stops(mirror=True)),   # b moves both stops: its column exact too
+    (("omega", "R"), ic.Stops(mirror=True)),   # R by a forward difference
+])
+def test_the_pitchfork_row_agrees_with_central_differences(parameters, stops, monkeypatch):
+    """The BP row ``d sigma(H + I)`` from the shot (exact in the half unknowns and a
+    parameter moving the stops) against central differences of the test (step 1e-6:
+    within 1e-6 relative; a forward-differenced column within 1e-5)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                              R=0.6, b=0.5, omega=1.6, eta=0.1, stops=stops)
+    motion = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 150.0))
+    problem = curve_problem("BP", osc, 1, parameters, p=2, pattern=motion.pattern,
+                            symmetric=True)
+    lam = problem.params[1].value(osc)
+    half = problem.branch_problem(lam)
+    x = np.append(half.half_unknowns(motion.unknowns), 1.6)
+    calls = []
+    exact = SymmetricBranchProblem.half_map_derivative
+    monkeypatch.setattr(SymmetricBranchProblem, "half_map_derivative",
+                        lambda *args: calls.append(1) or exact(*args))
+    row, column = problem.jacobian(x, lam)[-1], problem.dparam(x, lam)[-1]
+    assert calls == [1]  # the row from the shot, once for both
+    fd = np.empty(x.size + 1)
+    for i in range(x.size + 1):
+        y = np.append(x, lam)
+        h = 1e-6 * max(1.0, abs(y[i]))
+        up, down = y.copy(), y.copy()
+        up[i] += h
+        down[i] -= h
+        fd[i] = (problem.test(up[:-1], up[-1]) - problem.test(down[:-1], down[-1])) / (2 * h)
+    scale = np.abs(fd).max()
+    exact = slice(0, x.size - 1)
+    np.testing.assert_allclose(row[exact], fd[exact], rtol=1e-6, atol=1e-6 * scale)
+    np.testing.assert_allclose(row[-1], fd[-2], rtol=1e-5, atol=1e-5 * scale)
+    np.testing.assert_allclose(column, fd[-1], rtol=1e-6 if parameters[1] == "b" else 1e-5,
+                               atol=1e-6 * scale)

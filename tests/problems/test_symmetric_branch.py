@@ -13,6 +13,7 @@ import pytest
 
 import impactcont as ic
 from impactcont.errors import ParameterError
+from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops
 from impactcont.problems.symmetric_branch import SymmetricBranchProblem
 
@@ -98,3 +99,45 @@ def test_what_cannot_be_symmetric_is_refused(motion) -> None:
                                              r"\(8,\)"):
         problem.residual(motion.unknowns, OMEGA)
     assert "BP" in problem.events and problem.symmetric
+
+
+@pytest.mark.parametrize(("stops", "b", "omega", "moving"), [
+    (Stops(mirror=True), 0.5, OMEGA, "b"),      # b moves both stops
+    (Stops(b_low=0.8), 0.8, 0.8, "gap"),        # the backlash: gap moves both
+])
+def test_the_half_map_derivative_agrees_with_central_differences(stops, b, omega, moving):
+    """``dH`` in the half unknowns and in a parameter moving the stops (the complex step
+    of eq. 25 on the flights' exact derivatives) against central differences of
+    :meth:`half_map` (a new shot each; the moved stops by a problem on the moved
+    oscillator), within what differences of step 1e-5 give (1e-7 relative)."""
+    osc = _mirrored(stops=stops, b=b, omega=omega)
+    motion = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 200.0))
+    problem = SymmetricBranchProblem(osc, 1, 2, "omega", pattern=motion.pattern)
+    v = problem.half_unknowns(motion.unknowns)
+    param = model_parameter(osc, moving)
+    dv = np.vstack([np.eye(v.size), np.zeros(v.size)])
+    dc = np.zeros((v.size + 1, problem.p))
+    dc[-1] = param.stop_rates(problem.pattern)
+    H, dH = problem.half_map_derivative(v, omega, dv, dc)
+    np.testing.assert_allclose(H, problem.half_map(v, omega), rtol=1e-13, atol=1e-14)
+    for i in range(v.size):
+        h = 1e-5 * max(1.0, abs(v[i]))
+        e = np.zeros(v.size)
+        e[i] = h
+        fd = (problem.half_map(v + e, omega) - problem.half_map(v - e, omega)) / (2 * h)
+        np.testing.assert_allclose(dH[i], fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max())
+    value, h = param.value(osc), 1e-5
+
+    def moved(c: float) -> np.ndarray:
+        return problem.moved(param.at(osc, c)).half_map(v, omega)
+
+    fd = (moved(value + h) - moved(value - h)) / (2 * h)
+    np.testing.assert_allclose(dH[-1], fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max())
+    assert np.abs(dH[-1]).max() > 1e-3  # the stops' position moves H
+
+
+def test_the_half_map_derivative_needs_the_problem_in_omega(motion):
+    problem = SymmetricBranchProblem(_mirrored(), 1, 2, "b", pattern=motion.pattern)
+    v = problem.half_unknowns(motion.unknowns)
+    with pytest.raises(ParameterError, match="a problem in 'b' on"):
+        problem.half_map_derivative(v, 0.5, np.eye(v.size), np.zeros((v.size, 2)))
