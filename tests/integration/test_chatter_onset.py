@@ -127,8 +127,6 @@ def test_the_branch_locates_the_zero_of_the_pressing_force_at_the_accumulation_p
     assert ds.event_status.values[0] == "located" and ds.event_precision.values[0] < 1e-12
     located = float(ds.event_omega.values[0])
     assert located == pytest.approx(OMEGA_SO, abs=1e-9)
-    # the plain SO test sees no sign change at the branch's points (the xfail above)
-    assert "SO" not in list(ds.special_label.values)
     before, after = motion(located - 1e-7), motion(located + 1e-7)
     assert before.physical and 0 < before.landing_pressing[0] < 1e-3
     held = before.stick_times[0] - before.chatters[0].duration
