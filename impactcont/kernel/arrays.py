@@ -259,28 +259,8 @@ class ShootingFlow(NamedTuple):
         """The fields one flight reads (:class:`FlightArrays`): the flow without the contact
         search's scalar pairs, what :func:`~impactcont.kernel.shooting.shooting_system` and
         :func:`~impactcont.kernel.shooting.newton_solve` take."""
-        return FlightArrays(self.general, self.w, self.a, self.f, self.u, self.ui, self.g,
-                            self.free, self.lam, self.V, self.Vi, self.xs, self.xd)
-
-
-class FlightArrays(NamedTuple):
-    """The fields of :class:`ShootingFlow` one flight reads (the scalar pairs of the contact
-    search left out), flat: the argument of the shooting entry points
-    (:meth:`ShootingFlow.flight_arrays`), named on entry as :class:`FlightFlow`."""
-
-    general: bool
-    w: np.ndarray
-    a: np.ndarray
-    f: np.ndarray
-    u: np.ndarray
-    ui: np.ndarray
-    g: np.ndarray
-    free: np.ndarray
-    lam: np.ndarray
-    V: np.ndarray
-    Vi: np.ndarray
-    xs: np.ndarray
-    xd: np.ndarray
+        return FlightArrays(self.general,
+                            *(getattr(self, name) for name in FlightArrays._fields[1:]))
 
 
 class ModalFlight(NamedTuple):
@@ -305,6 +285,15 @@ class FirstOrderFlight(NamedTuple):
     Vi: np.ndarray
     xs: np.ndarray
     xd: np.ndarray
+
+
+# its fields are ModalFlight's and FirstOrderFlight's after `general`, declared there only
+FlightArrays = NamedTuple("FlightArrays", [("general", bool)] + [
+    (name, np.ndarray) for name in ModalFlight._fields + FirstOrderFlight._fields])
+FlightArrays.__doc__ = """The fields of :class:`ShootingFlow` one flight reads (the scalar
+pairs of the contact search left out), flat: ``general``, then those of
+:class:`ModalFlight` and :class:`FirstOrderFlight`; the argument of the shooting entry points
+(:meth:`ShootingFlow.flight_arrays`), named on entry as :class:`FlightFlow`."""
 
 
 class FlightFlow(NamedTuple):
@@ -653,34 +642,12 @@ class BranchLinearization(NamedTuple):
 
 
 # -- the map sweep (kernel/sweep.py) ----------------------------------------------------------
-class FlowTables(NamedTuple):
-    """The flows of a map's grid, stacked: each field of :class:`ShootingFlow` (but
-    ``general``, one for all) and of :class:`Forcing` with a first axis of flows, and the
-    flow of each grid point (:func:`stack_flows`)."""
-
-    general: bool
-    w: np.ndarray
-    a: np.ndarray
-    f: np.ndarray
-    u: np.ndarray
-    ui: np.ndarray
-    lam: np.ndarray
-    V: np.ndarray
-    Vi: np.ndarray
-    pw: np.ndarray
-    pa: np.ndarray
-    pk: np.ndarray
-    pj: np.ndarray
-    g: np.ndarray
-    free: np.ndarray
-    xs: np.ndarray
-    xd: np.ndarray
-    omega: np.ndarray
-    gamma: np.ndarray
-    beta: np.ndarray
-    Z: np.ndarray
-    index: np.ndarray
-    """The flow (row) of each grid point, int64, shape (n0, n1)."""
+# its fields are those of ShootingFlow and Forcing, declared there only
+FlowTables = NamedTuple("FlowTables", [("general", bool)] + [
+    (name, np.ndarray) for name in ShootingFlow._fields[1:] + Forcing._fields + ("index",)])
+FlowTables.__doc__ = """The flows of a map's grid, stacked: each field of :class:`ShootingFlow`
+(but ``general``, one for all) and of :class:`Forcing` with a first axis of flows, and
+``index``, the flow (row) of each grid point (int64, shape (n0, n1); :func:`stack_flows`)."""
 
 
 def stack_flows(flows: list[tuple[ShootingFlow, Forcing]], index: np.ndarray) -> FlowTables:
