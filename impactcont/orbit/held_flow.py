@@ -35,13 +35,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 import weakref
 
 import numpy as np
 
-from impactcont.errors import ParameterError
+from impactcont.errors import ParameterError, UnresolvedMotionWarning
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.orbit.extrema import critical_points, sample_times
 from impactcont.orbit.flow import Flow, flow_of
 
 __all__ = ["HeldFlow", "held_flow", "held_flow_at", "held_frame"]
@@ -238,50 +238,82 @@ class HeldFlow:
         grad, dtheta = self.pressing_gradient(theta)
         return float(grad @ rate + self.oscillator.omega * dtheta)
 
-    def coordinate_extrema(self, duration: float, X0: np.ndarray, theta: float,
-                           normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Another stop coordinate ``s = normal . x`` along a sticking phase of `duration`
-        from ``X0`` at phase `theta`: its values at both ends and at every turning point
-        inside (``s' = 0``), where its smallest clearance to any stop on it is.
+    def stop_clearances(self, duration: float, X0: np.ndarray, theta: float,
+                        stops: tuple[np.ndarray, np.ndarray, np.ndarray]
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """Each stop's clearance at the turning point of its coordinate nearest it inside a
+        sticking phase of `duration` from ``X0`` at phase `theta` (its ends left out).
 
-        ``s = normal . x_c + (P^T normal) . y`` is a coordinate of the held system, whose
-        flow is a flight's: its turning points are found as those of a flight's stop
-        coordinate in the contact search of eq. (16) (:func:`~impactcont.orbit.extrema.
-        sample_times`, :func:`~impactcont.orbit.extrema.critical_points`: the roots of
-        ``s''`` split ``s'`` into monotone pieces on a grid of 16 cells per fastest period
-        the coordinate sees, each root of ``s'`` polished by safeguarded Newton), not
-        sampled. A coordinate the hold fixes (``P^T normal = 0``: the held stop coordinate
-        itself) is constant.
+        Stop i, met with ``sign_i s' > 0`` at ``s = c_i`` on ``s = n_i . x``, has clearance
+        ``sign_i (c_i - s)``. Along the held flow ``s = n_i . x_c + (P^T n_i) . y`` is a
+        stop coordinate of the held system, whose flow is a flight's: it is searched by
+        the flights' contact search of eq. (16)
+        (:func:`impactcont.kernel.shooting.motion_checks`, compiled: the extrema bracketed
+        on 16 cells per fastest period the coordinate sees, bounded by the tangents of
+        concave pieces and polished by safeguarded Newton; not sampled), on the held
+        system's flow as one flight against these stops (its ``G`` is not read: the
+        flight's impact is a placeholder). A coordinate the hold fixes (``P^T n_i = 0``:
+        the held coordinate's other stop) has no turning point.
 
         Parameters
         ----------
         duration : float
-            The held flow's duration (``<= 0``: the start only).
+            The held flow's duration.
         X0 : ndarray, shape (2n,)
             The state where the held flow starts.
         theta : float
             The forcing phase there.
-        normal : ndarray, shape (n,)
-            The stop coordinate.
+        stops : (ndarray, ndarray, ndarray)
+            ``n_i`` (q, n), ``sign_i`` (q,) and ``c_i`` (q,).
 
         Returns
         -------
-        times, values : ndarray
-            Times after the start (``0`` and `duration` first) and ``s`` there.
+        gaps, times : ndarray, shape (q,)
+            The clearance at that turning point and its time after the start (``+inf``
+            and NaN where the coordinate has none inside).
         """
-        normal = np.asarray(normal, dtype=float)
+        normals, signs, positions = (np.asarray(a, dtype=float) for a in stops)
+        q = signs.size
+        gaps, times = np.full(q, np.inf), np.full(q, np.nan)
         _, Li, Xc = self._lift()
-        level = float(normal @ Xc[:self.n])
-        times = np.array([0.0, duration]) if duration > 0.0 else np.zeros(1)
-        row = self.frame.T @ normal
-        if self.reduced is None or not np.any(row):
-            return times, np.full(times.size, level)
-        motion = self.reduced.motion(Li @ (np.asarray(X0, dtype=float) - Xc), theta,
-                                     normal=row)
-        if duration > 0.0:
-            grid = sample_times(self.reduced, 0.0, duration, normal=row)
-            times = np.concatenate([times, critical_points(motion, grid)])
-        return times, level + motion(times)[0]
+        rows = normals @ self.frame
+        moving = np.flatnonzero(np.any(rows != 0.0, axis=1))
+        if self.reduced is None or not duration > 0.0 or moving.size == 0:
+            return gaps, times
+        from impactcont.kernel import shooting as kernel
+        from impactcont.kernel.arrays import (
+            CheckedFlights,
+            ContactStops,
+            ImpactSequence,
+            MotionChecks,
+        )
+
+        r = rows.shape[1]
+        m = 2 * r
+        eye = np.eye(m)[None]
+        searched = ContactStops(
+            normal=np.zeros(r), two_sided=False, b=math.inf, b_low=0.0,
+            extra_normals=np.ascontiguousarray(rows[moving]), extra_signs=signs[moving].copy(),
+            extra_positions=positions[moving] - normals[moving] @ Xc[:self.n])
+        placeholder = ImpactSequence(pivots=np.zeros(1, dtype=np.int64),
+                                     normals=np.eye(1, r), signs=np.ones(1),
+                                     positions=np.zeros(1), matrices=eye.copy())
+        flight = CheckedFlights(phases=np.array([float(theta)]),
+                                flight_times=np.array([float(duration)]),
+                                starts=(Li @ (np.asarray(X0, dtype=float) - Xc))[None].copy(),
+                                transitions=eye.copy(), phase_columns=np.zeros((1, m)),
+                                arrival_rates=np.ones((1, m)))
+        checked = MotionChecks._make(kernel.motion_checks(
+            tuple(self.reduced.shooting_arrays()), tuple(self.reduced.forcing_arrays()),
+            tuple(placeholder), tuple(searched), tuple(flight), True))
+        if checked.capped:
+            warnings.warn(f"the contact search of a sticking phase of {duration:.6g} was "
+                          "capped at 2000000 cells: a short excursion of another stop "
+                          "coordinate past its stop (eq. 16) may be missed",
+                          UnresolvedMotionWarning, stacklevel=2)
+        gaps[moving] = checked.gap_extra[0]
+        times[moving] = checked.time_extra[0]
+        return gaps, times
 
     def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float
                          ) -> tuple[float, float]:

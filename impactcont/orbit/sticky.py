@@ -432,31 +432,35 @@ def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase:
     The held flow runs `duration` from `start` at `phase` (the accumulation point of a
     chatter, `offset` after the landing; else the plastic impact's state, `offset` 0) to
     the release state `release`. Each stop coordinate is searched at both ends and at its
-    turning points inside (:meth:`~impactcont.orbit.held_flow.HeldFlow.coordinate_extrema`,
-    the contact search of eq. (16) on the held system's flow): a clearance ``<= 0`` at a
-    turning point, or below the rounding of its evaluation at an end (:data:`HELD_END_ULPS`),
-    is the stop crossed while the other is held.
+    turning point nearest the stop inside (:meth:`~impactcont.orbit.held_flow.HeldFlow.
+    stop_clearances`, the contact search of eq. (16) on the held system's flow): a
+    clearance ``<= 0`` at a turning point, or below the rounding of its evaluation at an
+    end (:data:`HELD_END_ULPS`), is the stop crossed while the other is held.
     """
     geo = _geometry(flow, impacts)
-    held = held_flow(flow.osc, impacts[k])
     n = flow.osc.n
-    stops = [(UPPER, geo.normal, 1.0, geo.b)]
-    if geo.two_sided:
-        stops.append((LOWER, geo.normal, -1.0, -geo.b_low))
-    stops += list(zip(geo.extra_names, geo.extra_normals, geo.extra_signs, geo.extra_positions,
-                      strict=True))
+    names = [UPPER, *([LOWER] if geo.two_sided else []), *geo.extra_names]
+    normals = np.vstack([geo.normal[None], *([geo.normal[None]] if geo.two_sided else []),
+                         np.reshape(geo.extra_normals, (-1, n))])
+    signs = np.concatenate([[1.0], [-1.0] if geo.two_sided else [], geo.extra_signs])
+    positions = np.concatenate([[geo.b], [-geo.b_low] if geo.two_sided else [],
+                                geo.extra_positions])
+    others = np.array([name != impacts[k] for name in names])
+    names = [name for name, other in zip(names, others, strict=True) if other]
+    normals, signs, positions = normals[others], signs[others], positions[others]
+    inner, inner_times = held_flow(flow.osc, impacts[k]).stop_clearances(
+        duration, start, phase, (normals, signs, positions))
     ends = np.vstack([start[:n], release[:n]])
     found = []
-    for name, normal, sign, position in stops:
-        if name == impacts[k]:
-            continue
-        times, values = held.coordinate_extrema(duration, start, phase, normal)
-        gaps = sign * (position - values)
-        tol = HELD_END_ULPS * _EPS * (abs(position) + np.abs(ends * normal).sum(axis=1))
-        i = int(np.argmin(gaps))
-        crossed = bool(np.any(~(gaps[2:] > 0.0)) or np.any(gaps[:2] < -tol[:gaps[:2].size]))
-        found.append(_HeldGap(float(gaps[i]), offset + float(times[i]), name,
-                              _coordinate(np.asarray(normal)), crossed))
+    for i, name in enumerate(names):
+        at_ends = signs[i] * (positions[i] - ends @ normals[i])
+        tol = HELD_END_ULPS * _EPS * (abs(positions[i]) + np.abs(ends * normals[i]).sum(axis=1))
+        gaps = np.append(at_ends, inner[i])
+        when = np.append([0.0, duration], inner_times[i])
+        j = int(np.argmin(gaps))
+        crossed = bool(not inner[i] > 0.0 or np.any(at_ends < -tol))
+        found.append(_HeldGap(float(gaps[j]), offset + float(when[j]), name,
+                              _coordinate(normals[i]), crossed))
     return found
 
 

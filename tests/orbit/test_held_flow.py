@@ -105,30 +105,37 @@ def test_the_held_flow_at_another_omega_is_the_one_built_there():
 
 @pytest.mark.parametrize("damping", [{"eta": 0.05},
                                      {"C": np.diag([0.1, 0.0, 0.02])}])
-def test_another_coordinate_along_the_held_flow_is_searched_at_its_turning_points(damping):
+def test_other_stops_are_searched_along_the_held_flow_at_their_turning_points(damping):
     """A chain of three masses held on a stop of mass 2 (the held system: masses 1 and 3
-    through their springs to the held mass, a constant force on it): each other coordinate's
-    extrema (``x1``, ``x3 - x1``) over a stick of 7 time units are among the values
-    coordinate_extrema returns (ends and turning points, where ``s' = 0`` to rounding),
-    against 200,001 samples of the held state (whose sampling error at an extremum is
-    below 1e-9 here); the held coordinate itself is constant at its stop."""
+    through their springs to the held mass, a constant force on it; modal and first-order
+    flows): for stops on ``x1`` and ``x3 - x1`` met from either side, stop_clearances gives
+    the clearance at the turning point of the coordinate nearest the stop inside a stick of
+    7 time units: there ``s' = 0`` and the held state has that clearance (1e-12), and
+    against 200,001 samples of the held state it is the smallest interior clearance (the
+    samples' error at an extremum is below 1e-9 here); the held coordinate's own other
+    stop has no turning point."""
     K = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
     osc = ic.ImpactOscillator(M=np.diag([1.0, 0.5, 2.0]), K=K, F=[1.0, 0.0, 0.3], R=0.0,
-                              b=0.2, omega=0.9, stops=Stops(mass=2),
+                              b=0.2, omega=0.9, stops=Stops(mass=2, b_low=0.5),
                               F_static=[0.0, 0.1, 0.0], **damping)
     held = held_flow(osc, "U")
     X0 = np.array([0.3, 0.2, -0.1, 0.4, 0.0, -0.2])
     t = np.linspace(0.0, 7.0, 200_001)
     sampled = held.state(t, X0, 0.4)[:, :3]
-    for normal in ([1.0, 0.0, 0.0], [-1.0, 0.0, 1.0]):
-        normal = np.array(normal)
-        times, values = held.coordinate_extrema(7.0, X0, 0.4, normal)
-        assert times[0] == 0.0 and times[1] == 7.0 and times.size > 2
-        s = sampled @ normal
-        assert s.min() - 1e-9 <= values.min() <= s.min() + 1e-14
-        assert s.max() - 1e-14 <= values.max() <= s.max() + 1e-9
-        speeds = [normal @ held.segment(time, X0, 0.4)[3][:3] for time in times[2:]]
-        assert np.abs(speeds).max() < 1e-13
-        assert values == pytest.approx(held.state(times, X0, 0.4)[:, :3] @ normal, abs=1e-13)
-    times, values = held.coordinate_extrema(7.0, X0, 0.4, np.array([0.0, 1.0, 0.0]))
-    assert list(times) == [0.0, 7.0] and list(values) == [0.2, 0.2]
+    normals = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 1.0],
+                        [-1.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+    signs = np.array([1.0, -1.0, 1.0, -1.0, -1.0])
+    positions = np.array([2.0, -2.0, 1.5, -1.5, -0.5])
+    gaps, times = held.stop_clearances(7.0, X0, 0.4, (normals, signs, positions))
+    for i in range(4):
+        clearance = signs[i] * (positions[i] - sampled @ normals[i])
+        inner = clearance[1:-1]
+        assert 0.0 < times[i] < 7.0
+        X, _, _, rate = held.segment(times[i], X0, 0.4)
+        assert normals[i] @ rate[:3] == pytest.approx(0.0, abs=1e-13)
+        assert signs[i] * (positions[i] - normals[i] @ X[:3]) == pytest.approx(gaps[i],
+                                                                               abs=1e-12)
+        assert gaps[i] >= inner.min() - 1e-9
+        if 0 < np.argmin(clearance) < t.size - 1:  # the smallest clearance inside
+            assert gaps[i] <= inner.min() + 1e-14
+    assert gaps[4] == np.inf and np.isnan(times[4])
