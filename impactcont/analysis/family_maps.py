@@ -11,9 +11,10 @@ system of :mod:`impactcont.orbit.multi_impact` at each grid point, started from 
 neighbour (natural-parameter continuation on the grid, a secant predictor through
 two solved points in line), in one compiled sweep (:mod:`impactcont.kernel.sweep`).
 A motion with sticking phases (a lowercase letter in its pattern) is swept the same way
-in Python over the Newton of its pattern's branch problem
-(:class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`: compiled in
-omega) and evaluated by the problem's ``orbit`` (``_StickySetting``); its map says why a
+in Python over the compiled Newton of :func:`impactcont.multi_impact_orbit`
+(:func:`~impactcont.orbit.sticky.sticky_newton`) on the flows of its pattern's branch
+problem (:class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`), each
+motion evaluated from the Newton's shot (``_StickySetting``); its map says why a
 motion found is not physical (``reason``: a stick ended, release grazing, the sticking
 onset passed, or a plain check) and carries its sticks' times, releases and pressing
 forces (:data:`~impactcont.dataset.maps.STICKY_MAP_VARIABLES`).
@@ -104,6 +105,7 @@ from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import MASS, ModelParameter, model_parameter
 from impactcont.orbit.flow import Flow
 from impactcont.orbit.multi_impact import MultiImpactOrbit, multi_impact_orbit
+from impactcont.orbit.sticky import StickyShooting, sticky_newton, sticky_orbit_from_unknowns
 from impactcont.orbit.stop_geometry import stop_geometry
 from impactcont.orbit.symmetry import (
     SYMMETRY_TOL,
@@ -127,9 +129,9 @@ _SEED_SUBSTEPS = (1, 2, 4, 8, 16, 32)
 #: Grid points of a task at least: a map of up to this many points is one sweep from its
 #: seed; a larger one is cut into bands of whole rows of its first parameter.
 _TASK_POINTS = 1 << 16
-#: The same for a motion with sticking phases, swept in Python over the compiled Newton of
-#: its branch problem (about 3-5 ms a point): tasks of some seconds, which a pool runs at
-#: once.
+#: The same for a motion with sticking phases, swept in Python over its compiled Newton
+#: and evaluated in Python (about 1-3 ms a point): tasks of some seconds, which a pool runs
+#: at once.
 _STICKY_TASK_POINTS = 1 << 11
 
 
@@ -353,8 +355,8 @@ class _Setting:
 # -- motions with sticking phases ------------------------------------------------------------
 #: What a Newton solve or a motion's evaluation at a grid point may raise where the motion
 #: of the family does not exist there (the point is then not found).
-_SOLVE_ERRORS = (ParameterError, np.linalg.LinAlgError, FloatingPointError, ValueError,
-                 ZeroDivisionError)
+_SOLVE_ERRORS = (ParameterError, NoPeriodicMotionError, np.linalg.LinAlgError,
+                 FloatingPointError, ValueError, ZeroDivisionError)
 
 
 #: Branch problems a sticky sweep keeps at once (one per value of the parameter that is not
@@ -370,14 +372,15 @@ def _wrap(phase: np.ndarray) -> np.ndarray:
 class _StickySetting:
     """What every sweep of the map of a motion with sticking phases shares, and the sweep.
 
-    Each grid point is solved by Newton on the shooting system of
-    :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem` (its
-    pattern's sticking phases, release rows and stick times) at fixed parameters: one
-    problem per value of one parameter, continued in the other (``omega`` when it is one of
-    the two: the problem's compiled Newton,
-    :meth:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem.palc_step` on
-    the hyperplane of that omega; else its residual and Jacobian), and evaluated by the
-    problem's :meth:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem.orbit`.
+    Each grid point is solved by the compiled Newton of the pattern's shooting system
+    (:func:`~impactcont.orbit.sticky.sticky_newton`: its sticking phases, release rows and
+    stick times) at fixed parameters, on the flow of
+    :class:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem`: one problem
+    per value of one parameter, continued in the other (``omega`` when it is one of the
+    two: a flow and its held systems at a new omega are the start's with new forced
+    amplitudes), and evaluated from the Newton's shot at the solution
+    (:func:`~impactcont.orbit.sticky.sticky_orbit_from_unknowns`, without the Jacobian: the
+    map keeps no condition number).
     The sweep is the compiled sweep's (:func:`impactcont.kernel.sweep.sweep_stops`) in
     Python: breadth first from the seed, a secant predictor through two solved points in
     line, `max_attempts` per point, a solution farther than `max_change` from its predictor
@@ -410,7 +413,9 @@ class _StickySetting:
         self.continued = names.index("omega") if "omega" in names else 1
         # the problems in both parameters: refuses one that unmakes a plastic stop (R)
         for name in names:
-            MultiImpactBranchProblem(osc, self.N, self.p, name, self.pattern)
+            problem = MultiImpactBranchProblem(osc, self.N, self.p, name, self.pattern)
+        #: the impacts followed by a sticking phase
+        self.sticks = problem.sticks
 
     def problem(self, params: tuple[ModelParameter, ModelParameter], values: tuple[float, float],
                 problems: dict[float, MultiImpactBranchProblem]) -> MultiImpactBranchProblem:
@@ -432,45 +437,22 @@ class _StickySetting:
         return found
 
     def newton(self, problem: MultiImpactBranchProblem, lam: float, x0: np.ndarray
-               ) -> tuple[np.ndarray | None, int]:
-        """Newton on the problem's system at ``lam`` from `x0`: the solution (None where it
-        does not converge) and the iterations."""
+               ) -> tuple[np.ndarray | None, int, tuple[Flow, StickyShooting] | None]:
+        """The compiled Newton of the pattern (:func:`~impactcont.orbit.sticky.sticky_newton`,
+        the solve of :func:`impactcont.multi_impact_orbit`) on the flow of the problem at
+        ``lam`` from `x0`: the solution (None where it does not converge), the iterations
+        and the flow with the shot at the solution (its motion's evaluation needs no other
+        shot)."""
         try:
-            scale = max(1.0, float(np.max(np.abs(x0))), abs(lam))
-            target = np.append(x0, lam)
-            normal = np.zeros(target.size)
-            normal[-1] = 1.0
-            step = problem.palc_step(target, normal, np.ones(target.size), self.tol * scale,
-                                     self.max_iter, hyperplane=True)
-            if step is not None:  # omega: the compiled Newton on the hyperplane lam = const
-                ok = step.status == "converged" and np.all(np.isfinite(step.state))
-                return (np.array(step.state[:-1]) if ok else None), int(step.iterations)
-            return self._newton(problem, lam, x0)
+            flow = problem.flow_at(lam)
+            u, sh, iterations = sticky_newton(flow, self.N, self.pattern, x0, tol=self.tol,
+                                              max_iter=self.max_iter)
         except _SOLVE_ERRORS as error:
             log.debug("Newton at %s = %r: %s", problem.parameter, lam, error)
-            return None, self.max_iter
-
-    def _newton(self, problem: MultiImpactBranchProblem, lam: float, x0: np.ndarray
-                ) -> tuple[np.ndarray | None, int]:
-        """Newton on the residual and Jacobian of `problem` at ``lam`` (a parameter without
-        the compiled step): converged when the residual and the last step are at most
-        ``tol * max(1, |x|)``."""
-        x = np.array(x0, dtype=float)
-        last = math.inf
-        for it in range(self.max_iter + 1):
-            residual = problem.residual(x, lam)
-            norm = float(np.max(np.abs(residual)))
-            scale = max(1.0, float(np.max(np.abs(x))))
-            if not math.isfinite(norm):
-                return None, it
-            if norm <= self.tol * scale and last <= self.tol * scale:
-                return x, it
-            if it == self.max_iter:
-                break
-            step = np.linalg.solve(problem.jacobian(x, lam), -residual)
-            x = x + step
-            last = float(np.max(np.abs(step)))
-        return None, self.max_iter
+            return None, self.max_iter, None
+        if not np.all(np.isfinite(u)):
+            return None, iterations, None
+        return u, iterations, (flow, sh)
 
     def solve_at(self, params: tuple[ModelParameter, ModelParameter], values: dict[str, float],
                  x0: np.ndarray) -> np.ndarray | None:
@@ -505,6 +487,7 @@ class _StickySetting:
         self.built = 0
         queue = collections.deque([(seed[0] * n1 + seed[1], -1)])
         attempts = iterations = 0
+        unevaluated: list[int] = []
         while queue:
             point, parent = queue.popleft()
             if found[point] or tried[point] >= self.max_attempts:
@@ -525,48 +508,44 @@ class _StickySetting:
                 problem = self.problem(params, values, problems)
             except _SOLVE_ERRORS:
                 continue
-            x, it = self.newton(problem, values[self.continued], x0)
+            x, it, shot = self.newton(problem, values[self.continued], x0)
             iterations += it
             if x is None or (parent >= 0 and float(np.max(np.abs(x - x0))) > self.max_change):
                 continue
             found[point] = True
             unknowns[point] = x
             out["newton_iterations"][point] = it
+            # evaluated from the Newton's own shot; a motion that cannot be evaluated is not
+            # found, but it seeds its neighbours as every solved point does
+            if evaluate and not self.evaluate(*shot, x, checks, out, point):
+                unevaluated.append(point)
             for d0, d1 in ((1, 0), (-1, 0), (0, 1), (0, -1)):
                 k0, k1 = i0 + d0, i1 + d1
                 if 0 <= k0 < n0 and 0 <= k1 < n1:
                     q = k0 * n1 + k1
                     if not found[q] and tried[q] < self.max_attempts:
                         queue.append((q, point))
-        if evaluate:  # one problem after the other: the points by its parameter's value
-            points = np.flatnonzero(found)
-            if self.continued == 0:
-                points = points[np.argsort(points % n1, kind="stable")]
-            for point in points:
-                i0, i1 = divmod(int(point), n1)
-                values = (float(c0[i0]), float(c1[i1]))
-                problem = self.problem(params, values, problems)
-                if not self.evaluate(problem, values[self.continued], unknowns[point], checks,
-                                     out, int(point)):
-                    found[point] = False
-                    unknowns[point] = np.nan
-                    out["newton_iterations"][point] = -1
+        for point in unevaluated:
+            found[point] = False
+            unknowns[point] = np.nan
+            out["newton_iterations"][point] = -1
         solved = int(np.count_nonzero(found))
         return out, unknowns, (solved, attempts, iterations, False), self.built
 
-    @staticmethod
-    def evaluate(problem: MultiImpactBranchProblem, lam: float, u: np.ndarray, checks: bool,
+    def evaluate(self, flow: Flow, sh: StickyShooting, u: np.ndarray, checks: bool,
                  out: dict[str, np.ndarray], point: int) -> bool:
-        """Write the motion of unknowns `u` (its G, checks and sticking phases: the
-        problem's :meth:`~impactcont.problems.multi_impact_branch.MultiImpactBranchProblem.
-        orbit`) into `out` at `point`; False where it cannot be evaluated."""
-        try:
-            orbit = problem.orbit(u, lam, checks=checks)
+        """Write the motion of unknowns `u` on `flow` (its G, checks and sticking phases:
+        :func:`~impactcont.orbit.sticky.sticky_orbit_from_unknowns` of the shot `sh` at
+        `u`, the Newton's) into `out` at `point`; False where it cannot be evaluated."""
+        try:  # without the Jacobian: the map keeps no condition number
+            orbit = sticky_orbit_from_unknowns(flow, self.N, self.pattern, u,
+                                               sh._replace(jacobian=None),
+                                               checks=checks)
         except _SOLVE_ERRORS as error:
-            log.debug("the motion at %s = %r not evaluated: %s", problem.parameter, lam, error)
+            log.debug("the motion of %r not evaluated: %s", flow.osc, error)
             return False
         mu = np.asarray(orbit.multipliers)
-        held = problem.sticks
+        held = self.sticks
         stick = np.where(held, np.asarray(orbit.stick_times, dtype=float), np.nan)
         out["delta"][point] = math.atan2(math.sin(u[0]), math.cos(u[0]))
         out["spectral_radius"][point] = orbit.spectral_radius
@@ -578,7 +557,7 @@ class _StickySetting:
         out["flight_time_k"][point] = orbit.flight_times
         out["state_k"][point] = orbit.states
         out["stick_time_k"][point] = stick
-        omega = problem.oscillator_at(lam).omega
+        omega = flow.osc.omega
         out["release_phase_k"][point] = np.where(held, _wrap(orbit.phases + omega * stick),
                                                  np.nan)
         out["pressing_min_k"][point] = np.where(held, orbit.pressing_min, np.nan)
@@ -587,6 +566,12 @@ class _StickySetting:
         out["pressing_min"][point] = release_grazing_test(orbit)
         out["reason"][point] = 0 if orbit.physical else _reasons(orbit, held, checks)
         return True
+
+
+#: How the motion's ``reason`` names a resolved bounce of a chatter that reaches another
+#: stop (:func:`impactcont.orbit.sticky.sticky_orbit_from_unknowns`: the motion carries
+#: no number of it, the bounces' clearances being checked, not kept).
+_BOUNCE_REACHES = "a bounce of the chatter on stop"
 
 
 def _reasons(orbit: MultiImpactOrbit, held: np.ndarray, checks: bool) -> int:
@@ -608,6 +593,8 @@ def _reasons(orbit: MultiImpactOrbit, held: np.ndarray, checks: bool) -> int:
         bits |= MAP_REASONS["contact_not_checked"]
     elif not orbit.gap_min > 0.0:
         bits |= MAP_REASONS["interior_contact"]
+    if _BOUNCE_REACHES in orbit.reason:
+        bits |= MAP_REASONS["bounce_reaches_stop"]
     return bits or MAP_REASONS["other"]
 
 

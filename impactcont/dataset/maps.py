@@ -159,9 +159,12 @@ _OPTIONAL = ("asymmetry",)
 #: Why a found point of a map is not physical: the bits of the variable ``reason`` (CF
 #: ``flag_masks``/``flag_meanings``), several at once where several checks fail. The
 #: first three are the sides of the points that end a branch of motions with sticking
-#: phases (``SE``, ``RG``, ``SO``, :class:`~impactcont.vocabulary.Label`); ``other`` is a
-#: check the others do not name (a release where the pressing force does not fall
-#: through zero, a stop crossed at a section; the motion's ``reason`` says which).
+#: phases (``SE``, ``RG``, ``SO``, :class:`~impactcont.vocabulary.Label`);
+#: ``bounce_reaches_stop`` a resolved bounce of the complete chatter that enters a sticking
+#: phase reaching another stop (the chatter map sees only its own stop; the motion's
+#: ``reason`` names the stop, the coordinate and when); ``other`` is a check the others do
+#: not name (a release where the pressing force does not fall through zero, a stop crossed
+#: at a section, a chatter that does not accumulate; the motion's ``reason`` says which).
 MAP_REASONS: dict[str, int] = {
     "stick_ended": 1,          # a stick time <= 0: past the end of a ride (SE)
     "release_grazing": 2,      # the pressing force <= 0 inside a stick (RG)
@@ -171,6 +174,7 @@ MAP_REASONS: dict[str, int] = {
     "interior_contact": 32,    # a stop reached inside a flight (gap_min <= 0, eq. 16)
     "contact_not_checked": 64,  # the flights were not searched for contact
     "other": 128,              # another check of the motion failed
+    "bounce_reaches_stop": 256,  # a bounce of a chatter reaches another stop
 }
 
 #: Variables of the map of a motion with sticking phases (a lowercase letter in its
@@ -210,8 +214,9 @@ STICKY_MAP_VARIABLES: dict[str, _Var] = {
                    "stick_ended = a stick time <= 0, the SE side; release_grazing = the "
                    "pressing force <= 0 inside a stick, the RG side; sticking_onset = the "
                    "pressing force <= 0 at a landing, the SO side; flight_time, "
-                   "impact_velocity, interior_contact, contact_not_checked, other); 0 where "
-                   "physical or not found.", kind="i"),
+                   "impact_velocity, interior_contact, contact_not_checked, other, "
+                   "bounce_reaches_stop = a bounce of the chatter entering a stick reaches "
+                   "another stop); 0 where physical or not found.", kind="i"),
 }
 
 

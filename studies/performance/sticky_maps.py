@@ -30,42 +30,19 @@ flows at each omega: a compiled sticky sweep (Newton and evaluation in one kerne
 from __future__ import annotations
 
 import os
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 import impactcont as ic
-from impactcont.model.stops import Stops
+
+# the two motions as the branch cost of studies/sticking_motions builds them (one builder)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "sticking_motions"))
+from branch_cost import starts
 
 POINTS = 41
-
-
-def damper(omega: float, R: float) -> ic.ImpactOscillator:
-    """Case (c): primary 1 on spring 1 (eta 0.3), ball 0.2 in |x2 - x1| <= 0.3."""
-    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
-                               R=R, b=0.3, omega=omega, eta=0.3,
-                               stops=Stops(mass=2, relative_to=1, mirror=True))
-
-
-def riding_start(osc: ic.ImpactOscillator) -> np.ndarray:
-    """The ball on the upper wall, the pair on the held system's forced response."""
-    m, c, omega = osc.M[1, 1], osc.C[0, 0], osc.omega
-    amplitude = 1.0 / (1.0 - (1.0 + m) * omega**2 + 1j * c * omega)
-    x1, v1 = amplitude.real, (1j * omega * amplitude).real
-    return np.array([x1, x1 + osc.b, v1, v1])
-
-
-def starts() -> dict[str, ic.MultiImpactOrbit]:
-    """The sticky and the plain motion, each from its simulated steady state."""
-    sticky = damper(1.2, 0.0)
-    plain = damper(2.5, 0.6)
-    return {
-        "sticky 'lu' (R 0)": ic.multi_impact_orbit(
-            sticky, 1, 2, ic.simulate(sticky, riding_start(sticky), 0.0, 16.0)),
-        "plain 'UL' (R 0.6)": ic.multi_impact_orbit(
-            plain, 1, 2, ic.simulate(plain, np.array([0.0, 0.3, 0.0, 0.0]), 0.0, 150.0),
-            pattern="UL"),
-    }
 
 
 def one_map(start: ic.MultiImpactOrbit, points: int, **options) -> tuple[float, int]:

@@ -55,7 +55,8 @@ def riding_start(osc: ic.ImpactOscillator) -> np.ndarray:
 
 
 def starts() -> dict[str, ic.MultiImpactOrbit]:
-    """The sticky and the plain motion, each from its simulated steady state."""
+    """The sticky and the plain motion, each from its simulated steady state (also the
+    motions of ``studies/performance/sticky_maps.py``)."""
     sticky = damper(1.2, 0.0)
     plain = damper(2.5, 0.6)
     return {

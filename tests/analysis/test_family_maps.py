@@ -655,10 +655,11 @@ def riding_start():
 
 
 def test_a_sticky_map_without_omega_is_newton_on_the_branch_problem(riding_start):
-    """A pair without omega, (b, eta): the problem's residual and Jacobian (no compiled
-    step). Each point is the motion multi_impact_orbit solves alone on the oscillator with
-    both values set (its own sticky Newton) to 1e-9, the stick times and the release
-    phases (the impact phase plus omega times the stick) included."""
+    """A pair without omega, (b, eta): each problem's flows built anew (no cheap flow at a
+    new omega). Each point is the motion multi_impact_orbit solves alone on the oscillator
+    with both values set (a solve from the simulated start, not from a neighbour) to 1e-9,
+    the stick times and the release phases (the impact phase plus omega times the stick)
+    included."""
     grid = {"b": np.linspace(0.28, 0.32, 3), "eta": np.linspace(0.28, 0.32, 3)}
     ds = multi_impact_map(riding_start, ("b", "eta"), grid=grid)
     assert ds["found"].all() and ds["physical"].all() and ds.attrs["pattern"] == \

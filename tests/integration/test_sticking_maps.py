@@ -219,6 +219,44 @@ def test_refusals_of_a_sticky_map():
                          grid={"R": [0.0, 0.1], "omega": OMEGAS})
 
 
+def test_a_chatter_bounce_reaching_another_stop_has_its_own_reason():
+    """The riding damper with an elastic ball (R = 0.3: each stick entered through complete
+    chatter, pattern "lu") at omega 0.2, under a stop A on the primary (x1 <= 1.04) that
+    the first bounce of the upper wall's chatter crosses while the flights and the rides
+    stay below it (the solved riding motion's bounces never reach the other wall: the
+    landing's speed comes from the flight across the clearance). The map over (omega, b)
+    flags those points bounce_reaches_stop, and nothing else; exactly where the re-solved
+    motion names the bounce reaching A. Witness: the simulator from the chatter's first
+    bounce hits A before it returns to the upper wall there, and the wall where the bit is
+    clear."""
+    osc = damper(0.2).replace(R=0.3)
+    ride = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, riding_start(osc), 0.0, 12.0))
+    capped = ic.ImpactOscillator(M=osc.M, K=osc.K, F=[1.0, 0.0], R=0.3, b=0.3, omega=0.2,
+                                 eta=0.3, stops=Stops(mass=2, relative_to=1, mirror=True,
+                                                      extra=(ic.Stop("A", mass=1, gap=1.04,
+                                                                     restitution=0.5),)))
+    start = ic.multi_impact_orbit(capped, 1, 2, ride)
+    assert start.pattern == "lu" and not start.physical
+    ds = ic.stability_map(start, parameters=("omega", "b"),
+                          grid={"omega": [0.19, 0.2, 0.21], "b": [0.25, 0.3, 0.35]})
+    bit = MAP_REASONS["bounce_reaches_stop"]
+    found = ds["found"].values
+    bounced = found & ((ds["reason"].values & bit) != 0)
+    assert bounced.any() and ds["physical"].values.any()
+    assert np.array_equal(ds["reason"].values[bounced], np.full(bounced.sum(), bit))
+    for i, omega in enumerate(ds["omega"].values):
+        for j, b in enumerate(ds["b"].values):
+            if not found[i, j]:
+                continue
+            orbit = multi_impact_map_orbit(ds, omega=omega, b=b)
+            assert ("a bounce of the chatter on stop 'U' reaches stop 'A'" in orbit.reason) \
+                == bounced[i, j]
+            upper = next(c for c in orbit.chatters if c.stop == "U")
+            run = ic.simulate(orbit.oscillator, upper.starts[0], float(upper.phases[0]),
+                              float(upper.times[0]) * 1.01)
+            assert run.impact_stops[0] == ("A" if bounced[i, j] else "U")
+
+
 SCENE = """title = "a map of the riding motion"
 [oscillator]
 M = [[1.0, 0.0], [0.0, 0.2]]
