@@ -80,6 +80,7 @@ from impactcont.orbit.periodic import (
     _check_N,
 )
 from impactcont.orbit.stop_geometry import StopGeometry, stop_geometry
+from impactcont.vocabulary import check_positive_integer
 
 __all__ = [
     "MultiImpactOrbit",
@@ -115,11 +116,9 @@ _SINGULAR = 1e-3
 
 
 def check_impacts(p: object) -> int:
-    """``p`` as an int ``>= 1`` (impacts per N forcing periods), else :class:`ParameterError`."""
-    if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or p < 1:
-        raise ParameterError(f"p must be an integer >= 1 (impacts per N forcing periods); "
-                             f"got {p!r}")
-    return int(p)
+    """``p`` as an int ``>= 1`` (impacts per N forcing periods), else :class:`ParameterError`
+    (:func:`impactcont.vocabulary.check_positive_integer`)."""
+    return check_positive_integer("p", p, "impacts per N forcing periods")
 
 
 def _wrap(phase: float) -> float:
