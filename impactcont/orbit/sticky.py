@@ -55,6 +55,7 @@ from impactcont.orbit.stop_geometry import StopGeometry
 
 __all__ = [
     "CHATTER_SPEED",
+    "HELD_END_ULPS",
     "OMEGA_STEP",
     "RELEASE_SHIFT",
     "Chatter",
