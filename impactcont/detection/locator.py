@@ -45,16 +45,19 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
     return True if criterion is None else criterion(multipliers, unit_tol)
 
 
-#: The point a kind's zero is when both are located on one step (:func:`drop_twins`): a
+#: The points a kind's zero is when both are located on one step (:func:`drop_twins`): a
 #: GR at a ZV is the grazing of the zero-velocity impact; an RG or an SO at an SE is the
 #: end of a sticking phase (the landing is the release there, so the pressing force at
-#: the landing and the smallest one inside the stick vanish with the stick time).
-TWIN_OF: dict[str, Label] = {Label.GR: Label.ZV, Label.RG: Label.SE, Label.SO: Label.SE}
+#: the landing and the smallest one inside the stick vanish with the stick time); an RG
+#: at an SO is the onset of complete chatter on a stick entered through chatter (the
+#: accumulation point reaches the release: the held phase shrinks to nothing).
+TWIN_OF: dict[str, tuple[Label, ...]] = {Label.GR: (Label.ZV,), Label.RG: (Label.SE, Label.SO),
+                                          Label.SO: (Label.SE,)}
 
-#: The kinds a detector also watches when one is asked for: ZV with GR, SE with RG and
-#: SO, whose located points tell which point is the other's twin (dropped,
-#: :func:`drop_twins`, also when ZV or SE is not asked for).
-COMPANIONS: dict[str, tuple[Label, ...]] = {kind: (twin,) for kind, twin in TWIN_OF.items()}
+#: The kinds a detector also watches when one is asked for: ZV with GR, SE (and SO) with
+#: RG, SE with SO, whose located points tell which point is the other's twin (dropped,
+#: :func:`drop_twins`, also when the twin's kind is not asked for).
+COMPANIONS: dict[str, tuple[Label, ...]] = dict(TWIN_OF)
 
 
 def watched_labels(labels: Sequence[str]) -> list[str]:
@@ -125,19 +128,23 @@ def drop_twins(points: Sequence[_Point], parameter: str = "lam") -> list[_Point]
     at the release, so the pressing force at the landing (SO's test) and the smallest
     inside the stick (RG's, which counts the landing's for a stick of no duration)
     vanish at the same point: one point, the end of the sticking phase, reported once,
-    as the SE.
+    as the SE. RG at SO: on a stick entered through complete chatter the held phase
+    shrinks to nothing where the pressing force at the accumulation point passes through
+    0 (the onset of complete chatter; the stick time, counted from the landing, does not
+    vanish there): one point, reported once, as the SO.
 
     A point is dropped when its twin was located on the same step within the two points'
     precisions (at least :data:`TWIN_TOL` relative: on the side where no flight has an
     interior maximum the GR test is +inf, and the precision search sees only one side of
     the double zero); every other point is kept, in order.
     """
-    located = [z for z in points if z.label in TWIN_OF.values() and z.status == "located"]
+    kinds = {kind for twins_of in TWIN_OF.values() for kind in twins_of}
+    located = [z for z in points if z.label in kinds and z.status == "located"]
     kept = []
     for point in points:
         twin = None
         if point.label in TWIN_OF:
-            twin = next((z for z in located if z.label == TWIN_OF[point.label]
+            twin = next((z for z in located if z.label in TWIN_OF[point.label]
                          and z.bracket == point.bracket and twins(
                              abs(z.value - point.value), z.precision + point.precision,
                              z.value)), None)

@@ -671,13 +671,16 @@ def release_grazing_test(orbit: Any) -> float:
     ``min_k pressing_min_k`` (their starts included, the releases excluded).
 
     Zero where the pressing force touches zero inside a stick (the release would come
-    earlier: another motion). A stick of duration <= 0 counts its landing's pressing force
-    (the limit of its minimum as the stick shrinks to its start), so the test is finite
-    along the whole branch; it vanishes at the end of a ride too (the landing there is a
-    release).
+    earlier: another motion). A held phase of duration <= 0 counts minus the size of its
+    landing's pressing force (the limit of its minimum as the stick shrinks to its start,
+    taken negative: no held phase is not a physical one), so the test is finite along the
+    whole branch and changes sign where the held phase vanishes: at the end of a ride
+    (the landing there is a release) and at the onset of complete chatter (the
+    accumulation point reaches the release), whatever the landing's pressing force does
+    past it.
     """
     low = np.asarray(orbit.pressing_min, dtype=float)
-    return _smallest(np.where(np.isnan(low), orbit.landing_pressing, low), orbit)
+    return _smallest(np.where(np.isnan(low), -np.abs(orbit.landing_pressing), low), orbit)
 
 
 def sticking_onset_test(orbit: Any) -> float:
@@ -685,9 +688,17 @@ def sticking_onset_test(orbit: Any) -> float:
     that start the sticking phases, ``min_k p(X_k, theta_k)``.
 
     Zero where an impact lands with the acceleration tangent to its stop: on one side the
-    stop holds the coordinate, on the other the mass leaves at once.
+    stop holds the coordinate, on the other the mass leaves at once. On a stick entered
+    through complete chatter the pressing force is the one at the accumulation point, and
+    its zero is the onset of complete chatter: the accumulation point reaches the
+    release. A held phase of duration <= 0 counts minus the size of its landing's
+    pressing force: past the onset the chatter map may accumulate in a later forcing
+    period with a positive pressing force again, which is no stick of this motion (the
+    test would step over the onset without a sign change).
     """
-    return _smallest(orbit.landing_pressing, orbit)
+    landing = np.asarray(orbit.landing_pressing, dtype=float)
+    held = ~np.isnan(np.asarray(orbit.pressing_min, dtype=float))
+    return _smallest(np.where(held, landing, -np.abs(landing)), orbit)
 
 
 def _time_noise(orbit: Any) -> float:

@@ -129,8 +129,23 @@ def test_release_grazing_and_sticking_onset_at_the_end_of_a_sticking_phase_are_t
         kept = drop_twins([lone, se, rg, so], parameter="omega")
     assert kept == [lone, se]
     assert caplog.text.count("reported once, as SE") == 2
-    assert COMPANIONS[Label.RG] == COMPANIONS[Label.SO] == (Label.SE,)
-    assert watched_labels(["RG"]) == ["RG", "SE"]
+    assert COMPANIONS[Label.SO] == (Label.SE,)
+    assert COMPANIONS[Label.RG] == (Label.SE, Label.SO)
+    assert watched_labels(["RG"]) == ["RG", "SE", "SO"]
+
+
+def test_release_grazing_at_the_onset_of_complete_chatter_is_the_so(caplog):
+    """On a stick entered through chatter the held phase shrinks to nothing where the
+    pressing force at the accumulation point passes through 0 (SO), and the RG test
+    vanishes there too: one point, reported once, as SO (an SO bracketed only drops
+    nothing)."""
+    so = _Point("SO", 0.9276948, 5e-15, (0.92, 0.93))
+    rg = _Point("RG", 0.9276948 + 2e-15, 5e-15, (0.92, 0.93))
+    with caplog.at_level(logging.INFO, logger="impactcont.detection.locator"):
+        assert drop_twins([rg, so], parameter="omega") == [so]
+    assert "reported once, as SO" in caplog.text
+    loose = _Point("SO", 0.9276948, 5e-15, (0.92, 0.93), status="bracketed")
+    assert drop_twins([rg, loose]) == [rg, loose]
 
 
 def test_a_zv_only_bracketed_drops_nothing():
