@@ -148,13 +148,64 @@ def cold_compile(script: str = COLD) -> dict[str, float]:
     return json.loads(run.stdout.splitlines()[-1])
 
 
+def bp_paired(sym_branch: Any, pairs: int = 30) -> dict[str, Any]:
+    """The BP curve per point with this round's BP row from the shot and moved stop geometry
+    (``problems/codim1.py``, ``orbit/stop_geometry.py``) on and off (the forward-difference
+    row and each stop geometry built afresh: the code before), timed back to back in one
+    process, the order alternating: the median and quartiles of the paired ratios on/off."""
+    import impactcont.problems.codim1 as codim1
+    import impactcont.problems.multi_impact_branch as branch
+    from impactcont.orbit.stop_geometry import stop_geometry
+
+    init, moved = codim1.ShootingCurve.__init__, branch.moved_stop_geometry
+
+    def switch(on: bool) -> None:
+        def patched(self: Any, *args: Any, **kw: Any) -> None:
+            init(self, *args, **kw)
+            self._exact_pitchfork = self._exact_pitchfork and on
+        codim1.ShootingCurve.__init__ = patched
+        branch.moved_stop_geometry = moved if on else (
+            lambda geometry, before, osc, pattern: stop_geometry(osc, pattern))
+
+    def per_point() -> float:
+        start = time.perf_counter()
+        ds = ic.multi_impact_curve(sym_branch, "BP", 1, parameter="b",
+                                   bounds={"omega": (0.5, 2.5), "b": (0.2, 1.0)}, ds_max=0.02)
+        return (time.perf_counter() - start) / ds.sizes["point"]
+
+    times: dict[bool, list[float]] = {False: [], True: []}
+    ratios = []
+    try:
+        for on in (False, True):  # warm
+            switch(on)
+            per_point()
+        for i in range(pairs):
+            pair = {}
+            for on in ((False, True) if i % 2 == 0 else (True, False)):
+                switch(on)
+                pair[on] = per_point()
+                times[on].append(pair[on])
+            ratios.append(pair[True] / pair[False])
+    finally:
+        codim1.ShootingCurve.__init__, branch.moved_stop_geometry = init, moved
+    q = np.percentile(ratios, [25, 50, 75])
+    return {"median_ratio": float(q[1]), "quartiles": [float(q[0]), float(q[2])],
+            "before_ms_best_median": [1e3 * min(times[False]),
+                                      1e3 * float(np.median(times[False]))],
+            "after_ms_best_median": [1e3 * min(times[True]),
+                                     1e3 * float(np.median(times[True]))],
+            "loadavg": os.getloadavg()}
+
+
 def main() -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=7)
-    parser.add_argument("--only", choices=("bp-symmetric",), default=None,
+    parser.add_argument("--only", choices=("bp-symmetric", "bp-paired"), default=None,
                         help="bp-symmetric: only the BP curve point and the symmetric 1-2 "
                         "branch with their references (the N = 1 PD curve and branch point), "
-                        "no cold compiles; prints per-point times")
+                        "no cold compiles; prints per-point times. bp-paired: the BP curve "
+                        "with the exact BP row and the moved stop geometry on and off in one "
+                        "process (off is the code before them), 30 alternating pairs")
     args = parser.parse_args()
     threadpool_limits(1)
     # the 2-2 motion of the period-doubled branch, and a guess at a nearby omega
@@ -244,6 +295,10 @@ def main() -> dict[str, Any]:
         "curve_bp": curve_bp,
         "curve_pd_n1": curve_pd_n1,
     }
+    if args.only == "bp-paired":
+        out = bp_paired(sym_branch)
+        print(json.dumps(out))
+        return out
     if args.only == "bp-symmetric":
         keep = ("branch_n1", "branch_12", "branch_12_no_detection", "curve_bp", "curve_pd_n1")
         t = interleaved({k: work[k] for k in keep}, args.rounds)
