@@ -10,21 +10,36 @@ the best of 3 rounds after a warm-up run of each (the compiled kernels)::
     python studies/performance/sticky_maps.py
 
 Prints, for each map, the grid points per second, the points found and the ratio of its
-time to the plain map's. The sticky map is swept in Python over the compiled Newton of
-its branch problem (``MultiImpactBranchProblem.palc_step`` on the hyperplane of each omega)
-and evaluates each motion found by the problem's ``orbit`` (its G, sticking phases and
-contact search: most of its time, the third line, ``checks=False``, shows how much is the
-contact search); the plain map is one compiled sweep (``kernel.sweep.sweep_stops``).
+time to the plain map's. The motions are those of ``studies/sticking_motions/
+branch_cost.py`` (imported from it: one builder). The sticky map is swept in Python:
+at each grid point the compiled Newton of ``multi_impact_orbit``
+(``orbit.sticky.sticky_newton``) on the flow of the branch problem of its b at that omega,
+and the motion evaluated from that Newton's shot
+(``orbit.sticky.sticky_orbit_from_unknowns``: G, the sticking phases' checks, the contact
+search; the third line, ``checks=False``, shows how much is the contact search); the
+plain map is one compiled sweep (``kernel.sweep.sweep_stops``).
 
 Measured 2026-12-07 (two cores shared with other jobs, so each figure within a factor of
-about 1.5), two runs: at load 8, sticky 194 points/s (8.6 s for 41 x 41, all found),
-plain 15442 points/s (0.11 s), 79x; at load 5-6, sticky 243 points/s (6.9 s), plain
-30116 (0.06 s), 124x. ``checks=False``: 154 and 275 points/s (no faster within the
-noise: the contact search is not what costs). A profile of the sticky
-map (48 points, warm) puts about two thirds of its time in the problem's ``orbit`` (the
-sticking phases' checks and G, in Python) and a quarter in the compiled Newton and the
-flows at each omega: a compiled sticky sweep (Newton and evaluation in one kernel, as
-``kernel.sweep`` does for plain motions) is what would close the gap.
+about 1.5). Before (6d886d3, the Newton of the branch problem's compiled ``palc_step`` on
+the hyperplane of each omega, then the problem's ``orbit`` from a second shot): at load 8,
+sticky 194 points/s, plain 15442 (79x); at load 5-6, 243 against 30116 (124x). After
+(f98fc57), interleaved with a ``git archive`` of 76f5528, twice, best of 3 each: before
+405 and 361 points/s against plain 35583 and 28775 (88x, 80x; load 4.5-5.0), after 326
+and 277 against 39809 and 35909 (122x, 130x; load 4.8-5.7). The after tree also holds
+the other stops' clearance along each stick (544b9a3, 921be33) and the other changes of
+orbit/ between the two commits; this module's change alone (HEAD's ``family_maps`` against
+the new one on the same tree, one process, interleaved, best of 3, load 9.3): 133 against
+143 points/s (1.07x), ``checks=False`` 212 against 194 (noise). **Not** a few times a
+plain point: about 100x. What sets the floor (the new sweep, per point at load 9, best
+of 180 calls): the compiled Newton 0.08 ms; the flow at the new omega with its held
+systems (``MultiImpactBranchProblem.flow_at``) 0.5 ms and their ``held_segments`` rebuilt
+from the held flows 1.4 ms; the motion's evaluation 2.7 ms, of which the sticking phases'
+checks (``orbit.sticky._sticks``: pressing minimum, other stops along the stick, chatter
+bounces, each stop's restitution through ``Stops.stop`` several times) 2.0 ms and G
+(``sticky_jacobians``) 0.14 ms; a plain point is 0.03-0.07 ms all told. Only a compiled
+sticky sweep (the held segments' amplitudes at each omega, the stick checks and G in the
+kernel, as ``kernel.sweep`` does for plain motions) would close it; the modules it needs
+(``kernel/``, ``orbit/sticky.py``) were not this change's.
 """
 
 from __future__ import annotations
