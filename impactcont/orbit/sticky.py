@@ -350,10 +350,28 @@ def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatt
     return tuple(found)
 
 
-def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[tuple[float, float, str, str]]:
-    """The stops a chatter's resolved bounces reach, each but the chatter's own: ``(gap,
-    t, stop, coordinate)`` per stop reached, its smallest clearance and when (``t`` from
-    the landing).
+#: A stop's clearance at an end of a sticking phase (its start, its release) is a crossing
+#: below ``-HELD_END_ULPS eps (|c| + sum |n_i x_i|)``, the rounding of its evaluation, as at
+#: a flight's ends (:data:`impactcont.kernel.shooting._END_ULPS`).
+HELD_END_ULPS = 64.0
+
+
+@dataclasses.dataclass(frozen=True)
+class _HeldGap:
+    """The smallest clearance of one other stop along one sticking phase (its chatter's
+    bounces or its held flow)."""
+
+    gap: float
+    time: float  # after the impact that starts the sticking phase
+    stop: str
+    coordinate: str
+    crossed: bool
+
+
+def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[_HeldGap]:
+    """Every stop's smallest clearance along a chatter's resolved bounces, each stop but the
+    chatter's own: one :class:`_HeldGap` per stop (its time from the landing), crossed
+    where a bounce reaches it.
 
     Each bounce is checked as every flight is (each a flight from an impact on the
     chatter's stop to the next): the contact search of eq. (16) at the interior extrema
@@ -381,11 +399,14 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[tuple[float, float,
     offsets = np.concatenate([[0.0], np.cumsum(chatter.times)[:-1]])
     names = (UPPER, LOWER, *geo.extra_names)
     normals = (geo.normal, geo.normal, *geo.extra_normals)
-    found: dict[int, tuple[float, float]] = {}  # stop -> (gap, t)
+    found: dict[int, tuple[float, float, bool]] = {}  # stop -> (gap, t, crossed)
 
-    def reached(stop: int, gap: float, when: float) -> None:
-        if names[stop] != chatter.stop and (stop not in found or gap < found[stop][0]):
-            found[stop] = (gap, when)
+    def seen(stop: int, gap: float, when: float, crossed: bool) -> None:
+        if names[stop] == chatter.stop:
+            return
+        low, at, before = found.get(stop, (math.inf, math.nan, False))
+        found[stop] = (gap, when, before or crossed) if gap < low else (low, at,
+                                                                        before or crossed)
 
     interior = [(0, checked.gap_upper, checked.time_upper)]
     if geo.two_sided:
@@ -393,36 +414,20 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[tuple[float, float,
     interior += [(2 + j, checked.gap_extra[:, j], checked.time_extra[:, j])
                  for j in range(len(geo.extra_names))]
     for stop, gaps, times in interior:
-        for i in np.flatnonzero(~(gaps > 0.0)):
-            reached(stop, float(gaps[i]), float(offsets[i] + times[i]))
+        for i in np.flatnonzero(np.isfinite(gaps)):
+            seen(stop, float(gaps[i]), float(offsets[i] + times[i]), not gaps[i] > 0.0)
     end_gap, end_stop, end_tol = _kernel().end_clearances(
         geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
         geo.extra_signs, geo.extra_positions, _writable(chatter.starts),
         _writable(chatter.arrivals))
     for i in range(c):
         for end in (0, 1):
-            if end_stop[i, end] >= 0 and end_gap[i, end] < -end_tol[i, end]:
-                reached(int(end_stop[i, end]), float(end_gap[i, end]),
-                        float(offsets[i] + end * chatter.times[i]))
-    return [(gap, when, names[stop], _coordinate(normals[stop]))
-            for stop, (gap, when) in sorted(found.items())]
-
-
-#: A stop's clearance at an end of a sticking phase (its start, its release) is a crossing
-#: below ``-HELD_END_ULPS eps (|c| + sum |n_i x_i|)``, the rounding of its evaluation, as at
-#: a flight's ends (:data:`impactcont.kernel.shooting._END_ULPS`).
-HELD_END_ULPS = 64.0
-
-
-@dataclasses.dataclass(frozen=True)
-class _HeldGap:
-    """The smallest clearance of one other stop along one sticking phase."""
-
-    gap: float
-    time: float  # after the impact that starts the sticking phase
-    stop: str
-    coordinate: str
-    crossed: bool
+            if end_stop[i, end] >= 0:
+                seen(int(end_stop[i, end]), float(end_gap[i, end]),
+                     float(offsets[i] + end * chatter.times[i]),
+                     bool(end_gap[i, end] < -end_tol[i, end]))
+    return [_HeldGap(gap, when, names[stop], _coordinate(normals[stop]), crossed)
+            for stop, (gap, when, crossed) in sorted(found.items())]
 
 
 def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase: float,
@@ -739,13 +744,13 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
     reasons = []
     held_gaps: list[tuple[_HeldGap, ...]] = [() for _ in range(p)]
     chatters = chatter_bounces(flow, pattern, sh)
-    crossings = {c.impact: _bounce_clearances(flow, c) for c in chatters} if checks else {}
+    bounces = {c.impact: _bounce_clearances(flow, c) for c in chatters} if checks else {}
     for k in np.flatnonzero(sticks):
         held = held_flow(osc, impacts[k])
-        for gap, when, other, coordinate in crossings.get(int(k), ()):
-            reasons.append(f"impact {k}: a bounce of the chatter on stop {impacts[k]!r} "
-                           f"reaches stop {other!r}: {coordinate} has clearance {gap:.3g} at "
-                           f"t={when:.6g} after the landing")
+        held_gaps[k] = tuple(bounces.get(int(k), ()))
+        reasons.extend(f"impact {k}: a bounce of the chatter on stop {impacts[k]!r} reaches "
+                       f"stop {g.stop!r}: {g.coordinate} has clearance {g.gap:.3g} at "
+                       f"t={g.time:.6g} after the landing" for g in held_gaps[k] if g.crossed)
         stop, s = impacts[k], float(sh.stick_times[k])
         releases[k] = sh.releases[k]
         start, phase = sh.accumulations[k], float(sh.accumulation_phases[k])
@@ -780,12 +785,13 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
                            f"{stop!r} does not fall through zero (dp/dt = {rate:.3g} >= 0): "
                            "the stop coordinate does not leave the stop")
         if checks:
-            held_gaps[k] = tuple(_held_clearances(flow, impacts, int(k), start, phase,
-                                                  s - chatter, sh.releases[k], chatter))
+            ride = _held_clearances(flow, impacts, int(k), start, phase, s - chatter,
+                                    sh.releases[k], chatter)
+            held_gaps[k] += tuple(ride)
             reasons.extend(
                 f"sticking phase {k} (stop {stop!r}): {g.coordinate} reaches stop {g.stop!r} "
                 f"while {stop!r} holds (clearance {g.gap:.3g} at t={g.time:.6g} after impact "
-                f"{k})" for g in held_gaps[k] if g.crossed)
+                f"{k})" for g in ride if g.crossed)
     return _Sticks(pattern=pattern, phases=sh.phases, states=sh.starts,
                    stick_times=sh.stick_times, flight_times=sh.flight_times, shift=shift,
                    release_states=releases, pressing_min=pressing, landing_pressing=landing,
@@ -835,12 +841,13 @@ def _sticky_motion(flow: Flow, N: int, pattern: str, sh: StickyShooting, checks:
 
 def _with_held_gaps(orbit: MultiImpactOrbit, sticks: _Sticks) -> MultiImpactOrbit:
     """`orbit` with each segment's smallest clearance over its sticking phase too: segment k
-    is impact k, the sticking phase after it and the flight from its release, so a held
-    phase's clearance smaller than its flight's becomes ``flight_gap_min[k]`` (the stop in
+    is impact k, the sticking phase after it (its chatter's resolved bounces and its held
+    flow) and the flight from its release, so a sticking phase's clearance smaller than
+    its flight's becomes ``flight_gap_min[k]`` (the stop in
     ``flight_gap_stops[k]``, the time in ``flight_gap_min_times[k]`` counted from the
     release as the flight's are: negative, inside the sticking phase). The GR test
     function ``gap_min`` then changes sign where another stop coordinate touches its stop
-    inside a sticking phase, as it does inside a flight."""
+    inside a sticking phase or a chatter's bounce, as it does inside a flight."""
     gaps = orbit.flight_gap_min.copy()
     times = orbit.flight_gap_min_times.copy()
     stops = list(orbit.flight_gap_stops)
