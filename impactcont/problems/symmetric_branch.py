@@ -150,6 +150,9 @@ class SymmetricBranchProblem:
         self.size = self.halves.size
         self._S = _reflection(osc.n)[:, None]  # S of the half-map, in the section coordinates
         self._last_full: tuple[tuple[bytes, float], np.ndarray] | None = None
+        # A and M^-1 of a flight: M, K, C are the same at every omega and stop position
+        # (moved problems share them)
+        self._state = _state_matrix(osc)
 
     # -- what the full problem says -------------------------------------------------------------
     osc = _of_full("osc", "The oscillator.")
@@ -321,7 +324,7 @@ class SymmetricBranchProblem:
         dv = np.atleast_2d(np.asarray(dv, dtype=float))
         dc = np.atleast_2d(np.asarray(dc, dtype=float))
         du = dv @ self._E.T  # (d, 2np): the full unknowns' change (e(omega) stays)
-        A, Minv = _state_matrix(osc)
+        A, Minv = self._state
         F = np.asarray(osc.F)
         rate_of = np.zeros((h, m))  # B f'(phi) at each flight's arrival
         eps = 1e-20
