@@ -27,6 +27,7 @@ import pytest
 
 import impactcont as ic
 from impactcont.model.stops import Stops
+from tests.integration.test_sticking_branches import riding_start
 
 #: Samples per forcing period of the simulated trajectories sampled for an extremum.
 DENSE = 20_000
@@ -38,14 +39,6 @@ def damper(omega: float, gap: float | None = None) -> ic.ImpactOscillator:
     return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
                                R=0.0, b=0.3, omega=omega, eta=0.3,
                                stops=Stops(mass=2, relative_to=1, mirror=True, extra=extra))
-
-
-def riding_start(osc: ic.ImpactOscillator) -> np.ndarray:
-    """The ball on the upper wall, the pair on the held system's forced response."""
-    m, c, omega = osc.M[1, 1], osc.C[0, 0], osc.omega
-    amplitude = 1.0 / (1.0 - (1.0 + m) * omega**2 + 1j * c * omega)
-    x1, v1 = amplitude.real, (1j * omega * amplitude).real
-    return np.array([x1, x1 + osc.b, v1, v1])
 
 
 @functools.cache
