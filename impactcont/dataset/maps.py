@@ -171,7 +171,7 @@ MAP_REASONS: dict[str, int] = {
     "sticking_onset": 4,       # the pressing force <= 0 where the stick starts (SO)
     "flight_time": 8,          # a flight time <= 0
     "impact_velocity": 16,     # an impact velocity <= 0 (not arriving towards its stop)
-    "interior_contact": 32,    # a stop reached inside a flight (gap_min <= 0, eq. 16)
+    "interior_contact": 32,    # gap_min <= 0: a stop reached in a flight (eq. 16), ride, bounce
     "contact_not_checked": 64,  # the flights were not searched for contact
     "other": 128,              # another check of the motion failed
     "bounce_reaches_stop": 256,  # a bounce of a chatter reaches another stop

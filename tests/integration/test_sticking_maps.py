@@ -225,8 +225,9 @@ def test_a_chatter_bounce_reaching_another_stop_has_its_own_reason():
     the first bounce of the upper wall's chatter crosses while the flights and the rides
     stay below it (the solved riding motion's bounces never reach the other wall: the
     landing's speed comes from the flight across the clearance). The map over (omega, b)
-    flags those points bounce_reaches_stop, and nothing else; exactly where the re-solved
-    motion names the bounce reaching A. Witness: the simulator from the chatter's first
+    flags those points bounce_reaches_stop (and interior_contact: the bounce's clearance is
+    the motion's gap_min), not "other"; exactly where the re-solved motion names the bounce
+    reaching A. Witness: the simulator from the chatter's first
     bounce hits A before it returns to the upper wall there, and the wall where the bit is
     clear."""
     osc = damper(0.2).replace(R=0.3)
@@ -243,7 +244,11 @@ def test_a_chatter_bounce_reaching_another_stop_has_its_own_reason():
     found = ds["found"].values
     bounced = found & ((ds["reason"].values & bit) != 0)
     assert bounced.any() and ds["physical"].values.any()
-    assert np.array_equal(ds["reason"].values[bounced], np.full(bounced.sum(), bit))
+    # the bounce's clearance is also the motion's gap_min (GR sees it): interior_contact,
+    # never "other"
+    contact = MAP_REASONS["interior_contact"]
+    assert np.array_equal(ds["reason"].values[bounced], np.full(bounced.sum(), bit | contact))
+    assert (ds["gap_min"].values[bounced] < 0).all()
     for i, omega in enumerate(ds["omega"].values):
         for j, b in enumerate(ds["b"].values):
             if not found[i, j]:
