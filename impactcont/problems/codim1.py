@@ -68,9 +68,10 @@ difference of the curve: it steers Newton and the tangent only, the points solve
 ``g = 0`` exactly. The BP row is exact in the unknowns and in a parameter that moves the
 stops (``d sigma = sign(det(H + I)) a^T dH b`` with the singular vectors of ``s_min`` and
 ``dH`` from the shot, :meth:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem.
-half_map_derivative`: one evaluation instead of one shot per unknown), by forward
-differences in the others (omega, R). It is taken afresh at every step and reused only within that step's
-Newton corrections, so that the tangent follows the curve round a fold in ``p2``.
+half_map_derivative`: one evaluation instead of one shot per unknown), and in omega as
+``p1``; by forward differences in the others (R, omega as ``p2``). The row is taken
+afresh at every step and reused only within that step's Newton corrections, so that the
+tangent follows the curve round a fold in ``p2``.
 """
 
 from __future__ import annotations
@@ -497,7 +498,7 @@ class ShootingCurve:
     def _pitchfork_row(self, x: np.ndarray, lam: float
                        ) -> tuple[np.ndarray, tuple[float, float]]:
         """BP: ``dg/du`` exactly, and ``dg/dp1``, ``dg/dp2`` for parameters that move the
-        stops (NaN for the others, left to forward differences).
+        stops and for omega as p1 (NaN for the others, left to forward differences).
 
         ``g = sign(det(H + I)) s_min(H + I)``, so ``dg = sign(det(H + I)) a^T dH b`` with
         ``a``, ``b`` the left and right singular vectors of ``s_min`` (where it is simple,
@@ -508,13 +509,20 @@ class ShootingCurve:
         base = self.branch_problem(lam)
         u, p1 = x[:-1], float(x[-1])
         size = u.size
-        stops = [i for i, par in enumerate(self.params) if par.data == GAP]
+        # the parameters with exact columns: those moving the stops, and omega as p1 (the
+        # problem's own parameter)
+        stops = [i for i, par in enumerate(self.params)
+                 if par.data == GAP or (i == 0 and par.data == FREQUENCY)]
         dv = np.zeros((size + len(stops), size))
         dv[:size] = np.eye(size)
         dc = np.zeros((size + len(stops), base.p))
+        domega = np.zeros(size + len(stops))
         for row, i in enumerate(stops):
-            dc[size + row] = self.params[i].stop_rates(base.pattern)
-        H, dH = base.half_map_derivative(u, p1, dv, dc)
+            if self.params[i].data == GAP:
+                dc[size + row] = self.params[i].stop_rates(base.pattern)
+            else:
+                domega[size + row] = 1.0
+        H, dH = base.half_map_derivative(u, p1, dv, dc, domega)
         A = H + _identity(H.shape[0])
         left, _, right = np.linalg.svd(A)
         sign, _ = np.linalg.slogdet(A)

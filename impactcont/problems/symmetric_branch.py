@@ -23,6 +23,7 @@ the damping and every element, ``gap`` (both stops), and ``b`` and ``R`` of mirr
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import ClassVar
@@ -84,7 +85,7 @@ def _flight_jacobian(tr: np.ndarray, pcol: np.ndarray, rate: np.ndarray, D: np.n
     DB = D @ B
     G = np.empty(tr.shape, dtype=complex)
     G[..., :m - 1, :] = DB[..., np.arange(m) != j_end, :]
-    G[..., m - 1, :] = -omega * hrow / h2[:, None]
+    G[..., m - 1, :] = -np.reshape(omega, (-1, 1)) * hrow / h2[:, None]
     G[..., m - 1, m - 1] += 1.0
     return G
 
@@ -265,7 +266,8 @@ class SymmetricBranchProblem:
         return self._S * A
 
     def half_map_derivative(self, v: np.ndarray, lam: float, dv: np.ndarray,
-                            dc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                            dc: np.ndarray, domega: np.ndarray | None = None
+                            ) -> tuple[np.ndarray, np.ndarray]:
         """``H`` (:meth:`half_map`) and its derivatives along `d` directions, exactly.
 
         Parameters
@@ -279,6 +281,9 @@ class SymmetricBranchProblem:
         dc : ndarray, shape (d, p)
             Each direction's change of the stops' positions ``c_k`` at the p impacts (a
             parameter's :meth:`~impactcont.model.parameters.ModelParameter.stop_rates`).
+        domega : ndarray, shape (d,), optional
+            Each direction's change of omega (the problem's parameter: the problem must be
+            in omega); none by default.
 
         Returns
         -------
@@ -296,7 +301,12 @@ class SymmetricBranchProblem:
         (the forced part ``X_f = X^- - Phi X_0`` of harmonic forcing ``Re(F e^{i phi})``,
         whose second derivative in the phase is ``-X_f``) and
         ``dX'^- = A dX^- + B f' (dtheta + omega dtau)``, ``f' = Re(i F e^{i phi})`` at the
-        arrival ``phi = theta + omega tau``. ``dH`` is the complex step of that rational
+        arrival ``phi = theta + omega tau``. In omega at fixed ``v`` the flights move
+        besides through ``e(omega)`` (``tau_{h-1}``), the phases ``theta_k`` and their forced
+        parts at fixed start, phase and time (:meth:`~impactcont.orbit.flow.Flow.
+        omega_partial`, and its phase derivative: the same a quarter period on, the forced
+        part being harmonic in the phase), and ``G_k``'s last row in omega itself.
+        ``dH`` is the complex step of that rational
         function along them (exact to rounding).
 
         A symmetric system has no constant force (the reflection would not map it to
@@ -323,7 +333,9 @@ class SymmetricBranchProblem:
         omega = float(flow.omega)
         dv = np.atleast_2d(np.asarray(dv, dtype=float))
         dc = np.atleast_2d(np.asarray(dc, dtype=float))
-        du = dv @ self._E.T  # (d, 2np): the full unknowns' change (e(omega) stays)
+        du = dv @ self._E.T  # (d, 2np): the full unknowns' change
+        dw = np.zeros(du.shape[0]) if domega is None else np.asarray(domega, dtype=float)
+        du = du + dw[:, None] * self.halves.offset_derivative(float(lam))  # e(omega)
         A, Minv = self._state
         F = np.asarray(osc.F)
         rate_of = np.zeros((h, m))  # B f'(phi) at each flight's arrival
@@ -331,27 +343,40 @@ class SymmetricBranchProblem:
         d = du.shape[0]
         G = np.broadcast_to(np.eye(m, dtype=complex), (d, m, m)).copy()
         tau_sum = np.zeros(d)
+        elapsed = 0.0  # tau_0 + .. + tau_{k-1}
         for k in range(h):
             tr, pcol = sh.transitions[k], sh.phase_columns[k]
             rate, X0 = sh.arrival_rates[k], sh.starts[k]
-            dtheta = du[:, 0] + omega * tau_sum
+            dtheta = du[:, 0] + omega * tau_sum + elapsed * dw
+            tau = float(sh.flight_times[k])
+            elapsed += tau
             dtau = du[:, 1 + k]
             tau_sum = tau_sum + dtau
             j, normal = int(geo.pivots[k]), geo.normals[k]
             dX0 = np.zeros((d, m))
             dX0[:, np.arange(m) != j] = du[:, p + k * (m - 1):p + (k + 1) * (m - 1)]
             dX0[:, j] = (dc[:, k] - dX0[:, :n] @ normal) / normal[j]
-            dXm = dX0 @ tr.T + dtheta[:, None] * pcol + dtau[:, None] * rate
+            # omega at fixed start, phase and time: the forced part (Flow.omega_partial)
+            theta0 = float(sh.phases[k])
+            forced_w = flow.omega_partial(tau, X0, theta0) if dw.any() else np.zeros(m)
+            dXm = (dX0 @ tr.T + dtheta[:, None] * pcol + dtau[:, None] * rate
+                   + dw[:, None] * forced_w)
             phi = float(sh.phases[k]) + omega * float(sh.flight_times[k])
             rate_of[k, n:] = Minv @ np.real(1j * F * np.exp(1j * phi))
             forced = sh.arrivals[k] - tr @ X0
             dtr = dtau[:, None, None] * (A @ tr)
-            dpcol = dtau[:, None] * (A @ pcol + rate_of[k]) - dtheta[:, None] * forced
-            drate = dXm @ A.T + (dtheta + omega * dtau)[:, None] * rate_of[k]
+            # the forced part is harmonic in the phase: its theta-derivative is itself a
+            # quarter period on
+            phase_w = (flow.omega_partial(tau, X0, theta0 + 0.5 * math.pi) if dw.any()
+                       else np.zeros(m))
+            dpcol = (dtau[:, None] * (A @ pcol + rate_of[k]) - dtheta[:, None] * forced
+                     + dw[:, None] * phase_w)
+            drate = dXm @ A.T + (dtheta + omega * dtau + tau * dw)[:, None] * rate_of[k]
             nxt = (k + 1) % p
             Gk = _flight_jacobian(tr + 1j * eps * dtr, pcol + 1j * eps * dpcol,
                                   rate + 1j * eps * drate, geo.matrices[nxt], j,
-                                  int(geo.pivots[nxt]), normal, geo.normals[nxt], omega)
+                                  int(geo.pivots[nxt]), normal, geo.normals[nxt],
+                                  omega + 1j * eps * dw)
             G = Gk @ G
         H = self._S * G
         return H[0].real.copy() if d else self.half_map(v, lam), H.imag / eps

@@ -106,7 +106,7 @@ def test_what_cannot_be_symmetric_is_refused(motion) -> None:
     (Stops(b_low=0.8), 0.8, 0.8, "gap"),        # the backlash: gap moves both
 ])
 def test_the_half_map_derivative_agrees_with_central_differences(stops, b, omega, moving):
-    """``dH`` in the half unknowns and in a parameter moving the stops (the complex step
+    """``dH`` in the half unknowns, a parameter moving the stops and omega (the complex step
     of eq. 25 on the flights' exact derivatives) against central differences of
     :meth:`half_map` (a new shot each; the moved stops by a problem on the moved
     oscillator), within what differences of step 1e-5 give (1e-7 relative)."""
@@ -134,6 +134,13 @@ def test_the_half_map_derivative_agrees_with_central_differences(stops, b, omega
     fd = (moved(value + h) - moved(value - h)) / (2 * h)
     np.testing.assert_allclose(dH[-1], fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max())
     assert np.abs(dH[-1]).max() > 1e-3  # the stops' position moves H
+    # omega, the problem's parameter, at fixed v (through e(omega), the phases, the forced
+    # parts and G's last row)
+    _, dH = problem.half_map_derivative(v, omega, np.zeros((1, v.size)),
+                                        np.zeros((1, problem.p)), np.ones(1))
+    h = 1e-5
+    fd = (problem.half_map(v, omega + h) - problem.half_map(v, omega - h)) / (2 * h)
+    np.testing.assert_allclose(dH[0], fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max())
 
 
 def test_the_half_map_derivative_needs_the_problem_in_omega(motion):
