@@ -405,8 +405,9 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[_HeldGap]:
         if names[stop] == chatter.stop:
             return
         low, at, before = found.get(stop, (math.inf, math.nan, False))
-        found[stop] = (gap, when, before or crossed) if gap < low else (low, at,
-                                                                        before or crossed)
+        # a NaN clearance (a failed search) is kept, and crosses
+        found[stop] = (gap, when, before or crossed) if not gap >= low else (
+            low, at, before or crossed)
 
     interior = [(0, checked.gap_upper, checked.time_upper)]
     if geo.two_sided:
@@ -414,7 +415,7 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[_HeldGap]:
     interior += [(2 + j, checked.gap_extra[:, j], checked.time_extra[:, j])
                  for j in range(len(geo.extra_names))]
     for stop, gaps, times in interior:
-        for i in np.flatnonzero(np.isfinite(gaps)):
+        for i in np.flatnonzero(~np.isposinf(gaps)):  # +inf: no extremum in the bounce
             seen(stop, float(gaps[i]), float(offsets[i] + times[i]), not gaps[i] > 0.0)
     end_gap, end_stop, end_tol = _kernel().end_clearances(
         geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
@@ -729,9 +730,10 @@ class _Sticks:
 def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
             checks: bool = True) -> _Sticks:
     """The sticking phases' part of a motion: G, its multipliers and the physical checks
-    of each sticking phase (its chatter's bounces clear of every other stop, with
-    `checks`; its onset, its pressing force inside, its release); `shift` the start of
-    each flight's contact search after its release."""
+    of each sticking phase (its chatter's bounces and its held flow clear of every other
+    stop, with `checks`, their clearances kept for :func:`_with_held_gaps`; its onset, its
+    pressing force inside, its release); `shift` the start of each flight's contact search
+    after its release."""
     osc = flow.osc
     impacts, sticks = sticking_pattern(osc, pattern)
     p, m = len(pattern), 2 * osc.n
