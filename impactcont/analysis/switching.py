@@ -590,15 +590,27 @@ def grazing_split(orbit: MultiImpactOrbit) -> tuple[dict[str, Any], int]:
         :func:`impactcont.orbit.multi_impact.multi_impact_orbit`.
     index : int
         Index of the new (zero-velocity) impact in the N-(p+1) motion.
+
+    Raises
+    ------
+    ParameterError
+        For a motion with sticking phases: its flights start at the releases, not at the
+        impact states, and a graze may lie inside a sticking phase (``flight_gap_min``
+        covers the held phase and a chatter's bounces there), so the guess built here
+        would be wrong.
     """
     from impactcont.orbit.flow import Flow
 
+    pattern = orbit.pattern or "U" * orbit.p
+    if any(letter.islower() for letter in pattern):
+        raise ParameterError(f"grazing_switch: the motion {pattern!r} has sticking phases "
+                             "(lowercase letters); switching at its grazing points is not "
+                             "supported (only motions made of flights and impacts)")
     k = int(np.argmin(orbit.flight_gap_min))
     t_g = float(orbit.flight_gap_min_times[k])
     if not math.isfinite(t_g):
         raise NoPeriodicMotionError("the motion has no interior maximum of x1: it does not graze")
     osc = orbit.oscillator
-    pattern = orbit.pattern or "U" * orbit.p
     # the stop grazed: the one nearest in that flight (any stop, extra ones included)
     if len(orbit.flight_gap_stops) == orbit.p:
         stop = orbit.flight_gap_stops[k]

@@ -10,6 +10,7 @@ import pytest
 import impactcont as ic
 from impactcont.analysis.switching import (
     critical_direction,
+    grazing_split,
     grazing_switch,
     special_orbit,
 )
@@ -81,3 +82,14 @@ def test_grazing_switch_steps_geometrically_away_from_the_graze():
     rho = switched.spectral_radius.values[:12]
     assert rho[0] > 1e3 and np.all(np.diff(rho) < 0)  # 1/|omega - omega_GR| decay seen
     assert_reproduced_by_simulator(orbit_at_point(switched, 6), 1, tol=1e-8)
+
+
+def test_grazing_split_refuses_a_motion_with_sticking_phases():
+    """A sticky motion's flights start at its releases and its graze may lie inside a
+    sticking phase: the guess of the N-(p+1) motion would be wrong, so it is refused."""
+    from tests.integration.test_sticking_branches import riding
+
+    orbit = riding()
+    assert orbit.pattern == "lu" and orbit.physical
+    with pytest.raises(ic.ParameterError, match=r"'lu' has sticking phases"):
+        grazing_split(orbit)
