@@ -696,7 +696,7 @@ def grazing_switch(branch: xr.Dataset, which: int = 0, *, bounds: Sequence[float
 
     def new_velocity(x: np.ndarray) -> float:
         # towards the stop hit: +n . x' at an upper stop, -n . x' at a lower (its side)
-        return sign * float(normal @ problem._shoot(x[:-1], float(x[-1])).arrivals[new - 1,
+        return sign * float(normal @ problem.shot(x[:-1], float(x[-1])).arrivals[new - 1,
                                                                                    n:])
 
     x_g = np.append(u_g, lam_g)

@@ -134,7 +134,11 @@ __all__ = [
 
 _FD_STEP = 1.5e-8  # about sqrt(eps): forward differences
 _CACHE_SIZE = 32
+#: A forward-difference g row is reused within this (relative) of where it was taken
+#: (:meth:`ShootingCurve._test_gradient`) ...
 _REUSE = 1e-3
+#: ... and while ``|g|`` at least halves from one use of the row to the next
+_CONTRACTION = 0.5
 _HYPERPLANE_TOL = 1e-11  # Newton on a hyperplane (codim-2 points, crossings, the start)
 #: Flight data whose parameters have exact derivatives from any branch problem's shot
 #: and leave the modal basis as it is.
@@ -243,6 +247,8 @@ class ShootingCurve:
         # both parameters move only omega and the stops: every problem has the same modes
         self._same_modes = all(par.data in _EXACT for par in self.params)
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
+        #: where the row was last taken or reused, and |g| there
+        self._gradient_used: tuple[np.ndarray | None, float] = (None, math.inf)
         first = self._base(self.params[1].value(osc), p1)
         self.size = first.size + 1
         #: BP: the test row from the shot (exact in the unknowns and the stops' positions),
@@ -349,11 +355,27 @@ class ShootingCurve:
         return int(held[np.argmin(sh.stick_times[held])])
 
     def _least_landing(self, base: BranchProblem, sh: Any, p1: float) -> int:
-        """SO follows the sticking phase with the smallest pressing force at its landing."""
-        osc = base.oscillator_at(p1)
+        """SO follows the sticking phase with the smallest pressing force where its held
+        phase starts (:meth:`_onset_pressing`)."""
         held = np.flatnonzero(base.sticks)
-        return int(held[np.argmin([held_flow(osc, base.impacts[j]).pressing(
-            sh.starts[j], sh.phases[j]) for j in held])])
+        return int(held[np.argmin([self._onset_pressing(base, sh, p1, int(j))
+                                   for j in held])])
+
+    @staticmethod
+    def _onset_pressing(base: BranchProblem, sh: Any, p1: float, k: int) -> float:
+        """The pressing force where the held phase of stick k starts: right after the
+        plastic impact, or at the accumulation point of the chatter the impact starts
+        (the shot's ``accumulations``: the landing state where there is no chatter).
+
+        Minus its size where the held phase has no duration (the stick time does not
+        exceed the chatter's), as :func:`~impactcont.problems.multi_impact_branch.
+        sticking_onset_test` takes it: past the onset of complete chatter the chatter map
+        may accumulate in a later period with a positive pressing force again, no stick of
+        this motion.
+        """
+        held = held_flow(base.oscillator_at(p1), base.impacts[k])
+        p = float(held.pressing(sh.accumulations[k], float(sh.accumulation_phases[k])))
+        return p if float(sh.stick_times[k]) > float(sh.chatter_times[k]) else -abs(p)
 
     def _least_minimum(self, base: BranchProblem, sh: Any, p1: float) -> int:
         """RG follows the smallest interior minimum of a pressing force (and keeps its time)."""
@@ -385,12 +407,12 @@ class ShootingCurve:
         return row, 0.0
 
     def _sticking_onset_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
-        """SO: the pressing force ``p_k(0)`` at the landing of the followed sticking phase."""
+        """SO: the pressing force ``p_k(0)`` where the followed sticking phase's held phase
+        starts: at its plastic landing, or at the accumulation point of its chatter (the
+        onset of complete chatter; :meth:`_onset_pressing`)."""
         k = self._follow(u, p1, lam)
         base = self.branch_problem(lam)
-        sh = base.shot(u, p1)
-        held = held_flow(base.oscillator_at(p1), base.impacts[k])
-        return float(held.pressing(sh.starts[k], sh.phases[k]))
+        return self._onset_pressing(base, base.shot(u, p1), p1, k)
 
     def _release_grazing_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
         """RG: the pressing force ``p_k(t*)`` at the followed interior minimum of stick k.
@@ -469,15 +491,24 @@ class ShootingCurve:
         ``_REUSE``: every tangent was that of one old point, Newton converged slowly
         off it, the step shrank and never left the old point's neighbourhood; an
         NS curve of the impact damper crawled at steps of 1e-6 near its fold in ``b``.
+        Within a step the row is reused only while Newton contracts on it (``|g|`` at
+        least halves from the iterate where it was last used); else a fresh one: where
+        the row varies fast along the curve (an SO curve of a stick entered through
+        chatter, 10-100 times over a step) Newton on the old row oscillated, and the
+        halved retries kept the same row until the step fell below its minimum.
         """
         exact = _KINDS[self.kind].exact_row
         if exact is not None:
             return exact(self, x, lam)
         y = np.append(x, lam)
+        g0 = self.test(x, lam)
         if self._gradient is not None and np.max(np.abs(y - self._gradient[0])) <= \
                 _REUSE * max(1.0, float(np.max(np.abs(y)))):
-            return self._gradient[1]
-        g0 = self.test(x, lam)
+            at, size = self._gradient_used
+            if np.array_equal(y, at) or abs(g0) <= _CONTRACTION * size:
+                self._gradient_used = (y, abs(g0))
+                return self._gradient[1]
+        self._gradient_used = (y, abs(g0))
         grad = np.full(x.size, np.nan)
         second = math.nan
         if self.kind is Label.BP and self._exact_pitchfork:

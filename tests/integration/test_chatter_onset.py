@@ -41,8 +41,8 @@ takes eta as it is, the release does not move): at eta 0.048, 0.05 and 0.052 the
 form's onset (0.92487405733708, omega*, 0.93050812715488) lies 2.051e-6, 2.052e-6,
 2.054e-6 below the shooting model's (the same chatter cut, whatever the damping; each
 motion solved alone brackets it within 0.15 .. 0.25 CHATTER_SPEED), the simulator's sign
-change at 0.052 3.4e-8 above it (its rounding floor, as at 0.05). The curve itself is a
-strict xfail: problems/codim1 takes SO at the landing impact, not at the accumulation point.
+change at 0.052 3.4e-8 above it (its rounding floor, as at 0.05). The curve follows SO at
+the accumulation point, as the branch does (it was taken at the landing impact before).
 """
 
 from __future__ import annotations
@@ -353,12 +353,6 @@ def test_the_simulator_brackets_the_onset_at_other_damping():
     assert stick is None and all(c.time > period for c in res.chatter)
 
 
-@pytest.mark.xfail(strict=True, raises=ic.ParameterError, reason=(
-    "problems/codim1.ShootingCurve._sticking_onset_of_shot (and _least_landing) take the "
-    "pressing force at the landing impact (sh.starts[k], sh.phases[k]), not at the "
-    "chatter's accumulation point (sh.accumulations[k], sh.accumulation_phases[k]) as the "
-    "branch's SO does (orbit.landing_pressing): 3.67 at the branch's SO, and Newton's start "
-    "on the curve runs to omega = 0"))
 def test_the_so_curve_in_omega_and_eta_is_the_closed_form_onset():
     """The SO curve from the branch's SO in (omega, eta), eta in (0.048, 0.052): it reaches
     both edges with no codim-2 point, and none can be there (the stick lasts 2.7 and the
