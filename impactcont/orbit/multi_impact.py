@@ -159,11 +159,14 @@ class MultiImpactOrbit:
         Both ends of the flight count too: every stop's clearance at its start (but
         the stop impact k hits) and at its end (but the stop impact k+1 hits), so that a
         coordinate past a stop when the flight ends on another stop is seen, and the
-        smallest clearance changes sign continuously at such a grazing.
+        smallest clearance changes sign continuously at such a grazing. Where a sticking
+        phase follows impact k, segment k's smallest clearance also covers every other
+        stop along its chatter's bounces and its held phase
+        (:mod:`impactcont.orbit.sticky`), so that GR sees a grazing there.
     flight_gap_min_times : ndarray, shape (p,)
         Time of that extremum after impact k (NaN when there is none; 0 or ``tau_k``
         for an end of the flight); after the release where a sticking phase follows
-        impact k.
+        impact k, so negative for a clearance inside the sticking phase.
     jacobians : ndarray, shape (p, 2n, 2n)
         ``G_k``, Jacobian of flight k and the impact ending it (eq. 25) in
         ``z = [dx2..dxn, dx1'..dxn', d theta]``.
