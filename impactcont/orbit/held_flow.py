@@ -37,6 +37,7 @@ import dataclasses
 import math
 import warnings
 import weakref
+from typing import Any
 
 import numpy as np
 
@@ -186,22 +187,44 @@ class HeldFlow:
         (``r = 0``) for one mass held."""
         cached = self.__dict__.get("_kernel_rows")
         if cached is None:
+            rows = self.static_rows()
+            Z = self.reduced.Z if self.reduced is not None else np.zeros(0, complex)
+            cached = (*rows[:8], Z, *rows[8:])
+            object.__setattr__(self, "_kernel_rows", cached)
+        return cached
+
+    def static_rows(self) -> tuple[np.ndarray, ...]:
+        """:meth:`kernel_rows` but the held system's forced amplitude ``Z``: the parts free
+        of omega (``L, L^+, X_c``, ``lam, V, V^-1, X_s, d``, ``grad, force, level``), one
+        tuple shared by the held flows :func:`held_flow_at` makes from this one at other
+        omegas (the same object: its users may key omega-free caches on it)."""
+        cached = self.__dict__.get("_static_rows")
+        if cached is None:
             L, Li, Xc = self._lift()
             r = L.shape[1]
             if self.reduced is None:
                 flow = (np.zeros(0, complex), np.zeros((0, 0), complex),
-                        np.zeros((0, 0), complex), np.zeros(0), np.zeros(0),
-                        np.zeros(0, complex))
+                        np.zeros((0, 0), complex), np.zeros(0), np.zeros(0))
             else:
                 red = self.reduced
                 xs = red.static_offset if np.size(red.static_offset) else np.zeros(r)
                 xd = red.drift if np.size(red.drift) else np.zeros(r)
-                flow = (red.lam, red.V, red.V_inv, xs, xd, red.Z)
+                flow = (red.lam, red.V, red.V_inv, xs, xd)
             k, c, f, g = self._force_rows()
             grad = -self.sign * np.concatenate([k, c])
             cached = (L, Li, Xc, *flow, grad, self.sign * complex(f), self.sign * g)
-            object.__setattr__(self, "_kernel_rows", cached)
+            object.__setattr__(self, "_static_rows", cached)
         return cached
+
+    def shared(self) -> dict[Any, Any]:
+        """A dict shared by this held flow and those :func:`held_flow_at` makes from it at
+        other omegas: for its users' caches of what does not depend on omega (keyed on
+        :meth:`static_rows`, checked by identity)."""
+        found = self.__dict__.get("_shared")
+        if found is None:
+            found = {}
+            object.__setattr__(self, "_shared", found)
+        return found
 
     def _force_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """``(n^T M^-1 K, n^T M^-1 C, n^T M^-1 F, n^T M^-1 F_static)`` over ``n^T M^-1 n``."""
@@ -405,9 +428,15 @@ def held_flow_at(base: HeldFlow, osc: ImpactOscillator, name: str, reduced: Flow
                              f"{osc.omega!r}" + (" (None: one mass held)" if base.reduced is None
                                                  else ""))
     flow = dataclasses.replace(base, oscillator=osc, reduced=reduced)
-    for cache in ("_lifted", "_rows"):  # the lift and the force rows: free of omega
-        if cache in base.__dict__:
-            object.__setattr__(flow, cache, base.__dict__[cache])
+    base._lift(), base._force_rows(), base.shared()
+    caches = ["_lifted", "_rows", "_shared"]  # the lift and the force rows: free of omega
+    old_reduced = base.reduced
+    if reduced is None or all(getattr(reduced, a, None) is getattr(old_reduced, a, False)
+                              for a in ("lam", "V", "V_inv", "static_offset", "drift")):
+        base.static_rows()  # the held system's modes and constant force are base's
+        caches.append("_static_rows")
+    for cache in caches:
+        object.__setattr__(flow, cache, base.__dict__[cache])
     _HELD.setdefault(osc, {})[name] = flow
     return flow
 

@@ -19,6 +19,7 @@ import dataclasses
 import logging
 import math
 import warnings
+import weakref
 from typing import Any
 
 import numpy as np
@@ -217,37 +218,65 @@ def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
     """The sticking phases of `pattern` as the kernel takes them: the plain tuple of
     :class:`~impactcont.kernel.arrays.HeldSegments` (rows of
     :meth:`~impactcont.orbit.held_flow.HeldFlow.kernel_rows`, zeros where no stick follows
-    an impact), built once per flow and pattern."""
+    an impact), built once per flow and pattern.
+
+    The tables free of omega (all but the held systems' forced amplitudes ``Z`` and the
+    release shifts) are built once per held system and pattern and shared by the flows
+    of its oscillator at other omegas whose held flows
+    :func:`~impactcont.orbit.held_flow.held_flow_at` made (a branch in omega: as
+    :func:`impactcont.kernel.sticky.sticky_palc_correct` replaces only ``Z``); the
+    arrays are those built afresh (the same rows, copied)."""
     cache = flow.__dict__.setdefault("_held_segments", {})
     held = cache.get(pattern)
     if held is None:
         osc = flow.osc
         impacts, sticks = sticking_pattern(osc, pattern)
         p, m = len(pattern), 2 * osc.n
+        helds = [held_flow(osc, impacts[k]) if sticks[k] else None for k in range(p)]
+        statics = tuple(None if h is None else h.static_rows() for h in helds)
+        first = next((h for h in helds if h is not None), None)
+        shared = first.shared() if first is not None else {}
+        key = ("held_segments", pattern)
+        entry = shared.get(key)
+        if entry is None or any(a is not b for a, b in zip(entry[0], statics, strict=True)):
+            entry = shared[key] = (statics, _static_tables(osc, impacts, sticks, statics))
+        tables = entry[1]
         r = m - 2
-        rows = [held_flow(osc, impacts[k]).kernel_rows() if sticks[k] else None
-                for k in range(p)]
-        shapes = ((m, r), (r, m), (m,), (r,), (r, r), (r, r), (r,), (r,), (r,), (m,), (), (),
-                  ())
-        kinds = (float, float, float, complex, complex, complex, float, float, complex, float,
-                 complex, float, float)
+        Z = np.zeros((p, r), dtype=complex)
+        shifts = np.zeros(p)
         geo = _geometry(flow, impacts)
-        rows = [None if row is None else
-                (*row, RELEASE_SHIFT * TWO_PI / flow.time_scales(normal=geo.normals[k])[0])
-                for k, row in enumerate(rows)]
-        fields = []
-        for i, (shape, kind) in enumerate(zip(shapes, kinds, strict=True)):
-            table = np.zeros((p, *shape), dtype=kind)
-            for k in range(p):
-                if rows[k] is not None:
-                    table[k] = rows[k][i]
-            fields.append(table)
-        restitutions = np.array([chatter_restitution(osc, impacts[k]) if sticks[k] else 0.0
-                                 for k in range(p)])
-        counts = np.array([chatter_impacts(r) for r in restitutions], dtype=np.int64)
-        held = cache[pattern] = HeldSegments(np.array(sticks, dtype=np.bool_), *fields,
-                                             restitutions, counts)
+        for k in np.flatnonzero(sticks):
+            if helds[k].reduced is not None:
+                Z[k] = helds[k].reduced.Z
+            shifts[k] = RELEASE_SHIFT * TWO_PI / flow.time_scales(normal=geo.normals[k])[0]
+        held = cache[pattern] = HeldSegments(*tables[:9], Z, *tables[9:12], shifts,
+                                             *tables[12:])
     return tuple(held)
+
+
+def _static_tables(osc: ImpactOscillator, impacts: str, sticks: Any, statics: tuple
+                   ) -> tuple[np.ndarray, ...]:
+    """The fields of :class:`~impactcont.kernel.arrays.HeldSegments` free of omega in its
+    order (``sticks``, ``L, L^+, X_c, lam, V, V^-1, X_s, d``, ``grad, force, level``,
+    restitutions, chatter impacts), from each stick's
+    :meth:`~impactcont.orbit.held_flow.HeldFlow.static_rows` (`statics`, None where no
+    stick follows an impact)."""
+    p, m = len(impacts), 2 * osc.n
+    r = m - 2
+    shapes = ((m, r), (r, m), (m,), (r,), (r, r), (r, r), (r,), (r,), (m,), (), ())
+    kinds = (float, float, float, complex, complex, complex, float, float, float, complex,
+             float)
+    fields = []
+    for i, (shape, kind) in enumerate(zip(shapes, kinds, strict=True)):
+        table = np.zeros((p, *shape), dtype=kind)
+        for k in range(p):
+            if statics[k] is not None:
+                table[k] = statics[k][i]
+        fields.append(table)
+    restitutions = np.array([chatter_restitution(osc, impacts[k]) if sticks[k] else 0.0
+                             for k in range(p)])
+    counts = np.array([chatter_impacts(r) for r in restitutions], dtype=np.int64)
+    return (np.array(sticks, dtype=np.bool_), *fields, restitutions, counts)
 
 
 #: The chatter after a landing impact is resolved impact by impact until its impact speed
@@ -261,7 +290,16 @@ CHATTER_SPEED = 1e-5
 def chatter_restitution(osc: ImpactOscillator, stop: str) -> float:
     """The restitution of `stop` (its name, a capital) on `osc`, above 0 where a sticking
     phase on it is entered through complete chatter."""
-    return float(osc.stops.stop(stop, osc.M, osc.b, osc.R).restitution)
+    known = _RESTITUTIONS.setdefault(osc, {})
+    found = known.get(stop)
+    if found is None:
+        found = known[stop] = float(osc.stops.stop(stop, osc.M, osc.b, osc.R).restitution)
+    return found
+
+
+#: :func:`chatter_restitution` of each live oscillator, by stop name.
+_RESTITUTIONS: weakref.WeakKeyDictionary[ImpactOscillator, dict[str, float]] = \
+    weakref.WeakKeyDictionary()
 
 
 def chatter_impacts(restitution: float) -> int:
