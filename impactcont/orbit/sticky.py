@@ -370,13 +370,17 @@ def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatt
     osc = flow.osc
     impacts, sticks = sticking_pattern(osc, pattern)
     found = []
+    arrays = None  # the kernel's arguments, once per call
     for k in np.flatnonzero(sticks):
         if not chatter_restitution(osc, impacts[k]) > 0.0 or sh.chatter_status[k] < 0:
             continue
+        if arrays is None:
+            arrays = (flow.flight_arrays(), tuple(flow.forcing_arrays()),
+                      tuple(impact_sequence(_geometry(flow, impacts))),
+                      held_segments(flow, pattern))
         starts, phases, times, arr, tr, cols, rates, count = _kernel().chatter_bounces(
-            flow.flight_arrays(), tuple(flow.forcing_arrays()),
-            tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
-            int(k), _writable(np.asarray(sh.starts[k], dtype=float)), float(sh.phases[k]))
+            *arrays, int(k), _writable(np.asarray(sh.starts[k], dtype=float)),
+            float(sh.phases[k]))
         c = max(int(count), 0)
         found.append(Chatter(impact=int(k), stop=impacts[k], starts=starts[:c].copy(),
                              phases=phases[:c].copy(), times=times[:c].copy(),
@@ -452,19 +456,29 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[_HeldGap]:
         interior.append((1, checked.gap_lower, checked.time_lower))
     interior += [(2 + j, checked.gap_extra[:, j], checked.time_extra[:, j])
                  for j in range(len(geo.extra_names))]
+    def seen_all(stop: int, gaps: np.ndarray, when: np.ndarray, crossed: np.ndarray) -> None:
+        """:func:`seen` of each in turn; at once (the first smallest) where none is NaN."""
+        if gaps.size == 0:
+            return
+        if np.isnan(gaps).any():
+            for i in range(gaps.size):
+                seen(stop, float(gaps[i]), float(when[i]), bool(crossed[i]))
+            return
+        i = int(np.argmin(gaps))
+        seen(stop, float(gaps[i]), float(when[i]), bool(crossed.any()))
+
     for stop, gaps, times in interior:
-        for i in np.flatnonzero(~np.isposinf(gaps)):  # +inf: no extremum in the bounce
-            seen(stop, float(gaps[i]), float(offsets[i] + times[i]), not gaps[i] > 0.0)
+        kept = np.flatnonzero(~np.isposinf(gaps))  # +inf: no extremum in the bounce
+        seen_all(stop, gaps[kept], offsets[kept] + times[kept], ~(gaps[kept] > 0.0))
     end_gap, end_stop, end_tol = _kernel().end_clearances(
         geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
         geo.extra_signs, geo.extra_positions, _writable(chatter.starts),
         _writable(chatter.arrivals))
-    for i in range(c):
-        for end in (0, 1):
-            if end_stop[i, end] >= 0:
-                seen(int(end_stop[i, end]), float(end_gap[i, end]),
-                     float(offsets[i] + end * chatter.times[i]),
-                     bool(end_gap[i, end] < -end_tol[i, end]))
+    end_times = offsets[:, None] + np.array([0.0, 1.0]) * chatter.times[:, None]
+    end_crossed = end_gap < -end_tol
+    for stop in np.unique(end_stop[end_stop >= 0]):  # row-major: bounce by bounce, start first
+        at = end_stop == stop
+        seen_all(int(stop), end_gap[at], end_times[at], end_crossed[at])
     return [_HeldGap(gap, when, names[stop], _coordinate(normals[stop]), crossed)
             for stop, (gap, when, crossed) in sorted(found.items())]
 
@@ -484,15 +498,7 @@ def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase:
     """
     geo = _geometry(flow, impacts)
     n = flow.osc.n
-    names = [UPPER, *([LOWER] if geo.two_sided else []), *geo.extra_names]
-    normals = np.vstack([geo.normal[None], *([geo.normal[None]] if geo.two_sided else []),
-                         np.reshape(geo.extra_normals, (-1, n))])
-    signs = np.concatenate([[1.0], [-1.0] if geo.two_sided else [], geo.extra_signs])
-    positions = np.concatenate([[geo.b], [-geo.b_low] if geo.two_sided else [],
-                                geo.extra_positions])
-    others = np.array([name != impacts[k] for name in names])
-    names = [name for name, other in zip(names, others, strict=True) if other]
-    normals, signs, positions = normals[others], signs[others], positions[others]
+    names, normals, signs, positions = _other_stops(flow, geo, impacts[k])
     inner, inner_times = held_flow(flow.osc, impacts[k]).stop_clearances(
         duration, start, phase, (normals, signs, positions))
     ends = np.vstack([start[:n], release[:n]])
@@ -506,6 +512,28 @@ def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase:
         crossed = bool(not inner[i] > 0.0 or np.any(at_ends < -tol))
         found.append(_HeldGap(float(gaps[j]), offset + float(when[j]), name,
                               _coordinate(normals[i]), crossed))
+    return found
+
+
+def _other_stops(flow: Flow, geo: StopGeometry, stop: str
+                 ) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
+    """Every stop of `geo` but `stop`: their names, normals (q, n), signs and positions,
+    kept per flow, geometry and stop (:func:`_held_clearances`)."""
+    cache = flow.__dict__.setdefault("_other_stops", {})
+    entry = cache.get(stop)
+    if entry is not None and entry[0] is geo:
+        return entry[1]
+    n = flow.osc.n
+    names = [UPPER, *([LOWER] if geo.two_sided else []), *geo.extra_names]
+    normals = np.vstack([geo.normal[None], *([geo.normal[None]] if geo.two_sided else []),
+                         np.reshape(geo.extra_normals, (-1, n))])
+    signs = np.concatenate([[1.0], [-1.0] if geo.two_sided else [], geo.extra_signs])
+    positions = np.concatenate([[geo.b], [-geo.b_low] if geo.two_sided else [],
+                                geo.extra_positions])
+    others = np.array([name != stop for name in names])
+    names = [name for name, other in zip(names, others, strict=True) if other]
+    found = (names, normals[others], signs[others], positions[others])
+    cache[stop] = (geo, found)
     return found
 
 
