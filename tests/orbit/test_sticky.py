@@ -104,3 +104,32 @@ def test_a_chatter_entered_ride_is_searched_from_its_accumulation_point():
     bounces = float(shot.flight_gap_min[0])
     assert shot.flight_gap_stops[0] == "A" and bounces < gap < 0.0
     assert 0.0 < shot.flight_gap_min_times[0] + shot.stick_times[0] < chatter.duration
+
+
+@pytest.mark.parametrize("R", [0.0, 0.3])
+def test_held_segments_at_a_new_omega_reuse_the_start_s_and_equal_those_built_afresh(R):
+    """A branch in omega (the flow and held flows at a new omega made from the start's, as
+    MultiImpactBranchProblem.flow_at does) reuses the start's omega-free held tables and
+    takes the forced amplitudes and release shifts anew: the arrays equal those of the
+    oscillator built afresh at that omega (the same arithmetic: 1e-13 relative); another
+    stop position is built afresh."""
+    from impactcont.orbit.flow import flow_of
+    from impactcont.orbit.held_flow import held_flow, held_flow_at
+    from impactcont.orbit.sticky import held_segments
+    from impactcont.problems.multi_impact_branch import _at_frequency, _flow_at_frequency
+
+    osc = _damper(R)
+    base = held_segments(flow_of(osc), "lu")
+    moved = osc.replace(omega=0.23)
+    for name in "UL":
+        start = held_flow(osc, name)
+        held_flow_at(start, moved, name, _flow_at_frequency(
+            start.reduced, start.reduced.osc.replace(omega=moved.omega)))
+    made = held_segments(_at_frequency(flow_of(osc), moved), "lu")
+    fresh = held_segments(flow_of(_damper(R).replace(omega=0.23)), "lu")
+    for mine, theirs in zip(made, fresh, strict=True):
+        assert np.asarray(mine) == pytest.approx(np.asarray(theirs), rel=1e-13, abs=1e-13)
+    assert made[1] is base[1] and fresh[1] is not base[1]  # the lifts: shared, not rebuilt
+    assert not np.allclose(made[9], base[9])  # Z moves with omega
+    other = held_segments(flow_of(osc.replace(b=0.35)), "lu")
+    assert not np.allclose(other[3], base[3])  # the stop's offset moves with it
