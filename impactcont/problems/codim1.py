@@ -134,11 +134,7 @@ __all__ = [
 
 _FD_STEP = 1.5e-8  # about sqrt(eps): forward differences
 _CACHE_SIZE = 32
-#: A forward-difference g row is reused within this (relative) of where it was taken
-#: (:meth:`ShootingCurve._test_gradient`) ...
 _REUSE = 1e-3
-#: ... and while ``|g|`` at least halves from one use of the row to the next
-_CONTRACTION = 0.5
 _HYPERPLANE_TOL = 1e-11  # Newton on a hyperplane (codim-2 points, crossings, the start)
 #: Flight data whose parameters have exact derivatives from any branch problem's shot
 #: and leave the modal basis as it is.
@@ -247,8 +243,6 @@ class ShootingCurve:
         # both parameters move only omega and the stops: every problem has the same modes
         self._same_modes = all(par.data in _EXACT for par in self.params)
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
-        #: where the row was last taken or reused, and |g| there
-        self._gradient_used: tuple[np.ndarray | None, float] = (None, math.inf)
         first = self._base(self.params[1].value(osc), p1)
         self.size = first.size + 1
         #: BP: the test row from the shot (exact in the unknowns and the stops' positions),
@@ -491,24 +485,15 @@ class ShootingCurve:
         ``_REUSE``: every tangent was that of one old point, Newton converged slowly
         off it, the step shrank and never left the old point's neighbourhood; an
         NS curve of the impact damper crawled at steps of 1e-6 near its fold in ``b``.
-        Within a step the row is reused only while Newton contracts on it (``|g|`` at
-        least halves from the iterate where it was last used); else a fresh one: where
-        the row varies fast along the curve (an SO curve of a stick entered through
-        chatter, 10-100 times over a step) Newton on the old row oscillated, and the
-        halved retries kept the same row until the step fell below its minimum.
         """
         exact = _KINDS[self.kind].exact_row
         if exact is not None:
             return exact(self, x, lam)
         y = np.append(x, lam)
-        g0 = self.test(x, lam)
         if self._gradient is not None and np.max(np.abs(y - self._gradient[0])) <= \
                 _REUSE * max(1.0, float(np.max(np.abs(y)))):
-            at, size = self._gradient_used
-            if np.array_equal(y, at) or abs(g0) <= _CONTRACTION * size:
-                self._gradient_used = (y, abs(g0))
-                return self._gradient[1]
-        self._gradient_used = (y, abs(g0))
+            return self._gradient[1]
+        g0 = self.test(x, lam)
         grad = np.full(x.size, np.nan)
         second = math.nan
         if self.kind is Label.BP and self._exact_pitchfork:
