@@ -326,9 +326,10 @@ class HeldFlow:
                                 starts=(Li @ (np.asarray(X0, dtype=float) - Xc))[None].copy(),
                                 transitions=eye.copy(), phase_columns=np.zeros((1, m)),
                                 arrival_rates=np.ones((1, m)))
+        # read-only, as the shooting path passes its stop geometry: one compiled version
         checked = MotionChecks._make(kernel.motion_checks(
             tuple(self.reduced.shooting_arrays()), tuple(self.reduced.forcing_arrays()),
-            tuple(placeholder), tuple(searched), tuple(flight), True))
+            _read_only(placeholder), _read_only(searched), tuple(flight), True))
         if checked.capped:
             warnings.warn(f"the contact search of a sticking phase of {duration:.6g} was "
                           "capped at 2000000 cells: a short excursion of another stop "
@@ -465,3 +466,18 @@ def _held_flow(osc: ImpactOscillator, name: str) -> HeldFlow:
         reduced = flow_of(held)
     return HeldFlow(oscillator=osc, normal=normal, position=float(view.position),
                     sign=float(view.sign), frame=P, offset=offset, reduced=reduced)
+
+
+def _read_only(record: tuple) -> tuple:
+    """`record`'s fields as a plain tuple, its arrays as read-only views: the argument types
+    of :func:`impactcont.kernel.shooting.motion_checks` on the shooting path
+    (:func:`impactcont.orbit.multi_impact.impact_sequence`,
+    :func:`~impactcont.orbit.multi_impact.contact_stops`), which numba would otherwise
+    compile a second time for writable arrays."""
+    fields = []
+    for value in record:
+        if isinstance(value, np.ndarray):
+            value = value.view()
+            value.flags.writeable = False
+        fields.append(value)
+    return tuple(fields)
