@@ -18,10 +18,7 @@ lightly damped branch (4 s), its NS and SO curves (8 s).
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -33,8 +30,8 @@ from impactcont.problems.multi_impact_branch import (
     stick_end_test,
     sticking_onset_test,
 )
+from tests._study_files import study_file
 
-STUDY = Path(__file__).resolve().parents[2] / "studies" / "sticking_motions"
 #: The end of the rides in omega at eta = 0.3 (closed form, the study's README).
 RIDING_END = 2.393422959745478
 
@@ -42,15 +39,8 @@ RIDING_END = 2.393422959745478
 @pytest.fixture(scope="module")
 def study():
     """``studies/sticking_motions/curves.py`` (the closed form's end at any eta, b, m)."""
-    spec = importlib.util.spec_from_file_location("sticking_curves_study",
-                                                  STUDY / "curves.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    try:
-        spec.loader.exec_module(module)
+    with study_file("sticking_motions", "curves.py") as module:
         yield module
-    finally:
-        sys.modules.pop(spec.name, None)
 
 
 @pytest.fixture(scope="module")
