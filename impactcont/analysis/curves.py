@@ -85,6 +85,7 @@ from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
+    NOISE_MARGIN,
     SHOOTING_KINDS,
     CurveProblem,
     ShootingCurve,
@@ -615,7 +616,13 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
         raise NoPeriodicMotionError(f"the {kind} point at {p1}={start_p1!r} could not be put "
                                     f"on the augmented system (last step {found.last_step:.3g})")
     x0 = found.x[:-1]
-    opts = driver_options(options, box[parameter], defaults=_SHOOTING_DEFAULTS, **single)
+    noise = problem.test_noise(x0, lam0)
+    opts = driver_options(options, box[parameter], defaults=_noise_defaults(kind, noise),
+                          **single)
+    if opts.newton_tol < NOISE_MARGIN * noise:
+        log.warning("newton_tol=%.3g is below %g times the rounding noise %.3g of the %s test "
+                    "at the start: Newton may stall there", opts.newton_tol, NOISE_MARGIN,
+                    noise, kind)
     what = f"{kind} curve of {N}-{p} motions in ({p1}, {parameter})"
     with interruptible(what) as call, reporter(progress, what, parameter=parameter) as rep:
         kept: dict[tuple[bytes, float], MultiImpactOrbit] = {}
@@ -630,7 +637,10 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
         if len(result) == 0 and result.interrupted:
             raise NothingComputed(f"{what} interrupted before its first point")
         if len(result) == 0:
-            raise NoPeriodicMotionError(f"{kind} curve: {result.message}")
+            below = (f" (newton_tol={opts.newton_tol:.3g} is below {NOISE_MARGIN:g} times the "
+                     f"{kind} test's rounding noise {noise:.3g} at the start)"
+                     if opts.newton_tol < NOISE_MARGIN * noise else "")
+            raise NoPeriodicMotionError(f"{kind} curve: {result.message}{below}")
         orbits = []
         for u, lam in zip(result.u, result.lam, strict=True):
             orbit = kept.get(_orbit_key(u, lam))
@@ -656,6 +666,7 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
         message = f"{message} (the {kind} test is undefined beyond: {lost})"
     record = {"kind": str(kind), "parameters": [p1, parameter], "start": start_p1,
               "bounds": {name: list(v) for name, v in box.items()}, "symmetric": symmetric,
+              "test_noise": noise,
               "status": [st.name for st in result.statuses], "message": message,
               **{key: value for key, value in dataclasses.asdict(opts).items()
                  if key != "bounds"}}
@@ -671,6 +682,21 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
     records = [codim2_record(problem, cp) for cp in sorted(found_points, key=lambda cp: cp.point)
                if cp.label in CODIM2_LABELS]
     return ds.assign(codim2_data(records, problem.parameters, osc.n))
+
+
+def _noise_defaults(kind: Label, noise: float) -> dict[str, Any]:
+    """The shooting curve's default options, its Newton tolerance raised to
+    :data:`~impactcont.problems.codim1.NOISE_MARGIN` times its test's rounding noise at the
+    start (:meth:`~impactcont.problems.codim1.ShootingCurve.test_noise`) where that is more
+    (an SO curve of a stick entered through chatter: about 3e-8)."""
+    defaults = dict(_SHOOTING_DEFAULTS)
+    floor = NOISE_MARGIN * noise
+    if math.isfinite(floor) and floor > defaults["newton_tol"]:
+        log.info("the %s test is known to %.3g at the start: Newton tolerance %.3g instead of "
+                 "%g (give newton_tol to choose)", kind, noise, floor,
+                 defaults["newton_tol"])
+        defaults["newton_tol"] = floor
+    return defaults
 
 
 class _CurveView:

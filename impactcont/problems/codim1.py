@@ -135,6 +135,10 @@ __all__ = [
 _FD_STEP = 1.5e-8  # about sqrt(eps): forward differences
 _CACHE_SIZE = 32
 _REUSE = 1e-3
+#: Points on each side of a curve's start where :meth:`ShootingCurve.test_noise` takes ``g``.
+NOISE_STEPS = 4
+#: A curve's default Newton tolerance is at least this many times its test's noise.
+NOISE_MARGIN = 4.0
 _HYPERPLANE_TOL = 1e-11  # Newton on a hyperplane (codim-2 points, crossings, the start)
 #: Flight data whose parameters have exact derivatives from any branch problem's shot
 #: and leave the modal basis as it is.
@@ -466,6 +470,29 @@ class ShootingCurve:
         x = np.asarray(x, dtype=float)
         self.test(x, lam)
         return self._minima.get((x.tobytes(), float(lam)), math.nan)
+
+    def test_noise(self, x: np.ndarray, lam: float) -> float:
+        """The rounding noise of ``g`` at ``(x, lam)``: the largest deviation of ``g`` from
+        its straight line over ``2 * NOISE_STEPS + 1`` points spaced ``1e-14`` (relative)
+        along a fixed direction in ``x``, times 2 (peak to peak).
+
+        The line takes out ``g``'s true slope, so what is left is how well the test is
+        known there. Most tests are known to about 1e-14; the pressing force at the
+        accumulation point of a complete chatter (SO of a stick entered through chatter)
+        to about 1e-8, since it sums the bounces' return times, each known to
+        ``eps |x| / u`` with ``u`` down to the chatter cut's speed. A Newton tolerance
+        below this cannot be met there (the curve drivers raise their default to
+        :data:`NOISE_MARGIN` times it).
+        """
+        x = np.asarray(x, dtype=float)
+        direction = np.cos(1.0 + 2.0 * np.arange(x.size))  # fixed, no axis left out
+        scale = 1e-14 * np.maximum(1.0, np.abs(x))
+        steps = np.arange(-NOISE_STEPS, NOISE_STEPS + 1, dtype=float)
+        values = np.array([self._test(x + t * scale * direction, lam) for t in steps])
+        if not np.all(np.isfinite(values)):
+            return math.nan
+        slope, offset = np.polyfit(steps, values, 1)
+        return 2.0 * float(np.max(np.abs(values - (slope * steps + offset))))
 
     def test_of(self, orbit: MultiImpactOrbit) -> float:
         """The test function at a motion (all kinds but SN, which needs the problem; SE, RG

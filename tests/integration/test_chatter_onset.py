@@ -363,13 +363,16 @@ def test_the_so_curve_in_omega_and_eta_is_the_closed_form_onset():
     The SO test at an accumulation point is known to about 1e-8 only (8e-9 peak to peak
     over steps of 1e-14 in the unknowns: the accumulation time sums bounce returns each
     known to eps |x| / u, u down to R^17 times the landing speed, times the force's rate
-    2.6): Newton's tolerance is 3e-8 (at the default 1e-10 Newton stalls; 3e-8 is 2e-11
-    in omega)."""
+    2.6): the curve measures that noise at its start and raises its default Newton
+    tolerance of 1e-10 to 4 times it (at 1e-10 Newton stalls; 4e-8 is 3e-11 in omega).
+    The options are the curve's defaults."""
     ds = ic.curve(None, None, "SO", start=branch(), parameters=("omega", "eta"),
-                  bounds={"omega": (0.85, 1.0), "eta": (0.048, 0.052)}, newton_tol=3e-8,
-                  ds=0.004, target_newton_iter=8)
-    message = json.loads(ds.attrs["options"])["message"]
+                  bounds={"omega": (0.85, 1.0), "eta": (0.048, 0.052)})
+    options = json.loads(ds.attrs["options"])
+    message = options["message"]
     assert message.count("parameter bound reached") == 2, message
+    assert 1e-9 < options["test_noise"] < 1e-7
+    assert options["newton_tol"] == pytest.approx(4.0 * options["test_noise"], rel=1e-12)
     assert ds.sizes["codim2"] == 0
     assert ds["stick_time_k"].values.min() > 2.5
     assert np.abs(ds["impact_velocity"].values).min() > 4.0
@@ -384,3 +387,15 @@ def test_the_so_curve_in_omega_and_eta_is_the_closed_form_onset():
     omega, eta = float(ds["omega"].values[k]), float(ds["eta"].values[k])
     assert onset_test(motion(omega, eta)) == pytest.approx(0.0, abs=1e-7)  # 1350 per omega
     assert motion(omega - 1e-7, eta).physical and not motion(omega + 1e-7, eta).physical
+
+
+def test_an_so_curve_asked_for_a_tolerance_below_its_noise_says_so(caplog):
+    """newton_tol=1e-13 given: far below 4 times the SO test's noise at the accumulation
+    point (about 1e-8), the start does not converge (at 1e-10 the residual stays near
+    3e-9); the warning and the error say why."""
+    with caplog.at_level("WARNING", logger="impactcont.analysis.curves"), \
+            pytest.raises(ic.NoPeriodicMotionError, match="below 4 times the SO test's "
+                          "rounding noise"):
+        ic.curve(None, None, "SO", start=branch(), parameters=("omega", "eta"),
+                 bounds={"omega": (0.85, 1.0), "eta": (0.048, 0.052)}, newton_tol=1e-13)
+    assert "newton_tol=1e-13 is below 4 times the rounding noise" in caplog.text
