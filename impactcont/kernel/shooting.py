@@ -759,7 +759,76 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
 
 
 @_inner
-def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log):
+def _forced_vectors(general, u, forcing, dgamma, dbeta, dZ):
+    """``(Zp, dZp)``: the complex amplitude of the steady forced state ``X_p(t) = Re(Zp
+    e^{i(omega t + theta)})`` and its omega derivative, shape (2n,) each. For the modal flow
+    ``Zp = [U A; i omega U A]`` with ``A = gamma - i beta`` (eq. 7), ``dA = dgamma - i
+    dbeta``; for a first-order flow ``Z`` and ``dZ`` as given."""
+    if general:
+        return forcing.Z.copy(), dZ.copy()
+    gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
+    n = u.shape[0]
+    Zp = np.empty(2 * n, dtype=np.complex128)
+    dZp = np.empty(2 * n, dtype=np.complex128)
+    for r in range(n):
+        s = 0j
+        ds = 0j
+        for i in range(n):
+            s += u[r, i] * complex(gam[i], -bet[i])
+            ds += u[r, i] * complex(dgamma[i], -dbeta[i])
+        Zp[r] = s
+        Zp[n + r] = 1j * omega * s
+        dZp[r] = ds
+        dZp[n + r] = 1j * s + 1j * omega * ds
+    return Zp, dZp
+
+
+@_inner
+def _flight_omega_partial(Zp, dZp, omega, t, theta, tr, out):
+    """``dX(t)/d omega`` of a flight at fixed ``t``, start state and start phase into
+    `out`: only its steady forced state moves, ``D(t) - Phi(t) D(0)`` with ``D(t) =
+    Re((dZp + i t Zp) e^{i(omega t + theta)})`` (:func:`omega_partials`, one flight)."""
+    m = out.size
+    rot_0 = complex(math.cos(theta), math.sin(theta))
+    rot_t = complex(math.cos(omega * t + theta), math.sin(omega * t + theta))
+    for r in range(m):
+        s = ((dZp[r] + 1j * t * Zp[r]) * rot_t).real
+        for c in range(m):
+            s -= tr[r, c] * (dZp[c] * rot_0).real
+        out[r] = s
+
+
+@_inner
+def _held_omega_partial(held, k, dZr, omega, t, theta, htr, out):
+    """``dX(t)/d omega`` of the held flow of the sticking phase after impact k at fixed
+    ``t``, start state and start phase into `out`: ``L Re((dZ_r + i t Z_r) e^{i(omega t +
+    theta)}) - (L Phi_r L^+) L Re(dZ_r e^{i theta})`` (`htr` the held transition
+    ``L Phi_r L^+``, `dZr` ``dZ_r/d omega``; :func:`sticky_frequency_column`)."""
+    L, Zr = held.lifts[k], held.Z[k]
+    m = out.size
+    r = L.shape[1]
+    rot_0 = complex(math.cos(theta), math.sin(theta))
+    rot_t = complex(math.cos(omega * t + theta), math.sin(omega * t + theta))
+    d0 = np.zeros(m)
+    for i in range(m):
+        a = 0.0
+        b = 0.0
+        for c in range(r):
+            lc = L[i, c]
+            if lc != 0.0:
+                a += lc * (dZr[c] * rot_0).real
+                b += lc * ((dZr[c] + 1j * t * Zr[c]) * rot_t).real
+        d0[i] = a
+        out[i] = b
+    for i in range(m):
+        s = 0.0
+        for c in range(m):
+            s += htr[i, c] * d0[c]
+        out[i] -= s
+
+
+@_inner
+def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log, forced):
     """The chatter's bounces after the landing impact k resolved one by one, at most
     `count`: from ``Y`` (right after the landing, on the stop's section, leaving it; updated
     in place to the state after the last resolved impact) at phase `theta`, each flight
@@ -772,6 +841,10 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log):
     With `J` of shape ``(2n + 1, 2n + 1)`` (``d[Y, theta] / d[X0, theta0]`` so far) and `dT`
     (``dT/d[X0, theta0]``), each bounce's chain rule (its transition, the return time's
     saltation, the impact) is applied to both; with shape (0, 0) and (0,) it is skipped.
+    With `J` of shape ``(2n + 1, 2n + 2)`` and `dT` of ``2n + 2`` the last column is
+    ``d/d omega`` at fixed ``[X0, theta0]``: each flight's explicit omega dependence (its
+    steady forced state, :func:`_flight_omega_partial` of `forced`, the plain tuple ``(Zp,
+    dZp)`` of :func:`_forced_vectors`) and the phase's ``t`` join the chain rule.
     `log` is the plain tuple ``(starts, phases, times, arrivals, transitions,
     phase_columns, rates)`` whose row ``i`` each resolved bounce ``i`` fills (the state
     after its impact, its phase, its duration and, at its end, ``X^-``, ``Phi``,
@@ -790,13 +863,17 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log):
     m = Y.size
     n = m // 2
     chain = J.shape[0] > 0
+    w = J.shape[1]
+    by_omega = w == m + 2  # the last column: d/d omega
+    Zp, dZp = forced
     logged = starts.shape[0] > 0
     tr = np.empty((m, m))
     arr = np.empty(m)
     pcol = np.empty(m)
     rate = np.empty(m)
-    B = np.empty((m, J.shape[1]))
-    dt = np.empty(J.shape[1])
+    explicit = np.empty(m)
+    B = np.empty((m, w))
+    dt = np.empty(w)
     th = theta
     T = 0.0
     floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
@@ -820,28 +897,34 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log):
             return -2, th, T
         if chain:
             for i in range(m):
-                for c in range(m + 1):
+                for c in range(w):
                     s = pcol[i] * J[m, c]
                     for q in range(m):
                         s += tr[i, q] * J[q, c]
                     B[i, c] = s
-            for c in range(m + 1):
+            if by_omega:
+                _flight_omega_partial(Zp, dZp, omega, t, th, tr, explicit)
+                for i in range(m):
+                    B[i, m + 1] += explicit[i]
+            for c in range(w):
                 s = 0.0
                 for r in range(n):
                     s += normal[r] * B[r, c]
                 dt[c] = -s / hd
             for i in range(m):
-                for c in range(m + 1):
+                for c in range(w):
                     B[i, c] += rate[i] * dt[c]
             for i in range(m):
-                for c in range(m + 1):
+                for c in range(w):
                     s = 0.0
                     for q in range(m):
                         s += D[i, q] * B[q, c]
                     J[i, c] = s
-            for c in range(m + 1):
+            for c in range(w):
                 J[m, c] += omega * dt[c]
                 dT[c] += dt[c]
+            if by_omega:  # th + omega t
+                J[m, m + 1] += t
         if logged:
             for c in range(m):
                 starts[status, c] = Y[c]
@@ -865,7 +948,7 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log):
 
 
 @_inner
-def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT):
+def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT, frequency):
     """The chatter map of the stop held after impact k: the state ``X0`` right after the
     landing impact (restitution ``R = held.restitutions[k] > 0``, on the stop's section,
     leaving it) at phase `theta0` to the accumulation point of the chatter it starts.
@@ -891,6 +974,13 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     periods; on a failure the map is the plastic impact at ``X0`` (``T = 0``) and the status
     says so. The stop and its impact law are impact k's of `impacts`
     (:class:`~impactcont.kernel.arrays.ImpactSequence`).
+
+    `frequency` is the plain tuple ``(Zp, dZp, dZr, dW)``: where ``dW`` has ``2n + 1``
+    entries it receives ``[dX/d omega, dT/d omega]`` at fixed ``X0``, `theta0` (exact: each
+    resolved flight's steady forced state ``Zp`` and its derivative ``dZp``
+    (:func:`_forced_vectors`), its return time and impact, the jump's ``u``, ``a`` (no
+    explicit omega: ``a`` is the state derivative at time 0) and the held flow's forced
+    amplitude, ``dZr = dZ_r/d omega``; the accumulation phase is ``theta0 + omega T``).
     """
     D = impacts.matrices[k]
     pivot = impacts.pivots[k]
@@ -900,11 +990,14 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     n = m // 2
     omega = forcing.omega
     R = held.restitutions[k]
-    J = np.zeros((m + 1, m + 1))  # d[Y, th] / d[X0, theta0]
+    Zp, dZp, dZr, dW = frequency
+    by_omega = dW.size > 0
+    w = m + 2 if by_omega else m + 1
+    J = np.zeros((m + 1, w))  # d[Y, th] / d[X0, theta0(, omega)]
     for c in range(m + 1):
         J[c, c] = 1.0
     Y = X0.copy()
-    dTv = np.zeros(m + 1)
+    dTv = np.zeros(w)
     tr = np.empty((m, m))
     arr = np.empty(m)
     pcol = np.empty(m)
@@ -912,9 +1005,9 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     no_log = (np.zeros((0, m)), np.zeros(0), np.zeros(0), np.zeros((0, m)),
               np.zeros((0, m, m)), np.zeros((0, m)), np.zeros((0, m)))
     status, th, T = _bounces(flow, forcing, impacts, k, held.chatter_impacts[k], Y, theta0,
-                             J, dTv, no_log)
+                             J, dTv, no_log, (Zp, dZp))
     dtj = 0.0
-    ddt = np.zeros(m + 1)
+    ddt = np.zeros(w)
     if status >= 0:
         _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
         u, a = _stop_speed(normal, sign, rate, n)
@@ -929,7 +1022,7 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
                 dyn[c] = -dtj / a * grad[c]
             for c in range(n):
                 dyn[n + c] -= 2.0 * sign * normal[c] / (a * (1.0 - R))
-            for c in range(m + 1):
+            for c in range(w):
                 s = 0.0
                 for q in range(m + 1):
                     s += dyn[q] * J[q, c]
@@ -937,9 +1030,9 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     if status < 0:  # the plastic impact at X0
         for i in range(m):
             Y[i] = X0[i]
-            for c in range(m + 1):
+            for c in range(w):
                 J[i, c] = 1.0 if i == c else 0.0
-        for c in range(m + 1):
+        for c in range(w):
             J[m, c] = 1.0 if c == m else 0.0
             dTv[c] = 0.0
         th = theta0
@@ -965,24 +1058,31 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT)
     hcol = np.empty(m)
     hrate = np.empty(m)
     _held_segment(held, k, omega, dtj, Yp, th, X, htr, hcol, hrate)
-    QJ = np.empty((m, m + 1))
+    QJ = np.empty((m, w))
     for i in range(m):
-        for c in range(m + 1):
+        for c in range(w):
             s = 0.0
             for q in range(m):
                 s += Q[i, q] * J[q, c]
             QJ[i, c] = s
+    explicit = np.zeros(m)
+    if by_omega:  # the held flow's own omega: its forced amplitude
+        _held_omega_partial(held, k, dZr, omega, dtj, th, htr, explicit)
     for i in range(m):
-        for c in range(m + 1):
+        for c in range(w):
             s = hcol[i] * J[m, c] + hrate[i] * ddt[c]
             for q in range(m):
                 s += htr[i, q] * QJ[q, c]
             if c < m:
                 dX[i, c] = s
-            else:
+            elif c == m:
                 dtheta[i] = s
+            else:
+                dW[i] = s + explicit[i]
     for c in range(m + 1):
         dT[c] = dTv[c] + ddt[c]
+    if by_omega:
+        dW[m] = dTv[m + 1] + ddt[m + 1]
     return status, T + dtj, th + omega * dtj
 
 
@@ -1016,14 +1116,15 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
     K = held.chatter_impacts[k]
     log = (np.zeros((K, m)), np.zeros(K), np.zeros(K), np.zeros((K, m)), np.zeros((K, m, m)),
            np.zeros((K, m)), np.zeros((K, m)))
+    empty = np.zeros(0, dtype=np.complex128)
     count, _, _ = _bounces(flow, forcing, impacts, k, K, X0.copy(), theta0,
-                           np.zeros((0, 0)), np.zeros(0), log)
+                           np.zeros((0, 0)), np.zeros(0), log, (empty, empty))
     starts, phases, times, arrivals, transitions, pcols, rates = log
     return starts, phases, times, arrivals, transitions, pcols, rates, count
 
 
 @_jit
-def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
+def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian, frequency):
     """Residual (and exact Jacobian) of the shooting system of a motion with sticking
     phases (:func:`impactcont.orbit.sticky.sticky_shooting` documents it).
 
@@ -1031,13 +1132,22 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     tuple of :class:`~impactcont.kernel.arrays.HeldSegments`. Compiled only where a motion
     with sticking phases is solved (no other entry point calls it).
 
+    `frequency` is the plain tuple ``(dgamma, dbeta, dZ, held_dZ, out)``: where ``out``
+    (shape (p, 2n)) has rows, row k of each sticking phase entered through complete
+    chatter receives ``dX_r/d omega`` of its release state at fixed ``X_k``, ``theta_k``
+    and ``s_k`` (through the chatter map, :func:`_chatter_map`, and the held flow after
+    it), what :func:`sticky_frequency_column` takes as `chatter_omega`; ``dgamma``,
+    ``dbeta``, ``dZ`` as :class:`~impactcont.kernel.arrays.ForcingDerivatives` names them
+    and ``held_dZ`` as :func:`sticky_frequency_column` takes it. Empty arrays: not asked.
+
     Returns
     -------
     tuple
         The fields of :class:`~impactcont.kernel.arrays.StickyFlights`
         (``StickyFlights._make`` names them).
     """
-    flow = _flights(FlightArrays(*flight))
+    arrays = FlightArrays(*flight)
+    flow = _flights(arrays)
     forcing = Forcing(*forcing)
     impacts = ImpactSequence(*impacts)
     held = HeldSegments(*held)
@@ -1087,6 +1197,11 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
     accumulation_phases = phases.copy()
     chatter_times = np.zeros(p)
     chatter_status = np.zeros(p)
+    dgamma, dbeta, dZ, held_dZ, d_omega = frequency
+    by_omega = d_omega.shape[0] > 0
+    Zp, dZp = _forced_vectors(arrays.general, arrays.u, forcing, dgamma, dbeta, dZ) if by_omega \
+        else (np.zeros(0, dtype=np.complex128), np.zeros(0, dtype=np.complex128))
+    dW = np.zeros(m + 1 if by_omega else 0)
     for k in range(p):
         nxt = (k + 1) % p
         if sticks[k] and held.restitutions[k] > 0.0:
@@ -1096,8 +1211,9 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
             cX = np.empty((m, m))
             cth = np.empty(m)
             cT = np.empty(m + 1)
-            status, Tc, th_inf = _chatter_map(flow, forcing, impacts, held, k, starts[k],
-                                              phases[k], accumulations[k], cX, cth, cT)
+            status, Tc, th_inf = _chatter_map(
+                flow, forcing, impacts, held, k, starts[k], phases[k], accumulations[k], cX,
+                cth, cT, (Zp, dZp, held_dZ[k] if by_omega else Zp, dW))
             chatter_status[k] = status
             chatter_times[k] = Tc
             accumulation_phases[k] = th_inf
@@ -1116,6 +1232,14 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
                     for q in range(m):
                         s += Htr[i, q] * cX[q, c]
                     h_tr[k, i, c] = s
+            if by_omega:  # the held flow's own omega, then through its start and duration
+                _held_omega_partial(held, k, held_dZ[k], omega, stimes[k] - Tc, th_inf, Htr,
+                                    d_omega[k])
+                for i in range(m):
+                    s = Hcol[i] * (Tc + omega * dW[m]) - h_rate[k, i] * dW[m]
+                    for q in range(m):
+                        s += Htr[i, q] * dW[q]
+                    d_omega[k, i] += s
             release_phases[k] = phases[k] + omega * stimes[k]
             force, _ = _pressing(held, k, releases[k], release_phases[k])
             residual[p * m + rank[k]] = force
@@ -1223,7 +1347,8 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian):
 
 
 @_jit
-def sticky_frequency_column(flow, forcing, derivatives, impacts, held, held_dZ, period, shot):
+def sticky_frequency_column(flow, forcing, derivatives, impacts, held, held_dZ, period, shot,
+                            chatter_omega):
     """``dr/d omega`` of the shooting system of a motion with sticking phases at fixed
     unknowns, shape (2np + q,): :func:`frequency_column` with the sticking phases.
 
@@ -1232,8 +1357,12 @@ def sticky_frequency_column(flow, forcing, derivatives, impacts, held, held_dZ, 
     steady amplitude (``(p, 2n - 2)`` complex, zeros where no stick follows an impact;
     :meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` of the held system), `period`
     the motion's ``2 pi N / omega`` and `shot` the plain tuple
-    :func:`sticky_system` returns at the unknowns (the Jacobian is not read). Compiled
-    only where a motion with sticking phases is continued in omega.
+    :func:`sticky_system` returns at the unknowns (the Jacobian is not read), and
+    `chatter_omega` (p, 2n) what :func:`sticky_system` writes into its ``frequency``'s
+    ``out`` there: ``dX_r/d omega`` at fixed ``X_k``, ``theta_k``, ``s_k`` of each sticking
+    phase entered through complete chatter (the chatter map's omega, exact; the rows of
+    the others are not read). Compiled only where a motion with sticking phases is
+    continued in omega.
 
     Notes
     -----
@@ -1280,7 +1409,10 @@ def sticky_frequency_column(flow, forcing, derivatives, impacts, held, held_dZ, 
         d_phase = elapsed + stimes[k]  # d theta_r / d omega
         for i in range(m):
             d_release[i] = 0.0
-        if sticks[k]:
+        if sticks[k] and named.restitutions[k] > 0.0:  # through the chatter map
+            for i in range(m):
+                d_release[i] = chatter_omega[k, i] + h_col[k, i] * elapsed
+        elif sticks[k]:
             s = stimes[k]
             theta = rphases[k] - omega * s
             rot_0 = complex(math.cos(theta), math.sin(theta))
@@ -1300,6 +1432,7 @@ def sticky_frequency_column(flow, forcing, derivatives, impacts, held, held_dZ, 
                 for c in range(m):
                     v -= h_tr[k, i, c] * d0[c]
                 d_release[i] = v
+        if sticks[k]:  # the release row
             g = named.grads[k]
             e = complex(math.cos(rphases[k]), math.sin(rphases[k])) * named.forces[k]
             v = (1j * e).real * d_phase
@@ -1453,7 +1586,12 @@ def sticky_newton_solve(flight, forcing, impacts, held, period, x0, tol, max_ite
     alone and reverted).
     """
     x = x0.copy()
-    out = sticky_system(flight, forcing, impacts, held, period, x, _jacobian_wanted(x))
+    empty = np.zeros(0)
+    empty_c = np.zeros(0, dtype=np.complex128)
+    frequency = (empty, empty, empty_c, np.zeros((0, 0), dtype=np.complex128),
+                 np.zeros((0, 0)))  # no omega column
+    out = sticky_system(flight, forcing, impacts, held, period, x, _jacobian_wanted(x),
+                        frequency)
     norm = _max_abs(StickyFlights(*out).residual)
     step_norm = np.inf
     it = 0
@@ -1475,7 +1613,7 @@ def sticky_newton_solve(flight, forcing, impacts, held, period, x0, tol, max_ite
         while True:
             trial = x + lam_step * step
             tout = sticky_system(flight, forcing, impacts, held, period, trial,
-                                 _jacobian_wanted(trial))
+                                 _jacobian_wanted(trial), frequency)
             tnorm = _max_abs(StickyFlights(*tout).residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -1972,29 +2110,13 @@ def omega_partials(flow, forcing, derivatives, shot):
     forced, partials, flights = (Forcing(*forcing), ForcingDerivatives(*derivatives),
                                  ShotFlights(*shot))
     general, u = named.general, named.u
-    gam, bet, Z, omega = forced.gamma, forced.beta, forced.Z, forced.omega
+    omega = forced.omega
     dgam, dbet, dZ = partials.dgamma, partials.dbeta, partials.dZ
     taus, starts, phases = flights.flight_times, flights.starts, flights.phases
     transitions = flights.transitions
     p = taus.size
     m = starts.shape[1]
-    n = m // 2
-    Zp = np.empty(m, dtype=np.complex128)
-    dZp = np.empty(m, dtype=np.complex128)
-    if general:
-        Zp[:] = Z
-        dZp[:] = dZ
-    else:
-        for r in range(n):
-            s = 0j
-            ds = 0j
-            for i in range(n):
-                s += u[r, i] * complex(gam[i], -bet[i])
-                ds += u[r, i] * complex(dgam[i], -dbet[i])
-            Zp[r] = s
-            Zp[n + r] = 1j * omega * s
-            dZp[r] = ds
-            dZp[n + r] = 1j * s + 1j * omega * ds
+    Zp, dZp = _forced_vectors(general, u, forced, dgam, dbet, dZ)
     out = np.empty((p, m))
     d0 = np.empty(m)
     for k in range(p):

@@ -23,6 +23,7 @@ from impactcont.kernel.arrays import (
     CorrectorStep,
     HeldForcing,
     HeldSegments,
+    ImpactSequence,
     PalcResult,
     ShootingFlow,
 )
@@ -45,9 +46,6 @@ __all__ = ["sticky_palc_correct"]
 #: A held system's dynamic stiffness is singular (an undamped resonance) where the condition
 #: number of its equilibrated form reaches ``1 / eps`` (``first_order._check_resonance``).
 _EPS = float(np.finfo(np.float64).eps)
-#: The relative step in omega of the central differences of ``dr/d omega`` where a sticking
-#: phase is entered through complete chatter (:data:`impactcont.orbit.sticky.OMEGA_STEP`).
-OMEGA_STEP = 1e-5
 
 
 @_jit
@@ -67,10 +65,10 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
     (:func:`impactcont.kernel.general.forced_response` and
     :func:`~impactcont.kernel.general.forced_response_derivative`, what
     :meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` computes), the residual and exact
-    Jacobian (:func:`sticky_system`) and ``dr/d omega`` (:func:`sticky_frequency_column`;
-    with a sticking phase entered through complete chatter, the central difference of the
-    residual of step :data:`OMEGA_STEP` omega, each side's amplitudes recomputed); then the
-    bordered Newton step, its tests and the tangent of :func:`palc_correct`.
+    Jacobian (:func:`sticky_system`) and ``dr/d omega`` (:func:`sticky_frequency_column`,
+    exact; with a sticking phase entered through complete chatter the chatter map's omega
+    comes with the residual, :func:`sticky_system`'s ``frequency``); then the bordered
+    Newton step, its tests and the tangent of :func:`palc_correct`.
 
     Returns
     -------
@@ -94,6 +92,7 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
         if sticks[k] and named.restitutions[k] > 0.0:
             chatter = True
     r = named.Z.shape[1]
+    m = ImpactSequence(*impacts).matrices.shape[1]
     size = predicted.size - 1
     empty_c = np.zeros(0, dtype=np.complex128)
     state = predicted.copy()
@@ -128,30 +127,12 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
         forcing = (omega, gam, bet, empty_c)
         period = 2.0 * math.pi * N / omega
         x = state[:size].copy()
-        sh = sticky_system(flight, forcing, impacts, now, period, x, _jacobian_wanted(x))
-        if chatter:  # the chatter map's omega: central differences of the residual
-            h = OMEGA_STEP * omega
-            col = np.zeros(size)
-            for side in (1.0, -1.0):
-                om = omega + side * h
-                g2, b2, _, _, _, bad = forced_amplitudes(w, a, f, errors, om)
-                Z2 = np.zeros((p, r), dtype=np.complex128)
-                if bad or not _held_response(hf, sticks, om, Z2,
-                                             np.zeros((0, r), dtype=np.complex128)):
-                    return PalcResult(state, it, REFUSED, omega, norm, raw, worst,
-                                      worst_omega, flagged, last_update)
-                moved = (named.sticks, named.lifts, named.inverses, named.offsets, named.lam,
-                         named.V, named.Vi, named.xs, named.xd, Z2, named.grads,
-                         named.forces, named.levels, named.shifts, named.restitutions,
-                         named.chatter_impacts)
-                out = sticky_system(flight, (om, g2, b2, empty_c), impacts, moved,
-                                    2.0 * math.pi * N / om, x, False)
-                res2 = out[13]
-                for row in range(size):
-                    col[row] += side * res2[row] / (2.0 * h)
-        else:
-            col = sticky_frequency_column(flow, forcing, (dgam, dbet, empty_c), impacts, now,
-                                          dZ, period, sh)
+        # the chatter map's omega comes with the residual (sticky_system's frequency)
+        d_release = np.zeros((p, m) if chatter else (0, 0))
+        sh = sticky_system(flight, forcing, impacts, now, period, x, _jacobian_wanted(x),
+                           (dgam, dbet, empty_c, dZ, d_release))
+        col = sticky_frequency_column(flow, forcing, (dgam, dbet, empty_c), impacts, now, dZ,
+                                      period, sh, d_release)
         residual = sh[13]
         J = sh[14]
         A = np.empty((size + 1, size + 1))  # [J | dF/domega] and the border

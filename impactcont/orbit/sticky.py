@@ -28,7 +28,7 @@ from impactcont.errors import NoPeriodicMotionError, ParameterError
 from impactcont.kernel.arrays import HeldSegments, MotionChecks, StickyFlights
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, sticking_pattern
-from impactcont.orbit.flow import Flow, flow_of
+from impactcont.orbit.flow import Flow
 from impactcont.orbit.held_flow import held_flow
 from impactcont.orbit.multi_impact import (
     _EPS,
@@ -196,8 +196,14 @@ def sticky_shooting(flow: Flow, N: int, pattern: str, u: np.ndarray, *,
     sh = StickyShooting._make(_kernel().sticky_system(
         flow.flight_arrays(), tuple(flow.forcing_arrays()),
         tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
-        TWO_PI * N / osc.omega, _writable(x), bool(jacobian)))
+        TWO_PI * N / osc.omega, _writable(x), bool(jacobian), _NO_FREQUENCY))
     return sh if jacobian else sh._replace(jacobian=None)
+
+
+#: :func:`impactcont.kernel.shooting.sticky_system`'s ``frequency`` where no omega column
+#: is asked (empty arrays of its types).
+_NO_FREQUENCY = (np.zeros(0), np.zeros(0), np.zeros(0, complex), np.zeros((0, 0), complex),
+                 np.zeros((0, 0)))
 
 
 def _sticky_unknowns(osc: ImpactOscillator, pattern: str, u: Any, argument: str
@@ -591,14 +597,15 @@ def held_omega_derivatives(flow: Flow, pattern: str) -> np.ndarray:
 def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
                         sh: StickyShooting | None = None) -> np.ndarray:
     """``dr/d omega`` of :func:`sticky_shooting` at fixed unknowns ``u``, exact (compiled:
-    :func:`impactcont.kernel.shooting.sticky_frequency_column`); with a sticking phase
-    entered through complete chatter, central differences in omega of step
-    :data:`OMEGA_STEP` ``omega`` (the chatter map's dependence on omega is not written out:
-    error about ``h^2`` plus ``eps / h``, ``1e-10`` relative).
+    :func:`impactcont.kernel.shooting.sticky_frequency_column`).
 
     The phases, the period's last flight time, the steady forced state of each flight and
     of each held system (its amplitude ``Z_r(omega)``) and, through them, the release rows;
-    the column of the continuation in omega (``MultiImpactBranchProblem.dparam``).
+    with a sticking phase entered through complete chatter, the chatter map's omega too
+    (each resolved bounce's forced state, return time and impact, the jump to the
+    accumulation point: :func:`impactcont.kernel.shooting.sticky_system`'s ``frequency``,
+    one more residual). The column of the continuation in omega
+    (``MultiImpactBranchProblem.dparam``).
 
     Parameters
     ----------
@@ -614,24 +621,34 @@ def sticky_omega_column(flow: Flow, N: int, pattern: str, u: np.ndarray,
     osc = flow.osc
     impacts = sticking_pattern(osc, pattern)[0]
     x = _sticky_unknowns(osc, pattern, u, "u")
-    if chatter_entered(osc, pattern):  # central differences (the chatter map's omega)
-        h = OMEGA_STEP * osc.omega
-        up, down = (sticky_shooting(flow_of(osc.replace(omega=osc.omega + d)), N, pattern, x,
-                                    jacobian=False).residual for d in (h, -h))
-        return (up - down) / (2.0 * h)
-    if sh is None:
+    geo = tuple(impact_sequence(_geometry(flow, impacts)))
+    held, held_dZ = held_segments(flow, pattern), held_omega_derivatives(flow, pattern)
+    derivatives = tuple(_writable_arrays(flow.omega_arrays()))
+    d_release = np.zeros((0, 0))
+    if chatter_entered(osc, pattern):  # the chatter map's omega comes with the residual
+        d_release = np.zeros((len(pattern), 2 * osc.n))
+        sh = StickyShooting._make(_kernel().sticky_system(
+            flow.flight_arrays(), tuple(flow.forcing_arrays()), geo, held,
+            TWO_PI * N / osc.omega, x, False, (*derivatives, held_dZ, d_release)))
+    elif sh is None:
         sh = sticky_shooting(flow, N, pattern, x, jacobian=False)
     shot = tuple(sh._replace(jacobian=np.zeros((0, 0))))  # the record's plain tuple
     return _kernel().sticky_frequency_column(
-        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
-        tuple(flow.omega_arrays()), tuple(impact_sequence(_geometry(flow, impacts))),
-        held_segments(flow, pattern), held_omega_derivatives(flow, pattern),
-        TWO_PI * N / osc.omega, shot)
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), derivatives, geo, held,
+        held_dZ, TWO_PI * N / osc.omega, shot, d_release)
 
 
-#: The relative step in omega of :func:`sticky_omega_column` for a motion whose sticking
-#: phases are entered through complete chatter (the compiled corrector's
-#: :data:`impactcont.kernel.sticky.OMEGA_STEP`).
+def _writable_arrays(arrays: tuple) -> list[np.ndarray]:
+    """Each array of `arrays` contiguous and writable, its dtype kept (the kernel's
+    argument types: one compile)."""
+    return [a if a.flags.c_contiguous and a.flags.writeable else np.array(a, order="C")
+            for a in arrays]
+
+
+#: The relative step in omega of the central differences that served as
+#: :func:`sticky_omega_column` for a motion whose sticking phases are entered through
+#: complete chatter before the chatter map's omega was written out (the step of the
+#: tests' witness).
 OMEGA_STEP = 1e-5
 
 
