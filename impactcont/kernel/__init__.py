@@ -15,5 +15,6 @@ concern:
   assembled from the above;
 - :mod:`.general`: the same motion for any damping matrix C (first-order complex modes);
 - :mod:`.shooting`: N-p motions by shooting (residual, exact Jacobian, G, contact checks);
+- :mod:`.half_map`: a product of flight Jacobians (eq. 25) and its exact derivatives;
 - :mod:`.sweep`: stability maps of N-p motions (a breadth-first sweep of Newton solves).
 """

@@ -23,10 +23,9 @@ the damping and every element, ``gap`` (both stops), and ``b`` and ``R`` of mirr
 from __future__ import annotations
 
 import copy
-import math
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -36,7 +35,12 @@ from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import FREQUENCY, ModelParameter
 from impactcont.orbit.flow import Flow
-from impactcont.orbit.multi_impact import MultiImpactOrbit, _geometry
+from impactcont.orbit.multi_impact import (
+    MultiImpactOrbit,
+    _geometry,
+    impact_sequence,
+    shot_flights,
+)
 from impactcont.orbit.symmetry import HalfUnknowns, _reflection, admits_symmetric_motions
 from impactcont.problems.events import BRANCH_TESTS, PITCHFORK
 from impactcont.problems.multi_impact_branch import MultiImpactBranchProblem
@@ -50,44 +54,24 @@ __all__ = ["SymmetricBranchProblem"]
 SYMMETRY_BREAKING = ("b", "R", "b_low", "R_low")
 
 
-def _state_matrix(osc: ImpactOscillator) -> tuple[np.ndarray, np.ndarray]:
-    """``A = [[0, I], [-M^-1 K, -M^-1 C]]`` of the flight ``X' = A X + B f`` and ``M^-1``."""
+def _flight_data(osc: ImpactOscillator) -> tuple[np.ndarray, np.ndarray]:
+    """``A = [[0, I], [-M^-1 K, -M^-1 C]]`` of the flight ``X' = A X + B f`` and ``M^-1 F``
+    (the forcing of ``B f = [0; M^-1 F cos(phi)]``), as the half-map's kernel takes them."""
     n = osc.n
     Minv = np.linalg.inv(np.asarray(osc.M, dtype=float))
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
     A[n:, :n] = -Minv @ np.asarray(osc.K, dtype=float)
     A[n:, n:] = -Minv @ np.asarray(osc.C, dtype=float)
-    return A, Minv
+    return A, np.ascontiguousarray(Minv @ np.real(np.asarray(osc.F)), dtype=float)
 
 
-def _flight_jacobian(tr: np.ndarray, pcol: np.ndarray, rate: np.ndarray, D: np.ndarray,
-                     j: int, j_end: int, n_start: np.ndarray, n_end: np.ndarray,
-                     omega: float) -> np.ndarray:
-    """``G_k`` of eq. (25) for a stack of flights' data (leading axis), complex allowed: the
-    kernel's (:func:`impactcont.kernel.shooting.jacobian_product`) in numpy, for the
-    complex step of :meth:`SymmetricBranchProblem.half_map_derivative`.
+def _half_map_kernel() -> Any:
+    """:mod:`impactcont.kernel.half_map`, imported on first use (numba is not imported with
+    :mod:`impactcont`)."""
+    from impactcont.kernel import half_map
 
-    ``tr`` (d, m, m), ``pcol`` and ``rate`` (d, m); the flight starts on ``n_start . x = c``
-    (coordinates without ``x_j``) and ends on ``n_end . x = c'`` (without ``x_{j_end}``).
-    """
-    m = D.shape[0]
-    n = m // 2
-    keep = np.arange(m) != j
-    B = np.empty(tr.shape, dtype=complex)
-    T = tr.copy()
-    T[..., :n] -= tr[..., :, j, None] * (n_start / n_start[j])[None, None, :]
-    B[..., :m - 1] = T[..., keep]
-    B[..., m - 1] = pcol
-    hrow = np.einsum("r,drc->dc", n_end, B[..., :n, :])
-    h2 = rate[..., :n] @ n_end
-    B -= rate[..., :, None] * hrow[..., None, :] / h2[:, None, None]
-    DB = D @ B
-    G = np.empty(tr.shape, dtype=complex)
-    G[..., :m - 1, :] = DB[..., np.arange(m) != j_end, :]
-    G[..., m - 1, :] = -np.reshape(omega, (-1, 1)) * hrow / h2[:, None]
-    G[..., m - 1, m - 1] += 1.0
-    return G
+    return half_map
 
 
 def _of_full(name: str, doc: str) -> property:
@@ -151,9 +135,9 @@ class SymmetricBranchProblem:
         self.size = self.halves.size
         self._S = _reflection(osc.n)[:, None]  # S of the half-map, in the section coordinates
         self._last_full: tuple[tuple[bytes, float], np.ndarray] | None = None
-        # A and M^-1 of a flight: M, K, C are the same at every omega and stop position
+        # A and M^-1 F of a flight: M, K, C, F are the same at every omega and stop position
         # (moved problems share them)
-        self._state = _state_matrix(osc)
+        self._flight = _flight_data(osc)
 
     # -- what the full problem says -------------------------------------------------------------
     osc = _of_full("osc", "The oscillator.")
@@ -306,8 +290,9 @@ class SymmetricBranchProblem:
         parts at fixed start, phase and time (:meth:`~impactcont.orbit.flow.Flow.
         omega_partial`, and its phase derivative: the same a quarter period on, the forced
         part being harmonic in the phase), and ``G_k``'s last row in omega itself.
-        ``dH`` is the complex step of that rational
-        function along them (exact to rounding).
+        ``dH`` is the derivative of that rational function along them, forward mode in one
+        compiled call (:func:`impactcont.kernel.half_map.jacobian_product_derivative`);
+        ``H`` is :meth:`half_map`'s, operation for operation.
 
         A symmetric system has no constant force (the reflection would not map it to
         itself), so the forced part is harmonic.
@@ -315,71 +300,36 @@ class SymmetricBranchProblem:
         Raises
         ------
         ParameterError
-            The problem is not in omega, or its flow is not modal.
+            The problem is not in omega, or its flow is not modal; `dv` or `dc` of another
+            shape.
         """
         full = self.full
-        osc = self.oscillator_at(lam)
         if full._base_flow is None:
             raise ParameterError(f"half_map_derivative: a problem in {self.parameter!r} on "
-                                 f"{osc!r}; it needs the modal flow of a problem in omega (no "
-                                 "damping matrix outside the paper's form): take differences "
-                                 "of half_map instead")
+                                 f"{self.osc!r}; it needs the modal flow of a problem in omega "
+                                 "(no damping matrix outside the paper's form): take "
+                                 "differences of half_map instead")
         u = self.full_unknowns(v, lam)
         sh = full.shot(u, lam)
         flow = full.flow_at(lam)
-        geo = _geometry(flow, full.pattern)
-        n, p, h = osc.n, full.p, full.p // 2
-        m = 2 * n
-        omega = float(flow.omega)
+        m = 2 * self.osc.n
         dv = np.atleast_2d(np.asarray(dv, dtype=float))
-        dc = np.atleast_2d(np.asarray(dc, dtype=float))
-        du = dv @ self._E.T  # (d, 2np): the full unknowns' change
-        dw = np.zeros(du.shape[0]) if domega is None else np.asarray(domega, dtype=float)
-        du = du + dw[:, None] * self.halves.offset_derivative(float(lam))  # e(omega)
-        A, Minv = self._state
-        F = np.asarray(osc.F)
-        rate_of = np.zeros((h, m))  # B f'(phi) at each flight's arrival
-        eps = 1e-20
-        d = du.shape[0]
-        G = np.broadcast_to(np.eye(m, dtype=complex), (d, m, m)).copy()
-        tau_sum = np.zeros(d)
-        elapsed = 0.0  # tau_0 + .. + tau_{k-1}
-        for k in range(h):
-            tr, pcol = sh.transitions[k], sh.phase_columns[k]
-            rate, X0 = sh.arrival_rates[k], sh.starts[k]
-            dtheta = du[:, 0] + omega * tau_sum + elapsed * dw
-            tau = float(sh.flight_times[k])
-            elapsed += tau
-            dtau = du[:, 1 + k]
-            tau_sum = tau_sum + dtau
-            j, normal = int(geo.pivots[k]), geo.normals[k]
-            dX0 = np.zeros((d, m))
-            dX0[:, np.arange(m) != j] = du[:, p + k * (m - 1):p + (k + 1) * (m - 1)]
-            dX0[:, j] = (dc[:, k] - dX0[:, :n] @ normal) / normal[j]
-            # omega at fixed start, phase and time: the forced part (Flow.omega_partial)
-            theta0 = float(sh.phases[k])
-            forced_w = flow.omega_partial(tau, X0, theta0) if dw.any() else np.zeros(m)
-            dXm = (dX0 @ tr.T + dtheta[:, None] * pcol + dtau[:, None] * rate
-                   + dw[:, None] * forced_w)
-            phi = float(sh.phases[k]) + omega * float(sh.flight_times[k])
-            rate_of[k, n:] = Minv @ np.real(1j * F * np.exp(1j * phi))
-            forced = sh.arrivals[k] - tr @ X0
-            dtr = dtau[:, None, None] * (A @ tr)
-            # the forced part is harmonic in the phase: its theta-derivative is itself a
-            # quarter period on
-            phase_w = (flow.omega_partial(tau, X0, theta0 + 0.5 * math.pi) if dw.any()
-                       else np.zeros(m))
-            dpcol = (dtau[:, None] * (A @ pcol + rate_of[k]) - dtheta[:, None] * forced
-                     + dw[:, None] * phase_w)
-            drate = dXm @ A.T + (dtheta + omega * dtau + tau * dw)[:, None] * rate_of[k]
-            nxt = (k + 1) % p
-            Gk = _flight_jacobian(tr + 1j * eps * dtr, pcol + 1j * eps * dpcol,
-                                  rate + 1j * eps * drate, geo.matrices[nxt], j,
-                                  int(geo.pivots[nxt]), normal, geo.normals[nxt],
-                                  omega + 1j * eps * dw)
-            G = Gk @ G
-        H = self._S * G
-        return H[0].real.copy() if d else self.half_map(v, lam), H.imag / eps
+        d = dv.shape[0]
+        dc = np.ascontiguousarray(np.atleast_2d(np.asarray(dc, dtype=float)))
+        dw = (np.zeros(d) if domega is None
+              else np.ascontiguousarray(np.asarray(domega, dtype=float).reshape(d)))
+        if dv.shape != (d, self.size) or dc.shape != (d, self.p):
+            raise ParameterError(f"half_map_derivative: dv must have shape (d, {self.size}) and "
+                                 f"dc (d, {self.p}); got {dv.shape} and {dc.shape}")
+        du = dv @ self._E.T  # (d, 2np): the full unknowns' change, with e(omega)'s
+        du += dw[:, None] * self.halves.offset_derivative(float(lam))
+        A, forcing_rate = self._flight
+        dH = np.empty((d, m, m))
+        H = _half_map_kernel().jacobian_product_derivative(
+            tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+            tuple(flow.omega_arrays()), tuple(impact_sequence(_geometry(flow, full.pattern))),
+            tuple(shot_flights(sh)), A, forcing_rate, du, dc, dw, self.p // 2, dH)
+        return self._S * H, self._S * dH
 
     def palc_step(self, predicted: np.ndarray, tangent: np.ndarray, weights: np.ndarray,
                   tol: float, max_iter: int, *, hyperplane: bool = False

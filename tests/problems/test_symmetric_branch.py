@@ -106,8 +106,8 @@ def test_what_cannot_be_symmetric_is_refused(motion) -> None:
     (Stops(b_low=0.8), 0.8, 0.8, "gap"),        # the backlash: gap moves both
 ])
 def test_the_half_map_derivative_agrees_with_central_differences(stops, b, omega, moving):
-    """``dH`` in the half unknowns, a parameter moving the stops and omega (the complex step
-    of eq. 25 on the flights' exact derivatives) against central differences of
+    """``dH`` in the half unknowns, a parameter moving the stops and omega (eq. 25
+    differentiated on the flights' exact derivatives, compiled) against central differences of
     :meth:`half_map` (a new shot each; the moved stops by a problem on the moved
     oscillator), within what differences of step 1e-5 give (1e-7 relative)."""
     osc = _mirrored(stops=stops, b=b, omega=omega)

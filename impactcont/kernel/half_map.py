@@ -1,0 +1,259 @@
+"""The product of flight Jacobians of eq. (25) and its exact derivatives, compiled.
+
+The half-map ``H = S G_{h-1} .. G_0`` of a symmetric N-p motion (its multiplier -1 is a
+symmetry-breaking pitchfork, BP) moves with the motion's unknowns, omega and the stops'
+positions only through each flight's shot data: the transition ``Phi_k = e^{A tau_k}``,
+the phase column ``dX_k^-/dtheta_k`` and the arrival rate ``X_k'^-`` (the impact matrices
+and the stops' normals stay). :func:`jacobian_product_derivative` carries the derivatives
+of these along given directions through ``G_k`` (eq. 25: rational in them) and the product,
+forward mode, from one shot (``SymmetricBranchProblem.half_map_derivative`` of
+:mod:`impactcont.problems.symmetric_branch`, the exact row of the BP test of a curve).
+
+The product itself is :func:`impactcont.kernel.shooting.jacobian_product`'s, operation for
+operation (each ``G_k`` from the shooting kernel's own flight Jacobian).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impactcont.kernel.arrays import Forcing, ImpactSequence, ShotFlights
+from impactcont.kernel.jit import entry as _jit
+from impactcont.kernel.jit import inner as _inner
+from impactcont.kernel.shooting import _apply_matrix, _flight_jacobian, omega_partials
+
+__all__ = ["jacobian_product_derivative"]
+
+
+@_inner
+def _start_columns(tr, pcol, j, n_start, out):
+    """``[Phi dX/dz | dX^-/dtheta]`` into ``out`` (m, m): the flight's arrival against its
+    start's section coordinates ``z`` (``X`` without ``x_j`` on ``n_start . x = c``) and
+    its phase. Linear in ``(tr, pcol)``: the same map takes their derivatives."""
+    m = tr.shape[0]
+    n = m // 2
+    col = 0
+    for c in range(m):
+        if c == j:
+            continue
+        for r in range(m):
+            v = tr[r, c]
+            if c < n:
+                v -= tr[r, j] * n_start[c] / n_start[j]
+            out[r, col] = v
+        col += 1
+    for r in range(m):
+        out[r, m - 1] = pcol[r]
+
+
+@_inner
+def _end_row(n_end, B, out):
+    """``out = n_end . B[:n]`` (m,): how the columns of `B` move the stop coordinate at
+    the arrival."""
+    m = B.shape[0]
+    n = m // 2
+    for c in range(m):
+        s = 0.0
+        for r in range(n):
+            s += n_end[r] * B[r, c]
+        out[c] = s
+
+
+@_inner
+def _product_into(Gk, G, out):
+    """``out = Gk G`` (m, m), summed in :func:`~impactcont.kernel.shooting.jacobian_product`'s
+    order."""
+    m = G.shape[0]
+    for r in range(m):
+        for c in range(m):
+            s = 0.0
+            for i in range(m):
+                s += Gk[r, i] * G[i, c]
+            out[r, c] = s
+
+
+@_jit
+def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state_matrix,
+                                forcing_rate, du, dc, domega, count, dG):
+    """``G_{count-1} .. G_0`` (eq. 25) and its derivatives along `d` directions, exactly.
+
+    Parameters
+    ----------
+    flow, forcing, derivatives
+        The plain tuples of :class:`~impactcont.kernel.arrays.ShootingFlow`,
+        :class:`~impactcont.kernel.arrays.Forcing` and
+        :class:`~impactcont.kernel.arrays.ForcingDerivatives` of the motion's (modal) flow
+        at its omega, as :func:`~impactcont.kernel.shooting.branch_linearization` takes them.
+    impacts, shot
+        The plain tuples of :class:`~impactcont.kernel.arrays.ImpactSequence` (all p
+        impacts) and :class:`~impactcont.kernel.arrays.ShotFlights` at the unknowns.
+    state_matrix : ndarray, shape (2n, 2n)
+        ``A = [[0, I], [-M^-1 K, -M^-1 C]]`` of the flight ``X' = A X + B f``.
+    forcing_rate : ndarray, shape (n,)
+        ``M^-1 F`` (real harmonic forcing ``F cos(phi)``, no constant force).
+    du : ndarray, shape (d, 2np)
+        Each direction's change of the shooting unknowns
+        ``u = [delta, tau_0..tau_{p-2}, z_0..z_{p-1}]``.
+    dc : ndarray, shape (d, p)
+        Each direction's change of the stops' positions ``c_k`` at the p impacts.
+    domega : ndarray, shape (d,)
+        Each direction's change of omega.
+    count : int
+        The flights of the product, ``1 <= count <= p - 1`` (the half-map's ``p / 2``;
+        ``tau_{p-1}`` is no unknown).
+    dG : ndarray, shape (d, 2n, 2n)
+        Filled with the derivatives of the product.
+
+    Returns
+    -------
+    ndarray, shape (2n, 2n)
+        The product, as :func:`~impactcont.kernel.shooting.jacobian_product` gives it.
+
+    Notes
+    -----
+    Along a direction flight k moves by its start ``dX_k`` (``z_k`` and ``c_k`` on the
+    section), phase ``dtheta_k = ddelta + omega (dtau_0 + .. + dtau_{k-1}) + (tau_0 + ..
+    + tau_{k-1}) domega``, time ``dtau_k`` and omega. Then ``dPhi = A Phi dtau``,
+    ``d(dX^-/dtheta) = (A dX^-/dtheta + B f') dtau - X_f dtheta + (dX_f/domega)(theta +
+    pi/2) domega`` (``X_f = X^- - Phi X_0`` the forced part, harmonic in the phase; its
+    omega partials at fixed start, phase and time from
+    :func:`~impactcont.kernel.shooting.omega_partials`), ``dX^- = Phi dX_0 + dX^-/dtheta
+    dtheta + X'^- dtau + (dX_f/domega) domega`` and ``dX'^- = A dX^- + B f' (dtheta +
+    omega dtau + tau domega)`` with ``B f' = [0; -M^-1 F sin(phi)]`` at the arrival
+    ``phi = theta + omega tau``. ``G_k`` (``B = Phi dX/dz - X'^- h / h2`` with
+    ``h = n . [Phi dX/dz | dX^-/dtheta]``, ``h2 = n . X'^-``; rows ``D B`` and
+    ``-omega h / h2 + e``) is differentiated by the quotient rule.
+    """
+    impacts, flights = ImpactSequence(*impacts), ShotFlights(*shot)
+    omega = Forcing(*forcing).omega
+    pivots, normals, matrices = impacts.pivots, impacts.normals, impacts.matrices
+    p = pivots.size
+    m = matrices.shape[1]
+    n = m // 2
+    d = du.shape[0]
+    # the forced part's omega partials at each flight's phase and a quarter period on
+    partials = omega_partials(flow, forcing, derivatives, shot)
+    shifted = flights.phases + 0.5 * math.pi
+    quarter = omega_partials(flow, forcing, derivatives, (
+        shifted, flights.flight_times, flights.starts, flights.arrivals,
+        flights.arrival_rates, flights.transitions, flights.phase_columns, flights.residual,
+        flights.jacobian))
+    G = np.empty((m, m))
+    for r in range(m):
+        for c in range(m):
+            G[r, c] = 1.0 if r == c else 0.0
+    for i in range(d):
+        for r in range(m):
+            for c in range(m):
+                dG[i, r, c] = 0.0
+    Gk = np.empty((m, m))
+    dGk = np.empty((m, m))
+    tmp = np.empty((m, m))
+    B = np.empty((m, m))
+    dB = np.empty((m, m))
+    DB = np.empty((m, m))
+    Atr = np.empty((m, m))
+    dtr = np.empty((m, m))
+    h = np.empty(m)
+    dh = np.empty(m)
+    Apcol = np.empty(m)
+    rate_of = np.zeros(m)  # B f' at the arrival
+    forced = np.empty(m)
+    dX0 = np.empty(m)
+    dXm = np.empty(m)
+    dpcol = np.empty(m)
+    drate = np.empty(m)
+    tau_sum = np.zeros(d)  # dtau_0 + .. + dtau_{k-1} of each direction
+    elapsed = 0.0  # tau_0 + .. + tau_{k-1}
+    for k in range(count):
+        nxt = (k + 1) % p
+        j, j_end = pivots[k], pivots[nxt]
+        n_start, n_end, D = normals[k], normals[nxt], matrices[nxt]
+        tr, pcol, rate = (flights.transitions[k], flights.phase_columns[k],
+                          flights.arrival_rates[k])
+        X0, tau = flights.starts[k], flights.flight_times[k]
+        h2 = _flight_jacobian(tr, pcol, rate, D, j, j_end, n_start, n_end, omega, Gk)
+        _start_columns(tr, pcol, j, n_start, B)
+        _end_row(n_end, B, h)
+        for r in range(m):
+            s = 0.0
+            for i in range(m):
+                s += state_matrix[r, i] * pcol[i]
+            Apcol[r] = s
+            for c in range(m):
+                s = 0.0
+                for i in range(m):
+                    s += state_matrix[r, i] * tr[i, c]
+                Atr[r, c] = s
+            s = 0.0
+            for c in range(m):
+                s += tr[r, c] * X0[c]
+            forced[r] = flights.arrivals[k, r] - s
+        phi = flights.phases[k] + omega * tau
+        for r in range(n):
+            rate_of[n + r] = -math.sin(phi) * forcing_rate[r]
+        for i in range(d):
+            dw = domega[i]
+            dtheta = du[i, 0] + omega * tau_sum[i] + elapsed * dw
+            dtau = du[i, 1 + k]
+            col = 0
+            off = p + k * (m - 1)
+            for c in range(m):
+                if c != j:
+                    dX0[c] = du[i, off + col]
+                    col += 1
+            s = 0.0
+            for c in range(n):
+                if c != j:
+                    s += dX0[c] * n_start[c]
+            dX0[j] = (dc[i, k] - s) / n_start[j]
+            for r in range(m):
+                s = 0.0
+                for c in range(m):
+                    s += tr[r, c] * dX0[c]
+                dXm[r] = s + dtheta * pcol[r] + dtau * rate[r] + dw * partials[k, r]
+                dpcol[r] = (dtau * (Apcol[r] + rate_of[r]) - dtheta * forced[r]
+                            + dw * quarter[k, r])
+                for c in range(m):
+                    dtr[r, c] = dtau * Atr[r, c]
+            speed = dtheta + omega * dtau + tau * dw
+            for r in range(m):
+                s = 0.0
+                for c in range(m):
+                    s += state_matrix[r, c] * dXm[c]
+                drate[r] = s + speed * rate_of[r]
+            _start_columns(dtr, dpcol, j, n_start, dB)
+            _end_row(n_end, dB, dh)
+            dh2 = 0.0
+            for r in range(n):
+                dh2 += n_end[r] * drate[r]
+            for c in range(m):
+                for r in range(m):
+                    dB[r, c] -= ((drate[r] * h[c] + rate[r] * dh[c]) / h2
+                                 - rate[r] * h[c] * dh2 / (h2 * h2))
+            _apply_matrix(D, dB, DB)
+            row = 0
+            for r in range(m):
+                if r == j_end:
+                    continue
+                for c in range(m):
+                    dGk[row, c] = DB[r, c]
+                row += 1
+            for c in range(m):
+                dGk[m - 1, c] = (-(dw * h[c] + omega * dh[c]) / h2
+                                 + omega * h[c] * dh2 / (h2 * h2))
+            # d(Gk G) = dGk G + Gk dG
+            _product_into(Gk, dG[i], tmp)
+            for r in range(m):
+                for c in range(m):
+                    s = 0.0
+                    for q in range(m):
+                        s += dGk[r, q] * G[q, c]
+                    dG[i, r, c] = s + tmp[r, c]
+            tau_sum[i] += dtau
+        _product_into(Gk, G, tmp)
+        G[:, :] = tmp
+        elapsed += tau
+    return G
