@@ -232,6 +232,24 @@ def test_the_sticking_tests_follow_one_stick(ride) -> None:
     assert set(pd.codim2_tests) >= {"SE", "RG", "SO"}
 
 
+def test_the_rounding_noise_of_a_plain_test_leaves_the_newton_tolerance(ride) -> None:
+    """``test_noise`` takes the line out: at the plastic ride (no chatter) the SE and SO
+    tests' noise is rounding (below 1e-11, so the default tolerance 1e-10 stays); a test
+    with a slope of 1e6 along the steps keeps only the rounding of its inputs (1e6 x a few
+    ulps of x: about 5e-10), not its rise over the 8 steps (1e6 x 8 x 1e-14 x the direction:
+    3.9e-8)."""
+    osc = ride.oscillator
+    x = np.append(ride.unknowns, osc.omega)
+    for kind in ("SE", "SO"):
+        curve = ShootingCurve(osc, 1, 2, ride.pattern, kind, ("omega", "eta"),
+                              symmetric=False)
+        assert curve.test_noise(x, osc.eta) < 1e-11
+    steep = ShootingCurve(osc, 1, 2, ride.pattern, "SE", ("omega", "eta"), symmetric=False)
+    plain = steep._test
+    steep._test = lambda y, lam: plain(y, lam) + 1e6 * float(np.sum(y - x))
+    assert steep.test_noise(x, osc.eta) < 1e-8
+
+
 def test_sticking_kinds_need_sticking_phases(ride) -> None:
     """SE, RG, SO on a motion without sticking phases, and a motion with sticking phases
     followed by its half, are refused by name."""
