@@ -22,43 +22,9 @@ import numpy as np
 from impactcont.kernel.arrays import Forcing, ImpactSequence, ShotFlights
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
-from impactcont.kernel.shooting import _apply_matrix, _flight_jacobian, omega_partials
+from impactcont.kernel.shooting import _apply, _flight_jacobian, omega_partials
 
 __all__ = ["jacobian_product_derivative"]
-
-
-@_inner
-def _start_columns(tr, pcol, j, n_start, out):
-    """``[Phi dX/dz | dX^-/dtheta]`` into ``out`` (m, m): the flight's arrival against its
-    start's section coordinates ``z`` (``X`` without ``x_j`` on ``n_start . x = c``) and
-    its phase. Linear in ``(tr, pcol)``: the same map takes their derivatives."""
-    m = tr.shape[0]
-    n = m // 2
-    col = 0
-    for c in range(m):
-        if c == j:
-            continue
-        for r in range(m):
-            v = tr[r, c]
-            if c < n:
-                v -= tr[r, j] * n_start[c] / n_start[j]
-            out[r, col] = v
-        col += 1
-    for r in range(m):
-        out[r, m - 1] = pcol[r]
-
-
-@_inner
-def _end_row(n_end, B, out):
-    """``out = n_end . B[:n]`` (m,): how the columns of `B` move the stop coordinate at
-    the arrival."""
-    m = B.shape[0]
-    n = m // 2
-    for c in range(m):
-        s = 0.0
-        for r in range(n):
-            s += n_end[r] * B[r, c]
-        out[c] = s
 
 
 @_inner
@@ -124,7 +90,11 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
     omega dtau + tau domega)`` with ``B f' = [0; -M^-1 F sin(phi)]`` at the arrival
     ``phi = theta + omega tau``. ``G_k`` (``B = Phi dX/dz - X'^- h / h2`` with
     ``h = n . [Phi dX/dz | dX^-/dtheta]``, ``h2 = n . X'^-``; rows ``D B`` and
-    ``-omega h / h2 + e``) is differentiated by the quotient rule.
+    ``-omega h / h2 + e``) is differentiated by the quotient rule: at a fixed arrival rate
+    ``G_k`` is affine in ``(Phi, dX^-/dtheta)`` (the constant ``e`` aside), so the
+    shooting kernel's ``G_k`` of ``(dPhi, d(dX^-/dtheta))`` is their part of ``dG_k``;
+    the rate's adds ``-(D w) h / h2`` to the rows, ``w = dX'^- - X'^- dh2 / h2``, and
+    ``omega h dh2 / h2^2 - domega h / h2`` to the last row (``h`` from ``G_k``'s last row).
     """
     impacts, flights = ImpactSequence(*impacts), ShotFlights(*shot)
     omega = Forcing(*forcing).omega
@@ -151,13 +121,9 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
     Gk = np.empty((m, m))
     dGk = np.empty((m, m))
     tmp = np.empty((m, m))
-    B = np.empty((m, m))
-    dB = np.empty((m, m))
-    DB = np.empty((m, m))
     Atr = np.empty((m, m))
     dtr = np.empty((m, m))
     h = np.empty(m)
-    dh = np.empty(m)
     Apcol = np.empty(m)
     rate_of = np.zeros(m)  # B f' at the arrival
     forced = np.empty(m)
@@ -165,6 +131,8 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
     dXm = np.empty(m)
     dpcol = np.empty(m)
     drate = np.empty(m)
+    w = np.empty(m)
+    Dw = np.empty(m)
     tau_sum = np.zeros(d)  # dtau_0 + .. + dtau_{k-1} of each direction
     elapsed = 0.0  # tau_0 + .. + tau_{k-1}
     for k in range(count):
@@ -175,8 +143,9 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
                           flights.arrival_rates[k])
         X0, tau = flights.starts[k], flights.flight_times[k]
         h2 = _flight_jacobian(tr, pcol, rate, D, j, j_end, n_start, n_end, omega, Gk)
-        _start_columns(tr, pcol, j, n_start, B)
-        _end_row(n_end, B, h)
+        for c in range(m):  # G_k's last row is -omega h / h2 + e
+            h[c] = -Gk[m - 1, c] * h2 / omega
+        h[m - 1] = (1.0 - Gk[m - 1, m - 1]) * h2 / omega
         for r in range(m):
             s = 0.0
             for i in range(m):
@@ -219,32 +188,31 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
                 for c in range(m):
                     dtr[r, c] = dtau * Atr[r, c]
             speed = dtheta + omega * dtau + tau * dw
+            dh2 = 0.0
             for r in range(m):
                 s = 0.0
                 for c in range(m):
                     s += state_matrix[r, c] * dXm[c]
                 drate[r] = s + speed * rate_of[r]
-            _start_columns(dtr, dpcol, j, n_start, dB)
-            _end_row(n_end, dB, dh)
-            dh2 = 0.0
-            for r in range(n):
-                dh2 += n_end[r] * drate[r]
-            for c in range(m):
-                for r in range(m):
-                    dB[r, c] -= ((drate[r] * h[c] + rate[r] * dh[c]) / h2
-                                 - rate[r] * h[c] * dh2 / (h2 * h2))
-            _apply_matrix(D, dB, DB)
+                if r < n:
+                    dh2 += n_end[r] * drate[r]
+            # the part of (dPhi, d(dX^-/dtheta)): G_k is affine in them at a fixed rate
+            _flight_jacobian(dtr, dpcol, rate, D, j, j_end, n_start, n_end, omega, dGk)
+            dGk[m - 1, m - 1] -= 1.0
+            # the rate's part
+            for r in range(m):
+                w[r] = drate[r] - rate[r] * dh2 / h2
+            _apply(D, w, Dw)
             row = 0
             for r in range(m):
                 if r == j_end:
                     continue
                 for c in range(m):
-                    dGk[row, c] = DB[r, c]
+                    dGk[row, c] -= Dw[r] * h[c] / h2
                 row += 1
             for c in range(m):
-                dGk[m - 1, c] = (-(dw * h[c] + omega * dh[c]) / h2
-                                 + omega * h[c] * dh2 / (h2 * h2))
-            # d(Gk G) = dGk G + Gk dG
+                dGk[m - 1, c] += (omega * dh2 / h2 - dw) * h[c] / h2
+            # d(G_k G) = dG_k G + G_k dG
             _product_into(Gk, dG[i], tmp)
             for r in range(m):
                 for c in range(m):
