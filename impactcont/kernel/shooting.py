@@ -87,7 +87,8 @@ from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "chatter_bounces", "end_clearances", "forced_amplitudes",
-           "frequency_column", "jacobian_product", "motion_checks", "newton_solve",
+           "frequency_column", "held_pressing", "jacobian_product", "motion_checks",
+           "newton_solve",
            "omega_partials", "palc_correct", "shooting_system", "sticky_frequency_column",
            "sticky_newton_solve", "sticky_system"]
 
@@ -1084,6 +1085,29 @@ def _chatter_map(flow, forcing, impacts, held, k, X0, theta0, X, dX, dtheta, dT,
     if by_omega:
         dW[m] = dTv[m + 1] + ddt[m + 1]
     return status, T + dtj, th + omega * dtj
+
+
+@_jit
+def held_pressing(held, k, omega, X0, theta, times):
+    """The pressing force of the stop held after impact k along its held flow from ``X0``
+    at phase `theta`, at each of `times` after the start, shape like `times`: the held
+    flow of :func:`_held_segment` (the shooting path's, at the forcing frequency `omega`)
+    and :func:`_pressing`. `held` the plain tuple of
+    :class:`~impactcont.kernel.arrays.HeldSegments`. Compiled only where a motion with
+    sticking phases is checked (``HeldFlow.pressing_minimum``'s samples,
+    :func:`impactcont.orbit.sticky.chatter_bounces`'s module); no other entry point calls
+    it."""
+    named = HeldSegments(*held)
+    m = X0.size
+    X = np.empty(m)
+    dX0 = np.empty((m, m))
+    dtheta = np.empty(m)
+    rate = np.empty(m)
+    out = np.empty(times.size)
+    for i in range(times.size):
+        _held_segment(named, k, omega, times[i], X0, theta, X, dX0, dtheta, rate)
+        out[i], _ = _pressing(named, k, X, theta + omega * times[i])
+    return out
 
 
 @_jit

@@ -37,6 +37,7 @@ import dataclasses
 import math
 import warnings
 import weakref
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -339,7 +340,8 @@ class HeldFlow:
         times[moving] = checked.time_extra[0]
         return gaps, times
 
-    def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float
+    def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float, *,
+                         samples: Callable[[np.ndarray], np.ndarray] | None = None
                          ) -> tuple[float, float]:
         """The smallest pressing force inside a sticking phase of `duration` from ``X0`` at
         phase `theta`: over its start and the interior minima of ``p(t)`` (the release at
@@ -349,6 +351,16 @@ class HeldFlow:
         motion the held system and the forcing have, and each interior minimum of the
         samples is refined by a bounded scalar minimisation (scipy) between its
         neighbours.
+
+        Parameters
+        ----------
+        duration, X0, theta
+            The sticking phase.
+        samples : callable, optional
+            ``p`` at an array of times after the start, the same held flow computed
+            elsewhere (compiled: :func:`impactcont.kernel.shooting.held_pressing`, as
+            :func:`impactcont.orbit.sticky.chatter_bounces`'s module passes it); by
+            default :meth:`pressing` of :meth:`state`.
 
         Returns
         -------
@@ -366,6 +378,8 @@ class HeldFlow:
 
         def force(times: np.ndarray) -> np.ndarray:
             times = np.atleast_1d(times)
+            if samples is not None:
+                return samples(times)
             return np.asarray(self.pressing(self.state(times, X0, theta), omega * times + theta))
 
         values = force(t)

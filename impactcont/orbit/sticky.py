@@ -20,6 +20,7 @@ import logging
 import math
 import warnings
 import weakref
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -858,7 +859,9 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
             reasons.append(f"impact {k}: sticking onset: the pressing force on stop {stop!r} "
                            f"{where} is {onset:.3g} <= 0 (the acceleration does not point "
                            "into the stop)")
-        low, when = held.pressing_minimum(s - chatter, start, phase)
+        low, when = held.pressing_minimum(s - chatter, start, phase,
+                                          samples=_held_pressing(flow, pattern, int(k), start,
+                                                                 phase))
         pressing[k] = low
         if onset > 0.0 and not low > 0.0:
             reasons.append(f"sticking phase {k}: release grazing: the pressing force on stop "
@@ -882,6 +885,23 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
                    release_states=releases, pressing_min=pressing, landing_pressing=landing,
                    jacobians=jacs, G=G, multipliers=mu, reasons=tuple(reasons),
                    chatters=chatters, held_gaps=tuple(held_gaps))
+
+
+def _held_pressing(flow: Flow, pattern: str, k: int, start: np.ndarray, phase: float
+                   ) -> Callable[[np.ndarray], np.ndarray]:
+    """The pressing force along the held flow of the sticking phase after impact k from
+    `start` at `phase`, at an array of times after it: compiled
+    (:func:`impactcont.kernel.shooting.held_pressing`, the shooting path's held flow), the
+    samples of :meth:`~impactcont.orbit.held_flow.HeldFlow.pressing_minimum`."""
+    held = held_segments(flow, pattern)
+    omega = float(flow.osc.omega)
+    X0 = _writable(np.asarray(start, dtype=float))
+    press = _kernel().held_pressing
+
+    def samples(times: np.ndarray) -> np.ndarray:
+        return press(held, k, omega, X0, float(phase), _writable(times))
+
+    return samples
 
 
 def _sticky_orbit(flow: Flow, N: int, pattern: str, u0: np.ndarray, tol: float,
