@@ -143,15 +143,27 @@ class StickyShooting(StickyFlights):
 
 def _section_lift(geo: StopGeometry, k: int, m: int) -> np.ndarray:
     """``dX_k/dz_k`` (m, m-1): the unit columns and the pivot's row ``-n_i / n_j`` from the
-    section ``n_k . x = c_k``."""
+    section ``n_k . x = c_k`` (kept per pivot and normal: the geometries of a branch's
+    points share them; read it, do not modify it)."""
     j = int(geo.pivots[k])
-    n = m // 2
-    rest = [c for c in range(m) if c != j]
-    L = np.eye(m)[:, rest]
-    row = np.zeros(m)
-    row[:n] = -np.asarray(geo.normals[k]) / geo.normals[k, j]
-    L[j, :] = row[rest]
+    normal = np.asarray(geo.normals[k], dtype=float)
+    key = (m, j, normal.tobytes())
+    L = _SECTION_LIFTS.get(key)
+    if L is None:
+        n = m // 2
+        rest = [c for c in range(m) if c != j]
+        L = np.eye(m)[:, rest]
+        row = np.zeros(m)
+        row[:n] = -normal / normal[j]
+        L[j, :] = row[rest]
+        if len(_SECTION_LIFTS) > 256:
+            _SECTION_LIFTS.clear()
+        _SECTION_LIFTS[key] = L
     return L
+
+
+#: :func:`_section_lift` by ``(m, pivot, normal's bytes)``.
+_SECTION_LIFTS: dict[tuple[int, int, bytes], np.ndarray] = {}
 
 
 def _python_flight(flow: Flow, t: float, X0: np.ndarray, theta: float
@@ -445,49 +457,52 @@ def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[_HeldGap]:
     checked = MotionChecks._make(_kernel().motion_checks(
         tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
         tuple(contact_stops(geo)), tuple(checked_flights(bounces)), True))
-    offsets = np.concatenate([[0.0], np.cumsum(chatter.times)[:-1]])
+    offsets = np.concatenate(([0.0], np.cumsum(chatter.times)[:-1]))
     names = (UPPER, LOWER, *geo.extra_names)
     normals = (geo.normal, geo.normal, *geo.extra_normals)
-    found: dict[int, tuple[float, float, bool]] = {}  # stop -> (gap, t, crossed)
+    # each stop's clearances in the order they are met: the interior extrema, then the
+    # bounces' ends (row-major: bounce by bounce, start first)
+    parts: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
 
-    def seen(stop: int, gap: float, when: float, crossed: bool) -> None:
-        if names[stop] == chatter.stop:
-            return
-        low, at, before = found.get(stop, (math.inf, math.nan, False))
-        # a NaN clearance (a failed search) is kept, and crosses
-        found[stop] = (gap, when, before or crossed) if not gap >= low else (
-            low, at, before or crossed)
+    def add(stop: int, gaps: np.ndarray, when: np.ndarray, crossed: np.ndarray) -> None:
+        if gaps.size and names[stop] != chatter.stop:
+            parts.setdefault(stop, []).append((gaps, when, crossed))
 
     interior = [(0, checked.gap_upper, checked.time_upper)]
     if geo.two_sided:
         interior.append((1, checked.gap_lower, checked.time_lower))
     interior += [(2 + j, checked.gap_extra[:, j], checked.time_extra[:, j])
                  for j in range(len(geo.extra_names))]
-    def seen_all(stop: int, gaps: np.ndarray, when: np.ndarray, crossed: np.ndarray) -> None:
-        """:func:`seen` of each in turn; at once (the first smallest) where none is NaN."""
-        if gaps.size == 0:
-            return
-        if np.isnan(gaps).any():
-            for i in range(gaps.size):
-                seen(stop, float(gaps[i]), float(when[i]), bool(crossed[i]))
-            return
-        i = int(np.argmin(gaps))
-        seen(stop, float(gaps[i]), float(when[i]), bool(crossed.any()))
-
     for stop, gaps, times in interior:
-        kept = np.flatnonzero(~np.isposinf(gaps))  # +inf: no extremum in the bounce
-        seen_all(stop, gaps[kept], offsets[kept] + times[kept], ~(gaps[kept] > 0.0))
+        kept = ~np.isposinf(gaps)  # +inf: no extremum in the bounce
+        add(stop, gaps[kept], offsets[kept] + times[kept], ~(gaps[kept] > 0.0))
     end_gap, end_stop, end_tol = _kernel().end_clearances(
         geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
         geo.extra_signs, geo.extra_positions, _writable(chatter.starts),
         _writable(chatter.arrivals))
-    end_times = offsets[:, None] + np.array([0.0, 1.0]) * chatter.times[:, None]
-    end_crossed = end_gap < -end_tol
-    for stop in np.unique(end_stop[end_stop >= 0]):  # row-major: bounce by bounce, start first
-        at = end_stop == stop
-        seen_all(int(stop), end_gap[at], end_times[at], end_crossed[at])
-    return [_HeldGap(gap, when, names[stop], _coordinate(normals[stop]), crossed)
-            for stop, (gap, when, crossed) in sorted(found.items())]
+    met = end_stop >= 0
+    if met.any():
+        stops = end_stop[met]
+        end_times = (offsets[:, None] + np.array([0.0, 1.0]) * chatter.times[:, None])[met]
+        gaps = end_gap[met]
+        crossed = gaps < -end_tol[met]
+        for stop in np.unique(stops):
+            at = stops == stop
+            add(int(stop), gaps[at], end_times[at], crossed[at])
+    found = []
+    for stop in sorted(parts):
+        gaps, when, crossed = (np.concatenate(a) for a in zip(*parts[stop], strict=True))
+        if np.isnan(gaps).any():  # a NaN clearance (a failed search) is kept, and crosses
+            low, at = math.inf, math.nan
+            for i in range(gaps.size):
+                if not gaps[i] >= low:
+                    low, at = float(gaps[i]), float(when[i])
+        else:  # the first smallest
+            i = int(np.argmin(gaps))
+            low, at = float(gaps[i]), float(when[i])
+        found.append(_HeldGap(low, at, names[stop], _coordinate(normals[stop]),
+                              bool(crossed.any())))
+    return found
 
 
 def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase: float,
@@ -775,15 +790,16 @@ def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
             held = held_flow(osc, impacts[k])
             grad, gth = held.pressing_gradient(sh.release_phases[k])
             ds = -(grad @ cols + gth * th) / (grad @ sh.held_rates[k] + omega * gth)
-            cols = cols + np.outer(sh.held_rates[k], ds)
+            cols = cols + sh.held_rates[k][:, None] * ds
             th = th + omega * ds
-        B = sh.transitions[k] @ cols + np.outer(sh.phase_columns[k], th)
+        B = sh.transitions[k] @ cols + sh.phase_columns[k][:, None] * th
         normal = geo.normals[nxt]
         h2 = float(normal @ sh.arrival_rates[k, :n])
         dtau = -(normal @ B[:n]) / h2
-        DB = geo.matrices[nxt] @ (B + np.outer(sh.arrival_rates[k], dtau))
+        DB = geo.matrices[nxt] @ (B + sh.arrival_rates[k][:, None] * dtau)
         jn = int(geo.pivots[nxt])
-        jacs[k, :m - 1] = np.delete(DB, jn, axis=0)
+        jacs[k, :jn] = DB[:jn]  # DB without the pivot's row
+        jacs[k, jn:m - 1] = DB[jn + 1:]
         jacs[k, m - 1] = th + omega * dtau
         G = jacs[k] @ G
     return jacs, G
