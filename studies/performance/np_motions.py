@@ -25,7 +25,8 @@ workload once, so all see the same load):
 6. the curve of a symmetry-breaking pitchfork of the symmetric 1-2 backlash motion in
    ``(omega, b)`` (mirrored stops; ``multi_impact_curve``), per point, against a point of
    the closed-form N = 1 PD curve of the paper system (``curve``); the issue's target is
-   2 ms per point;
+   2 ms per point (``--only bp-paired`` and ``--only bp-half-map``: that curve with one
+   change on and off, paired in one process);
 7. the cold compile the shooting kernel adds: in a fresh interpreter with an empty
    ``NUMBA_CACHE_DIR``, the N = 1 verbs first (compiling the kernel they share), then the
    first N-p solve and the first N-p continuation (CPU seconds); and, in another fresh
@@ -43,6 +44,7 @@ to ``output/np_motions.json`` next to this file.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import logging
 import os
@@ -50,6 +52,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import types
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -148,11 +151,43 @@ def cold_compile(script: str = COLD) -> dict[str, float]:
     return json.loads(run.stdout.splitlines()[-1])
 
 
-def bp_paired(sym_branch: Any, pairs: int = 30) -> dict[str, Any]:
-    """The BP curve per point with this round's BP row from the shot and moved stop geometry
-    (``problems/codim1.py``, ``orbit/stop_geometry.py``) on and off (the forward-difference
-    row and each stop geometry built afresh: the code before), timed back to back in one
+def _bp_per_point(sym_branch: Any) -> float:
+    """Seconds per point of the BP curve of the symmetric 1-2 motion in (omega, b)."""
+    start = time.perf_counter()
+    ds = ic.multi_impact_curve(sym_branch, "BP", 1, parameter="b",
+                               bounds={"omega": (0.5, 2.5), "b": (0.2, 1.0)}, ds_max=0.02)
+    return (time.perf_counter() - start) / ds.sizes["point"]
+
+
+def paired(per_point: Callable[[], float], switch: Callable[[bool], None],
+           pairs: int = 30) -> dict[str, Any]:
+    """`per_point` with `switch` on and off (off: the code before), timed back to back in one
     process, the order alternating: the median and quartiles of the paired ratios on/off."""
+    times: dict[bool, list[float]] = {False: [], True: []}
+    ratios = []
+    for on in (False, True):  # warm
+        switch(on)
+        per_point()
+    for i in range(pairs):
+        pair = {}
+        for on in ((False, True) if i % 2 == 0 else (True, False)):
+            switch(on)
+            pair[on] = per_point()
+            times[on].append(pair[on])
+        ratios.append(pair[True] / pair[False])
+    q = np.percentile(ratios, [25, 50, 75])
+    return {"median_ratio": float(q[1]), "quartiles": [float(q[0]), float(q[2])],
+            "before_ms_best_median": [1e3 * min(times[False]),
+                                      1e3 * float(np.median(times[False]))],
+            "after_ms_best_median": [1e3 * min(times[True]),
+                                     1e3 * float(np.median(times[True]))],
+            "loadavg": os.getloadavg()}
+
+
+def bp_paired(sym_branch: Any, pairs: int = 30) -> dict[str, Any]:
+    """The BP curve per point with the BP row from the shot and moved stop geometry
+    (``problems/codim1.py``, ``orbit/stop_geometry.py``) on and off (the forward-difference
+    row and each stop geometry built afresh: the code before), :func:`paired`."""
     import impactcont.problems.codim1 as codim1
     import impactcont.problems.multi_impact_branch as branch
     from impactcont.orbit.stop_geometry import stop_geometry
@@ -167,45 +202,59 @@ def bp_paired(sym_branch: Any, pairs: int = 30) -> dict[str, Any]:
         branch.moved_stop_geometry = moved if on else (
             lambda geometry, before, osc, pattern: stop_geometry(osc, pattern))
 
-    def per_point() -> float:
-        start = time.perf_counter()
-        ds = ic.multi_impact_curve(sym_branch, "BP", 1, parameter="b",
-                                   bounds={"omega": (0.5, 2.5), "b": (0.2, 1.0)}, ds_max=0.02)
-        return (time.perf_counter() - start) / ds.sizes["point"]
-
-    times: dict[bool, list[float]] = {False: [], True: []}
-    ratios = []
     try:
-        for on in (False, True):  # warm
-            switch(on)
-            per_point()
-        for i in range(pairs):
-            pair = {}
-            for on in ((False, True) if i % 2 == 0 else (True, False)):
-                switch(on)
-                pair[on] = per_point()
-                times[on].append(pair[on])
-            ratios.append(pair[True] / pair[False])
+        return paired(lambda: _bp_per_point(sym_branch), switch, pairs)
     finally:
         codim1.ShootingCurve.__init__, branch.moved_stop_geometry = init, moved
-    q = np.percentile(ratios, [25, 50, 75])
-    return {"median_ratio": float(q[1]), "quartiles": [float(q[0]), float(q[2])],
-            "before_ms_best_median": [1e3 * min(times[False]),
-                                      1e3 * float(np.median(times[False]))],
-            "after_ms_best_median": [1e3 * min(times[True]),
-                                     1e3 * float(np.median(times[True]))],
-            "loadavg": os.getloadavg()}
+
+
+#: The commit before the half-map's derivative was compiled (``kernel/half_map.py``): its
+#: ``problems/symmetric_branch.py`` has the numpy complex step.
+NUMPY_HALF_MAP = "d6bf099^"
+
+
+def half_map_paired(sym_branch: Any, pairs: int = 30) -> dict[str, Any]:
+    """The BP curve per point with the half-map's derivative compiled and as it was before
+    (``SymmetricBranchProblem.half_map_derivative`` of ``problems/symmetric_branch.py`` at
+    :data:`NUMPY_HALF_MAP`, read from git: the complex step in numpy), :func:`paired`.
+    Each variant's results are the same curve (the points within 2e-15)."""
+    from impactcont.problems.symmetric_branch import SymmetricBranchProblem
+
+    source = subprocess.run(
+        ["git", "show", f"{NUMPY_HALF_MAP}:impactcont/problems/symmetric_branch.py"],
+        cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    before = types.ModuleType("symmetric_branch_before")
+    exec(compile(source, "symmetric_branch_before.py", "exec"), before.__dict__)
+    compiled = SymmetricBranchProblem.half_map_derivative
+    state = functools.cached_property(lambda self: before._state_matrix(self.osc))
+    state.__set_name__(SymmetricBranchProblem, "_state")
+    SymmetricBranchProblem._state = state
+
+    def switch(on: bool) -> None:
+        SymmetricBranchProblem.half_map_derivative = (
+            compiled if on else before.SymmetricBranchProblem.half_map_derivative)
+
+    try:
+        return paired(lambda: _bp_per_point(sym_branch), switch, pairs)
+    finally:
+        SymmetricBranchProblem.half_map_derivative = compiled
+        del SymmetricBranchProblem._state
 
 
 def main() -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=7)
-    parser.add_argument("--only", choices=("bp-symmetric", "bp-paired"), default=None,
+    parser.add_argument("--pairs", type=int, default=30,
+                        help="pairs of the bp-paired and bp-half-map timings")
+    parser.add_argument("--only", choices=("bp-symmetric", "bp-paired", "bp-half-map"),
+                        default=None,
                         help="bp-symmetric: only the BP curve point and the symmetric 1-2 "
                         "branch with their references (the N = 1 PD curve and branch point), "
                         "no cold compiles; prints per-point times. bp-paired: the BP curve "
                         "with the exact BP row and the moved stop geometry on and off in one "
-                        "process (off is the code before them), 30 alternating pairs")
+                        "process (off is the code before them), 30 alternating pairs. "
+                        "bp-half-map: the BP curve with the half-map's derivative compiled and "
+                        "in numpy (as at NUMPY_HALF_MAP), the same way")
     args = parser.parse_args()
     threadpool_limits(1)
     # the 2-2 motion of the period-doubled branch, and a guess at a nearby omega
@@ -295,8 +344,9 @@ def main() -> dict[str, Any]:
         "curve_bp": curve_bp,
         "curve_pd_n1": curve_pd_n1,
     }
-    if args.only == "bp-paired":
-        out = bp_paired(sym_branch)
+    if args.only in ("bp-paired", "bp-half-map"):
+        out = (bp_paired if args.only == "bp-paired" else half_map_paired)(sym_branch,
+                                                                           args.pairs)
         print(json.dumps(out))
         return out
     if args.only == "bp-symmetric":
