@@ -704,46 +704,60 @@ def _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate):
 def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr, pcol,
                    rate):
     """The first return to its stop of the flight from `Y` (on the stop, leaving it), or
-    ``-1.0``: the clearance bracketed from the parabola's `guess` (marching forward in
-    quarters of it, at most two forcing periods, or halving it back while the clearance is
-    not positive), then safeguarded Newton (bisection where a Newton step leaves the
-    bracket) to a few ulps of the time or of the clearance."""
+    ``-1.0``: one Newton step from the parabola's `guess` (a small bounce's return lands
+    within the clearance's rounding), the clearance bracketed from there (marching forward
+    in quarters of `guess`, at most two forcing periods, or halving back while the
+    clearance is not positive), then safeguarded Newton (bisection where a Newton step
+    leaves the bracket) to a few ulps of the time or of the clearance."""
     period = 2.0 * math.pi / forcing.omega
-    lo = guess
-    g, _ = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol, rate)
+    # the clearance's rounding: a few ulps of the stop coordinate's terms
+    level = abs(position)
+    for c in range(normal.size):
+        level += abs(normal[c] * Y[c])
+    level *= 4.0 * _CHATTER_EPS
+    g, gd = _gap(flow, forcing, guess, Y, th, normal, sign, position, tr, arr, pcol, rate)
+    lo = -1.0
     hi = -1.0
     if g > 0.0:
+        lo = guess
+    else:
+        hi = guess
+    t = guess  # a time in [lo, hi] whose clearance g, gd are known
+    if gd < 0.0:  # Newton from the guess, no further than the march's first quarter
+        t1 = guess - g / gd
+        if t1 > 0.0 and abs(t1 - guess) <= 0.25 * guess:
+            g1, gd1 = _gap(flow, forcing, t1, Y, th, normal, sign, position, tr, arr, pcol,
+                           rate)
+            if g1 > 0.0:
+                lo = t1
+            else:
+                hi = t1
+            t, g, gd = t1, g1, gd1
+    if hi < 0.0:  # not returned by lo: march forward
         step = 0.25 * guess
         while lo < 2.0 * period:
             t = lo + step
-            gt, _ = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
-            if not gt > 0.0:
+            g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
+            if not g > 0.0:
                 hi = t
                 break
             lo = t
             step *= 1.5
         if hi < 0.0:
             return -1.0
-    else:
-        hi = lo
+    elif lo < 0.0:  # returned by hi: halve back
         lo = 0.5 * hi
         for _ in range(200):
-            g, _ = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol,
-                        rate)
+            g, gd = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol,
+                         rate)
             if g > 0.0:
                 break
             hi = lo
             lo *= 0.5
         if not g > 0.0:
             return -1.0
-    # the clearance's rounding: a few ulps of the stop coordinate's terms
-    level = abs(position)
-    for c in range(normal.size):
-        level += abs(normal[c] * Y[c])
-    level *= 4.0 * _CHATTER_EPS
-    t = 0.5 * (lo + hi)
+        t = lo
     for _ in range(_BOUNCE_ITERATIONS):
-        g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
         if abs(g) <= level:  # at the stop to rounding: the time is as good as it gets
             return t
         if g > 0.0:
@@ -756,6 +770,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
         if abs(new - t) <= 8.0 * _CHATTER_EPS * t or hi - lo <= 8.0 * _CHATTER_EPS * hi:
             return new
         t = new
+        g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
     return -1.0
 
 
