@@ -65,8 +65,8 @@ from impactcont.kernel.shooting import (
     _max_abs,
     _shooting_system,
     _solve,
+    _state_clearance,
     _stop_clearance,
-    end_clearances,
     unknowns_scale,
 )
 from impactcont.kernel.stability import multipliers
@@ -118,16 +118,20 @@ def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
 
 @_inner
 def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
-    """Newton with backtracking from ``x0``: the iteration and stopping rules of
+    """Newton with backtracking from ``x0`` (not modified: each iterate is a new array):
+    the iteration and stopping rules of
     :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system` (``settings.tol``,
-    ``settings.max_iter``).
+    ``settings.max_iter``). A trial point once the residual is below the tolerance is
+    evaluated without the Jacobian (it only confirms the rounding floor, or ends the
+    iteration); its Jacobian is computed only when another step needs it.
 
     Returns ``(x, converged, iterations, shot)``.
     """
     tol = settings.tol
     max_iter = settings.max_iter
-    x = x0.copy()
-    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, _jacobian_wanted(x))
+    x = x0
+    want = _jacobian_wanted(x)
+    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want)
     norm = _max_abs(sh.residual)
     step_norm = np.inf
     it = 0
@@ -138,6 +142,8 @@ def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
             return x, True, it, sh
         if it == max_iter:
             break
+        if sh.jacobian.shape[0] == 0:  # a trial taken without it: the step needs it now
+            sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want)
         J = sh.jacobian
         if not np.all(np.isfinite(J)):
             break
@@ -147,8 +153,7 @@ def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial,
-                          _jacobian_wanted(trial))
+            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial, not small)
             tnorm = _max_abs(tsh.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -195,10 +200,9 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
             for c in range(m):
                 G[r, c] = -G[r, c]
     mu = multipliers(G)
-    if symmetric:
-        mu = mu * mu
-    out_rho[point] = abs(mu[0])
-    out_mu[point] = mu[0]
+    critical = mu[0] * mu[0] if symmetric else mu[0]  # G = H^2
+    out_rho[point] = abs(critical)
+    out_mu[point] = critical
     physical = True
     for k in range(p):
         q = k % flights
@@ -244,7 +248,9 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
                 break
         if not gap > 0.0:  # NaN included
             physical = False
-        ends, crossed = _end_gap(stops, full, sh.starts, sh.arrivals, flights, symmetric)
+        mirrored = symmetric and _mirrored(stops, full, flights)
+        ends, crossed = _end_gap(stops, full, sh.starts, sh.arrivals, flights, symmetric,
+                                 mirrored)
         if gap == gap:  # a NaN gap (not searchable) stays NaN
             gap = min(gap, ends)
         if crossed:
@@ -272,32 +278,60 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
 
 
 @_inner
-def _end_gap(stops, full, starts, arrivals, flights, symmetric):
+def _end_gap(stops, full, starts, arrivals, flights, symmetric, mirrored):
     """Every stop's clearance at both ends of every flight, as
     :func:`impactcont.kernel.shooting.end_clearances` (the second half of a symmetric
     motion the mirror image of the first): ``(smallest clearance, crossed)``, ``crossed``
-    when an end is past a stop by more than the rounding of its clearance."""
+    when an end is past a stop by more than the rounding of its clearance.
+
+    With `mirrored` stops (U and L at the same distance, no further stop) a mirrored
+    flight's clearance to one stop is exactly the other's of its image (``-x``: the same
+    sums negated), so the second half of a symmetric motion adds nothing and is skipped;
+    `mirrored` is False otherwise, and the mirrored flights are checked on their states.
+    """
     p = full.signs.size
     m = starts.shape[1]
-    full_starts = np.empty((p, m))
-    full_arrivals = np.empty((p, m))
-    for k in range(p):
-        q = k % flights
-        sign = 1.0 if (k < flights or not symmetric) else -1.0
-        for c in range(m):
-            full_starts[k, c] = sign * starts[q, c]
-            full_arrivals[k, c] = sign * arrivals[q, c]
-    gap, _, tol = end_clearances(stops.normal, stops.two_sided, stops.b, stops.b_low,
-                                 full.normals, full.signs, stops.extra_normals,
-                                 stops.extra_signs, stops.extra_positions, full_starts,
-                                 full_arrivals)
+    last = flights if (symmetric and mirrored) else p
+    image = np.empty(m)
     smallest = np.inf
     crossed = False
-    for k in range(p):
+    for k in range(last):
+        q = k % flights
+        nxt = (k + 1) % p
+        sign = 1.0 if (k < flights or not symmetric) else -1.0
         for end in range(2):
-            smallest = min(smallest, gap[k, end])
-            crossed = crossed or gap[k, end] < -tol[k, end]
+            source = starts[q] if end == 0 else arrivals[q]
+            own = k if end == 0 else nxt
+            if sign < 0.0:
+                for c in range(m):
+                    image[c] = -source[c]
+                x = image
+            else:
+                x = source
+            g, _, tol = _state_clearance(x, full.normals[own], full.signs[own], stops.normal,
+                                         stops.two_sided, stops.b, stops.b_low,
+                                         stops.extra_normals, stops.extra_signs,
+                                         stops.extra_positions)
+            smallest = min(smallest, g)
+            crossed = crossed or g < -tol
     return smallest, crossed
+
+
+@_inner
+def _mirrored(stops, full, flights):
+    """The stops are the mirror images of each other for the half motion: U and L on one
+    coordinate at the same distance (``b == b_low``), no further stop, and impact ``k + h``
+    hits the mirror of impact k's stop (the same normal, the other side)."""
+    if not (stops.two_sided and stops.b == stops.b_low and stops.extra_signs.size == 0):
+        return False
+    normals, signs = full.normals, full.signs
+    for k in range(flights):
+        if signs[k + flights] != -signs[k]:
+            return False
+        for c in range(normals.shape[1]):
+            if normals[k + flights, c] != normals[k, c]:
+                return False
+    return True
 
 
 @_inner
@@ -388,6 +422,10 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
     attempts = 0
     total_iterations = 0
     capped = False
+    flow_row = flows.index[grid.seed0, grid.seed1]
+    flow, forcing = _flow_at(flows, flow_row)
+    geometry_row = geometries.index[grid.seed0, grid.seed1]
+    solved_impacts, full, stops = _geometry_at(geometries, geometry_row, motion)
     while head < tail:
         point = queue[head % size, 0]
         parent = queue[head % size, 1]
@@ -411,8 +449,12 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
                 else:
                     ratio = (coord1[i1] - coord1[p1]) / (coord1[p1] - coord1[g1])
                 x0 += ratio * (unknowns[parent] - unknowns[g0 * n1 + g1])
-        flow, forcing = _flow_at(flows, flows.index[i0, i1])
-        solved_impacts, full, stops = _geometry_at(geometries, geometries.index[i0, i1], motion)
+        if flows.index[i0, i1] != flow_row:  # the flow and geometry of the point's row
+            flow_row = flows.index[i0, i1]
+            flow, forcing = _flow_at(flows, flow_row)
+        if geometries.index[i0, i1] != geometry_row:
+            geometry_row = geometries.index[i0, i1]
+            solved_impacts, full, stops = _geometry_at(geometries, geometry_row, motion)
         attempts += 1
         x, ok, it, sh = _newton(flow, forcing, solved_impacts, motion.N, motion.symmetric,
                                 motion.pivots[0], x0, settings)
