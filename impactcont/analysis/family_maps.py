@@ -568,12 +568,6 @@ class _StickySetting:
         return True
 
 
-#: How the motion's ``reason`` names a resolved bounce of a chatter that reaches another
-#: stop (:func:`impactcont.orbit.sticky.sticky_orbit_from_unknowns`: the motion carries
-#: no number of it, the bounces' clearances being checked, not kept).
-_BOUNCE_REACHES = "a bounce of the chatter on stop"
-
-
 def _reasons(orbit: MultiImpactOrbit, held: np.ndarray, checks: bool) -> int:
     """Why the motion `orbit` (with the sticking phases `held`) is not physical, as the bits
     of :data:`~impactcont.dataset.maps.MAP_REASONS`: its checks, from its numbers."""
@@ -593,7 +587,7 @@ def _reasons(orbit: MultiImpactOrbit, held: np.ndarray, checks: bool) -> int:
         bits |= MAP_REASONS["contact_not_checked"]
     elif not orbit.gap_min > 0.0:
         bits |= MAP_REASONS["interior_contact"]
-    if _BOUNCE_REACHES in orbit.reason:
+    if any(chatter.reached for chatter in orbit.chatters):  # a bounce reaches a stop
         bits |= MAP_REASONS["bounce_reaches_stop"]
     return bits or MAP_REASONS["other"]
 

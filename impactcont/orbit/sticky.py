@@ -363,6 +363,11 @@ class Chatter:
     duration : float
         From the landing to the accumulation point: the resolved bounces and the jump over
         the rest (:func:`impactcont.kernel.shooting._chatter_map`).
+    reached : str
+        The other stops a resolved bounce reaches (their names, in the motion's stop order;
+        empty: none, or the bounces not checked): what the motion's reason says of them in
+        words, for readers of its numbers (``impactcont.analysis.family_maps``' bit
+        ``bounce_reaches_stop``).
     """
 
     impact: int
@@ -377,6 +382,7 @@ class Chatter:
     accumulation: np.ndarray
     accumulation_phase: float
     duration: float
+    reached: str = ""
 
 
 def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatter, ...]:
@@ -847,6 +853,9 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
     held_gaps: list[tuple[_HeldGap, ...]] = [() for _ in range(p)]
     chatters = chatter_bounces(flow, pattern, sh)
     bounces = {c.impact: _bounce_clearances(flow, c) for c in chatters} if checks else {}
+    chatters = tuple(dataclasses.replace(c, reached="".join(
+        g.stop for g in bounces[c.impact] if g.crossed)) if bounces.get(c.impact) else c
+        for c in chatters)
     for k in np.flatnonzero(sticks):
         held = held_flow(osc, impacts[k])
         held_gaps[k] = tuple(bounces.get(int(k), ()))

@@ -278,11 +278,14 @@ def test_a_chatter_bounce_that_reaches_the_other_wall_is_not_physical():
     apex = float(shot.reason.split("after the landing")[0].rsplit("t=", 1)[1])
     first = shot.chatters[0]
     assert 0 < apex < first.times[0]
+    assert first.reached == "U"  # the number of it
+    assert all(c.reached == "" for c in shot.chatters[1:])
     run = ic.simulate(osc, sh.starts[0], float(sh.phases[0]), 0.2)
     assert run.impact_stops[0] == "U" and 0 < run.impact_times[0] < apex
     # at the solution itself the bounces stay below the upper wall (no such reason)
-    assert "reaches stop" not in sticky.sticky_orbit_from_unknowns(
-        flow, 1, "lu", orbit.unknowns).reason
+    solved = sticky.sticky_orbit_from_unknowns(flow, 1, "lu", orbit.unknowns)
+    assert "reaches stop" not in solved.reason
+    assert [c.reached for c in solved.chatters] == ["", ""]
 
 
 def test_the_time_series_draws_the_chatter_and_the_simulated_motion():
