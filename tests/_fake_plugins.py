@@ -17,8 +17,8 @@ from impactcont.scene import plugins
 from impactcont.scene.entries import EntrySpec
 from impactcont.scene.keys import Integer, declare
 
-BUILTINS = ["orbits", "branches", "robust", "simulations", "curves", "maps", "multi_impact",
-            "switches"]
+BUILTINS = ["orbits", "branches", "robust", "simulations", "multi_impact", "switches",
+            "curves", "maps"]
 
 
 class GoodProblem:

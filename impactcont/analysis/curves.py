@@ -55,6 +55,7 @@ from impactcont.core.stepper import NewtonConvergenceError
 from impactcont.dataset.attributes import split_parameters
 from impactcont.dataset.curves import (
     CODIM2_LABELS,
+    CURVE_VARIABLES,
     codim2_data,
     curve_dataset,
     validate_curve_dataset,
@@ -681,7 +682,27 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
                            functions=functions, values=values, user_events=user_events)
     records = [codim2_record(problem, cp) for cp in sorted(found_points, key=lambda cp: cp.point)
                if cp.label in CODIM2_LABELS]
+    physical = np.array([problem.physical_on_curve(np.append(sample.u, sample.lam), o)
+                         for sample, o in zip(samples, orbits, strict=True)], dtype=bool)
+    ds["physical"] = ("point", physical, CURVE_VARIABLES["physical"].attrs())
+    ds["stable_side"] = ("point", _stable_sides(problem, orbits, physical),
+                         CURVE_VARIABLES["stable_side"].attrs())
     return ds.assign(codim2_data(records, problem.parameters, osc.n))
+
+
+def _stable_sides(problem: ShootingCurve, orbits: Sequence[MultiImpactOrbit],
+                  physical: np.ndarray) -> np.ndarray:
+    """``stable_side`` at each point of a shooting curve: physical (on the curve,
+    :meth:`~impactcont.problems.codim1.ShootingCurve.physical_on_curve`), multipliers
+    defined, and those but the critical one(s) inside the unit circle (as the closed
+    form's curves have it, :func:`_point_columns`)."""
+    out = np.zeros(len(orbits), dtype=bool)
+    if not problem.multipliers_defined:
+        return out
+    for k, orbit in enumerate(orbits):
+        rest = problem.other_multipliers(orbit.multipliers)
+        out[k] = bool(physical[k] and np.all(np.abs(rest) < 1.0))
+    return out
 
 
 def _noise_defaults(kind: Label, noise: float) -> dict[str, Any]:

@@ -98,8 +98,12 @@ SECTION_KINDS: dict[str, str] = {
     "orbits": "orbits", "branches": "branch", "switches": "branch", "multi_impact": "branch",
     "robust": "robust", "simulations": "simulation", "curves": "curve", "maps": "map"}
 #: ``section -> the other kinds its files may hold``: a ``[[maps]]`` entry maps every N-1
-#: motion (``"map"``) or one motion family (``"multi_impact_map"``, ``start`` given).
-SECTION_OTHER_KINDS: dict[str, tuple[str, ...]] = {"maps": ("multi_impact_map",)}
+#: motion (``"map"``) or one motion family (``"multi_impact_map"``, ``start`` given); a
+#: ``[[curves]]`` entry from an N-p branch is followed by shooting and written as an N-p
+#: branch in its second parameter (``"branch"``: no ``impactcont_dataset``, a
+#: ``curve_kind``).
+SECTION_OTHER_KINDS: dict[str, tuple[str, ...]] = {"maps": ("multi_impact_map",),
+                                                   "curves": ("branch",)}
 
 # Attributes every kind may carry, shown as text by ``impactcont info``.
 _TEXT = ("title", "impactcont_version", "history")
@@ -672,8 +676,11 @@ def dataset_kind(ds: xr.Dataset, section: Any = None) -> str | None:
         if expected == "branch" and tag is not None:
             raise ValueError(f"attribute 'impactcont_dataset' must be absent (a branch) in a "
                              f"file of section {section!r}; got {_shown(tag)}")
-        if tag in SECTION_OTHER_KINDS.get(section, ()):
+        others = SECTION_OTHER_KINDS.get(section, ())
+        if tag in others:
             return tag
+        if tag is None and "branch" in others and "curve_kind" in ds.attrs:
+            return "branch"  # a curve followed by shooting
         if expected != "branch" and tag != expected:
             kinds = " or ".join(repr(k) for k in (expected, *SECTION_OTHER_KINDS.get(section, ())))
             raise _refused("impactcont_dataset", tag, f"{kinds} in a file of section {section!r}")

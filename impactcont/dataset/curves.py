@@ -43,7 +43,7 @@ from impactcont.dataset.schema import (
     with_parameter_coords,
 )
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.vocabulary import CODIM2_LABELS, CURVE_KINDS, STATUSES
+from impactcont.vocabulary import CODIM2_LABELS, CURVE_KINDS, STATUSES, Label
 
 __all__ = [
     "CODIM2_FORMER_LABELS",
@@ -53,7 +53,9 @@ __all__ = [
     "codim2_data",
     "codim2_variable",
     "curve_dataset",
+    "kind_of_curve",
     "normalise_dataset",
+    "validate_any_curve",
     "validate_curve_dataset",
     "validate_dataset",
 ]
@@ -312,6 +314,49 @@ def validate_curve_dataset(ds: Any) -> xr.Dataset:
                              f"{sorted(values)}")
     check_user_variables(ds)
     check_attributes(ds, "curve")
+    return ds
+
+
+def kind_of_curve(ds: xr.Dataset) -> str:
+    """The kind of a curve dataset: its attribute ``kind`` (a curve in closed form) or
+    ``curve_kind`` (a curve followed by shooting, an N-p branch dataset in ``p2``)."""
+    return str(ds.attrs["curve_kind"] if "curve_kind" in ds.attrs else ds.attrs["kind"])
+
+
+def validate_any_curve(ds: Any) -> xr.Dataset:
+    """Check a curve dataset of either evaluator; return it.
+
+    A curve in closed form is checked by :func:`validate_curve_dataset`; one followed by
+    shooting (attribute ``curve_kind``) as an N-p branch dataset
+    (:func:`~impactcont.dataset.multi.validate_multi_impact_dataset`) with the curve's
+    ``parameters`` columns and ``stable_side``. A shooting curve written before it had
+    ``stable_side`` gets one of False (a WARNING says so): its plots then mark no stable
+    motion changing across it.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the missing or malformed attribute or variable.
+    """
+    if not (isinstance(ds, xr.Dataset) and "curve_kind" in ds.attrs):
+        return validate_curve_dataset(ds)
+    validate_multi_impact_dataset(ds)
+    kind = ds.attrs["curve_kind"]
+    kinds = [label.value for label in Label if label.codimension == 1]
+    if kind not in kinds:
+        raise ValueError(f"attribute 'curve_kind' must be one of {kinds}; got {kind!r}")
+    text = ds.attrs.get("parameters")
+    parameters = split_parameters(text) if isinstance(text, str) else []
+    missing = [name for name in parameters if name not in ds.variables]
+    if len(parameters) != 2 or missing:
+        raise ValueError(f"attribute 'parameters' must name the curve's two parameter "
+                         f"columns 'p1,p2'; got {text!r}" + (f" (no column {missing})"
+                                                             if missing else ""))
+    if "stable_side" not in ds.variables:
+        logger.warning("the %s curve in (%s) has no stable_side (written before it was "
+                       "stored): drawn as if no stable motion changed across it", kind, text)
+        ds = ds.assign(stable_side=("point", np.zeros(ds.sizes["point"], dtype=bool),
+                                    CURVE_VARIABLES["stable_side"].attrs()))
     return ds
 
 

@@ -23,7 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from impactcont.dataset.attributes import dataset_tag, split_parameters
-from impactcont.dataset.curves import codim2_variable, validate_curve_dataset
+from impactcont.dataset.curves import codim2_variable, kind_of_curve, validate_any_curve
 from impactcont.dataset.maps import (
     MAP_REASONS,
     map_parameters,
@@ -61,6 +61,10 @@ CURVE_STYLES: dict[str, dict[str, Any]] = {
     "NS": {"color": "tab:purple"},
     "GR": {"color": "tab:green"},
     "ZV": {"color": "tab:blue"},
+    "BP": {"color": "tab:orange"},
+    "SE": {"color": "tab:brown"},
+    "RG": {"color": "tab:pink"},
+    "SO": {"color": "tab:olive"},
 }
 
 #: Line style of each part of a curve, as the legend names it: bold where
@@ -164,7 +168,7 @@ def _curves(curves: Any) -> list[xr.Dataset]:
     else:
         raise TypeError(f"curves must be a curve Dataset, a sequence or mapping of them or a "
                         f"DataTree; got {type(curves).__name__}")
-    return [validate_curve_dataset(c) for c in items]
+    return [validate_any_curve(c) for c in items]
 
 
 def _segments(mask: np.ndarray) -> list[slice]:
@@ -221,7 +225,7 @@ def _panel(ax: Axes, map_ds: xr.Dataset | None, curve_list: Sequence[xr.Dataset]
     codim2: dict[tuple[float, float], tuple[str, bool]] = {}  # one per place
     part_names = list(CURVE_PARTS)
     for c in curve_list:
-        kind = c.attrs["kind"]
+        kind = kind_of_curve(c)
         if kind != "ZV" and int(c.attrs["N"]) != N:
             continue
         px, py = split_parameters(str(c.attrs["parameters"]))

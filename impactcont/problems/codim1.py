@@ -494,6 +494,32 @@ class ShootingCurve:
         slope, offset = np.polyfit(steps, values, 1)
         return 2.0 * float(np.max(np.abs(values - (slope * steps + offset))))
 
+    def other_multipliers(self, mu: np.ndarray) -> np.ndarray:
+        """The multipliers `mu` of a curve point but the curve's critical one(s) (all of them
+        on a GR, ZV, SE, RG or SO curve): inside the unit circle, a stable motion is born or
+        lost on the curve (a dataset's ``stable_side``)."""
+        mu = np.asarray(mu)
+        critical = _KINDS[self.kind].critical
+        return mu if critical is None or mu.size == 0 else np.delete(mu, critical(mu))
+
+    def physical_on_curve(self, x: np.ndarray, orbit: MultiImpactOrbit) -> bool:
+        """The motion at the curve point ``x = [u, p1, p2]`` is physical but for the curve's
+        own bound (as a closed-form GR curve leaves out the tangency itself).
+
+        On a curve of a kind that bounds the physical motions (GR, ZV, SE, RG, SO) the
+        motion's own test is zero to rounding, so ``orbit.physical`` flips from point to
+        point; there the other bounding tests the curve watches decide (those of
+        :data:`_BOUNDS_PHYSICAL` among :attr:`codim2_tests`, where defined; not RG on an
+        SO curve, which vanishes along it too). A reason for not being physical that no
+        test counts (a chatter bounce reaching another stop) is then not seen here; the
+        motion's ``reason`` names it.
+        """
+        if orbit.physical or _KINDS[self.kind].critical is not None:
+            return bool(orbit.physical)
+        values = [self.codim2_test(test, x, orbit) for test in self.codim2_tests
+                  if test in _BOUNDS_PHYSICAL]
+        return all(value > 0.0 for value in values if math.isfinite(value))
+
     def test_of(self, orbit: MultiImpactOrbit) -> float:
         """The test function at a motion (all kinds but SN, which needs the problem; SE, RG
         and SO at a motion are those of its branch, over every sticking phase)."""
@@ -784,6 +810,10 @@ class _Kind:
         chosen at the start (SE, RG, SO).
     follows_minimum : bool
         The test follows an interior minimum of a pressing force from point to point (RG).
+    critical : callable or None
+        ``mu -> indices`` of the multipliers that sit on the unit circle along the curve
+        (SN and BP: the one nearest +1; PD: nearest -1; NS: the pair nearest the circle);
+        None: none (GR, ZV, SE, RG, SO bound motions, not multipliers).
     """
 
     of_orbit: Callable[[MultiImpactOrbit], float]
@@ -796,6 +826,26 @@ class _Kind:
     exact_row: Callable[..., tuple[np.ndarray, float]] | None = None
     choose_stick: Callable[..., int] | None = None
     follows_minimum: bool = False
+    critical: Callable[[np.ndarray], np.ndarray] | None = None
+
+
+def _nearest_plus_one(mu: np.ndarray) -> np.ndarray:
+    return np.array([np.argmin(np.abs(mu - 1.0))])
+
+
+def _nearest_minus_one(mu: np.ndarray) -> np.ndarray:
+    return np.array([np.argmin(np.abs(mu + 1.0))])
+
+
+def _pair_nearest_the_circle(mu: np.ndarray) -> np.ndarray:
+    """The complex pair nearest the unit circle (the two nearest where none is complex)."""
+    upper = np.flatnonzero(mu.imag > 0.0)
+    if upper.size == 0:
+        return np.argsort(np.abs(np.abs(mu) - 1.0), kind="stable")[:2]
+    k = int(upper[np.argmin(np.abs(np.abs(mu[upper]) - 1.0))])
+    mate = np.abs(mu - np.conj(mu[k]))
+    mate[k] = np.inf
+    return np.array([k, int(np.argmin(mate))])
 
 
 def _event(label: Label) -> Callable[[MultiImpactOrbit], float]:
@@ -811,15 +861,16 @@ def _event(label: Label) -> Callable[[MultiImpactOrbit], float]:
 #: not watch RG, which counts the landing's pressing force (zero along it).
 _KINDS: dict[Label, _Kind] = {
     Label.SN: _Kind(_no_orbit_test, ShootingCurve._fold_of_shot,
-                    (Label.ZV, Label.GR, Label.PD, Label.NS)),
+                    (Label.ZV, Label.GR, Label.PD, Label.NS), critical=_nearest_plus_one),
     Label.PD: _Kind(_flip_of_orbit, ShootingCurve._flip_of_shot,
-                    (Label.ZV, Label.GR, Label.SN, Label.NS)),
-    Label.NS: _Kind(_event(Label.NS), None, (Label.ZV, Label.GR, Label.SN, Label.PD)),
+                    (Label.ZV, Label.GR, Label.SN, Label.NS), critical=_nearest_minus_one),
+    Label.NS: _Kind(_event(Label.NS), None, (Label.ZV, Label.GR, Label.SN, Label.PD),
+                    critical=_pair_nearest_the_circle),
     Label.GR: _Kind(_event(Label.GR), None, (Label.ZV, Label.SN, Label.PD, Label.NS),
                     contact_checks=True),
     Label.ZV: _Kind(_event(Label.ZV), None, (Label.SN,), multipliers_defined=False),
     Label.BP: _Kind(_pitchfork_of_orbit, ShootingCurve._pitchfork_of_shot, (),
-                    symmetric_only=True),
+                    symmetric_only=True, critical=_nearest_plus_one),
     Label.SE: _Kind(stick_end_test, ShootingCurve._stick_end_of_shot,
                     (Label.ZV, Label.GR, Label.SN, Label.PD, Label.NS), sticky_only=True,
                     exact_row=ShootingCurve._stick_end_row,

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.curves import kind_of_curve
 from impactcont.dataset.io import atomic_output, check_output_file
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
@@ -450,6 +451,15 @@ def draw_robust(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     return _finish(fig, plot, r"Robust stability: perturbation pattern $\Gamma$ (eq. 28)")
 
 
+def _motions_of(ds: xr.Dataset) -> str:
+    """``period-N motions`` of a closed-form curve, ``N-p motions "pattern"`` of one
+    followed by shooting."""
+    N = int(ds.attrs["N"])
+    if "curve_kind" not in ds.attrs:
+        return f"period-{N} motions"
+    return f"{N}-{int(ds.attrs['impacts'])} motions \"{ds.attrs['pattern']}\""
+
+
 def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
     """Codim-1 curves in their parameter plane; dotted where no stable motion changes.
 
@@ -477,8 +487,8 @@ def draw_curves(datasets: Mapping[str, xr.Dataset], plot: Any = None) -> Figure:
         ax.plot(np.where(observable, x, np.nan), np.where(observable, y, np.nan),
                 color=color, linewidth=1.8)
         handles.append(Line2D([], [], color=color, linewidth=1.8,
-                              label=f"{ds.attrs['kind']} curve, period-{int(ds.attrs['N'])} "
-                                    f"motions"))
+                              label=f"{kind_of_curve(ds)} curve, "
+                                    f"{_motions_of(ds)}"))
         for c in range(ds.sizes.get("codim2", 0)):
             cx, cy = float(ds[f"codim2_{p1}"].values[c]), float(ds[f"codim2_{p2}"].values[c])
             ax.plot(cx, cy, "o", markerfacecolor="white", markeredgecolor="black", zorder=3)

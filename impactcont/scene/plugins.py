@@ -6,8 +6,8 @@ dataclass that declares and validates the keys of one table, and the
 *driver* that computes one validated table into an :class:`xarray.Dataset`
 (which a scene run writes to ``<key>.nc`` and draws). It may also bring plot
 kinds (:class:`PlotKind`) and the continuation problem class it follows. The
-built-in tasks (orbits, branches, robust, simulations, curves, maps,
-multi_impact, switches) are
+built-in tasks (orbits, branches, robust, simulations, multi_impact, switches,
+curves, maps) are
 registered here the same way as a third-party problem; the scene parser, the
 runner, ``impactcont run`` and ``impactcont list-problems`` read this registry
 only.
@@ -80,8 +80,8 @@ _SECTION_KEY = re.compile(r"^[a-z][a-z0-9_]*$")
 #: name -> ``"module:attribute"`` of their :class:`SceneSection`.
 BUILTIN_PROBLEMS: dict[str, str] = {
     name: f"impactcont.scene.sections:{name.upper()}"
-    for name in ("orbits", "branches", "robust", "simulations", "curves", "maps",
-                 "multi_impact", "switches")
+    for name in ("orbits", "branches", "robust", "simulations", "multi_impact", "switches",
+                 "curves", "maps")
 }
 
 

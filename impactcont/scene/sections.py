@@ -64,7 +64,7 @@ class RunContext:
     datasets : mapping of str to mapping of str to xarray.Dataset
         ``section -> entry name -> dataset`` of the entries computed so far
         (sections run in registry order, so ``[[curves]]`` can start from a
-        computed ``[[branches]]`` entry).
+        computed ``[[branches]]``, ``[[multi_impact]]`` or ``[[switches]]`` entry).
     """
 
     datasets: Mapping[str, Mapping[str, xr.Dataset]]

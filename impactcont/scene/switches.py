@@ -72,6 +72,7 @@ __all__ = [
     "SWITCHES",
     "MultiImpactSpec",
     "SwitchSpec",
+    "origin_of",
     "simulation_seed",
 ]
 
@@ -149,6 +150,18 @@ def _origin(entry: SwitchSpec, sections: Mapping[str, tuple[EntrySpec, ...]]) ->
     while entry.start in switches:
         entry = switches[entry.start]
     return branches[entry.start]
+
+
+def origin_of(entry: Any, sections: Mapping[str, tuple[EntrySpec, ...]]
+              ) -> tuple[Any, ImpactOscillator]:
+    """The entry an N-p branch's chain starts from (a ``[[branches]]`` or ``[[multi_impact]]``
+    entry; a ``[[multi_impact]]`` entry is its own) and the oscillator of its motions (a
+    ``[[multi_impact]]`` entry's is its simulation's)."""
+    origin = _origin(entry, sections) if entry.section == "switches" else entry
+    if origin.section == "multi_impact":
+        simulations = {e.name: e for e in sections.get("simulations", ())}
+        return origin, simulations[origin.start].oscillator
+    return origin, origin.oscillator
 
 
 class Switches:

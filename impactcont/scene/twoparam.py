@@ -30,11 +30,13 @@ from impactcont.analysis.curves import check_curve_arguments, curve
 from impactcont.analysis.map_runner import SCHEDULER_PROTOCOLS
 from impactcont.analysis.maps import map_plane, stability_map
 from impactcont.dataset.attributes import split_parameters
+from impactcont.dataset.curves import kind_of_curve
 from impactcont.dataset.maps import MULTI_MAP_KIND, map_parameters
 from impactcont.errors import ImpactcontError
 from impactcont.model.oscillator import ImpactOscillator
+from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import multi_impact_orbit
-from impactcont.problems.codim1 import curve_problem
+from impactcont.problems.codim1 import SHOOTING_KINDS, curve_problem
 from impactcont.scene.entries import (
     CONTINUATION_KEYS,
     PARAMETER_RANGES,
@@ -59,7 +61,7 @@ from impactcont.scene.keys import (
     declare,
     show,
 )
-from impactcont.scene.switches import simulation_seed
+from impactcont.scene.switches import origin_of, simulation_seed
 from impactcont.scene.tasks import markdown_table
 from impactcont.vocabulary import CURVE_KINDS
 
@@ -67,7 +69,14 @@ __all__ = ["CURVES", "MAPS", "CurveSpec", "MapSpec", "check_curves_plot"]
 
 log = logging.getLogger(__name__)
 
-_CURVE_KINDS = CURVE_KINDS  # every special point but BP has its codim-1 curve
+_CURVE_KINDS = CURVE_KINDS  # the curves of N-1 motions (closed form)
+#: The curves of N-p motions (followed by shooting from a [[multi_impact]] or [[switches]]
+#: entry): the N-1 kinds, BP of symmetric motions, SE, RG and SO of motions with sticking
+#: phases.
+_NP_KINDS = tuple(str(kind) for kind in SHOOTING_KINDS)
+#: The sections whose branches are of N-p motions (a curve from them is followed by
+#: shooting).
+_NP_SECTIONS = ("multi_impact", "switches")
 
 
 _CURVE = defaults_of(curve)
@@ -125,20 +134,23 @@ class _NList(ValueType):
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class CurveSpec(continuation_entry(curve, "CurveEntry")):
-    """``[[curves]]``: a codim-1 curve of N-1 motions in two parameters."""
+    """``[[curves]]``: a codim-1 curve in two parameters, of N-1 motions (closed form) or,
+    from a ``[[multi_impact]]`` or ``[[switches]]`` entry, of its N-p motions (shooting)."""
 
     section: ClassVar[str] = "curves"
 
-    kind: str = declare(String(_CURVE_KINDS), "the curve: SN, PD, NS, GR or ZV", required=True)
+    kind: str = declare(String(_NP_KINDS), "the curve: SN, PD, NS, GR or ZV; from an N-p "
+                        "branch also BP (symmetric motions), SE, RG or SO (sticking phases)",
+                        required=True)
     N: int | None = declare(Integer(1, 1000), "one impact every N forcing periods (default: "
-                            "the start branch's, else 1)")
+                            "the start branch's, else 1; an N-p start's N and p are its own)")
     parameters: tuple[str, str] = declare(_ParameterPair(), "the two parameters [p1, p2]",
                                           ("omega", "b"))
     bounds: Mapping[str, tuple[float, float]] = declare(
         _Bounds(), "the box of the two parameters", required=True)
     start: str | Mapping[str, float] | None = declare(
-        _Start(), "a [[branches]] entry, or values {p1, p2, delta}; default: found by a "
-        "one-parameter continuation in p1")
+        _Start(), "a [[branches]], [[multi_impact]] or [[switches]] entry, or values "
+        "{p1, p2, delta}; default: found by a one-parameter continuation in p1")
     special: int | None = declare(Integer(0), "which special point of the kind on the start")
     root: int | None = declare(Integer(choices=(1, -1)), "root of eq. (15) to start on")
     codim2: bool = declare(Boolean(), "detect and locate codimension-two points",
@@ -160,7 +172,15 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
                                               else f"lacks {missing}"),
                     f"values of {', '.join(sorted(allowed))} (delta optional)")
         if not isinstance(self.start, str):  # a start from a branch: check_scene
+            self._check_n1_kind(where, "a start that is not a branch")
             self._check_arguments(where, osc)
+
+    def _check_n1_kind(self, where: Where, start: str) -> None:
+        if self.kind not in _CURVE_KINDS:
+            raise where.key("kind").error(
+                f"{self.kind!r} is a curve of N-p motions only ({start} gives N-1 motions)",
+                f"one of {list(_CURVE_KINDS)}, or start from a [[multi_impact]] or "
+                "[[switches]] entry")
 
     def _check_arguments(self, where: Where, osc: ImpactOscillator) -> None:
         """The checks :func:`impactcont.analysis.curves.curve` makes before it computes, on the
@@ -196,9 +216,15 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
         if not isinstance(self.start, str):
             return
         branches = {e.name: e for e in sections.get("branches", ())}
+        np_entries = {e.name: e for key in _NP_SECTIONS for e in sections.get(key, ())}
+        if self.start in np_entries:
+            self._check_np_start(where, sections, np_entries[self.start])
+            return
         if self.start not in branches:
-            raise where.key("start").error(f"{self.start!r} is not a [[branches]] entry",
-                                           ", ".join(branches) or "a [[branches]] entry")
+            raise where.key("start").error(
+                f"{self.start!r} is not a [[branches]], [[multi_impact]] or [[switches]] "
+                "entry", ", ".join([*branches, *np_entries]) or "a [[branches]] entry")
+        self._check_n1_kind(where, f"the [[branches]] entry {self.start!r}")
         branch = branches[self.start]
         if branch.parameter not in self.parameters:
             raise where.key("start").error(
@@ -209,6 +235,26 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
                                        f"{self.start!r}", f"{branch.N}, or leave it out")
         refuse_changes(self, where, "a curve started from a branch uses the branch's oscillator")
         self._check_arguments(where, branch.oscillator)
+
+
+    def _check_np_start(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]],
+                        start: EntrySpec) -> None:
+        """A curve from an N-p branch: ``p1`` is the branch's parameter, ``p2`` one of its
+        oscillator's, N and p the branch's; what :func:`~impactcont.analysis.curves.curve`
+        checks further (the special point of the kind, the start inside the bounds) is
+        known once the branch is computed."""
+        origin, osc = origin_of(start, sections)
+        parameter = origin.parameter
+        if self.parameters[0] != parameter:
+            raise where.key("parameters").error(
+                f"{list(self.parameters)} from the N-p branch {self.start!r}, continued in "
+                f"{parameter!r}", f"[{parameter!r}, p2]: p1 is the branch's parameter")
+        if self.N is not None:
+            raise where.key("N").error(
+                f"{self.N} given with the N-p branch {self.start!r}",
+                "no N: the curve follows the branch's motion (its N and p)")
+        library_check(where.key("parameters"), model_parameter, osc, self.parameters[1])
+        refuse_changes(self, where, "a curve started from a branch uses the branch's oscillator")
 
 
 def _span(v: np.ndarray) -> str:
@@ -224,7 +270,9 @@ class Curves:
         start: Any = entry.start
         N: int | None = entry.N if entry.N is not None else 1
         if isinstance(start, str):
-            branches = context.datasets.get("branches", {}) if context is not None else {}
+            datasets = context.datasets if context is not None else {}
+            branches = {name: ds for key in ("branches", *_NP_SECTIONS)
+                        for name, ds in datasets.get(key, {}).items()}
             if start not in branches:
                 raise ImpactcontError(f"curve {entry.name}: its start branch {start!r} was "
                                       f"not computed (it failed)")
@@ -243,7 +291,7 @@ class Curves:
         for name, ds in datasets.items():
             p1, p2 = split_parameters(str(ds.attrs["parameters"]))
             x, y = np.asarray(ds[p1].values), np.asarray(ds[p2].values)
-            rows.append([name, str(ds.attrs["kind"]), int(ds.attrs["N"]), f"{p1}, {p2}",
+            rows.append([name, kind_of_curve(ds), int(ds.attrs["N"]), f"{p1}, {p2}",
                          int(ds.sizes["point"]), _span(x), _span(y),
                          int(ds.sizes.get("codim2", 0)),
                          str(ds.attrs.get("end_status", "-")).replace("|", "/")])
@@ -255,7 +303,7 @@ class Curves:
         for name, ds in datasets.items():
             p1, p2 = split_parameters(str(ds.attrs["parameters"]))
             for k in range(ds.sizes.get("codim2", 0)):
-                out.append({"curve": name, "kind": str(ds.attrs["kind"]),
+                out.append({"curve": name, "kind": kind_of_curve(ds),
                             "label": str(ds["codim2_label"].values[k]),
                             p1: float(ds[f"codim2_{p1}"].values[k]),
                             p2: float(ds[f"codim2_{p2}"].values[k]),

@@ -210,9 +210,11 @@ def test_in_a_scene_file_the_kind_is_the_sections(branch) -> None:
     with pytest.raises(ValueError, match=r"attribute 'impactcont_dataset' must be absent \(a "
                                          r"branch\) in a file of section 'switches'; got 'map'"):
         at.dataset_kind(_with(branch, impactcont_dataset="map"), "switches")
-    with pytest.raises(ValueError, match=r"attribute 'impactcont_dataset' must be 'curve' in a "
-                                         r"file of section 'curves'; got None"):
+    with pytest.raises(ValueError, match=r"attribute 'impactcont_dataset' must be 'curve' or "
+                                         r"'branch' in a file of section 'curves'; got None"):
         at.dataset_kind(branch, "curves")
+    # a curve followed by shooting is an N-p branch dataset with its curve_kind
+    assert at.dataset_kind(_with(branch, curve_kind="PD"), "curves") == "branch"
 
 
 def test_a_dataset_of_a_scene_section_carries_what_its_description_reads(branch) -> None:

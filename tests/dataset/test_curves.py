@@ -235,3 +235,32 @@ def test_a_bad_map_is_named(n1_map) -> None:
     with pytest.raises(ValueError, match=r"variable 'exists' must have dims \('N', 'omega', "
                                          r"'b'\); got \('N', 'omega'\)"):
         dm.validate_map_dataset(_map(n1_map).isel(b=0, drop=True))
+
+
+def test_any_curve_of_either_evaluator_is_validated(caplog) -> None:
+    """``validate_any_curve``: a curve followed by shooting is an N-p branch dataset with
+    ``curve_kind`` and its two parameter columns; one written before it had
+    ``stable_side`` gets one of False, with a WARNING; a bad kind or parameters are
+    refused by name."""
+    import numpy as np
+
+    import impactcont as ic
+    from impactcont.dataset.curves import kind_of_curve, validate_any_curve
+
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[1.0, -1.0], [-1.0, 2.0]], F=[1.0, 0.0],
+                              R=0.6, eta=0.1, b=0.0, omega=1.75)
+    start = ic.multi_impact_orbit(osc, 1, 1, next(q for q in ic.periodic_orbits(osc, 1)
+                                                  if q.physical))
+    branch = ic.multi_impact_continuation(start, "omega", (1.6, 1.9), detect=("PD",),
+                                          both_directions=True)
+    curve = ic.curve(None, None, "PD", start=branch, parameters=("omega", "b"),
+                     bounds={"omega": (1.5, 2.0), "b": (-0.05, 0.05)})
+    assert kind_of_curve(curve) == "PD" and validate_any_curve(curve) is curve
+    old = curve.drop_vars("stable_side")
+    with caplog.at_level("WARNING", logger="impactcont.dataset.curves"):
+        mended = validate_any_curve(old)
+    assert not mended["stable_side"].values.any() and "has no stable_side" in caplog.text
+    with pytest.raises(ValueError, match="curve_kind"):
+        validate_any_curve(curve.assign_attrs(curve_kind="XX"))
+    with pytest.raises(ValueError, match="parameters"):
+        validate_any_curve(curve.assign_attrs(parameters="omega,q7"))

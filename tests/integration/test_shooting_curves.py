@@ -85,6 +85,34 @@ def test_pd_curve_by_shooting_is_the_closed_form_curve():
     assert np.all(np.min(np.abs(cv["multipliers"].values + 1.0), axis=1) < 1e-8)
 
 
+def _switches(ds) -> list[tuple[float, float, bool]]:
+    """Where ``stable_side`` changes along a curve: (omega, b, the value after)."""
+    side = ds["stable_side"].values.astype(bool)
+    return [(float(ds["omega"].values[i]), float(ds["b"].values[i]), bool(side[i + 1]))
+            for i in np.flatnonzero(side[1:] != side[:-1])]
+
+
+def test_a_shooting_curve_says_where_a_stable_motion_changes_as_the_closed_form():
+    """``stable_side`` of the PD curve followed by shooting (the 1-1 motion) against the
+    closed form's PD curve of the same motion, over a box where it changes twice inside
+    the physical motions (omega 2.96, b -0.70: a second multiplier leaves the unit circle;
+    omega 1.27, b 0.42) and once at the box's edge: the same changes, each between
+    neighbouring points of both curves (steps about 0.01 apart, so within 0.03)."""
+    osc = paper(b=0.0, omega=1.75)
+    box = {"omega": (0.5, 4.0), "b": (-1.5, 1.0)}
+    closed = ic.curve(None, None, "PD", start=ic.continuation(osc, 1, "omega", (1.6, 1.9),
+                                                              detect=("PD",)), bounds=box)
+    physical = next(q for q in ic.periodic_orbits(osc, 1) if q.physical)
+    branch = ic.multi_impact_continuation(ic.multi_impact_orbit(osc, 1, 1, physical), "omega",
+                                          (1.6, 1.9), detect=("PD",), both_directions=True)
+    shooting = ic.curve(None, None, "PD", start=branch, parameters=("omega", "b"), bounds=box)
+    assert shooting["stable_side"].attrs["long_name"] == "stable on one side"
+    expected, found = _switches(closed), _switches(shooting)
+    assert len(expected) == len(found) == 3, (expected, found)
+    for (w0, b0, after0), (w1, b1, after1) in zip(expected, found, strict=True):
+        assert after0 == after1 and abs(w0 - w1) < 0.03 and abs(b0 - b1) < 0.03
+
+
 @pytest.fixture(scope="module")
 def bp_curve():
     branch = symmetric_branch(1.6, 0.5, (0.9, 1.7))

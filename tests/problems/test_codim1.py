@@ -250,6 +250,20 @@ def test_the_rounding_noise_of_a_plain_test_leaves_the_newton_tolerance(ride) ->
     assert steep.test_noise(x, osc.eta) < 1e-8
 
 
+def test_other_multipliers_leave_out_the_curves_critical_ones() -> None:
+    """SN drops the multiplier nearest +1, PD the one nearest -1, NS the complex pair
+    nearest the unit circle (here 0.008 inside it, real ones 0.001 off); GR and ZV keep
+    them all (their motions are bounded by a contact, not by
+    a multiplier)."""
+    mu = np.array([0.999, -1.001, 0.6 + 0.79j, 0.6 - 0.79j, 0.2])
+    expect = {"SN": [-1.001, 0.6 + 0.79j, 0.6 - 0.79j, 0.2],
+              "PD": [0.999, 0.6 + 0.79j, 0.6 - 0.79j, 0.2],
+              "NS": [0.999, -1.001, 0.2], "GR": mu.tolist(), "ZV": mu.tolist()}
+    for kind, rest in expect.items():
+        curve = ShootingCurve(_paper(0.5), 1, 1, "U", kind, ("omega", "b"), symmetric=False)
+        assert curve.other_multipliers(mu).tolist() == rest, kind
+
+
 def test_sticking_kinds_need_sticking_phases(ride) -> None:
     """SE, RG, SO on a motion without sticking phases, and a motion with sticking phases
     followed by its half, are refused by name."""

@@ -126,7 +126,7 @@ def test_name_and_key_clashes_warn(fake_entry_points) -> None:
 def test_unknown_problem_names_the_available_ones(fake_entry_points) -> None:
     fake_entry_points(("good", "tests_fake_plugin:GoodProblem"))
     with pytest.raises(ParameterError, match=r"did you mean 'orbits'\?.*available: "
-                                             r"orbits, branches, .*, switches, good"):
+                                             r"orbits, branches, .*, maps, good"):
         get_problem("orbit")
 
 

@@ -27,8 +27,8 @@ BUILT_IN = {"orbits": (sections.ORBITS, entries.OrbitSpec, tasks.ORBITS),
 
 def test_the_built_in_sections_run_in_registry_order() -> None:
     found = sections.scene_sections()
-    assert list(found)[:8] == ["orbits", "branches", "robust", "simulations", "curves", "maps",
-                               "multi_impact", "switches"]
+    assert list(found)[:8] == ["orbits", "branches", "robust", "simulations", "multi_impact",
+                               "switches", "curves", "maps"]
     for key, (section, _, _) in BUILT_IN.items():
         assert found[key] is section and section.key == key
 

@@ -29,7 +29,8 @@ def test_curve_validation(tmp_path: Path) -> None:
     err = error(tmp_path, '[[curves]]\nkind = "SN"\nbounds = { omega = [0.9, 1.6] }\n')
     assert err.key == "curves[0].bounds" and "['omega', 'b']" in err.allowed
     err = error(tmp_path, '[[curves]]\nkind = "SN"\nstart = "nope"\n' + BOX)
-    assert err.key == "curves[0].start" and "not a [[branches]] entry" in str(err)
+    assert err.key == "curves[0].start"
+    assert "not a [[branches]], [[multi_impact]] or [[switches]] entry" in str(err)
     err = error(tmp_path, BRANCH.replace('bounds = [0.9, 1.5]', 'parameter = "R"\n'
                                          'bounds = [0.1, 0.9]')
                 + '[[curves]]\nkind = "SN"\nstart = "br"\n' + BOX)
@@ -216,3 +217,71 @@ def test_a_scene_maps_the_family_of_a_simulated_motion(tmp_path: Path) -> None:
                                atol=1e-9)
     assert (tmp_path / "o" / "fam.png").is_file()
     assert "2-2 family" in (tmp_path / "o" / "summary.md").read_text()
+
+
+NP_CURVE = """
+[[branches]]
+name = "N1"
+b = 0.0
+omega = 1.75
+bounds = [1.6, 1.9]
+detect = ["PD"]
+
+[[switches]]
+name = "two"
+start = "N1"
+detect = ["PD"]
+ds_max = 0.02
+
+[[curves]]
+name = "pd4"
+kind = "PD"
+start = "two"
+parameters = ["omega", "b"]
+bounds = { omega = [1.5, 2.2], b = [-0.05, 0.05] }
+
+[[plots]]
+kind = "curves"
+data = ["pd4"]
+file = "pd4.png"
+"""
+
+
+def test_a_curve_of_the_n_p_motion_of_a_switch(tmp_path: Path) -> None:
+    """[[curves]] from a [[switches]] entry (the 2-2 motion born at the PD of the N = 1
+    branch): its PD curve in (omega, b), followed by shooting, is the one ``ic.curve``
+    follows from the same branch (switches run before curves), drawn with the other curves
+    and written with ``stable_side``."""
+    import numpy as np
+
+    import impactcont as ic
+
+    result = run_scene(write(tmp_path, OSCILLATOR + NP_CURVE), output=tmp_path / "o")
+    assert result.ok, result.failures
+    two = read_output(tmp_path / "o" / "switches.nc").datasets["two"]
+    scene = read_output(tmp_path / "o" / "curves.nc").datasets["pd4"]
+    direct = ic.curve(None, None, "PD", start=two, parameters=("omega", "b"),
+                      bounds={"omega": (1.5, 2.2), "b": (-0.05, 0.05)})
+    assert scene.attrs["curve_kind"] == "PD" and int(scene.attrs["impacts"]) == 2
+    np.testing.assert_allclose(scene["omega"].values, direct["omega"].values, atol=1e-10)
+    np.testing.assert_allclose(scene["b"].values, direct["b"].values, atol=1e-10)
+    assert (scene["stable_side"].values == direct["stable_side"].values).all()
+    assert (tmp_path / "o" / "pd4.png").stat().st_size > 0
+    assert "pd4" in (tmp_path / "o" / "summary.md").read_text()
+
+
+@pytest.mark.parametrize(("change", "key", "words"), [
+    ('start = "N1"\nkind = "SO"', "curves[0].kind", "N-p motions only"),
+    ('start = "two"\nN = 2', "curves[0].N", "no N"),
+    ('start = "two"\nparameters = ["b", "omega"]', "curves[0].parameters", "p1 is the "),
+    ('start = "two"\nparameters = ["omega", "q7"]', "curves[0].parameters", "q7"),
+])
+def test_a_curve_from_an_n_p_branch_is_checked_before_it_runs(tmp_path: Path, change, key,
+                                                             words) -> None:
+    head, curve = NP_CURVE.split("[[plots]]")[0].split("[[curves]]")
+    lines = [ln for ln in curve.splitlines()
+             if not any(ln.startswith(c.split(" =")[0] + " =") for c in change.splitlines())]
+    text = head + "[[curves]]" + "\n".join(lines).replace('name = "pd4"',
+                                                          'name = "pd4"\n' + change)
+    err = error(tmp_path, text)
+    assert err.key == key and words in str(err) + (err.allowed or ""), (err.key, str(err))
