@@ -1111,17 +1111,40 @@ def held_pressing(held, k, omega, X0, theta, times):
     :class:`~impactcont.kernel.arrays.HeldSegments`. Compiled only where a motion with
     sticking phases is checked (``HeldFlow.pressing_minimum``'s samples,
     :func:`impactcont.orbit.sticky.chatter_bounces`'s module); no other entry point calls
-    it."""
+    it. The held state of each sample is :func:`_held_segment`'s ``X_c + L Y(t)`` (the same
+    arithmetic, without its derivatives)."""
     named = HeldSegments(*held)
-    m = X0.size
-    X = np.empty(m)
-    dX0 = np.empty((m, m))
-    dtheta = np.empty(m)
-    rate = np.empty(m)
+    L, Li, Xc = named.lifts[k], named.inverses[k], named.offsets[k]
+    m = Xc.size
+    r = Li.shape[0]
+    X = Xc.copy()
     out = np.empty(times.size)
-    for i in range(times.size):
-        _held_segment(named, k, omega, times[i], X0, theta, X, dX0, dtheta, rate)
-        out[i], _ = _pressing(named, k, X, theta + omega * times[i])
+    if r == 0:  # one mass held: the state stays
+        for i in range(times.size):
+            out[i], _ = _pressing(named, k, X, theta + omega * times[i])
+        return out
+    Y0 = np.zeros(r)
+    for i in range(r):
+        s = 0.0
+        for c in range(m):
+            s += Li[i, c] * (X0[c] - Xc[c])
+        Y0[i] = s
+    tr = np.empty((r, r))
+    Y = np.empty(r)
+    pcol = np.empty(r)
+    yr = np.empty(r)
+    empty = np.zeros(0)
+    flight = FirstOrderFlight(named.lam[k], named.V[k], named.Vi[k], named.xs[k], named.xd[k])
+    forcing = Forcing(omega, empty, empty, named.Z[k])
+    for j in range(times.size):
+        _flight_general(flight, forcing, times[j], Y0, theta, tr, Y, pcol, yr)
+        for i in range(m):
+            X[i] = Xc[i]
+            for q in range(r):
+                lq = L[i, q]
+                if lq != 0.0:
+                    X[i] += lq * Y[q]
+        out[j], _ = _pressing(named, k, X, theta + omega * times[j])
     return out
 
 

@@ -529,17 +529,18 @@ def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase:
     names, normals, signs, positions = _other_stops(flow, geo, impacts[k])
     inner, inner_times = held_flow(flow.osc, impacts[k]).stop_clearances(
         duration, start, phase, (normals, signs, positions))
-    ends = np.vstack([start[:n], release[:n]])
+    ends = np.array((start[:n], release[:n]))
     found = []
     for i, name in enumerate(names):
         at_ends = signs[i] * (positions[i] - ends @ normals[i])
         tol = HELD_END_ULPS * _EPS * (abs(positions[i]) + np.abs(ends * normals[i]).sum(axis=1))
-        gaps = np.append(at_ends, inner[i])
-        when = np.append([0.0, duration], inner_times[i])
-        j = int(np.argmin(gaps))
-        crossed = bool(not inner[i] > 0.0 or np.any(at_ends < -tol))
-        found.append(_HeldGap(float(gaps[j]), offset + float(when[j]), name,
-                              _coordinate(normals[i]), crossed))
+        gaps = (float(at_ends[0]), float(at_ends[1]), float(inner[i]))
+        when = (0.0, duration, float(inner_times[i]))
+        nans = [g for g in range(3) if math.isnan(gaps[g])]
+        j = nans[0] if nans else gaps.index(min(gaps))  # np.argmin's: the first NaN, smallest
+        crossed = bool(not gaps[2] > 0.0 or at_ends[0] < -tol[0] or at_ends[1] < -tol[1])
+        found.append(_HeldGap(gaps[j], offset + when[j], name, _coordinate(normals[i]),
+                              crossed))
     return found
 
 
