@@ -430,10 +430,13 @@ def held_flow_at(base: HeldFlow, osc: ImpactOscillator, name: str, reduced: Flow
         differ), or `reduced` is not at `osc`'s omega.
     """
     old = base.oscillator
-    if osc.n != old.n or not (np.array_equal(osc.M, old.M) and np.array_equal(osc.K, old.K)
-                              and np.array_equal(osc.C, old.C)
-                              and np.array_equal(osc.F, old.F)
-                              and np.array_equal(osc.F_static, old.F_static) and osc.b == old.b
+
+    def same(name: str) -> bool:  # the same array (osc.replace keeps it) or equal ones
+        a, b = getattr(osc, name), getattr(old, name)
+        return a is b or np.array_equal(a, b)
+
+    if osc.n != old.n or not (same("M") and same("K") and same("C") and same("F")
+                              and same("F_static") and osc.b == old.b
                               and osc.R == old.R and osc.stops == old.stops):
         raise ParameterError("held_flow_at: osc must be the held flow's oscillator at another "
                              f"omega only; got {osc!r} for {old!r}")
