@@ -149,19 +149,21 @@ def solve_cost(start: ic.MultiImpactOrbit, rounds: int, osc: ic.ImpactOscillator
                ) -> tuple[float, float]:
     """Seconds of ``ic.multi_impact_orbit`` at omega + 0.005 (`osc`, by default made here)
     seeded by `start` (a Newton solve of a few iterations) and of one branch point (omega
-    +- 0.02, ``ds_max = 0.005``, no detection): the best of `rounds`."""
+    +- 0.02, ``ds_max = 0.005``, no detection): the best of `rounds`, in CPU time of this
+    process (single-threaded with ``OPENBLAS_NUM_THREADS=1``: the wall clock of a machine
+    loaded beyond its cores counts the other processes' time slices too)."""
     if osc is None:
         osc = start.oscillator.replace(omega=start.oscillator.omega + 0.005)
     solve = branch = np.inf
     for _ in range(rounds):
-        begin = time.perf_counter()
+        begin = time.process_time()
         ic.multi_impact_orbit(osc, start.N, start.p, start)
-        solve = min(solve, time.perf_counter() - begin)
+        solve = min(solve, time.process_time() - begin)
         omega = start.oscillator.omega
-        begin = time.perf_counter()
+        begin = time.process_time()
         ds = ic.continuation(start, parameter="omega", bounds=(omega - 0.02, omega + 0.02),
                              ds_max=0.005, detect=())
-        branch = min(branch, (time.perf_counter() - begin) / ds.sizes["point"])
+        branch = min(branch, (time.process_time() - begin) / ds.sizes["point"])
     return solve, branch
 
 
