@@ -675,7 +675,7 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
         record["interrupted"] = True
         record["interrupted_while"] = phase
     info = {"curve_kind": str(kind), "parameters": f"{p1},{parameter}",
-            "born_at_value": start_p1}
+            "born_at_value": start_p1, "end_status": message}
     ds = branch_to_dataset(_CurveView(problem, parameter, osc), samples, [], record,
                            title=f"{kind} curve of periodic {N}-{p} impacting motions in "
                            f"({p1}, {parameter})", extra_attrs=info, extra_columns=(p1,),
