@@ -144,7 +144,7 @@ class StickyShooting(StickyFlights):
 def _section_lift(geo: StopGeometry, k: int, m: int) -> np.ndarray:
     """``dX_k/dz_k`` (m, m-1): the unit columns and the pivot's row ``-n_i / n_j`` from the
     section ``n_k . x = c_k`` (kept per pivot and normal: the geometries of a branch's
-    points share them; read it, do not modify it)."""
+    points share them; read-only)."""
     j = int(geo.pivots[k])
     normal = np.asarray(geo.normals[k], dtype=float)
     key = (m, j, normal.tobytes())
@@ -156,6 +156,7 @@ def _section_lift(geo: StopGeometry, k: int, m: int) -> np.ndarray:
         row = np.zeros(m)
         row[:n] = -normal / normal[j]
         L[j, :] = row[rest]
+        L.setflags(write=False)  # shared by the calls with this key
         if len(_SECTION_LIFTS) > 256:
             _SECTION_LIFTS.clear()
         _SECTION_LIFTS[key] = L
