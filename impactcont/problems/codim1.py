@@ -510,15 +510,20 @@ class ShootingCurve:
         motion's own test is zero to rounding, so ``orbit.physical`` flips from point to
         point; there the other bounding tests the curve watches decide (those of
         :data:`_BOUNDS_PHYSICAL` among :attr:`codim2_tests`, where defined; not RG on an
-        SO curve, which vanishes along it too). A reason for not being physical that no
-        test counts (a chatter bounce reaching another stop) is then not seen here; the
-        motion's ``reason`` names it.
+        SO curve, which vanishes along it too). Where it watches none (a ZV curve of a
+        motion without sticking phases: GR vanishes with the impact velocity) the motion
+        is not called physical. A reason for not being physical that no test counts (a
+        chatter bounce reaching another stop) is not seen here; the motion's ``reason``
+        names it.
         """
         if orbit.physical or _KINDS[self.kind].critical is not None:
             return bool(orbit.physical)
-        values = [self.codim2_test(test, x, orbit) for test in self.codim2_tests
-                  if test in _BOUNDS_PHYSICAL]
-        return all(value > 0.0 for value in values if math.isfinite(value))
+        values = [value for value in (self.codim2_test(test, x, orbit)
+                                      for test in self.codim2_tests
+                                      if test in _BOUNDS_PHYSICAL) if math.isfinite(value)]
+        if not values:  # no other bound watched (a ZV curve): orbit.physical, False here
+            return False
+        return all(value > 0.0 for value in values)
 
     def test_of(self, orbit: MultiImpactOrbit) -> float:
         """The test function at a motion (all kinds but SN, which needs the problem; SE, RG

@@ -264,6 +264,26 @@ def test_other_multipliers_leave_out_the_curves_critical_ones() -> None:
         assert curve.other_multipliers(mu).tolist() == rest, kind
 
 
+def test_physical_on_a_curve_leaves_out_the_curves_own_bound() -> None:
+    """On a GR curve the motion's own clearance is zero to rounding: the impact velocity
+    (ZV, the other bound it watches) decides. A ZV curve watches no other bound: the
+    motion's word. A PD curve bounds no physical motions: the motion's word too."""
+    from types import SimpleNamespace
+
+    x = np.zeros(3)
+    curves = {kind: ShootingCurve(_paper(0.5), 1, 1, "U", kind, ("omega", "b"),
+                                  symmetric=False) for kind in ("GR", "ZV", "PD")}
+
+    def orbit(physical: bool, velocity: float) -> SimpleNamespace:
+        return SimpleNamespace(physical=physical, impact_velocity=velocity, gap_min=-1e-16)
+
+    assert curves["GR"].physical_on_curve(x, orbit(False, 0.3))
+    assert not curves["GR"].physical_on_curve(x, orbit(False, -0.1))
+    assert not curves["ZV"].physical_on_curve(x, orbit(False, 1e-17))
+    assert curves["ZV"].physical_on_curve(x, orbit(True, 1e-17))
+    assert not curves["PD"].physical_on_curve(x, orbit(False, 0.3))
+
+
 def test_sticking_kinds_need_sticking_phases(ride) -> None:
     """SE, RG, SO on a motion without sticking phases, and a motion with sticking phases
     followed by its half, are refused by name."""
