@@ -236,7 +236,6 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
         refuse_changes(self, where, "a curve started from a branch uses the branch's oscillator")
         self._check_arguments(where, branch.oscillator)
 
-
     def _check_np_start(self, where: Where, sections: Mapping[str, tuple[EntrySpec, ...]],
                         start: EntrySpec) -> None:
         """A curve from an N-p branch: ``p1`` is the branch's parameter, ``p2`` one of its
