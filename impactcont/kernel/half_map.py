@@ -22,7 +22,12 @@ import numpy as np
 from impactcont.kernel.arrays import Forcing, ImpactSequence, ShotFlights
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
-from impactcont.kernel.shooting import _apply, _flight_jacobian, omega_partials
+from impactcont.kernel.shooting import (
+    _apply,
+    _apply_matrix,
+    _flight_jacobian,
+    omega_partials,
+)
 
 __all__ = ["jacobian_product_derivative"]
 
@@ -146,20 +151,11 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
         for c in range(m):  # G_k's last row is -omega h / h2 + e
             h[c] = -Gk[m - 1, c] * h2 / omega
         h[m - 1] = (1.0 - Gk[m - 1, m - 1]) * h2 / omega
+        _apply(state_matrix, pcol, Apcol)
+        _apply_matrix(state_matrix, tr, Atr)
+        _apply(tr, X0, forced)
         for r in range(m):
-            s = 0.0
-            for i in range(m):
-                s += state_matrix[r, i] * pcol[i]
-            Apcol[r] = s
-            for c in range(m):
-                s = 0.0
-                for i in range(m):
-                    s += state_matrix[r, i] * tr[i, c]
-                Atr[r, c] = s
-            s = 0.0
-            for c in range(m):
-                s += tr[r, c] * X0[c]
-            forced[r] = flights.arrivals[k, r] - s
+            forced[r] = flights.arrivals[k, r] - forced[r]
         phi = flights.phases[k] + omega * tau
         for r in range(n):
             rate_of[n + r] = -math.sin(phi) * forcing_rate[r]
@@ -189,11 +185,9 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
                     dtr[r, c] = dtau * Atr[r, c]
             speed = dtheta + omega * dtau + tau * dw
             dh2 = 0.0
+            _apply(state_matrix, dXm, drate)
             for r in range(m):
-                s = 0.0
-                for c in range(m):
-                    s += state_matrix[r, c] * dXm[c]
-                drate[r] = s + speed * rate_of[r]
+                drate[r] += speed * rate_of[r]
                 if r < n:
                     dh2 += n_end[r] * drate[r]
             # the part of (dPhi, d(dX^-/dtheta)): G_k is affine in them at a fixed rate
