@@ -575,6 +575,26 @@ def _shooting_system(flight, forcing, impacts, period, x, want_jacobian):
 
 # -- motions with sticking phases ---------------------------------------------------------------
 @_inner
+def _held_start(held, k, omega, X0):
+    """``(flight, forcing, Y0)`` of the sticking phase after impact k: the held system's
+    first-order flight (:class:`~impactcont.kernel.arrays.FirstOrderFlight`), its forcing
+    at `omega` and the reduced start ``Y0 = L^+ (X0 - X_c)`` (at least one coordinate
+    free)."""
+    Li, Xc = held.inverses[k], held.offsets[k]
+    m = Xc.size
+    r = Li.shape[0]
+    Y0 = np.zeros(r)
+    for i in range(r):
+        s = 0.0
+        for c in range(m):
+            s += Li[i, c] * (X0[c] - Xc[c])
+        Y0[i] = s
+    empty = np.zeros(0)
+    return (FirstOrderFlight(held.lam[k], held.V[k], held.Vi[k], held.xs[k], held.xd[k]),
+            Forcing(omega, empty, empty, held.Z[k]), Y0)
+
+
+@_inner
 def _held_segment(held, k, omega, t, X0, theta, X, dX0, dtheta, rate):
     """The sticking phase after impact k (:class:`~impactcont.kernel.arrays.HeldSegments`)
     held for `t` from ``X0`` at phase `theta`: ``X(t)``, ``dX/dX0 = L Phi_r L^+``,
@@ -591,20 +611,12 @@ def _held_segment(held, k, omega, t, X0, theta, X, dX0, dtheta, rate):
             dX0[i, c] = 0.0
     if r == 0:  # one mass held: the state stays
         return
-    Y0 = np.zeros(r)
-    for i in range(r):
-        s = 0.0
-        for c in range(m):
-            s += Li[i, c] * (X0[c] - Xc[c])
-        Y0[i] = s
+    flight, forcing, Y0 = _held_start(held, k, omega, X0)
     tr = np.empty((r, r))
     Y = np.empty(r)
     pcol = np.empty(r)
     yr = np.empty(r)
-    empty = np.zeros(0)
-    _flight_general(FirstOrderFlight(held.lam[k], held.V[k], held.Vi[k], held.xs[k],
-                                     held.xd[k]),
-                    Forcing(omega, empty, empty, held.Z[k]), t, Y0, theta, tr, Y, pcol, yr)
+    _flight_general(flight, forcing, t, Y0, theta, tr, Y, pcol, yr)
     TLi = np.empty((r, m))  # Phi_r L^+
     for i in range(r):
         for c in range(m):
@@ -1123,19 +1135,11 @@ def held_pressing(held, k, omega, X0, theta, times):
         for i in range(times.size):
             out[i], _ = _pressing(named, k, X, theta + omega * times[i])
         return out
-    Y0 = np.zeros(r)
-    for i in range(r):
-        s = 0.0
-        for c in range(m):
-            s += Li[i, c] * (X0[c] - Xc[c])
-        Y0[i] = s
+    flight, forcing, Y0 = _held_start(named, k, omega, X0)
     tr = np.empty((r, r))
     Y = np.empty(r)
     pcol = np.empty(r)
     yr = np.empty(r)
-    empty = np.zeros(0)
-    flight = FirstOrderFlight(named.lam[k], named.V[k], named.Vi[k], named.xs[k], named.xd[k])
-    forcing = Forcing(omega, empty, empty, named.Z[k])
     for j in range(times.size):
         _flight_general(flight, forcing, times[j], Y0, theta, tr, Y, pcol, yr)
         for i in range(m):
