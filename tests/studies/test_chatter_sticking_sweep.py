@@ -47,3 +47,19 @@ def test_the_excursion_sees_a_stop_passed(sweep):
     assert e == 0.0 and allowed > 0
     e, allowed = sweep.excursion(osc, past)
     assert e == pytest.approx(1e-9) and e > allowed
+
+
+def test_the_allowance_counts_the_whole_state(sweep):
+    """An excursion of 3e-16 past the stop is rounding where the state around it has size 4
+    (the flow sums the coordinate from terms of that size; balls on a floor #248 of the
+    sweep), and a violation where the whole state is that small."""
+    osc = sweep.preloaded(0.7)
+    big = SimpleNamespace(X=np.array([[0.0, 4.28], [3e-16, 4.28]]),
+                          impact_states=np.zeros((0, 2)), sticking=())
+    small = SimpleNamespace(X=np.array([[0.0, 1e-15], [3e-16, 0.0]]),
+                            impact_states=np.zeros((0, 2)), sticking=())
+    e, allowed = sweep.excursion(osc, big)
+    assert e == pytest.approx(3e-16) and e < allowed
+    assert allowed == pytest.approx(sweep.VIOLATION_ULPS * np.finfo(float).eps * 4.28)
+    e, allowed = sweep.excursion(osc, small)
+    assert e == pytest.approx(3e-16) and e > allowed
