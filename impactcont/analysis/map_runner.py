@@ -288,9 +288,9 @@ def _executor(executor: Any, max_workers: int | None
                                  f"distributed: pip install 'impactcont[dask]'") from None
         try:
             client = Client(executor, timeout="10s", set_as_default=False)
-        except OSError as exc:
+        except Exception as exc:  # no answer (OSError), or one that is not dask's protocol
             raise ParameterError(f"executor={executor!r}: no dask scheduler answers at this "
-                                 f"address ({exc})") from None
+                                 f"address ({type(exc).__name__}: {exc})") from None
         return client.get_executor(), [client], "dask.distributed", client
     client = _dask_client(executor)
     if client is not None and not isinstance(executor, cf.Executor):

@@ -95,6 +95,7 @@ from impactcont.dataset.maps import map_dataset, multi_impact_map_dataset
 from impactcont.errors import ParameterError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import ModelParameter, model_parameter
+from impactcont.model.stops import require_paper_stops
 from impactcont.orbit.batched import batched_orbits
 from impactcont.orbit.multi_impact import MultiImpactOrbit
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, impact_states, periodic_orbits
@@ -281,6 +282,7 @@ def stability_map(osc: Any, N: Any = _ALL_N, omega: Any = (), b: Any = (), *,
         raise ParameterError(
             f"stability_map takes the grid of a parameter as parameters=(p1, p2), grid={{p1: "
             f"..., p2: ...}}; got the keyword(s) {sorted(others)}")
+    require_paper_stops(osc, "the N-1 stability map")  # before a pool or cluster is opened
     params, axes = map_plane(osc, parameters, grid, omega=omega, b=b)
     names = (params[0].name, params[1].name)
     w, bb = axes[names[0]], axes[names[1]]

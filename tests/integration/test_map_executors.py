@@ -124,6 +124,37 @@ def test_multi_impact_map_refuses_what_it_cannot_run(start):
         multi_impact_map(start, ("omega", "b"), grid=GRID, rows_per_task=0)
 
 
+def test_an_address_that_answers_without_dask_is_named(paper, monkeypatch):
+    """A scheduler address whose server answers, but not in dask's protocol (the handshake
+    raises ValueError, not OSError: seen with a proxy listening on the port), is refused
+    as the executor, naming the address and what went wrong."""
+    import dask.distributed
+
+    def not_dask(address, **kwargs):
+        raise ValueError("Maximum allowed dimension exceeded")
+
+    monkeypatch.setattr(dask.distributed, "Client", not_dask)
+    with pytest.raises(ParameterError, match=r"executor='tcp://10\.0\.0\.5:8786': no dask "
+                       r"scheduler answers at this address \(ValueError: Maximum"):
+        stability_map(paper, 1, omega=OMEGA[:3], b=GAP[:3], executor="tcp://10.0.0.5:8786")
+
+
+def test_a_machine_the_closed_form_cannot_map_is_refused_before_the_executor_opens(
+        monkeypatch):
+    """The N-1 map refuses a machine outside eq. (12)-(16) at once, not in its first task
+    after a cluster was reached: no client is made."""
+    import dask.distributed
+
+    clients = []
+    monkeypatch.setattr(dask.distributed, "Client", lambda *a, **k: clients.append(a))
+    damper = ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
+                                 R=0.0, b=0.3, omega=2.3, eta=0.3,
+                                 stops=Stops(mass=2, relative_to=1, mirror=True))
+    with pytest.raises(ParameterError, match=r"the N-1 stability map: the closed form"):
+        stability_map(damper, [1, 2], omega=OMEGA, b=GAP, executor="tcp://127.0.0.1:9")
+    assert clients == []
+
+
 def _interrupted_after(k: int, real, *args):
     """The task; the k-th call raises KeyboardInterrupt (as Ctrl-C in a serial map)."""
     _interrupted_after.calls += 1
