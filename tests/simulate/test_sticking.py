@@ -162,7 +162,9 @@ def test_two_stops_held_at_once():
     assert force == pytest.approx(0.0, abs=1e-13)
     assert second.contact_force([second.start])[0, 0] == pytest.approx(
         0.5 - osc.K[1, 0] * second.start_state[0] - osc.C[1, 0] * second.start_state[2])
-    assert res.X[:, 0].max() <= 1e-15 and res.X[:, 1].max() <= 1e-15
+    # never above the stops, to rounding of the state's size (1.2e-15 on some processors)
+    rounding = 64 * EPS * float(np.abs(res.X).max())
+    assert res.X[:, 0].max() <= rounding and res.X[:, 1].max() <= rounding
     # an impact of mass 1 (plastic) while mass 2 is held: both held afterwards
     later = [p for p in res.sticking if p.start in set(res.impact_times)]
     assert later and all(np.all(p.forces >= -1e-14) for p in later)
