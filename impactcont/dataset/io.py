@@ -528,8 +528,8 @@ def _tree(obj: Any, validate: bool) -> xr.Dataset | xr.DataTree:
         # the root's title, provenance and description are written with its index
         tree = xr.DataTree.from_dict({"/": xr.Dataset(), **groups})
     else:
-        raise TypeError(f"obj must be an xarray.Dataset, a mapping of name to Dataset or an "
-                        f"xarray.DataTree; got {type(obj).__name__}")
+        raise TypeError(f"obj must be an xarray.Dataset, a mapping of name to Dataset, an "
+                        f"xarray.DataTree or a SimulationResult; got {type(obj).__name__}")
     check_file_attributes(tree.attrs)
     section = tree.attrs.get(SECTION_ATTRIBUTE)
     for node in tree.subtree:
@@ -1156,10 +1156,13 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
 
     Parameters
     ----------
-    obj : xarray.Dataset, mapping of str to Dataset, or xarray.DataTree
+    obj : xarray.Dataset, mapping of str to Dataset, xarray.DataTree or SimulationResult
         One dataset (written to the root group), or several (one group per
         mapping key, with an index in the root group; a DataTree is written
-        as it is, with that index if its root holds no data).
+        as it is, with that index if its root holds no data); a result of
+        :func:`impactcont.simulate` is written as its dataset
+        (:func:`impactcont.dataset.simulation.simulation_dataset`: impacts, sticking
+        phases with their contact forces, accumulation points, the trajectory).
     path : str or os.PathLike
         Target file; its directory must exist. An existing file is replaced
         only once the new one is completely written.
@@ -1197,6 +1200,12 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
         Ctrl-C: the target is untouched and the temporary file removed.
     """
     target = _path(path)
+    if not isinstance(obj, (xr.Dataset, xr.DataTree, Mapping)):
+        from impactcont.dataset.simulation import simulation_dataset
+        from impactcont.simulate.simulator import SimulationResult
+
+        if isinstance(obj, SimulationResult):
+            obj = simulation_dataset(obj)
     data = _tree(obj, validate)
     with atomic_output(path) as tmp:
         kwargs = {}

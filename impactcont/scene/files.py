@@ -209,10 +209,10 @@ def read_output(path: str | os.PathLike) -> SceneOutput:
                     for node in data.subtree if node.has_data}
     kind = attrs.get(KIND_ATTRIBUTE)
     if kind is None:
-        # a file of impactcont.save: two-parameter datasets say what they are
+        # a file of impactcont.save: two-parameter datasets and simulations say what they are
         tags = {ds.attrs.get("impactcont_dataset") for ds in datasets.values()}
-        kind = {frozenset({"curve"}): "curves", frozenset({"map"}): "maps"}.get(
-            frozenset(tags))
+        kind = {frozenset({"curve"}): "curves", frozenset({"map"}): "maps",
+                frozenset({"simulation"}): "simulations"}.get(frozenset(tags))
     if kind is None:
         try:
             for ds in datasets.values():

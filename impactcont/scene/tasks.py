@@ -39,6 +39,7 @@ import xarray as xr
 from impactcont.analysis.branch import continuation
 from impactcont.dataset import special_variable, state_component_names
 from impactcont.dataset.schema import robust_attributes
+from impactcont.dataset.simulation import simulation_dataset
 from impactcont.errors import NoPeriodicMotionError
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.orbit.periodic import PeriodicOrbit, amplitude_squared, periodic_orbits
@@ -471,66 +472,8 @@ class Simulations:
         res = simulate(osc, state, delta, entry.periods, trajectory=entry.trajectory,
                        samples_per_period=entry.samples_per_period,
                        max_impacts=entry.max_impacts)
-        data = {
-            "impact_times": _var(("impact",), res.impact_times, "impact time",
-                                 "Time of each impact since the start."),
-            "impact_velocities": _var(("impact",), res.impact_velocities, "impact velocity",
-                                      "Speed of the impacting mass towards the stop hit "
-                                      "just before each impact: x_j' at the upper stop, "
-                                      "-x_j' at the lower (impact_stops)."),
-            "impact_phases": _var(("impact",), res.impact_phases, "impact phase",
-                                  "Forcing phase at each impact, in (-pi, pi].", "rad"),
-            "impact_states": _var(("impact", "component"),
-                                  res.impact_states.reshape(-1, 2 * n), "state after impact",
-                                  "State right after each impact."),
-            "start_state": _var(("component",), state, "start state",
-                                "State at t = 0 (perturbation included)."),
-        }
-        events = res.sticking_arrays()  # sticking phases and chatter points (issue 30)
-        data.update({
-            "sticking_start": _var(("sticking",), events["sticking_start"],
-                                   "sticking start", "Time a sticking phase starts."),
-            "sticking_end": _var(("sticking",), events["sticking_end"], "sticking end",
-                                 "Time it ends (a release, an impact on another stop, "
-                                 "another stop holding, or the end of the run)."),
-            "sticking_stops": _var(("sticking",), events["sticking_stops"], "stops held",
-                                   "The stops held in the phase (their names)."),
-            "sticking_ended_by": _var(("sticking",), events["sticking_ended_by"], "ended by",
-                                      "release, impact, stick, chatter or end."),
-            "force_time": _var(("force_sample",), events["force_time"], "force sample time",
-                               "Times of the contact-force samples of the sticking phases."),
-            "contact_force": _var(("force_sample",), events["force"], "contact force",
-                                  "Pressing force of a held stop (>= 0; zero at a release)."),
-            "force_phase": _var(("force_sample",), events["force_phase"], "sticking phase",
-                                "Index of the sticking phase of each force sample."),
-            "force_stop": _var(("force_sample",), events["force_stop"], "stop pressed",
-                               "The held stop each force sample belongs to."),
-            "chatter_time": _var(("chatter",), events["chatter_time"], "accumulation time",
-                                 "Accumulation point of a complete chatter (a sticking "
-                                 "phase starts there)."),
-            "chatter_stop": _var(("chatter",), events["chatter_stop"], "chatter stop",
-                                 "The stop chattered on."),
-            "chatter_last_impact": _var(("chatter",), events["chatter_last_impact"],
-                                        "last impact resolved",
-                                        "Time of the last impact resolved before the "
-                                        "accumulation point."),
-            "chatter_last_velocity": _var(("chatter",), events["chatter_last_velocity"],
-                                          "last impact velocity",
-                                          "Its impact velocity (the jump's error is of "
-                                          "its square)."),
-        })
-        if entry.trajectory and res.t is not None:
-            data["t"] = _var(("sample",), res.t, "time", "Trajectory sample times.")
-            data["X"] = _var(("sample", "component"), res.X, "state",
-                             "Sampled state (both sides of each impact).")
-        ds = xr.Dataset(data, coords={"component": state_component_names(n),
-                                      **_parameters(osc)}, attrs={
-            "title": f"Simulation {entry.name}", "name": entry.name,
-            "impactcont_dataset": "simulation", "start": start,
-            "start_delta": delta, "periods": entry.periods, "perturbation": entry.perturbation,
-            "status": res.status.name, "message": res.message,
-            "final_time": res.final_time, "oscillator": osc.to_json(),
-            "impact_stops": res.impact_stops})
+        ds = simulation_dataset(res, name=entry.name, start=start,
+                                perturbation=entry.perturbation)
         log.info("simulation %s: %d impacts in %g periods (%s)", entry.name,
                  res.impact_times.size, entry.periods, res.status.name)
         return ds

@@ -134,6 +134,14 @@ class SimulationResult:
     chatter : tuple of ChatterPoint
         The accumulation points of complete chatter (:mod:`impactcont.simulate.chatter`):
         where the impacts on a stop accumulate and a sticking phase starts, in time order.
+    oscillator : ImpactOscillator or None
+        The oscillator simulated.
+    start_state : ndarray, shape (2n,), or None
+        The state at ``t = 0``.
+    start_phase : float
+        The forcing phase ``delta`` at ``t = 0``.
+    periods : float
+        The forcing periods asked for (``final_time`` says how far the run went).
     """
 
     impact_times: np.ndarray
@@ -149,6 +157,10 @@ class SimulationResult:
     impact_stops: str = ""
     sticking: tuple[StickingPhase, ...] = ()
     chatter: tuple[ChatterPoint, ...] = ()
+    oscillator: ImpactOscillator | None = None
+    start_state: np.ndarray | None = None
+    start_phase: float = math.nan
+    periods: float = math.nan
 
     def sticking_arrays(self) -> dict[str, np.ndarray]:
         """The sticking phases and the chatter accumulation points as flat arrays (one
@@ -444,6 +456,7 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
     state and the forcing) are rounding and are not searched.
     """
     X = _check_state(osc, state)
+    X_start = X.copy()
     if isinstance(periods, bool) or not isinstance(periods, numbers.Real) or not (
             math.isfinite(periods) and periods > 0):
         raise ParameterError(f"periods must be a finite number > 0; got {periods!r}")
@@ -660,4 +673,5 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         t=np.concatenate(t_chunks) if trajectory else None,
         X=np.vstack(X_chunks) if trajectory else None,
         impact_stops="".join(hits), sticking=tuple(sticks), chatter=tuple(chatter),
+        oscillator=osc, start_state=X_start, start_phase=delta, periods=periods,
     )
