@@ -126,6 +126,14 @@ def _wrap(phase: float) -> float:
     return math.atan2(math.sin(phase), math.cos(phase))
 
 
+def _nans(shape: int | tuple[int, ...]) -> np.ndarray:
+    """A new float array of NaN (``np.full`` without its Python-level overhead: every motion
+    makes three)."""
+    out = np.empty(shape)
+    out.fill(np.nan)
+    return out
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class MultiImpactOrbit:
     """One periodic N-p motion: p impacts in N forcing periods.
@@ -255,12 +263,11 @@ class MultiImpactOrbit:
         if self.stick_times is None:
             object.__setattr__(self, "stick_times", np.zeros(self.p))
         if self.release_states is None:
-            object.__setattr__(self, "release_states",
-                               np.full((self.p, np.shape(self.states)[1]), np.nan))
+            object.__setattr__(self, "release_states", _nans((self.p, np.shape(self.states)[1])))
         if self.pressing_min is None:
-            object.__setattr__(self, "pressing_min", np.full(self.p, np.nan))
+            object.__setattr__(self, "pressing_min", _nans(self.p))
         if self.landing_pressing is None:
-            object.__setattr__(self, "landing_pressing", np.full(self.p, np.nan))
+            object.__setattr__(self, "landing_pressing", _nans(self.p))
 
     # -- the scalar view shared with PeriodicOrbit (detection and datasets use it) ------------
     @property
@@ -503,10 +510,16 @@ def _system_input(flow: Flow, p: int, pattern: str | None, u: Any, argument: str
 
 def _kernel() -> Any:
     """:mod:`impactcont.kernel.shooting`, imported on first use (numba is not imported
-    with :mod:`impactcont`)."""
-    from impactcont.kernel import shooting as shooting_kernel
+    with :mod:`impactcont`) and kept (:data:`_KERNEL`: a solve asks for it several times)."""
+    if not _KERNEL:
+        from impactcont.kernel import shooting as shooting_kernel
 
-    return shooting_kernel
+        _KERNEL.append(shooting_kernel)
+    return _KERNEL[0]
+
+
+#: :func:`_kernel`'s module once imported.
+_KERNEL: list[Any] = []
 
 
 def _writable(a: np.ndarray) -> np.ndarray:
@@ -518,8 +531,11 @@ def _writable(a: np.ndarray) -> np.ndarray:
 
 
 def _section_unknowns(states: np.ndarray, pivots: np.ndarray) -> np.ndarray:
-    """``z_0..z_{p-1}`` flattened: each ``X_k`` without its pivot ``x_{j_k}``."""
-    return np.concatenate([np.delete(X, j) for X, j in zip(states, pivots, strict=True)])
+    """``z_0..z_{p-1}`` flattened: each ``X_k`` without its pivot ``x_{j_k}`` (row by row,
+    as ``np.delete`` of each would give them)."""
+    states = np.asarray(states)
+    kept = np.arange(states.shape[1]) != np.asarray(pivots)[:, None]
+    return states[kept]
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -859,8 +875,8 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
     if pattern is not None:
         pattern = check_pattern(pattern, p, osc.stops, sticking=True)
     delta, taus, states, gpat, sticks = _guess_arrays(guess, osc, N, p)
-    if not (math.isfinite(delta) and np.all(np.isfinite(taus)) and np.all(np.isfinite(states))
-            and np.all(np.isfinite(sticks))):
+    if not (math.isfinite(delta) and _all_finite(taus) and _all_finite(states)
+            and _all_finite(sticks)):
         raise ParameterError("guess must hold finite phases, flight times, stick times and "
                              "states")
     if gpat is not None:
@@ -878,6 +894,12 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
                            _section_unknowns(states, pivots)]), pattern
 
 
+def _all_finite(a: np.ndarray) -> bool:
+    """Every entry of the float array `a` finite: its sum is finite (a NaN or an infinity
+    makes it not), else, the sum having perhaps overflowed, each entry is checked."""
+    return math.isfinite(a.sum()) or bool(np.all(np.isfinite(a)))
+
+
 def unknowns_scale(u: np.ndarray) -> float:
     """The size ``max(1, |delta|, |tau|, |z|)`` of the unknowns that Newton's tolerance is
     relative to, with the phase counted at most pi (the residual is 2 pi periodic in it):
@@ -885,7 +907,7 @@ def unknowns_scale(u: np.ndarray) -> float:
     order 1 passed (a bouncing ball at Gamma = 1.06 from a poor guess did).
     """
     u = np.asarray(u, dtype=float)
-    return max(1.0, min(abs(float(u[0])), math.pi), float(np.max(np.abs(u[1:]), initial=0.0)))
+    return max(1.0, min(abs(float(u[0])), math.pi), float(np.abs(u[1:]).max(initial=0.0)))
 
 
 def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
@@ -912,17 +934,18 @@ def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
     error : float
         The error estimate above, in the 2-norm of ``u`` (``inf`` likewise).
     """
-    if not (np.all(np.isfinite(jacobian)) and np.all(np.isfinite(residual))):
+    if not (_all_finite(jacobian) and _all_finite(residual)):
         return math.inf, math.inf
     s = np.linalg.svd(jacobian, compute_uv=False)
     if not s[-1] > 0:
         return math.inf, math.inf
     cond = float(s[0] / s[-1])
     try:
-        correction = float(np.linalg.norm(np.linalg.solve(jacobian, residual)))  # |J^-1 r|
+        step = np.linalg.solve(jacobian, residual)
     except np.linalg.LinAlgError:  # an exact zero pivot where s_min > 0 only by rounding
         return math.inf, math.inf
-    return cond, correction + cond * _EPS * max(1.0, float(np.max(np.abs(u))))
+    correction = math.sqrt(float(step @ step))  # |J^-1 r|, as np.linalg.norm computes it
+    return cond, correction + cond * _EPS * max(1.0, float(np.abs(u).max()))
 
 
 def _parameters(osc: ImpactOscillator) -> str:
@@ -960,11 +983,18 @@ def newton(flow: Flow, N: int, p: int, u0: np.ndarray, *, tol: float = 1e-12,
         the message says whether the point is a bifurcation point (a singular Jacobian
         near a solution) or the guess is not near a motion with this impact pattern.
     """
-    osc = flow.osc
     pattern, geo, x0 = _system_input(flow, p, pattern, u0, "u0")
+    return _newton(flow, N, p, x0, geo, pattern, tol, max_iter)
+
+
+def _newton(flow: Flow, N: int, p: int, x0: np.ndarray, geo: StopGeometry, pattern: str,
+            tol: float, max_iter: int) -> tuple[np.ndarray, Shooting, int]:
+    """:func:`newton` from checked input: `x0` as :func:`_writable` gives it, `geo` the stop
+    geometry of the checked `pattern`."""
     solved = NewtonResult.from_kernel(_kernel().newton_solve(
         flow.flight_arrays(), tuple(flow.forcing_arrays()),
-        tuple(impact_sequence(geo)), TWO_PI * N / osc.omega, x0, float(tol), int(max_iter)))
+        tuple(impact_sequence(geo)), TWO_PI * N / flow.osc.omega, x0, float(tol),
+        int(max_iter)))
     u, it, norm, step_norm = solved.x, solved.iterations, solved.residual_norm, solved.step_norm
     sh = _as_shooting(solved.shot, True)
     if solved.status == 0:
@@ -1020,9 +1050,10 @@ def orbit_from_unknowns(flow: Flow, N: int, p: int, u: np.ndarray,
 
 def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
            condition_number: float = math.nan, error_estimate: float = math.nan,
-           sticks: Any = None) -> MultiImpactOrbit:
+           sticks: Any = None, *, residual: float | None = None) -> MultiImpactOrbit:
     """:func:`orbit_from_unknowns` from the shooting system at the solution (`pattern`
-    validated), with the accuracy of the solution when known.
+    validated), with the accuracy of the solution when known (and the max-norm of the
+    residual, `residual`, when the caller has it).
 
     With `sticks` (a motion with sticking phases, `pattern` its impacts' stops) `sh` holds
     the flights from the releases: their contact checks and impact velocities are read from
@@ -1030,6 +1061,8 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     `sticks`."""
     osc = flow.osc
     geo = _geometry(flow, pattern)
+    if residual is None:
+        residual = float(np.abs(sh.residual).max())
     checked = MotionChecks._make(_kernel().motion_checks(
         tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
         tuple(contact_stops(geo)), tuple(checked_flights(sh)), checks))
@@ -1045,8 +1078,9 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     nearest = [UPPER] * p
     if not checks:
         reasons.append("interior contact not checked")
+    taus = sh.flight_times.tolist()
     for k in range(p):
-        tau = float(sh.flight_times[k])
+        tau = taus[k]
         if not tau > 0:
             reasons.append(f"flight {k} has duration {tau:.3g} <= 0")
         elif checks:
@@ -1061,13 +1095,14 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         _end_checks(sh, geo, pattern, gaps, gap_times, nearest, reasons)
     # velocity before impact k is the arrival velocity of flight k-1, towards its stop
     velocities = checked.h2[np.arange(-1, p - 1)] * geo.signs
+    speeds, inside = velocities.tolist(), interior.tolist()
     for k in range(p):
-        if not velocities[k] > 0:
+        if not speeds[k] > 0:
             side = {UPPER: "the upper stop", LOWER: "the lower stop"}.get(
                 pattern[k], f"stop {pattern[k]!r}")
             reasons.append(f"impact {k}: velocity {velocities[k]:.3g} <= 0, "
                            f"{_coordinate(geo.normals[k])} does not arrive towards {side}")
-        if checks and not interior[k] > 0:
+        if checks and not inside[k] > 0:
             s = interior_stops[k]
             who = (_coordinate(geo.normal) if s in (UPPER, LOWER)
                    else f"{_coordinate(geo.extra_normals[geo.extra_names.index(s)])}"
@@ -1077,7 +1112,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     if sticks is not None:  # the times from the releases
         gap_times = gap_times + sticks.shift
     if sticks is None:
-        phases = np.array([_wrap(float(t)) for t in sh.phases])
+        phases = np.array([math.atan2(math.sin(t), math.cos(t)) for t in sh.phases.tolist()])
         states = sh.starts.copy()
         return MultiImpactOrbit(
             oscillator=osc, N=N, p=p, phases=phases, flight_times=sh.flight_times.copy(),
@@ -1085,7 +1120,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
             flight_gap_min_times=gap_times, jacobians=checked.jacobians, G=checked.G,
             multipliers=checked.multipliers,
             physical=not reasons, reason="; ".join(reasons),
-            residual=float(np.max(np.abs(sh.residual))), pattern=pattern,
+            residual=residual, pattern=pattern,
             flight_gap_lower=gaps_low, condition_number=condition_number,
             error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "")
     reasons.extend(sticks.reasons)
@@ -1095,7 +1130,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         impact_velocities=velocities, flight_gap_min=gaps, flight_gap_min_times=gap_times,
         jacobians=sticks.jacobians, G=sticks.G, multipliers=sticks.multipliers,
         physical=not reasons, reason="; ".join(reasons),
-        residual=float(np.max(np.abs(sh.residual))), pattern=sticks.pattern,
+        residual=residual, pattern=sticks.pattern,
         flight_gap_lower=gaps_low, condition_number=condition_number,
         error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "",
         stick_times=sticks.stick_times.copy(), release_states=sticks.release_states,
@@ -1123,20 +1158,22 @@ def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,
         geo.extra_signs, geo.extra_positions, sh.starts, sh.arrivals)
     names = (UPPER, LOWER, *geo.extra_names)
     crossed: dict[int, tuple[float, int, int, int]] = {}  # impact -> (gap, stop, flight, end)
+    taus, end_gaps, end_stops, end_tols = (a.tolist() for a in (sh.flight_times, end_gap,
+                                                                  end_stop, end_tol))
     for k in range(p):
-        if not float(sh.flight_times[k]) > 0:
+        if not taus[k] > 0:
             continue
         for end in (0, 1):
-            gap, stop = float(end_gap[k, end]), int(end_stop[k, end])
+            gap, stop = end_gaps[k][end], end_stops[k][end]
             if stop < 0:
                 continue
             if gap < gaps[k]:
                 gaps[k] = gap
-                gap_times[k] = 0.0 if end == 0 else float(sh.flight_times[k])
+                gap_times[k] = 0.0 if end == 0 else taus[k]
                 nearest[k] = names[stop]
             impact = (k + end) % p
-            if gap < -float(end_tol[k, end]) and (impact not in crossed
-                                                  or gap < crossed[impact][0]):
+            if gap < -end_tols[k][end] and (impact not in crossed
+                                            or gap < crossed[impact][0]):
                 crossed[impact] = (gap, stop, k, end)
     for impact in sorted(crossed):
         gap, stop, k, end = crossed[impact]
@@ -1225,10 +1262,12 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     u0, pattern = _seed(guess, osc, N, p, pattern)
     if pattern != pattern.upper() and np.any(sticking_pattern(osc, pattern)[1]):
         return _sticky_solver()(flow, N, pattern, u0, tol, max_iter)
-    u, sh, iterations = newton(flow, N, p, u0, tol=tol, max_iter=max_iter, pattern=pattern)
+    # the pattern is checked (_seed) and has no sticking phase; u0 is new, contiguous floats
+    u, sh, iterations = _newton(flow, N, p, u0, _geometry(flow, pattern), pattern, tol,
+                                max_iter)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
     scale = unknowns_scale(u)
-    residual = float(np.max(np.abs(sh.residual)))
+    residual = float(np.abs(sh.residual).max())
     if not error <= _ERROR_WARN * scale:
         if not error <= _SINGULAR * scale:
             warnings.warn(f"{_bifurcation(N, p, osc, cond, error)} (residual {residual:.3g})",
@@ -1243,7 +1282,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
                           "plus condition number x eps |u|)", IllConditionedWarning,
                           stacklevel=2)
     log.debug("N=%d p=%d %s motion in %d Newton iterations", N, p, pattern, iterations)
-    return _orbit(flow, N, p, sh, True, pattern, cond, error)
+    return _orbit(flow, N, p, sh, True, pattern, cond, error, residual=residual)
 
 
 def primitive_orbit(orbit: MultiImpactOrbit, *, tol: float = 1e-8) -> MultiImpactOrbit:
