@@ -419,13 +419,16 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
     # each event's test at the accepted points, evaluated once each (ends and neighbours)
     values = {id(event): functools.cache(event.at_point or (
         lambda j, t=event.test: t(x[j, :-1], x[j, -1]))) for event in events if event.test}
+    # and its pole quantities there (a step reads both its ends', a point ends two steps)
+    poles = {id(event): functools.cache(functools.partial(_poles_at_point, event, x))
+             for event in events if event.test and event.poles is not None}
     k = 0
     try:
         for k in range(len(x) - 1):
             if interrupted("location"):  # Ctrl-C taken in an earlier location of the call
                 break
-            _locate_step(problem, x, dlam, arclength, k, events, values, found, s_tol,
-                         newton_tol, position, before_step)
+            _locate_step(problem, x, dlam, arclength, k, events, (values, poles), found,
+                         s_tol, newton_tol, position, before_step)
     except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those located are kept
         if not (found and take_interrupt(
                 "location", "interrupted by the user (KeyboardInterrupt) while locating "
@@ -436,11 +439,15 @@ def locate_events(problem: Problem, u: Any, lam: Any, tangent: Any, events: Sequ
 
 
 def _locate_step(problem: Problem, x: FloatArray, dlam: FloatArray, arclength: FloatArray,
-                 k: int, events: Sequence[Event], values: dict[int, Callable[[int], float]],
+                 k: int, events: Sequence[Event],
+                 at_points: tuple[dict[int, Callable[[int], float]],
+                                  dict[int, Callable[[int], np.ndarray]]],
                  found: list[EventPoint], s_tol: float, newton_tol: float,
                  position: Callable[[FloatArray, float], Any] | None,
                  before_step: Callable[[int], None] | None) -> None:
-    """The events of :func:`locate_events` in step ``k``, appended to `found`."""
+    """The events of :func:`locate_events` in step ``k``, appended to `found` (`at_points`:
+    each event's test and pole quantities at the accepted points, by ``id(event)``)."""
+    values, poles = at_points
     chord = _Chord(problem, x[k], x[k + 1], newton_tol,
                    None if before_step is None else lambda k=k: before_step(k))
     if position is None:
@@ -460,28 +467,39 @@ def _locate_step(problem: Problem, x: FloatArray, dlam: FloatArray, arclength: F
             if event.noise_at is not None:
                 noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
             parts = _watched_parts(event, values[id(event)], x, k, chord, g, noise,
-                                   arclength)
+                                   arclength, poles.get(id(event)))
         for lo, hi in parts:
             found.append(_event_point(event.label, chord, g, noise, where, lo, hi, k, x,
                                       arclength, s_tol))
 
 
 def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
-    """`f` evaluated once per chord coordinate (its value as a float)."""
-    return functools.cache(lambda s: float(f(s)))
+    """`f` evaluated once per chord coordinate (its value as a float; a call that raises
+    keeps nothing). A plain table: ``functools.cache`` costs a few microseconds to build,
+    and a branch builds two per watched event and step."""
+    known: dict[float, float] = {}
+
+    def cached(s: float) -> float:
+        value = known.get(s)
+        if value is None:
+            value = known[s] = float(f(s))
+        return value
+    return cached
 
 
 def _watched_parts(event: Event, value: Callable[[int], float], x: FloatArray, k: int,
                    chord: _Chord, g: Callable[[float], float],
-                   noise: Callable[[float], float] | None, arclength: FloatArray
+                   noise: Callable[[float], float] | None, arclength: FloatArray,
+                   poles: Callable[[int], np.ndarray] | None = None
                    ) -> list[tuple[float, float]]:
     """The parts ``[lo, hi]`` of step `k` (chord coordinates) where `event`'s test changes
-    sign (`value`: the test at accepted point ``j``): the whole step; or, across the zeros
+    sign (`value`: the test at accepted point ``j``; `poles`, optional: its pole quantities
+    there, :func:`_poles_at_point`): the whole step; or, across the zeros
     of the event's pole quantities inside it, the parts between them
     (:func:`parts_beside_poles`); or, where the test has the same sign at both ends but
     dips through zero and back inside the step (:func:`dip_bottom`), the two halves of the
     step at the dip's bottom."""
-    cuts = _pole_cuts(event, x, k, chord) if event.poles is not None else []
+    cuts = _pole_cuts(event, x, k, chord, poles) if event.poles is not None else []
     if cuts:
         return parts_beside_poles(event.label, g, noise, cuts, k)
 
@@ -524,12 +542,14 @@ def dip_bottom(value: Callable[[int], float], arclength: FloatArray, k: int) -> 
     width = t1 - t0
     if not width > 0.0:
         return None
-    for triple in ((k - 1, k, k + 1), (k, k + 1, k + 2)):
-        if triple[0] < 0 or triple[-1] >= len(arclength):
+    size = len(arclength)
+    for i in (k - 1, k):  # the triples (i, i + 1, i + 2) around the step
+        if i < 0 or i + 2 >= size:
             continue
-        p, q, r = (float(arclength[j]) - t0 for j in triple)
-        yp, yq, yr = (float(value(j)) for j in triple)
-        if not (p < q < r and all(map(math.isfinite, (yp, yq, yr)))):
+        p, q, r = (float(arclength[i]) - t0, float(arclength[i + 1]) - t0,
+                   float(arclength[i + 2]) - t0)
+        yp, yq, yr = float(value(i)), float(value(i + 1)), float(value(i + 2))
+        if not (p < q < r and math.isfinite(yp) and math.isfinite(yq) and math.isfinite(yr)):
             continue
         # the parabola a t^2 + b t + c through the three samples (divided differences)
         first = (yq - yp) / (q - p)
@@ -540,24 +560,33 @@ def dip_bottom(value: Callable[[int], float], arclength: FloatArray, k: int) -> 
         if a == 0.0 or not discriminant > 0.0:
             continue
         root = math.sqrt(discriminant)
-        lo, hi = sorted(((-b - root) / (2.0 * a), (-b + root) / (2.0 * a)))
-        if lo > 0.0 and hi < width:
+        lo, hi = (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
+        if min(lo, hi) > 0.0 and max(lo, hi) < width:
             return min(max(-b / (2.0 * a) / width, 0.0), 1.0)
     return None
 
 
-def _pole_cuts(event: Event, x: FloatArray, k: int, chord: _Chord) -> list[float]:
-    """The chord coordinates of the zeros of the event's pole quantities on step `k`."""
+def _poles_at_point(event: Event, x: FloatArray, j: int) -> np.ndarray:
+    """The event's pole quantities at accepted point `j` (:attr:`Event.poles_at` when the
+    driver has them), as a float array."""
     assert event.poles is not None
+    if event.poles_at is not None:
+        return np.atleast_1d(np.asarray(event.poles_at(j), dtype=float))
+    return np.atleast_1d(np.asarray(event.poles(x[j, :-1], x[j, -1]), dtype=float))
 
-    def poles(j: int) -> np.ndarray:
-        if event.poles_at is not None:
-            return np.atleast_1d(np.asarray(event.poles_at(j), dtype=float))
-        return np.atleast_1d(np.asarray(event.poles(x[j, :-1], x[j, -1]), dtype=float))
 
+def _pole_cuts(event: Event, x: FloatArray, k: int, chord: _Chord,
+               poles: Callable[[int], np.ndarray] | None = None) -> list[float]:
+    """The chord coordinates of the zeros of the event's pole quantities on step `k`
+    (`poles`: them at accepted point ``j``, :func:`_poles_at_point` by default)."""
+    assert event.poles is not None
+    if poles is None:
+        poles = functools.partial(_poles_at_point, event, x)
     left, right = poles(k), poles(k + 1)
     cuts = []
-    for i in np.flatnonzero([_changes(a, b) for a, b in zip(left, right, strict=True)]):
+    crossing = [i for i, (a, b) in enumerate(zip(left.tolist(), right.tolist(), strict=True))
+                if _changes(a, b)]
+    for i in crossing:
         def h(s: float, i: int = int(i)) -> float:
             return float(np.atleast_1d(np.asarray(event.poles(*chord.point(s)), float))[i])
         try:
