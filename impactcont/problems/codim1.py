@@ -24,7 +24,8 @@ branch problem of the motion augmented by one equation (a minimally augmented sy
 Both provide what the driver (:func:`impactcont.analysis.curves.curve`) and the location of
 codim-2 points (:class:`~impactcont.detection.codim2.Codim2Problem`) read: the core's
 ``residual``, ``jacobian``, ``dparam`` and ``accept``, ``plane``, ``on_hyperplane``,
-``orbit``, ``codim2_tests`` and ``codim2_test``.
+``orbit``, ``codim2_tests`` and ``codim2_test`` (shooting also the core's one-call
+``linearize``: the three from one evaluation of the branch problem).
 
 ========  ========================================================  ===================
 kind      g (shooting)                                              vanishes where
@@ -61,14 +62,18 @@ derivative in ``p2`` is then the problem in ``p2``'s (:meth:`ShootingCurve.dpara
 ``sigma(A)`` is the signed smallest singular value ``sign(det A) s_min(A)``: it
 changes sign with ``det A`` and, unlike the determinant, keeps the size of the
 distance to the singular matrices (a regular zero where ``s_min`` is simple, as a
-minimally augmented system's bordered test). ``dF/du`` and ``dF/dp1``, ``dF/dp2`` are
-the branch problems' own (exact for omega, b, R); the row of ``g`` is a forward
-difference (relative step 1.5e-8, about the square root of eps), the one finite
-difference of the curve: it steers Newton and the tangent only, the points solve
-``g = 0`` exactly. The BP row is exact in the unknowns and in a parameter that moves the
-stops (``d sigma = sign(det(H + I)) a^T dH b`` with the singular vectors of ``s_min`` and
-``dH`` from the shot, :meth:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem.
-half_map_derivative`: one evaluation instead of one shot per unknown), and in omega as
+minimally augmented system's bordered test). The BP test and its row take both factors
+and the singular vectors from one compiled SVD
+(:func:`~impactcont.kernel.half_map.smallest_singular_value`: the full SVD's ``s_min``,
+which differs from that of numpy's ``svd(A, compute_uv=False)`` in the last bit at most).
+``dF/du`` and ``dF/dp1``, ``dF/dp2`` are the branch problems' own (exact for omega, b,
+R); the row of ``g`` is a forward difference (relative step 1.5e-8, about the square root
+of eps), the one finite difference of the curve: it steers Newton and the tangent only,
+the points solve ``g = 0`` exactly. The BP row is exact in the unknowns and in a
+parameter that moves the stops (``d sigma = sign(det(H + I)) a^T dH b`` with the singular
+vectors of ``s_min`` and ``dH`` from the shot,
+:meth:`~impactcont.problems.symmetric_branch.SymmetricBranchProblem.half_map_derivative`:
+one evaluation instead of one shot per unknown), and in omega as
 ``p1``; by forward differences in the others (R, omega as ``p2``). The row is taken
 afresh at every step and reused only within that step's Newton corrections, so that the
 tangent follows the curve round a fold in ``p2``.
@@ -182,6 +187,19 @@ def signed_smallest_singular_value(matrix: np.ndarray) -> float:
     return float(sign * s[-1])
 
 
+def _pitchfork_factors(H: np.ndarray) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """``sign(det(H + I))``, ``s_min(H + I)`` and the left and right singular vectors of
+    ``s_min``: the BP test ``sigma(H + I)`` and what its exact row needs, from one compiled
+    SVD (:func:`impactcont.kernel.half_map.smallest_singular_value`; NaN if ``H`` is not
+    finite)."""
+    from impactcont.kernel.half_map import smallest_singular_value  # numba on first use
+
+    m = H.shape[0]
+    left, right = np.empty(m), np.empty(m)
+    sign, smallest = smallest_singular_value(H + _identity(m), left, right)
+    return float(sign), float(smallest), left, right
+
+
 class ShootingCurve:
     """A codim-1 curve of any motion by shooting, in ``(p1, p2)``: ``x = [u, p1]``, ``lam = p2``.
 
@@ -247,6 +265,10 @@ class ShootingCurve:
         # both parameters move only omega and the stops: every problem has the same modes
         self._same_modes = all(par.data in _EXACT for par in self.params)
         self._gradient: tuple[np.ndarray, tuple[np.ndarray, float]] | None = None
+        #: The last :meth:`linearize`: its point's key, the test row it reused or took
+        #: (:attr:`_gradient`), the residual and the matrix.
+        self._linearization: tuple[tuple[bytes, float], Any, np.ndarray, np.ndarray] | None = \
+            None
         first = self._base(self.params[1].value(osc), p1)
         self.size = first.size + 1
         #: BP: the test row from the shot (exact in the unknowns and the stops' positions),
@@ -320,9 +342,9 @@ class ShootingCurve:
             G + _identity(G.shape[0]))
 
     def _pitchfork_of_shot(self, u: np.ndarray, p1: float, lam: float) -> float:
-        """BP: ``sigma(H + I)`` of the half-map."""
-        H = self.branch_problem(lam).half_map(u, p1)
-        return signed_smallest_singular_value(H + _identity(H.shape[0]))
+        """BP: ``sigma(H + I)`` of the half-map (:func:`_pitchfork_factors`)."""
+        sign, smallest, _, _ = _pitchfork_factors(self.branch_problem(lam).half_map(u, p1))
+        return sign * smallest
 
     # -- the kinds that bound motions with sticking phases --------------------------------------
     def _stick_column(self, k: int) -> int:
@@ -597,10 +619,8 @@ class ShootingCurve:
             else:
                 domega[size + row] = 1.0
         H, dH = base.half_map_derivative(u, p1, dv, dc, domega)
-        A = H + _identity(H.shape[0])
-        left, _, right = np.linalg.svd(A)
-        sign, _ = np.linalg.slogdet(A)
-        dg = sign * np.einsum("i,dij,j->d", left[:, -1], dH, right[-1])
+        sign, _, left, right = _pitchfork_factors(H)
+        dg = sign * np.einsum("i,dij,j->d", left, dH, right)
         moved = [math.nan, math.nan]
         for row, i in enumerate(stops):
             moved[i] = float(dg[size + row])
@@ -715,6 +735,7 @@ class ShootingCurve:
         """At an accepted point (the core's hook): the next step takes a fresh ``g`` row (and
         an RG curve's interior minimum is sought from this point's)."""
         self._gradient = None
+        self._linearization = None
         self.lost_minimum = ""
         if _KINDS[self.kind].follows_minimum:
             t = self.minimum_time(x, lam)
@@ -739,6 +760,42 @@ class ShootingCurve:
         out[:-1, -1] = base.dparam(u, p1)
         out[-1] = self._test_gradient(x, lam)[0]
         return out
+
+    def linearize(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`residual` and ``[jacobian | dparam]`` at ``(x, lam)`` in one call (the core's
+        one-call evaluation, :class:`~impactcont.core.problem.Problem`), shapes (m + 1,),
+        (m + 1, m + 2).
+
+        The same values as the three methods, from one evaluation of the branch problem
+        (its own ``linearize``) and one look-up of it. The last one is kept until the next
+        accepted point: the corrector's converged iterate and the tangent there ask for the
+        same point (while the test row is the one :meth:`jacobian` would use there). Where the
+        residual is not finite the matrix is NaN and no test row is taken (the corrector
+        stops on the residual, as without this method).
+        """
+        x = np.asarray(x, dtype=float)
+        key = (x.tobytes(), float(lam))
+        kept = self._linearization
+        # kept while the test row it holds is the one the Jacobian would reuse
+        if kept is None or kept[0] != key or kept[1] is not self._gradient:
+            u, p1 = x[:-1], float(x[-1])
+            base = self.branch_problem(lam)
+            rows_residual, rows = base.linearize(u, p1)
+            residual = np.empty(x.size)
+            residual[:-1] = rows_residual
+            extended = np.full((x.size, x.size + 1), np.nan)
+            if not np.isfinite(rows_residual).all():
+                residual[-1] = math.nan
+                return residual, extended
+            residual[-1] = self.test(x, lam)
+            if not math.isfinite(residual[-1]):
+                return residual, extended
+            extended[:-1, :-1] = rows
+            extended[:-1, -1] = self._second_column(base, u, p1, lam)
+            extended[-1, :-1], extended[-1, -1] = self._test_gradient(x, lam)
+            self._linearization = key, self._gradient, residual, extended
+        _, _, residual, extended = self._linearization
+        return residual.copy(), extended.copy()
 
     def _second_column(self, base: BranchProblem, u: np.ndarray, p1: float, lam: float
                        ) -> np.ndarray:
@@ -777,9 +834,9 @@ def _flip_of_orbit(orbit: MultiImpactOrbit) -> float:
 
 
 def _pitchfork_of_orbit(orbit: MultiImpactOrbit) -> float:
-    """BP at a motion: ``sigma(H + I)`` of its half-map."""
-    H = half_map(orbit)
-    return signed_smallest_singular_value(H + np.eye(H.shape[0]))
+    """BP at a motion: ``sigma(H + I)`` of its half-map (:func:`_pitchfork_factors`)."""
+    sign, smallest, _, _ = _pitchfork_factors(half_map(orbit))
+    return sign * smallest
 
 
 def _no_orbit_test(orbit: MultiImpactOrbit) -> float:

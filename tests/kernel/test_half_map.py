@@ -4,7 +4,9 @@ At generic unknowns (no motion: the product is defined at any shot), the product
 shooting kernel's ``jacobian_product`` operation for operation, and its derivatives along
 every unknown, the stops' positions and omega agree with central differences of that
 product over new shots (the moved stops and omega by a new flow and stop geometry): within
-what differences of step 1e-6 give (1e-6 relative to the largest entry).
+what differences of step 1e-6 give (1e-6 relative to the largest entry). The two factors
+of the BP test, ``sign(det A)`` and ``s_min(A)``, are numpy's (the smallest singular value
+within rounding of the largest) with singular vectors that satisfy ``A b = s_min a``.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import numpy as np
 import pytest
 
 import impactcont as ic
-from impactcont.kernel.half_map import jacobian_product_derivative
+from impactcont.kernel.half_map import jacobian_product_derivative, smallest_singular_value
 from impactcont.kernel.shooting import jacobian_product
 from impactcont.model.parameters import model_parameter
 from impactcont.model.stops import Stops
@@ -129,3 +131,29 @@ def test_no_direction_gives_the_product_alone():
                         (np.zeros((0, u.size)), np.zeros((0, 2)), np.zeros(0)))
     assert dG.shape == (0, 4, 4)
     np.testing.assert_array_equal(G, _product(osc, N, pattern, u, count))
+
+
+@pytest.mark.parametrize("matrix", [
+    np.diag([2.0, -3.0, 0.5, 4.0]),
+    np.random.default_rng(3).standard_normal((4, 4)),
+    np.array([[0.0, -1.0], [1.0, 0.0]]) * 0.5,
+    np.eye(3) + np.outer([1.0, 2.0, 3.0], [1.0, 0.0, -1.0]) * 1e-3,
+])
+def test_the_smallest_singular_value_is_numpys(matrix):
+    left, right = np.empty(matrix.shape[0]), np.empty(matrix.shape[0])
+    sign, smallest = smallest_singular_value(matrix.copy(), left, right)
+    singular = np.linalg.svd(matrix, compute_uv=False)
+    assert sign == np.linalg.slogdet(matrix)[0]
+    assert abs(smallest - singular[-1]) <= 1e-14 * singular[0]
+    np.testing.assert_allclose(matrix @ right, smallest * left, atol=1e-14 * singular[0])
+    assert np.linalg.norm(left) == pytest.approx(1.0) and np.linalg.norm(right) == \
+        pytest.approx(1.0)
+
+
+def test_the_smallest_singular_value_of_a_matrix_not_finite_is_nan():
+    matrix = np.eye(3)
+    matrix[1, 2] = np.inf
+    left, right = np.zeros(3), np.zeros(3)
+    sign, smallest = smallest_singular_value(matrix, left, right)
+    assert math.isnan(sign) and math.isnan(smallest)
+    assert np.isnan(left).all() and np.isnan(right).all()

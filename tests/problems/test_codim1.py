@@ -6,7 +6,8 @@ closed-form N-1 branch located, the curve's residual (the branch system and the 
 function) vanishes, the test function changes sign across the point, the exact blocks of
 the Jacobian and the parameter column agree with central differences, and bad curves are
 refused by name. :func:`~impactcont.problems.codim1.curve_problem` builds either evaluator,
-and both evaluators' curve points are the same curve."""
+and both evaluators' curve points are the same curve. Its one-call ``linearize`` gives
+what ``residual``, ``jacobian`` and ``dparam`` give, kept until the next accepted point."""
 
 from __future__ import annotations
 
@@ -371,3 +372,49 @@ def test_the_pitchfork_row_agrees_with_central_differences(parameters, stops, mo
     np.testing.assert_allclose(row[-1], fd[-2], rtol=1e-6, atol=1e-6 * scale)  # omega
     np.testing.assert_allclose(column, fd[-1], rtol=1e-6 if parameters[1] == "b" else 1e-5,
                                atol=1e-6 * scale)
+
+
+def _mirrored_bp() -> tuple[ShootingCurve, np.ndarray, float]:
+    """A BP curve problem in (omega, b) of the symmetric 1-2 motion with mirrored stops, and
+    a point near it (the motion at b = 0.5, omega = 1.6)."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=K, F=[1.0, 0.0], R=0.6, b=0.5, omega=1.6,
+                              eta=0.1, stops=ic.Stops(mirror=True))
+    motion = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.zeros(4), 0.0, 150.0))
+    problem = curve_problem("BP", osc, 1, ("omega", "b"), p=2, pattern=motion.pattern,
+                            symmetric=True)
+    x = np.append(problem.branch_problem(0.5).half_unknowns(motion.unknowns), 1.6)
+    return problem, x, 0.5
+
+
+@pytest.mark.parametrize("kind", ["BP", "PD"])
+def test_linearize_gives_the_residual_jacobian_and_dparam(specials, kind):
+    """The same numbers as the three methods (the same evaluations, gathered); a second call
+    at the point is the kept one until the next accepted point, which takes the test row
+    afresh."""
+    if kind == "BP":
+        problem, x, lam = _mirrored_bp()
+    else:
+        b, omega, delta = specials["PD"]
+        problem, x, lam = _problem("PD", b), _x(b, omega - 1e-3, delta), b
+    residual, extended = problem.linearize(x, lam)
+    np.testing.assert_array_equal(residual, problem.residual(x, lam))
+    np.testing.assert_array_equal(extended[:, :-1], problem.jacobian(x, lam))
+    np.testing.assert_array_equal(extended[:, -1], problem.dparam(x, lam))
+    extended[:] = 0.0  # a copy: the kept one stays
+    again = problem.linearize(x, lam)[1]
+    np.testing.assert_array_equal(again[:, -1], problem.dparam(x, lam))
+    problem.accept(x, lam)
+    near = x * (1.0 + 1e-6)
+    row = problem.linearize(near, lam)[1][-1]
+    # this close (within _REUSE) the row of `near` is reused, until the next accepted point
+    np.testing.assert_array_equal(problem.linearize(x, lam)[1][-1], row)
+    problem.accept(near, lam)
+    assert not np.array_equal(problem.linearize(x, lam)[1][-1], row)
+
+
+def test_linearize_takes_no_row_where_the_residual_is_not_finite(monkeypatch):
+    problem, x, lam = _mirrored_bp()
+    monkeypatch.setattr(ShootingCurve, "_test", lambda self, x, lam: math.nan)
+    monkeypatch.setattr(ShootingCurve, "_test_gradient", lambda *args: pytest.fail("a row"))
+    residual, extended = problem.linearize(x, lam)
+    assert math.isnan(residual[-1]) and np.isnan(extended).all()
