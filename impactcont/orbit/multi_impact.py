@@ -896,8 +896,10 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
 
 def _all_finite(a: np.ndarray) -> bool:
     """Every entry of the float array `a` finite: its sum is finite (a NaN or an infinity
-    makes it not), else, the sum having perhaps overflowed, each entry is checked."""
-    return math.isfinite(a.sum()) or bool(np.all(np.isfinite(a)))
+    makes it not), else, the sum having perhaps overflowed, each entry is checked. The sum
+    and the maxima below are the ufuncs' reductions themselves (``a.sum()`` and ``a.max()``
+    call them through a Python layer)."""
+    return math.isfinite(np.add.reduce(a, axis=None)) or bool(np.all(np.isfinite(a)))
 
 
 def unknowns_scale(u: np.ndarray) -> float:
@@ -907,7 +909,8 @@ def unknowns_scale(u: np.ndarray) -> float:
     order 1 passed (a bouncing ball at Gamma = 1.06 from a poor guess did).
     """
     u = np.asarray(u, dtype=float)
-    return max(1.0, min(abs(float(u[0])), math.pi), float(np.abs(u[1:]).max(initial=0.0)))
+    return max(1.0, min(abs(float(u[0])), math.pi),
+               float(np.maximum.reduce(np.abs(u[1:]), axis=None, initial=0.0)))
 
 
 def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
@@ -945,7 +948,8 @@ def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
     except np.linalg.LinAlgError:  # an exact zero pivot where s_min > 0 only by rounding
         return math.inf, math.inf
     correction = math.sqrt(float(step @ step))  # |J^-1 r|, as np.linalg.norm computes it
-    return cond, correction + cond * _EPS * max(1.0, float(np.abs(u).max()))
+    return cond, correction + cond * _EPS * max(1.0, float(np.maximum.reduce(np.abs(u),
+                                                                             axis=None)))
 
 
 def _parameters(osc: ImpactOscillator) -> str:
@@ -1062,7 +1066,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     osc = flow.osc
     geo = _geometry(flow, pattern)
     if residual is None:
-        residual = float(np.abs(sh.residual).max())
+        residual = float(np.maximum.reduce(np.abs(sh.residual), axis=None))
     checked = MotionChecks._make(_kernel().motion_checks(
         tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
         tuple(contact_stops(geo)), tuple(checked_flights(sh)), checks))
@@ -1267,7 +1271,7 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
                                 max_iter)
     cond, error = shooting_accuracy(sh.jacobian, sh.residual, u)
     scale = unknowns_scale(u)
-    residual = float(np.abs(sh.residual).max())
+    residual = float(np.maximum.reduce(np.abs(sh.residual), axis=None))
     if not error <= _ERROR_WARN * scale:
         if not error <= _SINGULAR * scale:
             warnings.warn(f"{_bifurcation(N, p, osc, cond, error)} (residual {residual:.3g})",
