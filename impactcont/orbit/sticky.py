@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from impactcont.errors import NoPeriodicMotionError, ParameterError
-from impactcont.kernel.arrays import HeldSegments, MotionChecks, StickyFlights
+from impactcont.kernel.arrays import HeldSegments, StickyFlights
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.stops import LOWER, UPPER, sticking_pattern
 from impactcont.orbit.flow import Flow
@@ -46,7 +46,6 @@ from impactcont.orbit.multi_impact import (
     _orbit,
     _parameters,
     _writable,
-    checked_flights,
     contact_stops,
     impact_sequence,
     shooting_accuracy,
@@ -389,33 +388,80 @@ class Chatter:
 def chatter_bounces(flow: Flow, pattern: str, sh: StickyShooting) -> tuple[Chatter, ...]:
     """The chatters of the shot `sh` whose impacts accumulate, one per chatter-entered
     sticking phase of `pattern`: the bounces :func:`impactcont.kernel.shooting._chatter_map`
-    resolved, replayed by :func:`impactcont.kernel.shooting.chatter_bounces` (the same
-    flights, returns and impacts: bitwise the shooting path's bounces), and the
-    accumulation point `sh` holds. A chatter whose map failed (``chatter_status < 0``) is
-    left out (the motion is not physical for it)."""
+    resolved, replayed (:func:`impactcont.kernel.sticky.chatter_checks`: the same flights,
+    returns and impacts, bitwise the shooting path's bounces), and the accumulation point
+    `sh` holds. A chatter whose map failed (``chatter_status < 0``) is left out (the motion
+    is not physical for it)."""
+    return _checked_chatters(flow, pattern, sh, False)[0]
+
+
+def _checked_chatters(flow: Flow, pattern: str, sh: StickyShooting, checks: bool
+                      ) -> tuple[tuple[Chatter, ...], dict[int, list[_HeldGap]]]:
+    """:func:`chatter_bounces` and, with `checks`, every stop's smallest clearance along each
+    chatter's resolved bounces (each stop but the chatter's own: one :class:`_HeldGap` per
+    stop, its time from the landing, crossed where a bounce reaches it), by the chatter's
+    landing impact; a chatter's ``reached`` names the stops its bounces cross. One compiled
+    call per chatter (:func:`impactcont.kernel.sticky.chatter_checks`).
+
+    Each bounce is checked as every flight is (each a flight from an impact on the
+    chatter's stop to the next): the contact search of eq. (16) at the interior extrema
+    of every stop coordinate (exact to its root search; a clearance ``<= 0`` there is a
+    crossing) and every stop's clearance at both ends (past the stop by more than its
+    rounding: a coordinate crossing monotonically inside a bounce). The chatter's own stop
+    is not searched (a bounce starts and ends on it and its return is the chatter map's).
+    The jumped rest of the chatter (after the last resolved impact, its speed ``<=
+    CHATTER_SPEED`` of the landing's) rises about ``(CHATTER_SPEED / R)^2`` of the first
+    bounce's apex (the apex goes as the square of the speed) and is not checked."""
     osc = flow.osc
     impacts, sticks = sticking_pattern(osc, pattern)
+    held = held_segments(flow, pattern)
+    restitutions = HeldSegments(*held).restitutions
     found = []
+    bounces: dict[int, list[_HeldGap]] = {}
     arrays = None  # the kernel's arguments, once per call
     for k in np.flatnonzero(sticks):
-        if not chatter_restitution(osc, impacts[k]) > 0.0 or sh.chatter_status[k] < 0:
+        if not restitutions[k] > 0.0 or sh.chatter_status[k] < 0:
             continue
         if arrays is None:
-            arrays = (flow.flight_arrays(), tuple(flow.forcing_arrays()),
-                      tuple(impact_sequence(_geometry(flow, impacts))),
-                      held_segments(flow, pattern))
-        starts, phases, times, arr, tr, cols, rates, count = _kernel().chatter_bounces(
-            *arrays, int(k), _writable(np.asarray(sh.starts[k], dtype=float)),
-            float(sh.phases[k]))
+            from impactcont.kernel.sticky import chatter_checks
+
+            geo = _geometry(flow, impacts)
+            arrays = (tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+                      tuple(impact_sequence(geo)), held, tuple(contact_stops(geo)))
+            names, coordinates = _stop_names(geo)
+        (starts, phases, times, arr, tr, cols, rates, count, gap, when, crossed,
+         present) = chatter_checks(*arrays, int(k), names.index(impacts[k]),
+                                   _writable(np.asarray(sh.starts[k], dtype=float)),
+                                   float(sh.phases[k]), bool(checks))
         c = max(int(count), 0)
+        gaps = [_HeldGap(float(gap[i]), float(when[i]), names[i], coordinates[i],
+                         bool(crossed[i])) for i in np.flatnonzero(present)]
+        if checks:
+            bounces[int(k)] = gaps
         found.append(Chatter(impact=int(k), stop=impacts[k], starts=starts[:c].copy(),
                              phases=phases[:c].copy(), times=times[:c].copy(),
                              arrivals=arr[:c].copy(), transitions=tr[:c].copy(),
                              phase_columns=cols[:c].copy(), rates=rates[:c].copy(),
                              accumulation=np.array(sh.accumulations[k], dtype=float),
                              accumulation_phase=float(sh.accumulation_phases[k]),
-                             duration=float(sh.chatter_times[k])))
-    return tuple(found)
+                             duration=float(sh.chatter_times[k]),
+                             reached="".join(g.stop for g in gaps if g.crossed)))
+    return tuple(found), bounces
+
+
+def _stop_names(geo: StopGeometry) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The names of the stops of `geo` in the kernel's order (U, L, the extra stops) and
+    their stop coordinates in words, kept per geometry."""
+    found = _NAMES.get(geo)
+    if found is None:
+        normals = (geo.normal, geo.normal, *geo.extra_normals)
+        found = _NAMES[geo] = ((UPPER, LOWER, *geo.extra_names),
+                               tuple(_coordinate(nv) for nv in normals))
+    return found
+
+
+#: :func:`_stop_names` of each live stop geometry.
+_NAMES: weakref.WeakKeyDictionary[StopGeometry, tuple] = weakref.WeakKeyDictionary()
 
 
 #: A stop's clearance at an end of a sticking phase (its start, its release) is a crossing
@@ -434,82 +480,6 @@ class _HeldGap:
     stop: str
     coordinate: str
     crossed: bool
-
-
-def _bounce_clearances(flow: Flow, chatter: Chatter) -> list[_HeldGap]:
-    """Every stop's smallest clearance along a chatter's resolved bounces, each stop but the
-    chatter's own: one :class:`_HeldGap` per stop (its time from the landing), crossed
-    where a bounce reaches it.
-
-    Each bounce is checked as every flight is (each a flight from an impact on the
-    chatter's stop to the next): the contact search of eq. (16) at the interior extrema
-    of every stop coordinate (:func:`impactcont.kernel.shooting.motion_checks`, exact to
-    its root search; a clearance ``<= 0`` there is a crossing) and every stop's
-    clearance at both ends (:func:`impactcont.kernel.shooting.end_clearances`, past the
-    stop by more than its rounding: a coordinate crossing monotonically inside a
-    bounce). The chatter's own stop is not searched (a bounce starts and ends on it and
-    its return is the chatter map's). The jumped rest of the chatter (after the last
-    resolved impact, its speed ``<= CHATTER_SPEED`` of the landing's) rises about
-    ``(CHATTER_SPEED / R)^2`` of the first bounce's apex (the apex goes as the square of
-    the speed) and is not checked.
-    """
-    c = chatter.times.size
-    if c == 0:
-        return []
-    geo = _geometry(flow, chatter.stop * c)
-    bounces = Shooting(phases=chatter.phases, flight_times=chatter.times, starts=chatter.starts,
-                       arrivals=chatter.arrivals, arrival_rates=chatter.rates,
-                       transitions=chatter.transitions, phase_columns=chatter.phase_columns,
-                       residual=np.zeros(0), jacobian=None)
-    checked = MotionChecks._make(_kernel().motion_checks(
-        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)),
-        tuple(contact_stops(geo)), tuple(checked_flights(bounces)), True))
-    offsets = np.concatenate(([0.0], np.cumsum(chatter.times)[:-1]))
-    names = (UPPER, LOWER, *geo.extra_names)
-    normals = (geo.normal, geo.normal, *geo.extra_normals)
-    # each stop's clearances in the order they are met: the interior extrema, then the
-    # bounces' ends (row-major: bounce by bounce, start first)
-    parts: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
-
-    def add(stop: int, gaps: np.ndarray, when: np.ndarray, crossed: np.ndarray) -> None:
-        if gaps.size and names[stop] != chatter.stop:
-            parts.setdefault(stop, []).append((gaps, when, crossed))
-
-    interior = [(0, checked.gap_upper, checked.time_upper)]
-    if geo.two_sided:
-        interior.append((1, checked.gap_lower, checked.time_lower))
-    interior += [(2 + j, checked.gap_extra[:, j], checked.time_extra[:, j])
-                 for j in range(len(geo.extra_names))]
-    for stop, gaps, times in interior:
-        kept = ~np.isposinf(gaps)  # +inf: no extremum in the bounce
-        add(stop, gaps[kept], offsets[kept] + times[kept], ~(gaps[kept] > 0.0))
-    end_gap, end_stop, end_tol = _kernel().end_clearances(
-        geo.normal, geo.two_sided, geo.b, geo.b_low, geo.normals, geo.signs, geo.extra_normals,
-        geo.extra_signs, geo.extra_positions, _writable(chatter.starts),
-        _writable(chatter.arrivals))
-    met = end_stop >= 0
-    if met.any():
-        stops = end_stop[met]
-        end_times = (offsets[:, None] + np.array([0.0, 1.0]) * chatter.times[:, None])[met]
-        gaps = end_gap[met]
-        crossed = gaps < -end_tol[met]
-        for stop in np.unique(stops):
-            at = stops == stop
-            add(int(stop), gaps[at], end_times[at], crossed[at])
-    found = []
-    for stop in sorted(parts):
-        gaps, when, crossed = (np.concatenate(a) for a in zip(*parts[stop], strict=True))
-        if np.isnan(gaps).any():  # a NaN clearance (a failed search) is kept, and crosses
-            low, at = math.inf, math.nan
-            for i in range(gaps.size):
-                if not gaps[i] >= low:
-                    low, at = float(gaps[i]), float(when[i])
-        else:  # the first smallest
-            i = int(np.argmin(gaps))
-            low, at = float(gaps[i]), float(when[i])
-        found.append(_HeldGap(low, at, names[stop], _coordinate(normals[stop]),
-                              bool(crossed.any())))
-    return found
 
 
 def _held_clearances(flow: Flow, impacts: str, k: int, start: np.ndarray, phase: float,
@@ -702,7 +672,8 @@ def held_forcing(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
 
 def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
                      tangent: np.ndarray, weights: np.ndarray, tol: float, max_iter: int,
-                     singular: float, *, hyperplane: bool = False) -> Any:
+                     singular: float, *, hyperplane: bool = False, with_shot: bool = False
+                     ) -> Any:
     """One corrector step of a branch in omega of a motion with sticking phases, compiled
     (:func:`impactcont.kernel.sticky.sticky_palc_correct`).
 
@@ -728,11 +699,18 @@ def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
         The Frobenius condition bound above which a bordered matrix is returned flagged.
     hyperplane : bool
         The Newton of :func:`impactcont.core.corrector.solve_on_hyperplane` instead.
+    with_shot : bool
+        Return the converged point's shot too.
 
     Returns
     -------
     PalcResult
         As :func:`impactcont.kernel.shooting.palc_correct` returns it.
+    StickyShooting or None
+        With `with_shot`: :func:`sticky_shooting` at the converged point (its flights and
+        held systems at its omega computed in the corrector, with the Jacobian), None where
+        the step did not converge or ends on the hyperplane (its last update comes after
+        its last shot).
 
     Raises
     ------
@@ -741,6 +719,7 @@ def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
         compiled code), or the arrays do not have the pattern's size.
     """
     from impactcont.kernel import sticky
+    from impactcont.kernel.shooting import CONVERGED
 
     osc = flow.osc
     if type(flow) is not Flow or not np.isrealobj(flow.f):
@@ -755,7 +734,7 @@ def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
     impacts = sticking_pattern(osc, pattern)[0]
     errors = osc.modes.eigenvalue_errors
     errors = np.zeros(osc.n) if errors is None else np.asarray(errors, dtype=float)
-    return sticky.sticky_palc_correct(
+    out, shot = sticky.sticky_palc_correct(
         tuple(flow.shooting_arrays()), _writable(errors),
         tuple(impact_sequence(_geometry(flow, impacts))), held_segments(flow, pattern),
         held_forcing(flow, pattern), float(N),
@@ -763,6 +742,11 @@ def sticky_palc_step(flow: Flow, N: int, pattern: str, predicted: np.ndarray,
          _writable(np.asarray(tangent, dtype=float)),
          _writable(np.asarray(weights, dtype=float))),
         (float(tol), int(max_iter), float(singular), bool(hyperplane)))
+    if not with_shot:
+        return out
+    if hyperplane or out.status != CONVERGED:
+        return out, None
+    return out, StickyShooting._make(shot)
 
 
 def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
@@ -853,11 +837,7 @@ def _sticks(flow: Flow, pattern: str, sh: StickyShooting, shift: np.ndarray,
     landing = np.full(p, np.nan)
     reasons = []
     held_gaps: list[tuple[_HeldGap, ...]] = [() for _ in range(p)]
-    chatters = chatter_bounces(flow, pattern, sh)
-    bounces = {c.impact: _bounce_clearances(flow, c) for c in chatters} if checks else {}
-    chatters = tuple(dataclasses.replace(c, reached="".join(
-        g.stop for g in bounces[c.impact] if g.crossed)) if bounces.get(c.impact) else c
-        for c in chatters)
+    chatters, bounces = _checked_chatters(flow, pattern, sh, checks)
     for k in np.flatnonzero(sticks):
         held = held_flow(osc, impacts[k])
         held_gaps[k] = tuple(bounces.get(int(k), ()))

@@ -56,7 +56,7 @@ import numpy as np
 from impactcont.core.locate import MotionTest
 from impactcont.core.stepper import SINGULAR_CONDITION, CorrectorResult
 from impactcont.errors import ParameterError
-from impactcont.kernel.arrays import Forcing, ForcingDerivatives
+from impactcont.kernel.arrays import Forcing, ForcingDerivatives, HeldSegments
 from impactcont.model.modal import _RESONANCE_REL_ERROR_WARN, forced_coefficients
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import (
@@ -85,6 +85,7 @@ from impactcont.orbit.multi_impact import (
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.sticky import (
     StickyShooting,
+    held_segments,
     sticky_jacobians,
     sticky_omega_column,
     sticky_orbit_from_unknowns,
@@ -280,6 +281,19 @@ class MultiImpactBranchProblem:
         """
         return self._shoot(u, lam)
 
+    def _held_shifts(self, lam: float) -> np.ndarray:
+        """Where the contact search of each flight from a release starts at ``lam``
+        (:func:`~impactcont.orbit.sticky.held_segments`' shifts)."""
+        return HeldSegments(*held_segments(self.flow_at(lam), self.pattern)).shifts
+
+    def _keep_shot(self, u: np.ndarray, lam: float, sh: Shooting | StickyShooting) -> None:
+        """Keep `sh`, the shot at ``(u, lam)`` computed elsewhere (a compiled corrector's at
+        its converged point), for :meth:`shot`."""
+        if len(self._shots) > _CACHE_SIZE:
+            self._shots.clear()
+            self._extended.clear()
+        self._shots[(np.asarray(u, dtype=float).tobytes(), float(lam))] = sh
+
     def _shoot(self, u: np.ndarray, lam: float) -> Shooting | StickyShooting:
         u = np.asarray(u, dtype=float)
         if u.shape != (self.size,):
@@ -469,9 +483,16 @@ class MultiImpactBranchProblem:
         if self._base_flow is None:
             return None
         if self.sticky:  # kernel.sticky.sticky_palc_correct
-            return self._corrector_result(sticky_palc_step(
-                self._base_flow, self.N, self.pattern, predicted, tangent, weights, tol,
-                max_iter, SINGULAR_CONDITION, hyperplane=hyperplane))
+            out, sh = sticky_palc_step(self._base_flow, self.N, self.pattern, predicted,
+                                       tangent, weights, tol, max_iter, SINGULAR_CONDITION,
+                                       hyperplane=hyperplane, with_shot=True)
+            if sh is not None and np.array_equal(
+                    sh.search_shifts, self._held_shifts(out.omega)):
+                # the converged point's shot, its motion made from it (where the contact
+                # searches from the releases start as at the point's omega: the corrector
+                # keeps the start's shifts)
+                self._keep_shot(out.state[:-1], out.omega, sh)
+            return self._corrector_result(out)
         return self._palc_step(predicted, tangent, weights, tol, max_iter,
                                np.eye(self.size), np.zeros(self.size), self.size, hyperplane)
 

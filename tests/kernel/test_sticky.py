@@ -113,3 +113,104 @@ def test_the_compiled_step_refuses_what_it_cannot_do(riding):
         sticky_palc_step(general, 1, "lu", u0, e, np.ones(u0.size), 1e-12, 5, 1e12)
     with pytest.raises(ic.ParameterError, match=r"tangent must have shape \(11,\)"):
         sticky_palc_step(flow, 1, "lu", u0, e[:-1], np.ones(u0.size), 1e-12, 5, 1e12)
+
+
+def _capped_riding() -> tuple[ic.ImpactOscillator, np.ndarray]:
+    """The riding damper with R = 0.3 at omega 0.8 under a stop A on the primary at x1 =
+    -1.80 that the lower chatter's bounces reach (tests/orbit/test_sticky.py), and the
+    unknowns of its motion without A."""
+    osc = _damper(0.8).replace(R=0.3)
+    motion = ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, np.array([-0.5, -0.2, 0.0,
+                                                                         0.0]), 0.0, 8.0))
+    assert motion.physical and motion.pattern == "lu", motion.reason
+    extra = (ic.Stop("A", mass=1, gap=1.80, restitution=0.5, side=-1),)
+    return osc.replace(stops=Stops(mass=2, relative_to=1, mirror=True, extra=extra)), \
+        motion.unknowns
+
+
+def test_chatter_checks_are_the_flights_checks_of_the_replayed_bounces():
+    """:func:`impactcont.kernel.sticky.chatter_checks` on the capped riding damper: its
+    bounces are bitwise the shooting path's replay (``kernel.shooting.chatter_bounces``),
+    and each stop's smallest clearance, its time from the landing and whether a bounce
+    crosses it are those of the bounces checked as flights (``motion_checks``' interior
+    extrema, ``end_clearances``' ends) reduced in numpy: A crossed, U not."""
+    from impactcont.kernel import shooting
+    from impactcont.kernel.arrays import MotionChecks
+    from impactcont.kernel.sticky import chatter_checks
+    from impactcont.orbit.multi_impact import Shooting as Flights
+    from impactcont.orbit.multi_impact import (
+        _geometry,
+        checked_flights,
+        contact_stops,
+        impact_sequence,
+    )
+    from impactcont.orbit.sticky import held_segments
+
+    osc, u = _capped_riding()
+    flow = flow_of(osc)
+    sh = sticky_shooting(flow, 1, "lu", u)
+    geo = _geometry(flow, "LU")
+    held = held_segments(flow, "lu")
+    X0 = np.array(sh.starts[0])
+    out = chatter_checks(tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+                         tuple(impact_sequence(geo)), held, tuple(contact_stops(geo)), 0, 1,
+                         X0, float(sh.phases[0]), True)
+    *log, count, gap, when, crossed, present = out
+    *replay, replayed = shooting.chatter_bounces(
+        flow.flight_arrays(), tuple(flow.forcing_arrays()), tuple(impact_sequence(geo)), held,
+        0, X0, float(sh.phases[0]))
+    assert count == replayed > 0
+    for mine, theirs in zip(log, replay, strict=True):
+        np.testing.assert_array_equal(mine, theirs)
+    starts, phases, times, arrivals, transitions, pcols, rates = (a[:count] for a in log)
+    own = _geometry(flow, "L" * count)
+    checked = MotionChecks._make(shooting.motion_checks(
+        tuple(flow.shooting_arrays()), tuple(flow.forcing_arrays()),
+        tuple(impact_sequence(own)), tuple(contact_stops(own)),
+        tuple(checked_flights(Flights(phases=phases, flight_times=times, starts=starts,
+                                      arrivals=arrivals, arrival_rates=rates,
+                                      transitions=transitions, phase_columns=pcols,
+                                      residual=np.zeros(0), jacobian=None))), True))
+    end_gap, end_stop, end_tol = shooting.end_clearances(
+        own.normal, own.two_sided, own.b, own.b_low, own.normals, own.signs,
+        own.extra_normals, own.extra_signs, own.extra_positions, starts, arrivals)
+    offsets = np.concatenate(([0.0], np.cumsum(times)[:-1]))
+    inner = {0: (checked.gap_upper, checked.time_upper),
+             2: (checked.gap_extra[:, 0], checked.time_extra[:, 0])}
+    for stop in (0, 2):  # U and A (L is the chatter's own stop)
+        gaps, at = inner[stop]
+        kept = ~np.isposinf(gaps)
+        ends = end_stop == stop
+        entries = np.concatenate([gaps[kept], end_gap[ends]])
+        times_of = np.concatenate([offsets[kept] + at[kept],
+                                   (offsets[:, None] + np.array([0.0, 1.0]) * times[:, None])
+                                   [ends]])
+        hits = np.concatenate([~(gaps[kept] > 0.0), end_gap[ends] < -end_tol[ends]])
+        assert present[stop] == (entries.size > 0)
+        i = int(np.argmin(entries))
+        assert gap[stop] == entries[i] and when[stop] == times_of[i]
+        assert crossed[stop] == hits.any()
+    assert crossed[2] and not crossed[0] and not present[1]
+
+
+def test_the_compiled_step_returns_the_converged_point_s_shot(riding):
+    """``with_shot``: the shot the compiled step made at its converged point is
+    :func:`sticky_shooting`'s there on the oscillator at its omega built afresh (residual,
+    Jacobian, releases and stick times to 1e-12); none on the hyperplane (its last update
+    follows its last shot)."""
+    u0 = riding.unknowns
+    e = np.zeros(u0.size + 1)
+    e[-1] = 1.0
+    predicted = np.concatenate([u0, [1.21]])
+    flow = flow_of(riding.oscillator)
+    out, shot = sticky_palc_step(flow, 1, "lu", predicted, e, np.ones(e.size), 1e-12, 10,
+                                 1e12, with_shot=True)
+    assert out.status == CONVERGED and shot is not None
+    fresh = sticky_shooting(flow_of(_damper(out.omega)), 1, "lu", out.state[:-1])
+    for name in ("residual", "jacobian", "releases", "stick_times", "arrivals",
+                 "transitions"):
+        np.testing.assert_allclose(getattr(shot, name), getattr(fresh, name), rtol=0,
+                                   atol=1e-12, err_msg=name)
+    _, none = sticky_palc_step(flow, 1, "lu", predicted, e, np.ones(e.size), 1e-12, 10, 1e12,
+                               hyperplane=True, with_shot=True)
+    assert none is None
