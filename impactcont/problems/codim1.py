@@ -269,6 +269,8 @@ class ShootingCurve:
         #: (:attr:`_gradient`), the residual and the matrix.
         self._linearization: tuple[tuple[bytes, float], Any, np.ndarray, np.ndarray] | None = \
             None
+        self._directions: tuple[list[int], tuple[np.ndarray, np.ndarray, np.ndarray]] | None \
+            = None  # BP: the exact row's directions (:meth:`_pitchfork_directions`)
         first = self._base(self.params[1].value(osc), p1)
         self.size = first.size + 1
         #: BP: the test row from the shot (exact in the unknowns and the stops' positions),
@@ -569,9 +571,10 @@ class ShootingCurve:
         exact = _KINDS[self.kind].exact_row
         if exact is not None:
             return exact(self, x, lam)
-        y = np.append(x, lam)
-        if self._gradient is not None and np.max(np.abs(y - self._gradient[0])) <= \
-                _REUSE * max(1.0, float(np.max(np.abs(y)))):
+        y = np.empty(x.size + 1)
+        y[:-1], y[-1] = x, lam
+        if self._gradient is not None and float(np.abs(y - self._gradient[0]).max()) <= \
+                _REUSE * max(1.0, float(np.abs(y).max())):
             return self._gradient[1]
         g0 = self.test(x, lam)
         grad = np.full(x.size, np.nan)
@@ -605,19 +608,7 @@ class ShootingCurve:
         base = self.branch_problem(lam)
         u, p1 = x[:-1], float(x[-1])
         size = u.size
-        # the parameters with exact columns: those moving the stops, and omega as p1 (the
-        # problem's own parameter)
-        stops = [i for i, par in enumerate(self.params)
-                 if par.data == GAP or (i == 0 and par.data == FREQUENCY)]
-        dv = np.zeros((size + len(stops), size))
-        dv[:size] = np.eye(size)
-        dc = np.zeros((size + len(stops), base.p))
-        domega = np.zeros(size + len(stops))
-        for row, i in enumerate(stops):
-            if self.params[i].data == GAP:
-                dc[size + row] = self.params[i].stop_rates(base.pattern)
-            else:
-                domega[size + row] = 1.0
+        stops, (dv, dc, domega) = self._pitchfork_directions(base)
         H, dH = base.half_map_derivative(u, p1, dv, dc, domega)
         sign, _, left, right = _pitchfork_factors(H)
         dg = sign * np.einsum("i,dij,j->d", left, dH, right)
@@ -625,6 +616,28 @@ class ShootingCurve:
         for row, i in enumerate(stops):
             moved[i] = float(dg[size + row])
         return dg[:size], (moved[0], moved[1])
+
+    def _pitchfork_directions(self, base: BranchProblem
+                              ) -> tuple[list[int], tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """The parameters with exact BP columns (those moving the stops, and omega as p1:
+        the problem's own parameter) and the directions ``(dv, dc, domega)`` of
+        :meth:`_pitchfork_row` (each half unknown, then each such parameter): the same at
+        every point of the curve, made once (read only)."""
+        if self._directions is None:
+            size = base.size
+            stops = [i for i, par in enumerate(self.params)
+                     if par.data == GAP or (i == 0 and par.data == FREQUENCY)]
+            dv = np.zeros((size + len(stops), size))
+            dv[:size] = np.eye(size)
+            dc = np.zeros((size + len(stops), base.p))
+            domega = np.zeros(size + len(stops))
+            for row, i in enumerate(stops):
+                if self.params[i].data == GAP:
+                    dc[size + row] = self.params[i].stop_rates(base.pattern)
+                else:
+                    domega[size + row] = 1.0
+            self._directions = stops, (dv, dc, domega)
+        return self._directions
 
     # -- what the location of codim-2 points needs (detection.codim2.Codim2Problem) ------------
     @property
