@@ -463,9 +463,15 @@ def _locate_step(problem: Problem, x: FloatArray, dlam: FloatArray, arclength: F
             g: Callable[[float], float] = chord.fold_test
             parts = [(0.0, 1.0)]
         else:
-            g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)))
+            # at the step's ends the test (and its noise) of the accepted points; a curve
+            # renews its borders before the step's first point: its ends are evaluated there
+            known, value = before_step is None, values[id(event)]
+            g = _cached(lambda s, test=event.test, chord=chord: test(*chord.point(s)),
+                        (lambda i, v=value: v(k + i)) if known else None)
             if event.noise_at is not None:
-                noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)))
+                noise = _cached(lambda s, n=event.noise_at, chord=chord: n(*chord.point(s)),
+                                (lambda i, n=event.noise: n(k + i))
+                                if known and event.noise is not None else None)
             parts = _watched_parts(event, values[id(event)], x, k, chord, g, noise,
                                    arclength, poles.get(id(event)))
         for lo, hi in parts:
@@ -473,16 +479,20 @@ def _locate_step(problem: Problem, x: FloatArray, dlam: FloatArray, arclength: F
                                       arclength, s_tol))
 
 
-def _cached(f: Callable[[float], float]) -> Callable[[float], float]:
+def _cached(f: Callable[[float], float], end: Callable[[int], Any] | None = None
+            ) -> Callable[[float], float]:
     """`f` evaluated once per chord coordinate (its value as a float; a call that raises
     keeps nothing). A plain table: ``functools.cache`` costs a few microseconds to build,
-    and a branch builds two per watched event and step."""
+    and a branch builds two per watched event and step. With `end`, the values at the
+    coordinates 0 and 1 are ``end(0)`` and ``end(1)`` (what the accepted points already
+    have), not evaluated on the chord again."""
     known: dict[float, float] = {}
 
     def cached(s: float) -> float:
         value = known.get(s)
         if value is None:
-            value = known[s] = float(f(s))
+            at_end = end is not None and (s == 0.0 or s == 1.0)
+            value = known[s] = float(end(int(s)) if at_end else f(s))
         return value
     return cached
 

@@ -195,7 +195,7 @@ def detect_special_points(problem: Any, samples: Sequence[BranchSample],
     candidates.sort(key=lambda c: (c[0], order[c[1]]))
     found: list[SpecialPoint] = []
     try:
-        _classify(problem, samples, candidates, tests, found)
+        _classify(problem, samples, candidates, tests, found, orbits[True])
     except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those built are kept
         if not (found and take_interrupt(
                 "location", "interrupted by the user (KeyboardInterrupt) while computing the "
@@ -216,14 +216,21 @@ def detect_special_points(problem: Any, samples: Sequence[BranchSample],
 
 def _classify(problem: Any, samples: Sequence[BranchSample],
               candidates: Sequence[tuple[int, Label, np.ndarray, float, float, str, bool]],
-              tests: Mapping[str, MotionTest], found: list[SpecialPoint]) -> None:
+              tests: Mapping[str, MotionTest], found: list[SpecialPoint],
+              orbit_at: Callable[[Any, float], Any] | None = None) -> None:
     """The records of the located zeros that are special points, appended to `found`: the
     motion there, the kind's criticality, the kind of a fold (the problem's ``fold_kind``:
-    a fold of a general N-p branch where it meets the symmetric one is the BP it is)."""
+    a fold of a general N-p branch where it meets the symmetric one is the BP it is).
+
+    `orbit_at` is ``problem.orbit`` with its checks, remembering the last motions the
+    locator computed (:func:`~impactcont.detection.locator.last_motions`): the motion at a
+    located zero is mostly the locator's last."""
     parameter = getattr(problem, "parameter", "lam")
     fold_kind = getattr(problem, "fold_kind", None)
+    if orbit_at is None:
+        orbit_at = problem.orbit
     for step, label, u, lam, precision, status, failed in candidates:
-        orbit = problem.orbit(u, lam)
+        orbit = orbit_at(u, lam)
         test = tests.get(label)
         if not failed and test is not None and test.critical is not None \
                 and not test.critical(orbit):
