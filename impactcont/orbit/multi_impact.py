@@ -524,10 +524,15 @@ _KERNEL: list[Any] = []
 
 def _writable(a: np.ndarray) -> np.ndarray:
     """``a`` as a writable, contiguous float array (the kernel's argument types: one compile)."""
-    if (type(a) is np.ndarray and a.dtype == np.float64 and a.flags.c_contiguous
-            and a.flags.writeable):
-        return a
+    if type(a) is np.ndarray and (a.dtype is _FLOAT64 or a.dtype == np.float64):
+        flags = a.flags
+        if flags.c_contiguous and flags.writeable:
+            return a
     return np.array(a, dtype=float, order="C")
+
+
+#: The float64 dtype (an array's own is this very object: :func:`_writable` tests it first).
+_FLOAT64 = np.dtype(np.float64)
 
 
 def _section_unknowns(states: np.ndarray, pivots: np.ndarray) -> np.ndarray:
@@ -1118,7 +1123,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
     if sticks is None:
         phases = np.array([math.atan2(math.sin(t), math.cos(t)) for t in sh.phases.tolist()])
         states = sh.starts.copy()
-        return MultiImpactOrbit(
+        return _motion(
             oscillator=osc, N=N, p=p, phases=phases, flight_times=sh.flight_times.copy(),
             states=states, impact_velocities=velocities, flight_gap_min=gaps,
             flight_gap_min_times=gap_times, jacobians=checked.jacobians, G=checked.G,
@@ -1128,7 +1133,7 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
             flight_gap_lower=gaps_low, condition_number=condition_number,
             error_estimate=error_estimate, flight_gap_stops="".join(nearest) if checks else "")
     reasons.extend(sticks.reasons)
-    return MultiImpactOrbit(
+    return _motion(
         oscillator=osc, N=N, p=p, phases=np.array([_wrap(float(t)) for t in sticks.phases]),
         flight_times=sticks.flight_times.copy(), states=sticks.states.copy(),
         impact_velocities=velocities, flight_gap_min=gaps, flight_gap_min_times=gap_times,
@@ -1140,6 +1145,22 @@ def _orbit(flow: Flow, N: int, p: int, sh: Shooting, checks: bool, pattern: str,
         stick_times=sticks.stick_times.copy(), release_states=sticks.release_states,
         pressing_min=sticks.pressing_min, landing_pressing=sticks.landing_pressing,
         chatters=sticks.chatters)
+
+
+def _motion(**fields: Any) -> MultiImpactOrbit:
+    """``MultiImpactOrbit(**fields)`` without the frozen dataclass's ``__init__`` (one
+    ``object.__setattr__`` per field: a few microseconds of every solve and branch point):
+    its defaults (:data:`_DEFAULTS`), `fields`, then ``__post_init__``. `fields` must name
+    every field without a default."""
+    orbit = object.__new__(MultiImpactOrbit)
+    orbit.__dict__.update(_DEFAULTS, **fields)
+    orbit.__post_init__()
+    return orbit
+
+
+#: The defaults of the fields of :class:`MultiImpactOrbit` (:func:`_motion`).
+_DEFAULTS = {f.name: f.default for f in dataclasses.fields(MultiImpactOrbit)
+             if f.default is not dataclasses.MISSING}
 
 
 def _end_checks(sh: Shooting, geo: StopGeometry, pattern: str, gaps: np.ndarray,
