@@ -299,29 +299,17 @@ class HeldFlow:
         normals, signs, positions = (np.asarray(a, dtype=float) for a in stops)
         q = signs.size
         gaps, times = np.full(q, np.inf), np.full(q, np.nan)
-        _, Li, Xc = self._lift()
-        rows = normals @ self.frame
-        moving = np.flatnonzero(np.any(rows != 0.0, axis=1))
-        if self.reduced is None or not duration > 0.0 or moving.size == 0:
+        if self.reduced is None or not duration > 0.0:
+            return gaps, times
+        moving, searched, placeholder = self._searched(normals, signs, positions)
+        if moving.size == 0:
             return gaps, times
         from impactcont.kernel import shooting as kernel
-        from impactcont.kernel.arrays import (
-            CheckedFlights,
-            ContactStops,
-            ImpactSequence,
-            MotionChecks,
-        )
+        from impactcont.kernel.arrays import CheckedFlights, MotionChecks
 
-        r = rows.shape[1]
-        m = 2 * r
+        _, Li, Xc = self._lift()
+        m = 2 * (self.n - 1)
         eye = np.eye(m)[None]
-        searched = ContactStops(
-            normal=np.zeros(r), two_sided=False, b=math.inf, b_low=0.0,
-            extra_normals=np.ascontiguousarray(rows[moving]), extra_signs=signs[moving].copy(),
-            extra_positions=positions[moving] - normals[moving] @ Xc[:self.n])
-        placeholder = ImpactSequence(pivots=np.zeros(1, dtype=np.int64),
-                                     normals=np.eye(1, r), signs=np.ones(1),
-                                     positions=np.zeros(1), matrices=eye.copy())
         flight = CheckedFlights(phases=np.array([float(theta)]),
                                 flight_times=np.array([float(duration)]),
                                 starts=(Li @ (np.asarray(X0, dtype=float) - Xc))[None].copy(),
@@ -330,7 +318,7 @@ class HeldFlow:
         # read-only, as the shooting path passes its stop geometry: one compiled version
         checked = MotionChecks._make(kernel.motion_checks(
             tuple(self.reduced.shooting_arrays()), tuple(self.reduced.forcing_arrays()),
-            _read_only(placeholder), _read_only(searched), tuple(flight), True))
+            placeholder, searched, tuple(flight), True))
         if checked.capped:
             warnings.warn(f"the contact search of a sticking phase of {duration:.6g} was "
                           "capped at 2000000 cells: a short excursion of another stop "
@@ -339,6 +327,36 @@ class HeldFlow:
         gaps[moving] = checked.gap_extra[0]
         times[moving] = checked.time_extra[0]
         return gaps, times
+
+    def _searched(self, normals: np.ndarray, signs: np.ndarray, positions: np.ndarray
+                  ) -> tuple[np.ndarray, tuple, tuple]:
+        """What :meth:`stop_clearances` searches, free of omega and kept in :meth:`shared`
+        per stops: the stops whose coordinate the hold leaves moving, them on the held
+        system's coordinates (``P^T n_i``, ``c_i - n_i . x_c``) and the placeholder impact,
+        as read-only kernel records."""
+        from impactcont.kernel.arrays import ContactStops, ImpactSequence
+
+        key = ("stop_clearances", normals.tobytes(), signs.tobytes(), positions.tobytes())
+        cache = self.shared()
+        found = cache.get(key)
+        if found is None:
+            Xc = self._lift()[2]
+            rows = normals @ self.frame
+            moving = np.flatnonzero(np.any(rows != 0.0, axis=1))
+            r = rows.shape[1]
+            searched = ContactStops(
+                normal=np.zeros(r), two_sided=False, b=math.inf, b_low=0.0,
+                extra_normals=np.ascontiguousarray(rows[moving]),
+                extra_signs=signs[moving].copy(),
+                extra_positions=positions[moving] - normals[moving] @ Xc[:self.n])
+            placeholder = ImpactSequence(pivots=np.zeros(1, dtype=np.int64),
+                                         normals=np.eye(1, r), signs=np.ones(1),
+                                         positions=np.zeros(1),
+                                         matrices=np.eye(2 * r)[None].copy())
+            # read-only, as the shooting path passes its stop geometry: one compiled version
+            found = cache[key] = (moving, _read_only(placeholder), _read_only(searched))
+        moving, placeholder, searched = found
+        return moving, searched, placeholder
 
     def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float, *,
                          samples: Callable[[np.ndarray], np.ndarray] | None = None

@@ -267,10 +267,23 @@ def held_segments(flow: Flow, pattern: str) -> tuple[np.ndarray, ...]:
         for k in np.flatnonzero(sticks):
             if helds[k].reduced is not None:
                 Z[k] = helds[k].reduced.Z
-            shifts[k] = RELEASE_SHIFT * TWO_PI / flow.time_scales(normal=geo.normals[k])[0]
+            shifts[k] = RELEASE_SHIFT * TWO_PI / _release_rate(flow, shared, geo.normals[k])
         held = cache[pattern] = HeldSegments(*tables[:9], Z, *tables[9:12], shifts,
                                              *tables[12:])
     return tuple(held)
+
+
+def _release_rate(flow: Flow, shared: dict, normal: np.ndarray) -> float:
+    """``flow.time_scales(normal=normal)[0]``, ``max(omega, fastest damped frequency the
+    stop coordinate sees)``: the modes' part is free of omega, so where a flow sharing
+    `shared` (:func:`held_segments`) found it above its omega, it is that at any omega."""
+    key = ("release_rate", np.asarray(normal, dtype=float).tobytes())
+    known = shared.get(key)
+    if known is not None and known[1] > known[0]:  # the fastest mode's: above omega there
+        return float(max(flow.omega, known[1]))
+    rate = flow.time_scales(normal=normal)[0]
+    shared[key] = (flow.omega, rate)
+    return rate
 
 
 def _static_tables(osc: ImpactOscillator, impacts: str, sticks: Any, statics: tuple
