@@ -1109,8 +1109,13 @@ def restart_problem(branch: xr.Dataset, row: int, *, special: bool = False
     osc = base.replace(omega=float(at("omega")), b=float(at("b")))
     if parameter not in ("omega", "b"):
         osc = model_parameter(base, parameter).at(osc, float(at(parameter)))
-    u = initial_unknowns({"delta": float(at("delta_k")[0]), "flight_times": at("flight_time_k"),
-                          "states": at("state_k"), "pattern": pattern}, osc, N, p)
+    guess = {"delta": float(at("delta_k")[0]), "flight_times": at("flight_time_k"),
+             "states": at("state_k"), "pattern": pattern}
+    if (special_variable("stick_time_k") if special else "stick_time_k") in branch:
+        # a motion with sticking phases: its stick times are unknowns too (NaN where no
+        # stick follows an impact), as in special_orbit
+        guess["stick_times"] = np.nan_to_num(np.asarray(at("stick_time_k"), dtype=float))
+    u = initial_unknowns(guess, osc, N, p)
     symmetric = bool(json.loads(branch.attrs.get("options", "{}")).get("symmetric", False))
     lam = model_parameter(osc, parameter).value(osc)
     if symmetric:
