@@ -550,8 +550,15 @@ def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: Label | str
                                  f"branch or motion (it fixes it); got {name}={value!r}")
     if N not in (None, 1, motion_N):
         raise ParameterError(f"N must be left out or the motion's N = {motion_N}; got N={N!r}")
-    return _shooting_curve(kind, start, 0 if special is None else special, given, bounds,
-                           **keywords)
+    which = 0 if special is None else special
+    if isinstance(start, xr.Dataset) and isinstance(which, (int, np.integer)) \
+            and not isinstance(which, bool):
+        labels = start[special_variable("label")].values.tolist()
+        count = sum(lab == str(kind) for lab in labels)
+        if not -count <= which < count:  # (special_orbit would name its own argument)
+            raise ParameterError(f"special={which!r} is out of range: the branch has {count} "
+                                 f"{kind} point(s) (its special points: {labels})")
+    return _shooting_curve(kind, start, which, given, bounds, **keywords)
 
 
 def _check_motion_parameters(osc: ImpactOscillator, parameters: tuple[str, ...]
@@ -760,9 +767,11 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
 
     Parameters
     ----------
-    osc : ImpactOscillator or None
+    osc : ImpactOscillator, None, branch dataset or motion
         The oscillator (other parameters fixed at its values); ``None`` with a branch
-        dataset or a motion as ``start``, whose oscillator is then used.
+        dataset or a motion as ``start``, whose oscillator is then used. A branch dataset
+        or a motion given here is the start (``curve(branch, "SE", parameters=...)``:
+        its N, and the kind given second).
     N : int or None
         One impact every N forcing periods; ``None`` takes it from a branch
         dataset or a motion given as ``start``.
@@ -850,6 +859,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     :class:`KeyboardInterrupt`.
     The dataset's attribute ``interrupted`` is then 1, as an interrupted map's.
     """
+    osc, N, kind, start = _start_given_first(osc, N, kind, start)
     if (isinstance(start, xr.Dataset) and "impact" in start.dims) \
             or isinstance(start, MultiImpactOrbit):
         return _motion_curve(osc, N, kind, start, special=special, parameters=parameters,
@@ -917,6 +927,25 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
             ds.attrs["options"] = json.dumps(record, sort_keys=True)
             ds.attrs["interrupted"] = 1
         return ds
+
+
+def _start_given_first(osc: Any, N: Any, kind: Any, start: Any) -> tuple[Any, Any, Any, Any]:
+    """``curve(branch, "SE", ...)`` or ``curve(motion, kind="PD", ...)``: a branch dataset or
+    a motion given in place of the oscillator is the start (its oscillator and N are used;
+    a kind given second is the kind). Other arguments are returned as they are."""
+    if not isinstance(osc, (xr.Dataset, PeriodicOrbit, MultiImpactOrbit)):
+        return osc, N, kind, start
+    if start is not None:
+        raise ParameterError(f"osc must be an ImpactOscillator or None; got a "
+                             f"{type(osc).__name__} and also start: give the branch or motion "
+                             f"as start only")
+    if isinstance(N, (str, Label)):  # curve(branch, "SE"): the second argument is the kind
+        if str(kind) != "PD":
+            raise ParameterError(f"kind is given twice: {N!r} (second argument) and {kind!r}")
+        kind, N = N, None
+    elif N == 1 and not isinstance(N, bool):  # the default: N is the start's
+        N = None
+    return None, N, kind, osc
 
 
 def _curve_dataset(problem: CurveProblem, kind: Label, N: int, parameters: tuple[str, str],
