@@ -944,17 +944,59 @@ def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
     """
     if not (_all_finite(jacobian) and _all_finite(residual)):
         return math.inf, math.inf
-    s = np.linalg.svd(jacobian, compute_uv=False)
+    s = _singular_values(jacobian)
     if not s[-1] > 0:
         return math.inf, math.inf
     cond = float(s[0] / s[-1])
     try:
-        step = np.linalg.solve(jacobian, residual)
+        step = _solve(jacobian, residual)
     except np.linalg.LinAlgError:  # an exact zero pivot where s_min > 0 only by rounding
         return math.inf, math.inf
     correction = math.sqrt(float(step @ step))  # |J^-1 r|, as np.linalg.norm computes it
     return cond, correction + cond * _EPS * max(1.0, float(np.maximum.reduce(np.abs(u),
                                                                              axis=None)))
+
+
+def _lapack(name: str, signature: str) -> Any:
+    """The LAPACK gufunc `name` of numpy's ``linalg`` with its `signature`, or None.
+
+    ``np.linalg.svd`` and ``np.linalg.solve`` call these after checks and inside an
+    ``np.errstate`` whose handler raises on a LAPACK failure: several microseconds of
+    Python around each call of a solve's accuracy (:func:`shooting_accuracy`).
+    :func:`_singular_values` and :func:`_solve` call them directly on float64 input and
+    hand any non-finite result to the public function (which raises as it always did).
+    None (the public functions then) where numpy names them otherwise.
+    """
+    from numpy.linalg import _umath_linalg
+
+    gufunc = getattr(_umath_linalg, name, None)
+    return gufunc if getattr(gufunc, "signature", None) == signature else None
+
+
+_SVD_VALUES = _lapack("svd", "(m,n)->(p)")
+_SOLVE_VECTOR = _lapack("solve1", "(m,m),(m)->(m)")
+
+
+def _singular_values(a: np.ndarray) -> np.ndarray:
+    """``np.linalg.svd(a, compute_uv=False)`` of a float64 matrix: the same values."""
+    if _SVD_VALUES is not None and a.dtype is _FLOAT64 and a.ndim == 2:
+        with np.errstate(invalid="ignore"):  # a failure gives NaN: the public call below
+            s = _SVD_VALUES(a, signature="d->d")
+        if _all_finite(s):
+            return s
+    return np.linalg.svd(a, compute_uv=False)
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.solve(a, b)`` of a float64 matrix and vector: the same solution (and the
+    same ``LinAlgError`` when `a` is singular)."""
+    if (_SOLVE_VECTOR is not None and a.dtype is _FLOAT64 and b.dtype is _FLOAT64
+            and a.ndim == 2 and b.ndim == 1):
+        with np.errstate(all="ignore"):  # singular: NaN, the public call below raises
+            x = _SOLVE_VECTOR(a, b, signature="dd->d")
+        if _all_finite(x):
+            return x
+    return np.linalg.solve(a, b)
 
 
 def _parameters(osc: ImpactOscillator) -> str:

@@ -441,3 +441,18 @@ def test_a_sticking_motion_against_the_physics_is_flagged_with_its_reasons():
     assert "sticking onset" in orbit.reason and "does not fall through zero" in orbit.reason
     assert orbit.pressing_min[0] == pytest.approx(-3.0 + 1.0, abs=1e-9)  # F cos(pi) + F_static
     assert math.cos(orbit.phases[0] + 0.7 * orbit.stick_times[0]) == pytest.approx(-1 / 3)
+
+
+def test_the_accuracy_calls_lapack_as_numpy_linalg_does():
+    """shooting_accuracy's singular values and J^-1 r (LAPACK's gufuncs called directly) are
+    np.linalg.svd's and np.linalg.solve's own, a singular matrix refused as solve refuses it."""
+    from impactcont.orbit.multi_impact import _singular_values, _solve, shooting_accuracy
+
+    rng = np.random.default_rng(3)
+    for scale in (1e-6, 1.0, 1e6):
+        a, b = scale * rng.standard_normal((8, 8)), rng.standard_normal(8)
+        assert np.array_equal(_singular_values(a), np.linalg.svd(a, compute_uv=False))
+        assert np.array_equal(_solve(a, b), np.linalg.solve(a, b))
+    with pytest.raises(np.linalg.LinAlgError):
+        _solve(np.zeros((3, 3)), np.ones(3))
+    assert shooting_accuracy(np.zeros((3, 3)), np.ones(3), np.ones(3)) == (math.inf, math.inf)
