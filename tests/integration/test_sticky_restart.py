@@ -12,31 +12,19 @@ import xarray as xr
 
 import impactcont as ic
 from impactcont.analysis.branch import restart_problem
-from impactcont.model.stops import Stops
-
-
-def _damper(omega: float, R: float) -> ic.ImpactOscillator:
-    """Case (c) of studies/sticking_motions: primary 1 on spring 1 (eta 0.3), a ball 0.2 in
-    |x2 - x1| <= 0.3."""
-    return ic.ImpactOscillator(M=np.diag([1.0, 0.2]), K=np.diag([1.0, 0.0]), F=[1.0, 0.0],
-                               R=R, b=0.3, omega=omega, eta=0.3,
-                               stops=Stops(mass=2, relative_to=1, mirror=True))
+from tests.integration.test_chatter_entered_motions import damper, riding_start
 
 
 def _riding(osc: ic.ImpactOscillator) -> ic.MultiImpactOrbit:
     """The ball riding each wall ("lu"), from its simulated steady state."""
-    m, c, omega = osc.M[1, 1], osc.C[0, 0], osc.omega
-    a = 1.0 / (1.0 - (1.0 + m) * omega**2 + 1j * c * omega)
-    x1, v1 = a.real, (1j * omega * a).real
-    sim = ic.simulate(osc, np.array([x1, x1 + osc.b, v1, v1]), 0.0, 16.0)
-    return ic.multi_impact_orbit(osc, 1, 2, sim)
+    return ic.multi_impact_orbit(osc, 1, 2, ic.simulate(osc, riding_start(osc), 0.0, 16.0))
 
 
 @pytest.fixture(scope="module", params=[(1.2, 0.0, 0.1), (0.2, 0.3, 0.02)],
                 ids=["plastic", "chatter-entered"])
 def ride(request) -> xr.Dataset:
     omega, R, half = request.param
-    start = _riding(_damper(omega, R))
+    start = _riding(damper(omega, R))
     assert start.physical and start.pattern == "lu"
     return ic.continuation(start, parameter="omega", bounds=(omega - half, omega + half),
                            ds_max=half / 4, detect=())
