@@ -524,14 +524,15 @@ _KERNEL: list[Any] = []
 
 def _writable(a: np.ndarray) -> np.ndarray:
     """``a`` as a writable, contiguous float array (the kernel's argument types: one compile)."""
-    if type(a) is np.ndarray and (a.dtype is _FLOAT64 or a.dtype == np.float64):
+    if type(a) is np.ndarray and (a.dtype is _FLOAT64 or a.dtype == _FLOAT64):
         flags = a.flags
         if flags.c_contiguous and flags.writeable:
             return a
     return np.array(a, dtype=float, order="C")
 
 
-#: The float64 dtype (an array's own is this very object: :func:`_writable` tests it first).
+#: The native float64 dtype (most arrays' own is this very object, :func:`_writable` tests
+#: that first; the kernel's are equal to it).
 _FLOAT64 = np.dtype(np.float64)
 
 
@@ -979,7 +980,7 @@ _SOLVE_VECTOR = _lapack("solve1", "(m,m),(m)->(m)")
 
 def _singular_values(a: np.ndarray) -> np.ndarray:
     """``np.linalg.svd(a, compute_uv=False)`` of a float64 matrix: the same values."""
-    if _SVD_VALUES is not None and a.dtype is _FLOAT64 and a.ndim == 2:
+    if _SVD_VALUES is not None and a.dtype == _FLOAT64 and a.ndim == 2:
         with np.errstate(invalid="ignore"):  # a failure gives NaN: the public call below
             s = _SVD_VALUES(a, signature="d->d")
         if _all_finite(s):
@@ -990,7 +991,7 @@ def _singular_values(a: np.ndarray) -> np.ndarray:
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.linalg.solve(a, b)`` of a float64 matrix and vector: the same solution (and the
     same ``LinAlgError`` when `a` is singular)."""
-    if (_SOLVE_VECTOR is not None and a.dtype is _FLOAT64 and b.dtype is _FLOAT64
+    if (_SOLVE_VECTOR is not None and a.dtype == _FLOAT64 and b.dtype == _FLOAT64
             and a.ndim == 2 and b.ndim == 1):
         with np.errstate(all="ignore"):  # singular: NaN, the public call below raises
             x = _SOLVE_VECTOR(a, b, signature="dd->d")
