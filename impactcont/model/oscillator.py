@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import json
 import math
@@ -541,6 +540,20 @@ class ImpactOscillator:
                                      "harmonic forcing) and has no shape to scale: give F")
             scale = value / self.F0
             changes["F"] = self.F / self.F0 * value  # exactly F0 = value for the largest |F_i|
+        if changes.keys() <= _SCALAR_RULES.keys():
+            # omega, b and R leave M, K, F (already validated) and the modal basis unchanged:
+            # validate only what changes and share the rest (the continuation's hot path;
+            # copy.copy's reduce protocol made the same shallow copy at twice the cost)
+            new = object.__new__(type(self))
+            new.__dict__.update(self.__dict__)
+            new.__dict__.pop("_flow", None)  # orbit.flow.flow_of's: the flow of self
+            for name, value in changes.items():
+                object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
+            if "b" in changes or "R" in changes:
+                # the lower stop must stay below the upper one; mirrored stops follow b, R
+                object.__setattr__(new, "stops", new.stops.check(new.n, new.b, new.R))
+                new.__dict__.pop("_paper_form_violations", None)  # its text names the stops
+            return new
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
             allowed = ", ".join(f.name for f in dataclasses.fields(self))
@@ -550,18 +563,6 @@ class ImpactOscillator:
             changes.setdefault("beta", None)
         if ("alpha" in changes or "beta" in changes) and changes.get("eta") is None:
             changes["eta"] = None
-        if set(changes) <= set(_SCALAR_RULES):
-            # omega, b and R leave M, K, F (already validated) and the modal basis unchanged:
-            # validate only what changes and share the rest (the continuation's hot path)
-            new = copy.copy(self)
-            new.__dict__.pop("_flow", None)  # orbit.flow.flow_of's: the flow of self
-            for name, value in changes.items():
-                object.__setattr__(new, name, _real(name, value, **_SCALAR_RULES[name]))
-            if "b" in changes or "R" in changes:
-                # the lower stop must stay below the upper one; mirrored stops follow b, R
-                object.__setattr__(new, "stops", new.stops.check(new.n, new.b, new.R))
-                new.__dict__.pop("_paper_form_violations", None)  # its text names the stops
-            return new
         # the damping model: a matrix C given here replaces eta / alpha / beta, and eta /
         # alpha / beta given here replace a matrix C; otherwise the damping matrix follows
         # eta / alpha / beta unless it was given as a matrix
