@@ -49,6 +49,7 @@ import this module.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -119,17 +120,40 @@ def _static_mode(w, a, g, free, t):
     return 0.0, 0.5 * g * t * t * phi, g * t * psi
 
 
+class FlightWork(NamedTuple):
+    """Scratch of one modal flight (:func:`_flight_modal_into`), reused from flight to
+    flight by a caller that shoots many (a map's sweep)."""
+
+    transfer: np.ndarray
+    """The modes' transfer matrices ``W(t)``, shape (4, n)."""
+    modal: np.ndarray
+    """The modal forcing columns, velocities and accelerations, shape (6, n)."""
+
+
+@_inner
+def _flight_work(n):
+    """A :class:`FlightWork` for `n` modes."""
+    return FlightWork(np.empty((4, n)), np.empty((6, n)))
+
+
 @_inner
 def _flight_modal(modal, forcing, t, X0, theta, tr, arr, pcol, rate):
     """Flight of the modal flow (:class:`~impactcont.kernel.arrays.ModalFlight`): ``Phi``,
     ``X^-``, ``dX^-/dtheta`` and ``X'(t^-)`` in place (the constant force ``modal.g``
     included: ``X(t) = Phi (X0 - P(0)) + P(t)`` with the particular solution ``P`` of the
     forcing and of the constant force)."""
+    _flight_modal_into(modal, forcing, t, X0, theta, tr, arr, pcol, rate,
+                       _flight_work(modal.w.size))
+
+
+@_inner
+def _flight_modal_into(modal, forcing, t, X0, theta, tr, arr, pcol, rate, work):
+    """:func:`_flight_modal` with its scratch `work` (a :class:`FlightWork`)."""
     w, a, f, u, ui = modal.w, modal.a, modal.f, modal.u, modal.ui
     g_static, free = modal.g, modal.free
     gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
     n = w.size
-    W = np.empty((4, n))
+    W = work.transfer
     for i in range(n):
         W[0, i], W[1, i], W[2, i], W[3, i] = mode_transfer(w[i], a[i], t)
     transfer_into(W, 0, u, ui, tr)
@@ -139,12 +163,12 @@ def _flight_modal(modal, forcing, t, X0, theta, tr, arr, pcol, rate):
     s0 = math.sin(theta)
     cth = math.cos(omega * t + theta)
     sth = math.sin(omega * t + theta)
-    fy = np.empty(n)  # modal forcing block times [cos theta, sin theta]
-    fv = np.empty(n)
-    py = np.empty(n)  # ... times [-sin theta, cos theta]
-    pv = np.empty(n)
-    vel = np.empty(n)  # modal velocity and acceleration at t
-    acc = np.empty(n)
+    fy = work.modal[0]  # modal forcing block times [cos theta, sin theta]
+    fv = work.modal[1]
+    py = work.modal[2]  # ... times [-sin theta, cos theta]
+    pv = work.modal[3]
+    vel = work.modal[4]  # modal velocity and acceleration at t
+    acc = work.modal[5]
     static = g_static.size > 0
     for i in range(n):
         g = gam[i]
@@ -344,6 +368,15 @@ def _flight(flight, forcing, t, X0, theta, tr, arr, pcol, rate):
 
 
 @_inner
+def _flight_into(flight, forcing, t, X0, theta, tr, arr, pcol, rate, work):
+    """:func:`_flight` with the modal flight's scratch `work` (a :class:`FlightWork`)."""
+    if flight.general:
+        _flight_general(flight.first_order, forcing, t, X0, theta, tr, arr, pcol, rate)
+    else:
+        _flight_modal_into(flight.modal, forcing, t, X0, theta, tr, arr, pcol, rate, work)
+
+
+@_inner
 def _flights(flow):
     """:class:`~impactcont.kernel.arrays.FlightFlow` of a structure with the flow's fields
     (:class:`~impactcont.kernel.arrays.ShootingFlow` or
@@ -369,8 +402,15 @@ def _section_starts(x, first, p, m, pivots, normals, positions):
     """``X_k`` from the unknowns: ``z_k`` (from ``x[first]`` on, ``m - 1`` each) in every
     component but ``x_j`` (``j = pivots[k]``, the stop's own mass), and ``x_j`` from the
     section ``n_k . x = c_k`` of impact k."""
-    n = m // 2
     starts = np.empty((p, m))
+    _section_starts_into(x, first, p, m, pivots, normals, positions, starts)
+    return starts
+
+
+@_inner
+def _section_starts_into(x, first, p, m, pivots, normals, positions, starts):
+    """:func:`_section_starts` into ``starts`` (p, m)."""
+    n = m // 2
     for k in range(p):
         j = pivots[k]
         col = first + k * (m - 1)
@@ -383,7 +423,6 @@ def _section_starts(x, first, p, m, pivots, normals, positions):
             if c != j:
                 s -= normals[k, c] * starts[k, c]
         starts[k, j] = s / normals[k, j]
-    return starts
 
 
 @_inner
@@ -476,34 +515,71 @@ def shooting_system(flight, forcing, impacts, period, x, want_jacobian):
 def _shooting_system(flight, forcing, impacts, period, x, want_jacobian):
     """:func:`shooting_system` on the named structures (what compiled callers call; `flight`
     a :class:`~impactcont.kernel.arrays.FlightFlow`, :func:`_flights`)."""
+    p = impacts.positions.size
+    m = impacts.matrices.shape[1]
+    size = p * m if want_jacobian else 0
+    out = ShotFlights(np.empty(p), np.empty(p), np.empty((p, m)), np.empty((p, m)),
+                      np.empty((p, m)), np.empty((p, m, m)), np.empty((p, m)),
+                      np.empty(p * m), np.empty((size, size)))
+    return _shooting_system_into(flight, forcing, impacts, period, x, want_jacobian, out,
+                                 _shooting_work(m))
+
+
+class ShootingWork(NamedTuple):
+    """Scratch of :func:`_shooting_system_into`, reused from call to call by a caller that
+    shoots many times (a map's sweep)."""
+
+    flight: FlightWork
+    """The modal flight's (:func:`_flight_modal_into`)."""
+    row: np.ndarray
+    """A row of ``D_{k+1} Phi_k``, shape (2n,)."""
+    no_jacobian: np.ndarray
+    """The Jacobian of a system evaluated without it, shape (0, 0)."""
+
+
+@_inner
+def _shooting_work(m):
+    """A :class:`ShootingWork` for states of size `m`."""
+    return ShootingWork(_flight_work(m // 2), np.empty(m), np.zeros((0, 0)))
+
+
+@_inner
+def _shooting_system_into(flight, forcing, impacts, period, x, want_jacobian, out, work):
+    """:func:`_shooting_system` into the arrays of `out` (a
+    :class:`~impactcont.kernel.arrays.ShotFlights` of p impacts, its Jacobian (2np, 2np)
+    when `want_jacobian`) with the scratch `work` (:class:`ShootingWork`): the same
+    arithmetic, no array allocated. Returns the
+    :class:`~impactcont.kernel.arrays.ShotFlights` of `out`'s arrays, its Jacobian
+    ``work.no_jacobian`` when not wanted."""
     pivots, normals = impacts.pivots, impacts.normals
     positions, matrices = impacts.positions, impacts.matrices
     omega = forcing.omega
     p = positions.size
     m = matrices.shape[1]
     n = m // 2
-    taus = np.empty(p)
+    taus = out.flight_times
     elapsed = 0.0
     for k in range(p - 1):
         taus[k] = x[1 + k]
         elapsed += x[1 + k]
     taus[p - 1] = period - elapsed
-    starts = _section_starts(x, p, p, m, pivots, normals, positions)
+    starts = out.starts
+    _section_starts_into(x, p, p, m, pivots, normals, positions, starts)
     diagonal = _is_diagonal(matrices)
-    phases = np.empty(p)
+    phases = out.phases
     phases[0] = x[0]
     elapsed = 0.0
     for k in range(1, p):
         elapsed += taus[k - 1]
         phases[k] = x[0] + omega * elapsed
-    transitions = np.empty((p, m, m))
-    arrivals = np.empty((p, m))
-    rates = np.empty((p, m))
-    pcols = np.empty((p, m))
-    residual = np.empty(p * m)
+    transitions = out.transitions
+    arrivals = out.arrivals
+    rates = out.arrival_rates
+    pcols = out.phase_columns
+    residual = out.residual
     for k in range(p):
-        _flight(flight, forcing, taus[k], starts[k], phases[k], transitions[k], arrivals[k],
-                pcols[k], rates[k])
+        _flight_into(flight, forcing, taus[k], starts[k], phases[k], transitions[k],
+                     arrivals[k], pcols[k], rates[k], work.flight)
         nxt = (k + 1) % p
         for r in range(m):
             if diagonal:
@@ -515,9 +591,10 @@ def _shooting_system(flight, forcing, impacts, period, x, want_jacobian):
             residual[k * m + r] = s - starts[nxt, r]
     if not want_jacobian:
         return ShotFlights(phases, taus, starts, arrivals, rates, transitions, pcols, residual,
-                           np.zeros((0, 0)))
-    J = np.zeros((p * m, p * m))
-    row_dphi = np.empty(m)  # row r of D_{k+1} Phi_k
+                           work.no_jacobian)
+    J = out.jacobian
+    J[:, :] = 0.0
+    row_dphi = work.row  # row r of D_{k+1} Phi_k
     zcol = p  # first column of z_0
     for k in range(p):
         nxt = (k + 1) % p
@@ -1546,9 +1623,15 @@ def _max_abs(v):
 def _solve(A, rhs):
     """``A^-1 rhs`` by Gaussian elimination with partial pivoting; ``ok`` False when a
     pivot is exactly zero (a singular matrix, as LAPACK's ``getrf`` reports it)."""
-    size = rhs.size
-    M = A.copy()
     x = rhs.copy()
+    return x, _solve_in_place(A.copy(), x)
+
+
+@_inner
+def _solve_in_place(M, x):
+    """:func:`_solve` overwriting ``M`` (its elimination) and ``x`` (the right-hand side on
+    entry, the solution on return); False when a pivot is exactly zero."""
+    size = x.size
     for c in range(size):
         piv = c
         big = abs(M[c, c])
@@ -1557,7 +1640,7 @@ def _solve(A, rhs):
                 big = abs(M[r, c])
                 piv = r
         if big == 0.0:
-            return x, False
+            return False
         if piv != c:
             for k in range(size):
                 M[c, k], M[piv, k] = M[piv, k], M[c, k]
@@ -1573,7 +1656,7 @@ def _solve(A, rhs):
         for k in range(c + 1, size):
             s -= M[c, k] * x[k]
         x[c] = s / M[c, c]
-    return x, True
+    return True
 
 
 @_jit

@@ -331,6 +331,31 @@ def multipliers_of(G):
     return eigvals(G)
 
 
+@_inner
+def _multipliers_into(G, out, a, v, size):
+    """:func:`multipliers` of G into ``out`` (m, complex) with the scratch ``a`` (m, m),
+    ``v`` and ``size`` (m): the same arithmetic, no array allocated (but by the LAPACK
+    fallback)."""
+    m = G.shape[0]
+    finite = True
+    for r in range(m):
+        for col in range(m):
+            if not np.isfinite(G[r, col]):
+                finite = False
+    if not finite:
+        out[:] = np.nan
+    else:
+        done = False
+        if m <= SMALL_EIG:
+            a[:, :] = G
+            _balance(a)
+            _hessenberg_in_place(a, v)
+            done = _hqr(a, out)
+        if not done:
+            out[:] = eigvals(G)
+    _by_modulus_in_place(out, size)
+
+
 @_jit
 def eigvals(A):
     """Eigenvalues of a real square matrix by LAPACK ``dgeev`` (exact conjugate pairs).
@@ -372,7 +397,15 @@ def by_modulus(mu):
     """``mu`` sorted by decreasing modulus, stable among equal moduli (insertion sort:
     a few entries; numba's mergesort would add seconds to the first compilation)."""
     out = mu.copy()
-    size = np.abs(out)
+    _by_modulus_in_place(out, np.empty(out.size))
+    return out
+
+
+@_inner
+def _by_modulus_in_place(out, size):
+    """:func:`by_modulus` of ``out`` in place; ``size``: scratch of its size."""
+    for i in range(out.size):
+        size[i] = np.abs(out[i])
     for i in range(1, out.size):
         z = out[i]
         r = size[i]
@@ -383,4 +416,3 @@ def by_modulus(mu):
             j -= 1
         out[j + 1] = z
         size[j + 1] = r
-    return out

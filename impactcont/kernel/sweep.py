@@ -39,6 +39,7 @@ Importing :mod:`impactcont` does not import this module.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -49,6 +50,7 @@ from impactcont.kernel.arrays import (
     GeometryTables,
     ImpactSequence,
     ShootingFlow,
+    ShotFlights,
     SweepGrid,
     SweepMotion,
     SweepOutputs,
@@ -58,18 +60,20 @@ from impactcont.kernel.arrays import (
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.shooting import (
+    ShootingWork,
     _clearances,
     _flights,
     _jacobian_product_into,
     _jacobian_wanted,
     _max_abs,
-    _shooting_system,
-    _solve,
+    _shooting_system_into,
+    _shooting_work,
+    _solve_in_place,
     _state_clearance,
     _stop_clearance,
     unknowns_scale,
 )
-from impactcont.kernel.stability import multipliers
+from impactcont.kernel.stability import _multipliers_into
 
 __all__ = ["sweep_stops"]
 
@@ -78,9 +82,66 @@ __all__ = ["sweep_stops"]
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 
+class SweepWork(NamedTuple):
+    """The arrays a sweep reuses at every grid point (allocated once per sweep): each
+    point's Newton, shooting systems and evaluation write into them instead of allocating
+    their own (the results are the same numbers)."""
+
+    current: ShotFlights
+    """The shooting system at Newton's iterate (the solution's, on return)."""
+    trial: ShotFlights
+    """The shooting system at a trial point (swapped with `current` when taken)."""
+    shooting: ShootingWork
+    """The shooting system's scratch."""
+    start: np.ndarray
+    """The point's predicted unknowns, shape (2np,)."""
+    iterates: np.ndarray
+    """Two trial points, shape (2, 2np): one holds the iterate, the other the trial."""
+    step: np.ndarray
+    """Newton's step, shape (2np,)."""
+    elimination: np.ndarray
+    """The Jacobian eliminated by the step's solve, shape (2np, 2np)."""
+    G: np.ndarray
+    """The motion's G (eq. 25), shape (2n, 2n)."""
+    hessenberg: np.ndarray
+    """G balanced and reduced to Hessenberg form, shape (2n, 2n)."""
+    reflector: np.ndarray
+    """The Householder vector of that reduction, shape (2n,)."""
+    moduli: np.ndarray
+    """The multipliers' moduli, shape (2n,)."""
+    multipliers: np.ndarray
+    """G's multipliers, shape (2n,), complex."""
+    h2: np.ndarray
+    """The stop coordinate's arrival velocity of each flight, shape (p,)."""
+    image: np.ndarray
+    """A mirrored state, shape (2n,)."""
+
+
 @_inner
-def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
-    """The shooting system (full, or the half of a symmetric motion) at ``x``.
+def _shot_buffers(p, m):
+    """A :class:`~impactcont.kernel.arrays.ShotFlights` of `p` impacts of states of size
+    `m`, its Jacobian (pm, pm)."""
+    return ShotFlights(np.empty(p), np.empty(p), np.empty((p, m)), np.empty((p, m)),
+                       np.empty((p, m)), np.empty((p, m, m)), np.empty((p, m)),
+                       np.empty(p * m), np.empty((p * m, p * m)))
+
+
+@_inner
+def _sweep_work(q, p, m):
+    """A :class:`SweepWork` for the `q` impacts solved of `p` with states of size `m`."""
+    size = q * m
+    return SweepWork(_shot_buffers(q, m), _shot_buffers(q, m), _shooting_work(m),
+                     np.empty(size), np.empty((2, size)), np.empty(size),
+                     np.empty((size, size)), np.empty((m, m)), np.empty((m, m)), np.empty(m),
+                     np.empty(m), np.empty(m, dtype=np.complex128), np.empty(p),
+                     np.empty(m))
+
+
+@_inner
+def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian, shot, work):
+    """The shooting system (full, or the half of a symmetric motion) at ``x``, into the
+    arrays of `shot` with the scratch `work` (a
+    :class:`~impactcont.kernel.shooting.ShootingWork`).
 
     `impacts` holds the impacts of the system solved (the first h of a symmetric motion),
     `pivot` the position eliminated on the sections of a symmetric motion (one for all).
@@ -89,12 +150,13 @@ def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
     """
     omega = forcing.omega
     if not symmetric:
-        return _shooting_system(_flights(flow), forcing, impacts, 2.0 * math.pi * N / omega,
-                                x, want_jacobian)
+        return _shooting_system_into(_flights(flow), forcing, impacts,
+                                     2.0 * math.pi * N / omega, x, want_jacobian, shot,
+                                     work)
     j = pivot
     normals = impacts.normals
-    out = _shooting_system(_flights(flow), forcing, impacts, math.pi * N / omega, x,
-                           want_jacobian)
+    out = _shooting_system_into(_flights(flow), forcing, impacts, math.pi * N / omega, x,
+                                want_jacobian, shot, work)
     h = impacts.positions.size
     m = impacts.matrices.shape[1]
     n = m // 2
@@ -117,21 +179,27 @@ def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian):
 
 
 @_inner
-def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
-    """Newton with backtracking from ``x0`` (not modified: each iterate is a new array):
-    the iteration and stopping rules of
+def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings, work):
+    """Newton with backtracking from ``x0`` (not modified: the iterates are written into
+    ``work.iterates`` and the systems into ``work.current``, ``work.trial``, a
+    :class:`SweepWork`): the iteration and stopping rules of
     :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system` (``settings.tol``,
     ``settings.max_iter``). A trial point once the residual is below the tolerance is
     evaluated without the Jacobian (it only confirms the rounding floor, or ends the
     iteration); its Jacobian is computed only when another step needs it.
 
-    Returns ``(x, converged, iterations, shot)``.
+    Returns ``(x, converged, iterations, shot)`` (`x` one of ``work.iterates`` or `x0`,
+    `shot` in one of ``work.current``, ``work.trial``: valid until the next call).
     """
     tol = settings.tol
     max_iter = settings.max_iter
+    current, spare = work.current, work.trial
+    free, other = work.iterates[0], work.iterates[1]  # the trial's array, and the iterate's
+    step = work.step
+    shooting = work.shooting
     x = x0
     want = _jacobian_wanted(x)
-    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want)
+    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want, current, shooting)
     norm = _max_abs(sh.residual)
     step_norm = np.inf
     it = 0
@@ -143,17 +211,23 @@ def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
         if it == max_iter:
             break
         if sh.jacobian.shape[0] == 0:  # a trial taken without it: the step needs it now
-            sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want)
+            sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want, current, shooting)
         J = sh.jacobian
-        if not np.all(np.isfinite(J)):
+        if not _finite(J):
             break
-        step, ok = _solve(J, -sh.residual)
-        if not ok:
+        M = work.elimination
+        M[:, :] = J
+        for r in range(step.size):
+            step[r] = -sh.residual[r]
+        if not _solve_in_place(M, step):
             break
         lam_step = 1.0
         while True:
-            trial = x + lam_step * step
-            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial, not small)
+            trial = free
+            for r in range(trial.size):
+                trial[r] = x[r] + lam_step * step[r]
+            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial, not small,
+                          spare, shooting)
             tnorm = _max_abs(tsh.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
@@ -165,11 +239,23 @@ def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings):
         x = trial
         sh = tsh
         norm = tnorm
+        free, other = other, free  # the next trial must not overwrite x
+        current, spare = spare, current
     return x, False, it, sh
 
 
 @_inner
-def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
+def _finite(A):
+    """Every entry of the matrix ``A`` is finite (``np.all(np.isfinite(A))``)."""
+    for r in range(A.shape[0]):
+        for c in range(A.shape[1]):
+            if not np.isfinite(A[r, c]):
+                return False
+    return True
+
+
+@_inner
+def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs, work):
     """Stability, velocities, flight times, states and the contact check of a solution.
 
     `motion` is the :class:`~impactcont.kernel.arrays.SweepMotion`, `full` the
@@ -181,7 +267,8 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
     ends of every flight but the stop hit there (:func:`_end_gap`); the gap is the
     smallest of all.
 
-    Writes the grid point `point` (flat index) of `outputs`; returns ``(physical, capped)``.
+    Writes the grid point `point` (flat index) of `outputs` (`work`: the sweep's
+    :class:`SweepWork`); returns ``(physical, capped)``.
     """
     symmetric, admits, signs = motion.symmetric, motion.admits, motion.signs
     omega = forcing.omega
@@ -192,14 +279,15 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
     p = signs.size
     m = full.matrices.shape[1]
     flights = taus.size  # h of a symmetric motion, else p
-    h2 = np.empty(flights)
-    G = np.empty((m, m))
+    h2 = work.h2
+    G = work.G
     _jacobian_product_into(full, omega, sh, flights, G, h2)
     if symmetric:  # the half-map H = S G_{h-1} .. G_0: G = H^2
         for r in range(m - 1):
             for c in range(m):
                 G[r, c] = -G[r, c]
-    mu = multipliers(G)
+    mu = work.multipliers
+    _multipliers_into(G, mu, work.hessenberg, work.reflector, work.moduli)
     critical = mu[0] * mu[0] if symmetric else mu[0]  # G = H^2
     out_rho[point] = abs(critical)
     out_mu[point] = critical
@@ -250,7 +338,7 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
             physical = False
         mirrored = symmetric and _mirrored(stops, full, flights)
         ends, crossed = _end_gap(stops, full, sh.starts, sh.arrivals, flights, symmetric,
-                                 mirrored)
+                                 mirrored, work.image)
         if gap == gap:  # a NaN gap (not searchable) stays NaN
             gap = min(gap, ends)
         if crossed:
@@ -278,7 +366,7 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs):
 
 
 @_inner
-def _end_gap(stops, full, starts, arrivals, flights, symmetric, mirrored):
+def _end_gap(stops, full, starts, arrivals, flights, symmetric, mirrored, image):
     """Every stop's clearance at both ends of every flight, as
     :func:`impactcont.kernel.shooting.end_clearances` (the second half of a symmetric
     motion the mirror image of the first): ``(smallest clearance, crossed)``, ``crossed``
@@ -287,12 +375,12 @@ def _end_gap(stops, full, starts, arrivals, flights, symmetric, mirrored):
     With `mirrored` stops (U and L at the same distance, no further stop) a mirrored
     flight's clearance to one stop is exactly the other's of its image (``-x``: the same
     sums negated), so the second half of a symmetric motion adds nothing and is skipped;
-    `mirrored` is False otherwise, and the mirrored flights are checked on their states.
+    `mirrored` is False otherwise, and the mirrored flights are checked on their states
+    (``image``: scratch of a state's size).
     """
     p = full.signs.size
     m = starts.shape[1]
     last = flights if (symmetric and mirrored) else p
-    image = np.empty(m)
     smallest = np.inf
     crossed = False
     for k in range(last):
@@ -426,6 +514,9 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
     flow, forcing = _flow_at(flows, flow_row)
     geometry_row = geometries.index[grid.seed0, grid.seed1]
     solved_impacts, full, stops = _geometry_at(geometries, geometry_row, motion)
+    work = _sweep_work(geometries.positions.shape[1], motion.signs.size,
+                       geometries.matrices.shape[2])
+    x0 = work.start
     while head < tail:
         point = queue[head % size, 0]
         parent = queue[head % size, 1]
@@ -436,9 +527,9 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
         i0 = point // n1
         i1 = point % n1
         if parent < 0:
-            x0 = x_seed.copy()
+            x0[:] = x_seed
         else:
-            x0 = unknowns[parent].copy()
+            x0[:] = unknowns[parent]
             p0 = parent // n1
             p1 = parent % n1
             g0 = 2 * p0 - i0
@@ -448,7 +539,9 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
                     ratio = (coord0[i0] - coord0[p0]) / (coord0[p0] - coord0[g0])
                 else:
                     ratio = (coord1[i1] - coord1[p1]) / (coord1[p1] - coord1[g1])
-                x0 += ratio * (unknowns[parent] - unknowns[g0 * n1 + g1])
+                grand = g0 * n1 + g1
+                for c in range(x0.size):
+                    x0[c] += ratio * (unknowns[parent, c] - unknowns[grand, c])
         if flows.index[i0, i1] != flow_row:  # the flow and geometry of the point's row
             flow_row = flows.index[i0, i1]
             flow, forcing = _flow_at(flows, flow_row)
@@ -457,7 +550,7 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
             solved_impacts, full, stops = _geometry_at(geometries, geometry_row, motion)
         attempts += 1
         x, ok, it, sh = _newton(flow, forcing, solved_impacts, motion.N, motion.symmetric,
-                                motion.pivots[0], x0, settings)
+                                motion.pivots[0], x0, settings, work)
         total_iterations += it
         if ok and parent >= 0:
             change = 0.0
@@ -472,7 +565,7 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
         outputs.iterations[point] = it
         outputs.delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
         phys, cap = _evaluate(flow, forcing, motion, full, stops, sh, settings.checks, point,
-                              outputs)
+                              outputs, work)
         outputs.physical[point] = phys
         outputs.stable[point] = outputs.rho[point] < 1.0
         capped = capped or cap
