@@ -54,7 +54,7 @@ import logging
 import math
 import os
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -178,10 +178,13 @@ class _Tables:
     matrices) once per value of those that move a stop (``b``, ``R``, ``b_low``,
     ``R_low``, ``gap``) or change the masses (the two-body impact law of a clearance
     between masses, :meth:`~impactcont.model.stops.Stops.impact_matrix`, depends on M).
+    `built` keeps them by value for the next tables of the same map (its bands share their
+    rows' flows and their columns' geometries).
     """
 
     def __init__(self, osc: ImpactOscillator, params: tuple[ModelParameter, ...],
-                 grid: dict[str, np.ndarray], pattern: str, solved: int) -> None:
+                 grid: dict[str, np.ndarray], pattern: str, solved: int,
+                 built: dict[tuple[Any, ...], Any] | None = None) -> None:
         parameters = tuple(param.name for param in params)
         self.osc, self.parameters, self.pattern, self.solved = osc, parameters, pattern, solved
         shape = tuple(grid[name].size for name in parameters)
@@ -191,8 +194,18 @@ class _Tables:
         flow_values, self.flow_index = _combinations(parameters, grid, flow_axes, shape)
         geometry_values, self.geometry_index = _combinations(parameters, grid, stop_axes, shape)
         by_name = {param.name: param for param in params}
-        self.flows = [Flow(_replaced(osc, by_name, values)) for values in flow_values]
-        geometries = [stop_geometry(_replaced(osc, by_name, values), pattern)
+        built = {} if built is None else built
+
+        def once(kind: str, values: dict[str, float], make: Callable[[], Any]) -> Any:
+            key = (kind, pattern, *sorted(values.items()))
+            if key not in built:
+                built[key] = make()
+            return built[key]
+
+        self.flows = [once("flow", values, lambda v=values: Flow(_replaced(osc, by_name, v)))
+                      for values in flow_values]
+        geometries = [once("geometry", values,
+                           lambda v=values: stop_geometry(_replaced(osc, by_name, v), pattern))
                       for values in geometry_values]
         self.flow_tables = _stack([(flow.shooting_arrays(), flow.forcing_arrays())
                                    for flow in self.flows], self.flow_index)
@@ -291,6 +304,12 @@ class _Setting:
         self.osc, self.N, self.pattern, self.half, self.admits = osc, N, pattern, half, admits
         self.tol, self.max_iter, self.max_change = tol, max_iter, max_change
         self.max_attempts = max_attempts
+        #: the flows and stop geometries built so far, by value (:class:`_Tables`)
+        self.built: dict[tuple[Any, ...], Any] = {}
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the flows and geometries built (a worker builds its own)."""
+        return {**self.__dict__, "built": {}}
 
     def sweep(self, tables: _Tables, axes: dict[str, np.ndarray], seed: tuple[int, int],
               x_seed: np.ndarray, checks: bool
@@ -338,7 +357,8 @@ class _Setting:
         the flat outputs, the unknowns, the counts and the flows built (`evaluate` is for
         the sticky sweep's sake: the compiled sweep always evaluates)."""
         p = len(self.pattern)
-        tables = _Tables(self.osc, params, axes, self.pattern, p // 2 if self.half else p)
+        tables = _Tables(self.osc, params, axes, self.pattern, p // 2 if self.half else p,
+                         self.built)
         out, unknowns, stats = self.sweep(tables, axes, seed, x_seed, checks)
         return out, unknowns, stats, len(tables.flows)
 
@@ -347,7 +367,8 @@ class _Setting:
         """Newton at one point of the two parameters (off the grid: the seed's way to its
         grid point); None when it does not converge."""
         axes = {name: np.array([value]) for name, value in values.items()}
-        tables = _Tables(self.osc, params, axes, self.pattern, len(x0) // (2 * self.osc.n))
+        tables = _Tables(self.osc, params, axes, self.pattern, len(x0) // (2 * self.osc.n),
+                         self.built)
         out, unknowns, _ = self.sweep(tables, axes, (0, 0), x0, False)
         return unknowns[0] if out["found"][0] else None
 
