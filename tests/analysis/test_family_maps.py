@@ -664,7 +664,11 @@ def test_a_sticky_map_without_omega_is_newton_on_the_branch_problem(riding_start
     ds = multi_impact_map(riding_start, ("b", "eta"), grid=grid)
     assert ds["found"].all() and ds["physical"].all() and ds.attrs["pattern"] == \
         riding_start.pattern
-    assert (ds["newton_iterations"] > 0).all() and (ds["reason"] == 0).all()
+    assert (ds["reason"] == 0).all()
+    # a Newton solve at every point; at (0.3, 0.3), the start's own oscillator, the start may
+    # already meet the tolerance (0 iterations on some processors, 1 on others)
+    iterations = ds["newton_iterations"].transpose("b", "eta").values.ravel()
+    assert (np.delete(iterations, 4) > 0).all()  # all but the centre (b, eta) = (0.3, 0.3)
     for b, eta in ((0.28, 0.32), (0.32, 0.28)):
         point = ds.sel(b=b, eta=eta)
         alone = ic.multi_impact_orbit(riding_damper(b=b, eta=eta), 1, 2, riding_start)
