@@ -940,7 +940,7 @@ def _start_given_first(osc: Any, N: Any, kind: Any, start: Any) -> tuple[Any, An
                              f"{type(osc).__name__} and also start: give the branch or motion "
                              f"as start only")
     if isinstance(N, (str, Label)):  # curve(branch, "SE"): the second argument is the kind
-        if str(kind) != "PD":
+        if kind != Label.PD:  # (the default)
             raise ParameterError(f"kind is given twice: {N!r} (second argument) and {kind!r}")
         kind, N = N, None
     elif N == 1 and not isinstance(N, bool):  # the default: N is the start's
