@@ -1251,10 +1251,18 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
         falls within :data:`_BOUNCE_ULPS` ulps of the stop), ``-2`` where a return is not
         found (the rows before it are still the bounces resolved).
     """
-    flow = _flights(FlightArrays(*flight))
-    forcing = Forcing(*forcing)
-    impacts = ImpactSequence(*impacts)
-    held = HeldSegments(*held)
+    log, count = _bounce_log(_flights(FlightArrays(*flight)), Forcing(*forcing),
+                             ImpactSequence(*impacts), HeldSegments(*held), k, X0, theta0)
+    starts, phases, times, arrivals, transitions, pcols, rates = log
+    return starts, phases, times, arrivals, transitions, pcols, rates, count
+
+
+@_inner
+def _bounce_log(flow, forcing, impacts, held, k, X0, theta0):
+    """The bounces of impact k's chatter replayed from ``(X0, theta0)`` with their log (the
+    seven arrays of :func:`chatter_bounces`, K rows) and the count resolved
+    (:func:`_bounces` without the Jacobian): for :func:`chatter_bounces` and
+    :func:`impactcont.kernel.sticky.chatter_checks`."""
     m = X0.size
     K = held.chatter_impacts[k]
     log = (np.zeros((K, m)), np.zeros(K), np.zeros(K), np.zeros((K, m)), np.zeros((K, m, m)),
@@ -1262,8 +1270,7 @@ def chatter_bounces(flight, forcing, impacts, held, k, X0, theta0):
     empty = np.zeros(0, dtype=np.complex128)
     count, _, _ = _bounces(flow, forcing, impacts, k, K, X0.copy(), theta0,
                            np.zeros((0, 0)), np.zeros(0), log, (empty, empty))
-    starts, phases, times, arrivals, transitions, pcols, rates = log
-    return starts, phases, times, arrivals, transitions, pcols, rates, count
+    return log, count
 
 
 @_jit

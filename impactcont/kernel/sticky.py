@@ -39,7 +39,7 @@ from impactcont.kernel.shooting import (
     GOING,
     REFUSED,
     _bordered_newton,
-    _bounces,
+    _bounce_log,
     _clearances,
     _flights,
     _jacobian_wanted,
@@ -244,13 +244,7 @@ def chatter_checks(flow, forcing, impacts, held, stops, k, own, X0, theta0, chec
     sequence = ImpactSequence(*impacts)
     named = HeldSegments(*held)
     contact = ContactStops(*stops)
-    m = X0.size
-    K = named.chatter_impacts[k]
-    log = (np.zeros((K, m)), np.zeros(K), np.zeros(K), np.zeros((K, m)), np.zeros((K, m, m)),
-           np.zeros((K, m)), np.zeros((K, m)))
-    empty = np.zeros(0, dtype=np.complex128)
-    count, _, _ = _bounces(_flights(modal), clock, sequence, k, K, X0.copy(), theta0,
-                           np.zeros((0, 0)), np.zeros(0), log, (empty, empty))
+    log, count = _bounce_log(_flights(modal), clock, sequence, named, k, X0, theta0)
     starts, phases, times, arrivals, transitions, pcols, rates = log
     q = contact.extra_signs.size
     gap = np.full(q + 2, np.inf)
