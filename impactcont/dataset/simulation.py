@@ -21,6 +21,49 @@ from impactcont.simulate.simulator import SimulationResult
 __all__ = ["simulation_dataset"]
 
 
+#: Each data variable: its dimensions, long name and description (units "1" but
+#: ``impact_phases``'s). The sticking, force-sample and chatter variables are the arrays of
+#: :meth:`impactcont.SimulationResult.sticking_arrays` (``contact_force`` is its ``force``).
+_VARIABLES: dict[str, tuple[tuple[str, ...], str, str]] = {
+    "impact_times": (("impact",), "impact time", "Time of each impact since the start."),
+    "impact_velocities": (("impact",), "impact velocity",
+                          "Speed of the impacting mass towards the stop hit just before "
+                          "each impact: x_j' at the upper stop, -x_j' at the lower "
+                          "(impact_stops)."),
+    "impact_phases": (("impact",), "impact phase",
+                      "Forcing phase at each impact, in (-pi, pi]."),
+    "impact_states": (("impact", "component"), "state after impact",
+                      "State right after each impact."),
+    "start_state": (("component",), "start state", "State at t = 0 (perturbation included)."),
+    "sticking_start": (("sticking",), "sticking start", "Time a sticking phase starts."),
+    "sticking_end": (("sticking",), "sticking end",
+                     "Time it ends (a release, an impact on another stop, another stop "
+                     "holding, or the end of the run)."),
+    "sticking_stops": (("sticking",), "stops held", "The stops held in the phase (their names)."),
+    "sticking_ended_by": (("sticking",), "ended by", "release, impact, stick, chatter or end."),
+    "force_time": (("force_sample",), "force sample time",
+                   "Times of the contact-force samples of the sticking phases."),
+    "contact_force": (("force_sample",), "contact force",
+                      "Pressing force of a held stop (>= 0; zero at a release)."),
+    "force_phase": (("force_sample",), "sticking phase",
+                    "Index of the sticking phase of each force sample."),
+    "force_stop": (("force_sample",), "stop pressed",
+                   "The held stop each force sample belongs to."),
+    "chatter_time": (("chatter",), "accumulation time",
+                     "Accumulation point of a complete chatter (a sticking phase starts "
+                     "there)."),
+    "chatter_stop": (("chatter",), "chatter stop", "The stop chattered on."),
+    "chatter_last_impact": (("chatter",), "last impact resolved",
+                            "Time of the last impact resolved before the accumulation "
+                            "point."),
+    "chatter_last_velocity": (("chatter",), "last impact velocity",
+                              "Its impact velocity (the jump's error is of its square)."),
+    "t": (("sample",), "time", "Trajectory sample times."),
+    "X": (("sample", "component"), "state", "Sampled state (both sides of each impact)."),
+}
+_UNITS = {"impact_phases": "rad"}
+
+
 def _var(dims: tuple[str, ...], data: Any, long_name: str, description: str,
          units: str = "1") -> xr.Variable:
     return xr.Variable(dims, data, attrs={"long_name": long_name, "units": units,
@@ -72,55 +115,17 @@ def simulation_dataset(result: SimulationResult, *, name: str = "simulation",
                              "impactcont.simulate")
     n = osc.n
     events = result.sticking_arrays()
-    data = {
-        "impact_times": _var(("impact",), result.impact_times, "impact time",
-                             "Time of each impact since the start."),
-        "impact_velocities": _var(("impact",), result.impact_velocities, "impact velocity",
-                                  "Speed of the impacting mass towards the stop hit just "
-                                  "before each impact: x_j' at the upper stop, -x_j' at the "
-                                  "lower (impact_stops)."),
-        "impact_phases": _var(("impact",), result.impact_phases, "impact phase",
-                              "Forcing phase at each impact, in (-pi, pi].", "rad"),
-        "impact_states": _var(("impact", "component"),
-                              result.impact_states.reshape(-1, 2 * n), "state after impact",
-                              "State right after each impact."),
-        "start_state": _var(("component",), result.start_state, "start state",
-                            "State at t = 0 (perturbation included)."),
-        "sticking_start": _var(("sticking",), events["sticking_start"], "sticking start",
-                               "Time a sticking phase starts."),
-        "sticking_end": _var(("sticking",), events["sticking_end"], "sticking end",
-                             "Time it ends (a release, an impact on another stop, another "
-                             "stop holding, or the end of the run)."),
-        "sticking_stops": _var(("sticking",), events["sticking_stops"], "stops held",
-                               "The stops held in the phase (their names)."),
-        "sticking_ended_by": _var(("sticking",), events["sticking_ended_by"], "ended by",
-                                  "release, impact, stick, chatter or end."),
-        "force_time": _var(("force_sample",), events["force_time"], "force sample time",
-                           "Times of the contact-force samples of the sticking phases."),
-        "contact_force": _var(("force_sample",), events["force"], "contact force",
-                              "Pressing force of a held stop (>= 0; zero at a release)."),
-        "force_phase": _var(("force_sample",), events["force_phase"], "sticking phase",
-                            "Index of the sticking phase of each force sample."),
-        "force_stop": _var(("force_sample",), events["force_stop"], "stop pressed",
-                           "The held stop each force sample belongs to."),
-        "chatter_time": _var(("chatter",), events["chatter_time"], "accumulation time",
-                             "Accumulation point of a complete chatter (a sticking phase "
-                             "starts there)."),
-        "chatter_stop": _var(("chatter",), events["chatter_stop"], "chatter stop",
-                             "The stop chattered on."),
-        "chatter_last_impact": _var(("chatter",), events["chatter_last_impact"],
-                                    "last impact resolved",
-                                    "Time of the last impact resolved before the "
-                                    "accumulation point."),
-        "chatter_last_velocity": _var(("chatter",), events["chatter_last_velocity"],
-                                      "last impact velocity",
-                                      "Its impact velocity (the jump's error is of its "
-                                      "square)."),
-    }
-    if result.t is not None:
-        data["t"] = _var(("sample",), result.t, "time", "Trajectory sample times.")
-        data["X"] = _var(("sample", "component"), result.X, "state",
-                         "Sampled state (both sides of each impact).")
+    values = {"impact_times": result.impact_times,
+              "impact_velocities": result.impact_velocities,
+              "impact_phases": result.impact_phases,
+              "impact_states": result.impact_states.reshape(-1, 2 * n),
+              "start_state": result.start_state,
+              **{k: v for k, v in events.items() if k != "force"},
+              "contact_force": events["force"],
+              "t": result.t, "X": result.X}  # None: no trajectory recorded
+    data = {var: _var(dims, values[var], long_name, description, _UNITS.get(var, "1"))
+            for var, (dims, long_name, description) in _VARIABLES.items()
+            if values[var] is not None}
     coords = {"component": state_component_names(n),
               "omega": _var((), osc.omega, "forcing frequency",
                             "Nondimensional forcing frequency omega of eq. (1)."),
