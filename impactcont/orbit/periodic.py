@@ -64,6 +64,14 @@ _FOLD_ERROR_WARN = 1e-10
 _FOLD_ULPS = 16.0
 
 
+def _one_impact(scalar: str, doc: str) -> property:
+    """A per-impact array of the motion protocol for a motion with one impact: the property
+    ``[self.<scalar>]``, shape (1,), documented by ``doc``."""
+    def value(self: PeriodicOrbit) -> np.ndarray:
+        return np.array([getattr(self, scalar)])
+    return property(value, doc=doc)
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class PeriodicOrbit:
     """One periodic N-1 motion: one impact every N forcing periods.
@@ -171,30 +179,19 @@ class PeriodicOrbit:
     pattern = "U"
     """The stop of each impact: the paper's one stop, ``"U"``, as an N-p motion's on it."""
 
-    @property
-    def phases(self) -> np.ndarray:
-        """``[delta]``: the forcing phase at the one impact, shape (1,)."""
-        return np.array([self.delta])
-
-    @property
-    def flight_times(self) -> np.ndarray:
-        """``[T]``: the one flight lasts the period, shape (1,)."""
-        return np.array([self.period])
+    phases = _one_impact(
+        "delta", "``[delta]``: the forcing phase at the one impact, shape (1,).")
+    flight_times = _one_impact(
+        "period", "``[T]``: the one flight lasts the period, shape (1,).")
+    impact_velocities = _one_impact(
+        "impact_velocity", "``[h2]``: the velocity just before the one impact, shape (1,).")
+    flight_gap_min = _one_impact(
+        "gap_min", "``[gap_min]``: the clearance of the one flight (eq. 16), shape (1,).")
 
     @property
     def states(self) -> np.ndarray:
         """``[X(0)]``: the state right after the one impact, shape (1, 2n)."""
         return self.state[None, :]
-
-    @property
-    def impact_velocities(self) -> np.ndarray:
-        """``[h2]``: the velocity just before the one impact, shape (1,)."""
-        return np.array([self.impact_velocity])
-
-    @property
-    def flight_gap_min(self) -> np.ndarray:
-        """``[gap_min]``: the clearance of the one flight (eq. 16), shape (1,)."""
-        return np.array([self.gap_min])
 
     def time_series(self, num: int = 400, periods: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Exact state over ``periods`` repetitions of the motion (for plots).
