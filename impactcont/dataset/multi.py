@@ -274,9 +274,10 @@ def multi_impact_dataset(*, parameter: str, N: int, p: int, oscillator: ImpactOs
                         more_coords={"impact": impact})
     ds.attrs["impacts"] = int(p)
     # the phases of an N-p motion are stored wrapped (those of an N-1 branch are not)
-    ds["delta"].attrs["description"] = ("Forcing phase theta_0 at impact 0, wrapped to "
-                                        "(-pi, pi] (as delta_k).")
-    ds[special_variable("delta")].attrs["description"] = (
+    # (on the variables themselves: a DataArray of each would be built only to reach them)
+    ds.variables["delta"].attrs["description"] = ("Forcing phase theta_0 at impact 0, "
+                                                  "wrapped to (-pi, pi] (as delta_k).")
+    ds.variables[special_variable("delta")].attrs["description"] = (
         "Forcing phase theta_0 at impact 0 at the special point, wrapped to (-pi, pi].")
     pattern = UPPER * int(p) if pattern is None else pattern
     ds.attrs["pattern"] = check_pattern_attribute(pattern, int(p), oscillator.stops.two_sided,

@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
+from xarray.indexes import Index, PandasIndex
 
 from impactcont.dataset.attributes import (
     ROBUST_INDEXING,
@@ -625,6 +626,32 @@ def _special_arrays(special_points: Any, parameter: str, n: int, npoints: int
     return out
 
 
+def _assembled(variables: Mapping[str, xr.Variable], coord_names: Sequence[str],
+               attrs: dict[str, Any]) -> xr.Dataset:
+    """The dataset of checked `variables` (in their order; those in `coord_names` are
+    coordinates, a variable named as its one dimension with its default index), built at
+    once.
+
+    What ``xr.Dataset(data_vars, coords=coords, attrs=attrs).set_coords(...)`` builds from
+    the same variables, without its merge and alignment (and the copy of
+    :func:`with_parameter_coords`): a branch dataset's variables share their dimensions by
+    construction (:func:`branch_dataset` checks every shape), and the general constructor
+    took most of the time of a short branch (a 9-point symmetric branch: 1.1 of its 1.9 ms
+    of dataset; tests/dataset/test_schema.py compares both constructions).
+    """
+    indexes: dict[str, Index] = {}
+    assembled: dict[str, xr.Variable] = {}
+    for name, variable in variables.items():
+        if variable.dims == (name,):  # a dimension coordinate: its default (pandas) index
+            index = PandasIndex.from_variables({name: variable}, options={})
+            assembled.update(index.create_variables({name: variable}))
+            indexes[name] = index
+        else:
+            assembled[name] = variable
+    return xr.Dataset._construct_direct(assembled, set(coord_names), attrs=attrs,
+                                        indexes=indexes)
+
+
 def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, options: Any,
                    columns: Mapping[str, Any], special_points: Sequence[Mapping[str, Any]],
                    title: str | None = None,
@@ -701,24 +728,25 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
     if npoints == 0:
         raise ValueError(f"column {parameter!r} must have at least one point; got length 0")
 
-    data_vars: dict[str, Any] = {}
+    data_vars: dict[str, xr.Variable] = {}
     for key, spec in specs.items():
         shape = (npoints,) + (2 * n,) * len(spec.extra_dims)
         arr = _column(key, columns[key], spec, shape, "column")
-        data_vars[key] = (("point", *spec.extra_dims), arr, spec.attrs())
+        data_vars[key] = xr.Variable(("point", *spec.extra_dims), arr, spec.attrs())
     for key in (parameter, "arclength"):
-        bad = ~np.isfinite(data_vars[key][1])
+        bad = ~np.isfinite(data_vars[key].values)
         if np.any(bad):
             raise ValueError(f"column {key!r} must be finite; got non-finite values at points "
                              f"{np.flatnonzero(bad)[:10].tolist()}")
 
     special = _special_arrays(special_points, parameter, n, npoints)
     for key, spec in {**_special_variables(parameter), **OPTIONAL_SPECIAL_FIELDS}.items():
-        data_vars[special_variable(key)] = (("special", *spec.extra_dims), special[key],
-                                            spec.attrs())
+        data_vars[special_variable(key)] = xr.Variable(("special", *spec.extra_dims),
+                                                       special[key], spec.attrs())
 
     data_vars.update(more_variables or {})
-    coords = {**point_coords(npoints, n), **(more_coords or {})}
+    coords = {name: xr.as_variable(value)
+              for name, value in {**point_coords(npoints, n), **(more_coords or {})}.items()}
     attrs = {
         "title": title if title is not None else
         f"Branch of periodic {N}-1 impacting motions continued in {parameter}",
@@ -728,7 +756,10 @@ def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, opti
         "options": _options_json(options),
         **provenance_attributes(),
     }
-    ds = with_parameter_coords(xr.Dataset(data_vars, coords=coords, attrs=attrs))
+    # omega, b and the continued parameter as coordinates (what with_parameter_coords makes)
+    on_point = [k for k in dict.fromkeys(["omega", "b", parameter])
+                if k in data_vars and data_vars[k].dims == ("point",)]
+    ds = _assembled({**data_vars, **coords}, [*on_point, *coords], attrs)
     logger.debug("branch dataset: parameter=%s N=%d npoints=%d special=%d", parameter, N,
                  npoints, ds.sizes["special"])
     return ds

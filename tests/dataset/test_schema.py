@@ -8,6 +8,7 @@ import json
 import matplotlib
 import numpy as np
 import pytest
+import xarray as xr
 
 import impactcont
 from impactcont.dataset import (
@@ -53,6 +54,34 @@ def test_schema_dims_coords_and_dtypes(branch):
     assert branch["special_multipliers"].dtype == np.complex128
     for name in ("omega", "b", "delta", "bracket_lo", "bracket_hi", "precision"):
         assert branch[f"special_{name}"].dtype == np.float64
+
+
+@pytest.mark.parametrize("parameter", ["omega", "R"])
+def test_the_dataset_is_what_xarrays_own_constructor_builds(osc, parameter):
+    """branch_dataset builds its dataset at once (schema._assembled): the same dataset as
+    ``xr.Dataset(data_vars, coords=coords).set_coords(parameters)`` of its variables, in
+    their order, with the same default indexes (point, component), dims and attributes."""
+    cols = _columns()
+    if parameter == "R":
+        cols["R"] = np.linspace(0.5, 0.9, NPOINTS)
+    ds = branch_dataset(parameter=parameter, N=1, oscillator=osc, options={}, columns=cols,
+                        special_points=_specials(cols) if parameter == "omega" else [])
+    indexed = ["point", "component"]
+    general = xr.Dataset(
+        {k: (v.dims, v.values, v.attrs) for k, v in ds.variables.items() if k not in indexed},
+        coords={k: (k, ds[k].values, ds[k].attrs) for k in indexed}, attrs=ds.attrs,
+    ).set_coords(["omega", "b", parameter])
+    xr.testing.assert_identical(ds, general)
+    assert list(ds.variables) == list(general.variables)
+    assert list(ds.dims) == list(general.dims)
+    assert set(ds.coords) == {"point", "component", "omega", "b", parameter}
+    assert set(ds.xindexes) == set(indexed)
+    for name in indexed:
+        assert ds.xindexes[name].equals(general.xindexes[name])
+        assert type(ds.variables[name]) is type(general.variables[name])
+        assert ds[name].dtype == general[name].dtype
+    ds.isel(point=slice(2, 5)).sel(component="x2")  # the indexes select
+    validate_branch_dataset(ds)
 
 
 def test_schema_attributes(branch, osc):
