@@ -7,6 +7,7 @@ the Axes; they never call ``plt.show`` so they work with any backend (Agg).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -626,6 +627,97 @@ def label_specials(ax: Axes, specials: Sequence[tuple[float, float, str]], *,
     return inset
 
 
+@dataclasses.dataclass
+class _Drawing:
+    """A diagram of branches being drawn: its axes and branches, and what the branches drew
+    so far, for the vertical range, the markers, the legend and the labels."""
+
+    ax: Axes
+    branches: list[tuple[str, xr.Dataset]]
+    differing: list[str]  # the parameters whose values differ between the branches
+    kinds_seen: set[str] = dataclasses.field(default_factory=set)
+    branch_handles: list[Any] = dataclasses.field(default_factory=list)
+    #: x, y, label, colour, whether on (or at the edge of) a physical motion
+    specials: list[tuple[float, float, str, str, bool]] = dataclasses.field(default_factory=list)
+    seen: list[np.ndarray] = dataclasses.field(default_factory=list)  # values of physical motions
+
+
+def _start_diagram(datasets: Any, ax: Axes | None, legend: str | None) -> _Drawing:
+    """Check ``legend`` and the branches (all continued in one parameter), and the axes."""
+    if legend not in LEGEND_PLACES:
+        raise ValueError(f"legend must be one of {LEGEND_PLACES}; got {legend!r}")
+    branches = _branches(datasets, one_parameter=True)
+    if ax is None:
+        ax = _new_axes()
+    return _Drawing(ax, branches, differing_parameters([[ds] for _, ds in branches]))
+
+
+def _mark_specials(drawing: _Drawing, physical_range: bool) -> tuple[list[str], bool]:
+    """Fit the vertical range and draw the special points (:func:`bifurcation_diagram`).
+
+    With ``physical_range`` the range fits the physical motions and their special points,
+    and a point off physical motions is drawn only inside it (never cut by the frame).
+    Returns the labels drawn on physical motions, in the order of :data:`SPECIAL_LABELS`,
+    and whether a point off physical motions (small, grey, any label) is drawn.
+    """
+    ax, specials = drawing.ax, drawing.specials
+    values = np.concatenate([*drawing.seen, [s[1] for s in specials if s[4]]])
+    values = values[np.isfinite(values)]
+    lo = hi = pad = None
+    if physical_range and values.size:
+        lo, hi, pad = _y_range(values)
+        ax.set_ylim(lo, hi)
+    labels = []
+    grey = False
+    for label in SPECIAL_LABELS:
+        for shown in (True, False):
+            pts = [(px, py, c) for px, py, lab, c, keep in specials
+                   if lab == label and keep == shown]
+            if not shown and lo is not None:  # never cut by the frame: inside or not drawn
+                pts = [q for q in pts if lo + 0.5 * pad <= q[1] <= hi - 0.5 * pad]
+            for px, py, c in pts:  # off physical motions: one small grey circle, any kind
+                ax.plot([px], [py], linestyle="none",
+                        marker=SPECIAL_MARKERS[label] if shown else NONPHYSICAL_MARKER,
+                        markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
+                        markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
+                        markeredgecolor=c if shown else NONPHYSICAL_GREY, zorder=3)
+            if pts and shown:
+                labels.append(label)
+            grey |= bool(pts) and not shown
+    return labels, grey
+
+
+def _finish_diagram(drawing: _Drawing, ylabel: str, *, physical_range: bool,
+                    legend: str | None, title: str | None, label_special: bool, zoom: bool,
+                    nest: bool) -> None:
+    """Draw the special points, name the axes, add the legend and the title, label the
+    special points on physical motions (last: the labels keep clear of everything else).
+
+    ``title=None``: the motions and the system drawn (:func:`motion_text`,
+    :func:`system_text`); ``nest``: nest coincident markers even when unlabelled
+    (:func:`nest_coincident_markers`; labelling nests them).
+    """
+    ax = drawing.ax
+    labels_seen, grey = _mark_specials(drawing, physical_range)
+    labelled = [s[:3] for s in drawing.specials if s[4]] if label_special else []
+    if nest and not labelled:
+        nest_coincident_markers(ax)
+    datasets = [ds for _, ds in drawing.branches]
+    parameter = datasets[0].attrs["parameter"]
+    ax.set_xlabel(axis_label(datasets[0], parameter))
+    ax.set_ylabel(ylabel)
+    diagram_legend(ax, drawing.kinds_seen, labels_seen, grey, drawing.branch_handles, legend)
+    if title is None:
+        where = system_text(datasets, skip={parameter})
+        title = motion_text(datasets) + (f", {where}" if where else "")
+    if title:
+        ax.set_title(title, fontsize="medium")
+        ax.figure.draw_without_rendering()
+        fit_text(ax.title)
+    if labelled:
+        label_specials(ax, labelled, zoom=zoom)
+
+
 def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes | None = None,
                         label_special: bool = True, title: str | None = None,
                         physical_range: bool = True, legend: str | None = "below",
@@ -682,18 +774,8 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         ``y`` or ``legend`` is not allowed, or the branches are continued in
         different parameters.
     """
-    if legend not in LEGEND_PLACES:
-        raise ValueError(f"legend must be one of {LEGEND_PLACES}; got {legend!r}")
-    branches = _branches(datasets, one_parameter=True)
-    parameters = {ds.attrs["parameter"] for _, ds in branches}
-    if ax is None:
-        ax = _new_axes()
-    differing = differing_parameters([[ds] for _, ds in branches])
-    kinds_seen: set[str] = set()
-    labels_seen: set[str] = set()
-    branch_handles = []
-    specials: list[tuple[float, float, str, str, bool]] = []  # x, y, label, colour, shown
-    seen: list[np.ndarray] = []  # y of the physical motions
+    drawing = _start_diagram(datasets, ax, legend)
+    ax, branches, differing = drawing.ax, drawing.branches, drawing.differing
     counts = {int(ds.attrs["N"]) for _, ds in branches}
     for b, (name, ds) in enumerate(branches):
         yname = _y_variable(ds, y)
@@ -703,59 +785,25 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         color = f"C{b % 10}"
         for kind, sl in stability_segments(ds):
             ax.plot(x[sl], yv[sl], color=color, **SEGMENT_STYLES[kind])
-            kinds_seen.add(kind)
+            drawing.kinds_seen.add(kind)
         physical = np.asarray(ds["physical"].values, dtype=bool)
-        seen.append(yv[physical])
+        drawing.seen.append(yv[physical])
         p = int(ds.attrs.get("impacts", 1))
         about = ", ".join([f"N = {int(ds.attrs['N'])}" if p == 1
                            else f"{int(ds.attrs['N'])}-{p}",
                            *([_system_text(fixed_parameters([ds]), differing)]
                              if differing else [])])
         unique = len(counts) == len(branches) and not differing
-        branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
+        drawing.branch_handles.append(Line2D([], [], color=color, linewidth=1.6,
                                      label=f"{name} ({about})" if name and not unique
                                      else about))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
         for k, label in enumerate(labels):
             px, py = _special_xy(ds, x, yv, yname, k)
-            specials.append((px, py, str(label), color, _borders_physical(ds, physical, k)))
-    kept = [s for s in specials if s[4]]
-    values = np.concatenate([*seen, [s[1] for s in kept]])
-    values = values[np.isfinite(values)]
-    lo = hi = pad = None
-    if physical_range and values.size:
-        lo, hi, pad = _y_range(values)
-        ax.set_ylim(lo, hi)
-    grey = False
-    for label in SPECIAL_LABELS:
-        for shown in (True, False):
-            pts = [(px, py, c) for px, py, lab, c, keep in specials
-                   if lab == label and keep == shown]
-            if not shown and lo is not None:  # never cut by the frame: inside or not drawn
-                pts = [q for q in pts if lo + 0.5 * pad <= q[1] <= hi - 0.5 * pad]
-            for px, py, c in pts:  # off physical motions: one small grey circle, any kind
-                ax.plot([px], [py], linestyle="none",
-                        marker=SPECIAL_MARKERS[label] if shown else NONPHYSICAL_MARKER,
-                        markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
-                        markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
-                        markeredgecolor=c if shown else NONPHYSICAL_GREY, zorder=3)
-            labels_seen.update([label] if pts and shown else [])
-            grey |= bool(pts) and not shown
-    if not (label_special and kept):  # label_specials nests them otherwise
-        nest_coincident_markers(ax)
-    first = branches[0][1]
-    ax.set_xlabel(axis_label(first, first.attrs["parameter"]))
-    ax.set_ylabel(_y_label(first, y))
-    if title is None:
-        where = system_text([ds for _, ds in branches], skip=parameters)
-        title = motion_text([ds for _, ds in branches]) + (f", {where}" if where else "")
-    diagram_legend(ax, kinds_seen, labels_seen, grey, branch_handles, legend)
-    if title:
-        ax.set_title(title, fontsize="medium")
-        ax.figure.draw_without_rendering()
-        fit_text(ax.title)
-    if label_special and kept:
-        label_specials(ax, [(px, py, lab) for px, py, lab, _, _ in kept], zoom=zoom)
+            drawing.specials.append((px, py, str(label), color, _borders_physical(ds, physical, k)))
+    _finish_diagram(drawing, _y_label(branches[0][1], y), physical_range=physical_range,
+                    legend=legend, title=title, label_special=label_special, zoom=zoom,
+                    nest=True)
     logger.debug("bifurcation diagram: %d branch(es), y=%s", len(branches), y)
     return ax
 

@@ -22,26 +22,14 @@ from matplotlib.lines import Line2D
 
 from impactcont.dataset.schema import SPECIAL_LABELS, special_variable
 from impactcont.plots.branches import (
-    LEGEND_PLACES,
-    NONPHYSICAL_GREY,
-    NONPHYSICAL_MARKER,
     SEGMENT_STYLES,
-    SPECIAL_MARKERS,
     _borders_physical,
-    _branches,
-    _new_axes,
+    _finish_diagram,
+    _start_diagram,
     _stops,
-    _y_range,
-    axis_label,
-    diagram_legend,
-    differing_parameters,
-    fit_text,
     fixed_parameters,
-    label_specials,
-    motion_text,
     parameter_text,
     stability_segments,
-    system_text,
 )
 
 __all__ = ["IMPACT_QUANTITIES", "impact_diagram", "impact_label"]
@@ -71,9 +59,6 @@ def _special_per_impact(ds: xr.Dataset, y: str, values: np.ndarray, k: int) -> n
     if base in ds.data_vars:
         return np.array([float(ds[base].values[k])])
     return values[int(ds[special_variable("point")].values[k])]
-
-
-_MARKER_SIZE = 6.0  # points, as in the bifurcation diagrams
 
 
 def impact_label(ds: xr.Dataset, y: str) -> str:
@@ -158,16 +143,8 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
     unknown = sorted(set(specials) - set(SPECIAL_LABELS))
     if unknown:
         raise ValueError(f"specials must be a subset of {SPECIAL_LABELS}; got unknown {unknown}")
-    if legend not in LEGEND_PLACES:
-        raise ValueError(f"legend must be one of {LEGEND_PLACES}; got {legend!r}")
-    branches = _branches(datasets, one_parameter=True)
-    if ax is None:
-        ax = _new_axes()
-    differing = differing_parameters([[ds] for _, ds in branches])
-    kinds_seen: set[str] = set()
-    branch_handles = []
-    marks: list[tuple[float, float, str, str, bool]] = []  # x, y, label, colour, physical
-    seen: list[np.ndarray] = []  # values of the physical motions
+    drawing = _start_diagram(datasets, ax, legend)
+    ax, branches, differing = drawing.ax, drawing.branches, drawing.differing
     for b, (name, ds) in enumerate(branches):
         parameter = ds.attrs["parameter"]
         x = np.asarray(ds[parameter].values, dtype=float)
@@ -178,17 +155,17 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
             if kind == "non-physical" and not nonphysical:
                 continue
             ax.plot(x[sl], values[sl], color=color, **SEGMENT_STYLES[kind])
-            kinds_seen.add(kind)
+            drawing.kinds_seen.add(kind)
             drawn = True
         physical = np.asarray(ds["physical"].values, dtype=bool)
-        seen.append(values[physical].ravel())
+        drawing.seen.append(values[physical].ravel())
         about = ", ".join([f"{int(ds.attrs['N'])}-{values.shape[1]}",
                            *([parameter_text(fixed_parameters([ds]), differing)]
                              if differing else [])])
         text = f"{name} ({about})" if name and names and about not in name else \
             name if name and names else about
         if drawn:  # a legend names what is drawn: not a branch without physical motions
-            branch_handles.append(Line2D([], [], color=color, linewidth=1.6, label=text))
+            drawing.branch_handles.append(Line2D([], [], color=color, linewidth=1.6, label=text))
         labels = np.asarray(ds[special_variable("label")].values).tolist()
         xs = np.asarray(ds[special_variable(parameter)].values, dtype=float)
         for k, label in enumerate(labels):
@@ -197,45 +174,9 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
                 continue
             for yk in _special_per_impact(ds, y, values, k):
                 if np.isfinite(yk) and np.isfinite(xs[k]):
-                    marks.append((float(xs[k]), float(yk), str(label), color, shown))
-    values = np.concatenate([*seen, [m[1] for m in marks if m[4]]])
-    values = values[np.isfinite(values)]
-    lo = hi = pad = None
-    if physical_range and values.size:
-        lo, hi, pad = _y_range(values)
-        ax.set_ylim(lo, hi)
-    labels_seen: list[str] = []
-    grey = False
-    for label in SPECIAL_LABELS:
-        for shown in (True, False):
-            pts = [m for m in marks if m[2] == label and m[4] == shown]
-            if not shown and lo is not None:  # never cut by the frame: inside or not drawn
-                pts = [m for m in pts if lo + 0.5 * pad <= m[1] <= hi - 0.5 * pad]
-            for color in dict.fromkeys(m[3] for m in pts):
-                own = np.array([m[:2] for m in pts if m[3] == color])
-                ax.plot(own[:, 0], own[:, 1], linestyle="none",
-                        marker=SPECIAL_MARKERS[label] if shown else NONPHYSICAL_MARKER,
-                        markersize=_MARKER_SIZE if shown else 0.7 * _MARKER_SIZE,
-                        markerfacecolor="white", markeredgewidth=1.2 if shown else 0.8,
-                        markeredgecolor=color if shown else NONPHYSICAL_GREY, zorder=3)
-            if pts and shown and label not in labels_seen:
-                labels_seen.append(label)
-            grey |= bool(pts) and not shown
-    first = branches[0][1]
-    parameter = first.attrs["parameter"]
-    ax.set_xlabel(axis_label(first, parameter))
-    ax.set_ylabel(impact_label(first, y))
-    diagram_legend(ax, kinds_seen, labels_seen, grey, branch_handles, legend)
-    if title is None:
-        datasets_ = [ds for _, ds in branches]
-        where = system_text(datasets_, skip={parameter})
-        title = motion_text(datasets_) + (f", {where}" if where else "")
-    if title:
-        ax.set_title(title, fontsize="medium")
-        ax.figure.draw_without_rendering()
-        fit_text(ax.title)
-    kept = [m[:3] for m in marks if m[4]]
-    if label_special and kept:
-        label_specials(ax, kept, zoom=zoom)
+                    drawing.specials.append((float(xs[k]), float(yk), str(label), color, shown))
+    _finish_diagram(drawing, impact_label(branches[0][1], y), physical_range=physical_range,
+                    legend=legend, title=title, label_special=label_special, zoom=zoom,
+                    nest=False)
     logger.debug("impact diagram: %d branch(es), y=%s", len(branches), y)
     return ax
