@@ -759,52 +759,104 @@ def _acceleration_gradient(flow, forcing, normal, sign, theta, grad):
     base = np.empty(m)
     rate = np.empty(m)
     zero = np.zeros(m)
-    _flight(flow, forcing, 0.0, zero, theta, tr, arr, pcol, base)
+    work = _flight_work(n)
+    _flight_into(flow, forcing, 0.0, zero, theta, tr, arr, pcol, base, work)
     _, a0 = _stop_speed(normal, sign, base, n)
     unit = np.zeros(m)
     for c in range(m):
         unit[c] = 1.0
-        _flight(flow, forcing, 0.0, unit, theta, tr, arr, pcol, rate)
+        _flight_into(flow, forcing, 0.0, unit, theta, tr, arr, pcol, rate, work)
         _, ac = _stop_speed(normal, sign, rate, n)
         grad[c] = ac - a0
         unit[c] = 0.0
-    _flight(flow, forcing, 0.0, zero, theta + 0.5 * math.pi, tr, arr, pcol, rate)
+    _flight_into(flow, forcing, 0.0, zero, theta + 0.5 * math.pi, tr, arr, pcol, rate,
+                 work)
     _, aq = _stop_speed(normal, sign, rate, n)
-    _flight(flow, forcing, 0.0, zero, theta + math.pi, tr, arr, pcol, rate)
+    _flight_into(flow, forcing, 0.0, zero, theta + math.pi, tr, arr, pcol, rate, work)
     _, ah = _stop_speed(normal, sign, rate, n)
     grad[m] = aq - 0.5 * (a0 + ah)
 
 
 @_inner
-def _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate):
+def _gap(flow, forcing, t, Y, th, stop, scratch):
     """``(g, g')`` at `t` of the flight from `Y`: the clearance ``sign (c - n . x)`` of the
-    stop (``>= 0`` free) and its rate."""
-    n = normal.size
-    _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
+    stop `stop` (the plain tuple ``(normal, sign, position)``; ``>= 0`` free) and its rate.
+    The modal flow's from its modes' states alone (:func:`_modal_gap`: no transition
+    matrix), the first-order flow's from its flight into `scratch` (``(tr, arr, pcol,
+    rate)``)."""
+    normal, sign, position = stop
+    if not flow.general:
+        return _modal_gap(flow.modal, forcing, t, Y, th, normal, sign, position)
+    tr, arr, pcol, rate = scratch
+    _flight_general(flow.first_order, forcing, t, Y, th, tr, arr, pcol, rate)
     g = position
     gd = 0.0
-    for c in range(n):
+    for c in range(normal.size):
         g -= normal[c] * arr[c]
         gd -= normal[c] * rate[c]
     return sign * g, sign * gd
 
 
 @_inner
-def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr, pcol,
-                   rate):
+def _modal_gap(modal, forcing, t, Y, th, normal, sign, position):
+    """:func:`_gap` of the modal flow: the stop coordinate ``n . x = sum_i (n . u_i) y_i``
+    and its rate from each mode's state at `t` (the modal state of
+    :func:`_flight_modal_into`, the constant force included), without the flight's
+    transition matrix, phase column and forced columns (a chatter's return search
+    evaluates it a few times per bounce: about a third of a flight)."""
+    w, a, u, ui = modal.w, modal.a, modal.u, modal.ui
+    g_static, free = modal.g, modal.free
+    gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
+    n = w.size
+    static = g_static.size > 0
+    c0 = math.cos(th)
+    s0 = math.sin(th)
+    cth = math.cos(omega * t + th)
+    sth = math.sin(omega * t + th)
+    x = position
+    xd = 0.0
+    for i in range(n):
+        w11, w12, w21, w22 = mode_transfer(w[i], a[i], t)
+        g = gam[i]
+        b = bet[i]
+        y0 = 0.0
+        v0 = 0.0
+        for c in range(n):
+            y0 += ui[i, c] * Y[c]
+            v0 += ui[i, c] * Y[n + c]
+        dy = y0 - (g * c0 + b * s0)
+        dv = v0 - omega * (b * c0 - g * s0)
+        y = g * cth + b * sth + w11 * dy + w12 * dv
+        v = omega * (b * cth - g * sth) + w21 * dy + w22 * dv
+        if static and g_static[i] != 0.0:
+            q, s_y, s_v = _static_mode(w[i], a[i], g_static[i], free[i], t)
+            y += (1.0 - w11) * q + s_y
+            v += -w21 * q + s_v
+        nu = 0.0
+        for c in range(n):
+            nu += normal[c] * u[c, i]
+        x -= nu * y
+        xd -= nu * v
+    return sign * x, sign * xd
+
+
+@_inner
+def _bounce_return(flow, forcing, Y, th, stop, guess, scratch):
     """The first return to its stop of the flight from `Y` (on the stop, leaving it), or
     ``-1.0``: one Newton step from the parabola's `guess` (a small bounce's return lands
     within the clearance's rounding), the clearance bracketed from there (marching forward
     in quarters of `guess`, at most two forcing periods, or halving back while the
     clearance is not positive), then safeguarded Newton (bisection where a Newton step
-    leaves the bracket) to a few ulps of the time or of the clearance."""
+    leaves the bracket) to a few ulps of the time or of the clearance. `stop` and
+    `scratch` as :func:`_gap` takes them."""
+    normal, _, position = stop
     period = 2.0 * math.pi / forcing.omega
     # the clearance's rounding: a few ulps of the stop coordinate's terms
     level = abs(position)
     for c in range(normal.size):
         level += abs(normal[c] * Y[c])
     level *= 4.0 * _CHATTER_EPS
-    g, gd = _gap(flow, forcing, guess, Y, th, normal, sign, position, tr, arr, pcol, rate)
+    g, gd = _gap(flow, forcing, guess, Y, th, stop, scratch)
     lo = -1.0
     hi = -1.0
     if g > 0.0:
@@ -815,8 +867,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
     if gd < 0.0:  # Newton from the guess, no further than the march's first quarter
         t1 = guess - g / gd
         if t1 > 0.0 and abs(t1 - guess) <= 0.25 * guess:
-            g1, gd1 = _gap(flow, forcing, t1, Y, th, normal, sign, position, tr, arr, pcol,
-                           rate)
+            g1, gd1 = _gap(flow, forcing, t1, Y, th, stop, scratch)
             if g1 > 0.0:
                 lo = t1
             else:
@@ -826,7 +877,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
         step = 0.25 * guess
         while lo < 2.0 * period:
             t = lo + step
-            g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
+            g, gd = _gap(flow, forcing, t, Y, th, stop, scratch)
             if not g > 0.0:
                 hi = t
                 break
@@ -837,8 +888,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
     elif lo < 0.0:  # returned by hi: halve back
         lo = 0.5 * hi
         for _ in range(200):
-            g, gd = _gap(flow, forcing, lo, Y, th, normal, sign, position, tr, arr, pcol,
-                         rate)
+            g, gd = _gap(flow, forcing, lo, Y, th, stop, scratch)
             if g > 0.0:
                 break
             hi = lo
@@ -859,7 +909,7 @@ def _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr, arr,
         if abs(new - t) <= 8.0 * _CHATTER_EPS * t or hi - lo <= 8.0 * _CHATTER_EPS * hi:
             return new
         t = new
-        g, gd = _gap(flow, forcing, t, Y, th, normal, sign, position, tr, arr, pcol, rate)
+        g, gd = _gap(flow, forcing, t, Y, th, stop, scratch)
     return -1.0
 
 
@@ -977,6 +1027,9 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log, forced):
     pcol = np.empty(m)
     rate = np.empty(m)
     explicit = np.empty(m)
+    work = _flight_work(n)
+    stop = (normal, sign, position)
+    scratch = (tr, arr, pcol, rate)
     B = np.empty((m, w))
     dt = np.empty(w)
     th = theta
@@ -984,17 +1037,16 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log, forced):
     floor = _BOUNCE_ULPS * _CHATTER_EPS * max(1.0, abs(position))
     status = 0
     for _ in range(count):
-        _flight(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate)
+        _flight_into(flow, forcing, 0.0, Y, th, tr, arr, pcol, rate, work)
         u, a = _stop_speed(normal, sign, rate, n)
         if a > 0.0 and u * u < 2.0 * a * floor:
             break
         # the parabola's return time (an eighth of a period where the stop does not press)
         guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
-        t = _bounce_return(flow, forcing, Y, th, normal, sign, position, guess, tr,
-                           arr, pcol, rate)
+        t = _bounce_return(flow, forcing, Y, th, stop, guess, scratch)
         if not t > 0.0:
             return -2, th, T
-        _flight(flow, forcing, t, Y, th, tr, arr, pcol, rate)
+        _flight_into(flow, forcing, t, Y, th, tr, arr, pcol, rate, work)
         hd = 0.0
         for c in range(n):
             hd += normal[c] * rate[c]
