@@ -1323,7 +1323,7 @@ def save_blocks(ds: xr.Dataset, path: str | os.PathLike,
     Returns
     -------
     pathlib.Path
-        ``path``.
+        ``path``, as :func:`save`.
 
     Raises
     ------

@@ -28,12 +28,7 @@ from impactcont.dataset.schema import (
     validate_branch_dataset,
 )
 from impactcont.errors import ParameterError
-from impactcont.plots.labels import (
-    coincident_groups,
-    marker_boxes,
-    merged_labels,
-    place_labels,
-)
+from impactcont.plots.labels import coincident_groups, marker_boxes, merged_labels, place_labels
 from impactcont.vocabulary import LABEL_MARKERS, LABEL_NAMES
 
 __all__ = ["LEGEND_PLACES", "NONPHYSICAL_GREY", "NONPHYSICAL_MARKER", "SEGMENT_STYLES",

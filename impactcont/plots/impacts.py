@@ -129,8 +129,8 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
     Returns
     -------
     matplotlib.axes.Axes
-        ``ax``, or the new figure's; the zoomed inset, if one was drawn, is its child
-        axes (``ax.child_axes``).
+        As :func:`impactcont.plots.bifurcation_diagram`: ``ax`` or the new figure's, with
+        the zoomed inset, if one was drawn, as its child axes (``ax.child_axes``).
 
     Raises
     ------
