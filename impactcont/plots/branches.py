@@ -636,6 +636,25 @@ class _Drawing:
     specials: list[tuple[float, float, str, str, bool]] = dataclasses.field(default_factory=list)
     seen: list[np.ndarray] = dataclasses.field(default_factory=list)  # values of physical motions
 
+    def draw_curves(self, ds: xr.Dataset, x: np.ndarray, values: np.ndarray, color: str,
+                    nonphysical: bool = True) -> tuple[bool, np.ndarray]:
+        """Draw ``values`` of the branch ``ds`` against ``x``, split and styled by kind of
+        segment (:func:`stability_segments`; the non-physical ones only with
+        ``nonphysical``), and keep the values of its physical motions.
+
+        Returns whether anything was drawn, and the branch's ``physical`` column.
+        """
+        drawn = False
+        for kind, sl in stability_segments(ds):
+            if kind == "non-physical" and not nonphysical:
+                continue
+            self.ax.plot(x[sl], values[sl], color=color, **SEGMENT_STYLES[kind])
+            self.kinds_seen.add(kind)
+            drawn = True
+        physical = np.asarray(ds["physical"].values, dtype=bool)
+        self.seen.append(values[physical].ravel())
+        return drawn, physical
+
 
 def _start_diagram(datasets: Any, ax: Axes | None, legend: str | None) -> _Drawing:
     """Check ``legend`` and the branches (all continued in one parameter), and the axes."""
@@ -778,11 +797,7 @@ def bifurcation_diagram(datasets: Any, *, y: str = "impact_velocity", ax: Axes |
         x = np.asarray(ds[parameter].values, dtype=float)
         yv = np.asarray(ds[yname].values, dtype=float)
         color = f"C{b % 10}"
-        for kind, sl in stability_segments(ds):
-            ax.plot(x[sl], yv[sl], color=color, **SEGMENT_STYLES[kind])
-            drawing.kinds_seen.add(kind)
-        physical = np.asarray(ds["physical"].values, dtype=bool)
-        drawing.seen.append(yv[physical])
+        _, physical = drawing.draw_curves(ds, x, yv, color)
         p = int(ds.attrs.get("impacts", 1))
         about = ", ".join([f"N = {int(ds.attrs['N'])}" if p == 1
                            else f"{int(ds.attrs['N'])}-{p}",

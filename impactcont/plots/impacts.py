@@ -22,14 +22,12 @@ from matplotlib.lines import Line2D
 
 from impactcont.dataset.schema import SPECIAL_LABELS, special_variable
 from impactcont.plots.branches import (
-    SEGMENT_STYLES,
     _borders_physical,
     _finish_diagram,
     _start_diagram,
     _stops,
     fixed_parameters,
     parameter_text,
-    stability_segments,
 )
 
 __all__ = ["IMPACT_QUANTITIES", "impact_diagram", "impact_label"]
@@ -150,15 +148,7 @@ def impact_diagram(datasets: Any, *, y: str = "impact_velocity_k", ax: Axes | No
         x = np.asarray(ds[parameter].values, dtype=float)
         values = _per_impact(ds, y)
         color = colors[b % len(colors)] if colors else f"C{b % 10}"
-        drawn = False
-        for kind, sl in stability_segments(ds):
-            if kind == "non-physical" and not nonphysical:
-                continue
-            ax.plot(x[sl], values[sl], color=color, **SEGMENT_STYLES[kind])
-            drawing.kinds_seen.add(kind)
-            drawn = True
-        physical = np.asarray(ds["physical"].values, dtype=bool)
-        drawing.seen.append(values[physical].ravel())
+        drawn, physical = drawing.draw_curves(ds, x, values, color, nonphysical)
         about = ", ".join([f"{int(ds.attrs['N'])}-{values.shape[1]}",
                            *([parameter_text(fixed_parameters([ds]), differing)]
                              if differing else [])])
