@@ -675,10 +675,11 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
         if not sticking:
             raise ParameterError(
                 f"pattern={pattern!r}: the lowercase letter(s) {held!r} ask for sticking phases "
-                "(a plastic impact held on its stop until the release), which "
-                "multi_impact_orbit solves; continuation, curves and maps of motions with "
-                "sticking phases are not supported yet (give the impacts' stops in capitals, "
-                "e.g. " + repr("".join(c if c in names else c.upper() for c in pattern)) + ")")
+                "(an impact held on its stop until the release), which this path (the "
+                "shooting of flights and impacts alone) does not solve: multi_impact_orbit "
+                "solves them, and continuation, curve and stability_map take its motion; or "
+                "give the impacts' stops in capitals, e.g. "
+                + repr("".join(c if c in names else c.upper() for c in pattern)))
         impacts = "".join(c if c in names else c.upper() for c in pattern)
         check_pattern(impacts, p, stops)
         return pattern

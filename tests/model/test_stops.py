@@ -47,6 +47,11 @@ def test_stop_record_views_and_round_trip():
         check_pattern("UB", 2, osc.stops)
     with pytest.raises(ParameterError, match="has none"):
         check_pattern("UL", 2, osc.stops)
+    # a sticking phase on a path of flights and impacts alone: where it is solved instead
+    assert check_pattern("uA", 2, osc.stops, sticking=True) == "uA"
+    with pytest.raises(ParameterError, match=r"'u'.*multi_impact_orbit solves them.*'UA'") as err:
+        check_pattern("uA", 2, osc.stops)
+    assert "not supported" not in str(err.value)
     with pytest.raises(ParameterError, match="one of"):
         osc.stops.stop("B", osc.M, osc.b, osc.R)
     with pytest.raises(TypeError, match="sequence of Stop"):
