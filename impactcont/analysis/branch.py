@@ -682,11 +682,12 @@ def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | No
         the symmetry.
     """
     pattern = orbit.pattern or None
+    defect: float | None = None  # the motion's symmetry_defect, computed once
     if symmetric is None:
         symmetric = (model_parameter(orbit.oscillator, parameter).keeps_symmetry
                      and admits_symmetric_motions(orbit.oscillator, orbit.N, orbit.p,
                                                   orbit.pattern or "")
-                     and symmetry_defect(orbit) <= _SYMMETRY_TOL)
+                     and (defect := symmetry_defect(orbit)) <= _SYMMETRY_TOL)
     elif not isinstance(symmetric, (bool, np.bool_)):
         raise ParameterError(f"symmetric must be True, False or None (decide from the motion); "
                              f"got {symmetric!r}")
@@ -696,7 +697,8 @@ def branch_problem(orbit: MultiImpactOrbit, parameter: str, symmetric: bool | No
         return problem, orbit.unknowns
     sym = SymmetricBranchProblem(orbit.oscillator, orbit.N, orbit.p, parameter,
                                  pattern=orbit.pattern)
-    defect = symmetry_defect(orbit)
+    if defect is None:  # symmetric=True given
+        defect = symmetry_defect(orbit)
     if not defect <= _SYMMETRY_TOL:
         raise ParameterError(f"symmetric=True: the N={orbit.N}, p={orbit.p} motion is not "
                              f"symmetric (X_(k+p/2) + X_k, tau_(k+p/2) - tau_k up to {defect:.3g} "

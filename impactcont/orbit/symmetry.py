@@ -111,9 +111,13 @@ def is_symmetric(orbit: MultiImpactOrbit, tol: float = SYMMETRY_TOL) -> bool:
     return symmetry_defect(orbit) <= tol
 
 
+@functools.cache
 def _reflection(n: int) -> np.ndarray:
-    """``S`` in the section coordinates ``[z, theta]`` (``2n - 1`` entries of z)."""
-    return np.append(-np.ones(2 * n - 1), 1.0)
+    """``S`` in the section coordinates ``[z, theta]`` (``2n - 1`` entries of z); made once
+    per n (the half-map of every BP test sample multiplies by it), read-only."""
+    S = np.append(-np.ones(2 * n - 1), 1.0)
+    S.flags.writeable = False
+    return S
 
 
 def half_map(orbit: MultiImpactOrbit) -> np.ndarray:

@@ -23,6 +23,7 @@ the damping and every element, ``gap`` (both stops), and ``b`` and ``R`` of mirr
 from __future__ import annotations
 
 import copy
+import functools
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any, ClassVar
@@ -135,9 +136,15 @@ class SymmetricBranchProblem:
         self.size = self.halves.size
         self._S = _reflection(osc.n)[:, None]  # S of the half-map, in the section coordinates
         self._last_full: tuple[tuple[bytes, float], np.ndarray] | None = None
-        # A and M^-1 F of a flight: M, K, C, F are the same at every omega and stop position
-        # (moved problems share them)
-        self._flight = _flight_data(osc)
+        #: ``-e(1)``: ``u = E v + offset / omega`` in the compiled corrector (:meth:`palc_step`)
+        self._offset = -self.halves.offset_derivative(1.0)
+
+    @functools.cached_property
+    def _flight(self) -> tuple[np.ndarray, np.ndarray]:
+        """A and M^-1 F of a flight (:func:`_flight_data`, for :meth:`half_map_derivative`:
+        made on its first use). M, K, C, F are the same at every omega and stop position:
+        moved problems share them."""
+        return _flight_data(self.osc)
 
     # -- what the full problem says -------------------------------------------------------------
     osc = _of_full("osc", "The oscillator.")
@@ -338,9 +345,8 @@ class SymmetricBranchProblem:
         (:meth:`MultiImpactBranchProblem.palc_step` with ``u = E v + e(omega)``)."""
         if self.full._base_flow is None:
             return None
-        offset = -self.halves.offset_derivative(1.0)  # e(omega) = offset / omega
         return self.full._palc_step(predicted, tangent, weights, tol, max_iter,
-                                    self._E, offset, self.size, hyperplane)
+                                    self._E, self._offset, self.size, hyperplane)
 
     def orbit(self, v: np.ndarray, lam: float, *, checks: bool = True) -> MultiImpactOrbit:
         """The full symmetric N-p motion (states, G, multipliers, checks) at ``(v, lam)``."""
