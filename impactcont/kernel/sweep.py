@@ -82,25 +82,26 @@ __all__ = ["sweep_stops"]
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 
-class SweepWork(NamedTuple):
-    """The arrays a sweep reuses at every grid point (allocated once per sweep): each
-    point's Newton, shooting systems and evaluation write into them instead of allocating
-    their own (the results are the same numbers)."""
+class NewtonWork(NamedTuple):
+    """The arrays of a grid point's Newton (:func:`_newton`), allocated once per sweep."""
 
     current: ShotFlights
     """The shooting system at Newton's iterate (the solution's, on return)."""
     trial: ShotFlights
-    """The shooting system at a trial point (swapped with `current` when taken)."""
+    """The shooting system at a trial point (copied into `current` when taken)."""
     shooting: ShootingWork
     """The shooting system's scratch."""
-    start: np.ndarray
-    """The point's predicted unknowns, shape (2np,)."""
     iterates: np.ndarray
     """Two trial points, shape (2, 2np): one holds the iterate, the other the trial."""
     step: np.ndarray
     """Newton's step, shape (2np,)."""
     elimination: np.ndarray
     """The Jacobian eliminated by the step's solve, shape (2np, 2np)."""
+
+
+class EvaluationWork(NamedTuple):
+    """The arrays of a solution's evaluation (:func:`_evaluate`), allocated once per sweep."""
+
     G: np.ndarray
     """The motion's G (eq. 25), shape (2n, 2n)."""
     hessenberg: np.ndarray
@@ -117,6 +118,21 @@ class SweepWork(NamedTuple):
     """A mirrored state, shape (2n,)."""
 
 
+class SweepWork(NamedTuple):
+    """The arrays a sweep reuses at every grid point (allocated once per sweep): each
+    point's Newton, shooting systems and evaluation write into them instead of allocating
+    their own (the results are the same numbers). Each compiled call is given only the part
+    it uses: numba counts a reference to every array of the structures a call is given, as
+    the call starts and again as it returns (an atomic operation each)."""
+
+    start: np.ndarray
+    """The point's predicted unknowns, shape (2np,)."""
+    newton: NewtonWork
+    """Newton's arrays."""
+    evaluation: EvaluationWork
+    """The evaluation's arrays."""
+
+
 @_inner
 def _shot_buffers(p, m):
     """A :class:`~impactcont.kernel.arrays.ShotFlights` of `p` impacts of states of size
@@ -130,66 +146,79 @@ def _shot_buffers(p, m):
 def _sweep_work(q, p, m):
     """A :class:`SweepWork` for the `q` impacts solved of `p` with states of size `m`."""
     size = q * m
-    return SweepWork(_shot_buffers(q, m), _shot_buffers(q, m), _shooting_work(m),
-                     np.empty(size), np.empty((2, size)), np.empty(size),
-                     np.empty((size, size)), np.empty((m, m)), np.empty((m, m)), np.empty(m),
-                     np.empty(m), np.empty(m, dtype=np.complex128), np.empty(p),
-                     np.empty(m))
+    newton = NewtonWork(_shot_buffers(q, m), _shot_buffers(q, m), _shooting_work(m),
+                        np.empty((2, size)), np.empty(size), np.empty((size, size)))
+    evaluation = EvaluationWork(np.empty((m, m)), np.empty((m, m)), np.empty(m), np.empty(m),
+                                np.empty(m, dtype=np.complex128), np.empty(p), np.empty(m))
+    return SweepWork(np.empty(size), newton, evaluation)
 
 
 @_inner
-def _system(flow, forcing, impacts, N, symmetric, pivot, x, want_jacobian, shot, work):
-    """The shooting system (full, or the half of a symmetric motion) at ``x``, into the
-    arrays of `shot` with the scratch `work` (a
-    :class:`~impactcont.kernel.shooting.ShootingWork`).
+def _period(omega, N, symmetric):
+    """The time the system solved spans: the period ``2 pi N / omega``, or its half for the
+    half system of a symmetric motion."""
+    if symmetric:
+        return math.pi * N / omega
+    return 2.0 * math.pi * N / omega
 
-    `impacts` holds the impacts of the system solved (the first h of a symmetric motion),
-    `pivot` the position eliminated on the sections of a symmetric motion (one for all).
-    Returns the :class:`~impactcont.kernel.arrays.ShotFlights` of
-    :func:`impactcont.kernel.shooting.shooting_system`.
-    """
-    omega = forcing.omega
-    if not symmetric:
-        return _shooting_system_into(_flights(flow), forcing, impacts,
-                                     2.0 * math.pi * N / omega, x, want_jacobian, shot,
-                                     work)
+
+@_inner
+def _reflect(normals, pivot, starts, residual, jacobian, want_jacobian):
+    """Close the half system of a symmetric motion in place: the last block ``D_0 X_{h-1}^-
+    - X_0`` of the shooting system of its first h flights becomes ``D_h X_{h-1}^- + X_0``
+    (the residual and, when wanted, the Jacobian; `pivot` the position eliminated on every
+    section, `normals` the sections' normals)."""
     j = pivot
-    normals = impacts.normals
-    out = _shooting_system_into(_flights(flow), forcing, impacts, math.pi * N / omega, x,
-                                want_jacobian, shot, work)
-    h = impacts.positions.size
-    m = impacts.matrices.shape[1]
+    h = starts.shape[0]
+    m = starts.shape[1]
     n = m // 2
-    starts = out.starts
-    residual = out.residual
     last = (h - 1) * m
     for r in range(m):  # - X_0 -> + X_0 = - X_h
         residual[last + r] += 2.0 * starts[0, r]
     if want_jacobian:
-        J = out.jacobian
         for r in range(m):  # dX_0/dz_0: unit columns, and x_j from the section
             if r != j:
-                J[last + r, h + (r if r < j else r - 1)] += 2.0
+                jacobian[last + r, h + (r if r < j else r - 1)] += 2.0
             else:
                 for c in range(n):
                     if c != j:
-                        J[last + r, h + (c if c < j else c - 1)] -= (
+                        jacobian[last + r, h + (c if c < j else c - 1)] -= (
                             2.0 * normals[0, c] / normals[0, j])
-    return out
 
 
 @_inner
-def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings, work):
-    """Newton with backtracking from ``x0`` (not modified: the iterates are written into
-    ``work.iterates`` and the systems into ``work.current``, ``work.trial``, a
-    :class:`SweepWork`): the iteration and stopping rules of
-    :func:`impactcont.kernel.shooting.newton_solve` on :func:`_system` (``settings.tol``,
-    ``settings.max_iter``). A trial point once the residual is below the tolerance is
-    evaluated without the Jacobian (it only confirms the rounding floor, or ends the
-    iteration); its Jacobian is computed only when another step needs it.
+def _take_trial(trial, current, with_jacobian):
+    """Copy the shooting system at a trial point (`trial`) into `current`, its Jacobian when
+    it was computed."""
+    current.phases[:] = trial.phases
+    current.flight_times[:] = trial.flight_times
+    current.starts[:, :] = trial.starts
+    current.arrivals[:, :] = trial.arrivals
+    current.arrival_rates[:, :] = trial.arrival_rates
+    current.transitions[:, :, :] = trial.transitions
+    current.phase_columns[:, :] = trial.phase_columns
+    current.residual[:] = trial.residual
+    if with_jacobian:
+        current.jacobian[:, :] = trial.jacobian
 
-    Returns ``(x, converged, iterations, shot)`` (`x` one of ``work.iterates`` or `x0`,
-    `shot` in one of ``work.current``, ``work.trial``: valid until the next call).
+
+@_inner
+def _newton(flights, forcing, impacts, period, symmetric, pivot, x0, settings, work):
+    """Newton with backtracking from ``x0`` (not modified: the iterates are written into
+    ``work.iterates``, the systems into ``work.current`` and ``work.trial``, a
+    :class:`NewtonWork`): the iteration and stopping rules of
+    :func:`impactcont.kernel.shooting.newton_solve` on the shooting system (full, or the
+    half of a symmetric motion closed by :func:`_reflect`; `flights` a
+    :class:`~impactcont.kernel.arrays.FlightFlow`, `period` the time solved,
+    :func:`_period`; `impacts` the impacts solved, the first h of a symmetric motion),
+    ``settings.tol``, ``settings.max_iter``. A trial point once the residual is below the
+    tolerance is evaluated without the Jacobian (it only confirms the rounding floor, or
+    ends the iteration); its Jacobian is computed only when another step needs it.
+
+    Returns ``(x, converged, iterations)``: `x` one of ``work.iterates`` or `x0`, its
+    system in ``work.current`` (valid until the next call). A trial taken is copied into
+    ``work.current``: the structures are never bound to new names (numba counts a
+    reference to each of their arrays at every such binding).
     """
     tol = settings.tol
     max_iter = settings.max_iter
@@ -197,28 +226,37 @@ def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings, work):
     free, other = work.iterates[0], work.iterates[1]  # the trial's array, and the iterate's
     step = work.step
     shooting = work.shooting
+    normals = impacts.normals
+    residual = current.residual
     x = x0
     want = _jacobian_wanted(x)
-    sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want, current, shooting)
-    norm = _max_abs(sh.residual)
+    _shooting_system_into(flights, forcing, impacts, period, x, want, current, shooting)
+    if symmetric:
+        _reflect(normals, pivot, current.starts, residual, current.jacobian, want)
+    has_jacobian = True
+    norm = _max_abs(residual)
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
         scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
-            return x, True, it, sh
+            return x, True, it
         if it == max_iter:
             break
-        if sh.jacobian.shape[0] == 0:  # a trial taken without it: the step needs it now
-            sh = _system(flow, forcing, impacts, N, symmetric, pivot, x, want, current, shooting)
-        J = sh.jacobian
+        if not has_jacobian:  # a trial taken without it: the step needs it now
+            _shooting_system_into(flights, forcing, impacts, period, x, want, current,
+                                  shooting)
+            if symmetric:
+                _reflect(normals, pivot, current.starts, residual, current.jacobian, want)
+            has_jacobian = True
+        J = current.jacobian
         if not _finite(J):
             break
         M = work.elimination
         M[:, :] = J
         for r in range(step.size):
-            step[r] = -sh.residual[r]
+            step[r] = -residual[r]
         if not _solve_in_place(M, step):
             break
         lam_step = 1.0
@@ -226,22 +264,25 @@ def _newton(flow, forcing, impacts, N, symmetric, pivot, x0, settings, work):
             trial = free
             for r in range(trial.size):
                 trial[r] = x[r] + lam_step * step[r]
-            tsh = _system(flow, forcing, impacts, N, symmetric, pivot, trial, not small,
-                          spare, shooting)
-            tnorm = _max_abs(tsh.residual)
+            _shooting_system_into(flights, forcing, impacts, period, trial, not small, spare,
+                                  shooting)
+            if symmetric:
+                _reflect(normals, pivot, spare.starts, spare.residual, spare.jacobian,
+                         not small)
+            tnorm = _max_abs(spare.residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
-                return x, True, it, sh
+                return x, True, it
             if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
                 break
             lam_step *= 0.5
         step_norm = lam_step * _max_abs(step)
         x = trial
-        sh = tsh
+        _take_trial(spare, current, not small)
+        has_jacobian = not small
         norm = tnorm
         free, other = other, free  # the next trial must not overwrite x
-        current, spare = spare, current
-    return x, False, it, sh
+    return x, False, it
 
 
 @_inner
@@ -268,7 +309,7 @@ def _evaluate(flow, forcing, motion, full, stops, sh, checks, point, outputs, wo
     smallest of all.
 
     Writes the grid point `point` (flat index) of `outputs` (`work`: the sweep's
-    :class:`SweepWork`); returns ``(physical, capped)``.
+    :class:`EvaluationWork`); returns ``(physical, capped)``.
     """
     symmetric, admits, signs = motion.symmetric, motion.admits, motion.signs
     omega = forcing.omega
@@ -512,11 +553,13 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
     capped = False
     flow_row = flows.index[grid.seed0, grid.seed1]
     flow, forcing = _flow_at(flows, flow_row)
+    flights = _flights(flow)
     geometry_row = geometries.index[grid.seed0, grid.seed1]
     solved_impacts, full, stops = _geometry_at(geometries, geometry_row, motion)
     work = _sweep_work(geometries.positions.shape[1], motion.signs.size,
                        geometries.matrices.shape[2])
     x0 = work.start
+    newton, evaluation = work.newton, work.evaluation
     while head < tail:
         point = queue[head % size, 0]
         parent = queue[head % size, 1]
@@ -545,12 +588,14 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
         if flows.index[i0, i1] != flow_row:  # the flow and geometry of the point's row
             flow_row = flows.index[i0, i1]
             flow, forcing = _flow_at(flows, flow_row)
+            flights = _flights(flow)
         if geometries.index[i0, i1] != geometry_row:
             geometry_row = geometries.index[i0, i1]
             solved_impacts, full, stops = _geometry_at(geometries, geometry_row, motion)
         attempts += 1
-        x, ok, it, sh = _newton(flow, forcing, solved_impacts, motion.N, motion.symmetric,
-                                motion.pivots[0], x0, settings, work)
+        x, ok, it = _newton(flights, forcing, solved_impacts,
+                            _period(forcing.omega, motion.N, motion.symmetric), motion.symmetric,
+                            motion.pivots[0], x0, settings, newton)
         total_iterations += it
         if ok and parent >= 0:
             change = 0.0
@@ -564,8 +609,8 @@ def _sweep(flows, geometries, motion, grid, settings, outputs):
         unknowns[point, :] = x
         outputs.iterations[point] = it
         outputs.delta[point] = math.atan2(math.sin(x[0]), math.cos(x[0]))
-        phys, cap = _evaluate(flow, forcing, motion, full, stops, sh, settings.checks, point,
-                              outputs, work)
+        phys, cap = _evaluate(flow, forcing, motion, full, stops, newton.current,
+                              settings.checks, point, outputs, evaluation)
         outputs.physical[point] = phys
         outputs.stable[point] = outputs.rho[point] < 1.0
         capped = capped or cap
