@@ -323,11 +323,11 @@ def _contact_now(flight: Flight, X: np.ndarray, views: dict[str, StopView],
 
 def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
     try:
-        X = np.array(state, dtype=float).reshape(-1)
+        X = np.array(state, dtype=float)
     except (TypeError, ValueError) as exc:
         raise TypeError(f"state must be a real vector of length {2 * osc.n}; "
                         f"got {state!r}") from exc
-    if X.shape != (2 * osc.n,) or not np.all(np.isfinite(X)):
+    if X.shape != (2 * osc.n,) or not np.all(np.isfinite(X)):  # (a matrix is not flattened)
         raise ParameterError(f"state must be a finite vector [x; x'] of length {2 * osc.n}; "
                              f"got {np.asarray(state).tolist()!r}")
     j = osc.stops.index
@@ -351,6 +351,15 @@ def _check_state(osc: ImpactOscillator, state: object) -> np.ndarray:
                 f"at {view.position!r}; {e.coordinate} {'<=' if e.side > 0 else '>='} "
                 f"{view.position!r} is required")
     return X
+
+
+def _check_count(name: str, value: object, least: int) -> int:
+    """`value` as an int ``>= least``, or a ParameterError naming `name` (an integral
+    float is taken; a bool, a fraction or a string is refused, not truncated)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(value) or value != int(value) or value < least:
+        raise ParameterError(f"{name} must be an integer >= {least}; got {value!r}")
+    return int(value)
 
 
 def _check_stop_at(stop_at: object) -> frozenset[str]:
@@ -409,15 +418,15 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
         Also return sampled states ``t, X`` (both sides of each impact).
     samples_per_period : int
         Trajectory samples per forcing period (and contact-force samples of the sticking
-        phases).
+        phases), ``>= 2``.
     max_impacts : int
-        Stop after this many impacts.
+        Stop after this many impacts, ``>= 1``.
     chatter_velocity : float
-        With ``"chatter"`` in `stop_at` only: also stop with status CHATTER when an impact
-        velocity falls below this fraction of the largest impact velocity seen (or below
-        it in absolute value, if none yet), or when the bounce after an impact would rise
-        less than 1000 ulps of the stop position above it (``v^2 / (2 |x_j''|)``: below
-        that the motion cannot be told from rounding).
+        Finite, ``>= 0``. With ``"chatter"`` in `stop_at` only: also stop with status
+        CHATTER when an impact velocity falls below this fraction of the largest impact
+        velocity seen (or below it in absolute value, if none yet), or when the bounce
+        after an impact would rise less than 1000 ulps of the stop position above it
+        (``v^2 / (2 |x_j''|)``: below that the motion cannot be told from rounding).
     stop_at : tuple of str
         Ends to stop at rather than simulate through: ``"sticking"`` stops with status
         STICKING where a sticking phase would start, ``"chatter"`` with status CHATTER
@@ -464,8 +473,13 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             delta):
         raise ParameterError(f"delta must be a finite real number; got {delta!r}")
     periods, delta = float(periods), float(delta)
-    if int(samples_per_period) < 2:
-        raise ParameterError(f"samples_per_period must be >= 2; got {samples_per_period!r}")
+    samples_per_period = _check_count("samples_per_period", samples_per_period, 2)
+    max_impacts = _check_count("max_impacts", max_impacts, 1)
+    if isinstance(chatter_velocity, bool) or not isinstance(chatter_velocity, numbers.Real) \
+            or not (math.isfinite(chatter_velocity) and chatter_velocity >= 0.0):
+        raise ParameterError(f"chatter_velocity must be a finite number >= 0 (a fraction of "
+                             f"the largest impact speed; 0: never stop for a slow impact); got "
+                             f"{chatter_velocity!r}")
     ends = _check_stop_at(stop_at)
     if isinstance(chatter_tolerance, bool) or not isinstance(chatter_tolerance, numbers.Real) \
             or not 0.0 < chatter_tolerance < 1.0:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import re
 
 import numpy as np
 import pytest
@@ -113,6 +114,30 @@ def test_bad_inputs(paper):
         simulate(paper, np.zeros(4), 0.0, -1)
     with pytest.raises(ParameterError, match="delta must be a finite"):
         simulate(paper, np.zeros(4), math.nan, 1.0)
+
+
+@pytest.mark.parametrize("keyword, value, words", [
+    ("max_impacts", 0, "max_impacts must be an integer >= 1; got 0"),  # stopped after one
+    ("max_impacts", -1, "max_impacts must be an integer >= 1; got -1"),
+    ("max_impacts", 2.5, "max_impacts must be an integer >= 1; got 2.5"),
+    ("samples_per_period", 2.5, "samples_per_period must be an integer >= 2; got 2.5"),
+    ("samples_per_period", "10", "samples_per_period must be an integer >= 2; got '10'"),
+    ("chatter_velocity", -1.0, "chatter_velocity must be a finite number >= 0"),
+    ("chatter_velocity", math.nan, "chatter_velocity must be a finite number >= 0"),
+])
+def test_bad_counts_and_thresholds_are_refused_naming_them(paper, keyword, value, words):
+    """Before, max_impacts 0 or -1 ran and stopped after one impact, a fraction was
+    truncated, a string raised ValueError from int(), and a negative or NaN chatter_velocity
+    was taken silently."""
+    with pytest.raises(ParameterError, match=re.escape(words)):
+        simulate(paper, np.zeros(4), 0.0, 1.0, **{keyword: value})
+
+
+def test_a_state_matrix_is_refused_not_flattened(paper):
+    with pytest.raises(ParameterError, match="state must be a finite vector"):
+        simulate(paper, np.zeros((2, 2)), 0.0, 1.0)
+    res = simulate(paper, np.zeros(4), 0.0, 1.0, max_impacts=1.0)  # an integral float is taken
+    assert res.status is SimulationStatus.MAX_IMPACTS and len(res.impact_times) == 1
 
 
 def test_plastic_impact_motion_is_followed(paper):
