@@ -550,6 +550,7 @@ def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: Label | str
                                  f"branch or motion (it fixes it); got {name}={value!r}")
     if N not in (None, 1, motion_N):
         raise ParameterError(f"N must be left out or the motion's N = {motion_N}; got N={N!r}")
+    kind = curve_kind(kind, kinds=SHOOTING_KINDS)  # before counting the points of a kind
     which = 0 if special is None else special
     if isinstance(start, xr.Dataset) and isinstance(which, (int, np.integer)) \
             and not isinstance(which, bool):
@@ -608,11 +609,11 @@ def _shooting_curve(kind: Label | str, start: xr.Dataset | MultiImpactOrbit, whi
     osc = orbit.oscillator
     N, p, pattern = orbit.N, orbit.p, orbit.pattern
     problem = curve_problem(kind, osc, N, parameters, p=p, pattern=pattern, symmetric=symmetric)
-    lam0 = _value(osc, parameter)
-    if not box[parameter][0] <= lam0 <= box[parameter][1]:
-        raise ParameterError(f"bounds[{parameter!r}] = {box[parameter]} must contain the "
-                             f"start {parameter}={lam0!r}")
-    start_p1 = _value(osc, p1)
+    lam0, start_p1 = _value(osc, parameter), _value(osc, p1)
+    for name, value in ((p1, start_p1), (parameter, lam0)):  # as the closed form's curve
+        if not box[name][0] <= value <= box[name][1]:
+            raise ParameterError(f"bounds[{name!r}] = {box[name]} must contain the start "
+                                 f"{name}={value!r}")
     base = problem.branch_problem(lam0)
     u0 = base.half_unknowns(orbit.unknowns) if symmetric else orbit.unknowns
     # on the curve at fixed p2 (the special point is located to its precision only)

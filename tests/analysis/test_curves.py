@@ -452,3 +452,19 @@ def test_a_shooting_curve_keeps_the_motion_of_each_point_from_its_run(branches, 
     afresh = shot()
     assert built_after_run[-1] > 0  # the count sees the problems built after a run
     xr.testing.assert_identical(kept, afresh)
+
+
+def test_a_shooting_curve_refuses_a_box_without_its_start_in_either_parameter(paper, branches):
+    """The box must contain the start in p1 as well as p2, as the closed form's curve asks
+    (before, a shooting curve from omega outside ``bounds['omega']`` returned points on the
+    omega bound far outside ``bounds['b']``), and an unknown kind is named as such (it was
+    'special=0 is out of range: the branch has 0 XX point(s)')."""
+    start = ic.analysis.switching.special_orbit(branches[0.0], "PD", 0)
+    omega = start.oscillator.omega
+    with pytest.raises(ic.ParameterError, match=r"bounds\['omega'\].*must contain the start"):
+        curve(None, None, "PD", start=start, parameters=("omega", "b"),
+              bounds={"omega": (omega + 0.1, omega + 0.5), "b": (-0.3, 0.3)})
+    branch = ic.multi_impact_continuation(start, "omega", (omega - 0.05, omega + 0.05))
+    with pytest.raises(ic.ParameterError, match="kind must be one of"):
+        curve(branch, "XX", parameters=("omega", "b"), bounds={"omega": (0.5, 2.0),
+                                                                "b": (-0.3, 0.3)})
