@@ -485,6 +485,18 @@ class PalcStepper:
             if condition > SINGULAR_CONDITION:
                 logger.warning("matrix singular to working precision at lam = %.10g "
                                "(condition number %.3e)", lam, condition)
+        if result.status != "converged":  # the message only when it is raised
+            raise NewtonConvergenceError(self._failure(result.status, result))
+        tangent = np.asarray(result.tangent, dtype=float)
+        if not np.isfinite(tangent).all():
+            raise NewtonConvergenceError(self._failure("non-finite update", result))
+        state = np.array(result.state, dtype=float)
+        return state, result.iterations, tangent / self.scaled_norm(tangent)
+
+    def _failure(self, status: str, result: CorrectorResult) -> str:
+        """Why the problem's corrector (:meth:`_problem_step`) failed (`status`), in the
+        stepper's words."""
+        lam = result.lam
         failure = {
             "not converged": f"corrector did not converge in {self.options.newton_max_iter} "
                              f"iterations (residual {result.residual_norm:.3g})",
@@ -494,13 +506,7 @@ class PalcStepper:
             "singular": f"singular matrix at lam = {lam:.10g}",
             "non-finite update": f"non-finite Newton update at lam = {lam:.10g}",
         }
-        if result.status != "converged":
-            raise NewtonConvergenceError(failure.get(result.status, result.status))
-        tangent = np.asarray(result.tangent, dtype=float)
-        if not np.isfinite(tangent).all():
-            raise NewtonConvergenceError(failure["non-finite update"])
-        state = np.array(result.state, dtype=float)
-        return state, result.iterations, tangent / self.scaled_norm(tangent)
+        return failure.get(status, status)
 
     def _adapted_step(self, ds: float, iterations: int, angle: float) -> float:
         """Step size for the next step after an accepted one."""
