@@ -949,9 +949,22 @@ def _for_disk(data: xr.Dataset | xr.DataTree) -> xr.Dataset | xr.DataTree:
 
 def _disk_encoding(encoding: Mapping[str, Any], ds: xr.Dataset) -> dict[str, Any]:
     """``encoding`` with the entry of a complex variable given to both of its parts, each
-    under its name on disk (:func:`_disk_names`)."""
+    under its name on disk (:func:`_disk_names`).
+
+    Raises
+    ------
+    ValueError
+        A key that is not a variable of `ds`, or an entry that is not a mapping (xarray
+        raised a bare KeyError from inside its writer).
+    """
     out = {}
     for key, value in encoding.items():
+        if key not in ds.variables:
+            raise ValueError(f"encoding has an entry for {key!r}, which is not a variable of "
+                             f"the dataset; its variables: {sorted(map(str, ds.variables))}")
+        if not isinstance(value, Mapping):
+            raise ValueError(f"encoding[{key!r}] must be a mapping of NetCDF encoding "
+                             f"settings (e.g. {{'zlib': True}}); got {value!r}")
         if key in ds.data_vars and ds[key].dtype.kind == "c":
             out[f"{key}_real"] = out[f"{key}_imag"] = dict(value)
         else:
@@ -1206,7 +1219,12 @@ def save(obj: xr.Dataset | xr.DataTree | Mapping[str, xr.Dataset], path: str | o
 
         if isinstance(obj, SimulationResult):
             obj = simulation_dataset(obj)
-    data = _tree(obj, validate)
+    try:
+        data = _tree(obj, validate)
+    except _SchemaError as exc:
+        raise _SchemaError(f"{exc}. impactcont.save(obj, path, validate=False) writes it "
+                           f"without this check (impactcont.load(path, validate=False) reads "
+                           f"it back)") from exc
     with atomic_output(path) as tmp:
         kwargs = {}
         if encoding:

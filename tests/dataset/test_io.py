@@ -190,6 +190,25 @@ def test_io_bad_arguments(branch, tmp_path):
     assert os.path.exists(other)
 
 
+def test_a_bad_encoding_or_schema_is_refused_naming_what_to_do(branch, tmp_path):
+    """Before, an encoding entry for a variable the dataset does not have raised a bare
+    ``KeyError: 'nonexistent'`` from xarray's writer, and a dataset that fails its schema on
+    save did not say that ``validate=False`` writes it (load says so)."""
+    with pytest.raises(ValueError, match=r"encoding has an entry for 'nonexistent', which is "
+                                         r"not a variable of the dataset; its variables: .*"
+                                         r"'state'"):
+        save(branch, tmp_path / "x.nc", encoding={"nonexistent": {"zlib": True}})
+    with pytest.raises(ValueError, match=r"encoding\['state'\] must be a mapping"):
+        save(branch, tmp_path / "x.nc", encoding={"state": True})
+    plain = xr.Dataset({"a": ("t", np.arange(3.0))})
+    with pytest.raises(ValueError, match=r"missing attribute.*save\(obj, path, "
+                                         r"validate=False\) writes it"):
+        save(plain, tmp_path / "x.nc")
+    assert _leftovers(tmp_path) == [] and not (tmp_path / "x.nc").exists()
+    save(branch, tmp_path / "x.nc", encoding={"state": {"zlib": True}})
+    assert load(tmp_path / "x.nc")["state"].encoding["zlib"]
+
+
 # -- robust datasets: element names 1-based; files of before element_indexing ---------------------
 def _robust_dataset(attrs: dict) -> xr.Dataset:
     """A robust dataset as the scene's [[robust]] writes it (the attributes readers use)."""
