@@ -485,10 +485,12 @@ class Simulations:
             rows.append([name, _changes_text(ds.attrs["oscillator"]), str(ds.attrs["start"]),
                          float(ds.attrs["periods"]), int(ds.sizes["impact"]),
                          float(v[-1]) if v.size else math.nan,
+                         int(ds.sizes.get("sticking", 0)), int(ds.sizes.get("chatter", 0)),
                          "yes" if "X" in ds else "no", str(ds.attrs["status"]),
                          str(ds.attrs.get("impact_stops", ""))[-8:] or "-"])
         return markdown_table(["entry", "at", "start", "periods", "impacts", "last impact velocity",
-                       "trajectory", "status", "last stops (U/L)"], rows)
+                               "sticking phases", "accumulation points", "trajectory",
+                               "status", "last stops (U/L)"], rows)
 
     def special_points(self, datasets: Mapping[str, xr.Dataset]) -> list[dict[str, Any]]:
         return []

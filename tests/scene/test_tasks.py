@@ -162,7 +162,19 @@ def test_a_simulation_from_the_stable_motion_repeats_its_impact(base) -> None:
         3.5 * 2 * np.pi)
     _cf(ds)
     check_attributes(ds, "simulation", in_section=True)
-    assert t.SIMULATIONS.describe({"sim": ds})[2].endswith("| yes | COMPLETED | UUU |")
+    assert t.SIMULATIONS.describe({"sim": ds})[2].endswith("| 0 | 0 | yes | COMPLETED | UUU |")
+
+
+def test_the_simulations_table_counts_sticking_phases_and_accumulation_points() -> None:
+    """`impactcont info` of a run that chatters and sticks said nothing of either (only the
+    impacts, whose last speed was a chatter's last resolved bounce)."""
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[3.0], F_static=[1.0], R=0.5, b=0.0,
+                              omega=0.7, eta=0.05)
+    res = ic.simulate(osc, [0.0, 0.0], 0.0, 3.0)
+    assert res.sticking and res.chatter
+    ds = ic.dataset.simulation.simulation_dataset(res, name="run")
+    row = t.SIMULATIONS.describe({"run": ds})[2]
+    assert f"| {len(res.sticking)} | {len(res.chatter)} | no | COMPLETED |" in row
 
 
 def test_a_simulation_from_a_state_is_the_simulators(base) -> None:
