@@ -681,7 +681,11 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
                 "give the impacts' stops in capitals, e.g. "
                 + repr("".join(c if c in names else c.upper() for c in pattern)))
         impacts = "".join(c if c in names else c.upper() for c in pattern)
-        check_pattern(impacts, p, stops)
+        try:
+            check_pattern(impacts, p, stops)
+        except ParameterError as exc:  # (it names the impacts in capitals: say what was given)
+            raise ParameterError(f"pattern={pattern!r} (lowercase: an impact followed by a "
+                                 f"sticking phase on its stop): {exc}") from None
         return pattern
     extra = "".join(e.name for e in getattr(stops, "extra", ()))
     if extra and len(pattern) == p and not set(pattern) - set(UPPER + LOWER + extra):
@@ -693,8 +697,10 @@ def check_pattern(pattern: Any, p: int, stops: Stops, *, sticking: bool = False)
         raise ParameterError(f"pattern must be {p} stop names (one per impact) from "
                              f"{list(stops.names)}; got {pattern!r}")
     if len(pattern) != p or set(pattern) - {UPPER, LOWER}:
-        raise ParameterError(f"pattern must be {p} letters (one per impact) from 'U' (upper "
-                             f"stop) and 'L' (lower stop); got {pattern!r}")
+        lower = " and 'L' (lower stop)" if stops.two_sided else ""
+        raise ParameterError(f"pattern must be {p} letter{'s' if p != 1 else ''} (one per "
+                             f"impact) from 'U' (upper stop){lower}, lowercase where a "
+                             f"sticking phase follows the impact; got {pattern!r}")
     if LOWER in pattern and not stops.two_sided:
         raise ParameterError(f"pattern={pattern!r} has impacts on the lower stop, but the "
                              "oscillator has none: give stops=Stops(b_low=...)")

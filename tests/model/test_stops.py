@@ -58,6 +58,21 @@ def test_stop_record_views_and_round_trip():
         Stops(extra=low)
 
 
+def test_a_bad_sticking_pattern_is_named_as_given():
+    """A lowercase pattern of the wrong length was named in capitals ('got 'UU'' for
+    pattern='uu', p = 1, as '1 letters'); a one-sided oscillator's pattern named 'L' as
+    allowed, and neither said that lowercase marks a sticking phase."""
+    one = Stops()
+    with pytest.raises(ParameterError, match=r"pattern='uu' \(lowercase: an impact followed by "
+                                             r"a sticking phase.*must be 1 letter \(.*got 'UU'"):
+        check_pattern("uu", 1, one, sticking=True)
+    with pytest.raises(ParameterError) as err:
+        check_pattern("x", 1, one)
+    assert "'L'" not in str(err.value) and "lowercase where a sticking phase" in str(err.value)
+    with pytest.raises(ParameterError, match=r"'U' \(upper stop\) and 'L' \(lower stop\)"):
+        check_pattern("UX", 2, Stops(b_low=0.5))
+
+
 @pytest.mark.parametrize("make, match", [
     (lambda: Stop("U", mass=2, gap=1.0, restitution=0.5), "'U' and 'L'"),
     (lambda: Stop("AB", mass=2, gap=1.0, restitution=0.5), "one letter"),
