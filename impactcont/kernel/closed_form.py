@@ -66,6 +66,7 @@ from impactcont.kernel.flights import (
 )
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
+from impactcont.kernel.linalg import _solve_in_place
 from impactcont.kernel.roots import orbit_roots, phase_sigma
 from impactcont.kernel.stability import (
     _charpoly_in_place,
@@ -361,34 +362,9 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
         A[m + 1, r] = right[r]
     rhs = np.zeros(k, dtype=G_reg.dtype)
     rhs[k - 1] = 1.0
-    return _solve_small(A, rhs)[k - 1]
-
-
-@_inner
-def _solve_small(A, x):
-    """Solve ``A y = x`` in place (both overwritten) by Gaussian elimination with partial
-    pivoting; returns ``x`` holding ``y`` (inf or NaN when A is singular)."""
-    k = x.size
-    for j in range(k):
-        p = j
-        for r in range(j + 1, k):
-            if abs(A[r, j]) > abs(A[p, j]):
-                p = r
-        if p != j:
-            for col in range(k):
-                A[j, col], A[p, col] = A[p, col], A[j, col]
-            x[j], x[p] = x[p], x[j]
-        for r in range(j + 1, k):
-            factor = A[r, j] / A[j, j]
-            for col in range(j + 1, k):
-                A[r, col] -= factor * A[j, col]
-            x[r] -= factor * x[j]
-    for j in range(k - 1, -1, -1):
-        acc = x[j]
-        for col in range(j + 1, k):
-            acc -= A[j, col] * x[col]
-        x[j] = acc / A[j, j]
-    return x
+    if not _solve_in_place(A, rhs):  # singular
+        return rhs[k - 1] * np.nan
+    return rhs[k - 1]
 
 
 @_inner

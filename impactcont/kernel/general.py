@@ -39,6 +39,7 @@ from impactcont.kernel.contact import WORK_ROWS, free_on_grid, time_grid, x1_max
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
 from impactcont.kernel.jit import typed_entry
+from impactcont.kernel.linalg import _cdiv, _solve_in_place
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["amplitude_setup", "forced_response", "forced_response_derivative",
@@ -74,22 +75,6 @@ def _entry(*argument_types):
 
 # -- complex scalars as numpy computes them ----------------------------------------------------
 @_inner
-def _cdiv(a, b):
-    """``a / b`` by numpy's algorithm (Smith's), inf/NaN for ``b = 0`` instead of raising."""
-    ar, ai, br, bi = a.real, a.imag, b.real, b.imag
-    abs_r, abs_i = abs(br), abs(bi)
-    if abs_r >= abs_i:
-        if abs_r == 0.0 and abs_i == 0.0:
-            return complex(ar / abs_r, ai / abs_r)
-        rat = bi / br
-        scl = 1.0 / (br + bi * rat)
-        return complex((ar + ai * rat) * scl, (ai - ar * rat) * scl)
-    rat = br / bi
-    scl = 1.0 / (bi + br * rat)
-    return complex((ar * rat + ai) * scl, (ai * rat - ar) * scl)
-
-
-@_inner
 def _cexpm1(x):
     """``exp(x) - 1`` of a complex x without cancellation (numpy's formula)."""
     half = math.sin(0.5 * x.imag)
@@ -120,31 +105,14 @@ def _power_of_two_scale(v):
     return np.exp2(-np.round(np.log2(v))) if v > 0.0 else 1.0
 
 
-@_jit
+@_inner
 def _solve(H, rhs):
-    """``H^-1 rhs`` by Gaussian elimination with partial pivoting (complex, in place: H and
-    rhs are overwritten), as LAPACK ``zgesv`` pivots (largest ``|Re| + |Im|``); numba's
+    """``H^-1 rhs`` (complex, in place: H and rhs are overwritten) by
+    :func:`impactcont.kernel.linalg._solve_in_place` (partial pivoting as LAPACK ``zgesv``
+    pivots, largest ``|Re| + |Im|``); NaN when a pivot is exactly zero. numba's
     ``np.linalg.solve`` would add seconds to the first compilation."""
-    n = H.shape[0]
-    for k in range(n):
-        p = k
-        for r in range(k + 1, n):
-            if abs(H[r, k].real) + abs(H[r, k].imag) > abs(H[p, k].real) + abs(H[p, k].imag):
-                p = r
-        if p != k:
-            for c in range(k, n):
-                H[k, c], H[p, c] = H[p, c], H[k, c]
-            rhs[k], rhs[p] = rhs[p], rhs[k]
-        for r in range(k + 1, n):
-            f = _cdiv(H[r, k], H[k, k])
-            for c in range(k + 1, n):
-                H[r, c] -= f * H[k, c]
-            rhs[r] -= f * rhs[k]
-    for k in range(n - 1, -1, -1):
-        acc = rhs[k]
-        for c in range(k + 1, n):
-            acc -= H[k, c] * rhs[c]
-        rhs[k] = _cdiv(acc, H[k, k])
+    if not _solve_in_place(H, rhs):
+        rhs[:] = complex(np.nan, np.nan)
     return rhs
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from impactcont.kernel.arrays import Forcing, ImpactSequence, ShotFlights
 from impactcont.kernel.jit import entry as _jit
-from impactcont.kernel.jit import inner as _inner
+from impactcont.kernel.linalg import _product_into
 from impactcont.kernel.shooting import (
     _apply,
     _apply_matrix,
@@ -35,19 +35,6 @@ from impactcont.kernel.shooting import (
 )
 
 __all__ = ["jacobian_product_derivative", "smallest_singular_value"]
-
-
-@_inner
-def _product_into(Gk, G, out):
-    """``out = Gk G`` (m, m), summed in :func:`~impactcont.kernel.shooting.jacobian_product`'s
-    order."""
-    m = G.shape[0]
-    for r in range(m):
-        for c in range(m):
-            s = 0.0
-            for i in range(m):
-                s += Gk[r, i] * G[i, c]
-            out[r, c] = s
 
 
 @_jit
@@ -202,13 +189,10 @@ def jacobian_product_derivative(flow, forcing, derivatives, impacts, shot, state
             for r in range(m):
                 w[r] = drate[r] - rate[r] * dh2 / h2
             _apply(D, w, Dw)
-            row = 0
-            for r in range(m):
-                if r == j_end:
-                    continue
+            for row in range(m - 1):  # every row of D w but the next section's (j_end)
+                r = row if row < j_end else row + 1
                 for c in range(m):
                     dGk[row, c] -= Dw[r] * h[c] / h2
-                row += 1
             for c in range(m):
                 dGk[m - 1, c] += (omega * dh2 / h2 - dw) * h[c] / h2
             # d(G_k G) = dG_k G + G_k dG
