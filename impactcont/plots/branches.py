@@ -150,6 +150,8 @@ def stability_segments(ds: xr.Dataset) -> list[tuple[str, slice]]:
     stable = np.asarray(ds["stable"].values, dtype=bool)
     code = np.where(~physical, 2, np.where(stable, 0, 1))
     npoints = code.size
+    if npoints == 0:  # (a selection of no points: nothing to draw)
+        return []
     part = (np.asarray(ds["connected_component"].values) if "connected_component" in ds
             else np.zeros(npoints, dtype=int))
     new_part = np.diff(part) != 0

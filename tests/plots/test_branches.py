@@ -40,6 +40,16 @@ def test_stability_segments(branch):
     assert [(s.start, s.stop) for _, s in segs] == [(0, 21), (20, 36), (35, 46), (45, 50)]
 
 
+def test_a_selection_of_no_points_draws_nothing(branch):
+    """A branch sliced to no points raised IndexError (index 0 is out of bounds) from
+    stability_segments; it has no segments, and its diagram draws no curve."""
+    empty = branch.isel(point=slice(0, 0), special=slice(0, 0))
+    assert stability_segments(empty) == []
+    ax = bifurcation_diagram([branch, empty], legend=None)
+    assert ax.get_xlim()[0] < float(branch["omega"].min())
+    plt.close(ax.figure)
+
+
 _SHAPES = {marker: label for label, marker in SPECIAL_MARKERS.items()}
 
 
