@@ -37,7 +37,8 @@ The lower stop is the same search on ``-s`` (forced, free and polynomial parts n
 Entry points (each compiled once): :func:`shooting_system`, :func:`newton_solve`,
 :func:`motion_checks`, :func:`omega_partials`, :func:`frequency_column`,
 :func:`branch_linearization`, :func:`palc_correct` and, for motions with sticking phases
-only, :func:`sticky_system`, :func:`sticky_newton_solve` and :func:`sticky_frequency_column`
+only, :func:`sticky_system`, :func:`sticky_newton_solve`, :func:`sticky_jacobians` and
+:func:`sticky_frequency_column`
 (their corrector is :func:`impactcont.kernel.sticky.sticky_palc_correct`), and for those
 entered through complete chatter only, :func:`chatter_bounces`.
 An entry point that compiled code calls too is called there with the plain tuples Python
@@ -52,6 +53,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba import types
+from numba.extending import overload
 
 from impactcont.kernel.arrays import (
     BranchLinearization,
@@ -91,7 +94,7 @@ __all__ = ["branch_linearization", "chatter_bounces", "end_clearances", "forced_
            "frequency_column", "held_pressing", "jacobian_product", "motion_checks",
            "newton_solve",
            "omega_partials", "palc_correct", "shooting_system", "sticky_frequency_column",
-           "sticky_newton_solve", "sticky_system"]
+           "sticky_jacobians", "sticky_newton_solve", "sticky_system"]
 
 
 #: ``newton_solve`` status: converged, or stopped without convergence
@@ -185,21 +188,10 @@ def _flight_modal_into(modal, forcing, t, X0, theta, tr, arr, pcol, rate, work):
         fv[i] = evc * c0 + evs * s0
         py[i] = -eyc * s0 + eys * c0
         pv[i] = -evc * s0 + evs * c0
-        # the modal state at t from the deviation of the start from the steady motion
-        y0 = 0.0
-        v0 = 0.0
-        for c in range(n):
-            y0 += ui[i, c] * X0[c]
-            v0 += ui[i, c] * X0[n + c]
-        dy = y0 - (g * c0 + b * s0)
-        dv = v0 - omega * (b * c0 - g * s0)
-        y = g * cth + b * sth + w11 * dy + w12 * dv
-        v = omega * (b * cth - g * sth) + w21 * dy + w22 * dv
+        y, v = _mode_state(ui, X0, i, omega, (g, b), (c0, s0, cth, sth), (w11, w12, w21, w22))
         force = f[i] * cth
         if static and g_static[i] != 0.0:
-            q, s_y, s_v = _static_mode(w[i], a[i], g_static[i], free[i], t)
-            sty = (1.0 - w11) * q + s_y  # the constant force's part of the state from rest
-            stv = -w21 * q + s_v
+            sty, stv = _static_state(w[i], a[i], g_static[i], free[i], t, w11, w21)
             fy[i] += sty
             fv[i] += stv
             y += sty
@@ -233,6 +225,36 @@ def _flight_modal_into(modal, forcing, t, X0, theta, tr, arr, pcol, rate, work):
         pcol[n + r] = qv
         rate[r] = ry
         rate[n + r] = rv
+
+
+@_inner
+def _mode_state(ui, X0, i, omega, amplitude, phases, transfer):
+    """Mode i's state ``(y, v)`` at `t` of the flight from ``X0``: the steady motion at `t`
+    and the deviation of the start from it carried by the mode's ``W(t)`` (`transfer`), for
+    :func:`_flight_modal_into` and :func:`_modal_gap` (the constant force's part is
+    :func:`_static_state`). `amplitude` is the mode's ``(gamma, beta)`` of eq. (7),
+    `phases` ``(cos theta, sin theta, cos(omega t + theta), sin(omega t + theta))``."""
+    g, b = amplitude
+    c0, s0, cth, sth = phases
+    w11, w12, w21, w22 = transfer
+    n = ui.shape[0]
+    y0 = 0.0
+    v0 = 0.0
+    for c in range(n):
+        y0 += ui[i, c] * X0[c]
+        v0 += ui[i, c] * X0[n + c]
+    dy = y0 - (g * c0 + b * s0)
+    dv = v0 - omega * (b * c0 - g * s0)
+    return (g * cth + b * sth + w11 * dy + w12 * dv,
+            omega * (b * cth - g * sth) + w21 * dy + w22 * dv)
+
+
+@_inner
+def _static_state(w, a, g, free, t, w11, w21):
+    """The part ``(s_y, s_v)`` of a mode's state at `t` that its constant modal force `g`
+    adds from rest (:func:`_static_mode`; `w11`, `w21` its ``W(t)``)."""
+    q, s_y, s_v = _static_mode(w, a, g, free, t)
+    return (1.0 - w11) * q + s_y, -w21 * q + s_v
 
 
 @_inner
@@ -807,31 +829,18 @@ def _modal_gap(modal, forcing, t, Y, th, normal, sign, position):
     w, a, u, ui = modal.w, modal.a, modal.u, modal.ui
     g_static, free = modal.g, modal.free
     gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
+    phases = (math.cos(th), math.sin(th), math.cos(omega * t + th), math.sin(omega * t + th))
     n = w.size
     static = g_static.size > 0
-    c0 = math.cos(th)
-    s0 = math.sin(th)
-    cth = math.cos(omega * t + th)
-    sth = math.sin(omega * t + th)
     x = position
     xd = 0.0
     for i in range(n):
         w11, w12, w21, w22 = mode_transfer(w[i], a[i], t)
-        g = gam[i]
-        b = bet[i]
-        y0 = 0.0
-        v0 = 0.0
-        for c in range(n):
-            y0 += ui[i, c] * Y[c]
-            v0 += ui[i, c] * Y[n + c]
-        dy = y0 - (g * c0 + b * s0)
-        dv = v0 - omega * (b * c0 - g * s0)
-        y = g * cth + b * sth + w11 * dy + w12 * dv
-        v = omega * (b * cth - g * sth) + w21 * dy + w22 * dv
+        y, v = _mode_state(ui, Y, i, omega, (gam[i], bet[i]), phases, (w11, w12, w21, w22))
         if static and g_static[i] != 0.0:
-            q, s_y, s_v = _static_mode(w[i], a[i], g_static[i], free[i], t)
-            y += (1.0 - w11) * q + s_y
-            v += -w21 * q + s_v
+            sty, stv = _static_state(w[i], a[i], g_static[i], free[i], t, w11, w21)
+            y += sty
+            v += stv
         nu = 0.0
         for c in range(n):
             nu += normal[c] * u[c, i]
@@ -1500,15 +1509,7 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian, freq
             for i in range(m):
                 for c in range(size):
                     dXr[i, c] = h_col[k, i] * d_theta[c] + h_rate[k, i] * d_stick[c]
-                col = col0
-                for c in range(m):
-                    if c == j:
-                        continue
-                    v = h_tr[k, i, c]
-                    if c < n and normals[k, c] != 0.0:
-                        v -= h_tr[k, i, j] * normals[k, c] / normals[k, j]
-                    dXr[i, col] += v
-                    col += 1
+                _add_lifted_row(h_tr[k], normals[k], j, i, dXr, col0)
             # dX^-/du = Phi dX_r + dX^-/dtheta (d theta_k + omega ds_k) + X' dtau_k
             for i in range(m):
                 for c in range(size):
@@ -1546,6 +1547,25 @@ def sticky_system(flight, forcing, impacts, held, period, x, want_jacobian, freq
     return (phases, stimes, taus, starts, releases, release_phases, h_tr, h_col, h_rate,
             arrivals, rates, transitions, pcols, residual, J, search_shifts, search_starts,
             search_phases, accumulations, accumulation_phases, chatter_times, chatter_status)
+
+
+@_inner
+def _add_lifted_row(tr, normal, j, i, out, first):
+    """Row i of ``tr dX/dz`` added to ``out[i, first:first + 2n - 1]``: ``dX/dz`` the lift
+    of the section ``normal . x = c`` (pivot j) to the state, the unit columns but j's and
+    the pivot's row ``-n_c / n_j`` (:func:`sticky_system`'s ``dX_r/du``,
+    :func:`sticky_jacobians`)."""
+    m = tr.shape[0]
+    n = m // 2
+    col = first
+    for c in range(m):
+        if c == j:
+            continue
+        v = tr[i, c]
+        if c < n and normal[c] != 0.0:
+            v -= tr[i, j] * normal[c] / normal[j]
+        out[i, col] += v
+        col += 1
 
 
 @_jit
@@ -1723,8 +1743,8 @@ def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
 
     The iteration of :func:`impactcont.orbit.multi_impact.newton` (which documents the
-    stopping rules), compiled; `flight`, `forcing`, `impacts` and `period` as
-    :func:`shooting_system` takes them.
+    stopping rules), compiled (:func:`_newton`); `flight`, `forcing`, `impacts` and
+    `period` as :func:`shooting_system` takes them.
 
     Returns
     -------
@@ -1733,51 +1753,14 @@ def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
         (``NewtonResult.from_kernel`` names them): ``status`` :data:`CONVERGED` or
         :data:`FAILED`, ``shot`` the :func:`shooting_system` at ``x`` (with its Jacobian).
     """
-    flight = _flights(FlightArrays(*flight))
-    forcing = Forcing(*forcing)
-    impacts = ImpactSequence(*impacts)
-    x = x0.copy()
-    sh = _shooting_system(flight, forcing, impacts, period, x, _jacobian_wanted(x))
-    norm = _max_abs(sh.residual)
-    step_norm = np.inf
-    it = 0
-    for it in range(max_iter + 1):
-        scale = unknowns_scale(x)
-        small = norm <= tol * scale
-        if small and (step_norm <= tol * scale or it == max_iter):
-            return (x, CONVERGED, it, norm, step_norm, _shot_tuple(sh))
-        if it == max_iter:
-            break
-        J = sh.jacobian
-        if not np.all(np.isfinite(J)):
-            break
-        step, ok = _solve(J, -sh.residual)
-        if not ok:
-            break
-        lam_step = 1.0
-        while True:
-            trial = x + lam_step * step
-            tsh = _shooting_system(flight, forcing, impacts, period, trial,
-                                   _jacobian_wanted(trial))
-            tnorm = _max_abs(tsh.residual)
-            finite = np.isfinite(tnorm)
-            if small and not (finite and tnorm < norm):
-                # within tol and the update does not lower the residual: at its rounding floor
-                return (x, CONVERGED, it, norm, step_norm, _shot_tuple(sh))
-            if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
-                break
-            lam_step *= 0.5
-        step_norm = lam_step * _max_abs(step)
-        x = trial
-        sh = tsh
-        norm = tnorm
-    return (x, FAILED, it, norm, step_norm, _shot_tuple(sh))
+    return _newton(_flights(FlightArrays(*flight)), Forcing(*forcing), ImpactSequence(*impacts),
+                   None, period, None, x0, tol, max_iter)
 
 
 @_jit
 def sticky_newton_solve(flight, forcing, impacts, held, period, x0, tol, max_iter):
     """:func:`newton_solve` on :func:`sticky_system`: the same iteration and stopping rules
-    for a motion with sticking phases (`held` the plain tuple of
+    (:func:`_newton`) for a motion with sticking phases (`held` the plain tuple of
     :class:`~impactcont.kernel.arrays.HeldSegments`).
 
     Returns
@@ -1786,54 +1769,177 @@ def sticky_newton_solve(flight, forcing, impacts, held, period, x0, tol, max_ite
         ``(x, status, iterations, residual_norm, step_norm, shot)`` as :func:`newton_solve`,
         ``shot`` the plain tuple of :class:`~impactcont.kernel.arrays.StickyFlights` at
         ``x`` (with its Jacobian).
-
-    Notes
-    -----
-    A loop of its own beside :func:`newton_solve` (whose compiled form motions without
-    sticking phases keep unchanged: one loop over both systems was tried for the flights
-    alone and reverted).
     """
-    x = x0.copy()
     empty = np.zeros(0)
     empty_c = np.zeros(0, dtype=np.complex128)
     frequency = (empty, empty, empty_c, np.zeros((0, 0), dtype=np.complex128),
                  np.zeros((0, 0)))  # no omega column
+    return _newton(flight, forcing, impacts, held, period, frequency, x0, tol, max_iter)
+
+
+def _newton_system(flight, forcing, impacts, held, period, frequency, x):
+    """``(residual, jacobian, shot)`` at ``x`` for :func:`_newton`, in compiled code only
+    (numba takes :func:`_shooting_residual` where `held` is None, else
+    :func:`_sticky_residual`: :func:`_newton_system_of`)."""
+    raise TypeError("_newton_system is called from compiled code only")
+
+
+@overload(_newton_system, jit_options=dict(error_model="numpy"))  # the kernel's x / 0
+def _newton_system_of(flight, forcing, impacts, held, period, frequency, x):
+    """:func:`_newton_system` for the types of a call: one Newton loop, each entry point
+    compiles it with its own system."""
+    return _shooting_residual if isinstance(held, types.NoneType) else _sticky_residual
+
+
+def _shooting_residual(flight, forcing, impacts, held, period, frequency, x):
+    """:func:`_newton_system` of :func:`_shooting_system` (`flight`, `forcing` and
+    `impacts` named; `held` and `frequency` None): the shot the plain tuple
+    :func:`newton_solve` returns."""
+    sh = _shooting_system(flight, forcing, impacts, period, x, _jacobian_wanted(x))
+    return sh.residual, sh.jacobian, _shot_tuple(sh)
+
+
+def _sticky_residual(flight, forcing, impacts, held, period, frequency, x):
+    """:func:`_newton_system` of :func:`sticky_system` (its arguments)."""
     out = sticky_system(flight, forcing, impacts, held, period, x, _jacobian_wanted(x),
                         frequency)
-    norm = _max_abs(StickyFlights(*out).residual)
+    named = StickyFlights(*out)
+    return named.residual, named.jacobian, out
+
+
+@_inner
+def _newton(flight, forcing, impacts, held, period, frequency, x0, tol, max_iter):
+    """Newton's method with backtracking from ``x0`` on :func:`_newton_system` (its
+    arguments but ``x``): the one loop of :func:`newton_solve` (`held` and `frequency`
+    None) and :func:`sticky_newton_solve`.
+
+    The stopping rules of :func:`impactcont.orbit.multi_impact.newton`: converged when
+    ``max|r| <= tol * scale`` and the last step's max-norm too (or at `max_iter`), or when
+    within tol a step does not lower the residual (its rounding floor); each step halved
+    until the residual falls (down to a thousandth). Returns ``(x, status, iterations,
+    residual_norm, step_norm, shot)``, the shot at ``x``."""
+    x = x0.copy()
+    residual, J, shot = _newton_system(flight, forcing, impacts, held, period, frequency, x)
+    norm = _max_abs(residual)
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
         scale = unknowns_scale(x)
         small = norm <= tol * scale
         if small and (step_norm <= tol * scale or it == max_iter):
-            return (x, CONVERGED, it, norm, step_norm, out)
+            return (x, CONVERGED, it, norm, step_norm, shot)
         if it == max_iter:
             break
-        sh = StickyFlights(*out)
-        J = sh.jacobian
         if not np.all(np.isfinite(J)):
             break
-        step, ok = _solve(J, -sh.residual)
+        step, ok = _solve(J, -residual)
         if not ok:
             break
         lam_step = 1.0
         while True:
             trial = x + lam_step * step
-            tout = sticky_system(flight, forcing, impacts, held, period, trial,
-                                 _jacobian_wanted(trial), frequency)
-            tnorm = _max_abs(StickyFlights(*tout).residual)
+            t_residual, t_J, t_shot = _newton_system(flight, forcing, impacts, held, period,
+                                                     frequency, trial)
+            tnorm = _max_abs(t_residual)
             finite = np.isfinite(tnorm)
             if small and not (finite and tnorm < norm):
-                return (x, CONVERGED, it, norm, step_norm, out)
+                # within tol and the update does not lower the residual: at its rounding floor
+                return (x, CONVERGED, it, norm, step_norm, shot)
             if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
                 break
             lam_step *= 0.5
         step_norm = lam_step * _max_abs(step)
         x = trial
-        out = tout
+        residual, J, shot = t_residual, t_J, t_shot
         norm = tnorm
-    return (x, FAILED, it, norm, step_norm, out)
+    return (x, FAILED, it, norm, step_norm, shot)
+
+@_jit
+def sticky_jacobians(impacts, held, omega, segments):
+    """``G_k`` of each segment of a motion with sticking phases (impact k's section to
+    impact ``k + 1``'s, in ``[z, theta]``) and their product ``G``, from its shot:
+    :func:`impactcont.orbit.sticky.sticky_jacobians` (which documents them), compiled.
+
+    `impacts` and `held` as :func:`sticky_system` takes them, `segments` the plain tuple
+    ``(releases, release_phases, held_transitions, held_phase_columns, held_rates,
+    transitions, phase_columns, arrival_rates)`` of the shot
+    (:class:`~impactcont.kernel.arrays.StickyFlights`). A sticking phase's duration moves
+    by the release row's saltation ``ds = -(dp/dX dX_r + dp/dtheta dtheta_r) / (dp/dt)``
+    (:func:`_pressing`'s gradient, as :func:`sticky_system`'s release row), each flight's
+    by eq. (25)'s ``dtau = -(n . B) / (n . X')``.
+
+    Returns
+    -------
+    jacobians : ndarray, shape (p, 2n, 2n)
+    G : ndarray, shape (2n, 2n)
+    """
+    sequence = ImpactSequence(*impacts)
+    named = HeldSegments(*held)
+    releases, rphases, h_tr, h_col, h_rate, transitions, pcols, rates = segments
+    matrices, normals, pivots = sequence.matrices, sequence.normals, sequence.pivots
+    p = pivots.size
+    m = matrices.shape[1]
+    n = m // 2
+    jacs = np.empty((p, m, m))
+    G = np.eye(m)
+    cols = np.empty((m, m))  # dX_r / d[z_k, theta_k]
+    th = np.empty(m)  # d theta_r / d[z_k, theta_k]
+    B = np.empty((m, m))
+    dtau = np.empty(m)
+    for k in range(p):
+        nxt = (k + 1) % p
+        j = pivots[k]
+        for i in range(m):  # the held transition times the section's lift, the phase column
+            for c in range(m - 1):
+                cols[i, c] = 0.0
+            _add_lifted_row(h_tr[k], normals[k], j, i, cols, 0)
+            cols[i, m - 1] = h_col[k, i]
+        for c in range(m):
+            th[c] = 0.0
+        th[m - 1] = 1.0
+        if named.sticks[k]:
+            grad = named.grads[k]
+            _, gth = _pressing(named, k, releases[k], rphases[k])
+            rate = omega * gth
+            for i in range(m):
+                rate += grad[i] * h_rate[k, i]
+            for c in range(m):
+                s = gth * th[c]
+                for i in range(m):
+                    s += grad[i] * cols[i, c]
+                ds = -s / rate
+                for i in range(m):
+                    cols[i, c] += h_rate[k, i] * ds
+                th[c] += omega * ds
+        for i in range(m):
+            for c in range(m):
+                s = pcols[k, i] * th[c]
+                for q in range(m):
+                    s += transitions[k, i, q] * cols[q, c]
+                B[i, c] = s
+        h2 = 0.0
+        for r in range(n):
+            h2 += normals[nxt, r] * rates[k, r]
+        for c in range(m):
+            s = 0.0
+            for r in range(n):
+                s += normals[nxt, r] * B[r, c]
+            dtau[c] = -s / h2
+        jn = pivots[nxt]
+        for i in range(m):
+            if i == jn:
+                continue
+            row = i if i < jn else i - 1
+            for c in range(m):
+                s = 0.0
+                for q in range(m):
+                    s += matrices[nxt, i, q] * (B[q, c] + rates[k, q] * dtau[c])
+                jacs[k, row, c] = s
+        for c in range(m):
+            jacs[k, m - 1, c] = th[c] + omega * dtau[c]
+        G = jacs[k] @ G
+    return jacs, G
+
 
 # -- G, multipliers and the interior-contact check ----------------------------------------------
 @_inner
@@ -2541,7 +2647,8 @@ def _bordered_newton(A, residual, border, state, predicted, it, settings, last_u
     :func:`impactcont.kernel.sticky.sticky_palc_correct`.
 
     `A` is ``[dF/dx | dF/domega]`` on its first ``m = A.shape[0] - 1`` rows (``m`` the
-    unknowns ``x`` but omega) and the border ``W t`` (`border`) on its last; `residual`
+    unknowns ``x`` but omega); its last row is set here to the border ``W t`` (`border`);
+    `residual`
     ``F`` (its first ``m`` entries read) at `state` ``[x, omega]``; `predicted` the
     predicted point; `settings` the plain tuple of
     :class:`~impactcont.kernel.arrays.CorrectorSettings`; `last_update` and `flagged` as
@@ -2557,6 +2664,8 @@ def _bordered_newton(A, residual, border, state, predicted, it, settings, last_u
     """
     tol, max_iter, singular, hyperplane = CorrectorSettings(*settings)
     size = A.shape[0] - 1
+    for k in range(size + 1):
+        A[size, k] = border[k]
     norm = 0.0
     for r in range(size):
         v = abs(residual[r])
@@ -2612,6 +2721,38 @@ def _bordered_newton(A, residual, border, state, predicted, it, settings, last_u
     return (GOING, it, norm, update, last_update, flagged)
 
 
+@_inner
+def _corrector_start(predicted, tangent, weights):
+    """The pseudo-arclength corrector's state before its first iterate (:func:`palc_correct`
+    and :func:`impactcont.kernel.sticky.sticky_palc_correct`): ``(state, border, raw,
+    last_update, worst, worst_omega, flagged, norm)``, the iterate a copy of `predicted`,
+    the border ``W t``, a zero tangent, no update, no amplitude error, no flagged matrix
+    and no residual yet."""
+    state = predicted.copy()
+    return (state, weights * tangent, np.zeros(state.size), np.inf, 0.0, np.nan,
+            np.zeros((0, 0)), np.nan)
+
+
+@_inner
+def _corrector_amplitudes(w, a, f, errors, state, worst, worst_omega):
+    """The forced amplitudes of eq. (7) (:func:`forced_amplitudes`) at the omega of a
+    pseudo-arclength corrector's iterate `state` (its last entry), with the largest error
+    bound so far (`worst` at `worst_omega`) updated: ``(ok, omega, gamma, beta, dgamma,
+    dbeta, worst, worst_omega)``, ``ok`` False where omega is not positive and finite or a
+    mode is at an undamped resonance (the corrector refuses the step)."""
+    omega = state[state.size - 1]
+    if not (omega > 0.0 and omega < np.inf):
+        none = np.zeros(0)
+        return False, omega, none, none, none, none, worst, worst_omega
+    gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
+    if resonant:
+        return False, omega, gam, bet, dgam, dbet, worst, worst_omega
+    if bound > worst or bound != bound:
+        worst = bound
+        worst_omega = omega
+    return True, omega, gam, bet, dgam, dbet, worst, worst_omega
+
+
 @_jit
 def palc_correct(flow, errors, impacts, N, embedding, step, settings):
     """The pseudo-arclength corrector of an N-p branch in omega (modal flow), compiled.
@@ -2660,27 +2801,15 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
     size = predicted.size - 1
     full = E.shape[0]
     empty_c = np.zeros(0, dtype=np.complex128)
-    state = predicted.copy()
-    last_update = np.inf
-    worst = 0.0
-    worst_omega = np.nan
-    flagged = np.zeros((0, 0))
-    border = weights * tangent
-    raw = np.zeros(size + 1)
+    state, border, raw, last_update, worst, worst_omega, flagged, norm = _corrector_start(
+        predicted, tangent, weights)
     omega = state[size]
-    norm = np.nan
     for it in range(max_iter + 1):
-        omega = state[size]
-        if not (omega > 0.0 and omega < np.inf):
+        ok, omega, gam, bet, dgam, dbet, worst, worst_omega = _corrector_amplitudes(
+            w, a, f, errors, state, worst, worst_omega)
+        if not ok:
             return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
                               last_update)
-        gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
-        if resonant:
-            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
-                              last_update)
-        if bound > worst or bound != bound:
-            worst = bound
-            worst_omega = omega
         x = np.empty(full)
         for r in range(full):
             s = c[r] / omega
@@ -2691,7 +2820,7 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
         sh, ext = branch_linearization(flow, (omega, gam, bet, empty_c),
                                        (dgam, dbet, empty_c), impacts, period, x)
         residual = sh.residual
-        # [J E | dF/domega - J c / omega^2] on the first rows, and the border
+        # [J E | dF/domega - J c / omega^2] on the first rows (the border: _bordered_newton)
         A = np.empty((size + 1, size + 1))
         for r in range(rows):
             for k in range(size):
@@ -2703,8 +2832,6 @@ def palc_correct(flow, errors, impacts, N, embedding, step, settings):
             for i in range(full):
                 s -= ext[r, i] * c[i] / (omega * omega)
             A[r, size] = s
-        for k in range(size + 1):
-            A[size, k] = border[k]
         status, done, norm, column, last_update, flagged = _bordered_newton(
             A, residual, border, state, predicted, it, settings, last_update, flagged)
         if status != GOING:

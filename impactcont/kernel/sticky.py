@@ -30,6 +30,7 @@ from impactcont.kernel.arrays import (
     ImpactSequence,
     PalcResult,
     ShootingFlow,
+    StickyFlights,
 )
 from impactcont.kernel.general import forced_response, forced_response_derivative
 from impactcont.kernel.jit import entry as _jit
@@ -41,11 +42,12 @@ from impactcont.kernel.shooting import (
     _bordered_newton,
     _bounce_log,
     _clearances,
+    _corrector_amplitudes,
+    _corrector_start,
     _flights,
     _jacobian_wanted,
     _state_clearance,
     _stop_clearance,
-    forced_amplitudes,
     sticky_frequency_column,
     sticky_system,
 )
@@ -69,9 +71,9 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
     :class:`~impactcont.kernel.arrays.HeldForcing`. Compiled only where a motion with
     sticking phases is continued in omega (no other entry point calls it).
 
-    At each iterate's omega: the flights' amplitudes of eq. (7) (:func:`forced_amplitudes`),
-    each held system's ``Z_r`` and ``dZ_r/d omega``
-    (:func:`impactcont.kernel.general.forced_response` and
+    At each iterate's omega: the flights' amplitudes of eq. (7)
+    (:func:`~impactcont.kernel.shooting.forced_amplitudes`), each held system's ``Z_r`` and
+    ``dZ_r/d omega`` (:func:`impactcont.kernel.general.forced_response` and
     :func:`~impactcont.kernel.general.forced_response_derivative`, what
     :meth:`impactcont.orbit.flow.GeneralFlow.omega_arrays` computes), the residual and exact
     Jacobian (:func:`sticky_system`) and ``dr/d omega`` (:func:`sticky_frequency_column`,
@@ -108,28 +110,16 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
     m = ImpactSequence(*impacts).matrices.shape[1]
     size = predicted.size - 1
     empty_c = np.zeros(0, dtype=np.complex128)
-    state = predicted.copy()
-    last_update = np.inf
-    worst = 0.0
-    worst_omega = np.nan
-    flagged = np.zeros((0, 0))
-    border = weights * tangent
-    raw = np.zeros(size + 1)
+    state, border, raw, last_update, worst, worst_omega, flagged, norm = _corrector_start(
+        predicted, tangent, weights)
     omega = state[size]
-    norm = np.nan
     shot = _no_shot()
     for it in range(max_iter + 1):
-        omega = state[size]
-        if not (omega > 0.0 and omega < np.inf):
+        ok, omega, gam, bet, dgam, dbet, worst, worst_omega = _corrector_amplitudes(
+            w, a, f, errors, state, worst, worst_omega)
+        if not ok:
             return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
                               last_update), shot
-        gam, bet, dgam, dbet, bound, resonant = forced_amplitudes(w, a, f, errors, omega)
-        if resonant:
-            return PalcResult(state, it, REFUSED, omega, norm, raw, worst, worst_omega, flagged,
-                              last_update), shot
-        if bound > worst or bound != bound:
-            worst = bound
-            worst_omega = omega
         Z = np.zeros((p, r), dtype=np.complex128)
         dZ = np.zeros((p, r), dtype=np.complex128)
         if not _held_response(hf, sticks, omega, Z, dZ):
@@ -148,15 +138,14 @@ def sticky_palc_correct(flow, errors, impacts, held, held_forcing, N, step, sett
         shot = sh
         col = sticky_frequency_column(flow, forcing, (dgam, dbet, empty_c), impacts, now, dZ,
                                       period, sh, d_release)
-        residual = sh[13]
-        J = sh[14]
-        A = np.empty((size + 1, size + 1))  # [J | dF/domega] and the border
+        named_shot = StickyFlights(*sh)
+        residual = named_shot.residual
+        J = named_shot.jacobian
+        A = np.empty((size + 1, size + 1))  # [J | dF/domega] (the border: _bordered_newton)
         for row in range(size):
             for k in range(size):
                 A[row, k] = J[row, k]
             A[row, size] = col[row]
-        for k in range(size + 1):
-            A[size, k] = border[k]
         status, done, norm, column, last_update, flagged = _bordered_newton(
             A, residual, border, state, predicted, it, settings, last_update, flagged)
         if status != GOING:

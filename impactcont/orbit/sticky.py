@@ -140,32 +140,6 @@ class StickyShooting(StickyFlights):
                         jacobian=None)
 
 
-def _section_lift(geo: StopGeometry, k: int, m: int) -> np.ndarray:
-    """``dX_k/dz_k`` (m, m-1): the unit columns and the pivot's row ``-n_i / n_j`` from the
-    section ``n_k . x = c_k`` (kept per pivot and normal: the geometries of a branch's
-    points share them; read-only)."""
-    j = int(geo.pivots[k])
-    normal = np.asarray(geo.normals[k], dtype=float)
-    key = (m, j, normal.tobytes())
-    L = _SECTION_LIFTS.get(key)
-    if L is None:
-        n = m // 2
-        rest = [c for c in range(m) if c != j]
-        L = np.eye(m)[:, rest]
-        row = np.zeros(m)
-        row[:n] = -normal / normal[j]
-        L[j, :] = row[rest]
-        L.setflags(write=False)  # shared by the calls with this key
-        if len(_SECTION_LIFTS) > 256:
-            _SECTION_LIFTS.clear()
-        _SECTION_LIFTS[key] = L
-    return L
-
-
-#: :func:`_section_lift` by ``(m, pivot, normal's bytes)``.
-_SECTION_LIFTS: dict[tuple[int, int, bytes], np.ndarray] = {}
-
-
 def _python_flight(flow: Flow, t: float, X0: np.ndarray, theta: float
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(X(t), X'(t), Phi(t), dX(t)/dtheta)`` of one flight of `flow` (either kind)."""
@@ -770,44 +744,21 @@ def sticky_jacobians(flow: Flow, pattern: str, sh: StickyShooting
     A sticking phase ends where the pressing force vanishes, so its duration moves by
     ``ds = -(dp/dX dX_r + dp/dtheta dtheta_r) / (dp/dt)`` (the release row's saltation),
     and the flight from the release ends on the next section as in eq. (25); the stick
-    collapses the directions it holds (``G`` has exact zero multipliers).
+    collapses the directions it holds (``G`` has exact zero multipliers). Compiled
+    (:func:`impactcont.kernel.shooting.sticky_jacobians`).
 
     Returns
     -------
     jacobians : ndarray, shape (p, 2n, 2n)
     G : ndarray, shape (2n, 2n)
     """
-    osc = flow.osc
-    impacts, sticks = sticking_pattern(osc, pattern)
-    geo = _geometry(flow, impacts)
-    p, m, n = len(pattern), 2 * osc.n, osc.n
-    omega = osc.omega
-    jacs = np.empty((p, m, m))
-    G = np.eye(m)
-    for k in range(p):
-        nxt = (k + 1) % p
-        cols = np.zeros((m, m))  # dX_r / d[z_k, theta_k]
-        cols[:, :m - 1] = sh.held_transitions[k] @ _section_lift(geo, k, m)
-        cols[:, m - 1] = sh.held_phase_columns[k]
-        th = np.zeros(m)
-        th[m - 1] = 1.0
-        if sticks[k]:
-            held = held_flow(osc, impacts[k])
-            grad, gth = held.pressing_gradient(sh.release_phases[k])
-            ds = -(grad @ cols + gth * th) / (grad @ sh.held_rates[k] + omega * gth)
-            cols = cols + sh.held_rates[k][:, None] * ds
-            th = th + omega * ds
-        B = sh.transitions[k] @ cols + sh.phase_columns[k][:, None] * th
-        normal = geo.normals[nxt]
-        h2 = float(normal @ sh.arrival_rates[k, :n])
-        dtau = -(normal @ B[:n]) / h2
-        DB = geo.matrices[nxt] @ (B + sh.arrival_rates[k][:, None] * dtau)
-        jn = int(geo.pivots[nxt])
-        jacs[k, :jn] = DB[:jn]  # DB without the pivot's row
-        jacs[k, jn:m - 1] = DB[jn + 1:]
-        jacs[k, m - 1] = th + omega * dtau
-        G = jacs[k] @ G
-    return jacs, G
+    impacts = sticking_pattern(flow.osc, pattern)[0]
+    segments = tuple(_writable(np.asarray(a, dtype=float)) for a in (
+        sh.releases, sh.release_phases, sh.held_transitions, sh.held_phase_columns,
+        sh.held_rates, sh.transitions, sh.phase_columns, sh.arrival_rates))
+    return _kernel().sticky_jacobians(tuple(impact_sequence(_geometry(flow, impacts))),
+                                      held_segments(flow, pattern), float(flow.osc.omega),
+                                      segments)
 
 
 @dataclasses.dataclass(frozen=True)

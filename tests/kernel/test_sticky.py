@@ -214,3 +214,25 @@ def test_the_compiled_step_returns_the_converged_point_s_shot(riding):
     _, none = sticky_palc_step(flow, 1, "lu", predicted, e, np.ones(e.size), 1e-12, 10, 1e12,
                                hyperplane=True, with_shot=True)
     assert none is None
+
+
+def test_sticky_motions_compile_each_entry_point_once(riding):
+    """A plastic ride and a ride entered through complete chatter (R 0.3, omega 0.2), each
+    solved at a nearby omega and checked, share one compiled version of each entry point of
+    a motion with sticking phases (the Newton loop is the one of ``newton_solve``,
+    ``_newton``, compiled for the sticky system; ``sticky_jacobians`` G from the shot)."""
+    from impactcont.kernel import shooting as shooting_kernel
+
+    chatter_osc = _damper(0.2).replace(R=0.3)
+    m, c, omega = chatter_osc.M[1, 1], chatter_osc.C[0, 0], chatter_osc.omega
+    amplitude = 1.0 / (1.0 - (1.0 + m) * omega**2 + 1j * c * omega)
+    x1, v1 = amplitude.real, (1j * omega * amplitude).real
+    chatter = ic.multi_impact_orbit(chatter_osc, 1, 2, ic.simulate(
+        chatter_osc, np.array([x1, x1 + chatter_osc.b, v1, v1]), 0.0, 12.0))
+    assert chatter.pattern == "lu" and chatter.physical
+    for start in (riding, chatter):
+        osc = start.oscillator.replace(omega=start.oscillator.omega + 0.005)
+        orbit = ic.multi_impact_orbit(osc, 1, 2, start)
+        assert orbit.physical and orbit.residual < 1e-12
+    for name in ("sticky_newton_solve", "sticky_jacobians"):
+        assert len(getattr(shooting_kernel, name).signatures) == 1, name
