@@ -205,10 +205,12 @@ def _start_from_branch(ds: xr.Dataset, kind: Label, special: int | None,
 
 
 def _start_by_continuation(osc: ImpactOscillator, N: int, kind: Label, special: int | None,
-                           parameters: tuple[str, str], bounds: dict[str, tuple[float, float]]
-                           ) -> tuple[ImpactOscillator, int, float]:
+                           parameters: tuple[str, str], bounds: dict[str, tuple[float, float]],
+                           root: int | None = None) -> tuple[ImpactOscillator, int, float]:
     p1 = parameters[0]
-    branch = continuation(osc, N, p1, bounds[p1], detect=[kind], progress=False)
+    # a root given: the component through the motion of that root (else every component)
+    branch = continuation(osc, N, p1, bounds[p1], detect=[kind], progress=False,
+                          **({} if root is None else {"root": root, "components": "start"}))
     if json.loads(branch.attrs.get("options", "{}")).get("interrupted"):
         raise NothingComputed(f"{kind} curve interrupted while its start was searched")
     rows = [k for k, (lab, st) in enumerate(zip(branch["special_label"].values,
@@ -218,8 +220,26 @@ def _start_by_continuation(osc: ImpactOscillator, N: int, kind: Label, special: 
         raise NoPeriodicMotionError(
             f"no located {kind} point on the N={N} branch in {p1} in {bounds[p1]} at "
             f"{parameters[1]}={_value(osc, parameters[1])!r}; give start explicitly")
-    k = rows[0] if special is None else rows[int(special)]
+    if special is not None and not -len(rows) <= special < len(rows):
+        raise ParameterError(f"special={special!r} is out of range: the N={N} branch in {p1} "
+                             f"in {bounds[p1]} has {len(rows)} located {kind} point(s)")
+    k = rows[0] if special is None else rows[special]
     return _start_from_branch(branch, kind, k, None, N, parameters)
+
+
+def _check_special_and_root(special: Any, root: Any, start: Any) -> None:
+    """`special` an integer index or None; `root` +1, -1 or None, and given only where it
+    chooses the start (explicit values, or None: the branch searched for the start)."""
+    if special is not None and (isinstance(special, bool)
+                                or not isinstance(special, (int, np.integer))):
+        raise ParameterError(f"special must be an integer index (or None); got {special!r}")
+    if root is None:
+        return
+    if isinstance(root, bool) or root not in (1, -1):
+        raise ParameterError(f"root must be +1, -1 or None; got {root!r}")
+    if isinstance(start, xr.Dataset):
+        raise ParameterError(f"root must be left out when start is a branch dataset (the "
+                             f"branch's special point fixes the motion); got root={root!r}")
 
 
 def _start_from_values(osc: ImpactOscillator, N: int, problem: CurveProblem,
@@ -806,7 +826,9 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     bounds : mapping or pair of pairs
         The box ``{p1: (lo, hi), p2: (lo, hi)}``; the curve stops on its edges.
     root : {+1, -1}, optional
-        With explicit start values and no ``delta``: the root of eq. (15).
+        With explicit start values and no ``delta``: the root of eq. (15); with ``start``
+        None: the branch searched for the start is the component through the motion of
+        this root. Refused with a branch dataset or a motion as ``start`` (it fixes it).
     detect_codim2_points : bool
         Locate the codim-2 points on the curve.
     options : ContinuationOptions, optional
@@ -871,6 +893,7 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
                              progress=progress, events=events, monitors=monitors, **more)
     if isinstance(start, PeriodicOrbit):  # its values and phase, on its oscillator
         osc, N, start = _from_orbit(osc, N, start, parameters)
+    _check_special_and_root(special, root, start)
     kind, parameters, box, N, opts = check_curve_arguments(
         osc, N, kind, start=start, parameters=parameters, bounds=bounds, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
@@ -881,7 +904,8 @@ def curve(osc: ImpactOscillator | None, N: int | None = 1, kind: Label | str = "
     elif start is None:
         if N is None:
             raise ParameterError("N must be given unless start is a branch dataset; got None")
-        start_osc, N, delta0 = _start_by_continuation(osc, N, kind, special, parameters, box)
+        start_osc, N, delta0 = _start_by_continuation(osc, N, kind, special, parameters, box,
+                                                      root)
     elif isinstance(start, Mapping):
         if N is None:
             raise ParameterError("N must be given unless start is a branch dataset; got None")

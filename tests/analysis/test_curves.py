@@ -468,3 +468,22 @@ def test_a_shooting_curve_refuses_a_box_without_its_start_in_either_parameter(pa
     with pytest.raises(ic.ParameterError, match="kind must be one of"):
         curve(branch, "XX", parameters=("omega", "b"), bounds={"omega": (0.5, 2.0),
                                                                 "b": (-0.3, 0.3)})
+
+
+def test_special_and_root_are_checked_before_the_start_is_searched(paper, branches):
+    """special out of range raised IndexError after the search's branch, 'a' a ValueError
+    of int(), 1.5 was truncated to 1; root=5 was taken (and ignored) without start values,
+    and with a branch as start."""
+    flat = paper.replace(b=0.0)
+    with pytest.raises(ic.ParameterError, match=r"special=5 is out of range: the N=1 branch "
+                                                r"in omega .* has \d located PD point"):
+        curve(flat, 1, "PD", bounds=BOX, special=5)
+    for bad in ("a", 1.5, True):
+        with pytest.raises(ic.ParameterError, match="special must be an integer index"):
+            curve(flat, 1, "PD", bounds=BOX, special=bad)
+    with pytest.raises(ic.ParameterError, match=r"root must be \+1, -1 or None; got 5"):
+        curve(flat, 1, "PD", bounds=BOX, root=5)
+    with pytest.raises(ic.ParameterError, match="root must be left out when start is a branch"):
+        curve(paper, None, "PD", start=branches[0.0], bounds=BOX, root=1)
+    last = curve(flat, 1, "PD", bounds=BOX, special=-1, detect_codim2_points=False)
+    assert last.sizes["point"] > 2
