@@ -135,6 +135,16 @@ def apply_settings(data: dict[str, Any], settings: Iterable[str], *,
                                   "dotted keys, arrays indexed as name[0] or name[entry]")
             name, index = m.group(1), m.group(2)
             last = depth == len(segments) - 1
+            if isinstance(node, list):  # an array of tables named without an index
+                before = ".".join(segments[:depth])
+                names = [str(item["name"]) for item in node
+                         if isinstance(item, dict) and "name" in item]
+                # simulations.riding.periods: the entry named as a key
+                entry, rest = ((segment, segments[depth + 1:]) if segment in names
+                               and not last else ("0", segments[depth:]))
+                raise where.error(
+                    f"--set: {before} is an array of tables ([[{before}]]): index it by "
+                    f"position or entry name", ".".join([f"{before}[{entry}]", *rest]))
             if not isinstance(node, dict):
                 raise where.error(f"--set: {'.'.join(segments[:depth])} is not a table")
             if index is None:

@@ -31,6 +31,10 @@ def test_apply_settings() -> None:
     ("branches[3].N=1", "does not exist"),
     ("branches[zz].N=1", "no [[branches]] entry is named 'zz'"),
     ("orbits[0].N=1", "orbits is not an array"),
+    # an array of tables named as a table: it said only 'branches is not a table'
+    ("branches.a.N=1", "branches is an array of tables ([[branches]]): index it by position "
+                       "or entry name; allowed: branches[a].N"),
+    ("branches.N=1", "allowed: branches[0].N"),
 ])
 def test_bad_settings(setting: str, fragment: str) -> None:
     with pytest.raises(SceneError) as info:
