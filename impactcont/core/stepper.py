@@ -426,8 +426,8 @@ class PalcStepper:
         except NewtonConvergenceError as error:
             self._current = previous
             return None, f"landing on the bound lam = {bound:.10g} failed ({error})"
-        angle = float(np.arccos(np.clip(self.scaled_dot(previous.tangent, point.tangent),
-                                        -1.0, 1.0)))
+        angle = float(np.arccos(_clip(self.scaled_dot(previous.tangent, point.tangent),
+                                      -1.0, 1.0)))
         if angle > self.options.max_angle:
             self._current = previous
             return None, (f"the point on the bound lam = {bound:.10g} turns the tangent by "
@@ -463,7 +463,7 @@ class PalcStepper:
         else:
             state, iterations, tangent = compiled
             u, lam = state[:-1], float(state[-1])
-        cosine = np.clip(self.scaled_dot(previous.tangent, tangent), -1.0, 1.0)
+        cosine = _clip(self.scaled_dot(previous.tangent, tangent), -1.0, 1.0)
         point = self._make_point(u, lam, tangent, ds, iterations, index=previous.index + 1)
         return point, float(np.arccos(cosine))
 
@@ -514,7 +514,7 @@ class PalcStepper:
             ds *= STEP_GROWTH_FACTOR
         elif iterations > self.options.target_newton_iter:
             ds *= STEP_SLOW_NEWTON_FACTOR
-        return float(np.clip(ds, self.options.ds_min, self.options.ds_max))
+        return float(_clip(ds, self.options.ds_min, self.options.ds_max))
 
     def _tangent_at(self, u: FloatArray, lam: float, reference: FloatArray) -> FloatArray:
         """Unit tangent at ``(u, lam)`` with positive scaled dot product with `reference`."""
@@ -779,6 +779,12 @@ class PalcStepper:
             direction=self.direction,
             monitors=evaluate_monitors(self.problem, u, lam),
         )
+
+
+def _clip(x: float, lo: float, hi: float) -> float:
+    """``np.clip(x, lo, hi)`` of one float, in Python (the same value; numpy's call costs
+    microseconds, two per step)."""
+    return min(max(x, lo), hi)
 
 
 def _solve_2x2(a: float, b: float, c: float, d: float, e: float, f: float, lam: float
