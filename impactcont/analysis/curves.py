@@ -544,6 +544,22 @@ def check_curve_arguments(
     return kind, parameters, box, N, opts
 
 
+def _check_branch_start(start: xr.Dataset) -> None:
+    """A dataset given as start is a one-parameter branch: a curve, a map or a simulation
+    (which have impacts too) is refused, naming what it is."""
+    what = ("a two-parameter curve dataset" if "curve_kind" in start.attrs
+            else f"a {start.attrs['impactcont_dataset']} dataset"
+            if "impactcont_dataset" in start.attrs else "")
+    if what or "parameters" in start.attrs:
+        raise ParameterError(f"start must be a one-parameter branch dataset (a curve starts "
+                             f"from one of its special points); got {what or 'a dataset'} "
+                             f"(parameters {start.attrs.get('parameters')!r})")
+    try:
+        validate_branch_dataset(start)
+    except ValueError as exc:
+        raise ParameterError(f"start is not a branch dataset: {exc}") from None
+
+
 def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: Label | str,
                   start: xr.Dataset | MultiImpactOrbit, *, special: int | None,
                   parameters: Sequence[str], bounds: Any, root: int | None,
@@ -555,6 +571,7 @@ def _motion_curve(osc: ImpactOscillator | None, N: int | None, kind: Label | str
     """
     given = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
     if isinstance(start, xr.Dataset):
+        _check_branch_start(start)
         p1 = str(start.attrs.get("parameter"))
         if len(given) != 2 or given[0] != p1:
             raise ParameterError(f"parameters must be (p1, p2) with p1 the branch's parameter "

@@ -13,6 +13,7 @@ import xarray as xr
 import impactcont as ic
 from impactcont.analysis.curves import curve, curve_crossings
 from impactcont.analysis.maps import stability_map
+from impactcont.dataset.simulation import simulation_dataset
 from impactcont.orbit.periodic import orbit_at_phase
 
 BOX = {"omega": (0.6, 2.0), "b": (0.0, 0.6)}
@@ -487,3 +488,20 @@ def test_special_and_root_are_checked_before_the_start_is_searched(paper, branch
         curve(paper, None, "PD", start=branches[0.0], bounds=BOX, root=1)
     last = curve(flat, 1, "PD", bounds=BOX, special=-1, detect_codim2_points=False)
     assert last.sizes["point"] > 2
+
+
+def test_a_curve_map_or_simulation_as_start_is_named(paper, branches):
+    """Datasets with impacts that are not branches: a shooting curve's dataset said
+    'special=0 is out of range: the branch has 0 SE point(s)', a simulation's 'p1 the
+    branch's parameter 'None''."""
+    start = ic.analysis.switching.special_orbit(branches[0.0], "PD", 0)
+    omega = start.oscillator.omega
+    branch = ic.multi_impact_continuation(start, "omega", (omega - 0.05, omega + 0.05))
+    box = {"omega": (0.5, 2.0), "b": (-0.3, 0.3)}
+    as_curve = branch.assign_attrs(curve_kind="PD", parameters="omega,b")
+    with pytest.raises(ic.ParameterError, match="start must be a one-parameter branch dataset "
+                                                r".*got a two-parameter curve dataset"):
+        curve(as_curve, "PD", parameters=("omega", "b"), bounds=box)
+    run = simulation_dataset(ic.simulate(start.oscillator, start.states[0], start.phases[0], 2.0))
+    with pytest.raises(ic.ParameterError, match="got a simulation dataset"):
+        curve(run, "PD", parameters=("omega", "b"), bounds=box)
