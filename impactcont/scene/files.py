@@ -28,6 +28,7 @@ import xarray as xr
 
 from impactcont.dataset import load, save
 from impactcont.dataset.io import SECTION_ATTRIBUTE
+from impactcont.dataset.maps import MULTI_MAP_KIND
 from impactcont.dataset.schema import CONVENTIONS, validate_branch_dataset
 
 try:  # POSIX; elsewhere a run takes no lock (logged)
@@ -188,6 +189,9 @@ class SceneOutput:
                f"entries={list(self.datasets)})"
 
 
+_KIND_NAMES = {None: "branch"}  # the tag of a dataset without one (a branch)
+
+
 def read_output(path: str | os.PathLike) -> SceneOutput:
     """Read a file written by a scene run (or by :func:`impactcont.save`).
 
@@ -211,8 +215,14 @@ def read_output(path: str | os.PathLike) -> SceneOutput:
     if kind is None:
         # a file of impactcont.save: two-parameter datasets and simulations say what they are
         tags = {ds.attrs.get("impactcont_dataset") for ds in datasets.values()}
-        kind = {frozenset({"curve"}): "curves", frozenset({"map"}): "maps",
-                frozenset({"simulation"}): "simulations"}.get(frozenset(tags))
+        kind = ("maps" if tags and tags <= {"map", MULTI_MAP_KIND}  # (a scene's maps hold both)
+                else {frozenset({"curve"}): "curves",
+                      frozenset({"simulation"}): "simulations"}.get(frozenset(tags)))
+        if kind is None and len(tags) > 1:
+            raise ValueError(f"{str(path)!r} holds datasets of several kinds "
+                             f"({', '.join(sorted(_KIND_NAMES.get(t, t) for t in tags))}): "
+                             f"impactcont info and plot read files of one kind (a scene's "
+                             f"section); save each kind to a file of its own")
     if kind is None:
         try:
             for ds in datasets.values():

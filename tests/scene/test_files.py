@@ -71,6 +71,19 @@ def test_a_file_of_save_is_read_as_its_section(tmp_path) -> None:
     grid = ic.stability_map(osc, [1], [1.0, 1.2], [0.4, 0.5])
     out = f.read_output(ic.save({"m": grid}, tmp_path / "maps.nc"))
     assert out.kind == "maps" and list(out.datasets) == ["m"]
+    # a map of a motion's family (stability_map of a motion, its out= file): it was 'not a
+    # file written by impactcont (... missing attribute(s) ['parameter'])'
+    motion = ic.multi_impact_orbit(osc, 1, 1, next(o for o in ic.periodic_orbits(osc, 1)
+                                                    if o.physical))
+    family = ic.stability_map(motion, parameters=("omega", "b"),
+                              grid={"omega": [1.15, 1.2], "b": [0.45, 0.5]})
+    out = f.read_output(ic.save(family, tmp_path / "family.nc"))
+    assert out.kind == "maps" and list(out.datasets) == ["family"]
+    out = f.read_output(ic.save({"m": grid, "family": family}, tmp_path / "both.nc"))
+    assert out.kind == "maps" and list(out.datasets) == ["m", "family"]
+    # datasets of several kinds: said 'not a file written by impactcont'
+    with pytest.raises(ValueError, match=r"holds datasets of several kinds \(branch, map\)"):
+        f.read_output(ic.save({"b": branch, "m": grid}, tmp_path / "mixed.nc"))
 
 
 def test_a_file_that_is_not_impactcont_s_is_refused(tmp_path) -> None:
