@@ -59,6 +59,8 @@ from impactcont.kernel.arrays import (
 )
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
+from impactcont.kernel.linalg import _solve_in_place
+from impactcont.kernel.newton_rules import FLOOR, TAKE, _converged, _trial_outcome
 from impactcont.kernel.shooting import (
     ShootingWork,
     _clearances,
@@ -68,7 +70,6 @@ from impactcont.kernel.shooting import (
     _max_abs,
     _shooting_system_into,
     _shooting_work,
-    _solve_in_place,
     _state_clearance,
     _stop_clearance,
     unknowns_scale,
@@ -207,7 +208,8 @@ def _newton(flights, forcing, impacts, period, symmetric, pivot, x0, settings, w
     """Newton with backtracking from ``x0`` (not modified: the iterates are written into
     ``work.iterates``, the systems into ``work.current`` and ``work.trial``, a
     :class:`NewtonWork`): the iteration and stopping rules of
-    :func:`impactcont.kernel.shooting.newton_solve` on the shooting system (full, or the
+    :func:`impactcont.kernel.shooting.newton_solve`
+    (:mod:`impactcont.kernel.newton_rules`) on the shooting system (full, or the
     half of a symmetric motion closed by :func:`_reflect`; `flights` a
     :class:`~impactcont.kernel.arrays.FlightFlow`, `period` the time solved,
     :func:`_period`; `impacts` the impacts solved, the first h of a symmetric motion),
@@ -238,9 +240,9 @@ def _newton(flights, forcing, impacts, period, symmetric, pivot, x0, settings, w
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
-        scale = unknowns_scale(x)
-        small = norm <= tol * scale
-        if small and (step_norm <= tol * scale or it == max_iter):
+        bound = tol * unknowns_scale(x)
+        small, converged = _converged(norm, step_norm, bound, it, max_iter)
+        if converged:
             return x, True, it
         if it == max_iter:
             break
@@ -270,10 +272,10 @@ def _newton(flights, forcing, impacts, period, symmetric, pivot, x0, settings, w
                 _reflect(normals, pivot, spare.starts, spare.residual, spare.jacobian,
                          not small)
             tnorm = _max_abs(spare.residual)
-            finite = np.isfinite(tnorm)
-            if small and not (finite and tnorm < norm):
+            outcome = _trial_outcome(tnorm, norm, small, bound, lam_step)
+            if outcome == FLOOR:  # x is at its rounding floor
                 return x, True, it
-            if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
+            if outcome == TAKE:
                 break
             lam_step *= 0.5
         step_norm = lam_step * _max_abs(step)
