@@ -88,6 +88,8 @@ from impactcont.kernel.contact import (
 from impactcont.kernel.flights import mode_transfer, transfer_into
 from impactcont.kernel.jit import entry as _jit
 from impactcont.kernel.jit import inner as _inner
+from impactcont.kernel.linalg import _product_into, _solve_in_place
+from impactcont.kernel.newton_rules import FLOOR, TAKE, _converged, _trial_outcome
 from impactcont.kernel.stability import multipliers
 
 __all__ = ["branch_linearization", "chatter_bounces", "end_clearances", "forced_amplitudes",
@@ -717,12 +719,7 @@ def _held_segment(held, k, omega, t, X0, theta, X, dX0, dtheta, rate):
     yr = np.empty(r)
     _flight_general(flight, forcing, t, Y0, theta, tr, Y, pcol, yr)
     TLi = np.empty((r, m))  # Phi_r L^+
-    for i in range(r):
-        for c in range(m):
-            s = 0.0
-            for q in range(r):
-                s += tr[i, q] * Li[q, c]
-            TLi[i, c] = s
+    _product_into(tr, Li, TLi)
     for i in range(m):
         for q in range(r):
             lq = L[i, q]
@@ -1706,38 +1703,6 @@ def _solve(A, rhs):
     return x, _solve_in_place(A.copy(), x)
 
 
-@_inner
-def _solve_in_place(M, x):
-    """:func:`_solve` overwriting ``M`` (its elimination) and ``x`` (the right-hand side on
-    entry, the solution on return); False when a pivot is exactly zero."""
-    size = x.size
-    for c in range(size):
-        piv = c
-        big = abs(M[c, c])
-        for r in range(c + 1, size):
-            if abs(M[r, c]) > big:
-                big = abs(M[r, c])
-                piv = r
-        if big == 0.0:
-            return False
-        if piv != c:
-            for k in range(size):
-                M[c, k], M[piv, k] = M[piv, k], M[c, k]
-            x[c], x[piv] = x[piv], x[c]
-        for r in range(c + 1, size):
-            factor = M[r, c] / M[c, c]
-            if factor != 0.0:
-                for k in range(c + 1, size):
-                    M[r, k] -= factor * M[c, k]
-                x[r] -= factor * x[c]
-    for c in range(size - 1, -1, -1):
-        s = x[c]
-        for k in range(c + 1, size):
-            s -= M[c, k] * x[k]
-        x[c] = s / M[c, c]
-    return True
-
-
 @_jit
 def newton_solve(flight, forcing, impacts, period, x0, tol, max_iter):
     """Newton's method with backtracking on :func:`shooting_system` from ``x0``.
@@ -1824,9 +1789,9 @@ def _newton(flight, forcing, impacts, held, period, frequency, x0, tol, max_iter
     step_norm = np.inf
     it = 0
     for it in range(max_iter + 1):
-        scale = unknowns_scale(x)
-        small = norm <= tol * scale
-        if small and (step_norm <= tol * scale or it == max_iter):
+        bound = tol * unknowns_scale(x)
+        small, converged = _converged(norm, step_norm, bound, it, max_iter)
+        if converged:
             return (x, CONVERGED, it, norm, step_norm, shot)
         if it == max_iter:
             break
@@ -1841,11 +1806,10 @@ def _newton(flight, forcing, impacts, held, period, frequency, x0, tol, max_iter
             t_residual, t_J, t_shot = _newton_system(flight, forcing, impacts, held, period,
                                                      frequency, trial)
             tnorm = _max_abs(t_residual)
-            finite = np.isfinite(tnorm)
-            if small and not (finite and tnorm < norm):
-                # within tol and the update does not lower the residual: at its rounding floor
+            outcome = _trial_outcome(tnorm, norm, small, bound, lam_step)
+            if outcome == FLOOR:  # within tol, the update does not lower the residual
                 return (x, CONVERGED, it, norm, step_norm, shot)
-            if finite and (tnorm < norm or tnorm <= tol * scale or lam_step < 1e-3):
+            if outcome == TAKE:
                 break
             lam_step *= 0.5
         step_norm = lam_step * _max_abs(step)
@@ -1853,6 +1817,7 @@ def _newton(flight, forcing, impacts, held, period, frequency, x0, tol, max_iter
         residual, J, shot = t_residual, t_J, t_shot
         norm = tnorm
     return (x, FAILED, it, norm, step_norm, shot)
+
 
 @_jit
 def sticky_jacobians(impacts, held, omega, segments):

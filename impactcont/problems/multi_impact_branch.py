@@ -459,7 +459,7 @@ class MultiImpactBranchProblem:
         sh = self._shoot(u, lam)
         flow = self.flow_at(lam)
         if self.sticky:
-            jacobians = sticky_jacobians(flow, self.pattern, sh)[0]
+            jacobians, _ = sticky_jacobians(flow, self.pattern, sh)
             G = np.eye(2 * self.osc.n)
             for k in range(int(count)):
                 G = jacobians[k] @ G
