@@ -36,7 +36,7 @@ import datetime
 import json
 import logging
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -638,18 +638,43 @@ def _assembled(variables: Mapping[str, xr.Variable], coord_names: Sequence[str],
     construction (:func:`branch_dataset` checks every shape), and the general constructor
     took most of the time of a short branch (a 9-point symmetric branch: 1.1 of its 1.9 ms
     of dataset; tests/dataset/test_schema.py compares both constructions).
+    ``xr.Dataset._construct_direct`` is private to xarray: where a release has it no more
+    or changes its arguments, :func:`_constructed` builds the same dataset publicly (the
+    test checks that too).
     """
-    indexes: dict[str, Index] = {}
-    assembled: dict[str, xr.Variable] = {}
-    for name, variable in variables.items():
-        if variable.dims == (name,):  # a dimension coordinate: its default (pandas) index
-            index = PandasIndex.from_variables({name: variable}, options={})
-            assembled.update(index.create_variables({name: variable}))
-            indexes[name] = index
-        else:
-            assembled[name] = variable
-    return xr.Dataset._construct_direct(assembled, set(coord_names), attrs=attrs,
-                                        indexes=indexes)
+    direct = _direct_constructor()
+    if direct is not None:
+        indexes: dict[str, Index] = {}
+        assembled: dict[str, xr.Variable] = {}
+        for name, variable in variables.items():
+            if variable.dims == (name,):  # a dimension coordinate: its default (pandas) index
+                index = PandasIndex.from_variables({name: variable}, options={})
+                assembled.update(index.create_variables({name: variable}))
+                indexes[name] = index
+            else:
+                assembled[name] = variable
+        try:
+            return direct(assembled, set(coord_names), attrs=attrs, indexes=indexes)
+        except TypeError:  # a private API whose signature changed: the public way below
+            logger.debug("xr.Dataset._construct_direct refused its arguments; built by "
+                         "xr.Dataset")
+    return _constructed(variables, coord_names, attrs)
+
+
+def _direct_constructor() -> Callable[..., xr.Dataset] | None:
+    """xarray's private ``xr.Dataset._construct_direct``, or None where a release has it no
+    more."""
+    return getattr(xr.Dataset, "_construct_direct", None)
+
+
+def _constructed(variables: Mapping[str, xr.Variable], coord_names: Sequence[str],
+                 attrs: dict[str, Any]) -> xr.Dataset:
+    """:func:`_assembled` by xarray's public constructor (its merge and alignment): where
+    the private ``xr.Dataset._construct_direct`` is gone or takes other arguments."""
+    coords = set(coord_names)
+    return xr.Dataset({k: v for k, v in variables.items() if k not in coords},
+                      coords={k: v for k, v in variables.items() if k in coords},
+                      attrs=attrs)
 
 
 def branch_dataset(*, parameter: str, N: int, oscillator: ImpactOscillator, options: Any,

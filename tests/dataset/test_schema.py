@@ -15,6 +15,7 @@ from impactcont.dataset import (
     POINT_VARIABLES,
     branch_dataset,
     oscillator_from_dataset,
+    schema,
     validate_branch_dataset,
 )
 
@@ -82,6 +83,32 @@ def test_the_dataset_is_what_xarrays_own_constructor_builds(osc, parameter):
         assert ds[name].dtype == general[name].dtype
     ds.isel(point=slice(2, 5)).sel(component="x2")  # the indexes select
     validate_branch_dataset(ds)
+
+
+@pytest.mark.parametrize("private", ["gone", "other arguments"])
+def test_without_xarrays_private_constructor_the_dataset_is_the_same(osc, monkeypatch,
+                                                                      private):
+    """A release of xarray without ``Dataset._construct_direct`` (or with other arguments)
+    gets the same branch dataset from the public constructor (schema._constructed)."""
+    cols = _columns()
+    kwargs = dict(parameter="omega", N=1, oscillator=osc, options={}, columns=cols,
+                  special_points=_specials(cols))
+    direct = branch_dataset(**kwargs)
+
+    def refuse(*args, **kw):
+        raise TypeError("unexpected keyword argument")
+
+    monkeypatch.setattr(schema, "_direct_constructor",
+                        (lambda: None) if private == "gone" else (lambda: refuse))
+    built = []
+    public_way = schema._constructed
+    monkeypatch.setattr(schema, "_constructed", lambda *a: built.append(1) or public_way(*a))
+    public = branch_dataset(**kwargs)
+    assert built == [1]  # the public constructor built it
+    xr.testing.assert_identical(direct, public)
+    assert set(public.xindexes) == {"point", "component"}
+    assert set(public.coords) == set(direct.coords)
+    validate_branch_dataset(public)
 
 
 def test_schema_attributes(branch, osc):
