@@ -786,7 +786,9 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
     components : {"all", "start"}
         ``"all"`` (default): every connected component of the solution set in
         `bounds`, found by a scan of eq. (15) and followed one by one (component 0
-        goes through the start); ``"start"``: only the component through the start.
+        goes through the start; with ``both_directions=False`` it is followed from the
+        start one way, the others over the whole bounds); ``"start"``: only the component
+        through the start.
     options : ContinuationOptions, optional
         Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
         Newton tolerance 1e-12 by default: the closed form is exact to rounding).
@@ -848,6 +850,12 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
                               ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol,
                               max_points=max_points, both_directions=both_directions,
                               progress=progress, events=events, monitors=monitors, **more)
+    if not isinstance(osc, ImpactOscillator):
+        hint = (" (a computed dataset: restart or extend a branch with "
+                "impactcont.analysis.branch.continuation_from or extend, or start from a "
+                "motion of it, ic.special_orbit)" if isinstance(osc, xr.Dataset) else "")
+        raise ParameterError(f"osc must be an ImpactOscillator, a PeriodicOrbit or a "
+                             f"MultiImpactOrbit; got {type(osc).__name__}{hint}")
     problem, detect, (lo, hi), opts = check_continuation_arguments(
         osc, N, parameter, bounds, detect=detect, components=components, options=options,
         ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=newton_tol, max_points=max_points,
@@ -861,11 +869,20 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
           reporter(progress, f"continuation in {parameter}", parameter=parameter) as rep):
         runs = [_follow(problem, u0, lam0, opts, detect, rep, functions, warn_max_points=True)]
         if components == "all" and not interrupted():
+            # every further component over the whole of the bounds; with one direction the
+            # start's own component is followed one way only, and a seed on its other side
+            # is not another component (its run goes through the start: left out)
+            whole = opts if opts.both_directions else dataclasses.replace(
+                opts, both_directions=True)
+            known = list(runs)
             try:
                 for lam, u in problem.component_seeds((lo, hi)):
-                    if not any(_passes(run, lam, float(u[0])) for run in runs):
-                        runs.append(_follow(problem, u, lam, opts, detect, rep, functions,
-                                            warn_max_points=True))
+                    if not any(_passes(run, lam, float(u[0])) for run in known):
+                        run = _follow(problem, u, lam, whole, detect, rep, functions,
+                                      warn_max_points=True)
+                        known.append(run)
+                        if opts.both_directions or not _passes(run, lam0, float(u0[0])):
+                            runs.append(run)
                     if interrupted():
                         break
             except (ImpactcontError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:

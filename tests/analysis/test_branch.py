@@ -217,6 +217,41 @@ def test_a_component_that_cannot_start_is_reported_not_fatal(monkeypatch):
         assert abs(orbit.state[0] - osc.b) < 1e-9  # a motion of eq. (14): x1(0) = b
 
 
+def test_one_direction_follows_the_start_one_way_and_every_other_component_whole(
+        paper_system, branch_b0):
+    """both_directions=False with every component: the start's component from the start
+    forward only, the others over the whole bounds, no component twice. Before, a seed on
+    the start's other side was followed forward as a further component: it ran over the
+    start's points again (524 points against 398 both ways, the PD at 1.7004 twice) and
+    omega 0.5-0.61 was missing."""
+    one = ic.continuation(paper_system, N=1, parameter="omega", bounds=(0.5, 6.0),
+                          both_directions=False)
+    comp = one.connected_component.values
+    assert sorted(set(comp)) == [0, 1]
+    start = one.omega.values[comp == 0]
+    assert start[0] == 1.0 and start.min() == 1.0 and start.max() == 6.0
+    whole = one.isel(point=comp == 1).omega.values
+    assert (whole.min(), whole.max()) == (0.5, 6.0)
+    # each special point once: the two-way branch's, less the GR behind the start
+    found = list(zip(one.special_label.values, one.special_omega.values,
+                     one.special_delta.values, strict=True))
+    expected = [(lab, w, d) for lab, w, d in zip(
+        branch_b0.special_label.values, branch_b0.special_omega.values,
+        branch_b0.special_delta.values, strict=True) if w > 1.0]
+    assert len(found) == len(expected) == 2
+    for lab, w, d in expected:  # the located points agree to far below their spacing
+        assert sum(lab == f[0] and abs(w - f[1]) < 1e-8 and abs(d - f[2]) < 1e-6
+                   for f in found) == 1
+
+
+def test_a_dataset_given_as_the_oscillator_is_refused_naming_what_to_call(branch_b0):
+    with pytest.raises(ParameterError, match=r"osc must be an ImpactOscillator.*got "
+                                             r"Dataset.*continuation_from or extend"):
+        ic.continuation(branch_b0, N=1, parameter="omega", bounds=(0.5, 6.0))
+    with pytest.raises(ParameterError, match="got str"):
+        ic.continuation("paper", N=1, parameter="omega", bounds=(0.5, 6.0))
+
+
 TOL = 1e-9  # the branches' Newton tolerance is 1e-12 (N-1) and 1e-11 (N-p)
 
 
