@@ -776,6 +776,7 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
         kept = kept[-(p + 1):]
         all_times = np.asarray(guess.impact_times, dtype=float)
         times = all_times[kept]
+        _check_sticking_phases(guess, times[0], times[-1])
         stops = guess.impact_stops or UPPER * k
         spat = "".join(stops[i] for i in kept[:-1])
         taus, sticks, letters = np.diff(times), np.zeros(p), list(spat)
@@ -806,6 +807,27 @@ def _guess_arrays(guess: Any, osc: ImpactOscillator, N: int, p: int
     raise TypeError(f"guess must be a MultiImpactOrbit, a PeriodicOrbit, a SimulationResult or "
                     f"a mapping with 'delta', 'flight_times', 'states'; got "
                     f"{type(guess).__name__}")
+
+
+def _check_sticking_phases(res: Any, first: float, last: float) -> None:
+    """Refuse a simulation guess whose motion between its impacts at `first` and `last`
+    has a sticking phase a periodic motion's segment cannot hold: one holding several stops
+    at once, or one ended otherwise than by its release (another stop hit or held while it
+    holds). A periodic motion's sticking phase holds one stop from the impact on it to the
+    release (a lowercase letter of the pattern)."""
+    tol = 1e-9 * max(1.0, abs(last))
+    for phase in getattr(res, "sticking", ()):
+        if not first - tol <= phase.start < last:
+            continue
+        if len(phase.stops) > 1 or phase.ended_by != "release":
+            why = (f"holds the stops {phase.stops!r} at once" if len(phase.stops) > 1 else
+                   f"on stop {phase.stops!r} ends by {phase.ended_by!r}, not by its release")
+            raise ParameterError(
+                f"guess: the simulated motion's sticking phase at t = {phase.start:.10g}"
+                f"..{phase.end:.10g} {why}; the periodic motions solved here hold one stop "
+                "at a time, from the impact on it to the release (the simulator holds "
+                "several), so this motion is not solved: take a guess where each sticking "
+                "phase holds one stop")
 
 
 def landing_impacts(res: Any) -> tuple[np.ndarray, dict[int, Any]]:

@@ -203,3 +203,25 @@ def test_a_flight_grazing_another_stop_on_a_sticky_branch_is_located_as_GR():
     hit = first_impact_on_A(below, 0.55)
     assert released < hit < released + flight
     assert np.isnan(first_impact_on_A(above, 0.55))
+
+
+def test_a_simulation_holding_two_stops_at_once_is_refused_as_a_guess():
+    """A chain whose steady motion holds mass 1 on U and mass 2 on A at once (the simulator
+    holds several stops): a periodic motion's sticking phase holds one stop, from the
+    impact on it to its release, so the guess is refused saying so. Before, it was read as
+    the flights-only pattern 'AU' without stick times and solved to a motion that is not
+    physical, without a word of the two held stops."""
+    from impactcont.errors import ParameterError
+    from impactcont.model.stops import Stop
+
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[2.0, -1.0], [-1.0, 1.0]], F=[1.5, 0.5],
+                              F_static=[0.5, 0.3], R=0.0, b=0.0, omega=0.5, eta=0.05,
+                              stops=Stops(extra=(Stop("A", mass=2, gap=0.1,
+                                                      restitution=0.0),)))
+    res = ic.simulate(osc, np.zeros(4), 0.0, 60 * 2 * np.pi / 0.5)
+    assert any(phase.stops == "UA" for phase in res.sticking)  # both held at once
+    with pytest.raises(ParameterError, match=r"holds the stops 'UA' at once.*one stop at a "
+                                             r"time"):
+        ic.multi_impact_orbit(osc, 1, 2, res)
+    with pytest.raises(ParameterError, match="ends by 'impact', not by its release"):
+        ic.multi_impact_orbit(osc, 1, 1, res)
