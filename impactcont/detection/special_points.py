@@ -43,7 +43,10 @@ PD and NS were multiplied free of the pole of G at ``h2 = 0``: their events decl
 impact velocity as their pole quantity, and a step in which it changes sign is split at
 its zero (:func:`~impactcont.core.locate.parts_beside_poles`): a sign change across it
 is the pole's, not a special point (``docs/engine.md``, *Detection that does not depend
-on the step*).
+on the step*). Where the branch cannot be followed inside such a step (e.g. where a
+flight of a motion with sticking phases shrinks to nothing, its impact velocity through
+0 with it) the step cannot be split at the pole, and a PD or NS there that is not located
+is not reported (:func:`_through_pole`).
 """
 
 from __future__ import annotations
@@ -238,6 +241,11 @@ def _classify(problem: Any, samples: Sequence[BranchSample],
                       "(a neutral saddle, or the pole of G at h2 = 0)", label, parameter, lam)
             continue
         left, right = samples[step], samples[step + 1]
+        if failed and test is not None and _through_pole(test, left.orbit, right.orbit):
+            log.info("%s between points %d and %d not located on a step where its test's "
+                     "pole quantities change sign too: its sign change cannot be told from "
+                     "the pole's, not a special point", label, step, step + 1)
+            continue
         if label == Label.SN and fold_kind is not None:
             label = fold_kind(orbit, left.orbit, right.orbit)
         nearest = step if abs(lam - left.lam) <= abs(lam - right.lam) else step + 1
@@ -246,6 +254,21 @@ def _classify(problem: Any, samples: Sequence[BranchSample],
                                   bracket=(min(left.lam, right.lam), max(left.lam, right.lam)),
                                   precision=precision, status=status, orbit=orbit,
                                   delta=float(u[0]) if u.size == 1 else None))
+
+
+def _through_pole(test: MotionTest, left: Any, right: Any) -> bool:
+    """Whether a pole quantity of `test` (the impact velocities of PD and NS) changes sign
+    between the motions `left` and `right` at a step's ends.
+
+    Where the locator could not follow the branch inside such a step it cannot split the
+    step at the pole (:func:`~impactcont.core.locate.parts_beside_poles`): a sign change of
+    the test there cannot be told from the pole's, as a zero closer to a pole than where
+    the test's sign can be read."""
+    if test.poles is None:
+        return False
+    before = np.asarray(test.poles(left), dtype=float)
+    after = np.asarray(test.poles(right), dtype=float)
+    return bool(np.any(np.signbit(before) != np.signbit(after)))
 
 
 # -- user-defined events and monitors ----------------------------------------------------------

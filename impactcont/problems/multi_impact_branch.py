@@ -85,6 +85,7 @@ from impactcont.orbit.multi_impact import (
 from impactcont.orbit.periodic import _check_N
 from impactcont.orbit.sticky import (
     StickyShooting,
+    chatter_restitution,
     held_segments,
     sticky_jacobians,
     sticky_omega_column,
@@ -676,6 +677,22 @@ def _smallest(values: np.ndarray, orbit: Any) -> float:
     return float(np.min(np.asarray(values, dtype=float)[held])) if held.size else math.nan
 
 
+def _held(orbit: Any) -> np.ndarray:
+    """Which impacts of `orbit` start a held phase: its pressing minimum is known and, on a
+    stop with restitution above 0, the chatter the landing starts accumulates (a chatter
+    whose impacts do not accumulate, left out of ``orbit.chatters``, enters no stick: the
+    motion is not physical for it, and its pressing force is the landing's, not one of a
+    held phase)."""
+    held = ~np.isnan(np.asarray(orbit.pressing_min, dtype=float))
+    accumulated = {chatter.impact for chatter in orbit.chatters}
+    impacts, _ = sticking_pattern(orbit.oscillator, orbit.pattern)
+    for k in np.flatnonzero(held):
+        if chatter_restitution(orbit.oscillator, impacts[k]) > 0.0 \
+                and int(k) not in accumulated:
+            held[k] = False
+    return held
+
+
 def stick_end_test(orbit: Any) -> float:
     """The end of a ride: the shortest stick time ``min_k s_k`` of the motion.
 
@@ -701,7 +718,7 @@ def release_grazing_test(orbit: Any) -> float:
     past it.
     """
     low = np.asarray(orbit.pressing_min, dtype=float)
-    return _smallest(np.where(np.isnan(low), -np.abs(orbit.landing_pressing), low), orbit)
+    return _smallest(np.where(_held(orbit), low, -np.abs(orbit.landing_pressing)), orbit)
 
 
 def sticking_onset_test(orbit: Any) -> float:
@@ -715,11 +732,11 @@ def sticking_onset_test(orbit: Any) -> float:
     release. A held phase of duration <= 0 counts minus the size of its landing's
     pressing force: past the onset the chatter map may accumulate in a later forcing
     period with a positive pressing force again, which is no stick of this motion (the
-    test would step over the onset without a sign change).
+    test would step over the onset without a sign change); a chatter whose impacts do not
+    accumulate enters no held phase either (:func:`_held`).
     """
     landing = np.asarray(orbit.landing_pressing, dtype=float)
-    held = ~np.isnan(np.asarray(orbit.pressing_min, dtype=float))
-    return _smallest(np.where(held, landing, -np.abs(landing)), orbit)
+    return _smallest(np.where(_held(orbit), landing, -np.abs(landing)), orbit)
 
 
 def _time_noise(orbit: Any) -> float:
