@@ -45,8 +45,8 @@ its zero (:func:`~impactcont.core.locate.parts_beside_poles`): a sign change acr
 is the pole's, not a special point (``docs/engine.md``, *Detection that does not depend
 on the step*). Where the branch cannot be followed inside such a step (e.g. where a
 flight of a motion with sticking phases shrinks to nothing, its impact velocity through
-0 with it) the step cannot be split at the pole, and a PD or NS there that is not located
-is not reported (:func:`_through_pole`).
+0 with it) the step cannot be split at the pole, and a PD, NS or fold there that is not
+located is not reported (:func:`_through_pole`).
 """
 
 from __future__ import annotations
@@ -70,7 +70,13 @@ from impactcont.detection.locator import (
 )
 from impactcont.detection.points import SpecialPoint
 from impactcont.errors import ParameterError
-from impactcont.problems.events import BRANCH_TESTS, event_function, event_noise, pole_free
+from impactcont.problems.events import (
+    BRANCH_TESTS,
+    event_function,
+    event_noise,
+    impact_speeds,
+    pole_free,
+)
 from impactcont.progress import take_interrupt
 from impactcont.vocabulary import CODIM2_LABELS, LABELS, Label, check_labels
 
@@ -241,7 +247,7 @@ def _classify(problem: Any, samples: Sequence[BranchSample],
                       "(a neutral saddle, or the pole of G at h2 = 0)", label, parameter, lam)
             continue
         left, right = samples[step], samples[step + 1]
-        if failed and test is not None and _through_pole(test, left.orbit, right.orbit):
+        if failed and _through_pole(test, left.orbit, right.orbit):
             log.info("%s between points %d and %d not located on a step where its test's "
                      "pole quantities change sign too: its sign change cannot be told from "
                      "the pole's, not a special point", label, step, step + 1)
@@ -256,18 +262,21 @@ def _classify(problem: Any, samples: Sequence[BranchSample],
                                   delta=float(u[0]) if u.size == 1 else None))
 
 
-def _through_pole(test: MotionTest, left: Any, right: Any) -> bool:
-    """Whether a pole quantity of `test` (the impact velocities of PD and NS) changes sign
+def _through_pole(test: MotionTest | None, left: Any, right: Any) -> bool:
+    """Whether a pole quantity of `test` (the impact velocities of PD and NS; those of the
+    fold, `test` None: :func:`~impactcont.problems.events.impact_speeds`) changes sign
     between the motions `left` and `right` at a step's ends.
 
     Where the locator could not follow the branch inside such a step it cannot split the
     step at the pole (:func:`~impactcont.core.locate.parts_beside_poles`): a sign change of
     the test there cannot be told from the pole's, as a zero closer to a pole than where
-    the test's sign can be read."""
-    if test.poles is None:
+    the test's sign can be read; a fold there cannot be told from the singularity of the
+    branch's system where an impact velocity is 0 (reported as the ZV it is)."""
+    poles = impact_speeds if test is None else test.poles
+    if poles is None:
         return False
-    before = np.asarray(test.poles(left), dtype=float)
-    after = np.asarray(test.poles(right), dtype=float)
+    before = np.asarray(poles(left), dtype=float)
+    after = np.asarray(poles(right), dtype=float)
     return bool(np.any(np.signbit(before) != np.signbit(after)))
 
 

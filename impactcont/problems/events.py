@@ -31,7 +31,7 @@ from impactcont.vocabulary import Label
 
 __all__ = ["BRANCH_TESTS", "GRAZING", "MULTIPLIER_CRITERIA", "NEIMARK_SACKER",
            "PERIOD_DOUBLING", "PITCHFORK", "UNIT_TOL", "ZERO_VELOCITY", "event_function",
-           "event_noise", "half_speeds", "ns_critical", "pd_critical", "pole_free"]
+           "event_noise", "half_speeds", "impact_speeds", "ns_critical", "pd_critical", "pole_free"]
 
 _EPS = float(np.finfo(float).eps)
 
@@ -94,8 +94,13 @@ def pole_free(label: str, multipliers: np.ndarray, impact_velocities: np.ndarray
     return product(np.asarray(multipliers), np.asarray(impact_velocities, dtype=float))
 
 
-def _speeds(orbit: Any) -> np.ndarray:
-    """The impact velocities of a motion: an N-p motion's p, an N-1 motion's one."""
+def impact_speeds(orbit: Any) -> np.ndarray:
+    """The impact velocities of a motion: an N-p motion's p, an N-1 motion's one.
+
+    The poles PD and NS were cleared of, and where the branch's own system is singular
+    besides its folds (the rate of an impact condition, eq. (22), vanishes with them):
+    a fold that is not located where one changes sign cannot be told from it
+    (:mod:`impactcont.detection.special_points`)."""
     velocities = getattr(orbit, "impact_velocities", None)
     return np.array([orbit.impact_velocity]) if velocities is None else velocities
 
@@ -129,11 +134,11 @@ def _ns_factors(mu: np.ndarray, err: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pd_test(orbit: Any) -> float:
-    return _pd_product(np.asarray(orbit.multipliers), np.asarray(_speeds(orbit), dtype=float))
+    return _pd_product(np.asarray(orbit.multipliers), np.asarray(impact_speeds(orbit), dtype=float))
 
 
 def _ns_test(orbit: Any) -> float:
-    return _ns_product(np.asarray(orbit.multipliers), np.asarray(_speeds(orbit), dtype=float))
+    return _ns_product(np.asarray(orbit.multipliers), np.asarray(impact_speeds(orbit), dtype=float))
 
 
 def _sizes(orbit: Any) -> tuple[np.ndarray, float]:
@@ -181,13 +186,13 @@ MULTIPLIER_CRITERIA: Mapping[str, Callable[[np.ndarray, float], bool]] = Mapping
 #: PD: ``h2 det(G + I)`` (pole-free), a multiplier -1; split at every impact's ``h2 = 0``.
 PERIOD_DOUBLING = MotionTest(
     _pd_test, lambda orbit: _product_noise(orbit, _pd_test, _pd_factors),
-    lambda orbit: pd_critical(orbit.multipliers, UNIT_TOL), poles=_speeds)
+    lambda orbit: pd_critical(orbit.multipliers, UNIT_TOL), poles=impact_speeds)
 
 #: NS: ``h2^(m-1) prod_{i<j}(mu_i mu_j - 1)`` (pole-free), a complex pair on the unit
 #: circle (not a neutral saddle); split at every impact's ``h2 = 0``.
 NEIMARK_SACKER = MotionTest(
     _ns_test, lambda orbit: _product_noise(orbit, _ns_test, _ns_factors),
-    lambda orbit: ns_critical(orbit.multipliers, UNIT_TOL), poles=_speeds)
+    lambda orbit: ns_critical(orbit.multipliers, UNIT_TOL), poles=impact_speeds)
 
 #: GR: ``gap_min``, the smallest clearance inside the flights (eq. 16); it needs the
 #: motion's interior-contact search.
