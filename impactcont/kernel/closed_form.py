@@ -57,6 +57,8 @@ import numpy as np
 
 from impactcont.kernel.contact import flight_tables, x1_maximum
 from impactcont.kernel.flights import (
+    _forced_slope,
+    _period_slope,
     _physical_into,
     _re,
     _transition_into,
@@ -88,6 +90,7 @@ __all__ = [
     "phase_orbit",
     "physical_state",
     "point_orbits",
+    "setup_slope",
 ]
 
 
@@ -210,6 +213,72 @@ def amplitude_derivative(w, a, f, u0, ui0, R, omega, N, which, da):
     # complex f as every complex-stepped caller passes it: one compiled complex variant
     c, s = amplitude(wc, ac, f.astype(np.complex128), u0, ui0, Rc, omc, N)
     return c.imag / h, s.imag / h
+
+
+@_jit
+def setup_slope(w, a, f, u0, ui0, R, omega, N, which):
+    """Exact derivatives of :func:`omega_setup`'s outputs in real arithmetic: ``which`` 0
+    omega, 1 R.
+
+    Returns ``d modal`` (8, n) and ``d scalars`` (10,) in the layout of
+    :func:`omega_setup` (the rounding scales ``cond``, ``resonance_error`` and the flag
+    ``elastic`` have derivative 0, as under a complex step). The chain rule: in omega the
+    period ``T = 2 pi N / omega`` moves every mode (``dW/dT = A W`` of eq. 9,
+    :func:`~impactcont.kernel.flights._period_slope`) and the forced response
+    (:func:`~impactcont.kernel.flights._forced_slope`); in R only ``kappa`` and
+    ``Delta`` move (the modal rows do not depend on R); then ``rho = kappa omega g /
+    Delta``, ``c = Gamma - rho B``, ``s = B + rho Gamma``. Equal to the complex step of
+    :func:`amplitude_derivative` within rounding, without complex variants of the
+    flights (those are compiled for the damping only).
+    """
+    n = w.size
+    T = 2.0 * np.pi * N / omega
+    kappa = 1.0 + R
+    gamma, beta, _ = forced(w, a, f, omega, np.zeros(n))
+    d_modal = np.zeros((8, n))
+    d_sc = np.zeros(10)
+    Gam = B = g = hs = 0.0
+    d_T = -T / omega if which == 0 else 0.0
+    damped = False
+    for i in range(n):
+        _, w12, w21, w22, det, h, omw, _ = mode_period(w[i], a[i], T)
+        ci = u0[i] * ui0[i]
+        Gam += u0[i] * gamma[i]
+        B += u0[i] * beta[i]
+        g += ci * w12 / det
+        hs += ci * h
+        damped = damped or a[i] != 0.0
+        if which == 0:
+            d_gamma, d_beta = _forced_slope(w[i], a[i], f[i], omega)
+            d_w12, d_det, d_h = _period_slope(w[i], a[i], T, w12, w22, det, h)
+            d_modal[0, i] = d_gamma
+            d_modal[1, i] = d_beta
+            d_modal[2, i] = w21 * d_T  # dW/dT = A W (eq. 9)
+            d_modal[3, i] = d_w12 * d_T
+            d_modal[4, i] = -(w[i] * w[i] * (1.0 - omw) + 2.0 * a[i] * w21) * d_T
+            d_modal[5, i] = -(w[i] * w[i] * w12 + 2.0 * a[i] * w22) * d_T
+            d_modal[6, i] = -ui0[i] * (d_w12 * det - w12 * d_det) / (det * det) * d_T
+            d_modal[7, i] = -ui0[i] * (-w21 * det - omw * d_det) / (det * det) * d_T
+            d_sc[1] += u0[i] * d_gamma
+            d_sc[2] += u0[i] * d_beta
+            d_sc[3] += ci * (d_w12 * det - w12 * d_det) / (det * det) * d_T
+            d_sc[4] += kappa * ci * d_h * d_T
+    d_sc[0] = d_T
+    if which == 1:
+        d_sc[4] = hs - 0.5  # Delta = (1 - R) / 2 + kappa hs
+    if not damped and R == 1.0:  # elastic: rho = 0 for every omega and R (omega_setup)
+        d_sc[5] = d_sc[1]
+        d_sc[6] = d_sc[2]
+        return d_modal, d_sc
+    Delta = 0.5 * (1.0 - R) + kappa * hs
+    rho = kappa * omega * g / Delta
+    if which == 0:
+        d_rho = kappa * (g + omega * d_sc[3] - omega * g * d_sc[4] / Delta) / Delta
+    else:
+        d_rho = omega * g * (1.0 - kappa * d_sc[4] / Delta) / Delta
+    d_sc[5] = d_sc[1] - d_rho * B - rho * d_sc[2]
+    d_sc[6] = d_sc[2] + d_rho * Gam + rho * d_sc[1]
+    return d_modal, d_sc
 
 
 @_jit

@@ -129,6 +129,21 @@ def mode_period(w, a, T):
     return w11, w12, w21, w22, det, h, one_m_w11, cond
 
 
+@_inner
+def _period_slope(w, a, T, w12, w22, det, h):
+    """``d/dT`` of ``W12``, ``det(I - W)`` and ``h`` of :func:`mode_period`, exact (real).
+
+    ``dW/dT = A W`` with ``A = [[0, 1], [-w^2, -2a]]`` (eq. 9) and ``det W = exp(-2aT)``
+    (Liouville) give, with ``X = W22 - exp(-2aT)`` and ``W21 = -w^2 W12``,
+    ``d W12 = W22``, ``d det = 2 w^2 W12 + 2a X`` and ``d (2 h det) = -2a X``, the same
+    form for every damping class (no branch, no complex step).
+    """
+    x = w22 - math.exp(-2.0 * a * T)
+    d_det = 2.0 * w * w * w12 + 2.0 * a * x
+    d_h = -(a * x * (1.0 + 2.0 * h) + 2.0 * h * w * w * w12) / det
+    return w22, d_det, d_h
+
+
 # -- one frequency: S of eq. (13) in modal form ---------------------------------------------------
 @_jit
 def forced(w, a, f, omega, eig_err):
@@ -155,6 +170,19 @@ def forced(w, a, f, omega, eig_err):
             if rel > worst:
                 worst = rel
     return gamma, beta, worst
+
+
+@_inner
+def _forced_slope(w, a, f, omega):
+    """``d gamma / d omega, d beta / d omega`` of one mode (eq. 7, :func:`forced`), exact."""
+    detune = (w - omega) * (w + omega)
+    damp = 2.0 * a * omega
+    den = detune * detune + damp * damp
+    if den == 0.0:
+        return (np.nan, np.nan) if f != 0.0 else (0.0, 0.0)
+    d_den = 4.0 * (a * damp - omega * detune)
+    return (f * (-2.0 * omega * den - detune * d_den) / (den * den),
+            f * (2.0 * a * den - damp * d_den) / (den * den))
 
 
 @_jit

@@ -279,11 +279,19 @@ def modal_jacobian(osc: ImpactOscillator, modal: np.ndarray, delta: float, sigma
 
 def physical_transition(osc: ImpactOscillator, modal: np.ndarray) -> np.ndarray:
     """The physical transition ``U W(T) U^-1`` (eq. 9): compiled loops for small systems,
-    numpy (BLAS) matrix products above ``closed_form.BLAS_MIN`` degrees of freedom."""
+    numpy (BLAS) matrix products above ``closed_form.BLAS_MIN`` degrees of freedom.
+
+    It is real-linear in the modal transfers: complex (complex-stepped) pieces take two
+    real transitions, the same sums as complex loops, and no complex compiled variant."""
     from impactcont.kernel import closed_form, flights
 
     arrays = modal_arrays(osc)
     u, ui = arrays.u, arrays.ui
+    if osc.n <= closed_form.BLAS_MIN and modal.dtype.kind == "c":
+        tr = np.empty((2 * osc.n, 2 * osc.n), dtype=complex)
+        tr.real = flights.transition(np.ascontiguousarray(modal.real), u, ui)
+        tr.imag = flights.transition(np.ascontiguousarray(modal.imag), u, ui)
+        return tr
     if osc.n <= closed_form.BLAS_MIN:
         return flights.transition(modal, u, ui)
     return np.block([[(u * modal[2]) @ ui, (u * modal[3]) @ ui],

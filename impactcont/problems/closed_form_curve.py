@@ -66,7 +66,10 @@ condition's ``(x1p(delta) - b) / (kappa g)`` for every phase, with G's pole at i
 
 Derivatives are exact: complex steps of the residual in the two parameters, the
 phase and the grazing time (the kernel evaluates eq. 12-15, G and ``x1(t)`` in
-complex arithmetic), closed form in the NS system's ``theta`` and ``v``. No
+complex arithmetic; in omega and R the stepped pieces of eq. 12-15 are the real ones plus
+``i h`` times their exact slope, :func:`~impactcont.kernel.closed_form.setup_slope`, so
+the flights are compiled in real arithmetic only), closed form in the NS system's
+``theta`` and ``v``. No
 finite differences: the Jacobian is as accurate as the residual at every step
 size, including next to a domain boundary of a parameter (``R = 1``,
 ``eta = 0``), since a complex step never leaves the real point. Newton reuses a
@@ -84,6 +87,7 @@ exist with a matrix C and are refused.
 
 from __future__ import annotations
 
+import cmath
 import collections
 import dataclasses
 import functools
@@ -210,12 +214,19 @@ class _Pieces:
         if name is None or name == "b":
             b += 1j * h if name == "b" else 0.0
             modal, scalars = self.modal.astype(complex), self.scalars.astype(complex)
+        elif name in ("omega", "R"):
+            # the step's first order from the exact slope of omega_setup (real arithmetic:
+            # no complex variant of the flights is compiled), equal to the step's to rounding
+            omega += 1j * h if name == "omega" else 0.0
+            R += 1j * h if name == "R" else 0.0
+            arrays = modal_arrays(self.osc)
+            d_modal, d_scalars = kernel.setup_slope(
+                arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0, float(self.R),
+                float(self.omega), self.N, 0 if name == "omega" else 1)
+            modal = self.modal + 1j * h * d_modal
+            scalars = self.scalars + 1j * h * d_scalars
         else:
-            if name == "omega":
-                omega += 1j * h
-            elif name == "R":
-                R += 1j * h
-            elif name == "F0":
+            if name == "F0":
                 f = f * complex(1.0, h / self.osc.F0)
             else:
                 a = a + 1j * h * decay_rate_derivative(name, self.w)
@@ -243,6 +254,13 @@ class _Pieces:
         if self.impact_form:  # the impact condition x1(0) = b
             Gam, B, g = self.scalars[1], self.scalars[2], self.scalars[3]
             return (Gam * np.cos(delta) + B * np.sin(delta) - self.b) / ((1.0 + self.R) * g)
+        if self.scalars.dtype.kind == "c":  # a complex step: roots.phase_sigma's formula here,
+            # not a complex compiled variant of it
+            Gam, B, g, Delta = self.scalars[1:5].tolist()
+            cd, sd = cmath.cos(delta), cmath.sin(delta)
+            if self.scalars[9] != 0.0:  # elastic, undamped
+                return (Gam * cd + B * sd - self.b) / ((1.0 + self.R) * g)
+            return self.omega * (B * cd - Gam * sd) / Delta
         return roots.phase_sigma(self.scalars, self.omega, self.R, self.b, delta)
 
     @functools.cached_property

@@ -126,8 +126,10 @@ class PeriodicBranchProblem:
     ``c, s`` (eq. 13) come from the compiled kernel in modal form (O(n) per
     parameter value, cached); when the parameter moves the stop (``b``) they do not
     depend on it at all, and they are affine in the forcing amplitude (``F0``, ``F[j]``:
-    eq. 13 is linear in F). Their derivative is exact in omega, R and the proportional
-    damping (one complex-step evaluation of the same kernel: no step-size error, no
+    eq. 13 is linear in F). Their derivative is exact in omega and R (the chain rule in
+    real arithmetic, :func:`~impactcont.kernel.closed_form.setup_slope`: no complex
+    variant of the flights is compiled for the first branch), in the proportional damping
+    (one complex-step evaluation of the same kernel: no step-size error, no
     cancellation), in the stop and the forcing; in the elements (masses, springs, dampers,
     matrix entries: a new modal basis at each value) and on the first-order path in the
     damping it is the parameter's finite-difference fallback
@@ -289,8 +291,13 @@ class PeriodicBranchProblem:
                                            self.oscillator_at(lam))
             return float(dc), float(ds), 0.0
         a, R, omega = self._arguments(float(lam))
-        dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R, omega,
-                                             self.N, self._kernel, self._da)
+        if self._kernel == 2:  # the damping: the complex step (its variants compiled here only)
+            dc, ds = kernel.amplitude_derivative(self._w, a, self._f, self._u0, self._ui0, R,
+                                                 omega, self.N, self._kernel, self._da)
+        else:
+            _, slope = kernel.setup_slope(self._w, a, self._f, self._u0, self._ui0, R, omega,
+                                          self.N, self._kernel)
+            dc, ds = slope[5], slope[6]
         return float(dc), float(ds), 0.0
 
     # -- the Problem protocol ------------------------------------------------------------------

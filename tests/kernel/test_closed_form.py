@@ -103,7 +103,7 @@ def test_kernel_matches_the_dense_path(n, damping):
 
 
 @pytest.mark.parametrize("parameter", ["omega", "R", "eta"])
-def test_complex_step_derivative_matches_finite_differences(paper, parameter):
+def test_exact_derivative_matches_finite_differences(paper, parameter):
     problem = PeriodicBranchProblem(paper, 1, parameter)
     lam = float(getattr(paper, parameter))
     exact = problem._amplitude_derivative(lam)
@@ -111,6 +111,28 @@ def test_complex_step_derivative_matches_finite_differences(paper, parameter):
     up, down = problem.amplitude(lam + h), problem.amplitude(lam - h)
     for k in range(2):
         assert exact[k] == pytest.approx((up[k] - down[k]) / (2 * h), rel=1e-7, abs=1e-9)
+
+
+@pytest.mark.parametrize("omega", [0.3, 1.2, 2.5, 40.0])
+@pytest.mark.parametrize("damping", list(DAMPING))
+@pytest.mark.parametrize("n", [1, 3, 8])
+def test_exact_slope_matches_the_complex_step(n, damping, omega):
+    """``setup_slope`` (the chain rule in real arithmetic) against the complex step of
+    ``amplitude_derivative``, in omega and R, every damping class (elastic impacts too),
+    up to 40 times the forcing frequencies of the paper: both are exact, the difference
+    is the rounding of ``c, s`` and of their derivative, whose terms grow like
+    ``|c, s| / omega``."""
+    rng = np.random.default_rng(n)
+    for R in (0.7, 1.0):
+        osc = _random_oscillator(rng, n, DAMPING[damping]).replace(omega=omega, R=R)
+        ar = periodic.modal_arrays(osc)
+        args = (ar.w, ar.a, ar.f, ar.u0, ar.ui0, osc.R, osc.omega, 1)
+        c, s = closed_form.amplitude(*args)
+        for which in (0, 1):
+            exact = closed_form.setup_slope(*args, which)[1][5:7]
+            stepped = np.array(closed_form.amplitude_derivative(*args, which, np.zeros(n)))
+            scale = np.abs(stepped).max() + (abs(c) + abs(s)) / (omega if which == 0 else 1.0)
+            assert np.abs(exact - stepped).max() <= 1e-11 * scale
 
 
 @pytest.mark.parametrize("n", [33, 60])
