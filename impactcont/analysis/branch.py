@@ -465,8 +465,8 @@ def _follow(problem: BranchProblem, u0: np.ndarray, lam0: float, opts: Continuat
 
     With `required`, a branch without a point raises (:func:`trace_branch`); otherwise its
     run has no samples (the N-1 driver warns and keeps the other components). With
-    `warn_max_points`, a component that stops at ``max_points`` warns (the closed form's
-    components; a switch limits its branch on purpose).
+    `warn_max_points`, a component that stops at ``max_points`` warns (a continuation or
+    restart of any motion; a switch does not: a cascade limits its branches on purpose).
     """
     u0 = np.asarray(u0, dtype=float)
     samples, result, message = _trace(problem, u0, lam0, opts, stop_after_pd=stop_after_pd,
@@ -630,12 +630,16 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
                stop_after_pd: int | None = None, record: Mapping[str, Any] | None = None,
                extra_attrs: Mapping[str, Any] | None = None,
                progress: ProgressOption | Reporter = None,
-               functions: UserFunctions | None = None) -> xr.Dataset:
+               functions: UserFunctions | None = None,
+               warn_max_points: bool = False) -> xr.Dataset:
     """Trace, detect and assemble: the dataset of the branch through ``(u0, lam0)``.
 
     `progress` is a driver's ``progress=`` option or the reporter of an enclosing call
     (:func:`impactcont.progress.reporter`); `functions` the user's events and monitors
-    (:func:`~impactcont.detection.special_points.check_user_functions`).
+    (:func:`~impactcont.detection.special_points.check_user_functions`). With
+    `warn_max_points`, a branch that stops at ``max_points`` warns (a continuation or a
+    restart of any motion, as the closed form's components do; a switch does not: a
+    cascade limits its branches on purpose).
     """
     labels = check_labels(detect)
     functions = without_detected_events(functions, problem, labels)  # no point twice
@@ -643,7 +647,8 @@ def run_branch(problem: BranchProblem, u0: np.ndarray, lam0: float,
     what = f"continuation of {problem.N}-{problem.p} motions in {problem.parameter}"
     with interruptible(what), reporter(progress, what, parameter=problem.parameter) as rep:
         run = _follow(problem, u0, lam0, options, labels, rep, functions,
-                      stop_after_pd=stop_after_pd, required=True)
+                      stop_after_pd=stop_after_pd, required=True,
+                      warn_max_points=warn_max_points)
         if interrupted():
             record = {**(record or {}), "interrupted": True}
     statuses = [st.name for st in run.result.statuses]
@@ -987,7 +992,7 @@ def _shooting_branch(start: MultiImpactOrbit | PeriodicOrbit, parameter: str,
                              f"{lam0!r} of the orbit")
     return run_branch(problem, u0, lam0, opts, detect=labels,
                       record={"symmetric": isinstance(problem, SymmetricBranchProblem)},
-                      progress=progress, functions=functions)
+                      progress=progress, functions=functions, warn_max_points=True)
 
 
 
@@ -1057,6 +1062,12 @@ def multi_impact_continuation(start: MultiImpactOrbit | PeriodicOrbit, parameter
     xarray.Dataset
         The branch with an ``impact`` dimension (``docs/multi_impact.md``);
         valid for :func:`impactcont.save`, :func:`impactcont.load` and the plots.
+
+    Warns
+    -----
+    RuntimeWarning
+        When the branch stops at ``max_points`` (in either direction): the rest of it is
+        not in the dataset.
 
     Raises
     ------
@@ -1339,7 +1350,8 @@ def _restart(branch: xr.Dataset, row: int, special: bool, along: int | None,
             opts = dataclasses.replace(opts, ds=min(max(step, opts.ds_min), opts.ds_max))
         symmetric = _record(branch).get("symmetric", False)
         return run_branch(problem, u0, lam0, opts, detect=detect, progress=progress,
-                          record={"symmetric": symmetric, **record}, functions=functions)
+                          record={"symmetric": symmetric, **record}, functions=functions,
+                          warn_max_points=True)
     _, detect, (lo, hi), opts = check_continuation_arguments(
         problem.osc, problem.N, parameter, (lo, hi), detect=detect, components="start",
         options=base, direction=direction, both_directions=along is None, **single)
@@ -1424,6 +1436,11 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
         the schema of `branch`; its ``options`` record ``restart`` (the row and the
         parameter value it started from).
 
+    Warns
+    -----
+    RuntimeWarning
+        When the restarted branch stops at ``max_points`` (N-1 or N-p).
+
     Raises
     ------
     TypeError
@@ -1490,6 +1507,11 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     xarray.Dataset
         The extended branch in the schema of `branch`; its ``options`` record the new
         ``bounds`` and, in ``extended``, each end continued.
+
+    Warns
+    -----
+    RuntimeWarning
+        When a new part stops at ``max_points`` (its end is then left there).
 
     Raises
     ------

@@ -356,6 +356,21 @@ def test_np_branch_restarted_and_extended(branch, switched):
     assert extended.attrs["born_at"] == "PD"
 
 
+def test_a_branch_of_any_motion_that_stops_at_max_points_warns(system, switched):
+    """As the closed form's components do: an N-p branch (and its restart) cut at
+    max_points says so; the rest of it is not in the dataset."""
+    motion = ic.multi_impact_orbit(system, 1, 1, next(o for o in ic.periodic_orbits(system, 1)
+                                                       if o.physical))
+    with pytest.warns(RuntimeWarning, match=r"the 1-1 component through omega=1 stopped at "
+                                            r"max_points=5: the rest of it is not in"):
+        ds = ic.continuation(motion, parameter="omega", bounds=(0.5, 3.0), max_points=5,
+                             progress=False)
+    assert "MAX_POINTS_REACHED" in json.loads(ds.attrs["options"])["status"]
+    with pytest.warns(RuntimeWarning, match=r"the 2-2 component .* stopped at max_points=4"):
+        restarted = continuation_from(switched, 0, max_points=4, progress=False)
+    assert restarted.sizes["point"] == 4
+
+
 def test_restart_from_a_saved_file(tmp_path, branch, switched):
     for ds in (branch, switched):
         path = tmp_path / f"{ds.attrs['N']}.nc"

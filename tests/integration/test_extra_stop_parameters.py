@@ -181,7 +181,8 @@ def test_a_branch_in_the_extra_stops_gap_round_trips(gap_branch, tmp_path):
 
 # -- curves and maps -----------------------------------------------------------------------
 def test_a_curve_in_omega_and_the_extra_stops_restitution(motion):
-    br = ic.multi_impact_continuation(motion, "omega", (0.6, 1.2), max_points=80)
+    with pytest.warns(RuntimeWarning, match="stopped at max_points=80"):  # past its PD
+        br = ic.multi_impact_continuation(motion, "omega", (0.6, 1.2), max_points=80)
     assert "PD" in list(br["special_label"].values)
     cv = ic.multi_impact_curve(br, "PD", 0, parameter="R[A]",
                                bounds={"omega": (0.6, 1.2), "R[A]": (0.3, 1.0)},

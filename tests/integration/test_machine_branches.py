@@ -274,8 +274,9 @@ def test_impact_damper_pitchfork_curve_in_omega_and_b(damper_branch):
 # ------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def pair_branch(pair_orbit):
-    return multi_impact_continuation(pair_orbit, "omega", (1.0, 2.9), progress=False,
-                                     both_directions=True, max_points=60)
+    with pytest.warns(RuntimeWarning, match="stopped at max_points=60"):  # kept short
+        return multi_impact_continuation(pair_orbit, "omega", (1.0, 2.9), progress=False,
+                                         both_directions=True, max_points=60)
 
 
 def test_impact_pair_branch_in_omega(pair_branch):
@@ -294,8 +295,9 @@ def test_impact_pair_branch_in_omega(pair_branch):
 
 @pytest.fixture(scope="module")
 def loaded_branch(loaded_orbit):
-    return multi_impact_continuation(loaded_orbit, "omega", (0.8, 3.0), progress=False,
-                                     both_directions=True, max_points=60)
+    with pytest.warns(RuntimeWarning, match="stopped at max_points=60"):  # kept short
+        return multi_impact_continuation(loaded_orbit, "omega", (0.8, 3.0), progress=False,
+                                         both_directions=True, max_points=60)
 
 
 @pytest.mark.parametrize("label, target", [("PD", -1.0), ("SN", 1.0)])
@@ -332,8 +334,9 @@ def test_impact_pair_lower_stop_and_element_branches(pair_orbit):
 def test_loaded_pair_branch_in_the_forcing_amplitude(loaded_orbit):
     """The constant force (held by the springs: the contact search applies): SN, ZV, PD in
     F0, every point re-solved, the PD witnessed by the simulator."""
-    ds = multi_impact_continuation(loaded_orbit, "F0", (0.2, 3.0), progress=False,
-                                   both_directions=True, max_points=50)
+    with pytest.warns(RuntimeWarning, match="stopped at max_points=50"):  # kept short
+        ds = multi_impact_continuation(loaded_orbit, "F0", (0.2, 3.0), progress=False,
+                                       both_directions=True, max_points=50)
     assert {"SN", "PD", "ZV"} <= set(ds["special_label"].values.tolist())
     assert bool(ds["physical"].values.any())
     assert _resolve_every_point(ds, loaded, {"F0": "F0"}, 1, 1) < 1e-8
@@ -367,7 +370,8 @@ def test_a_pushed_free_mode_is_checked(caplog):
     res = ic.simulate(osc, orbit.states[0], float(orbit.phases[0]), 1.5)
     assert res.impact_stops[0] == "L"
     assert res.impact_times[0] == pytest.approx(T, rel=0, abs=1e-8)
-    with caplog.at_level(logging.WARNING, logger="impactcont.analysis.branch"):
+    with (caplog.at_level(logging.WARNING, logger="impactcont.analysis.branch"),
+          pytest.warns(RuntimeWarning, match="stopped at max_points=6")):  # a few points
         ds = multi_impact_continuation(orbit, "omega", (1.2, 1.4), progress=False,
                                        max_points=6)
     assert ds["physical"].values.all()
