@@ -821,48 +821,109 @@ def _modal_gap(modal, forcing, t, Y, th, normal, sign, position):
     """:func:`_gap` of the modal flow: the stop coordinate ``n . x = sum_i (n . u_i) y_i``
     and its rate from each mode's state at `t` (the modal state of
     :func:`_flight_modal_into`, the constant force included), without the flight's
-    transition matrix, phase column and forced columns (a chatter's return search
-    evaluates it a few times per bounce: about a third of a flight)."""
+    transition matrix, phase column and forced columns: :func:`_gap_terms` then
+    :func:`_modal_gap_at`."""
+    terms = np.empty((_GAP_ROWS, modal.w.size))
+    _gap_terms(modal, forcing, Y, th, normal, terms)
+    return _modal_gap_at(terms, forcing.omega, t, th, sign, position)
+
+
+#: Rows of :func:`_gap_terms`: each mode's w, a, gamma, beta, constant force, free (1.0
+#: or 0.0), ``n . u_i`` and its deviation ``(dy, dv)`` from the steady motion at the start.
+_GAP_ROWS = 9
+
+
+@_inner
+def _gap_terms(modal, forcing, Y, th, normal, terms):
+    """What :func:`_modal_gap_at` reads of the modal flight from `Y` at phase `th` and the
+    stop coordinate ``n . x`` (`normal`), into `terms` (:data:`_GAP_ROWS`, n): the same for
+    every time of the flight, so a chatter's return search (a few clearances per bounce)
+    computes the modes' start deviations (:func:`_mode_state`'s ``dy, dv``) and ``n . u_i``
+    once per bounce, and its clearances read one array (numba counts a reference to every
+    array of every structure a compiled call is given, as it starts and as it returns)."""
     w, a, u, ui = modal.w, modal.a, modal.u, modal.ui
     g_static, free = modal.g, modal.free
     gam, bet, omega = forcing.gamma, forcing.beta, forcing.omega
-    phases = (math.cos(th), math.sin(th), math.cos(omega * t + th), math.sin(omega * t + th))
+    c0 = math.cos(th)
+    s0 = math.sin(th)
     n = w.size
     static = g_static.size > 0
-    x = position
-    xd = 0.0
     for i in range(n):
-        w11, w12, w21, w22 = mode_transfer(w[i], a[i], t)
-        y, v = _mode_state(ui, Y, i, omega, (gam[i], bet[i]), phases, (w11, w12, w21, w22))
-        if static and g_static[i] != 0.0:
-            sty, stv = _static_state(w[i], a[i], g_static[i], free[i], t, w11, w21)
-            y += sty
-            v += stv
+        g = gam[i]
+        b = bet[i]
+        y0 = 0.0
+        v0 = 0.0
+        for c in range(n):
+            y0 += ui[i, c] * Y[c]
+            v0 += ui[i, c] * Y[n + c]
         nu = 0.0
         for c in range(n):
             nu += normal[c] * u[c, i]
+        terms[0, i] = w[i]
+        terms[1, i] = a[i]
+        terms[2, i] = g
+        terms[3, i] = b
+        terms[4, i] = g_static[i] if static else 0.0
+        terms[5, i] = 1.0 if static and free[i] else 0.0
+        terms[6, i] = nu
+        terms[7, i] = y0 - (g * c0 + b * s0)
+        terms[8, i] = v0 - omega * (b * c0 - g * s0)
+
+
+@_inner
+def _modal_gap_at(terms, omega, t, th, sign, position):
+    """The clearance ``sign (c - n . x)`` and its rate at `t` of the modal flight whose
+    :func:`_gap_terms` are `terms`: each mode's state as :func:`_mode_state` and
+    :func:`_static_state` give it (the same arithmetic), summed as :func:`_modal_gap`."""
+    cth = math.cos(omega * t + th)
+    sth = math.sin(omega * t + th)
+    x = position
+    xd = 0.0
+    for i in range(terms.shape[1]):
+        w = terms[0, i]
+        a = terms[1, i]
+        g = terms[2, i]
+        b = terms[3, i]
+        dy = terms[7, i]
+        dv = terms[8, i]
+        w11, w12, w21, w22 = mode_transfer(w, a, t)
+        y = g * cth + b * sth + w11 * dy + w12 * dv
+        v = omega * (b * cth - g * sth) + w21 * dy + w22 * dv
+        if terms[4, i] != 0.0:
+            sty, stv = _static_state(w, a, terms[4, i], terms[5, i] != 0.0, t, w11, w21)
+            y += sty
+            v += stv
+        nu = terms[6, i]
         x -= nu * y
         xd -= nu * v
     return sign * x, sign * xd
 
 
 @_inner
-def _bounce_return(flow, forcing, Y, th, stop, guess, scratch):
+def _bounce_return(flow, forcing, Y, th, stop, guess, scratch, terms):
     """The first return to its stop of the flight from `Y` (on the stop, leaving it), or
     ``-1.0``: one Newton step from the parabola's `guess` (a small bounce's return lands
     within the clearance's rounding), the clearance bracketed from there (marching forward
     in quarters of `guess`, at most two forcing periods, or halving back while the
     clearance is not positive), then safeguarded Newton (bisection where a Newton step
     leaves the bracket) to a few ulps of the time or of the clearance. `stop` and
-    `scratch` as :func:`_gap` takes them."""
-    normal, _, position = stop
-    period = 2.0 * math.pi / forcing.omega
+    `scratch` as :func:`_gap` takes them; `terms` the modal flight's scratch of
+    :func:`_gap_terms`, shape (:data:`_GAP_ROWS`, n) (shape (:data:`_GAP_ROWS`, 0) for the
+    first-order flow, whose clearances are :func:`_gap`'s): the clearances of the modal
+    flow are :func:`_modal_gap_at` of it (:func:`_modal_gap`'s arithmetic)."""
+    normal, sign, position = stop
+    omega = forcing.omega
+    period = 2.0 * math.pi / omega
+    modal = terms.shape[1] > 0
+    if modal:
+        _gap_terms(flow.modal, forcing, Y, th, normal, terms)
     # the clearance's rounding: a few ulps of the stop coordinate's terms
     level = abs(position)
     for c in range(normal.size):
         level += abs(normal[c] * Y[c])
     level *= 4.0 * _CHATTER_EPS
-    g, gd = _gap(flow, forcing, guess, Y, th, stop, scratch)
+    g, gd = (_modal_gap_at(terms, omega, guess, th, sign, position) if modal
+             else _gap(flow, forcing, guess, Y, th, stop, scratch))
     lo = -1.0
     hi = -1.0
     if g > 0.0:
@@ -873,7 +934,8 @@ def _bounce_return(flow, forcing, Y, th, stop, guess, scratch):
     if gd < 0.0:  # Newton from the guess, no further than the march's first quarter
         t1 = guess - g / gd
         if t1 > 0.0 and abs(t1 - guess) <= 0.25 * guess:
-            g1, gd1 = _gap(flow, forcing, t1, Y, th, stop, scratch)
+            g1, gd1 = (_modal_gap_at(terms, omega, t1, th, sign, position) if modal
+                       else _gap(flow, forcing, t1, Y, th, stop, scratch))
             if g1 > 0.0:
                 lo = t1
             else:
@@ -883,7 +945,8 @@ def _bounce_return(flow, forcing, Y, th, stop, guess, scratch):
         step = 0.25 * guess
         while lo < 2.0 * period:
             t = lo + step
-            g, gd = _gap(flow, forcing, t, Y, th, stop, scratch)
+            g, gd = (_modal_gap_at(terms, omega, t, th, sign, position) if modal
+                     else _gap(flow, forcing, t, Y, th, stop, scratch))
             if not g > 0.0:
                 hi = t
                 break
@@ -894,7 +957,8 @@ def _bounce_return(flow, forcing, Y, th, stop, guess, scratch):
     elif lo < 0.0:  # returned by hi: halve back
         lo = 0.5 * hi
         for _ in range(200):
-            g, gd = _gap(flow, forcing, lo, Y, th, stop, scratch)
+            g, gd = (_modal_gap_at(terms, omega, lo, th, sign, position) if modal
+                     else _gap(flow, forcing, lo, Y, th, stop, scratch))
             if g > 0.0:
                 break
             hi = lo
@@ -915,7 +979,8 @@ def _bounce_return(flow, forcing, Y, th, stop, guess, scratch):
         if abs(new - t) <= 8.0 * _CHATTER_EPS * t or hi - lo <= 8.0 * _CHATTER_EPS * hi:
             return new
         t = new
-        g, gd = _gap(flow, forcing, t, Y, th, stop, scratch)
+        g, gd = (_modal_gap_at(terms, omega, t, th, sign, position) if modal
+                 else _gap(flow, forcing, t, Y, th, stop, scratch))
     return -1.0
 
 
@@ -1036,6 +1101,7 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log, forced):
     work = _flight_work(n)
     stop = (normal, sign, position)
     scratch = (tr, arr, pcol, rate)
+    terms = np.empty((_GAP_ROWS, 0 if flow.general else n))
     B = np.empty((m, w))
     dt = np.empty(w)
     th = theta
@@ -1049,7 +1115,7 @@ def _bounces(flow, forcing, impacts, k, count, Y, theta, J, dT, log, forced):
             break
         # the parabola's return time (an eighth of a period where the stop does not press)
         guess = 2.0 * u / a if a > 0.0 else 0.25 * math.pi / omega
-        t = _bounce_return(flow, forcing, Y, th, stop, guess, scratch)
+        t = _bounce_return(flow, forcing, Y, th, stop, guess, scratch, terms)
         if not t > 0.0:
             return -2, th, T
         _flight_into(flow, forcing, t, Y, th, tr, arr, pcol, rate, work)
