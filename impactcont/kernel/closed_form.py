@@ -87,6 +87,7 @@ __all__ = [
     "omega_setup",
     "orbit_states",
     "pd_condition",
+    "pd_condition_slope",
     "phase_orbit",
     "physical_state",
     "point_orbits",
@@ -416,6 +417,19 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     Gaussian elimination with partial pivoting (as LAPACK's ``dgesv``).
     """
     G_reg, av, bv, h2 = jacobian_split(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma)
+    A = _pd_bordered(G_reg, av, bv, h2, left, right)
+    k = A.shape[0]
+    rhs = np.zeros(k, dtype=G_reg.dtype)
+    rhs[k - 1] = 1.0
+    if not _solve_in_place(A, rhs):  # singular
+        return rhs[k - 1] * np.nan
+    return rhs[k - 1]
+
+
+@_inner
+def _pd_bordered(G_reg, av, bv, h2, left, right):
+    """The bordered matrix ``[[E, w], [v^T, 0]]``, ``E = [[G_reg + I, a], [b^T, -h2]]``,
+    borders ``w = left``, ``v = right`` (:func:`pd_condition`), shape (2n + 2, 2n + 2)."""
     m = G_reg.shape[0]
     k = m + 2
     A = np.zeros((k, k), dtype=G_reg.dtype)
@@ -429,11 +443,110 @@ def pd_condition(tr, modal, w, a, f, u, ui0, omega, R, delta, sigma, left, right
     for r in range(m + 1):
         A[r, m + 1] = left[r]
         A[m + 1, r] = right[r]
-    rhs = np.zeros(k, dtype=G_reg.dtype)
-    rhs[k - 1] = 1.0
-    if not _solve_in_place(A, rhs):  # singular
-        return rhs[k - 1] * np.nan
-    return rhs[k - 1]
+    return A
+
+
+@_jit
+def pd_condition_slope(tr, d_tr, modal, d_modal, w, a, u, ui0, point, d_point, left, right):
+    """Exact derivatives of :func:`pd_condition`'s ``g`` along ``k`` directions, in real
+    arithmetic (no complex step: no complex variant of G's assembly and solve).
+
+    ``point = [omega, R, delta, sigma]``; direction ``j`` moves the transition by
+    ``d_tr[j]`` (m, m), the modal rows of :func:`omega_setup` by ``d_modal[j]`` (8, n)
+    and ``point`` by ``d_point[j]`` (4,). With ``A x = e`` the bordered system and
+    ``A^T psi = e``, ``dg = -psi^T dA x`` (``A`` moves in its block ``E`` only: G's
+    pieces of eq. 22-25, :func:`_pieces_slope`, :func:`_split_slope`). Returns ``g`` and
+    ``dg`` (k,), NaN where ``A`` is singular; ``k = 0`` gives ``g`` alone (one solve).
+    """
+    omega, R, delta, sigma = point[0], point[1], point[2], point[3]
+    G_reg, av, bv, h2 = jacobian_split(tr, modal, w, a, w, u, ui0, omega, R, delta, sigma)
+    A = _pd_bordered(G_reg, av, bv, h2, left, right)
+    k = A.shape[0]
+    At = A.T.copy()
+    x = np.zeros(k)
+    x[k - 1] = 1.0
+    psi = np.zeros(k)
+    psi[k - 1] = 1.0
+    slopes = np.full(d_point.shape[0], np.nan)
+    if not _solve_in_place(A, x):
+        return np.nan, slopes
+    if d_point.shape[0] == 0 or not _solve_in_place(At, psi):
+        return x[k - 1], slopes
+    m = k - 2
+    n = m // 2
+    # E, X of eq. 22 before the impact law (rows 0, 2) and their derivatives (rows 1, 3)
+    raw = np.empty((4, m))
+    pieces = np.empty((4, n))
+    _jacobian_pieces_into(modal, w, a, w, ui0, omega, R, delta, sigma, pieces)
+    _physical_into(u, pieces[0], pieces[1], raw[0])
+    _physical_into(u, pieces[2], pieces[3], raw[2])
+    dE = np.empty((m + 1, m + 1))
+    for j in range(d_point.shape[0]):
+        _pieces_slope(modal, d_modal[j], w, a, ui0, point, d_point[j], pieces)
+        _physical_into(u, pieces[0], pieces[1], raw[1])
+        _physical_into(u, pieces[2], pieces[3], raw[3])
+        _split_slope(tr, d_tr[j], raw, R, d_point[j], dE)
+        total = 0.0
+        for r in range(m + 1):
+            for col in range(m + 1):
+                total += psi[r] * dE[r, col] * x[col]
+        slopes[j] = -total
+    return x[k - 1], slopes
+
+
+@_inner
+def _split_slope(tr, d_tr, raw, R, d_point, dE):
+    """The derivative of ``E = [[G_reg + I, a], [b^T, -h2]]`` (:func:`jacobian_split`)
+    along one direction (:func:`pd_condition_slope`) into ``dE`` (m + 1, m + 1), from the
+    rows ``E, dE, X, dX`` of ``raw`` (4, m): eq. 22's vectors before the impact law."""
+    m = raw.shape[1]
+    n = m // 2
+    d_omega, d_R = d_point[0], d_point[1]
+    for r in range(m + 1):
+        for col in range(m + 1):
+            dE[r, col] = 0.0
+    for r in range(m - 1):
+        dr = -R if r + 1 == n else 1.0
+        ddr = -d_R if r + 1 == n else 0.0
+        for col in range(m - 1):
+            dE[r, col] = dr * d_tr[r + 1, col + 1] + ddr * tr[r + 1, col + 1]
+        dE[r, m - 1] = ddr * raw[0, r + 1] + dr * raw[1, r + 1]
+        dE[r, m] = -(ddr * raw[2, r + 1] + dr * raw[3, r + 1])
+        dE[m, r] = d_tr[0, r + 1]
+    dE[m - 1, m] = -d_omega
+    dE[m, m - 1] = raw[1, 0]
+    dE[m, m] = -raw[3, 0]
+
+
+@_inner
+def _pieces_slope(modal, d_modal, w, a, ui0, point, d_point, d_pieces):
+    """The derivative of :func:`_jacobian_pieces_into`'s modal pieces along one direction
+    (``d_modal`` (8, n), ``d_point = d [omega, R, delta, sigma]``) into ``d_pieces`` (4, n):
+    the product rule, each piece a polynomial in the modal rows, ``cos delta``,
+    ``sin delta``, omega and ``kappa sigma``."""
+    omega, R, delta, sigma = point[0], point[1], point[2], point[3]
+    d_omega, d_R, d_delta, d_sigma = d_point[0], d_point[1], d_point[2], d_point[3]
+    ks = (1.0 + R) * sigma
+    d_ks = d_R * sigma + (1.0 + R) * d_sigma
+    cd, sd = np.cos(delta), np.sin(delta)
+    for i in range(modal.shape[1]):
+        gm, bt, dgm, dbt = modal[0, i], modal[1, i], d_modal[0, i], d_modal[1, i]
+        py = -gm * sd + bt * cd  # d/d delta of the forced displacement
+        d_py = -dgm * sd + dbt * cd - (gm * cd + bt * sd) * d_delta
+        q = -bt * sd - gm * cd
+        d_pv = d_omega * q + omega * (-dbt * sd - dgm * cd - py * d_delta)
+        d_pieces[0, i] = (-d_modal[2, i] * py + (1.0 - modal[2, i]) * d_py
+                          - d_modal[3, i] * omega * q - modal[3, i] * d_pv)
+        d_pieces[1, i] = (-d_modal[4, i] * py - modal[4, i] * d_py
+                          - d_modal[5, i] * omega * q + (1.0 - modal[5, i]) * d_pv)
+        free_v = modal[7, i] + ui0[i]  # the forced velocity is omega py
+        d_pieces[2, i] = d_omega * py + omega * d_py + d_ks * free_v + ks * d_modal[7, i]
+        y_p = gm * cd + bt * sd
+        d_y_p = dgm * cd + dbt * sd + py * d_delta
+        free_a = -w[i] * w[i] * modal[6, i] - 2.0 * a[i] * free_v
+        d_free_a = -w[i] * w[i] * d_modal[6, i] - 2.0 * a[i] * d_modal[7, i]
+        d_pieces[3, i] = (-2.0 * omega * d_omega * y_p - omega * omega * d_y_p + d_ks * free_a
+                          + ks * d_free_a)
 
 
 @_inner

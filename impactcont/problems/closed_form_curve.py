@@ -306,7 +306,17 @@ class _Pieces:
 
         if self.impact_form:
             return bordered_condition(self.pole_free_pd_matrix(delta), left, right)
-        return kernel.pd_condition(self.transition, *self._kernel_args(delta), left, right)
+        if self.modal.dtype.kind == "c":  # a complex step
+            return kernel.pd_condition(self.transition, *self._kernel_args(delta), left, right)
+        # real: the compiled variant the exact Jacobian uses, with no direction
+        arrays = modal_arrays(self.osc)
+        n = self.modal.shape[1]
+        point = np.array([self.omega, self.R, delta, self.impact_velocity(delta)])
+        g, _ = kernel.pd_condition_slope(self.transition, np.empty((0, 2 * n, 2 * n)),
+                                         self.modal, np.empty((0, 8, n)), arrays.w, arrays.a,
+                                         arrays.u, arrays.ui0, point, np.empty((0, 4)), left,
+                                         right)
+        return g
 
     def pole_free_pd_matrix(self, delta: float) -> np.ndarray:
         """``E = [[G_reg + I, a], [b^T, -h2]]`` with ``G = G_reg + a b^T / h2``, (m+1, m+1).
@@ -337,6 +347,26 @@ class _Pieces:
                                             delta, ks, self.w, self.a, u0,
                                             self.modal[6].copy(), self.modal[7].copy())
         return x, v
+
+
+def _velocity_slope(pc: _Pieces, delta: float, d_scalars: np.ndarray, d_point: np.ndarray,
+                    d_b: float) -> float:
+    """The derivative of the kernel's impact velocity (:func:`impactcont.kernel.roots.
+    phase_sigma`) at the real pieces `pc` and phase `delta` along ``d_scalars`` (of
+    :func:`~impactcont.kernel.closed_form.setup_slope`), ``d_point = d [omega, R, delta,
+    .]`` and ``d_b``: ``x1p'(delta) / Delta``, or ``(x1p(delta) - b) / (kappa g)`` for
+    elastic impacts without damping."""
+    Gam, B, g, Delta = (float(v) for v in pc.scalars[1:5])
+    d_omega, d_R, d_delta = d_point[0], d_point[1], d_point[2]
+    cd, sd = math.cos(delta), math.sin(delta)
+    if pc.scalars[9] != 0.0:  # elastic, undamped: the impact condition
+        num, den = Gam * cd + B * sd - pc.b, (1.0 + pc.R) * g
+        d_num = d_scalars[1] * cd + d_scalars[2] * sd + (B * cd - Gam * sd) * d_delta - d_b
+        d_den = d_R * g + (1.0 + pc.R) * d_scalars[3]
+        return (d_num - num * d_den / den) / den
+    num = B * cd - Gam * sd
+    d_num = d_scalars[2] * cd - d_scalars[1] * sd - (B * sd + Gam * cd) * d_delta
+    return (d_omega * num + pc.omega * d_num - pc.omega * num * d_scalars[4] / Delta) / Delta
 
 
 #: The named parameters of the N-1 curves: the paper's stop and the model's named scalars
@@ -618,6 +648,10 @@ class CurveProblem:
             # converges linearly instead of quadratically, the accuracy is the residual's
             # (not across a change of the velocity's form: the two agree on eq. 14 only)
             return self._jac_cache[1]
+        J = None if self._general or pc.impact_form else self._exact_jacobian(pc, x)
+        if J is not None:
+            self._jac_cache = (x, J, pc.impact_form)
+            return J
         m = x.size - 1
         delta, extras = float(x[1]), x[2:-1]
         J = np.empty((m, m + 1))
@@ -701,6 +735,11 @@ class CurveProblem:
     def _extra_columns(self, pc: _Pieces, delta: float, extras: np.ndarray
                        ) -> np.ndarray | None:
         """``dF/d extras`` in closed form, shape (m, m - 2), or None (complex steps)."""
+        return None
+
+    def _exact_jacobian(self, pc: _Pieces, x: np.ndarray) -> np.ndarray | None:
+        """``dF/dx`` in real arithmetic, shape (m, m + 1), or None (complex steps); asked
+        on the closed form's pieces with the kernel's impact velocity only."""
         return None
 
     # -- for subclasses -------------------------------------------------------------------------
@@ -854,6 +893,47 @@ class PeriodDoublingCurve(CurveProblem):
 
     def _conditions(self, pc: _Pieces, delta: float, extras: np.ndarray) -> np.ndarray:
         return np.array([pc.pd_condition(delta, self._left, self._right)])
+
+    def _exact_jacobian(self, pc: _Pieces, x: np.ndarray) -> np.ndarray | None:
+        """``dF/d[p1, delta, p2]`` in real arithmetic when both parameters are among omega,
+        R and b: eq. (14) from the exact slope of ``c, s``
+        (:func:`~impactcont.kernel.closed_form.setup_slope`), ``g`` from
+        :func:`~impactcont.kernel.closed_form.pd_condition_slope`. Equal to the complex
+        steps within rounding, without compiling complex variants of G and its solve."""
+        if any(name not in ("omega", "R", "b") for name in self.parameters):
+            return None
+        from impactcont.kernel import closed_form as kernel
+
+        arrays = modal_arrays(pc.osc)
+        delta = float(x[1])
+        n = pc.modal.shape[1]
+        d_modal, d_scalars = np.zeros((3, 8, n)), np.zeros((3, 10))
+        d_point, d_b = np.zeros((3, 4)), np.zeros(3)  # d [omega, R, delta, sigma], d b
+        for j, name in enumerate((self.parameters[0], "delta", self.parameters[1])):
+            if name in ("omega", "R"):
+                which = 0 if name == "omega" else 1
+                d_modal[j], d_scalars[j] = kernel.setup_slope(
+                    arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0, pc.R, pc.omega, pc.N,
+                    which)
+                d_point[j, which] = 1.0
+            elif name == "b":
+                d_b[j] = 1.0
+            else:
+                d_point[j, 2] = 1.0
+            d_point[j, 3] = _velocity_slope(pc, delta, d_scalars[j], d_point[j], d_b[j])
+        d_tr = np.stack([physical_transition(pc.osc, d_modal[j]) for j in range(3)])
+        c, s = (float(v) for v in pc.S0)
+        cd, sd = math.cos(delta), math.sin(delta)
+        J = np.empty((2, 3))
+        for j in range(3):
+            dc, ds = d_scalars[j, 5], d_scalars[j, 6]
+            df = dc * cd + ds * sd - d_b[j] + (-c * sd + s * cd) * d_point[j, 2]
+            J[0, j] = scaled_derivative(c * cd + s * sd - pc.b, df, c, s, dc, ds)
+        point = np.array([pc.omega, pc.R, delta, pc.impact_velocity(delta)])
+        _, J[1] = kernel.pd_condition_slope(pc.transition, d_tr, pc.modal, d_modal, arrays.w,
+                                            arrays.a, arrays.u, arrays.ui0, point, d_point,
+                                            self._left, self._right)
+        return J
 
     def accept(self, u: np.ndarray, lam: float) -> None:
         """Borders from the SVD of the pole-free ``E`` at the accepted point."""

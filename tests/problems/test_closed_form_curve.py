@@ -98,6 +98,30 @@ def test_jacobian_in_an_element_is_its_central_difference(kind, pair):
     assert _jacobian_error(_paper(), kind, pair) < 1e-7
 
 
+@pytest.mark.parametrize("pair", [("omega", "b"), ("b", "omega"), ("omega", "R"), ("R", "b")])
+@pytest.mark.parametrize("make", [_paper, _chain3])
+def test_period_doubling_jacobian_in_real_arithmetic_is_the_complex_steps(make, pair):
+    """The PD curve's Jacobian in omega, R and b (the exact slopes of ``c, s`` and of
+    ``g``, real arithmetic) against its complex steps, with borders that are not unit
+    vectors, at several phases: equal within rounding."""
+    osc = make()
+    problem = codim1.curve_problem("PD", osc, 1, pair)
+    rng = np.random.default_rng(7)
+    m = 2 * osc.n + 1
+    problem._left, problem._right = rng.standard_normal(m), rng.standard_normal(m)
+    x0 = _point(problem, osc, "PD")
+    for shift in (0.0, 0.4, -1.3):
+        x = x0 + np.r_[0.0, shift, 0.0]
+        problem._jac_cache = None
+        exact = problem.full_jacobian(x)
+        problem._jac_cache = None
+        problem._exact_jacobian = lambda pc, x: None  # the generic complex-step columns
+        ref = problem.full_jacobian(x)
+        del problem._exact_jacobian
+        scale = np.max(np.abs(ref), axis=1, keepdims=True)
+        assert np.max(np.abs(exact - ref) / scale) < 1e-11
+
+
 def test_kinds_are_labels_and_strings_are_accepted():
     """Issue 29, item 2: the kinds of curves are the Label members; a string names one."""
     from impactcont.vocabulary import Label
