@@ -28,6 +28,7 @@ __all__ = [
     "CURVE_KINDS",
     "ELEMENT_FAMILIES",
     "LABELS",
+    "LABEL_COLOURS",
     "LABEL_MARKERS",
     "LABEL_NAMES",
     "PARAMETERS",
@@ -51,10 +52,20 @@ class Label(str, enum.Enum):
     """A kind of special point of a branch (a codim-1 point of the two-parameter plane).
 
     Each kind is an object carrying what every module says of it: its ``marker`` in
-    figures (a matplotlib marker code), its ``words`` (legends), its ``codimension`` (1:
-    one condition on a branch) and whether it has ``curves`` of every motion (two-parameter
-    continuation, :data:`CURVE_KINDS`; BP, SE, RG and SO have curves of their motions
-    only: :data:`impactcont.problems.codim1.SHOOTING_KINDS`). How a problem detects it
+    figures (a matplotlib marker code), its ``colour`` (its curves in two-parameter
+    figures), its ``words`` (legends), its ``codimension`` (1: one condition on a branch)
+    and whether it has ``curves`` of every motion (two-parameter continuation,
+    :data:`CURVE_KINDS`; BP, SE, RG, SO and FT have curves of their motions only:
+    :data:`impactcont.problems.codim1.SHOOTING_KINDS`); the kinds it ``absorbs`` (a point of
+    such a kind located on the same step at one of this kind is this one, reported once:
+    :data:`impactcont.detection.locator.TWIN_OF`), whether its test ``bounds`` the physical
+    motions (past its zero a motion is not physical: a curve of a motion with sticking
+    phases ends where such a test changes sign) and whether its points are ``singular``
+    points of a branch's system (the shooting system is degenerate there, so a step across
+    one is not followed by Newton: its zero is interpolated from the branch on both sides,
+    and the other kinds' sign changes on that step or beyond it among motions past it are
+    not told apart from it: :mod:`impactcont.detection.special_points`).
+    How a problem detects it
     (its test function, rounding noise and criticality) is declared by the problem
     (:mod:`impactcont.problems.events`; the points that bound a sticking phase, ``SE``,
     ``RG`` and ``SO``, by a branch problem of motions with sticking phases,
@@ -70,46 +81,67 @@ class Label(str, enum.Enum):
 
     marker: str
     words: str
+    colour: str
     codimension: int
     curves: bool
+    absorbs: tuple[str, ...]
+    bounds: bool
+    singular: bool
 
-    def __new__(cls, value: str, marker: str, words: str, curves: bool = True) -> Label:
+    def __new__(cls, value: str, marker: str, words: str, colour: str, curves: bool = True,
+                absorbs: str = "", bounds: bool = False, singular: bool = False) -> Label:
         kind = str.__new__(cls, value)
         kind._value_ = value
-        kind.marker, kind.words, kind.codimension, kind.curves = marker, words, 1, curves
+        kind.marker, kind.words, kind.colour, kind.codimension = marker, words, colour, 1
+        kind.curves, kind.absorbs = curves, tuple(absorbs.split())
+        kind.bounds, kind.singular = bounds, singular
         return kind
 
-    SN = ("SN", "o", "saddle-node")
+    SN = ("SN", "o", "saddle-node", "black")
     """Saddle-node (fold): a multiplier crosses +1 (eq. 25)."""
-    PD = ("PD", "s", "period doubling")
+    PD = ("PD", "s", "period doubling", "tab:red")
     """Period-doubling (flip): a multiplier crosses -1."""
-    NS = ("NS", "D", "Neimark-Sacker")
+    NS = ("NS", "D", "Neimark-Sacker", "tab:purple")
     """Neimark-Sacker: a pair of complex multipliers crosses the unit circle."""
-    GR = ("GR", "^", "grazing")
+    GR = ("GR", "^", "grazing", "tab:green", True, "", True)
     """Grazing: mass 1 touches the stop between impacts (eq. 16 with equality)."""
-    ZV = ("ZV", "v", "zero-velocity impact")
-    """Zero-velocity impact: the impact velocity h2 of eq. (22) vanishes."""
-    BP = ("BP", "P", "symmetry-breaking pitchfork", False)
+    ZV = ("ZV", "v", "zero-velocity impact", "tab:blue", True, "GR", True)
+    """Zero-velocity impact: the impact velocity h2 of eq. (22) vanishes. A grazing located
+    with it is the grazing of that impact (the GR test touches 0 quadratically there)."""
+    BP = ("BP", "P", "symmetry-breaking pitchfork", "tab:orange", False)
     """Symmetry-breaking pitchfork of a symmetric motion of a symmetric two-sided system:
     a multiplier of its half-map crosses -1 (G gets +1 without a fold) and a pair of
     asymmetric motions, mirror images, branches off (:mod:`impactcont.orbit.symmetry`)."""
-    SE = ("SE", "X", "end of a sticking phase", False)
+    SE = ("SE", "X", "end of a sticking phase", "tab:brown", False, "RG SO", True)
     """End of a sticking phase (the end of a ride): a stick time of a motion with sticking
     phases passes through 0, the plastic impact landing where the stop stops pressing its
     coordinate, so that the landing is itself a release; beyond it the motion would stick
     for a negative time (not physical). Only branches of motions with sticking phases have
-    it (:func:`impactcont.problems.multi_impact_branch.stick_end_test`)."""
-    RG = ("RG", "p", "release grazing", False)
+    it (:func:`impactcont.problems.multi_impact_branch.stick_end_test`). A release grazing
+    or a sticking onset located with it is that end (the landing is the release there)."""
+    RG = ("RG", "p", "release grazing", "tab:pink", False, "", True)
     """Release grazing: the pressing force of a stop on the coordinate it holds touches 0
     inside a sticking phase (a release that almost happens early; beyond it the mass
     leaves there: another motion). Branches of motions with sticking phases only
     (:func:`impactcont.problems.multi_impact_branch.release_grazing_test`)."""
-    SO = ("SO", "h", "sticking onset", False)
+    SO = ("SO", "h", "sticking onset", "tab:olive", False, "RG", True)
     """Sticking onset: the pressing force right after a plastic impact that starts a
     sticking phase passes through 0 (the acceleration tangent to the stop at the
     landing: on one side the stop holds the coordinate, on the other the mass leaves at
     once). Branches of motions with sticking phases only
-    (:func:`impactcont.problems.multi_impact_branch.sticking_onset_test`)."""
+    (:func:`impactcont.problems.multi_impact_branch.sticking_onset_test`). A release
+    grazing located with it on a stick entered through chatter is that onset."""
+    FT = ("FT", "<", "end of a flight", "tab:cyan", False, "ZV GR RG SO", True, True)
+    """End of a flight: a flight time of a motion passes through 0, two consecutive
+    contacts merging (an impact and the next, or a release and the landing after it:
+    the ball on a table as the forcing just lifts it). The impact ending the vanishing
+    flight arrives at zero velocity and the flight's clearance and the stick's pressing
+    force vanish with it, so a ZV, GR, RG or SO located there is this point; beyond it
+    the motion would fly for a negative time (not physical). The shooting system is
+    singular there (the impact condition of a flight of length tau is of order tau^3),
+    so its zero is interpolated from the branch on both sides
+    (:data:`impactcont.problems.events.FLIGHT_END`). A one-impact motion's one flight
+    lasts its period: only motions with several contacts per period have it."""
 
     def __str__(self) -> str:
         return str(self.value)
@@ -129,10 +161,14 @@ LABEL_MARKERS: dict[str, str] = {label.value: label.marker for label in Label}
 #: What each label stands for, in words (legends): :attr:`Label.words`.
 LABEL_NAMES: dict[str, str] = {label.value: label.words for label in Label}
 
+#: The colour of each kind's curves in two-parameter figures: :attr:`Label.colour`.
+LABEL_COLOURS: dict[str, str] = {label.value: label.colour for label in Label}
+
 #: The kinds of codimension-one curves of every motion (two-parameter continuation of a
 #: special point): the labels with :attr:`Label.curves`, every one but ``BP``, which exists
-#: only on symmetric N-p motions, and ``SE``, ``RG``, ``SO``, which bound the motions with
-#: sticking phases. Those four have curves too, of their motions only, followed by
+#: only on symmetric N-p motions, ``SE``, ``RG``, ``SO``, which bound the motions with
+#: sticking phases, and ``FT``, which bounds motions with several contacts per period.
+#: Those five have curves too, of their motions only, followed by
 #: shooting (:data:`impactcont.problems.codim1.SHOOTING_KINDS`, whose table declares each
 #: curve kind's test function and the codim-2 tests it watches); ``curves=False`` keeps
 #: them out of the kinds a curve of any motion (an N-1 curve in closed form, a scene's

@@ -16,16 +16,19 @@ from impactcont.detection import LABELS
 def test_labels_are_strings_and_the_old_names_are_the_same_tuple():
     assert vocab.Label.PD == "PD" and f"{vocab.Label.PD}" == "PD" and str(vocab.Label.NS) == "NS"
     assert LABELS == SPECIAL_LABELS == vocab.LABELS == ("SN", "PD", "NS", "GR", "ZV", "BP",
-                                                        "SE", "RG", "SO")
+                                                        "SE", "RG", "SO", "FT")
     # every label has its codim-1 curve; BP (symmetric N-p motions) and the points that
     # bound a sticking phase (SE, RG, SO) of their motions only: not among the kinds of
-    # curves of every motion, but among those followed by shooting
+    # curves of every motion, but among those followed by shooting; FT, a singular point of
+    # the shooting system, none yet
     assert vocab.CURVE_KINDS == ("SN", "PD", "NS", "GR", "ZV")
     from impactcont.problems.codim1 import CURVE_KINDS, SHOOTING_KINDS
     assert CURVE_KINDS == vocab.CURVE_KINDS
-    assert set(SHOOTING_KINDS) == set(LABELS)
+    assert set(SHOOTING_KINDS) == {label for label in LABELS if not vocab.Label(label).singular}
+    assert [label for label in vocab.Label if label.singular] == [vocab.Label.FT]
     # every label has its marker and its words, defined with it (figures read them)
     assert set(vocab.LABEL_MARKERS) == set(vocab.LABEL_NAMES) == set(LABELS)
+    assert set(vocab.LABEL_COLOURS) == set(LABELS)
     assert set(PARAMETERS) == set(vocab.CONTINUABLE_PARAMETERS)
 
 
@@ -47,6 +50,15 @@ def test_each_kind_carries_its_marker_words_codimension_and_curves():
     assert len(set(vocab.CODIM2_LABELS)) == len(vocab.CODIM2_LABELS)
     markers = list(vocab.LABEL_MARKERS.values())
     assert len(set(markers)) == len(markers)  # no two kinds drawn alike
+    colours = list(vocab.LABEL_COLOURS.values())
+    assert len(set(colours)) == len(colours)  # no two kinds of curves drawn alike
+    # the end of a flight: its own marker and words; the ZV, GR, RG and SO at it are it; it
+    # bounds the physical motions, and its points are singular points of the shooting
+    assert vocab.Label.FT.words == "end of a flight" and not vocab.Label.FT.curves
+    assert set(vocab.Label.FT.absorbs) == {"ZV", "GR", "RG", "SO"}
+    assert vocab.Label.FT.bounds and vocab.Label.FT.singular
+    assert {label for label in vocab.Label if label.bounds} == {"GR", "ZV", "SE", "RG", "SO",
+                                                               "FT"}
     # a kind reads as its label in messages, is found by it and hashes as it
     assert repr(vocab.Label.GR) == "'GR'" and vocab.Label("ZV") is vocab.Label.ZV
     assert {"SN": 1}[vocab.Label.SN] == 1

@@ -45,18 +45,22 @@ def is_critical(label: str, multipliers: np.ndarray, unit_tol: float) -> bool:
     return True if criterion is None else criterion(multipliers, unit_tol)
 
 
-#: The points a kind's zero is when both are located on one step (:func:`drop_twins`): a
-#: GR at a ZV is the grazing of the zero-velocity impact; an RG or an SO at an SE is the
-#: end of a sticking phase (the landing is the release there, so the pressing force at
-#: the landing and the smallest one inside the stick vanish with the stick time); an RG
-#: at an SO is the onset of complete chatter on a stick entered through chatter (the
-#: accumulation point reaches the release: the held phase shrinks to nothing).
-TWIN_OF: dict[str, tuple[Label, ...]] = {Label.GR: (Label.ZV,), Label.RG: (Label.SE, Label.SO),
-                                          Label.SO: (Label.SE,)}
+#: The points a kind's zero is when both are located on one step (:func:`drop_twins`): the
+#: kinds each kind is absorbed by (:attr:`~impactcont.vocabulary.Label.absorbs`). A GR at a
+#: ZV is the grazing of the zero-velocity impact; an RG or an SO at an SE is the end of a
+#: sticking phase (the landing is the release there, so the pressing force at the landing
+#: and the smallest one inside the stick vanish with the stick time); an RG at an SO is the
+#: onset of complete chatter on a stick entered through chatter (the accumulation point
+#: reaches the release: the held phase shrinks to nothing); a ZV, GR, RG or SO at an FT is
+#: the end of a flight (the impact ending it arrives at rest, the flight's clearance and
+#: the landing's pressing force vanish with it).
+TWIN_OF: dict[str, tuple[Label, ...]] = {
+    label: twins_of for label in Label
+    if (twins_of := tuple(kind for kind in Label if label.value in kind.absorbs))}
 
 #: The kinds a detector also watches when one is asked for: ZV with GR, SE (and SO) with
-#: RG, SE with SO, whose located points tell which point is the other's twin (dropped,
-#: :func:`drop_twins`, also when the twin's kind is not asked for).
+#: RG, SE with SO, FT with each of those, whose located points tell which point is the
+#: other's twin (dropped, :func:`drop_twins`, also when the twin's kind is not asked for).
 COMPANIONS: dict[str, tuple[Label, ...]] = dict(TWIN_OF)
 
 
@@ -133,10 +137,17 @@ def drop_twins(points: Sequence[_Point], parameter: str = "lam") -> list[_Point]
     0 (the onset of complete chatter; the stick time, counted from the landing, does not
     vanish there): one point, reported once, as the SO.
 
+    ZV, GR, RG and SO at FT: where a flight time passes through 0 the impact ending the
+    flight arrives at rest, and the flight's clearance and the pressing force of the stick
+    it lands on vanish with it: one point, the end of the flight, reported once, as the FT.
+
     A point is dropped when its twin was located on the same step within the two points'
     precisions (at least :data:`TWIN_TOL` relative: on the side where no flight has an
     interior maximum the GR test is +inf, and the precision search sees only one side of
-    the double zero); every other point is kept, in order.
+    the double zero), or, when its twin is a singular point of the branch's system
+    (:attr:`~impactcont.vocabulary.Label.singular`: FT), when it is only bracketed on that
+    step (the locator cannot follow the branch inside it, so no other zero of its kind can
+    be told from the twin's there); every other point is kept, in order.
     """
     kinds = {kind for twins_of in TWIN_OF.values() for kind in twins_of}
     located = [z for z in points if z.label in kinds and z.status == "located"]
@@ -145,15 +156,16 @@ def drop_twins(points: Sequence[_Point], parameter: str = "lam") -> list[_Point]
         twin = None
         if point.label in TWIN_OF:
             twin = next((z for z in located if z.label in TWIN_OF[point.label]
-                         and z.bracket == point.bracket and twins(
+                         and z.bracket == point.bracket and (twins(
                              abs(z.value - point.value), z.precision + point.precision,
-                             z.value)), None)
+                             z.value) or (Label(z.label).singular
+                                          and point.status != "located"))), None)
         if twin is None:
             kept.append(point)
         else:
-            log.info("%s at %s=%.12g (precision %.1e) is the %s at %.12g: reported once, as "
-                     "%s", point.label, parameter, point.value, point.precision, twin.label,
-                     twin.value, twin.label)
+            log.info("%s at %s=%.12g (precision %.1e, %s) is the %s at %.12g: reported once, "
+                     "as %s", point.label, parameter, point.value, point.precision,
+                     point.status, twin.label, twin.value, twin.label)
     return kept
 
 

@@ -18,6 +18,7 @@ label     test function                               meaning
 ``SE``    ``min_k s_k`` (stick times)                 end of a sticking phase
 ``RG``    smallest pressing force inside the sticks   release grazing
 ``SO``    smallest pressing force at the landings     sticking onset
+``FT``    ``min_k tau_k`` (flight times)              end of a flight
 ========  ==========================================  =================================
 
 SE, RG and SO are declared by a branch of motions with sticking phases only
@@ -46,7 +47,16 @@ is the pole's, not a special point (``docs/engine.md``, *Detection that does not
 on the step*). Where the branch cannot be followed inside such a step (e.g. where a
 flight of a motion with sticking phases shrinks to nothing, its impact velocity through
 0 with it) the step cannot be split at the pole, and a PD, NS or fold there that is not
-located is not reported (:func:`_through_pole`).
+located is not reported (:func:`_through_pole`; the fold SN is the one kind declared
+without a test of the motion, its pole quantities :data:`FOLD_POLES`).
+
+The end of a flight (FT, declared by every branch: a flight time through 0) is a singular
+point of the shooting system (:attr:`~impactcont.vocabulary.Label.singular`): the chord
+Newton cannot reach it, so its zero is interpolated from the branch on both sides
+(:func:`_singular_zero`); a ZV, GR, RG or SO only bracketed on its step is that FT
+(:func:`~impactcont.detection.locator.drop_twins`), and a sign change not located among
+motions past it (a negative flight time at both ends of the step) is no special point
+(:func:`_past_singular_bound`).
 """
 
 from __future__ import annotations
@@ -61,6 +71,7 @@ from typing import Any
 
 import numpy as np
 
+from impactcont.core.corrector import solve_on_hyperplane
 from impactcont.core.locate import Event, MotionTest, locate_events
 from impactcont.detection.locator import (
     drop_twins,
@@ -88,6 +99,7 @@ __all__ = ["LABELS", "BranchSample", "MultiImpactSample", "SpecialPoint", "UserE
 log = logging.getLogger(__name__)
 
 _XTOL = 1e-13
+_EPS = float(np.finfo(float).eps)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -200,6 +212,8 @@ def detect_special_points(problem: Any, samples: Sequence[BranchSample],
                 "location", "interrupted by the user (KeyboardInterrupt) while locating%s: "
                 "the %d special points located before are kept", where, len(candidates))):
             raise
+    candidates = [_at_singular_point(problem, samples, candidate, tests.get(candidate[1]))
+                  for candidate in candidates]
     order = {label: i for i, label in enumerate(watched)}
     candidates.sort(key=lambda c: (c[0], order[c[1]]))
     found: list[SpecialPoint] = []
@@ -247,10 +261,17 @@ def _classify(problem: Any, samples: Sequence[BranchSample],
                       "(a neutral saddle, or the pole of G at h2 = 0)", label, parameter, lam)
             continue
         left, right = samples[step], samples[step + 1]
-        if failed and _through_pole(test, left.orbit, right.orbit):
+        if failed and _through_pole(label, test, left.orbit, right.orbit):
             log.info("%s between points %d and %d not located on a step where its test's "
                      "pole quantities change sign too: its sign change cannot be told from "
                      "the pole's, not a special point", label, step, step + 1)
+            continue
+        past = None if status == "located" else _past_singular_bound(tests, left.orbit,
+                                                                      right.orbit)
+        if past is not None:
+            log.info("%s between points %d and %d not located among motions past the %s "
+                     "(its test %s < 0 at both): not a special point of a motion", label,
+                     step, step + 1, past.words, past)
             continue
         if label == Label.SN and fold_kind is not None:
             label = fold_kind(orbit, left.orbit, right.orbit)
@@ -262,22 +283,151 @@ def _classify(problem: Any, samples: Sequence[BranchSample],
                                   delta=float(u[0]) if u.size == 1 else None))
 
 
-def _through_pole(test: MotionTest | None, left: Any, right: Any) -> bool:
-    """Whether a pole quantity of `test` (the impact velocities of PD and NS; those of the
-    fold, `test` None: :func:`~impactcont.problems.events.impact_speeds`) changes sign
+#: The pole quantities of the fold SN, the one kind declared without a test of the motion
+#: (its test is the parameter component of the branch's tangent): the impact velocities,
+#: where the branch's system is singular besides its folds (the rate of an impact
+#: condition, eq. 22, vanishes with them).
+FOLD_POLES: Callable[[Any], Any] = impact_speeds
+
+
+def _pole_quantities(label: Label, test: MotionTest | None) -> Callable[[Any], Any] | None:
+    """The pole quantities of a kind: its test's (:attr:`MotionTest.poles`, None for a test
+    without poles), or :data:`FOLD_POLES` for the fold SN, which has no test of the motion.
+
+    Raises
+    ------
+    ValueError
+        A kind other than SN without a test (none is declared so).
+    """
+    if test is not None:
+        return test.poles
+    if label is not Label.SN:
+        raise ValueError(f"only the fold SN is located without a test of the motion; got "
+                         f"{label!r} without one")
+    return FOLD_POLES
+
+
+def _through_pole(label: Label, test: MotionTest | None, left: Any, right: Any) -> bool:
+    """Whether a pole quantity of kind `label` (:func:`_pole_quantities`: the impact
+    velocities of PD and NS, and of the fold SN, whose `test` is None) changes sign
     between the motions `left` and `right` at a step's ends.
 
     Where the locator could not follow the branch inside such a step it cannot split the
     step at the pole (:func:`~impactcont.core.locate.parts_beside_poles`): a sign change of
     the test there cannot be told from the pole's, as a zero closer to a pole than where
     the test's sign can be read; a fold there cannot be told from the singularity of the
-    branch's system where an impact velocity is 0 (reported as the ZV it is)."""
-    poles = impact_speeds if test is None else test.poles
+    branch's system where an impact velocity is 0 (reported as the ZV it is, or as the
+    FT where a flight vanishes with it)."""
+    poles = _pole_quantities(label, test)
     if poles is None:
         return False
     before = np.asarray(poles(left), dtype=float)
     after = np.asarray(poles(right), dtype=float)
     return bool(np.any(np.signbit(before) != np.signbit(after)))
+
+
+def _past_singular_bound(tests: Mapping[str, MotionTest], left: Any, right: Any
+                         ) -> Label | None:
+    """The singular kind (:attr:`~impactcont.vocabulary.Label.singular`: FT) whose test,
+    a bound of the physical motions, is negative at both motions `left` and `right` at a
+    step's ends, or None.
+
+    Past such a point (a flight of negative duration) the branch's motions are not
+    physical, and the other tests (a stick longer than the period, its pressing force)
+    jump among them: a sign change there that is not located is no special point."""
+    for label, test in tests.items():
+        kind = Label.__members__.get(str(label))  # a plugin's own kinds are none of these
+        if kind is not None and kind.singular and kind.bounds and test.test(left) < 0.0 \
+                and test.test(right) < 0.0:
+            return kind
+    return None
+
+
+#: A chord point is a node of the interpolation at a singular point when its Newton's last
+#: step is at most this (relative): the system's conditioning there grows as the cube of
+#: the distance to the point, so Newton stalls at that level of rounding.
+_NODE_STEP = 1e-9
+#: Chord points tried on each side of a singular point, halving the distance to it.
+_NODE_HALVINGS = 8
+#: Nodes needed on each side.
+_NODES_PER_SIDE = 2
+
+
+Candidate = tuple[int, Label, np.ndarray, float, float, str, bool]
+
+
+def _at_singular_point(problem: Any, samples: Sequence[BranchSample], candidate: Candidate,
+                       test: MotionTest | None) -> Candidate:
+    """`candidate`, or, for a kind whose zero is a singular point of the branch's system
+    (:attr:`~impactcont.vocabulary.Label.singular`, FT) that the chord location could not
+    reach, its zero interpolated from the branch on both sides (:func:`_singular_zero`)."""
+    step, label, _, _, _, _, failed = candidate
+    if not (failed and label.singular and test is not None):
+        return candidate
+    zero = _singular_zero(problem, test, samples[step], samples[step + 1])
+    if zero is None:
+        return candidate
+    x, precision = zero
+    log.debug("%s between points %d and %d interpolated at %s=%.15g (precision %.1e)",
+              label, step, step + 1, getattr(problem, "parameter", "lam"), x[-1], precision)
+    return step, label, x[:-1], float(x[-1]), precision, "located", False
+
+
+def _singular_zero(problem: Any, test: MotionTest, left: BranchSample, right: BranchSample
+                   ) -> tuple[np.ndarray, float] | None:
+    """The zero of `test` between two accepted points where it is a singular point of the
+    branch's system: ``(x = [u, lam], precision)``, or None with too few nodes.
+
+    At the end of a flight (FT) the shooting system is singular: the impact condition of a
+    flight of length ``tau`` is of order ``tau^3`` (the smallest singular value of
+    ``[dF/du | dF/dlam]`` shrinks so), and Newton on the chord's hyperplanes stalls near
+    it. The branch itself is smooth there and the test (a flight time) a regular
+    coordinate of it: the branch points on the chord are found on both sides, halving the
+    distance to the test's linear zero while Newton reaches them (last step at most
+    :data:`_NODE_STEP`), and ``x`` is the polynomial through them as a function of the
+    test, at 0. The precision is twice the largest change of ``lam`` when the nodes
+    farthest from the zero are left out one by one (down to three nodes).
+    """
+    x0 = np.append(left.u, left.lam)
+    x1 = np.append(right.u, right.lam)
+    chord = x1 - x0
+    g0, g1 = test.test(left.orbit), test.test(right.orbit)
+    if not (math.isfinite(g0) and math.isfinite(g1)) or g0 == g1:
+        return None
+    s_zero = g0 / (g0 - g1)
+    nodes = [(g0, x0), (g1, x1)]
+    for towards in (0.0, 1.0):
+        reached = 0
+        for j in range(1, _NODE_HALVINGS + 1):
+            s = s_zero + (towards - s_zero) * 2.0 ** -j
+            try:
+                found = solve_on_hyperplane(problem, x0 + s * chord, chord, tol=_XTOL)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+                break
+            if not (found.converged or found.last_step
+                    <= _NODE_STEP * max(1.0, float(np.max(np.abs(found.x))))):
+                break
+            value = test.test(problem.orbit(found.u, found.lam, checks=test.checks))
+            if not math.isfinite(value):
+                break
+            nodes.append((value, found.x))
+            reached += 1
+        if reached + 1 < _NODES_PER_SIDE:
+            return None
+    values = np.array([g for g, _ in nodes])
+    points = np.array([x for _, x in nodes])
+    nearest = np.argsort(np.abs(values), kind="stable")
+    size = float(np.max(np.abs(values)))
+    estimates = [_polynomial_at_zero(values[nearest[:n]] / size, points[nearest[:n]])
+                 for n in range(len(nodes), 2, -1)]
+    x = estimates[0]
+    spread = max(abs(float(e[-1]) - float(x[-1])) for e in estimates)
+    return x, 2.0 * spread + 4.0 * _EPS * max(1.0, abs(float(x[-1])))
+
+
+def _polynomial_at_zero(values: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The polynomial through ``(values[i], points[i])`` (one per component) at 0."""
+    return np.linalg.solve(np.vander(values, values.size), points)[-1]
 
 
 # -- user-defined events and monitors ----------------------------------------------------------

@@ -5,7 +5,8 @@ has a test function of a motion that changes sign at the special point (the tabl
 :mod:`impactcont.detection.special_points`), the rounding of that test, and a check that a
 located zero is the bifurcation; here each is one :class:`~impactcont.core.locate.MotionTest`
 object: :data:`PERIOD_DOUBLING`, :data:`NEIMARK_SACKER`, :data:`GRAZING`,
-:data:`ZERO_VELOCITY` and the symmetry-breaking pitchfork :data:`PITCHFORK` (a multiplier
+:data:`ZERO_VELOCITY`, the end of a flight :data:`FLIGHT_END` (a flight time through 0)
+and the symmetry-breaking pitchfork :data:`PITCHFORK` (a multiplier
 -1 of the half-map ``H`` of :mod:`impactcont.orbit.symmetry`). A branch problem declares
 the kinds its branches have (``problem.events``) and their tests (``problem.motion_tests``:
 :data:`BRANCH_TESTS`, with BP on a branch of symmetric motions); the detectors locate
@@ -29,9 +30,10 @@ from impactcont.core.locate import MotionTest
 from impactcont.orbit.symmetry import pitchfork_critical, pitchfork_noise, pitchfork_test
 from impactcont.vocabulary import Label
 
-__all__ = ["BRANCH_TESTS", "GRAZING", "MULTIPLIER_CRITERIA", "NEIMARK_SACKER",
+__all__ = ["BRANCH_TESTS", "FLIGHT_END", "GRAZING", "MULTIPLIER_CRITERIA", "NEIMARK_SACKER",
            "PERIOD_DOUBLING", "PITCHFORK", "UNIT_TOL", "ZERO_VELOCITY", "event_function",
-           "event_noise", "half_speeds", "impact_speeds", "ns_critical", "pd_critical", "pole_free"]
+           "event_noise", "flight_end_test", "half_speeds", "impact_speeds", "ns_critical",
+           "pd_critical", "pole_free"]
 
 _EPS = float(np.finfo(float).eps)
 
@@ -201,15 +203,38 @@ GRAZING = MotionTest(lambda orbit: orbit.gap_min, _gr_noise, checks=True)
 #: ZV: the impact velocity h2 of eq. (22) (the smallest of an N-p motion's).
 ZERO_VELOCITY = MotionTest(lambda orbit: orbit.impact_velocity, _zv_noise)
 
+
+
+def flight_end_test(orbit: Any) -> float:
+    """The end of a flight: the shortest flight time ``min_k tau_k`` of the motion.
+
+    Zero where two consecutive contacts merge (an impact and the next, or a release and
+    the landing after it); past it the shooting continues with a negative flight time, a
+    motion flagged not physical. A one-impact motion's flight lasts its period (never 0);
+    with a sticking phase its flight is the period less the stick.
+    """
+    return float(np.min(np.asarray(orbit.flight_times, dtype=float)))
+
+
+def _flight_noise(orbit: Any) -> float:
+    """Rounding of a flight time: eps times the period (the last flight time closes it)."""
+    return _NOISE_ULPS * _EPS * 2.0 * math.pi * orbit.N / orbit.oscillator.omega
+
+
+#: FT: ``min_k tau_k``, the shortest flight (:func:`flight_end_test`). Its zero is a
+#: singular point of the shooting system (:attr:`~impactcont.vocabulary.Label.singular`).
+FLIGHT_END = MotionTest(flight_end_test, _flight_noise)
+
 #: The tests of the kinds every branch of periodic motions has (besides its folds, SN);
-#: a branch of symmetric motions adds :data:`PITCHFORK`.
+#: a branch of symmetric motions adds :data:`PITCHFORK`, one of motions with sticking
+#: phases :data:`~impactcont.problems.multi_impact_branch.STICKING_TESTS`.
 BRANCH_TESTS: Mapping[str, MotionTest] = MappingProxyType({
     Label.PD: PERIOD_DOUBLING, Label.NS: NEIMARK_SACKER, Label.GR: GRAZING,
-    Label.ZV: ZERO_VELOCITY})
+    Label.ZV: ZERO_VELOCITY, Label.FT: FLIGHT_END})
 
 
 def event_function(label: str, orbit: Any) -> float:
-    """Value of the test function of `label` (PD, NS, GR or ZV) at a motion
+    """Value of the test function of `label` (PD, NS, GR, ZV or FT) at a motion
     (:data:`BRANCH_TESTS`).
 
     Raises
@@ -219,7 +244,7 @@ def event_function(label: str, orbit: Any) -> float:
     """
     test = BRANCH_TESTS.get(label)
     if test is None:
-        raise ValueError(f"label must be one of PD, NS, GR, ZV here; got {label!r}")
+        raise ValueError(f"label must be one of {', '.join(BRANCH_TESTS)} here; got {label!r}")
     return test.test(orbit)
 
 

@@ -18,6 +18,7 @@ import pytest
 from impactcont.detection.locator import (
     COMPANIONS,
     STATUSES,
+    TWIN_OF,
     drop_grazing_at_zero_velocity,
     drop_twins,
     is_critical,
@@ -129,9 +130,37 @@ def test_release_grazing_and_sticking_onset_at_the_end_of_a_sticking_phase_are_t
         kept = drop_twins([lone, se, rg, so], parameter="omega")
     assert kept == [lone, se]
     assert caplog.text.count("reported once, as SE") == 2
-    assert COMPANIONS[Label.SO] == (Label.SE,)
-    assert COMPANIONS[Label.RG] == (Label.SE, Label.SO)
-    assert watched_labels(["RG"]) == ["RG", "SE", "SO"]
+    assert COMPANIONS[Label.SO] == (Label.SE, Label.FT)
+    assert COMPANIONS[Label.RG] == (Label.SE, Label.SO, Label.FT)
+    assert watched_labels(["RG"]) == ["RG", "SE", "SO", "FT"]
+
+
+def test_the_twins_are_the_kinds_own():
+    """Issue 29, 2: which kind a point at another is, is declared by the kind that absorbs
+    it (Label.absorbs), not listed in the locator."""
+    assert TWIN_OF == {Label.GR: (Label.ZV, Label.FT), Label.ZV: (Label.FT,),
+                       Label.RG: (Label.SE, Label.SO, Label.FT),
+                       Label.SO: (Label.SE, Label.FT)}
+
+
+def test_what_vanishes_at_the_end_of_a_flight_is_the_ft(caplog):
+    """Where a flight time passes through 0 (FT, a singular point of the branch's system)
+    the landing's velocity vanishes with it: a ZV located there is the FT, and a ZV or RG
+    only bracketed on its step too (the locator cannot follow the branch there); a ZV
+    bracketed on another step, or located away from the FT on its step, is kept."""
+    ft = _Point("FT", 1.0, 4e-12, (1.00002, 1.0000221))
+    at = _Point("ZV", 1.0 + 1e-12, 1e-12, (1.00002, 1.0000221))
+    loose = _Point("ZV", 1.0000221, 2e-6, (1.00002, 1.0000221), status="bracketed")
+    rg = _Point("RG", 1.00001, 2e-6, (1.00002, 1.0000221), status="bracketed")
+    elsewhere = _Point("ZV", 1.5, 1e-3, (1.4, 1.6), status="bracketed")
+    away = _Point("ZV", 1.00001, 1e-14, (1.00002, 1.0000221))
+    with caplog.at_level(logging.INFO, logger="impactcont.detection.locator"):
+        kept = drop_twins([ft, at, loose, rg, elsewhere, away], parameter="F0")
+    assert kept == [ft, elsewhere, away]
+    assert caplog.text.count("reported once, as FT") == 3
+    # a bracketed FT absorbs only what is within the precisions
+    unsure = _Point("FT", 1.0, 2e-5, (1.00002, 1.0000221), status="bracketed")
+    assert drop_twins([unsure, loose]) == [unsure, loose]
 
 
 def test_release_grazing_at_the_onset_of_complete_chatter_is_the_so(caplog):
@@ -174,5 +203,5 @@ def test_a_kind_event_is_built_from_the_declared_test_of_the_motion():
     bare = kind_event(Label.ZV, MotionTest(lambda m: m.h), lambda u, lam: motions[0],
                       motions.__getitem__)
     assert bare.noise is None and bare.noise_at is None and bare.poles is None
-    assert watched_labels([Label.GR, Label.PD]) == [Label.GR, Label.PD, Label.ZV]
-    assert watched_labels(["ZV", "GR"]) == ["ZV", "GR"]
+    assert watched_labels([Label.GR, Label.PD]) == [Label.GR, Label.PD, Label.ZV, Label.FT]
+    assert watched_labels(["ZV", "GR"]) == ["ZV", "GR", "FT"]

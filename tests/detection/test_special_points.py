@@ -435,3 +435,44 @@ def test_a_user_event_is_the_one_record_codimension_two_on_a_curve():
     assert {e.codimension for e in on_plane} == {2}
     assert [e.name for e in on_branch] == ["v07"] * len(on_branch)
     assert all(abs(e.orbit.impact_velocity - V_LEVEL) < 1e-9 for e in on_branch)
+
+
+def test_the_fold_is_the_one_kind_without_a_test_of_the_motion():
+    """Review item: ``test None`` is the fold by name: its pole quantities are the impact
+    velocities (:data:`FOLD_POLES`); any other kind without a test is refused."""
+    from types import SimpleNamespace
+
+    from impactcont.core.locate import MotionTest
+    from impactcont.detection.special_points import (
+        FOLD_POLES,
+        _pole_quantities,
+        _through_pole,
+    )
+    from impactcont.problems.events import BRANCH_TESTS, impact_speeds
+    from impactcont.vocabulary import Label
+
+    assert FOLD_POLES is impact_speeds and _pole_quantities(Label.SN, None) is impact_speeds
+    assert _pole_quantities(Label.PD, BRANCH_TESTS[Label.PD]) is impact_speeds
+    assert _pole_quantities(Label.ZV, BRANCH_TESTS[Label.ZV]) is None
+    with pytest.raises(ValueError, match="only the fold SN"):
+        _pole_quantities(Label.ZV, None)
+    left = SimpleNamespace(impact_velocity=2.0, impact_velocities=np.array([2.0, -1e-3]))
+    right = SimpleNamespace(impact_velocity=2.0, impact_velocities=np.array([2.0, 1e-3]))
+    assert _through_pole(Label.SN, None, left, right)
+    assert not _through_pole(Label.GR, MotionTest(lambda m: 0.0), left, right)
+
+
+def test_points_among_motions_past_the_end_of_a_flight_are_none():
+    """A step whose two motions both fly for a negative time (FT's test < 0) lies past the
+    end of the physical motion: the bound it passes is named, none elsewhere."""
+    from types import SimpleNamespace
+
+    from impactcont.detection.special_points import _past_singular_bound
+    from impactcont.problems.events import BRANCH_TESTS
+    from impactcont.vocabulary import Label
+
+    def motion(*flights):
+        return SimpleNamespace(flight_times=np.array(flights))
+
+    assert _past_singular_bound(BRANCH_TESTS, motion(2.0, -0.1), motion(-0.3, 2.0)) is Label.FT
+    assert _past_singular_bound(BRANCH_TESTS, motion(2.0, -0.1), motion(0.3, 2.0)) is None

@@ -65,7 +65,7 @@ def test_the_test_functions_are_the_motions_own_numbers(specials) -> None:
     assert event_function("NS", orbit) == pytest.approx(
         float(np.prod(mu[i] * mu[j] - 1.0).real) * orbit.impact_velocity ** (mu.size - 1),
         rel=1e-12)
-    with pytest.raises(ValueError, match=r"label must be one of PD, NS, GR, ZV here; got 'SN'"):
+    with pytest.raises(ValueError, match=r"label must be one of PD, NS, GR, ZV, FT here; got 'SN'"):
         event_function("SN", orbit)
 
 
@@ -127,7 +127,7 @@ def test_each_kind_is_an_object_declared_with_its_test_noise_and_criticality(spe
     from impactcont.problems.symmetric_branch import SymmetricBranchProblem
     from impactcont.vocabulary import Label
 
-    assert list(BRANCH_TESTS) == [Label.PD, Label.NS, Label.GR, Label.ZV]
+    assert list(BRANCH_TESTS) == [Label.PD, Label.NS, Label.GR, Label.ZV, Label.FT]
     assert all(isinstance(test, MotionTest) for test in BRANCH_TESTS.values())
     assert BRANCH_TESTS[Label.GR].checks and not BRANCH_TESTS[Label.ZV].checks
     b, omega, delta = specials["PD"]
@@ -145,3 +145,21 @@ def test_each_kind_is_an_object_declared_with_its_test_noise_and_criticality(spe
     assert SymmetricBranchProblem.motion_tests[Label.BP] is PITCHFORK
     with pytest.raises(ValueError, match="label must be PD or NS here; got 'GR'"):
         pole_free("GR", orbit.multipliers, np.array([orbit.impact_velocity]))
+
+
+def test_the_end_of_a_flight_is_the_shortest_flight_time(specials) -> None:
+    """FT's test is the shortest flight time: a one-impact motion's flight lasts its period
+    (never 0), with its rounding of eps times the period; its zero is declared a singular
+    point of the branch's system, past which the motions are not physical."""
+    from impactcont.problems.events import FLIGHT_END, flight_end_test
+    from impactcont.vocabulary import Label
+
+    b, omega, delta = specials["PD"]
+    orbit = _nearest(b, omega, delta)
+    period = 2 * np.pi / orbit.oscillator.omega
+    assert flight_end_test(orbit) == pytest.approx(period, rel=1e-14)
+    assert 0.0 < FLIGHT_END.noise(orbit) < 1e-12 * period
+    assert FLIGHT_END.critical is None and not FLIGHT_END.checks
+    two = type("Motion", (), {"flight_times": np.array([3.0, -1e-3])})()
+    assert flight_end_test(two) == -1e-3
+    assert Label.FT.singular and Label.FT.bounds
