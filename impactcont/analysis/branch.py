@@ -43,6 +43,7 @@ from impactcont.core import (
 from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
 from impactcont.dataset import branch_dataset
+from impactcont.dataset.maps import MULTI_MAP_KIND
 from impactcont.dataset.multi import (
     impacts_of,
     multi_impact_dataset,
@@ -1161,14 +1162,37 @@ def _check_branch(branch: Any) -> xr.Dataset:
         raise TypeError(f"branch must be a branch xarray.Dataset (of continuation, "
                         f"multi_impact_continuation or a switch, or impactcont.load of its "
                         f"file); got {type(branch).__name__}")
-    if "curve_kind" in branch.attrs or "parameters" in branch.attrs:
-        raise ParameterError("branch must be a one-parameter branch; got a two-parameter curve "
-                             f"dataset (parameters {branch.attrs.get('parameters')!r})")
+    what = _not_a_branch(branch.attrs)
+    if what:
+        raise ParameterError(f"branch must be a one-parameter branch dataset (of continuation, "
+                             f"multi_impact_continuation or a switch); got {what}")
     try:
         validate_branch_dataset(branch)
     except ValueError as exc:
         raise ParameterError(f"branch is not a branch dataset: {exc}") from None
     return branch
+
+
+#: What a dataset of impactcont that is not a branch is, by its ``impactcont_dataset``.
+_OTHER_DATASETS = {
+    "map": "a stability map of N-1 motions (impactcont.stability_map of an oscillator)",
+    MULTI_MAP_KIND: "a stability map of a motion's family (impactcont.stability_map of a "
+                    "motion)",
+    "simulation": "a simulation dataset (impactcont.dataset.simulation.simulation_dataset)",
+}
+
+
+def _not_a_branch(attrs: Mapping[str, Any]) -> str:
+    """What a dataset with these attributes is when it is not a one-parameter branch (a
+    curve, a map, a simulation, ... named by its attributes), else ``""``."""
+    tag, parameters = attrs.get("impactcont_dataset"), attrs.get("parameters")
+    over = f" over {parameters!r}" if parameters is not None else ""
+    if "curve_kind" in attrs:
+        return f"a two-parameter curve dataset ({attrs['curve_kind']} curve{over})"
+    if tag is not None:
+        words = _OTHER_DATASETS.get(tag, f"a dataset of kind {tag!r}")
+        return f"{words}{over} (attribute impactcont_dataset={tag!r})"
+    return f"a two-parameter dataset{over}" if parameters is not None else ""
 
 
 def _record(branch: xr.Dataset) -> dict[str, Any]:
@@ -1423,9 +1447,11 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     progress : None, bool or callable
         See :mod:`impactcont.progress`.
     events, monitors : mapping of str to callable, optional
-        User events and monitors on the restarted branch (as for
-        :func:`continuation`; functions are not stored in a file, so those of `branch`
-        are not carried over).
+        User events and monitors on the restarted branch (as for :func:`continuation`).
+        Required when `branch` has them (its attributes ``user_events`` and
+        ``user_monitors``): their names must be among those given (others may be added).
+        Functions are not stored in a file, so they cannot be carried over, and a
+        restart without them would lose its events without a word.
     **single
         Single options (``ds``, ``ds_max``, ``max_points``, ...) over `options`.
 
@@ -1448,7 +1474,8 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     ParameterError
         Not a branch dataset; neither or both of `point` and `label`; a point index out
         of range; no such special point; bad `along`, `bounds` (not containing the
-        restart point), `detect` or options; bad `events` or `monitors`.
+        restart point), `detect` or options; bad `events` or `monitors`, or without a
+        name of the branch's.
 
     Notes
     -----
@@ -1456,7 +1483,7 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     :func:`continuation` (see its Notes): the other direction is not followed.
     """
     _check_branch(branch)
-    functions = check_user_functions(events, monitors, reserved_names())
+    functions = _same_user_functions(branch, events, monitors, more=True)
     along = _check_along(along)
     row, special = _start_row(branch, point, label, which)
     parameter = str(branch.attrs["parameter"])
@@ -1575,16 +1602,22 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     return joined
 
 
-def _same_user_functions(branch: xr.Dataset, events: Any, monitors: Any) -> UserFunctions:
-    """The user's functions for an extension of `branch`: checked, with the branch's names."""
+def _same_user_functions(branch: xr.Dataset, events: Any, monitors: Any, *,
+                         more: bool = False) -> UserFunctions:
+    """The user's functions for a restart or an extension of `branch`: checked, with the
+    branch's names (and others too with `more`: a restart is a new branch, an extension
+    is joined to the old one)."""
     functions = check_user_functions(events, monitors, reserved_names())
     for what, attr, given in (("events", USER_EVENTS_ATTR, functions.events),
                               ("monitors", USER_MONITORS_ATTR, functions.monitors)):
         names = [name for name in str(branch.attrs.get(attr, "")).split(",") if name]
-        if sorted(names) != sorted(given):
+        refused = (not set(names) <= set(given)) if more else sorted(names) != sorted(given)
+        if refused:
+            allowed = "with those names (others may be added)" if more else "with those names"
             raise ParameterError(f"{what} must have the names of the branch's {what} {names} "
                                  f"(attribute {attr!r}: functions are not stored, the new "
-                                 f"parts need them); got {sorted(given)}")
+                                 f"points need them); got {sorted(given)}; allowed: a mapping "
+                                 f"{allowed}")
     return functions
 
 

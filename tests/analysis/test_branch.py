@@ -412,6 +412,58 @@ def test_bad_arguments_are_refused(branch, switched):
         extend(branch.drop_vars("delta"), (0.4, 4.0))
 
 
+def test_a_restart_needs_the_branchs_user_functions(system):
+    """continuation_from requires the branch's events and monitors, as extend does
+    (functions are not stored: without them the restart lost its events silently); it may
+    add others."""
+    def v07(o):
+        return o.impact_velocity - 0.7
+
+    short = ic.continuation(system, 1, "omega", (1.4, 2.0), components="start",
+                            events={"v07": v07}, monitors={"v": lambda o: o.impact_velocity},
+                            progress=False)
+    assert short.sizes["event"] >= 1
+    with pytest.raises(ParameterError, match=r"events must have the names of the branch's "
+                                             r"events \['v07'\] .*got \[\]; allowed: a mapping "
+                                             r"with those names \(others may be added\)"):
+        continuation_from(short, 0, progress=False)
+    with pytest.raises(ParameterError, match=r"monitors must have the names .*\['v'\]"):
+        continuation_from(short, 0, events={"v07": v07}, progress=False)
+    again = continuation_from(short, 0, events={"v07": v07, "v06": lambda o:
+                                                o.impact_velocity - 0.6},
+                              monitors={"v": lambda o: o.impact_velocity}, progress=False)
+    assert set(again["event_name"].values.tolist()) >= {"v07"}
+    np.testing.assert_allclose(np.sort(again["event_omega"].values[
+        again["event_name"].values == "v07"]), np.sort(short["event_omega"].values), rtol=0,
+        atol=TOL)
+
+
+def test_a_dataset_that_is_not_a_branch_is_refused_naming_what_it_is(system, branch):
+    """A map, a family map or a simulation given to continuation_from or extend is named
+    (a family map was called a two-parameter curve)."""
+    closed = ic.stability_map(system, N=[1], omega=np.linspace(1.0, 1.2, 3),
+                              b=np.linspace(0.0, 0.1, 2), progress=False)
+    motion = ic.multi_impact_orbit(system.replace(omega=1.5), 1, 1, next(
+        o for o in ic.periodic_orbits(system.replace(omega=1.5), 1) if o.physical))
+    family = ic.stability_map(motion, parameters=("omega", "b"),
+                              grid={"omega": [1.5, 1.55], "b": [0.0, 0.05]}, progress=False)
+    run = ic.simulate(system, motion.states[0], float(motion.phases[0]), 2)
+    from impactcont.dataset.simulation import simulation_dataset
+    for ds, what in ((closed, r"a stability map of N-1 motions .*impactcont_dataset='map'"),
+                     (family, r"a stability map of a motion's family .* over 'omega,b' "
+                              r"\(attribute impactcont_dataset='multi_impact_map'\)"),
+                     (simulation_dataset(run), r"a simulation dataset .*'simulation'")):
+        refused = r"branch must be a one-parameter branch dataset .*; got " + what
+        with pytest.raises(ParameterError, match=refused):
+            continuation_from(ds, 0)
+        with pytest.raises(ParameterError, match=refused):
+            extend(ds, (0.5, 4.0))
+    cv = branch.assign_attrs(curve_kind="PD", parameters="omega,b")
+    with pytest.raises(ParameterError, match=r"got a two-parameter curve dataset \(PD curve "
+                                             r"over 'omega,b'\)"):
+        continuation_from(cv, 0)
+
+
 # -- issue 28: bounds of an element checked up front; a failure keeps what was computed ------
 def test_bounds_of_a_stiffness_entry_are_refused_before_computing(paper_system) -> None:
     import time
