@@ -40,7 +40,12 @@ from impactcont.core import (
     Stop,
     follow,
 )
-from impactcont.core.options import DRIVER_DEFAULTS, driver_options, option_keywords
+from impactcont.core.options import (
+    DRIVER_DEFAULTS,
+    ContinuationOptionError,
+    driver_options,
+    option_keywords,
+)
 from impactcont.core.stepper import FOLD_DLAM_TOLERANCE, NewtonConvergenceError
 from impactcont.dataset import branch_dataset
 from impactcont.dataset.maps import MULTI_MAP_KIND
@@ -80,7 +85,7 @@ from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterE
 from impactcont.model.oscillator import ImpactOscillator
 from impactcont.model.parameters import model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
-from impactcont.orbit.periodic import PeriodicOrbit, _check_N
+from impactcont.orbit.periodic import _PHASE_TOL, PeriodicOrbit, _check_N
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
 from impactcont.problems import PeriodicBranchProblem
 from impactcont.problems.events import PERIOD_DOUBLING
@@ -167,7 +172,8 @@ def check_continuation_arguments(
         `components`, or a range reaching elastic impacts without damping (R = 1, no
         damping), where eq. (12) is singular.
     ContinuationOptionError
-        A bad option (named; a ParameterError).
+        A bad option (named; a ParameterError), or ``newton_tol`` above 1e-7, where an
+        accepted point could fail eq. (14)'s check of a motion.
     """
     N = _check_N(N)
     detect = check_labels(detect)
@@ -178,9 +184,28 @@ def check_continuation_arguments(
     lo, hi = problem.param.check_bounds(osc, bounds)
     problem.check_bounds((lo, hi))  # the closed form's own limit: elastic without damping
     opts = driver_options(options, (lo, hi), defaults=_DEFAULTS, **single)
+    _check_closed_form_tolerance(opts.newton_tol)
     if components not in ("all", "start"):
         raise ParameterError(f"components must be 'all' or 'start'; got {components!r}")
     return problem, detect, (lo, hi), opts
+
+
+def _check_closed_form_tolerance(newton_tol: float) -> None:
+    """Refuse a Newton tolerance whose points the closed form could not take as motions.
+
+    A point is accepted when the residual of eq. (14), over its scale
+    :func:`~impactcont.problems.periodic_branch.residual_scale` (at most
+    ``max(1, |b|, sqrt(c^2 + s^2))``), is within `newton_tol`; the motion at a phase is
+    built only where that relative residual is within ``_PHASE_TOL`` = 1e-7
+    (:func:`~impactcont.orbit.periodic.orbit_at_phase`). Above it an accepted point could
+    be no motion (``newton_tol=1.0`` failed in the motion's eq. 14 check).
+    """
+    if newton_tol > _PHASE_TOL:
+        raise ContinuationOptionError(
+            f"option newton_tol = {newton_tol!r} is invalid; the closed form of N-1 motions "
+            f"takes at most {_PHASE_TOL:g} (a point accepted at newton_tol must satisfy eq. "
+            f"(14) to {_PHASE_TOL:g} relative to be a motion; its default is "
+            f"{_DEFAULTS['newton_tol']:g})")
 
 
 def as_multi_impact_orbit(start: Any) -> MultiImpactOrbit:
@@ -797,7 +822,8 @@ def continuation(osc: ImpactOscillator, N: int = 1, parameter: str = "omega",
         through the start.
     options : ContinuationOptions, optional
         Continuation options with ``bounds`` from `bounds` (see ``docs/engine.md``;
-        Newton tolerance 1e-12 by default: the closed form is exact to rounding).
+        Newton tolerance 1e-12 by default: the closed form is exact to rounding; at
+        most 1e-7, eq. (14)'s tolerance for a motion).
     ds, ds_min, ds_max, newton_tol, max_points, both_directions, **more
         Single options, over `options`.
     progress : None, bool or callable

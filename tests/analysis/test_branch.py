@@ -16,6 +16,7 @@ import impactcont as ic
 from impactcont.analysis.branch import continuation_from, extend
 from impactcont.core import ContinuationOptionError
 from impactcont.errors import ParameterError
+from impactcont.orbit.periodic import orbit_at_phase
 
 
 @pytest.fixture(scope="module")
@@ -462,6 +463,27 @@ def test_a_dataset_that_is_not_a_branch_is_refused_naming_what_it_is(system, bra
     with pytest.raises(ParameterError, match=r"got a two-parameter curve dataset \(PD curve "
                                              r"over 'omega,b'\)"):
         continuation_from(cv, 0)
+
+
+@pytest.mark.parametrize("newton_tol", [1.0, 1e-5, 2e-7])
+def test_a_newton_tolerance_the_closed_form_cannot_keep_is_refused(system, branch, newton_tol):
+    """Above 1e-7, eq. (14)'s tolerance for a motion, an accepted point could be no motion:
+    refused naming newton_tol (1.0 failed inside the motion's eq. 14 check)."""
+    match = (rf"option newton_tol = {newton_tol!r} is invalid; the closed form of N-1 motions "
+             r"takes at most 1e-07")
+    with pytest.raises(ContinuationOptionError, match=match):
+        ic.continuation(system, 1, "omega", (1.4, 2.0), newton_tol=newton_tol, progress=False)
+    with pytest.raises(ContinuationOptionError, match=match):
+        continuation_from(branch, 3, newton_tol=newton_tol, progress=False)
+
+
+def test_the_largest_newton_tolerance_of_the_closed_form_keeps_every_point(system):
+    ds = ic.continuation(system, 1, "omega", (0.5, 3.0), newton_tol=1e-7, progress=False)
+    for k in range(0, ds.sizes["point"], 7):  # each point a motion (eq. 14 checked)
+        orbit = orbit_at_phase(system.replace(omega=float(ds.omega.values[k])), 1,
+                                  float(ds.delta.values[k]))
+        assert orbit.impact_velocity == pytest.approx(float(ds.impact_velocity.values[k]),
+                                                      rel=1e-5)
 
 
 # -- issue 28: bounds of an element checked up front; a failure keeps what was computed ------
