@@ -44,7 +44,7 @@ from impactcont.plots.branches import (
     system_text,
 )
 from impactcont.plots.labels import marker_boxes, merged_labels, place_labels
-from impactcont.vocabulary import check_positive_integer
+from impactcont.vocabulary import Label, check_positive_integer
 
 __all__ = ["CODIM2_NAMES", "CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES",
            "MULTI_MAP_BOUNDARIES", "MULTI_MAP_REGIONS", "REGIONS", "codim2_legend",
@@ -54,18 +54,8 @@ __all__ = ["CODIM2_NAMES", "CODIM2_STYLES", "CURVE_PARTS", "CURVE_STYLES",
 logger = logging.getLogger(__name__)
 
 #: Colour of each kind of curve (the line style says what crossing it changes:
-#: :data:`CURVE_PARTS`).
-CURVE_STYLES: dict[str, dict[str, Any]] = {
-    "SN": {"color": "black"},
-    "PD": {"color": "tab:red"},
-    "NS": {"color": "tab:purple"},
-    "GR": {"color": "tab:green"},
-    "ZV": {"color": "tab:blue"},
-    "BP": {"color": "tab:orange"},
-    "SE": {"color": "tab:brown"},
-    "RG": {"color": "tab:pink"},
-    "SO": {"color": "tab:olive"},
-}
+#: :data:`CURVE_PARTS`): the kind's own (:attr:`~impactcont.vocabulary.Label.colour`).
+CURVE_STYLES: dict[str, dict[str, Any]] = {kind.value: {"color": kind.colour} for kind in Label}
 
 #: Line style of each part of a curve, as the legend names it: bold where
 #: crossing it changes an observable stable motion (``stable_side``), thin where

@@ -685,8 +685,12 @@ class ShootingCurve:
         impact velocity (ZV) and clearance (GR) over the p impacts and flights, the signed
         smallest singular value of the branch problem's Jacobian in ``u`` (SN: the branch
         in ``p1`` folds), the PD and NS products free of the poles of every impact
-        (:func:`~impactcont.problems.events.event_function`)."""
-        return _CODIM2_TESTS[test](self, x, orbit)
+        (:func:`~impactcont.problems.events.event_function`): the branch problem's own test
+        of each kind but the fold (its ``motion_tests``, :mod:`impactcont.problems.events`;
+        SE, RG and SO those of a branch of motions with sticking phases)."""
+        if test is Label.SN:
+            return self.fold_test(x)
+        return float(self.branch_problem(float(x[-1])).motion_tests[test].test(orbit))
 
     def fold_test(self, x: np.ndarray) -> float:
         """``sigma(dF/du)`` at the curve point ``x = [u, p1, p2]`` (zero at a fold in p1)."""
@@ -959,24 +963,15 @@ _KINDS: dict[Label, _Kind] = {
                     sticky_only=True, choose_stick=ShootingCurve._least_landing),
 }
 
-#: The kinds of curves that bound periodic motions with sticking phases.
-STICKING_CURVE_KINDS: tuple[Label, ...] = (Label.SE, Label.RG, Label.SO)
+#: The kinds of curves that bound periodic motions with sticking phases (SE, RG, SO: the
+#: kinds of :data:`_KINDS` with ``sticky_only``).
+STICKING_CURVE_KINDS: tuple[Label, ...] = tuple(kind for kind, entry in _KINDS.items()
+                                                if entry.sticky_only)
 
 #: The codim-2 tests whose sign change takes a motion with sticking phases out of the
-#: physical motions (:meth:`ShootingCurve.physical_end`).
-_BOUNDS_PHYSICAL = (Label.SE, Label.RG, Label.SO, Label.GR, Label.ZV)
-
-#: The test function of each kind at a point of a curve of another kind.
-_CODIM2_TESTS: dict[Label, Callable[[ShootingCurve, np.ndarray, Any], float]] = {
-    Label.ZV: lambda problem, x, orbit: orbit.impact_velocity,
-    Label.GR: lambda problem, x, orbit: orbit.gap_min,
-    Label.SN: lambda problem, x, orbit: problem.fold_test(x),
-    Label.PD: lambda problem, x, orbit: float(event_function(Label.PD, orbit)),
-    Label.NS: lambda problem, x, orbit: float(event_function(Label.NS, orbit)),
-    Label.SE: lambda problem, x, orbit: stick_end_test(orbit),
-    Label.RG: lambda problem, x, orbit: release_grazing_test(orbit),
-    Label.SO: lambda problem, x, orbit: sticking_onset_test(orbit),
-}
+#: physical motions (:meth:`ShootingCurve.physical_end`): the kinds that bound them
+#: (:attr:`~impactcont.vocabulary.Label.bounds`: GR, ZV, SE, RG, SO, FT).
+_BOUNDS_PHYSICAL = tuple(kind for kind in Label if kind.bounds)
 
 
 #: The earlier name of :class:`ShootingCurve` (``impactcont.problems.multi_impact_curve``).
@@ -1020,6 +1015,9 @@ def curve_kind(kind: object, argument: str = "kind", kinds: tuple[Label, ...] = 
                "start from a special point of a branch of such motions, a pattern with "
                "lowercase letters)"
                if label in STICKING_CURVE_KINDS and label not in kinds else "")
+        if label is not None and label.singular:
+            why = (f" ({label}, {label.words}, has no curve yet: its points are singular "
+                   "points of the shooting system, which the augmented system cannot follow)")
         raise ParameterError(f"{argument} must be one of {tuple(map(str, kinds))}; got "
                              f"{kind!r}{why}")
     return Label(kind)

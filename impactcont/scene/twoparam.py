@@ -74,6 +74,10 @@ _CURVE_KINDS = CURVE_KINDS  # the curves of N-1 motions (closed form)
 #: entry): the N-1 kinds, BP of symmetric motions, SE, RG and SO of motions with sticking
 #: phases.
 _NP_KINDS = tuple(str(kind) for kind in SHOOTING_KINDS)
+#: What ``kind`` may be, in words: from the kinds themselves.
+_KIND_HELP = (f"the curve: {', '.join(_CURVE_KINDS)}; from an N-p branch also "
+              + ", ".join(f"{kind} ({kind.words})" for kind in SHOOTING_KINDS
+                          if kind not in _CURVE_KINDS))
 #: The sections whose branches are of N-p motions (a curve from them is followed by
 #: shooting).
 _NP_SECTIONS = ("multi_impact", "switches")
@@ -139,9 +143,7 @@ class CurveSpec(continuation_entry(curve, "CurveEntry")):
 
     section: ClassVar[str] = "curves"
 
-    kind: str = declare(String(_NP_KINDS), "the curve: SN, PD, NS, GR or ZV; from an N-p "
-                        "branch also BP (symmetric motions), SE, RG or SO (sticking phases)",
-                        required=True)
+    kind: str = declare(String(_NP_KINDS), _KIND_HELP, required=True)
     N: int | None = declare(Integer(1, 1000), "one impact every N forcing periods (default: "
                             "the start branch's, else 1; an N-p start's N and p are its own)")
     parameters: tuple[str, str] = declare(_ParameterPair(), "the two parameters [p1, p2]",

@@ -418,3 +418,32 @@ def test_linearize_takes_no_row_where_the_residual_is_not_finite(monkeypatch):
     monkeypatch.setattr(ShootingCurve, "_test_gradient", lambda *args: pytest.fail("a row"))
     residual, extended = problem.linearize(x, lam)
     assert math.isnan(residual[-1]) and np.isnan(extended).all()
+
+
+def test_the_codim2_tests_are_the_branch_problems_own(ride) -> None:
+    """Issue 29, 2: a shooting curve watches each other kind by the branch problem's own
+    test of the motion (its ``motion_tests``), the fold by sigma(dF/du): the numbers the
+    per-kind table gave (impact velocity, clearance, the pole-free products, the sticking
+    tests), so a new kind needs no entry there."""
+    from impactcont.problems.events import event_function
+    from impactcont.problems.multi_impact_branch import (
+        release_grazing_test,
+        stick_end_test,
+        sticking_onset_test,
+    )
+    from impactcont.vocabulary import Label
+
+    osc = ride.oscillator
+    x = np.append(np.append(ride.unknowns, osc.omega), osc.eta)
+    pd = ShootingCurve(osc, 1, 2, ride.pattern, "PD", ("omega", "eta"), symmetric=False)
+    orbit = pd.orbit(x[:-1], x[-1])
+    former = {Label.ZV: orbit.impact_velocity, Label.GR: orbit.gap_min,
+              Label.SN: pd.fold_test(x), Label.NS: event_function(Label.NS, orbit),
+              Label.SE: stick_end_test(orbit), Label.RG: release_grazing_test(orbit),
+              Label.SO: sticking_onset_test(orbit)}
+    assert set(pd.codim2_tests) == set(former)
+    for test in pd.codim2_tests:
+        assert pd.codim2_test(test, x, orbit) == former[test]
+    # the end of a flight has no curve (a singular point of the shooting), refused so
+    with pytest.raises(ParameterError, match="has no curve yet: its points are singular"):
+        ShootingCurve(osc, 1, 2, ride.pattern, "FT", ("omega", "eta"), symmetric=False)
