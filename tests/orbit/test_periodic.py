@@ -359,3 +359,20 @@ def test_impact_states_are_the_states_of_periodic_orbits(damping):
     with pytest.raises(ParameterError, match=r"delta and sigma must be 1-D arrays of the same "
                                              r"length; got shapes \(2,\) and \(1,\)"):
         impact_states(base, 1, np.zeros(2), np.zeros(1))
+
+
+def test_physical_transition_of_complex_pieces_is_two_real_ones():
+    """Complex-stepped modal pieces (the N-1 curves' Jacobian) take two real transitions:
+    the same sums as the compiled loops in complex arithmetic, to the last bit."""
+    from impactcont.kernel import closed_form, flights
+    from impactcont.orbit.periodic import modal_arrays, physical_transition
+
+    osc = ic.ImpactOscillator.chain(masses=[1.0, 0.5, 2.0], springs=[1.0, 2.0, 0.7],
+                                    F=[1.0, 0.0, 0.2], R=0.7, b=0.1, omega=1.3, eta=0.05)
+    arrays = modal_arrays(osc)
+    modal, _ = closed_form.omega_setup(arrays.w, arrays.a, arrays.f, arrays.u0, arrays.ui0,
+                                       arrays.eig_err, osc.R, osc.omega, 1)
+    stepped = modal + 1j * 1e-30 * np.arange(1.0, 1.0 + modal.size).reshape(modal.shape)
+    tr = physical_transition(osc, stepped)
+    assert tr.dtype == complex
+    np.testing.assert_array_equal(tr, flights.transition(stepped, arrays.u, arrays.ui))
