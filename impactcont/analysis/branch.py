@@ -83,7 +83,7 @@ from impactcont.detection.special_points import (
 )
 from impactcont.errors import ImpactcontError, NoPeriodicMotionError, ParameterError
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import model_parameter
+from impactcont.model.parameters import check_model_bounds, model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns, multi_impact_orbit
 from impactcont.orbit.periodic import _PHASE_TOL, PeriodicOrbit, _check_N
 from impactcont.orbit.symmetry import admits_symmetric_motions, symmetry_defect
@@ -103,7 +103,7 @@ from impactcont.progress import (
     until_interrupted,
 )
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import LABELS, check_bounds, check_labels
+from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["as_multi_impact_orbit", "branch_problem", "branch_to_dataset",
            "check_continuation_arguments", "continuation", "continuation_from", "extend",
@@ -1007,7 +1007,7 @@ def _shooting_branch(start: MultiImpactOrbit | PeriodicOrbit, parameter: str,
     # the drivers' one check (as continuation's): two finite numbers lo < hi in the
     # parameter's range; then the stops' limits; then the oscillator at both ends (an
     # element of K keeps K positive semi-definite)
-    bounds = check_bounds(parameter, bounds)
+    bounds = check_model_bounds(parameter, bounds)
     problem, u0 = branch_problem(orbit, parameter, symmetric)
     problem.check_bounds(bounds)
     param.check_bounds(orbit.oscillator, bounds)
@@ -1514,7 +1514,8 @@ def continuation_from(branch: xr.Dataset, point: int | None = None, *, label: st
     row, special = _start_row(branch, point, label, which)
     parameter = str(branch.attrs["parameter"])
     _check_finite_row(branch, row, special)
-    lo, hi = _branch_bounds(branch) if bounds is None else check_bounds(parameter, bounds)
+    lo, hi = _branch_bounds(branch) if bounds is None else check_model_bounds(parameter,
+                                                                                  bounds)
     record = {"restart": {"point": None if special else row, "label": label,
                           "which": which if special else None, "along": along}}
     return _restart(branch, row, special, along, (lo, hi), detect, options, single, progress,
@@ -1587,7 +1588,7 @@ def extend(branch: xr.Dataset, bounds: Sequence[float], *, detect: Sequence[str]
     functions = _same_user_functions(branch, events, monitors)
     parameter = str(branch.attrs["parameter"])
     old = _branch_bounds(branch)
-    lo, hi = check_bounds(parameter, bounds)
+    lo, hi = check_model_bounds(parameter, bounds)
     if not (lo <= old[0] and hi >= old[1] and (lo, hi) != old):
         raise ParameterError(f"bounds must contain the branch's bounds {list(old)} and reach "
                              f"past at least one of them; got {bounds!r}")

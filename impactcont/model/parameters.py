@@ -49,8 +49,8 @@ from impactcont.vocabulary import (
 )
 
 __all__ = ["DAMPING", "FD_RELATIVE_STEP", "FORCING", "FREQUENCY", "GAP", "MASS", "RESTITUTION",
-           "STIFFNESS", "ModelParameter", "ParameterView", "chain_elements", "entry_range",
-           "model_parameter"]
+           "STIFFNESS", "ModelParameter", "ParameterView", "chain_elements", "check_model_bounds",
+           "entry_range", "model_parameter"]
 
 #: The flight data a parameter changes.
 FREQUENCY = "forcing frequency"
@@ -108,6 +108,48 @@ class ParameterView(Mapping[str, _T], Generic[_T]):
 
     def __len__(self) -> int:
         return len(self._names)
+
+
+def check_model_bounds(parameter: str, bounds: Any, argument: str = "bounds"
+                       ) -> tuple[float, float]:
+    """:func:`~impactcont.vocabulary.check_bounds`, saying why a spring of the chain may
+    not reach 0.
+
+    A spring ``k_j = 0`` takes the spring away: K becomes singular (a mode of zero
+    frequency, masses free of the ground or of each other), which is another oscillator,
+    not a point of a branch. Near it the modes' frequencies go to 0 like ``sqrt(k_j)`` and
+    the N-1 closed form stalls (the paper's system with k1 = 0.5 in bounds (1e-6, 0.5):
+    steps below ds_min at k1 = 9e-6; from 1e-3 it reaches the bound).
+
+    Raises
+    ------
+    ParameterError
+        As :func:`~impactcont.vocabulary.check_bounds`; bounds of a spring ``k<j>`` that
+        reach ``k_j <= 0`` name the spring, the end and why.
+    """
+    try:
+        return check_bounds(parameter, bounds, argument)
+    except ParameterError:
+        element = element_name(parameter)
+        lo = _lower_end(bounds)
+        if element is not None and element[0] == "k<j>" and lo is not None and lo <= 0.0:
+            raise ParameterError(
+                f"{argument} {bounds!r} for {parameter} reach {parameter} = {lo!r}: a spring "
+                f"of the chain at 0 is taken away (K singular: a mode of zero frequency, "
+                f"another oscillator), which no branch reaches; allowed: bounds with "
+                f"{parameter} > 0 (a branch may stall before 0, where K nears a singular "
+                f"matrix), or an oscillator built with that spring at 0 (free masses held "
+                f"by stops) and another parameter continued") from None
+        raise
+
+
+def _lower_end(bounds: Any) -> float | None:
+    """The lower end of `bounds` when it is a pair of finite real numbers, else None."""
+    try:
+        lo, hi = (float(v) for v in bounds)
+    except (TypeError, ValueError):
+        return None
+    return min(lo, hi) if math.isfinite(lo) and math.isfinite(hi) else None
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -206,7 +248,7 @@ class ModelParameter:
         ParameterError
             Naming `argument`, the value, the end the oscillator refuses and why.
         """
-        lo, hi = check_bounds(self.name, bounds, argument)
+        lo, hi = check_model_bounds(self.name, bounds, argument)
         if self.data == FREQUENCY:  # omega > 0 is all the oscillator asks
             return lo, hi
         ends = (lo, hi, 0.0) if self.data == FORCING and lo < 0.0 < hi else (lo, hi)

@@ -479,3 +479,31 @@ def test_parameter_view_resolves_every_vocabulary_name_and_lists_the_given_ones(
     names = ParameterView(lambda p: p.name, ("omega", "b"))
     assert list(names) == ["omega", "b"] and len(names) == 2
     assert names["F[2]"] == "F[2]"  # a lookup is not limited to the names listed
+
+
+@pytest.mark.parametrize("bounds", [(0.0, 0.5), (-1.0, 0.5)])
+def test_a_spring_reaching_zero_is_refused_saying_why(bounds):
+    """k_j = 0 takes the spring away (K singular, another oscillator): refused by every
+    driver naming the spring, the end and why (it said only 'finite and > 0')."""
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[0.5, -0.5], [-0.5, 1.5]], F=[1.0, 0.0], R=0.6,
+                              b=0.0, omega=1.5, eta=0.1)
+    match = (rf"bounds \({bounds[0]}, 0\.5\) for k1 reach k1 = {bounds[0]}: a spring of the "
+             r"chain at 0 is taken away \(K singular.*allowed: bounds with k1 > 0")
+    with pytest.raises(ic.ParameterError, match=match):
+        model_parameter(osc, "k1").check_bounds(osc, bounds)
+    with pytest.raises(ic.ParameterError, match=match):
+        ic.continuation(osc, 1, "k1", bounds, progress=False)
+    motion = multi_impact_orbit(osc, 1, 1, next(o for o in ic.periodic_orbits(osc, 1)
+                                                 if o.physical))
+    with pytest.raises(ic.ParameterError, match=match):
+        multi_impact_continuation(motion, "k1", bounds, progress=False)
+    # other refusals of the range keep their words
+    with pytest.raises(ic.ParameterError, match=r"bounds must be two finite numbers .*inf"):
+        model_parameter(osc, "k1").check_bounds(osc, (0.1, math.inf))
+
+
+def test_a_spring_branch_from_just_above_zero_reaches_its_bound():
+    osc = ic.ImpactOscillator(M=np.eye(2), K=[[0.5, -0.5], [-0.5, 1.5]], F=[1.0, 0.0], R=0.6,
+                              b=0.0, omega=1.5, eta=0.1)
+    ds = ic.continuation(osc, 1, "k1", (1e-3, 0.5), components="start", progress=False)
+    assert float(ds["k1"].min()) == 1e-3 and float(ds["k1"].max()) == 0.5
