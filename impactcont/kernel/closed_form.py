@@ -462,15 +462,17 @@ def pd_condition_slope(tr, d_tr, modal, d_modal, w, a, u, ui0, point, d_point, l
     G_reg, av, bv, h2 = jacobian_split(tr, modal, w, a, w, u, ui0, omega, R, delta, sigma)
     A = _pd_bordered(G_reg, av, bv, h2, left, right)
     k = A.shape[0]
-    At = A.T.copy()
+    slopes = np.full(d_point.shape[0], np.nan)
+    At = A.T.copy() if slopes.size > 0 else np.empty((0, 0))  # the solve overwrites A
     x = np.zeros(k)
     x[k - 1] = 1.0
-    psi = np.zeros(k)
-    psi[k - 1] = 1.0
-    slopes = np.full(d_point.shape[0], np.nan)
     if not _solve_in_place(A, x):
         return np.nan, slopes
-    if d_point.shape[0] == 0 or not _solve_in_place(At, psi):
+    if slopes.size == 0:
+        return x[k - 1], slopes
+    psi = np.zeros(k)
+    psi[k - 1] = 1.0
+    if not _solve_in_place(At, psi):
         return x[k - 1], slopes
     m = k - 2
     n = m // 2

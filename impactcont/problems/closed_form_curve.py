@@ -310,11 +310,10 @@ class _Pieces:
             return kernel.pd_condition(self.transition, *self._kernel_args(delta), left, right)
         # real: the compiled variant the exact Jacobian uses, with no direction
         arrays = modal_arrays(self.osc)
-        n = self.modal.shape[1]
+        d_tr, d_modal, d_point = _no_directions(self.modal.shape[1])
         point = np.array([self.omega, self.R, delta, self.impact_velocity(delta)])
-        g, _ = kernel.pd_condition_slope(self.transition, np.empty((0, 2 * n, 2 * n)),
-                                         self.modal, np.empty((0, 8, n)), arrays.w, arrays.a,
-                                         arrays.u, arrays.ui0, point, np.empty((0, 4)), left,
+        g, _ = kernel.pd_condition_slope(self.transition, d_tr, self.modal, d_modal, arrays.w,
+                                         arrays.a, arrays.u, arrays.ui0, point, d_point, left,
                                          right)
         return g
 
@@ -347,6 +346,13 @@ class _Pieces:
                                             delta, ks, self.w, self.a, u0,
                                             self.modal[6].copy(), self.modal[7].copy())
         return x, v
+
+
+@functools.cache
+def _no_directions(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Empty direction arrays of :func:`~impactcont.kernel.closed_form.pd_condition_slope`
+    for ``n`` modes (``g`` alone), shared: nothing writes them."""
+    return np.empty((0, 2 * n, 2 * n)), np.empty((0, 8, n)), np.empty((0, 4))
 
 
 def _velocity_slope(pc: _Pieces, delta: float, d_scalars: np.ndarray, d_point: np.ndarray,
