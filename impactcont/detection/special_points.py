@@ -187,11 +187,14 @@ def detect_special_points(problem: Any, samples: Sequence[BranchSample],
                   for checks in (False, True)}
     else:  # the closed form checks at no cost: one motion per trial point
         orbits = dict.fromkeys((False, True), last_motions(problem.orbit))
+    # the kinds whose zeros are singular points of the branch's system: interpolated
+    singular = [label for label in watched
+                if Label(label).singular and tests.get(label) is not None]
     events = [Event(label, None) if tests.get(label) is None  # the fold: d lam / ds
               else kind_event(label, tests[label], orbits[tests[label].checks],
                               lambda k: samples[k].orbit)
               for label in watched
-              if not (label == Label.SN and locate_fold is not None)]
+              if not (label == Label.SN and locate_fold is not None) and label not in singular]
     candidates: list[tuple[int, Label, np.ndarray, float, float, str, bool]] = []
     k = 0
     try:
@@ -206,14 +209,15 @@ def detect_special_points(problem: Any, samples: Sequence[BranchSample],
                                 newton_tol=_XTOL):
             candidates.append((ep.step, Label(ep.label), np.asarray(ep.u, dtype=float),
                                ep.lam, ep.precision, ep.status, ep.failed))
+        for label in singular:
+            candidates.extend(_singular_points(problem, samples, Label(label), tests[label],
+                                               orbits[tests[label].checks]))
     except KeyboardInterrupt:  # the first Ctrl-C of a driver's call: those located are kept
         where = "" if k < 0 else f" the fold between points {k} and {k + 1}"
         if not (candidates and take_interrupt(
                 "location", "interrupted by the user (KeyboardInterrupt) while locating%s: "
                 "the %d special points located before are kept", where, len(candidates))):
             raise
-    candidates = [_at_singular_point(problem, samples, candidate, tests.get(candidate[1]))
-                  for candidate in candidates]
     order = {label: i for i, label in enumerate(watched)}
     candidates.sort(key=lambda c: (c[0], order[c[1]]))
     found: list[SpecialPoint] = []
@@ -356,21 +360,44 @@ _NODES_PER_SIDE = 2
 Candidate = tuple[int, Label, np.ndarray, float, float, str, bool]
 
 
-def _at_singular_point(problem: Any, samples: Sequence[BranchSample], candidate: Candidate,
-                       test: MotionTest | None) -> Candidate:
-    """`candidate`, or, for a kind whose zero is a singular point of the branch's system
-    (:attr:`~impactcont.vocabulary.Label.singular`, FT) that the chord location could not
-    reach, its zero interpolated from the branch on both sides (:func:`_singular_zero`)."""
-    step, label, _, _, _, _, failed = candidate
-    if not (failed and label.singular and test is not None):
-        return candidate
-    zero = _singular_zero(problem, test, samples[step], samples[step + 1])
-    if zero is None:
-        return candidate
-    x, precision = zero
-    log.debug("%s between points %d and %d interpolated at %s=%.15g (precision %.1e)",
-              label, step, step + 1, getattr(problem, "parameter", "lam"), x[-1], precision)
-    return step, label, x[:-1], float(x[-1]), precision, "located", False
+def _singular_points(problem: Any, samples: Sequence[BranchSample], label: Label,
+                     test: MotionTest, orbit_at: Callable[[Any, float], Any]
+                     ) -> list[Candidate]:
+    """The zeros of the test of a kind whose zeros are singular points of the branch's
+    system (:attr:`~impactcont.vocabulary.Label.singular`, FT), as candidates.
+
+    On each step where the test changes sign between accepted points (beyond its rounding
+    at both) the zero is interpolated from the branch on both sides
+    (:func:`_singular_zero`); where too few branch points are reached for that, it is
+    located on the chord as any kind's (:func:`~impactcont.core.locate_events` on that step,
+    ``bracketed`` where that fails too). A test dipping through 0 and back inside one step
+    is not searched (a flight time does not).
+    """
+    values = [test.test(sample.orbit) for sample in samples]
+    found: list[Candidate] = []
+    for k in range(len(samples) - 1):
+        a, b = values[k], values[k + 1]
+        if math.isnan(a) or math.isnan(b) or (a < 0.0) == (b < 0.0):
+            continue
+        if test.noise is not None and abs(a) <= test.noise(samples[k].orbit) \
+                and abs(b) <= test.noise(samples[k + 1].orbit):
+            continue  # a sign change by rounding only
+        zero = _singular_zero(problem, test, samples[k], samples[k + 1])
+        if zero is not None:
+            x, precision = zero
+            log.debug("%s between points %d and %d interpolated at %s=%.15g (precision "
+                      "%.1e)", label, k, k + 1, getattr(problem, "parameter", "lam"), x[-1],
+                      precision)
+            found.append((k, label, x[:-1], float(x[-1]), precision, "located", False))
+            continue
+        pair = samples[k:k + 2]
+        event = kind_event(label, test, orbit_at, lambda j, pair=pair: pair[j].orbit)
+        for ep in locate_events(problem, [s.u for s in pair], [s.lam for s in pair],
+                                [s.tangent for s in pair], [event], s_tol=_XTOL,
+                                newton_tol=_XTOL):
+            found.append((k + ep.step, label, np.asarray(ep.u, dtype=float), ep.lam,
+                          ep.precision, ep.status, ep.failed))
+    return found
 
 
 def _singular_zero(problem: Any, test: MotionTest, left: BranchSample, right: BranchSample

@@ -476,3 +476,51 @@ def test_points_among_motions_past_the_end_of_a_flight_are_none():
 
     assert _past_singular_bound(BRANCH_TESTS, motion(2.0, -0.1), motion(-0.3, 2.0)) is Label.FT
     assert _past_singular_bound(BRANCH_TESTS, motion(2.0, -0.1), motion(0.3, 2.0)) is None
+
+
+def test_a_singular_kinds_zero_is_interpolated_from_the_branch_on_both_sides():
+    """_singular_zero on a branch known in closed form, u = lam + lam^3 / 10, with the test
+    u - 0.3: the zero is where lam + lam^3 / 10 = 0.3, found within its stated precision;
+    the candidates of such a kind are its interpolated zeros, located."""
+    from types import SimpleNamespace
+
+    from scipy.optimize import brentq
+
+    from impactcont.core.locate import MotionTest
+    from impactcont.detection.special_points import (
+        BranchSample,
+        _singular_points,
+        _singular_zero,
+    )
+    from impactcont.vocabulary import Label
+
+    class Cubic:
+        def residual(self, u, lam):
+            return np.array([u[0] - lam - lam**3 / 10])
+
+        def jacobian(self, u, lam):
+            return np.array([[1.0]])
+
+        def dparam(self, u, lam):
+            return np.array([-1.0 - 3 * lam**2 / 10])
+
+        def orbit(self, u, lam, *, checks=True):
+            return SimpleNamespace(u=float(u[0]))
+
+    problem = Cubic()
+    test = MotionTest(lambda motion: motion.u - 0.3)
+
+    def sample(lam):
+        u = np.array([lam + lam**3 / 10])
+        tangent = np.array([1.0 + 3 * lam**2 / 10, 1.0]) / np.hypot(1.0 + 3 * lam**2 / 10, 1)
+        return BranchSample(u=u, lam=lam, tangent=tangent, orbit=problem.orbit(u, lam))
+
+    left, right = sample(0.2), sample(0.45)
+    x, precision = _singular_zero(problem, test, left, right)
+    exact = brentq(lambda lam: lam + lam**3 / 10 - 0.3, 0.0, 1.0, xtol=1e-15)
+    assert precision < 1e-10
+    assert abs(x[-1] - exact) <= precision and abs(x[0] - 0.3) < 1e-10
+    found = _singular_points(problem, [sample(0.0), left, right, sample(0.7)], Label.FT, test,
+                             problem.orbit)
+    assert [(k, label, status) for k, label, _, _, _, status, _ in found] == [
+        (1, Label.FT, "located")]
