@@ -200,7 +200,7 @@ def test_resolved_scene_round_trips(tmp_path: Path) -> None:
     scene = load_scene(write(tmp_path, SMALL_SCENE))
     resolved = scene.to_dict()
     assert resolved["branches"][0]["detect"] == ["SN", "PD", "NS", "GR", "ZV", "BP", "SE", "RG",
-                                                 "SO"]  # default: every kind
+                                                 "SO", "FT"]  # default: every kind
     assert resolved["branches"][0]["ds"] == 0.02
     again = parse_scene(json.loads(scene.to_json()))
     assert again.to_dict() == resolved
