@@ -627,11 +627,15 @@ def _coordinate(normal: np.ndarray) -> str:
 
 
 def _as_shooting(out: ShotFlights, jacobian: bool) -> Shooting:
-    """:class:`Shooting` from :func:`shooting_kernel.shooting_system`'s record."""
-    return Shooting(phases=out.phases, flight_times=out.flight_times, starts=out.starts,
-                    arrivals=out.arrivals, arrival_rates=out.arrival_rates,
-                    transitions=out.transitions, phase_columns=out.phase_columns,
-                    residual=out.residual, jacobian=out.jacobian if jacobian else None)
+    """:class:`Shooting` from :func:`shooting_kernel.shooting_system`'s record (without the
+    frozen dataclass's ``__init__``, one ``object.__setattr__`` per field: a few
+    microseconds of every solve and branch point, as :func:`_motion`)."""
+    sh = object.__new__(Shooting)
+    sh.__dict__.update(phases=out.phases, flight_times=out.flight_times, starts=out.starts,
+                       arrivals=out.arrivals, arrival_rates=out.arrival_rates,
+                       transitions=out.transitions, phase_columns=out.phase_columns,
+                       residual=out.residual, jacobian=out.jacobian if jacobian else None)
+    return sh
 
 
 def flight_jacobian(transition: np.ndarray, phase_column: np.ndarray, rate: np.ndarray,
@@ -908,7 +912,7 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
         raise ParameterError("guess must hold finite phases, flight times, stick times and "
                              "states")
     if gpat is not None:
-        gpat = check_pattern(gpat, p, osc.stops, sticking=True)
+        gpat = _checked_pattern(osc, gpat, p)
         if pattern is not None and gpat != pattern:
             raise ParameterError(f"pattern={pattern!r} differs from the guess's impact sequence "
                                  f"{gpat!r}; give pattern={gpat!r}, or a guess with the "
@@ -920,6 +924,20 @@ def _seed(guess: Any, osc: ImpactOscillator, N: int, p: int, pattern: str | None
     pivots = stop_geometry(osc, impacts).pivots
     return np.concatenate([[delta], taus[:-1], sticks[held],
                            _section_unknowns(states, pivots)]), pattern
+
+
+def _checked_pattern(osc: ImpactOscillator, pattern: str, p: int) -> str:
+    """``check_pattern(pattern, p, osc.stops, sticking=True)``, kept on the oscillator's flow
+    when it has one (a pure function of the pattern and the stops: a guess solved again at
+    one oscillator checks its pattern once)."""
+    flow = osc.__dict__.get("_flow")
+    if flow is None:
+        return check_pattern(pattern, p, osc.stops, sticking=True)
+    known = flow.__dict__.setdefault("_checked_patterns", {})
+    checked = known.get((pattern, p))
+    if checked is None:
+        checked = known[(pattern, p)] = check_pattern(pattern, p, osc.stops, sticking=True)
+    return checked
 
 
 def _all_finite(a: np.ndarray) -> bool:
@@ -967,14 +985,15 @@ def shooting_accuracy(jacobian: np.ndarray, residual: np.ndarray, u: np.ndarray
     """
     if not (_all_finite(jacobian) and _all_finite(residual)):
         return math.inf, math.inf
-    s = _singular_values(jacobian)
+    s, step = _values_and_step(jacobian, residual)
     if not s[-1] > 0:
         return math.inf, math.inf
     cond = float(s[0] / s[-1])
-    try:
-        step = _solve(jacobian, residual)
-    except np.linalg.LinAlgError:  # an exact zero pivot where s_min > 0 only by rounding
-        return math.inf, math.inf
+    if step is None:
+        try:
+            step = _solve(jacobian, residual)
+        except np.linalg.LinAlgError:  # an exact zero pivot where s_min > 0 only by rounding
+            return math.inf, math.inf
     correction = math.sqrt(float(step @ step))  # |J^-1 r|, as np.linalg.norm computes it
     return cond, correction + cond * _EPS * max(1.0, float(np.maximum.reduce(np.abs(u),
                                                                              axis=None)))
@@ -1008,6 +1027,22 @@ def _singular_values(a: np.ndarray) -> np.ndarray:
         if _all_finite(s):
             return s
     return np.linalg.svd(a, compute_uv=False)
+
+
+def _values_and_step(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`_singular_values` of `a` and, when it is finite, :func:`_solve`'s ``a^-1 b``
+    (else None: the caller takes :func:`_solve`, which raises as it does), both LAPACK
+    calls inside one ``np.errstate`` (entering one costs a few microseconds: every solve's
+    :func:`shooting_accuracy` makes them). The same values as the two functions give."""
+    if (_SVD_VALUES is None or _SOLVE_VECTOR is None or a.dtype != _FLOAT64
+            or b.dtype != _FLOAT64 or a.ndim != 2 or b.ndim != 1):
+        return _singular_values(a), None
+    with np.errstate(all="ignore"):  # a failure gives NaN: the public calls
+        s = _SVD_VALUES(a, signature="d->d")
+        x = _SOLVE_VECTOR(a, b, signature="dd->d")
+    if not _all_finite(s):
+        s = np.linalg.svd(a, compute_uv=False)
+    return s, (x if _all_finite(x) else None)
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -1343,12 +1378,15 @@ def multi_impact_orbit(osc: ImpactOscillator, N: int, p: int, guess: Any, *,
     p = check_impacts(p)
     if not isinstance(osc, ImpactOscillator):
         raise TypeError(f"osc must be an ImpactOscillator; got {type(osc).__name__}")
-    require_forcing(osc, "multi_impact_orbit")
+    known = osc.__dict__.get("_flow")
+    if known is None or "_forced" not in known.__dict__:  # checked once per oscillator
+        require_forcing(osc, "multi_impact_orbit")
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not tol > 0:
         raise ParameterError(f"tol must be a real number > 0; got {tol!r}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
         raise ParameterError(f"max_iter must be an integer >= 1; got {max_iter!r}")
     flow = flow_of(osc)
+    flow.__dict__["_forced"] = True
     u0, pattern = _seed(guess, osc, N, p, pattern)
     if pattern != pattern.upper() and np.any(sticking_pattern(osc, pattern)[1]):
         return _sticky_solver()(flow, N, pattern, u0, tol, max_iter)
