@@ -358,6 +358,17 @@ class HeldFlow:
         moving, placeholder, searched = found
         return moving, searched, placeholder
 
+    def _fastest_rate(self) -> float:
+        """The largest ``|lambda|`` of the held system's first-order flow (0 without one),
+        kept: :meth:`pressing_minimum`'s grid of every sticking phase reads it."""
+        cached = self.__dict__.get("_fastest")
+        if cached is None:
+            cached = 0.0
+            if self.reduced is not None:  # a first-order flow: its eigenvalues lambda
+                cached = float(np.max(np.abs(self.reduced.lam), initial=0.0))
+            object.__setattr__(self, "_fastest", cached)
+        return cached
+
     def pressing_minimum(self, duration: float, X0: np.ndarray, theta: float, *,
                          samples: Callable[[np.ndarray], np.ndarray] | None = None
                          ) -> tuple[float, float]:
@@ -388,9 +399,7 @@ class HeldFlow:
         omega = self.oscillator.omega
         if not duration > 0.0:
             return float(self.pressing(np.asarray(X0, dtype=float), theta)), 0.0
-        rate = omega
-        if self.reduced is not None:  # a first-order flow: its eigenvalues lambda
-            rate = max(rate, float(np.max(np.abs(self.reduced.lam), initial=0.0)))
+        rate = max(omega, self._fastest_rate())
         count = int(min(2_000_000, max(64, math.ceil(32.0 * duration * rate / (2 * math.pi)))))
         t = np.linspace(0.0, duration, count + 1)
 
@@ -402,9 +411,9 @@ class HeldFlow:
 
         values = force(t)
         best, when = float(values[0]), 0.0
-        from scipy.optimize import minimize_scalar
-
         inner = np.flatnonzero((values[1:-1] <= values[:-2]) & (values[1:-1] <= values[2:])) + 1
+        if inner.size:  # scipy's import statement only where it refines a minimum
+            from scipy.optimize import minimize_scalar
         for i in inner:
             lo, hi = t[i - 1], t[min(i + 1, count)]
             res = minimize_scalar(lambda s: float(force(np.array([s]))[0]), bounds=(lo, hi),
