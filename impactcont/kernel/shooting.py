@@ -740,11 +740,19 @@ def _held_segment(held, k, omega, t, X0, theta, X, dX0, dtheta, rate):
 def _pressing(held, k, X, theta):
     """The pressing force of the stop held after impact k at ``X``, phase `theta`, and
     ``dp/dtheta``."""
-    g = held.grads[k]
-    s = held.levels[k]
+    return _pressing_at(held.grads[k], held.levels[k], held.forces[k], X, theta)
+
+
+@_inner
+def _pressing_at(g, level, force, X, theta):
+    """:func:`_pressing` from the held stop's ``dp/dX`` (`g`), constant part (`level`) and
+    complex forcing amplitude (`force`): ``p = level + g . X + Re(force e^{i theta})``
+    (what :func:`held_pressing` evaluates at every sample, without the 16 arrays of
+    :class:`~impactcont.kernel.arrays.HeldSegments` counted in and out each time)."""
+    s = level
     for i in range(g.size):
         s += g[i] * X[i]
-    e = complex(math.cos(theta), math.sin(theta)) * held.forces[k]
+    e = complex(math.cos(theta), math.sin(theta)) * force
     return s + e.real, (1j * e).real
 
 
@@ -1348,13 +1356,14 @@ def held_pressing(held, k, omega, X0, theta, times):
     arithmetic, without its derivatives)."""
     named = HeldSegments(*held)
     L, Li, Xc = named.lifts[k], named.inverses[k], named.offsets[k]
+    g, level, force = named.grads[k], named.levels[k], named.forces[k]
     m = Xc.size
     r = Li.shape[0]
     X = Xc.copy()
     out = np.empty(times.size)
     if r == 0:  # one mass held: the state stays
         for i in range(times.size):
-            out[i], _ = _pressing(named, k, X, theta + omega * times[i])
+            out[i], _ = _pressing_at(g, level, force, X, theta + omega * times[i])
         return out
     flight, forcing, Y0 = _held_start(named, k, omega, X0)
     tr = np.empty((r, r))
@@ -1369,7 +1378,7 @@ def held_pressing(held, k, omega, X0, theta, times):
                 lq = L[i, q]
                 if lq != 0.0:
                     X[i] += lq * Y[q]
-        out[j], _ = _pressing(named, k, X, theta + omega * times[j])
+        out[j], _ = _pressing_at(g, level, force, X, theta + omega * times[j])
     return out
 
 
