@@ -238,7 +238,8 @@ def contact_free_until(motion: StopMotion, level: float, t0: float,
 
 def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
                  after: dict[str, float] | None = None, stops: Any = None,
-                 releases: dict[str, np.ndarray] | None = None
+                 releases: dict[str, np.ndarray] | None = None,
+                 released: tuple[str, ...] = ()
                  ) -> tuple[float, np.ndarray, str] | None:
     """First impact on any stop within ``t_max`` of a flight from state X.
 
@@ -270,6 +271,10 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
         the flight's internal state (:meth:`Flight.row`) reaches 0 from below (the contact
         force of a held stop falling to zero, :mod:`impactcont.simulate.sticking`),
         searched with the stops; the event is returned under its name.
+    released : tuple of str
+        The stops of `after` the flight leaves at a release (zero speed and acceleration):
+        their ``after`` is the separation time, past which a landing is searched
+        (:func:`~impactcont.simulate.search.first_crossing`'s ``released``).
 
     Returns
     -------
@@ -301,7 +306,7 @@ def next_contact(flight: Any, X: np.ndarray, phase: float, t_max: float, *,
         targets[name] = (motion, 0.0, motion.row)
     if not targets:
         return None
-    return _first_event(fl, targets, t_max, after)
+    return _first_event(fl, targets, t_max, after, released)
 
 
 def _windows(fl: Any, row: np.ndarray) -> tuple[float, float]:
@@ -312,7 +317,7 @@ def _windows(fl: Any, row: np.ndarray) -> tuple[float, float]:
 
 
 def _first_event(fl: Any, targets: dict[str, tuple[StopMotion, float, np.ndarray]],
-                 t_max: float, after: dict[str, float]
+                 t_max: float, after: dict[str, float], released: tuple[str, ...] = ()
                  ) -> tuple[float, np.ndarray, str] | None:
     """The earliest first crossing of its level from below among `targets` (each a
     motion, a level and the row its grid follows), within ``t_max``; see
@@ -350,7 +355,8 @@ def _first_event(fl: Any, targets: dict[str, tuple[StopMotion, float, np.ndarray
                 # rounding of the evaluation, moving into it (no crossing from below to find)
                 tc: float | None = start
             else:
-                tc = first_crossing(motions[s], levels[s], grid, after=after.get(s, -math.inf))
+                tc = first_crossing(motions[s], levels[s], grid, after=after.get(s, -math.inf),
+                                    released=s in released)
             if tc is not None and (best is None or tc < best[0]):
                 best = (tc, s)
         if best is not None:

@@ -217,16 +217,25 @@ def turning_points(motion: StopMotion, grid: np.ndarray) -> np.ndarray:
 
 
 def first_crossing(motion: StopMotion, level: float, grid: np.ndarray, *,
-                   after: float = -math.inf) -> float | None:
+                   after: float = -math.inf, released: bool = False) -> float | None:
     """When ``y`` first reaches `level` from below in ``(grid[0], grid[-1]]``, to a few ulps
     or to where ``y`` is within 4 ulps of its size (:meth:`StopMotion.size`) of `level`
     (None when ``y < level`` throughout): the first piece between the grid's times and the
     turning points of ``y`` whose left end is below `level` and whose right end is not.
 
     A crossing whose piece ends by `after` is ignored: the rounding-size excursion of a
-    flight that starts on a stop and leaves it. `grid` comes from :func:`search_grid`.
+    flight that starts on a stop and leaves it. With `released` (a flight that leaves the
+    stop at zero speed and acceleration: a release) `after` is itself a piece's end: such
+    a flight starts with ``y``, ``y'`` and ``y''`` zero up to rounding, so the first cell
+    may hold the sign changes of ``y''`` and ``y'`` at the start and at the apex of a
+    short hop together, where the cell rule sees none (a ball released from a table that
+    landed again within that cell was searched past its landing); from `after` (the
+    separation time) on ``y`` is below `level` beyond rounding, so the landing is
+    bracketed. `grid` comes from :func:`search_grid`.
     """
     pieces = np.union1d(grid, turning_points(motion, grid))  # y monotone on each piece
+    if released and grid[0] < after < grid[-1]:
+        pieces = np.union1d(pieces, [after])
     gap = motion(pieces)[0] - level
     up = np.flatnonzero((gap[:-1] < 0) & (gap[1:] >= 0) & (pieces[1:] > after))
     if up.size == 0:

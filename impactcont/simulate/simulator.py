@@ -77,6 +77,9 @@ _ON_STOP = 1e-12  # allowance of a given start state past a stop (relative to it
 # a stop coordinate within this many ulps of its size from its stop touches it (rounding of
 # the state); a speed towards it within this many ulps of the velocities' size is zero
 _ON_ULPS = 256
+# a state past a stop by more than this fraction of its size (position and coordinates) is a
+# crossing the contact search missed (:func:`_check_sides`)
+_PAST_STOP = 1e-9
 _EPS = float(np.finfo(float).eps)
 # a bounce off a stop whose apex v^2 / (2 |x_j''|) lies within this many ulps of the stop
 # position cannot be resolved (the crossing test sees rounding, not the motion): complete
@@ -288,6 +291,21 @@ def _touching(X: np.ndarray, views: dict[str, StopView], last: str | None) -> li
         if name == last or view.sign * (view.position - s) <= band:
             out.append(name)
     return out
+
+
+def _check_sides(X: np.ndarray, views: dict[str, StopView], t: float) -> None:
+    """Refuse a state past a stop by more than ``_PAST_STOP`` of its size: a crossing the
+    contact search missed. The search is built never to miss one
+    (:mod:`impactcont.simulate.search`); should it, the simulation stops here with an error
+    rather than go on through the stop (a wrong trajectory, silently)."""
+    n = X.size // 2
+    for name, view in views.items():
+        s = float(view.normal @ X[:n])
+        size = abs(view.position) + float(np.abs(view.normal) @ np.abs(X[:n]))
+        if view.sign * (s - view.position) > _PAST_STOP * size:
+            raise RuntimeError(f"at t={t!r} stop coordinate {name!r} is {s!r}, past its stop "
+                               f"at {view.position!r}: the contact search missed a crossing "
+                               f"(state {X.tolist()}); please report this case")
 
 
 def _contact_now(flight: Flight, X: np.ndarray, views: dict[str, StopView],
@@ -570,7 +588,8 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
                 after[s] = max(after.get(s, 0.0), t_sep)
             hit = next_contact(fl, X, phase, t_end - t_now + _END_ULPS * _EPS * t_end,
                                after=after, stops=list(free_views),
-                               releases=fl.release_rows if held else None)
+                               releases=fl.release_rows if held else None,
+                               released=tuple(released))
         released = {}
         duration = hit[0] if hit is not None else max(t_end - t_now, 0.0)
         if trajectory:
@@ -579,12 +598,14 @@ def simulate(osc: ImpactOscillator, state: np.ndarray, delta: float, periods: fl
             X_chunks.append(fl.samples(np.append(tau, duration), X, phase))
         if hit is None:
             X = fl.state(duration, X, phase)
+            _check_sides(X, free_views, t_now + duration)
             phase = _wrap(phase + osc.omega * duration)
             t_now = max(t_now, t_end)
             close(held, "end")
             break
         tc, X_minus, side = hit
         t_now += tc
+        _check_sides(X_minus, {s: v for s, v in free_views.items() if s != side}, t_now)
         phase = _wrap(phase + osc.omega * tc)
         if side not in views:  # a release: the contact force of a held stop reached zero
             stop = next(s for s in held if release_name(s) == side)

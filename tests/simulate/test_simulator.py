@@ -397,3 +397,60 @@ def test_a_crossing_met_at_zero_speed_is_a_touch_not_an_impact(monkeypatch):
     assert res.impact_velocities.size == 0, res.impact_velocities
     assert [p.ended_by for p in res.sticking] == ["release"]
     np.testing.assert_allclose(res.final_state, reference.final_state, rtol=0, atol=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# A release followed by a short hop: the landing is found (it was searched past)
+# ---------------------------------------------------------------------------------------------
+def _hop(F0: float) -> float:
+    """The flight time of a ball released from a table (``x'' = -1 + F0 cos theta``, lifted
+    where the forcing passes its weight, ``cos theta = 1 / F0`` with the force rising) until
+    it lands, from the closed form of the flight (mpmath, 40 digits): an independent
+    witness of the simulator's landing."""
+    import mpmath
+
+    mpmath.mp.dps = 40
+    F = mpmath.mpf(F0)
+    phi = -mpmath.acos(1 / F)
+
+    def x(tau):
+        return -tau**2 / 2 + F * (mpmath.cos(phi) - mpmath.cos(phi + tau) - tau * mpmath.sin(phi))
+
+    # x > 0 from the release to the landing, x < 0 past it (the weight wins within a period)
+    lo, hi = mpmath.mpf("1e-3"), mpmath.mpf(2)
+    assert x(lo) > 0 > x(hi)
+    for _ in range(120):  # bisection: 2^-120 of the bracket
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if x(mid) > 0 else (lo, mid)
+    return float(lo)
+
+
+@pytest.mark.parametrize("excess", [1e-4, 1e-3, 2e-3, 5e-3, 2e-2])
+def test_a_ball_released_from_a_table_lands_again(excess: float) -> None:
+    """A forcing just above the ball's weight lifts it for a short hop. At F0 <= 1.003 the
+    landing lay in the first search cell after the release, where y, y' and y'' start at
+    zero (up to rounding): it was missed and the ball fell through the table (x = -159
+    after three periods, status COMPLETED)."""
+    from impactcont.model.stops import Stops
+
+    F0 = 1.0 + excess
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[0.0]], F=[F0], F_static=[-1.0], R=0.5, b=100.0,
+                              omega=1.0, stops=Stops(b_low=0.0, R_low=0.0))
+    res = simulate(osc, [0.0, 0.0], -1.0, 3.0, trajectory=True)
+    assert res.status is SimulationStatus.COMPLETED
+    assert res.X[:, 0].min() >= -1e-12 and res.final_state[0] >= -1e-12
+    releases = [p.end for p in res.sticking if p.ended_by == "release"]
+    assert res.impact_times.size == len(releases) == 3  # one hop per period
+    flights = res.impact_times - np.array(releases)
+    np.testing.assert_allclose(flights, _hop(F0), rtol=1e-8)
+
+
+def test_a_state_past_a_stop_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Should the contact search miss a crossing, the simulation stops with an error naming
+    the stop instead of going on through it."""
+    contact = importlib.import_module("impactcont.simulate.contact")
+    monkeypatch.setattr(contact, "first_crossing", lambda *args, **kwargs: None)
+    osc = ic.ImpactOscillator(M=[[1.0]], K=[[1.0]], F=[0.1], F_static=[1.0], R=0.8, b=0.1,
+                              omega=1.3, eta=0.5)  # pressed past its stop, x -> 1 +- 0.1
+    with pytest.raises(RuntimeError, match=r"stop coordinate 'U' .* past its stop .* missed"):
+        simulate(osc, [0.0, 0.0], 0.0, 3.0)
