@@ -864,6 +864,10 @@ def landing_impacts(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
     landings: dict[int, Any] = {}
     chattering: set[str] = set()
     ends = sorted(ph.end for ph in getattr(res, "sticking", ()))
+    # where a chatter's impacts accumulated (the simulator's record): a stick that starts
+    # there was entered through chatter, however close its last resolved impact (with a
+    # small R the accumulation point lies within rounding of it: R = 1e-3, 3e-9 after it)
+    accumulations = np.array([c.time for c in getattr(res, "chatter", ())], dtype=float)
     for phase in getattr(res, "sticking", ()):
         if phase.ended_by != "release":
             continue
@@ -874,7 +878,8 @@ def landing_impacts(res: Any) -> tuple[np.ndarray, dict[int, Any]]:
         before = [e for e in ends if e < times[last] - tol]
         boundary = before[-1] if before else -math.inf
         first = last
-        if phase.start - times[last] > tol:  # entered through chatter: back to its landing
+        if phase.start - times[last] > tol or np.any(np.abs(accumulations - phase.start)
+                                                     <= tol):  # back to its landing
             while (first > 0 and stops[first - 1] == phase.stops
                    and times[first - 1] > boundary):
                 first -= 1

@@ -26,9 +26,6 @@ def _preloaded(R: float) -> ic.ImpactOscillator:
                                omega=0.7, eta=0.05)
 
 
-@pytest.mark.xfail(strict=True, reason="fault in orbit.multi_impact.landing_impacts (helper "
-                   "H1's file): the patch is in H4's report of 2026-12-08; remove this mark "
-                   "when it lands")
 @pytest.mark.parametrize("R", [1e-2, 1e-3, 1e-6])
 def test_a_stick_entered_through_a_short_chatter_is_read_as_a_sticking_phase(R):
     osc = _preloaded(R)
