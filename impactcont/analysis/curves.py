@@ -82,7 +82,7 @@ from impactcont.errors import (
     ParameterError,
 )
 from impactcont.model.oscillator import ImpactOscillator
-from impactcont.model.parameters import model_parameter
+from impactcont.model.parameters import check_model_bounds, model_parameter
 from impactcont.orbit.multi_impact import MultiImpactOrbit, initial_unknowns
 from impactcont.orbit.periodic import PeriodicOrbit, _check_N, periodic_orbits
 from impactcont.problems.codim1 import (
@@ -104,7 +104,7 @@ from impactcont.progress import (
     until_interrupted,
 )
 from impactcont.threads import blas_limited
-from impactcont.vocabulary import Label, check_bounds
+from impactcont.vocabulary import Label
 
 __all__ = ["check_curve_arguments", "crossing_steps", "curve", "curve_crossings",
            "multi_impact_curve", "multi_impact_curve_crossings"]
@@ -143,7 +143,7 @@ def _check_bounds(bounds: Any, parameters: tuple[str, str], osc: ImpactOscillato
             raise ParameterError(f"bounds[{name!r}] must be finite with lo < hi; got {pair!r}")
         # inside the parameter's range: the drivers' one check (vocabulary.check_bounds),
         # and the oscillator at both ends (an element keeps K, M positive definite)
-        out[name] = check_bounds(name, (lo, hi), argument=f"bounds[{name!r}]")
+        out[name] = check_model_bounds(name, (lo, hi), argument=f"bounds[{name!r}]")
         model_parameter(osc, name).check_bounds(osc, out[name], argument=f"bounds[{name!r}]")
     return out
 
@@ -424,11 +424,15 @@ def _point_columns(problem: CurveProblem, xs: list[np.ndarray]
         "delta", "root", "impact_velocity", "gap_min", "spectral_radius", "multipliers", "state",
         "physical", "stable_side", "residual", "tangency_time", "angle")}
     defined = problem.multipliers_defined  # not on a ZV curve: G has its pole (eq. 25)
+    # the curve's own bound is left out of `physical`, as a GR curve's gap leaves out the
+    # tangency: along a ZV curve the impact velocity is zero to rounding and its sign flips
+    # from point to point (+-1e-17), which drew the curve's pieces at random
+    own_velocity = problem.kind is Label.ZV
     for x, o in zip(xs, orbits, strict=True):
         mu = o.multipliers if defined else np.full(n2, np.nan + 0j)
         rest = problem.other_multipliers(mu, x)
         gap = problem.grazing_test(x, o)
-        physical = bool(o.impact_velocity > 0 and gap > 0)
+        physical = bool((own_velocity or o.impact_velocity > 0) and gap > 0)
         cols["delta"].append(math.remainder(float(x[1]), 2 * math.pi))
         cols["root"].append(problem.root(x))
         cols["impact_velocity"].append(o.impact_velocity)

@@ -90,6 +90,15 @@ def test_zero_velocity_curve_is_the_linear_response_for_every_N(paper, curves):
         assert np.allclose(w1, w2, atol=1e-9)
 
 
+def test_a_zero_velocity_curve_is_physical_but_for_its_own_bound(curves):
+    """Along a ZV curve the impact velocity is zero to rounding (its sign flipped from point to
+    point, +-1e-17, and so did ``physical``: the curve was drawn in random dashes). Its own
+    bound is left out, as a GR curve's tangency is: ``physical`` is the gap's test alone."""
+    c = curves["ZV"]
+    assert (c.impact_velocity.values > 0).any() and (c.impact_velocity.values <= 0).any()
+    np.testing.assert_array_equal(c.physical.values, c.gap_min.values > 0)
+
+
 def test_codim2_points_lie_on_both_curves(curves):
     """PD+NS on the PD curve is NS+PD on the NS curve; SN+ZV is ZV+SN."""
     for a, b, la, lb in (("PD", "NS", "PD+NS", "NS+PD"), ("SN", "ZV", "SN+ZV", "ZV+SN"),

@@ -497,6 +497,10 @@ def test_a_spring_reaching_zero_is_refused_saying_why(bounds):
                                                  if o.physical))
     with pytest.raises(ic.ParameterError, match=match):
         multi_impact_continuation(motion, "k1", bounds, progress=False)
+    curve_match = r"bounds\['k1'\] " + match[len("bounds "):]
+    with pytest.raises(ic.ParameterError, match=curve_match):  # a curve's bounds too
+        ic.curve(osc, 1, "PD", parameters=("omega", "k1"),
+                 bounds={"omega": (1.0, 2.0), "k1": bounds})
     # other refusals of the range keep their words
     with pytest.raises(ic.ParameterError, match=r"bounds must be two finite numbers .*inf"):
         model_parameter(osc, "k1").check_bounds(osc, (0.1, math.inf))
