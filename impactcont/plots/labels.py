@@ -283,8 +283,12 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
     out = []
     # the longest labels first (a merged label of a cluster needs the most room), then
     # from left to right
-    for k in np.lexsort((pts[:, 0], [-len(str(t)) for t in texts])):
+    order = np.lexsort((pts[:, 0], [-len(str(t)) for t in texts]))
+    for i, k in enumerate(order):
         px, py = pts[k]
+        # the points of the labels still to place: a label (with its leader) over one of
+        # them leaves that label no room but over it
+        pending = pts[order[i + 1:]]
         probe = Text(0.0, 0.0, texts[k], fontsize=fontsize,
                      fontweight=kws[k].get("fontweight", "normal"))
         probe.set_figure(fig)
@@ -299,6 +303,9 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
                                 max(box[3], py)]) if ring > 0 else box)
             hard = (_overlap(box, np.array(placed).reshape(-1, 4)) + _overlap(box, markers)
                     + _overlap(extent, np.array(reach).reshape(-1, 4)))
+            covered = np.count_nonzero((pending[:, 0] > extent[0]) & (pending[:, 0] < extent[2])
+                                       & (pending[:, 1] > extent[1])
+                                       & (pending[:, 1] < extent[3]))
             beside = _overlap(box, _side_room(labels, size)) - _overlap(box, labels)
             outside = (max(frame[0] - box[0], 0) + max(box[2] - frame[2], 0)
                        + max(frame[1] - box[1], 0) + max(box[3] - frame[3], 0))
@@ -311,7 +318,7 @@ def place_labels(ax: Axes, xy: Sequence[tuple[float, float]], texts: Sequence[st
             # curves under the box: a big label (three lines) covers many curve vertices
             score = (100.0 * hard + 5000.0 * (hard > 1.0) + 10.0 * beside
                      + 5000.0 * (beside > 1.0) + 50.0 * h * outside + 20.0 * crossed
-                     + 30.0 * ring + 400.0 * (leader + tangle))
+                     + 30.0 * ring + 400.0 * (leader + tangle) + 5000.0 * covered)
             if best is None or score < best[0]:
                 best = (score, dx, dy, ring)
         _, dx, dy, ring = best  # type: ignore[misc]
