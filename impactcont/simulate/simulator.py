@@ -283,14 +283,22 @@ def _touching(X: np.ndarray, views: dict[str, StopView], last: str | None) -> li
     it approaches: its contact is searched along the flight (a contact assumed at once
     would come too early and too fast, issue 28).
     """
-    n = X.size // 2
     out = []
     for name, view in views.items():
-        s = float(view.normal @ X[:n])
-        band = _ON_ULPS * _EPS * (abs(view.position) + float(np.abs(view.normal) @ np.abs(X[:n])))
-        if name == last or view.sign * (view.position - s) <= band:
+        clearance, size = _clearance(X, view)
+        if name == last or clearance <= _ON_ULPS * _EPS * size:
             out.append(name)
     return out
+
+
+def _clearance(X: np.ndarray, view: StopView) -> tuple[float, float]:
+    """``(sign (c - s), size)`` of the state X at a stop: its clearance (``>= 0`` on the
+    allowed side) and the size of the terms it is computed from (``|c| + |n| . |x|``, the
+    scale of its rounding)."""
+    x = X[:X.size // 2]
+    s = float(view.normal @ x)
+    size = abs(view.position) + float(np.abs(view.normal) @ np.abs(x))
+    return view.sign * (view.position - s), size
 
 
 def _check_sides(X: np.ndarray, views: dict[str, StopView], t: float) -> None:
@@ -298,11 +306,10 @@ def _check_sides(X: np.ndarray, views: dict[str, StopView], t: float) -> None:
     contact search missed. The search is built never to miss one
     (:mod:`impactcont.simulate.search`); should it, the simulation stops here with an error
     rather than go on through the stop (a wrong trajectory, silently)."""
-    n = X.size // 2
     for name, view in views.items():
-        s = float(view.normal @ X[:n])
-        size = abs(view.position) + float(np.abs(view.normal) @ np.abs(X[:n]))
-        if view.sign * (s - view.position) > _PAST_STOP * size:
+        clearance, size = _clearance(X, view)
+        if clearance < -_PAST_STOP * size:
+            s = float(view.normal @ X[:X.size // 2])
             raise RuntimeError(f"at t={t!r} stop coordinate {name!r} is {s!r}, past its stop "
                                f"at {view.position!r}: the contact search missed a crossing "
                                f"(state {X.tolist()}); please report this case")
