@@ -107,8 +107,8 @@ from impactcont.vocabulary import LABELS, check_labels
 
 __all__ = ["as_multi_impact_orbit", "branch_problem", "branch_to_dataset",
            "check_continuation_arguments", "continuation", "continuation_from", "extend",
-           "make_options", "multi_impact_continuation", "restart_problem", "run_branch",
-           "trace_branch", "with_user_functions"]
+           "make_options", "multi_impact_continuation", "not_a_branch", "restart_problem",
+           "run_branch", "trace_branch", "with_user_functions"]
 
 log = logging.getLogger(__name__)
 
@@ -1188,7 +1188,7 @@ def _check_branch(branch: Any) -> xr.Dataset:
         raise TypeError(f"branch must be a branch xarray.Dataset (of continuation, "
                         f"multi_impact_continuation or a switch, or impactcont.load of its "
                         f"file); got {type(branch).__name__}")
-    what = _not_a_branch(branch.attrs)
+    what = not_a_branch(branch.attrs)
     if what:
         raise ParameterError(f"branch must be a one-parameter branch dataset (of continuation, "
                              f"multi_impact_continuation or a switch); got {what}")
@@ -1208,7 +1208,7 @@ _OTHER_DATASETS = {
 }
 
 
-def _not_a_branch(attrs: Mapping[str, Any]) -> str:
+def not_a_branch(attrs: Mapping[str, Any]) -> str:
     """What a dataset with these attributes is when it is not a one-parameter branch (a
     curve, a map, a simulation, ... named by its attributes), else ``""``."""
     tag, parameters = attrs.get("impactcont_dataset"), attrs.get("parameters")

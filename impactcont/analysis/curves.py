@@ -37,6 +37,7 @@ import xarray as xr
 from impactcont.analysis.branch import (
     branch_to_dataset,
     continuation,
+    not_a_branch,
     user_events_until_interrupted,
     with_user_functions,
 )
@@ -551,13 +552,10 @@ def check_curve_arguments(
 def _check_branch_start(start: xr.Dataset) -> None:
     """A dataset given as start is a one-parameter branch: a curve, a map or a simulation
     (which have impacts too) is refused, naming what it is."""
-    what = ("a two-parameter curve dataset" if "curve_kind" in start.attrs
-            else f"a {start.attrs['impactcont_dataset']} dataset"
-            if "impactcont_dataset" in start.attrs else "")
-    if what or "parameters" in start.attrs:
+    what = not_a_branch(start.attrs)
+    if what:
         raise ParameterError(f"start must be a one-parameter branch dataset (a curve starts "
-                             f"from one of its special points); got {what or 'a dataset'} "
-                             f"(parameters {start.attrs.get('parameters')!r})")
+                             f"from one of its special points); got {what}")
     try:
         validate_branch_dataset(start)
     except ValueError as exc:
